@@ -1,0 +1,1 @@
+"""energy — what a motion costs: physics and learned current models, logs, metrics."""

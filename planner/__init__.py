@@ -1,0 +1,1 @@
+"""planner — where to drive: edge costs, OMPL and lattice planners, routes, CLI."""

@@ -1,0 +1,91 @@
+"""The terrawatt exception hierarchy: one root, small subclasses that also inherit a builtin.
+
+Every error the library raises on bad input derives from :class:`TerrawattError` and from
+the builtin exception it resembles, so ``except ValueError`` keeps working for callers that
+do not know terrawatt. Messages name the parameter, show the bad value with ``!r`` and say
+what was expected.
+
+``energy`` and ``planner`` re-export these classes and add a few of their own; this module
+lives in ``terrain`` because ``terrain`` is the bottom layer and imports nothing above it.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "TerrawattError",
+    "InvalidParameterError",
+    "GridMismatchError",
+    "OutOfBoundsError",
+    "UnknownNameError",
+    "FileFormatError",
+    "FormatVersionError",
+    "NotFittedError",
+    "DataError",
+    "UnitError",
+    "PlanningError",
+    "BlockedPositionError",
+    "OptionalDependencyError",
+    "TerrawattWarning",
+    "DataRepairWarning",
+]
+
+
+class TerrawattError(Exception):
+    """Root of every exception raised by terrawatt."""
+
+
+class InvalidParameterError(TerrawattError, ValueError):
+    """A parameter has a value outside its valid range (NaN, non-positive, wrong shape...)."""
+
+
+class GridMismatchError(TerrawattError, ValueError):
+    """Two rasters or layers that must share one grid do not."""
+
+
+class OutOfBoundsError(TerrawattError, ValueError):
+    """A position lies outside the map bounds."""
+
+
+class UnknownNameError(TerrawattError, ValueError):
+    """A name (layer, ground class, planner, model, effect) is not one of the known names."""
+
+
+class FileFormatError(TerrawattError, OSError):
+    """A file is corrupt, truncated or not of the expected format."""
+
+
+class FormatVersionError(FileFormatError):
+    """A file was written with a format version this release cannot read."""
+
+
+class NotFittedError(TerrawattError, ValueError, AttributeError):
+    """A model was used before ``fit`` (same contract as scikit-learn's NotFittedError)."""
+
+
+class DataError(TerrawattError, ValueError):
+    """Recorded data is unusable as given: unsorted or duplicated timestamps, NaNs, gaps,
+    missing columns, empty files."""
+
+
+class UnitError(DataError):
+    """A quantity's magnitude contradicts its declared unit (e.g. mA declared as A)."""
+
+
+class PlanningError(TerrawattError, RuntimeError):
+    """A planning problem cannot be set up or solved."""
+
+
+class BlockedPositionError(PlanningError, ValueError):
+    """A start or goal lies in an obstacle or on ground steeper than the slope limit."""
+
+
+class OptionalDependencyError(TerrawattError, ImportError):
+    """An optional dependency (an extra such as ``geo`` or ``ros``) is not installed."""
+
+
+class TerrawattWarning(UserWarning):
+    """Root of the warnings terrawatt emits."""
+
+
+class DataRepairWarning(TerrawattWarning):
+    """Data was repaired because the caller asked for it (e.g. duplicates dropped)."""
