@@ -1,0 +1,150 @@
+"""Tests of energy.params: validation, presets and lookups."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from energy import (
+    GROUND_PRESETS,
+    ROBOT_PRESETS,
+    GroundParams,
+    MotorParams,
+    RobotParams,
+    ground_preset,
+    robot_preset,
+)
+from terrain import InvalidParameterError, UnknownNameError
+
+
+def _motor(**kw: object) -> MotorParams:
+    base = dict(torque_constant_nm_per_a=0.05, back_emf_v_s_per_rad=0.05,
+                armature_resistance_ohm=0.5, max_torque_nm=1.0, max_speed_radps=500.0)
+    base.update(kw)
+    return MotorParams(**base)
+
+
+def _robot(**kw: object) -> RobotParams:
+    base = dict(name="r", mass_kg=10.0, wheel_radius_m=0.1, track_width_m=0.4,
+                wheelbase_m=0.3, battery_voltage_v=24.0, drive_kind="skid_steer",
+                motor=_motor(), max_speed_mps=1.0, max_omega_radps=2.0, turn_rate_radps=0.5)
+    base.update(kw)
+    return RobotParams(**base)
+
+
+def test_paper_seed_preset_has_the_paper_constants() -> None:
+    r = robot_preset("paper_seed")
+    assert (r.mass_kg, r.wheel_radius_m, r.track_width_m) == (0.8, 0.03, 0.1)
+    m = r.motor
+    assert (m.torque_constant_nm_per_a, m.back_emf_v_s_per_rad) == (0.8693, 0.8883)
+    assert (m.rotor_inertia_kg_m2, m.viscous_damping_nm_s_per_rad) == (0.038, 0.00075)
+    assert (m.armature_resistance_ohm, m.armature_inductance_h) == (53.94, 1e-6)
+    assert r.battery_voltage_v == 12.0 and r.sensor_power_w == 1.2
+    assert (r.control_standby_power_w, r.control_startup_power_w) == (1.4, 2.4)
+    # derived limits: stall torque and no-load speed of the 12 V motor
+    assert m.max_torque_nm == pytest.approx(0.8693 * 12.0 / 53.94)
+    assert m.max_speed_radps == pytest.approx(12.0 / 0.8883)
+    assert r.drive_kind == "differential"
+
+
+def test_clearpath_presets() -> None:
+    jackal, husky = robot_preset("jackal"), robot_preset("husky")
+    assert jackal.mass_kg == 17.0 and jackal.drive_kind == "skid_steer"
+    assert jackal.driven_sides == 2 and jackal.track_width_multiplier == 1.5
+    assert husky.drive_kind == "skid_steer" and husky.track_width_multiplier == 1.875
+    assert husky.wheel_radius_m == 0.1651 and husky.battery_voltage_v == 24.0
+    assert set(ROBOT_PRESETS) == {"paper_seed", "jackal", "husky"}
+
+
+def test_ground_presets() -> None:
+    needed = {"asphalt", "concrete", "stone", "grass", "gravel", "sand", "snow",
+              "coated_wood", "flooring"}
+    assert needed <= set(GROUND_PRESETS)
+    stone = ground_preset("stone")
+    assert (stone.static_friction_coef, stone.coulomb_friction_coef) == (1.0, 0.7)
+    assert stone.stribeck_velocity_coef_s_per_m == 20.0
+    assert ground_preset("sand").coulomb_friction_coef == 0.5
+    # loose ground rolls harder than paved ground
+    crr = {n: g.rolling_resistance_coef for n, g in GROUND_PRESETS.items()}
+    assert crr["sand"] > crr["grass"] > crr["asphalt"]
+    for name, g in GROUND_PRESETS.items():
+        assert g.name == name
+
+
+def test_presets_are_frozen() -> None:
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        robot_preset("husky").mass_kg = 1.0  # type: ignore[misc]
+
+
+@pytest.mark.parametrize(("lookup", "name"), [(robot_preset, "rover9000"),
+                                              (ground_preset, "lava")])
+def test_unknown_preset_lists_valid_names(lookup, name) -> None:
+    with pytest.raises(UnknownNameError, match=rf"'{name}' is unknown.*expected one of"):
+        lookup(name)
+
+
+def test_unhashable_preset_name() -> None:
+    with pytest.raises(UnknownNameError, match="robot preset"):
+        robot_preset(["husky"])  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "match"),
+    [
+        ("mass_kg", -1.0, r"mass_kg must be > 0\.0, got -1\.0"),
+        ("mass_kg", float("nan"), "mass_kg must be finite"),
+        ("wheel_radius_m", 0.0, "wheel_radius_m must be > 0"),
+        ("drive_kind", "tracked", "drive_kind must be one of"),
+        ("track_width_multiplier", 0.5, "track_width_multiplier must be >= 1.0"),
+        ("regen_efficiency", 1.5, "regen_efficiency must be <= 1.0"),
+        ("driven_sides", 4, "driven_sides must be 2"),
+        ("motor", "big", "motor must be a MotorParams"),
+        ("name", "", "name must be a non-empty string"),
+        ("mass_kg", "10", "mass_kg must be a real number"),
+    ],
+)
+def test_robot_validation(field: str, value: object, match: str) -> None:
+    with pytest.raises(InvalidParameterError, match=match):
+        _robot(**{field: value})
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "match"),
+    [
+        ("torque_constant_nm_per_a", 0.0, "torque_constant_nm_per_a must be > 0"),
+        ("gear_efficiency", 1.2, "gear_efficiency must be <= 1.0"),
+        ("gear_efficiency", 0.0, "gear_efficiency must be > 0"),
+        ("rotor_inertia_kg_m2", -1e-3, "rotor_inertia_kg_m2 must be >= 0"),
+        ("max_speed_radps", float("inf"), "max_speed_radps must be finite"),
+    ],
+)
+def test_motor_validation(field: str, value: object, match: str) -> None:
+    with pytest.raises(InvalidParameterError, match=match):
+        _motor(**{field: value})
+
+
+def test_ground_validation() -> None:
+    with pytest.raises(InvalidParameterError, match="static_friction_coef must be >= coulomb"):
+        GroundParams(name="g", static_friction_coef=0.3, coulomb_friction_coef=0.5,
+                     rolling_resistance_coef=0.01)
+    with pytest.raises(InvalidParameterError, match="rolling_resistance_coef must be >= 0"):
+        GroundParams(name="g", static_friction_coef=0.5, coulomb_friction_coef=0.5,
+                     rolling_resistance_coef=-0.01)
+    with pytest.raises(InvalidParameterError, match="coulomb_friction_coef must be > 0"):
+        GroundParams(name="g", static_friction_coef=0.5, coulomb_friction_coef=0.0,
+                     rolling_resistance_coef=0.01)
+
+
+def test_defaults_follow_replacements() -> None:
+    g = GroundParams(name="g", static_friction_coef=0.6, coulomb_friction_coef=0.5,
+                     rolling_resistance_coef=0.01)
+    assert g.effective_lateral_friction_coef == 0.5
+    assert g.replace(coulomb_friction_coef=0.4).effective_lateral_friction_coef == 0.4
+    assert g.replace(lateral_friction_coef=0.2).effective_lateral_friction_coef == 0.2
+    r = _robot()
+    assert r.effective_yaw_inertia_kg_m2 == pytest.approx(10.0 * (0.5**2 + 0.4**2) / 12.0)
+    assert r.replace(mass_kg=20.0).effective_yaw_inertia_kg_m2 == pytest.approx(
+        2 * r.effective_yaw_inertia_kg_m2)
+    with pytest.raises(InvalidParameterError, match="mass_kg"):
+        r.replace(mass_kg=-2.0)
