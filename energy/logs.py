@@ -1,0 +1,627 @@
+"""Interaction logs: time-aligned drive, current and vibration streams of one robot run.
+
+An :class:`InteractionLog` holds two streams that share one clock:
+
+- the **drive stream** (``time_s``, N samples): linear speed ``v_mps``, yaw rate
+  ``omega_radps`` (commanded or measured, see :attr:`LogMeta.velocity_source`), the left and
+  right drive currents ``current_left_a`` / ``current_right_a`` (A), and optionally the
+  pose ``pose_xyh`` (x_m, y_m, heading_rad) and a per-sample ground label ``ground``;
+- the **acceleration stream** (``accel_time_s``, M samples, usually at a higher rate): the
+  vertical acceleration ``accel_z_mps2`` as recorded, gravity included (about +9.81 m/s^2
+  at rest on level ground); vibration features remove the mean themselves.
+
+Both time vectors are strictly increasing and finite; all arrays are float64 copies made
+read-only. Changing rate is always explicit: :meth:`InteractionLog.resample` puts the drive
+stream on a uniform grid over the overlap of both streams, :meth:`InteractionLog.accel_on`
+interpolates the acceleration onto other timestamps. Readers for files live in
+``energy.readers``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import warnings
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from terrain.errors import DataError, DataRepairWarning, InvalidParameterError, UnknownNameError
+
+__all__ = [
+    "LogMeta",
+    "InteractionLog",
+    "VELOCITY_SOURCES",
+    "RESAMPLE_METHODS",
+    "DEFAULT_GAP_FACTOR",
+]
+
+_LOG = logging.getLogger(__name__)
+
+#: Allowed values of :attr:`LogMeta.velocity_source`.
+VELOCITY_SOURCES = ("commanded", "measured")
+#: Allowed ``method`` values of :meth:`InteractionLog.resample`.
+RESAMPLE_METHODS = ("linear", "previous")
+#: A step between consecutive samples larger than this many median sampling periods is a
+#: gap (used by :meth:`InteractionLog.split_at_gaps` and by the readers' gap check).
+DEFAULT_GAP_FACTOR = 5.0
+#: Timestamps closer than this are the same instant for zero-order holds (s).
+_TIME_TOL_S = 1e-9
+
+
+@dataclass(frozen=True)
+class LogMeta:
+    """Run-level metadata of an :class:`InteractionLog`.
+
+    Parameters
+    ----------
+    robot : str
+        Name of the robot (e.g. ``"husky_a200"``).
+    source : str
+        Where the data came from: a file path, ``"synthetic"``, ...
+    ground_label : str or None
+        Ground of the whole run (e.g. ``"snow"``), when known.
+    velocity_source : {"commanded", "measured"}
+        Whether ``v_mps`` / ``omega_radps`` are the commands sent to the robot or speeds
+        measured on it (wheel odometry).
+    track_width_m : float or None
+        Track width used to derive ``omega_radps`` from wheel speeds, when it was derived.
+    notes : str
+        Free text: alignment, repairs and resampling applied by readers and methods.
+    start_time_ns : int or None
+        Absolute time of ``time_s == 0`` in ns since the Unix epoch, when the source has one
+        (ROS bags); ``None`` for sources whose clock starts at zero.
+
+    Raises
+    ------
+    InvalidParameterError
+        Non-string names, an unknown ``velocity_source``, a non-positive track width.
+    """
+
+    robot: str = "unknown"
+    source: str = "synthetic"
+    ground_label: str | None = None
+    velocity_source: str = "commanded"
+    track_width_m: float | None = None
+    notes: str = ""
+    start_time_ns: int | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("robot", "source", "notes"):
+            value = getattr(self, name)
+            if not isinstance(value, str):
+                raise InvalidParameterError(f"LogMeta.{name} must be a str, got {value!r}")
+        if self.ground_label is not None and (not isinstance(self.ground_label, str) or not self.ground_label):
+            raise InvalidParameterError(
+                f"LogMeta.ground_label must be a non-empty str or None, got {self.ground_label!r}"
+            )
+        if self.velocity_source not in VELOCITY_SOURCES:
+            raise InvalidParameterError(
+                f"LogMeta.velocity_source must be one of {VELOCITY_SOURCES!r}, got {self.velocity_source!r}"
+            )
+        if self.track_width_m is not None:
+            tw = self.track_width_m
+            if isinstance(tw, bool) or not isinstance(tw, (int, float)) or not math.isfinite(tw) or tw <= 0:
+                raise InvalidParameterError(
+                    f"LogMeta.track_width_m must be a finite number > 0 or None, got {tw!r}"
+                )
+            object.__setattr__(self, "track_width_m", float(tw))
+        if self.start_time_ns is not None and (
+            isinstance(self.start_time_ns, bool) or not isinstance(self.start_time_ns, (int, np.integer))
+        ):
+            raise InvalidParameterError(f"LogMeta.start_time_ns must be an int or None, got {self.start_time_ns!r}")
+
+
+def _as_vector(name: str, value: Any) -> np.ndarray:
+    """A read-only float64 1-D copy of ``value``; InvalidParameterError/DataError otherwise."""
+    try:
+        arr = np.array(value, dtype=np.float64, copy=True)
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(f"{name} must be an array of numbers, got {value!r:.80}") from exc
+    if arr.ndim != 1:
+        raise InvalidParameterError(f"{name} must be 1-D, got shape {arr.shape!r}")
+    bad = ~np.isfinite(arr)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise DataError(
+            f"{name} must be finite; {int(bad.sum())} non-finite value(s), first at index {i} "
+            f"({float(arr[i])!r})"
+        )
+    arr.setflags(write=False)
+    return arr
+
+
+def _check_increasing(name: str, t: np.ndarray) -> None:
+    if t.size == 0:
+        raise DataError(f"{name} is empty; an interaction log needs at least one sample per stream")
+    d = np.diff(t)
+    bad = d <= 0
+    if bad.any():
+        i = int(np.argmax(bad)) + 1
+        raise DataError(
+            f"{name} must be strictly increasing; {int(bad.sum())} step(s) are not, first at index {i} "
+            f"(t={float(t[i])!r} after t={float(t[i - 1])!r})"
+        )
+
+
+def _median_period_s(t: np.ndarray) -> float:
+    return float(np.median(np.diff(t)))
+
+
+def _gap_steps(t: np.ndarray, gap_factor: float) -> np.ndarray:
+    """Indices i such that ``t[i+1] - t[i]`` exceeds ``gap_factor`` median periods."""
+    if t.size < 3:
+        return np.zeros(0, dtype=np.intp)
+    d = np.diff(t)
+    return np.flatnonzero(d > gap_factor * float(np.median(d)))
+
+
+def _check_gap_factor(gap_factor: float) -> float:
+    if isinstance(gap_factor, bool) or not isinstance(gap_factor, (int, float)) or not gap_factor > 1:
+        raise InvalidParameterError(f"gap_factor must be a number > 1, got {gap_factor!r}")
+    return float(gap_factor)
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class InteractionLog:
+    """One robot run: drive commands/speeds, drive currents and vertical acceleration.
+
+    Parameters
+    ----------
+    time_s : array_like, shape (N,)
+        Drive-stream timestamps (s), strictly increasing.
+    v_mps, omega_radps : array_like, shape (N,)
+        Linear speed (m/s) and yaw rate (rad/s, counter-clockwise positive); commanded or
+        measured according to ``meta.velocity_source``.
+    current_left_a, current_right_a : array_like, shape (N,)
+        Left and right drive current (A). Negative values (regeneration) are allowed.
+    accel_time_s : array_like, shape (M,)
+        Acceleration-stream timestamps (s), strictly increasing, same clock as ``time_s``.
+    accel_z_mps2 : array_like, shape (M,)
+        Vertical acceleration (m/s^2) as recorded, gravity included.
+    pose_xyh : array_like, shape (N, 3), optional
+        x_m, y_m, heading_rad at the drive timestamps.
+    ground : array_like of str, shape (N,), optional
+        Ground label of each drive sample.
+    meta : LogMeta
+        Run-level metadata.
+
+    Raises
+    ------
+    InvalidParameterError
+        Wrong shapes, lengths or types.
+    DataError
+        Empty streams, non-finite values, timestamps not strictly increasing.
+
+    Notes
+    -----
+    Arrays are copied to float64 and made read-only. Equality is identity (``eq=False``):
+    compare the arrays themselves. ``len(log)`` is the number of drive samples.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.arange(5) * 0.1
+    >>> log = InteractionLog(t, np.full(5, 0.5), np.zeros(5), np.full(5, 2.0), np.full(5, 2.1),
+    ...                      np.arange(50) * 0.01, np.full(50, 9.81))
+    >>> len(log), round(log.drive_rate_hz, 6), round(log.accel_rate_hz, 6)
+    (5, 10.0, 100.0)
+    """
+
+    time_s: np.ndarray
+    v_mps: np.ndarray
+    omega_radps: np.ndarray
+    current_left_a: np.ndarray
+    current_right_a: np.ndarray
+    accel_time_s: np.ndarray
+    accel_z_mps2: np.ndarray
+    pose_xyh: np.ndarray | None = None
+    ground: np.ndarray | None = None
+    meta: LogMeta = field(default_factory=LogMeta)
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        t = _as_vector("time_s", self.time_s)
+        _check_increasing("time_s", t)
+        set_(self, "time_s", t)
+        n = t.size
+        for name in ("v_mps", "omega_radps", "current_left_a", "current_right_a"):
+            arr = _as_vector(name, getattr(self, name))
+            if arr.size != n:
+                raise InvalidParameterError(f"{name} must have the length of time_s ({n}), got {arr.size}")
+            set_(self, name, arr)
+        ta = _as_vector("accel_time_s", self.accel_time_s)
+        _check_increasing("accel_time_s", ta)
+        set_(self, "accel_time_s", ta)
+        az = _as_vector("accel_z_mps2", self.accel_z_mps2)
+        if az.size != ta.size:
+            raise InvalidParameterError(
+                f"accel_z_mps2 must have the length of accel_time_s ({ta.size}), got {az.size}"
+            )
+        set_(self, "accel_z_mps2", az)
+        if self.pose_xyh is not None:
+            try:
+                pose = np.array(self.pose_xyh, dtype=np.float64, copy=True)
+            except (TypeError, ValueError) as exc:
+                raise InvalidParameterError(f"pose_xyh must be a numeric (N, 3) array, got {self.pose_xyh!r:.80}") from exc
+            if pose.shape != (n, 3):
+                raise InvalidParameterError(f"pose_xyh must have shape ({n}, 3), got {pose.shape!r}")
+            bad = ~np.isfinite(pose)
+            if bad.any():
+                i = int(np.argmax(bad.any(axis=1)))
+                raise DataError(
+                    f"pose_xyh must be finite; {int(bad.any(axis=1).sum())} row(s) are not, first at index {i}"
+                )
+            pose.setflags(write=False)
+            set_(self, "pose_xyh", pose)
+        if self.ground is not None:
+            raw = np.asarray(self.ground)
+            if raw.ndim != 1 or raw.size != n:
+                raise InvalidParameterError(f"ground must be a 1-D array of {n} labels, got shape {raw.shape!r}")
+            if raw.dtype.kind == "O" and all(isinstance(g, str) for g in raw.tolist()):
+                raw = raw.astype(str)
+            if raw.dtype.kind != "U":
+                raise InvalidParameterError(f"ground must hold str labels, got dtype {raw.dtype!r}")
+            if n and (np.char.str_len(raw) == 0).any():
+                i = int(np.argmax(np.char.str_len(raw) == 0))
+                raise DataError(f"ground labels must be non-empty; first empty label at index {i}")
+            g = raw.copy()
+            g.setflags(write=False)
+            set_(self, "ground", g)
+        if not isinstance(self.meta, LogMeta):
+            raise InvalidParameterError(f"meta must be a LogMeta, got {self.meta!r}")
+
+    # ------------------------------------------------------------------ basics
+    def __len__(self) -> int:
+        return int(self.time_s.size)
+
+    def __repr__(self) -> str:
+        def rate(t: np.ndarray) -> str:
+            return f"{1.0 / _median_period_s(t):.4g} Hz" if t.size > 1 else "single sample"
+
+        return (
+            f"InteractionLog(robot={self.meta.robot!r}, ground={self.meta.ground_label!r}, "
+            f"velocity={self.meta.velocity_source}, drive={len(self)} samples @ {rate(self.time_s)}, "
+            f"accel={self.accel_time_s.size} samples @ {rate(self.accel_time_s)}, "
+            f"t=[{self.time_s[0]:.3f}, {self.time_s[-1]:.3f}] s, source={self.meta.source!r})"
+        )
+
+    @property
+    def duration_s(self) -> float:
+        """Span of the drive stream, last minus first timestamp (s)."""
+        return float(self.time_s[-1] - self.time_s[0])
+
+    @property
+    def drive_rate_hz(self) -> float:
+        """Drive-stream rate: 1 / median sampling period (Hz). DataError with < 2 samples."""
+        if self.time_s.size < 2:
+            raise DataError("drive_rate_hz needs at least 2 drive samples, the log has 1")
+        return 1.0 / _median_period_s(self.time_s)
+
+    @property
+    def accel_rate_hz(self) -> float:
+        """Acceleration-stream rate: 1 / median sampling period (Hz). DataError with < 2 samples."""
+        if self.accel_time_s.size < 2:
+            raise DataError("accel_rate_hz needs at least 2 acceleration samples, the log has 1")
+        return 1.0 / _median_period_s(self.accel_time_s)
+
+    @property
+    def ground_labels(self) -> np.ndarray | None:
+        """Ground label per drive sample: ``ground`` if set, else ``meta.ground_label``
+        repeated, else ``None``."""
+        if self.ground is not None:
+            return self.ground
+        if self.meta.ground_label is not None:
+            out = np.full(len(self), self.meta.ground_label)
+            out.setflags(write=False)
+            return out
+        return None
+
+    def overlap_s(self) -> tuple[float, float]:
+        """Time interval covered by both streams, ``(start_s, end_s)``.
+
+        Raises
+        ------
+        DataError
+            The streams do not overlap.
+        """
+        t0 = max(float(self.time_s[0]), float(self.accel_time_s[0]))
+        t1 = min(float(self.time_s[-1]), float(self.accel_time_s[-1]))
+        if t1 < t0:
+            raise DataError(
+                f"drive stream [{float(self.time_s[0])!r}, {float(self.time_s[-1])!r}] s and acceleration stream "
+                f"[{float(self.accel_time_s[0])!r}, {float(self.accel_time_s[-1])!r}] s do not overlap"
+            )
+        return t0, t1
+
+    # --------------------------------------------------------------- resampling
+    def accel_on(self, time_s: Any) -> np.ndarray:
+        """Vertical acceleration linearly interpolated onto other timestamps.
+
+        Parameters
+        ----------
+        time_s : array_like
+            Timestamps (s) within ``[accel_time_s[0], accel_time_s[-1]]``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Acceleration (m/s^2), same shape as ``time_s``.
+
+        Raises
+        ------
+        DataError
+            A timestamp is non-finite or outside the acceleration record (no extrapolation).
+        """
+        t = np.asarray(time_s, dtype=np.float64)
+        bad = ~np.isfinite(t) | (t < self.accel_time_s[0]) | (t > self.accel_time_s[-1])
+        if bad.any():
+            flat = t.reshape(-1)
+            i = int(np.argmax(bad.reshape(-1)))
+            raise DataError(
+                f"accel_on: {int(bad.sum())} timestamp(s) outside the acceleration record "
+                f"[{float(self.accel_time_s[0])!r}, {float(self.accel_time_s[-1])!r}] s, first at index {i} "
+                f"(t={float(flat[i])!r}); the acceleration is not extrapolated"
+            )
+        return np.interp(t, self.accel_time_s, self.accel_z_mps2)
+
+    def resample(self, rate_hz: float, method: str = "linear") -> InteractionLog:
+        """The drive stream on a uniform grid over the overlap of both streams.
+
+        The grid is ``t0 + k / rate_hz`` for ``k = 0, 1, ...`` while ``<= t1``, with
+        ``[t0, t1]`` the overlap of the drive and acceleration streams. Speeds, currents and
+        x/y are interpolated linearly (``"linear"``) or held from the last sample at or
+        before each grid time (``"previous"``, zero-order hold, right for commands; a sample
+        less than 1 ns after a grid time counts as at it, absorbing float rounding);
+        heading is unwrapped before interpolation and wrapped to (-pi, pi] after; ground
+        labels are always held (``"previous"``). The acceleration stream keeps its own rate:
+        its samples from the last one at or before ``t0`` to the first one at or after the
+        last grid time are kept, so :meth:`accel_on` works on every new drive time.
+        Interpolation does not know about gaps: split at gaps first if the log has any.
+
+        Parameters
+        ----------
+        rate_hz : float
+            New drive rate (Hz), > 0.
+        method : {"linear", "previous"}
+
+        Returns
+        -------
+        InteractionLog
+
+        Raises
+        ------
+        InvalidParameterError
+            ``rate_hz`` not a finite number > 0.
+        UnknownNameError
+            ``method`` is not one of :data:`RESAMPLE_METHODS`.
+        DataError
+            The streams do not overlap.
+        """
+        if isinstance(rate_hz, bool) or not isinstance(rate_hz, (int, float)) or not math.isfinite(rate_hz) or rate_hz <= 0:
+            raise InvalidParameterError(f"rate_hz must be a finite number > 0, got {rate_hz!r}")
+        if method not in RESAMPLE_METHODS:
+            raise UnknownNameError(f"method must be one of {RESAMPLE_METHODS!r}, got {method!r}")
+        t0, t1 = self.overlap_s()
+        n = int(math.floor((t1 - t0) * rate_hz + 1e-9)) + 1
+        grid = t0 + np.arange(n, dtype=np.float64) / float(rate_hz)
+        # a sample up to _TIME_TOL_S after a grid time counts as at it (float rounding of
+        # e.g. k * 0.1 vs k / 10); >= 0 since grid >= time_s[0]
+        held = np.searchsorted(self.time_s, grid + _TIME_TOL_S, side="right") - 1
+
+        def take(values: np.ndarray) -> np.ndarray:
+            if method == "linear":
+                return np.interp(grid, self.time_s, values)
+            return values[held]
+
+        pose = None
+        if self.pose_xyh is not None:
+            heading = np.unwrap(self.pose_xyh[:, 2])
+            h = take(heading)
+            h = np.pi - np.mod(np.pi - h, 2 * np.pi)  # wrap to (-pi, pi]
+            pose = np.column_stack([take(self.pose_xyh[:, 0]), take(self.pose_xyh[:, 1]), h])
+        ground = None if self.ground is None else self.ground[held]
+        ia = max(int(np.searchsorted(self.accel_time_s, grid[0], side="right")) - 1, 0)
+        ib = min(int(np.searchsorted(self.accel_time_s, grid[-1], side="left")), self.accel_time_s.size - 1)
+        note = f"resampled drive stream to {float(rate_hz):g} Hz ({method}) over [{t0:g}, {t1:g}] s"
+        return InteractionLog(
+            time_s=grid,
+            v_mps=take(self.v_mps),
+            omega_radps=take(self.omega_radps),
+            current_left_a=take(self.current_left_a),
+            current_right_a=take(self.current_right_a),
+            accel_time_s=self.accel_time_s[ia : ib + 1],
+            accel_z_mps2=self.accel_z_mps2[ia : ib + 1],
+            pose_xyh=pose,
+            ground=ground,
+            meta=replace(self.meta, notes=_join_notes(self.meta.notes, note)),
+        )
+
+    # ---------------------------------------------------------- cutting, joining
+    def slice(self, t0_s: float, t1_s: float) -> InteractionLog:
+        """The samples of both streams with ``t0_s <= t < t1_s`` (times are not shifted).
+
+        Raises
+        ------
+        InvalidParameterError
+            Non-finite bounds or ``t1_s <= t0_s``.
+        DataError
+            The window holds no drive or no acceleration sample.
+        """
+        for name, value in (("t0_s", t0_s), ("t1_s", t1_s)):
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)) or not math.isfinite(value):
+                raise InvalidParameterError(f"{name} must be a finite number, got {value!r}")
+        if not t1_s > t0_s:
+            raise InvalidParameterError(f"t1_s must be > t0_s, got t0_s={t0_s!r}, t1_s={t1_s!r}")
+        d = (self.time_s >= t0_s) & (self.time_s < t1_s)
+        a = (self.accel_time_s >= t0_s) & (self.accel_time_s < t1_s)
+        if not d.any() or not a.any():
+            which = "drive" if not d.any() else "acceleration"
+            raise DataError(f"slice [{t0_s!r}, {t1_s!r}) s holds no {which} sample")
+        return self._subset(d, a)
+
+    def _subset(self, d: np.ndarray, a: np.ndarray, note: str = "") -> InteractionLog:
+        return InteractionLog(
+            time_s=self.time_s[d],
+            v_mps=self.v_mps[d],
+            omega_radps=self.omega_radps[d],
+            current_left_a=self.current_left_a[d],
+            current_right_a=self.current_right_a[d],
+            accel_time_s=self.accel_time_s[a],
+            accel_z_mps2=self.accel_z_mps2[a],
+            pose_xyh=None if self.pose_xyh is None else self.pose_xyh[d],
+            ground=None if self.ground is None else self.ground[d],
+            meta=replace(self.meta, notes=_join_notes(self.meta.notes, note)) if note else self.meta,
+        )
+
+    def shifted(self, offset_s: float) -> InteractionLog:
+        """The same log with ``offset_s`` added to both time vectors (e.g. before
+        :meth:`concatenate` of runs that each start at zero)."""
+        if isinstance(offset_s, bool) or not isinstance(offset_s, (int, float, np.floating, np.integer)) or not math.isfinite(offset_s):
+            raise InvalidParameterError(f"offset_s must be a finite number, got {offset_s!r}")
+        return replace(self, time_s=self.time_s + offset_s, accel_time_s=self.accel_time_s + offset_s)
+
+    def split_at_gaps(self, gap_factor: float = DEFAULT_GAP_FACTOR) -> list[InteractionLog]:
+        """Split the run where either stream has a gap.
+
+        A gap is a step between consecutive samples of one stream larger than
+        ``gap_factor`` times that stream's median period. The run is cut inside every gap
+        of either stream; samples of the other stream lying strictly inside a gap, and
+        pieces left without a drive or an acceleration sample, are dropped — counted,
+        logged and warned with :class:`DataRepairWarning` (the caller asked for the split).
+
+        Returns
+        -------
+        list of InteractionLog
+            The pieces in time order (a single element when there is no gap).
+
+        Raises
+        ------
+        InvalidParameterError
+            ``gap_factor`` not a number > 1.
+        DataError
+            No piece keeps both streams.
+        """
+        gap_factor = _check_gap_factor(gap_factor)
+        gaps: list[tuple[float, float]] = []
+        for t in (self.time_s, self.accel_time_s):
+            for i in _gap_steps(t, gap_factor):
+                gaps.append((float(t[i]), float(t[i + 1])))
+        if not gaps:
+            return [self]
+        gaps.sort()
+        merged = [list(gaps[0])]
+        for a, b in gaps[1:]:
+            if a < merged[-1][1]:
+                merged[-1][1] = max(merged[-1][1], b)
+            else:
+                merged.append([a, b])
+        starts = [-math.inf] + [b for _, b in merged]
+        ends = [a for a, _ in merged] + [math.inf]
+        pieces: list[InteractionLog] = []
+        kept_d = kept_a = 0
+        empty = 0
+        for k, (lo, hi) in enumerate(zip(starts, ends)):
+            d = (self.time_s >= lo) & (self.time_s <= hi)
+            a = (self.accel_time_s >= lo) & (self.accel_time_s <= hi)
+            if not d.any() or not a.any():
+                empty += 1
+                continue
+            kept_d += int(d.sum())
+            kept_a += int(a.sum())
+            pieces.append(self._subset(d, a, f"piece {k} of a split at gaps > {gap_factor:g} median periods"))
+        dropped_d = len(self) - kept_d
+        dropped_a = self.accel_time_s.size - kept_a
+        msg = (
+            f"split_at_gaps: {len(merged)} gap(s) (> {gap_factor:g} median periods) -> {len(pieces)} piece(s); "
+            f"dropped {dropped_d} drive and {dropped_a} acceleration sample(s) inside gaps or in "
+            f"{empty} piece(s) lacking one stream"
+        )
+        if not pieces:
+            raise DataError(msg + "; no piece keeps both streams")
+        _LOG.info(msg)
+        if dropped_d or dropped_a or empty:
+            warnings.warn(msg, DataRepairWarning, stacklevel=2)
+        return pieces
+
+    @classmethod
+    def concatenate(cls, logs: Sequence[InteractionLog] | Iterable[InteractionLog]) -> InteractionLog:
+        """Join logs of one robot, in time order, into one log.
+
+        Each log must start (both streams) after the previous one ends; use
+        :meth:`shifted` to put separate runs that each start at zero one after another.
+        The joined log keeps the gaps between them. Pose and per-sample ground must be
+        present in all logs or in none; a log without ``ground`` but with a
+        ``meta.ground_label`` contributes that label. The metadata keep the common robot,
+        velocity source and track width (these must agree), the ground label when all
+        agree (else ``None``), and the distinct sources joined by ``"; "``.
+
+        Raises
+        ------
+        InvalidParameterError
+            No logs, or an element that is not an InteractionLog.
+        DataError
+            Overlapping or out-of-order logs; disagreeing robot, velocity source or track
+            width; pose or ground present in some logs only.
+        """
+        items = list(logs)
+        if not items:
+            raise InvalidParameterError("concatenate needs at least one InteractionLog, got none")
+        for i, log in enumerate(items):
+            if not isinstance(log, InteractionLog):
+                raise InvalidParameterError(f"logs[{i}] must be an InteractionLog, got {log!r:.80}")
+        first = items[0]
+        for i, log in enumerate(items[1:], start=1):
+            prev = items[i - 1]
+            for attr in ("robot", "velocity_source", "track_width_m"):
+                if getattr(log.meta, attr) != getattr(first.meta, attr):
+                    raise DataError(
+                        f"cannot concatenate: logs[{i}].meta.{attr}={getattr(log.meta, attr)!r} differs from "
+                        f"logs[0].meta.{attr}={getattr(first.meta, attr)!r}"
+                    )
+            if log.time_s[0] <= prev.time_s[-1] or log.accel_time_s[0] <= prev.accel_time_s[-1]:
+                raise DataError(
+                    f"cannot concatenate: logs[{i}] starts at t={float(log.time_s[0])!r} s (accel "
+                    f"{float(log.accel_time_s[0])!r} s), not after logs[{i - 1}] ends at t={float(prev.time_s[-1])!r} s "
+                    f"(accel {float(prev.accel_time_s[-1])!r} s); shift it with .shifted(offset_s)"
+                )
+        with_pose = [log.pose_xyh is not None for log in items]
+        if any(with_pose) and not all(with_pose):
+            raise DataError(f"cannot concatenate: pose_xyh present in logs {with_pose!r} (need all or none)")
+        ground = None
+        if any(log.ground is not None for log in items):
+            labels = [log.ground_labels for log in items]
+            missing = [i for i, g in enumerate(labels) if g is None]
+            if missing:
+                raise DataError(
+                    f"cannot concatenate: logs {missing!r} have neither per-sample ground nor "
+                    f"meta.ground_label while others have ground labels"
+                )
+            ground = np.concatenate([np.asarray(g, dtype=str) for g in labels])
+        run_labels = {log.meta.ground_label for log in items}
+        sources = list(dict.fromkeys(log.meta.source for log in items))
+        notes = list(dict.fromkeys(log.meta.notes for log in items if log.meta.notes))
+        meta = replace(
+            first.meta,
+            source="; ".join(sources),
+            ground_label=run_labels.pop() if len(run_labels) == 1 else None,
+            notes=_join_notes(*notes, f"concatenation of {len(items)} logs"),
+        )
+        return cls(
+            time_s=np.concatenate([log.time_s for log in items]),
+            v_mps=np.concatenate([log.v_mps for log in items]),
+            omega_radps=np.concatenate([log.omega_radps for log in items]),
+            current_left_a=np.concatenate([log.current_left_a for log in items]),
+            current_right_a=np.concatenate([log.current_right_a for log in items]),
+            accel_time_s=np.concatenate([log.accel_time_s for log in items]),
+            accel_z_mps2=np.concatenate([log.accel_z_mps2 for log in items]),
+            pose_xyh=np.concatenate([log.pose_xyh for log in items]) if all(with_pose) else None,
+            ground=ground,
+            meta=meta,
+        )
+
+
+def _join_notes(*parts: str) -> str:
+    return "; ".join(p for p in parts if p)
