@@ -42,3 +42,65 @@ __all__ = [
     "TerrawattWarning",
     "DataRepairWarning",
 ]
+
+# --- terrain helper (procedural, vector, geotiff); appended until the lead rewires this file
+from .procedural import (
+    EXAMPLE_GOAL_XY_M,
+    EXAMPLE_START_XY_M,
+    example_map,
+    flat_map,
+    procedural_map,
+    ramp_map,
+    wall_map,
+)
+
+__all__ += [
+    "procedural_map",
+    "flat_map",
+    "ramp_map",
+    "wall_map",
+    "example_map",
+    "EXAMPLE_START_XY_M",
+    "EXAMPLE_GOAL_XY_M",
+]
+from .geotiff import read_geotiff, write_geotiff
+from .vector import (
+    apply_geojson,
+    rasterize_polygons,
+    read_geojson,
+    set_ground_from_polygons,
+    set_obstacles_from_polygons,
+)
+
+__all__ += [
+    "rasterize_polygons",
+    "set_ground_from_polygons",
+    "set_obstacles_from_polygons",
+    "read_geojson",
+    "apply_geojson",
+    "read_geotiff",
+    "write_geotiff",
+]
+from .registry import (
+    PRIOR_MODEL_ID,
+    REGISTRY_FORMAT_VERSION,
+    CellModelRegistry,
+    CurrentModelProtocol,
+    FlaggedRegion,
+    ModelRecord,
+    RegistryVersion,
+    UpdateDecision,
+    UpdatePolicy,
+)
+
+__all__ += [
+    "CellModelRegistry",
+    "CurrentModelProtocol",
+    "UpdatePolicy",
+    "FlaggedRegion",
+    "RegistryVersion",
+    "UpdateDecision",
+    "ModelRecord",
+    "REGISTRY_FORMAT_VERSION",
+    "PRIOR_MODEL_ID",
+]

@@ -1,0 +1,213 @@
+"""Read and write GeoTIFF rasters as TerrainMaps (needs the optional ``geo`` extra: rasterio)."""
+
+from __future__ import annotations
+
+import logging
+import os
+import tempfile
+import warnings
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+from scipy import ndimage
+
+from .errors import (
+    DataRepairWarning,
+    FileFormatError,
+    InvalidParameterError,
+    OptionalDependencyError,
+    UnknownNameError,
+)
+from .grid import UNKNOWN_GROUND, TerrainMap
+
+__all__ = ["read_geotiff", "write_geotiff"]
+
+logger = logging.getLogger(__name__)
+
+_METRE_UNITS = ("", "m", "metre", "metres", "meter", "meters")
+_FILL_METHODS = ("nearest",)
+
+
+def _rasterio() -> ModuleType:
+    """Import rasterio lazily, pointing at the ``geo`` extra when it is missing."""
+    try:
+        import rasterio
+    except ImportError as exc:
+        raise OptionalDependencyError(
+            "GeoTIFF support needs rasterio; install it with: pip install 'terrawatt[geo]'"
+        ) from exc
+    return rasterio
+
+
+def read_geotiff(
+    path: str | os.PathLike[str], band: int = 1, *, fill_nodata: str | None = None
+) -> TerrainMap:
+    """Read one band of a GeoTIFF as the elevation of a new :class:`TerrainMap`.
+
+    The raster must have square pixels, no rotation, and horizontal and vertical units
+    of metres (a projected CRS, or none). North-up rasters (the usual case, row 0 at the
+    top) are flipped into TerrainMap's convention (row grows with y); the CRS is kept as
+    a string. Scale and offset tags are applied.
+
+    Parameters
+    ----------
+    path : str or path-like
+        GeoTIFF file.
+    band : int
+        1-based band index.
+    fill_nodata : {None, "nearest"}
+        What to do with nodata / NaN cells. ``None`` (default) raises; ``"nearest"``
+        gives each such cell the value of the nearest valid cell and warns with
+        :class:`DataRepairWarning`.
+
+    Returns
+    -------
+    TerrainMap
+        Elevation only; ground unknown, no obstacles.
+
+    Raises
+    ------
+    OptionalDependencyError
+        rasterio is not installed.
+    FileFormatError
+        Missing or unreadable file; a rotated or non-square-pixel grid; a geographic
+        CRS or units other than metres.
+    InvalidParameterError
+        A band out of range; nodata cells when ``fill_nodata`` is None; no valid cell.
+    UnknownNameError
+        An unknown ``fill_nodata`` method.
+    """
+    rasterio = _rasterio()
+    if fill_nodata is not None and fill_nodata not in _FILL_METHODS:
+        raise UnknownNameError(f"fill_nodata must be None or one of {_FILL_METHODS!r}, got {fill_nodata!r}")
+    path = Path(path)
+    if not path.is_file():
+        raise FileFormatError(f"GeoTIFF file {str(path)!r} does not exist")
+    try:
+        with rasterio.open(path) as src:
+            if isinstance(band, bool) or not isinstance(band, (int, np.integer)) or not 1 <= band <= src.count:
+                raise InvalidParameterError(f"band must be an integer in 1..{src.count}, got {band!r}")
+            transform, crs, shape = src.transform, src.crs, (src.height, src.width)
+            units = (src.units[band - 1] or "").strip().lower()
+            scale, offset = src.scales[band - 1], src.offsets[band - 1]
+            data = src.read(band, masked=True)
+    except rasterio.errors.RasterioError as exc:
+        raise FileFormatError(f"cannot read {str(path)!r} as a raster: {exc}") from exc
+
+    where = f"GeoTIFF {str(path)!r}"
+    if transform.b != 0 or transform.d != 0:
+        raise FileFormatError(
+            f"{where} has a rotated or sheared transform {tuple(transform)[:6]!r}; "
+            "warp it to a north-up grid first (e.g. gdalwarp)"
+        )
+    width_m, height_m = abs(transform.a), abs(transform.e)
+    if not np.isclose(width_m, height_m, rtol=1e-6):
+        raise FileFormatError(
+            f"{where} has non-square pixels of {width_m!r} x {height_m!r} (CRS units); "
+            "resample it to square pixels first (e.g. gdalwarp -tr)"
+        )
+    if crs is not None and (crs.is_geographic or crs.linear_units_factor[1] != 1.0):
+        raise FileFormatError(
+            f"{where} uses CRS {crs.to_string()!r} whose units are not metres; reproject it to a "
+            "projected CRS in metres (e.g. UTM) first"
+        )
+    if units not in _METRE_UNITS:
+        raise FileFormatError(f"{where} band {band} has vertical units {units!r}; expected metres")
+
+    values = np.ma.getdata(data).astype(np.float64) * scale + offset
+    invalid = np.ma.getmaskarray(data) | ~np.isfinite(values)
+    n_bad = int(np.count_nonzero(invalid))
+    if n_bad == invalid.size:
+        raise InvalidParameterError(f"{where} band {band} holds no valid cell (all {n_bad} are nodata)")
+    if n_bad and fill_nodata is None:
+        raise InvalidParameterError(
+            f"{where} band {band} has {n_bad} nodata/NaN cells of {invalid.size}; pass "
+            "fill_nodata='nearest' to fill them from the nearest valid cell"
+        )
+    if n_bad:
+        nearest = ndimage.distance_transform_edt(invalid, return_distances=False, return_indices=True)
+        values = values[tuple(nearest)]
+        message = f"filled {n_bad} nodata cells of {where} from their nearest valid cells"
+        logger.info(message)
+        warnings.warn(message, DataRepairWarning, stacklevel=2)
+
+    if transform.e < 0:  # north-up: file row 0 is the northern edge
+        values = values[::-1]
+    if transform.a < 0:  # east-left: file column 0 is the eastern edge
+        values = values[:, ::-1]
+    rows, cols = shape
+    xmin = min(transform.c, transform.c + transform.a * cols)
+    ymin = min(transform.f, transform.f + transform.e * rows)
+    return TerrainMap(values, width_m, (xmin, ymin), crs=None if crs is None else crs.to_string())
+
+
+def write_geotiff(
+    tmap: TerrainMap, path: str | os.PathLike[str], layer: str = "elevation"
+) -> Path:
+    """Write one layer of a map as a single-band north-up GeoTIFF, atomically.
+
+    The file is written to a temporary file in the same directory, then renamed.
+    Boolean layers are stored as uint8; the ground layer declares ``-1`` (unknown) as
+    nodata; the map's CRS string is stored when it has one.
+
+    Parameters
+    ----------
+    tmap : TerrainMap
+        Source map.
+    path : str or path-like
+        Output file, ending in ``.tif`` or ``.tiff``.
+    layer : str
+        Layer name (derived layers such as ``"slope"`` work too).
+
+    Returns
+    -------
+    Path
+        The written file.
+
+    Raises
+    ------
+    OptionalDependencyError
+        rasterio is not installed.
+    InvalidParameterError
+        A path without a GeoTIFF suffix, or a CRS rasterio does not understand.
+    UnknownNameError
+        An unknown layer.
+    """
+    rasterio = _rasterio()
+    path = Path(path)
+    if path.suffix.lower() not in (".tif", ".tiff"):
+        raise InvalidParameterError(f"GeoTIFF files end in '.tif' or '.tiff', got {str(path)!r}")
+    data = tmap[layer]
+    if data.dtype == bool:
+        data = data.astype(np.uint8)
+    xmin, _, _, ymax = tmap.bounds
+    profile: dict[str, Any] = {
+        "driver": "GTiff",
+        "height": tmap.shape[0],
+        "width": tmap.shape[1],
+        "count": 1,
+        "dtype": data.dtype.name,
+        "transform": rasterio.transform.from_origin(xmin, ymax, tmap.cell_size_m, tmap.cell_size_m),
+        "crs": tmap.crs,
+        "nodata": UNKNOWN_GROUND if layer == "ground" else None,
+        "compress": "deflate",
+    }
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        try:
+            with rasterio.open(tmp, "w", **profile) as dst:
+                dst.write(data[::-1], 1)
+                if layer == "elevation":
+                    dst.units = ("m",)
+        except rasterio.errors.CRSError as exc:
+            raise InvalidParameterError(f"map CRS {tmap.crs!r} is not understood by rasterio: {exc}") from exc
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
