@@ -1,0 +1,31 @@
+# Two entry points: `make demo` (set up, plan on the bundled map) and `make test`.
+PYTHON ?= python3
+VENV ?= .venv
+# torch is pinned to a CPU build so a fresh install never pulls a multi-GB CUDA wheel.
+# Elsewhere: make TORCH_SPEC="torch --index-url https://download.pytorch.org/whl/cpu"
+TORCH_SPEC ?= torch==2.13.0
+EXTRAS ?= geo,ros,distributed,test
+OUT ?= out
+
+.PHONY: setup demo test bench clean
+
+$(VENV)/.installed: pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(VENV)/bin/python -m pip install -q --upgrade pip
+	$(VENV)/bin/python -m pip install -q $(TORCH_SPEC)
+	$(VENV)/bin/python -m pip install -q -e '.[$(EXTRAS)]'
+	touch $@
+
+setup: $(VENV)/.installed
+
+demo: $(VENV)/.installed
+	$(VENV)/bin/terrawatt demo --out $(OUT)
+
+test: $(VENV)/.installed
+	$(VENV)/bin/python -m pytest -q
+
+bench: $(VENV)/.installed
+	$(VENV)/bin/python benchmarks/plan_bench.py --out $(OUT)/plan_bench.json
+
+clean:
+	rm -rf $(VENV) $(OUT) .pytest_cache

@@ -1,0 +1,331 @@
+"""Planning benchmark: map preparation, edge-cost throughput, planners vs the lattice optimum.
+
+On seeded procedural maps (1 m cells) of 256^2, 512^2 and 1024^2 cells, for each planner and
+each time budget, the script plans a few fixed start/goal queries (crossing the map at
+different angles to the lattice directions) and reports
+
+- map preparation: building the :class:`EnergyCost` tables and the 16-connected lattice graph
+  (numba compilation is excluded and reported on its own);
+- edge-cost throughput: segments per second, in bulk (the lattice path) and one compiled call
+  at a time from Python (the OMPL callback path);
+- per planner and budget: planning time, route energy (J, turns included), drive energy and
+  its ratio to the directed 16-connected 1-cell lattice optimum, energy saved against the
+  shortest-distance route.
+
+All ratios are against baselines computed in the same run on the same machine; absolute times
+depend on the machine (the project's targets are stated for a 2-core machine). Usage::
+
+    python benchmarks/plan_bench.py --out bench_plan.json          # full run (several minutes)
+    python benchmarks/plan_bench.py --quick                         # small run (~1 minute)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from energy import PhysicsEnergyModel, ground_preset, robot_preset
+from planner import (
+    OMPL_PLANNERS,
+    EnergyCost,
+    Lattice,
+    PlannerSettings,
+    plan_route,
+    warm_up_kernels,
+)
+from terrain.procedural import procedural_map
+
+# Start/goal as fractions of the map extent: about 12, 45 and 74 degrees from the x axis.
+QUERIES = (((0.05, 0.30), (0.95, 0.50)), ((0.08, 0.06), (0.92, 0.94)), ((0.30, 0.05), (0.55, 0.95)))
+# FMT* is a batch planner (its work is its sample count): per query, two probes (100 and 300
+# samples) fit its time as a power of the sample count, and each budget then gets the sample
+# count expected to fill ``FMT_FILL`` of it; the time limit is 1.5 x the budget, the actual
+# planning time is reported.
+FMT_PROBES = (100, 300)
+FMT_FILL = 0.5
+
+
+def _free_point(
+    cost: EnergyCost, frac: tuple[float, float], labels: np.ndarray, want: int | None
+) -> tuple[float, float]:
+    """The free cell centre nearest to a fractional map position (in component ``want`` if given)."""
+    rows, cols = cost.shape
+    r0, c0 = int(frac[1] * (rows - 1)), int(frac[0] * (cols - 1))
+    ok = (~cost.blocked) & ((labels == want) if want is not None else (labels > 0))
+    rr, cc = np.nonzero(ok)
+    k = int(np.argmin((rr - r0) ** 2 + (cc - c0) ** 2))
+    x, y = cost.terrain.xy(rr[k], cc[k])
+    return (float(x), float(y))
+
+
+def _queries(cost: EnergyCost, n_queries: int) -> list[tuple[tuple[float, float], tuple[float, float]]]:
+    labels = cost.components()
+    sizes = np.bincount(labels.ravel())
+    sizes[0] = 0
+    main = int(np.argmax(sizes))  # plan inside the largest free region
+    return [(_free_point(cost, a, labels, main), _free_point(cost, b, labels, main)) for a, b in QUERIES[:n_queries]]
+
+
+def _edge_rates(cost: EnergyCost, rng: np.random.Generator) -> dict[str, float]:
+    xmin, ymin, xmax, ymax = cost.terrain.bounds
+    n = 200_000
+    a = rng.uniform([xmin, ymin], [xmax, ymax], size=(n, 2))
+    step = rng.normal(0, 5.0 * cost.terrain.cell_size_m, size=(n, 2))
+    b = np.clip(a + step, [xmin, ymin], [xmax, ymax])
+    cost.segment_energy_j(a[:1000], b[:1000])
+    t0 = time.perf_counter()
+    cost.segment_energy_j(a, b)
+    bulk = n / (time.perf_counter() - t0)
+    m = 50_000
+    one = cost.segment_energy_one_j
+    t0 = time.perf_counter()
+    for i in range(m):
+        one(a[i, 0], a[i, 1], b[i, 0], b[i, 1])
+    single = m / (time.perf_counter() - t0)
+    mean_len = float(np.mean(np.hypot(*(b - a).T)))
+    return {"bulk_segments_per_s": bulk, "single_call_segments_per_s": single, "mean_segment_m": mean_len}
+
+
+def _warm_up_planners() -> float:
+    """One tiny plan per planner so first-call costs (imports, dispatch) are not timed."""
+    t0 = time.perf_counter()
+    tmap = procedural_map((48, 48), 1.0, seed=1, n_ridges=0, obstacle_fraction=0.0)
+    cost = _make_cost(tmap, "husky")
+    for planner in (*OMPL_PLANNERS, "lattice"):
+        plan_route(tmap, (3.5, 3.5), (44.5, 40.5), cost=cost, planner=planner, time_limit_s=0.05, seed=0,
+                   settings=PlannerSettings(fmt_samples=50))
+    return time.perf_counter() - t0
+
+
+def _make_cost(tmap, robot: str) -> EnergyCost:
+    model = PhysicsEnergyModel(robot_preset(robot))
+    grounds = {name: ground_preset(name) for name in tmap.ground_names.values()}
+    return EnergyCost.from_model(tmap, model, grounds, speed_mps=0.5)
+
+
+def _run_size(n: int, args: argparse.Namespace, rng: np.random.Generator) -> dict[str, Any]:
+    tmap = procedural_map((n, n), 1.0, seed=args.seed)
+    cost = _make_cost(tmap, args.robot)
+    t0 = time.perf_counter()
+    lattice = Lattice.for_cost(cost, 1)
+    lattice_build_s = time.perf_counter() - t0
+    prep = {
+        "cells": n * n,
+        "cost_tables_s": cost.prep_time_s,
+        "lattice_graph_s": lattice_build_s,
+        "map_preparation_s": cost.prep_time_s + lattice_build_s,
+        "lattice_edges": lattice.n_edges,
+        "blocked_fraction": float(cost.blocked.mean()),
+    }
+    prep.update(_edge_rates(cost, rng))
+    queries = _queries(cost, args.queries)
+    runs: list[dict[str, Any]] = []
+    for qi, (start, goal) in enumerate(queries):
+        t0 = time.perf_counter()
+        optimum = lattice.shortest_path(start, goal)
+        optimum_s = time.perf_counter() - t0
+        optimum_total_j = cost.path_energy_j(optimum.waypoints_m)
+        base = {"size": n, "query": qi, "start_xy_m": start, "goal_xy_m": goal, "lattice_optimum_j": optimum.objective,
+                "lattice_optimum_total_j": optimum_total_j}
+        runs.append({**base, "planner": "lattice-optimum", "budget_s": None, "status": "exact",
+                     "planning_time_s": optimum_s, "drive_energy_j": optimum.objective,
+                     "energy_j": optimum_total_j, "ratio": 1.0, "total_ratio": 1.0, "energy_saved_pct": math.nan})
+        fmt_fit = None
+        if "FMT" in args.planners:
+            times = []
+            for samples in FMT_PROBES:
+                probe = plan_route(tmap, start, goal, cost=cost, planner="FMT", time_limit_s=30.0, seed=args.seed,
+                                   refine=False, compare=False, settings=PlannerSettings(fmt_samples=samples))
+                times.append(max(probe.planning_time_s, 1e-4))
+            power = max(1.0, math.log(times[1] / times[0]) / math.log(FMT_PROBES[1] / FMT_PROBES[0]))
+            fmt_fit = (times[0] / FMT_PROBES[0] ** power, power)  # t(n) = a n^p
+        variants: list[tuple[str, float | None, bool]] = [("lattice", None, True)]
+        for planner in args.planners:
+            for budget in args.budgets:
+                variants.append((planner, budget, False))
+                if args.refine:
+                    variants.append((planner, budget, True))
+        for planner, budget, refine in variants:
+            settings = PlannerSettings()
+            limit = budget
+            if planner == "FMT" and budget is not None:
+                a, power = fmt_fit
+                samples = int(np.clip((FMT_FILL * budget / a) ** (1.0 / power), 50, 50_000))
+                settings = PlannerSettings(fmt_samples=samples)
+                limit = 1.5 * budget
+            route = plan_route(
+                tmap, start, goal, cost=cost, planner=planner, time_limit_s=limit if limit else 1.0,
+                seed=args.seed, refine=refine, settings=settings,
+            )
+            runs.append({
+                **base,
+                "planner": planner + ("+refine" if refine else ""),
+                "budget_s": budget,
+                "status": route.status,
+                "planning_time_s": route.planning_time_s,
+                "drive_energy_j": route.drive_energy_j,
+                "energy_j": route.energy_j,
+                "ratio": route.optimality_ratio,
+                "total_ratio": route.energy_j / optimum_total_j if route.found else math.nan,
+                "energy_saved_pct": route.energy_saved_pct,
+                "n_waypoints": int(route.waypoints_m.shape[0]),
+                "fmt_samples": settings.fmt_samples if planner == "FMT" else None,
+            })
+            _progress(f"  {n}^2 q{qi} {runs[-1]['planner']:<22} budget {budget!s:>4}: {route.status:<11} "
+                      f"{route.planning_time_s:6.3f} s  ratio {route.optimality_ratio:.4f}")
+    return {"size": n, "preparation": prep, "runs": runs}
+
+
+def _progress(msg: str) -> None:
+    print(msg, file=sys.stderr, flush=True)
+
+
+def _summarise(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    rows = []
+    for res in results:
+        groups: dict[tuple[str, Any], list[dict[str, Any]]] = {}
+        for run in res["runs"]:
+            groups.setdefault((run["planner"], run["budget_s"]), []).append(run)
+        for (planner, budget), runs in groups.items():
+            ratios = [r["ratio"] for r in runs if math.isfinite(r["ratio"])]
+            totals = [r["total_ratio"] for r in runs if math.isfinite(r["total_ratio"])]
+            saved = [r["energy_saved_pct"] for r in runs if math.isfinite(r["energy_saved_pct"])]
+            energies = [r["energy_j"] for r in runs if math.isfinite(r["energy_j"])]
+            rows.append({
+                "size": res["size"],
+                "planner": planner,
+                "budget_s": budget,
+                "n": len(runs),
+                "exact": sum(r["status"] == "exact" for r in runs),
+                "planning_time_s_median": statistics.median(r["planning_time_s"] for r in runs),
+                "planning_time_s_max": max(r["planning_time_s"] for r in runs),
+                "ratio_median": statistics.median(ratios) if ratios else math.nan,
+                "ratio_max": max(ratios) if ratios else math.nan,
+                "total_ratio_median": statistics.median(totals) if totals else math.nan,
+                "energy_j_mean": statistics.fmean(energies) if energies else math.nan,
+                "energy_saved_pct_median": statistics.median(saved) if saved else math.nan,
+            })
+    return rows
+
+
+def _print_tables(results: list[dict[str, Any]], rows: list[dict[str, Any]], compile_s: float) -> None:
+    print(f"numba kernels compile/load: {compile_s:.2f} s (not part of map preparation)")
+    print("\nmap preparation and edge-cost throughput")
+    print(f"{'size':>6} {'tables s':>9} {'lattice s':>10} {'prep s':>7} {'edges':>10} "
+          f"{'bulk seg/s':>12} {'1-call seg/s':>13} {'blocked':>8}")
+    for res in results:
+        p = res["preparation"]
+        print(f"{res['size']:>5}² {p['cost_tables_s']:9.3f} {p['lattice_graph_s']:10.3f} "
+              f"{p['map_preparation_s']:7.3f} "
+              f"{p['lattice_edges']:10d} {p['bulk_segments_per_s']:12.3g} {p['single_call_segments_per_s']:13.3g} "
+              f"{p['blocked_fraction']:8.3f}")
+    print("\nplanners (medians over queries; ratio = drive energy / 16-connected 1-cell lattice optimum;")
+    print("          E ratio = total energy with turns / that of the lattice-optimum route)")
+    print(f"{'size':>6} {'planner':<24} {'budget':>6} {'exact':>6} {'plan s':>7} {'max s':>6} {'ratio':>7} "
+          f"{'max':>7} {'E ratio':>8} {'E mean J':>10} {'saved %':>8}")
+    for r in rows:
+        budget = "-" if r["budget_s"] is None else f"{r['budget_s']:g}"
+        print(f"{r['size']:>5}² {r['planner']:<24} {budget:>6} {r['exact']:>3}/{r['n']:<2} "
+              f"{r['planning_time_s_median']:7.3f} {r['planning_time_s_max']:6.3f} {r['ratio_median']:7.4f} "
+              f"{r['ratio_max']:7.4f} {r['total_ratio_median']:8.4f} "
+              f"{r['energy_j_mean']:10.0f} "
+              f"{r['energy_saved_pct_median']:8.2f}")
+
+
+def _targets(results: list[dict[str, Any]], rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """The project's 512^2 targets, checked against this run."""
+    out = []
+    for res in results:
+        if res["size"] != 512:
+            continue
+        prep = res["preparation"]["map_preparation_s"]
+        out.append({"target": "512^2 map preparation <= 1 s", "value": prep, "met": prep <= 1.0})
+        for r in rows:
+            if r["size"] == 512 and r["planner"] != "lattice-optimum":
+                fast = r["planning_time_s_max"] <= 0.5
+                good = r["ratio_max"] <= 0.99
+                out.append({
+                    "target": f"512^2 {r['planner']} (budget {r['budget_s']}) <= 0.99 x lattice optimum within 0.5 s",
+                    "value": {"ratio_max": r["ratio_max"], "planning_time_s_max": r["planning_time_s_max"]},
+                    "met": bool(fast and good),
+                })
+    return out
+
+
+def _clean(obj: Any) -> Any:
+    """JSON-safe copy: NaN/inf -> None, tuples -> lists, numpy scalars -> Python."""
+    if isinstance(obj, dict):
+        return {str(k): _clean(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_clean(v) for v in obj]
+    if isinstance(obj, (np.floating, float)):
+        return float(obj) if math.isfinite(obj) else None
+    if isinstance(obj, (np.integer, np.bool_)):
+        return obj.item()
+    return obj
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", type=int, nargs="+", default=[256, 512, 1024], help="map sides in cells")
+    parser.add_argument("--budgets", type=float, nargs="+", default=[0.5, 1.0, 2.0], help="OMPL time budgets (s)")
+    parser.add_argument("--planners", nargs="+", default=["RRTstar", "InformedRRTstar", "BITstar", "FMT"],
+                        choices=list(OMPL_PLANNERS), help="OMPL planners (the lattice planner always runs)")
+    parser.add_argument("--refine", action="store_true", help="also run each OMPL planner with refinement")
+    parser.add_argument("--queries", type=int, default=3, choices=[1, 2, 3], help="start/goal pairs per map")
+    parser.add_argument("--robot", default="husky", help="robot preset")
+    parser.add_argument("--seed", type=int, default=0, help="map and planner seed")
+    parser.add_argument("--quick", action="store_true", help="small run: 256^2, budgets 0.25/0.5, 2 queries")
+    parser.add_argument("--out", type=Path, default=None, help="write results as JSON here")
+    args = parser.parse_args(argv)
+    if args.quick:
+        args.sizes, args.budgets, args.queries = [256], [0.25, 0.5], 2
+        args.planners = ["RRTstar", "BITstar", "FMT"]
+    rng = np.random.default_rng(args.seed)
+    compile_s = warm_up_kernels()
+    warm_s = _warm_up_planners()
+    results = []
+    for n in args.sizes:
+        _progress(f"map {n}^2 ...")
+        results.append(_run_size(n, args, rng))
+    rows = _summarise(results)
+    _print_tables(results, rows, compile_s)
+    targets = _targets(results, rows)
+    for t in targets:
+        print(f"{'MET ' if t['met'] else 'NOT MET'} {t['target']}: {t['value']}")
+    if args.out is not None:
+        payload = {
+            "benchmark": "plan_bench",
+            "version": 1,
+            "args": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()},
+            "machine": {
+                "cpu_count": os.cpu_count(), "platform": platform.platform(), "python": platform.python_version()
+            },
+            "numba_compile_s": compile_s,
+            "planner_warm_up_s": warm_s,
+            "sizes": results,
+            "summary": rows,
+            "targets": targets,
+        }
+        args.out.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{args.out.name}.", suffix=".tmp", dir=args.out.parent)
+        with os.fdopen(fd, "w") as fh:
+            json.dump(_clean(payload), fh, indent=1, allow_nan=False)
+        os.replace(tmp, args.out)
+        print(f"\nwrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

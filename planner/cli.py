@@ -1,0 +1,290 @@
+"""The ``terrawatt`` command line: demo, plan (and the subcommands of later modules)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import math
+import os
+import sys
+import tempfile
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from energy import GROUND_PRESETS, PhysicsEnergyModel, ground_preset, robot_preset
+from terrain import (
+    TerrainMap,
+    TerrawattError,
+    UnknownNameError,
+)
+from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
+
+from .edge_cost import EnergyCost
+from .ompl_planner import PLANNERS, plan_route, shortest_route
+from .plot import RouteLine, plot_routes
+from .route import Route
+
+__all__ = ["main", "build_cost", "load_map", "write_json_atomic"]
+
+log = logging.getLogger(__name__)
+
+
+def write_json_atomic(data: Any, path: str | os.PathLike[str]) -> Path:
+    """Write ``data`` as indented JSON through a temporary file and a rename."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w") as fh:
+            json.dump(data, fh, indent=2, default=_json_default)
+            fh.write("\n")
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    raise TypeError(f"cannot serialise {type(obj).__name__}")
+
+
+def _finite_or_none(x: float) -> float | None:
+    return x if math.isfinite(x) else None
+
+
+def load_map(path: str | os.PathLike[str]) -> TerrainMap:
+    """Load a ``.npz`` map, or a GeoTIFF DEM (``.tif`` / ``.tiff``, needs the ``geo`` extra)."""
+    suffix = Path(path).suffix.lower()
+    if suffix in (".tif", ".tiff"):
+        from terrain.geotiff import read_geotiff
+
+        return read_geotiff(path)
+    return TerrainMap.load(path)
+
+
+def build_cost(
+    tmap: TerrainMap,
+    *,
+    robot: str = "husky",
+    speed_mps: float = 0.5,
+    max_slope_deg: float = 20.0,
+    unknown_ground: str | None = "gravel",
+) -> EnergyCost:
+    """Edge costs of the physics model on a map whose ground names are preset names.
+
+    Raises
+    ------
+    UnknownNameError
+        A ground class of the map has no preset of the same name.
+    """
+    model = PhysicsEnergyModel(robot_preset(robot))
+    grounds = {}
+    for gid, name in tmap.ground_names.items():
+        if name not in GROUND_PRESETS:
+            raise UnknownNameError(
+                f"ground class {gid} of the map is named {name!r}, which has no preset; "
+                f"known grounds: {sorted(GROUND_PRESETS)!r}"
+            )
+        grounds[gid] = ground_preset(name)
+    unknown = ground_preset(unknown_ground) if unknown_ground else None
+    return EnergyCost.from_model(
+        tmap,
+        model,
+        grounds,
+        speed_mps,
+        unknown_ground=unknown,
+        max_slope_rad=math.radians(max_slope_deg),
+    )
+
+
+def _route_row(label: str, route: Route, optimum_j: float) -> dict[str, Any]:
+    ratio = route.drive_energy_j / optimum_j if route.found and optimum_j > 0 else math.nan
+    return {
+        "route": label,
+        "status": route.status,
+        "energy_j": route.energy_j if route.found else math.nan,
+        "energy_wh": route.energy_wh if route.found else math.nan,
+        "charge_mah": route.charge_mah if route.found else math.nan,
+        "length_m": route.length_m,
+        "duration_s": route.duration_s,
+        "ratio_to_lattice_optimum": ratio,
+        "planning_time_s": route.planning_time_s,
+    }
+
+
+def _print_table(rows: Sequence[dict[str, Any]]) -> None:
+    header = f"{'route':<26} {'status':<11} {'energy J':>10} {'Wh':>7} {'mAh':>8} {'length m':>9} {'time s':>8} {'/ optimum':>9} {'plan s':>7}"
+    print(header)
+    print("-" * len(header))
+    for r in rows:
+        print(
+            f"{r['route']:<26} {r['status']:<11} {r['energy_j']:>10.1f} {r['energy_wh']:>7.3f} "
+            f"{r['charge_mah']:>8.1f} {r['length_m']:>9.1f} {r['duration_s']:>8.1f} "
+            f"{r['ratio_to_lattice_optimum']:>9.3f} {r['planning_time_s']:>7.3f}"
+        )
+
+
+def run_plan(
+    tmap: TerrainMap,
+    start: tuple[float, float],
+    goal: tuple[float, float],
+    *,
+    planner: str,
+    time_limit_s: float,
+    seed: int,
+    out_dir: Path,
+    robot: str,
+    speed_mps: float,
+    max_slope_deg: float,
+    unknown_ground: str | None,
+    map_label: str,
+) -> dict[str, Any]:
+    """Plan, compare with the shortest route and the lattice optimum, print, write files."""
+    t0 = time.perf_counter()
+    cost = build_cost(
+        tmap, robot=robot, speed_mps=speed_mps, max_slope_deg=max_slope_deg, unknown_ground=unknown_ground
+    )
+    prep_s = time.perf_counter() - t0
+    route = plan_route(tmap, start, goal, cost=cost, planner=planner, time_limit_s=time_limit_s, seed=seed)
+    rows = []
+    routes_json: dict[str, Any] = {}
+    lines = []
+    if route.found:
+        shortest = shortest_route(cost, start, goal)
+        optimum = plan_route(tmap, start, goal, cost=cost, planner="lattice", seed=seed, compare=False)
+        rows.append(_route_row(f"min-energy ({planner})", route, route.lattice_energy_j))
+        rows.append(_route_row("lattice + refinement", optimum, route.lattice_energy_j))
+        rows.append(_route_row("shortest distance", shortest, route.lattice_energy_j))
+        lines = [
+            RouteLine(f"min-energy ({planner})", route.waypoints_m, route.energy_j, colour="#d32f2f"),
+            RouteLine("shortest distance", shortest.waypoints_m, shortest.energy_j, colour="#1565c0", linestyle="--"),
+        ]
+        routes_json = {
+            "min_energy": {**route.summary(), "waypoints_m": route.waypoints_m.tolist()},
+            "lattice": {**optimum.summary(), "waypoints_m": optimum.waypoints_m.tolist()},
+            "shortest": {**shortest.summary(), "waypoints_m": shortest.waypoints_m.tolist()},
+        }
+    print(f"map: {map_label}  {tmap.shape[0]} x {tmap.shape[1]} cells of {tmap.cell_size_m:g} m; grounds {tmap.ground_names}")
+    print(
+        f"robot: {robot}, speed {speed_mps:g} m/s, max slope {max_slope_deg:g} deg; "
+        f"map preparation {prep_s:.2f} s"
+    )
+    print(f"start {start} -> goal {goal}; planner {planner}, time limit {time_limit_s:g} s, seed {seed}")
+    print()
+    if not route.found:
+        print(f"no route: status {route.status!r} after {route.planning_time_s:.3f} s")
+    else:
+        _print_table(rows)
+        print()
+        print(
+            f"energy saved vs shortest route: {route.energy_saved_pct:.1f} %  "
+            f"(min-energy {route.energy_j:.0f} J vs shortest {route.shortest_energy_j:.0f} J); "
+            f"drive energy / 16-connected lattice optimum: {route.optimality_ratio:.3f}"
+        )
+    out_dir.mkdir(parents=True, exist_ok=True)
+    result = {
+        "map": map_label,
+        "robot": robot,
+        "speed_mps": speed_mps,
+        "max_slope_deg": max_slope_deg,
+        "start_xy_m": list(start),
+        "goal_xy_m": list(goal),
+        "planner": planner,
+        "time_limit_s": time_limit_s,
+        "seed": seed,
+        "map_preparation_s": prep_s,
+        "status": route.status,
+        "energy_saved_pct": _finite_or_none(route.energy_saved_pct) if route.found else None,
+        "optimality_ratio": _finite_or_none(route.optimality_ratio) if route.found else None,
+        "table": rows,
+        "routes": routes_json,
+    }
+    json_path = write_json_atomic(result, out_dir / "route.json")
+    png_path = plot_routes(
+        tmap,
+        lines,
+        start,
+        goal,
+        out_dir / "route.png",
+        title=f"terrawatt: minimum-energy route on {map_label}",
+    )
+    print(f"\nwrote {json_path} and {png_path}")
+    return result
+
+
+def _add_plan_options(p: argparse.ArgumentParser, *, default_time: float) -> None:
+    p.add_argument("--planner", default="RRTstar", choices=PLANNERS, help="planner name (default RRTstar)")
+    p.add_argument("--time-limit", type=float, default=default_time, metavar="S", help="planning time budget (s)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
+    p.add_argument("--robot", default="husky", help="robot preset: paper_seed, jackal or husky (default husky)")
+    p.add_argument("--speed", type=float, default=0.5, metavar="M/S", help="planning speed (default 0.5 m/s)")
+    p.add_argument("--max-slope-deg", type=float, default=20.0, help="steepest drivable slope (default 20 deg)")
+    p.add_argument(
+        "--unknown-ground",
+        default="gravel",
+        help="ground preset assumed where the map's ground class is unknown (-1); 'none' to refuse such cells",
+    )
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``terrawatt`` command."""
+    parser = argparse.ArgumentParser(
+        prog="terrawatt", description="Energy-aware path planning for ground robots."
+    )
+    parser.add_argument("-v", "--verbose", action="store_true", help="log progress")
+    sub = parser.add_subparsers(dest="command", required=True)
+    demo = sub.add_parser("demo", help="plan a minimum-energy route on the bundled example map")
+    _add_plan_options(demo, default_time=1.0)
+    plan = sub.add_parser("plan", help="plan a minimum-energy route on a map file (.npz or GeoTIFF)")
+    plan.add_argument("--map", type=Path, required=True, metavar="FILE", help=".npz map or .tif DEM")
+    plan.add_argument("--start", type=float, nargs=2, required=True, metavar=("X", "Y"), help="start (m)")
+    plan.add_argument("--goal", type=float, nargs=2, required=True, metavar=("X", "Y"), help="goal (m)")
+    _add_plan_options(plan, default_time=2.0)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``terrawatt`` console script; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    try:
+        unknown = None if args.unknown_ground.lower() == "none" else args.unknown_ground
+        if args.command == "demo":
+            tmap, start, goal, label = example_map(), EXAMPLE_START_XY_M, EXAMPLE_GOAL_XY_M, "bundled example map"
+        else:
+            tmap, start, goal, label = load_map(args.map), tuple(args.start), tuple(args.goal), args.map.name
+        result = run_plan(
+            tmap,
+            start,
+            goal,
+            planner=args.planner,
+            time_limit_s=args.time_limit,
+            seed=args.seed,
+            out_dir=args.out,
+            robot=args.robot,
+            speed_mps=args.speed,
+            max_slope_deg=args.max_slope_deg,
+            unknown_ground=unknown,
+            map_label=label,
+        )
+    except TerrawattError as exc:
+        print(f"terrawatt: error: {exc}", file=sys.stderr)
+        return 2
+    return 0 if result["status"] in ("exact", "approximate") else 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

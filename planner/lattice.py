@@ -1,0 +1,333 @@
+"""Reference lattice planner: a directed 16-connected grid graph solved with scipy's Dijkstra.
+
+Nodes sit at cell centres (every ``stride_cells``-th cell in each direction). Each node has
+16 out-edges: the 8 king moves and the 8 knight moves of the node grid. The weight of an
+edge is :meth:`EnergyCost.segment_energy_j` of the straight segment between the two node
+centres (directed: uphill ``!=`` downhill); edges that cross a blocked cell, or meet a
+grade their ground cannot be driven at in that direction, are absent.
+Both directions of a pair are costed in one cell walk, in parallel (numba).
+
+A query joins the start and goal points to the lattice nodes within ``1.5 * stride`` cells
+(plus the direct start-goal segment), so a lattice route is ``start, node, ..., node, goal``.
+The lattice optimum is the minimum *drive* energy over such routes; turn energies are not
+part of the graph search (a heading-free lattice cannot see them) but are part of every
+route evaluation. Collinear runs of moves are merged into single segments (same energy).
+
+A second graph with the same edges weighted by their length gives the shortest-distance
+route, straightened afterwards by pulling the string (greedy line-of-sight shortcuts).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import dijkstra
+
+from terrain.errors import InvalidParameterError, UnknownNameError
+
+from .edge_cost import EnergyCost, _as_points, _walk
+
+__all__ = ["Lattice", "LatticePath", "LATTICE_OFFSETS", "LATTICE_WEIGHTS", "string_pull"]
+
+#: The 8 (row, col) node offsets of one half-plane; with their negatives, the 16 lattice moves.
+_HALF = np.array([(0, 1), (1, 0), (1, 1), (1, -1), (1, 2), (2, 1), (2, -1), (1, -2)], dtype=np.int64)
+#: All 16 (row, col) node offsets: ``LATTICE_OFFSETS[k + 8] == -LATTICE_OFFSETS[k]``.
+LATTICE_OFFSETS = np.concatenate([_HALF, -_HALF])
+#: Edge weights a lattice can search with.
+LATTICE_WEIGHTS = ("energy", "length")
+
+
+@numba.njit(cache=True, nogil=True, parallel=True)
+def _lattice_weights(cells, table, geo, stride, offset, ni, nj, half):  # pragma: no cover - compiled
+    """Directed energies of the 16 moves of every node; ``inf`` = no edge."""
+    n = ni * nj
+    nh = half.shape[0]
+    w = np.full((n, 2 * nh), np.inf)
+    x0 = geo[0]
+    y0 = geo[1]
+    d = geo[2]
+    for i in numba.prange(ni):
+        ya = y0 + ((i * stride + offset) + 0.5) * d
+        for j in range(nj):
+            xa = x0 + ((j * stride + offset) + 0.5) * d
+            src = i * nj + j
+            for k in range(nh):
+                ti = i + half[k, 0]
+                tj = j + half[k, 1]
+                if ti < 0 or ti >= ni or tj < 0 or tj >= nj:
+                    continue
+                xb = x0 + ((tj * stride + offset) + 0.5) * d
+                yb = y0 + ((ti * stride + offset) + 0.5) * d
+                ef, eb = _walk(cells, table, geo, xa, ya, xb, yb, True)
+                w[src, k] = ef
+                w[ti * nj + tj, nh + k] = eb  # the reverse move is offset k + nh from the target
+    return w
+
+
+@numba.njit(cache=True, nogil=True)
+def _string_pull_idx(cells, table, geo, xs, ys):  # pragma: no cover - compiled
+    """Greedy line-of-sight shortcut: indices of the kept vertices of a polyline."""
+    n = xs.shape[0]
+    keep = np.empty(n, np.int64)
+    m = 0
+    keep[m] = 0
+    m += 1
+    i = 0
+    while i < n - 1:
+        j = i + 1
+        while j + 1 < n:
+            ef, _ = _walk(cells, table, geo, xs[i], ys[i], xs[j + 1], ys[j + 1], False)
+            if not math.isfinite(ef):
+                break
+            j += 1
+        keep[m] = j
+        m += 1
+        i = j
+    return keep[:m]
+
+
+def string_pull(cost: EnergyCost, waypoints_m: np.ndarray) -> np.ndarray:
+    """Shorten a valid polyline by greedy line-of-sight shortcuts (never longer, stays valid).
+
+    From each kept vertex, jump to the farthest later vertex reachable by one free segment
+    before the first blocked one. Ignores energy: it is for shortest-distance routes.
+    """
+    pts = _as_points(waypoints_m, "waypoints_m")
+    if pts.shape[0] < 3:
+        return pts.copy()
+    idx = _string_pull_idx(
+        cost._cells, cost.grade_table_j_per_m, cost._geo, np.array(pts[:, 0]), np.array(pts[:, 1])
+    )
+    return pts[idx].copy()
+
+
+@dataclass(frozen=True)
+class LatticePath:
+    """A lattice query's answer.
+
+    Attributes
+    ----------
+    found : bool
+        Whether the lattice joins start and goal.
+    waypoints_m : ndarray, shape (K, 2)
+        ``start, ..., goal`` with collinear runs merged; empty (0, 2) when not found.
+    objective : float
+        Sum of the searched edge weights (drive energy in J, or length in m); ``inf`` when
+        not found.
+    weight : str
+        ``"energy"`` or ``"length"``.
+    solve_time_s : float
+        Seconds spent in the query (graph building excluded).
+    """
+
+    found: bool
+    waypoints_m: np.ndarray
+    objective: float
+    weight: str
+    solve_time_s: float
+
+    def __post_init__(self) -> None:
+        if self.weight not in LATTICE_WEIGHTS:
+            raise UnknownNameError(f"weight must be one of {LATTICE_WEIGHTS!r}, got {self.weight!r}")
+        wp = np.asarray(self.waypoints_m, dtype=float)
+        if wp.ndim != 2 or wp.shape[1] != 2:
+            raise InvalidParameterError(f"waypoints_m must have shape (K, 2), got {wp.shape!r}")
+        if self.found != (wp.shape[0] >= 2):
+            raise InvalidParameterError(f"found={self.found!r} but waypoints_m has {wp.shape[0]} points")
+        wp.setflags(write=False)
+        object.__setattr__(self, "waypoints_m", wp)
+
+
+class Lattice:
+    """Directed 16-connected lattice over an :class:`EnergyCost`'s map.
+
+    Build it once per cost (the graph is the expensive part; :meth:`for_cost` caches it on
+    the cost object) and query it for any start and goal.
+
+    Parameters
+    ----------
+    cost : EnergyCost
+        Edge costs and blocked cells.
+    stride_cells : int
+        Node spacing in cells (1 = a node at every cell centre).
+
+    Attributes
+    ----------
+    node_rows, node_cols : ndarray of int
+        Map rows / columns of the node grid.
+    build_time_s : float
+        Seconds spent building both graphs.
+    n_edges : int
+        Number of directed edges.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``stride_cells`` not a positive integer, or a map too small for it.
+
+    Examples
+    --------
+    >>> lat = Lattice(cost, stride_cells=1)                          # doctest: +SKIP
+    >>> path = lat.shortest_path((1.0, 1.0), (30.0, 20.0))           # doctest: +SKIP
+    >>> path.objective, path.waypoints_m.shape                       # doctest: +SKIP
+    """
+
+    def __init__(self, cost: EnergyCost, stride_cells: int = 1) -> None:
+        if not isinstance(cost, EnergyCost):
+            raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
+        if isinstance(stride_cells, bool) or int(stride_cells) != stride_cells or stride_cells < 1:
+            raise InvalidParameterError(f"stride_cells must be a positive integer, got {stride_cells!r}")
+        t0 = time.perf_counter()
+        s = int(stride_cells)
+        rows, cols = cost.shape
+        off = s // 2
+        self.cost = cost
+        self.stride_cells = s
+        self.node_rows = np.arange(off, rows, s)
+        self.node_cols = np.arange(off, cols, s)
+        ni, nj = self.node_rows.size, self.node_cols.size
+        if ni < 2 or nj < 2:
+            raise InvalidParameterError(
+                f"stride_cells={stride_cells!r} leaves a {ni} x {nj} node grid on a {rows} x {cols} map; need >= 2 x 2"
+            )
+        self._ni, self._nj = ni, nj
+        w = _lattice_weights(cost._cells, cost.grade_table_j_per_m, cost._geo, s, off, ni, nj, _HALF)
+        mask = np.isfinite(w)
+        delta = LATTICE_OFFSETS[:, 0] * nj + LATTICE_OFFSETS[:, 1]
+        n = ni * nj
+        targets = (np.arange(n, dtype=np.int64)[:, None] + delta[None, :])[mask].astype(np.int32)
+        indptr = np.zeros(n + 1, dtype=np.int32)
+        np.cumsum(mask.sum(axis=1), out=indptr[1:])
+        self._indices = targets
+        self._indptr = indptr
+        step_m = np.hypot(LATTICE_OFFSETS[:, 0], LATTICE_OFFSETS[:, 1]) * s * cost.terrain.cell_size_m
+        self._data = {"energy": w[mask], "length": np.broadcast_to(step_m, w.shape)[mask]}
+        self.n_edges = int(targets.size)
+        xc, yc = cost.terrain.cell_centres()
+        self._node_x = xc[self.node_cols]
+        self._node_y = yc[self.node_rows]
+        self.build_time_s = time.perf_counter() - t0
+
+    @classmethod
+    def for_cost(cls, cost: EnergyCost, stride_cells: int = 1) -> Lattice:
+        """The lattice of ``cost`` at ``stride_cells``, built once and cached on the cost."""
+        key = ("lattice", int(stride_cells))
+        lat = cost._cache.get(key)
+        if lat is None:
+            lat = cls(cost, stride_cells)
+            cost._cache[key] = lat
+        return lat
+
+    @property
+    def n_nodes(self) -> int:
+        """Number of lattice nodes."""
+        return self._ni * self._nj
+
+    def node_xy(self, node: np.ndarray) -> np.ndarray:
+        """World coordinates (m) of node indices, shape (N, 2)."""
+        node = np.asarray(node, dtype=np.int64)
+        return np.column_stack([self._node_x[node % self._nj], self._node_y[node // self._nj]])
+
+    def _nearby_nodes(self, p: np.ndarray) -> np.ndarray:
+        """Nodes within 1.5 strides of a point."""
+        d = self.cost.terrain.cell_size_m * self.stride_cells
+        radius = 1.5 * d
+        cols = np.flatnonzero(np.abs(self._node_x - p[0]) <= radius)
+        rows = np.flatnonzero(np.abs(self._node_y - p[1]) <= radius)
+        nodes = (rows[:, None] * self._nj + cols[None, :]).ravel()
+        xy = self.node_xy(nodes)
+        return nodes[np.hypot(xy[:, 0] - p[0], xy[:, 1] - p[1]) <= radius]
+
+    def shortest_path(
+        self, start_xy_m: tuple[float, float], goal_xy_m: tuple[float, float], weight: str = "energy"
+    ) -> LatticePath:
+        """Best lattice route from start to goal.
+
+        Parameters
+        ----------
+        start_xy_m, goal_xy_m : (float, float)
+            Points on the map (m).
+        weight : {"energy", "length"}
+            Minimise drive energy (J) or length (m).
+
+        Returns
+        -------
+        LatticePath
+            ``found=False`` when no lattice route exists (e.g. the points are separated by
+            obstacles, or a passage is narrower than the lattice can thread).
+
+        Raises
+        ------
+        UnknownNameError
+            Unknown ``weight``.
+        InvalidParameterError, OutOfBoundsError
+            NaN points / points outside the map.
+        """
+        t0 = time.perf_counter()
+        if weight not in LATTICE_WEIGHTS:
+            raise UnknownNameError(f"weight must be one of {LATTICE_WEIGHTS!r}, got {weight!r}")
+        pts = _as_points(np.array([start_xy_m, goal_xy_m], dtype=float), "start/goal")
+        self.cost._check_inside(pts, "start/goal")
+        start, goal = pts
+        cost = self.cost
+        src = self._nearby_nodes(start)
+        dst = self._nearby_nodes(goal)
+        src_xy = self.node_xy(src)
+        dst_xy = self.node_xy(dst)
+        e_src = cost.segment_energy_j(np.broadcast_to(start, src_xy.shape), src_xy)
+        e_dst = cost.segment_energy_j(dst_xy, np.broadcast_to(goal, dst_xy.shape))
+        e_direct = float(cost.segment_energy_j(start, goal)[0])
+        if weight == "length":
+            e_src = np.where(np.isfinite(e_src), np.hypot(*(src_xy - start).T), np.inf)
+            e_dst = np.where(np.isfinite(e_dst), np.hypot(*(goal - dst_xy).T), np.inf)
+            e_direct = float(np.hypot(*(goal - start))) if math.isfinite(e_direct) else math.inf
+        ok_src = np.isfinite(e_src)
+        ok_dst = np.isfinite(e_dst)
+        best = e_direct
+        best_nodes: list[int] = []
+        if ok_src.any() and ok_dst.any():
+            n = self.n_nodes
+            data = np.concatenate([self._data[weight], e_src[ok_src]])
+            indices = np.concatenate([self._indices, src[ok_src].astype(np.int32)])
+            indptr = np.append(self._indptr, np.int32(self._indptr[-1] + ok_src.sum()))
+            graph = csr_matrix((data, indices, indptr), shape=(n + 1, n + 1))
+            dist, pred = dijkstra(graph, directed=True, indices=n, return_predecessors=True)
+            total = dist[dst] + e_dst
+            k = int(np.argmin(total))
+            if total[k] < best:
+                best = float(total[k])
+                node = int(dst[k])
+                chain = []
+                while node != n and node >= 0:
+                    chain.append(node)
+                    node = int(pred[node])
+                best_nodes = chain[::-1]
+        elapsed = time.perf_counter() - t0
+        if not math.isfinite(best):
+            return LatticePath(False, np.empty((0, 2)), math.inf, weight, elapsed)
+        mid = self.node_xy(np.array(best_nodes, dtype=np.int64)) if best_nodes else np.empty((0, 2))
+        waypoints = _merge_collinear(np.vstack([start, mid, goal]))
+        return LatticePath(True, waypoints, best, weight, time.perf_counter() - t0)
+
+
+def _merge_collinear(pts: np.ndarray) -> np.ndarray:
+    """Drop interior vertices where the polyline goes straight on (and repeated points)."""
+    if pts.shape[0] < 3:
+        return pts
+    seg = np.diff(pts, axis=0)
+    nonzero = np.hypot(seg[:, 0], seg[:, 1]) > 0
+    pts = np.vstack([pts[:1], pts[1:][nonzero]])
+    if pts.shape[0] < 3:
+        return pts
+    seg = np.diff(pts, axis=0)
+    cross = seg[:-1, 0] * seg[1:, 1] - seg[:-1, 1] * seg[1:, 0]
+    dot = np.einsum("ij,ij->i", seg[:-1], seg[1:])
+    scale = np.hypot(seg[:-1, 0], seg[:-1, 1]) * np.hypot(seg[1:, 0], seg[1:, 1])
+    straight = (np.abs(cross) <= 1e-12 * scale) & (dot > 0)
+    keep = np.concatenate([[True], ~straight, [True]])
+    return pts[keep]

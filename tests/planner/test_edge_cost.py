@@ -1,0 +1,374 @@
+"""Tests of planner.edge_cost: exact cell walks, directional grades, blocking, turns, bounds."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from energy import PhysicsEnergyModel, ground_preset, robot_preset
+from planner import EnergyCost, Lattice
+from terrain import (
+    GridMismatchError,
+    InvalidParameterError,
+    OutOfBoundsError,
+    TerrainMap,
+    UnknownNameError,
+)
+
+GRAVITY_MPS2 = 9.80665
+
+
+class _Robot:
+    battery_voltage_v = 24.0
+    turn_rate_radps = 0.5
+
+
+class LinearModel:
+    """Stand-in with a closed form: e(s) = a + b * max(s, 0) J per metre travelled, turns c J/rad."""
+
+    robot = _Robot()
+
+    def __init__(self, a: float = 50.0, b: float = 400.0, c: float = 30.0) -> None:
+        self.a, self.b, self.c = a, b, c
+
+    def energy_per_metre_j(self, speed_mps, grade, ground):
+        g = np.asarray(grade, dtype=float)
+        return self.a * ground + self.b * np.maximum(g, 0.0)
+
+    def turn_energy_j(self, heading_change_rad, ground):
+        return self.c * np.abs(np.asarray(heading_change_rad, dtype=float))
+
+
+def _flat(rows=20, cols=30, cell=1.0, origin=(0.0, 0.0), obstacle=None):
+    return TerrainMap(
+        np.zeros((rows, cols)), cell, origin,
+        ground=np.zeros((rows, cols), int), ground_names={0: "g"}, obstacle=obstacle,
+    )
+
+
+def _ramp(grade=0.1, rows=20, cols=40, cell=1.0):
+    x = (np.arange(cols) + 0.5) * cell
+    return TerrainMap(
+        np.broadcast_to(grade * x, (rows, cols)), cell, ground=np.zeros((rows, cols), int), ground_names={0: "asphalt"}
+    )
+
+
+def _rough(seed=0, n=48, cell=0.5):
+    rng = np.random.default_rng(seed)
+    z = np.cumsum(np.cumsum(rng.normal(0, 0.01, (n, n)), axis=0), axis=1)
+    ground = (rng.random((n, n)) < 0.3).astype(int)
+    obstacle = rng.random((n, n)) < 0.03
+    return TerrainMap(z, cell, (5.0, -3.0), ground=ground, ground_names={0: "a", 1: "b"}, obstacle=obstacle)
+
+
+def _reference_energy(cost: EnergyCost, a, b) -> float:
+    """Slow reference: TerrainMap.segment_cells + np.interp on the cost's own tables."""
+    tmap = cost.terrain
+    rows, cols, lengths = tmap.segment_cells(tuple(a), tuple(b))
+    if np.any(cost.blocked[rows, cols]):
+        return math.inf
+    length = math.hypot(b[0] - a[0], b[1] - a[1])
+    if length == 0:
+        return 0.0
+    ux, uy = (b[0] - a[0]) / length, (b[1] - a[1]) / length
+    grade = tmap["grad_x"][rows, cols] * ux + tmap["grad_y"][rows, cols] * uy
+    grades = np.linspace(-cost.grade_max, cost.grade_max, cost.grade_table_j_per_m.shape[1])
+    table_rows = cost.ground_rows[rows, cols]
+    per_m = np.array([np.interp(g, grades, cost.grade_table_j_per_m[k]) for g, k in zip(grade, table_rows)])
+    return float(np.sum(lengths * per_m))
+
+
+# --------------------------------------------------------------------------- flat and exactness
+def test_flat_uniform_map_energy_proportional_to_length():
+    cost = EnergyCost.from_model(_flat(), LinearModel(a=50.0), {"g": 1.0}, speed_mps=0.5)
+    rng = np.random.default_rng(1)
+    a = rng.uniform([0, 0], [30, 20], size=(200, 2))
+    b = rng.uniform([0, 0], [30, 20], size=(200, 2))
+    e = cost.segment_energy_j(a, b)
+    np.testing.assert_allclose(e, 50.0 * np.hypot(*(b - a).T), rtol=1e-12)
+
+
+def test_segment_energy_matches_reference_walk_on_rough_map():
+    tmap = _rough()
+    cost = EnergyCost.from_model(tmap, LinearModel(), {"a": 1.0, "b": 2.5}, speed_mps=0.5, max_slope_rad=0.6)
+    xmin, ymin, xmax, ymax = tmap.bounds
+    rng = np.random.default_rng(2)
+    a = rng.uniform([xmin, ymin], [xmax, ymax], size=(150, 2))
+    b = rng.uniform([xmin, ymin], [xmax, ymax], size=(150, 2))
+    # Ends on grid lines, cell corners and the far map edges too.
+    a[:10] = np.round(a[:10] * 2) / 2
+    b[10:20] = np.round(b[10:20] * 2) / 2
+    b[20:25, 0] = xmax
+    a[25:30, 1] = ymax
+    got = cost.segment_energy_j(a, b)
+    ref = np.array([_reference_energy(cost, p, q) for p, q in zip(a, b)])
+    finite = np.isfinite(ref)
+    assert finite.sum() > 20 and (~finite).sum() > 5
+    np.testing.assert_array_equal(np.isfinite(got[~finite]), np.zeros((~finite).sum(), bool))
+    np.testing.assert_allclose(got[finite], ref[finite], rtol=1e-9)
+    # The one-segment kernel (OMPL callbacks) agrees with the bulk one.
+    one = np.array([cost.segment_energy_one_j(p[0], p[1], q[0], q[1]) for p, q in zip(a, b)])
+    np.testing.assert_array_equal(one, got)
+
+
+def test_zero_length_segment_costs_nothing():
+    cost = EnergyCost.from_model(_flat(), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    assert cost.segment_energy_j([3.3, 4.4], [3.3, 4.4])[0] == 0.0
+
+
+# --------------------------------------------------------------------------- direction and slope
+def test_uphill_exceeds_downhill_by_gravity_term_closed_form():
+    grade, length = 0.1, 30.0
+    cost = EnergyCost.from_model(_ramp(grade), LinearModel(a=50.0, b=400.0), {"asphalt": 1.0}, speed_mps=0.5)
+    up, down = cost.segment_energy_j([[5.0, 10.0], [35.0, 10.0]], [[35.0, 10.0], [5.0, 10.0]])
+    factor = math.sqrt(1 + grade**2)  # per metre travelled -> per horizontal metre
+    # rel 1e-5: the table interpolates sqrt(1 + s^2) linearly between grade samples.
+    assert up == pytest.approx((50.0 + 400.0 * grade) * length * factor, rel=1e-5)
+    assert down == pytest.approx(50.0 * length * factor, rel=1e-5)
+    assert up - down == pytest.approx(400.0 * grade * length * factor, rel=1e-5)
+
+
+def test_uphill_exceeds_downhill_by_gravity_term_physics_model():
+    grade, length = 0.1, 30.0
+    robot = robot_preset("husky")
+    model = PhysicsEnergyModel(robot)
+    cost = EnergyCost.from_model(_ramp(grade), model, {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
+    up, down = cost.segment_energy_j([[5.0, 10.0], [35.0, 10.0]], [[35.0, 10.0], [5.0, 10.0]])
+    potential_j = robot.mass_kg * GRAVITY_MPS2 * grade * length
+    # The battery pays at least the potential energy going up, and gravity only helps going down.
+    assert up - down >= potential_j
+    assert up - down < 4.0 * potential_j
+    flat = EnergyCost.from_model(_ramp(0.0), model, {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
+    e_flat = flat.segment_energy_j([5.0, 10.0], [35.0, 10.0])[0]
+    assert up > e_flat and down < up
+
+
+def test_diagonal_on_ramp_sees_projected_grade():
+    grade = 0.2
+    cost = EnergyCost.from_model(_ramp(grade), LinearModel(a=0.0, b=100.0), {"asphalt": 1.0}, speed_mps=0.5)
+    a, b = np.array([5.0, 2.0]), np.array([25.0, 17.0])
+    length = float(np.hypot(*(b - a)))
+    s = grade * (b[0] - a[0]) / length
+    assert cost.segment_energy_j(a, b)[0] == pytest.approx(100.0 * s * length * math.sqrt(1 + s**2), rel=1e-5)
+    assert cost.segment_energy_j(b, a)[0] == pytest.approx(0.0, abs=1e-9)
+
+
+def test_too_steep_cells_are_blocked():
+    tmap = _ramp(0.5)  # 26.6 deg
+    cost = EnergyCost.from_model(tmap, LinearModel(), {"asphalt": 1.0}, speed_mps=0.5, max_slope_rad=math.radians(20))
+    assert cost.blocked.all()
+    assert np.isinf(cost.segment_energy_j([1.0, 1.0], [9.0, 9.0])[0])
+    relaxed = EnergyCost.from_model(
+        tmap, LinearModel(), {"asphalt": 1.0}, speed_mps=0.5, max_slope_rad=math.radians(30)
+    )
+    assert np.isfinite(relaxed.segment_energy_j([1.0, 1.0], [9.0, 9.0])[0])
+
+
+def test_obstacle_blocks_segments_through_it_only():
+    obstacle = np.zeros((20, 30), bool)
+    obstacle[5:15, 10] = True
+    cost = EnergyCost.from_model(_flat(obstacle=obstacle), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    e = cost.segment_energy_j([[2.5, 10.5], [2.5, 17.5]], [[20.5, 10.5], [20.5, 17.5]])
+    assert np.isinf(e[0]) and np.isfinite(e[1])
+    assert cost.is_free([[10.5, 10.5], [10.5, 17.5]]).tolist() == [False, True]
+
+
+def test_corner_squeeze_between_diagonal_obstacles_is_blocked():
+    obstacle = np.zeros((6, 6), bool)
+    obstacle[2, 3] = obstacle[3, 2] = True  # touching only at the corner (3, 3)
+    cost = EnergyCost.from_model(_flat(6, 6, obstacle=obstacle), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    # The diagonal from cell (2,2) to (3,3) passes exactly through the shared corner.
+    assert np.isinf(cost.segment_energy_j([2.5, 2.5], [3.5, 3.5])[0])
+    # One blocked side cell is enough (the robot is not a point); none blocked: free.
+    one = obstacle.copy()
+    one[3, 2] = False
+    cost_one = EnergyCost.from_model(_flat(6, 6, obstacle=one), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    assert np.isinf(cost_one.segment_energy_j([2.5, 2.5], [3.5, 3.5])[0])
+    free = EnergyCost.from_model(_flat(6, 6), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    assert free.segment_energy_j([2.5, 2.5], [3.5, 3.5])[0] == pytest.approx(50.0 * math.sqrt(2))
+
+
+def test_undrivable_grade_blocks_one_direction_only():
+    class Steep(LinearModel):
+        def energy_per_metre_j(self, speed_mps, grade, ground):
+            g = np.asarray(grade, dtype=float)
+            return np.where(g > 0.05, np.inf, 50.0)
+
+    cost = EnergyCost.from_model(_ramp(0.1), Steep(), {"asphalt": 1.0}, speed_mps=0.5)
+    up, down = cost.segment_energy_j([[5.0, 10.0], [35.0, 10.0]], [[35.0, 10.0], [5.0, 10.0]])
+    assert np.isinf(up) and np.isfinite(down)
+    across = cost.segment_energy_j([10.0, 2.0], [10.0, 18.0])[0]  # along the contour: grade 0
+    assert across == pytest.approx(50.0 * 16.0, rel=1e-9)
+
+
+# --------------------------------------------------------------------------- turns and paths
+def test_turn_energies_and_path_energy():
+    cost = EnergyCost.from_model(_flat(), LinearModel(a=50.0, c=30.0), {"g": 1.0}, speed_mps=0.5)
+    pts = np.array([[1.0, 1.0], [11.0, 1.0], [11.0, 1.0], [11.0, 6.0], [6.0, 1.0]])
+    angles, turns = cost.turn_energies_j(pts)
+    # Repeated point: the 90 degree turn is taken where the new heading starts (index 2).
+    np.testing.assert_allclose(angles, [0, 0, math.pi / 2, 3 * math.pi / 4, 0], atol=1e-12)
+    np.testing.assert_allclose(turns, 30.0 * angles, rtol=1e-9, atol=1e-12)
+    length = 10 + 5 + math.hypot(5, 5)
+    assert cost.path_energy_j(pts) == pytest.approx(50.0 * length + 30.0 * (math.pi / 2 + 3 * math.pi / 4), rel=1e-9)
+
+
+def test_surface_length_on_ramp():
+    grade = 0.2
+    cost = EnergyCost.from_model(_ramp(grade), LinearModel(), {"asphalt": 1.0}, speed_mps=0.5)
+    assert cost.surface_length_m([[5.0, 3.0], [25.0, 3.0], [25.0, 13.0]]) == pytest.approx(
+        20 * math.sqrt(1 + grade**2) + 10, rel=1e-9
+    )
+
+
+def test_relax_path_straightens_zigzag_and_never_raises_energy():
+    cost = EnergyCost.from_model(_flat(), LinearModel(a=50.0, c=30.0), {"g": 1.0}, speed_mps=0.5)
+    zigzag = np.array([[1.0, 1.0], [6.0, 4.0], [11.0, 1.0], [16.0, 4.0], [25.0, 1.0]])
+    out = cost.relax_path(zigzag)
+    assert cost.path_energy_j(out) <= cost.path_energy_j(zigzag)
+    np.testing.assert_allclose(out, [[1.0, 1.0], [25.0, 1.0]], atol=0.05)
+    assert cost.path_energy_j(out) == pytest.approx(50.0 * 24.0, rel=1e-3)
+
+
+def test_relax_path_keeps_route_valid_around_obstacle():
+    obstacle = np.zeros((20, 30), bool)
+    obstacle[0:15, 15] = True
+    cost = EnergyCost.from_model(_flat(obstacle=obstacle), LinearModel(a=50.0, c=5.0), {"g": 1.0}, speed_mps=0.5)
+    route = np.array([[5.5, 5.5], [10.5, 17.5], [20.5, 17.5], [25.5, 5.5]])
+    out = cost.relax_path(route)
+    assert np.isfinite(cost.path_energy_j(out))
+    assert cost.path_energy_j(out) < cost.path_energy_j(route)
+    np.testing.assert_array_equal(out[[0, -1]], route[[0, -1]])
+
+
+# --------------------------------------------------------------------------- heuristic
+def test_lower_bound_is_admissible():
+    tmap = _rough(seed=3, n=40, cell=1.0)
+    model = PhysicsEnergyModel(robot_preset("husky"))
+    grounds = {"a": ground_preset("asphalt"), "b": ground_preset("grass")}
+    cost = EnergyCost.from_model(tmap, model, grounds, speed_mps=0.5, max_slope_rad=0.6)
+    assert cost.min_energy_per_metre_j > 0
+    lattice = Lattice(cost)
+    rng = np.random.default_rng(4)
+    free = np.argwhere(~cost.blocked)
+    xs, ys = tmap.cell_centres()
+    checked = 0
+    for _ in range(25):
+        (r0, c0), (r1, c1) = free[rng.choice(len(free), 2, replace=False)]
+        a, b = np.array([xs[c0], ys[r0]]), np.array([xs[c1], ys[r1]])
+        bound = cost.lower_bound_j(a, b)[0]
+        path = lattice.shortest_path(a, b)
+        if path.found:
+            assert bound <= path.objective * (1 + 1e-12)
+            checked += 1
+        e = cost.segment_energy_j(a, b)[0]
+        assert bound <= e * (1 + 1e-12)
+    assert checked >= 10
+    # Random (valid) polylines cost at least the bound too.
+    pts = rng.uniform([xs[0], ys[0]], [xs[-1], ys[-1]], size=(200, 3, 2))
+    for poly in pts:
+        e = cost.segment_energy_j(poly[:-1], poly[1:]).sum()
+        if np.isfinite(e):
+            assert cost.lower_bound_j(poly[0], poly[-1])[0] <= e * (1 + 1e-12)
+
+
+# --------------------------------------------------------------------------- construction errors
+def test_unknown_ground_class_without_params_raises():
+    tmap = _rough()
+    with pytest.raises(UnknownNameError, match="'b'"):
+        EnergyCost.from_model(tmap, LinearModel(), {"a": 1.0}, speed_mps=0.5)
+
+
+def test_unknown_ground_cells_need_unknown_ground():
+    tmap = TerrainMap(np.zeros((10, 10)), 1.0)  # every cell ground -1
+    with pytest.raises(InvalidParameterError, match="unknown_ground"):
+        EnergyCost.from_model(tmap, LinearModel(), {}, speed_mps=0.5)
+    cost = EnergyCost.from_model(tmap, LinearModel(a=50.0), {}, speed_mps=0.5, unknown_ground=2.0)
+    assert cost.segment_energy_j([1.0, 1.0], [5.0, 1.0])[0] == pytest.approx(400.0)
+    assert cost.ground_labels == ("unknown",)
+
+
+def test_grounds_keyed_by_class_id():
+    cost = EnergyCost.from_model(_rough(), LinearModel(a=10.0), {0: 1.0, 1: 3.0}, speed_mps=0.5, max_slope_rad=0.6)
+    assert cost.grade_table_j_per_m.shape == (2, 513)
+    assert cost.grade_table_j_per_m[1, 256] == pytest.approx(30.0)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"speed_mps": 0.0}, "speed_mps"),
+        ({"speed_mps": math.nan}, "speed_mps"),
+        ({"speed_mps": 0.5, "max_slope_rad": 2.0}, "max_slope_rad"),
+        ({"speed_mps": 0.5, "grade_samples": 100}, "grade_samples"),
+        ({"speed_mps": 0.5, "turn_samples": 1}, "turn_samples"),
+    ],
+)
+def test_from_model_rejects_bad_parameters(kwargs, match):
+    with pytest.raises(InvalidParameterError, match=match):
+        EnergyCost.from_model(_flat(), LinearModel(), {"g": 1.0}, **kwargs)
+
+
+def test_negative_or_nan_model_energy_rejected():
+    class Regen(LinearModel):
+        def energy_per_metre_j(self, speed_mps, grade, ground):
+            return 50.0 + 600.0 * np.asarray(grade, dtype=float)  # negative downhill
+
+    with pytest.raises(InvalidParameterError, match="non-negative"):
+        EnergyCost.from_model(_flat(), Regen(), {"g": 1.0}, speed_mps=0.5)
+
+    class Broken(LinearModel):
+        def turn_energy_j(self, heading_change_rad, ground):
+            return np.full(np.shape(heading_change_rad), np.nan)
+
+    with pytest.raises(InvalidParameterError, match="turn_table_j"):
+        EnergyCost.from_model(_flat(), Broken(), {"g": 1.0}, speed_mps=0.5)
+
+
+def test_missing_voltage_or_turn_rate_raises():
+    class Bare(LinearModel):
+        robot = None
+
+    with pytest.raises(InvalidParameterError, match="battery_voltage_v"):
+        EnergyCost.from_model(_flat(), Bare(), {"g": 1.0}, speed_mps=0.5)
+    with pytest.raises(InvalidParameterError, match="turn_rate_radps"):
+        EnergyCost.from_model(_flat(), Bare(), {"g": 1.0}, speed_mps=0.5, battery_voltage_v=24.0)
+    cost = EnergyCost.from_model(
+        _flat(), Bare(), {"g": 1.0}, speed_mps=0.5, battery_voltage_v=24.0, turn_rate_radps=1.0
+    )
+    assert cost.battery_voltage_v == 24.0
+
+
+def test_constructor_checks_grid_and_tables():
+    tmap = _flat()
+    ok = np.ones((1, 5))
+    kw = {"speed_mps": 1.0, "battery_voltage_v": 24.0, "turn_rate_radps": 1.0}
+    with pytest.raises(GridMismatchError):
+        EnergyCost(tmap, np.zeros((3, 3), int), ok, ok, **kw)
+    with pytest.raises(InvalidParameterError, match="odd"):
+        EnergyCost(tmap, np.zeros((20, 30), int), np.ones((1, 4)), ok, **kw)
+    with pytest.raises(InvalidParameterError, match="ground_rows"):
+        EnergyCost(tmap, np.ones((20, 30), int), ok, ok, **kw)
+    with pytest.raises(InvalidParameterError, match="turn_rate_radps"):
+        EnergyCost(tmap, np.zeros((20, 30), int), ok, ok, **{**kw, "turn_rate_radps": 0.0})
+    # Tables are copied and read-only: the caller's arrays stay writable.
+    cost = EnergyCost(tmap, np.zeros((20, 30), int), ok, ok, **kw)
+    assert ok.flags.writeable and not cost.grade_table_j_per_m.flags.writeable
+
+
+@pytest.mark.parametrize(
+    ("a", "b", "exc", "match"),
+    [
+        ([[math.nan, 1.0]], [[2.0, 2.0]], InvalidParameterError, "finite"),
+        ([[1.0, 1.0]], [[2.0, math.inf]], InvalidParameterError, "finite"),
+        ([[1.0, 1.0]], [[31.0, 2.0]], OutOfBoundsError, "outside"),
+        ([[1.0, 1.0, 1.0]], [[2.0, 2.0, 2.0]], InvalidParameterError, "shape"),
+        ([[1.0, 1.0], [2.0, 2.0]], [[2.0, 2.0]], InvalidParameterError, "equal shapes"),
+    ],
+)
+def test_segment_energy_rejects_bad_points(a, b, exc, match):
+    cost = EnergyCost.from_model(_flat(), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    with pytest.raises(exc, match=match):
+        cost.segment_energy_j(a, b)
