@@ -252,7 +252,118 @@ def build_parser() -> argparse.ArgumentParser:
     plan.add_argument("--start", type=float, nargs=2, required=True, metavar=("X", "Y"), help="start (m)")
     plan.add_argument("--goal", type=float, nargs=2, required=True, metavar=("X", "Y"), help="goal (m)")
     _add_plan_options(plan, default_time=2.0)
+
+    evaluate = sub.add_parser(
+        "evaluate", help="leave-one-run-out evaluation of current models on BorealTC-layout logs"
+    )
+    evaluate.add_argument("--data", type=Path, required=True, metavar="DIR", help="directory with GROUND/imu_NN.csv + pro_NN.csv")
+    evaluate.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
+    evaluate.add_argument("--grounds", nargs="+", metavar="NAME", help="ground folders to use (default all)")
+    evaluate.add_argument(
+        "--model", nargs="+", default=list(CURRENT_MODELS), choices=list(CURRENT_MODELS), dest="models",
+        help="models to evaluate (default all)",
+    )
+    evaluate.add_argument(
+        "--variants", nargs="+", default=["per_ground", "ground_agnostic"],
+        choices=["per_ground", "ground_agnostic"], help="evaluation variants",
+    )
+    evaluate.add_argument("--seed", type=int, default=0, help="random seed of the learned models")
+
+    train = sub.add_parser("train", help="fit a current model on logs and save it to one file")
+    train.add_argument("--data", type=Path, required=True, metavar="DIR", help="directory with GROUND/imu_NN.csv + pro_NN.csv")
+    train.add_argument("--grounds", nargs="+", metavar="NAME", help="ground folders to use (default all)")
+    train.add_argument("--model", default="estimator", choices=list(CURRENT_MODELS), help="model kind (default estimator)")
+    train.add_argument("--seed", type=int, default=0, help="random seed")
+    train.add_argument("--out", type=Path, required=True, metavar="FILE", help="model file to write (e.g. model.pt)")
+
+    predict = sub.add_parser("predict", help="predict drive currents of logs with a saved model")
+    predict.add_argument("--model", type=Path, required=True, metavar="FILE", help="model file written by `terrawatt train`")
+    predict.add_argument("--data", type=Path, required=True, metavar="DIR", help="directory with GROUND/imu_NN.csv + pro_NN.csv")
+    predict.add_argument("--grounds", nargs="+", metavar="NAME", help="ground folders to use (default all)")
+    predict.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
     return parser
+
+
+def _current_model(name: str, seed: int) -> Any:
+    from energy import ConstantCurrentModel, LinearCurrentModel, PhysicsCurrentModel, VibrationCurrentEstimator
+
+    factories = {
+        "estimator": lambda: VibrationCurrentEstimator("default", seed=seed),
+        "paper": lambda: VibrationCurrentEstimator("paper", seed=seed),
+        "linear": LinearCurrentModel,
+        "physics": PhysicsCurrentModel,
+        "constant": ConstantCurrentModel,
+    }
+    return factories[name]()
+
+
+#: Current models selectable on the command line: estimator (improved default), paper
+#: (the source network), and the baselines.
+CURRENT_MODELS = ("estimator", "paper", "linear", "physics", "constant")
+
+
+def run_evaluate(args: argparse.Namespace) -> int:
+    """``terrawatt evaluate``: write evaluation.json and evaluation.md."""
+    from energy import evaluate_current_models, read_borealtc
+
+    logs = read_borealtc(args.data, grounds=args.grounds)
+    models = {name: _current_model(name, args.seed) for name in args.models}
+    t0 = time.perf_counter()
+    result = evaluate_current_models(logs, models, variants=args.variants, progress=True)
+    elapsed = time.perf_counter() - t0
+    args.out.mkdir(parents=True, exist_ok=True)
+    json_path = result.write_json(args.out / "evaluation.json")
+    md_path = result.write_markdown(args.out / "evaluation.md")
+    print(result.to_markdown())
+    print(f"\n{len(logs)} runs, {len(models)} models, {elapsed:.1f} s; wrote {json_path} and {md_path}")
+    return 0
+
+
+def run_train(args: argparse.Namespace) -> int:
+    """``terrawatt train``: fit one model on every run found and save it."""
+    from energy import read_borealtc
+
+    logs = read_borealtc(args.data, grounds=args.grounds)
+    model = _current_model(args.model, args.seed)
+    t0 = time.perf_counter()
+    model.fit(logs)
+    elapsed = time.perf_counter() - t0
+    path = model.save(args.out)
+    print(f"fitted {args.model} on {len(logs)} runs ({sum(log.duration_s for log in logs):.0f} s of logs) in {elapsed:.1f} s; wrote {path}")
+    return 0
+
+
+def run_predict(args: argparse.Namespace) -> int:
+    """``terrawatt predict``: per-run charge errors of a saved model, written as JSON."""
+    from energy import compare_currents, load_current_model, read_borealtc
+
+    model = load_current_model(args.model)
+    logs = read_borealtc(args.data, grounds=args.grounds)
+    rows = []
+    print(f"{'run':<28} {'side':<6} {'truth mAh':>10} {'pred mAh':>10} {'error %':>8} {'RMSE A':>7}")
+    for log in logs:
+        pred = model.predict(log)
+        for k, side in enumerate(("left", "right")):
+            truth = log.current_left_a if k == 0 else log.current_right_a
+            err = compare_currents(log.time_s, truth, pred[:, k])
+            row = {
+                "run": log.meta.source,
+                "ground": log.meta.ground_label,
+                "side": side,
+                "charge_true_mah": err.charge_true_mah,
+                "charge_predicted_mah": err.charge_predicted_mah,
+                "whole_run_error_pct": err.whole_run_error_pct,
+                "section_error_pct": err.section_error_pct,
+                "rmse_a": err.rmse_a,
+            }
+            rows.append(row)
+            print(
+                f"{str(log.meta.ground_label) + '/' + Path(log.meta.source).name:<28} {side:<6} {err.charge_true_mah:>10.1f} "
+                f"{err.charge_predicted_mah:>10.1f} {err.whole_run_error_pct:>8.2f} {err.rmse_a:>7.2f}"
+            )
+    path = write_json_atomic({"model": str(args.model), "runs": rows}, args.out / "predictions.json")
+    print(f"wrote {path}")
+    return 0
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -261,6 +372,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     try:
+        if args.command == "evaluate":
+            return run_evaluate(args)
+        if args.command == "train":
+            return run_train(args)
+        if args.command == "predict":
+            return run_predict(args)
         unknown = None if args.unknown_ground.lower() == "none" else args.unknown_ground
         if args.command == "demo":
             tmap, start, goal, label = example_map(), EXAMPLE_START_XY_M, EXAMPLE_GOAL_XY_M, "bundled example map"
