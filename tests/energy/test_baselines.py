@@ -1,0 +1,124 @@
+"""Tests of energy.baselines: constant, linear and fitted-physics current models."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from energy import (
+    ConstantCurrentModel,
+    EFFECTS,
+    DataError,
+    InteractionLog,
+    InvalidParameterError,
+    LinearCurrentModel,
+    LogMeta,
+    PhysicsCurrentModel,
+    PhysicsEnergyModel,
+    UnknownNameError,
+    ground_preset,
+    robot_preset,
+)
+
+
+def _motion(seed: int, duration_s: float = 40.0, rate_hz: float = 10.0):
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, duration_s, 1.0 / rate_hz)
+    p1, p2 = rng.uniform(0, 2 * np.pi, 2)
+    v = 0.4 + 0.3 * np.sin(2 * np.pi * t / 9.0 + p1)
+    w = 0.5 * np.sin(2 * np.pi * t / 6.0 + p2)
+    return t, v, w
+
+
+def _log(t, v, w, left, right, meta=None):
+    ta = np.arange(0.0, t[-1] + 0.005, 0.01)
+    return InteractionLog(t, v, w, left, right, ta, np.full(ta.size, 9.81), meta=meta or LogMeta())
+
+
+def test_constant_model_predicts_the_time_averaged_current():
+    t = np.array([0.0, 1.0, 3.0])
+    log = _log(t, np.zeros(3), np.zeros(3), np.array([1.0, 1.0, 4.0]), np.full(3, 2.0))
+    model = ConstantCurrentModel().fit(log)
+    # left: (1 + 2.5 * 2) / 3 = 2 A (charge over time, not the sample mean 2.0 by chance)
+    assert model.current_a_.tolist() == pytest.approx([2.0, 2.0])
+    assert model.predict(log).shape == (3, 2)
+    assert np.all(model.predict(log)[:, 0] == pytest.approx(2.0))
+
+
+def test_linear_model_recovers_known_coefficients():
+    logs = []
+    for seed in (0, 1):
+        t, v, w = _motion(seed)
+        dv = np.gradient(v, t)
+        left = 0.7 + 3.0 * np.abs(v) + 2.0 * np.abs(w) + 1.5 * dv
+        right = 0.5 + 4.0 * np.abs(v) + 1.0 * np.abs(w) - 0.5 * dv
+        logs.append(_log(t, v, w, left, right))
+    model = LinearCurrentModel().fit(logs)
+    assert model.coef_[:, 0] == pytest.approx([0.7, 3.0, 2.0, 1.5], abs=1e-9)
+    assert model.coef_[:, 1] == pytest.approx([0.5, 4.0, 1.0, -0.5], abs=1e-9)
+    assert model.score(logs) == pytest.approx(1.0)
+
+
+def test_linear_model_needs_samples():
+    log = _log(np.array([0.0, 0.1]), np.zeros(2), np.zeros(2), np.ones(2), np.ones(2))
+    with pytest.raises(DataError, match="at least 4"):
+        LinearCurrentModel().fit(log)
+
+
+DRIVE_EFFECTS = [e for e in EFFECTS if e not in ("sensor", "control")]
+
+
+def _physics_truth(seed, crr, mu_lat, idle_a, robot, ground, meta=None):
+    t, v, w = _motion(seed)
+    model = PhysicsEnergyModel(robot, DRIVE_EFFECTS)
+    g = ground.replace(rolling_resistance_coef=crr, lateral_friction_coef=mu_lat)
+    res = model.power(v, w, g, accel_mps2=np.gradient(v, t), alpha_radps2=np.gradient(w, t), time_s=t)
+    cur = res.motor_current_a * np.sign(res.motor_speed_radps)
+    cur = np.maximum(idle_a + cur, 0.0)
+    return _log(t, v, w, cur[:, 0], cur[:, 1], meta)
+
+
+def test_physics_model_recovers_ground_coefficients_from_its_own_currents():
+    robot, ground = robot_preset("husky"), ground_preset("asphalt")
+    logs = [_physics_truth(s, 0.06, 0.4, 0.8, robot, ground) for s in (0, 1)]
+    model = PhysicsCurrentModel("husky", "asphalt").fit(logs)
+    assert model.fitted_["rolling_resistance_coef"] == pytest.approx(0.06, rel=0.05)
+    assert model.fitted_["lateral_friction_coef"] == pytest.approx(0.4, rel=0.05)
+    assert model.idle_current_a_ == pytest.approx(0.8, abs=0.05)
+    assert model.ground_.rolling_resistance_coef == pytest.approx(0.06, rel=0.05)
+    assert model.cost_ < 1e-3
+    assert model.score(logs) > 0.99
+
+
+def test_physics_model_uses_measured_wheel_speeds_for_side_speeds():
+    # wheel-derived omega = (vR - vL) / 0.555 m: the side speeds are the wheel speeds (chi = 1)
+    husky = robot_preset("husky")
+    wheels = dataclasses.replace(husky, track_width_multiplier=0.555 / husky.track_width_m)
+    ground = ground_preset("asphalt")
+    measured = LogMeta(velocity_source="measured", track_width_m=0.555)
+    logs = [_physics_truth(s, 0.06, 0.4, 0.8, wheels, ground, measured) for s in (0, 1)]
+    assert PhysicsCurrentModel().fit(logs).cost_ < 1e-3
+    commanded = [_physics_truth(s, 0.06, 0.4, 0.8, wheels, ground) for s in (0, 1)]
+    assert PhysicsCurrentModel().fit(commanded).cost_ > 1e-2  # husky's own chi 1.875 is used
+
+
+def test_physics_model_validates_its_parameters():
+    log = _log(*_motion(0), np.ones(400), np.ones(400))
+    with pytest.raises(UnknownNameError, match="fit parameter"):
+        PhysicsCurrentModel(fit_parameters=("magic_coef",)).fit(log)
+    with pytest.raises(InvalidParameterError, match="not a string"):
+        PhysicsCurrentModel(fit_parameters="idle_current_a").fit(log)
+    with pytest.raises(UnknownNameError):
+        PhysicsCurrentModel(robot="rover9000").fit(log)
+    with pytest.raises(InvalidParameterError, match="clip_negative"):
+        PhysicsCurrentModel(clip_negative=1).fit(log)
+
+
+def test_physics_model_persists_custom_robot_and_ground(tmp_path):
+    robot = dataclasses.replace(robot_preset("husky"), mass_kg=60.0)
+    ground = ground_preset("snow")
+    logs = [_physics_truth(0, 0.1, 0.3, 0.5, robot, ground)]
+    model = PhysicsCurrentModel(robot, ground, fit_parameters=("rolling_resistance_coef", "idle_current_a")).fit(logs)
+    again = PhysicsCurrentModel.load(model.save(tmp_path / "p.pt"))
+    assert again.robot == robot and again.ground == ground
+    assert np.array_equal(again.predict(logs[0]), model.predict(logs[0]))

@@ -1,0 +1,230 @@
+"""Tests of energy.estimator: the vibration-conditioned current estimator, its net and trainer."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from energy import (
+    ESTIMATOR_PRESETS,
+    CurrentNet,
+    CurrentNetConfig,
+    DataError,
+    EstimatorConfig,
+    InteractionLog,
+    InvalidParameterError,
+    LogMeta,
+    TrainConfig,
+    UnknownNameError,
+    VibrationCurrentEstimator,
+    WindowDataset,
+    WindowSpec,
+    estimator_preset,
+    read_borealtc,
+    train_network,
+)
+
+DATA = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "borealtc"
+
+
+def _log(seed: int, gain: float = 1.0, vibration_mps2: float = 0.3, duration_s: float = 40.0,
+         drive_hz: float = 10.0, accel_hz: float = 100.0) -> InteractionLog:
+    """Known relation: I_side = gain * (0.5 + 4 |v| + 3 (turning towards the other side)
+    + 1 (turning towards this side)); vertical vibration of white noise."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, duration_s, 1.0 / drive_hz)
+    p1, p2 = rng.uniform(0, 2 * np.pi, 2)
+    v = 0.45 + 0.35 * np.sin(2 * np.pi * t / 7.0 + p1)
+    w = 0.6 * np.sin(2 * np.pi * t / 5.0 + p2)
+    left = gain * (0.5 + 4.0 * v + 3.0 * np.maximum(-w, 0) + np.maximum(w, 0))
+    right = gain * (0.5 + 4.0 * v + 3.0 * np.maximum(w, 0) + np.maximum(-w, 0))
+    ta = np.arange(0.0, t[-1] + 0.5 / accel_hz, 1.0 / accel_hz)
+    az = 9.81 + vibration_mps2 * rng.standard_normal(ta.size)
+    return InteractionLog(t, v, w, left, right, ta, az, meta=LogMeta(source=f"synthetic-{seed}", ground_label="g"))
+
+
+def _small(**changes) -> EstimatorConfig:
+    base = dict(window_s=0.5, hidden_sizes=(32, 32), n_members=1, max_epochs=80, patience=15, learning_rate=3e-3,
+                batch_size=32, train_stride_s=0.3)
+    base.update(changes)
+    return estimator_preset("default").replace(**base)
+
+
+def _r2(truth: np.ndarray, pred: np.ndarray) -> float:
+    return 1.0 - float(np.sum((truth - pred) ** 2) / np.sum((truth - truth.mean()) ** 2))
+
+
+def _truth(log: InteractionLog) -> np.ndarray:
+    return np.column_stack([log.current_left_a, log.current_right_a])
+
+
+def test_estimator_learns_a_known_relation_and_tells_left_from_right():
+    train = [_log(0), _log(1)]
+    test = _log(2)
+    est = VibrationCurrentEstimator(_small(), seed=0).fit(train)
+    pred = est.predict(test)
+    assert _r2(_truth(test), pred) > 0.9
+    # in a left turn (omega > 0) the right side draws more; the model must know the sign
+    turning = test.omega_radps > 0.4
+    truth_gap = np.mean(test.current_right_a[turning] - test.current_left_a[turning])
+    assert np.mean(pred[turning, 1] - pred[turning, 0]) > 0.7 * truth_gap > 0.5
+    assert est.score(test) > 0.9
+
+
+def test_absolute_inputs_cannot_tell_left_from_right():
+    train = [_log(0), _log(1)]
+    test = _log(2)
+    signed = VibrationCurrentEstimator(_small(), seed=0).fit(train).score(test)
+    absolute = VibrationCurrentEstimator(_small(absolute_inputs=True), seed=0).fit(train).score(test)
+    assert signed > absolute + 0.1
+
+
+def test_vibration_features_identify_the_ground():
+    # two grounds: the rough one doubles the current; only the vibration tells them apart
+    train = [_log(0, 1.0, 0.1), _log(1, 2.0, 1.5), _log(3, 1.0, 0.1), _log(4, 2.0, 1.5)]
+    tests = [_log(5, 1.0, 0.1), _log(6, 2.0, 1.5)]
+    with_vib = VibrationCurrentEstimator(_small(), seed=0).fit(train)
+    blind = VibrationCurrentEstimator(_small(local_spectrum=False, run_features="none"), seed=0).fit(train)
+    assert with_vib.score(tests) > 0.85
+    assert with_vib.score(tests) > blind.score(tests) + 0.2
+
+
+def test_paper_preset_reproduces_the_source_network_shape():
+    cfg = estimator_preset("paper")
+    assert (cfg.window_s, cfg.rate_hz, cfg.n_spectrum_bins, cfg.hidden_sizes) == (0.1, 100.0, 8000, (100, 100, 100))
+    est = VibrationCurrentEstimator(cfg.replace(max_epochs=1), seed=0).fit(_log(0, duration_s=20.0))
+    net = est.networks_[0]
+    assert net.n_inputs == 8020 and net.config.n_outputs == 20
+    assert sum(isinstance(m, torch.nn.ReLU) for m in net.modules()) == 3
+    assert (est.window_.length_samples, est.window_.length_s) == (10, pytest.approx(0.1))
+    assert est.normalisers_["v"].absolute and est.normalisers_["current"].absolute
+
+
+def test_default_works_at_the_drive_rate_with_windows_in_seconds():
+    log = _log(0, drive_hz=6.5, duration_s=30.0)
+    est = VibrationCurrentEstimator(_small(window_s=1.0, train_stride_s=0.1, max_epochs=2, patience=None), seed=0).fit(log)
+    assert est.rate_hz_ == pytest.approx(6.5)
+    assert est.window_.length_samples in (6, 7)  # 1 s at 6.5 Hz, rounded
+    assert est.window_.length_s == pytest.approx(1.0, abs=0.08) and est.window_.stride_samples == 1
+    assert est.band_edges_hz_.size == est.config_.n_bands + 1
+
+
+def test_output_clipped_to_training_range_only_when_asked():
+    train = _log(0)
+    extreme = _log(1)
+    extreme = InteractionLog(extreme.time_s, extreme.v_mps * 5.0, extreme.omega_radps, extreme.current_left_a,
+                             extreme.current_right_a, extreme.accel_time_s, extreme.accel_z_mps2)
+    clipped = VibrationCurrentEstimator(_small(), seed=0).fit(train)
+    pred = clipped.predict(extreme)
+    lo, hi = clipped.current_range_a_
+    assert np.all(pred >= lo - 1e-12) and np.all(pred <= hi + 1e-12)
+    free = VibrationCurrentEstimator(_small(clip_output=False), seed=0).fit(train)
+    assert np.any(free.predict(extreme) > hi)
+
+
+def test_early_stopping_restores_best_epoch_and_ensemble_has_members():
+    est = VibrationCurrentEstimator(_small(n_members=3, max_epochs=300, patience=3, learning_rate=0.05), seed=1).fit(_log(0))
+    assert len(est.networks_) == len(est.history_) == 3
+    for h in est.history_:
+        assert len(h.validation_loss) == len(h.train_loss)
+        assert h.best_epoch == int(np.argmin(h.validation_loss))
+        assert h.stopped_early == (len(h.train_loss) < 300)
+    assert any(h.stopped_early for h in est.history_)
+
+
+def test_different_seeds_give_different_models():
+    a = VibrationCurrentEstimator(_small(max_epochs=5, patience=None), seed=0).fit(_log(0)).predict(_log(1))
+    b = VibrationCurrentEstimator(_small(max_epochs=5, patience=None), seed=1).fit(_log(0)).predict(_log(1))
+    assert not np.array_equal(a, b)
+
+
+def test_thread_setting_is_restored():
+    before = torch.get_num_threads()
+    VibrationCurrentEstimator(_small(max_epochs=1, patience=None), seed=0, n_threads=1).fit(_log(0))
+    assert torch.get_num_threads() == before
+
+
+def test_refit_starts_from_scratch():
+    est = VibrationCurrentEstimator(_small(max_epochs=3, patience=None), seed=0)
+    est.fit(_log(0))
+    first = est.predict(_log(2))
+    est.fit([_log(1, gain=3.0)])
+    assert np.mean(est.predict(_log(2))) > np.mean(first)
+    assert est.fit(_log(0)).predict(_log(2)) == pytest.approx(first)
+
+
+def test_bad_parameters_and_short_logs_raise():
+    with pytest.raises(UnknownNameError, match="estimator preset"):
+        VibrationCurrentEstimator("fancy").fit(_log(0))
+    with pytest.raises(InvalidParameterError, match="seed"):
+        VibrationCurrentEstimator(_small(), seed=-1).fit(_log(0))
+    with pytest.raises(InvalidParameterError, match="InteractionLog"):
+        VibrationCurrentEstimator(_small()).fit([])
+    with pytest.raises(DataError, match="shorter than one window"):
+        VibrationCurrentEstimator(_small(window_s=5.0, patience=None, validation_fraction=0.0)).fit(_log(0, duration_s=3.0))
+    with pytest.raises(UnknownNameError, match="run_features"):
+        EstimatorConfig(run_features="wavelets")
+    with pytest.raises(InvalidParameterError, match="validation_fraction"):
+        EstimatorConfig(patience=5, validation_fraction=0.0)
+    with pytest.raises(InvalidParameterError, match="hidden_sizes"):
+        EstimatorConfig(hidden_sizes=())
+    with pytest.raises(UnknownNameError, match="loss"):
+        TrainConfig(loss="l1")
+    est = VibrationCurrentEstimator(_small(max_epochs=1, patience=None)).fit(_log(0))
+    assert not est.is_fitted or est.networks_  # fitted
+    failed = VibrationCurrentEstimator(_small(window_s=5.0, patience=None, validation_fraction=0.0))
+    with pytest.raises(DataError):
+        failed.fit(_log(0, duration_s=3.0))
+    assert not failed.is_fitted  # nothing half-fitted left behind
+
+
+def test_config_round_trips_through_plain_dict():
+    for cfg in ESTIMATOR_PRESETS.values():
+        assert EstimatorConfig.from_dict(cfg.to_dict()) == cfg
+    with pytest.raises(InvalidParameterError, match="unknown EstimatorConfig field"):
+        EstimatorConfig.from_dict({"colour": "red"})
+
+
+def test_training_loop_knows_nothing_about_the_model():
+    class Affine(torch.nn.Module):
+        def __init__(self):
+            super().__init__()
+            self.lin = torch.nn.Linear(1, 1)
+
+        def forward(self, x, table, index):
+            return self.lin(x)
+
+    x = np.linspace(-1, 1, 64)[:, None]
+    ds = WindowDataset(x, np.zeros((1, 0)), np.zeros(64, int), np.arange(64), WindowSpec(1, 1, 1.0), y=2.0 * x + 0.5)
+    net = Affine()
+    hist = train_network(net, ds, None, TrainConfig(max_epochs=300, batch_size=16, learning_rate=0.05), seed=0)
+    assert net.lin.weight.item() == pytest.approx(2.0, abs=0.02)
+    assert net.lin.bias.item() == pytest.approx(0.5, abs=0.02)
+    assert hist.train_loss[-1] < hist.train_loss[0]
+    with pytest.raises(InvalidParameterError, match="validation"):
+        train_network(Affine(), ds, None, TrainConfig(patience=2), seed=0)
+
+
+def test_current_net_equals_one_dense_layer_over_run_and_window_features():
+    torch.manual_seed(0)
+    net = CurrentNet(CurrentNetConfig(3, 5, 2, hidden_sizes=(4,)))
+    x = torch.randn(6, 3)
+    table = torch.randn(2, 5)
+    idx = torch.tensor([0, 1, 1, 0, 0, 1])
+    w = torch.cat([net.run_in.weight, net.window_in.weight], dim=1)
+    h = torch.relu(torch.cat([table[idx], x], dim=1) @ w.T + net.window_in.bias)
+    expected = net.body[-1](h)
+    assert torch.allclose(net(x, table, idx), expected, atol=1e-6)
+
+
+def test_fits_a_real_borealtc_run():
+    if not DATA.is_dir():
+        pytest.skip("BorealTC sample not found beside the repository (../shared/data/borealtc)")
+    logs = read_borealtc(DATA, grounds=["FLOORING"])
+    short = sorted(logs, key=lambda lg: lg.duration_s)[:3]
+    est = VibrationCurrentEstimator(_small(window_s=1.0, max_epochs=30), seed=0).fit(short[:2])
+    assert est.rate_hz_ == pytest.approx(6.5, rel=0.01)
+    pred = est.predict(short[2])
+    assert pred.shape == (len(short[2]), 2) and np.all(np.isfinite(pred))
+    assert np.all(pred >= 0.0)  # clipped to the (non-negative) training range

@@ -1,0 +1,114 @@
+"""Tests of energy.evaluation: leave-one-run-out per ground and ground-agnostic."""
+
+import json
+
+import numpy as np
+import pytest
+
+from energy import (
+    ConstantCurrentModel,
+    DataError,
+    EvaluationResult,
+    InteractionLog,
+    InvalidParameterError,
+    LinearCurrentModel,
+    LogMeta,
+    UnknownNameError,
+    evaluate_current_models,
+)
+from terrain import TerrawattWarning
+
+
+def _log(seed: int, ground: str, gain: float) -> InteractionLog:
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 30.0, 0.1)
+    v = 0.4 + 0.3 * np.sin(2 * np.pi * t / rng.uniform(5, 9) + rng.uniform(0, 6))
+    w = 0.4 * np.sin(2 * np.pi * t / 4.0 + rng.uniform(0, 6))
+    left = gain * (0.5 + 3.0 * np.abs(v) + 2.0 * np.abs(w))
+    right = gain * (0.8 + 2.0 * np.abs(v) + 1.0 * np.abs(w))
+    ta = np.arange(0.0, t[-1] + 0.005, 0.01)
+    return InteractionLog(t, v, w, left, right, ta, np.full(ta.size, 9.81),
+                          meta=LogMeta(source=f"{ground}/pro_{seed:02d}.csv", ground_label=ground))
+
+
+@pytest.fixture(scope="module")
+def logs():
+    return [_log(i, "grass", 1.0) for i in range(3)] + [_log(10 + i, "sand", 2.5) for i in range(3)]
+
+
+@pytest.fixture(scope="module")
+def result(logs):
+    return evaluate_current_models(logs, {"constant": ConstantCurrentModel(), "linear": LinearCurrentModel()})
+
+
+def test_every_run_side_model_and_variant_is_scored(result):
+    assert isinstance(result, EvaluationResult)
+    assert len(result.runs) == 2 * 6 * 2 * 2  # variants x runs x models x sides
+    per_ground = [r for r in result.runs if r.variant == "per_ground"]
+    assert {r.run for r in per_ground} == {f"grass/pro_0{i}" for i in range(3)} | {f"sand/pro_1{i}" for i in range(3)}
+    assert {(r.model, r.side) for r in per_ground} == {(m, s) for m in ("constant", "linear") for s in ("left", "right")}
+
+
+def test_linear_model_is_exact_per_ground_but_not_across_grounds(result):
+    exact = result.summary_for("per_ground", "all", "linear")
+    assert exact.whole_run_median_pct < 1e-6 and exact.rmse_p90_a < 1e-6
+    assert exact.n_runs == 6 and exact.n_values == 12
+    mixed = result.summary_for("ground_agnostic", "all", "linear")
+    assert mixed.whole_run_median_pct > 10.0
+    const = result.summary_for("per_ground", "grass", "constant")
+    assert const.section_median_pct >= const.whole_run_median_pct > 0.0
+
+
+def test_scores_agree_with_a_direct_fit(logs, result):
+    test, train = logs[0], logs[1:3]
+    pred = LinearCurrentModel().fit(train).predict(test)
+    q_true = np.trapezoid(test.current_left_a, test.time_s) / 3.6
+    q_pred = np.trapezoid(pred[:, 0], test.time_s) / 3.6
+    row = next(r for r in result.runs if (r.variant, r.model, r.run, r.side) == ("per_ground", "linear", "grass/pro_00", "left"))
+    assert row.charge_true_mah == pytest.approx(q_true)
+    assert row.charge_predicted_mah == pytest.approx(q_pred)
+    assert row.duration_s == pytest.approx(test.duration_s)
+
+
+def test_summary_percentiles(result):
+    rows = [r.whole_run_error_pct for r in result.runs
+            if (r.variant, r.model, r.ground) == ("ground_agnostic", "constant", "sand")]
+    s = result.summary_for("ground_agnostic", "sand", "constant")
+    assert s.whole_run_median_pct == pytest.approx(float(np.median(rows)))
+    assert s.whole_run_p90_pct == pytest.approx(float(np.percentile(rows, 90)))
+    with pytest.raises(UnknownNameError, match="no summary"):
+        result.summary_for("per_ground", "ice", "constant")
+
+
+def test_json_and_markdown_outputs(result, tmp_path):
+    path = result.write_json(tmp_path / "evaluation.json")
+    data = json.loads(path.read_text())
+    assert data["format_version"] == 1 and data["models"] == ["constant", "linear"]
+    assert len(data["runs"]) == len(result.runs) and len(data["summary"]) == len(result.summary)
+    md = result.to_markdown()
+    assert md.count("\n") == 2 + len(result.summary)
+    assert "| per_ground | sand | linear |" in md
+    assert result.write_markdown(tmp_path / "evaluation.md").read_text() == md
+
+
+def test_single_run_ground_is_skipped_with_a_warning(logs):
+    few = logs[:3] + [_log(20, "ice", 1.0)]
+    with pytest.warns(TerrawattWarning, match="'ice' has 1 run"):
+        res = evaluate_current_models(few, {"linear": LinearCurrentModel()}, variants=("per_ground",))
+    assert res.skipped and "ice" in res.skipped[0]
+    assert {r.ground for r in res.runs} == {"grass"}
+
+
+def test_bad_inputs_raise(logs):
+    unlabeled = InteractionLog(logs[0].time_s, logs[0].v_mps, logs[0].omega_radps, logs[0].current_left_a,
+                               logs[0].current_right_a, logs[0].accel_time_s, logs[0].accel_z_mps2)
+    with pytest.raises(DataError, match="ground_label"):
+        evaluate_current_models([unlabeled, logs[1]], {"c": ConstantCurrentModel()})
+    with pytest.raises(UnknownNameError, match="variant"):
+        evaluate_current_models(logs, {"c": ConstantCurrentModel()}, variants=("cross_robot",))
+    with pytest.raises(InvalidParameterError, match="at least one CurrentModel"):
+        evaluate_current_models(logs, {})
+    with pytest.raises(InvalidParameterError, match="must be a CurrentModel"):
+        evaluate_current_models(logs, {"x": object()})
+    with pytest.raises(DataError, match="at least 2 runs"):
+        evaluate_current_models(logs[:1], {"c": ConstantCurrentModel()})

@@ -1,0 +1,196 @@
+"""Tests of energy.features: windows, whole-run and local spectra, min-max normalisers."""
+
+import math
+
+import numpy as np
+import pytest
+
+from energy import (
+    SOURCE_CURRENT_RANGE_A,
+    SOURCE_SPEED_RANGE_MPS,
+    DataError,
+    InvalidParameterError,
+    MinMaxNormaliser,
+    UnknownNameError,
+    WindowSpec,
+    band_rms_spectra,
+    log_band_edges_hz,
+    sliding_windows,
+    whole_run_band_spectrum,
+    whole_run_spectrum,
+    window_starts,
+)
+
+
+# ------------------------------------------------------------------------ windows
+def test_paper_t_interval_is_ten_samples_at_100_hz():
+    spec = WindowSpec.from_seconds(0.1, rate_hz=100.0)
+    assert (spec.length_samples, spec.stride_samples) == (10, 10)
+    assert spec.length_s == pytest.approx(0.1) and spec.stride_s == pytest.approx(0.1)
+
+
+def test_window_in_seconds_at_the_borealtc_drive_rate():
+    spec = WindowSpec.from_seconds(1.0, rate_hz=6.5, stride_s=0.1)
+    assert spec.length_samples == 6  # round(6.5) to even
+    assert spec.stride_samples == 1  # never below one sample
+    assert spec.length_s == pytest.approx(6 / 6.5)
+
+
+@pytest.mark.parametrize("kwargs", [dict(length_s=0.0, rate_hz=10.0), dict(length_s=1.0, rate_hz=-1.0),
+                                    dict(length_s=1.0, rate_hz=10.0, stride_s=math.nan)])
+def test_window_spec_rejects_bad_values(kwargs):
+    with pytest.raises(InvalidParameterError, match="must be a finite number > 0"):
+        WindowSpec.from_seconds(**kwargs)
+    with pytest.raises(InvalidParameterError, match="length_samples"):
+        WindowSpec(0, 1, 10.0)
+
+
+def test_window_starts_cover_the_end():
+    spec = WindowSpec(length_samples=4, stride_samples=3, rate_hz=10.0)
+    starts = window_starts(12, spec)
+    assert starts.tolist() == [0, 3, 6, 8]
+    covered = np.zeros(12, bool)
+    for s in starts:
+        covered[s : s + 4] = True
+    assert covered.all()
+    assert window_starts(4, spec).tolist() == [0]
+    with pytest.raises(DataError, match="shorter than one window"):
+        window_starts(3, spec)
+
+
+def test_sliding_windows_content():
+    x = np.arange(10.0)
+    spec = WindowSpec(3, 3, 1.0)
+    w = sliding_windows(x, spec)
+    assert w.tolist() == [[0, 1, 2], [3, 4, 5], [6, 7, 8], [7, 8, 9]]
+    two = sliding_windows(np.column_stack([x, -x]), spec)
+    assert two.shape == (4, 3, 2) and two[1, 0, 1] == -3.0
+
+
+# ---------------------------------------------------------------- whole-run spectrum
+def test_whole_run_spectrum_finds_a_sinusoid_and_ignores_gravity():
+    t = np.arange(16000) / 100.0
+    f, amp = whole_run_spectrum(t, 9.81 + 0.3 * np.sin(2 * np.pi * 7.5 * t))
+    assert f.size == 8000 and f[0] == pytest.approx(50.0 / 8000) and f[-1] == pytest.approx(50.0)
+    assert f[np.argmax(amp)] == pytest.approx(7.5)
+    assert amp.max() == pytest.approx(0.3, rel=1e-3)
+    assert np.median(amp) < 1e-3
+
+
+def test_density_scaling_does_not_depend_on_run_length_for_broadband_vibration():
+    rng = np.random.default_rng(1)
+    levels = {}
+    for n in (3000, 24000):
+        t = np.arange(n) / 100.0
+        a = 9.81 + rng.standard_normal(n)
+        levels[n] = {s: float(np.mean(whole_run_spectrum(t, a, 200, scaling=s)[1])) for s in ("amplitude", "density")}
+    assert levels[3000]["density"] == pytest.approx(levels[24000]["density"], rel=0.15)
+    assert levels[3000]["amplitude"] > 2.0 * levels[24000]["amplitude"]
+
+
+def test_whole_run_spectrum_validates():
+    t = np.arange(1000) / 50.0  # 50 Hz IMU: Nyquist 25 Hz
+    with pytest.raises(InvalidParameterError, match="Nyquist"):
+        whole_run_spectrum(t, np.zeros(1000))
+    t = np.arange(1000) / 100.0
+    with pytest.raises(UnknownNameError, match="scaling"):
+        whole_run_spectrum(t, np.zeros(1000), scaling="power")
+    with pytest.raises(InvalidParameterError, match="n_bins"):
+        whole_run_spectrum(t, np.zeros(1000), n_bins=0)
+    with pytest.raises(DataError, match="strictly increasing"):
+        whole_run_spectrum(t[::-1], np.zeros(1000))
+
+
+# -------------------------------------------------------------------- band spectra
+def test_log_band_edges_give_every_band_a_bin():
+    edges = log_band_edges_hz(12, 1.0, 50.0, 1.0)
+    assert edges.size == 13
+    assert np.all(np.diff(edges) >= 1.0 - 1e-12)
+    assert edges[0] == 1.0 and edges[-1] == 50.0
+    assert np.allclose(edges / 1.0, np.round(edges))  # on the bin grid
+    assert log_band_edges_hz(4, 1.0, 16.0, 1.0).tolist() == [1.0, 2.0, 4.0, 8.0, 16.0]
+    with pytest.raises(InvalidParameterError, match="do not fit"):
+        log_band_edges_hz(60, 1.0, 50.0, 1.0)
+    with pytest.raises(InvalidParameterError, match="max_frequency_hz"):
+        log_band_edges_hz(4, 10.0, 5.0, 1.0)
+
+
+def test_band_rms_places_a_sinusoid_in_its_band():
+    t = np.arange(3000) / 100.0
+    a = 9.81 + np.sqrt(2.0) * np.sin(2 * np.pi * 10.0 * t)  # RMS 1 at 10 Hz
+    rms = band_rms_spectra(t, a, [5.0, 15.0, 25.0], 2.0, [1.0, 5.0, 20.0, 50.0])
+    assert rms.shape == (3, 3)
+    assert np.allclose(rms[:, 1], 1.0, atol=0.02)
+    assert np.all(rms[:, [0, 2]] < 0.02)
+
+
+def test_band_rms_obeys_parseval_for_white_noise():
+    rng = np.random.default_rng(2)
+    t = np.arange(20000) / 100.0
+    a = 9.81 + 0.7 * rng.standard_normal(t.size)
+    edges = log_band_edges_hz(10, 1.0, 50.0, 1.0)
+    edges[0] = 0.5  # include everything but DC
+    rms = band_rms_spectra(t, a, np.arange(5.0, 195.0, 10.0), 1.0, edges)
+    total = np.mean(np.sum(rms**2, axis=1))
+    assert total == pytest.approx(0.49, rel=0.1)
+
+
+def test_band_rms_tracks_a_change_of_ground():
+    t = np.arange(4000) / 100.0
+    rng = np.random.default_rng(3)
+    a = 9.81 + np.where(t < 20.0, 0.1, 1.0) * rng.standard_normal(t.size)
+    edges = log_band_edges_hz(6, 1.0, 50.0, 1.0)
+    rms = band_rms_spectra(t, a, [10.0, 30.0], 1.0, edges)
+    assert np.all(rms[1] > 4.0 * rms[0])
+
+
+def test_band_rms_validates():
+    t = np.arange(50) / 100.0
+    with pytest.raises(DataError, match="shorter than the spectrum window"):
+        band_rms_spectra(t, np.zeros(50), [0.2], 1.0, [1.0, 10.0])
+    t = np.arange(500) / 100.0
+    with pytest.raises(InvalidParameterError, match="hold no FFT bin"):
+        band_rms_spectra(t, np.zeros(500), [2.0], 1.0, [1.0, 1.2, 10.0])
+    with pytest.raises(InvalidParameterError, match="band_edges_hz"):
+        band_rms_spectra(t, np.zeros(500), [2.0], 1.0, [10.0, 1.0])
+    with pytest.raises(InvalidParameterError, match="Nyquist"):
+        band_rms_spectra(t, np.zeros(500), [2.0], 1.0, [1.0, 10.0, 80.0])
+
+
+def test_whole_run_band_spectrum_is_the_average_rms():
+    t = np.arange(6000) / 100.0
+    a = 9.81 + np.sqrt(2.0) * 0.5 * np.sin(2 * np.pi * 25.0 * t)
+    edges = log_band_edges_hz(8, 1.0, 50.0, 1.0)
+    spec = whole_run_band_spectrum(t, a, 1.0, edges)
+    assert spec.shape == (8,)
+    k = int(np.searchsorted(edges, 25.0, side="right")) - 1
+    assert spec[k] == pytest.approx(0.5, rel=0.05)
+    assert spec.sum() == pytest.approx(spec[k], rel=0.1)
+
+
+# --------------------------------------------------------------------- normalisers
+def test_source_ranges_with_absolute_values():
+    speed = MinMaxNormaliser(*SOURCE_SPEED_RANGE_MPS, absolute=True)
+    assert speed.transform(np.array([-0.5, 0.25, 1.5])).tolist() == [0.5, 0.25, 1.5]  # never clipped
+    cur = MinMaxNormaliser(*SOURCE_CURRENT_RANGE_A)
+    assert cur.transform(5.0) == pytest.approx(0.5)
+    assert cur.inverse_transform(cur.transform(np.array([1.0, 7.0]))).tolist() == pytest.approx([1.0, 7.0])
+
+
+def test_fitted_ranges_per_column_or_global():
+    x = np.array([[0.0, 10.0, 3.0], [2.0, 20.0, 3.0]])
+    per = MinMaxNormaliser.from_data(x)
+    assert per.transform(x).tolist() == [[0.0, 0.0, 0.0], [1.0, 1.0, 0.0]]  # constant column: shifted only
+    glob = MinMaxNormaliser.from_data(x, per_column=False)
+    assert glob.low.shape == () and glob.transform(x).max() == pytest.approx(1.0)
+    again = MinMaxNormaliser.from_dict(per.to_dict())
+    assert np.array_equal(again.transform(x), per.transform(x))
+
+
+def test_normaliser_validates():
+    with pytest.raises(InvalidParameterError, match="high >= low"):
+        MinMaxNormaliser(1.0, 0.0)
+    with pytest.raises(DataError, match="non-finite"):
+        MinMaxNormaliser.from_data([1.0, math.nan])
+    with pytest.raises(InvalidParameterError, match="keys"):
+        MinMaxNormaliser.from_dict({"low": 0.0})
