@@ -1,0 +1,201 @@
+"""Tests of energy.battery: closed-form discharges, reserve crossing, budgets, validation."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from energy import (
+    EFFECTS,
+    Battery,
+    InteractionLog,
+    NoiseModel,
+    TruthSimulator,
+    discharge_from_current,
+    discharge_from_power,
+    energy_budget,
+    ground_preset,
+    log_battery_power_w,
+    robot_preset,
+)
+from terrain import DataError, InvalidParameterError, UnknownNameError
+
+
+def test_constant_current_soc_closed_form():
+    # SoC = initial - I t / (3600 C), exactly, at every sample.
+    b = Battery(capacity_ah=7.5, voltage_v=24.0, min_reserve_pct=10.0, initial_soc=0.9)
+    t = np.linspace(0.0, 1234.5, 97)
+    current = 3.3
+    d = discharge_from_current(b, t, np.full_like(t, current))
+    np.testing.assert_allclose(d.soc, 0.9 - current * t / (3600.0 * 7.5), rtol=0, atol=1e-13)
+    np.testing.assert_allclose(d.charge_mah, current * t / 3.6, rtol=1e-13)
+    np.testing.assert_allclose(d.energy_j, 24.0 * current * t, rtol=1e-13)
+    assert d.reserve_crossed_index is None and not d.reserve_crossed
+
+
+def test_constant_power_equals_constant_current_without_resistance():
+    b = Battery(capacity_ah=2.0, voltage_v=12.0)
+    t = np.linspace(0.0, 600.0, 11)
+    dp = discharge_from_power(b, t, np.full(11, 24.0))
+    di = discharge_from_current(b, t, np.full(11, 2.0))
+    np.testing.assert_allclose(dp.soc, di.soc, atol=1e-15)
+    np.testing.assert_allclose(dp.current_a, 2.0)
+
+
+def test_reserve_crossing_time_closed_form():
+    # 1 Ah, start full, reserve 25 %, 2 A: crossing at (1 - 0.25) * 3600 / 2 = 1350 s.
+    b = Battery(capacity_ah=1.0, voltage_v=12.0, min_reserve_pct=25.0)
+    t = np.arange(0.0, 2001.0, 7.0)
+    d = discharge_from_current(b, t, np.full(t.size, 2.0))
+    assert d.reserve_crossed_time_s == pytest.approx(1350.0, abs=1e-9)
+    k = d.reserve_crossed_index
+    assert d.soc[k] < 0.25 <= d.soc[k - 1]
+    assert t[k - 1] <= 1350.0 < t[k]
+    budget = energy_budget(d, predicted_energy_j=0.0)
+    assert not budget.feasible and budget.predicted_feasible
+    assert budget.reserve_crossed_time_s == pytest.approx(1350.0, abs=1e-9)
+    assert budget.reserve_margin_pct < 0 and budget.reserve_margin_wh < 0
+
+
+def test_start_below_reserve_crosses_at_first_sample():
+    b = Battery(capacity_ah=1.0, voltage_v=12.0, min_reserve_pct=50.0, initial_soc=0.4)
+    d = discharge_from_current(b, [0.0, 1.0, 2.0], [0.0, 0.0, 0.0])
+    assert d.reserve_crossed_index == 0 and d.reserve_crossed_time_s == 0.0
+
+
+def test_soc_monotone_for_non_negative_current():
+    rng = np.random.default_rng(3)
+    b = Battery(capacity_ah=3.0, voltage_v=24.0, internal_resistance_ohm=0.05, peukert_exponent=1.2)
+    t = np.cumsum(rng.uniform(0.01, 0.5, 400))
+    power = np.abs(rng.normal(50.0, 40.0, t.size))
+    power[::17] = 0.0
+    d = discharge_from_power(b, t, power)
+    assert np.all(np.diff(d.soc) <= 0)
+    assert np.all(np.diff(d.charge_mah) >= 0) and np.all(np.diff(d.energy_j) >= 0)
+    assert d.soc[0] == b.initial_soc
+
+
+def test_internal_resistance_roundtrip_and_extra_charge():
+    b = Battery(capacity_ah=5.0, voltage_v=24.0, internal_resistance_ohm=0.2)
+    p = np.array([-50.0, 0.0, 10.0, 300.0, 700.0])
+    i = b.current_a(p)
+    np.testing.assert_allclose(b.terminal_power_w(i), p, rtol=1e-12, atol=1e-12)
+    assert np.all(i[2:] > p[2:] / 24.0)  # losses: more current than P / V
+    with pytest.raises(InvalidParameterError, match="maximum deliverable power"):
+        b.current_a([b.max_power_w * 1.01])
+
+
+def test_peukert_depletes_faster_above_reference_current():
+    # Reference current 1 A (20 Ah over 20 h); at 4 A with k = 1.5, I_eff = 4 * 4**0.5 = 8 A.
+    b = Battery(capacity_ah=20.0, voltage_v=12.0, peukert_exponent=1.5)
+    d = discharge_from_current(b, [0.0, 3600.0], [4.0, 4.0])
+    assert d.final_soc == pytest.approx(1.0 - 8.0 / 20.0, abs=1e-12)
+    assert d.total_charge_mah == pytest.approx(4000.0)
+
+
+def test_budget_arithmetic_and_segments():
+    b = Battery(capacity_ah=1.0, voltage_v=10.0, min_reserve_pct=20.0)
+    t = np.array([0.0, 10.0, 20.0, 30.0, 40.0])
+    power = np.array([36.0, 36.0, 72.0, 72.0, 72.0])
+    seg = np.array([0, 0, 1, 1, 1])
+    d = discharge_from_power(b, t, power)
+    budget = energy_budget(d, 2000.0, segment_index=seg, segment_predicted_j=[700.0, 1300.0])
+    # intervals: [0,10] 360 J (seg 0), [10,20] 540 J (seg 0), [20,30] 720, [30,40] 720 (seg 1)
+    np.testing.assert_allclose(budget.segment_actual_j, [900.0, 1440.0])
+    assert budget.actual_energy_j == pytest.approx(2340.0)
+    assert budget.segment_actual_j.sum() == pytest.approx(budget.actual_energy_j)
+    assert budget.error_pct == pytest.approx(100.0 * (2000.0 - 2340.0) / 2340.0)
+    np.testing.assert_allclose(budget.segment_error_pct, [100 * (700 - 900) / 900, 100 * (1300 - 1440) / 1440])
+    assert budget.actual_charge_mah == pytest.approx(2340.0 / 10.0 / 3.6)
+    assert budget.predicted_charge_mah == pytest.approx(2000.0 / 10.0 / 3.6)
+    assert budget.arrival_soc == pytest.approx(1.0 - 2340.0 / 36000.0)
+    assert budget.arrival_energy_wh == pytest.approx(10.0 - 2340.0 / 3600.0)
+    assert budget.reserve_margin_wh == pytest.approx(8.0 - 2340.0 / 3600.0)
+    assert budget.feasible and budget.predicted_feasible
+    js = budget.to_json_dict()
+    assert js["actual_energy_j"] == pytest.approx(2340.0) and js["reserve_crossed_time_s"] is None
+    assert js["battery"]["capacity_ah"] == 1.0
+
+
+def test_budget_predicted_infeasible():
+    b = Battery(capacity_ah=1.0, voltage_v=10.0, min_reserve_pct=20.0)
+    d = discharge_from_power(b, [0.0, 100.0], [1.0, 1.0])
+    budget = energy_budget(d, predicted_energy_j=9.0 * 3600.0)  # 9 Wh of 8 usable
+    assert budget.feasible and not budget.predicted_feasible
+    assert budget.predicted_arrival_soc == pytest.approx(0.1)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"capacity_ah": 0.0}, "capacity_ah must be > 0"),
+        ({"capacity_ah": -2.0}, "capacity_ah must be > 0"),
+        ({"capacity_ah": math.nan}, "capacity_ah must be finite"),
+        ({"voltage_v": 0.0}, "voltage_v must be > 0"),
+        ({"min_reserve_pct": 100.0}, "min_reserve_pct must be < 100"),
+        ({"min_reserve_pct": -1.0}, "min_reserve_pct must be >= 0"),
+        ({"initial_soc": 0.0}, "initial_soc must be > 0"),
+        ({"initial_soc": 1.5}, "initial_soc must be <= 1"),
+        ({"internal_resistance_ohm": -0.1}, "internal_resistance_ohm must be >= 0"),
+        ({"peukert_exponent": 0.9}, "peukert_exponent must be >= 1"),
+        ({"capacity_ah": True}, "capacity_ah must be a real number"),
+    ],
+)
+def test_battery_validation(kwargs, match):
+    args = {"capacity_ah": 10.0, "voltage_v": 24.0} | kwargs
+    with pytest.raises(InvalidParameterError, match=match):
+        Battery(**args)
+
+
+def test_series_validation():
+    b = Battery(1.0, 12.0)
+    with pytest.raises(DataError, match="strictly increasing"):
+        discharge_from_power(b, [0.0, 1.0, 1.0], [1.0, 1.0, 1.0])
+    with pytest.raises(DataError, match="at least 2 samples"):
+        discharge_from_power(b, [0.0], [1.0])
+    with pytest.raises(InvalidParameterError, match="must have the shape of time_s"):
+        discharge_from_current(b, [0.0, 1.0], [1.0])
+    with pytest.raises(DataError, match="power_w must be finite"):
+        discharge_from_power(b, [0.0, 1.0], [1.0, math.nan])
+    with pytest.raises(InvalidParameterError, match="battery must be a Battery"):
+        discharge_from_power("battery", [0.0, 1.0], [1.0, 1.0])
+    d = discharge_from_power(b, [0.0, 1.0, 2.0], [1.0, 1.0, 1.0])
+    with pytest.raises(InvalidParameterError, match="predicted_energy_j must be >= 0"):
+        energy_budget(d, -1.0)
+    with pytest.raises(InvalidParameterError, match="must be given together"):
+        energy_budget(d, 1.0, segment_index=[0, 0, 0])
+    with pytest.raises(InvalidParameterError, match=r"segment_index must lie in \[0, 0\]"):
+        energy_budget(d, 1.0, segment_index=[0, 1, 1], segment_predicted_j=[1.0])
+
+
+def test_log_power_reproduces_physics_battery_power():
+    # Noise-free log without wheel slip (not observable in a log): the motoring currents plus
+    # electronics give back the physics model's battery power sample by sample.
+    robot = robot_preset("husky")
+    effects = [e for e in EFFECTS if e != "longitudinal_slip"]
+    sim = TruthSimulator(robot, {"grass": ground_preset("grass")}, effects=effects, noise=NoiseModel.off(),
+                         velocity_time_constant_s=0.0, seed=1)
+    t = np.arange(600) * 0.01
+    v = np.where(t < 3.0, 0.6 * np.minimum(t, 1.0), 0.0)
+    w = np.where(t >= 3.0, 0.5 * np.minimum(t - 3.0, 1.0), 0.1)
+    run = sim.run_commands(t, v, w, ground="grass")
+    p = log_battery_power_w(run.log, robot)
+    np.testing.assert_allclose(p, run.breakdown.total_power_w, rtol=1e-9, atol=1e-9)
+    drive = log_battery_power_w(run.log, robot, electronics=False)
+    np.testing.assert_allclose(drive, run.breakdown.drive_power_w, rtol=1e-9, atol=1e-9)
+
+
+def test_log_power_battery_convention_and_errors():
+    robot = robot_preset("jackal")
+    log = InteractionLog([0.0, 1.0, 2.0], [0.0] * 3, [0.0] * 3, [1.0, 2.0, 0.5], [1.0, 0.0, -0.5],
+                         [0.0, 2.0], [9.8, 9.8])
+    p = log_battery_power_w(log, robot, current_convention="battery", electronics=False)
+    np.testing.assert_allclose(p, robot.battery_voltage_v * np.array([2.0, 2.0, 0.0]))
+    with_el = log_battery_power_w(log, robot, current_convention="battery")
+    np.testing.assert_allclose(with_el - p, robot.sensor_power_w + robot.control_standby_power_w)
+    with pytest.raises(UnknownNameError, match="current_convention must be one of"):
+        log_battery_power_w(log, robot, current_convention="duty")
+    with pytest.raises(InvalidParameterError, match="robot must be a RobotParams"):
+        log_battery_power_w(log, "jackal")

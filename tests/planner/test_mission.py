@@ -1,0 +1,194 @@
+"""Tests of planner.mission: apples-to-apples energy, replay, reserve crossing, outputs, bad input."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+
+from energy import Battery, NoiseModel, PhysicsEnergyModel, TruthSimulator, ground_preset, robot_preset
+from planner import EnergyCost, MISSION_FORMAT_VERSION, evaluate_route, simulate_mission
+from terrain import (
+    DataError,
+    GridMismatchError,
+    InvalidParameterError,
+    OutOfBoundsError,
+    UnknownNameError,
+    flat_map,
+    ramp_map,
+)
+
+ROBOT = robot_preset("husky")
+GROUNDS = {"asphalt": ground_preset("asphalt")}
+L_ROUTE = [[2.5, 2.5], [35.5, 2.5], [35.5, 25.5]]
+
+
+@pytest.fixture(scope="module")
+def flat():
+    tmap = flat_map((30, 40), 1.0)
+    cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(ROBOT), GROUNDS, speed_mps=0.5)
+    return tmap, cost
+
+
+@pytest.fixture(scope="module")
+def clean_sim():
+    # Noise off and parameters equal to the planner's model: the apples-to-apples truth.
+    return TruthSimulator(ROBOT, GROUNDS, noise=NoiseModel.off(), velocity_time_constant_s=0.0,
+                          current_rate_hz=50.0, seed=0)
+
+
+@pytest.fixture(scope="module")
+def flat_mission(flat, clean_sim):
+    tmap, cost = flat
+    route = evaluate_route(cost, L_ROUTE)
+    return route, simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=cost)
+
+
+def test_flat_mission_matches_planner_prediction(flat_mission):
+    route, res = flat_mission
+    b = res.budget
+    assert res.status == "completed" and res.source == "truth" and b.feasible
+    assert b.predicted_energy_j == pytest.approx(route.energy_j, rel=1e-12)
+    # Only the stop-turn-go ramps (inertia, slower electronics time, control start-up) differ.
+    assert abs(b.error_pct) < 4.0
+    assert b.error_pct < 0  # the ramps cost extra, never less
+    np.testing.assert_allclose(b.segment_predicted_j, route.segment_energy_j + route.turn_energy_j[:-1])
+    assert np.all(np.abs(b.segment_error_pct) < 5.0)
+    assert b.segment_actual_j.sum() == pytest.approx(b.actual_energy_j, rel=1e-12)
+    # the log's currents, turned into battery power, reproduce the simulator's own battery energy
+    assert res.budget.actual_energy_j == pytest.approx(res.truth_energy_j, rel=2e-3)
+    # series bookkeeping
+    assert np.all(np.diff(res.soc) <= 0) and res.soc[0] == 1.0
+    assert res.energy_wh[-1] * 3600.0 == pytest.approx(b.actual_energy_j)
+    assert res.charge_mah[-1] == pytest.approx(b.actual_energy_j / 24.0 / 3.6)
+    assert res.predicted_energy_wh[-1] * 3600.0 == pytest.approx(b.predicted_energy_j)
+    assert np.all(np.diff(res.predicted_energy_wh) >= 0)
+    assert np.all(np.diff(res.segment_index) >= 0) and set(np.unique(res.segment_index)) == {0, 1}
+    assert res.x_m[-1] == pytest.approx(35.5) and res.y_m[-1] == pytest.approx(25.5)
+    assert b.arrival_soc == pytest.approx(1.0 - b.actual_energy_j / (20.0 * 24.0 * 3600.0))
+
+
+def test_ramp_up_and_down_match_prediction(clean_sim):
+    tmap = ramp_map((12, 30), 1.0, grade=0.1)
+    cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(ROBOT), GROUNDS, speed_mps=0.5)
+    up = simulate_mission(tmap, evaluate_route(cost, [[2.5, 5.5], [27.5, 5.5]]), ROBOT, Battery(20.0, 24.0),
+                          truth=clean_sim, cost=cost)
+    down = simulate_mission(tmap, evaluate_route(cost, [[27.5, 5.5], [2.5, 5.5]]), ROBOT, Battery(20.0, 24.0),
+                            truth=clean_sim, cost=cost)
+    assert up.budget.actual_energy_j > 1.5 * down.budget.actual_energy_j
+    assert abs(up.budget.error_pct) < 3.0 and abs(down.budget.error_pct) < 3.0
+
+
+def test_speed_recovered_from_route_without_cost(flat, flat_mission, clean_sim):
+    tmap, cost = flat
+    route, res = flat_mission
+    alone = simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim)
+    assert alone.speed_mps == pytest.approx(cost.speed_mps, rel=1e-9)
+    assert alone.budget.actual_energy_j == pytest.approx(res.budget.actual_energy_j, rel=1e-9)
+
+
+def test_replay_of_log_gives_same_budget(flat, flat_mission):
+    tmap, cost = flat
+    route, res = flat_mission
+    replay = simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=res.log, cost=cost)
+    assert replay.source == "replay" and math.isnan(replay.truth_energy_j)
+    np.testing.assert_array_equal(replay.segment_index, res.segment_index)
+    assert replay.budget.actual_energy_j == res.budget.actual_energy_j
+    np.testing.assert_allclose(replay.budget.segment_actual_j, res.budget.segment_actual_j)
+    # without a pose the log is mapped by the velocity profile's timing
+    blind = simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0),
+                             truth=dataclasses.replace(res.log, pose_xyh=None), cost=cost)
+    np.testing.assert_array_equal(blind.segment_index, res.segment_index)
+    np.testing.assert_allclose(blind.x_m, res.x_m, atol=1e-9)
+    assert blind.budget.actual_energy_j == pytest.approx(res.budget.actual_energy_j)
+
+
+def test_repeated_waypoint_segment_is_empty(flat, clean_sim):
+    tmap, cost = flat
+    route = evaluate_route(cost, [[2.5, 2.5], [10.5, 2.5], [10.5, 2.5], [10.5, 12.5]])
+    res = simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=cost)
+    assert res.budget.segment_predicted_j[1] == 0.0 and res.budget.segment_actual_j[1] == 0.0
+    assert set(np.unique(res.segment_index)) == {0, 2}
+    assert res.budget.segment_predicted_j[2] == pytest.approx(route.segment_energy_j[2] + route.turn_energy_j[2])
+
+
+def test_infeasible_mission_reports_crossing(flat, flat_mission, clean_sim):
+    tmap, cost = flat
+    route, full = flat_mission
+    # A battery whose reserve is reached 70 % of the way through the energy.
+    actual_ah = full.budget.actual_energy_j / 24.0 / 3600.0
+    battery = Battery(capacity_ah=actual_ah * 0.7 / 0.75, voltage_v=24.0, min_reserve_pct=25.0)
+    res = simulate_mission(tmap, route, ROBOT, battery, truth=clean_sim, cost=cost)
+    assert res.status == "reserve_violated" and not res.feasible
+    k = res.budget.reserve_crossed_index
+    assert res.soc[k] < 0.25 <= res.soc[k - 1]
+    tc = res.reserve_crossed_time_s
+    assert res.time_s[k - 1] <= tc <= res.time_s[k]
+    # the crossing is where 70 % of the actual energy has been used
+    assert np.interp(tc, res.time_s, res.energy_wh) == pytest.approx(0.7 * res.energy_wh[-1], rel=1e-3)
+    x, y = res.reserve_crossed_xy_m
+    seg = res.reserve_crossed_segment
+    assert seg == res.segment_index[k - 1]
+    a, b = route.waypoints_m[seg], route.waypoints_m[seg + 1]
+    assert abs((b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0])) < 1e-6  # on the segment's line
+    assert res.budget.reserve_margin_pct < 0
+
+    stopped = simulate_mission(tmap, route, ROBOT, battery, truth=clean_sim, cost=cost, stop_at_reserve=True)
+    assert stopped.status == "reserve_violated" and stopped.n_samples == k + 1
+    assert stopped.soc[-1] < 0.25 and stopped.reserve_crossed_time_s == pytest.approx(tc)
+    # the aborted budget covers the part driven, so its error stays small
+    assert stopped.budget.predicted_energy_j < full.budget.predicted_energy_j
+    assert abs(stopped.budget.error_pct) < 4.0
+    assert stopped.log.time_s[-1] == pytest.approx(stopped.time_s[-1] + full.log.time_s[0])
+
+
+def test_log_shorter_than_route_raises(flat, flat_mission):
+    tmap, cost = flat
+    route, res = flat_mission
+    half = res.log.slice(res.log.time_s[0], res.log.time_s[len(res.log) // 2])
+    with pytest.raises(DataError, match="from the route's goal"):
+        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=half, cost=cost)
+    with pytest.raises(DataError, match="expected a log of the whole route"):
+        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0),
+                         truth=dataclasses.replace(half, pose_xyh=None), cost=cost)
+
+
+def test_bad_inputs(flat, flat_mission, clean_sim):
+    tmap, cost = flat
+    route, res = flat_mission
+    small = flat_map((10, 10), 1.0)
+    with pytest.raises(OutOfBoundsError, match="outside the map bounds"):
+        simulate_mission(small, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim)
+    with pytest.raises(InvalidParameterError, match="capacity_ah must be > 0"):
+        simulate_mission(tmap, route, ROBOT, Battery(0.0, 24.0), truth=clean_sim)
+    with pytest.raises(InvalidParameterError, match="battery must be a Battery"):
+        simulate_mission(tmap, route, ROBOT, 20.0, truth=clean_sim)
+    with pytest.raises(InvalidParameterError, match="truth must be a TruthSimulator or an InteractionLog"):
+        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth="log.csv")
+    with pytest.raises(UnknownNameError, match="current_convention must be one of"):
+        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=res.log, current_convention="duty")
+    with pytest.raises(InvalidParameterError, match="accel_mps2 must be > 0"):
+        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, accel_mps2=0.0)
+    other = EnergyCost.from_model(flat_map((30, 41), 1.0), PhysicsEnergyModel(ROBOT), GROUNDS, speed_mps=0.5)
+    with pytest.raises(GridMismatchError, match="cost was built on a grid"):
+        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=other)
+
+
+def test_json_and_plot(flat_mission, flat, tmp_path):
+    tmap, _ = flat
+    _, res = flat_mission
+    path = res.save_json(tmp_path / "mission.json", series_every=25)
+    data = json.loads(path.read_text())
+    assert data["format_version"] == MISSION_FORMAT_VERSION and data["status"] == "completed"
+    assert data["budget"]["actual_energy_j"] == pytest.approx(res.budget.actual_energy_j)
+    assert data["reserve_crossing"] is None
+    n = len(range(0, res.n_samples, 25)) + (0 if (res.n_samples - 1) % 25 == 0 else 1)
+    assert len(data["series"]["soc"]) == n and data["series"]["time_s"][-1] == res.time_s[-1]
+    png = res.plot(tmp_path / "mission.png", tmap)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mission.json", "mission.png"]  # no temp files left
+    with pytest.raises(InvalidParameterError, match="series_every must be an int >= 1"):
+        res.to_json_dict(series_every=0)
