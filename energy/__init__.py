@@ -39,3 +39,160 @@ __all__ += [
     "write_csv_log",
     "read_rosbag",
 ]
+
+# --- battery helper (missions); appended until the lead rewires this file
+from .battery import (
+    CURRENT_CONVENTIONS,
+    Battery,
+    Discharge,
+    EnergyBudget,
+    discharge_from_current,
+    discharge_from_power,
+    energy_budget,
+    log_battery_power_w,
+)
+
+__all__ += [
+    "Battery",
+    "Discharge",
+    "EnergyBudget",
+    "CURRENT_CONVENTIONS",
+    "discharge_from_power",
+    "discharge_from_current",
+    "energy_budget",
+    "log_battery_power_w",
+]
+
+# --- truth-simulator helper (issue 3); appended until the lead rewires this file
+from .excitation import CommandProfile, excitation_commands, waypoint_commands
+from .truth import (
+    PAPER_GROUNDS,
+    PAPER_VARIATION,
+    VIBRATION_PRESETS,
+    GroundVariation,
+    NoiseModel,
+    TruthRun,
+    TruthSimulator,
+    VibrationSignature,
+    vibration_preset,
+)
+
+__all__ += [
+    "CommandProfile",
+    "excitation_commands",
+    "waypoint_commands",
+    "TruthSimulator",
+    "TruthRun",
+    "NoiseModel",
+    "VibrationSignature",
+    "GroundVariation",
+    "PAPER_GROUNDS",
+    "PAPER_VARIATION",
+    "VIBRATION_PRESETS",
+    "vibration_preset",
+]
+
+from terrain.errors import (
+    DataError,
+    FileFormatError,
+    FormatVersionError,
+    InvalidParameterError,
+    NotFittedError,
+    UnknownNameError,
+)
+
+from .baselines import PHYSICS_FIT_PARAMETERS, ConstantCurrentModel, LinearCurrentModel, PhysicsCurrentModel
+from .estimator import (
+    CURRENT_MODEL_FORMAT_VERSION,
+    ESTIMATOR_PRESETS,
+    CurrentModel,
+    CurrentNet,
+    CurrentNetConfig,
+    EstimatorConfig,
+    TrainConfig,
+    TrainingHistory,
+    VibrationCurrentEstimator,
+    WindowDataset,
+    estimator_preset,
+    load_current_model,
+    train_network,
+)
+from .evaluation import EvaluationResult, RunScore, ScoreSummary, evaluate_current_models
+from .features import (
+    SOURCE_CURRENT_RANGE_A,
+    SOURCE_OMEGA_RANGE_RADPS,
+    SOURCE_SPEED_RANGE_MPS,
+    MinMaxNormaliser,
+    WindowSpec,
+    band_rms_spectra,
+    log_band_edges_hz,
+    sliding_windows,
+    whole_run_band_spectrum,
+    whole_run_spectrum,
+    window_starts,
+)
+from .metrics import (
+    CurrentErrors,
+    charge_mah,
+    compare_currents,
+    cumulative_charge_mah,
+    error_rate_pct,
+    moving_median,
+    rmse_a,
+    section_charges_mah,
+    section_error_pct,
+)
+
+__all__ += [
+    # current models (estimator, baselines) and their evaluation
+    "CurrentModel",
+    "load_current_model",
+    "CURRENT_MODEL_FORMAT_VERSION",
+    "VibrationCurrentEstimator",
+    "EstimatorConfig",
+    "ESTIMATOR_PRESETS",
+    "estimator_preset",
+    "CurrentNet",
+    "CurrentNetConfig",
+    "WindowDataset",
+    "TrainConfig",
+    "TrainingHistory",
+    "train_network",
+    "ConstantCurrentModel",
+    "LinearCurrentModel",
+    "PhysicsCurrentModel",
+    "PHYSICS_FIT_PARAMETERS",
+    "evaluate_current_models",
+    "EvaluationResult",
+    "RunScore",
+    "ScoreSummary",
+    # vibration features
+    "WindowSpec",
+    "window_starts",
+    "sliding_windows",
+    "whole_run_spectrum",
+    "whole_run_band_spectrum",
+    "band_rms_spectra",
+    "log_band_edges_hz",
+    "MinMaxNormaliser",
+    "SOURCE_SPEED_RANGE_MPS",
+    "SOURCE_OMEGA_RANGE_RADPS",
+    "SOURCE_CURRENT_RANGE_A",
+    # metrics
+    "charge_mah",
+    "cumulative_charge_mah",
+    "section_charges_mah",
+    "error_rate_pct",
+    "section_error_pct",
+    "rmse_a",
+    "moving_median",
+    "compare_currents",
+    "CurrentErrors",
+    # errors used by the models
+    "DataError",
+    "FileFormatError",
+    "FormatVersionError",
+    "InvalidParameterError",
+    "NotFittedError",
+    "UnknownNameError",
+]

@@ -1,0 +1,658 @@
+"""The adaptive mission loop: plan, drive a leg, compare per cell, update models, replan.
+
+:func:`run_adaptive_mission` plans with the registry's current models (through
+:class:`~planner.learned_cost.LearnedEnergyModel` edge costs), drives the route leg by leg
+against a :class:`energy.TruthSimulator` (which knows the true grounds), records measured vs
+predicted current per cell in the :class:`terrain.CellModelRegistry`, and where the
+:class:`terrain.UpdatePolicy` flags a region it
+
+1. runs the excitation manoeuvre there (:func:`energy.excitation_commands`: a straight run
+   over speed levels and a pivot run, simulated on the spot on the ground of the region's
+   representative cell; its energy and time are charged to the battery),
+2. fits a new model (``model_factory``, default :class:`energy.LinearCurrentModel`) on the
+   first ``1 - validation_fraction`` of each excitation log,
+3. validates new and old model on the held-back tails (absolute relative error of the
+   integrated absolute current, both sides) and calls ``registry.propose_update``, which
+   keeps the new model only if it is better,
+4. refreshes the edge costs (only the new model's table is computed) and replans from
+   the current position.
+
+The scope of an update is, with ``update_scope="ground_class"`` (default), every cell of the
+map's ground class at the representative cell that is served by the same model(s) as the
+flagged region: the map's ground layer is used as a *segmentation* only (e.g. surface classes
+from imagery), never for its energy; with ``"region"`` only the flagged cells.
+
+The loop stops at the goal, when the predicted energy of the remaining route exceeds the
+energy above the battery's reserve (``"budget_exceeded"``), when the reserve is crossed while
+driving (``"reserve_violated"``), when no route is found (``"no_route"``) or after
+``max_legs`` legs (``"max_legs"``); the result says why and where.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from energy import (
+    Battery,
+    GroundParams,
+    InteractionLog,
+    LinearCurrentModel,
+    RobotParams,
+    TruthSimulator,
+    excitation_commands,
+    log_battery_power_w,
+)
+from terrain import CellModelRegistry, InvalidParameterError, TerrainMap, UpdatePolicy
+
+from .learned_cost import LearnedEnergyModel
+from .mission import simulate_mission
+from .ompl_planner import plan_route
+from .route import Route, evaluate_route
+
+__all__ = [
+    "ADAPTIVE_STATUSES",
+    "ADAPTIVE_FORMAT_VERSION",
+    "UPDATE_SCOPES",
+    "AdaptiveSettings",
+    "LegRecord",
+    "UpdateRecord",
+    "ReplanRecord",
+    "AdaptiveResult",
+    "run_adaptive_mission",
+    "validation_error",
+]
+
+ADAPTIVE_STATUSES = ("completed", "budget_exceeded", "reserve_violated", "no_route", "max_legs")
+ADAPTIVE_FORMAT_VERSION = 1
+UPDATE_SCOPES = ("ground_class", "region")
+
+
+@dataclass(frozen=True, kw_only=True)
+class AdaptiveSettings:
+    """Knobs of :func:`run_adaptive_mission`.
+
+    Parameters
+    ----------
+    speed_mps : float
+        Planning and driving speed (m/s, > 0).
+    leg_length_m : float
+        Length of route driven between comparisons (m, > 0).
+    policy : UpdatePolicy
+        When a cell's error calls for an update.
+    update_scope : {"ground_class", "region"}
+        Cells an update covers (see the module docstring).
+    planner : str
+        Planner name for :func:`plan_route` (default ``"lattice"``).
+    planner_time_limit_s : float
+        OMPL time budget (s; ignored by the lattice).
+    excitation_duration_s, turn_excitation_duration_s : float
+        Lengths of the straight and pivot excitation runs (s, > 2).
+    excitation_speeds_mps : tuple of float
+        Speed levels of the straight excitation run.
+    excitation_omega_radps : float
+        Pivot rate of the turn excitation run (rad/s, > 0).
+    validation_fraction : float
+        Held-back tail of each excitation log, in (0, 0.5].
+    max_updates : int
+        Update attempts allowed (>= 0).
+    max_legs : int
+        Legs allowed (>= 1).
+    goal_tolerance_m : float
+        Distance to the goal that counts as arrived (m, > 0).
+    seed : int
+        Seeds the drives and excitations (>= 0).
+    """
+
+    speed_mps: float = 0.5
+    leg_length_m: float = 10.0
+    policy: UpdatePolicy = field(default_factory=lambda: UpdatePolicy(threshold_pct=10.0, min_samples=50,
+                                                                      hysteresis_pct=3.0, min_region_cells=8))
+    update_scope: str = "ground_class"
+    planner: str = "lattice"
+    planner_time_limit_s: float = 1.0
+    excitation_duration_s: float = 20.0
+    turn_excitation_duration_s: float = 8.0
+    excitation_speeds_mps: tuple[float, ...] = (0.2, 0.35, 0.5, 0.65, 0.8)
+    excitation_omega_radps: float = 0.5
+    validation_fraction: float = 0.25
+    max_updates: int = 5
+    max_legs: int = 500
+    goal_tolerance_m: float = 0.5
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        for name in ("speed_mps", "leg_length_m", "planner_time_limit_s", "excitation_omega_radps", "goal_tolerance_m"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise InvalidParameterError(f"AdaptiveSettings.{name} must be a finite number > 0, got {v!r}")
+        for name in ("excitation_duration_s", "turn_excitation_duration_s"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 2.0):
+                raise InvalidParameterError(f"AdaptiveSettings.{name} must be a finite number > 2 s, got {v!r}")
+        if not isinstance(self.policy, UpdatePolicy):
+            raise InvalidParameterError(f"AdaptiveSettings.policy must be an UpdatePolicy, got {self.policy!r}")
+        if self.update_scope not in UPDATE_SCOPES:
+            raise InvalidParameterError(f"AdaptiveSettings.update_scope must be one of {UPDATE_SCOPES!r}, got {self.update_scope!r}")
+        if not (isinstance(self.validation_fraction, (int, float)) and 0 < self.validation_fraction <= 0.5):
+            raise InvalidParameterError(f"AdaptiveSettings.validation_fraction must be in (0, 0.5], got {self.validation_fraction!r}")
+        speeds = tuple(float(s) for s in self.excitation_speeds_mps)
+        if not speeds or any(not (math.isfinite(s) and s > 0) for s in speeds):
+            raise InvalidParameterError(f"AdaptiveSettings.excitation_speeds_mps must be numbers > 0, got {self.excitation_speeds_mps!r}")
+        object.__setattr__(self, "excitation_speeds_mps", speeds)
+        for name, low in (("max_updates", 0), ("max_legs", 1), ("seed", 0)):
+            v = getattr(self, name)
+            if not (isinstance(v, int) and not isinstance(v, bool) and v >= low):
+                raise InvalidParameterError(f"AdaptiveSettings.{name} must be an integer >= {low}, got {v!r}")
+
+
+@dataclass(frozen=True)
+class LegRecord:
+    """One driven leg: where, predicted and actual battery energy (J), duration (s)."""
+
+    index: int
+    start_xy_m: tuple[float, float]
+    end_xy_m: tuple[float, float]
+    predicted_energy_j: float
+    actual_energy_j: float
+    duration_s: float
+    n_samples: int
+
+
+@dataclass(frozen=True)
+class UpdateRecord:
+    """One model update attempt after leg ``after_leg``."""
+
+    after_leg: int
+    ground: str
+    region_cells: int
+    scope_cells: int
+    region_error_pct: float
+    accepted: bool
+    model_id: int | None
+    validation_error_new: float
+    validation_error_old: float
+    excitation_energy_j: float
+    excitation_duration_s: float
+    wall_time_s: float
+
+
+@dataclass(frozen=True)
+class ReplanRecord:
+    """A (re)plan: when, the remaining route's predicted energy, whether the route changed."""
+
+    after_leg: int
+    reason: str
+    predicted_energy_j: float
+    previous_route_energy_j: float
+    route_changed: bool
+    refresh_time_s: float
+    planning_time_s: float
+    tables_built: int
+
+
+@dataclass(frozen=True, eq=False)
+class AdaptiveResult:
+    """Outcome of :func:`run_adaptive_mission` (see the module docstring).
+
+    Attributes
+    ----------
+    status, reason : str
+        One of :data:`ADAPTIVE_STATUSES` and a sentence saying why the loop stopped.
+    final_xy_m : (float, float)
+        Where the robot is at the end.
+    distance_to_goal_m : float
+    initial_route : Route
+        The first plan (prior models).
+    legs, updates, replans : tuple of records
+    time_s, x_m, y_m, soc, energy_j, predicted_energy_j : ndarray
+        Series over the whole mission (driving and excitation), cumulative energies (J).
+    driven_energy_j, excitation_energy_j : float
+        Actual battery energy of driving and of the excitation manoeuvres (J).
+    update_wall_time_s : float
+        Wall-clock time spent fitting/validating/refreshing for updates (s).
+    final_soc : float
+    """
+
+    status: str
+    reason: str
+    final_xy_m: tuple[float, float]
+    distance_to_goal_m: float
+    initial_route: Route
+    legs: tuple[LegRecord, ...]
+    updates: tuple[UpdateRecord, ...]
+    replans: tuple[ReplanRecord, ...]
+    time_s: np.ndarray
+    x_m: np.ndarray
+    y_m: np.ndarray
+    soc: np.ndarray
+    energy_j: np.ndarray
+    predicted_energy_j: np.ndarray
+    driven_energy_j: float
+    excitation_energy_j: float
+    update_wall_time_s: float
+    final_soc: float
+
+    def __post_init__(self) -> None:
+        if self.status not in ADAPTIVE_STATUSES:
+            raise InvalidParameterError(f"status must be one of {ADAPTIVE_STATUSES!r}, got {self.status!r}")
+
+    # ------------------------------------------------------------------ metrics
+    @property
+    def accepted_updates(self) -> int:
+        """Number of accepted updates."""
+        return sum(u.accepted for u in self.updates)
+
+    def _legs_error_pct(self, legs: list[LegRecord]) -> float:
+        pred = sum(leg.predicted_energy_j for leg in legs)
+        act = sum(leg.actual_energy_j for leg in legs)
+        return 100.0 * (pred - act) / act if act > 0 else math.nan
+
+    @property
+    def error_before_update_pct(self) -> float:
+        """Prediction error (%) of the legs driven before the first accepted update (all legs if none)."""
+        first = next((u.after_leg for u in self.updates if u.accepted), None)
+        return self._legs_error_pct([lg for lg in self.legs if first is None or lg.index <= first])
+
+    @property
+    def error_after_update_pct(self) -> float:
+        """Prediction error (%) of the legs driven after the last accepted update (NaN if none)."""
+        last = next((u.after_leg for u in reversed(self.updates) if u.accepted), None)
+        if last is None:
+            return math.nan
+        return self._legs_error_pct([lg for lg in self.legs if lg.index > last])
+
+    @property
+    def remaining_error_after_update_pct(self) -> float:
+        """Error (%) of the remaining-route prediction made right after the last accepted update
+        against the energy actually driven from there (NaN without update or unfinished)."""
+        last = next((u.after_leg for u in reversed(self.updates) if u.accepted), None)
+        plan = next((p for p in reversed(self.replans) if p.after_leg == last), None) if last is not None else None
+        if plan is None or self.status != "completed":
+            return math.nan
+        act = sum(lg.actual_energy_j for lg in self.legs if lg.index > last)
+        return 100.0 * (plan.predicted_energy_j - act) / act if act > 0 else math.nan
+
+    @property
+    def route_changes(self) -> int:
+        """Replans that changed the route."""
+        return sum(p.route_changed for p in self.replans if p.reason != "initial")
+
+    def to_json_dict(self, *, series_every: int = 10) -> dict[str, Any]:
+        """Plain JSON data (non-finite numbers become ``None``); series every ``series_every`` samples."""
+        def num(x: Any) -> Any:
+            if isinstance(x, (float, np.floating)):
+                return float(x) if math.isfinite(x) else None
+            if isinstance(x, (np.integer,)):
+                return int(x)
+            if isinstance(x, tuple):
+                return [num(v) for v in x]
+            return x
+
+        def rec(r: Any) -> dict[str, Any]:
+            return {k: num(v) for k, v in vars(r).items()}
+
+        k = max(1, int(series_every))
+        return {
+            "format": "terrawatt-adaptive-mission",
+            "format_version": ADAPTIVE_FORMAT_VERSION,
+            "status": self.status,
+            "reason": self.reason,
+            "final_xy_m": num(self.final_xy_m),
+            "distance_to_goal_m": num(self.distance_to_goal_m),
+            "final_soc": num(self.final_soc),
+            "initial_route": self.initial_route.summary(),
+            "initial_route_waypoints_m": self.initial_route.waypoints_m.tolist(),
+            "driven_energy_j": num(self.driven_energy_j),
+            "excitation_energy_j": num(self.excitation_energy_j),
+            "update_wall_time_s": num(self.update_wall_time_s),
+            "accepted_updates": self.accepted_updates,
+            "route_changes": self.route_changes,
+            "error_before_update_pct": num(self.error_before_update_pct),
+            "error_after_update_pct": num(self.error_after_update_pct),
+            "remaining_error_after_update_pct": num(self.remaining_error_after_update_pct),
+            "legs": [rec(r) for r in self.legs],
+            "updates": [rec(r) for r in self.updates],
+            "replans": [rec(r) for r in self.replans],
+            "series": {name: [num(v) for v in getattr(self, name)[::k].tolist()]
+                       for name in ("time_s", "x_m", "y_m", "soc", "energy_j", "predicted_energy_j")},
+        }
+
+    def save_json(self, path: str | os.PathLike[str], *, series_every: int = 10) -> Path:
+        """Write :meth:`to_json_dict` atomically to ``path``; return the path."""
+        target = Path(path)
+        data = json.dumps(self.to_json_dict(series_every=series_every), indent=1, default=str).encode()
+        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(data)
+            os.replace(tmp, target)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+        return target
+
+    def plot(self, path: str | os.PathLike[str], terrain: TerrainMap, registry: CellModelRegistry) -> Path:
+        """Four panels: route over cells coloured by model and by error, SoC, cumulative energy."""
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(2, 2, figsize=(11, 9))
+        x0, y0 = terrain.origin_xy_m
+        rows, cols = terrain.shape
+        ext = (x0, x0 + cols * terrain.cell_size_m, y0, y0 + rows * terrain.cell_size_m)
+        im = ax[0, 0].imshow(np.asarray(registry.model_id_map), origin="lower", extent=ext, cmap="tab10",
+                             interpolation="nearest")
+        fig.colorbar(im, ax=ax[0, 0], label="model id")
+        ax[0, 0].set_title("cells by model")
+        with np.errstate(invalid="ignore"):
+            err = 100.0 * np.abs(registry.relative_error())
+        im = ax[0, 1].imshow(err, origin="lower", extent=ext, cmap="magma", interpolation="nearest")
+        fig.colorbar(im, ax=ax[0, 1], label="|error| of current (%) since last reset")
+        ax[0, 1].set_title("cells by observed error")
+        for a in (ax[0, 0], ax[0, 1]):
+            wp = self.initial_route.waypoints_m
+            if wp.size:
+                a.plot(wp[:, 0], wp[:, 1], "w--", lw=1, label="initial plan")
+            a.plot(self.x_m, self.y_m, "c-", lw=1.5, label="driven")
+            a.set_xlabel("x (m)")
+            a.set_ylabel("y (m)")
+            a.legend(loc="upper left", fontsize=7)
+        ax[1, 0].plot(self.time_s, 100.0 * self.soc)
+        ax[1, 0].set_xlabel("time (s)")
+        ax[1, 0].set_ylabel("state of charge (%)")
+        ax[1, 1].plot(self.time_s, self.energy_j / 3600.0, label="actual")
+        ax[1, 1].plot(self.time_s, self.predicted_energy_j / 3600.0, label="predicted")
+        ax[1, 1].set_xlabel("time (s)")
+        ax[1, 1].set_ylabel("cumulative energy (Wh)")
+        ax[1, 1].legend()
+        fig.suptitle(f"adaptive mission: {self.status}")
+        fig.tight_layout()
+        target = Path(path)
+        fig.savefig(target, dpi=90)
+        plt.close(fig)
+        return target
+
+
+# ----------------------------------------------------------------------- helpers
+def validation_error(model: Any, logs: list[InteractionLog]) -> float:
+    """Absolute relative error of the integrated absolute current (both sides) over ``logs``.
+
+    ``|sum |I_pred| dt - sum |I_meas| dt| / sum |I_meas| dt`` (lower is better); the metric
+    :func:`run_adaptive_mission` compares old and new models with.
+    """
+    pred = meas = 0.0
+    for log in logs:
+        dt = np.gradient(log.time_s)
+        p = np.abs(np.asarray(model.predict(log))).sum(axis=1)
+        m = np.abs(log.current_left_a) + np.abs(log.current_right_a)
+        pred += float(np.sum(p * dt))
+        meas += float(np.sum(m * dt))
+    if meas <= 0:
+        raise InvalidParameterError("validation logs hold no current; cannot validate")
+    return abs(pred - meas) / meas
+
+
+def _split_polyline(wp: np.ndarray, length_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """The first ``length_m`` of a polyline and the rest (sharing the cut point)."""
+    seg = np.hypot(*np.diff(wp, axis=0).T)
+    cum = np.concatenate(([0.0], np.cumsum(seg)))
+    if cum[-1] <= length_m + 1e-9:
+        return wp, wp[-1:]
+    k = int(np.searchsorted(cum, length_m, side="right"))  # cut inside segment k-1
+    f = (length_m - cum[k - 1]) / seg[k - 1]
+    cut = wp[k - 1] + f * (wp[k] - wp[k - 1])
+    head = np.vstack([wp[:k], cut])
+    tail = np.vstack([cut, wp[k:]])
+    if np.hypot(*(head[-1] - head[-2])) < 1e-9:
+        head = head[:-1]
+    if np.hypot(*(tail[1] - tail[0])) < 1e-9:
+        tail = tail[1:]
+    return head, tail
+
+
+def _predicted_currents(registry: CellModelRegistry, log: InteractionLog, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """Each sample's current from the model serving its cell (one predict per model in use)."""
+    ids = np.asarray(registry.model_id_map)[rows, cols]
+    out = np.empty((len(log), 2))
+    for mid in np.unique(ids).tolist():
+        sel = ids == mid
+        out[sel] = np.asarray(registry.model(mid).predict(log))[sel]
+    return out
+
+
+def _log_energy_j(log: InteractionLog, robot: RobotParams) -> float:
+    return float(np.trapezoid(log_battery_power_w(log, robot), log.time_s))
+
+
+# ----------------------------------------------------------------------- the loop
+def run_adaptive_mission(
+    terrain: TerrainMap,
+    registry: CellModelRegistry,
+    robot: RobotParams,
+    battery: Battery,
+    truth: TruthSimulator,
+    start_xy_m: tuple[float, float],
+    goal_xy_m: tuple[float, float],
+    *,
+    physics_ground: GroundParams,
+    settings: AdaptiveSettings | None = None,
+    model_factory: Callable[[], Any] | None = None,
+    learned: LearnedEnergyModel | None = None,
+) -> AdaptiveResult:
+    """Drive from start to goal, updating per-cell current models and replanning.
+
+    Parameters
+    ----------
+    terrain : TerrainMap
+        The map (the truth simulator looks up its true grounds by the map's ground names).
+    registry : CellModelRegistry
+        Per-cell models on the map's grid (changed in place by accepted updates).
+    robot : RobotParams
+        The robot (normally ``truth.robot``).
+    battery : Battery
+        Capacity, voltage, reserve and initial state of charge.
+    truth : TruthSimulator
+        Drives the legs and the excitation manoeuvres.
+    start_xy_m, goal_xy_m : (float, float)
+        World coordinates (m).
+    physics_ground : GroundParams
+        Ground of the physics slope term of the learned edge costs.
+    settings : AdaptiveSettings, optional
+    model_factory : callable, optional
+        Returns a new unfitted current model (``fit(logs)`` / ``predict(log)``); default
+        :class:`energy.LinearCurrentModel`.
+    learned : LearnedEnergyModel, optional
+        Edge-cost adapter over ``registry`` (to reuse its table cache); built when None.
+
+    Returns
+    -------
+    AdaptiveResult
+
+    Raises
+    ------
+    InvalidParameterError
+        Wrong argument types; ``learned`` bound to another registry.
+    GridMismatchError
+        ``registry`` on another grid.
+    OutOfBoundsError, BlockedPositionError
+        Start or goal outside the map or blocked.
+    """
+    for name, value, cls in (("terrain", terrain, TerrainMap), ("registry", registry, CellModelRegistry),
+                             ("robot", robot, RobotParams), ("battery", battery, Battery),
+                             ("truth", truth, TruthSimulator), ("physics_ground", physics_ground, GroundParams)):
+        if not isinstance(value, cls):
+            raise InvalidParameterError(f"{name} must be a {cls.__name__}, got {type(value).__name__!r}")
+    registry.check_grid(terrain)
+    cfg = AdaptiveSettings() if settings is None else settings
+    if not isinstance(cfg, AdaptiveSettings):
+        raise InvalidParameterError(f"settings must be an AdaptiveSettings, got {type(cfg).__name__!r}")
+    factory = LinearCurrentModel if model_factory is None else model_factory
+    lem = learned if learned is not None else LearnedEnergyModel(registry, robot, physics_ground)
+    if lem.registry is not registry:
+        raise InvalidParameterError("learned must be a LearnedEnergyModel over the same registry")
+    goal = np.asarray(goal_xy_m, dtype=np.float64)
+    capacity_j = battery.energy_capacity_j
+
+    def plan(pos: np.ndarray, cost: Any) -> Route:
+        return plan_route(terrain, tuple(pos), tuple(goal), cost=cost, planner=cfg.planner,
+                          time_limit_s=cfg.planner_time_limit_s, seed=cfg.seed, compare=False)
+
+    t0 = time.perf_counter()
+    builds0 = lem.table_builds
+    cost = lem.energy_cost(terrain, cfg.speed_mps)
+    refresh = time.perf_counter() - t0
+    route = plan(np.asarray(start_xy_m, dtype=np.float64), cost)
+    initial_route = route
+    replans = [ReplanRecord(0, "initial", route.energy_j if route.found else math.nan, math.nan, True, refresh,
+                            route.planning_time_s, lem.table_builds - builds0)]
+    legs: list[LegRecord] = []
+    updates: list[UpdateRecord] = []
+    series: dict[str, list[np.ndarray]] = {k: [] for k in ("t", "x", "y", "soc", "e", "p")}
+    pos = np.asarray(start_xy_m, dtype=np.float64)
+    heading: float | None = None
+    soc = battery.initial_soc
+    clock = e_total = p_total = 0.0
+    driven_j = excitation_j = update_wall = 0.0
+
+    def push(t: np.ndarray, x: np.ndarray, y: np.ndarray, s: np.ndarray, e: np.ndarray, p: np.ndarray) -> None:
+        for key, arr in zip(("t", "x", "y", "soc", "e", "p"), (t, x, y, s, e, p)):
+            series[key].append(np.asarray(arr, dtype=np.float64))
+
+    push(np.array([0.0]), pos[:1], pos[1:], np.array([soc]), np.array([0.0]), np.array([0.0]))
+    status, reason = "max_legs", f"stopped after max_legs={cfg.max_legs} legs"
+    for leg_index in range(cfg.max_legs):
+        if np.hypot(*(pos - goal)) <= cfg.goal_tolerance_m:
+            status, reason = "completed", "reached the goal"
+            break
+        if not route.found:
+            status, reason = "no_route", f"no route from {tuple(pos.round(2))} to the goal (planner status {route.status!r})"
+            break
+        avail_j = (soc - battery.reserve_soc) * capacity_j
+        if route.energy_j > avail_j:
+            status = "budget_exceeded"
+            reason = (f"the remaining route needs {route.energy_j / 3600:.2f} Wh (predicted) but only "
+                      f"{max(avail_j, 0.0) / 3600:.2f} Wh are left above the {battery.min_reserve_pct:g} % reserve")
+            break
+        head, tail = _split_polyline(np.asarray(route.waypoints_m), cfg.leg_length_m)
+        leg_route = evaluate_route(cost, head, status="exact", planner="leg")
+        mr = simulate_mission(terrain, leg_route, robot, battery.replace(initial_soc=soc), truth, cost,
+                              speed_mps=cfg.speed_mps, start_heading_rad=heading, stop_at_reserve=True,
+                              seed=cfg.seed + 1000 + leg_index)
+        budget = mr.budget
+        legs.append(LegRecord(leg_index, (float(pos[0]), float(pos[1])), (float(mr.x_m[-1]), float(mr.y_m[-1])),
+                              float(budget.predicted_energy_j), float(budget.actual_energy_j), float(mr.duration_s),
+                              int(mr.n_samples)))
+        e_leg = np.asarray(mr.energy_wh) * 3600.0
+        p_leg = np.asarray(mr.predicted_energy_wh) * 3600.0
+        push(clock + mr.time_s, mr.x_m, mr.y_m, mr.soc, e_total + e_leg, p_total + p_leg)
+        clock += float(mr.time_s[-1])
+        e_total += float(budget.actual_energy_j)
+        p_total += float(budget.predicted_energy_j)
+        driven_j += float(budget.actual_energy_j)
+        soc = float(mr.soc[-1])
+        pos = np.array([mr.x_m[-1], mr.y_m[-1]])
+        heading = float(mr.heading_rad[-1])
+        if mr.status == "reserve_violated":
+            status = "reserve_violated"
+            xy = mr.reserve_crossed_xy_m
+            reason = f"the battery reached its {battery.min_reserve_pct:g} % reserve at {xy!r} m during leg {leg_index}"
+            break
+        # compare measured and predicted current per cell
+        log = mr.log
+        rows, cols = terrain.rowcol(log.pose_xyh[:, 0], log.pose_xyh[:, 1])
+        pred = _predicted_currents(registry, log, np.asarray(rows), np.asarray(cols))
+        meas = np.column_stack([log.current_left_a, log.current_right_a])
+        registry.record(rows, cols, np.abs(meas), np.abs(pred), np.gradient(log.time_s))
+        changed = False
+        for region in registry.flagged_regions(cfg.policy):
+            if len(updates) >= cfg.max_updates:
+                break
+            w0 = time.perf_counter()
+            r, c = region.representative_row_col
+            gid = int(terrain.ground[r, c])
+            gname = terrain.ground_names.get(gid, str(gid))
+            old_id = int(np.asarray(registry.model_id_map)[r, c])
+            seed = cfg.seed + 10_000 + 10 * len(updates)
+            straight = excitation_commands(cfg.excitation_duration_s, 1.0 / truth.current_rate_hz,
+                                           speed_levels_mps=cfg.excitation_speeds_mps, omega_levels_radps=(0.0,),
+                                           rest_s=0.0, seed=seed)
+            turn = excitation_commands(cfg.turn_excitation_duration_s, 1.0 / truth.current_rate_hz,
+                                       speed_levels_mps=(0.0,), omega_levels_radps=(cfg.excitation_omega_radps,),
+                                       omega_sign="both", hold_s=(2.0, 3.0), rest_s=0.0, seed=seed + 1)
+            xlogs = [truth.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground=gname, seed=seed + 2 + i)
+                     for i, p in enumerate((straight, turn))]
+            train, held = [], []
+            for xl in xlogs:
+                cut = xl.time_s[0] + (1.0 - cfg.validation_fraction) * (xl.time_s[-1] - xl.time_s[0])
+                train.append(xl.slice(xl.time_s[0], cut))
+                held.append(xl.slice(cut, xl.time_s[-1] + 1.0))
+            new_model = factory().fit(train)
+            err_new = validation_error(new_model, held)
+            err_old = validation_error(registry.model(old_id), held)
+            if cfg.update_scope == "ground_class":
+                scope = (np.asarray(terrain.ground) == gid) & np.isin(np.asarray(registry.model_id_map),
+                                                                      np.asarray(region.model_ids))
+            else:
+                scope = region.mask(registry.shape)
+            decision = registry.propose_update(
+                scope, new_model, err_new, err_old, name=f"update{len(updates) + 1}-{gname}",
+                reason=f"region error {100 * region.relative_error:+.1f} % after leg {leg_index}",
+                meta={"ground": gname, "after_leg": leg_index})
+            if decision.accepted:
+                lem.set_vibration(decision.model_id, xlogs[0].accel_time_s, xlogs[0].accel_z_mps2)
+                changed = True
+            else:
+                registry.reset_evidence(region)  # gather fresh evidence before trying again
+            x_e = sum(_log_energy_j(xl, robot) for xl in xlogs)
+            x_t = sum(float(xl.time_s[-1] - xl.time_s[0]) for xl in xlogs)
+            excitation_j += x_e
+            soc -= x_e / capacity_j
+            clock += x_t
+            e_total += x_e
+            push(np.array([clock]), pos[:1], pos[1:], np.array([soc]), np.array([e_total]), np.array([p_total]))
+            wall = time.perf_counter() - w0
+            update_wall += wall
+            updates.append(UpdateRecord(leg_index, gname, region.cell_count, int(np.count_nonzero(scope)),
+                                        100.0 * region.relative_error, bool(decision.accepted), decision.model_id,
+                                        err_new, err_old, x_e, x_t, wall))
+        if changed:
+            t1 = time.perf_counter()
+            builds0 = lem.table_builds
+            cost = lem.energy_cost(terrain, cfg.speed_mps)
+            refresh = time.perf_counter() - t1
+            old_energy = evaluate_route(cost, tail).energy_j if len(tail) >= 2 else 0.0
+            route = plan(pos, cost)
+            if route.found:
+                same = route.waypoints_m.shape == tail.shape and np.allclose(route.waypoints_m, tail, atol=1e-6)
+                if not same and old_energy <= route.energy_j:  # planner found nothing better: keep the old one
+                    route, same = evaluate_route(cost, tail, status="exact", planner="kept"), True
+            else:
+                same = False
+            update_wall += refresh
+            replans.append(ReplanRecord(leg_index, "update", route.energy_j if route.found else math.nan, old_energy,
+                                        not same, refresh, route.planning_time_s, lem.table_builds - builds0))
+        elif len(tail) >= 2:
+            route = evaluate_route(cost, tail, status="exact", planner=route.planner)
+        else:
+            status, reason = "completed", "reached the goal"
+            break
+    cat = {k: np.concatenate(v) for k, v in series.items()}
+    return AdaptiveResult(
+        status=status, reason=reason, final_xy_m=(float(pos[0]), float(pos[1])),
+        distance_to_goal_m=float(np.hypot(*(pos - goal))), initial_route=initial_route, legs=tuple(legs),
+        updates=tuple(updates), replans=tuple(replans), time_s=cat["t"], x_m=cat["x"], y_m=cat["y"],
+        soc=cat["soc"], energy_j=cat["e"], predicted_energy_j=cat["p"], driven_energy_j=driven_j,
+        excitation_energy_j=excitation_j, update_wall_time_s=update_wall, final_soc=soc,
+    )

@@ -1,0 +1,425 @@
+"""Edge costs from learned current models: per-model energy tables from one batched prediction.
+
+A :class:`LearnedEnergyModel` turns the current models of a
+:class:`~terrain.CellModelRegistry` into planner edge costs.
+
+For every model it runs **one** ``predict`` call on a synthetic log that holds each speed
+of ``speeds_mps`` (straight driving, ``omega = 0``) and then each turn rate of
+``omegas_radps`` (turning in place, ``v = 0``) for ``hold_s`` seconds, and averages the
+predicted currents over the settled tail of every hold (the first ``settle_s`` seconds of
+each hold are left out, so step transients of models that use ``dv/dt`` or windows do not
+count). The predicted ``[left, right]`` motor currents become battery power with
+:func:`energy.log_battery_power_w` (``current_convention`` as there, electronics off), plus
+the robot's electronics (sensor and stable control-board power of
+:class:`energy.PhysicsEnergyModel`), and are kept as tables:
+
+- ``energy_per_metre_j[k] = P(speeds_mps[k]) / speeds_mps[k]`` (J/m, flat ground),
+- ``turn_energy_per_rad_j[k] = P(omegas_radps[k]) / omegas_radps[k]`` (J/rad).
+
+**Vibration input.** Models conditioned on vibration (the
+:class:`energy.VibrationCurrentEstimator`) need an acceleration stream. The synthetic log
+carries the vertical acceleration observed where the model was trained: register it with
+:meth:`LearnedEnergyModel.set_vibration` (e.g. the training log's ``accel_time_s`` /
+``accel_z_mps2``); it is tiled over the synthetic log, so the whole-run spectrum the
+estimator sees is that of its training ground. Without one, a constant 9.81 m/s^2 (gravity,
+no vibration) is used; models that ignore acceleration are unaffected.
+
+**Slope.** Learned models are trained on what the robot drove, mostly flat ground, so they
+say nothing reliable about grades. The grade-dependent part comes from the physics model::
+
+    e(v, grade) = e_learned(v) + [e_physics(v, grade) - e_physics(v, 0)]
+
+on ``physics_ground`` (the slope term ``m g sin(beta)`` and the normal-force change of
+rolling resistance hardly depend on the ground). Downhill the bracket is negative; the sum
+is floored at the electronics' energy per metre (the robot never draws less than its
+electronics; with ``regen_efficiency = 0`` the physics model floors the same way).
+
+**Caching.** A model's table depends only on the model object (an update adds a *new*
+model id; models are never changed in place), so tables are cached per model id and
+recomputed only when the registry holds another object under that id (e.g. after
+``load``); :attr:`LearnedEnergyModel.table_builds` counts the recomputations. The
+per-cell map changes with every registry version; :meth:`LearnedEnergyModel.energy_cost`
+rebuilds only the cheap per-cell row index from ``registry.model_id_map``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from energy import GroundParams, InteractionLog, LogMeta, PhysicsEnergyModel, RobotParams, log_battery_power_w
+from terrain import CellModelRegistry, InvalidParameterError, TerrainMap, UnknownNameError
+
+from .edge_cost import DEFAULT_GRADE_SAMPLES, DEFAULT_MAX_SLOPE_RAD, DEFAULT_TURN_SAMPLES, EnergyCost
+
+__all__ = ["LearnedEnergyModel", "LearnedModelTable", "DEFAULT_TABLE_SPEEDS_MPS", "DEFAULT_TABLE_OMEGAS_RADPS"]
+
+#: Default speed grid of the tables (m/s).
+DEFAULT_TABLE_SPEEDS_MPS: tuple[float, ...] = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0)
+#: Default turn-rate grid of the tables (rad/s).
+DEFAULT_TABLE_OMEGAS_RADPS: tuple[float, ...] = (0.25, 0.5, 0.75, 1.0, 1.5)
+
+_GRAVITY_MPS2 = 9.81
+
+
+def _grid(name: str, values: Sequence[float]) -> np.ndarray:
+    try:
+        arr = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(f"{name} must be a sequence of numbers, got {values!r:.80}") from exc
+    if arr.ndim != 1 or arr.size < 1 or not np.all(np.isfinite(arr)) or np.any(arr <= 0) or np.any(np.diff(arr) <= 0):
+        raise InvalidParameterError(f"{name} must be a non-empty, strictly increasing sequence of numbers > 0, got {values!r}")
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class LearnedModelTable:
+    """Flat-ground energy tables of one current model (see :mod:`planner.learned_cost`).
+
+    Attributes
+    ----------
+    model_id : int
+        Id of the model in the registry.
+    speeds_mps : ndarray, shape (S,)
+        Speed grid (m/s).
+    energy_per_metre_j : ndarray, shape (S,)
+        Battery energy per metre of straight flat driving, electronics included (J/m).
+    omegas_radps : ndarray, shape (W,)
+        Turn-rate grid (rad/s).
+    turn_energy_per_rad_j : ndarray, shape (W,)
+        Battery energy per radian of turning in place, electronics included (J/rad).
+    mean_current_a : ndarray, shape (S + W, 2)
+        The settled mean predicted ``[left, right]`` currents behind the tables (A).
+    build_time_s : float
+        Seconds spent building the table (prediction included).
+    """
+
+    model_id: int
+    speeds_mps: np.ndarray
+    energy_per_metre_j: np.ndarray
+    omegas_radps: np.ndarray
+    turn_energy_per_rad_j: np.ndarray
+    mean_current_a: np.ndarray
+    build_time_s: float
+
+    def __post_init__(self) -> None:
+        for name in ("speeds_mps", "energy_per_metre_j", "omegas_radps", "turn_energy_per_rad_j", "mean_current_a"):
+            arr = np.array(getattr(self, name), dtype=np.float64)
+            if not np.all(np.isfinite(arr)):
+                raise InvalidParameterError(f"LearnedModelTable.{name} must be finite, got {arr!r}")
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+        if self.energy_per_metre_j.shape != self.speeds_mps.shape:
+            raise InvalidParameterError("LearnedModelTable: energy_per_metre_j must match speeds_mps")
+        if self.turn_energy_per_rad_j.shape != self.omegas_radps.shape:
+            raise InvalidParameterError("LearnedModelTable: turn_energy_per_rad_j must match omegas_radps")
+
+    def energy_per_metre_at(self, speed_mps: float) -> float:
+        """Flat-ground J/m at ``speed_mps``, linearly interpolated (constant beyond the grid)."""
+        return float(np.interp(speed_mps, self.speeds_mps, self.energy_per_metre_j))
+
+    def turn_energy_per_rad_at(self, omega_radps: float) -> float:
+        """J/rad of turning at ``omega_radps``, linearly interpolated (constant beyond the grid)."""
+        return float(np.interp(omega_radps, self.omegas_radps, self.turn_energy_per_rad_j))
+
+
+class LearnedEnergyModel:
+    """Energy model over the current models of a registry (the edge-cost protocol).
+
+    Implements ``energy_per_metre_j(speed_mps, grades, ground)`` and
+    ``turn_energy_j(angles, ground)`` where ``ground`` is a **model id** of the registry,
+    so :meth:`EnergyCost.from_model` can tabulate it with the model ids as pseudo-grounds;
+    :meth:`energy_cost` does the same directly from cached tables (the fast path for
+    replanning).
+
+    Parameters
+    ----------
+    registry : CellModelRegistry
+        The per-cell models; every model must have ``predict(log) -> (N, 2)`` currents (A).
+    robot : RobotParams
+        The robot (motor constants for the battery power, electronics, turn rate).
+    physics_ground : GroundParams
+        Ground of the physics slope term.
+    speeds_mps, omegas_radps : sequence of float
+        Table grids (> 0, increasing).
+    hold_s, settle_s : float
+        Hold time of each level in the synthetic log and the settling time left out of the
+        average (0 <= settle_s < hold_s).
+    rate_hz : float
+        Sample rate of the synthetic log (Hz).
+    current_convention : {"motor", "battery"}
+        What the models' currents are (see :func:`energy.log_battery_power_w`).
+
+    Raises
+    ------
+    InvalidParameterError
+        Bad types, grids or times.
+
+    Examples
+    --------
+    >>> lem = LearnedEnergyModel(registry, robot_preset("husky"), ground_preset("asphalt"))  # doctest: +SKIP
+    >>> cost = lem.energy_cost(terrain, speed_mps=0.5)                                      # doctest: +SKIP
+    """
+
+    def __init__(
+        self,
+        registry: CellModelRegistry,
+        robot: RobotParams,
+        physics_ground: GroundParams,
+        *,
+        speeds_mps: Sequence[float] = DEFAULT_TABLE_SPEEDS_MPS,
+        omegas_radps: Sequence[float] = DEFAULT_TABLE_OMEGAS_RADPS,
+        hold_s: float = 2.0,
+        settle_s: float = 0.5,
+        rate_hz: float = 100.0,
+        current_convention: str = "motor",
+    ) -> None:
+        if not isinstance(registry, CellModelRegistry):
+            raise InvalidParameterError(f"registry must be a CellModelRegistry, got {type(registry).__name__!r}")
+        if not isinstance(robot, RobotParams):
+            raise InvalidParameterError(f"robot must be a RobotParams, got {type(robot).__name__!r}")
+        if not isinstance(physics_ground, GroundParams):
+            raise InvalidParameterError(f"physics_ground must be a GroundParams, got {type(physics_ground).__name__!r}")
+        self.registry = registry
+        self.robot = robot
+        self.physics_ground = physics_ground
+        self.speeds_mps = _grid("speeds_mps", speeds_mps)
+        self.omegas_radps = _grid("omegas_radps", omegas_radps)
+        for name, value in (("hold_s", hold_s), ("rate_hz", rate_hz)):
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise InvalidParameterError(f"{name} must be a finite number > 0, got {value!r}")
+        if not (isinstance(settle_s, (int, float)) and math.isfinite(settle_s) and 0 <= settle_s < hold_s):
+            raise InvalidParameterError(f"settle_s must be >= 0 and < hold_s ({hold_s!r}), got {settle_s!r}")
+        self.hold_s = float(hold_s)
+        self.settle_s = float(settle_s)
+        self.rate_hz = float(rate_hz)
+        if current_convention not in ("motor", "battery"):
+            raise UnknownNameError(f"current_convention must be 'motor' or 'battery', got {current_convention!r}")
+        self.current_convention = current_convention
+        self.turn_rate_radps = float(robot.turn_rate_radps)
+        self._physics = PhysicsEnergyModel(robot)
+        self._electronics = PhysicsEnergyModel(robot, effects=("sensor", "control"))
+        self._vibration: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._tables: dict[int, tuple[int, LearnedModelTable]] = {}  # id -> (id(model object), table)
+        self._slope_delta: dict[tuple[float, int, float], np.ndarray] = {}
+        #: Number of per-model tables computed so far (cache misses).
+        self.table_builds = 0
+
+    # ------------------------------------------------------------------ vibration
+    def set_vibration(self, model_id: int, accel_time_s: Any, accel_z_mps2: Any) -> None:
+        """Vertical acceleration to feed model ``model_id`` (e.g. its training log's).
+
+        Invalidates that model's cached table.
+
+        Raises
+        ------
+        UnknownNameError
+            Unknown model id.
+        InvalidParameterError
+            Arrays of different lengths, fewer than 2 samples, non-finite or non-increasing times.
+        """
+        self.registry.model(model_id)  # UnknownNameError
+        t = np.asarray(accel_time_s, dtype=np.float64)
+        a = np.asarray(accel_z_mps2, dtype=np.float64)
+        if t.ndim != 1 or a.shape != t.shape or t.size < 2:
+            raise InvalidParameterError(
+                f"accel_time_s and accel_z_mps2 must be 1-D of the same length >= 2, got {t.shape!r} and {a.shape!r}"
+            )
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(a)) and np.all(np.diff(t) > 0)):
+            raise InvalidParameterError("accel_time_s must be finite and strictly increasing and accel_z_mps2 finite")
+        self._vibration[int(model_id)] = (t - t[0], a.copy())
+        self._tables.pop(int(model_id), None)
+
+    # ------------------------------------------------------------------ tables
+    def _synthetic_log(self, model_id: int) -> tuple[InteractionLog, np.ndarray]:
+        n_hold = max(2, int(round(self.hold_s * self.rate_hz)))
+        levels_v = np.concatenate([self.speeds_mps, np.zeros(self.omegas_radps.size)])
+        levels_w = np.concatenate([np.zeros(self.speeds_mps.size), self.omegas_radps])
+        n = n_hold * levels_v.size
+        t = np.arange(n) / self.rate_hz
+        v = np.repeat(levels_v, n_hold)
+        w = np.repeat(levels_w, n_hold)
+        if model_id in self._vibration:
+            ta, az = self._vibration[model_id]
+            period = ta[-1] + (ta[-1] - ta[0]) / (ta.size - 1)
+            reps = int(math.ceil((t[-1] + 1.0) / period)) + 1
+            at = (ta[None, :] + period * np.arange(reps)[:, None]).reshape(-1)
+            accel = np.tile(az, reps)
+        else:
+            at, accel = t.copy(), np.full(n, _GRAVITY_MPS2)
+        zeros = np.zeros(n)
+        log = InteractionLog(t, v, w, zeros, zeros, at, accel,
+                             meta=LogMeta(robot=self.robot.name, source=f"learned-cost table of model {model_id}"))
+        # settled tail of each hold
+        settle = int(round(self.settle_s * self.rate_hz))
+        keep = (np.arange(n) % n_hold) >= settle
+        return log, keep
+
+    def table(self, model_id: int) -> LearnedModelTable:
+        """The flat-ground tables of model ``model_id`` (cached; built with one ``predict`` call).
+
+        Raises
+        ------
+        UnknownNameError
+            Unknown model id.
+        InvalidParameterError
+            The model's prediction is not ``(N, 2)`` finite currents, or the resulting energies are negative.
+        """
+        model = self.registry.model(model_id)
+        mid = int(model_id)
+        cached = self._tables.get(mid)
+        if cached is not None and cached[0] == id(model):
+            return cached[1]
+        t0 = time.perf_counter()
+        log, keep = self._synthetic_log(mid)
+        pred = np.asarray(model.predict(log), dtype=np.float64)
+        if pred.shape != (len(log), 2) or not np.all(np.isfinite(pred)):
+            raise InvalidParameterError(
+                f"model {mid} ({self.registry.model_record(mid).name!r}) must predict finite (N, 2) currents, "
+                f"got shape {pred.shape!r}"
+            )
+        plog = InteractionLog(log.time_s, log.v_mps, log.omega_radps, pred[:, 0], pred[:, 1], log.accel_time_s,
+                              log.accel_z_mps2, meta=log.meta)
+        drive_w = log_battery_power_w(plog, self.robot, current_convention=self.current_convention, electronics=False)
+        n_levels = self.speeds_mps.size + self.omegas_radps.size
+        level = np.arange(len(log)) * n_levels // len(log)
+        sel = level[keep]
+        counts = np.bincount(sel, minlength=n_levels)
+        mean_drive_w = np.bincount(sel, weights=drive_w[keep], minlength=n_levels) / counts
+        mean_current = np.column_stack([np.bincount(sel, weights=pred[keep, k], minlength=n_levels) / counts
+                                        for k in range(2)])
+        levels_v = np.concatenate([self.speeds_mps, np.zeros(self.omegas_radps.size)])
+        levels_w = np.concatenate([np.zeros(self.speeds_mps.size), self.omegas_radps])
+        elec_w = self._electronics.power(levels_v, levels_w, self.physics_ground).total_power_w
+        power_w = mean_drive_w + elec_w
+        ns = self.speeds_mps.size
+        e_per_m = power_w[:ns] / self.speeds_mps
+        e_per_rad = power_w[ns:] / self.omegas_radps
+        if np.any(e_per_m < 0) or np.any(e_per_rad < 0):
+            raise InvalidParameterError(
+                f"model {mid} predicts negative battery power (J/m {e_per_m.tolist()!r}, J/rad "
+                f"{e_per_rad.tolist()!r}); edge costs must be >= 0"
+            )
+        table = LearnedModelTable(mid, self.speeds_mps, e_per_m, self.omegas_radps, e_per_rad, mean_current,
+                                  time.perf_counter() - t0)
+        self._tables[mid] = (id(model), table)
+        self.table_builds += 1
+        return table
+
+    def refresh(self) -> list[int]:
+        """Build the tables of every model in use that has none yet (or changed); return their ids."""
+        built = []
+        for mid in self.registry.model_ids_in_use().tolist():
+            before = self.table_builds
+            self.table(mid)
+            if self.table_builds != before:
+                built.append(int(mid))
+        return built
+
+    # ------------------------------------------------------------------ protocol
+    def _electronics_per_metre_j(self, speed: float) -> float:
+        return float(self._electronics.energy_per_metre_j(speed, 0.0, self.physics_ground))
+
+    def _grade_delta_j(self, speed: float, grades: np.ndarray) -> np.ndarray:
+        return (np.asarray(self._physics.energy_per_metre_j(speed, grades, self.physics_ground), dtype=np.float64)
+                - float(self._physics.energy_per_metre_j(speed, 0.0, self.physics_ground)))
+
+    def energy_per_metre_j(self, speed_mps: float, grade: Any, ground: int) -> np.ndarray:
+        """J per metre travelled at ``speed_mps`` on ``grade`` for the model with id ``ground``.
+
+        ``e_learned(v) + [e_physics(v, grade) - e_physics(v, 0)]``, floored at the
+        electronics' J/m (see the module docstring).
+
+        Raises
+        ------
+        UnknownNameError
+            Unknown model id.
+        InvalidParameterError
+            Non-positive speed, NaN grades.
+        """
+        speed = float(speed_mps)
+        if not (math.isfinite(speed) and speed > 0):
+            raise InvalidParameterError(f"speed_mps must be a finite number > 0, got {speed_mps!r}")
+        grades = np.asarray(grade, dtype=np.float64)
+        if np.any(np.isnan(grades)):
+            raise InvalidParameterError("grade must not hold NaN")
+        flat = self.table(int(ground)).energy_per_metre_at(speed)
+        return np.maximum(flat + self._grade_delta_j(speed, grades), self._electronics_per_metre_j(speed))
+
+    def turn_energy_j(self, heading_change_rad: Any, ground: int) -> np.ndarray:
+        """J of turning in place by ``|heading_change_rad|`` at the robot's turn rate, model ``ground``.
+
+        Raises
+        ------
+        UnknownNameError
+            Unknown model id.
+        """
+        angles = np.abs(np.asarray(heading_change_rad, dtype=np.float64))
+        return angles * self.table(int(ground)).turn_energy_per_rad_at(self.turn_rate_radps)
+
+    # ------------------------------------------------------------------ edge costs
+    def energy_cost(
+        self,
+        terrain: TerrainMap,
+        speed_mps: float,
+        *,
+        max_slope_rad: float = DEFAULT_MAX_SLOPE_RAD,
+        grade_samples: int = DEFAULT_GRADE_SAMPLES,
+        turn_samples: int = DEFAULT_TURN_SAMPLES,
+    ) -> EnergyCost:
+        """An :class:`EnergyCost` whose table rows are the models in use (cell row = its model).
+
+        Equal to ``EnergyCost.from_model`` on a map whose ground classes are the model ids,
+        but only the tables of models not yet cached are computed.
+
+        Raises
+        ------
+        GridMismatchError
+            ``terrain`` is not on the registry's grid.
+        InvalidParameterError
+            Bad speed or sizes (as :meth:`EnergyCost.from_model`).
+        """
+        t0 = time.perf_counter()
+        self.registry.check_grid(terrain)
+        speed = float(speed_mps)
+        if not (math.isfinite(speed) and speed > 0):
+            raise InvalidParameterError(f"speed_mps must be a finite number > 0, got {speed_mps!r}")
+        if int(grade_samples) != grade_samples or grade_samples < 3 or grade_samples % 2 == 0:
+            raise InvalidParameterError(f"grade_samples must be an odd integer >= 3, got {grade_samples!r}")
+        if int(turn_samples) != turn_samples or turn_samples < 2:
+            raise InvalidParameterError(f"turn_samples must be an integer >= 2, got {turn_samples!r}")
+        ids = self.registry.model_ids_in_use()
+        grade_max = math.tan(float(max_slope_rad))
+        grades = np.linspace(-grade_max, grade_max, int(grade_samples))
+        angles = np.linspace(0.0, math.pi, int(turn_samples))
+        key = (speed, int(grade_samples), float(max_slope_rad))
+        delta = self._slope_delta.get(key)
+        if delta is None:
+            delta = self._grade_delta_j(speed, grades)
+            self._slope_delta[key] = delta
+        floor = self._electronics_per_metre_j(speed)
+        horiz = np.sqrt(1.0 + grades**2)
+        grade_table = np.empty((ids.size, grades.size))
+        turn_table = np.empty((ids.size, angles.size))
+        for i, mid in enumerate(ids.tolist()):
+            tab = self.table(mid)
+            grade_table[i] = np.maximum(tab.energy_per_metre_at(speed) + delta, floor) * horiz
+            turn_table[i] = angles * tab.turn_energy_per_rad_at(self.turn_rate_radps)
+        lut = np.zeros(int(ids.max()) + 1, dtype=np.int32)
+        lut[ids] = np.arange(ids.size, dtype=np.int32)
+        rows = lut[np.asarray(self.registry.model_id_map)]
+        labels = tuple(self.registry.model_record(int(m)).name for m in ids.tolist())
+        cost = EnergyCost(terrain, rows, grade_table, turn_table, speed_mps=speed, max_slope_rad=float(max_slope_rad),
+                          battery_voltage_v=self.robot.battery_voltage_v, turn_rate_radps=self.turn_rate_radps,
+                          ground_labels=labels)
+        cost.prep_time_s = time.perf_counter() - t0
+        return cost
+
+    def __repr__(self) -> str:
+        return (f"LearnedEnergyModel(robot={self.robot.name!r}, models={len(self.registry.model_ids)}, "
+                f"cached={sorted(self._tables)}, table_builds={self.table_builds})")

@@ -1,0 +1,90 @@
+"""Tests of planner.adaptive: flag -> update -> replan, rejection of worse models, budget stop."""
+
+import numpy as np
+import pytest
+
+from energy import Battery, LinearCurrentModel, TruthSimulator, excitation_commands, ground_preset, robot_preset
+from planner import AdaptiveSettings, run_adaptive_mission
+from terrain import CellModelRegistry, InvalidParameterError, TerrainMap
+
+
+def _world():
+    robot = robot_preset("husky")
+    grounds = {"asphalt": ground_preset("asphalt"), "sand": ground_preset("sand")}
+    truth = TruthSimulator(robot, grounds, seed=0)
+    ground = np.zeros((16, 40), int)
+    ground[4:12, 12:34] = 1
+    tmap = TerrainMap(np.zeros((16, 40)), 1.0, ground=ground, ground_names={0: "asphalt", 1: "sand"})
+    a = excitation_commands(20.0, speed_levels_mps=(0.2, 0.5, 0.8), omega_levels_radps=(0.0,), rest_s=0.0, seed=1)
+    b = excitation_commands(8.0, speed_levels_mps=(0.0,), omega_levels_radps=(0.5,), omega_sign="both",
+                            hold_s=(2.0, 3.0), rest_s=0.0, seed=2)
+    logs = [truth.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground="asphalt", seed=3 + i)
+            for i, p in enumerate((a, b))]
+    prior = LinearCurrentModel().fit(logs)
+    return robot, truth, tmap, prior
+
+
+SETTINGS = AdaptiveSettings(leg_length_m=8.0, seed=0, max_updates=2)
+
+
+def test_unknown_region_flagged_updated_and_error_drops():
+    robot, truth, tmap, prior = _world()
+    reg = CellModelRegistry.from_terrain(tmap, prior)
+    res = run_adaptive_mission(tmap, reg, robot, Battery(20.0, 24.0), truth, (2.5, 8.0), (37.5, 8.0),
+                               physics_ground=ground_preset("asphalt"), settings=SETTINGS)
+    assert res.status == "completed" and res.distance_to_goal_m <= SETTINGS.goal_tolerance_m
+    assert res.accepted_updates >= 1
+    up = next(u for u in res.updates if u.accepted)
+    assert up.ground == "sand" and up.validation_error_new < up.validation_error_old
+    assert abs(up.region_error_pct) > SETTINGS.policy.threshold_pct
+    assert abs(res.error_before_update_pct) > SETTINGS.policy.threshold_pct
+    assert abs(res.error_after_update_pct) < SETTINGS.policy.threshold_pct
+    assert len(reg.history) >= 1 and reg.history[-1].kind == "update"
+    d = res.to_json_dict()
+    assert d["status"] == "completed" and d["accepted_updates"] == res.accepted_updates
+
+
+def test_worse_model_rejected_and_old_kept():
+    robot, truth, tmap, prior = _world()
+    reg = CellModelRegistry.from_terrain(tmap, prior)
+
+    class Worse:
+        """Fits a linear model but predicts three times its currents."""
+
+        def fit(self, logs):
+            self.inner_ = LinearCurrentModel().fit(logs)
+            return self
+
+        def predict(self, log):
+            return 3.0 * self.inner_.predict(log)
+
+    def bad_factory():
+        return Worse()
+
+    res = run_adaptive_mission(tmap, reg, robot, Battery(20.0, 24.0), truth, (2.5, 8.0), (37.5, 8.0),
+                               physics_ground=ground_preset("asphalt"), settings=SETTINGS, model_factory=bad_factory)
+    assert len(res.updates) >= 1
+    assert not any(u.accepted for u in res.updates)
+    assert reg.model_ids == (0,) and np.all(np.asarray(reg.model_id_map) == 0)
+
+
+def test_budget_violation_stops_with_reason_and_position():
+    robot, truth, tmap, prior = _world()
+    reg = CellModelRegistry.from_terrain(tmap, prior)
+    tiny = Battery(capacity_ah=0.05, voltage_v=24.0, min_reserve_pct=20.0)
+    res = run_adaptive_mission(tmap, reg, robot, tiny, truth, (2.5, 8.0), (37.5, 8.0),
+                               physics_ground=ground_preset("asphalt"), settings=SETTINGS)
+    assert res.status == "budget_exceeded"
+    assert "reserve" in res.reason and "Wh" in res.reason
+    assert res.final_xy_m == (2.5, 8.0) and res.distance_to_goal_m == pytest.approx(35.0)
+    assert res.legs == ()
+
+
+def test_bad_input():
+    robot, truth, tmap, prior = _world()
+    reg = CellModelRegistry.from_terrain(tmap, prior)
+    with pytest.raises(InvalidParameterError, match="battery"):
+        run_adaptive_mission(tmap, reg, robot, "battery", truth, (2.5, 8.0), (37.5, 8.0),
+                             physics_ground=ground_preset("asphalt"))
+    with pytest.raises(InvalidParameterError, match="update_scope"):
+        AdaptiveSettings(update_scope="everywhere")

@@ -1,0 +1,91 @@
+"""Tests of planner.learned_cost: tables equal direct predictions, cached refresh, EnergyCost equality."""
+
+import numpy as np
+import pytest
+
+from energy import InteractionLog, LogMeta, PhysicsEnergyModel, ground_preset, log_battery_power_w, robot_preset
+from planner import EnergyCost, LearnedEnergyModel
+from terrain import CellModelRegistry, InvalidParameterError, TerrainMap, UnknownNameError
+
+
+class ConstModel:
+    """Predicts constant side currents depending only on whether the robot drives or turns."""
+
+    def __init__(self, drive_a: float, turn_a: float) -> None:
+        self.drive_a, self.turn_a, self.calls = drive_a, turn_a, 0
+
+    def fit(self, *a, **k):
+        return self
+
+    def predict(self, log):
+        self.calls += 1
+        cur = np.where(np.abs(log.v_mps) > 0, self.drive_a, np.where(np.abs(log.omega_radps) > 0, self.turn_a, 0.0))
+        return np.column_stack([cur, cur])
+
+
+def _setup():
+    robot = robot_preset("husky")
+    tmap = TerrainMap(np.zeros((12, 16)), 1.0)
+    reg = CellModelRegistry.from_terrain(tmap, ConstModel(2.0, 5.0), prior_name="a")
+    mid = reg.add_model(ConstModel(4.0, 6.0), name="b")
+    reg.assign((np.array([3, 4]), np.array([5, 5])), mid)
+    lem = LearnedEnergyModel(reg, robot, ground_preset("asphalt"), speeds_mps=(0.25, 0.5, 1.0), omegas_radps=(0.5, 1.0))
+    return robot, tmap, reg, lem, mid
+
+
+def test_table_equals_direct_prediction():
+    robot, _, reg, lem, mid = _setup()
+    tab = lem.table(mid)
+    elec = PhysicsEnergyModel(robot, effects=("sensor", "control"))
+    for k, v in enumerate((0.25, 0.5, 1.0)):
+        n = 50
+        log = InteractionLog(np.arange(n) / 100, np.full(n, v), np.zeros(n), np.full(n, 4.0), np.full(n, 4.0),
+                             np.arange(n) / 100, np.full(n, 9.81), meta=LogMeta())
+        p = log_battery_power_w(log, robot, electronics=False).mean()
+        p += float(elec.power(np.array([v]), np.array([0.0]), ground_preset("asphalt")).total_power_w[0])
+        assert tab.energy_per_metre_j[k] == pytest.approx(p / v, rel=1e-9)
+    assert np.allclose(tab.mean_current_a[:3], 4.0) and np.allclose(tab.mean_current_a[3:], 6.0)
+    assert reg.model(mid).calls == 1  # one batched prediction
+
+
+def test_refresh_only_recomputes_changed_models():
+    _, tmap, reg, lem, mid = _setup()
+    lem.energy_cost(tmap, 0.5)
+    assert lem.table_builds == 2
+    lem.energy_cost(tmap, 0.5)
+    assert lem.table_builds == 2 and reg.model(0).calls == 1
+    new = reg.add_model(ConstModel(8.0, 9.0), name="c")
+    reg.assign((np.array([0]), np.array([0])), new)
+    lem.energy_cost(tmap, 0.5)
+    assert lem.table_builds == 3 and reg.model(0).calls == 1 and reg.model(new).calls == 1
+
+
+def test_energy_cost_matches_from_model_on_model_id_map():
+    _, tmap, reg, lem, mid = _setup()
+    fast = lem.energy_cost(tmap, 0.5)
+    ids = np.asarray(reg.model_id_map)
+    pseudo = TerrainMap(np.zeros(tmap.shape), 1.0, ground=ids, ground_names={0: "a", 1: "b"})
+    slow = EnergyCost.from_model(pseudo, lem, {0: 0, 1: 1}, 0.5)
+    np.testing.assert_allclose(fast.grade_table_j_per_m, slow.grade_table_j_per_m, rtol=1e-12)
+    np.testing.assert_allclose(fast.turn_table_j, slow.turn_table_j, rtol=1e-12)
+    assert np.array_equal(fast.ground_rows, slow.ground_rows)
+    # the costlier model's cells cost more
+    assert fast.grade_table_j_per_m[1].min() > fast.grade_table_j_per_m[0].min()
+
+
+def test_slope_term_from_physics():
+    robot, _, _, lem, mid = _setup()
+    phys = PhysicsEnergyModel(robot)
+    g = ground_preset("asphalt")
+    e = lem.energy_per_metre_j(0.5, np.array([0.0, 0.1]), mid)
+    assert e[1] - e[0] == pytest.approx(float(phys.energy_per_metre_j(0.5, 0.1, g) - phys.energy_per_metre_j(0.5, 0.0, g)))
+
+
+def test_errors():
+    robot, _, reg, lem, _ = _setup()
+    with pytest.raises(UnknownNameError, match="no model with id"):
+        lem.table(7)
+    with pytest.raises(InvalidParameterError, match="speeds_mps"):
+        LearnedEnergyModel(reg, robot, ground_preset("asphalt"), speeds_mps=(0.5, 0.2))
+    with pytest.raises(InvalidParameterError, match="speed_mps"):
+        lem.energy_per_metre_j(0.0, [0.0], 0)
