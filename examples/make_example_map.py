@@ -12,8 +12,8 @@ What is on it (all positions in metres):
 - a ridge 3 m high with 20 deg flanks from (100, 15) to (150, 60);
 - grounds: grass everywhere, an 8 m wide asphalt road from the start north to (10, 105),
   bending to (40, 135) and running east to (158, 135); a sand patch (radius 16 m) at
-  (112, 110) and a snow patch (radius 18 m) at (60, 150) off the line; a little asphalt
-  apron round the goal is not provided on purpose (the goal lies 15 m north of the road);
+  (112, 110) and a snow patch (radius 18 m) at (60, 150) off the line (the goal lies 15 m
+  north of the road);
 - seven round rocks (obstacles, radius 2-3 m), none on the road, the start or the goal.
 
 The straight route climbs the hill and crosses the sand; a minimum-energy route
@@ -30,6 +30,7 @@ import argparse
 from pathlib import Path
 
 import numpy as np
+import shapely
 from shapely import LineString, Point
 
 from terrain import (
@@ -70,7 +71,7 @@ def build_example_map() -> TerrainMap:
     ridge = LineString([(100.0, 15.0), (150.0, 60.0)])
     ridge_height_m, ridge_slope_rad = 3.0, np.radians(20.0)
     ridge_sigma_m = ridge_height_m * np.exp(-0.5) / np.tan(ridge_slope_rad)
-    dist_m = ridge.distance(np.array([Point(p) for p in zip(x.ravel(), y.ravel(), strict=True)])).reshape(SHAPE)
+    dist_m = shapely.distance(ridge, shapely.points(x, y))
     elevation += ridge_height_m * np.exp(-0.5 * (dist_m / ridge_sigma_m) ** 2)
     elevation = np.round(elevation * 1024.0) / 1024.0
 

@@ -87,7 +87,8 @@ def read_geotiff(
         raise FileFormatError(f"GeoTIFF file {str(path)!r} does not exist")
     try:
         with rasterio.open(path) as src:
-            if isinstance(band, bool) or not isinstance(band, (int, np.integer)) or not 1 <= band <= src.count:
+            is_int = isinstance(band, (int, np.integer)) and not isinstance(band, bool)
+            if not is_int or not 1 <= band <= src.count:
                 raise InvalidParameterError(f"band must be an integer in 1..{src.count}, got {band!r}")
             transform, crs, shape = src.transform, src.crs, (src.height, src.width)
             units = (src.units[band - 1] or "").strip().lower()
@@ -189,7 +190,7 @@ def write_geotiff(
         "width": tmap.shape[1],
         "count": 1,
         "dtype": data.dtype.name,
-        "transform": rasterio.transform.from_origin(xmin, ymax, tmap.cell_size_m, tmap.cell_size_m),
+        "transform": rasterio.Affine(tmap.cell_size_m, 0.0, xmin, 0.0, -tmap.cell_size_m, ymax),
         "crs": tmap.crs,
         "nodata": UNKNOWN_GROUND if layer == "ground" else None,
         "compress": "deflate",

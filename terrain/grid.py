@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 import tempfile
-import zipfile
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
@@ -17,6 +16,7 @@ from .errors import (
     GridMismatchError,
     InvalidParameterError,
     OutOfBoundsError,
+    TerrawattError,
     UnknownNameError,
 )
 
@@ -196,12 +196,11 @@ class TerrainMap:
         OutOfBoundsError
             If any point lies outside the map bounds (or is NaN).
         """
-        x = np.asarray(x_m, dtype=float)
-        y = np.asarray(y_m, dtype=float)
+        x, y = np.broadcast_arrays(np.asarray(x_m, dtype=float), np.asarray(y_m, dtype=float))
         inside = np.asarray(self.contains(x, y))
         if not np.all(inside):
             bad = np.flatnonzero(~inside.ravel())[0]
-            px, py = np.broadcast_to(x, inside.shape).ravel()[bad], np.broadcast_to(y, inside.shape).ravel()[bad]
+            px, py = x.ravel()[bad], y.ravel()[bad]
             raise OutOfBoundsError(
                 f"point ({px!r}, {py!r}) m lies outside the map bounds {self.bounds!r}"
             )
@@ -214,8 +213,7 @@ class TerrainMap:
 
     def xy(self, row: Any, col: Any) -> tuple[Any, Any]:
         """World coordinates (m) of cell centres."""
-        r = np.asarray(row)
-        c = np.asarray(col)
+        r, c = np.broadcast_arrays(np.asarray(row), np.asarray(col))
         x0, y0 = self._origin_xy_m
         x = x0 + (c + 0.5) * self._cell_size_m
         y = y0 + (r + 0.5) * self._cell_size_m
@@ -489,7 +487,10 @@ class TerrainMap:
         tm = tm[keep]
         rows, cols = self.rowcol(xa + tm * (xb - xa), ya + tm * (yb - ya))
         lengths = np.diff(t)[keep] * length
-        return np.asarray(rows), np.asarray(cols), lengths
+        # Rounding can split a cell into a sliver and the rest (e.g. a crossing computed
+        # just past the far map edge): merge consecutive pieces in the same cell.
+        first = np.flatnonzero(np.concatenate(([True], (np.diff(rows) != 0) | (np.diff(cols) != 0))))
+        return rows[first], cols[first], np.add.reduceat(lengths, first)
 
     def sample_segment(
         self, name: str, start_xy_m: tuple[float, float], end_xy_m: tuple[float, float]
@@ -549,11 +550,15 @@ class TerrainMap:
                 content = {k: data[k] for k in data.files}
         except FileNotFoundError as exc:
             raise FileFormatError(f"map file {str(path)!r} does not exist") from exc
-        except (OSError, ValueError, zipfile.BadZipFile, EOFError) as exc:
+        except Exception as exc:  # corrupt archives raise zipfile, zlib, tokenize, TypeError (.npy), ...
             raise FileFormatError(f"map file {str(path)!r} is corrupt or not a .npz file: {exc}") from exc
-        if content.get("__magic__", np.array("")).item() != _MAP_MAGIC:
+        magic = content.get("__magic__")
+        if magic is None or magic.shape != () or magic.item() != _MAP_MAGIC:
             raise FileFormatError(f"{str(path)!r} is a .npz file but not a terrawatt map")
-        version = int(content["__version__"])
+        try:
+            version = int(content["__version__"])
+        except (KeyError, TypeError, ValueError) as exc:
+            raise FileFormatError(f"map file {str(path)!r} has no valid format version") from exc
         if version != MAP_FORMAT_VERSION:
             raise FormatVersionError(
                 f"map file {str(path)!r} has format version {version!r}; this terrawatt reads "
@@ -575,6 +580,10 @@ class TerrainMap:
             )
         except KeyError as exc:
             raise FileFormatError(f"map file {str(path)!r} lacks entry {exc.args[0]!r}") from exc
+        except TerrawattError:
+            raise
+        except (TypeError, ValueError) as exc:
+            raise FileFormatError(f"map file {str(path)!r} has malformed metadata: {exc}") from exc
         for key, arr in content.items():
             if key.startswith("layer:") and key[6:] not in tmap._layers:
                 tmap[key[6:]] = arr

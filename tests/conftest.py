@@ -1,0 +1,37 @@
+"""Shared fixtures: small maps whose answers are known exactly (flat, ramp, wall)."""
+
+from __future__ import annotations
+
+import pytest
+
+import terrain
+
+#: Grade (dz/dx) of the ``ramp_map`` fixture.
+RAMP_GRADE = 0.1
+
+
+@pytest.fixture
+def flat_map() -> terrain.TerrainMap:
+    """20 x 30 cells of 0.5 m (15 m east x 10 m north, origin (0, 0)), elevation 0,
+    all asphalt (class 0), no obstacles."""
+    return terrain.flat_map((20, 30), 0.5, ground="asphalt")
+
+
+@pytest.fixture
+def ramp_grade() -> float:
+    """The grade of the ``ramp_map`` fixture (0.1: rises 0.1 m per metre along +x)."""
+    return RAMP_GRADE
+
+
+@pytest.fixture
+def ramp_map() -> terrain.TerrainMap:
+    """20 x 40 cells of 0.5 m (20 m east x 10 m north, origin (0, 0)) rising with grade
+    0.1 along +x (``z = 0.1 * x`` at cell centres), all asphalt (class 0), no obstacles."""
+    return terrain.ramp_map((20, 40), 0.5, grade=RAMP_GRADE, axis="x", ground="asphalt")
+
+
+@pytest.fixture
+def wall_map() -> terrain.TerrainMap:
+    """40 x 40 flat cells of 1 m, all asphalt, with an obstacle wall along column 20
+    (x in [20, 21) m) open only at rows 30-33 (y in [30, 34) m)."""
+    return terrain.wall_map((40, 40), 1.0, wall_col=20, gap_rows=(30, 34), ground="asphalt")
