@@ -29,6 +29,7 @@ import numpy as np
 from terrain.errors import DataError, InvalidParameterError, UnknownNameError
 
 __all__ = [
+    "DEFAULT_T_INTERVAL_S",
     "SOURCE_SPEED_RANGE_MPS",
     "SOURCE_OMEGA_RANGE_RADPS",
     "SOURCE_CURRENT_RANGE_A",
@@ -43,6 +44,8 @@ __all__ = [
     "MinMaxNormaliser",
 ]
 
+#: The source method's window ``t_interval`` (s): 10 samples at 100 Hz.
+DEFAULT_T_INTERVAL_S = 0.1
 #: Min-max range of |v| in the source method (m/s).
 SOURCE_SPEED_RANGE_MPS = (0.0, 1.0)
 #: Min-max range of |omega| in the source method (rad/s).
@@ -102,8 +105,10 @@ class WindowSpec:
         object.__setattr__(self, "stride_samples", int(self.stride_samples))
 
     @classmethod
-    def from_seconds(cls, length_s: float, rate_hz: float, stride_s: float | None = None) -> WindowSpec:
-        """Window of ``length_s`` (and stride ``stride_s``, default: the length) at ``rate_hz``.
+    def from_seconds(cls, length_s: float = DEFAULT_T_INTERVAL_S, rate_hz: float = 100.0,
+                     stride_s: float | None = None) -> WindowSpec:
+        """Window of ``length_s`` (default the paper's 0.1 s) and stride ``stride_s``
+        (default: the length) at ``rate_hz`` (default 100 Hz).
 
         Lengths are rounded to the nearest whole sample, at least one.
 

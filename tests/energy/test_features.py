@@ -26,6 +26,7 @@ from energy import (
 def test_paper_t_interval_is_ten_samples_at_100_hz():
     spec = WindowSpec.from_seconds(0.1, rate_hz=100.0)
     assert (spec.length_samples, spec.stride_samples) == (10, 10)
+    assert WindowSpec.from_seconds() == spec  # the default t_interval
     assert spec.length_s == pytest.approx(0.1) and spec.stride_s == pytest.approx(0.1)
 
 
