@@ -374,7 +374,8 @@ def warm_up_kernels() -> float:
     cost.segment_energy_one_j(0.5, 0.5, 3.5, 2.5)
     cost.relax_path([[0.5, 0.5], [2.0, 3.0], [3.5, 0.5]])
     _point_free(cost._cells, cost._geo, 0.5, 0.5)
-    path = Lattice(cost).shortest_path((0.5, 0.5), (3.5, 3.5), weight="length")
+    path = Lattice.for_cost(cost, 1).shortest_path((0.5, 0.5), (3.5, 3.5), weight="length")
+    cost.with_tables(2.0 * cost.grade_table_j_per_m, cost.turn_table_j)  # incremental lattice reweighting
     string_pull(cost, np.vstack([path.waypoints_m, [[0.5, 3.5]]]))
     return time.perf_counter() - t0
 
@@ -398,6 +399,52 @@ def _model_turn_rate_radps(model: Any) -> float | None:
         if value is not None:
             return float(value)
     return None
+
+
+def _check_tables(
+    shape: tuple[int, int], ground_rows: Any, grade_table_j_per_m: Any, turn_table_j: Any, ground_labels: Any
+) -> tuple[np.ndarray, np.ndarray, tuple[str, ...], np.ndarray]:
+    """Validated copies of EnergyCost tables and per-cell rows (see :class:`EnergyCost`)."""
+    grade_table = np.array(grade_table_j_per_m, dtype=np.float64, order="C", copy=True)
+    turn_table = np.array(turn_table_j, dtype=np.float64, order="C", copy=True)
+    if grade_table.ndim != 2 or grade_table.shape[1] < 3 or grade_table.shape[1] % 2 == 0:
+        raise InvalidParameterError(
+            f"grade_table_j_per_m must have shape (n_grounds, n_grade) with odd n_grade >= 3, "
+            f"got {grade_table.shape!r}"
+        )
+    n_rows = grade_table.shape[0]
+    if turn_table.ndim != 2 or turn_table.shape[0] != n_rows or turn_table.shape[1] < 2:
+        raise InvalidParameterError(
+            f"turn_table_j must have shape ({n_rows}, n_turn >= 2), got {turn_table.shape!r}"
+        )
+    labels = tuple(ground_labels) if ground_labels is not None else tuple(f"row{i}" for i in range(n_rows))
+    if len(labels) != n_rows:
+        raise InvalidParameterError(f"ground_labels needs {n_rows} names, got {labels!r}")
+    for tname, tab, allowed in (
+        ("grade_table_j_per_m", grade_table, "energies >= 0 or +inf (a grade the ground cannot be driven at)"),
+        ("turn_table_j", turn_table, "finite energies >= 0"),
+    ):
+        bad = np.isnan(tab) | (tab < 0)
+        if tname == "turn_table_j":
+            bad |= ~np.isfinite(tab)
+        if np.any(bad):
+            i, j = np.argwhere(bad)[0]
+            raise InvalidParameterError(
+                f"{tname} must hold {allowed} (minimum-energy planning needs non-negative edge "
+                f"costs; a regenerating model must not go below 0), got {tab[i, j]!r} for "
+                f"ground {labels[i]!r} at sample {j}"
+            )
+    rows = np.asarray(ground_rows)
+    if rows.shape != tuple(shape):
+        from terrain.errors import GridMismatchError
+
+        raise GridMismatchError(f"ground_rows has shape {rows.shape!r}; the map's grid is {tuple(shape)!r}")
+    if not np.issubdtype(rows.dtype, np.integer) or rows.min() < 0 or rows.max() >= n_rows:
+        raise InvalidParameterError(
+            f"ground_rows must hold integer table rows in 0..{n_rows - 1}, got values in "
+            f"[{rows.min()!r}, {rows.max()!r}] of dtype {rows.dtype}"
+        )
+    return grade_table, turn_table, labels, rows
 
 
 class EnergyCost:
@@ -472,45 +519,9 @@ class EnergyCost:
             v = float(value)
             if not (math.isfinite(v) and 0.0 < v < hi):
                 raise InvalidParameterError(f"{name} must be a finite number in (0, {hi!r}), got {value!r}")
-        grade_table = np.array(grade_table_j_per_m, dtype=np.float64, order="C", copy=True)
-        turn_table = np.array(turn_table_j, dtype=np.float64, order="C", copy=True)
-        if grade_table.ndim != 2 or grade_table.shape[1] < 3 or grade_table.shape[1] % 2 == 0:
-            raise InvalidParameterError(
-                f"grade_table_j_per_m must have shape (n_grounds, n_grade) with odd n_grade >= 3, "
-                f"got {grade_table.shape!r}"
-            )
-        n_rows = grade_table.shape[0]
-        if turn_table.ndim != 2 or turn_table.shape[0] != n_rows or turn_table.shape[1] < 2:
-            raise InvalidParameterError(
-                f"turn_table_j must have shape ({n_rows}, n_turn >= 2), got {turn_table.shape!r}"
-            )
-        labels = tuple(ground_labels) if ground_labels is not None else tuple(f"row{i}" for i in range(n_rows))
-        if len(labels) != n_rows:
-            raise InvalidParameterError(f"ground_labels needs {n_rows} names, got {labels!r}")
-        for tname, tab, allowed in (
-            ("grade_table_j_per_m", grade_table, "energies >= 0 or +inf (a grade the ground cannot be driven at)"),
-            ("turn_table_j", turn_table, "finite energies >= 0"),
-        ):
-            bad = np.isnan(tab) | (tab < 0)
-            if tname == "turn_table_j":
-                bad |= ~np.isfinite(tab)
-            if np.any(bad):
-                i, j = np.argwhere(bad)[0]
-                raise InvalidParameterError(
-                    f"{tname} must hold {allowed} (minimum-energy planning needs non-negative edge "
-                    f"costs; a regenerating model must not go below 0), got {tab[i, j]!r} for "
-                    f"ground {labels[i]!r} at sample {j}"
-                )
-        rows = np.asarray(ground_rows)
-        if rows.shape != terrain.shape:
-            from terrain.errors import GridMismatchError
-
-            raise GridMismatchError(f"ground_rows has shape {rows.shape!r}; the map's grid is {terrain.shape!r}")
-        if not np.issubdtype(rows.dtype, np.integer) or rows.min() < 0 or rows.max() >= n_rows:
-            raise InvalidParameterError(
-                f"ground_rows must hold integer table rows in 0..{n_rows - 1}, got values in "
-                f"[{rows.min()!r}, {rows.max()!r}] of dtype {rows.dtype}"
-            )
+        grade_table, turn_table, labels, rows = _check_tables(
+            terrain.shape, ground_rows, grade_table_j_per_m, turn_table_j, ground_labels
+        )
 
         self.terrain = terrain
         self.speed_mps = float(speed_mps)
@@ -536,10 +547,101 @@ class EnergyCost:
         self._geo = np.array([x0, y0, terrain.cell_size_m, rows_n, cols_n, -self.grade_max, 1.0 / dg])
         for arr in (grade_table, turn_table, self.ground_rows, self.blocked, self._cells, self._geo):
             arr.setflags(write=False)
+        self._free_grade_index: np.ndarray | None = None  # geometry only: shared by with_tables
         self.min_energy_per_metre_j = self._min_energy_per_metre(dg)
         self._components: np.ndarray | None = None
         self._cache: dict[Any, Any] = {}  # lattice graphs etc., keyed by their builders
+        #: Cells whose table row content differs from the cost this one was derived from
+        #: (:meth:`with_tables`); ``None`` for a cost built from scratch.
+        self.changed_cells: np.ndarray | None = None
         self.prep_time_s = time.perf_counter() - t0
+
+    def with_tables(
+        self,
+        grade_table_j_per_m: np.ndarray,
+        turn_table_j: np.ndarray,
+        ground_rows: np.ndarray | None = None,
+        *,
+        ground_labels: tuple[str, ...] | None = None,
+    ) -> EnergyCost:
+        """The same map geometry with new energy tables (a table-only refresh, e.g. after a model update).
+
+        Equal in every query to ``EnergyCost(self.terrain, ground_rows, grade_table_j_per_m,
+        turn_table_j, ...)`` with this cost's speed, slope limit, voltage and turn rate, but
+        the per-cell geometry (gradients, blocked cells, connected regions) is shared, and
+        every lattice graph cached on this cost is carried over by recomputing only the
+        weights of edges that cross a cell whose table row *content* changed
+        (:meth:`Lattice.refreshed`), instead of being rebuilt. Cells whose row index changed
+        but whose row content did not (rows renumbered) count as unchanged.
+
+        Parameters
+        ----------
+        grade_table_j_per_m, turn_table_j : ndarray
+            New tables, as in the constructor; ``grade_table_j_per_m`` must have this cost's
+            number of grade samples (the grade grid is part of the geometry).
+        ground_rows : ndarray of int, optional
+            New per-cell rows (default: the current ones).
+        ground_labels : tuple of str, optional
+            Labels of the new rows.
+
+        Returns
+        -------
+        EnergyCost
+            A new cost; its :attr:`changed_cells` marks the cells whose energy changed and its
+            ``prep_time_s`` is the refresh time (lattice updates included). ``self`` is not
+            modified.
+
+        Raises
+        ------
+        InvalidParameterError
+            Tables invalid as in the constructor, or another number of grade samples.
+        GridMismatchError
+            ``ground_rows`` not on the map's grid.
+        """
+        t0 = time.perf_counter()
+        rows_in = self.ground_rows if ground_rows is None else ground_rows
+        grade_table, turn_table, labels, rows = _check_tables(
+            self.terrain.shape, rows_in, grade_table_j_per_m, turn_table_j, ground_labels
+        )
+        if grade_table.shape[1] != self.grade_table_j_per_m.shape[1]:
+            raise InvalidParameterError(
+                f"grade_table_j_per_m has {grade_table.shape[1]} grade samples; this cost's grade grid has "
+                f"{self.grade_table_j_per_m.shape[1]} (build a new EnergyCost to change it)"
+            )
+        new = object.__new__(EnergyCost)
+        for name in ("terrain", "speed_mps", "max_slope_rad", "battery_voltage_v", "turn_rate_radps", "grade_max",
+                     "blocked", "_geo", "_free_grade_index", "_components"):
+            setattr(new, name, getattr(self, name))
+        new.ground_labels = labels
+        new.grade_table_j_per_m = grade_table
+        new.turn_table_j = turn_table
+        new.ground_rows = rows.astype(np.int32)
+        cells = self._cells.copy()
+        cells[..., 2] = np.where(self.blocked, -1.0, new.ground_rows)
+        new._cells = cells
+        for arr in (grade_table, turn_table, new.ground_rows, cells):
+            arr.setflags(write=False)
+        dg = 2.0 * self.grade_max / (grade_table.shape[1] - 1)
+        new.min_energy_per_metre_j = new._min_energy_per_metre(dg)
+        new.changed_cells = self._changed_cells(new)
+        new.changed_cells.setflags(write=False)
+        new._cache = {}
+        for key, value in self._cache.items():
+            if isinstance(key, tuple) and key and key[0] == "lattice":
+                new._cache[key] = value.refreshed(new, new.changed_cells)
+        new.prep_time_s = time.perf_counter() - t0
+        return new
+
+    def _changed_cells(self, other: EnergyCost) -> np.ndarray:
+        """Free cells whose grade-table row content differs between ``self`` and ``other``."""
+        n_new = other.grade_table_j_per_m.shape[0]
+        code = self.ground_rows.astype(np.int64) * n_new + other.ground_rows
+        present = np.flatnonzero(np.bincount(code.ravel(), minlength=self.grade_table_j_per_m.shape[0] * n_new))
+        differs = np.zeros(self.grade_table_j_per_m.shape[0] * n_new, dtype=bool)
+        for pair in present.tolist():
+            a, b = divmod(pair, n_new)
+            differs[pair] = not np.array_equal(self.grade_table_j_per_m[a], other.grade_table_j_per_m[b])
+        return differs[code] & ~self.blocked
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -725,9 +827,10 @@ class EnergyCost:
         left = np.minimum.accumulate(table[:, m::-1], axis=1)
         right = np.minimum.accumulate(table[:, m:], axis=1)
         prefix = np.minimum(left, right)
-        grad = np.hypot(self.terrain["grad_x"], self.terrain["grad_y"])[free]
-        k = np.minimum(np.ceil(grad / dg * (1 + 1e-9)).astype(np.int64), m)
-        value = float(np.min(prefix[self.ground_rows[free], k]))
+        if self._free_grade_index is None:
+            grad = np.hypot(self.terrain["grad_x"], self.terrain["grad_y"])[free]
+            self._free_grade_index = np.minimum(np.ceil(grad / dg * (1 + 1e-9)).astype(np.int64), m)
+        value = float(np.min(prefix[self.ground_rows[free], self._free_grade_index]))
         return value if math.isfinite(value) else 0.0
 
     # ------------------------------------------------------------------ queries

@@ -69,6 +69,56 @@ def _lattice_weights(cells, table, geo, stride, offset, ni, nj, half):  # pragma
     return w
 
 
+@numba.njit(cache=True, nogil=True, parallel=True)
+def _lattice_reweight(cells, table, geo, stride, offset, ni, nj, half, changed_sat, pos, data):  # pragma: no cover
+    """Recompute, into ``data``, the energies of the edges whose cell box holds a changed cell.
+
+    ``changed_sat`` is the summed-area table of the changed-cell mask (shape rows+1, cols+1);
+    ``pos[node, k]`` is the index in ``data`` of move ``k`` of ``node`` (-1: no edge). Returns
+    per node-row counts of recomputed moves and of edges whose presence would change (an
+    absent edge becoming finite or a present one becoming ``inf``).
+    """
+    nh = half.shape[0]
+    recomputed = np.zeros(ni, np.int64)
+    flips = np.zeros(ni, np.int64)
+    for i in numba.prange(ni):
+        ra = i * stride + offset
+        ya = geo[1] + (ra + 0.5) * geo[2]
+        for j in range(nj):
+            ca = j * stride + offset
+            xa = geo[0] + (ca + 0.5) * geo[2]
+            src = i * nj + j
+            for k in range(nh):
+                ti = i + half[k, 0]
+                tj = j + half[k, 1]
+                if ti < 0 or ti >= ni or tj < 0 or tj >= nj:
+                    continue
+                rb = ti * stride + offset
+                cb = tj * stride + offset
+                r0 = min(ra, rb)
+                r1 = max(ra, rb) + 1
+                c0 = min(ca, cb)
+                c1 = max(ca, cb) + 1
+                if changed_sat[r1, c1] - changed_sat[r0, c1] - changed_sat[r1, c0] + changed_sat[r0, c0] == 0:
+                    continue
+                xb = geo[0] + (cb + 0.5) * geo[2]
+                yb = geo[1] + (rb + 0.5) * geo[2]
+                ef, eb = _walk(cells, table, geo, xa, ya, xb, yb, True)
+                recomputed[i] += 2
+                tgt = ti * nj + tj
+                p = pos[src, k]
+                if p >= 0:
+                    data[p] = ef
+                if (p >= 0) != (ef < math.inf):
+                    flips[i] += 1
+                p = pos[tgt, nh + k]
+                if p >= 0:
+                    data[p] = eb
+                if (p >= 0) != (eb < math.inf):
+                    flips[i] += 1
+    return recomputed, flips
+
+
 @numba.njit(cache=True, nogil=True)
 def _string_pull_idx(cells, table, geo, xs, ys):  # pragma: no cover - compiled
     """Greedy line-of-sight shortcut: indices of the kept vertices of a polyline."""
@@ -172,9 +222,16 @@ class Lattice:
 
     Examples
     --------
-    >>> lat = Lattice(cost, stride_cells=1)                          # doctest: +SKIP
-    >>> path = lat.shortest_path((1.0, 1.0), (30.0, 20.0))           # doctest: +SKIP
-    >>> path.objective, path.waypoints_m.shape                       # doctest: +SKIP
+    >>> from energy import PhysicsEnergyModel, ground_preset, robot_preset
+    >>> from planner import EnergyCost
+    >>> from terrain import flat_map
+    >>> tmap = flat_map((30, 40), 1.0)  # level asphalt, 1 m cells
+    >>> cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(robot_preset("husky")),
+    ...                              {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
+    >>> lat = Lattice(cost, stride_cells=1)
+    >>> path = lat.shortest_path((1.0, 1.0), (30.0, 20.0))
+    >>> path.waypoints_m.shape  # string-pulled: level ground needs no intermediate waypoint
+    (2, 2)
     """
 
     def __init__(self, cost: EnergyCost, stride_cells: int = 1) -> None:
@@ -196,22 +253,106 @@ class Lattice:
                 f"stride_cells={stride_cells!r} leaves a {ni} x {nj} node grid on a {rows} x {cols} map; need >= 2 x 2"
             )
         self._ni, self._nj = ni, nj
+        self._offset = off
         w = _lattice_weights(cost._cells, cost.grade_table_j_per_m, cost._geo, s, off, ni, nj, _HALF)
+        self._set_structure(w)
+        xc, yc = cost.terrain.cell_centres()
+        self._node_x = xc[self.node_cols]
+        self._node_y = yc[self.node_rows]
+        #: Directed moves whose energy was computed when this lattice was made (2 per walk).
+        self.edges_computed = int(w.size - np.count_nonzero(self._out_of_grid_mask()))
+        self.build_time_s = time.perf_counter() - t0
+
+    def _out_of_grid_mask(self) -> np.ndarray:
+        """(n_nodes, 16) mask of moves that leave the node grid."""
+        i = np.arange(self._ni)[:, None, None] + LATTICE_OFFSETS[None, None, :, 0]
+        j = np.arange(self._nj)[None, :, None] + LATTICE_OFFSETS[None, None, :, 1]
+        return ((i < 0) | (i >= self._ni) | (j < 0) | (j >= self._nj)).reshape(self.n_nodes, -1)
+
+    def _set_structure(self, w: np.ndarray) -> None:
+        """CSR graphs (energy and length weights) from the dense (n_nodes, 16) energies ``w``."""
+        ni, nj, s = self._ni, self._nj, self.stride_cells
         mask = np.isfinite(w)
         delta = LATTICE_OFFSETS[:, 0] * nj + LATTICE_OFFSETS[:, 1]
         n = ni * nj
         targets = (np.arange(n, dtype=np.int64)[:, None] + delta[None, :])[mask].astype(np.int32)
         indptr = np.zeros(n + 1, dtype=np.int32)
         np.cumsum(mask.sum(axis=1), out=indptr[1:])
+        pos = np.full(w.shape, -1, dtype=np.int32)
+        pos[mask] = np.arange(targets.size, dtype=np.int32)
+        self._pos = pos
         self._indices = targets
         self._indptr = indptr
-        step_m = np.hypot(LATTICE_OFFSETS[:, 0], LATTICE_OFFSETS[:, 1]) * s * cost.terrain.cell_size_m
+        step_m = np.hypot(LATTICE_OFFSETS[:, 0], LATTICE_OFFSETS[:, 1]) * s * self.cost.terrain.cell_size_m
         self._data = {"energy": w[mask], "length": np.broadcast_to(step_m, w.shape)[mask]}
         self.n_edges = int(targets.size)
-        xc, yc = cost.terrain.cell_centres()
-        self._node_x = xc[self.node_cols]
-        self._node_y = yc[self.node_rows]
-        self.build_time_s = time.perf_counter() - t0
+
+    def refreshed(self, cost: EnergyCost, changed_cells: np.ndarray) -> Lattice:
+        """This lattice over ``cost`` (same geometry, new tables), recomputing only changed edges.
+
+        An edge's energy depends only on the table rows of the cells its segment crosses, all
+        inside the box of cells spanned by its two nodes; the edges whose box holds a cell of
+        ``changed_cells`` are recomputed (both directions in one walk, in parallel), the other
+        weights and the graph structure are shared. If an edge would appear or vanish (a
+        grade becoming drivable or undrivable) the structure is rebuilt from all weights.
+        The result's weights equal those of ``Lattice(cost, stride_cells)`` exactly.
+
+        Parameters
+        ----------
+        cost : EnergyCost
+            A cost made by :meth:`EnergyCost.with_tables` from this lattice's cost (same
+            map, blocked cells and grade grid).
+        changed_cells : ndarray of bool, shape (rows, cols)
+            Cells whose table row content changed.
+
+        Returns
+        -------
+        Lattice
+            A new lattice; ``edges_computed`` counts the directed moves recomputed and
+            ``build_time_s`` the seconds spent.
+
+        Raises
+        ------
+        InvalidParameterError
+            ``cost`` on another grid or with other blocked cells; a mask of the wrong shape.
+        """
+        t0 = time.perf_counter()
+        if not isinstance(cost, EnergyCost):
+            raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
+        old = self.cost
+        if (cost.terrain is not old.terrain and not cost.terrain.same_grid(old.terrain)) or not np.array_equal(
+            cost.blocked, old.blocked
+        ) or not np.array_equal(cost._geo, old._geo):
+            raise InvalidParameterError(
+                "cost must share this lattice's map geometry (grid, blocked cells, grade grid); build a new Lattice"
+            )
+        changed = np.asarray(changed_cells, dtype=bool)
+        if changed.shape != cost.shape:
+            raise InvalidParameterError(f"changed_cells must have shape {cost.shape!r}, got {changed.shape!r}")
+        new = object.__new__(Lattice)
+        new.__dict__.update(self.__dict__)
+        new.cost = cost
+        if not changed.any():
+            new.edges_computed = 0
+            new.build_time_s = time.perf_counter() - t0
+            return new
+        sat = np.zeros((changed.shape[0] + 1, changed.shape[1] + 1), dtype=np.int32)
+        np.cumsum(np.cumsum(changed, axis=0, dtype=np.int32), axis=1, out=sat[1:, 1:])
+        data = self._data["energy"].copy()
+        recomputed, flips = _lattice_reweight(
+            cost._cells, cost.grade_table_j_per_m, cost._geo, self.stride_cells, self._offset, self._ni, self._nj,
+            _HALF, sat, self._pos, data,
+        )
+        if int(flips.sum()):
+            w = _lattice_weights(cost._cells, cost.grade_table_j_per_m, cost._geo, self.stride_cells, self._offset,
+                                 self._ni, self._nj, _HALF)
+            new._set_structure(w)
+            new.edges_computed = int(w.size - np.count_nonzero(self._out_of_grid_mask()))
+        else:
+            new._data = {"energy": data, "length": self._data["length"]}
+            new.edges_computed = int(recomputed.sum())
+        new.build_time_s = time.perf_counter() - t0
+        return new
 
     @classmethod
     def for_cost(cls, cost: EnergyCost, stride_cells: int = 1) -> Lattice:

@@ -39,7 +39,9 @@ model id; models are never changed in place), so tables are cached per model id 
 recomputed only when the registry holds another object under that id (e.g. after
 ``load``); :attr:`LearnedEnergyModel.table_builds` counts the recomputations. The
 per-cell map changes with every registry version; :meth:`LearnedEnergyModel.energy_cost`
-rebuilds only the cheap per-cell row index from ``registry.model_id_map``.
+rebuilds only the cheap per-cell row index from ``registry.model_id_map``, and with
+``previous=`` it derives the new cost with :meth:`EnergyCost.with_tables`, so lattice graphs
+are reweighted only where a cell's model changed instead of being rebuilt.
 """
 
 from __future__ import annotations
@@ -162,8 +164,10 @@ class LearnedEnergyModel:
 
     Examples
     --------
-    >>> lem = LearnedEnergyModel(registry, robot_preset("husky"), ground_preset("asphalt"))  # doctest: +SKIP
-    >>> cost = lem.energy_cost(terrain, speed_mps=0.5)                                      # doctest: +SKIP
+    Usage (needs data or fitted models, so not run as a doctest)::
+
+        lem = LearnedEnergyModel(registry, robot_preset("husky"), ground_preset("asphalt"))
+        cost = lem.energy_cost(terrain, speed_mps=0.5)
     """
 
     def __init__(
@@ -371,11 +375,18 @@ class LearnedEnergyModel:
         max_slope_rad: float = DEFAULT_MAX_SLOPE_RAD,
         grade_samples: int = DEFAULT_GRADE_SAMPLES,
         turn_samples: int = DEFAULT_TURN_SAMPLES,
+        previous: EnergyCost | None = None,
     ) -> EnergyCost:
         """An :class:`EnergyCost` whose table rows are the models in use (cell row = its model).
 
         Equal to ``EnergyCost.from_model`` on a map whose ground classes are the model ids,
         but only the tables of models not yet cached are computed.
+
+        With ``previous`` (a cost this adapter made earlier for the same map, speed, slope
+        limit and table sizes), the result is ``previous.with_tables(...)``: the map geometry
+        is shared and lattice graphs cached on ``previous`` are carried over, recomputing
+        only the edges that cross cells whose model (table content) changed — the fast path
+        of a replan after a model update. The result is equal to a fresh build.
 
         Raises
         ------
@@ -393,6 +404,20 @@ class LearnedEnergyModel:
             raise InvalidParameterError(f"grade_samples must be an odd integer >= 3, got {grade_samples!r}")
         if int(turn_samples) != turn_samples or turn_samples < 2:
             raise InvalidParameterError(f"turn_samples must be an integer >= 2, got {turn_samples!r}")
+        if previous is not None:
+            if not isinstance(previous, EnergyCost):
+                raise InvalidParameterError(f"previous must be an EnergyCost or None, got {type(previous).__name__!r}")
+            same = (previous.terrain is terrain or previous.terrain.same_grid(terrain)) and (
+                previous.speed_mps == speed and previous.max_slope_rad == float(max_slope_rad)
+                and previous.grade_table_j_per_m.shape[1] == int(grade_samples)
+                and previous.turn_table_j.shape[1] == int(turn_samples)
+            )
+            if not same:
+                raise InvalidParameterError(
+                    f"previous ({previous!r}) was built for another grid, speed, slope limit or table size; "
+                    f"expected speed_mps={speed!r}, max_slope_rad={float(max_slope_rad)!r}, "
+                    f"grade_samples={grade_samples!r}, turn_samples={turn_samples!r}"
+                )
         ids = self.registry.model_ids_in_use()
         grade_max = math.tan(float(max_slope_rad))
         grades = np.linspace(-grade_max, grade_max, int(grade_samples))
@@ -414,6 +439,10 @@ class LearnedEnergyModel:
         lut[ids] = np.arange(ids.size, dtype=np.int32)
         rows = lut[np.asarray(self.registry.model_id_map)]
         labels = tuple(self.registry.model_record(int(m)).name for m in ids.tolist())
+        if previous is not None:
+            cost = previous.with_tables(grade_table, turn_table, rows, ground_labels=labels)
+            cost.prep_time_s = time.perf_counter() - t0
+            return cost
         cost = EnergyCost(terrain, rows, grade_table, turn_table, speed_mps=speed, max_slope_rad=float(max_slope_rad),
                           battery_voltage_v=self.robot.battery_voltage_v, turn_rate_radps=self.turn_rate_radps,
                           ground_labels=labels)

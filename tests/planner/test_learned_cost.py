@@ -89,3 +89,24 @@ def test_errors():
         LearnedEnergyModel(reg, robot, ground_preset("asphalt"), speeds_mps=(0.5, 0.2))
     with pytest.raises(InvalidParameterError, match="speed_mps"):
         lem.energy_per_metre_j(0.0, [0.0], 0)
+
+
+def test_energy_cost_with_previous_equals_fresh_and_reuses_lattice():
+    from planner import Lattice
+
+    robot, tmap, reg, lem, mid = _setup()
+    cost = lem.energy_cost(tmap, 0.5)
+    lat = Lattice.for_cost(cost, 1)
+    new = reg.add_model(ConstModel(8.0, 9.0), name="c")
+    reg.assign((np.array([6, 7]), np.array([2, 2])), new)
+    got = lem.energy_cost(tmap, 0.5, previous=cost)
+    ref = LearnedEnergyModel(reg, robot, ground_preset("asphalt"), speeds_mps=(0.25, 0.5, 1.0),
+                             omegas_radps=(0.5, 1.0)).energy_cost(tmap, 0.5)
+    assert np.array_equal(got.grade_table_j_per_m, ref.grade_table_j_per_m)
+    assert np.array_equal(got.ground_rows, ref.ground_rows)
+    assert np.array_equal(got.changed_cells, np.asarray(reg.model_id_map) == new)
+    got_lat = Lattice.for_cost(got, 1)
+    assert 0 < got_lat.edges_computed < lat.edges_computed
+    assert np.array_equal(got_lat._data["energy"], Lattice(ref, 1)._data["energy"])
+    with pytest.raises(InvalidParameterError, match="previous"):
+        lem.energy_cost(tmap, 0.4, previous=cost)

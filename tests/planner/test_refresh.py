@@ -1,0 +1,122 @@
+"""Tests of table-only refreshes: EnergyCost.with_tables and Lattice.refreshed equal fresh builds."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planner import EnergyCost, Lattice
+from terrain import InvalidParameterError, TerrainMap
+from terrain.procedural import procedural_map
+
+
+def _tables(n_rows: int, n_grade: int = 33, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    grades = np.linspace(-0.4, 0.4, n_grade)
+    base = 40.0 + 10.0 * np.arange(n_rows)[:, None]
+    grade = scale * (base + 300.0 * np.maximum(grades, 0.0)[None, :])
+    turn = np.tile(np.linspace(0.0, 30.0, 9), (n_rows, 1))
+    return grade, turn
+
+
+def _cost(seed: int = 0, shape: tuple[int, int] = (40, 48)) -> EnergyCost:
+    tmap = procedural_map(shape, 1.0, seed=seed, grounds=("a", "b", "c"), obstacle_fraction=0.03)
+    grade, turn = _tables(3)
+    return EnergyCost(tmap, np.asarray(tmap.ground), grade, turn, speed_mps=0.5, max_slope_rad=np.arctan(0.4),
+                      battery_voltage_v=24.0, turn_rate_radps=0.5)
+
+
+def _fresh(old: EnergyCost, grade: np.ndarray, turn: np.ndarray, rows: np.ndarray) -> EnergyCost:
+    return EnergyCost(old.terrain, rows, grade, turn, speed_mps=old.speed_mps, max_slope_rad=old.max_slope_rad,
+                      battery_voltage_v=old.battery_voltage_v, turn_rate_radps=old.turn_rate_radps)
+
+
+@pytest.mark.parametrize("stride", [1, 2])
+def test_refreshed_weights_equal_fresh_build_exactly(stride):
+    cost = _cost()
+    lat = Lattice.for_cost(cost, stride)
+    grade, turn = _tables(3)
+    grade[1] *= 1.7  # one ground's model changed
+    new = cost.with_tables(grade, turn)
+    ref = Lattice(_fresh(cost, grade, turn, cost.ground_rows), stride)
+    got = Lattice.for_cost(new, stride)
+    assert got is not lat and got.cost is new
+    assert np.array_equal(got._data["energy"], ref._data["energy"])  # exact, not approx
+    assert np.array_equal(got._indices, ref._indices) and np.array_equal(got._indptr, ref._indptr)
+    assert np.array_equal(new.changed_cells, (cost.ground_rows == 1) & ~cost.blocked)
+    assert new.min_energy_per_metre_j == _fresh(cost, grade, turn, cost.ground_rows).min_energy_per_metre_j
+    a = got.shortest_path((2.5, 3.5), (44.5, 36.5))
+    b = ref.shortest_path((2.5, 3.5), (44.5, 36.5))
+    assert a.found and a.objective == b.objective and np.array_equal(a.waypoints_m, b.waypoints_m)
+    # the old cost and lattice are untouched
+    assert np.array_equal(Lattice.for_cost(cost, stride)._data["energy"], Lattice(cost, stride)._data["energy"])
+
+
+def test_unchanged_rows_are_not_recomputed():
+    cost = _cost()
+    lat = Lattice.for_cost(cost, 1)
+    grade, turn = _tables(3)
+    same = cost.with_tables(grade, turn)
+    assert Lattice.for_cost(same, 1).edges_computed == 0 and not same.changed_cells.any()
+    # one free cell moves to a changed row: only the moves whose cell box holds it are recomputed
+    r, c = 20, 24
+    assert not cost.blocked[r, c]
+    rows = cost.ground_rows.copy()
+    grade4, turn4 = np.vstack([grade, 2.0 * grade[:1]]), np.vstack([turn, turn[:1]])
+    rows[r, c] = 3
+    one = cost.with_tables(grade4, turn4, rows)
+    got = Lattice.for_cost(one, 1)
+    ni, nj = cost.shape
+    expected = 0
+    for i in range(ni):
+        for j in range(nj):
+            for di, dj in ((0, 1), (1, 0), (1, 1), (1, -1), (1, 2), (2, 1), (2, -1), (1, -2)):
+                ti, tj = i + di, j + dj
+                if 0 <= ti < ni and 0 <= tj < nj and min(i, ti) <= r <= max(i, ti) and min(j, tj) <= c <= max(j, tj):
+                    expected += 2
+    assert got.edges_computed == expected
+    assert 0 < got.edges_computed < lat.edges_computed / 100
+    ref = Lattice(_fresh(cost, grade4, turn4, rows), 1)
+    assert np.array_equal(got._data["energy"], ref._data["energy"])
+
+
+def test_renumbered_rows_with_equal_content_count_as_unchanged():
+    cost = _cost()
+    Lattice.for_cost(cost, 1)
+    grade, turn = _tables(3)
+    perm = np.array([2, 0, 1])  # old row k is new row perm[k]
+    new = cost.with_tables(grade[np.argsort(perm)], turn[np.argsort(perm)], perm[cost.ground_rows])
+    assert not new.changed_cells.any() and Lattice.for_cost(new, 1).edges_computed == 0
+    assert np.array_equal(new.segment_energy_j([[1.5, 1.5]], [[40.5, 30.5]]),
+                          cost.segment_energy_j([[1.5, 1.5]], [[40.5, 30.5]]))
+
+
+def test_edges_appearing_or_vanishing_rebuild_the_structure():
+    cost = _cost()
+    lat = Lattice.for_cost(cost, 1)
+    grade, turn = _tables(3)
+    grade[2, grade.shape[1] // 2 + 3:] = np.inf  # ground "c" can no longer be driven uphill
+    new = cost.with_tables(grade, turn)
+    got = Lattice.for_cost(new, 1)
+    ref = Lattice(_fresh(cost, grade, turn, cost.ground_rows), 1)
+    assert got.n_edges == ref.n_edges < lat.n_edges
+    assert np.array_equal(got._indices, ref._indices) and np.array_equal(got._data["energy"], ref._data["energy"])
+
+
+def test_refresh_errors():
+    cost = _cost()
+    grade, turn = _tables(3, n_grade=17)
+    with pytest.raises(InvalidParameterError, match="grade samples"):
+        cost.with_tables(grade, turn)
+    grade, turn = _tables(3)
+    with pytest.raises(InvalidParameterError, match="grade_table_j_per_m must hold"):
+        cost.with_tables(-grade, turn)
+    with pytest.raises(InvalidParameterError, match="ground_rows must hold"):
+        cost.with_tables(grade[:2], turn[:2])
+    lat = Lattice(cost, 1)
+    flat = TerrainMap(np.zeros(cost.shape), 1.0)
+    other = EnergyCost(flat, np.zeros(cost.shape, int), grade[:1], turn[:1], speed_mps=0.5,
+                       max_slope_rad=cost.max_slope_rad, battery_voltage_v=24.0, turn_rate_radps=0.5)
+    with pytest.raises(InvalidParameterError, match="geometry"):
+        lat.refreshed(other, np.zeros(cost.shape, bool))
+    with pytest.raises(InvalidParameterError, match="changed_cells"):
+        lat.refreshed(cost.with_tables(grade, turn), np.zeros((3, 3), bool))
