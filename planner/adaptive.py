@@ -14,8 +14,9 @@ predicted current per cell in the :class:`terrain.CellModelRegistry`, and where 
 3. validates new and old model on the held-back tails (absolute relative error of the
    integrated absolute current, both sides) and calls ``registry.propose_update``, which
    keeps the new model only if it is better,
-4. refreshes the edge costs (only the new model's table is computed) and replans from
-   the current position.
+4. refreshes the edge costs (only the new model's table is computed, and the lattice graph
+   is reweighted only where cells changed model: ``energy_cost(..., previous=cost)``) and
+   replans from the current position.
 
 The scope of an update is, with ``update_scope="ground_class"`` (default), every cell of the
 map's ground class at the representative cell that is served by the same model(s) as the
@@ -404,6 +405,46 @@ def validation_error(model: Any, logs: list[InteractionLog]) -> float:
     return abs(pred - meas) / meas
 
 
+def fit_prior_model(truth: TruthSimulator, ground: str, seed: int = 1) -> LinearCurrentModel:
+    """A prior current model: a :class:`energy.LinearCurrentModel` fitted on one ground.
+
+    It drives two excitation manoeuvres on ``ground`` in the truth simulator — straight runs
+    at 0.2–0.8 m/s (30 s) and pivot turns at ±0.5 rad/s (12 s) — and fits the linear model
+    to both, which is what a robot commissioned on that one ground would know.
+
+    Parameters
+    ----------
+    truth : TruthSimulator
+        Simulator that knows ``ground``.
+    ground : str
+        Ground name the prior is trained on (a key of ``truth``'s grounds).
+    seed : int
+        Seed of the manoeuvres and the simulated noise.
+
+    Returns
+    -------
+    LinearCurrentModel
+        The fitted prior.
+
+    Raises
+    ------
+    UnknownNameError
+        If ``truth`` does not know ``ground``.
+    """
+    straight = excitation_commands(
+        30.0, speed_levels_mps=(0.2, 0.35, 0.5, 0.65, 0.8), omega_levels_radps=(0.0,), rest_s=0.0, seed=seed
+    )
+    pivot = excitation_commands(
+        12.0, speed_levels_mps=(0.0,), omega_levels_radps=(0.5,), omega_sign="both",
+        hold_s=(2.0, 3.0), rest_s=0.0, seed=seed + 1,
+    )
+    logs = [
+        truth.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground=ground, seed=seed + 10 + i)
+        for i, p in enumerate((straight, pivot))
+    ]
+    return LinearCurrentModel().fit(logs)
+
+
 def _split_polyline(wp: np.ndarray, length_m: float) -> tuple[np.ndarray, np.ndarray]:
     """The first ``length_m`` of a polyline and the rest (sharing the cut point)."""
     seg = np.hypot(*np.diff(wp, axis=0).T)
@@ -630,7 +671,7 @@ def run_adaptive_mission(
         if changed:
             t1 = time.perf_counter()
             builds0 = lem.table_builds
-            cost = lem.energy_cost(terrain, cfg.speed_mps)
+            cost = lem.energy_cost(terrain, cfg.speed_mps, previous=cost)  # lattice reweighted, not rebuilt
             refresh = time.perf_counter() - t1
             old_energy = evaluate_route(cost, tail).energy_j if len(tail) >= 2 else 0.0
             route = plan(pos, cost)

@@ -18,6 +18,7 @@ import numpy as np
 
 from energy import GROUND_PRESETS, PhysicsEnergyModel, ground_preset, robot_preset
 from terrain import (
+    InvalidParameterError,
     TerrainMap,
     TerrawattError,
     UnknownNameError,
@@ -276,6 +277,27 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--seed", type=int, default=0, help="random seed")
     train.add_argument("--out", type=Path, required=True, metavar="FILE", help="model file to write (e.g. model.pt)")
 
+    mission = sub.add_parser(
+        "mission",
+        help="drive a planned route in simulation against a battery, learning current models on the way",
+    )
+    mission.add_argument("--map", default="example", metavar="FILE", help=".npz map, .tif DEM or 'example' (default)")
+    mission.add_argument("--start", type=float, nargs=2, metavar=("X", "Y"), help="start (m); default: the example's")
+    mission.add_argument("--goal", type=float, nargs=2, metavar=("X", "Y"), help="goal (m); default: the example's")
+    mission.add_argument("--battery-ah", type=float, required=True, metavar="AH", help="battery capacity (Ah)")
+    mission.add_argument("--battery-v", type=float, default=None, metavar="V", help="battery voltage (default: the robot's)")
+    mission.add_argument("--reserve-pct", type=float, default=20.0, metavar="P", help="minimum reserve (%%, default 20)")
+    mission.add_argument("--robot", default="husky", help="robot preset (default husky)")
+    mission.add_argument("--speed", type=float, default=0.5, metavar="M/S", help="driving speed (default 0.5 m/s)")
+    mission.add_argument(
+        "--prior-ground", default="asphalt",
+        help="ground the prior current model was trained on (default asphalt); other grounds are learned on the way",
+    )
+    mission.add_argument("--leg-m", type=float, default=10.0, metavar="M", help="route driven between comparisons (m)")
+    mission.add_argument("--no-adapt", action="store_true", help="drive the first plan without model updates")
+    mission.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    mission.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
+
     predict = sub.add_parser("predict", help="predict drive currents of logs with a saved model")
     predict.add_argument("--model", type=Path, required=True, metavar="FILE", help="model file written by `terrawatt train`")
     predict.add_argument("--data", type=Path, required=True, metavar="DIR", help="directory with GROUND/imu_NN.csv + pro_NN.csv")
@@ -333,6 +355,81 @@ def run_train(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_mission(args: argparse.Namespace) -> int:
+    """``terrawatt mission``: adaptive mission in simulation; writes mission.json and plots."""
+    from energy import Battery, TruthSimulator
+    from terrain import CellModelRegistry
+
+    from .adaptive import AdaptiveSettings, fit_prior_model, run_adaptive_mission
+    from .learned_cost import LearnedEnergyModel
+    from .mission import simulate_mission
+
+    if args.map == "example":
+        tmap, label = example_map(), "bundled example map"
+        start = tuple(args.start) if args.start else EXAMPLE_START_XY_M
+        goal = tuple(args.goal) if args.goal else EXAMPLE_GOAL_XY_M
+    else:
+        if not (args.start and args.goal):
+            raise InvalidParameterError("--start and --goal are required with a map file")
+        tmap, label = load_map(args.map), Path(args.map).name
+        start, goal = tuple(args.start), tuple(args.goal)
+    robot = robot_preset(args.robot)
+    names = set(tmap.ground_names.values()) | {args.prior_ground}
+    unknown = sorted(n for n in names if n not in GROUND_PRESETS)
+    if unknown:
+        raise UnknownNameError(f"grounds {unknown!r} have no preset; known grounds: {sorted(GROUND_PRESETS)!r}")
+    grounds = {name: ground_preset(name) for name in names}
+    truth = TruthSimulator(robot, grounds, seed=args.seed)
+    battery = Battery(
+        capacity_ah=args.battery_ah,
+        voltage_v=args.battery_v if args.battery_v is not None else robot.battery_voltage_v,
+        min_reserve_pct=args.reserve_pct,
+    )
+    prior = fit_prior_model(truth, args.prior_ground, seed=args.seed)
+    settings = AdaptiveSettings(
+        speed_mps=args.speed,
+        leg_length_m=args.leg_m,
+        max_updates=0 if args.no_adapt else AdaptiveSettings().max_updates,
+        seed=args.seed,
+    )
+    registry = CellModelRegistry.from_terrain(tmap, prior, prior_name=f"{args.prior_ground}-prior")
+    t0 = time.perf_counter()
+    result = run_adaptive_mission(
+        tmap, registry, robot, battery, truth, start, goal,
+        physics_ground=grounds[args.prior_ground], settings=settings,
+    )
+    elapsed = time.perf_counter() - t0
+    route0 = result.initial_route
+    used_wh = (result.driven_energy_j + result.excitation_energy_j) / 3600.0
+    budget = {
+        "battery": {"capacity_ah": battery.capacity_ah, "voltage_v": battery.voltage_v,
+                    "min_reserve_pct": battery.min_reserve_pct, "energy_capacity_wh": battery.energy_capacity_wh,
+                    "usable_energy_wh": battery.usable_energy_wh},
+        "predicted_energy_wh": route0.energy_wh,
+        "predicted_fits": route0.energy_wh <= battery.usable_energy_wh,
+        "actual_energy_wh": used_wh,
+        "final_soc_pct": 100.0 * result.final_soc,
+        "reserve_margin_pct": 100.0 * result.final_soc - battery.min_reserve_pct,
+    }
+    data = {**result.to_json_dict(), "budget": budget, "computing_time_s": elapsed}
+    json_path = write_json_atomic(data, args.out / "mission.json")
+    png_path = result.plot(args.out / "mission.png", tmap, registry)
+    print(f"map: {label}; robot {args.robot}; battery {battery.capacity_ah:g} Ah at {battery.voltage_v:g} V "
+          f"({battery.energy_capacity_wh:.0f} Wh, {battery.usable_energy_wh:.0f} Wh above the {battery.min_reserve_pct:g} % reserve)")
+    print(f"start {start} -> goal {goal}; prior trained on {args.prior_ground}; adaptive updates {'off' if args.no_adapt else 'on'}")
+    print(f"status: {result.status} — {result.reason}")
+    print(f"first plan (prior models):  {route0.energy_wh:8.2f} Wh  {route0.length_m:7.1f} m  "
+          f"({'fits' if budget['predicted_fits'] else 'does NOT fit'} the usable {battery.usable_energy_wh:.0f} Wh)")
+    print(f"driven (actual):            {result.driven_energy_j / 3600:8.2f} Wh  in {len(result.legs)} legs")
+    print(f"excitation manoeuvres:      {result.excitation_energy_j / 3600:8.2f} Wh")
+    print(f"prediction error before / after updates: {result.error_before_update_pct:.1f} % / {result.error_after_update_pct:.1f} %")
+    print(f"updates accepted: {result.accepted_updates} of {len(result.updates)}; route changes {result.route_changes}")
+    print(f"final state of charge {budget['final_soc_pct']:.1f} % (margin {budget['reserve_margin_pct']:+.1f} points "
+          f"above the reserve); loop computing {elapsed:.1f} s")
+    print(f"wrote {json_path} and {png_path}")
+    return 0 if result.status == "completed" else 1
+
+
 def run_predict(args: argparse.Namespace) -> int:
     """``terrawatt predict``: per-run charge errors of a saved model, written as JSON."""
     from energy import compare_currents, load_current_model, read_borealtc
@@ -378,6 +475,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return run_train(args)
         if args.command == "predict":
             return run_predict(args)
+        if args.command == "mission":
+            return run_mission(args)
         unknown = None if args.unknown_ground.lower() == "none" else args.unknown_ground
         if args.command == "demo":
             tmap, start, goal, label = example_map(), EXAMPLE_START_XY_M, EXAMPLE_GOAL_XY_M, "bundled example map"

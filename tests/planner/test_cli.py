@@ -1,0 +1,184 @@
+"""The ``terrawatt`` command line: each subcommand end to end on small inputs."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import terrain
+from terrain import TerrawattWarning
+from planner.cli import main
+
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+def _is_png(path: Path) -> bool:
+    return path.is_file() and path.read_bytes()[:8] == PNG_MAGIC
+
+
+def test_demo_plans_on_the_bundled_map_and_writes_json_and_plot(tmp_path, capsys):
+    rc = main(["demo", "--planner", "lattice", "--out", str(tmp_path)])
+    out = capsys.readouterr().out
+    assert rc == 0
+    assert "shortest distance" in out and "energy saved vs shortest route" in out
+    data = json.loads((tmp_path / "route.json").read_text())
+    assert data["status"] == "exact"
+    assert set(data["routes"]) == {"min_energy", "lattice", "shortest"}
+    saved = data["energy_saved_pct"]
+    energies = {k: v["energy_j"] for k, v in data["routes"].items()}
+    # the saving printed is the saving between the two routes written
+    assert saved == pytest.approx(100.0 * (1 - energies["min_energy"] / energies["shortest"]), rel=1e-9)
+    assert saved > 5.0  # the example map is built so that the straight line climbs a hill and crosses sand
+    assert data["optimality_ratio"] == pytest.approx(1.0, abs=0.02)
+    assert _is_png(tmp_path / "route.png")
+
+
+def test_plan_on_a_map_file_goes_around_the_wall(tmp_path, capsys, wall_map):
+    path = wall_map.save(tmp_path / "wall.npz")
+    rc = main(["plan", "--map", str(path), "--start", "5", "5", "--goal", "35", "5",
+               "--planner", "lattice", "--out", str(tmp_path / "out")])
+    assert rc == 0
+    wp = np.array(json.loads((tmp_path / "out" / "route.json").read_text())["routes"]["min_energy"]["waypoints_m"])
+    assert wp[:, 1].max() >= 30.0  # through the gap at y in [30, 34)
+    assert _is_png(tmp_path / "out" / "route.png")
+    capsys.readouterr()
+
+
+@pytest.mark.parametrize(
+    ("start", "message"),
+    [(("20.5", "10"), "obstacle"), (("-5", "10"), "outside")],
+)
+def test_plan_reports_a_bad_start_as_an_error(tmp_path, capsys, wall_map, start, message):
+    path = wall_map.save(tmp_path / "wall.npz")
+    rc = main(["plan", "--map", str(path), "--start", *start, "--goal", "35", "5", "--planner", "lattice",
+               "--out", str(tmp_path / "out")])
+    assert rc == 2
+    assert message in capsys.readouterr().err
+
+
+def test_plan_reports_a_corrupt_map_file(tmp_path, capsys):
+    bad = tmp_path / "broken.npz"
+    bad.write_bytes(b"not a zip archive")
+    rc = main(["plan", "--map", str(bad), "--start", "1", "1", "--goal", "2", "2", "--out", str(tmp_path)])
+    assert rc == 2
+    assert "corrupt" in capsys.readouterr().err
+
+
+def test_unknown_planner_is_refused_with_the_valid_names(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["demo", "--planner", "Dijkstra", "--out", str(tmp_path)])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "Dijkstra" in err and "RRTstar" in err
+
+
+def _patch_map(tmp_path: Path) -> Path:
+    """Level asphalt with a sand band across the straight line."""
+    ground = np.zeros((24, 60), dtype=int)
+    ground[6:18, 20:40] = 1
+    tmap = terrain.TerrainMap(np.zeros((24, 60)), 1.0, ground=ground, ground_names={0: "asphalt", 1: "sand"})
+    return tmap.save(tmp_path / "patch.npz")
+
+
+def test_mission_writes_budget_json_and_plot(tmp_path, capsys):
+    path = _patch_map(tmp_path)
+    rc = main(["mission", "--map", str(path), "--start", "3", "12", "--goal", "57", "12", "--battery-ah", "20",
+               "--out", str(tmp_path / "out")])
+    out = capsys.readouterr().out
+    assert rc == 0, out
+    data = json.loads((tmp_path / "out" / "mission.json").read_text())
+    assert data["status"] == "completed" and data["distance_to_goal_m"] == pytest.approx(0.0, abs=1e-6)
+    budget = data["budget"]
+    assert budget["battery"]["usable_energy_wh"] == pytest.approx(20 * 24 * 0.8)
+    used = (data["driven_energy_j"] + data["excitation_energy_j"]) / 3600.0
+    assert budget["actual_energy_wh"] == pytest.approx(used)
+    # the state of charge fell by the energy used (within the Peukert/efficiency terms of Battery)
+    assert 100.0 - budget["final_soc_pct"] == pytest.approx(100.0 * used / 480.0, rel=0.25)
+    assert budget["reserve_margin_pct"] == pytest.approx(budget["final_soc_pct"] - 20.0)
+    assert data["accepted_updates"] >= 1  # the sand is unknown to the asphalt prior
+    assert _is_png(tmp_path / "out" / "mission.png")
+
+
+def test_mission_without_adaptation_makes_no_update(tmp_path, capsys):
+    path = _patch_map(tmp_path)
+    rc = main(["mission", "--map", str(path), "--start", "3", "12", "--goal", "57", "12", "--battery-ah", "20",
+               "--no-adapt", "--out", str(tmp_path / "out")])
+    assert rc == 0
+    data = json.loads((tmp_path / "out" / "mission.json").read_text())
+    assert data["updates"] == [] and data["excitation_energy_j"] == 0.0
+    capsys.readouterr()
+
+
+def test_mission_with_a_small_battery_stops_and_says_why(tmp_path, capsys):
+    path = _patch_map(tmp_path)
+    rc = main(["mission", "--map", str(path), "--start", "3", "12", "--goal", "57", "12", "--battery-ah", "0.01",
+               "--out", str(tmp_path / "out")])
+    out = capsys.readouterr().out
+    assert rc == 1
+    data = json.loads((tmp_path / "out" / "mission.json").read_text())
+    assert data["status"] == "budget_exceeded"
+    assert "reserve" in data["reason"] and "does NOT fit" in out
+    assert data["budget"]["predicted_fits"] is False
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [(["--battery-ah", "0"], "capacity_ah"), (["--battery-ah", "5", "--prior-ground", "lava"], "lava")],
+)
+def test_mission_bad_input_is_an_error(tmp_path, capsys, extra, message):
+    path = _patch_map(tmp_path)
+    rc = main(["mission", "--map", str(path), "--start", "3", "12", "--goal", "57", "12", *extra,
+               "--out", str(tmp_path / "out")])
+    assert rc == 2
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "out" / "mission.json").exists()
+
+
+def test_train_then_predict_round_trip(tmp_path, capsys):
+    model = tmp_path / "linear.pt"
+    assert main(["train", "--data", str(FIXTURES), "--model", "linear", "--out", str(model)]) == 0
+    assert model.is_file()
+    assert main(["predict", "--model", str(model), "--data", str(FIXTURES), "--out", str(tmp_path / "pred")]) == 0
+    runs = json.loads((tmp_path / "pred" / "predictions.json").read_text())["runs"]
+    assert {(r["ground"], r["side"]) for r in runs} == {(g, s) for g in ("asphalt", "snow") for s in ("left", "right")}
+    for r in runs:
+        assert r["charge_true_mah"] > 0 and np.isfinite(r["charge_predicted_mah"])
+        assert r["whole_run_error_pct"] == pytest.approx(
+            100.0 * abs(r["charge_predicted_mah"] - r["charge_true_mah"]) / r["charge_true_mah"], rel=1e-6
+        )
+    capsys.readouterr()
+
+
+def test_predict_with_a_corrupt_model_file_is_an_error(tmp_path, capsys):
+    bad = tmp_path / "model.pt"
+    bad.write_bytes(b"\x00garbage")
+    rc = main(["predict", "--model", str(bad), "--data", str(FIXTURES), "--out", str(tmp_path)])
+    assert rc == 2
+    assert "model.pt" in capsys.readouterr().err
+
+
+def test_evaluate_writes_json_and_markdown(tmp_path, capsys):
+    data = tmp_path / "logs"
+    shutil.copytree(FIXTURES, data)
+    # a second asphalt run, so leave-one-run-out has something to train on per ground
+    for kind in ("imu", "pro"):
+        shutil.copy(data / "ASPHALT" / f"{kind}_00.csv", data / "ASPHALT" / f"{kind}_01.csv")
+    with pytest.warns(TerrawattWarning, match="'snow' has 1 run"):
+        rc = main(["evaluate", "--data", str(data), "--model", "constant", "linear", "--out", str(tmp_path / "out")])
+    assert rc == 0
+    result = json.loads((tmp_path / "out" / "evaluation.json").read_text())
+    assert result["models"] == ["constant", "linear"]
+    assert result["skipped"] == ["ground 'snow' has 1 run; per-ground leave-one-run-out needs 2"]
+    rows = {(r["variant"], r["ground"], r["model"]): r for r in result["summary"]}
+    # each asphalt run is held out against its identical copy: the constant model's charge is exact
+    assert rows[("per_ground", "asphalt", "constant")]["whole_run_median_pct"] == pytest.approx(0.0, abs=1e-9)
+    assert rows[("ground_agnostic", "snow", "constant")]["n_runs"] == 1
+    assert rows[("ground_agnostic", "snow", "constant")]["whole_run_median_pct"] > 10.0  # trained on asphalt only
+    md = (tmp_path / "out" / "evaluation.md").read_text()
+    assert "| per_ground | asphalt | constant | 2 |" in md
+    capsys.readouterr()
