@@ -1,97 +1,5 @@
 """energy — what a motion costs: physics and learned current models, logs, metrics."""
 
-from .params import (
-    DRIVE_KINDS,
-    GROUND_PRESETS,
-    ROBOT_PRESETS,
-    GroundParams,
-    MotorParams,
-    RobotParams,
-    ground_preset,
-    robot_preset,
-)
-from .physics import EFFECTS, PhysicsEnergyModel, PowerBreakdown
-
-__all__ = [
-    "MotorParams",
-    "RobotParams",
-    "GroundParams",
-    "DRIVE_KINDS",
-    "ROBOT_PRESETS",
-    "GROUND_PRESETS",
-    "robot_preset",
-    "ground_preset",
-    "EFFECTS",
-    "PhysicsEnergyModel",
-    "PowerBreakdown",
-]
-
-from .logs import DEFAULT_GAP_FACTOR, InteractionLog, LogMeta
-from .readers import read_borealtc, read_borealtc_run, read_csv_log, read_rosbag, write_csv_log
-
-__all__ += [
-    "InteractionLog",
-    "LogMeta",
-    "DEFAULT_GAP_FACTOR",
-    "read_borealtc_run",
-    "read_borealtc",
-    "read_csv_log",
-    "write_csv_log",
-    "read_rosbag",
-]
-
-# --- battery helper (missions); appended until the lead rewires this file
-from .battery import (
-    CURRENT_CONVENTIONS,
-    Battery,
-    Discharge,
-    EnergyBudget,
-    discharge_from_current,
-    discharge_from_power,
-    energy_budget,
-    log_battery_power_w,
-)
-
-__all__ += [
-    "Battery",
-    "Discharge",
-    "EnergyBudget",
-    "CURRENT_CONVENTIONS",
-    "discharge_from_power",
-    "discharge_from_current",
-    "energy_budget",
-    "log_battery_power_w",
-]
-
-# --- truth-simulator helper (issue 3); appended until the lead rewires this file
-from .excitation import CommandProfile, excitation_commands, waypoint_commands
-from .truth import (
-    PAPER_GROUNDS,
-    PAPER_VARIATION,
-    VIBRATION_PRESETS,
-    GroundVariation,
-    NoiseModel,
-    TruthRun,
-    TruthSimulator,
-    VibrationSignature,
-    vibration_preset,
-)
-
-__all__ += [
-    "CommandProfile",
-    "excitation_commands",
-    "waypoint_commands",
-    "TruthSimulator",
-    "TruthRun",
-    "NoiseModel",
-    "VibrationSignature",
-    "GroundVariation",
-    "PAPER_GROUNDS",
-    "PAPER_VARIATION",
-    "VIBRATION_PRESETS",
-    "vibration_preset",
-]
-
 from terrain.errors import (
     DataError,
     FileFormatError,
@@ -102,6 +10,16 @@ from terrain.errors import (
 )
 
 from .baselines import PHYSICS_FIT_PARAMETERS, ConstantCurrentModel, LinearCurrentModel, PhysicsCurrentModel
+from .battery import (
+    CURRENT_CONVENTIONS,
+    Battery,
+    Discharge,
+    EnergyBudget,
+    discharge_from_current,
+    discharge_from_power,
+    energy_budget,
+    log_battery_power_w,
+)
 from .estimator import (
     CURRENT_MODEL_FORMAT_VERSION,
     ESTIMATOR_PRESETS,
@@ -118,7 +36,9 @@ from .estimator import (
     train_network,
 )
 from .evaluation import EvaluationResult, RunScore, ScoreSummary, evaluate_current_models
+from .excitation import CommandProfile, excitation_commands, waypoint_commands
 from .features import (
+    DEFAULT_T_INTERVAL_S,
     SOURCE_CURRENT_RANGE_A,
     SOURCE_OMEGA_RANGE_RADPS,
     SOURCE_SPEED_RANGE_MPS,
@@ -131,6 +51,7 @@ from .features import (
     whole_run_spectrum,
     window_starts,
 )
+from .logs import DEFAULT_GAP_FACTOR, InteractionLog, LogMeta
 from .metrics import (
     CurrentErrors,
     charge_mah,
@@ -142,8 +63,74 @@ from .metrics import (
     section_charges_mah,
     section_error_pct,
 )
+from .params import (
+    DRIVE_KINDS,
+    GROUND_PRESETS,
+    ROBOT_PRESETS,
+    GroundParams,
+    MotorParams,
+    RobotParams,
+    ground_preset,
+    robot_preset,
+)
+from .physics import EFFECTS, PhysicsEnergyModel, PowerBreakdown
+from .readers import read_borealtc, read_borealtc_run, read_csv_log, read_rosbag, write_csv_log
+from .truth import (
+    PAPER_GROUNDS,
+    PAPER_VARIATION,
+    VIBRATION_PRESETS,
+    GroundVariation,
+    NoiseModel,
+    TruthRun,
+    TruthSimulator,
+    VibrationSignature,
+    vibration_preset,
+)
 
-__all__ += [
+__all__ = [
+    # parameters and the physics model
+    "MotorParams",
+    "RobotParams",
+    "GroundParams",
+    "DRIVE_KINDS",
+    "ROBOT_PRESETS",
+    "GROUND_PRESETS",
+    "robot_preset",
+    "ground_preset",
+    "EFFECTS",
+    "PhysicsEnergyModel",
+    "PowerBreakdown",
+    # interaction logs and readers
+    "InteractionLog",
+    "LogMeta",
+    "DEFAULT_GAP_FACTOR",
+    "read_borealtc_run",
+    "read_borealtc",
+    "read_csv_log",
+    "write_csv_log",
+    "read_rosbag",
+    # battery and budgets
+    "Battery",
+    "Discharge",
+    "EnergyBudget",
+    "CURRENT_CONVENTIONS",
+    "discharge_from_power",
+    "discharge_from_current",
+    "energy_budget",
+    "log_battery_power_w",
+    # truth simulator and command profiles
+    "CommandProfile",
+    "excitation_commands",
+    "waypoint_commands",
+    "TruthSimulator",
+    "TruthRun",
+    "NoiseModel",
+    "VibrationSignature",
+    "GroundVariation",
+    "PAPER_GROUNDS",
+    "PAPER_VARIATION",
+    "VIBRATION_PRESETS",
+    "vibration_preset",
     # current models (estimator, baselines) and their evaluation
     "CurrentModel",
     "load_current_model",
@@ -167,6 +154,7 @@ __all__ += [
     "RunScore",
     "ScoreSummary",
     # vibration features
+    "DEFAULT_T_INTERVAL_S",
     "WindowSpec",
     "window_starts",
     "sliding_windows",
@@ -188,7 +176,7 @@ __all__ += [
     "moving_median",
     "compare_currents",
     "CurrentErrors",
-    # errors used by the models
+    # errors the models raise (re-exported for convenience; defined in terrain.errors)
     "DataError",
     "FileFormatError",
     "FormatVersionError",

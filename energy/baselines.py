@@ -57,7 +57,9 @@ class ConstantCurrentModel(CurrentModel):
 
     Examples
     --------
-    >>> ConstantCurrentModel().fit(train_logs).predict(test_log)   # doctest: +SKIP
+    Usage (needs data or fitted models, so not run as a doctest)::
+
+        ConstantCurrentModel().fit(train_logs).predict(test_log)
     """
 
     _param_names = ()

@@ -298,9 +298,11 @@ def evaluate_current_models(
 
     Examples
     --------
-    >>> from energy import LinearCurrentModel, read_borealtc            # doctest: +SKIP
-    >>> res = evaluate_current_models(read_borealtc("borealtc"), {"linear": LinearCurrentModel()})  # doctest: +SKIP
-    >>> print(res.to_markdown())                                          # doctest: +SKIP
+    Usage (needs data or fitted models, so not run as a doctest)::
+
+        from energy import LinearCurrentModel, read_borealtc
+        res = evaluate_current_models(read_borealtc("borealtc"), {"linear": LinearCurrentModel()})
+        print(res.to_markdown())
     """
     items = list(logs)
     if not items:

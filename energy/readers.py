@@ -466,7 +466,9 @@ def read_borealtc_run(
 
     Examples
     --------
-    >>> log = read_borealtc_run("SNOW/imu_00.csv", "SNOW/pro_00.csv", ground_label="snow")  # doctest: +SKIP
+    Usage (needs data or fitted models, so not run as a doctest)::
+
+        log = read_borealtc_run("SNOW/imu_00.csv", "SNOW/pro_00.csv", ground_label="snow")
     """
     track_width_m = _check_track_width(track_width_m)
     if ground_label is not None and (not isinstance(ground_label, str) or not ground_label):
@@ -667,9 +669,11 @@ def read_csv_log(
 
     Examples
     --------
-    >>> log = read_csv_log("run.csv", columns={"time": "t", "v": "cmd_v", "omega": "cmd_w",
-    ...     "current_left": "iL", "current_right": "iR", "accel_z": "az"},
-    ...     units={"current_left": "mA", "current_right": "mA"})  # doctest: +SKIP
+    Usage (needs data or fitted models, so not run as a doctest)::
+
+        log = read_csv_log("run.csv", columns={"time": "t", "v": "cmd_v", "omega": "cmd_w",
+            "current_left": "iL", "current_right": "iR", "accel_z": "az"},
+            units={"current_left": "mA", "current_right": "mA"})
     """
     path = Path(path)
     src = str(path)

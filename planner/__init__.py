@@ -1,14 +1,35 @@
-"""planner — where to drive: edge costs, OMPL and lattice planners, routes, CLI."""
+"""planner — where to drive: edge costs, OMPL and lattice planners, routes, missions, CLI."""
 
+from .adaptive import (
+    ADAPTIVE_FORMAT_VERSION,
+    ADAPTIVE_STATUSES,
+    UPDATE_SCOPES,
+    AdaptiveResult,
+    AdaptiveSettings,
+    LegRecord,
+    ReplanRecord,
+    UpdateRecord,
+    fit_prior_model,
+    run_adaptive_mission,
+    validation_error,
+)
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost, warm_up_kernels
 from .lattice import Lattice, LatticePath, string_pull
+from .learned_cost import DEFAULT_TABLE_OMEGAS_RADPS, DEFAULT_TABLE_SPEEDS_MPS, LearnedEnergyModel, LearnedModelTable
+from .mission import MISSION_FORMAT_VERSION, MISSION_STATUSES, MissionResult, simulate_mission
 from .ompl_planner import OMPL_PLANNERS, PLANNERS, PlannerSettings, plan_route, refine_route, shortest_route
 from .route import ROUTE_STATUSES, Route, evaluate_route
 
 __all__ = [
+    # edge costs
     "EnergyCost",
     "DEFAULT_MAX_SLOPE_RAD",
     "warm_up_kernels",
+    "LearnedEnergyModel",
+    "LearnedModelTable",
+    "DEFAULT_TABLE_SPEEDS_MPS",
+    "DEFAULT_TABLE_OMEGAS_RADPS",
+    # planners and routes
     "Lattice",
     "LatticePath",
     "string_pull",
@@ -21,34 +42,15 @@ __all__ = [
     "Route",
     "ROUTE_STATUSES",
     "evaluate_route",
-]
-
-# --- mission helper; appended until the lead rewires this file
-from .mission import MISSION_FORMAT_VERSION, MISSION_STATUSES, MissionResult, simulate_mission
-
-__all__ += ["simulate_mission", "MissionResult", "MISSION_STATUSES", "MISSION_FORMAT_VERSION"]
-
-# --- adaptive-mission helper (issue 4); appended until the lead rewires this file
-from .adaptive import (
-    ADAPTIVE_FORMAT_VERSION,
-    ADAPTIVE_STATUSES,
-    UPDATE_SCOPES,
-    AdaptiveResult,
-    AdaptiveSettings,
-    LegRecord,
-    ReplanRecord,
-    UpdateRecord,
-    run_adaptive_mission,
-    validation_error,
-)
-from .learned_cost import DEFAULT_TABLE_OMEGAS_RADPS, DEFAULT_TABLE_SPEEDS_MPS, LearnedEnergyModel, LearnedModelTable
-
-__all__ += [
-    "LearnedEnergyModel",
-    "LearnedModelTable",
-    "DEFAULT_TABLE_SPEEDS_MPS",
-    "DEFAULT_TABLE_OMEGAS_RADPS",
+    # missions
+    "simulate_mission",
+    "MissionResult",
+    "MISSION_STATUSES",
+    "MISSION_FORMAT_VERSION",
+    # the adaptive loop
     "run_adaptive_mission",
+    "fit_prior_model",
+    "validation_error",
     "AdaptiveSettings",
     "AdaptiveResult",
     "LegRecord",
@@ -57,5 +59,4 @@ __all__ += [
     "ADAPTIVE_STATUSES",
     "ADAPTIVE_FORMAT_VERSION",
     "UPDATE_SCOPES",
-    "validation_error",
 ]

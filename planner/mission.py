@@ -603,9 +603,10 @@ def simulate_mission(
 
     Examples
     --------
-    >>> result = simulate_mission(tmap, route, robot, Battery(20.0, 24.0), truth=sim)   # doctest: +SKIP
-    >>> result.status, round(result.budget.error_pct, 1)                                  # doctest: +SKIP
-    ('completed', -2.4)
+    Usage (needs data or fitted models, so not run as a doctest)::
+
+        result = simulate_mission(tmap, route, robot, Battery(20.0, 24.0), truth=sim)
+        print(result.status, result.budget.error_pct)
     """
     # ---------------------------------------------------------------- validation
     if not isinstance(terrain, TerrainMap):

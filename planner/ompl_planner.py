@@ -578,8 +578,15 @@ def plan_route(
 
     Examples
     --------
-    >>> route = plan_route(tmap, (5.0, 5.0), (120.0, 90.0), cost=cost, planner="lattice")  # doctest: +SKIP
-    >>> route.status, route.energy_j, route.energy_saved_pct                               # doctest: +SKIP
+    >>> from energy import PhysicsEnergyModel, ground_preset, robot_preset
+    >>> from planner import EnergyCost
+    >>> from terrain import flat_map
+    >>> tmap = flat_map((30, 40), 1.0)  # level asphalt, 1 m cells
+    >>> cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(robot_preset("husky")),
+    ...                              {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
+    >>> route = plan_route(tmap, (5.0, 5.0), (35.0, 25.0), cost=cost, planner="lattice")
+    >>> route.status, round(route.length_m, 2)  # level ground: the straight line
+    ('exact', 36.06)
     """
     if not isinstance(planner, str) or planner not in PLANNERS:
         raise UnknownNameError(f"planner must be one of {list(PLANNERS)!r}, got {planner!r}")

@@ -252,8 +252,14 @@ def evaluate_route(
 
     Examples
     --------
-    >>> route = evaluate_route(cost, [[0.5, 0.5], [10.5, 0.5], [10.5, 5.5]])   # doctest: +SKIP
-    >>> route.length_m, route.turn_energy_j[1] > 0                               # doctest: +SKIP
+    >>> from energy import PhysicsEnergyModel, ground_preset, robot_preset
+    >>> from planner import EnergyCost
+    >>> from terrain import flat_map
+    >>> tmap = flat_map((30, 40), 1.0)  # level asphalt, 1 m cells
+    >>> cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(robot_preset("husky")),
+    ...                              {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
+    >>> route = evaluate_route(cost, [[0.5, 0.5], [10.5, 0.5], [10.5, 5.5]])
+    >>> route.length_m, bool(route.turn_energy_j[1] > 0)
     (15.0, True)
     """
     if not isinstance(cost, EnergyCost):

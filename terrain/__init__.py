@@ -1,6 +1,7 @@
 """terrain — where the robot drives: a georeferenced stack of raster layers.
 
-Public API: :class:`TerrainMap` and the library's exception hierarchy.
+Public API: :class:`TerrainMap`, its builders (procedural, GeoTIFF, vector), the per-cell
+current-model registry and the library's exception hierarchy.
 """
 
 from .errors import (
@@ -20,12 +21,67 @@ from .errors import (
     UnitError,
     UnknownNameError,
 )
+from .geotiff import read_geotiff, write_geotiff
 from .grid import MAP_FORMAT_VERSION, UNKNOWN_GROUND, TerrainMap
+from .procedural import (
+    EXAMPLE_GOAL_XY_M,
+    EXAMPLE_START_XY_M,
+    example_map,
+    flat_map,
+    procedural_map,
+    ramp_map,
+    wall_map,
+)
+from .registry import (
+    PRIOR_MODEL_ID,
+    REGISTRY_FORMAT_VERSION,
+    CellModelRegistry,
+    CurrentModelProtocol,
+    FlaggedRegion,
+    ModelRecord,
+    RegistryVersion,
+    UpdateDecision,
+    UpdatePolicy,
+)
+from .vector import (
+    apply_geojson,
+    rasterize_polygons,
+    read_geojson,
+    set_ground_from_polygons,
+    set_obstacles_from_polygons,
+)
 
 __all__ = [
+    # the map
     "TerrainMap",
     "MAP_FORMAT_VERSION",
     "UNKNOWN_GROUND",
+    # builders
+    "procedural_map",
+    "flat_map",
+    "ramp_map",
+    "wall_map",
+    "example_map",
+    "EXAMPLE_START_XY_M",
+    "EXAMPLE_GOAL_XY_M",
+    "read_geotiff",
+    "write_geotiff",
+    "rasterize_polygons",
+    "set_ground_from_polygons",
+    "set_obstacles_from_polygons",
+    "read_geojson",
+    "apply_geojson",
+    # per-cell current models
+    "CellModelRegistry",
+    "CurrentModelProtocol",
+    "UpdatePolicy",
+    "FlaggedRegion",
+    "RegistryVersion",
+    "UpdateDecision",
+    "ModelRecord",
+    "REGISTRY_FORMAT_VERSION",
+    "PRIOR_MODEL_ID",
+    # errors and warnings
     "TerrawattError",
     "InvalidParameterError",
     "GridMismatchError",
@@ -41,66 +97,4 @@ __all__ = [
     "OptionalDependencyError",
     "TerrawattWarning",
     "DataRepairWarning",
-]
-
-# --- terrain helper (procedural, vector, geotiff); appended until the lead rewires this file
-from .procedural import (
-    EXAMPLE_GOAL_XY_M,
-    EXAMPLE_START_XY_M,
-    example_map,
-    flat_map,
-    procedural_map,
-    ramp_map,
-    wall_map,
-)
-
-__all__ += [
-    "procedural_map",
-    "flat_map",
-    "ramp_map",
-    "wall_map",
-    "example_map",
-    "EXAMPLE_START_XY_M",
-    "EXAMPLE_GOAL_XY_M",
-]
-from .geotiff import read_geotiff, write_geotiff
-from .vector import (
-    apply_geojson,
-    rasterize_polygons,
-    read_geojson,
-    set_ground_from_polygons,
-    set_obstacles_from_polygons,
-)
-
-__all__ += [
-    "rasterize_polygons",
-    "set_ground_from_polygons",
-    "set_obstacles_from_polygons",
-    "read_geojson",
-    "apply_geojson",
-    "read_geotiff",
-    "write_geotiff",
-]
-from .registry import (
-    PRIOR_MODEL_ID,
-    REGISTRY_FORMAT_VERSION,
-    CellModelRegistry,
-    CurrentModelProtocol,
-    FlaggedRegion,
-    ModelRecord,
-    RegistryVersion,
-    UpdateDecision,
-    UpdatePolicy,
-)
-
-__all__ += [
-    "CellModelRegistry",
-    "CurrentModelProtocol",
-    "UpdatePolicy",
-    "FlaggedRegion",
-    "RegistryVersion",
-    "UpdateDecision",
-    "ModelRecord",
-    "REGISTRY_FORMAT_VERSION",
-    "PRIOR_MODEL_ID",
 ]
