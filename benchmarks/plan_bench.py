@@ -22,13 +22,11 @@ depend on the machine (the project's targets are stated for a 2-core machine). U
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import os
 import platform
 import statistics
 import sys
-import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -44,6 +42,7 @@ from planner import (
     plan_route,
     warm_up_kernels,
 )
+from terrain.atomic import write_json_atomic
 from terrain.procedural import procedural_map
 
 # Start/goal as fractions of the map extent: about 12, 45 and 74 degrees from the x axis.
@@ -318,11 +317,7 @@ def main(argv: list[str] | None = None) -> int:
             "summary": rows,
             "targets": targets,
         }
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{args.out.name}.", suffix=".tmp", dir=args.out.parent)
-        with os.fdopen(fd, "w") as fh:
-            json.dump(_clean(payload), fh, indent=1, allow_nan=False)
-        os.replace(tmp, args.out)
+        write_json_atomic(args.out, _clean(payload), indent=1)
         print(f"\nwrote {args.out}")
     return 0
 

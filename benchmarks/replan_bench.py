@@ -23,20 +23,31 @@ The refreshed lattice's weights are checked to equal a fresh build's exactly. Us
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import statistics
-import tempfile
 import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from energy import LinearCurrentModel, TruthSimulator, excitation_commands, ground_preset, robot_preset
-from planner import Lattice, LearnedEnergyModel, PlannerSettings, plan_route, warm_up_kernels
+from energy import (
+    LinearCurrentModel,
+    TruthSimulator,
+    excitation_commands,
+    ground_preset,
+    robot_preset,
+)
+from planner import (
+    Lattice,
+    LearnedEnergyModel,
+    PlannerSettings,
+    plan_route,
+    warm_up_kernels,
+)
 from terrain import CellModelRegistry
+from terrain.atomic import write_json_atomic
 from terrain.procedural import procedural_map
 
 GROUNDS = ("asphalt", "grass", "sand", "snow")
@@ -152,17 +163,6 @@ def _print(res: dict[str, Any]) -> None:
         print(" ".join(f"{r[c]:>14.4f}" if isinstance(r[c], float) else f"{r[c]!s:>14}" for c in cols))
 
 
-def _write_json(path: Path, data: dict[str, Any]) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            json.dump(data, fh, indent=1)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def main(argv: list[str] | None = None) -> dict[str, Any]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=512, help="map side in cells (default 512)")
@@ -174,7 +174,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     res = run(args.size, args.repeats, tuple(args.strides), args.seed)
     _print(res)
     if args.out is not None:
-        _write_json(args.out, res)
+        write_json_atomic(args.out, res, indent=1)
     return res
 
 

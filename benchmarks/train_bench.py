@@ -23,11 +23,9 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import sys
-import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -44,6 +42,7 @@ from energy import (
     VibrationCurrentEstimator,
     read_borealtc_run,
 )
+from terrain.atomic import write_json_atomic
 
 TARGET_S = 20.0
 DURATION_S = 160.0
@@ -153,11 +152,7 @@ def main(argv: list[str] | None = None) -> int:
                         "cpu_count": os.cpu_count(), "platform": platform.platform()},
             "rows": rows,
         }
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{args.out.name}.", suffix=".tmp", dir=args.out.parent)
-        with os.fdopen(fd, "w") as fh:
-            json.dump(payload, fh, indent=1)
-        os.replace(tmp, args.out)
+        write_json_atomic(args.out, payload, indent=1)
     return 0
 
 

@@ -9,7 +9,12 @@ from terrain.errors import (
     UnknownNameError,
 )
 
-from .baselines import PHYSICS_FIT_PARAMETERS, ConstantCurrentModel, LinearCurrentModel, PhysicsCurrentModel
+from .baselines import (
+    PHYSICS_FIT_PARAMETERS,
+    ConstantCurrentModel,
+    LinearCurrentModel,
+    PhysicsCurrentModel,
+)
 from .battery import (
     CURRENT_CONVENTIONS,
     Battery,
@@ -35,7 +40,12 @@ from .estimator import (
     load_current_model,
     train_network,
 )
-from .evaluation import EvaluationResult, RunScore, ScoreSummary, evaluate_current_models
+from .evaluation import (
+    EvaluationResult,
+    RunScore,
+    ScoreSummary,
+    evaluate_current_models,
+)
 from .excitation import CommandProfile, excitation_commands, waypoint_commands
 from .features import (
     DEFAULT_T_INTERVAL_S,
@@ -74,7 +84,13 @@ from .params import (
     robot_preset,
 )
 from .physics import EFFECTS, PhysicsEnergyModel, PowerBreakdown
-from .readers import read_borealtc, read_borealtc_run, read_csv_log, read_rosbag, write_csv_log
+from .readers import (
+    read_borealtc,
+    read_borealtc_run,
+    read_csv_log,
+    read_rosbag,
+    write_csv_log,
+)
 from .truth import (
     PAPER_GROUNDS,
     PAPER_VARIATION,

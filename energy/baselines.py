@@ -33,7 +33,7 @@ __all__ = [
     "PHYSICS_FIT_PARAMETERS",
 ]
 
-_trapezoid = getattr(np, "trapezoid", None) or getattr(np, "trapz")
+_trapezoid = getattr(np, "trapezoid", None) or np.trapz
 
 
 def _time_mean(logs: list[InteractionLog]) -> np.ndarray:

@@ -31,9 +31,9 @@ per-segment breakdown).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import numbers
-import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 

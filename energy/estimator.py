@@ -49,10 +49,9 @@ import logging
 import math
 import os
 import platform
-import tempfile
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, ClassVar
 
@@ -60,6 +59,7 @@ import numpy as np
 import torch
 from torch import nn
 
+from terrain.atomic import atomic_open
 from terrain.errors import (
     DataError,
     FileFormatError,
@@ -143,21 +143,7 @@ def _package_versions() -> dict[str, str]:
             "python": platform.python_version()}
 
 
-def _atomic_torch_save(obj: Any, path: Path) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            torch.save(obj, fh)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
+
 
 
 def _read_checkpoint(path: str | os.PathLike[str]) -> dict[str, Any]:
@@ -350,7 +336,8 @@ class CurrentModel:
             "state": self._state(),
             "versions": _package_versions(),
         }
-        _atomic_torch_save(payload, p)
+        with atomic_open(p, "wb") as fh:
+            torch.save(payload, fh)
         return p
 
     @classmethod
@@ -1102,7 +1089,9 @@ class VibrationCurrentEstimator(CurrentModel):
             self.current_range_a_ = np.stack([cur.min(axis=0), cur.max(axis=0)])
             self.physics_ = None
             if cfg.physics_prior is not None:
-                from .baselines import PhysicsCurrentModel  # baselines import this module
+                from .baselines import (
+                    PhysicsCurrentModel,  # baselines import this module
+                )
 
                 self.physics_ = PhysicsCurrentModel(robot=cfg.physics_prior).fit(logs)
                 logs = [self._residual_log(lg) for lg in logs]

@@ -14,7 +14,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 import time
 import warnings
 from collections.abc import Mapping, Sequence
@@ -24,7 +23,13 @@ from typing import Any
 
 import numpy as np
 
-from terrain.errors import DataError, InvalidParameterError, TerrawattWarning, UnknownNameError
+from terrain.atomic import write_text_atomic
+from terrain.errors import (
+    DataError,
+    InvalidParameterError,
+    TerrawattWarning,
+    UnknownNameError,
+)
 
 from .estimator import CurrentModel
 from .logs import InteractionLog
@@ -125,25 +130,6 @@ def _plain(value: Any) -> Any:
     return value
 
 
-def _atomic_write_text(path: str | os.PathLike[str], text: str) -> Path:
-    p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{p.name}.", suffix=".tmp", dir=p.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, p)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-    return p
-
-
 @dataclass(frozen=True)
 class EvaluationResult:
     """All scores of :func:`evaluate_current_models` and their summaries.
@@ -200,7 +186,7 @@ class EvaluationResult:
 
     def write_json(self, path: str | os.PathLike[str]) -> Path:
         """Write :meth:`to_dict` as JSON, atomically."""
-        return _atomic_write_text(path, json.dumps(self.to_dict(), indent=1, allow_nan=False) + "\n")
+        return write_text_atomic(path, json.dumps(self.to_dict(), indent=1, allow_nan=False) + "\n")
 
     def to_markdown(self) -> str:
         """A markdown table of the summary: per variant, ground and model."""
@@ -224,7 +210,7 @@ class EvaluationResult:
 
     def write_markdown(self, path: str | os.PathLike[str]) -> Path:
         """Write :meth:`to_markdown`, atomically."""
-        return _atomic_write_text(path, self.to_markdown())
+        return write_text_atomic(path, self.to_markdown())
 
 
 def _run_names(logs: list[InteractionLog]) -> list[str]:

@@ -28,7 +28,12 @@ from typing import Any
 
 import numpy as np
 
-from terrain.errors import DataError, DataRepairWarning, InvalidParameterError, UnknownNameError
+from terrain.errors import (
+    DataError,
+    DataRepairWarning,
+    InvalidParameterError,
+    UnknownNameError,
+)
 
 __all__ = [
     "LogMeta",

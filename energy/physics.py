@@ -119,7 +119,7 @@ _STOPPED_MPS = 1e-3  # robot counts as stopped for the control board below this 
 _STOPPED_RADPS = 1e-3  # ... and below this yaw rate
 _MAX_SLIP = 0.95
 
-_trapezoid = getattr(np, "trapezoid", None) or getattr(np, "trapz")
+_trapezoid = getattr(np, "trapezoid", None) or np.trapz
 
 
 def _readonly(a: np.ndarray) -> np.ndarray:

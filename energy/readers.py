@@ -37,7 +37,6 @@ import logging
 import math
 import os
 import re
-import tempfile
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
@@ -45,6 +44,7 @@ from typing import Any
 
 import numpy as np
 
+from terrain.atomic import write_text_atomic
 from terrain.errors import (
     DataError,
     DataRepairWarning,
@@ -56,7 +56,14 @@ from terrain.errors import (
     UnknownNameError,
 )
 
-from .logs import DEFAULT_GAP_FACTOR, VELOCITY_SOURCES, InteractionLog, LogMeta, _check_gap_factor, _gap_steps
+from .logs import (
+    DEFAULT_GAP_FACTOR,
+    VELOCITY_SOURCES,
+    InteractionLog,
+    LogMeta,
+    _check_gap_factor,
+    _gap_steps,
+)
 
 __all__ = [
     "REPAIRS",
@@ -887,18 +894,7 @@ def write_csv_log(log: InteractionLog, path: str | os.PathLike[str]) -> Path:
     }
     lines = [_CSV_MAGIC + json.dumps(head), ",".join(names)]
     lines += [",".join(r) for r in zip(*table)]
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            fh.write("\n".join(lines) + "\n")
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    write_text_atomic(path, "\n".join(lines) + "\n")
     return path
 
 

@@ -15,9 +15,26 @@ from .adaptive import (
 )
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost, warm_up_kernels
 from .lattice import Lattice, LatticePath, string_pull
-from .learned_cost import DEFAULT_TABLE_OMEGAS_RADPS, DEFAULT_TABLE_SPEEDS_MPS, LearnedEnergyModel, LearnedModelTable
-from .mission import MISSION_FORMAT_VERSION, MISSION_STATUSES, MissionResult, simulate_mission
-from .ompl_planner import OMPL_PLANNERS, PLANNERS, PlannerSettings, plan_route, refine_route, shortest_route
+from .learned_cost import (
+    DEFAULT_TABLE_OMEGAS_RADPS,
+    DEFAULT_TABLE_SPEEDS_MPS,
+    LearnedEnergyModel,
+    LearnedModelTable,
+)
+from .mission import (
+    MISSION_FORMAT_VERSION,
+    MISSION_STATUSES,
+    MissionResult,
+    simulate_mission,
+)
+from .ompl_planner import (
+    OMPL_PLANNERS,
+    PLANNERS,
+    PlannerSettings,
+    plan_route,
+    refine_route,
+    shortest_route,
+)
 from .route import ROUTE_STATUSES, Route, evaluate_route
 
 __all__ = [

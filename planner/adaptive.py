@@ -31,10 +31,8 @@ driving (``"reserve_violated"``), when no route is found (``"no_route"``) or aft
 
 from __future__ import annotations
 
-import json
 import math
 import os
-import tempfile
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -54,6 +52,7 @@ from energy import (
     log_battery_power_w,
 )
 from terrain import CellModelRegistry, InvalidParameterError, TerrainMap, UpdatePolicy
+from terrain.atomic import atomic_path, write_json_atomic
 
 from .learned_cost import LearnedEnergyModel
 from .mission import simulate_mission
@@ -330,17 +329,7 @@ class AdaptiveResult:
 
     def save_json(self, path: str | os.PathLike[str], *, series_every: int = 10) -> Path:
         """Write :meth:`to_json_dict` atomically to ``path``; return the path."""
-        target = Path(path)
-        data = json.dumps(self.to_json_dict(series_every=series_every), indent=1, default=str).encode()
-        fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=f".{target.name}.", suffix=".tmp")
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                fh.write(data)
-            os.replace(tmp, target)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
-        return target
+        return write_json_atomic(path, self.to_json_dict(series_every=series_every), indent=1, default=str)
 
     def plot(self, path: str | os.PathLike[str], terrain: TerrainMap, registry: CellModelRegistry) -> Path:
         """Four panels: route over cells coloured by model and by error, SoC, cumulative energy."""
@@ -381,8 +370,11 @@ class AdaptiveResult:
         fig.suptitle(f"adaptive mission: {self.status}")
         fig.tight_layout()
         target = Path(path)
-        fig.savefig(target, dpi=90)
-        plt.close(fig)
+        try:
+            with atomic_path(target) as tmp:
+                fig.savefig(tmp, dpi=90, format="png")
+        finally:
+            plt.close(fig)
         return target
 
 

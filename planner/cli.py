@@ -3,18 +3,14 @@
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 import math
 import os
 import sys
-import tempfile
 import time
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 from energy import GROUND_PRESETS, PhysicsEnergyModel, ground_preset, robot_preset
 from terrain import (
@@ -23,6 +19,7 @@ from terrain import (
     TerrawattError,
     UnknownNameError,
 )
+from terrain.atomic import write_json_atomic
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
 
 from .edge_cost import EnergyCost
@@ -30,34 +27,9 @@ from .ompl_planner import PLANNERS, plan_route, shortest_route
 from .plot import RouteLine, plot_routes
 from .route import Route
 
-__all__ = ["main", "build_cost", "load_map", "write_json_atomic"]
+__all__ = ["main", "build_cost", "load_map"]
 
 log = logging.getLogger(__name__)
-
-
-def write_json_atomic(data: Any, path: str | os.PathLike[str]) -> Path:
-    """Write ``data`` as indented JSON through a temporary file and a rename."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w") as fh:
-            json.dump(data, fh, indent=2, default=_json_default)
-            fh.write("\n")
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
-
-
-def _json_default(obj: Any) -> Any:
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, np.generic):
-        return obj.item()
-    raise TypeError(f"cannot serialise {type(obj).__name__}")
 
 
 def _finite_or_none(x: float) -> float | None:
@@ -211,7 +183,7 @@ def run_plan(
         "table": rows,
         "routes": routes_json,
     }
-    json_path = write_json_atomic(result, out_dir / "route.json")
+    json_path = write_json_atomic(out_dir / "route.json", result)
     png_path = plot_routes(
         tmap,
         lines,
@@ -307,7 +279,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _current_model(name: str, seed: int) -> Any:
-    from energy import ConstantCurrentModel, LinearCurrentModel, PhysicsCurrentModel, VibrationCurrentEstimator
+    from energy import (
+        ConstantCurrentModel,
+        LinearCurrentModel,
+        PhysicsCurrentModel,
+        VibrationCurrentEstimator,
+    )
 
     factories = {
         "estimator": lambda: VibrationCurrentEstimator("default", seed=seed),
@@ -361,8 +338,6 @@ def run_mission(args: argparse.Namespace) -> int:
     from terrain import CellModelRegistry
 
     from .adaptive import AdaptiveSettings, fit_prior_model, run_adaptive_mission
-    from .learned_cost import LearnedEnergyModel
-    from .mission import simulate_mission
 
     if args.map == "example":
         tmap, label = example_map(), "bundled example map"
@@ -412,7 +387,7 @@ def run_mission(args: argparse.Namespace) -> int:
         "reserve_margin_pct": 100.0 * result.final_soc - battery.min_reserve_pct,
     }
     data = {**result.to_json_dict(), "budget": budget, "computing_time_s": elapsed}
-    json_path = write_json_atomic(data, args.out / "mission.json")
+    json_path = write_json_atomic(args.out / "mission.json", data)
     png_path = result.plot(args.out / "mission.png", tmap, registry)
     print(f"map: {label}; robot {args.robot}; battery {battery.capacity_ah:g} Ah at {battery.voltage_v:g} V "
           f"({battery.energy_capacity_wh:.0f} Wh, {battery.usable_energy_wh:.0f} Wh above the {battery.min_reserve_pct:g} % reserve)")
@@ -458,7 +433,7 @@ def run_predict(args: argparse.Namespace) -> int:
                 f"{str(log.meta.ground_label) + '/' + Path(log.meta.source).name:<28} {side:<6} {err.charge_true_mah:>10.1f} "
                 f"{err.charge_predicted_mah:>10.1f} {err.whole_run_error_pct:>8.2f} {err.rmse_a:>7.2f}"
             )
-    path = write_json_atomic({"model": str(args.model), "runs": rows}, args.out / "predictions.json")
+    path = write_json_atomic(args.out / "predictions.json", {"model": str(args.model), "runs": rows})
     print(f"wrote {path}")
     return 0
 

@@ -48,16 +48,33 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from energy import GroundParams, InteractionLog, LogMeta, PhysicsEnergyModel, RobotParams, log_battery_power_w
-from terrain import CellModelRegistry, InvalidParameterError, TerrainMap, UnknownNameError
+from energy import (
+    GroundParams,
+    InteractionLog,
+    LogMeta,
+    PhysicsEnergyModel,
+    RobotParams,
+    log_battery_power_w,
+)
+from terrain import (
+    CellModelRegistry,
+    InvalidParameterError,
+    TerrainMap,
+    UnknownNameError,
+)
 
-from .edge_cost import DEFAULT_GRADE_SAMPLES, DEFAULT_MAX_SLOPE_RAD, DEFAULT_TURN_SAMPLES, EnergyCost
+from .edge_cost import (
+    DEFAULT_GRADE_SAMPLES,
+    DEFAULT_MAX_SLOPE_RAD,
+    DEFAULT_TURN_SAMPLES,
+    EnergyCost,
+)
 
 __all__ = ["LearnedEnergyModel", "LearnedModelTable", "DEFAULT_TABLE_SPEEDS_MPS", "DEFAULT_TABLE_OMEGAS_RADPS"]
 

@@ -33,7 +33,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -53,6 +52,7 @@ from energy import (
     waypoint_commands,
 )
 from terrain import TerrainMap
+from terrain.atomic import atomic_path, write_text_atomic
 from terrain.errors import (
     DataError,
     GridMismatchError,
@@ -325,7 +325,7 @@ class MissionResult:
             ``series_every`` not an int >= 1.
         """
         payload = json.dumps(self.to_json_dict(series_every=series_every), allow_nan=False)
-        return _atomic_write(Path(path), payload.encode("utf-8"))
+        return write_text_atomic(path, payload)
 
     def plot(self, path: str | os.PathLike[str], terrain: TerrainMap | None = None, *,
              title: str | None = None, dpi: int = 110) -> Path:
@@ -388,14 +388,8 @@ class MissionResult:
                      f"arrival SoC {self.budget.arrival_soc_pct:.1f} %")
         fig.tight_layout()
         path = Path(path)
-        fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=f".{path.name}.", suffix=".png")
-        os.close(fd)
-        try:
+        with atomic_path(path) as tmp:
             fig.savefig(tmp, dpi=dpi, format="png")
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
         return path
 
     def __repr__(self) -> str:
@@ -408,22 +402,6 @@ class MissionResult:
         )
 
 
-def _atomic_write(path: Path, data: bytes) -> Path:
-    parent = path.parent if str(path.parent) else Path(".")
-    fd, tmp = tempfile.mkstemp(dir=parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
-
-
-# ------------------------------------------------------------------ geometry helpers
 def _drivable_waypoints(route: Route) -> tuple[np.ndarray, np.ndarray]:
     """Waypoints without consecutive repeats, and the route segment of each kept segment."""
     wp = route.waypoints_m

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from terrain import TerrainMap
+from terrain.atomic import atomic_path
 
 __all__ = ["RouteLine", "plot_routes"]
 
@@ -147,13 +148,9 @@ def plot_routes(
     fig.tight_layout()
 
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp")
     try:
-        fig.savefig(tmp, dpi=dpi, format="png")
-        os.replace(tmp, path)
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp, dpi=dpi, format="png")
     finally:
         plt.close(fig)
-        if tmp.exists():
-            tmp.unlink()
     return path

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import logging
 import os
-import tempfile
 import warnings
 from pathlib import Path
 from types import ModuleType
@@ -13,6 +12,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
+from .atomic import atomic_path
 from .errors import (
     DataRepairWarning,
     FileFormatError,
@@ -195,10 +195,7 @@ def write_geotiff(
         "nodata": UNKNOWN_GROUND if layer == "ground" else None,
         "compress": "deflate",
     }
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
+    with atomic_path(path) as tmp:
         try:
             with rasterio.open(tmp, "w", **profile) as dst:
                 dst.write(data[::-1], 1)
@@ -206,9 +203,4 @@ def write_geotiff(
                     dst.units = ("m",)
         except rasterio.errors.CRSError as exc:
             raise InvalidParameterError(f"map CRS {tmap.crs!r} is not understood by rasterio: {exc}") from exc
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
     return path

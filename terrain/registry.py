@@ -1211,6 +1211,7 @@ class CellModelRegistry:
         tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent))
         try:
             self._write_into(tmp, save_model, model_suffix)
+            os.chmod(tmp, 0o755)  # mkdtemp makes it owner-only
             _fsync_dir(tmp)
             if target.exists():
                 holder = Path(tempfile.mkdtemp(prefix=f".{target.name}.", suffix=".old", dir=target.parent))

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from energy import (
-    ConstantCurrentModel,
     EFFECTS,
+    ConstantCurrentModel,
     DataError,
     InteractionLog,
     InvalidParameterError,

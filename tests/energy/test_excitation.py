@@ -8,7 +8,7 @@ import pytest
 from energy import CommandProfile, excitation_commands, waypoint_commands
 from terrain import DataError, InvalidParameterError, UnknownNameError
 
-_trapezoid = getattr(np, "trapezoid", None) or getattr(np, "trapz")
+_trapezoid = getattr(np, "trapezoid", None) or np.trapz
 
 
 # ------------------------------------------------------------------ excitation pattern

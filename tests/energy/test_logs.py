@@ -8,7 +8,12 @@ import numpy as np
 import pytest
 
 from energy import DEFAULT_GAP_FACTOR, InteractionLog, LogMeta
-from terrain import DataError, DataRepairWarning, InvalidParameterError, UnknownNameError
+from terrain import (
+    DataError,
+    DataRepairWarning,
+    InvalidParameterError,
+    UnknownNameError,
+)
 
 
 def make_log(n: int = 11, drive_dt: float = 0.1, m: int = 101, accel_dt: float = 0.01, **kw) -> InteractionLog:
@@ -56,9 +61,9 @@ def test_len_duration_rates():
 def test_rates_need_two_samples():
     log = make_log(n=1, m=1)
     with pytest.raises(DataError, match="at least 2 drive samples"):
-        log.drive_rate_hz
+        _ = log.drive_rate_hz
     with pytest.raises(DataError, match="at least 2 acceleration samples"):
-        log.accel_rate_hz
+        _ = log.accel_rate_hz
 
 
 @pytest.mark.parametrize("field", ["v_mps", "omega_radps", "current_left_a", "current_right_a"])

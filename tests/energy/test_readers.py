@@ -11,7 +11,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from energy import InteractionLog, LogMeta, read_borealtc, read_borealtc_run, read_csv_log, read_rosbag, write_csv_log
+from energy import (
+    InteractionLog,
+    LogMeta,
+    read_borealtc,
+    read_borealtc_run,
+    read_csv_log,
+    read_rosbag,
+    write_csv_log,
+)
 from terrain import (
     DataError,
     DataRepairWarning,

@@ -10,7 +10,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from energy import PAPER_GROUNDS, PAPER_VARIATION, TruthSimulator, charge_mah, robot_preset
+from energy import (
+    PAPER_GROUNDS,
+    PAPER_VARIATION,
+    TruthSimulator,
+    charge_mah,
+    robot_preset,
+)
 
 SCRIPT = Path(__file__).resolve().parents[2] / "examples" / "paper_current_experiment.py"
 

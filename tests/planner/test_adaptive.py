@@ -3,7 +3,14 @@
 import numpy as np
 import pytest
 
-from energy import Battery, LinearCurrentModel, TruthSimulator, excitation_commands, ground_preset, robot_preset
+from energy import (
+    Battery,
+    LinearCurrentModel,
+    TruthSimulator,
+    excitation_commands,
+    ground_preset,
+    robot_preset,
+)
 from planner import AdaptiveSettings, run_adaptive_mission
 from terrain import CellModelRegistry, InvalidParameterError, TerrainMap
 

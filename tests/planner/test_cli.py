@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import terrain
-from terrain import TerrawattWarning
 from planner.cli import main
+from terrain import TerrawattWarning
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"

@@ -3,9 +3,21 @@
 import numpy as np
 import pytest
 
-from energy import InteractionLog, LogMeta, PhysicsEnergyModel, ground_preset, log_battery_power_w, robot_preset
+from energy import (
+    InteractionLog,
+    LogMeta,
+    PhysicsEnergyModel,
+    ground_preset,
+    log_battery_power_w,
+    robot_preset,
+)
 from planner import EnergyCost, LearnedEnergyModel
-from terrain import CellModelRegistry, InvalidParameterError, TerrainMap, UnknownNameError
+from terrain import (
+    CellModelRegistry,
+    InvalidParameterError,
+    TerrainMap,
+    UnknownNameError,
+)
 
 
 class ConstModel:

@@ -9,8 +9,15 @@ import math
 import numpy as np
 import pytest
 
-from energy import Battery, NoiseModel, PhysicsEnergyModel, TruthSimulator, ground_preset, robot_preset
-from planner import EnergyCost, MISSION_FORMAT_VERSION, evaluate_route, simulate_mission
+from energy import (
+    Battery,
+    NoiseModel,
+    PhysicsEnergyModel,
+    TruthSimulator,
+    ground_preset,
+    robot_preset,
+)
+from planner import MISSION_FORMAT_VERSION, EnergyCost, evaluate_route, simulate_mission
 from terrain import (
     DataError,
     GridMismatchError,

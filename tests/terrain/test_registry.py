@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -485,6 +486,7 @@ def test_save_load_round_trip(tmp_path: Path) -> None:
     reg, tmap = _populated(tmp_path)
     out = reg.save(tmp_path / "reg", save_gain, model_suffix=".npy")
     assert sorted(p.name for p in out.iterdir()) == ["history.json", "models", "registry.npz"]
+    assert stat.S_IMODE(out.stat().st_mode) == 0o755  # not mkdtemp's owner-only 0700
     assert sorted(p.name for p in (out / "models").iterdir()) == [
         "model-0000.npy", "model-0001.npy", "model-0002.npy"]
     back = CellModelRegistry.load(out, load_gain, terrain=tmap)
