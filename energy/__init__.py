@@ -84,6 +84,7 @@ from .params import (
     robot_preset,
 )
 from .physics import EFFECTS, PhysicsEnergyModel, PowerBreakdown
+from .plots import ground_spectra, plot_current_estimate, plot_vibration_spectra
 from .readers import (
     read_borealtc,
     read_borealtc_run,
@@ -169,6 +170,10 @@ __all__ = [
     "EvaluationResult",
     "RunScore",
     "ScoreSummary",
+    # figures
+    "plot_current_estimate",
+    "plot_vibration_spectra",
+    "ground_spectra",
     # vibration features
     "DEFAULT_T_INTERVAL_S",
     "WindowSpec",

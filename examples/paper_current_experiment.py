@@ -27,6 +27,7 @@ import argparse
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -43,6 +44,8 @@ from energy import (
     error_rate_pct,
     estimator_preset,
     excitation_commands,
+    plot_current_estimate,
+    plot_vibration_spectra,
     robot_preset,
     section_charges_mah,
 )
@@ -116,17 +119,26 @@ def make_model(name: str, quick: bool, seed: int) -> VibrationCurrentEstimator:
 
 
 def run_experiment(duration_s: float = RUN_DURATION_S, *, quick: bool = False, model: str = "default",
-                   seed: int = 0) -> list[GroundTable]:
-    """Simulate, train on run 1, test on run 2, for the three grounds of the paper."""
+                   seed: int = 0, out_dir: Path | None = None) -> list[GroundTable]:
+    """Simulate, train on run 1, test on run 2, for the three grounds of the paper.
+
+    With ``out_dir``, also write the paper's Fig. 6 for each ground's test run
+    (``current_<ground>.png``) and its Fig. 7 over all runs (``spectra.png``).
+    """
     sim = TruthSimulator(robot_preset("husky"), PAPER_GROUNDS, noise=NOISE, variation=PAPER_VARIATION, seed=seed)
     section_s = duration_s / N_SECTIONS
     tables = []
+    runs: list[InteractionLog] = []
     for ground in PAPER_GROUNDS:
         train, test = simulate_runs(sim, ground, duration_s, seed)
+        runs += [train, test]
         t0 = time.perf_counter()
         estimator = make_model(model, quick, seed).fit(train)
         fit_s = time.perf_counter() - t0
         est = estimator.predict(test)
+        if out_dir is not None:
+            plot_current_estimate(test, est, out_dir / f"current_{ground}.png", label=f"{model} estimator",
+                                  title=f"test run on {ground}: measured vs estimated current (the paper's Fig. 6)")
         base = LinearCurrentModel().fit(train).predict(test)
         t = test.time_s
         right = side_rows(t, test.current_right_a, est[:, 1], section_s)
@@ -138,6 +150,8 @@ def run_experiment(duration_s: float = RUN_DURATION_S, *, quick: bool = False, m
         starts = t[0] + section_s * np.arange(len(right) - 1)
         bounds = tuple((float(a), float(min(a + section_s, t[-1]))) for a in starts)
         tables.append(GroundTable(ground, bounds, right, left, base_err, fit_s))
+    if out_dir is not None:
+        plot_vibration_spectra(runs, out_dir / "spectra.png", title="simulated vertical vibration by ground (Fig. 7)")
     return tables
 
 
@@ -173,10 +187,11 @@ def main(argv: Sequence[str] | None = None) -> list[GroundTable]:
     parser.add_argument("--quick", action="store_true", help="40 s runs and a tiny model (for tests)")
     parser.add_argument("--model", default="default", choices=sorted(ESTIMATOR_PRESETS), help="estimator preset")
     parser.add_argument("--seed", type=int, default=0, help="seed of commands, noise and training")
+    parser.add_argument("--out", type=Path, default=None, help="write the Fig. 6 / Fig. 7 figures into this directory")
     args = parser.parse_args(argv)
     duration = QUICK_DURATION_S if args.quick else RUN_DURATION_S
     t0 = time.perf_counter()
-    tables = run_experiment(duration, quick=args.quick, model=args.model, seed=args.seed)
+    tables = run_experiment(duration, quick=args.quick, model=args.model, seed=args.seed, out_dir=args.out)
     print(f"Synthetic Table I: Husky preset, {duration:g} s runs, train run 1 / test run 2, "
           f"model {args.model!r}{' (quick)' if args.quick else ''}\n")
     for tb in tables:

@@ -342,9 +342,18 @@ class AdaptiveResult:
         x0, y0 = terrain.origin_xy_m
         rows, cols = terrain.shape
         ext = (x0, x0 + cols * terrain.cell_size_m, y0, y0 + rows * terrain.cell_size_m)
-        im = ax[0, 0].imshow(np.asarray(registry.model_id_map), origin="lower", extent=ext, cmap="tab10",
-                             interpolation="nearest")
-        fig.colorbar(im, ax=ax[0, 0], label="model id")
+        from matplotlib.colors import BoundaryNorm, ListedColormap
+        from matplotlib.patches import Patch
+
+        id_map = np.asarray(registry.model_id_map)
+        ids = np.unique(id_map)
+        palette = plt.get_cmap("tab10").colors
+        colours = [palette[i % len(palette)] for i in range(ids.size)]
+        # one discrete colour per model in use, named in the legend
+        ax[0, 0].imshow(np.searchsorted(ids, id_map), origin="lower", extent=ext, interpolation="nearest",
+                        cmap=ListedColormap(colours), norm=BoundaryNorm(np.arange(ids.size + 1) - 0.5, ids.size))
+        model_patches = [Patch(color=c, label=f"{int(m)}: {registry.model_record(int(m)).name}")
+                         for m, c in zip(ids.tolist(), colours)]
         ax[0, 0].set_title("cells by model")
         with np.errstate(invalid="ignore"):
             err = 100.0 * np.abs(registry.relative_error())
@@ -358,12 +367,14 @@ class AdaptiveResult:
             a.plot(self.x_m, self.y_m, "c-", lw=1.5, label="driven")
             a.set_xlabel("x (m)")
             a.set_ylabel("y (m)")
-            a.legend(loc="upper left", fontsize=7)
+        handles, _ = ax[0, 0].get_legend_handles_labels()
+        ax[0, 0].legend(handles=handles + model_patches, loc="upper left", fontsize=7, framealpha=0.85)
+        ax[0, 1].legend(loc="upper left", fontsize=7)
         ax[1, 0].plot(self.time_s, 100.0 * self.soc)
         ax[1, 0].set_xlabel("time (s)")
         ax[1, 0].set_ylabel("state of charge (%)")
-        ax[1, 1].plot(self.time_s, self.energy_j / 3600.0, label="actual")
-        ax[1, 1].plot(self.time_s, self.predicted_energy_j / 3600.0, label="predicted")
+        ax[1, 1].plot(self.time_s, self.energy_j / 3600.0, label="actual (driving + excitation manoeuvres)")
+        ax[1, 1].plot(self.time_s, self.predicted_energy_j / 3600.0, label="predicted (driving; flat while exciting)")
         ax[1, 1].set_xlabel("time (s)")
         ax[1, 1].set_ylabel("cumulative energy (Wh)")
         ax[1, 1].legend()

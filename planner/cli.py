@@ -275,6 +275,10 @@ def build_parser() -> argparse.ArgumentParser:
     predict.add_argument("--data", type=Path, required=True, metavar="DIR", help="directory with GROUND/imu_NN.csv + pro_NN.csv")
     predict.add_argument("--grounds", nargs="+", metavar="NAME", help="ground folders to use (default all)")
     predict.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
+    predict.add_argument(
+        "--plots", action="store_true",
+        help="also write one figure per run (measured vs estimated current, moving medians) into DIR/plots/",
+    )
     return parser
 
 
@@ -303,7 +307,7 @@ CURRENT_MODELS = ("estimator", "paper", "linear", "physics", "constant")
 
 def run_evaluate(args: argparse.Namespace) -> int:
     """``terrawatt evaluate``: write evaluation.json and evaluation.md."""
-    from energy import evaluate_current_models, read_borealtc
+    from energy import evaluate_current_models, plot_vibration_spectra, read_borealtc
 
     logs = read_borealtc(args.data, grounds=args.grounds)
     models = {name: _current_model(name, args.seed) for name in args.models}
@@ -313,8 +317,9 @@ def run_evaluate(args: argparse.Namespace) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     json_path = result.write_json(args.out / "evaluation.json")
     md_path = result.write_markdown(args.out / "evaluation.md")
+    png_path = plot_vibration_spectra(logs, args.out / "spectra.png")
     print(result.to_markdown())
-    print(f"\n{len(logs)} runs, {len(models)} models, {elapsed:.1f} s; wrote {json_path} and {md_path}")
+    print(f"\n{len(logs)} runs, {len(models)} models, {elapsed:.1f} s; wrote {json_path}, {md_path} and {png_path}")
     return 0
 
 
@@ -407,14 +412,18 @@ def run_mission(args: argparse.Namespace) -> int:
 
 def run_predict(args: argparse.Namespace) -> int:
     """``terrawatt predict``: per-run charge errors of a saved model, written as JSON."""
-    from energy import compare_currents, load_current_model, read_borealtc
+    from energy import compare_currents, load_current_model, plot_current_estimate, read_borealtc
 
     model = load_current_model(args.model)
     logs = read_borealtc(args.data, grounds=args.grounds)
     rows = []
     print(f"{'run':<28} {'side':<6} {'truth mAh':>10} {'pred mAh':>10} {'error %':>8} {'RMSE A':>7}")
+    plots = []
     for log in logs:
         pred = model.predict(log)
+        if args.plots:
+            name = f"current_{log.meta.ground_label}_{Path(log.meta.source).stem}.png"
+            plots.append(plot_current_estimate(log, pred, args.out / "plots" / name, label=Path(args.model).name))
         for k, side in enumerate(("left", "right")):
             truth = log.current_left_a if k == 0 else log.current_right_a
             err = compare_currents(log.time_s, truth, pred[:, k])
@@ -434,7 +443,7 @@ def run_predict(args: argparse.Namespace) -> int:
                 f"{err.charge_predicted_mah:>10.1f} {err.whole_run_error_pct:>8.2f} {err.rmse_a:>7.2f}"
             )
     path = write_json_atomic(args.out / "predictions.json", {"model": str(args.model), "runs": rows})
-    print(f"wrote {path}")
+    print(f"wrote {path}" + (f" and {len(plots)} figures in {args.out / 'plots'}" if plots else ""))
     return 0
 
 

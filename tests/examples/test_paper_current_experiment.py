@@ -27,11 +27,23 @@ def example() -> dict:
 
 
 @pytest.fixture(scope="module")
-def quick_run(example: dict) -> tuple[list, str]:
+def figures_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("figures")
+
+
+@pytest.fixture(scope="module")
+def quick_run(example: dict, figures_dir: Path) -> tuple[list, str]:
     buf = io.StringIO()
     with contextlib.redirect_stdout(buf):
-        tables = example["main"](["--quick", "--seed", "0"])
+        tables = example["main"](["--quick", "--seed", "0", "--out", str(figures_dir)])
     return tables, buf.getvalue()
+
+
+def test_writes_the_papers_figures(quick_run: tuple[list, str], figures_dir: Path) -> None:
+    expected = {f"current_{g}.png" for g in PAPER_GROUNDS} | {"spectra.png"}
+    assert {p.name for p in figures_dir.iterdir()} == expected
+    for name in expected:
+        assert (figures_dir / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
 def test_prints_table_one_for_each_ground(quick_run: tuple[list, str]) -> None:

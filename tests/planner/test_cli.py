@@ -143,7 +143,11 @@ def test_train_then_predict_round_trip(tmp_path, capsys):
     model = tmp_path / "linear.pt"
     assert main(["train", "--data", str(FIXTURES), "--model", "linear", "--out", str(model)]) == 0
     assert model.is_file()
-    assert main(["predict", "--model", str(model), "--data", str(FIXTURES), "--out", str(tmp_path / "pred")]) == 0
+    assert main(["predict", "--model", str(model), "--data", str(FIXTURES), "--out", str(tmp_path / "pred"),
+                 "--plots"]) == 0
+    figures = sorted(p.name for p in (tmp_path / "pred" / "plots").iterdir())
+    assert figures == ["current_asphalt_pro_00.png", "current_snow_pro_05.png"]
+    assert all(_is_png(tmp_path / "pred" / "plots" / f) for f in figures)
     runs = json.loads((tmp_path / "pred" / "predictions.json").read_text())["runs"]
     assert {(r["ground"], r["side"]) for r in runs} == {(g, s) for g in ("asphalt", "snow") for s in ("left", "right")}
     for r in runs:
@@ -181,4 +185,5 @@ def test_evaluate_writes_json_and_markdown(tmp_path, capsys):
     assert rows[("ground_agnostic", "snow", "constant")]["whole_run_median_pct"] > 10.0  # trained on asphalt only
     md = (tmp_path / "out" / "evaluation.md").read_text()
     assert "| per_ground | asphalt | constant | 2 |" in md
+    assert _is_png(tmp_path / "out" / "spectra.png")
     capsys.readouterr()

@@ -1,0 +1,245 @@
+"""Figures of the current estimator: measured vs estimated current (Fig. 6), vibration spectra (Fig. 7).
+
+Both follow the layout of the vibration-current paper's figures and write PNG files
+atomically. matplotlib is imported when a figure is drawn, with the non-interactive Agg
+backend, so these work on a robot or a CI machine without a display.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy.ndimage import uniform_filter1d
+
+from terrain.atomic import atomic_path
+from terrain.errors import DataError, GridMismatchError, InvalidParameterError
+
+from .features import whole_run_spectrum
+from .logs import InteractionLog
+from .metrics import DEFAULT_SMOOTHING_SAMPLES, moving_median
+
+__all__ = ["plot_current_estimate", "plot_vibration_spectra", "ground_spectra"]
+
+_SIDES = ("left", "right")
+
+
+def _pyplot() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(fig: Any, path: str | os.PathLike[str], dpi: int) -> Path:
+    plt = _pyplot()
+    target = Path(path)
+    try:
+        with atomic_path(target) as tmp:
+            fig.savefig(tmp, dpi=dpi, format="png")
+    finally:
+        plt.close(fig)
+    return target
+
+
+def plot_current_estimate(
+    log: InteractionLog,
+    predicted_a: Any,
+    path: str | os.PathLike[str],
+    *,
+    window_samples: int = DEFAULT_SMOOTHING_SAMPLES,
+    label: str = "estimate",
+    title: str | None = None,
+    dpi: int = 100,
+) -> Path:
+    """The paper's Fig. 6: measured current, its moving median and the estimate's, per side.
+
+    One panel per drive side (left above right): the measured current in a light colour,
+    its median moving average over ``window_samples`` samples, and the moving median of
+    the estimate over the same window (:func:`energy.moving_median`).
+
+    Parameters
+    ----------
+    log : InteractionLog
+        The run with its measured currents.
+    predicted_a : array_like, shape (N, 2)
+        Estimated ``[left, right]`` current (A) at ``log.time_s`` (``model.predict(log)``).
+    path : str or os.PathLike
+        PNG file to write.
+    window_samples : int
+        Moving-median window in drive samples (default 100, the paper's).
+    label : str
+        Name of the estimate in the legend.
+    title : str, optional
+        Figure title (default: the log's source and ground).
+    dpi : int
+
+    Returns
+    -------
+    pathlib.Path
+        The written file.
+
+    Raises
+    ------
+    GridMismatchError
+        ``predicted_a`` is not of shape ``(len(log.time_s), 2)``.
+    InvalidParameterError
+        ``log`` is not an InteractionLog, ``predicted_a`` holds non-finite values, or a bad
+        ``window_samples``.
+    """
+    if not isinstance(log, InteractionLog):
+        raise InvalidParameterError(f"log must be an InteractionLog, got {type(log).__name__!r}")
+    pred = np.asarray(predicted_a, dtype=float)
+    if pred.shape != (log.time_s.size, 2):
+        raise GridMismatchError(
+            f"predicted_a must have shape ({log.time_s.size}, 2) (one [left, right] row per drive sample), "
+            f"got {pred.shape!r}"
+        )
+    if not np.all(np.isfinite(pred)):
+        raise InvalidParameterError("predicted_a holds NaN or infinite currents")
+    measured = np.column_stack([log.current_left_a, log.current_right_a])
+    smooth_meas = moving_median(measured, window_samples)
+    smooth_pred = moving_median(pred, window_samples)
+    t = log.time_s - log.time_s[0]
+
+    plt = _pyplot()
+    fig, axes = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True)
+    for k, (ax, side) in enumerate(zip(axes, _SIDES)):
+        ax.plot(t, measured[:, k], color="#9ecae1", lw=0.8, label="measured")
+        ax.plot(t, smooth_meas[:, k], color="#08519c", lw=1.8, label=f"measured, moving median ({window_samples})")
+        ax.plot(t, smooth_pred[:, k], color="#d94801", lw=1.8, label=f"{label}, moving median ({window_samples})")
+        ax.set_ylabel(f"{side} current (A)")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    axes[-1].set_xlabel("time (s)")
+    ground = log.meta.ground_label or "unknown ground"
+    fig.suptitle(title or f"drive current: {Path(log.meta.source).name or 'run'} on {ground}")
+    fig.tight_layout()
+    return _save(fig, path, dpi)
+
+
+def ground_spectra(
+    logs: Sequence[InteractionLog],
+    *,
+    n_bins: int = 2000,
+    max_frequency_hz: float = 50.0,
+    scaling: str = "density",
+) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """Mean vertical-vibration spectrum of each ground's runs, on one frequency grid.
+
+    Every run's whole-run spectrum (:func:`energy.whole_run_spectrum`) is computed on the
+    same ``n_bins`` frequencies and the runs of a ground (``log.meta.ground_label``) are
+    averaged. ``"density"`` scaling (default) makes runs of different lengths comparable.
+
+    Returns
+    -------
+    frequency_hz : ndarray, shape (n_bins,)
+    spectra : dict of str to ndarray, shape (n_bins,)
+        Ground label -> mean spectrum, in the order grounds first appear.
+
+    Raises
+    ------
+    InvalidParameterError
+        No logs, or an entry that is not an InteractionLog.
+    DataError
+        A log without a ground label.
+    """
+    items = list(logs)
+    if not items:
+        raise InvalidParameterError("logs must hold at least one InteractionLog, got none")
+    sums: dict[str, np.ndarray] = {}
+    counts: dict[str, int] = {}
+    freq = np.empty(0)
+    for i, log in enumerate(items):
+        if not isinstance(log, InteractionLog):
+            raise InvalidParameterError(f"logs[{i}] must be an InteractionLog, got {type(log).__name__!r}")
+        ground = log.meta.ground_label
+        if not ground:
+            raise DataError(f"logs[{i}] ({log.meta.source!r}) has no ground label; spectra are grouped by ground")
+        freq, spec = whole_run_spectrum(log.accel_time_s, log.accel_z_mps2, n_bins, max_frequency_hz, scaling)
+        sums[ground] = sums.get(ground, 0.0) + spec
+        counts[ground] = counts.get(ground, 0) + 1
+    return freq, {g: sums[g] / counts[g] for g in sums}
+
+
+def plot_vibration_spectra(
+    logs: Sequence[InteractionLog] | Mapping[str, np.ndarray],
+    path: str | os.PathLike[str],
+    *,
+    frequency_hz: Any = None,
+    smoothing_bins: int = 25,
+    n_bins: int = 2000,
+    max_frequency_hz: float = 50.0,
+    scaling: str = "density",
+    title: str | None = None,
+    dpi: int = 100,
+) -> Path:
+    """The paper's Fig. 7: vertical-vibration amplitude spectrum per ground with a moving average.
+
+    One panel per ground, sharing the axes: the spectrum in a light colour and its
+    centred moving average over ``smoothing_bins`` bins.
+
+    Parameters
+    ----------
+    logs : sequence of InteractionLog, or mapping of str to ndarray
+        Runs (grouped by ground with :func:`ground_spectra`), or precomputed spectra per
+        ground together with ``frequency_hz``.
+    path : str or os.PathLike
+        PNG file to write.
+    frequency_hz : array_like, optional
+        Frequencies of precomputed spectra (required with a mapping, ignored otherwise).
+    smoothing_bins : int
+        Moving-average width in bins (>= 1).
+    n_bins, max_frequency_hz, scaling :
+        Frequency grid and scaling (``"density"`` or ``"amplitude"``, see
+        :func:`energy.whole_run_spectrum`) when spectra are computed from logs; ``scaling``
+        also names the y axis.
+    title : str, optional
+    dpi : int
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    InvalidParameterError
+        Bad ``smoothing_bins``; a mapping without ``frequency_hz``; empty input.
+    GridMismatchError
+        A precomputed spectrum whose length differs from ``frequency_hz``.
+    """
+    if isinstance(smoothing_bins, bool) or not isinstance(smoothing_bins, (int, np.integer)) or smoothing_bins < 1:
+        raise InvalidParameterError(f"smoothing_bins must be an int >= 1, got {smoothing_bins!r}")
+    if isinstance(logs, Mapping):
+        if frequency_hz is None:
+            raise InvalidParameterError("frequency_hz is required with precomputed spectra")
+        freq = np.asarray(frequency_hz, dtype=float)
+        spectra = {str(g): np.asarray(s, dtype=float) for g, s in logs.items()}
+        if not spectra:
+            raise InvalidParameterError("spectra must hold at least one ground, got none")
+        for g, s in spectra.items():
+            if s.shape != freq.shape:
+                raise GridMismatchError(f"spectrum of {g!r} has shape {s.shape!r}; frequency_hz has {freq.shape!r}")
+    else:
+        freq, spectra = ground_spectra(logs, n_bins=n_bins, max_frequency_hz=max_frequency_hz, scaling=scaling)
+
+    plt = _pyplot()
+    fig, axes = plt.subplots(len(spectra), 1, figsize=(10, 2.4 * len(spectra) + 0.8), sharex=True, sharey=True,
+                             squeeze=False)
+    for ax, (ground, spec) in zip(axes[:, 0], spectra.items()):
+        ax.plot(freq, spec, color="#bdbdbd", lw=0.6, label="spectrum")
+        ax.plot(freq, uniform_filter1d(spec, smoothing_bins, mode="nearest"), color="#238b45", lw=1.6,
+                label=f"moving average ({smoothing_bins} bins)")
+        ax.set_ylabel("ASD (m/s² /√Hz)" if scaling == "density" else "amplitude (m/s²)")
+        ax.set_title(ground, fontsize=10, loc="left")
+        ax.grid(alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    axes[-1, 0].set_xlabel("frequency (Hz)")
+    fig.suptitle(title or "vertical vibration spectra by ground")
+    fig.tight_layout()
+    return _save(fig, path, dpi)

@@ -1,0 +1,79 @@
+"""Figures of the current estimator: Fig. 6 (currents) and Fig. 7 (spectra)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from energy import (
+    InteractionLog,
+    LogMeta,
+    ground_spectra,
+    plot_current_estimate,
+    plot_vibration_spectra,
+)
+from terrain import DataError, GridMismatchError, InvalidParameterError
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def _log(ground: str | None, freq_hz: float, seconds: float = 20.0, seed: int = 0) -> InteractionLog:
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, seconds, 0.1)
+    ta = np.arange(0.0, seconds, 0.01)
+    az = 9.81 + np.sin(2 * np.pi * freq_hz * ta) + 0.05 * rng.standard_normal(ta.size)
+    cur = 2.0 + 0.2 * rng.standard_normal(t.size)
+    return InteractionLog(t, np.full(t.size, 0.3), np.zeros(t.size), cur, cur + 0.5, ta, az,
+                          meta=LogMeta(source=f"run_{ground}_{seed}", ground_label=ground))
+
+
+def test_current_figure_is_written_atomically(tmp_path: Path) -> None:
+    log = _log("asphalt", 8.0)
+    pred = np.column_stack([log.current_left_a, log.current_right_a]) * 1.1
+    out = plot_current_estimate(log, pred, tmp_path / "figs" / "current.png", window_samples=10)
+    assert out.read_bytes()[:8] == PNG
+    assert [p.name for p in out.parent.iterdir()] == ["current.png"]  # no temporary left
+
+
+def test_current_figure_refuses_mismatched_or_nan_estimates(tmp_path: Path) -> None:
+    log = _log("asphalt", 8.0)
+    with pytest.raises(GridMismatchError, match=r"shape \(200, 2\)"):
+        plot_current_estimate(log, np.zeros((199, 2)), tmp_path / "x.png")
+    bad = np.zeros((200, 2))
+    bad[5, 1] = np.nan
+    with pytest.raises(InvalidParameterError, match="NaN"):
+        plot_current_estimate(log, bad, tmp_path / "x.png")
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_ground_spectra_average_runs_and_find_each_grounds_peak() -> None:
+    logs = [_log("wood", 8.0, seed=0), _log("wood", 8.0, seed=1), _log("snow", 21.0, seed=2)]
+    freq, spectra = ground_spectra(logs, n_bins=500)
+    assert list(spectra) == ["wood", "snow"] and freq.shape == (500,)
+    assert freq[np.argmax(spectra["wood"])] == pytest.approx(8.0, abs=0.2)
+    assert freq[np.argmax(spectra["snow"])] == pytest.approx(21.0, abs=0.2)
+    one = ground_spectra(logs[:1], n_bins=500)[1]["wood"]
+    two = ground_spectra(logs[1:2], n_bins=500)[1]["wood"]
+    np.testing.assert_allclose(spectra["wood"], (one + two) / 2)
+
+
+def test_spectra_figure_from_logs_or_precomputed(tmp_path: Path) -> None:
+    logs = [_log("wood", 8.0), _log("snow", 21.0, seed=1)]
+    assert plot_vibration_spectra(logs, tmp_path / "a.png").read_bytes()[:8] == PNG
+    freq, spectra = ground_spectra(logs, n_bins=300)
+    assert plot_vibration_spectra(spectra, tmp_path / "b.png", frequency_hz=freq).read_bytes()[:8] == PNG
+    with pytest.raises(InvalidParameterError, match="frequency_hz is required"):
+        plot_vibration_spectra(spectra, tmp_path / "c.png")
+    with pytest.raises(GridMismatchError, match="'wood'"):
+        plot_vibration_spectra(spectra, tmp_path / "c.png", frequency_hz=freq[:-1])
+    with pytest.raises(InvalidParameterError, match="smoothing_bins"):
+        plot_vibration_spectra(logs, tmp_path / "c.png", smoothing_bins=0)
+
+
+def test_spectra_need_a_ground_label(tmp_path: Path) -> None:
+    with pytest.raises(DataError, match="no ground label"):
+        ground_spectra([_log(None, 8.0)])
+    with pytest.raises(InvalidParameterError, match="at least one"):
+        ground_spectra([])
