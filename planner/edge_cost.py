@@ -79,6 +79,29 @@ def _start_index(u: float, du: float, n: int) -> int:
     return int(i)
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _rate_per_metre(table, row: int, grade: float, gmin: float, inv_dg: float) -> float:  # pragma: no cover - compiled
+    """Energy per horizontal metre (J/m) of table ``row`` at ``grade``, linearly interpolated
+    on the uniform grade grid (clamped at its ends); ``inf`` if a neighbouring sample is."""
+    ns = table.shape[1]
+    fi = (grade - gmin) * inv_dg
+    i0 = int(math.floor(fi))
+    if i0 < 0:
+        i0 = 0
+    elif i0 > ns - 2:
+        i0 = ns - 2
+    w = fi - i0
+    if w < 0.0:
+        w = 0.0
+    elif w > 1.0:
+        w = 1.0
+    lo = table[row, i0]
+    hi = table[row, i0 + 1]
+    if lo == math.inf or hi == math.inf:
+        return math.inf
+    return lo * (1.0 - w) + hi * w
+
+
 @numba.njit(cache=True, nogil=True)
 def _walk(cells, table, geo, xa, ya, xb, yb, both):  # pragma: no cover - compiled
     """Energy (J) of a -> b and (if ``both``) of b -> a in one cell walk; ``inf`` when blocked,
@@ -91,7 +114,6 @@ def _walk(cells, table, geo, xa, ya, xb, yb, both):  # pragma: no cover - compil
     nc = int(geo[_G_NCOLS])
     gmin = geo[_G_GMIN]
     inv_dg = geo[_G_INV_DG]
-    ns = table.shape[1]
     ua = (xa - x0) / d
     va = (ya - y0) / d
     ub = (xb - x0) / d
@@ -146,43 +168,19 @@ def _walk(cells, table, geo, xa, ya, xb, yb, both):  # pragma: no cover - compil
             seg = (tn - t) * length
             ki = int(k)
             # forward: grade; backward: -grade (same cells, opposite direction)
-            fi = (grade - gmin) * inv_dg
-            i0 = int(math.floor(fi))
-            if i0 < 0:
-                i0 = 0
-            elif i0 > ns - 2:
-                i0 = ns - 2
-            w = fi - i0
-            if w < 0.0:
-                w = 0.0
-            elif w > 1.0:
-                w = 1.0
-            lo = table[ki, i0]
-            hi = table[ki, i0 + 1]
-            if lo == inf or hi == inf:
+            rate = _rate_per_metre(table, ki, grade, gmin, inv_dg)
+            if rate == inf:
                 e_fwd = inf  # a grade this ground cannot be driven at (in this direction)
             else:
-                e_fwd += seg * (lo * (1.0 - w) + hi * w)
+                e_fwd += seg * rate
             if not both and e_fwd == inf:
                 return inf, inf
             if both:
-                fi = (-grade - gmin) * inv_dg
-                i0 = int(math.floor(fi))
-                if i0 < 0:
-                    i0 = 0
-                elif i0 > ns - 2:
-                    i0 = ns - 2
-                w = fi - i0
-                if w < 0.0:
-                    w = 0.0
-                elif w > 1.0:
-                    w = 1.0
-                lo = table[ki, i0]
-                hi = table[ki, i0 + 1]
-                if lo == inf or hi == inf:
+                rate = _rate_per_metre(table, ki, -grade, gmin, inv_dg)
+                if rate == inf:
                     e_bwd = inf
                 else:
-                    e_bwd += seg * (lo * (1.0 - w) + hi * w)
+                    e_bwd += seg * rate
                 if e_fwd == inf and e_bwd == inf:
                     return inf, inf
             t = tn
