@@ -12,13 +12,13 @@ import numpy as np
 from .atomic import atomic_open
 from .errors import (
     FileFormatError,
-    FormatVersionError,
     GridMismatchError,
     InvalidParameterError,
     OutOfBoundsError,
     TerrawattError,
     UnknownNameError,
 )
+from .formats import read_versioned_npz
 
 __all__ = ["TerrainMap", "MAP_FORMAT_VERSION", "UNKNOWN_GROUND"]
 
@@ -535,25 +535,7 @@ class TerrainMap:
             A file of another format version.
         """
         path = Path(path)
-        try:
-            with np.load(path, allow_pickle=False) as data:
-                content = {k: data[k] for k in data.files}
-        except FileNotFoundError as exc:
-            raise FileFormatError(f"map file {str(path)!r} does not exist") from exc
-        except Exception as exc:  # corrupt archives raise zipfile, zlib, tokenize, TypeError (.npy), ...
-            raise FileFormatError(f"map file {str(path)!r} is corrupt or not a .npz file: {exc}") from exc
-        magic = content.get("__magic__")
-        if magic is None or magic.shape != () or magic.item() != _MAP_MAGIC:
-            raise FileFormatError(f"{str(path)!r} is a .npz file but not a terrawatt map")
-        try:
-            version = int(content["__version__"])
-        except (KeyError, TypeError, ValueError) as exc:
-            raise FileFormatError(f"map file {str(path)!r} has no valid format version") from exc
-        if version != MAP_FORMAT_VERSION:
-            raise FormatVersionError(
-                f"map file {str(path)!r} has format version {version!r}; this terrawatt reads "
-                f"version {MAP_FORMAT_VERSION}"
-            )
+        content = read_versioned_npz(path, magic=_MAP_MAGIC, version=MAP_FORMAT_VERSION, what="map")
         try:
             names = dict(
                 zip(content["__ground_ids__"].tolist(), content["__ground_names__"].tolist(), strict=True)

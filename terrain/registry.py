@@ -45,7 +45,6 @@ import os
 import re
 import shutil
 import tempfile
-import zipfile
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -64,6 +63,7 @@ from .errors import (
     OutOfBoundsError,
     UnknownNameError,
 )
+from .formats import check_format_version, read_versioned_npz
 from .grid import TerrainMap
 
 __all__ = [
@@ -1491,26 +1491,7 @@ def _fsync_dir(path: Path) -> None:
 
 
 def _read_npz(path: Path) -> dict[str, np.ndarray]:
-    if not path.is_file():
-        raise FileFormatError(f"registry file {str(path)!r} is missing")
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            content = {k: data[k] for k in data.files}
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError, KeyError) as exc:
-        raise FileFormatError(f"registry file {str(path)!r} is corrupt or not a .npz file: {exc}") from exc
-    magic = content.get("__magic__")
-    if magic is None or magic.shape != () or str(magic) != _MAGIC:
-        raise FileFormatError(f"{str(path)!r} is a .npz file but not a terrawatt cell-model registry")
-    try:
-        version = int(content["__version__"])
-    except (KeyError, TypeError, ValueError) as exc:
-        raise FileFormatError(f"registry file {str(path)!r} has no readable format version") from exc
-    if version != REGISTRY_FORMAT_VERSION:
-        raise FormatVersionError(
-            f"registry file {str(path)!r} has format version {version!r}; this terrawatt reads "
-            f"version {REGISTRY_FORMAT_VERSION}"
-        )
-    return content
+    return read_versioned_npz(path, magic=_MAGIC, version=REGISTRY_FORMAT_VERSION, what="cell-model registry")
 
 
 def _read_history(path: Path) -> dict[str, Any]:
@@ -1522,10 +1503,5 @@ def _read_history(path: Path) -> dict[str, Any]:
         raise FileFormatError(f"registry history {str(path)!r} is corrupt: {exc}") from exc
     if not isinstance(data, dict) or data.get("format") != _HISTORY_MAGIC:
         raise FileFormatError(f"{str(path)!r} is not a terrawatt registry history")
-    version = data.get("format_version")
-    if version != REGISTRY_FORMAT_VERSION:
-        raise FormatVersionError(
-            f"registry history {str(path)!r} has format version {version!r}; this terrawatt reads "
-            f"version {REGISTRY_FORMAT_VERSION}"
-        )
+    check_format_version(data.get("format_version"), REGISTRY_FORMAT_VERSION, "registry history", path)
     return data
