@@ -176,13 +176,16 @@ class CommandProfile:
         return cls(t, v, omega, pose)
 
 
-def _vector(name: str, value: Any) -> np.ndarray:
+def _vector(name: str, value: Any, n: int | None = None) -> np.ndarray:
+    """A finite 1-D float64 copy of ``value`` (of length ``n`` when given)."""
     try:
         arr = np.array(value, dtype=np.float64)
     except (TypeError, ValueError):
         raise InvalidParameterError(f"{name} must be an array of numbers, got {value!r:.80}") from None
     if arr.ndim != 1:
         raise InvalidParameterError(f"{name} must be 1-D, got shape {arr.shape!r}")
+    if n is not None and arr.size != n:
+        raise InvalidParameterError(f"{name} must have the length of time_s ({n}), got {arr.size}")
     bad = ~np.isfinite(arr)
     if bad.any():
         i = int(np.argmax(bad))

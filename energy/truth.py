@@ -48,13 +48,12 @@ from scipy import ndimage, signal
 
 from terrain.errors import (
     BlockedPositionError,
-    DataError,
     InvalidParameterError,
     UnknownNameError,
 )
 from terrain.grid import UNKNOWN_GROUND, TerrainMap
 
-from .excitation import CommandProfile, _check_uniform_time, waypoint_commands
+from .excitation import CommandProfile, _check_uniform_time, _vector, waypoint_commands
 from .logs import InteractionLog, LogMeta
 from .params import GRAVITY_MPS2, GroundParams, RobotParams, ground_preset
 from .physics import EFFECTS, PhysicsEnergyModel, PowerBreakdown
@@ -435,22 +434,6 @@ def _check_seed(seed: Any) -> int:
     return int(seed)
 
 
-def _command_vector(name: str, value: Any, n: int | None) -> np.ndarray:
-    try:
-        arr = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"{name} must be an array of numbers, got {value!r:.80}") from None
-    if arr.ndim != 1:
-        raise InvalidParameterError(f"{name} must be 1-D, got shape {arr.shape!r}")
-    if n is not None and arr.size != n:
-        raise InvalidParameterError(f"{name} must have the length of time_s ({n}), got {arr.size}")
-    bad = ~np.isfinite(arr)
-    if bad.any():
-        i = int(np.argmax(bad))
-        raise DataError(f"{name} must be finite; {int(bad.sum())} non-finite value(s), first at index {i} ({arr[i]!r})")
-    return arr
-
-
 class TruthSimulator:
     """Synthesise interaction logs of a robot on named grounds, seeded.
 
@@ -615,13 +598,13 @@ class TruthSimulator:
         UnknownNameError
             A ground name that is not one of the simulator's grounds.
         """
-        t = _command_vector("time_s", time_s, None)
+        t = _vector("time_s", time_s, None)
         if t.size < 2:
             raise InvalidParameterError(f"time_s must hold at least 2 samples, got {t.size}")
         _check_uniform_time("time_s", t)
         n = t.size
-        v = _command_vector("v_cmd_mps", v_cmd_mps, n)
-        w = _command_vector("omega_cmd_radps", omega_cmd_radps, n)
+        v = _vector("v_cmd_mps", v_cmd_mps, n)
+        w = _vector("omega_cmd_radps", omega_cmd_radps, n)
         gidx = self._ground_index(ground, n)
         try:
             slope = np.asarray(slope_rad, dtype=np.float64)
