@@ -22,9 +22,12 @@ from .learned_cost import (
     LearnedModelTable,
 )
 from .mission import (
+    DEFAULT_ACCEL_MPS2,
+    DEFAULT_YAW_ACCEL_RADPS2,
     MISSION_FORMAT_VERSION,
     MISSION_STATUSES,
     MissionResult,
+    drive_profile,
     simulate_mission,
 )
 from .ompl_planner import (
@@ -61,6 +64,12 @@ __all__ = [
     "evaluate_route",
     # missions
     "simulate_mission",
+    "drive_profile",
+    "DEFAULT_ACCEL_MPS2",
+    "DEFAULT_YAW_ACCEL_RADPS2",
+    "drive_profile",
+    "DEFAULT_ACCEL_MPS2",
+    "DEFAULT_YAW_ACCEL_RADPS2",
     "MissionResult",
     "MISSION_STATUSES",
     "MISSION_FORMAT_VERSION",

@@ -23,6 +23,14 @@ map's ground class at the representative cell that is served by the same model(s
 flagged region: the map's ground layer is used as a *segmentation* only (e.g. surface classes
 from imagery), never for its energy; with ``"region"`` only the flagged cells.
 
+Predictions (of each leg, of the remaining route for the budget check and after a replan)
+price the velocity profile the robot will drive with the models serving the cells it crosses
+(:meth:`LearnedEnergyModel.profile_energy_j` of the stop-turn-go profile): the edge costs the
+planner minimises price steady driving plus turns in place, and miss the energy of stopping
+and starting at every waypoint and leg end (a few per cent per 10 m leg, more with turns).
+Both are recorded (``LegRecord.route_energy_j`` is the edge-cost figure). A remaining route
+is predicted as the loop drives it: leg by leg, stopping at every leg end.
+
 The loop stops at the goal, when the predicted energy of the remaining route exceeds the
 energy above the battery's reserve (``"budget_exceeded"``), when the reserve is crossed while
 driving (``"reserve_violated"``), when no route is found (``"no_route"``) or after
@@ -157,7 +165,11 @@ class AdaptiveSettings:
 
 @dataclass(frozen=True)
 class LegRecord:
-    """One driven leg: where, predicted and actual battery energy (J), duration (s)."""
+    """One driven leg: where, predicted and actual battery energy (J), duration (s).
+
+    ``predicted_energy_j`` prices the leg's velocity profile with the models in use before it
+    was driven; ``route_energy_j`` is the planner's edge-cost energy of the same leg.
+    """
 
     index: int
     start_xy_m: tuple[float, float]
@@ -166,6 +178,7 @@ class LegRecord:
     actual_energy_j: float
     duration_s: float
     n_samples: int
+    route_energy_j: float
 
 
 @dataclass(frozen=True)
@@ -553,14 +566,34 @@ def run_adaptive_mission(
         return plan_route(terrain, tuple(pos), tuple(goal), cost=cost, planner=cfg.planner,
                           time_limit_s=cfg.planner_time_limit_s, seed=cfg.seed, compare=False)
 
+    dt_s = 1.0 / truth.current_rate_hz
+
+    def predict_leg(waypoints: np.ndarray, heading: float | None) -> float:
+        """Energy of driving ``waypoints`` (one leg, rest to rest) from ``heading`` with the models in use now."""
+        if len(waypoints) < 2 or not np.any(np.hypot(*np.diff(waypoints, axis=0).T) > 0):
+            return 0.0
+        return lem.predict_route_energy_j(terrain, waypoints, cfg.speed_mps, start_heading_rad=heading, dt_s=dt_s)
+
+    def predict(waypoints: np.ndarray, heading: float | None) -> float:
+        """Energy of driving a route the way the loop does: leg by leg, stopping at each leg's end."""
+        total, rest = 0.0, np.asarray(waypoints, dtype=np.float64)
+        while len(rest) >= 2:
+            leg, rest = _split_polyline(rest, cfg.leg_length_m)
+            total += predict_leg(leg, heading)
+            d = np.diff(leg, axis=0)
+            d = d[np.hypot(d[:, 0], d[:, 1]) > 0]
+            if len(d):
+                heading = float(np.arctan2(d[-1, 1], d[-1, 0]))
+        return total
+
     t0 = time.perf_counter()
     builds0 = lem.table_builds
     cost = lem.energy_cost(terrain, cfg.speed_mps)
     refresh = time.perf_counter() - t0
     route = plan(np.asarray(start_xy_m, dtype=np.float64), cost)
     initial_route = route
-    replans = [ReplanRecord(0, "initial", route.energy_j if route.found else math.nan, math.nan, True, refresh,
-                            route.planning_time_s, lem.table_builds - builds0)]
+    replans = [ReplanRecord(0, "initial", predict(route.waypoints_m, None) if route.found else math.nan, math.nan,
+                            True, refresh, route.planning_time_s, lem.table_builds - builds0)]
     legs: list[LegRecord] = []
     updates: list[UpdateRecord] = []
     series: dict[str, list[np.ndarray]] = {k: [] for k in ("t", "x", "y", "soc", "e", "p")}
@@ -584,26 +617,31 @@ def run_adaptive_mission(
             status, reason = "no_route", f"no route from {tuple(pos.round(2))} to the goal (planner status {route.status!r})"
             break
         avail_j = (soc - battery.reserve_soc) * capacity_j
-        if route.energy_j > avail_j:
+        need_j = predict(np.asarray(route.waypoints_m), heading)
+        if need_j > avail_j:
             status = "budget_exceeded"
-            reason = (f"the remaining route needs {route.energy_j / 3600:.2f} Wh (predicted) but only "
+            reason = (f"the remaining route needs {need_j / 3600:.2f} Wh (predicted) but only "
                       f"{max(avail_j, 0.0) / 3600:.2f} Wh are left above the {battery.min_reserve_pct:g} % reserve")
             break
         head, tail = _split_polyline(np.asarray(route.waypoints_m), cfg.leg_length_m)
         leg_route = evaluate_route(cost, head, status="exact", planner="leg")
+        leg_pred_j = predict_leg(head, heading)
         mr = simulate_mission(terrain, leg_route, robot, battery.replace(initial_soc=soc), truth, cost,
                               speed_mps=cfg.speed_mps, start_heading_rad=heading, stop_at_reserve=True,
                               seed=cfg.seed + 1000 + leg_index)
         budget = mr.budget
         legs.append(LegRecord(leg_index, (float(pos[0]), float(pos[1])), (float(mr.x_m[-1]), float(mr.y_m[-1])),
-                              float(budget.predicted_energy_j), float(budget.actual_energy_j), float(mr.duration_s),
-                              int(mr.n_samples)))
+                              leg_pred_j, float(budget.actual_energy_j), float(mr.duration_s),
+                              int(mr.n_samples), float(budget.predicted_energy_j)))
         e_leg = np.asarray(mr.energy_wh) * 3600.0
+        # the edge-cost prediction's progress along the leg, scaled to the profile prediction
         p_leg = np.asarray(mr.predicted_energy_wh) * 3600.0
+        if budget.predicted_energy_j > 0:
+            p_leg = p_leg * (leg_pred_j / budget.predicted_energy_j)
         push(clock + mr.time_s, mr.x_m, mr.y_m, mr.soc, e_total + e_leg, p_total + p_leg)
         clock += float(mr.time_s[-1])
         e_total += float(budget.actual_energy_j)
-        p_total += float(budget.predicted_energy_j)
+        p_total += leg_pred_j
         driven_j += float(budget.actual_energy_j)
         soc = float(mr.soc[-1])
         pos = np.array([mr.x_m[-1], mr.y_m[-1]])
@@ -685,7 +723,8 @@ def run_adaptive_mission(
             else:
                 same = False
             update_wall += refresh
-            replans.append(ReplanRecord(leg_index, "update", route.energy_j if route.found else math.nan, old_energy,
+            replans.append(ReplanRecord(leg_index, "update",
+                                        predict(route.waypoints_m, heading) if route.found else math.nan, old_energy,
                                         not same, refresh, route.planning_time_s, lem.table_builds - builds0))
         elif len(tail) >= 2:
             route = evaluate_route(cost, tail, status="exact", planner=route.planner)

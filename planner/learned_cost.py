@@ -55,6 +55,7 @@ from typing import Any
 import numpy as np
 
 from energy import (
+    CommandProfile,
     GroundParams,
     InteractionLog,
     LogMeta,
@@ -75,6 +76,7 @@ from .edge_cost import (
     DEFAULT_TURN_SAMPLES,
     EnergyCost,
 )
+from .mission import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, drive_profile
 
 __all__ = ["LearnedEnergyModel", "LearnedModelTable", "DEFAULT_TABLE_SPEEDS_MPS", "DEFAULT_TABLE_OMEGAS_RADPS"]
 
@@ -257,6 +259,17 @@ class LearnedEnergyModel:
         self._tables.pop(int(model_id), None)
 
     # ------------------------------------------------------------------ tables
+    def _accel_signal(self, model_id: int, duration_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """Vertical acceleration for model ``model_id`` over ``[0, duration_s + 1]`` s: its stored
+        vibration repeated end to end, or gravity alone (100 Hz) when none was set."""
+        if model_id in self._vibration:
+            ta, az = self._vibration[model_id]
+            period = ta[-1] + (ta[-1] - ta[0]) / (ta.size - 1)
+            reps = int(math.ceil((duration_s + 1.0) / period)) + 1
+            return (ta[None, :] + period * np.arange(reps)[:, None]).reshape(-1), np.tile(az, reps)
+        at = np.arange(0.0, duration_s + 1.0 + 1e-9, 0.01)
+        return at, np.full(at.size, _GRAVITY_MPS2)
+
     def _synthetic_log(self, model_id: int) -> tuple[InteractionLog, np.ndarray]:
         n_hold = max(2, int(round(self.hold_s * self.rate_hz)))
         levels_v = np.concatenate([self.speeds_mps, np.zeros(self.omegas_radps.size)])
@@ -265,14 +278,7 @@ class LearnedEnergyModel:
         t = np.arange(n) / self.rate_hz
         v = np.repeat(levels_v, n_hold)
         w = np.repeat(levels_w, n_hold)
-        if model_id in self._vibration:
-            ta, az = self._vibration[model_id]
-            period = ta[-1] + (ta[-1] - ta[0]) / (ta.size - 1)
-            reps = int(math.ceil((t[-1] + 1.0) / period)) + 1
-            at = (ta[None, :] + period * np.arange(reps)[:, None]).reshape(-1)
-            accel = np.tile(az, reps)
-        else:
-            at, accel = t.copy(), np.full(n, _GRAVITY_MPS2)
+        at, accel = self._accel_signal(model_id, float(t[-1]))
         zeros = np.zeros(n)
         log = InteractionLog(t, v, w, zeros, zeros, at, accel,
                              meta=LogMeta(robot=self.robot.name, source=f"learned-cost table of model {model_id}"))
@@ -331,6 +337,97 @@ class LearnedEnergyModel:
         self._tables[mid] = (id(model), table)
         self.table_builds += 1
         return table
+
+    def profile_energy_j(self, terrain: TerrainMap, profile: CommandProfile, *, speed_mps: float | None = None) -> float:
+        """Predicted battery energy (J) of driving a command profile across the map.
+
+        Every sample's current comes from the model serving the cell under its pose (fed that
+        model's vibration, :meth:`set_vibration`), turned into battery power with the same
+        bookkeeping as a driven log (:func:`energy.log_battery_power_w`, electronics
+        included) and integrated over time; the physics slope term (module docstring) is
+        added per metre along the path. Unlike the edge costs, which price steady driving at
+        one speed plus turns in place, this prices the whole velocity profile: starting and
+        stopping at every waypoint, slow pivots, time spent accelerating.
+
+        Parameters
+        ----------
+        terrain : TerrainMap
+            The registry's map.
+        profile : CommandProfile
+            Commands with poses (e.g. :func:`planner.drive_profile`).
+        speed_mps : float, optional
+            Speed of the slope term's physics evaluation; default the profile's top speed.
+
+        Returns
+        -------
+        float
+
+        Raises
+        ------
+        GridMismatchError
+            ``terrain`` is not the registry's grid.
+        InvalidParameterError
+            A profile without poses or with fewer than 2 samples.
+        OutOfBoundsError
+            A pose outside the map.
+        """
+        self.registry.check_grid(terrain)
+        if not isinstance(profile, CommandProfile) or profile.pose_xyh is None:
+            raise InvalidParameterError("profile must be a CommandProfile with poses (pose_xyh)")
+        t = np.asarray(profile.time_s, dtype=np.float64)
+        if t.size < 2:
+            raise InvalidParameterError(f"profile must have at least 2 samples, got {t.size}")
+        v = np.asarray(profile.v_mps, dtype=np.float64)
+        w = np.asarray(profile.omega_radps, dtype=np.float64)
+        pose = np.asarray(profile.pose_xyh, dtype=np.float64)
+        rows, cols = terrain.rowcol(pose[:, 0], pose[:, 1])
+        ids = np.asarray(self.registry.model_id_map)[rows, cols]
+        power = np.empty(t.size)
+        zeros = np.zeros(t.size)
+        t_rel = t - t[0]
+        for mid in np.unique(ids).tolist():
+            at, accel = self._accel_signal(int(mid), float(t_rel[-1]))
+            log = InteractionLog(t_rel, v, w, zeros, zeros, at, accel,
+                                 meta=LogMeta(robot=self.robot.name, source=f"profile prediction, model {mid}"))
+            pred = np.asarray(self.registry.model(int(mid)).predict(log), dtype=np.float64)
+            plog = InteractionLog(t_rel, v, w, pred[:, 0], pred[:, 1], at, accel, meta=log.meta)
+            sel = ids == mid
+            power[sel] = log_battery_power_w(plog, self.robot, current_convention=self.current_convention)[sel]
+        energy = float(np.trapezoid(power, t))
+        speed = float(np.max(np.abs(v))) if speed_mps is None else float(speed_mps)
+        if speed > 0:
+            heading = pose[:, 2]
+            grade = terrain["grad_x"][rows, cols] * np.cos(heading) + terrain["grad_y"][rows, cols] * np.sin(heading)
+            grade = np.where(v < 0, -grade, grade)
+            metres = np.abs(v) * np.gradient(t)
+            energy += float(np.sum(self._grade_delta_j(speed, grade) * metres))
+        return energy
+
+    def predict_route_energy_j(
+        self,
+        terrain: TerrainMap,
+        waypoints_m: Any,
+        speed_mps: float,
+        *,
+        start_heading_rad: float | None = None,
+        dt_s: float = 0.05,
+        accel_mps2: float = DEFAULT_ACCEL_MPS2,
+        yaw_accel_radps2: float = DEFAULT_YAW_ACCEL_RADPS2,
+    ) -> float:
+        """Predicted battery energy (J) of driving a route the way :func:`planner.simulate_mission` does.
+
+        :meth:`profile_energy_j` of :func:`planner.drive_profile` (stop, pivot at the robot's
+        turn rate, drive each segment rest to rest at ``speed_mps``).
+
+        Raises
+        ------
+        InvalidParameterError, OutOfBoundsError, GridMismatchError
+            As :func:`planner.drive_profile` and :meth:`profile_energy_j`.
+        """
+        profile = drive_profile(waypoints_m, speed_mps, turn_rate_radps=self.turn_rate_radps, dt_s=dt_s,
+                                accel_mps2=accel_mps2, yaw_accel_radps2=yaw_accel_radps2,
+                                start_heading_rad=start_heading_rad)
+        return self.profile_energy_j(terrain, profile, speed_mps=speed_mps)
 
     def refresh(self) -> list[int]:
         """Build the tables of every model in use that has none yet (or changed); return their ids."""

@@ -42,6 +42,7 @@ import numpy as np
 from energy import (
     CURRENT_CONVENTIONS,
     Battery,
+    CommandProfile,
     EnergyBudget,
     InteractionLog,
     RobotParams,
@@ -64,11 +65,18 @@ from terrain.errors import (
 from .edge_cost import EnergyCost
 from .route import Route
 
+#: Default acceleration limits of the stop-turn-go profile (m/s^2, rad/s^2).
+DEFAULT_ACCEL_MPS2 = 0.5
+DEFAULT_YAW_ACCEL_RADPS2 = 1.0
+
 __all__ = [
     "MissionResult",
     "MISSION_STATUSES",
     "MISSION_FORMAT_VERSION",
     "simulate_mission",
+    "drive_profile",
+    "DEFAULT_ACCEL_MPS2",
+    "DEFAULT_YAW_ACCEL_RADPS2",
 ]
 
 #: ``completed``: the route was driven to its end with the state of charge at or above the
@@ -402,15 +410,42 @@ class MissionResult:
         )
 
 
-def _drivable_waypoints(route: Route) -> tuple[np.ndarray, np.ndarray]:
+def _drivable_waypoints(wp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Waypoints without consecutive repeats, and the route segment of each kept segment."""
-    wp = route.waypoints_m
     length = np.hypot(*np.diff(wp, axis=0).T)
     keep_seg = np.flatnonzero(length > 0)
     if keep_seg.size == 0:
         raise InvalidParameterError(f"route has no segment of positive length (waypoints {wp.tolist()!r})")
     pts = np.vstack([wp[keep_seg], wp[keep_seg[-1] + 1][None, :]])
     return pts, keep_seg
+
+
+def drive_profile(
+    waypoints_m: Any,
+    speed_mps: float,
+    *,
+    turn_rate_radps: float,
+    dt_s: float,
+    accel_mps2: float = DEFAULT_ACCEL_MPS2,
+    yaw_accel_radps2: float = DEFAULT_YAW_ACCEL_RADPS2,
+    start_heading_rad: float | None = None,
+) -> CommandProfile:
+    """The stop-turn-go command profile :func:`simulate_mission` drives along ``waypoints_m``.
+
+    Consecutive repeated waypoints are dropped; then :func:`energy.waypoint_commands`
+    (pivot to each segment's heading, drive it rest to rest at ``speed_mps``).
+
+    Raises
+    ------
+    InvalidParameterError
+        Fewer than two distinct waypoints, or bad speeds, rates or ``dt_s``.
+    """
+    wp = np.asarray(waypoints_m, dtype=np.float64)
+    if wp.ndim != 2 or wp.shape[1] != 2 or len(wp) < 2:
+        raise InvalidParameterError(f"waypoints_m must have shape (K >= 2, 2), got {wp.shape!r}")
+    pts, _ = _drivable_waypoints(wp)
+    return waypoint_commands(pts, speed_mps, accel_mps2=accel_mps2, turn_rate_radps=turn_rate_radps,
+                             yaw_accel_radps2=yaw_accel_radps2, dt_s=dt_s, start_heading_rad=start_heading_rad)
 
 
 def _move_duration_s(distance: np.ndarray, peak: float, accel: float) -> np.ndarray:
@@ -498,9 +533,9 @@ def simulate_mission(
     cost: EnergyCost | None = None,
     *,
     speed_mps: float | None = None,
-    accel_mps2: float = 0.5,
+    accel_mps2: float = DEFAULT_ACCEL_MPS2,
     turn_rate_radps: float | None = None,
-    yaw_accel_radps2: float = 1.0,
+    yaw_accel_radps2: float = DEFAULT_YAW_ACCEL_RADPS2,
     start_heading_rad: float | None = None,
     current_convention: str = "motor",
     electronics: bool = True,
@@ -647,15 +682,14 @@ def simulate_mission(
             f"route segment {i} from {tuple(wp[i].tolist())!r} to {tuple(wp[i + 1].tolist())!r} m crosses a "
             "blocked cell of cost; expected a route valid for cost"
         )
-    pts, kept = _drivable_waypoints(route)
+    pts, kept = _drivable_waypoints(route.waypoints_m)
     turn_s, straight_s = _planned_durations_s(pts, start_heading_rad, speed, accel, turn_rate, yaw_accel)
 
     # ---------------------------------------------------------------- drive or replay
     truth_power = None
     if isinstance(truth, TruthSimulator):
-        profile = waypoint_commands(pts, speed, accel_mps2=accel, turn_rate_radps=turn_rate,
-                                    yaw_accel_radps2=yaw_accel, dt_s=1.0 / truth.current_rate_hz,
-                                    start_heading_rad=start_heading_rad)
+        profile = drive_profile(pts, speed, accel_mps2=accel, turn_rate_radps=turn_rate, yaw_accel_radps2=yaw_accel,
+                                dt_s=1.0 / truth.current_rate_hz, start_heading_rad=start_heading_rad)
         run = truth.run_drive(terrain, profile, seed=seed)
         log = run.log
         truth_power = np.asarray(run.breakdown.total_power_w)
@@ -689,8 +723,8 @@ def simulate_mission(
                 "expected a log of the whole route"
             )
         rate = log.drive_rate_hz
-        profile = waypoint_commands(pts, speed, accel_mps2=accel, turn_rate_radps=turn_rate,
-                                    yaw_accel_radps2=yaw_accel, dt_s=1.0 / rate, start_heading_rad=start_heading_rad)
+        profile = drive_profile(pts, speed, accel_mps2=accel, turn_rate_radps=turn_rate, yaw_accel_radps2=yaw_accel,
+                                dt_s=1.0 / rate, start_heading_rad=start_heading_rad)
         ppose = np.asarray(profile.pose_xyh)
         pt = np.asarray(profile.time_s)
         xy = np.column_stack([np.interp(t, pt, ppose[:, 0]), np.interp(t, pt, ppose[:, 1])])

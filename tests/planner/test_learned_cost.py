@@ -122,3 +122,48 @@ def test_energy_cost_with_previous_equals_fresh_and_reuses_lattice():
     assert np.array_equal(got_lat._data["energy"], Lattice(ref, 1)._data["energy"])
     with pytest.raises(InvalidParameterError, match="previous"):
         lem.energy_cost(tmap, 0.4, previous=cost)
+
+
+def test_profile_energy_is_the_integral_of_the_cell_models_power():
+    # a profile that crosses model b's two cells: each sample priced by the model under it
+    from planner import drive_profile
+
+    robot, tmap, reg, lem, mid = _setup()
+    profile = drive_profile([[1.5, 3.5], [12.5, 3.5]], 0.5, turn_rate_radps=lem.turn_rate_radps, dt_s=0.01)
+    energy = lem.profile_energy_j(tmap, profile)
+    pose = np.asarray(profile.pose_xyh)
+    rows, cols = tmap.rowcol(pose[:, 0], pose[:, 1])
+    ids = np.asarray(reg.model_id_map)[rows, cols]
+    assert set(ids.tolist()) == {0, mid}
+    t, v, w = profile.time_s, profile.v_mps, profile.omega_radps
+    cur = np.where(ids == mid, 4.0, 2.0) * (np.abs(v) > 0)
+    log = InteractionLog(t, v, w, cur, cur, t, np.full(t.size, 9.81), meta=LogMeta())
+    expected = np.trapezoid(log_battery_power_w(log, robot), t)
+    assert energy == pytest.approx(expected, rel=1e-9)
+    with pytest.raises(InvalidParameterError, match="poses"):
+        lem.profile_energy_j(tmap, type(profile)(t, v, w))
+
+
+def test_route_prediction_prices_the_stops_the_edge_costs_miss():
+    # a model equal to the truth: the profile prediction matches the driven energy, the edge costs do not
+    from energy import Battery, LinearCurrentModel, TruthSimulator, excitation_commands
+    from planner import evaluate_route, simulate_mission
+
+    robot = robot_preset("husky")
+    truth = TruthSimulator(robot, {"asphalt": ground_preset("asphalt")}, seed=0)
+    logs = [truth.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground="asphalt", seed=i)
+            for i, p in enumerate((
+                excitation_commands(30.0, speed_levels_mps=(0.2, 0.5, 0.8), omega_levels_radps=(0.0,), seed=1),
+                excitation_commands(12.0, speed_levels_mps=(0.0,), omega_levels_radps=(0.5,), omega_sign="both",
+                                    hold_s=(2.0, 3.0), rest_s=0.0, seed=2)))]
+    tmap = TerrainMap(np.zeros((20, 30)), 1.0, ground=np.zeros((20, 30), dtype=int), ground_names={0: "asphalt"})
+    reg = CellModelRegistry.from_terrain(tmap, LinearCurrentModel().fit(logs), prior_name="asphalt")
+    lem = LearnedEnergyModel(reg, robot, ground_preset("asphalt"))
+    cost = lem.energy_cost(tmap, 0.5)
+    wp = [[2.5, 2.5], [12.5, 2.5], [12.5, 9.5], [20.5, 14.5]]  # two pivots, three stops
+    route = evaluate_route(cost, wp)
+    actual = simulate_mission(tmap, route, robot, Battery(20.0, 24.0), truth, cost, seed=5).budget.actual_energy_j
+    predicted = lem.predict_route_energy_j(tmap, wp, 0.5, dt_s=1.0 / truth.current_rate_hz)
+    assert abs(predicted / actual - 1.0) < 0.03
+    assert abs(route.energy_j / actual - 1.0) > 2 * abs(predicted / actual - 1.0)
+    assert predicted > route.energy_j  # stopping and starting costs energy
