@@ -5,8 +5,9 @@ The prior current model (a LinearCurrentModel) is fitted on an asphalt excitatio
 it under-predicts the sand badly. Without updates the predicted mission energy is off by
 tens of per cent; the adaptive loop flags the patch as soon as it drives into it, runs the
 excitation manoeuvre there, swaps in a sand model and replans around the rest of the patch.
-The script prints whether that pays off net of the excitation energy (on this map it does
-not: the detour saves less than the ~28 s excitation manoeuvre costs).
+The script prints whether that pays off net of the excitation energy: on this map (a
+115 m sand patch on a 151 m route) it does, by about 1.1 Wh of 8.7 Wh; with the patch cut
+to 65 m it does not (the detour saves less than the 23 s manoeuvre costs).
 
 Run:  python examples/adaptive_mission.py [--quick] [--out DIR]
 """
@@ -33,10 +34,10 @@ from terrain import CellModelRegistry, TerrainMap
 
 def scenario(quick: bool = False) -> tuple[TerrainMap, tuple[float, float], tuple[float, float]]:
     """Level asphalt map with a sand patch on the straight line (smaller with ``quick``)."""
-    cols, rows = (80, 36) if quick else (110, 50)
+    cols, rows = (80, 36) if quick else (160, 50)
     ground = np.zeros((rows, cols), dtype=int)
     y0, y1 = (12, 24) if quick else (18, 32)
-    x0, x1 = (18, 64) if quick else (25, 90)
+    x0, x1 = (18, 64) if quick else (25, 140)
     ground[y0:y1, x0:x1] = 1
     tmap = TerrainMap(np.zeros((rows, cols)), 1.0, ground=ground, ground_names={0: "asphalt", 1: "sand"})
     mid = (y0 + y1) / 2.0
@@ -55,7 +56,10 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     tmap, start, goal = scenario(args.quick)
     battery = Battery(capacity_ah=20.0, voltage_v=robot.battery_voltage_v, min_reserve_pct=20.0)
     prior = fit_prior_model(truth, "asphalt", seed=1)
-    settings = AdaptiveSettings(speed_mps=0.5, leg_length_m=10.0, seed=0)
+    # a 15 s straight + 8 s pivot excitation: enough for a linear model (its held-back error
+    # is ~2 %), and each second of it costs ~140 W on sand
+    settings = AdaptiveSettings(speed_mps=0.5, leg_length_m=10.0, excitation_duration_s=15.0,
+                                turn_excitation_duration_s=8.0, seed=0)
 
     # Baseline: plan with the prior and drive the whole route without updates.
     reg0 = CellModelRegistry.from_terrain(tmap, prior, prior_name="asphalt-prior")
