@@ -18,6 +18,11 @@ predicted current per cell in the :class:`terrain.CellModelRegistry`, and where 
    is reweighted only where cells changed model: ``energy_cost(..., previous=cost)``) and
    replans from the current position.
 
+A (ground class, model) pair is excited at most once: the model fitted there, or the old
+model that beat it, has been validated on fresh excitation data of that ground, so later
+flags of the same pair only reset the evidence (the cells' error then comes from the
+transients — pivots, stops — that small regions over-represent).
+
 The scope of an update is, with ``update_scope="ground_class"`` (default), every cell of the
 map's ground class at the representative cell that is served by the same model(s) as the
 flagged region: the map's ground layer is used as a *segmentation* only (e.g. surface classes
@@ -602,6 +607,7 @@ def run_adaptive_mission(
     soc = battery.initial_soc
     clock = e_total = p_total = 0.0
     driven_j = excitation_j = update_wall = 0.0
+    validated: set[tuple[int, int]] = set()  # (ground class, model id) pairs validated on excitation data
 
     def push(t: np.ndarray, x: np.ndarray, y: np.ndarray, s: np.ndarray, e: np.ndarray, p: np.ndarray) -> None:
         for key, arr in zip(("t", "x", "y", "soc", "e", "p"), (t, x, y, s, e, p)):
@@ -666,6 +672,11 @@ def run_adaptive_mission(
             gid = int(terrain.ground[r, c])
             gname = terrain.ground_names.get(gid, str(gid))
             old_id = int(np.asarray(registry.model_id_map)[r, c])
+            if (gid, old_id) in validated:
+                # this model already proved itself on fresh excitation data of this ground: the
+                # cells' error comes from transients (pivots, stops) they over-represent
+                registry.reset_evidence(region)
+                continue
             seed = cfg.seed + 10_000 + 10 * len(updates)
             straight = excitation_commands(cfg.excitation_duration_s, 1.0 / truth.current_rate_hz,
                                            speed_levels_mps=cfg.excitation_speeds_mps, omega_levels_radps=(0.0,),
@@ -694,9 +705,11 @@ def run_adaptive_mission(
                 meta={"ground": gname, "after_leg": leg_index})
             if decision.accepted:
                 lem.set_vibration(decision.model_id, xlogs[0].accel_time_s, xlogs[0].accel_z_mps2)
+                validated.add((gid, int(decision.model_id)))
                 changed = True
             else:
-                registry.reset_evidence(region)  # gather fresh evidence before trying again
+                validated.add((gid, old_id))
+                registry.reset_evidence(region)
             x_e = sum(_log_energy_j(xl, robot) for xl in xlogs)
             x_t = sum(float(xl.time_s[-1] - xl.time_s[0]) for xl in xlogs)
             excitation_j += x_e

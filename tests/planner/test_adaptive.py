@@ -73,6 +73,9 @@ def test_worse_model_rejected_and_old_kept():
     assert len(res.updates) >= 1
     assert not any(u.accepted for u in res.updates)
     assert reg.model_ids == (0,) and np.all(np.asarray(reg.model_id_map) == 0)
+    # the old model beat the refit on this ground's fresh excitation data: the same
+    # (ground, model) pair is not excited again, however long the sand still shows an error
+    assert [u.ground for u in res.updates] == ["sand"]
 
 
 def test_budget_violation_stops_with_reason_and_position():
