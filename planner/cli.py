@@ -380,13 +380,15 @@ def run_mission(args: argparse.Namespace) -> int:
     )
     elapsed = time.perf_counter() - t0
     route0 = result.initial_route
+    predicted_wh = result.replans[0].predicted_energy_j / 3600.0  # the stop-turn-go profile, prior models
     used_wh = (result.driven_energy_j + result.excitation_energy_j) / 3600.0
     budget = {
         "battery": {"capacity_ah": battery.capacity_ah, "voltage_v": battery.voltage_v,
                     "min_reserve_pct": battery.min_reserve_pct, "energy_capacity_wh": battery.energy_capacity_wh,
                     "usable_energy_wh": battery.usable_energy_wh},
-        "predicted_energy_wh": route0.energy_wh,
-        "predicted_fits": route0.energy_wh <= battery.usable_energy_wh,
+        "predicted_energy_wh": predicted_wh,
+        "edge_cost_energy_wh": route0.energy_wh,
+        "predicted_fits": predicted_wh <= battery.usable_energy_wh,
         "actual_energy_wh": used_wh,
         "final_soc_pct": 100.0 * result.final_soc,
         "reserve_margin_pct": 100.0 * result.final_soc - battery.min_reserve_pct,
@@ -398,7 +400,7 @@ def run_mission(args: argparse.Namespace) -> int:
           f"({battery.energy_capacity_wh:.0f} Wh, {battery.usable_energy_wh:.0f} Wh above the {battery.min_reserve_pct:g} % reserve)")
     print(f"start {start} -> goal {goal}; prior trained on {args.prior_ground}; adaptive updates {'off' if args.no_adapt else 'on'}")
     print(f"status: {result.status} — {result.reason}")
-    print(f"first plan (prior models):  {route0.energy_wh:8.2f} Wh  {route0.length_m:7.1f} m  "
+    print(f"first plan (prior models):  {predicted_wh:8.2f} Wh  {route0.length_m:7.1f} m  "
           f"({'fits' if budget['predicted_fits'] else 'does NOT fit'} the usable {battery.usable_energy_wh:.0f} Wh)")
     print(f"driven (actual):            {result.driven_energy_j / 3600:8.2f} Wh  in {len(result.legs)} legs")
     print(f"excitation manoeuvres:      {result.excitation_energy_j / 3600:8.2f} Wh")
