@@ -70,6 +70,19 @@ def _sift_up(keys, nodes, where, i):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
+def _heap_set(keys, nodes, where, size, node, key):  # pragma: no cover - compiled
+    """Insert ``node`` with ``key``, or lower its key if it is in the heap; return the new size."""
+    i = where[node]
+    if i < 0:
+        i = size
+        nodes[i] = node
+        size += 1
+    keys[i] = key
+    _sift_up(keys, nodes, where, i)
+    return size
+
+
+@numba.njit(cache=True, nogil=True)
 def _heap_pop(keys, nodes, where, size):  # pragma: no cover - compiled
     """Pop the minimum of the indexed binary heap ``keys[:size]``; return key, node, new size."""
     top_k = keys[0]
@@ -124,14 +137,7 @@ def _astar(indptr, indices, data, node_x, node_y, nj, src, src_cost, dst, dst_co
             g[u] = src_cost[k]
             pred[u] = -1
             f = src_cost[k] + h_per_m * math.hypot(node_x[u % nj] - gx, node_y[u // nj] - gy)
-            if where[u] < 0:
-                keys[size] = f
-                nodes[size] = u
-                size += 1
-                _sift_up(keys, nodes, where, size - 1)
-            else:
-                keys[where[u]] = f
-                _sift_up(keys, nodes, where, where[u])
+            size = _heap_set(keys, nodes, where, size, u, f)
     while size > 0:
         f, u, size = _heap_pop(keys, nodes, where, size)
         if f >= best:
@@ -150,14 +156,7 @@ def _astar(indptr, indices, data, node_x, node_y, nj, src, src_cost, dst, dst_co
                 g[v] = nv
                 pred[v] = u
                 f = nv + h_per_m * math.hypot(node_x[v % nj] - gx, node_y[v // nj] - gy)
-                if where[v] < 0:
-                    keys[size] = f
-                    nodes[size] = v
-                    size += 1
-                    _sift_up(keys, nodes, where, size - 1)
-                else:
-                    keys[where[v]] = f
-                    _sift_up(keys, nodes, where, where[v])
+                size = _heap_set(keys, nodes, where, size, v, f)
     return best, best_node, pred
 
 
