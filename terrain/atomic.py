@@ -43,11 +43,13 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     Examples
     --------
     >>> import tempfile, pathlib
-    >>> target = pathlib.Path(tempfile.mkdtemp()) / "note.txt"
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> target = pathlib.Path(folder.name) / "note.txt"
     >>> with atomic_path(target) as tmp:
     ...     _ = tmp.write_text("complete")
     >>> target.read_text()
     'complete'
+    >>> folder.cleanup()
     """
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
