@@ -579,17 +579,18 @@ def run_adaptive_mission(
             return 0.0
         return lem.predict_route_energy_j(terrain, waypoints, cfg.speed_mps, start_heading_rad=heading, dt_s=dt_s)
 
-    def predict(waypoints: np.ndarray, heading: float | None) -> float:
-        """Energy of driving a route the way the loop does: leg by leg, stopping at each leg's end."""
-        total, rest = 0.0, np.asarray(waypoints, dtype=np.float64)
+    def predict_legs(waypoints: np.ndarray, heading: float | None) -> list[float]:
+        """Energy of each leg of a route driven the way the loop does: leg by leg, stopping at
+        each leg's end (kept until the route or the models change, then recomputed)."""
+        energies, rest = [], np.asarray(waypoints, dtype=np.float64)
         while len(rest) >= 2:
             leg, rest = _split_polyline(rest, cfg.leg_length_m)
-            total += predict_leg(leg, heading)
+            energies.append(predict_leg(leg, heading))
             d = np.diff(leg, axis=0)
             d = d[np.hypot(d[:, 0], d[:, 1]) > 0]
             if len(d):
                 heading = float(np.arctan2(d[-1, 1], d[-1, 0]))
-        return total
+        return energies
 
     t0 = time.perf_counter()
     builds0 = lem.table_builds
@@ -597,7 +598,8 @@ def run_adaptive_mission(
     refresh = time.perf_counter() - t0
     route = plan(np.asarray(start_xy_m, dtype=np.float64), cost)
     initial_route = route
-    replans = [ReplanRecord(0, "initial", predict(route.waypoints_m, None) if route.found else math.nan, math.nan,
+    pending = predict_legs(route.waypoints_m, None) if route.found else []  # remaining legs' energies (J)
+    replans = [ReplanRecord(0, "initial", sum(pending) if route.found else math.nan, math.nan,
                             True, refresh, route.planning_time_s, lem.table_builds - builds0)]
     legs: list[LegRecord] = []
     updates: list[UpdateRecord] = []
@@ -623,7 +625,7 @@ def run_adaptive_mission(
             status, reason = "no_route", f"no route from {tuple(pos.round(2))} to the goal (planner status {route.status!r})"
             break
         avail_j = (soc - battery.reserve_soc) * capacity_j
-        need_j = predict(np.asarray(route.waypoints_m), heading)
+        need_j = sum(pending)
         if need_j > avail_j:
             status = "budget_exceeded"
             reason = (f"the remaining route needs {need_j / 3600:.2f} Wh (predicted) but only "
@@ -631,7 +633,7 @@ def run_adaptive_mission(
             break
         head, tail = _split_polyline(np.asarray(route.waypoints_m), cfg.leg_length_m)
         leg_route = evaluate_route(cost, head, status="exact", planner="leg")
-        leg_pred_j = predict_leg(head, heading)
+        leg_pred_j = pending.pop(0) if pending else predict_leg(head, heading)
         mr = simulate_mission(terrain, leg_route, robot, battery.replace(initial_soc=soc), truth, cost,
                               speed_mps=cfg.speed_mps, start_heading_rad=heading, stop_at_reserve=True,
                               seed=cfg.seed + 1000 + leg_index)
@@ -733,11 +735,11 @@ def run_adaptive_mission(
                 same = route.waypoints_m.shape == tail.shape and np.allclose(route.waypoints_m, tail, atol=1e-6)
                 if not same and old_energy <= route.energy_j:  # planner found nothing better: keep the old one
                     route, same = evaluate_route(cost, tail, status="exact", planner="kept"), True
+                pending = predict_legs(route.waypoints_m, heading)  # the models changed
             else:
-                same = False
+                same, pending = False, []
             update_wall += refresh
-            replans.append(ReplanRecord(leg_index, "update",
-                                        predict(route.waypoints_m, heading) if route.found else math.nan, old_energy,
+            replans.append(ReplanRecord(leg_index, "update", sum(pending) if route.found else math.nan, old_energy,
                                         not same, refresh, route.planning_time_s, lem.table_builds - builds0))
         elif len(tail) >= 2:
             route = evaluate_route(cost, tail, status="exact", planner=route.planner)
