@@ -187,3 +187,22 @@ def test_evaluate_writes_json_and_markdown(tmp_path, capsys):
     assert "| per_ground | asphalt | constant | 2 |" in md
     assert _is_png(tmp_path / "out" / "spectra.png")
     capsys.readouterr()
+
+
+def test_plan_on_a_geotiff_dem_uses_the_unknown_ground_preset(tmp_path, capsys):
+    pytest.importorskip("rasterio", reason="GeoTIFF needs the geo extra (rasterio)")
+    from terrain import ramp_map, write_geotiff
+
+    dem = write_geotiff(ramp_map((30, 40), 1.0, grade=0.05), tmp_path / "dem.tif")
+    out = tmp_path / "out"
+    rc = main(["plan", "--map", str(dem), "--start", "3", "3", "--goal", "36", "26", "--planner", "lattice",
+               "--out", str(out)])
+    assert rc == 0
+    data = json.loads((out / "route.json").read_text())
+    assert data["map"] == "dem.tif" and data["status"] == "exact"
+    # a DEM carries no ground classes: every cell is unknown and priced as gravel
+    assert "grounds {}" in capsys.readouterr().out
+    rc = main(["plan", "--map", str(dem), "--start", "3", "3", "--goal", "36", "26", "--planner", "lattice",
+               "--unknown-ground", "none", "--out", str(out)])
+    assert rc == 2
+    assert "unknown" in capsys.readouterr().err
