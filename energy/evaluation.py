@@ -27,6 +27,7 @@ from terrain.atomic import write_text_atomic
 from terrain.errors import (
     DataError,
     InvalidParameterError,
+    OptionalDependencyError,
     TerrawattWarning,
     UnknownNameError,
 )
@@ -234,6 +235,82 @@ def _trim(log: InteractionLog) -> InteractionLog:
     return log.slice(t0, float(np.nextafter(t1, np.inf)))
 
 
+def _score_fold(
+    variant: str,
+    run: str,
+    log: InteractionLog,
+    train_logs: list[InteractionLog],
+    model_name: str,
+    proto: CurrentModel,
+    section_s: float,
+) -> list[RunScore]:
+    """Fit a fresh copy of ``proto`` on ``train_logs`` and score it on ``log``: one row per side.
+
+    Module-level so that dask workers can unpickle it by reference.
+    """
+    t0 = time.perf_counter()
+    model = proto.clone().fit(train_logs)
+    fit_s = time.perf_counter() - t0
+    pred = model.predict(log)
+    truth = (log.current_left_a, log.current_right_a)
+    rows = []
+    for k, side in enumerate(_SIDES):
+        e = compare_currents(log.time_s, truth[k], pred[:, k], section_s)
+        rows.append(RunScore(
+            variant=variant, ground=str(log.meta.ground_label), run=run, model=model_name, side=side,
+            duration_s=log.duration_s, charge_true_mah=e.charge_true_mah,
+            charge_predicted_mah=e.charge_predicted_mah, whole_run_error_pct=e.whole_run_error_pct,
+            section_error_pct=e.section_error_pct, rmse_a=e.rmse_a, fit_duration_s=fit_s,
+        ))
+    return rows
+
+
+def _distributed_client_type() -> type:
+    """``distributed.Client``, imported only when a client is given (the extra is optional)."""
+    try:
+        from distributed import Client
+    except ImportError as exc:
+        raise OptionalDependencyError(
+            "evaluating on a cluster needs dask.distributed; install it with: pip install 'terrawatt[distributed]'"
+        ) from exc
+    return Client
+
+
+def _score_on_cluster(
+    client: Any,
+    items: list[InteractionLog],
+    names: list[str],
+    folds: list[tuple[str, int, list[int]]],
+    models: Mapping[str, CurrentModel],
+    section_s: float,
+    progress: bool,
+) -> list[RunScore]:
+    """Every (fold, model) pair as one task on ``client``; rows in the serial order."""
+    from distributed import as_completed
+    from tqdm.auto import tqdm
+
+    scattered = client.scatter(items, broadcast=True, hash=False)
+    futures = [
+        client.submit(
+            _score_fold, variant, names[test], scattered[test], [scattered[j] for j in train], mname, proto,
+            section_s, pure=False,
+        )
+        for variant, test, train in folds
+        for mname, proto in models.items()
+    ]
+    position = {f.key: i for i, f in enumerate(futures)}
+    rows: list[list[RunScore]] = [[] for _ in futures]
+    try:
+        with tqdm(total=len(futures), desc="evaluation tasks", disable=not progress) as bar:
+            for fut in as_completed(futures):
+                rows[position[fut.key]] = fut.result()  # re-raises a task's exception here
+                bar.update()
+    except BaseException:
+        client.cancel(futures + scattered)  # drop the tasks still queued or running
+        raise
+    return [row for task_rows in rows for row in task_rows]
+
+
 def evaluate_current_models(
     logs: Sequence[InteractionLog],
     models: Mapping[str, CurrentModel],
@@ -241,6 +318,7 @@ def evaluate_current_models(
     variants: Sequence[str] = EVALUATION_VARIANTS,
     section_s: float = DEFAULT_SECTION_S,
     progress: bool = False,
+    client: Any = None,
 ) -> EvaluationResult:
     """Leave-one-run-out evaluation of current models, per ground and over all grounds.
 
@@ -249,6 +327,11 @@ def evaluate_current_models(
     (``model.clone()``: same parameters and seed, unfitted) is fitted on the ground's other
     runs and scored on the run. ``"ground_agnostic"`` does the same with the training set
     made of every other run of every ground.
+
+    With a dask ``client``, every (fold, model) pair is one task on the cluster: the
+    trimmed logs are scattered to every worker once, each task fits, predicts and scores
+    one model on one fold, and the scores are put back in the order of the serial run, so
+    the result does not depend on which task finishes first.
 
     Parameters
     ----------
@@ -261,7 +344,12 @@ def evaluate_current_models(
     section_s : float
         Section length of the section error (s).
     progress : bool
-        Show a tqdm bar over the folds.
+        Show a tqdm bar over the folds (over the completed tasks with a ``client``).
+    client : distributed.Client or None
+        ``None`` (default): fit and score the folds here, one after another. A
+        ``distributed.Client``: run them as tasks on its cluster (needs the
+        ``distributed`` extra; every worker must be able to import terrawatt). An
+        exception raised in a task is raised here, and the remaining tasks are cancelled.
 
     Returns
     -------
@@ -270,7 +358,10 @@ def evaluate_current_models(
     Raises
     ------
     InvalidParameterError
-        Empty ``logs`` or ``models``; a model that is not a CurrentModel.
+        Empty ``logs`` or ``models``; a model that is not a CurrentModel; a ``client``
+        that is neither ``None`` nor a ``distributed.Client``.
+    OptionalDependencyError
+        A ``client`` is given but dask.distributed is not installed.
     UnknownNameError
         An unknown variant.
     DataError
@@ -282,6 +373,17 @@ def evaluate_current_models(
         A ground with a single run is left out of the per-ground variant (it is listed in
         ``EvaluationResult.skipped``).
 
+    Notes
+    -----
+    On a cluster the scores equal the serial ones for models whose fit and predict do not
+    depend on the thread count. Torch models (and BLAS-backed fits) can differ in the last
+    bits when a worker runs another number of threads than this process: dask's nanny
+    sets ``OMP_NUM_THREADS=1`` (and ``MKL_NUM_THREADS``, ``OPENBLAS_NUM_THREADS``) before
+    it starts a worker process (``distributed.nanny.pre-spawn-environ``; a value already
+    set in the nanny's environment wins), so torch there uses one thread. Pin the count
+    on both sides (``VibrationCurrentEstimator(..., n_threads=1)``) for identical results
+    on one machine. ``fit_duration_s`` is measured on the worker.
+
     Examples
     --------
     Usage (needs data or fitted models, so not run as a doctest)::
@@ -289,6 +391,12 @@ def evaluate_current_models(
         from energy import LinearCurrentModel, read_borealtc
         res = evaluate_current_models(read_borealtc("borealtc"), {"linear": LinearCurrentModel()})
         print(res.to_markdown())
+
+    The same folds on a local dask cluster of two worker processes::
+
+        from distributed import Client, LocalCluster
+        with LocalCluster(n_workers=2, threads_per_worker=1) as cluster, Client(cluster) as client:
+            res = evaluate_current_models(logs, {"linear": LinearCurrentModel()}, client=client)
     """
     items = list(logs)
     if not items:
@@ -307,6 +415,10 @@ def evaluate_current_models(
     for v in chosen:
         if v not in EVALUATION_VARIANTS:
             raise UnknownNameError(f"variant {v!r} is unknown; expected names from {EVALUATION_VARIANTS!r}")
+    if client is not None and not isinstance(client, _distributed_client_type()):
+        raise InvalidParameterError(
+            f"client must be None (run the folds here, one after another) or a distributed.Client, got {client!r:.80}"
+        )
     if len(items) < 2:
         raise DataError(f"leave-one-run-out needs at least 2 runs, got {len(items)}")
     items = [_trim(log) for log in items]
@@ -326,26 +438,16 @@ def evaluate_current_models(
     if "ground_agnostic" in chosen:
         folds += [("ground_agnostic", i, [j for j in range(len(items)) if j != i]) for i in range(len(items))]
 
-    from tqdm.auto import tqdm
-
     scores: list[RunScore] = []
-    for variant, test, train in tqdm(folds, desc="evaluation folds", disable=not progress):
-        log = items[test]
-        train_logs = [items[j] for j in train]
-        for mname, proto in models.items():
-            t0 = time.perf_counter()
-            model = proto.clone().fit(train_logs)
-            fit_s = time.perf_counter() - t0
-            pred = model.predict(log)
-            truth = (log.current_left_a, log.current_right_a)
-            for k, side in enumerate(_SIDES):
-                e = compare_currents(log.time_s, truth[k], pred[:, k], section_s)
-                scores.append(RunScore(
-                    variant=variant, ground=str(log.meta.ground_label), run=names[test], model=mname, side=side,
-                    duration_s=log.duration_s, charge_true_mah=e.charge_true_mah,
-                    charge_predicted_mah=e.charge_predicted_mah, whole_run_error_pct=e.whole_run_error_pct,
-                    section_error_pct=e.section_error_pct, rmse_a=e.rmse_a, fit_duration_s=fit_s,
-                ))
+    if client is not None:
+        scores = _score_on_cluster(client, items, names, folds, models, section_s, progress)
+    else:
+        from tqdm.auto import tqdm
+
+        for variant, test, train in tqdm(folds, desc="evaluation folds", disable=not progress):
+            train_logs = [items[j] for j in train]
+            for mname, proto in models.items():
+                scores += _score_fold(variant, names[test], items[test], train_logs, mname, proto, section_s)
     summary: list[ScoreSummary] = []
     for variant in chosen:
         for g in grounds + [_ALL]:

@@ -1,5 +1,6 @@
 """Tests of energy.evaluation: leave-one-run-out per ground and ground-agnostic."""
 
+import dataclasses
 import json
 
 import numpy as np
@@ -112,3 +113,52 @@ def test_bad_inputs_raise(logs):
         evaluate_current_models(logs, {"x": object()})
     with pytest.raises(DataError, match="at least 2 runs"):
         evaluate_current_models(logs[:1], {"c": ConstantCurrentModel()})
+
+
+# ------------------------------------------------------------------ on a dask cluster
+
+_NO_DASK = "evaluation on a cluster needs the distributed extra (dask[distributed])"
+
+
+@pytest.fixture(scope="module")
+def dask_client():
+    """A client of an in-process cluster: one worker with two threads, no dashboard."""
+    distributed = pytest.importorskip("distributed", reason=_NO_DASK)
+    with distributed.LocalCluster(processes=False, n_workers=1, threads_per_worker=2, dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            yield client
+
+
+def _without_fit_time(rows):
+    """Every field but the measured fit time (which differs from run to run)."""
+    return [{k: v for k, v in dataclasses.asdict(r).items() if not k.startswith("fit_duration")} for r in rows]
+
+
+class _FailingFitModel(ConstantCurrentModel):
+    """Refuses every training set, to see a fold's exception reach the caller."""
+
+    def _fit(self, logs):
+        raise DataError(f"refusing to fit on {len(logs)} runs")
+
+
+def test_cluster_scores_equal_the_serial_scores_in_the_same_order(logs, result, dask_client):
+    on_cluster = evaluate_current_models(
+        logs, {"constant": ConstantCurrentModel(), "linear": LinearCurrentModel()}, client=dask_client, progress=True
+    )
+    assert all(np.isfinite(r.whole_run_error_pct) for r in result.runs)  # so == below compares no NaN
+    assert _without_fit_time(on_cluster.runs) == _without_fit_time(result.runs)
+    assert _without_fit_time(on_cluster.summary) == _without_fit_time(result.summary)
+    assert (on_cluster.models, on_cluster.variants, on_cluster.skipped) == (result.models, result.variants, result.skipped)
+    assert all(r.fit_duration_s >= 0.0 for r in on_cluster.runs)
+
+
+def test_a_client_that_is_not_a_dask_client_is_refused(logs, dask_client):
+    for bad in ("tcp://127.0.0.1:8786", dask_client.cluster):
+        with pytest.raises(InvalidParameterError, match=r"client must be None .* or a distributed\.Client, got"):
+            evaluate_current_models(logs, {"c": ConstantCurrentModel()}, client=bad)
+
+
+def test_an_exception_in_a_fold_reaches_the_caller(logs, dask_client):
+    models = {"constant": ConstantCurrentModel(), "failing": _FailingFitModel()}
+    with pytest.raises(DataError, match="refusing to fit on 2 runs"):
+        evaluate_current_models(logs, models, variants=("per_ground",), client=dask_client)
