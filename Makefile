@@ -1,9 +1,11 @@
 # Two entry points: `make demo` (set up, plan on the bundled map) and `make test`.
 PYTHON ?= python3
 VENV ?= .venv
-# torch is pinned to a CPU build so a fresh install never pulls a multi-GB CUDA wheel.
-# Elsewhere: make TORCH_SPEC="torch --index-url https://download.pytorch.org/whl/cpu"
-TORCH_SPEC ?= torch==2.13.0
+# torch is pinned to a CPU build ("+cpu"), so a fresh install never pulls a multi-GB CUDA
+# wheel: pip takes it from a local wheel directory or index when one holds it; PyPI has no
+# "+cpu" builds, so elsewhere the first attempt fails at once and the CPU index is used.
+TORCH_SPEC ?= torch==2.13.0+cpu
+TORCH_CPU_INDEX ?= https://download.pytorch.org/whl/cpu
 EXTRAS ?= geo,ros,distributed,test
 OUT ?= out
 
@@ -12,7 +14,8 @@ OUT ?= out
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(VENV)/bin/python -m pip install -q --upgrade pip
-	$(VENV)/bin/python -m pip install -q $(TORCH_SPEC)
+	$(VENV)/bin/python -m pip install -q "$(TORCH_SPEC)" || \
+	  $(VENV)/bin/python -m pip install -q "$(TORCH_SPEC)" --index-url $(TORCH_CPU_INDEX)
 	$(VENV)/bin/python -m pip install -q -e '.[$(EXTRAS)]'
 	touch $@
 
