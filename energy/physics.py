@@ -493,22 +493,33 @@ class PhysicsEnergyModel:
         return float(_trapezoid(res.total_power_w, t))
 
     # --------------------------------------------------------------- planner
-    def energy_per_metre_j(self, speed_mps: float, grade: Any, ground: GroundParams) -> np.ndarray:
+    def energy_per_metre_j(self, speed_mps: float, grade: Any, ground: GroundParams,
+                           *, infeasible: str = "inf") -> np.ndarray:
         """Energy per metre (J/m) of steady straight driving on constant grades.
 
         Includes the electronics (sensor and stable control power divided by the speed)
         when those effects are on. Battery-side, so >= 0 for every grade when
-        ``regen_efficiency`` is 0. On grades the drive cannot climb, torque saturation
-        caps the power (see :meth:`power`'s ``saturated``); planners should exclude such
-        grades with their slope limit.
+        ``regen_efficiency`` is 0.
+
+        A grade is *infeasible* at ``speed_mps`` when the drive cannot hold that speed on
+        it: a side saturates (torque, power or speed limit, with the saturation effects on)
+        or demands more than the traction limit (with a slip effect on) — uphill beyond the
+        climbing limit, or downhill beyond what the motors can hold back (see
+        :meth:`max_feasible_grade`). Planners need such grades to be impassable, not
+        cheap, so by default they cost ``+inf`` (:class:`planner.EnergyCost` then refuses
+        them in that direction only).
 
         Parameters
         ----------
         speed_mps : float
-            Driving speed (> 0), m/s.
+            Driving speed, m/s: > 0 and at most ``robot.max_speed_mps``.
         grade : array_like
             ``tan(beta) = dz/dl`` along the direction of motion, positive uphill.
         ground : GroundParams
+        infeasible : {"inf", "capped"}
+            ``"inf"`` (default) for infeasible grades; ``"capped"`` returns the saturated
+            (capped) power instead — what the model says is drawn while the robot, driven
+            there anyway, falls short of the commanded speed.
 
         Returns
         -------
@@ -518,7 +529,8 @@ class PhysicsEnergyModel:
         Raises
         ------
         InvalidParameterError
-            Non-positive or non-finite speed, NaN grades, ``ground`` not a GroundParams.
+            Non-positive or non-finite speed, a speed above ``robot.max_speed_mps``, NaN
+            grades, ``ground`` not a GroundParams, an unknown ``infeasible``.
 
         Examples
         --------
@@ -528,13 +540,23 @@ class PhysicsEnergyModel:
         0.0
         """
         speed = self._positive_scalar("speed_mps", speed_mps)
+        if speed > self.robot.max_speed_mps:
+            raise InvalidParameterError(
+                f"speed_mps {speed_mps!r} exceeds the robot's max_speed_mps "
+                f"{self.robot.max_speed_mps!r} ({self.robot.name!r})"
+            )
+        if infeasible not in ("inf", "capped"):
+            raise UnknownNameError(f"infeasible must be 'inf' or 'capped', got {infeasible!r}")
         g = _as_finite("grade", grade)
         self._single_ground(ground)
         flat = g.reshape(-1)
         if flat.size == 0:
             return np.zeros(g.shape)
         res = self.power(speed, 0.0, ground, slope_rad=np.arctan(flat))
-        return (res.total_power_w / speed).reshape(g.shape)
+        e = res.total_power_w / speed
+        if infeasible == "inf":
+            e = np.where(res.saturated | res.traction_exceeded, np.inf, e)
+        return e.reshape(g.shape)
 
     def max_feasible_grade(self, speed_mps: float, ground: GroundParams,
                            resolution: float = 1e-3) -> float:

@@ -32,7 +32,10 @@ say nothing reliable about grades. The grade-dependent part comes from the physi
 on ``physics_ground`` (the slope term ``m g sin(beta)`` and the normal-force change of
 rolling resistance hardly depend on the ground). Downhill the bracket is negative; the sum
 is floored at the electronics' energy per metre (the robot never draws less than its
-electronics; with ``regen_efficiency = 0`` the physics model floors the same way).
+electronics; with ``regen_efficiency = 0`` the physics model floors the same way). Grades
+the drive cannot hold at the planning speed on ``physics_ground`` (climbing, traction or
+braking limit) are impassable in the tables (``inf``, in that direction only); predictions
+of a driven profile price them at the saturated power instead.
 
 **Caching.** A model's table depends only on the model object (an update adds a *new*
 model id; models are never changed in place), so tables are cached per model id and
@@ -400,7 +403,7 @@ class LearnedEnergyModel:
             grade = terrain["grad_x"][rows, cols] * np.cos(heading) + terrain["grad_y"][rows, cols] * np.sin(heading)
             grade = np.where(v < 0, -grade, grade)
             metres = np.abs(v) * np.gradient(t)
-            energy += float(np.sum(self._grade_delta_j(speed, grade) * metres))
+            energy += float(np.sum(self._grade_delta_j(speed, grade, infeasible="capped") * metres))
         return energy
 
     def predict_route_energy_j(
@@ -443,9 +446,13 @@ class LearnedEnergyModel:
     def _electronics_per_metre_j(self, speed: float) -> float:
         return float(self._electronics.energy_per_metre_j(speed, 0.0, self.physics_ground))
 
-    def _grade_delta_j(self, speed: float, grades: np.ndarray) -> np.ndarray:
-        return (np.asarray(self._physics.energy_per_metre_j(speed, grades, self.physics_ground), dtype=np.float64)
-                - float(self._physics.energy_per_metre_j(speed, 0.0, self.physics_ground)))
+    def _grade_delta_j(self, speed: float, grades: np.ndarray, infeasible: str = "inf") -> np.ndarray:
+        """Physics slope term (J/m): ``inf`` on grades the drive cannot hold at ``speed`` for
+        planning tables; ``infeasible="capped"`` prices them at the saturated power (what
+        driving there anyway draws), for predictions of routes being driven."""
+        phys = self._physics.energy_per_metre_j
+        return (np.asarray(phys(speed, grades, self.physics_ground, infeasible=infeasible), dtype=np.float64)
+                - float(phys(speed, 0.0, self.physics_ground, infeasible="capped")))
 
     def energy_per_metre_j(self, speed_mps: float, grade: Any, ground: int) -> np.ndarray:
         """J per metre travelled at ``speed_mps`` on ``grade`` for the model with id ``ground``.

@@ -203,6 +203,36 @@ def test_undrivable_grade_blocks_one_direction_only():
     assert across == pytest.approx(50.0 * 16.0, rel=1e-9)
 
 
+def test_physics_model_refuses_grades_beyond_the_climbing_limit_so_routes_climb_obliquely():
+    """Husky on snow climbs at most ~10 deg at 0.5 m/s (traction); on a 12 deg ramp the fall
+    line is impassable uphill but not downhill, and the planner climbs at an angle to it."""
+    from planner import plan_route
+
+    model = PhysicsEnergyModel(robot_preset("husky"))
+    snow = ground_preset("snow")
+    limit = model.max_feasible_grade(0.5, snow)
+    grade = math.tan(math.radians(12.0))
+    assert limit < grade  # the premise: steeper than the climbing limit, under the 20 deg slope limit
+    x = np.arange(40) + 0.5
+    tmap = TerrainMap(np.broadcast_to(grade * x, (60, 40)), 1.0, ground=np.zeros((60, 40), int),
+                      ground_names={0: "snow"})
+    cost = EnergyCost.from_model(tmap, model, {"snow": snow}, speed_mps=0.5)
+    up, down = cost.segment_energy_j([[5.0, 30.0], [35.0, 30.0]], [[35.0, 30.0], [5.0, 30.0]])
+    assert np.isinf(up) and np.isfinite(down)
+    route = plan_route(tmap, (5.0, 30.0), (35.0, 30.0), cost=cost, planner="lattice", compare=False)
+    assert route.status == "exact"
+    seg = np.diff(route.waypoints_m, axis=0)
+    along = grade * seg[:, 0] / np.hypot(seg[:, 0], seg[:, 1])  # grade met along each segment
+    assert np.all(along <= limit + 1e-9)
+    assert route.length_m >= 30.0 * grade / limit * (1 - 1e-6)  # no shorter climb keeps within the limit
+
+
+def test_speed_above_the_robot_maximum_is_refused():
+    model = PhysicsEnergyModel(robot_preset("husky"))
+    with pytest.raises(InvalidParameterError, match=r"speed_mps 5\.0 exceeds the robot's max_speed_mps 1\.0"):
+        EnergyCost.from_model(_flat(), model, {"g": ground_preset("asphalt")}, speed_mps=5.0)
+
+
 # --------------------------------------------------------------------------- turns and paths
 def test_turn_energies_and_path_energy():
     cost = EnergyCost.from_model(_flat(), LinearModel(a=50.0, c=30.0), {"g": 1.0}, speed_mps=0.5)
