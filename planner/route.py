@@ -156,15 +156,19 @@ class Route:
 
     @property
     def energy_saved_pct(self) -> float:
-        """Energy saved against the shortest-distance route, in percent (negative: it costs more)."""
-        if not (self.found and math.isfinite(self.shortest_energy_j) and self.shortest_energy_j > 0):
+        """Energy saved against the shortest-distance route, in percent (negative: it costs more).
+
+        NaN unless the route reaches the goal (``exact``): a route that stops short would
+        look cheaper than one that arrives."""
+        if not (self.status == "exact" and math.isfinite(self.shortest_energy_j) and self.shortest_energy_j > 0):
             return _NAN
         return 100.0 * (self.shortest_energy_j - self.energy_j) / self.shortest_energy_j
 
     @property
     def optimality_ratio(self) -> float:
-        """Drive energy divided by the lattice optimum (< 1: better than the 16-connected lattice)."""
-        if not (self.found and math.isfinite(self.lattice_energy_j) and self.lattice_energy_j > 0):
+        """Drive energy divided by the lattice optimum (< 1: better than the 16-connected lattice);
+        NaN unless the route reaches the goal (``exact``)."""
+        if not (self.status == "exact" and math.isfinite(self.lattice_energy_j) and self.lattice_energy_j > 0):
             return _NAN
         return self.drive_energy_j / self.lattice_energy_j
 

@@ -51,6 +51,22 @@ def test_plan_on_a_map_file_goes_around_the_wall(tmp_path, capsys, wall_map):
     capsys.readouterr()
 
 
+def test_plan_stopped_short_by_its_work_bound_is_not_compared_and_fails(tmp_path, capsys, wall_map):
+    path = wall_map.save(tmp_path / "wall.npz")
+    args = ["plan", "--map", str(path), "--start", "5", "5", "--goal", "35", "5", "--planner", "RRTstar",
+            "--max-evaluations", "30", "--seed", "1", "--out", str(tmp_path / "out")]
+    rc = main(args)
+    out = capsys.readouterr().out
+    data = json.loads((tmp_path / "out" / "route.json").read_text())
+    assert rc == 1 and data["status"] == "approximate" and data["max_evaluations"] == 30
+    assert "short of the goal" in out and "energy saved" not in out
+    assert data["energy_saved_pct"] is None and data["optimality_ratio"] is None
+    main(args)  # the same work bound and seed give the same route
+    again = json.loads((tmp_path / "out" / "route.json").read_text())
+    assert again["routes"]["min_energy"]["waypoints_m"] == data["routes"]["min_energy"]["waypoints_m"]
+    capsys.readouterr()
+
+
 @pytest.mark.parametrize(
     ("start", "message"),
     [(("20.5", "10"), "obstacle"), (("-5", "10"), "outside")],
