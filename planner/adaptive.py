@@ -67,7 +67,7 @@ from energy import (
 from terrain import CellModelRegistry, InvalidParameterError, TerrainMap, UpdatePolicy
 from terrain.atomic import atomic_path, write_json_atomic
 
-from .learned_cost import LearnedEnergyModel
+from .learned_cost import LearnedEnergyModel, predict_currents
 from .mission import simulate_mission
 from .ompl_planner import plan_route
 from .route import Route, evaluate_route
@@ -417,7 +417,7 @@ def validation_error(model: Any, logs: list[InteractionLog]) -> float:
     pred = meas = 0.0
     for log in logs:
         dt = np.gradient(log.time_s)
-        p = np.abs(np.asarray(model.predict(log))).sum(axis=1)
+        p = np.abs(predict_currents(model, log, f"model {model!r:.60}")).sum(axis=1)
         m = np.abs(log.current_left_a) + np.abs(log.current_right_a)
         pred += float(np.sum(p * dt))
         meas += float(np.sum(m * dt))
@@ -490,7 +490,7 @@ def _predicted_currents(registry: CellModelRegistry, log: InteractionLog, rows: 
     out = np.empty((len(log), 2))
     for mid in np.unique(ids).tolist():
         sel = ids == mid
-        out[sel] = np.asarray(registry.model(mid).predict(log))[sel]
+        out[sel] = predict_currents(registry.model(mid), log, f"model {mid} ({registry.model_record(mid).name!r})")[sel]
     return out
 
 

@@ -101,6 +101,30 @@ def _grid(name: str, values: Sequence[float]) -> np.ndarray:
     return arr
 
 
+def predict_currents(model: Any, log: InteractionLog, label: str) -> np.ndarray:
+    """``model.predict(log)`` checked: finite ``(len(log), 2)`` left/right currents (A).
+
+    Every place the planner asks a current model for currents goes through here, so a model
+    with another feature or output layout fails with a message naming it rather than with a
+    numpy error or, worse, silently (an ``(N, 3)`` output is not cut to two columns).
+
+    Raises
+    ------
+    InvalidParameterError
+        The prediction is not a finite ``(len(log), 2)`` array; ``label`` names the model.
+    """
+    try:
+        pred = np.asarray(model.predict(log), dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(f"{label} could not predict currents for a {len(log)}-sample log: {exc}") from exc
+    if pred.shape != (len(log), 2) or not np.all(np.isfinite(pred)):
+        what = "non-finite values" if pred.shape == (len(log), 2) else f"shape {pred.shape!r}"
+        raise InvalidParameterError(
+            f"{label} must predict finite (N, 2) left/right currents for a log of N={len(log)} samples, got {what}"
+        )
+    return pred
+
+
 @dataclass(frozen=True, eq=False)
 class LearnedModelTable:
     """Flat-ground energy tables of one current model (see :mod:`planner.learned_cost`).
@@ -307,12 +331,7 @@ class LearnedEnergyModel:
             return cached[1]
         t0 = time.perf_counter()
         log, keep = self._synthetic_log(mid)
-        pred = np.asarray(model.predict(log), dtype=np.float64)
-        if pred.shape != (len(log), 2) or not np.all(np.isfinite(pred)):
-            raise InvalidParameterError(
-                f"model {mid} ({self.registry.model_record(mid).name!r}) must predict finite (N, 2) currents, "
-                f"got shape {pred.shape!r}"
-            )
+        pred = predict_currents(model, log, self._label(mid))
         plog = InteractionLog(log.time_s, log.v_mps, log.omega_radps, pred[:, 0], pred[:, 1], log.accel_time_s,
                               log.accel_z_mps2, meta=log.meta)
         drive_w = log_battery_power_w(plog, self.robot, current_convention=self.current_convention, electronics=False)
@@ -392,7 +411,7 @@ class LearnedEnergyModel:
             at, accel = self._accel_signal(int(mid), float(t_rel[-1]))
             log = InteractionLog(t_rel, v, w, zeros, zeros, at, accel,
                                  meta=LogMeta(robot=self.robot.name, source=f"profile prediction, model {mid}"))
-            pred = np.asarray(self.registry.model(int(mid)).predict(log), dtype=np.float64)
+            pred = predict_currents(self.registry.model(int(mid)), log, self._label(int(mid)))
             plog = InteractionLog(t_rel, v, w, pred[:, 0], pred[:, 1], at, accel, meta=log.meta)
             sel = ids == mid
             power[sel] = log_battery_power_w(plog, self.robot, current_convention=self.current_convention)[sel]
@@ -445,6 +464,9 @@ class LearnedEnergyModel:
     # ------------------------------------------------------------------ protocol
     def _electronics_per_metre_j(self, speed: float) -> float:
         return float(self._electronics.energy_per_metre_j(speed, 0.0, self.physics_ground))
+
+    def _label(self, model_id: int) -> str:
+        return f"model {model_id} ({self.registry.model_record(model_id).name!r})"
 
     def _grade_delta_j(self, speed: float, grades: np.ndarray, infeasible: str = "inf") -> np.ndarray:
         """Physics slope term (J/m): ``inf`` on grades the drive cannot hold at ``speed`` for

@@ -167,3 +167,40 @@ def test_route_prediction_prices_the_stops_the_edge_costs_miss():
     assert abs(predicted / actual - 1.0) < 0.03
     assert abs(route.energy_j / actual - 1.0) > 2 * abs(predicted / actual - 1.0)
     assert predicted > route.energy_j  # stopping and starting costs energy
+
+
+class _BadLayout(ConstModel):
+    """A model whose output layout is not (N, 2): three columns, one column, NaN or too short."""
+
+    def __init__(self, kind: str) -> None:
+        super().__init__(3.0, 3.0)
+        self.kind = kind
+
+    def predict(self, log):
+        good = super().predict(log)
+        return {
+            "three columns": np.column_stack([good, good[:, :1]]),
+            "one column": good[:, 0],
+            "nan": np.where(np.arange(len(log))[:, None] == 3, np.nan, good),
+            "too short": good[:-1],
+        }[self.kind]
+
+
+@pytest.mark.parametrize("kind", ["three columns", "one column", "nan", "too short"])
+def test_models_whose_output_layout_does_not_match_are_refused_by_name(kind):
+    from planner import drive_profile
+    from planner.adaptive import validation_error
+
+    robot, tmap, reg, lem, _ = _setup()
+    bad = reg.add_model(_BadLayout(kind), name="odd layout")
+    reg.assign((np.array([3]), np.array([2])), bad)
+    with pytest.raises(InvalidParameterError, match=r"model \d+ \('odd layout'\) must predict finite \(N, 2\)"):
+        lem.table(bad)
+    profile = drive_profile([[1.5, 3.5], [12.5, 3.5]], 0.5, turn_rate_radps=lem.turn_rate_radps, dt_s=0.01)
+    with pytest.raises(InvalidParameterError, match="odd layout"):
+        lem.profile_energy_j(tmap, profile)
+    t = np.arange(0.0, 5.0, 0.1)
+    log = InteractionLog(t, np.full(t.size, 0.5), np.zeros(t.size), np.ones(t.size), np.ones(t.size), t,
+                         np.full(t.size, 9.81), meta=LogMeta())
+    with pytest.raises(InvalidParameterError, match=r"must predict finite \(N, 2\)"):
+        validation_error(reg.model(bad), [log])
