@@ -239,6 +239,9 @@ class AdaptiveResult:
     update_wall_time_s : float
         Wall-clock time spent fitting/validating/refreshing for updates (s).
     final_soc : float
+    skipped_updates : tuple of str
+        Updates not attempted because the excitation manoeuvre and the remaining route did not
+        both fit above the reserve, one sentence each.
     """
 
     status: str
@@ -259,6 +262,7 @@ class AdaptiveResult:
     excitation_energy_j: float
     update_wall_time_s: float
     final_soc: float
+    skipped_updates: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.status not in ADAPTIVE_STATUSES:
@@ -340,6 +344,7 @@ class AdaptiveResult:
             "remaining_error_after_update_pct": num(self.remaining_error_after_update_pct),
             "legs": [rec(r) for r in self.legs],
             "updates": [rec(r) for r in self.updates],
+            "skipped_updates": list(self.skipped_updates),
             "replans": [rec(r) for r in self.replans],
             "series": {name: [num(v) for v in getattr(self, name)[::k].tolist()]
                        for name in ("time_s", "x_m", "y_m", "soc", "energy_j", "predicted_energy_j")},
@@ -498,6 +503,21 @@ def _log_energy_j(log: InteractionLog, robot: RobotParams) -> float:
     return float(np.trapezoid(log_battery_power_w(log, robot), log.time_s))
 
 
+def _time_to_spend_j(logs: list[InteractionLog], robot: RobotParams, energy_j: float) -> float:
+    """Seconds into the logs, played one after another, when their battery energy reaches ``energy_j``."""
+    from scipy.integrate import cumulative_trapezoid
+
+    elapsed = 0.0
+    for log in logs:
+        t = log.time_s - log.time_s[0]
+        cum = cumulative_trapezoid(log_battery_power_w(log, robot), t, initial=0.0)  # non-decreasing: power >= 0
+        if cum[-1] >= energy_j:
+            return elapsed + float(np.interp(energy_j, cum, t))
+        energy_j -= float(cum[-1])
+        elapsed += float(t[-1])
+    return elapsed
+
+
 # ----------------------------------------------------------------------- the loop
 def run_adaptive_mission(
     terrain: TerrainMap,
@@ -610,6 +630,7 @@ def run_adaptive_mission(
     clock = e_total = p_total = 0.0
     driven_j = excitation_j = update_wall = 0.0
     validated: set[tuple[int, int]] = set()  # (ground class, model id) pairs validated on excitation data
+    skipped: list[str] = []  # updates not attempted for lack of energy
 
     def push(t: np.ndarray, x: np.ndarray, y: np.ndarray, s: np.ndarray, e: np.ndarray, p: np.ndarray) -> None:
         for key, arr in zip(("t", "x", "y", "soc", "e", "p"), (t, x, y, s, e, p)):
@@ -679,6 +700,15 @@ def run_adaptive_mission(
                 # cells' error comes from transients (pivots, stops) they over-represent
                 registry.reset_evidence(region)
                 continue
+            # Afford the manoeuvre? Estimated at the last leg's mean battery power, it and the
+            # remaining route as predicted now must both fit above the reserve; else skip it.
+            x_t_est = cfg.excitation_duration_s + cfg.turn_excitation_duration_s
+            x_e_est = float(budget.actual_energy_j) / max(float(mr.duration_s), 1e-9) * x_t_est
+            if x_e_est > (soc - battery.reserve_soc) * capacity_j - sum(pending):
+                skipped.append(f"after leg {leg_index}: no {gname!r} update, its ~{x_e_est / 3600:.2f} Wh "
+                               "manoeuvre and the remaining route do not both fit above the reserve")
+                registry.reset_evidence(region)
+                continue
             seed = cfg.seed + 10_000 + 10 * len(updates)
             straight = excitation_commands(cfg.excitation_duration_s, 1.0 / truth.current_rate_hz,
                                            speed_levels_mps=cfg.excitation_speeds_mps, omega_levels_radps=(0.0,),
@@ -688,6 +718,22 @@ def run_adaptive_mission(
                                        omega_sign="both", hold_s=(2.0, 3.0), rest_s=0.0, seed=seed + 1)
             xlogs = [truth.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground=gname, seed=seed + 2 + i)
                      for i, p in enumerate((straight, turn))]
+            x_e = sum(_log_energy_j(xl, robot) for xl in xlogs)
+            x_t = sum(float(xl.time_s[-1] - xl.time_s[0]) for xl in xlogs)
+            avail_j = (soc - battery.reserve_soc) * capacity_j
+            if x_e > avail_j:  # it costs more than estimated: it stops at the reserve, nothing is learned
+                x_t = _time_to_spend_j(xlogs, robot, avail_j)
+                excitation_j += avail_j
+                e_total += avail_j
+                clock += x_t
+                soc = battery.reserve_soc
+                push(np.array([clock]), pos[:1], pos[1:], np.array([soc]), np.array([e_total]), np.array([p_total]))
+                update_wall += time.perf_counter() - w0
+                status = "reserve_violated"
+                reason = (f"the battery reached its {battery.min_reserve_pct:g} % reserve {x_t:.1f} s into the "
+                          f"{gname!r} excitation manoeuvre at {tuple(pos.round(2).tolist())!r} m after leg "
+                          f"{leg_index}; no update was made from the incomplete data")
+                break
             train, held = [], []
             for xl in xlogs:
                 cut = xl.time_s[0] + (1.0 - cfg.validation_fraction) * (xl.time_s[-1] - xl.time_s[0])
@@ -712,8 +758,6 @@ def run_adaptive_mission(
             else:
                 validated.add((gid, old_id))
                 registry.reset_evidence(region)
-            x_e = sum(_log_energy_j(xl, robot) for xl in xlogs)
-            x_t = sum(float(xl.time_s[-1] - xl.time_s[0]) for xl in xlogs)
             excitation_j += x_e
             soc -= x_e / capacity_j
             clock += x_t
@@ -724,6 +768,8 @@ def run_adaptive_mission(
             updates.append(UpdateRecord(leg_index, gname, region.cell_count, int(np.count_nonzero(scope)),
                                         100.0 * region.relative_error, bool(decision.accepted), decision.model_id,
                                         err_new, err_old, x_e, x_t, wall))
+        if status == "reserve_violated":
+            break
         if changed:
             t1 = time.perf_counter()
             builds0 = lem.table_builds
@@ -753,4 +799,5 @@ def run_adaptive_mission(
         updates=tuple(updates), replans=tuple(replans), time_s=cat["t"], x_m=cat["x"], y_m=cat["y"],
         soc=cat["soc"], energy_j=cat["e"], predicted_energy_j=cat["p"], driven_energy_j=driven_j,
         excitation_energy_j=excitation_j, update_wall_time_s=update_wall, final_soc=soc,
+        skipped_updates=tuple(skipped),
     )

@@ -499,6 +499,8 @@ def run_mission(args: argparse.Namespace) -> int:
     print(f"excitation manoeuvres:      {result.excitation_energy_j / 3600:8.2f} Wh")
     print(f"prediction error before / after updates: {result.error_before_update_pct:.1f} % / {result.error_after_update_pct:.1f} %")
     print(f"updates accepted: {result.accepted_updates} of {len(result.updates)}; route changes {result.route_changes}")
+    for line in result.skipped_updates:
+        print(f"skipped update {line}")
     print(f"final state of charge {budget['final_soc_pct']:.1f} % (margin {budget['reserve_margin_pct']:+.1f} points "
           f"above the reserve); loop computing {elapsed:.1f} s")
     print(f"wrote {json_path} and {png_path}")

@@ -1,5 +1,7 @@
 """Tests of planner.adaptive: flag -> update -> replan, rejection of worse models, budget stop."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -98,3 +100,44 @@ def test_bad_input():
                              physics_ground=ground_preset("asphalt"))
     with pytest.raises(InvalidParameterError, match="update_scope"):
         AdaptiveSettings(update_scope="everywhere")
+
+
+def _usable_wh_battery(usable_wh: float) -> Battery:
+    """A 24 V battery with ``usable_wh`` above its 20 % reserve."""
+    return Battery(capacity_ah=usable_wh / 24.0 / 0.8, voltage_v=24.0, min_reserve_pct=20.0)
+
+
+def test_an_update_the_battery_cannot_afford_is_skipped_and_the_reserve_kept():
+    # 2 Wh above the reserve: the route (~1.9 Wh driven) fits, the ~1 Wh sand manoeuvre does not
+    robot, truth, tmap, prior = _world()
+    reg = CellModelRegistry.from_terrain(tmap, prior)
+    res = run_adaptive_mission(tmap, reg, robot, _usable_wh_battery(2.0), truth, (2.5, 8.0), (37.5, 8.0),
+                               physics_ground=ground_preset("asphalt"), settings=SETTINGS)
+    assert res.status == "completed" and res.updates == ()
+    assert res.skipped_updates and all("'sand'" in s and "reserve" in s for s in res.skipped_updates)
+    assert res.excitation_energy_j == 0.0 and res.final_soc >= 0.2
+    assert res.to_json_dict()["skipped_updates"] == list(res.skipped_updates)
+
+
+def test_a_manoeuvre_that_crosses_the_reserve_stops_the_mission_where_it_stands():
+    robot, truth, tmap, prior = _world()
+
+    class HungryTruth(TruthSimulator):
+        """Excitation manoeuvres (simulate_commands) draw five times the current."""
+
+        def simulate_commands(self, *args, **kwargs):
+            log = super().simulate_commands(*args, **kwargs)
+            return dataclasses.replace(log, current_left_a=5.0 * log.current_left_a,
+                                       current_right_a=5.0 * log.current_right_a)
+
+    hungry = HungryTruth(robot, truth.grounds, seed=0)
+    reg = CellModelRegistry.from_terrain(tmap, prior)
+    res = run_adaptive_mission(tmap, reg, robot, _usable_wh_battery(2.8), hungry, (2.5, 8.0), (37.5, 8.0),
+                               physics_ground=ground_preset("asphalt"), settings=SETTINGS)
+    assert res.status == "reserve_violated"
+    assert "excitation manoeuvre" in res.reason and "'sand'" in res.reason and "no update" in res.reason
+    assert f"{res.final_xy_m!r}" in res.reason  # where it stands (a leg end: the manoeuvre is made in place)
+    # it stopped at the reserve: nothing below it is spent, and nothing is learned from the cut data
+    assert res.final_soc == pytest.approx(0.2) and res.soc.min() >= 0.2 - 1e-12
+    assert res.updates == () and reg.model_ids == (0,)
+    assert res.excitation_energy_j > 0
