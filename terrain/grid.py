@@ -263,6 +263,11 @@ class TerrainMap:
                     raise InvalidParameterError(
                         f"ground layer must hold integer class ids, got dtype {arr.dtype}"
                     )
+            if arr.size and (arr.min() < UNKNOWN_GROUND or arr.max() > np.iinfo(np.int16).max):
+                raise InvalidParameterError(
+                    f"ground layer holds class ids in [{arr.min()!r}, {arr.max()!r}]; expected ids in "
+                    f"[0, {np.iinfo(np.int16).max}] or {UNKNOWN_GROUND} for unknown ground"
+                )
             arr = arr.astype(np.int16)
             self._check_ground(arr)
         elif name == "obstacle":

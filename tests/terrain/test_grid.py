@@ -74,6 +74,14 @@ def test_unknown_ground_class_id_raises():
         TerrainMap(np.zeros((2, 2)), 1.0, ground=ground, ground_names={0: "grass", 1: "sand"})
 
 
+@pytest.mark.parametrize("bad_id", [65535, 65536, 40000, -2])
+def test_ground_ids_outside_the_int16_range_raise_instead_of_wrapping(bad_id):
+    # 65535 would wrap to -1 (unknown) and 65536 to 0 (a named class) in an int16 layer
+    ground = np.array([[0, 0], [0, bad_id]])
+    with pytest.raises(InvalidParameterError, match=rf"class ids in \[{min(0, bad_id)}, {max(0, bad_id)}\]"):
+        TerrainMap(np.zeros((2, 2)), 1.0, ground=ground, ground_names={0: "grass"})
+
+
 def test_ground_must_hold_integers():
     with pytest.raises(InvalidParameterError, match="integer class ids"):
         TerrainMap(np.zeros((2, 2)), 1.0, ground=np.full((2, 2), 0.5), ground_names={0: "grass"})
