@@ -265,7 +265,7 @@ class TerrainMap:
                     )
             if arr.size and (arr.min() < UNKNOWN_GROUND or arr.max() > np.iinfo(np.int16).max):
                 raise InvalidParameterError(
-                    f"ground layer holds class ids in [{arr.min()!r}, {arr.max()!r}]; expected ids in "
+                    f"ground layer holds class ids in [{int(arr.min())}, {int(arr.max())}]; expected ids in "
                     f"[0, {np.iinfo(np.int16).max}] or {UNKNOWN_GROUND} for unknown ground"
                 )
             arr = arr.astype(np.int16)
