@@ -8,6 +8,7 @@ from .errors import (
     BlockedPositionError,
     DataError,
     DataRepairWarning,
+    RecoveryWarning,
     FileFormatError,
     FormatVersionError,
     GridMismatchError,
@@ -97,4 +98,5 @@ __all__ = [
     "OptionalDependencyError",
     "TerrawattWarning",
     "DataRepairWarning",
+    "RecoveryWarning",
 ]

@@ -27,6 +27,7 @@ __all__ = [
     "OptionalDependencyError",
     "TerrawattWarning",
     "DataRepairWarning",
+    "RecoveryWarning",
 ]
 
 
@@ -89,3 +90,7 @@ class TerrawattWarning(UserWarning):
 
 class DataRepairWarning(TerrawattWarning):
     """Data was repaired because the caller asked for it (e.g. duplicates dropped)."""
+
+
+class RecoveryWarning(TerrawattWarning):
+    """A file left by an interrupted write was recovered (e.g. a registry moved back)."""

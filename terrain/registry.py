@@ -45,6 +45,7 @@ import os
 import re
 import shutil
 import tempfile
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -61,6 +62,7 @@ from .errors import (
     GridMismatchError,
     InvalidParameterError,
     OutOfBoundsError,
+    RecoveryWarning,
     UnknownNameError,
 )
 from .formats import check_format_version, read_versioned_npz
@@ -1312,6 +1314,11 @@ class CellModelRegistry:
         terrain : TerrainMap, optional
             When given, the registry must be on its grid (see :meth:`check_grid`).
 
+        A :meth:`save` interrupted between moving the old registry aside and moving the new
+        one in (a crash in that instant) leaves no directory under the name but the previous
+        registry in a hidden ``.NAME.*.old`` folder beside it; ``load`` then moves that one
+        back, with a :class:`~terrain.errors.RecoveryWarning`, and reads it.
+
         Raises
         ------
         FileFormatError
@@ -1325,6 +1332,8 @@ class CellModelRegistry:
             ``terrain`` is on another grid.
         """
         root = Path(directory)
+        if not root.is_dir():
+            _recover_interrupted_save(root)
         if not root.is_dir():
             raise FileFormatError(f"registry directory {str(root)!r} does not exist")
         arrays = _read_npz(root / _REGISTRY_FILE)
@@ -1475,6 +1484,24 @@ def _replaceable(target: Path) -> bool:
     if not target.is_dir():
         return False
     return (target / _REGISTRY_FILE).is_file() or not any(target.iterdir())
+
+
+def _recover_interrupted_save(target: Path) -> None:
+    """Move back the registry a crashed :meth:`CellModelRegistry.save` left aside (see ``load``)."""
+    holders = sorted(target.parent.glob(f".{target.name}.*.old"), key=lambda p: p.stat().st_mtime, reverse=True)
+    for holder in holders:
+        old = holder / target.name
+        if (old / _REGISTRY_FILE).is_file():
+            os.rename(old, target)
+            _fsync_dir(target.parent)
+            shutil.rmtree(holder, ignore_errors=True)
+            warnings.warn(
+                f"registry {str(target)!r} was missing after an interrupted save; restored the previous "
+                f"version from {str(holder)!r}",
+                RecoveryWarning,
+                stacklevel=3,
+            )
+            return
 
 
 def _fsync_dir(path: Path) -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import stat
 from pathlib import Path
 
@@ -545,6 +546,26 @@ def test_save_replaces_previous_registry_and_keeps_it_on_failure(tmp_path: Path)
     with pytest.raises(InvalidParameterError, match="wrote nothing"):
         reg.save(target, lambda model, path: None)
     assert sorted(os.listdir(tmp_path)) == ["reg"]
+
+
+def test_load_recovers_the_registry_a_crashed_save_left_aside(tmp_path: Path) -> None:
+    # a save killed between its two renames: the previous registry sits in save's hidden
+    # holder (.reg.*.old/reg) and nothing is under the name; load moves it back
+    import tempfile
+
+    from terrain import RecoveryWarning
+
+    reg, _ = _populated(tmp_path)
+    target = reg.save(tmp_path / "reg", save_gain)
+    holder = Path(tempfile.mkdtemp(prefix=".reg.", suffix=".old", dir=tmp_path))
+    os.rename(target, holder / "reg")
+    with pytest.warns(RecoveryWarning, match="interrupted save"):
+        back = CellModelRegistry.load(target, load_gain)
+    np.testing.assert_array_equal(back.model_id_map, reg.model_id_map)
+    assert sorted(os.listdir(tmp_path)) == ["reg"]  # the holder is gone
+    shutil.rmtree(target)
+    with pytest.raises(FileFormatError, match="does not exist"):  # nothing to recover
+        CellModelRegistry.load(target, load_gain)
 
 
 def test_save_refuses_to_replace_a_foreign_directory(tmp_path: Path) -> None:
