@@ -209,7 +209,7 @@ def test_nan_coordinates_raise(point):
 
 def test_unknown_planner_name_lists_valid_names():
     tmap = _wall_map()
-    with pytest.raises(UnknownNameError, match="'PRM'.*|.*BITstar.*FMT.*lattice"):
+    with pytest.raises(UnknownNameError, match=r"planner must be one of \[.*'RRTstar'.*'BITstar'.*'FMT'.*'lattice'\], got 'PRM'"):
         plan_route(tmap, (5.0, 10.0), (75.0, 10.0), cost=_cost(tmap), planner="PRM")
     with pytest.raises(UnknownNameError, match="RRTstar"):
         plan_route(tmap, (5.0, 10.0), (75.0, 10.0), cost=_cost(tmap), planner="rrtstar")
