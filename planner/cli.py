@@ -13,8 +13,11 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from energy import GROUND_PRESETS, PhysicsEnergyModel, ground_preset, robot_preset
 from terrain import (
+    UNKNOWN_GROUND,
     InvalidParameterError,
     OptionalDependencyError,
     TerrainMap,
@@ -38,14 +41,22 @@ def _finite_or_none(x: float) -> float | None:
     return x if math.isfinite(x) else None
 
 
-def load_map(path: str | os.PathLike[str]) -> TerrainMap:
-    """Load a ``.npz`` map, or a GeoTIFF DEM (``.tif`` / ``.tiff``, needs the ``geo`` extra)."""
+def load_map(path: str | os.PathLike[str], fill_nodata: str | None = None) -> TerrainMap:
+    """Load a ``.npz`` map, or a GeoTIFF DEM (``.tif`` / ``.tiff``, needs the ``geo`` extra;
+    ``fill_nodata`` as in :func:`terrain.geotiff.read_geotiff`)."""
     suffix = Path(path).suffix.lower()
     if suffix in (".tif", ".tiff"):
         from terrain.geotiff import read_geotiff
 
-        return read_geotiff(path)
+        return read_geotiff(path, fill_nodata=fill_nodata)
     return TerrainMap.load(path)
+
+
+def _add_map_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--fill-nodata", choices=["nearest"], default=None,
+        help="GeoTIFF DEMs: fill nodata cells from the nearest valid cell (default: refuse such DEMs)",
+    )
 
 
 def build_cost(
@@ -161,6 +172,10 @@ def run_plan(
         f"map preparation {prep_s:.2f} s"
     )
     budget = f"{max_evaluations} edge-cost evaluations" if max_evaluations is not None else f"time limit {time_limit_s:g} s"
+    n_unknown = int(np.count_nonzero(np.asarray(tmap.ground) == UNKNOWN_GROUND))
+    if n_unknown and unknown_ground:
+        print(f"ground class unknown in {n_unknown} of {tmap.ground.size} cells: priced as {unknown_ground!r} "
+              "(--unknown-ground NAME to choose, 'none' to refuse them)")
     print(f"start {start} -> goal {goal}; planner {planner}, {budget}, seed {seed}")
     if compile_s > 1.0:
         print(f"(compiled the edge-cost kernels in {compile_s:.1f} s: first run in this environment; not in the times below)")
@@ -246,6 +261,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_plan_options(demo, default_time=1.0)
     plan = sub.add_parser("plan", help="plan a minimum-energy route on a map file (.npz or GeoTIFF)")
     plan.add_argument("--map", type=Path, required=True, metavar="FILE", help=".npz map or .tif DEM")
+    _add_map_options(plan)
     plan.add_argument("--start", type=float, nargs=2, required=True, metavar=("X", "Y"), help="start (m)")
     plan.add_argument("--goal", type=float, nargs=2, required=True, metavar=("X", "Y"), help="goal (m)")
     _add_plan_options(plan, default_time=2.0)
@@ -287,6 +303,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="drive a planned route in simulation against a battery, learning current models on the way",
     )
     mission.add_argument("--map", default="example", metavar="FILE", help=".npz map, .tif DEM or 'example' (default)")
+    _add_map_options(mission)
     mission.add_argument("--start", type=float, nargs=2, metavar=("X", "Y"), help="start (m); default: the example's")
     mission.add_argument("--goal", type=float, nargs=2, metavar=("X", "Y"), help="goal (m); default: the example's")
     mission.add_argument("--battery-ah", type=float, required=True, metavar="AH", help="battery capacity (Ah)")
@@ -444,7 +461,7 @@ def run_mission(args: argparse.Namespace) -> int:
     else:
         if not (args.start and args.goal):
             raise InvalidParameterError("--start and --goal are required with a map file")
-        tmap, label = load_map(args.map), Path(args.map).name
+        tmap, label = load_map(args.map, args.fill_nodata), Path(args.map).name
         start, goal = tuple(args.start), tuple(args.goal)
     robot = robot_preset(args.robot)
     names = set(tmap.ground_names.values()) | {args.prior_ground}
@@ -562,7 +579,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "demo":
             tmap, start, goal, label = example_map(), EXAMPLE_START_XY_M, EXAMPLE_GOAL_XY_M, "bundled example map"
         else:
-            tmap, start, goal, label = load_map(args.map), tuple(args.start), tuple(args.goal), args.map.name
+            tmap, start, goal, label = (load_map(args.map, args.fill_nodata), tuple(args.start), tuple(args.goal),
+                                        args.map.name)
         result = run_plan(
             tmap,
             start,

@@ -281,9 +281,32 @@ def test_plan_on_a_geotiff_dem_uses_the_unknown_ground_preset(tmp_path, capsys):
     assert rc == 0
     data = json.loads((out / "route.json").read_text())
     assert data["map"] == "dem.tif" and data["status"] == "exact"
-    # a DEM carries no ground classes: every cell is unknown and priced as gravel
-    assert "grounds {}" in capsys.readouterr().out
+    # a DEM carries no ground classes: every cell is unknown and priced as gravel, and says so
+    out_text = capsys.readouterr().out
+    assert "grounds {}" in out_text and "unknown in 1200 of 1200 cells: priced as 'gravel'" in out_text
     rc = main(["plan", "--map", str(dem), "--start", "3", "3", "--goal", "36", "26", "--planner", "lattice",
                "--unknown-ground", "none", "--out", str(out)])
     assert rc == 2
     assert "unknown" in capsys.readouterr().err
+
+
+def test_plan_on_a_geotiff_with_nodata_needs_fill_nodata(tmp_path, capsys):
+    rasterio = pytest.importorskip("rasterio", reason="GeoTIFF needs the geo extra (rasterio)")
+    from affine import Affine
+
+    from terrain import DataRepairWarning
+
+    z = np.tile(0.05 * np.arange(40.0), (30, 1)).astype(np.float32)
+    z[10:13, 18:21] = -9999.0  # a hole in the survey
+    dem = tmp_path / "holes.tif"
+    with rasterio.open(dem, "w", driver="GTiff", height=30, width=40, count=1, dtype="float32",
+                       transform=Affine(1.0, 0.0, 0.0, 0.0, -1.0, 30.0), nodata=-9999.0) as dst:
+        dst.write(z, 1)
+    args = ["plan", "--map", str(dem), "--start", "3", "3", "--goal", "36", "26", "--planner", "lattice",
+            "--out", str(tmp_path / "out")]
+    assert main(args) == 2
+    assert "fill_nodata" in capsys.readouterr().err
+    with pytest.warns(DataRepairWarning, match="filled 9 nodata cells"):
+        assert main([*args, "--fill-nodata", "nearest"]) == 0
+    assert json.loads((tmp_path / "out" / "route.json").read_text())["status"] == "exact"
+    capsys.readouterr()
