@@ -9,7 +9,11 @@ The script prints whether that pays off net of the excitation energy: on this ma
 115 m sand patch on a 151 m route) it does, by about 1.1 Wh of 8.7 Wh; with the patch cut
 to 65 m it does not (the detour saves less than the 23 s manoeuvre costs).
 
-Run:  python examples/adaptive_mission.py [--quick] [--out DIR]
+By default an accepted model serves every cell of the map's ground class (the ground layer
+used as a segmentation, e.g. surface classes from imagery, never for its energy);
+``--update-scope region`` gives it only the flagged cells, as when no segmentation is known.
+
+Run:  python examples/adaptive_mission.py [--quick] [--out DIR] [--update-scope region]
 """
 
 from __future__ import annotations
@@ -48,6 +52,12 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="smaller map (for tests)")
     parser.add_argument("--out", type=Path, default=None, help="write adaptive_mission.json and a plot here")
+    parser.add_argument(
+        "--update-scope", choices=["ground_class", "region"], default="ground_class",
+        help="cells an accepted model serves: every cell of the map's ground class that the old model served "
+             "(the map's ground layer as a segmentation, e.g. from imagery; default) or only the flagged cells "
+             "(no segmentation known)",
+    )
     args = parser.parse_args(argv)
     t_start = time.perf_counter()
     robot = robot_preset("husky")
@@ -59,7 +69,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     # a 15 s straight + 8 s pivot excitation: enough for a linear model (its held-back error
     # is ~2 %), and each second of it costs ~140 W on sand
     settings = AdaptiveSettings(speed_mps=0.5, leg_length_m=10.0, excitation_duration_s=15.0,
-                                turn_excitation_duration_s=8.0, seed=0)
+                                turn_excitation_duration_s=8.0, update_scope=args.update_scope, seed=0)
 
     # Baseline: plan with the prior and drive the whole route without updates.
     reg0 = CellModelRegistry.from_terrain(tmap, prior, prior_name="asphalt-prior")

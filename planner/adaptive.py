@@ -18,6 +18,14 @@ predicted current per cell in the :class:`terrain.CellModelRegistry`, and where 
    is reweighted only where cells changed model: ``energy_cost(..., previous=cost)``) and
    replans from the current position.
 
+Before exciting a flagged region, the loop tries the models it already has: the one that
+best explains what the last leg measured in the region (integrated current, both sides) is
+assigned to the update's scope without a manoeuvre when its error is under the policy
+threshold and below the serving model's on the same samples (``UpdateRecord.kind ==
+"reuse"``; a registry version like any other, so it rolls back). Without a segmentation
+(``"region"``) this is what keeps a ground learned once from being excited again at every
+new patch of it.
+
 A (ground class, model) pair is excited at most once: the model fitted there, or the old
 model that beat it, has been validated on fresh excitation data of that ground, so later
 flags of the same pair only reset the evidence (the cells' error then comes from the
@@ -202,6 +210,7 @@ class UpdateRecord:
     excitation_energy_j: float
     excitation_duration_s: float
     wall_time_s: float
+    kind: str = "excitation"  # or "reuse": a model learned elsewhere assigned without a manoeuvre
 
 
 @dataclass(frozen=True)
@@ -499,6 +508,34 @@ def _predicted_currents(registry: CellModelRegistry, log: InteractionLog, rows: 
     return out
 
 
+def _best_other_model(
+    registry: CellModelRegistry, log: InteractionLog, in_region: np.ndarray, measured_a: np.ndarray,
+    dt_s: np.ndarray, serving: tuple[int, ...], min_samples: int,
+) -> tuple[int, float] | None:
+    """The registry model that best explains the log's samples in a region, unless it alone
+    already serves the whole region (``serving``: the ids serving its cells): ``(model id,
+    |predicted - measured| / measured)`` of the integrated absolute current (both sides), or
+    None with fewer than ``min_samples`` samples or no candidate."""
+    if np.count_nonzero(in_region) < min_samples or not np.any(measured_a[in_region]):
+        return None
+    best: tuple[int, float] | None = None
+    for mid in registry.model_ids:
+        if tuple(serving) == (mid,):  # assigning it would change nothing
+            continue
+        pred = predict_currents(registry.model(mid), log, f"model {mid} ({registry.model_record(mid).name!r})")
+        err = _charge_error(pred, measured_a, dt_s, in_region)
+        if best is None or err < best[1]:
+            best = (int(mid), err)
+    return best
+
+
+def _charge_error(predicted_a: np.ndarray, measured_a: np.ndarray, dt_s: np.ndarray, sel: np.ndarray) -> float:
+    """``|Q_pred - Q_meas| / Q_meas`` of the absolute current (both sides) over the samples ``sel``."""
+    q_meas = float(np.sum(np.abs(measured_a[sel]).sum(axis=1) * dt_s[sel]))
+    q_pred = float(np.sum(np.abs(predicted_a[sel]).sum(axis=1) * dt_s[sel]))
+    return abs(q_pred - q_meas) / q_meas
+
+
 def _log_energy_j(log: InteractionLog, robot: RobotParams) -> float:
     return float(np.trapezoid(log_battery_power_w(log, robot), log.time_s))
 
@@ -685,16 +722,40 @@ def run_adaptive_mission(
         rows, cols = terrain.rowcol(log.pose_xyh[:, 0], log.pose_xyh[:, 1])
         pred = _predicted_currents(registry, log, np.asarray(rows), np.asarray(cols))
         meas = np.column_stack([log.current_left_a, log.current_right_a])
-        registry.record(rows, cols, np.abs(meas), np.abs(pred), np.gradient(log.time_s))
+        dt = np.gradient(log.time_s)
+        registry.record(rows, cols, np.abs(meas), np.abs(pred), dt)
         changed = False
         for region in registry.flagged_regions(cfg.policy):
-            if len(updates) >= cfg.max_updates:
+            if sum(u.kind == "excitation" for u in updates) >= cfg.max_updates:
                 break
             w0 = time.perf_counter()
             r, c = region.representative_row_col
             gid = int(terrain.ground[r, c])
             gname = terrain.ground_names.get(gid, str(gid))
             old_id = int(np.asarray(registry.model_id_map)[r, c])
+            if cfg.update_scope == "ground_class":
+                scope = (np.asarray(terrain.ground) == gid) & np.isin(np.asarray(registry.model_id_map),
+                                                                      np.asarray(region.model_ids))
+            else:
+                scope = region.mask(registry.shape)
+            # A model learned elsewhere may already explain what this leg measured in the
+            # region: assign it without a manoeuvre (the registry keeps it as a new version).
+            in_region = region.mask(registry.shape)[rows, cols]
+            reuse = _best_other_model(registry, log, in_region, meas, dt, region.model_ids, cfg.policy.min_samples)
+            if reuse is not None:
+                mid, err = reuse
+                err_now = _charge_error(pred, meas, dt, in_region)  # the serving model(s), same samples
+                if err < min(cfg.policy.threshold_pct / 100.0, err_now):
+                    registry.assign(scope, mid, reason=(
+                        f"reuse: model {mid} ({registry.model_record(mid).name!r}) explains the {gname!r} region "
+                        f"driven in leg {leg_index} to {100 * err:.1f} % (the serving model: {100 * err_now:.1f} %)"))
+                    changed = True
+                    wall = time.perf_counter() - w0
+                    update_wall += wall
+                    updates.append(UpdateRecord(leg_index, gname, region.cell_count, int(np.count_nonzero(scope)),
+                                                100.0 * region.relative_error, True, mid, err, err_now,
+                                                0.0, 0.0, wall, kind="reuse"))
+                    continue
             if (gid, old_id) in validated:
                 # this model already proved itself on fresh excitation data of this ground: the
                 # cells' error comes from transients (pivots, stops) they over-represent
@@ -742,11 +803,6 @@ def run_adaptive_mission(
             new_model = factory().fit(train)
             err_new = validation_error(new_model, held)
             err_old = validation_error(registry.model(old_id), held)
-            if cfg.update_scope == "ground_class":
-                scope = (np.asarray(terrain.ground) == gid) & np.isin(np.asarray(registry.model_id_map),
-                                                                      np.asarray(region.model_ids))
-            else:
-                scope = region.mask(registry.shape)
             decision = registry.propose_update(
                 scope, new_model, err_new, err_old, name=f"update{len(updates) + 1}-{gname}",
                 reason=f"region error {100 * region.relative_error:+.1f} % after leg {leg_index}",

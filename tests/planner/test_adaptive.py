@@ -141,3 +141,26 @@ def test_a_manoeuvre_that_crosses_the_reserve_stops_the_mission_where_it_stands(
     assert res.final_soc == pytest.approx(0.2) and res.soc.min() >= 0.2 - 1e-12
     assert res.updates == () and reg.model_ids == (0,)
     assert res.excitation_energy_j > 0
+
+
+def test_without_a_segmentation_a_learned_model_is_reused_instead_of_exciting_again():
+    # update_scope="region": each update serves only the flagged cells, so the next sand cells
+    # are flagged again; the sand model learned there explains them, no second manoeuvre
+    robot, truth, tmap, prior = _world()
+    reg = CellModelRegistry.from_terrain(tmap, prior)
+    settings = dataclasses.replace(SETTINGS, update_scope="region")
+    res = run_adaptive_mission(tmap, reg, robot, Battery(20.0, 24.0), truth, (2.5, 8.0), (37.5, 8.0),
+                               physics_ground=ground_preset("asphalt"), settings=settings)
+    assert res.status == "completed"
+    kinds = [u.kind for u in res.updates]
+    assert kinds[0] == "excitation" and kinds.count("excitation") == 1 and "reuse" in kinds
+    learned = res.updates[0].model_id
+    for u in res.updates[1:]:
+        assert u.model_id == learned and u.excitation_energy_j == 0.0 and u.excitation_duration_s == 0.0
+        assert u.validation_error_new < min(settings.policy.threshold_pct / 100, u.validation_error_old)
+    assert res.excitation_energy_j == res.updates[0].excitation_energy_j
+    assert any(v.reason.startswith("reuse: model") for v in reg.history)
+    # the reuse is a registry version like any other: rolling it back restores the cells
+    before = np.asarray(reg.model_id_map).copy()
+    reg.rollback()
+    assert not np.array_equal(np.asarray(reg.model_id_map), before)
