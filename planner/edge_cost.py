@@ -662,7 +662,8 @@ class EnergyCost:
 
         ``model.energy_per_metre_j(speed_mps, grades, ground)`` is called once per ground
         with all ``grade_samples`` grades, and ``model.turn_energy_j(angles, ground)`` once
-        per ground with ``turn_samples`` angles over ``[0, pi]``. The model's energy is per
+        per ground with ``turn_samples`` angles over ``[0, pi]`` (turns are priced on level
+        ground: a pivot's extra load on a slope is not in the table). The model's energy is per
         metre *travelled*; the table stores it per *horizontal* (map) metre, i.e. times
         ``sqrt(1 + grade**2)``. A model may return ``+inf`` for grades a ground cannot be
         driven at; segments meeting such a grade in their direction of travel are then
