@@ -33,7 +33,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Mapping
-from numbers import Integral
+from numbers import Integral, Real
 from typing import Any
 
 import numba
@@ -986,6 +986,7 @@ class EnergyCost:
         *,
         spacing_m: float | None = None,
         levels: int = 3,
+        min_gain: float = 1e-3,
         step_m: float | None = None,
         max_sweeps: int = 300,
     ) -> np.ndarray:
@@ -999,8 +1000,10 @@ class EnergyCost:
         default one cell) and halving it down to 1 % of a cell; finally vertices whose
         removal does not raise the energy are dropped. Every accepted move keeps the route
         valid (an invalid move costs inf). Coarse passes move long stretches at little cost;
-        fine ones let the route follow ground and slope boundaries (on 512 x 512 procedural
-        maps, three passes end 0.1–0.5 % lower than one).
+        fine ones let the route follow ground and slope boundaries. A finer pass runs only
+        while the previous one lowered the energy by at least ``min_gain`` (relative): on
+        512 x 512 procedural maps the first pass does most of the work and the finer ones
+        add 0.05–0.6 %, at two to four times its cost.
 
         Returns
         -------
@@ -1030,7 +1033,10 @@ class EnergyCost:
                 raise InvalidParameterError(f"{name} must be an integer >= 1, got {v!r}")
         if pts.shape[0] < 2:
             return pts.copy()
+        if not (isinstance(min_gain, Real) and math.isfinite(min_gain) and min_gain >= 0):
+            raise InvalidParameterError(f"min_gain must be a finite number >= 0, got {min_gain!r}")
         out = pts
+        energy = before
         for level in range(int(levels)):
             gap = spacing / 2**level
             seg = np.diff(out, axis=0)
@@ -1045,6 +1051,9 @@ class EnergyCost:
                 min(step, gap / 4.0), 0.01 * d, int(max_sweeps),
             )
             out = np.column_stack([xs[:m], ys[:m]])
+            previous, energy = energy, self.path_energy_j(out)
+            if energy > previous * (1.0 - min_gain):
+                break
         return out if self.path_energy_j(out) <= before * (1.0 + _KEEP_RTOL) else pts.copy()
 
     def lower_bound_j(self, a_xy_m: Any, b_xy_m: Any) -> np.ndarray:
