@@ -7,9 +7,10 @@ aggregate section error ``sum_s |Q_pred,s - Q_true,s| / sum_s Q_true,s * 100`` (
 per run that does not let a tiny section dominate), the RMSE of the current (A), and the
 paper's smoothing, a running median of 100 samples.
 
-Charges are integrated with the trapezoid rule; section boundaries fall between samples and
-are handled exactly for the piecewise-linear current (the cumulative integral is
-interpolated at the boundary), so the section charges always add up to the whole-run charge.
+Charges are integrated with the trapezoid rule, i.e. exactly for the piecewise-linear current
+through the samples. Section boundaries fall between samples: each boundary is inserted as a
+sample with the linearly interpolated current and every section is integrated on its own, so
+the section charges are exact for that current and add up to the whole-run charge.
 Currents are in A inside; mAh only in the names of the reported charges (as in the paper).
 """
 
@@ -106,7 +107,9 @@ def section_charges_mah(
 
     Sections start at the first sample: ``[t0, t0 + section_s)``, ``[t0 + section_s, ...)``;
     the last one ends at the last sample and may be shorter (it is kept, so the section
-    charges add up to :func:`charge_mah`).
+    charges add up to :func:`charge_mah`). Each boundary between samples is inserted with
+    the linearly interpolated current and each section is integrated by trapezoid, which is
+    the exact charge of the piecewise-linear current through the samples.
 
     Parameters
     ----------
@@ -137,13 +140,21 @@ def section_charges_mah(
     """
     if isinstance(section_s, bool) or not isinstance(section_s, (int, float)) or not math.isfinite(section_s) or section_s <= 0:
         raise InvalidParameterError(f"section_s must be a finite number > 0, got {section_s!r}")
-    t, _ = _series(time_s, current_a)
-    cum = cumulative_charge_mah(t, current_a)
+    t, i = _series(time_s, current_a)
     n_sections = max(1, int(math.ceil((t[-1] - t[0]) / section_s - 1e-9)))
     starts = t[0] + section_s * np.arange(n_sections)
     bounds = np.append(starts, t[-1])
-    at = np.interp(bounds, t, cum)
-    return starts, np.diff(at)
+    # samples and boundaries merged in time order; a boundary on a sample comes after it
+    merged_t = np.concatenate([t, bounds])
+    merged_i = np.concatenate([i, np.interp(bounds, t, i)])
+    order = np.argsort(merged_t, kind="stable")
+    merged_t, merged_i = merged_t[order], merged_i[order]
+    steps = 0.5 * (merged_i[1:] + merged_i[:-1]) * np.diff(merged_t)
+    at = np.empty(order.size, dtype=np.intp)
+    at[order] = np.arange(order.size)
+    edge = at[t.size:]  # merged index of every boundary, increasing
+    charge_as = np.add.reduceat(steps[: edge[-1]], edge[:-1])
+    return starts, charge_as / _AS_PER_MAH
 
 
 def error_rate_pct(predicted: Any, truth: Any) -> np.ndarray | float:

@@ -43,6 +43,18 @@ def test_sections_add_up_and_split_between_samples():
     assert starts[-1] < t[-1] <= starts[-1] + 8.0
 
 
+@pytest.mark.parametrize("section_s", [8.0, 7.5, 2.5, 0.4])
+def test_section_charges_of_a_ramp_are_exact_between_samples(section_s):
+    # 0 -> 10 A over 10 s at 1 Hz: I = t, so a section [a, b) draws (b^2 - a^2) / 2 A*s
+    t = np.arange(11.0)
+    starts, q = section_charges_mah(t, t, section_s)
+    ends = np.minimum(starts + section_s, 10.0)
+    assert (q * 3.6).tolist() == pytest.approx(((ends**2 - starts**2) / 2.0).tolist(), rel=1e-12)
+    assert q.sum() == pytest.approx(charge_mah(t, t), rel=1e-12)
+    if section_s == 7.5:
+        assert (q * 3.6).tolist() == pytest.approx([28.125, 21.875])  # not [28.25, 21.75] (cumulative interpolated)
+
+
 def test_sections_of_constant_current_are_proportional_to_length():
     starts, q = section_charges_mah([0.0, 20.0], [3.6, 3.6], 8.0)
     assert starts.tolist() == [0.0, 8.0, 16.0]
