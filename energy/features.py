@@ -6,7 +6,8 @@ Three kinds of features feed :class:`energy.estimator.VibrationCurrentEstimator`
   *and* samples at a stated rate (the paper's 0.1 s = 10 samples at 100 Hz).
 - **Whole-run spectrum** (:func:`whole_run_spectrum`): the source method's FFT amplitude
   spectrum of the vertical acceleration over a whole interaction run, 0–50 Hz on a fixed
-  grid of 8000 bins (one spectrum per run), and its compact form (:func:`whole_run_band_spectrum`),
+  grid of 8000 bins (one spectrum per run; the FFT bins of runs longer than the grid's
+  resolution are pooled into it by power), and its compact form (:func:`whole_run_band_spectrum`),
   the band RMS averaged over the run (Welch), which does not depend on the run length.
 - **Local spectra** (:func:`band_rms_spectra`): the RMS vertical acceleration in
   log-spaced frequency bands over a short window (e.g. 1 s) around given times.
@@ -225,10 +226,20 @@ def whole_run_spectrum(
     """FFT spectrum of the vertical acceleration over a whole run, on a fixed frequency grid.
 
     The source method's feature: one spectrum per interaction run. The acceleration (mean
-    removed) is resampled onto a uniform grid at its median rate, transformed with one
-    real FFT over the whole run (no window function), and the one-sided spectrum is
-    linearly interpolated onto ``n_bins`` frequencies ``k * max_frequency_hz / n_bins``,
-    ``k = 1..n_bins`` (the paper's 160 s at 100 Hz gives exactly 8000 such bins).
+    removed) is resampled onto a uniform grid at its median rate and transformed with one
+    real FFT over the whole run (no window function). The one-sided spectrum is then put on
+    ``n_bins`` frequencies ``k * max_frequency_hz / n_bins``, ``k = 1..n_bins`` (the paper's
+    160 s at 100 Hz gives exactly one FFT bin per output bin):
+
+    - a run shorter than ``n_bins / max_frequency_hz`` seconds has coarser FFT bins than
+      the grid: the spectrum is linearly interpolated onto it;
+    - a longer run has finer FFT bins: each output bin pools the FFT bins nearest to it
+      (ties go to the higher bin) by power, not by picking one of them, so no FFT bin is
+      skipped. ``"amplitude"`` takes the root of the summed squared amplitudes, so a
+      sinusoid keeps its amplitude wherever its energy falls among the pooled bins (a plain
+      mean of the amplitudes would divide it by the number of bins pooled, i.e. by the run
+      length); ``"density"`` takes the root of the mean power spectral density, which keeps
+      the level of broadband vibration.
 
     Parameters
     ----------
@@ -240,11 +251,14 @@ def whole_run_spectrum(
         Highest frequency (default 50 Hz); must not exceed the stream's Nyquist frequency
         by more than 2 %.
     scaling : {"amplitude", "density"}
-        ``"amplitude"`` (default, the paper's): single-sided amplitude ``2 |X_k| / M`` in
-        m/s^2 — a sinusoid of amplitude A shows a peak A whatever the run length, but
-        broadband vibration falls as ``1 / sqrt(M)``, so runs of different lengths are not
-        comparable. ``"density"``: amplitude spectral density ``sqrt(2 |X_k|^2 / (M f_s))``
-        in (m/s^2)/sqrt(Hz), independent of the run length for broadband vibration.
+        ``"amplitude"`` (default, the paper's): single-sided amplitude in m/s^2,
+        ``2 |X_k| / M`` and ``|X_k| / M`` for the 0 Hz and (even ``M``) Nyquist bins, which
+        have no mirror image — a sinusoid of amplitude A shows a peak A whatever the run
+        length. Broadband vibration falls as ``1 / sqrt(M)`` for runs shorter than
+        ``n_bins / max_frequency_hz`` seconds (longer runs are pooled to the grid's
+        resolution), so short runs are not comparable with long ones. ``"density"``:
+        amplitude spectral density ``sqrt(2 |X_k|^2 / (M f_s))`` (no factor 2 at 0 Hz and
+        Nyquist) in (m/s^2)/sqrt(Hz), independent of the run length for broadband vibration.
 
     Returns
     -------
@@ -275,14 +289,29 @@ def whole_run_spectrum(
     _, a, rate = _uniform_accel(accel_time_s, accel_z_mps2)
     _check_nyquist(max_frequency_hz, rate)
     m = a.size
-    x = np.abs(np.fft.rfft(a - a.mean()))
+    x2 = np.abs(np.fft.rfft(a - a.mean())) ** 2
     freq = np.fft.rfftfreq(m, 1.0 / rate)
+    one_sided = np.full(freq.size, 2.0)  # every bin but 0 Hz and Nyquist stands for +f and -f
+    one_sided[0] = 1.0
+    if m % 2 == 0:
+        one_sided[-1] = 1.0
     if scaling == "amplitude":
-        spec = 2.0 * x / m
+        power = (one_sided * np.sqrt(x2) / m) ** 2  # squared amplitude, summed when pooled
     else:
-        spec = np.sqrt(2.0 * x**2 / (m * rate))
-    grid = max_frequency_hz / n_bins * np.arange(1, n_bins + 1)
-    return grid, np.interp(grid, freq, spec)
+        power = one_sided * x2 / (m * rate)  # power spectral density, averaged when pooled
+    step_hz = max_frequency_hz / n_bins
+    grid = step_hz * np.arange(1, n_bins + 1)
+    spec = np.interp(grid, freq, np.sqrt(power))
+    if freq[1] <= step_hz * (1.0 + 1e-9):  # FFT bins at least as fine as the grid: pool them
+        k = np.floor(freq / step_hz + 0.5).astype(np.int64) - 1  # output bin of each FFT bin
+        inside = (k >= 0) & (k < n_bins)
+        count = np.bincount(k[inside], minlength=n_bins)
+        total = np.bincount(k[inside], weights=power[inside], minlength=n_bins)
+        pooled = total if scaling == "amplitude" else total / np.maximum(count, 1)
+        # bins above the Nyquist frequency (within its tolerance) hold no FFT bin: keep the
+        # interpolated (held Nyquist) value there
+        spec = np.where(count > 0, np.sqrt(pooled), spec)
+    return grid, spec
 
 
 def log_band_edges_hz(

@@ -78,15 +78,46 @@ def test_whole_run_spectrum_finds_a_sinusoid_and_ignores_gravity():
     assert np.median(amp) < 1e-3
 
 
-def test_density_scaling_does_not_depend_on_run_length_for_broadband_vibration():
+@pytest.mark.parametrize("freq_hz, amplitude", [(12.5, 0.3), (50.0, 0.5)])  # a mid bin; the Nyquist bin
+def test_one_sided_scaling_of_a_cosine_at_a_mid_bin_and_at_nyquist(freq_hz, amplitude):
+    t = np.arange(16000) / 100.0  # 160 s at 100 Hz: one FFT bin per output bin, 50 Hz is Nyquist
+    a = 9.81 + amplitude * np.cos(2 * np.pi * freq_hz * t)
+    f, amp = whole_run_spectrum(t, a)
+    peak = int(np.argmax(amp))
+    assert f[peak] == pytest.approx(freq_hz)
+    assert amp[peak] == pytest.approx(amplitude, rel=1e-6)  # not 2 * amplitude at Nyquist
+    assert np.delete(amp, peak).max() < 1e-6
+    # density: ASD^2 times the bin width is the signal's mean square (A^2 / 2, but A^2 at
+    # Nyquist, where the cosine samples are +-A)
+    _, asd = whole_run_spectrum(t, a, scaling="density")
+    mean_square = amplitude**2 if freq_hz == 50.0 else amplitude**2 / 2
+    assert asd[peak] ** 2 * (100.0 / t.size) == pytest.approx(mean_square, rel=1e-6)
+
+
+def test_a_long_run_pools_every_fft_bin_into_the_grid():
+    # 640 s: four FFT bins per output bin; this sinusoid lies on an FFT bin between two grid
+    # frequencies, which picking the FFT bin at each grid frequency would miss entirely
+    t = np.arange(64000) / 100.0
+    step_hz = 50.0 / 8000
+    f, amp = whole_run_spectrum(t, 9.81 + 0.3 * np.sin(2 * np.pi * (12.0 + step_hz / 4) * t))
+    assert f[np.argmax(amp)] == pytest.approx(12.0)
+    assert amp.max() == pytest.approx(0.3, rel=1e-6)
+    assert np.sort(amp)[-2] < 1e-6
+
+
+def test_broadband_level_depends_on_run_length_only_below_the_grid_resolution():
+    # the 8000-bin grid has the resolution of a 160 s run
     rng = np.random.default_rng(1)
-    levels = {}
-    for n in (3000, 24000):
+    power = {}
+    for n in (3000, 24000, 64000):  # 30 s, 240 s, 640 s at 100 Hz
         t = np.arange(n) / 100.0
         a = 9.81 + rng.standard_normal(n)
-        levels[n] = {s: float(np.mean(whole_run_spectrum(t, a, 200, scaling=s)[1])) for s in ("amplitude", "density")}
-    assert levels[3000]["density"] == pytest.approx(levels[24000]["density"], rel=0.15)
-    assert levels[3000]["amplitude"] > 2.0 * levels[24000]["amplitude"]
+        power[n] = {s: float(np.mean(whole_run_spectrum(t, a, scaling=s)[1] ** 2)) for s in ("amplitude", "density")}
+    for n in (3000, 64000):
+        assert power[n]["density"] == pytest.approx(power[24000]["density"], rel=0.1)
+    assert power[64000]["amplitude"] == pytest.approx(power[24000]["amplitude"], rel=0.1)
+    assert power[24000]["amplitude"] == pytest.approx(4.0 / 16000, rel=0.1)  # E(2|X|/M)^2 = 4 sigma^2 / M, M = 160 s
+    assert power[3000]["amplitude"] > 3.0 * power[24000]["amplitude"]  # a 30 s run is interpolated, not pooled
 
 
 def test_whole_run_spectrum_validates():
