@@ -19,7 +19,9 @@ bad input with a clear error instead of guessing:
   module constants:
 
   * current declared in A whose median |I| exceeds :data:`MAX_MEDIAN_CURRENT_A` (100 A), or
-    whose values are all integers reaching 100 or more -> UnitError "looks like mA";
+    whose values are all integers reaching 100 or more, or whose 99th percentile of the
+    non-zero |I| exceeds :data:`MAX_P99_CURRENT_A` (300 A; zeros say nothing about the
+    unit, so a side idle most of the time is still caught) -> UnitError "looks like mA";
   * current declared in mA whose peak |I| is below :data:`MIN_PEAK_CURRENT_A` (0.05 A = 50 mA)
     while not all zero -> UnitError "looks like A";
   * |v| (or a wheel speed) above :data:`MAX_SPEED_MPS` (10 m/s, implausible for a ground
@@ -72,11 +74,14 @@ __all__ = [
     "CSV_UNITS",
     "DEFAULT_CSV_COLUMNS",
     "CSV_LOG_FORMAT_VERSION",
+    "CSV_RATES",
     "MAX_MEDIAN_CURRENT_A",
+    "MAX_P99_CURRENT_A",
     "MIN_PEAK_CURRENT_A",
     "MAX_SPEED_MPS",
     "MAX_OMEGA_RADPS",
     "MAX_MEDIAN_ACCEL_MPS2",
+    "MAX_CLOCK_OFFSET_S",
     "read_borealtc_run",
     "read_borealtc",
     "read_csv_log",
@@ -95,10 +100,16 @@ BOREALTC_TRACK_WIDTH_M = 0.555
 
 #: Unit-check thresholds (see the module docstring).
 MAX_MEDIAN_CURRENT_A = 100.0
+#: No ground robot's drive draws this much most of the time it draws anything (BorealTC's
+#: Husky peaks at ~35 A): a 99th percentile of the non-zero |I| above it is mA declared as A.
+MAX_P99_CURRENT_A = 300.0
 MIN_PEAK_CURRENT_A = 0.05
 MAX_SPEED_MPS = 10.0
 MAX_OMEGA_RADPS = 20.0
 MAX_MEDIAN_ACCEL_MPS2 = 50.0
+#: Default largest median (receive time - header stamp) a bag topic may show before
+#: ``read_rosbag`` refuses to mix its header stamps with receive times (s).
+MAX_CLOCK_OFFSET_S = 0.5
 
 _UNIT_TABLES: dict[str, dict[str, float]] = {
     "time": {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9},
@@ -145,6 +156,9 @@ DEFAULT_CSV_COLUMNS: dict[str, str] = {
 }
 #: Version of the generic CSV layout written by :func:`write_csv_log`.
 CSV_LOG_FORMAT_VERSION = 1
+#: Values of ``read_csv_log``'s ``rates``: one row per sample of both streams, or two
+#: streams of different rates interleaved by time (the layout :func:`write_csv_log` writes).
+CSV_RATES = ("mixed", "single")
 _CSV_MAGIC = "# terrawatt-log "
 _MISSING_TOKENS = frozenset({"", "nan", "NaN", "NAN", "NA", "null", "None"})
 
@@ -257,10 +271,18 @@ def _check_current(source: str, name: str, values_a: np.ndarray, unit: str) -> N
     if unit == "A":
         med = float(np.median(mag))
         peak = float(mag.max())
-        if med > MAX_MEDIAN_CURRENT_A or (peak >= 100.0 and np.all(mag == np.round(mag))):
+        nonzero = mag[mag > 0]
+        p99 = float(np.percentile(nonzero, 99)) if nonzero.size else 0.0
+        if (
+            med > MAX_MEDIAN_CURRENT_A
+            or p99 > MAX_P99_CURRENT_A
+            or (peak >= 100.0 and np.all(mag == np.round(mag)))
+        ):
             raise UnitError(
                 f"{source}: {name} is declared in A but its values look like mA (median |I| = {med:.6g} A, "
-                f"peak {peak:.6g} A, integer-valued: {bool(np.all(mag == np.round(mag)))}); declare 'mA' "
+                f"99th percentile of the non-zero |I| = {p99:.6g} A, peak {peak:.6g} A, integer-valued: "
+                f"{bool(np.all(mag == np.round(mag)))}; expected a median <= {MAX_MEDIAN_CURRENT_A:g} A and a "
+                f"99th percentile <= {MAX_P99_CURRENT_A:g} A for a ground robot's drive); declare 'mA' "
                 f"or pass check_units=False"
             )
     elif unit == "mA":
@@ -621,6 +643,7 @@ def read_csv_log(
     ground_label: str | None = None,
     velocity_source: str | None = None,
     track_width_m: float | None = None,
+    rates: str = "mixed",
     repair: str | Iterable[str] = (),
     allow_gaps: bool = False,
     gap_factor: float = DEFAULT_GAP_FACTOR,
@@ -629,13 +652,20 @@ def read_csv_log(
     """Read an interaction log from one CSV file with a column map and declared units.
 
     Layout: a header line (lines starting with ``#`` before or between rows are comments),
-    one row per timestamp. The drive stream and the acceleration stream may have different
-    rates in the same file: a row belongs to the acceleration stream when its
-    acceleration field is present, and to the drive stream when any drive field is present
-    (or when the acceleration field is missing too). Missing fields are empty or ``nan``.
-    A missing drive value in a drive row is a NaN (error unless repaired); a missing
-    acceleration value just means the row is not an acceleration sample — in a single-rate
-    file a run of those shows up as an acceleration gap.
+    one row per timestamp. Missing fields are empty or ``nan``. ``rates`` says how rows map
+    to the drive and acceleration streams:
+
+    - ``"single"``: every row is a sample of both streams, so any missing field is a NaN
+      of its stream (DataError unless ``repair=("interpolate_nans",)``). Use it for
+      single-rate files: nothing is ever moved out of a stream.
+    - ``"mixed"`` (default; the layout :func:`write_csv_log` writes): the two streams have
+      different rates and are interleaved by time. A row is an acceleration sample when its
+      acceleration field is present, and a drive sample when any drive field (a pose field
+      or a ground label included) is present, or when the acceleration field is missing
+      too; a missing value among present drive fields is a NaN. So a row whose drive
+      fields are all empty is an IMU-only row and one without acceleration a drive-only
+      row; how many of each were split is logged (INFO) and written to ``meta.notes``.
+      In a single-rate file such rows are lost samples: read it with ``rates="single"``.
 
     Parameters
     ----------
@@ -656,6 +686,8 @@ def read_csv_log(
         Metadata. ``None`` takes the value from a :func:`write_csv_log` header when the file
         has one; otherwise robot ``"unknown"``, velocity ``"measured"`` for wheel speeds and
         ``"commanded"`` for v/omega.
+    rates : {"mixed", "single"}
+        Whether the file interleaves streams of different rates (see above).
     repair, allow_gaps, gap_factor, check_units
         See the module docstring.
 
@@ -666,7 +698,7 @@ def read_csv_log(
     Raises
     ------
     UnknownNameError
-        An unknown field, unit or repair name.
+        An unknown field, unit, ``rates`` or repair name.
     InvalidParameterError
         An incomplete column map (e.g. wheel speeds without ``track_width_m``).
     FileFormatError, FormatVersionError
@@ -684,6 +716,8 @@ def read_csv_log(
     """
     path = Path(path)
     src = str(path)
+    if rates not in CSV_RATES:
+        raise UnknownNameError(f"rates must be one of {CSV_RATES!r}, got {rates!r}")
     repairs = _parse_repair(repair)
     gap_factor = _check_gap_factor(gap_factor)
     explicit = columns is not None
@@ -756,10 +790,22 @@ def read_csv_log(
         raise DataError(f"{src}: missing column {colmap['ground']!r}; the header has {header!r}")
     num = {f: table[colmap[f]] * factors[f] for f in numeric_fields + optional_fields}
     drive_fields = [f for f in num if f not in ("time", "accel_z")]
-    present = np.column_stack([np.isfinite(num[f]) for f in drive_fields])
-    acc_rows = np.isfinite(num["accel_z"])
-    drive_rows = present.any(axis=1) | ~acc_rows
     t_all = num["time"]
+    split_note = ""
+    if rates == "single":
+        acc_rows = drive_rows = np.ones(t_all.size, dtype=bool)
+    else:
+        present = [np.isfinite(num[f]) for f in drive_fields]
+        if text_fields:
+            present.append(np.char.str_len(table[colmap["ground"]]) > 0)
+        acc_rows = np.isfinite(num["accel_z"])
+        drive_rows = np.column_stack(present).any(axis=1) | ~acc_rows
+        split_note = (
+            f"rates='mixed': {t_all.size} row(s) split into {int((drive_rows & acc_rows).sum())} drive+IMU, "
+            f"{int((drive_rows & ~acc_rows).sum())} drive-only and {int((acc_rows & ~drive_rows).sum())} IMU-only "
+            f"(all drive fields empty) row(s)"
+        )
+        _LOG.info("%s: %s", src, split_note)
     extra = {"ground": table[colmap["ground"]][drive_rows]} if text_fields else None
     td, dc, de = _clean_stream(
         src, "drive stream", t_all[drive_rows], {f: num[f][drive_rows] for f in drive_fields},
@@ -797,7 +843,7 @@ def read_csv_log(
         velocity_source = file_meta.get("velocity_source") or ("measured" if has_wheels else "commanded")
     if velocity_source not in VELOCITY_SOURCES:
         raise InvalidParameterError(f"velocity_source must be one of {VELOCITY_SOURCES!r}, got {velocity_source!r}")
-    notes = [file_meta.get("notes") or "", f"read from {src}"]
+    notes = [file_meta.get("notes") or "", f"read from {src}", split_note]
     if file_meta.get("source"):
         notes.append(f"original source: {file_meta['source']}")
     declared = {f: u for f, u in units.items() if factors[f] != 1.0}
@@ -921,6 +967,7 @@ def read_rosbag(
     robot: str = "unknown",
     ground_label: str | None = None,
     use_header_stamps: bool = True,
+    max_clock_offset_s: float = MAX_CLOCK_OFFSET_S,
     cmd_vel_timeout_s: float | None = 0.5,
     repair: str | Iterable[str] = (),
     allow_gaps: bool = False,
@@ -945,7 +992,12 @@ def read_rosbag(
     Timestamps: a topic whose messages carry a header uses the header stamps when
     ``use_header_stamps`` and every stamp is non-zero; otherwise (and for std_msgs
     topics) the bag receive time; ``meta.notes`` says which. Header stamps come from the
-    publishers' clocks and receive times from the recorder's: if they disagree, pass
+    publishers' clocks and receive times from the recorder's, and the current topics are
+    always on receive time, so a clock offset would shift vibration (and odometry) against
+    current. For each topic read on header stamps the reader takes the median of
+    (receive time - header stamp), written to ``meta.notes``; if its magnitude exceeds
+    ``max_clock_offset_s`` (default :data:`MAX_CLOCK_OFFSET_S` = 0.5 s, well above
+    transport latency) it raises DataError rather than guess: pass
     ``use_header_stamps=False`` to put every topic on the receive time. Times are seconds
     since the earliest timestamp used (``meta.start_time_ns`` keeps that absolute time).
 
@@ -969,6 +1021,9 @@ def read_rosbag(
     current_unit : {"A", "mA"}
     robot, ground_label : metadata
     use_header_stamps : bool
+    max_clock_offset_s : float
+        Largest tolerated |median(receive time - header stamp)| of a topic read on header
+        stamps (s, finite, > 0).
     cmd_vel_timeout_s : float or None
     repair, allow_gaps, gap_factor, check_units
         See the module docstring.
@@ -985,10 +1040,13 @@ def read_rosbag(
         Missing or unreadable bag.
     DataError
         A topic is missing or has no messages, has an unexpected type, a multi-array of
-        the wrong length; streams that do not overlap; plus the checks of the module
-        docstring.
+        the wrong length; header stamps more than ``max_clock_offset_s`` away from the
+        receive times; streams that do not overlap; plus the checks of the module
+        docstring (unsorted or duplicated timestamps, NaNs, gaps; ``repair`` and
+        ``allow_gaps`` work as in the CSV readers).
     UnitError, UnknownNameError, InvalidParameterError
-        As documented in the module docstring; unknown ``current_unit``; bad timeout.
+        As documented in the module docstring; unknown ``current_unit``; bad timeout or
+        ``max_clock_offset_s``.
     """
     try:
         from rosbags.highlevel import AnyReader
@@ -1006,6 +1064,13 @@ def read_rosbag(
         or cmd_vel_timeout_s <= 0
     ):
         raise InvalidParameterError(f"cmd_vel_timeout_s must be a finite number > 0 or None, got {cmd_vel_timeout_s!r}")
+    if (
+        isinstance(max_clock_offset_s, bool)
+        or not isinstance(max_clock_offset_s, (int, float))
+        or not math.isfinite(max_clock_offset_s)
+        or max_clock_offset_s <= 0
+    ):
+        raise InvalidParameterError(f"max_clock_offset_s must be a finite number > 0, got {max_clock_offset_s!r}")
     if ground_label is not None and (not isinstance(ground_label, str) or not ground_label):
         raise InvalidParameterError(f"ground_label must be a non-empty str or None, got {ground_label!r}")
     topics_cur = (current_topics,) if isinstance(current_topics, str) else tuple(current_topics)
@@ -1050,15 +1115,25 @@ def read_rosbag(
 
     def stamps(topic: str) -> np.ndarray:
         msgs = raw[topic]
+        received = np.array([ts for ts, _ in msgs], dtype=np.int64)
         if use_header_stamps and hasattr(msgs[0][1], "header"):
             hdr = np.array([_stamp_ns(m) for _, m in msgs], dtype=np.int64)
             if (hdr != 0).all():
-                notes.append(f"{topic}: header stamps")
+                offset_s = float(np.median(received - hdr)) / 1e9
+                if abs(offset_s) > max_clock_offset_s:
+                    raise DataError(
+                        f"{src}: topic {topic!r}: median (receive time - header stamp) is {offset_s!r} s, "
+                        f"expected within +/-{max_clock_offset_s!r} s (max_clock_offset_s): the publisher's "
+                        f"and the recorder's clocks disagree, and the receive-time current topics would be "
+                        f"shifted against this topic; pass use_header_stamps=False to put every topic on the "
+                        f"receive time"
+                    )
+                notes.append(f"{topic}: header stamps (median receive time - stamp {offset_s:.3g} s)")
                 return hdr
             notes.append(f"{topic}: receive time ({int((hdr == 0).sum())} zero header stamp(s))")
         else:
             notes.append(f"{topic}: receive time")
-        return np.array([ts for ts, _ in msgs], dtype=np.int64)
+        return received
 
     vel_type = expect(cmd_vel_topic, _TWIST_TYPES + _ODOM_TYPES)
     expect(imu_topic, _IMU_TYPES)
@@ -1067,6 +1142,13 @@ def read_rosbag(
             expect(t, _SCALAR_TYPES)
     else:
         expect(topics_cur[0], _ARRAY_TYPES)
+        arrays = [np.asarray(m.data, dtype=np.float64).reshape(-1) for _, m in raw[topics_cur[0]]]
+        bad = [i for i, a in enumerate(arrays) if a.size != 2]
+        if bad:
+            raise DataError(
+                f"{src}: topic {topics_cur[0]!r}: {len(bad)} message(s) do not hold exactly [left, right], first at "
+                f"index {bad[0]} with {arrays[bad[0]].size} value(s)"
+            )
     streams_ns = {t: stamps(t) for t in wanted}
     origin = int(min(s.min() for s in streams_ns.values()))
 
@@ -1102,13 +1184,6 @@ def read_rosbag(
     # current stream(s)
     scale = _UNIT_TABLES["current"][current_unit]
     if len(topics_cur) == 1:
-        arrays = [np.asarray(m.data, dtype=np.float64).reshape(-1) for _, m in raw[topics_cur[0]]]
-        bad = [i for i, a in enumerate(arrays) if a.size != 2]
-        if bad:
-            raise DataError(
-                f"{src}: topic {topics_cur[0]!r}: {len(bad)} message(s) do not hold exactly [left, right], first at "
-                f"index {bad[0]} with {arrays[bad[0]].size} value(s)"
-            )
         stacked = np.vstack(arrays) * scale
         tc, cc, _ = _clean_stream(
             src, topics_cur[0], secs(topics_cur[0]), {"left": stacked[:, 0], "right": stacked[:, 1]},

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import logging
+import re
 import shutil
 import sys
 from pathlib import Path
@@ -369,6 +370,90 @@ def test_generic_csv_nan_in_drive_row(tmp_path):
     assert log.omega_radps[2] == pytest.approx(np.deg2rad(20))
 
 
+def write_single_rate(path: Path, n: int = 30, blank: dict[int, tuple[str, ...]] | None = None,
+                      right_a: np.ndarray | None = None) -> Path:
+    """A single-rate CSV in the default layout (no terrawatt header): row k at t = 0.1 k s;
+    ``blank`` maps a row to the columns left empty in it."""
+    k = np.arange(n)
+    cols = {
+        "time_s": 0.1 * k, "v_mps": 0.1 + 0.01 * k, "omega_radps": 0.02 * k, "current_left_a": 2.0 + 0.1 * k,
+        "current_right_a": 3.0 + 0.05 * k if right_a is None else right_a, "accel_z_mps2": 9.8 + 0.001 * k,
+    }
+    lines = [",".join(cols)]
+    for i in range(n):
+        empty = (blank or {}).get(i, ())
+        lines.append(",".join("" if c in empty else repr(float(v[i])) for c, v in cols.items()))
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+DRIVE_COLUMNS = ("v_mps", "omega_radps", "current_left_a", "current_right_a")
+
+
+def test_generic_csv_single_rate_row_without_drive_fields(tmp_path, caplog):
+    path = write_single_rate(tmp_path / "s.csv", blank={7: DRIVE_COLUMNS})
+    # mixed (default): the row is an IMU-only row, and the split is reported, not silent
+    with caplog.at_level(logging.INFO, logger="energy.readers"):
+        log = read_csv_log(path)
+    assert len(log) == 29 and log.accel_time_s.size == 30
+    split = "30 row(s) split into 29 drive+IMU, 0 drive-only and 1 IMU-only"
+    assert split in log.meta.notes
+    assert any(split in r.getMessage() for r in caplog.records)
+    # single: every row is a drive sample, the empty fields are NaNs
+    with pytest.raises(DataError, match=r"drive stream: column 'current_left' has 1 missing or non-finite "
+                                        r"value\(s\), first at index 7 \(t=0\.7"):
+        read_csv_log(path, rates="single")
+    with pytest.warns(DataRepairWarning, match="interpolated 1 missing value"):
+        fixed = read_csv_log(path, rates="single", repair=("interpolate_nans",))
+    assert len(fixed) == 30 and "split into" not in fixed.meta.notes
+    assert fixed.v_mps[7] == pytest.approx(0.17, abs=1e-12)
+
+
+def test_generic_csv_single_rate_row_without_accel(tmp_path):
+    path = write_single_rate(tmp_path / "s.csv", blank={12: ("accel_z_mps2",)})
+    log = read_csv_log(path)
+    assert len(log) == 30 and log.accel_time_s.size == 29
+    assert "29 drive+IMU, 1 drive-only and 0 IMU-only" in log.meta.notes
+    with pytest.raises(DataError, match=r"acceleration stream: column 'accel_z' has 1 missing .* first at index 12"):
+        read_csv_log(path, rates="single")
+    with pytest.warns(DataRepairWarning, match=r"interpolated 1 missing value\(s\) of column 'accel_z'"):
+        fixed = read_csv_log(path, rates="single", repair="interpolate_nans")
+    assert fixed.accel_time_s.size == 30 and fixed.accel_z_mps2[12] == pytest.approx(9.812, abs=1e-12)
+
+
+def test_generic_csv_mixed_rates_reported_and_unknown_rates():
+    log = read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS)
+    assert "rates='mixed': 51 row(s) split into 11 drive+IMU, 0 drive-only and 40 IMU-only" in log.meta.notes
+    with pytest.raises(UnknownNameError, match=r"rates must be one of \('mixed', 'single'\), got 'dual'"):
+        read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS, rates="dual")
+    # a mixed-rate file read as single-rate: the IMU-only rows are NaNs of the drive stream
+    with pytest.raises(DataError, match=r"drive stream: column 'current_left' has 40 missing .* first at index 1"):
+        read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS, rates="single")
+
+
+def test_generic_csv_label_on_row_without_drive_values(tmp_path):
+    # a ground label is a drive field: the row is a drive sample with NaNs, not an IMU-only row
+    path = tmp_path / "g.csv"
+    shutil.copy(GENERIC, path)
+    edit_lines(path, lambda ls: [line + "grass" if line == "20,,,,,9.82," else line for line in ls])
+    with pytest.raises(DataError, match=r"drive stream: column 'current_left' has 1 missing .* index 1 \(t=0\.02 s\)"):
+        read_csv_log(path, GENERIC_COLUMNS, GENERIC_UNITS)
+
+
+def test_generic_csv_float_milliamps_mostly_idle_declared_as_amps(tmp_path):
+    # one side idle (0) in 24 of 30 rows, then float mA: median 0 and not integer-valued
+    right = np.where(np.arange(30) < 24, 0.0, 1500.25 + 400.5 * np.arange(30))
+    path = write_single_rate(tmp_path / "s.csv", right_a=right)
+    with pytest.raises(UnitError, match=r"current_right_a is declared in A but its values look like mA \(median "
+                                        r"\|I\| = 0 A, 99th percentile of the non-zero \|I\| = 13094\.7 A.*declare 'mA'"):
+        read_csv_log(path, rates="single")
+    log = read_csv_log(path, rates="single", units={"current_right": "mA"})
+    assert log.current_right_a.max() == pytest.approx(13.11475, abs=1e-12)
+    # a ground robot's real peaks (tens of A) still read as A
+    write_single_rate(path, right_a=np.where(np.arange(30) < 24, 0.0, 35.5))
+    assert read_csv_log(path, rates="single").current_right_a.max() == 35.5
+
+
 def test_generic_csv_empty_label(tmp_path):
     path = tmp_path / "g.csv"
     shutil.copy(GENERIC, path)
@@ -468,8 +553,13 @@ def bag_content() -> dict:
 
 
 def write_bag(path: Path, kind: str, content: dict, multiarray: bool = False, odom: bool = False,
-              scale: float = 1.0) -> Path:
+              scale: float = 1.0, imu_stamp_ns: list[int] | None = None, empty_topics: tuple[str, ...] = ()) -> Path:
+    """Write ``content`` to a bag. IMU messages are received 1 ms after ``content["imu_ns"]``
+    and stamped with ``imu_stamp_ns`` (default: ``content["imu_ns"]``); ``empty_topics`` get
+    a connection but no messages."""
     ros1 = kind == "ros1"
+    if imu_stamp_ns is None:
+        imu_stamp_ns = content["imu_ns"]
     ts = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
     T = ts.types
     ser = ts.serialize_ros1 if ros1 else ts.serialize_cdr
@@ -497,9 +587,9 @@ def write_bag(path: Path, kind: str, content: dict, multiarray: bool = False, od
             return conns[topic]
 
         msgs = []
-        for ns, az in zip(content["imu_ns"], content["az"]):
+        for ns, stamp_ns, az in zip(content["imu_ns"], imu_stamp_ns, content["az"]):
             m = T["sensor_msgs/msg/Imu"](
-                header=header(ns), orientation=quat(x=0.0, y=0.0, z=0.0, w=1.0), orientation_covariance=np.zeros(9),
+                header=header(stamp_ns), orientation=quat(x=0.0, y=0.0, z=0.0, w=1.0), orientation_covariance=np.zeros(9),
                 angular_velocity=vec(), angular_velocity_covariance=np.zeros(9),
                 linear_acceleration=vec(z=az), linear_acceleration_covariance=np.zeros(9))
             msgs.append((ns + MS, "/imu/data", "sensor_msgs/msg/Imu", m))  # received 1 ms after the stamp
@@ -525,7 +615,10 @@ def write_bag(path: Path, kind: str, content: dict, multiarray: bool = False, od
             else:
                 msgs.append((ns, "/cmd_vel", "geometry_msgs/msg/Twist", twist))
         for ns, topic, typ, m in sorted(msgs, key=lambda x: x[0]):
-            writer.write(conn(topic, typ), ns, ser(m, typ))
+            if topic in empty_topics:
+                conn(topic, typ)
+            else:
+                writer.write(conn(topic, typ), ns, ser(m, typ))
     return path
 
 
@@ -635,6 +728,90 @@ def test_rosbag_bad_inputs(tmp_path):
     not_a_bag.write_bytes(b"definitely not a bag")
     with pytest.raises(FileFormatError, match="cannot read bag"):
         read_rosbag(not_a_bag)
+
+
+@requires_rosbags
+@pytest.mark.parametrize("shift_s", [-100.0, -0.8, 0.8])
+def test_rosbag_header_clock_offset_raises(tmp_path, shift_s):
+    content = bag_content()
+    shift_ns = round(shift_s * 1e9)
+    stamps = [ns + shift_ns for ns in content["imu_ns"]]  # publisher clock off the recorder's
+    path = write_bag(tmp_path / "run", "ros2", content, imu_stamp_ns=stamps)
+    offset = (MS - shift_ns) / 1e9  # median of receive time - header stamp
+    with pytest.raises(DataError, match=rf"topic '/imu/data': median \(receive time - header stamp\) is "
+                                        rf"{re.escape(repr(offset))} s, expected within \+/-0\.5 s.*"
+                                        r"use_header_stamps=False"):
+        read_rosbag(path)
+    # on receive time the IMU and the currents share the recorder's clock: same as an unshifted bag
+    log = read_rosbag(path, use_header_stamps=False)
+    ref = read_rosbag(write_bag(tmp_path / "ref", "ros2", content), use_header_stamps=False)
+    np.testing.assert_array_equal(log.accel_time_s, ref.accel_time_s)
+    np.testing.assert_array_equal(log.time_s, ref.time_s)
+    # a wider tolerance is an explicit choice
+    if abs(shift_s) < 1:
+        assert read_rosbag(path, max_clock_offset_s=1.0).meta.notes.count("header stamps") == 1
+    with pytest.raises(InvalidParameterError, match=r"max_clock_offset_s must be a finite number > 0, got nan"):
+        read_rosbag(path, max_clock_offset_s=float("nan"))
+
+
+@requires_rosbags
+def test_rosbag_notes_clock_offset(tmp_path):
+    log = read_rosbag(write_bag(tmp_path / "run", "mcap", bag_content()))
+    assert "/imu/data: header stamps (median receive time - stamp 0.001 s)" in log.meta.notes
+
+
+@requires_rosbags
+def test_rosbag_unsorted_header_stamps_raise_then_sort(tmp_path):
+    content = bag_content()
+    ref = read_rosbag(write_bag(tmp_path / "ref", "ros2", content))
+    stamps = list(content["imu_ns"])
+    stamps[50], stamps[51] = stamps[51], stamps[50]  # received in order, stamped out of order
+    path = write_bag(tmp_path / "run", "ros2", content, imu_stamp_ns=stamps)
+    with pytest.raises(DataError, match=r"/imu/data: timestamps are not sorted; 1 step\(s\) go backwards, first at "
+                                        r"index 51 .*repair=\('sort',\)"):
+        read_rosbag(path)
+    with pytest.warns(DataRepairWarning, match=r"/imu/data: sorted timestamps \(1 backward step"):
+        log = read_rosbag(path, repair="sort")
+    np.testing.assert_array_equal(log.accel_time_s, ref.accel_time_s)
+    i = int(np.searchsorted(log.accel_time_s, 0.5))  # stamp index 50 (t = 0.5 s)
+    assert (log.accel_z_mps2[i], log.accel_z_mps2[i + 1]) == (content["az"][51], content["az"][50])
+
+
+@requires_rosbags
+def test_rosbag_duplicated_receive_times_raise_then_drop(tmp_path):
+    content = bag_content()
+    content["cur_ns"][5] = content["cur_ns"][4]
+    path = write_bag(tmp_path / "run", "ros2", content)
+    with pytest.raises(DataError, match=r"/drive/current_left: 1 duplicated timestamp\(s\), first at index 5 "
+                                        r"\(t=0\.45 s\); pass repair=\('drop_duplicates',\)"):
+        read_rosbag(path)
+    with pytest.warns(DataRepairWarning) as record:
+        log = read_rosbag(path, repair="drop_duplicates")
+    assert sorted(str(w.message).split(": ", 1)[1] for w in record) == [
+        f"/drive/current_{side}: dropped 1 sample(s) with a duplicated timestamp" for side in ("left", "right")
+    ]
+    assert len(log) == 19 and log.current_left_a[4] == content["left"][4]
+
+
+@requires_rosbags
+def test_rosbag_nan_current_raises_then_interpolates(tmp_path):
+    content = bag_content()
+    content["left"][3] = float("nan")
+    path = write_bag(tmp_path / "run", "mcap", content)
+    with pytest.raises(DataError, match=r"/drive/current_left: column 'left' has 1 missing or non-finite value\(s\), "
+                                        r"first at index 3 \(t=0\.35 s\); pass repair=\('interpolate_nans',\)"):
+        read_rosbag(path)
+    with pytest.warns(DataRepairWarning, match=r"interpolated 1 missing value\(s\) of column 'left'"):
+        log = read_rosbag(path, repair=("interpolate_nans",))
+    assert log.current_left_a[3] == pytest.approx(0.5 * (content["left"][2] + content["left"][4]), abs=1e-12)
+
+
+@requires_rosbags
+@pytest.mark.parametrize("kind", ["ros2", "mcap"])
+def test_rosbag_empty_topic(tmp_path, kind):
+    path = write_bag(tmp_path / "run", kind, bag_content(), empty_topics=("/drive/current_right",))
+    with pytest.raises(DataError, match=r"topic '/drive/current_right' has no messages"):
+        read_rosbag(path)
 
 
 def test_rosbag_without_rosbags_names_the_extra(tmp_path, monkeypatch):
