@@ -23,6 +23,7 @@ from energy import (
     estimator_preset,
     read_borealtc,
     train_network,
+    window_starts,
 )
 
 DATA = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "borealtc"
@@ -134,6 +135,48 @@ def test_paper_preset_reproduces_the_source_network_shape():
     assert sum(isinstance(m, torch.nn.ReLU) for m in net.modules()) == 3
     assert (est.window_.length_samples, est.window_.length_s) == (10, pytest.approx(0.1))
     assert est.normalisers_["v"].absolute and est.normalisers_["current"].absolute
+
+
+def _n_windows(log: InteractionLog, est: VibrationCurrentEstimator) -> int:
+    grid = log.resample(est.rate_hz_, est.config_.resample_method)
+    return window_starts(len(grid), est.window_).size
+
+
+def test_paper_preset_trains_on_every_window_of_its_runs():
+    # no early stopping in the paper: nothing is held out for validation
+    assert estimator_preset("paper").validation_fraction == 0.0
+    logs = [_log(0, duration_s=12.0), _log(1, duration_s=9.0)]
+    est = VibrationCurrentEstimator(estimator_preset("paper").replace(max_epochs=1, n_spectrum_bins=400), seed=0).fit(logs)
+    assert est.n_train_windows_ == sum(_n_windows(lg, est) for lg in logs) == 120 + 90
+    assert est.history_[0].validation_loss == ()
+
+
+def test_no_validation_tail_works_end_to_end(tmp_path):
+    cfg = _small(max_epochs=3, patience=None, validation_fraction=0.0)
+    est = VibrationCurrentEstimator(cfg, seed=0).fit(_log(0))
+    assert est.n_train_windows_ == _n_windows(_log(0), est)
+    assert est.history_[0].validation_loss == () and est.history_[0].best_epoch == 2
+    held_out = VibrationCurrentEstimator(cfg.replace(validation_fraction=0.2), seed=0).fit(_log(0))
+    assert held_out.n_train_windows_ < est.n_train_windows_
+    again = VibrationCurrentEstimator.load(est.save(tmp_path / "m.pt"))
+    assert again.config_.validation_fraction == 0.0
+    assert np.array_equal(again.predict(_log(2)), est.predict(_log(2)))
+
+
+def test_predict_holds_the_ends_outside_the_imu_overlap():
+    log = _log(2)
+    late = (log.accel_time_s >= 5.0) & (log.accel_time_s <= 30.0)  # IMU from 5 s to 30 s of 40 s
+    short_imu = InteractionLog(log.time_s, log.v_mps, log.omega_radps, log.current_left_a, log.current_right_a,
+                               log.accel_time_s[late], log.accel_z_mps2[late], meta=log.meta)
+    est = VibrationCurrentEstimator(_small(max_epochs=2, patience=None, clip_output=False), seed=0).fit(_log(0))
+    pred = est.predict(short_imu)
+    before, after = short_imu.time_s < 5.0, short_imu.time_s > 30.0
+    assert before.sum() == 50 and after.sum() == 99
+    assert np.ptp(pred[before], axis=0).max() == 0.0 and np.ptp(pred[after], axis=0).max() == 0.0  # held
+    inside = pred[~before & ~after]
+    assert pred[before][0] == pytest.approx(inside[0], abs=1e-9)  # the nearest grid prediction
+    assert pred[after][0] == pytest.approx(inside[-1], abs=1e-9)
+    assert np.ptp(inside, axis=0).min() > 0.1  # inside the overlap the motion matters
 
 
 def test_default_works_at_the_drive_rate_with_windows_in_seconds():
