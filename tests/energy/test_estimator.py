@@ -250,7 +250,8 @@ def test_bad_parameters_and_short_logs_raise():
     with pytest.raises(UnknownNameError, match="loss"):
         TrainConfig(loss="l1")
     est = VibrationCurrentEstimator(_small(max_epochs=1, patience=None)).fit(_log(0))
-    assert not est.is_fitted or est.networks_  # fitted
+    assert est.is_fitted and len(est.networks_) == len(est.history_) == 1
+    assert len(est.history_[0].train_loss) == 1
     failed = VibrationCurrentEstimator(_small(window_s=5.0, patience=None, validation_fraction=0.0))
     with pytest.raises(DataError):
         failed.fit(_log(0, duration_s=3.0))
