@@ -92,6 +92,39 @@ def test_json_and_markdown_outputs(result, tmp_path):
     assert result.write_markdown(tmp_path / "evaluation.md").read_text() == md
 
 
+class _SpyModel(ConstantCurrentModel):
+    """Records, for every prediction, the run predicted and the runs the model was fitted on.
+
+    ``folds`` is a class attribute, so it survives the ``clone()`` the evaluation makes of
+    every prototype for every fold.
+    """
+
+    folds: list[tuple[str, tuple[str, ...]]] = []
+
+    def _fit(self, logs):
+        super()._fit(logs)
+        self.train_sources_ = tuple(log.meta.source for log in logs)
+
+    def _predict(self, log):
+        _SpyModel.folds.append((log.meta.source, self.train_sources_))
+        return super()._predict(log)
+
+
+@pytest.mark.parametrize("variant", ["per_ground", "ground_agnostic"])
+def test_no_fold_trains_on_its_held_out_run(logs, variant):
+    _SpyModel.folds.clear()
+    evaluate_current_models(logs, {"spy": _SpyModel()}, variants=(variant,))
+    ground = {log.meta.source: log.meta.ground_label for log in logs}
+    assert sorted(test for test, _ in _SpyModel.folds) == sorted(ground)  # every run held out once
+    for test, train in _SpyModel.folds:
+        assert test not in train
+        if variant == "per_ground":
+            assert set(train) == {s for s in ground if ground[s] == ground[test] and s != test}
+        else:
+            assert set(train) == set(ground) - {test}
+        assert len(train) == len(set(train))
+
+
 def test_single_run_ground_is_skipped_with_a_warning(logs):
     few = logs[:3] + [_log(20, "ice", 1.0)]
     with pytest.warns(TerrawattWarning, match="'ice' has 1 run"):
