@@ -297,6 +297,11 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--model", default="estimator", choices=list(CURRENT_MODELS), help="model kind (default estimator)")
     train.add_argument("--seed", type=int, default=0, help="random seed")
     train.add_argument("--out", type=Path, required=True, metavar="FILE", help="model file to write (e.g. model.pt)")
+    train.add_argument(
+        "--threads", type=int, metavar="N",
+        help="torch threads while training the estimator or paper model (default: torch's own setting)",
+    )
+    train.add_argument("--quiet", action="store_true", help="no progress bar with the training loss")
 
     mission = sub.add_parser(
         "mission",
@@ -434,11 +439,21 @@ def run_evaluate(args: argparse.Namespace) -> int:
 
 
 def run_train(args: argparse.Namespace) -> int:
-    """``terrawatt train``: fit one model on every run found and save it."""
-    from energy import read_borealtc
+    """``terrawatt train``: fit one model on every run found and save it.
 
-    logs = read_borealtc(args.data, grounds=args.grounds)
+    The learned models (``estimator``, ``paper``) show a progress bar with the loss unless
+    ``--quiet`` and train on ``--threads`` torch threads; the other models take neither.
+    """
+    from energy import VibrationCurrentEstimator, read_borealtc
+
+    if args.threads is not None and args.threads < 1:
+        raise InvalidParameterError(f"--threads must be a positive number of threads, got {args.threads!r}")
     model = _current_model(args.model, args.seed)
+    if isinstance(model, VibrationCurrentEstimator):
+        model = VibrationCurrentEstimator(model.config, seed=model.seed, progress=not args.quiet, n_threads=args.threads)
+    elif args.threads is not None:
+        raise InvalidParameterError(f"--threads applies to the estimator and paper models only, got --model {args.model!r}")
+    logs = read_borealtc(args.data, grounds=args.grounds)
     t0 = time.perf_counter()
     model.fit(logs)
     elapsed = time.perf_counter() - t0

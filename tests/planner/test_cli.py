@@ -176,6 +176,48 @@ def test_train_then_predict_round_trip(tmp_path, capsys):
     capsys.readouterr()
 
 
+@pytest.fixture
+def tiny_paper_preset(monkeypatch):
+    """The ``paper`` preset shrunk to train in a second on the two short fixture runs."""
+    from energy import ESTIMATOR_PRESETS, estimator_preset
+
+    small = estimator_preset("paper").replace(max_epochs=2, n_spectrum_bins=100, hidden_sizes=(8, 8, 8))
+    monkeypatch.setitem(ESTIMATOR_PRESETS, "paper", small)
+
+
+def test_train_passes_threads_and_shows_the_loss(tmp_path, capsys, monkeypatch, tiny_paper_preset):
+    import torch
+
+    calls = []
+    real = torch.set_num_threads
+    monkeypatch.setattr(torch, "set_num_threads", lambda n: (calls.append(n), real(n))[1])
+    before = torch.get_num_threads()
+    model = tmp_path / "paper.pt"
+    assert main(["train", "--data", str(FIXTURES), "--model", "paper", "--threads", "1", "--out", str(model)]) == 0
+    params = torch.load(model, map_location="cpu", weights_only=True)["params"]
+    assert (params["n_threads"], params["progress"]) == (1, True)
+    assert calls[0] == 1 and torch.get_num_threads() == before  # used while fitting, restored after
+    assert "loss=" in capsys.readouterr().err  # the progress bar's postfix
+
+    quiet = tmp_path / "quiet.pt"
+    assert main(["train", "--data", str(FIXTURES), "--model", "paper", "--quiet", "--out", str(quiet)]) == 0
+    params = torch.load(quiet, map_location="cpu", weights_only=True)["params"]
+    assert (params["n_threads"], params["progress"]) == (None, False)
+    assert "loss=" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [(["--model", "paper", "--threads", "0"], "--threads must be a positive number of threads, got 0"),
+     (["--model", "linear", "--threads", "2"], "--threads applies to the estimator and paper models only")],
+)
+def test_train_bad_threads_is_an_error(tmp_path, capsys, extra, message):
+    rc = main(["train", "--data", str(FIXTURES), *extra, "--out", str(tmp_path / "m.pt")])
+    assert rc == 2
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "m.pt").exists()
+
+
 def test_predict_with_a_corrupt_model_file_is_an_error(tmp_path, capsys):
     bad = tmp_path / "model.pt"
     bad.write_bytes(b"\x00garbage")
