@@ -134,7 +134,10 @@ def ground_spectra(
 
     Every run's whole-run spectrum (:func:`energy.whole_run_spectrum`) is computed on the
     same ``n_bins`` frequencies and the runs of a ground (``log.meta.ground_label``) are
-    averaged. ``"density"`` scaling (default) makes runs of different lengths comparable.
+    averaged. ``"density"`` scaling (default) gives broadband vibration the same level
+    whatever the run length, so runs of different lengths can be averaged; with
+    ``"amplitude"`` the level of runs shorter than ``n_bins / max_frequency_hz`` seconds
+    (40 s at the defaults) grows as ``1 / sqrt(duration)``.
 
     Returns
     -------
@@ -179,10 +182,20 @@ def plot_vibration_spectra(
     title: str | None = None,
     dpi: int = 100,
 ) -> Path:
-    """The paper's Fig. 7: vertical-vibration amplitude spectrum per ground with a moving average.
+    """The paper's Fig. 7: vertical-vibration spectrum per ground with a moving average.
 
     One panel per ground, sharing the axes: the spectrum in a light colour and its
     centred moving average over ``smoothing_bins`` bins.
+
+    The paper plots amplitude spectra of runs of one length (160 s). This figure plots the
+    amplitude spectral density by default, because runs differ in length (the BorealTC
+    runs last from about 10 s to over 4 min): the amplitude of broadband vibration — most
+    of what the ground does — falls as ``1 / sqrt(duration)`` for runs shorter than the
+    frequency grid's resolution (``n_bins / max_frequency_hz`` seconds), so amplitude
+    spectra would rank grounds by run length as much as by roughness, while the density's
+    level does not depend on the duration. Sinusoidal peaks (wheel or motor harmonics)
+    keep their amplitude only in ``scaling="amplitude"``, which reproduces the paper's
+    axis for runs of equal length. The y-axis label names the scaling and this reason.
 
     Parameters
     ----------
@@ -196,9 +209,9 @@ def plot_vibration_spectra(
     smoothing_bins : int
         Moving-average width in bins (>= 1).
     n_bins, max_frequency_hz, scaling :
-        Frequency grid and scaling (``"density"`` or ``"amplitude"``, see
+        Frequency grid and scaling (``"density"``, the default, or ``"amplitude"``, see
         :func:`energy.whole_run_spectrum`) when spectra are computed from logs; ``scaling``
-        also names the y axis.
+        also names the y axis (say which one precomputed spectra use).
     title : str, optional
     dpi : int
 
@@ -235,11 +248,15 @@ def plot_vibration_spectra(
         ax.plot(freq, spec, color="#bdbdbd", lw=0.6, label="spectrum")
         ax.plot(freq, uniform_filter1d(spec, smoothing_bins, mode="nearest"), color="#238b45", lw=1.6,
                 label=f"moving average ({smoothing_bins} bins)")
-        ax.set_ylabel("ASD (m/s² /√Hz)" if scaling == "density" else "amplitude (m/s²)")
         ax.set_title(ground, fontsize=10, loc="left")
         ax.grid(alpha=0.3)
         ax.legend(loc="upper right", fontsize=8)
     axes[-1, 0].set_xlabel("frequency (Hz)")
+    if scaling == "density":
+        fig.supylabel("amplitude spectral density (m/s²/√Hz)\nlevel independent of run length (runs differ in length)",
+                      fontsize=9)
+    else:
+        fig.supylabel("amplitude (m/s²)", fontsize=9)
     fig.suptitle(title or "vertical vibration spectra by ground")
     fig.tight_layout()
     return _save(fig, path, dpi)
