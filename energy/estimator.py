@@ -1182,25 +1182,8 @@ class VibrationCurrentEstimator(CurrentModel):
         configured, is then added at ``log.time_s``, and ``clip_output`` clips the result
         to ``current_range_a_``.
 
-        Parameters
-        ----------
-        log : InteractionLog
-            Uses ``time_s``, ``v_mps``, ``omega_radps`` and the acceleration stream; the
-            logged currents are ignored.
-
-        Returns
-        -------
-        numpy.ndarray, shape (N, 2)
-            ``[left, right]`` current (A) at ``log.time_s``.
-
-        Raises
-        ------
-        NotFittedError
-            Before :meth:`fit`.
-        InvalidParameterError
-            ``log`` is not an InteractionLog.
-        DataError
-            The streams do not overlap, or the overlap is shorter than one window.
+        Parameters, returns and errors as :meth:`CurrentModel.predict`; the ``DataError``
+        here means the streams do not overlap, or overlap for less than one window.
         """
         return super().predict(log)
 
