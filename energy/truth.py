@@ -51,7 +51,7 @@ from terrain.errors import (
     InvalidParameterError,
     UnknownNameError,
 )
-from terrain.grid import UNKNOWN_GROUND, TerrainMap
+from terrain.terrain_map import UNKNOWN_GROUND, TerrainMap
 
 from .excitation import CommandProfile, _check_uniform_time, _vector, waypoint_commands
 from .logs import InteractionLog, LogMeta

@@ -41,7 +41,7 @@ import numpy as np
 
 from terrain import TerrainMap
 from terrain.errors import InvalidParameterError, OutOfBoundsError, UnknownNameError
-from terrain.grid import UNKNOWN_GROUND
+from terrain.terrain_map import UNKNOWN_GROUND
 
 __all__ = [
     "EnergyCost",

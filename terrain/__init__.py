@@ -23,7 +23,8 @@ from .errors import (
     UnknownNameError,
 )
 from .geotiff import read_geotiff, write_geotiff
-from .grid import MAP_FORMAT_VERSION, UNKNOWN_GROUND, TerrainMap
+from .grid import Grid
+from .terrain_map import MAP_FORMAT_VERSION, UNKNOWN_GROUND, TerrainMap
 from .procedural import (
     EXAMPLE_GOAL_XY_M,
     EXAMPLE_START_XY_M,
@@ -55,6 +56,7 @@ from .vector import (
 __all__ = [
     # the map
     "TerrainMap",
+    "Grid",
     "MAP_FORMAT_VERSION",
     "UNKNOWN_GROUND",
     # builders

@@ -1,8 +1,14 @@
-"""Atomic file writes: a temporary file beside the target, fsync, then one rename.
+"""Atomic file writes: a temporary file beside the target, fsync, one rename, fsync the folder.
 
 Every file terrawatt saves (maps, models, logs, results, plots) goes through here, so a
 crash or a full disk never leaves a half-written file under the target's name and never
 destroys the previous version: the target is either the old file or the complete new one.
+
+Temporaries are named ``.<target name>.<pid>.<random>.tmp`` beside the target. A process
+killed mid-save (SIGKILL, power loss) cannot remove its own; the next save of the same
+target removes every temporary of that target whose writing process is gone
+(:func:`remove_stale_temporaries`), so leftovers never accumulate, and a save running at
+the same time in another live process is never disturbed.
 """
 
 from __future__ import annotations
@@ -10,16 +16,123 @@ from __future__ import annotations
 import json
 import math
 import os
+import shutil
 import tempfile
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, Any
 
-__all__ = ["FILE_MODE", "atomic_path", "atomic_open", "write_bytes_atomic", "write_text_atomic", "write_json_atomic"]
+__all__ = [
+    "FILE_MODE",
+    "DIR_MODE",
+    "atomic_path",
+    "atomic_open",
+    "atomic_directory",
+    "write_bytes_atomic",
+    "write_text_atomic",
+    "write_json_atomic",
+    "save_figure",
+    "fsync_directory",
+    "remove_stale_temporaries",
+    "check_output_path",
+]
 
 #: Permissions of written files (``mkstemp`` alone would leave them owner-only, 0600).
 FILE_MODE = 0o644
+#: Permissions of written directories (``mkdtemp`` alone would leave them owner-only, 0700).
+DIR_MODE = 0o755
+
+
+def _temp_prefix(target: Path) -> str:
+    return f".{target.name}.{os.getpid()}."
+
+
+def _pid_alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # alive, owned by someone else
+        return True
+    except OSError:
+        return False
+    return True
+
+
+def remove_stale_temporaries(path: str | os.PathLike[str]) -> list[Path]:
+    """Remove temporaries of ``path`` left by saves whose process is gone; return them.
+
+    Only names of the form ``.<target name>.<pid>.<random>.tmp`` (files or folders) beside
+    ``path`` are considered, and only those whose ``pid`` is not a running process. A save
+    of another target, or one still running, is never touched.
+    """
+    target = Path(path)
+    removed: list[Path] = []
+    parent = target.parent
+    if not parent.is_dir():
+        return removed
+    prefix = f".{target.name}."
+    for entry in parent.iterdir():
+        name = entry.name
+        if not (name.startswith(prefix) and name.endswith(".tmp")):
+            continue
+        pid_text = name[len(prefix):].split(".", 1)[0]
+        if not pid_text.isdigit() or _pid_alive(int(pid_text)):
+            continue
+        try:
+            if entry.is_dir() and not entry.is_symlink():
+                shutil.rmtree(entry)
+            else:
+                entry.unlink()
+        except FileNotFoundError:  # removed meanwhile by another cleaner
+            continue
+        removed.append(entry)
+    return removed
+
+
+def fsync_directory(path: str | os.PathLike[str]) -> None:
+    """Flush a directory's entries (a rename into it) to disk; a no-op where unsupported."""
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:  # pragma: no cover - platforms without directory descriptors
+        return
+    try:
+        os.fsync(fd)
+    except OSError:  # pragma: no cover - file systems that refuse fsync on directories
+        pass
+    finally:
+        os.close(fd)
+
+
+def check_output_path(path: str | os.PathLike[str], name: str = "path", *, directory: bool = False) -> Path:
+    """Check, before any work is done, that ``path`` can be written as a file (or a folder).
+
+    A file target must not be an existing directory and its parent must not be an existing
+    file; a folder target must not be an existing file. Missing parents are fine (writers
+    create them).
+
+    Raises
+    ------
+    InvalidParameterError
+        The target or one of its parents is of the wrong kind.
+    """
+    from .errors import InvalidParameterError
+
+    target = Path(path)
+    if directory:
+        if target.exists() and not target.is_dir():
+            raise InvalidParameterError(f"{name} {str(target)!r} is a file; expected a folder (or a new name)")
+    elif target.is_dir():
+        raise InvalidParameterError(f"{name} {str(target)!r} is a directory; expected a file name")
+    for parent in target.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise InvalidParameterError(f"{name} {str(target)!r} lies under {str(parent)!r}, which is a file")
+            break
+    return target
 
 
 @contextmanager
@@ -51,9 +164,10 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     'complete'
     >>> folder.cleanup()
     """
-    target = Path(path)
+    target = check_output_path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
+    remove_stale_temporaries(target)
+    fd, name = tempfile.mkstemp(prefix=_temp_prefix(target), suffix=".tmp", dir=target.parent)
     os.close(fd)
     tmp = Path(name)
     try:
@@ -65,6 +179,42 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     except BaseException:
         tmp.unlink(missing_ok=True)
         raise
+    fsync_directory(target.parent)
+
+
+@contextmanager
+def atomic_directory(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """Yield a new empty temporary folder beside ``path`` to fill; on success it becomes ``path``.
+
+    The folder must not exist yet, or be a folder that the caller means to replace: it is
+    moved aside first and removed only once the new one is in place (if the rename fails it
+    is put back). Files written inside should be fsynced by the writer; the folder itself
+    and its parent are fsynced here. If the block raises, the temporary folder is removed.
+    """
+    target = check_output_path(path, directory=True)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(target)
+    tmp = Path(tempfile.mkdtemp(prefix=_temp_prefix(target), suffix=".tmp", dir=target.parent))
+    try:
+        yield tmp
+        os.chmod(tmp, DIR_MODE)
+        fsync_directory(tmp)
+        if target.exists():
+            aside = Path(tempfile.mkdtemp(prefix=_temp_prefix(target), suffix=".tmp", dir=target.parent))
+            old = aside / "old"
+            os.rename(target, old)
+            try:
+                os.rename(tmp, target)
+            except BaseException:
+                os.rename(old, target)
+                raise
+            shutil.rmtree(aside, ignore_errors=True)
+        else:
+            os.rename(tmp, target)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    fsync_directory(target.parent)
 
 
 @contextmanager
@@ -75,7 +225,9 @@ def atomic_open(path: str | os.PathLike[str], mode: str = "wb", **kwargs: Any) -
     (e.g. ``encoding``, ``newline``).
     """
     if not mode.startswith("w"):
-        raise ValueError(f"atomic_open needs a write mode, got {mode!r}")
+        from .errors import InvalidParameterError
+
+        raise InvalidParameterError(f"atomic_open needs a write mode, got {mode!r}")
     with atomic_path(path) as tmp, open(tmp, mode, **kwargs) as fh:
         yield fh
         fh.flush()
@@ -125,3 +277,16 @@ def write_json_atomic(
     encoded = json.loads(json.dumps(data, default=default or _json_default))
     text = json.dumps(_finite(encoded), indent=indent, allow_nan=False) + "\n"
     return write_text_atomic(path, text)
+
+
+def save_figure(fig: Any, path: str | os.PathLike[str], *, dpi: int = 150, **savefig_kwargs: Any) -> Path:
+    """Write a matplotlib figure atomically; return the path.
+
+    The format comes from ``path``'s suffix (PNG when it has none); ``savefig_kwargs`` go to
+    ``Figure.savefig``. The figure is left open: the caller owns it (and closes it).
+    """
+    target = Path(path)
+    savefig_kwargs.setdefault("format", target.suffix.lstrip(".").lower() or "png")
+    with atomic_path(target) as tmp:
+        fig.savefig(tmp, dpi=dpi, **savefig_kwargs)
+    return target

@@ -20,7 +20,7 @@ from .errors import (
     OptionalDependencyError,
     UnknownNameError,
 )
-from .grid import UNKNOWN_GROUND, TerrainMap
+from .terrain_map import UNKNOWN_GROUND, TerrainMap
 
 __all__ = ["read_geotiff", "write_geotiff"]
 

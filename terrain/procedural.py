@@ -11,7 +11,7 @@ import scipy.fft
 from scipy import ndimage
 
 from .errors import InvalidParameterError, UnknownNameError
-from .grid import UNKNOWN_GROUND, TerrainMap
+from .terrain_map import UNKNOWN_GROUND, TerrainMap
 
 __all__ = [
     "procedural_map",

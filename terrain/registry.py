@@ -66,7 +66,7 @@ from .errors import (
     UnknownNameError,
 )
 from .formats import check_format_version, read_versioned_npz
-from .grid import TerrainMap
+from .terrain_map import TerrainMap
 
 __all__ = [
     "CurrentModelProtocol",

@@ -20,7 +20,7 @@ from .errors import (
     TerrawattWarning,
     UnknownNameError,
 )
-from .grid import TerrainMap
+from .terrain_map import TerrainMap
 
 __all__ = [
     "rasterize_polygons",

@@ -1,0 +1,228 @@
+"""Argument validation shared by the whole library: one checker per kind of argument.
+
+Every public function of ``terrain``, ``energy`` and ``planner`` checks its user-facing
+arguments through these, so one kind of argument follows one rule everywhere: a seed valid
+in one call is valid in every call, a string where a number is expected names the parameter,
+and every failure is an :class:`~terrain.errors.InvalidParameterError` (also a
+``ValueError``) whose message names the parameter, shows the value and says what was
+expected.
+
+Examples
+--------
+>>> check_real("speed_mps", 0.5, low=0.0, low_inclusive=False)
+0.5
+>>> check_real("speed_mps", "fast")
+Traceback (most recent call last):
+...
+terrain.errors.InvalidParameterError: speed_mps must be a real number, got 'fast' (str)
+>>> check_seed(None), check_seed(7)
+(None, 7)
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+
+from .errors import InvalidParameterError, UnknownNameError
+
+__all__ = [
+    "SEED_LIMIT",
+    "check_real",
+    "check_optional_real",
+    "check_int",
+    "check_seed",
+    "check_text",
+    "check_choice",
+    "check_bool",
+    "real_array",
+    "readonly",
+    "fmt_number",
+]
+
+#: Seeds are ``None`` or integers in ``[0, SEED_LIMIT)`` (numpy's and OMPL's common range).
+SEED_LIMIT = 2**32
+
+
+def _label(name: str, owner: str | None) -> str:
+    return f"{owner}.{name}" if owner else name
+
+
+def _describe(value: object) -> str:
+    text = repr(value)
+    if len(text) > 80:
+        text = text[:77] + "..."
+    return f"{text} ({type(value).__name__})"
+
+
+def fmt_number(value: float, digits: int = 4) -> str:
+    """A number rounded for people: ``49.000000000001066`` reads ``49``.
+
+    Examples
+    --------
+    >>> fmt_number(49.000000000001066), fmt_number(0.0123456), fmt_number(1e308)
+    ('49', '0.01235', '1e+308')
+    """
+    if isinstance(value, numbers.Integral) and not isinstance(value, bool):
+        return str(int(value))
+    v = float(value)
+    if not math.isfinite(v):
+        return repr(v)
+    return f"{v:.{digits}g}"
+
+
+def check_real(
+    name: str,
+    value: Any,
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    low_inclusive: bool = True,
+    high_inclusive: bool = True,
+    owner: str | None = None,
+) -> float:
+    """A finite real number in an optional range, as ``float``.
+
+    Booleans, strings, ``None``, NaN and infinities are refused (numpy scalars and 0-d
+    arrays of a real dtype are accepted).
+
+    Parameters
+    ----------
+    name : str
+        The parameter's name, as the caller spells it.
+    value : object
+        The value to check.
+    low, high : float, optional
+        Bounds; ``low_inclusive`` / ``high_inclusive`` say whether they are allowed.
+    owner : str, optional
+        Prefix of the name in messages (e.g. a dataclass: ``"RobotParams"``).
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a finite real number, or out of range.
+    """
+    label = _label(name, owner)
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise InvalidParameterError(f"{label} must be a real number, got {_describe(value)}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise InvalidParameterError(f"{label} must be finite, got {value!r}")
+    if low is not None and (v < low or (v == low and not low_inclusive)):
+        op = ">=" if low_inclusive else ">"
+        raise InvalidParameterError(f"{label} must be {op} {fmt_number(low)}, got {value!r}")
+    if high is not None and (v > high or (v == high and not high_inclusive)):
+        op = "<=" if high_inclusive else "<"
+        raise InvalidParameterError(f"{label} must be {op} {fmt_number(high)}, got {value!r}")
+    return v
+
+
+def check_optional_real(name: str, value: Any, **bounds: Any) -> float | None:
+    """``None``, or :func:`check_real` of ``value`` with the same keyword bounds."""
+    return None if value is None else check_real(name, value, **bounds)
+
+
+def check_int(
+    name: str, value: Any, *, low: int | None = None, high: int | None = None, owner: str | None = None
+) -> int:
+    """An integer (not a bool, not a float) in the closed range ``[low, high]``, as ``int``.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not an integer, or out of range.
+    """
+    label = _label(name, owner)
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value[()]
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
+        raise InvalidParameterError(f"{label} must be an integer, got {_describe(value)}")
+    v = int(value)
+    if low is not None and v < low:
+        raise InvalidParameterError(f"{label} must be >= {low}, got {value!r}")
+    if high is not None and v > high:
+        raise InvalidParameterError(f"{label} must be <= {high}, got {value!r}")
+    return v
+
+
+def check_seed(seed: Any, name: str = "seed") -> int | None:
+    """The library's one seed rule: ``None`` (fresh entropy) or an integer in ``[0, 2**32)``.
+
+    Raises
+    ------
+    InvalidParameterError
+        Anything else (negative, too large, a float, a bool, a string).
+    """
+    if seed is None:
+        return None
+    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, numbers.Integral) or not 0 <= int(seed) < SEED_LIMIT:
+        raise InvalidParameterError(f"{name} must be None or an integer in [0, 2**32), got {_describe(seed)}")
+    return int(seed)
+
+
+def check_text(name: str, value: Any, *, owner: str | None = None) -> str:
+    """A non-empty, non-blank string.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a string, or blank.
+    """
+    if not isinstance(value, str) or not value.strip():
+        raise InvalidParameterError(f"{_label(name, owner)} must be a non-empty string, got {_describe(value)}")
+    return value
+
+
+def check_choice(name: str, value: Any, choices: Iterable[str]) -> str:
+    """One of ``choices`` (a string).
+
+    Raises
+    ------
+    UnknownNameError
+        Not one of them; the message lists the valid names.
+    """
+    options = tuple(choices)
+    if not isinstance(value, str) or value not in options:
+        raise UnknownNameError(f"{name} must be one of {list(options)!r}, got {value!r}")
+    return value
+
+
+def check_bool(name: str, value: Any) -> bool:
+    """A real ``bool`` (numpy's too): ``"no"`` or ``0`` are refused rather than read as truth values."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise InvalidParameterError(f"{name} must be True or False, got {_describe(value)}")
+    return bool(value)
+
+
+def real_array(name: str, value: Any, *, ndim: int | None = None, finite: bool = True) -> np.ndarray:
+    """``value`` as a float64 array (a new array), optionally of a given ``ndim``, all finite.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not numeric (strings, objects), wrong number of dimensions, or NaN / inf entries
+        (with ``finite``); the message counts the bad entries.
+    """
+    try:
+        arr = np.array(value, dtype=np.float64, copy=True)
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(f"{name} must be an array of real numbers, got {_describe(value)}") from exc
+    if ndim is not None and arr.ndim != ndim:
+        raise InvalidParameterError(f"{name} must be a {ndim}-D array, got shape {arr.shape!r}")
+    if finite and not np.all(np.isfinite(arr)):
+        n_bad = int(np.count_nonzero(~np.isfinite(arr)))
+        raise InvalidParameterError(f"{name} has {n_bad} NaN/inf entries of {arr.size}; expected finite values")
+    return arr
+
+
+def readonly(value: Any, dtype: Any = None) -> np.ndarray:
+    """A read-only copy of ``value`` (as ``dtype`` when given): results never alias inputs."""
+    out = np.array(value, dtype=dtype, copy=True)
+    out.setflags(write=False)
+    return out
