@@ -46,7 +46,8 @@ from .evaluation import (
     ScoreSummary,
     evaluate_current_models,
 )
-from .excitation import CommandProfile, excitation_commands, waypoint_commands
+from .commands import CommandProfile
+from .excitation import excitation_commands
 from .features import (
     DEFAULT_T_INTERVAL_S,
     SOURCE_CURRENT_RANGE_A,
@@ -84,6 +85,7 @@ from .params import (
     robot_preset,
 )
 from .physics import EFFECTS, PhysicsEnergyModel, PowerBreakdown
+from .profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, drive_profile, waypoint_commands
 from .plots import ground_spectra, plot_current_estimate, plot_vibration_spectra
 from .readers import (
     read_borealtc,
@@ -139,6 +141,9 @@ __all__ = [
     "CommandProfile",
     "excitation_commands",
     "waypoint_commands",
+    "drive_profile",
+    "DEFAULT_ACCEL_MPS2",
+    "DEFAULT_YAW_ACCEL_RADPS2",
     "TruthSimulator",
     "TruthRun",
     "NoiseModel",

@@ -53,7 +53,8 @@ from terrain.errors import (
 )
 from terrain.terrain_map import UNKNOWN_GROUND, TerrainMap
 
-from .excitation import CommandProfile, _check_uniform_time, _vector, waypoint_commands
+from .commands import CommandProfile, command_series, uniform_step_s
+from .profiles import waypoint_commands
 from .logs import InteractionLog, LogMeta
 from .params import GRAVITY_MPS2, GroundParams, RobotParams, ground_preset
 from .physics import EFFECTS, PhysicsEnergyModel, PowerBreakdown
@@ -598,13 +599,13 @@ class TruthSimulator:
         UnknownNameError
             A ground name that is not one of the simulator's grounds.
         """
-        t = _vector("time_s", time_s, None)
+        t = command_series("time_s", time_s, None)
         if t.size < 2:
             raise InvalidParameterError(f"time_s must hold at least 2 samples, got {t.size}")
-        _check_uniform_time("time_s", t)
+        uniform_step_s("time_s", t)
         n = t.size
-        v = _vector("v_cmd_mps", v_cmd_mps, n)
-        w = _vector("omega_cmd_radps", omega_cmd_radps, n)
+        v = command_series("v_cmd_mps", v_cmd_mps, n)
+        w = command_series("omega_cmd_radps", omega_cmd_radps, n)
         gidx = self._ground_index(ground, n)
         try:
             slope = np.asarray(slope_rad, dtype=np.float64)

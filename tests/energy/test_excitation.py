@@ -1,14 +1,12 @@
-"""Tests of energy.excitation: the paper's excitation pattern and waypoint command profiles."""
+"""Tests of energy.excitation: the paper's excitation pattern."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from energy import CommandProfile, excitation_commands, waypoint_commands
-from terrain import DataError, InvalidParameterError, UnknownNameError
-
-_trapezoid = getattr(np, "trapezoid", None) or np.trapz
+from energy import excitation_commands
+from terrain import InvalidParameterError, UnknownNameError
 
 
 # ------------------------------------------------------------------ excitation pattern
@@ -67,75 +65,15 @@ def test_excitation_bad_input(kwargs: dict, exc: type, match: str) -> None:
         excitation_commands(**kwargs)
 
 
-# ------------------------------------------------------------------ waypoint profiles
-def test_straight_segment_trapezoid_closed_form() -> None:
-    # 2 m at 0.5 m/s with 0.5 m/s^2: 1 s up, 3 s cruise, 1 s down = 5 s
-    p = waypoint_commands([[0.0, 0.0], [2.0, 0.0]], 0.5, accel_mps2=0.5, dt_s=0.001)
-    assert p.duration_s == pytest.approx(5.0, abs=1e-3)
-    assert p.v_mps.max() == pytest.approx(0.5)
-    assert _trapezoid(p.v_mps, p.time_s) == pytest.approx(2.0, abs=1e-5)
-    assert p.pose_xyh[-1, :2] == pytest.approx([2.0, 0.0])
-    assert p.v_mps[0] == 0.0 and p.v_mps[-1] == 0.0
-    assert np.all(p.omega_radps == 0.0)
+def test_excitation_seed_follows_the_seed_rule() -> None:
+    # one seed rule everywhere: None or an int in [0, 2**32)
+    assert len(excitation_commands(10.0, seed=None)) == 1000
+    assert len(excitation_commands(10.0, seed=2**32 - 1)) == 1000
+    for bad in (-1, 2**32, True, "1"):
+        with pytest.raises(InvalidParameterError, match=r"seed must be None or an integer in \[0, 2\*\*32\)"):
+            excitation_commands(10.0, seed=bad)
 
 
-def test_short_segment_is_triangular() -> None:
-    p = waypoint_commands([[0.0, 0.0], [0.1, 0.0]], 1.0, accel_mps2=0.5, dt_s=0.001)
-    assert p.v_mps.max() == pytest.approx(np.sqrt(0.1 * 0.5), abs=1e-3)
-    assert p.duration_s == pytest.approx(2 * np.sqrt(0.1 / 0.5), abs=2e-3)
-
-
-def test_turns_in_place_by_the_heading_change() -> None:
-    wp = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
-    p = waypoint_commands(wp, 0.4, turn_rate_radps=0.5, dt_s=0.001)
-    turning = p.omega_radps != 0
-    assert np.all(p.v_mps[turning] == 0)  # pivot turns only
-    assert _trapezoid(p.omega_radps, p.time_s) == pytest.approx(np.pi, abs=1e-3)  # two left turns
-    assert p.omega_radps.max() == pytest.approx(0.5)
-    assert p.pose_xyh[-1] == pytest.approx([0.0, 1.0, np.pi])
-    # positions follow the commanded speeds
-    h = p.pose_xyh[:, 2]
-    x = np.concatenate(([0.0], np.cumsum(0.5 * np.diff(p.time_s) * (p.v_mps[1:] * np.cos(h[1:]) + p.v_mps[:-1] * np.cos(h[:-1])))))
-    assert np.abs(x - p.pose_xyh[:, 0]).max() < 1e-3
-
-
-def test_start_heading_adds_a_first_turn() -> None:
-    p = waypoint_commands([[0.0, 0.0], [0.0, 1.0]], 0.4, start_heading_rad=0.0, dt_s=0.001)
-    assert _trapezoid(p.omega_radps, p.time_s) == pytest.approx(np.pi / 2, abs=1e-3)
-    assert p.pose_xyh[0, 2] == pytest.approx(0.0)
-
-
-@pytest.mark.parametrize(
-    ("args", "kwargs", "match"),
-    [
-        (([[0.0, 0.0]], 0.5), {}, "shape"),
-        (([[0.0, 0.0], [0.0, 0.0], [1.0, 0.0]], 0.5), {}, "repeated"),
-        (([[0.0, 0.0], [np.nan, 0.0]], 0.5), {}, "finite"),
-        (([[0.0, 0.0], [1.0, 0.0]], 0.0), {}, "speed_mps"),
-        (([[0.0, 0.0], [1.0, 0.0]], 0.5), {"accel_mps2": -1.0}, "accel_mps2"),
-    ],
-)
-def test_waypoint_bad_input(args: tuple, kwargs: dict, match: str) -> None:
-    with pytest.raises(InvalidParameterError, match=match):
-        waypoint_commands(*args, **kwargs)
-
-
-# ------------------------------------------------------------------ CommandProfile
-def test_profile_from_poses_recovers_the_commands() -> None:
-    p = waypoint_commands([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]], 0.4, dt_s=0.005)
-    q = CommandProfile.from_poses(p.time_s, p.pose_xyh)
-    assert np.abs(q.v_mps - p.v_mps).max() < 0.01
-    assert np.abs(q.omega_radps - p.omega_radps).max() < 0.02
-
-
-def test_profile_validation() -> None:
-    with pytest.raises(DataError, match="uniformly spaced"):
-        CommandProfile([0.0, 0.1, 0.3], [0.0] * 3, [0.0] * 3)
-    with pytest.raises(DataError, match="strictly increasing"):
-        CommandProfile([0.0, 0.1, 0.1], [0.0] * 3, [0.0] * 3)
-    with pytest.raises(InvalidParameterError, match="length of time_s"):
-        CommandProfile([0.0, 0.1, 0.2], [0.0] * 2, [0.0] * 3)
-    with pytest.raises(DataError, match="finite"):
-        CommandProfile([0.0, 0.1, 0.2], [0.0, np.nan, 0.0], [0.0] * 3)
-    with pytest.raises(InvalidParameterError, match="pose_xyh"):
-        CommandProfile([0.0, 0.1, 0.2], [0.0] * 3, [0.0] * 3, np.zeros((3, 2)))
+def test_excitation_string_duration_names_the_parameter() -> None:
+    with pytest.raises(InvalidParameterError, match="duration_s must be a real number, got 'long'"):
+        excitation_commands("long")

@@ -1,0 +1,284 @@
+"""Stop-turn-go command profiles along a waypoint route (closed form, vectorised).
+
+:func:`waypoint_commands` builds the profile along a polyline: at every waypoint the robot
+pivots in place to the next segment's heading (trapezoidal yaw rate), then drives the
+segment from rest to rest (trapezoidal speed). :func:`drive_profile` is the same on a
+planned route (consecutive repeated waypoints dropped): the motion a mission drives and a
+planner's costs price. :func:`drivable_waypoints` and :func:`planned_durations_s` expose
+the route cleaning and the per-segment durations, in closed form, without sampling.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from terrain.checks import check_optional_real, check_real
+from terrain.errors import InvalidParameterError
+
+from .commands import CommandProfile
+
+__all__ = [
+    "DEFAULT_ACCEL_MPS2",
+    "DEFAULT_YAW_ACCEL_RADPS2",
+    "waypoint_commands",
+    "drive_profile",
+    "drivable_waypoints",
+    "move_duration_s",
+    "planned_durations_s",
+]
+
+#: Default acceleration limits of the stop-turn-go profile (m/s^2, rad/s^2).
+DEFAULT_ACCEL_MPS2 = 0.5
+DEFAULT_YAW_ACCEL_RADPS2 = 1.0
+
+
+def _positive(name: str, value: Any) -> float:
+    return check_real(name, value, low=0.0, low_inclusive=False)
+
+
+def _trapezoid_times(distance: np.ndarray, v_max: float, a_max: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Peak speed, acceleration time and total time of rest-to-rest trapezoid moves."""
+    full = distance >= v_max**2 / a_max
+    peak = np.where(full, v_max, np.sqrt(distance * a_max))
+    t_acc = peak / a_max
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t_cruise = np.where(full, (distance - v_max**2 / a_max) / v_max, 0.0)
+    return peak, t_acc, 2.0 * t_acc + t_cruise
+
+
+def _trapezoid_eval(tau: np.ndarray, distance: np.ndarray, peak: np.ndarray, t_acc: np.ndarray,
+                    total: np.ndarray, a_max: float) -> tuple[np.ndarray, np.ndarray]:
+    """Position and speed of a trapezoid move ``tau`` seconds after its start (clamped)."""
+    tau = np.clip(tau, 0.0, total)
+    t_dec = total - t_acc
+    acc_phase = tau < t_acc
+    dec_phase = tau > t_dec
+    s_cruise = 0.5 * a_max * t_acc**2 + peak * (tau - t_acc)
+    rem = total - tau
+    s = np.where(acc_phase, 0.5 * a_max * tau**2, np.where(dec_phase, distance - 0.5 * a_max * rem**2, s_cruise))
+    v = np.where(acc_phase, a_max * tau, np.where(dec_phase, a_max * rem, peak))
+    return s, v
+
+
+def waypoint_commands(
+    waypoints_xy_m: Any,
+    speed_mps: float,
+    *,
+    accel_mps2: float = DEFAULT_ACCEL_MPS2,
+    turn_rate_radps: float = 0.5,
+    yaw_accel_radps2: float = DEFAULT_YAW_ACCEL_RADPS2,
+    dt_s: float = 0.01,
+    start_heading_rad: float | None = None,
+) -> CommandProfile:
+    """Stop-turn-go commands along a polyline, with the reference pose.
+
+    At each waypoint the robot turns in place to the next segment's heading (the shorter
+    way round) with a trapezoidal yaw-rate profile (``turn_rate_radps``,
+    ``yaw_accel_radps2``), then drives the segment from rest to rest with a trapezoidal
+    speed profile (``speed_mps``, ``accel_mps2``); segments too short to reach the
+    cruise speed get a triangular profile. The first turn happens only when
+    ``start_heading_rad`` is given. Positions and headings follow in closed form.
+
+    Parameters
+    ----------
+    waypoints_xy_m : array_like, shape (K, 2)
+        Route vertices (m), K >= 2, no two consecutive ones equal.
+    speed_mps : float
+        Cruise speed (m/s), > 0.
+    accel_mps2, turn_rate_radps, yaw_accel_radps2 : float
+        Acceleration limit (m/s^2), pivot yaw rate (rad/s) and yaw-acceleration limit
+        (rad/s^2), all > 0.
+    dt_s : float
+        Sampling period (s), > 0.
+    start_heading_rad : float, optional
+        Heading at the start; ``None`` starts facing the first segment.
+
+    Returns
+    -------
+    CommandProfile
+        Samples ``k * dt_s`` up to the first one at or after the end of the route (which
+        is at rest at the last waypoint), with ``pose_xyh`` (heading wrapped to (-pi, pi]).
+
+    Raises
+    ------
+    InvalidParameterError
+        Bad shapes, non-finite or repeated waypoints, non-positive limits.
+
+    Examples
+    --------
+    >>> p = waypoint_commands([[0.0, 0.0], [2.0, 0.0]], 0.5, dt_s=0.05)
+    >>> round(float(p.pose_xyh[-1, 0]), 6), float(p.v_mps[-1])
+    (2.0, 0.0)
+    """
+    try:
+        wp = np.array(waypoints_xy_m, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"waypoints_xy_m must be a numeric (K, 2) array, got {waypoints_xy_m!r:.80}") from None
+    if wp.ndim != 2 or wp.shape[1] != 2 or wp.shape[0] < 2:
+        raise InvalidParameterError(f"waypoints_xy_m must have shape (K, 2) with K >= 2, got {wp.shape!r}")
+    if not np.all(np.isfinite(wp)):
+        raise InvalidParameterError("waypoints_xy_m must be finite (no NaN or inf)")
+    v_max = _positive("speed_mps", speed_mps)
+    a_max = _positive("accel_mps2", accel_mps2)
+    w_max = _positive("turn_rate_radps", turn_rate_radps)
+    al_max = _positive("yaw_accel_radps2", yaw_accel_radps2)
+    dt = _positive("dt_s", dt_s)
+    delta = np.diff(wp, axis=0)
+    length = np.hypot(delta[:, 0], delta[:, 1])
+    if np.any(length == 0):
+        i = int(np.argmax(length == 0))
+        raise InvalidParameterError(
+            f"waypoints_xy_m[{i}] and waypoints_xy_m[{i + 1}] are equal ({wp[i].tolist()!r}); "
+            "remove repeated waypoints"
+        )
+    heading = np.arctan2(delta[:, 1], delta[:, 0])
+    h_start = check_optional_real("start_heading_rad", start_heading_rad)
+    if h_start is None:
+        h_start = heading[0]
+    prev = np.concatenate(([h_start], heading[:-1]))
+    turn = np.angle(np.exp(1j * (heading - prev)))  # wrapped to (-pi, pi]
+    k = heading.size
+    # phases alternate: turn_0, straight_0, turn_1, straight_1, ...
+    dist = np.empty(2 * k)
+    dist[0::2] = np.abs(turn)
+    dist[1::2] = length
+    is_turn = np.zeros(2 * k, dtype=bool)
+    is_turn[0::2] = True
+    peak = np.empty(2 * k)
+    t_acc = np.empty(2 * k)
+    total = np.empty(2 * k)
+    for mask, vm, am in ((is_turn, w_max, al_max), (~is_turn, v_max, a_max)):
+        p, ta, tt = _trapezoid_times(dist[mask], vm, am)
+        peak[mask], t_acc[mask], total[mask] = p, ta, tt
+    starts = np.concatenate(([0.0], np.cumsum(total)))
+    t_end = float(starts[-1])
+    n = int(math.ceil(t_end / dt - 1e-9)) + 1
+    t = np.arange(n, dtype=np.float64) * dt
+    phase = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, 2 * k - 1)
+    tau = t - starts[phase]
+    a_phase = np.where(is_turn[phase], al_max, a_max)
+    s, rate = _trapezoid_eval(tau, dist[phase], peak[phase], t_acc[phase], total[phase], a_phase)
+    seg = phase // 2
+    turning = is_turn[phase]
+    sign = np.sign(turn[seg])
+    v = np.where(turning, 0.0, rate)
+    omega = np.where(turning, sign * rate, 0.0)
+    unit = delta / length[:, None]
+    xy = np.where(turning[:, None], wp[seg], wp[seg] + s[:, None] * unit[seg])
+    h = np.where(turning, prev[seg] + sign * s, heading[seg])
+    h = np.pi - np.mod(np.pi - h, 2.0 * np.pi)
+    return CommandProfile(t, v, omega, np.column_stack([xy, h]))
+
+
+def drivable_waypoints(waypoints_m: Any) -> tuple[np.ndarray, np.ndarray]:
+    """A route's waypoints without consecutive repeats, and the route segment of each kept segment.
+
+    Parameters
+    ----------
+    waypoints_m : array_like, shape (K, 2)
+        Route vertices (m).
+
+    Returns
+    -------
+    points : ndarray, shape (M + 1, 2)
+        The vertices of the ``M`` segments of positive length.
+    kept : ndarray of int, shape (M,)
+        Index in the original route of each kept segment.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a finite (K >= 2, 2) array, or no segment of positive length.
+
+    Examples
+    --------
+    >>> pts, kept = drivable_waypoints([[0, 0], [0, 0], [1, 0]])
+    >>> pts.tolist(), kept.tolist()
+    ([[0.0, 0.0], [1.0, 0.0]], [1])
+    """
+    try:
+        wp = np.asarray(waypoints_m, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"waypoints_m must be a numeric (K, 2) array, got {waypoints_m!r:.80}") from None
+    if wp.ndim != 2 or wp.shape[1] != 2 or len(wp) < 2:
+        raise InvalidParameterError(f"waypoints_m must have shape (K >= 2, 2), got {wp.shape!r}")
+    if not np.all(np.isfinite(wp)):
+        raise InvalidParameterError("waypoints_m must be finite (no NaN or inf)")
+    length = np.hypot(*np.diff(wp, axis=0).T)
+    keep_seg = np.flatnonzero(length > 0)
+    if keep_seg.size == 0:
+        raise InvalidParameterError(f"route has no segment of positive length (waypoints {wp.tolist()!r})")
+    pts = np.vstack([wp[keep_seg], wp[keep_seg[-1] + 1][None, :]])
+    return pts, keep_seg
+
+
+def drive_profile(
+    waypoints_m: Any,
+    speed_mps: float,
+    *,
+    turn_rate_radps: float,
+    dt_s: float,
+    accel_mps2: float = DEFAULT_ACCEL_MPS2,
+    yaw_accel_radps2: float = DEFAULT_YAW_ACCEL_RADPS2,
+    start_heading_rad: float | None = None,
+) -> CommandProfile:
+    """The stop-turn-go command profile a mission drives along ``waypoints_m``.
+
+    Consecutive repeated waypoints are dropped (:func:`drivable_waypoints`); then
+    :func:`waypoint_commands` (pivot to each segment's heading, drive it rest to rest at
+    ``speed_mps``).
+
+    Raises
+    ------
+    InvalidParameterError
+        Fewer than two distinct waypoints, or bad speeds, rates or ``dt_s``.
+
+    Examples
+    --------
+    >>> p = drive_profile([[0, 0], [0, 0], [2, 0]], 0.5, turn_rate_radps=0.5, dt_s=0.05)
+    >>> round(p.duration_s, 6)
+    5.0
+    """
+    pts, _ = drivable_waypoints(waypoints_m)
+    return waypoint_commands(pts, speed_mps, accel_mps2=accel_mps2, turn_rate_radps=turn_rate_radps,
+                             yaw_accel_radps2=yaw_accel_radps2, dt_s=dt_s, start_heading_rad=start_heading_rad)
+
+
+def move_duration_s(distance: Any, peak: float, accel: float) -> np.ndarray:
+    """Duration of rest-to-rest trapezoidal (or triangular) moves (s).
+
+    ``distance`` in m (or rad), ``peak`` the cruise speed (m/s or rad/s) and ``accel`` the
+    acceleration limit (m/s^2 or rad/s^2), both > 0 (not checked: a hot-path helper).
+
+    Examples
+    --------
+    >>> move_duration_s([2.0, 0.125], 0.5, 0.5).tolist()
+    [5.0, 1.0]
+    """
+    distance = np.asarray(distance, dtype=np.float64)
+    full = distance >= peak * peak / accel
+    return np.where(full, distance / peak + peak / accel, 2.0 * np.sqrt(distance / accel))
+
+
+def planned_durations_s(points_m: np.ndarray, start_heading_rad: float | None, speed_mps: float, accel_mps2: float,
+                        turn_rate_radps: float, yaw_accel_radps2: float) -> tuple[np.ndarray, np.ndarray]:
+    """Durations (s) of the turn and of the straight of each segment of the stop-turn-go profile.
+
+    ``points_m`` are drivable waypoints (:func:`drivable_waypoints`); the turn at waypoint
+    ``k`` starts segment ``k`` (none at the start unless ``start_heading_rad`` is given).
+
+    Examples
+    --------
+    >>> turn, straight = planned_durations_s(np.array([[0.0, 0], [2, 0]]), None, 0.5, 0.5, 0.5, 1.0)
+    >>> turn.tolist(), straight.tolist()
+    ([0.0], [5.0])
+    """
+    d = np.diff(points_m, axis=0)
+    heading = np.arctan2(d[:, 1], d[:, 0])
+    prev = np.concatenate(([heading[0] if start_heading_rad is None else start_heading_rad], heading[:-1]))
+    turn = np.abs(np.angle(np.exp(1j * (heading - prev))))
+    return (move_duration_s(turn, turn_rate_radps, yaw_accel_radps2),
+            move_duration_s(np.hypot(d[:, 0], d[:, 1]), speed_mps, accel_mps2))

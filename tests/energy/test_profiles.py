@@ -1,0 +1,112 @@
+"""Tests of energy.profiles: stop-turn-go waypoint profiles and the mission's drive profile."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import energy
+from energy import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, drive_profile, waypoint_commands
+from energy.profiles import drivable_waypoints, move_duration_s, planned_durations_s
+from terrain import InvalidParameterError
+
+_trapezoid = getattr(np, "trapezoid", None) or np.trapz
+
+
+# ------------------------------------------------------------------ waypoint profiles
+def test_straight_segment_trapezoid_closed_form() -> None:
+    # 2 m at 0.5 m/s with 0.5 m/s^2: 1 s up, 3 s cruise, 1 s down = 5 s
+    p = waypoint_commands([[0.0, 0.0], [2.0, 0.0]], 0.5, accel_mps2=0.5, dt_s=0.001)
+    assert p.duration_s == pytest.approx(5.0, abs=1e-3)
+    assert p.v_mps.max() == pytest.approx(0.5)
+    assert _trapezoid(p.v_mps, p.time_s) == pytest.approx(2.0, abs=1e-5)
+    assert p.pose_xyh[-1, :2] == pytest.approx([2.0, 0.0])
+    assert p.v_mps[0] == 0.0 and p.v_mps[-1] == 0.0
+    assert np.all(p.omega_radps == 0.0)
+
+
+def test_short_segment_is_triangular() -> None:
+    p = waypoint_commands([[0.0, 0.0], [0.1, 0.0]], 1.0, accel_mps2=0.5, dt_s=0.001)
+    assert p.v_mps.max() == pytest.approx(np.sqrt(0.1 * 0.5), abs=1e-3)
+    assert p.duration_s == pytest.approx(2 * np.sqrt(0.1 / 0.5), abs=2e-3)
+
+
+def test_turns_in_place_by_the_heading_change() -> None:
+    wp = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+    p = waypoint_commands(wp, 0.4, turn_rate_radps=0.5, dt_s=0.001)
+    turning = p.omega_radps != 0
+    assert np.all(p.v_mps[turning] == 0)  # pivot turns only
+    assert _trapezoid(p.omega_radps, p.time_s) == pytest.approx(np.pi, abs=1e-3)  # two left turns
+    assert p.omega_radps.max() == pytest.approx(0.5)
+    assert p.pose_xyh[-1] == pytest.approx([0.0, 1.0, np.pi])
+    # positions follow the commanded speeds
+    h = p.pose_xyh[:, 2]
+    x = np.concatenate(([0.0], np.cumsum(0.5 * np.diff(p.time_s) * (p.v_mps[1:] * np.cos(h[1:]) + p.v_mps[:-1] * np.cos(h[:-1])))))
+    assert np.abs(x - p.pose_xyh[:, 0]).max() < 1e-3
+
+
+def test_start_heading_adds_a_first_turn() -> None:
+    p = waypoint_commands([[0.0, 0.0], [0.0, 1.0]], 0.4, start_heading_rad=0.0, dt_s=0.001)
+    assert _trapezoid(p.omega_radps, p.time_s) == pytest.approx(np.pi / 2, abs=1e-3)
+    assert p.pose_xyh[0, 2] == pytest.approx(0.0)
+
+
+@pytest.mark.parametrize(
+    ("args", "kwargs", "match"),
+    [
+        (([[0.0, 0.0]], 0.5), {}, "shape"),
+        (([[0.0, 0.0], [0.0, 0.0], [1.0, 0.0]], 0.5), {}, "repeated"),
+        (([[0.0, 0.0], [np.nan, 0.0]], 0.5), {}, "finite"),
+        (([[0.0, 0.0], [1.0, 0.0]], 0.0), {}, "speed_mps"),
+        (([[0.0, 0.0], [1.0, 0.0]], 0.5), {"accel_mps2": -1.0}, "accel_mps2"),
+    ],
+)
+def test_waypoint_bad_input(args: tuple, kwargs: dict, match: str) -> None:
+    with pytest.raises(InvalidParameterError, match=match):
+        waypoint_commands(*args, **kwargs)
+
+
+# ------------------------------------------------------------------ drive profile (a mission's motion)
+def test_drive_profile_drops_repeated_waypoints_and_matches_waypoint_commands() -> None:
+    wp = [[0.0, 0.0], [0.0, 0.0], [2.0, 0.0], [2.0, 0.0], [2.0, 1.0]]
+    p = drive_profile(wp, 0.5, turn_rate_radps=0.5, dt_s=0.01)
+    q = waypoint_commands([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0]], 0.5, turn_rate_radps=0.5, dt_s=0.01,
+                          accel_mps2=DEFAULT_ACCEL_MPS2, yaw_accel_radps2=DEFAULT_YAW_ACCEL_RADPS2)
+    assert np.array_equal(p.time_s, q.time_s) and np.array_equal(p.v_mps, q.v_mps)
+    assert np.array_equal(p.pose_xyh, q.pose_xyh)
+    assert p.pose_xyh[-1, :2] == pytest.approx([2.0, 1.0])
+
+
+def test_drive_profile_is_exported_from_energy() -> None:
+    for name in ("drive_profile", "DEFAULT_ACCEL_MPS2", "DEFAULT_YAW_ACCEL_RADPS2"):
+        assert name in energy.__all__
+    assert (DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2) == (0.5, 1.0)
+
+
+def test_planned_durations_match_the_sampled_profile() -> None:
+    wp = [[0.0, 0.0], [3.0, 0.0], [3.0, 0.2], [1.0, 0.2]]
+    pts, kept = drivable_waypoints(wp)
+    assert kept.tolist() == [0, 1, 2]
+    turn_s, straight_s = planned_durations_s(pts, None, 0.4, 0.5, 0.5, 1.0)
+    p = drive_profile(wp, 0.4, turn_rate_radps=0.5, dt_s=0.001, accel_mps2=0.5, yaw_accel_radps2=1.0)
+    assert turn_s[0] == 0.0 and turn_s[1] == pytest.approx(move_duration_s(np.pi / 2, 0.5, 1.0))
+    assert float(turn_s.sum() + straight_s.sum()) == pytest.approx(p.duration_s, abs=2e-3)
+
+
+@pytest.mark.parametrize(
+    ("wp", "match"),
+    [
+        ([[1.0, 1.0], [1.0, 1.0]], "no segment of positive length"),
+        ([[0.0, 0.0]], "shape"),
+        ([[0.0, 0.0], [np.inf, 0.0]], "finite"),
+        ("ab", "numeric"),
+    ],
+)
+def test_drive_profile_bad_waypoints(wp: object, match: str) -> None:
+    with pytest.raises(InvalidParameterError, match=match):
+        drive_profile(wp, 0.5, turn_rate_radps=0.5, dt_s=0.01)
+
+
+def test_drive_profile_string_speed_names_the_parameter() -> None:
+    with pytest.raises(InvalidParameterError, match="speed_mps must be a real number, got 'fast'"):
+        drive_profile([[0.0, 0.0], [1.0, 0.0]], "fast", turn_rate_radps=0.5, dt_s=0.01)
