@@ -94,7 +94,7 @@ from .readers import (
     read_rosbag,
     write_csv_log,
 )
-from .truth import (
+from .sim import (
     PAPER_GROUNDS,
     PAPER_VARIATION,
     VIBRATION_PRESETS,

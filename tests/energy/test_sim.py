@@ -1,4 +1,4 @@
-"""Tests of energy.truth: the truth simulator's currents, noise, vibration, map driving, errors."""
+"""Tests of energy.sim: the truth simulator's currents, noise, vibration, map driving, errors."""
 
 from __future__ import annotations
 
@@ -350,7 +350,18 @@ def test_drive_errors() -> None:
         sim2.drive(tmap, [[1.0, 1.0], [1.0, 12.0]])
     with pytest.raises(BlockedPositionError, match="obstacle"):
         sim2.drive(tmap, [[2.5, 1.0], [2.5, 9.5]])
-    assert len(sim2.drive(tmap, [[2.5, 1.0], [2.5, 9.5]], allow_obstacles=True)) > 0
+    # allow_obstacles drives the whole route through the obstacle cell: 8.5 m rest to rest at
+    # 0.5 m/s with 0.5 m/s^2 takes 8.5 / 0.5 + 0.5 / 0.5 = 18 s, sampled at current_rate_hz
+    log = sim2.drive(tmap, [[2.5, 1.0], [2.5, 9.5]], allow_obstacles=True)
+    assert len(log) == 1801 and log.duration_s == pytest.approx(18.0)
+    assert np.diff(log.time_s) == pytest.approx(np.full(1800, 0.01))
+    assert log.pose_xyh[-1] == pytest.approx([2.5, 9.5, np.pi / 2])
+    rows, cols = tmap.rowcol(log.pose_xyh[:, 0], log.pose_xyh[:, 1])
+    assert np.any(obstacle[rows, cols])
+    cruising = log.v_mps > 0.45
+    for side in (log.current_left_a, log.current_right_a):
+        assert side.min() >= 0.0 and side.max() < 10.0  # motoring currents, braking clipped to 0
+        assert 0.59 < side[cruising].mean() < 3.0  # more than the idle current while driving
     with pytest.raises(InvalidParameterError, match="pose_xyh"):
         sim2.drive(tmap, CommandProfile([0.0, 0.1], [0.0, 0.0], [0.0, 0.0]))
     with pytest.raises(InvalidParameterError, match="TerrainMap"):
@@ -379,6 +390,26 @@ def test_bad_commands() -> None:
         sim.simulate_commands(t, v, w, ground="coated_wood", slope_rad=2.0)
     with pytest.raises(InvalidParameterError, match="seed"):
         sim.simulate_commands(t, v, w, ground="coated_wood", seed=-1)
+
+
+@pytest.mark.parametrize("seed", [-1, 2**32, 1.0, True, "3"])
+def test_seed_follows_the_one_seed_rule(seed: object) -> None:
+    t, v, w = steady(20)
+    with pytest.raises(InvalidParameterError, match=r"seed must be None or an integer in \[0, 2\*\*32\)"):
+        TruthSimulator(HUSKY, PAPER_GROUNDS, seed=seed)  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match=r"seed must be None or an integer in \[0, 2\*\*32\)"):
+        TruthSimulator(HUSKY, PAPER_GROUNDS).simulate_commands(t, v, w, ground="coated_wood", seed=seed)
+
+
+def test_string_numbers_name_the_parameter() -> None:
+    with pytest.raises(InvalidParameterError, match="TruthSimulator.accel_rate_hz must be a real number, got 'fast'"):
+        TruthSimulator(HUSKY, PAPER_GROUNDS, accel_rate_hz="fast")  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match="NoiseModel.idle_current_a must be a real number"):
+        NoiseModel(idle_current_a="0.5")  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match="NoiseModel.clip_negative must be True or False"):
+        NoiseModel(clip_negative="no")  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match=r"VibrationSignature.peak_frequencies_hz\[0\] must be a real"):
+        VibrationSignature(peak_frequencies_hz=("12",), peak_amplitudes_mps2=(0.1,))
 
 
 def test_bad_configuration() -> None:

@@ -1,0 +1,103 @@
+"""Measurement of the synthetic logs: the :class:`NoiseModel` of the current sensor and the accelerometer."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from terrain.checks import check_bool, check_real
+
+__all__ = ["NoiseModel", "measure_currents"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class NoiseModel:
+    """How the drive currents and the accelerometer are measured.
+
+    The logged current of a side is, in this order: ``gain * (I_motoring + idle)`` plus
+    Gaussian noise, plus outlier spikes; braking (negative) values set to 0 when
+    ``clip_negative``; rounded to multiples of ``quantisation_step_a``.
+
+    Parameters
+    ----------
+    current_noise_std_a : float
+        Standard deviation of white Gaussian current noise (>= 0), A.
+    outlier_rate : float
+        Fraction of samples (per side) with an outlier spike, in [0, 1].
+    outlier_magnitude_a : float
+        Typical spike (>= 0), A; each spike is positive and uniform in [0.5, 1.5] times it.
+    quantisation_step_a : float
+        Resolution of the current sensor (>= 0; 0 = none), A. BorealTC's Husky logs show
+        steps of about 0.13 A.
+    idle_current_a : float
+        Current drawn by a standing drive (>= 0), A (BorealTC: about 0.59 A).
+    clip_negative : bool
+        Report braking currents as 0, like the Husky driver.
+    side_gain_std : float
+        Log-normal spread (>= 0) of a per-run gain of each side's current (calibration,
+        wear); 0 = exact.
+    accel_noise_std_mps2 : float
+        Standard deviation of white accelerometer noise (>= 0), m/s^2.
+
+    Raises
+    ------
+    InvalidParameterError
+        Negative or non-finite values, a rate outside [0, 1].
+    """
+
+    current_noise_std_a: float = 0.1
+    outlier_rate: float = 0.002
+    outlier_magnitude_a: float = 2.0
+    quantisation_step_a: float = 0.13
+    idle_current_a: float = 0.59
+    clip_negative: bool = True
+    side_gain_std: float = 0.0
+    accel_noise_std_mps2: float = 0.02
+
+    def __post_init__(self) -> None:
+        own = "NoiseModel"
+        for name in ("current_noise_std_a", "outlier_magnitude_a", "quantisation_step_a",
+                     "idle_current_a", "side_gain_std", "accel_noise_std_mps2"):
+            check_real(name, getattr(self, name), low=0.0, owner=own)
+        check_real("outlier_rate", self.outlier_rate, low=0.0, high=1.0, owner=own)
+        check_bool(f"{own}.clip_negative", self.clip_negative)
+
+    @classmethod
+    def off(cls) -> NoiseModel:
+        """No noise, outliers, quantisation, idle current, clipping or gains: the logged
+        currents are the physics model's motoring currents, the acceleration has no sensor
+        noise."""
+        return cls(current_noise_std_a=0.0, outlier_rate=0.0, outlier_magnitude_a=0.0,
+                   quantisation_step_a=0.0, idle_current_a=0.0, clip_negative=False,
+                   side_gain_std=0.0, accel_noise_std_mps2=0.0)
+
+
+def measure_currents(
+    noise: NoiseModel, drive_a: np.ndarray, rngs: Mapping[str, np.random.Generator]
+) -> tuple[np.ndarray, np.ndarray]:
+    """The clean and the measured side currents of motoring currents ``drive_a`` (N, 2), A.
+
+    ``rngs`` holds the generators ``"side_gain"``, ``"current_noise"`` and ``"outliers"``
+    (each drawn from only when its component is on, so switching one off leaves the
+    others' draws unchanged). Clean: gains, idle current and clipping; measured: plus
+    noise, outliers and quantisation.
+    """
+    nm = noise
+    n = drive_a.shape[0]
+    gain = np.exp(nm.side_gain_std * rngs["side_gain"].standard_normal(2)) if nm.side_gain_std > 0 else np.ones(2)
+    clean = gain * (drive_a + nm.idle_current_a)
+    meas = clean.copy()
+    if nm.current_noise_std_a > 0:
+        meas += nm.current_noise_std_a * rngs["current_noise"].standard_normal((n, 2))
+    if nm.outlier_rate > 0 and nm.outlier_magnitude_a > 0:
+        r = rngs["outliers"]
+        hit = r.random((n, 2)) < nm.outlier_rate
+        meas += np.where(hit, nm.outlier_magnitude_a * r.uniform(0.5, 1.5, (n, 2)), 0.0)
+    if nm.clip_negative:
+        clean = np.maximum(clean, 0.0)
+        meas = np.maximum(meas, 0.0)
+    if nm.quantisation_step_a > 0:
+        meas = np.round(meas / nm.quantisation_step_a) * nm.quantisation_step_a
+    return clean, meas
