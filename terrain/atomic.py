@@ -16,6 +16,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import shutil
 import tempfile
 from collections.abc import Callable, Iterator
@@ -34,6 +35,7 @@ __all__ = [
     "write_json_atomic",
     "save_figure",
     "fsync_directory",
+    "stale_temporaries",
     "remove_stale_temporaries",
     "check_output_path",
 ]
@@ -62,6 +64,34 @@ def _pid_alive(pid: int) -> bool:
     return True
 
 
+def stale_temporaries(path: str | os.PathLike[str]) -> list[Path]:
+    """Temporaries of ``path`` left by saves whose process is gone (nothing is removed).
+
+    Only names of the form ``.<target name>.<pid>.<random>.tmp`` (files or folders) beside
+    ``path`` are considered, and only those whose ``pid`` is not a running process; they are
+    listed oldest first (by modification time). For writers that may recover something from
+    a dead save before :func:`remove_stale_temporaries` removes it (e.g. a folder moved
+    aside by :func:`atomic_directory`).
+    """
+    target = Path(path)
+    parent = target.parent
+    if not parent.is_dir():
+        return []
+    # exactly one random part (no dot) between pid and suffix, so that the temporaries of
+    # a target named e.g. "a.123" are never taken for those of "a" written by pid 123
+    pattern = re.compile(rf"\.{re.escape(target.name)}\.([0-9]+)\.[A-Za-z0-9_]+\.tmp")
+    found: list[tuple[float, Path]] = []
+    for entry in parent.iterdir():
+        match = pattern.fullmatch(entry.name)
+        if match is None or _pid_alive(int(match.group(1))):
+            continue
+        try:
+            found.append((entry.lstat().st_mtime, entry))
+        except FileNotFoundError:  # removed meanwhile by another cleaner
+            continue
+    return [entry for _, entry in sorted(found)]
+
+
 def remove_stale_temporaries(path: str | os.PathLike[str]) -> list[Path]:
     """Remove temporaries of ``path`` left by saves whose process is gone; return them.
 
@@ -69,19 +99,8 @@ def remove_stale_temporaries(path: str | os.PathLike[str]) -> list[Path]:
     ``path`` are considered, and only those whose ``pid`` is not a running process. A save
     of another target, or one still running, is never touched.
     """
-    target = Path(path)
     removed: list[Path] = []
-    parent = target.parent
-    if not parent.is_dir():
-        return removed
-    prefix = f".{target.name}."
-    for entry in parent.iterdir():
-        name = entry.name
-        if not (name.startswith(prefix) and name.endswith(".tmp")):
-            continue
-        pid_text = name[len(prefix):].split(".", 1)[0]
-        if not pid_text.isdigit() or _pid_alive(int(pid_text)):
-            continue
+    for entry in stale_temporaries(path):
         try:
             if entry.is_dir() and not entry.is_symlink():
                 shutil.rmtree(entry)

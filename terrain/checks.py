@@ -35,6 +35,7 @@ __all__ = [
     "check_real",
     "check_optional_real",
     "check_int",
+    "check_shape",
     "check_seed",
     "check_text",
     "check_choice",
@@ -149,6 +150,31 @@ def check_int(
     if high is not None and v > high:
         raise InvalidParameterError(f"{label} must be <= {high}, got {value!r}")
     return v
+
+
+def check_shape(name: str, value: Any, *, low: int = 1) -> tuple[int, int]:
+    """A raster shape: a pair ``(rows, cols)`` of integers (not bools, not floats), each ``>= low``.
+
+    Examples
+    --------
+    >>> check_shape("shape", (3, 4))
+    (3, 4)
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a pair of integers, or an entry below ``low``.
+    """
+    try:
+        rows, cols = value
+    except (TypeError, ValueError):
+        rows = cols = None
+    ok = all(
+        isinstance(v, numbers.Integral) and not isinstance(v, (bool, np.bool_)) and int(v) >= low for v in (rows, cols)
+    )
+    if not ok:
+        raise InvalidParameterError(f"{name} must be (rows, cols) of integers >= {low}, got {_describe(value)}")
+    return int(rows), int(cols)  # type: ignore[arg-type]
 
 
 def check_seed(seed: Any, name: str = "seed") -> int | None:

@@ -1,0 +1,70 @@
+"""Per-cell current-model registry: which model serves each cell, its observed error, updates.
+
+A :class:`CellModelRegistry` is bound to one grid (``rows x cols``, optionally with the
+cell size and origin of a :class:`~terrain.grid.Grid`). It keeps
+
+- a **model table**: models added with :meth:`~CellModelRegistry.add_model` get an integer
+  id, a unique name and string/number metadata. Model id ``0`` is the *prior* given to the
+  constructor (the physics model or a model trained elsewhere); every cell starts on it.
+  Many cells share one model.
+- a **cell map** (``int32`` model id per cell), changed only by
+  :meth:`~CellModelRegistry.assign`, an accepted :meth:`~CellModelRegistry.propose_update`
+  or :meth:`~CellModelRegistry.rollback`. Each change is a :class:`RegistryVersion` in
+  :attr:`~CellModelRegistry.history` that remembers the previous id of every cell it
+  touched, so a rollback restores the exact previous assignment.
+- per-cell **evidence**: measured and predicted charge (integrated current, C) and a sample
+  count, accumulated by :meth:`~CellModelRegistry.record`, from which
+  :meth:`~CellModelRegistry.relative_error` and, under an :class:`UpdatePolicy` (threshold,
+  minimum evidence, hysteresis), :meth:`~CellModelRegistry.flagged` and
+  :meth:`~CellModelRegistry.flagged_regions` say which cells need new data.
+
+The registry holds models through :class:`CurrentModelProtocol` and never calls them: the
+caller predicts, fits and validates, and passes the numbers in; saving and loading models go
+through caller-provided functions. So this package imports nothing from ``energy`` or
+``planner``.
+
+How it is built (one idea per module, composed in :mod:`~terrain.registry.registry`):
+
+- :mod:`~terrain.registry.records` — the value types: the model protocol, the update
+  policy, model records, history versions, update decisions, flagged regions.
+- :mod:`~terrain.registry.cells` — cell selections (mask, ``(rows, cols)``, region) as flat
+  indices, checked against the grid.
+- :mod:`~terrain.registry.table` — :class:`~terrain.registry.table.ModelTable`, models by id.
+- :mod:`~terrain.registry.assignment` — :class:`~terrain.registry.assignment.CellAssignment`,
+  the cell map, its numbered versions and exact rollback.
+- :mod:`~terrain.registry.evidence` — :class:`~terrain.registry.evidence.CellEvidence`,
+  charges, counts, flags with hysteresis and flagged regions, and the
+  :class:`~terrain.registry.evidence.EvidenceMixin` that gives the registry its evidence
+  methods.
+- :mod:`~terrain.registry.store` — the directory format, atomic save, load, and recovery
+  of a save killed between its two renames.
+- :mod:`~terrain.registry.registry` — :class:`CellModelRegistry`, a facade that owns one of
+  each part (composition), checks the caller's arguments, converts cell selections, and
+  keeps the parts consistent: a cell whose model changes loses its evidence. The evidence
+  methods come from a small mixin that uses only the facade's public grid and cell-map
+  properties, so the facade stays one readable class without one 1,000-line module.
+"""
+
+from .records import (
+    PRIOR_MODEL_ID,
+    CurrentModelProtocol,
+    FlaggedRegion,
+    ModelRecord,
+    RegistryVersion,
+    UpdateDecision,
+    UpdatePolicy,
+)
+from .registry import CellModelRegistry
+from .store import REGISTRY_FORMAT_VERSION
+
+__all__ = [
+    "CellModelRegistry",
+    "CurrentModelProtocol",
+    "UpdatePolicy",
+    "FlaggedRegion",
+    "RegistryVersion",
+    "UpdateDecision",
+    "ModelRecord",
+    "REGISTRY_FORMAT_VERSION",
+    "PRIOR_MODEL_ID",
+]
