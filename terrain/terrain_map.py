@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .atomic import atomic_open
+from .atomic import atomic_open, remove_stale_temporaries
 from .errors import (
     FileFormatError,
     GridMismatchError,
@@ -17,6 +17,7 @@ from .errors import (
     TerrawattError,
     UnknownNameError,
 )
+from .checks import check_int
 from .formats import read_versioned_npz
 from .grid import Grid
 
@@ -302,11 +303,11 @@ class TerrainMap:
 
     @ground_names.setter
     def ground_names(self, names: Mapping[int, str]) -> None:
+        if not isinstance(names, Mapping):
+            raise InvalidParameterError(f"ground_names must be a mapping of class id to name, got {names!r}")
         clean: dict[int, str] = {}
-        for key, value in dict(names).items():
-            k = int(key)
-            if k < 0 or k > np.iinfo(np.int16).max:
-                raise InvalidParameterError(f"ground class id must be in 0..32767, got {key!r}")
+        for key, value in names.items():
+            k = check_int("ground class id", key, low=0, high=int(np.iinfo(np.int16).max))
             if not isinstance(value, str) or not value:
                 raise InvalidParameterError(f"ground class {k} needs a non-empty name, got {value!r}")
             clean[k] = value
@@ -407,17 +408,8 @@ class TerrainMap:
     def segment_cells(
         self, start_xy_m: tuple[float, float], end_xy_m: tuple[float, float]
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Cells crossed by a straight segment and the length of the segment in each.
-
-        The traversal is exact: the segment is cut where it crosses grid lines, so the
-        lengths sum to the segment's length.
-
-        Returns
-        -------
-        rows, cols : ndarray of int
-            Cells in the order they are crossed.
-        lengths_m : ndarray of float
-            Length of the segment inside each cell (m).
+        """Cells crossed by a straight segment and its exact length in each (see
+        :meth:`Grid.segment_cells <terrain.grid.Grid.segment_cells>`).
 
         Raises
         ------
@@ -433,33 +425,7 @@ class TerrainMap:
         >>> rows.tolist(), cols.tolist(), lengths.tolist()
         ([0, 0, 0], [0, 1, 2], [0.5, 1.0, 0.5])
         """
-        (xa, ya), (xb, yb) = start_xy_m, end_xy_m
-        self.rowcol(np.array([xa, xb]), np.array([ya, yb]))
-        x0, y0 = self._grid.origin_xy_m
-        d = self.cell_size_m
-        ua, va = (xa - x0) / d, (ya - y0) / d
-        ub, vb = (xb - x0) / d, (yb - y0) / d
-        ts = [np.array([0.0, 1.0])]
-        for a, b in ((ua, ub), (va, vb)):
-            if a != b:
-                lo, hi = sorted((a, b))
-                lines = np.arange(np.floor(lo) + 1, np.ceil(hi))
-                ts.append((lines - a) / (b - a))
-        t = np.unique(np.concatenate(ts))
-        t = t[(t >= 0) & (t <= 1)]
-        length = float(np.hypot(xb - xa, yb - ya))
-        if length == 0.0:
-            r, c = self.rowcol(xa, ya)
-            return np.array([r]), np.array([c]), np.array([0.0])
-        tm = 0.5 * (t[:-1] + t[1:])
-        keep = np.diff(t) > 0
-        tm = tm[keep]
-        rows, cols = self.rowcol(xa + tm * (xb - xa), ya + tm * (yb - ya))
-        lengths = np.diff(t)[keep] * length
-        # Rounding can split a cell into a sliver and the rest (e.g. a crossing computed
-        # just past the far map edge): merge consecutive pieces in the same cell.
-        first = np.flatnonzero(np.concatenate(([True], (np.diff(rows) != 0) | (np.diff(cols) != 0))))
-        return rows[first], cols[first], np.add.reduceat(lengths, first)
+        return self._grid.segment_cells(start_xy_m, end_xy_m)
 
     def sample_segment(
         self, name: str, start_xy_m: tuple[float, float], end_xy_m: tuple[float, float]
@@ -504,6 +470,7 @@ class TerrainMap:
             A file of another format version.
         """
         path = Path(path)
+        remove_stale_temporaries(path)
         content = read_versioned_npz(path, magic=_MAP_MAGIC, version=MAP_FORMAT_VERSION, what="map")
         try:
             names = dict(

@@ -1,4 +1,4 @@
-"""Tests of terrain.grid: TerrainMap construction, coordinates, derived layers, sampling, I/O."""
+"""Tests of terrain.terrain_map: TerrainMap construction, coordinates, derived layers, sampling, I/O."""
 
 from __future__ import annotations
 
@@ -95,7 +95,10 @@ def test_obstacle_must_be_boolean():
 @pytest.mark.parametrize(
     ("names", "match"),
     [
-        ({-2: "x"}, "ground class id must be in 0..32767"),
+        ({-2: "x"}, "ground class id must be >= 0"),
+        ({40000: "x"}, "ground class id must be <= 32767"),
+        ({"a": "x"}, "ground class id must be an integer, got 'a'"),
+        ([(0, "x")], "ground_names must be a mapping"),
         ({0: ""}, "non-empty name"),
         ({0: "a", 1: "a"}, "unique"),
     ],
@@ -425,3 +428,42 @@ def test_load_terrawatt_file_missing_entries(tmp_path):
     with pytest.raises(FileFormatError, match="lacks entry"):
         TerrainMap.load(path)
 
+
+
+# ------------------------------------------------------------------ hostile input
+@pytest.mark.parametrize(
+    ("args", "match"),
+    [
+        (("abc", 1.0), "elevation_m must be a 2-D array of real numbers, got str"),
+        (([[0.0, "x"], [0.0, 0.0]], 1.0), "elevation_m must be a 2-D array of real numbers"),
+        ((np.zeros((3, 3)), "1.0"), r"cell_size_m must be a real number, got '1.0' \(str\)"),
+        ((np.zeros((3, 3)), "abc"), r"cell_size_m must be a real number, got 'abc' \(str\)"),
+        ((np.zeros((3, 3)), 1.0, ("0", 0.0)), r"origin_xy_m\[0\] must be a real number"),
+        ((np.zeros((3, 3)), 1e308), "no finite far corner"),
+    ],
+)
+def test_strings_and_absurd_sizes_name_the_parameter(args, match):
+    with pytest.raises(InvalidParameterError, match=match):
+        TerrainMap(*args)
+
+
+def test_save_onto_a_directory_is_a_parameter_error(tmp_path, flat_map):
+    target = tmp_path / "m.npz"
+    target.mkdir()
+    with pytest.raises(InvalidParameterError, match="is a directory; expected a file name"):
+        flat_map.save(target)
+    assert target.is_dir() and os.listdir(tmp_path) == ["m.npz"]
+
+
+def test_save_and_load_remove_temporaries_of_dead_saves_only(tmp_path, flat_map, dead_pid, live_pid):
+    path = flat_map.save(tmp_path / "m.npz")
+    dead = tmp_path / f".m.npz.{dead_pid}.k1ll3d_0.tmp"
+    live = tmp_path / f".m.npz.{live_pid}.running.tmp"
+    other = tmp_path / f".n.npz.{dead_pid}.k1ll3d_0.tmp"  # another target's: not ours to remove
+    for leftover in (dead, live, other):
+        leftover.write_bytes(b"half a map")
+    flat_map.save(path)
+    assert not dead.exists() and live.exists() and other.exists()
+    dead.write_bytes(b"half a map")
+    assert TerrainMap.load(path).same_grid(flat_map)
+    assert not dead.exists() and live.exists() and other.exists()
