@@ -8,15 +8,16 @@ from .errors import (
     BlockedPositionError,
     DataError,
     DataRepairWarning,
-    RecoveryWarning,
     FileFormatError,
     FormatVersionError,
     GridMismatchError,
+    ImplausibleDataWarning,
     InvalidParameterError,
     NotFittedError,
     OptionalDependencyError,
     OutOfBoundsError,
     PlanningError,
+    RecoveryWarning,
     TerrawattError,
     TerrawattWarning,
     UnitError,
@@ -24,7 +25,7 @@ from .errors import (
 )
 from .geotiff import read_geotiff, write_geotiff
 from .grid import Grid
-from .terrain_map import MAP_FORMAT_VERSION, UNKNOWN_GROUND, TerrainMap
+from .io import read_map
 from .procedural import (
     EXAMPLE_GOAL_XY_M,
     EXAMPLE_START_XY_M,
@@ -45,6 +46,7 @@ from .registry import (
     UpdateDecision,
     UpdatePolicy,
 )
+from .terrain_map import MAP_FORMAT_VERSION, UNKNOWN_GROUND, TerrainMap
 from .vector import (
     apply_geojson,
     rasterize_polygons,
@@ -67,6 +69,7 @@ __all__ = [
     "example_map",
     "EXAMPLE_START_XY_M",
     "EXAMPLE_GOAL_XY_M",
+    "read_map",
     "read_geotiff",
     "write_geotiff",
     "rasterize_polygons",
@@ -101,4 +104,5 @@ __all__ = [
     "TerrawattWarning",
     "DataRepairWarning",
     "RecoveryWarning",
+    "ImplausibleDataWarning",
 ]

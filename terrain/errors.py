@@ -5,8 +5,10 @@ the builtin exception it resembles, so ``except ValueError`` keeps working for c
 do not know terrawatt. Messages name the parameter, show the bad value with ``!r`` and say
 what was expected.
 
-``energy`` and ``planner`` re-export these classes and add a few of their own; this module
-lives in ``terrain`` because ``terrain`` is the bottom layer and imports nothing above it.
+The whole hierarchy lives here, in ``terrain``, because ``terrain`` is the bottom layer and
+imports nothing above it; ``energy`` and ``planner`` subclass these classes rather than start
+their own. Each package's ``__init__`` re-exports the errors and warnings its users meet, so
+``from energy import DataError`` works without knowing where the class is defined.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ __all__ = [
     "TerrawattWarning",
     "DataRepairWarning",
     "RecoveryWarning",
+    "ImplausibleDataWarning",
 ]
 
 
@@ -94,3 +97,8 @@ class DataRepairWarning(TerrawattWarning):
 
 class RecoveryWarning(TerrawattWarning):
     """A file left by an interrupted write was recovered (e.g. a registry moved back)."""
+
+
+class ImplausibleDataWarning(TerrawattWarning):
+    """Data is readable and internally consistent but unlikely to be what the caller meant
+    (e.g. a DEM whose cells are mostly steeper than 60 degrees); it is used as given."""

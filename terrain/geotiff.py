@@ -13,21 +13,28 @@ import numpy as np
 from scipy import ndimage
 
 from .atomic import atomic_path
+from .checks import fmt_number
 from .errors import (
     DataRepairWarning,
     FileFormatError,
+    ImplausibleDataWarning,
     InvalidParameterError,
     OptionalDependencyError,
+    UnitError,
     UnknownNameError,
 )
 from .terrain_map import UNKNOWN_GROUND, TerrainMap
 
-__all__ = ["read_geotiff", "write_geotiff"]
+__all__ = ["read_geotiff", "write_geotiff", "check_fill_method"]
 
 logger = logging.getLogger(__name__)
 
 _METRE_UNITS = ("", "m", "metre", "metres", "meter", "meters")
 _FILL_METHODS = ("nearest",)
+#: Cell sizes (m) plausible for a DEM without a CRS: outside, the unit is likely degrees.
+_CELL_RANGE_M = (0.01, 10_000.0)
+#: Slope (rad) of the cells that, when they are the majority, make a DEM implausible.
+_STEEP_RAD = float(np.radians(60.0))
 
 
 def _rasterio() -> ModuleType:
@@ -42,7 +49,7 @@ def _rasterio() -> ModuleType:
 
 
 def read_geotiff(
-    path: str | os.PathLike[str], band: int = 1, *, fill_nodata: str | None = None
+    path: str | os.PathLike[str], band: int | None = None, *, fill_nodata: str | None = None
 ) -> TerrainMap:
     """Read one band of a GeoTIFF as the elevation of a new :class:`TerrainMap`.
 
@@ -51,12 +58,20 @@ def read_geotiff(
     top) are flipped into TerrainMap's convention (row grows with y); the CRS is kept as
     a string. Scale and offset tags are applied.
 
+    A DEM is one band: a file of several bands (an RGB orthophoto, a stack) is read only
+    when ``band`` names the elevation band. Georeferencing that cannot be metres is refused
+    (a geographic CRS; without a CRS, cells under 1 cm or over 10 km, which are what a DEM
+    in degrees looks like). A DEM whose cells are mostly steeper than 60 degrees is read
+    but warned about with :class:`ImplausibleDataWarning`: such terrain exists (a crop of
+    a cliff or a quarry wall), so refusing it would refuse real data, whereas a wrong band
+    or unit is never right; the planner's slope limit blocks such cells anyway.
+
     Parameters
     ----------
     path : str or path-like
         GeoTIFF file.
-    band : int
-        1-based band index.
+    band : int, optional
+        1-based index of the elevation band; required when the file has more than one.
     fill_nodata : {None, "nearest"}
         What to do with nodata / NaN cells. ``None`` (default) raises; ``"nearest"``
         gives each such cell the value of the nearest valid cell and warns with
@@ -72,21 +87,34 @@ def read_geotiff(
     OptionalDependencyError
         rasterio is not installed.
     FileFormatError
-        Missing or unreadable file; a rotated or non-square-pixel grid; a geographic
-        CRS or units other than metres.
+        Missing or unreadable file; several bands and no ``band``; a rotated or
+        non-square-pixel grid; a geographic CRS or units other than metres.
+    UnitError
+        No CRS and a cell size implausible for metres (below 1 cm or above 10 km).
     InvalidParameterError
         A band out of range; nodata cells when ``fill_nodata`` is None; no valid cell.
     UnknownNameError
         An unknown ``fill_nodata`` method.
+
+    Warns
+    -----
+    ImplausibleDataWarning
+        More than half of the cells are steeper than 60 degrees.
     """
     rasterio = _rasterio()
-    if fill_nodata is not None and fill_nodata not in _FILL_METHODS:
-        raise UnknownNameError(f"fill_nodata must be None or one of {_FILL_METHODS!r}, got {fill_nodata!r}")
+    check_fill_method(fill_nodata)
     path = Path(path)
     if not path.is_file():
         raise FileFormatError(f"GeoTIFF file {str(path)!r} does not exist")
     try:
         with rasterio.open(path) as src:
+            if band is None:
+                if src.count != 1:
+                    raise FileFormatError(
+                        f"GeoTIFF {str(path)!r} has {src.count} bands; a DEM has one. Name the elevation "
+                        f"band with band=N (1..{src.count}), e.g. read_geotiff(path, band=1)"
+                    )
+                band = 1
             is_int = isinstance(band, (int, np.integer)) and not isinstance(band, bool)
             if not is_int or not 1 <= band <= src.count:
                 raise InvalidParameterError(f"band must be an integer in 1..{src.count}, got {band!r}")
@@ -116,6 +144,12 @@ def read_geotiff(
         )
     if units not in _METRE_UNITS:
         raise FileFormatError(f"{where} band {band} has vertical units {units!r}; expected metres")
+    if crs is None and not _CELL_RANGE_M[0] <= width_m <= _CELL_RANGE_M[1]:
+        raise UnitError(
+            f"{where} has no CRS and cells of {fmt_number(width_m)}; that is implausible as metres "
+            f"(expected {fmt_number(_CELL_RANGE_M[0])} to {fmt_number(_CELL_RANGE_M[1])} m) and looks like "
+            "degrees: reproject it to a projected CRS in metres (e.g. UTM) first"
+        )
 
     values = np.ma.getdata(data).astype(np.float64) * scale + offset
     invalid = np.ma.getmaskarray(data) | ~np.isfinite(values)
@@ -141,7 +175,29 @@ def read_geotiff(
     rows, cols = shape
     xmin = min(transform.c, transform.c + transform.a * cols)
     ymin = min(transform.f, transform.f + transform.e * rows)
-    return TerrainMap(values, width_m, (xmin, ymin), crs=None if crs is None else crs.to_string())
+    tmap = TerrainMap(values, width_m, (xmin, ymin), crs=None if crs is None else crs.to_string())
+    steep = float(np.mean(tmap.slope_rad > _STEEP_RAD))
+    if steep > 0.5:
+        warnings.warn(
+            f"{where} band {band}: {100 * steep:.0f} % of the cells are steeper than 60 degrees; is it really "
+            "a DEM in metres (not an image band, not elevations in another unit)?",
+            ImplausibleDataWarning,
+            stacklevel=2,
+        )
+    return tmap
+
+
+def check_fill_method(fill_nodata: str | None) -> str | None:
+    """``fill_nodata`` if it is ``None`` or a known method (``"nearest"``).
+
+    Raises
+    ------
+    UnknownNameError
+        Any other value; the message lists the methods.
+    """
+    if fill_nodata is not None and (not isinstance(fill_nodata, str) or fill_nodata not in _FILL_METHODS):
+        raise UnknownNameError(f"fill_nodata must be None or one of {_FILL_METHODS!r}, got {fill_nodata!r}")
+    return fill_nodata
 
 
 def write_geotiff(

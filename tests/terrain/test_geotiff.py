@@ -11,9 +11,11 @@ import pytest
 from terrain import (
     DataRepairWarning,
     FileFormatError,
+    ImplausibleDataWarning,
     InvalidParameterError,
     OptionalDependencyError,
     TerrainMap,
+    UnitError,
     UnknownNameError,
     procedural_map,
     read_geotiff,
@@ -71,6 +73,7 @@ def test_north_up_file_is_flipped_so_rows_grow_with_y(rasterio, tmp_path):
     assert tmap.sample("elevation", 135.0, 205.0) == 11.0  # south-east pixel
 
 
+@pytest.mark.filterwarnings("ignore::terrain.errors.ImplausibleDataWarning")  # 1 m steps between 1 m cells
 def test_south_up_and_east_left_files(rasterio, tmp_path):
     data = np.arange(6, dtype=np.float64).reshape(2, 3)
     south_up = rasterio.Affine(2.0, 0.0, 10.0, 0.0, 2.0, 20.0)  # file row 0 = south edge
@@ -139,6 +142,7 @@ def test_nodata_raises_by_default(rasterio, tmp_path):
         read_geotiff(nodata_file(rasterio, tmp_path))
 
 
+@pytest.mark.filterwarnings("ignore::terrain.errors.ImplausibleDataWarning")  # 1 m steps between 1 m cells
 def test_nodata_filled_from_the_nearest_cell_on_request(rasterio, tmp_path):
     with pytest.warns(DataRepairWarning, match="filled 2 nodata cells"):
         tmap = read_geotiff(nodata_file(rasterio, tmp_path), fill_nodata="nearest")
@@ -186,7 +190,7 @@ def test_non_square_pixels(rasterio, tmp_path):
 @pytest.mark.parametrize("crs", ["EPSG:4326", "EPSG:2263"])
 def test_crs_not_in_metres(rasterio, tmp_path, crs):
     transform = north_up(rasterio, 0, 10, 1.0, 1.0)
-    with pytest.raises(FileFormatError, match="units are not metres"):
+    with pytest.raises(FileFormatError, match="units are not metres; reproject it to a projected CRS in metres"):
         read_geotiff(write_raw(rasterio, tmp_path / "g.tif", np.zeros((3, 3)), transform, crs=crs))
 
 
@@ -225,4 +229,51 @@ def test_loaded_map_is_a_plain_terrain_map(rasterio, tmp_path, ramp_map):
     back = read_geotiff(write_geotiff(ramp_map, tmp_path / "r.tif"))
     assert isinstance(back, TerrainMap) and back.ground_names == {} and not back.obstacle.any()
     np.testing.assert_allclose(back["grad_x"], ramp_map["grad_x"])
+
+
+# ------------------------------------------------------- images and degrees
+def rgb_file(rasterio, tmp_path):
+    """A 3-band uint8 orthophoto-like GeoTIFF (bands of random colours, 1 m cells)."""
+    rng = np.random.default_rng(5)
+    data = rng.integers(0, 256, size=(3, 16, 16)).astype(np.uint8)
+    data[1] = 40  # band 2 is flat: a plausible (if odd) DEM
+    path = tmp_path / "rgb.tif"
+    profile = dict(driver="GTiff", height=16, width=16, count=3, dtype="uint8",
+                   transform=north_up(rasterio, 0, 16, 1, 1), crs="EPSG:32633")
+    with rasterio.open(path, "w", **profile) as dst:
+        dst.write(data)
+    return path, data
+
+
+def test_a_multi_band_file_needs_its_elevation_band_named(rasterio, tmp_path):
+    path, data = rgb_file(rasterio, tmp_path)
+    with pytest.raises(FileFormatError, match=r"has 3 bands; a DEM has one. Name the elevation band with band=N \(1..3\)"):
+        read_geotiff(path)
+    np.testing.assert_array_equal(read_geotiff(path, band=2).elevation_m, data[1][::-1].astype(float))
+    with pytest.warns(ImplausibleDataWarning, match=r"band 1: \d+ % of the cells are steeper than 60 degrees"):
+        read_geotiff(path, band=1)  # random colours as heights: cliffs everywhere
+    with pytest.raises(InvalidParameterError, match=r"band must be an integer in 1..3, got 4"):
+        read_geotiff(path, band=4)
+
+
+@pytest.mark.parametrize("cell", [0.0003, 0.005, 20_000.0])
+def test_no_crs_and_a_cell_size_implausible_for_metres(rasterio, tmp_path, cell):
+    transform = north_up(rasterio, 10.0, 50.0, cell, cell)
+    path = write_raw(rasterio, tmp_path / "deg.tif", np.zeros((4, 4)), transform, crs=None)
+    with pytest.raises(UnitError, match=r"no CRS and cells of .*implausible as metres.*looks like degrees"):
+        read_geotiff(path)
+
+
+def test_plausible_cell_sizes_without_crs_are_read(rasterio, tmp_path):
+    for cell in (0.01, 10_000.0):
+        path = write_raw(rasterio, tmp_path / "ok.tif", np.zeros((4, 4)), north_up(rasterio, 0, 0, cell, cell), crs=None)
+        assert read_geotiff(path).cell_size_m == cell
+
+
+def test_a_mostly_vertical_dem_warns_but_is_read(rasterio, tmp_path):
+    z = np.tile(5.0 * np.arange(6), (6, 1))  # a 79 degree wall (grade 5)
+    path = write_raw(rasterio, tmp_path / "cliffs.tif", z, north_up(rasterio, 0, 6, 1, 1))
+    with pytest.warns(ImplausibleDataWarning, match="steeper than 60 degrees"):
+        tmap = read_geotiff(path)
+    np.testing.assert_array_equal(tmap.elevation_m, z[::-1])
 
