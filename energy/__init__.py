@@ -87,7 +87,7 @@ from .params import (
 from .physics import EFFECTS, PhysicsEnergyModel, PowerBreakdown
 from .profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, drive_profile, waypoint_commands
 from .plots import ground_spectra, plot_current_estimate, plot_vibration_spectra
-from .readers import (
+from .io import (
     read_borealtc,
     read_borealtc_run,
     read_csv_log,

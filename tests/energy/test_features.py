@@ -40,7 +40,7 @@ def test_window_in_seconds_at_the_borealtc_drive_rate():
 @pytest.mark.parametrize("kwargs", [dict(length_s=0.0, rate_hz=10.0), dict(length_s=1.0, rate_hz=-1.0),
                                     dict(length_s=1.0, rate_hz=10.0, stride_s=math.nan)])
 def test_window_spec_rejects_bad_values(kwargs):
-    with pytest.raises(InvalidParameterError, match="must be a finite number > 0"):
+    with pytest.raises(InvalidParameterError, match=r"(length_s must be > 0|rate_hz must be > 0|stride_s must be finite)"):
         WindowSpec.from_seconds(**kwargs)
     with pytest.raises(InvalidParameterError, match="length_samples"):
         WindowSpec(0, 1, 10.0)

@@ -1,4 +1,4 @@
-"""Interaction logs: time-aligned drive, current and vibration streams of one robot run.
+"""The interaction log: time-aligned drive, current and vibration streams of one robot run.
 
 An :class:`InteractionLog` holds two streams that share one clock:
 
@@ -14,7 +14,7 @@ Both time vectors are strictly increasing and finite; all arrays are float64 cop
 read-only. Changing rate is always explicit: :meth:`InteractionLog.resample` puts the drive
 stream on a uniform grid over the overlap of both streams, :meth:`InteractionLog.accel_on`
 interpolates the acceleration onto other timestamps. Readers for files live in
-``energy.readers``.
+:mod:`energy.io`.
 """
 
 from __future__ import annotations
@@ -28,145 +28,21 @@ from typing import Any
 
 import numpy as np
 
-from terrain.errors import (
-    DataError,
-    DataRepairWarning,
-    InvalidParameterError,
-    UnknownNameError,
-)
+from terrain.checks import check_choice, check_real
+from terrain.errors import DataError, DataRepairWarning, InvalidParameterError
 
-__all__ = [
-    "LogMeta",
-    "InteractionLog",
-    "VELOCITY_SOURCES",
-    "RESAMPLE_METHODS",
-    "DEFAULT_GAP_FACTOR",
-]
+from .arrays import check_increasing, ground_array, log_vector, pose_array
+from .gaps import DEFAULT_GAP_FACTOR, check_gap_factor, gap_steps, median_period_s
+from .meta import LogMeta
+
+__all__ = ["RESAMPLE_METHODS", "InteractionLog"]
 
 _LOG = logging.getLogger(__name__)
 
-#: Allowed values of :attr:`LogMeta.velocity_source`.
-VELOCITY_SOURCES = ("commanded", "measured")
 #: Allowed ``method`` values of :meth:`InteractionLog.resample`.
 RESAMPLE_METHODS = ("linear", "previous")
-#: A step between consecutive samples larger than this many median sampling periods is a
-#: gap (used by :meth:`InteractionLog.split_at_gaps` and by the readers' gap check).
-DEFAULT_GAP_FACTOR = 5.0
 #: Timestamps closer than this are the same instant for zero-order holds (s).
 _TIME_TOL_S = 1e-9
-
-
-@dataclass(frozen=True)
-class LogMeta:
-    """Run-level metadata of an :class:`InteractionLog`.
-
-    Parameters
-    ----------
-    robot : str
-        Name of the robot (e.g. ``"husky_a200"``).
-    source : str
-        Where the data came from: a file path, ``"synthetic"``, ...
-    ground_label : str or None
-        Ground of the whole run (e.g. ``"snow"``), when known.
-    velocity_source : {"commanded", "measured"}
-        Whether ``v_mps`` / ``omega_radps`` are the commands sent to the robot or speeds
-        measured on it (wheel odometry).
-    track_width_m : float or None
-        Track width used to derive ``omega_radps`` from wheel speeds, when it was derived.
-    notes : str
-        Free text: alignment, repairs and resampling applied by readers and methods.
-    start_time_ns : int or None
-        Absolute time of ``time_s == 0`` in ns since the Unix epoch, when the source has one
-        (ROS bags); ``None`` for sources whose clock starts at zero.
-
-    Raises
-    ------
-    InvalidParameterError
-        Non-string names, an unknown ``velocity_source``, a non-positive track width.
-    """
-
-    robot: str = "unknown"
-    source: str = "synthetic"
-    ground_label: str | None = None
-    velocity_source: str = "commanded"
-    track_width_m: float | None = None
-    notes: str = ""
-    start_time_ns: int | None = None
-
-    def __post_init__(self) -> None:
-        for name in ("robot", "source", "notes"):
-            value = getattr(self, name)
-            if not isinstance(value, str):
-                raise InvalidParameterError(f"LogMeta.{name} must be a str, got {value!r}")
-        if self.ground_label is not None and (not isinstance(self.ground_label, str) or not self.ground_label):
-            raise InvalidParameterError(
-                f"LogMeta.ground_label must be a non-empty str or None, got {self.ground_label!r}"
-            )
-        if self.velocity_source not in VELOCITY_SOURCES:
-            raise InvalidParameterError(
-                f"LogMeta.velocity_source must be one of {VELOCITY_SOURCES!r}, got {self.velocity_source!r}"
-            )
-        if self.track_width_m is not None:
-            tw = self.track_width_m
-            if isinstance(tw, bool) or not isinstance(tw, (int, float)) or not math.isfinite(tw) or tw <= 0:
-                raise InvalidParameterError(
-                    f"LogMeta.track_width_m must be a finite number > 0 or None, got {tw!r}"
-                )
-            object.__setattr__(self, "track_width_m", float(tw))
-        if self.start_time_ns is not None and (
-            isinstance(self.start_time_ns, bool) or not isinstance(self.start_time_ns, (int, np.integer))
-        ):
-            raise InvalidParameterError(f"LogMeta.start_time_ns must be an int or None, got {self.start_time_ns!r}")
-
-
-def _as_vector(name: str, value: Any) -> np.ndarray:
-    """A read-only float64 1-D copy of ``value``; InvalidParameterError/DataError otherwise."""
-    try:
-        arr = np.array(value, dtype=np.float64, copy=True)
-    except (TypeError, ValueError) as exc:
-        raise InvalidParameterError(f"{name} must be an array of numbers, got {value!r:.80}") from exc
-    if arr.ndim != 1:
-        raise InvalidParameterError(f"{name} must be 1-D, got shape {arr.shape!r}")
-    bad = ~np.isfinite(arr)
-    if bad.any():
-        i = int(np.argmax(bad))
-        raise DataError(
-            f"{name} must be finite; {int(bad.sum())} non-finite value(s), first at index {i} "
-            f"({float(arr[i])!r})"
-        )
-    arr.setflags(write=False)
-    return arr
-
-
-def _check_increasing(name: str, t: np.ndarray) -> None:
-    if t.size == 0:
-        raise DataError(f"{name} is empty; an interaction log needs at least one sample per stream")
-    d = np.diff(t)
-    bad = d <= 0
-    if bad.any():
-        i = int(np.argmax(bad)) + 1
-        raise DataError(
-            f"{name} must be strictly increasing; {int(bad.sum())} step(s) are not, first at index {i} "
-            f"(t={float(t[i])!r} after t={float(t[i - 1])!r})"
-        )
-
-
-def _median_period_s(t: np.ndarray) -> float:
-    return float(np.median(np.diff(t)))
-
-
-def _gap_steps(t: np.ndarray, gap_factor: float) -> np.ndarray:
-    """Indices i such that ``t[i+1] - t[i]`` exceeds ``gap_factor`` median periods."""
-    if t.size < 3:
-        return np.zeros(0, dtype=np.intp)
-    d = np.diff(t)
-    return np.flatnonzero(d > gap_factor * float(np.median(d)))
-
-
-def _check_gap_factor(gap_factor: float) -> float:
-    if isinstance(gap_factor, bool) or not isinstance(gap_factor, (int, float)) or not gap_factor > 1:
-        raise InvalidParameterError(f"gap_factor must be a number > 1, got {gap_factor!r}")
-    return float(gap_factor)
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -228,53 +104,28 @@ class InteractionLog:
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        t = _as_vector("time_s", self.time_s)
-        _check_increasing("time_s", t)
+        t = log_vector("time_s", self.time_s)
+        check_increasing("time_s", t)
         set_(self, "time_s", t)
         n = t.size
         for name in ("v_mps", "omega_radps", "current_left_a", "current_right_a"):
-            arr = _as_vector(name, getattr(self, name))
+            arr = log_vector(name, getattr(self, name))
             if arr.size != n:
                 raise InvalidParameterError(f"{name} must have the length of time_s ({n}), got {arr.size}")
             set_(self, name, arr)
-        ta = _as_vector("accel_time_s", self.accel_time_s)
-        _check_increasing("accel_time_s", ta)
+        ta = log_vector("accel_time_s", self.accel_time_s)
+        check_increasing("accel_time_s", ta)
         set_(self, "accel_time_s", ta)
-        az = _as_vector("accel_z_mps2", self.accel_z_mps2)
+        az = log_vector("accel_z_mps2", self.accel_z_mps2)
         if az.size != ta.size:
             raise InvalidParameterError(
                 f"accel_z_mps2 must have the length of accel_time_s ({ta.size}), got {az.size}"
             )
         set_(self, "accel_z_mps2", az)
         if self.pose_xyh is not None:
-            try:
-                pose = np.array(self.pose_xyh, dtype=np.float64, copy=True)
-            except (TypeError, ValueError) as exc:
-                raise InvalidParameterError(f"pose_xyh must be a numeric (N, 3) array, got {self.pose_xyh!r:.80}") from exc
-            if pose.shape != (n, 3):
-                raise InvalidParameterError(f"pose_xyh must have shape ({n}, 3), got {pose.shape!r}")
-            bad = ~np.isfinite(pose)
-            if bad.any():
-                i = int(np.argmax(bad.any(axis=1)))
-                raise DataError(
-                    f"pose_xyh must be finite; {int(bad.any(axis=1).sum())} row(s) are not, first at index {i}"
-                )
-            pose.setflags(write=False)
-            set_(self, "pose_xyh", pose)
+            set_(self, "pose_xyh", pose_array(self.pose_xyh, n))
         if self.ground is not None:
-            raw = np.asarray(self.ground)
-            if raw.ndim != 1 or raw.size != n:
-                raise InvalidParameterError(f"ground must be a 1-D array of {n} labels, got shape {raw.shape!r}")
-            if raw.dtype.kind == "O" and all(isinstance(g, str) for g in raw.tolist()):
-                raw = raw.astype(str)
-            if raw.dtype.kind != "U":
-                raise InvalidParameterError(f"ground must hold str labels, got dtype {raw.dtype!r}")
-            if n and (np.char.str_len(raw) == 0).any():
-                i = int(np.argmax(np.char.str_len(raw) == 0))
-                raise DataError(f"ground labels must be non-empty; first empty label at index {i}")
-            g = raw.copy()
-            g.setflags(write=False)
-            set_(self, "ground", g)
+            set_(self, "ground", ground_array(self.ground, n))
         if not isinstance(self.meta, LogMeta):
             raise InvalidParameterError(f"meta must be a LogMeta, got {self.meta!r}")
 
@@ -284,7 +135,7 @@ class InteractionLog:
 
     def __repr__(self) -> str:
         def rate(t: np.ndarray) -> str:
-            return f"{1.0 / _median_period_s(t):.4g} Hz" if t.size > 1 else "single sample"
+            return f"{1.0 / median_period_s(t):.4g} Hz" if t.size > 1 else "single sample"
 
         return (
             f"InteractionLog(robot={self.meta.robot!r}, ground={self.meta.ground_label!r}, "
@@ -303,14 +154,14 @@ class InteractionLog:
         """Drive-stream rate: 1 / median sampling period (Hz). DataError with < 2 samples."""
         if self.time_s.size < 2:
             raise DataError("drive_rate_hz needs at least 2 drive samples, the log has 1")
-        return 1.0 / _median_period_s(self.time_s)
+        return 1.0 / median_period_s(self.time_s)
 
     @property
     def accel_rate_hz(self) -> float:
         """Acceleration-stream rate: 1 / median sampling period (Hz). DataError with < 2 samples."""
         if self.accel_time_s.size < 2:
             raise DataError("accel_rate_hz needs at least 2 acceleration samples, the log has 1")
-        return 1.0 / _median_period_s(self.accel_time_s)
+        return 1.0 / median_period_s(self.accel_time_s)
 
     @property
     def ground_labels(self) -> np.ndarray | None:
@@ -405,10 +256,8 @@ class InteractionLog:
         DataError
             The streams do not overlap.
         """
-        if isinstance(rate_hz, bool) or not isinstance(rate_hz, (int, float)) or not math.isfinite(rate_hz) or rate_hz <= 0:
-            raise InvalidParameterError(f"rate_hz must be a finite number > 0, got {rate_hz!r}")
-        if method not in RESAMPLE_METHODS:
-            raise UnknownNameError(f"method must be one of {RESAMPLE_METHODS!r}, got {method!r}")
+        rate_hz = check_real("rate_hz", rate_hz, low=0.0, low_inclusive=False)
+        check_choice("method", method, RESAMPLE_METHODS)
         t0, t1 = self.overlap_s()
         n = int(math.floor((t1 - t0) * rate_hz + 1e-9)) + 1
         grid = t0 + np.arange(n, dtype=np.float64) / float(rate_hz)
@@ -455,9 +304,8 @@ class InteractionLog:
         DataError
             The window holds no drive or no acceleration sample.
         """
-        for name, value in (("t0_s", t0_s), ("t1_s", t1_s)):
-            if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)) or not math.isfinite(value):
-                raise InvalidParameterError(f"{name} must be a finite number, got {value!r}")
+        t0_s = check_real("t0_s", t0_s)
+        t1_s = check_real("t1_s", t1_s)
         if not t1_s > t0_s:
             raise InvalidParameterError(f"t1_s must be > t0_s, got t0_s={t0_s!r}, t1_s={t1_s!r}")
         d = (self.time_s >= t0_s) & (self.time_s < t1_s)
@@ -484,8 +332,7 @@ class InteractionLog:
     def shifted(self, offset_s: float) -> InteractionLog:
         """The same log with ``offset_s`` added to both time vectors (e.g. before
         :meth:`concatenate` of runs that each start at zero)."""
-        if isinstance(offset_s, bool) or not isinstance(offset_s, (int, float, np.floating, np.integer)) or not math.isfinite(offset_s):
-            raise InvalidParameterError(f"offset_s must be a finite number, got {offset_s!r}")
+        offset_s = check_real("offset_s", offset_s)
         return replace(self, time_s=self.time_s + offset_s, accel_time_s=self.accel_time_s + offset_s)
 
     def split_at_gaps(self, gap_factor: float = DEFAULT_GAP_FACTOR) -> list[InteractionLog]:
@@ -509,10 +356,10 @@ class InteractionLog:
         DataError
             No piece keeps both streams.
         """
-        gap_factor = _check_gap_factor(gap_factor)
+        gap_factor = check_gap_factor(gap_factor)
         gaps: list[tuple[float, float]] = []
         for t in (self.time_s, self.accel_time_s):
-            for i in _gap_steps(t, gap_factor):
+            for i in gap_steps(t, gap_factor):
                 gaps.append((float(t[i]), float(t[i + 1])))
         if not gaps:
             return [self]

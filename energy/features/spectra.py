@@ -1,195 +1,41 @@
-"""Vibration and motion features for learned current models: windows, spectra, normalisers.
-
-Three kinds of features feed :class:`energy.estimator.VibrationCurrentEstimator`:
-
-- **Windows** of the drive stream (:class:`WindowSpec`): ``t_interval`` stated in seconds
-  *and* samples at a stated rate (the paper's 0.1 s = 10 samples at 100 Hz).
-- **Whole-run spectrum** (:func:`whole_run_spectrum`): the source method's FFT amplitude
-  spectrum of the vertical acceleration over a whole interaction run, 0–50 Hz on a fixed
-  grid of 8000 bins (one spectrum per run; the FFT bins of runs longer than the grid's
-  resolution are pooled into it by power), and its compact form (:func:`whole_run_band_spectrum`),
-  the band RMS averaged over the run (Welch), which does not depend on the run length.
-- **Local spectra** (:func:`band_rms_spectra`): the RMS vertical acceleration in
-  log-spaced frequency bands over a short window (e.g. 1 s) around given times.
+"""Vibration spectra of the vertical acceleration: whole-run FFT spectrum, band RMS spectra.
 
 Every spectrum removes the mean of each segment first (so gravity drops out) and resamples
 the acceleration onto a uniform grid at its median rate (linear interpolation) before the
-FFT. :class:`MinMaxNormaliser` holds the min-max scaling: the source ranges (v 0–1 m/s,
-omega 0–1 rad/s, current 0–10 000 mA, absolute values) as constants, spectrum ranges fitted
-on training data; both are stored with a model.
+FFT.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from terrain.checks import check_int, check_real, fmt_number, real_array
 from terrain.errors import DataError, InvalidParameterError, UnknownNameError
 
 __all__ = [
-    "DEFAULT_T_INTERVAL_S",
-    "SOURCE_SPEED_RANGE_MPS",
-    "SOURCE_OMEGA_RANGE_RADPS",
-    "SOURCE_CURRENT_RANGE_A",
     "SPECTRUM_SCALINGS",
-    "WindowSpec",
-    "window_starts",
-    "sliding_windows",
+    "NYQUIST_TOLERANCE",
+    "accel_rate_hz",
     "whole_run_spectrum",
     "log_band_edges_hz",
     "band_rms_spectra",
     "whole_run_band_spectrum",
-    "MinMaxNormaliser",
 ]
 
-#: The source method's window ``t_interval`` (s): 10 samples at 100 Hz.
-DEFAULT_T_INTERVAL_S = 0.1
-#: Min-max range of |v| in the source method (m/s).
-SOURCE_SPEED_RANGE_MPS = (0.0, 1.0)
-#: Min-max range of |omega| in the source method (rad/s).
-SOURCE_OMEGA_RANGE_RADPS = (0.0, 1.0)
-#: Min-max range of the drive current in the source method (0–10 000 mA, in A).
-SOURCE_CURRENT_RANGE_A = (0.0, 10.0)
 #: ``scaling`` values of :func:`whole_run_spectrum`.
 SPECTRUM_SCALINGS = ("amplitude", "density")
-
-# Bins up to this fraction above the Nyquist frequency are accepted (held at the Nyquist
-# value): a 99.5 Hz IMU still serves a 0-50 Hz spectrum.
-_NYQUIST_TOLERANCE = 0.02
-
-
-def _positive(name: str, value: Any) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)) or not math.isfinite(value) or value <= 0:
-        raise InvalidParameterError(f"{name} must be a finite number > 0, got {value!r}")
-    return float(value)
+#: Bins up to this fraction above the Nyquist frequency are accepted (held at the Nyquist
+#: value): a 99.5 Hz IMU still serves a 0-50 Hz spectrum.
+NYQUIST_TOLERANCE = 0.02
 
 
-def _positive_int(name: str, value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise InvalidParameterError(f"{name} must be an int >= 1, got {value!r}")
-    return int(value)
-
-
-# ---------------------------------------------------------------------------- windows
-@dataclass(frozen=True)
-class WindowSpec:
-    """A window over a uniformly sampled stream, stated in samples and in seconds.
-
-    Parameters
-    ----------
-    length_samples : int
-        Samples per window (>= 1).
-    stride_samples : int
-        Samples between window starts (>= 1).
-    rate_hz : float
-        Sampling rate of the stream the windows cut (Hz, > 0).
-
-    Examples
-    --------
-    >>> spec = WindowSpec.from_seconds(0.1, rate_hz=100.0)   # the paper's t_interval
-    >>> spec.length_samples, spec.stride_samples, spec.length_s
-    (10, 10, 0.1)
-    """
-
-    length_samples: int
-    stride_samples: int
-    rate_hz: float
-
-    def __post_init__(self) -> None:
-        _positive_int("WindowSpec.length_samples", self.length_samples)
-        _positive_int("WindowSpec.stride_samples", self.stride_samples)
-        object.__setattr__(self, "rate_hz", _positive("WindowSpec.rate_hz", self.rate_hz))
-        object.__setattr__(self, "length_samples", int(self.length_samples))
-        object.__setattr__(self, "stride_samples", int(self.stride_samples))
-
-    @classmethod
-    def from_seconds(cls, length_s: float = DEFAULT_T_INTERVAL_S, rate_hz: float = 100.0,
-                     stride_s: float | None = None) -> WindowSpec:
-        """Window of ``length_s`` (default the paper's 0.1 s) and stride ``stride_s``
-        (default: the length) at ``rate_hz`` (default 100 Hz).
-
-        Lengths are rounded to the nearest whole sample, at least one.
-
-        Raises
-        ------
-        InvalidParameterError
-            Non-positive or non-finite arguments.
-        """
-        length_s = _positive("length_s", length_s)
-        rate_hz = _positive("rate_hz", rate_hz)
-        stride_s = length_s if stride_s is None else _positive("stride_s", stride_s)
-        return cls(
-            length_samples=max(1, int(round(length_s * rate_hz))),
-            stride_samples=max(1, int(round(stride_s * rate_hz))),
-            rate_hz=rate_hz,
-        )
-
-    @property
-    def length_s(self) -> float:
-        """Window length (s)."""
-        return self.length_samples / self.rate_hz
-
-    @property
-    def stride_s(self) -> float:
-        """Stride between window starts (s)."""
-        return self.stride_samples / self.rate_hz
-
-
-def window_starts(n_samples: int, spec: WindowSpec) -> np.ndarray:
-    """Start indices of the windows that cover ``n_samples`` samples.
-
-    Windows start every ``stride_samples``; when the last regular window stops short of the
-    end, one more window is aligned with the end, so every sample is covered when the
-    stride does not exceed the length.
-
-    Raises
-    ------
-    DataError
-        ``n_samples`` is shorter than one window.
-    """
-    n = int(n_samples)
-    if n < spec.length_samples:
-        raise DataError(
-            f"the record has {n} samples ({n / spec.rate_hz:.3g} s), shorter than one window of "
-            f"{spec.length_samples} samples ({spec.length_s:.3g} s)"
-        )
-    last = n - spec.length_samples
-    starts = np.arange(0, last + 1, spec.stride_samples, dtype=np.intp)
-    if starts[-1] != last:
-        starts = np.append(starts, last)
-    return starts
-
-
-def sliding_windows(values: Any, spec: WindowSpec, starts: np.ndarray | None = None) -> np.ndarray:
-    """Windows of a uniformly sampled array, shape ``(n_windows, length_samples, *rest)``.
-
-    Parameters
-    ----------
-    values : array_like, shape (N, ...)
-    spec : WindowSpec
-    starts : numpy.ndarray, optional
-        Start indices; default :func:`window_starts`.
-
-    Returns
-    -------
-    numpy.ndarray
-        A copy (safe to modify).
-    """
-    x = np.asarray(values)
-    if starts is None:
-        starts = window_starts(x.shape[0], spec)
-    idx = starts[:, None] + np.arange(spec.length_samples)[None, :]
-    return x[idx]
-
-
-# --------------------------------------------------------------------------- spectra
 def _uniform_accel(accel_time_s: Any, accel_z_mps2: Any) -> tuple[np.ndarray, np.ndarray, float]:
     """Acceleration linearly interpolated onto a uniform grid at its median rate."""
-    t = np.asarray(accel_time_s, dtype=np.float64)
-    a = np.asarray(accel_z_mps2, dtype=np.float64)
+    t = real_array("accel_time_s", accel_time_s, finite=False)
+    a = real_array("accel_z_mps2", accel_z_mps2, finite=False)
     if t.ndim != 1 or a.shape != t.shape:
         raise InvalidParameterError(
             f"accel_time_s and accel_z_mps2 must be 1-D of one length, got shapes {t.shape!r} and {a.shape!r}"
@@ -207,12 +53,38 @@ def _uniform_accel(accel_time_s: Any, accel_z_mps2: Any) -> tuple[np.ndarray, np
     return grid, np.interp(grid, t, a), rate
 
 
+def accel_rate_hz(accel_time_s: Any) -> float:
+    """Median sampling rate of an acceleration stream (Hz), the rate its spectra resample to.
+
+    Its Nyquist frequency, half of it, bounds every spectrum's ``max_frequency_hz`` (with
+    :data:`NYQUIST_TOLERANCE`).
+
+    Raises
+    ------
+    DataError
+        Fewer than 2 timestamps, or a median step that is not positive and finite.
+
+    Examples
+    --------
+    >>> round(accel_rate_hz(np.arange(100) / 50.0), 9)
+    50.0
+    """
+    t = real_array("accel_time_s", accel_time_s, ndim=1, finite=False)
+    if t.size < 2:
+        raise DataError(f"a sampling rate needs at least 2 timestamps, got {t.size}")
+    step = float(np.median(np.diff(t)))
+    if not (math.isfinite(step) and step > 0):
+        raise DataError(f"accel_time_s has a median step of {step!r} s; expected finite increasing times")
+    return 1.0 / step
+
+
 def _check_nyquist(max_frequency_hz: float, rate_hz: float) -> None:
     nyquist = rate_hz / 2.0
-    if max_frequency_hz > nyquist * (1.0 + _NYQUIST_TOLERANCE):
+    if max_frequency_hz > nyquist * (1.0 + NYQUIST_TOLERANCE):
         raise InvalidParameterError(
-            f"max_frequency_hz={max_frequency_hz!r} exceeds the Nyquist frequency {nyquist:.4g} Hz of "
-            f"the acceleration stream ({rate_hz:.4g} Hz); lower max_frequency_hz or record faster"
+            f"max_frequency_hz={fmt_number(max_frequency_hz)} Hz exceeds the Nyquist frequency "
+            f"{fmt_number(nyquist)} Hz of the acceleration stream ({fmt_number(rate_hz)} Hz); lower "
+            f"max_frequency_hz or record faster"
         )
 
 
@@ -282,8 +154,8 @@ def whole_run_spectrum(
     >>> f.size, float(f[np.argmax(amp)]), round(float(amp.max()), 3)
     (8000, 12.0, 0.5)
     """
-    n_bins = _positive_int("n_bins", n_bins)
-    max_frequency_hz = _positive("max_frequency_hz", max_frequency_hz)
+    n_bins = check_int("n_bins", n_bins, low=1)
+    max_frequency_hz = check_real("max_frequency_hz", max_frequency_hz, low=0.0, low_inclusive=False)
     if scaling not in SPECTRUM_SCALINGS:
         raise UnknownNameError(f"scaling must be one of {SPECTRUM_SCALINGS!r}, got {scaling!r}")
     _, a, rate = _uniform_accel(accel_time_s, accel_z_mps2)
@@ -347,10 +219,10 @@ def log_band_edges_hz(
     >>> log_band_edges_hz(4, 1.0, 16.0, 1.0).tolist()
     [1.0, 2.0, 4.0, 8.0, 16.0]
     """
-    n_bands = _positive_int("n_bands", n_bands)
-    lo = _positive("min_frequency_hz", min_frequency_hz)
-    hi = _positive("max_frequency_hz", max_frequency_hz)
-    res = _positive("resolution_hz", resolution_hz)
+    n_bands = check_int("n_bands", n_bands, low=1)
+    lo = check_real("min_frequency_hz", min_frequency_hz, low=0.0, low_inclusive=False)
+    hi = check_real("max_frequency_hz", max_frequency_hz, low=0.0, low_inclusive=False)
+    res = check_real("resolution_hz", resolution_hz, low=0.0, low_inclusive=False)
     if not hi > lo:
         raise InvalidParameterError(f"max_frequency_hz must be > min_frequency_hz={lo!r}, got {hi!r}")
     k = np.round(np.geomspace(lo, hi, n_bands + 1) / res).astype(np.int64)
@@ -445,11 +317,11 @@ def band_rms_spectra(
     >>> np.round(rms, 2).tolist()
     [[0.0, 1.0, 0.0]]
     """
-    span_s = _positive("span_s", span_s)
-    edges = np.asarray(band_edges_hz, dtype=np.float64)
-    if edges.ndim != 1 or edges.size < 2 or np.any(np.diff(edges) <= 0) or edges[0] < 0:
+    span_s = check_real("span_s", span_s, low=0.0, low_inclusive=False)
+    edges = real_array("band_edges_hz", band_edges_hz, finite=False)
+    if edges.ndim != 1 or edges.size < 2 or not np.all(np.isfinite(edges)) or np.any(np.diff(edges) <= 0) or edges[0] < 0:
         raise InvalidParameterError(f"band_edges_hz must be >= 2 increasing non-negative edges, got {edges.tolist()!r}")
-    centres = np.atleast_1d(np.asarray(centre_time_s, dtype=np.float64))
+    centres = np.atleast_1d(real_array("centre_time_s", centre_time_s, finite=False))
     if centres.ndim != 1 or not np.all(np.isfinite(centres)):
         raise InvalidParameterError("centre_time_s must be a finite 1-D array")
     grid, a, rate = _uniform_accel(accel_time_s, accel_z_mps2)
@@ -494,107 +366,12 @@ def whole_run_band_spectrum(
     ------
     As :func:`band_rms_spectra`.
     """
-    span_s = _positive("span_s", span_s)
-    hop_s = span_s / 2.0 if hop_s is None else _positive("hop_s", hop_s)
-    t = np.asarray(accel_time_s, dtype=np.float64)
+    span_s = check_real("span_s", span_s, low=0.0, low_inclusive=False)
+    hop_s = span_s / 2.0 if hop_s is None else check_real("hop_s", hop_s, low=0.0, low_inclusive=False)
+    t = real_array("accel_time_s", accel_time_s, finite=False)
     if t.ndim != 1 or t.size < 4:
         raise DataError(f"a spectrum needs at least 4 acceleration samples, got shape {t.shape!r}")
     first, last = t[0] + span_s / 2.0, t[-1] - span_s / 2.0
     centres = np.arange(first, max(first, last) + 1e-9, hop_s)
     rms = band_rms_spectra(t, accel_z_mps2, centres, span_s, band_edges_hz)
     return np.sqrt(np.mean(rms**2, axis=0))
-
-
-# ----------------------------------------------------------------------- normalisers
-@dataclass(frozen=True, eq=False)
-class MinMaxNormaliser:
-    """Min-max scaling ``(x' - low) / (high - low)`` with ``x' = |x|`` when ``absolute``.
-
-    Values outside ``[low, high]`` map outside ``[0, 1]``; nothing is clipped. A column
-    with ``high == low`` is scaled by 1 (only shifted).
-
-    Parameters
-    ----------
-    low, high : array_like
-        Per-column (or scalar) range, ``high >= low``.
-    absolute : bool
-        Take absolute values first (the source method's convention for v, omega, current).
-
-    Examples
-    --------
-    >>> speed = MinMaxNormaliser(*SOURCE_SPEED_RANGE_MPS, absolute=True)
-    >>> speed.transform(np.array([-0.5, 0.25])).tolist()
-    [0.5, 0.25]
-    """
-
-    low: np.ndarray
-    high: np.ndarray
-    absolute: bool = False
-
-    def __post_init__(self) -> None:
-        low = np.array(self.low, dtype=np.float64)
-        high = np.array(self.high, dtype=np.float64)
-        if low.shape != high.shape or low.ndim > 1:
-            raise InvalidParameterError(f"low and high must be scalars or 1-D of one shape, got {low.shape!r} and {high.shape!r}")
-        if not (np.all(np.isfinite(low)) and np.all(np.isfinite(high))) or np.any(high < low):
-            raise InvalidParameterError(f"low and high must be finite with high >= low, got low={low!r}, high={high!r}")
-        if not isinstance(self.absolute, (bool, np.bool_)):
-            raise InvalidParameterError(f"absolute must be a bool, got {self.absolute!r}")
-        low.setflags(write=False)
-        high.setflags(write=False)
-        object.__setattr__(self, "low", low)
-        object.__setattr__(self, "high", high)
-        object.__setattr__(self, "absolute", bool(self.absolute))
-
-    @property
-    def span(self) -> np.ndarray:
-        """``high - low`` with zero spans replaced by 1."""
-        s = self.high - self.low
-        return np.where(s > 0, s, 1.0)
-
-    @classmethod
-    def from_data(cls, values: Any, absolute: bool = False, per_column: bool = True) -> MinMaxNormaliser:
-        """Fit the range to data: per column of a 2-D array, or one range over everything.
-
-        Raises
-        ------
-        DataError
-            Empty or non-finite data.
-        """
-        x = np.asarray(values, dtype=np.float64)
-        if x.size == 0 or not np.all(np.isfinite(x)):
-            raise DataError(f"cannot fit a normaliser to empty or non-finite data (shape {x.shape!r})")
-        if absolute:
-            x = np.abs(x)
-        if per_column and x.ndim == 2:
-            return cls(x.min(axis=0), x.max(axis=0), absolute)
-        return cls(float(x.min()), float(x.max()), absolute)
-
-    def transform(self, values: Any) -> np.ndarray:
-        """Scale values (broadcast over the last axis)."""
-        x = np.asarray(values, dtype=np.float64)
-        if self.absolute:
-            x = np.abs(x)
-        return (x - self.low) / self.span
-
-    def inverse_transform(self, values: Any) -> np.ndarray:
-        """Undo :meth:`transform` (absolute values stay absolute)."""
-        return np.asarray(values, dtype=np.float64) * self.span + self.low
-
-    def to_dict(self) -> dict[str, Any]:
-        """Plain-types form for checkpoints."""
-        return {"low": self.low.tolist(), "high": self.high.tolist(), "absolute": self.absolute}
-
-    @classmethod
-    def from_dict(cls, data: Any) -> MinMaxNormaliser:
-        """Rebuild from :meth:`to_dict` output.
-
-        Raises
-        ------
-        InvalidParameterError
-            Missing keys or bad values.
-        """
-        try:
-            return cls(data["low"], data["high"], data["absolute"])
-        except (KeyError, TypeError) as exc:
-            raise InvalidParameterError(f"a normaliser needs keys 'low', 'high', 'absolute', got {data!r:.120}") from exc

@@ -1,0 +1,84 @@
+"""Readers and writers of interaction logs: BorealTC CSV, generic CSV, ROS 1/2 bags and MCAP.
+
+Every reader returns :class:`~energy.logs.InteractionLog` objects in SI units and refuses
+bad input with a clear error instead of guessing:
+
+- unsorted timestamps, duplicated timestamps, NaNs (empty fields or ``nan``) -> DataError
+  naming the stream, the first offending index and time, and the count; each can be
+  repaired on request with ``repair=("sort", "drop_duplicates", "interpolate_nans")``
+  (applied in that order; each repair is logged through ``logging.getLogger(__name__)`` and
+  warned with :class:`~terrain.errors.DataRepairWarning` giving the count). NaN timestamps
+  are never repaired; ``interpolate_nans`` interpolates linearly in time from the nearest
+  finite samples and holds the first/last finite value at the ends.
+- gaps: a step between consecutive samples of one stream larger than ``gap_factor``
+  (default :data:`~energy.logs.DEFAULT_GAP_FACTOR` = 5) median periods -> DataError unless
+  ``allow_gaps=True``; split such logs with :meth:`InteractionLog.split_at_gaps`.
+- missing columns / topics, empty files -> DataError; a missing, unreadable or corrupt file
+  (not UTF-8: the message gives the byte offset and line; a ragged row; a bad
+  ``# terrawatt-log`` header) -> FileFormatError.
+- unit checks (``check_units=True``), made after conversion to SI; the thresholds are
+  constants of :mod:`energy.io.cleaning`:
+
+  * current declared in A whose median |I| exceeds ``MAX_MEDIAN_CURRENT_A`` (100 A), or
+    whose values are all integers reaching 100 or more, or whose 99th percentile of the
+    non-zero |I| exceeds ``MAX_P99_CURRENT_A`` (300 A; zeros say nothing about the
+    unit, so a side idle most of the time is still caught) -> UnitError "looks like mA";
+  * current declared in mA whose peak |I| is below ``MIN_PEAK_CURRENT_A`` (0.05 A = 50 mA)
+    while not all zero -> UnitError "looks like A";
+  * |v| (or a wheel speed) above ``MAX_SPEED_MPS`` (10 m/s, implausible for a ground
+    robot) -> UnitError "looks like mm/s or cm/s";
+  * |omega| above ``MAX_OMEGA_RADPS`` (20 rad/s) -> UnitError "looks like deg/s";
+  * median |a_z| above ``MAX_MEDIAN_ACCEL_MPS2`` (50 m/s^2) -> UnitError (e.g. m/s^2
+    declared as g, or mm/s^2);
+  * a drive, current or IMU stream whose median rate lies outside
+    [``MIN_STREAM_RATE_HZ``, ``MAX_STREAM_RATE_HZ``] (1 Hz to 10 kHz), or that spans more
+    than ``MAX_RUN_DURATION_S`` (one day) -> UnitError "the time unit looks wrong" (e.g.
+    BorealTC times in ms read as s: 0.0065 Hz over 9,385 s). Commands are event-like and
+    not rate-checked.
+
+Modules: :mod:`~energy.io.cleaning` (the checks above), :mod:`~energy.io.csv_table` (CSV
+decoding and parsing), :mod:`~energy.io.borealtc`, :mod:`~energy.io.csv_log` (+ its header
+line, :mod:`~energy.io.csv_header`), :mod:`~energy.io.rosbag`.
+"""
+
+from .borealtc import BOREALTC_TRACK_WIDTH_M, read_borealtc, read_borealtc_run
+from .cleaning import (
+    MAX_MEDIAN_ACCEL_MPS2,
+    MAX_MEDIAN_CURRENT_A,
+    MAX_OMEGA_RADPS,
+    MAX_P99_CURRENT_A,
+    MAX_RUN_DURATION_S,
+    MAX_SPEED_MPS,
+    MAX_STREAM_RATE_HZ,
+    MIN_PEAK_CURRENT_A,
+    MIN_STREAM_RATE_HZ,
+    REPAIRS,
+)
+from .csv_header import CSV_LOG_FORMAT_VERSION
+from .csv_log import CSV_FIELDS, CSV_RATES, CSV_UNITS, DEFAULT_CSV_COLUMNS, read_csv_log, write_csv_log
+from .rosbag import MAX_CLOCK_OFFSET_S, read_rosbag
+
+__all__ = [
+    "REPAIRS",
+    "BOREALTC_TRACK_WIDTH_M",
+    "CSV_FIELDS",
+    "CSV_UNITS",
+    "DEFAULT_CSV_COLUMNS",
+    "CSV_LOG_FORMAT_VERSION",
+    "CSV_RATES",
+    "MAX_MEDIAN_CURRENT_A",
+    "MAX_P99_CURRENT_A",
+    "MIN_PEAK_CURRENT_A",
+    "MAX_SPEED_MPS",
+    "MAX_OMEGA_RADPS",
+    "MAX_MEDIAN_ACCEL_MPS2",
+    "MIN_STREAM_RATE_HZ",
+    "MAX_STREAM_RATE_HZ",
+    "MAX_RUN_DURATION_S",
+    "MAX_CLOCK_OFFSET_S",
+    "read_borealtc_run",
+    "read_borealtc",
+    "read_csv_log",
+    "write_csv_log",
+    "read_rosbag",
+]

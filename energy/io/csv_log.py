@@ -1,0 +1,421 @@
+"""The generic CSV layout of an interaction log: a column map with declared units, read and written."""
+
+from __future__ import annotations
+
+import logging
+import os
+import re
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from terrain.atomic import write_text_atomic
+from terrain.checks import fmt_number
+from terrain.errors import DataError, InvalidParameterError, UnknownNameError
+
+from ..logs import DEFAULT_GAP_FACTOR, VELOCITY_SOURCES, InteractionLog, LogMeta, check_gap_factor
+from .cleaning import (
+    MAX_OMEGA_RADPS,
+    MAX_SPEED_MPS,
+    UNIT_FACTORS,
+    check_accel,
+    check_current,
+    check_limit,
+    check_timing,
+    check_track_width,
+    clean_stream,
+    parse_repair,
+)
+from .csv_header import CSV_LOG_FORMAT_VERSION, LOG_HEADER_PREFIX, format_log_header, parse_log_header
+from .csv_table import CsvText, read_csv_text, read_table
+
+__all__ = [
+    "CSV_FIELDS",
+    "CSV_UNITS",
+    "DEFAULT_CSV_COLUMNS",
+    "CSV_LOG_FORMAT_VERSION",
+    "CSV_RATES",
+    "read_csv_log",
+    "write_csv_log",
+]
+
+_LOG = logging.getLogger(__name__)
+
+_FIELD_KIND = {
+    "time": "time",
+    "v": "speed",
+    "omega": "omega",
+    "speed_left": "speed",
+    "speed_right": "speed",
+    "current_left": "current",
+    "current_right": "current",
+    "accel_z": "accel",
+    "x": "length",
+    "y": "length",
+    "heading": "angle",
+    "ground": "",
+}
+#: Canonical field names accepted in ``read_csv_log``'s column map.
+CSV_FIELDS = tuple(_FIELD_KIND)
+#: Units accepted per field of ``read_csv_log`` (the first of each is the SI default).
+CSV_UNITS: dict[str, tuple[str, ...]] = {
+    f: tuple(UNIT_FACTORS[k]) for f, k in _FIELD_KIND.items() if k
+}
+#: Column names of the generic layout written by :func:`write_csv_log` (and read by
+#: :func:`read_csv_log` when ``columns`` is None).
+DEFAULT_CSV_COLUMNS: dict[str, str] = {
+    "time": "time_s",
+    "v": "v_mps",
+    "omega": "omega_radps",
+    "current_left": "current_left_a",
+    "current_right": "current_right_a",
+    "accel_z": "accel_z_mps2",
+    "x": "x_m",
+    "y": "y_m",
+    "heading": "heading_rad",
+    "ground": "ground",
+}
+#: Values of ``read_csv_log``'s ``rates``: one row per sample of both streams, or two
+#: streams of different rates interleaved by time (the layout :func:`write_csv_log` writes).
+CSV_RATES = ("mixed", "single")
+
+
+def _unit_factor(field: str, unit: str) -> float:
+    table = UNIT_FACTORS[_FIELD_KIND[field]]
+    if unit not in table:
+        raise UnknownNameError(f"unit {unit!r} is not known for field {field!r}; expected one of {tuple(table)!r}")
+    return table[unit]
+
+
+def read_csv_log(
+    path: str | os.PathLike[str],
+    columns: Mapping[str, str] | None = None,
+    units: Mapping[str, str] | None = None,
+    *,
+    robot: str | None = None,
+    ground_label: str | None = None,
+    velocity_source: str | None = None,
+    track_width_m: float | None = None,
+    rates: str = "mixed",
+    repair: str | Iterable[str] = (),
+    allow_gaps: bool = False,
+    gap_factor: float = DEFAULT_GAP_FACTOR,
+    check_units: bool = True,
+) -> InteractionLog:
+    """Read an interaction log from one CSV file with a column map and declared units.
+
+    Layout: a header line (lines starting with ``#`` before or between rows are comments),
+    one row per timestamp. Missing fields are empty or ``nan``. ``rates`` says how rows map
+    to the drive and acceleration streams:
+
+    - ``"single"``: every row is a sample of both streams, so any missing field is a NaN
+      of its stream (DataError unless ``repair=("interpolate_nans",)``). Use it for
+      single-rate files: nothing is ever moved out of a stream.
+    - ``"mixed"`` (default; the layout :func:`write_csv_log` writes): the two streams have
+      different rates and are interleaved by time. A row is an acceleration sample when its
+      acceleration field is present, and a drive sample when any drive field (a pose field
+      or a ground label included) is present, or when the acceleration field is missing
+      too; a missing value among present drive fields is a NaN. So a row whose drive
+      fields are all empty is an IMU-only row and one without acceleration a drive-only
+      row; how many of each were split is logged (INFO) and written to ``meta.notes``.
+      In a single-rate file such rows are lost samples: read it with ``rates="single"``.
+
+    Parameters
+    ----------
+    path : path-like
+    columns : mapping field -> column name, optional
+        Fields (:data:`CSV_FIELDS`): ``time``, ``accel_z``, ``current_left``,
+        ``current_right`` (required); ``v`` and ``omega``, or ``speed_left`` and
+        ``speed_right`` (wheel speeds, with ``track_width_m``; v = mean, omega =
+        (right - left) / track_width_m); optional ``x``, ``y``, ``heading`` (all three) and
+        ``ground`` (text labels). Default: :data:`DEFAULT_CSV_COLUMNS`, the layout written by
+        :func:`write_csv_log` (optional columns used when present).
+    units : mapping field -> unit, optional
+        Declared unit per field (:data:`CSV_UNITS`: current ``"A"``/``"mA"``; speed
+        ``"m/s"``, ``"cm/s"``, ``"mm/s"``, ``"km/h"``; omega ``"rad/s"``/``"deg/s"``; time
+        ``"s"``, ``"ms"``, ``"us"``, ``"ns"``; accel ``"m/s^2"``/``"g"``; x/y ``"m"``,
+        ``"cm"``, ``"mm"``; heading ``"rad"``/``"deg"``). Undeclared fields are SI.
+    robot, ground_label, velocity_source, track_width_m : optional
+        Metadata. ``None`` takes the value from a :func:`write_csv_log` header when the file
+        has one; otherwise robot ``"unknown"``, velocity ``"measured"`` for wheel speeds and
+        ``"commanded"`` for v/omega.
+    rates : {"mixed", "single"}
+        Whether the file interleaves streams of different rates (see above).
+    repair, allow_gaps, gap_factor, check_units
+        See :mod:`energy.io`.
+
+    Returns
+    -------
+    InteractionLog
+
+    Raises
+    ------
+    UnknownNameError
+        An unknown field, unit, ``rates`` or repair name.
+    InvalidParameterError
+        An incomplete column map (e.g. wheel speeds without ``track_width_m``).
+    FileFormatError, FormatVersionError
+        Missing/unparsable file, a corrupt terrawatt header, another layout version.
+    DataError, UnitError
+        As in the module docstring.
+
+    Examples
+    --------
+    Usage (needs data or fitted models, so not run as a doctest)::
+
+        log = read_csv_log("run.csv", columns={"time": "t", "v": "cmd_v", "omega": "cmd_w",
+            "current_left": "iL", "current_right": "iR", "accel_z": "az"},
+            units={"current_left": "mA", "current_right": "mA"})
+    """
+    path = Path(path)
+    src = str(path)
+    if rates not in CSV_RATES:
+        raise UnknownNameError(f"rates must be one of {CSV_RATES!r}, got {rates!r}")
+    repairs = parse_repair(repair)
+    gap_factor = check_gap_factor(gap_factor)
+    explicit = columns is not None
+    colmap, units, factors = _field_map(columns, units)
+    text = read_csv_text(path)
+    file_meta = _file_meta(text)
+    has_wheels, vel_fields, required = _velocity_fields(colmap)
+    if track_width_m is None and has_wheels:
+        track_width_m = file_meta["track_width_m"]
+    if has_wheels:
+        if track_width_m is None:
+            raise InvalidParameterError("wheel speeds (speed_left/speed_right) need track_width_m to derive omega")
+        track_width_m = check_track_width(track_width_m)
+    pose_fields, optional_fields = _pose_fields(colmap, explicit, text.names, src)
+    numeric_fields = required + (pose_fields if explicit else [])
+    text_fields = ["ground"] if "ground" in colmap else []
+    table = read_table(
+        text,
+        [colmap[f] for f in numeric_fields],
+        optional=[colmap[f] for f in optional_fields],
+        columns_text=[colmap[f] for f in text_fields],
+    )
+    if text_fields and colmap["ground"] not in table:
+        raise DataError(f"{src}: missing column {colmap['ground']!r}; the header has {text.names!r}")
+    num = {f: table[colmap[f]] * factors[f] for f in numeric_fields + optional_fields}
+    labels = table[colmap["ground"]] if text_fields else None
+    drive_fields = [f for f in num if f not in ("time", "accel_z")]
+    drive_rows, acc_rows, split_note = _split_rows(num, drive_fields, labels, rates, src)
+    t_all = num["time"]
+    td, dc, de = clean_stream(
+        src, "drive stream", t_all[drive_rows], {f: num[f][drive_rows] for f in drive_fields},
+        repairs, allow_gaps, gap_factor, None if labels is None else {"ground": labels[drive_rows]},
+    )
+    ta, ac, _ = clean_stream(
+        src, "acceleration stream", t_all[acc_rows], {"accel_z": num["accel_z"][acc_rows]},
+        repairs, allow_gaps, gap_factor,
+    )
+    ground = None if labels is None else _ground_labels(de["ground"], td, src)
+    if check_units:
+        _check_csv_units(src, colmap, units, vel_fields, td, dc, ta, ac["accel_z"])
+    if has_wheels:
+        v = 0.5 * (dc["speed_left"] + dc["speed_right"])
+        omega = (dc["speed_right"] - dc["speed_left"]) / track_width_m
+    else:
+        v, omega = dc["v"], dc["omega"]
+    pose = np.column_stack([dc["x"], dc["y"], dc["heading"]]) if pose_fields else None
+    if velocity_source is None:
+        velocity_source = file_meta["velocity_source"] or ("measured" if has_wheels else "commanded")
+    if velocity_source not in VELOCITY_SOURCES:
+        raise InvalidParameterError(f"velocity_source must be one of {VELOCITY_SOURCES!r}, got {velocity_source!r}")
+    notes = [file_meta["notes"] or "", f"read from {src}", split_note]
+    if file_meta["source"]:
+        notes.append(f"original source: {file_meta['source']}")
+    declared = {f: u for f, u in units.items() if factors[f] != 1.0}
+    if declared:
+        notes.append(f"converted to SI from {declared!r}")
+    return InteractionLog(
+        time_s=td,
+        v_mps=v,
+        omega_radps=omega,
+        current_left_a=dc["current_left"],
+        current_right_a=dc["current_right"],
+        accel_time_s=ta,
+        accel_z_mps2=ac["accel_z"],
+        pose_xyh=pose,
+        ground=ground,
+        meta=LogMeta(
+            robot=robot if robot is not None else (file_meta["robot"] or "unknown"),
+            source=src,
+            ground_label=ground_label if ground_label is not None else file_meta["ground_label"],
+            velocity_source=velocity_source,
+            track_width_m=track_width_m if track_width_m is not None else file_meta["track_width_m"],
+            notes="; ".join(n for n in notes if n),
+            start_time_ns=file_meta["start_time_ns"],
+        ),
+    )
+
+
+def _field_map(
+    columns: Mapping[str, str] | None, units: Mapping[str, str] | None
+) -> tuple[dict[str, str], dict[str, str], dict[str, float]]:
+    """(field -> column, field -> declared unit, field -> factor to SI), checked."""
+    colmap = dict(DEFAULT_CSV_COLUMNS if columns is None else columns)
+    unknown = [f for f in colmap if f not in _FIELD_KIND]
+    if unknown:
+        raise UnknownNameError(f"columns has unknown field(s) {unknown!r}; expected fields from {CSV_FIELDS!r}")
+    bad = {f: c for f, c in colmap.items() if not isinstance(c, str) or not c}
+    if bad:
+        raise InvalidParameterError(f"columns must map fields to non-empty column names, got {bad!r}")
+    units = dict(units or {})
+    unknown = [f for f in units if f not in colmap or f == "ground"]
+    if unknown:
+        raise UnknownNameError(f"units given for field(s) {unknown!r} that are not numeric columns of the map {colmap!r}")
+    factors = {f: _unit_factor(f, units.get(f, next(iter(UNIT_FACTORS[_FIELD_KIND[f]])))) for f in colmap if f != "ground"}
+    return colmap, units, factors
+
+
+def _file_meta(text: CsvText) -> dict[str, Any]:
+    """The checked metadata of the file's terrawatt-log header, all ``None`` without one."""
+    for line in text.comments:
+        if line.startswith(LOG_HEADER_PREFIX):
+            return parse_log_header(line, text.source)
+    return dict.fromkeys(
+        ("robot", "source", "notes", "ground_label", "velocity_source", "track_width_m", "start_time_ns")
+    )
+
+
+def _velocity_fields(colmap: dict[str, str]) -> tuple[bool, tuple[str, str], list[str]]:
+    """(wheel speeds?, the two velocity fields, every required field)."""
+    has_v = "v" in colmap or "omega" in colmap
+    has_wheels = "speed_left" in colmap or "speed_right" in colmap
+    if has_v and has_wheels:
+        raise InvalidParameterError("columns must map either v/omega or speed_left/speed_right, not both")
+    if not has_v and not has_wheels:
+        raise InvalidParameterError("columns must map v and omega, or speed_left and speed_right")
+    vel_fields = ("speed_left", "speed_right") if has_wheels else ("v", "omega")
+    required = ["time", "accel_z", "current_left", "current_right", *vel_fields]
+    absent = [f for f in required if f not in colmap]
+    if absent:
+        raise InvalidParameterError(f"columns lacks required field(s) {absent!r}; got {colmap!r}")
+    return has_wheels, vel_fields, required
+
+
+def _pose_fields(colmap: dict[str, str], explicit: bool, header: list[str], src: str) -> tuple[list[str], list[str]]:
+    """(pose fields, optional fields); the default layout drops pose and ground the file lacks."""
+    pose_fields = [f for f in ("x", "y", "heading") if f in colmap]
+    if explicit:
+        if pose_fields and len(pose_fields) != 3:
+            raise InvalidParameterError(f"columns must map all of x, y, heading or none, got {pose_fields!r}")
+        return pose_fields, []
+    pose_fields = [f for f in ("x", "y", "heading") if colmap[f] in header]
+    if pose_fields and len(pose_fields) != 3:
+        raise DataError(f"{src}: the header has only {pose_fields!r} of the pose columns x_m, y_m, heading_rad")
+    if colmap["ground"] not in header:
+        del colmap["ground"]
+    return pose_fields, pose_fields
+
+
+def _split_rows(
+    num: dict[str, np.ndarray], drive_fields: list[str], labels: np.ndarray | None, rates: str, src: str
+) -> tuple[np.ndarray, np.ndarray, str]:
+    """(drive rows, acceleration rows, a note of the split) of the file's rows."""
+    n = num["time"].size
+    if rates == "single":
+        every = np.ones(n, dtype=bool)
+        return every, every, ""
+    present = [np.isfinite(num[f]) for f in drive_fields]
+    if labels is not None:
+        present.append(np.char.str_len(labels) > 0)
+    acc_rows = np.isfinite(num["accel_z"])
+    drive_rows = np.column_stack(present).any(axis=1) | ~acc_rows
+    note = (
+        f"rates='mixed': {n} row(s) split into {int((drive_rows & acc_rows).sum())} drive+IMU, "
+        f"{int((drive_rows & ~acc_rows).sum())} drive-only and {int((acc_rows & ~drive_rows).sum())} IMU-only "
+        f"(all drive fields empty) row(s)"
+    )
+    _LOG.info("%s: %s", src, note)
+    return drive_rows, acc_rows, note
+
+
+def _ground_labels(ground: np.ndarray, td: np.ndarray, src: str) -> np.ndarray:
+    empty = np.char.str_len(ground) == 0
+    if empty.any():
+        i = int(np.argmax(empty))
+        raise DataError(
+            f"{src}: drive stream: {int(empty.sum())} empty ground label(s), first at index {i} "
+            f"(t={fmt_number(float(td[i]), 9)} s)"
+        )
+    return ground
+
+
+def _check_csv_units(
+    src: str, colmap: dict[str, str], units: dict[str, str], vel_fields: tuple[str, str],
+    td: np.ndarray, dc: dict[str, np.ndarray], ta: np.ndarray, accel_z: np.ndarray,
+) -> None:
+    for f in ("current_left", "current_right"):
+        check_current(src, colmap[f], dc[f], units.get(f, "A"))
+    for f in vel_fields:
+        if _FIELD_KIND[f] == "speed":
+            check_limit(src, colmap[f], dc[f], MAX_SPEED_MPS, "m/s", f"declared {units.get(f, 'm/s')!r} looks like mm/s or cm/s")
+        else:
+            check_limit(src, colmap[f], dc[f], MAX_OMEGA_RADPS, "rad/s", f"declared {units.get(f, 'rad/s')!r} looks like deg/s")
+    check_accel(src, colmap["accel_z"], accel_z)
+    check_timing(src, "drive stream", td)
+    check_timing(src, "acceleration stream", ta)
+
+
+def write_csv_log(log: InteractionLog, path: str | os.PathLike[str]) -> Path:
+    """Write a log in the generic CSV layout, atomically (temporary file, then rename).
+
+    The first line is ``# terrawatt-log {json}`` with the format version and the metadata;
+    then the header ``time_s,v_mps,omega_radps,current_left_a,current_right_a,accel_z_mps2``
+    (+ ``x_m,y_m,heading_rad`` with a pose, + ``ground`` with labels) and one row per
+    distinct timestamp of either stream, fields of the stream not sampled at that time left
+    empty. Floats are written with ``repr`` so :func:`read_csv_log` reads back the exact
+    values.
+
+    Returns
+    -------
+    pathlib.Path
+        The written path.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``log`` is not an InteractionLog, or a ground label holds a comma, quote or newline.
+    """
+    if not isinstance(log, InteractionLog):
+        raise InvalidParameterError(f"log must be an InteractionLog, got {log!r:.80}")
+    path = Path(path)
+    if log.ground is not None:
+        bad = [g for g in np.unique(log.ground).tolist() if re.search(r"[,\"\r\n#]", g) or g != g.strip()]
+        if bad:
+            raise InvalidParameterError(
+                f"ground labels {bad!r} cannot be written to CSV (no commas, quotes, '#', newlines or outer spaces)"
+            )
+    t = np.union1d(log.time_s, log.accel_time_s)
+    rows = t.size
+    di = np.searchsorted(t, log.time_s)
+    ai = np.searchsorted(t, log.accel_time_s)
+    cols: list[tuple[str, np.ndarray, np.ndarray]] = [
+        ("v_mps", log.v_mps, di),
+        ("omega_radps", log.omega_radps, di),
+        ("current_left_a", log.current_left_a, di),
+        ("current_right_a", log.current_right_a, di),
+        ("accel_z_mps2", log.accel_z_mps2, ai),
+    ]
+    if log.pose_xyh is not None:
+        cols += [(n, log.pose_xyh[:, k], di) for k, n in enumerate(("x_m", "y_m", "heading_rad"))]
+    table = [[repr(x) for x in t.tolist()]]
+    for _, values, where in cols:
+        column = [""] * rows
+        for i, x in zip(where.tolist(), values.tolist()):
+            column[i] = repr(x)
+        table.append(column)
+    names = ["time_s"] + [c[0] for c in cols]
+    if log.ground is not None:
+        column = [""] * rows
+        for i, g in zip(di.tolist(), log.ground.tolist()):
+            column[i] = g
+        table.append(column)
+        names.append("ground")
+    lines = [format_log_header(log.meta), ",".join(names)]
+    lines += [",".join(r) for r in zip(*table)]
+    write_text_atomic(path, "\n".join(lines) + "\n")
+    return path

@@ -1,0 +1,73 @@
+"""Run-level metadata of an interaction log: robot, source, ground, velocity source."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from terrain.checks import check_optional_real
+from terrain.errors import InvalidParameterError
+
+__all__ = ["VELOCITY_SOURCES", "LogMeta"]
+
+#: Allowed values of :attr:`LogMeta.velocity_source`.
+VELOCITY_SOURCES = ("commanded", "measured")
+
+
+@dataclass(frozen=True)
+class LogMeta:
+    """Run-level metadata of an :class:`~energy.logs.InteractionLog`.
+
+    Parameters
+    ----------
+    robot : str
+        Name of the robot (e.g. ``"husky_a200"``).
+    source : str
+        Where the data came from: a file path, ``"synthetic"``, ...
+    ground_label : str or None
+        Ground of the whole run (e.g. ``"snow"``), when known.
+    velocity_source : {"commanded", "measured"}
+        Whether ``v_mps`` / ``omega_radps`` are the commands sent to the robot or speeds
+        measured on it (wheel odometry).
+    track_width_m : float or None
+        Track width used to derive ``omega_radps`` from wheel speeds, when it was derived.
+    notes : str
+        Free text: alignment, repairs and resampling applied by readers and methods.
+    start_time_ns : int or None
+        Absolute time of ``time_s == 0`` in ns since the Unix epoch, when the source has one
+        (ROS bags); ``None`` for sources whose clock starts at zero.
+
+    Raises
+    ------
+    InvalidParameterError
+        Non-string names, an unknown ``velocity_source``, a non-positive track width.
+    """
+
+    robot: str = "unknown"
+    source: str = "synthetic"
+    ground_label: str | None = None
+    velocity_source: str = "commanded"
+    track_width_m: float | None = None
+    notes: str = ""
+    start_time_ns: int | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("robot", "source", "notes"):
+            value = getattr(self, name)
+            if not isinstance(value, str):
+                raise InvalidParameterError(f"LogMeta.{name} must be a str, got {value!r}")
+        if self.ground_label is not None and (not isinstance(self.ground_label, str) or not self.ground_label):
+            raise InvalidParameterError(
+                f"LogMeta.ground_label must be a non-empty str or None, got {self.ground_label!r}"
+            )
+        if self.velocity_source not in VELOCITY_SOURCES:
+            raise InvalidParameterError(
+                f"LogMeta.velocity_source must be one of {VELOCITY_SOURCES!r}, got {self.velocity_source!r}"
+            )
+        tw = check_optional_real("track_width_m", self.track_width_m, low=0.0, low_inclusive=False, owner="LogMeta")
+        object.__setattr__(self, "track_width_m", tw)
+        if self.start_time_ns is not None and (
+            isinstance(self.start_time_ns, bool) or not isinstance(self.start_time_ns, (int, np.integer))
+        ):
+            raise InvalidParameterError(f"LogMeta.start_time_ns must be an int or None, got {self.start_time_ns!r}")
