@@ -4,12 +4,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from importlib import resources
-from numbers import Integral, Real
+from numbers import Integral
 
 import numpy as np
 import scipy.fft
 from scipy import ndimage
 
+from .checks import check_int, check_real, check_seed, check_shape, check_text
 from .errors import InvalidParameterError, UnknownNameError
 from .terrain_map import UNKNOWN_GROUND, TerrainMap
 
@@ -32,41 +33,8 @@ _EXAMPLE_RESOURCE = "example_map.npz"
 
 
 # ------------------------------------------------------------------ validation
-def _check_shape(shape: Sequence[int]) -> tuple[int, int]:
-    try:
-        rows, cols = shape
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"shape must be (rows, cols), got {shape!r}") from None
-    for n in (rows, cols):
-        if isinstance(n, bool) or not isinstance(n, Integral) or n < 2:
-            raise InvalidParameterError(f"shape must be two integers >= 2, got {shape!r}")
-    return int(rows), int(cols)
-
-
-def _check_real(name: str, value: float, *, low: float = 0.0, inclusive: bool = True) -> float:
-    ok = isinstance(value, Real) and not isinstance(value, bool) and np.isfinite(value)
-    ok = ok and (value >= low if inclusive else value > low)
-    if not ok:
-        relation = ">=" if inclusive else ">"
-        raise InvalidParameterError(f"{name} must be a finite number {relation} {low:g}, got {value!r}")
-    return float(value)
-
-
-def _positive_or(name: str, value: float | None, default: float) -> float:
-    """``default`` when ``value`` is None, else ``value`` checked to be finite and > 0."""
-    return default if value is None else _check_real(name, value, inclusive=False)
-
-
-def _check_count(name: str, value: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, Integral) or value < 0:
-        raise InvalidParameterError(f"{name} must be an integer >= 0, got {value!r}")
-    return int(value)
-
-
-def _check_seed(seed: int) -> int:
-    if isinstance(seed, bool) or not isinstance(seed, Integral) or seed < 0:
-        raise InvalidParameterError(f"seed must be an integer >= 0, got {seed!r}")
-    return int(seed)
+def _positive(name: str, value: float) -> float:
+    return check_real(name, value, low=0.0, low_inclusive=False)
 
 
 def _check_grounds(grounds: Sequence[str]) -> tuple[str, ...]:
@@ -82,8 +50,7 @@ def _single_ground(shape: tuple[int, int], ground: str | None) -> dict:
     """``ground``/``ground_names`` keyword arguments for a map covered by one ground."""
     if ground is None:
         return {}
-    if not isinstance(ground, str) or not ground:
-        raise InvalidParameterError(f"ground must be a non-empty name or None, got {ground!r}")
+    check_text("ground", ground)
     return {"ground": np.zeros(shape, np.int16), "ground_names": {0: ground}}
 
 
@@ -127,8 +94,8 @@ def flat_map(
     >>> tmap.bounds, tmap.ground_names, float(tmap.slope_rad.max())
     ((0.0, 0.0, 3.0, 2.0), {0: 'asphalt'}, 0.0)
     """
-    shape = _check_shape(shape)
-    elevation_m = _check_real("elevation_m", elevation_m, low=-np.inf)
+    shape = check_shape("shape", shape, low=2)
+    elevation_m = check_real("elevation_m", elevation_m)
     return TerrainMap(
         np.full(shape, elevation_m), cell_size_m, origin_xy_m, **_single_ground(shape, ground)
     )
@@ -184,11 +151,11 @@ def ramp_map(
     >>> float(tmap["grad_x"][1, 2]), float(tmap["grad_y"][1, 2])
     (0.25, 0.0)
     """
-    shape = _check_shape(shape)
-    grade = _check_real("grade", grade, low=-np.inf)
+    shape = check_shape("shape", shape, low=2)
+    grade = check_real("grade", grade)
     if axis not in ("x", "y"):
         raise UnknownNameError(f"axis must be 'x' or 'y', got {axis!r}")
-    cell = _check_real("cell_size_m", cell_size_m, inclusive=False)
+    cell = _positive("cell_size_m", cell_size_m)
     rows, cols = shape
     if axis == "x":
         elev = np.broadcast_to(grade * (np.arange(cols) + 0.5) * cell, shape)
@@ -243,12 +210,11 @@ def wall_map(
     >>> int(tmap.obstacle.sum())
     8
     """
-    shape = _check_shape(shape)
+    shape = check_shape("shape", shape, low=2)
     rows, cols = shape
     if wall_col is None:
         wall_col = cols // 2
-    if isinstance(wall_col, bool) or not isinstance(wall_col, Integral) or not 0 <= wall_col < cols:
-        raise InvalidParameterError(f"wall_col must be an integer in [0, {cols}), got {wall_col!r}")
+    wall_col = check_int("wall_col", wall_col, low=0, high=cols - 1)
     if gap_rows is None:
         start = 3 * rows // 4
         gap_rows = (start, min(rows, start + max(2, rows // 10)))
@@ -299,7 +265,7 @@ def _random_segment(rng: np.random.Generator, extent_xy_m: np.ndarray, length_m:
 def procedural_map(
     shape: Sequence[int] = (256, 256),
     cell_size_m: float = 1.0,
-    seed: int = 0,
+    seed: int | None = 0,
     *,
     origin_xy_m: tuple[float, float] = (0.0, 0.0),
     n_hills: int = 6,
@@ -340,8 +306,9 @@ def procedural_map(
         ``(rows, cols)``, each >= 2.
     cell_size_m : float
         Cell side (m).
-    seed : int
-        Non-negative seed.
+    seed : int or None
+        Seed, an integer in ``[0, 2**32)`` (the library's seed rule); ``None`` draws fresh
+        entropy, so each call gives another map.
     origin_xy_m : (float, float)
         Lower-left corner of the map (m).
     n_hills : int
@@ -390,32 +357,25 @@ def procedural_map(
     >>> bool(np.array_equal(tmap.elevation_m, procedural_map((64, 64), 0.5, seed=3).elevation_m))
     True
     """
-    shape = _check_shape(shape)
-    cell = _check_real("cell_size_m", cell_size_m, inclusive=False)
-    seed = _check_seed(seed)
-    n_hills = _check_count("n_hills", n_hills)
-    n_ridges = _check_count("n_ridges", n_ridges)
-    n_walls = _check_count("n_walls", n_walls)
-    slope_deg = _check_real("slope_deg", slope_deg)
-    if slope_deg > 60:
-        raise InvalidParameterError(f"slope_deg must be in [0, 60], got {slope_deg!r}")
-    ridge_slope_deg = _check_real("ridge_slope_deg", ridge_slope_deg, inclusive=False)
-    if ridge_slope_deg > 80:
-        raise InvalidParameterError(f"ridge_slope_deg must be in (0, 80], got {ridge_slope_deg!r}")
-    obstacle_fraction = _check_real("obstacle_fraction", obstacle_fraction)
-    if obstacle_fraction > 0.5:
-        raise InvalidParameterError(f"obstacle_fraction must be in [0, 0.5], got {obstacle_fraction!r}")
+    shape = check_shape("shape", shape, low=2)
+    cell = _positive("cell_size_m", cell_size_m)
+    seed = check_seed(seed)
+    n_hills, n_ridges, n_walls = (check_int(k, v, low=0) for k, v in
+                                  (("n_hills", n_hills), ("n_ridges", n_ridges), ("n_walls", n_walls)))
+    slope_deg = check_real("slope_deg", slope_deg, low=0.0, high=60.0)
+    ridge_slope_deg = check_real("ridge_slope_deg", ridge_slope_deg, low=0.0, low_inclusive=False, high=80.0)
+    obstacle_fraction = check_real("obstacle_fraction", obstacle_fraction, low=0.0, high=0.5)
     grounds = _check_grounds(grounds)
     rows, cols = shape
     side_m = min(rows, cols) * cell
-    hill_size_m = _positive_or("hill_size_m", hill_size_m, side_m / 10)
-    ground_patch_size_m = _positive_or("ground_patch_size_m", ground_patch_size_m, side_m / 6)
-    if ridge_height_m is None:
-        ridge_height_m = side_m / 80
-    ridge_height_m = _check_real("ridge_height_m", ridge_height_m)
+    hill_size_m = side_m / 10 if hill_size_m is None else _positive("hill_size_m", hill_size_m)
+    ground_patch_size_m = side_m / 6 if ground_patch_size_m is None else _positive(
+        "ground_patch_size_m", ground_patch_size_m
+    )
+    ridge_height_m = check_real("ridge_height_m", side_m / 80 if ridge_height_m is None else ridge_height_m, low=0.0)
     if rock_radius_m is None:
         rock_radius_m = max(side_m / 100, cell)
-    elif _check_real("rock_radius_m", rock_radius_m) < cell:
+    elif check_real("rock_radius_m", rock_radius_m, low=0.0) < cell:
         raise InvalidParameterError(
             f"rock_radius_m must be at least the cell size {cell!r} m, got {rock_radius_m!r}"
         )

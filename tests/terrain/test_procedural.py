@@ -48,9 +48,9 @@ def test_builders_reject_bad_shapes(shape):
 
 
 def test_flat_map_rejects_bad_values():
-    with pytest.raises(InvalidParameterError, match="elevation_m must be a finite number"):
+    with pytest.raises(InvalidParameterError, match="elevation_m must be finite"):
         flat_map((3, 3), elevation_m=np.nan)
-    with pytest.raises(InvalidParameterError, match="ground must be a non-empty name"):
+    with pytest.raises(InvalidParameterError, match="ground must be a non-empty string"):
         flat_map((3, 3), ground="")
     with pytest.raises(InvalidParameterError, match="cell_size_m"):
         flat_map((3, 3), 0.0)
@@ -76,7 +76,7 @@ def test_ramp_map_along_y():
 def test_ramp_map_errors():
     with pytest.raises(UnknownNameError, match="axis must be 'x' or 'y'"):
         ramp_map((3, 3), 1.0, 0.1, "z")
-    with pytest.raises(InvalidParameterError, match="grade must be a finite number"):
+    with pytest.raises(InvalidParameterError, match="grade must be finite"):
         ramp_map((3, 3), 1.0, np.inf)
 
 
@@ -100,8 +100,9 @@ def test_closed_wall():
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
-        ({"wall_col": 6}, "wall_col must be an integer in"),
-        ({"wall_col": -1}, "wall_col must be an integer in"),
+        ({"wall_col": 6}, "wall_col must be <= 5"),
+        ({"wall_col": -1}, "wall_col must be >= 0"),
+        ({"wall_col": 2.0}, "wall_col must be an integer"),
         ({"gap_rows": (4, 2)}, "gap_rows must be integers"),
         ({"gap_rows": (0, 7)}, "gap_rows must be integers"),
         ({"gap_rows": (1.0, 2)}, "gap_rows must be integers"),
@@ -196,18 +197,22 @@ def test_walls_add_obstacles():
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
-        ({"seed": -1}, "seed must be an integer >= 0"),
-        ({"seed": 1.5}, "seed must be an integer >= 0"),
-        ({"seed": True}, "seed must be an integer >= 0"),
-        ({"cell_size_m": 0.0}, "cell_size_m must be a finite number > 0"),
-        ({"n_hills": -1}, "n_hills must be an integer >= 0"),
-        ({"slope_deg": 75.0}, r"slope_deg must be in \[0, 60\]"),
-        ({"slope_deg": np.nan}, "slope_deg must be a finite number"),
-        ({"ridge_slope_deg": 0.0}, "ridge_slope_deg must be a finite number > 0"),
-        ({"obstacle_fraction": 0.6}, r"obstacle_fraction must be in \[0, 0.5\]"),
+        ({"seed": -1}, r"seed must be None or an integer in \[0, 2\*\*32\)"),
+        ({"seed": 1.5}, r"seed must be None or an integer in \[0, 2\*\*32\)"),
+        ({"seed": True}, r"seed must be None or an integer in \[0, 2\*\*32\)"),
+        ({"seed": 2**32}, r"seed must be None or an integer in \[0, 2\*\*32\)"),
+        ({"cell_size_m": 0.0}, "cell_size_m must be > 0"),
+        ({"cell_size_m": "1"}, "cell_size_m must be a real number"),
+        ({"n_hills": -1}, "n_hills must be >= 0"),
+        ({"n_walls": 1.0}, "n_walls must be an integer"),
+        ({"slope_deg": 75.0}, "slope_deg must be <= 60"),
+        ({"slope_deg": np.nan}, "slope_deg must be finite"),
+        ({"ridge_slope_deg": 0.0}, "ridge_slope_deg must be > 0"),
+        ({"ridge_slope_deg": 85.0}, "ridge_slope_deg must be <= 80"),
+        ({"obstacle_fraction": 0.6}, "obstacle_fraction must be <= 0.5"),
         ({"grounds": "sand"}, "grounds must be a sequence of names"),
         ({"grounds": ("sand", "sand")}, "grounds must be unique"),
-        ({"hill_size_m": -3.0}, "hill_size_m must be a finite number > 0"),
+        ({"hill_size_m": -3.0}, "hill_size_m must be > 0"),
         ({"rock_radius_m": 0.5}, "rock_radius_m must be at least the cell size"),
     ],
 )
@@ -244,4 +249,9 @@ def test_example_map_is_reproducible_from_its_script(tmp_path):
     for name in bundled:
         np.testing.assert_array_equal(rebuilt[name], bundled[name])
     assert (REPO / "terrain" / "data" / "example_map.npz").stat().st_size < 300 * 1024
+
+
+def test_a_seed_of_none_is_allowed_and_the_default_seed_is_kept():
+    assert procedural_map((16, 16), seed=None).shape == (16, 16)
+    np.testing.assert_array_equal(procedural_map((16, 16)).elevation_m, procedural_map((16, 16), seed=0).elevation_m)
 
