@@ -15,16 +15,8 @@ from .baselines import (
     LinearCurrentModel,
     PhysicsCurrentModel,
 )
-from .battery import (
-    CURRENT_CONVENTIONS,
-    Battery,
-    Discharge,
-    EnergyBudget,
-    discharge_from_current,
-    discharge_from_power,
-    energy_budget,
-    log_battery_power_w,
-)
+from .battery import Battery, Discharge, discharge_from_current, discharge_from_power
+from .budget import CURRENT_CONVENTIONS, EnergyBudget, energy_budget, log_battery_power_w
 from .estimator import (
     CURRENT_MODEL_FORMAT_VERSION,
     ESTIMATOR_PRESETS,

@@ -1,4 +1,4 @@
-"""Tests of energy.battery: closed-form discharges, reserve crossing, budgets, validation."""
+"""Tests of energy.battery: closed-form discharges, reserve crossing, stepping the state of charge, validation."""
 
 from __future__ import annotations
 
@@ -8,19 +8,12 @@ import numpy as np
 import pytest
 
 from energy import (
-    EFFECTS,
     Battery,
-    InteractionLog,
-    NoiseModel,
-    TruthSimulator,
     discharge_from_current,
     discharge_from_power,
     energy_budget,
-    ground_preset,
-    log_battery_power_w,
-    robot_preset,
 )
-from terrain import DataError, InvalidParameterError, UnknownNameError
+from terrain import DataError, InvalidParameterError
 
 
 def test_constant_current_soc_closed_form():
@@ -95,38 +88,6 @@ def test_peukert_depletes_faster_above_reference_current():
     assert d.total_charge_mah == pytest.approx(4000.0)
 
 
-def test_budget_arithmetic_and_segments():
-    b = Battery(capacity_ah=1.0, voltage_v=10.0, min_reserve_pct=20.0)
-    t = np.array([0.0, 10.0, 20.0, 30.0, 40.0])
-    power = np.array([36.0, 36.0, 72.0, 72.0, 72.0])
-    seg = np.array([0, 0, 1, 1, 1])
-    d = discharge_from_power(b, t, power)
-    budget = energy_budget(d, 2000.0, segment_index=seg, segment_predicted_j=[700.0, 1300.0])
-    # intervals: [0,10] 360 J (seg 0), [10,20] 540 J (seg 0), [20,30] 720, [30,40] 720 (seg 1)
-    np.testing.assert_allclose(budget.segment_actual_j, [900.0, 1440.0])
-    assert budget.actual_energy_j == pytest.approx(2340.0)
-    assert budget.segment_actual_j.sum() == pytest.approx(budget.actual_energy_j)
-    assert budget.error_pct == pytest.approx(100.0 * (2000.0 - 2340.0) / 2340.0)
-    np.testing.assert_allclose(budget.segment_error_pct, [100 * (700 - 900) / 900, 100 * (1300 - 1440) / 1440])
-    assert budget.actual_charge_mah == pytest.approx(2340.0 / 10.0 / 3.6)
-    assert budget.predicted_charge_mah == pytest.approx(2000.0 / 10.0 / 3.6)
-    assert budget.arrival_soc == pytest.approx(1.0 - 2340.0 / 36000.0)
-    assert budget.arrival_energy_wh == pytest.approx(10.0 - 2340.0 / 3600.0)
-    assert budget.reserve_margin_wh == pytest.approx(8.0 - 2340.0 / 3600.0)
-    assert budget.feasible and budget.predicted_feasible
-    js = budget.to_json_dict()
-    assert js["actual_energy_j"] == pytest.approx(2340.0) and js["reserve_crossed_time_s"] is None
-    assert js["battery"]["capacity_ah"] == 1.0
-
-
-def test_budget_predicted_infeasible():
-    b = Battery(capacity_ah=1.0, voltage_v=10.0, min_reserve_pct=20.0)
-    d = discharge_from_power(b, [0.0, 100.0], [1.0, 1.0])
-    budget = energy_budget(d, predicted_energy_j=9.0 * 3600.0)  # 9 Wh of 8 usable
-    assert budget.feasible and not budget.predicted_feasible
-    assert budget.predicted_arrival_soc == pytest.approx(0.1)
-
-
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [
@@ -170,32 +131,49 @@ def test_series_validation():
         energy_budget(d, 1.0, segment_index=[0, 1, 1], segment_predicted_j=[1.0])
 
 
-def test_log_power_reproduces_physics_battery_power():
-    # Noise-free log without wheel slip (not observable in a log): the motoring currents plus
-    # electronics give back the physics model's battery power sample by sample.
-    robot = robot_preset("husky")
-    effects = [e for e in EFFECTS if e != "longitudinal_slip"]
-    sim = TruthSimulator(robot, {"grass": ground_preset("grass")}, effects=effects, noise=NoiseModel.off(),
-                         velocity_time_constant_s=0.0, seed=1)
-    t = np.arange(600) * 0.01
-    v = np.where(t < 3.0, 0.6 * np.minimum(t, 1.0), 0.0)
-    w = np.where(t >= 3.0, 0.5 * np.minimum(t - 3.0, 1.0), 0.1)
-    run = sim.run_commands(t, v, w, ground="grass")
-    p = log_battery_power_w(run.log, robot)
-    np.testing.assert_allclose(p, run.breakdown.total_power_w, rtol=1e-9, atol=1e-9)
-    drive = log_battery_power_w(run.log, robot, electronics=False)
-    np.testing.assert_allclose(drive, run.breakdown.drive_power_w, rtol=1e-9, atol=1e-9)
+# ------------------------------------------------------------------ stepping the state of charge
+def test_soc_after_energy_matches_a_constant_power_discharge() -> None:
+    # internal resistance and Peukert are applied exactly as by discharge_from_power
+    b = Battery(capacity_ah=2.0, voltage_v=24.0, internal_resistance_ohm=0.3, peukert_exponent=1.05,
+                min_reserve_pct=0.0, initial_soc=0.9)
+    power, duration = 30.0, 1200.0
+    d = discharge_from_power(b, [0.0, duration], [power, power])
+    stepped = b.soc_after_energy(power * duration, power_w=power)
+    assert stepped == pytest.approx(d.final_soc, rel=1e-12)
+    # two half steps from an explicit soc equal one whole step
+    half = b.soc_after_energy(power * duration / 2, power_w=power)
+    assert b.soc_after_energy(power * duration / 2, power_w=power, soc=half) == pytest.approx(stepped, rel=1e-12)
+    # more than a plain soc -= E / (C V): losses cost charge
+    assert 0.5 < stepped < 0.9 - power * duration / (2.0 * 24.0 * 3600.0)
 
 
-def test_log_power_battery_convention_and_errors():
-    robot = robot_preset("jackal")
-    log = InteractionLog([0.0, 1.0, 2.0], [0.0] * 3, [0.0] * 3, [1.0, 2.0, 0.5], [1.0, 0.0, -0.5],
-                         [0.0, 2.0], [9.8, 9.8])
-    p = log_battery_power_w(log, robot, current_convention="battery", electronics=False)
-    np.testing.assert_allclose(p, robot.battery_voltage_v * np.array([2.0, 2.0, 0.0]))
-    with_el = log_battery_power_w(log, robot, current_convention="battery")
-    np.testing.assert_allclose(with_el - p, robot.sensor_power_w + robot.control_standby_power_w)
-    with pytest.raises(UnknownNameError, match="current_convention must be one of"):
-        log_battery_power_w(log, robot, current_convention="duty")
-    with pytest.raises(InvalidParameterError, match="robot must be a RobotParams"):
-        log_battery_power_w(log, "jackal")
+def test_soc_after_never_goes_below_zero_and_time_to_empty() -> None:
+    b = Battery(capacity_ah=1e-4, voltage_v=24.0)
+    assert b.soc_after_energy(1000.0, power_w=100.0) == 0.0
+    assert b.soc_after(5.0) == 0.0 and b.soc_after(0.05) == pytest.approx(0.5)
+    assert b.time_to_empty_s(100.0) == pytest.approx(0.0864)
+    assert Battery(1.0, 10.0).time_to_empty_s(5.0, soc=0.25) == pytest.approx(1800.0)
+    assert b.soc_after_energy(0.0, power_w=1.0, soc=0.0) == 0.0
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"energy_j": -1.0, "power_w": 10.0}, "energy_j must be >= 0"),
+        ({"energy_j": "lots", "power_w": 10.0}, "energy_j must be a real number"),
+        ({"energy_j": 1.0, "power_w": 0.0}, "power_w must be > 0"),
+        ({"energy_j": 1.0, "power_w": 10.0, "soc": 1.5}, "soc must be <= 1"),
+        ({"energy_j": 1.0, "power_w": 1e9}, "maximum deliverable power"),
+    ],
+)
+def test_soc_after_energy_bad_input(kwargs: dict, match: str) -> None:
+    b = Battery(capacity_ah=1.0, voltage_v=24.0, internal_resistance_ohm=0.1)
+    energy = kwargs.pop("energy_j")
+    with pytest.raises(InvalidParameterError, match=match):
+        b.soc_after_energy(energy, **kwargs)
+
+
+def test_battery_string_capacity_names_the_parameter() -> None:
+    with pytest.raises(InvalidParameterError, match="Battery.capacity_ah must be a real number, got '20'"):
+        Battery(capacity_ah="20", voltage_v=24.0)  # type: ignore[arg-type]
+
