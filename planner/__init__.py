@@ -13,8 +13,9 @@ from .adaptive import (
     run_adaptive_mission,
     validation_error,
 )
-from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost, warm_up_kernels
-from .lattice import Lattice, LatticePath, string_pull
+from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
+from .kernels import CostArrays
+from .lattice import Lattice, LatticePath
 from .learned_cost import (
     DEFAULT_TABLE_OMEGAS_RADPS,
     DEFAULT_TABLE_SPEEDS_MPS,
@@ -30,19 +31,16 @@ from .mission import (
     drive_profile,
     simulate_mission,
 )
-from .ompl_planner import (
-    OMPL_PLANNERS,
-    PLANNERS,
-    PlannerSettings,
-    plan_route,
-    refine_route,
-    shortest_route,
-)
-from .route import ROUTE_STATUSES, Route, evaluate_route
+from .planning import OMPL_PLANNERS, PLANNERS, compare_route, plan_route, shortest_route
+from .refine import refine_route, relax_path, string_pull
+from .route import ROUTE_STATUSES, Route, RouteComparison, evaluate_route
+from .settings import PlannerSettings
+from .warmup import warm_up_kernels
 
 __all__ = [
     # edge costs
     "EnergyCost",
+    "CostArrays",
     "DEFAULT_MAX_SLOPE_RAD",
     "warm_up_kernels",
     "LearnedEnergyModel",
@@ -55,11 +53,14 @@ __all__ = [
     "string_pull",
     "plan_route",
     "refine_route",
+    "relax_path",
+    "compare_route",
     "shortest_route",
     "PlannerSettings",
     "PLANNERS",
     "OMPL_PLANNERS",
     "Route",
+    "RouteComparison",
     "ROUTE_STATUSES",
     "evaluate_route",
     # missions

@@ -30,16 +30,17 @@ import math
 import time
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from terrain.errors import InvalidParameterError, UnknownNameError
 
-from .edge_cost import EnergyCost, _as_points, _walk
+from .edge_cost import EnergyCost
+from .kernels import astar, lattice_reweight, lattice_weights
+from .points import as_points
 
-__all__ = ["Lattice", "LatticePath", "LATTICE_OFFSETS", "LATTICE_WEIGHTS", "LATTICE_METHODS", "string_pull"]
+__all__ = ["Lattice", "LatticePath", "LATTICE_OFFSETS", "LATTICE_WEIGHTS", "LATTICE_METHODS"]
 
 #: The 8 (row, col) node offsets of one half-plane; with their negatives, the 16 lattice moves.
 _HALF = np.array([(0, 1), (1, 0), (1, 1), (1, -1), (1, 2), (2, 1), (2, -1), (1, -2)], dtype=np.int64)
@@ -49,229 +50,6 @@ LATTICE_OFFSETS = np.concatenate([_HALF, -_HALF])
 LATTICE_WEIGHTS = ("energy", "length")
 #: Exact shortest-path solvers of :meth:`Lattice.shortest_path`.
 LATTICE_METHODS = ("astar", "dijkstra")
-
-
-@numba.njit(cache=True, nogil=True)
-def _sift_up(keys, nodes, where, i):  # pragma: no cover - compiled
-    """Move heap entry ``i`` up to its place (``where[node]`` tracks each node's slot)."""
-    key = keys[i]
-    node = nodes[i]
-    while i > 0:
-        parent = (i - 1) >> 1
-        if keys[parent] <= key:
-            break
-        keys[i] = keys[parent]
-        nodes[i] = nodes[parent]
-        where[nodes[i]] = i
-        i = parent
-    keys[i] = key
-    nodes[i] = node
-    where[node] = i
-
-
-@numba.njit(cache=True, nogil=True)
-def _heap_set(keys, nodes, where, size, node, key):  # pragma: no cover - compiled
-    """Insert ``node`` with ``key``, or lower its key if it is in the heap; return the new size."""
-    i = where[node]
-    if i < 0:
-        i = size
-        nodes[i] = node
-        size += 1
-    keys[i] = key
-    _sift_up(keys, nodes, where, i)
-    return size
-
-
-@numba.njit(cache=True, nogil=True)
-def _heap_pop(keys, nodes, where, size):  # pragma: no cover - compiled
-    """Pop the minimum of the indexed binary heap ``keys[:size]``; return key, node, new size."""
-    top_k = keys[0]
-    top_n = nodes[0]
-    where[top_n] = -1
-    size -= 1
-    if size > 0:
-        key = keys[size]
-        node = nodes[size]
-        i = 0
-        while True:
-            c = 2 * i + 1
-            if c >= size:
-                break
-            if c + 1 < size and keys[c + 1] < keys[c]:
-                c += 1
-            if key <= keys[c]:
-                break
-            keys[i] = keys[c]
-            nodes[i] = nodes[c]
-            where[nodes[i]] = i
-            i = c
-        keys[i] = key
-        nodes[i] = node
-        where[node] = i
-    return top_k, top_n, size
-
-
-@numba.njit(cache=True, nogil=True)
-def _astar(indptr, indices, data, node_x, node_y, nj, src, src_cost, dst, dst_cost, gx, gy, h_per_m, upper):
-    """A* from a virtual start (edges to ``src`` costing ``src_cost``) to a virtual goal (reached
-    from ``dst`` at ``dst_cost``). Returns the best total (``upper`` if none is lower), the last
-    lattice node of that route (-1: none) and the predecessor array (-1: the virtual start).
-    The open set is an indexed binary heap with decrease-key (each node at most once)."""  # pragma: no cover
-    n = indptr.size - 1
-    g = np.full(n, np.inf)
-    pred = np.full(n, -2, np.int64)
-    closed = np.zeros(n, np.bool_)
-    exit_cost = np.full(n, np.inf)
-    for k in range(dst.size):
-        if dst_cost[k] < exit_cost[dst[k]]:
-            exit_cost[dst[k]] = dst_cost[k]
-    keys = np.empty(n)
-    nodes = np.empty(n, np.int64)
-    where = np.full(n, -1, np.int64)
-    size = 0
-    best = upper
-    best_node = -1
-    for k in range(src.size):
-        u = src[k]
-        if src_cost[k] < g[u]:
-            g[u] = src_cost[k]
-            pred[u] = -1
-            f = src_cost[k] + h_per_m * math.hypot(node_x[u % nj] - gx, node_y[u // nj] - gy)
-            size = _heap_set(keys, nodes, where, size, u, f)
-    while size > 0:
-        f, u, size = _heap_pop(keys, nodes, where, size)
-        if f >= best:
-            break  # no open node can lead to a cheaper route
-        closed[u] = True
-        gu = g[u]
-        if gu + exit_cost[u] < best:
-            best = gu + exit_cost[u]
-            best_node = u
-        for p in range(indptr[u], indptr[u + 1]):
-            v = indices[p]
-            if closed[v]:
-                continue
-            nv = gu + data[p]
-            if nv < g[v]:
-                g[v] = nv
-                pred[v] = u
-                f = nv + h_per_m * math.hypot(node_x[v % nj] - gx, node_y[v // nj] - gy)
-                size = _heap_set(keys, nodes, where, size, v, f)
-    return best, best_node, pred
-
-
-@numba.njit(cache=True, nogil=True, parallel=True)
-def _lattice_weights(cells, table, geo, stride, offset, ni, nj, half):  # pragma: no cover - compiled
-    """Directed energies of the 16 moves of every node; ``inf`` = no edge."""
-    n = ni * nj
-    nh = half.shape[0]
-    w = np.full((n, 2 * nh), np.inf)
-    x0 = geo[0]
-    y0 = geo[1]
-    d = geo[2]
-    for i in numba.prange(ni):
-        ya = y0 + ((i * stride + offset) + 0.5) * d
-        for j in range(nj):
-            xa = x0 + ((j * stride + offset) + 0.5) * d
-            src = i * nj + j
-            for k in range(nh):
-                ti = i + half[k, 0]
-                tj = j + half[k, 1]
-                if ti < 0 or ti >= ni or tj < 0 or tj >= nj:
-                    continue
-                xb = x0 + ((tj * stride + offset) + 0.5) * d
-                yb = y0 + ((ti * stride + offset) + 0.5) * d
-                ef, eb = _walk(cells, table, geo, xa, ya, xb, yb, True)
-                w[src, k] = ef
-                w[ti * nj + tj, nh + k] = eb  # the reverse move is offset k + nh from the target
-    return w
-
-
-@numba.njit(cache=True, nogil=True, parallel=True)
-def _lattice_reweight(cells, table, geo, stride, offset, ni, nj, half, changed_sat, pos, data):  # pragma: no cover
-    """Recompute, into ``data``, the energies of the edges whose cell box holds a changed cell.
-
-    ``changed_sat`` is the summed-area table of the changed-cell mask (shape rows+1, cols+1);
-    ``pos[node, k]`` is the index in ``data`` of move ``k`` of ``node`` (-1: no edge). Returns
-    per node-row counts of recomputed moves and of edges whose presence would change (an
-    absent edge becoming finite or a present one becoming ``inf``).
-    """
-    nh = half.shape[0]
-    recomputed = np.zeros(ni, np.int64)
-    flips = np.zeros(ni, np.int64)
-    for i in numba.prange(ni):
-        ra = i * stride + offset
-        ya = geo[1] + (ra + 0.5) * geo[2]
-        for j in range(nj):
-            ca = j * stride + offset
-            xa = geo[0] + (ca + 0.5) * geo[2]
-            src = i * nj + j
-            for k in range(nh):
-                ti = i + half[k, 0]
-                tj = j + half[k, 1]
-                if ti < 0 or ti >= ni or tj < 0 or tj >= nj:
-                    continue
-                rb = ti * stride + offset
-                cb = tj * stride + offset
-                r0 = min(ra, rb)
-                r1 = max(ra, rb) + 1
-                c0 = min(ca, cb)
-                c1 = max(ca, cb) + 1
-                if changed_sat[r1, c1] - changed_sat[r0, c1] - changed_sat[r1, c0] + changed_sat[r0, c0] == 0:
-                    continue
-                xb = geo[0] + (cb + 0.5) * geo[2]
-                yb = geo[1] + (rb + 0.5) * geo[2]
-                ef, eb = _walk(cells, table, geo, xa, ya, xb, yb, True)
-                recomputed[i] += 2
-                tgt = ti * nj + tj
-                p = pos[src, k]
-                if p >= 0:
-                    data[p] = ef
-                if (p >= 0) != (ef < math.inf):
-                    flips[i] += 1
-                p = pos[tgt, nh + k]
-                if p >= 0:
-                    data[p] = eb
-                if (p >= 0) != (eb < math.inf):
-                    flips[i] += 1
-    return recomputed, flips
-
-
-@numba.njit(cache=True, nogil=True)
-def _string_pull_idx(cells, table, geo, xs, ys):  # pragma: no cover - compiled
-    """Greedy line-of-sight shortcut: indices of the kept vertices of a polyline."""
-    n = xs.shape[0]
-    keep = np.empty(n, np.int64)
-    m = 0
-    keep[m] = 0
-    m += 1
-    i = 0
-    while i < n - 1:
-        j = i + 1
-        while j + 1 < n:
-            ef, _ = _walk(cells, table, geo, xs[i], ys[i], xs[j + 1], ys[j + 1], False)
-            if not math.isfinite(ef):
-                break
-            j += 1
-        keep[m] = j
-        m += 1
-        i = j
-    return keep[:m]
-
-
-def string_pull(cost: EnergyCost, waypoints_m: np.ndarray) -> np.ndarray:
-    """Shorten a valid polyline by greedy line-of-sight shortcuts (never longer, stays valid).
-
-    From each kept vertex, jump to the farthest later vertex reachable by one free segment
-    before the first blocked one. Ignores energy: it is for shortest-distance routes.
-    """
-    pts = _as_points(waypoints_m, "waypoints_m")
-    if pts.shape[0] < 3:
-        return pts.copy()
-    idx = _string_pull_idx(
-        cost._cells, cost.grade_table_j_per_m, cost._geo, np.array(pts[:, 0]), np.array(pts[:, 1])
-    )
-    return pts[idx].copy()
 
 
 @dataclass(frozen=True)
@@ -372,7 +150,8 @@ class Lattice:
             )
         self._ni, self._nj = ni, nj
         self._offset = off
-        w = _lattice_weights(cost._cells, cost.grade_table_j_per_m, cost._geo, s, off, ni, nj, _HALF)
+        arr = cost.arrays
+        w = lattice_weights(arr.cells, arr.grade_table, arr.geo, s, off, ni, nj, _HALF)
         self._set_structure(w)
         xc, yc = cost.terrain.cell_centres()
         self._node_x = xc[self.node_cols]
@@ -440,7 +219,7 @@ class Lattice:
         old = self.cost
         if (cost.terrain is not old.terrain and not cost.terrain.same_grid(old.terrain)) or not np.array_equal(
             cost.blocked, old.blocked
-        ) or not np.array_equal(cost._geo, old._geo):
+        ) or not cost.arrays.same_geometry(old.arrays):
             raise InvalidParameterError(
                 "cost must share this lattice's map geometry (grid, blocked cells, grade grid); build a new Lattice"
             )
@@ -457,13 +236,14 @@ class Lattice:
         sat = np.zeros((changed.shape[0] + 1, changed.shape[1] + 1), dtype=np.int32)
         np.cumsum(np.cumsum(changed, axis=0, dtype=np.int32), axis=1, out=sat[1:, 1:])
         data = self._data["energy"].copy()
-        recomputed, flips = _lattice_reweight(
-            cost._cells, cost.grade_table_j_per_m, cost._geo, self.stride_cells, self._offset, self._ni, self._nj,
+        arr = cost.arrays
+        recomputed, flips = lattice_reweight(
+            arr.cells, arr.grade_table, arr.geo, self.stride_cells, self._offset, self._ni, self._nj,
             _HALF, sat, self._pos, data,
         )
         if int(flips.sum()):
-            w = _lattice_weights(cost._cells, cost.grade_table_j_per_m, cost._geo, self.stride_cells, self._offset,
-                                 self._ni, self._nj, _HALF)
+            w = lattice_weights(arr.cells, arr.grade_table, arr.geo, self.stride_cells, self._offset,
+                                self._ni, self._nj, _HALF)
             new._set_structure(w)
             new.edges_computed = int(w.size - np.count_nonzero(self._out_of_grid_mask()))
         else:
@@ -475,12 +255,26 @@ class Lattice:
     @classmethod
     def for_cost(cls, cost: EnergyCost, stride_cells: int = 1) -> Lattice:
         """The lattice of ``cost`` at ``stride_cells``, built once and cached on the cost."""
-        key = ("lattice", int(stride_cells))
-        lat = cost._cache.get(key)
+        key = int(stride_cells)
+        lat = cost.lattices.get(key)
         if lat is None:
             lat = cls(cost, stride_cells)
-            cost._cache[key] = lat
+            cost.lattices[key] = lat
         return lat
+
+    def graph(self, weight: str = "energy") -> csr_matrix:
+        """The directed lattice graph as a sparse matrix (a copy): entry ``[u, v]`` is the weight
+        of move ``u -> v`` (drive energy in J, or length in m); absent moves are not stored.
+
+        Raises
+        ------
+        UnknownNameError
+            Unknown ``weight``.
+        """
+        if weight not in LATTICE_WEIGHTS:
+            raise UnknownNameError(f"weight must be one of {LATTICE_WEIGHTS!r}, got {weight!r}")
+        n = self.n_nodes
+        return csr_matrix((self._data[weight].copy(), self._indices.copy(), self._indptr.copy()), shape=(n, n))
 
     @property
     def n_nodes(self) -> int:
@@ -538,8 +332,8 @@ class Lattice:
             raise UnknownNameError(f"weight must be one of {LATTICE_WEIGHTS!r}, got {weight!r}")
         if method not in LATTICE_METHODS:
             raise UnknownNameError(f"method must be one of {LATTICE_METHODS!r}, got {method!r}")
-        pts = _as_points(np.array([start_xy_m, goal_xy_m], dtype=float), "start/goal")
-        self.cost._check_inside(pts, "start/goal")
+        pts = as_points([start_xy_m, goal_xy_m], "start/goal")
+        self.cost.check_inside(pts, "start/goal")
         start, goal = pts
         cost = self.cost
         src = self._nearby_nodes(start)
@@ -559,7 +353,7 @@ class Lattice:
         best_nodes: list[int] = []
         if ok_src.any() and ok_dst.any() and method == "astar":
             h_per_m = cost.min_energy_per_metre_j if weight == "energy" else 1.0
-            total, last, pred = _astar(
+            total, last, pred = astar(
                 self._indptr, self._indices, self._data[weight], self._node_x, self._node_y, self._nj,
                 src[ok_src].astype(np.int64), e_src[ok_src], dst[ok_dst].astype(np.int64), e_dst[ok_dst],
                 float(goal[0]), float(goal[1]), float(h_per_m), best,

@@ -58,12 +58,15 @@ from typing import Any
 import numpy as np
 
 from energy import (
+    DEFAULT_ACCEL_MPS2,
+    DEFAULT_YAW_ACCEL_RADPS2,
     CommandProfile,
     GroundParams,
     InteractionLog,
     LogMeta,
     PhysicsEnergyModel,
     RobotParams,
+    drive_profile,
     log_battery_power_w,
 )
 from terrain import (
@@ -73,13 +76,10 @@ from terrain import (
     UnknownNameError,
 )
 
-from .edge_cost import (
-    DEFAULT_GRADE_SAMPLES,
-    DEFAULT_MAX_SLOPE_RAD,
-    DEFAULT_TURN_SAMPLES,
-    EnergyCost,
-)
-from .mission import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, drive_profile
+from terrain.checks import check_real
+
+from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
+from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES, check_table_sizes, tabulate
 
 __all__ = ["LearnedEnergyModel", "LearnedModelTable", "DEFAULT_TABLE_SPEEDS_MPS", "DEFAULT_TABLE_OMEGAS_RADPS"]
 
@@ -256,7 +256,7 @@ class LearnedEnergyModel:
         self._electronics = PhysicsEnergyModel(robot, effects=("sensor", "control"))
         self._vibration: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._tables: dict[int, tuple[int, LearnedModelTable]] = {}  # id -> (id(model object), table)
-        self._slope_delta: dict[tuple[float, int, float], np.ndarray] = {}
+        self._slope_delta: dict[tuple[float, bytes], np.ndarray] = {}  # (speed, grades) -> slope term
         #: Number of per-model tables computed so far (cache misses).
         self.table_builds = 0
 
@@ -468,6 +468,17 @@ class LearnedEnergyModel:
     def _label(self, model_id: int) -> str:
         return f"model {model_id} ({self.registry.model_record(model_id).name!r})"
 
+    def _slope_term_j(self, speed: float, grades: np.ndarray) -> np.ndarray:
+        """:meth:`_grade_delta_j` of planning tables, cached per (speed, grade grid): tables of
+        every model share one grade grid, so the physics runs once per grid."""
+        key = (speed, grades.shape, grades.tobytes())
+        delta = self._slope_delta.get(key)
+        if delta is None:
+            delta = self._grade_delta_j(speed, grades)
+            delta.setflags(write=False)
+            self._slope_delta[key] = delta
+        return delta
+
     def _grade_delta_j(self, speed: float, grades: np.ndarray, infeasible: str = "inf") -> np.ndarray:
         """Physics slope term (J/m): ``inf`` on grades the drive cannot hold at ``speed`` for
         planning tables; ``infeasible="capped"`` prices them at the saturated power (what
@@ -489,14 +500,15 @@ class LearnedEnergyModel:
         InvalidParameterError
             Non-positive speed, NaN grades.
         """
-        speed = float(speed_mps)
-        if not (math.isfinite(speed) and speed > 0):
-            raise InvalidParameterError(f"speed_mps must be a finite number > 0, got {speed_mps!r}")
-        grades = np.asarray(grade, dtype=np.float64)
+        speed = check_real("speed_mps", speed_mps, low=0.0, low_inclusive=False)
+        try:
+            grades = np.asarray(grade, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise InvalidParameterError(f"grade must be numbers, got {grade!r:.80}") from exc
         if np.any(np.isnan(grades)):
             raise InvalidParameterError("grade must not hold NaN")
         flat = self.table(int(ground)).energy_per_metre_at(speed)
-        return np.maximum(flat + self._grade_delta_j(speed, grades), self._electronics_per_metre_j(speed))
+        return np.maximum(flat + self._slope_term_j(speed, grades), self._electronics_per_metre_j(speed))
 
     def turn_energy_j(self, heading_change_rad: Any, ground: int) -> np.ndarray:
         """J of turning in place by ``|heading_change_rad|`` at the robot's turn rate, model ``ground``.
@@ -540,53 +552,37 @@ class LearnedEnergyModel:
         """
         t0 = time.perf_counter()
         self.registry.check_grid(terrain)
-        speed = float(speed_mps)
-        if not (math.isfinite(speed) and speed > 0):
-            raise InvalidParameterError(f"speed_mps must be a finite number > 0, got {speed_mps!r}")
-        if int(grade_samples) != grade_samples or grade_samples < 3 or grade_samples % 2 == 0:
-            raise InvalidParameterError(f"grade_samples must be an odd integer >= 3, got {grade_samples!r}")
-        if int(turn_samples) != turn_samples or turn_samples < 2:
-            raise InvalidParameterError(f"turn_samples must be an integer >= 2, got {turn_samples!r}")
+        speed = check_real("speed_mps", speed_mps, low=0.0, low_inclusive=False)
+        slope = check_real("max_slope_rad", max_slope_rad, low=0.0, high=math.pi / 2, low_inclusive=False,
+                           high_inclusive=False)
+        n_grade, n_turn = check_table_sizes(grade_samples, turn_samples)
         if previous is not None:
             if not isinstance(previous, EnergyCost):
                 raise InvalidParameterError(f"previous must be an EnergyCost or None, got {type(previous).__name__!r}")
             same = (previous.terrain is terrain or previous.terrain.same_grid(terrain)) and (
-                previous.speed_mps == speed and previous.max_slope_rad == float(max_slope_rad)
-                and previous.grade_table_j_per_m.shape[1] == int(grade_samples)
-                and previous.turn_table_j.shape[1] == int(turn_samples)
+                previous.speed_mps == speed and previous.max_slope_rad == slope
+                and previous.grade_table_j_per_m.shape[1] == n_grade
+                and previous.turn_table_j.shape[1] == n_turn
             )
             if not same:
                 raise InvalidParameterError(
                     f"previous ({previous!r}) was built for another grid, speed, slope limit or table size; "
-                    f"expected speed_mps={speed!r}, max_slope_rad={float(max_slope_rad)!r}, "
+                    f"expected speed_mps={speed!r}, max_slope_rad={slope!r}, "
                     f"grade_samples={grade_samples!r}, turn_samples={turn_samples!r}"
                 )
         ids = self.registry.model_ids_in_use()
-        grade_max = math.tan(float(max_slope_rad))
-        grades = np.linspace(-grade_max, grade_max, int(grade_samples))
-        angles = np.linspace(0.0, math.pi, int(turn_samples))
-        key = (speed, int(grade_samples), float(max_slope_rad))
-        delta = self._slope_delta.get(key)
-        if delta is None:
-            delta = self._grade_delta_j(speed, grades)
-            self._slope_delta[key] = delta
-        floor = self._electronics_per_metre_j(speed)
-        horiz = np.sqrt(1.0 + grades**2)
-        grade_table = np.empty((ids.size, grades.size))
-        turn_table = np.empty((ids.size, angles.size))
-        for i, mid in enumerate(ids.tolist()):
-            tab = self.table(mid)
-            grade_table[i] = np.maximum(tab.energy_per_metre_at(speed) + delta, floor) * horiz
-            turn_table[i] = angles * tab.turn_energy_per_rad_at(self.turn_rate_radps)
+        labels = tuple(self.registry.model_record(int(m)).name for m in ids.tolist())
+        grade_table, turn_table = tabulate(
+            self, speed, ids.tolist(), labels, max_slope_rad=slope, grade_samples=n_grade, turn_samples=n_turn
+        )
         lut = np.zeros(int(ids.max()) + 1, dtype=np.int32)
         lut[ids] = np.arange(ids.size, dtype=np.int32)
         rows = lut[np.asarray(self.registry.model_id_map)]
-        labels = tuple(self.registry.model_record(int(m)).name for m in ids.tolist())
         if previous is not None:
             cost = previous.with_tables(grade_table, turn_table, rows, ground_labels=labels)
             cost.prep_time_s = time.perf_counter() - t0
             return cost
-        cost = EnergyCost(terrain, rows, grade_table, turn_table, speed_mps=speed, max_slope_rad=float(max_slope_rad),
+        cost = EnergyCost(terrain, rows, grade_table, turn_table, speed_mps=speed, max_slope_rad=slope,
                           battery_voltage_v=self.robot.battery_voltage_v, turn_rate_radps=self.turn_rate_radps,
                           ground_labels=labels)
         cost.prep_time_s = time.perf_counter() - t0

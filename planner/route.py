@@ -9,11 +9,13 @@ from typing import Any
 
 import numpy as np
 
+from terrain.checks import readonly, real_array
 from terrain.errors import InvalidParameterError, PlanningError
 
-from .edge_cost import EnergyCost, _as_points
+from .edge_cost import EnergyCost
+from .points import as_points
 
-__all__ = ["Route", "ROUTE_STATUSES", "evaluate_route"]
+__all__ = ["Route", "RouteComparison", "ROUTE_STATUSES", "evaluate_route", "empty_route"]
 
 #: Planning outcomes. ``exact``: the route reaches the goal. ``approximate``: the planner ran
 #: out of budget and returns its route to the state closest to the goal (it does not end at
@@ -25,12 +27,48 @@ _NAN = math.nan
 
 
 def _readonly(arr: Any, shape_tail: tuple[int, ...], name: str) -> np.ndarray:
-    a = np.array(arr, dtype=np.float64, copy=True)
+    """A read-only float copy of ``arr`` of shape ``(K,) + shape_tail`` (NaN allowed: checked later)."""
+    a = real_array(name, arr, finite=False)
     if a.ndim != 1 + len(shape_tail) or a.shape[1:] != shape_tail:
         expected = "(K, 2)" if shape_tail else "(K,)"
         raise InvalidParameterError(f"{name} must have shape {expected}, got {a.shape!r}")
-    a.setflags(write=False)
-    return a
+    return readonly(a)
+
+
+@dataclass(frozen=True)
+class RouteComparison:
+    """The baselines of one route query, computed once per query and only when asked.
+
+    Attributes
+    ----------
+    shortest : Route
+        The shortest-distance route between the same points, evaluated
+        (:func:`planner.shortest_route`; status ``"infeasible"`` when there is none).
+    lattice_optimum_j : float
+        Drive energy (J) of the minimum-energy route on the directed 16-connected 1-cell
+        lattice (the reference optimum); NaN when that lattice joins no route.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``shortest`` not a Route, or a negative / infinite optimum.
+    """
+
+    shortest: Route
+    lattice_optimum_j: float
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.shortest, Route):
+            raise InvalidParameterError(f"shortest must be a Route, got {type(self.shortest).__name__!r}")
+        value = float(self.lattice_optimum_j)
+        if not (math.isnan(value) or (math.isfinite(value) and value >= 0)):
+            raise InvalidParameterError(f"lattice_optimum_j must be a finite energy >= 0 or NaN, got {value!r}")
+        object.__setattr__(self, "lattice_optimum_j", value)
+
+    @property
+    def shortest_energy_j(self) -> float:
+        """Energy (J, turns included) of :attr:`shortest`; NaN when it was not found."""
+        return self.shortest.energy_j if self.shortest.status == "exact" else _NAN
 
 
 @dataclass(frozen=True)
@@ -66,16 +104,12 @@ class Route:
     planning_time_s : float
         Wall-clock planning time (s), map preparation (tables, lattice graph, numba
         compilation) excluded.
-    shortest_energy_j : float
-        Energy (J, with turns) of the shortest-distance route between the same points: the
-        straight line when it is free, else the shortest lattice route straightened by
-        line-of-sight shortcuts. NaN when not computed.
-    lattice_energy_j : float
-        Drive energy (J) of the minimum-energy route on the directed 16-connected 1-cell
-        lattice (the reference optimum). NaN when not computed.
+    comparison : RouteComparison or None
+        The baselines of the same query (``plan_route(..., compare=True)``); None when not
+        computed.
 
     Derived (properties): ``found``, ``drive_energy_j``, ``energy_wh``, ``charge_mah``,
-    ``energy_saved_pct``, ``optimality_ratio``.
+    ``shortest_energy_j``, ``lattice_energy_j``, ``energy_saved_pct``, ``optimality_ratio``.
 
     Raises
     ------
@@ -93,8 +127,7 @@ class Route:
     battery_voltage_v: float
     planner: str
     planning_time_s: float
-    shortest_energy_j: float = _NAN
-    lattice_energy_j: float = _NAN
+    comparison: RouteComparison | None = None
 
     def __post_init__(self) -> None:
         if self.status not in ROUTE_STATUSES:
@@ -132,6 +165,10 @@ class Route:
             raise InvalidParameterError(f"planning_time_s must be finite and >= 0, got {self.planning_time_s!r}")
         if not isinstance(self.planner, str) or not self.planner:
             raise InvalidParameterError(f"planner must be a non-empty name, got {self.planner!r}")
+        if self.comparison is not None and not isinstance(self.comparison, RouteComparison):
+            raise InvalidParameterError(
+                f"comparison must be a RouteComparison or None, got {type(self.comparison).__name__!r}"
+            )
 
     # ------------------------------------------------------------------ derived
     @property
@@ -153,6 +190,19 @@ class Route:
     def charge_mah(self) -> float:
         """Battery charge (mAh) at :attr:`battery_voltage_v`: ``J / V / 3.6``."""
         return self.energy_j / self.battery_voltage_v / 3.6
+
+    @property
+    def shortest_energy_j(self) -> float:
+        """Energy (J, with turns) of the shortest-distance route between the same points (the
+        straight line when it is free, else the shortest lattice route straightened by
+        line-of-sight shortcuts); NaN when not compared or when there is none."""
+        return _NAN if self.comparison is None else self.comparison.shortest_energy_j
+
+    @property
+    def lattice_energy_j(self) -> float:
+        """Drive energy (J) of the minimum-energy route on the directed 16-connected 1-cell
+        lattice (the reference optimum); NaN when not compared or when there is none."""
+        return _NAN if self.comparison is None else self.comparison.lattice_optimum_j
 
     @property
     def energy_saved_pct(self) -> float:
@@ -268,7 +318,7 @@ def evaluate_route(
     """
     if not isinstance(cost, EnergyCost):
         raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
-    pts = _as_points(waypoints_m, "waypoints_m")
+    pts = as_points(waypoints_m, "waypoints_m")
     if pts.shape[0] < 2:
         raise InvalidParameterError(f"waypoints_m needs at least 2 points, got {pts.shape[0]}")
     seg = cost.segment_energy_j(pts[:-1], pts[1:])
@@ -296,7 +346,7 @@ def evaluate_route(
     )
 
 
-def _empty_route(status: str, planner: str, planning_time_s: float, battery_voltage_v: float) -> Route:
+def empty_route(status: str, planner: str, planning_time_s: float, battery_voltage_v: float) -> Route:
     """A route without waypoints (``timeout`` or ``infeasible``)."""
     if status in ("exact", "approximate"):
         raise InvalidParameterError(f"an empty route cannot have status {status!r}")

@@ -188,8 +188,7 @@ class _BadLayout(ConstModel):
 
 @pytest.mark.parametrize("kind", ["three columns", "one column", "nan", "too short"])
 def test_models_whose_output_layout_does_not_match_are_refused_by_name(kind):
-    from planner import drive_profile
-    from planner.adaptive import validation_error
+    from planner import drive_profile, validation_error
 
     robot, tmap, reg, lem, _ = _setup()
     bad = reg.add_model(_BadLayout(kind), name="odd layout")

@@ -85,7 +85,8 @@ def test_flat_map_straight_route_is_optimal(planner):
     tmap = _map(np.zeros((40, 60)))
     cost = _cost(tmap)
     start, goal = (3.0, 4.0), (55.0, 31.0)  # an off-lattice direction
-    route = plan_route(tmap, start, goal, cost=cost, planner=planner, seed=1, settings=FAST, **_budget(planner))
+    route = plan_route(tmap, start, goal, cost=cost, planner=planner, seed=1, settings=FAST, compare=True,
+                       **_budget(planner))
     straight = cost.path_energy_j([start, goal])
     assert route.status == "exact"
     assert route.energy_j == pytest.approx(straight, rel=1e-6)
@@ -104,7 +105,8 @@ def test_every_planner_prefers_the_gentler_detour_around_a_hill(planner):
     tmap = _hill_map()
     cost = _cost(tmap)
     start, goal = (5.0, 25.0), (75.0, 25.0)
-    route = plan_route(tmap, start, goal, cost=cost, planner=planner, seed=2, settings=FAST, **_budget(planner))
+    route = plan_route(tmap, start, goal, cost=cost, planner=planner, seed=2, settings=FAST, compare=True,
+                       **_budget(planner))
     assert route.status == "exact"
     np.testing.assert_allclose(route.waypoints_m[[0, -1]], [start, goal])
     straight = cost.path_energy_j([start, goal])
@@ -165,7 +167,8 @@ def test_tiny_budget_gives_an_approximate_route():
     tmap = _wall_map()
     goal = (75.0, 40.0)
     route = plan_route(
-        tmap, (5.0, 40.0), goal, cost=_cost(tmap), planner="RRTstar", seed=0, time_limit_s=None, max_cost_evaluations=50
+        tmap, (5.0, 40.0), goal, cost=_cost(tmap), planner="RRTstar", seed=0, time_limit_s=None, max_cost_evaluations=50,
+        compare=True,
     )
     assert route.status == "approximate"
     assert route.found and math.dist(route.waypoints_m[-1], goal) > 1.0

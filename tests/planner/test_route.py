@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from planner import ROUTE_STATUSES, EnergyCost, Route, evaluate_route
+from planner import ROUTE_STATUSES, EnergyCost, Route, RouteComparison, evaluate_route
 from terrain import InvalidParameterError, OutOfBoundsError, PlanningError, TerrainMap
 
 
@@ -61,12 +61,27 @@ def test_duration_uses_surface_length_on_slopes():
 
 
 def test_comparisons_against_baselines():
-    route = evaluate_route(_cost(), [[1.0, 1.0], [21.0, 1.0]]).replace(shortest_energy_j=1250.0, lattice_energy_j=800.0)
+    plain = evaluate_route(_cost(), [[1.0, 1.0], [21.0, 1.0]])
+    assert plain.comparison is None and math.isnan(plain.energy_saved_pct) and math.isnan(plain.optimality_ratio)
+    shortest = plain.replace(energy_j=1250.0, segment_energy_j=[1250.0], planner="shortest")
+    route = plain.replace(comparison=RouteComparison(shortest=shortest, lattice_optimum_j=800.0))
+    assert route.shortest_energy_j == 1250.0 and route.lattice_energy_j == 800.0
     assert route.energy_saved_pct == pytest.approx(100.0 * (1250.0 - 1000.0) / 1250.0)
     assert route.optimality_ratio == pytest.approx(1000.0 / 800.0)
     summary = route.summary()
     assert summary["energy_saved_pct"] == pytest.approx(20.0)
     assert {"status", "planner", "energy_j", "energy_wh", "charge_mah", "duration_s", "planning_time_s"} <= set(summary)
+
+
+def test_route_comparison_is_validated():
+    plain = evaluate_route(_cost(), [[1.0, 1.0], [21.0, 1.0]])
+    with pytest.raises(InvalidParameterError, match="shortest must be a Route"):
+        RouteComparison(shortest=1250.0, lattice_optimum_j=800.0)
+    with pytest.raises(InvalidParameterError, match="lattice_optimum_j"):
+        RouteComparison(shortest=plain, lattice_optimum_j=-1.0)
+    with pytest.raises(InvalidParameterError, match="comparison must be a RouteComparison"):
+        plain.replace(comparison={"shortest_energy_j": 1.0})
+    assert math.isnan(RouteComparison(shortest=plain, lattice_optimum_j=math.nan).lattice_optimum_j)
 
 
 def test_route_is_frozen_with_readonly_arrays():

@@ -1,0 +1,34 @@
+"""Compiled (numba) kernels of the planner behind one public seam, over :class:`CostArrays`.
+
+- :mod:`.arrays` — :class:`CostArrays`, the packed read-only arrays of an ``EnergyCost``;
+- :mod:`.walk` — cell walks: segment energies, free points, turn energies;
+- :mod:`.paths` — whole-polyline kernels: pattern-search relaxation, line-of-sight pulls;
+- :mod:`.graph` — lattice graphs: move energies, their refresh, A*;
+- :mod:`.variants` — serial / parallel compilations picked by work size.
+
+Every kernel is compiled with ``cache=True``; ``planner.warm_up_kernels`` compiles or loads
+them all.
+"""
+
+from .arrays import CostArrays
+from .graph import astar, lattice_reweight, lattice_weights
+from .paths import KEEP_RTOL, relax_polyline, string_pull_indices
+from .variants import PARALLEL_MIN_WALKS, use_parallel
+from .walk import point_free, turn_energy, walk_forward, walk_many, walk_pair
+
+__all__ = [
+    "CostArrays",
+    "walk_pair",
+    "walk_forward",
+    "walk_many",
+    "point_free",
+    "turn_energy",
+    "relax_polyline",
+    "string_pull_indices",
+    "KEEP_RTOL",
+    "astar",
+    "lattice_weights",
+    "lattice_reweight",
+    "PARALLEL_MIN_WALKS",
+    "use_parallel",
+]

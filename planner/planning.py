@@ -1,0 +1,332 @@
+"""Plan a minimum-energy route: plan_route (OMPL planners or the lattice, then refinement), shortest_route.
+
+Choose a planner by name from :data:`PLANNERS`: the OMPL planners of
+:data:`~planner.ompl.OMPL_PLANNERS` (a 2-D problem over the map whose objective is the
+directed drive energy, :mod:`planner.ompl`) or ``"lattice"``, the fast path: the directed
+16-connected lattice optimum (:class:`~planner.Lattice`). With ``refine=True`` (default)
+every exact route is post-processed by :func:`~planner.refine_route`: OMPL's
+``partialShortcutPath`` and ``perturbPath`` under the energy objective, then
+:func:`~planner.refine.relax_path`; each step is kept only when the route's true energy —
+segments plus turns, re-evaluated exactly — went down. Turn energies are not part of the
+search (a 2-D state has no heading); every route is evaluated with them.
+
+Determinism: the lattice search is exact and the refinement is seeded (``seed``, or 0 when
+``seed=None``), so a lattice plan is the same in every run. OMPL planners are seeded only by
+an explicit ``seed``; give it and ``max_cost_evaluations`` (a work bound counted in
+objective motion-cost calls) and leave ``time_limit_s=None``, and the same inputs give the
+same route in any process, whatever was planned before. Time-bounded runs are not
+reproducible.
+
+Comparisons (the shortest-distance route and the lattice optimum, :class:`RouteComparison`)
+are computed only with ``compare=True``, once per query: they are cached on the cost
+(:attr:`EnergyCost.results`, a bounded LRU cache).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from terrain import TerrainMap
+from terrain.checks import check_bool, check_int, check_real, check_seed
+from terrain.errors import (
+    BlockedPositionError,
+    GridMismatchError,
+    InvalidParameterError,
+    OutOfBoundsError,
+    UnknownNameError,
+)
+
+from .edge_cost import EnergyCost
+from .lattice import Lattice, LatticePath
+from .ompl import OMPL_PLANNERS
+from .ompl import solve as solve_ompl
+from .refine import refine_route, string_pull
+from .route import Route, RouteComparison, empty_route, evaluate_route
+from .settings import PlannerSettings
+
+__all__ = ["plan_route", "shortest_route", "compare_route", "PLANNERS", "OMPL_PLANNERS", "REFINE_DEFAULT_SEED"]
+
+#: Every planner name :func:`plan_route` accepts.
+PLANNERS = OMPL_PLANNERS + ("lattice",)
+#: Seed of the refinement when :func:`plan_route` gets ``seed=None``.
+REFINE_DEFAULT_SEED = 0
+
+
+# --------------------------------------------------------------------------- input checks
+def _check_point(cost: EnergyCost, xy: Any, name: str) -> np.ndarray:
+    try:
+        p = np.asarray(xy, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be (x_m, y_m), got {xy!r}") from None
+    if p.shape != (2,):
+        raise InvalidParameterError(f"{name} must be (x_m, y_m), got {xy!r}")
+    if not np.all(np.isfinite(p)):
+        raise InvalidParameterError(f"{name} must be finite coordinates in metres, got {xy!r}")
+    if not cost.terrain.contains(p[0], p[1]):
+        raise OutOfBoundsError(f"{name} {tuple(p.tolist())!r} m lies outside the map bounds {cost.terrain.bounds!r}")
+    r, c = cost.terrain.rowcol(p[0], p[1])
+    if cost.blocked[r, c]:
+        if cost.terrain.obstacle[r, c]:
+            why = "on an obstacle"
+        else:
+            why = (
+                f"on ground steeper ({math.degrees(float(cost.terrain.slope_rad[r, c])):.1f} deg) than "
+                f"max_slope_rad ({math.degrees(cost.max_slope_rad):.1f} deg)"
+            )
+        raise BlockedPositionError(
+            f"{name} {tuple(p.tolist())!r} m lies {why} (cell row {r}, col {c}); expected a free cell"
+        )
+    return p
+
+
+def _check_budget(time_limit_s: Any, max_cost_evaluations: Any) -> tuple[float | None, int | None]:
+    if max_cost_evaluations is not None:
+        max_cost_evaluations = check_int("max_cost_evaluations", max_cost_evaluations, low=1)
+    if time_limit_s is None:
+        if max_cost_evaluations is None:
+            raise InvalidParameterError("time_limit_s and max_cost_evaluations are both None; give at least one budget")
+        return None, max_cost_evaluations
+    return check_real("time_limit_s", time_limit_s, low=0.0, low_inclusive=False), max_cost_evaluations
+
+
+def _lattice_optimum(cost: EnergyCost, start: np.ndarray, goal: np.ndarray) -> LatticePath:
+    """The 1-cell lattice's minimum-energy path of a query (cached on the cost)."""
+    key = ("optimum", tuple(start.tolist()), tuple(goal.tolist()))
+    path = cost.results.get(key)
+    if path is None:
+        path = Lattice.for_cost(cost, 1).shortest_path(start, goal, weight="energy")
+        cost.results[key] = path
+    return path
+
+
+def compare_route(cost: EnergyCost, start_xy_m: tuple[float, float], goal_xy_m: tuple[float, float]) -> RouteComparison:
+    """The baselines of a query: the shortest-distance route and the 1-cell lattice optimum.
+
+    Computed once per (cost, start, goal) and cached on the cost (:attr:`EnergyCost.results`,
+    least recently used dropped beyond :data:`~planner.edge_cost.CACHE_SIZE` entries). The
+    first call builds the 1-cell lattice graph of the cost (cached too).
+
+    Raises
+    ------
+    InvalidParameterError, OutOfBoundsError, BlockedPositionError
+        As :func:`plan_route` for bad start / goal points.
+    """
+    if not isinstance(cost, EnergyCost):
+        raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
+    start = _check_point(cost, start_xy_m, "start_xy_m")
+    goal = _check_point(cost, goal_xy_m, "goal_xy_m")
+    key = ("comparison", tuple(start.tolist()), tuple(goal.tolist()))
+    comparison = cost.results.get(key)
+    if comparison is None:
+        optimum = _lattice_optimum(cost, start, goal)
+        comparison = RouteComparison(
+            shortest=shortest_route(cost, start, goal),
+            lattice_optimum_j=optimum.objective if optimum.found else math.nan,
+        )
+        cost.results[key] = comparison
+    return comparison
+
+
+def shortest_route(cost: EnergyCost, start_xy_m: tuple[float, float], goal_xy_m: tuple[float, float]) -> Route:
+    """The shortest-distance route between two points, costed in energy.
+
+    The straight line when it is free; otherwise the shortest route on the 1-cell lattice
+    (edge weights = lengths) straightened by greedy line-of-sight shortcuts
+    (:func:`string_pull`). It is the baseline of ``Route.energy_saved_pct``.
+
+    Returns
+    -------
+    Route
+        ``planner="shortest"``; status ``"exact"``, or ``"infeasible"`` when start and goal
+        lie in different free regions.
+
+    Raises
+    ------
+    InvalidParameterError, OutOfBoundsError, BlockedPositionError
+        As :func:`plan_route` for bad start / goal points.
+    """
+    if not isinstance(cost, EnergyCost):
+        raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
+    start = _check_point(cost, start_xy_m, "start_xy_m")
+    goal = _check_point(cost, goal_xy_m, "goal_xy_m")
+    t0 = time.perf_counter()
+    if math.isfinite(cost.segment_energy_one_j(start[0], start[1], goal[0], goal[1])):
+        pts = np.array([start, goal])
+    else:
+        lp = Lattice.for_cost(cost, 1).shortest_path(start, goal, weight="length")
+        if not lp.found:
+            return empty_route("infeasible", "shortest", time.perf_counter() - t0, cost.battery_voltage_v)
+        pts = string_pull(cost, lp.waypoints_m)
+    return evaluate_route(cost, pts, status="exact", planner="shortest", planning_time_s=time.perf_counter() - t0)
+
+
+def plan_route(
+    terrain: TerrainMap,
+    start_xy_m: tuple[float, float],
+    goal_xy_m: tuple[float, float],
+    *,
+    cost: EnergyCost,
+    planner: str = "RRTstar",
+    time_limit_s: float | None = 1.0,
+    seed: int | None = None,
+    max_cost_evaluations: int | None = None,
+    refine: bool = True,
+    compare: bool = False,
+    settings: PlannerSettings | None = None,
+) -> Route:
+    """Plan a minimum-energy route from start to goal.
+
+    Parameters
+    ----------
+    terrain : TerrainMap
+        The map; must be the grid ``cost`` was built on.
+    start_xy_m, goal_xy_m : (float, float)
+        World coordinates (m) of a free cell each.
+    cost : EnergyCost
+        Edge costs (see :meth:`EnergyCost.from_model`).
+    planner : str
+        One of :data:`PLANNERS`: ``"RRTstar"``, ``"InformedRRTstar"``, ``"SORRTstar"``,
+        ``"BITstar"``, ``"FMT"`` (OMPL, minimising drive energy) or ``"lattice"`` (the
+        directed 16-connected lattice optimum).
+    time_limit_s : float or None
+        Wall-clock budget of the OMPL solve (s); ignored by ``"lattice"``. ``None``
+        requires ``max_cost_evaluations``.
+    seed : int, optional
+        Seeds OMPL's RNG for the OMPL planners and the refinement (``None`` or an integer
+        in ``[0, 2**32)``). ``None`` leaves OMPL planners unseeded and seeds the refinement
+        with :data:`REFINE_DEFAULT_SEED` (0), so a lattice plan is reproducible.
+    max_cost_evaluations : int, optional
+        Work bound of OMPL planners: stop after this many objective motion-cost calls.
+        With ``seed`` and ``time_limit_s=None`` the result is reproducible; with both
+        budgets the first one reached stops the solve.
+    refine : bool
+        Post-process an exact route with :func:`refine_route` (OMPL energy shortcuts, then
+        :meth:`EnergyCost.relax_path`), each step kept only if the true energy (turns
+        included) went down. The route's ``planner`` then reads e.g. ``"RRTstar+refine"``;
+        the refinement time is part of ``planning_time_s``.
+    compare : bool
+        Also compute the query's :class:`RouteComparison` (:func:`compare_route`: the
+        shortest-distance route and the lattice optimum), stored as ``Route.comparison``
+        (``shortest_energy_j``, ``energy_saved_pct``, ``lattice_energy_j``,
+        ``optimality_ratio``). Computed once per query and cached on ``cost``; its time (the
+        first call builds the 1-cell lattice graph) is not part of ``planning_time_s``.
+    settings : PlannerSettings, optional
+        Planner tuning.
+
+    Returns
+    -------
+    Route
+        ``status`` ``"exact"`` / ``"approximate"`` / ``"timeout"`` / ``"infeasible"``; the
+        last three raise nothing (call :meth:`Route.raise_for_status` to get a
+        :class:`PlanningError`). ``"infeasible"`` is decided before planning: start and goal
+        lie in different 4-connected regions of free cells, which is exact when every grade
+        of every ground is drivable; when the model marks some grades undrivable (``inf``)
+        the lattice planner also reports ``"infeasible"`` if its 1-cell lattice has no route.
+
+    Raises
+    ------
+    UnknownNameError
+        Unknown planner name (the message lists the valid ones).
+    InvalidParameterError
+        NaN coordinates, start equals goal, bad budgets, seed or settings.
+    OutOfBoundsError
+        Start or goal outside the map.
+    BlockedPositionError
+        Start or goal on an obstacle or on ground steeper than ``cost.max_slope_rad``.
+    GridMismatchError
+        ``cost`` was built for another grid.
+
+    Examples
+    --------
+    >>> from energy import PhysicsEnergyModel, ground_preset, robot_preset
+    >>> from planner import EnergyCost
+    >>> from terrain import flat_map
+    >>> tmap = flat_map((30, 40), 1.0)  # level asphalt, 1 m cells
+    >>> cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(robot_preset("husky")),
+    ...                              {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
+    >>> route = plan_route(tmap, (5.0, 5.0), (35.0, 25.0), cost=cost, planner="lattice")
+    >>> route.status, round(route.length_m, 2)  # level ground: the straight line
+    ('exact', 36.06)
+    """
+    if not isinstance(planner, str) or planner not in PLANNERS:
+        raise UnknownNameError(f"planner must be one of {list(PLANNERS)!r}, got {planner!r}")
+    if not isinstance(cost, EnergyCost):
+        raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
+    if not isinstance(terrain, TerrainMap):
+        raise InvalidParameterError(f"terrain must be a TerrainMap, got {type(terrain).__name__!r}")
+    if terrain is not cost.terrain and not terrain.same_grid(cost.terrain):
+        raise GridMismatchError(f"cost was built for the grid of {cost.terrain!r}, not of {terrain!r}")
+    settings = PlannerSettings() if settings is None else settings
+    if not isinstance(settings, PlannerSettings):
+        raise InvalidParameterError(f"settings must be a PlannerSettings, got {type(settings).__name__!r}")
+    refine = check_bool("refine", refine)
+    compare = check_bool("compare", compare)
+    start = _check_point(cost, start_xy_m, "start_xy_m")
+    goal = _check_point(cost, goal_xy_m, "goal_xy_m")
+    if np.array_equal(start, goal):
+        raise InvalidParameterError(
+            f"start equals goal ({start[0]!r}, {start[1]!r}) m: there is no route to plan; expected two different points"
+        )
+    if planner == "lattice" and time_limit_s is None and max_cost_evaluations is None:
+        time_limit, max_evals = None, None
+    else:
+        time_limit, max_evals = _check_budget(time_limit_s, max_cost_evaluations)
+    seed = check_seed(seed)
+
+    labels = cost.components()
+    rs, cs = cost.terrain.rowcol(start[0], start[1])
+    rg, cg = cost.terrain.rowcol(goal[0], goal[1])
+    if labels[rs, cs] != labels[rg, cg]:
+        route = empty_route("infeasible", planner, 0.0, cost.battery_voltage_v)
+    else:
+        route = _plan(cost, start, goal, planner, time_limit, max_evals, seed, refine, settings)
+    if compare:
+        route = route.replace(comparison=compare_route(cost, start, goal))
+    return route
+
+
+def _plan(
+    cost: EnergyCost,
+    start: np.ndarray,
+    goal: np.ndarray,
+    planner: str,
+    time_limit: float | None,
+    max_evals: int | None,
+    seed: int | None,
+    refine: bool,
+    settings: PlannerSettings,
+) -> Route:
+    """Search (lattice or OMPL), then refine an exact route; start and goal are checked and joined."""
+    if planner == "lattice":
+        stride = settings.lattice_stride_cells
+        lattice = Lattice.for_cost(cost, stride)  # building the graph is map preparation
+        t0 = time.perf_counter()
+        path = lattice.shortest_path(start, goal, weight="energy")
+        if not path.found and stride > 1:  # a passage too narrow for the coarse lattice
+            stride = 1
+            path = Lattice.for_cost(cost, 1).shortest_path(start, goal, weight="energy")
+        elapsed = time.perf_counter() - t0
+        if stride == 1:
+            cost.results[("optimum", tuple(start.tolist()), tuple(goal.tolist()))] = path
+        status = "exact" if path.found else "infeasible"
+        waypoints = path.waypoints_m if path.found else None
+    else:
+        status, waypoints, elapsed, _ = solve_ompl(
+            cost.arrays, cost.min_energy_per_metre_j, start, goal, planner, time_limit, max_evals, seed, settings
+        )
+    name = planner
+    if waypoints is not None and status == "exact" and refine:
+        t0 = time.perf_counter()
+        waypoints = refine_route(
+            cost, waypoints, seed=REFINE_DEFAULT_SEED if seed is None else seed,
+            max_steps=settings.refine_max_steps, rounds=settings.refine_rounds,
+        )
+        elapsed += time.perf_counter() - t0
+        name = f"{planner}+refine"
+    if waypoints is None:
+        return empty_route(status, name, elapsed, cost.battery_voltage_v)
+    return evaluate_route(cost, waypoints, status=status, planner=name, planning_time_s=elapsed)

@@ -1,0 +1,230 @@
+"""Energy tables of an edge cost: the one grade/turn table builder, ground-to-row mapping, checks.
+
+An :class:`~planner.EnergyCost` prices a cell by a *table row*: the energy per horizontal
+metre at grades uniformly spaced over ``[-tan(max_slope), +tan(max_slope)]`` and the energy
+of turning in place at angles uniformly spaced over ``[0, pi]``. :func:`tabulate` builds
+those rows from any energy model (the physics model per ground, the learned model per model
+id): it is the only place tables are computed.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from terrain.checks import check_int
+from terrain.errors import GridMismatchError, InvalidParameterError, UnknownNameError
+from terrain.terrain_map import UNKNOWN_GROUND, TerrainMap
+
+__all__ = [
+    "DEFAULT_GRADE_SAMPLES",
+    "DEFAULT_TURN_SAMPLES",
+    "grade_grid",
+    "turn_grid",
+    "check_table_sizes",
+    "tabulate",
+    "ground_table_rows",
+    "check_tables",
+]
+
+#: Default number of samples of each ground's energy-per-metre-vs-grade table (odd: grade 0 is a sample).
+DEFAULT_GRADE_SAMPLES = 513
+#: Default number of samples of each ground's turn-energy-vs-angle table over [0, pi].
+DEFAULT_TURN_SAMPLES = 65
+
+
+def check_table_sizes(grade_samples: Any, turn_samples: Any) -> tuple[int, int]:
+    """``(grade_samples, turn_samples)`` checked: an odd integer >= 3 and an integer >= 2.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not integers, or out of range.
+    """
+    n_grade = check_int("grade_samples", grade_samples, low=3)
+    if n_grade % 2 == 0:
+        raise InvalidParameterError(f"grade_samples must be an odd integer >= 3, got {grade_samples!r}")
+    return n_grade, check_int("turn_samples", turn_samples, low=2)
+
+
+def grade_grid(max_slope_rad: float, grade_samples: int) -> np.ndarray:
+    """The uniform grade grid ``[-tan(max_slope_rad), +tan(max_slope_rad)]`` of ``grade_samples`` points."""
+    grade_max = math.tan(float(max_slope_rad))
+    return np.linspace(-grade_max, grade_max, int(grade_samples))
+
+
+def turn_grid(turn_samples: int) -> np.ndarray:
+    """The uniform heading-change grid ``[0, pi]`` of ``turn_samples`` points."""
+    return np.linspace(0.0, math.pi, int(turn_samples))
+
+
+def tabulate(
+    model: Any,
+    speed_mps: float,
+    grounds: Sequence[Any],
+    labels: Sequence[str],
+    *,
+    max_slope_rad: float,
+    grade_samples: int,
+    turn_samples: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Grade and turn tables of an energy model, one row per ground (the one table builder).
+
+    Row ``i`` holds ``model.energy_per_metre_j(speed_mps, grades, grounds[i])`` (J per metre
+    *travelled*) times ``sqrt(1 + grade**2)`` (J per *horizontal* map metre) on
+    :func:`grade_grid`, and ``model.turn_energy_j(angles, grounds[i])`` on :func:`turn_grid`.
+
+    Parameters
+    ----------
+    model : energy model
+        Anything with ``energy_per_metre_j(speed, grades, ground)`` and
+        ``turn_energy_j(angles, ground)`` (the physics model, a learned model).
+    speed_mps : float
+        Planning speed (m/s).
+    grounds : sequence
+        What the model takes as ``ground`` for each row (ground parameters, model ids).
+    labels : sequence of str
+        A name per row, for messages.
+    max_slope_rad, grade_samples, turn_samples
+        The grade grid and the turn grid.
+
+    Returns
+    -------
+    grade_table, turn_table : ndarray, shape (len(grounds), grade_samples) and (len(grounds), turn_samples)
+
+    Raises
+    ------
+    InvalidParameterError
+        The model returned arrays of other shapes.
+    """
+    grades = grade_grid(max_slope_rad, grade_samples)
+    angles = turn_grid(turn_samples)
+    horizontal = np.sqrt(1.0 + grades**2)
+    grade_table = np.empty((len(grounds), grades.size))
+    turn_table = np.empty((len(grounds), angles.size))
+    for i, ground in enumerate(grounds):
+        e = np.asarray(model.energy_per_metre_j(speed_mps, grades, ground), dtype=np.float64)
+        te = np.asarray(model.turn_energy_j(angles, ground), dtype=np.float64)
+        if e.shape != grades.shape or te.shape != angles.shape:
+            raise InvalidParameterError(
+                f"model returned shapes {e.shape!r} / {te.shape!r} for {grades.shape!r} grades / "
+                f"{angles.shape!r} angles on ground {labels[i]!r}; expected the input shapes"
+            )
+        grade_table[i] = e * horizontal
+        turn_table[i] = te
+    return grade_table, turn_table
+
+
+def ground_table_rows(
+    terrain: TerrainMap, grounds: Mapping[str, Any] | Mapping[int, Any], unknown_ground: Any = None
+) -> tuple[np.ndarray, list[Any], list[str]]:
+    """Map a map's ground classes onto table rows: ``(rows per cell, params per row, label per row)``.
+
+    ``grounds`` is keyed by class name (``terrain.ground_names``) or class id; only classes
+    present in the map get a row. Unknown cells (class ``-1``) use ``unknown_ground``.
+
+    Raises
+    ------
+    UnknownNameError
+        A class of the map without parameters.
+    InvalidParameterError
+        Unknown-ground cells without ``unknown_ground``; keys that are neither names nor ids.
+    """
+    names = terrain.ground_names
+    by_id: dict[int, Any] = {}
+    for key, params in dict(grounds).items():
+        if isinstance(key, str):
+            for gid, gname in names.items():
+                if gname == key:
+                    by_id[gid] = params
+        elif isinstance(key, (int, np.integer)) and not isinstance(key, bool):
+            by_id[int(key)] = params
+        else:
+            raise InvalidParameterError(f"grounds keys must be ground names or class ids, got {key!r}")
+    ground = np.asarray(terrain.ground)
+    present = [int(v) for v in np.unique(ground)]
+    params_rows: list[Any] = []
+    labels: list[str] = []
+    lut = np.full(int(max(present + [0])) + 2, -1, dtype=np.int32)  # lut[gid + 1] -> row
+    for gid in present:
+        if gid == UNKNOWN_GROUND:
+            if unknown_ground is None:
+                n_unknown = int(np.count_nonzero(ground == UNKNOWN_GROUND))
+                raise InvalidParameterError(
+                    f"the map has {n_unknown} cells of unknown ground ({UNKNOWN_GROUND}) and "
+                    "unknown_ground is None; pass unknown_ground=<ground params> for them"
+                )
+            params = unknown_ground
+            label = "unknown"
+        else:
+            if gid not in by_id:
+                label = names.get(gid, str(gid))
+                raise UnknownNameError(
+                    f"ground class {label!r} (id {gid}) of the map has no parameters in grounds; "
+                    f"grounds has {sorted(map(str, dict(grounds)))!r}"
+                )
+            params = by_id[gid]
+            label = names.get(gid, str(gid))
+        lut[gid + 1] = len(params_rows)
+        params_rows.append(params)
+        labels.append(label)
+    return lut[ground.astype(np.int64) + 1], params_rows, labels
+
+
+def check_tables(
+    shape: tuple[int, int], ground_rows: Any, grade_table_j_per_m: Any, turn_table_j: Any, ground_labels: Any
+) -> tuple[np.ndarray, np.ndarray, tuple[str, ...], np.ndarray]:
+    """Validated copies of an edge cost's tables and per-cell rows (see :class:`~planner.EnergyCost`).
+
+    Raises
+    ------
+    InvalidParameterError
+        Tables of the wrong shape or with negative / NaN energies (or infinite turn
+        energies); rows that are not table indices; labels of the wrong length.
+    GridMismatchError
+        ``ground_rows`` not of ``shape``.
+    """
+    try:
+        grade_table = np.array(grade_table_j_per_m, dtype=np.float64, order="C", copy=True)
+        turn_table = np.array(turn_table_j, dtype=np.float64, order="C", copy=True)
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(f"grade_table_j_per_m and turn_table_j must be arrays of numbers: {exc}") from exc
+    if grade_table.ndim != 2 or grade_table.shape[1] < 3 or grade_table.shape[1] % 2 == 0:
+        raise InvalidParameterError(
+            f"grade_table_j_per_m must have shape (n_grounds, n_grade) with odd n_grade >= 3, "
+            f"got {grade_table.shape!r}"
+        )
+    n_rows = grade_table.shape[0]
+    if turn_table.ndim != 2 or turn_table.shape[0] != n_rows or turn_table.shape[1] < 2:
+        raise InvalidParameterError(
+            f"turn_table_j must have shape ({n_rows}, n_turn >= 2), got {turn_table.shape!r}"
+        )
+    labels = tuple(ground_labels) if ground_labels is not None else tuple(f"row{i}" for i in range(n_rows))
+    if len(labels) != n_rows:
+        raise InvalidParameterError(f"ground_labels needs {n_rows} names, got {labels!r}")
+    for tname, tab, allowed in (
+        ("grade_table_j_per_m", grade_table, "energies >= 0 or +inf (a grade the ground cannot be driven at)"),
+        ("turn_table_j", turn_table, "finite energies >= 0"),
+    ):
+        bad = np.isnan(tab) | (tab < 0)
+        if tname == "turn_table_j":
+            bad |= ~np.isfinite(tab)
+        if np.any(bad):
+            i, j = np.argwhere(bad)[0]
+            raise InvalidParameterError(
+                f"{tname} must hold {allowed} (minimum-energy planning needs non-negative edge "
+                f"costs; a regenerating model must not go below 0), got {tab[i, j]!r} for "
+                f"ground {labels[i]!r} at sample {j}"
+            )
+    rows = np.asarray(ground_rows)
+    if rows.shape != tuple(shape):
+        raise GridMismatchError(f"ground_rows has shape {rows.shape!r}; the map's grid is {tuple(shape)!r}")
+    if not np.issubdtype(rows.dtype, np.integer) or rows.min() < 0 or rows.max() >= n_rows:
+        raise InvalidParameterError(
+            f"ground_rows must hold integer table rows in 0..{n_rows - 1}, got values in "
+            f"[{rows.min()!r}, {rows.max()!r}] of dtype {rows.dtype}"
+        )
+    return grade_table, turn_table, labels, rows
