@@ -178,6 +178,7 @@ def test_read_geojson_single_feature_and_bare_geometry(tmp_path):
     ("content", "match"),
     [
         ("{not json", "not a readable JSON file"),
+        ("[" * 100_000, "not a readable JSON file.*RecursionError"),
         ("[1, 2]", "not GeoJSON"),
         ('{"type": "FeatureCollection"}', "needs a 'features' list"),
         (
