@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from .atomic import atomic_open, remove_stale_temporaries
+from .checks import check_int
 from .errors import (
     FileFormatError,
     GridMismatchError,
@@ -17,7 +18,6 @@ from .errors import (
     TerrawattError,
     UnknownNameError,
 )
-from .checks import check_int
 from .formats import read_versioned_npz
 from .grid import Grid
 
