@@ -9,29 +9,18 @@ from terrain.errors import (
     UnknownNameError,
 )
 
-from .baselines import (
-    PHYSICS_FIT_PARAMETERS,
-    ConstantCurrentModel,
-    LinearCurrentModel,
-    PhysicsCurrentModel,
-)
 from .battery import Battery, Discharge, discharge_from_current, discharge_from_power
 from .budget import CURRENT_CONVENTIONS, EnergyBudget, energy_budget, log_battery_power_w
-from .estimator import (
+from .models import (  # torch-free: the contract, its file format, the baselines, the loader
     CURRENT_MODEL_FORMAT_VERSION,
-    ESTIMATOR_PRESETS,
+    PHYSICS_FIT_PARAMETERS,
+    ConstantCurrentModel,
     CurrentModel,
-    CurrentNet,
-    CurrentNetConfig,
-    EstimatorConfig,
-    TrainConfig,
-    TrainingHistory,
-    VibrationCurrentEstimator,
-    WindowDataset,
-    estimator_preset,
+    LinearCurrentModel,
+    PhysicsCurrentModel,
     load_current_model,
-    train_network,
 )
+from .models import __getattr__  # the torch names (estimator, net, data, training) load on first use
 from .evaluation import (
     EvaluationResult,
     RunScore,

@@ -32,7 +32,7 @@ from terrain.errors import (
     UnknownNameError,
 )
 
-from .estimator import CurrentModel
+from .models.base import CurrentModel
 from .logs import InteractionLog
 from .metrics import DEFAULT_SECTION_S, compare_currents
 

@@ -1,7 +1,18 @@
 """planner — where to drive: edge costs, OMPL and lattice planners, routes, missions, CLI."""
 
-from energy import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, drive_profile
-
+from .adaptive import (
+    ADAPTIVE_FORMAT_VERSION,
+    ADAPTIVE_STATUSES,
+    UPDATE_SCOPES,
+    AdaptiveResult,
+    AdaptiveSettings,
+    LegRecord,
+    ReplanRecord,
+    UpdateRecord,
+    fit_prior_model,
+    run_adaptive_mission,
+    validation_error,
+)
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
 from .kernels import CostArrays
 from .lattice import Lattice, LatticePath
@@ -11,22 +22,14 @@ from .learned_cost import (
     LearnedEnergyModel,
     LearnedModelTable,
 )
-from .missions import (
-    ADAPTIVE_FORMAT_VERSION,
-    ADAPTIVE_STATUSES,
+from .mission import (
+    DEFAULT_ACCEL_MPS2,
+    DEFAULT_YAW_ACCEL_RADPS2,
     MISSION_FORMAT_VERSION,
     MISSION_STATUSES,
-    UPDATE_SCOPES,
-    AdaptiveResult,
-    AdaptiveSettings,
-    LegRecord,
     MissionResult,
-    ReplanRecord,
-    UpdateRecord,
-    fit_prior_model,
-    run_adaptive_mission,
+    drive_profile,
     simulate_mission,
-    validation_error,
 )
 from .planning import OMPL_PLANNERS, PLANNERS, compare_route, plan_route, shortest_route
 from .refine import refine_route, relax_path, string_pull
@@ -62,6 +65,9 @@ __all__ = [
     "evaluate_route",
     # missions
     "simulate_mission",
+    "drive_profile",
+    "DEFAULT_ACCEL_MPS2",
+    "DEFAULT_YAW_ACCEL_RADPS2",
     "drive_profile",
     "DEFAULT_ACCEL_MPS2",
     "DEFAULT_YAW_ACCEL_RADPS2",

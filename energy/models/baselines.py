@@ -1,4 +1,4 @@
-"""Baseline drive-current models behind the :class:`~energy.estimator.CurrentModel` contract.
+"""Baseline drive-current models (constant, linear, fitted physics); they never import torch.
 
 - :class:`ConstantCurrentModel`: each side's time-averaged training current (the floor
   every model must beat).
@@ -19,12 +19,13 @@ from typing import Any
 import numpy as np
 from scipy import optimize
 
+from terrain.checks import check_bool, real_array
 from terrain.errors import DataError, InvalidParameterError, UnknownNameError
 
-from .estimator import CurrentModel, _currents
-from .logs import InteractionLog
-from .params import GroundParams, MotorParams, RobotParams, ground_preset, robot_preset
-from .physics import EFFECTS, PhysicsEnergyModel
+from ..logs import InteractionLog
+from ..params import GroundParams, MotorParams, RobotParams, ground_preset, robot_preset
+from ..physics import EFFECTS, PhysicsEnergyModel
+from .base import CurrentModel, log_currents
 
 __all__ = [
     "ConstantCurrentModel",
@@ -42,7 +43,7 @@ def _time_mean(logs: list[InteractionLog]) -> np.ndarray:
     for log in logs:
         if len(log) < 2:
             raise DataError(f"each training log needs at least 2 drive samples, got {len(log)} ({log.meta.source!r})")
-        charge += _trapezoid(_currents(log), log.time_s, axis=0)
+        charge += _trapezoid(log_currents(log), log.time_s, axis=0)
         duration += log.duration_s
     return charge / duration
 
@@ -77,7 +78,7 @@ class ConstantCurrentModel(CurrentModel):
         return {"current_a": self.current_a_.tolist()}
 
     def _load_state(self, state: dict[str, Any]) -> None:
-        self.current_a_ = np.asarray(state["current_a"], dtype=np.float64).reshape(2)
+        self.current_a_ = real_array("current_a", state["current_a"]).reshape(2)
 
 
 def _linear_design(log: InteractionLog) -> np.ndarray:
@@ -108,7 +109,7 @@ class LinearCurrentModel(CurrentModel):
 
     def _fit(self, logs: list[InteractionLog]) -> None:
         x = np.concatenate([_linear_design(log) for log in logs])
-        y = np.concatenate([_currents(log) for log in logs])
+        y = np.concatenate([log_currents(log) for log in logs])
         if x.shape[0] < x.shape[1]:
             raise DataError(f"the linear model needs at least {x.shape[1]} drive samples, got {x.shape[0]}")
         self.coef_ = np.linalg.lstsq(x, y, rcond=None)[0]
@@ -120,7 +121,7 @@ class LinearCurrentModel(CurrentModel):
         return {"coef": self.coef_.tolist()}
 
     def _load_state(self, state: dict[str, Any]) -> None:
-        self.coef_ = np.asarray(state["coef"], dtype=np.float64).reshape(4, 2)
+        self.coef_ = real_array("coef", state["coef"]).reshape(4, 2)
 
 
 #: Quantities :class:`PhysicsCurrentModel` can fit, with their bounds.
@@ -228,8 +229,7 @@ class PhysicsCurrentModel(CurrentModel):
                 raise UnknownNameError(f"fit parameter {n!r} is unknown; expected names from {sorted(PHYSICS_FIT_PARAMETERS)!r}")
         if len(set(names)) != len(names):
             raise InvalidParameterError(f"fit_parameters has duplicates: {names!r}")
-        if not isinstance(self.clip_negative, bool):
-            raise InvalidParameterError(f"clip_negative must be a bool, got {self.clip_negative!r}")
+        check_bool("clip_negative", self.clip_negative)
         effects = _DRIVE_EFFECTS if self.effects is None else tuple(self.effects)
         model = PhysicsEnergyModel(robot, effects)
         return robot, ground, names, model
@@ -271,10 +271,13 @@ class PhysicsCurrentModel(CurrentModel):
             ground = ground.replace(**values)
         return robot, ground, idle
 
+    def _check_params(self) -> tuple[RobotParams, GroundParams, tuple[str, ...], PhysicsEnergyModel]:
+        return self._check()
+
     def _fit(self, logs: list[InteractionLog]) -> None:
         robot, ground, names, model = self._check()
         effects = model.effects
-        truth = np.concatenate([_currents(log) for log in logs]).ravel()
+        truth = np.concatenate([log_currents(log) for log in logs]).ravel()
         fitted_chi = "track_width_multiplier" in names
         start = []
         for n in names:
@@ -349,6 +352,7 @@ class PhysicsCurrentModel(CurrentModel):
         self.idle_current_a_ = float(state["idle_current_a"])
         self.fitted_ = {str(k): float(v) for k, v in state["fitted"].items()}
         self.cost_ = float(state["cost"])
-        self.effects_ = tuple(state["effects"])
-        if not all(math.isfinite(v) for v in self.fitted_.values()):
+        self.effects_ = tuple(str(e) for e in state["effects"])
+        PhysicsEnergyModel(self.robot_, self.effects_)  # validates the effect names
+        if not all(math.isfinite(v) for v in self.fitted_.values()) or not math.isfinite(self.idle_current_a_):
             raise ValueError("non-finite fitted coefficient")

@@ -1,0 +1,404 @@
+"""The vibration-conditioned current estimator, :class:`VibrationCurrentEstimator`.
+
+The torch (CPU) estimator of "End-to-end current consumption estimation for a driving
+system of a mobile robot considering geology", in three parts after minGPT: the model
+(:mod:`~energy.models.net`), the windowed dataset (:mod:`~energy.models.data`) and the
+training loop (:mod:`~energy.models.training`), configured by
+:class:`~energy.models.config.EstimatorConfig`; this module holds the estimator that joins
+them behind the :class:`~energy.models.base.CurrentModel`
+contract. Every ensemble member is seeded through local ``torch.Generator`` objects (its
+initial weights, dropout masks and shuffling); torch's global generator is never reseeded.
+
+Sampling rates: the paper's 0.1 s windows of 10 samples assume drive streams at 100 Hz;
+BorealTC's drive streams run at 6.5 Hz. Both presets resample explicitly with
+:meth:`InteractionLog.resample` onto a uniform grid at ``rate_hz``: the ``"paper"`` preset
+at 100 Hz (linear interpolation between drive samples — the 10-sample windows then hold
+interpolated values, not measurements), the ``"default"`` preset at the training logs'
+own median drive rate (no new samples are invented), with 1 s windows (6–7 samples at
+6.5 Hz, stride one sample) and the local vibration spectrum of the 100 Hz IMU over each
+window.
+
+The ``"default"`` preset departs from the paper where leave-one-run-out on the BorealTC
+logs said so: a physics prior (the physics model with rolling resistance, lateral friction
+and idle current fitted to the training logs; the networks learn the residual), signed v
+and omega (|omega| cannot tell the inner side of a turn), local spectra (12 log-spaced
+bands, 1–50 Hz, over 1 s) instead of the whole-run spectrum (with few training runs the
+8000-bin — or even a 12-band — whole-run spectrum acts as a run identifier the network
+memorises; held-out runs got worse), an ensemble of 5 members, dropout and weight decay,
+early stopping on the tail of each run, and predictions clipped to the training current
+range.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+import torch
+
+from terrain.checks import check_bool, check_int, check_seed, real_array
+from terrain.errors import DataError, InvalidParameterError
+
+from ..features import (
+    SOURCE_CURRENT_RANGE_A,
+    SOURCE_OMEGA_RANGE_RADPS,
+    SOURCE_SPEED_RANGE_MPS,
+    MinMaxNormaliser,
+    WindowSpec,
+    band_rms_spectra,
+    log_band_edges_hz,
+    sliding_windows,
+    whole_run_band_spectrum,
+    whole_run_spectrum,
+    window_starts,
+)
+from ..logs import InteractionLog
+from .base import CurrentModel, ModelRecord, log_currents, package_versions
+from .baselines import PhysicsCurrentModel
+from .config import EstimatorConfig, estimator_preset
+from .data import WindowDataset
+from .net import CurrentNet, CurrentNetConfig
+from .training import TrainingHistory, train_network
+
+__all__ = ["VibrationCurrentEstimator"]
+
+_LOG_FLOOR_MPS2 = 1e-4  # floor of band RMS before log10 (m/s^2)
+# ========================================================================= estimator
+def _source_normaliser(source_range: tuple[float, float], absolute: bool) -> MinMaxNormaliser:
+    """The source range for absolute values; mirrored (-high..high) for signed values."""
+    if absolute:
+        return MinMaxNormaliser(*source_range, absolute=True)
+    return MinMaxNormaliser(-source_range[1], source_range[1], absolute=False)
+
+
+def _root_seed(seed: int | None) -> int:
+    """``seed``, or fresh entropy (one draw per fit) when it is None."""
+    if seed is None:
+        return int(np.random.SeedSequence().generate_state(1)[0])
+    return int(seed)
+
+
+def _member_seed(seed: int, member: int) -> int:
+    return int(np.random.SeedSequence([int(seed), int(member)]).generate_state(1)[0])
+
+
+class VibrationCurrentEstimator(CurrentModel):
+    """Drive currents from velocity commands and the vertical vibration of the ground.
+
+    Parameters
+    ----------
+    config : str or EstimatorConfig
+        A preset name (``"default"``, ``"paper"``) or a configuration; change presets with
+        ``estimator_preset("default").replace(n_members=3)``.
+    seed : int
+        Seed of weight initialisation, shuffling and dropout (members use derived seeds).
+        The same seed, data and thread count give the same model.
+    progress : bool
+        Show a tqdm progress bar with the training and validation loss.
+    n_threads : int or None
+        ``torch.set_num_threads`` while fitting and predicting (restored after);
+        ``None`` leaves torch's setting alone.
+
+    Attributes
+    ----------
+    config_ : EstimatorConfig
+        The resolved configuration.
+    rate_hz_ : float
+        Rate of the uniform grid the model works on (Hz).
+    window_ : WindowSpec
+        Training windows (length and stride in samples and seconds).
+    band_edges_hz_ : numpy.ndarray or None
+        Edges of the spectrum bands.
+    normalisers_ : dict of str to MinMaxNormaliser
+        ``"v"``, ``"omega"``, ``"current"`` (source ranges) and the fitted spectrum ranges
+        (``"run"``, ``"local"`` when used).
+    current_range_a_ : numpy.ndarray, shape (2, 2)
+        ``[[min_left, min_right], [max_left, max_right]]`` of the training currents.
+    networks_ : list of CurrentNet
+        The ensemble members.
+    history_ : tuple of TrainingHistory
+        One per member.
+    n_train_windows_ : int
+    physics_ : PhysicsCurrentModel or None
+        The fitted physics prior (``config.physics_prior``), or None.
+
+    Examples
+    --------
+    Usage (needs data or fitted models, so not run as a doctest)::
+
+        est = VibrationCurrentEstimator("default", seed=0)
+        est.fit(train_logs).predict(test_log)
+    """
+
+    _param_names = ("config", "seed", "progress", "n_threads")
+
+    def __init__(self, config: str | EstimatorConfig = "default", seed: int = 0, progress: bool = False,
+                 n_threads: int | None = None) -> None:
+        self.config = config
+        self.seed = seed
+        self.progress = progress
+        self.n_threads = n_threads
+
+    # -------------------------------------------------------------- validation
+    def _resolved_config(self) -> EstimatorConfig:
+        if isinstance(self.config, EstimatorConfig):
+            return self.config
+        if isinstance(self.config, str):
+            return estimator_preset(self.config)
+        raise InvalidParameterError(f"config must be a preset name or an EstimatorConfig, got {self.config!r:.80}")
+
+    def _check_params(self) -> EstimatorConfig:
+        cfg = self._resolved_config()
+        check_seed(self.seed)
+        check_bool("progress", self.progress)
+        if self.n_threads is not None:
+            check_int("n_threads", self.n_threads, low=1)
+        return cfg
+
+    # ---------------------------------------------------------------- features
+    def _grid_log(self, log: InteractionLog, rate_hz: float, method: str) -> InteractionLog:
+        return log.resample(rate_hz, method)
+
+    def _run_vector(self, log: InteractionLog, cfg: EstimatorConfig) -> np.ndarray:
+        if cfg.run_features == "bins":
+            return whole_run_spectrum(log.accel_time_s, log.accel_z_mps2, cfg.n_spectrum_bins,
+                                      cfg.max_frequency_hz, cfg.spectrum_scaling)[1]
+        if cfg.run_features == "bands":
+            rms = whole_run_band_spectrum(log.accel_time_s, log.accel_z_mps2, cfg.spectrum_span_s, self.band_edges_hz_)
+            return np.log10(np.maximum(rms, _LOG_FLOOR_MPS2))
+        return np.zeros(0)
+
+    def _window_features(self, grid: InteractionLog, spec: WindowSpec, starts: np.ndarray,
+                         cfg: EstimatorConfig) -> tuple[np.ndarray, np.ndarray | None]:
+        """Raw (unnormalised-spectrum) window features and local spectra of one gridded run."""
+        nv, nw = self.normalisers_["v"], self.normalisers_["omega"]
+        v = sliding_windows(nv.transform(grid.v_mps), spec, starts)
+        w = sliding_windows(nw.transform(grid.omega_radps), spec, starts)
+        motion = np.concatenate([v, w], axis=1)
+        local = None
+        if cfg.local_spectrum:
+            t = grid.time_s
+            centre = 0.5 * (t[starts] + t[starts + spec.length_samples - 1])
+            rms = band_rms_spectra(grid.accel_time_s, grid.accel_z_mps2, centre, cfg.spectrum_span_s, self.band_edges_hz_)
+            local = np.log10(np.maximum(rms, _LOG_FLOOR_MPS2))
+        return motion, local
+
+    def _targets(self, grid: InteractionLog, spec: WindowSpec, starts: np.ndarray) -> np.ndarray:
+        cur = self.normalisers_["current"].transform(log_currents(grid))  # (N, 2)
+        win = sliding_windows(cur, spec, starts)  # (n, W, 2)
+        return np.concatenate([win[:, :, 0], win[:, :, 1]], axis=1)  # left window, right window
+
+    def _dataset(self, grids: list[InteractionLog], spec: WindowSpec, cfg: EstimatorConfig,
+                 with_targets: bool) -> WindowDataset:
+        xs, idx, starts_all, ys, locals_, runs = [], [], [], [], [], []
+        for r, g in enumerate(grids):
+            starts = window_starts(len(g), spec)
+            motion, local = self._window_features(g, spec, starts, cfg)
+            xs.append(motion)
+            if local is not None:
+                locals_.append(local)
+            idx.append(np.full(starts.size, r))
+            starts_all.append(starts)
+            runs.append(self._run_vector(g, cfg))
+            if with_targets:
+                ys.append(self._targets(g, spec, starts))
+        x = np.concatenate(xs)
+        if locals_:
+            if "local" not in self.normalisers_:
+                self.normalisers_["local"] = MinMaxNormaliser.from_data(np.concatenate(locals_), per_column=True)
+            x = np.concatenate([x, self.normalisers_["local"].transform(np.concatenate(locals_))], axis=1)
+        table = np.stack(runs)
+        if table.shape[1]:
+            if "run" not in self.normalisers_:
+                # one range over all bins/bands: per-column ranges over a handful of runs
+                # would blow run-to-run noise up to the full [0, 1] span
+                self.normalisers_["run"] = MinMaxNormaliser.from_data(table, per_column=False)
+            table = self.normalisers_["run"].transform(table)
+        y = np.concatenate(ys) if with_targets else None
+        return WindowDataset(x, table, np.concatenate(idx), np.concatenate(starts_all), spec, y)
+
+    # ------------------------------------------------------------------- fit
+    def _fit(self, logs: list[InteractionLog]) -> None:
+        cfg = self._check_params()
+        with _threads(self.n_threads):
+            cur = np.concatenate([log_currents(lg) for lg in logs])
+            if cfg.absolute_currents:
+                cur = np.abs(cur)
+            self.current_range_a_ = np.stack([cur.min(axis=0), cur.max(axis=0)])
+            self.physics_ = None
+            if cfg.physics_prior is not None:
+                self.physics_ = PhysicsCurrentModel(robot=cfg.physics_prior).fit(logs)
+                logs = [self._residual_log(lg) for lg in logs]
+            rate = cfg.rate_hz if cfg.rate_hz is not None else float(np.median([lg.drive_rate_hz for lg in logs]))
+            grids = [self._grid_log(lg, rate, cfg.resample_method) for lg in logs]
+            spec = WindowSpec.from_seconds(cfg.window_s, rate, cfg.train_stride_s)
+            self.config_ = cfg
+            self.rate_hz_ = rate
+            self.window_ = spec
+            self.band_edges_hz_ = None
+            if cfg.local_spectrum or cfg.run_features == "bands":
+                acc_rate = float(np.median([g.accel_rate_hz for g in grids]))
+                n_fft = int(round(cfg.spectrum_span_s * acc_rate))
+                self.band_edges_hz_ = log_band_edges_hz(cfg.n_bands, cfg.min_band_hz, cfg.max_frequency_hz, acc_rate / n_fft)
+            self.normalisers_ = {
+                "v": _source_normaliser(SOURCE_SPEED_RANGE_MPS, cfg.absolute_inputs),
+                "omega": _source_normaliser(SOURCE_OMEGA_RANGE_RADPS, cfg.absolute_inputs),
+                "current": MinMaxNormaliser(*SOURCE_CURRENT_RANGE_A, absolute=cfg.absolute_currents),
+            }
+            data = self._dataset(grids, spec, cfg, with_targets=True)
+            train, val = data.split_tail(cfg.validation_fraction)
+            if cfg.patience is not None and val is None:
+                raise DataError(
+                    f"the training logs are too short for a {cfg.validation_fraction:g} validation tail of "
+                    f"{spec.length_s:.3g} s windows; give longer logs or set patience=None"
+                )
+            net_cfg = cfg.net_config(data.x_window.shape[1], data.run_table.shape[1], data.y.shape[1])
+            networks, histories = [], []
+            root = _root_seed(self.seed)
+            for m in range(cfg.n_members):
+                s = _member_seed(root, m)
+                net = CurrentNet(net_cfg, seed=s)
+                histories.append(train_network(net, train, val, cfg.train_config(), s, self.progress,
+                                               f"{cfg.name} member {m + 1}/{cfg.n_members}"))
+                networks.append(net)
+            self.networks_ = networks
+            self.history_ = tuple(histories)
+            self.n_train_windows_ = len(train)
+
+    def _residual_log(self, log: InteractionLog) -> InteractionLog:
+        prior = self.physics_.predict(log)
+        return dataclasses.replace(log, current_left_a=log.current_left_a - prior[:, 0],
+                                   current_right_a=log.current_right_a - prior[:, 1])
+
+    # --------------------------------------------------------------- predict
+    def _predict_grid(self, grid: InteractionLog) -> np.ndarray:
+        cfg = self.config_
+        spec = WindowSpec.from_seconds(cfg.window_s, self.rate_hz_, cfg.predict_stride_s)
+        data = self._dataset([grid], spec, cfg, with_targets=False)
+        with torch.no_grad():
+            outs = [net(*data.inputs(slice(None))).numpy().astype(np.float64) for net in self.networks_]
+        y = self.normalisers_["current"].inverse_transform(np.mean(outs, axis=0))  # (n, 2W)
+        w = spec.length_samples
+        per_window = np.stack([y[:, :w], y[:, w:]], axis=2)  # (n, W, 2)
+        rows = (data.start[:, None] + np.arange(w)[None, :]).reshape(-1)
+        total = np.zeros((len(grid), 2))
+        count = np.zeros(len(grid))
+        np.add.at(total, rows, per_window.reshape(-1, 2))
+        np.add.at(count, rows, 1.0)
+        return total / count[:, None]
+
+    def _predict(self, log: InteractionLog) -> np.ndarray:
+        with _threads(self.n_threads):
+            grid = self._grid_log(log, self.rate_hz_, self.config_.resample_method)
+            pred = self._predict_grid(grid)
+        # back onto the log's own timestamps; drive samples outside the overlap of the
+        # drive and acceleration streams take the nearest grid value (np.interp holds ends)
+        out = np.column_stack([np.interp(log.time_s, grid.time_s, pred[:, k]) for k in range(2)])
+        if self.physics_ is not None:
+            out = out + self.physics_.predict(log)
+        if self.config_.clip_output:
+            out = np.clip(out, self.current_range_a_[0], self.current_range_a_[1])
+        return out
+
+    def predict(self, log: InteractionLog) -> np.ndarray:
+        """Predicted drive currents at the log's drive timestamps.
+
+        The drive stream is resampled onto the model's uniform grid (``rate_hz_``) over the
+        overlap of the drive and acceleration streams, predicted there window by window
+        (overlapping windows averaged per sample) and interpolated linearly back onto
+        ``log.time_s``. Drive samples outside that grid — before the acceleration stream
+        starts, after it ends, or after the last grid time — take the nearest grid
+        prediction (the ends are held, not extrapolated). The physics prior, when
+        configured, is then added at ``log.time_s``, and ``clip_output`` clips the result
+        to ``current_range_a_``.
+
+        Parameters, returns and errors as :meth:`CurrentModel.predict`; the ``DataError``
+        here means the streams do not overlap, or overlap for less than one window.
+        """
+        return super().predict(log)
+
+    # ------------------------------------------------------------ persistence
+    def _params_to_plain(self) -> dict[str, Any]:
+        p = self.get_params()
+        p["config"] = self.config if isinstance(self.config, str) else {"__config__": self.config.to_dict()}
+        return p
+
+    @classmethod
+    def _params_from_plain(cls, params: dict[str, Any]) -> dict[str, Any]:
+        p = dict(params)
+        if isinstance(p.get("config"), dict):
+            p["config"] = EstimatorConfig.from_dict(p["config"]["__config__"])
+        return p
+
+    def _state(self) -> dict[str, Any]:
+        return {
+            "config": self.config_.to_dict(),
+            "rate_hz": self.rate_hz_,
+            "window": {"length_samples": self.window_.length_samples, "stride_samples": self.window_.stride_samples,
+                       "rate_hz": self.window_.rate_hz},
+            "band_edges_hz": self.band_edges_hz_,
+            "normalisers": {k: v.to_dict() for k, v in self.normalisers_.items()},
+            "current_range_a": np.asarray(self.current_range_a_),
+            "net_config": dataclasses.asdict(self.networks_[0].config) | {"hidden_sizes": list(self.networks_[0].config.hidden_sizes)},
+            "weights": [{k: v.detach().numpy().copy() for k, v in net.state_dict().items()} for net in self.networks_],
+            "history": [h.to_dict() for h in self.history_],
+            "n_train_windows": self.n_train_windows_,
+            "physics": None if self.physics_ is None else _record_to_plain(self.physics_.to_record()),
+        }
+
+    def _load_state(self, state: dict[str, Any]) -> None:
+        self.config_ = EstimatorConfig.from_dict(state["config"])
+        self.rate_hz_ = float(state["rate_hz"])
+        self.window_ = WindowSpec(**state["window"])
+        edges = state["band_edges_hz"]
+        self.band_edges_hz_ = None if edges is None else real_array("band_edges_hz", edges, ndim=1)
+        self.normalisers_ = {str(k): MinMaxNormaliser.from_dict(v) for k, v in state["normalisers"].items()}
+        needed = {"v", "omega", "current"} | ({"local"} if self.config_.local_spectrum else set())
+        needed |= {"run"} if self.config_.run_features != "none" else set()
+        if needed - set(self.normalisers_):
+            raise KeyError(f"normalisers {sorted(needed - set(self.normalisers_))!r} are missing")
+        self.current_range_a_ = real_array("current_range_a", state["current_range_a"]).reshape(2, 2)
+        nc = dict(state["net_config"])
+        nc["hidden_sizes"] = tuple(nc["hidden_sizes"])
+        net_cfg = CurrentNetConfig(**nc)
+        nets = []
+        for weights in state["weights"]:
+            net = CurrentNet(net_cfg, seed=0)  # every weight is replaced below
+            net.load_state_dict({str(k): torch.from_numpy(np.asarray(v, dtype=np.float32)) for k, v in weights.items()})
+            net.eval()
+            nets.append(net)
+        if not nets:
+            raise ValueError("no ensemble member weights")
+        self.networks_ = nets
+        self.history_ = tuple(TrainingHistory.from_dict(h) for h in state["history"])
+        self.n_train_windows_ = int(state["n_train_windows"])
+        self.physics_ = None
+        if state["physics"] is not None:
+            prior = state["physics"]
+            record = ModelRecord(str(prior.get("model_class", "PhysicsCurrentModel")), prior["params"], prior["state"])
+            self.physics_ = PhysicsCurrentModel.from_record(record, "the estimator's physics prior")
+
+    def _versions(self) -> dict[str, str]:
+        return package_versions(torch=str(torch.__version__))
+
+
+def _record_to_plain(record: ModelRecord) -> dict[str, Any]:
+    return {"model_class": record.model_class, "params": record.params, "state": record.state}
+
+
+class _threads:
+    """Context manager: ``torch.set_num_threads(n)`` inside, previous value restored after."""
+
+    def __init__(self, n: int | None) -> None:
+        self.n = n
+        self.old: int | None = None
+
+    def __enter__(self) -> None:
+        if self.n is not None:
+            self.old = torch.get_num_threads()
+            torch.set_num_threads(int(self.n))
+
+    def __exit__(self, *exc: Any) -> None:
+        if self.old is not None:
+            torch.set_num_threads(self.old)
