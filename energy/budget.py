@@ -20,9 +20,10 @@ from terrain.checks import check_bool, check_choice, check_int, check_real, read
 from terrain.errors import InvalidParameterError
 
 from .battery import AS_PER_MAH, S_PER_H, Battery, Discharge
+from .ground import GroundParams
 from .logs import InteractionLog
-from .params import GroundParams, RobotParams
 from .physics import PhysicsEnergyModel
+from .robot import RobotParams
 
 __all__ = ["EnergyBudget", "energy_budget", "log_battery_power_w", "CURRENT_CONVENTIONS"]
 

@@ -39,7 +39,7 @@ from .noise import NoiseModel, measure_currents
 from .presets import PAPER_GROUNDS, PAPER_VARIATION, VIBRATION_PRESETS, vibration_preset
 from .run import TruthRun
 from .simulator import TruthSimulator
-from .variation import FACTOR_LOG_STEP, GroundVariation, varied_ground_table, variation_factor
+from .variation import FACTOR_LOG_STEP, GroundVariation, variation_factor, varied_ground_table
 from .vibration import VibrationSignature, vibration_accel_mps2
 
 __all__ = [

@@ -9,7 +9,7 @@ import numpy as np
 from terrain.errors import InvalidParameterError
 
 from ..logs import InteractionLog
-from ..physics import PowerBreakdown
+from ..power import PowerBreakdown
 
 __all__ = ["TruthRun"]
 

@@ -23,19 +23,23 @@ from terrain.errors import (
 from terrain.terrain_map import UNKNOWN_GROUND, TerrainMap
 
 from ..commands import CommandProfile, command_series, uniform_step_s
+from ..ground import GroundParams
 from ..logs import InteractionLog, LogMeta
-from ..params import GRAVITY_MPS2, GroundParams, RobotParams
 from ..physics import EFFECTS, PhysicsEnergyModel
 from ..profiles import waypoint_commands
+from ..robot import GRAVITY_MPS2, RobotParams
 from .noise import NoiseModel, measure_currents
 from .presets import VIBRATION_PRESETS
 from .run import TruthRun
-from .variation import GroundVariation, varied_ground_table, variation_factor
+from .variation import GroundVariation, variation_factor, varied_ground_table
 from .vibration import VibrationSignature, vibration_accel_mps2
 
-__all__ = ["TruthSimulator"]
+__all__ = ["TruthSimulator", "DEFAULT_NOISE"]
 
 _LOG = logging.getLogger(__name__)
+
+#: The measurement model of a :class:`TruthSimulator` built without ``noise=``.
+DEFAULT_NOISE = NoiseModel()
 
 # Independent random streams, in spawn order of SeedSequence(seed).
 _STREAMS = ("current_noise", "outliers", "side_gain", "variation", "vibration", "accel_noise")
@@ -94,7 +98,7 @@ class TruthSimulator:
         grounds: Mapping[str, GroundParams],
         effects: Sequence[str] | None = None,
         vibration: Mapping[str, VibrationSignature] | None = None,
-        noise: NoiseModel = NoiseModel(),
+        noise: NoiseModel = DEFAULT_NOISE,
         *,
         variation: Mapping[str, GroundVariation] | None = None,
         velocity_time_constant_s: float = 0.1,

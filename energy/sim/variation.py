@@ -11,7 +11,7 @@ from scipy import ndimage
 
 from terrain.checks import check_real
 
-from ..params import GroundParams
+from ..ground import GroundParams
 
 __all__ = ["GroundVariation", "FACTOR_LOG_STEP", "variation_factor", "varied_ground_table"]
 

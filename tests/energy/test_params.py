@@ -92,16 +92,18 @@ def test_unhashable_preset_name() -> None:
 @pytest.mark.parametrize(
     ("field", "value", "match"),
     [
-        ("mass_kg", -1.0, r"mass_kg must be > 0\.0, got -1\.0"),
+        ("mass_kg", -1.0, r"RobotParams\.mass_kg must be > 0, got -1\.0"),
         ("mass_kg", float("nan"), "mass_kg must be finite"),
         ("wheel_radius_m", 0.0, "wheel_radius_m must be > 0"),
         ("drive_kind", "tracked", "drive_kind must be one of"),
-        ("track_width_multiplier", 0.5, "track_width_multiplier must be >= 1.0"),
-        ("regen_efficiency", 1.5, "regen_efficiency must be <= 1.0"),
+        ("track_width_multiplier", 0.5, "track_width_multiplier must be >= 1, got 0.5"),
+        ("regen_efficiency", 1.5, "regen_efficiency must be <= 1, got 1.5"),
         ("driven_sides", 4, "driven_sides must be 2"),
         ("motor", "big", "motor must be a MotorParams"),
         ("name", "", "name must be a non-empty string"),
-        ("mass_kg", "10", "mass_kg must be a real number"),
+        ("mass_kg", "10", "mass_kg must be a real number, got '10' \\(str\\)"),
+        ("wheel_radius_m", None, "wheel_radius_m must be a real number"),
+        ("name", 7, "RobotParams.name must be a non-empty string"),
     ],
 )
 def test_robot_validation(field: str, value: object, match: str) -> None:
@@ -113,7 +115,7 @@ def test_robot_validation(field: str, value: object, match: str) -> None:
     ("field", "value", "match"),
     [
         ("torque_constant_nm_per_a", 0.0, "torque_constant_nm_per_a must be > 0"),
-        ("gear_efficiency", 1.2, "gear_efficiency must be <= 1.0"),
+        ("gear_efficiency", 1.2, "gear_efficiency must be <= 1, got 1.2"),
         ("gear_efficiency", 0.0, "gear_efficiency must be > 0"),
         ("rotor_inertia_kg_m2", -1e-3, "rotor_inertia_kg_m2 must be >= 0"),
         ("max_speed_radps", float("inf"), "max_speed_radps must be finite"),
@@ -122,6 +124,12 @@ def test_robot_validation(field: str, value: object, match: str) -> None:
 def test_motor_validation(field: str, value: object, match: str) -> None:
     with pytest.raises(InvalidParameterError, match=match):
         _motor(**{field: value})
+
+
+def test_ground_string_coefficient_names_the_parameter() -> None:
+    with pytest.raises(InvalidParameterError, match="GroundParams.rolling_resistance_coef must be a real number"):
+        GroundParams(name="g", static_friction_coef=0.5, coulomb_friction_coef=0.5,
+                     rolling_resistance_coef="0.01")  # type: ignore[arg-type]
 
 
 def test_ground_validation() -> None:

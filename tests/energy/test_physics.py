@@ -373,7 +373,7 @@ def test_vectorised_over_thousands_of_samples() -> None:
 def test_bad_inputs_raise_library_errors() -> None:
     m = PhysicsEnergyModel(robot_preset("jackal"))
     g = ground_preset("asphalt")
-    with pytest.raises(InvalidParameterError, match=r"speed_mps must be finite.*nan"):
+    with pytest.raises(InvalidParameterError, match=r"speed_mps has 1 NaN/inf entries"):
         m.power([0.1, np.nan], 0.0, g)
     with pytest.raises(InvalidParameterError, match="slope_rad must lie in"):
         m.power(0.1, 0.0, g, slope_rad=2.0)
@@ -387,9 +387,9 @@ def test_bad_inputs_raise_library_errors() -> None:
         m.power([0.1, 0.2], 0.0, [g], ground_index=[0, 3])
     with pytest.raises(InvalidParameterError, match="ground must be a GroundParams"):
         m.energy_per_metre_j(0.5, 0.0, "asphalt")  # type: ignore[arg-type]
-    with pytest.raises(InvalidParameterError, match="speed_mps must be a finite scalar > 0"):
+    with pytest.raises(InvalidParameterError, match="speed_mps must be > 0"):
         m.energy_per_metre_j(0.0, 0.0, g)
-    with pytest.raises(InvalidParameterError, match="grade must be finite"):
+    with pytest.raises(InvalidParameterError, match="grade has 1 NaN/inf entries"):
         m.energy_per_metre_j(0.5, [0.0, np.nan], g)
     with pytest.raises(InvalidParameterError, match="length_m must be >= 0"):
         m.segment_energy_j(-1.0, 0.5, 0.0, g)
@@ -402,6 +402,40 @@ def test_bad_inputs_raise_library_errors() -> None:
     res = m.power([0.1, 0.2], 0.0, g)
     with pytest.raises(UnknownNameError, match="component 'warp_power_w' is unknown"):
         res.energy_j([0.0, 1.0], "warp_power_w")
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda m, g: m.power("fast", 0.0, g),
+        lambda m, g: m.power(["0.1", "0.2"], 0.0, g),  # numeric strings are refused, not parsed
+        lambda m, g: m.energy_j([0.0, 1.0], "fast", 0.0, g),
+        lambda m, g: m.energy_per_metre_j("fast", 0.0, g),
+        lambda m, g: m.max_feasible_grade("fast", g),
+        lambda m, g: m.segment_energy_j(1.0, "fast", 0.0, g),
+        lambda m, g: m.energy_per_metre_j(None, 0.0, g),
+    ],
+)
+def test_speed_that_is_not_a_number_names_the_parameter(call) -> None:
+    m = PhysicsEnergyModel(robot_preset("jackal"))
+    with pytest.raises(InvalidParameterError, match=r"speed_mps must be a real number"):
+        call(m, ground_preset("asphalt"))
+
+
+def test_other_string_inputs_name_their_parameter() -> None:
+    m = PhysicsEnergyModel(robot_preset("jackal"))
+    g = ground_preset("asphalt")
+    with pytest.raises(InvalidParameterError, match="omega_radps must be a real number"):
+        m.power(0.5, "left", g)
+    with pytest.raises(InvalidParameterError, match="slope_rad must be a real number"):
+        m.power(0.5, 0.0, g, slope_rad="steep")
+    with pytest.raises(InvalidParameterError, match="grade must be a real number"):
+        m.energy_per_metre_j(0.5, "10%", g)
+    with pytest.raises(InvalidParameterError, match="resolution must be a real number"):
+        m.max_feasible_grade(0.5, g, resolution="fine")
+    # numpy scalars and 0-d arrays are numbers
+    assert m.energy_per_metre_j(np.float32(0.5), 0.0, g) == pytest.approx(m.energy_per_metre_j(0.5, 0.0, g))
+    assert m.energy_per_metre_j(np.array(0.5), 0.0, g) == pytest.approx(m.energy_per_metre_j(0.5, 0.0, g))
 
 
 def test_effect_names_are_validated() -> None:
