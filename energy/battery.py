@@ -16,11 +16,10 @@ Conventions (all vectorised over sample arrays, integrated with the trapezoid ru
   ``k``, reference current ``I_ref = C / peukert_reference_duration``; ``k = 1`` default:
   ``I_eff = I``). Charging currents count as they are. A constant current ``I`` over ``t``
   seconds gives exactly ``initial_soc - I t / (3600 C)``.
-- The state of charge **never goes below 0**: a pack that runs out is *depleted* at the
-  first sample whose unclamped SoC reaches 0 (the time interpolated linearly, like the
-  reserve crossing); from there the SoC is held at 0 (it rises again only if the series
-  charges the pack) while the series keeps the load's energy and charge, i.e. what the
-  load would have drawn — the pack could not deliver it.
+- The state of charge **never goes below 0**: the pack is *depleted* at the first sample
+  whose unclamped SoC reaches 0 (time interpolated like the reserve crossing); from there
+  the SoC stays at 0 (unless the series charges the pack) while energy and charge keep
+  what the load would have drawn — the pack could not deliver it.
 - The **reserve** is crossed at the first sample whose SoC is *below*
   ``min_reserve_pct / 100``; the crossing time is interpolated linearly between that sample
   and the previous one (exact for a constant current).
@@ -193,25 +192,14 @@ class Battery:
         return 2.0 * p / (v + disc)
 
     def terminal_power_w(self, current_a: Any) -> np.ndarray:
-        """Terminal power (W) of a battery current: ``V I - R I**2``.
-
-        Raises
-        ------
-        InvalidParameterError
-            Non-finite current.
-        """
+        """Terminal power (W) of a battery current: ``V I - R I**2`` (InvalidParameterError
+        for a non-finite current)."""
         i = real_array("current_a", current_a)
         return self.voltage_v * i - self.internal_resistance_ohm * i * i
 
     def effective_current_a(self, current_a: Any) -> np.ndarray:
         """Current that depletes the rated capacity (Peukert): ``I (|I| / I_ref)**(k-1)`` for
-        discharge, ``I`` for charge (A).
-
-        Raises
-        ------
-        InvalidParameterError
-            Non-finite current.
-        """
+        discharge, ``I`` for charge (A); InvalidParameterError for a non-finite current."""
         i = real_array("current_a", current_a)
         k = self.peukert_exponent
         if k == 1.0:
@@ -233,11 +221,6 @@ class Battery:
         """State of charge (fraction, never below 0) after drawing ``charge_mah`` of
         *effective* (Peukert-adjusted) charge from ``soc`` (default :attr:`initial_soc`).
 
-        Raises
-        ------
-        InvalidParameterError
-            A charge that is not a finite number, ``soc`` outside [0, 1].
-
         Examples
         --------
         >>> b = Battery(capacity_ah=1.0, voltage_v=12.0)
@@ -257,26 +240,10 @@ class Battery:
         the capacity at :meth:`effective_current_a` (Peukert). Use it to book energy leg by
         leg instead of ``soc -= energy / capacity``.
 
-        Parameters
-        ----------
-        energy_j : float
-            Load energy drawn (J), >= 0.
-        power_w : float
-            Mean terminal power of the draw (W), > 0 and at most :attr:`max_power_w`.
-        soc : float, optional
-            State of charge before the draw, in [0, 1]; default :attr:`initial_soc`.
-
-        Returns
-        -------
-        float
-            The state of charge after the draw, clamped at 0 (see :meth:`time_to_empty_s`
-            for when a draw would run the pack out).
-
-        Raises
-        ------
-        InvalidParameterError
-            Negative or non-finite energy, a non-positive power or one above
-            :attr:`max_power_w`, ``soc`` outside [0, 1].
+        ``energy_j`` (J) is >= 0; ``power_w`` (W) > 0 and at most :attr:`max_power_w`;
+        ``soc`` in [0, 1]. Returns the state of charge after the draw, clamped at 0
+        (:meth:`time_to_empty_s` says when a draw runs the pack out). Anything else raises
+        :class:`~terrain.errors.InvalidParameterError`.
 
         Examples
         --------
