@@ -195,3 +195,45 @@ def test_an_exception_in_a_fold_reaches_the_caller(logs, dask_client):
     models = {"constant": ConstantCurrentModel(), "failing": _FailingFitModel()}
     with pytest.raises(DataError, match="refusing to fit on 2 runs"):
         evaluate_current_models(logs, models, variants=("per_ground",), client=dask_client)
+
+
+def test_a_prefit_model_is_scored_like_a_fold(logs, result):
+    from energy.evaluation import score_current_model
+
+    model = LinearCurrentModel().fit(logs[1:3])
+    scored = score_current_model(model, [logs[0]], name="linear", section_s=result.section_s)
+    assert isinstance(scored, EvaluationResult) and scored.variants == ("prefit",)
+    fold = {r.side: r for r in result.runs if (r.variant, r.model, r.run) == ("per_ground", "linear", "grass/pro_00")}
+    for row in scored.runs:  # the same fit scored by the one scoring function
+        expected = fold[row.side]
+        assert row.run == expected.run and row.charge_true_mah == pytest.approx(expected.charge_true_mah)
+        assert row.charge_predicted_mah == pytest.approx(expected.charge_predicted_mah)
+        assert row.whole_run_error_pct == pytest.approx(expected.whole_run_error_pct)
+        assert np.isnan(row.fit_duration_s)
+    assert scored.summary_for("prefit", "all", "linear").n_values == 2
+    assert "| prefit | grass | linear |" in scored.to_markdown()
+    with pytest.raises(InvalidParameterError, match="section_s"):
+        score_current_model(model, logs, section_s="long")
+    with pytest.raises(InvalidParameterError, match="CurrentModel"):
+        score_current_model("linear", logs)
+    with pytest.raises(InvalidParameterError, match="sequence of InteractionLog"):
+        score_current_model(model, logs[0])
+
+
+def test_output_folder_is_checked_before_any_fold_and_written_after(logs, tmp_path):
+    _SpyModel.folds.clear()
+    blocker = tmp_path / "taken"
+    blocker.write_text("a file")
+    with pytest.raises(InvalidParameterError, match="is a file"):
+        evaluate_current_models(logs, {"spy": _SpyModel()}, out_dir=blocker)
+    (tmp_path / "out" / "evaluation.json").mkdir(parents=True)
+    with pytest.raises(InvalidParameterError, match="is a directory"):
+        evaluate_current_models(logs, {"spy": _SpyModel()}, out_dir=tmp_path / "out")
+    with pytest.raises(InvalidParameterError, match="section_s"):
+        evaluate_current_models(logs, {"spy": _SpyModel()}, section_s=float("nan"))
+    assert _SpyModel.folds == []  # nothing was fitted or scored
+    res = evaluate_current_models(logs, {"constant": ConstantCurrentModel()}, variants=("per_ground",),
+                                  out_dir=tmp_path / "new")
+    data = json.loads((tmp_path / "new" / "evaluation.json").read_text())
+    assert len(data["runs"]) == len(res.runs)
+    assert (tmp_path / "new" / "evaluation.md").read_text() == res.to_markdown()

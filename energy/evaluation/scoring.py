@@ -7,23 +7,25 @@ every ground). Each held-out run and side gets the whole-run error %, the sectio
 (``section_s`` sections, aggregated as ``sum |error| / sum truth``) and the RMSE; the
 result (:class:`EvaluationResult`) summarises medians and 90th percentiles per ground and
 over all grounds and writes ``evaluation.json`` and a markdown table.
+
+Every per-run score of the library comes from :func:`score_run`, here: the folds of the
+evaluation and :func:`score_current_model` (a model fitted beforehand, scored on given
+runs) both use it, and both return an :class:`EvaluationResult`.
 """
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import time
 import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from terrain.atomic import write_text_atomic
+from terrain.checks import check_real, check_text
 from terrain.errors import (
     DataError,
     InvalidParameterError,
@@ -32,189 +34,24 @@ from terrain.errors import (
     UnknownNameError,
 )
 
-from .models.base import CurrentModel
-from .logs import InteractionLog
-from .metrics import DEFAULT_SECTION_S, compare_currents
+from ..logs import InteractionLog
+from ..metrics import DEFAULT_SECTION_S, compare_currents
+from ..models.base import CurrentModel
+from .results import (
+    EVALUATION_VARIANTS,
+    PREFIT_VARIANT,
+    SIDES,
+    EvaluationResult,
+    RunScore,
+    check_evaluation_dir,
+    summarise_scores,
+)
 
-__all__ = [
-    "EVALUATION_VARIANTS",
-    "EVALUATION_FORMAT_VERSION",
-    "RunScore",
-    "ScoreSummary",
-    "EvaluationResult",
-    "evaluate_current_models",
-]
-
-#: Evaluation variants: one model per ground, or one model over all grounds.
-EVALUATION_VARIANTS = ("per_ground", "ground_agnostic")
-#: Version of the ``evaluation.json`` layout.
-EVALUATION_FORMAT_VERSION = 1
-_ALL = "all"
-_SIDES = ("left", "right")
+__all__ = ["run_names", "score_run", "score_current_model", "evaluate_current_models"]
 
 
-@dataclass(frozen=True)
-class RunScore:
-    """Scores of one model on one held-out run and one drive side."""
-
-    variant: str
-    ground: str
-    run: str
-    model: str
-    side: str
-    duration_s: float
-    charge_true_mah: float
-    charge_predicted_mah: float
-    whole_run_error_pct: float
-    section_error_pct: float
-    rmse_a: float
-    fit_duration_s: float
-
-    def __post_init__(self) -> None:
-        if self.variant not in EVALUATION_VARIANTS:
-            raise UnknownNameError(f"RunScore.variant must be one of {EVALUATION_VARIANTS!r}, got {self.variant!r}")
-        if self.side not in _SIDES:
-            raise UnknownNameError(f"RunScore.side must be one of {_SIDES!r}, got {self.side!r}")
-
-
-@dataclass(frozen=True)
-class ScoreSummary:
-    """Medians and 90th percentiles over the (run, side) scores of one model on one ground.
-
-    ``ground`` is ``"all"`` for the pool over every ground. NaN scores (a side with zero
-    true charge) are left out and counted in ``n_undefined``.
-    """
-
-    variant: str
-    ground: str
-    model: str
-    n_runs: int
-    n_values: int
-    n_undefined: int
-    whole_run_median_pct: float
-    whole_run_p90_pct: float
-    section_median_pct: float
-    section_p90_pct: float
-    rmse_median_a: float
-    rmse_p90_a: float
-    fit_duration_median_s: float
-
-
-def _stat(values: list[float], q: float) -> float:
-    arr = np.asarray(values, dtype=np.float64)
-    arr = arr[np.isfinite(arr)]
-    return float(np.percentile(arr, q)) if arr.size else math.nan
-
-
-def _summarise(variant: str, ground: str, model: str, scores: list[RunScore]) -> ScoreSummary:
-    whole = [s.whole_run_error_pct for s in scores]
-    sec = [s.section_error_pct for s in scores]
-    rmse = [s.rmse_a for s in scores]
-    return ScoreSummary(
-        variant=variant, ground=ground, model=model,
-        n_runs=len({s.run for s in scores}), n_values=len(scores),
-        n_undefined=int(sum(not math.isfinite(w) for w in whole)),
-        whole_run_median_pct=_stat(whole, 50), whole_run_p90_pct=_stat(whole, 90),
-        section_median_pct=_stat(sec, 50), section_p90_pct=_stat(sec, 90),
-        rmse_median_a=_stat(rmse, 50), rmse_p90_a=_stat(rmse, 90),
-        fit_duration_median_s=_stat([s.fit_duration_s for s in scores], 50),
-    )
-
-
-def _plain(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    return value
-
-
-@dataclass(frozen=True)
-class EvaluationResult:
-    """All scores of :func:`evaluate_current_models` and their summaries.
-
-    Attributes
-    ----------
-    runs : tuple of RunScore
-        One per (variant, held-out run, model, side).
-    summary : tuple of ScoreSummary
-        One per (variant, ground or ``"all"``, model).
-    models : tuple of str
-        Model names, in the order given.
-    variants : tuple of str
-    section_s : float
-    skipped : tuple of str
-        Grounds left out of the per-ground variant and why.
-    """
-
-    runs: tuple[RunScore, ...]
-    summary: tuple[ScoreSummary, ...]
-    models: tuple[str, ...]
-    variants: tuple[str, ...]
-    section_s: float
-    skipped: tuple[str, ...] = ()
-
-    def summary_for(self, variant: str, ground: str, model: str) -> ScoreSummary:
-        """The summary row of one variant, ground (or ``"all"``) and model.
-
-        Raises
-        ------
-        UnknownNameError
-            No such row.
-        """
-        for s in self.summary:
-            if (s.variant, s.ground, s.model) == (variant, ground, model):
-                return s
-        raise UnknownNameError(
-            f"no summary for variant={variant!r}, ground={ground!r}, model={model!r}; rows exist for "
-            f"{sorted({(s.variant, s.ground, s.model) for s in self.summary})!r}"
-        )
-
-    def to_dict(self) -> dict[str, Any]:
-        """Plain-types form (NaN becomes ``None``), as written to ``evaluation.json``."""
-        return _plain({
-            "format": "terrawatt-evaluation",
-            "format_version": EVALUATION_FORMAT_VERSION,
-            "section_s": self.section_s,
-            "models": list(self.models),
-            "variants": list(self.variants),
-            "skipped": list(self.skipped),
-            "summary": [asdict(s) for s in self.summary],
-            "runs": [asdict(r) for r in self.runs],
-        })
-
-    def write_json(self, path: str | os.PathLike[str]) -> Path:
-        """Write :meth:`to_dict` as JSON, atomically."""
-        return write_text_atomic(path, json.dumps(self.to_dict(), indent=1, allow_nan=False) + "\n")
-
-    def to_markdown(self) -> str:
-        """A markdown table of the summary: per variant, ground and model."""
-        def f(x: float, nd: int = 1) -> str:
-            return "–" if not math.isfinite(x) else f"{x:.{nd}f}"
-
-        lines = [
-            f"| variant | ground | model | runs | whole-run median % | whole-run p90 % | "
-            f"{self.section_s:g} s sections median % | sections p90 % | RMSE median A |",
-            "|---|---|---|---:|---:|---:|---:|---:|---:|",
-        ]
-        for s in self.summary:
-            lines.append(
-                f"| {s.variant} | {s.ground} | {s.model} | {s.n_runs} | {f(s.whole_run_median_pct)} | "
-                f"{f(s.whole_run_p90_pct)} | {f(s.section_median_pct)} | {f(s.section_p90_pct)} | {f(s.rmse_median_a, 2)} |"
-            )
-        if self.skipped:
-            lines.append("")
-            lines.extend(f"Skipped: {s}" for s in self.skipped)
-        return "\n".join(lines) + "\n"
-
-    def write_markdown(self, path: str | os.PathLike[str]) -> Path:
-        """Write :meth:`to_markdown`, atomically."""
-        return write_text_atomic(path, self.to_markdown())
-
-
-def _run_names(logs: list[InteractionLog]) -> list[str]:
+def run_names(logs: Sequence[InteractionLog]) -> list[str]:
+    """A unique name per log: ``<ground>/<source file stem>`` (``#k`` added to repeats)."""
     names = []
     for log in logs:
         stem = Path(log.meta.source).stem if log.meta.source else "run"
@@ -235,6 +72,40 @@ def _trim(log: InteractionLog) -> InteractionLog:
     return log.slice(t0, float(np.nextafter(t1, np.inf)))
 
 
+def score_run(
+    model: CurrentModel,
+    log: InteractionLog,
+    *,
+    variant: str,
+    run: str,
+    model_name: str,
+    section_s: float = DEFAULT_SECTION_S,
+    fit_duration_s: float = math.nan,
+) -> list[RunScore]:
+    """Score a fitted ``model`` on one run: one :class:`RunScore` per side (left, right).
+
+    The one place where a run's predicted currents are compared with the logged ones
+    (:func:`~energy.metrics.compare_currents`): whole-run error %, section error % and RMSE.
+
+    Raises
+    ------
+    NotFittedError
+        ``model`` is not fitted.
+    """
+    pred = model.predict(log)
+    truth = (log.current_left_a, log.current_right_a)
+    rows = []
+    for k, side in enumerate(SIDES):
+        e = compare_currents(log.time_s, truth[k], pred[:, k], section_s)
+        rows.append(RunScore(
+            variant=variant, ground=str(log.meta.ground_label), run=run, model=model_name, side=side,
+            duration_s=log.duration_s, charge_true_mah=e.charge_true_mah,
+            charge_predicted_mah=e.charge_predicted_mah, whole_run_error_pct=e.whole_run_error_pct,
+            section_error_pct=e.section_error_pct, rmse_a=e.rmse_a, fit_duration_s=fit_duration_s,
+        ))
+    return rows
+
+
 def _score_fold(
     variant: str,
     run: str,
@@ -251,18 +122,71 @@ def _score_fold(
     t0 = time.perf_counter()
     model = proto.clone().fit(train_logs)
     fit_s = time.perf_counter() - t0
-    pred = model.predict(log)
-    truth = (log.current_left_a, log.current_right_a)
-    rows = []
-    for k, side in enumerate(_SIDES):
-        e = compare_currents(log.time_s, truth[k], pred[:, k], section_s)
-        rows.append(RunScore(
-            variant=variant, ground=str(log.meta.ground_label), run=run, model=model_name, side=side,
-            duration_s=log.duration_s, charge_true_mah=e.charge_true_mah,
-            charge_predicted_mah=e.charge_predicted_mah, whole_run_error_pct=e.whole_run_error_pct,
-            section_error_pct=e.section_error_pct, rmse_a=e.rmse_a, fit_duration_s=fit_s,
-        ))
-    return rows
+    return score_run(model, log, variant=variant, run=run, model_name=model_name, section_s=section_s,
+                     fit_duration_s=fit_s)
+
+
+def score_current_model(
+    model: CurrentModel,
+    logs: Sequence[InteractionLog],
+    *,
+    name: str = "model",
+    section_s: float = DEFAULT_SECTION_S,
+) -> EvaluationResult:
+    """Score a model fitted beforehand (e.g. a loaded one) on every run of ``logs``.
+
+    Each run is scored as it is (not trimmed): one :class:`RunScore` per run and side, of
+    variant ``"prefit"`` with a NaN ``fit_duration_s``, and their summaries per ground and
+    over all grounds. Runs are named as in :func:`run_names`.
+
+    Parameters
+    ----------
+    model : CurrentModel
+        A fitted model.
+    logs : sequence of InteractionLog
+        Runs to score the model on (``meta.ground_label`` may be None).
+    name : str
+        The model's name in the result.
+    section_s : float
+        Section length of the section error (s, > 0).
+
+    Returns
+    -------
+    EvaluationResult
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a CurrentModel; empty ``logs`` or not InteractionLogs; a bad ``name`` or
+        ``section_s``.
+    NotFittedError
+        ``model`` is not fitted.
+    """
+    if not isinstance(model, CurrentModel):
+        raise InvalidParameterError(f"model must be a CurrentModel, got {model!r:.80}")
+    check_text("name", name)
+    section_s = check_real("section_s", section_s, low=0.0, low_inclusive=False)
+    items = _check_log_items(logs)
+    names = run_names(items)
+    scores: list[RunScore] = []
+    for run, log in zip(names, items):
+        scores += score_run(model, log, variant=PREFIT_VARIANT, run=run, model_name=name, section_s=section_s)
+    grounds = list(dict.fromkeys(str(log.meta.ground_label) for log in items))
+    variants = (PREFIT_VARIANT,)
+    summary = summarise_scores(scores, variants, grounds, (name,))
+    return EvaluationResult(tuple(scores), summary, (name,), variants, float(section_s))
+
+
+def _check_log_items(logs: Any) -> list[InteractionLog]:
+    if isinstance(logs, InteractionLog) or isinstance(logs, (str, bytes)) or not isinstance(logs, Sequence):
+        raise InvalidParameterError(f"logs must be a sequence of InteractionLog, got {logs!r:.80}")
+    items = list(logs)
+    if not items:
+        raise InvalidParameterError("logs must hold at least one InteractionLog, got none")
+    for i, log in enumerate(items):
+        if not isinstance(log, InteractionLog):
+            raise InvalidParameterError(f"logs[{i}] must be an InteractionLog, got {log!r:.80}")
+    return items
 
 
 def _distributed_client_type() -> type:
@@ -319,6 +243,7 @@ def evaluate_current_models(
     section_s: float = DEFAULT_SECTION_S,
     progress: bool = False,
     client: Any = None,
+    out_dir: str | os.PathLike[str] | None = None,
 ) -> EvaluationResult:
     """Leave-one-run-out evaluation of current models, per ground and over all grounds.
 
@@ -350,6 +275,9 @@ def evaluate_current_models(
         ``distributed.Client``: run them as tasks on its cluster (needs the
         ``distributed`` extra; every worker must be able to import terrawatt). An
         exception raised in a task is raised here, and the remaining tasks are cancelled.
+    out_dir : str or os.PathLike, optional
+        Folder to write ``evaluation.json`` and ``evaluation.md`` into
+        (:meth:`EvaluationResult.write`); checked before any model is fitted.
 
     Returns
     -------
@@ -359,7 +287,8 @@ def evaluate_current_models(
     ------
     InvalidParameterError
         Empty ``logs`` or ``models``; a model that is not a CurrentModel; a ``client``
-        that is neither ``None`` nor a ``distributed.Client``.
+        that is neither ``None`` nor a ``distributed.Client``; a bad ``section_s``; an
+        ``out_dir`` that cannot be written (a file, or under a file).
     OptionalDependencyError
         A ``client`` is given but dask.distributed is not installed.
     UnknownNameError
@@ -398,6 +327,9 @@ def evaluate_current_models(
         with LocalCluster(n_workers=2, threads_per_worker=1) as cluster, Client(cluster) as client:
             res = evaluate_current_models(logs, {"linear": LinearCurrentModel()}, client=client)
     """
+    if out_dir is not None:
+        check_evaluation_dir(out_dir)  # before the work, not after it
+    section_s = check_real("section_s", section_s, low=0.0, low_inclusive=False)
     items = list(logs)
     if not items:
         raise InvalidParameterError("logs must hold at least one InteractionLog, got none")
@@ -422,7 +354,7 @@ def evaluate_current_models(
     if len(items) < 2:
         raise DataError(f"leave-one-run-out needs at least 2 runs, got {len(items)}")
     items = [_trim(log) for log in items]
-    names = _run_names(items)
+    names = run_names(items)
     grounds = list(dict.fromkeys(log.meta.ground_label for log in items))
     skipped: list[str] = []
     folds: list[tuple[str, int, list[int]]] = []  # (variant, test index, train indices)
@@ -448,11 +380,8 @@ def evaluate_current_models(
             train_logs = [items[j] for j in train]
             for mname, proto in models.items():
                 scores += _score_fold(variant, names[test], items[test], train_logs, mname, proto, section_s)
-    summary: list[ScoreSummary] = []
-    for variant in chosen:
-        for g in grounds + [_ALL]:
-            for mname in models:
-                rows = [s for s in scores if s.variant == variant and s.model == mname and (g == _ALL or s.ground == g)]
-                if rows:
-                    summary.append(_summarise(variant, g, mname, rows))
-    return EvaluationResult(tuple(scores), tuple(summary), tuple(models), chosen, float(section_s), tuple(skipped))
+    summary = summarise_scores(scores, chosen, grounds, tuple(models))
+    result = EvaluationResult(tuple(scores), summary, tuple(models), chosen, float(section_s), tuple(skipped))
+    if out_dir is not None:
+        result.write(out_dir)
+    return result
