@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
+from terrain.checks import check_int, check_real, real_array
 from terrain.errors import DataError, InvalidParameterError
 
 __all__ = [
@@ -48,8 +49,8 @@ _AS_PER_MAH = 3.6  # 1 mAh = 3.6 A*s
 
 
 def _series(time_s: Any, current_a: Any, *, name: str = "current_a") -> tuple[np.ndarray, np.ndarray]:
-    t = np.asarray(time_s, dtype=np.float64)
-    i = np.asarray(current_a, dtype=np.float64)
+    t = real_array("time_s", time_s, finite=False)
+    i = real_array(name, current_a, finite=False)
     if t.ndim != 1 or t.size < 2:
         raise DataError(f"time_s must be 1-D with at least 2 samples, got shape {t.shape!r}")
     if i.shape != t.shape:
@@ -138,8 +139,7 @@ def section_charges_mah(
     >>> starts.tolist(), [round(x, 6) for x in q.tolist()]
     ([0.0, 8.0, 16.0], [8.0, 8.0, 4.0])
     """
-    if isinstance(section_s, bool) or not isinstance(section_s, (int, float)) or not math.isfinite(section_s) or section_s <= 0:
-        raise InvalidParameterError(f"section_s must be a finite number > 0, got {section_s!r}")
+    section_s = check_real("section_s", section_s, low=0.0, low_inclusive=False)
     t, i = _series(time_s, current_a)
     n_sections = max(1, int(math.ceil((t[-1] - t[0]) / section_s - 1e-9)))
     starts = t[0] + section_s * np.arange(n_sections)
@@ -175,8 +175,8 @@ def error_rate_pct(predicted: Any, truth: Any) -> np.ndarray | float:
     >>> error_rate_pct(105.0, 100.0)
     5.0
     """
-    p = np.asarray(predicted, dtype=np.float64)
-    q = np.asarray(truth, dtype=np.float64)
+    p = real_array("predicted", predicted, finite=False)
+    q = real_array("truth", truth, finite=False)
     with np.errstate(divide="ignore", invalid="ignore"):
         out = np.where(q != 0, np.abs(p - q) / np.abs(np.where(q != 0, q, 1.0)) * 100.0, np.nan)
     return float(out) if out.ndim == 0 else out
@@ -192,8 +192,8 @@ def section_error_pct(predicted_mah: Any, truth_mah: Any) -> float:
     DataError
         The total true charge is not positive.
     """
-    p = np.asarray(predicted_mah, dtype=np.float64)
-    q = np.asarray(truth_mah, dtype=np.float64)
+    p = real_array("predicted_mah", predicted_mah, finite=False)
+    q = real_array("truth_mah", truth_mah, finite=False)
     if p.shape != q.shape or p.size == 0:
         raise InvalidParameterError(f"predicted and truth must have one non-empty shape, got {p.shape!r} and {q.shape!r}")
     total = float(np.sum(q))
@@ -210,8 +210,8 @@ def rmse_a(predicted_a: Any, truth_a: Any) -> float:
     InvalidParameterError
         Shapes differ or are empty.
     """
-    p = np.asarray(predicted_a, dtype=np.float64)
-    q = np.asarray(truth_a, dtype=np.float64)
+    p = real_array("predicted_a", predicted_a, finite=False)
+    q = real_array("truth_a", truth_a, finite=False)
     if p.shape != q.shape or p.size == 0:
         raise InvalidParameterError(f"predicted and truth must have one non-empty shape, got {p.shape!r} and {q.shape!r}")
     return float(np.sqrt(np.mean((p - q) ** 2)))
@@ -241,9 +241,8 @@ def moving_median(values: Any, window_samples: int = DEFAULT_SMOOTHING_SAMPLES) 
     InvalidParameterError
         ``window_samples`` < 1 or not an int; ``values`` not 1-D or 2-D.
     """
-    if isinstance(window_samples, bool) or not isinstance(window_samples, (int, np.integer)) or window_samples < 1:
-        raise InvalidParameterError(f"window_samples must be an int >= 1, got {window_samples!r}")
-    x = np.asarray(values, dtype=np.float64)
+    check_int("window_samples", window_samples, low=1)
+    x = real_array("values", values, finite=False)
     if x.ndim == 1:
         return ndimage.median_filter(x, size=int(window_samples), mode="nearest")
     if x.ndim == 2:

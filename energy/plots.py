@@ -1,13 +1,17 @@
 """Figures of the current estimator: measured vs estimated current (Fig. 6), vibration spectra (Fig. 7).
 
 Both follow the layout of the vibration-current paper's figures and write PNG files
-atomically. matplotlib is imported when a figure is drawn, with the non-interactive Agg
+atomically (:func:`terrain.atomic.save_figure`). A figure draws what the data has: spectra of
+logs whose IMU is too slow for the requested band are drawn up to the data's Nyquist
+frequency, with a warning and a note on the figure, instead of failing after the results
+that the figure illustrates are done. matplotlib is imported when a figure is drawn, with the non-interactive Agg
 backend, so these work on a robot or a CI machine without a display.
 """
 
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -15,10 +19,11 @@ from typing import Any
 import numpy as np
 from scipy.ndimage import uniform_filter1d
 
-from terrain.atomic import atomic_path
-from terrain.errors import DataError, GridMismatchError, InvalidParameterError
+from terrain.atomic import save_figure
+from terrain.checks import check_int, check_real, fmt_number
+from terrain.errors import DataError, GridMismatchError, InvalidParameterError, TerrawattWarning
 
-from .features import whole_run_spectrum
+from .features import NYQUIST_TOLERANCE, accel_rate_hz, whole_run_spectrum
 from .logs import InteractionLog
 from .metrics import DEFAULT_SMOOTHING_SAMPLES, moving_median
 
@@ -37,14 +42,30 @@ def _pyplot() -> Any:
 
 
 def _save(fig: Any, path: str | os.PathLike[str], dpi: int) -> Path:
-    plt = _pyplot()
-    target = Path(path)
     try:
-        with atomic_path(target) as tmp:
-            fig.savefig(tmp, dpi=dpi, format="png")
+        return save_figure(fig, path, dpi=dpi)
     finally:
-        plt.close(fig)
-    return target
+        _pyplot().close(fig)
+
+
+def _band_for_data(logs: Sequence[Any], max_frequency_hz: float) -> tuple[float, str]:
+    """``max_frequency_hz`` clipped to the lowest Nyquist frequency of the logs' IMU streams,
+    and a note saying so ("" when nothing was clipped)."""
+    slowest: tuple[float, str] | None = None
+    for log in logs:
+        if isinstance(log, InteractionLog) and log.accel_time_s.size >= 2:
+            rate = accel_rate_hz(log.accel_time_s)
+            if slowest is None or rate < slowest[0]:
+                slowest = (rate, log.meta.source)
+    if slowest is None or max_frequency_hz <= slowest[0] / 2.0 * (1.0 + NYQUIST_TOLERANCE):
+        return max_frequency_hz, ""
+    nyquist = slowest[0] / 2.0
+    note = (
+        f"spectra drawn up to {fmt_number(nyquist)} Hz, not {fmt_number(max_frequency_hz)} Hz: the IMU of "
+        f"{Path(slowest[1]).name or slowest[1]!r} samples at {fmt_number(slowest[0])} Hz (Nyquist {fmt_number(nyquist)} Hz)"
+    )
+    warnings.warn(f"plot_vibration_spectra: {note}", TerrawattWarning, stacklevel=3)
+    return nyquist, note
 
 
 def plot_current_estimate(
@@ -223,11 +244,18 @@ def plot_vibration_spectra(
     ------
     InvalidParameterError
         Bad ``smoothing_bins``; a mapping without ``frequency_hz``; empty input.
+
+    Warns
+    -----
+    TerrawattWarning
+        ``max_frequency_hz`` lies above the Nyquist frequency of a log's IMU stream (e.g.
+        the 50 Hz default band of 50 Hz IMU logs): the spectra are drawn up to the lowest
+        Nyquist frequency of the logs instead, and a note on the figure says so.
     GridMismatchError
         A precomputed spectrum whose length differs from ``frequency_hz``.
     """
-    if isinstance(smoothing_bins, bool) or not isinstance(smoothing_bins, (int, np.integer)) or smoothing_bins < 1:
-        raise InvalidParameterError(f"smoothing_bins must be an int >= 1, got {smoothing_bins!r}")
+    check_int("smoothing_bins", smoothing_bins, low=1)
+    note = ""
     if isinstance(logs, Mapping):
         if frequency_hz is None:
             raise InvalidParameterError("frequency_hz is required with precomputed spectra")
@@ -239,7 +267,9 @@ def plot_vibration_spectra(
             if s.shape != freq.shape:
                 raise GridMismatchError(f"spectrum of {g!r} has shape {s.shape!r}; frequency_hz has {freq.shape!r}")
     else:
-        freq, spectra = ground_spectra(logs, n_bins=n_bins, max_frequency_hz=max_frequency_hz, scaling=scaling)
+        logs = list(logs)
+        band_hz, note = _band_for_data(logs, check_real("max_frequency_hz", max_frequency_hz, low=0.0, low_inclusive=False))
+        freq, spectra = ground_spectra(logs, n_bins=n_bins, max_frequency_hz=band_hz, scaling=scaling)
 
     plt = _pyplot()
     fig, axes = plt.subplots(len(spectra), 1, figsize=(10, 2.4 * len(spectra) + 0.8), sharex=True, sharey=True,
@@ -258,5 +288,7 @@ def plot_vibration_spectra(
     else:
         fig.supylabel("amplitude (m/s²)", fontsize=9)
     fig.suptitle(title or "vertical vibration spectra by ground")
-    fig.tight_layout()
+    if note:
+        fig.text(0.5, 0.005, note, ha="center", va="bottom", fontsize=8, color="#a50f15")
+    fig.tight_layout(rect=(0, 0.03 if note else 0, 1, 1))
     return _save(fig, path, dpi)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +15,7 @@ from energy import (
     plot_current_estimate,
     plot_vibration_spectra,
 )
-from terrain import DataError, GridMismatchError, InvalidParameterError
+from terrain import DataError, GridMismatchError, InvalidParameterError, TerrawattWarning
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -77,3 +78,29 @@ def test_spectra_need_a_ground_label(tmp_path: Path) -> None:
         ground_spectra([_log(None, 8.0)])
     with pytest.raises(InvalidParameterError, match="at least one"):
         ground_spectra([])
+
+
+def _log_at(ground: str, imu_hz: float, peak_hz: float, seconds: float = 20.0) -> InteractionLog:
+    t = np.arange(0.0, seconds, 0.1)
+    ta = np.arange(0.0, seconds, 1.0 / imu_hz)
+    az = 9.81 + np.sin(2 * np.pi * peak_hz * ta)
+    cur = np.full(t.size, 2.0)
+    return InteractionLog(t, np.full(t.size, 0.3), np.zeros(t.size), cur, cur, ta, az,
+                          meta=LogMeta(source=f"imu_{imu_hz:g}hz.csv", ground_label=ground))
+
+
+def test_spectra_figure_of_a_50_hz_imu_draws_up_to_its_nyquist(tmp_path: Path) -> None:
+    # the estimator's default 0-50 Hz band needs a 100 Hz IMU; a 50 Hz IMU has data up to 25 Hz
+    logs = [_log_at("wood", 50.0, 8.0), _log_at("snow", 100.0, 21.0)]
+    with pytest.raises(InvalidParameterError, match=r"exceeds the Nyquist frequency 25 Hz"):
+        ground_spectra(logs, n_bins=500)  # the library function still refuses to invent data
+    with pytest.warns(TerrawattWarning, match=r"drawn up to 25 Hz, not 50 Hz: the IMU of 'imu_50hz\.csv' samples at 50 Hz"):
+        out = plot_vibration_spectra(logs, tmp_path / "spectra.png", max_frequency_hz=50.0)
+    assert out.read_bytes()[:8] == PNG
+    assert [p.name for p in tmp_path.iterdir()] == ["spectra.png"]
+    # within the data's band nothing is clipped and nothing is warned
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        plot_vibration_spectra(logs, tmp_path / "low.png", max_frequency_hz=25.0)
+    with pytest.raises(InvalidParameterError, match="max_frequency_hz must be > 0"):
+        plot_vibration_spectra(logs, tmp_path / "bad.png", max_frequency_hz=0.0)
