@@ -15,7 +15,7 @@ import terrain
 from planner.cli import main
 from terrain import TerrawattWarning
 
-FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"
+FIXTURES = Path(__file__).resolve().parents[2] / "fixtures" / "borealtc"
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
@@ -112,14 +112,33 @@ def test_mission_writes_budget_json_and_plot(tmp_path, capsys):
     data = json.loads((tmp_path / "out" / "mission.json").read_text())
     assert data["status"] == "completed" and data["distance_to_goal_m"] == pytest.approx(0.0, abs=1e-6)
     budget = data["budget"]
-    assert budget["battery"]["usable_energy_wh"] == pytest.approx(20 * 24 * 0.8)
+    assert budget["battery"]["capacity_ah"] == 20 and budget["battery"]["min_reserve_pct"] == 20
     used = (data["driven_energy_j"] + data["excitation_energy_j"]) / 3600.0
     assert budget["actual_energy_wh"] == pytest.approx(used)
-    # the state of charge fell by the energy used (within the Peukert/efficiency terms of Battery)
-    assert 100.0 - budget["final_soc_pct"] == pytest.approx(100.0 * used / 480.0, rel=0.25)
-    assert budget["reserve_margin_pct"] == pytest.approx(budget["final_soc_pct"] - 20.0)
+    assert budget["reserve_margin_pct"] == pytest.approx(budget["arrival_soc_pct"] - 20.0)
     assert data["accepted_updates"] >= 1  # the sand is unknown to the asphalt prior
     assert _is_png(tmp_path / "out" / "mission.png")
+    # the budget written and printed is the library's EnergyBudget of the same mission, not a CLI formula
+    expected = _library_mission(path).budget
+    assert budget == expected.to_json_dict()
+    assert f"final state of charge {expected.arrival_soc_pct:.1f} %" in out
+    assert f"{expected.predicted_energy_wh:8.2f} Wh" in out and "fits" in out
+
+
+def _library_mission(path: Path):
+    """The mission `terrawatt mission --map path --start 3 12 --goal 57 12 --battery-ah 20` runs, via the API."""
+    from energy import Battery, TruthSimulator, ground_preset, robot_preset
+    from planner import AdaptiveSettings, fit_prior_model, run_adaptive_mission
+
+    tmap = terrain.read_map(path)
+    robot = robot_preset("husky")
+    grounds = {name: ground_preset(name) for name in ("asphalt", "sand")}
+    truth = TruthSimulator(robot, grounds, seed=0)
+    prior = fit_prior_model(truth, "asphalt", seed=0)
+    registry = terrain.CellModelRegistry.from_terrain(tmap, prior, prior_name="asphalt-prior")
+    return run_adaptive_mission(tmap, registry, robot, Battery(20.0, robot.battery_voltage_v, min_reserve_pct=20.0),
+                                truth, (3.0, 12.0), (57.0, 12.0), physics_ground=grounds["asphalt"],
+                                settings=AdaptiveSettings(speed_mps=0.5, leg_length_m=10.0, seed=0))
 
 
 def test_mission_without_adaptation_makes_no_update(tmp_path, capsys):
@@ -141,12 +160,15 @@ def test_mission_with_a_small_battery_stops_and_says_why(tmp_path, capsys):
     data = json.loads((tmp_path / "out" / "mission.json").read_text())
     assert data["status"] == "budget_exceeded"
     assert "reserve" in data["reason"] and "does NOT fit" in out
-    assert data["budget"]["predicted_fits"] is False
+    assert data["budget"]["predicted_feasible"] is False
 
 
 @pytest.mark.parametrize(
     ("extra", "message"),
-    [(["--battery-ah", "0"], "capacity_ah"), (["--battery-ah", "5", "--prior-ground", "lava"], "lava")],
+    [(["--battery-ah", "0"], "--battery-ah must be a number > 0, got 0"),
+     (["--battery-ah", "5", "--prior-ground", "lava"], "--prior-ground 'lava' has no preset"),
+     (["--battery-ah", "5", "--reserve-pct", "100"], "--reserve-pct must be in [0, 100), got 100"),
+     (["--battery-ah", "5", "--leg-m", "-1"], "--leg-m must be a number > 0, got -1")],
 )
 def test_mission_bad_input_is_an_error(tmp_path, capsys, extra, message):
     path = _patch_map(tmp_path)
@@ -188,21 +210,23 @@ def tiny_paper_preset(monkeypatch):
 def test_train_passes_threads_and_shows_the_loss(tmp_path, capsys, monkeypatch, tiny_paper_preset):
     import torch
 
+    from energy import load_current_model
+
     calls = []
     real = torch.set_num_threads
     monkeypatch.setattr(torch, "set_num_threads", lambda n: (calls.append(n), real(n))[1])
     before = torch.get_num_threads()
     model = tmp_path / "paper.pt"
     assert main(["train", "--data", str(FIXTURES), "--model", "paper", "--threads", "1", "--out", str(model)]) == 0
-    params = torch.load(model, map_location="cpu", weights_only=True)["params"]
-    assert (params["n_threads"], params["progress"]) == (1, True)
+    loaded = load_current_model(model)
+    assert (loaded.n_threads, loaded.progress) == (1, True)
     assert calls[0] == 1 and torch.get_num_threads() == before  # used while fitting, restored after
     assert "loss=" in capsys.readouterr().err  # the progress bar's postfix
 
     quiet = tmp_path / "quiet.pt"
     assert main(["train", "--data", str(FIXTURES), "--model", "paper", "--quiet", "--out", str(quiet)]) == 0
-    params = torch.load(quiet, map_location="cpu", weights_only=True)["params"]
-    assert (params["n_threads"], params["progress"]) == (None, False)
+    loaded = load_current_model(quiet)
+    assert (loaded.n_threads, loaded.progress) == (None, False)
     assert "loss=" not in capsys.readouterr().err
 
 
@@ -347,8 +371,139 @@ def test_plan_on_a_geotiff_with_nodata_needs_fill_nodata(tmp_path, capsys):
     args = ["plan", "--map", str(dem), "--start", "3", "3", "--goal", "36", "26", "--planner", "lattice",
             "--out", str(tmp_path / "out")]
     assert main(args) == 2
-    assert "fill_nodata" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "--fill-nodata nearest" in err and "fill_nodata=" not in err
     with pytest.warns(DataRepairWarning, match="filled 9 nodata cells"):
         assert main([*args, "--fill-nodata", "nearest"]) == 0
     assert json.loads((tmp_path / "out" / "route.json").read_text())["status"] == "exact"
     capsys.readouterr()
+
+
+# ---------------------------------------------------------------- CLI rules: exit codes, outputs, flags
+
+
+def _one_line_error(capsys) -> str:
+    err = capsys.readouterr().err
+    assert err.startswith("terrawatt: error: ") and "Traceback" not in err and err.count("\n") == 1, err
+    return err
+
+
+def test_plan_with_start_equal_to_goal_says_so(tmp_path, capsys, wall_map):
+    path = wall_map.save(tmp_path / "wall.npz")
+    rc = main(["plan", "--map", str(path), "--start", "5", "5", "--goal", "5", "5", "--planner", "lattice",
+               "--out", str(tmp_path / "out")])
+    assert rc == 2
+    err = _one_line_error(capsys)
+    assert "start equals goal" in err and "nan" not in err
+    assert not (tmp_path / "out" / "route.json").exists()
+
+
+def test_mission_with_start_equal_to_goal_says_so(tmp_path, capsys):
+    path = _patch_map(tmp_path)
+    rc = main(["mission", "--map", str(path), "--start", "3", "12", "--goal", "3", "12", "--battery-ah", "20",
+               "--out", str(tmp_path / "out")])
+    assert rc == 2
+    assert "start equals goal" in _one_line_error(capsys)
+    assert not (tmp_path / "out" / "mission.json").exists()
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--max-slope-deg", "95"], "--max-slope-deg must be between 0 and 90 degrees (exclusive), got 95"),
+        (["--unknown-ground", "lava"], "--unknown-ground must be a ground preset"),
+        (["--speed", "0"], "--speed must be a number > 0, got 0"),
+        (["--time-limit", "-1"], "--time-limit must be a number > 0, got -1"),
+    ],
+)
+def test_plan_flags_are_checked_and_named_as_flags(tmp_path, capsys, wall_map, extra, message):
+    path = wall_map.save(tmp_path / "wall.npz")
+    rc = main(["plan", "--map", str(path), "--start", "5", "5", "--goal", "35", "5", "--planner", "lattice",
+               *extra, "--out", str(tmp_path / "out")])
+    assert rc == 2
+    err = _one_line_error(capsys)
+    assert message in err
+    assert "max_slope_rad" not in err and "unknown_ground=" not in err and "speed_mps" not in err
+
+
+def test_unknown_ground_none_on_a_map_with_unknown_cells_names_the_flag(tmp_path, capsys):
+    ground = np.zeros((20, 20), dtype=int)
+    ground[5:8, 5:8] = -1
+    tmap = terrain.TerrainMap(np.zeros((20, 20)), 1.0, ground=ground, ground_names={0: "asphalt"})
+    path = tmap.save(tmp_path / "holes.npz")
+    rc = main(["plan", "--map", str(path), "--start", "1", "1", "--goal", "18", "18", "--planner", "lattice",
+               "--unknown-ground", "none", "--out", str(tmp_path / "out")])
+    assert rc == 2
+    err = _one_line_error(capsys)
+    assert "unknown in 9 of 400 cells" in err and "--unknown-ground none" in err and "unknown_ground=" not in err
+
+
+def test_a_missing_map_file_is_one_line_and_exit_2(tmp_path, capsys):
+    rc = main(["plan", "--map", str(tmp_path / "nowhere.npz"), "--start", "1", "1", "--goal", "2", "2",
+               "--out", str(tmp_path / "out")])
+    assert rc == 2
+    assert "nowhere.npz" in _one_line_error(capsys)
+
+
+def test_plan_output_folder_that_is_a_file_is_refused_before_planning(tmp_path, capsys, wall_map, monkeypatch):
+    import planner.cli.plan as plan_cli
+
+    path = wall_map.save(tmp_path / "wall.npz")
+    out = tmp_path / "out"
+    out.write_text("a file where the folder goes")
+    monkeypatch.setattr(plan_cli, "plan_route", lambda *a, **k: pytest.fail("planned before checking --out"))
+    rc = main(["plan", "--map", str(path), "--start", "5", "5", "--goal", "35", "5", "--planner", "lattice",
+               "--out", str(out)])
+    assert rc == 2
+    assert "--out" in _one_line_error(capsys)
+    (tmp_path / "out2" / "route.json").mkdir(parents=True)  # the JSON's place taken by a folder
+    rc = main(["demo", "--planner", "lattice", "--out", str(tmp_path / "out2")])
+    assert rc == 2
+    assert "route.json" in _one_line_error(capsys)
+
+
+def test_train_onto_a_directory_is_refused_before_training(tmp_path, capsys, monkeypatch):
+    import planner.cli.train as train_cli
+
+    monkeypatch.setattr(train_cli, "read_borealtc", lambda *a, **k: pytest.fail("read the logs before checking --out"))
+    rc = main(["train", "--data", str(FIXTURES), "--model", "linear", "--out", str(tmp_path)])
+    assert rc == 2
+    assert "--out" in _one_line_error(capsys)
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    rc = main(["train", "--data", str(FIXTURES), "--model", "linear", "--out", str(blocker / "model.pt")])
+    assert rc == 2
+    assert "--out" in _one_line_error(capsys)
+
+
+def test_mission_output_taken_by_a_folder_is_refused_before_the_mission(tmp_path, capsys, monkeypatch):
+    import planner.cli.mission as mission_cli
+
+    path = _patch_map(tmp_path)
+    (tmp_path / "out" / "mission.png").mkdir(parents=True)
+    monkeypatch.setattr(mission_cli, "run_adaptive_mission", lambda *a, **k: pytest.fail("ran before checking --out"))
+    rc = main(["mission", "--map", str(path), "--start", "3", "12", "--goal", "57", "12", "--battery-ah", "20",
+               "--out", str(tmp_path / "out")])
+    assert rc == 2
+    assert "mission.png" in _one_line_error(capsys)
+
+
+def test_evaluate_whose_figure_fails_still_succeeds_with_its_results(tmp_path, capsys, monkeypatch):
+    import planner.cli.evaluate as evaluate_cli
+    from terrain import InvalidParameterError
+
+    def no_spectra(*args, **kwargs):
+        raise InvalidParameterError("band (0.5, 50.0) Hz exceeds the Nyquist frequency 25 Hz of a 50 Hz IMU")
+
+    monkeypatch.setattr(evaluate_cli, "plot_vibration_spectra", no_spectra)
+    data = tmp_path / "logs"
+    shutil.copytree(FIXTURES, data)
+    for kind in ("imu", "pro"):
+        shutil.copy(data / "ASPHALT" / f"{kind}_00.csv", data / "ASPHALT" / f"{kind}_01.csv")
+    with pytest.warns(TerrawattWarning, match="'snow' has 1 run"):
+        rc = main(["evaluate", "--data", str(data), "--model", "constant", "--out", str(tmp_path / "out")])
+    assert rc == 0
+    assert json.loads((tmp_path / "out" / "evaluation.json").read_text())["models"] == ["constant"]
+    err = capsys.readouterr().err
+    assert "warning: could not draw" in err and "spectra.png" in err and "Nyquist" in err
+    assert not (tmp_path / "out" / "spectra.png").exists()

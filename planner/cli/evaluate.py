@@ -1,0 +1,132 @@
+"""``terrawatt evaluate``: leave-one-run-out scores of current models (:class:`energy.EvaluationResult`)."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import logging
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+from energy import evaluate_current_models, plot_vibration_spectra, read_borealtc
+from terrain import InvalidParameterError, OptionalDependencyError
+
+from .common import check_outputs, draw_figure
+from .models import CURRENT_MODELS, current_model
+
+__all__ = ["add_parser", "run_evaluate"]
+
+_OUTPUTS = ("evaluation.json", "evaluation.md", "spectra.png")
+
+
+def add_parser(sub: Any) -> None:
+    """The ``evaluate`` subcommand."""
+    evaluate = sub.add_parser(
+        "evaluate", help="leave-one-run-out evaluation of current models on BorealTC-layout logs"
+    )
+    evaluate.add_argument("--data", type=Path, required=True, metavar="DIR", help="directory with GROUND/imu_NN.csv + pro_NN.csv")
+    evaluate.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
+    evaluate.add_argument("--grounds", nargs="+", metavar="NAME", help="ground folders to use (default all)")
+    evaluate.add_argument(
+        "--model", nargs="+", default=list(CURRENT_MODELS), choices=list(CURRENT_MODELS), dest="models",
+        help="models to evaluate (default all)",
+    )
+    evaluate.add_argument(
+        "--variants", nargs="+", default=["per_ground", "ground_agnostic"],
+        choices=["per_ground", "ground_agnostic"], help="evaluation variants",
+    )
+    evaluate.add_argument("--seed", type=int, default=0, help="random seed of the learned models")
+    evaluate.add_argument(
+        "--workers", type=int, default=1, metavar="N",
+        help="run the folds on a local dask cluster of N worker processes (default 1: serially, here; "
+        "needs the distributed extra)",
+    )
+    evaluate.add_argument(
+        "--scheduler", metavar="ADDRESS",
+        help="run the folds on an existing dask cluster, e.g. tcp://host:8786 (not with --workers > 1)",
+    )
+    evaluate.set_defaults(run=run_evaluate)
+
+
+def run_evaluate(args: argparse.Namespace) -> int:
+    """``terrawatt evaluate``: write evaluation.json, evaluation.md and spectra.png.
+
+    The spectra figure comes after the results are written: if it cannot be drawn (e.g.
+    logs whose IMU rate does not reach the estimator's band), a warning says so and the
+    command still succeeds.
+    """
+    if args.workers < 1:
+        raise InvalidParameterError(f"--workers must be a positive number of processes, got {args.workers!r}")
+    if args.scheduler is not None and args.workers > 1:
+        raise InvalidParameterError(
+            f"--workers {args.workers!r} and --scheduler {args.scheduler!r} exclude each other: "
+            "give --workers N for a local cluster or --scheduler ADDRESS for an existing one"
+        )
+    check_outputs(args.out, _OUTPUTS)
+    with contextlib.ExitStack() as stack:
+        client, workers = None, "1 worker (serial)"
+        if args.workers > 1 or args.scheduler is not None:  # before reading: a missing extra or scheduler fails fast
+            client = stack.enter_context(_dask_client(args.workers, args.scheduler, quiet=not args.verbose))
+            where = args.scheduler if args.scheduler is not None else "a local cluster"
+            workers = f"{len(client.nthreads())} dask workers ({where})"
+            print(f"evaluating on {workers}", flush=True)
+        logs = read_borealtc(args.data, grounds=args.grounds)
+        models = {name: current_model(name, args.seed) for name in args.models}
+        t0 = time.perf_counter()
+        result = evaluate_current_models(logs, models, variants=args.variants, progress=True, client=client)
+        elapsed = time.perf_counter() - t0
+    args.out.mkdir(parents=True, exist_ok=True)
+    json_path = result.write_json(args.out / "evaluation.json")
+    md_path = result.write_markdown(args.out / "evaluation.md")
+    png_path = draw_figure(args.out / "spectra.png", lambda: plot_vibration_spectra(logs, args.out / "spectra.png"))
+    print(result.to_markdown())
+    written = f"{json_path}, {md_path} and {png_path}" if png_path is not None else f"{json_path} and {md_path}"
+    print(f"\n{len(logs)} runs, {len(models)} models, {elapsed:.1f} s on {workers}; wrote {written}")
+    return 0
+
+
+@contextlib.contextmanager
+def _dask_client(workers: int, scheduler: str | None, *, quiet: bool = True) -> Iterator[Any]:
+    """A ``distributed.Client`` on ``scheduler``, or on a new local cluster of ``workers`` processes.
+
+    Leaving the context closes the client and the local cluster it started. ``quiet``
+    keeps dask's INFO messages (cluster start and stop) out of the log meanwhile.
+
+    Raises
+    ------
+    OptionalDependencyError
+        dask.distributed is not installed.
+    InvalidParameterError
+        No dask scheduler answers at ``scheduler``.
+    """
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError as exc:
+        option = f"--scheduler {scheduler}" if scheduler is not None else f"--workers {workers}"
+        raise OptionalDependencyError(
+            f"{option} needs dask.distributed; install it with: pip install 'terrawatt[distributed]'"
+        ) from exc
+    dask_log = logging.getLogger("distributed")  # configured by the import above
+    old_level = dask_log.level
+    if quiet:
+        dask_log.setLevel(max(dask_log.getEffectiveLevel(), logging.WARNING))
+    try:
+        if scheduler is not None:
+            try:
+                client = Client(scheduler)
+            except (OSError, ValueError) as exc:  # unreachable (a TimeoutError is an OSError) or malformed
+                raise InvalidParameterError(
+                    f"--scheduler {scheduler!r}: cannot connect to a dask scheduler there ({exc}); "
+                    "expected the address of a running scheduler, e.g. tcp://host:8786"
+                ) from exc
+            with client:
+                yield client
+        else:
+            with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True) as cluster, Client(cluster) as client:
+                yield client
+    finally:
+        dask_log.setLevel(old_level)
+
+

@@ -1,0 +1,139 @@
+"""``terrawatt mission``: an adaptive mission in simulation against a battery; prints its budget."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+from typing import Any
+
+from energy import GROUND_PRESETS, Battery, TruthSimulator, ground_preset, robot_preset
+from terrain import CellModelRegistry, InvalidParameterError, UnknownNameError
+from terrain.atomic import write_json_atomic
+from terrain.checks import fmt_number
+from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
+
+from ..missions import AdaptiveSettings, fit_prior_model, run_adaptive_mission
+from .common import add_map_options, check_outputs, check_positive, draw_figure, read_map_file
+
+__all__ = ["add_parser", "run_mission"]
+
+_OUTPUTS = ("mission.json", "mission.png")
+
+
+def add_parser(sub: Any) -> None:
+    """The ``mission`` subcommand."""
+    mission = sub.add_parser(
+        "mission",
+        help="drive a planned route in simulation against a battery, learning current models on the way",
+    )
+    mission.add_argument("--map", default="example", metavar="FILE", help=".npz map, .tif DEM or 'example' (default)")
+    add_map_options(mission)
+    mission.add_argument("--start", type=float, nargs=2, metavar=("X", "Y"), help="start (m); default: the example's")
+    mission.add_argument("--goal", type=float, nargs=2, metavar=("X", "Y"), help="goal (m); default: the example's")
+    mission.add_argument("--battery-ah", type=float, required=True, metavar="AH", help="battery capacity (Ah)")
+    mission.add_argument("--battery-v", type=float, default=None, metavar="V", help="battery voltage (default: the robot's)")
+    mission.add_argument("--reserve-pct", type=float, default=20.0, metavar="P", help="minimum reserve (%%, default 20)")
+    mission.add_argument("--robot", default="husky", help="robot preset (default husky)")
+    mission.add_argument("--speed", type=float, default=0.5, metavar="M/S", help="driving speed (default 0.5 m/s)")
+    mission.add_argument(
+        "--prior-ground", default="asphalt",
+        help="ground the prior current model was trained on (default asphalt); other grounds are learned on the way",
+    )
+    mission.add_argument("--leg-m", type=float, default=10.0, metavar="M", help="route driven between comparisons (m)")
+    mission.add_argument("--no-adapt", action="store_true", help="drive the first plan without model updates")
+    mission.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    mission.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
+    mission.set_defaults(run=run_mission)
+
+
+def _check_flags(args: argparse.Namespace) -> None:
+    for flag, value in (("--battery-ah", args.battery_ah), ("--speed", args.speed), ("--leg-m", args.leg_m)):
+        check_positive(flag, value)
+    if args.battery_v is not None:
+        check_positive("--battery-v", args.battery_v)
+    if not 0.0 <= args.reserve_pct < 100.0:
+        raise InvalidParameterError(f"--reserve-pct must be in [0, 100), got {fmt_number(args.reserve_pct)}")
+    if args.prior_ground not in GROUND_PRESETS:
+        raise UnknownNameError(
+            f"--prior-ground {args.prior_ground!r} has no preset; known grounds: {sorted(GROUND_PRESETS)!r}"
+        )
+
+
+def run_mission(args: argparse.Namespace) -> int:
+    """``terrawatt mission``: adaptive mission in simulation; writes mission.json and mission.png.
+
+    Exit code 0 when the robot reached the goal, 1 when the mission stopped short (budget
+    exceeded, reserve crossed, no route).
+    """
+    _check_flags(args)
+    check_outputs(args.out, _OUTPUTS)
+    if args.map == "example":
+        tmap, label = example_map(), "bundled example map"
+        start = tuple(args.start) if args.start else EXAMPLE_START_XY_M
+        goal = tuple(args.goal) if args.goal else EXAMPLE_GOAL_XY_M
+    else:
+        if not (args.start and args.goal):
+            raise InvalidParameterError("--start and --goal are required with a map file")
+        tmap, label = read_map_file(args.map, args.fill_nodata), Path(args.map).name
+        start, goal = tuple(args.start), tuple(args.goal)
+    unknown = sorted(n for n in set(tmap.ground_names.values()) if n not in GROUND_PRESETS)
+    if unknown:
+        raise UnknownNameError(f"the map's grounds {unknown!r} have no preset; known grounds: {sorted(GROUND_PRESETS)!r}")
+    robot = robot_preset(args.robot)
+    names = set(tmap.ground_names.values()) | {args.prior_ground}
+    grounds = {name: ground_preset(name) for name in names}
+    truth = TruthSimulator(robot, grounds, seed=args.seed)
+    battery = Battery(
+        capacity_ah=args.battery_ah,
+        voltage_v=args.battery_v if args.battery_v is not None else robot.battery_voltage_v,
+        min_reserve_pct=args.reserve_pct,
+    )
+    prior = fit_prior_model(truth, args.prior_ground, seed=args.seed)
+    settings = AdaptiveSettings(
+        speed_mps=args.speed,
+        leg_length_m=args.leg_m,
+        max_updates=0 if args.no_adapt else AdaptiveSettings().max_updates,
+        seed=args.seed,
+    )
+    registry = CellModelRegistry.from_terrain(tmap, prior, prior_name=f"{args.prior_ground}-prior")
+    t0 = time.perf_counter()
+    result = run_adaptive_mission(
+        tmap, registry, robot, battery, truth, start, goal,
+        physics_ground=grounds[args.prior_ground], settings=settings,
+    )
+    elapsed = time.perf_counter() - t0
+    json_path = write_json_atomic(args.out / "mission.json", {**result.to_json_dict(), "computing_time_s": elapsed})
+    png_path = draw_figure(args.out / "mission.png", lambda: result.plot(args.out / "mission.png", tmap, registry))
+    _print_summary(args, result, battery, label, start, goal, elapsed)
+    print(f"wrote {json_path}" + (f" and {png_path}" if png_path is not None else ""))
+    return 0 if result.status == "completed" else 1
+
+
+def _percent(value: float) -> str:
+    return "n/a" if value != value else f"{value:.1f} %"  # NaN: nothing to compare
+
+
+def _print_summary(args: argparse.Namespace, result: Any, battery: Battery, label: str, start: tuple, goal: tuple,
+                   elapsed: float) -> None:
+    budget = result.budget
+    route0 = result.initial_route
+    print(f"map: {label}; robot {args.robot}; battery {battery.capacity_ah:g} Ah at {battery.voltage_v:g} V "
+          f"({battery.energy_capacity_wh:.0f} Wh, {battery.usable_energy_wh:.0f} Wh above the "
+          f"{battery.min_reserve_pct:g} % reserve)")
+    print(f"start {start} -> goal {goal}; prior trained on {args.prior_ground}; "
+          f"adaptive updates {'off' if args.no_adapt else 'on'}")
+    print(f"status: {result.status} — {result.reason}")
+    print(f"first plan (prior models):  {budget.predicted_energy_wh:8.2f} Wh  {route0.length_m:7.1f} m  "
+          f"({'fits' if budget.predicted_feasible else 'does NOT fit'} the usable {battery.usable_energy_wh:.0f} Wh)")
+    print(f"driven (actual):            {result.driven_energy_j / 3600:8.2f} Wh  in {len(result.legs)} legs")
+    print(f"excitation manoeuvres:      {result.excitation_energy_j / 3600:8.2f} Wh")
+    print(f"prediction error before / after updates: {_percent(result.error_before_update_pct)} / "
+          f"{_percent(result.error_after_update_pct)}")
+    print(f"updates accepted: {result.accepted_updates} of {len(result.updates)}; route changes {result.route_changes}")
+    for line in result.skipped_updates:
+        print(f"skipped update {line}")
+    if budget.depleted:
+        print(f"the battery ran out {budget.depleted_time_s:.1f} s into the mission")
+    print(f"final state of charge {budget.arrival_soc_pct:.1f} % (margin {budget.reserve_margin_pct:+.1f} points "
+          f"above the reserve); loop computing {elapsed:.1f} s")

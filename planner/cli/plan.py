@@ -1,0 +1,227 @@
+"""``terrawatt demo`` and ``terrawatt plan``: a minimum-energy route compared with the shortest one."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from terrain import UNKNOWN_GROUND, TerrainMap
+from terrain.atomic import write_json_atomic
+from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
+
+from .. import PLANNERS, EnergyCost, Route, plan_route, warm_up_kernels
+from ..plot import RouteLine, plot_routes
+from .common import (
+    add_map_options,
+    check_outputs,
+    check_positive,
+    draw_figure,
+    max_slope_rad,
+    read_map_file,
+    unknown_ground,
+)
+
+__all__ = ["add_parsers", "run_demo", "run_plan_command", "run_plan"]
+
+_OUTPUTS = ("route.json", "route.png")
+
+
+def add_parsers(sub: Any) -> None:
+    """The ``demo`` and ``plan`` subcommands."""
+    demo = sub.add_parser("demo", help="plan a minimum-energy route on the bundled example map")
+    _add_plan_options(demo, default_time=1.0)
+    demo.set_defaults(run=run_demo)
+    plan = sub.add_parser("plan", help="plan a minimum-energy route on a map file (.npz or GeoTIFF)")
+    plan.add_argument("--map", type=Path, required=True, metavar="FILE", help=".npz map or .tif DEM")
+    add_map_options(plan)
+    plan.add_argument("--start", type=float, nargs=2, required=True, metavar=("X", "Y"), help="start (m)")
+    plan.add_argument("--goal", type=float, nargs=2, required=True, metavar=("X", "Y"), help="goal (m)")
+    _add_plan_options(plan, default_time=2.0)
+    plan.set_defaults(run=run_plan_command)
+
+
+def _add_plan_options(p: argparse.ArgumentParser, *, default_time: float) -> None:
+    p.add_argument("--planner", default="RRTstar", choices=PLANNERS, help="planner name (default RRTstar)")
+    p.add_argument("--time-limit", type=float, default=default_time, metavar="S", help="planning time budget (s)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument(
+        "--max-evaluations", type=int, default=None, metavar="N",
+        help="work bound of OMPL planners: stop after N edge-cost evaluations instead of after --time-limit; "
+             "with --seed the route is then the same on every run and machine",
+    )
+    p.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
+    p.add_argument("--robot", default="husky", help="robot preset: paper_seed, jackal or husky (default husky)")
+    p.add_argument("--speed", type=float, default=0.5, metavar="M/S", help="planning speed (default 0.5 m/s)")
+    p.add_argument("--max-slope-deg", type=float, default=20.0, help="steepest drivable slope (default 20 deg)")
+    p.add_argument(
+        "--unknown-ground",
+        default="gravel",
+        help="ground preset assumed where the map's ground class is unknown (-1); 'none' to refuse such cells",
+    )
+
+
+def run_demo(args: argparse.Namespace) -> int:
+    """``terrawatt demo``: plan on the bundled example map."""
+    check_outputs(args.out, _OUTPUTS)
+    return _run(args, example_map(), EXAMPLE_START_XY_M, EXAMPLE_GOAL_XY_M, "bundled example map")
+
+
+def run_plan_command(args: argparse.Namespace) -> int:
+    """``terrawatt plan``: plan on a map file."""
+    check_outputs(args.out, _OUTPUTS)
+    tmap = read_map_file(args.map, args.fill_nodata)
+    return _run(args, tmap, tuple(args.start), tuple(args.goal), args.map.name)
+
+
+def _run(args: argparse.Namespace, tmap: TerrainMap, start: tuple[float, float], goal: tuple[float, float],
+         label: str) -> int:
+    check_positive("--speed", args.speed)
+    check_positive("--time-limit", args.time_limit)
+    if args.max_evaluations is not None:
+        check_positive("--max-evaluations", args.max_evaluations)
+    result = run_plan(
+        tmap, start, goal, planner=args.planner, time_limit_s=args.time_limit, max_evaluations=args.max_evaluations,
+        seed=args.seed, out_dir=args.out, robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg,
+        unknown_ground=unknown_ground(args.unknown_ground, tmap), map_label=label,
+    )
+    return 0 if result["status"] == "exact" else 1
+
+
+def _route_row(label: str, route: Route, optimum_j: float) -> dict[str, Any]:
+    ratio = route.drive_energy_j / optimum_j if route.status == "exact" and optimum_j > 0 else math.nan
+    return {
+        "route": label,
+        "status": route.status,
+        "energy_j": route.energy_j if route.found else math.nan,
+        "energy_wh": route.energy_wh if route.found else math.nan,
+        "charge_mah": route.charge_mah if route.found else math.nan,
+        "length_m": route.length_m,
+        "duration_s": route.duration_s,
+        "ratio_to_lattice_optimum": ratio,
+        "planning_time_s": route.planning_time_s,
+    }
+
+
+def _print_table(rows: Sequence[dict[str, Any]]) -> None:
+    header = (f"{'route':<26} {'status':<11} {'energy J':>10} {'Wh':>7} {'mAh':>8} {'length m':>9} {'time s':>8} "
+              f"{'/ optimum':>9} {'plan s':>7}")
+    print(header)
+    print("-" * len(header))
+    for r in rows:
+        print(
+            f"{r['route']:<26} {r['status']:<11} {r['energy_j']:>10.1f} {r['energy_wh']:>7.3f} "
+            f"{r['charge_mah']:>8.1f} {r['length_m']:>9.1f} {r['duration_s']:>8.1f} "
+            f"{r['ratio_to_lattice_optimum']:>9.3f} {r['planning_time_s']:>7.3f}"
+        )
+
+
+def _finite_or_none(x: float) -> float | None:
+    return x if math.isfinite(x) else None
+
+
+def run_plan(
+    tmap: TerrainMap,
+    start: tuple[float, float],
+    goal: tuple[float, float],
+    *,
+    planner: str,
+    time_limit_s: float,
+    seed: int,
+    out_dir: Path,
+    max_evaluations: int | None = None,
+    robot: str,
+    speed_mps: float,
+    max_slope_deg: float,
+    unknown_ground: str | None,
+    map_label: str,
+) -> dict[str, Any]:
+    """Plan once with its comparison (shortest route, lattice optimum), print, write files."""
+    slope_rad = max_slope_rad(max_slope_deg)
+    compile_s = warm_up_kernels()  # compiled once per environment, then loaded from numba's cache
+    t0 = time.perf_counter()
+    cost = EnergyCost.from_presets(tmap, robot=robot, speed_mps=speed_mps, max_slope_rad=slope_rad,
+                                   unknown_ground=unknown_ground)
+    prep_s = time.perf_counter() - t0
+    route = plan_route(
+        tmap, start, goal, cost=cost, planner=planner, seed=seed, compare=True,
+        time_limit_s=None if max_evaluations is not None else time_limit_s, max_cost_evaluations=max_evaluations,
+    )
+    rows: list[dict[str, Any]] = []
+    routes_json: dict[str, Any] = {}
+    lines = []
+    if route.found:
+        shortest = route.comparison.shortest
+        # the table's second row: the lattice planner with refinement (the route itself when it is one)
+        optimum = route if planner == "lattice" else plan_route(tmap, start, goal, cost=cost, planner="lattice",
+                                                                 seed=seed, compare=False)
+        rows = [_route_row(f"min-energy ({planner})", route, route.lattice_energy_j),
+                _route_row("lattice + refinement", optimum, route.lattice_energy_j),
+                _route_row("shortest distance", shortest, route.lattice_energy_j)]
+        lines = [
+            RouteLine(f"min-energy ({planner})", route.waypoints_m, route.energy_j, colour="#d32f2f"),
+            RouteLine("shortest distance", shortest.waypoints_m, shortest.energy_j, colour="#1565c0", linestyle="--"),
+        ]
+        routes_json = {
+            "min_energy": {**route.summary(), "waypoints_m": route.waypoints_m.tolist()},
+            "lattice": {**optimum.summary(), "waypoints_m": optimum.waypoints_m.tolist()},
+            "shortest": {**shortest.summary(), "waypoints_m": shortest.waypoints_m.tolist()},
+        }
+    print(f"map: {map_label}  {tmap.shape[0]} x {tmap.shape[1]} cells of {tmap.cell_size_m:g} m; grounds {tmap.ground_names}")
+    print(f"robot: {robot}, speed {speed_mps:g} m/s, max slope {max_slope_deg:g} deg; map preparation {prep_s:.2f} s")
+    budget = f"{max_evaluations} edge-cost evaluations" if max_evaluations is not None else f"time limit {time_limit_s:g} s"
+    n_unknown = int(np.count_nonzero(np.asarray(tmap.ground) == UNKNOWN_GROUND))
+    if n_unknown and unknown_ground:
+        print(f"ground class unknown in {n_unknown} of {tmap.ground.size} cells: priced as {unknown_ground!r} "
+              "(--unknown-ground NAME to choose, 'none' to refuse them)")
+    print(f"start {start} -> goal {goal}; planner {planner}, {budget}, seed {seed}")
+    if compile_s > 1.0:
+        print(f"(compiled the edge-cost kernels in {compile_s:.1f} s: first run in this environment; not in the times below)")
+    print()
+    if not route.found:
+        print(f"no route: status {route.status!r} after {route.planning_time_s:.3f} s")
+    else:
+        _print_table(rows)
+        print()
+        if route.status == "exact":
+            print(
+                f"energy saved vs shortest route: {route.energy_saved_pct:.1f} %  "
+                f"(min-energy {route.energy_j:.0f} J vs shortest {route.shortest_energy_j:.0f} J); "
+                f"drive energy / 16-connected lattice optimum: {route.optimality_ratio:.3f}"
+            )
+        else:
+            short_m = math.dist(route.waypoints_m[-1], goal)
+            print(
+                f"the {planner} route is {route.status}: it ends {short_m:.1f} m short of the goal, so it is "
+                "not compared with the shortest route; give the planner more time"
+            )
+    result = {
+        "map": map_label,
+        "robot": robot,
+        "speed_mps": speed_mps,
+        "max_slope_deg": max_slope_deg,
+        "start_xy_m": list(start),
+        "goal_xy_m": list(goal),
+        "planner": planner,
+        "time_limit_s": time_limit_s if max_evaluations is None else None,
+        "max_evaluations": max_evaluations,
+        "seed": seed,
+        "map_preparation_s": prep_s,
+        "kernel_compile_s": compile_s,
+        "status": route.status,
+        "energy_saved_pct": _finite_or_none(route.energy_saved_pct) if route.found else None,
+        "optimality_ratio": _finite_or_none(route.optimality_ratio) if route.found else None,
+        "table": rows,
+        "routes": routes_json,
+    }
+    out_dir.mkdir(parents=True, exist_ok=True)
+    json_path = write_json_atomic(out_dir / "route.json", result)
+    png_path = draw_figure(out_dir / "route.png", lambda: plot_routes(
+        tmap, lines, start, goal, out_dir / "route.png", title=f"terrawatt: minimum-energy route on {map_label}"))
+    print(f"\nwrote {json_path}" + (f" and {png_path}" if png_path is not None else ""))
+    return result

@@ -1,0 +1,56 @@
+"""``terrawatt train``: fit one current model on logs and save it to one file."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+from typing import Any
+
+from energy import read_borealtc
+from terrain import InvalidParameterError
+from terrain.atomic import check_output_path
+
+from .models import CURRENT_MODELS, current_model
+
+__all__ = ["add_parser", "run_train"]
+
+
+def add_parser(sub: Any) -> None:
+    """The ``train`` subcommand."""
+    train = sub.add_parser("train", help="fit a current model on logs and save it to one file")
+    train.add_argument("--data", type=Path, required=True, metavar="DIR", help="directory with GROUND/imu_NN.csv + pro_NN.csv")
+    train.add_argument("--grounds", nargs="+", metavar="NAME", help="ground folders to use (default all)")
+    train.add_argument("--model", default="estimator", choices=list(CURRENT_MODELS), help="model kind (default estimator)")
+    train.add_argument("--seed", type=int, default=0, help="random seed")
+    train.add_argument("--out", type=Path, required=True, metavar="FILE", help="model file to write (e.g. model.pt)")
+    train.add_argument(
+        "--threads", type=int, metavar="N",
+        help="torch threads while training the estimator or paper model (default: torch's own setting)",
+    )
+    train.add_argument("--quiet", action="store_true", help="no progress bar with the training loss")
+    train.set_defaults(run=run_train)
+
+
+def run_train(args: argparse.Namespace) -> int:
+    """``terrawatt train``: fit one model on every run found and save it.
+
+    The learned models (``estimator``, ``paper``) show a progress bar with the loss unless
+    ``--quiet`` and train on ``--threads`` torch threads; the other models take neither. The
+    output path is checked before the logs are read, so a bad ``--out`` never costs a training.
+    """
+    learned = args.model in ("estimator", "paper")
+    if args.threads is not None and args.threads < 1:
+        raise InvalidParameterError(f"--threads must be a positive number of threads, got {args.threads!r}")
+    if args.threads is not None and not learned:
+        raise InvalidParameterError(f"--threads applies to the estimator and paper models only, got --model {args.model!r}")
+    check_output_path(args.out, "--out")
+    model = current_model(args.model, args.seed, progress=learned and not args.quiet, n_threads=args.threads)
+    logs = read_borealtc(args.data, grounds=args.grounds)
+    t0 = time.perf_counter()
+    model.fit(logs)
+    elapsed = time.perf_counter() - t0
+    path = model.save(args.out)
+    print(f"fitted {args.model} on {len(logs)} runs ({sum(log.duration_s for log in logs):.0f} s of logs) "
+          f"in {elapsed:.1f} s; wrote {path}")
+    return 0
