@@ -1,4 +1,4 @@
-"""``terrawatt predict``: per-run charge errors of a saved current model on logs, written as JSON."""
+"""``terrawatt predict``: the scores of a saved current model on logs (an :class:`energy.EvaluationResult`)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from energy import compare_currents, load_current_model, plot_current_estimate, read_borealtc
+from energy import load_current_model, plot_current_estimate, read_borealtc
+from energy.evaluation import score_current_model
 from terrain.atomic import write_json_atomic
 
 from .common import check_outputs, draw_figure
@@ -29,41 +30,26 @@ def add_parser(sub: Any) -> None:
 
 
 def run_predict(args: argparse.Namespace) -> int:
-    """``terrawatt predict``: per-run charge errors of a saved model, written as JSON."""
+    """``terrawatt predict``: per-run charge errors of a saved model
+    (:func:`energy.evaluation.score_current_model`), printed and written as JSON."""
     check_outputs(args.out, ["predictions.json"])
     if args.plots:
         check_outputs(args.out / "plots")
     model = load_current_model(args.model)
     logs = read_borealtc(args.data, grounds=args.grounds)
-    rows = []
+    result = score_current_model(model, logs, name=Path(args.model).name)
     print(f"{'run':<28} {'side':<6} {'truth mAh':>10} {'pred mAh':>10} {'error %':>8} {'RMSE A':>7}")
+    for r in result.runs:
+        print(f"{r.run:<28} {r.side:<6} {r.charge_true_mah:>10.1f} {r.charge_predicted_mah:>10.1f} "
+              f"{r.whole_run_error_pct:>8.2f} {r.rmse_a:>7.2f}")
+    path = write_json_atomic(args.out / "predictions.json", {"model": str(args.model), **result.to_dict()})
     plots = []
-    for log in logs:
-        pred = model.predict(log)
-        for k, side in enumerate(("left", "right")):
-            truth = log.current_left_a if k == 0 else log.current_right_a
-            err = compare_currents(log.time_s, truth, pred[:, k])
-            rows.append({
-                "run": log.meta.source,
-                "ground": log.meta.ground_label,
-                "side": side,
-                "charge_true_mah": err.charge_true_mah,
-                "charge_predicted_mah": err.charge_predicted_mah,
-                "whole_run_error_pct": err.whole_run_error_pct,
-                "section_error_pct": err.section_error_pct,
-                "rmse_a": err.rmse_a,
-            })
-            print(
-                f"{str(log.meta.ground_label) + '/' + Path(log.meta.source).name:<28} {side:<6} "
-                f"{err.charge_true_mah:>10.1f} {err.charge_predicted_mah:>10.1f} {err.whole_run_error_pct:>8.2f} "
-                f"{err.rmse_a:>7.2f}"
-            )
-        if args.plots:
-            path = args.out / "plots" / f"current_{log.meta.ground_label}_{Path(log.meta.source).stem}.png"
-            done = draw_figure(path, lambda log=log, pred=pred, path=path: plot_current_estimate(
-                log, pred, path, label=Path(args.model).name))
+    if args.plots:
+        for log in logs:
+            png = args.out / "plots" / f"current_{log.meta.ground_label}_{Path(log.meta.source).stem}.png"
+            done = draw_figure(png, lambda log=log, png=png: plot_current_estimate(
+                log, model.predict(log), png, label=Path(args.model).name))
             if done is not None:
                 plots.append(done)
-    path = write_json_atomic(args.out / "predictions.json", {"model": str(args.model), "runs": rows})
     print(f"wrote {path}" + (f" and {len(plots)} figures in {args.out / 'plots'}" if plots else ""))
     return 0
