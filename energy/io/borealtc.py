@@ -9,7 +9,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from terrain.checks import check_text
+from terrain.checks import check_text, fmt_number
 from terrain.errors import DataError, FileFormatError, InvalidParameterError, UnknownNameError
 
 from ..logs import DEFAULT_GAP_FACTOR, InteractionLog, LogMeta, check_gap_factor
@@ -126,7 +126,7 @@ def read_borealtc_run(
     keep = (tp >= t0) & (tp <= t1)
     if t1 < t0 or not keep.any():
         raise DataError(
-            f"{src_p} spans [{float(tp[0])!r}, {float(tp[-1])!r}] s and {src_i} spans [{float(ti[0])!r}, {float(ti[-1])!r}] s: "
+            f"{src_p} spans [{fmt_number(float(tp[0]), 9)}, {fmt_number(float(tp[-1]), 9)}] s and {src_i} spans [{fmt_number(float(ti[0]), 9)}, {fmt_number(float(ti[-1]), 9)}] s: "
             f"they do not overlap"
         )
     td = tp[keep]
@@ -204,7 +204,12 @@ def read_borealtc(
     if grounds is None:
         chosen = sorted(folders)
     else:
-        wanted = [grounds] if isinstance(grounds, str) else list(grounds)
+        try:
+            wanted = [grounds] if isinstance(grounds, str) else list(grounds)
+        except TypeError:
+            raise InvalidParameterError(
+                f"grounds must be a folder name or an iterable of folder names, got {grounds!r:.80}"
+            ) from None
         by_lower = {name.lower(): name for name in folders}
         unknown = [g for g in wanted if not isinstance(g, str) or g.lower() not in by_lower]
         if unknown:

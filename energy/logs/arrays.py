@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import real_array
+from terrain.checks import fmt_number, real_array
 from terrain.errors import DataError, InvalidParameterError
 
 __all__ = ["log_vector", "check_increasing", "pose_array", "ground_array"]
@@ -28,7 +28,7 @@ def log_vector(name: str, value: Any) -> np.ndarray:
         i = int(np.argmax(bad))
         raise DataError(
             f"{name} must be finite; {int(bad.sum())} non-finite value(s), first at index {i} "
-            f"({float(arr[i])!r})"
+            f"({fmt_number(float(arr[i]), 9)})"
         )
     arr.setflags(write=False)
     return arr
@@ -44,7 +44,7 @@ def check_increasing(name: str, t: np.ndarray) -> None:
         i = int(np.argmax(bad)) + 1
         raise DataError(
             f"{name} must be strictly increasing; {int(bad.sum())} step(s) are not, first at index {i} "
-            f"(t={float(t[i])!r} after t={float(t[i - 1])!r})"
+            f"(t={fmt_number(float(t[i]), 9)} after t={fmt_number(float(t[i - 1]), 9)})"
         )
 
 

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_choice, check_real
+from terrain.checks import check_choice, check_real, fmt_number
 from terrain.errors import DataError, DataRepairWarning, InvalidParameterError
 
 from .arrays import check_increasing, ground_array, log_vector, pose_array
@@ -187,8 +187,8 @@ class InteractionLog:
         t1 = min(float(self.time_s[-1]), float(self.accel_time_s[-1]))
         if t1 < t0:
             raise DataError(
-                f"drive stream [{float(self.time_s[0])!r}, {float(self.time_s[-1])!r}] s and acceleration stream "
-                f"[{float(self.accel_time_s[0])!r}, {float(self.accel_time_s[-1])!r}] s do not overlap"
+                f"drive stream [{fmt_number(float(self.time_s[0]), 9)}, {fmt_number(float(self.time_s[-1]), 9)}] s and acceleration stream "
+                f"[{fmt_number(float(self.accel_time_s[0]), 9)}, {fmt_number(float(self.accel_time_s[-1]), 9)}] s do not overlap"
             )
         return t0, t1
 
@@ -218,8 +218,8 @@ class InteractionLog:
             i = int(np.argmax(bad.reshape(-1)))
             raise DataError(
                 f"accel_on: {int(bad.sum())} timestamp(s) outside the acceleration record "
-                f"[{float(self.accel_time_s[0])!r}, {float(self.accel_time_s[-1])!r}] s, first at index {i} "
-                f"(t={float(flat[i])!r}); the acceleration is not extrapolated"
+                f"[{fmt_number(float(self.accel_time_s[0]), 9)}, {fmt_number(float(self.accel_time_s[-1]), 9)}] s, first at index {i} "
+                f"(t={fmt_number(float(flat[i]), 9)}); the acceleration is not extrapolated"
             )
         return np.interp(t, self.accel_time_s, self.accel_z_mps2)
 
@@ -435,9 +435,9 @@ class InteractionLog:
                     )
             if log.time_s[0] <= prev.time_s[-1] or log.accel_time_s[0] <= prev.accel_time_s[-1]:
                 raise DataError(
-                    f"cannot concatenate: logs[{i}] starts at t={float(log.time_s[0])!r} s (accel "
-                    f"{float(log.accel_time_s[0])!r} s), not after logs[{i - 1}] ends at t={float(prev.time_s[-1])!r} s "
-                    f"(accel {float(prev.accel_time_s[-1])!r} s); shift it with .shifted(offset_s)"
+                    f"cannot concatenate: logs[{i}] starts at t={fmt_number(float(log.time_s[0]), 9)} s (accel "
+                    f"{fmt_number(float(log.accel_time_s[0]), 9)} s), not after logs[{i - 1}] ends at t={fmt_number(float(prev.time_s[-1]), 9)} s "
+                    f"(accel {fmt_number(float(prev.accel_time_s[-1]), 9)} s); shift it with .shifted(offset_s)"
                 )
         with_pose = [log.pose_xyh is not None for log in items]
         if any(with_pose) and not all(with_pose):

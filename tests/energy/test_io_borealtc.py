@@ -88,6 +88,8 @@ def test_borealtc_grounds_selection(tmp_path):
         read_borealtc(tmp_path)
     with pytest.raises(InvalidParameterError, match="do not pass ground_label"):
         read_borealtc(BOREALTC_FIX, ground_label="x")
+    with pytest.raises(InvalidParameterError, match="grounds must be a folder name or an iterable of folder names, got 5"):
+        read_borealtc(BOREALTC_FIX, grounds=5)
 
 
 def test_borealtc_unpaired_file(tmp_path):

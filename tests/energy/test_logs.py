@@ -241,7 +241,7 @@ def test_concatenate_shifted_runs():
 
 def test_concatenate_errors():
     a = make_log()
-    with pytest.raises(DataError, match=r"logs\[1\] starts at t=0.0 s.*shift it"):
+    with pytest.raises(DataError, match=r"logs\[1\] starts at t=0 s.*shift it"):
         InteractionLog.concatenate([a, a])
     other = make_log(meta=LogMeta(robot="other")).shifted(5)
     with pytest.raises(DataError, match="meta.robot='other' differs"):
