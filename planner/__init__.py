@@ -1,18 +1,7 @@
 """planner — where to drive: edge costs, OMPL and lattice planners, routes, missions, CLI."""
 
-from .adaptive import (
-    ADAPTIVE_FORMAT_VERSION,
-    ADAPTIVE_STATUSES,
-    UPDATE_SCOPES,
-    AdaptiveResult,
-    AdaptiveSettings,
-    LegRecord,
-    ReplanRecord,
-    UpdateRecord,
-    fit_prior_model,
-    run_adaptive_mission,
-    validation_error,
-)
+from energy import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, drive_profile
+
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
 from .kernels import CostArrays
 from .lattice import Lattice, LatticePath
@@ -22,14 +11,22 @@ from .learned_cost import (
     LearnedEnergyModel,
     LearnedModelTable,
 )
-from .mission import (
-    DEFAULT_ACCEL_MPS2,
-    DEFAULT_YAW_ACCEL_RADPS2,
+from .missions import (
+    ADAPTIVE_FORMAT_VERSION,
+    ADAPTIVE_STATUSES,
     MISSION_FORMAT_VERSION,
     MISSION_STATUSES,
+    UPDATE_SCOPES,
+    AdaptiveResult,
+    AdaptiveSettings,
+    LegRecord,
     MissionResult,
-    drive_profile,
+    ReplanRecord,
+    UpdateRecord,
+    fit_prior_model,
+    run_adaptive_mission,
     simulate_mission,
+    validation_error,
 )
 from .planning import OMPL_PLANNERS, PLANNERS, compare_route, plan_route, shortest_route
 from .refine import refine_route, relax_path, string_pull
@@ -65,9 +62,6 @@ __all__ = [
     "evaluate_route",
     # missions
     "simulate_mission",
-    "drive_profile",
-    "DEFAULT_ACCEL_MPS2",
-    "DEFAULT_YAW_ACCEL_RADPS2",
     "drive_profile",
     "DEFAULT_ACCEL_MPS2",
     "DEFAULT_YAW_ACCEL_RADPS2",

@@ -6,8 +6,15 @@ import numpy as np
 import pytest
 
 import energy
-from energy import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, drive_profile, waypoint_commands
-from energy.profiles import drivable_waypoints, move_duration_s, planned_durations_s
+from energy import (
+    DEFAULT_ACCEL_MPS2,
+    DEFAULT_YAW_ACCEL_RADPS2,
+    drivable_waypoints,
+    drive_profile,
+    planned_durations_s,
+    waypoint_commands,
+)
+from energy.profiles import move_duration_s
 from terrain import InvalidParameterError
 
 _trapezoid = getattr(np, "trapezoid", None) or np.trapz
@@ -78,7 +85,8 @@ def test_drive_profile_drops_repeated_waypoints_and_matches_waypoint_commands() 
 
 
 def test_drive_profile_is_exported_from_energy() -> None:
-    for name in ("drive_profile", "DEFAULT_ACCEL_MPS2", "DEFAULT_YAW_ACCEL_RADPS2"):
+    for name in ("drive_profile", "DEFAULT_ACCEL_MPS2", "DEFAULT_YAW_ACCEL_RADPS2", "drivable_waypoints",
+                 "planned_durations_s"):
         assert name in energy.__all__
     assert (DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2) == (0.5, 1.0)
 

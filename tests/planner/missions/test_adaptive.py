@@ -1,4 +1,4 @@
-"""Tests of planner.adaptive: flag -> update -> replan, rejection of worse models, budget stop."""
+"""Tests of planner.missions.adaptive: flag -> update -> replan, rejection of worse models, budget stop."""
 
 import dataclasses
 
@@ -164,3 +164,30 @@ def test_without_a_segmentation_a_learned_model_is_reused_instead_of_exciting_ag
     before = np.asarray(reg.model_id_map).copy()
     reg.rollback()
     assert not np.array_equal(np.asarray(reg.model_id_map), before)
+
+
+def test_start_equal_to_goal_is_refused():
+    robot, truth, tmap, prior = _world()
+    reg = CellModelRegistry.from_terrain(tmap, prior)
+    with pytest.raises(InvalidParameterError, match="start equals goal"):
+        run_adaptive_mission(tmap, reg, robot, Battery(20.0, 24.0), truth, (2.5, 8.0), (2.5, 8.0),
+                             physics_ground=ground_preset("asphalt"), settings=SETTINGS)
+
+
+def test_the_budget_is_the_batterys_own_over_driving_and_manoeuvres():
+    robot, truth, tmap, prior = _world()
+    reg = CellModelRegistry.from_terrain(tmap, prior)
+    battery = Battery(20.0, 24.0, internal_resistance_ohm=0.1, peukert_exponent=1.2)
+    res = run_adaptive_mission(tmap, reg, robot, battery, truth, (2.5, 8.0), (37.5, 8.0),
+                               physics_ground=ground_preset("asphalt"), settings=SETTINGS)
+    assert res.status == "completed" and res.excitation_energy_j > 0
+    b = res.budget
+    assert b.battery == battery
+    assert b.actual_energy_j == pytest.approx(res.driven_energy_j + res.excitation_energy_j, rel=1e-6)
+    assert b.predicted_energy_j == pytest.approx(res.replans[0].predicted_energy_j)
+    # state of charge only through energy.battery: the loop's running SoC (leg by leg and
+    # manoeuvre by manoeuvre) is the one of the whole draw, with resistance and Peukert
+    assert b.arrival_soc == pytest.approx(res.final_soc, abs=1e-6)
+    naive = battery.initial_soc - (res.driven_energy_j + res.excitation_energy_j) / battery.energy_capacity_j
+    assert res.final_soc < naive  # the pack's losses cost more than energy / capacity
+    assert res.to_json_dict()["budget"] == b.to_json_dict()

@@ -1,0 +1,35 @@
+"""Missions: drive a route against a battery (:func:`simulate_mission`) and the adaptive loop (:func:`run_adaptive_mission`)."""
+
+from .adaptive import run_adaptive_mission
+from .adaptive_results import (
+    ADAPTIVE_FORMAT_VERSION,
+    ADAPTIVE_STATUSES,
+    AdaptiveResult,
+    LegRecord,
+    ReplanRecord,
+    UpdateRecord,
+)
+from .manoeuvres import excitation_manoeuvre, fit_prior_model
+from .results import MISSION_FORMAT_VERSION, MISSION_STATUSES, MissionResult
+from .settings import UPDATE_SCOPES, AdaptiveSettings
+from .simulate import simulate_mission
+from .updates import validation_error
+
+__all__ = [
+    "simulate_mission",
+    "MissionResult",
+    "MISSION_STATUSES",
+    "MISSION_FORMAT_VERSION",
+    "run_adaptive_mission",
+    "fit_prior_model",
+    "excitation_manoeuvre",
+    "validation_error",
+    "AdaptiveSettings",
+    "AdaptiveResult",
+    "LegRecord",
+    "UpdateRecord",
+    "ReplanRecord",
+    "ADAPTIVE_STATUSES",
+    "ADAPTIVE_FORMAT_VERSION",
+    "UPDATE_SCOPES",
+]

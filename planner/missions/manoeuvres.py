@@ -1,0 +1,78 @@
+"""The excitation manoeuvre (a straight run over speed levels, then pivots) and the prior model it trains."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from energy import InteractionLog, LinearCurrentModel, TruthSimulator, excitation_commands
+from terrain.checks import SEED_LIMIT, check_int
+
+__all__ = ["excitation_manoeuvre", "fit_prior_model"]
+
+
+def excitation_manoeuvre(
+    truth: TruthSimulator,
+    ground: str,
+    *,
+    straight_s: float,
+    turn_s: float,
+    speeds_mps: Sequence[float],
+    omega_radps: float,
+    seed: int,
+    sim_seed: int,
+    dt_s: float = 0.01,
+) -> list[InteractionLog]:
+    """Drive the excitation manoeuvre on ``ground`` in the truth simulator: two logs.
+
+    A straight run over ``speeds_mps`` (``straight_s`` seconds, no turning) and a pivot run
+    at ``±omega_radps`` held 2-3 s (``turn_s`` seconds), both without rests
+    (:func:`energy.excitation_commands`, seeded ``seed`` and ``seed + 1``), simulated with
+    seeds ``sim_seed`` and ``sim_seed + 1``.
+
+    Raises
+    ------
+    InvalidParameterError
+        Bad durations, levels or seeds.
+    UnknownNameError
+        ``truth`` does not know ``ground``.
+    """
+    seed = check_int("seed", seed, low=0, high=SEED_LIMIT - 2)
+    sim_seed = check_int("sim_seed", sim_seed, low=0, high=SEED_LIMIT - 2)
+    straight = excitation_commands(straight_s, dt_s, speed_levels_mps=tuple(speeds_mps), omega_levels_radps=(0.0,),
+                                   rest_s=0.0, seed=seed)
+    turn = excitation_commands(turn_s, dt_s, speed_levels_mps=(0.0,), omega_levels_radps=(omega_radps,),
+                               omega_sign="both", hold_s=(2.0, 3.0), rest_s=0.0, seed=seed + 1)
+    return [truth.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground=ground, seed=sim_seed + i)
+            for i, p in enumerate((straight, turn))]
+
+
+def fit_prior_model(truth: TruthSimulator, ground: str, seed: int = 1) -> LinearCurrentModel:
+    """A prior current model: a :class:`energy.LinearCurrentModel` fitted on one ground.
+
+    It drives the excitation manoeuvre on ``ground`` in the truth simulator — straight runs
+    at 0.2–0.8 m/s (30 s) and pivot turns at ±0.5 rad/s (12 s) — and fits the linear model
+    to both, which is what a robot commissioned on that one ground would know.
+
+    Parameters
+    ----------
+    truth : TruthSimulator
+        Simulator that knows ``ground``.
+    ground : str
+        Ground name the prior is trained on (a key of ``truth``'s grounds).
+    seed : int
+        Seed of the manoeuvres and the simulated noise.
+
+    Returns
+    -------
+    LinearCurrentModel
+        The fitted prior.
+
+    Raises
+    ------
+    UnknownNameError
+        If ``truth`` does not know ``ground``.
+    """
+    seed = check_int("seed", seed, low=0, high=SEED_LIMIT - 12)
+    logs = excitation_manoeuvre(truth, ground, straight_s=30.0, turn_s=12.0, speeds_mps=(0.2, 0.35, 0.5, 0.65, 0.8),
+                                omega_radps=0.5, seed=seed, sim_seed=seed + 10)
+    return LinearCurrentModel().fit(logs)

@@ -1,0 +1,76 @@
+"""Per-cell comparison of a driven leg and the update decisions of the adaptive loop (reuse or validate)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from energy import InteractionLog
+from terrain import CellModelRegistry, InvalidParameterError
+
+from ..learned_cost import predict_currents
+
+__all__ = ["validation_error", "predicted_currents", "best_other_model", "charge_error"]
+
+
+def validation_error(model: Any, logs: list[InteractionLog]) -> float:
+    """Absolute relative error of the integrated absolute current (both sides) over ``logs``.
+
+    ``|sum |I_pred| dt - sum |I_meas| dt| / sum |I_meas| dt`` (lower is better); the metric
+    :func:`~planner.run_adaptive_mission` compares old and new models with.
+
+    Raises
+    ------
+    InvalidParameterError
+        The logs hold no current.
+    """
+    pred = meas = 0.0
+    for log in logs:
+        dt = np.gradient(log.time_s)
+        p = np.abs(predict_currents(model, log, f"model {model!r:.60}")).sum(axis=1)
+        m = np.abs(log.current_left_a) + np.abs(log.current_right_a)
+        pred += float(np.sum(p * dt))
+        meas += float(np.sum(m * dt))
+    if meas <= 0:
+        raise InvalidParameterError("validation logs hold no current; cannot validate")
+    return abs(pred - meas) / meas
+
+
+def predicted_currents(registry: CellModelRegistry, log: InteractionLog, rows: np.ndarray,
+                       cols: np.ndarray) -> np.ndarray:
+    """Each sample's current (A, shape (N, 2)) from the model serving its cell (one predict per model in use)."""
+    ids = np.asarray(registry.model_id_map)[rows, cols]
+    out = np.empty((len(log), 2))
+    for mid in np.unique(ids).tolist():
+        sel = ids == mid
+        out[sel] = predict_currents(registry.model(mid), log, f"model {mid} ({registry.model_record(mid).name!r})")[sel]
+    return out
+
+
+def best_other_model(
+    registry: CellModelRegistry, log: InteractionLog, in_region: np.ndarray, measured_a: np.ndarray,
+    dt_s: np.ndarray, serving: tuple[int, ...], min_samples: int,
+) -> tuple[int, float] | None:
+    """The registry model that best explains the log's samples in a region, unless it alone
+    already serves the whole region (``serving``: the ids serving its cells): ``(model id,
+    |predicted - measured| / measured)`` of the integrated absolute current (both sides), or
+    None with fewer than ``min_samples`` samples or no candidate."""
+    if np.count_nonzero(in_region) < min_samples or not np.any(measured_a[in_region]):
+        return None
+    best: tuple[int, float] | None = None
+    for mid in registry.model_ids:
+        if tuple(serving) == (mid,):  # assigning it would change nothing
+            continue
+        pred = predict_currents(registry.model(mid), log, f"model {mid} ({registry.model_record(mid).name!r})")
+        err = charge_error(pred, measured_a, dt_s, in_region)
+        if best is None or err < best[1]:
+            best = (int(mid), err)
+    return best
+
+
+def charge_error(predicted_a: np.ndarray, measured_a: np.ndarray, dt_s: np.ndarray, sel: np.ndarray) -> float:
+    """``|Q_pred - Q_meas| / Q_meas`` of the absolute current (both sides) over the samples ``sel``."""
+    q_meas = float(np.sum(np.abs(measured_a[sel]).sum(axis=1) * dt_s[sel]))
+    q_pred = float(np.sum(np.abs(predicted_a[sel]).sum(axis=1) * dt_s[sel]))
+    return abs(q_pred - q_meas) / q_meas
