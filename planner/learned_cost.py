@@ -52,7 +52,6 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -75,13 +74,19 @@ from terrain import (
     TerrainMap,
     UnknownNameError,
 )
-
 from terrain.checks import check_real
 
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
+from .learned_table import LearnedModelTable, increasing_grid, predict_currents
 from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES, check_table_sizes, tabulate
 
-__all__ = ["LearnedEnergyModel", "LearnedModelTable", "DEFAULT_TABLE_SPEEDS_MPS", "DEFAULT_TABLE_OMEGAS_RADPS"]
+__all__ = [
+    "LearnedEnergyModel",
+    "LearnedModelTable",
+    "predict_currents",
+    "DEFAULT_TABLE_SPEEDS_MPS",
+    "DEFAULT_TABLE_OMEGAS_RADPS",
+]
 
 #: Default speed grid of the tables (m/s).
 DEFAULT_TABLE_SPEEDS_MPS: tuple[float, ...] = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0)
@@ -89,91 +94,6 @@ DEFAULT_TABLE_SPEEDS_MPS: tuple[float, ...] = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8
 DEFAULT_TABLE_OMEGAS_RADPS: tuple[float, ...] = (0.25, 0.5, 0.75, 1.0, 1.5)
 
 _GRAVITY_MPS2 = 9.81
-
-
-def _grid(name: str, values: Sequence[float]) -> np.ndarray:
-    try:
-        arr = np.asarray(values, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidParameterError(f"{name} must be a sequence of numbers, got {values!r:.80}") from exc
-    if arr.ndim != 1 or arr.size < 1 or not np.all(np.isfinite(arr)) or np.any(arr <= 0) or np.any(np.diff(arr) <= 0):
-        raise InvalidParameterError(f"{name} must be a non-empty, strictly increasing sequence of numbers > 0, got {values!r}")
-    return arr
-
-
-def predict_currents(model: Any, log: InteractionLog, label: str) -> np.ndarray:
-    """``model.predict(log)`` checked: finite ``(len(log), 2)`` left/right currents (A).
-
-    Every place the planner asks a current model for currents goes through here, so a model
-    with another feature or output layout fails with a message naming it rather than with a
-    numpy error or, worse, silently (an ``(N, 3)`` output is not cut to two columns).
-
-    Raises
-    ------
-    InvalidParameterError
-        The prediction is not a finite ``(len(log), 2)`` array; ``label`` names the model.
-    """
-    try:
-        pred = np.asarray(model.predict(log), dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidParameterError(f"{label} could not predict currents for a {len(log)}-sample log: {exc}") from exc
-    if pred.shape != (len(log), 2) or not np.all(np.isfinite(pred)):
-        what = "non-finite values" if pred.shape == (len(log), 2) else f"shape {pred.shape!r}"
-        raise InvalidParameterError(
-            f"{label} must predict finite (N, 2) left/right currents for a log of N={len(log)} samples, got {what}"
-        )
-    return pred
-
-
-@dataclass(frozen=True, eq=False)
-class LearnedModelTable:
-    """Flat-ground energy tables of one current model (see :mod:`planner.learned_cost`).
-
-    Attributes
-    ----------
-    model_id : int
-        Id of the model in the registry.
-    speeds_mps : ndarray, shape (S,)
-        Speed grid (m/s).
-    energy_per_metre_j : ndarray, shape (S,)
-        Battery energy per metre of straight flat driving, electronics included (J/m).
-    omegas_radps : ndarray, shape (W,)
-        Turn-rate grid (rad/s).
-    turn_energy_per_rad_j : ndarray, shape (W,)
-        Battery energy per radian of turning in place, electronics included (J/rad).
-    mean_current_a : ndarray, shape (S + W, 2)
-        The settled mean predicted ``[left, right]`` currents behind the tables (A).
-    build_time_s : float
-        Seconds spent building the table (prediction included).
-    """
-
-    model_id: int
-    speeds_mps: np.ndarray
-    energy_per_metre_j: np.ndarray
-    omegas_radps: np.ndarray
-    turn_energy_per_rad_j: np.ndarray
-    mean_current_a: np.ndarray
-    build_time_s: float
-
-    def __post_init__(self) -> None:
-        for name in ("speeds_mps", "energy_per_metre_j", "omegas_radps", "turn_energy_per_rad_j", "mean_current_a"):
-            arr = np.array(getattr(self, name), dtype=np.float64)
-            if not np.all(np.isfinite(arr)):
-                raise InvalidParameterError(f"LearnedModelTable.{name} must be finite, got {arr!r}")
-            arr.setflags(write=False)
-            object.__setattr__(self, name, arr)
-        if self.energy_per_metre_j.shape != self.speeds_mps.shape:
-            raise InvalidParameterError("LearnedModelTable: energy_per_metre_j must match speeds_mps")
-        if self.turn_energy_per_rad_j.shape != self.omegas_radps.shape:
-            raise InvalidParameterError("LearnedModelTable: turn_energy_per_rad_j must match omegas_radps")
-
-    def energy_per_metre_at(self, speed_mps: float) -> float:
-        """Flat-ground J/m at ``speed_mps``, linearly interpolated (constant beyond the grid)."""
-        return float(np.interp(speed_mps, self.speeds_mps, self.energy_per_metre_j))
-
-    def turn_energy_per_rad_at(self, omega_radps: float) -> float:
-        """J/rad of turning at ``omega_radps``, linearly interpolated (constant beyond the grid)."""
-        return float(np.interp(omega_radps, self.omegas_radps, self.turn_energy_per_rad_j))
 
 
 class LearnedEnergyModel:
@@ -238,8 +158,8 @@ class LearnedEnergyModel:
         self.registry = registry
         self.robot = robot
         self.physics_ground = physics_ground
-        self.speeds_mps = _grid("speeds_mps", speeds_mps)
-        self.omegas_radps = _grid("omegas_radps", omegas_radps)
+        self.speeds_mps = increasing_grid("speeds_mps", speeds_mps)
+        self.omegas_radps = increasing_grid("omegas_radps", omegas_radps)
         for name, value in (("hold_s", hold_s), ("rate_hz", rate_hz)):
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise InvalidParameterError(f"{name} must be a finite number > 0, got {value!r}")

@@ -107,7 +107,7 @@ def compare_route(cost: EnergyCost, start_xy_m: tuple[float, float], goal_xy_m: 
     """The baselines of a query: the shortest-distance route and the 1-cell lattice optimum.
 
     Computed once per (cost, start, goal) and cached on the cost (:attr:`EnergyCost.results`,
-    least recently used dropped beyond :data:`~planner.edge_cost.CACHE_SIZE` entries). The
+    least recently used dropped beyond :data:`~planner.cache.CACHE_SIZE` entries). The
     first call builds the 1-cell lattice graph of the cost (cached too).
 
     Raises

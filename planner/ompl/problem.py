@@ -16,7 +16,20 @@ from ompl import util as ou
 from ..kernels import CostArrays, point_free, walk_forward
 from .objective import EnergyObjective
 
-__all__ = ["EnergyProblem", "FreeCellChecker", "WalkMotionValidator", "seed_ompl", "ompl_log_level", "ompl_seed"]
+__all__ = [
+    "EnergyProblem",
+    "FreeCellChecker",
+    "WalkMotionValidator",
+    "seed_ompl",
+    "ompl_log_level",
+    "ompl_seed",
+    "CHECKS_PER_EVALUATION",
+]
+
+#: A work-bounded solve also stops after this many termination checks per allowed objective
+#: call: a planner that has converged (BIT* on its lower bound) stops calling the objective
+#: but keeps polling, and would otherwise never reach the work bound.
+CHECKS_PER_EVALUATION = 2
 
 
 def ompl_seed(seed: int) -> int:
@@ -162,12 +175,18 @@ class EnergyProblem:
         return out
 
     def termination(self, deadline: float | None):
-        """A termination condition: the work bound reached, or ``time.perf_counter() >= deadline``."""
+        """A termination condition: the work bound reached (``max_evaluations`` objective calls,
+        or :data:`CHECKS_PER_EVALUATION` times as many checks of this condition), or
+        ``time.perf_counter() >= deadline``. Both work counts are deterministic."""
         objective, max_evals = self.objective, self.max_evaluations
+        max_checks = None if max_evals is None else CHECKS_PER_EVALUATION * max_evals
+        checks = [0]
 
         def done() -> bool:
-            if max_evals is not None and objective.evaluations >= max_evals:
-                return True
+            if max_evals is not None:
+                checks[0] += 1
+                if objective.evaluations >= max_evals or checks[0] >= max_checks:
+                    return True
             return deadline is not None and time.perf_counter() >= deadline
 
         return ob.PlannerTerminationCondition(done)

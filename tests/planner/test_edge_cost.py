@@ -361,6 +361,9 @@ def test_grounds_keyed_by_class_id():
         ({"speed_mps": 0.5, "max_slope_rad": 2.0}, "max_slope_rad"),
         ({"speed_mps": 0.5, "grade_samples": 100}, "grade_samples"),
         ({"speed_mps": 0.5, "turn_samples": 1}, "turn_samples"),
+        ({"speed_mps": "fast"}, "speed_mps must be a real number, got 'fast'"),
+        ({"speed_mps": 0.5, "max_slope_rad": "steep"}, "max_slope_rad must be a real number"),
+        ({"speed_mps": 0.5, "grade_samples": "many"}, "grade_samples must be an integer"),
     ],
 )
 def test_from_model_rejects_bad_parameters(kwargs, match):
@@ -410,6 +413,10 @@ def test_constructor_checks_grid_and_tables():
         EnergyCost(tmap, np.ones((20, 30), int), ok, ok, **kw)
     with pytest.raises(InvalidParameterError, match="turn_rate_radps"):
         EnergyCost(tmap, np.zeros((20, 30), int), ok, ok, **{**kw, "turn_rate_radps": 0.0})
+    with pytest.raises(InvalidParameterError, match="speed_mps must be a real number, got 'fast'"):
+        EnergyCost(tmap, np.zeros((20, 30), int), ok, ok, **{**kw, "speed_mps": "fast"})
+    with pytest.raises(InvalidParameterError, match="grade_table_j_per_m and turn_table_j must be arrays of numbers"):
+        EnergyCost(tmap, np.zeros((20, 30), int), [["a", "b", "c"]], ok, **kw)
     # Tables are copied and read-only: the caller's arrays stay writable.
     cost = EnergyCost(tmap, np.zeros((20, 30), int), ok, ok, **kw)
     assert ok.flags.writeable and not cost.grade_table_j_per_m.flags.writeable
@@ -429,3 +436,60 @@ def test_segment_energy_rejects_bad_points(a, b, exc, match):
     cost = EnergyCost.from_model(_flat(), LinearModel(), {"g": 1.0}, speed_mps=0.5)
     with pytest.raises(exc, match=match):
         cost.segment_energy_j(a, b)
+
+
+@pytest.mark.parametrize("name", ["starts_xy_m", "ends_xy_m"])
+def test_segment_energy_names_a_non_numeric_point(name):
+    cost = EnergyCost.from_model(_flat(), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    points = {"starts_xy_m": [[1.0, 1.0]], "ends_xy_m": [[2.0, 2.0]]}
+    points[name] = [["one", "two"]]
+    with pytest.raises(InvalidParameterError, match=f"{name} must be an array of real numbers"):
+        cost.segment_energy_j(points["starts_xy_m"], points["ends_xy_m"])
+
+
+# --------------------------------------------------------------------------- from_presets
+def _preset_map(names=("asphalt", "grass"), unknown=False):
+    ground = np.zeros((12, 16), int)
+    ground[:, 8:] = 1
+    if unknown:
+        ground[0, 0] = -1
+    return TerrainMap(np.zeros((12, 16)), 1.0, ground=ground, ground_names=dict(enumerate(names)))
+
+
+def test_from_presets_equals_from_model_with_the_presets():
+    tmap = _preset_map(unknown=True)
+    got = EnergyCost.from_presets(tmap, speed_mps=0.4, max_slope_rad=math.radians(15.0))
+    ref = EnergyCost.from_model(
+        tmap, PhysicsEnergyModel(robot_preset("husky")),
+        {"asphalt": ground_preset("asphalt"), "grass": ground_preset("grass")}, 0.4,
+        unknown_ground=ground_preset("gravel"), max_slope_rad=math.radians(15.0),
+    )
+    assert got.ground_labels == ref.ground_labels == ("unknown", "asphalt", "grass")
+    assert np.array_equal(got.grade_table_j_per_m, ref.grade_table_j_per_m)
+    assert np.array_equal(got.turn_table_j, ref.turn_table_j)
+    assert np.array_equal(got.ground_rows, ref.ground_rows)
+
+
+def test_from_presets_refuses_unknown_names_and_bad_speeds():
+    with pytest.raises(UnknownNameError, match=r"named 'lava', which has no preset; known grounds: \[.*'asphalt'"):
+        EnergyCost.from_presets(_preset_map(("asphalt", "lava")))
+    with pytest.raises(InvalidParameterError, match="speed_mps must be a real number, got 'fast'"):
+        EnergyCost.from_presets(_preset_map(), speed_mps="fast")
+    with pytest.raises(InvalidParameterError, match="unknown_ground is None"):
+        EnergyCost.from_presets(_preset_map(unknown=True), unknown_ground=None)
+    with pytest.raises(UnknownNameError):
+        EnergyCost.from_presets(_preset_map(), robot="no such robot")
+    with pytest.raises(InvalidParameterError, match="terrain must be a TerrainMap"):
+        EnergyCost.from_presets(np.zeros((4, 4)))
+
+
+def test_arrays_are_the_read_only_kernel_seam():
+    cost = EnergyCost.from_model(_ramp(), LinearModel(), {"asphalt": 1.0}, speed_mps=0.5)
+    arr = cost.arrays
+    assert arr.grid == cost.terrain.grid
+    assert arr.cells.shape == cost.shape + (3,)
+    assert np.array_equal(arr.cells[..., 2] < 0, cost.blocked)
+    assert arr.grade_table is cost.grade_table_j_per_m and arr.turn_table is cost.turn_table_j
+    for a in (arr.cells, arr.grade_table, arr.turn_table, arr.geo):
+        assert not a.flags.writeable
+    assert arr.grade_max == pytest.approx(math.tan(cost.max_slope_rad))

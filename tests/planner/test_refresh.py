@@ -25,6 +25,20 @@ def _cost(seed: int = 0, shape: tuple[int, int] = (40, 48)) -> EnergyCost:
                       battery_voltage_v=24.0, turn_rate_radps=0.5)
 
 
+def _assert_same_lattice(got: Lattice, ref: Lattice) -> None:
+    """Exactly the same directed graph (structure and weights), and the same answers to queries."""
+    for weight in ("energy", "length"):
+        g, r = got.graph(weight), ref.graph(weight)
+        assert g.shape == r.shape
+        assert np.array_equal(g.indptr, r.indptr) and np.array_equal(g.indices, r.indices)
+        assert np.array_equal(g.data, r.data)  # exact, not approx
+    assert got.n_edges == ref.n_edges
+    for start, goal in (((2.5, 3.5), (44.5, 36.5)), ((40.5, 2.5), (3.5, 30.5)), ((20.2, 20.7), (30.1, 5.3))):
+        a = got.shortest_path(start, goal)
+        b = ref.shortest_path(start, goal)
+        assert a.found == b.found and a.objective == b.objective and np.array_equal(a.waypoints_m, b.waypoints_m)
+
+
 def _fresh(old: EnergyCost, grade: np.ndarray, turn: np.ndarray, rows: np.ndarray) -> EnergyCost:
     return EnergyCost(old.terrain, rows, grade, turn, speed_mps=old.speed_mps, max_slope_rad=old.max_slope_rad,
                       battery_voltage_v=old.battery_voltage_v, turn_rate_radps=old.turn_rate_radps)
@@ -40,15 +54,12 @@ def test_refreshed_weights_equal_fresh_build_exactly(stride):
     ref = Lattice(_fresh(cost, grade, turn, cost.ground_rows), stride)
     got = Lattice.for_cost(new, stride)
     assert got is not lat and got.cost is new
-    assert np.array_equal(got._data["energy"], ref._data["energy"])  # exact, not approx
-    assert np.array_equal(got._indices, ref._indices) and np.array_equal(got._indptr, ref._indptr)
+    _assert_same_lattice(got, ref)
+    assert got.shortest_path((2.5, 3.5), (44.5, 36.5)).found
     assert np.array_equal(new.changed_cells, (cost.ground_rows == 1) & ~cost.blocked)
     assert new.min_energy_per_metre_j == _fresh(cost, grade, turn, cost.ground_rows).min_energy_per_metre_j
-    a = got.shortest_path((2.5, 3.5), (44.5, 36.5))
-    b = ref.shortest_path((2.5, 3.5), (44.5, 36.5))
-    assert a.found and a.objective == b.objective and np.array_equal(a.waypoints_m, b.waypoints_m)
     # the old cost and lattice are untouched
-    assert np.array_equal(Lattice.for_cost(cost, stride)._data["energy"], Lattice(cost, stride)._data["energy"])
+    _assert_same_lattice(Lattice.for_cost(cost, stride), Lattice(cost, stride))
 
 
 def test_unchanged_rows_are_not_recomputed():
@@ -75,8 +86,7 @@ def test_unchanged_rows_are_not_recomputed():
                     expected += 2
     assert got.edges_computed == expected
     assert 0 < got.edges_computed < lat.edges_computed / 100
-    ref = Lattice(_fresh(cost, grade4, turn4, rows), 1)
-    assert np.array_equal(got._data["energy"], ref._data["energy"])
+    _assert_same_lattice(got, Lattice(_fresh(cost, grade4, turn4, rows), 1))
 
 
 def test_renumbered_rows_with_equal_content_count_as_unchanged():
@@ -99,7 +109,7 @@ def test_edges_appearing_or_vanishing_rebuild_the_structure():
     got = Lattice.for_cost(new, 1)
     ref = Lattice(_fresh(cost, grade, turn, cost.ground_rows), 1)
     assert got.n_edges == ref.n_edges < lat.n_edges
-    assert np.array_equal(got._indices, ref._indices) and np.array_equal(got._data["energy"], ref._data["energy"])
+    _assert_same_lattice(got, ref)
 
 
 def test_refresh_errors():
@@ -120,3 +130,14 @@ def test_refresh_errors():
         lat.refreshed(other, np.zeros(cost.shape, bool))
     with pytest.raises(InvalidParameterError, match="changed_cells"):
         lat.refreshed(cost.with_tables(grade, turn), np.zeros((3, 3), bool))
+
+
+def test_graph_is_a_copy_and_names_its_weight():
+    from terrain import UnknownNameError
+
+    lat = Lattice(_cost(), 1)
+    g = lat.graph()
+    g.data[:] = 0.0
+    assert lat.graph().data.min() > 0
+    with pytest.raises(UnknownNameError, match="weight"):
+        lat.graph("time")

@@ -1,4 +1,4 @@
-"""Tests of planner.ompl_planner: plan_route with every planner, statuses, errors, determinism."""
+"""Tests of planner.planning (and planner.ompl): plan_route with every planner, statuses, errors, determinism, comparisons."""
 
 from __future__ import annotations
 
@@ -13,6 +13,8 @@ from planner import (
     PLANNERS,
     EnergyCost,
     PlannerSettings,
+    RouteComparison,
+    compare_route,
     plan_route,
     refine_route,
     shortest_route,
@@ -278,3 +280,101 @@ def test_shortest_route_goes_round_the_wall_end():
 def test_ompl_planner_names_are_all_plannable():
     assert set(OMPL_PLANNERS) <= set(PLANNERS) and "lattice" in PLANNERS
     assert "PRM" not in PLANNERS and "PRMstar" not in PLANNERS  # deadlock with Python objectives
+
+
+@pytest.mark.parametrize("planner", PLANNERS)
+def test_every_planner_name_plans_a_route_on_a_tiny_map(planner):
+    """Each registered name builds, tunes and solves (seeded, a work bound only), then refines.
+
+    BIT* converges on this map (the straight line meets its lower bound) and stops calling the
+    objective: the work bound must still end its solve (it used to poll forever)."""
+    tmap = _map(np.zeros((12, 16)))
+    cost = _cost(tmap)
+    settings = PlannerSettings(fmt_samples=60, bit_samples_per_batch=20, refine_max_steps=20, refine_rounds=1)
+    start, goal = (1.5, 1.5), (14.5, 10.5)
+    evaluations = 20000 if planner == "FMT" else 3000  # FMT's work is its sample count
+    route = plan_route(tmap, start, goal, cost=cost, planner=planner, seed=5, time_limit_s=None,
+                       max_cost_evaluations=evaluations, settings=settings)
+    assert route.status == "exact", route
+    assert route.planner == f"{planner}+refine"
+    np.testing.assert_allclose(route.waypoints_m[[0, -1]], [start, goal])
+    # level uniform ground: the straight line is optimal, and the refinement finds it
+    assert route.energy_j == pytest.approx(cost.path_energy_j([start, goal]), rel=1e-6)
+
+
+# --------------------------------------------------------------------------- start = goal, seeds, comparisons
+@pytest.mark.parametrize("planner", ["lattice", "RRTstar"])
+def test_start_equal_to_goal_is_refused(planner):
+    tmap = _hill_map()
+    with pytest.raises(InvalidParameterError, match="start equals goal"):
+        plan_route(tmap, (5.0, 25.0), (5.0, 25.0), cost=_cost(tmap), planner=planner)
+
+
+def test_unseeded_lattice_plans_are_identical():
+    tmap = _hill_map()
+    cost = _cost(tmap)
+    a = plan_route(tmap, (5.0, 25.0), (75.0, 25.0), cost=cost, planner="lattice")
+    b = plan_route(tmap, (5.0, 25.0), (75.0, 25.0), cost=cost, planner="lattice")
+    c = plan_route(tmap, (5.0, 25.0), (75.0, 25.0), cost=_cost(tmap), planner="lattice")
+    assert a.planner == "lattice+refine" and a.waypoints_m.shape[0] > 2
+    np.testing.assert_array_equal(a.waypoints_m, b.waypoints_m)
+    np.testing.assert_array_equal(a.waypoints_m, c.waypoints_m)
+    # seed=None refines with seed 0
+    d = plan_route(tmap, (5.0, 25.0), (75.0, 25.0), cost=cost, planner="lattice", seed=0)
+    np.testing.assert_array_equal(a.waypoints_m, d.waypoints_m)
+
+
+@pytest.mark.parametrize("seed", [2**32 - 1, 2**32, 1.5, True])
+def test_seeds_follow_the_library_rule(seed):
+    tmap = _wall_map()
+    args = (tmap, (5.0, 10.0), (75.0, 10.0))
+    if seed == 2**32 - 1 and not isinstance(seed, bool):
+        route = plan_route(*args, cost=_cost(tmap), planner="lattice", seed=seed)
+        assert route.status == "exact"
+    else:
+        with pytest.raises(InvalidParameterError, match=r"seed must be None or an integer in \[0, 2\*\*32\)"):
+            plan_route(*args, cost=_cost(tmap), planner="lattice", seed=seed)
+
+
+def test_comparisons_only_when_asked_and_once_per_query():
+    tmap = _hill_map()
+    cost = _cost(tmap)
+    start, goal = (5.0, 25.0), (75.0, 25.0)
+    plain = plan_route(tmap, start, goal, cost=cost, planner="lattice")
+    assert plain.comparison is None and math.isnan(plain.energy_saved_pct) and math.isnan(plain.optimality_ratio)
+    assert not any(key[0] == "comparison" for key in cost.results)
+    route = plan_route(tmap, start, goal, cost=cost, planner="lattice", compare=True)
+    assert isinstance(route.comparison, RouteComparison)
+    shortest = route.comparison.shortest
+    assert shortest.planner == "shortest" and shortest.status == "exact"
+    assert route.shortest_energy_j == shortest.energy_j == pytest.approx(cost.path_energy_j([start, goal]))
+    assert route.lattice_energy_j == route.comparison.lattice_optimum_j > 0
+    assert route.energy_saved_pct > 5.0 and 0.95 < route.optimality_ratio < 1.02
+    again = plan_route(tmap, start, goal, cost=cost, planner="RRTstar", seed=1, time_limit_s=None,
+                       max_cost_evaluations=3000, compare=True)
+    assert again.comparison is route.comparison  # computed once, cached on the cost
+    assert compare_route(cost, start, goal) is route.comparison
+
+
+def test_the_comparison_cache_is_bounded():
+    tmap = _map(np.zeros((10, 12)))
+    cost = _cost(tmap)
+    cost.results.maxsize = 6
+    for k in range(10):
+        compare_route(cost, (0.5 + k, 0.5), (11.5, 9.5 - 0.5 * k))
+    assert len(cost.results) <= 6
+    kept = compare_route(cost, (9.5, 0.5), (11.5, 5.0))  # the most recent query is still cached
+    assert compare_route(cost, (9.5, 0.5), (11.5, 5.0)) is kept
+
+
+def test_bad_flags_are_refused():
+    tmap = _wall_map()
+    args = (tmap, (5.0, 10.0), (75.0, 10.0))
+    with pytest.raises(InvalidParameterError, match="compare must be True or False"):
+        plan_route(*args, cost=_cost(tmap), planner="lattice", compare="yes")
+    with pytest.raises(InvalidParameterError, match="refine must be True or False"):
+        plan_route(*args, cost=_cost(tmap), planner="lattice", refine=1)
+    with pytest.raises(InvalidParameterError, match="time_limit_s must be a real number"):
+        plan_route(*args, cost=_cost(tmap), time_limit_s="1 s")
+    with pytest.raises(InvalidParameterError, match="PlannerSettings.fmt_samples must be an integer"):
+        PlannerSettings(fmt_samples=500.0)

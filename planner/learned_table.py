@@ -1,0 +1,106 @@
+"""LearnedModelTable: one current model's flat-ground energy tables, and the checked prediction behind them."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from energy import InteractionLog
+from terrain.errors import InvalidParameterError
+
+__all__ = ["LearnedModelTable", "predict_currents", "increasing_grid"]
+
+
+def increasing_grid(name: str, values: Sequence[float]) -> np.ndarray:
+    """``values`` as a non-empty, strictly increasing float array of numbers > 0 (a table grid).
+
+    Raises
+    ------
+    InvalidParameterError
+        Anything else; the message names ``name``.
+    """
+    try:
+        arr = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(f"{name} must be a sequence of numbers, got {values!r:.80}") from exc
+    if arr.ndim != 1 or arr.size < 1 or not np.all(np.isfinite(arr)) or np.any(arr <= 0) or np.any(np.diff(arr) <= 0):
+        raise InvalidParameterError(f"{name} must be a non-empty, strictly increasing sequence of numbers > 0, got {values!r}")
+    return arr
+
+
+def predict_currents(model: Any, log: InteractionLog, label: str) -> np.ndarray:
+    """``model.predict(log)`` checked: finite ``(len(log), 2)`` left/right currents (A).
+
+    Every place the planner asks a current model for currents goes through here, so a model
+    with another feature or output layout fails with a message naming it rather than with a
+    numpy error or, worse, silently (an ``(N, 3)`` output is not cut to two columns).
+
+    Raises
+    ------
+    InvalidParameterError
+        The prediction is not a finite ``(len(log), 2)`` array; ``label`` names the model.
+    """
+    try:
+        pred = np.asarray(model.predict(log), dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(f"{label} could not predict currents for a {len(log)}-sample log: {exc}") from exc
+    if pred.shape != (len(log), 2) or not np.all(np.isfinite(pred)):
+        what = "non-finite values" if pred.shape == (len(log), 2) else f"shape {pred.shape!r}"
+        raise InvalidParameterError(
+            f"{label} must predict finite (N, 2) left/right currents for a log of N={len(log)} samples, got {what}"
+        )
+    return pred
+
+
+@dataclass(frozen=True, eq=False)
+class LearnedModelTable:
+    """Flat-ground energy tables of one current model (see :mod:`planner.learned_cost`).
+
+    Attributes
+    ----------
+    model_id : int
+        Id of the model in the registry.
+    speeds_mps : ndarray, shape (S,)
+        Speed grid (m/s).
+    energy_per_metre_j : ndarray, shape (S,)
+        Battery energy per metre of straight flat driving, electronics included (J/m).
+    omegas_radps : ndarray, shape (W,)
+        Turn-rate grid (rad/s).
+    turn_energy_per_rad_j : ndarray, shape (W,)
+        Battery energy per radian of turning in place, electronics included (J/rad).
+    mean_current_a : ndarray, shape (S + W, 2)
+        The settled mean predicted ``[left, right]`` currents behind the tables (A).
+    build_time_s : float
+        Seconds spent building the table (prediction included).
+    """
+
+    model_id: int
+    speeds_mps: np.ndarray
+    energy_per_metre_j: np.ndarray
+    omegas_radps: np.ndarray
+    turn_energy_per_rad_j: np.ndarray
+    mean_current_a: np.ndarray
+    build_time_s: float
+
+    def __post_init__(self) -> None:
+        for name in ("speeds_mps", "energy_per_metre_j", "omegas_radps", "turn_energy_per_rad_j", "mean_current_a"):
+            arr = np.array(getattr(self, name), dtype=np.float64)
+            if not np.all(np.isfinite(arr)):
+                raise InvalidParameterError(f"LearnedModelTable.{name} must be finite, got {arr!r}")
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+        if self.energy_per_metre_j.shape != self.speeds_mps.shape:
+            raise InvalidParameterError("LearnedModelTable: energy_per_metre_j must match speeds_mps")
+        if self.turn_energy_per_rad_j.shape != self.omegas_radps.shape:
+            raise InvalidParameterError("LearnedModelTable: turn_energy_per_rad_j must match omegas_radps")
+
+    def energy_per_metre_at(self, speed_mps: float) -> float:
+        """Flat-ground J/m at ``speed_mps``, linearly interpolated (constant beyond the grid)."""
+        return float(np.interp(speed_mps, self.speeds_mps, self.energy_per_metre_j))
+
+    def turn_energy_per_rad_at(self, omega_radps: float) -> float:
+        """J/rad of turning at ``omega_radps``, linearly interpolated (constant beyond the grid)."""
+        return float(np.interp(omega_radps, self.omegas_radps, self.turn_energy_per_rad_j))
