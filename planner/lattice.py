@@ -5,7 +5,8 @@ Nodes sit at cell centres (every ``stride_cells``-th cell in each direction). Ea
 edge is :meth:`EnergyCost.segment_energy_j` of the straight segment between the two node
 centres (directed: uphill ``!=`` downhill); edges that cross a blocked cell, or meet a
 grade their ground cannot be driven at in that direction, are absent.
-Both directions of a pair are costed in one cell walk, in parallel (numba).
+Both directions of a pair are costed in one cell walk by the compiled kernels of
+:mod:`planner.kernels` (in parallel on large lattices).
 
 A query joins the start and goal points to the lattice nodes within ``1.5 * stride`` cells
 (plus the direct start-goal segment), so a lattice route is ``start, node, ..., node, goal``.
@@ -34,6 +35,7 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from terrain.checks import check_int
 from terrain.errors import InvalidParameterError, UnknownNameError
 
 from .edge_cost import EnergyCost
@@ -133,10 +135,8 @@ class Lattice:
     def __init__(self, cost: EnergyCost, stride_cells: int = 1) -> None:
         if not isinstance(cost, EnergyCost):
             raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
-        if isinstance(stride_cells, bool) or int(stride_cells) != stride_cells or stride_cells < 1:
-            raise InvalidParameterError(f"stride_cells must be a positive integer, got {stride_cells!r}")
+        s = check_int("stride_cells", stride_cells, low=1)
         t0 = time.perf_counter()
-        s = int(stride_cells)
         rows, cols = cost.shape
         off = s // 2
         self.cost = cost
@@ -255,7 +255,7 @@ class Lattice:
     @classmethod
     def for_cost(cls, cost: EnergyCost, stride_cells: int = 1) -> Lattice:
         """The lattice of ``cost`` at ``stride_cells``, built once and cached on the cost."""
-        key = int(stride_cells)
+        key = check_int("stride_cells", stride_cells, low=1)
         lat = cost.lattices.get(key)
         if lat is None:
             lat = cls(cost, stride_cells)

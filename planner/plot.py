@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from terrain import TerrainMap
-from terrain.atomic import atomic_path
+from terrain.atomic import check_output_path, save_figure
 
 __all__ = ["RouteLine", "plot_routes"]
 
@@ -70,7 +70,13 @@ def plot_routes(
     -------
     Path
         The written file.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``path`` is a directory or lies under a file (checked before drawing).
     """
+    path = check_output_path(path, "path")
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -147,10 +153,7 @@ def plot_routes(
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, framealpha=0.9)
     fig.tight_layout()
 
-    path = Path(path)
     try:
-        with atomic_path(path) as tmp:
-            fig.savefig(tmp, dpi=dpi, format="png")
+        return save_figure(fig, path, dpi=dpi, format="png")
     finally:
         plt.close(fig)
-    return path
