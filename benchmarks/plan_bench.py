@@ -8,6 +8,10 @@ different angles to the lattice directions) and reports
   (numba compilation is excluded and reported on its own);
 - edge-cost throughput: segments per second, in bulk (the lattice path) and one compiled call
   at a time from Python (the OMPL callback path);
+- serial vs parallel kernels: segment batches and lattice graphs of several sizes, and lattice
+  plans on the bundled example map, timed with the serial kernel, the parallel kernel and the
+  variant the library picks by work size (``planner.kernels.PARALLEL_MIN_WALKS``), with their
+  ratios in the same run;
 - per planner and budget: planning time, route energy (J, turns included), drive energy and
   its ratio to the directed 16-connected 1-cell lattice optimum, energy saved against the
   shortest-distance route. The lattice optimum minimises drive energy alone while the
@@ -46,8 +50,9 @@ from planner import (
     plan_route,
     warm_up_kernels,
 )
+from planner.kernels import variants
 from terrain.atomic import write_json_atomic
-from terrain.procedural import procedural_map
+from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map, procedural_map
 
 # Start/goal as fractions of the map extent: about 12, 45 and 74 degrees from the x axis.
 QUERIES = (((0.05, 0.30), (0.95, 0.50)), ((0.08, 0.06), (0.92, 0.94)), ((0.30, 0.05), (0.55, 0.95)))
@@ -117,6 +122,80 @@ def _make_cost(tmap, robot: str) -> EnergyCost:
     return EnergyCost.from_model(tmap, model, grounds, speed_mps=0.5)
 
 
+def _best_time(fn: Any, repeats: int) -> float:
+    """Median wall time (s) of ``repeats`` calls of ``fn``."""
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def _with_threshold(threshold: int, fn: Any) -> Any:
+    """Run ``fn`` with ``planner.kernels.variants.PARALLEL_MIN_WALKS`` set to ``threshold``."""
+    saved = variants.PARALLEL_MIN_WALKS
+    variants.PARALLEL_MIN_WALKS = threshold
+    try:
+        return fn()
+    finally:
+        variants.PARALLEL_MIN_WALKS = saved
+
+
+def _variant_times(fn: Any, repeats: int) -> dict[str, float]:
+    """Median times of ``fn`` forced serial, forced parallel and as chosen by work size."""
+    out = {}
+    for label, threshold in (("serial", 2**62), ("parallel", 0), ("chosen", variants.PARALLEL_MIN_WALKS)):
+        out[f"{label}_s"] = _with_threshold(threshold, lambda: _best_time(fn, repeats))
+    out["parallel_over_serial"] = out["parallel_s"] / out["serial_s"]
+    out["chosen_over_best"] = out["chosen_s"] / min(out["serial_s"], out["parallel_s"])
+    return out
+
+
+def _parallel_table(args: argparse.Namespace) -> list[dict[str, Any]]:
+    """Serial vs parallel vs chosen: segment batches, lattice graphs, lattice plans on the example map."""
+    import numba
+
+    rows: list[dict[str, Any]] = []
+    side = 128 if args.quick else 256
+    tmap = procedural_map((side, side), 1.0, seed=args.seed)
+    cost = _make_cost(tmap, args.robot)
+    rng = np.random.default_rng(args.seed)
+    for n in (10, 100, 1_000, 10_000, 100_000):
+        a = rng.uniform(0.0, side, size=(n, 2))
+        b = np.clip(a + rng.normal(0.0, 5.0, size=(n, 2)), 0.0, side)
+        repeats = max(3, min(200, 200_000 // n))
+        rows.append({"work": "segment_energy_j", "size": f"{n} segments", "walks": n,
+                     **_variant_times(lambda a=a, b=b: cost.segment_energy_j(a, b), repeats)})
+    for n in ((32, 64) if args.quick else (32, 64, 128, 256)):
+        sub = procedural_map((n, n), 1.0, seed=args.seed)
+        sub_cost = _make_cost(sub, args.robot)
+        rows.append({"work": "Lattice graph", "size": f"{n}^2 cells", "walks": n * n * 8,
+                     **_variant_times(lambda c=sub_cost: Lattice(c, 1), 3)})
+    bundled = example_map()
+    bundled_cost = _make_cost(bundled, args.robot)
+    Lattice.for_cost(bundled_cost, 1)  # map preparation, not timed
+
+    def lattice_plan() -> None:
+        plan_route(bundled, EXAMPLE_START_XY_M, EXAMPLE_GOAL_XY_M, cost=bundled_cost, planner="lattice")
+
+    rows.append({"work": "plan_route lattice", "size": f"example map {bundled.shape[0]}x{bundled.shape[1]}",
+                 "walks": None, **_variant_times(lattice_plan, 3 if args.quick else 5)})
+    for r in rows:
+        r["numba_threads"] = numba.get_num_threads()
+        r["threshold_walks"] = variants.PARALLEL_MIN_WALKS
+    return rows
+
+
+def _print_parallel(rows: list[dict[str, Any]]) -> None:
+    print(f"\nserial vs parallel kernels (numba threads {rows[0]['numba_threads']}, parallel from "
+          f"{rows[0]['threshold_walks']} walks; median seconds)")
+    print(f"{'work':<20} {'size':<26} {'serial s':>9} {'parallel s':>11} {'chosen s':>9} {'par/ser':>8} {'chosen/best':>12}")
+    for r in rows:
+        print(f"{r['work']:<20} {r['size']:<26} {r['serial_s']:9.5f} {r['parallel_s']:11.5f} {r['chosen_s']:9.5f} "
+              f"{r['parallel_over_serial']:8.2f} {r['chosen_over_best']:12.2f}")
+
+
 def _run_size(n: int, args: argparse.Namespace, rng: np.random.Generator) -> dict[str, Any]:
     tmap = procedural_map((n, n), 1.0, seed=args.seed)
     cost = _make_cost(tmap, args.robot)
@@ -150,7 +229,7 @@ def _run_size(n: int, args: argparse.Namespace, rng: np.random.Generator) -> dic
             times = []
             for samples in FMT_PROBES:
                 probe = plan_route(tmap, start, goal, cost=cost, planner="FMT", time_limit_s=30.0, seed=args.seed,
-                                   refine=False, compare=False, settings=PlannerSettings(fmt_samples=samples))
+                                   refine=False, settings=PlannerSettings(fmt_samples=samples))
                 times.append(max(probe.planning_time_s, 1e-4))
             power = max(1.0, math.log(times[1] / times[0]) / math.log(FMT_PROBES[1] / FMT_PROBES[0]))
             fmt_fit = (times[0] / FMT_PROBES[0] ** power, power)  # t(n) = a n^p
@@ -176,6 +255,7 @@ def _run_size(n: int, args: argparse.Namespace, rng: np.random.Generator) -> dic
             route = plan_route(
                 tmap, start, goal, cost=drive_cost if objective == "drive" else cost, planner=planner,
                 time_limit_s=limit if limit else 1.0, seed=args.seed, refine=refine, settings=settings,
+                compare=True,
             )
             # every route is scored on the true cost (turns included), whatever it optimised
             energy_j = cost.path_energy_j(route.waypoints_m) if route.found else math.nan
@@ -308,6 +388,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0, help="map and planner seed")
     parser.add_argument("--quick", action="store_true", help="small run: 256^2, budgets 0.25/0.5, 2 queries")
     parser.add_argument("--out", type=Path, default=None, help="write results as JSON here")
+    parser.add_argument("--no-parallel-table", dest="parallel_table", action="store_false",
+                        help="skip the serial vs parallel kernel table")
     args = parser.parse_args(argv)
     if args.quick:
         args.sizes, args.budgets, args.queries = [256], [0.25, 0.5], 2
@@ -315,12 +397,15 @@ def main(argv: list[str] | None = None) -> int:
     rng = np.random.default_rng(args.seed)
     compile_s = warm_up_kernels()
     warm_s = _warm_up_planners()
+    parallel_rows = _parallel_table(args) if args.parallel_table else []
     results = []
     for n in args.sizes:
         _progress(f"map {n}^2 ...")
         results.append(_run_size(n, args, rng))
     rows = _summarise(results)
     _print_tables(results, rows, compile_s)
+    if parallel_rows:
+        _print_parallel(parallel_rows)
     targets = _targets(results, rows)
     for t in targets:
         print(f"{'MET ' if t['met'] else 'NOT MET'} {t['target']}: {t['value']}")
@@ -336,6 +421,7 @@ def main(argv: list[str] | None = None) -> int:
             "planner_warm_up_s": warm_s,
             "sizes": results,
             "summary": rows,
+            "parallel": parallel_rows,
             "targets": targets,
         }
         write_json_atomic(args.out, _clean(payload), indent=1)

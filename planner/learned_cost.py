@@ -72,9 +72,8 @@ from terrain import (
     CellModelRegistry,
     InvalidParameterError,
     TerrainMap,
-    UnknownNameError,
 )
-from terrain.checks import check_real
+from terrain.checks import check_choice, check_real, real_array
 
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
 from .learned_table import LearnedModelTable, increasing_grid, predict_currents
@@ -160,17 +159,10 @@ class LearnedEnergyModel:
         self.physics_ground = physics_ground
         self.speeds_mps = increasing_grid("speeds_mps", speeds_mps)
         self.omegas_radps = increasing_grid("omegas_radps", omegas_radps)
-        for name, value in (("hold_s", hold_s), ("rate_hz", rate_hz)):
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise InvalidParameterError(f"{name} must be a finite number > 0, got {value!r}")
-        if not (isinstance(settle_s, (int, float)) and math.isfinite(settle_s) and 0 <= settle_s < hold_s):
-            raise InvalidParameterError(f"settle_s must be >= 0 and < hold_s ({hold_s!r}), got {settle_s!r}")
-        self.hold_s = float(hold_s)
-        self.settle_s = float(settle_s)
-        self.rate_hz = float(rate_hz)
-        if current_convention not in ("motor", "battery"):
-            raise UnknownNameError(f"current_convention must be 'motor' or 'battery', got {current_convention!r}")
-        self.current_convention = current_convention
+        self.hold_s = check_real("hold_s", hold_s, low=0.0, low_inclusive=False)
+        self.rate_hz = check_real("rate_hz", rate_hz, low=0.0, low_inclusive=False)
+        self.settle_s = check_real("settle_s", settle_s, low=0.0, high=self.hold_s, high_inclusive=False)
+        self.current_convention = check_choice("current_convention", current_convention, ("motor", "battery"))
         self.turn_rate_radps = float(robot.turn_rate_radps)
         self._physics = PhysicsEnergyModel(robot)
         self._electronics = PhysicsEnergyModel(robot, effects=("sensor", "control"))
@@ -194,15 +186,12 @@ class LearnedEnergyModel:
             Arrays of different lengths, fewer than 2 samples, non-finite or non-increasing times.
         """
         self.registry.model(model_id)  # UnknownNameError
-        t = np.asarray(accel_time_s, dtype=np.float64)
-        a = np.asarray(accel_z_mps2, dtype=np.float64)
-        if t.ndim != 1 or a.shape != t.shape or t.size < 2:
-            raise InvalidParameterError(
-                f"accel_time_s and accel_z_mps2 must be 1-D of the same length >= 2, got {t.shape!r} and {a.shape!r}"
-            )
-        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(a)) and np.all(np.diff(t) > 0)):
-            raise InvalidParameterError("accel_time_s must be finite and strictly increasing and accel_z_mps2 finite")
-        self._vibration[int(model_id)] = (t - t[0], a.copy())
+        t = real_array("accel_time_s", accel_time_s, ndim=1)
+        a = real_array("accel_z_mps2", accel_z_mps2, ndim=1)
+        if a.shape != t.shape or t.size < 2 or not np.all(np.diff(t) > 0):
+            raise InvalidParameterError(f"accel_time_s (strictly increasing) and accel_z_mps2 must have the same "
+                                        f"length >= 2, got {t.shape!r} and {a.shape!r}")
+        self._vibration[int(model_id)] = (t - t[0], a)
         self._tables.pop(int(model_id), None)
 
     # ------------------------------------------------------------------ tables
@@ -479,12 +468,9 @@ class LearnedEnergyModel:
         if previous is not None:
             if not isinstance(previous, EnergyCost):
                 raise InvalidParameterError(f"previous must be an EnergyCost or None, got {type(previous).__name__!r}")
-            same = (previous.terrain is terrain or previous.terrain.same_grid(terrain)) and (
-                previous.speed_mps == speed and previous.max_slope_rad == slope
-                and previous.grade_table_j_per_m.shape[1] == n_grade
-                and previous.turn_table_j.shape[1] == n_turn
-            )
-            if not same:
+            if not ((previous.terrain is terrain or previous.terrain.same_grid(terrain))
+                    and (previous.speed_mps, previous.max_slope_rad) == (speed, slope)
+                    and (previous.grade_table_j_per_m.shape[1], previous.turn_table_j.shape[1]) == (n_grade, n_turn)):
                 raise InvalidParameterError(
                     f"previous ({previous!r}) was built for another grid, speed, slope limit or table size; "
                     f"expected speed_mps={speed!r}, max_slope_rad={slope!r}, "

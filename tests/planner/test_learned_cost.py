@@ -103,6 +103,36 @@ def test_errors():
         lem.energy_per_metre_j(0.0, [0.0], 0)
 
 
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"hold_s": "2 s"}, "hold_s must be a real number"),
+        ({"rate_hz": 0.0}, "rate_hz must be > 0"),
+        ({"settle_s": 2.0}, "settle_s must be < 2"),
+        ({"current_convention": "amps"}, r"current_convention must be one of \['motor', 'battery'\]"),
+    ],
+)
+def test_constructor_arguments_are_checked(kwargs, match):
+    robot, _, reg, _, _ = _setup()
+    exc = UnknownNameError if "current_convention" in kwargs else InvalidParameterError
+    with pytest.raises(exc, match=match):
+        LearnedEnergyModel(reg, robot, ground_preset("asphalt"), **kwargs)
+
+
+def test_energy_cost_and_vibration_arguments_are_named():
+    _, tmap, _, lem, mid = _setup()
+    with pytest.raises(InvalidParameterError, match="speed_mps must be a real number, got 'fast'"):
+        lem.energy_cost(tmap, "fast")
+    with pytest.raises(InvalidParameterError, match="grade_samples must be an odd integer"):
+        lem.energy_cost(tmap, 0.5, grade_samples=100)
+    with pytest.raises(InvalidParameterError, match="accel_time_s must be an array of real numbers"):
+        lem.set_vibration(mid, ["a", "b"], [1.0, 2.0])
+    with pytest.raises(InvalidParameterError, match="strictly increasing"):
+        lem.set_vibration(mid, [0.0, 0.0, 1.0], [9.8, 9.8, 9.8])
+    with pytest.raises(InvalidParameterError, match="accel_z_mps2 has 1 NaN"):
+        lem.set_vibration(mid, [0.0, 0.1], [9.8, np.nan])
+
+
 def test_energy_cost_with_previous_equals_fresh_and_reuses_lattice():
     from planner import Lattice
 
