@@ -21,7 +21,7 @@ from scipy.ndimage import uniform_filter1d
 
 from terrain.atomic import save_figure
 from terrain.checks import check_int, check_real, fmt_number
-from terrain.errors import DataError, GridMismatchError, InvalidParameterError, TerrawattWarning
+from terrain.errors import DataError, FigureWarning, GridMismatchError, InvalidParameterError
 
 from .features import NYQUIST_TOLERANCE, accel_rate_hz, whole_run_spectrum
 from .logs import InteractionLog
@@ -64,7 +64,7 @@ def _band_for_data(logs: Sequence[Any], max_frequency_hz: float) -> tuple[float,
         f"spectra drawn up to {fmt_number(nyquist)} Hz, not {fmt_number(max_frequency_hz)} Hz: the IMU of "
         f"{Path(slowest[1]).name or slowest[1]!r} samples at {fmt_number(slowest[0])} Hz (Nyquist {fmt_number(nyquist)} Hz)"
     )
-    warnings.warn(f"plot_vibration_spectra: {note}", TerrawattWarning, stacklevel=3)
+    warnings.warn(f"plot_vibration_spectra: {note}", FigureWarning, stacklevel=3)
     return nyquist, note
 
 
@@ -244,15 +244,15 @@ def plot_vibration_spectra(
     ------
     InvalidParameterError
         Bad ``smoothing_bins``; a mapping without ``frequency_hz``; empty input.
+    GridMismatchError
+        A precomputed spectrum whose length differs from ``frequency_hz``.
 
     Warns
     -----
-    TerrawattWarning
+    FigureWarning
         ``max_frequency_hz`` lies above the Nyquist frequency of a log's IMU stream (e.g.
         the 50 Hz default band of 50 Hz IMU logs): the spectra are drawn up to the lowest
         Nyquist frequency of the logs instead, and a note on the figure says so.
-    GridMismatchError
-        A precomputed spectrum whose length differs from ``frequency_hz``.
     """
     check_int("smoothing_bins", smoothing_bins, low=1)
     note = ""

@@ -8,6 +8,7 @@ from .errors import (
     BlockedPositionError,
     DataError,
     DataRepairWarning,
+    FigureWarning,
     FileFormatError,
     FormatVersionError,
     GridMismatchError,
@@ -105,4 +106,5 @@ __all__ = [
     "DataRepairWarning",
     "RecoveryWarning",
     "ImplausibleDataWarning",
+    "FigureWarning",
 ]

@@ -69,7 +69,9 @@ def fmt_number(value: float, digits: int = 4) -> str:
     ('49', '0.01235', '1e+308')
     """
     if isinstance(value, numbers.Integral) and not isinstance(value, bool):
-        return str(int(value))
+        text = str(abs(int(value)))
+        sign = "-" if value < 0 else ""
+        return sign + (text if len(text) <= 16 else f"{text[0]}.{text[1:digits]}e+{len(text) - 1}")
     v = float(value)
     if not math.isfinite(v):
         return repr(v)
@@ -112,9 +114,12 @@ def check_real(
         value = value[()]
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
         raise InvalidParameterError(f"{label} must be a real number, got {_describe(value)}")
-    v = float(value)
+    try:
+        v = float(value)
+    except OverflowError:  # an int beyond float range, e.g. 10**400
+        v = math.inf
     if not math.isfinite(v):
-        raise InvalidParameterError(f"{label} must be finite, got {value!r}")
+        raise InvalidParameterError(f"{label} must be finite, got {fmt_number(value)}")
     if low is not None and (v < low or (v == low and not low_inclusive)):
         op = ">=" if low_inclusive else ">"
         raise InvalidParameterError(f"{label} must be {op} {fmt_number(low)}, got {value!r}")

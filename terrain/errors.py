@@ -99,6 +99,11 @@ class RecoveryWarning(TerrawattWarning):
     """A file left by an interrupted write was recovered (e.g. a registry moved back)."""
 
 
+class FigureWarning(TerrawattWarning):
+    """A figure was drawn other than asked because the data cannot show it (e.g. a spectrum
+    band clipped to the IMU's Nyquist frequency); the results it shows are unaffected."""
+
+
 class ImplausibleDataWarning(TerrawattWarning):
     """Data is readable and internally consistent but unlikely to be what the caller meant
     (e.g. a DEM whose cells are mostly steeper than 60 degrees); it is used as given."""

@@ -15,7 +15,7 @@ from energy import (
     plot_current_estimate,
     plot_vibration_spectra,
 )
-from terrain import DataError, GridMismatchError, InvalidParameterError, TerrawattWarning
+from terrain import DataError, FigureWarning, GridMismatchError, InvalidParameterError
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -94,7 +94,7 @@ def test_spectra_figure_of_a_50_hz_imu_draws_up_to_its_nyquist(tmp_path: Path) -
     logs = [_log_at("wood", 50.0, 8.0), _log_at("snow", 100.0, 21.0)]
     with pytest.raises(InvalidParameterError, match=r"exceeds the Nyquist frequency 25 Hz"):
         ground_spectra(logs, n_bins=500)  # the library function still refuses to invent data
-    with pytest.warns(TerrawattWarning, match=r"drawn up to 25 Hz, not 50 Hz: the IMU of 'imu_50hz\.csv' samples at 50 Hz"):
+    with pytest.warns(FigureWarning, match=r"drawn up to 25 Hz, not 50 Hz: the IMU of 'imu_50hz\.csv' samples at 50 Hz"):
         out = plot_vibration_spectra(logs, tmp_path / "spectra.png", max_frequency_hz=50.0)
     assert out.read_bytes()[:8] == PNG
     assert [p.name for p in tmp_path.iterdir()] == ["spectra.png"]

@@ -119,3 +119,8 @@ def test_numbers_are_rounded_for_people() -> None:
     assert fmt_number(7) == "7"
     assert fmt_number(math.inf) == "inf"
     assert fmt_number(0.000123456) == "0.0001235"
+
+
+def test_an_int_beyond_float_range_is_not_finite() -> None:
+    with pytest.raises(InvalidParameterError, match="x must be finite"):
+        check_real("x", 10**400)
