@@ -23,13 +23,14 @@ __all__ = [
     "seed_ompl",
     "ompl_log_level",
     "ompl_seed",
-    "CHECKS_PER_EVALUATION",
+    "STALL_CHECKS",
 ]
 
-#: A work-bounded solve also stops after this many termination checks per allowed objective
-#: call: a planner that has converged (BIT* on its lower bound) stops calling the objective
-#: but keeps polling, and would otherwise never reach the work bound.
-CHECKS_PER_EVALUATION = 2
+#: A work-bounded solve also stops after this many consecutive termination checks without an
+#: objective call: a planner that stopped calling the objective (BIT* once no sample can
+#: improve its route) would otherwise poll forever. Working planners were measured at most
+#: ~70 checks between two objective calls.
+STALL_CHECKS = 100_000
 
 
 def ompl_seed(seed: int) -> int:
@@ -135,6 +136,9 @@ class EnergyProblem:
         si.setup()
         self.space, self.si = space, si
         self.objective = EnergyObjective(si, arrays, min_energy_per_metre_j)
+        # A route at the admissible lower bound is optimal: planners stop there ("satisfied").
+        bound = float(min_energy_per_metre_j) * math.hypot(goal[0] - start[0], goal[1] - start[1])
+        self.objective.setCostThreshold(ob.Cost(bound * (1.0 + 1e-9)))
         self.start_state = self.state(start)
         self.goal_state = self.state(goal)
         pdef = ob.ProblemDefinition(si)
@@ -175,18 +179,23 @@ class EnergyProblem:
         return out
 
     def termination(self, deadline: float | None):
-        """A termination condition: the work bound reached (``max_evaluations`` objective calls,
-        or :data:`CHECKS_PER_EVALUATION` times as many checks of this condition), or
-        ``time.perf_counter() >= deadline``. Both work counts are deterministic."""
+        """A termination condition: the work bound reached (``max_evaluations`` objective calls),
+        the planner stalled (:data:`STALL_CHECKS` checks in a row without an objective call), or
+        ``time.perf_counter() >= deadline``. The work counts are deterministic."""
         objective, max_evals = self.objective, self.max_evaluations
-        max_checks = None if max_evals is None else CHECKS_PER_EVALUATION * max_evals
-        checks = [0]
+        state = [0, -1]  # checks since the last new objective call, evaluations seen then
 
         def done() -> bool:
             if max_evals is not None:
-                checks[0] += 1
-                if objective.evaluations >= max_evals or checks[0] >= max_checks:
+                evaluations = objective.evaluations
+                if evaluations >= max_evals:
                     return True
+                if evaluations == state[1]:
+                    state[0] += 1
+                    if state[0] >= STALL_CHECKS:
+                        return True
+                else:
+                    state[0], state[1] = 0, evaluations
             return deadline is not None and time.perf_counter() >= deadline
 
         return ob.PlannerTerminationCondition(done)

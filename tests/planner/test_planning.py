@@ -287,7 +287,8 @@ def test_every_planner_name_plans_a_route_on_a_tiny_map(planner):
     """Each registered name builds, tunes and solves (seeded, a work bound only), then refines.
 
     BIT* converges on this map (the straight line meets its lower bound) and stops calling the
-    objective: the work bound must still end its solve (it used to poll forever)."""
+    objective: its solve must still end (the objective is satisfied at its lower bound; it used
+    to poll forever under a work bound)."""
     tmap = _map(np.zeros((12, 16)))
     cost = _cost(tmap)
     settings = PlannerSettings(fmt_samples=60, bit_samples_per_batch=20, refine_max_steps=20, refine_rounds=1)
