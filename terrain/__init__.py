@@ -14,6 +14,7 @@ from .errors import (
     GridMismatchError,
     ImplausibleDataWarning,
     InvalidParameterError,
+    NodataError,
     NotFittedError,
     OptionalDependencyError,
     OutOfBoundsError,
@@ -91,6 +92,7 @@ __all__ = [
     # errors and warnings
     "TerrawattError",
     "InvalidParameterError",
+    "NodataError",
     "GridMismatchError",
     "OutOfBoundsError",
     "UnknownNameError",

@@ -75,6 +75,19 @@ class UnitError(DataError):
     """A quantity's magnitude contradicts its declared unit (e.g. mA declared as A)."""
 
 
+class NodataError(InvalidParameterError, DataError):
+    """A raster has nodata cells and the caller did not say how to fill them.
+
+    ``n_nodata`` and ``n_cells`` count them, so a front end can phrase its own advice (the
+    command line names its ``--fill-nodata`` flag, the API its ``fill_nodata`` argument).
+    """
+
+    def __init__(self, message: str, *, n_nodata: int = 0, n_cells: int = 0) -> None:
+        super().__init__(message)
+        self.n_nodata = n_nodata
+        self.n_cells = n_cells
+
+
 class PlanningError(TerrawattError, RuntimeError):
     """A planning problem cannot be set up or solved."""
 

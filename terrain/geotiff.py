@@ -19,6 +19,7 @@ from .errors import (
     FileFormatError,
     ImplausibleDataWarning,
     InvalidParameterError,
+    NodataError,
     OptionalDependencyError,
     UnitError,
     UnknownNameError,
@@ -157,9 +158,11 @@ def read_geotiff(
     if n_bad == invalid.size:
         raise InvalidParameterError(f"{where} band {band} holds no valid cell (all {n_bad} are nodata)")
     if n_bad and fill_nodata is None:
-        raise InvalidParameterError(
+        raise NodataError(
             f"{where} band {band} has {n_bad} nodata/NaN cells of {invalid.size}; pass "
-            "fill_nodata='nearest' to fill them from the nearest valid cell"
+            "fill_nodata='nearest' to fill them from the nearest valid cell",
+            n_nodata=n_bad,
+            n_cells=int(invalid.size),
         )
     if n_bad:
         nearest = ndimage.distance_transform_edt(invalid, return_distances=False, return_indices=True)

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from energy import GROUND_PRESETS
-from terrain import UNKNOWN_GROUND, InvalidParameterError, TerrainMap, TerrawattError, UnknownNameError
+from terrain import UNKNOWN_GROUND, InvalidParameterError, NodataError, TerrainMap, UnknownNameError
 from terrain.atomic import check_output_path
 from terrain.checks import fmt_number
 
@@ -42,12 +42,13 @@ def read_map_file(path: str | os.PathLike[str], fill_nodata: str | None) -> Terr
 
     try:
         return read_map(path, fill_nodata=fill_nodata)
-    except TerrawattError as exc:
-        text = str(exc)
-        if "fill_nodata='nearest'" not in text:
-            raise
-        advice = text.replace("pass fill_nodata='nearest'", "give --fill-nodata nearest")
-        raise type(exc)(advice.replace("fill_nodata='nearest'", "--fill-nodata nearest")) from exc
+    except NodataError as exc:
+        raise NodataError(
+            f"{Path(path).name} has {exc.n_nodata} nodata cells of {exc.n_cells}; give "
+            "--fill-nodata nearest to fill them from the nearest valid cell",
+            n_nodata=exc.n_nodata,
+            n_cells=exc.n_cells,
+        ) from exc
 
 
 def check_outputs(directory: Path, files: Iterable[str] = ()) -> None:
