@@ -21,13 +21,13 @@ from .models import (  # torch-free: the contract, its file format, the baseline
     load_current_model,
 )
 from .models import __getattr__  # the torch names (estimator, net, data, training) load on first use
+from .commands import CommandProfile
 from .evaluation import (
     EvaluationResult,
     RunScore,
     ScoreSummary,
     evaluate_current_models,
 )
-from .commands import CommandProfile
 from .excitation import excitation_commands
 from .features import (
     DEFAULT_T_INTERVAL_S,
@@ -66,7 +66,14 @@ from .params import (
     robot_preset,
 )
 from .physics import EFFECTS, PhysicsEnergyModel, PowerBreakdown
-from .profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, drive_profile, waypoint_commands
+from .profiles import (
+    DEFAULT_ACCEL_MPS2,
+    DEFAULT_YAW_ACCEL_RADPS2,
+    drivable_waypoints,
+    drive_profile,
+    planned_durations_s,
+    waypoint_commands,
+)
 from .plots import ground_spectra, plot_current_estimate, plot_vibration_spectra
 from .io import (
     read_borealtc,
@@ -125,6 +132,8 @@ __all__ = [
     "drive_profile",
     "DEFAULT_ACCEL_MPS2",
     "DEFAULT_YAW_ACCEL_RADPS2",
+    "drivable_waypoints",
+    "planned_durations_s",
     "TruthSimulator",
     "TruthRun",
     "NoiseModel",
