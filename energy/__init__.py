@@ -2,31 +2,31 @@
 
 from terrain.errors import (
     DataError,
+    DataRepairWarning,
+    FigureWarning,
     FileFormatError,
     FormatVersionError,
+    GridMismatchError,
     InvalidParameterError,
     NotFittedError,
+    OptionalDependencyError,
+    OutOfBoundsError,
+    RecoveryWarning,
+    TerrawattError,
+    TerrawattWarning,
+    UnitError,
     UnknownNameError,
 )
 
 from .battery import Battery, Discharge, discharge_from_current, discharge_from_power
 from .budget import CURRENT_CONVENTIONS, EnergyBudget, energy_budget, log_battery_power_w
-from .models import (  # torch-free: the contract, its file format, the baselines, the loader
-    CURRENT_MODEL_FORMAT_VERSION,
-    PHYSICS_FIT_PARAMETERS,
-    ConstantCurrentModel,
-    CurrentModel,
-    LinearCurrentModel,
-    PhysicsCurrentModel,
-    load_current_model,
-)
-from .models import __getattr__  # the torch names (estimator, net, data, training) load on first use
 from .commands import CommandProfile
 from .evaluation import (
     EvaluationResult,
     RunScore,
     ScoreSummary,
     evaluate_current_models,
+    score_current_model,
 )
 from .excitation import excitation_commands
 from .features import (
@@ -43,6 +43,13 @@ from .features import (
     whole_run_spectrum,
     window_starts,
 )
+from .io import (
+    read_borealtc,
+    read_borealtc_run,
+    read_csv_log,
+    read_rosbag,
+    write_csv_log,
+)
 from .logs import DEFAULT_GAP_FACTOR, InteractionLog, LogMeta
 from .metrics import (
     CurrentErrors,
@@ -55,6 +62,18 @@ from .metrics import (
     section_charges_mah,
     section_error_pct,
 )
+from .models import (  # torch-free: the contract, its file format, the baselines, the loader
+    CURRENT_MODEL_FORMAT_VERSION,
+    CURRENT_MODEL_KINDS,
+    PHYSICS_FIT_PARAMETERS,
+    ConstantCurrentModel,
+    CurrentModel,
+    LinearCurrentModel,
+    PhysicsCurrentModel,
+    __getattr__,  # noqa: F401  (PEP 562: the torch names load on first use)
+    load_current_model,
+    new_current_model,
+)
 from .params import (
     DRIVE_KINDS,
     GROUND_PRESETS,
@@ -66,6 +85,7 @@ from .params import (
     robot_preset,
 )
 from .physics import EFFECTS, PhysicsEnergyModel, PowerBreakdown
+from .plots import ground_spectra, plot_current_estimate, plot_vibration_spectra
 from .profiles import (
     DEFAULT_ACCEL_MPS2,
     DEFAULT_YAW_ACCEL_RADPS2,
@@ -73,14 +93,6 @@ from .profiles import (
     drive_profile,
     planned_durations_s,
     waypoint_commands,
-)
-from .plots import ground_spectra, plot_current_estimate, plot_vibration_spectra
-from .io import (
-    read_borealtc,
-    read_borealtc_run,
-    read_csv_log,
-    read_rosbag,
-    write_csv_log,
 )
 from .sim import (
     PAPER_GROUNDS,
@@ -162,6 +174,9 @@ __all__ = [
     "PhysicsCurrentModel",
     "PHYSICS_FIT_PARAMETERS",
     "evaluate_current_models",
+    "score_current_model",
+    "CURRENT_MODEL_KINDS",
+    "new_current_model",
     "EvaluationResult",
     "RunScore",
     "ScoreSummary",
@@ -192,11 +207,20 @@ __all__ = [
     "moving_median",
     "compare_currents",
     "CurrentErrors",
-    # errors the models raise (re-exported for convenience; defined in terrain.errors)
+    # errors and warnings its users meet (defined in terrain.errors, the one hierarchy)
+    "TerrawattError",
+    "TerrawattWarning",
+    "InvalidParameterError",
+    "UnknownNameError",
     "DataError",
+    "UnitError",
     "FileFormatError",
     "FormatVersionError",
-    "InvalidParameterError",
     "NotFittedError",
-    "UnknownNameError",
+    "GridMismatchError",
+    "OutOfBoundsError",
+    "OptionalDependencyError",
+    "DataRepairWarning",
+    "FigureWarning",
+    "RecoveryWarning",
 ]

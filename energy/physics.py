@@ -30,10 +30,6 @@ __all__ = ["EFFECTS", "PhysicsEnergyModel", "PowerBreakdown"]
 
 def _samples(name: str, value: Any) -> np.ndarray:
     """Finite real samples (a scalar or an array): strings are refused, not parsed."""
-    kind = np.asarray(value).dtype.kind if not isinstance(value, (str, bytes)) else "U"
-    if kind not in "iuf":
-        raise InvalidParameterError(f"{name} must be a real number or an array of them, got {value!r:.80} "
-                                    f"({type(value).__name__})")
     return real_array(name, value)
 
 

@@ -1,6 +1,27 @@
 """planner — where to drive: edge costs, OMPL and lattice planners, routes, missions, CLI."""
 
 from energy import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, drive_profile
+from terrain.errors import (
+    BlockedPositionError,
+    DataError,
+    DataRepairWarning,
+    FigureWarning,
+    FileFormatError,
+    FormatVersionError,
+    GridMismatchError,
+    ImplausibleDataWarning,
+    InvalidParameterError,
+    NodataError,
+    NotFittedError,
+    OptionalDependencyError,
+    OutOfBoundsError,
+    PlanningError,
+    RecoveryWarning,
+    TerrawattError,
+    TerrawattWarning,
+    UnitError,
+    UnknownNameError,
+)
 
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
 from .kernels import CostArrays
@@ -80,4 +101,24 @@ __all__ = [
     "ADAPTIVE_STATUSES",
     "ADAPTIVE_FORMAT_VERSION",
     "UPDATE_SCOPES",
+    # errors and warnings its users meet (defined in terrain.errors, the one hierarchy)
+    "TerrawattError",
+    "TerrawattWarning",
+    "InvalidParameterError",
+    "UnknownNameError",
+    "DataError",
+    "UnitError",
+    "FileFormatError",
+    "FormatVersionError",
+    "NotFittedError",
+    "GridMismatchError",
+    "OutOfBoundsError",
+    "NodataError",
+    "OptionalDependencyError",
+    "PlanningError",
+    "BlockedPositionError",
+    "DataRepairWarning",
+    "FigureWarning",
+    "RecoveryWarning",
+    "ImplausibleDataWarning",
 ]

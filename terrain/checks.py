@@ -234,16 +234,24 @@ def check_bool(name: str, value: Any) -> bool:
 def real_array(name: str, value: Any, *, ndim: int | None = None, finite: bool = True) -> np.ndarray:
     """``value`` as a float64 array (a new array), optionally of a given ``ndim``, all finite.
 
+    Only numbers are numbers: strings are refused even when they spell one (``"0.5"``), so a
+    column read as text never passes as data.
+
     Raises
     ------
     InvalidParameterError
-        Not numeric (strings, objects), wrong number of dimensions, or NaN / inf entries
+        Not numeric (booleans, strings, objects, complex), wrong number of dimensions, or NaN / inf entries
         (with ``finite``); the message counts the bad entries.
     """
     try:
-        arr = np.array(value, dtype=np.float64, copy=True)
-    except (TypeError, ValueError) as exc:
-        raise InvalidParameterError(f"{name} must be an array of real numbers, got {_describe(value)}") from exc
+        raw = np.asarray(value)
+    except (TypeError, ValueError) as exc:  # ragged nested sequences
+        raise InvalidParameterError(f"{name} must be a real number or an array of them, got {_describe(value)}") from exc
+    if raw.dtype.kind not in "iuf":  # booleans, strings ("0.5" is not parsed), objects, complex
+        raise InvalidParameterError(
+            f"{name} must be a real number or an array of them, got {_describe(value)} of dtype {raw.dtype}"
+        )
+    arr = np.array(raw, dtype=np.float64, copy=True)
     if ndim is not None and arr.ndim != ndim:
         raise InvalidParameterError(f"{name} must be a {ndim}-D array, got shape {arr.shape!r}")
     if finite and not np.all(np.isfinite(arr)):

@@ -2,7 +2,7 @@
 
 Modules: :mod:`~energy.models.base` (the :class:`CurrentModel` contract and its torch-free
 file format), :mod:`~energy.models.baselines` (constant, linear, fitted physics),
-:mod:`~energy.models.loading` (:func:`load_current_model`), and the torch estimator in three
+:mod:`~energy.models.loading` (:func:`load_current_model`), :mod:`~energy.models.kinds` (models by name), and the torch estimator in three
 parts after minGPT: :mod:`~energy.models.net` (the network), :mod:`~energy.models.data`
 (the windowed dataset), :mod:`~energy.models.training` (the seeded training loop), plus
 :mod:`~energy.models.config` (its configuration and presets) and
@@ -34,6 +34,7 @@ from .baselines import (
     LinearCurrentModel,
     PhysicsCurrentModel,
 )
+from .kinds import CURRENT_MODEL_KINDS, new_current_model
 from .loading import MODEL_CLASSES, load_current_model, model_class
 
 #: Names that need torch, by the module that defines them (imported on first access).
@@ -78,6 +79,8 @@ __all__ = [
     "MODEL_CLASSES",
     "model_class",
     "load_current_model",
+    "CURRENT_MODEL_KINDS",
+    "new_current_model",
     "ConstantCurrentModel",
     "LinearCurrentModel",
     "PhysicsCurrentModel",

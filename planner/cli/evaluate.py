@@ -10,11 +10,16 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from energy import evaluate_current_models, plot_vibration_spectra, read_borealtc
+from energy import (
+    CURRENT_MODEL_KINDS,
+    evaluate_current_models,
+    new_current_model,
+    plot_vibration_spectra,
+    read_borealtc,
+)
 from terrain import InvalidParameterError, OptionalDependencyError
 
 from .common import check_outputs, draw_figure
-from .models import CURRENT_MODELS, current_model
 
 __all__ = ["add_parser", "run_evaluate"]
 
@@ -30,7 +35,7 @@ def add_parser(sub: Any) -> None:
     evaluate.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
     evaluate.add_argument("--grounds", nargs="+", metavar="NAME", help="ground folders to use (default all)")
     evaluate.add_argument(
-        "--model", nargs="+", default=list(CURRENT_MODELS), choices=list(CURRENT_MODELS), dest="models",
+        "--model", nargs="+", default=list(CURRENT_MODEL_KINDS), choices=list(CURRENT_MODEL_KINDS), dest="models",
         help="models to evaluate (default all)",
     )
     evaluate.add_argument(
@@ -73,7 +78,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
             workers = f"{len(client.nthreads())} dask workers ({where})"
             print(f"evaluating on {workers}", flush=True)
         logs = read_borealtc(args.data, grounds=args.grounds)
-        models = {name: current_model(name, args.seed) for name in args.models}
+        models = {name: new_current_model(name, seed=args.seed) for name in args.models}
         t0 = time.perf_counter()
         result = evaluate_current_models(logs, models, variants=args.variants, progress=True, client=client)
         elapsed = time.perf_counter() - t0

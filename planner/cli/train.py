@@ -7,11 +7,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-from energy import read_borealtc
+from energy import CURRENT_MODEL_KINDS, new_current_model, read_borealtc
 from terrain import InvalidParameterError
 from terrain.atomic import check_output_path
-
-from .models import CURRENT_MODELS, current_model
 
 __all__ = ["add_parser", "run_train"]
 
@@ -21,7 +19,7 @@ def add_parser(sub: Any) -> None:
     train = sub.add_parser("train", help="fit a current model on logs and save it to one file")
     train.add_argument("--data", type=Path, required=True, metavar="DIR", help="directory with GROUND/imu_NN.csv + pro_NN.csv")
     train.add_argument("--grounds", nargs="+", metavar="NAME", help="ground folders to use (default all)")
-    train.add_argument("--model", default="estimator", choices=list(CURRENT_MODELS), help="model kind (default estimator)")
+    train.add_argument("--model", default="estimator", choices=list(CURRENT_MODEL_KINDS), help="model kind (default estimator)")
     train.add_argument("--seed", type=int, default=0, help="random seed")
     train.add_argument("--out", type=Path, required=True, metavar="FILE", help="model file to write (e.g. model.pt)")
     train.add_argument(
@@ -45,7 +43,7 @@ def run_train(args: argparse.Namespace) -> int:
     if args.threads is not None and not learned:
         raise InvalidParameterError(f"--threads applies to the estimator and paper models only, got --model {args.model!r}")
     check_output_path(args.out, "--out")
-    model = current_model(args.model, args.seed, progress=learned and not args.quiet, n_threads=args.threads)
+    model = new_current_model(args.model, seed=args.seed, progress=learned and not args.quiet, n_threads=args.threads)
     logs = read_borealtc(args.data, grounds=args.grounds)
     t0 = time.perf_counter()
     model.fit(logs)

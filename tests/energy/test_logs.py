@@ -80,7 +80,7 @@ def test_accel_length_mismatch_and_2d():
 
 
 def test_non_numeric_rejected():
-    with pytest.raises(InvalidParameterError, match="v_mps must be an array of real numbers"):
+    with pytest.raises(InvalidParameterError, match="v_mps must be a real number or an array of them"):
         make_log(v_mps=["a"] * 11)
 
 

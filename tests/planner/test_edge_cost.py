@@ -443,7 +443,7 @@ def test_segment_energy_names_a_non_numeric_point(name):
     cost = EnergyCost.from_model(_flat(), LinearModel(), {"g": 1.0}, speed_mps=0.5)
     points = {"starts_xy_m": [[1.0, 1.0]], "ends_xy_m": [[2.0, 2.0]]}
     points[name] = [["one", "two"]]
-    with pytest.raises(InvalidParameterError, match=f"{name} must be an array of real numbers"):
+    with pytest.raises(InvalidParameterError, match=f"{name} must be a real number or an array of them"):
         cost.segment_energy_j(points["starts_xy_m"], points["ends_xy_m"])
 
 

@@ -127,7 +127,7 @@ def test_bad_arguments():
         Lattice(cost, stride_cells=12)
     with pytest.raises(InvalidParameterError, match="stride_cells must be an integer, got 'two'"):
         Lattice(cost, stride_cells="two")  # used to escape as a bare ValueError
-    with pytest.raises(InvalidParameterError, match="start/goal must be an array of real numbers"):
+    with pytest.raises(InvalidParameterError, match="start/goal must be a real number or an array of them"):
         Lattice(cost, 1).shortest_path(("a", "b"), (3.0, 3.0))
     with pytest.raises(UnknownNameError, match="weight"):
         Lattice(cost).shortest_path((1.0, 1.0), (5.0, 5.0), weight="time")

@@ -125,7 +125,7 @@ def test_energy_cost_and_vibration_arguments_are_named():
         lem.energy_cost(tmap, "fast")
     with pytest.raises(InvalidParameterError, match="grade_samples must be an odd integer"):
         lem.energy_cost(tmap, 0.5, grade_samples=100)
-    with pytest.raises(InvalidParameterError, match="accel_time_s must be an array of real numbers"):
+    with pytest.raises(InvalidParameterError, match="accel_time_s must be a real number or an array of them"):
         lem.set_vibration(mid, ["a", "b"], [1.0, 2.0])
     with pytest.raises(InvalidParameterError, match="strictly increasing"):
         lem.set_vibration(mid, [0.0, 0.0, 1.0], [9.8, 9.8, 9.8])

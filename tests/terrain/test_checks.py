@@ -97,8 +97,9 @@ def test_real_array_is_a_new_checked_array() -> None:
     out = real_array("z", src, ndim=1)
     out[0] = 99.0
     assert src[0] == 0.0  # a copy: the caller's array is never altered
-    with pytest.raises(InvalidParameterError, match=r"z must be an array of real numbers"):
-        real_array("z", ["a", "b"])
+    for bad in (["a", "b"], ["0.5"], [1.0, None], [[1.0], [1.0, 2.0]], [1j], [True]):
+        with pytest.raises(InvalidParameterError, match=r"z must be a real number or an array of them"):
+            real_array("z", bad)
     with pytest.raises(InvalidParameterError, match=r"z must be a 2-D array, got shape \(4,\)"):
         real_array("z", src, ndim=2)
     with pytest.raises(InvalidParameterError, match=r"z has 1 NaN/inf entries of 4"):
