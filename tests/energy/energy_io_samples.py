@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, settings
 __all__ = [
     "FIXTURES", "BOREALTC_FIX", "GENERIC", "SHARED_BOREALTC", "GENERIC_COLUMNS", "GENERIC_UNITS",
     "read_rows", "copy_run", "edit_lines", "shared_data_or_skip", "HAVE_ROSBAGS", "requires_rosbags",
-    "BASE_NS", "MS", "bag_content", "write_bag", "fuzz_examples", "fuzz_settings",
+    "BASE_NS", "MS", "bag_content", "write_bag", "fuzz_examples", "fuzz_settings", "mutate_bytes",
 ]
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
@@ -186,3 +186,19 @@ def fuzz_settings(default: int) -> settings:
         database=None,
         suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
     )
+
+
+def mutate_bytes(data: bytes, edits: list[tuple[int, int, int]]) -> bytes:
+    """Apply (kind, position, byte) edits: 0 replaces, 1 inserts, 2 deletes a byte."""
+    out = bytearray(data)
+    for kind, pos, byte in edits:
+        if not out:
+            break
+        i = pos % len(out)
+        if kind == 0:
+            out[i] = byte
+        elif kind == 1:
+            out.insert(i, byte)
+        else:
+            del out[i]
+    return bytes(out)

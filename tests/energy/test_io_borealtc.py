@@ -14,6 +14,7 @@ from energy_io_samples import (
     copy_run,
     edit_lines,
     fuzz_settings,
+    mutate_bytes,
     read_rows,
     shared_data_or_skip,
 )
@@ -289,22 +290,6 @@ def test_borealtc_imu_rate_above_10_khz_is_a_unit_error(tmp_path):
         read_borealtc_run(imu, pro)
 
 
-def _mutate(data: bytes, edits: list[tuple[int, int, int]]) -> bytes:
-    """Apply (kind, position, byte) edits: 0 replaces, 1 inserts, 2 deletes a byte."""
-    out = bytearray(data)
-    for kind, pos, byte in edits:
-        if not out:
-            break
-        i = pos % len(out)
-        if kind == 0:
-            out[i] = byte
-        elif kind == 1:
-            out.insert(i, byte)
-        else:
-            del out[i]
-    return bytes(out)
-
-
 EDITS = st.lists(st.tuples(st.integers(0, 2), st.integers(0, 2**31), st.integers(0, 255)), min_size=1, max_size=8)
 CSVISH = st.sampled_from(list(b"0123456789.,-+eE \n\r#\"nai"))
 
@@ -318,7 +303,7 @@ def test_fuzz_borealtc_mutated_run_files(tmp_path, target, edits, truncate):
     Long run: ``TERRAWATT_FUZZ_EXAMPLES=20 python -m pytest -q tests/energy -k fuzz``.
     """
     src = BOREALTC_FIX / "SNOW" / f"{target}_05.csv"
-    data = _mutate(src.read_bytes(), edits)
+    data = mutate_bytes(src.read_bytes(), edits)
     if truncate is not None:
         data = data[:truncate]
     folder = tmp_path / "SNOW"

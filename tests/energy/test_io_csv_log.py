@@ -18,6 +18,7 @@ from energy_io_samples import (
     GENERIC_UNITS,
     edit_lines,
     fuzz_settings,
+    mutate_bytes,
 )
 from hypothesis import given
 from hypothesis import strategies as st
@@ -373,22 +374,6 @@ EDITS = st.lists(st.tuples(st.integers(0, 2), st.integers(0, 2**31), st.integers
 CSVISH = st.sampled_from(list(b"0123456789.,-+eE \n\r#\"naimAsv_{}[]:"))
 
 
-def _mutate(data: bytes, edits: list[tuple[int, int, int]]) -> bytes:
-    """Apply (kind, position, byte) edits: 0 replaces, 1 inserts, 2 deletes a byte."""
-    out = bytearray(data)
-    for kind, pos, byte in edits:
-        if not out:
-            break
-        i = pos % len(out)
-        if kind == 0:
-            out[i] = byte
-        elif kind == 1:
-            out.insert(i, byte)
-        else:
-            del out[i]
-    return bytes(out)
-
-
 @fuzz_settings(80)
 @given(edits=EDITS, truncate=st.one_of(st.none(), st.integers(0, 3000)), which=st.sampled_from(["fixture", "written"]))
 def test_fuzz_csv_mutated_files(tmp_path, edits, truncate, which):
@@ -400,7 +385,7 @@ def test_fuzz_csv_mutated_files(tmp_path, edits, truncate, which):
         source, kwargs = GENERIC, dict(columns=GENERIC_COLUMNS, units=GENERIC_UNITS)
     else:
         source, kwargs = FUZZ_WRITTEN, {}
-    data = _mutate(source.read_bytes(), edits)
+    data = mutate_bytes(source.read_bytes(), edits)
     path = tmp_path / "fuzz.csv"
     path.write_bytes(data if truncate is None else data[:truncate])
     _read_quietly(path, **kwargs)

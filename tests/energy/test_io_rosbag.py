@@ -13,6 +13,7 @@ from energy_io_samples import (
     MS,
     bag_content,
     fuzz_settings,
+    mutate_bytes,
     requires_rosbags,
     write_bag,
 )
@@ -277,22 +278,6 @@ def valid_bags(tmp_path_factory):
 EDITS = st.lists(st.tuples(st.integers(0, 2), st.integers(0, 2**31), st.integers(0, 255)), min_size=1, max_size=6)
 
 
-def _mutate(data: bytes, edits: list[tuple[int, int, int]]) -> bytes:
-    """Apply (kind, position, byte) edits: 0 replaces, 1 inserts, 2 deletes a byte."""
-    out = bytearray(data)
-    for kind, pos, byte in edits:
-        if not out:
-            break
-        i = pos % len(out)
-        if kind == 0:
-            out[i] = byte
-        elif kind == 1:
-            out.insert(i, byte)
-        else:
-            del out[i]
-    return bytes(out)
-
-
 @requires_rosbags
 @pytest.mark.parametrize("kind", ["ros1", "mcap"])
 @fuzz_settings(40)
@@ -303,7 +288,7 @@ def test_fuzz_rosbag_mutated_bags(tmp_path, valid_bags, kind, edits, truncate):
     Long run: ``TERRAWATT_FUZZ_EXAMPLES=20 python -m pytest -q tests/energy -k fuzz``.
     """
     data, extra = valid_bags[kind]
-    data = _mutate(data, edits)
+    data = mutate_bytes(data, edits)
     if truncate is not None:
         data = data[:truncate]
     if extra is None:
