@@ -21,7 +21,7 @@ def add_parser(sub: Any) -> None:
     train.add_argument("--grounds", nargs="+", metavar="NAME", help="ground folders to use (default all)")
     train.add_argument("--model", default="estimator", choices=list(CURRENT_MODEL_KINDS), help="model kind (default estimator)")
     train.add_argument("--seed", type=int, default=0, help="random seed")
-    train.add_argument("--out", type=Path, required=True, metavar="FILE", help="model file to write (e.g. model.pt)")
+    train.add_argument("--out", type=Path, required=True, metavar="FILE", help="model file to write (e.g. model.zip)")
     train.add_argument(
         "--threads", type=int, metavar="N",
         help="torch threads while training the estimator or paper model (default: torch's own setting)",

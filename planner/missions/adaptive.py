@@ -186,7 +186,6 @@ class _Loop:
                  factory: Callable[[], Any]) -> None:
         self.terrain, self.registry, self.robot, self.battery, self.truth = terrain, registry, robot, battery, truth
         self.goal, self.cfg, self.lem, self.factory = goal, cfg, lem, factory
-        self.capacity_j = battery.energy_capacity_j
         self.predictor = LegPredictor(lem, terrain, speed_mps=cfg.speed_mps, leg_length_m=cfg.leg_length_m,
                                       dt_s=1.0 / truth.current_rate_hz)
         self.legs: list[LegRecord] = []
@@ -221,8 +220,8 @@ class _Loop:
         self.draw.append((t, np.asarray(power_w, dtype=np.float64)))
 
     def available_j(self) -> float:
-        """Energy above the reserve at the current state of charge (J)."""
-        return (self.soc - self.battery.reserve_soc) * self.capacity_j
+        """Nominal energy above the reserve at the current state of charge (J), from the battery."""
+        return self.battery.replace(initial_soc=self.soc).usable_energy_wh * 3600.0
 
     def stop(self, status: str, reason: str) -> bool:
         self.status, self.reason = status, reason
