@@ -72,9 +72,16 @@ def test_ground_presets() -> None:
         assert g.name == name
 
 
-def test_presets_are_frozen() -> None:
-    with pytest.raises(dataclasses.FrozenInstanceError):
-        robot_preset("husky").mass_kg = 1.0  # type: ignore[misc]
+def test_a_preset_cannot_be_altered_through_a_returned_copy() -> None:
+    """Changing a preset means a new, re-validated parameter set; the preset stays as it was."""
+    husky = robot_preset("husky")
+    heavier = dataclasses.replace(husky, mass_kg=husky.mass_kg + 20.0)
+    assert heavier.mass_kg == husky.mass_kg + 20.0
+    assert robot_preset("husky") == husky and robot_preset("husky").mass_kg != heavier.mass_kg
+    with pytest.raises(InvalidParameterError, match="mass_kg"):
+        dataclasses.replace(husky, mass_kg=-1.0)  # __post_init__ checks every replacement
+    with pytest.raises(InvalidParameterError, match="rolling_resistance_coef must be a real number"):
+        dataclasses.replace(ground_preset("sand"), rolling_resistance_coef="0.05")
 
 
 @pytest.mark.parametrize(("lookup", "name"), [(robot_preset, "rover9000"),
