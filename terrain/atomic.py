@@ -293,7 +293,12 @@ def write_json_atomic(
     numpy arrays and scalars are written as lists and numbers; non-finite floats
     (NaN, inf) are written as ``null`` so the file is strict JSON.
     """
-    encoded = json.loads(json.dumps(data, default=default or _json_default))
+    try:
+        encoded = json.loads(json.dumps(data, default=default or _json_default))
+    except (TypeError, ValueError, RecursionError) as exc:
+        from .errors import InvalidParameterError
+
+        raise InvalidParameterError(f"data cannot be written as JSON to {str(path)!r}: {exc}") from exc
     text = json.dumps(_finite(encoded), indent=indent, allow_nan=False) + "\n"
     return write_text_atomic(path, text)
 

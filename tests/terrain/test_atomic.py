@@ -48,3 +48,12 @@ def test_json_is_strict_with_numpy_values_and_non_finite_as_null(tmp_path):
 def test_atomic_open_refuses_read_modes(tmp_path):
     with pytest.raises(ValueError, match="write mode"), atomic_open(tmp_path / "x", "r"):
         pass
+
+
+def test_json_of_something_unserialisable_is_a_parameter_error_and_writes_nothing(tmp_path):
+    from terrain import InvalidParameterError
+
+    target = tmp_path / "x.json"
+    with pytest.raises(InvalidParameterError, match="cannot be written as JSON"):
+        write_json_atomic(target, {"a": object()})
+    assert not target.exists() and list(tmp_path.iterdir()) == []
