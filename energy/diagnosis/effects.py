@@ -1,0 +1,129 @@
+"""The catalogue of candidate effects: names, lookup, and the candidates that apply to a model and data."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+from terrain.errors import InvalidParameterError, UnknownNameError
+
+from .effect_base import EFFECT_KINDS, Effect
+from .effects_learned import LearnedResidualEffect
+from .effects_measurement import (
+    MEASUREMENT_CANDIDATES,
+    IdleCurrentEffect,
+    SideGainEffect,
+    SideOffsetEffect,
+    TimeLagEffect,
+)
+from .effects_physics import (
+    PARAMETER_CANDIDATES,
+    PHYSICS_CANDIDATES,
+    GroundResistanceEffect,
+    MassEffect,
+    PhysicsTermEffect,
+    SlopeEffect,
+    TorqueConstantEffect,
+    TrackWidthEffect,
+)
+
+__all__ = ["EFFECTS_CATALOGUE", "NOT_IDENTIFIABLE_FROM_CURRENT", "LEARNED_EFFECT", "effect", "effect_from_spec",
+           "resolve_effects", "composition_order"]
+
+#: Name of the last-resort learned correction (not part of the default candidates).
+LEARNED_EFFECT = "learned_residual"
+#: Every catalogued effect name: physics terms, parameter errors, measurement effects, learned.
+EFFECTS_CATALOGUE: tuple[str, ...] = PHYSICS_CANDIDATES + PARAMETER_CANDIDATES + MEASUREMENT_CANDIDATES + (LEARNED_EFFECT,)
+#: Physics effects that change power but not the drive current: a current log cannot show them.
+NOT_IDENTIFIABLE_FROM_CURRENT: tuple[str, ...] = ("armature_heat", "sensor", "control")
+
+_CLASSES: dict[str, Any] = {
+    "slope": SlopeEffect,
+    "mass": MassEffect,
+    "track_width": TrackWidthEffect,
+    "ground_resistance": GroundResistanceEffect,
+    "torque_constant": TorqueConstantEffect,
+    "idle_current": IdleCurrentEffect,
+    "side_offset": SideOffsetEffect,
+    "side_gain": SideGainEffect,
+    "time_lag": TimeLagEffect,
+    LEARNED_EFFECT: LearnedResidualEffect,
+}
+
+
+def effect(name: str) -> Effect:
+    """A new :class:`Effect` of the catalogue by name.
+
+    Raises
+    ------
+    UnknownNameError
+        ``name`` is not in :data:`EFFECTS_CATALOGUE` (the message lists the names; effects
+        that a current log cannot show are named as such).
+    """
+    if isinstance(name, str) and name in NOT_IDENTIFIABLE_FROM_CURRENT:
+        raise UnknownNameError(
+            f"effect {name!r} changes power, not the drive current, so a current log cannot show it; "
+            f"catalogued effects: {list(EFFECTS_CATALOGUE)!r}"
+        )
+    if not isinstance(name, str) or name not in EFFECTS_CATALOGUE:
+        raise UnknownNameError(f"effect {name!r:.80} is not in the catalogue; expected one of {list(EFFECTS_CATALOGUE)!r}")
+    if name in _CLASSES:
+        return _CLASSES[name]()
+    return PhysicsTermEffect(name)
+
+
+def effect_from_spec(spec: Any) -> Effect:
+    """Rebuild an effect from :meth:`Effect.spec` (a dict with ``"name"``, plus ``"labels"`` for per-ground ones).
+
+    Raises
+    ------
+    UnknownNameError
+        An unknown name.
+    InvalidParameterError
+        Not such a dict.
+    """
+    if not isinstance(spec, dict) or "name" not in spec:
+        raise InvalidParameterError(f"an effect spec must be a dict with a 'name', got {spec!r:.80}")
+    out = effect(spec["name"])
+    if isinstance(out, GroundResistanceEffect):
+        labels = spec.get("labels", [])
+        if not isinstance(labels, list) or not all(isinstance(g, str) for g in labels):
+            raise InvalidParameterError(f"ground_resistance labels must be a list of str, got {labels!r:.80}")
+        out = out.with_labels(labels)
+    return out
+
+
+def resolve_effects(effects: Sequence[Any] | None) -> list[Effect]:
+    """Candidate effects: names from the catalogue and/or :class:`Effect` objects (None: every catalogued one but the learned).
+
+    Raises
+    ------
+    UnknownNameError
+        A name not in the catalogue.
+    InvalidParameterError
+        Not a sequence, an entry that is neither a name nor an Effect, duplicates, an
+        effect of an unknown kind.
+    """
+    if effects is None:
+        return [effect(n) for n in EFFECTS_CATALOGUE if n != LEARNED_EFFECT]
+    if isinstance(effects, (str, Effect)):
+        effects = [effects]
+    if not isinstance(effects, Sequence) or not effects:
+        raise InvalidParameterError(f"effects must be None or a non-empty sequence of effect names, got {effects!r:.80}")
+    out: list[Effect] = []
+    for e in effects:
+        item = e if isinstance(e, Effect) else effect(e)
+        if item.kind not in EFFECT_KINDS:
+            raise InvalidParameterError(f"effect {item.name!r} has kind {item.kind!r}; expected one of {EFFECT_KINDS!r}")
+        out.append(item)
+    names = [e.name for e in out]
+    if len(set(names)) != len(names):
+        raise InvalidParameterError(f"effects has duplicate names: {names!r}")
+    return out
+
+
+def composition_order(effect_: Effect) -> tuple[int, int]:
+    """Sort key composing effects onto a prediction: physics and parameters, learned, then measurement."""
+    kind = {"parameter": 0, "physics": 0, "learned": 1, "measurement": 2}.get(effect_.kind, 1)
+    pos = EFFECTS_CATALOGUE.index(effect_.name) if effect_.name in EFFECTS_CATALOGUE else -1
+    return kind, pos

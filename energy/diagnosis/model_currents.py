@@ -1,0 +1,113 @@
+"""The physics basis of a model under diagnosis and its per-side currents before the clamp at 0."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from terrain.errors import DataError, InvalidParameterError
+
+from ..ground import GroundParams
+from ..logs import InteractionLog
+from ..models.baselines import PhysicsCurrentModel
+from ..params import ground_preset, robot_preset
+from ..physics import EFFECTS, PhysicsEnergyModel
+from ..robot import RobotParams
+
+__all__ = ["DRIVE_EFFECTS", "PhysicsBasis", "physics_basis", "motoring_currents_a", "unclipped_prediction",
+           "clamps_at_zero"]
+
+#: Physics effects that change the motor current (the electronics draw no motor current).
+DRIVE_EFFECTS: tuple[str, ...] = tuple(e for e in EFFECTS if e not in ("sensor", "control"))
+
+
+@dataclass(frozen=True)
+class PhysicsBasis:
+    """The physics a model stands on: robot, ground, effects switched on, idle current.
+
+    For a fitted :class:`~energy.PhysicsCurrentModel` these are its fitted values; for any
+    other model a reference (the robot's preset on asphalt, every drive effect) from which
+    the physics terms are offered as additive candidates.
+    """
+
+    robot: RobotParams
+    ground: GroundParams
+    effects: tuple[str, ...]
+    idle_current_a: float
+    fitted_chi: bool
+    is_model: bool
+
+
+def physics_basis(model: Any, robot: Any = None) -> PhysicsBasis:
+    """The :class:`PhysicsBasis` of ``model`` (``robot``: preset name or RobotParams for other models).
+
+    Raises
+    ------
+    InvalidParameterError
+        ``robot`` is neither None, a preset name nor a RobotParams.
+    """
+    if isinstance(model, PhysicsCurrentModel) and model.is_fitted:
+        return PhysicsBasis(model.robot_, model.ground_, tuple(model.effects_), float(model.idle_current_a_),
+                            "track_width_multiplier" in model.fitted_, True)
+    if robot is None:
+        rb = robot_preset("husky")
+    elif isinstance(robot, str):
+        rb = robot_preset(robot)
+    elif isinstance(robot, RobotParams):
+        rb = robot
+    else:
+        raise InvalidParameterError(f"robot must be None, a preset name or a RobotParams, got {robot!r:.80}")
+    return PhysicsBasis(rb, ground_preset("asphalt"), DRIVE_EFFECTS, 0.0, False, False)
+
+
+def _log_robot(robot: RobotParams, log: InteractionLog, fitted_chi: bool) -> RobotParams:
+    # the rule of PhysicsCurrentModel: measured wheel speeds fix chi to the derivation track
+    if fitted_chi or log.meta.velocity_source != "measured" or log.meta.track_width_m is None:
+        return robot
+    chi = log.meta.track_width_m / robot.track_width_m
+    return robot if chi < 1.0 else dataclasses.replace(robot, track_width_multiplier=chi)
+
+
+def motoring_currents_a(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[str, ...] | None = None,
+                        robot: RobotParams | None = None, ground: Any = None, ground_index: Any = None,
+                        slope_rad: Any = 0.0) -> np.ndarray:
+    """Per-side motor current in the direction of rotation (N, 2), A, no idle, no clamp.
+
+    The physics of ``basis`` (or the given ``effects`` / ``robot`` / ``ground``, which may be
+    a list of GroundParams with ``ground_index``) for the log's ``v``, ``omega``, their time
+    derivatives and ``slope_rad`` — what :class:`~energy.PhysicsCurrentModel` predicts.
+
+    Raises
+    ------
+    DataError
+        Fewer than 2 drive samples.
+    """
+    if len(log) < 2:
+        raise DataError(f"the physics terms need at least 2 drive samples per log, got {len(log)} ({log.meta.source!r})")
+    rb = _log_robot(basis.robot if robot is None else robot, log, basis.fitted_chi)
+    model = PhysicsEnergyModel(rb, basis.effects if effects is None else effects)
+    t, v, w = log.time_s, log.v_mps, log.omega_radps
+    res = model.power(v, w, basis.ground if ground is None else ground, accel_mps2=np.gradient(v, t),
+                      alpha_radps2=np.gradient(w, t), slope_rad=slope_rad, time_s=t, ground_index=ground_index)
+    i_m = np.asarray(res.motor_current_a)
+    sign = np.sign(np.asarray(res.motor_speed_radps))
+    return np.where(sign != 0, i_m * sign, np.abs(i_m))
+
+
+def unclipped_prediction(model: Any, log: InteractionLog, basis: PhysicsBasis | None = None) -> np.ndarray:
+    """The model's ``[left, right]`` prediction before its clamp at 0 (N, 2), A.
+
+    A :class:`~energy.PhysicsCurrentModel`: idle current plus motoring current; any other
+    model: ``model.predict(log)``.
+    """
+    if basis is not None and basis.is_model:
+        return basis.idle_current_a + motoring_currents_a(basis, log)
+    return np.asarray(model.predict(log), dtype=np.float64)
+
+
+def clamps_at_zero(model: Any) -> bool:
+    """Whether the model clamps its currents at 0 (the diagnosis clamps the corrected ones too)."""
+    return isinstance(model, PhysicsCurrentModel) and bool(model.clip_negative)
