@@ -1,0 +1,168 @@
+"""Tests of energy.diagnosis.localise: the gap split by time, regime, side and space, ranked."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from energy import PAPER_GROUNDS, InteractionLog, LogMeta, TruthSimulator, charge_mah, robot_preset
+from energy.diagnosis.localise import DIMENSIONS, GapShare, localise_gap, shares_of, time_labels
+from energy.diagnosis.residuals import gap_summary
+from terrain import flat_map, ramp_map
+from terrain.errors import DataError, InvalidParameterError, UnknownNameError
+
+
+def make_log(v_mps, omega_radps, left_a, right_a, *, dt_s=0.1, pose_xyh=None, ground=None, ground_label=None):
+    v = np.asarray(v_mps, dtype=float)
+    n = v.size
+    t = np.arange(n) * dt_s
+    return InteractionLog(t, v, omega_radps, left_a, right_a, t, np.full(n, 9.81), pose_xyh=pose_xyh,
+                          ground=ground, meta=LogMeta(ground_label=ground_label))
+
+
+def stop_turn_go(n_each=100):
+    """Straight, pivot, arc, standstill blocks of ``n_each`` samples at 10 Hz."""
+    v = np.concatenate([np.full(n_each, 0.8), np.zeros(n_each), np.full(n_each, 0.5), np.zeros(n_each)])
+    w = np.concatenate([np.zeros(n_each), np.full(n_each, 0.6), np.full(n_each, 0.5), np.zeros(n_each)])
+    return v, w
+
+
+def measured(v, w):
+    base = 1.0 + 2.0 * np.abs(v) + 4.0 * np.abs(w)
+    return base, base + 0.2
+
+
+def test_a_model_that_misses_only_while_pivoting_puts_all_the_gap_in_pivot():
+    v, w = stop_turn_go()
+    left, right = measured(v, w)
+    log = make_log(v, w, left, right)
+    pred = np.column_stack([left, right])
+    pivot = (np.abs(v) < 0.05) & (np.abs(w) > 0.1)
+    pred[pivot] -= 2.0  # the model lacks turning resistance in pivots only
+    before = pred.copy()
+    rows = localise_gap([log], [pred])
+    turning = shares_of(rows, "turning")
+    assert turning[0].label == "pivot"
+    assert turning[0].share_pct == pytest.approx(100.0)
+    assert sum(r.share_pct for r in turning) == pytest.approx(100.0)
+    assert turning[0].gap_mah == pytest.approx(gap_summary([log], [pred]).gap_mah)
+    assert turning[0].n_samples == 100 and turning[0].duration_s == pytest.approx(10.0)
+    np.testing.assert_array_equal(pred, before)
+
+
+def test_a_model_wrong_on_one_ground_localises_to_that_ground():
+    v, w = stop_turn_go(50)
+    left, right = measured(v, w)
+    n = v.size
+    per_sample = np.where(np.arange(n) < n // 2, "tiles", "snow")
+    logs = [
+        make_log(v, w, left, right, ground_label="asphalt"),
+        make_log(v, w, left * 1.3, right * 1.3, ground_label="grass"),  # the model is 30 % low on grass
+        make_log(v, w, np.where(per_sample == "snow", left + 1.0, left), right, ground=per_sample),
+    ]
+    preds = [np.column_stack([left, right])] * 3
+    ground = shares_of(localise_gap(logs, preds), "ground")
+    assert [r.label for r in ground] == ["grass", "snow", "asphalt", "tiles"]
+    q = charge_mah(logs[1].time_s, 0.3 * left) + charge_mah(logs[1].time_s, 0.3 * right)
+    assert ground[0].gap_mah == pytest.approx(q)
+    assert ground[2].gap_mah == 0.0 and ground[3].gap_mah == 0.0
+    assert ground[1].n_runs == 1 and ground[1].n_samples == n // 2
+    assert ground[0].share_pct + ground[1].share_pct == pytest.approx(100.0)
+
+
+def test_a_one_amp_offset_on_the_left_shows_in_side_left_with_its_exact_charge():
+    v, w = stop_turn_go()
+    left, right = measured(v, w)
+    log = make_log(v, w, left + 1.0, right)
+    pred = np.column_stack([left, right])
+    side = shares_of(localise_gap(log, pred), "side")
+    assert [r.label for r in side] == ["left", "right"]
+    assert side[0].gap_mah == pytest.approx(charge_mah(log.time_s, np.ones(v.size)), rel=1e-12)
+    assert side[0].share_pct == 100.0 and side[1].gap_mah == 0.0 and side[1].share_pct == 0.0
+    assert side[0].n_samples == v.size and side[0].n_runs == 1
+
+
+def test_time_sections_follow_the_metrics_sections_and_carry_the_run():
+    log = make_log(np.full(201, 0.5), np.zeros(201), np.ones(201), np.ones(201))  # 20 s
+    labels = time_labels(log, 3)
+    assert labels[0] == "run 3, 0-8 s" and labels[80] == "run 3, 8-16 s" and labels[-1] == "run 3, 16-20 s"
+    pred = np.ones((201, 2))
+    pred[110:120] = 0.0  # a miss between 11 and 12 s
+    logs = [make_log(np.full(201, 0.5), np.zeros(201), np.ones(201), np.ones(201)), log]
+    time = shares_of(localise_gap(logs, [np.ones((201, 2)), pred]), "time")
+    assert time[0].label == "run 1, 8-16 s" and time[0].share_pct == pytest.approx(100.0)
+    assert len(time) == 6 and time[0].n_runs == 1
+    assert sum(r.duration_s for r in time) == pytest.approx(40.0)
+
+
+def test_every_dimension_adds_up_to_the_whole_gap_on_a_simulated_drive():
+    ramp = ramp_map((30, 30), 1.0, grade=0.08, ground="coated_wood")
+    sim = TruthSimulator(robot_preset("husky"), PAPER_GROUNDS, seed=2)
+    logs = [sim.drive(ramp, [(3.0, 3.0), (20.0, 3.0), (20.0, 20.0), (4.0, 20.0)], seed=s) for s in (1, 2)]
+    rng = np.random.default_rng(1)
+    preds = [rng.uniform(0.5, 4.0, (len(log), 2)) for log in logs]
+    rows = localise_gap(logs, preds, terrain=ramp)
+    assert tuple(dict.fromkeys(r.dimension for r in rows)) == DIMENSIONS
+    whole = gap_summary(logs, preds)
+    for dim in DIMENSIONS:
+        part = shares_of(rows, dim)
+        assert sum(r.gap_mah for r in part) == pytest.approx(whole.gap_mah, abs=1e-9), dim
+        if dim == "side":  # each side covers all the time
+            assert [r.duration_s for r in part] == [pytest.approx(whole.duration_s)] * 2
+        else:
+            assert sum(r.duration_s for r in part) == pytest.approx(whole.duration_s), dim
+            assert sum(r.n_samples for r in part) == whole.n_samples, dim
+            assert sum(r.share_pct for r in part) == pytest.approx(100.0), dim
+        magnitudes = [abs(r.gap_mah) for r in part]
+        assert magnitudes == sorted(magnitudes, reverse=True), dim
+    grades = {r.label for r in shares_of(rows, "grade")}
+    assert {"uphill", "level", "downhill"} <= grades
+    assert all(r.label.startswith("cells (") for r in shares_of(rows, "space"))
+    row = rows[0]
+    assert isinstance(row, GapShare) and "mAh" in str(row)
+    json.dumps([r.to_dict() for r in rows])
+
+
+def test_a_miss_in_one_corner_of_the_map_tops_the_space_rows():
+    tmap = flat_map((20, 20), 1.0)
+    x = np.linspace(1.0, 19.0, 181)
+    pose = np.column_stack([x, np.full(181, 2.0), np.zeros(181)])
+    v = np.full(181, 0.5)
+    log = make_log(v, np.zeros(181), np.ones(181), np.ones(181), pose_xyh=pose)
+    pred = np.ones((181, 2))
+    pred[x >= 15.5] = 0.5
+    space = shares_of(localise_gap([log], [pred], terrain=tmap), "space")
+    assert space[0].label == "cells (0-4, 15-19)" and space[0].share_pct == pytest.approx(100.0)
+    unknown = shares_of(localise_gap([log], [pred]), "space")
+    assert [r.label for r in unknown] == ["unknown"]
+
+
+def test_a_perfect_model_has_zero_shares_everywhere():
+    v, w = stop_turn_go(20)
+    left, right = measured(v, w)
+    rows = localise_gap([make_log(v, w, left, right)], [np.column_stack([left, right])])
+    assert all(r.gap_mah == 0.0 and r.share_pct == 0.0 for r in rows)
+    assert not any(math.isnan(r.share_pct) for r in rows)
+
+
+def test_bad_input_is_named():
+    v, w = stop_turn_go(5)
+    log = make_log(v, w, *measured(v, w))
+    good = np.ones((v.size, 2))
+    with pytest.raises(DataError, match="logs is empty"):
+        localise_gap([], [])
+    with pytest.raises(InvalidParameterError, match="one array per log: 1 log"):
+        localise_gap([log], [good, good])
+    with pytest.raises(InvalidParameterError, match=r"predictions\[0\] must have shape \(20, 2\)"):
+        localise_gap([log], [good.T])
+    with pytest.raises(DataError, match="must be finite"):
+        localise_gap([log], [np.full((v.size, 2), np.inf)])
+    with pytest.raises(InvalidParameterError, match="terrain must be a TerrainMap"):
+        localise_gap([log], [good], terrain="map.tif")
+    with pytest.raises(InvalidParameterError, match="section_s must be a real number"):
+        localise_gap([log], [good], section_s="8")
+    with pytest.raises(UnknownNameError, match="dimension must be one of"):
+        shares_of(localise_gap([log], [good]), "weather")
