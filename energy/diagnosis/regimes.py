@@ -209,9 +209,11 @@ def ground_labels(log: InteractionLog) -> np.ndarray:
     return out
 
 
-def _cell_range(first: np.ndarray, block: int, size: int) -> np.ndarray:
-    last = np.minimum(first + block - 1, size - 1)
-    return np.char.add(np.char.add(first.astype(str), "-"), last.astype(str))
+def _block_name(row: int, col: int, block: int, shape: tuple[int, int]) -> str:
+    if block == 1:
+        return f"cell ({row}, {col})"
+    last_row, last_col = min(row + block, shape[0]) - 1, min(col + block, shape[1]) - 1
+    return f"cells ({row}-{last_row}, {col}-{last_col})"
 
 
 def space_labels(log: InteractionLog, terrain: TerrainMap | None = None) -> np.ndarray:
@@ -222,22 +224,16 @@ def space_labels(log: InteractionLog, terrain: TerrainMap | None = None) -> np.n
         return _labelled(np.zeros(len(log), dtype=np.intp), (UNKNOWN_LABEL,))
     x, y = log.pose_xyh[:, 0], log.pose_xyh[:, 1]
     inside = np.asarray(terrain.contains(x, y), dtype=bool)
-    out = np.full(len(log), OFF_MAP_LABEL, dtype=object)
+    codes = np.zeros(len(log), dtype=np.intp)  # 0: off the map, k > 0: the k-th block met
+    names = [OFF_MAP_LABEL]
     if inside.any():
         rows, cols = terrain.rowcol(x[inside], y[inside])
-        rows, cols = np.atleast_1d(rows), np.atleast_1d(cols)
         block = max(1, int(round(SPACE_BLOCK_M / terrain.cell_size_m)))
-        if block == 1:
-            text = np.char.add(np.char.add(np.char.add("cell (", rows.astype(str)), ", "), cols.astype(str))
-            out[inside] = np.char.add(text, ")")
-        else:
-            r0, c0 = rows // block * block, cols // block * block
-            n_rows, n_cols = terrain.shape
-            text = np.char.add(np.char.add("cells (", _cell_range(r0, block, n_rows)), ", ")
-            out[inside] = np.char.add(np.char.add(text, _cell_range(c0, block, n_cols)), ")")
-    result = out.astype(str)
-    result.setflags(write=False)
-    return result
+        r0, c0 = np.atleast_1d(rows) // block * block, np.atleast_1d(cols) // block * block
+        keys, inv = np.unique(r0 * terrain.shape[1] + c0, return_inverse=True)
+        codes[inside] = inv.reshape(-1) + 1
+        names += [_block_name(int(k // terrain.shape[1]), int(k % terrain.shape[1]), block, terrain.shape) for k in keys]
+    return _labelled(codes, tuple(names))
 
 
 def regime_labels(log: InteractionLog, *, terrain: TerrainMap | None = None) -> dict[str, np.ndarray]:
