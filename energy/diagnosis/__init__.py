@@ -1,3 +1,36 @@
 """Sim-to-real gap diagnosis: where a current model's gap lies, which unmodelled effect causes it, how far it shrinks."""
 
-__all__: list[str] = []
+from .corrected import CorrectedCurrentModel
+from .diagnose import diagnose
+from .effect_base import EFFECT_KINDS, Effect, EffectParameter
+from .effects import EFFECTS_CATALOGUE, NOT_IDENTIFIABLE_FROM_CURRENT, effect, effect_from_spec
+from .localise import GapShare, localise_gap
+from .regimes import regime_labels
+from .residuals import GapSummary, gap_summary, residual_currents_a
+from .result import Diagnosis, EffectScore, WaterfallStep
+from .split import SPLITS, Fold, Split, make_split
+
+__all__ = [
+    "CorrectedCurrentModel",
+    "Diagnosis",
+    "EFFECTS_CATALOGUE",
+    "EFFECT_KINDS",
+    "Effect",
+    "EffectParameter",
+    "EffectScore",
+    "Fold",
+    "GapShare",
+    "GapSummary",
+    "NOT_IDENTIFIABLE_FROM_CURRENT",
+    "SPLITS",
+    "Split",
+    "WaterfallStep",
+    "diagnose",
+    "effect",
+    "effect_from_spec",
+    "gap_summary",
+    "localise_gap",
+    "make_split",
+    "regime_labels",
+    "residual_currents_a",
+]

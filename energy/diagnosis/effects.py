@@ -12,18 +12,18 @@ from .effects_learned import LearnedResidualEffect
 from .effects_measurement import (
     MEASUREMENT_CANDIDATES,
     IdleCurrentEffect,
-    SideGainEffect,
-    SideOffsetEffect,
+    CurrentGainEffect,
+    CurrentOffsetEffect,
     TimeLagEffect,
 )
 from .effects_physics import (
     PARAMETER_CANDIDATES,
     PHYSICS_CANDIDATES,
-    GroundResistanceEffect,
+    RollingResistanceEffect,
     MassEffect,
     PhysicsTermEffect,
     SlopeEffect,
-    TorqueConstantEffect,
+    MotorConstantEffect,
     TrackWidthEffect,
 )
 
@@ -41,11 +41,11 @@ _CLASSES: dict[str, Any] = {
     "slope": SlopeEffect,
     "mass": MassEffect,
     "track_width": TrackWidthEffect,
-    "ground_resistance": GroundResistanceEffect,
-    "torque_constant": TorqueConstantEffect,
+    "rolling_resistance": RollingResistanceEffect,
+    "motor_constant": MotorConstantEffect,
     "idle_current": IdleCurrentEffect,
-    "side_offset": SideOffsetEffect,
-    "side_gain": SideGainEffect,
+    "current_offset": CurrentOffsetEffect,
+    "current_gain": CurrentGainEffect,
     "time_lag": TimeLagEffect,
     LEARNED_EFFECT: LearnedResidualEffect,
 }
@@ -85,10 +85,10 @@ def effect_from_spec(spec: Any) -> Effect:
     if not isinstance(spec, dict) or "name" not in spec:
         raise InvalidParameterError(f"an effect spec must be a dict with a 'name', got {spec!r:.80}")
     out = effect(spec["name"])
-    if isinstance(out, GroundResistanceEffect):
+    if isinstance(out, RollingResistanceEffect):
         labels = spec.get("labels", [])
         if not isinstance(labels, list) or not all(isinstance(g, str) for g in labels):
-            raise InvalidParameterError(f"ground_resistance labels must be a list of str, got {labels!r:.80}")
+            raise InvalidParameterError(f"rolling_resistance labels must be a list of str, got {labels!r:.80}")
         out = out.with_labels(labels)
     return out
 

@@ -9,10 +9,10 @@ import numpy as np
 from ..logs import InteractionLog
 from .effect_base import Effect, EffectParameter
 
-__all__ = ["MEASUREMENT_CANDIDATES", "SideGainEffect", "SideOffsetEffect", "IdleCurrentEffect", "TimeLagEffect"]
+__all__ = ["MEASUREMENT_CANDIDATES", "CurrentGainEffect", "CurrentOffsetEffect", "IdleCurrentEffect", "TimeLagEffect"]
 
 #: Measurement-effect candidates, in the order they are composed.
-MEASUREMENT_CANDIDATES: tuple[str, ...] = ("idle_current", "side_offset", "side_gain", "time_lag")
+MEASUREMENT_CANDIDATES: tuple[str, ...] = ("idle_current", "current_offset", "current_gain", "time_lag")
 
 
 class IdleCurrentEffect(Effect):
@@ -30,10 +30,10 @@ class IdleCurrentEffect(Effect):
         return predicted_a + values[0]
 
 
-class SideOffsetEffect(Effect):
+class CurrentOffsetEffect(Effect):
     """A per-side current offset (sensor zero): ``I + [offset_left, offset_right]``."""
 
-    name = "side_offset"
+    name = "current_offset"
     kind = "measurement"
     parameters = (EffectParameter("offset_left_a", 0.0, -5.0, 5.0, "A"),
                   EffectParameter("offset_right_a", 0.0, -5.0, 5.0, "A"))
@@ -46,10 +46,10 @@ class SideOffsetEffect(Effect):
         return predicted_a + values[None, :2]
 
 
-class SideGainEffect(Effect):
+class CurrentGainEffect(Effect):
     """A per-side current gain (sensor calibration, wear): ``I * [gain_left, gain_right]``."""
 
-    name = "side_gain"
+    name = "current_gain"
     kind = "measurement"
     parameters = (EffectParameter("gain_left", 1.0, 0.3, 3.0, "1", "gain_left"),
                   EffectParameter("gain_right", 1.0, 0.3, 3.0, "1", "gain_right"))

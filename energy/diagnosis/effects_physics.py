@@ -17,7 +17,7 @@ from .effect_base import Effect, EffectParameter
 from .model_currents import PhysicsBasis, motoring_currents_a, physics_basis
 
 __all__ = ["PHYSICS_CANDIDATES", "PARAMETER_CANDIDATES", "PhysicsTermEffect", "SlopeEffect", "MassEffect",
-           "TrackWidthEffect", "GroundResistanceEffect", "TorqueConstantEffect", "log_ground_labels"]
+           "TrackWidthEffect", "RollingResistanceEffect", "MotorConstantEffect", "log_ground_labels"]
 
 #: Physics effects offered as candidates (those that change the motor current).
 PHYSICS_CANDIDATES: tuple[str, ...] = (
@@ -26,7 +26,7 @@ PHYSICS_CANDIDATES: tuple[str, ...] = (
     "speed_saturation",
 )
 #: Parameter-error candidates of a physics model.
-PARAMETER_CANDIDATES: tuple[str, ...] = ("mass", "track_width", "ground_resistance", "torque_constant")
+PARAMETER_CANDIDATES: tuple[str, ...] = ("mass", "track_width", "rolling_resistance", "motor_constant")
 
 _GAIN = EffectParameter("gain", 1.0, 0.0, 3.0, "1", None)
 
@@ -178,10 +178,10 @@ def log_ground_labels(log: InteractionLog) -> np.ndarray | None:
     return None
 
 
-class GroundResistanceEffect(_RepredictEffect):
+class RollingResistanceEffect(_RepredictEffect):
     """Per-ground rolling resistance: one coefficient per ground label seen in the logs."""
 
-    name = "ground_resistance"
+    name = "rolling_resistance"
     parameters: tuple[EffectParameter, ...] = ()
     description = "per-ground rolling-resistance coefficients"
     labels: tuple[str, ...] = ()
@@ -196,15 +196,17 @@ class GroundResistanceEffect(_RepredictEffect):
 
     def bind(self, logs: Sequence[Any], terrain: Any = None, robot: Any = None) -> Effect:
         out = super().bind(logs, terrain, robot)
+        if not logs:  # rebinding a loaded effect: keep its labels
+            return out
         found = [log_ground_labels(log) for log in logs]
         out.labels = tuple(sorted({str(x) for lab in found if lab is not None for x in np.unique(lab)}))
         out.parameters = tuple(EffectParameter(f"rolling_resistance_coef_{g}", 0.02, 0.0, 1.0, "1",
                                                f"{g}.rolling_resistance_coef") for g in out.labels)
         return out
 
-    def with_labels(self, labels: Sequence[str]) -> GroundResistanceEffect:
+    def with_labels(self, labels: Sequence[str]) -> RollingResistanceEffect:
         """The effect for these ground labels (used when loading a corrected model)."""
-        out = GroundResistanceEffect()
+        out = RollingResistanceEffect()
         out.labels = tuple(str(g) for g in labels)
         out.parameters = tuple(EffectParameter(f"rolling_resistance_coef_{g}", 0.02, 0.0, 1.0, "1",
                                                f"{g}.rolling_resistance_coef") for g in out.labels)
@@ -228,10 +230,10 @@ class GroundResistanceEffect(_RepredictEffect):
         return motoring_currents_a(b, log, ground=grounds, ground_index=idx)
 
 
-class TorqueConstantEffect(_RepredictEffect):
+class MotorConstantEffect(_RepredictEffect):
     """A motor-constant error: the motoring current divided by ``torque_constant_scale``."""
 
-    name = "torque_constant"
+    name = "motor_constant"
     parameters = (EffectParameter("torque_constant_scale", 1.0, 0.5, 2.0, "1", "torque_constant_nm_per_a"),)
     description = "motor torque-constant error (scale on Kt)"
 

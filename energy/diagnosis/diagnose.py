@@ -1,0 +1,236 @@
+"""``diagnose``: where a current model's gap lies, which catalogued effect causes it, how far it shrinks."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from terrain.checks import check_int, check_real, check_seed, fmt_number
+from terrain.errors import DataError, InvalidParameterError, NotFittedError
+
+from ..logs import InteractionLog
+from ..models.base import CurrentModel, check_logs, log_currents
+from .corrected import CorrectedCurrentModel
+from .effect_base import Effect
+from .effects import LEARNED_EFFECT, NOT_IDENTIFIABLE_FROM_CURRENT, effect, resolve_effects
+from .fit import SetScore, bootstrap_shrink_interval_pct, prepare_data, score_effect_set, shrink_pct
+from .localise import GapShare, localise_gap
+from .model_currents import physics_basis
+from .regimes import check_terrain
+from .residuals import GapSummary, gap_summary
+from .result import Diagnosis, EffectScore, WaterfallStep
+from .split import make_split
+
+__all__ = ["SIGNIFICANT_SHRINK_PCT", "MAX_GREEDY_CANDIDATES", "diagnose"]
+
+#: An effect is added only when it shrinks the held-out gap by at least this much (points of %).
+SIGNIFICANT_SHRINK_PCT = 2.0
+#: Candidates (best alone first) tried at each greedy step.
+MAX_GREEDY_CANDIDATES = 6
+
+
+def _check_model(model: Any, logs: list[InteractionLog]) -> list[np.ndarray]:
+    if not isinstance(model, CurrentModel):
+        raise InvalidParameterError(f"model must be a fitted CurrentModel, got {type(model).__name__!r}")
+    if not model.is_fitted:
+        raise NotFittedError(f"model {type(model).__name__} is not fitted; fit it (or load a saved one) before diagnosing")
+    out = []
+    for k, log in enumerate(logs):
+        try:
+            pred = np.asarray(model.predict(log), dtype=np.float64)
+        except (DataError, InvalidParameterError, ValueError, KeyError, AttributeError) as exc:
+            raise DataError(f"the {type(model).__name__} cannot predict logs[{k}] ({log.meta.source!r}): {exc}") from exc
+        if pred.shape != (len(log), 2) or not np.all(np.isfinite(pred)):
+            raise DataError(f"the {type(model).__name__} gives no finite (N, 2) prediction for logs[{k}]")
+        out.append(pred)
+    return out
+
+
+def _check_currents(logs: list[InteractionLog]) -> None:
+    for k, log in enumerate(logs):
+        if len(log) < 2:
+            raise DataError(f"logs[{k}] has {len(log)} drive sample(s); the diagnosis needs at least 2 per log")
+        if not np.any(log_currents(log)):
+            raise DataError(f"logs[{k}] ({log.meta.source!r}) has no drive currents (all zero); "
+                            "the diagnosis compares measured and predicted currents")
+
+
+def _candidates(model: Any, logs: list[InteractionLog], effects: Any, terrain: Any,
+                robot: Any) -> tuple[list[Effect], Effect | None, dict[str, str]]:
+    items = resolve_effects(effects)
+    skipped: dict[str, str] = {}
+    usable: list[Effect] = []
+    learned: Effect | None = None
+    for e in items:
+        if not e.applies_to(model):
+            skipped[e.name] = "already in the model, or not applicable to it"
+            continue
+        why = e.unsupported(logs, terrain)
+        if why:
+            skipped[e.name] = why
+            continue
+        bound = e.bind(logs, terrain, robot)
+        if e.name == LEARNED_EFFECT:
+            learned = bound
+        elif bound.n_parameters:
+            usable.append(bound)
+    if learned is None and effects is None:
+        learned = effect(LEARNED_EFFECT)
+    return usable, learned, skipped
+
+
+def _score(name_of: Effect, none: SetScore, s: SetScore, n_bootstrap: int, seed: int | None) -> EffectScore:
+    lo, hi = bootstrap_shrink_interval_pct(none, s, n_bootstrap=n_bootstrap, seed=seed)
+    vals = s.median_values()[-1]
+    return EffectScore(name_of.name, name_of.kind, name_of.values_dict(vals), shrink_pct(none, s), (lo, hi),
+                       name_of.n_parameters)
+
+
+def _step(label: str, logs: list[InteractionLog], s: SetScore, none: SetScore, section_s: float) -> WaterfallStep:
+    g = gap_summary(logs, list(s.held_out_a), section_s=section_s)
+    return WaterfallStep(label, g.charge_error_pct, g.section_error_pct, g.rmse_a, shrink_pct(none, s))
+
+
+def _significant(current: SetScore, trial: SetScore, none: SetScore, n_bootstrap: int, seed: int | None) -> bool:
+    lo, _ = bootstrap_shrink_interval_pct(current, trial, n_bootstrap=n_bootstrap, seed=seed)
+    gain = shrink_pct(none, trial) - shrink_pct(none, current)
+    return lo > 0.0 and gain >= SIGNIFICANT_SHRINK_PCT
+
+
+def _top_share(localisation: Sequence[GapShare]) -> str:
+    dims = ("turning", "speed", "acceleration", "ground", "grade")
+    counts = {d: sum(1 for r in localisation if r.dimension == d and r.n_samples) for d in dims}
+    rows = [r for r in localisation if r.dimension in dims and counts[r.dimension] > 1]
+    if not rows:
+        return ""
+    best = max(rows, key=lambda r: r.share_pct if r.n_samples else -1.0)
+    return f", {fmt_number(best.share_pct, 2)} % of it {best.dimension} {best.label!r}"
+
+
+def _verdict(before: GapSummary, after: GapSummary, ranking: Sequence[EffectScore], chosen: Sequence[str],
+             localisation: Sequence[GapShare], skipped: dict[str, str], split: str) -> tuple[str, ...]:
+    held = "held-out runs" if split == "runs" else "held-out blocks"
+    out = [f"The gap is {fmt_number(before.charge_error_pct, 2)} % of the charge (RMSE "
+           f"{fmt_number(before.rmse_a, 3)} A){_top_share(localisation)}."]
+    by_name = {s.name: s for s in ranking}
+    physical = [n for n in chosen if by_name[n].kind != "learned"]
+    if not physical:
+        out.append("No unmodelled effect found: no catalogued effect shrinks the held-out gap significantly.")
+    for k, n in enumerate(chosen):
+        s = by_name[n]
+        lo, hi = s.shrink_interval_pct
+        what = "A learned residual correction (last resort, not physics)" if s.kind == "learned" else f"{n} ({s.kind})"
+        lead = what if k == 0 else f"Then {what}"
+        out.append(f"{lead} explains {fmt_number(s.shrink_pct, 3)} % of the squared current gap on {held} "
+                   f"alone (95 % interval {fmt_number(lo, 3)} … {fmt_number(hi, 3)} %).")
+    if chosen:
+        out.append(f"With {', '.join(chosen)} added, the gap falls to {fmt_number(after.charge_error_pct, 2)} % of "
+                   f"the charge (RMSE {fmt_number(after.rmse_a, 3)} A) on {held}.")
+    out.append("Not identifiable from current logs (they change power, not current): "
+               + ", ".join(NOT_IDENTIFIABLE_FROM_CURRENT) + ".")
+    data_bound = {n: w for n, w in skipped.items() if "already" not in w}
+    if data_bound:
+        out.append("Not scored on these data: " + "; ".join(f"{n} ({w})" for n, w in data_bound.items()) + ".")
+    return tuple(out)
+
+
+def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog], *, terrain: Any = None,
+             effects: Sequence[Any] | None = None, split: str = "runs", n_blocks: int = 5, seed: int | None = 0,
+             section_s: float = 8.0, n_bootstrap: int = 200, robot: Any = None) -> Diagnosis:
+    """Diagnose the gap between a current model and logged currents.
+
+    Every candidate effect (the catalogue, or ``effects``) that the model lacks is fitted on
+    the calibration part of each fold and scored on its held-out part (other runs with
+    ``split="runs"``; contiguous blocks of each run with ``split="blocks"``); candidates are
+    ranked by held-out shrink, then added greedily (the set refitted jointly) while the next
+    one improves the held-out gap significantly (bootstrap lower bound > 0 and at least
+    :data:`SIGNIFICANT_SHRINK_PCT` points). When no catalogued effect is significant, the
+    learned residual correction is tried, labelled as such. Nothing is scored on the data
+    it was fitted on; the inputs are not modified.
+
+    Parameters
+    ----------
+    model : CurrentModel
+        A fitted current model (physics, estimator, baselines).
+    logs : InteractionLog or sequence of InteractionLog
+        Runs with measured currents.
+    terrain : TerrainMap, optional
+        The map the runs drove on (slope effect, grade and space localisation).
+    effects : sequence of str or Effect, optional
+        Candidates (default: the whole catalogue but the learned correction).
+    split : {"runs", "blocks"}
+    n_blocks : int
+        Folds of runs (at most the number of runs), or blocks per run (>= 2).
+    seed : int or None
+        Seed of the bootstrap intervals.
+    section_s : float
+        Section length of the section error and the time localisation (s), > 0.
+    n_bootstrap : int
+        Bootstrap resamples (>= 1).
+    robot : str or RobotParams, optional
+        Robot of the reference physics for a model that is not a physics model.
+
+    Returns
+    -------
+    Diagnosis
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a CurrentModel, bad logs, bad numbers, an effect that is neither a name nor an Effect.
+    NotFittedError
+        An unfitted model.
+    UnknownNameError
+        An effect name not in the catalogue; an unknown split.
+    DataError
+        Logs without currents, a model that cannot predict the logs, a split that leaves no
+        held-out data, fewer calibration samples than an effect has parameters.
+    """
+    items = check_logs(logs)
+    seed = check_seed(seed)
+    section_s = check_real("section_s", section_s, low=0.0, low_inclusive=False)
+    n_bootstrap = check_int("n_bootstrap", n_bootstrap, low=1)
+    terrain = check_terrain(terrain)
+    _check_currents(items)
+    sp = make_split(items, split, n_blocks)
+    predictions = _check_model(model, items)
+    usable, learned, skipped = _candidates(model, items, effects, terrain, robot)
+    basis = physics_basis(model, robot)
+    data = prepare_data(model, items, usable + ([learned] if learned is not None else []), basis)
+
+    none = score_effect_set([], data, sp)
+    alone = {e.name: score_effect_set([e], data, sp) for e in usable}
+    scores = {e.name: _score(e, none, alone[e.name], n_bootstrap, seed) for e in usable}
+    order = sorted(usable, key=lambda e: -scores[e.name].shrink_pct)
+
+    chosen: list[Effect] = []
+    sets = [none]
+    pool = [e for e in order if scores[e.name].shrink_pct >= SIGNIFICANT_SHRINK_PCT][:MAX_GREEDY_CANDIDATES]
+    while pool:
+        trials = {e.name: (alone[e.name] if not chosen else score_effect_set(chosen + [e], data, sp)) for e in pool}
+        best = min(pool, key=lambda e: trials[e.name].sse_units.sum())
+        if not _significant(sets[-1], trials[best.name], none, n_bootstrap, seed):
+            break
+        chosen.append(best)
+        sets.append(trials[best.name])
+        pool = [e for e in pool if e is not best]
+    if not chosen and learned is not None:
+        s = score_effect_set([learned], data, sp)
+        scores[learned.name] = _score(learned, none, s, n_bootstrap, seed)
+        order.append(learned)
+        if _significant(none, s, none, n_bootstrap, seed):
+            chosen.append(learned)
+            sets.append(s)
+
+    ranking = tuple(sorted((scores[e.name] for e in order), key=lambda s: -s.shrink_pct))
+    waterfall = [_step("as given", items, none, none, section_s)]
+    waterfall += [_step(f"+ {e.name}", items, s, none, section_s) for e, s in zip(chosen, sets[1:])]
+    before = gap_summary(items, list(none.held_out_a), section_s=section_s)
+    after = gap_summary(items, list(sets[-1].held_out_a), section_s=section_s)
+    localisation = localise_gap(items, predictions, terrain=terrain, section_s=section_s)
+    corrected = CorrectedCurrentModel(model, list(chosen), robot, terrain).fit(items)
+    names = tuple(e.name for e in chosen)
+    verdict = _verdict(before, after, ranking, names, localisation, skipped, sp.kind)
+    return Diagnosis(before, after, localisation, ranking, names, tuple(waterfall), verdict, corrected, skipped, sp.kind)

@@ -1,0 +1,192 @@
+"""Fitting candidate effects on calibration data and scoring them on held-out data, vectorised.
+
+An effect set is fitted with :func:`scipy.optimize.least_squares` on the residual vector of
+all calibration samples (both sides) of a fold and scored on that fold's held-out samples;
+every sample is held out exactly once, so the pooled held-out squared error of a set is a
+fair measure of what it explains. There is no function here that scores a set on the data
+it was fitted on: :func:`score_effect_set` takes a :class:`~energy.diagnosis.split.Split`,
+whose folds never overlap, and :func:`fit_effect_set` (used for the final corrected model)
+returns values, never a score.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import optimize
+
+from terrain.checks import check_int, check_seed
+from terrain.errors import DataError
+
+from ..logs import InteractionLog
+from ..models.base import log_currents
+from .effect_base import Effect
+from .effects import composition_order
+from .model_currents import PhysicsBasis, clamps_at_zero, unclipped_prediction
+from .split import Split
+
+__all__ = ["DiagnosisData", "SetScore", "prepare_data", "compose", "fit_effect_set", "score_effect_set",
+           "bootstrap_shrink_interval_pct", "shrink_pct"]
+
+
+@dataclass(frozen=True, eq=False)
+class DiagnosisData:
+    """Everything fitting needs, computed once: measured currents, the model's unclamped
+    prediction, and each candidate's per-log precomputation (by effect name)."""
+
+    logs: tuple[InteractionLog, ...]
+    measured: tuple[np.ndarray, ...]
+    base: tuple[np.ndarray, ...]
+    clip: bool
+    prepared: dict[str, tuple[Any, ...]]
+
+    @property
+    def n_samples(self) -> int:
+        """Number of drive samples over all logs."""
+        return int(sum(m.shape[0] for m in self.measured))
+
+
+def prepare_data(model: Any, logs: Sequence[InteractionLog], effects: Sequence[Effect],
+                 basis: PhysicsBasis | None = None) -> DiagnosisData:
+    """Measured currents, the model's unclamped predictions and every effect's per-log preparation."""
+    measured = tuple(log_currents(log) for log in logs)
+    base = tuple(unclipped_prediction(model, log, basis) for log in logs)
+    prepared = {e.name: tuple(e.prepare(model, log) for log in logs) for e in effects}
+    return DiagnosisData(tuple(logs), measured, base, clamps_at_zero(model), prepared)
+
+
+def compose(effects: Sequence[Effect], values: Sequence[np.ndarray], base_a: np.ndarray,
+            prepared: Sequence[Any], clip: bool) -> np.ndarray:
+    """The prediction of one log with ``effects`` added (in composition order), clamped at 0 if ``clip``."""
+    cur = base_a
+    order = sorted(range(len(effects)), key=lambda i: composition_order(effects[i]))
+    for i in order:
+        cur = effects[i].apply(np.asarray(values[i], dtype=np.float64), cur, prepared[i])
+    return np.maximum(cur, 0.0) if clip else cur
+
+
+def _unpack(effects: Sequence[Effect], theta: np.ndarray) -> list[np.ndarray]:
+    out, k = [], 0
+    for e in effects:
+        out.append(theta[k:k + e.n_parameters])
+        k += e.n_parameters
+    return out
+
+
+def _predict_log(effects: Sequence[Effect], values: Sequence[np.ndarray], data: DiagnosisData, k: int) -> np.ndarray:
+    return compose(effects, values, data.base[k], [data.prepared[e.name][k] for e in effects], data.clip)
+
+
+def _fit_rows(effects: Sequence[Effect], data: DiagnosisData, masks: Sequence[np.ndarray] | None,
+              start: np.ndarray | None = None) -> list[np.ndarray]:
+    """Least-squares values of ``effects`` on the samples selected by ``masks`` (all when None)."""
+    n_par = sum(e.n_parameters for e in effects)
+    if n_par == 0:
+        return [np.zeros(0) for _ in effects]
+    rows = [None if masks is None else np.asarray(m) for m in (masks or [None] * len(data.logs))]
+    used = [k for k, m in enumerate(rows) if m is None or m.any()]
+    n_rows = sum(data.measured[k].shape[0] if rows[k] is None else int(rows[k].sum()) for k in used)
+    if 2 * n_rows < n_par:
+        names = [e.name for e in effects]
+        raise DataError(f"effects {names!r} have {n_par} parameters but the calibration data holds only "
+                        f"{2 * n_rows} current values")
+    lo = np.concatenate([e.bounds[0] for e in effects])
+    hi = np.concatenate([e.bounds[1] for e in effects])
+    x0 = np.concatenate([e.initial for e in effects]) if start is None else np.clip(start, lo, hi)
+
+    def residual(theta: np.ndarray) -> np.ndarray:
+        vals = _unpack(effects, theta)
+        parts = []
+        for k in used:
+            r = _predict_log(effects, vals, data, k) - data.measured[k]
+            parts.append((r if rows[k] is None else r[rows[k]]).ravel())
+        parts.extend(e.penalty(v) for e, v in zip(effects, vals))
+        return np.concatenate(parts)
+
+    sol = optimize.least_squares(residual, x0, bounds=(lo, hi), method="trf", diff_step=1e-4, x_scale="jac",
+                                 max_nfev=200)
+    return _unpack(effects, sol.x)
+
+
+def fit_effect_set(effects: Sequence[Effect], data: DiagnosisData) -> list[np.ndarray]:
+    """Values of ``effects`` fitted jointly on all samples of ``data`` (for the final model; no score).
+
+    Raises
+    ------
+    DataError
+        Fewer current values than parameters.
+    """
+    return _fit_rows(effects, data, None)
+
+
+@dataclass(frozen=True, eq=False)
+class SetScore:
+    """Held-out result of one effect set: squared error per bootstrap unit, the fold values,
+    and the held-out prediction of every sample (each from the fold that held it out)."""
+
+    names: tuple[str, ...]
+    sse_units: np.ndarray
+    n_units_samples: np.ndarray
+    fold_values: tuple[tuple[np.ndarray, ...], ...]
+    held_out_a: tuple[np.ndarray, ...]
+
+    @property
+    def mse(self) -> float:
+        """Held-out mean squared current residual (A^2), both sides."""
+        return float(self.sse_units.sum() / max(2 * self.n_units_samples.sum(), 1))
+
+    def median_values(self) -> list[np.ndarray]:
+        """Per effect, the median over folds of the fitted values."""
+        n = len(self.names)
+        return [np.median(np.stack([fv[i] for fv in self.fold_values]), axis=0) if self.fold_values else np.zeros(0)
+                for i in range(n)]
+
+
+def score_effect_set(effects: Sequence[Effect], data: DiagnosisData, split: Split) -> SetScore:
+    """Fit ``effects`` jointly on each fold's calibration samples; score them on its held-out samples.
+
+    Raises
+    ------
+    DataError
+        A fold with fewer calibration current values than the set has parameters.
+    """
+    n_logs = len(data.logs)
+    held = [np.zeros_like(m) for m in data.measured]
+    fold_values = []
+    for fold in split.folds:
+        vals = _fit_rows(effects, data, fold.calibration) if effects else []
+        fold_values.append(tuple(vals))
+        for k in range(n_logs):
+            h = fold.held_out[k]
+            if h.any():
+                held[k][h] = _predict_log(effects, vals, data, k)[h]
+    sse = np.zeros(split.n_units)
+    count = np.zeros(split.n_units)
+    for k in range(n_logs):
+        sq = ((held[k] - data.measured[k]) ** 2).sum(axis=1)
+        sse += np.bincount(split.units[k], weights=sq, minlength=split.n_units)
+        count += np.bincount(split.units[k], minlength=split.n_units)
+    return SetScore(tuple(e.name for e in effects), sse, count, tuple(fold_values), tuple(held))
+
+
+def shrink_pct(before: SetScore, after: SetScore) -> float:
+    """``100 * (1 - MSE_after / MSE_before)`` over the held-out samples."""
+    b = float(before.sse_units.sum())
+    return 100.0 * (1.0 - float(after.sse_units.sum()) / b) if b > 0 else 0.0
+
+
+def bootstrap_shrink_interval_pct(before: SetScore, after: SetScore, *, n_bootstrap: int = 200,
+                                  seed: int | None = 0, level: float = 0.95) -> tuple[float, float]:
+    """Percentile interval of the held-out shrink, resampling the split's units (runs or blocks)."""
+    n_bootstrap = check_int("n_bootstrap", n_bootstrap, low=1)
+    rng = np.random.default_rng(check_seed(seed))
+    b, a = before.sse_units, after.sse_units
+    idx = rng.integers(0, b.size, size=(n_bootstrap, b.size))
+    sb = b[idx].sum(axis=1)
+    sa = a[idx].sum(axis=1)
+    vals = 100.0 * (1.0 - sa / np.where(sb > 0, sb, 1.0))
+    tail = (1.0 - level) / 2.0 * 100.0
+    return float(np.percentile(vals, tail)), float(np.percentile(vals, 100.0 - tail))

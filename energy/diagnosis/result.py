@@ -1,0 +1,162 @@
+"""The result of a diagnosis: effect scores, the held-out waterfall, the verdict, the corrected model."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from terrain.atomic import write_json_atomic, write_text_atomic
+from terrain.checks import fmt_number
+
+from ..models.base import CurrentModel
+from .localise import GapShare
+from .residuals import GapSummary
+
+__all__ = ["EffectScore", "WaterfallStep", "Diagnosis"]
+
+
+@dataclass(frozen=True)
+class EffectScore:
+    """One candidate effect, fitted on calibration data and scored alone on held-out data.
+
+    Attributes
+    ----------
+    name, kind : str
+        Catalogue name; ``"physics"``, ``"parameter"``, ``"measurement"`` or ``"learned"``.
+    parameters : dict of str to float
+        Fitted values (median over the folds' calibration fits).
+    shrink_pct : float
+        ``100 * (1 - MSE_after / MSE_before)`` of the current over the held-out samples.
+    shrink_interval_pct : (float, float)
+        95 % bootstrap interval of the shrink over runs (or blocks).
+    n_parameters : int
+    """
+
+    name: str
+    kind: str
+    parameters: dict[str, float]
+    shrink_pct: float
+    shrink_interval_pct: tuple[float, float]
+    n_parameters: int
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict."""
+        d = asdict(self)
+        d["shrink_interval_pct"] = list(self.shrink_interval_pct)
+        return d
+
+
+@dataclass(frozen=True)
+class WaterfallStep:
+    """The held-out gap after one more effect: whole-set charge error, 8 s section error, RMSE, shrink."""
+
+    label: str
+    charge_error_pct: float
+    section_error_pct: float
+    rmse_a: float
+    shrink_pct: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict."""
+        return asdict(self)
+
+
+def _pct(x: float) -> str:
+    return f"{fmt_number(abs(x), 2)} %"
+
+
+@dataclass(frozen=True, eq=False)
+class Diagnosis:
+    """What :func:`energy.diagnosis.diagnose` found (frozen).
+
+    Attributes
+    ----------
+    before, after : GapSummary
+        Held-out gap of the model as given and of the corrected model (each sample
+        predicted by the fold that held it out).
+    localisation : tuple of GapShare
+        Where the gap of the model as given lies, on all logs.
+    ranking : tuple of EffectScore
+        Every candidate, best held-out shrink first.
+    chosen : tuple of str
+        Effects added greedily, in order.
+    waterfall : tuple of WaterfallStep
+        ``"as given"``, then one step per chosen effect.
+    verdict : tuple of str
+        Plain sentences.
+    corrected_model : CurrentModel
+        The input model plus the chosen effects, fitted on all logs.
+    skipped : dict of str to str
+        Candidates not scored and why (already in the model, data cannot show them).
+    """
+
+    before: GapSummary
+    after: GapSummary
+    localisation: tuple[GapShare, ...]
+    ranking: tuple[EffectScore, ...]
+    chosen: tuple[str, ...]
+    waterfall: tuple[WaterfallStep, ...]
+    verdict: tuple[str, ...]
+    corrected_model: CurrentModel
+    skipped: dict[str, str] = field(default_factory=dict)
+    split: str = "runs"
+
+    @property
+    def found(self) -> bool:
+        """Whether a catalogued (non-learned) effect explains part of the gap."""
+        kinds = {s.name: s.kind for s in self.ranking}
+        return any(kinds.get(n) != "learned" for n in self.chosen)
+
+    def score(self, name: str) -> EffectScore | None:
+        """The ranking entry of ``name``, or None."""
+        return next((s for s in self.ranking if s.name == name), None)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict (the corrected model is named by class, not embedded)."""
+        return {
+            "before": self.before.to_dict(),
+            "after": self.after.to_dict(),
+            "localisation": [r.to_dict() for r in self.localisation],
+            "ranking": [s.to_dict() for s in self.ranking],
+            "chosen": list(self.chosen),
+            "waterfall": [w.to_dict() for w in self.waterfall],
+            "verdict": list(self.verdict),
+            "skipped": dict(self.skipped),
+            "split": self.split,
+            "corrected_model": type(self.corrected_model).__name__,
+        }
+
+    def write_json(self, path: str | os.PathLike[str]) -> Path:
+        """Write :meth:`to_dict` to ``path`` atomically; return the path."""
+        return write_json_atomic(path, self.to_dict())
+
+    def to_markdown(self) -> str:
+        """A plain-words report: verdict, where the gap lies, the ranking and the waterfall."""
+        lines = ["# Sim-to-real gap diagnosis", ""]
+        lines += [f"- {s}" for s in self.verdict]
+        lines += ["", "## Where the gap lies (model as given, all logs)", "",
+                  "| dimension | slice | gap (mAh) | share | samples | runs |", "|---|---|---|---|---|---|"]
+        for r in self.localisation:
+            lines.append(f"| {r.dimension} | {r.label} | {fmt_number(r.gap_mah, 3)} | {_pct(r.share_pct)} | "
+                         f"{r.n_samples} | {r.n_runs} |")
+        lines += ["", f"## Candidate effects (held-out shrink, split by {self.split})", "",
+                  "| rank | effect | kind | shrink | 95 % interval | parameters |", "|---|---|---|---|---|---|"]
+        for k, s in enumerate(self.ranking, 1):
+            lo, hi = s.shrink_interval_pct
+            params = ", ".join(f"{n} = {fmt_number(v, 4)}" for n, v in s.parameters.items())
+            lines.append(f"| {k} | {s.name} | {s.kind} | {fmt_number(s.shrink_pct, 3)} % | "
+                         f"{fmt_number(lo, 3)} … {fmt_number(hi, 3)} % | {params} |")
+        if self.skipped:
+            lines += ["", "Not scored: " + "; ".join(f"{n} ({why})" for n, why in self.skipped.items()) + "."]
+        lines += ["", "## Waterfall (held-out)", "",
+                  "| step | charge error | 8 s section error | RMSE (A) | shrink |", "|---|---|---|---|---|"]
+        for w in self.waterfall:
+            lines.append(f"| {w.label} | {fmt_number(w.charge_error_pct, 3)} % | {fmt_number(w.section_error_pct, 3)} % | "
+                         f"{fmt_number(w.rmse_a, 3)} | {fmt_number(w.shrink_pct, 3)} % |")
+        return "\n".join(lines) + "\n"
+
+    def write_markdown(self, path: str | os.PathLike[str]) -> Path:
+        """Write :meth:`to_markdown` to ``path`` atomically; return the path."""
+        return write_text_atomic(path, self.to_markdown())
