@@ -207,7 +207,8 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
 
     chosen: list[Effect] = []
     sets = [none]
-    pool = [e for e in order if scores[e.name].shrink_pct >= SIGNIFICANT_SHRINK_PCT][:MAX_GREEDY_CANDIDATES]
+    pool = [e for e in order if scores[e.name].shrink_pct >= SIGNIFICANT_SHRINK_PCT
+            and not e.negligible(alone[e.name].median_values()[-1])][:MAX_GREEDY_CANDIDATES]
     while pool:
         trials = {e.name: (alone[e.name] if not chosen else score_effect_set(chosen + [e], data, sp)) for e in pool}
         best = min(pool, key=lambda e: trials[e.name].sse_units.sum())

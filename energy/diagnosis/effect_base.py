@@ -112,6 +112,10 @@ class Effect:
         """``predicted_a`` (N, 2) with the effect added for parameter ``values``."""
         raise NotImplementedError
 
+    def negligible(self, values: np.ndarray) -> bool:
+        """Whether fitted ``values`` are below what the data can resolve (never added then); default False."""
+        return False
+
     def penalty(self, values: np.ndarray) -> np.ndarray:
         """Extra least-squares residuals (regularisation); none by default."""
         return np.zeros(0)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import copy
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -73,6 +75,17 @@ class TimeLagEffect(Effect):
     kind = "measurement"
     parameters = (EffectParameter("lag_s", 0.0, -0.5, 0.5, "s", "lag_s"),)
     description = "time lag between the motion and the current streams"
+    period_s: float = 0.0
+
+    def bind(self, logs: Sequence[Any], terrain: Any = None, robot: Any = None) -> Effect:
+        out = copy.copy(self)
+        periods = [float(np.median(np.diff(log.time_s))) for log in logs if len(log) > 1]
+        out.period_s = float(np.median(periods)) if periods else self.period_s
+        return out
+
+    def negligible(self, values: np.ndarray) -> bool:
+        # a shift below one sample period only smooths the prediction by interpolation
+        return abs(float(values[0])) < self.period_s
 
     def prepare(self, model: Any, log: InteractionLog) -> np.ndarray:
         return np.asarray(log.time_s)

@@ -1,0 +1,108 @@
+"""diagnose(): the withheld effect ranks first and closes the held-out gap; the null finds nothing; bad input."""
+
+import dataclasses
+import inspect
+
+import numpy as np
+import pytest
+
+from energy import DataError, InvalidParameterError, LinearCurrentModel, NotFittedError, UnknownNameError
+from energy.diagnosis import Diagnosis, Effect, EffectParameter, diagnose
+from energy.diagnosis.scenarios import null_scenario, scenario
+
+CANDIDATES = ["turning_resistance", "gear_losses", "current_gain", "idle_current", "mass"]
+
+
+def _small(sc):
+    return dataclasses.replace(sc, n_runs=3, run_duration_s=8.0)
+
+
+class NoiseEffect(Effect):
+    """A pure-noise candidate: a gain on seeded random currents."""
+
+    name = "pure_noise"
+    kind = "measurement"
+    parameters = (EffectParameter("gain", 0.0, -5.0, 5.0, "A"),)
+
+    def prepare(self, model, log):
+        return np.random.default_rng(len(log)).standard_normal((len(log), 2))
+
+    def apply(self, values, predicted_a, prepared):
+        return predicted_a + values[0] * prepared
+
+
+@pytest.fixture(scope="module")
+def turning():
+    sc = _small(scenario("turning_resistance"))
+    logs, model = sc.make_logs(0), sc.make_model(0)
+    return logs, model, diagnose(model, logs, terrain=sc.terrain, effects=CANDIDATES + [NoiseEffect()],
+                                 n_bootstrap=50)
+
+
+def test_withheld_effect_ranks_first_and_closes_the_gap(turning):
+    logs, model, d = turning
+    assert isinstance(d, Diagnosis)
+    assert d.ranking[0].name == "turning_resistance"
+    assert d.ranking[0].shrink_pct >= 80.0 and d.ranking[0].shrink_interval_pct[0] > 0
+    assert abs(d.ranking[0].parameters["gain"] - 1.0) < 0.2  # the truth's term at gain 1
+    assert d.chosen[0] == "turning_resistance"
+    assert [w.label for w in d.waterfall][:2] == ["as given", "+ turning_resistance"]
+    assert d.waterfall[1].rmse_a < 0.5 * d.waterfall[0].rmse_a
+    assert abs(d.after.charge_error_pct) < abs(d.before.charge_error_pct)
+    assert "turning_resistance" in " ".join(d.verdict)
+    ranks = [s.name for s in d.ranking]
+    assert ranks.index("pure_noise") > ranks.index("turning_resistance")  # noise never above a true effect
+    assert "pure_noise" not in d.chosen
+
+
+def test_corrected_model_predicts_closer(turning):
+    logs, model, d = turning
+    err = [np.mean((model.predict(g) - np.column_stack([g.current_left_a, g.current_right_a])) ** 2) for g in logs]
+    err2 = [np.mean((d.corrected_model.predict(g) - np.column_stack([g.current_left_a, g.current_right_a])) ** 2)
+            for g in logs]
+    assert sum(err2) < 0.2 * sum(err)
+
+
+def test_result_serialises(turning, tmp_path):
+    _, _, d = turning
+    p = d.write_json(tmp_path / "diagnosis.json")
+    assert p.exists() and "ranking" in p.read_text()
+    md = d.to_markdown()
+    assert "Waterfall" in md and "turning_resistance" in md
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        d.chosen = ()
+
+
+def test_null_finds_no_unmodelled_effect():
+    sc = _small(null_scenario())
+    d = diagnose(sc.make_model(1), sc.make_logs(1), terrain=sc.terrain,
+                 effects=["gear_losses", "current_gain", "idle_current", "time_lag"], n_bootstrap=50)
+    assert d.chosen == ()
+    assert any("No unmodelled effect found" in s for s in d.verdict)
+
+
+def test_no_public_way_to_score_on_fitting_data():
+    params = inspect.signature(diagnose).parameters
+    assert not any(("train" in p or "in_sample" in p or "fit_on" in p) for p in params)
+    assert params["split"].default == "runs"
+
+
+def test_bad_input(turning):
+    logs, model, _ = turning
+    with pytest.raises(UnknownNameError, match="not in the catalogue"):
+        diagnose(model, logs, effects=["warp_drive"])
+    with pytest.raises(DataError, match="at least 2 runs"):
+        diagnose(model, logs[:1], effects=["current_gain"])
+    with pytest.raises(NotFittedError, match="not fitted"):
+        diagnose(LinearCurrentModel(), logs, effects=["current_gain"])
+    with pytest.raises(InvalidParameterError, match="CurrentModel"):
+        diagnose("physics", logs)
+    zero = dataclasses.replace(logs[0], current_left_a=np.zeros(len(logs[0])), current_right_a=np.zeros(len(logs[0])))
+    with pytest.raises(DataError, match="no drive currents"):
+        diagnose(model, [zero, logs[1]], effects=["current_gain"])
+    short = [g.slice(g.time_s[0], g.time_s[0] + 0.015) for g in logs]
+    with pytest.raises(DataError, match="parameters but the calibration data"):
+        diagnose(model, short, effects=["learned_residual"], split="runs")
+    before = logs[0].current_left_a.copy()
+    diagnose(model, logs, effects=["current_gain"], n_bootstrap=5)
+    np.testing.assert_array_equal(before, logs[0].current_left_a)  # nothing modified in place

@@ -1,0 +1,74 @@
+"""Fitting on calibration data and scoring on held-out data: recovered values, shrink, intervals, errors."""
+
+import numpy as np
+import pytest
+
+from energy import DataError, InteractionLog, LinearCurrentModel
+from energy.diagnosis import effect, make_split
+from energy.diagnosis.fit import (
+    bootstrap_shrink_interval_pct,
+    fit_effect_set,
+    prepare_data,
+    score_effect_set,
+    shrink_pct,
+)
+
+
+def _logs(n_logs=4, n=300, gain=(1.3, 0.8), seed=0):
+    rng = np.random.default_rng(seed)
+    out = []
+    for k in range(n_logs):
+        t = np.arange(n) * 0.05
+        v = 0.5 + 0.3 * np.sin(t + k)
+        base = 1.0 + 2.0 * v
+        cur = base[:, None] * np.array(gain) + 0.05 * rng.standard_normal((n, 2))
+        out.append(InteractionLog(t, v, np.zeros(n), cur[:, 0], cur[:, 1], t, np.full(n, 9.81)))
+    return out
+
+
+@pytest.fixture(scope="module")
+def setup():
+    logs = _logs()
+    ungained = [InteractionLog(g.time_s, g.v_mps, g.omega_radps, 1 + 2 * g.v_mps, 1 + 2 * g.v_mps, g.time_s,
+                               g.accel_z_mps2) for g in logs]
+    model = LinearCurrentModel().fit(ungained)
+    return logs, model
+
+
+def test_gain_is_recovered_and_shrinks_the_held_out_gap(setup):
+    logs, model = setup
+    gain, offset = effect("current_gain"), effect("idle_current")
+    data = prepare_data(model, logs, [gain, offset])
+    values = fit_effect_set([gain], data)
+    np.testing.assert_allclose(values[0], [1.3, 0.8], rtol=0.02)
+    sp = make_split(logs, "runs", n_blocks=4)
+    none = score_effect_set([], data, sp)
+    s_gain = score_effect_set([gain], data, sp)
+    s_off = score_effect_set([offset], data, sp)
+    assert shrink_pct(none, s_gain) > 95.0
+    assert shrink_pct(none, s_gain) > shrink_pct(none, s_off)
+    lo, hi = bootstrap_shrink_interval_pct(none, s_gain, n_bootstrap=50, seed=1)
+    assert 90.0 < lo <= hi <= 100.0
+    assert bootstrap_shrink_interval_pct(none, s_gain, n_bootstrap=50, seed=1) == (lo, hi)  # seeded
+    for fv in s_gain.fold_values:
+        np.testing.assert_allclose(fv[0], [1.3, 0.8], rtol=0.03)
+
+
+def test_held_out_prediction_comes_from_the_fold_that_held_it_out(setup):
+    logs, model = setup
+    gain = effect("current_gain")
+    data = prepare_data(model, logs, [gain])
+    sp = make_split(logs, "blocks", n_blocks=3)
+    s = score_effect_set([gain], data, sp)
+    assert s.sse_units.shape == (sp.n_units,) and s.n_units_samples.sum() == data.n_samples
+    assert len(s.fold_values) == 3 and all(h.shape == m.shape for h, m in zip(s.held_out_a, data.measured))
+
+
+def test_fewer_samples_than_parameters(setup):
+    logs, model = setup
+    tiny = [InteractionLog(g.time_s[:3], g.v_mps[:3], g.omega_radps[:3], g.current_left_a[:3], g.current_right_a[:3],
+                           g.time_s[:3], g.accel_z_mps2[:3]) for g in logs[:1]]
+    learned = effect("learned_residual")
+    data = prepare_data(model, tiny, [learned])
+    with pytest.raises(DataError, match="parameters but the calibration data holds only"):
+        fit_effect_set([learned], data)
