@@ -21,6 +21,23 @@ from terrain.errors import (
 from .battery import Battery, Discharge, discharge_from_current, discharge_from_power
 from .budget import CURRENT_CONVENTIONS, EnergyBudget, energy_budget, log_battery_power_w
 from .commands import CommandProfile
+from .diagnosis import (
+    EFFECTS_CATALOGUE,
+    CorrectedCurrentModel,
+    Diagnosis,
+    Effect,
+    EffectParameter,
+    EffectScore,
+    GapShare,
+    GapSummary,
+    WaterfallStep,
+    diagnose,
+    effect,
+    gap_summary,
+    localise_gap,
+    regime_labels,
+    residual_currents_a,
+)
 from .evaluation import (
     EvaluationResult,
     RunScore,
@@ -207,6 +224,22 @@ __all__ = [
     "moving_median",
     "compare_currents",
     "CurrentErrors",
+    # the sim-to-real gap diagnosis
+    "diagnose",
+    "Diagnosis",
+    "EffectScore",
+    "WaterfallStep",
+    "CorrectedCurrentModel",
+    "Effect",
+    "EffectParameter",
+    "EFFECTS_CATALOGUE",
+    "effect",
+    "GapSummary",
+    "gap_summary",
+    "residual_currents_a",
+    "GapShare",
+    "localise_gap",
+    "regime_labels",
     # errors and warnings its users meet (defined in terrain.errors, the one hierarchy)
     "TerrawattError",
     "TerrawattWarning",

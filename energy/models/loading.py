@@ -16,7 +16,15 @@ from .baselines import ConstantCurrentModel, LinearCurrentModel, PhysicsCurrentM
 __all__ = ["MODEL_CLASSES", "model_class", "load_current_model"]
 
 #: Names of the model classes a current-model file may hold (plus any imported subclass).
-MODEL_CLASSES = ("ConstantCurrentModel", "LinearCurrentModel", "PhysicsCurrentModel", "VibrationCurrentEstimator")
+#: Model classes a file may hold. ``CorrectedCurrentModel`` (a model plus fitted effects, from
+#: :func:`energy.diagnose`) registers itself when ``energy`` is imported.
+MODEL_CLASSES = (
+    "ConstantCurrentModel",
+    "LinearCurrentModel",
+    "PhysicsCurrentModel",
+    "VibrationCurrentEstimator",
+    "CorrectedCurrentModel",
+)
 
 _BASELINES: dict[str, type[CurrentModel]] = {
     cls.__name__: cls for cls in (ConstantCurrentModel, LinearCurrentModel, PhysicsCurrentModel)

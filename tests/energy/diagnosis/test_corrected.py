@@ -5,7 +5,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from energy import InvalidParameterError, LinearCurrentModel, PhysicsCurrentModel
+from energy import InvalidParameterError, LinearCurrentModel, PhysicsCurrentModel, load_current_model
 from energy.diagnosis import CorrectedCurrentModel
 from energy.diagnosis.scenarios import scenario
 
@@ -27,6 +27,9 @@ def test_fit_recovers_the_withheld_term_and_roundtrips(setup, tmp_path):
     back = CorrectedCurrentModel.load(path)
     assert isinstance(back.base, PhysicsCurrentModel)
     np.testing.assert_allclose(back.predict(logs[1]), cm.predict(logs[1]))
+    any_model = load_current_model(path)  # the generic loader knows the class too
+    assert isinstance(any_model, CorrectedCurrentModel)
+    np.testing.assert_allclose(any_model.predict(logs[1]), cm.predict(logs[1]))
 
 
 def test_no_effects_is_the_base(setup):
