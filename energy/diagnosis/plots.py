@@ -1,0 +1,290 @@
+"""Figures of a diagnosis: effect ranking, waterfall, and :func:`plot_diagnosis`, which draws every figure.
+
+Each figure is a public function that draws one PNG through :func:`terrain.atomic.save_figure`
+and returns its path; the output path is checked before anything is drawn. The figures of
+where the gap lies (residual over time, by regime, on the map) are in
+:mod:`energy.diagnosis.plots_gap` and re-exported here. :func:`plot_diagnosis` *skips* a
+figure whose data is missing (no poses or no map: no map figure) and says why in
+:attr:`DiagnosisFigures.skipped`; called on its own, such a figure raises
+:class:`~terrain.errors.DataError` with that reason.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from terrain.atomic import check_output_path
+from terrain.checks import check_choice, check_int, fmt_number
+from terrain.errors import DataError, FigureWarning, InvalidParameterError
+from terrain.terrain_map import TerrainMap
+
+from .plots_gap import (
+    REGIME_PANELS,
+    checked_diagnosis,
+    figure_target,
+    log_list,
+    missing_map_reason,
+    missing_regimes_reason,
+    plot_gap_by_regime,
+    plot_gap_map,
+    plot_residual_time,
+    pyplot,
+    save_closed,
+)
+from .regimes import check_terrain
+from .result import Diagnosis
+
+__all__ = [
+    "FIGURES",
+    "REGIME_PANELS",
+    "DiagnosisFigures",
+    "plot_residual_time",
+    "plot_gap_by_regime",
+    "plot_gap_map",
+    "plot_effect_ranking",
+    "plot_waterfall",
+    "plot_diagnosis",
+]
+
+#: Figure names of :func:`plot_diagnosis` and their file names, in drawing order.
+FIGURES: dict[str, str] = {
+    "residual_time": "residual_time.png",
+    "gap_by_regime": "gap_by_regime.png",
+    "gap_map": "gap_map.png",
+    "effect_ranking": "effect_ranking.png",
+    "waterfall": "waterfall.png",
+}
+
+_KIND_COLOURS = {"physics": "#3182bd", "parameter": "#31a354", "measurement": "#756bb1", "learned": "#969696"}
+_NO_RANKING = "no effect ranking: no candidate effect was scored (every one was skipped for these data)"
+
+
+# ----------------------------------------------------------------- effect ranking
+def plot_effect_ranking(diagnosis: Diagnosis, path: str | os.PathLike[str], *, max_effects: int = 20,
+                        dpi: int = 110) -> Path:
+    """The effect ranking: held-out shrink of each candidate alone, with its 95 % bootstrap interval.
+
+    Horizontal bars, best first, coloured by kind; effects the greedy selection chose are
+    marked with their order, the learned correction is labelled as such.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a Diagnosis; a bad ``path`` (checked before drawing) or ``max_effects``.
+    DataError
+        No candidate was scored.
+    """
+    diagnosis = checked_diagnosis(diagnosis)
+    target = figure_target(path)
+    max_effects = check_int("max_effects", max_effects, low=1)
+    dpi = check_int("dpi", dpi, low=10, high=1200)
+    if not diagnosis.ranking:
+        raise DataError(_NO_RANKING)
+    ranking = list(diagnosis.ranking[:max_effects])
+    order = {n: k + 1 for k, n in enumerate(diagnosis.chosen)}
+
+    plt = pyplot()
+    from matplotlib.patches import Patch
+
+    fig, ax = plt.subplots(figsize=(9, 0.38 * len(ranking) + 1.8))
+    y = np.arange(len(ranking))
+    shrink = np.array([s.shrink_pct for s in ranking])
+    lo = np.array([s.shrink_interval_pct[0] for s in ranking])
+    hi = np.array([s.shrink_interval_pct[1] for s in ranking])
+    colours = [_KIND_COLOURS.get(s.kind, "#969696") for s in ranking]
+    bars = ax.barh(y, shrink, color=colours, alpha=0.85)
+    for bar, s in zip(bars, ranking):
+        if s.name in order:
+            bar.set_edgecolor("k")
+            bar.set_linewidth(1.6)
+        if s.kind == "learned":
+            bar.set_hatch("//")
+    ax.errorbar(shrink, y, xerr=[np.maximum(shrink - lo, 0.0), np.maximum(hi - shrink, 0.0)], fmt="none", ecolor="k",
+                elinewidth=1.0, capsize=3)
+    names = []
+    for s in ranking:
+        name = f"{s.name} (learned, not physics)" if s.kind == "learned" else s.name
+        names.append(f"* {name} [chosen {order[s.name]}]" if s.name in order else name)
+    ax.set_yticks(y, names, fontsize=8)
+    ax.invert_yaxis()
+    ax.axvline(0.0, color="k", lw=0.6)
+    ax.set_xlabel(f"held-out shrink of the squared current gap (%), split by {diagnosis.split}; bars: 95 % bootstrap "
+                  "interval")
+    kinds = sorted({s.kind for s in ranking})
+    ax.legend(handles=[Patch(facecolor=_KIND_COLOURS.get(k, "#969696"), label=k) for k in kinds], fontsize=8,
+              loc="lower right")
+    more = f" (best {len(ranking)} of {len(diagnosis.ranking)})" if len(diagnosis.ranking) > len(ranking) else ""
+    chosen = ", ".join(diagnosis.chosen) if diagnosis.chosen else "none"
+    ax.set_title(f"candidate effects, each alone{more}; chosen: {chosen}", fontsize=10)
+    ax.grid(axis="x", alpha=0.3)
+    fig.tight_layout()
+    return save_closed(fig, target, dpi)
+
+
+# ----------------------------------------------------------------- waterfall
+def plot_waterfall(diagnosis: Diagnosis, path: str | os.PathLike[str], *, dpi: int = 110) -> Path:
+    """The held-out waterfall: charge error (%), 8 s section error (%) and RMSE (A) after each added effect.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a Diagnosis; a bad ``path`` (checked before drawing).
+    """
+    diagnosis = checked_diagnosis(diagnosis)
+    target = figure_target(path)
+    dpi = check_int("dpi", dpi, low=10, high=1200)
+    steps = diagnosis.waterfall
+    plt = pyplot()
+    fig, axes = plt.subplots(1, 3, figsize=(4.0 * 3, 3.6 + 0.12 * len(steps)))
+    x = np.arange(len(steps))
+    panels = (("charge_error_pct", "whole-set charge error (%)", "#de2d26"),
+              ("section_error_pct", "8 s section error (%)", "#fd8d3c"),
+              ("rmse_a", "RMSE (A)", "#3182bd"))
+    for ax, (attr, title, colour) in zip(axes, panels):
+        vals = np.array([getattr(w, attr) for w in steps], dtype=float)
+        ax.bar(x, vals, color=colour, alpha=0.85)
+        for k, v in enumerate(vals):
+            ax.annotate(fmt_number(float(v), 3), (k, v), ha="center", va="bottom" if v >= 0 else "top", fontsize=8)
+        ax.set_xticks(x, [w.label for w in steps], rotation=30, ha="right", fontsize=8)
+        ax.axhline(0.0, color="k", lw=0.6)
+        ax.set_title(title, fontsize=10)
+        ax.margins(y=0.15)
+        ax.grid(axis="y", alpha=0.3)
+    held = "held-out runs" if diagnosis.split == "runs" else "held-out blocks"
+    fig.suptitle(f"how far the gap shrinks on {held}, effect by effect", fontsize=11)
+    fig.tight_layout()
+    return save_closed(fig, target, dpi)
+
+
+# ----------------------------------------------------------------- all of them
+@dataclass(frozen=True)
+class DiagnosisFigures:
+    """What :func:`plot_diagnosis` drew.
+
+    Attributes
+    ----------
+    written : dict of str to pathlib.Path
+        Figure name (:data:`FIGURES`) -> written file.
+    skipped : dict of str to str
+        Figure name -> why its data is missing.
+    failed : dict of str to str
+        Figure name -> the error that stopped it (only with ``on_error="warn"``).
+    """
+
+    written: dict[str, Path] = field(default_factory=dict)
+    skipped: dict[str, str] = field(default_factory=dict)
+    failed: dict[str, str] = field(default_factory=dict)
+
+    def __str__(self) -> str:
+        lines = [f"{name}: {path}" for name, path in self.written.items()]
+        lines += [f"{name}: skipped, {why}" for name, why in self.skipped.items()]
+        lines += [f"{name}: failed, {why}" for name, why in self.failed.items()]
+        return "\n".join(lines)
+
+
+def plot_diagnosis(diagnosis: Diagnosis, directory: str | os.PathLike[str], *, logs: Any = None,
+                   predictions: Any = None, terrain: TerrainMap | None = None, figures: Sequence[str] | None = None,
+                   max_runs: int = 4, on_error: str = "raise", dpi: int = 110) -> DiagnosisFigures:
+    """Draw every figure of a diagnosis into ``directory`` (file names :data:`FIGURES`).
+
+    A figure whose data is missing is skipped with its reason: the residual over time
+    without ``logs``; the map without ``terrain`` or poses. Without ``predictions`` the
+    residual is that of the model as given (``diagnosis.corrected_model.base``), and the
+    corrected model's (fitted on all logs: in-sample) is drawn dashed beside it.
+
+    Parameters
+    ----------
+    diagnosis : Diagnosis
+    directory : path-like
+        Folder to write into (created when missing).
+    logs : InteractionLog or sequence of them, optional
+        The logs the diagnosis ran on (same order).
+    predictions : sequence of array_like (N, 2), optional
+        Predictions of the model as given, per log.
+    terrain : TerrainMap, optional
+        The map the diagnosis ran on.
+    figures : sequence of str, optional
+        Names from :data:`FIGURES` (default all).
+    max_runs : int
+        Panels of the residual-over-time figure.
+    on_error : {"raise", "warn"}
+        A figure that fails while drawing raises, or warns (:class:`~terrain.errors.FigureWarning`)
+        and is listed in :attr:`DiagnosisFigures.failed`. Bad arguments always raise.
+    dpi : int
+
+    Returns
+    -------
+    DiagnosisFigures
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a Diagnosis; ``directory`` (or a figure's file in it) of the wrong kind, checked
+        before drawing; bad ``figures``, ``max_runs``, ``on_error`` or ``dpi``.
+    UnknownNameError
+        A figure name not in :data:`FIGURES`, or an unknown ``on_error``.
+    """
+    diagnosis = checked_diagnosis(diagnosis)
+    terrain = check_terrain(terrain)
+    check_choice("on_error", on_error, ("raise", "warn"))
+    max_runs = check_int("max_runs", max_runs, low=1, high=8)
+    dpi = check_int("dpi", dpi, low=10, high=1200)
+    if figures is None:
+        names = list(FIGURES)
+    elif isinstance(figures, (str, bytes)) or not isinstance(figures, Sequence):
+        raise InvalidParameterError(f"figures must be None or a sequence of figure names, got {figures!r:.80}")
+    else:
+        names = [check_choice("figures", n, tuple(FIGURES)) for n in figures]
+    folder = check_output_path(directory, "directory", directory=True)
+    paths = {n: check_output_path(folder / FIGURES[n], f"directory {str(folder)!r}: {FIGURES[n]}") for n in names}
+
+    skipped: dict[str, str] = {}
+    if logs is None:
+        skipped["residual_time"] = "no residual over time: no logs given"
+    why = missing_regimes_reason(diagnosis)
+    if why:
+        skipped["gap_by_regime"] = why
+    why = missing_map_reason(diagnosis, terrain, logs)
+    if why:
+        skipped["gap_map"] = why
+    if not diagnosis.ranking:
+        skipped["effect_ranking"] = _NO_RANKING
+
+    def residual(path: Path) -> Path:
+        items = log_list(logs)
+        preds, after = predictions, None
+        if preds is None:
+            model = diagnosis.corrected_model
+            base = getattr(model, "base", model)
+            preds = [base.predict(log) for log in items]
+            after = [model.predict(log) for log in items] if model is not base else None
+        return plot_residual_time(items, preds, path, corrected=after, max_runs=max_runs, dpi=dpi)
+
+    draw = {
+        "residual_time": residual,
+        "gap_by_regime": lambda p: plot_gap_by_regime(diagnosis, p, dpi=dpi),
+        "gap_map": lambda p: plot_gap_map(diagnosis, terrain, p, logs=logs, dpi=dpi),
+        "effect_ranking": lambda p: plot_effect_ranking(diagnosis, p, dpi=dpi),
+        "waterfall": lambda p: plot_waterfall(diagnosis, p, dpi=dpi),
+    }
+    written: dict[str, Path] = {}
+    failed: dict[str, str] = {}
+    todo = [n for n in names if n not in skipped]
+    if todo:
+        folder.mkdir(parents=True, exist_ok=True)
+    for name in todo:
+        try:
+            written[name] = draw[name](paths[name])
+        except Exception as exc:  # noqa: BLE001 - with on_error="warn" a failing figure is reported, never fatal
+            if on_error == "raise":
+                raise
+            failed[name] = f"{type(exc).__name__}: {exc}"
+            warnings.warn(f"plot_diagnosis: could not draw {name}: {failed[name]}", FigureWarning, stacklevel=2)
+    return DiagnosisFigures(written, {n: w for n, w in skipped.items() if n in names}, failed)

@@ -1,0 +1,383 @@
+"""Figures of where a gap lies: residual over time per side, gap by regime, gap on the map.
+
+The figure helpers shared with :mod:`energy.diagnosis.plots` (pyplot on Agg, save and
+close, argument checks, the reasons a figure's data is missing) live here too.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from terrain.atomic import check_output_path, save_figure
+from terrain.checks import check_int, check_real, fmt_number
+from terrain.errors import DataError, GridMismatchError, InvalidParameterError
+from terrain.terrain_map import TerrainMap
+
+from ..logs import InteractionLog
+from ..metrics import DEFAULT_SECTION_S, DEFAULT_SMOOTHING_SAMPLES, moving_median
+from .localise import SIDES, time_labels
+from .regimes import (
+    ACCELERATION_LABELS,
+    GRADE_LABELS,
+    OFF_MAP_LABEL,
+    SPEED_LABELS,
+    TURNING_LABELS,
+    UNKNOWN_LABEL,
+    check_terrain,
+)
+from .residuals import checked_pairs, sample_gap_mah
+from .result import Diagnosis
+
+__all__ = [
+    "REGIME_PANELS",
+    "pyplot",
+    "save_closed",
+    "checked_diagnosis",
+    "log_list",
+    "figure_target",
+    "regime_rows",
+    "missing_regimes_reason",
+    "missing_map_reason",
+    "plot_residual_time",
+    "plot_gap_by_regime",
+    "plot_gap_map",
+]
+
+#: Localisation dimensions drawn by :func:`plot_gap_by_regime`, one panel each, in order.
+REGIME_PANELS = ("speed", "turning", "acceleration", "grade", "ground", "side")
+
+_ORDERS = {"speed": SPEED_LABELS, "turning": TURNING_LABELS, "acceleration": ACCELERATION_LABELS,
+           "grade": GRADE_LABELS, "side": SIDES}
+_SIDE_COLOURS = ("#08519c", "#d94801")
+_BLOCK = re.compile(r"^cells? \((\d+)(?:-(\d+))?, (\d+)(?:-(\d+))?\)$")
+
+
+def pyplot() -> Any:
+    """``matplotlib.pyplot`` on the non-interactive Agg backend."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def save_closed(fig: Any, path: Path, dpi: int) -> Path:
+    """Write ``fig`` with :func:`terrain.atomic.save_figure`, close it, return the path."""
+    try:
+        return save_figure(fig, path, dpi=dpi)
+    finally:
+        pyplot().close(fig)
+
+
+def checked_diagnosis(diagnosis: Any) -> Diagnosis:
+    """``diagnosis`` if it is a :class:`Diagnosis`, else InvalidParameterError."""
+    if not isinstance(diagnosis, Diagnosis):
+        raise InvalidParameterError(f"diagnosis must be a Diagnosis, got {type(diagnosis).__name__!r}")
+    return diagnosis
+
+
+def log_list(logs: Any) -> list[Any]:
+    """A log or a sequence of logs as a list (InvalidParameterError for anything else)."""
+    if isinstance(logs, InteractionLog):
+        return [logs]
+    if isinstance(logs, (str, bytes)) or not isinstance(logs, Sequence):
+        raise InvalidParameterError(f"logs must be an InteractionLog or a sequence of them, got {type(logs).__name__!r}")
+    return list(logs)
+
+
+def figure_target(path: Any) -> Path:
+    """A figure's output path, checked before drawing (not a folder, not under a file)."""
+    if not isinstance(path, (str, os.PathLike)):
+        raise InvalidParameterError(f"path must be a file name, got {type(path).__name__!r}")
+    return check_output_path(path, "path")
+
+
+# ----------------------------------------------------------------- residual over time
+def _runs_to_draw(gaps: Sequence[float], runs: Sequence[int] | None, max_runs: int) -> list[int]:
+    n = len(gaps)
+    if runs is None:
+        order = sorted(range(n), key=lambda i: (-abs(gaps[i]), i))
+        return sorted(order[:max_runs])
+    if isinstance(runs, (str, bytes)) or not isinstance(runs, Sequence) or not runs:
+        raise InvalidParameterError(f"runs must be None or a non-empty sequence of run indices, got {runs!r:.80}")
+    chosen = [check_int(f"runs[{k}]", r, low=0, high=n - 1) for k, r in enumerate(runs)]
+    if len(set(chosen)) != len(chosen):
+        raise InvalidParameterError(f"runs has duplicates: {chosen!r}")
+    if len(chosen) > max_runs:
+        raise InvalidParameterError(f"runs names {len(chosen)} runs; at most max_runs = {max_runs} are drawn")
+    return chosen
+
+
+def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str], *, corrected: Any = None,
+                       runs: Sequence[int] | None = None, max_runs: int = 4, section_s: float = DEFAULT_SECTION_S,
+                       window_samples: int = DEFAULT_SMOOTHING_SAMPLES, dpi: int = 110) -> Path:
+    """Residual current (measured - predicted) over time per side, one panel per run, sections shaded.
+
+    Each panel shows the left and right residual (thin) and their moving medians (thick);
+    the ``section_s`` time sections of :func:`~energy.diagnosis.localise.time_labels` are
+    shaded in proportion to the share of the run's gap they carry, and labelled with it
+    (mAh). With ``corrected`` the residual of the corrected model is drawn dashed.
+
+    Parameters
+    ----------
+    logs : InteractionLog or sequence of InteractionLog
+    predictions : array_like (N, 2) or sequence of them
+        ``[left, right]`` predicted current (A) of the model as given, per log.
+    path : path-like
+        PNG file to write.
+    corrected : sequence of array_like (N, 2), optional
+        Predictions of the corrected model, per log (label says "in-sample" when it was
+        fitted on these logs, as :attr:`Diagnosis.corrected_model` is).
+    runs : sequence of int, optional
+        Runs to draw (indices into ``logs``); default the ``max_runs`` runs with the
+        largest whole-run ``|gap|``. The title says which.
+    max_runs : int
+        At most this many panels (1 to 8).
+    section_s : float
+        Section length (s), > 0.
+    window_samples : int
+        Moving-median window (samples), >= 1.
+    dpi : int
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    InvalidParameterError
+        ``path`` is a folder or lies under a file (checked before drawing); bad logs,
+        predictions, runs or numbers.
+    DataError
+        A log with fewer than 2 samples; non-finite predictions.
+    """
+    target = figure_target(path)
+    max_runs = check_int("max_runs", max_runs, low=1, high=8)
+    section_s = check_real("section_s", section_s, low=0.0, low_inclusive=False)
+    window_samples = check_int("window_samples", window_samples, low=1)
+    dpi = check_int("dpi", dpi, low=10, high=1200)
+    items, preds = checked_pairs(logs, predictions)
+    after = checked_pairs(items, corrected)[1] if corrected is not None else None
+    sample_gaps = [sample_gap_mah(log, p) for log, p in zip(items, preds)]
+    chosen = _runs_to_draw([float(g.sum()) for g in sample_gaps], runs, max_runs)
+
+    plt = pyplot()
+    fig, axes = plt.subplots(len(chosen), 1, figsize=(10, 2.6 * len(chosen) + 0.8), squeeze=False)
+    for ax, i in zip(axes[:, 0], chosen):
+        log, pred = items[i], preds[i]
+        t = log.time_s - log.time_s[0]
+        res = np.column_stack([log.current_left_a, log.current_right_a]) - pred
+        labels = time_labels(log, i, section_s)
+        names, inv = np.unique(labels, return_inverse=True)
+        gaps = np.bincount(inv.reshape(-1), weights=sample_gaps[i].sum(axis=1), minlength=names.size)
+        peak = float(np.max(np.abs(gaps))) or 1.0
+        for k in range(names.size):
+            span = t[inv.reshape(-1) == k]
+            ax.axvspan(span[0], span[-1], color="#fdae6b", alpha=0.08 + 0.4 * abs(gaps[k]) / peak, lw=0)
+            ax.text(0.5 * (span[0] + span[-1]), 1.0, f"{fmt_number(gaps[k], 2)}", transform=ax.get_xaxis_transform(),
+                    ha="center", va="bottom", fontsize=7, color="#7f2704")
+        smooth = moving_median(res, min(window_samples, len(log)))
+        for s, side in enumerate(SIDES):
+            ax.plot(t, res[:, s], color=_SIDE_COLOURS[s], lw=0.5, alpha=0.35)
+            ax.plot(t, smooth[:, s], color=_SIDE_COLOURS[s], lw=1.6, label=f"{side}, moving median")
+            if after is not None:
+                ra = np.column_stack([log.current_left_a, log.current_right_a])[:, s] - after[i][:, s]
+                ax.plot(t, moving_median(ra, min(window_samples, len(log))), color=_SIDE_COLOURS[s], lw=1.2, ls="--",
+                        label=f"{side}, corrected (in-sample)")
+        ax.axhline(0.0, color="k", lw=0.6)
+        src = Path(log.meta.source).name or "run"
+        ax.set_ylabel("residual (A)")
+        ax.set_title(f"run {i}: {src}, {log.meta.ground_label or 'unknown ground'}, gap "
+                     f"{fmt_number(float(sample_gaps[i].sum()), 3)} mAh", fontsize=9, loc="left", pad=12)
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(loc="upper right", fontsize=7, ncol=2)
+    axes[-1, 0].set_xlabel(f"time from the run's start (s); shaded: {fmt_number(section_s)} s sections by their gap (mAh)")
+    which = "chosen" if runs is not None else "largest |gap|"
+    fig.suptitle(f"residual current (measured - predicted): runs {', '.join(map(str, chosen))} of {len(items)} ({which})")
+    fig.tight_layout()
+    return save_closed(fig, target, dpi)
+
+
+# ----------------------------------------------------------------- gap by regime
+def regime_rows(diagnosis: Diagnosis) -> dict[str, list[Any]]:
+    """The known, non-empty localisation rows of each :data:`REGIME_PANELS` dimension, in a natural order."""
+    out: dict[str, list[Any]] = {}
+    for dim in REGIME_PANELS:
+        rows = [r for r in diagnosis.localisation if r.dimension == dim and r.label != UNKNOWN_LABEL and r.n_samples]
+        if rows:
+            order = _ORDERS.get(dim)
+            if order is not None:
+                rows.sort(key=lambda r: order.index(r.label) if r.label in order else len(order))
+            out[dim] = rows
+    return out
+
+
+def plot_gap_by_regime(diagnosis: Diagnosis, path: str | os.PathLike[str], *, dpi: int = 110) -> Path:
+    """The gap (mAh) by operating regime: one bar chart per dimension of :data:`REGIME_PANELS`.
+
+    Bars are the signed gap of each slice (measured - predicted charge, the model as
+    given, all logs) from :attr:`Diagnosis.localisation`, labelled with their share of the
+    dimension's gap and the time behind them; a dimension the logs cannot tell (only
+    ``"unknown"``) gets no panel and is named in the figure's note.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a Diagnosis; a bad ``path`` (checked before drawing).
+    DataError
+        No dimension has a known slice.
+    """
+    diagnosis = checked_diagnosis(diagnosis)
+    target = figure_target(path)
+    dpi = check_int("dpi", dpi, low=10, high=1200)
+    why = missing_regimes_reason(diagnosis)
+    if why:
+        raise DataError(why)
+    rows = regime_rows(diagnosis)
+    missing = [d for d in REGIME_PANELS if d not in rows]
+
+    plt = pyplot()
+    ncols = 3 if len(rows) > 2 else len(rows)
+    nrows = -(-len(rows) // ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(4.2 * ncols, 3.2 * nrows + 0.6), squeeze=False)
+    for ax, (dim, rs) in zip(axes.ravel(), rows.items()):
+        y = np.arange(len(rs))
+        gaps = np.array([r.gap_mah for r in rs])
+        bars = ax.barh(y, gaps, color=np.where(gaps >= 0, "#de2d26", "#3182bd"), alpha=0.8)
+        ax.bar_label(bars, [f"{r.share_pct:.0f} %, {fmt_number(r.duration_s, 3)} s" for r in rs], padding=3, fontsize=7)
+        ax.set_yticks(y, [r.label for r in rs], fontsize=8)
+        ax.invert_yaxis()
+        ax.axvline(0.0, color="k", lw=0.6)
+        ax.margins(x=0.3)
+        ax.set_title(dim, fontsize=10)
+        ax.set_xlabel("gap (mAh)", fontsize=8)
+        ax.grid(axis="x", alpha=0.3)
+    for ax in axes.ravel()[len(rows):]:
+        ax.set_visible(False)
+    note = f"; not known from these logs: {', '.join(missing)}" if missing else ""
+    fig.suptitle(f"where the gap lies (model as given, all logs; bar = measured - predicted charge){note}", fontsize=10)
+    fig.tight_layout()
+    return save_closed(fig, target, dpi)
+
+
+def missing_regimes_reason(diagnosis: Diagnosis) -> str:
+    """Why :func:`plot_gap_by_regime` has nothing to draw, or ``""``."""
+    if regime_rows(diagnosis):
+        return ""
+    return "no regime figure: the diagnosis localises no gap by regime (every regime slice is unknown or empty)"
+
+
+# ----------------------------------------------------------------- gap on the map
+def _blocks(diagnosis: Diagnosis) -> list[tuple[int, int, int, int, float]]:
+    out = []
+    for r in diagnosis.localisation:
+        if r.dimension != "space":
+            continue
+        m = _BLOCK.match(r.label)
+        if m:
+            r0, r1, c0, c1 = m.group(1), m.group(2) or m.group(1), m.group(3), m.group(4) or m.group(3)
+            out.append((int(r0), int(r1), int(c0), int(c1), r.gap_mah))
+    return out
+
+
+def missing_map_reason(diagnosis: Diagnosis, terrain: Any, logs: Any) -> str:
+    """Why :func:`plot_gap_map` has nothing to draw (no poses, no map, no block), or ``""``."""
+    if logs is not None and all(getattr(log, "pose_xyh", None) is None for log in log_list(logs)):
+        return "no map figure: the logs carry no poses, so the gap cannot be placed on a map"
+    if terrain is None:
+        return "no map figure: no terrain map given (the map the runs drove on)"
+    if not _blocks(diagnosis):
+        labels = {r.label for r in diagnosis.localisation if r.dimension == "space"}
+        if labels == {OFF_MAP_LABEL}:
+            return "no map figure: every pose of the logs lies off the map"
+        return ("no map figure: the diagnosis has no map blocks (its logs carry no poses, or it was run "
+                "without a terrain)")
+    return ""
+
+
+def plot_gap_map(diagnosis: Diagnosis, terrain: TerrainMap, path: str | os.PathLike[str], *, logs: Any = None,
+                 dpi: int = 110) -> Path:
+    """The gap on the map: the ``"space"`` rows of :attr:`Diagnosis.localisation` over a hillshade and contours.
+
+    Each map block (about :data:`~energy.diagnosis.regimes.SPACE_BLOCK_M` wide) the runs
+    crossed is coloured by its gap (mAh, red: the model predicts too little, blue: too
+    much), over a hillshade of the elevation; ``logs`` with poses add their tracks.
+
+    Parameters
+    ----------
+    diagnosis : Diagnosis
+        Run with ``terrain`` on logs with poses.
+    terrain : TerrainMap
+        The map the diagnosis ran on.
+    path : path-like
+    logs : InteractionLog or sequence of them, optional
+        Tracks to draw.
+    dpi : int
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a Diagnosis or TerrainMap; a bad ``path`` (checked before drawing).
+    DataError
+        No map blocks (logs without poses, no terrain); the message says which.
+    GridMismatchError
+        A block lies outside ``terrain`` (not the map the diagnosis ran on).
+    """
+    diagnosis = checked_diagnosis(diagnosis)
+    terrain = check_terrain(terrain)
+    target = figure_target(path)
+    dpi = check_int("dpi", dpi, low=10, high=1200)
+    why = missing_map_reason(diagnosis, terrain, logs)
+    if why:
+        raise DataError(why)
+    blocks = _blocks(diagnosis)
+    rows, cols = terrain.shape
+    raster = np.full(terrain.shape, np.nan)
+    for r0, r1, c0, c1, gap in blocks:
+        if r1 >= rows or c1 >= cols:
+            raise GridMismatchError(f"map block cells ({r0}-{r1}, {c0}-{c1}) lie outside the terrain's {rows} x {cols} "
+                                    "cells; give the map the diagnosis ran on")
+        raster[r0:r1 + 1, c0:c1 + 1] = gap
+    from matplotlib.colors import LightSource
+
+    plt = pyplot()
+    xmin, ymin, xmax, ymax = terrain.bounds
+    extent = (xmin, xmax, ymin, ymax)
+    fig, ax = plt.subplots(figsize=(7.5, 6.4))
+    shade = LightSource(azdeg=315, altdeg=45).hillshade(terrain.elevation_m, vert_exag=3.0, dx=terrain.cell_size_m,
+                                                         dy=terrain.cell_size_m)
+    ax.imshow(shade, cmap="gray", extent=extent, origin="lower", vmin=0, vmax=1, interpolation="bilinear")
+    z = terrain.elevation_m
+    if float(z.max()) > float(z.min()):
+        xs, ys = terrain.cell_centres()
+        cs = ax.contour(xs, ys, z, levels=np.linspace(float(z.min()), float(z.max()), 12)[1:-1], colors="k",
+                        linewidths=0.4, alpha=0.5)
+        ax.clabel(cs, fmt="%.1f m", fontsize=6)
+    lim = float(np.nanmax(np.abs(raster))) or 1.0
+    im = ax.imshow(np.ma.masked_invalid(raster), cmap="RdBu_r", vmin=-lim, vmax=lim, alpha=0.75, extent=extent,
+                   origin="lower", interpolation="nearest")
+    fig.colorbar(im, ax=ax, shrink=0.8, label="gap per block (mAh, measured - predicted)")
+    if logs is not None:
+        for log in log_list(logs):
+            if getattr(log, "pose_xyh", None) is not None:
+                ax.plot(log.pose_xyh[:, 0], log.pose_xyh[:, 1], color="k", lw=0.6, alpha=0.6)
+    r0, r1, c0, c1, gap = max(blocks, key=lambda b: abs(b[4]))
+    size, (x0, y0) = terrain.cell_size_m, terrain.origin_xy_m
+    margin = 2.0 * max(size * (r1 - r0 + 1), size * (c1 - c0 + 1))  # two blocks around the blocks met
+    ax.set_xlim(max(xmin, x0 + size * min(b[2] for b in blocks) - margin),
+                min(xmax, x0 + size * (max(b[3] for b in blocks) + 1) + margin))
+    ax.set_ylim(max(ymin, y0 + size * min(b[0] for b in blocks) - margin),
+                min(ymax, y0 + size * (max(b[1] for b in blocks) + 1) + margin))
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title(f"gap on the map: {len(blocks)} blocks; largest {fmt_number(gap, 3)} mAh at cells "
+                 f"({r0}-{r1}, {c0}-{c1})", fontsize=10)
+    fig.tight_layout()
+    return save_closed(fig, target, dpi)

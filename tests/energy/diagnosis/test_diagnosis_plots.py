@@ -1,0 +1,166 @@
+"""Figures of a diagnosis: each written as a PNG, missing data skipped with its reason, bad paths refused first."""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+
+import terrain
+from energy.diagnosis import diagnose
+from energy.diagnosis.plots import (
+    FIGURES,
+    DiagnosisFigures,
+    plot_diagnosis,
+    plot_effect_ranking,
+    plot_gap_by_regime,
+    plot_gap_map,
+    plot_residual_time,
+    plot_waterfall,
+)
+from energy.diagnosis.scenarios import scenario
+from terrain import DataError, FigureWarning, GridMismatchError, InvalidParameterError, UnknownNameError
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def _png(path: Path) -> bool:
+    return path.is_file() and path.read_bytes()[:8] == PNG
+
+
+@pytest.fixture(scope="module")
+def case():
+    """A physics model without turning resistance, diagnosed on 3 short runs with poses on a map."""
+    sc = dataclasses.replace(scenario("turning_resistance"), n_runs=3, run_duration_s=8.0)
+    logs = sc.make_logs(0)
+    d = diagnose(sc.make_model(0), logs, terrain=sc.terrain, seed=0, n_bootstrap=20)
+    return d, logs, sc.terrain
+
+
+def _no_drawing(monkeypatch):
+    def refuse(*args, **kwargs):
+        raise AssertionError("drew a figure although the path was refused")
+
+    monkeypatch.setattr(plt, "subplots", refuse)
+
+
+def test_every_figure_is_written_with_no_temporary_left(case, tmp_path):
+    d, logs, tmap = case
+    out = plot_diagnosis(d, tmp_path / "figs", logs=logs, terrain=tmap)
+    assert isinstance(out, DiagnosisFigures)
+    assert list(out.written) == list(FIGURES) and not out.skipped and not out.failed
+    assert all(_png(p) for p in out.written.values())
+    assert sorted(p.name for p in (tmp_path / "figs").iterdir()) == sorted(FIGURES.values())
+    assert "gap_map: " in str(out)
+
+
+def test_each_figure_function_returns_its_path(case, tmp_path):
+    d, logs, tmap = case
+    preds = [d.corrected_model.base.predict(log) for log in logs]
+    paths = [
+        plot_residual_time(logs, preds, tmp_path / "a.png", runs=[2, 0], section_s=4.0),
+        plot_gap_by_regime(d, tmp_path / "b.png"),
+        plot_gap_map(d, tmap, tmp_path / "c.png", logs=logs),
+        plot_effect_ranking(d, tmp_path / "d.png", max_effects=3),
+        plot_waterfall(d, tmp_path / "e.png"),
+    ]
+    assert paths == [tmp_path / n for n in ("a.png", "b.png", "c.png", "d.png", "e.png")]
+    assert all(_png(p) for p in paths)
+
+
+def test_missing_data_skips_a_figure_and_says_why(case, tmp_path):
+    d, logs, tmap = case
+    out = plot_diagnosis(d, tmp_path, figures=["residual_time", "gap_map", "waterfall"])
+    assert list(out.written) == ["waterfall"]
+    assert out.skipped == {"residual_time": "no residual over time: no logs given",
+                           "gap_map": "no map figure: no terrain map given (the map the runs drove on)"}
+    no_poses = [dataclasses.replace(log, pose_xyh=None) for log in logs]
+    out = plot_diagnosis(d, tmp_path / "np", logs=no_poses, terrain=tmap, figures=["gap_map"])
+    assert out.written == {} and "carry no poses" in out.skipped["gap_map"]
+    assert not (tmp_path / "np").exists()  # nothing to draw, no folder made
+    with pytest.raises(DataError, match="no terrain map given"):
+        plot_gap_map(d, None, tmp_path / "m.png")
+
+
+def test_a_diagnosis_without_map_blocks_or_regimes_or_ranking_is_skipped(case, tmp_path):
+    d, logs, tmap = case
+    bare = dataclasses.replace(d, localisation=tuple(r for r in d.localisation if r.dimension == "time"), ranking=())
+    out = plot_diagnosis(bare, tmp_path, logs=logs, terrain=tmap)
+    assert set(out.skipped) == {"gap_by_regime", "gap_map", "effect_ranking"}
+    assert "no map blocks" in out.skipped["gap_map"]
+    assert "no candidate effect was scored" in out.skipped["effect_ranking"]
+    with pytest.raises(DataError, match="no gap by regime"):
+        plot_gap_by_regime(bare, tmp_path / "r.png")
+    with pytest.raises(DataError, match="no candidate effect"):
+        plot_effect_ranking(bare, tmp_path / "e.png")
+
+
+def test_learned_and_negative_scores_are_drawn(case, tmp_path):
+    d, _, _ = case
+    learned = dataclasses.replace(d.ranking[0], name="learned_residual", kind="learned", shrink_pct=-3.0,
+                                  shrink_interval_pct=(-8.0, 1.0))
+    d2 = dataclasses.replace(d, ranking=(*d.ranking, learned), chosen=(*d.chosen, "learned_residual"))
+    assert _png(plot_effect_ranking(d2, tmp_path / "ranking.png"))
+
+
+def test_bad_paths_are_refused_before_drawing(case, tmp_path, monkeypatch):
+    d, logs, tmap = case
+    preds = [d.corrected_model.base.predict(log) for log in logs]
+    (tmp_path / "taken.png").mkdir()
+    (tmp_path / "file").write_text("x")
+    _no_drawing(monkeypatch)
+    for call in (lambda p: plot_waterfall(d, p), lambda p: plot_effect_ranking(d, p),
+                 lambda p: plot_gap_by_regime(d, p), lambda p: plot_gap_map(d, tmap, p),
+                 lambda p: plot_residual_time(logs, preds, p)):
+        with pytest.raises(InvalidParameterError, match="is a directory"):
+            call(tmp_path / "taken.png")
+        with pytest.raises(InvalidParameterError, match="which is a file"):
+            call(tmp_path / "file" / "x.png")
+    with pytest.raises(InvalidParameterError, match="is a file; expected a folder"):
+        plot_diagnosis(d, tmp_path / "file", logs=logs)
+    (tmp_path / "out" / "waterfall.png").mkdir(parents=True)
+    with pytest.raises(InvalidParameterError, match="waterfall.png"):
+        plot_diagnosis(d, tmp_path / "out", logs=logs, terrain=tmap)
+    assert [p.name for p in (tmp_path / "out").iterdir()] == ["waterfall.png"]  # nothing drawn
+
+
+def test_bad_arguments_are_library_errors(case, tmp_path):
+    d, logs, tmap = case
+    preds = [d.corrected_model.base.predict(log) for log in logs]
+    with pytest.raises(InvalidParameterError, match="diagnosis must be a Diagnosis"):
+        plot_waterfall({"waterfall": []}, tmp_path / "w.png")
+    with pytest.raises(InvalidParameterError, match=r"runs\[0\]"):
+        plot_residual_time(logs, preds, tmp_path / "r.png", runs=[7])
+    with pytest.raises(InvalidParameterError, match="at most max_runs"):
+        plot_residual_time(logs, preds, tmp_path / "r.png", runs=[0, 1, 2], max_runs=2)
+    with pytest.raises(InvalidParameterError, match="shape"):
+        plot_residual_time(logs, [p[:, :1] for p in preds], tmp_path / "r.png")
+    with pytest.raises(UnknownNameError, match="figures must be one of"):
+        plot_diagnosis(d, tmp_path, figures=["pie_chart"])
+    with pytest.raises(UnknownNameError, match="on_error"):
+        plot_diagnosis(d, tmp_path, on_error="ignore")
+    small = terrain.flat_map((10, 10), 1.0)
+    with pytest.raises(GridMismatchError, match="the map the diagnosis ran on"):
+        plot_gap_map(d, small, tmp_path / "m.png")
+
+
+def test_a_failing_figure_warns_when_asked_and_raises_otherwise(case, tmp_path, monkeypatch):
+    d, logs, _ = case
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("no canvas")
+
+    monkeypatch.setattr(plt, "subplots", broken)
+    with pytest.raises(RuntimeError, match="no canvas"):
+        plot_diagnosis(d, tmp_path, figures=["waterfall"])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        out = plot_diagnosis(d, tmp_path, logs=logs, figures=["waterfall", "gap_by_regime"], on_error="warn")
+    assert out.written == {} and set(out.failed) == {"waterfall", "gap_by_regime"}
+    assert "RuntimeError: no canvas" in out.failed["waterfall"]
+    assert sum(issubclass(w.category, FigureWarning) for w in caught) == 2
+    assert np.isfinite(d.before.rmse_a)  # the diagnosis is untouched
