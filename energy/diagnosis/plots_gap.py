@@ -55,6 +55,8 @@ REGIME_PANELS = ("speed", "turning", "acceleration", "grade", "ground", "side")
 _ORDERS = {"speed": SPEED_LABELS, "turning": TURNING_LABELS, "acceleration": ACCELERATION_LABELS,
            "grade": GRADE_LABELS, "side": SIDES}
 _SIDE_COLOURS = ("#08519c", "#d94801")
+_GAP_COLOURS = ("#fb6a4a", "#6baed6")  # shade of a section whose gap is >= 0 (model predicts too little), < 0
+_LABELLED_SECTIONS = 6  # sections of a run labelled with their gap: the largest |gap|
 _BLOCK = re.compile(r"^cells? \((\d+)(?:-(\d+))?, (\d+)(?:-(\d+))?\)$")
 
 
@@ -122,8 +124,8 @@ def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str]
 
     Each panel shows the left and right residual (thin) and their moving medians (thick);
     the ``section_s`` time sections of :func:`~energy.diagnosis.localise.time_labels` are
-    shaded in proportion to the share of the run's gap they carry, and labelled with it
-    (mAh). With ``corrected`` the residual of the corrected model is drawn dashed.
+    shaded in proportion to the gap they carry (red: the model predicts too little, blue:
+    too much), the six largest labelled with it (mAh). With ``corrected`` the residual of the corrected model is drawn dashed.
 
     Parameters
     ----------
@@ -176,13 +178,20 @@ def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str]
         res = np.column_stack([log.current_left_a, log.current_right_a]) - pred
         labels = time_labels(log, i, section_s)
         names, inv = np.unique(labels, return_inverse=True)
-        gaps = np.bincount(inv.reshape(-1), weights=sample_gaps[i].sum(axis=1), minlength=names.size)
+        inv = inv.reshape(-1)
+        gaps = np.bincount(inv, weights=sample_gaps[i].sum(axis=1), minlength=names.size)
+        first = np.full(names.size, len(log))
+        np.minimum.at(first, inv, np.arange(len(log)))
+        order = np.argsort(first)  # sections in time order
+        starts = t[first[order]]
+        ends = np.append(starts[1:], t[-1])
         peak = float(np.max(np.abs(gaps))) or 1.0
-        for k in range(names.size):
-            span = t[inv.reshape(-1) == k]
-            ax.axvspan(span[0], span[-1], color="#fdae6b", alpha=0.08 + 0.4 * abs(gaps[k]) / peak, lw=0)
-            ax.text(0.5 * (span[0] + span[-1]), 1.0, f"{fmt_number(gaps[k], 2)}", transform=ax.get_xaxis_transform(),
-                    ha="center", va="bottom", fontsize=7, color="#7f2704")
+        labelled = set(np.argsort(-np.abs(gaps))[:_LABELLED_SECTIONS].tolist())
+        for a, b, k in zip(starts, ends, order):
+            ax.axvspan(a, b, color=_GAP_COLOURS[int(gaps[k] < 0)], alpha=0.06 + 0.34 * abs(gaps[k]) / peak, lw=0)
+            if k in labelled:
+                ax.text(0.5 * (a + b), 1.0, fmt_number(gaps[k], 2), transform=ax.get_xaxis_transform(), ha="center",
+                        va="bottom", fontsize=7, color="#67000d" if gaps[k] >= 0 else "#08306b")
         smooth = moving_median(res, min(window_samples, len(log)))
         for s, side in enumerate(SIDES):
             ax.plot(t, res[:, s], color=_SIDE_COLOURS[s], lw=0.5, alpha=0.35)
@@ -198,7 +207,8 @@ def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str]
                      f"{fmt_number(float(sample_gaps[i].sum()), 3)} mAh", fontsize=9, loc="left", pad=12)
         ax.grid(alpha=0.3)
     axes[0, 0].legend(loc="upper right", fontsize=7, ncol=2)
-    axes[-1, 0].set_xlabel(f"time from the run's start (s); shaded: {fmt_number(section_s)} s sections by their gap (mAh)")
+    axes[-1, 0].set_xlabel(f"time from the run's start (s); shaded: {fmt_number(section_s)} s sections by their gap "
+                         "(mAh; red: predicted too little, blue: too much)")
     which = "chosen" if runs is not None else "largest |gap|"
     fig.suptitle(f"residual current (measured - predicted): runs {', '.join(map(str, chosen))} of {len(items)} ({which})")
     fig.tight_layout()

@@ -61,6 +61,7 @@ def test_every_figure_is_written_with_no_temporary_left(case, tmp_path):
 def test_each_figure_function_returns_its_path(case, tmp_path):
     d, logs, tmap = case
     preds = [d.corrected_model.base.predict(log) for log in logs]
+    preds[0] = preds[0] + 20.0  # a run the model over-predicts: its sections carry negative gaps
     paths = [
         plot_residual_time(logs, preds, tmp_path / "a.png", runs=[2, 0], section_s=4.0),
         plot_gap_by_regime(d, tmp_path / "b.png"),
