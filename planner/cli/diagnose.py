@@ -1,0 +1,192 @@
+"""``terrawatt diagnose``: where a current model's gap lies, which effect causes it, how far it shrinks (:func:`energy.diagnose`)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import warnings
+from pathlib import Path
+from typing import Any
+
+from energy import (
+    EFFECTS_CATALOGUE,
+    GROUND_PRESETS,
+    ROBOT_PRESETS,
+    InteractionLog,
+    PhysicsCurrentModel,
+    diagnose,
+    load_current_model,
+    new_current_model,
+    read_borealtc,
+    read_csv_log,
+    read_rosbag,
+)
+from energy.diagnosis.model_currents import DRIVE_EFFECTS
+from energy.diagnosis.plots import FIGURES, plot_diagnosis
+from terrain import DataError, FigureWarning, InvalidParameterError, UnknownNameError
+from terrain.checks import check_seed, fmt_number
+
+from .common import add_map_options, check_outputs, read_map_file
+
+__all__ = ["add_parser", "read_logs", "run_diagnose"]
+
+_OUTPUTS = ("diagnosis.json", "diagnosis.md", "corrected_model.zip", *FIGURES.values())
+_LOG_SUFFIXES = {".csv": "csv", ".bag": "bag", ".db3": "bag", ".mcap": "bag"}
+
+
+def add_parser(sub: Any) -> None:
+    """The ``diagnose`` subcommand."""
+    p = sub.add_parser(
+        "diagnose",
+        help="diagnose a current model's gap on logs: where it lies, which effect causes it, how far it shrinks",
+    )
+    p.add_argument("--model", required=True, metavar="physics|estimator|FILE",
+                   help="'physics' (fitted on the data), 'estimator' (trained on the data) or a saved model file")
+    p.add_argument("--robot", default=None, metavar="NAME",
+                   help=f"robot preset of the physics ({', '.join(sorted(ROBOT_PRESETS))}; default husky)")
+    p.add_argument("--ground", default=None, metavar="NAME",
+                   help="--model physics: starting ground preset (default: the logs' ground when they share one "
+                   "preset, else asphalt)")
+    p.add_argument("--without", nargs="+", default=[], metavar="EFFECT",
+                   help="--model physics: physics effects to switch off (diagnose a reduced model)")
+    p.add_argument("--data", type=Path, required=True, metavar="DIR|FILE",
+                   help="logs: a BorealTC folder (GROUND/imu_NN.csv + pro_NN.csv), a CSV log, a bag (.bag, .db3, "
+                   ".mcap, ROS 2 bag folder), or a folder of CSV logs and bags")
+    p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder")
+    p.add_argument("--effects", nargs="+", default=None, metavar="EFFECT",
+                   help="candidate effects (default: the whole catalogue)")
+    p.add_argument("--split", choices=["runs", "blocks"], default="runs",
+                   help="held-out data: other runs (default) or contiguous blocks of each run")
+    p.add_argument("--map", type=Path, default=None, metavar="FILE",
+                   help="the map the logs drove on (slope effect, grade and map localisation, the map figure)")
+    add_map_options(p)
+    p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (and of the estimator's training)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar while training the estimator")
+    p.set_defaults(run=run_diagnose)
+
+
+def read_logs(path: Path) -> list[InteractionLog]:
+    """Every log at ``--data``: a BorealTC folder, a CSV log, a bag, or a folder of CSV logs and bags.
+
+    Raises
+    ------
+    FileFormatError, DataError
+        As the readers; a missing path; a folder without logs; an unknown file type.
+    """
+    if not path.exists():
+        raise DataError(f"--data {str(path)!r} does not exist; expected a log file or a folder of logs")
+    if path.is_file():
+        kind = _LOG_SUFFIXES.get(path.suffix.lower())
+        if kind is None:
+            raise DataError(f"--data {str(path)!r}: unknown log file type {path.suffix!r}; expected one of "
+                            f"{sorted(_LOG_SUFFIXES)!r} or a folder")
+        return [read_csv_log(path) if kind == "csv" else read_rosbag(path)]
+    if (path / "metadata.yaml").exists():
+        return [read_rosbag(path)]  # a ROS 2 bag folder
+    if any(sub.is_dir() and any(sub.glob("imu_*.csv")) for sub in path.iterdir()):
+        return read_borealtc(path)
+    logs = []
+    for item in sorted(path.iterdir()):
+        if item.is_dir() and (item / "metadata.yaml").exists():
+            logs.append(read_rosbag(item))
+        elif item.is_file() and item.suffix.lower() in _LOG_SUFFIXES:
+            logs.append(read_csv_log(item) if _LOG_SUFFIXES[item.suffix.lower()] == "csv" else read_rosbag(item))
+    if not logs:
+        raise DataError(f"--data {str(path)!r} holds no logs: expected BorealTC ground folders, CSV logs "
+                        f"({', '.join(sorted(_LOG_SUFFIXES))}) or ROS 2 bag folders")
+    return logs
+
+
+def _check_flags(args: argparse.Namespace) -> None:
+    """Names and numbers of the flags, before any work."""
+    kind = args.model if args.model in ("physics", "estimator") else "file"
+    if kind == "file" and not Path(args.model).is_file():
+        raise InvalidParameterError(f"--model must be 'physics', 'estimator' or a model file; {args.model!r} is "
+                                    "no file")
+    if args.robot is not None and args.robot not in ROBOT_PRESETS:
+        raise UnknownNameError(f"--robot {args.robot!r} is not a robot preset; known: {sorted(ROBOT_PRESETS)!r}")
+    if kind != "physics":
+        for flag, value in (("--ground", args.ground), ("--without", args.without)):
+            if value:
+                raise InvalidParameterError(f"{flag} applies to --model physics only, got --model {args.model!r}")
+    if args.ground is not None and args.ground not in GROUND_PRESETS:
+        raise UnknownNameError(f"--ground {args.ground!r} is not a ground preset; known: {sorted(GROUND_PRESETS)!r}")
+    bad = [e for e in args.without if e not in DRIVE_EFFECTS]
+    if bad:
+        raise UnknownNameError(f"--without {bad!r}: not physics drive effects; expected names from "
+                               f"{list(DRIVE_EFFECTS)!r}")
+    if len(set(args.without)) != len(args.without):
+        raise InvalidParameterError(f"--without names an effect twice: {args.without!r}")
+    if args.effects is not None:
+        bad = [e for e in args.effects if e not in EFFECTS_CATALOGUE]
+        if bad:
+            raise UnknownNameError(f"--effects {bad!r}: not in the catalogue; expected names from "
+                                   f"{list(EFFECTS_CATALOGUE)!r}")
+        if len(set(args.effects)) != len(args.effects):
+            raise InvalidParameterError(f"--effects names an effect twice: {args.effects!r}")
+    try:
+        check_seed(args.seed)
+    except InvalidParameterError as exc:
+        raise InvalidParameterError(f"--seed: {exc}") from None
+
+
+def _model(args: argparse.Namespace, logs: list[InteractionLog]) -> tuple[Any, str]:
+    """The model under diagnosis and a sentence saying where it comes from."""
+    n = f"{len(logs)} run{'s' if len(logs) != 1 else ''}"
+    if args.model == "physics":
+        grounds = {log.meta.ground_label for log in logs}
+        ground = args.ground or (grounds.pop() if len(grounds) == 1 and grounds <= set(GROUND_PRESETS) else "asphalt")
+        robot = args.robot or "husky"
+        effects = tuple(e for e in DRIVE_EFFECTS if e not in args.without)
+        model = PhysicsCurrentModel(robot, ground, effects=None if not args.without else effects).fit(logs)
+        without = f" without {', '.join(args.without)}" if args.without else " (every drive effect)"
+        fitted = ", ".join(f"{k} = {fmt_number(v, 4)}" for k, v in model.fitted_.items())
+        return model, (f"model: physics, {robot} starting from {ground}{without}; its coefficients fitted on the "
+                       f"same {n} it is diagnosed on ({fitted}); the diagnosis scores held-out data")
+    if args.model == "estimator":
+        model = new_current_model("estimator", seed=args.seed, progress=not args.quiet).fit(logs)
+        return model, (f"model: the vibration estimator, trained on the same {n} it is diagnosed on (the input "
+                       "model only); the diagnosis itself fits and scores effects on held-out data")
+    model = load_current_model(args.model)
+    return model, f"model: {type(model).__name__} loaded from {args.model}"
+
+
+def _waterfall_table(diagnosis: Any) -> str:
+    lines = [f"{'step':<28} {'charge err %':>12} {'8 s sect. %':>12} {'RMSE A':>8} {'shrink %':>9}"]
+    for w in diagnosis.waterfall:
+        lines.append(f"{w.label:<28} {w.charge_error_pct:>12.2f} {w.section_error_pct:>12.2f} {w.rmse_a:>8.3f} "
+                     f"{w.shrink_pct:>9.1f}")
+    return "\n".join(lines)
+
+
+def run_diagnose(args: argparse.Namespace) -> int:
+    """``terrawatt diagnose``: diagnosis.json, diagnosis.md, corrected_model.zip and the figures.
+
+    Flags and the output folder are checked before the logs are read; figures come last
+    and a figure that fails is a warning on stderr, never a failed command.
+    """
+    _check_flags(args)
+    check_outputs(args.out, _OUTPUTS)
+    terrain = read_map_file(args.map, args.fill_nodata) if args.map is not None else None
+    logs = read_logs(args.data)
+    model, origin = _model(args, logs)
+    print(origin, flush=True)
+    robot = args.robot if args.model != "physics" else None
+    diagnosis = diagnose(model, logs, terrain=terrain, effects=args.effects, split=args.split, seed=args.seed,
+                         robot=robot)
+    args.out.mkdir(parents=True, exist_ok=True)
+    written = [diagnosis.write_json(args.out / "diagnosis.json"), diagnosis.write_markdown(args.out / "diagnosis.md"),
+               diagnosis.corrected_model.save(args.out / "corrected_model.zip")]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", FigureWarning)  # failures are printed below, once
+        figures = plot_diagnosis(diagnosis, args.out, logs=logs, terrain=terrain, on_error="warn")
+    print("\n".join(diagnosis.verdict))
+    print()
+    print(_waterfall_table(diagnosis))
+    for name, why in figures.skipped.items():
+        print(f"skipped {FIGURES[name]}: {why}")
+    for name, why in figures.failed.items():
+        print(f"terrawatt: warning: could not draw {args.out / FIGURES[name]}: {why}", file=sys.stderr)
+    written += list(figures.written.values())
+    print(f"\n{len(logs)} runs; wrote {', '.join(str(p) for p in written)}")
+    return 0
