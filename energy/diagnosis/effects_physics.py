@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -14,10 +15,10 @@ from terrain.terrain_map import TerrainMap
 from ..logs import InteractionLog
 from ..models.baselines import PhysicsCurrentModel
 from .effect_base import Effect, EffectParameter
-from .model_currents import PhysicsBasis, motoring_currents_a, physics_basis
+from .model_currents import ParameterTable, PhysicsBasis, motoring_currents_a, physics_basis
 
 __all__ = ["PHYSICS_CANDIDATES", "PARAMETER_CANDIDATES", "PhysicsTermEffect", "SlopeEffect", "MassEffect",
-           "TrackWidthEffect", "RollingResistanceEffect", "MotorConstantEffect", "log_ground_labels"]
+           "TrackWidthEffect", "RollingResistanceEffect", "MotorConstantEffect", "Reprediction", "log_ground_labels"]
 
 #: Physics effects offered as candidates (those that change the motor current).
 PHYSICS_CANDIDATES: tuple[str, ...] = (
@@ -123,23 +124,67 @@ class SlopeEffect(_BasisEffect):
         return predicted_a + values[0] * prepared
 
 
+@dataclass(frozen=True, eq=False)
+class Reprediction:
+    """Per-log preparation of a parameter-error effect: the basis, the log, the motoring currents
+    at the model's values, the per-sample parameter slot (per-ground effects) and the fitting table."""
+
+    basis: PhysicsBasis
+    log: InteractionLog
+    base_a: np.ndarray
+    index: np.ndarray | None
+    table: ParameterTable | None
+
+
 class _RepredictEffect(_BasisEffect):
-    """A parameter error of a physics model: re-predict the physics with the changed value."""
+    """A parameter error of a physics model: re-predict the physics with the changed value.
+
+    :meth:`apply` re-predicts exactly (scores, predictions); :meth:`apply_surrogate`, used
+    while fitting, interpolates a :class:`ParameterTable` of the physics precomputed at nodes
+    of the parameter, so a least-squares fit does not rerun the physics at every evaluation.
+    """
 
     kind = "parameter"
 
     def applies_to(self, model: Any) -> bool:
         return _is_physics(model)
 
-    def prepare(self, model: Any, log: InteractionLog) -> tuple[PhysicsBasis, InteractionLog, np.ndarray]:
-        b = self.basis(model)
-        return b, log, motoring_currents_a(b, log)
-
-    def changed(self, values: np.ndarray, prepared: Any) -> np.ndarray:  # pragma: no cover - abstract
+    def nominal(self, b: PhysicsBasis) -> float:  # pragma: no cover - abstract
+        """The parameter's value in the model under test."""
         raise NotImplementedError
 
-    def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: Any) -> np.ndarray:
-        return predicted_a + self.changed(values, prepared) - prepared[2]
+    def repredict(self, b: PhysicsBasis, log: InteractionLog, value: float, index: Any = None) -> np.ndarray:
+        """Exact motoring currents (N, 2) with every slot of the parameter at ``value``."""
+        raise NotImplementedError  # pragma: no cover - abstract
+
+    def index(self, log: InteractionLog) -> np.ndarray | None:
+        """Per-sample parameter slot (None: one parameter for every sample)."""
+        return None
+
+    def prepare(self, model: Any, log: InteractionLog) -> Reprediction:
+        b = self.basis(model)
+        idx = self.index(log)
+        p = self.parameters[0] if self.parameters else None
+        table = None if p is None else ParameterTable(lambda x: self.repredict(b, log, x, idx), p.low, p.high,
+                                                       self.nominal(b))
+        return Reprediction(b, log, motoring_currents_a(b, log), idx, table)
+
+    def changed(self, values: np.ndarray, prepared: Reprediction) -> np.ndarray:
+        """Exact motoring currents (N, 2) at parameter ``values``."""
+        return self.repredict(prepared.basis, prepared.log, float(values[0]), prepared.index)
+
+    def per_sample(self, values: np.ndarray, prepared: Reprediction) -> Any:
+        """The parameter value of each sample (a scalar when one value holds for every sample)."""
+        return float(values[0])
+
+    def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: Reprediction) -> np.ndarray:
+        return predicted_a + self.changed(values, prepared) - prepared.base_a
+
+    def apply_surrogate(self, values: np.ndarray, predicted_a: np.ndarray, prepared: Reprediction) -> np.ndarray:
+        """:meth:`apply` through the interpolated table (for fitting only)."""
+        if prepared.table is None:
+            return self.apply(values, predicted_a, prepared)
+        return predicted_a + prepared.table.at(self.per_sample(values, prepared)) - prepared.base_a
 
 
 class MassEffect(_RepredictEffect):
@@ -149,9 +194,11 @@ class MassEffect(_RepredictEffect):
     parameters = (EffectParameter("mass_scale", 1.0, 0.5, 2.0, "1", "mass_kg"),)
     description = "mass / payload error (scale on the robot's mass)"
 
-    def changed(self, values: np.ndarray, prepared: Any) -> np.ndarray:
-        b, log, _ = prepared
-        return motoring_currents_a(b, log, robot=b.robot.replace(mass_kg=b.robot.mass_kg * float(values[0])))
+    def nominal(self, b: PhysicsBasis) -> float:
+        return 1.0
+
+    def repredict(self, b: PhysicsBasis, log: InteractionLog, value: float, index: Any = None) -> np.ndarray:
+        return motoring_currents_a(b, log, robot=b.robot.replace(mass_kg=b.robot.mass_kg * value))
 
 
 class TrackWidthEffect(_RepredictEffect):
@@ -164,9 +211,19 @@ class TrackWidthEffect(_RepredictEffect):
     def applies_to(self, model: Any) -> bool:
         return _is_physics(model) and "track_width_multiplier" not in model.fitted_
 
-    def changed(self, values: np.ndarray, prepared: Any) -> np.ndarray:
-        b, log, _ = prepared
-        return motoring_currents_a(b, log, robot=b.robot.replace(track_width_multiplier=float(values[0])))
+    def unsupported(self, logs: Sequence[Any], terrain: Any) -> str | None:
+        # the rule of measured_side_speeds, read from the logs alone (the model's robot is not known
+        # here): a logged track narrower than the robot's geometric one would leave the multiplier free
+        if logs and all(log.meta.velocity_source == "measured" and log.meta.track_width_m is not None for log in logs):
+            return ("the side speeds are measured wheel speeds (omega derived with meta.track_width_m), "
+                    "so the effective track width does not change the predicted current")
+        return None
+
+    def nominal(self, b: PhysicsBasis) -> float:
+        return float(b.robot.track_width_multiplier)
+
+    def repredict(self, b: PhysicsBasis, log: InteractionLog, value: float, index: Any = None) -> np.ndarray:
+        return motoring_currents_a(b, log, robot=b.robot.replace(track_width_multiplier=value))
 
 
 def log_ground_labels(log: InteractionLog) -> np.ndarray | None:
@@ -215,19 +272,28 @@ class RollingResistanceEffect(_RepredictEffect):
     def spec(self) -> dict[str, Any]:
         return {"name": self.name, "labels": list(self.labels)}
 
-    def prepare(self, model: Any, log: InteractionLog) -> Any:
-        b, lg, base = super().prepare(model, log)
+    def nominal(self, b: PhysicsBasis) -> float:
+        return float(b.ground.rolling_resistance_coef)
+
+    def index(self, log: InteractionLog) -> np.ndarray:
         lab = log_ground_labels(log)
         lookup = {g: k for k, g in enumerate(self.labels)}
         idx = np.array([lookup.get(str(x), len(self.labels)) for x in (lab if lab is not None else [])], dtype=np.intp)
-        if idx.size != len(log):
-            idx = np.full(len(log), len(self.labels), dtype=np.intp)
-        return b, lg, base, idx
+        return idx if idx.size == len(log) else np.full(len(log), len(self.labels), dtype=np.intp)
 
-    def changed(self, values: np.ndarray, prepared: Any) -> np.ndarray:
-        b, log, _, idx = prepared
-        grounds = [b.ground.replace(rolling_resistance_coef=float(v)) for v in values] + [b.ground]
-        return motoring_currents_a(b, log, ground=grounds, ground_index=idx)
+    def _grounds(self, b: PhysicsBasis, values: Sequence[float]) -> list[Any]:
+        return [b.ground.replace(rolling_resistance_coef=float(v)) for v in values] + [b.ground]
+
+    def repredict(self, b: PhysicsBasis, log: InteractionLog, value: float, index: Any = None) -> np.ndarray:
+        return motoring_currents_a(b, log, ground=self._grounds(b, [value] * len(self.labels)), ground_index=index)
+
+    def changed(self, values: np.ndarray, prepared: Reprediction) -> np.ndarray:
+        b = prepared.basis
+        return motoring_currents_a(b, prepared.log, ground=self._grounds(b, values), ground_index=prepared.index)
+
+    def per_sample(self, values: np.ndarray, prepared: Reprediction) -> np.ndarray:
+        # samples of unlisted grounds keep the model's ground whatever the value: any value will do
+        return np.append(np.asarray(values, dtype=np.float64), prepared.table.nodes[0])[prepared.index]
 
 
 class MotorConstantEffect(_RepredictEffect):
@@ -237,5 +303,9 @@ class MotorConstantEffect(_RepredictEffect):
     parameters = (EffectParameter("torque_constant_scale", 1.0, 0.5, 2.0, "1", "torque_constant_nm_per_a"),)
     description = "motor torque-constant error (scale on Kt)"
 
-    def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: Any) -> np.ndarray:
-        return predicted_a + prepared[2] * (1.0 / float(values[0]) - 1.0)
+    def prepare(self, model: Any, log: InteractionLog) -> Reprediction:
+        b = self.basis(model)
+        return Reprediction(b, log, motoring_currents_a(b, log), None, None)  # analytic: no table
+
+    def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: Reprediction) -> np.ndarray:
+        return predicted_a + prepared.base_a * (1.0 / float(values[0]) - 1.0)

@@ -59,12 +59,19 @@ def prepare_data(model: Any, logs: Sequence[InteractionLog], effects: Sequence[E
 
 
 def compose(effects: Sequence[Effect], values: Sequence[np.ndarray], base_a: np.ndarray,
-            prepared: Sequence[Any], clip: bool) -> np.ndarray:
-    """The prediction of one log with ``effects`` added (in composition order), clamped at 0 if ``clip``."""
+            prepared: Sequence[Any], clip: bool, *, surrogate: bool = False) -> np.ndarray:
+    """The prediction of one log with ``effects`` added (in composition order), clamped at 0 if ``clip``.
+
+    ``surrogate=True`` (fitting only) uses an effect's ``apply_surrogate`` where it has one:
+    a cheap approximation of ``apply`` (the parameter errors interpolate precomputed physics);
+    held-out scores and predictions always use the exact ``apply``.
+    """
     cur = base_a
     order = sorted(range(len(effects)), key=lambda i: composition_order(effects[i]))
     for i in order:
-        cur = effects[i].apply(np.asarray(values[i], dtype=np.float64), cur, prepared[i])
+        e = effects[i]
+        apply = getattr(e, "apply_surrogate", e.apply) if surrogate else e.apply
+        cur = apply(np.asarray(values[i], dtype=np.float64), cur, prepared[i])
     return np.maximum(cur, 0.0) if clip else cur
 
 
@@ -76,8 +83,10 @@ def _unpack(effects: Sequence[Effect], theta: np.ndarray) -> list[np.ndarray]:
     return out
 
 
-def _predict_log(effects: Sequence[Effect], values: Sequence[np.ndarray], data: DiagnosisData, k: int) -> np.ndarray:
-    return compose(effects, values, data.base[k], [data.prepared[e.name][k] for e in effects], data.clip)
+def _predict_log(effects: Sequence[Effect], values: Sequence[np.ndarray], data: DiagnosisData, k: int,
+                 surrogate: bool = False) -> np.ndarray:
+    return compose(effects, values, data.base[k], [data.prepared[e.name][k] for e in effects], data.clip,
+                   surrogate=surrogate)
 
 
 def _fit_rows(effects: Sequence[Effect], data: DiagnosisData, masks: Sequence[np.ndarray] | None,
@@ -101,7 +110,7 @@ def _fit_rows(effects: Sequence[Effect], data: DiagnosisData, masks: Sequence[np
         vals = _unpack(effects, theta)
         parts = []
         for k in used:
-            r = _predict_log(effects, vals, data, k) - data.measured[k]
+            r = _predict_log(effects, vals, data, k, surrogate=True) - data.measured[k]
             parts.append((r if rows[k] is None else r[rows[k]]).ravel())
         parts.extend(e.penalty(v) for e, v in zip(effects, vals))
         return np.concatenate(parts)

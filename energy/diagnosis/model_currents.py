@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -17,11 +18,14 @@ from ..params import ground_preset, robot_preset
 from ..physics import EFFECTS, PhysicsEnergyModel
 from ..robot import RobotParams
 
-__all__ = ["DRIVE_EFFECTS", "PhysicsBasis", "physics_basis", "motoring_currents_a", "unclipped_prediction",
-           "clamps_at_zero"]
+__all__ = ["DRIVE_EFFECTS", "TABLE_NODES", "PhysicsBasis", "ParameterTable", "physics_basis", "measured_side_speeds",
+           "motoring_currents_a", "unclipped_prediction", "clamps_at_zero"]
 
 #: Physics effects that change the motor current (the electronics draw no motor current).
 DRIVE_EFFECTS: tuple[str, ...] = tuple(e for e in EFFECTS if e not in ("sensor", "control"))
+#: Evenly spaced nodes of a :class:`ParameterTable` over a parameter's bounds (its nominal value is added;
+#: computed only where a fit needs them).
+TABLE_NODES = 129
 
 
 @dataclass(frozen=True)
@@ -63,12 +67,19 @@ def physics_basis(model: Any, robot: Any = None) -> PhysicsBasis:
     return PhysicsBasis(rb, ground_preset("asphalt"), DRIVE_EFFECTS, 0.0, False, False)
 
 
+def measured_side_speeds(log: InteractionLog, robot: RobotParams) -> bool:
+    """Whether the log's wheel speeds fix the robot's track multiplier (the rule of
+    :class:`~energy.PhysicsCurrentModel`: speeds measured from the wheels, ``omega`` derived
+    with ``meta.track_width_m`` at least the robot's track), so that no other value of it
+    changes the physics of this log."""
+    tw = log.meta.track_width_m
+    return log.meta.velocity_source == "measured" and tw is not None and tw / robot.track_width_m >= 1.0
+
+
 def _log_robot(robot: RobotParams, log: InteractionLog, fitted_chi: bool) -> RobotParams:
-    # the rule of PhysicsCurrentModel: measured wheel speeds fix chi to the derivation track
-    if fitted_chi or log.meta.velocity_source != "measured" or log.meta.track_width_m is None:
+    if fitted_chi or not measured_side_speeds(log, robot):
         return robot
-    chi = log.meta.track_width_m / robot.track_width_m
-    return robot if chi < 1.0 else dataclasses.replace(robot, track_width_multiplier=chi)
+    return dataclasses.replace(robot, track_width_multiplier=log.meta.track_width_m / robot.track_width_m)
 
 
 def motoring_currents_a(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[str, ...] | None = None,
@@ -111,3 +122,59 @@ def unclipped_prediction(model: Any, log: InteractionLog, basis: PhysicsBasis | 
 def clamps_at_zero(model: Any) -> bool:
     """Whether the model clamps its currents at 0 (the diagnosis clamps the corrected ones too)."""
     return isinstance(model, PhysicsCurrentModel) and bool(model.clip_negative)
+
+
+class ParameterTable:
+    """The motoring currents of one log re-predicted at nodes of one parameter, linear in between.
+
+    ``repredict(value)`` gives the exact ``(N, 2)`` currents at one parameter value. The
+    nodes are :data:`TABLE_NODES` evenly spaced over ``[low, high]`` plus ``nominal`` (so the
+    model's own value is exact); each node's currents are computed the first time an
+    interpolation needs them and kept, so a least-squares fit reruns the physics only at
+    the few nodes around the values it visits, shared by every fold and effect set. It is a
+    surrogate for fitting only: scores and predictions use the exact ``repredict``.
+
+    Parameters
+    ----------
+    repredict : callable
+        Exact currents (N, 2) at one value.
+    low, high, nominal : float
+        Bounds of the parameter and its value in the model under test.
+    n_nodes : int
+        Evenly spaced nodes (>= 2).
+    """
+
+    def __init__(self, repredict: Callable[[float], np.ndarray], low: float, high: float, nominal: float,
+                 n_nodes: int = TABLE_NODES) -> None:
+        nodes = np.linspace(float(low), float(high), int(n_nodes))
+        if low <= nominal <= high:
+            nodes = np.unique(np.append(nodes, float(nominal)))
+        self.repredict = repredict
+        self.nodes = nodes
+        self._rows: dict[int, np.ndarray] = {}
+
+    @property
+    def n_computed(self) -> int:
+        """Nodes whose physics has been computed so far."""
+        return len(self._rows)
+
+    def row(self, j: int) -> np.ndarray:
+        """Currents (N, 2) at node ``j`` (computed on first use)."""
+        j = int(j)
+        if j not in self._rows:
+            self._rows[j] = np.asarray(self.repredict(float(self.nodes[j])), dtype=np.float64)
+        return self._rows[j]
+
+    def at(self, value: Any) -> np.ndarray:
+        """Interpolated currents (N, 2) at one value, or at one value per sample (an (N,) array)."""
+        nodes = self.nodes
+        x = np.clip(np.asarray(value, dtype=np.float64), nodes[0], nodes[-1])
+        j = np.clip(np.searchsorted(nodes, x, side="right") - 1, 0, nodes.size - 2)
+        w = (x - nodes[j]) / (nodes[j + 1] - nodes[j])
+        if x.ndim == 0:
+            return (1.0 - w) * self.row(j) + w * self.row(j + 1)
+        out = np.empty((x.size, 2))
+        for jj in np.unique(j):
+            m = j == jj
+            out[m] = (1.0 - w[m])[:, None] * self.row(jj)[m] + w[m][:, None] * self.row(jj + 1)[m]
+        return out

@@ -84,3 +84,40 @@ def test_rolling_resistance_binds_one_parameter_per_ground(model, log):
 
 def test_slope_needs_a_map_and_poses(log):
     assert "terrain map" in effect("slope").unsupported([log], None)
+
+
+def test_parameter_table_is_exact_at_nodes_and_linear_between():
+    from energy.diagnosis.model_currents import ParameterTable
+
+    base = np.column_stack([np.linspace(0.0, 1.0, 5), np.linspace(1.0, 2.0, 5)])
+    table = ParameterTable(lambda x: base * x ** 2, 0.0, 2.0, 0.7, n_nodes=5)
+    assert 0.7 in table.nodes and table.n_computed == 0  # the nominal is a node; nothing computed yet
+    np.testing.assert_allclose(table.at(0.7), base * 0.49)
+    np.testing.assert_allclose(table.at(1.5), base * 2.25)
+    np.testing.assert_allclose(table.at(1.75), base * (2.25 + 4.0) / 2.0)  # linear between 1.5 and 2.0
+    per_sample = np.array([0.0, 0.7, 1.75, 2.0, 9.0])  # clipped to the bounds
+    expected = base * np.array([0.0, 0.49, 3.125, 4.0, 4.0])[:, None]
+    np.testing.assert_allclose(table.at(per_sample), expected)
+    assert table.nodes.size == 6 and table.n_computed == 6
+
+
+def test_parameter_errors_are_exact_at_the_nominal_and_the_surrogate_is_close(model, log):
+    basis = physics_basis(model)
+    base = unclipped_prediction(model, log, basis)
+    for name, value in (("mass", 1.23), ("track_width", 2.1), ("rolling_resistance", 0.05)):
+        e = effect(name).bind([log])
+        prep = e.prepare(model, log)
+        nominal = e.nominal(basis)
+        np.testing.assert_allclose(e.apply(np.full(e.n_parameters, nominal), base, prep), base, atol=1e-12)
+        exact = e.apply(np.full(e.n_parameters, value), base, prep)
+        fast = e.apply_surrogate(np.full(e.n_parameters, value), base, prep)
+        assert np.sqrt(np.mean((fast - exact) ** 2)) < 0.05 * max(np.sqrt(np.mean((exact - base) ** 2)), 0.1)
+
+
+def test_track_width_cannot_show_on_measured_wheel_speeds(log):
+    import dataclasses
+
+    measured = dataclasses.replace(log, meta=dataclasses.replace(log.meta, velocity_source="measured",
+                                                                 track_width_m=0.555))
+    assert "measured wheel speeds" in effect("track_width").unsupported([measured], None)
+    assert effect("track_width").unsupported([log], None) is None

@@ -1,5 +1,7 @@
 """Fitting on calibration data and scoring on held-out data: recovered values, shrink, intervals, errors."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -72,3 +74,29 @@ def test_fewer_samples_than_parameters(setup):
     data = prepare_data(model, tiny, [learned])
     with pytest.raises(DataError, match="parameters but the calibration data holds only"):
         fit_effect_set([learned], data)
+
+
+def test_parameter_errors_fit_on_the_interpolated_physics_as_on_the_exact():
+    from energy.diagnosis.effects_physics import MassEffect
+    from energy.diagnosis.scenarios import scenario
+
+    class ExactMass(MassEffect):
+        apply_surrogate = MassEffect.apply  # re-predicts the physics at every evaluation
+
+    sc = dataclasses.replace(scenario("mass"), n_runs=3, run_duration_s=6.0)
+    logs, model = sc.make_logs(0), sc.make_model(0)
+    fast, exact = effect("mass"), ExactMass()
+    data = prepare_data(model, logs, [fast])
+    (v_fast,) = fit_effect_set([fast], data)
+    (v_exact,) = fit_effect_set([exact], prepare_data(model, logs, [exact]))
+    np.testing.assert_allclose(v_fast, v_exact, rtol=1e-3)
+    np.testing.assert_allclose(v_fast, [65.0 / 50.0], rtol=0.05)  # the scenario's payload
+    table = data.prepared["mass"][0].table
+    assert 2 <= table.n_computed <= 8 < table.nodes.size  # only the nodes around the visited values
+    sp = make_split(logs, "runs", n_blocks=3)
+    s = score_effect_set([fast], data, sp)
+    for k, fold in enumerate(sp.folds):  # held-out predictions are the exact physics at the fold's values
+        for i, h in enumerate(fold.held_out):
+            if h.any():
+                exact_pred = fast.apply(s.fold_values[k][0], data.base[i], data.prepared["mass"][i])
+                np.testing.assert_allclose(s.held_out_a[i][h], np.maximum(exact_pred, 0.0)[h], atol=1e-12)
