@@ -22,6 +22,7 @@ from .battery import Battery, Discharge, discharge_from_current, discharge_from_
 from .budget import CURRENT_CONVENTIONS, EnergyBudget, energy_budget, log_battery_power_w
 from .commands import CommandProfile
 from .diagnosis import (
+    DRIVE_EFFECTS,
     EFFECTS_CATALOGUE,
     CorrectedCurrentModel,
     Diagnosis,
@@ -35,6 +36,7 @@ from .diagnosis import (
     effect,
     gap_summary,
     localise_gap,
+    plot_diagnosis,
     regime_labels,
     residual_currents_a,
 )
@@ -225,6 +227,8 @@ __all__ = [
     "compare_currents",
     "CurrentErrors",
     # the sim-to-real gap diagnosis
+    "DRIVE_EFFECTS",
+    "plot_diagnosis",
     "diagnose",
     "Diagnosis",
     "EffectScore",

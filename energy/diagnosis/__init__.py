@@ -5,12 +5,24 @@ from .diagnose import diagnose
 from .effect_base import EFFECT_KINDS, Effect, EffectParameter
 from .effects import EFFECTS_CATALOGUE, NOT_IDENTIFIABLE_FROM_CURRENT, effect, effect_from_spec
 from .localise import GapShare, localise_gap
+from .model_currents import DRIVE_EFFECTS
+from .plots import FIGURES, DiagnosisFigures, plot_diagnosis, plot_effect_ranking, plot_waterfall
+from .plots_gap import plot_gap_by_regime, plot_gap_map, plot_residual_time
 from .regimes import regime_labels
 from .residuals import GapSummary, gap_summary, residual_currents_a
 from .result import Diagnosis, EffectScore, WaterfallStep
 from .split import SPLITS, Fold, Split, make_split
 
 __all__ = [
+    "DRIVE_EFFECTS",
+    "FIGURES",
+    "DiagnosisFigures",
+    "plot_diagnosis",
+    "plot_effect_ranking",
+    "plot_waterfall",
+    "plot_gap_by_regime",
+    "plot_gap_map",
+    "plot_residual_time",
     "CorrectedCurrentModel",
     "Diagnosis",
     "EFFECTS_CATALOGUE",

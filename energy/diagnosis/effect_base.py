@@ -112,6 +112,12 @@ class Effect:
         """``predicted_a`` (N, 2) with the effect added for parameter ``values``."""
         raise NotImplementedError
 
+    def apply_surrogate(self, values: np.ndarray, predicted_a: np.ndarray, prepared: Any) -> np.ndarray:
+        """A cheap approximation of :meth:`apply` used only while fitting (e.g. an interpolated
+        table instead of a physics re-prediction); scores and predictions always use
+        :meth:`apply`. Default: :meth:`apply` itself."""
+        return self.apply(values, predicted_a, prepared)
+
     def negligible(self, values: np.ndarray) -> bool:
         """Whether fitted ``values`` are below what the data can resolve (never added then); default False."""
         return False

@@ -70,7 +70,7 @@ def compose(effects: Sequence[Effect], values: Sequence[np.ndarray], base_a: np.
     order = sorted(range(len(effects)), key=lambda i: composition_order(effects[i]))
     for i in order:
         e = effects[i]
-        apply = getattr(e, "apply_surrogate", e.apply) if surrogate else e.apply
+        apply = e.apply_surrogate if surrogate else e.apply
         cur = apply(np.asarray(values[i], dtype=np.float64), cur, prepared[i])
     return np.maximum(cur, 0.0) if clip else cur
 

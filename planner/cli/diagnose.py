@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from energy import (
+    DRIVE_EFFECTS,
     EFFECTS_CATALOGUE,
     GROUND_PRESETS,
     ROBOT_PRESETS,
@@ -17,12 +18,12 @@ from energy import (
     diagnose,
     load_current_model,
     new_current_model,
+    plot_diagnosis,
     read_borealtc,
     read_csv_log,
     read_rosbag,
 )
-from energy.diagnosis.model_currents import DRIVE_EFFECTS
-from energy.diagnosis.plots import FIGURES, plot_diagnosis
+from energy.diagnosis import FIGURES
 from terrain import DataError, FigureWarning, InvalidParameterError, UnknownNameError
 from terrain.checks import check_seed, fmt_number
 
