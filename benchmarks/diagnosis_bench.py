@@ -50,8 +50,11 @@ except ImportError:  # pragma: no cover - the diagnosis lands in the same sessio
     diagnose = None
     effect = None
 
-PAIRS = (("turning_resistance", "inertia"), ("coulomb_friction", "inertia"), ("viscous_friction", "turning_resistance"),
-         ("slope", "turning_resistance"), ("stribeck", "gear_losses"))
+# Pairs of comparable withheld gaps, then one where turning resistance (85 % of the charge)
+# dominates: each effect is ranked by its own held-out shrink on the model as given, so a
+# small effect beside a dominant one can fall out of the top 3 and still be chosen greedily.
+PAIRS = (("inertia", "coulomb_friction"), ("gear_losses", "viscous_friction"), ("slope", "inertia"),
+         ("coulomb_friction", "stribeck"), ("turning_resistance", "inertia"))
 QUICK_SCENARIOS = ("turning_resistance", "inertia", "slope", "mass", "current_gain", "time_lag")
 TARGETS = {"first_pct": 90.0, "shrink_pct": 80.0, "param_error_pct": 20.0, "pairs_top3_pct": 80.0,
            "null_pct": 95.0, "forty_runs_s": 60.0}
@@ -115,6 +118,7 @@ def _run_case(kind: str, names: tuple[str, ...], seed: int, n_bootstrap: int) ->
                    param_error_pct=None if score is None else _param_error_pct(sc, name, score.parameters))
     elif kind == "pair":
         row["both_top3"] = all(n in ranked[:3] for n in names)
+        row["both_chosen"] = all(n in d.chosen for n in names)
     else:
         row["no_effect_found"] = not d.chosen
     return row
@@ -157,6 +161,7 @@ def _summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
         if visible else float("nan"),
         "param_within_20_pct": _pct(sum(1 for r in with_param if r["param_error_pct"] <= 20.0), len(with_param)),
         "pairs_top3_pct": _pct(sum(1 for r in pairs if r["both_top3"]), len(pairs)),
+        "pairs_chosen_pct": _pct(sum(1 for r in pairs if r["both_chosen"]), len(pairs)),
         "null_pct": _pct(sum(1 for r in null if r["no_effect_found"]), len(null)),
         "smallest_gap_found": smallest,
         "not_first": sorted({f"{r['scenario']} (seed {r['seed']}: rank {r['rank']}, top {r['top3'][:1]})"
@@ -203,7 +208,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
                   f"{', '.join(r['top3'])}")
     for r in rows:
         if r["kind"] == "pair":
-            print(f"pair {r['scenario']:<40} seed {r['seed']}: both in top 3 {r['both_top3']}  ({', '.join(r['top3'])})")
+            print(f"pair {r['scenario']:<40} seed {r['seed']}: both in top 3 {r['both_top3']}, both chosen "
+                  f"{r['both_chosen']}  (top 3: {', '.join(r['top3'])}; chosen: {', '.join(r['chosen'])})")
     null = [r for r in rows if r["kind"] == "null"]
     print(f"null: no effect found in {sum(r['no_effect_found'] for r in null)} of {len(null)} seeds")
     for name in sorted(set(names) - set(excitable)):
@@ -218,7 +224,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     print(f"held-out shrink >= 80 %: {_fmt(summary['shrink_ge_80_pct'])} % of them, median "
           f"{_fmt(summary['median_shrink_pct'])} %")
     print(f"fitted parameter within 20 % of the truth: {_fmt(summary['param_within_20_pct'])} % of the cases with one")
-    print(f"pairs both in top 3: {_fmt(summary['pairs_top3_pct'])} % (target >= {TARGETS['pairs_top3_pct']:.0f} %)")
+    print(f"pairs both in top 3: {_fmt(summary['pairs_top3_pct'])} % (target >= {TARGETS['pairs_top3_pct']:.0f} %); "
+          f"both chosen: {_fmt(summary['pairs_chosen_pct'])} %")
     print(f"null, no effect found: {_fmt(summary['null_pct'])} % (target >= {TARGETS['null_pct']:.0f} %)")
     if summary["not_first"]:
         print("not first: " + "; ".join(summary["not_first"]))
