@@ -11,19 +11,19 @@ from .effect_base import EFFECT_KINDS, Effect
 from .effects_learned import LearnedResidualEffect
 from .effects_measurement import (
     MEASUREMENT_CANDIDATES,
-    IdleCurrentEffect,
     CurrentGainEffect,
     CurrentOffsetEffect,
+    IdleCurrentEffect,
     TimeLagEffect,
 )
 from .effects_physics import (
     PARAMETER_CANDIDATES,
     PHYSICS_CANDIDATES,
-    RollingResistanceEffect,
     MassEffect,
-    PhysicsTermEffect,
-    SlopeEffect,
     MotorConstantEffect,
+    PhysicsTermEffect,
+    RollingResistanceEffect,
+    SlopeEffect,
     TrackWidthEffect,
 )
 
