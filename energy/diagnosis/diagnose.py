@@ -126,8 +126,14 @@ def _verdict(before: GapSummary, after: GapSummary, ranking: Sequence[EffectScor
         out.append(f"{lead} explains {fmt_number(s.shrink_pct, 3)} % of the squared current gap on {held} "
                    f"alone (95 % interval {fmt_number(lo, 3)} … {fmt_number(hi, 3)} %).")
     if chosen:
-        out.append(f"With {', '.join(chosen)} added, the gap falls to {fmt_number(after.charge_error_pct, 2)} % of "
-                   f"the charge (RMSE {fmt_number(after.rmse_a, 3)} A) on {held}.")
+        shrink = 100.0 * (1.0 - (after.rmse_a / before.rmse_a) ** 2) if before.rmse_a > 0 else 0.0
+        text = (f"With {', '.join(chosen)} added, the squared current gap on {held} shrinks by "
+                f"{fmt_number(shrink, 3)} % (RMSE {fmt_number(before.rmse_a, 3)} -> {fmt_number(after.rmse_a, 3)} A) "
+                f"and the charge error goes from {fmt_number(before.charge_error_pct, 2)} % to "
+                f"{fmt_number(after.charge_error_pct, 2)} %")
+        if abs(after.charge_error_pct) > abs(before.charge_error_pct):
+            text += ": the whole-run charge gets worse, the correction fits the current's shape, not its total"
+        out.append(text + ".")
     out.append("Not identifiable from current logs (they change power, not current): "
                + ", ".join(NOT_IDENTIFIABLE_FROM_CURRENT) + ".")
     data_bound = {n: w for n, w in skipped.items() if "already" not in w}

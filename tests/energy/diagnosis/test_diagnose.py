@@ -50,6 +50,8 @@ def test_withheld_effect_ranks_first_and_closes_the_gap(turning):
     assert d.waterfall[1].rmse_a < 0.5 * d.waterfall[0].rmse_a
     assert abs(d.after.charge_error_pct) < abs(d.before.charge_error_pct)
     assert "turning_resistance" in " ".join(d.verdict)
+    added = [s for s in d.verdict if s.startswith("With turning_resistance")]
+    assert len(added) == 1 and "shrinks by" in added[0] and "gets worse" not in added[0]
     ranks = [s.name for s in d.ranking]
     assert ranks.index("pure_noise") > ranks.index("turning_resistance")  # noise never above a true effect
     assert "pure_noise" not in d.chosen
