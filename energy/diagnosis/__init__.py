@@ -11,9 +11,27 @@ from .plots_gap import plot_gap_by_regime, plot_gap_map, plot_residual_time
 from .regimes import regime_labels
 from .residuals import GapSummary, gap_summary, residual_currents_a
 from .result import Diagnosis, EffectScore, WaterfallStep
+from .scenarios import (
+    SCENARIOS,
+    Scenario,
+    WithheldGap,
+    null_scenario,
+    pair_scenario,
+    scenario,
+    withheld_gap,
+    withheld_gap_ratio,
+)
 from .split import SPLITS, Fold, Split, make_split
 
 __all__ = [
+    "Scenario",
+    "SCENARIOS",
+    "WithheldGap",
+    "scenario",
+    "pair_scenario",
+    "null_scenario",
+    "withheld_gap",
+    "withheld_gap_ratio",
     "DRIVE_EFFECTS",
     "FIGURES",
     "DiagnosisFigures",
