@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from energy import DataError, InvalidParameterError, LinearCurrentModel, NotFittedError, UnknownNameError
-from energy.diagnosis import Diagnosis, Effect, EffectParameter, diagnose
+from energy.diagnosis import CorrectedCurrentModel, Diagnosis, Effect, EffectParameter, diagnose
 from energy.diagnosis.scenarios import null_scenario, scenario
 
 CANDIDATES = ["turning_resistance", "gear_losses", "current_gain", "idle_current", "mass"]
@@ -108,3 +108,24 @@ def test_bad_input(turning):
     before = logs[0].current_left_a.copy()
     diagnose(model, logs, effects=["current_gain"], n_bootstrap=5)
     np.testing.assert_array_equal(before, logs[0].current_left_a)  # nothing modified in place
+
+
+def test_an_effect_that_only_fits_its_own_runs_is_not_credited():
+    """Runs that differ by an offset no input explains (+1, -1, +1, -1, +1 A): fitted on
+    the very runs it is scored on, a current offset would look like a gain; scored on
+    held-out runs it makes the gap worse, so the diagnosis must not choose it."""
+    sc = null_scenario()
+    logs, model = sc.make_logs(5), sc.make_model(5)
+    shifted = []
+    for k, log in enumerate(logs):
+        off = 1.0 if k % 2 == 0 else -1.0
+        shifted.append(dataclasses.replace(log, current_left_a=log.current_left_a + off,
+                                           current_right_a=log.current_right_a + off))
+    # the control: an in-sample fit on all runs does lower the squared gap of those runs
+    in_sample = CorrectedCurrentModel(model, ["current_offset"]).fit(shifted)
+    sq = lambda m: sum(float(((m.predict(g) - np.column_stack([g.current_left_a, g.current_right_a])) ** 2).sum())
+                       for g in shifted)
+    assert sq(in_sample) < 0.98 * sq(model)
+    d = diagnose(model, shifted, effects=["current_offset"], seed=0, n_bootstrap=50)
+    score = {s.name: s for s in d.ranking}["current_offset"]
+    assert score.shrink_pct < 0.0 and "current_offset" not in d.chosen
