@@ -123,8 +123,11 @@ def test_an_effect_that_only_fits_its_own_runs_is_not_credited():
                                            current_right_a=log.current_right_a + off))
     # the control: an in-sample fit on all runs does lower the squared gap of those runs
     in_sample = CorrectedCurrentModel(model, ["current_offset"]).fit(shifted)
-    sq = lambda m: sum(float(((m.predict(g) - np.column_stack([g.current_left_a, g.current_right_a])) ** 2).sum())
-                       for g in shifted)
+
+    def sq(m):
+        return sum(float(((m.predict(g) - np.column_stack([g.current_left_a, g.current_right_a])) ** 2).sum())
+                   for g in shifted)
+
     assert sq(in_sample) < 0.98 * sq(model)
     d = diagnose(model, shifted, effects=["current_offset"], seed=0, n_bootstrap=50)
     score = {s.name: s for s in d.ranking}["current_offset"]
