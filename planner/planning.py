@@ -103,6 +103,13 @@ def _lattice_optimum(cost: EnergyCost, start: np.ndarray, goal: np.ndarray) -> L
     return path
 
 
+def _check_query(cost: Any, start_xy_m: Any, goal_xy_m: Any) -> tuple[np.ndarray, np.ndarray]:
+    """A checked (start, goal) pair on an EnergyCost (the shared start of every route query)."""
+    if not isinstance(cost, EnergyCost):
+        raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
+    return _check_point(cost, start_xy_m, "start_xy_m"), _check_point(cost, goal_xy_m, "goal_xy_m")
+
+
 def compare_route(cost: EnergyCost, start_xy_m: tuple[float, float], goal_xy_m: tuple[float, float]) -> RouteComparison:
     """The baselines of a query: the shortest-distance route and the 1-cell lattice optimum.
 
@@ -115,10 +122,7 @@ def compare_route(cost: EnergyCost, start_xy_m: tuple[float, float], goal_xy_m: 
     InvalidParameterError, OutOfBoundsError, BlockedPositionError
         As :func:`plan_route` for bad start / goal points.
     """
-    if not isinstance(cost, EnergyCost):
-        raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
-    start = _check_point(cost, start_xy_m, "start_xy_m")
-    goal = _check_point(cost, goal_xy_m, "goal_xy_m")
+    start, goal = _check_query(cost, start_xy_m, goal_xy_m)
     key = ("comparison", tuple(start.tolist()), tuple(goal.tolist()))
     comparison = cost.results.get(key)
     if comparison is None:
@@ -149,10 +153,7 @@ def shortest_route(cost: EnergyCost, start_xy_m: tuple[float, float], goal_xy_m:
     InvalidParameterError, OutOfBoundsError, BlockedPositionError
         As :func:`plan_route` for bad start / goal points.
     """
-    if not isinstance(cost, EnergyCost):
-        raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
-    start = _check_point(cost, start_xy_m, "start_xy_m")
-    goal = _check_point(cost, goal_xy_m, "goal_xy_m")
+    start, goal = _check_query(cost, start_xy_m, goal_xy_m)
     t0 = time.perf_counter()
     if math.isfinite(cost.segment_energy_one_j(start[0], start[1], goal[0], goal[1])):
         pts = np.array([start, goal])

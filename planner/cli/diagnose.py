@@ -98,6 +98,15 @@ def read_logs(path: Path) -> list[InteractionLog]:
     return logs
 
 
+
+def _check_effect_names(flag: str, names: list[str], allowed: tuple[str, ...], what: str) -> None:
+    """Each of ``names`` once, and each one of ``allowed``; errors name the flag."""
+    bad = [e for e in names if e not in allowed]
+    if bad:
+        raise UnknownNameError(f"{flag} {bad!r}: {what}; expected names from {list(allowed)!r}")
+    if len(set(names)) != len(names):
+        raise InvalidParameterError(f"{flag} names an effect twice: {names!r}")
+
 def _check_flags(args: argparse.Namespace) -> None:
     """Names and numbers of the flags, before any work."""
     kind = args.model if args.model in ("physics", "estimator") else "file"
@@ -112,19 +121,9 @@ def _check_flags(args: argparse.Namespace) -> None:
                 raise InvalidParameterError(f"{flag} applies to --model physics only, got --model {args.model!r}")
     if args.ground is not None and args.ground not in GROUND_PRESETS:
         raise UnknownNameError(f"--ground {args.ground!r} is not a ground preset; known: {sorted(GROUND_PRESETS)!r}")
-    bad = [e for e in args.without if e not in DRIVE_EFFECTS]
-    if bad:
-        raise UnknownNameError(f"--without {bad!r}: not physics drive effects; expected names from "
-                               f"{list(DRIVE_EFFECTS)!r}")
-    if len(set(args.without)) != len(args.without):
-        raise InvalidParameterError(f"--without names an effect twice: {args.without!r}")
+    _check_effect_names("--without", args.without, DRIVE_EFFECTS, "not physics drive effects")
     if args.effects is not None:
-        bad = [e for e in args.effects if e not in EFFECTS_CATALOGUE]
-        if bad:
-            raise UnknownNameError(f"--effects {bad!r}: not in the catalogue; expected names from "
-                                   f"{list(EFFECTS_CATALOGUE)!r}")
-        if len(set(args.effects)) != len(args.effects):
-            raise InvalidParameterError(f"--effects names an effect twice: {args.effects!r}")
+        _check_effect_names("--effects", args.effects, EFFECTS_CATALOGUE, "not in the catalogue")
     try:
         check_seed(args.seed)
     except InvalidParameterError as exc:
