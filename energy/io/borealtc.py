@@ -14,6 +14,7 @@ from terrain.errors import DataError, FileFormatError, InvalidParameterError, Un
 
 from ..logs import DEFAULT_GAP_FACTOR, InteractionLog, LogMeta, check_gap_factor
 from .cleaning import (
+    MAX_OMEGA_RADPS,
     MAX_SPEED_MPS,
     bracket_accel,
     check_accel,
@@ -55,7 +56,8 @@ def read_borealtc_run(
     measured wheel speeds (m/s) turned into ``v = (velL + velR) / 2`` and
     ``omega = (velR - velL) / track_width_m`` (``meta.velocity_source = "measured"``) and the
     motor currents (A). ``imu_NN.csv`` (``time,wx,wy,wz,ax,ay,az``, ~100 Hz) gives
-    ``accel_z_mps2 = az`` (gravity included). Both clocks start at zero but the files end
+    ``accel_z_mps2 = az`` (gravity included) and, when the file has the column,
+    ``gyro_z_radps = wz`` (rad/s). Both clocks start at zero but the files end
     at different times; they are aligned on the overlap ``[max(starts), min(ends)]``: drive
     samples outside it are dropped, and the IMU keeps the samples from the last one at or
     before the first kept drive time to the first one at or after the last kept drive
@@ -107,19 +109,22 @@ def read_borealtc_run(
     gap_factor = check_gap_factor(gap_factor)
     imu_path, pro_path = Path(imu_csv), Path(pro_csv)
     pro = read_table(read_csv_text(pro_path), ("time", "curL", "curR", "velL", "velR"))
-    imu = read_table(read_csv_text(imu_path), ("time", "az"))
+    imu = read_table(read_csv_text(imu_path), ("time", "az"), optional=("wz",))
+    imu_cols = {k: imu[k] for k in ("az", "wz") if k in imu}
     src_p, src_i = str(pro_path), str(imu_path)
     tp, pc, _ = clean_stream(
         src_p, "drive stream", pro["time"], {k: pro[k] for k in ("curL", "curR", "velL", "velR")},
         repairs, allow_gaps, gap_factor,
     )
-    ti, ic, _ = clean_stream(src_i, "IMU stream", imu["time"], {"az": imu["az"]}, repairs, allow_gaps, gap_factor)
+    ti, ic, _ = clean_stream(src_i, "IMU stream", imu["time"], imu_cols, repairs, allow_gaps, gap_factor)
     if check_units:
         check_current(src_p, "curL", pc["curL"], "A")
         check_current(src_p, "curR", pc["curR"], "A")
         for k in ("velL", "velR"):
             check_limit(src_p, k, pc[k], MAX_SPEED_MPS, "m/s", "wheel speeds look like mm/s or cm/s")
         check_accel(src_i, "az", ic["az"])
+        if "wz" in ic:
+            check_limit(src_i, "wz", ic["wz"], MAX_OMEGA_RADPS, "rad/s", "gyro rates look like deg/s")
         check_timing(src_p, "drive stream", tp)
         check_timing(src_i, "IMU stream", ti)
     t0, t1 = max(tp[0], ti[0]), min(tp[-1], ti[-1])
@@ -149,6 +154,7 @@ def read_borealtc_run(
         current_right_a=pc["curR"][keep],
         accel_time_s=ti[acc],
         accel_z_mps2=ic["az"][acc],
+        gyro_z_radps=ic["wz"][acc] if "wz" in ic else None,
         meta=LogMeta(
             robot=robot,
             source=src_p,

@@ -1,11 +1,13 @@
-"""Interaction logs: one robot run's drive, current and vibration streams on one clock.
+"""Interaction logs: one robot run's drive, current, vibration and gyro streams on one clock.
 
 Modules: :mod:`~energy.logs.meta` (run metadata), :mod:`~energy.logs.gaps` (the gap rule
-shared with the readers), :mod:`~energy.logs.arrays` (validation of the log's arrays),
+shared with the readers), :mod:`~energy.logs.arrays` (the stream fields and the validation
+of the log's arrays), :mod:`~energy.logs.joining` (concatenation),
 :mod:`~energy.logs.interaction_log` (the log itself). Readers of files live in
 :mod:`energy.io`.
 """
 
+from .arrays import DRIVE_FIELDS, IMU_FIELDS, OPTIONAL_FIELDS
 from .gaps import DEFAULT_GAP_FACTOR, check_gap_factor, gap_steps, median_period_s
 from .interaction_log import RESAMPLE_METHODS, InteractionLog
 from .meta import VELOCITY_SOURCES, LogMeta
@@ -19,4 +21,7 @@ __all__ = [
     "check_gap_factor",
     "gap_steps",
     "median_period_s",
+    "DRIVE_FIELDS",
+    "IMU_FIELDS",
+    "OPTIONAL_FIELDS",
 ]

@@ -1,4 +1,4 @@
-"""Validation of an interaction log's arrays: finite vectors, increasing times, pose, labels."""
+"""Validation of an interaction log's arrays: the stream fields, finite vectors, increasing times, pose, labels."""
 
 from __future__ import annotations
 
@@ -9,7 +9,23 @@ import numpy as np
 from terrain.checks import fmt_number, real_array
 from terrain.errors import DataError, InvalidParameterError
 
-__all__ = ["log_vector", "check_increasing", "pose_array", "ground_array"]
+__all__ = [
+    "DRIVE_FIELDS",
+    "IMU_FIELDS",
+    "OPTIONAL_FIELDS",
+    "log_vector",
+    "stream_vector",
+    "check_increasing",
+    "pose_array",
+    "ground_array",
+]
+
+#: Per-sample arrays of the drive stream (on ``time_s``).
+DRIVE_FIELDS = ("v_mps", "omega_radps", "current_left_a", "current_right_a", "battery_voltage_v")
+#: Per-sample arrays of the IMU stream (on ``accel_time_s``).
+IMU_FIELDS = ("accel_z_mps2", "gyro_z_radps")
+#: The stream arrays a log may lack (``None``); the two currents come together or not at all.
+OPTIONAL_FIELDS = ("current_left_a", "current_right_a", "battery_voltage_v", "gyro_z_radps")
 
 
 def log_vector(name: str, value: Any) -> np.ndarray:
@@ -31,6 +47,27 @@ def log_vector(name: str, value: Any) -> np.ndarray:
             f"({fmt_number(float(arr[i]), 9)})"
         )
     arr.setflags(write=False)
+    return arr
+
+
+def stream_vector(name: str, value: Any, n: int, clock: str) -> np.ndarray | None:
+    """:func:`log_vector` of a stream field that must have ``n`` samples (the length of
+    ``clock``); ``None`` stays ``None`` for an optional field.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``None`` for a required field, a wrong length, not numeric or not 1-D.
+    DataError
+        A non-finite value.
+    """
+    if value is None:
+        if name in OPTIONAL_FIELDS:
+            return None
+        raise InvalidParameterError(f"{name} is required, got None")
+    arr = log_vector(name, value)
+    if arr.size != n:
+        raise InvalidParameterError(f"{name} must have the length of {clock} ({n}), got {arr.size}")
     return arr
 
 

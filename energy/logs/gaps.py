@@ -8,7 +8,7 @@ import numpy as np
 
 from terrain.checks import check_real
 
-__all__ = ["DEFAULT_GAP_FACTOR", "check_gap_factor", "gap_steps", "median_period_s"]
+__all__ = ["DEFAULT_GAP_FACTOR", "check_gap_factor", "gap_steps", "median_period_s", "merged_gaps"]
 
 #: A step between consecutive samples larger than this many median sampling periods is a
 #: gap (used by :meth:`InteractionLog.split_at_gaps` and by the readers' gap check).
@@ -50,3 +50,21 @@ def gap_steps(t: np.ndarray, gap_factor: float) -> np.ndarray:
         return np.zeros(0, dtype=np.intp)
     d = np.diff(t)
     return np.flatnonzero(d > gap_factor * float(np.median(d)))
+
+
+def merged_gaps(streams: tuple[np.ndarray, ...], gap_factor: float) -> list[tuple[float, float]]:
+    """The gaps of several time vectors, ``(start_s, end_s)`` each, overlapping ones merged.
+
+    Examples
+    --------
+    >>> merged_gaps((np.array([0.0, 0.1, 0.2, 1.2, 1.3]), np.arange(0.0, 1.31, 0.01)), 5.0)
+    [(0.2, 1.2)]
+    """
+    gaps = sorted((float(t[i]), float(t[i + 1])) for t in streams for i in gap_steps(t, gap_factor))
+    merged: list[list[float]] = []
+    for a, b in gaps:
+        if merged and a < merged[-1][1]:
+            merged[-1][1] = max(merged[-1][1], b)
+        else:
+            merged.append([a, b])
+    return [(a, b) for a, b in merged]

@@ -4,11 +4,16 @@ An :class:`InteractionLog` holds two streams that share one clock:
 
 - the **drive stream** (``time_s``, N samples): linear speed ``v_mps``, yaw rate
   ``omega_radps`` (commanded or measured, see :attr:`LogMeta.velocity_source`), the left and
-  right drive currents ``current_left_a`` / ``current_right_a`` (A), and optionally the
-  pose ``pose_xyh`` (x_m, y_m, heading_rad) and a per-sample ground label ``ground``;
-- the **acceleration stream** (``accel_time_s``, M samples, usually at a higher rate): the
-  vertical acceleration ``accel_z_mps2`` as recorded, gravity included (about +9.81 m/s^2
-  at rest on level ground); vibration features remove the mean themselves.
+  right drive currents ``current_left_a`` / ``current_right_a`` (A; both ``None`` in a log
+  read for prediction only, see :attr:`InteractionLog.has_currents`), and optionally the
+  battery voltage ``battery_voltage_v``, the pose ``pose_xyh`` (x_m, y_m, heading_rad) and
+  a per-sample ground label ``ground``;
+- the **acceleration (IMU) stream** (``accel_time_s``, M samples, usually at a higher
+  rate): the vertical acceleration ``accel_z_mps2`` as recorded, gravity included (about
+  +9.81 m/s^2 at rest on level ground) unless ``meta.gravity_removed``; vibration features
+  remove the mean themselves; and optionally the gyro's yaw rate ``gyro_z_radps`` (rad/s,
+  counter-clockwise positive), the IMU's own measure of turning, against which the
+  wheel-derived ``omega_radps`` shows skid.
 
 Both time vectors are strictly increasing and finite; all arrays are float64 copies made
 read-only. Changing rate is always explicit: :meth:`InteractionLog.resample` puts the drive
@@ -31,8 +36,9 @@ import numpy as np
 from terrain.checks import check_choice, check_real, fmt_number
 from terrain.errors import DataError, DataRepairWarning, InvalidParameterError
 
-from .arrays import check_increasing, ground_array, log_vector, pose_array
-from .gaps import DEFAULT_GAP_FACTOR, check_gap_factor, gap_steps, median_period_s
+from .arrays import DRIVE_FIELDS, IMU_FIELDS, check_increasing, ground_array, log_vector, pose_array, stream_vector
+from .gaps import DEFAULT_GAP_FACTOR, check_gap_factor, median_period_s, merged_gaps
+from .joining import concatenated_fields, join_notes
 from .meta import LogMeta
 
 __all__ = ["RESAMPLE_METHODS", "InteractionLog"]
@@ -47,7 +53,7 @@ _TIME_TOL_S = 1e-9
 
 @dataclass(frozen=True, eq=False, repr=False)
 class InteractionLog:
-    """One robot run: drive commands/speeds, drive currents and vertical acceleration.
+    """One robot run: drive commands/speeds, drive currents, vertical acceleration and gyro yaw rate.
 
     Parameters
     ----------
@@ -56,8 +62,10 @@ class InteractionLog:
     v_mps, omega_radps : array_like, shape (N,)
         Linear speed (m/s) and yaw rate (rad/s, counter-clockwise positive); commanded or
         measured according to ``meta.velocity_source``.
-    current_left_a, current_right_a : array_like, shape (N,)
+    current_left_a, current_right_a : array_like, shape (N,), or None
         Left and right drive current (A). Negative values (regeneration) are allowed.
+        Both ``None``: a log without currents, enough to predict from but not to train or
+        score on (:meth:`require_currents`).
     accel_time_s : array_like, shape (M,)
         Acceleration-stream timestamps (s), strictly increasing, same clock as ``time_s``.
     accel_z_mps2 : array_like, shape (M,)
@@ -68,6 +76,10 @@ class InteractionLog:
         Ground label of each drive sample.
     meta : LogMeta
         Run-level metadata.
+    gyro_z_radps : array_like, shape (M,), optional
+        Gyro yaw rate (rad/s, counter-clockwise positive) at the acceleration timestamps.
+    battery_voltage_v : array_like, shape (N,), optional
+        Battery voltage (V) at the drive timestamps; current x voltage is the battery power.
 
     Raises
     ------
@@ -101,27 +113,24 @@ class InteractionLog:
     pose_xyh: np.ndarray | None = None
     ground: np.ndarray | None = None
     meta: LogMeta = field(default_factory=LogMeta)
+    gyro_z_radps: np.ndarray | None = None
+    battery_voltage_v: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        t = log_vector("time_s", self.time_s)
-        check_increasing("time_s", t)
-        set_(self, "time_s", t)
-        n = t.size
-        for name in ("v_mps", "omega_radps", "current_left_a", "current_right_a"):
-            arr = log_vector(name, getattr(self, name))
-            if arr.size != n:
-                raise InvalidParameterError(f"{name} must have the length of time_s ({n}), got {arr.size}")
-            set_(self, name, arr)
-        ta = log_vector("accel_time_s", self.accel_time_s)
-        check_increasing("accel_time_s", ta)
-        set_(self, "accel_time_s", ta)
-        az = log_vector("accel_z_mps2", self.accel_z_mps2)
-        if az.size != ta.size:
+        for clock, names in (("time_s", DRIVE_FIELDS), ("accel_time_s", IMU_FIELDS)):
+            t = log_vector(clock, getattr(self, clock))
+            check_increasing(clock, t)
+            set_(self, clock, t)
+            for name in names:
+                set_(self, name, stream_vector(name, getattr(self, name), t.size, clock))
+        if (self.current_left_a is None) != (self.current_right_a is None):
             raise InvalidParameterError(
-                f"accel_z_mps2 must have the length of accel_time_s ({ta.size}), got {az.size}"
+                "current_left_a and current_right_a must both be arrays or both be None, got "
+                f"{'None' if self.current_left_a is None else 'an array'} and "
+                f"{'None' if self.current_right_a is None else 'an array'}"
             )
-        set_(self, "accel_z_mps2", az)
+        n = len(self.time_s)
         if self.pose_xyh is not None:
             set_(self, "pose_xyh", pose_array(self.pose_xyh, n))
         if self.ground is not None:
@@ -143,6 +152,33 @@ class InteractionLog:
             f"accel={self.accel_time_s.size} samples @ {rate(self.accel_time_s)}, "
             f"t=[{self.time_s[0]:.3f}, {self.time_s[-1]:.3f}] s, source={self.meta.source!r})"
         )
+
+    @property
+    def has_currents(self) -> bool:
+        """Whether the log holds measured drive currents (a log read for prediction may not)."""
+        return self.current_left_a is not None
+
+    def require_currents(self, purpose: str) -> None:
+        """Raise unless the log holds drive currents.
+
+        Parameters
+        ----------
+        purpose : str
+            What needs them, for the message (e.g. ``"training"``).
+
+        Raises
+        ------
+        DataError
+            The log has no currents; the message names the source, what it lacked
+            (``meta.missing_currents``) and the options that read currents.
+        """
+        if self.current_left_a is None:
+            lacked = f" ({self.meta.missing_currents})" if self.meta.missing_currents else ""
+            raise DataError(
+                f"{self.meta.source}: {purpose} needs measured drive currents and this log has none{lacked}; "
+                f"read it with its current topics (current_topics, --current-topics) or the status message's "
+                f"current fields (current_fields, --current-fields)"
+            )
 
     @property
     def duration_s(self) -> float:
@@ -223,16 +259,34 @@ class InteractionLog:
             )
         return np.interp(t, self.accel_time_s, self.accel_z_mps2)
 
+    def gyro_z_on(self, time_s: Any) -> np.ndarray:
+        """Gyro yaw rate (rad/s) linearly interpolated onto other timestamps (e.g. the drive
+        times, to set it against ``omega_radps``).
+
+        Raises
+        ------
+        DataError
+            The log has no gyro stream, or a timestamp outside the IMU record (as
+            :meth:`accel_on`).
+        """
+        if self.gyro_z_radps is None:
+            raise DataError(
+                f"{self.meta.source}: the log has no gyro yaw rate (gyro_z_radps); read it from an IMU "
+                f"that records angular_velocity.z (BorealTC 'wz', a bag's sensor_msgs/Imu)"
+            )
+        self.accel_on(time_s)  # the same range check
+        return np.interp(np.asarray(time_s, dtype=np.float64), self.accel_time_s, self.gyro_z_radps)
+
     def resample(self, rate_hz: float, method: str = "linear") -> InteractionLog:
         """The drive stream on a uniform grid over the overlap of both streams.
 
         The grid is ``t0 + k / rate_hz`` for ``k = 0, 1, ...`` while ``<= t1``, with
-        ``[t0, t1]`` the overlap of the drive and acceleration streams. Speeds, currents and
-        x/y are interpolated linearly (``"linear"``) or held from the last sample at or
+        ``[t0, t1]`` the overlap of the drive and acceleration streams. Speeds, currents,
+        battery voltage and x/y are interpolated linearly (``"linear"``) or held from the last sample at or
         before each grid time (``"previous"``, zero-order hold, right for commands; a sample
         less than 1 ns after a grid time counts as at it, absorbing float rounding);
         heading is unwrapped before interpolation and wrapped to (-pi, pi] after; ground
-        labels are always held (``"previous"``). The acceleration stream keeps its own rate:
+        labels are always held (``"previous"``). The IMU stream (acceleration, gyro) keeps its own rate:
         its samples from the last one at or before ``t0`` to the first one at or after the
         last grid time are kept, so :meth:`accel_on` works on every new drive time.
         Interpolation does not know about gaps: split at gaps first if the log has any.
@@ -265,7 +319,9 @@ class InteractionLog:
         # e.g. k * 0.1 vs k / 10); >= 0 since grid >= time_s[0]
         held = np.searchsorted(self.time_s, grid + _TIME_TOL_S, side="right") - 1
 
-        def take(values: np.ndarray) -> np.ndarray:
+        def take(values: np.ndarray | None) -> np.ndarray | None:
+            if values is None:
+                return None
             if method == "linear":
                 return np.interp(grid, self.time_s, values)
             return values[held]
@@ -280,17 +336,15 @@ class InteractionLog:
         ia = max(int(np.searchsorted(self.accel_time_s, grid[0], side="right")) - 1, 0)
         ib = min(int(np.searchsorted(self.accel_time_s, grid[-1], side="left")), self.accel_time_s.size - 1)
         note = f"resampled drive stream to {float(rate_hz):g} Hz ({method}) over [{t0:g}, {t1:g}] s"
+        imu = {name: None if getattr(self, name) is None else getattr(self, name)[ia : ib + 1] for name in IMU_FIELDS}
         return InteractionLog(
             time_s=grid,
-            v_mps=take(self.v_mps),
-            omega_radps=take(self.omega_radps),
-            current_left_a=take(self.current_left_a),
-            current_right_a=take(self.current_right_a),
+            **{name: take(getattr(self, name)) for name in DRIVE_FIELDS},
             accel_time_s=self.accel_time_s[ia : ib + 1],
-            accel_z_mps2=self.accel_z_mps2[ia : ib + 1],
+            **imu,
             pose_xyh=pose,
             ground=ground,
-            meta=replace(self.meta, notes=_join_notes(self.meta.notes, note)),
+            meta=replace(self.meta, notes=join_notes(self.meta.notes, note)),
         )
 
     # ---------------------------------------------------------- cutting, joining
@@ -316,17 +370,16 @@ class InteractionLog:
         return self._subset(d, a)
 
     def _subset(self, d: np.ndarray, a: np.ndarray, note: str = "") -> InteractionLog:
+        def cut(name: str, mask: np.ndarray) -> np.ndarray | None:
+            values = getattr(self, name)
+            return None if values is None else values[mask]
+
         return InteractionLog(
             time_s=self.time_s[d],
-            v_mps=self.v_mps[d],
-            omega_radps=self.omega_radps[d],
-            current_left_a=self.current_left_a[d],
-            current_right_a=self.current_right_a[d],
+            **{name: cut(name, d) for name in (*DRIVE_FIELDS, "pose_xyh", "ground")},
             accel_time_s=self.accel_time_s[a],
-            accel_z_mps2=self.accel_z_mps2[a],
-            pose_xyh=None if self.pose_xyh is None else self.pose_xyh[d],
-            ground=None if self.ground is None else self.ground[d],
-            meta=replace(self.meta, notes=_join_notes(self.meta.notes, note)) if note else self.meta,
+            **{name: cut(name, a) for name in IMU_FIELDS},
+            meta=replace(self.meta, notes=join_notes(self.meta.notes, note)) if note else self.meta,
         )
 
     def shifted(self, offset_s: float) -> InteractionLog:
@@ -357,19 +410,9 @@ class InteractionLog:
             No piece keeps both streams.
         """
         gap_factor = check_gap_factor(gap_factor)
-        gaps: list[tuple[float, float]] = []
-        for t in (self.time_s, self.accel_time_s):
-            for i in gap_steps(t, gap_factor):
-                gaps.append((float(t[i]), float(t[i + 1])))
-        if not gaps:
+        merged = merged_gaps((self.time_s, self.accel_time_s), gap_factor)
+        if not merged:
             return [self]
-        gaps.sort()
-        merged = [list(gaps[0])]
-        for a, b in gaps[1:]:
-            if a < merged[-1][1]:
-                merged[-1][1] = max(merged[-1][1], b)
-            else:
-                merged.append([a, b])
         starts = [-math.inf] + [b for _, b in merged]
         ends = [a for a, _ in merged] + [math.inf]
         pieces: list[InteractionLog] = []
@@ -404,8 +447,8 @@ class InteractionLog:
 
         Each log must start (both streams) after the previous one ends; use
         :meth:`shifted` to put separate runs that each start at zero one after another.
-        The joined log keeps the gaps between them. Pose and per-sample ground must be
-        present in all logs or in none; a log without ``ground`` but with a
+        The joined log keeps the gaps between them. Pose, per-sample ground, currents,
+        battery voltage and gyro must be present in all logs or in none; a log without ``ground`` but with a
         ``meta.ground_label`` contributes that label. The metadata keep the common robot,
         velocity source and track width (these must agree), the ground label when all
         agree (else ``None``), and the distinct sources joined by ``"; "``.
@@ -416,7 +459,7 @@ class InteractionLog:
             No logs, or an element that is not an InteractionLog.
         DataError
             Overlapping or out-of-order logs; disagreeing robot, velocity source or track
-            width; pose or ground present in some logs only.
+            width; pose, ground, currents, voltage or gyro present in some logs only.
         """
         items = list(logs)
         if not items:
@@ -424,56 +467,4 @@ class InteractionLog:
         for i, log in enumerate(items):
             if not isinstance(log, InteractionLog):
                 raise InvalidParameterError(f"logs[{i}] must be an InteractionLog, got {log!r:.80}")
-        first = items[0]
-        for i, log in enumerate(items[1:], start=1):
-            prev = items[i - 1]
-            for attr in ("robot", "velocity_source", "track_width_m"):
-                if getattr(log.meta, attr) != getattr(first.meta, attr):
-                    raise DataError(
-                        f"cannot concatenate: logs[{i}].meta.{attr}={getattr(log.meta, attr)!r} differs from "
-                        f"logs[0].meta.{attr}={getattr(first.meta, attr)!r}"
-                    )
-            if log.time_s[0] <= prev.time_s[-1] or log.accel_time_s[0] <= prev.accel_time_s[-1]:
-                raise DataError(
-                    f"cannot concatenate: logs[{i}] starts at t={fmt_number(float(log.time_s[0]), 9)} s (accel "
-                    f"{fmt_number(float(log.accel_time_s[0]), 9)} s), not after logs[{i - 1}] ends at t={fmt_number(float(prev.time_s[-1]), 9)} s "
-                    f"(accel {fmt_number(float(prev.accel_time_s[-1]), 9)} s); shift it with .shifted(offset_s)"
-                )
-        with_pose = [log.pose_xyh is not None for log in items]
-        if any(with_pose) and not all(with_pose):
-            raise DataError(f"cannot concatenate: pose_xyh present in logs {with_pose!r} (need all or none)")
-        ground = None
-        if any(log.ground is not None for log in items):
-            labels = [log.ground_labels for log in items]
-            missing = [i for i, g in enumerate(labels) if g is None]
-            if missing:
-                raise DataError(
-                    f"cannot concatenate: logs {missing!r} have neither per-sample ground nor "
-                    f"meta.ground_label while others have ground labels"
-                )
-            ground = np.concatenate([np.asarray(g, dtype=str) for g in labels])
-        run_labels = {log.meta.ground_label for log in items}
-        sources = list(dict.fromkeys(log.meta.source for log in items))
-        notes = list(dict.fromkeys(log.meta.notes for log in items if log.meta.notes))
-        meta = replace(
-            first.meta,
-            source="; ".join(sources),
-            ground_label=run_labels.pop() if len(run_labels) == 1 else None,
-            notes=_join_notes(*notes, f"concatenation of {len(items)} logs"),
-        )
-        return cls(
-            time_s=np.concatenate([log.time_s for log in items]),
-            v_mps=np.concatenate([log.v_mps for log in items]),
-            omega_radps=np.concatenate([log.omega_radps for log in items]),
-            current_left_a=np.concatenate([log.current_left_a for log in items]),
-            current_right_a=np.concatenate([log.current_right_a for log in items]),
-            accel_time_s=np.concatenate([log.accel_time_s for log in items]),
-            accel_z_mps2=np.concatenate([log.accel_z_mps2 for log in items]),
-            pose_xyh=np.concatenate([log.pose_xyh for log in items]) if all(with_pose) else None,
-            ground=ground,
-            meta=meta,
-        )
-
-
-def _join_notes(*parts: str) -> str:
-    return "; ".join(p for p in parts if p)
+        return cls(**concatenated_fields(items))

@@ -1,4 +1,4 @@
-"""Run-level metadata of an interaction log: robot, source, ground, velocity source."""
+"""Run-level metadata of an interaction log: robot, source, ground, velocity source, IMU facts."""
 
 from __future__ import annotations
 
@@ -37,6 +37,13 @@ class LogMeta:
     start_time_ns : int or None
         Absolute time of ``time_s == 0`` in ns since the Unix epoch, when the source has one
         (ROS bags); ``None`` for sources whose clock starts at zero.
+    gravity_removed : bool
+        The IMU's ``accel_z_mps2`` has gravity removed (median about 0 instead of about
+        +9.81 m/s^2 at rest); readers set it and say so in ``notes``. The vibration features
+        remove each window's mean, so they do not need gravity.
+    missing_currents : str
+        Why the log has no drive currents (e.g. which topics the bag lacked), empty when
+        it has them; part of the error a training or scoring function raises on such a log.
 
     Raises
     ------
@@ -51,9 +58,11 @@ class LogMeta:
     track_width_m: float | None = None
     notes: str = ""
     start_time_ns: int | None = None
+    gravity_removed: bool = False
+    missing_currents: str = ""
 
     def __post_init__(self) -> None:
-        for name in ("robot", "source", "notes"):
+        for name in ("robot", "source", "notes", "missing_currents"):
             value = getattr(self, name)
             if not isinstance(value, str):
                 raise InvalidParameterError(f"LogMeta.{name} must be a str, got {value!r}")
@@ -71,3 +80,6 @@ class LogMeta:
             isinstance(self.start_time_ns, bool) or not isinstance(self.start_time_ns, (int, np.integer))
         ):
             raise InvalidParameterError(f"LogMeta.start_time_ns must be an int or None, got {self.start_time_ns!r}")
+        if not isinstance(self.gravity_removed, (bool, np.bool_)):
+            raise InvalidParameterError(f"LogMeta.gravity_removed must be a bool, got {self.gravity_removed!r}")
+        object.__setattr__(self, "gravity_removed", bool(self.gravity_removed))
