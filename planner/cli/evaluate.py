@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import logging
 import time
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -17,8 +15,9 @@ from energy import (
     plot_vibration_spectra,
     read_borealtc,
 )
-from terrain import InvalidParameterError, OptionalDependencyError
+from terrain import InvalidParameterError
 
+from ..dask_client import dask_client
 from .common import check_outputs, draw_figure
 
 __all__ = ["add_parser", "run_evaluate"]
@@ -73,7 +72,9 @@ def run_evaluate(args: argparse.Namespace) -> int:
     with contextlib.ExitStack() as stack:
         client, workers = None, "1 worker (serial)"
         if args.workers > 1 or args.scheduler is not None:  # before reading: a missing extra or scheduler fails fast
-            client = stack.enter_context(_dask_client(args.workers, args.scheduler, quiet=not args.verbose))
+            client = stack.enter_context(
+                dask_client(args.workers, args.scheduler, quiet=not args.verbose, flags=("--workers", "--scheduler"))
+            )
             where = args.scheduler if args.scheduler is not None else "a local cluster"
             workers = f"{len(client.nthreads())} dask workers ({where})"
             print(f"evaluating on {workers}", flush=True)
@@ -90,48 +91,3 @@ def run_evaluate(args: argparse.Namespace) -> int:
     written = f"{json_path}, {md_path} and {png_path}" if png_path is not None else f"{json_path} and {md_path}"
     print(f"\n{len(logs)} runs, {len(models)} models, {elapsed:.1f} s on {workers}; wrote {written}")
     return 0
-
-
-@contextlib.contextmanager
-def _dask_client(workers: int, scheduler: str | None, *, quiet: bool = True) -> Iterator[Any]:
-    """A ``distributed.Client`` on ``scheduler``, or on a new local cluster of ``workers`` processes.
-
-    Leaving the context closes the client and the local cluster it started. ``quiet``
-    keeps dask's INFO messages (cluster start and stop) out of the log meanwhile.
-
-    Raises
-    ------
-    OptionalDependencyError
-        dask.distributed is not installed.
-    InvalidParameterError
-        No dask scheduler answers at ``scheduler``.
-    """
-    try:
-        from distributed import Client, LocalCluster
-    except ImportError as exc:
-        option = f"--scheduler {scheduler}" if scheduler is not None else f"--workers {workers}"
-        raise OptionalDependencyError(
-            f"{option} needs dask.distributed; install it with: pip install 'terrawatt[distributed]'"
-        ) from exc
-    dask_log = logging.getLogger("distributed")  # configured by the import above
-    old_level = dask_log.level
-    if quiet:
-        dask_log.setLevel(max(dask_log.getEffectiveLevel(), logging.WARNING))
-    try:
-        if scheduler is not None:
-            try:
-                client = Client(scheduler)
-            except (OSError, ValueError) as exc:  # unreachable (a TimeoutError is an OSError) or malformed
-                raise InvalidParameterError(
-                    f"--scheduler {scheduler!r}: cannot connect to a dask scheduler there ({exc}); "
-                    "expected the address of a running scheduler, e.g. tcp://host:8786"
-                ) from exc
-            with client:
-                yield client
-        else:
-            with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True) as cluster, Client(cluster) as client:
-                yield client
-    finally:
-        dask_log.setLevel(old_level)
-
-

@@ -1,0 +1,242 @@
+"""plan_batch: plan many (start, goal) pairs on one cost, in this process or as tasks on a dask cluster."""
+
+from __future__ import annotations
+
+import contextlib
+import copy
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from terrain.checks import check_bool, check_int, check_seed
+from terrain.errors import InvalidParameterError, OutOfBoundsError, UnknownNameError
+
+from .batch_pairs import BatchPairs
+from .batch_result import BatchResult, BatchRow
+from .cache import CACHE_SIZE, ResultCache
+from .dask_client import check_client, client_worker_count, dask_client
+from .edge_cost import EnergyCost
+from .planning import PLANNERS, plan_route
+from .settings import PlannerSettings
+
+__all__ = ["plan_batch", "plan_pair"]
+
+
+def plan_pair(
+    cost: EnergyCost,
+    name: str,
+    start_xy_m: tuple[float, float],
+    goal_xy_m: tuple[float, float],
+    planner: str = "lattice",
+    settings: PlannerSettings | None = None,
+    time_limit_s: float | None = 1.0,
+    max_cost_evaluations: int | None = None,
+    seed: int | None = 0,
+) -> BatchRow:
+    """Plan one pair with its comparison (:func:`plan_route` with ``compare=True``) as a :class:`BatchRow`.
+
+    The task of :func:`plan_batch` (module-level, so dask workers import it by reference).
+    Errors propagate: the caller turns them into an ``"error"`` row.
+    """
+    route = plan_route(
+        cost.terrain, start_xy_m, goal_xy_m, cost=cost, planner=planner, time_limit_s=time_limit_s,
+        seed=seed, max_cost_evaluations=max_cost_evaluations, compare=True, settings=settings,
+    )
+    found = route.found
+    nan = math.nan
+    return BatchRow(
+        name=name, start_x_m=float(start_xy_m[0]), start_y_m=float(start_xy_m[1]),
+        goal_x_m=float(goal_xy_m[0]), goal_y_m=float(goal_xy_m[1]), status=route.status,
+        energy_j=route.energy_j if found else nan, energy_wh=route.energy_wh if found else nan,
+        length_m=route.length_m if found else nan, duration_s=route.duration_s if found else nan,
+        shortest_energy_j=route.shortest_energy_j, energy_saved_pct=route.energy_saved_pct,
+        planning_time_s=route.planning_time_s,
+    )
+
+
+def _error_row(pairs: BatchPairs, i: int, exc: BaseException) -> BatchRow:
+    s, g = pairs.starts_xy_m[i], pairs.goals_xy_m[i]
+    return BatchRow(name=pairs.names[i], start_x_m=float(s[0]), start_y_m=float(s[1]), goal_x_m=float(g[0]),
+                    goal_y_m=float(g[1]), status="error", error=f"{type(exc).__name__}: {exc}")
+
+
+def _shippable(cost: EnergyCost) -> EnergyCost:
+    """A shallow copy of ``cost`` without its caches (lattice graphs, results): what goes to the workers.
+
+    Each worker builds the lattice graph once, on its first task, and keeps it on its copy.
+    """
+    shipped = copy.copy(cost)
+    shipped.lattices = {}
+    shipped.results = ResultCache(CACHE_SIZE)
+    return shipped
+
+
+def _check_inside(cost: EnergyCost, pairs: BatchPairs) -> None:
+    """Every start and goal inside the map (a bad input for the whole batch, not one failed task)."""
+    for label, pts in (("start", pairs.starts_xy_m), ("goal", pairs.goals_xy_m)):
+        inside = np.asarray(cost.terrain.contains(pts[:, 0], pts[:, 1]), dtype=bool)
+        if not inside.all():
+            i = int(np.flatnonzero(~inside)[0])
+            raise OutOfBoundsError(
+                f"pair {pairs.names[i]!r}: {label} {tuple(pts[i].tolist())!r} m lies outside the map bounds "
+                f"{cost.terrain.bounds!r} ({int(np.count_nonzero(~inside))} {label}s outside)"
+            )
+
+
+def plan_batch(
+    cost: EnergyCost,
+    pairs: Any,
+    *,
+    names: Any = None,
+    planner: str = "lattice",
+    settings: PlannerSettings | None = None,
+    time_limit_s: float | None = 1.0,
+    max_cost_evaluations: int | None = None,
+    seed: int | None = 0,
+    client: Any = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = True,
+) -> BatchResult:
+    """Plan many (start, goal) pairs on one cost: here, on a local dask cluster, or on a given client.
+
+    Every pair is planned by :func:`plan_route` with ``compare=True`` (its saving against the
+    shortest route). On dask, each pair is one task; the cost (map and tables, without its
+    caches) is sent to every worker once (``client.scatter(..., broadcast=True)``), never
+    with a task, and each worker builds the lattice graph once. A pair whose planning raises
+    (e.g. a start on an obstacle) becomes a row of status ``"error"`` with the exception's
+    text; the other pairs are planned as usual. Rows come back in the order of the pairs,
+    whichever task finishes first, so a batch gives the same rows in process and on any
+    number of workers (the lattice planner is deterministic; OMPL planners need ``seed``
+    and ``max_cost_evaluations`` with ``time_limit_s=None`` for that).
+
+    Parameters
+    ----------
+    cost : EnergyCost
+        Edge costs of the map (the map is ``cost.terrain``).
+    pairs : BatchPairs or array-like
+        :class:`BatchPairs` (e.g. :func:`read_pairs_csv`, :meth:`BatchPairs.all_pairs`), an
+        ``(N, 4)`` array ``[start_x_m, start_y_m, goal_x_m, goal_y_m]`` or ``(N, 2, 2)``.
+    names : sequence of str, optional
+        A unique name per pair for an array ``pairs`` (default ``"0"``, ``"1"``, ...).
+    planner : str
+        One of :data:`PLANNERS`; ``"lattice"`` (default) is exact, deterministic and fast.
+    settings : PlannerSettings, optional
+        Planner tuning.
+    time_limit_s, max_cost_evaluations, seed
+        As :func:`plan_route` (ignored by the lattice planner but ``seed``, which seeds the
+        refinement).
+    client : distributed.Client, optional
+        Run the pairs as tasks on this client's cluster (not with ``workers`` / ``scheduler``).
+    workers : int, optional
+        ``None`` or 1: plan here (unless ``client`` or ``scheduler``); N > 1: on a new local
+        cluster of N worker processes, closed at the end.
+    scheduler : str, optional
+        Address of a running dask scheduler to plan on (e.g. ``"tcp://host:8786"``).
+    progress : bool
+        Show a tqdm bar over the pairs (the completed tasks on dask).
+
+    Returns
+    -------
+    BatchResult
+
+    Raises
+    ------
+    InvalidParameterError
+        Not an EnergyCost; pairs of a bad shape, NaN coordinates, bad names; a ``client``
+        that is not a ``distributed.Client``; ``client`` together with ``workers`` > 1 or
+        ``scheduler``; ``workers < 1``; an unreachable ``scheduler`` (after a timeout); bad
+        budgets, seed or settings.
+    UnknownNameError
+        An unknown planner.
+    OutOfBoundsError
+        A start or goal outside the map (the message names the pair).
+    OptionalDependencyError
+        A cluster is asked for but dask.distributed is not installed.
+
+    Examples
+    --------
+    >>> from terrain import flat_map
+    >>> cost = EnergyCost.from_presets(flat_map((20, 20), 1.0))
+    >>> res = plan_batch(cost, [[2.0, 2.0, 15.0, 12.0], [15.0, 12.0, 2.0, 2.0]], progress=False)
+    >>> [r.status for r in res.rows], round(res.rows[0].length_m, 2)
+    (['exact', 'exact'], 16.4)
+    """
+    if not isinstance(cost, EnergyCost):
+        raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
+    batch = BatchPairs.from_array(pairs, names)
+    if not isinstance(planner, str) or planner not in PLANNERS:
+        raise UnknownNameError(f"planner must be one of {list(PLANNERS)!r}, got {planner!r}")
+    if settings is not None and not isinstance(settings, PlannerSettings):
+        raise InvalidParameterError(f"settings must be a PlannerSettings, got {type(settings).__name__!r}")
+    seed = check_seed(seed)
+    progress = check_bool("progress", progress)
+    client = check_client(client, "pairs")
+    n_workers = 1 if workers is None else check_int("workers", workers, low=1)
+    if client is not None and (n_workers > 1 or scheduler is not None):
+        raise InvalidParameterError(
+            "client excludes workers and scheduler: give a distributed.Client, or workers=N for a local cluster, "
+            "or scheduler=ADDRESS"
+        )
+    _check_inside(cost, batch)
+    opts = (planner, settings, time_limit_s, max_cost_evaluations, seed)
+    with contextlib.ExitStack() as stack:
+        where = "in process"
+        if client is None and (n_workers > 1 or scheduler is not None):
+            client = stack.enter_context(dask_client(n_workers, scheduler))
+            where = "local cluster" if scheduler is None else scheduler
+        elif client is not None:
+            where = "given client"
+        t0 = time.perf_counter()
+        if client is None:
+            rows = _plan_here(cost, batch, opts, progress)
+            n_used = 1
+        else:
+            rows = _plan_on_cluster(client, cost, batch, opts, progress)
+            n_used = client_worker_count(client)
+        elapsed = time.perf_counter() - t0
+    return BatchResult(tuple(rows), planner, where, n_used, elapsed)
+
+
+def _plan_here(cost: EnergyCost, batch: BatchPairs, opts: tuple, progress: bool) -> list[BatchRow]:
+    from tqdm.auto import tqdm
+
+    rows = []
+    for i in tqdm(range(len(batch)), desc="routes", disable=not progress):
+        try:
+            rows.append(plan_pair(cost, batch.names[i], tuple(batch.starts_xy_m[i]), tuple(batch.goals_xy_m[i]), *opts))
+        except Exception as exc:  # noqa: BLE001 - a pair that raises is reported in its row, the others go on
+            rows.append(_error_row(batch, i, exc))
+    return rows
+
+
+def _plan_on_cluster(client: Any, cost: EnergyCost, batch: BatchPairs, opts: tuple, progress: bool) -> list[BatchRow]:
+    """One task per pair on ``client``, the cost scattered once to every worker; rows in pair order."""
+    from distributed import as_completed
+    from tqdm.auto import tqdm
+
+    [shared] = client.scatter([_shippable(cost)], broadcast=True, hash=False)
+    futures = [
+        client.submit(plan_pair, shared, batch.names[i], tuple(batch.starts_xy_m[i].tolist()),
+                      tuple(batch.goals_xy_m[i].tolist()), *opts, pure=False)
+        for i in range(len(batch))
+    ]
+    position = {f.key: i for i, f in enumerate(futures)}
+    rows: list[BatchRow | None] = [None] * len(futures)
+    try:
+        with tqdm(total=len(futures), desc="routes", disable=not progress) as bar:
+            for fut in as_completed(futures):
+                i = position[fut.key]
+                try:
+                    rows[i] = fut.result()
+                except Exception as exc:  # noqa: BLE001 - the task's exception, re-raised here: report it
+                    rows[i] = _error_row(batch, i, exc)
+                bar.update()
+    except BaseException:
+        client.cancel(futures)
+        raise
+    finally:
+        client.cancel([shared])
+    return rows  # type: ignore[return-value]

@@ -1,0 +1,201 @@
+"""The (start, goal) pairs of a batch: checked arrays, read from a pairs CSV or made from every ordered pair of sites."""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from terrain.checks import readonly, real_array
+from terrain.errors import DataError, FileFormatError, InvalidParameterError
+
+__all__ = ["BatchPairs", "read_pairs_csv", "read_sites_csv", "PAIR_COLUMNS", "SITE_COLUMNS"]
+
+#: Columns a pairs CSV must have (an optional ``name`` column labels each pair).
+PAIR_COLUMNS = ("start_x_m", "start_y_m", "goal_x_m", "goal_y_m")
+#: Columns a sites CSV must have (an optional ``name`` column labels each site).
+SITE_COLUMNS = ("x_m", "y_m")
+
+
+@dataclass(frozen=True, eq=False)
+class BatchPairs:
+    """The (start, goal) pairs of a batch, with a name each.
+
+    Attributes
+    ----------
+    names : tuple of str
+        A unique label per pair (``"0"``, ``"1"``, ... when none were given).
+    starts_xy_m, goals_xy_m : ndarray, shape (N, 2)
+        Start and goal of each pair (m, read-only, finite).
+
+    Raises
+    ------
+    InvalidParameterError
+        No pairs, arrays of another shape, NaN / inf coordinates, names not matching the pairs.
+    """
+
+    names: tuple[str, ...]
+    starts_xy_m: np.ndarray
+    goals_xy_m: np.ndarray
+
+    def __post_init__(self) -> None:
+        starts = _points("starts_xy_m", self.starts_xy_m)
+        goals = _points("goals_xy_m", self.goals_xy_m)
+        if starts.shape != goals.shape:
+            raise InvalidParameterError(f"starts_xy_m has {starts.shape[0]} points but goals_xy_m {goals.shape[0]}")
+        if starts.shape[0] == 0:
+            raise InvalidParameterError("a batch needs at least one (start, goal) pair, got none")
+        names = tuple(self.names)
+        if len(names) != starts.shape[0] or not all(isinstance(n, str) and n for n in names):
+            raise InvalidParameterError(f"names must be {starts.shape[0]} non-empty strings, one per pair, got {names!r:.120}")
+        if len(set(names)) != len(names):
+            dup = next(n for n in names if names.count(n) > 1)
+            raise InvalidParameterError(f"pair names must be unique; {dup!r} appears {names.count(dup)} times")
+        object.__setattr__(self, "names", names)
+        object.__setattr__(self, "starts_xy_m", readonly(starts))
+        object.__setattr__(self, "goals_xy_m", readonly(goals))
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    @classmethod
+    def from_array(cls, pairs: Any, names: Sequence[str] | None = None) -> BatchPairs:
+        """Pairs from an ``(N, 4)`` array ``[start_x, start_y, goal_x, goal_y]`` or an ``(N, 2, 2)``
+        array / sequence of ``((start_x, start_y), (goal_x, goal_y))``; a ``BatchPairs`` is returned as is.
+
+        Examples
+        --------
+        >>> p = BatchPairs.from_array([((1.0, 1.0), (5.0, 5.0)), ((5.0, 5.0), (1.0, 1.0))])
+        >>> len(p), p.names
+        (2, ('0', '1'))
+        """
+        if isinstance(pairs, BatchPairs):
+            if names is not None:
+                raise InvalidParameterError("names must be None when pairs is already a BatchPairs (it has its names)")
+            return pairs
+        arr = real_array("pairs", pairs, finite=False)
+        if arr.ndim == 3 and arr.shape[1:] == (2, 2):
+            arr = arr.reshape(-1, 4)
+        if arr.ndim != 2 or arr.shape[1] != 4:
+            raise InvalidParameterError(
+                f"pairs must have shape (N, 4) [start_x_m, start_y_m, goal_x_m, goal_y_m] or (N, 2, 2), got {arr.shape!r}"
+            )
+        bad = np.flatnonzero(~np.all(np.isfinite(arr), axis=1))
+        if bad.size:
+            raise InvalidParameterError(
+                f"pairs row {int(bad[0])} has NaN/inf coordinates {arr[bad[0]].tolist()!r} ({bad.size} such rows); "
+                "expected finite metres"
+            )
+        labels = tuple(str(i) for i in range(arr.shape[0])) if names is None else tuple(names)
+        return cls(labels, arr[:, :2], arr[:, 2:])
+
+    @classmethod
+    def all_pairs(cls, sites_xy_m: Any, names: Sequence[str] | None = None) -> BatchPairs:
+        """Every ordered pair of distinct sites (``N (N - 1)`` pairs: energy depends on direction).
+
+        Pairs are named ``"A->B"`` from the site names (``"0"``, ``"1"``, ... when none).
+
+        Examples
+        --------
+        >>> BatchPairs.all_pairs([(0.0, 0.0), (3.0, 0.0), (0.0, 4.0)], ["a", "b", "c"]).names
+        ('a->b', 'a->c', 'b->a', 'b->c', 'c->a', 'c->b')
+        """
+        xy = _points("sites_xy_m", sites_xy_m)
+        labels = tuple(str(i) for i in range(xy.shape[0])) if names is None else tuple(names)
+        if len(labels) != xy.shape[0]:
+            raise InvalidParameterError(f"names must give one name per site ({xy.shape[0]}), got {len(labels)}")
+        if len(set(labels)) != len(labels):
+            dup = next(n for n in labels if labels.count(n) > 1)
+            raise InvalidParameterError(f"site names must be unique; {dup!r} appears {labels.count(dup)} times")
+        if xy.shape[0] < 2:
+            raise InvalidParameterError(f"all pairs of sites needs at least 2 sites, got {xy.shape[0]}")
+        i, j = np.nonzero(~np.eye(xy.shape[0], dtype=bool))
+        return cls(tuple(f"{labels[a]}->{labels[b]}" for a, b in zip(i, j)), xy[i], xy[j])
+
+
+def _points(name: str, value: Any) -> np.ndarray:
+    arr = real_array(name, value, finite=True)
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise InvalidParameterError(f"{name} must have shape (N, 2) (x_m, y_m), got shape {arr.shape!r}")
+    return arr
+
+
+def _read_table(path: str | os.PathLike[str], required: Sequence[str], what: str) -> tuple[list[str] | None, np.ndarray]:
+    """The optional ``name`` column and the ``required`` numeric columns of a CSV file."""
+    p = Path(path)
+    with open(p, newline="", encoding="utf-8-sig") as fh:
+        reader = csv.DictReader(fh)
+        header = [h.strip() for h in (reader.fieldnames or [])]
+        missing = [c for c in required if c not in header]
+        if missing:
+            raise FileFormatError(
+                f"{what} file {p.name!r} lacks the column(s) {missing!r}; it has {header!r}; expected a header with "
+                f"{list(required)!r} (and optionally 'name')"
+            )
+        reader.fieldnames = header
+        rows = list(reader)
+    if not rows:
+        raise DataError(f"{what} file {p.name!r} has a header but no rows")
+    values = np.empty((len(rows), len(required)))
+    for i, row in enumerate(rows):
+        for k, col in enumerate(required):
+            text = (row.get(col) or "").strip()
+            try:
+                v = float(text)
+            except ValueError:
+                v = math.nan
+            if not math.isfinite(v):
+                raise DataError(
+                    f"{what} file {p.name!r}, line {i + 2}: column {col!r} is {text!r}; expected a finite number of metres"
+                )
+            values[i, k] = v
+    names = None
+    if "name" in header:
+        names = [(row.get("name") or "").strip() for row in rows]
+        blank = [i + 2 for i, n in enumerate(names) if not n]
+        if blank:
+            raise DataError(f"{what} file {p.name!r}, line {blank[0]}: the name is empty; give every row a name")
+        seen: set[str] = set()
+        for i, n in enumerate(names):
+            if n in seen:
+                raise DataError(f"{what} file {p.name!r}, line {i + 2}: the name {n!r} is used twice; names must be unique")
+            seen.add(n)
+    return names, values
+
+
+def read_pairs_csv(path: str | os.PathLike[str]) -> BatchPairs:
+    """Pairs from a CSV file with columns ``start_x_m, start_y_m, goal_x_m, goal_y_m`` (and optionally ``name``).
+
+    Raises
+    ------
+    FileNotFoundError
+        No such file.
+    FileFormatError
+        A required column is missing (the message lists the file's columns).
+    DataError
+        No rows; an empty, non-numeric or NaN coordinate (the message gives the line and
+        column); an empty or repeated name.
+    """
+    names, values = _read_table(path, PAIR_COLUMNS, "pairs")
+    return BatchPairs.from_array(values, names)
+
+
+def read_sites_csv(path: str | os.PathLike[str]) -> tuple[tuple[str, ...], np.ndarray]:
+    """Sites from a CSV file with columns ``x_m, y_m`` (and optionally ``name``): names and an ``(N, 2)`` array.
+
+    Combine them with :meth:`BatchPairs.all_pairs`.
+
+    Raises
+    ------
+    FileNotFoundError, FileFormatError, DataError
+        As :func:`read_pairs_csv`.
+    """
+    names, values = _read_table(path, SITE_COLUMNS, "sites")
+    labels = tuple(names) if names is not None else tuple(str(i) for i in range(values.shape[0]))
+    return labels, readonly(values)

@@ -1,0 +1,205 @@
+"""BatchResult: one row per (start, goal) pair of a batch (energy, length, time, status, saving, error), as CSV and JSON."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+from dataclasses import asdict, dataclass, fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from terrain.atomic import write_json_atomic, write_text_atomic
+from terrain.errors import InvalidParameterError
+
+from .route import ROUTE_STATUSES
+
+__all__ = ["BatchRow", "BatchResult", "BATCH_STATUSES", "BATCH_FORMAT_VERSION"]
+
+#: Status of a row: a route status, or ``"error"`` when planning the pair raised.
+BATCH_STATUSES = (*ROUTE_STATUSES, "error")
+#: Version of the JSON layout written by :meth:`BatchResult.write_json`.
+BATCH_FORMAT_VERSION = 1
+
+
+@dataclass(frozen=True)
+class BatchRow:
+    """The outcome of one pair.
+
+    Attributes
+    ----------
+    name : str
+        The pair's name.
+    start_x_m, start_y_m, goal_x_m, goal_y_m : float
+        The query (m).
+    status : str
+        One of :data:`BATCH_STATUSES`.
+    energy_j, energy_wh, length_m, duration_s : float
+        The route's energy (segments and turns), length and driving time; NaN when no route.
+    shortest_energy_j : float
+        Energy of the shortest-distance route between the same points (NaN when none).
+    energy_saved_pct : float
+        Saving of the minimum-energy route against the shortest one (%); NaN unless both exist.
+    planning_time_s : float
+        Planning time of the route (s, on the worker that planned it).
+    error : str
+        ``"ExceptionType: message"`` for status ``"error"``, else empty.
+    """
+
+    name: str
+    start_x_m: float
+    start_y_m: float
+    goal_x_m: float
+    goal_y_m: float
+    status: str
+    energy_j: float = math.nan
+    energy_wh: float = math.nan
+    length_m: float = math.nan
+    duration_s: float = math.nan
+    shortest_energy_j: float = math.nan
+    energy_saved_pct: float = math.nan
+    planning_time_s: float = math.nan
+    error: str = ""
+
+    def __post_init__(self) -> None:
+        if self.status not in BATCH_STATUSES:
+            raise InvalidParameterError(f"status must be one of {list(BATCH_STATUSES)!r}, got {self.status!r}")
+        if (self.status == "error") != bool(self.error):
+            raise InvalidParameterError(f"a row has error text exactly when its status is 'error'; got {self.status!r}")
+
+    @property
+    def found(self) -> bool:
+        """The pair has a route (``exact`` or ``approximate``)."""
+        return self.status in ("exact", "approximate")
+
+
+#: CSV / JSON columns of a row, in order.
+_COLUMNS = tuple(f.name for f in fields(BatchRow))
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """The rows of a batch, in the order of its pairs, and how it ran.
+
+    Attributes
+    ----------
+    rows : tuple of BatchRow
+    planner : str
+        Planner name (see :data:`planner.PLANNERS`).
+    where : str
+        ``"in process"``, ``"local cluster"`` or the scheduler address.
+    n_workers : int
+        Dask workers that planned (1 in process).
+    elapsed_s : float
+        Wall time of the planning (shipping the cost to the workers included, starting a
+        local cluster not).
+
+    Examples
+    --------
+    >>> r = BatchResult((BatchRow("a", 0.0, 0.0, 1.0, 1.0, "exact", energy_j=7.2e3),), "lattice", "in process", 1, 0.5)
+    >>> r.n_found, r.routes_per_s
+    (1, 2.0)
+    """
+
+    rows: tuple[BatchRow, ...]
+    planner: str
+    where: str
+    n_workers: int
+    elapsed_s: float
+
+    def __post_init__(self) -> None:
+        rows = tuple(self.rows)
+        if not all(isinstance(r, BatchRow) for r in rows):
+            raise InvalidParameterError("rows must be BatchRow objects")
+        object.__setattr__(self, "rows", rows)
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def count(self, status: str) -> int:
+        """Rows of a status."""
+        return sum(r.status == status for r in self.rows)
+
+    @property
+    def n_found(self) -> int:
+        """Pairs with a route."""
+        return sum(r.found for r in self.rows)
+
+    @property
+    def n_errors(self) -> int:
+        """Pairs whose planning raised."""
+        return self.count("error")
+
+    @property
+    def routes_per_s(self) -> float:
+        """Pairs planned per second of wall time (all rows, errors included)."""
+        return len(self.rows) / self.elapsed_s if self.elapsed_s > 0 else math.nan
+
+    def column(self, name: str) -> np.ndarray:
+        """One column over the rows as an array (numbers as float64, text as str).
+
+        Raises
+        ------
+        InvalidParameterError
+            Not a column name.
+        """
+        if name not in _COLUMNS:
+            raise InvalidParameterError(f"column must be one of {list(_COLUMNS)!r}, got {name!r}")
+        return np.array([getattr(r, name) for r in self.rows])
+
+    def median_saving_pct(self) -> float:
+        """Median energy saving vs the shortest route over the pairs that have both (NaN if none)."""
+        s = self.column("energy_saved_pct").astype(float)
+        s = s[np.isfinite(s)]
+        return float(np.median(s)) if s.size else math.nan
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-friendly dict (NaN stays NaN here; :meth:`write_json` writes it as null)."""
+        return {
+            "format_version": BATCH_FORMAT_VERSION,
+            "planner": self.planner,
+            "where": self.where,
+            "n_workers": self.n_workers,
+            "elapsed_s": self.elapsed_s,
+            "routes_per_s": self.routes_per_s,
+            "n_pairs": len(self.rows),
+            "counts": {s: self.count(s) for s in BATCH_STATUSES},
+            "median_energy_saved_pct": self.median_saving_pct(),
+            "rows": [asdict(r) for r in self.rows],
+        }
+
+    def write_json(self, path: str | os.PathLike[str]) -> Path:
+        """Write :meth:`to_dict` as JSON (atomically); return the path."""
+        return write_json_atomic(path, self.to_dict())
+
+    def to_csv(self, path: str | os.PathLike[str]) -> Path:
+        """Write one line per row (header: the :class:`BatchRow` fields; NaN as an empty cell), atomically."""
+        buf = io.StringIO()
+        writer = csv.writer(buf, lineterminator="\n")
+        writer.writerow(_COLUMNS)
+        for r in self.rows:
+            writer.writerow(["" if isinstance(v, float) and not math.isfinite(v) else v for v in
+                             (getattr(r, c) for c in _COLUMNS)])
+        return write_text_atomic(path, buf.getvalue())
+
+    def summary(self) -> str:
+        """A few lines for people: counts by status, throughput, median saving, the errors."""
+        counts = ", ".join(f"{self.count(s)} {s}" for s in BATCH_STATUSES if self.count(s))
+        lines = [
+            f"{len(self.rows)} pairs ({counts}) planned with {self.planner} in {self.elapsed_s:.2f} s "
+            f"on {self.n_workers} worker(s) ({self.where}): {self.routes_per_s:.1f} routes/s",
+        ]
+        saving = self.median_saving_pct()
+        if math.isfinite(saving):
+            lines.append(f"median energy saved vs the shortest route: {saving:.1f} %")
+        found = [r for r in self.rows if r.found]
+        if found:
+            e = np.array([r.energy_wh for r in found])
+            lines.append(f"route energy: min {e.min():.2f} Wh, median {np.median(e):.2f} Wh, max {e.max():.2f} Wh")
+        for r in self.rows:
+            if r.status == "error":
+                lines.append(f"error in pair {r.name!r}: {r.error}")
+        return "\n".join(lines)

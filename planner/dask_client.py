@@ -1,0 +1,133 @@
+"""The dask seam: open a ``distributed.Client`` (local cluster or scheduler address) and check a given one.
+
+Every part of terrawatt that runs tasks on dask (``terrawatt evaluate``, :func:`planner.plan_batch`,
+:func:`planner.simulate_missions_mc`) opens and checks its client here, so the optional
+extra, the timeout of an unreachable scheduler and the messages are the same everywhere.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+from collections.abc import Iterator
+from typing import Any
+
+from terrain.checks import check_bool, check_int, check_real, check_text
+from terrain.errors import InvalidParameterError, OptionalDependencyError
+
+__all__ = ["dask_client", "check_client", "client_worker_count", "DEFAULT_CONNECT_TIMEOUT_S"]
+
+#: Seconds to wait for a dask scheduler to answer before giving up.
+DEFAULT_CONNECT_TIMEOUT_S = 10.0
+
+_INSTALL = "install it with: pip install 'terrawatt[distributed]'"
+
+
+@contextlib.contextmanager
+def dask_client(
+    workers: int = 1,
+    scheduler: str | None = None,
+    *,
+    quiet: bool = True,
+    timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S,
+    flags: tuple[str, str] = ("workers", "scheduler"),
+) -> Iterator[Any]:
+    """A ``distributed.Client`` on ``scheduler``, or on a new local cluster of ``workers`` processes.
+
+    Leaving the context closes the client and the local cluster it started. ``quiet``
+    keeps dask's INFO messages (cluster start and stop) out of the log meanwhile.
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes of the local cluster (>= 1, one thread each); not with ``scheduler``
+        unless 1.
+    scheduler : str, optional
+        Address of a running scheduler, e.g. ``"tcp://host:8786"``.
+    quiet : bool
+        Silence dask's INFO log while the client is open.
+    timeout_s : float
+        Seconds to wait for ``scheduler`` to answer (> 0).
+    flags : (str, str)
+        How messages name the two options (the CLI passes ``("--workers", "--scheduler")``).
+
+    Raises
+    ------
+    OptionalDependencyError
+        dask.distributed is not installed.
+    InvalidParameterError
+        ``workers < 1``; both ``workers > 1`` and ``scheduler``; no dask scheduler answers at
+        ``scheduler`` within ``timeout_s``.
+
+    Examples
+    --------
+    Usage (starts worker processes, so not run as a doctest)::
+
+        with dask_client(workers=2) as client:
+            result = plan_batch(cost, pairs, client=client)
+    """
+    w_flag, s_flag = flags
+    workers = check_int(w_flag, workers, low=1)
+    quiet = check_bool("quiet", quiet)
+    timeout_s = check_real("timeout_s", timeout_s, low=0.0, low_inclusive=False)
+    if scheduler is not None:
+        check_text(s_flag, scheduler)
+        if workers > 1:
+            raise InvalidParameterError(
+                f"{w_flag} {workers!r} and {s_flag} {scheduler!r} exclude each other: "
+                f"give {w_flag} N for a local cluster or {s_flag} ADDRESS for an existing one"
+            )
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError as exc:
+        option = f"{s_flag} {scheduler}" if scheduler is not None else f"{w_flag} {workers}"
+        raise OptionalDependencyError(f"{option} needs dask.distributed; {_INSTALL}") from exc
+    dask_log = logging.getLogger("distributed")  # configured by the import above
+    old_level = dask_log.level
+    if quiet:
+        dask_log.setLevel(max(dask_log.getEffectiveLevel(), logging.WARNING))
+    try:
+        if scheduler is not None:
+            try:
+                client = Client(scheduler, timeout=timeout_s)
+            except (OSError, ValueError, TypeError) as exc:  # unreachable (TimeoutError is an OSError) or malformed
+                raise InvalidParameterError(
+                    f"{s_flag} {scheduler!r}: cannot connect to a dask scheduler there "
+                    f"({exc}); expected the address of a running scheduler, e.g. tcp://host:8786"
+                ) from exc
+            with client:
+                yield client
+        else:
+            with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                              dashboard_address=None) as cluster, Client(cluster) as client:
+                yield client
+    finally:
+        dask_log.setLevel(old_level)
+
+
+def check_client(client: Any, what: str = "tasks") -> Any:
+    """``client`` if it is ``None`` or a ``distributed.Client``; else a clear error.
+
+    Raises
+    ------
+    InvalidParameterError
+        Anything else (e.g. a scheduler address string or a cluster object).
+    OptionalDependencyError
+        A client is given but dask.distributed is not installed.
+    """
+    if client is None:
+        return None
+    try:
+        from distributed import Client
+    except ImportError as exc:
+        raise OptionalDependencyError(f"running {what} on a cluster needs dask.distributed; {_INSTALL}") from exc
+    if not isinstance(client, Client):
+        raise InvalidParameterError(
+            f"client must be None (run the {what} here, one after another) or a distributed.Client, got {client!r:.80}"
+        )
+    return client
+
+
+def client_worker_count(client: Any) -> int:
+    """Number of workers connected to ``client``'s scheduler now (at least 1 is assumed for None)."""
+    return 1 if client is None else max(1, len(client.scheduler_info().get("workers", {})))
