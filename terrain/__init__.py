@@ -25,6 +25,7 @@ from .errors import (
     UnitError,
     UnknownNameError,
 )
+from .georef import WGS84, transform_xy, utm_crs
 from .geotiff import read_geotiff, write_geotiff
 from .grid import Grid
 from .io import read_map
@@ -48,6 +49,7 @@ from .registry import (
     UpdateDecision,
     UpdatePolicy,
 )
+from .surface import surface_layers
 from .terrain_map import MAP_FORMAT_VERSION, UNKNOWN_GROUND, TerrainMap
 from .vector import (
     apply_geojson,
@@ -56,6 +58,7 @@ from .vector import (
     set_ground_from_polygons,
     set_obstacles_from_polygons,
 )
+from .windows import SurfaceWindow, iter_surface_windows, windowed_surface
 
 __all__ = [
     # the map
@@ -74,6 +77,13 @@ __all__ = [
     "read_map",
     "read_geotiff",
     "write_geotiff",
+    "transform_xy",
+    "utm_crs",
+    "WGS84",
+    "surface_layers",
+    "iter_surface_windows",
+    "windowed_surface",
+    "SurfaceWindow",
     "rasterize_polygons",
     "set_ground_from_polygons",
     "set_obstacles_from_polygons",

@@ -6,66 +6,58 @@ import logging
 import os
 import warnings
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 import numpy as np
 from scipy import ndimage
 
 from .atomic import atomic_path
-from .checks import fmt_number
 from .errors import (
     DataRepairWarning,
     FileFormatError,
     ImplausibleDataWarning,
     InvalidParameterError,
     NodataError,
-    OptionalDependencyError,
-    UnitError,
     UnknownNameError,
 )
+from .georef import dem_band, import_rasterio
+from .reproject import warp_band
 from .terrain_map import UNKNOWN_GROUND, TerrainMap
 
 __all__ = ["read_geotiff", "write_geotiff", "check_fill_method"]
 
 logger = logging.getLogger(__name__)
 
-_METRE_UNITS = ("", "m", "metre", "metres", "meter", "meters")
 _FILL_METHODS = ("nearest",)
-#: Cell sizes (m) plausible for a DEM without a CRS: outside, the unit is likely degrees.
-_CELL_RANGE_M = (0.01, 10_000.0)
 #: Slope (rad) of the cells that, when they are the majority, make a DEM implausible.
 _STEEP_RAD = float(np.radians(60.0))
 
 
-def _rasterio() -> ModuleType:
-    """Import rasterio lazily, pointing at the ``geo`` extra when it is missing."""
-    try:
-        import rasterio
-    except ImportError as exc:
-        raise OptionalDependencyError(
-            "GeoTIFF support needs rasterio; install it with: pip install 'terrawatt[geo]'"
-        ) from exc
-    return rasterio
-
-
 def read_geotiff(
-    path: str | os.PathLike[str], band: int | None = None, *, fill_nodata: str | None = None
+    path: str | os.PathLike[str],
+    band: int | None = None,
+    *,
+    fill_nodata: str | None = None,
+    reproject_to: str | None = None,
+    cell_size_m: float | None = None,
+    resampling: str = "bilinear",
 ) -> TerrainMap:
     """Read one band of a GeoTIFF as the elevation of a new :class:`TerrainMap`.
 
     The raster must have square pixels, no rotation, and horizontal and vertical units
-    of metres (a projected CRS, or none). North-up rasters (the usual case, row 0 at the
-    top) are flipped into TerrainMap's convention (row grows with y); the CRS is kept as
-    a string. Scale and offset tags are applied.
+    of metres (a projected CRS, or none) — or be reprojected on reading with
+    ``reproject_to``. North-up rasters (the usual case, row 0 at the top) are flipped into
+    TerrainMap's convention (row grows with y); the CRS is kept as a string (``tmap.crs``).
+    Scale and offset tags are applied.
 
     A DEM is one band: a file of several bands (an RGB orthophoto, a stack) is read only
     when ``band`` names the elevation band. Georeferencing that cannot be metres is refused
-    (a geographic CRS; without a CRS, cells under 1 cm or over 10 km, which are what a DEM
-    in degrees looks like). A DEM whose cells are mostly steeper than 60 degrees is read
-    but warned about with :class:`ImplausibleDataWarning`: such terrain exists (a crop of
-    a cliff or a quarry wall), so refusing it would refuse real data, whereas a wrong band
-    or unit is never right; the planner's slope limit blocks such cells anyway.
+    (a geographic CRS, unless reprojected; without a CRS, cells under 1 cm or over 10 km,
+    which are what a DEM in degrees looks like). A DEM whose cells are mostly steeper than
+    60 degrees is read but warned about with :class:`ImplausibleDataWarning`: such terrain
+    exists (a crop of a cliff or a quarry wall), so refusing it would refuse real data,
+    whereas a wrong band or unit is never right; the planner's slope limit blocks such
+    cells anyway.
 
     Parameters
     ----------
@@ -77,11 +69,23 @@ def read_geotiff(
         What to do with nodata / NaN cells. ``None`` (default) raises; ``"nearest"``
         gives each such cell the value of the nearest valid cell and warns with
         :class:`DataRepairWarning`.
+    reproject_to : {None, "utm"} or str
+        Reproject the DEM (:func:`rasterio.warp.reproject`) to the WGS 84 UTM zone of its
+        centre (``"utm"``) or to a named projected CRS in metres (``"EPSG:32633"``); the
+        usual way to read a DEM in geographic coordinates (EPSG:4326). The map's ``crs`` is
+        the target CRS. Cells outside the source's footprint (the corners a warped
+        rectangle leaves empty) become obstacles, their elevation taken from the nearest
+        covered cell; nodata inside the footprint follows ``fill_nodata``.
+    cell_size_m : float, optional
+        Cell side of the reprojected map (m); required with ``reproject_to``.
+    resampling : str
+        Resampling of the reprojection: ``"bilinear"`` (default), ``"cubic"``,
+        ``"nearest"`` or ``"average"``.
 
     Returns
     -------
     TerrainMap
-        Elevation only; ground unknown, no obstacles.
+        Elevation only; ground unknown, no obstacles (but for a reprojection's empty corners).
 
     Raises
     ------
@@ -89,100 +93,86 @@ def read_geotiff(
         rasterio is not installed.
     FileFormatError
         Missing or unreadable file; several bands and no ``band``; a rotated or
-        non-square-pixel grid; a geographic CRS or units other than metres.
+        non-square-pixel grid; a geographic CRS or units other than metres without
+        ``reproject_to`` (the message names it).
     UnitError
         No CRS and a cell size implausible for metres (below 1 cm or above 10 km).
     InvalidParameterError
-        A band out of range; nodata cells when ``fill_nodata`` is None; no valid cell.
+        A band out of range; nodata cells when ``fill_nodata`` is None; no valid cell;
+        ``reproject_to`` without ``cell_size_m`` (or the reverse), a target CRS that is
+        not projected in metres, a source without CRS.
     UnknownNameError
-        An unknown ``fill_nodata`` method.
+        An unknown ``fill_nodata`` or ``resampling`` method.
 
     Warns
     -----
     ImplausibleDataWarning
         More than half of the cells are steeper than 60 degrees.
     """
-    rasterio = _rasterio()
+    rasterio = import_rasterio()
     check_fill_method(fill_nodata)
+    if (reproject_to is None) != (cell_size_m is None):
+        raise InvalidParameterError(
+            "reproject_to and cell_size_m go together: give both (e.g. reproject_to='utm', cell_size_m=5.0) "
+            f"or neither, got reproject_to={reproject_to!r}, cell_size_m={cell_size_m!r}"
+        )
     path = Path(path)
     if not path.is_file():
         raise FileFormatError(f"GeoTIFF file {str(path)!r} does not exist")
+    where = f"GeoTIFF {str(path)!r}"
+    footprint = None
     try:
         with rasterio.open(path) as src:
-            if band is None:
-                if src.count != 1:
-                    raise FileFormatError(
-                        f"GeoTIFF {str(path)!r} has {src.count} bands; a DEM has one. Name the elevation "
-                        f"band with band=N (1..{src.count}), e.g. read_geotiff(path, band=1)"
-                    )
-                band = 1
-            is_int = isinstance(band, (int, np.integer)) and not isinstance(band, bool)
-            if not is_int or not 1 <= band <= src.count:
-                raise InvalidParameterError(f"band must be an integer in 1..{src.count}, got {band!r}")
-            transform, crs, shape = src.transform, src.crs, (src.height, src.width)
-            units = (src.units[band - 1] or "").strip().lower()
-            scale, offset = src.scales[band - 1], src.offsets[band - 1]
-            data = src.read(band, masked=True)
+            info = dem_band(src, band, where, allow_geographic=reproject_to is not None)
+            if reproject_to is None:
+                data = src.read(info.band, masked=True)
+                values = np.ma.getdata(data).astype(np.float64) * info.scale + info.offset
+                invalid = np.ma.getmaskarray(data) | ~np.isfinite(values)
+                cell, origin, crs = info.cell_size_m, info.origin_xy_m, info.crs
+                flip_rows, flip_cols = info.flip_rows, info.flip_cols
+            else:
+                warped = warp_band(src, info, reproject_to, cell_size_m, resampling)
+                values, footprint = warped.values, warped.footprint
+                invalid = ~np.isfinite(values)
+                t = warped.transform
+                cell, crs = abs(t.a), warped.crs
+                origin = (t.c, t.f + t.e * values.shape[0])
+                flip_rows, flip_cols = True, False
     except rasterio.errors.RasterioError as exc:
         raise FileFormatError(f"cannot read {str(path)!r} as a raster: {exc}") from exc
 
-    where = f"GeoTIFF {str(path)!r}"
-    if transform.b != 0 or transform.d != 0:
-        raise FileFormatError(
-            f"{where} has a rotated or sheared transform {tuple(transform)[:6]!r}; "
-            "warp it to a north-up grid first (e.g. gdalwarp)"
-        )
-    width_m, height_m = abs(transform.a), abs(transform.e)
-    if not np.isclose(width_m, height_m, rtol=1e-6):
-        raise FileFormatError(
-            f"{where} has non-square pixels of {width_m!r} x {height_m!r} (CRS units); "
-            "resample it to square pixels first (e.g. gdalwarp -tr)"
-        )
-    if crs is not None and (crs.is_geographic or crs.linear_units_factor[1] != 1.0):
-        raise FileFormatError(
-            f"{where} uses CRS {crs.to_string()!r} whose units are not metres; reproject it to a "
-            "projected CRS in metres (e.g. UTM) first"
-        )
-    if units not in _METRE_UNITS:
-        raise FileFormatError(f"{where} band {band} has vertical units {units!r}; expected metres")
-    if crs is None and not _CELL_RANGE_M[0] <= width_m <= _CELL_RANGE_M[1]:
-        raise UnitError(
-            f"{where} has no CRS and cells of {fmt_number(width_m)}; that is implausible as metres "
-            f"(expected {fmt_number(_CELL_RANGE_M[0])} to {fmt_number(_CELL_RANGE_M[1])} m) and looks like "
-            "degrees: reproject it to a projected CRS in metres (e.g. UTM) first"
-        )
-
-    values = np.ma.getdata(data).astype(np.float64) * scale + offset
-    invalid = np.ma.getmaskarray(data) | ~np.isfinite(values)
-    n_bad = int(np.count_nonzero(invalid))
-    if n_bad == invalid.size:
-        raise InvalidParameterError(f"{where} band {band} holds no valid cell (all {n_bad} are nodata)")
+    outside = None if footprint is None else ~footprint
+    missing = invalid if outside is None else invalid & ~outside
+    n_bad = int(np.count_nonzero(missing))
+    if np.all(invalid):
+        raise InvalidParameterError(f"{where} band {info.band} holds no valid cell (all {invalid.size} are nodata)")
     if n_bad and fill_nodata is None:
         raise NodataError(
-            f"{where} band {band} has {n_bad} nodata/NaN cells of {invalid.size}; pass "
+            f"{where} band {info.band} has {n_bad} nodata/NaN cells of {invalid.size}; pass "
             "fill_nodata='nearest' to fill them from the nearest valid cell",
             n_nodata=n_bad,
             n_cells=int(invalid.size),
         )
-    if n_bad:
+    if np.any(invalid):
         nearest = ndimage.distance_transform_edt(invalid, return_distances=False, return_indices=True)
         values = values[tuple(nearest)]
+    if n_bad:
         message = f"filled {n_bad} nodata cells of {where} from their nearest valid cells"
         logger.info(message)
         warnings.warn(message, DataRepairWarning, stacklevel=2)
+    if outside is not None and outside.any():
+        logger.info("%s: %d cells outside the reprojected footprint are obstacles", where, int(outside.sum()))
 
-    if transform.e < 0:  # north-up: file row 0 is the northern edge
+    if flip_rows:  # north-up: file row 0 is the northern edge
         values = values[::-1]
-    if transform.a < 0:  # east-left: file column 0 is the eastern edge
+        outside = None if outside is None else outside[::-1]
+    if flip_cols:  # east-left: file column 0 is the eastern edge
         values = values[:, ::-1]
-    rows, cols = shape
-    xmin = min(transform.c, transform.c + transform.a * cols)
-    ymin = min(transform.f, transform.f + transform.e * rows)
-    tmap = TerrainMap(values, width_m, (xmin, ymin), crs=None if crs is None else crs.to_string())
+    tmap = TerrainMap(values, cell, origin, crs=crs, obstacle=outside)
     steep = float(np.mean(tmap.slope_rad > _STEEP_RAD))
     if steep > 0.5:
         warnings.warn(
-            f"{where} band {band}: {100 * steep:.0f} % of the cells are steeper than 60 degrees; is it really "
+            f"{where} band {info.band}: {100 * steep:.0f} % of the cells are steeper than 60 degrees; is it really "
             "a DEM in metres (not an image band, not elevations in another unit)?",
             ImplausibleDataWarning,
             stacklevel=2,
@@ -235,7 +225,7 @@ def write_geotiff(
     UnknownNameError
         An unknown layer.
     """
-    rasterio = _rasterio()
+    rasterio = import_rasterio()
     path = Path(path)
     if path.suffix.lower() not in (".tif", ".tiff"):
         raise InvalidParameterError(f"GeoTIFF files end in '.tif' or '.tiff', got {str(path)!r}")

@@ -16,7 +16,12 @@ MAP_SUFFIXES = (".npz", ".tif", ".tiff")
 
 
 def read_map(
-    path: str | os.PathLike[str], *, fill_nodata: str | None = None, band: int | None = None
+    path: str | os.PathLike[str],
+    *,
+    fill_nodata: str | None = None,
+    band: int | None = None,
+    reproject_to: str | None = None,
+    cell_size_m: float | None = None,
 ) -> TerrainMap:
     """Read a map file, choosing the reader by the file's suffix.
 
@@ -33,6 +38,10 @@ def read_map(
         valid cell. A ``.npz`` map never holds nodata, so it has nothing to fill.
     band : int, optional
         GeoTIFF: the 1-based elevation band, required when the file has several bands.
+    reproject_to, cell_size_m : optional
+        GeoTIFF: reproject the DEM to ``"utm"`` (the UTM zone of its centre) or a named
+        projected CRS, at ``cell_size_m`` (see :func:`~terrain.geotiff.read_geotiff`); the
+        way to read a DEM in geographic coordinates.
 
     Returns
     -------
@@ -44,7 +53,7 @@ def read_map(
         A suffix other than those in :data:`MAP_SUFFIXES` (the message lists them), and
         whatever the chosen reader raises for a missing, corrupt or unsuitable file.
     InvalidParameterError
-        ``band`` given for a ``.npz`` map (it has no bands).
+        ``band`` or ``reproject_to`` given for a ``.npz`` map (it has no bands and is in metres).
     UnknownNameError
         An unknown ``fill_nodata`` method.
     OptionalDependencyError
@@ -68,10 +77,14 @@ def read_map(
     p = Path(path)
     suffix = p.suffix.lower()
     if suffix in (".tif", ".tiff"):
-        return read_geotiff(p, band, fill_nodata=fill_nodata)
+        return read_geotiff(p, band, fill_nodata=fill_nodata, reproject_to=reproject_to, cell_size_m=cell_size_m)
     if suffix == ".npz":
         if band is not None:
             raise InvalidParameterError(f"band applies to GeoTIFF DEMs; {str(p)!r} is a .npz map, got band={band!r}")
+        if reproject_to is not None or cell_size_m is not None:
+            raise InvalidParameterError(
+                f"reproject_to and cell_size_m apply to GeoTIFF DEMs; {str(p)!r} is a .npz map (already in metres)"
+            )
         return TerrainMap.load(p)
     raise FileFormatError(
         f"cannot read a map from {str(p)!r}: its suffix {p.suffix!r} is not one of "

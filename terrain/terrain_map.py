@@ -20,6 +20,7 @@ from .errors import (
 )
 from .formats import read_versioned_npz
 from .grid import Grid
+from .surface import SURFACE_LAYERS, surface_layers
 
 __all__ = ["TerrainMap", "MAP_FORMAT_VERSION", "UNKNOWN_GROUND"]
 
@@ -28,7 +29,7 @@ MAP_FORMAT_VERSION = 1
 #: Ground-class value of cells whose ground is not known.
 UNKNOWN_GROUND = -1
 
-_DERIVED = ("slope", "aspect", "grad_x", "grad_y")
+_DERIVED = SURFACE_LAYERS
 _MAP_MAGIC = "terrawatt-map"
 
 
@@ -337,12 +338,7 @@ class TerrainMap:
             )
 
     def _derive(self) -> None:
-        z = self._layers["elevation"]
-        d = self.cell_size_m
-        gy, gx = np.gradient(z, d, d)
-        slope = np.arctan(np.hypot(gx, gy))
-        aspect = np.arctan2(-gy, -gx)
-        for name, arr in (("slope", slope), ("aspect", aspect), ("grad_x", gx), ("grad_y", gy)):
+        for name, arr in surface_layers(self._layers["elevation"], self.cell_size_m).items():
             arr.setflags(write=False)
             self._derived[name] = arr
 

@@ -1,0 +1,225 @@
+"""Raster georeferencing shared by the GeoTIFF readers: rasterio on demand, DEM band checks, CRS transforms."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from types import ModuleType
+from typing import Any
+
+import numpy as np
+
+from .checks import check_text, fmt_number, real_array
+from .errors import FileFormatError, InvalidParameterError, OptionalDependencyError, UnitError
+
+__all__ = [
+    "import_rasterio",
+    "DemBand",
+    "dem_band",
+    "check_metric_crs",
+    "parse_crs",
+    "utm_crs",
+    "transform_xy",
+    "WGS84",
+    "METRE_UNITS",
+    "REPROJECT_ADVICE",
+]
+
+#: The CRS of GeoJSON coordinates (longitude, latitude in degrees).
+WGS84 = "EPSG:4326"
+#: Vertical units read as metres (lower case; empty: undeclared).
+METRE_UNITS = ("", "m", "metre", "metres", "meter", "meters")
+#: Cell sizes (m) plausible for a DEM without a CRS: outside, the unit is likely degrees.
+_CELL_RANGE_M = (0.01, 10_000.0)
+#: How to reproject a geographic DEM, for messages.
+REPROJECT_ADVICE = (
+    "pass reproject_to='utm' (or 'EPSG:N') and cell_size_m=M to read_geotiff, or on the command line "
+    "--reproject utm --cell-size M"
+)
+
+
+def import_rasterio() -> ModuleType:
+    """Import rasterio lazily, pointing at the ``geo`` extra when it is missing.
+
+    Raises
+    ------
+    OptionalDependencyError
+        rasterio is not installed.
+    """
+    try:
+        import rasterio
+        import rasterio.warp  # noqa: F401 - the submodules the readers use
+        import rasterio.windows  # noqa: F401
+    except ImportError as exc:
+        raise OptionalDependencyError(
+            "GeoTIFF support needs rasterio; install it with: pip install 'terrawatt[geo]'"
+        ) from exc
+    return rasterio
+
+
+@dataclass(frozen=True)
+class DemBand:
+    """The checked georeferencing of one elevation band of an open raster.
+
+    Attributes
+    ----------
+    band : int
+        1-based band index.
+    shape : (int, int)
+        ``(rows, cols)`` of the file.
+    cell_size_m : float
+        Square cell side in CRS units (metres, unless ``geographic``).
+    origin_xy_m : (float, float)
+        Lower-left (south-west) corner.
+    flip_rows, flip_cols : bool
+        The file is north-up (row 0 the northern edge) / east-left: flip into TerrainMap's
+        convention (row grows with y, column with x).
+    scale, offset : float
+        The band's value transform (``z = raw * scale + offset``).
+    crs : str or None
+        The CRS as a string.
+    geographic : bool
+        The CRS is not in metres (geographic, or projected in other units); only
+        reprojection makes such a band a map.
+    """
+
+    band: int
+    shape: tuple[int, int]
+    cell_size_m: float
+    origin_xy_m: tuple[float, float]
+    flip_rows: bool
+    flip_cols: bool
+    scale: float
+    offset: float
+    crs: str | None
+    geographic: bool
+
+
+def dem_band(src: Any, band: int | None, where: str, *, allow_geographic: bool = False) -> DemBand:
+    """Check that band ``band`` of an open rasterio dataset is a DEM TerrainMap can hold.
+
+    Square pixels, no rotation, vertical units of metres; horizontal units of metres (a
+    projected CRS, or none with a plausible cell size) unless ``allow_geographic``.
+
+    Raises
+    ------
+    FileFormatError
+        Several bands and no ``band``; a rotated or non-square-pixel grid; a CRS not in
+        metres (unless ``allow_geographic``); vertical units other than metres.
+    InvalidParameterError
+        A band out of range.
+    UnitError
+        No CRS and a cell size implausible for metres.
+    """
+    if band is None:
+        if src.count != 1:
+            raise FileFormatError(
+                f"{where} has {src.count} bands; a DEM has one. Name the elevation "
+                f"band with band=N (1..{src.count}), e.g. read_geotiff(path, band=1)"
+            )
+        band = 1
+    is_int = isinstance(band, (int, np.integer)) and not isinstance(band, bool)
+    if not is_int or not 1 <= band <= src.count:
+        raise InvalidParameterError(f"band must be an integer in 1..{src.count}, got {band!r}")
+    band = int(band)
+    transform, crs = src.transform, src.crs
+    if transform.b != 0 or transform.d != 0:
+        raise FileFormatError(
+            f"{where} has a rotated or sheared transform {tuple(transform)[:6]!r}; "
+            "warp it to a north-up grid first (e.g. gdalwarp)"
+        )
+    width, height = abs(transform.a), abs(transform.e)
+    if not np.isclose(width, height, rtol=1e-6) and not allow_geographic:
+        raise FileFormatError(
+            f"{where} has non-square pixels of {width!r} x {height!r} (CRS units); "
+            "resample it to square pixels first (e.g. gdalwarp -tr)"
+        )
+    geographic = crs is not None and (crs.is_geographic or crs.linear_units_factor[1] != 1.0)
+    if geographic and not allow_geographic:
+        raise FileFormatError(
+            f"{where} uses CRS {crs.to_string()!r} whose units are not metres; reproject it to a "
+            f"projected CRS in metres (e.g. UTM): {REPROJECT_ADVICE}"
+        )
+    units = (src.units[band - 1] or "").strip().lower()
+    if units not in METRE_UNITS:
+        raise FileFormatError(f"{where} band {band} has vertical units {units!r}; expected metres")
+    if crs is None and not _CELL_RANGE_M[0] <= width <= _CELL_RANGE_M[1]:
+        raise UnitError(
+            f"{where} has no CRS and cells of {fmt_number(width)}; that is implausible as metres "
+            f"(expected {fmt_number(_CELL_RANGE_M[0])} to {fmt_number(_CELL_RANGE_M[1])} m) and looks like "
+            "degrees: reproject it to a projected CRS in metres (e.g. UTM) first"
+        )
+    rows, cols = src.height, src.width
+    xmin = min(transform.c, transform.c + transform.a * cols)
+    ymin = min(transform.f, transform.f + transform.e * rows)
+    return DemBand(
+        band=band,
+        shape=(rows, cols),
+        cell_size_m=float(width),
+        origin_xy_m=(float(xmin), float(ymin)),
+        flip_rows=transform.e < 0,
+        flip_cols=transform.a < 0,
+        scale=float(src.scales[band - 1]),
+        offset=float(src.offsets[band - 1]),
+        crs=None if crs is None else crs.to_string(),
+        geographic=bool(geographic),
+    )
+
+
+def parse_crs(value: Any, name: str = "crs") -> Any:
+    """A ``rasterio.crs.CRS`` from a user string (``"EPSG:32633"``, WKT, PROJ).
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a non-empty string, or a CRS rasterio does not understand.
+    """
+    rasterio = import_rasterio()
+    check_text(name, value)
+    try:
+        return rasterio.crs.CRS.from_user_input(value)
+    except rasterio.errors.CRSError as exc:
+        raise InvalidParameterError(f"{name} {value!r} is not a CRS rasterio understands: {exc}") from exc
+
+
+def check_metric_crs(crs: Any, name: str) -> Any:
+    """``crs`` (a rasterio CRS) if it is projected in metres, else an error naming ``name``."""
+    if crs.is_geographic or crs.linear_units_factor[1] != 1.0:
+        raise InvalidParameterError(
+            f"{name} must be a projected CRS in metres (e.g. a UTM zone 'EPSG:326NN'), got {crs.to_string()!r}"
+        )
+    return crs
+
+
+def utm_crs(lon_deg: float, lat_deg: float) -> str:
+    """The WGS 84 UTM zone of a point, as ``"EPSG:326NN"`` (north) or ``"EPSG:327NN"`` (south).
+
+    Examples
+    --------
+    >>> utm_crs(15.2, 45.0), utm_crs(-70.6, -33.4)
+    ('EPSG:32633', 'EPSG:32719')
+    """
+    if not (math.isfinite(lon_deg) and math.isfinite(lat_deg) and -90 <= lat_deg <= 90):
+        raise InvalidParameterError(f"a UTM zone needs a longitude and a latitude in degrees, got {(lon_deg, lat_deg)!r}")
+    zone = int(math.floor(((lon_deg + 180.0) % 360.0) / 6.0)) + 1
+    return f"EPSG:{32600 + zone if lat_deg >= 0 else 32700 + zone}"
+
+
+def transform_xy(xy: Any, src_crs: Any, dst_crs: Any) -> np.ndarray:
+    """Points ``(N, 2)`` from one CRS to another (:func:`rasterio.warp.transform`).
+
+    Raises
+    ------
+    InvalidParameterError
+        Points not of shape ``(N, 2)`` or not finite; a CRS rasterio does not understand.
+    """
+    rasterio = import_rasterio()
+    pts = real_array("xy", xy, ndim=2)
+    if pts.shape[1] != 2:
+        raise InvalidParameterError(f"xy must have shape (N, 2), got {pts.shape!r}")
+    src = parse_crs(src_crs, "src_crs") if isinstance(src_crs, str) else src_crs
+    dst = parse_crs(dst_crs, "dst_crs") if isinstance(dst_crs, str) else dst_crs
+    if pts.shape[0] == 0:
+        return pts
+    xs, ys = rasterio.warp.transform(src, dst, pts[:, 0].tolist(), pts[:, 1].tolist())
+    return np.column_stack([np.asarray(xs, float), np.asarray(ys, float)])
