@@ -50,6 +50,8 @@ from .missions import (
     validation_error,
 )
 from .planning import OMPL_PLANNERS, PLANNERS, compare_route, plan_route, shortest_route
+from .reachability import lattice_move_energies, reachability
+from .reachability_result import REACH_FORMAT_VERSION, REACH_LAYERS, Reachability
 from .refine import refine_route, relax_path, string_pull
 from .route import ROUTE_STATUSES, Route, RouteComparison, evaluate_route
 from .settings import PlannerSettings
@@ -81,6 +83,12 @@ __all__ = [
     "RouteComparison",
     "ROUTE_STATUSES",
     "evaluate_route",
+    # energy reachability
+    "reachability",
+    "Reachability",
+    "lattice_move_energies",
+    "REACH_FORMAT_VERSION",
+    "REACH_LAYERS",
     # missions
     "simulate_mission",
     "drive_profile",

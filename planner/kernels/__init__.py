@@ -3,7 +3,8 @@
 - :mod:`.arrays` — :class:`CostArrays`, the packed read-only arrays of an ``EnergyCost``;
 - :mod:`.walk` — cell walks: segment energies, free points, turn energies;
 - :mod:`.paths` — whole-polyline kernels: pattern-search relaxation, line-of-sight pulls;
-- :mod:`.graph` — lattice graphs: move energies, their refresh, A*;
+- :mod:`.graph` — lattice graphs: move energies, their refresh, an indexed heap, A*;
+- :mod:`.reach` — single-source Dijkstra over a node grid's dense move energies (reachability);
 - :mod:`.variants` — serial / parallel compilations picked by work size.
 
 Every kernel is compiled with ``cache=True``; ``planner.warm_up_kernels`` compiles or loads
@@ -11,8 +12,9 @@ them all.
 """
 
 from .arrays import CostArrays
-from .graph import astar, lattice_reweight, lattice_weights
+from .graph import astar, heap_pop, heap_set, lattice_reweight, lattice_weights
 from .paths import KEEP_RTOL, relax_polyline, string_pull_indices
+from .reach import grid_dijkstra
 from .variants import PARALLEL_MIN_WALKS, use_parallel
 from .walk import point_free, turn_energy, walk_forward, walk_many, walk_pair
 
@@ -29,6 +31,9 @@ __all__ = [
     "astar",
     "lattice_weights",
     "lattice_reweight",
+    "heap_set",
+    "heap_pop",
+    "grid_dijkstra",
     "PARALLEL_MIN_WALKS",
     "use_parallel",
 ]

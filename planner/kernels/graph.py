@@ -1,4 +1,4 @@
-"""Compiled lattice-graph kernels: directed move energies of a node grid, their refresh, and A*."""
+"""Compiled lattice-graph kernels: directed move energies of a node grid, their refresh, an indexed heap, and A*."""
 
 from __future__ import annotations
 
@@ -11,6 +11,9 @@ from .variants import compile_variants, use_parallel
 from .walk import walk_pair
 
 __all__ = [
+    "heap_set",
+    "heap_pop",
+    "heap_sift_up",
     "astar",
     "lattice_weights",
     "lattice_reweight",
@@ -22,7 +25,7 @@ __all__ = [
 
 
 @numba.njit(cache=True, nogil=True)
-def _sift_up(keys, nodes, where, i):  # pragma: no cover - compiled
+def heap_sift_up(keys, nodes, where, i):  # pragma: no cover - compiled
     """Move heap entry ``i`` up to its place (``where[node]`` tracks each node's slot)."""
     key = keys[i]
     node = nodes[i]
@@ -40,7 +43,7 @@ def _sift_up(keys, nodes, where, i):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def _heap_set(keys, nodes, where, size, node, key):  # pragma: no cover - compiled
+def heap_set(keys, nodes, where, size, node, key):  # pragma: no cover - compiled
     """Insert ``node`` with ``key``, or lower its key if it is in the heap; return the new size."""
     i = where[node]
     if i < 0:
@@ -48,12 +51,12 @@ def _heap_set(keys, nodes, where, size, node, key):  # pragma: no cover - compil
         nodes[i] = node
         size += 1
     keys[i] = key
-    _sift_up(keys, nodes, where, i)
+    heap_sift_up(keys, nodes, where, i)
     return size
 
 
 @numba.njit(cache=True, nogil=True)
-def _heap_pop(keys, nodes, where, size):  # pragma: no cover - compiled
+def heap_pop(keys, nodes, where, size):  # pragma: no cover - compiled
     """Pop the minimum of the indexed binary heap ``keys[:size]``; return key, node, new size."""
     top_k = keys[0]
     top_n = nodes[0]
@@ -107,9 +110,9 @@ def astar(indptr, indices, data, node_x, node_y, nj, src, src_cost, dst, dst_cos
             g[u] = src_cost[k]
             pred[u] = -1
             f = src_cost[k] + h_per_m * math.hypot(node_x[u % nj] - gx, node_y[u // nj] - gy)
-            size = _heap_set(keys, nodes, where, size, u, f)
+            size = heap_set(keys, nodes, where, size, u, f)
     while size > 0:
-        f, u, size = _heap_pop(keys, nodes, where, size)
+        f, u, size = heap_pop(keys, nodes, where, size)
         if f >= best:
             break  # no open node can lead to a cheaper route
         closed[u] = True
@@ -126,7 +129,7 @@ def astar(indptr, indices, data, node_x, node_y, nj, src, src_cost, dst, dst_cos
                 g[v] = nv
                 pred[v] = u
                 f = nv + h_per_m * math.hypot(node_x[v % nj] - gx, node_y[v // nj] - gy)
-                size = _heap_set(keys, nodes, where, size, v, f)
+                size = heap_set(keys, nodes, where, size, v, f)
     return best, best_node, pred
 
 
