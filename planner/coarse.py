@@ -1,0 +1,302 @@
+"""Coarse-to-fine planning for big maps: a lattice route on a downsampled cost, then the 1-cell lattice in a corridor.
+
+:func:`plan_coarse_to_fine` (1) downsamples the cost by ``factor`` (elevation averaged over
+each block of ``factor x factor`` cells, a block blocked when most of its cells are, its
+ground the most common one; the energy tables are the fine cost's), (2) finds the
+minimum-energy route on that coarse map's 16-connected lattice, (3) marks a corridor of
+``corridor_m`` around it and (4) searches the directed 16-connected 1-cell lattice of the
+full-resolution cost restricted to the corridor's free cells (:mod:`planner.kernels.corridor`).
+The corridor graph is a subgraph of the full 1-cell lattice (:class:`~planner.Lattice`),
+start and goal are joined the same way, so the route's drive energy is never below the
+full-resolution lattice optimum; ``compare=True`` computes that optimum and the ratio.
+When the corridor holds no route (a passage the coarse map could not see) the corridor is
+widened four times, then the whole map is searched (``fallback`` says which).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from terrain import TerrainMap
+from terrain.checks import check_bool, check_int, check_optional_real
+from terrain.errors import InvalidParameterError
+
+from .edge_cost import EnergyCost
+from .kernels import astar
+from .kernels.corridor import corridor_weights
+from .lattice import LATTICE_OFFSETS, Lattice
+from .points import as_points
+from .route import Route, empty_route, evaluate_route
+
+__all__ = ["CoarseToFine", "plan_coarse_to_fine", "downsample_cost", "COARSE_FALLBACKS"]
+
+#: What a coarse-to-fine plan fell back to: nothing, a corridor four times wider, the whole map.
+COARSE_FALLBACKS = ("none", "wider corridor", "whole map")
+_HALF = LATTICE_OFFSETS[:8]
+
+
+@dataclass(frozen=True)
+class CoarseToFine:
+    """A coarse-to-fine plan and how it was found.
+
+    Attributes
+    ----------
+    route : Route
+        The full-resolution route (``planner="coarse-to-fine"``), evaluated on the fine cost.
+    coarse_waypoints_m : ndarray, shape (K, 2)
+        The coarse lattice route (empty when the coarse map joins no route).
+    factor : int
+        Downsampling factor.
+    corridor_m : float
+        Corridor half-width (m) actually searched (after any widening).
+    corridor_cells : int
+        Free fine cells in the corridor (the searched graph's nodes).
+    objective_j : float
+        Drive energy (J) of the corridor lattice route (``inf`` when none).
+    optimum_j : float
+        Drive energy (J) of the full-resolution 1-cell lattice optimum; NaN unless compared.
+    fallback : str
+        One of :data:`COARSE_FALLBACKS`.
+    coarse_time_s, fine_time_s, optimum_time_s : float
+        Seconds spent downsampling and planning on the coarse map; building and searching
+        the corridor graph; computing the optimum (0 unless compared).
+    """
+
+    route: Route
+    coarse_waypoints_m: np.ndarray
+    factor: int
+    corridor_m: float
+    corridor_cells: int
+    objective_j: float
+    optimum_j: float
+    fallback: str
+    coarse_time_s: float
+    fine_time_s: float
+    optimum_time_s: float
+
+    @property
+    def ratio_to_optimum(self) -> float:
+        """Corridor route energy over the full-resolution optimum (>= 1); NaN when not computed."""
+        if not (math.isfinite(self.optimum_j) and self.optimum_j > 0 and math.isfinite(self.objective_j)):
+            return math.nan
+        return self.objective_j / self.optimum_j
+
+    def summary(self) -> dict:
+        """Scalars as a flat dict of JSON-friendly values."""
+        return {
+            **self.route.summary(), "factor": self.factor, "corridor_m": self.corridor_m,
+            "corridor_cells": self.corridor_cells, "objective_j": self.objective_j, "optimum_j": self.optimum_j,
+            "ratio_to_optimum": self.ratio_to_optimum, "fallback": self.fallback,
+            "coarse_time_s": self.coarse_time_s, "fine_time_s": self.fine_time_s,
+            "optimum_time_s": self.optimum_time_s,
+        }
+
+
+def _blocks(arr: np.ndarray, f: int) -> np.ndarray:
+    """``arr`` as a (R/f, f, C/f, f) view, edge-padded to multiples of ``f`` when needed."""
+    rows, cols = arr.shape
+    pr, pc = -rows % f, -cols % f
+    if pr or pc:
+        arr = np.pad(arr, ((0, pr), (0, pc)), mode="edge")
+    return arr.reshape(arr.shape[0] // f, f, arr.shape[1] // f, f)
+
+
+def downsample_cost(cost: EnergyCost, factor: int) -> EnergyCost:
+    """The cost on a grid ``factor`` times coarser, with the fine cost's energy tables.
+
+    Each coarse cell averages the elevation of its ``factor x factor`` block, takes the
+    block's most common table row, and is an obstacle when more than half of the block is
+    blocked; the coarse slope limit is the fine one.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``cost`` not an EnergyCost, ``factor`` not an integer >= 2, or a coarse grid under 2 x 2.
+    """
+    if not isinstance(cost, EnergyCost):
+        raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
+    f = check_int("factor", factor, low=2)
+    rows, cols = cost.shape
+    if -(-rows // f) < 2 or -(-cols // f) < 2:
+        raise InvalidParameterError(f"factor={f} leaves fewer than 2 x 2 coarse cells on a {rows} x {cols} map")
+    elevation = _blocks(cost.terrain.elevation_m, f).mean(axis=(1, 3))
+    blocked = _blocks(cost.blocked, f).mean(axis=(1, 3)) > 0.5
+    ground = _blocks(cost.ground_rows, f)
+    best = np.full(elevation.shape, -1, dtype=np.int64)
+    count = np.zeros(elevation.shape, dtype=np.int64)
+    for row in np.unique(cost.ground_rows).tolist():
+        n = (ground == row).sum(axis=(1, 3))
+        better = n > count
+        best[better], count[better] = row, n[better]
+    coarse = TerrainMap(elevation, cost.terrain.cell_size_m * f, cost.terrain.origin_xy_m, obstacle=blocked,
+                        crs=cost.terrain.crs)
+    return EnergyCost(coarse, best, cost.grade_table_j_per_m, cost.turn_table_j, speed_mps=cost.speed_mps,
+                      max_slope_rad=cost.max_slope_rad, battery_voltage_v=cost.battery_voltage_v,
+                      turn_rate_radps=cost.turn_rate_radps, ground_labels=cost.ground_labels)
+
+
+def _corridor(coarse: EnergyCost, waypoints: np.ndarray, width_m: float, f: int, shape: tuple[int, int]) -> np.ndarray:
+    """Fine cells within about ``width_m`` of the coarse route (dilated on the coarse grid)."""
+    grid = coarse.terrain.grid
+    on_route = np.zeros(grid.shape, dtype=bool)
+    for a, b in zip(waypoints[:-1], waypoints[1:], strict=True):
+        r, c, _ = grid.segment_cells(tuple(a), tuple(b))
+        on_route[r, c] = True
+    reach = width_m / grid.cell_size_m + 1.0  # + the coarse cell the route crosses
+    near = ndimage.distance_transform_edt(~on_route) <= reach
+    return np.repeat(np.repeat(near, f, axis=0), f, axis=1)[: shape[0], : shape[1]]
+
+
+def _merge_straight(pts: np.ndarray) -> np.ndarray:
+    """Drop interior vertices where the polyline goes straight on (lattice moves in a row)."""
+    if pts.shape[0] < 3:
+        return pts
+    seg = np.diff(pts, axis=0)
+    cross = seg[:-1, 0] * seg[1:, 1] - seg[:-1, 1] * seg[1:, 0]
+    dot = np.einsum("ij,ij->i", seg[:-1], seg[1:])
+    scale = np.hypot(*seg[:-1].T) * np.hypot(*seg[1:].T)
+    straight = (np.abs(cross) <= 1e-12 * scale) & (dot > 0)
+    return pts[np.concatenate([[True], ~straight, [True]])]
+
+
+def _search_corridor(cost: EnergyCost, start: np.ndarray, goal: np.ndarray, inside: np.ndarray
+                     ) -> tuple[float, np.ndarray, int]:
+    """Best 1-cell lattice route inside ``inside`` cells: (drive energy, waypoints, number of nodes)."""
+    free = inside & ~cost.blocked
+    node_rows, node_cols = (a.astype(np.int64) for a in np.nonzero(free))
+    n = node_rows.size
+    index = np.full(cost.shape, -1, dtype=np.int32)
+    index[node_rows, node_cols] = np.arange(n, dtype=np.int32)
+    arr = cost.arrays
+    w = corridor_weights(arr.cells, arr.grade_table, arr.geo, node_rows, node_cols, index, _HALF)
+    mask = np.isfinite(w)
+    # the target of move k of node u: the node of cell (row + dr, col + dc); a finite move stays inside
+    targets = index[(node_rows[:, None] + LATTICE_OFFSETS[None, :, 0])[mask],
+                    (node_cols[:, None] + LATTICE_OFFSETS[None, :, 1])[mask]]
+    del index
+    indptr = np.zeros(n + 1, dtype=np.int32)
+    np.cumsum(mask.sum(axis=1), out=indptr[1:])
+    data = w[mask]
+    d = cost.terrain.cell_size_m
+    xs = cost.terrain.origin_xy_m[0] + (node_cols + 0.5) * d
+    ys = cost.terrain.origin_xy_m[1] + (node_rows + 0.5) * d
+
+    def joined(p: np.ndarray) -> np.ndarray:
+        return np.flatnonzero((np.abs(xs - p[0]) <= 1.5 * d) & (np.abs(ys - p[1]) <= 1.5 * d)
+                              & (np.hypot(xs - p[0], ys - p[1]) <= 1.5 * d))
+
+    src, dst = joined(start), joined(goal)
+    src_xy, dst_xy = np.column_stack([xs[src], ys[src]]), np.column_stack([xs[dst], ys[dst]])
+    e_src = cost.segment_energy_j(np.broadcast_to(start, src_xy.shape), src_xy)
+    e_dst = cost.segment_energy_j(dst_xy, np.broadcast_to(goal, dst_xy.shape))
+    best = float(cost.segment_energy_j(start, goal)[0])
+    ok_s, ok_d = np.isfinite(e_src), np.isfinite(e_dst)
+    chain: list[int] = []
+    if ok_s.any() and ok_d.any():
+        total, last, pred = astar(indptr, targets, data, np.zeros(1), np.zeros(n), 1,
+                                  src[ok_s].astype(np.int64), e_src[ok_s], dst[ok_d].astype(np.int64), e_dst[ok_d],
+                                  float(goal[0]), float(goal[1]), 0.0, best)
+        if last >= 0 and total < best:
+            best = float(total)
+            node = int(last)
+            while node >= 0:
+                chain.append(node)
+                node = int(pred[node])
+    mid = np.column_stack([xs[chain[::-1]], ys[chain[::-1]]]) if chain else np.empty((0, 2))
+    return best, _merge_straight(np.vstack([start, mid, goal])), n
+
+
+def plan_coarse_to_fine(
+    cost: EnergyCost,
+    start_xy_m: tuple[float, float],
+    goal_xy_m: tuple[float, float],
+    *,
+    factor: int = 4,
+    corridor_m: float | None = None,
+    compare: bool = False,
+) -> CoarseToFine:
+    """Plan on a downsampled cost, then at full resolution inside a corridor around the coarse route.
+
+    Parameters
+    ----------
+    cost : EnergyCost
+        The full-resolution cost.
+    start_xy_m, goal_xy_m : (float, float)
+        Points on the map (m).
+    factor : int
+        Downsampling factor (>= 2): the coarse lattice has ``factor**2`` times fewer nodes.
+    corridor_m : float, optional
+        Half-width (m) of the corridor searched at full resolution; default three coarse
+        cells (``3 * factor * cell_size_m``).
+    compare : bool
+        Also compute the full-resolution 1-cell lattice optimum (builds the whole lattice:
+        the expensive step this function avoids) and the ratio.
+
+    Returns
+    -------
+    CoarseToFine
+        The route (status ``"exact"``, or ``"infeasible"`` when not even the whole map
+        joins start and goal), the coarse route, corridor, times and, if compared, the ratio.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``cost`` not an EnergyCost, bad ``factor`` / ``corridor_m`` / points, start equals goal.
+    OutOfBoundsError
+        A point outside the map.
+
+    Examples
+    --------
+    >>> from planner import EnergyCost
+    >>> from terrain import procedural_map
+    >>> cost = EnergyCost.from_presets(procedural_map((96, 96), 1.0, seed=2), unknown_ground="gravel")
+    >>> plan = plan_coarse_to_fine(cost, (8.0, 8.0), (88.0, 80.0), factor=4, compare=True)
+    >>> plan.route.status, bool(1.0 <= plan.ratio_to_optimum < 1.05)
+    ('exact', True)
+    """
+    if not isinstance(cost, EnergyCost):
+        raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
+    f = check_int("factor", factor, low=2)
+    width = check_optional_real("corridor_m", corridor_m, low=0.0, low_inclusive=False)
+    compare = check_bool("compare", compare)
+    pts = as_points([start_xy_m, goal_xy_m], "start/goal")
+    cost.check_inside(pts, "start/goal")
+    start, goal = pts
+    if np.array_equal(start, goal):
+        raise InvalidParameterError(f"start equals goal {tuple(start.tolist())!r} m; expected two different points")
+    width = 3.0 * f * cost.terrain.cell_size_m if width is None else width
+
+    t0 = time.perf_counter()
+    coarse = downsample_cost(cost, f)
+    coarse_path = Lattice(coarse, 1).shortest_path(start, goal)
+    coarse_s = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    objective, waypoints, n_nodes, fallback = math.inf, np.empty((0, 2)), 0, COARSE_FALLBACKS[0]
+    if coarse_path.found:
+        for label, scale in zip(COARSE_FALLBACKS[:2], (1.0, 4.0), strict=True):
+            inside = _corridor(coarse, coarse_path.waypoints_m, width * scale, f, cost.shape)
+            objective, waypoints, n_nodes = _search_corridor(cost, start, goal, inside)
+            if math.isfinite(objective):
+                width, fallback = width * scale, label
+                break
+    if not math.isfinite(objective):
+        fallback = COARSE_FALLBACKS[2]
+        objective, waypoints, n_nodes = _search_corridor(cost, start, goal, np.ones(cost.shape, dtype=bool))
+    fine_s = time.perf_counter() - t0
+    if math.isfinite(objective):
+        route = evaluate_route(cost, waypoints, planner="coarse-to-fine", planning_time_s=coarse_s + fine_s)
+    else:
+        route = empty_route("infeasible", "coarse-to-fine", coarse_s + fine_s, cost.battery_voltage_v)
+    optimum, optimum_s = math.nan, 0.0
+    if compare:
+        t0 = time.perf_counter()
+        best = Lattice.for_cost(cost, 1).shortest_path(start, goal)
+        optimum = best.objective if best.found else math.nan
+        optimum_s = time.perf_counter() - t0
+    return CoarseToFine(route, coarse_path.waypoints_m, f, width, n_nodes, objective, optimum, fallback,
+                        coarse_s, fine_s, optimum_s)
