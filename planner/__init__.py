@@ -23,6 +23,11 @@ from terrain.errors import (
     UnknownNameError,
 )
 
+from .batch import plan_batch
+from .batch_pairs import BatchPairs, read_pairs_csv, read_sites_csv
+from .batch_result import BATCH_FORMAT_VERSION, BATCH_STATUSES, BatchResult, BatchRow
+from .coarse import COARSE_FALLBACKS, CoarseToFine, downsample_cost, plan_coarse_to_fine
+from .dask_client import dask_client
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
 from .kernels import CostArrays
 from .lattice import Lattice, LatticePath
@@ -37,16 +42,20 @@ from .missions import (
     ADAPTIVE_STATUSES,
     MISSION_FORMAT_VERSION,
     MISSION_STATUSES,
+    MONTE_CARLO_FORMAT_VERSION,
     UPDATE_SCOPES,
     AdaptiveResult,
     AdaptiveSettings,
     LegRecord,
+    MissionDistributions,
     MissionResult,
+    MonteCarloResult,
     ReplanRecord,
     UpdateRecord,
     fit_prior_model,
     run_adaptive_mission,
     simulate_mission,
+    simulate_missions_mc,
     validation_error,
 )
 from .planning import OMPL_PLANNERS, PLANNERS, compare_route, plan_route, shortest_route
@@ -83,6 +92,11 @@ __all__ = [
     "RouteComparison",
     "ROUTE_STATUSES",
     "evaluate_route",
+    # big maps
+    "plan_coarse_to_fine",
+    "CoarseToFine",
+    "downsample_cost",
+    "COARSE_FALLBACKS",
     # energy reachability
     "reachability",
     "Reachability",
@@ -97,6 +111,20 @@ __all__ = [
     "MissionResult",
     "MISSION_STATUSES",
     "MISSION_FORMAT_VERSION",
+    # batches and Monte Carlo missions (dask.distributed optional)
+    "plan_batch",
+    "BatchPairs",
+    "read_pairs_csv",
+    "read_sites_csv",
+    "BatchResult",
+    "BatchRow",
+    "BATCH_STATUSES",
+    "BATCH_FORMAT_VERSION",
+    "dask_client",
+    "simulate_missions_mc",
+    "MissionDistributions",
+    "MonteCarloResult",
+    "MONTE_CARLO_FORMAT_VERSION",
     # the adaptive loop
     "run_adaptive_mission",
     "fit_prior_model",
