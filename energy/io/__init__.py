@@ -27,7 +27,9 @@ bad input with a clear error instead of guessing:
     while not all zero -> UnitError "looks like A";
   * |v| (or a wheel speed) above ``MAX_SPEED_MPS`` (10 m/s, implausible for a ground
     robot) -> UnitError "looks like mm/s or cm/s";
-  * |omega| above ``MAX_OMEGA_RADPS`` (20 rad/s) -> UnitError "looks like deg/s";
+  * |omega| (or an IMU's gyro yaw rate) above ``MAX_OMEGA_RADPS`` (20 rad/s) -> UnitError
+    "looks like deg/s"; a battery voltage above ``MAX_BATTERY_VOLTAGE_V`` (200 V) ->
+    UnitError "looks like mV";
   * median |a_z| above ``MAX_MEDIAN_ACCEL_MPS2`` (50 m/s^2) -> UnitError (e.g. m/s^2
     declared as g, or mm/s^2);
   * a drive, current or IMU stream whose median rate lies outside
@@ -36,13 +38,27 @@ bad input with a clear error instead of guessing:
     BorealTC times in ms read as s: 0.0065 Hz over 9,385 s). Commands are event-like and
     not rate-checked.
 
+- an IMU whose vertical acceleration has gravity removed (median within
+  +/-``GRAVITY_REMOVED_MAX_MPS2`` = 3 m/s^2 instead of about +9.81) is accepted:
+  ``meta.gravity_removed`` is set and ``meta.notes`` says so (the vibration features remove
+  each segment's mean, so they do not need gravity).
+- currents are optional where a source may lack them (a bag without current topics, a
+  CSV without current columns): the log's ``has_currents`` is False and
+  ``meta.missing_currents`` says what was missing; training and scoring refuse such logs
+  (:meth:`~energy.logs.InteractionLog.require_currents`).
+- the gyro yaw rate (``gyro_z_radps``, on the IMU clock) and the battery voltage
+  (``battery_voltage_v``, on the drive clock) are read where the source has them.
+
 Modules: :mod:`~energy.io.cleaning` (the checks above), :mod:`~energy.io.csv_table` (CSV
 decoding and parsing), :mod:`~energy.io.borealtc`, :mod:`~energy.io.csv_log` (+ its header
-line, :mod:`~energy.io.csv_header`), :mod:`~energy.io.rosbag`.
+line, :mod:`~energy.io.csv_header`), :mod:`~energy.io.rosbag` (+ :mod:`~energy.io.bag_messages`,
+:mod:`~energy.io.bag_align`).
 """
 
 from .borealtc import BOREALTC_TRACK_WIDTH_M, read_borealtc, read_borealtc_run
 from .cleaning import (
+    GRAVITY_REMOVED_MAX_MPS2,
+    MAX_BATTERY_VOLTAGE_V,
     MAX_MEDIAN_ACCEL_MPS2,
     MAX_MEDIAN_CURRENT_A,
     MAX_OMEGA_RADPS,
@@ -76,6 +92,8 @@ __all__ = [
     "MAX_STREAM_RATE_HZ",
     "MAX_RUN_DURATION_S",
     "MAX_CLOCK_OFFSET_S",
+    "MAX_BATTERY_VOLTAGE_V",
+    "GRAVITY_REMOVED_MAX_MPS2",
     "read_borealtc_run",
     "read_borealtc",
     "read_csv_log",

@@ -33,6 +33,8 @@ __all__ = [
     "MIN_STREAM_RATE_HZ",
     "MAX_STREAM_RATE_HZ",
     "MAX_RUN_DURATION_S",
+    "MAX_BATTERY_VOLTAGE_V",
+    "GRAVITY_REMOVED_MAX_MPS2",
     "parse_repair",
     "clean_stream",
     "check_current",
@@ -41,6 +43,7 @@ __all__ = [
     "check_timing",
     "check_track_width",
     "bracket_accel",
+    "gravity_note",
 ]
 
 _LOG = logging.getLogger(__name__)
@@ -64,6 +67,12 @@ MIN_STREAM_RATE_HZ = 1.0
 MAX_STREAM_RATE_HZ = 10_000.0
 #: Longest plausible single run (s): one day. BorealTC's runs last 10 s to 5 min.
 MAX_RUN_DURATION_S = 86_400.0
+#: Highest plausible battery voltage of a ground robot (V); 12-58 V packs are usual, so a
+#: larger value is a voltage in mV.
+MAX_BATTERY_VOLTAGE_V = 200.0
+#: An IMU whose median vertical acceleration lies within +/- this (m/s^2) reports it with
+#: gravity removed (gravity included gives about +9.81, or 8.5 on a 30 deg slope).
+GRAVITY_REMOVED_MAX_MPS2 = 3.0
 
 #: Factors to SI of the units a reader accepts, per kind of quantity (the first is SI).
 UNIT_FACTORS: dict[str, dict[str, float]] = {
@@ -74,6 +83,7 @@ UNIT_FACTORS: dict[str, dict[str, float]] = {
     "accel": {"m/s^2": 1.0, "m/s2": 1.0, "g": 9.80665},
     "length": {"m": 1.0, "cm": 1e-2, "mm": 1e-3},
     "angle": {"rad": 1.0, "deg": math.pi / 180.0},
+    "voltage": {"V": 1.0, "mV": 1e-3},
 }
 
 
@@ -306,3 +316,26 @@ def bracket_accel(t_drive: np.ndarray, t_acc: np.ndarray) -> slice:
     ia = max(int(np.searchsorted(t_acc, t_drive[0], side="right")) - 1, 0)
     ib = min(int(np.searchsorted(t_acc, t_drive[-1], side="left")), t_acc.size - 1)
     return slice(ia, ib + 1)
+
+
+def gravity_note(name: str, accel_z_mps2: np.ndarray) -> str:
+    """A note when the vertical acceleration has gravity removed, else ``""``.
+
+    Gravity-free IMUs (e.g. a driver that publishes ``linear_acceleration`` minus gravity)
+    give a median near 0 instead of about +9.81 m/s^2; the log is accepted (the vibration
+    features remove each segment's mean) and the note goes to its metadata.
+
+    Examples
+    --------
+    >>> gravity_note("az", np.array([0.05, 0.09, 0.12]))[:48]
+    'az has gravity removed (median 0.09 m/s^2, |medi'
+    >>> gravity_note("az", np.array([9.7, 9.8, 9.9]))
+    ''
+    """
+    median = float(np.median(accel_z_mps2))
+    if abs(median) >= GRAVITY_REMOVED_MAX_MPS2:
+        return ""
+    return (
+        f"{name} has gravity removed (median {fmt_number(median, 3)} m/s^2, |median| < "
+        f"{GRAVITY_REMOVED_MAX_MPS2:g} m/s^2); accepted: the vibration features remove each segment's mean"
+    )

@@ -25,7 +25,7 @@ LOG_HEADER_PREFIX = "# terrawatt-log"
 #: Longest header line read (characters); metadata notes are a few hundred.
 MAX_LOG_HEADER_CHARS = 1_000_000
 
-_TEXT_KEYS = ("robot", "source", "notes")
+_TEXT_KEYS = ("robot", "source", "notes", "missing_currents")
 
 
 def format_log_header(meta: LogMeta) -> str:
@@ -46,6 +46,10 @@ def format_log_header(meta: LogMeta) -> str:
         "notes": meta.notes,
         "start_time_ns": None if meta.start_time_ns is None else int(meta.start_time_ns),
     }
+    if meta.gravity_removed:
+        head["gravity_removed"] = True
+    if meta.missing_currents:
+        head["missing_currents"] = meta.missing_currents
     return f"{LOG_HEADER_PREFIX} {json.dumps(head)}"
 
 
@@ -61,7 +65,8 @@ def parse_log_header(line: str, source: str) -> dict[str, Any]:
 
     Keys: ``robot``, ``source``, ``notes`` (str), ``ground_label`` (non-empty str),
     ``velocity_source`` (one of ``VELOCITY_SOURCES``), ``track_width_m`` (finite > 0),
-    ``start_time_ns`` (int); unknown keys are ignored.
+    ``start_time_ns`` (int), ``gravity_removed`` (bool), ``missing_currents`` (str);
+    unknown keys are ignored.
 
     Raises
     ------
@@ -123,4 +128,8 @@ def parse_log_header(line: str, source: str) -> dict[str, Any]:
     if start is not None and (isinstance(start, bool) or not isinstance(start, int) or not -(2**63) <= start < 2**63):
         raise _bad(source, "start_time_ns", start, "a 64-bit integer or null")
     out["start_time_ns"] = start
+    gravity = data.get("gravity_removed")
+    if gravity is not None and not isinstance(gravity, bool):
+        raise _bad(source, "gravity_removed", gravity, "true, false or null")
+    out["gravity_removed"] = gravity
     return out

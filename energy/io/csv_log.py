@@ -26,6 +26,7 @@ from .cleaning import (
     check_timing,
     check_track_width,
     clean_stream,
+    gravity_note,
     parse_repair,
 )
 from .csv_header import CSV_LOG_FORMAT_VERSION, LOG_HEADER_PREFIX, format_log_header, parse_log_header
@@ -52,6 +53,8 @@ _FIELD_KIND = {
     "current_left": "current",
     "current_right": "current",
     "accel_z": "accel",
+    "gyro_z": "omega",
+    "battery_voltage": "voltage",
     "x": "length",
     "y": "length",
     "heading": "angle",
@@ -72,6 +75,8 @@ DEFAULT_CSV_COLUMNS: dict[str, str] = {
     "current_left": "current_left_a",
     "current_right": "current_right_a",
     "accel_z": "accel_z_mps2",
+    "gyro_z": "gyro_z_radps",
+    "battery_voltage": "battery_voltage_v",
     "x": "x_m",
     "y": "y_m",
     "heading": "heading_rad",
@@ -80,6 +85,10 @@ DEFAULT_CSV_COLUMNS: dict[str, str] = {
 #: Values of ``read_csv_log``'s ``rates``: one row per sample of both streams, or two
 #: streams of different rates interleaved by time (the layout :func:`write_csv_log` writes).
 CSV_RATES = ("mixed", "single")
+#: Fields that go together: all mapped (or, in the default layout, all in the header) or none.
+_GROUPS = (("current_left", "current_right"), ("x", "y", "heading"), ("gyro_z",), ("battery_voltage",))
+#: Fields of the IMU stream (the rest but time belong to the drive stream).
+_IMU = ("accel_z", "gyro_z")
 
 
 def _unit_factor(field: str, unit: str) -> float:
@@ -114,8 +123,8 @@ def read_csv_log(
       of its stream (DataError unless ``repair=("interpolate_nans",)``). Use it for
       single-rate files: nothing is ever moved out of a stream.
     - ``"mixed"`` (default; the layout :func:`write_csv_log` writes): the two streams have
-      different rates and are interleaved by time. A row is an acceleration sample when its
-      acceleration field is present, and a drive sample when any drive field (a pose field
+      different rates and are interleaved by time. A row is an IMU sample (acceleration,
+      gyro) when its acceleration field is present, and a drive sample when any drive field (a pose field
       or a ground label included) is present, or when the acceleration field is missing
       too; a missing value among present drive fields is a NaN. So a row whose drive
       fields are all empty is an IMU-only row and one without acceleration a drive-only
@@ -126,17 +135,19 @@ def read_csv_log(
     ----------
     path : path-like
     columns : mapping field -> column name, optional
-        Fields (:data:`CSV_FIELDS`): ``time``, ``accel_z``, ``current_left``,
-        ``current_right`` (required); ``v`` and ``omega``, or ``speed_left`` and
-        ``speed_right`` (wheel speeds, with ``track_width_m``; v = mean, omega =
-        (right - left) / track_width_m); optional ``x``, ``y``, ``heading`` (all three) and
+        Fields (:data:`CSV_FIELDS`): ``time``, ``accel_z`` (required); ``v`` and ``omega``,
+        or ``speed_left`` and ``speed_right`` (wheel speeds, with ``track_width_m``; v =
+        mean, omega = (right - left) / track_width_m); ``current_left`` and
+        ``current_right`` (both, or neither for a log to predict from only); optional ``x``,
+        ``y``, ``heading`` (all three), ``gyro_z`` (IMU yaw rate), ``battery_voltage`` and
         ``ground`` (text labels). Default: :data:`DEFAULT_CSV_COLUMNS`, the layout written by
-        :func:`write_csv_log` (optional columns used when present).
+        :func:`write_csv_log` (optional columns, the currents included, used when present).
     units : mapping field -> unit, optional
         Declared unit per field (:data:`CSV_UNITS`: current ``"A"``/``"mA"``; speed
         ``"m/s"``, ``"cm/s"``, ``"mm/s"``, ``"km/h"``; omega ``"rad/s"``/``"deg/s"``; time
         ``"s"``, ``"ms"``, ``"us"``, ``"ns"``; accel ``"m/s^2"``/``"g"``; x/y ``"m"``,
-        ``"cm"``, ``"mm"``; heading ``"rad"``/``"deg"``). Undeclared fields are SI.
+        ``"cm"``, ``"mm"``; heading ``"rad"``/``"deg"``; gyro_z as omega; battery_voltage
+        ``"V"``/``"mV"``). Undeclared fields are SI.
     robot, ground_label, velocity_source, track_width_m : optional
         Metadata. ``None`` takes the value from a :func:`write_csv_log` header when the file
         has one; otherwise robot ``"unknown"``, velocity ``"measured"`` for wheel speeds and
@@ -186,8 +197,9 @@ def read_csv_log(
         if track_width_m is None:
             raise InvalidParameterError("wheel speeds (speed_left/speed_right) need track_width_m to derive omega")
         track_width_m = check_track_width(track_width_m)
-    pose_fields, optional_fields = _pose_fields(colmap, explicit, text.names, src)
-    numeric_fields = required + (pose_fields if explicit else [])
+    present_fields = _present_fields(colmap, explicit, text.names, src)
+    optional_fields = [] if explicit else present_fields
+    numeric_fields = required + (present_fields if explicit else [])
     text_fields = ["ground"] if "ground" in colmap else []
     table = read_table(
         text,
@@ -197,9 +209,12 @@ def read_csv_log(
     )
     if text_fields and colmap["ground"] not in table:
         raise DataError(f"{src}: missing column {colmap['ground']!r}; the header has {text.names!r}")
-    num = {f: table[colmap[f]] * factors[f] for f in numeric_fields + optional_fields}
+    order = ("time", "accel_z", "current_left", "current_right")  # the first columns checked
+    fields = sorted(numeric_fields + optional_fields, key=lambda f: order.index(f) if f in order else len(order))
+    num = {f: table[colmap[f]] * factors[f] for f in fields}
     labels = table[colmap["ground"]] if text_fields else None
-    drive_fields = [f for f in num if f not in ("time", "accel_z")]
+    drive_fields = [f for f in num if f not in ("time", *_IMU)]
+    imu_fields = [f for f in num if f in _IMU]
     drive_rows, acc_rows, split_note = _split_rows(num, drive_fields, labels, rates, src)
     t_all = num["time"]
     td, dc, de = clean_stream(
@@ -207,18 +222,18 @@ def read_csv_log(
         repairs, allow_gaps, gap_factor, None if labels is None else {"ground": labels[drive_rows]},
     )
     ta, ac, _ = clean_stream(
-        src, "acceleration stream", t_all[acc_rows], {"accel_z": num["accel_z"][acc_rows]},
+        src, "acceleration stream", t_all[acc_rows], {f: num[f][acc_rows] for f in imu_fields},
         repairs, allow_gaps, gap_factor,
     )
     ground = None if labels is None else _ground_labels(de["ground"], td, src)
     if check_units:
-        _check_csv_units(src, colmap, units, vel_fields, td, dc, ta, ac["accel_z"])
+        _check_csv_units(src, colmap, units, vel_fields, td, dc, ta, ac)
     if has_wheels:
         v = 0.5 * (dc["speed_left"] + dc["speed_right"])
         omega = (dc["speed_right"] - dc["speed_left"]) / track_width_m
     else:
         v, omega = dc["v"], dc["omega"]
-    pose = np.column_stack([dc["x"], dc["y"], dc["heading"]]) if pose_fields else None
+    pose = np.column_stack([dc["x"], dc["y"], dc["heading"]]) if "x" in dc else None
     if velocity_source is None:
         velocity_source = file_meta["velocity_source"] or ("measured" if has_wheels else "commanded")
     if velocity_source not in VELOCITY_SOURCES:
@@ -226,6 +241,9 @@ def read_csv_log(
     notes = [file_meta["notes"] or "", f"read from {src}", split_note]
     if file_meta["source"]:
         notes.append(f"original source: {file_meta['source']}")
+    gravity = gravity_note(colmap["accel_z"], ac["accel_z"])
+    if file_meta["gravity_removed"] is None and gravity:
+        notes.append(gravity)
     declared = {f: u for f, u in units.items() if factors[f] != 1.0}
     if declared:
         notes.append(f"converted to SI from {declared!r}")
@@ -233,10 +251,12 @@ def read_csv_log(
         time_s=td,
         v_mps=v,
         omega_radps=omega,
-        current_left_a=dc["current_left"],
-        current_right_a=dc["current_right"],
+        current_left_a=dc.get("current_left"),
+        current_right_a=dc.get("current_right"),
+        battery_voltage_v=dc.get("battery_voltage"),
         accel_time_s=ta,
         accel_z_mps2=ac["accel_z"],
+        gyro_z_radps=ac.get("gyro_z"),
         pose_xyh=pose,
         ground=ground,
         meta=LogMeta(
@@ -247,6 +267,8 @@ def read_csv_log(
             track_width_m=track_width_m if track_width_m is not None else file_meta["track_width_m"],
             notes="; ".join(n for n in notes if n),
             start_time_ns=file_meta["start_time_ns"],
+            gravity_removed=bool(gravity) if file_meta["gravity_removed"] is None else file_meta["gravity_removed"],
+            missing_currents=file_meta["missing_currents"] or ("" if "current_left" in dc else f"no current columns in {src}"),
         ),
     )
 
@@ -276,7 +298,8 @@ def _file_meta(text: CsvText) -> dict[str, Any]:
         if line.startswith(LOG_HEADER_PREFIX):
             return parse_log_header(line, text.source)
     return dict.fromkeys(
-        ("robot", "source", "notes", "ground_label", "velocity_source", "track_width_m", "start_time_ns")
+        ("robot", "source", "notes", "ground_label", "velocity_source", "track_width_m", "start_time_ns",
+         "gravity_removed", "missing_currents")
     )
 
 
@@ -289,26 +312,31 @@ def _velocity_fields(colmap: dict[str, str]) -> tuple[bool, tuple[str, str], lis
     if not has_v and not has_wheels:
         raise InvalidParameterError("columns must map v and omega, or speed_left and speed_right")
     vel_fields = ("speed_left", "speed_right") if has_wheels else ("v", "omega")
-    required = ["time", "accel_z", "current_left", "current_right", *vel_fields]
+    required = ["time", "accel_z", *vel_fields]
     absent = [f for f in required if f not in colmap]
     if absent:
         raise InvalidParameterError(f"columns lacks required field(s) {absent!r}; got {colmap!r}")
     return has_wheels, vel_fields, required
 
 
-def _pose_fields(colmap: dict[str, str], explicit: bool, header: list[str], src: str) -> tuple[list[str], list[str]]:
-    """(pose fields, optional fields); the default layout drops pose and ground the file lacks."""
-    pose_fields = [f for f in ("x", "y", "heading") if f in colmap]
-    if explicit:
-        if pose_fields and len(pose_fields) != 3:
-            raise InvalidParameterError(f"columns must map all of x, y, heading or none, got {pose_fields!r}")
-        return pose_fields, []
-    pose_fields = [f for f in ("x", "y", "heading") if colmap[f] in header]
-    if pose_fields and len(pose_fields) != 3:
-        raise DataError(f"{src}: the header has only {pose_fields!r} of the pose columns x_m, y_m, heading_rad")
-    if colmap["ground"] not in header:
+def _present_fields(colmap: dict[str, str], explicit: bool, header: list[str], src: str) -> list[str]:
+    """The optional numeric fields to read (currents, pose, gyro, voltage), whole groups only;
+    the default layout drops those the file lacks (and the ground column if absent)."""
+    out: list[str] = []
+    for group in _GROUPS:
+        have = [f for f in group if f in colmap and (explicit or colmap[f] in header)]
+        if have and len(have) != len(group):
+            if explicit:
+                raise InvalidParameterError(
+                    f"columns lacks required field(s) {[f for f in group if f not in have]!r}: map all of "
+                    f"{', '.join(group)} or none, got {colmap!r}"
+                )
+            raise DataError(f"{src}: the header has only {[colmap[f] for f in have]!r} of the columns "
+                            f"{[colmap[f] for f in group]!r}")
+        out += have
+    if not explicit and colmap["ground"] not in header:
         del colmap["ground"]
-    return pose_fields, pose_fields
+    return out
 
 
 def _split_rows(
@@ -346,16 +374,20 @@ def _ground_labels(ground: np.ndarray, td: np.ndarray, src: str) -> np.ndarray:
 
 def _check_csv_units(
     src: str, colmap: dict[str, str], units: dict[str, str], vel_fields: tuple[str, str],
-    td: np.ndarray, dc: dict[str, np.ndarray], ta: np.ndarray, accel_z: np.ndarray,
+    td: np.ndarray, dc: dict[str, np.ndarray], ta: np.ndarray, ac: dict[str, np.ndarray],
 ) -> None:
     for f in ("current_left", "current_right"):
-        check_current(src, colmap[f], dc[f], units.get(f, "A"))
+        if f in dc:
+            check_current(src, colmap[f], dc[f], units.get(f, "A"))
+    if "gyro_z" in ac:
+        check_limit(src, colmap["gyro_z"], ac["gyro_z"], MAX_OMEGA_RADPS, "rad/s",
+                    f"declared {units.get('gyro_z', 'rad/s')!r} looks like deg/s")
     for f in vel_fields:
         if _FIELD_KIND[f] == "speed":
             check_limit(src, colmap[f], dc[f], MAX_SPEED_MPS, "m/s", f"declared {units.get(f, 'm/s')!r} looks like mm/s or cm/s")
         else:
             check_limit(src, colmap[f], dc[f], MAX_OMEGA_RADPS, "rad/s", f"declared {units.get(f, 'rad/s')!r} looks like deg/s")
-    check_accel(src, colmap["accel_z"], accel_z)
+    check_accel(src, colmap["accel_z"], ac["accel_z"])
     check_timing(src, "drive stream", td)
     check_timing(src, "acceleration stream", ta)
 
@@ -365,7 +397,9 @@ def write_csv_log(log: InteractionLog, path: str | os.PathLike[str]) -> Path:
 
     The first line is ``# terrawatt-log {json}`` with the format version and the metadata;
     then the header ``time_s,v_mps,omega_radps,current_left_a,current_right_a,accel_z_mps2``
-    (+ ``x_m,y_m,heading_rad`` with a pose, + ``ground`` with labels) and one row per
+    (the currents only when the log has them; + ``gyro_z_radps`` and
+    ``battery_voltage_v`` when it has them, + ``x_m,y_m,heading_rad`` with a pose,
+    + ``ground`` with labels) and one row per
     distinct timestamp of either stream, fields of the stream not sampled at that time left
     empty. Floats are written with ``repr`` so :func:`read_csv_log` reads back the exact
     values.
@@ -393,13 +427,9 @@ def write_csv_log(log: InteractionLog, path: str | os.PathLike[str]) -> Path:
     rows = t.size
     di = np.searchsorted(t, log.time_s)
     ai = np.searchsorted(t, log.accel_time_s)
-    cols: list[tuple[str, np.ndarray, np.ndarray]] = [
-        ("v_mps", log.v_mps, di),
-        ("omega_radps", log.omega_radps, di),
-        ("current_left_a", log.current_left_a, di),
-        ("current_right_a", log.current_right_a, di),
-        ("accel_z_mps2", log.accel_z_mps2, ai),
-    ]
+    streams = [(n, di) for n in ("v_mps", "omega_radps", "current_left_a", "current_right_a")]
+    streams += [("accel_z_mps2", ai), ("gyro_z_radps", ai), ("battery_voltage_v", di)]
+    cols = [(n, getattr(log, n), where) for n, where in streams if getattr(log, n) is not None]
     if log.pose_xyh is not None:
         cols += [(n, log.pose_xyh[:, k], di) for k, n in enumerate(("x_m", "y_m", "heading_rad"))]
     table = [[repr(x) for x in t.tolist()]]

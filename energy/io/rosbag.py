@@ -1,38 +1,55 @@
 """ROS 1 bags, ROS 2 bags (sqlite3 or MCAP) into interaction logs, in named steps.
 
-:func:`read_rosbag` reads the messages of the wanted topics (:func:`_read_messages`), puts
-each topic on one clock (:func:`_topic_times`), builds the velocity, IMU and current
-streams, checks and cleans them like every reader (:mod:`energy.io.cleaning`) and aligns them
-on their overlap (:func:`_align`).
+:func:`read_rosbag` reads the messages of the wanted topics
+(:func:`~energy.io.bag_messages.read_messages`, with the message types a ROS 1 bag defines
+in its connection headers), puts each topic on one clock
+(:func:`~energy.io.bag_messages.topic_times`), builds the velocity, IMU and current streams
+(currents from ``std_msgs`` topics or fields of a status message picked by name), checks and
+cleans them like every reader (:mod:`energy.io.cleaning`) and aligns them on their overlap
+(:func:`~energy.io.bag_align.align_streams`).
 """
 
 from __future__ import annotations
 
+import logging
 import os
 from collections.abc import Iterable, Sequence
-from pathlib import Path
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_choice, check_optional_real, check_real, check_text, fmt_number
-from terrain.errors import DataError, FileFormatError, InvalidParameterError, OptionalDependencyError
+from terrain.checks import check_bool, check_choice, check_optional_real, check_real, check_text
+from terrain.errors import DataError, InvalidParameterError
 
 from ..logs import DEFAULT_GAP_FACTOR, InteractionLog, LogMeta, check_gap_factor
+from .bag_align import CurrentStreams, align_streams
+from .bag_messages import (
+    Messages,
+    bag_path,
+    expect_type,
+    field_values,
+    import_rosbags,
+    read_messages,
+    topic_times,
+)
 from .cleaning import (
+    MAX_BATTERY_VOLTAGE_V,
     MAX_OMEGA_RADPS,
     MAX_SPEED_MPS,
     UNIT_FACTORS,
-    bracket_accel,
     check_accel,
     check_current,
     check_limit,
     check_timing,
     clean_stream,
+    gravity_note,
     parse_repair,
 )
 
 __all__ = ["MAX_CLOCK_OFFSET_S", "read_rosbag"]
+
+_LOG = logging.getLogger(__name__)
 
 #: Default largest median (receive time - header stamp) a bag topic may show before
 #: ``read_rosbag`` refuses to mix its header stamps with receive times (s).
@@ -43,8 +60,21 @@ _ODOM_TYPES = ("nav_msgs/msg/Odometry",)
 _IMU_TYPES = ("sensor_msgs/msg/Imu",)
 _SCALAR_TYPES = ("std_msgs/msg/Float64", "std_msgs/msg/Float32")
 _ARRAY_TYPES = ("std_msgs/msg/Float64MultiArray", "std_msgs/msg/Float32MultiArray")
+_FIELDS_HINT = (
+    "; for a status message (e.g. husky_msgs/msg/HuskyStatus) name its current fields with "
+    "current_fields (--current-fields left_driver_current right_driver_current)"
+)
 
-Messages = dict[str, list[tuple[int, Any]]]
+
+@dataclass(frozen=True)
+class _Options:
+    """The checked options of one read."""
+
+    topics_cur: tuple[str, ...]
+    current_fields: tuple[str, str] | None
+    voltage_field: str | None
+    require: bool
+    drive_rate_hz: float
 
 
 def read_rosbag(
@@ -53,6 +83,10 @@ def read_rosbag(
     imu_topic: str = "/imu/data",
     current_topics: str | Sequence[str] = ("/drive/current_left", "/drive/current_right"),
     *,
+    current_fields: Sequence[str] | None = None,
+    voltage_field: str | None = None,
+    require_currents: bool = False,
+    drive_rate_hz: float = 10.0,
     current_unit: str = "A",
     robot: str = "unknown",
     ground_label: str | None = None,
@@ -73,11 +107,26 @@ def read_rosbag(
     - ``cmd_vel_topic``: ``geometry_msgs/msg/Twist`` or ``TwistStamped`` (commanded;
       ``linear.x`` m/s, ``angular.z`` rad/s), or ``nav_msgs/msg/Odometry`` (measured
       ``twist.twist``; its pose becomes ``pose_xyh`` with the yaw of the orientation).
-    - ``imu_topic``: ``sensor_msgs/msg/Imu``; ``linear_acceleration.z`` (gravity included).
+    - ``imu_topic``: ``sensor_msgs/msg/Imu``; ``linear_acceleration.z`` (gravity included;
+      an IMU that publishes it with gravity removed — median within +/-3 m/s^2 — is
+      accepted, with ``meta.gravity_removed`` set and a note) and ``angular_velocity.z``
+      (the gyro yaw rate, ``gyro_z_radps``; left out when the IMU marks it absent with
+      ``angular_velocity_covariance[0] == -1``).
     - per-side drive current, in ``current_unit`` (``"A"`` or ``"mA"``): either two topics
       ``(left, right)`` of ``std_msgs/msg/Float64`` or ``Float32`` (``data``), or one topic
       of ``std_msgs/msg/Float64MultiArray`` / ``Float32MultiArray`` whose ``data`` is
-      exactly ``[left, right]``.
+      exactly ``[left, right]``, or — with ``current_fields`` — one topic of any message
+      type (a vendor status message, e.g. ``husky_msgs/HuskyStatus`` with
+      ``current_fields=("left_driver_current", "right_driver_current")`` and
+      ``voltage_field="battery_voltage"``) whose named numeric fields (dotted paths for
+      nested ones) are the left and right currents. A ROS 1 bag carries the definition of
+      every message type in its connection headers, and those are registered before
+      reading, so vendor messages need no installed package.
+    - currents are optional: when none of the current topics is in the bag, the log has
+      no currents (``log.has_currents`` is False, ``meta.missing_currents`` says which
+      topics were missing) — enough to predict from; training and scoring refuse it.
+      ``require_currents=True`` (implied by ``current_fields`` or ``voltage_field``)
+      makes a missing topic an error instead.
 
     Timestamps: a topic whose messages carry a header uses the header stamps when
     ``use_header_stamps`` and every stamp is non-zero; otherwise (and for std_msgs
@@ -93,7 +142,9 @@ def read_rosbag(
 
     Alignment: the drive stream is sampled at the current messages (the left topic's with
     two topics; the right current is interpolated linearly onto them), inside the
-    overlap of the current and IMU streams (and of the odometry stream, if used).
+    overlap of the current and IMU streams (and of the odometry stream, if used); without
+    currents, at the odometry messages, or with commands only on a uniform grid at
+    ``drive_rate_hz``.
     Commands are held (zero-order hold) from the last message at or before each drive
     time; with ``cmd_vel_timeout_s`` set, a command older than that — or no command yet —
     counts as zero (robots stop when commands stop). With ``cmd_vel_timeout_s=None`` the
@@ -108,6 +159,15 @@ def read_rosbag(
         ``.bag`` file, ROS 2 bag directory, or the ``.db3`` / ``.mcap`` file inside one.
     cmd_vel_topic, imu_topic, current_topics : str
         Topic names (see above).
+    current_fields : (str, str), optional
+        Left and right current fields of the message on the one current topic.
+    voltage_field : str, optional
+        Battery voltage field (V) of the message on the one current topic; goes to
+        ``battery_voltage_v`` (current x voltage is the battery power).
+    require_currents : bool
+        Refuse a bag without the current topics instead of reading a log without currents.
+    drive_rate_hz : float
+        Rate of the drive grid of a bag with neither currents nor odometry (Hz, > 0).
     current_unit : {"A", "mA"}
     robot, ground_label : metadata
     use_header_stamps : bool
@@ -129,8 +189,11 @@ def read_rosbag(
     FileFormatError
         Missing or unreadable bag.
     DataError
-        A topic is missing or has no messages, has an unexpected type, a multi-array of
-        the wrong length; header stamps more than ``max_clock_offset_s`` away from the
+        The velocity or IMU topic is missing (a current topic too with
+        ``require_currents``; one of two current topics always), a topic has no messages,
+        an unexpected type, a multi-array of the wrong length; a named field the message
+        does not have or that is not a number (the message names the option and lists the
+        fields it has); header stamps more than ``max_clock_offset_s`` away from the
         receive times; streams that do not overlap; plus the checks of the module
         docstring (unsorted or duplicated timestamps, NaNs, gaps; ``repair`` and
         ``allow_gaps`` work as in the CSV readers).
@@ -139,50 +202,50 @@ def read_rosbag(
         topic whose rate lies outside [1 Hz, 10 kHz]); unknown ``current_unit``; bad
         timeout or ``max_clock_offset_s``.
     """
-    topics_cur = _check_arguments(current_unit, cmd_vel_timeout_s, max_clock_offset_s, ground_label, current_topics)
+    opts = _check_arguments(current_unit, cmd_vel_timeout_s, max_clock_offset_s, ground_label, current_topics,
+                            current_fields, voltage_field, require_currents, drive_rate_hz)
     repairs = parse_repair(repair)
     gap_factor = check_gap_factor(gap_factor)
-    bag = _bag_path(path)
+    bag = bag_path(path)
     src = str(bag)
-    wanted = (cmd_vel_topic, imu_topic, *topics_cur)
-    raw, types = _read_messages(bag, wanted)
-    vel_type = _expect(src, raw, types, cmd_vel_topic, _TWIST_TYPES + _ODOM_TYPES)
-    _expect(src, raw, types, imu_topic, _IMU_TYPES)
-    arrays = _current_arrays(src, raw, types, topics_cur)
+    raw, types = read_messages(bag, (cmd_vel_topic, imu_topic) + (opts.topics_cur if opts.require else ()),
+                               () if opts.require else opts.topics_cur)
+    vel_type = expect_type(src, raw, types, cmd_vel_topic, _TWIST_TYPES + _ODOM_TYPES)
+    expect_type(src, raw, types, imu_topic, _IMU_TYPES)
+    present = [t for t in opts.topics_cur if t in raw]
+    if present and len(present) != len(opts.topics_cur):
+        raise DataError(f"{src}: current topic {present[0]!r} is in the bag but "
+                        f"{[t for t in opts.topics_cur if t not in raw]!r} is not (current_topics)")
+    missing_currents = "" if present else (
+        f"current topic(s) {list(opts.topics_cur)!r} not in the bag, which has {sorted(types)!r}")
+    if missing_currents:
+        _LOG.info("%s: no currents: %s", src, missing_currents)
+    cur_cols = _current_columns(src, raw, types, opts, current_unit) if present else {}
+    wanted = (cmd_vel_topic, imu_topic, *present)
     notes: list[str] = []
-    times_ns = {t: _topic_times(src, t, raw[t], use_header_stamps, max_clock_offset_s, notes) for t in wanted}
+    times_ns = {t: topic_times(src, t, raw[t], use_header_stamps, max_clock_offset_s, notes) for t in wanted}
     origin = int(min(s.min() for s in times_ns.values()))
     secs = {t: (s - origin).astype(np.float64) / 1e9 for t, s in times_ns.items()}
     clean = dict(repairs=repairs, gap_factor=gap_factor)
     measured = vel_type in _ODOM_TYPES
     vcols = _velocity_columns(vel_type, [m for _, m in raw[cmd_vel_topic]])
     tv, vc, _ = clean_stream(src, cmd_vel_topic, secs[cmd_vel_topic], vcols, allow_gaps=allow_gaps or not measured, **clean)
-    az = np.array([m.linear_acceleration.z for _, m in raw[imu_topic]], dtype=np.float64)
-    ti, ic, _ = clean_stream(src, imu_topic, secs[imu_topic], {"accel_z": az}, allow_gaps=allow_gaps, **clean)
-    scale = UNIT_FACTORS["current"][current_unit]
-    if arrays is not None:
-        stacked = np.vstack(arrays) * scale
-        tc, cc, _ = clean_stream(src, topics_cur[0], secs[topics_cur[0]], {"left": stacked[:, 0], "right": stacked[:, 1]},
-                                 allow_gaps=allow_gaps, **clean)
-        cur_l, cur_r, t_right = cc["left"], cc["right"], tc
+    imu_msgs = [m for _, m in raw[imu_topic]]
+    icols = {"accel_z": np.array([m.linear_acceleration.z for m in imu_msgs], dtype=np.float64)}
+    if not all(float(m.angular_velocity_covariance[0]) == -1.0 for m in imu_msgs):
+        icols["gyro_z"] = np.array([m.angular_velocity.z for m in imu_msgs], dtype=np.float64)
     else:
-        left, right = (np.array([m.data for _, m in raw[t]], dtype=np.float64) * scale for t in topics_cur)
-        tc, cl, _ = clean_stream(src, topics_cur[0], secs[topics_cur[0]], {"left": left}, allow_gaps=allow_gaps, **clean)
-        t_right, cr, _ = clean_stream(src, topics_cur[1], secs[topics_cur[1]], {"right": right}, allow_gaps=allow_gaps,
-                                      **clean)
-        cur_l, cur_r = cl["left"], cr["right"]
+        notes.append(f"{imu_topic}: no gyro (angular_velocity_covariance[0] == -1)")
+    ti, ic, _ = clean_stream(src, imu_topic, secs[imu_topic], icols, allow_gaps=allow_gaps, **clean)
+    currents = _current_streams(src, cur_cols, secs, dict(allow_gaps=allow_gaps, **clean)) if present else None
     if check_units:
-        check_current(src, f"{topics_cur[0]} (left)", cur_l, current_unit)
-        check_current(src, f"{topics_cur[-1]} (right)", cur_r, current_unit)
-        check_limit(src, f"{cmd_vel_topic} linear.x", vc["v"], MAX_SPEED_MPS, "m/s", "speeds look like mm/s or cm/s")
-        check_limit(src, f"{cmd_vel_topic} angular.z", vc["omega"], MAX_OMEGA_RADPS, "rad/s", "yaw rates look like deg/s")
-        check_accel(src, f"{imu_topic} linear_acceleration.z", ic["accel_z"])
-        check_timing(src, topics_cur[0], tc)
-        check_timing(src, imu_topic, ti)
-    log = _align(
-        src, (tc, cur_l), (t_right, cur_r, len(topics_cur) == 2), (tv, vc, measured), (ti, ic["accel_z"]),
-        cmd_vel_timeout_s, notes,
-    )
+        _check_units(src, currents, opts.topics_cur, current_unit, (cmd_vel_topic, vc), (imu_topic, ti, ic))
+    gravity = gravity_note(f"{imu_topic} linear_acceleration.z", ic["accel_z"])
+    if gravity:
+        notes.append(gravity)
+    log = align_streams(src, currents, (tv, vc, measured), (ti, ic), cmd_vel_timeout_s, opts.drive_rate_hz, notes)
+    if missing_currents:
+        notes.append(f"no currents: {missing_currents}")
     meta = LogMeta(
         robot=robot,
         source=src,
@@ -190,123 +253,116 @@ def read_rosbag(
         velocity_source="measured" if measured else "commanded",
         notes="; ".join(notes),
         start_time_ns=origin,
+        gravity_removed=bool(gravity),
+        missing_currents=missing_currents,
     )
     return InteractionLog(**log, meta=meta)
 
 
-def _import_rosbags() -> tuple[Any, Any, Any]:
-    try:
-        from rosbags.highlevel import AnyReader
-        from rosbags.typesys import Stores, get_typestore
-    except ImportError as exc:
-        raise OptionalDependencyError(
-            "read_rosbag needs the optional dependency 'rosbags': pip install 'terrawatt[ros]'"
-        ) from exc
-    return AnyReader, Stores, get_typestore
-
-
 def _check_arguments(
-    current_unit: Any, cmd_vel_timeout_s: Any, max_clock_offset_s: Any, ground_label: Any, current_topics: Any
-) -> tuple[str, ...]:
-    """Check the options (after the optional dependency); return the current topics as a tuple."""
-    _import_rosbags()
+    current_unit: Any, cmd_vel_timeout_s: Any, max_clock_offset_s: Any, ground_label: Any, current_topics: Any,
+    current_fields: Any, voltage_field: Any, require_currents: Any, drive_rate_hz: Any,
+) -> _Options:
+    """Check the options (after the optional dependency)."""
+    import_rosbags()
     check_choice("current_unit", current_unit, tuple(UNIT_FACTORS["current"]))
     check_optional_real("cmd_vel_timeout_s", cmd_vel_timeout_s, low=0.0, low_inclusive=False)
     check_real("max_clock_offset_s", max_clock_offset_s, low=0.0, low_inclusive=False)
+    rate = check_real("drive_rate_hz", drive_rate_hz, low=0.0, low_inclusive=False)
+    require = check_bool("require_currents", require_currents)
     if ground_label is not None:
         check_text("ground_label", ground_label)
     topics_cur = (current_topics,) if isinstance(current_topics, str) else tuple(current_topics)
-    if len(topics_cur) not in (1, 2) or not all(isinstance(x, str) for x in topics_cur):
+    if len(topics_cur) not in (1, 2) or not all(isinstance(x, str) and x for x in topics_cur):
         raise InvalidParameterError(
-            f"current_topics must be one topic name (a [left, right] multi-array) or two (left, right), got {current_topics!r}"
+            f"current_topics must be one topic name (a [left, right] multi-array or a status message) or two "
+            f"(left, right), got {current_topics!r}"
         )
-    return topics_cur
-
-
-def _bag_path(path: str | os.PathLike[str]) -> Path:
-    bag = Path(path)
-    if bag.is_file() and bag.suffix in (".db3", ".mcap") and (bag.parent / "metadata.yaml").exists():
-        bag = bag.parent
-    if not bag.exists():
-        raise FileFormatError(f"bag {str(bag)!r} does not exist")
-    return bag
-
-
-def _read_messages(bag: Path, wanted: tuple[str, ...]) -> tuple[Messages, dict[str, str]]:
-    """Deserialised messages (receive time in ns, message) and the type of each wanted topic."""
-    any_reader, stores, get_typestore = _import_rosbags()
-    raw: Messages = {t: [] for t in wanted}
-    try:
-        with any_reader([bag], default_typestore=get_typestore(stores.LATEST)) as reader:
-            available = {c.topic: c.msgtype for c in reader.connections}
-            missing = [t for t in wanted if t not in available]
-            if missing:
-                raise DataError(f"{bag}: topic(s) {missing!r} not in the bag; it has {available!r}")
-            conns = [c for c in reader.connections if c.topic in raw]
-            for conn, ts_ns, data in reader.messages(connections=conns):
-                raw[conn.topic].append((ts_ns, reader.deserialize(data, conn.msgtype)))
-    except (DataError, OptionalDependencyError):
-        raise
-    except Exception as exc:  # rosbags raises its own error classes per format
-        raise FileFormatError(f"cannot read bag {str(bag)!r}: {type(exc).__name__}: {exc}") from exc
-    return raw, {t: available[t] for t in wanted}
-
-
-def _expect(src: str, raw: Messages, types: dict[str, str], topic: str, allowed: tuple[str, ...]) -> str:
-    if types[topic] not in allowed:
-        raise DataError(f"{src}: topic {topic!r} has type {types[topic]!r}; expected one of {allowed!r}")
-    if not raw[topic]:
-        raise DataError(f"{src}: topic {topic!r} has no messages")
-    return types[topic]
-
-
-def _current_arrays(src: str, raw: Messages, types: dict[str, str], topics_cur: tuple[str, ...]) -> list[np.ndarray] | None:
-    """The [left, right] arrays of a multi-array current topic; None with two scalar topics."""
-    if len(topics_cur) == 2:
-        for t in topics_cur:
-            _expect(src, raw, types, t, _SCALAR_TYPES)
-        return None
-    _expect(src, raw, types, topics_cur[0], _ARRAY_TYPES)
-    arrays = [np.asarray(m.data, dtype=np.float64).reshape(-1) for _, m in raw[topics_cur[0]]]
-    bad = [i for i, a in enumerate(arrays) if a.size != 2]
-    if bad:
-        raise DataError(
-            f"{src}: topic {topics_cur[0]!r}: {len(bad)} message(s) do not hold exactly [left, right], first at "
-            f"index {bad[0]} with {arrays[bad[0]].size} value(s)"
+    fields = None
+    if current_fields is not None:
+        fields = (current_fields,) if isinstance(current_fields, str) else tuple(current_fields)
+        if len(fields) != 2 or not all(isinstance(x, str) and x for x in fields):
+            raise InvalidParameterError(
+                f"current_fields (--current-fields) must be two field names (left, right), got {current_fields!r}"
+            )
+    if voltage_field is not None:
+        check_text("voltage_field", voltage_field)
+    if (fields is not None or voltage_field is not None) and len(topics_cur) != 1:
+        raise InvalidParameterError(
+            f"current_fields and voltage_field (--current-fields, --voltage-field) read one status topic; "
+            f"give one current topic (current_topics, --current-topics), got {topics_cur!r}"
         )
-    return arrays
-
-
-def _stamp_ns(msg: Any) -> int:
-    stamp = msg.header.stamp
-    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
-
-
-def _topic_times(
-    src: str, topic: str, msgs: list[tuple[int, Any]], use_header_stamps: bool, max_clock_offset_s: float,
-    notes: list[str],
-) -> np.ndarray:
-    """One topic's times (ns): header stamps when asked, all non-zero and near the receive
-    times; else the receive times. Appends which to ``notes``."""
-    received = np.array([ts for ts, _ in msgs], dtype=np.int64)
-    if not (use_header_stamps and hasattr(msgs[0][1], "header")):
-        notes.append(f"{topic}: receive time")
-        return received
-    hdr = np.array([_stamp_ns(m) for _, m in msgs], dtype=np.int64)
-    if not (hdr != 0).all():
-        notes.append(f"{topic}: receive time ({int((hdr == 0).sum())} zero header stamp(s))")
-        return received
-    offset_s = float(np.median((received - hdr).astype(np.float64))) / 1e9
-    if abs(offset_s) > max_clock_offset_s:
-        raise DataError(
-            f"{src}: topic {topic!r}: median (receive time - header stamp) is {fmt_number(offset_s, 6)} s, "
-            f"expected within +/-{fmt_number(max_clock_offset_s)} s (max_clock_offset_s): the publisher's "
-            f"and the recorder's clocks disagree, and the receive-time current topics would be "
-            f"shifted against this topic; pass use_header_stamps=False to put every topic on the "
-            f"receive time"
+    if voltage_field is not None and fields is None:
+        raise InvalidParameterError(
+            "voltage_field (--voltage-field) is read beside the currents of a status message: name them too "
+            "with current_fields (--current-fields)"
         )
-    notes.append(f"{topic}: header stamps (median receive time - stamp {offset_s:.3g} s)")
-    return hdr
+    return _Options(topics_cur, fields, voltage_field, require or fields is not None, rate)
+
+
+def _current_columns(
+    src: str, raw: Messages, types: dict[str, str], opts: _Options, unit: str
+) -> dict[str, dict[str, np.ndarray]]:
+    """Per current topic, its checked columns in A (``left``, ``right``) and V (``voltage``)."""
+    scale = UNIT_FACTORS["current"][unit]
+    first = opts.topics_cur[0]
+    if len(opts.topics_cur) == 2:
+        for t in opts.topics_cur:
+            expect_type(src, raw, types, t, _SCALAR_TYPES, _FIELDS_HINT)
+        return {t: {side: np.array([m.data for _, m in raw[t]], dtype=np.float64) * scale}
+                for t, side in zip(opts.topics_cur, ("left", "right"))}
+    if opts.current_fields is None:
+        expect_type(src, raw, types, first, _ARRAY_TYPES, _FIELDS_HINT)
+        arrays = [np.asarray(m.data, dtype=np.float64).reshape(-1) for _, m in raw[first]]
+        bad = [i for i, a in enumerate(arrays) if a.size != 2]
+        if bad:
+            raise DataError(
+                f"{src}: topic {first!r}: {len(bad)} message(s) do not hold exactly [left, right], first at "
+                f"index {bad[0]} with {arrays[bad[0]].size} value(s)"
+            )
+        stacked = np.vstack(arrays) * scale
+        return {first: {"left": stacked[:, 0], "right": stacked[:, 1]}}
+    if not raw[first]:
+        raise DataError(f"{src}: topic {first!r} has no messages")
+    cols = {
+        side: field_values(src, first, types[first], raw[first], name, "current_fields (--current-fields)") * scale
+        for side, name in zip(("left", "right"), opts.current_fields)
+    }
+    if opts.voltage_field is not None:
+        cols["voltage"] = field_values(src, first, types[first], raw[first], opts.voltage_field,
+                                       "voltage_field (--voltage-field)")
+    return {first: cols}
+
+
+def _current_streams(
+    src: str, cur_cols: dict[str, dict[str, np.ndarray]], secs: dict[str, np.ndarray], clean: dict[str, Any]
+) -> CurrentStreams:
+    """The cleaned left/right current streams (and battery voltage) of the current topic(s)."""
+    streams = [clean_stream(src, topic, secs[topic], cols, **clean)[:2] for topic, cols in cur_cols.items()]
+    (tc, cc), (tr, cr) = streams[0], streams[-1]
+    return CurrentStreams(tc, cc["left"], tr, cr["right"], cc.get("voltage"))
+
+
+def _check_units(
+    src: str, currents: CurrentStreams | None, topics_cur: tuple[str, ...], unit: str,
+    velocity: tuple[str, dict[str, np.ndarray]], imu: tuple[str, np.ndarray, dict[str, np.ndarray]],
+) -> None:
+    vel_topic, vc = velocity
+    imu_topic, ti, ic = imu
+    if currents is not None:
+        check_current(src, f"{topics_cur[0]} (left)", currents.left_a, unit)
+        check_current(src, f"{topics_cur[-1]} (right)", currents.right_a, unit)
+        check_timing(src, topics_cur[0], currents.time_s)
+        if currents.voltage_v is not None:
+            check_limit(src, f"{topics_cur[0]} battery voltage", currents.voltage_v, MAX_BATTERY_VOLTAGE_V, "V",
+                        "the voltage looks like mV")
+    check_limit(src, f"{vel_topic} linear.x", vc["v"], MAX_SPEED_MPS, "m/s", "speeds look like mm/s or cm/s")
+    check_limit(src, f"{vel_topic} angular.z", vc["omega"], MAX_OMEGA_RADPS, "rad/s", "yaw rates look like deg/s")
+    check_accel(src, f"{imu_topic} linear_acceleration.z", ic["accel_z"])
+    if "gyro_z" in ic:
+        check_limit(src, f"{imu_topic} angular_velocity.z", ic["gyro_z"], MAX_OMEGA_RADPS, "rad/s",
+                    "gyro rates look like deg/s")
+    check_timing(src, imu_topic, ti)
 
 
 def _velocity_columns(vel_type: str, msgs: list[Any]) -> dict[str, np.ndarray]:
@@ -328,68 +384,3 @@ def _velocity_columns(vel_type: str, msgs: list[Any]) -> dict[str, np.ndarray]:
         cols["y"] = np.array([p.position.y for p in pos], dtype=np.float64)
         cols["heading"] = np.arctan2(2 * (q[:, 0] * q[:, 3] + q[:, 1] * q[:, 2]), 1 - 2 * (q[:, 2] ** 2 + q[:, 3] ** 2))
     return cols
-
-
-def _align(
-    src: str,
-    left: tuple[np.ndarray, np.ndarray],
-    right: tuple[np.ndarray, np.ndarray, bool],
-    velocity: tuple[np.ndarray, dict[str, np.ndarray], bool],
-    imu: tuple[np.ndarray, np.ndarray],
-    cmd_vel_timeout_s: float | None,
-    notes: list[str],
-) -> dict[str, Any]:
-    """The streams on the drive times: the left current's times inside the overlap.
-
-    Returns the keyword arguments of :class:`InteractionLog` but its ``meta``.
-    """
-    tc, cur_l = left
-    t_right, cur_r, two_topics = right
-    tv, vc, measured = velocity
-    ti, az = imu
-    spans = [(tc[0], tc[-1]), (t_right[0], t_right[-1]), (ti[0], ti[-1])]
-    if measured:
-        spans.append((tv[0], tv[-1]))
-    t0 = max(s[0] for s in spans)
-    t1 = min(s[1] for s in spans)
-    if not measured and cmd_vel_timeout_s is None:
-        t0 = max(t0, tv[0])
-    keep = (tc >= t0) & (tc <= t1)
-    if t1 < t0 or not keep.any():
-        def span(a: float, b: float) -> str:
-            return f"[{fmt_number(float(a), 9)}, {fmt_number(float(b), 9)}] s"
-
-        raise DataError(
-            f"{src}: the streams do not overlap (current {span(*spans[0])}, IMU {span(*spans[2])}, "
-            f"velocity {span(tv[0], tv[-1])})"
-        )
-    td = tc[keep]
-    cur_r = np.interp(td, t_right, cur_r) if two_topics else cur_r[keep]
-    pose = None
-    if measured:
-        v = np.interp(td, tv, vc["v"])
-        omega = np.interp(td, tv, vc["omega"])
-        h = np.interp(td, tv, np.unwrap(vc["heading"]))
-        pose = np.column_stack([np.interp(td, tv, vc["x"]), np.interp(td, tv, vc["y"]), np.pi - np.mod(np.pi - h, 2 * np.pi)])
-    else:
-        idx = np.searchsorted(tv, td, side="right") - 1
-        valid = idx >= 0
-        if cmd_vel_timeout_s is not None:
-            valid &= (td - tv[np.maximum(idx, 0)]) <= cmd_vel_timeout_s
-        v = np.where(valid, vc["v"][np.maximum(idx, 0)], 0.0)
-        omega = np.where(valid, vc["omega"][np.maximum(idx, 0)], 0.0)
-        notes.append(
-            "commands held from the last message" + (
-                f", zero after {cmd_vel_timeout_s:g} s without one ({int((~valid).sum())} drive sample(s))"
-                if cmd_vel_timeout_s is not None else ""
-            )
-        )
-    acc = bracket_accel(td, ti)
-    notes.append(
-        f"aligned on the overlap [{t0:g}, {t1:g}] s: dropped {int((~keep).sum())} drive sample(s) outside it and "
-        f"{ti.size - (acc.stop - acc.start)} IMU sample(s) outside the kept drive span (bracketing samples kept)"
-    )
-    return dict(
-        time_s=td, v_mps=v, omega_radps=omega, current_left_a=cur_l[keep], current_right_a=cur_r,
-        accel_time_s=ti[acc], accel_z_mps2=az[acc], pose_xyh=pose,
-    )

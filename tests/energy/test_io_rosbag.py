@@ -126,7 +126,8 @@ def test_rosbag_bad_inputs(tmp_path):
     content = bag_content()
     path = write_bag(tmp_path / "run", "ros2", content, multiarray=True)
     with pytest.raises(DataError, match=r"topic\(s\) \['/drive/current_left'.* not in the bag"):
-        read_rosbag(path)
+        read_rosbag(path, require_currents=True)
+    assert not read_rosbag(path).has_currents  # optional by default: a log to predict from
     with pytest.raises(DataError, match="topic '/imu/data' has type 'sensor_msgs/msg/Imu'; expected one of"):
         read_rosbag(path, cmd_vel_topic="/imu/data", current_topics="/drive/current")
     with pytest.raises(DataError, match="has type 'std_msgs/msg/Float64MultiArray'"):
