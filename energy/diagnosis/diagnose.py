@@ -15,7 +15,14 @@ from ..models.base import CurrentModel, check_logs, log_currents
 from .corrected import CorrectedCurrentModel
 from .effect_base import Effect
 from .effects import LEARNED_EFFECT, NOT_IDENTIFIABLE_FROM_CURRENT, effect, resolve_effects
-from .fit import SetScore, bootstrap_shrink_interval_pct, prepare_data, score_effect_set, shrink_pct
+from .fit import (
+    SetScore,
+    bootstrap_gain_interval_pct,
+    bootstrap_shrink_interval_pct,
+    prepare_data,
+    score_effect_set,
+    shrink_pct,
+)
 from .localise import GapShare, localise_gap
 from .model_currents import physics_basis
 from .regimes import check_terrain
@@ -23,12 +30,10 @@ from .residuals import GapSummary, gap_summary
 from .result import Diagnosis, EffectScore, WaterfallStep
 from .split import make_split
 
-__all__ = ["SIGNIFICANT_SHRINK_PCT", "MAX_GREEDY_CANDIDATES", "diagnose"]
+__all__ = ["SIGNIFICANT_SHRINK_PCT", "diagnose"]
 
 #: An effect is added only when it shrinks the held-out gap by at least this much (points of %).
 SIGNIFICANT_SHRINK_PCT = 2.0
-#: Candidates (best alone first) tried at each greedy step.
-MAX_GREEDY_CANDIDATES = 6
 
 
 def _check_model(model: Any, logs: list[InteractionLog]) -> list[np.ndarray]:
@@ -81,11 +86,14 @@ def _candidates(model: Any, logs: list[InteractionLog], effects: Any, terrain: A
     return usable, learned, skipped
 
 
-def _score(name_of: Effect, none: SetScore, s: SetScore, n_bootstrap: int, seed: int | None) -> EffectScore:
-    lo, hi = bootstrap_shrink_interval_pct(none, s, n_bootstrap=n_bootstrap, seed=seed)
-    vals = s.median_values()[-1]
-    return EffectScore(name_of.name, name_of.kind, name_of.values_dict(vals), shrink_pct(none, s), (lo, hi),
-                       name_of.n_parameters)
+def _score(e: Effect, none: SetScore, alone: SetScore, current: SetScore, trial: SetScore, n_bootstrap: int,
+           seed: int | None) -> EffectScore:
+    """``e`` alone (``alone`` against ``none``) and added to the chosen set (``trial`` against ``current``)."""
+    lo, hi = bootstrap_shrink_interval_pct(none, alone, n_bootstrap=n_bootstrap, seed=seed)
+    added = shrink_pct(none, trial) - shrink_pct(none, current)
+    interval = bootstrap_gain_interval_pct(none, current, trial, n_bootstrap=n_bootstrap, seed=seed)
+    return EffectScore(e.name, e.kind, e.values_dict(trial.median_values()[-1]), shrink_pct(none, alone), (lo, hi),
+                       e.n_parameters, added, interval)
 
 
 def _step(label: str, logs: list[InteractionLog], s: SetScore, none: SetScore, section_s: float) -> WaterfallStep:
@@ -120,11 +128,15 @@ def _verdict(before: GapSummary, after: GapSummary, ranking: Sequence[EffectScor
         out.append("No unmodelled effect found: no catalogued effect shrinks the held-out gap significantly.")
     for k, n in enumerate(chosen):
         s = by_name[n]
-        lo, hi = s.shrink_interval_pct
+        lo, hi = s.added_interval_pct
         what = "A learned residual correction (last resort, not physics)" if s.kind == "learned" else f"{n} ({s.kind})"
-        lead = what if k == 0 else f"Then {what}"
-        out.append(f"{lead} explains {fmt_number(s.shrink_pct, 3)} % of the squared current gap on {held} "
-                   f"alone (95 % interval {fmt_number(lo, 3)} … {fmt_number(hi, 3)} %).")
+        if k == 0:
+            out.append(f"{what} explains {fmt_number(s.added_pct, 3)} % of the squared current gap on {held} "
+                       f"(95 % interval {fmt_number(lo, 3)} … {fmt_number(hi, 3)} %).")
+        else:
+            out.append(f"Then {what}, fitted jointly with the effects before it, explains a further "
+                       f"{fmt_number(s.added_pct, 3)} points (95 % interval {fmt_number(lo, 3)} … {fmt_number(hi, 3)}; "
+                       f"{fmt_number(s.shrink_pct, 3)} % alone).")
     if chosen:
         shrink = 100.0 * (1.0 - (after.rmse_a / before.rmse_a) ** 2) if before.rmse_a > 0 else 0.0
         text = (f"With {', '.join(chosen)} added, the squared current gap on {held} shrinks by "
@@ -208,30 +220,39 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
 
     none = score_effect_set([], data, sp)
     alone = {e.name: score_effect_set([e], data, sp) for e in usable}
-    scores = {e.name: _score(e, none, alone[e.name], n_bootstrap, seed) for e in usable}
-    order = sorted(usable, key=lambda e: -scores[e.name].shrink_pct)
-
     chosen: list[Effect] = []
     sets = [none]
-    pool = [e for e in order if scores[e.name].shrink_pct >= SIGNIFICANT_SHRINK_PCT
-            and not e.negligible(alone[e.name].median_values()[-1])][:MAX_GREEDY_CANDIDATES]
-    while pool:
-        trials = {e.name: (alone[e.name] if not chosen else score_effect_set(chosen + [e], data, sp)) for e in pool}
-        best = min(pool, key=lambda e: trials[e.name].sse_units.sum())
+    scores: dict[str, EffectScore] = {}
+    remaining = list(usable)
+    trials = dict(alone)
+    while remaining:
+        # every remaining candidate refitted jointly with the chosen ones: the ranking is conditional
+        trials = {e.name: (alone[e.name] if not chosen else score_effect_set(chosen + [e], data, sp))
+                  for e in remaining}
+        eligible = [e for e in remaining if not e.negligible(trials[e.name].median_values()[-1])]
+        if not eligible:
+            break
+        best = min(eligible, key=lambda e: trials[e.name].sse_units.sum())
         if not _significant(sets[-1], trials[best.name], none, n_bootstrap, seed):
             break
+        scores[best.name] = _score(best, none, alone[best.name], sets[-1], trials[best.name], n_bootstrap, seed)
         chosen.append(best)
         sets.append(trials[best.name])
-        pool = [e for e in pool if e is not best]
+        remaining.remove(best)
+    remaining.sort(key=lambda e: trials[e.name].sse_units.sum())
+    scores.update({e.name: _score(e, none, alone[e.name], sets[-1], trials[e.name], n_bootstrap, seed)
+                   for e in remaining})
+    order = chosen + remaining
     if not chosen and learned is not None:
         s = score_effect_set([learned], data, sp)
-        scores[learned.name] = _score(learned, none, s, n_bootstrap, seed)
+        scores[learned.name] = _score(learned, none, s, none, s, n_bootstrap, seed)
         order.append(learned)
         if _significant(none, s, none, n_bootstrap, seed):
             chosen.append(learned)
             sets.append(s)
+            order = [learned] + order[:-1]
 
-    ranking = tuple(sorted((scores[e.name] for e in order), key=lambda s: -s.shrink_pct))
+    ranking = tuple(scores[e.name] for e in order)
     waterfall = [_step("as given", items, none, none, section_s)]
     waterfall += [_step(f"+ {e.name}", items, s, none, section_s) for e, s in zip(chosen, sets[1:])]
     before = gap_summary(items, list(none.held_out_a), section_s=section_s)

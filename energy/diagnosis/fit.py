@@ -29,7 +29,7 @@ from .model_currents import PhysicsBasis, clamps_at_zero, unclipped_prediction
 from .split import Split
 
 __all__ = ["DiagnosisData", "SetScore", "prepare_data", "compose", "fit_effect_set", "score_effect_set",
-           "bootstrap_shrink_interval_pct", "shrink_pct"]
+           "bootstrap_shrink_interval_pct", "bootstrap_gain_interval_pct", "shrink_pct"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -199,3 +199,19 @@ def bootstrap_shrink_interval_pct(before: SetScore, after: SetScore, *, n_bootst
     vals = 100.0 * (1.0 - sa / np.where(sb > 0, sb, 1.0))
     tail = (1.0 - level) / 2.0 * 100.0
     return float(np.percentile(vals, tail)), float(np.percentile(vals, 100.0 - tail))
+
+
+def bootstrap_gain_interval_pct(none: SetScore, current: SetScore, trial: SetScore, *, n_bootstrap: int = 200,
+                                seed: int | None = 0, level: float = 0.95) -> tuple[float, float]:
+    """Percentile interval of what ``trial`` adds to ``current``, in points of the gap of ``none``.
+
+    The same resampled units (runs or blocks) enter all three sums, so the interval is that of
+    ``shrink_pct(none, trial) - shrink_pct(none, current)``.
+    """
+    n_bootstrap = check_int("n_bootstrap", n_bootstrap, low=1)
+    rng = np.random.default_rng(check_seed(seed))
+    idx = rng.integers(0, none.sse_units.size, size=(n_bootstrap, none.sse_units.size))
+    sn = none.sse_units[idx].sum(axis=1)
+    gain = (current.sse_units[idx].sum(axis=1) - trial.sse_units[idx].sum(axis=1)) / np.where(sn > 0, sn, 1.0)
+    tail = (1.0 - level) / 2.0 * 100.0
+    return float(np.percentile(100.0 * gain, tail)), float(np.percentile(100.0 * gain, 100.0 - tail))

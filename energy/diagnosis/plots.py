@@ -69,7 +69,7 @@ _NO_RANKING = "no effect ranking: no candidate effect was scored (every one was 
 # ----------------------------------------------------------------- effect ranking
 def plot_effect_ranking(diagnosis: Diagnosis, path: str | os.PathLike[str], *, max_effects: int = 20,
                         dpi: int = 110) -> Path:
-    """The effect ranking: held-out shrink of each candidate alone, with its 95 % bootstrap interval.
+    """The effect ranking: what each candidate adds to the chosen effects above it (held-out, 95 % interval) and its shrink alone.
 
     Horizontal bars, best first, coloured by kind; effects the greedy selection chose are
     marked with their order, the learned correction is labelled as such.
@@ -95,9 +95,10 @@ def plot_effect_ranking(diagnosis: Diagnosis, path: str | os.PathLike[str], *, m
 
     fig, ax = plt.subplots(figsize=(9, 0.38 * len(ranking) + 1.8))
     y = np.arange(len(ranking))
-    shrink = np.array([s.shrink_pct for s in ranking])
-    lo = np.array([s.shrink_interval_pct[0] for s in ranking])
-    hi = np.array([s.shrink_interval_pct[1] for s in ranking])
+    shrink = np.array([s.added_pct for s in ranking])
+    lo = np.array([s.added_interval_pct[0] for s in ranking])
+    hi = np.array([s.added_interval_pct[1] for s in ranking])
+    alone = np.array([s.shrink_pct for s in ranking])
     colours = [_KIND_COLOURS.get(s.kind, "#969696") for s in ranking]
     bars = ax.barh(y, shrink, color=colours, alpha=0.85)
     for bar, s in zip(bars, ranking):
@@ -108,6 +109,7 @@ def plot_effect_ranking(diagnosis: Diagnosis, path: str | os.PathLike[str], *, m
             bar.set_hatch("//")
     ax.errorbar(shrink, y, xerr=[np.maximum(shrink - lo, 0.0), np.maximum(hi - shrink, 0.0)], fmt="none", ecolor="k",
                 elinewidth=1.0, capsize=3)
+    ax.plot(alone, y, "o", mfc="none", mec="k", ms=5, label="alone")
     names = []
     for s in ranking:
         name = f"{s.name} (learned, not physics)" if s.kind == "learned" else s.name
@@ -115,14 +117,14 @@ def plot_effect_ranking(diagnosis: Diagnosis, path: str | os.PathLike[str], *, m
     ax.set_yticks(y, names, fontsize=8)
     ax.invert_yaxis()
     ax.axvline(0.0, color="k", lw=0.6)
-    ax.set_xlabel(f"held-out shrink of the squared current gap (%), split by {diagnosis.split}; bars: 95 % bootstrap "
-                  "interval")
+    ax.set_xlabel(f"held-out shrink of the squared current gap (points of %), split by {diagnosis.split}: what each "
+                  "adds to the chosen effects above it (95 % bootstrap interval); o: the effect alone", fontsize=8)
     kinds = sorted({s.kind for s in ranking})
-    ax.legend(handles=[Patch(facecolor=_KIND_COLOURS.get(k, "#969696"), label=k) for k in kinds], fontsize=8,
-              loc="lower right")
+    handles = [Patch(facecolor=_KIND_COLOURS.get(k, "#969696"), label=k) for k in kinds]
+    ax.legend(handles=handles + ax.get_legend_handles_labels()[0], fontsize=8, loc="lower right")
     more = f" (best {len(ranking)} of {len(diagnosis.ranking)})" if len(diagnosis.ranking) > len(ranking) else ""
     chosen = ", ".join(diagnosis.chosen) if diagnosis.chosen else "none"
-    ax.set_title(f"candidate effects, each alone{more}; chosen: {chosen}", fontsize=10)
+    ax.set_title(f"candidate effects, added greedily{more}; chosen: {chosen}", fontsize=10)
     ax.grid(axis="x", alpha=0.3)
     fig.tight_layout()
     return save_closed(fig, target, dpi)

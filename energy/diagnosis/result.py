@@ -19,7 +19,7 @@ __all__ = ["EffectScore", "WaterfallStep", "Diagnosis"]
 
 @dataclass(frozen=True)
 class EffectScore:
-    """One candidate effect, fitted on calibration data and scored alone on held-out data.
+    """One candidate effect, fitted on calibration data and scored on held-out data.
 
     Attributes
     ----------
@@ -29,9 +29,15 @@ class EffectScore:
         Fitted values (median over the folds' calibration fits).
     shrink_pct : float
         ``100 * (1 - MSE_after / MSE_before)`` of the current over the held-out samples.
+        The effect alone on the model as given.
     shrink_interval_pct : (float, float)
         95 % bootstrap interval of the shrink over runs (or blocks).
     n_parameters : int
+    added_pct : float
+        Points of the original squared gap it adds, fitted jointly with the effects ranked
+        above it that were chosen (equal to ``shrink_pct`` for the first).
+    added_interval_pct : (float, float)
+        95 % bootstrap interval of ``added_pct``.
     """
 
     name: str
@@ -40,11 +46,14 @@ class EffectScore:
     shrink_pct: float
     shrink_interval_pct: tuple[float, float]
     n_parameters: int
+    added_pct: float = float("nan")
+    added_interval_pct: tuple[float, float] = (float("nan"), float("nan"))
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict."""
         d = asdict(self)
         d["shrink_interval_pct"] = list(self.shrink_interval_pct)
+        d["added_interval_pct"] = list(self.added_interval_pct)
         return d
 
 
@@ -79,7 +88,9 @@ class Diagnosis:
     localisation : tuple of GapShare
         Where the gap of the model as given lies, on all logs.
     ranking : tuple of EffectScore
-        Every candidate, best held-out shrink first.
+        Every candidate: the chosen effects in the order they were added (each the best
+        addition to those before it), then the others by what they would add to the chosen
+        set (best first).
     chosen : tuple of str
         Effects added greedily, in order.
     waterfall : tuple of WaterfallStep
@@ -142,12 +153,14 @@ class Diagnosis:
             lines.append(f"| {r.dimension} | {r.label} | {fmt_number(r.gap_mah, 3)} | {_pct(r.share_pct)} | "
                          f"{r.n_samples} | {r.n_runs} |")
         lines += ["", f"## Candidate effects (held-out shrink, split by {self.split})", "",
-                  "| rank | effect | kind | shrink | 95 % interval | parameters |", "|---|---|---|---|---|---|"]
+                  "Ranked by what each adds to the chosen effects above it; *alone* is the effect on its own.", "",
+                  "| rank | effect | kind | adds | 95 % interval | alone | parameters |",
+                  "|---|---|---|---|---|---|---|"]
         for k, s in enumerate(self.ranking, 1):
-            lo, hi = s.shrink_interval_pct
+            lo, hi = s.added_interval_pct
             params = ", ".join(f"{n} = {fmt_number(v, 4)}" for n, v in s.parameters.items())
-            lines.append(f"| {k} | {s.name} | {s.kind} | {fmt_number(s.shrink_pct, 3)} % | "
-                         f"{fmt_number(lo, 3)} … {fmt_number(hi, 3)} % | {params} |")
+            lines.append(f"| {k} | {s.name} | {s.kind} | {fmt_number(s.added_pct, 3)} % | "
+                         f"{fmt_number(lo, 3)} … {fmt_number(hi, 3)} % | {fmt_number(s.shrink_pct, 3)} % | {params} |")
         if self.skipped:
             lines += ["", "Not scored: " + "; ".join(f"{n} ({why})" for n, why in self.skipped.items()) + "."]
         lines += ["", "## Waterfall (held-out)", "",
