@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from terrain.checks import check_bool, check_int, check_seed
-from terrain.errors import InvalidParameterError, OutOfBoundsError, UnknownNameError
+from terrain.errors import InvalidParameterError, OutOfBoundsError, TerrawattError, UnknownNameError
 
 from .batch_pairs import BatchPairs
 from .batch_result import BatchResult, BatchRow
@@ -56,10 +56,24 @@ def plan_pair(
     )
 
 
-def _error_row(pairs: BatchPairs, i: int, exc: BaseException) -> BatchRow:
-    s, g = pairs.starts_xy_m[i], pairs.goals_xy_m[i]
-    return BatchRow(name=pairs.names[i], start_x_m=float(s[0]), start_y_m=float(s[1]), goal_x_m=float(g[0]),
-                    goal_y_m=float(g[1]), status="error", error=f"{type(exc).__name__}: {exc}")
+def _error_row(name: str, start_xy_m: Any, goal_xy_m: Any, exc: BaseException) -> BatchRow:
+    return BatchRow(name=name, start_x_m=float(start_xy_m[0]), start_y_m=float(start_xy_m[1]),
+                    goal_x_m=float(goal_xy_m[0]), goal_y_m=float(goal_xy_m[1]), status="error",
+                    error=f"{type(exc).__name__}: {exc}")
+
+
+def _plan_pair_task(cost: EnergyCost, name: str, start_xy_m: tuple[float, float], goal_xy_m: tuple[float, float],
+                    *opts: Any) -> BatchRow:
+    """:func:`plan_pair`, a library error (a blocked start, ...) returned as an ``"error"`` row.
+
+    Returning the row rather than raising keeps a dask worker from logging the expected
+    failure with a traceback; any other exception propagates (and is reported the same way
+    by the caller).
+    """
+    try:
+        return plan_pair(cost, name, start_xy_m, goal_xy_m, *opts)
+    except TerrawattError as exc:
+        return _error_row(name, start_xy_m, goal_xy_m, exc)
 
 
 def _shippable(cost: EnergyCost) -> EnergyCost:
@@ -205,10 +219,11 @@ def _plan_here(cost: EnergyCost, batch: BatchPairs, opts: tuple, progress: bool)
 
     rows = []
     for i in tqdm(range(len(batch)), desc="routes", disable=not progress):
+        name, start, goal = batch.names[i], tuple(batch.starts_xy_m[i].tolist()), tuple(batch.goals_xy_m[i].tolist())
         try:
-            rows.append(plan_pair(cost, batch.names[i], tuple(batch.starts_xy_m[i]), tuple(batch.goals_xy_m[i]), *opts))
+            rows.append(_plan_pair_task(cost, name, start, goal, *opts))
         except Exception as exc:  # noqa: BLE001 - a pair that raises is reported in its row, the others go on
-            rows.append(_error_row(batch, i, exc))
+            rows.append(_error_row(name, start, goal, exc))
     return rows
 
 
@@ -219,7 +234,7 @@ def _plan_on_cluster(client: Any, cost: EnergyCost, batch: BatchPairs, opts: tup
 
     [shared] = client.scatter([_shippable(cost)], broadcast=True, hash=False)
     futures = [
-        client.submit(plan_pair, shared, batch.names[i], tuple(batch.starts_xy_m[i].tolist()),
+        client.submit(_plan_pair_task, shared, batch.names[i], tuple(batch.starts_xy_m[i].tolist()),
                       tuple(batch.goals_xy_m[i].tolist()), *opts, pure=False)
         for i in range(len(batch))
     ]
@@ -232,7 +247,7 @@ def _plan_on_cluster(client: Any, cost: EnergyCost, batch: BatchPairs, opts: tup
                 try:
                     rows[i] = fut.result()
                 except Exception as exc:  # noqa: BLE001 - the task's exception, re-raised here: report it
-                    rows[i] = _error_row(batch, i, exc)
+                    rows[i] = _error_row(batch.names[i], batch.starts_xy_m[i], batch.goals_xy_m[i], exc)
                 bar.update()
     except BaseException:
         client.cancel(futures)

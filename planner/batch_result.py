@@ -76,6 +76,8 @@ class BatchRow:
         return self.status in ("exact", "approximate")
 
 
+#: Errors listed by :meth:`BatchResult.summary` (the rows hold them all).
+_SHOWN_ERRORS = 10
 #: CSV / JSON columns of a row, in order.
 _COLUMNS = tuple(f.name for f in fields(BatchRow))
 
@@ -199,7 +201,8 @@ class BatchResult:
         if found:
             e = np.array([r.energy_wh for r in found])
             lines.append(f"route energy: min {e.min():.2f} Wh, median {np.median(e):.2f} Wh, max {e.max():.2f} Wh")
-        for r in self.rows:
-            if r.status == "error":
-                lines.append(f"error in pair {r.name!r}: {r.error}")
+        errors = [r for r in self.rows if r.status == "error"]
+        lines += [f"error in pair {r.name!r}: {r.error}" for r in errors[:_SHOWN_ERRORS]]
+        if len(errors) > _SHOWN_ERRORS:
+            lines.append(f"... and {len(errors) - _SHOWN_ERRORS} more errors (see the rows' error column)")
         return "\n".join(lines)

@@ -99,7 +99,7 @@ def dask_client(
                 yield client
         else:
             with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                              dashboard_address=None) as cluster, Client(cluster) as client:
+                              dashboard_address=":0") as cluster, Client(cluster) as client:
                 yield client
     finally:
         dask_log.setLevel(old_level)

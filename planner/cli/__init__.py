@@ -15,7 +15,7 @@ from collections.abc import Sequence
 
 from terrain import TerrawattError
 
-from . import diagnose, evaluate, mission, plan, predict, reach, train
+from . import batch, diagnose, evaluate, mission, plan, predict, reach, train
 
 __all__ = ["main", "build_parser", "EXIT_OK", "EXIT_NOT_ACHIEVED", "EXIT_BAD_INPUT"]
 
@@ -35,6 +35,7 @@ def build_parser() -> argparse.ArgumentParser:
     predict.add_parser(sub)
     diagnose.add_parser(sub)
     reach.add_parser(sub)
+    batch.add_parser(sub)
     return parser
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import time
 from pathlib import Path
 from typing import Any
@@ -13,12 +14,16 @@ from terrain.atomic import write_json_atomic
 from terrain.checks import fmt_number
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
 
-from ..missions import AdaptiveSettings, fit_prior_model, run_adaptive_mission
+from ..dask_client import dask_client
+from ..edge_cost import EnergyCost
+from ..missions import AdaptiveSettings, fit_prior_model, run_adaptive_mission, simulate_missions_mc
+from ..planning import plan_route
 from .common import add_map_options, check_outputs, check_positive, draw_figure, read_map_file
 
-__all__ = ["add_parser", "run_mission"]
+__all__ = ["add_parser", "run_mission", "add_monte_carlo_options", "check_monte_carlo_flags", "run_monte_carlo"]
 
 _OUTPUTS = ("mission.json", "mission.png")
+_MC_OUTPUTS = ("monte_carlo.json", "monte_carlo.csv", "monte_carlo.png")
 
 
 def add_parser(sub: Any) -> None:
@@ -44,6 +49,7 @@ def add_parser(sub: Any) -> None:
     mission.add_argument("--no-adapt", action="store_true", help="drive the first plan without model updates")
     mission.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     mission.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
+    add_monte_carlo_options(mission)
     mission.set_defaults(run=run_mission)
 
 
@@ -67,7 +73,8 @@ def run_mission(args: argparse.Namespace) -> int:
     exceeded, reserve crossed, no route).
     """
     _check_flags(args)
-    check_outputs(args.out, _OUTPUTS)
+    check_monte_carlo_flags(args)
+    check_outputs(args.out, _OUTPUTS if args.monte_carlo is None else _MC_OUTPUTS)
     if args.map == "example":
         tmap, label = example_map(), "bundled example map"
         start = tuple(args.start) if args.start else EXAMPLE_START_XY_M
@@ -80,6 +87,8 @@ def run_mission(args: argparse.Namespace) -> int:
     unknown = sorted(n for n in set(tmap.ground_names.values()) if n not in GROUND_PRESETS)
     if unknown:
         raise UnknownNameError(f"the map's grounds {unknown!r} have no preset; known grounds: {sorted(GROUND_PRESETS)!r}")
+    if args.monte_carlo is not None:
+        return run_monte_carlo(args, tmap, label, start, goal)
     robot = robot_preset(args.robot)
     names = set(tmap.ground_names.values()) | {args.prior_ground}
     grounds = {name: ground_preset(name) for name in names}
@@ -137,3 +146,70 @@ def _print_summary(args: argparse.Namespace, result: Any, battery: Battery, labe
         print(f"the battery ran out {budget.depleted_time_s:.1f} s into the mission")
     print(f"final state of charge {budget.arrival_soc_pct:.1f} % (margin {budget.reserve_margin_pct:+.1f} points "
           f"above the reserve); loop computing {elapsed:.1f} s")
+
+
+# ------------------------------------------------------------------ --monte-carlo N
+def add_monte_carlo_options(p: argparse.ArgumentParser) -> None:
+    """``--monte-carlo N``, its risk threshold and where its missions run."""
+    p.add_argument("--monte-carlo", type=int, default=None, metavar="N",
+                   help="instead of one adaptive mission, drive the lattice route N times with drawn ground "
+                        "coefficients, payload, capacity fade, internal resistance and speed (seeded by --seed); "
+                        "writes monte_carlo.json, .csv and .png")
+    p.add_argument("--max-risk-pct", type=float, default=5.0, metavar="P",
+                   help="--monte-carlo: exit 1 when more than P %% of the missions go below the reserve (default 5)")
+    p.add_argument("--workers", type=int, default=1, metavar="N",
+                   help="--monte-carlo: run the missions on a local dask cluster of N worker processes (default 1: here)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="--monte-carlo: run the missions on an existing dask cluster (not with --workers > 1)")
+
+
+def check_monte_carlo_flags(args: argparse.Namespace) -> None:
+    """The ``--monte-carlo`` flags, checked before any work."""
+    if args.monte_carlo is None:
+        if args.workers != 1 or args.scheduler is not None:
+            raise InvalidParameterError("--workers and --scheduler apply to --monte-carlo N only")
+        return
+    if args.monte_carlo < 1:
+        raise InvalidParameterError(f"--monte-carlo must be a number of missions >= 1, got {args.monte_carlo!r}")
+    if not 0.0 <= args.max_risk_pct <= 100.0:
+        raise InvalidParameterError(f"--max-risk-pct must be in [0, 100], got {fmt_number(args.max_risk_pct)}")
+    if args.workers < 1:
+        raise InvalidParameterError(f"--workers must be a positive number of processes, got {args.workers!r}")
+    if args.scheduler is not None and args.workers > 1:
+        raise InvalidParameterError(
+            f"--workers {args.workers!r} and --scheduler {args.scheduler!r} exclude each other: "
+            "give --workers N for a local cluster or --scheduler ADDRESS for an existing one"
+        )
+
+
+def run_monte_carlo(args: argparse.Namespace, tmap: Any, label: str, start: tuple, goal: tuple) -> int:
+    """``terrawatt mission --monte-carlo N``: plan the lattice route, drive it N times with drawn parameters.
+
+    Exit code 0 when at most ``--max-risk-pct`` % of the missions go below the reserve, 1
+    otherwise (or when there is no route).
+    """
+    robot = robot_preset(args.robot)
+    battery = Battery(capacity_ah=args.battery_ah,
+                      voltage_v=args.battery_v if args.battery_v is not None else robot.battery_voltage_v,
+                      min_reserve_pct=args.reserve_pct)
+    cost = EnergyCost.from_presets(tmap, robot=args.robot, speed_mps=args.speed, unknown_ground=None)
+    route = plan_route(tmap, start, goal, cost=cost, planner="lattice", seed=args.seed)
+    print(f"map: {label}; robot {args.robot}; battery {battery.capacity_ah:g} Ah at {battery.voltage_v:g} V, "
+          f"reserve {battery.min_reserve_pct:g} %")
+    if not route.found:
+        print(f"no route from {start} to {goal}: status {route.status!r}")
+        return 1
+    print(f"route: {route.length_m:.1f} m, planned {route.energy_wh:.2f} Wh; {args.monte_carlo} missions", flush=True)
+    with contextlib.ExitStack() as stack:
+        client = None
+        if args.workers > 1 or args.scheduler is not None:
+            client = stack.enter_context(dask_client(args.workers, args.scheduler, quiet=not args.verbose,
+                                                     flags=("--workers", "--scheduler")))
+        result = simulate_missions_mc(tmap, route, battery, args.monte_carlo, robot=robot, speed_mps=args.speed,
+                                      seed=args.seed, client=client, progress=True)
+    json_path = result.write_json(args.out / "monte_carlo.json")
+    csv_path = result.to_csv(args.out / "monte_carlo.csv")
+    png_path = draw_figure(args.out / "monte_carlo.png", lambda: result.plot(args.out / "monte_carlo.png"))
+    print(result.summary())
+    print(f"wrote {json_path}, {csv_path}" + (f" and {png_path}" if png_path is not None else ""))
+    return 0 if 100.0 * result.p_below_reserve <= args.max_risk_pct else 1

@@ -10,6 +10,10 @@ from .adaptive_results import (
     UpdateRecord,
 )
 from .manoeuvres import excitation_manoeuvre, fit_prior_model
+from .monte_carlo import DEFAULT_MC_CURRENT_RATE_HZ, MissionSetup, simulate_missions_mc
+from .monte_carlo_figure import plot_monte_carlo
+from .monte_carlo_result import MONTE_CARLO_FORMAT_VERSION, MonteCarloResult
+from .monte_carlo_sampling import MissionDistributions, MissionSample
 from .results import MISSION_FORMAT_VERSION, MISSION_STATUSES, MissionResult
 from .settings import UPDATE_SCOPES, AdaptiveSettings
 from .simulate import simulate_mission
@@ -32,4 +36,13 @@ __all__ = [
     "ADAPTIVE_STATUSES",
     "ADAPTIVE_FORMAT_VERSION",
     "UPDATE_SCOPES",
+    # Monte Carlo missions
+    "simulate_missions_mc",
+    "MissionDistributions",
+    "MissionSample",
+    "MissionSetup",
+    "MonteCarloResult",
+    "MONTE_CARLO_FORMAT_VERSION",
+    "DEFAULT_MC_CURRENT_RATE_HZ",
+    "plot_monte_carlo",
 ]

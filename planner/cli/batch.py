@@ -1,0 +1,112 @@
+"""``terrawatt batch``: plan many (start, goal) pairs on one map, here or on dask (:func:`planner.plan_batch`)."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import dataclasses
+from pathlib import Path
+from typing import Any
+
+from terrain import InvalidParameterError
+from terrain.procedural import example_map
+
+from .. import PLANNERS, BatchPairs, EnergyCost, plan_batch, read_pairs_csv, read_sites_csv, warm_up_kernels
+from ..dask_client import dask_client
+from .common import add_map_options, check_outputs, check_positive, max_slope_rad, read_map_file, unknown_ground
+
+__all__ = ["add_parser", "run_batch"]
+
+_OUTPUTS = ("batch.csv", "batch.json")
+_FLAGS = ("--workers", "--scheduler")
+
+
+def add_parser(sub: Any) -> None:
+    """The ``batch`` subcommand."""
+    batch = sub.add_parser(
+        "batch",
+        help="plan many (start, goal) pairs on one map, in process or on a dask cluster; writes batch.csv and batch.json",
+        description="Exit 0 when every pair has a route, 1 when some pair has none or failed (its row says why), "
+                    "2 on bad input.",
+    )
+    batch.add_argument("--map", required=True, metavar="FILE", help=".npz map, .tif DEM or 'example' (the bundled map)")
+    add_map_options(batch)
+    source = batch.add_mutually_exclusive_group(required=True)
+    source.add_argument("--pairs", type=Path, metavar="CSV",
+                        help="pairs file: columns start_x_m, start_y_m, goal_x_m, goal_y_m (and optionally name)")
+    source.add_argument("--sites", type=Path, metavar="CSV", help="sites file: columns x_m, y_m (and optionally name)")
+    batch.add_argument("--all-pairs", action="store_true", help="with --sites: plan every ordered pair of sites")
+    batch.add_argument("--workers", type=int, default=1, metavar="N",
+                       help="plan on a local dask cluster of N worker processes (default 1: here, one after another)")
+    batch.add_argument("--scheduler", metavar="ADDRESS",
+                       help="plan on an existing dask cluster, e.g. tcp://host:8786 (not with --workers > 1)")
+    batch.add_argument("--planner", default="lattice", choices=PLANNERS, help="planner name (default lattice)")
+    batch.add_argument("--time-limit", type=float, default=1.0, metavar="S", help="OMPL planners: time budget per pair (s)")
+    batch.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    batch.add_argument("--robot", default="husky", help="robot preset (default husky)")
+    batch.add_argument("--speed", type=float, default=0.5, metavar="M/S", help="planning speed (default 0.5 m/s)")
+    batch.add_argument("--max-slope-deg", type=float, default=20.0, help="steepest drivable slope (default 20 deg)")
+    batch.add_argument("--unknown-ground", default="gravel",
+                       help="ground preset assumed where the map's ground class is unknown (-1); 'none' to refuse")
+    batch.add_argument("--no-progress", action="store_true", help="no progress bar")
+    batch.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
+    batch.set_defaults(run=run_batch)
+
+
+def _check_flags(args: argparse.Namespace) -> None:
+    if args.sites is not None and not args.all_pairs:
+        raise InvalidParameterError("--sites needs --all-pairs (every ordered pair of the sites is planned)")
+    if args.all_pairs and args.sites is None:
+        raise InvalidParameterError("--all-pairs needs --sites CSV")
+    if args.workers < 1:
+        raise InvalidParameterError(f"--workers must be a positive number of processes, got {args.workers!r}")
+    if args.scheduler is not None and args.workers > 1:
+        raise InvalidParameterError(
+            f"--workers {args.workers!r} and --scheduler {args.scheduler!r} exclude each other: "
+            "give --workers N for a local cluster or --scheduler ADDRESS for an existing one"
+        )
+    check_positive("--speed", args.speed)
+    check_positive("--time-limit", args.time_limit)
+
+
+def _read_pairs(args: argparse.Namespace) -> BatchPairs:
+    if args.pairs is not None:
+        return read_pairs_csv(args.pairs)
+    names, xy = read_sites_csv(args.sites)
+    return BatchPairs.all_pairs(xy, names)
+
+
+def run_batch(args: argparse.Namespace) -> int:
+    """``terrawatt batch``: plan the pairs, write batch.csv and batch.json, print the summary.
+
+    Exit code 0 when every pair has a route, 1 when some pair has none (infeasible) or its
+    planning failed (e.g. a start on an obstacle: the row's error says so).
+    """
+    _check_flags(args)
+    check_outputs(args.out, _OUTPUTS)
+    pairs = _read_pairs(args)
+    if args.map == "example":
+        tmap, label = example_map(), "bundled example map"
+    else:
+        tmap, label = read_map_file(args.map, args.fill_nodata), Path(args.map).name
+    cost = EnergyCost.from_presets(tmap, robot=args.robot, speed_mps=args.speed,
+                                   max_slope_rad=max_slope_rad(args.max_slope_deg),
+                                   unknown_ground=unknown_ground(args.unknown_ground, tmap))
+    warm_up_kernels()
+    with contextlib.ExitStack() as stack:
+        client = None
+        if args.workers > 1 or args.scheduler is not None:  # a missing extra or scheduler fails before planning
+            client = stack.enter_context(dask_client(args.workers, args.scheduler, quiet=not args.verbose,
+                                                     flags=_FLAGS))
+        print(f"map: {label}  {tmap.shape[0]} x {tmap.shape[1]} cells of {tmap.cell_size_m:g} m; "
+              f"{len(pairs)} pairs; planner {args.planner}", flush=True)
+        result = plan_batch(cost, pairs, planner=args.planner, time_limit_s=args.time_limit, seed=args.seed,
+                            client=client, progress=not args.no_progress)
+        if client is not None:  # where it ran, as the user named it
+            result = dataclasses.replace(result, where=args.scheduler or "local cluster")
+    args.out.mkdir(parents=True, exist_ok=True)
+    csv_path = result.to_csv(args.out / "batch.csv")
+    json_path = result.write_json(args.out / "batch.json")
+    print(result.summary())
+    print(f"wrote {csv_path} and {json_path}")
+    return 0 if result.n_found == len(result) else 1

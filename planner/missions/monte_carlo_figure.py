@@ -1,0 +1,85 @@
+"""The figure of a Monte Carlo mission study: energy histogram with P50/P90/P99 and the exceedance curve (written atomically)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from terrain.atomic import check_output_path, save_figure
+
+__all__ = ["plot_monte_carlo"]
+
+
+def plot_monte_carlo(result: Any, path: str | os.PathLike[str], *, title: str | None = None, dpi: int = 110) -> Path:
+    """Write a PNG of a :class:`~planner.missions.monte_carlo_result.MonteCarloResult`.
+
+    Left: histogram of the mission energy (Wh) with its P50, P90 and P99, the planned
+    energy and the battery's usable energy above the reserve (nominal capacity), missions
+    that went below the reserve stacked in red. Right: the exceedance curve, the
+    probability that a mission needs more than a given energy (log scale).
+
+    Returns
+    -------
+    Path
+        The written file.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``path`` cannot be written (a folder, or under a file); checked before drawing.
+    """
+    target = check_output_path(path, "path")
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    e_wh = np.asarray(result.energy_j) / 3600.0
+    below = np.asarray(result.below_reserve)
+    pct = result.energy_percentiles_wh
+    usable_wh = result.battery.usable_energy_wh
+    planned_wh = result.predicted_energy_j / 3600.0
+
+    fig = Figure(figsize=(12.0, 4.4))
+    FigureCanvasAgg(fig)
+    ax_h, ax_x = fig.subplots(1, 2)
+    bins = np.histogram_bin_edges(e_wh, bins=min(50, max(10, result.n // 20)))
+    ax_h.hist([e_wh[~below], e_wh[below]], bins=bins, stacked=True, color=["tab:blue", "tab:red"],
+              label=["reserve kept", "below the reserve"])
+    marks = [(pct["p50"], "P50", "k", "-"), (pct["p90"], "P90", "k", "--"), (pct["p99"], "P99", "k", ":"),
+             (planned_wh, "planned", "tab:gray", "-.")]
+    lo, hi = min(float(e_wh.min()), planned_wh), float(e_wh.max())
+    span = max(hi - lo, 1e-6)
+    usable_label = f"usable above the reserve (nominal) {usable_wh:.2f} Wh"
+    if usable_wh <= hi + span:  # near enough to draw without squeezing the distribution
+        marks.append((usable_wh, "usable (nominal)", "tab:red", "-"))
+        hi = max(hi, usable_wh)
+    else:
+        ax_h.plot([], [], " ", label=f"{usable_label}: off the axis")
+    xlim = (lo - 0.05 * span, hi + 0.05 * span)
+    for value, label, colour, style in marks:
+        ax_h.axvline(value, color=colour, linestyle=style, linewidth=1.2, label=f"{label} {value:.2f} Wh")
+    ax_h.set_xlim(*xlim)
+    ax_h.set_xlabel("mission energy (Wh)")
+    ax_h.set_ylabel("missions")
+    ax_h.legend(loc="best", fontsize=7)
+
+    x = np.sort(e_wh)
+    exceed = 1.0 - np.arange(x.size) / x.size  # P(E >= x_k)
+    ax_x.step(x, exceed, where="post", color="tab:blue")
+    ax_x.set_yscale("log")
+    ax_x.set_ylim(min(0.5 / x.size, 1e-2), 1.05)
+    for value, _, colour, style in marks:
+        ax_x.axvline(value, color=colour, linestyle=style, linewidth=1.0)
+    for q in (0.5, 0.1, 0.01):
+        ax_x.axhline(q, color="0.8", linewidth=0.6)
+    ax_x.set_xlim(*xlim)
+    ax_x.set_xlabel("mission energy (Wh)")
+    ax_x.set_ylabel("P(energy > x)")
+    p = result.p_below_reserve
+    fig.suptitle(title or f"{result.n} missions: P(below the {result.battery.min_reserve_pct:g} % reserve) = "
+                 f"{100 * p:.1f} %; P50 {pct['p50']:.2f} / P90 {pct['p90']:.2f} / P99 {pct['p99']:.2f} Wh",
+                 fontsize=10)
+    fig.tight_layout()
+    return save_figure(fig, target, dpi=dpi)

@@ -1,0 +1,193 @@
+"""MonteCarloResult: the per-sample table of a Monte Carlo mission study, its risk of crossing the reserve and energy percentiles."""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from energy import Battery
+from terrain.atomic import write_json_atomic, write_text_atomic
+from terrain.checks import check_real, readonly, real_array
+from terrain.errors import InvalidParameterError
+
+from .monte_carlo_figure import plot_monte_carlo
+from .monte_carlo_sampling import MissionDistributions
+
+__all__ = ["MonteCarloResult", "MONTE_CARLO_FORMAT_VERSION", "SAMPLE_COLUMNS"]
+
+#: Version of the JSON layout written by :meth:`MonteCarloResult.write_json`.
+MONTE_CARLO_FORMAT_VERSION = 1
+#: Per-sample numeric columns (besides the ground factors), in CSV order.
+SAMPLE_COLUMNS = ("payload_kg", "capacity_ah", "internal_resistance_ohm", "speed_mps", "energy_j", "charge_mah",
+                  "duration_s", "arrival_soc", "min_soc")
+_FLAGS = ("below_reserve", "depleted")
+
+
+@dataclass(frozen=True, eq=False)
+class MonteCarloResult:
+    """N missions with drawn parameters: one row per sample, the reserve risk and the energy percentiles.
+
+    Attributes
+    ----------
+    seed : int or None
+        The seed given; ``entropy`` is what the samples were drawn from (equal to ``seed``
+        when one was given), so ``seed=entropy`` reproduces a run made with ``seed=None``.
+    entropy : int
+    distributions : MissionDistributions
+    battery : Battery
+        The nominal battery (each sample fades its capacity and sets its resistance).
+    predicted_energy_j : float
+        The route's planned energy (nominal parameters, the planner's model).
+    ground_names : tuple of str
+        Columns of ``ground_scale``.
+    ground_scale : ndarray, shape (N, n_grounds)
+        Factor drawn for each ground's coefficients.
+    payload_kg, capacity_ah, internal_resistance_ohm, speed_mps : ndarray, shape (N,)
+        The other drawn parameters (capacity after fade).
+    energy_j, charge_mah, duration_s : ndarray, shape (N,)
+        Load energy, battery charge and duration of each mission.
+    arrival_soc, min_soc : ndarray, shape (N,)
+        State of charge at arrival and its lowest value (fractions).
+    below_reserve, depleted : ndarray of bool, shape (N,)
+        The state of charge went below the reserve; the pack ran empty.
+    where : str
+        ``"in process"``, ``"local cluster"``, ``"given client"`` or a scheduler address.
+    n_workers : int
+    elapsed_s : float
+    """
+
+    seed: int | None
+    entropy: int
+    distributions: MissionDistributions
+    battery: Battery
+    predicted_energy_j: float
+    ground_names: tuple[str, ...]
+    ground_scale: np.ndarray
+    payload_kg: np.ndarray
+    capacity_ah: np.ndarray
+    internal_resistance_ohm: np.ndarray
+    speed_mps: np.ndarray
+    energy_j: np.ndarray
+    charge_mah: np.ndarray
+    duration_s: np.ndarray
+    arrival_soc: np.ndarray
+    min_soc: np.ndarray
+    below_reserve: np.ndarray
+    depleted: np.ndarray
+    where: str = "in process"
+    n_workers: int = 1
+    elapsed_s: float = math.nan
+
+    def __post_init__(self) -> None:
+        n = np.asarray(self.energy_j).shape[0] if np.ndim(self.energy_j) == 1 else -1
+        if n < 1:
+            raise InvalidParameterError("energy_j must be a 1-D array of at least one sample")
+        for name in SAMPLE_COLUMNS:
+            arr = real_array(name, getattr(self, name), ndim=1, finite=False)
+            if arr.shape != (n,):
+                raise InvalidParameterError(f"{name} must have shape ({n},), got {arr.shape!r}")
+            object.__setattr__(self, name, readonly(arr))
+        for name in _FLAGS:
+            arr = np.asarray(getattr(self, name))
+            if arr.shape != (n,) or arr.dtype != bool:
+                raise InvalidParameterError(f"{name} must be a bool array of shape ({n},), got {arr.dtype} {arr.shape!r}")
+            object.__setattr__(self, name, readonly(arr))
+        scale = real_array("ground_scale", self.ground_scale, ndim=2)
+        if scale.shape != (n, len(self.ground_names)):
+            raise InvalidParameterError(f"ground_scale must have shape ({n}, {len(self.ground_names)}), got {scale.shape!r}")
+        object.__setattr__(self, "ground_scale", readonly(scale))
+        object.__setattr__(self, "ground_names", tuple(self.ground_names))
+
+    @property
+    def n(self) -> int:
+        """Number of samples."""
+        return int(self.energy_j.shape[0])
+
+    @property
+    def p_below_reserve(self) -> float:
+        """Fraction of the missions whose state of charge went below the reserve."""
+        return float(np.mean(self.below_reserve))
+
+    @property
+    def p_below_reserve_ci95(self) -> tuple[float, float]:
+        """95 % Wilson interval of :attr:`p_below_reserve` (binomial, :func:`scipy.stats.binomtest`)."""
+        from scipy.stats import binomtest
+
+        ci = binomtest(int(np.count_nonzero(self.below_reserve)), self.n).proportion_ci(0.95, method="wilson")
+        return float(ci.low), float(ci.high)
+
+    def energy_percentile_j(self, q: float) -> float:
+        """The ``q``-th percentile (0-100) of the mission energy (J; linear interpolation)."""
+        return float(np.percentile(self.energy_j, check_real("q", q, low=0.0, high=100.0)))
+
+    @property
+    def energy_percentiles_wh(self) -> dict[str, float]:
+        """Mission energy P50, P90 and P99 (Wh)."""
+        return {f"p{q}": self.energy_percentile_j(q) / 3600.0 for q in (50, 90, 99)}
+
+    def to_dict(self, *, samples: bool = True) -> dict[str, Any]:
+        """Plain JSON-friendly dict: the summary and (``samples``) the per-sample columns."""
+        lo, hi = self.p_below_reserve_ci95
+        out: dict[str, Any] = {
+            "format_version": MONTE_CARLO_FORMAT_VERSION,
+            "n": self.n,
+            "seed": self.seed,
+            "entropy": self.entropy,
+            "distributions": self.distributions.to_dict(),
+            "battery": {"capacity_ah": self.battery.capacity_ah, "voltage_v": self.battery.voltage_v,
+                        "min_reserve_pct": self.battery.min_reserve_pct, "initial_soc": self.battery.initial_soc},
+            "predicted_energy_wh": self.predicted_energy_j / 3600.0,
+            "p_below_reserve": self.p_below_reserve,
+            "p_below_reserve_ci95": [lo, hi],
+            "p_depleted": float(np.mean(self.depleted)),
+            "energy_wh": {**self.energy_percentiles_wh, "mean": float(np.mean(self.energy_j)) / 3600.0},
+            "where": self.where,
+            "n_workers": self.n_workers,
+            "elapsed_s": self.elapsed_s,
+        }
+        if samples:
+            out["ground_names"] = list(self.ground_names)
+            out["samples"] = {"ground_scale": self.ground_scale.tolist(),
+                              **{c: getattr(self, c).tolist() for c in (*SAMPLE_COLUMNS, *_FLAGS)}}
+        return out
+
+    def write_json(self, path: str | os.PathLike[str], *, samples: bool = True) -> Path:
+        """Write :meth:`to_dict` as JSON (atomically); return the path."""
+        return write_json_atomic(path, self.to_dict(samples=samples))
+
+    def to_csv(self, path: str | os.PathLike[str]) -> Path:
+        """Write the per-sample table (one line per sample, a column per ground factor), atomically."""
+        buf = io.StringIO()
+        writer = csv.writer(buf, lineterminator="\n")
+        writer.writerow(["sample", *(f"ground_scale_{g}" for g in self.ground_names), *SAMPLE_COLUMNS, *_FLAGS])
+        cols = [getattr(self, c) for c in SAMPLE_COLUMNS]
+        for i in range(self.n):
+            writer.writerow([i, *(repr(float(v)) for v in self.ground_scale[i]), *(repr(float(c[i])) for c in cols),
+                             *(str(bool(getattr(self, f)[i])).lower() for f in _FLAGS)])
+        return write_text_atomic(path, buf.getvalue())
+
+    def summary(self) -> str:
+        """A few lines for people: the reserve risk and the energy percentiles against the battery."""
+        pct = self.energy_percentiles_wh
+        lo, hi = self.p_below_reserve_ci95
+        b = self.battery
+        return "\n".join([
+            f"{self.n} missions (seed {self.entropy if self.seed is None else self.seed}) in {self.elapsed_s:.1f} s on "
+            f"{self.n_workers} worker(s) ({self.where})",
+            f"energy: P50 {pct['p50']:.2f} Wh, P90 {pct['p90']:.2f} Wh, P99 {pct['p99']:.2f} Wh "
+            f"(planned {self.predicted_energy_j / 3600.0:.2f} Wh with nominal parameters)",
+            f"below the {b.min_reserve_pct:g} % reserve in {np.count_nonzero(self.below_reserve)} of {self.n} missions: "
+            f"P = {100 * self.p_below_reserve:.1f} % (95 % interval {100 * lo:.1f}-{100 * hi:.1f} %); "
+            f"battery {b.capacity_ah:g} Ah nominal, {self.capacity_ah.min():.2f}-{self.capacity_ah.max():.2f} Ah after fade",
+        ])
+
+    def plot(self, path: str | os.PathLike[str], *, title: str | None = None) -> Path:
+        """Write the histogram and exceedance figure (:func:`plot_monte_carlo`); return the path."""
+        return plot_monte_carlo(self, path, title=title)
