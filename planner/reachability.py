@@ -38,7 +38,7 @@ from .lattice import LATTICE_OFFSETS
 from .points import as_points
 from .reachability_result import Reachability
 
-__all__ = ["reachability", "lattice_move_energies"]
+__all__ = ["reachability", "lattice_move_energies", "depot_links"]
 
 _CACHE_KEY = ("reachability", "lattice_move_energies", 1)
 #: Depot links: lattice nodes within this many cells of the depot, as a lattice query's start.
@@ -66,8 +66,9 @@ def lattice_move_energies(cost: EnergyCost) -> tuple[np.ndarray, float]:
     return w, time.perf_counter() - t0
 
 
-def _depot_links(cost: EnergyCost, depot: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Nodes within 1.5 cells of the depot and the energies depot -> node and node -> depot (J)."""
+def depot_links(cost: EnergyCost, depot: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The stride-1 lattice nodes within 1.5 cells of a depot ``(x_m, y_m)`` (a checked point on the
+    map), and the energies depot -> node and node -> depot (J; ``inf``: no straight drive)."""
     grid = cost.terrain.grid
     radius = _LINK_RADIUS_CELLS * grid.cell_size_m
     xc, yc = cost.terrain.cell_centres()
@@ -158,7 +159,7 @@ def reachability(
     w, graph_s = lattice_move_energies(cost)
     t0 = time.perf_counter()
     rows, cols = cost.shape
-    nodes, out_j, back_j = _depot_links(cost, depot)
+    nodes, out_j, back_j = depot_links(cost, depot)
     di = np.ascontiguousarray(LATTICE_OFFSETS[:, 0])
     dj = np.ascontiguousarray(LATTICE_OFFSETS[:, 1])
     ok_out, ok_back = np.isfinite(out_j), np.isfinite(back_j)
