@@ -1,0 +1,379 @@
+"""plan_batch, BatchPairs / the pairs and sites CSVs, BatchResult, the dask client seam and ``terrawatt batch``."""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import json
+import math
+import socket
+import sys
+
+import numpy as np
+import pytest
+
+import terrain
+from planner import (
+    BATCH_FORMAT_VERSION,
+    BatchPairs,
+    BatchResult,
+    BatchRow,
+    DataError,
+    EnergyCost,
+    FileFormatError,
+    InvalidParameterError,
+    OptionalDependencyError,
+    OutOfBoundsError,
+    UnknownNameError,
+    dask_client,
+    plan_batch,
+    plan_route,
+    read_pairs_csv,
+    read_sites_csv,
+)
+from planner.cli import main
+
+_NO_DASK = "planning on a cluster needs the distributed extra (dask[distributed])"
+#: A free cell west of the wall, one east of it, one below the gap and the wall itself (wall_map).
+WEST, EAST, EAST_LOW, ON_WALL = (5.5, 10.5), (35.5, 10.5), (30.5, 3.5), (20.5, 10.5)
+PAIRS = [[*WEST, *EAST], [*EAST, *WEST], [*WEST, *EAST_LOW], [*EAST_LOW, *EAST]]
+
+
+@pytest.fixture
+def cost(wall_map):
+    return EnergyCost.from_presets(wall_map)
+
+
+@pytest.fixture
+def local_client():
+    """An in-process dask cluster of two single-thread workers."""
+    distributed = pytest.importorskip("distributed", reason=_NO_DASK)
+    with distributed.LocalCluster(processes=False, n_workers=2, threads_per_worker=1,
+                                  dashboard_address=":0") as cluster, distributed.Client(cluster) as client:
+        yield client
+
+
+def _outcome(row: BatchRow) -> dict:
+    """A row without its planning time (the only field measured, not computed)."""
+    d = dataclasses.asdict(row)
+    d.pop("planning_time_s")
+    return d
+
+
+# ------------------------------------------------------------------ in process
+def test_in_process_rows_are_plan_route_with_its_comparison_in_pair_order(cost, wall_map):
+    res = plan_batch(cost, PAIRS, progress=False)
+    assert [r.name for r in res.rows] == ["0", "1", "2", "3"]
+    assert res.where == "in process" and res.n_workers == 1 and res.planner == "lattice"
+    for row, pair in zip(res.rows, PAIRS):
+        route = plan_route(wall_map, pair[:2], pair[2:], cost=cost, planner="lattice", seed=0, compare=True)
+        assert row.status == "exact" == route.status
+        assert row.energy_j == route.energy_j and row.length_m == route.length_m
+        assert row.energy_wh == pytest.approx(row.energy_j / 3600.0)
+        assert row.duration_s == route.duration_s
+        assert row.energy_saved_pct == route.energy_saved_pct
+        assert (row.start_x_m, row.start_y_m, row.goal_x_m, row.goal_y_m) == tuple(pair)
+    # through the gap in the wall: much longer than the straight line
+    assert res.rows[0].length_m > 40.0
+    assert res.n_found == 4 and res.n_errors == 0
+
+
+def test_a_pair_that_raises_is_reported_and_the_others_are_planned(cost):
+    pairs = [[*WEST, *EAST], [*ON_WALL, *EAST], [*EAST, *ON_WALL], [*EAST, *WEST]]
+    res = plan_batch(cost, pairs, names=["ok1", "from-wall", "to-wall", "ok2"], progress=False)
+    assert [r.status for r in res.rows] == ["exact", "error", "error", "exact"]
+    assert res.rows[1].error.startswith("BlockedPositionError: start_xy_m (20.5, 10.5) m lies on an obstacle")
+    assert res.rows[2].error.startswith("BlockedPositionError: goal_xy_m (20.5, 10.5) m lies on an obstacle")
+    assert math.isnan(res.rows[1].energy_j) and res.rows[0].error == ""
+    assert res.n_errors == 2 and res.count("exact") == 2
+    assert "error in pair 'from-wall': BlockedPositionError" in res.summary()
+
+
+def test_disconnected_pairs_are_infeasible_rows():
+    closed = terrain.wall_map((40, 40), 1.0, wall_col=20, gap_rows=(0, 0), ground="asphalt")
+    res = plan_batch(EnergyCost.from_presets(closed), [[*WEST, *EAST]], progress=False)
+    assert res.rows[0].status == "infeasible" and math.isnan(res.rows[0].energy_j) and res.n_found == 0
+
+
+# ------------------------------------------------------------------ on a dask cluster
+def test_a_local_cluster_plans_the_in_process_rows(cost, local_client):
+    pairs = [*PAIRS, [*ON_WALL, *WEST]]
+    here = plan_batch(cost, pairs, progress=False)
+    there = plan_batch(cost, pairs, client=local_client, progress=True)
+    assert there.where == "given client" and there.n_workers == 2
+    assert [_outcome(r) for r in there.rows] == [_outcome(r) for r in here.rows]
+    assert there.rows[-1].status == "error" and "BlockedPositionError" in there.rows[-1].error
+
+
+def test_the_cost_goes_to_the_workers_once_without_its_caches(cost, local_client):
+    plan_batch(cost, PAIRS, progress=False)  # fills the caller's caches
+    assert cost.lattices and len(cost.results)
+    submitted = []
+    original = local_client.submit
+
+    def spy(fn, *args, **kwargs):
+        submitted.append(args)
+        return original(fn, *args, **kwargs)
+
+    local_client.submit = spy
+    try:
+        plan_batch(cost, PAIRS, client=local_client, progress=False)
+    finally:
+        local_client.submit = original
+    from distributed import Future
+
+    shared = {a[0].key for a in submitted}
+    assert len(submitted) == 4 and len(shared) == 1  # one scattered cost, referenced by every task
+    assert all(isinstance(a[0], Future) for a in submitted)
+    assert cost.lattices and len(cost.results)  # the caller's cost keeps its caches
+
+
+def test_an_exception_outside_the_library_in_a_task_is_a_row_too(cost, local_client, monkeypatch):
+    import planner.batch as batch_module
+
+    def broken(*args, **kwargs):
+        raise ZeroDivisionError("boom")
+
+    monkeypatch.setattr(batch_module, "plan_pair", broken)  # the processes=False workers see the patch
+    res = plan_batch(cost, PAIRS[:2], client=local_client, progress=False)
+    assert [r.error for r in res.rows] == ["ZeroDivisionError: boom"] * 2
+    here = plan_batch(cost, PAIRS[:2], progress=False)
+    assert [r.error for r in here.rows] == ["ZeroDivisionError: boom"] * 2
+
+
+# ------------------------------------------------------------------ pairs and their files
+def test_pairs_from_arrays_of_both_layouts_and_all_pairs_of_sites():
+    a = BatchPairs.from_array(np.array(PAIRS))
+    b = BatchPairs.from_array(np.array(PAIRS).reshape(-1, 2, 2), names=list("abcd"))
+    assert np.array_equal(a.starts_xy_m, b.starts_xy_m) and np.array_equal(a.goals_xy_m, b.goals_xy_m)
+    assert b.names == ("a", "b", "c", "d") and len(a) == 4
+    assert not a.starts_xy_m.flags.writeable
+    sites = BatchPairs.all_pairs([WEST, EAST, EAST_LOW], ["w", "e", "s"])
+    assert len(sites) == 6 and sites.names[:2] == ("w->e", "w->s")
+    assert np.array_equal(sites.starts_xy_m[2], EAST) and np.array_equal(sites.goals_xy_m[2], WEST)
+
+
+@pytest.mark.parametrize(
+    ("pairs", "kwargs", "error", "match"),
+    [
+        ([[1.0, 2.0, 3.0]], {}, InvalidParameterError, r"pairs must have shape \(N, 4\)"),
+        ([[1.0, np.nan, 3.0, 4.0]], {}, InvalidParameterError, r"pairs row 0 has NaN/inf coordinates"),
+        (np.empty((0, 4)), {}, InvalidParameterError, "at least one"),
+        ([["a", "b", "c", "d"]], {}, InvalidParameterError, "must be a real number"),
+        (PAIRS, {"names": ["x"]}, InvalidParameterError, "names must be 4 non-empty strings"),
+        (PAIRS, {"names": ["x", "y", "x", "z"]}, InvalidParameterError, "'x' appears 2 times"),
+    ],
+)
+def test_bad_pairs_are_refused(cost, pairs, kwargs, error, match):
+    with pytest.raises(error, match=match):
+        plan_batch(cost, pairs, progress=False, **kwargs)
+
+
+def test_sites_need_two_and_unique_names():
+    with pytest.raises(InvalidParameterError, match="at least 2 sites"):
+        BatchPairs.all_pairs([WEST])
+    with pytest.raises(InvalidParameterError, match="'a' appears 2 times"):
+        BatchPairs.all_pairs([WEST, EAST], ["a", "a"])
+
+
+def test_a_point_outside_the_map_fails_the_batch_naming_the_pair(cost):
+    with pytest.raises(OutOfBoundsError, match=r"pair '1': goal \(55.0, 5.0\) m lies outside the map bounds"):
+        plan_batch(cost, [[*WEST, *EAST], [*WEST, 55.0, 5.0]], progress=False)
+
+
+def _write(path, text):
+    path.write_text(text)
+    return path
+
+
+def test_a_pairs_csv_is_read_with_its_names(tmp_path, cost):
+    f = _write(tmp_path / "p.csv", "name,start_x_m,start_y_m,goal_x_m,goal_y_m\nthere,5.5,10.5,35.5,10.5\nback,35.5,10.5,5.5,10.5\n")
+    pairs = read_pairs_csv(f)
+    assert pairs.names == ("there", "back")
+    res = plan_batch(cost, pairs, progress=False)
+    assert res.rows[0].energy_j != res.rows[1].energy_j or res.rows[0].status == "exact"
+    names, xy = read_sites_csv(_write(tmp_path / "s.csv", "x_m,y_m\n1,2\n3,4\n"))
+    assert names == ("0", "1") and xy.tolist() == [[1.0, 2.0], [3.0, 4.0]]
+
+
+@pytest.mark.parametrize(
+    ("text", "error", "match"),
+    [
+        ("start_x_m,start_y_m,goal_x_m\n1,2,3\n", FileFormatError, r"lacks the column\(s\) \['goal_y_m'\]"),
+        ("", FileFormatError, r"lacks the column"),
+        ("start_x_m,start_y_m,goal_x_m,goal_y_m\n", DataError, "has a header but no rows"),
+        ("start_x_m,start_y_m,goal_x_m,goal_y_m\n1,2,3,4\n1,nan,3,4\n", DataError, r"line 3: column 'start_y_m' is 'nan'"),
+        ("start_x_m,start_y_m,goal_x_m,goal_y_m\n1,2,3,east\n", DataError, r"line 2: column 'goal_y_m' is 'east'"),
+        ("start_x_m,start_y_m,goal_x_m,goal_y_m\n1,2,3\n", DataError, r"line 2: column 'goal_y_m' is ''"),
+        ("name,start_x_m,start_y_m,goal_x_m,goal_y_m\na,1,2,3,4\na,1,2,3,5\n", DataError, "the name 'a' is used twice"),
+        ("name,start_x_m,start_y_m,goal_x_m,goal_y_m\n,1,2,3,4\n", DataError, "line 2: the name is empty"),
+    ],
+)
+def test_bad_pairs_files_are_refused_with_the_line_and_column(tmp_path, text, error, match):
+    with pytest.raises(error, match=match):
+        read_pairs_csv(_write(tmp_path / "p.csv", text))
+
+
+def test_a_missing_pairs_file_is_a_file_not_found_error(tmp_path):
+    with pytest.raises(FileNotFoundError):
+        read_pairs_csv(tmp_path / "none.csv")
+
+
+# ------------------------------------------------------------------ bad arguments
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"planner": "Dijkstra"}, UnknownNameError, "planner must be one of"),
+        ({"client": "tcp://127.0.0.1:8786"}, InvalidParameterError, r"client must be None .* or a distributed\.Client"),
+        ({"workers": 0}, InvalidParameterError, "workers must be >= 1"),
+        ({"seed": -1}, InvalidParameterError, "seed must be None or an integer"),
+        ({"progress": "yes"}, InvalidParameterError, "progress must be True or False"),
+        ({"settings": {"lattice_stride_cells": 2}}, InvalidParameterError, "settings must be a PlannerSettings"),
+    ],
+)
+def test_bad_arguments_are_refused(cost, kwargs, error, match):
+    with pytest.raises(error, match=match):
+        plan_batch(cost, PAIRS, **kwargs)
+
+
+def test_a_cost_that_is_not_an_energy_cost_is_refused(wall_map):
+    with pytest.raises(InvalidParameterError, match="cost must be an EnergyCost, got 'TerrainMap'"):
+        plan_batch(wall_map, PAIRS)
+
+
+def test_a_client_excludes_workers_and_scheduler(cost, local_client):
+    for extra in ({"workers": 2}, {"scheduler": "tcp://127.0.0.1:1"}):
+        with pytest.raises(InvalidParameterError, match="client excludes workers and scheduler"):
+            plan_batch(cost, PAIRS, client=local_client, **extra)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_an_unreachable_scheduler_is_a_clear_error_after_the_timeout():
+    pytest.importorskip("distributed", reason=_NO_DASK)
+    address = f"tcp://127.0.0.1:{_free_port()}"
+    with pytest.raises(InvalidParameterError, match=rf"scheduler '{address}': cannot connect to a dask scheduler"):
+        with dask_client(scheduler=address, timeout_s=0.5):
+            pass
+    with pytest.raises(InvalidParameterError, match=r"scheduler 'nowhere': cannot connect"):
+        with dask_client(scheduler="nowhere", timeout_s=0.5):
+            pass
+
+
+def test_dask_client_refuses_workers_with_a_scheduler_and_names_the_missing_extra(monkeypatch):
+    with pytest.raises(InvalidParameterError, match="--workers 2 and --scheduler 'tcp://h:1' exclude each other"):
+        with dask_client(2, "tcp://h:1", flags=("--workers", "--scheduler")):
+            pass
+    with pytest.raises(InvalidParameterError, match="workers must be >= 1"):
+        with dask_client(0):
+            pass
+    monkeypatch.setitem(sys.modules, "distributed", None)  # `import distributed` now raises ImportError
+    with pytest.raises(OptionalDependencyError, match=r"workers 3 needs dask.distributed; install it with"):
+        with dask_client(3):
+            pass
+
+
+# ------------------------------------------------------------------ the result's files
+def test_the_result_writes_csv_and_json_with_nan_as_empty_and_null(cost, tmp_path):
+    res = plan_batch(cost, [*PAIRS[:2], [*ON_WALL, *EAST]], progress=False)
+    res.to_csv(tmp_path / "b.csv")
+    res.write_json(tmp_path / "b.json")
+    with open(tmp_path / "b.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["status"] for r in rows] == ["exact", "exact", "error"]
+    assert float(rows[0]["energy_j"]) == res.rows[0].energy_j  # repr round-trips
+    assert rows[2]["energy_j"] == "" and rows[2]["error"].startswith("BlockedPositionError")
+    data = json.loads((tmp_path / "b.json").read_text())
+    assert data["format_version"] == BATCH_FORMAT_VERSION and data["n_pairs"] == 3
+    assert data["counts"]["error"] == 1 and data["rows"][2]["energy_j"] is None
+    assert data["rows"][0]["energy_saved_pct"] == pytest.approx(res.rows[0].energy_saved_pct)
+    assert res.to_dict()["median_energy_saved_pct"] == pytest.approx(res.median_saving_pct())
+
+
+def test_rows_and_results_check_themselves():
+    with pytest.raises(InvalidParameterError, match="status must be one of"):
+        BatchRow("a", 0.0, 0.0, 1.0, 1.0, "done")
+    with pytest.raises(InvalidParameterError, match="error text exactly when its status is 'error'"):
+        BatchRow("a", 0.0, 0.0, 1.0, 1.0, "error")
+    with pytest.raises(InvalidParameterError, match="rows must be BatchRow"):
+        BatchResult(({"name": "a"},), "lattice", "in process", 1, 1.0)
+    res = BatchResult((BatchRow("a", 0.0, 0.0, 1.0, 1.0, "infeasible"),), "lattice", "in process", 1, 0.0)
+    assert math.isnan(res.routes_per_s) and math.isnan(res.median_saving_pct())
+    with pytest.raises(InvalidParameterError, match="column must be one of"):
+        res.column("energy")
+
+
+# ------------------------------------------------------------------ terrawatt batch
+def _pairs_file(tmp_path, rows):
+    lines = ["name,start_x_m,start_y_m,goal_x_m,goal_y_m", *(",".join(map(str, r)) for r in rows)]
+    return _write(tmp_path / "pairs.csv", "\n".join(lines) + "\n")
+
+
+def test_cli_batch_writes_its_files_and_exits_0_when_every_pair_has_a_route(tmp_path, capsys):
+    f = _pairs_file(tmp_path, [("a", 10, 10, 150, 150), ("b", 150, 150, 10, 10)])
+    rc = main(["batch", "--map", "example", "--pairs", str(f), "--out", str(tmp_path / "out"), "--no-progress"])
+    out = capsys.readouterr().out
+    assert rc == 0
+    assert "2 pairs (2 exact) planned with lattice" in out and "median energy saved vs the shortest route" in out
+    data = json.loads((tmp_path / "out" / "batch.json").read_text())
+    assert [r["name"] for r in data["rows"]] == ["a", "b"] and data["where"] == "in process"
+    assert (tmp_path / "out" / "batch.csv").read_text().startswith("name,start_x_m,")
+
+
+def test_cli_batch_all_pairs_of_sites_with_a_blocked_site_exits_1(tmp_path, capsys):
+    f = _write(tmp_path / "sites.csv", "name,x_m,y_m\na,10,10\nb,150,150\nrock,58.5,28.5\n")
+    rc = main(["batch", "--map", "example", "--sites", str(f), "--all-pairs", "--out", str(tmp_path / "out"),
+               "--no-progress"])
+    out = capsys.readouterr().out
+    assert rc == 1
+    assert "6 pairs (2 exact, 4 error)" in out and "error in pair 'a->rock': BlockedPositionError" in out
+    assert len(json.loads((tmp_path / "out" / "batch.json").read_text())["rows"]) == 6
+
+
+def test_cli_batch_on_a_scheduler_address(tmp_path, capsys):
+    distributed = pytest.importorskip("distributed", reason=_NO_DASK)
+    f = _pairs_file(tmp_path, [("a", 10, 10, 150, 150), ("b", 20, 140, 140, 20)])
+    rc0 = main(["batch", "--map", "example", "--pairs", str(f), "--out", str(tmp_path / "here"), "--no-progress"])
+    with distributed.LocalCluster(processes=False, n_workers=1, threads_per_worker=1,
+                                  dashboard_address=":0") as cluster:
+        rc = main(["batch", "--map", "example", "--pairs", str(f), "--scheduler", cluster.scheduler_address,
+                   "--out", str(tmp_path / "there"), "--no-progress"])
+    assert rc0 == rc == 0
+    assert "(in process)" in capsys.readouterr().out
+    here = json.loads((tmp_path / "here" / "batch.json").read_text())["rows"]
+    there = json.loads((tmp_path / "there" / "batch.json").read_text())
+    assert there["where"] == cluster.scheduler_address
+    assert [{k: v for k, v in r.items() if k != "planning_time_s"} for r in there["rows"]] == [
+        {k: v for k, v in r.items() if k != "planning_time_s"} for r in here
+    ]
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--sites", "S"], "--sites needs --all-pairs"),
+        (["--pairs", "P", "--all-pairs"], "--all-pairs needs --sites CSV"),
+        (["--pairs", "P", "--workers", "0"], "--workers must be a positive number of processes, got 0"),
+        (["--pairs", "P", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "exclude each other"),
+        (["--pairs", "BADCOLS"], "lacks the column(s) ['goal_x_m', 'goal_y_m']"),
+        (["--pairs", "P", "--speed", "0"], "--speed must be a number > 0"),
+    ],
+)
+def test_cli_batch_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, extra, message):
+    good = _pairs_file(tmp_path, [("a", 10, 10, 150, 150)])
+    bad = _write(tmp_path / "bad.csv", "start_x_m,start_y_m\n1,2\n")
+    argv = [{"P": str(good), "S": str(good), "BADCOLS": str(bad)}.get(a, a) for a in extra]
+    rc = main(["batch", "--map", "example", *argv, "--out", str(tmp_path / "out"), "--no-progress"])
+    err = capsys.readouterr().err
+    assert rc == 2 and message in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+
+
+def test_cli_batch_checks_the_output_folder_before_reading_anything(tmp_path, capsys):
+    (tmp_path / "out").write_text("a file")
+    rc = main(["batch", "--map", "example", "--pairs", str(tmp_path / "missing.csv"), "--out", str(tmp_path / "out")])
+    assert rc == 2 and "is a file; expected a folder" in capsys.readouterr().err
