@@ -1,5 +1,8 @@
 """Readers and writers of interaction logs: BorealTC CSV, generic CSV, ROS 1/2 bags and MCAP.
 
+:func:`read_logs` reads every log at a path whatever its layout (a BorealTC folder, a CSV
+log, a bag, or a folder of them); the CLI's ``--data`` goes through it.
+
 Every reader returns :class:`~energy.logs.InteractionLog` objects in SI units and refuses
 bad input with a clear error instead of guessing:
 
@@ -52,7 +55,7 @@ bad input with a clear error instead of guessing:
 Modules: :mod:`~energy.io.cleaning` (the checks above), :mod:`~energy.io.csv_table` (CSV
 decoding and parsing), :mod:`~energy.io.borealtc`, :mod:`~energy.io.csv_log` (+ its header
 line, :mod:`~energy.io.csv_header`), :mod:`~energy.io.rosbag` (+ :mod:`~energy.io.bag_messages`,
-:mod:`~energy.io.bag_align`).
+:mod:`~energy.io.bag_align`), :mod:`~energy.io.layouts` (:func:`read_logs`).
 """
 
 from .borealtc import BOREALTC_TRACK_WIDTH_M, read_borealtc, read_borealtc_run
@@ -72,6 +75,7 @@ from .cleaning import (
 )
 from .csv_header import CSV_LOG_FORMAT_VERSION
 from .csv_log import CSV_FIELDS, CSV_RATES, CSV_UNITS, DEFAULT_CSV_COLUMNS, read_csv_log, write_csv_log
+from .layouts import LOG_SUFFIXES, BagTopics, read_logs
 from .rosbag import MAX_CLOCK_OFFSET_S, read_rosbag
 
 __all__ = [
@@ -99,4 +103,7 @@ __all__ = [
     "read_csv_log",
     "write_csv_log",
     "read_rosbag",
+    "LOG_SUFFIXES",
+    "BagTopics",
+    "read_logs",
 ]

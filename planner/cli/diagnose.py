@@ -19,20 +19,17 @@ from energy import (
     load_current_model,
     new_current_model,
     plot_diagnosis,
-    read_borealtc,
-    read_csv_log,
-    read_rosbag,
 )
 from energy.diagnosis import FIGURES
-from terrain import DataError, FigureWarning, InvalidParameterError, UnknownNameError
+from terrain import FigureWarning, InvalidParameterError, UnknownNameError
 from terrain.checks import check_seed, fmt_number
 
 from .common import add_map_options, check_outputs, read_map_file
+from .data import add_data_options, logs_from_args
 
-__all__ = ["add_parser", "read_logs", "run_diagnose"]
+__all__ = ["add_parser", "run_diagnose"]
 
 _OUTPUTS = ("diagnosis.json", "diagnosis.md", "corrected_model.zip", *FIGURES.values())
-_LOG_SUFFIXES = {".csv": "csv", ".bag": "bag", ".db3": "bag", ".mcap": "bag"}
 
 
 def add_parser(sub: Any) -> None:
@@ -50,9 +47,7 @@ def add_parser(sub: Any) -> None:
                    "preset, else asphalt)")
     p.add_argument("--without", nargs="+", default=[], metavar="EFFECT",
                    help="--model physics: physics effects to switch off (diagnose a reduced model)")
-    p.add_argument("--data", type=Path, required=True, metavar="DIR|FILE",
-                   help="logs: a BorealTC folder (GROUND/imu_NN.csv + pro_NN.csv), a CSV log, a bag (.bag, .db3, "
-                   ".mcap, ROS 2 bag folder), or a folder of CSV logs and bags")
+    add_data_options(p)
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder")
     p.add_argument("--effects", nargs="+", default=None, metavar="EFFECT",
                    help="candidate effects (default: the whole catalogue)")
@@ -64,39 +59,6 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (and of the estimator's training)")
     p.add_argument("--quiet", action="store_true", help="no progress bar while training the estimator")
     p.set_defaults(run=run_diagnose)
-
-
-def read_logs(path: Path) -> list[InteractionLog]:
-    """Every log at ``--data``: a BorealTC folder, a CSV log, a bag, or a folder of CSV logs and bags.
-
-    Raises
-    ------
-    FileFormatError, DataError
-        As the readers; a missing path; a folder without logs; an unknown file type.
-    """
-    if not path.exists():
-        raise DataError(f"--data {str(path)!r} does not exist; expected a log file or a folder of logs")
-    if path.is_file():
-        kind = _LOG_SUFFIXES.get(path.suffix.lower())
-        if kind is None:
-            raise DataError(f"--data {str(path)!r}: unknown log file type {path.suffix!r}; expected one of "
-                            f"{sorted(_LOG_SUFFIXES)!r} or a folder")
-        return [read_csv_log(path) if kind == "csv" else read_rosbag(path)]
-    if (path / "metadata.yaml").exists():
-        return [read_rosbag(path)]  # a ROS 2 bag folder
-    if any(sub.is_dir() and any(sub.glob("imu_*.csv")) for sub in path.iterdir()):
-        return read_borealtc(path)
-    logs = []
-    for item in sorted(path.iterdir()):
-        if item.is_dir() and (item / "metadata.yaml").exists():
-            logs.append(read_rosbag(item))
-        elif item.is_file() and item.suffix.lower() in _LOG_SUFFIXES:
-            logs.append(read_csv_log(item) if _LOG_SUFFIXES[item.suffix.lower()] == "csv" else read_rosbag(item))
-    if not logs:
-        raise DataError(f"--data {str(path)!r} holds no logs: expected BorealTC ground folders, CSV logs "
-                        f"({', '.join(sorted(_LOG_SUFFIXES))}) or ROS 2 bag folders")
-    return logs
-
 
 
 def _check_effect_names(flag: str, names: list[str], allowed: tuple[str, ...], what: str) -> None:
@@ -168,7 +130,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     _check_flags(args)
     check_outputs(args.out, _OUTPUTS)
     terrain = read_map_file(args.map, args.fill_nodata) if args.map is not None else None
-    logs = read_logs(args.data)
+    logs = logs_from_args(args, require_currents=True)
     model, origin = _model(args, logs)
     print(origin, flush=True)
     robot = args.robot if args.model != "physics" else None

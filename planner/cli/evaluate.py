@@ -13,12 +13,12 @@ from energy import (
     evaluate_current_models,
     new_current_model,
     plot_vibration_spectra,
-    read_borealtc,
 )
 from terrain import InvalidParameterError
 
 from ..dask_client import dask_client
 from .common import check_outputs, draw_figure
+from .data import add_data_options, logs_from_args
 
 __all__ = ["add_parser", "run_evaluate"]
 
@@ -28,11 +28,12 @@ _OUTPUTS = ("evaluation.json", "evaluation.md", "spectra.png")
 def add_parser(sub: Any) -> None:
     """The ``evaluate`` subcommand."""
     evaluate = sub.add_parser(
-        "evaluate", help="leave-one-run-out evaluation of current models on BorealTC-layout logs"
+        "evaluate", help="leave-one-run-out evaluation of current models on logs (BorealTC folder, CSV logs, bags)"
     )
-    evaluate.add_argument("--data", type=Path, required=True, metavar="DIR", help="directory with GROUND/imu_NN.csv + pro_NN.csv")
+    add_data_options(evaluate)
     evaluate.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
-    evaluate.add_argument("--grounds", nargs="+", metavar="NAME", help="ground folders to use (default all)")
+    evaluate.add_argument("--grounds", nargs="+", metavar="NAME",
+                          help="ground folders (or the logs' ground labels) to use (default all)")
     evaluate.add_argument(
         "--model", nargs="+", default=list(CURRENT_MODEL_KINDS), choices=list(CURRENT_MODEL_KINDS), dest="models",
         help="models to evaluate (default all)",
@@ -78,7 +79,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
             where = args.scheduler if args.scheduler is not None else "a local cluster"
             workers = f"{len(client.nthreads())} dask workers ({where})"
             print(f"evaluating on {workers}", flush=True)
-        logs = read_borealtc(args.data, grounds=args.grounds)
+        logs = logs_from_args(args, require_currents=True)
         models = {name: new_current_model(name, seed=args.seed) for name in args.models}
         t0 = time.perf_counter()
         result = evaluate_current_models(logs, models, variants=args.variants, progress=True, client=client)

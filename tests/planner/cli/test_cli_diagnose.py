@@ -91,7 +91,7 @@ def test_an_output_path_that_is_a_file_exits_2_before_any_work(data, tmp_path, c
     def no_work(*args, **kwargs):
         raise AssertionError("read the logs although --out was refused")
 
-    monkeypatch.setattr(diagnose_cli, "read_logs", no_work)
+    monkeypatch.setattr(diagnose_cli, "logs_from_args", no_work)
     (tmp_path / "taken").write_text("x")
     rc, _, err = _run(capsys, "--model", "physics", "--data", data / "logs", "--out", tmp_path / "taken")
     assert rc == 2 and "--out" in err and "is a file" in err

@@ -1,0 +1,216 @@
+"""Every log at a path, whatever its layout: a BorealTC folder, a CSV log, a bag, or a folder of them."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from terrain.checks import check_bool, check_choice, check_text
+from terrain.errors import DataError, InvalidParameterError, UnknownNameError
+
+from ..logs import DEFAULT_GAP_FACTOR, InteractionLog
+from .borealtc import read_borealtc
+from .cleaning import UNIT_FACTORS
+from .csv_log import read_csv_log
+from .rosbag import read_rosbag
+
+__all__ = ["LOG_SUFFIXES", "BagTopics", "read_logs"]
+
+#: File suffixes :func:`read_logs` reads, and the reader of each.
+LOG_SUFFIXES = {".csv": "csv", ".bag": "bag", ".db3": "bag", ".mcap": "bag"}
+#: What needs measured currents, for the message of :func:`read_logs` with ``require_currents``.
+_NEEDS_CURRENTS = "training, evaluation and diagnosis"
+
+
+@dataclass(frozen=True)
+class BagTopics:
+    """Where a bag keeps its streams: the topics and message fields :func:`~energy.io.read_rosbag` reads.
+
+    Parameters
+    ----------
+    cmd_vel_topic : str
+        Commands (``geometry_msgs/Twist``) or wheel odometry (``nav_msgs/Odometry``).
+    imu_topic : str
+        ``sensor_msgs/Imu``.
+    current_topics : tuple of str
+        Two ``std_msgs/Float*`` topics (left, right), or one multi-array or status topic.
+    current_fields : (str, str) or None
+        Left and right current fields of a status message on the one current topic, e.g.
+        ``("left_driver_current", "right_driver_current")`` for ``husky_msgs/HuskyStatus``.
+    voltage_field : str or None
+        Battery voltage field of that status message (e.g. ``"battery_voltage"``).
+    current_unit : {"A", "mA"}
+
+    Raises
+    ------
+    InvalidParameterError, UnknownNameError
+        Empty or non-string names, the wrong number of topics or fields, a voltage field
+        without current fields, an unknown unit.
+
+    Examples
+    --------
+    >>> BagTopics(cmd_vel_topic="/odometry/filtered", current_topics=("/status",),
+    ...           current_fields=("left_driver_current", "right_driver_current")).current_topics
+    ('/status',)
+    """
+
+    cmd_vel_topic: str = "/cmd_vel"
+    imu_topic: str = "/imu/data"
+    current_topics: tuple[str, ...] = ("/drive/current_left", "/drive/current_right")
+    current_fields: tuple[str, str] | None = None
+    voltage_field: str | None = None
+    current_unit: str = "A"
+
+    def __post_init__(self) -> None:
+        check_text("cmd_vel_topic", self.cmd_vel_topic)
+        check_text("imu_topic", self.imu_topic)
+        topics = _names("current_topics", self.current_topics, (1, 2))
+        object.__setattr__(self, "current_topics", topics)
+        if self.current_fields is not None:
+            object.__setattr__(self, "current_fields", _names("current_fields", self.current_fields, (2,)))
+            if len(topics) != 1:
+                raise InvalidParameterError(
+                    f"current_fields (--current-fields) read one status topic; give one current topic "
+                    f"(current_topics, --current-topics), got {topics!r}"
+                )
+        if self.voltage_field is not None:
+            check_text("voltage_field", self.voltage_field)
+            if self.current_fields is None:
+                raise InvalidParameterError(
+                    "voltage_field (--voltage-field) is read beside the currents of a status message: name them "
+                    "too with current_fields (--current-fields)"
+                )
+        check_choice("current_unit", self.current_unit, tuple(UNIT_FACTORS["current"]))
+
+
+def _names(name: str, value: Any, counts: tuple[int, ...]) -> tuple[str, ...]:
+    items = (value,) if isinstance(value, str) else tuple(value) if isinstance(value, Iterable) else (value,)
+    if len(items) not in counts or not all(isinstance(x, str) and x for x in items):
+        raise InvalidParameterError(
+            f"{name} must be {' or '.join(map(str, counts))} non-empty name(s), got {value!r:.80}"
+        )
+    return items
+
+
+def read_logs(
+    path: str | os.PathLike[str],
+    grounds: Sequence[str] | None = None,
+    *,
+    bag: BagTopics | None = None,
+    require_currents: bool = False,
+    robot: str = "unknown",
+    repair: str | Iterable[str] = (),
+    allow_gaps: bool = False,
+    gap_factor: float = DEFAULT_GAP_FACTOR,
+    check_units: bool = True,
+    name: str = "path",
+) -> list[InteractionLog]:
+    """Every interaction log at ``path``, whatever its layout.
+
+    ``path`` may be a BorealTC folder (``GROUND/imu_NN.csv`` + ``pro_NN.csv``), a generic
+    CSV log (:func:`~energy.io.read_csv_log`), a bag (``.bag``, ``.db3``, ``.mcap`` or a ROS 2
+    bag folder, read with ``bag``'s topics by :func:`~energy.io.read_rosbag`), or a folder of
+    CSV logs and bags (read in name order).
+
+    Parameters
+    ----------
+    path : path-like
+    grounds : sequence of str, optional
+        Grounds to keep (case-insensitive): BorealTC ground folders, or the ground labels
+        of the other logs. All by default.
+    bag : BagTopics, optional
+        Topics and fields of the bags (default :class:`BagTopics`).
+    require_currents : bool
+        Refuse a log without drive currents (for training, evaluation and diagnosis); by
+        default such logs (a bag with no current topic) are read, enough to predict from.
+    robot : str
+        Robot name of the bags' and CSV logs' metadata (when the file does not say).
+    repair, allow_gaps, gap_factor, check_units
+        See :mod:`energy.io`.
+    name : str
+        The name of ``path`` in messages (the CLI passes ``"--data"``).
+
+    Returns
+    -------
+    list of InteractionLog
+
+    Raises
+    ------
+    DataError
+        ``path`` does not exist, a folder without logs, an unknown file type; with
+        ``require_currents`` a log without currents (the message names what its source
+        lacked and the options that read currents); plus everything the readers raise.
+    UnknownNameError
+        A requested ground that no log has.
+    InvalidParameterError
+        ``bag`` not a BagTopics, bad flags.
+
+    Examples
+    --------
+    Usage (needs data, so not run as a doctest)::
+
+        logs = read_logs("husky.bag", bag=BagTopics(cmd_vel_topic="/odometry/filtered",
+            current_topics=("/status",), current_fields=("left_driver_current", "right_driver_current"),
+            voltage_field="battery_voltage"))
+    """
+    check_text("name", name)
+    require_currents = check_bool("require_currents", require_currents)
+    if bag is None:
+        bag = BagTopics()
+    if not isinstance(bag, BagTopics):
+        raise InvalidParameterError(f"bag must be a BagTopics, got {bag!r:.80}")
+    wanted = _grounds(grounds)
+    root = Path(path)
+    common = dict(repair=repair, allow_gaps=allow_gaps, gap_factor=gap_factor, check_units=check_units)
+    if not root.exists():
+        raise DataError(f"{name} {str(root)!r} does not exist; expected a log file or a folder of logs")
+
+    def one(item: Path) -> InteractionLog:
+        if LOG_SUFFIXES.get(item.suffix.lower()) == "csv":
+            return read_csv_log(item, robot=None if robot == "unknown" else robot, **common)
+        return read_rosbag(item, bag.cmd_vel_topic, bag.imu_topic, bag.current_topics, current_fields=bag.current_fields,
+                           voltage_field=bag.voltage_field, current_unit=bag.current_unit, robot=robot, **common)
+
+    if root.is_file():
+        if root.suffix.lower() not in LOG_SUFFIXES:
+            raise DataError(f"{name} {str(root)!r}: unknown log file type {root.suffix!r}; expected one of "
+                            f"{sorted(LOG_SUFFIXES)!r} or a folder")
+        logs = [one(root)]
+    elif (root / "metadata.yaml").exists():
+        logs = [one(root)]  # a ROS 2 bag folder
+    elif any(sub.is_dir() and any(sub.glob("imu_*.csv")) for sub in root.iterdir()):
+        return _required(read_borealtc(root, grounds=grounds, **common), require_currents)
+    else:
+        items = [p for p in sorted(root.iterdir())
+                 if (p.is_dir() and (p / "metadata.yaml").exists()) or (p.is_file() and p.suffix.lower() in LOG_SUFFIXES)]
+        if not items:
+            raise DataError(f"{name} {str(root)!r} holds no logs: expected BorealTC ground folders, log files "
+                            f"({', '.join(sorted(LOG_SUFFIXES))}) or ROS 2 bag folders")
+        logs = [one(p) for p in items]
+    if wanted is not None:
+        labels = sorted({str(log.meta.ground_label) for log in logs})
+        unknown = [g for g in wanted if g not in {label.lower() for label in labels}]
+        if unknown:
+            raise UnknownNameError(f"grounds {unknown!r}: no log at {name} {str(root)!r} has that ground label; "
+                                   f"the logs' labels: {labels!r}")
+        logs = [log for log in logs if log.meta.ground_label is not None and log.meta.ground_label.lower() in wanted]
+    return _required(logs, require_currents)
+
+
+def _grounds(grounds: Any) -> set[str] | None:
+    if grounds is None:
+        return None
+    items = [grounds] if isinstance(grounds, str) else list(grounds) if isinstance(grounds, Iterable) else None
+    if not items or not all(isinstance(g, str) and g for g in items):
+        raise InvalidParameterError(f"grounds must be ground names, got {grounds!r:.80}")
+    return {g.lower() for g in items}
+
+
+def _required(logs: list[InteractionLog], require_currents: bool) -> list[InteractionLog]:
+    if require_currents:
+        for log in logs:
+            log.require_currents(_NEEDS_CURRENTS)
+    return logs
