@@ -127,7 +127,8 @@ def simulate_missions_mc(
     speed_mps : float, optional
         Nominal driving speed (m/s); default the route's planning speed.
     seed : int or None
-        Seed of the whole study (``None``: fresh entropy, kept in ``result.entropy``).
+        Seed of the whole study (``None``: a fresh one, kept in ``result.entropy``: pass it
+        as ``seed`` to repeat the study).
     current_rate_hz : float
         Sampling rate of each simulated mission (Hz, > 0).
     chunk_size : int
@@ -188,8 +189,8 @@ def simulate_missions_mc(
         raise InvalidParameterError(
             "client excludes workers and scheduler: give a distributed.Client, or workers=N, or scheduler=ADDRESS"
         )
-    root = np.random.SeedSequence(seed)
-    seqs = root.spawn(n)
+    used = int(np.random.SeedSequence().generate_state(1)[0]) if seed is None else seed  # in [0, 2**32)
+    seqs = np.random.SeedSequence(used).spawn(n)
     with contextlib.ExitStack() as stack:
         where = "in process" if client is None else "given client"
         if client is None and (n_workers > 1 or scheduler is not None):
@@ -209,7 +210,7 @@ def simulate_missions_mc(
     k = len(setup.grounds)
     cols = table[:, k:].T
     return MonteCarloResult(
-        seed=seed, entropy=int(root.entropy), distributions=distributions, battery=battery,
+        seed=seed, entropy=used, distributions=distributions, battery=battery,
         predicted_energy_j=route.energy_j, ground_names=tuple(sorted(setup.grounds)), ground_scale=table[:, :k],
         payload_kg=cols[0], capacity_ah=cols[1], internal_resistance_ohm=cols[2], speed_mps=cols[3],
         energy_j=cols[4], charge_mah=cols[5], duration_s=cols[6], arrival_soc=cols[7], min_soc=cols[8],

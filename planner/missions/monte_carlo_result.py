@@ -37,8 +37,8 @@ class MonteCarloResult:
     Attributes
     ----------
     seed : int or None
-        The seed given; ``entropy`` is what the samples were drawn from (equal to ``seed``
-        when one was given), so ``seed=entropy`` reproduces a run made with ``seed=None``.
+        The seed given; ``entropy`` is the seed the samples were drawn from (``seed`` when
+        one was given, a fresh one for ``None``): ``seed=entropy`` repeats the study.
     entropy : int
     distributions : MissionDistributions
     battery : Battery
