@@ -11,8 +11,14 @@ import numpy as np
 
 from terrain import TerrainMap
 from terrain.atomic import check_output_path, save_figure
+from terrain.checks import check_choice, check_optional_real, check_real
 
-__all__ = ["RouteLine", "plot_routes"]
+__all__ = ["RouteLine", "plot_routes", "view_bounds", "PLOT_EXTENTS"]
+
+#: What :func:`plot_routes` shows: the routes with a margin, or the whole map.
+PLOT_EXTENTS = ("routes", "map")
+#: Most raster samples drawn along a side: larger views are decimated for the background.
+_MAX_PIXELS = 1600
 
 # Colours for ground classes by name; other names get colours from a qualitative map.
 _GROUND_COLOURS = {
@@ -39,6 +45,42 @@ class RouteLine:
     linestyle: str = "-"
 
 
+def view_bounds(
+    tmap: TerrainMap,
+    routes: Sequence[RouteLine],
+    points_xy_m: Sequence[tuple[float, float]] = (),
+    *,
+    extent: str = "routes",
+    margin_frac: float = 0.15,
+) -> tuple[float, float, float, float]:
+    """The ``(xmin, ymin, xmax, ymax)`` a route plot shows (m).
+
+    ``extent="routes"``: the box of every route vertex and point, grown by ``margin_frac``
+    of its larger side (at least 10 cells) on each side and clipped to the map; the whole
+    map when there is nothing to show. ``extent="map"``: the map's bounds.
+
+    Raises
+    ------
+    UnknownNameError
+        ``extent`` not one of :data:`PLOT_EXTENTS`.
+    InvalidParameterError
+        ``margin_frac`` negative or not finite.
+    """
+    check_choice("extent", extent, PLOT_EXTENTS)
+    margin_frac = check_real("margin_frac", margin_frac, low=0.0)
+    bounds = tmap.bounds
+    pts = [np.asarray(r.waypoints_m, float).reshape(-1, 2) for r in routes]
+    pts += [np.asarray(p, float).reshape(1, 2) for p in points_xy_m]
+    xy = np.vstack(pts) if pts else np.empty((0, 2))
+    xy = xy[np.all(np.isfinite(xy), axis=1)]
+    if extent == "map" or xy.shape[0] == 0:
+        return bounds
+    lo, hi = xy.min(axis=0), xy.max(axis=0)
+    pad = max(margin_frac * float(np.max(hi - lo)), 10.0 * tmap.cell_size_m)
+    return (max(bounds[0], lo[0] - pad), max(bounds[1], lo[1] - pad),
+            min(bounds[2], hi[0] + pad), min(bounds[3], hi[1] + pad))
+
+
 def plot_routes(
     tmap: TerrainMap,
     routes: Sequence[RouteLine],
@@ -48,12 +90,18 @@ def plot_routes(
     *,
     title: str | None = None,
     dpi: int = 130,
+    extent: str = "routes",
+    margin_frac: float = 0.15,
+    max_slope_rad: float | None = None,
 ) -> Path:
     """Draw routes over the map and write a PNG.
 
     The background is a hillshade of the elevation with contour lines, the ground classes
-    as a translucent colour layer (legend by name), obstacles in black, each route with its
-    energy in the legend, and start / goal markers.
+    as a translucent colour layer (legend by name), obstacles in black, the cells steeper
+    than ``max_slope_rad`` tinted and hatched, each route with its energy in the legend,
+    and start / goal markers. By default the view zooms on the routes with a margin
+    (:func:`view_bounds`), so a 7 km route on a 30 km DEM is not a speck; only the cells in
+    view are drawn (decimated beyond 1,600 samples a side).
 
     Parameters
     ----------
@@ -65,6 +113,12 @@ def plot_routes(
         Start and goal (m).
     path : path-like
         Output PNG file (written atomically).
+    extent : {"routes", "map"}
+        Zoom on the routes and points with a margin (default), or show the whole map.
+    margin_frac : float
+        Margin around the routes, as a fraction of their larger extent (>= 0).
+    max_slope_rad : float, optional
+        The cost's slope limit: cells steeper than it are drawn as a hatched layer.
 
     Returns
     -------
@@ -74,9 +128,14 @@ def plot_routes(
     Raises
     ------
     InvalidParameterError
-        ``path`` is a directory or lies under a file (checked before drawing).
+        ``path`` is a directory or lies under a file (checked before drawing); a bad
+        ``margin_frac`` or ``max_slope_rad``.
+    UnknownNameError
+        ``extent`` not one of :data:`PLOT_EXTENTS`.
     """
     path = check_output_path(path, "path")
+    max_slope_rad = check_optional_real("max_slope_rad", max_slope_rad, low=0.0, low_inclusive=False)
+    view = view_bounds(tmap, routes, [start_xy_m, goal_xy_m], extent=extent, margin_frac=margin_frac)
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -84,17 +143,26 @@ def plot_routes(
     from matplotlib.colors import LightSource, ListedColormap
     from matplotlib.patches import Patch
 
-    xmin, ymin, xmax, ymax = tmap.bounds
-    extent = (xmin, xmax, ymin, ymax)
-    z = tmap.elevation_m
+    d = tmap.cell_size_m
+    x0, y0 = tmap.origin_xy_m
+    r0 = int(np.clip(np.floor((view[1] - y0) / d), 0, tmap.shape[0] - 2))
+    c0 = int(np.clip(np.floor((view[0] - x0) / d), 0, tmap.shape[1] - 2))
+    r1 = int(np.clip(np.ceil((view[3] - y0) / d), r0 + 2, tmap.shape[0]))
+    c1 = int(np.clip(np.ceil((view[2] - x0) / d), c0 + 2, tmap.shape[1]))
+    step = max(1, int(np.ceil(max(r1 - r0, c1 - c0) / _MAX_PIXELS)))
+    window = (slice(r0, r1, step), slice(c0, c1, step))
+    xmin, ymin = x0 + c0 * d, y0 + r0 * d
+    xmax, ymax = x0 + c1 * d, y0 + r1 * d
+    extent_xy = (xmin, xmax, ymin, ymax)
+    z = tmap.elevation_m[window]
     fig, ax = plt.subplots(figsize=(10.5, 7.2))
     light = LightSource(azdeg=315, altdeg=45)
-    shade = light.hillshade(z[::-1], vert_exag=3.0, dx=tmap.cell_size_m, dy=tmap.cell_size_m)
-    ax.imshow(shade, cmap="gray", extent=extent, origin="upper", vmin=0, vmax=1, interpolation="bilinear")
+    shade = light.hillshade(z[::-1], vert_exag=3.0, dx=d * step, dy=d * step)
+    ax.imshow(shade, cmap="gray", extent=extent_xy, origin="upper", vmin=0, vmax=1, interpolation="bilinear")
 
     handles: list = []
     names = tmap.ground_names
-    ground = tmap.ground
+    ground = tmap.ground[window]
     if names:
         ids = sorted(names)
         cycle = plt.get_cmap("tab10")
@@ -108,22 +176,32 @@ def plot_routes(
             vmin=-0.5,
             vmax=len(ids) - 0.5,
             alpha=0.35,
-            extent=extent,
+            extent=extent_xy,
             origin="lower",
             interpolation="nearest",
         )
         handles += [Patch(facecolor=c, alpha=0.6, label=names[k]) for k, c in zip(ids, colours, strict=True)]
 
     xs, ys = tmap.cell_centres()
+    xs, ys = xs[window[1]], ys[window[0]]
     levels = np.linspace(z.min(), z.max(), 12)[1:-1] if z.max() > z.min() else None
     if levels is not None:
         cs = ax.contour(xs, ys, z, levels=levels, colors="k", linewidths=0.4, alpha=0.5)
         ax.clabel(cs, fmt="%.0f m", fontsize=6)
-    if tmap.obstacle.any():
+    if max_slope_rad is not None:
+        steep = tmap.slope_rad[window] > max_slope_rad
+        if steep.any():
+            ax.imshow(np.ma.masked_where(~steep, steep.astype(float)), cmap=ListedColormap(["#ff7043"]), alpha=0.35,
+                      extent=extent_xy, origin="lower", interpolation="nearest")
+            ax.contourf(xs, ys, steep.astype(float), levels=[0.5, 1.5], colors="none", hatches=["////"])
+            label = f"steeper than {np.degrees(max_slope_rad):.0f} deg (blocked)"
+            handles.append(Patch(facecolor="#ff7043", alpha=0.5, hatch="////", label=label))
+    obstacle = tmap.obstacle[window]
+    if obstacle.any():
         ax.imshow(
-            np.ma.masked_where(~tmap.obstacle, tmap.obstacle.astype(float)),
+            np.ma.masked_where(~obstacle, obstacle.astype(float)),
             cmap=ListedColormap(["black"]),
-            extent=extent,
+            extent=extent_xy,
             origin="lower",
             interpolation="nearest",
         )
@@ -144,8 +222,8 @@ def plot_routes(
     (s,) = ax.plot(*start_xy_m, marker="o", color="white", markeredgecolor="k", markersize=9, linestyle="", label="start")
     (g,) = ax.plot(*goal_xy_m, marker="*", color="gold", markeredgecolor="k", markersize=14, linestyle="", label="goal")
     handles += [s, g]
-    ax.set_xlim(xmin, xmax)
-    ax.set_ylim(ymin, ymax)
+    ax.set_xlim(view[0], view[2])
+    ax.set_ylim(view[1], view[3])
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")

@@ -14,6 +14,7 @@ from terrain.errors import InvalidParameterError, PlanningError
 
 from .edge_cost import EnergyCost
 from .points import as_points
+from .route_geojson import routes_geojson
 
 __all__ = ["Route", "RouteComparison", "ROUTE_STATUSES", "evaluate_route", "empty_route"]
 
@@ -236,6 +237,11 @@ class Route:
                 "expected an exact route"
             )
         return self
+
+    def to_geojson(self, where: Any, *, crs: str | None = None, name: str = "route") -> dict[str, Any]:
+        """This route as a GeoJSON FeatureCollection of one LineString (:func:`planner.route_geojson.routes_geojson`:
+        WGS 84 when ``where``, the map or its Grid, has a CRS; per-vertex cumulative energy)."""
+        return routes_geojson({name: self}, where, crs=crs)
 
     def replace(self, **changes: Any) -> Route:
         """A copy with some fields changed (validated again)."""

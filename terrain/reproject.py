@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from .checks import check_real, check_text
+from .checks import check_real, check_text, fmt_number
 from .errors import InvalidParameterError, UnknownNameError
 from .georef import DemBand, check_metric_crs, import_rasterio, parse_crs, transform_xy, utm_crs
 
@@ -102,7 +102,7 @@ def warp_band(src: Any, info: DemBand, to: str, cell_size_m: float, resampling: 
     )
     if width < 2 or height < 2 or width * height > 2**31:
         raise InvalidParameterError(
-            f"cell_size_m={cell!r} gives a {height} x {width} grid for this DEM; expected at least 2 x 2 and at "
+            f"cell_size_m {fmt_number(cell)} m gives a {height} x {width} grid for this DEM; expected at least 2 x 2 and at "
             "most 2**31 cells (choose a cell size near the DEM's resolution in metres)"
         )
     data = src.read(info.band, masked=True)

@@ -19,6 +19,7 @@ from terrain.checks import fmt_number
 __all__ = [
     "add_map_options",
     "read_map_file",
+    "read_map_args",
     "check_outputs",
     "check_positive",
     "max_slope_rad",
@@ -28,20 +29,42 @@ __all__ = [
 ]
 
 
-def add_map_options(p: argparse.ArgumentParser) -> None:
-    """``--fill-nodata``."""
+def add_map_options(p: argparse.ArgumentParser, *, reproject: bool = False) -> None:
+    """``--fill-nodata``; with ``reproject=True`` also ``--reproject`` and ``--cell-size`` (read them
+    with :func:`read_map_args`)."""
     p.add_argument(
         "--fill-nodata", choices=["nearest"], default=None,
         help="GeoTIFF DEMs: fill nodata cells from the nearest valid cell (default: refuse such DEMs)",
     )
+    if reproject:
+        p.add_argument(
+            "--reproject", default=None, metavar="utm|EPSG:N",
+            help="GeoTIFF DEMs: reproject to the UTM zone of the DEM's centre ('utm') or to a projected CRS in "
+                 "metres (e.g. EPSG:32633); needed for DEMs in geographic coordinates (EPSG:4326); with --cell-size",
+        )
+        p.add_argument("--cell-size", type=float, default=None, metavar="M",
+                       help="cell size (m) of the reprojected map; with --reproject")
 
 
-def read_map_file(path: str | os.PathLike[str], fill_nodata: str | None) -> TerrainMap:
-    """:func:`terrain.read_map`, its advice phrased with the CLI's ``--fill-nodata nearest``."""
+def read_map_file(
+    path: str | os.PathLike[str],
+    fill_nodata: str | None,
+    reproject: str | None = None,
+    cell_size: float | None = None,
+) -> TerrainMap:
+    """:func:`terrain.read_map`, its advice phrased with the CLI's ``--fill-nodata nearest``,
+    ``--reproject`` and ``--cell-size``."""
     from terrain import read_map
 
+    if (reproject is None) != (cell_size is None):
+        raise InvalidParameterError(
+            "--reproject and --cell-size go together: e.g. --reproject utm --cell-size 5 "
+            f"(got --reproject {reproject}, --cell-size {cell_size})"
+        )
+    if cell_size is not None:
+        check_positive("--cell-size", cell_size)
     try:
-        return read_map(path, fill_nodata=fill_nodata)
+        return read_map(path, fill_nodata=fill_nodata, reproject_to=reproject, cell_size_m=cell_size)
     except NodataError as exc:
         raise NodataError(
             f"{Path(path).name} has {exc.n_nodata} nodata cells of {exc.n_cells}; give "
@@ -49,6 +72,17 @@ def read_map_file(path: str | os.PathLike[str], fill_nodata: str | None) -> Terr
             n_nodata=exc.n_nodata,
             n_cells=exc.n_cells,
         ) from exc
+    except InvalidParameterError as exc:
+        text = str(exc)
+        if reproject is None or not text.startswith(("reproject_to", "cell_size_m")):
+            raise
+        raise InvalidParameterError(text.replace("reproject_to", "--reproject").replace("cell_size_m", "--cell-size")
+                                    ) from exc
+
+
+def read_map_args(args: argparse.Namespace) -> TerrainMap:
+    """The map of a command's ``--map``, ``--fill-nodata`` and (if offered) ``--reproject`` / ``--cell-size``."""
+    return read_map_file(args.map, args.fill_nodata, getattr(args, "reproject", None), getattr(args, "cell_size", None))
 
 
 def check_outputs(directory: Path, files: Iterable[str] = ()) -> None:

@@ -17,19 +17,20 @@ from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_ma
 
 from .. import PLANNERS, EnergyCost, Route, plan_route, warm_up_kernels
 from ..plot import RouteLine, plot_routes
+from ..route_geojson import write_geojson
 from .common import (
     add_map_options,
     check_outputs,
     check_positive,
     draw_figure,
     max_slope_rad,
-    read_map_file,
+    read_map_args,
     unknown_ground,
 )
 
 __all__ = ["add_parsers", "run_demo", "run_plan_command", "run_plan"]
 
-_OUTPUTS = ("route.json", "route.png")
+_OUTPUTS = ("route.json", "route.geojson", "route.png")
 
 
 def add_parsers(sub: Any) -> None:
@@ -39,7 +40,7 @@ def add_parsers(sub: Any) -> None:
     demo.set_defaults(run=run_demo)
     plan = sub.add_parser("plan", help="plan a minimum-energy route on a map file (.npz or GeoTIFF)")
     plan.add_argument("--map", type=Path, required=True, metavar="FILE", help=".npz map or .tif DEM")
-    add_map_options(plan)
+    add_map_options(plan, reproject=True)
     plan.add_argument("--start", type=float, nargs=2, required=True, metavar=("X", "Y"), help="start (m)")
     plan.add_argument("--goal", type=float, nargs=2, required=True, metavar=("X", "Y"), help="goal (m)")
     _add_plan_options(plan, default_time=2.0)
@@ -56,6 +57,8 @@ def _add_plan_options(p: argparse.ArgumentParser, *, default_time: float) -> Non
              "with --seed the route is then the same on every run and machine",
     )
     p.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
+    p.add_argument("--whole-map", action="store_true",
+                   help="draw the whole map in route.png (default: zoom on the routes with a margin)")
     p.add_argument("--robot", default="husky", help="robot preset: paper_seed, jackal or husky (default husky)")
     p.add_argument("--speed", type=float, default=0.5, metavar="M/S", help="planning speed (default 0.5 m/s)")
     p.add_argument("--max-slope-deg", type=float, default=20.0, help="steepest drivable slope (default 20 deg)")
@@ -75,7 +78,7 @@ def run_demo(args: argparse.Namespace) -> int:
 def run_plan_command(args: argparse.Namespace) -> int:
     """``terrawatt plan``: plan on a map file."""
     check_outputs(args.out, _OUTPUTS)
-    tmap = read_map_file(args.map, args.fill_nodata)
+    tmap = read_map_args(args)
     return _run(args, tmap, tuple(args.start), tuple(args.goal), args.map.name)
 
 
@@ -88,7 +91,7 @@ def _run(args: argparse.Namespace, tmap: TerrainMap, start: tuple[float, float],
     result = run_plan(
         tmap, start, goal, planner=args.planner, time_limit_s=args.time_limit, max_evaluations=args.max_evaluations,
         seed=args.seed, out_dir=args.out, robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg,
-        unknown_ground=unknown_ground(args.unknown_ground, tmap), map_label=label,
+        unknown_ground=unknown_ground(args.unknown_ground, tmap), map_label=label, whole_map=args.whole_map,
     )
     return 0 if result["status"] == "exact" else 1
 
@@ -140,8 +143,13 @@ def run_plan(
     max_slope_deg: float,
     unknown_ground: str | None,
     map_label: str,
+    whole_map: bool = False,
 ) -> dict[str, Any]:
-    """Plan once with its comparison (shortest route, lattice optimum), print, write files."""
+    """Plan once with its comparison (shortest route, lattice optimum), print, write files.
+
+    Writes ``route.json``, ``route.geojson`` (the found routes as LineStrings: WGS 84 when the
+    map has a CRS, else local metres) and ``route.png`` (zoomed on the routes unless
+    ``whole_map``)."""
     slope_rad = max_slope_rad(max_slope_deg)
     compile_s = warm_up_kernels()  # compiled once per environment, then loaded from numba's cache
     t0 = time.perf_counter()
@@ -202,6 +210,7 @@ def run_plan(
             )
     result = {
         "map": map_label,
+        "map_crs": tmap.crs,
         "robot": robot,
         "speed_mps": speed_mps,
         "max_slope_deg": max_slope_deg,
@@ -221,7 +230,13 @@ def run_plan(
     }
     out_dir.mkdir(parents=True, exist_ok=True)
     json_path = write_json_atomic(out_dir / "route.json", result)
+    written = [json_path]
+    if route.found:
+        found = {"min_energy": route, "lattice": optimum, "shortest": shortest}
+        written.append(write_geojson({k: r for k, r in found.items() if r.found}, tmap, out_dir / "route.geojson"))
     png_path = draw_figure(out_dir / "route.png", lambda: plot_routes(
-        tmap, lines, start, goal, out_dir / "route.png", title=f"terrawatt: minimum-energy route on {map_label}"))
-    print(f"\nwrote {json_path}" + (f" and {png_path}" if png_path is not None else ""))
+        tmap, lines, start, goal, out_dir / "route.png", title=f"terrawatt: minimum-energy route on {map_label}",
+        extent="map" if whole_map else "routes", max_slope_rad=slope_rad))
+    written += [png_path] if png_path is not None else []
+    print("\nwrote " + ", ".join(str(p) for p in written))
     return result
