@@ -63,6 +63,7 @@ from .reachability import lattice_move_energies, reachability
 from .reachability_result import REACH_FORMAT_VERSION, REACH_LAYERS, Reachability
 from .refine import refine_route, relax_path, string_pull
 from .route import ROUTE_STATUSES, Route, RouteComparison, evaluate_route
+from .route_geojson import GEOJSON_FORMAT_VERSION, routes_geojson, write_geojson
 from .settings import PlannerSettings
 from .warmup import warm_up_kernels
 
@@ -97,6 +98,9 @@ __all__ = [
     "CoarseToFine",
     "downsample_cost",
     "COARSE_FALLBACKS",
+    "routes_geojson",
+    "write_geojson",
+    "GEOJSON_FORMAT_VERSION",
     # energy reachability
     "reachability",
     "Reachability",
