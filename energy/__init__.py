@@ -82,14 +82,17 @@ from .metrics import (
     section_error_pct,
 )
 from .models import (  # torch-free: the contract, its file format, the baselines, the loader
+    ADAPT_METHODS,
     CURRENT_MODEL_FORMAT_VERSION,
     CURRENT_MODEL_KINDS,
     PHYSICS_FIT_PARAMETERS,
+    AdaptedCurrentModel,
     ConstantCurrentModel,
     CurrentModel,
     LinearCurrentModel,
     PhysicsCurrentModel,
     __getattr__,  # noqa: F401  (PEP 562: the torch names load on first use)
+    adapt_current_model,
     load_current_model,
     new_current_model,
 )
@@ -234,6 +237,10 @@ __all__ = [
     "EffectScore",
     "WaterfallStep",
     "CorrectedCurrentModel",
+    # in-run adaptation
+    "ADAPT_METHODS",
+    "AdaptedCurrentModel",
+    "adapt_current_model",
     "Effect",
     "EffectParameter",
     "EFFECTS_CATALOGUE",

@@ -2,7 +2,8 @@
 
 Modules: :mod:`~energy.models.base` (the :class:`CurrentModel` contract and its torch-free
 file format), :mod:`~energy.models.baselines` (constant, linear, fitted physics),
-:mod:`~energy.models.loading` (:func:`load_current_model`), :mod:`~energy.models.kinds` (models by name), and the torch estimator in three
+:mod:`~energy.models.loading` (:func:`load_current_model`), :mod:`~energy.models.kinds` (models by name),
+:mod:`~energy.models.adaptation` (in-run adaptation of a fitted model), and the torch estimator in three
 parts after minGPT: :mod:`~energy.models.net` (the network), :mod:`~energy.models.data`
 (the windowed dataset), :mod:`~energy.models.training` (the seeded training loop), plus
 :mod:`~energy.models.config` (its configuration and presets) and
@@ -17,6 +18,7 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from .adaptation import ADAPT_METHODS, MIN_ADAPT_SAMPLES, MIN_ADAPT_SECONDS, AdaptedCurrentModel, adapt_current_model
 from .base import (
     CURRENT_MODEL_FORMAT,
     CURRENT_MODEL_FORMAT_VERSION,
@@ -85,6 +87,11 @@ __all__ = [
     "LinearCurrentModel",
     "PhysicsCurrentModel",
     "PHYSICS_FIT_PARAMETERS",
+    "ADAPT_METHODS",
+    "MIN_ADAPT_SECONDS",
+    "MIN_ADAPT_SAMPLES",
+    "AdaptedCurrentModel",
+    "adapt_current_model",
     "TORCH_NAMES",
     *TORCH_NAMES,
 ]

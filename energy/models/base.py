@@ -390,6 +390,10 @@ class CurrentModel:
             raise DataError("score needs logged currents that vary; they are all equal")
         return 1.0 - float(np.sum((truth - pred) ** 2)) / ss_tot
 
+    def adapt(self, log_prefix: InteractionLog | Sequence[InteractionLog], **options: Any) -> CurrentModel:
+        """A new model updated on a short stretch of new data; this one is unchanged (see ``AdaptedCurrentModel``)."""
+        return CurrentModel._registry["AdaptedCurrentModel"](self, **options).fit(log_prefix)
+
     def _fit(self, logs: list[InteractionLog]) -> None:  # pragma: no cover - abstract
         raise NotImplementedError
 

@@ -24,6 +24,7 @@ MODEL_CLASSES = (
     "PhysicsCurrentModel",
     "VibrationCurrentEstimator",
     "CorrectedCurrentModel",
+    "AdaptedCurrentModel",
 )
 
 _BASELINES: dict[str, type[CurrentModel]] = {

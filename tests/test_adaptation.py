@@ -1,0 +1,212 @@
+"""Tests of energy.models.adaptation: in-run adaptation of a fitted current model (model.adapt)."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from energy import (
+    ADAPT_METHODS,
+    AdaptedCurrentModel,
+    DataError,
+    FileFormatError,
+    InteractionLog,
+    InvalidParameterError,
+    LinearCurrentModel,
+    LogMeta,
+    NotFittedError,
+    adapt_current_model,
+    load_current_model,
+)
+from energy.models import MIN_ADAPT_SAMPLES, ModelRecord
+from terrain import UnknownNameError
+
+
+def _log(seed: int, *, turn_extra_a: float = 0.0, offset_a: float = 0.0, turns_after_s: float = 0.0,
+         duration_s: float = 60.0) -> InteractionLog:
+    """A run whose currents follow a known relation; ``turn_extra_a`` adds current on the outer side of turns."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, duration_s, 0.1)
+    v = 0.5 + 0.2 * np.sin(2 * np.pi * t / 7.0 + rng.uniform(0, 6))
+    w = np.where(t >= turns_after_s, 0.6 * np.sign(np.sin(2 * np.pi * t / 6.0 + rng.uniform(0, 6))), 0.0)
+    m = np.tanh(np.abs(w) / 0.3)
+    left = 0.5 + 3.0 * np.abs(v) + 1.0 * np.abs(w) + turn_extra_a * m * (w < 0) + offset_a
+    right = 0.8 + 2.0 * np.abs(v) + 1.5 * np.abs(w) + turn_extra_a * m * (w > 0) + offset_a
+    ta = np.arange(0.0, t[-1] + 0.005, 0.01)
+    return InteractionLog(t, v, w, left, right, ta, np.full(ta.size, 9.81),
+                          meta=LogMeta(source=f"g/pro_{seed:02d}.csv", ground_label="g"))
+
+
+def _on_base(base, log: InteractionLog, *, offset_a: float = 0.0, turn_extra_a: float = 0.0) -> InteractionLog:
+    """``log`` with currents = the base model's prediction + an offset + extra current on the outer side of turns."""
+    pred = base.predict(log)
+    w = log.omega_radps
+    m = np.tanh(np.abs(w) / 0.3)
+    return dataclasses.replace(log, current_left_a=pred[:, 0] + offset_a + turn_extra_a * m * (w < 0),
+                               current_right_a=pred[:, 1] + offset_a + turn_extra_a * m * (w > 0))
+
+
+def _head(log: InteractionLog, seconds: float) -> InteractionLog:
+    return log.slice(float(log.time_s[0]), float(log.time_s[0] + seconds))
+
+
+def _charge_error_pct(log: InteractionLog, pred: np.ndarray, t_from: float) -> float:
+    sel = log.time_s >= t_from
+    truth = np.trapezoid(np.column_stack([log.current_left_a, log.current_right_a])[sel], log.time_s[sel], axis=0)
+    q = np.trapezoid(pred[sel], log.time_s[sel], axis=0)
+    return float(np.max(np.abs(q - truth) / truth) * 100)
+
+
+@pytest.fixture(scope="module")
+def base():
+    return LinearCurrentModel().fit([_log(1), _log(2)])
+
+
+def test_adapt_returns_a_new_model_and_leaves_the_fitted_one_unchanged(base):
+    run = _log(3, turn_extra_a=1.5)
+    before = base.predict(run)
+    coef_before = {k: np.copy(v) for k, v in vars(base).items() if isinstance(v, np.ndarray)}
+    adapted = base.adapt(_head(run, 20.0))
+    assert isinstance(adapted, AdaptedCurrentModel) and adapted is not base
+    assert adapted.base is base and adapted.method == ADAPT_METHODS[0] == "regime"
+    np.testing.assert_array_equal(base.predict(run), before)
+    for k, v in coef_before.items():
+        np.testing.assert_array_equal(getattr(base, k), v)
+    assert adapted.adapted_on_s_ == pytest.approx(20.0, abs=0.11) and adapted.n_samples_ >= 199
+
+
+def test_regime_update_corrects_turns_seen_in_the_prefix(base):
+    run = _on_base(base, _log(4), turn_extra_a=1.5)
+    plain = _charge_error_pct(run, base.predict(run), 20.0)
+    adapted = base.adapt(_head(run, 20.0))
+    assert plain > 10.0
+    assert _charge_error_pct(run, adapted.predict(run), 20.0) < plain / 3
+    outer = adapted.coefficients_[:, 3]
+    assert np.all(outer > 0.2) and np.all(outer > np.abs(adapted.coefficients_[:, 2]))  # the outer side carries it
+
+
+def test_straight_prefix_does_not_rescale_turns_unlike_the_gain(base):
+    # +0.6 A on every sample (a higher idle current), turns only after 45 s: the first 40 s see straights only
+    run = _on_base(base, _log(5, turns_after_s=45.0, duration_s=90.0), offset_a=0.6)
+    head = _head(run, 40.0)
+    regime = base.adapt(head, prior_s=2.0)
+    gain = base.adapt(head, method="gain")
+    assert np.all(np.abs(regime.coefficients_[:, 2:]) < 0.05)  # no turn seen: no turn correction
+    shift = (regime.predict(head) - base.predict(head)).mean(axis=0)
+    assert np.all((shift > 0.5) & (shift < 0.6))  # the 0.6 A, shrunk a little by the prior
+    # the gain, fitted on straights, scales the larger turning currents too
+    assert _charge_error_pct(run, regime.predict(run), 40.0) < 0.5 * _charge_error_pct(run, gain.predict(run), 40.0)
+
+
+def test_gain_method_is_measured_over_predicted_charge_of_the_prefix(base):
+    run = _log(6, offset_a=0.4)
+    head = _head(run, 15.0)
+    adapted = adapt_current_model(base, head, method="gain")
+    pred = base.predict(head)
+    expect = np.trapezoid(np.column_stack([head.current_left_a, head.current_right_a]), head.time_s, axis=0) / \
+        np.trapezoid(pred, head.time_s, axis=0)
+    np.testing.assert_allclose(adapted.coefficients_[:, 0], expect)
+    np.testing.assert_allclose(adapted.predict(run), base.predict(run) * expect[None, :])
+
+
+def test_gain_offset_and_prior_strength(base):
+    run = _log(7, offset_a=0.8)
+    weak = base.adapt(_head(run, 30.0), method="gain_offset", prior_s=0.1)
+    strong = base.adapt(_head(run, 30.0), method="gain_offset", prior_s=1e6)
+    assert _charge_error_pct(run, weak.predict(run), 30.0) < 3.0
+    np.testing.assert_allclose(strong.predict(run), base.predict(run), atol=1e-3)
+
+
+def test_adapting_an_adapted_model_refits_on_the_base_without_stacking(base):
+    run = _log(8, turn_extra_a=1.0)
+    first = base.adapt(_head(run, 20.0))
+    second = first.adapt(_head(run, 20.0))
+    assert second.base_model is base
+    np.testing.assert_allclose(second.predict(run), first.predict(run))
+
+
+def test_correct_equals_predict_and_checks_its_input(base):
+    run = _log(9, turn_extra_a=1.0)
+    adapted = base.adapt(_head(run, 20.0))
+    np.testing.assert_allclose(adapted.correct(run, base.predict(run)), adapted.predict(run))
+    with pytest.raises(InvalidParameterError, match="base_prediction must have shape"):
+        adapted.correct(run, np.zeros((3, 2)))
+    with pytest.raises(InvalidParameterError, match="NaN"):
+        adapted.correct(run, np.full((len(run), 2), np.nan))
+    with pytest.raises(NotFittedError):
+        AdaptedCurrentModel(base).correct(run, base.predict(run))
+
+
+def test_predictions_are_clamped_at_zero_when_the_data_never_went_negative(base):
+    run = _log(10, offset_a=-5.0)  # negative currents in the data: no clamp
+    assert not base.adapt(_head(run, 20.0)).nonnegative_
+    adapted = base.adapt(_head(_log(11, offset_a=-0.3), 20.0))
+    assert adapted.nonnegative_ and np.all(adapted.predict(run) >= 0.0)
+
+
+def test_save_and_load_round_trip(base, tmp_path):
+    run = _log(12, turn_extra_a=1.0)
+    adapted = base.adapt(_head(run, 20.0))
+    loaded = load_current_model(adapted.save(tmp_path / "adapted.zip"))
+    assert isinstance(loaded, AdaptedCurrentModel) and isinstance(loaded.base, LinearCurrentModel)
+    np.testing.assert_allclose(loaded.predict(run), adapted.predict(run))
+    clone = adapted.clone()
+    assert not clone.is_fitted and clone.base is base
+
+
+def test_forged_coefficients_are_a_file_format_error(base):
+    adapted = base.adapt(_head(_log(13), 20.0))
+    rec = adapted.to_record()
+    bad = ModelRecord(rec.model_class, rec.params, {**rec.state, "coefficients": np.zeros((2, 7))})
+    with pytest.raises(FileFormatError, match="coefficients"):
+        AdaptedCurrentModel.from_record(bad)
+    unknown = ModelRecord(rec.model_class, {**rec.params, "base": {**rec.params["base"], "model_class": "Nope"}}, rec.state)
+    with pytest.raises(FileFormatError):
+        AdaptedCurrentModel.from_record(unknown)
+
+
+def test_too_little_data_is_a_data_error_naming_the_minimum(base):
+    run = _log(14)
+    before = base.predict(run)
+    with pytest.raises(DataError, match=r"at least 5 s and 10 drive samples.*min_seconds.*got 1.9 s"):
+        base.adapt(_head(run, 2.0))
+    with pytest.raises(DataError, match="at least 30 s"):
+        base.adapt(_head(run, 20.0), min_seconds=30.0)
+    few = run.slice(0.0, 0.1 * (MIN_ADAPT_SAMPLES - 2))
+    with pytest.raises(DataError, match="drive samples"):
+        base.adapt(few, min_seconds=0.0)
+    np.testing.assert_array_equal(base.predict(run), before)  # a failed adaptation changes nothing
+
+
+def test_gain_on_a_base_that_predicts_no_charge_is_a_data_error():
+    zero = _log(15, offset_a=0.0)
+    flat = InteractionLog(zero.time_s, zero.v_mps, zero.omega_radps, np.zeros(len(zero)), np.zeros(len(zero)),
+                          zero.accel_time_s, zero.accel_z_mps2, meta=zero.meta)
+    model = LinearCurrentModel().fit(flat)
+    with pytest.raises(DataError, match="method='regime'"):
+        model.adapt(_head(zero, 20.0), method="gain")
+
+
+@pytest.mark.parametrize(("options", "error", "match"), [
+    ({"method": "retrain"}, UnknownNameError, "method"),
+    ({"prior_s": 0.0}, InvalidParameterError, "prior_s"),
+    ({"prior_s": float("nan")}, InvalidParameterError, "prior_s"),
+    ({"turn_scale_radps": -1.0}, InvalidParameterError, "turn_scale_radps"),
+    ({"min_seconds": -1.0}, InvalidParameterError, "min_seconds"),
+    ({"method": 3}, UnknownNameError, "method"),
+])
+def test_bad_options(base, options, error, match):
+    with pytest.raises(error, match=match):
+        base.adapt(_head(_log(16), 20.0), **options)
+
+
+def test_bad_models_and_logs(base):
+    head = _head(_log(17), 20.0)
+    with pytest.raises(InvalidParameterError, match="fitted CurrentModel"):
+        LinearCurrentModel().adapt(head)
+    with pytest.raises(InvalidParameterError, match="fitted CurrentModel"):
+        adapt_current_model("linear", head)
+    with pytest.raises(InvalidParameterError, match="log_prefix"):
+        adapt_current_model(base, [])
+    with pytest.raises(InvalidParameterError, match="InteractionLog"):
+        base.adapt("run.csv")
