@@ -22,7 +22,7 @@ __all__ = ["LOG_SUFFIXES", "BagTopics", "read_logs"]
 #: File suffixes :func:`read_logs` reads, and the reader of each.
 LOG_SUFFIXES = {".csv": "csv", ".bag": "bag", ".db3": "bag", ".mcap": "bag"}
 #: What needs measured currents, for the message of :func:`read_logs` with ``require_currents``.
-_NEEDS_CURRENTS = "training, evaluation and diagnosis"
+_NEEDS_CURRENTS = "training, evaluation or diagnosis"
 
 
 @dataclass(frozen=True)

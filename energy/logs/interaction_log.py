@@ -164,7 +164,8 @@ class InteractionLog:
         Parameters
         ----------
         purpose : str
-            What needs them, for the message (e.g. ``"training"``).
+            What needs them, for the message (e.g. ``"training"``: "training needs measured
+            drive currents, and ...").
 
         Raises
         ------
@@ -175,7 +176,7 @@ class InteractionLog:
         if self.current_left_a is None:
             lacked = f" ({self.meta.missing_currents})" if self.meta.missing_currents else ""
             raise DataError(
-                f"{self.meta.source}: {purpose} needs measured drive currents and this log has none{lacked}; "
+                f"{self.meta.source}: {purpose} needs measured drive currents, and this log has none{lacked}; "
                 f"read it with its current topics (current_topics, --current-topics) or the status message's "
                 f"current fields (current_fields, --current-fields)"
             )
