@@ -1,0 +1,276 @@
+"""Map-size benchmark: peak memory (RSS) and time to prepare and plan from a GeoTIFF DEM, full resolution vs coarse-to-fine.
+
+For each map side N (512, 2048, 4096; 8192 with ``--big``; 1 m cells) the script writes a
+seeded synthetic DEM (closed-form hills, undulations and a ridge with two passes, so some cells are steeper
+than the 20-degree slope limit) to a GeoTIFF in a temporary folder, tile by tile, and then
+runs each measurement in a fresh child process (its peak RSS is ``getrusage`` of that child
+alone; the numba kernels are loaded from their cache and warmed on a tiny map first, which
+is excluded):
+
+- ``windowed``: :func:`terrain.windowed_surface` (slope and gradients, tile by tile with halo
+  cells, into ``.npy`` memory maps) — the preparation of a map larger than memory;
+- ``full``: ``read_geotiff`` + ``EnergyCost.from_presets`` (prepare), then the directed
+  16-connected 1-cell lattice optimum (graph build + A*; the baseline, the exact optimum);
+- ``c2f``: the same preparation, then :func:`planner.plan_coarse_to_fine` (factor 8 by
+  default; the corridor is three coarse cells).
+
+It prints a table and writes JSON (``--out``): per size, time and peak RSS of each child,
+and the coarse-to-fine route's energy over the full-resolution optimum and its time over
+the full-resolution time (ratios measured in the same run). The full-resolution lattice is
+not run above 4096^2 (its graph alone needs 16 edges x 8 bytes per cell, about 9 GB at
+8192^2): there, only coarse-to-fine runs. Targets (2-core machine): 2048^2 prepares and
+plans in <= 5 s and <= 4 GiB; 8192^2 from a GeoTIFF in <= 60 s and <= 8 GiB; coarse-to-fine
+within 1 % of the optimum on 4096^2.
+
+Usage::
+
+    python benchmarks/map_scale_bench.py --out bench_map_scale.json   # 512, 2048, 4096 (~5 min)
+    python benchmarks/map_scale_bench.py --big                        # adds 8192 (coarse-to-fine only)
+    python benchmarks/map_scale_bench.py --quick                      # 256 and 512 (~30 s)
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+#: Start and goal as fractions of the map side.
+START_FRAC, GOAL_FRAC = (0.08, 0.10), (0.92, 0.86)
+#: Largest side the full-resolution lattice runs on.
+FULL_MAX = 4096
+TARGETS = {"prep_plan_2048_s": 5.0, "prep_plan_2048_gib": 4.0, "c2f_8192_s": 60.0, "c2f_8192_gib": 8.0,
+           "ratio_4096": 1.01}
+
+
+# ------------------------------------------------------------------ the synthetic DEM
+def _hills(seed: int) -> np.ndarray:
+    """Seeded hills as rows of (x, y, sigma) in map fractions and height / sigma (dimensionless)."""
+    rng = np.random.default_rng(seed)
+    n = 40
+    return np.column_stack([rng.uniform(0, 1, n), rng.uniform(0, 1, n), rng.uniform(0.01, 0.05, n),
+                            rng.uniform(0.15, 0.45, n) * rng.choice([-1, 1], n)])
+
+
+def _elevation(x: np.ndarray, y: np.ndarray, side_m: float, hills: np.ndarray) -> np.ndarray:
+    """Closed-form elevation (m) at points (m): hills whose flanks reach ~10-30 degrees, undulations, a ridge."""
+    u, v = x / side_m, y / side_m
+    z = 2.0 * np.sin(2 * np.pi * 7 * u) * np.cos(2 * np.pi * 5 * v) * side_m / 2048
+    for hx, hy, s, h in hills:
+        z += h * s * side_m * np.exp(-((u - hx) ** 2 + (v - hy) ** 2) / (2 * s * s))
+    # a ridge across the diagonal (flanks ~40 degrees), with two passes through it
+    ridge = np.exp(-((u + v - 1.0) ** 2) / (2 * 0.01**2))
+    for px, py in ((0.3, 0.7), (0.65, 0.35)):
+        ridge = ridge * (1.0 - np.exp(-((u - px) ** 2 + (v - py) ** 2) / (2 * 0.04**2)))
+    return z + 0.012 * side_m * ridge
+
+
+def write_dem(path: Path, n: int, seed: int, tile: int = 1024) -> float:
+    """Write the n x n DEM (1 m cells, EPSG:32633) tile by tile; return the seconds spent."""
+    import rasterio
+
+    t0 = time.perf_counter()
+    hills = _hills(seed)
+    profile = {"driver": "GTiff", "height": n, "width": n, "count": 1, "dtype": "float32", "crs": "EPSG:32633",
+               "transform": rasterio.Affine(1.0, 0.0, 500_000.0, 0.0, -1.0, 4_990_000.0 + n), "tiled": True,
+               "blockxsize": 256, "blockysize": 256}
+    with rasterio.open(path, "w", **profile) as dst:
+        for r0 in range(0, n, tile):
+            for c0 in range(0, n, tile):
+                rows, cols = min(tile, n - r0), min(tile, n - c0)
+                y = n - (r0 + np.arange(rows) + 0.5)  # file row 0 is the northern edge
+                x = c0 + np.arange(cols) + 0.5
+                z = _elevation(x[None, :], y[:, None], float(n), hills)
+                dst.write(z.astype(np.float32), 1, window=rasterio.windows.Window(c0, r0, cols, rows))
+        dst.units = ("m",)
+    return time.perf_counter() - t0
+
+
+# ------------------------------------------------------------------ child processes
+def _rss_gib() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20  # KiB on Linux
+
+
+def _free_point(cost: Any, frac: tuple[float, float]) -> tuple[float, float]:
+    """The free cell centre nearest to a fractional position (in the largest free region)."""
+    labels = cost.components()
+    big = np.argmax(np.bincount(labels.ravel())[1:]) + 1
+    rows, cols = cost.shape
+    r0, c0 = int(frac[1] * (rows - 1)), int(frac[0] * (cols - 1))
+    win = 64
+    sub = labels[max(0, r0 - win): r0 + win, max(0, c0 - win): c0 + win] == big
+    rr, cc = np.nonzero(sub)
+    k = int(np.argmin((rr + max(0, r0 - win) - r0) ** 2 + (cc + max(0, c0 - win) - c0) ** 2))
+    x, y = cost.terrain.xy(rr[k] + max(0, r0 - win), cc[k] + max(0, c0 - win))
+    return float(x), float(y)
+
+
+def _warm() -> float:
+    """Load (or compile) every kernel the children use, on a tiny map; seconds spent."""
+    from planner import EnergyCost, Lattice, plan_coarse_to_fine, warm_up_kernels
+    from terrain import procedural_map
+
+    t0 = time.perf_counter()
+    warm_up_kernels()
+    cost = EnergyCost.from_presets(procedural_map((48, 48), 1.0, seed=0, obstacle_fraction=0.0))
+    plan_coarse_to_fine(cost, (4.5, 4.5), (40.5, 40.5), factor=4)
+    Lattice(cost, 1).shortest_path((4.5, 4.5), (40.5, 40.5))
+    return time.perf_counter() - t0
+
+
+def child(mode: str, tif: Path, factor: int) -> dict[str, Any]:
+    """One measurement in this (fresh) process."""
+    warm_s = _warm()
+    base_gib = _rss_gib()
+    from planner import EnergyCost, Lattice, plan_coarse_to_fine
+    from terrain import read_geotiff, windowed_surface
+
+    out: dict[str, Any] = {"mode": mode, "warm_s": warm_s, "base_rss_gib": base_gib}
+    t0 = time.perf_counter()
+    if mode == "windowed":
+        with tempfile.TemporaryDirectory() as folder:
+            windowed_surface(tif, layers=("slope", "grad_x", "grad_y"), out_dir=Path(folder) / "prep")
+            out["prepare_s"] = time.perf_counter() - t0
+        out["total_s"] = out["prepare_s"]
+        out["peak_rss_gib"] = _rss_gib()
+        return out
+    tmap = read_geotiff(tif)
+    cost = EnergyCost.from_presets(tmap)
+    out["prepare_s"] = time.perf_counter() - t0
+    start, goal = _free_point(cost, START_FRAC), _free_point(cost, GOAL_FRAC)
+    out["start_xy_m"], out["goal_xy_m"] = start, goal
+    t1 = time.perf_counter()
+    if mode == "full":
+        lattice = Lattice(cost, 1)
+        out["graph_s"] = time.perf_counter() - t1
+        path = lattice.shortest_path(start, goal)
+        out["objective_j"] = path.objective if path.found else None
+        out["blocked_pct"] = 100.0 * float(cost.blocked.mean())
+    else:
+        plan = plan_coarse_to_fine(cost, start, goal, factor=factor)
+        out["objective_j"] = plan.objective_j if plan.route.found else None
+        out["corridor_cells"] = plan.corridor_cells
+        out["fallback"] = plan.fallback
+        out["coarse_s"], out["fine_s"] = plan.coarse_time_s, plan.fine_time_s
+    out["plan_s"] = time.perf_counter() - t1
+    out["total_s"] = time.perf_counter() - t0
+    out["peak_rss_gib"] = _rss_gib()
+    return out
+
+
+def _run_child(mode: str, tif: Path, factor: int) -> dict[str, Any]:
+    cmd = [sys.executable, __file__, "--child", mode, "--tif", str(tif), "--factor", str(factor)]
+    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    if proc.returncode != 0:
+        return {"mode": mode, "error": (proc.stderr.strip().splitlines() or ["?"])[-1], "returncode": proc.returncode}
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+# ------------------------------------------------------------------ the run
+def run(sizes: list[int], factor: int, seed: int) -> list[dict[str, Any]]:
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        for n in sizes:
+            tif = Path(folder) / f"dem_{n}.tif"
+            write_s = write_dem(tif, n, seed)
+            row: dict[str, Any] = {"size": n, "cells": n * n, "write_geotiff_s": write_s}
+            modes = ["windowed", "c2f"] + (["full"] if n <= FULL_MAX else [])
+            for mode in modes:
+                row[mode] = _run_child(mode, tif, factor)
+                print(f"  {n}^2 {mode}: {row[mode]}", file=sys.stderr, flush=True)
+            full, c2f = row.get("full", {}), row["c2f"]
+            if full.get("objective_j") and c2f.get("objective_j"):
+                row["energy_ratio"] = c2f["objective_j"] / full["objective_j"]
+                row["time_ratio_full_over_c2f"] = full["total_s"] / c2f["total_s"]
+            tif.unlink()
+            rows.append(row)
+    return rows
+
+
+def _fmt(v: Any, spec: str) -> str:
+    return format(v, spec) if isinstance(v, (int, float)) else f"{'-':>{spec.split('.')[0] or 1}}"
+
+
+def print_table(rows: list[dict[str, Any]]) -> None:
+    head = (f"{'side':>6} {'Mcells':>7} | {'window s':>8} {'GiB':>5} | {'c2f prep':>8} {'plan':>6} {'total':>6} "
+            f"{'GiB':>5} | {'full prep':>9} {'graph':>6} {'total':>6} {'GiB':>5} | {'E c2f/full':>10} "
+            f"{'t full/c2f':>10}")
+    print(head)
+    print("-" * len(head))
+    for r in rows:
+        w, c, f = r["windowed"], r["c2f"], r.get("full", {})
+        print(f"{r['size']:>6} {r['cells'] / 1e6:>7.1f} | {_fmt(w.get('total_s'), '8.2f')} "
+              f"{_fmt(w.get('peak_rss_gib'), '5.2f')} | {_fmt(c.get('prepare_s'), '8.2f')} "
+              f"{_fmt(c.get('plan_s'), '6.2f')} {_fmt(c.get('total_s'), '6.2f')} {_fmt(c.get('peak_rss_gib'), '5.2f')} | "
+              f"{_fmt(f.get('prepare_s'), '9.2f')} {_fmt(f.get('graph_s'), '6.2f')} {_fmt(f.get('total_s'), '6.2f')} "
+              f"{_fmt(f.get('peak_rss_gib'), '5.2f')} | {_fmt(r.get('energy_ratio'), '10.5f')} "
+              f"{_fmt(r.get('time_ratio_full_over_c2f'), '10.1f')}")
+        for mode in ("windowed", "c2f", "full"):
+            if "error" in r.get(mode, {}):
+                print(f"       {mode} failed: {r[mode]['error']}")
+
+
+def check_targets(rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """The issue's targets against this run (None when the size was not run)."""
+    by = {r["size"]: r for r in rows}
+    out: dict[str, Any] = {}
+    if 2048 in by:
+        for mode in ("c2f", "full"):
+            m = by[2048].get(mode, {})
+            if "total_s" in m:
+                out[f"2048_{mode}_total_s"] = m["total_s"]
+                out[f"2048_{mode}_meets"] = (m["total_s"] <= TARGETS["prep_plan_2048_s"]
+                                             and m["peak_rss_gib"] <= TARGETS["prep_plan_2048_gib"])
+    if 8192 in by and "total_s" in by[8192]["c2f"]:
+        m = by[8192]["c2f"]
+        out["8192_c2f_total_s"], out["8192_c2f_gib"] = m["total_s"], m["peak_rss_gib"]
+        out["8192_c2f_meets"] = m["total_s"] <= TARGETS["c2f_8192_s"] and m["peak_rss_gib"] <= TARGETS["c2f_8192_gib"]
+    if 4096 in by and "energy_ratio" in by[4096]:
+        out["4096_energy_ratio"] = by[4096]["energy_ratio"]
+        out["4096_ratio_meets"] = by[4096]["energy_ratio"] <= TARGETS["ratio_4096"]
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="256^2 and 512^2 only")
+    parser.add_argument("--big", action="store_true", help="add 8192^2 (coarse-to-fine only; ~8 GB, minutes)")
+    parser.add_argument("--sizes", type=int, nargs="+", default=None, metavar="N", help="map sides (cells)")
+    parser.add_argument("--factor", type=int, default=8, help="coarse-to-fine downsampling factor (default 8)")
+    parser.add_argument("--seed", type=int, default=0, help="DEM seed (default 0)")
+    parser.add_argument("--out", type=Path, default=None, help="write results as JSON here")
+    parser.add_argument("--child", choices=["windowed", "full", "c2f"], help=argparse.SUPPRESS)
+    parser.add_argument("--tif", type=Path, help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.child:
+        print(json.dumps(child(args.child, args.tif, args.factor)))
+        return 0
+    sizes = args.sizes or ([256, 512] if args.quick else [512, 2048, 4096] + ([8192] if args.big else []))
+    t0 = time.perf_counter()
+    rows = run(sizes, args.factor, args.seed)
+    print_table(rows)
+    targets = check_targets(rows)
+    print("\ntargets:", json.dumps(targets))
+    result = {"benchmark": "map_scale", "sizes": sizes, "factor": args.factor, "seed": args.seed, "rows": rows,
+              "targets": TARGETS, "checked": targets, "machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
+              "platform": platform.platform()}, "wall_s": time.perf_counter() - t0}
+    if args.out is not None:
+        from terrain.atomic import write_json_atomic
+
+        write_json_atomic(args.out, result)
+        print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
