@@ -15,6 +15,9 @@ repository, or ``--data``), the same protocol as ``terrawatt evaluate``, for the
 - ``window-2s`` / ``window-0.5s``: windows (and local spectra) of 2 s / 0.5 s instead of 1 s;
 - ``run-bands``: the whole-run band spectrum added as run-level input;
 - ``mlp-v-omega``: a plain network on one (v, omega) sample, nothing else;
+- ``band-1-50`` / ``band-1-25`` / ``band-0-14``: the vibration features on another band
+  than the default 1-12 Hz (1-50 Hz was the default before the band became an option; it
+  needs a 100 Hz IMU, 1-25 Hz a 50 Hz one);
 - ``linear``: the per-ground linear baseline, for reference.
 
 It prints, per variant, the whole-run error of the integrated current (median and p90 over
@@ -66,6 +69,9 @@ def variants(seed: int) -> dict[str, Any]:
         "window-2s": {"window_s": 2.0, "spectrum_span_s": 2.0},
         "window-0.5s": {"window_s": 0.5},
         "run-bands": {"run_features": "bands"},
+        "band-1-50": {"band_hz": (1.0, 50.0)},
+        "band-1-25": {"band_hz": (1.0, 25.0)},
+        "band-0-14": {"band_hz": (0.0, 14.0)},
         "mlp-v-omega": {"window_s": 0.15, "local_spectrum": False, "physics_prior": None, "n_members": 1,
                         "clip_output": False},
     }

@@ -14,11 +14,17 @@ Three kinds of features feed the vibration-conditioned current estimator:
 - **Local spectra** (:func:`band_rms_spectra`): the RMS vertical acceleration in
   log-spaced frequency bands over a short window (e.g. 1 s) around given times.
 
+Every spectrum is computed at its stream's own rate; the **band** of the features
+(:data:`DEFAULT_BAND_HZ`, :func:`check_band_hz`, :mod:`~energy.features.band`) is stated in
+Hz, so a model serves any IMU whose Nyquist frequency reaches its band
+(:func:`band_served`) and refuses the others with a :class:`BandNotServedError`.
+
 :class:`MinMaxNormaliser` (:mod:`~energy.features.normalise`) holds the min-max scaling:
 the source ranges (v 0–1 m/s, omega 0–1 rad/s, current 0–10 000 mA, absolute values) as
 constants, spectrum ranges fitted on training data; both are stored with a model.
 """
 
+from .band import DEFAULT_BAND_HZ, BandNotServedError, band_served, check_band_hz, require_band
 from .normalise import (
     SOURCE_CURRENT_RANGE_A,
     SOURCE_OMEGA_RANGE_RADPS,
@@ -52,4 +58,9 @@ __all__ = [
     "band_rms_spectra",
     "whole_run_band_spectrum",
     "MinMaxNormaliser",
+    "DEFAULT_BAND_HZ",
+    "BandNotServedError",
+    "check_band_hz",
+    "band_served",
+    "require_band",
 ]

@@ -239,9 +239,10 @@ def log_band_edges_hz(
 
 
 def _band_index(freq: np.ndarray, edges_hz: np.ndarray) -> np.ndarray:
-    """Band number of each FFT bin (-1 outside every band)."""
+    """Band number of each FFT bin (-1 outside every band); a bin within rounding of an edge
+    belongs to the band that edge opens (``edges[k] <= f < edges[k + 1]``)."""
     eps = 1e-9 * max(1.0, float(edges_hz[-1]))
-    band = np.searchsorted(edges_hz + eps, freq + 0.0, side="right") - 1
+    band = np.searchsorted(edges_hz - eps, freq + 0.0, side="right") - 1
     band[(freq < edges_hz[0] - eps) | (freq >= edges_hz[-1] - eps)] = -1
     return band
 

@@ -9,7 +9,7 @@ from typing import Any
 from terrain.checks import check_bool, check_choice, check_int, check_real, check_text
 from terrain.errors import InvalidParameterError, UnknownNameError
 
-from ..features import DEFAULT_T_INTERVAL_S, SPECTRUM_SCALINGS
+from ..features import DEFAULT_BAND_HZ, DEFAULT_T_INTERVAL_S, SPECTRUM_SCALINGS, check_band_hz
 from ..params import ROBOT_PRESETS
 from .net import CurrentNetConfig
 from .training import TrainConfig
@@ -63,17 +63,21 @@ class EstimatorConfig:
         Bins of the ``"bins"`` spectrum (paper: 8000).
     spectrum_scaling : {"amplitude", "density"}
         Scaling of the ``"bins"`` spectrum (see :func:`~energy.features.whole_run_spectrum`).
-    max_frequency_hz : float
-        Top of every spectrum (Hz; paper: 50).
+    band_hz : (float, float)
+        ``(low_hz, high_hz)``, the frequency band of every vibration feature, ``0 <= low <
+        high``: the local spectra and the ``"bands"`` run features split it into
+        ``n_bands`` log-spaced bands (``low == 0`` starts at the first non-zero bin); the
+        ``"bins"`` spectrum spans 0 to ``high_hz`` (the paper: 50 Hz). The default,
+        :data:`~energy.features.DEFAULT_BAND_HZ` (1-12 Hz), is served by every IMU of
+        25 Hz or more; a model predicts from any stream whose Nyquist frequency reaches
+        its band and refuses the others.
     local_spectrum : bool
         Add each window's local spectrum: log10 band RMS of the vertical acceleration over
         ``spectrum_span_s`` seconds centred on the window.
     spectrum_span_s : float
         Segment length of local spectra and of the ``"bands"`` Welch average (s).
     n_bands : int
-        Log-spaced bands between ``min_band_hz`` and ``max_frequency_hz``.
-    min_band_hz : float
-        Lowest band edge (Hz).
+        Log-spaced bands in ``band_hz`` (each at least one ``1 / spectrum_span_s`` bin wide).
     hidden_sizes : tuple of int
         Hidden layer widths (paper: 3 x 100).
     dropout : float
@@ -109,11 +113,10 @@ class EstimatorConfig:
     run_features: str = "none"
     n_spectrum_bins: int = 8000
     spectrum_scaling: str = "amplitude"
-    max_frequency_hz: float = 50.0
+    band_hz: tuple[float, float] = DEFAULT_BAND_HZ
     local_spectrum: bool = True
     spectrum_span_s: float = 1.0
     n_bands: int = 12
-    min_band_hz: float = 1.0
     hidden_sizes: tuple[int, ...] = (64, 64)
     dropout: float = 0.1
     n_members: int = 5
@@ -133,7 +136,8 @@ class EstimatorConfig:
         if self.rate_hz is not None:
             check_real("rate_hz", self.rate_hz, low=0.0, low_inclusive=False, owner=own)
         check_choice(f"{own}.resample_method", self.resample_method, RESAMPLE_METHODS)
-        for name in ("window_s", "max_frequency_hz", "spectrum_span_s", "min_band_hz"):
+        object.__setattr__(self, "band_hz", check_band_hz(self.band_hz, f"{own}.band_hz"))
+        for name in ("window_s", "spectrum_span_s"):
             check_real(name, getattr(self, name), low=0.0, low_inclusive=False, owner=own)
         for name in ("train_stride_s", "predict_stride_s"):
             if getattr(self, name) is not None:
@@ -144,10 +148,6 @@ class EstimatorConfig:
         check_choice(f"{own}.spectrum_scaling", self.spectrum_scaling, SPECTRUM_SCALINGS)
         for name in ("n_spectrum_bins", "n_bands", "n_members"):
             check_int(name, getattr(self, name), low=1, owner=own)
-        if not self.min_band_hz < self.max_frequency_hz:
-            raise InvalidParameterError(
-                f"EstimatorConfig.min_band_hz must be < max_frequency_hz={self.max_frequency_hz!r}, got {self.min_band_hz!r}"
-            )
         check_real("validation_fraction", self.validation_fraction, low=0.0, high=0.5, owner=own)
         if self.physics_prior is not None and (not isinstance(self.physics_prior, str) or self.physics_prior not in ROBOT_PRESETS):
             raise UnknownNameError(
@@ -184,16 +184,26 @@ class EstimatorConfig:
         """Plain-types form (for checkpoints and JSON)."""
         d = dataclasses.asdict(self)
         d["hidden_sizes"] = list(self.hidden_sizes)
+        d["band_hz"] = list(self.band_hz)
         return d
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> EstimatorConfig:
-        """Rebuild from :meth:`to_dict` output (unknown keys raise InvalidParameterError)."""
+        """Rebuild from :meth:`to_dict` output (unknown keys raise InvalidParameterError).
+
+        Configurations saved before ``band_hz`` existed (``min_band_hz``, default 1, and
+        ``max_frequency_hz``, default 50) are read as ``band_hz=(min_band_hz,
+        max_frequency_hz)``.
+        """
+        d = dict(d)
+        if "min_band_hz" in d or "max_frequency_hz" in d:
+            if "band_hz" in d:
+                raise InvalidParameterError("an EstimatorConfig has band_hz or the older min_band_hz/max_frequency_hz, not both")
+            d["band_hz"] = (d.pop("min_band_hz", 1.0), d.pop("max_frequency_hz", 50.0))
         known = {f.name for f in dataclasses.fields(cls)}
         extra = set(d) - known
         if extra:
             raise InvalidParameterError(f"unknown EstimatorConfig field(s) {sorted(extra)!r}")
-        d = dict(d)
         if "hidden_sizes" in d:
             d["hidden_sizes"] = tuple(d["hidden_sizes"])
         return cls(**d)
@@ -202,13 +212,13 @@ class EstimatorConfig:
 #: Named configurations: ``"paper"`` reproduces the source network (8000-bin whole-run
 #: spectrum + 10 |v| + 10 |omega| at 100 Hz -> 3 x 100 ReLU -> 10 + 10 currents, trained
 #: on every window of the training runs; the paper does not state its optimiser, epochs or
-#: batch size: Adam, 50 epochs, batch 256 here); ``"default"`` is the improved estimator
-#: (see the module docstring).
+#: batch size: Adam, 50 epochs, batch 256 here; its 0-50 Hz spectrum needs a 100 Hz IMU);
+#: ``"default"`` is the improved estimator (see the module docstring).
 ESTIMATOR_PRESETS: dict[str, EstimatorConfig] = {
     "paper": EstimatorConfig(
         name="paper", rate_hz=100.0, resample_method="linear", window_s=DEFAULT_T_INTERVAL_S,
         train_stride_s=None, predict_stride_s=None, absolute_inputs=True, absolute_currents=True,
-        run_features="bins", n_spectrum_bins=8000, spectrum_scaling="amplitude",
+        run_features="bins", n_spectrum_bins=8000, spectrum_scaling="amplitude", band_hz=(0.0, 50.0),
         local_spectrum=False, hidden_sizes=(100, 100, 100), dropout=0.0, n_members=1,
         max_epochs=50, batch_size=256, learning_rate=1e-3, weight_decay=0.0, patience=None,
         loss="mse", validation_fraction=0.0, clip_output=False, physics_prior=None,

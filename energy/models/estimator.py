@@ -21,17 +21,24 @@ window.
 The ``"default"`` preset departs from the paper where leave-one-run-out on the BorealTC
 logs said so: a physics prior (the physics model with rolling resistance, lateral friction
 and idle current fitted to the training logs; the networks learn the residual), signed v
-and omega (|omega| cannot tell the inner side of a turn), local spectra (12 log-spaced
-bands, 1–50 Hz, over 1 s) instead of the whole-run spectrum (with few training runs the
-8000-bin — or even a 12-band — whole-run spectrum acts as a run identifier the network
-memorises; held-out runs got worse), an ensemble of 5 members, dropout and weight decay,
+and omega (|omega| cannot tell the inner side of a turn), local spectra (12 bands over
+``band_hz``, 1–12 Hz by default, over 1 s) instead of the whole-run spectrum (with few
+training runs the 8000-bin — or even a 12-band — whole-run spectrum acts as a run
+identifier the network memorises; held-out runs got worse), an ensemble of 5 members, dropout and weight decay,
 early stopping on the tail of each run, and predictions clipped to the training current
 range.
+
+IMU rates: every spectrum is computed at its acceleration stream's own rate with bands
+stated in Hz, so a model trained on 100 Hz logs predicts 50 Hz or 30 Hz logs as long as
+its band (``EstimatorConfig.band_hz``) lies below their Nyquist frequency; a stream too
+slow for the band is refused (:class:`~energy.features.BandNotServedError`, naming the
+band, the rate and the fix) when fitting and when predicting.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Any
 
 import numpy as np
@@ -48,6 +55,7 @@ from ..features import (
     WindowSpec,
     band_rms_spectra,
     log_band_edges_hz,
+    require_band,
     sliding_windows,
     whole_run_band_spectrum,
     whole_run_spectrum,
@@ -163,7 +171,7 @@ class VibrationCurrentEstimator(CurrentModel):
     def _run_vector(self, log: InteractionLog, cfg: EstimatorConfig) -> np.ndarray:
         if cfg.run_features == "bins":
             return whole_run_spectrum(log.accel_time_s, log.accel_z_mps2, cfg.n_spectrum_bins,
-                                      cfg.max_frequency_hz, cfg.spectrum_scaling)[1]
+                                      cfg.band_hz[1], cfg.spectrum_scaling)[1]
         if cfg.run_features == "bands":
             rms = whole_run_band_spectrum(log.accel_time_s, log.accel_z_mps2, cfg.spectrum_span_s, self.band_edges_hz_)
             return np.log10(np.maximum(rms, _LOG_FLOOR_MPS2))
@@ -184,6 +192,16 @@ class VibrationCurrentEstimator(CurrentModel):
             local = np.log10(np.maximum(rms, _LOG_FLOOR_MPS2))
         return motion, local
 
+    def _feature_top_hz(self, cfg: EstimatorConfig) -> float:
+        """The highest frequency the vibration features use (Hz; 0 without any)."""
+        top = 0.0
+        if self.band_edges_hz_ is not None:  # the top edge is exclusive: the last bin below it
+            res = 1.0 / cfg.spectrum_span_s
+            top = (math.ceil(float(self.band_edges_hz_[-1]) / res - 1e-6) - 1) * res
+        if cfg.run_features == "bins":
+            top = max(top, cfg.band_hz[1])
+        return top
+
     def _targets(self, grid: InteractionLog, spec: WindowSpec, starts: np.ndarray) -> np.ndarray:
         cur = self.normalisers_["current"].transform(log_currents(grid))  # (N, 2)
         win = sliding_windows(cur, spec, starts)  # (n, W, 2)
@@ -192,7 +210,10 @@ class VibrationCurrentEstimator(CurrentModel):
     def _dataset(self, grids: list[InteractionLog], spec: WindowSpec, cfg: EstimatorConfig,
                  with_targets: bool) -> WindowDataset:
         xs, idx, starts_all, ys, locals_, runs = [], [], [], [], [], []
+        top_hz = self._feature_top_hz(cfg)
         for r, g in enumerate(grids):
+            if top_hz > 0:
+                require_band(cfg.band_hz, top_hz, g.accel_rate_hz, f"the acceleration stream of {g.meta.source!r}")
             starts = window_starts(len(g), spec)
             motion, local = self._window_features(g, spec, starts, cfg)
             xs.append(motion)
@@ -239,8 +260,9 @@ class VibrationCurrentEstimator(CurrentModel):
             self.band_edges_hz_ = None
             if cfg.local_spectrum or cfg.run_features == "bands":
                 acc_rate = float(np.median([g.accel_rate_hz for g in grids]))
-                n_fft = int(round(cfg.spectrum_span_s * acc_rate))
-                self.band_edges_hz_ = log_band_edges_hz(cfg.n_bands, cfg.min_band_hz, cfg.max_frequency_hz, acc_rate / n_fft)
+                res = acc_rate / int(round(cfg.spectrum_span_s * acc_rate))
+                lo, hi = cfg.band_hz
+                self.band_edges_hz_ = log_band_edges_hz(cfg.n_bands, max(lo, res), hi, res)
             self.normalisers_ = {
                 "v": _source_normaliser(SOURCE_SPEED_RANGE_MPS, cfg.absolute_inputs),
                 "omega": _source_normaliser(SOURCE_OMEGA_RANGE_RADPS, cfg.absolute_inputs),
@@ -353,6 +375,8 @@ class VibrationCurrentEstimator(CurrentModel):
         self.window_ = WindowSpec(**state["window"])
         edges = state["band_edges_hz"]
         self.band_edges_hz_ = None if edges is None else real_array("band_edges_hz", edges, ndim=1)
+        if self.band_edges_hz_ is not None and "band_hz" not in state["config"]:
+            self.band_edges_hz_ = _legacy_band_edges(self.band_edges_hz_, self.config_.spectrum_span_s)
         self.normalisers_ = {str(k): MinMaxNormaliser.from_dict(v) for k, v in state["normalisers"].items()}
         needed = {"v", "omega", "current"} | ({"local"} if self.config_.local_spectrum else set())
         needed |= {"run"} if self.config_.run_features != "none" else set()
@@ -381,6 +405,16 @@ class VibrationCurrentEstimator(CurrentModel):
 
     def _versions(self) -> dict[str, str]:
         return package_versions(torch=str(torch.__version__))
+
+
+def _legacy_band_edges(edges_hz: np.ndarray, span_s: float) -> np.ndarray:
+    """Band edges saved before ``band_hz`` existed, moved half an FFT bin so that every band
+    keeps the bins it had: those releases put a bin lying on an edge into the band below it
+    and left the bins on the lowest and the top edge out."""
+    half = 0.5 / span_s
+    out = edges_hz + half
+    out[-1] = edges_hz[-1] - half
+    return out
 
 
 def _record_to_plain(record: ModelRecord) -> dict[str, Any]:

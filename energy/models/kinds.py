@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import importlib
+from typing import Any
 
 from terrain.checks import check_choice
+from terrain.errors import InvalidParameterError
 
 from .base import CurrentModel
 from .baselines import ConstantCurrentModel, LinearCurrentModel, PhysicsCurrentModel
@@ -20,17 +22,22 @@ _PRESETS = {"estimator": "default", "paper": "paper"}
 
 
 def new_current_model(
-    kind: str, *, seed: int | None = 0, progress: bool = False, n_threads: int | None = None
+    kind: str, *, seed: int | None = 0, progress: bool = False, n_threads: int | None = None,
+    band_hz: tuple[float, float] | None = None,
 ) -> CurrentModel:
     """A new unfitted current model of ``kind`` (one of :data:`CURRENT_MODEL_KINDS`).
 
     ``seed``, ``progress`` and ``n_threads`` configure the learned models (``estimator``,
     ``paper``, which import torch here); the baselines are deterministic and take none.
+    ``band_hz`` (``(low_hz, high_hz)``) replaces the learned models' vibration band
+    (``EstimatorConfig.band_hz``); ``None`` keeps their preset's.
 
     Raises
     ------
     UnknownNameError
         ``kind`` is not one of :data:`CURRENT_MODEL_KINDS` (the message lists them).
+    InvalidParameterError
+        A bad ``band_hz``, or a ``band_hz`` for a baseline.
 
     Examples
     --------
@@ -39,6 +46,11 @@ def new_current_model(
     """
     check_choice("kind", kind, CURRENT_MODEL_KINDS)
     if kind in _BASELINES:
+        if band_hz is not None:
+            raise InvalidParameterError(f"band_hz applies to the estimator and paper models only, got kind {kind!r}")
         return _BASELINES[kind]()
     estimator = importlib.import_module(f"{__package__}.estimator")
-    return estimator.VibrationCurrentEstimator(_PRESETS[kind], seed=seed, progress=progress, n_threads=n_threads)
+    config: Any = _PRESETS[kind]  # a preset's name, kept as a name in saved parameters
+    if band_hz is not None:
+        config = importlib.import_module(f"{__package__}.config").estimator_preset(config).replace(band_hz=band_hz)
+    return estimator.VibrationCurrentEstimator(config, seed=seed, progress=progress, n_threads=n_threads)

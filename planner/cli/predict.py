@@ -8,8 +8,11 @@ from typing import Any
 
 from energy import load_current_model, plot_current_estimate, read_borealtc
 from energy.evaluation import score_current_model
+from energy.features import BandNotServedError
+from terrain import InvalidParameterError
 from terrain.atomic import write_json_atomic
 
+from .band import add_band_option, band_from_args
 from .common import check_outputs, draw_figure
 
 __all__ = ["add_parser", "run_predict"]
@@ -26,6 +29,10 @@ def add_parser(sub: Any) -> None:
         "--plots", action="store_true",
         help="also write one figure per run (measured vs estimated current, moving medians) into DIR/plots/",
     )
+    add_band_option(predict, help_text=(
+        "the frequency band (Hz) the logs' IMU serves, e.g. 0 25 for a 50 Hz IMU: refuse, before reading the "
+        "logs, a model whose vibration band does not lie within it (the model's band is fixed when training)"
+    ))
     predict.set_defaults(run=run_predict)
 
 
@@ -35,7 +42,10 @@ def run_predict(args: argparse.Namespace) -> int:
     check_outputs(args.out, ["predictions.json"])
     if args.plots:
         check_outputs(args.out / "plots")
+    band_hz = band_from_args(args)
     model = load_current_model(args.model)
+    if band_hz is not None:
+        _check_model_band(model, band_hz, args.model)
     logs = read_borealtc(args.data, grounds=args.grounds)
     result = score_current_model(model, logs, name=Path(args.model).name)
     print(f"{'run':<28} {'side':<6} {'truth mAh':>10} {'pred mAh':>10} {'error %':>8} {'RMSE A':>7}")
@@ -53,3 +63,18 @@ def run_predict(args: argparse.Namespace) -> int:
                 plots.append(done)
     print(f"wrote {path}" + (f" and {len(plots)} figures in {args.out / 'plots'}" if plots else ""))
     return 0
+
+
+def _check_model_band(model: Any, band_hz: tuple[float, float], path: Path) -> None:
+    """Refuse a model whose vibration band does not lie within ``--band``."""
+    config = getattr(model, "config_", None)
+    if config is None or not hasattr(config, "band_hz"):
+        raise InvalidParameterError(
+            f"--band applies to estimator and paper model files; {str(path)!r} holds a {type(model).__name__}"
+        )
+    lo, hi = config.band_hz
+    if lo < band_hz[0] or hi > band_hz[1]:
+        raise BandNotServedError(
+            f"the model {str(path)!r} was trained on the vibration band {lo:g}-{hi:g} Hz, which does not lie within "
+            f"--band {band_hz[0]:g} {band_hz[1]:g}; retrain it with terrawatt train --band LO HI inside that band"
+        )

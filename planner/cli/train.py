@@ -11,6 +11,8 @@ from energy import CURRENT_MODEL_KINDS, new_current_model, read_borealtc
 from terrain import InvalidParameterError
 from terrain.atomic import check_output_path
 
+from .band import LEARNED_KINDS, add_band_option, band_from_args
+
 __all__ = ["add_parser", "run_train"]
 
 
@@ -27,6 +29,7 @@ def add_parser(sub: Any) -> None:
         help="torch threads while training the estimator or paper model (default: torch's own setting)",
     )
     train.add_argument("--quiet", action="store_true", help="no progress bar with the training loss")
+    add_band_option(train)
     train.set_defaults(run=run_train)
 
 
@@ -36,19 +39,27 @@ def run_train(args: argparse.Namespace) -> int:
     The learned models (``estimator``, ``paper``) show a progress bar with the loss unless
     ``--quiet`` and train on ``--threads`` torch threads; the other models take neither. The
     output path is checked before the logs are read, so a bad ``--out`` never costs a training.
+    ``--band LO HI`` sets the learned models' vibration band (Hz): a model predicts from any
+    IMU whose Nyquist frequency reaches HI.
     """
     learned = args.model in ("estimator", "paper")
     if args.threads is not None and args.threads < 1:
         raise InvalidParameterError(f"--threads must be a positive number of threads, got {args.threads!r}")
     if args.threads is not None and not learned:
         raise InvalidParameterError(f"--threads applies to the estimator and paper models only, got --model {args.model!r}")
+    band_hz = band_from_args(args)
+    if band_hz is not None and args.model not in LEARNED_KINDS:
+        raise InvalidParameterError(f"--band applies to the estimator and paper models only, got --model {args.model!r}")
     check_output_path(args.out, "--out")
-    model = new_current_model(args.model, seed=args.seed, progress=learned and not args.quiet, n_threads=args.threads)
+    model = new_current_model(args.model, seed=args.seed, progress=learned and not args.quiet, n_threads=args.threads,
+                              band_hz=band_hz)
     logs = read_borealtc(args.data, grounds=args.grounds)
     t0 = time.perf_counter()
     model.fit(logs)
     elapsed = time.perf_counter() - t0
     path = model.save(args.out)
-    print(f"fitted {args.model} on {len(logs)} runs ({sum(log.duration_s for log in logs):.0f} s of logs) "
+    band = getattr(getattr(model, "config_", None), "band_hz", None)
+    band_text = f", vibration band {band[0]:g}-{band[1]:g} Hz" if band is not None else ""
+    print(f"fitted {args.model} on {len(logs)} runs ({sum(log.duration_s for log in logs):.0f} s of logs{band_text}) "
           f"in {elapsed:.1f} s; wrote {path}")
     return 0

@@ -182,7 +182,7 @@ def test_band_rms_validates():
         band_rms_spectra(t, np.zeros(50), [0.2], 1.0, [1.0, 10.0])
     t = np.arange(500) / 100.0
     with pytest.raises(InvalidParameterError, match="hold no FFT bin"):
-        band_rms_spectra(t, np.zeros(500), [2.0], 1.0, [1.0, 1.2, 10.0])
+        band_rms_spectra(t, np.zeros(500), [2.0], 1.0, [1.2, 1.5, 10.0])
     with pytest.raises(InvalidParameterError, match="band_edges_hz"):
         band_rms_spectra(t, np.zeros(500), [2.0], 1.0, [10.0, 1.0])
     with pytest.raises(InvalidParameterError, match="Nyquist"):

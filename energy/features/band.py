@@ -1,0 +1,94 @@
+"""The frequency band of the vibration features: its validation and whether an IMU stream can serve it."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from terrain.checks import check_real, fmt_number
+from terrain.errors import DataError, InvalidParameterError
+
+from .spectra import NYQUIST_TOLERANCE
+
+__all__ = ["DEFAULT_BAND_HZ", "BandNotServedError", "check_band_hz", "band_served", "require_band"]
+
+#: Default band of the vibration features (Hz): served by every IMU of 25 Hz or more
+#: (the Husky's 30 Hz, the Jackal's 50 Hz, BorealTC's 100 Hz). On the BorealTC logs it
+#: costs nothing against 1-50 Hz (leave-one-run-out per ground; see the README).
+DEFAULT_BAND_HZ = (1.0, 12.0)
+
+
+class BandNotServedError(DataError):
+    """An acceleration stream is too slow for a band: the band reaches above its Nyquist frequency."""
+
+
+def check_band_hz(band_hz: Any, name: str = "band_hz") -> tuple[float, float]:
+    """A validated frequency band ``(low_hz, high_hz)`` with ``0 <= low_hz < high_hz``, finite.
+
+    ``low_hz == 0`` starts the band at the first non-zero frequency bin (the mean of every
+    segment is removed, so 0 Hz carries nothing).
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a pair of real numbers; a NaN, infinite or negative edge; ``low_hz >= high_hz``.
+
+    Examples
+    --------
+    >>> check_band_hz([1, 12])
+    (1.0, 12.0)
+    >>> check_band_hz((12.0, 1.0))
+    Traceback (most recent call last):
+    ...
+    terrain.errors.InvalidParameterError: band_hz must be (low_hz, high_hz) with low_hz < high_hz, got (12.0, 1.0)
+    """
+    if isinstance(band_hz, (str, bytes)) or not hasattr(band_hz, "__len__") or len(band_hz) != 2:
+        raise InvalidParameterError(f"{name} must be a pair (low_hz, high_hz) of frequencies in Hz, got {band_hz!r:.80}")
+    low = check_real(f"{name}[0] (low_hz)", band_hz[0], low=0.0)
+    high = check_real(f"{name}[1] (high_hz)", band_hz[1], low=0.0, low_inclusive=False)
+    if not low < high:
+        raise InvalidParameterError(f"{name} must be (low_hz, high_hz) with low_hz < high_hz, got ({low!r}, {high!r})")
+    return (low, high)
+
+
+def band_served(top_hz: float, rate_hz: float) -> bool:
+    """Whether a stream sampled at ``rate_hz`` holds frequencies up to ``top_hz``.
+
+    True when ``top_hz`` does not exceed the Nyquist frequency ``rate_hz / 2`` by more than
+    :data:`~energy.features.NYQUIST_TOLERANCE` (a 99.5 Hz IMU serves 50 Hz).
+
+    Examples
+    --------
+    >>> band_served(12.0, 30.0), band_served(49.0, 50.0)
+    (True, False)
+    """
+    return float(top_hz) <= float(rate_hz) / 2.0 * (1.0 + NYQUIST_TOLERANCE)
+
+
+def require_band(band_hz: Any, top_hz: float, rate_hz: float, where: str = "the acceleration stream") -> None:
+    """Refuse a stream that cannot serve a model's band, naming the band, the rate and the fix.
+
+    Parameters
+    ----------
+    band_hz : (float, float)
+        The band the model was trained on (named in the message).
+    top_hz : float
+        The highest frequency the model's features use (Hz).
+    rate_hz : float
+        Sampling rate of the acceleration stream (Hz).
+    where : str
+        The stream, for the message (e.g. the run's source).
+
+    Raises
+    ------
+    BandNotServedError
+        ``top_hz`` lies above the stream's Nyquist frequency (see :func:`band_served`).
+    """
+    if band_served(top_hz, rate_hz):
+        return
+    lo, hi = check_band_hz(band_hz)
+    nyquist = float(rate_hz) / 2.0
+    raise BandNotServedError(
+        f"the model's vibration band {fmt_number(lo)}-{fmt_number(hi)} Hz reaches {fmt_number(top_hz)} Hz, above the "
+        f"Nyquist frequency {fmt_number(nyquist)} Hz of {where} (IMU at {fmt_number(rate_hz)} Hz); use a model trained "
+        f"on a band below {fmt_number(nyquist)} Hz (retrain with --band LO HI, or EstimatorConfig band_hz=(lo, hi))"
+    )
