@@ -49,8 +49,8 @@ def bag_path(path: Any) -> Path:
 
 
 def read_messages(bag: Path, wanted: tuple[str, ...], optional: tuple[str, ...] = ()) -> tuple[Messages, dict[str, str]]:
-    """Deserialised messages and the type of each topic of ``wanted`` (all must be in the bag)
-    and of ``optional`` (read when present).
+    """Deserialised messages of each topic of ``wanted`` (all must be in the bag) and of
+    ``optional`` (read when present), and the type of every topic of the bag.
 
     Message types come from the bag itself where it defines them — every ROS 1 bag carries
     each connection's full message definition, so vendor messages such as
@@ -80,7 +80,7 @@ def read_messages(bag: Path, wanted: tuple[str, ...], optional: tuple[str, ...] 
         raise
     except Exception as exc:  # rosbags raises its own error classes per format
         raise FileFormatError(f"cannot read bag {str(bag)!r}: {type(exc).__name__}: {exc}") from exc
-    return raw, {t: available[t] for t in raw}
+    return raw, available
 
 
 def expect_type(src: str, raw: Messages, types: dict[str, str], topic: str, allowed: tuple[str, ...],

@@ -102,6 +102,7 @@ def read_logs(
     bag: BagTopics | None = None,
     require_currents: bool = False,
     robot: str = "unknown",
+    ground_label: str | None = None,
     repair: str | Iterable[str] = (),
     allow_gaps: bool = False,
     gap_factor: float = DEFAULT_GAP_FACTOR,
@@ -113,7 +114,8 @@ def read_logs(
     ``path`` may be a BorealTC folder (``GROUND/imu_NN.csv`` + ``pro_NN.csv``), a generic
     CSV log (:func:`~energy.io.read_csv_log`), a bag (``.bag``, ``.db3``, ``.mcap`` or a ROS 2
     bag folder, read with ``bag``'s topics by :func:`~energy.io.read_rosbag`), or a folder of
-    CSV logs and bags (read in name order).
+    CSV logs and bags (read in name order) — or of ground folders of them (``SNOW/run1.bag``:
+    the folder name, lowercased, is their ground label).
 
     Parameters
     ----------
@@ -128,6 +130,9 @@ def read_logs(
         default such logs (a bag with no current topic) are read, enough to predict from.
     robot : str
         Robot name of the bags' and CSV logs' metadata (when the file does not say).
+    ground_label : str, optional
+        Ground label of the bags and CSV logs outside ground folders (a CSV header's label
+        otherwise; BorealTC runs take their folder's).
     repair, allow_gaps, gap_factor, check_units
         See :mod:`energy.io`.
     name : str
@@ -157,6 +162,8 @@ def read_logs(
             voltage_field="battery_voltage"))
     """
     check_text("name", name)
+    if ground_label is not None:
+        check_text("ground_label", ground_label)
     require_currents = check_bool("require_currents", require_currents)
     if bag is None:
         bag = BagTopics()
@@ -168,11 +175,12 @@ def read_logs(
     if not root.exists():
         raise DataError(f"{name} {str(root)!r} does not exist; expected a log file or a folder of logs")
 
-    def one(item: Path) -> InteractionLog:
+    def one(item: Path, label: str | None = ground_label) -> InteractionLog:
         if LOG_SUFFIXES.get(item.suffix.lower()) == "csv":
-            return read_csv_log(item, robot=None if robot == "unknown" else robot, **common)
+            return read_csv_log(item, robot=None if robot == "unknown" else robot, ground_label=label, **common)
         return read_rosbag(item, bag.cmd_vel_topic, bag.imu_topic, bag.current_topics, current_fields=bag.current_fields,
-                           voltage_field=bag.voltage_field, current_unit=bag.current_unit, robot=robot, **common)
+                           voltage_field=bag.voltage_field, current_unit=bag.current_unit, robot=robot,
+                           ground_label=label, **common)
 
     if root.is_file():
         if root.suffix.lower() not in LOG_SUFFIXES:
@@ -184,12 +192,12 @@ def read_logs(
     elif any(sub.is_dir() and any(sub.glob("imu_*.csv")) for sub in root.iterdir()):
         return _required(read_borealtc(root, grounds=grounds, **common), require_currents)
     else:
-        items = [p for p in sorted(root.iterdir())
-                 if (p.is_dir() and (p / "metadata.yaml").exists()) or (p.is_file() and p.suffix.lower() in LOG_SUFFIXES)]
-        if not items:
+        logs = [one(p) for p in _log_items(root)]
+        for sub in sorted(p for p in root.iterdir() if p.is_dir() and not (p / "metadata.yaml").exists()):
+            logs += [one(p, sub.name.lower()) for p in _log_items(sub)]  # a ground folder
+        if not logs:
             raise DataError(f"{name} {str(root)!r} holds no logs: expected BorealTC ground folders, log files "
-                            f"({', '.join(sorted(LOG_SUFFIXES))}) or ROS 2 bag folders")
-        logs = [one(p) for p in items]
+                            f"({', '.join(sorted(LOG_SUFFIXES))}), ROS 2 bag folders, or ground folders of them")
     if wanted is not None:
         labels = sorted({str(log.meta.ground_label) for log in logs})
         unknown = [g for g in wanted if g not in {label.lower() for label in labels}]
@@ -198,6 +206,12 @@ def read_logs(
                                    f"the logs' labels: {labels!r}")
         logs = [log for log in logs if log.meta.ground_label is not None and log.meta.ground_label.lower() in wanted]
     return _required(logs, require_currents)
+
+
+def _log_items(folder: Path) -> list[Path]:
+    """The log files and ROS 2 bag folders directly in ``folder``, in name order."""
+    return [p for p in sorted(folder.iterdir())
+            if (p.is_dir() and (p / "metadata.yaml").exists()) or (p.is_file() and p.suffix.lower() in LOG_SUFFIXES)]
 
 
 def _grounds(grounds: Any) -> set[str] | None:

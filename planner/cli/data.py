@@ -15,13 +15,16 @@ _DEFAULT = BagTopics()
 
 
 def add_data_options(parser: Any) -> None:
-    """Add ``--data`` and the bag flags (``--cmd-vel-topic``, ``--imu-topic``, ``--current-topics``,
+    """Add ``--data``, ``--ground-label`` and the bag flags (``--cmd-vel-topic``, ``--imu-topic``, ``--current-topics``,
     ``--current-fields``, ``--voltage-field``, ``--current-unit``) to a subcommand's parser."""
     parser.add_argument(
         "--data", type=Path, required=True, metavar="DIR|FILE",
         help=f"logs: a BorealTC folder (GROUND/imu_NN.csv + pro_NN.csv), a CSV log, a bag "
-        f"({', '.join(s for s in sorted(LOG_SUFFIXES) if s != '.csv')}, ROS 2 bag folder), or a folder of CSV logs and bags",
+        f"({', '.join(s for s in sorted(LOG_SUFFIXES) if s != '.csv')}, ROS 2 bag folder), or a folder of CSV logs and "
+        f"bags, or of ground folders of them (SNOW/run1.bag: ground 'snow')",
     )
+    parser.add_argument("--ground-label", default=None, metavar="NAME",
+                        help="ground label of the bags and CSV logs outside ground folders")
     bags = parser.add_argument_group("bags (--data .bag, .db3, .mcap or a ROS 2 bag folder)")
     bags.add_argument("--cmd-vel-topic", default=_DEFAULT.cmd_vel_topic, metavar="TOPIC",
                       help="geometry_msgs/Twist commands or nav_msgs/Odometry (default %(default)s)")
@@ -57,4 +60,4 @@ def logs_from_args(args: argparse.Namespace, require_currents: bool) -> list[Int
         current_unit=args.current_unit,
     )
     return read_logs(args.data, getattr(args, "grounds", None), bag=bag, require_currents=require_currents,
-                     name="--data")
+                     ground_label=args.ground_label, name="--data")
