@@ -7,11 +7,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-from energy import CURRENT_MODEL_KINDS, new_current_model, read_borealtc
+from energy import CURRENT_MODEL_KINDS, new_current_model
 from terrain import InvalidParameterError
 from terrain.atomic import check_output_path
 
 from .band import LEARNED_KINDS, add_band_option, band_from_args
+from .data import add_data_options, logs_from_args
 
 __all__ = ["add_parser", "run_train"]
 
@@ -19,8 +20,9 @@ __all__ = ["add_parser", "run_train"]
 def add_parser(sub: Any) -> None:
     """The ``train`` subcommand."""
     train = sub.add_parser("train", help="fit a current model on logs and save it to one file")
-    train.add_argument("--data", type=Path, required=True, metavar="DIR", help="directory with GROUND/imu_NN.csv + pro_NN.csv")
-    train.add_argument("--grounds", nargs="+", metavar="NAME", help="ground folders to use (default all)")
+    add_data_options(train)
+    train.add_argument("--grounds", nargs="+", metavar="NAME",
+                       help="ground folders (or the logs' ground labels) to use (default all)")
     train.add_argument("--model", default="estimator", choices=list(CURRENT_MODEL_KINDS), help="model kind (default estimator)")
     train.add_argument("--seed", type=int, default=0, help="random seed")
     train.add_argument("--out", type=Path, required=True, metavar="FILE", help="model file to write (e.g. model.zip)")
@@ -53,7 +55,7 @@ def run_train(args: argparse.Namespace) -> int:
     check_output_path(args.out, "--out")
     model = new_current_model(args.model, seed=args.seed, progress=learned and not args.quiet, n_threads=args.threads,
                               band_hz=band_hz)
-    logs = read_borealtc(args.data, grounds=args.grounds)
+    logs = logs_from_args(args, require_currents=True)
     t0 = time.perf_counter()
     model.fit(logs)
     elapsed = time.perf_counter() - t0
