@@ -126,8 +126,14 @@ def read_geotiff(
             info = dem_band(src, band, where, allow_geographic=reproject_to is not None)
             if reproject_to is None:
                 data = src.read(info.band, masked=True)
-                values = np.ma.getdata(data).astype(np.float64) * info.scale + info.offset
-                invalid = np.ma.getmaskarray(data) | ~np.isfinite(values)
+                values = np.ma.getdata(data).astype(np.float64)  # in place from here: big DEMs
+                if info.scale != 1.0:
+                    values *= info.scale
+                if info.offset != 0.0:
+                    values += info.offset
+                invalid = np.ma.getmaskarray(data)
+                invalid |= ~np.isfinite(values)
+                del data
                 cell, origin, crs = info.cell_size_m, info.origin_xy_m, info.crs
                 flip_rows, flip_cols = info.flip_rows, info.flip_cols
             else:
@@ -169,6 +175,7 @@ def read_geotiff(
     if flip_cols:  # east-left: file column 0 is the eastern edge
         values = values[:, ::-1]
     tmap = TerrainMap(values, cell, origin, crs=crs, obstacle=outside)
+    del values, invalid, missing  # the map holds its own copy: free ours before deriving slopes
     steep = float(np.mean(tmap.slope_rad > _STEEP_RAD))
     if steep > 0.5:
         warnings.warn(
