@@ -465,7 +465,7 @@ def test_plan_output_folder_that_is_a_file_is_refused_before_planning(tmp_path, 
 def test_train_onto_a_directory_is_refused_before_training(tmp_path, capsys, monkeypatch):
     import planner.cli.train as train_cli
 
-    monkeypatch.setattr(train_cli, "read_borealtc", lambda *a, **k: pytest.fail("read the logs before checking --out"))
+    monkeypatch.setattr(train_cli, "logs_from_args", lambda *a, **k: pytest.fail("read the logs before checking --out"))
     rc = main(["train", "--data", str(FIXTURES), "--model", "linear", "--out", str(tmp_path)])
     assert rc == 2
     assert "--out" in _one_line_error(capsys)
