@@ -20,6 +20,7 @@ from energy import (
 )
 from energy.features import DEFAULT_BAND_HZ, BandNotServedError, band_served, check_band_hz
 from planner.cli import main
+from planner.cli import evaluate as evaluate_cli
 from planner.cli import train as train_cli
 from terrain import InvalidParameterError
 
@@ -213,7 +214,29 @@ def test_cli_predicts_50hz_logs_with_a_model_trained_on_100hz_logs(model, logs, 
     assert (out / "predictions.json").is_file()
 
 
-@pytest.mark.parametrize("command", ["train", "predict"])
+@needs_shared
+def test_cli_evaluate_band_reaches_the_learned_models(logs, tmp_path, capsys, monkeypatch):
+    real, made = evaluate_cli.new_current_model, []
+
+    def small(kind, **kwargs):
+        model = real(kind, **kwargs)
+        if kind == "estimator":
+            model.config = model.config.replace(**TINY)
+        made.append((kind, kwargs["band_hz"]))
+        return model
+
+    monkeypatch.setattr(evaluate_cli, "new_current_model", small)
+    out = tmp_path / "eval"
+    assert main(["evaluate", "--data", str(logs["root"] / "train"), "--model", "estimator", "linear",
+                 "--variants", "per_ground", "--band", "0", "14", "--out", str(out)]) == 0
+    assert made == [("estimator", (0.0, 14.0)), ("linear", None)]
+    assert (out / "evaluation.json").is_file()
+    capsys.readouterr()
+    rc = main(["evaluate", "--data", str(FIXTURES), "--model", "linear", "--band", "1", "12", "--out", str(out / "x")])
+    assert rc == 2 and "--band applies to the estimator and paper models only" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["train", "evaluate", "predict"])
 @pytest.mark.parametrize(
     "band, message",
     [(["12", "1"], "low_hz < high_hz"), (["5", "5"], "low_hz < high_hz"), (["-1", "12"], "must be >= 0"),
@@ -221,7 +244,7 @@ def test_cli_predicts_50hz_logs_with_a_model_trained_on_100hz_logs(model, logs, 
 )
 def test_cli_bad_bands_exit_2(tmp_path, capsys, command, band, message):
     out = tmp_path / ("m.zip" if command == "train" else "out")
-    model_args = ["--model", "estimator"] if command == "train" else ["--model", str(tmp_path / "missing.zip")]
+    model_args = ["--model", "estimator"] if command != "predict" else ["--model", str(tmp_path / "missing.zip")]
     rc = main([command, "--data", str(FIXTURES), *model_args, "--band", *band, "--out", str(out)])
     err = capsys.readouterr().err
     assert rc == 2 and "--band" in err and message in err, err

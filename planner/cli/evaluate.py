@@ -17,6 +17,7 @@ from energy import (
 from terrain import InvalidParameterError
 
 from ..dask_client import dask_client
+from .band import LEARNED_KINDS, add_band_option, band_from_args
 from .common import check_outputs, draw_figure
 from .data import add_data_options, logs_from_args
 
@@ -52,6 +53,7 @@ def add_parser(sub: Any) -> None:
         "--scheduler", metavar="ADDRESS",
         help="run the folds on an existing dask cluster, e.g. tcp://host:8786 (not with --workers > 1)",
     )
+    add_band_option(evaluate)
     evaluate.set_defaults(run=run_evaluate)
 
 
@@ -60,7 +62,8 @@ def run_evaluate(args: argparse.Namespace) -> int:
 
     The spectra figure comes after the results are written: if it cannot be drawn (e.g.
     logs whose IMU rate does not reach the estimator's band), a warning says so and the
-    command still succeeds.
+    command still succeeds. ``--band LO HI`` sets the vibration band (Hz) of the estimator and
+    paper models (the default band of the estimator serves IMUs of 25 Hz and more).
     """
     if args.workers < 1:
         raise InvalidParameterError(f"--workers must be a positive number of processes, got {args.workers!r}")
@@ -68,6 +71,11 @@ def run_evaluate(args: argparse.Namespace) -> int:
         raise InvalidParameterError(
             f"--workers {args.workers!r} and --scheduler {args.scheduler!r} exclude each other: "
             "give --workers N for a local cluster or --scheduler ADDRESS for an existing one"
+        )
+    band_hz = band_from_args(args)
+    if band_hz is not None and not set(args.models) & set(LEARNED_KINDS):
+        raise InvalidParameterError(
+            f"--band applies to the estimator and paper models only, got --model {' '.join(args.models)}"
         )
     check_outputs(args.out, _OUTPUTS)
     with contextlib.ExitStack() as stack:
@@ -80,7 +88,8 @@ def run_evaluate(args: argparse.Namespace) -> int:
             workers = f"{len(client.nthreads())} dask workers ({where})"
             print(f"evaluating on {workers}", flush=True)
         logs = logs_from_args(args, require_currents=True)
-        models = {name: new_current_model(name, seed=args.seed) for name in args.models}
+        models = {name: new_current_model(name, seed=args.seed, band_hz=band_hz if name in LEARNED_KINDS else None)
+                  for name in args.models}
         t0 = time.perf_counter()
         result = evaluate_current_models(logs, models, variants=args.variants, progress=True, client=client)
         elapsed = time.perf_counter() - t0
