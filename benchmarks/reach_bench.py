@@ -5,7 +5,9 @@ On seeded procedural maps (1 m cells, hills, four grounds, rocks, one wall) of 5
 centre, the script times
 
 - ``moves``: costing the stride-1 lattice's directed moves (``lattice_move_energies``,
-  the lattice planner's kernel; cached on the cost afterwards);
+  the stride-1 kernel; cached on the cost afterwards), against the lattice planner's own
+  kernel (``lattice_weights``) on the same cost: CPU-time ratio and the largest relative
+  difference of the moves;
 - ``one way`` and ``round trip``: :func:`planner.reachability` searches on the cached
   moves (the round trip runs its forward and reversed searches on two threads);
 - ``cold round trip``: what one call costs on a fresh cost: moves + round-trip search —
@@ -42,8 +44,9 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from planner import EnergyCost, lattice_move_energies, reachability, warm_up_kernels
+from planner.kernels import lattice_weights
 from planner.lattice import LATTICE_OFFSETS
-from planner.reachability import depot_links
+from planner.reachability import depot_links, warm_up_reachability
 from terrain.atomic import write_json_atomic
 from terrain.procedural import procedural_map
 
@@ -116,6 +119,13 @@ def _run_size(n: int, args: argparse.Namespace) -> dict[str, Any]:
     reachability(cost, depot, round_trip=True)
     t2, c2 = time.perf_counter(), time.process_time()
     moves_s, moves_cpu_s, cold_s, cold_cpu_s = t1 - t0, c1 - c0, t2 - t0, c2 - c0
+    # the lattice planner's own move kernel on the same cost: a baseline and a check of the moves
+    arr = cost.arrays
+    t0, c0 = time.perf_counter(), time.process_time()
+    ref_w = lattice_weights(arr.cells, arr.grade_table, arr.geo, 1, 0, n, n, LATTICE_OFFSETS[:8])
+    lat_moves_s, lat_moves_cpu_s = time.perf_counter() - t0, time.process_time() - c0
+    moves_err, moves_inf = _compare(w.ravel(), ref_w.ravel())
+    del ref_w
     one_s, one = _best(lambda: reachability(cost, depot), args.repeats)
     c0 = time.process_time()
     one_cpu_s = (reachability(cost, depot), time.process_time() - c0)[1]
@@ -139,6 +149,11 @@ def _run_size(n: int, args: argparse.Namespace) -> dict[str, Any]:
         "prep_s": prep_s,
         "moves_s": moves_s,
         "moves_cpu_s": moves_cpu_s,
+        "lattice_kernel_moves_s": lat_moves_s,
+        "lattice_kernel_moves_cpu_s": lat_moves_cpu_s,
+        "ratio_lattice_kernel_over_ours_moves_cpu": lat_moves_cpu_s / moves_cpu_s,
+        "moves_max_rel_diff_vs_lattice_kernel": moves_err,
+        "moves_same_absent_as_lattice_kernel": moves_inf,
         "one_way_search_s": one_s,
         "one_way_search_cpu_s": one_cpu_s,
         "round_trip_search_s": rt_s,
@@ -161,18 +176,20 @@ def _run_size(n: int, args: argparse.Namespace) -> dict[str, Any]:
 def _print(rows: list[dict[str, Any]], compile_s: float) -> None:
     print(f"numba threads {numba.get_num_threads()}, cpu count {os.cpu_count()}; warm-up (compile/load) "
           f"{compile_s:.1f} s, not in the times below\n")
-    header = (f"{'cells':>9} {'prep s':>7} {'moves s':>8} {'1-way s':>8} {'round s':>8} {'cold RT s':>9} {'CPU s':>6} "
+    header = (f"{'cells':>9} {'prep s':>7} {'moves s':>8} {'x moves':>7} {'1-way s':>8} {'round s':>8} {'cold RT s':>9} {'CPU s':>6} "
               f"{'scipy 1w s':>10} {'scipy RT s':>10} {'x 1-way':>8} {'x RT':>6} {'max rel diff':>12} {'RSS GiB':>8}")
     print(header)
     print("-" * len(header))
     for r in rows:
-        print(f"{r['size']:>5}^2   {r['prep_s']:>7.2f} {r['moves_s']:>8.2f} {r['one_way_search_s']:>8.2f} "
+        print(f"{r['size']:>5}^2   {r['prep_s']:>7.2f} {r['moves_s']:>8.2f} "
+              f"{r['ratio_lattice_kernel_over_ours_moves_cpu']:>7.1f} {r['one_way_search_s']:>8.2f} "
               f"{r['round_trip_search_s']:>8.2f} {r['cold_round_trip_s']:>9.2f} {r['cold_round_trip_cpu_s']:>6.2f} "
               f"{r['scipy_forward_s']:>10.2f} "
               f"{r['scipy_round_trip_s']:>10.2f} {r['ratio_scipy_over_ours_one_way']:>8.1f} "
               f"{r['ratio_scipy_over_ours_round_trip']:>6.1f} "
               f"{max(r['max_rel_diff_forward'], r['max_rel_diff_back']):>12.1e} {r['peak_rss_gib']:>8.2f}")
-    print("\nx: scipy's search time over ours (same graph, same depot); 'cold RT': moves + round-trip search "
+    print("\nx moves: CPU seconds of the lattice planner's move kernel (lattice_weights) over ours (same moves);")
+    print("x: scipy's search time over ours (same graph, same depot); 'cold RT': moves + round-trip search "
           "(wall), 'CPU s' its CPU seconds over all threads")
     loads = ", ".join(f"{r['load_average_1min']:.1f}" for r in rows)
     print(f"load average (1 min) after each size: {loads} on {os.cpu_count()} cores")
@@ -184,6 +201,10 @@ def _targets(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
         if r["size"] == TARGET_SIZE:
             out.append({"target": f"cold round-trip reachability on {TARGET_SIZE}^2 <= {TARGET_S:g} s",
                         "measured_s": r["cold_round_trip_s"], "met": r["cold_round_trip_s"] <= TARGET_S})
+    out.append({"target": "moves equal the lattice planner's (rel 1e-9, same absent moves)",
+                "measured": max(r["moves_max_rel_diff_vs_lattice_kernel"] for r in rows),
+                "met": all(r["moves_same_absent_as_lattice_kernel"] and r["moves_max_rel_diff_vs_lattice_kernel"] <= 1e-9
+                           for r in rows)})
     out.append({"target": "same answers as scipy (rel 1e-9, same unreachable cells)",
                 "measured": max(max(r["max_rel_diff_forward"], r["max_rel_diff_back"]) for r in rows),
                 "met": all(r["same_unreachable_cells"] and max(r["max_rel_diff_forward"], r["max_rel_diff_back"]) <= 1e-9
@@ -202,11 +223,7 @@ def main(argv: list[str] | None = None) -> int:
     sizes = args.sizes or ([256, 512] if args.quick else [512, TARGET_SIZE])
     if args.repeats is None:
         args.repeats = 1 if args.quick else 3
-    compile_s = warm_up_kernels()
-    t0 = time.perf_counter()
-    reachability(EnergyCost.from_presets(procedural_map((12, 12), 1.0, seed=0, obstacle_fraction=0.0)), (6.0, 6.0),
-                 round_trip=True)
-    compile_s += time.perf_counter() - t0
+    compile_s = warm_up_kernels() + warm_up_reachability()
     rows = []
     for n in sizes:
         print(f"... {n}^2", file=sys.stderr, flush=True)

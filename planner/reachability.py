@@ -3,8 +3,9 @@
 The graph is the reference lattice of :class:`~planner.Lattice` at stride 1 (a node at
 every cell centre, the 16 king and knight moves, each weighted by the cell-walk energy of
 its straight segment, uphill ``!=`` downhill; moves that cross a blocked cell or an
-undrivable grade are absent), costed by the same kernel
-(:func:`~planner.kernels.lattice_weights`). The depot joins the nodes within 1.5 cells of
+undrivable grade are absent), costed with the lattice's own per-metre rates by the stride-1
+kernel :func:`~planner.kernels.unit_lattice_weights` (equal to the lattice's
+:func:`~planner.kernels.lattice_weights` to rounding, at a third of its work). The depot joins the nodes within 1.5 cells of
 it by straight segments, as a lattice query's start does. One single-source Dijkstra
 (:func:`~planner.kernels.reach.grid_dijkstra`, compiled) gives every cell's energy *from*
 the depot; with ``round_trip`` a second one on the reversed graph gives every cell's
@@ -29,16 +30,17 @@ from typing import Any
 
 import numpy as np
 
+from terrain import TerrainMap
 from terrain.checks import check_bool, check_real
 from terrain.errors import BlockedPositionError, InvalidParameterError
 
 from .edge_cost import EnergyCost
-from .kernels import grid_dijkstra, lattice_weights, use_parallel
+from .kernels import grid_dijkstra, unit_lattice_weights, unit_moves, use_parallel
 from .lattice import LATTICE_OFFSETS
 from .points import as_points
 from .reachability_result import Reachability
 
-__all__ = ["reachability", "lattice_move_energies", "depot_links"]
+__all__ = ["reachability", "lattice_move_energies", "depot_links", "warm_up_reachability"]
 
 _CACHE_KEY = ("reachability", "lattice_move_energies", 1)
 #: Depot links: lattice nodes within this many cells of the depot, as a lattice query's start.
@@ -50,7 +52,8 @@ def lattice_move_energies(cost: EnergyCost) -> tuple[np.ndarray, float]:
     computed once and cached on the cost; returns them with the seconds spent (0 when cached).
 
     Move ``k`` of node ``r * cols + c`` goes to the node at ``LATTICE_OFFSETS[k]`` from it; the
-    weights are those of ``Lattice(cost, stride_cells=1)``.
+    weights are those of ``Lattice(cost, stride_cells=1)`` (to rounding), computed by the
+    stride-1 kernel :func:`~planner.kernels.unit_lattice_weights`.
     """
     if not isinstance(cost, EnergyCost):
         raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
@@ -60,10 +63,27 @@ def lattice_move_energies(cost: EnergyCost) -> tuple[np.ndarray, float]:
     t0 = time.perf_counter()
     rows, cols = cost.shape
     arr = cost.arrays
-    w = lattice_weights(arr.cells, arr.grade_table, arr.geo, 1, 0, rows, cols, LATTICE_OFFSETS[:8])
+    w = unit_lattice_weights(arr.cells, arr.grade_table, arr.geo, rows, cols)
     w.setflags(write=False)
     cost.results[_CACHE_KEY] = w
     return w, time.perf_counter() - t0
+
+
+def warm_up_reachability() -> float:
+    """Compile (or load from numba's cache) the reachability kernels: both variants of the stride-1
+    move kernel and the Dijkstra, forward and reversed; returns the seconds spent.
+
+    :func:`planner.warm_up_kernels` does not cover them; call this too before timing reachability.
+    """
+    t0 = time.perf_counter()
+    tmap = TerrainMap(np.zeros((4, 4)), 1.0)
+    cost = EnergyCost(tmap, np.zeros((4, 4), np.int32), np.ones((1, 3)), np.ones((1, 2)),
+                      speed_mps=1.0, battery_voltage_v=1.0, turn_rate_radps=1.0)
+    arr = cost.arrays
+    for kernel in (unit_moves.unit_lattice_weights_serial, unit_moves.unit_lattice_weights_parallel):
+        kernel(arr.cells, arr.grade_table, arr.geo, 4, 4, unit_moves.UNIT_HALF, *unit_moves.CROSSINGS, 2)
+    reachability(cost, (1.5, 1.5), round_trip=True)
+    return time.perf_counter() - t0
 
 
 def depot_links(cost: EnergyCost, depot: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

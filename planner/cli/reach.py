@@ -16,6 +16,7 @@ from terrain.errors import InvalidParameterError
 from terrain.procedural import EXAMPLE_START_XY_M, example_map
 
 from .. import EnergyCost, Reachability, reachability, warm_up_kernels
+from ..reachability import warm_up_reachability
 from .common import (
     add_map_options,
     check_outputs,
@@ -96,7 +97,7 @@ def run_reach(args: argparse.Namespace) -> int:
     voltage_v = args.voltage if args.voltage is not None else robot.battery_voltage_v
     budget_j = args.battery_ah * voltage_v * S_PER_H
     reserve_j = budget_j * args.reserve / 100.0
-    compile_s = warm_up_kernels()
+    compile_s = warm_up_kernels() + warm_up_reachability()
     t0 = time.perf_counter()
     cost = EnergyCost.from_presets(tmap, robot=args.robot, speed_mps=args.speed, max_slope_rad=slope_rad,
                                    unknown_ground=ground)

@@ -28,6 +28,7 @@ __all__ = [
     "walk_many_parallel",
     "point_free",
     "turn_energy",
+    "rate_per_metre",
     "CORNER_EPS",
 ]
 
@@ -49,7 +50,7 @@ def _start_index(u: float, du: float, n: int) -> int:
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _rate_per_metre(table, row: int, grade: float, gmin: float, inv_dg: float) -> float:  # pragma: no cover - compiled
+def rate_per_metre(table, row: int, grade: float, gmin: float, inv_dg: float) -> float:  # pragma: no cover - compiled
     """Energy per horizontal metre (J/m) of table ``row`` at ``grade``, linearly interpolated
     on the uniform grade grid (clamped at its ends); ``inf`` if a neighbouring sample is."""
     ns = table.shape[1]
@@ -137,7 +138,7 @@ def walk_pair(cells, table, geo, xa, ya, xb, yb, both):  # pragma: no cover - co
             seg = (tn - t) * length
             ki = int(k)
             # forward: grade; backward: -grade (same cells, opposite direction)
-            rate = _rate_per_metre(table, ki, grade, gmin, inv_dg)
+            rate = rate_per_metre(table, ki, grade, gmin, inv_dg)
             if rate == inf:
                 e_fwd = inf  # a grade this ground cannot be driven at (in this direction)
             else:
@@ -145,7 +146,7 @@ def walk_pair(cells, table, geo, xa, ya, xb, yb, both):  # pragma: no cover - co
             if not both and e_fwd == inf:
                 return inf, inf
             if both:
-                rate = _rate_per_metre(table, ki, -grade, gmin, inv_dg)
+                rate = rate_per_metre(table, ki, -grade, gmin, inv_dg)
                 if rate == inf:
                     e_bwd = inf
                 else:
