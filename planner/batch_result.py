@@ -187,6 +187,20 @@ class BatchResult:
                              (getattr(r, c) for c in _COLUMNS)])
         return write_text_atomic(path, buf.getvalue())
 
+    def table(self, max_rows: int = 20) -> str:
+        """The first ``max_rows`` rows as a fixed-width text table (name, status, Wh, m, s, saving)."""
+        header = f"{'pair':<20} {'status':<11} {'energy Wh':>9} {'length m':>9} {'time s':>8} {'saved %':>8}"
+        lines = [header, "-" * len(header)]
+        def num(value: float, width: int, digits: int) -> str:
+            return f"{value:>{width}.{digits}f}" if math.isfinite(value) else f"{'-':>{width}}"
+
+        for r in self.rows[:max_rows]:
+            lines.append(f"{r.name[:20]:<20} {r.status:<11} {num(r.energy_wh, 9, 2)} {num(r.length_m, 9, 1)} "
+                         f"{num(r.duration_s, 8, 1)} {num(r.energy_saved_pct, 8, 1)}")
+        if len(self.rows) > max_rows:
+            lines.append(f"... {len(self.rows) - max_rows} more rows")
+        return "\n".join(lines)
+
     def summary(self) -> str:
         """A few lines for people: counts by status, throughput, median saving, the errors."""
         counts = ", ".join(f"{self.count(s)} {s}" for s in BATCH_STATUSES if self.count(s))

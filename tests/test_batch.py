@@ -377,3 +377,12 @@ def test_cli_batch_checks_the_output_folder_before_reading_anything(tmp_path, ca
     (tmp_path / "out").write_text("a file")
     rc = main(["batch", "--map", "example", "--pairs", str(tmp_path / "missing.csv"), "--out", str(tmp_path / "out")])
     assert rc == 2 and "is a file; expected a folder" in capsys.readouterr().err
+
+
+def test_the_table_shows_missing_numbers_as_dashes_and_cuts_long_batches(cost):
+    res = plan_batch(cost, [*PAIRS, [*ON_WALL, *EAST]], progress=False)
+    lines = res.table(max_rows=4).splitlines()
+    assert lines[0].split() == ["pair", "status", "energy", "Wh", "length", "m", "time", "s", "saved", "%"]
+    assert lines[2].split()[:2] == ["0", "exact"] and float(lines[2].split()[2]) == round(res.rows[0].energy_wh, 2)
+    assert lines[-1] == "... 1 more rows"
+    assert res.table().splitlines()[-1].split() == ["4", "error", "-", "-", "-", "-"]

@@ -247,3 +247,15 @@ def test_cli_monte_carlo_bad_flags_exit_2(tmp_path, capsys, extra, message):
     rc = main(["mission", "--battery-ah", "5", *extra, "--out", str(tmp_path / "o")])
     assert rc == 2 and message in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+def test_cli_monte_carlo_on_a_scheduler_gives_the_in_process_study(tmp_path, capsys):
+    distributed = pytest.importorskip("distributed", reason=_NO_DASK)
+    base = ["mission", "--battery-ah", "0.6", "--monte-carlo", "4", "--seed", "5"]
+    assert main([*base, "--out", str(tmp_path / "here")]) == 1  # a 0.6 Ah pack is too small for some missions
+    with distributed.LocalCluster(processes=False, n_workers=2, threads_per_worker=1,
+                                  dashboard_address=":0") as cluster:
+        assert main([*base, "--scheduler", cluster.scheduler_address, "--out", str(tmp_path / "there")]) == 1
+    assert f"on 2 worker(s) ({cluster.scheduler_address})" in capsys.readouterr().out
+    here, there = (json.loads((tmp_path / d / "monte_carlo.json").read_text()) for d in ("here", "there"))
+    assert here["energy_wh"] == there["energy_wh"] and here["samples"] == there["samples"]

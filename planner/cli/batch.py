@@ -107,6 +107,8 @@ def run_batch(args: argparse.Namespace) -> int:
     args.out.mkdir(parents=True, exist_ok=True)
     csv_path = result.to_csv(args.out / "batch.csv")
     json_path = result.write_json(args.out / "batch.json")
+    print(result.table())
+    print()
     print(result.summary())
     print(f"wrote {csv_path} and {json_path}")
     return 0 if result.n_found == len(result) else 1

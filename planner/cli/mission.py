@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import time
 from pathlib import Path
 from typing import Any
@@ -207,6 +208,8 @@ def run_monte_carlo(args: argparse.Namespace, tmap: Any, label: str, start: tupl
                                                      flags=("--workers", "--scheduler")))
         result = simulate_missions_mc(tmap, route, battery, args.monte_carlo, robot=robot, speed_mps=args.speed,
                                       seed=args.seed, client=client, progress=True)
+        if client is not None:  # where it ran, as the user named it
+            result = dataclasses.replace(result, where=args.scheduler or "local cluster")
     json_path = result.write_json(args.out / "monte_carlo.json")
     csv_path = result.to_csv(args.out / "monte_carlo.csv")
     png_path = draw_figure(args.out / "monte_carlo.png", lambda: result.plot(args.out / "monte_carlo.png"))
