@@ -193,16 +193,23 @@ def reachability(
         forward = grid_dijkstra(*args_out)
         back = grid_dijkstra(*args_back) if trip else None
     blocked = cost.blocked
-    forward = np.where(blocked, np.inf, forward.reshape(rows, cols))
+    forward = forward.reshape(rows, cols)
+    forward[blocked] = np.inf  # already inf (no move enters a blocked cell); said, not assumed
+    forward.setflags(write=False)
+    total = None
     if back is not None:
-        back = np.where(blocked, np.inf, back.reshape(rows, cols))
+        back = back.reshape(rows, cols)
+        back[blocked] = np.inf
+        back.setflags(write=False)
+        total = forward + back
+        total.setflags(write=False)
     return Reachability(
         grid=cost.terrain.grid,
         crs=cost.terrain.crs,
         depot_xy_m=(float(depot[0]), float(depot[1])),
         forward_energy_j=forward,
         back_energy_j=back,
-        round_trip_energy_j=None if back is None else forward + back,
+        round_trip_energy_j=total,
         blocked=blocked,
         budget_j=budget,
         reserve_j=reserve,

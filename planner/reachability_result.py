@@ -31,7 +31,11 @@ REACH_LAYERS = ("energy", "forward", "back", "round_trip", "reachable")
 
 
 def _raster(name: str, value: Any, shape: tuple[int, int]) -> np.ndarray:
-    arr = np.array(value, dtype=np.float64)
+    """``value`` as a read-only float64 raster of ``shape`` (a read-only float64 array is kept, else copied)."""
+    if isinstance(value, np.ndarray) and value.dtype == np.float64 and not value.flags.writeable:
+        arr = value
+    else:
+        arr = np.array(value, dtype=np.float64)
     if arr.shape != shape:
         raise InvalidParameterError(f"{name} must have the grid's shape {shape!r}, got {arr.shape!r}")
     if np.isnan(arr).any() or (arr < 0).any():

@@ -11,6 +11,8 @@ the indexed binary heap of :mod:`planner.kernels.graph` (decrease-key, each node
 
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 
@@ -39,18 +41,25 @@ def grid_dijkstra(w, ni, nj, di, dj, src, src_cost, reverse):  # pragma: no cove
         if src_cost[k] < dist[u]:
             dist[u] = src_cost[k]
             size = heap_set(keys, nodes, where, size, u, src_cost[k])
-    sign = -1 if reverse else 1
+    # Linear index offsets of the moves. A finite w[u, k] means the move lands on the grid, so
+    # no row/column arithmetic is needed: forward, v = u + delta[k] is then a node; reversed,
+    # v = u - delta[k] inside [0, n) with a finite w[v, k] is a node whose move k lands on u.
+    delta = np.empty(nk, np.int64)
+    for k in range(nk):
+        delta[k] = di[k] * nj + dj[k]
     while size > 0:
         du, u, size = heap_pop(keys, nodes, where, size)
-        i = u // nj
-        j = u - i * nj
         for k in range(nk):
-            vi = i + sign * di[k]
-            vj = j + sign * dj[k]
-            if vi < 0 or vi >= ni or vj < 0 or vj >= nj:
-                continue
-            v = vi * nj + vj
-            e = w[v, k] if reverse else w[u, k]
+            if reverse:
+                v = u - delta[k]
+                if v < 0 or v >= n:
+                    continue
+                e = w[v, k]
+            else:
+                e = w[u, k]
+                if e == math.inf:
+                    continue  # no move (possibly off the grid: v would not be a node)
+                v = u + delta[k]
             nv = du + e
             if nv < dist[v]:
                 dist[v] = nv
