@@ -15,7 +15,9 @@ region is planned three ways, all in the same run:
   (:meth:`planner.Lattice.shortest_path`) against ``networkx.single_source_dijkstra`` on a
   ``networkx.DiGraph`` of that graph, what a Python user would reach for. Both give the same
   minimum energy (checked; the baseline also tries the straight start-goal segment, as the
-  library's query does); the ratio is search routes/s, graph building reported apart.
+  library's query does); the ratio is search routes/s, graph building reported apart;
+- **Monte Carlo**: :func:`planner.simulate_missions_mc` of the first pair's route, in process
+  and on the same cluster: missions/s and the check that the percentiles are equal.
 
 Rows are compared too: the cluster's rows must equal the in-process rows (planning times
 aside). Ratios, not absolute seconds, are the result (the machine is shared: run it with
@@ -41,7 +43,8 @@ from typing import Any
 
 import numpy as np
 
-from planner import EnergyCost, Lattice, plan_batch, warm_up_kernels
+from energy import Battery
+from planner import EnergyCost, Lattice, plan_batch, plan_route, simulate_missions_mc, warm_up_kernels
 from planner.cache import CACHE_SIZE, ResultCache
 from terrain.atomic import write_json_atomic
 from terrain.procedural import procedural_map
@@ -89,8 +92,26 @@ def _same(a: list[dict[str, Any]], b: list[dict[str, Any]]) -> bool:
     return all(eq(ra[k], rb[k]) for ra, rb in zip(a, b) for k in ra) and len(a) == len(b)
 
 
-def _batch_rows(cost: EnergyCost, pairs: np.ndarray, workers: int, repeats: int) -> dict[str, Any]:
-    """In process and on a local cluster, ``repeats`` times each, alternating; the median routes/s of each."""
+def _mc_rows(client: Any, cost: EnergyCost, pair: np.ndarray, n: int) -> dict[str, Any]:
+    """Monte Carlo missions of one route: missions/s in process and on the cluster, the same percentiles."""
+    route = plan_route(cost.terrain, pair[:2], pair[2:], cost=cost, planner="lattice")
+    battery = Battery(2.0, 24.0)
+    here = simulate_missions_mc(cost.terrain, route, battery, n, seed=0)
+    there = simulate_missions_mc(cost.terrain, route, battery, n, seed=0, client=client, chunk_size=4)
+    return {
+        "missions": n, "route_length_m": route.length_m, "in_process_s": here.elapsed_s, "cluster_s": there.elapsed_s,
+        "in_process_missions_per_s": n / here.elapsed_s, "cluster_missions_per_s": n / there.elapsed_s,
+        "speedup": here.elapsed_s / there.elapsed_s,
+        "percentiles_equal": here.energy_percentiles_wh == there.energy_percentiles_wh
+        and bool(np.array_equal(here.energy_j, there.energy_j)),
+        "energy_wh": here.energy_percentiles_wh, "p_below_reserve": here.p_below_reserve,
+    }
+
+
+def _batch_rows(cost: EnergyCost, pairs: np.ndarray, workers: int, repeats: int,
+                mc_n: int) -> tuple[dict[str, Any], dict[str, Any]]:
+    """In process and on a local cluster, ``repeats`` times each, alternating; the median routes/s of each;
+    then ``mc_n`` Monte Carlo missions of the first pair's route, here and on the same cluster."""
     distributed = _need("distributed", "distributed")
     here_rps, warm_rps, there_rps, equal = [], [], [], True
     t0 = time.perf_counter()
@@ -108,6 +129,7 @@ def _batch_rows(cost: EnergyCost, pairs: np.ndarray, workers: int, repeats: int)
             warm_rps.append(warm_here.routes_per_s)
             there_rps.append(there.routes_per_s)
             equal = equal and _same(_outcome(here.rows), _outcome(there.rows))
+        mc = _mc_rows(client, cost, pairs[0], mc_n)
     rps_here, rps_warm, rps_there = (float(np.median(v)) for v in (here_rps, warm_rps, there_rps))
     return {
         "pairs": len(pairs), "found": here.n_found, "errors": here.n_errors, "repeats": repeats,
@@ -119,7 +141,7 @@ def _batch_rows(cost: EnergyCost, pairs: np.ndarray, workers: int, repeats: int)
         "speedup": rps_there / rps_here, "scaling_efficiency": rps_there / (workers * rps_here),
         "cluster_rows_equal_in_process": equal,
         "median_energy_saved_pct": here.median_saving_pct(),
-    }
+    }, mc
 
 
 def _peer_rows(cost: EnergyCost, pairs: np.ndarray) -> dict[str, Any]:
@@ -196,11 +218,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workers", type=int, default=2, help="local cluster worker processes (default 2)")
     parser.add_argument("--seed", type=int, default=0, help="map and pair seed")
     parser.add_argument("--repeats", type=int, default=3, help="timed repetitions of each batch (median; default 3)")
-    parser.add_argument("--quick", action="store_true", help="small run: 128^2, 16 pairs, 4 networkx pairs")
+    parser.add_argument("--mc", type=int, default=32, help="Monte Carlo missions of the first pair's route (default 32)")
+    parser.add_argument("--quick", action="store_true", help="small run: 128^2, 16 pairs, 4 networkx pairs, 8 missions")
     parser.add_argument("--out", type=Path, default=None, help="write results as JSON here")
     args = parser.parse_args(argv)
     if args.quick:
-        args.size, args.pairs, args.peer_pairs, args.repeats = 128, 16, 4, 1
+        args.size, args.pairs, args.peer_pairs, args.repeats, args.mc = 128, 16, 4, 1, 8
     _need("distributed", "distributed")
     _need("networkx", "bench")
     compile_s = warm_up_kernels()
@@ -211,16 +234,19 @@ def main(argv: list[str] | None = None) -> int:
     rng = np.random.default_rng(args.seed)
     pairs = _pairs(cost, args.pairs, rng, min_dist_m=args.size / 3)
     load_before = os.getloadavg()[0]
-    batch = _batch_rows(cost, pairs, args.workers, args.repeats)
+    batch, mc = _batch_rows(cost, pairs, args.workers, args.repeats, args.mc)
     peer = _peer_rows(cost, pairs[: args.peer_pairs])
     load = (load_before + os.getloadavg()[0]) / 2
     _print(batch, peer, args.size)
+    print(f"\nMonte Carlo: {mc['missions']} missions of a {mc['route_length_m']:.0f} m route: "
+          f"{mc['in_process_missions_per_s']:.1f} missions/s in process, {mc['cluster_missions_per_s']:.1f} on "
+          f"{args.workers} workers ({mc['speedup']:.2f}x); the same percentiles: {mc['percentiles_equal']}")
     print(f"\n(1-minute load average during the run: about {load:.1f} on {os.cpu_count()} cores; "
           "other work on the machine shows in the ratios)")
     if args.out is not None:
         payload = {
             "benchmark": "batch_bench", "size": args.size, "seed": args.seed, "map_preparation_s": prep_s,
-            "kernel_compile_s": compile_s, "batch": batch, "peer": peer,
+            "kernel_compile_s": compile_s, "batch": batch, "peer": peer, "monte_carlo": mc,
             "machine": {"python": platform.python_version(), "cpus": os.cpu_count(), "platform": platform.platform(),
                         "load_average_1min": load},
         }
