@@ -18,6 +18,8 @@ repository, or ``--data``), the same protocol as ``terrawatt evaluate``, for the
 - ``band-1-50`` / ``band-1-25`` / ``band-0-14``: the vibration features on another band
   than the default 1-12 Hz (1-50 Hz was the default before the band became an option; it
   needs a 100 Hz IMU, 1-25 Hz a 50 Hz one);
+- ``yaw-slip``: each window's yaw-rate slip (gyro against wheel-derived yaw rate) added;
+  ``yaw-slip-no-spectra``: the yaw-rate slip instead of the local vibration spectra;
 - ``linear``: the per-ground linear baseline, for reference.
 
 It prints, per variant, the whole-run error of the integrated current (median and p90 over
@@ -72,6 +74,8 @@ def variants(seed: int) -> dict[str, Any]:
         "band-1-50": {"band_hz": (1.0, 50.0)},
         "band-1-25": {"band_hz": (1.0, 25.0)},
         "band-0-14": {"band_hz": (0.0, 14.0)},
+        "yaw-slip": {"use_yaw_slip": True},
+        "yaw-slip-no-spectra": {"use_yaw_slip": True, "local_spectrum": False},
         "mlp-v-omega": {"window_s": 0.15, "local_spectrum": False, "physics_prior": None, "n_members": 1,
                         "clip_output": False},
     }

@@ -14,6 +14,10 @@ Three kinds of features feed the vibration-conditioned current estimator:
 - **Local spectra** (:func:`band_rms_spectra`): the RMS vertical acceleration in
   log-spaced frequency bands over a short window (e.g. 1 s) around given times.
 
+- **Yaw-rate slip** (:func:`yaw_slip_features`, :mod:`~energy.features.yaw_slip`): the
+  gyro's yaw rate against the wheel-derived one over each window — how much a ground
+  makes a skid-steer robot skid, beside how it makes it vibrate.
+
 Every spectrum is computed at its stream's own rate; the **band** of the features
 (:data:`DEFAULT_BAND_HZ`, :func:`check_band_hz`, :mod:`~energy.features.band`) is stated in
 Hz, so a model serves any IMU whose Nyquist frequency reaches its band
@@ -41,6 +45,7 @@ from .spectra import (
     whole_run_spectrum,
 )
 from .windows import DEFAULT_T_INTERVAL_S, WindowSpec, sliding_windows, window_starts
+from .yaw_slip import YAW_SLIP_FEATURES, YAW_SLIP_FLOOR_RADPS, yaw_slip_features
 
 __all__ = [
     "DEFAULT_T_INTERVAL_S",
@@ -63,4 +68,7 @@ __all__ = [
     "check_band_hz",
     "band_served",
     "require_band",
+    "YAW_SLIP_FLOOR_RADPS",
+    "YAW_SLIP_FEATURES",
+    "yaw_slip_features",
 ]

@@ -78,6 +78,10 @@ class EstimatorConfig:
         Segment length of local spectra and of the ``"bands"`` Welch average (s).
     n_bands : int
         Log-spaced bands in ``band_hz`` (each at least one ``1 / spectrum_span_s`` bin wide).
+    use_yaw_slip : bool
+        Add each window's yaw-rate slip (:func:`~energy.features.yaw_slip_features`: the
+        gyro's yaw rate against the wheel-derived omega), min-max scaled on the training
+        windows; every log then needs a gyro stream (``InteractionLog.gyro_z_radps``).
     hidden_sizes : tuple of int
         Hidden layer widths (paper: 3 x 100).
     dropout : float
@@ -117,6 +121,7 @@ class EstimatorConfig:
     local_spectrum: bool = True
     spectrum_span_s: float = 1.0
     n_bands: int = 12
+    use_yaw_slip: bool = False
     hidden_sizes: tuple[int, ...] = (64, 64)
     dropout: float = 0.1
     n_members: int = 5
@@ -142,7 +147,7 @@ class EstimatorConfig:
         for name in ("train_stride_s", "predict_stride_s"):
             if getattr(self, name) is not None:
                 check_real(name, getattr(self, name), low=0.0, low_inclusive=False, owner=own)
-        for name in ("absolute_inputs", "absolute_currents", "local_spectrum", "clip_output"):
+        for name in ("absolute_inputs", "absolute_currents", "local_spectrum", "clip_output", "use_yaw_slip"):
             check_bool(f"{own}.{name}", getattr(self, name))
         check_choice(f"{own}.run_features", self.run_features, RUN_FEATURES)
         check_choice(f"{own}.spectrum_scaling", self.spectrum_scaling, SPECTRUM_SCALINGS)

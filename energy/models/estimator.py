@@ -60,6 +60,7 @@ from ..features import (
     whole_run_band_spectrum,
     whole_run_spectrum,
     window_starts,
+    yaw_slip_features,
 )
 from ..logs import InteractionLog
 from .base import CurrentModel, ModelRecord, log_currents, package_versions
@@ -192,6 +193,14 @@ class VibrationCurrentEstimator(CurrentModel):
             local = np.log10(np.maximum(rms, _LOG_FLOOR_MPS2))
         return motion, local
 
+    def _yaw_slip(self, grid: InteractionLog, spec: WindowSpec, starts: np.ndarray) -> np.ndarray:
+        if grid.gyro_z_radps is None:
+            raise DataError(
+                f"{grid.meta.source}: use_yaw_slip needs the gyro's yaw rate (InteractionLog.gyro_z_radps: "
+                f"BorealTC 'wz', a bag's IMU angular_velocity.z); give logs with it or set use_yaw_slip=False"
+            )
+        return yaw_slip_features(grid.time_s, grid.omega_radps, grid.accel_time_s, grid.gyro_z_radps, spec, starts)
+
     def _feature_top_hz(self, cfg: EstimatorConfig) -> float:
         """The highest frequency the vibration features use (Hz; 0 without any)."""
         top = 0.0
@@ -209,7 +218,7 @@ class VibrationCurrentEstimator(CurrentModel):
 
     def _dataset(self, grids: list[InteractionLog], spec: WindowSpec, cfg: EstimatorConfig,
                  with_targets: bool) -> WindowDataset:
-        xs, idx, starts_all, ys, locals_, runs = [], [], [], [], [], []
+        xs, idx, starts_all, ys, locals_, runs, yaws = [], [], [], [], [], [], []
         top_hz = self._feature_top_hz(cfg)
         for r, g in enumerate(grids):
             if top_hz > 0:
@@ -219,6 +228,8 @@ class VibrationCurrentEstimator(CurrentModel):
             xs.append(motion)
             if local is not None:
                 locals_.append(local)
+            if cfg.use_yaw_slip:
+                yaws.append(self._yaw_slip(g, spec, starts))
             idx.append(np.full(starts.size, r))
             starts_all.append(starts)
             runs.append(self._run_vector(g, cfg))
@@ -229,6 +240,10 @@ class VibrationCurrentEstimator(CurrentModel):
             if "local" not in self.normalisers_:
                 self.normalisers_["local"] = MinMaxNormaliser.from_data(np.concatenate(locals_), per_column=True)
             x = np.concatenate([x, self.normalisers_["local"].transform(np.concatenate(locals_))], axis=1)
+        if yaws:
+            if "yaw" not in self.normalisers_:
+                self.normalisers_["yaw"] = MinMaxNormaliser.from_data(np.concatenate(yaws), per_column=True)
+            x = np.concatenate([x, self.normalisers_["yaw"].transform(np.concatenate(yaws))], axis=1)
         table = np.stack(runs)
         if table.shape[1]:
             if "run" not in self.normalisers_:
@@ -379,6 +394,7 @@ class VibrationCurrentEstimator(CurrentModel):
             self.band_edges_hz_ = _legacy_band_edges(self.band_edges_hz_, self.config_.spectrum_span_s)
         self.normalisers_ = {str(k): MinMaxNormaliser.from_dict(v) for k, v in state["normalisers"].items()}
         needed = {"v", "omega", "current"} | ({"local"} if self.config_.local_spectrum else set())
+        needed |= {"yaw"} if self.config_.use_yaw_slip else set()
         needed |= {"run"} if self.config_.run_features != "none" else set()
         if needed - set(self.normalisers_):
             raise KeyError(f"normalisers {sorted(needed - set(self.normalisers_))!r} are missing")
