@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_bool, check_int, check_seed
+from terrain.checks import check_bool, check_int, check_real, check_seed
 from terrain.errors import InvalidParameterError, OutOfBoundsError, TerrawattError, UnknownNameError
 
 from .batch_pairs import BatchPairs
@@ -186,6 +186,12 @@ def plan_batch(
     if settings is not None and not isinstance(settings, PlannerSettings):
         raise InvalidParameterError(f"settings must be a PlannerSettings, got {type(settings).__name__!r}")
     seed = check_seed(seed)
+    if time_limit_s is not None:  # checked once here rather than failing every pair the same way
+        check_real("time_limit_s", time_limit_s, low=0.0, low_inclusive=False)
+    if max_cost_evaluations is not None:
+        check_int("max_cost_evaluations", max_cost_evaluations, low=1)
+    if planner != "lattice" and time_limit_s is None and max_cost_evaluations is None:
+        raise InvalidParameterError("time_limit_s and max_cost_evaluations are both None; give at least one budget")
     progress = check_bool("progress", progress)
     client = check_client(client, "pairs")
     n_workers = 1 if workers is None else check_int("workers", workers, low=1)

@@ -229,6 +229,9 @@ def test_a_missing_pairs_file_is_a_file_not_found_error(tmp_path):
         ({"seed": -1}, InvalidParameterError, "seed must be None or an integer"),
         ({"progress": "yes"}, InvalidParameterError, "progress must be True or False"),
         ({"settings": {"lattice_stride_cells": 2}}, InvalidParameterError, "settings must be a PlannerSettings"),
+        ({"time_limit_s": 0.0}, InvalidParameterError, "time_limit_s must be > 0"),
+        ({"max_cost_evaluations": 0}, InvalidParameterError, "max_cost_evaluations must be >= 1"),
+        ({"planner": "RRTstar", "time_limit_s": None}, InvalidParameterError, "give at least one budget"),
     ],
 )
 def test_bad_arguments_are_refused(cost, kwargs, error, match):
@@ -386,3 +389,11 @@ def test_the_table_shows_missing_numbers_as_dashes_and_cuts_long_batches(cost):
     assert lines[2].split()[:2] == ["0", "exact"] and float(lines[2].split()[2]) == round(res.rows[0].energy_wh, 2)
     assert lines[-1] == "... 1 more rows"
     assert res.table().splitlines()[-1].split() == ["4", "error", "-", "-", "-", "-"]
+
+
+def test_an_ompl_planner_with_seed_and_work_bound_gives_the_same_rows_on_the_cluster(cost, local_client):
+    kw = {"planner": "RRTstar", "time_limit_s": None, "max_cost_evaluations": 3000, "seed": 1, "progress": False}
+    here = plan_batch(cost, PAIRS, **kw)
+    there = plan_batch(cost, PAIRS, client=local_client, **kw)
+    assert all(r.planning_time_s >= 0 for r in here.rows) and here.n_found == 4
+    assert [_outcome(r) for r in there.rows] == [_outcome(r) for r in here.rows]
