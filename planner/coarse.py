@@ -10,7 +10,8 @@ The corridor graph is a subgraph of the full 1-cell lattice (:class:`~planner.La
 start and goal are joined the same way, so the route's drive energy is never below the
 full-resolution lattice optimum; ``compare=True`` computes that optimum and the ratio.
 When the corridor holds no route (a passage the coarse map could not see) the corridor is
-widened four times, then the whole map is searched (``fallback`` says which).
+widened four times, then the whole map is searched (``fallback`` says which) unless start
+and goal lie in different free regions (then the route is ``infeasible`` at once).
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from scipy import ndimage
 
 from terrain import TerrainMap
 from terrain.checks import check_bool, check_int, check_optional_real
-from terrain.errors import InvalidParameterError
+from terrain.errors import BlockedPositionError, InvalidParameterError
 
 from .edge_cost import EnergyCost
 from .kernels import astar
@@ -249,6 +250,8 @@ def plan_coarse_to_fine(
         ``cost`` not an EnergyCost, bad ``factor`` / ``corridor_m`` / points, start equals goal.
     OutOfBoundsError
         A point outside the map.
+    BlockedPositionError
+        A point on an obstacle or on ground steeper than ``cost.max_slope_rad``.
 
     Examples
     --------
@@ -269,6 +272,13 @@ def plan_coarse_to_fine(
     start, goal = pts
     if np.array_equal(start, goal):
         raise InvalidParameterError(f"start equals goal {tuple(start.tolist())!r} m; expected two different points")
+    for name, p in (("start_xy_m", start), ("goal_xy_m", goal)):
+        r, c = cost.terrain.rowcol(p[0], p[1])
+        if cost.blocked[r, c]:
+            raise BlockedPositionError(
+                f"{name} {tuple(p.tolist())!r} m lies on a blocked cell (obstacle, or steeper than max_slope_rad) "
+                f"at row {r}, col {c}; expected a free cell"
+            )
     width = 3.0 * f * cost.terrain.cell_size_m if width is None else width
 
     t0 = time.perf_counter()
@@ -286,7 +296,9 @@ def plan_coarse_to_fine(
                 break
     if not math.isfinite(objective):
         fallback = COARSE_FALLBACKS[2]
-        objective, waypoints, n_nodes = _search_corridor(cost, start, goal, np.ones(cost.shape, dtype=bool))
+        labels = cost.components()
+        if labels[cost.terrain.rowcol(*start)] == labels[cost.terrain.rowcol(*goal)]:  # else: no route anywhere
+            objective, waypoints, n_nodes = _search_corridor(cost, start, goal, np.ones(cost.shape, dtype=bool))
     fine_s = time.perf_counter() - t0
     if math.isfinite(objective):
         route = evaluate_route(cost, waypoints, planner="coarse-to-fine", planning_time_s=coarse_s + fine_s)

@@ -309,3 +309,12 @@ def test_bad_coarse_to_fine_points(hilly_cost):
         plan_coarse_to_fine(hilly_cost, (6.5, 8.5), (6.5, 8.5))
     with pytest.raises(InvalidParameterError, match="cost must be an EnergyCost"):
         plan_coarse_to_fine("cost", (6.5, 8.5), (100.5, 100.5))
+
+
+def test_coarse_to_fine_refuses_a_blocked_start(tmp_path):
+    from planner import BlockedPositionError, EnergyCost, plan_coarse_to_fine
+    from terrain import wall_map
+
+    cost = EnergyCost.from_presets(wall_map((32, 32), 1.0, wall_col=16, ground="asphalt"))
+    with pytest.raises(BlockedPositionError, match="start_xy_m .* blocked cell"):
+        plan_coarse_to_fine(cost, (16.5, 4.5), (28.5, 4.5))
