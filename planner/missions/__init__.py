@@ -1,4 +1,4 @@
-"""Missions: drive a route against a battery (:func:`simulate_mission`) and the adaptive loop (:func:`run_adaptive_mission`)."""
+"""Missions: drive a route against a battery (:func:`simulate_mission`), the adaptive loop (:func:`run_adaptive_mission`) and Monte Carlo studies (:func:`simulate_missions_mc`)."""
 
 from .adaptive import run_adaptive_mission
 from .adaptive_results import (
