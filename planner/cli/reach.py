@@ -124,6 +124,8 @@ def run_reach(args: argparse.Namespace) -> int:
     png_path = draw_figure(args.out / "reach.png", lambda: reach.plot(
         args.out / "reach.png", title=f"terrawatt: energy reachability on {label}"))
     _print_summary(reach, tmap, label, args, voltage_v, prep_s, total_s)
+    if compile_s > 1.0:
+        print(f"(compiled the kernels in {compile_s:.1f} s: first run in this environment; not in the times above)")
     print(f"\nwrote {raster}, {json_path}" + (f" and {png_path}" if png_path is not None else ""))
     return 0 if reach.n_reachable_cells else 1
 
