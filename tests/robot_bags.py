@@ -10,6 +10,8 @@ import pytest
 
 try:
     from rosbags.rosbag1 import Writer
+    from rosbags.rosbag2 import StoragePlugin
+    from rosbags.rosbag2 import Writer as Writer2
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     HAVE_ROSBAGS = True
@@ -60,8 +62,11 @@ def write_robot_bag(
     gyro: bool = True,
     duration_s: float = 6.0,
     seed: int = 0,
+    kind: str = "ros1",
 ) -> dict[str, np.ndarray]:
-    """Write a ROS 1 bag at ``path`` and return its truth (times in s from the first message).
+    """Write a bag at ``path`` (``kind``: a ROS 1 ``.bag``, or a ROS 2 bag folder in sqlite3
+    (``"ros2"``) or MCAP (``"mcap"``) storage) and return its truth (times in s from the first
+    message).
 
     Topics: ``/imu/data`` (``sensor_msgs/Imu``, ``imu_hz``, gyro z = 0.3 sin t, a_z = 9.81 or
     0.09 + noise with ``gravity=False``), ``/odometry/filtered`` (``nav_msgs/Odometry``,
@@ -70,13 +75,16 @@ def write_robot_bag(
     battery voltage 26.5 V falling slowly).
     """
     rng = np.random.default_rng(seed)
-    ts = get_typestore(Stores.ROS1_NOETIC)
+    ros1 = kind == "ros1"
+    ts = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
     ts.register(get_types_from_msg(HUSKY_STATUS_MSG, "husky_msgs/msg/HuskyStatus"))
     T = ts.types
 
     def header(ns: int):
         stamp = T["builtin_interfaces/msg/Time"](sec=ns // _S, nanosec=ns % _S)
-        return T["std_msgs/msg/Header"](seq=0, stamp=stamp, frame_id="base_link")
+        if ros1:
+            return T["std_msgs/msg/Header"](seq=0, stamp=stamp, frame_id="base_link")
+        return T["std_msgs/msg/Header"](stamp=stamp, frame_id="base_link")
 
     def vec(x=0.0, y=0.0, z=0.0):
         return T["geometry_msgs/msg/Vector3"](x=x, y=y, z=z)
@@ -131,10 +139,15 @@ def write_robot_bag(
                 charge_estimate=0.9, timeout=False, lockout=False, e_stop=False, ros_pause=False, no_battery=False,
                 current_limit=False)
             msgs.append((ns, "/status", "husky_msgs/msg/HuskyStatus", m))
-    with Writer(path) as writer:
+    if ros1:
+        writer = Writer(path)
+    else:
+        writer = Writer2(path, version=9, storage_plugin=StoragePlugin.MCAP if kind == "mcap" else StoragePlugin.SQLITE3)
+    serialize = ts.serialize_ros1 if ros1 else ts.serialize_cdr
+    with writer:
         conns = {}
         for ns, topic, typ, m in sorted(msgs, key=lambda x: x[0]):
             if topic not in conns:
                 conns[topic] = writer.add_connection(topic, typ, typestore=ts)
-            writer.write(conns[topic], ns, ts.serialize_ros1(m, typ))
+            writer.write(conns[topic], ns, serialize(m, typ))
     return truth
