@@ -182,3 +182,12 @@ def test_read_logs_bag_topics_and_required_currents(bags):
         read_logs(jackal, bag=BagTopics(cmd_vel_topic="/odometry/filtered"), require_currents=True)
     (log,) = read_logs(husky, bag=BagTopics(**{**HUSKY, "current_topics": ("/status",)}), require_currents=True)
     assert log.has_currents and log.battery_voltage_v is not None
+
+
+def test_training_refuses_a_log_without_currents(bags):
+    jackal = read_rosbag(bags["jackal"][0], "/odometry/filtered")
+    husky = read_rosbag(bags["husky"][0], **HUSKY)
+    match = r"training, adaptation, scoring or diagnosis needs measured drive currents.*'/drive/current_left'"
+    for kind in ("constant", "linear", "physics"):
+        with pytest.raises(DataError, match=match):
+            new_current_model(kind).fit([husky, jackal])
