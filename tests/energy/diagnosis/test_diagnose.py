@@ -132,3 +132,26 @@ def test_an_effect_that_only_fits_its_own_runs_is_not_credited():
     d = diagnose(model, shifted, effects=["current_offset"], seed=0, n_bootstrap=50)
     score = {s.name: s for s in d.ranking}["current_offset"]
     assert score.shrink_pct < 0.0 and "current_offset" not in d.chosen
+
+
+def test_a_small_effect_beside_a_dominant_one_ranks_second():
+    """Turning resistance (most of the charge) and inertia withheld together: ranked alone, the
+    inertia term is hidden by the turning gap its fit absorbs; refitted jointly with the chosen
+    turning term it is the next best addition, and the ranking says what it adds."""
+    from energy.diagnosis.scenarios import pair_scenario
+
+    sc = dataclasses.replace(pair_scenario("turning_resistance", "inertia"), run_duration_s=10.0)
+    logs, model = sc.make_logs(0), sc.make_model(0)
+    d = diagnose(model, logs, terrain=sc.terrain, effects=["turning_resistance", "inertia", "current_gain"],
+                 n_bootstrap=50)
+    names = [s.name for s in d.ranking]
+    assert names == ["turning_resistance", "inertia", "current_gain"]
+    # alone, a current gain (which absorbs part of the turning gap) looks better than inertia
+    assert d.score("current_gain").shrink_pct > d.score("inertia").shrink_pct
+    assert d.chosen[:2] == ("turning_resistance", "inertia")
+    first, second = d.ranking[0], d.ranking[1]
+    assert first.added_pct == pytest.approx(first.shrink_pct)
+    assert second.added_pct > 0 and second.added_interval_pct[0] > 0
+    # what the chosen pair explains is the sum of the added shrinks, and the waterfall agrees
+    assert d.waterfall[2].shrink_pct == pytest.approx(first.added_pct + second.added_pct)
+    assert any(s.startswith("Then inertia") and "further" in s for s in d.verdict)
