@@ -49,18 +49,23 @@ from .evaluation import (
 )
 from .excitation import excitation_commands
 from .features import (
+    DEFAULT_BAND_HZ,
     DEFAULT_T_INTERVAL_S,
     SOURCE_CURRENT_RANGE_A,
     SOURCE_OMEGA_RANGE_RADPS,
     SOURCE_SPEED_RANGE_MPS,
+    BandNotServedError,
     MinMaxNormaliser,
     WindowSpec,
     band_rms_spectra,
+    band_served,
+    check_band_hz,
     log_band_edges_hz,
     sliding_windows,
     whole_run_band_spectrum,
     whole_run_spectrum,
     window_starts,
+    yaw_slip_features,
 )
 from .io import (
     read_borealtc,
@@ -216,6 +221,11 @@ __all__ = [
     "band_rms_spectra",
     "log_band_edges_hz",
     "MinMaxNormaliser",
+    "DEFAULT_BAND_HZ",
+    "BandNotServedError",
+    "check_band_hz",
+    "band_served",
+    "yaw_slip_features",
     "SOURCE_SPEED_RANGE_MPS",
     "SOURCE_OMEGA_RANGE_RADPS",
     "SOURCE_CURRENT_RANGE_A",
