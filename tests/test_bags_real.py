@@ -191,3 +191,10 @@ def test_training_refuses_a_log_without_currents(bags):
     for kind in ("constant", "linear", "physics"):
         with pytest.raises(DataError, match=match):
             new_current_model(kind).fit([husky, jackal])
+
+
+def test_a_status_message_at_a_jittery_1_hz_passes_the_rate_check(tmp_path):
+    truth = write_robot_bag(tmp_path / "slow.bag", status_hz=0.95, duration_s=12.0)
+    log = read_rosbag(tmp_path / "slow.bag", **HUSKY)
+    assert log.has_currents and len(log) == truth["status_t"].size
+    assert log.drive_rate_hz == pytest.approx(0.95, rel=1e-6)

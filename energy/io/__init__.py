@@ -36,7 +36,7 @@ bad input with a clear error instead of guessing:
   * median |a_z| above ``MAX_MEDIAN_ACCEL_MPS2`` (50 m/s^2) -> UnitError (e.g. m/s^2
     declared as g, or mm/s^2);
   * a drive, current or IMU stream whose median rate lies outside
-    [``MIN_STREAM_RATE_HZ``, ``MAX_STREAM_RATE_HZ``] (1 Hz to 10 kHz), or that spans more
+    [``MIN_STREAM_RATE_HZ``, ``MAX_STREAM_RATE_HZ``] (0.5 Hz to 10 kHz), or that spans more
     than ``MAX_RUN_DURATION_S`` (one day) -> UnitError "the time unit looks wrong" (e.g.
     BorealTC times in ms read as s: 0.0065 Hz over 9,385 s). Commands are event-like and
     not rate-checked.

@@ -91,7 +91,7 @@ def read_borealtc_run(
         repaired/allowed), streams that do not overlap.
     UnitError
         Currents or speeds whose magnitude contradicts A or m/s; a stream rate outside
-        [1 Hz, 10 kHz] or a run longer than a day (times in ms read as s); all with
+        [0.5 Hz, 10 kHz] or a run longer than a day (times in ms read as s); all with
         ``check_units``.
     InvalidParameterError, UnknownNameError
         Bad ``track_width_m``, ``ground_label``, ``gap_factor`` or repair names.

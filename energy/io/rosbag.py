@@ -199,7 +199,7 @@ def read_rosbag(
         ``allow_gaps`` work as in the CSV readers).
     UnitError, UnknownNameError, InvalidParameterError
         As documented in :mod:`energy.io` (with ``check_units``, also a current or IMU
-        topic whose rate lies outside [1 Hz, 10 kHz]); unknown ``current_unit``; bad
+        topic whose rate lies outside [0.5 Hz, 10 kHz]); unknown ``current_unit``; bad
         timeout or ``max_clock_offset_s``.
     """
     opts = _check_arguments(current_unit, cmd_vel_timeout_s, max_clock_offset_s, ground_label, current_topics,

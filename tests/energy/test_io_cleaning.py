@@ -17,8 +17,8 @@ def test_timing_bounds_pass_real_rates_and_refuse_wrong_time_units():
     check_timing("pro.csv", "drive stream", np.arange(1800) / 6.5)
     check_timing("imu.csv", "IMU stream", np.arange(27_754) / 100.0)
     check_timing("one.csv", "drive stream", np.array([3.0]))  # one sample has no rate
-    assert MIN_STREAM_RATE_HZ == 1.0 and MAX_STREAM_RATE_HZ == 10_000.0 and MAX_RUN_DURATION_S == 86_400.0
-    with pytest.raises(UnitError, match=r"pro\.csv: drive stream: median rate 0\.0065 Hz is below the plausible 1 Hz"):
+    assert MIN_STREAM_RATE_HZ == 0.5 and MAX_STREAM_RATE_HZ == 10_000.0 and MAX_RUN_DURATION_S == 86_400.0
+    with pytest.raises(UnitError, match=r"pro\.csv: drive stream: median rate 0\.0065 Hz is below the plausible 0.5 Hz"):
         check_timing("pro.csv", "drive stream", np.arange(60) * (1000.0 / 6.5))  # ms read as s
     with pytest.raises(UnitError, match=r"imu\.csv: IMU stream: median rate 1e\+05 Hz is above the plausible 10000 Hz"):
         check_timing("imu.csv", "IMU stream", np.arange(100) * 1e-5)  # s declared as ms

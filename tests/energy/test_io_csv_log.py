@@ -350,7 +350,7 @@ def test_csv_header_format_version_true_is_not_1(tmp_path):
 
 def test_csv_times_in_ms_declared_as_s_are_a_unit_error():
     units = dict(GENERIC_UNITS, time="s")  # the fixture's stamps are ms
-    with pytest.raises(UnitError, match=r"generic_ma\.csv: drive stream: median rate 0\.01 Hz is below the plausible 1 Hz "
+    with pytest.raises(UnitError, match=r"generic_ma\.csv: drive stream: median rate 0\.01 Hz is below the plausible 0.5 Hz "
                                         r".*the time unit looks wrong"):
         read_csv_log(GENERIC, GENERIC_COLUMNS, units)
     assert read_csv_log(GENERIC, GENERIC_COLUMNS, units, check_units=False).drive_rate_hz == pytest.approx(0.01)
