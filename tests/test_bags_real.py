@@ -22,7 +22,7 @@ from energy import (
 )
 from energy.io import BagTopics, read_logs
 from energy.prediction import predict_runs
-from terrain import DataError, InvalidParameterError, UnitError
+from terrain import DataError, InvalidParameterError, UnitError, UnknownNameError
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures" / "borealtc"
 HUSKY = dict(cmd_vel_topic="/odometry/filtered", current_topics="/status",
@@ -198,3 +198,20 @@ def test_a_status_message_at_a_jittery_1_hz_passes_the_rate_check(tmp_path):
     log = read_rosbag(tmp_path / "slow.bag", **HUSKY)
     assert log.has_currents and len(log) == truth["status_t"].size
     assert log.drive_rate_hz == pytest.approx(0.95, rel=1e-6)
+
+
+def test_a_slow_status_message_beside_fast_odometry_on_the_odometry_clock(tmp_path):
+    truth = write_robot_bag(tmp_path / "slow.bag", status_hz=1.0, odom_hz=10.0, duration_s=12.0)
+    on_status = read_rosbag(tmp_path / "slow.bag", **HUSKY)
+    on_odom = read_rosbag(tmp_path / "slow.bag", **HUSKY, drive_clock="velocity")
+    assert on_status.drive_rate_hz == pytest.approx(1.0) and on_odom.drive_rate_hz == pytest.approx(10.0)
+    np.testing.assert_allclose(on_odom.current_left_a, np.interp(on_odom.time_s, truth["status_t"], truth["left"]))
+    np.testing.assert_allclose(on_odom.battery_voltage_v, np.interp(on_odom.time_s, truth["status_t"], truth["volts"]))
+    np.testing.assert_allclose(on_odom.v_mps, np.interp(on_odom.time_s, truth["odom_t"], truth["v"]), atol=1e-9)
+    assert on_odom.time_s[0] >= truth["status_t"][0] and on_odom.time_s[-1] <= truth["status_t"][-1]
+    assert "interpolated linearly onto the velocity stream's drive times" in on_odom.meta.notes
+    (via_layouts,) = read_logs(tmp_path / "slow.bag", bag=BagTopics(**{**HUSKY, "current_topics": ("/status",)},
+                                                                   drive_clock="velocity"))
+    np.testing.assert_array_equal(via_layouts.time_s, on_odom.time_s)
+    with pytest.raises(UnknownNameError, match="drive_clock"):
+        read_rosbag(tmp_path / "slow.bag", **HUSKY, drive_clock="imu")

@@ -76,7 +76,7 @@ from .cleaning import (
 from .csv_header import CSV_LOG_FORMAT_VERSION
 from .csv_log import CSV_FIELDS, CSV_RATES, CSV_UNITS, DEFAULT_CSV_COLUMNS, read_csv_log, write_csv_log
 from .layouts import LOG_SUFFIXES, BagTopics, read_logs
-from .rosbag import MAX_CLOCK_OFFSET_S, read_rosbag
+from .rosbag import DRIVE_CLOCKS, MAX_CLOCK_OFFSET_S, read_rosbag
 
 __all__ = [
     "REPAIRS",
@@ -96,6 +96,7 @@ __all__ = [
     "MAX_STREAM_RATE_HZ",
     "MAX_RUN_DURATION_S",
     "MAX_CLOCK_OFFSET_S",
+    "DRIVE_CLOCKS",
     "MAX_BATTERY_VOLTAGE_V",
     "GRAVITY_REMOVED_MAX_MPS2",
     "read_borealtc_run",

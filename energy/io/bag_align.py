@@ -40,12 +40,14 @@ def align_streams(
     cmd_vel_timeout_s: float | None,
     drive_rate_hz: float,
     notes: list[str],
+    on_currents: bool = True,
 ) -> dict[str, Any]:
     """The streams on the drive times, inside the overlap of the current, IMU and odometry streams.
 
-    The drive times are the left current's times; without currents, the odometry's times,
-    or with commands only a uniform grid at ``drive_rate_hz``. The right current is
-    interpolated onto them (when on its own topic), odometry interpolated (heading
+    The drive times are the left current's times (``on_currents``); without currents, or
+    with ``on_currents=False``, the odometry's times, or with commands only a uniform grid at
+    ``drive_rate_hz`` (the currents and voltage then interpolated linearly onto them). The
+    right current is interpolated onto them (when on its own topic), odometry interpolated (heading
     unwrapped), commands held (zero after ``cmd_vel_timeout_s`` without one). The IMU keeps
     the samples bracketing the drive span.
 
@@ -70,13 +72,16 @@ def align_streams(
     t1 = min(s[1] for s in spans)
     if not measured and cmd_vel_timeout_s is None:
         t0 = max(t0, tv[0])
-    if currents is not None:
+    on_currents = on_currents and currents is not None
+    if on_currents:
         base = currents.time_s
     elif measured:
         base = tv
     else:
         base = t0 + np.arange(int(math.floor(max(t1 - t0, 0.0) * drive_rate_hz + 1e-9)) + 1) / drive_rate_hz
-        notes.append(f"no currents: drive stream on a {drive_rate_hz:g} Hz grid over the overlap")
+        notes.append(f"drive stream on a {drive_rate_hz:g} Hz grid over the overlap")
+    if currents is not None and not on_currents:
+        notes.append("currents (and voltage) interpolated linearly onto the velocity stream's drive times")
     keep = (base >= t0) & (base <= t1)
     if t1 < t0 or not keep.any():
         cur = "" if currents is None else f"current {_span(*spans[1])}, "
@@ -86,12 +91,14 @@ def align_streams(
     td = base[keep]
     out: dict[str, Any] = dict(time_s=td, current_left_a=None, current_right_a=None, battery_voltage_v=None)
     if currents is not None:
-        two_topics = not np.array_equal(currents.right_time_s, currents.time_s)
-        out["current_left_a"] = currents.left_a[keep]
-        out["current_right_a"] = (np.interp(td, currents.right_time_s, currents.right_a) if two_topics
-                                  else currents.right_a[keep])
+        def at_drive(t: np.ndarray, values: np.ndarray, own: bool) -> np.ndarray:
+            return values[keep] if own else np.interp(td, t, values)
+
+        same = on_currents and np.array_equal(currents.right_time_s, currents.time_s)
+        out["current_left_a"] = at_drive(currents.time_s, currents.left_a, on_currents)
+        out["current_right_a"] = at_drive(currents.right_time_s, currents.right_a, same)
         if currents.voltage_v is not None:
-            out["battery_voltage_v"] = currents.voltage_v[keep]
+            out["battery_voltage_v"] = at_drive(currents.time_s, currents.voltage_v, on_currents)
     if measured:
         out["v_mps"] = np.interp(td, tv, vc["v"])
         out["omega_radps"] = np.interp(td, tv, vc["omega"])

@@ -15,7 +15,7 @@ from ..logs import DEFAULT_GAP_FACTOR, InteractionLog
 from .borealtc import read_borealtc
 from .cleaning import UNIT_FACTORS
 from .csv_log import read_csv_log
-from .rosbag import read_rosbag
+from .rosbag import DRIVE_CLOCKS, read_rosbag
 
 __all__ = ["LOG_SUFFIXES", "BagTopics", "read_logs"]
 
@@ -27,7 +27,8 @@ _NEEDS_CURRENTS = "training, evaluation or diagnosis"
 
 @dataclass(frozen=True)
 class BagTopics:
-    """Where a bag keeps its streams: the topics and message fields :func:`~energy.io.read_rosbag` reads.
+    """Where a bag keeps its streams: the topics and message fields :func:`~energy.io.read_rosbag` reads,
+    and whose times the drive stream takes.
 
     Parameters
     ----------
@@ -43,6 +44,9 @@ class BagTopics:
     voltage_field : str or None
         Battery voltage field of that status message (e.g. ``"battery_voltage"``).
     current_unit : {"A", "mA"}
+    drive_clock : {"currents", "velocity"}
+        The drive stream on the current messages' times, or on the odometry's (currents
+        interpolated onto them: a 1 Hz status message beside 10-50 Hz odometry).
 
     Raises
     ------
@@ -63,6 +67,7 @@ class BagTopics:
     current_fields: tuple[str, str] | None = None
     voltage_field: str | None = None
     current_unit: str = "A"
+    drive_clock: str = "currents"
 
     def __post_init__(self) -> None:
         check_text("cmd_vel_topic", self.cmd_vel_topic)
@@ -84,6 +89,7 @@ class BagTopics:
                     "too with current_fields (--current-fields)"
                 )
         check_choice("current_unit", self.current_unit, tuple(UNIT_FACTORS["current"]))
+        check_choice("drive_clock", self.drive_clock, DRIVE_CLOCKS)
 
 
 def _names(name: str, value: Any, counts: tuple[int, ...]) -> tuple[str, ...]:
@@ -179,7 +185,8 @@ def read_logs(
         if LOG_SUFFIXES.get(item.suffix.lower()) == "csv":
             return read_csv_log(item, robot=None if robot == "unknown" else robot, ground_label=label, **common)
         return read_rosbag(item, bag.cmd_vel_topic, bag.imu_topic, bag.current_topics, current_fields=bag.current_fields,
-                           voltage_field=bag.voltage_field, current_unit=bag.current_unit, robot=robot,
+                           voltage_field=bag.voltage_field, current_unit=bag.current_unit,
+                           drive_clock=bag.drive_clock, robot=robot,
                            ground_label=label, **common)
 
     if root.is_file():

@@ -47,13 +47,16 @@ from .cleaning import (
     parse_repair,
 )
 
-__all__ = ["MAX_CLOCK_OFFSET_S", "read_rosbag"]
+__all__ = ["MAX_CLOCK_OFFSET_S", "DRIVE_CLOCKS", "read_rosbag"]
 
 _LOG = logging.getLogger(__name__)
 
 #: Default largest median (receive time - header stamp) a bag topic may show before
 #: ``read_rosbag`` refuses to mix its header stamps with receive times (s).
 MAX_CLOCK_OFFSET_S = 0.5
+#: Values of ``read_rosbag``'s ``drive_clock``: the drive stream on the current messages'
+#: times, or on the velocity stream's (odometry messages, or a grid for commands).
+DRIVE_CLOCKS = ("currents", "velocity")
 
 _TWIST_TYPES = ("geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped")
 _ODOM_TYPES = ("nav_msgs/msg/Odometry",)
@@ -75,6 +78,7 @@ class _Options:
     voltage_field: str | None
     require: bool
     drive_rate_hz: float
+    on_currents: bool
 
 
 def read_rosbag(
@@ -87,6 +91,7 @@ def read_rosbag(
     voltage_field: str | None = None,
     require_currents: bool = False,
     drive_rate_hz: float = 10.0,
+    drive_clock: str = "currents",
     current_unit: str = "A",
     robot: str = "unknown",
     ground_label: str | None = None,
@@ -143,8 +148,10 @@ def read_rosbag(
     Alignment: the drive stream is sampled at the current messages (the left topic's with
     two topics; the right current is interpolated linearly onto them), inside the
     overlap of the current and IMU streams (and of the odometry stream, if used); without
-    currents, at the odometry messages, or with commands only on a uniform grid at
-    ``drive_rate_hz``.
+    currents, or with ``drive_clock="velocity"``, at the odometry messages, or with
+    commands only on a uniform grid at ``drive_rate_hz``, the currents (and voltage) then
+    interpolated linearly onto them — for a status message at 1 Hz beside odometry at
+    10-50 Hz.
     Commands are held (zero-order hold) from the last message at or before each drive
     time; with ``cmd_vel_timeout_s`` set, a command older than that — or no command yet —
     counts as zero (robots stop when commands stop). With ``cmd_vel_timeout_s=None`` the
@@ -167,7 +174,10 @@ def read_rosbag(
     require_currents : bool
         Refuse a bag without the current topics instead of reading a log without currents.
     drive_rate_hz : float
-        Rate of the drive grid of a bag with neither currents nor odometry (Hz, > 0).
+        Rate of the drive grid of a bag without odometry when the drive stream is not on
+        the currents (Hz, > 0).
+    drive_clock : {"currents", "velocity"}
+        Whose times the drive stream takes when the bag has currents (see Alignment).
     current_unit : {"A", "mA"}
     robot, ground_label : metadata
     use_header_stamps : bool
@@ -203,7 +213,7 @@ def read_rosbag(
         timeout or ``max_clock_offset_s``.
     """
     opts = _check_arguments(current_unit, cmd_vel_timeout_s, max_clock_offset_s, ground_label, current_topics,
-                            current_fields, voltage_field, require_currents, drive_rate_hz)
+                            current_fields, voltage_field, require_currents, drive_rate_hz, drive_clock)
     repairs = parse_repair(repair)
     gap_factor = check_gap_factor(gap_factor)
     bag = bag_path(path)
@@ -243,7 +253,8 @@ def read_rosbag(
     gravity = gravity_note(f"{imu_topic} linear_acceleration.z", ic["accel_z"])
     if gravity:
         notes.append(gravity)
-    log = align_streams(src, currents, (tv, vc, measured), (ti, ic), cmd_vel_timeout_s, opts.drive_rate_hz, notes)
+    log = align_streams(src, currents, (tv, vc, measured), (ti, ic), cmd_vel_timeout_s, opts.drive_rate_hz, notes,
+                        opts.on_currents)
     if missing_currents:
         notes.append(f"no currents: {missing_currents}")
     meta = LogMeta(
@@ -261,7 +272,7 @@ def read_rosbag(
 
 def _check_arguments(
     current_unit: Any, cmd_vel_timeout_s: Any, max_clock_offset_s: Any, ground_label: Any, current_topics: Any,
-    current_fields: Any, voltage_field: Any, require_currents: Any, drive_rate_hz: Any,
+    current_fields: Any, voltage_field: Any, require_currents: Any, drive_rate_hz: Any, drive_clock: Any,
 ) -> _Options:
     """Check the options (after the optional dependency)."""
     import_rosbags()
@@ -269,6 +280,7 @@ def _check_arguments(
     check_optional_real("cmd_vel_timeout_s", cmd_vel_timeout_s, low=0.0, low_inclusive=False)
     check_real("max_clock_offset_s", max_clock_offset_s, low=0.0, low_inclusive=False)
     rate = check_real("drive_rate_hz", drive_rate_hz, low=0.0, low_inclusive=False)
+    check_choice("drive_clock", drive_clock, DRIVE_CLOCKS)
     require = check_bool("require_currents", require_currents)
     if ground_label is not None:
         check_text("ground_label", ground_label)
@@ -297,7 +309,7 @@ def _check_arguments(
             "voltage_field (--voltage-field) is read beside the currents of a status message: name them too "
             "with current_fields (--current-fields)"
         )
-    return _Options(topics_cur, fields, voltage_field, require or fields is not None, rate)
+    return _Options(topics_cur, fields, voltage_field, require or fields is not None, rate, drive_clock == "currents")
 
 
 def _current_columns(

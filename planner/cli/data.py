@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from energy import InteractionLog
-from energy.io import LOG_SUFFIXES, BagTopics, read_logs
+from energy.io import DRIVE_CLOCKS, LOG_SUFFIXES, BagTopics, read_logs
 
 __all__ = ["add_data_options", "logs_from_args"]
 
@@ -16,7 +16,7 @@ _DEFAULT = BagTopics()
 
 def add_data_options(parser: Any) -> None:
     """Add ``--data``, ``--ground-label`` and the bag flags (``--cmd-vel-topic``, ``--imu-topic``, ``--current-topics``,
-    ``--current-fields``, ``--voltage-field``, ``--current-unit``) to a subcommand's parser."""
+    ``--current-fields``, ``--voltage-field``, ``--current-unit``, ``--drive-clock``) to a subcommand's parser."""
     parser.add_argument(
         "--data", type=Path, required=True, metavar="DIR|FILE",
         help=f"logs: a BorealTC folder (GROUND/imu_NN.csv + pro_NN.csv), a CSV log, a bag "
@@ -40,6 +40,9 @@ def add_data_options(parser: Any) -> None:
                       help="battery voltage field of that status message, e.g. battery_voltage")
     bags.add_argument("--current-unit", default=_DEFAULT.current_unit, choices=("A", "mA"),
                       help="unit of the bag's currents (default %(default)s)")
+    bags.add_argument("--drive-clock", default=_DEFAULT.drive_clock, choices=DRIVE_CLOCKS,
+                      help="drive samples at the current messages (default) or at the odometry messages, the "
+                      "currents interpolated onto them (e.g. a 1 Hz status message beside 10-50 Hz odometry)")
 
 
 def logs_from_args(args: argparse.Namespace, require_currents: bool) -> list[InteractionLog]:
@@ -58,6 +61,7 @@ def logs_from_args(args: argparse.Namespace, require_currents: bool) -> list[Int
         current_fields=None if args.current_fields is None else tuple(args.current_fields),
         voltage_field=args.voltage_field,
         current_unit=args.current_unit,
+        drive_clock=args.drive_clock,
     )
     return read_logs(args.data, getattr(args, "grounds", None), bag=bag, require_currents=require_currents,
                      ground_label=args.ground_label, name="--data")
