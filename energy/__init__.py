@@ -68,9 +68,11 @@ from .features import (
     yaw_slip_features,
 )
 from .io import (
+    BagTopics,
     read_borealtc,
     read_borealtc_run,
     read_csv_log,
+    read_logs,
     read_rosbag,
     write_csv_log,
 )
@@ -113,6 +115,7 @@ from .params import (
 )
 from .physics import EFFECTS, PhysicsEnergyModel, PowerBreakdown
 from .plots import ground_spectra, plot_current_estimate, plot_vibration_spectra
+from .prediction import RunPrediction, predict_runs
 from .profiles import (
     DEFAULT_ACCEL_MPS2,
     DEFAULT_YAW_ACCEL_RADPS2,
@@ -155,6 +158,10 @@ __all__ = [
     "read_csv_log",
     "write_csv_log",
     "read_rosbag",
+    "read_logs",
+    "BagTopics",
+    "predict_runs",
+    "RunPrediction",
     # battery and budgets
     "Battery",
     "Discharge",
