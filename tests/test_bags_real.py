@@ -10,18 +10,19 @@ import pytest
 from robot_bags import BASE_NS, requires_rosbags, write_robot_bag
 
 from energy import (
+    BagTopics,
     InteractionLog,
     LogMeta,
     band_rms_spectra,
     log_band_edges_hz,
     new_current_model,
+    predict_runs,
     read_borealtc,
     read_csv_log,
+    read_logs,
     read_rosbag,
     write_csv_log,
 )
-from energy.io import BagTopics, read_logs
-from energy.prediction import predict_runs
 from terrain import DataError, InvalidParameterError, UnitError, UnknownNameError
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures" / "borealtc"

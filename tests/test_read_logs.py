@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from robot_bags import requires_rosbags, write_robot_bag
 
-from energy import InteractionLog, LogMeta, new_current_model, read_borealtc, write_csv_log
-from energy.io import LOG_SUFFIXES, BagTopics, read_logs
+from energy import BagTopics, InteractionLog, LogMeta, new_current_model, read_borealtc, read_logs, write_csv_log
+from energy.io import LOG_SUFFIXES
 from planner.cli import main
 from terrain import DataError, InvalidParameterError, UnknownNameError
 

@@ -91,14 +91,7 @@ def check_logs(logs: Any, name: str = "logs") -> list[InteractionLog]:
 
 
 def log_currents(log: InteractionLog) -> np.ndarray:
-    """The logged ``[left, right]`` drive currents of ``log``, shape ``(N, 2)``, in A.
-
-    Raises
-    ------
-    DataError
-        The log has no currents (e.g. a bag read for prediction only): training, adapting,
-        scoring and diagnosing need them (:meth:`InteractionLog.require_currents`).
-    """
+    """The logged ``[left, right]`` drive currents of ``log``, ``(N, 2)``, in A; DataError without any."""
     log.require_currents("training, adaptation, scoring or diagnosis")
     return np.column_stack([log.current_left_a, log.current_right_a])
 
