@@ -117,7 +117,7 @@ def _batch_rows(cost: EnergyCost, pairs: np.ndarray, workers: int, repeats: int,
     """In process and on a local cluster, ``repeats`` times each, alternating; the median routes/s of each;
     then ``mc_n`` Monte Carlo missions of the first pair's route, here and on the same cluster."""
     distributed = _need("distributed", "distributed")
-    here_rps, warm_rps, there_rps, equal = [], [], [], True
+    here_rps, warm_rps, there_rps, inflation, cpu_ratio, equal = [], [], [], [], [], True
     t0 = time.perf_counter()
     Lattice.for_cost(cost, 1)  # the lattice of the "lattice built" rows
     with distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
@@ -127,12 +127,19 @@ def _batch_rows(cost: EnergyCost, pairs: np.ndarray, workers: int, repeats: int,
         client.run(warm_up_kernels)  # import terrawatt and load the compiled kernels on every worker
         warm_s = time.perf_counter() - t1
         for _ in range(repeats):
+            cpu0 = time.process_time()
             here = plan_batch(_fresh(cost), pairs, progress=False)
+            cpu_here = time.process_time() - cpu0
             warm_here = plan_batch(_fresh(cost, keep_lattices=True), pairs, progress=False)  # lattice built already
+            cpu0 = client.run(time.process_time)
             there = plan_batch(cost, pairs, client=client, progress=False)  # a fresh scatter: workers start cold
+            cpu_there = sum(t - cpu0[w] for w, t in client.run(time.process_time).items())
+            cpu_ratio.append(cpu_there / cpu_here)
             here_rps.append(here.routes_per_s)
             warm_rps.append(warm_here.routes_per_s)
             there_rps.append(there.routes_per_s)
+            # the same searches timed on the workers: ~1 on an idle machine, more when others take the cores
+            inflation.append(float(np.sum(there.column("planning_time_s")) / np.sum(here.column("planning_time_s"))))
             equal = equal and _same(_outcome(here.rows), _outcome(there.rows))
         mc = _mc_rows(client, cost, pairs[0], mc_n)
     rps_here, rps_warm, rps_there = (float(np.median(v)) for v in (here_rps, warm_rps, there_rps))
@@ -145,6 +152,8 @@ def _batch_rows(cost: EnergyCost, pairs: np.ndarray, workers: int, repeats: int,
         "cluster_s": len(pairs) / rps_there, "cluster_routes_per_s": rps_there, "cluster_routes_per_s_all": there_rps,
         "speedup": rps_there / rps_here, "scaling_efficiency": rps_there / (workers * rps_here),
         "cluster_rows_equal_in_process": equal,
+        "worker_time_inflation": float(np.median(inflation)),
+        "worker_cpu_ratio": float(np.median(cpu_ratio)),
         "median_energy_saved_pct": here.median_saving_pct(),
     }, mc
 
@@ -203,6 +212,9 @@ def _print(batch: dict[str, Any], peer: dict[str, Any], size: int) -> None:
     print(f"scaling efficiency {100 * batch['scaling_efficiency']:.0f} % (cluster start {batch['cluster_start_s']:.1f} s "
           f"and worker warm-up {batch['worker_warmup_s']:.1f} s not included); cluster rows equal in-process rows: "
           f"{batch['cluster_rows_equal_in_process']}")
+    print(f"per-route planning time on the workers / in process: {batch['worker_time_inflation']:.2f} (wall); "
+          f"CPU time of the workers / in process: {batch['worker_cpu_ratio']:.2f} (the same work costs the "
+          "same CPU: a wall ratio above it is time the workers waited for a core)")
     print(f"\npeer baseline: minimum-energy search on the same directed 16-connected lattice "
           f"({peer['nodes']} nodes, {peer['edges']} edges), {peer['pairs']} pairs")
     print(f"{'search':<32} {'routes/s':>9} {'graph build s':>14}")
