@@ -397,3 +397,23 @@ def test_an_ompl_planner_with_seed_and_work_bound_gives_the_same_rows_on_the_clu
     there = plan_batch(cost, PAIRS, client=local_client, **kw)
     assert all(r.planning_time_s >= 0 for r in here.rows) and here.n_found == 4
     assert [_outcome(r) for r in there.rows] == [_outcome(r) for r in here.rows]
+
+
+def test_workers_and_scheduler_open_a_client_through_the_seam(cost, local_client, monkeypatch):
+    import contextlib
+
+    import planner.batch as batch_module
+
+    calls = []
+
+    @contextlib.contextmanager
+    def fake_dask_client(workers, scheduler):
+        calls.append((workers, scheduler))
+        yield local_client
+
+    monkeypatch.setattr(batch_module, "dask_client", fake_dask_client)
+    on_local = plan_batch(cost, PAIRS[:2], workers=2, progress=False)
+    on_scheduler = plan_batch(cost, PAIRS[:2], scheduler="tcp://127.0.0.1:8786", progress=False)
+    assert calls == [(2, None), (1, "tcp://127.0.0.1:8786")]
+    assert on_local.where == "local cluster" and on_scheduler.where == "tcp://127.0.0.1:8786"
+    assert on_local.n_workers == 2 and [r.status for r in on_scheduler.rows] == ["exact", "exact"]

@@ -259,3 +259,24 @@ def test_cli_monte_carlo_on_a_scheduler_gives_the_in_process_study(tmp_path, cap
     assert f"on 2 worker(s) ({cluster.scheduler_address})" in capsys.readouterr().out
     here, there = (json.loads((tmp_path / d / "monte_carlo.json").read_text()) for d in ("here", "there"))
     assert here["energy_wh"] == there["energy_wh"] and here["samples"] == there["samples"]
+
+
+def test_workers_open_a_local_cluster_through_the_seam(setup, monkeypatch):
+    import contextlib
+
+    import planner.missions.monte_carlo as mc_module
+
+    distributed = pytest.importorskip("distributed", reason=_NO_DASK)
+    calls = []
+    with distributed.LocalCluster(processes=False, n_workers=2, threads_per_worker=1,
+                                  dashboard_address=":0") as cluster, distributed.Client(cluster) as client:
+
+        @contextlib.contextmanager
+        def fake_dask_client(workers, scheduler):
+            calls.append((workers, scheduler))
+            yield client
+
+        monkeypatch.setattr(mc_module, "dask_client", fake_dask_client)
+        mc = _mc(setup, n=3, seed=1, workers=2)
+    assert calls == [(2, None)] and mc.where == "local cluster" and mc.n_workers == 2
+    assert np.array_equal(mc.energy_j, _mc(setup, n=3, seed=1).energy_j)
