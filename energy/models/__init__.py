@@ -49,6 +49,7 @@ TORCH_NAMES: dict[str, str] = {
     "TrainConfig": "training",
     "TrainingHistory": "training",
     "train_network": "training",
+    "train_ensemble": "ensemble",
     "RUN_FEATURES": "config",
     "RESAMPLE_METHODS": "config",
     "EstimatorConfig": "config",

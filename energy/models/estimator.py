@@ -67,6 +67,7 @@ from .base import CurrentModel, ModelRecord, log_currents, package_versions
 from .baselines import PhysicsCurrentModel
 from .config import EstimatorConfig, estimator_preset
 from .data import WindowDataset
+from .ensemble import train_ensemble
 from .net import CurrentNet, CurrentNetConfig
 from .training import TrainingHistory, train_network
 
@@ -291,14 +292,15 @@ class VibrationCurrentEstimator(CurrentModel):
                     f"{spec.length_s:.3g} s windows; give longer logs or set patience=None"
                 )
             net_cfg = cfg.net_config(data.x_window.shape[1], data.run_table.shape[1], data.y.shape[1])
-            networks, histories = [], []
             root = _root_seed(self.seed)
-            for m in range(cfg.n_members):
-                s = _member_seed(root, m)
-                net = CurrentNet(net_cfg, seed=s)
-                histories.append(train_network(net, train, val, cfg.train_config(), s, self.progress,
-                                               f"{cfg.name} member {m + 1}/{cfg.n_members}"))
-                networks.append(net)
+            seeds = [_member_seed(root, m) for m in range(cfg.n_members)]
+            networks = [CurrentNet(net_cfg, seed=s) for s in seeds]
+            if len(networks) == 1:
+                histories = [train_network(networks[0], train, val, cfg.train_config(), seeds[0], self.progress,
+                                           f"{cfg.name} member 1/1")]
+            else:  # the members in lockstep, one batched step for all (same weights as one after another)
+                histories = train_ensemble(networks, train, val, cfg.train_config(), seeds, self.progress,
+                                           f"{cfg.name} {cfg.n_members} members")
             self.networks_ = networks
             self.history_ = tuple(histories)
             self.n_train_windows_ = len(train)
