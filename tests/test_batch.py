@@ -364,6 +364,7 @@ def test_cli_batch_on_a_scheduler_address(tmp_path, capsys):
         (["--pairs", "P", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "exclude each other"),
         (["--pairs", "BADCOLS"], "lacks the column(s) ['goal_x_m', 'goal_y_m']"),
         (["--pairs", "P", "--speed", "0"], "--speed must be a number > 0"),
+        (["--pairs", "P", "--max-evaluations", "0"], "--max-evaluations must be a number > 0"),
     ],
 )
 def test_cli_batch_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, capsys, extra, message):

@@ -42,6 +42,9 @@ def add_parser(sub: Any) -> None:
                        help="plan on an existing dask cluster, e.g. tcp://host:8786 (not with --workers > 1)")
     batch.add_argument("--planner", default="lattice", choices=PLANNERS, help="planner name (default lattice)")
     batch.add_argument("--time-limit", type=float, default=1.0, metavar="S", help="OMPL planners: time budget per pair (s)")
+    batch.add_argument("--max-evaluations", type=int, default=None, metavar="N",
+                       help="OMPL planners: stop each pair after N edge-cost evaluations instead of --time-limit; "
+                            "with --seed the rows are then the same on every run and any number of workers")
     batch.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     batch.add_argument("--robot", default="husky", help="robot preset (default husky)")
     batch.add_argument("--speed", type=float, default=0.5, metavar="M/S", help="planning speed (default 0.5 m/s)")
@@ -67,6 +70,8 @@ def _check_flags(args: argparse.Namespace) -> None:
         )
     check_positive("--speed", args.speed)
     check_positive("--time-limit", args.time_limit)
+    if args.max_evaluations is not None:
+        check_positive("--max-evaluations", args.max_evaluations)
 
 
 def _read_pairs(args: argparse.Namespace) -> BatchPairs:
@@ -100,8 +105,9 @@ def run_batch(args: argparse.Namespace) -> int:
                                                      flags=_FLAGS))
         print(f"map: {label}  {tmap.shape[0]} x {tmap.shape[1]} cells of {tmap.cell_size_m:g} m; "
               f"{len(pairs)} pairs; planner {args.planner}", flush=True)
-        result = plan_batch(cost, pairs, planner=args.planner, time_limit_s=args.time_limit, seed=args.seed,
-                            client=client, progress=not args.no_progress)
+        result = plan_batch(cost, pairs, planner=args.planner, seed=args.seed, client=client,
+                            time_limit_s=None if args.max_evaluations is not None else args.time_limit,
+                            max_cost_evaluations=args.max_evaluations, progress=not args.no_progress)
         if client is not None:  # where it ran, as the user named it
             result = dataclasses.replace(result, where=args.scheduler or "local cluster")
     args.out.mkdir(parents=True, exist_ok=True)
