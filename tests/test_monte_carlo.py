@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from energy import Battery, TruthSimulator, ground_preset, robot_preset
+from energy import Battery, PhysicsEnergyModel, TruthSimulator, ground_preset, robot_preset
 from planner import (
     MONTE_CARLO_FORMAT_VERSION,
     EnergyCost,
@@ -280,3 +280,16 @@ def test_workers_open_a_local_cluster_through_the_seam(setup, monkeypatch):
         mc = _mc(setup, n=3, seed=1, workers=2)
     assert calls == [(2, None)] and mc.where == "local cluster" and mc.n_workers == 2
     assert np.array_equal(mc.energy_j, _mc(setup, n=3, seed=1).energy_j)
+
+
+def test_a_ground_the_truth_simulator_cannot_drive_is_refused_before_any_mission():
+    import terrain
+
+    tmap = terrain.flat_map((10, 20), 1.0, ground="mud")
+    cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(robot_preset("husky")), {"mud": ground_preset("sand")}, 0.5)
+    route = plan_route(tmap, (2.5, 2.5), (17.5, 7.5), cost=cost, planner="lattice")
+    mud = {"mud": ground_preset("sand").replace(name="mud")}
+    with pytest.raises(UnknownNameError, match=r"no vibration signature for ground\(s\) \['mud'\]"):
+        simulate_missions_mc(tmap, route, NOMINAL, 3, grounds=mud)
+    with pytest.raises(UnknownNameError, match=r"the map's grounds \['mud'\] have no preset"):
+        simulate_missions_mc(tmap, route, NOMINAL, 3)

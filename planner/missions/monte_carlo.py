@@ -183,6 +183,7 @@ def simulate_missions_mc(
                else check_real("speed_mps", speed_mps, low=0.0, low_inclusive=False))
     setup = MissionSetup(terrain, route, robot, _grounds(terrain, grounds), battery, distributions, nominal,
                          check_real("current_rate_hz", current_rate_hz, low=0.0, low_inclusive=False))
+    TruthSimulator(robot, setup.grounds, current_rate_hz=setup.current_rate_hz)  # what every sample meets, checked once
     client = check_client(client, "missions")
     n_workers = 1 if workers is None else check_int("workers", workers, low=1)
     if client is not None and (n_workers > 1 or scheduler is not None):
