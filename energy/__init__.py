@@ -41,10 +41,14 @@ from .diagnosis import (
     residual_currents_a,
 )
 from .evaluation import (
+    AdaptationResult,
+    AdaptSettings,
     EvaluationResult,
     RunScore,
     ScoreSummary,
+    evaluate_adaptation,
     evaluate_current_models,
+    evaluate_few_shot,
     score_current_model,
 )
 from .excitation import excitation_commands
@@ -208,6 +212,10 @@ __all__ = [
     "PhysicsCurrentModel",
     "PHYSICS_FIT_PARAMETERS",
     "evaluate_current_models",
+    "AdaptSettings",
+    "AdaptationResult",
+    "evaluate_adaptation",
+    "evaluate_few_shot",
     "score_current_model",
     "CURRENT_MODEL_KINDS",
     "new_current_model",

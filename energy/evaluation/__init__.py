@@ -2,9 +2,26 @@
 
 Modules: :mod:`~energy.evaluation.results` (the score records, their summaries and files)
 and :mod:`~energy.evaluation.scoring` (:func:`score_run`, the one per-run scoring,
-:func:`score_current_model` for a model fitted beforehand, :func:`evaluate_current_models`).
+:func:`score_current_model` for a model fitted beforehand, :func:`evaluate_current_models`);
+the ``adapt`` protocol in :mod:`~energy.evaluation.adapt_protocol` (adapt on a held-out run's
+first seconds, score the rest), :mod:`~energy.evaluation.few_shot` (adapt on a ground left out
+of training) and :mod:`~energy.evaluation.adapt_results`; :mod:`~energy.evaluation.fold_runner`
+runs folds here or on a dask cluster.
 """
 
+from .adapt_protocol import DEFAULT_ADAPT_SECONDS, AdaptSettings, adaptation_scores, evaluate_adaptation, schedule_name
+from .adapt_results import (
+    ADAPT_FILES,
+    ADAPT_FORMAT_VERSION,
+    ADAPT_PROTOCOLS,
+    TRIGGER_SCHEDULE,
+    AdaptationResult,
+    AdaptScore,
+    AdaptSummary,
+    check_adapt_dir,
+    summarise_adapt_scores,
+)
+from .few_shot import evaluate_few_shot, few_shot_scores
 from .results import (
     EVALUATION_FILES,
     EVALUATION_FORMAT_VERSION,
@@ -18,7 +35,7 @@ from .results import (
     check_evaluation_dir,
     summarise_scores,
 )
-from .scoring import evaluate_current_models, run_names, score_current_model, score_run
+from .scoring import evaluate_current_models, run_names, score_current_model, score_run, trim_to_overlap
 
 __all__ = [
     "EVALUATION_VARIANTS",
@@ -36,4 +53,21 @@ __all__ = [
     "score_run",
     "score_current_model",
     "evaluate_current_models",
+    "trim_to_overlap",
+    "ADAPT_PROTOCOLS",
+    "ADAPT_FILES",
+    "ADAPT_FORMAT_VERSION",
+    "TRIGGER_SCHEDULE",
+    "DEFAULT_ADAPT_SECONDS",
+    "AdaptScore",
+    "AdaptSummary",
+    "AdaptationResult",
+    "AdaptSettings",
+    "summarise_adapt_scores",
+    "check_adapt_dir",
+    "adaptation_scores",
+    "schedule_name",
+    "evaluate_adaptation",
+    "few_shot_scores",
+    "evaluate_few_shot",
 ]

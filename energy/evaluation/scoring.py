@@ -47,7 +47,7 @@ from .results import (
     summarise_scores,
 )
 
-__all__ = ["run_names", "score_run", "score_current_model", "evaluate_current_models"]
+__all__ = ["run_names", "trim_to_overlap", "score_run", "score_current_model", "evaluate_current_models"]
 
 
 def run_names(logs: Sequence[InteractionLog]) -> list[str]:
@@ -65,7 +65,8 @@ def run_names(logs: Sequence[InteractionLog]) -> list[str]:
     return out
 
 
-def _trim(log: InteractionLog) -> InteractionLog:
+def trim_to_overlap(log: InteractionLog) -> InteractionLog:
+    """``log`` cut to the span covered by both its streams (itself when it already is)."""
     t0, t1 = log.overlap_s()
     if log.time_s[0] >= t0 and log.time_s[-1] <= t1:
         return log
@@ -353,7 +354,7 @@ def evaluate_current_models(
         )
     if len(items) < 2:
         raise DataError(f"leave-one-run-out needs at least 2 runs, got {len(items)}")
-    items = [_trim(log) for log in items]
+    items = [trim_to_overlap(log) for log in items]
     names = run_names(items)
     grounds = list(dict.fromkeys(log.meta.ground_label for log in items))
     skipped: list[str] = []

@@ -1,0 +1,170 @@
+"""Tests of the adapt protocol (energy.evaluation.adapt_protocol, few_shot, adapt_results)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from energy import DataError, InteractionLog, InvalidParameterError, LinearCurrentModel, LogMeta
+from energy.evaluation import (
+    ADAPT_FILES,
+    TRIGGER_SCHEDULE,
+    AdaptationResult,
+    AdaptSettings,
+    adaptation_scores,
+    evaluate_adaptation,
+    evaluate_few_shot,
+)
+from terrain import UnknownNameError
+
+
+def _log(seed: int, ground: str, *, gain: float = 1.0, offset_a: float = 0.0, duration_s: float = 60.0) -> InteractionLog:
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, duration_s, 0.2)
+    v = 0.4 + 0.2 * np.sin(2 * np.pi * t / rng.uniform(5, 9) + rng.uniform(0, 6))
+    w = 0.5 * np.sign(np.sin(2 * np.pi * t / 7.0 + rng.uniform(0, 6)))
+    left = gain * (0.5 + 3.0 * np.abs(v) + 2.0 * np.abs(w)) + offset_a
+    right = gain * (0.8 + 2.0 * np.abs(v) + 1.0 * np.abs(w)) + offset_a
+    ta = np.arange(0.0, t[-1] + 0.005, 0.05)
+    return InteractionLog(t, v, w, left, right, ta, np.full(ta.size, 9.81),
+                          meta=LogMeta(source=f"{ground}/pro_{seed:02d}.csv", ground_label=ground))
+
+
+@pytest.fixture(scope="module")
+def logs():
+    # each run draws more current than the others by its own offset: only adaptation can know it
+    return ([_log(i, "grass", offset_a=0.3 * i) for i in range(3)]
+            + [_log(10 + i, "sand", gain=2.0, offset_a=0.4 * i, duration_s=50.0) for i in range(3)])
+
+
+def _settings(**kw):
+    return AdaptSettings(adapt_seconds=(10.0, 20.0), **kw)
+
+
+@pytest.fixture(scope="module")
+def result(logs):
+    return evaluate_adaptation(logs, LinearCurrentModel(), name="linear", settings=_settings())
+
+
+def test_every_run_side_and_schedule_is_scored(result):
+    assert isinstance(result, AdaptationResult)
+    schedules = {"10 s", "20 s", TRIGGER_SCHEDULE}
+    assert {r.schedule for r in result.runs} == schedules
+    assert len(result.runs) == 6 * 2 * 3
+    assert {(s.ground, s.schedule) for s in result.summary} == {(g, s) for g in ("grass", "sand", "all") for s in schedules}
+    row = result.summary_for("per_ground", "all", "linear", "20 s")
+    assert row.n_values == 12
+    with pytest.raises(UnknownNameError, match="no adaptation summary"):
+        result.summary_for("per_ground", "all", "linear", "30 s")
+
+
+def test_adapting_removes_a_run_offset_the_model_cannot_know(result):
+    for g in ("grass", "sand"):
+        row = result.summary_for("per_ground", g, "linear", "20 s")
+        assert row.unadapted_median_pct > 3.0
+        assert row.adapted_median_pct < 0.5 * row.unadapted_median_pct
+        assert row.adapted_rmse_median_a < row.unadapted_rmse_median_a
+    trig = result.summary_for("per_ground", "all", "linear", TRIGGER_SCHEDULE)
+    assert trig.updates_mean > 0.5 and trig.adapted_median_pct < trig.unadapted_median_pct
+
+
+def test_scores_match_a_direct_adaptation(logs, result):
+    test, train = logs[0], logs[1:3]
+    model = LinearCurrentModel().fit(train)
+    adapted = model.adapt(test.slice(0.0, 20.0))
+    rem = test.time_s >= 20.0
+    pred = adapted.predict(test)[rem, 0]
+    q_true = np.trapezoid(test.current_left_a[rem], test.time_s[rem])
+    q_pred = np.trapezoid(pred, test.time_s[rem])
+    row = next(r for r in result.runs if (r.run, r.schedule, r.side) == ("grass/pro_00", "20 s", "left"))
+    assert row.adapted_whole_pct == pytest.approx(100 * abs(q_pred - q_true) / q_true, rel=1e-6)
+    assert row.scored_s == pytest.approx(test.duration_s - 20.0)
+    base = model.predict(test)
+    head = ~rem
+    gain = np.trapezoid(test.current_left_a[head], test.time_s[head]) / np.trapezoid(base[head, 0], test.time_s[head])
+    q_gain = np.trapezoid(gain * base[rem, 0], test.time_s[rem])
+    assert row.gain_whole_pct == pytest.approx(100 * abs(q_gain - q_true) / q_true, rel=1e-6)
+
+
+def test_trigger_never_updates_a_model_within_the_threshold(logs):
+    exact = [_log(i, "grass") for i in range(2)]
+    model = LinearCurrentModel().fit(exact[:1])
+    scores, skipped = adaptation_scores(model, exact[1], run="r", model_name="m",
+                                        settings=AdaptSettings(adapt_seconds=(20.0,), threshold_pct=5.0))
+    trig = [s for s in scores if s.schedule == TRIGGER_SCHEDULE]
+    assert len(trig) == 2 and all(s.n_updates == 0 for s in trig) and not skipped
+    assert all(s.adapted_whole_pct == pytest.approx(s.unadapted_whole_pct) for s in trig)
+
+
+def test_short_runs_are_skipped_and_said_so(logs):
+    model = LinearCurrentModel().fit(logs[:2])
+    short = _log(30, "grass", duration_s=25.0)
+    scores, skipped = adaptation_scores(model, short, run="grass/short", model_name="m", settings=_settings())
+    assert {s.schedule for s in scores} == {"10 s"}
+    assert len(skipped) == 2 and all("min_remainder_s=10" in s for s in skipped)
+
+
+def test_writes_json_and_markdown(logs, tmp_path):
+    res = evaluate_adaptation(logs[:3], LinearCurrentModel(), name="linear", settings=_settings(trigger=False),
+                              out_dir=tmp_path / "out")
+    data = json.loads((tmp_path / "out" / ADAPT_FILES[0]).read_text())
+    assert data["format"] == "terrawatt-adaptation" and data["settings"]["adapt_seconds"] == [10.0, 20.0]
+    assert len(data["runs"]) == len(res.runs) == 3 * 2 * 2
+    md = (tmp_path / "out" / ADAPT_FILES[1]).read_text()
+    assert "| per_ground | grass | linear | 20 s | 6 |" in md
+
+
+def test_few_shot_adapts_on_one_run_of_a_ground_left_out(logs):
+    res = evaluate_few_shot(logs, LinearCurrentModel(), name="linear", settings=_settings(trigger=False))
+    assert {r.protocol for r in res.runs} == {"few_shot"}
+    # 2 target grounds x 3 adaptation runs x 2 T x 2 other runs x 2 sides
+    assert len(res.runs) == 2 * 3 * 2 * 2 * 2
+    assert all(r.adapt_run != r.run and r.ground == r.adapt_run.split("/")[0] for r in res.runs)
+    sand = res.summary_for("few_shot", "sand", "linear", "20 s")
+    assert sand.unadapted_median_pct > 30.0  # trained on grass only: half the current
+    assert sand.adapted_median_pct < 0.5 * sand.unadapted_median_pct
+    one = evaluate_few_shot(logs, LinearCurrentModel(), settings=_settings(trigger=False), target_grounds=["sand"])
+    assert {r.ground for r in one.runs} == {"sand"}
+
+
+@pytest.mark.parametrize(("kw", "match"), [
+    ({"adapt_seconds": ()}, "adapt_seconds"),
+    ({"adapt_seconds": (0.0,)}, "adapt_seconds"),
+    ({"adapt_seconds": "20"}, "adapt_seconds"),
+    ({"threshold_pct": -1.0}, "threshold_pct"),
+    ({"check_s": 0.0}, "check_s"),
+    ({"min_remainder_s": float("nan")}, "min_remainder_s"),
+    ({"prior_s": 0.0}, "prior_s"),
+    ({"trigger": "yes"}, "trigger"),
+])
+def test_bad_settings(kw, match):
+    with pytest.raises(InvalidParameterError, match=match):
+        AdaptSettings(**kw)
+    with pytest.raises(UnknownNameError, match="method"):
+        AdaptSettings(method="retrain")
+
+
+def test_bad_inputs(logs, tmp_path):
+    with pytest.raises(InvalidParameterError, match="settings must be an AdaptSettings"):
+        evaluate_adaptation(logs, LinearCurrentModel(), settings={"adapt_seconds": [20]})
+    with pytest.raises(InvalidParameterError, match="CurrentModel"):
+        evaluate_adaptation(logs, "linear")
+    with pytest.raises(InvalidParameterError, match="sequence of InteractionLog"):
+        evaluate_adaptation(logs[0], LinearCurrentModel())
+    unlabelled = InteractionLog(logs[0].time_s, logs[0].v_mps, logs[0].omega_radps, logs[0].current_left_a,
+                                logs[0].current_right_a, logs[0].accel_time_s, logs[0].accel_z_mps2)
+    with pytest.raises(DataError, match="ground_label"):
+        evaluate_adaptation([unlabelled, logs[1]], LinearCurrentModel())
+    with pytest.raises(DataError, match="at least 2 runs"):
+        evaluate_adaptation([logs[0], logs[3]], LinearCurrentModel())
+    with pytest.raises(InvalidParameterError, match="client"):
+        evaluate_adaptation(logs, LinearCurrentModel(), client="tcp://nowhere")
+    (tmp_path / "afile").write_text("x")
+    with pytest.raises(InvalidParameterError):
+        evaluate_adaptation(logs, LinearCurrentModel(), out_dir=tmp_path / "afile")
+    with pytest.raises(DataError, match="at least 2 grounds"):
+        evaluate_few_shot(logs[:3], LinearCurrentModel())
+    with pytest.raises(DataError, match="target ground 'mud' has 0 runs"):
+        evaluate_few_shot(logs, LinearCurrentModel(), target_grounds=["mud"])
+    with pytest.raises(InvalidParameterError, match="target_grounds"):
+        evaluate_few_shot(logs, LinearCurrentModel(), target_grounds="sand")
