@@ -97,6 +97,16 @@ def test_bad_bands_are_refused_by_name(band, message):
         EstimatorConfig(band_hz=band)
 
 
+def test_a_band_too_narrow_for_its_bands_is_refused_early(tmp_path, capsys):
+    with pytest.raises(InvalidParameterError, match=r"holds 3 frequency bin\(s\) of 1 Hz.*n_bands=12"):
+        EstimatorConfig(band_hz=(1.0, 3.0))
+    assert EstimatorConfig(band_hz=(1.0, 3.0), n_bands=2).band_hz == (1.0, 3.0)
+    assert EstimatorConfig(band_hz=(1.0, 3.0), local_spectrum=False).band_hz == (1.0, 3.0)  # no bands to fit
+    rc = main(["train", "--data", str(FIXTURES), "--band", "1", "3", "--out", str(tmp_path / "m.zip")])
+    err = capsys.readouterr().err
+    assert rc == 2 and "n_bands=12" in err and "--band" in err and not (tmp_path / "m.zip").exists()
+
+
 def test_the_default_band_is_served_by_common_imus():
     assert EstimatorConfig().band_hz == DEFAULT_BAND_HZ == estimator_preset("default").band_hz
     assert all(band_served(DEFAULT_BAND_HZ[1], rate) for rate in (25.0, 30.0, 50.0, 100.0))

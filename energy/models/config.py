@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -153,6 +154,8 @@ class EstimatorConfig:
         check_choice(f"{own}.spectrum_scaling", self.spectrum_scaling, SPECTRUM_SCALINGS)
         for name in ("n_spectrum_bins", "n_bands", "n_members"):
             check_int(name, getattr(self, name), low=1, owner=own)
+        if self.local_spectrum or self.run_features == "bands":
+            self._check_bands_fit()
         check_real("validation_fraction", self.validation_fraction, low=0.0, high=0.5, owner=own)
         if self.physics_prior is not None and (not isinstance(self.physics_prior, str) or self.physics_prior not in ROBOT_PRESETS):
             raise UnknownNameError(
@@ -171,6 +174,18 @@ class EstimatorConfig:
         object.__setattr__(self, "hidden_sizes", tuple(self.hidden_sizes))
         self.net_config(1, 0, 1)  # validates hidden_sizes and dropout
         self.train_config()  # validates the training settings
+
+    def _check_bands_fit(self) -> None:
+        """``n_bands`` bands of at least one ``1 / spectrum_span_s`` bin fit in ``band_hz``."""
+        res = 1.0 / self.spectrum_span_s
+        first = max(int(round(self.band_hz[0] / res)), 1)
+        top = int(math.floor(self.band_hz[1] / res + 1e-9)) + 1
+        if first + self.n_bands > top:
+            raise InvalidParameterError(
+                f"EstimatorConfig.band_hz={self.band_hz!r} holds {max(top - first, 0)} frequency bin(s) of "
+                f"{res:.4g} Hz (1 / spectrum_span_s), fewer than n_bands={self.n_bands!r}; widen the band "
+                f"(--band), use fewer bands or a longer spectrum_span_s"
+            )
 
     def net_config(self, n_window_inputs: int, n_run_inputs: int, n_outputs: int) -> CurrentNetConfig:
         """The :class:`CurrentNetConfig` for given input/output sizes."""
