@@ -214,3 +214,33 @@ def test_plan_reprojection_flags_are_checked(tmp_path, capsys, extra, message):
     rc = main(["plan", "--map", str(dem), "--start", "1", "1", "--goal", "2", "2", "--planner", "lattice",
                "--out", str(tmp_path / "out"), *extra])
     assert rc == 2 and message in capsys.readouterr().err
+
+
+def test_plan_coarse_to_fine_from_the_command_line(tmp_path, capsys, wall_map):
+    path = wall_map.save(tmp_path / "wall.npz")
+    rc = main(["plan", "--map", str(path), "--start", "5", "5", "--goal", "35", "5", "--coarse-factor", "4",
+               "--out", str(tmp_path / "out")])
+    out = capsys.readouterr().out
+    assert rc == 0 and "coarse-to-fine (x4)" in out
+    data = json.loads((tmp_path / "out" / "route.json").read_text())
+    assert data["planner"] == "coarse-to-fine" and data["coarse_to_fine"]["factor"] == 4
+    wp = np.array(data["routes"]["min_energy"]["waypoints_m"])
+    assert wp[:, 1].max() >= 30.0  # through the gap, which the 4 x coarser map could not see
+    assert data["coarse_to_fine"]["fallback"] in ("wider corridor", "whole map")
+    names = [f["properties"]["name"] for f in json.loads((tmp_path / "out" / "route.geojson").read_text())["features"]]
+    assert names == ["min_energy"] and (tmp_path / "out" / "route.png").is_file()
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--corridor", "5"], "give --coarse-factor F too"),
+        (["--coarse-factor", "1"], "--coarse-factor must be an integer >= 2"),
+        (["--coarse-factor", "4", "--corridor", "-1"], "--corridor must be a number > 0"),
+    ],
+)
+def test_plan_coarse_to_fine_flags_are_checked(tmp_path, capsys, wall_map, extra, message):
+    path = wall_map.save(tmp_path / "wall.npz")
+    rc = main(["plan", "--map", str(path), "--start", "5", "5", "--goal", "35", "5", "--out", str(tmp_path / "o"),
+               *extra])
+    assert rc == 2 and message in capsys.readouterr().err

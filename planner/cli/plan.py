@@ -11,11 +11,11 @@ from typing import Any
 
 import numpy as np
 
-from terrain import UNKNOWN_GROUND, TerrainMap
+from terrain import UNKNOWN_GROUND, InvalidParameterError, TerrainMap
 from terrain.atomic import write_json_atomic
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
 
-from .. import PLANNERS, EnergyCost, Route, plan_route, warm_up_kernels
+from .. import PLANNERS, EnergyCost, Route, plan_coarse_to_fine, plan_route, warm_up_kernels
 from ..plot import RouteLine, plot_routes
 from ..route_geojson import write_geojson
 from .common import (
@@ -28,7 +28,7 @@ from .common import (
     unknown_ground,
 )
 
-__all__ = ["add_parsers", "run_demo", "run_plan_command", "run_plan"]
+__all__ = ["add_parsers", "run_demo", "run_plan_command", "run_plan", "run_coarse_plan"]
 
 _OUTPUTS = ("route.json", "route.geojson", "route.png")
 
@@ -44,6 +44,14 @@ def add_parsers(sub: Any) -> None:
     plan.add_argument("--start", type=float, nargs=2, required=True, metavar=("X", "Y"), help="start (m)")
     plan.add_argument("--goal", type=float, nargs=2, required=True, metavar=("X", "Y"), help="goal (m)")
     _add_plan_options(plan, default_time=2.0)
+    plan.add_argument(
+        "--coarse-factor", type=int, default=None, metavar="F",
+        help="big maps: plan coarse-to-fine (the lattice on a map F times coarser, then the 1-cell lattice in a "
+             "corridor around that route) instead of --planner, without the comparison (which needs the whole "
+             "1-cell lattice: about 10 GB at 4096 x 4096 cells)",
+    )
+    plan.add_argument("--corridor", type=float, default=None, metavar="M",
+                      help="with --coarse-factor: corridor half-width (m; default three coarse cells)")
     plan.set_defaults(run=run_plan_command)
 
 
@@ -88,6 +96,21 @@ def _run(args: argparse.Namespace, tmap: TerrainMap, start: tuple[float, float],
     check_positive("--time-limit", args.time_limit)
     if args.max_evaluations is not None:
         check_positive("--max-evaluations", args.max_evaluations)
+    factor = getattr(args, "coarse_factor", None)
+    corridor = getattr(args, "corridor", None)
+    if corridor is not None and factor is None:
+        raise InvalidParameterError("--corridor applies to coarse-to-fine planning; give --coarse-factor F too")
+    if factor is not None:
+        if factor < 2:
+            raise InvalidParameterError(f"--coarse-factor must be an integer >= 2, got {factor}")
+        if corridor is not None:
+            check_positive("--corridor", corridor)
+        result = run_coarse_plan(
+            tmap, start, goal, factor=factor, corridor_m=corridor, out_dir=args.out, robot=args.robot,
+            speed_mps=args.speed, max_slope_deg=args.max_slope_deg,
+            unknown_ground=unknown_ground(args.unknown_ground, tmap), map_label=label, whole_map=args.whole_map,
+        )
+        return 0 if result["status"] == "exact" else 1
     result = run_plan(
         tmap, start, goal, planner=args.planner, time_limit_s=args.time_limit, max_evaluations=args.max_evaluations,
         seed=args.seed, out_dir=args.out, robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg,
@@ -238,5 +261,62 @@ def run_plan(
         tmap, lines, start, goal, out_dir / "route.png", title=f"terrawatt: minimum-energy route on {map_label}",
         extent="map" if whole_map else "routes", max_slope_rad=slope_rad))
     written += [png_path] if png_path is not None else []
+    print("\nwrote " + ", ".join(str(p) for p in written))
+    return result
+
+
+def run_coarse_plan(
+    tmap: TerrainMap,
+    start: tuple[float, float],
+    goal: tuple[float, float],
+    *,
+    factor: int,
+    corridor_m: float | None,
+    out_dir: Path,
+    robot: str,
+    speed_mps: float,
+    max_slope_deg: float,
+    unknown_ground: str | None,
+    map_label: str,
+    whole_map: bool = False,
+) -> dict[str, Any]:
+    """Plan coarse-to-fine (:func:`planner.plan_coarse_to_fine`), print, write route.json, route.geojson, route.png."""
+    slope_rad = max_slope_rad(max_slope_deg)
+    compile_s = warm_up_kernels()
+    t0 = time.perf_counter()
+    cost = EnergyCost.from_presets(tmap, robot=robot, speed_mps=speed_mps, max_slope_rad=slope_rad,
+                                   unknown_ground=unknown_ground)
+    prep_s = time.perf_counter() - t0
+    plan = plan_coarse_to_fine(cost, start, goal, factor=factor, corridor_m=corridor_m)
+    route = plan.route
+    print(f"map: {map_label}  {tmap.shape[0]} x {tmap.shape[1]} cells of {tmap.cell_size_m:g} m; grounds {tmap.ground_names}")
+    print(f"robot: {robot}, speed {speed_mps:g} m/s, max slope {max_slope_deg:g} deg; map preparation {prep_s:.2f} s")
+    if compile_s > 1.0:
+        print(f"(compiled the edge-cost kernels in {compile_s:.1f} s: first run in this environment; not in the times below)")
+    print(f"start {start} -> goal {goal}; coarse-to-fine, factor {factor}, corridor {plan.corridor_m:g} m "
+          f"({plan.corridor_cells} free cells searched; fallback: {plan.fallback})")
+    print(f"coarse route {plan.coarse_time_s:.2f} s, corridor search {plan.fine_time_s:.2f} s\n")
+    if route.found:
+        _print_table([_route_row(f"coarse-to-fine (x{factor})", route, math.nan)])
+    else:
+        print(f"no route: status {route.status!r}")
+    result = {
+        "map": map_label, "map_crs": tmap.crs, "robot": robot, "speed_mps": speed_mps, "max_slope_deg": max_slope_deg,
+        "start_xy_m": list(start), "goal_xy_m": list(goal), "planner": "coarse-to-fine",
+        "map_preparation_s": prep_s, "kernel_compile_s": compile_s, "status": route.status,
+        "coarse_to_fine": {k: v for k, v in plan.summary().items() if k not in route.summary()},
+        "routes": {"min_energy": {**route.summary(), "waypoints_m": route.waypoints_m.tolist()}} if route.found else {},
+        "coarse_waypoints_m": plan.coarse_waypoints_m.tolist(),
+    }
+    out_dir.mkdir(parents=True, exist_ok=True)
+    written = [write_json_atomic(out_dir / "route.json", result)]
+    lines = []
+    if route.found:
+        written.append(write_geojson({"min_energy": route}, tmap, out_dir / "route.geojson"))
+        lines.append(RouteLine("coarse-to-fine", route.waypoints_m, route.energy_j, colour="#d32f2f"))
+    png = draw_figure(out_dir / "route.png", lambda: plot_routes(
+        tmap, lines, start, goal, out_dir / "route.png", title=f"terrawatt: coarse-to-fine route on {map_label}",
+        extent="map" if whole_map else "routes", max_slope_rad=slope_rad))
+    written += [png] if png is not None else []
     print("\nwrote " + ", ".join(str(p) for p in written))
     return result
