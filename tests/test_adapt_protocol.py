@@ -168,3 +168,52 @@ def test_bad_inputs(logs, tmp_path):
         evaluate_few_shot(logs, LinearCurrentModel(), target_grounds=["mud"])
     with pytest.raises(InvalidParameterError, match="target_grounds"):
         evaluate_few_shot(logs, LinearCurrentModel(), target_grounds="sand")
+
+
+def _write_borealtc(folder, logs_by_ground):
+    for ground, logs in logs_by_ground.items():
+        d = folder / ground.upper()
+        d.mkdir(parents=True)
+        for k, log in enumerate(logs):
+            half = 0.5 * 0.555 * log.omega_radps
+            pro = np.column_stack([log.time_s, log.current_left_a, log.current_right_a, log.v_mps - half, log.v_mps + half])
+            np.savetxt(d / f"pro_{k:02d}.csv", pro, delimiter=",", header="time,curL,curR,velL,velR", comments="")
+            ta = log.accel_time_s
+            imu = np.column_stack([ta, np.zeros((ta.size, 5)), log.accel_z_mps2])
+            np.savetxt(d / f"imu_{k:02d}.csv", imu, delimiter=",", header="time,wx,wy,wz,ax,ay,az", comments="")
+
+
+def test_cli_evaluate_protocol_adapt_and_few_shot(logs, tmp_path, capsys):
+    from planner.cli import main
+
+    data = tmp_path / "logs"
+    _write_borealtc(data, {"grass": logs[:3], "sand": logs[3:]})
+    rc = main(["evaluate", "--data", str(data), "--model", "linear", "--protocol", "adapt", "--adapt-seconds", "20",
+               "--out", str(tmp_path / "out")])
+    assert rc == 0
+    res = json.loads((tmp_path / "out" / "adapt.json").read_text())
+    assert {r["schedule"] for r in res["runs"]} == {"20 s", TRIGGER_SCHEDULE}
+    assert {r["model"] for r in res["runs"]} == {"linear"}
+    printed = capsys.readouterr().out
+    assert "| per_ground | grass | linear | 20 s |" in printed and "adapt.md" in printed
+    rc = main(["evaluate", "--data", str(data), "--model", "linear", "--protocol", "few-shot", "--adapt-seconds", "10",
+               "--out", str(tmp_path / "few")])
+    assert rc == 0
+    few = json.loads((tmp_path / "few" / "adapt.json").read_text())
+    assert {r["protocol"] for r in few["runs"]} == {"few_shot"} and {r["schedule"] for r in few["runs"]} == {"10 s"}
+
+
+@pytest.mark.parametrize(("extra", "match"), [
+    (["--adapt-seconds", "0"], "--adapt-seconds"),
+    (["--adapt-threshold", "-3"], "--adapt-threshold"),
+])
+def test_cli_bad_adapt_options_exit_2(logs, tmp_path, capsys, extra, match):
+    from planner.cli import main
+
+    data = tmp_path / "logs"
+    _write_borealtc(data, {"grass": logs[:2]})
+    rc = main(["evaluate", "--data", str(data), "--model", "linear", "--protocol", "adapt", *extra,
+               "--out", str(tmp_path / "out")])
+    assert rc == 2
+    assert match in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()

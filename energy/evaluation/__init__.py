@@ -9,7 +9,15 @@ of training) and :mod:`~energy.evaluation.adapt_results`; :mod:`~energy.evaluati
 runs folds here or on a dask cluster.
 """
 
-from .adapt_protocol import DEFAULT_ADAPT_SECONDS, AdaptSettings, adaptation_scores, evaluate_adaptation, schedule_name
+from .adapt_protocol import (
+    DEFAULT_ADAPT_SECONDS,
+    AdaptSettings,
+    adaptation_scores,
+    evaluate_adaptation,
+    labelled_logs,
+    named_models,
+    schedule_name,
+)
 from .adapt_results import (
     ADAPT_FILES,
     ADAPT_FORMAT_VERSION,
@@ -67,6 +75,8 @@ __all__ = [
     "check_adapt_dir",
     "adaptation_scores",
     "schedule_name",
+    "labelled_logs",
+    "named_models",
     "evaluate_adaptation",
     "few_shot_scores",
     "evaluate_few_shot",

@@ -14,7 +14,7 @@ so far; it is scored on the remainder after ``trigger_from_s``.
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -37,6 +37,7 @@ __all__ = [
     "adaptation_scores",
     "schedule_name",
     "labelled_logs",
+    "named_models",
     "evaluate_adaptation",
 ]
 
@@ -237,9 +238,28 @@ def _adapt_fold(proto: CurrentModel, train: list[InteractionLog], test: Interact
     return adaptation_scores(model, test, run=run, model_name=model_name, settings=settings)
 
 
+def named_models(model: Any, name: str) -> dict[str, CurrentModel]:
+    """``{name: model}`` for one model, or a mapping of named models, checked.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a CurrentModel nor a non-empty mapping of str to CurrentModel; a bad ``name``.
+    """
+    if isinstance(model, CurrentModel):
+        return {check_text("name", name): model}
+    if not isinstance(model, Mapping) or not model:
+        raise InvalidParameterError(f"model must be a CurrentModel or a non-empty mapping of names to them, got {model!r:.80}")
+    for key, value in model.items():
+        check_text("model name", key)
+        if not isinstance(value, CurrentModel):
+            raise InvalidParameterError(f"model[{key!r}] must be a CurrentModel, got {value!r:.80}")
+    return dict(model)
+
+
 def evaluate_adaptation(
     logs: Sequence[InteractionLog],
-    model: CurrentModel,
+    model: CurrentModel | Mapping[str, CurrentModel],
     *,
     name: str = "model",
     settings: AdaptSettings | None = None,
@@ -257,10 +277,10 @@ def evaluate_adaptation(
     ----------
     logs : sequence of InteractionLog
         Runs with ``meta.ground_label`` set.
-    model : CurrentModel
-        The prototype (not modified; ``clone()`` is fitted per fold).
+    model : CurrentModel or mapping of str to CurrentModel
+        The prototype (not modified; ``clone()`` is fitted per fold), or several by name.
     name : str
-        The model's name in the result.
+        The model's name in the result (one model).
     settings : AdaptSettings, optional
         Schedules, update and scoring settings (defaults: T = 10, 20, 40 s and the trigger).
     progress : bool
@@ -286,9 +306,7 @@ def evaluate_adaptation(
     settings = AdaptSettings() if settings is None else settings
     if not isinstance(settings, AdaptSettings):
         raise InvalidParameterError(f"settings must be an AdaptSettings, got {settings!r:.80}")
-    if not isinstance(model, CurrentModel):
-        raise InvalidParameterError(f"model must be a CurrentModel, got {model!r:.80}")
-    check_text("name", name)
+    models = named_models(model, name)
     items = labelled_logs(logs)
     check_client(client)
     items = [trim_to_overlap(lg) for lg in items]
@@ -300,8 +318,8 @@ def evaluate_adaptation(
         if len(idx) < 2:
             skipped.append(f"ground {g!r} has {len(idx)} run; leave-one-run-out needs 2")
             continue
-        tasks += [(_adapt_fold, (model, [items[j] for j in idx if j != i], items[i], names[i], name, settings))
-                  for i in idx]
+        tasks += [(_adapt_fold, (proto, [items[j] for j in idx if j != i], items[i], names[i], mname, settings))
+                  for i in idx for mname, proto in models.items()]
     if not tasks:
         raise DataError("the adapt protocol needs a ground with at least 2 runs; none has")
     scores: list[AdaptScore] = []

@@ -11,7 +11,7 @@ unknown until driven on.
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -23,7 +23,7 @@ from ..logs import InteractionLog
 from ..metrics import compare_currents
 from ..models.adaptation import AdaptedCurrentModel
 from ..models.base import CurrentModel, log_currents
-from .adapt_protocol import AdaptSettings, labelled_logs, schedule_name
+from .adapt_protocol import AdaptSettings, labelled_logs, named_models, schedule_name
 from .adapt_results import AdaptationResult, AdaptScore, check_adapt_dir, summarise_adapt_scores
 from .fold_runner import check_client, run_tasks
 from .scoring import run_names, trim_to_overlap
@@ -131,7 +131,7 @@ def _few_shot_fold(proto: CurrentModel, train: list[InteractionLog], target: lis
 
 def evaluate_few_shot(
     logs: Sequence[InteractionLog],
-    model: CurrentModel,
+    model: CurrentModel | Mapping[str, CurrentModel],
     *,
     name: str = "model",
     settings: AdaptSettings | None = None,
@@ -146,10 +146,10 @@ def evaluate_few_shot(
     ----------
     logs : sequence of InteractionLog
         Runs with ``meta.ground_label`` set (at least two grounds).
-    model : CurrentModel
-        The prototype (``clone()`` is fitted once per target ground).
+    model : CurrentModel or mapping of str to CurrentModel
+        The prototype (``clone()`` is fitted once per target ground), or several by name.
     name : str
-        The model's name in the result.
+        The model's name in the result (one model).
     settings : AdaptSettings, optional
         ``adapt_seconds``, the update and ``section_s``.
     target_grounds : sequence of str, optional
@@ -174,9 +174,7 @@ def evaluate_few_shot(
     settings = AdaptSettings() if settings is None else settings
     if not isinstance(settings, AdaptSettings):
         raise InvalidParameterError(f"settings must be an AdaptSettings, got {settings!r:.80}")
-    if not isinstance(model, CurrentModel):
-        raise InvalidParameterError(f"model must be a CurrentModel, got {model!r:.80}")
-    check_text("name", name)
+    models = named_models(model, name)
     items = [trim_to_overlap(lg) for lg in labelled_logs(logs)]
     check_client(client)
     names = run_names(items)
@@ -200,7 +198,8 @@ def evaluate_few_shot(
     for g in targets:
         idx = [i for i, lg in enumerate(items) if str(lg.meta.ground_label) == g]
         train = [lg for lg in items if str(lg.meta.ground_label) != g]
-        tasks.append((_few_shot_fold, (model, train, [items[i] for i in idx], [names[i] for i in idx], name, settings)))
+        tasks += [(_few_shot_fold, (proto, train, [items[i] for i in idx], [names[i] for i in idx], mname, settings))
+                  for mname, proto in models.items()]
     scores: list[AdaptScore] = []
     skipped: list[str] = []
     for rows, notes in run_tasks(tasks, client=client, progress=progress, description="few-shot grounds"):

@@ -20,6 +20,7 @@ from ..dask_client import dask_client
 from .band import LEARNED_KINDS, add_band_option, band_from_args
 from .common import check_outputs, draw_figure
 from .data import add_data_options, logs_from_args
+from .evaluate_adapt import ADAPT_OUTPUTS, adapt_settings_from_args, add_adapt_options, run_adapt_protocol
 
 __all__ = ["add_parser", "run_evaluate"]
 
@@ -36,8 +37,8 @@ def add_parser(sub: Any) -> None:
     evaluate.add_argument("--grounds", nargs="+", metavar="NAME",
                           help="ground folders (or the logs' ground labels) to use (default all)")
     evaluate.add_argument(
-        "--model", nargs="+", default=list(CURRENT_MODEL_KINDS), choices=list(CURRENT_MODEL_KINDS), dest="models",
-        help="models to evaluate (default all)",
+        "--model", nargs="+", default=None, choices=list(CURRENT_MODEL_KINDS), dest="models",
+        help="models to evaluate (default all; the estimator with --protocol adapt or few-shot)",
     )
     evaluate.add_argument(
         "--variants", nargs="+", default=["per_ground", "ground_agnostic"],
@@ -54,6 +55,7 @@ def add_parser(sub: Any) -> None:
         help="run the folds on an existing dask cluster, e.g. tcp://host:8786 (not with --workers > 1)",
     )
     add_band_option(evaluate)
+    add_adapt_options(evaluate)
     evaluate.set_defaults(run=run_evaluate)
 
 
@@ -72,12 +74,15 @@ def run_evaluate(args: argparse.Namespace) -> int:
             f"--workers {args.workers!r} and --scheduler {args.scheduler!r} exclude each other: "
             "give --workers N for a local cluster or --scheduler ADDRESS for an existing one"
         )
+    if args.models is None:
+        args.models = list(CURRENT_MODEL_KINDS) if args.protocol == "loo" else ["estimator"]
+    settings = adapt_settings_from_args(args) if args.protocol != "loo" else None
     band_hz = band_from_args(args)
     if band_hz is not None and not set(args.models) & set(LEARNED_KINDS):
         raise InvalidParameterError(
             f"--band applies to the estimator and paper models only, got --model {' '.join(args.models)}"
         )
-    check_outputs(args.out, _OUTPUTS)
+    check_outputs(args.out, _OUTPUTS if settings is None else ADAPT_OUTPUTS)
     with contextlib.ExitStack() as stack:
         client, workers = None, "1 worker (serial)"
         if args.workers > 1 or args.scheduler is not None:  # before reading: a missing extra or scheduler fails fast
@@ -91,6 +96,12 @@ def run_evaluate(args: argparse.Namespace) -> int:
         models = {name: new_current_model(name, seed=args.seed, band_hz=band_hz if name in LEARNED_KINDS else None)
                   for name in args.models}
         t0 = time.perf_counter()
+        if settings is not None:  # --protocol adapt / few-shot
+            adapted = run_adapt_protocol(args, logs, models, client, settings, args.out)
+            print(adapted.to_markdown())
+            print(f"\n{len(logs)} runs, {len(models)} models, {time.perf_counter() - t0:.1f} s on {workers}; "
+                  f"wrote {', '.join(str(args.out / f) for f in ADAPT_OUTPUTS)}")
+            return 0
         result = evaluate_current_models(logs, models, variants=args.variants, progress=True, client=client)
         elapsed = time.perf_counter() - t0
     args.out.mkdir(parents=True, exist_ok=True)
