@@ -373,7 +373,9 @@ def log_battery_power_w(
       little faster, so this slightly underestimates). Negative side power counts times
       ``robot.regen_efficiency``, as in the physics model.
     - ``"battery"`` (e.g. Jackal's bridge feedback): battery-side bridge currents; the drive
-      power is ``battery_voltage_v * (I_left + I_right)``.
+      power is ``battery_voltage_v * (I_left + I_right)``, with the log's measured
+      ``battery_voltage_v`` where it has one (e.g. read from a status message), else the
+      robot's nominal voltage.
 
     With ``electronics`` the robot's sensor power (``sensor_power_w`` plus
     ``sensor_power_per_mps_w * |v|``) and control-board power (standby / start-up / stable,
@@ -413,9 +415,11 @@ def log_battery_power_w(
     if not isinstance(robot, RobotParams):
         raise InvalidParameterError(f"robot must be a RobotParams, got {type(robot).__name__!r}")
     check_choice("current_convention", current_convention, CURRENT_CONVENTIONS)
+    log.require_currents("log_battery_power_w")
     currents = np.column_stack([log.current_left_a, log.current_right_a])  # (N, 2) [left, right]
     if current_convention == "battery":
-        drive = robot.battery_voltage_v * currents.sum(axis=1)
+        volts = robot.battery_voltage_v if log.battery_voltage_v is None else log.battery_voltage_v
+        drive = volts * currents.sum(axis=1)
     else:
         mo = robot.motor
         half = robot.track_width_multiplier * robot.track_width_m / 2.0

@@ -36,9 +36,10 @@ class RunPrediction:
     charge_measured_left_mah, charge_measured_right_mah : float
         Measured charge per side (mAh); NaN for a log without currents.
     energy_predicted_wh : float
-        Predicted battery energy, the integral of ``battery_voltage_v * (I_left + I_right)``
-        (Wh; battery-side currents, as a status message's driver currents); NaN for a log
-        without battery voltage.
+        The integral of the log's ``battery_voltage_v * (I_left + I_right)`` over the
+        predicted currents (Wh): the battery energy when the currents are battery-side, as
+        :func:`~energy.log_battery_power_w` with ``current_convention="battery"`` and no
+        electronics; NaN for a log without battery voltage.
     has_currents : bool
     """
 

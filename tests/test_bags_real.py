@@ -216,3 +216,16 @@ def test_a_slow_status_message_beside_fast_odometry_on_the_odometry_clock(tmp_pa
     np.testing.assert_array_equal(via_layouts.time_s, on_odom.time_s)
     with pytest.raises(UnknownNameError, match="drive_clock"):
         read_rosbag(tmp_path / "slow.bag", **HUSKY, drive_clock="imu")
+
+
+def test_the_battery_power_of_a_log_uses_its_measured_voltage(bags):
+    from energy import log_battery_power_w, robot_preset
+
+    husky = read_rosbag(bags["husky"][0], **HUSKY)
+    robot = robot_preset("husky")
+    power = log_battery_power_w(husky, robot, current_convention="battery", electronics=False)
+    np.testing.assert_allclose(power, husky.battery_voltage_v * (husky.current_left_a + husky.current_right_a))
+    assert not np.allclose(power, robot.battery_voltage_v * (husky.current_left_a + husky.current_right_a))
+    jackal = read_rosbag(bags["jackal"][0], "/odometry/filtered")
+    with pytest.raises(DataError, match="log_battery_power_w needs measured drive currents"):
+        log_battery_power_w(jackal, robot, current_convention="battery")
