@@ -210,3 +210,16 @@ def test_bad_models_and_logs(base):
         adapt_current_model(base, [])
     with pytest.raises(InvalidParameterError, match="InteractionLog"):
         base.adapt("run.csv")
+
+
+def test_the_adaptive_loop_can_adapt_instead_of_refitting(base):
+    from planner import adapted_model, validation_error
+
+    run = _on_base(base, _log(18), offset_a=0.8)
+    drive, held = run.slice(0.0, 30.0), run.slice(30.0, 60.0)
+    upd = adapted_model(base, [drive])
+    assert upd is not None and validation_error(upd, [held]) < 0.5 * validation_error(base, [held])
+    assert adapted_model(base, [run.slice(0.0, 2.0)]) is None  # too short: keep the serving model
+    assert adapted_model(LinearCurrentModel(), [drive]) is None  # not fitted: nothing to adapt
+    with pytest.raises(UnknownNameError):
+        adapted_model(base, [drive], method="retrain")

@@ -17,7 +17,7 @@ from .monte_carlo_sampling import MissionDistributions, MissionSample
 from .results import MISSION_FORMAT_VERSION, MISSION_STATUSES, MissionResult
 from .settings import UPDATE_SCOPES, AdaptiveSettings
 from .simulate import simulate_mission
-from .updates import validation_error
+from .updates import adapted_model, validation_error
 
 __all__ = [
     "simulate_mission",
@@ -28,6 +28,7 @@ __all__ = [
     "fit_prior_model",
     "excitation_manoeuvre",
     "validation_error",
+    "adapted_model",
     "AdaptiveSettings",
     "AdaptiveResult",
     "LegRecord",

@@ -1,4 +1,4 @@
-"""Per-cell comparison of a driven leg and the update decisions of the adaptive loop (reuse or validate)."""
+"""Per-cell comparison of a driven leg and the update decisions of the adaptive loop (reuse, adapt or validate)."""
 
 from __future__ import annotations
 
@@ -6,12 +6,12 @@ from typing import Any
 
 import numpy as np
 
-from energy import InteractionLog
+from energy import CurrentModel, DataError, InteractionLog
 from terrain import CellModelRegistry, InvalidParameterError
 
 from ..learned_cost import predict_currents
 
-__all__ = ["validation_error", "predicted_currents", "best_other_model", "charge_error"]
+__all__ = ["validation_error", "predicted_currents", "best_other_model", "charge_error", "adapted_model"]
 
 
 def validation_error(model: Any, logs: list[InteractionLog]) -> float:
@@ -74,3 +74,26 @@ def charge_error(predicted_a: np.ndarray, measured_a: np.ndarray, dt_s: np.ndarr
     q_meas = float(np.sum(np.abs(measured_a[sel]).sum(axis=1) * dt_s[sel]))
     q_pred = float(np.sum(np.abs(predicted_a[sel]).sum(axis=1) * dt_s[sel]))
     return abs(q_pred - q_meas) / q_meas
+
+
+def adapted_model(model: Any, logs: list[InteractionLog], **options: Any) -> CurrentModel | None:
+    """``model`` updated in-run on ``logs`` (:meth:`energy.CurrentModel.adapt`: seconds, not a refit), or None.
+
+    The update the loop can try before it refits from scratch: the serving model plus a
+    small per-side correction fitted on the leg or the excitation just driven, to be
+    validated like a new model (:func:`validation_error` on held-back data). ``model``
+    itself is never changed. None when ``model`` is not a fitted current model or the logs
+    are too short for the update (``options``: ``method``, ``prior_s``, ``min_seconds``...
+    of :class:`energy.AdaptedCurrentModel`).
+
+    Raises
+    ------
+    InvalidParameterError, UnknownNameError
+        Bad ``options`` or ``logs``.
+    """
+    if not isinstance(model, CurrentModel) or not model.is_fitted:
+        return None
+    try:
+        return model.adapt(logs, **options)
+    except DataError:  # too little data for an update: keep the model as it is
+        return None
