@@ -85,7 +85,7 @@ def _folds(logs: list) -> list[tuple[int, list[int]]]:
 def _local_client(workers: int):  # noqa: ANN202
     from distributed import Client, LocalCluster
 
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0")
     return cluster, Client(cluster)
 
 

@@ -217,3 +217,10 @@ def test_cli_bad_adapt_options_exit_2(logs, tmp_path, capsys, extra, match):
     assert rc == 2
     assert match in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_folds_on_a_dask_client_give_the_serial_scores(logs, result):
+    distributed = pytest.importorskip("distributed", reason="the client path needs the distributed extra")
+    with distributed.Client(processes=False, n_workers=1, threads_per_worker=1, dashboard_address=":0") as client:
+        on_cluster = evaluate_adaptation(logs, LinearCurrentModel(), name="linear", settings=_settings(), client=client)
+    assert on_cluster.runs == result.runs
