@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_int, check_real, check_seed, fmt_number
+from terrain.checks import check_bool, check_int, check_real, check_seed, fmt_number
 from terrain.errors import DataError, InvalidParameterError, NotFittedError
 
 from ..logs import InteractionLog
@@ -16,6 +16,7 @@ from .corrected import CorrectedCurrentModel
 from .effect_base import Effect
 from .effects import LEARNED_EFFECT, NOT_IDENTIFIABLE_FROM_CURRENT, effect, resolve_effects
 from .fit import (
+    DiagnosisData,
     SetScore,
     bootstrap_gain_interval_pct,
     bootstrap_shrink_interval_pct,
@@ -28,7 +29,8 @@ from .model_currents import physics_basis
 from .regimes import check_terrain
 from .residuals import GapSummary, gap_summary
 from .result import Diagnosis, EffectScore, WaterfallStep
-from .split import make_split
+from .runner import SetRunner, check_client
+from .split import Split, make_split
 
 __all__ = ["SIGNIFICANT_SHRINK_PCT", "diagnose"]
 
@@ -156,7 +158,8 @@ def _verdict(before: GapSummary, after: GapSummary, ranking: Sequence[EffectScor
 
 def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog], *, terrain: Any = None,
              effects: Sequence[Any] | None = None, split: str = "runs", n_blocks: int = 5, seed: int | None = 0,
-             section_s: float = 8.0, n_bootstrap: int = 200, robot: Any = None) -> Diagnosis:
+             section_s: float = 8.0, n_bootstrap: int = 200, robot: Any = None, client: Any = None,
+             progress: bool = False) -> Diagnosis:
     """Diagnose the gap between a current model and logged currents.
 
     Every candidate effect (the catalogue, or ``effects``) that the model lacks is fitted on
@@ -189,6 +192,11 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
         Bootstrap resamples (>= 1).
     robot : str or RobotParams, optional
         Robot of the reference physics for a model that is not a physics model.
+    client : distributed.Client, optional
+        Score the candidate sets as tasks on this dask client (the data go to each worker
+        once); the result equals the serial one.
+    progress : bool
+        Show a progress bar per batch of candidate sets.
 
     Returns
     -------
@@ -197,7 +205,10 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
     Raises
     ------
     InvalidParameterError
-        Not a CurrentModel, bad logs, bad numbers, an effect that is neither a name nor an Effect.
+        Not a CurrentModel, bad logs, bad numbers, an effect that is neither a name nor an
+        Effect, a ``client`` that is not a ``distributed.Client``.
+    OptionalDependencyError
+        A ``client`` without dask.distributed installed.
     NotFittedError
         An unfitted model.
     UnknownNameError
@@ -210,6 +221,8 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
     seed = check_seed(seed)
     section_s = check_real("section_s", section_s, low=0.0, low_inclusive=False)
     n_bootstrap = check_int("n_bootstrap", n_bootstrap, low=1)
+    progress = check_bool("progress", progress)
+    check_client(client)
     terrain = check_terrain(terrain)
     _check_currents(items)
     sp = make_split(items, split, n_blocks)
@@ -218,8 +231,21 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
     basis = physics_basis(model, robot)
     data = prepare_data(model, items, usable + ([learned] if learned is not None else []), basis)
 
+    runner = SetRunner(data, sp, client=client, progress=progress)
+    try:
+        return _select(model, items, predictions, terrain, robot, usable, learned, skipped, sp, data, runner,
+                       section_s, n_bootstrap, seed)
+    finally:
+        runner.close()
+
+
+def _select(model: CurrentModel, items: list[InteractionLog], predictions: list[np.ndarray], terrain: Any,
+            robot: Any, usable: list[Effect], learned: Effect | None, skipped: dict[str, str], sp: Split,
+            data: DiagnosisData, runner: SetRunner, section_s: float, n_bootstrap: int,
+            seed: int | None) -> Diagnosis:
+    """Rank, add greedily, build the waterfall, the verdict and the corrected model."""
     none = score_effect_set([], data, sp)
-    alone = {e.name: score_effect_set([e], data, sp) for e in usable}
+    alone = dict(zip((e.name for e in usable), runner.score([[e] for e in usable], "candidates alone")))
     chosen: list[Effect] = []
     sets = [none]
     scores: dict[str, EffectScore] = {}
@@ -227,8 +253,9 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
     trials = dict(alone)
     while remaining:
         # every remaining candidate refitted jointly with the chosen ones: the ranking is conditional
-        trials = {e.name: (alone[e.name] if not chosen else score_effect_set(chosen + [e], data, sp))
-                  for e in remaining}
+        trials = (dict(alone) if not chosen else dict(zip(
+            (e.name for e in remaining),
+            runner.score([chosen + [e] for e in remaining], f"candidates added to {len(chosen)} chosen"))))
         eligible = [e for e in remaining if not e.negligible(trials[e.name].median_values()[-1])]
         if not eligible:
             break

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 import warnings
 from pathlib import Path
@@ -24,6 +25,7 @@ from energy.diagnosis import FIGURES
 from terrain import FigureWarning, InvalidParameterError, UnknownNameError
 from terrain.checks import check_seed, fmt_number
 
+from ..dask_client import client_worker_count, dask_client
 from .common import add_map_options, check_outputs, read_map_file
 from .data import add_data_options, logs_from_args
 
@@ -57,7 +59,12 @@ def add_parser(sub: Any) -> None:
                    help="the map the logs drove on (slope effect, grade and map localisation, the map figure)")
     add_map_options(p)
     p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (and of the estimator's training)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar while training the estimator")
+    p.add_argument("--workers", type=int, default=1, metavar="N",
+                   help="score the candidate effects on a local dask cluster of N worker processes (default 1: here)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="score the candidate effects on an existing dask cluster, e.g. tcp://host:8786 "
+                   "(not with --workers > 1)")
+    p.add_argument("--quiet", action="store_true", help="no progress bars (estimator training, effect scoring)")
     p.set_defaults(run=run_diagnose)
 
 
@@ -90,6 +97,12 @@ def _check_flags(args: argparse.Namespace) -> None:
         check_seed(args.seed)
     except InvalidParameterError as exc:
         raise InvalidParameterError(f"--seed: {exc}") from None
+    if args.workers < 1:
+        raise InvalidParameterError(f"--workers must be a positive number of processes, got {args.workers!r}")
+    if args.scheduler is not None and args.workers > 1:
+        raise InvalidParameterError(f"--workers {args.workers!r} and --scheduler {args.scheduler!r} exclude each "
+                                    "other: give --workers N for a local cluster or --scheduler ADDRESS for an "
+                                    "existing one")
 
 
 def _model(args: argparse.Namespace, logs: list[InteractionLog]) -> tuple[Any, str]:
@@ -134,8 +147,14 @@ def run_diagnose(args: argparse.Namespace) -> int:
     model, origin = _model(args, logs)
     print(origin, flush=True)
     robot = args.robot if args.model != "physics" else None
-    diagnosis = diagnose(model, logs, terrain=terrain, effects=args.effects, split=args.split, seed=args.seed,
-                         robot=robot)
+    with contextlib.ExitStack() as stack:
+        client = None
+        if args.workers > 1 or args.scheduler is not None:
+            client = stack.enter_context(dask_client(args.workers, args.scheduler, quiet=not args.verbose,
+                                                     flags=("--workers", "--scheduler")))
+            print(f"scoring effects on {client_worker_count(client)} dask workers", flush=True)
+        diagnosis = diagnose(model, logs, terrain=terrain, effects=args.effects, split=args.split, seed=args.seed,
+                             robot=robot, client=client, progress=not args.quiet)
     args.out.mkdir(parents=True, exist_ok=True)
     written = [diagnosis.write_json(args.out / "diagnosis.json"), diagnosis.write_markdown(args.out / "diagnosis.md"),
                diagnosis.corrected_model.save(args.out / "corrected_model.zip")]

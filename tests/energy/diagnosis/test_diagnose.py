@@ -155,3 +155,27 @@ def test_a_small_effect_beside_a_dominant_one_ranks_second():
     # what the chosen pair explains is the sum of the added shrinks, and the waterfall agrees
     assert d.waterfall[2].shrink_pct == pytest.approx(first.added_pct + second.added_pct)
     assert any(s.startswith("Then inertia") and "further" in s for s in d.verdict)
+
+
+def test_on_a_dask_client_equals_serial(turning):
+    distributed = pytest.importorskip("distributed", reason="dask.distributed (the 'distributed' extra) is not installed")
+    logs, model, serial = turning
+    cands = CANDIDATES + [NoiseEffect()]
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0") as cl, \
+            distributed.Client(cl) as client:
+        d = diagnose(model, logs, terrain=scenario("turning_resistance").terrain, effects=cands, n_bootstrap=50,
+                     client=client, progress=True)
+    assert [s.name for s in d.ranking] == [s.name for s in serial.ranking]
+    assert d.chosen == serial.chosen
+    for a, b in zip(d.ranking, serial.ranking):
+        assert a.added_pct == pytest.approx(b.added_pct, abs=1e-9)
+        assert a.parameters == pytest.approx(b.parameters, abs=1e-9)
+    assert d.after.rmse_a == pytest.approx(serial.after.rmse_a, abs=1e-12)
+
+
+def test_a_client_that_is_not_one(turning):
+    logs, model, _ = turning
+    with pytest.raises(InvalidParameterError, match="client must be None"):
+        diagnose(model, logs, effects=CANDIDATES, client="tcp://localhost:8786")
+    with pytest.raises(InvalidParameterError, match="progress"):
+        diagnose(model, logs, effects=CANDIDATES, progress="yes")

@@ -40,7 +40,7 @@ def _run(capsys, *argv):
 
 def test_physics_without_an_effect_writes_every_file(data, tmp_path, capsys):
     rc, out, err = _run(capsys, "--model", "physics", "--without", "turning_resistance", "--ground", "coated_wood",
-                        "--data", data / "logs", "--map", data / "map.npz", "--out", tmp_path / "out", "--seed", 1)
+                        "--data", data / "logs", "--map", data / "map.npz", "--out", tmp_path / "out", "--seed", 1, "--quiet")
     assert rc == 0, err
     files = {p.name for p in (tmp_path / "out").iterdir()}
     assert files == {"diagnosis.json", "diagnosis.md", "corrected_model.zip", *FIGURES}
@@ -52,7 +52,7 @@ def test_physics_without_an_effect_writes_every_file(data, tmp_path, capsys):
     assert "charge err %" in out and "as given" in out  # ... and the waterfall as a table
     corrected = load_current_model(tmp_path / "out" / "corrected_model.zip")
     assert type(corrected).__name__ == "CorrectedCurrentModel"
-    assert err == ""
+    assert err == ""  # --quiet: no progress bars
 
 
 def test_a_saved_model_on_one_csv_file_without_a_map_skips_the_map_figure(data, tmp_path, capsys):
@@ -73,6 +73,8 @@ def test_a_saved_model_on_one_csv_file_without_a_map_skips_the_map_figure(data, 
     (["--model", "estimator", "--without", "inertia"], "--without applies to --model physics only"),
     (["--model", "no_such_model.zip"], "--model must be 'physics', 'estimator' or a model file"),
     (["--model", "physics", "--seed", "-1"], "--seed"),
+    (["--model", "physics", "--workers", "0"], "--workers must be a positive number"),
+    (["--model", "physics", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "exclude each other"),
 ])
 def test_bad_flags_exit_2_naming_the_flag(data, tmp_path, capsys, extra, message):
     rc, out, err = _run(capsys, *extra, "--data", data / "logs", "--out", tmp_path / "out")
