@@ -89,14 +89,14 @@ def _local_client(workers: int):  # noqa: ANN202
     return cluster, Client(cluster)
 
 
-def speed(logs: list, *, quick: bool, workers: int, seed: int) -> list[dict[str, Any]]:
+def speed(logs: list, *, quick: bool, workers: int, seed: int, skip_default_threads: bool = False) -> list[dict[str, Any]]:
     """Wall time of the whole leave-one-run-out per ground, per variant."""
     folds = _folds(logs)
     variants = [("one after another, default threads", None, True, 1),
                 ("one after another, 1 thread", 1, True, 1),
                 ("lockstep ensemble, 1 thread", 1, False, 1),
                 (f"lockstep ensemble, {workers} dask workers x 1 thread", 1, False, workers)]
-    if quick:
+    if quick or skip_default_threads:
         variants = variants[1:]
     rows = []
     for name, threads, sequential, n_workers in variants:
@@ -174,6 +174,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--parts", nargs="+", default=["speed", "adapt"], choices=["speed", "adapt"])
     parser.add_argument("--workers", type=int, default=2, help="dask worker processes (one thread each)")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--skip-default-threads", action="store_true",
+                        help="leave out the slowest speed variant (torch's default thread count)")
     parser.add_argument("--data", type=Path, default=DATA)
     args = parser.parse_args(argv)
     if not args.data.is_dir():
@@ -185,7 +187,8 @@ def main(argv: list[str] | None = None) -> int:
                               "runs": len(logs), "quick": args.quick, "targets_at_20_s": TARGETS}
     if "speed" in args.parts:
         print(f"speed: leave-one-run-out per ground of the default estimator, {len(logs)} runs", flush=True)
-        rows = speed(logs, quick=args.quick, workers=args.workers, seed=args.seed)
+        rows = speed(logs, quick=args.quick, workers=args.workers, seed=args.seed,
+                     skip_default_threads=args.skip_default_threads)
         report["speed"] = rows
         print("\n| variant | folds | wall s | sum of folds s | speed-up |\n|---|---:|---:|---:|---:|")
         for r in rows:
