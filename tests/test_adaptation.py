@@ -208,8 +208,10 @@ def test_bad_models_and_logs(base):
         adapt_current_model("linear", head)
     with pytest.raises(InvalidParameterError, match="log_prefix"):
         adapt_current_model(base, [])
-    with pytest.raises(InvalidParameterError, match="InteractionLog"):
+    with pytest.raises(InvalidParameterError, match="log_prefix"):
         base.adapt("run.csv")
+    with pytest.raises(InvalidParameterError, match=r"unknown adaptation option\(s\) \['methd'\]"):
+        base.adapt(head, methd="gain")
 
 
 def test_the_adaptive_loop_can_adapt_instead_of_refitting(base):

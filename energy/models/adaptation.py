@@ -121,6 +121,22 @@ class AdaptedCurrentModel(CurrentModel):
         self.turn_scale_radps = turn_scale_radps
         self.min_seconds = min_seconds
 
+    @classmethod
+    def adapting(cls, model: CurrentModel, log_prefix: InteractionLog | Sequence[InteractionLog],
+                 **options: Any) -> AdaptedCurrentModel:
+        """``cls(model, **options).fit(log_prefix)`` with the option names checked (what ``model.adapt`` calls).
+
+        Raises
+        ------
+        InvalidParameterError
+            An option that is not a parameter of this class (the message lists them), or
+            ``log_prefix`` is not logs; and as :meth:`fit`.
+        """
+        unknown = sorted(set(options) - set(cls._param_names[1:]))
+        if unknown:
+            raise InvalidParameterError(f"unknown adaptation option(s) {unknown!r}; expected names from {list(cls._param_names[1:])!r}")
+        return cls(model, **options).fit(check_logs(log_prefix, "log_prefix"))
+
     # -------------------------------------------------------------- validation
     def _check_params(self) -> CurrentModel:
         if not isinstance(self.base, CurrentModel) or not self.base.is_fitted:
@@ -274,5 +290,5 @@ def adapt_current_model(model: CurrentModel, log_prefix: InteractionLog | Sequen
     """
     if not isinstance(model, CurrentModel):
         raise InvalidParameterError(f"model must be a fitted CurrentModel, got {model!r:.80}")
-    logs = check_logs(log_prefix, "log_prefix")
-    return AdaptedCurrentModel(model, method, prior_s, turn_scale_radps, min_seconds).fit(logs)
+    return AdaptedCurrentModel.adapting(model, log_prefix, method=method, prior_s=prior_s,
+                                        turn_scale_radps=turn_scale_radps, min_seconds=min_seconds)

@@ -393,7 +393,7 @@ class CurrentModel:
 
     def adapt(self, log_prefix: InteractionLog | Sequence[InteractionLog], **options: Any) -> CurrentModel:
         """A new model updated on a short stretch of new data; this one is unchanged (see ``AdaptedCurrentModel``)."""
-        return CurrentModel._registry["AdaptedCurrentModel"](self, **options).fit(log_prefix)
+        return CurrentModel._registry["AdaptedCurrentModel"].adapting(self, log_prefix, **options)
 
     def _fit(self, logs: list[InteractionLog]) -> None:  # pragma: no cover - abstract
         raise NotImplementedError
