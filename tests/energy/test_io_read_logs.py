@@ -15,7 +15,7 @@ from energy.io import LOG_SUFFIXES
 from planner.cli import main
 from terrain import DataError, InvalidParameterError, UnknownNameError
 
-FIXTURES = Path(__file__).resolve().parent / "fixtures" / "borealtc"
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"
 ODOM = BagTopics(cmd_vel_topic="/odometry/filtered")
 HUSKY = BagTopics(cmd_vel_topic="/odometry/filtered", current_topics=("/status",),
                   current_fields=("left_driver_current", "right_driver_current"), voltage_field="battery_voltage")

@@ -25,7 +25,7 @@ from energy import (
 )
 from terrain import DataError, InvalidParameterError, UnitError, UnknownNameError
 
-FIXTURES = Path(__file__).resolve().parent / "fixtures" / "borealtc"
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"
 HUSKY = dict(cmd_vel_topic="/odometry/filtered", current_topics="/status",
              current_fields=("left_driver_current", "right_driver_current"), voltage_field="battery_voltage")
 

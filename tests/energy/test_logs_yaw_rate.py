@@ -12,7 +12,7 @@ from robot_bags import requires_rosbags, write_robot_bag
 from energy import InteractionLog, LogMeta, read_borealtc, read_borealtc_run, read_csv_log, read_rosbag, write_csv_log
 from terrain import DataError, DataRepairWarning, InvalidParameterError, UnitError
 
-FIXTURES = Path(__file__).resolve().parent / "fixtures" / "borealtc"
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"
 
 
 def gyro_log(n: int = 21, m: int = 201, **kw) -> InteractionLog:
