@@ -73,7 +73,7 @@ def warm_up_reachability() -> float:
     """Compile (or load from numba's cache) the reachability kernels: both variants of the stride-1
     move kernel and the Dijkstra, forward and reversed; returns the seconds spent.
 
-    :func:`planner.warm_up_kernels` does not cover them; call this too before timing reachability.
+    :func:`planner.warm_up_kernels` calls it.
     """
     t0 = time.perf_counter()
     tmap = TerrainMap(np.zeros((4, 4)), 1.0)

@@ -11,6 +11,7 @@ from terrain import TerrainMap
 from .edge_cost import EnergyCost
 from .kernels import graph, point_free, walk
 from .lattice import Lattice
+from .reachability import warm_up_reachability
 from .refine import relax_path, string_pull
 
 __all__ = ["warm_up_kernels"]
@@ -54,4 +55,5 @@ def warm_up_kernels() -> float:
     path = Lattice.for_cost(cost, 1).shortest_path((0.5, 0.5), (3.5, 3.5), weight="length")
     cost.with_tables(2.0 * cost.grade_table_j_per_m, cost.turn_table_j)  # incremental lattice reweighting
     string_pull(cost, np.vstack([path.waypoints_m, [[0.5, 3.5]]]))
+    warm_up_reachability()
     return time.perf_counter() - t0
