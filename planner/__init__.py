@@ -1,6 +1,7 @@
 """planner — where to drive: edge costs, OMPL and lattice planners, routes, missions, CLI."""
 
 from energy import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, drive_profile
+from terrain.dask_client import dask_client
 from terrain.errors import (
     BlockedPositionError,
     DataError,
@@ -27,7 +28,6 @@ from .batch import plan_batch
 from .batch_pairs import BatchPairs, read_pairs_csv, read_sites_csv
 from .batch_result import BATCH_FORMAT_VERSION, BATCH_STATUSES, BatchResult, BatchRow
 from .coarse import COARSE_FALLBACKS, CoarseToFine, downsample_cost, plan_coarse_to_fine
-from .dask_client import dask_client
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
 from .kernels import CostArrays
 from .lattice import Lattice, LatticePath

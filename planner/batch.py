@@ -11,12 +11,12 @@ from typing import Any
 import numpy as np
 
 from terrain.checks import check_bool, check_int, check_real, check_seed
+from terrain.dask_client import check_client, client_worker_count, dask_client
 from terrain.errors import InvalidParameterError, OutOfBoundsError, TerrawattError, UnknownNameError
 
 from .batch_pairs import BatchPairs
 from .batch_result import BatchResult, BatchRow
 from .cache import CACHE_SIZE, ResultCache
-from .dask_client import check_client, client_worker_count, dask_client
 from .edge_cost import EnergyCost
 from .planning import PLANNERS, plan_route
 from .settings import PlannerSettings

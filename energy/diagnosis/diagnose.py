@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from terrain.checks import check_bool, check_int, check_real, check_seed, fmt_number
+from terrain.dask_client import check_client
 from terrain.errors import DataError, InvalidParameterError, NotFittedError
 
 from ..logs import InteractionLog
@@ -29,7 +30,7 @@ from .model_currents import physics_basis
 from .regimes import check_terrain
 from .residuals import GapSummary, gap_summary
 from .result import Diagnosis, EffectScore, WaterfallStep
-from .runner import SetRunner, check_client
+from .runner import SetRunner
 from .split import Split, make_split
 
 __all__ = ["SIGNIFICANT_SHRINK_PCT", "diagnose"]
@@ -222,7 +223,7 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
     section_s = check_real("section_s", section_s, low=0.0, low_inclusive=False)
     n_bootstrap = check_int("n_bootstrap", n_bootstrap, low=1)
     progress = check_bool("progress", progress)
-    check_client(client)
+    check_client(client, "candidate effect sets")
     terrain = check_terrain(terrain)
     _check_currents(items)
     sp = make_split(items, split, n_blocks)

@@ -5,38 +5,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from terrain.errors import InvalidParameterError, OptionalDependencyError
+from terrain.dask_client import check_client
 
 from .effect_base import Effect
 from .fit import DiagnosisData, SetScore, score_effect_set
 from .split import Split
 
-__all__ = ["SetRunner", "check_client"]
-
-
-def check_client(client: Any) -> Any:
-    """``client`` if it is ``None`` or a ``distributed.Client``.
-
-    Raises
-    ------
-    OptionalDependencyError
-        A client is given but dask.distributed is not installed.
-    InvalidParameterError
-        Anything else.
-    """
-    if client is None:
-        return None
-    try:
-        from distributed import Client
-    except ImportError as exc:  # pragma: no cover - the extra is installed in CI
-        raise OptionalDependencyError(
-            "diagnosing on a cluster needs dask.distributed; install it with: pip install 'terrawatt[distributed]'"
-        ) from exc
-    if not isinstance(client, Client):
-        raise InvalidParameterError(
-            f"client must be None (score here, one set after another) or a distributed.Client, got {client!r:.80}"
-        )
-    return client
+__all__ = ["SetRunner"]
 
 
 class SetRunner:
@@ -49,7 +24,7 @@ class SetRunner:
 
     def __init__(self, data: DiagnosisData, split: Split, *, client: Any = None, progress: bool = False) -> None:
         self.data, self.split = data, split
-        self.client = check_client(client)
+        self.client = check_client(client, "candidate effect sets")
         self.progress = bool(progress)
         self._remote: tuple[Any, Any] | None = None
 

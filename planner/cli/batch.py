@@ -9,10 +9,10 @@ from pathlib import Path
 from typing import Any
 
 from terrain import InvalidParameterError
+from terrain.dask_client import dask_client
 from terrain.procedural import example_map
 
 from .. import PLANNERS, BatchPairs, EnergyCost, plan_batch, read_pairs_csv, read_sites_csv, warm_up_kernels
-from ..dask_client import dask_client
 from .common import add_map_options, check_outputs, check_positive, max_slope_rad, read_map_file, unknown_ground
 
 __all__ = ["add_parser", "run_batch"]

@@ -24,8 +24,8 @@ from energy import (
 from energy.diagnosis import FIGURES
 from terrain import FigureWarning, InvalidParameterError, UnknownNameError
 from terrain.checks import check_seed, fmt_number
+from terrain.dask_client import client_worker_count, dask_client
 
-from ..dask_client import client_worker_count, dask_client
 from .common import add_map_options, check_outputs, read_map_file
 from .data import add_data_options, logs_from_args
 

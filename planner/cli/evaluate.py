@@ -15,8 +15,8 @@ from energy import (
     plot_vibration_spectra,
 )
 from terrain import InvalidParameterError
+from terrain.dask_client import dask_client
 
-from ..dask_client import dask_client
 from .band import LEARNED_KINDS, add_band_option, band_from_args
 from .common import check_outputs, draw_figure
 from .data import add_data_options, logs_from_args

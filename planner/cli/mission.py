@@ -13,9 +13,9 @@ from energy import GROUND_PRESETS, Battery, TruthSimulator, ground_preset, robot
 from terrain import CellModelRegistry, InvalidParameterError, UnknownNameError
 from terrain.atomic import write_json_atomic
 from terrain.checks import fmt_number
+from terrain.dask_client import dask_client
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
 
-from ..dask_client import dask_client
 from ..edge_cost import EnergyCost
 from ..missions import AdaptiveSettings, fit_prior_model, run_adaptive_mission, simulate_missions_mc
 from ..planning import plan_route

@@ -21,9 +21,9 @@ import numpy as np
 from energy import GROUND_PRESETS, Battery, GroundParams, RobotParams, TruthSimulator, ground_preset, robot_preset
 from terrain import TerrainMap
 from terrain.checks import check_bool, check_int, check_real, check_seed
+from terrain.dask_client import check_client, client_worker_count, dask_client
 from terrain.errors import InvalidParameterError, UnknownNameError
 
-from ..dask_client import check_client, client_worker_count, dask_client
 from ..route import Route
 from .monte_carlo_result import MonteCarloResult
 from .monte_carlo_sampling import MissionDistributions

@@ -1,7 +1,7 @@
 """The dask seam: open a ``distributed.Client`` (local cluster or scheduler address) and check a given one.
 
-Every part of terrawatt that runs tasks on dask (``terrawatt evaluate``, :func:`planner.plan_batch`,
-:func:`planner.simulate_missions_mc`) opens and checks its client here, so the optional
+Every part of terrawatt that runs tasks on dask (the evaluation folds, the diagnosis,
+:func:`planner.plan_batch`, :func:`planner.simulate_missions_mc`) opens and checks its client here, so the optional
 extra, the timeout of an unreachable scheduler and the messages are the same everywhere.
 """
 
