@@ -24,8 +24,8 @@ from planner.cli import main
 from planner.cli import train as train_cli
 from terrain import InvalidParameterError
 
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "borealtc"
-FIXTURES = Path(__file__).resolve().parent / "fixtures" / "borealtc"
+SHARED = Path(__file__).resolve().parents[3] / "shared" / "data" / "borealtc"
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"
 needs_shared = pytest.mark.skipif(not (SHARED / "FLOORING").is_dir(),
                                   reason=f"the shared BorealTC logs are not at {SHARED}")
 TINY = dict(n_members=1, max_epochs=4, hidden_sizes=(16, 16), patience=None, validation_fraction=0.0)
