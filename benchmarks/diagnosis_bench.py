@@ -37,6 +37,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
+from energy.diagnosis import diagnose, effect
 from energy.diagnosis.scenarios import (
     SCENARIOS,
     Scenario,
@@ -46,15 +47,9 @@ from energy.diagnosis.scenarios import (
 )
 from terrain.atomic import write_json_atomic
 
-try:
-    from energy.diagnosis import diagnose, effect
-except ImportError:  # pragma: no cover - the diagnosis lands in the same session
-    diagnose = None
-    effect = None
-
 # Pairs of comparable withheld gaps, then one where turning resistance (85 % of the charge)
-# dominates: each effect is ranked by its own held-out shrink on the model as given, so a
-# small effect beside a dominant one can fall out of the top 3 and still be chosen greedily.
+# dominates: the ranking is conditional (each candidate refitted with the effects chosen before
+# it), so a small effect beside a dominant one is judged by what it adds, not by its fit alone.
 PAIRS = (("inertia", "coulomb_friction"), ("gear_losses", "viscous_friction"), ("slope", "inertia"),
          ("coulomb_friction", "stribeck"), ("turning_resistance", "inertia"))
 QUICK_SCENARIOS = ("turning_resistance", "inertia", "slope", "mass", "current_gain", "time_lag")
@@ -185,9 +180,6 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--workers", type=int, default=1, help="processes running cases in parallel")
     ap.add_argument("--out", default=None, help="write the results as JSON here")
     args = ap.parse_args(argv)
-    if diagnose is None:
-        sys.exit("energy.diagnosis.diagnose is not available yet: the benchmark needs it "
-                 "(the scenarios work on their own: energy.diagnosis.scenarios)")
     n_seeds = args.seeds if args.seeds is not None else (1 if args.quick else 5)
     names = args.scenarios or (list(QUICK_SCENARIOS) if args.quick else list(SCENARIOS))
     unknown = [n for n in names if n not in SCENARIOS]
