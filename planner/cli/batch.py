@@ -13,7 +13,16 @@ from terrain.dask_client import dask_client
 from terrain.procedural import example_map
 
 from .. import PLANNERS, BatchPairs, EnergyCost, plan_batch, read_pairs_csv, read_sites_csv, warm_up_kernels
-from .common import add_map_options, check_outputs, check_positive, max_slope_rad, read_map_file, unknown_ground
+from .common import (
+    add_dask_options,
+    add_map_options,
+    check_dask_flags,
+    check_outputs,
+    check_positive,
+    max_slope_rad,
+    read_map_file,
+    unknown_ground,
+)
 
 __all__ = ["add_parser", "run_batch"]
 
@@ -36,10 +45,7 @@ def add_parser(sub: Any) -> None:
                         help="pairs file: columns start_x_m, start_y_m, goal_x_m, goal_y_m (and optionally name)")
     source.add_argument("--sites", type=Path, metavar="CSV", help="sites file: columns x_m, y_m (and optionally name)")
     batch.add_argument("--all-pairs", action="store_true", help="with --sites: plan every ordered pair of sites")
-    batch.add_argument("--workers", type=int, default=1, metavar="N",
-                       help="plan on a local dask cluster of N worker processes (default 1: here, one after another)")
-    batch.add_argument("--scheduler", metavar="ADDRESS",
-                       help="plan on an existing dask cluster, e.g. tcp://host:8786 (not with --workers > 1)")
+    add_dask_options(batch, "the pairs")
     batch.add_argument("--planner", default="lattice", choices=PLANNERS, help="planner name (default lattice)")
     batch.add_argument("--time-limit", type=float, default=1.0, metavar="S", help="OMPL planners: time budget per pair (s)")
     batch.add_argument("--max-evaluations", type=int, default=None, metavar="N",
@@ -61,13 +67,7 @@ def _check_flags(args: argparse.Namespace) -> None:
         raise InvalidParameterError("--sites needs --all-pairs (every ordered pair of the sites is planned)")
     if args.all_pairs and args.sites is None:
         raise InvalidParameterError("--all-pairs needs --sites CSV")
-    if args.workers < 1:
-        raise InvalidParameterError(f"--workers must be a positive number of processes, got {args.workers!r}")
-    if args.scheduler is not None and args.workers > 1:
-        raise InvalidParameterError(
-            f"--workers {args.workers!r} and --scheduler {args.scheduler!r} exclude each other: "
-            "give --workers N for a local cluster or --scheduler ADDRESS for an existing one"
-        )
+    check_dask_flags(args)
     check_positive("--speed", args.speed)
     check_positive("--time-limit", args.time_limit)
     if args.max_evaluations is not None:

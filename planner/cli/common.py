@@ -26,6 +26,8 @@ __all__ = [
     "unknown_ground",
     "check_grounds",
     "draw_figure",
+    "add_dask_options",
+    "check_dask_flags",
 ]
 
 
@@ -156,3 +158,23 @@ def draw_figure(path: Path, draw: Callable[[], Path]) -> Path | None:
     except Exception as exc:  # noqa: BLE001 - any failure of a figure is reported, never fatal
         print(f"terrawatt: warning: could not draw {path}: {type(exc).__name__}: {exc}", file=sys.stderr)
         return None
+
+
+def add_dask_options(p: argparse.ArgumentParser, what: str) -> None:
+    """``--workers N`` / ``--scheduler ADDRESS``: run ``what`` on a local dask cluster or an existing one."""
+    p.add_argument("--workers", type=int, default=1, metavar="N",
+                   help=f"run {what} on a local dask cluster of N worker processes (default 1: here, one after "
+                   "another; needs the distributed extra)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help=f"run {what} on an existing dask cluster, e.g. tcp://host:8786 (not with --workers > 1)")
+
+
+def check_dask_flags(args: argparse.Namespace) -> None:
+    """``--workers`` and ``--scheduler`` of :func:`add_dask_options`, checked before any work."""
+    if args.workers < 1:
+        raise InvalidParameterError(f"--workers must be a positive number of processes, got {args.workers!r}")
+    if args.scheduler is not None and args.workers > 1:
+        raise InvalidParameterError(
+            f"--workers {args.workers!r} and --scheduler {args.scheduler!r} exclude each other: "
+            "give --workers N for a local cluster or --scheduler ADDRESS for an existing one"
+        )

@@ -26,7 +26,7 @@ from terrain import FigureWarning, InvalidParameterError, UnknownNameError
 from terrain.checks import check_seed, fmt_number
 from terrain.dask_client import client_worker_count, dask_client
 
-from .common import add_map_options, check_outputs, read_map_file
+from .common import add_dask_options, add_map_options, check_dask_flags, check_outputs, read_map_file
 from .data import add_data_options, logs_from_args
 
 __all__ = ["add_parser", "run_diagnose"]
@@ -59,11 +59,7 @@ def add_parser(sub: Any) -> None:
                    help="the map the logs drove on (slope effect, grade and map localisation, the map figure)")
     add_map_options(p)
     p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (and of the estimator's training)")
-    p.add_argument("--workers", type=int, default=1, metavar="N",
-                   help="score the candidate effects on a local dask cluster of N worker processes (default 1: here)")
-    p.add_argument("--scheduler", metavar="ADDRESS",
-                   help="score the candidate effects on an existing dask cluster, e.g. tcp://host:8786 "
-                   "(not with --workers > 1)")
+    add_dask_options(p, "the candidate effects' scoring")
     p.add_argument("--quiet", action="store_true", help="no progress bars (estimator training, effect scoring)")
     p.set_defaults(run=run_diagnose)
 
@@ -97,12 +93,7 @@ def _check_flags(args: argparse.Namespace) -> None:
         check_seed(args.seed)
     except InvalidParameterError as exc:
         raise InvalidParameterError(f"--seed: {exc}") from None
-    if args.workers < 1:
-        raise InvalidParameterError(f"--workers must be a positive number of processes, got {args.workers!r}")
-    if args.scheduler is not None and args.workers > 1:
-        raise InvalidParameterError(f"--workers {args.workers!r} and --scheduler {args.scheduler!r} exclude each "
-                                    "other: give --workers N for a local cluster or --scheduler ADDRESS for an "
-                                    "existing one")
+    check_dask_flags(args)
 
 
 def _model(args: argparse.Namespace, logs: list[InteractionLog]) -> tuple[Any, str]:

@@ -18,7 +18,7 @@ from terrain import InvalidParameterError
 from terrain.dask_client import dask_client
 
 from .band import LEARNED_KINDS, add_band_option, band_from_args
-from .common import check_outputs, draw_figure
+from .common import add_dask_options, check_dask_flags, check_outputs, draw_figure
 from .data import add_data_options, logs_from_args
 from .evaluate_adapt import ADAPT_OUTPUTS, adapt_settings_from_args, add_adapt_options, run_adapt_protocol
 
@@ -45,15 +45,7 @@ def add_parser(sub: Any) -> None:
         choices=["per_ground", "ground_agnostic"], help="evaluation variants",
     )
     evaluate.add_argument("--seed", type=int, default=0, help="random seed of the learned models")
-    evaluate.add_argument(
-        "--workers", type=int, default=1, metavar="N",
-        help="run the folds on a local dask cluster of N worker processes (default 1: serially, here; "
-        "needs the distributed extra)",
-    )
-    evaluate.add_argument(
-        "--scheduler", metavar="ADDRESS",
-        help="run the folds on an existing dask cluster, e.g. tcp://host:8786 (not with --workers > 1)",
-    )
+    add_dask_options(evaluate, "the folds")
     add_band_option(evaluate)
     add_adapt_options(evaluate)
     evaluate.set_defaults(run=run_evaluate)
@@ -67,13 +59,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
     command still succeeds. ``--band LO HI`` sets the vibration band (Hz) of the estimator and
     paper models (the default band of the estimator serves IMUs of 25 Hz and more).
     """
-    if args.workers < 1:
-        raise InvalidParameterError(f"--workers must be a positive number of processes, got {args.workers!r}")
-    if args.scheduler is not None and args.workers > 1:
-        raise InvalidParameterError(
-            f"--workers {args.workers!r} and --scheduler {args.scheduler!r} exclude each other: "
-            "give --workers N for a local cluster or --scheduler ADDRESS for an existing one"
-        )
+    check_dask_flags(args)
     if args.models is None:
         args.models = list(CURRENT_MODEL_KINDS) if args.protocol == "loo" else ["estimator"]
     settings = adapt_settings_from_args(args) if args.protocol != "loo" else None

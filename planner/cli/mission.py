@@ -19,7 +19,15 @@ from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_ma
 from ..edge_cost import EnergyCost
 from ..missions import AdaptiveSettings, fit_prior_model, run_adaptive_mission, simulate_missions_mc
 from ..planning import plan_route
-from .common import add_map_options, check_outputs, check_positive, draw_figure, read_map_file
+from .common import (
+    add_dask_options,
+    add_map_options,
+    check_dask_flags,
+    check_outputs,
+    check_positive,
+    draw_figure,
+    read_map_file,
+)
 
 __all__ = ["add_parser", "run_mission", "add_monte_carlo_options", "check_monte_carlo_flags", "run_monte_carlo"]
 
@@ -158,10 +166,7 @@ def add_monte_carlo_options(p: argparse.ArgumentParser) -> None:
                         "writes monte_carlo.json, .csv and .png")
     p.add_argument("--max-risk-pct", type=float, default=5.0, metavar="P",
                    help="--monte-carlo: exit 1 when more than P %% of the missions go below the reserve (default 5)")
-    p.add_argument("--workers", type=int, default=1, metavar="N",
-                   help="--monte-carlo: run the missions on a local dask cluster of N worker processes (default 1: here)")
-    p.add_argument("--scheduler", metavar="ADDRESS",
-                   help="--monte-carlo: run the missions on an existing dask cluster (not with --workers > 1)")
+    add_dask_options(p, "the --monte-carlo missions")
 
 
 def check_monte_carlo_flags(args: argparse.Namespace) -> None:
@@ -174,13 +179,7 @@ def check_monte_carlo_flags(args: argparse.Namespace) -> None:
         raise InvalidParameterError(f"--monte-carlo must be a number of missions >= 1, got {args.monte_carlo!r}")
     if not 0.0 <= args.max_risk_pct <= 100.0:
         raise InvalidParameterError(f"--max-risk-pct must be in [0, 100], got {fmt_number(args.max_risk_pct)}")
-    if args.workers < 1:
-        raise InvalidParameterError(f"--workers must be a positive number of processes, got {args.workers!r}")
-    if args.scheduler is not None and args.workers > 1:
-        raise InvalidParameterError(
-            f"--workers {args.workers!r} and --scheduler {args.scheduler!r} exclude each other: "
-            "give --workers N for a local cluster or --scheduler ADDRESS for an existing one"
-        )
+    check_dask_flags(args)
 
 
 def run_monte_carlo(args: argparse.Namespace, tmap: Any, label: str, start: tuple, goal: tuple) -> int:
