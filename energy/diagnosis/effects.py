@@ -14,6 +14,7 @@ from .effects_measurement import (
     CurrentGainEffect,
     CurrentOffsetEffect,
     IdleCurrentEffect,
+    ImuLagEffect,
     TimeLagEffect,
 )
 from .effects_physics import (
@@ -47,6 +48,7 @@ _CLASSES: dict[str, Any] = {
     "current_offset": CurrentOffsetEffect,
     "current_gain": CurrentGainEffect,
     "time_lag": TimeLagEffect,
+    "imu_lag": ImuLagEffect,
     LEARNED_EFFECT: LearnedResidualEffect,
 }
 

@@ -1,8 +1,9 @@
-"""Measurement candidates: per-side current gain and offset, an idle current, a time lag between streams."""
+"""Measurement candidates: per-side current gain and offset, an idle current, time lags between streams."""
 
 from __future__ import annotations
 
 import copy
+import dataclasses
 from collections.abc import Sequence
 from typing import Any
 
@@ -11,10 +12,13 @@ import numpy as np
 from ..logs import InteractionLog
 from .effect_base import Effect, EffectParameter
 
-__all__ = ["MEASUREMENT_CANDIDATES", "CurrentGainEffect", "CurrentOffsetEffect", "IdleCurrentEffect", "TimeLagEffect"]
+__all__ = ["MEASUREMENT_CANDIDATES", "IMU_LAG_GRID_S", "CurrentGainEffect", "CurrentOffsetEffect", "IdleCurrentEffect",
+           "TimeLagEffect", "ImuLagEffect", "reads_vibration"]
 
 #: Measurement-effect candidates, in the order they are composed.
-MEASUREMENT_CANDIDATES: tuple[str, ...] = ("idle_current", "current_offset", "current_gain", "time_lag")
+MEASUREMENT_CANDIDATES: tuple[str, ...] = ("idle_current", "current_offset", "current_gain", "time_lag", "imu_lag")
+#: Lags (s) at which :class:`ImuLagEffect` re-predicts a log; its fit interpolates between them.
+IMU_LAG_GRID_S: tuple[float, ...] = (-0.4, -0.3, -0.2, -0.1, 0.0, 0.1, 0.2, 0.3, 0.4)
 
 
 class IdleCurrentEffect(Effect):
@@ -94,3 +98,58 @@ class TimeLagEffect(Effect):
         t = prepared
         shifted = t - float(values[0])
         return np.column_stack([np.interp(shifted, t, predicted_a[:, k]) for k in range(predicted_a.shape[1])])
+
+
+def reads_vibration(model: Any) -> bool:
+    """Whether ``model`` predicts from the IMU stream (a vibration band in its configuration)."""
+    return getattr(getattr(model, "config", None), "band_hz", None) is not None
+
+
+class ImuLagEffect(Effect):
+    """A clock offset between the IMU and the drive streams: the model fed the IMU stream
+    shifted by ``lag_s`` (positive: the logged IMU times run late, the true vibration came
+    ``lag_s`` earlier).
+
+    Only for models that read the IMU (the vibration estimators). The log is re-predicted at
+    each lag of :data:`IMU_LAG_GRID_S` once (:meth:`prepare`); the effect adds the difference
+    to the prediction at lag 0, interpolated linearly between grid lags, so it composes with
+    the other effects.
+    """
+
+    name = "imu_lag"
+    kind = "measurement"
+    parameters = (EffectParameter("lag_s", 0.0, IMU_LAG_GRID_S[0], IMU_LAG_GRID_S[-1], "s", "imu_lag_s"),)
+    description = "time lag between the IMU and the drive streams"
+    period_s: float = 0.0
+
+    def applies_to(self, model: Any) -> bool:
+        return reads_vibration(model)
+
+    def unsupported(self, logs: Sequence[Any], terrain: Any) -> str | None:
+        if any(getattr(log, "accel_time_s", None) is None or len(log.accel_time_s) < 2 for log in logs):
+            return "a log has no IMU stream"
+        return None
+
+    def bind(self, logs: Sequence[Any], terrain: Any = None, robot: Any = None) -> Effect:
+        out = copy.copy(self)
+        periods = [float(np.median(np.diff(log.accel_time_s))) for log in logs if len(log.accel_time_s) > 1]
+        out.period_s = float(np.median(periods)) if periods else self.period_s
+        return out
+
+    def negligible(self, values: np.ndarray) -> bool:
+        # below one IMU sample the spectra barely move: a fit there is noise
+        return abs(float(values[0])) < self.period_s
+
+    def prepare(self, model: Any, log: InteractionLog) -> np.ndarray:
+        grid = np.asarray(IMU_LAG_GRID_S)
+        preds = [np.asarray(model.predict(dataclasses.replace(log, accel_time_s=log.accel_time_s - lag)),
+                            dtype=np.float64) for lag in grid]
+        table = np.stack(preds)  # (lags, N, 2)
+        return table - table[int(np.argmin(np.abs(grid)))][None]
+
+    def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: np.ndarray) -> np.ndarray:
+        grid = np.asarray(IMU_LAG_GRID_S)
+        lag = float(np.clip(values[0], grid[0], grid[-1]))
+        k = int(np.clip(np.searchsorted(grid, lag) - 1, 0, grid.size - 2))
+        w = (lag - grid[k]) / (grid[k + 1] - grid[k])
+        return predicted_a + (1.0 - w) * prepared[k] + w * prepared[k + 1]
