@@ -43,9 +43,9 @@ from energy.evaluation import (
     summarise_adapt_scores,
     trim_to_overlap,
 )
-from energy.evaluation.fold_runner import run_tasks
 from energy.models import ADAPT_METHODS, train_network
 from terrain.atomic import write_json_atomic
+from terrain.dask_client import run_tasks
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "borealtc"
 TARGETS = {"median_pct": 5.0, "p90_pct": 15.0, "sections_pct": 8.0}

@@ -9,13 +9,13 @@ from __future__ import annotations
 
 import contextlib
 import logging
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from terrain.checks import check_bool, check_int, check_real, check_text
 from terrain.errors import InvalidParameterError, OptionalDependencyError
 
-__all__ = ["dask_client", "check_client", "client_worker_count", "DEFAULT_CONNECT_TIMEOUT_S"]
+__all__ = ["dask_client", "check_client", "client_worker_count", "run_tasks", "DEFAULT_CONNECT_TIMEOUT_S"]
 
 #: Seconds to wait for a dask scheduler to answer before giving up.
 DEFAULT_CONNECT_TIMEOUT_S = 10.0
@@ -131,3 +131,31 @@ def check_client(client: Any, what: str = "tasks") -> Any:
 def client_worker_count(client: Any) -> int:
     """Number of workers connected to ``client``'s scheduler now (at least 1 is assumed for None)."""
     return 1 if client is None else max(1, len(client.scheduler_info().get("workers", {})))
+
+
+def run_tasks(tasks: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]], *, client: Any = None,
+              progress: bool = False, description: str = "tasks") -> Iterator[Any]:
+    """Each task's ``fn(*args)``, yielded in the order of ``tasks``.
+
+    With a dask ``client`` every task is submitted at once (``fn`` must be importable by
+    the workers) and the results come back in task order, whichever finishes first; a
+    task's exception is raised here and the other tasks are cancelled.
+    """
+    from tqdm.auto import tqdm
+
+    if client is None:
+        for fn, args in tqdm(tasks, desc=description, disable=not progress):
+            yield fn(*args)
+        return
+    from distributed import wait
+
+    futures = [client.submit(fn, *args, pure=False) for fn, args in tasks]
+    try:
+        with tqdm(total=len(futures), desc=description, disable=not progress) as bar:
+            for fut in futures:
+                wait(fut)
+                bar.update()
+                yield fut.result()  # re-raises the task's exception
+    except BaseException:
+        client.cancel(futures)
+        raise

@@ -5,8 +5,8 @@ and :mod:`~energy.evaluation.scoring` (:func:`score_run`, the one per-run scorin
 :func:`score_current_model` for a model fitted beforehand, :func:`evaluate_current_models`);
 the ``adapt`` protocol in :mod:`~energy.evaluation.adapt_protocol` (adapt on a held-out run's
 first seconds, score the rest), :mod:`~energy.evaluation.few_shot` (adapt on a ground left out
-of training) and :mod:`~energy.evaluation.adapt_results`; :mod:`~energy.evaluation.fold_runner`
-runs folds here or on a dask cluster.
+of training) and :mod:`~energy.evaluation.adapt_results`; folds run here or on a dask cluster
+(:mod:`terrain.dask_client`).
 """
 
 from .adapt_protocol import (

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from terrain.checks import check_bool, check_choice, check_real, check_text
+from terrain.dask_client import check_client, run_tasks
 from terrain.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog
@@ -28,7 +29,6 @@ from ..metrics import DEFAULT_SECTION_S, compare_currents
 from ..models.adaptation import ADAPT_METHODS, AdaptedCurrentModel
 from ..models.base import CurrentModel, log_currents
 from .adapt_results import TRIGGER_SCHEDULE, AdaptationResult, AdaptScore, check_adapt_dir, summarise_adapt_scores
-from .fold_runner import check_client, run_tasks
 from .scoring import run_names, trim_to_overlap
 
 __all__ = [
@@ -308,7 +308,7 @@ def evaluate_adaptation(
         raise InvalidParameterError(f"settings must be an AdaptSettings, got {settings!r:.80}")
     models = named_models(model, name)
     items = labelled_logs(logs)
-    check_client(client)
+    check_client(client, "folds")
     items = [trim_to_overlap(lg) for lg in items]
     names = run_names(items)
     skipped: list[str] = []

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from terrain.checks import check_text
+from terrain.dask_client import check_client, run_tasks
 from terrain.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog
@@ -25,7 +26,6 @@ from ..models.adaptation import AdaptedCurrentModel
 from ..models.base import CurrentModel, log_currents
 from .adapt_protocol import AdaptSettings, labelled_logs, named_models, schedule_name
 from .adapt_results import AdaptationResult, AdaptScore, check_adapt_dir, summarise_adapt_scores
-from .fold_runner import check_client, run_tasks
 from .scoring import run_names, trim_to_overlap
 
 __all__ = ["few_shot_scores", "evaluate_few_shot"]
@@ -176,7 +176,7 @@ def evaluate_few_shot(
         raise InvalidParameterError(f"settings must be an AdaptSettings, got {settings!r:.80}")
     models = named_models(model, name)
     items = [trim_to_overlap(lg) for lg in labelled_logs(logs)]
-    check_client(client)
+    check_client(client, "folds")
     names = run_names(items)
     grounds = list(dict.fromkeys(str(lg.meta.ground_label) for lg in items))
     if len(grounds) < 2:

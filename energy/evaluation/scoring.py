@@ -26,17 +26,17 @@ from typing import Any
 import numpy as np
 
 from terrain.checks import check_real, check_text
+from terrain.dask_client import check_client
 from terrain.errors import (
     DataError,
     InvalidParameterError,
-    OptionalDependencyError,
     TerrawattWarning,
     UnknownNameError,
 )
 
 from ..logs import InteractionLog
 from ..metrics import DEFAULT_SECTION_S, compare_currents
-from ..models.base import CurrentModel
+from ..models.base import CurrentModel, log_currents
 from .results import (
     EVALUATION_VARIANTS,
     PREFIT_VARIANT,
@@ -92,9 +92,12 @@ def score_run(
     ------
     NotFittedError
         ``model`` is not fitted.
+    DataError
+        ``log`` has no measured currents.
     """
+    measured = log_currents(log)  # a log without currents: DataError naming the missing topics
     pred = model.predict(log)
-    truth = (log.current_left_a, log.current_right_a)
+    truth = (measured[:, 0], measured[:, 1])
     rows = []
     for k, side in enumerate(SIDES):
         e = compare_currents(log.time_s, truth[k], pred[:, k], section_s)
@@ -188,17 +191,6 @@ def _check_log_items(logs: Any) -> list[InteractionLog]:
         if not isinstance(log, InteractionLog):
             raise InvalidParameterError(f"logs[{i}] must be an InteractionLog, got {log!r:.80}")
     return items
-
-
-def _distributed_client_type() -> type:
-    """``distributed.Client``, imported only when a client is given (the extra is optional)."""
-    try:
-        from distributed import Client
-    except ImportError as exc:
-        raise OptionalDependencyError(
-            "evaluating on a cluster needs dask.distributed; install it with: pip install 'terrawatt[distributed]'"
-        ) from exc
-    return Client
 
 
 def _score_on_cluster(
@@ -348,10 +340,7 @@ def evaluate_current_models(
     for v in chosen:
         if v not in EVALUATION_VARIANTS:
             raise UnknownNameError(f"variant {v!r} is unknown; expected names from {EVALUATION_VARIANTS!r}")
-    if client is not None and not isinstance(client, _distributed_client_type()):
-        raise InvalidParameterError(
-            f"client must be None (run the folds here, one after another) or a distributed.Client, got {client!r:.80}"
-        )
+    check_client(client, "folds")
     if len(items) < 2:
         raise DataError(f"leave-one-run-out needs at least 2 runs, got {len(items)}")
     items = [trim_to_overlap(log) for log in items]
