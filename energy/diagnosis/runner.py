@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from terrain.dask_client import check_client
+from terrain.dask_client import check_client, run_tasks
 
 from .effect_base import Effect
 from .fit import DiagnosisData, SetScore, score_effect_set
@@ -30,29 +30,15 @@ class SetRunner:
 
     def score(self, sets: Sequence[Sequence[Effect]], desc: str = "effect sets") -> list[SetScore]:
         """The held-out score of each set in ``sets``, in order."""
-        from tqdm.auto import tqdm
-
         if self.client is None or len(sets) < 2:
-            return [score_effect_set(list(s), self.data, self.split)
-                    for s in tqdm(sets, desc=desc, disable=not self.progress, leave=False)]
-        from distributed import as_completed
-
-        if self._remote is None:
-            data_f, split_f = self.client.scatter([self.data, self.split], broadcast=True, hash=False)
-            self._remote = (data_f, split_f)
-        data_f, split_f = self._remote
-        futures = [self.client.submit(score_effect_set, list(s), data_f, split_f, pure=False) for s in sets]
-        position = {f.key: i for i, f in enumerate(futures)}
-        out: list[SetScore | None] = [None] * len(futures)
-        try:
-            with tqdm(total=len(futures), desc=desc, disable=not self.progress, leave=False) as bar:
-                for fut in as_completed(futures):
-                    out[position[fut.key]] = fut.result()  # re-raises a task's exception here
-                    bar.update()
-        except BaseException:
-            self.client.cancel(futures)
-            raise
-        return [s for s in out if s is not None]
+            data, split = self.data, self.split
+        else:
+            if self._remote is None:
+                self._remote = tuple(self.client.scatter([self.data, self.split], broadcast=True, hash=False))
+            data, split = self._remote
+        tasks = [(score_effect_set, (list(s), data, split)) for s in sets]
+        client = self.client if len(sets) >= 2 else None
+        return list(run_tasks(tasks, client=client, progress=self.progress, description=desc))
 
     def close(self) -> None:
         """Release the scattered data on the cluster."""
