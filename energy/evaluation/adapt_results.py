@@ -14,6 +14,8 @@ import numpy as np
 from terrain.atomic import check_output_path, write_text_atomic
 from terrain.errors import UnknownNameError
 
+from .results import json_plain
+
 __all__ = [
     "ADAPT_PROTOCOLS",
     "ADAPT_FILES",
@@ -130,16 +132,6 @@ def summarise_adapt_scores(scores: list[AdaptScore] | tuple[AdaptScore, ...]) ->
     return tuple(_summary(*k, keys[k]) for k in order)
 
 
-def _plain(value: Any) -> Any:
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    return value
-
-
 @dataclass(frozen=True)
 class AdaptationResult:
     """All scores of :func:`~energy.evaluation.evaluate_adaptation` / :func:`~energy.evaluation.evaluate_few_shot`.
@@ -177,7 +169,7 @@ class AdaptationResult:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-types form (NaN becomes ``None``), as written to ``adapt.json``."""
-        return _plain({"format": "terrawatt-adaptation", "format_version": ADAPT_FORMAT_VERSION,
+        return json_plain({"format": "terrawatt-adaptation", "format_version": ADAPT_FORMAT_VERSION,
                        "settings": dict(self.settings), "skipped": list(self.skipped),
                        "summary": [asdict(s) for s in self.summary], "runs": [asdict(r) for r in self.runs]})
 

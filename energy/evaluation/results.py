@@ -15,6 +15,7 @@ from terrain.atomic import check_output_path, write_text_atomic
 from terrain.errors import UnknownNameError
 
 __all__ = [
+    "json_plain",
     "EVALUATION_VARIANTS",
     "PREFIT_VARIANT",
     "SCORE_VARIANTS",
@@ -112,13 +113,14 @@ def _summarise(variant: str, ground: str, model: str, scores: list[RunScore]) ->
     )
 
 
-def _plain(value: Any) -> Any:
+def json_plain(value: Any) -> Any:
+    """``value`` with non-finite floats as None and tuples as lists, ready for JSON."""
     if isinstance(value, float) and not math.isfinite(value):
         return None
     if isinstance(value, dict):
-        return {k: _plain(v) for k, v in value.items()}
+        return {k: json_plain(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
+        return [json_plain(v) for v in value]
     return value
 
 
@@ -165,7 +167,7 @@ class EvaluationResult:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-types form (NaN becomes ``None``), as written to ``evaluation.json``."""
-        return _plain({
+        return json_plain({
             "format": "terrawatt-evaluation",
             "format_version": EVALUATION_FORMAT_VERSION,
             "section_s": self.section_s,
