@@ -20,7 +20,7 @@ from .common import (
     check_outputs,
     check_positive,
     max_slope_rad,
-    read_map_file,
+    read_map_args,
     unknown_ground,
 )
 
@@ -93,7 +93,7 @@ def run_batch(args: argparse.Namespace) -> int:
     if args.map == "example":
         tmap, label = example_map(), "bundled example map"
     else:
-        tmap, label = read_map_file(args.map, args.fill_nodata), Path(args.map).name
+        tmap, label = read_map_args(args), Path(args.map).name
     cost = EnergyCost.from_presets(tmap, robot=args.robot, speed_mps=args.speed,
                                    max_slope_rad=max_slope_rad(args.max_slope_deg),
                                    unknown_ground=unknown_ground(args.unknown_ground, tmap))

@@ -31,9 +31,9 @@ __all__ = [
 ]
 
 
-def add_map_options(p: argparse.ArgumentParser, *, reproject: bool = False) -> None:
-    """``--fill-nodata``; with ``reproject=True`` also ``--reproject`` and ``--cell-size`` (read them
-    with :func:`read_map_args`)."""
+def add_map_options(p: argparse.ArgumentParser, *, reproject: bool = True) -> None:
+    """``--fill-nodata``, ``--reproject`` and ``--cell-size`` (read them with :func:`read_map_args`);
+    ``reproject=False`` offers ``--fill-nodata`` only."""
     p.add_argument(
         "--fill-nodata", choices=["nearest"], default=None,
         help="GeoTIFF DEMs: fill nodata cells from the nearest valid cell (default: refuse such DEMs)",

@@ -26,7 +26,7 @@ from .common import (
     check_outputs,
     check_positive,
     draw_figure,
-    read_map_file,
+    read_map_args,
 )
 
 __all__ = ["add_parser", "run_mission", "add_monte_carlo_options", "check_monte_carlo_flags", "run_monte_carlo"]
@@ -91,7 +91,7 @@ def run_mission(args: argparse.Namespace) -> int:
     else:
         if not (args.start and args.goal):
             raise InvalidParameterError("--start and --goal are required with a map file")
-        tmap, label = read_map_file(args.map, args.fill_nodata), Path(args.map).name
+        tmap, label = read_map_args(args), Path(args.map).name
         start, goal = tuple(args.start), tuple(args.goal)
     unknown = sorted(n for n in set(tmap.ground_names.values()) if n not in GROUND_PRESETS)
     if unknown:

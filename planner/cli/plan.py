@@ -40,7 +40,7 @@ def add_parsers(sub: Any) -> None:
     demo.set_defaults(run=run_demo)
     plan = sub.add_parser("plan", help="plan a minimum-energy route on a map file (.npz or GeoTIFF)")
     plan.add_argument("--map", type=Path, required=True, metavar="FILE", help=".npz map or .tif DEM")
-    add_map_options(plan, reproject=True)
+    add_map_options(plan)
     plan.add_argument("--start", type=float, nargs=2, required=True, metavar=("X", "Y"), help="start (m)")
     plan.add_argument("--goal", type=float, nargs=2, required=True, metavar=("X", "Y"), help="goal (m)")
     _add_plan_options(plan, default_time=2.0)

@@ -23,7 +23,7 @@ from .common import (
     check_positive,
     draw_figure,
     max_slope_rad,
-    read_map_file,
+    read_map_args,
     unknown_ground,
 )
 
@@ -91,7 +91,7 @@ def run_reach(args: argparse.Namespace) -> int:
     if args.example:
         tmap, label = example_map(), "bundled example map"
     else:
-        tmap, label = read_map_file(args.map, args.fill_nodata), args.map.name
+        tmap, label = read_map_args(args), args.map.name
     depot = tuple(args.depot) if args.depot is not None else EXAMPLE_START_XY_M
     ground = unknown_ground(args.unknown_ground, tmap)
     voltage_v = args.voltage if args.voltage is not None else robot.battery_voltage_v

@@ -318,3 +318,28 @@ def test_coarse_to_fine_refuses_a_blocked_start(tmp_path):
     cost = EnergyCost.from_presets(wall_map((32, 32), 1.0, wall_col=16, ground="asphalt"))
     with pytest.raises(BlockedPositionError, match="start_xy_m .* blocked cell"):
         plan_coarse_to_fine(cost, (16.5, 4.5), (28.5, 4.5))
+
+
+def test_every_map_taking_command_reprojects_a_geographic_dem(tmp_path, capsys):
+    from planner.cli import main
+
+    path = write_geographic_dem(tmp_path / "geo.tif")
+    tmap = read_geotiff(path, reproject_to="utm", cell_size_m=20.0)
+    xmin, ymin, xmax, ymax = tmap.bounds
+    cx, cy = (xmin + xmax) / 2, (ymin + ymax) / 2
+    rc = main(["reach", "--map", str(path), "--reproject", "utm", "--cell-size", "20", "--depot", str(cx), str(cy),
+               "--battery-ah", "2", "--out", str(tmp_path / "reach")])
+    assert rc == 0, capsys.readouterr().err
+    import rasterio
+
+    with rasterio.open(tmp_path / "reach" / "reach.tif") as src:
+        assert src.crs.to_string() == "EPSG:32633"
+    # the pair of flags is checked the same way by every command that takes --map
+    (tmp_path / "sites.csv").write_text("x_m,y_m\n1,1\n2,2\n")
+    for argv in (["batch", "--map", str(path), "--sites", str(tmp_path / "sites.csv"), "--all-pairs"],
+                 ["mission", "--map", str(path), "--battery-ah", "1", "--start", "1", "1", "--goal", "2", "2"],
+                 ["diagnose", "--model", "physics", "--data", str(tmp_path), "--map", str(path)]):
+        capsys.readouterr()
+        rc = main(argv + ["--reproject", "utm", "--out", str(tmp_path / "o")])
+        err = capsys.readouterr().err
+        assert rc == 2 and "--reproject and --cell-size go together" in err, (argv[0], err)
