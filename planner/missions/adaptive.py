@@ -89,7 +89,7 @@ from .legs import LegPredictor, split_polyline
 from .manoeuvres import excitation_manoeuvre
 from .settings import AdaptiveSettings
 from .simulate import simulate_mission
-from .updates import best_other_model, charge_error, predicted_currents, validation_error
+from .updates import adapted_model, best_other_model, charge_error, predicted_currents, validation_error
 
 __all__ = ["run_adaptive_mission"]
 
@@ -401,8 +401,12 @@ class _Loop:
             cut = xl.time_s[0] + (1.0 - cfg.validation_fraction) * (xl.time_s[-1] - xl.time_s[0])
             train.append(xl.slice(xl.time_s[0], cut))
             held.append(xl.slice(cut, xl.time_s[-1] + 1.0))
-        new_model = self.factory().fit(train)
+        new_model, kind = self.factory().fit(train), "excitation"
         err_new = validation_error(new_model, held)
+        adapted = adapted_model(registry.model(old_id), train) if cfg.in_run_update else None
+        err_adapted = validation_error(adapted, held) if adapted is not None else np.inf
+        if err_adapted < err_new:  # the serving model updated in-run validates better than a refit
+            new_model, err_new, kind = adapted, err_adapted, "in_run"
         err_old = validation_error(registry.model(old_id), held)
         decision = registry.propose_update(
             scope, new_model, err_new, err_old, name=f"update{len(self.updates) + 1}-{gname}",
@@ -418,7 +422,7 @@ class _Loop:
         self.update_wall += wall
         self.updates.append(UpdateRecord(leg_index, gname, region.cell_count, int(np.count_nonzero(scope)),
                                          100.0 * region.relative_error, bool(decision.accepted), decision.model_id,
-                                         err_new, err_old, x_e, x_t, wall))
+                                         err_new, err_old, x_e, x_t, wall, kind))
         return bool(decision.accepted)
 
     def discharge(self, logs: list[InteractionLog]) -> tuple[float, float, float, bool]:

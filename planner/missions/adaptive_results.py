@@ -65,7 +65,8 @@ class UpdateRecord:
     excitation_energy_j: float
     excitation_duration_s: float
     wall_time_s: float
-    kind: str = "excitation"  # or "reuse": a model learned elsewhere assigned without a manoeuvre
+    kind: str = "excitation"  # "reuse": a model learned elsewhere assigned without a manoeuvre; "in_run": the
+    # serving model updated in-run on the excitation data (AdaptiveSettings.in_run_update)
 
 
 @dataclass(frozen=True)

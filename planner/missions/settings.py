@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from terrain import InvalidParameterError, UpdatePolicy
-from terrain.checks import check_int, check_real, check_seed
+from terrain.checks import check_bool, check_int, check_real, check_seed
 
 __all__ = ["UPDATE_SCOPES", "AdaptiveSettings"]
 
@@ -48,6 +48,10 @@ class AdaptiveSettings:
         Distance to the goal that counts as arrived (m, > 0).
     seed : int
         Seeds the drives and excitations (>= 0).
+    in_run_update : bool
+        Also try the serving model updated in-run on the excitation data
+        (:meth:`energy.CurrentModel.adapt`) and propose it instead of the refitted model when
+        it validates better (the update is then recorded with kind ``"in_run"``).
     """
 
     speed_mps: float = 0.5
@@ -66,6 +70,7 @@ class AdaptiveSettings:
     max_legs: int = 500
     goal_tolerance_m: float = 0.5
     seed: int = 0
+    in_run_update: bool = False
 
     def __post_init__(self) -> None:
         own = "AdaptiveSettings"
@@ -88,6 +93,7 @@ class AdaptiveSettings:
         speeds = tuple(check_real("excitation_speeds_mps", s, low=0.0, low_inclusive=False, owner=own) for s in speeds)
         object.__setattr__(self, "excitation_speeds_mps", speeds)
         check_int("max_updates", self.max_updates, low=0, owner=own)
+        check_bool(f"{own}.in_run_update", self.in_run_update)
         check_int("max_legs", self.max_legs, low=1, owner=own)
         seed = check_seed(self.seed, f"{own}.seed")
         if seed is None:

@@ -191,3 +191,48 @@ def test_the_budget_is_the_batterys_own_over_driving_and_manoeuvres():
     naive = battery.initial_soc - (res.driven_energy_j + res.excitation_energy_j) / battery.energy_capacity_j
     assert res.final_soc < naive  # the pack's losses cost more than energy / capacity
     assert res.to_json_dict()["budget"] == b.to_json_dict()
+
+
+def test_the_in_run_update_is_tried_and_proposed_when_it_validates_better(monkeypatch):
+    """With in_run_update the loop also adapts the serving model on the excitation data; a
+    stand-in update that fits the held-back data exactly must win over the refit."""
+    import planner.missions.adaptive as adaptive_module
+
+    robot, truth, tmap, prior = _world()
+    calls = []
+
+    class Oracle(LinearCurrentModel):
+        def _predict(self, log):
+            return np.column_stack([log.current_left_a, log.current_right_a])
+
+    def fake_adapted(model, logs, **options):
+        calls.append(sum(len(g) for g in logs))
+        oracle = Oracle().fit(logs)
+        return oracle
+
+    monkeypatch.setattr(adaptive_module, "adapted_model", fake_adapted)
+    reg = CellModelRegistry.from_terrain(tmap, prior)
+    settings = dataclasses.replace(SETTINGS, in_run_update=True)
+    res = run_adaptive_mission(tmap, reg, robot, Battery(20.0, 24.0), truth, (2.5, 8.0), (37.5, 8.0),
+                               physics_ground=ground_preset("asphalt"), settings=settings)
+    assert calls and all(n > 0 for n in calls)
+    up = next(u for u in res.updates if u.accepted)
+    assert up.kind == "in_run" and up.validation_error_new == pytest.approx(0.0, abs=1e-12)
+    # off by default: the loop refits only
+    res_off = run_adaptive_mission(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0),
+                                   truth, (2.5, 8.0), (37.5, 8.0), physics_ground=ground_preset("asphalt"),
+                                   settings=SETTINGS)
+    assert all(u.kind != "in_run" for u in res_off.updates)
+    with pytest.raises(InvalidParameterError, match="in_run_update"):
+        AdaptiveSettings(in_run_update="yes")
+
+
+def test_the_real_in_run_update_runs_in_the_loop():
+    robot, truth, tmap, prior = _world()
+    reg = CellModelRegistry.from_terrain(tmap, prior)
+    settings = dataclasses.replace(SETTINGS, in_run_update=True)
+    res = run_adaptive_mission(tmap, reg, robot, Battery(20.0, 24.0), truth, (2.5, 8.0), (37.5, 8.0),
+                               physics_ground=ground_preset("asphalt"), settings=settings)
+    assert res.status == "completed" and res.accepted_updates >= 1
+    assert {u.kind for u in res.updates} <= {"excitation", "in_run", "reuse"}
+    assert abs(res.error_after_update_pct) < SETTINGS.policy.threshold_pct
