@@ -14,7 +14,6 @@ from .adapt_protocol import (
     AdaptSettings,
     adaptation_scores,
     evaluate_adaptation,
-    labelled_logs,
     named_models,
     schedule_name,
 )
@@ -75,7 +74,6 @@ __all__ = [
     "check_adapt_dir",
     "adaptation_scores",
     "schedule_name",
-    "labelled_logs",
     "named_models",
     "evaluate_adaptation",
     "few_shot_scores",

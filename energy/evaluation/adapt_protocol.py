@@ -29,14 +29,13 @@ from ..metrics import DEFAULT_SECTION_S, compare_currents
 from ..models.adaptation import ADAPT_METHODS, AdaptedCurrentModel
 from ..models.base import CurrentModel, log_currents
 from .adapt_results import TRIGGER_SCHEDULE, AdaptationResult, AdaptScore, check_adapt_dir, summarise_adapt_scores
-from .scoring import run_names, trim_to_overlap
+from .scoring import check_runs, run_names, trim_to_overlap
 
 __all__ = [
     "DEFAULT_ADAPT_SECONDS",
     "AdaptSettings",
     "adaptation_scores",
     "schedule_name",
-    "labelled_logs",
     "named_models",
     "evaluate_adaptation",
 ]
@@ -307,7 +306,7 @@ def evaluate_adaptation(
     if not isinstance(settings, AdaptSettings):
         raise InvalidParameterError(f"settings must be an AdaptSettings, got {settings!r:.80}")
     models = named_models(model, name)
-    items = labelled_logs(logs)
+    items = check_runs(logs, labelled=True, what="the adapt protocol")
     check_client(client, "folds")
     items = [trim_to_overlap(lg) for lg in items]
     names = run_names(items)
@@ -332,24 +331,3 @@ def evaluate_adaptation(
     return result
 
 
-def labelled_logs(logs: Any) -> list[InteractionLog]:
-    """``logs`` as a list of InteractionLogs that all carry ``meta.ground_label``.
-
-    Raises
-    ------
-    InvalidParameterError
-        Not a non-empty sequence of InteractionLogs.
-    DataError
-        A log without a ground label.
-    """
-    if isinstance(logs, InteractionLog) or isinstance(logs, (str, bytes)) or not isinstance(logs, Sequence):
-        raise InvalidParameterError(f"logs must be a sequence of InteractionLog, got {logs!r:.80}")
-    items = list(logs)
-    if not items:
-        raise InvalidParameterError("logs must hold at least one InteractionLog, got none")
-    for i, lg in enumerate(items):
-        if not isinstance(lg, InteractionLog):
-            raise InvalidParameterError(f"logs[{i}] must be an InteractionLog, got {lg!r:.80}")
-        if lg.meta.ground_label is None:
-            raise DataError(f"logs[{i}] ({lg.meta.source!r}) has no meta.ground_label; the protocol groups runs by ground")
-    return items

@@ -24,9 +24,9 @@ from ..logs import InteractionLog
 from ..metrics import compare_currents
 from ..models.adaptation import AdaptedCurrentModel
 from ..models.base import CurrentModel, log_currents
-from .adapt_protocol import AdaptSettings, labelled_logs, named_models, schedule_name
+from .adapt_protocol import AdaptSettings, named_models, schedule_name
 from .adapt_results import AdaptationResult, AdaptScore, check_adapt_dir, summarise_adapt_scores
-from .scoring import run_names, trim_to_overlap
+from .scoring import check_runs, run_names, trim_to_overlap
 
 __all__ = ["few_shot_scores", "evaluate_few_shot"]
 
@@ -175,7 +175,7 @@ def evaluate_few_shot(
     if not isinstance(settings, AdaptSettings):
         raise InvalidParameterError(f"settings must be an AdaptSettings, got {settings!r:.80}")
     models = named_models(model, name)
-    items = [trim_to_overlap(lg) for lg in labelled_logs(logs)]
+    items = [trim_to_overlap(lg) for lg in check_runs(logs, labelled=True, what="the few-shot protocol")]
     check_client(client, "folds")
     names = run_names(items)
     grounds = list(dict.fromkeys(str(lg.meta.ground_label) for lg in items))

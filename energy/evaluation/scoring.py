@@ -47,7 +47,7 @@ from .results import (
     summarise_scores,
 )
 
-__all__ = ["run_names", "trim_to_overlap", "score_run", "score_current_model", "evaluate_current_models"]
+__all__ = ["check_runs", "run_names", "trim_to_overlap", "score_run", "score_current_model", "evaluate_current_models"]
 
 
 def run_names(logs: Sequence[InteractionLog]) -> list[str]:
@@ -170,7 +170,7 @@ def score_current_model(
         raise InvalidParameterError(f"model must be a CurrentModel, got {model!r:.80}")
     check_text("name", name)
     section_s = check_real("section_s", section_s, low=0.0, low_inclusive=False)
-    items = _check_log_items(logs)
+    items = check_runs(logs)
     names = run_names(items)
     scores: list[RunScore] = []
     for run, log in zip(names, items):
@@ -181,7 +181,17 @@ def score_current_model(
     return EvaluationResult(tuple(scores), summary, (name,), variants, float(section_s))
 
 
-def _check_log_items(logs: Any) -> list[InteractionLog]:
+def check_runs(logs: Any, *, labelled: bool = False, what: str = "the evaluation") -> list[InteractionLog]:
+    """``logs`` as a list: a non-empty sequence of InteractionLogs (one log alone is refused: the
+    protocols compare runs); with ``labelled``, each must carry ``meta.ground_label``.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a non-empty sequence of InteractionLogs.
+    DataError
+        ``labelled`` and a log without a ground label.
+    """
     if isinstance(logs, InteractionLog) or isinstance(logs, (str, bytes)) or not isinstance(logs, Sequence):
         raise InvalidParameterError(f"logs must be a sequence of InteractionLog, got {logs!r:.80}")
     items = list(logs)
@@ -190,6 +200,8 @@ def _check_log_items(logs: Any) -> list[InteractionLog]:
     for i, log in enumerate(items):
         if not isinstance(log, InteractionLog):
             raise InvalidParameterError(f"logs[{i}] must be an InteractionLog, got {log!r:.80}")
+        if labelled and log.meta.ground_label is None:
+            raise DataError(f"logs[{i}] ({log.meta.source!r}) has no meta.ground_label; {what} groups runs by ground")
     return items
 
 
@@ -323,14 +335,7 @@ def evaluate_current_models(
     if out_dir is not None:
         check_evaluation_dir(out_dir)  # before the work, not after it
     section_s = check_real("section_s", section_s, low=0.0, low_inclusive=False)
-    items = list(logs)
-    if not items:
-        raise InvalidParameterError("logs must hold at least one InteractionLog, got none")
-    for i, log in enumerate(items):
-        if not isinstance(log, InteractionLog):
-            raise InvalidParameterError(f"logs[{i}] must be an InteractionLog, got {log!r:.80}")
-        if log.meta.ground_label is None:
-            raise DataError(f"logs[{i}] ({log.meta.source!r}) has no meta.ground_label; the evaluation groups runs by ground")
+    items = check_runs(logs, labelled=True)
     if not models:
         raise InvalidParameterError("models must name at least one CurrentModel, got none")
     for name, m in models.items():
