@@ -38,6 +38,7 @@ __all__ = [
     "schedule_name",
     "named_models",
     "evaluate_adaptation",
+    "collect_adaptation",
 ]
 
 #: Prefix durations (s) of the ``adapt`` protocol.
@@ -321,11 +322,20 @@ def evaluate_adaptation(
                   for i in idx for mname, proto in models.items()]
     if not tasks:
         raise DataError("the adapt protocol needs a ground with at least 2 runs; none has")
+    return collect_adaptation(tasks, settings, skipped, client=client, progress=progress, description="adapt folds",
+                              out_dir=out_dir)
+
+
+def collect_adaptation(tasks: list[tuple[Any, tuple[Any, ...]]], settings: AdaptSettings, skipped: list[str], *,
+                       client: Any, progress: bool, description: str, out_dir: Any) -> AdaptationResult:
+    """Run fold tasks (each returns ``(scores, notes)``) here or on ``client``; the result, written to
+    ``out_dir`` when given."""
     scores: list[AdaptScore] = []
-    for rows, notes in run_tasks(tasks, client=client, progress=progress, description="adapt folds"):
+    notes_all = list(skipped)
+    for rows, notes in run_tasks(tasks, client=client, progress=progress, description=description):
         scores += rows
-        skipped += notes
-    result = AdaptationResult(tuple(scores), summarise_adapt_scores(scores), settings.to_dict(), tuple(skipped))
+        notes_all += notes
+    result = AdaptationResult(tuple(scores), summarise_adapt_scores(scores), settings.to_dict(), tuple(notes_all))
     if out_dir is not None:
         result.write(out_dir)
     return result

@@ -17,15 +17,15 @@ from typing import Any
 import numpy as np
 
 from terrain.checks import check_text
-from terrain.dask_client import check_client, run_tasks
+from terrain.dask_client import check_client
 from terrain.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog
 from ..metrics import compare_currents
 from ..models.adaptation import AdaptedCurrentModel
 from ..models.base import CurrentModel, log_currents
-from .adapt_protocol import AdaptSettings, named_models, schedule_name
-from .adapt_results import AdaptationResult, AdaptScore, check_adapt_dir, summarise_adapt_scores
+from .adapt_protocol import AdaptSettings, collect_adaptation, named_models, schedule_name
+from .adapt_results import AdaptationResult, AdaptScore, check_adapt_dir
 from .scoring import check_runs, run_names, trim_to_overlap
 
 __all__ = ["few_shot_scores", "evaluate_few_shot"]
@@ -200,12 +200,5 @@ def evaluate_few_shot(
         train = [lg for lg in items if str(lg.meta.ground_label) != g]
         tasks += [(_few_shot_fold, (proto, train, [items[i] for i in idx], [names[i] for i in idx], mname, settings))
                   for mname, proto in models.items()]
-    scores: list[AdaptScore] = []
-    skipped: list[str] = []
-    for rows, notes in run_tasks(tasks, client=client, progress=progress, description="few-shot grounds"):
-        scores += rows
-        skipped += notes
-    result = AdaptationResult(tuple(scores), summarise_adapt_scores(scores), settings.to_dict(), tuple(skipped))
-    if out_dir is not None:
-        result.write(out_dir)
-    return result
+    return collect_adaptation(tasks, settings, [], client=client, progress=progress, description="few-shot grounds",
+                              out_dir=out_dir)
