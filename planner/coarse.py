@@ -34,7 +34,17 @@ from .lattice import LATTICE_OFFSETS, Lattice
 from .points import as_points
 from .route import Route, empty_route, evaluate_route
 
-__all__ = ["CoarseToFine", "plan_coarse_to_fine", "downsample_cost", "COARSE_FALLBACKS"]
+__all__ = [
+    "CoarseToFine",
+    "plan_coarse_to_fine",
+    "downsample_cost",
+    "COARSE_FALLBACKS",
+    "coarse_layers",
+    "coarse_cost",
+    "corridor_mask",
+    "search_corridor",
+    "check_free_point",
+]
 
 #: What a coarse-to-fine plan fell back to: nothing, a corridor four times wider, the whole map.
 COARSE_FALLBACKS = ("none", "wider corridor", "whole map")
@@ -66,6 +76,9 @@ class CoarseToFine:
     coarse_time_s, fine_time_s, optimum_time_s : float
         Seconds spent downsampling and planning on the coarse map; building and searching
         the corridor graph; computing the optimum (0 unless compared).
+    fine_window_cells : int
+        Full-resolution cells the fine stage read from the file, summed over the windows it
+        read (0: the whole map was given in memory, :func:`plan_coarse_to_fine`).
     """
 
     route: Route
@@ -79,6 +92,7 @@ class CoarseToFine:
     coarse_time_s: float
     fine_time_s: float
     optimum_time_s: float
+    fine_window_cells: int = 0
 
     @property
     def ratio_to_optimum(self) -> float:
@@ -94,7 +108,7 @@ class CoarseToFine:
             "corridor_cells": self.corridor_cells, "objective_j": self.objective_j, "optimum_j": self.optimum_j,
             "ratio_to_optimum": self.ratio_to_optimum, "fallback": self.fallback,
             "coarse_time_s": self.coarse_time_s, "fine_time_s": self.fine_time_s,
-            "optimum_time_s": self.optimum_time_s,
+            "optimum_time_s": self.optimum_time_s, "fine_window_cells": self.fine_window_cells,
         }
 
 
@@ -125,31 +139,63 @@ def downsample_cost(cost: EnergyCost, factor: int) -> EnergyCost:
     rows, cols = cost.shape
     if -(-rows // f) < 2 or -(-cols // f) < 2:
         raise InvalidParameterError(f"factor={f} leaves fewer than 2 x 2 coarse cells on a {rows} x {cols} map")
-    elevation = _blocks(cost.terrain.elevation_m, f).mean(axis=(1, 3))
-    blocked = _blocks(cost.blocked, f).mean(axis=(1, 3)) > 0.5
-    ground = _blocks(cost.ground_rows, f)
+    elevation, blocked, best = coarse_layers(cost.terrain.elevation_m, cost.blocked, cost.ground_rows, f)
+    return coarse_cost(cost, elevation, blocked, best, cost.terrain.cell_size_m * f, cost.terrain.origin_xy_m,
+                       cost.terrain.crs)
+
+
+def coarse_layers(elevation_m: np.ndarray, blocked: np.ndarray, ground_rows: np.ndarray, factor: int
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Block reductions of :func:`downsample_cost`: mean elevation, majority blocked, most common table row.
+
+    Blocks are ``factor x factor`` cells from cell (0, 0); a partial last block is edge-padded
+    (its last row / column repeated). Blocks are independent, so a map cut into parts whose
+    sides are multiples of ``factor`` (the last parts excepted) gives, part by part, the
+    same numbers as the whole map.
+
+    Returns
+    -------
+    (ndarray, ndarray, ndarray)
+        Coarse elevation (float64), blocked (bool, more than half the block) and table row
+        (int64, the most common; ties to the lowest row).
+    """
+    f = int(factor)
+    elevation = _blocks(elevation_m, f).mean(axis=(1, 3))
+    coarse_blocked = _blocks(blocked, f).mean(axis=(1, 3)) > 0.5
+    ground = _blocks(ground_rows, f)
     best = np.full(elevation.shape, -1, dtype=np.int64)
     count = np.zeros(elevation.shape, dtype=np.int64)
-    for row in np.unique(cost.ground_rows).tolist():
+    for row in np.unique(ground_rows).tolist():
         n = (ground == row).sum(axis=(1, 3))
         better = n > count
         best[better], count[better] = row, n[better]
-    coarse = TerrainMap(elevation, cost.terrain.cell_size_m * f, cost.terrain.origin_xy_m, obstacle=blocked,
-                        crs=cost.terrain.crs)
-    return EnergyCost(coarse, best, cost.grade_table_j_per_m, cost.turn_table_j, speed_mps=cost.speed_mps,
-                      max_slope_rad=cost.max_slope_rad, battery_voltage_v=cost.battery_voltage_v,
-                      turn_rate_radps=cost.turn_rate_radps, ground_labels=cost.ground_labels)
+    return elevation, coarse_blocked, best
+
+
+def coarse_cost(tables: EnergyCost, elevation_m: np.ndarray, blocked: np.ndarray, ground_rows: np.ndarray,
+                cell_size_m: float, origin_xy_m: tuple[float, float], crs: str | None) -> EnergyCost:
+    """The coarse map of :func:`coarse_layers` priced with the energy tables and settings of ``tables``."""
+    coarse = TerrainMap(elevation_m, cell_size_m, origin_xy_m, obstacle=blocked, crs=crs)
+    return EnergyCost(coarse, ground_rows, tables.grade_table_j_per_m, tables.turn_table_j,
+                      speed_mps=tables.speed_mps, max_slope_rad=tables.max_slope_rad,
+                      battery_voltage_v=tables.battery_voltage_v, turn_rate_radps=tables.turn_rate_radps,
+                      ground_labels=tables.ground_labels)
+
+
+def corridor_mask(coarse: EnergyCost, waypoints_m: np.ndarray, width_m: float) -> np.ndarray:
+    """Coarse cells within about ``width_m`` of the coarse route (plus the coarse cell the route crosses)."""
+    grid = coarse.terrain.grid
+    on_route = np.zeros(grid.shape, dtype=bool)
+    for a, b in zip(waypoints_m[:-1], waypoints_m[1:], strict=True):
+        r, c, _ = grid.segment_cells(tuple(a), tuple(b))
+        on_route[r, c] = True
+    reach = width_m / grid.cell_size_m + 1.0  # + the coarse cell the route crosses
+    return ndimage.distance_transform_edt(~on_route) <= reach
 
 
 def _corridor(coarse: EnergyCost, waypoints: np.ndarray, width_m: float, f: int, shape: tuple[int, int]) -> np.ndarray:
     """Fine cells within about ``width_m`` of the coarse route (dilated on the coarse grid)."""
-    grid = coarse.terrain.grid
-    on_route = np.zeros(grid.shape, dtype=bool)
-    for a, b in zip(waypoints[:-1], waypoints[1:], strict=True):
-        r, c, _ = grid.segment_cells(tuple(a), tuple(b))
-        on_route[r, c] = True
-    reach = width_m / grid.cell_size_m + 1.0  # + the coarse cell the route crosses
-    near = ndimage.distance_transform_edt(~on_route) <= reach
+    near = corridor_mask(coarse, waypoints, width_m)
     return np.repeat(np.repeat(near, f, axis=0), f, axis=1)[: shape[0], : shape[1]]
 
 
@@ -165,9 +211,12 @@ def _merge_straight(pts: np.ndarray) -> np.ndarray:
     return pts[np.concatenate([[True], ~straight, [True]])]
 
 
-def _search_corridor(cost: EnergyCost, start: np.ndarray, goal: np.ndarray, inside: np.ndarray
-                     ) -> tuple[float, np.ndarray, int]:
-    """Best 1-cell lattice route inside ``inside`` cells: (drive energy, waypoints, number of nodes)."""
+def search_corridor(cost: EnergyCost, start: np.ndarray, goal: np.ndarray, inside: np.ndarray
+                    ) -> tuple[float, np.ndarray, int]:
+    """Best 1-cell lattice route inside ``inside`` cells: (drive energy, waypoints, number of nodes).
+
+    Start and goal join the free nodes within 1.5 cells; the straight segment start -> goal
+    is the route when no lattice route is cheaper (``inf`` energy: none at all)."""
     free = inside & ~cost.blocked
     node_rows, node_cols = (a.astype(np.int64) for a in np.nonzero(free))
     n = node_rows.size
@@ -210,6 +259,21 @@ def _search_corridor(cost: EnergyCost, start: np.ndarray, goal: np.ndarray, insi
                 node = int(pred[node])
     mid = np.column_stack([xs[chain[::-1]], ys[chain[::-1]]]) if chain else np.empty((0, 2))
     return best, _merge_straight(np.vstack([start, mid, goal])), n
+
+
+def check_free_point(cost: EnergyCost, name: str, point_xy_m: np.ndarray, row_col: tuple[int, int] | None = None
+                     ) -> None:
+    """Raise :class:`BlockedPositionError` naming ``name`` when the point lies on a blocked cell of ``cost``.
+
+    ``row_col`` names the cell in the messages (default: its cell in ``cost``; a window's
+    caller gives the whole map's)."""
+    r, c = cost.terrain.rowcol(point_xy_m[0], point_xy_m[1])
+    if cost.blocked[r, c]:
+        rr, cc = (r, c) if row_col is None else row_col
+        raise BlockedPositionError(
+            f"{name} {tuple(point_xy_m.tolist())!r} m lies on a blocked cell (obstacle, or steeper than "
+            f"max_slope_rad) at row {rr}, col {cc}; expected a free cell"
+        )
 
 
 def plan_coarse_to_fine(
@@ -273,12 +337,7 @@ def plan_coarse_to_fine(
     if np.array_equal(start, goal):
         raise InvalidParameterError(f"start equals goal {tuple(start.tolist())!r} m; expected two different points")
     for name, p in (("start_xy_m", start), ("goal_xy_m", goal)):
-        r, c = cost.terrain.rowcol(p[0], p[1])
-        if cost.blocked[r, c]:
-            raise BlockedPositionError(
-                f"{name} {tuple(p.tolist())!r} m lies on a blocked cell (obstacle, or steeper than max_slope_rad) "
-                f"at row {r}, col {c}; expected a free cell"
-            )
+        check_free_point(cost, name, p)
     width = 3.0 * f * cost.terrain.cell_size_m if width is None else width
 
     t0 = time.perf_counter()
@@ -290,7 +349,7 @@ def plan_coarse_to_fine(
     if coarse_path.found:
         for label, scale in zip(COARSE_FALLBACKS[:2], (1.0, 4.0), strict=True):
             inside = _corridor(coarse, coarse_path.waypoints_m, width * scale, f, cost.shape)
-            objective, waypoints, n_nodes = _search_corridor(cost, start, goal, inside)
+            objective, waypoints, n_nodes = search_corridor(cost, start, goal, inside)
             if math.isfinite(objective):
                 width, fallback = width * scale, label
                 break
@@ -298,7 +357,7 @@ def plan_coarse_to_fine(
         fallback = COARSE_FALLBACKS[2]
         labels = cost.components()
         if labels[cost.terrain.rowcol(*start)] == labels[cost.terrain.rowcol(*goal)]:  # else: no route anywhere
-            objective, waypoints, n_nodes = _search_corridor(cost, start, goal, np.ones(cost.shape, dtype=bool))
+            objective, waypoints, n_nodes = search_corridor(cost, start, goal, np.ones(cost.shape, dtype=bool))
     fine_s = time.perf_counter() - t0
     if math.isfinite(objective):
         route = evaluate_route(cost, waypoints, planner="coarse-to-fine", planning_time_s=coarse_s + fine_s)

@@ -58,7 +58,7 @@ from .vector import (
     set_ground_from_polygons,
     set_obstacles_from_polygons,
 )
-from .windows import SurfaceWindow, iter_surface_windows, windowed_surface
+from .windows import DemWindows, ElevationWindow, SurfaceWindow, iter_surface_windows, windowed_surface
 
 __all__ = [
     # the map
@@ -84,6 +84,8 @@ __all__ = [
     "iter_surface_windows",
     "windowed_surface",
     "SurfaceWindow",
+    "DemWindows",
+    "ElevationWindow",
     "rasterize_polygons",
     "set_ground_from_polygons",
     "set_obstacles_from_polygons",

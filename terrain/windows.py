@@ -7,7 +7,9 @@ and crops the halo. Central differences need one neighbour on each side, so ever
 value equals the whole-map value exactly (same floating-point operations on the same
 numbers); at the raster's own edges the tile's edge is the map's edge and the one-sided
 differences agree too. :func:`windowed_surface` assembles the tiles into arrays (in memory,
-or ``.npy`` memory maps in a folder).
+or ``.npy`` memory maps in a folder). :class:`DemWindows` reads any block with its halo
+(:class:`ElevationWindow`, a georeferenced :class:`TerrainMap` on demand), for planners that
+work window by window.
 """
 
 from __future__ import annotations
@@ -23,9 +25,11 @@ from .atomic import atomic_directory
 from .checks import check_choice, check_int
 from .errors import FileFormatError, InvalidParameterError, NodataError
 from .georef import DemBand, dem_band, import_rasterio
+from .grid import Grid
 from .surface import SURFACE_LAYERS, surface_layers
+from .terrain_map import TerrainMap
 
-__all__ = ["SurfaceWindow", "WINDOW_LAYERS", "iter_surface_windows", "windowed_surface"]
+__all__ = ["SurfaceWindow", "WINDOW_LAYERS", "iter_surface_windows", "windowed_surface", "DemWindows", "ElevationWindow"]
 
 #: Layers a window carries: the elevation and its surface layers.
 WINDOW_LAYERS = ("elevation",) + SURFACE_LAYERS
@@ -71,14 +75,174 @@ def _file_span(map_lo: int, map_hi: int, n: int, flip: bool) -> tuple[int, int]:
     return (n - map_hi, n - map_lo) if flip else (map_lo, map_hi)
 
 
+@dataclass(frozen=True)
+class ElevationWindow:
+    """A block of a DEM's elevation with its halo cells, in TerrainMap's convention (row 0 the southern edge).
+
+    Attributes
+    ----------
+    rows, cols : slice
+        The block in the whole map's arrays (without halo).
+    halo_rows, halo_cols : slice
+        Where :attr:`elevation_m` lies in the whole map's arrays (the block grown by the halo,
+        clipped at the map's edges).
+    elevation_m : ndarray
+        Elevation (m, float64) of the haloed block.
+    cell_size_m : float
+        Cell side (m).
+    origin_xy_m : (float, float)
+        South-west corner of the haloed block in the map's coordinates.
+    crs : str or None
+        The map's CRS.
+    """
+
+    rows: slice
+    cols: slice
+    halo_rows: slice
+    halo_cols: slice
+    elevation_m: np.ndarray
+    cell_size_m: float
+    origin_xy_m: tuple[float, float]
+    crs: str | None
+
+    @property
+    def crop(self) -> tuple[slice, slice]:
+        """The block inside :attr:`elevation_m` (index it to drop the halo)."""
+        r0, c0 = self.rows.start - self.halo_rows.start, self.cols.start - self.halo_cols.start
+        return slice(r0, r0 + self.rows.stop - self.rows.start), slice(c0, c0 + self.cols.stop - self.cols.start)
+
+    def terrain_map(self) -> TerrainMap:
+        """The haloed block as a georeferenced :class:`TerrainMap` (ground unknown, no obstacles).
+
+        Its layers inside :attr:`crop` equal the whole map's (``read_geotiff``) exactly; only
+        the halo's outer ring, where not the map's edge, differs (one-sided differences)."""
+        return TerrainMap(self.elevation_m, self.cell_size_m, self.origin_xy_m, crs=self.crs)
+
+
+class DemWindows:
+    """An open GeoTIFF DEM read by windows (rasterio windows), never whole: a context manager.
+
+    Parameters
+    ----------
+    path : str or path-like
+        GeoTIFF DEM (one band, or ``band``), in metres as :func:`~terrain.read_geotiff` needs.
+    band : int, optional
+        1-based elevation band.
+
+    Attributes
+    ----------
+    grid : Grid
+        The whole map's grid (shape, cell size, south-west origin), as ``read_geotiff(path).grid``.
+    crs : str or None
+        The map's CRS.
+
+    Raises
+    ------
+    FileFormatError, UnitError, InvalidParameterError
+        As :func:`~terrain.read_geotiff` for the file, its band and georeferencing, and a
+        raster under 2 x 2 cells.
+
+    Examples
+    --------
+    >>> with DemWindows("dem.tif") as dem:  # doctest: +SKIP
+    ...     win = dem.read(slice(0, 256), slice(0, 256))
+    ...     tmap = win.terrain_map()
+    """
+
+    def __init__(self, path: str | os.PathLike[str], band: int | None = None) -> None:
+        self._rasterio = import_rasterio()
+        self._src, self._info, self.where = _open(path, band)
+        rows, cols = self._info.shape
+        if rows < 2 or cols < 2:
+            self._src.close()
+            raise InvalidParameterError(f"{self.where} has {rows} x {cols} cells; a map needs at least 2 x 2")
+        self.grid = Grid((rows, cols), self._info.cell_size_m, self._info.origin_xy_m)
+        self.crs = self._info.crs
+
+    def __enter__(self) -> DemWindows:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Close the file."""
+        self._src.close()
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """``(rows, cols)`` of the whole map."""
+        return self.grid.shape
+
+    def read(self, rows: slice, cols: slice, *, halo: int = 1) -> ElevationWindow:
+        """The elevation of map rows ``rows`` and columns ``cols`` (clipped to the map) with ``halo`` cells around.
+
+        Raises
+        ------
+        InvalidParameterError
+            An empty block, or ``halo`` not an integer >= 0.
+        NodataError
+            The haloed block holds nodata / NaN cells: windows fill nothing (a nearest-cell
+            fill is not local), so fill the DEM first (e.g. gdal_fillnodata, or read it whole
+            with ``fill_nodata="nearest"``).
+        """
+        h = check_int("halo", halo, low=0)
+        n_rows, n_cols = self.shape
+        r0, r1, _ = rows.indices(n_rows)
+        c0, c1, _ = cols.indices(n_cols)
+        if r1 <= r0 or c1 <= c0:
+            raise InvalidParameterError(f"the window rows {rows!r}, cols {cols!r} hold no cell of the "
+                                        f"{n_rows} x {n_cols} map")
+        hr0, hr1, hc0, hc1 = max(0, r0 - h), min(n_rows, r1 + h), max(0, c0 - h), min(n_cols, c1 + h)
+        info = self._info
+        fr0, fr1 = _file_span(hr0, hr1, n_rows, info.flip_rows)
+        fc0, fc1 = _file_span(hc0, hc1, n_cols, info.flip_cols)
+        window = self._rasterio.windows.Window(fc0, fr0, fc1 - fc0, fr1 - fr0)
+        data = self._src.read(info.band, window=window, masked=True)
+        z = np.ma.getdata(data).astype(np.float64) * info.scale + info.offset
+        bad = np.ma.getmaskarray(data) | ~np.isfinite(z)
+        if bad.any():
+            raise NodataError(
+                f"{self.where} band {info.band} has {int(bad.sum())} nodata/NaN cells in map rows {hr0}..{hr1 - 1}, "
+                f"cols {hc0}..{hc1 - 1}; windowed preparation fills nothing: fill the DEM first "
+                "(gdal_fillnodata) or read it whole with fill_nodata='nearest'",
+                n_nodata=int(bad.sum()),
+                n_cells=int(bad.size),
+            )
+        if info.flip_rows:
+            z = z[::-1]
+        if info.flip_cols:
+            z = z[:, ::-1]
+        d = info.cell_size_m
+        origin = (info.origin_xy_m[0] + hc0 * d, info.origin_xy_m[1] + hr0 * d)
+        return ElevationWindow(slice(r0, r1), slice(c0, c1), slice(hr0, hr1), slice(hc0, hc1), z, d, origin, self.crs)
+
+    def iter_blocks(self, window_cells: int, *, halo: int = 1) -> Iterator[ElevationWindow]:
+        """Blocks of ``window_cells`` x ``window_cells`` cells (smaller at the map's far edges) at multiples of
+        ``window_cells``, southern row of blocks first, each with ``halo`` cells around.
+
+        Raises
+        ------
+        InvalidParameterError
+            ``window_cells`` not an integer >= 2; as :meth:`read`.
+        NodataError
+            As :meth:`read`.
+        """
+        size = check_int("window_cells", window_cells, low=2)
+        n_rows, n_cols = self.shape
+        for r0 in range(0, n_rows, size):
+            for c0 in range(0, n_cols, size):
+                yield self.read(slice(r0, r0 + size), slice(c0, c0 + size), halo=halo)
+
+
 def iter_surface_windows(
     path: str | os.PathLike[str], *, band: int | None = None, window_cells: int = 1024
 ) -> Iterator[SurfaceWindow]:
     """Tiles of a GeoTIFF DEM with their elevation, slope, aspect and gradients.
 
-    Each tile is read with a one-cell halo (rasterio windows), so memory holds one haloed
-    tile at a time; the values equal those of ``read_geotiff(path)`` and its derived layers
-    exactly (module docstring).
+    Each tile is read with a one-cell halo (rasterio windows, :class:`DemWindows`), so memory
+    holds one haloed tile at a time; the values equal those of ``read_geotiff(path)`` and its
+    derived layers exactly (module docstring).
 
     Parameters
     ----------
@@ -104,38 +268,11 @@ def iter_surface_windows(
         with ``fill_nodata="nearest"``).
     """
     size = check_int("window_cells", window_cells, low=2)
-    rasterio = import_rasterio()
-    src, info, where = _open(path, band)
-    with src:
-        rows, cols = info.shape
-        if rows < 2 or cols < 2:
-            raise InvalidParameterError(f"{where} has {rows} x {cols} cells; a map needs at least 2 x 2")
-        for r0 in range(0, rows, size):
-            r1 = min(rows, r0 + size)
-            for c0 in range(0, cols, size):
-                c1 = min(cols, c0 + size)
-                hr0, hr1, hc0, hc1 = max(0, r0 - 1), min(rows, r1 + 1), max(0, c0 - 1), min(cols, c1 + 1)
-                fr0, fr1 = _file_span(hr0, hr1, rows, info.flip_rows)
-                fc0, fc1 = _file_span(hc0, hc1, cols, info.flip_cols)
-                window = rasterio.windows.Window(fc0, fr0, fc1 - fc0, fr1 - fr0)
-                data = src.read(info.band, window=window, masked=True)
-                z = np.ma.getdata(data).astype(np.float64) * info.scale + info.offset
-                bad = np.ma.getmaskarray(data) | ~np.isfinite(z)
-                if bad.any():
-                    raise NodataError(
-                        f"{where} band {info.band} has {int(bad.sum())} nodata/NaN cells in map rows {hr0}..{hr1 - 1}, "
-                        f"cols {hc0}..{hc1 - 1}; windowed preparation fills nothing: fill the DEM first "
-                        "(gdal_fillnodata) or read it whole with fill_nodata='nearest'",
-                        n_nodata=int(bad.sum()),
-                        n_cells=int(bad.size),
-                    )
-                if info.flip_rows:
-                    z = z[::-1]
-                if info.flip_cols:
-                    z = z[:, ::-1]
-                layers = {"elevation": z, **surface_layers(z, info.cell_size_m)}
-                crop = (slice(r0 - hr0, r0 - hr0 + (r1 - r0)), slice(c0 - hc0, c0 - hc0 + (c1 - c0)))
-                yield SurfaceWindow(slice(r0, r1), slice(c0, c1), {k: v[crop] for k, v in layers.items()})
+    with DemWindows(path, band) as dem:
+        for win in dem.iter_blocks(size):
+            z = win.elevation_m
+            layers = {"elevation": z, **surface_layers(z, win.cell_size_m)}
+            yield SurfaceWindow(win.rows, win.cols, {k: v[win.crop] for k, v in layers.items()})
 
 
 def windowed_surface(
