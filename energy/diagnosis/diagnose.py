@@ -75,7 +75,7 @@ def _candidates(model: Any, logs: list[InteractionLog], effects: Any, terrain: A
         if not e.applies_to(model):
             skipped[e.name] = "already in the model, or not applicable to it"
             continue
-        why = e.unsupported(logs, terrain)
+        why = e.unsupported(logs, terrain, model)
         if why:
             skipped[e.name] = why
             continue

@@ -91,8 +91,9 @@ class Effect:
         """Whether the effect can be added to ``model`` (False when the model already has it)."""
         return True
 
-    def unsupported(self, logs: Sequence[Any], terrain: Any) -> str | None:
-        """Why the data cannot show this effect (e.g. no poses for slope), or None."""
+    def unsupported(self, logs: Sequence[Any], terrain: Any, model: Any = None) -> str | None:
+        """Why the data (or ``model``, the model under test) cannot show this effect (e.g. no
+        poses for slope), or None."""
         return None
 
     def bind(self, logs: Sequence[Any], terrain: Any = None, robot: Any = None) -> Effect:

@@ -125,7 +125,7 @@ class ImuLagEffect(Effect):
     def applies_to(self, model: Any) -> bool:
         return reads_vibration(model)
 
-    def unsupported(self, logs: Sequence[Any], terrain: Any) -> str | None:
+    def unsupported(self, logs: Sequence[Any], terrain: Any, model: Any = None) -> str | None:
         if any(getattr(log, "accel_time_s", None) is None or len(log.accel_time_s) < 2 for log in logs):
             return "a log has no IMU stream"
         return None

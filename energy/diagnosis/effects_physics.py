@@ -100,7 +100,7 @@ class SlopeEffect(_BasisEffect):
     description = "slope: gravity along the pitch under the logged poses (needs a map)"
     terrain: Any = None
 
-    def unsupported(self, logs: Sequence[Any], terrain: Any) -> str | None:
+    def unsupported(self, logs: Sequence[Any], terrain: Any, model: Any = None) -> str | None:
         if not isinstance(terrain, TerrainMap):
             return "needs a terrain map (terrain=)"
         if any(log.pose_xyh is None for log in logs):
@@ -211,7 +211,7 @@ class TrackWidthEffect(_RepredictEffect):
     def applies_to(self, model: Any) -> bool:
         return _is_physics(model) and "track_width_multiplier" not in model.fitted_
 
-    def unsupported(self, logs: Sequence[Any], terrain: Any) -> str | None:
+    def unsupported(self, logs: Sequence[Any], terrain: Any, model: Any = None) -> str | None:
         # the rule of measured_side_speeds, read from the logs alone (the model's robot is not known
         # here): a logged track narrower than the robot's geometric one would leave the multiplier free
         if logs and all(log.meta.velocity_source == "measured" and log.meta.track_width_m is not None for log in logs):
@@ -236,19 +236,29 @@ def log_ground_labels(log: InteractionLog) -> np.ndarray | None:
 
 
 class RollingResistanceEffect(_RepredictEffect):
-    """Per-ground rolling resistance: one coefficient per ground label seen in the logs."""
+    """Per-ground rolling resistance: one coefficient per ground label seen in the logs.
+
+    For a model with Coulomb friction, an error of its coefficient on each ground. For a
+    model without it, Coulomb (rolling) friction switched on with one coefficient per
+    ground — offered only when the logs hold at least two grounds (with one ground it is the
+    ``coulomb_friction`` candidate itself, as a coefficient instead of a gain).
+    """
 
     name = "rolling_resistance"
     parameters: tuple[EffectParameter, ...] = ()
-    description = "per-ground rolling-resistance coefficients"
+    description = "per-ground rolling-resistance coefficients (Coulomb friction switched on if the model lacks it)"
     labels: tuple[str, ...] = ()
 
     def applies_to(self, model: Any) -> bool:
-        return _is_physics(model) and "coulomb_friction" in model.effects_
+        return _is_physics(model)
 
-    def unsupported(self, logs: Sequence[Any], terrain: Any) -> str | None:
-        if any(log_ground_labels(log) is None for log in logs):
+    def unsupported(self, logs: Sequence[Any], terrain: Any, model: Any = None) -> str | None:
+        found = [log_ground_labels(log) for log in logs]
+        if any(lab is None for lab in found):
             return "needs ground labels in every log"
+        n_grounds = len({str(x) for lab in found if lab is not None for x in np.unique(lab)})
+        if n_grounds < 2 and _is_physics(model) and "coulomb_friction" not in model.effects_:
+            return "one ground and no Coulomb friction in the model: that is the coulomb_friction candidate"
         return None
 
     def bind(self, logs: Sequence[Any], terrain: Any = None, robot: Any = None) -> Effect:
@@ -272,8 +282,12 @@ class RollingResistanceEffect(_RepredictEffect):
     def spec(self) -> dict[str, Any]:
         return {"name": self.name, "labels": list(self.labels)}
 
+    @staticmethod
+    def _switched_on(b: PhysicsBasis) -> bool:
+        return "coulomb_friction" not in b.effects
+
     def nominal(self, b: PhysicsBasis) -> float:
-        return float(b.ground.rolling_resistance_coef)
+        return 0.0 if self._switched_on(b) else float(b.ground.rolling_resistance_coef)
 
     def index(self, log: InteractionLog) -> np.ndarray:
         lab = log_ground_labels(log)
@@ -282,14 +296,21 @@ class RollingResistanceEffect(_RepredictEffect):
         return idx if idx.size == len(log) else np.full(len(log), len(self.labels), dtype=np.intp)
 
     def _grounds(self, b: PhysicsBasis, values: Sequence[float]) -> list[Any]:
-        return [b.ground.replace(rolling_resistance_coef=float(v)) for v in values] + [b.ground]
+        # samples of grounds not listed keep the model's physics: its coefficient, or none when
+        # Coulomb friction is switched on here
+        other = b.ground.replace(rolling_resistance_coef=0.0) if self._switched_on(b) else b.ground
+        return [b.ground.replace(rolling_resistance_coef=float(v)) for v in values] + [other]
+
+    def _currents(self, b: PhysicsBasis, log: InteractionLog, grounds: list[Any], index: Any) -> np.ndarray:
+        effects = tuple(b.effects) + ("coulomb_friction",) if self._switched_on(b) else None
+        return motoring_currents_a(b, log, effects=effects, ground=grounds, ground_index=index)
 
     def repredict(self, b: PhysicsBasis, log: InteractionLog, value: float, index: Any = None) -> np.ndarray:
-        return motoring_currents_a(b, log, ground=self._grounds(b, [value] * len(self.labels)), ground_index=index)
+        return self._currents(b, log, self._grounds(b, [value] * len(self.labels)), index)
 
     def changed(self, values: np.ndarray, prepared: Reprediction) -> np.ndarray:
         b = prepared.basis
-        return motoring_currents_a(b, prepared.log, ground=self._grounds(b, values), ground_index=prepared.index)
+        return self._currents(b, prepared.log, self._grounds(b, values), prepared.index)
 
     def per_sample(self, values: np.ndarray, prepared: Reprediction) -> np.ndarray:
         # samples of unlisted grounds keep the model's ground whatever the value: any value will do
