@@ -55,6 +55,7 @@ _FIELD_KIND = {
     "accel_z": "accel",
     "gyro_z": "omega",
     "battery_voltage": "voltage",
+    "battery_current": "current",
     "x": "length",
     "y": "length",
     "heading": "angle",
@@ -77,6 +78,7 @@ DEFAULT_CSV_COLUMNS: dict[str, str] = {
     "accel_z": "accel_z_mps2",
     "gyro_z": "gyro_z_radps",
     "battery_voltage": "battery_voltage_v",
+    "battery_current": "battery_current_a",
     "x": "x_m",
     "y": "y_m",
     "heading": "heading_rad",
@@ -86,7 +88,8 @@ DEFAULT_CSV_COLUMNS: dict[str, str] = {
 #: streams of different rates interleaved by time (the layout :func:`write_csv_log` writes).
 CSV_RATES = ("mixed", "single")
 #: Fields that go together: all mapped (or, in the default layout, all in the header) or none.
-_GROUPS = (("current_left", "current_right"), ("x", "y", "heading"), ("gyro_z",), ("battery_voltage",))
+_GROUPS = (("current_left", "current_right"), ("x", "y", "heading"), ("gyro_z",), ("battery_voltage",),
+           ("battery_current",))
 #: Fields of the IMU stream (the rest but time belong to the drive stream).
 _IMU = ("accel_z", "gyro_z")
 
@@ -139,15 +142,15 @@ def read_csv_log(
         or ``speed_left`` and ``speed_right`` (wheel speeds, with ``track_width_m``; v =
         mean, omega = (right - left) / track_width_m); ``current_left`` and
         ``current_right`` (both, or neither for a log to predict from only); optional ``x``,
-        ``y``, ``heading`` (all three), ``gyro_z`` (IMU yaw rate), ``battery_voltage`` and
-        ``ground`` (text labels). Default: :data:`DEFAULT_CSV_COLUMNS`, the layout written by
+        ``y``, ``heading`` (all three), ``gyro_z`` (IMU yaw rate), ``battery_voltage``,
+        ``battery_current`` (pack current, A; needs ``battery_voltage``) and ``ground`` (text labels). Default: :data:`DEFAULT_CSV_COLUMNS`, the layout written by
         :func:`write_csv_log` (optional columns, the currents included, used when present).
     units : mapping field -> unit, optional
         Declared unit per field (:data:`CSV_UNITS`: current ``"A"``/``"mA"``; speed
         ``"m/s"``, ``"cm/s"``, ``"mm/s"``, ``"km/h"``; omega ``"rad/s"``/``"deg/s"``; time
         ``"s"``, ``"ms"``, ``"us"``, ``"ns"``; accel ``"m/s^2"``/``"g"``; x/y ``"m"``,
         ``"cm"``, ``"mm"``; heading ``"rad"``/``"deg"``; gyro_z as omega; battery_voltage
-        ``"V"``/``"mV"``). Undeclared fields are SI.
+        ``"V"``/``"mV"``; battery_current as current). Undeclared fields are SI.
     robot, ground_label, velocity_source, track_width_m : optional
         Metadata. ``None`` takes the value from a :func:`write_csv_log` header when the file
         has one; otherwise robot ``"unknown"``, velocity ``"measured"`` for wheel speeds and
@@ -254,6 +257,7 @@ def read_csv_log(
         current_left_a=dc.get("current_left"),
         current_right_a=dc.get("current_right"),
         battery_voltage_v=dc.get("battery_voltage"),
+        battery_current_a=dc.get("battery_current"),
         accel_time_s=ta,
         accel_z_mps2=ac["accel_z"],
         gyro_z_radps=ac.get("gyro_z"),
@@ -376,7 +380,7 @@ def _check_csv_units(
     src: str, colmap: dict[str, str], units: dict[str, str], vel_fields: tuple[str, str],
     td: np.ndarray, dc: dict[str, np.ndarray], ta: np.ndarray, ac: dict[str, np.ndarray],
 ) -> None:
-    for f in ("current_left", "current_right"):
+    for f in ("current_left", "current_right", "battery_current"):
         if f in dc:
             check_current(src, colmap[f], dc[f], units.get(f, "A"))
     if "gyro_z" in ac:
@@ -398,7 +402,7 @@ def write_csv_log(log: InteractionLog, path: str | os.PathLike[str]) -> Path:
     The first line is ``# terrawatt-log {json}`` with the format version and the metadata;
     then the header ``time_s,v_mps,omega_radps,current_left_a,current_right_a,accel_z_mps2``
     (the currents only when the log has them; + ``gyro_z_radps`` and
-    ``battery_voltage_v`` when it has them, + ``x_m,y_m,heading_rad`` with a pose,
+    ``battery_voltage_v`` / ``battery_current_a`` when it has them, + ``x_m,y_m,heading_rad`` with a pose,
     + ``ground`` with labels) and one row per
     distinct timestamp of either stream, fields of the stream not sampled at that time left
     empty. Floats are written with ``repr`` so :func:`read_csv_log` reads back the exact
@@ -428,7 +432,7 @@ def write_csv_log(log: InteractionLog, path: str | os.PathLike[str]) -> Path:
     di = np.searchsorted(t, log.time_s)
     ai = np.searchsorted(t, log.accel_time_s)
     streams = [(n, di) for n in ("v_mps", "omega_radps", "current_left_a", "current_right_a")]
-    streams += [("accel_z_mps2", ai), ("gyro_z_radps", ai), ("battery_voltage_v", di)]
+    streams += [("accel_z_mps2", ai), ("gyro_z_radps", ai), ("battery_voltage_v", di), ("battery_current_a", di)]
     cols = [(n, getattr(log, n), where) for n, where in streams if getattr(log, n) is not None]
     if log.pose_xyh is not None:
         cols += [(n, log.pose_xyh[:, k], di) for k, n in enumerate(("x_m", "y_m", "heading_rad"))]

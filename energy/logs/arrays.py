@@ -21,11 +21,11 @@ __all__ = [
 ]
 
 #: Per-sample arrays of the drive stream (on ``time_s``).
-DRIVE_FIELDS = ("v_mps", "omega_radps", "current_left_a", "current_right_a", "battery_voltage_v")
+DRIVE_FIELDS = ("v_mps", "omega_radps", "current_left_a", "current_right_a", "battery_voltage_v", "battery_current_a")
 #: Per-sample arrays of the IMU stream (on ``accel_time_s``).
 IMU_FIELDS = ("accel_z_mps2", "gyro_z_radps")
 #: The stream arrays a log may lack (``None``); the two currents come together or not at all.
-OPTIONAL_FIELDS = ("current_left_a", "current_right_a", "battery_voltage_v", "gyro_z_radps")
+OPTIONAL_FIELDS = ("current_left_a", "current_right_a", "battery_voltage_v", "battery_current_a", "gyro_z_radps")
 
 
 def log_vector(name: str, value: Any) -> np.ndarray:

@@ -6,7 +6,7 @@ An :class:`InteractionLog` holds two streams that share one clock:
   ``omega_radps`` (commanded or measured, see :attr:`LogMeta.velocity_source`), the left and
   right drive currents ``current_left_a`` / ``current_right_a`` (A; both ``None`` in a log
   read for prediction only, see :attr:`InteractionLog.has_currents`), and optionally the
-  battery voltage ``battery_voltage_v``, the pose ``pose_xyh`` (x_m, y_m, heading_rad) and
+  battery voltage ``battery_voltage_v`` and pack current ``battery_current_a``, the pose ``pose_xyh`` (x_m, y_m, heading_rad) and
   a per-sample ground label ``ground``;
 - the **acceleration (IMU) stream** (``accel_time_s``, M samples, usually at a higher
   rate): the vertical acceleration ``accel_z_mps2`` as recorded, gravity included (about
@@ -79,14 +79,19 @@ class InteractionLog:
     gyro_z_radps : array_like, shape (M,), optional
         Gyro yaw rate (rad/s, counter-clockwise positive) at the acceleration timestamps.
     battery_voltage_v : array_like, shape (N,), optional
-        Battery voltage (V) at the drive timestamps; current x voltage is the battery power.
+        Battery voltage (V, >= 0) at the drive timestamps; current x voltage is the battery power.
+    battery_current_a : array_like, shape (N,), optional
+        Pack current at the battery (A) at the drive timestamps, positive when discharging;
+        it includes the electronics. Needs ``battery_voltage_v``: their product is the
+        measured battery power (:attr:`battery_power_w`).
 
     Raises
     ------
     InvalidParameterError
-        Wrong shapes, lengths or types.
+        Wrong shapes, lengths or types; a pack current without a battery voltage.
     DataError
-        Empty streams, non-finite values, timestamps not strictly increasing.
+        Empty streams, non-finite values, timestamps not strictly increasing, a negative
+        battery voltage.
 
     Notes
     -----
@@ -115,6 +120,7 @@ class InteractionLog:
     meta: LogMeta = field(default_factory=LogMeta)
     gyro_z_radps: np.ndarray | None = None
     battery_voltage_v: np.ndarray | None = None
+    battery_current_a: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -130,6 +136,15 @@ class InteractionLog:
                 f"{'None' if self.current_left_a is None else 'an array'} and "
                 f"{'None' if self.current_right_a is None else 'an array'}"
             )
+        if self.battery_current_a is not None and self.battery_voltage_v is None:
+            raise InvalidParameterError(
+                "battery_current_a (the pack current) needs battery_voltage_v too: the battery power is their "
+                "product; give both or neither"
+            )
+        if self.battery_voltage_v is not None and np.any(self.battery_voltage_v < 0):
+            i = int(np.argmax(self.battery_voltage_v < 0))
+            raise DataError(f"battery_voltage_v must be >= 0 V; index {i} holds "
+                            f"{fmt_number(float(self.battery_voltage_v[i]), 6)} V")
         n = len(self.time_s)
         if self.pose_xyh is not None:
             set_(self, "pose_xyh", pose_array(self.pose_xyh, n))
@@ -157,6 +172,18 @@ class InteractionLog:
     def has_currents(self) -> bool:
         """Whether the log holds measured drive currents (a log read for prediction may not)."""
         return self.current_left_a is not None
+
+    @property
+    def has_battery_power(self) -> bool:
+        """Whether the log holds battery voltage and pack current (the measured battery power)."""
+        return self.battery_current_a is not None
+
+    @property
+    def battery_power_w(self) -> np.ndarray | None:
+        """Measured battery power ``battery_voltage_v * battery_current_a`` (W), or None."""
+        if self.battery_current_a is None:
+            return None
+        return self.battery_voltage_v * self.battery_current_a
 
     def require_currents(self, purpose: str) -> None:
         """Raise unless the log holds drive currents.
@@ -283,7 +310,7 @@ class InteractionLog:
 
         The grid is ``t0 + k / rate_hz`` for ``k = 0, 1, ...`` while ``<= t1``, with
         ``[t0, t1]`` the overlap of the drive and acceleration streams. Speeds, currents,
-        battery voltage and x/y are interpolated linearly (``"linear"``) or held from the last sample at or
+        battery voltage and pack current and x/y are interpolated linearly (``"linear"``) or held from the last sample at or
         before each grid time (``"previous"``, zero-order hold, right for commands; a sample
         less than 1 ns after a grid time counts as at it, absorbing float rounding);
         heading is unwrapped before interpolation and wrapped to (-pi, pi] after; ground
@@ -449,7 +476,7 @@ class InteractionLog:
         Each log must start (both streams) after the previous one ends; use
         :meth:`shifted` to put separate runs that each start at zero one after another.
         The joined log keeps the gaps between them. Pose, per-sample ground, currents,
-        battery voltage and gyro must be present in all logs or in none; a log without ``ground`` but with a
+        battery voltage, pack current and gyro must be present in all logs or in none; a log without ``ground`` but with a
         ``meta.ground_label`` contributes that label. The metadata keep the common robot,
         velocity source and track width (these must agree), the ground label when all
         agree (else ``None``), and the distinct sources joined by ``"; "``.

@@ -21,7 +21,10 @@ or a route over a :class:`~terrain.TerrainMap` (:meth:`~TruthSimulator.drive`) i
    coefficients (rolling, viscous, lateral friction) — patchy snow, varying grass — and
    the broadband vibration with it.
 4. **Measurement** (:class:`NoiseModel`): per-run side gains, idle current, Gaussian noise,
-   positive outlier spikes, clipping of braking currents to 0 and quantisation.
+   positive outlier spikes, clipping of braking currents to 0 and quantisation. With a
+   ``battery=``, also the pack's terminal voltage and the pack current that delivers the
+   total battery power (drive, sensors, control board), with small white noise
+   (:func:`measure_battery`, its own stream).
 5. **Vertical vibration**: gravity ``g cos(tilt)`` plus, per ground, narrow spectral peaks
    (:class:`VibrationSignature`: frequencies, amplitudes growing with the wheel speed,
    optional speed-proportional shift for periodic ground such as tile joints) and a
@@ -35,7 +38,7 @@ values are plausible, invented ones shaped after the paper's Fig. 7 and the Bore
 IMU spectra — not measurements), :data:`PAPER_VARIATION`.
 """
 
-from .noise import NoiseModel, measure_currents
+from .noise import NoiseModel, measure_battery, measure_currents
 from .presets import PAPER_GROUNDS, PAPER_VARIATION, VIBRATION_PRESETS, vibration_preset
 from .run import TruthRun
 from .simulator import TruthSimulator
@@ -53,6 +56,7 @@ __all__ = [
     "VIBRATION_PRESETS",
     "vibration_preset",
     "measure_currents",
+    "measure_battery",
     "variation_factor",
     "varied_ground_table",
     "vibration_accel_mps2",

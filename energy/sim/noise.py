@@ -9,7 +9,9 @@ import numpy as np
 
 from terrain.checks import check_bool, check_real
 
-__all__ = ["NoiseModel", "measure_currents"]
+from ..battery import Battery
+
+__all__ = ["NoiseModel", "measure_currents", "measure_battery"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -40,6 +42,13 @@ class NoiseModel:
         wear); 0 = exact.
     accel_noise_std_mps2 : float
         Standard deviation of white accelerometer noise (>= 0), m/s^2.
+    battery_current_noise_rel : float
+        Relative standard deviation (>= 0) of white noise on the logged pack current
+        (0.01 = 1 % of the current), on top of ``battery_current_noise_std_a``.
+    battery_current_noise_std_a : float
+        Standard deviation of white pack-current noise (>= 0), A.
+    battery_voltage_noise_std_v : float
+        Standard deviation of white battery-voltage noise (>= 0), V.
 
     Raises
     ------
@@ -55,11 +64,15 @@ class NoiseModel:
     clip_negative: bool = True
     side_gain_std: float = 0.0
     accel_noise_std_mps2: float = 0.02
+    battery_current_noise_rel: float = 0.01
+    battery_current_noise_std_a: float = 0.05
+    battery_voltage_noise_std_v: float = 0.01
 
     def __post_init__(self) -> None:
         own = "NoiseModel"
         for name in ("current_noise_std_a", "outlier_magnitude_a", "quantisation_step_a",
-                     "idle_current_a", "side_gain_std", "accel_noise_std_mps2"):
+                     "idle_current_a", "side_gain_std", "accel_noise_std_mps2", "battery_current_noise_rel",
+                     "battery_current_noise_std_a", "battery_voltage_noise_std_v"):
             check_real(name, getattr(self, name), low=0.0, owner=own)
         check_real("outlier_rate", self.outlier_rate, low=0.0, high=1.0, owner=own)
         check_bool(f"{own}.clip_negative", self.clip_negative)
@@ -68,10 +81,11 @@ class NoiseModel:
     def off(cls) -> NoiseModel:
         """No noise, outliers, quantisation, idle current, clipping or gains: the logged
         currents are the physics model's motoring currents, the acceleration has no sensor
-        noise."""
+        noise, the battery voltage and pack current are exact."""
         return cls(current_noise_std_a=0.0, outlier_rate=0.0, outlier_magnitude_a=0.0,
                    quantisation_step_a=0.0, idle_current_a=0.0, clip_negative=False,
-                   side_gain_std=0.0, accel_noise_std_mps2=0.0)
+                   side_gain_std=0.0, accel_noise_std_mps2=0.0, battery_current_noise_rel=0.0,
+                   battery_current_noise_std_a=0.0, battery_voltage_noise_std_v=0.0)
 
 
 def measure_currents(
@@ -101,3 +115,29 @@ def measure_currents(
     if nm.quantisation_step_a > 0:
         meas = np.round(meas / nm.quantisation_step_a) * nm.quantisation_step_a
     return clean, meas
+
+
+def measure_battery(noise: NoiseModel, battery: Battery, power_w: np.ndarray,
+                    rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The clean and the measured battery voltage and pack current of a battery power ``power_w`` (N,), W.
+
+    The pack current is :meth:`Battery.current_a` (``V I - R I**2 = P``), the terminal
+    voltage ``V - R I``; so clean voltage x clean current is ``power_w`` exactly. The
+    measured ones add white noise from ``rng`` (relative and absolute on the current, absolute
+    on the voltage; ``rng`` is drawn from only when some of it is on).
+
+    Returns
+    -------
+    clean_voltage_v, clean_current_a, voltage_v, current_a : numpy.ndarray, shape (N,)
+    """
+    nm = noise
+    current = np.asarray(battery.current_a(power_w), dtype=np.float64)
+    voltage = battery.voltage_v - battery.internal_resistance_ohm * current
+    n = current.shape[0]
+    meas_i, meas_v = current.copy(), voltage.copy()
+    if nm.battery_current_noise_rel > 0 or nm.battery_current_noise_std_a > 0:
+        std = np.hypot(nm.battery_current_noise_rel * np.abs(current), nm.battery_current_noise_std_a)
+        meas_i = meas_i + std * rng.standard_normal(n)
+    if nm.battery_voltage_noise_std_v > 0:
+        meas_v = np.maximum(meas_v + nm.battery_voltage_noise_std_v * rng.standard_normal(n), 0.0)
+    return voltage, current, meas_v, meas_i

@@ -22,13 +22,14 @@ from terrain.errors import (
 )
 from terrain.terrain_map import UNKNOWN_GROUND, TerrainMap
 
+from ..battery import Battery
 from ..commands import CommandProfile, command_series, uniform_step_s
 from ..ground import GroundParams
 from ..logs import InteractionLog, LogMeta
 from ..physics import EFFECTS, PhysicsEnergyModel
 from ..profiles import waypoint_commands
 from ..robot import GRAVITY_MPS2, RobotParams
-from .noise import NoiseModel, measure_currents
+from .noise import NoiseModel, measure_battery, measure_currents
 from .presets import VIBRATION_PRESETS
 from .run import TruthRun
 from .variation import GroundVariation, variation_factor, varied_ground_table
@@ -41,8 +42,8 @@ _LOG = logging.getLogger(__name__)
 #: The measurement model of a :class:`TruthSimulator` built without ``noise=``.
 DEFAULT_NOISE = NoiseModel()
 
-# Independent random streams, in spawn order of SeedSequence(seed).
-_STREAMS = ("current_noise", "outliers", "side_gain", "variation", "vibration", "accel_noise")
+# Independent random streams, in spawn order of SeedSequence(seed) (a new one goes last: the others keep their draws).
+_STREAMS = ("current_noise", "outliers", "side_gain", "variation", "vibration", "accel_noise", "battery")
 
 
 class TruthSimulator:
@@ -75,6 +76,11 @@ class TruthSimulator:
     seed : int or None
         Default seed of every method (the seed rule: ``None`` or an int in [0, 2**32);
         ``None`` draws fresh entropy at each call); each method takes its own ``seed=`` too.
+    battery : Battery, optional
+        The pack: when given, the logs also carry its terminal voltage and the pack current
+        that delivers the physics' total battery power (drive, sensors, control board), with
+        the noise's battery terms (:func:`~energy.sim.noise.measure_battery`, its own random
+        stream); ``None`` (default): the logs carry neither.
 
     Raises
     ------
@@ -105,8 +111,12 @@ class TruthSimulator:
         current_rate_hz: float = 100.0,
         accel_rate_hz: float = 100.0,
         seed: int | None = 0,
+        battery: Battery | None = None,
     ) -> None:
         self.model = PhysicsEnergyModel(robot, effects)
+        if battery is not None and not isinstance(battery, Battery):
+            raise InvalidParameterError(f"battery must be None or a Battery, got {type(battery).__name__!r}")
+        self.battery = battery
         self.robot = robot
         if not isinstance(grounds, Mapping) or not grounds:
             raise InvalidParameterError(f"grounds must be a non-empty mapping of name to GroundParams, got {grounds!r:.80}")
@@ -468,8 +478,12 @@ class TruthSimulator:
                 _LOG.info("truth simulator: %d of %d samples %s", count, n, what)
         meta = LogMeta(robot=self.robot.name, source="synthetic", ground_label=used[0] if len(used) == 1 else None,
                        velocity_source="commanded", notes="; ".join(notes))
+        volts = amps = None
+        if self.battery is not None:
+            _, _, volts, amps = measure_battery(self.noise, self.battery, np.asarray(res.total_power_w),
+                                                rngs["battery"])
         log = InteractionLog(t, v_cmd, w_cmd, measured[:, 0], measured[:, 1], ta, accel_z,
-                             pose_xyh=pose, ground=labels, meta=meta)
+                             pose_xyh=pose, ground=labels, meta=meta, battery_voltage_v=volts, battery_current_a=amps)
         return TruthRun(log=log, breakdown=res, actual_v_mps=v, actual_omega_radps=w, accel_mps2=acc,
                         alpha_radps2=alpha, slope_rad=slope, resistance_factor=factor, clean_current_a=clean)
 
