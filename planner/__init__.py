@@ -28,6 +28,7 @@ from .batch import plan_batch
 from .batch_pairs import BatchPairs, read_pairs_csv, read_sites_csv
 from .batch_result import BATCH_FORMAT_VERSION, BATCH_STATUSES, BatchResult, BatchRow
 from .coarse import COARSE_FALLBACKS, CoarseToFine, downsample_cost, plan_coarse_to_fine
+from .coarse_geotiff import plan_coarse_to_fine_geotiff
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
 from .kernels import CostArrays
 from .lattice import Lattice, LatticePath
@@ -96,6 +97,7 @@ __all__ = [
     "evaluate_route",
     # big maps
     "plan_coarse_to_fine",
+    "plan_coarse_to_fine_geotiff",
     "CoarseToFine",
     "downsample_cost",
     "COARSE_FALLBACKS",

@@ -1,0 +1,296 @@
+"""Coarse-to-fine planning straight from a GeoTIFF DEM larger than memory: the coarse map tile by tile, the fine stage on one window.
+
+:func:`plan_coarse_to_fine_geotiff` is :func:`planner.plan_coarse_to_fine` without ever
+holding the whole raster (:class:`terrain.DemWindows`):
+
+1. **coarse stage** — the DEM is read in block-aligned tiles (side a multiple of ``factor``,
+   with one halo cell so that slopes equal the whole map's); each tile is priced with
+   ``cost_from`` and reduced to coarse cells (:func:`planner.coarse.coarse_layers`: block-mean
+   elevation, majority blocked, most common table row), so memory holds one tile plus the
+   coarse grid; a coarse block never straddles two tiles, so the coarse cost equals
+   :func:`planner.downsample_cost` of the whole-map cost. The coarse lattice route follows.
+2. **fine stage** — the full-resolution window holding the corridor's bounding box (plus two
+   cells for the lattice's moves and one halo cell for slopes) is read, priced with
+   ``cost_from`` (a georeferenced TerrainMap: coordinates stay the map's) and searched as
+   :func:`planner.coarse.search_corridor` does on the whole map. When the corridor holds no
+   route it is widened four times, and a bigger window read if the wider one leaves the
+   window; the last fallback reads the whole map (``fallback == "whole map"``; then memory
+   holds the whole map, as :func:`plan_coarse_to_fine` would).
+
+The fine window is a rectangle: a corridor along the map's diagonal has a bounding box of
+most of the map, and the fine stage then holds most of it (the limit of this design; a
+corridor graph assembled tile by tile would not have it).
+
+The route, its energy and the coarse route equal those of ``plan_coarse_to_fine(cost_from(
+read_geotiff(path)), ...)``: the same numbers go through the same operations, with cell
+coordinates counted from the window's corner instead of the map's (``origin + k * cell``
+sums): bit for bit when the origin and cell size are exact binary fractions (whole metres,
+as DEMs usually are), else within rounding (about 1e-12 relative).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from terrain import DemWindows, ElevationWindow, TerrainMap
+from terrain.checks import check_int, check_optional_real
+from terrain.errors import InvalidParameterError, OutOfBoundsError
+
+from .coarse import (
+    COARSE_FALLBACKS,
+    CoarseToFine,
+    check_free_point,
+    coarse_cost,
+    coarse_layers,
+    corridor_mask,
+    search_corridor,
+)
+from .edge_cost import EnergyCost
+from .lattice import Lattice
+from .points import as_points
+from .route import empty_route, evaluate_route
+
+__all__ = ["plan_coarse_to_fine_geotiff", "DEFAULT_WINDOW_CELLS", "FINE_MARGIN_CELLS"]
+
+logger = logging.getLogger(__name__)
+
+#: Tile side (cells) of the coarse stage, rounded down to a multiple of the factor.
+DEFAULT_WINDOW_CELLS = 1024
+#: Cells around the corridor's bounding box in the fine window: a lattice move spans two
+#: cells and a segment through a cell corner checks the cells beside it.
+FINE_MARGIN_CELLS = 2
+
+CostBuilder = Callable[[TerrainMap], EnergyCost]
+
+
+@dataclass
+class _FineWindow:
+    """A priced full-resolution window: map rows / cols of its haloed array, and the cost on it."""
+
+    window: ElevationWindow
+    cost: EnergyCost
+
+    def holds(self, rows: slice, cols: slice) -> bool:
+        return (self.window.rows.start <= rows.start and rows.stop <= self.window.rows.stop
+                and self.window.cols.start <= cols.start and cols.stop <= self.window.cols.stop)
+
+    def inside(self, near: np.ndarray, f: int) -> np.ndarray:
+        """The fine corridor (coarse ``near`` cells repeated ``f`` times) on this window's cells."""
+        w = self.window
+        rows = np.arange(w.halo_rows.start, w.halo_rows.stop) // f
+        cols = np.arange(w.halo_cols.start, w.halo_cols.stop) // f
+        return near[np.ix_(rows, cols)]
+
+
+def _same_tables(ref: EnergyCost, cost: EnergyCost) -> bool:
+    return (np.array_equal(ref.grade_table_j_per_m, cost.grade_table_j_per_m)
+            and np.array_equal(ref.turn_table_j, cost.turn_table_j) and ref.ground_labels == cost.ground_labels
+            and (ref.speed_mps, ref.max_slope_rad, ref.battery_voltage_v, ref.turn_rate_radps)
+            == (cost.speed_mps, cost.max_slope_rad, cost.battery_voltage_v, cost.turn_rate_radps))
+
+
+class _Pricer:
+    """``cost_from`` applied to windows, checked: an EnergyCost on the window, the same tables everywhere."""
+
+    def __init__(self, cost_from: CostBuilder | None) -> None:
+        if cost_from is not None and not callable(cost_from):
+            raise InvalidParameterError(
+                f"cost_from must be a callable TerrainMap -> EnergyCost (e.g. functools.partial("
+                f"EnergyCost.from_presets, robot='husky')), got {type(cost_from).__name__!r}")
+        self.build = EnergyCost.from_presets if cost_from is None else cost_from
+        self.ref: EnergyCost | None = None
+
+    def __call__(self, window: ElevationWindow) -> EnergyCost:
+        tmap = window.terrain_map()
+        cost = self.build(tmap)
+        if not isinstance(cost, EnergyCost) or cost.terrain.grid != tmap.grid:
+            got = type(cost).__name__ if not isinstance(cost, EnergyCost) else f"a cost on grid {cost.terrain.grid!r}"
+            raise InvalidParameterError(f"cost_from must return an EnergyCost on the TerrainMap it is given "
+                                        f"(grid {tmap.grid!r}), got {got}")
+        if self.ref is None:
+            self.ref = cost
+        elif not _same_tables(self.ref, cost):
+            raise InvalidParameterError(
+                "cost_from priced two windows of the map with different energy tables or settings (ground rows "
+                f"{self.ref.ground_labels!r} vs {cost.ground_labels!r}); windowed planning needs one set of tables "
+                "for the whole map: price every window alike (e.g. EnergyCost.from_presets)")
+        return cost
+
+
+def _window_side(window_cells: int | None, f: int) -> int:
+    if window_cells is None:
+        return f * max(1, DEFAULT_WINDOW_CELLS // f)
+    w = check_int("window_cells", window_cells, low=2)
+    if w % f:
+        raise InvalidParameterError(
+            f"window_cells={w} is not a multiple of factor={f}: a coarse block would straddle two windows; "
+            f"use e.g. window_cells={f * max(1, round(w / f))}")
+    return w
+
+
+def _coarse_stage(dem: DemWindows, price: _Pricer, f: int, side: int) -> EnergyCost:
+    """The coarse cost of :func:`downsample_cost`, reduced tile by tile."""
+    rows, cols = dem.shape
+    shape = (-(-rows // f), -(-cols // f))
+    elevation = np.empty(shape, dtype=np.float64)
+    blocked = np.empty(shape, dtype=bool)
+    ground = np.empty(shape, dtype=np.int64)
+    for win in dem.iter_blocks(side, halo=1):
+        cost = price(win)
+        crop = win.crop
+        e, b, g = coarse_layers(win.elevation_m[crop], cost.blocked[crop], cost.ground_rows[crop], f)
+        at = (slice(win.rows.start // f, win.rows.start // f + e.shape[0]),
+              slice(win.cols.start // f, win.cols.start // f + e.shape[1]))
+        elevation[at], blocked[at], ground[at] = e, b, g
+        del cost, win
+    ref = price.ref if price.ref is not None else price(dem.read(slice(0, 2), slice(0, 2)))
+    return coarse_cost(ref, elevation, blocked, ground, dem.grid.cell_size_m * f, dem.grid.origin_xy_m, dem.crs)
+
+
+def _box(near: np.ndarray, f: int, shape: tuple[int, int]) -> tuple[slice, slice]:
+    """Map rows / cols of the corridor's bounding box in fine cells, grown by :data:`FINE_MARGIN_CELLS`."""
+    rr, cc = np.nonzero(near.any(axis=1))[0], np.nonzero(near.any(axis=0))[0]
+    m = FINE_MARGIN_CELLS
+    return (slice(max(0, int(rr[0]) * f - m), min(shape[0], (int(rr[-1]) + 1) * f + m)),
+            slice(max(0, int(cc[0]) * f - m), min(shape[1], (int(cc[-1]) + 1) * f + m)))
+
+
+def _check_points(dem: DemWindows, price: _Pricer, start_xy_m: tuple[float, float], goal_xy_m: tuple[float, float]
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Start and goal checked as :func:`plan_coarse_to_fine` checks them, each from a 3 x 3 window."""
+    pts = as_points([start_xy_m, goal_xy_m], "start/goal")
+    grid = dem.grid
+    inside = np.asarray(grid.contains(pts[:, 0], pts[:, 1]))
+    if not np.all(inside):
+        bad = pts[~inside][0]
+        raise OutOfBoundsError(f"start/goal point {tuple(bad.tolist())!r} m lies outside the map bounds {grid.bounds!r}")
+    start, goal = pts
+    if np.array_equal(start, goal):
+        raise InvalidParameterError(f"start equals goal {tuple(start.tolist())!r} m; expected two different points")
+    for name, p in (("start_xy_m", start), ("goal_xy_m", goal)):
+        r, c = (int(v) for v in grid.rowcol(p[0], p[1]))
+        check_free_point(price(dem.read(slice(r, r + 1), slice(c, c + 1), halo=1)), name, p, (r, c))
+    return start, goal
+
+
+def plan_coarse_to_fine_geotiff(
+    path: str | os.PathLike[str],
+    start_xy_m: tuple[float, float],
+    goal_xy_m: tuple[float, float],
+    *,
+    factor: int = 4,
+    corridor_m: float | None = None,
+    band: int | None = None,
+    window_cells: int | None = None,
+    cost_from: CostBuilder | None = None,
+) -> CoarseToFine:
+    """Coarse-to-fine planning on a GeoTIFF DEM read by windows, never whole (module docstring).
+
+    Parameters
+    ----------
+    path : str or path-like
+        GeoTIFF DEM in metres (one band, or ``band``), without nodata cells (windows fill
+        nothing: fill it first).
+    start_xy_m, goal_xy_m : (float, float)
+        Points on the map (m, the map's CRS).
+    factor : int
+        Downsampling factor (>= 2), as :func:`plan_coarse_to_fine`.
+    corridor_m : float, optional
+        Corridor half-width (m); default three coarse cells.
+    band : int, optional
+        1-based elevation band.
+    window_cells : int, optional
+        Tile side (cells) of the coarse stage, a multiple of ``factor``; default 1024 rounded
+        down to a multiple of ``factor``. Memory holds one tile (about 100 bytes per cell
+        priced) plus the coarse grid.
+    cost_from : callable, optional
+        ``TerrainMap -> EnergyCost``, applied to each window (a georeferenced part of the
+        map); it must price every window with the same tables, as a preset or model does
+        (e.g. ``functools.partial(EnergyCost.from_presets, robot="jackal", speed_mps=0.8)``).
+        Default :meth:`EnergyCost.from_presets` (husky, 0.5 m/s, 20 degrees, unknown ground
+        priced as gravel).
+
+    Returns
+    -------
+    CoarseToFine
+        As :func:`plan_coarse_to_fine` (``optimum_j`` NaN: no comparison, it needs the
+        whole map), with ``fine_window_cells`` the full-resolution cells the fine stage read.
+        ``coarse_time_s`` includes reading and pricing the tiles, ``fine_time_s`` reading and
+        pricing the fine window.
+
+    Raises
+    ------
+    FileFormatError, UnitError
+        As :func:`terrain.read_geotiff` for the file, its band and georeferencing.
+    NodataError
+        A window read holds nodata / NaN cells.
+    InvalidParameterError
+        Bad ``factor`` / ``corridor_m`` / ``window_cells`` (not a multiple of ``factor``) /
+        ``cost_from`` (not callable, not returning an EnergyCost on the window, tables that
+        differ between windows) / points; start equals goal; a coarse grid under 2 x 2.
+    OutOfBoundsError
+        A point outside the map.
+    BlockedPositionError
+        A point on an obstacle or on ground steeper than the cost's slope limit.
+    """
+    f = check_int("factor", factor, low=2)
+    width = check_optional_real("corridor_m", corridor_m, low=0.0, low_inclusive=False)
+    side = _window_side(window_cells, f)
+    price = _Pricer(cost_from)
+    with DemWindows(path, band) as dem:
+        rows, cols = dem.shape
+        if -(-rows // f) < 2 or -(-cols // f) < 2:
+            raise InvalidParameterError(f"factor={f} leaves fewer than 2 x 2 coarse cells on a {rows} x {cols} map")
+        start, goal = _check_points(dem, price, start_xy_m, goal_xy_m)
+        width = 3.0 * f * dem.grid.cell_size_m if width is None else width
+
+        t0 = time.perf_counter()
+        coarse = _coarse_stage(dem, price, f, side)
+        coarse_path = Lattice(coarse, 1).shortest_path(start, goal)
+        coarse_s = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        objective, waypoints, n_nodes, fallback = math.inf, np.empty((0, 2)), 0, COARSE_FALLBACKS[0]
+        fine: _FineWindow | None = None
+        cells_read = 0
+
+        def window_for(box: tuple[slice, slice]) -> _FineWindow:
+            nonlocal fine, cells_read
+            if fine is None or not fine.holds(*box):
+                fine = None  # free the smaller window before reading the bigger one
+                win = dem.read(*box, halo=1)
+                cells_read += win.elevation_m.size
+                logger.info("fine stage: map rows %d..%d, cols %d..%d (%d cells)", win.halo_rows.start,
+                            win.halo_rows.stop - 1, win.halo_cols.start, win.halo_cols.stop - 1, win.elevation_m.size)
+                fine = _FineWindow(win, price(win))
+            return fine
+
+        if coarse_path.found:
+            for label, scale in zip(COARSE_FALLBACKS[:2], (1.0, 4.0), strict=True):
+                near = corridor_mask(coarse, coarse_path.waypoints_m, width * scale)
+                here = window_for(_box(near, f, (rows, cols)))
+                objective, waypoints, n_nodes = search_corridor(here.cost, start, goal, here.inside(near, f))
+                if math.isfinite(objective):
+                    width, fallback = width * scale, label
+                    break
+        if not math.isfinite(objective):
+            fallback = COARSE_FALLBACKS[2]
+            logger.warning("coarse-to-fine: no route in the corridor; reading the whole %d x %d map", rows, cols)
+            here = window_for((slice(0, rows), slice(0, cols)))
+            labels = here.cost.components()
+            if labels[here.cost.terrain.rowcol(*start)] == labels[here.cost.terrain.rowcol(*goal)]:
+                objective, waypoints, n_nodes = search_corridor(here.cost, start, goal,
+                                                                np.ones(here.cost.shape, dtype=bool))
+        fine_s = time.perf_counter() - t0
+        if math.isfinite(objective):
+            route = evaluate_route(here.cost, waypoints, planner="coarse-to-fine", planning_time_s=coarse_s + fine_s)
+        else:
+            route = empty_route("infeasible", "coarse-to-fine", coarse_s + fine_s, coarse.battery_voltage_v)
+    return CoarseToFine(route, coarse_path.waypoints_m, f, width, n_nodes, objective, math.nan, fallback,
+                        coarse_s, fine_s, 0.0, cells_read)
