@@ -4,17 +4,9 @@ import importlib.util
 import json
 from pathlib import Path
 
-import pytest
-
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "diagnose_synthetic.py"
 
-try:
-    from energy.diagnosis import diagnose  # noqa: F401
-except ImportError:  # the diagnosis may land after the example
-    diagnose = None
 
-
-@pytest.mark.skipif(diagnose is None, reason="energy.diagnosis.diagnose has not landed yet")
 def test_diagnose_synthetic_quick(tmp_path, capsys):
     spec = importlib.util.spec_from_file_location("diagnose_synthetic_example", EXAMPLE)
     mod = importlib.util.module_from_spec(spec)
