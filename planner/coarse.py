@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import ndimage
@@ -79,6 +79,13 @@ class CoarseToFine:
     fine_window_cells : int
         Full-resolution cells the fine stage read from the file, summed over the windows it
         read (0: the whole map was given in memory, :func:`plan_coarse_to_fine`).
+    coarse_map : TerrainMap or None
+        The downsampled map the coarse route was planned on (elevation, blocked blocks as
+        obstacles): a view of the whole map even when only windows of it were read.
+    fine_map : TerrainMap or None
+        The full-resolution map the route was searched and evaluated on: the cost's map, or
+        the window of the map read by :func:`planner.plan_coarse_to_fine_geotiff` (in the
+        map's coordinates); None when no fine search ran.
     """
 
     route: Route
@@ -93,6 +100,8 @@ class CoarseToFine:
     fine_time_s: float
     optimum_time_s: float
     fine_window_cells: int = 0
+    coarse_map: TerrainMap | None = field(default=None, repr=False, compare=False)
+    fine_map: TerrainMap | None = field(default=None, repr=False, compare=False)
 
     @property
     def ratio_to_optimum(self) -> float:
@@ -370,4 +379,5 @@ def plan_coarse_to_fine(
         optimum = best.objective if best.found else math.nan
         optimum_s = time.perf_counter() - t0
     return CoarseToFine(route, coarse_path.waypoints_m, f, width, n_nodes, objective, optimum, fallback,
-                        coarse_s, fine_s, optimum_s)
+                        coarse_s, fine_s, optimum_s, coarse_map=coarse.terrain,
+                        fine_map=cost.terrain)

@@ -293,4 +293,5 @@ def plan_coarse_to_fine_geotiff(
         else:
             route = empty_route("infeasible", "coarse-to-fine", coarse_s + fine_s, coarse.battery_voltage_v)
     return CoarseToFine(route, coarse_path.waypoints_m, f, width, n_nodes, objective, math.nan, fallback,
-                        coarse_s, fine_s, 0.0, cells_read)
+                        coarse_s, fine_s, 0.0, cells_read, coarse_map=coarse.terrain,
+                        fine_map=None if fine is None else fine.cost.terrain)

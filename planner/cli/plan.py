@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import time
 from collections.abc import Sequence
@@ -11,11 +12,21 @@ from typing import Any
 
 import numpy as np
 
-from terrain import UNKNOWN_GROUND, InvalidParameterError, TerrainMap
+from energy import GROUND_PRESETS
+from terrain import UNKNOWN_GROUND, DemWindows, InvalidParameterError, TerrainMap, UnknownNameError
 from terrain.atomic import write_json_atomic
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
 
-from .. import PLANNERS, EnergyCost, Route, plan_coarse_to_fine, plan_route, warm_up_kernels
+from .. import (
+    PLANNERS,
+    CoarseToFine,
+    EnergyCost,
+    Route,
+    plan_coarse_to_fine,
+    plan_coarse_to_fine_geotiff,
+    plan_route,
+    warm_up_kernels,
+)
 from ..plot import RouteLine, plot_routes
 from ..route_geojson import write_geojson
 from .common import (
@@ -28,7 +39,7 @@ from .common import (
     unknown_ground,
 )
 
-__all__ = ["add_parsers", "run_demo", "run_plan_command", "run_plan", "run_coarse_plan"]
+__all__ = ["add_parsers", "run_demo", "run_plan_command", "run_plan", "run_coarse_plan", "run_windowed_plan"]
 
 _OUTPUTS = ("route.json", "route.geojson", "route.png")
 
@@ -52,6 +63,11 @@ def add_parsers(sub: Any) -> None:
     )
     plan.add_argument("--corridor", type=float, default=None, metavar="M",
                       help="with --coarse-factor: corridor half-width (m; default three coarse cells)")
+    plan.add_argument(
+        "--windowed", action="store_true",
+        help="with --coarse-factor on a GeoTIFF DEM: read the DEM by windows, never whole (the coarse map tile by "
+             "tile, the full resolution only in the corridor's window), for DEMs larger than memory",
+    )
     plan.set_defaults(run=run_plan_command)
 
 
@@ -86,6 +102,8 @@ def run_demo(args: argparse.Namespace) -> int:
 def run_plan_command(args: argparse.Namespace) -> int:
     """``terrawatt plan``: plan on a map file."""
     check_outputs(args.out, _OUTPUTS)
+    if args.windowed:
+        return _run_windowed(args)
     tmap = read_map_args(args)
     return _run(args, tmap, tuple(args.start), tuple(args.goal), args.map.name)
 
@@ -115,6 +133,38 @@ def _run(args: argparse.Namespace, tmap: TerrainMap, start: tuple[float, float],
         tmap, start, goal, planner=args.planner, time_limit_s=args.time_limit, max_evaluations=args.max_evaluations,
         seed=args.seed, out_dir=args.out, robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg,
         unknown_ground=unknown_ground(args.unknown_ground, tmap), map_label=label, whole_map=args.whole_map,
+    )
+    return 0 if result["status"] == "exact" else 1
+
+
+def _run_windowed(args: argparse.Namespace) -> int:
+    """``terrawatt plan --windowed``: its flags checked before any work, then :func:`run_windowed_plan`."""
+    if args.coarse_factor is None:
+        raise InvalidParameterError("--windowed plans coarse-to-fine; give --coarse-factor F too")
+    if args.map.suffix.lower() not in (".tif", ".tiff"):
+        raise InvalidParameterError(f"--windowed reads GeoTIFF DEMs (.tif, .tiff), got --map {args.map.name}")
+    for flag, value in (("--fill-nodata", args.fill_nodata), ("--reproject", args.reproject),
+                        ("--cell-size", args.cell_size)):
+        if value is not None:
+            raise InvalidParameterError(
+                f"--windowed reads the DEM as it is and cannot apply {flag} (it needs the whole map): fill or "
+                "reproject the DEM first (gdal_fillnodata, gdalwarp), or plan without --windowed")
+    if args.coarse_factor < 2:
+        raise InvalidParameterError(f"--coarse-factor must be an integer >= 2, got {args.coarse_factor}")
+    check_positive("--speed", args.speed)
+    if args.corridor is not None:
+        check_positive("--corridor", args.corridor)
+    if args.unknown_ground.lower() == "none":
+        raise InvalidParameterError(
+            "a GeoTIFF DEM has no ground classes, so --unknown-ground none refuses every cell; give "
+            f"--unknown-ground NAME, one of {sorted(GROUND_PRESETS)!r}")
+    if args.unknown_ground not in GROUND_PRESETS:
+        raise UnknownNameError(f"--unknown-ground must be a ground preset, one of {sorted(GROUND_PRESETS)!r}, "
+                               f"or 'none'; got {args.unknown_ground!r}")
+    result = run_windowed_plan(
+        args.map, tuple(args.start), tuple(args.goal), factor=args.coarse_factor, corridor_m=args.corridor,
+        out_dir=args.out, robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg,
+        unknown_ground=args.unknown_ground, whole_map=args.whole_map,
     )
     return 0 if result["status"] == "exact" else 1
 
@@ -288,9 +338,55 @@ def run_coarse_plan(
                                    unknown_ground=unknown_ground)
     prep_s = time.perf_counter() - t0
     plan = plan_coarse_to_fine(cost, start, goal, factor=factor, corridor_m=corridor_m)
-    route = plan.route
     print(f"map: {map_label}  {tmap.shape[0]} x {tmap.shape[1]} cells of {tmap.cell_size_m:g} m; grounds {tmap.ground_names}")
     print(f"robot: {robot}, speed {speed_mps:g} m/s, max slope {max_slope_deg:g} deg; map preparation {prep_s:.2f} s")
+    return _report_coarse(plan, start, goal, out_dir=out_dir, robot=robot, speed_mps=speed_mps,
+                          max_slope_deg=max_slope_deg, map_label=map_label, prep_s=prep_s, compile_s=compile_s,
+                          fine_map=tmap, whole_map=whole_map)
+
+
+def run_windowed_plan(
+    path: Path,
+    start: tuple[float, float],
+    goal: tuple[float, float],
+    *,
+    factor: int,
+    corridor_m: float | None,
+    out_dir: Path,
+    robot: str,
+    speed_mps: float,
+    max_slope_deg: float,
+    unknown_ground: str,
+    whole_map: bool = False,
+) -> dict[str, Any]:
+    """Plan coarse-to-fine from a GeoTIFF DEM read by windows (:func:`planner.plan_coarse_to_fine_geotiff`);
+    print and write the files of :func:`run_coarse_plan` (route.png over the coarse map: the only whole view held)."""
+    slope_rad = max_slope_rad(max_slope_deg)
+    compile_s = warm_up_kernels()
+    with DemWindows(path) as dem:
+        grid = dem.grid
+    cost_from = functools.partial(EnergyCost.from_presets, robot=robot, speed_mps=speed_mps, max_slope_rad=slope_rad,
+                                  unknown_ground=unknown_ground)
+    plan = plan_coarse_to_fine_geotiff(path, start, goal, factor=factor, corridor_m=corridor_m, cost_from=cost_from)
+    rows, cols = grid.shape
+    print(f"map: {path.name}  {rows} x {cols} cells of {grid.cell_size_m:g} m, read by windows; ground unknown, "
+          f"priced as {unknown_ground!r}")
+    print(f"robot: {robot}, speed {speed_mps:g} m/s, max slope {max_slope_deg:g} deg; full-resolution cells read "
+          f"by the fine stage: {plan.fine_window_cells} of {rows * cols} ({100 * plan.fine_window_cells / (rows * cols):.1f} %)")
+    return _report_coarse(plan, start, goal, out_dir=out_dir, robot=robot, speed_mps=speed_mps,
+                          max_slope_deg=max_slope_deg, map_label=path.name, prep_s=0.0, compile_s=compile_s,
+                          fine_map=plan.fine_map, whole_map=whole_map, windowed=True)
+
+
+def _report_coarse(plan: CoarseToFine, start: tuple[float, float], goal: tuple[float, float], *, out_dir: Path,
+                   robot: str, speed_mps: float, max_slope_deg: float, map_label: str, prep_s: float, compile_s: float,
+                   fine_map: TerrainMap | None, whole_map: bool, windowed: bool = False) -> dict[str, Any]:
+    """Print a coarse-to-fine plan and write route.json, route.geojson, route.png.
+
+    ``windowed``: the GeoJSON's elevations come from the fine window (the route lies in it);
+    the figure zoomed on the route draws the fine window, the whole-map figure the coarse map."""
+    route, factor = plan.route, plan.factor
+    plot_map = plan.coarse_map if fine_map is None or (windowed and whole_map) else fine_map
     if compile_s > 1.0:
         print(f"(compiled the edge-cost kernels in {compile_s:.1f} s: first run in this environment; not in the times below)")
     print(f"start {start} -> goal {goal}; coarse-to-fine, factor {factor}, corridor {plan.corridor_m:g} m "
@@ -301,9 +397,9 @@ def run_coarse_plan(
     else:
         print(f"no route: status {route.status!r}")
     result = {
-        "map": map_label, "map_crs": tmap.crs, "robot": robot, "speed_mps": speed_mps, "max_slope_deg": max_slope_deg,
+        "map": map_label, "map_crs": plan.coarse_map.crs if plan.coarse_map is not None else None, "robot": robot, "speed_mps": speed_mps, "max_slope_deg": max_slope_deg,
         "start_xy_m": list(start), "goal_xy_m": list(goal), "planner": "coarse-to-fine",
-        "map_preparation_s": prep_s, "kernel_compile_s": compile_s, "status": route.status,
+        "map_preparation_s": prep_s, "kernel_compile_s": compile_s, "status": route.status, "windowed": windowed,
         "coarse_to_fine": {k: v for k, v in plan.summary().items() if k not in route.summary()},
         "routes": {"min_energy": {**route.summary(), "waypoints_m": route.waypoints_m.tolist()}} if route.found else {},
         "coarse_waypoints_m": plan.coarse_waypoints_m.tolist(),
@@ -312,11 +408,13 @@ def run_coarse_plan(
     written = [write_json_atomic(out_dir / "route.json", result)]
     lines = []
     if route.found:
-        written.append(write_geojson({"min_energy": route}, tmap, out_dir / "route.geojson"))
+        written.append(write_geojson({"min_energy": route}, fine_map, out_dir / "route.geojson"))
         lines.append(RouteLine("coarse-to-fine", route.waypoints_m, route.energy_j, colour="#d32f2f"))
+    title = f"terrawatt: coarse-to-fine route on {map_label}" + (f" (the x{factor} coarse map)"
+                                                                  if plot_map is plan.coarse_map else "")
     png = draw_figure(out_dir / "route.png", lambda: plot_routes(
-        tmap, lines, start, goal, out_dir / "route.png", title=f"terrawatt: coarse-to-fine route on {map_label}",
-        extent="map" if whole_map else "routes", max_slope_rad=slope_rad))
+        plot_map, lines, start, goal, out_dir / "route.png", title=title,
+        extent="map" if whole_map else "routes", max_slope_rad=math.radians(max_slope_deg)))
     written += [png] if png is not None else []
     print("\nwrote " + ", ".join(str(p) for p in written))
     return result
