@@ -53,7 +53,7 @@ def test_each_case_moves_energy_in_the_papers_direction(scenario: dict) -> None:
 
 
 def test_script_prints_the_table(capsys: pytest.CaptureFixture[str], scenario: dict) -> None:
-    cases, full = scenario["main"]()
+    cases, full = scenario["main"](["--no-data"])
     out = capsys.readouterr().out
     for value in ("814.2", "822.9", "888.5", "922.6", "932.8", "988.2", "1015.6", "1016.6",
                   "1067.6", "1084.1"):
@@ -63,7 +63,35 @@ def test_script_prints_the_table(capsys: pytest.CaptureFixture[str], scenario: d
 
 
 def test_script_runs_as_a_program() -> None:
-    proc = subprocess.run([sys.executable, str(SCRIPT)], capture_output=True, text=True,
+    proc = subprocess.run([sys.executable, str(SCRIPT), "--no-data"], capture_output=True, text=True,
                           timeout=120, check=False)
     assert proc.returncode == 0, proc.stderr
     assert "full (Table 2)" in proc.stdout
+
+
+@pytest.fixture(scope="module")
+def from_data(scenario: dict):
+    return scenario["waterfall_from_data"](10, 0), scenario["by_hand_charge_errors"](10, 0)
+
+
+def test_the_diagnosis_finds_the_ablation_from_data(from_data) -> None:
+    d, by_hand = from_data
+    assert d.chosen[0] == "inertia"  # the paper's case 2: the rotors' inertia dominates this robot's current
+    assert "rolling_resistance" in d.chosen[:2]  # case 3: Coulomb (rolling) friction, a coefficient per ground
+    scores = {s.name: s for s in d.ranking}
+    assert scores["inertia"].parameters["gain"] == pytest.approx(1.0, rel=0.2)
+    coef = scores["rolling_resistance"].parameters
+    assert coef["rolling_resistance_coef_sand"] > 2.0 * coef["rolling_resistance_coef_stone"]
+    before, after = d.waterfall[0], d.waterfall[-1]
+    assert after.shrink_pct > 90.0
+    assert abs(before.charge_error_pct) > 50.0 and abs(after.charge_error_pct) < 5.0
+
+
+def test_the_waterfall_has_the_shape_of_the_ablation_by_hand(from_data) -> None:
+    d, by_hand = from_data
+    hand = dict(by_hand)
+    # the first two steps: the base and + inertia land where switching the truth's effects off puts them
+    assert d.waterfall[0].charge_error_pct == pytest.approx(hand["1 base motor + slope"], abs=10.0)
+    assert d.waterfall[1].charge_error_pct == pytest.approx(hand["2 + inertia"], abs=5.0)
+    errors = [e for _, e in by_hand]
+    assert errors[0] > errors[1] > errors[2] and abs(errors[-1]) < 1.0
