@@ -84,12 +84,19 @@ def test_windowed_plan_equals_the_whole_map_plan_exactly(dem_path, factor, windo
     assert 0 < windowed.fine_window_cells <= 131 * 97 and whole.fine_window_cells == 0
 
 
-def test_the_coarse_map_from_tiles_equals_downsample_cost(dem_path):
+def test_the_coarse_map_from_tiles_equals_downsample_cost(dem_path, tmp_path):
     coarse_whole = downsample_cost(EnergyCost.from_presets(read_geotiff(dem_path)), 5)  # 131 x 97: partial blocks
     coarse = plan_coarse_to_fine_geotiff(dem_path, START, GOAL, factor=5, window_cells=10).coarse_map
     assert np.array_equal(coarse.elevation_m, coarse_whole.terrain.elevation_m)
-    assert np.array_equal(coarse.obstacle, coarse_whole.blocked) and coarse_whole.blocked.any()
+    assert np.array_equal(coarse.obstacle, coarse_whole.blocked)
     assert coarse.grid == coarse_whole.terrain.grid and coarse.crs == "EPSG:32633"
+    # a steep band (45 degrees) of blocked cells, cut by tiles of 9 cells
+    z = np.clip(np.arange(50.0) - 20.0, 0.0, 17.0)[None, :].repeat(40, axis=0)
+    path = write_dem(tmp_path / "band.tif", z)
+    coarse_whole = downsample_cost(EnergyCost.from_presets(read_geotiff(path)), 3)
+    coarse = plan_coarse_to_fine_geotiff(path, (2.5, 2.5), (10.5, 30.5), factor=3, window_cells=9).coarse_map
+    assert coarse_whole.blocked.any() and np.array_equal(coarse.obstacle, coarse_whole.blocked)
+    assert np.array_equal(coarse.elevation_m, coarse_whole.terrain.elevation_m)
 
 
 def test_a_short_route_reads_a_small_window_in_map_coordinates(dem_path):
