@@ -14,9 +14,18 @@ is excluded):
   16-connected 1-cell lattice optimum (graph build + A*; the baseline, the exact optimum);
 - ``c2f``: the same preparation, then :func:`planner.plan_coarse_to_fine` (factor side / 256
   within 4..16 by default, a coarse lattice of about 256^2 nodes; the corridor is three
-  coarse cells).
+  coarse cells);
+- ``wc2f`` (windowed c2f): :func:`planner.plan_coarse_to_fine_geotiff` on the same file — the
+  coarse map tile by tile, the full resolution only in the corridor's window, never the
+  whole raster; its route is compared with ``c2f``'s (equal where both run).
 
-Choosing the start and goal (free cells near fixed map fractions) is the benchmark's own
+With ``--huge`` a 16384^2 DEM (1 GiB of float32, written tile by tile and deleted) runs in
+``wc2f`` only, on a shorter route (``BIG_START_FRAC`` -> ``BIG_GOAL_FRAC``): the fine stage
+holds the corridor's bounding window, and the corner-to-corner route's window would be most
+of the map (about 170 M cells).
+
+Choosing the start and goal (free cells near fixed map fractions, found in 129^2 windows
+in the parent process, so every mode plans between the same points) is the benchmark's own
 work and is not timed.
 
 It prints a table and writes JSON (``--out``): per size, wall time (and CPU time, less
@@ -33,6 +42,7 @@ Usage::
     python benchmarks/map_scale_bench.py --out bench_map_scale.json   # 512, 2048, 4096 (~5 min)
     python benchmarks/map_scale_bench.py --big                        # adds 8192 (coarse-to-fine only)
     python benchmarks/map_scale_bench.py --quick                      # 256 and 512 (~30 s)
+    python benchmarks/map_scale_bench.py --sizes 8192 --huge          # 8192 (all but full) and 16384 (wc2f)
 """
 
 from __future__ import annotations
@@ -53,6 +63,10 @@ import numpy as np
 
 #: Start and goal as fractions of the map side.
 START_FRAC, GOAL_FRAC = (0.08, 0.10), (0.92, 0.86)
+#: Start and goal of the sizes only the windowed planner runs on (above ``C2F_MAX``).
+BIG_START_FRAC, BIG_GOAL_FRAC = (0.08, 0.10), (0.40, 0.30)
+#: Largest side the whole-map coarse-to-fine runs on.
+C2F_MAX = 8192
 #: Largest side the full-resolution lattice runs on.
 FULL_MAX = 4096
 TARGETS = {"prep_plan_2048_s": 5.0, "prep_plan_2048_gib": 4.0, "c2f_8192_s": 60.0, "c2f_8192_gib": 8.0,
@@ -114,38 +128,52 @@ def _rss_gib() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20  # KiB on Linux
 
 
-def _free_point(cost: Any, frac: tuple[float, float]) -> tuple[float, float]:
-    """The free cell centre nearest to a fractional position (in the largest free region)."""
+def free_point(tif: Path, frac: tuple[float, float], win: int = 64) -> tuple[float, float]:
+    """The free cell centre nearest to a fractional position, in the largest free region of a 129^2 window."""
+    from planner import EnergyCost
+    from terrain import DemWindows
+
+    with DemWindows(tif) as dem:
+        rows, cols = dem.shape
+        r0, c0 = int(frac[1] * (rows - 1)), int(frac[0] * (cols - 1))
+        w = dem.read(slice(r0 - win if r0 >= win else 0, r0 + win + 1), slice(max(0, c0 - win), c0 + win + 1), halo=1)
+        cost = EnergyCost.from_presets(w.terrain_map())
     labels = cost.components()
     big = np.argmax(np.bincount(labels.ravel())[1:]) + 1
-    rows, cols = cost.shape
-    r0, c0 = int(frac[1] * (rows - 1)), int(frac[0] * (cols - 1))
-    win = 64
-    sub = labels[max(0, r0 - win): r0 + win, max(0, c0 - win): c0 + win] == big
-    rr, cc = np.nonzero(sub)
-    k = int(np.argmin((rr + max(0, r0 - win) - r0) ** 2 + (cc + max(0, c0 - win) - c0) ** 2))
-    x, y = cost.terrain.xy(rr[k] + max(0, r0 - win), cc[k] + max(0, c0 - win))
+    rr, cc = np.nonzero(labels == big)
+    hr, hc = w.halo_rows.start, w.halo_cols.start
+    k = int(np.argmin((rr + hr - r0) ** 2 + (cc + hc - c0) ** 2))
+    x, y = cost.terrain.xy(rr[k], cc[k])
     return float(x), float(y)
 
 
 def _warm() -> float:
     """Load (or compile) every kernel the children use, on a tiny map; seconds spent."""
-    from planner import EnergyCost, Lattice, plan_coarse_to_fine, warm_up_kernels
-    from terrain import procedural_map
+    from planner import EnergyCost, Lattice, plan_coarse_to_fine, plan_coarse_to_fine_geotiff, warm_up_kernels
+    from terrain import procedural_map, write_geotiff
 
     t0 = time.perf_counter()
     warm_up_kernels()
-    cost = EnergyCost.from_presets(procedural_map((48, 48), 1.0, seed=0, obstacle_fraction=0.0))
+    tmap = procedural_map((48, 48), 1.0, seed=0, obstacle_fraction=0.0)
+    cost = EnergyCost.from_presets(tmap)
     plan_coarse_to_fine(cost, (4.5, 4.5), (40.5, 40.5), factor=4)
+    with tempfile.TemporaryDirectory() as folder:
+        plan_coarse_to_fine_geotiff(write_geotiff(tmap, Path(folder) / "warm.tif"), (4.5, 4.5), (40.5, 40.5), factor=4)
     Lattice(cost, 1).shortest_path((4.5, 4.5), (40.5, 40.5))
     return time.perf_counter() - t0
 
 
-def child(mode: str, tif: Path, factor: int) -> dict[str, Any]:
+def _route_digest(waypoints: np.ndarray) -> str:
+    import hashlib
+
+    return hashlib.sha1(np.ascontiguousarray(waypoints, dtype=np.float64).tobytes()).hexdigest()[:16]
+
+
+def child(mode: str, tif: Path, factor: int, start: tuple[float, float], goal: tuple[float, float]) -> dict[str, Any]:
     """One measurement in this (fresh) process."""
     warm_s = _warm()
     base_gib = _rss_gib()
-    from planner import EnergyCost, Lattice, plan_coarse_to_fine
+    from planner import EnergyCost, Lattice, plan_coarse_to_fine, plan_coarse_to_fine_geotiff
     from terrain import iter_surface_windows, read_geotiff
 
     out: dict[str, Any] = {"mode": mode, "warm_s": warm_s, "base_rss_gib": base_gib}
@@ -161,13 +189,21 @@ def child(mode: str, tif: Path, factor: int) -> dict[str, Any]:
         out["blocked_pct"] = 100.0 * float(blocked.mean())
         out["peak_rss_gib"] = _rss_gib()
         return out
+    if mode == "wc2f":
+        plan = plan_coarse_to_fine_geotiff(tif, start, goal, factor=factor)
+        out["prepare_s"], out["plan_s"] = 0.0, time.perf_counter() - t0
+        out["total_s"], out["cpu_s"] = out["plan_s"], time.process_time() - cpu0
+        out["objective_j"] = plan.objective_j if plan.route.found else None
+        out["route"] = _route_digest(plan.route.waypoints_m)
+        out["corridor_cells"], out["fallback"] = plan.corridor_cells, plan.fallback
+        out["coarse_s"], out["fine_s"] = plan.coarse_time_s, plan.fine_time_s
+        out["fine_window_cells"] = plan.fine_window_cells
+        out["peak_rss_gib"] = _rss_gib()
+        return out
     tmap = read_geotiff(tif)
     cost = EnergyCost.from_presets(tmap)
     out["prepare_s"] = time.perf_counter() - t0
     cpu_prep = time.process_time() - cpu0
-    tq = time.perf_counter()
-    start, goal = _free_point(cost, START_FRAC), _free_point(cost, GOAL_FRAC)  # the benchmark's own work
-    out["start_xy_m"], out["goal_xy_m"], out["query_s"] = start, goal, time.perf_counter() - tq
     t1, cpu1 = time.perf_counter(), time.process_time()
     if mode == "full":
         lattice = Lattice(cost, 1)
@@ -178,6 +214,7 @@ def child(mode: str, tif: Path, factor: int) -> dict[str, Any]:
     else:
         plan = plan_coarse_to_fine(cost, start, goal, factor=factor)
         out["objective_j"] = plan.objective_j if plan.route.found else None
+        out["route"] = _route_digest(plan.route.waypoints_m)
         out["corridor_cells"] = plan.corridor_cells
         out["fallback"] = plan.fallback
         out["coarse_s"], out["fine_s"] = plan.coarse_time_s, plan.fine_time_s
@@ -188,8 +225,10 @@ def child(mode: str, tif: Path, factor: int) -> dict[str, Any]:
     return out
 
 
-def _run_child(mode: str, tif: Path, factor: int) -> dict[str, Any]:
-    cmd = [sys.executable, __file__, "--child", mode, "--tif", str(tif), "--factor", str(factor)]
+def _run_child(mode: str, tif: Path, factor: int, start: tuple[float, float], goal: tuple[float, float]
+               ) -> dict[str, Any]:
+    cmd = [sys.executable, __file__, "--child", mode, "--tif", str(tif), "--factor", str(factor),
+           "--start", *map(repr, start), "--goal", *map(repr, goal)]
     proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
     if proc.returncode != 0:
         return {"mode": mode, "error": (proc.stderr.strip().splitlines() or ["?"])[-1], "returncode": proc.returncode}
@@ -209,15 +248,23 @@ def run(sizes: list[int], factor: int | None, seed: int) -> list[dict[str, Any]]
             tif = Path(folder) / f"dem_{n}.tif"
             write_s = write_dem(tif, n, seed)
             f = auto_factor(n) if factor is None else factor
-            row: dict[str, Any] = {"size": n, "cells": n * n, "factor": f, "write_geotiff_s": write_s}
-            modes = ["windowed", "c2f"] + (["full"] if n <= FULL_MAX else [])
+            fracs = (START_FRAC, GOAL_FRAC) if n <= C2F_MAX else (BIG_START_FRAC, BIG_GOAL_FRAC)
+            start, goal = free_point(tif, fracs[0]), free_point(tif, fracs[1])
+            row: dict[str, Any] = {"size": n, "cells": n * n, "factor": f, "write_geotiff_s": write_s,
+                                   "start_xy_m": start, "goal_xy_m": goal, "route_fracs": fracs}
+            modes = (["windowed", "c2f", "wc2f"] if n <= C2F_MAX else ["wc2f"]) + (["full"] if n <= FULL_MAX else [])
             for mode in modes:
-                row[mode] = _run_child(mode, tif, f)
+                row[mode] = _run_child(mode, tif, f, start, goal)
                 print(f"  {n}^2 {mode}: {row[mode]}", file=sys.stderr, flush=True)
-            full, c2f = row.get("full", {}), row["c2f"]
+            full, c2f, wc2f = row.get("full", {}), row.get("c2f", {}), row["wc2f"]
             if full.get("objective_j") and c2f.get("objective_j"):
                 row["energy_ratio"] = c2f["objective_j"] / full["objective_j"]
                 row["time_ratio_full_over_c2f"] = full["total_s"] / c2f["total_s"]
+            if "peak_rss_gib" in c2f and "peak_rss_gib" in wc2f:
+                row["rss_ratio_wc2f_over_c2f"] = wc2f["peak_rss_gib"] / c2f["peak_rss_gib"]
+                row["time_ratio_wc2f_over_c2f"] = wc2f["total_s"] / c2f["total_s"]
+                row["routes_equal"] = (wc2f.get("route") == c2f.get("route")
+                                       and wc2f.get("objective_j") == c2f.get("objective_j"))
             tif.unlink()
             rows.append(row)
     return rows
@@ -234,16 +281,30 @@ def print_table(rows: list[dict[str, Any]]) -> None:
     print(head)
     print("-" * len(head))
     for r in rows:
-        w, c, f = r["windowed"], r["c2f"], r.get("full", {})
+        w, c, f = r.get("windowed", {}), r.get("c2f", {}), r.get("full", {})
         print(f"{r['size']:>6} {r['cells'] / 1e6:>7.1f} {r['factor']:>3} | {_fmt(w.get('total_s'), '8.2f')} "
               f"{_fmt(w.get('peak_rss_gib'), '5.2f')} | {_fmt(c.get('prepare_s'), '8.2f')} "
               f"{_fmt(c.get('plan_s'), '6.2f')} {_fmt(c.get('total_s'), '6.2f')} {_fmt(c.get('peak_rss_gib'), '5.2f')} | "
               f"{_fmt(f.get('prepare_s'), '9.2f')} {_fmt(f.get('graph_s'), '6.2f')} {_fmt(f.get('total_s'), '6.2f')} "
               f"{_fmt(f.get('peak_rss_gib'), '5.2f')} | {_fmt(r.get('energy_ratio'), '10.5f')} "
               f"{_fmt(r.get('time_ratio_full_over_c2f'), '10.1f')}")
-        for mode in ("windowed", "c2f", "full"):
+        for mode in ("windowed", "c2f", "wc2f", "full"):
             if "error" in r.get(mode, {}):
                 print(f"       {mode} failed: {r[mode]['error']}")
+    print()
+    head = (f"{'side':>6} {'f':>3} | {'wc2f s':>7} {'CPU s':>7} {'coarse':>7} {'fine':>6} {'GiB':>5} {'fine Mcells':>11} | "
+            f"{'c2f s':>6} {'CPU s':>7} {'GiB':>5} | {'GiB w/c2f':>9} {'t w/c2f':>7} {'equal':>5}")
+    print(head)
+    print("-" * len(head))
+    for r in rows:
+        w, c = r["wc2f"], r.get("c2f", {})
+        cells = w.get("fine_window_cells")
+        print(f"{r['size']:>6} {r['factor']:>3} | {_fmt(w.get('total_s'), '7.2f')} {_fmt(w.get('cpu_s'), '7.2f')} "
+              f"{_fmt(w.get('coarse_s'), '7.2f')} {_fmt(w.get('fine_s'), '6.2f')} {_fmt(w.get('peak_rss_gib'), '5.2f')} "
+              f"{_fmt(cells / 1e6 if cells else None, '11.1f')} | {_fmt(c.get('total_s'), '6.2f')} "
+              f"{_fmt(c.get('cpu_s'), '7.2f')} {_fmt(c.get('peak_rss_gib'), '5.2f')} | "
+              f"{_fmt(r.get('rss_ratio_wc2f_over_c2f'), '9.2f')} {_fmt(r.get('time_ratio_wc2f_over_c2f'), '7.2f')} "
+              f"{str(r.get('routes_equal', '-')):>5}")
 
 
 def check_targets(rows: list[dict[str, Any]]) -> dict[str, Any]:
@@ -257,7 +318,7 @@ def check_targets(rows: list[dict[str, Any]]) -> dict[str, Any]:
                 out[f"2048_{mode}_total_s"] = m["total_s"]
                 out[f"2048_{mode}_meets"] = (m["total_s"] <= TARGETS["prep_plan_2048_s"]
                                              and m["peak_rss_gib"] <= TARGETS["prep_plan_2048_gib"])
-    if 8192 in by and "total_s" in by[8192]["c2f"]:
+    if 8192 in by and "total_s" in by[8192].get("c2f", {}):
         m = by[8192]["c2f"]
         out["8192_c2f_total_s"], out["8192_c2f_gib"] = m["total_s"], m["peak_rss_gib"]
         out["8192_c2f_meets"] = m["total_s"] <= TARGETS["c2f_8192_s"] and m["peak_rss_gib"] <= TARGETS["c2f_8192_gib"]
@@ -271,18 +332,23 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="256^2 and 512^2 only")
     parser.add_argument("--big", action="store_true", help="add 8192^2 (coarse-to-fine only; ~8 GB, minutes)")
+    parser.add_argument("--huge", action="store_true",
+                        help="add 16384^2 (windowed coarse-to-fine only, a shorter route; a 1 GiB temporary DEM)")
     parser.add_argument("--sizes", type=int, nargs="+", default=None, metavar="N", help="map sides (cells)")
     parser.add_argument("--factor", type=int, default=None,
                         help="coarse-to-fine downsampling factor (default: side / 256, within 4..16)")
     parser.add_argument("--seed", type=int, default=0, help="DEM seed (default 0)")
     parser.add_argument("--out", type=Path, default=None, help="write results as JSON here")
-    parser.add_argument("--child", choices=["windowed", "full", "c2f"], help=argparse.SUPPRESS)
+    parser.add_argument("--child", choices=["windowed", "full", "c2f", "wc2f"], help=argparse.SUPPRESS)
     parser.add_argument("--tif", type=Path, help=argparse.SUPPRESS)
+    parser.add_argument("--start", type=float, nargs=2, help=argparse.SUPPRESS)
+    parser.add_argument("--goal", type=float, nargs=2, help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.child:
-        print(json.dumps(child(args.child, args.tif, args.factor or 8)))
+        print(json.dumps(child(args.child, args.tif, args.factor or 8, tuple(args.start), tuple(args.goal))))
         return 0
     sizes = args.sizes or ([256, 512] if args.quick else [512, 2048, 4096] + ([8192] if args.big else []))
+    sizes = sizes + ([16384] if args.huge and 16384 not in sizes else [])
     t0 = time.perf_counter()
     rows = run(sizes, args.factor, args.seed)
     print_table(rows)
