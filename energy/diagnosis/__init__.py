@@ -8,10 +8,12 @@ from .localise import GapShare, localise_gap
 from .model_currents import DRIVE_EFFECTS
 from .plots import FIGURES, DiagnosisFigures, plot_diagnosis, plot_effect_ranking, plot_waterfall
 from .plots_gap import plot_gap_by_regime, plot_gap_map, plot_residual_time
+from .power_result import PowerDiagnosis, PowerGapSummary, PowerWaterfallStep
 from .regimes import regime_labels
 from .residuals import GapSummary, gap_summary, residual_currents_a
 from .result import Diagnosis, EffectScore, WaterfallStep
 from .scenarios import (
+    POWER_ONLY_EFFECTS,
     SCENARIOS,
     Scenario,
     WithheldGap,
@@ -24,6 +26,10 @@ from .scenarios import (
 from .split import SPLITS, Fold, Split, make_split
 
 __all__ = [
+    "PowerDiagnosis",
+    "PowerGapSummary",
+    "PowerWaterfallStep",
+    "POWER_ONLY_EFFECTS",
     "Scenario",
     "SCENARIOS",
     "WithheldGap",

@@ -16,27 +16,20 @@ from ..models.base import CurrentModel, check_logs, log_currents
 from .corrected import CorrectedCurrentModel
 from .effect_base import Effect
 from .effects import LEARNED_EFFECT, NOT_IDENTIFIABLE_FROM_CURRENT, effect, resolve_effects
-from .fit import (
-    DiagnosisData,
-    SetScore,
-    bootstrap_gain_interval_pct,
-    bootstrap_shrink_interval_pct,
-    prepare_data,
-    score_effect_set,
-    shrink_pct,
-)
+from .fit import DiagnosisData, SetScore, prepare_data, score_effect_set, shrink_pct
 from .localise import GapShare, localise_gap
 from .model_currents import physics_basis
+from .power_data import power_logs_missing
+from .power_result import PowerDiagnosis
+from .power_stage import diagnose_power
 from .regimes import check_terrain
 from .residuals import GapSummary, gap_summary
 from .result import Diagnosis, EffectScore, WaterfallStep
 from .runner import SetRunner
+from .selection import SIGNIFICANT_SHRINK_PCT, score_entry, select_effects, significant
 from .split import Split, make_split
 
 __all__ = ["SIGNIFICANT_SHRINK_PCT", "diagnose"]
-
-#: An effect is added only when it shrinks the held-out gap by at least this much (points of %).
-SIGNIFICANT_SHRINK_PCT = 2.0
 
 
 def _check_model(model: Any, logs: list[InteractionLog]) -> list[np.ndarray]:
@@ -65,9 +58,8 @@ def _check_currents(logs: list[InteractionLog]) -> None:
                             "the diagnosis compares measured and predicted currents")
 
 
-def _candidates(model: Any, logs: list[InteractionLog], effects: Any, terrain: Any,
+def _candidates(model: Any, logs: list[InteractionLog], items: list[Effect], effects: Any, terrain: Any,
                 robot: Any) -> tuple[list[Effect], Effect | None, dict[str, str]]:
-    items = resolve_effects(effects)
     skipped: dict[str, str] = {}
     usable: list[Effect] = []
     learned: Effect | None = None
@@ -89,25 +81,9 @@ def _candidates(model: Any, logs: list[InteractionLog], effects: Any, terrain: A
     return usable, learned, skipped
 
 
-def _score(e: Effect, none: SetScore, alone: SetScore, current: SetScore, trial: SetScore, n_bootstrap: int,
-           seed: int | None) -> EffectScore:
-    """``e`` alone (``alone`` against ``none``) and added to the chosen set (``trial`` against ``current``)."""
-    lo, hi = bootstrap_shrink_interval_pct(none, alone, n_bootstrap=n_bootstrap, seed=seed)
-    added = shrink_pct(none, trial) - shrink_pct(none, current)
-    interval = bootstrap_gain_interval_pct(none, current, trial, n_bootstrap=n_bootstrap, seed=seed)
-    return EffectScore(e.name, e.kind, e.values_dict(trial.median_values()[-1]), shrink_pct(none, alone), (lo, hi),
-                       e.n_parameters, added, interval)
-
-
 def _step(label: str, logs: list[InteractionLog], s: SetScore, none: SetScore, section_s: float) -> WaterfallStep:
     g = gap_summary(logs, list(s.held_out_a), section_s=section_s)
     return WaterfallStep(label, g.charge_error_pct, g.section_error_pct, g.rmse_a, shrink_pct(none, s))
-
-
-def _significant(current: SetScore, trial: SetScore, none: SetScore, n_bootstrap: int, seed: int | None) -> bool:
-    lo, _ = bootstrap_shrink_interval_pct(current, trial, n_bootstrap=n_bootstrap, seed=seed)
-    gain = shrink_pct(none, trial) - shrink_pct(none, current)
-    return lo > 0.0 and gain >= SIGNIFICANT_SHRINK_PCT
 
 
 def _top_share(localisation: Sequence[GapShare]) -> str:
@@ -121,7 +97,8 @@ def _top_share(localisation: Sequence[GapShare]) -> str:
 
 
 def _verdict(before: GapSummary, after: GapSummary, ranking: Sequence[EffectScore], chosen: Sequence[str],
-             localisation: Sequence[GapShare], skipped: dict[str, str], split: str) -> tuple[str, ...]:
+             localisation: Sequence[GapShare], skipped: dict[str, str], split: str,
+             power: PowerDiagnosis | None = None) -> tuple[str, ...]:
     held = "held-out runs" if split == "runs" else "held-out blocks"
     out = [f"The gap is {fmt_number(before.charge_error_pct, 2)} % of the charge (RMSE "
            f"{fmt_number(before.rmse_a, 3)} A){_top_share(localisation)}."]
@@ -149,8 +126,11 @@ def _verdict(before: GapSummary, after: GapSummary, ranking: Sequence[EffectScor
         if abs(after.charge_error_pct) > abs(before.charge_error_pct):
             text += ": the whole-run charge gets worse, the correction fits the current's shape, not its total"
         out.append(text + ".")
-    out.append("Not identifiable from current logs (they change power, not current): "
-               + ", ".join(NOT_IDENTIFIABLE_FROM_CURRENT) + ".")
+    if power is None:
+        out.append("Not identifiable from current logs (they change power, not current): "
+                   + ", ".join(NOT_IDENTIFIABLE_FROM_CURRENT) + ".")
+    else:
+        out.extend(power.verdict)
     data_bound = {n: w for n, w in skipped.items() if "already" not in w}
     if data_bound:
         out.append("Not scored on these data: " + "; ".join(f"{n} ({w})" for n, w in data_bound.items()) + ".")
@@ -177,7 +157,10 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
     model : CurrentModel
         A fitted current model (physics, estimator, baselines).
     logs : InteractionLog or sequence of InteractionLog
-        Runs with measured currents.
+        Runs with measured currents. When every log also carries battery voltage and pack
+        current, a power stage explains the battery power beyond what the measured currents
+        draw with the electrical candidates (``armature_heat``, ``sensor``, ``control``),
+        with the same split, bootstrap and selection rule (:attr:`Diagnosis.power`).
     terrain : TerrainMap, optional
         The map the runs drove on (slope effect, grade and space localisation).
     effects : sequence of str or Effect, optional
@@ -216,7 +199,8 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
         An effect name not in the catalogue; an unknown split.
     DataError
         Logs without currents, a model that cannot predict the logs, a split that leaves no
-        held-out data, fewer calibration samples than an effect has parameters.
+        held-out data, fewer calibration samples than an effect has parameters, a battery
+        voltage <= 0 where a pack current is logged.
     """
     items = check_logs(logs)
     seed = check_seed(seed)
@@ -228,14 +212,23 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
     _check_currents(items)
     sp = make_split(items, split, n_blocks)
     predictions = _check_model(model, items)
-    usable, learned, skipped = _candidates(model, items, effects, terrain, robot)
+    resolved = resolve_effects(effects)
+    electrical = [e for e in resolved if e.kind == "electrical"]
+    usable, learned, skipped = _candidates(model, items, [e for e in resolved if e.kind != "electrical"], effects,
+                                           terrain, robot)
+    power = None
+    if electrical and not power_logs_missing(items):
+        power = diagnose_power(model, items, electrical, sp, robot=robot, section_s=section_s, n_bootstrap=n_bootstrap,
+                               seed=seed, client=client, progress=progress)
+    elif electrical and effects is not None:  # asked for by name on logs without battery power
+        skipped.update({e.name: e.unsupported(items, terrain) or "" for e in electrical})
     basis = physics_basis(model, robot)
     data = prepare_data(model, items, usable + ([learned] if learned is not None else []), basis)
 
     runner = SetRunner(data, sp, client=client, progress=progress)
     try:
         return _select(model, items, predictions, terrain, robot, usable, learned, skipped, sp, data, runner,
-                       section_s, n_bootstrap, seed)
+                       section_s, n_bootstrap, seed, power)
     finally:
         runner.close()
 
@@ -243,39 +236,16 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
 def _select(model: CurrentModel, items: list[InteractionLog], predictions: list[np.ndarray], terrain: Any,
             robot: Any, usable: list[Effect], learned: Effect | None, skipped: dict[str, str], sp: Split,
             data: DiagnosisData, runner: SetRunner, section_s: float, n_bootstrap: int,
-            seed: int | None) -> Diagnosis:
+            seed: int | None, power: PowerDiagnosis | None = None) -> Diagnosis:
     """Rank, add greedily, build the waterfall, the verdict and the corrected model."""
-    none = score_effect_set([], data, sp)
-    alone = dict(zip((e.name for e in usable), runner.score([[e] for e in usable], "candidates alone")))
-    chosen: list[Effect] = []
-    sets = [none]
-    scores: dict[str, EffectScore] = {}
-    remaining = list(usable)
-    trials = dict(alone)
-    while remaining:
-        # every remaining candidate refitted jointly with the chosen ones: the ranking is conditional
-        trials = (dict(alone) if not chosen else dict(zip(
-            (e.name for e in remaining),
-            runner.score([chosen + [e] for e in remaining], f"candidates added to {len(chosen)} chosen"))))
-        eligible = [e for e in remaining if not e.negligible(trials[e.name].median_values()[-1])]
-        if not eligible:
-            break
-        best = min(eligible, key=lambda e: trials[e.name].sse_units.sum())
-        if not _significant(sets[-1], trials[best.name], none, n_bootstrap, seed):
-            break
-        scores[best.name] = _score(best, none, alone[best.name], sets[-1], trials[best.name], n_bootstrap, seed)
-        chosen.append(best)
-        sets.append(trials[best.name])
-        remaining.remove(best)
-    remaining.sort(key=lambda e: trials[e.name].sse_units.sum())
-    scores.update({e.name: _score(e, none, alone[e.name], sets[-1], trials[e.name], n_bootstrap, seed)
-                   for e in remaining})
-    order = chosen + remaining
+    sel = select_effects(usable, data, sp, runner, n_bootstrap, seed)
+    none = sel.none
+    chosen, sets, scores, order = list(sel.chosen), list(sel.sets), dict(sel.scores), list(sel.order)
     if not chosen and learned is not None:
         s = score_effect_set([learned], data, sp)
-        scores[learned.name] = _score(learned, none, s, none, s, n_bootstrap, seed)
+        scores[learned.name] = score_entry(learned, none, s, none, s, n_bootstrap, seed)
         order.append(learned)
-        if _significant(none, s, none, n_bootstrap, seed):
+        if significant(none, s, none, n_bootstrap, seed):
             chosen.append(learned)
             sets.append(s)
             order = [learned] + order[:-1]
@@ -288,5 +258,6 @@ def _select(model: CurrentModel, items: list[InteractionLog], predictions: list[
     localisation = localise_gap(items, predictions, terrain=terrain, section_s=section_s)
     corrected = CorrectedCurrentModel(model, list(chosen), robot, terrain).fit(items)
     names = tuple(e.name for e in chosen)
-    verdict = _verdict(before, after, ranking, names, localisation, skipped, sp.kind)
-    return Diagnosis(before, after, localisation, ranking, names, tuple(waterfall), verdict, corrected, skipped, sp.kind)
+    verdict = _verdict(before, after, ranking, names, localisation, skipped, sp.kind, power)
+    return Diagnosis(before, after, localisation, ranking, names, tuple(waterfall), verdict, corrected, skipped, sp.kind,
+                     power)

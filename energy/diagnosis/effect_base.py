@@ -14,8 +14,8 @@ from terrain.errors import InvalidParameterError
 
 __all__ = ["EFFECT_KINDS", "EffectParameter", "Effect"]
 
-#: Kinds of candidate effect, in the order they are composed onto a prediction.
-EFFECT_KINDS = ("parameter", "physics", "learned", "measurement")
+#: Kinds of candidate effect (``"electrical"``: fitted on battery power, not on the drive currents).
+EFFECT_KINDS = ("parameter", "physics", "learned", "measurement", "electrical")
 
 
 @dataclass(frozen=True)

@@ -27,16 +27,20 @@ from .effects_physics import (
     SlopeEffect,
     TrackWidthEffect,
 )
+from .effects_power import ArmatureHeatEffect, ControlPowerEffect, SensorPowerEffect
+from .power_data import POWER_EFFECTS
 
 __all__ = ["EFFECTS_CATALOGUE", "NOT_IDENTIFIABLE_FROM_CURRENT", "LEARNED_EFFECT", "effect", "effect_from_spec",
            "resolve_effects", "composition_order"]
 
 #: Name of the last-resort learned correction (not part of the default candidates).
 LEARNED_EFFECT = "learned_residual"
-#: Every catalogued effect name: physics terms, parameter errors, measurement effects, learned.
-EFFECTS_CATALOGUE: tuple[str, ...] = PHYSICS_CANDIDATES + PARAMETER_CANDIDATES + MEASUREMENT_CANDIDATES + (LEARNED_EFFECT,)
-#: Physics effects that change power but not the drive current: a current log cannot show them.
-NOT_IDENTIFIABLE_FROM_CURRENT: tuple[str, ...] = ("armature_heat", "sensor", "control")
+#: Physics effects that change power but not the drive current: a current log cannot show them; they are
+#: the electrical candidates, fitted on battery power (voltage x pack current) when every log carries it.
+NOT_IDENTIFIABLE_FROM_CURRENT: tuple[str, ...] = POWER_EFFECTS
+#: Every catalogued effect name: physics terms, parameter errors, measurement effects, electrical, learned.
+EFFECTS_CATALOGUE: tuple[str, ...] = (PHYSICS_CANDIDATES + PARAMETER_CANDIDATES + MEASUREMENT_CANDIDATES
+                                      + NOT_IDENTIFIABLE_FROM_CURRENT + (LEARNED_EFFECT,))
 
 _CLASSES: dict[str, Any] = {
     "slope": SlopeEffect,
@@ -49,6 +53,9 @@ _CLASSES: dict[str, Any] = {
     "current_gain": CurrentGainEffect,
     "time_lag": TimeLagEffect,
     "imu_lag": ImuLagEffect,
+    "armature_heat": ArmatureHeatEffect,
+    "sensor": SensorPowerEffect,
+    "control": ControlPowerEffect,
     LEARNED_EFFECT: LearnedResidualEffect,
 }
 
@@ -59,14 +66,8 @@ def effect(name: str) -> Effect:
     Raises
     ------
     UnknownNameError
-        ``name`` is not in :data:`EFFECTS_CATALOGUE` (the message lists the names; effects
-        that a current log cannot show are named as such).
+        ``name`` is not in :data:`EFFECTS_CATALOGUE` (the message lists the names).
     """
-    if isinstance(name, str) and name in NOT_IDENTIFIABLE_FROM_CURRENT:
-        raise UnknownNameError(
-            f"effect {name!r} changes power, not the drive current, so a current log cannot show it; "
-            f"catalogued effects: {list(EFFECTS_CATALOGUE)!r}"
-        )
     if not isinstance(name, str) or name not in EFFECTS_CATALOGUE:
         raise UnknownNameError(f"effect {name!r:.80} is not in the catalogue; expected one of {list(EFFECTS_CATALOGUE)!r}")
     if name in _CLASSES:
@@ -125,7 +126,7 @@ def resolve_effects(effects: Sequence[Any] | None) -> list[Effect]:
 
 
 def composition_order(effect_: Effect) -> tuple[int, int]:
-    """Sort key composing effects onto a prediction: physics and parameters, learned, then measurement."""
-    kind = {"parameter": 0, "physics": 0, "learned": 1, "measurement": 2}.get(effect_.kind, 1)
+    """Sort key composing effects onto a prediction: physics, parameters and electrical, learned, then measurement."""
+    kind = {"parameter": 0, "physics": 0, "electrical": 0, "learned": 1, "measurement": 2}.get(effect_.kind, 1)
     pos = EFFECTS_CATALOGUE.index(effect_.name) if effect_.name in EFFECTS_CATALOGUE else -1
     return kind, pos

@@ -1,7 +1,8 @@
 """Fitting candidate effects on calibration data and scoring them on held-out data, vectorised.
 
 An effect set is fitted with :func:`scipy.optimize.least_squares` on the residual vector of
-all calibration samples (both sides) of a fold and scored on that fold's held-out samples;
+all calibration samples (every column: both drive sides, or the one battery power) of a fold
+and scored on that fold's held-out samples;
 every sample is held out exactly once, so the pooled held-out squared error of a set is a
 fair measure of what it explains. There is no function here that scores a set on the data
 it was fitted on: :func:`score_effect_set` takes a :class:`~energy.diagnosis.split.Split`,
@@ -34,8 +35,9 @@ __all__ = ["DiagnosisData", "SetScore", "prepare_data", "compose", "fit_effect_s
 
 @dataclass(frozen=True, eq=False)
 class DiagnosisData:
-    """Everything fitting needs, computed once: measured currents, the model's unclamped
-    prediction, and each candidate's per-log precomputation (by effect name)."""
+    """Everything fitting needs, computed once: the measured values (per log ``(N, C)``: the
+    two side currents, or the battery power), the model's unclamped prediction of them, and
+    each candidate's per-log precomputation (by effect name)."""
 
     logs: tuple[InteractionLog, ...]
     measured: tuple[np.ndarray, ...]
@@ -47,6 +49,11 @@ class DiagnosisData:
     def n_samples(self) -> int:
         """Number of drive samples over all logs."""
         return int(sum(m.shape[0] for m in self.measured))
+
+    @property
+    def n_columns(self) -> int:
+        """Measured values per sample (2 side currents; 1 battery power)."""
+        return int(self.measured[0].shape[1]) if self.measured else 2
 
 
 def prepare_data(model: Any, logs: Sequence[InteractionLog], effects: Sequence[Effect],
@@ -98,10 +105,10 @@ def _fit_rows(effects: Sequence[Effect], data: DiagnosisData, masks: Sequence[np
     rows = [None if masks is None else np.asarray(m) for m in (masks or [None] * len(data.logs))]
     used = [k for k, m in enumerate(rows) if m is None or m.any()]
     n_rows = sum(data.measured[k].shape[0] if rows[k] is None else int(rows[k].sum()) for k in used)
-    if 2 * n_rows < n_par:
+    if data.n_columns * n_rows < n_par:
         names = [e.name for e in effects]
         raise DataError(f"effects {names!r} have {n_par} parameters but the calibration data holds only "
-                        f"{2 * n_rows} current values")
+                        f"{data.n_columns * n_rows} measured values")
     lo = np.concatenate([e.bounds[0] for e in effects])
     hi = np.concatenate([e.bounds[1] for e in effects])
     x0 = np.concatenate([e.initial for e in effects]) if start is None else np.clip(start, lo, hi)
@@ -126,7 +133,7 @@ def fit_effect_set(effects: Sequence[Effect], data: DiagnosisData) -> list[np.nd
     Raises
     ------
     DataError
-        Fewer current values than parameters.
+        Fewer measured values than parameters.
     """
     return _fit_rows(effects, data, None)
 
@@ -141,11 +148,12 @@ class SetScore:
     n_units_samples: np.ndarray
     fold_values: tuple[tuple[np.ndarray, ...], ...]
     held_out_a: tuple[np.ndarray, ...]
+    n_columns: int = 2
 
     @property
     def mse(self) -> float:
-        """Held-out mean squared current residual (A^2), both sides."""
-        return float(self.sse_units.sum() / max(2 * self.n_units_samples.sum(), 1))
+        """Held-out mean squared residual over every measured value (A^2 for currents, W^2 for power)."""
+        return float(self.sse_units.sum() / max(self.n_columns * self.n_units_samples.sum(), 1))
 
     def median_values(self) -> list[np.ndarray]:
         """Per effect, the median over folds of the fitted values."""
@@ -160,7 +168,7 @@ def score_effect_set(effects: Sequence[Effect], data: DiagnosisData, split: Spli
     Raises
     ------
     DataError
-        A fold with fewer calibration current values than the set has parameters.
+        A fold with fewer calibration values than the set has parameters.
     """
     n_logs = len(data.logs)
     held = [np.zeros_like(m) for m in data.measured]
@@ -178,7 +186,7 @@ def score_effect_set(effects: Sequence[Effect], data: DiagnosisData, split: Spli
         sq = ((held[k] - data.measured[k]) ** 2).sum(axis=1)
         sse += np.bincount(split.units[k], weights=sq, minlength=split.n_units)
         count += np.bincount(split.units[k], minlength=split.n_units)
-    return SetScore(tuple(e.name for e in effects), sse, count, tuple(fold_values), tuple(held))
+    return SetScore(tuple(e.name for e in effects), sse, count, tuple(fold_values), tuple(held), data.n_columns)
 
 
 def shrink_pct(before: SetScore, after: SetScore) -> float:

@@ -16,10 +16,11 @@ from ..logs import InteractionLog
 from ..models.baselines import PhysicsCurrentModel
 from ..params import ground_preset, robot_preset
 from ..physics import EFFECTS, PhysicsEnergyModel
+from ..power import PowerBreakdown
 from ..robot import RobotParams
 
 __all__ = ["DRIVE_EFFECTS", "TABLE_NODES", "PhysicsBasis", "ParameterTable", "physics_basis", "measured_side_speeds",
-           "motoring_currents_a", "unclipped_prediction", "clamps_at_zero"]
+           "basis_breakdown", "motoring_currents_a", "unclipped_prediction", "clamps_at_zero"]
 
 #: Physics effects that change the motor current (the electronics draw no motor current).
 DRIVE_EFFECTS: tuple[str, ...] = tuple(e for e in EFFECTS if e not in ("sensor", "control"))
@@ -82,6 +83,27 @@ def _log_robot(robot: RobotParams, log: InteractionLog, fitted_chi: bool) -> Rob
     return dataclasses.replace(robot, track_width_multiplier=log.meta.track_width_m / robot.track_width_m)
 
 
+def basis_breakdown(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[str, ...] | None = None,
+                    robot: RobotParams | None = None, ground: Any = None, ground_index: Any = None,
+                    slope_rad: Any = 0.0) -> PowerBreakdown:
+    """The :class:`~energy.power.PowerBreakdown` of the physics of ``basis`` (or the given
+    ``effects`` / ``robot`` / ``ground``) for the log's ``v``, ``omega``, their time
+    derivatives and ``slope_rad``, with the log's track multiplier rule.
+
+    Raises
+    ------
+    DataError
+        Fewer than 2 drive samples.
+    """
+    if len(log) < 2:
+        raise DataError(f"the physics terms need at least 2 drive samples per log, got {len(log)} ({log.meta.source!r})")
+    rb = _log_robot(basis.robot if robot is None else robot, log, basis.fitted_chi)
+    model = PhysicsEnergyModel(rb, basis.effects if effects is None else effects)
+    t, v, w = log.time_s, log.v_mps, log.omega_radps
+    return model.power(v, w, basis.ground if ground is None else ground, accel_mps2=np.gradient(v, t),
+                       alpha_radps2=np.gradient(w, t), slope_rad=slope_rad, time_s=t, ground_index=ground_index)
+
+
 def motoring_currents_a(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[str, ...] | None = None,
                         robot: RobotParams | None = None, ground: Any = None, ground_index: Any = None,
                         slope_rad: Any = 0.0) -> np.ndarray:
@@ -96,13 +118,8 @@ def motoring_currents_a(basis: PhysicsBasis, log: InteractionLog, *, effects: tu
     DataError
         Fewer than 2 drive samples.
     """
-    if len(log) < 2:
-        raise DataError(f"the physics terms need at least 2 drive samples per log, got {len(log)} ({log.meta.source!r})")
-    rb = _log_robot(basis.robot if robot is None else robot, log, basis.fitted_chi)
-    model = PhysicsEnergyModel(rb, basis.effects if effects is None else effects)
-    t, v, w = log.time_s, log.v_mps, log.omega_radps
-    res = model.power(v, w, basis.ground if ground is None else ground, accel_mps2=np.gradient(v, t),
-                      alpha_radps2=np.gradient(w, t), slope_rad=slope_rad, time_s=t, ground_index=ground_index)
+    res = basis_breakdown(basis, log, effects=effects, robot=robot, ground=ground, ground_index=ground_index,
+                          slope_rad=slope_rad)
     i_m = np.asarray(res.motor_current_a)
     sign = np.sign(np.asarray(res.motor_speed_radps))
     return np.where(sign != 0, i_m * sign, np.abs(i_m))

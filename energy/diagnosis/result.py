@@ -101,6 +101,10 @@ class Diagnosis:
         The input model plus the chosen effects, fitted on all logs.
     skipped : dict of str to str
         Candidates not scored and why (already in the model, data cannot show them).
+    split : {"runs", "blocks"}
+    power : PowerDiagnosis or None
+        The power stage (electrical effects on battery power) when every log carries battery
+        voltage and pack current; None otherwise.
     """
 
     before: GapSummary
@@ -113,6 +117,7 @@ class Diagnosis:
     corrected_model: CurrentModel
     skipped: dict[str, str] = field(default_factory=dict)
     split: str = "runs"
+    power: Any = None
 
     @property
     def found(self) -> bool:
@@ -137,7 +142,7 @@ class Diagnosis:
             "skipped": dict(self.skipped),
             "split": self.split,
             "corrected_model": type(self.corrected_model).__name__,
-        }
+        } | ({} if self.power is None else {"power": self.power.to_dict()})
 
     def write_json(self, path: str | os.PathLike[str]) -> Path:
         """Write :meth:`to_dict` to ``path`` atomically; return the path."""
@@ -168,6 +173,8 @@ class Diagnosis:
         for w in self.waterfall:
             lines.append(f"| {w.label} | {fmt_number(w.charge_error_pct, 3)} % | {fmt_number(w.section_error_pct, 3)} % | "
                          f"{fmt_number(w.rmse_a, 3)} | {fmt_number(w.shrink_pct, 3)} % |")
+        if self.power is not None:
+            lines += self.power.markdown_lines(self.split)
         return "\n".join(lines) + "\n"
 
     def write_markdown(self, path: str | os.PathLike[str]) -> Path:

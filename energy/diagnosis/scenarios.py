@@ -42,14 +42,11 @@ current_gain             mixed / coated_wood                     8.01     48.1  
 current_offset           mixed / coated_wood                     5.81     32.6    1.40
 time_lag                 start_stop / coated_wood                0.13      0.2    9.31
 idle_current             mixed / coated_wood                    17.29     89.9    4.02
-armature_heat            mixed / coated_wood                     0.00      0.0    0.00
-sensor                   mixed / coated_wood                     0.00      0.0    0.00
-control                  mixed / coated_wood                     0.00      0.0    0.00
 =======================  ==================================  ========  =======  ======
 
-Not excitable in drive currents (the scenarios exist, their gap is 0): ``armature_heat``
-(copper loss changes power, not the current), ``sensor`` and ``control`` (electronics
-draw no motor current); they need power or battery-voltage logs. Weak ones: static
+``armature_heat``, ``sensor`` and ``control`` change power, not the drive currents: their
+scenarios log battery voltage and pack current (:attr:`Scenario.power_logs`), their gap is
+one of battery power (:attr:`WithheldGap.power`). Weak ones: static
 friction acts only on the breakaway samples (4x the noise on the charge, below it per
 sample); a time lag moves the current, not the charge (its RMS ratio shows it). The stock
 Husky never reaches its torque limit, so that scenario drives one with an 8 A limit, and
@@ -79,8 +76,9 @@ from ..physics import EFFECTS
 from ..robot import RobotParams
 from ..sim import PAPER_GROUNDS, NoiseModel, TruthSimulator, measure_currents
 from .manoeuvres import MANOEUVRES, manoeuvre_commands
+from .scenario_power import PowerGap, battery_streams, power_gap
 
-__all__ = ["MEASUREMENT_EFFECTS", "PARAMETER_EFFECTS", "UNEXCITABLE_EFFECTS", "Scenario",
+__all__ = ["MEASUREMENT_EFFECTS", "PARAMETER_EFFECTS", "POWER_ONLY_EFFECTS", "Scenario",
            "WithheldGap", "SCENARIOS", "scenario", "pair_scenario", "null_scenario", "withheld_gap",
            "withheld_gap_ratio"]
 
@@ -102,12 +100,10 @@ MEASUREMENT_EFFECTS: dict[str, str] = {
     "time_lag": "the current stream lags the drive stream by 0.12 s",
     "idle_current": "the model has no idle current (truth 0.59 A)",
 }
-#: Catalogued effects no drive-current log can show, and why.
-UNEXCITABLE_EFFECTS: dict[str, str] = {
-    "armature_heat": "copper loss changes the electrical power, not the motor current",
-    "sensor": "the sensors draw no motor current (needs battery power logs)",
-    "control": "the control board draws no motor current (needs battery power logs)",
-}
+#: Catalogued effects no drive-current log can show, and why: their scenarios log battery power.
+POWER_ONLY_EFFECTS: dict[str, str] = {"armature_heat": "copper loss changes the electrical power, not the motor current",
+                                      "sensor": "the sensors draw no motor current",
+                                      "control": "the control board draws no motor current"}
 
 
 @dataclass(frozen=True)
@@ -117,7 +113,8 @@ class WithheldGap:
     ``charge_change_mah``: sum over runs and sides of ``|Q_truth - Q_without|`` (clean
     currents); ``noise_charge_mah``: the same for the measurement noise (``|Q_measured -
     Q_clean|``); ``ratio`` their quotient. ``rms_change_a`` / ``noise_rms_a``: per-sample
-    RMS of the same differences; ``rms_ratio`` their quotient.
+    RMS of the same differences; ``rms_ratio`` their quotient. ``power``: the same for the
+    battery power of a scenario with :attr:`Scenario.power_logs` (None otherwise).
     """
 
     scenario: str
@@ -129,6 +126,7 @@ class WithheldGap:
     rms_change_a: float
     noise_rms_a: float
     rms_ratio: float
+    power: PowerGap | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """Plain dict."""
@@ -171,6 +169,8 @@ class Scenario:
         Delay of the current stream behind the drive stream (s).
     model_idle : bool
         The model is calibrated with the idle current (False for ``"idle_current"``).
+    power_logs : bool
+        The logs carry battery voltage and pack current; the model has the electronics unless withheld.
     excitable : bool
         Whether drive currents can show the withheld effects at all.
     note : str
@@ -191,6 +191,7 @@ class Scenario:
     current_offset_a: tuple[float, float] = (0.0, 0.0)
     lag_s: float = 0.0
     model_idle: bool = True
+    power_logs: bool = False
     excitable: bool = True
     note: str = ""
 
@@ -232,8 +233,9 @@ class Scenario:
 
     @property
     def model_effects(self) -> tuple[str, ...]:
-        """Physics effects of the model under test (every drive effect but the withheld ones)."""
-        return tuple(e for e in _DRIVE_EFFECTS if e not in self.withheld)
+        """Physics effects of the model under test (every drive effect, and with :attr:`power_logs` the
+        electronics, but the withheld ones)."""
+        return tuple(e for e in (EFFECTS if self.power_logs else _DRIVE_EFFECTS) if e not in self.withheld)
 
     @property
     def terrain(self) -> TerrainMap:
@@ -322,8 +324,12 @@ class Scenario:
             _, meas = self._measure(motoring, log.time_s, run_seed, altered=True)
             notes = f"withheld-effect scenario {self.name!r}, run {k}; {log.meta.notes}"
             meta = dataclasses.replace(log.meta, velocity_source="measured", notes=notes)
+            volts = amps = None
+            if self.power_logs:
+                _, _, volts, amps = battery_streams(self.noise, self.robot, run.breakdown.total_power_w, run_seed)
             logs.append(dataclasses.replace(log, v_mps=run.actual_v_mps, omega_radps=run.actual_omega_radps,
-                                            current_left_a=meas[:, 0], current_right_a=meas[:, 1], meta=meta))
+                                            current_left_a=meas[:, 0], current_right_a=meas[:, 1], meta=meta,
+                                            battery_voltage_v=volts, battery_current_a=amps))
         return logs
 
     def calibration_log(self, seed: int | None = 0) -> InteractionLog:
@@ -365,6 +371,12 @@ def withheld_gap(sc: Scenario, seed: int | None = 0) -> WithheldGap:
     model = sc._runs(seed, world="model")
     q = dq = dn = sq_change = sq_noise = 0.0
     n = 0
+    power = None
+    if sc.power_logs:
+        measured = [np.prod(battery_streams(sc.noise, sc.robot, r.breakdown.total_power_w, rs)[2:], axis=0)
+                    for r, _, rs in truth]
+        power = power_gap([np.asarray(r.breakdown.total_power_w) for r, _, _ in truth],
+                          [np.asarray(r.breakdown.total_power_w) for r, _, _ in model], measured, _DT_S)
     for (run, mot, rs), (_, mot_m, _) in zip(truth, model):
         t = run.log.time_s
         clean, meas = sc._measure(mot, t, rs, altered=True)
@@ -378,15 +390,16 @@ def withheld_gap(sc: Scenario, seed: int | None = 0) -> WithheldGap:
         n += clean.size
     rms_c, rms_n = (sq_change / n) ** 0.5, (sq_noise / n) ** 0.5
     return WithheldGap(sc.name, q, dq, 100.0 * dq / q if q > 0 else 0.0, dn, dq / dn if dn > 0 else float("inf"),
-                       rms_c, rms_n, rms_c / rms_n if rms_n > 0 else float("inf"))
+                       rms_c, rms_n, rms_c / rms_n if rms_n > 0 else float("inf"), power)
 
 
 def withheld_gap_ratio(sc: Scenario, seed: int | None = 0) -> float:
-    """How far the withheld effects stand above the noise: the larger of the charge ratio
+    """How far the withheld effects stand above the noise: the largest of the charge ratio
     and the per-sample RMS ratio of :func:`withheld_gap` (an effect shows either as a bias
-    of the whole-run charge, or in the shape of the current, as a lag does)."""
+    of the whole-run charge, or in the shape of the current, as a lag does), and of the
+    battery power's with :attr:`Scenario.power_logs`."""
     gap = withheld_gap(sc, seed)
-    return max(gap.ratio, gap.rms_ratio)
+    return max(gap.ratio, gap.rms_ratio, *((gap.power.ratio, gap.power.rms_ratio) if gap.power else ()))
 
 
 def _make_scenarios() -> dict[str, Scenario]:
@@ -425,8 +438,9 @@ def _make_scenarios() -> dict[str, Scenario]:
         Scenario("time_lag", ("time_lag",), "start_stop", ground=wood, lag_s=0.12),
         Scenario("idle_current", ("idle_current",), "mixed", ground=wood, model_idle=False),
     ]
-    for name, why in UNEXCITABLE_EFFECTS.items():
-        s.append(Scenario(name, (name,), "mixed", ground=wood, excitable=False, note=why))
+    for name, why in POWER_ONLY_EFFECTS.items():
+        s.append(Scenario(name, (name,), "pivots_arcs" if name == "armature_heat" else "mixed", ground=wood,
+                          power_logs=True, note=why))
     return {sc.name: sc for sc in s}
 
 
@@ -461,7 +475,7 @@ def pair_scenario(a: str, b: str) -> Scenario:
     if a == b:
         raise InvalidParameterError(f"pair_scenario needs two different effects, got {a!r} twice")
     for sc in (sa, sb):
-        if not sc.excitable or any(w not in EFFECTS for w in sc.withheld):
+        if not sc.excitable or sc.power_logs or any(w not in EFFECTS for w in sc.withheld):
             raise InvalidParameterError(
                 f"pair_scenario takes excitable physics effects; {sc.name!r} is not one"
             )

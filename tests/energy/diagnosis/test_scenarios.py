@@ -9,8 +9,8 @@ from energy import PhysicsCurrentModel
 from energy.diagnosis import EFFECTS_CATALOGUE, NOT_IDENTIFIABLE_FROM_CURRENT, diagnose
 from energy.diagnosis.manoeuvres import MANOEUVRES, manoeuvre_commands
 from energy.diagnosis.scenarios import (
+    POWER_ONLY_EFFECTS,
     SCENARIOS,
-    UNEXCITABLE_EFFECTS,
     Scenario,
     null_scenario,
     pair_scenario,
@@ -32,7 +32,8 @@ def test_every_catalogued_effect_has_a_scenario():
     # vibration-reading model in test_imu_lag.py
     expected = (set(EFFECTS_CATALOGUE) - {"learned_residual", "imu_lag"}) | set(NOT_IDENTIFIABLE_FROM_CURRENT)
     assert expected <= set(SCENARIOS)
-    assert set(UNEXCITABLE_EFFECTS) == {name for name, sc in SCENARIOS.items() if not sc.excitable}
+    assert set(POWER_ONLY_EFFECTS) == {name for name, sc in SCENARIOS.items() if sc.power_logs}
+    assert all(sc.excitable for sc in SCENARIOS.values())
     for name, sc in SCENARIOS.items():
         assert sc.withheld == (name,) and scenario(name) is sc
 
@@ -66,16 +67,19 @@ def test_same_seed_same_logs_other_seed_other_logs():
 @pytest.mark.parametrize("name", EXCITABLE)
 def test_withheld_effect_exceeds_twice_the_noise(name):
     gap = withheld_gap(SCENARIOS[name], seed=0)
-    assert max(gap.ratio, gap.rms_ratio) > 2.0, gap
-    assert withheld_gap_ratio(SCENARIOS[name], seed=0) == pytest.approx(max(gap.ratio, gap.rms_ratio))
+    ratios = (gap.ratio, gap.rms_ratio) + ((gap.power.ratio, gap.power.rms_ratio) if gap.power else ())
+    assert max(ratios) > 2.0, gap
+    assert withheld_gap_ratio(SCENARIOS[name], seed=0) == pytest.approx(max(ratios))
     assert gap.noise_rms_a == pytest.approx(0.14, abs=0.03)  # the default noise, per sample
 
 
-@pytest.mark.parametrize("name", sorted(UNEXCITABLE_EFFECTS))
-def test_unexcitable_effects_change_nothing_in_the_currents(name):
+@pytest.mark.parametrize("name", sorted(POWER_ONLY_EFFECTS))
+def test_power_only_effects_change_nothing_in_the_currents_but_the_battery_power(name):
     gap = withheld_gap(SCENARIOS[name], seed=0)
     assert gap.charge_change_mah == 0.0 and gap.rms_change_a == 0.0
     assert SCENARIOS[name].note
+    assert gap.power is not None and gap.power.ratio > 2.0 and gap.power.rms_ratio > 2.0
+    assert gap.power.energy_change_pct > 2.0
 
 
 def test_null_model_equals_the_truth_up_to_noise():

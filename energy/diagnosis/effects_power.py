@@ -1,0 +1,91 @@
+"""Electrical candidates, fitted on battery power: armature heat, sensor power, control-board power.
+
+Each one sets its quantity to the fitted value in place of what the model's physics basis
+counts (nothing when the basis has the effect off, its robot's value when on), so the same
+candidate finds a missing effect and a wrong value of a present one. They change the
+battery power, never the drive current: they need logs with battery voltage and pack
+current (:attr:`energy.logs.InteractionLog.has_battery_power`).
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from .effect_base import Effect, EffectParameter
+from .model_currents import PhysicsBasis, physics_basis
+from .power_data import PowerInputs, battery_side_w, power_inputs
+
+__all__ = ["ElectricalEffect", "ArmatureHeatEffect", "SensorPowerEffect", "ControlPowerEffect"]
+
+
+class ElectricalEffect(Effect):
+    """An effect of the battery power (kind ``"electrical"``); :meth:`apply` takes and returns ``(N, 1)`` W."""
+
+    kind = "electrical"
+    robot: Any = None
+
+    def unsupported(self, logs: Sequence[Any], terrain: Any, model: Any = None) -> str | None:
+        missing = [k for k, log in enumerate(logs) if not getattr(log, "has_battery_power", False)]
+        if missing:
+            return (f"needs battery voltage and pack current (battery_voltage_v, battery_current_a) in every log; "
+                    f"logs {missing[:5]!r} lack them")
+        return None
+
+    def bind(self, logs: Sequence[Any], terrain: Any = None, robot: Any = None) -> Effect:
+        out = copy.copy(self)
+        out.robot = robot
+        return out
+
+    def basis(self, model: Any) -> PhysicsBasis:
+        """The physics basis of ``model`` (the bound robot for a model that is not a physics one)."""
+        return physics_basis(model, self.robot)
+
+    def prepare(self, model: Any, log: Any) -> PowerInputs:
+        return power_inputs(self.basis(model), log)
+
+
+class ArmatureHeatEffect(ElectricalEffect):
+    """Copper loss ``Ra I^2`` per side with a fitted armature resistance (battery side as the physics)."""
+
+    name = "armature_heat"
+    parameters = (EffectParameter("armature_resistance_ohm", 0.1, 0.0, 5.0, "ohm", "armature_resistance_ohm"),)
+    description = "armature heat Ra I^2 (fitted resistance)"
+
+    def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: PowerInputs) -> np.ndarray:
+        p = prepared
+        new = battery_side_w(p.back_emf_w + float(values[0]) * p.current_sq_a2, p.regen).sum(axis=1)
+        old = battery_side_w(p.back_emf_w + p.ra0_ohm * p.current_sq_a2, p.regen).sum(axis=1)
+        return predicted_a + (new - old)[:, None]
+
+
+class SensorPowerEffect(ElectricalEffect):
+    """Sensor power ``P_s + k |v|`` (W): a constant and a part growing with the speed."""
+
+    name = "sensor"
+    parameters = (EffectParameter("sensor_power_w", 1.0, 0.0, 500.0, "W", "sensor_power_w"),
+                  EffectParameter("sensor_power_per_mps_w", 0.5, 0.0, 100.0, "W s/m", "sensor_power_per_mps_w"))
+    description = "sensor power (constant + per m/s)"
+
+    def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: PowerInputs) -> np.ndarray:
+        p = prepared
+        change = (float(values[0]) - p.sensor0[0]) + (float(values[1]) - p.sensor0[1]) * p.speed_mps
+        return predicted_a + change[:, None]
+
+
+class ControlPowerEffect(ElectricalEffect):
+    """Control-board power: ``standby`` when stopped, ``stable`` when moving (the start-up window
+    after each start from rest adds the robot's rated start-up excess over its stable power)."""
+
+    name = "control"
+    parameters = (EffectParameter("control_standby_power_w", 1.0, 0.0, 500.0, "W", "control_standby_power_w"),
+                  EffectParameter("control_stable_power_w", 1.0, 0.0, 500.0, "W", "control_stable_power_w"))
+    description = "control-board power (standby when stopped, stable when moving)"
+
+    def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: PowerInputs) -> np.ndarray:
+        p = prepared
+        new = float(values[0]) * p.stopped + float(values[1]) * (1.0 - p.stopped) + p.startup_excess_w * p.startup
+        return predicted_a + (new - p.control0_w)[:, None]

@@ -1,0 +1,92 @@
+"""Greedy effect selection on held-out data: rank candidates, add the best while it is significant (any stage)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from .effect_base import Effect
+from .fit import (
+    DiagnosisData,
+    SetScore,
+    bootstrap_gain_interval_pct,
+    bootstrap_shrink_interval_pct,
+    score_effect_set,
+    shrink_pct,
+)
+from .result import EffectScore
+from .runner import SetRunner
+from .split import Split
+
+__all__ = ["SIGNIFICANT_SHRINK_PCT", "Selection", "score_entry", "significant", "select_effects"]
+
+#: An effect is added only when it shrinks the held-out gap by at least this much (points of %).
+SIGNIFICANT_SHRINK_PCT = 2.0
+
+
+def score_entry(e: Effect, none: SetScore, alone: SetScore, current: SetScore, trial: SetScore, n_bootstrap: int,
+                seed: int | None) -> EffectScore:
+    """``e`` alone (``alone`` against ``none``) and added to the chosen set (``trial`` against ``current``)."""
+    lo, hi = bootstrap_shrink_interval_pct(none, alone, n_bootstrap=n_bootstrap, seed=seed)
+    added = shrink_pct(none, trial) - shrink_pct(none, current)
+    interval = bootstrap_gain_interval_pct(none, current, trial, n_bootstrap=n_bootstrap, seed=seed)
+    return EffectScore(e.name, e.kind, e.values_dict(trial.median_values()[-1]), shrink_pct(none, alone), (lo, hi),
+                       e.n_parameters, added, interval)
+
+
+def significant(current: SetScore, trial: SetScore, none: SetScore, n_bootstrap: int, seed: int | None) -> bool:
+    """Whether ``trial`` improves on ``current`` significantly: bootstrap lower bound > 0 and at
+    least :data:`SIGNIFICANT_SHRINK_PCT` points of the gap of ``none``."""
+    lo, _ = bootstrap_shrink_interval_pct(current, trial, n_bootstrap=n_bootstrap, seed=seed)
+    gain = shrink_pct(none, trial) - shrink_pct(none, current)
+    return lo > 0.0 and gain >= SIGNIFICANT_SHRINK_PCT
+
+
+@dataclass(frozen=True, eq=False)
+class Selection:
+    """The outcome of :func:`select_effects`.
+
+    ``none``: the held-out score of the data as given; ``alone``: each candidate on its own;
+    ``chosen`` / ``sets``: the effects added, in order, and the held-out score after each
+    (``sets[0]`` is ``none``); ``scores``: every candidate's :class:`EffectScore`; ``order``:
+    the chosen ones, then the rest by what they would add (best first).
+    """
+
+    none: SetScore
+    alone: dict[str, SetScore]
+    chosen: tuple[Effect, ...]
+    sets: tuple[SetScore, ...]
+    scores: dict[str, EffectScore]
+    order: tuple[Effect, ...]
+
+
+def select_effects(usable: Sequence[Effect], data: DiagnosisData, split: Split, runner: SetRunner,
+                   n_bootstrap: int, seed: int | None) -> Selection:
+    """Rank ``usable`` by held-out shrink; add greedily (every remaining candidate refitted jointly
+    with the chosen ones at each step) while the next one is :func:`significant`."""
+    none = score_effect_set([], data, split)
+    alone = dict(zip((e.name for e in usable), runner.score([[e] for e in usable], "candidates alone")))
+    chosen: list[Effect] = []
+    sets = [none]
+    scores: dict[str, EffectScore] = {}
+    remaining = list(usable)
+    trials = dict(alone)
+    while remaining:
+        # every remaining candidate refitted jointly with the chosen ones: the ranking is conditional
+        trials = (dict(alone) if not chosen else dict(zip(
+            (e.name for e in remaining),
+            runner.score([chosen + [e] for e in remaining], f"candidates added to {len(chosen)} chosen"))))
+        eligible = [e for e in remaining if not e.negligible(trials[e.name].median_values()[-1])]
+        if not eligible:
+            break
+        best = min(eligible, key=lambda e: trials[e.name].sse_units.sum())
+        if not significant(sets[-1], trials[best.name], none, n_bootstrap, seed):
+            break
+        scores[best.name] = score_entry(best, none, alone[best.name], sets[-1], trials[best.name], n_bootstrap, seed)
+        chosen.append(best)
+        sets.append(trials[best.name])
+        remaining.remove(best)
+    remaining.sort(key=lambda e: trials[e.name].sse_units.sum())
+    scores.update({e.name: score_entry(e, none, alone[e.name], sets[-1], trials[e.name], n_bootstrap, seed)
+                   for e in remaining})
+    return Selection(none, alone, tuple(chosen), tuple(sets), scores, tuple(chosen) + tuple(remaining))
