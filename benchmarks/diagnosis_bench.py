@@ -18,16 +18,24 @@ the squared residual, so the table also gives the shrink as % of that ceiling ("
 - pairs: both in the top 3 in >= 80 % of cases; null: no effect found in >= 95 % of seeds;
 - a 40-run diagnosis against the whole catalogue in <= 60 s on 2 cores (machine-dependent).
 
+The electrical effects (``armature_heat``, ``sensor``, ``control``) change battery power, not
+the drive currents: their scenarios log battery voltage and pack current and the diagnosis'
+power stage scores them (rank, shrink of the held-out power gap, parameters); the power
+null (``power_null``: model = truth incl. electronics, power logs) checks that no electrical
+effect is chosen.
+
 Usage::
 
     python benchmarks/diagnosis_bench.py --out bench_diagnosis.json      # full (5 seeds; long)
     python benchmarks/diagnosis_bench.py --quick                          # a few scenarios, 1 seed
     python benchmarks/diagnosis_bench.py --seeds 2 --workers 2 --scenarios inertia slope
+    python benchmarks/diagnosis_bench.py --scenarios armature_heat sensor control --parts single power_null
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import os
 import platform
@@ -53,6 +61,7 @@ from terrain.atomic import write_json_atomic
 PAIRS = (("inertia", "coulomb_friction"), ("gear_losses", "viscous_friction"), ("slope", "inertia"),
          ("coulomb_friction", "stribeck"), ("turning_resistance", "inertia"))
 QUICK_SCENARIOS = ("turning_resistance", "inertia", "slope", "mass", "current_gain", "time_lag")
+PARTS = ("single", "pair", "null", "power_null", "timing")
 TARGETS = {"first_pct": 90.0, "shrink_pct": 80.0, "param_error_pct": 20.0, "pairs_top3_pct": 80.0,
            "null_pct": 95.0, "forty_runs_s": 60.0}
 
@@ -92,6 +101,8 @@ def _run_case(kind: str, names: tuple[str, ...], seed: int, n_bootstrap: int) ->
         sc = SCENARIOS[names[0]]
     elif kind == "pair":
         sc = pair_scenario(*names)
+    elif kind == "power_null":
+        sc = dataclasses.replace(null_scenario(), power_logs=True)
     else:
         sc = null_scenario()
     gap = withheld_gap(sc, seed)
@@ -99,17 +110,24 @@ def _run_case(kind: str, names: tuple[str, ...], seed: int, n_bootstrap: int) ->
     t0 = time.perf_counter()
     d = diagnose(model, logs, terrain=sc.terrain, seed=seed, n_bootstrap=n_bootstrap)
     elapsed = time.perf_counter() - t0
-    ranked = [r.name for r in d.ranking]
-    row: dict[str, Any] = {"kind": kind, "scenario": sc.name, "seed": seed, "gap_ratio": max(gap.ratio, gap.rms_ratio),
+    power = sc.power_logs and d.power is not None  # electrical effects: ranked and scored on battery power
+    ranking = d.power.ranking if power else d.ranking
+    ranked = [r.name for r in ranking]
+    ratios = (gap.ratio, gap.rms_ratio) + ((gap.power.ratio, gap.power.rms_ratio) if gap.power else ())
+    row: dict[str, Any] = {"kind": kind, "scenario": sc.name, "seed": seed, "gap_ratio": max(ratios),
                            "charge_change_pct": gap.charge_change_pct, "chosen": list(d.chosen),
                            "top3": ranked[:3], "verdict": list(d.verdict), "time_s": elapsed,
                            "after_shrink_pct": 100.0 * (1.0 - (d.after.rmse_a / d.before.rmse_a) ** 2)
                            if d.before.rmse_a > 0 else 0.0}
     if kind == "single":
         name = names[0]
-        score = next((r for r in d.ranking if r.name == name), None)
+        score = next((r for r in ranking if r.name == name), None)
         # the noise bounds any shrink: at most the withheld share of the squared residual
-        ceiling = 100.0 * gap.rms_change_a**2 / (gap.rms_change_a**2 + gap.noise_rms_a**2)
+        change, noise = (gap.power.rms_change_w, gap.power.noise_rms_w) if power else (gap.rms_change_a, gap.noise_rms_a)
+        ceiling = 100.0 * change**2 / (change**2 + noise**2)
+        if power:
+            row.update(power_chosen=list(d.power.chosen), power_verdict=list(d.power.verdict),
+                       energy_error_pct=[w.energy_error_pct for w in d.power.waterfall])
         row.update(rank=ranked.index(name) + 1 if name in ranked else None, shrink_ceiling_pct=ceiling,
                    shrink_of_withheld_pct=None if score is None or ceiling <= 0 else 100.0 * score.shrink_pct / ceiling,
                    shrink_pct=None if score is None else score.shrink_pct,
@@ -119,6 +137,9 @@ def _run_case(kind: str, names: tuple[str, ...], seed: int, n_bootstrap: int) ->
     elif kind == "pair":
         row["both_top3"] = all(n in ranked[:3] for n in names)
         row["both_chosen"] = all(n in d.chosen for n in names)
+    elif kind == "power_null":
+        row["no_effect_found"] = not d.power.chosen
+        row["power_verdict"] = list(d.power.verdict)
     else:
         row["no_effect_found"] = not d.chosen
     return row
@@ -150,6 +171,7 @@ def _summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
     with_param = [r for r in visible if r["param_error_pct"] is not None]
     pairs = [r for r in rows if r["kind"] == "pair"]
     null = [r for r in rows if r["kind"] == "null"]
+    power_null = [r for r in rows if r["kind"] == "power_null"]
     smallest: dict[str, float] = {}
     for r in first:
         smallest[r["scenario"]] = min(smallest.get(r["scenario"], math.inf), r["gap_ratio"])
@@ -165,6 +187,7 @@ def _summary(rows: list[dict[str, Any]]) -> dict[str, Any]:
         "pairs_top3_pct": _pct(sum(1 for r in pairs if r["both_top3"]), len(pairs)),
         "pairs_chosen_pct": _pct(sum(1 for r in pairs if r["both_chosen"]), len(pairs)),
         "null_pct": _pct(sum(1 for r in null if r["no_effect_found"]), len(null)),
+        "power_null_pct": _pct(sum(1 for r in power_null if r["no_effect_found"]), len(power_null)),
         "smallest_gap_found": smallest,
         "not_first": sorted({f"{r['scenario']} (seed {r['seed']}: rank {r['rank']}, top {r['top3'][:1]})"
                              for r in visible if r["rank"] != 1}),
@@ -179,6 +202,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--n-bootstrap", type=int, default=200, help="bootstrap resamples of the diagnosis")
     ap.add_argument("--workers", type=int, default=1, help="processes running cases in parallel")
     ap.add_argument("--out", default=None, help="write the results as JSON here")
+    ap.add_argument("--parts", nargs="+", choices=PARTS, default=list(PARTS),
+                    help="what to run: single-effect scenarios, pairs, the null, the power null, the 40-run timing "
+                    "(default all)")
     args = ap.parse_args(argv)
     n_seeds = args.seeds if args.seeds is not None else (1 if args.quick else 5)
     names = args.scenarios or (list(QUICK_SCENARIOS) if args.quick else list(SCENARIOS))
@@ -187,9 +213,11 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         sys.exit(f"unknown scenario(s) {unknown}; known: {sorted(SCENARIOS)}")
     excitable = [n for n in names if SCENARIOS[n].excitable]
     pairs = PAIRS[:1] if args.quick else PAIRS
-    cases = ([("single", (n,), s) for n in excitable for s in range(n_seeds)]
-             + [("pair", p, s) for p in pairs for s in range(n_seeds)]
-             + [("null", (), s) for s in range(max(n_seeds, 1 if args.quick else 20))])
+    parts = set(args.parts)
+    cases = ([("single", (n,), s) for n in excitable for s in range(n_seeds) if "single" in parts]
+             + [("pair", p, s) for p in pairs for s in range(n_seeds) if "pair" in parts]
+             + [("null", (), s) for s in range(max(n_seeds, 1 if args.quick else 20)) if "null" in parts]
+             + [("power_null", (), s) for s in range(n_seeds) if "power_null" in parts])
     t0 = time.perf_counter()
     if args.workers > 1:
         with ProcessPoolExecutor(args.workers) as pool:
@@ -210,15 +238,19 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         if r["kind"] == "pair":
             print(f"pair {r['scenario']:<40} seed {r['seed']}: both in top 3 {r['both_top3']}, both chosen "
                   f"{r['both_chosen']}  (top 3: {', '.join(r['top3'])}; chosen: {', '.join(r['chosen'])})")
-    null = [r for r in rows if r["kind"] == "null"]
-    print(f"null: no effect found in {sum(r['no_effect_found'] for r in null)} of {len(null)} seeds")
+    for kind in ("null", "power_null"):
+        null = [r for r in rows if r["kind"] == kind]
+        if null:
+            what = "electrical effect" if kind == "power_null" else "effect"
+            print(f"{kind}: no {what} found in {sum(r['no_effect_found'] for r in null)} of {len(null)} seeds")
     for name in sorted(set(names) - set(excitable)):
-        print(f"{name}: not excitable in drive currents ({SCENARIOS[name].note})")
+        print(f"{name}: not excitable ({SCENARIOS[name].note})")
 
-    timing = _time_forty_runs(10 if args.quick else 40, args.n_bootstrap)
+    timing = _time_forty_runs(10 if args.quick else 40, args.n_bootstrap) if "timing" in parts else None
     summary = _summary(rows)
-    print(f"\n{timing['n_runs']}-run diagnosis ({timing['samples']} samples, {timing['cpu_count']} cores): "
-          f"{timing['time_s']:.1f} s (target for 40 runs: <= {TARGETS['forty_runs_s']:.0f} s on 2 cores)")
+    if timing:
+        print(f"\n{timing['n_runs']}-run diagnosis ({timing['samples']} samples, {timing['cpu_count']} cores): "
+              f"{timing['time_s']:.1f} s (target for 40 runs: <= {TARGETS['forty_runs_s']:.0f} s on 2 cores)")
     print(f"withheld effect first: {_fmt(summary['first_pct'])} % of {summary['visible_cases']} cases above twice "
           f"the noise (target >= {TARGETS['first_pct']:.0f} %)")
     print(f"held-out shrink >= 80 %: {_fmt(summary['shrink_ge_80_pct'])} % of them, median "
@@ -227,7 +259,8 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     print(f"fitted parameter within 20 % of the truth: {_fmt(summary['param_within_20_pct'])} % of the cases with one")
     print(f"pairs both in top 3: {_fmt(summary['pairs_top3_pct'])} % (target >= {TARGETS['pairs_top3_pct']:.0f} %); "
           f"both chosen: {_fmt(summary['pairs_chosen_pct'])} %")
-    print(f"null, no effect found: {_fmt(summary['null_pct'])} % (target >= {TARGETS['null_pct']:.0f} %)")
+    print(f"null, no effect found: {_fmt(summary['null_pct'])} % (target >= {TARGETS['null_pct']:.0f} %); power null, "
+          f"no electrical effect found: {_fmt(summary['power_null_pct'])} %")
     if summary["not_first"]:
         print("not first: " + "; ".join(summary["not_first"]))
     print(f"wall time {wall:.0f} s, {args.workers} worker(s)")

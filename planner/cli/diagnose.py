@@ -125,6 +125,15 @@ def _waterfall_table(diagnosis: Any) -> str:
     return "\n".join(lines)
 
 
+def _power_table(diagnosis: Any) -> str:
+    lines = ["battery power (voltage x pack current):",
+             f"{'step':<28} {'energy err %':>12} {'8 s sect. %':>12} {'RMSE W':>8} {'shrink %':>9}"]
+    for w in diagnosis.power.waterfall:
+        lines.append(f"{w.label:<28} {w.energy_error_pct:>12.2f} {w.section_error_pct:>12.2f} {w.rmse_w:>8.2f} "
+                     f"{w.shrink_pct:>9.1f}")
+    return "\n".join(lines)
+
+
 def run_diagnose(args: argparse.Namespace) -> int:
     """``terrawatt diagnose``: diagnosis.json, diagnosis.md, corrected_model.zip and the figures.
 
@@ -155,6 +164,9 @@ def run_diagnose(args: argparse.Namespace) -> int:
     print("\n".join(diagnosis.verdict))
     print()
     print(_waterfall_table(diagnosis))
+    if diagnosis.power is not None:
+        print()
+        print(_power_table(diagnosis))
     for name, why in figures.skipped.items():
         print(f"skipped {FIGURES[name]}: {why}")
     for name, why in figures.failed.items():
