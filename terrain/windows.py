@@ -144,9 +144,11 @@ class DemWindows:
 
     Examples
     --------
-    >>> with DemWindows("dem.tif") as dem:  # doctest: +SKIP
-    ...     win = dem.read(slice(0, 256), slice(0, 256))
-    ...     tmap = win.terrain_map()
+    Read the south-west 256 x 256 cells of a DEM as a georeferenced map::
+
+        with DemWindows("dem.tif") as dem:
+            win = dem.read(slice(0, 256), slice(0, 256))
+            tmap = win.terrain_map()
     """
 
     def __init__(self, path: str | os.PathLike[str], band: int | None = None) -> None:
