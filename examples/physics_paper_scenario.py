@@ -48,7 +48,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from energy import EFFECTS, InteractionLog, PhysicsCurrentModel, PhysicsEnergyModel, ground_preset, robot_preset
+from energy import (
+    EFFECTS,
+    Battery,
+    InteractionLog,
+    PhysicsCurrentModel,
+    PhysicsEnergyModel,
+    ground_preset,
+    robot_preset,
+)
 from energy.diagnosis import Diagnosis, diagnose
 from energy.sim import NoiseModel, TruthSimulator
 from terrain import TerrainMap
@@ -160,9 +168,13 @@ def run_scenario() -> tuple[list[CaseResult], CaseResult, PhysicsEnergyModel]:
 
 
 # ------------------------------------------------------------------ the ablation from data
-#: Current measurement at the paper robot's scale (it draws about 0.1 A at most).
+#: Current measurement at the paper robot's scale (it draws about 0.1 A at most; the pack about 0.3 A).
 PAPER_NOISE = NoiseModel(current_noise_std_a=0.002, outlier_rate=0.0, outlier_magnitude_a=0.0,
-                         quantisation_step_a=0.001, idle_current_a=0.005, clip_negative=True, side_gain_std=0.0)
+                         quantisation_step_a=0.001, idle_current_a=0.005, clip_negative=True, side_gain_std=0.0,
+                         battery_current_noise_std_a=0.005, battery_current_noise_rel=0.01,
+                         battery_voltage_noise_std_v=0.01)
+#: The paper robot's 12 V pack (the capacity does not matter here).
+PAPER_BATTERY = Battery(2.0, 12.0)
 MAP_CELL_M = 0.025
 _GROUNDS = ("stone", "sand")
 
@@ -192,13 +204,15 @@ def _route_commands(cruise_mps: float, ramp_s: float) -> tuple[np.ndarray, ...]:
 
 def paper_route_runs(n_runs: int = 10, seed: int = 0,
                      effects: tuple[str, ...] | None = None) -> list[InteractionLog]:
-    """Truth logs of the paper robot driving the route (measured speeds, poses on :func:`paper_route_map`).
+    """Truth logs of the paper robot driving the route (measured speeds, poses on :func:`paper_route_map`,
+    battery voltage and pack current).
 
     ``effects`` (default every one) are the truth's; the same ``seed`` gives the same commands
     and noise whatever the effects, so ablations compare like with like.
     """
     robot = robot_preset("paper_seed")
-    sim = TruthSimulator(robot, {g: ground_preset(g) for g in _GROUNDS}, effects, noise=PAPER_NOISE, seed=0)
+    sim = TruthSimulator(robot, {g: ground_preset(g) for g in _GROUNDS}, effects, noise=PAPER_NOISE, seed=0,
+                         battery=PAPER_BATTERY)
     rng = np.random.default_rng(seed)
     logs = []
     for k in range(n_runs):
@@ -239,6 +253,22 @@ def by_hand_charge_errors(n_runs: int = 10, seed: int = 0) -> list[tuple[str, fl
     return out
 
 
+def by_hand_energy_errors(n_runs: int = 10, seed: int = 0) -> list[tuple[str, float]]:
+    """Battery-energy error (%) of the truth without its electronics, with the sensors, and whole.
+
+    As :func:`by_hand_charge_errors`, on the logged battery power (voltage x pack current):
+    what Table 4's case 7 (+ sensor) and Table 2's control board add to the battery energy.
+    """
+    def energy(logs: list[InteractionLog]) -> float:
+        return float(sum(np.trapezoid(log.battery_power_w, log.time_s) for log in logs))
+
+    drive = tuple(e for e in EFFECTS if e not in ("sensor", "control"))
+    full = energy(paper_route_runs(n_runs, seed))
+    rows = (("1-6, 8: every drive effect", drive), ("7 + sensor", drive + ("sensor",)),
+            ("full (Table 2): + control board", tuple(EFFECTS)))
+    return [(label, 100.0 * (full - energy(paper_route_runs(n_runs, seed, eff))) / full) for label, eff in rows]
+
+
 def waterfall_from_data(n_runs: int = 10, seed: int = 0) -> Diagnosis:
     """Diagnose the paper's base model on truth logs of the route (held-out runs)."""
     return diagnose(base_model(seed), paper_route_runs(n_runs, seed), terrain=paper_route_map(), seed=seed)
@@ -257,6 +287,15 @@ def print_from_data(n_runs: int = 10, seed: int = 0) -> Diagnosis:
         print(f"{label:32s} {err:12.1f}")
     by_name = {s.name: s for s in d.ranking}
     print("fitted: " + "; ".join(f"{n} {by_name[n].parameters}" for n in d.chosen))
+    if d.power is not None:
+        print(f"{'battery power (power stage)':32s} {'energy err %':>12s} {'8 s sect. %':>11s} {'RMSE W':>8s}")
+        for w in d.power.waterfall:
+            print(f"{w.label:32s} {w.energy_error_pct:12.1f} {w.section_error_pct:11.1f} {w.rmse_w:8.3f}")
+        print(f"{'by hand (truth with the case)':32s} {'energy err %':>12s}")
+        for label, err in by_hand_energy_errors(n_runs, seed):
+            print(f"{label:32s} {err:12.1f}")
+        by_power = {s.name: s for s in d.power.ranking}
+        print("fitted: " + "; ".join(f"{n} {by_power[n].parameters}" for n in d.power.chosen))
     for line in d.verdict:
         print("  " + line)
     return d

@@ -166,7 +166,7 @@ class _RepredictEffect(_BasisEffect):
         idx = self.index(log)
         p = self.parameters[0] if self.parameters else None
         table = None if p is None else ParameterTable(lambda x: self.repredict(b, log, x, idx), p.low, p.high,
-                                                       self.nominal(b))
+                                                       self.nominal(b), slots=idx)
         return Reprediction(b, log, motoring_currents_a(b, log), idx, table)
 
     def changed(self, values: np.ndarray, prepared: Reprediction) -> np.ndarray:
@@ -315,6 +315,13 @@ class RollingResistanceEffect(_RepredictEffect):
     def per_sample(self, values: np.ndarray, prepared: Reprediction) -> np.ndarray:
         # samples of unlisted grounds keep the model's ground whatever the value: any value will do
         return np.append(np.asarray(values, dtype=np.float64), prepared.table.nodes[0])[prepared.index]
+
+    def apply_surrogate(self, values: np.ndarray, predicted_a: np.ndarray, prepared: Reprediction) -> np.ndarray:
+        """:meth:`apply` through the table, one interpolation per ground (for fitting only)."""
+        if prepared.table is None:
+            return self.apply(values, predicted_a, prepared)
+        slots = np.append(np.asarray(values, dtype=np.float64), prepared.table.nodes[0])
+        return predicted_a + prepared.table.at_slots(slots) - prepared.base_a
 
 
 class MotorConstantEffect(_RepredictEffect):

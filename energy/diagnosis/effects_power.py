@@ -52,7 +52,7 @@ class ArmatureHeatEffect(ElectricalEffect):
     """Copper loss ``Ra I^2`` per side with a fitted armature resistance (battery side as the physics)."""
 
     name = "armature_heat"
-    parameters = (EffectParameter("armature_resistance_ohm", 0.1, 0.0, 5.0, "ohm", "armature_resistance_ohm"),)
+    parameters = (EffectParameter("armature_resistance_ohm", 0.1, 0.0, 1000.0, "ohm", "armature_resistance_ohm"),)
     description = "armature heat Ra I^2 (fitted resistance)"
 
     def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: PowerInputs) -> np.ndarray:

@@ -71,7 +71,7 @@ def test_script_runs_as_a_program() -> None:
 
 @pytest.fixture(scope="module")
 def from_data(scenario: dict):
-    return scenario["waterfall_from_data"](10, 0), scenario["by_hand_charge_errors"](10, 0)
+    return scenario["waterfall_from_data"](6, 0), scenario["by_hand_charge_errors"](6, 0)
 
 
 def test_the_diagnosis_finds_the_ablation_from_data(from_data) -> None:
@@ -95,3 +95,18 @@ def test_the_waterfall_has_the_shape_of_the_ablation_by_hand(from_data) -> None:
     assert d.waterfall[1].charge_error_pct == pytest.approx(hand["2 + inertia"], abs=5.0)
     errors = [e for _, e in by_hand]
     assert errors[0] > errors[1] > errors[2] and abs(errors[-1]) < 1.0
+
+
+def test_the_power_stage_finds_the_electronics(scenario: dict, from_data) -> None:
+    d, _ = from_data
+    p = d.power
+    assert p is not None and p.chosen and p.chosen[0] in ("control", "sensor")  # the two cannot be told apart here
+    robot = scenario["robot_preset"]("paper_seed")
+    truth_w = robot.sensor_power_w + robot.control_stable_power_w  # 1.2 + 1.4 W while moving
+    fitted = {s.name: s.parameters for s in p.ranking}[p.chosen[0]]
+    moving_w = fitted.get("control_stable_power_w", fitted.get("sensor_power_w", 0.0))
+    assert moving_w == pytest.approx(truth_w, rel=0.2)
+    assert p.waterfall[0].energy_error_pct > 50.0 and abs(p.waterfall[-1].energy_error_pct) < 2.0
+    hand = dict(scenario["by_hand_energy_errors"](6, 0))
+    assert p.waterfall[0].energy_error_pct == pytest.approx(hand["1-6, 8: every drive effect"], abs=5.0)
+    assert hand["1-6, 8: every drive effect"] > hand["7 + sensor"] > hand["full (Table 2): + control board"] == 0.0

@@ -57,3 +57,22 @@ def test_switches_coulomb_on_with_a_coefficient_per_ground(model, logs):
     snow = moving & (idx == 1)
     wood = moving & (idx == 0)
     assert (got - base)[snow].mean() > 3.0 * (got - base)[wood].mean() > 0.0  # the looser ground draws more
+
+
+def test_table_interpolation_by_slot_equals_per_sample(model, logs):
+    from energy import InvalidParameterError
+    from energy.diagnosis.model_currents import ParameterTable
+
+    log = logs[0]
+    e = effect("rolling_resistance").bind(logs)
+    prep = e.prepare(model, log)
+    base = unclipped_prediction(model, log, physics_basis(model))
+    for values in (np.array([0.013, 0.27]), np.array([0.0, 1.0]), np.array([0.5, 0.5])):
+        fast = e.apply_surrogate(values, base, prep)
+        slow = base + prep.table.at(e.per_sample(values, prep)) - prep.base_a
+        np.testing.assert_array_equal(fast, slow)
+        np.testing.assert_allclose(fast, e.apply(values, base, prep), atol=2e-3)  # the table is a surrogate
+    with pytest.raises(InvalidParameterError, match="no slots"):
+        ParameterTable(lambda x: np.zeros((3, 2)), 0.0, 1.0, 0.5).at_slots([0.1])
+    with pytest.raises(InvalidParameterError, match=r"a value for each of \d+ slots"):
+        prep.table.at_slots([0.1])
