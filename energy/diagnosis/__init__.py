@@ -2,7 +2,7 @@
 
 from .corrected import CorrectedCurrentModel
 from .diagnose import diagnose
-from .effect_base import EFFECT_KINDS, Effect, EffectParameter
+from .effect_base import EFFECT_KINDS, BasisEffect, Effect, EffectParameter
 from .effects import EFFECTS_CATALOGUE, NOT_IDENTIFIABLE_FROM_CURRENT, effect, effect_from_spec
 from .localise import GapShare, localise_gap
 from .model_currents import DRIVE_EFFECTS
@@ -51,6 +51,7 @@ __all__ = [
     "Diagnosis",
     "EFFECTS_CATALOGUE",
     "EFFECT_KINDS",
+    "BasisEffect",
     "Effect",
     "EffectParameter",
     "EffectScore",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -12,7 +13,9 @@ import numpy as np
 from terrain.checks import check_real, check_text
 from terrain.errors import InvalidParameterError
 
-__all__ = ["EFFECT_KINDS", "EffectParameter", "Effect"]
+from .model_currents import PhysicsBasis, physics_basis
+
+__all__ = ["EFFECT_KINDS", "EffectParameter", "Effect", "BasisEffect"]
 
 #: Kinds of candidate effect (``"electrical"``: fitted on battery power, not on the drive currents).
 EFFECT_KINDS = ("parameter", "physics", "learned", "measurement", "electrical")
@@ -133,3 +136,19 @@ class Effect:
         if arr.size != self.n_parameters:
             raise InvalidParameterError(f"effect {self.name!r} has {self.n_parameters} parameters, got {arr.size} values")
         return {p.name: float(v) for p, v in zip(self.parameters, arr) if math.isfinite(v)}
+
+
+class BasisEffect(Effect):
+    """An effect computed from a model's physics basis (:func:`~energy.diagnosis.model_currents.physics_basis`);
+    :meth:`bind` keeps the robot given for a model that is not a physics one."""
+
+    robot: Any = None
+
+    def bind(self, logs: Sequence[Any], terrain: Any = None, robot: Any = None) -> Effect:
+        out = copy.copy(self)
+        out.robot = robot
+        return out
+
+    def basis(self, model: Any) -> PhysicsBasis:
+        """The physics basis of ``model`` (the bound robot for a model that is not a physics one)."""
+        return physics_basis(model, self.robot)

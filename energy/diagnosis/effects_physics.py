@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import copy
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -14,8 +13,8 @@ from terrain.terrain_map import TerrainMap
 
 from ..logs import InteractionLog
 from ..models.baselines import PhysicsCurrentModel
-from .effect_base import Effect, EffectParameter
-from .model_currents import ParameterTable, PhysicsBasis, motoring_currents_a, physics_basis
+from .effect_base import BasisEffect, Effect, EffectParameter
+from .model_currents import ParameterTable, PhysicsBasis, motoring_currents_a
 
 __all__ = ["PHYSICS_CANDIDATES", "PARAMETER_CANDIDATES", "PhysicsTermEffect", "SlopeEffect", "MassEffect",
            "TrackWidthEffect", "RollingResistanceEffect", "MotorConstantEffect", "Reprediction", "log_ground_labels"]
@@ -36,21 +35,7 @@ def _is_physics(model: Any) -> bool:
     return isinstance(model, PhysicsCurrentModel) and model.is_fitted
 
 
-class _BasisEffect(Effect):
-    """An effect computed from a model's physics basis (the robot of a non-physics model is bound)."""
-
-    robot: Any = None
-
-    def bind(self, logs: Sequence[Any], terrain: Any = None, robot: Any = None) -> Effect:
-        out = copy.copy(self)
-        out.robot = robot
-        return out
-
-    def basis(self, model: Any) -> PhysicsBasis:
-        return physics_basis(model, self.robot)
-
-
-class PhysicsTermEffect(_BasisEffect):
+class PhysicsTermEffect(BasisEffect):
     """A physics effect the model lacks, as a gain on its current: ``I + gain * (I_with - I_without)``.
 
     For a :class:`~energy.PhysicsCurrentModel` the term is computed with the model's fitted
@@ -88,7 +73,7 @@ def log_slope_rad(terrain: TerrainMap, log: InteractionLog) -> np.ndarray:
     return np.arctan(gx * np.cos(h) + gy * np.sin(h))
 
 
-class SlopeEffect(_BasisEffect):
+class SlopeEffect(BasisEffect):
     """Gravity along the slope (pitch from the map under the logged poses), as a gain on its current.
 
     The current models take level ground; this term needs ``terrain`` and poses in every log.
@@ -136,7 +121,7 @@ class Reprediction:
     table: ParameterTable | None
 
 
-class _RepredictEffect(_BasisEffect):
+class _RepredictEffect(BasisEffect):
     """A parameter error of a physics model: re-predict the physics with the changed value.
 
     :meth:`apply` re-predicts exactly (scores, predictions); :meth:`apply_surrogate`, used

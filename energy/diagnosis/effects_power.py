@@ -9,24 +9,21 @@ current (:attr:`energy.logs.InteractionLog.has_battery_power`).
 
 from __future__ import annotations
 
-import copy
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-from .effect_base import Effect, EffectParameter
-from .model_currents import PhysicsBasis, physics_basis
+from .effect_base import BasisEffect, EffectParameter
 from .power_data import PowerInputs, battery_side_w, power_inputs
 
 __all__ = ["ElectricalEffect", "ArmatureHeatEffect", "SensorPowerEffect", "ControlPowerEffect"]
 
 
-class ElectricalEffect(Effect):
+class ElectricalEffect(BasisEffect):
     """An effect of the battery power (kind ``"electrical"``); :meth:`apply` takes and returns ``(N, 1)`` W."""
 
     kind = "electrical"
-    robot: Any = None
 
     def unsupported(self, logs: Sequence[Any], terrain: Any, model: Any = None) -> str | None:
         missing = [k for k, log in enumerate(logs) if not getattr(log, "has_battery_power", False)]
@@ -34,15 +31,6 @@ class ElectricalEffect(Effect):
             return (f"needs battery voltage and pack current (battery_voltage_v, battery_current_a) in every log; "
                     f"logs {missing[:5]!r} lack them")
         return None
-
-    def bind(self, logs: Sequence[Any], terrain: Any = None, robot: Any = None) -> Effect:
-        out = copy.copy(self)
-        out.robot = robot
-        return out
-
-    def basis(self, model: Any) -> PhysicsBasis:
-        """The physics basis of ``model`` (the bound robot for a model that is not a physics one)."""
-        return physics_basis(model, self.robot)
 
     def prepare(self, model: Any, log: Any) -> PowerInputs:
         return power_inputs(self.basis(model), log)
