@@ -341,7 +341,9 @@ def test_cli_batch_on_a_scheduler_address(tmp_path, capsys):
     distributed = pytest.importorskip("distributed", reason=_NO_DASK)
     f = _pairs_file(tmp_path, [("a", 10, 10, 150, 150), ("b", 20, 140, 140, 20)])
     rc0 = main(["batch", "--map", "example", "--pairs", str(f), "--out", str(tmp_path / "here"), "--no-progress"])
-    with distributed.LocalCluster(processes=False, n_workers=1, threads_per_worker=1,
+    # a worker process, as a real scheduler has: a second client on an in-process (processes=False)
+    # cluster from the same process shares its event loop thread, and hung once in a full-suite run
+    with distributed.LocalCluster(processes=True, n_workers=1, threads_per_worker=1,
                                   dashboard_address=":0") as cluster:
         rc = main(["batch", "--map", "example", "--pairs", str(f), "--scheduler", cluster.scheduler_address,
                    "--out", str(tmp_path / "there"), "--no-progress"])

@@ -253,7 +253,9 @@ def test_cli_monte_carlo_on_a_scheduler_gives_the_in_process_study(tmp_path, cap
     distributed = pytest.importorskip("distributed", reason=_NO_DASK)
     base = ["mission", "--battery-ah", "0.6", "--monte-carlo", "4", "--seed", "5"]
     assert main([*base, "--out", str(tmp_path / "here")]) == 1  # a 0.6 Ah pack is too small for some missions
-    with distributed.LocalCluster(processes=False, n_workers=2, threads_per_worker=1,
+    # worker processes, as a real scheduler has (a second client on an in-process cluster from the same
+    # process shares its event loop thread; that pattern hung once in a full-suite run)
+    with distributed.LocalCluster(processes=True, n_workers=2, threads_per_worker=1,
                                   dashboard_address=":0") as cluster:
         assert main([*base, "--scheduler", cluster.scheduler_address, "--out", str(tmp_path / "there")]) == 1
     assert f"on 2 worker(s) ({cluster.scheduler_address})" in capsys.readouterr().out
