@@ -95,7 +95,7 @@ from .ground import GroundParams
 from .power import PowerBreakdown
 from .robot import GRAVITY_MPS2, RobotParams
 
-__all__ = ["EFFECTS", "GroundArrays", "drive_power", "control_power"]
+__all__ = ["EFFECTS", "GroundArrays", "drive_power", "control_power", "battery_side_w"]
 
 #: Names of every effect of :class:`PhysicsEnergyModel`.
 EFFECTS: tuple[str, ...] = (
@@ -305,7 +305,7 @@ def drive_power(robot: RobotParams, effects: Iterable[str], v: np.ndarray, omega
     p_elec = ke * omega_m * current + heat
     voltage = ke * omega_m + ra * current
     voltage_exceeded = np.any(np.abs(voltage) > rb.battery_voltage_v * (1.0 + 1e-9), axis=1)
-    p_batt = np.where(p_elec >= 0, p_elec, rb.regen_efficiency * p_elec)
+    p_batt = battery_side_w(p_elec, rb.regen_efficiency)
     drive = p_batt.sum(axis=1)
 
     sensor = np.zeros(n)
@@ -340,6 +340,11 @@ def drive_power(robot: RobotParams, effects: Iterable[str], v: np.ndarray, omega
         traction_exceeded=traction_exceeded,
         voltage_exceeded=voltage_exceeded,
     )
+
+
+def battery_side_w(p_elec_w: np.ndarray, regen_efficiency: float) -> np.ndarray:
+    """The battery side of a motor's electrical power: in full when >= 0, times ``regen_efficiency`` when negative."""
+    return np.where(p_elec_w >= 0, p_elec_w, regen_efficiency * p_elec_w)
 
 
 def control_power(robot: RobotParams, v: np.ndarray, omega: np.ndarray, t: np.ndarray | None) -> np.ndarray:

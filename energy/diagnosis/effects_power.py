@@ -14,8 +14,9 @@ from typing import Any
 
 import numpy as np
 
+from ..drivetrain import battery_side_w
 from .effect_base import BasisEffect, EffectParameter
-from .power_data import PowerInputs, battery_side_w, power_inputs
+from .power_data import PowerInputs, power_inputs
 
 __all__ = ["ElectricalEffect", "ArmatureHeatEffect", "SensorPowerEffect", "ControlPowerEffect"]
 

@@ -26,12 +26,12 @@ import numpy as np
 
 from terrain.errors import DataError
 
-from ..drivetrain import control_power
+from ..drivetrain import battery_side_w, control_power
 from ..logs import InteractionLog
 from ..models.base import log_currents
 from .model_currents import PhysicsBasis, basis_breakdown
 
-__all__ = ["POWER_EFFECTS", "PowerInputs", "power_logs_missing", "check_power_logs", "battery_side_w", "power_inputs",
+__all__ = ["POWER_EFFECTS", "PowerInputs", "power_logs_missing", "check_power_logs", "power_inputs",
            "predicted_battery_power_w"]
 
 #: Electrical candidates, fitted on battery power: they change power, not the drive current.
@@ -74,11 +74,6 @@ def check_power_logs(logs: Sequence[InteractionLog]) -> None:
             i = int(np.argmax(log.battery_voltage_v <= 0))
             raise DataError(f"logs[{k}] ({log.meta.source!r}): battery_voltage_v must be > 0 V where a pack current "
                             f"is logged; index {i} holds {float(log.battery_voltage_v[i])!r} V")
-
-
-def battery_side_w(p_elec_w: np.ndarray, regen: float) -> np.ndarray:
-    """The battery side of per-side electrical power: in full when >= 0, times ``regen`` when negative."""
-    return np.where(p_elec_w >= 0, p_elec_w, regen * p_elec_w)
 
 
 def power_inputs(basis: PhysicsBasis, log: InteractionLog) -> PowerInputs:
