@@ -12,10 +12,14 @@ from energy.diagnosis.regimes import (
     OFF_MAP_LABEL,
     REGIME_DIMENSIONS,
     UNKNOWN_LABEL,
+    STANDSTILL_SPEED_MPS,
+    TURN_RATE_RADPS,
     acceleration_labels,
+    at_rest,
     grade_labels,
     ground_labels,
     motion_grade_rad,
+    pivoting,
     regime_labels,
     space_labels,
     speed_labels,
@@ -40,6 +44,31 @@ def test_speed_bins_use_the_magnitude_and_lower_edges_belong_to_the_upper_bin():
         "standstill", "standstill", "0.05-0.25 m/s", "0.05-0.25 m/s", "0.25-0.5 m/s", "0.5-1 m/s", "0.5-1 m/s",
         "> 1 m/s", "> 1 m/s",
     ]
+
+
+def test_a_pivot_is_its_own_speed_class_apart_from_standstill():
+    v = [0.0, 0.0, -0.04, 0.01, 0.2, 0.0]
+    w = [0.0, 0.5, -0.8, 0.05, 0.6, -0.1]
+    assert speed_labels(make_log(v, w)).tolist() == [
+        "standstill", "pivot", "pivot", "standstill", "0.05-0.25 m/s", "pivot",
+    ]
+
+
+def test_at_rest_and_pivoting_are_the_one_public_definition():
+    v = np.array([0.0, 0.049, 0.05, 0.0, 0.0, -0.03, 0.7])
+    w = np.array([0.0, -0.099, 0.0, 0.1, -2.0, 0.02, 0.0])
+    rest, pivot = at_rest(v, w), pivoting(v, w)
+    assert rest.tolist() == [True, True, False, False, False, True, False]
+    assert pivot.tolist() == [False, False, False, True, True, False, False]
+    assert not np.any(rest & pivot)
+    assert at_rest(0.0, 0.0) is True and pivoting(0.0, 0.0) is False  # scalars give bools
+    assert at_rest(STANDSTILL_SPEED_MPS, 0.0) is False and at_rest(0.0, TURN_RATE_RADPS) is False
+    # the regime labels use exactly this definition
+    log = make_log(v, w)
+    assert (speed_labels(log) == "standstill").tolist() == rest.tolist()
+    assert (turning_labels(log) == "standstill").tolist() == rest.tolist()
+    assert (speed_labels(log) == "pivot").tolist() == pivot.tolist()
+    assert (turning_labels(log) == "pivot").tolist() == pivot.tolist()
 
 
 def test_turning_tells_pivot_arc_straight_and_standstill():
