@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -17,7 +18,7 @@ from .corrected import CorrectedCurrentModel
 from .effect_base import Effect
 from .effects import LEARNED_EFFECT, NOT_IDENTIFIABLE_FROM_CURRENT, effect, resolve_effects
 from .fit import DiagnosisData, SetScore, prepare_data, score_effect_set, shrink_pct
-from .localise import GapShare, localise_gap
+from .localise import GapShare, largest_slices, localise_gap
 from .model_currents import physics_basis
 from .power_data import power_logs_missing
 from .power_result import PowerDiagnosis
@@ -87,13 +88,24 @@ def _step(label: str, logs: list[InteractionLog], s: SetScore, none: SetScore, s
 
 
 def _top_share(localisation: Sequence[GapShare]) -> str:
-    dims = ("turning", "speed", "acceleration", "ground", "grade")
-    counts = {d: sum(1 for r in localisation if r.dimension == d and r.n_samples) for d in dims}
-    rows = [r for r in localisation if r.dimension in dims and counts[r.dimension] > 1]
-    if not rows:
+    """The clause on the largest net slice (``largest_slices``), or ``""`` when no slice tells where."""
+    top = largest_slices(localisation, 1)
+    if not top:
         return ""
-    best = max(rows, key=lambda r: r.share_pct if r.n_samples else -1.0)
-    return f", {fmt_number(best.share_pct, 2)} % of it {best.dimension} {best.label!r}"
+    best = top[0]
+    whole = sum(r.gap_mah for r in localisation if r.dimension == "side")
+    total_s = sum(r.duration_s for r in localisation if r.dimension == "time")
+    lo, hi = best.gap_interval_mah
+    sign = "+" if best.gap_mah > 0 else ""
+    text = (f"; the largest net slice is {best.dimension} {best.label!r}: {sign}{fmt_number(best.gap_mah, 3)} mAh "
+            f"(95 % interval {fmt_number(lo, 3)} … {fmt_number(hi, 3)} mAh)")
+    if math.isfinite(best.gap_pct):
+        text += f", {sign}{fmt_number(best.gap_pct, 2)} % of that slice's charge"
+    if total_s > 0:
+        text += f", in {fmt_number(100.0 * best.duration_s / total_s, 2)} % of the time"
+    if abs(best.gap_mah) > abs(whole) * (1.0 + 1e-9) + 1e-12:
+        text += f" — more than the whole net gap of {fmt_number(whole, 3)} mAh: slices of opposite sign cancel in the total"
+    return text
 
 
 def _verdict(before: GapSummary, after: GapSummary, ranking: Sequence[EffectScore], chosen: Sequence[str],

@@ -1,9 +1,19 @@
-"""Where a gap lies: the gap (mAh) split by time section, regime, drive side and map block, ranked.
+"""Where a gap lies: the net gap (mAh) split by time section, regime, drive side and map block, ranked.
 
 Each drive sample carries its share of the gap, residual times trapezoid weight
 (:func:`~energy.diagnosis.residuals.sample_gap_mah`), so the slices of every dimension add up
-exactly to the whole gap of :func:`~energy.diagnosis.residuals.gap_summary`. The dimensions,
-in the fixed order of :data:`DIMENSIONS`:
+exactly to the whole gap of :func:`~energy.diagnosis.residuals.gap_summary`.
+
+A slice is ranked by its **net signed gap**, measured minus predicted charge in mAh
+(1 mAh = 3.6 A s; positive: the model predicts too little), largest ``|gap|`` first: a charge,
+not a share, so a slice that holds much of the energy weighs as much as it costs, and slices of
+opposite sign are shown as such instead of adding up as shares of ``|gap|``. Each slice also
+carries its measured charge and the gap as a percentage of it, and a 95 % bootstrap interval
+of its net gap: runs are resampled with replacement (the time sections of the run when there
+is only one), seeded, so the same inputs give the same interval. A slice found in one run
+only gets an interval from 0 to a few times its gap: one run cannot tell whether it recurs.
+
+The dimensions, in the fixed order of :data:`DIMENSIONS`:
 
 - ``"time"`` — contiguous ``section_s`` sections of each run, ``"run 3, 16-24 s"`` (runs
   numbered by their position in ``logs`` from 0; sections start at each run's first sample,
@@ -18,28 +28,33 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from terrain.checks import check_choice, check_real, fmt_number
+from terrain.checks import check_choice, check_int, check_real, check_seed, fmt_number
 
 from ..logs import InteractionLog
 from ..metrics import DEFAULT_SECTION_S
-from .regimes import check_terrain, regime_labels
+from .regimes import UNKNOWN_LABEL, check_terrain, regime_labels
 from .residuals import AS_PER_MAH, checked_pairs, sample_weights_s
 
-__all__ = ["DIMENSIONS", "SIDES", "GapShare", "time_labels", "localise_gap", "shares_of"]
+__all__ = ["DIMENSIONS", "SIDES", "GAP_INTERVAL_LEVEL", "GapShare", "time_labels", "localise_gap", "shares_of",
+           "largest_slices"]
 
 #: Dimensions of a localisation table, in order.
 DIMENSIONS = ("time", "speed", "turning", "acceleration", "grade", "ground", "side", "space")
 #: Labels of the side dimension, in the column order of predictions.
 SIDES = ("left", "right")
+#: Level of the bootstrap interval of each slice's net gap.
+GAP_INTERVAL_LEVEL = 0.95
+
+_NAN = float("nan")
 
 
 @dataclass(frozen=True)
 class GapShare:
-    """One row of a localisation table: the gap in one slice of one dimension.
+    """One row of a localisation table: the net gap in one slice of one dimension.
 
     Attributes
     ----------
@@ -48,17 +63,26 @@ class GapShare:
     label : str
         The slice, e.g. ``"pivot"``, ``"0.5-1 m/s"``, ``"snow"``, ``"run 3, 16-24 s"``.
     gap_mah : float
-        Signed gap (measured - predicted charge, mAh) in this slice; both sides except in
-        the ``"side"`` dimension.
+        Net signed gap (measured - predicted charge, mAh) in this slice; both sides except in
+        the ``"side"`` dimension. The ranking key (largest ``|gap_mah|`` first).
     share_pct : float
         ``100 * |gap_mah| / sum of |gap_mah|`` over the dimension's slices (0 when the
-        dimension has no gap at all).
+        dimension has no gap at all). Kept for readers of older results; it is a share of
+        absolute gaps, large even when opposite slices cancel to a net gap near zero: read
+        ``gap_mah`` and ``gap_interval_mah`` instead.
     n_samples : int
         Drive samples in the slice.
     duration_s : float
         Time in the slice (s): the samples' trapezoid weights.
     n_runs : int
         Runs with samples in the slice.
+    measured_mah : float
+        Measured charge in the slice (mAh; the same sides as ``gap_mah``).
+    gap_pct : float
+        ``100 * gap_mah / measured_mah`` (signed; NaN when the slice drew no net charge).
+    gap_interval_mah : (float, float)
+        95 % bootstrap interval of ``gap_mah`` (runs resampled; the time sections of the run
+        when there is one; see the module notes).
     """
 
     dimension: str
@@ -68,14 +92,21 @@ class GapShare:
     n_samples: int
     duration_s: float
     n_runs: int
+    measured_mah: float = _NAN
+    gap_pct: float = _NAN
+    gap_interval_mah: tuple[float, float] = (_NAN, _NAN)
 
-    def to_dict(self) -> dict[str, str | float | int]:
-        """The row as a flat dict (JSON-ready)."""
-        return asdict(self)
+    def to_dict(self) -> dict[str, Any]:
+        """The row as a flat dict (JSON-ready; the interval as a two-item list)."""
+        d = asdict(self)
+        d["gap_interval_mah"] = list(self.gap_interval_mah)
+        return d
 
     def __str__(self) -> str:
+        lo, hi = self.gap_interval_mah
         return (
-            f"{self.dimension}: {self.label}: {fmt_number(self.gap_mah)} mAh ({fmt_number(self.share_pct, 3)} %), "
+            f"{self.dimension}: {self.label}: net {fmt_number(self.gap_mah)} mAh (95 % interval {fmt_number(lo)} … "
+            f"{fmt_number(hi)} mAh; {fmt_number(self.gap_pct, 3)} % of its {fmt_number(self.measured_mah)} mAh), "
             f"{self.n_samples} samples, {fmt_number(self.duration_s)} s, {self.n_runs} run(s)"
         )
 
@@ -108,35 +139,63 @@ def time_labels(log: InteractionLog, run: int, section_s: float = DEFAULT_SECTIO
     return out
 
 
-def _rows(dimension: str, labels: np.ndarray, gap: np.ndarray, weight: np.ndarray, run: np.ndarray,
-          n_runs_total: int) -> list[GapShare]:
-    names, inv = np.unique(labels, return_inverse=True)
-    inv = inv.reshape(-1)
-    k = names.size
-    gap_mah = np.bincount(inv, weights=gap, minlength=k)
-    n_samples = np.bincount(inv, minlength=k)
-    duration = np.bincount(inv, weights=weight, minlength=k)
-    pairs = np.unique(inv * n_runs_total + run)
-    n_runs = np.bincount(pairs // n_runs_total, minlength=k)
-    return _ranked(dimension, names.tolist(), gap_mah, n_samples, duration, n_runs)
+def _bootstrap_units(logs: tuple[InteractionLog, ...], section_s: float) -> list[np.ndarray]:
+    """Per log, the unit each drive sample is resampled with: its run, or with one run its time section."""
+    if len(logs) > 1:
+        return [np.full(len(log), i, dtype=np.intp) for i, log in enumerate(logs)]
+    _, inv = np.unique(time_labels(logs[0], 0, section_s), return_inverse=True)
+    return [inv.reshape(-1).astype(np.intp)]
 
 
-def _ranked(dimension: str, names: list[str], gap_mah: np.ndarray, n_samples: np.ndarray, duration: np.ndarray,
-            n_runs: np.ndarray) -> list[GapShare]:
-    magnitude = np.abs(gap_mah)
+def _per_unit(codes: np.ndarray, k: int, unit: np.ndarray, n_units: int, values: np.ndarray) -> np.ndarray:
+    """Sum of ``values`` per (slice, unit): a (k, n_units) array."""
+    return np.bincount(codes * n_units + unit, weights=values, minlength=k * n_units).reshape(k, n_units)
+
+
+def _intervals(per_unit: np.ndarray, n_bootstrap: int, seed: int | None) -> tuple[np.ndarray, np.ndarray]:
+    """Percentile interval of every row's sum over units resampled with replacement (the same resamples for all)."""
+    n_units = per_unit.shape[1]
+    rng = np.random.default_rng(seed)
+    draws = rng.integers(0, n_units, size=(n_bootstrap, n_units))
+    counts = np.zeros((n_bootstrap, n_units))
+    np.add.at(counts, (np.arange(n_bootstrap)[:, None], draws), 1.0)
+    sums = counts @ per_unit.T  # (n_bootstrap, rows)
+    tail = 100.0 * (1.0 - GAP_INTERVAL_LEVEL) / 2.0
+    return np.percentile(sums, tail, axis=0), np.percentile(sums, 100.0 - tail, axis=0)
+
+
+class _Table(NamedTuple):
+    """The slices of one dimension: names and per-slice sums, and the gap per (slice, bootstrap unit)."""
+
+    dimension: str
+    names: list[str]
+    gap_mah: np.ndarray
+    n_samples: np.ndarray
+    duration_s: np.ndarray
+    n_runs: np.ndarray
+    measured_mah: np.ndarray
+    per_unit: np.ndarray
+
+
+def _ranked(t: _Table, low: np.ndarray, high: np.ndarray) -> list[GapShare]:
+    magnitude = np.abs(t.gap_mah)
     total = float(np.sum(magnitude))
     share = 100.0 * magnitude / total if total > 0 else np.zeros_like(magnitude)
-    order = np.lexsort((np.arange(len(names)), -magnitude))
+    drew = t.measured_mah > 0
+    pct = np.where(drew, 100.0 * t.gap_mah / np.where(drew, t.measured_mah, 1.0), np.nan)
+    order = np.lexsort((np.arange(len(t.names)), -magnitude))
     return [
-        GapShare(dimension=dimension, label=str(names[i]), gap_mah=float(gap_mah[i]), share_pct=float(share[i]),
-                 n_samples=int(n_samples[i]), duration_s=float(duration[i]), n_runs=int(n_runs[i]))
+        GapShare(dimension=t.dimension, label=str(t.names[i]), gap_mah=float(t.gap_mah[i]), share_pct=float(share[i]),
+                 n_samples=int(t.n_samples[i]), duration_s=float(t.duration_s[i]), n_runs=int(t.n_runs[i]),
+                 measured_mah=float(t.measured_mah[i]), gap_pct=float(pct[i]),
+                 gap_interval_mah=(float(low[i]), float(high[i])))
         for i in order
     ]
 
 
-def localise_gap(logs: Any, predictions: Any, *, terrain: Any = None,
-                 section_s: float = DEFAULT_SECTION_S) -> tuple[GapShare, ...]:
-    """Where the gap of predicted currents lies: every dimension's slices, ranked by ``|gap|``.
+def localise_gap(logs: Any, predictions: Any, *, terrain: Any = None, section_s: float = DEFAULT_SECTION_S,
+                 n_bootstrap: int = 200, seed: int | None = 0) -> tuple[GapShare, ...]:
+    """Where the gap of predicted currents lies: every dimension's slices, ranked by ``|net gap|``.
 
     Parameters
     ----------
@@ -148,13 +207,17 @@ def localise_gap(logs: Any, predictions: Any, *, terrain: Any = None,
         The map the runs drove on; with poses in the logs it gives the grade and space rows.
     section_s : float
         Length of the time sections (s), > 0; default 8 s as in the paper.
+    n_bootstrap : int
+        Resamples of the slices' 95 % intervals (>= 1).
+    seed : int or None
+        Seed of the resampling.
 
     Returns
     -------
     tuple of GapShare
         The rows of all :data:`DIMENSIONS` in that order; within a dimension, largest
-        ``|gap_mah|`` first. Each dimension's ``gap_mah`` add up to the whole gap and its
-        ``duration_s`` to the summed span of the logs.
+        ``|gap_mah|`` (net signed gap) first. Each dimension's ``gap_mah`` add up to the whole
+        gap and its ``duration_s`` to the summed span of the logs.
 
     Raises
     ------
@@ -162,7 +225,8 @@ def localise_gap(logs: Any, predictions: Any, *, terrain: Any = None,
         No logs; a log with fewer than 2 samples; non-finite predictions.
     InvalidParameterError
         Not logs; a different number of predictions and logs; a prediction of the wrong
-        shape; ``terrain`` not a TerrainMap; ``section_s`` not a finite number > 0.
+        shape; ``terrain`` not a TerrainMap; ``section_s`` not a finite number > 0; a bad
+        ``n_bootstrap`` or ``seed``.
 
     Examples
     --------
@@ -171,18 +235,22 @@ def localise_gap(logs: Any, predictions: Any, *, terrain: Any = None,
     >>> t = np.arange(5) * 1.0
     >>> log = InteractionLog(t, np.zeros(5), np.full(5, 0.5), np.full(5, 3.6), np.full(5, 3.6), t, np.full(5, 9.81))
     >>> rows = localise_gap([log], [np.column_stack([np.zeros(5), np.full(5, 3.6)])])
-    >>> [(r.label, round(r.gap_mah, 6), round(r.share_pct, 1)) for r in rows if r.dimension == "side"]
+    >>> [(r.label, round(r.gap_mah, 6), round(r.gap_pct, 1)) for r in rows if r.dimension == "side"]
     [('left', 4.0, 100.0), ('right', 0.0, 0.0)]
     """
     section_s = check_real("section_s", section_s, low=0.0, low_inclusive=False)
+    n_bootstrap = check_int("n_bootstrap", n_bootstrap, low=1)
+    seed = check_seed(seed)
     terrain = check_terrain(terrain)
     logs, preds = checked_pairs(logs, predictions)
+    unit_parts = _bootstrap_units(logs, section_s)
     per_dim: dict[str, list[np.ndarray]] = {d: [] for d in DIMENSIONS if d != "side"}
-    side_gaps, weights, runs = [], [], []
+    side_gaps, side_measured, weights, runs = [], [], [], []
     for i, (log, pred) in enumerate(zip(logs, preds)):
         w = sample_weights_s(log.time_s)
         measured = np.column_stack([log.current_left_a, log.current_right_a])
         side_gaps.append((measured - pred) * (w / AS_PER_MAH)[:, None])
+        side_measured.append(measured * (w / AS_PER_MAH)[:, None])
         weights.append(w)
         runs.append(np.full(len(log), i, dtype=np.intp))
         labels = regime_labels(log, terrain=terrain)
@@ -190,17 +258,36 @@ def localise_gap(logs: Any, predictions: Any, *, terrain: Any = None,
         for dim in per_dim:
             per_dim[dim].append(labels[dim])
     gap_sides = np.concatenate(side_gaps)
+    measured_sides = np.concatenate(side_measured)
     gap = gap_sides.sum(axis=1)
+    measured_all = measured_sides.sum(axis=1)
     weight = np.concatenate(weights)
     run = np.concatenate(runs)
+    unit = np.concatenate(unit_parts)
     n_runs = len(logs)
-    rows: list[GapShare] = []
+    n_units = int(unit.max()) + 1
+    tables = []  # per dimension: the slices' names, sums and per-unit gaps
     for dim in DIMENSIONS:
         if dim == "side":
-            n = np.full(2, gap.size)
-            rows += _ranked(dim, list(SIDES), gap_sides.sum(axis=0), n, np.full(2, weight.sum()), np.full(2, n_runs))
-        else:
-            rows += _rows(dim, np.concatenate(per_dim[dim]), gap, weight, run, n_runs)
+            per_unit = np.stack([np.bincount(unit, weights=gap_sides[:, j], minlength=n_units) for j in range(2)])
+            tables.append(_Table(dim, list(SIDES), gap_sides.sum(axis=0), np.full(2, gap.size), np.full(2, weight.sum()),
+                                 np.full(2, n_runs), measured_sides.sum(axis=0), per_unit))
+            continue
+        names, inv = np.unique(np.concatenate(per_dim[dim]), return_inverse=True)
+        inv = inv.reshape(-1)
+        k = names.size
+        pairs = np.unique(inv * n_runs + run)
+        tables.append(_Table(dim, names.tolist(), np.bincount(inv, weights=gap, minlength=k),
+                             np.bincount(inv, minlength=k), np.bincount(inv, weights=weight, minlength=k),
+                             np.bincount(pairs // n_runs, minlength=k), np.bincount(inv, weights=measured_all, minlength=k),
+                             _per_unit(inv, k, unit, n_units, gap)))
+    low, high = _intervals(np.concatenate([t.per_unit for t in tables]), n_bootstrap, seed)
+    rows: list[GapShare] = []
+    at = 0
+    for t in tables:
+        k = len(t.names)
+        rows += _ranked(t, low[at:at + k], high[at:at + k])
+        at += k
     return tuple(rows)
 
 
@@ -214,3 +301,32 @@ def shares_of(rows: Any, dimension: str) -> tuple[GapShare, ...]:
     """
     check_choice("dimension", dimension, DIMENSIONS)
     return tuple(r for r in rows if isinstance(r, GapShare) and r.dimension == dimension)
+
+
+def largest_slices(rows: Any, n: int = 10) -> tuple[GapShare, ...]:
+    """The ``n`` slices of a localisation table with the largest ``|net gap|``, over all dimensions.
+
+    Left out, as they localise nothing: slices labelled ``"unknown"`` and the slices of a
+    dimension with fewer than two known, non-empty slices (its one slice holds the whole gap).
+    Ties keep the table's order.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``n`` not an int >= 1.
+
+    Examples
+    --------
+    >>> rows = (GapShare("ground", "snow", 2.0, 80.0, 5, 1.0, 1), GapShare("ground", "grass", -0.5, 20.0, 5, 1.0, 1),
+    ...         GapShare("grade", "unknown", 1.5, 100.0, 10, 2.0, 1))
+    >>> [r.label for r in largest_slices(rows)]
+    ['snow', 'grass']
+    """
+    n = check_int("n", n, low=1)
+    known = [r for r in rows if isinstance(r, GapShare) and r.label != UNKNOWN_LABEL and r.n_samples > 0]
+    counts: dict[str, int] = {}
+    for r in known:
+        counts[r.dimension] = counts.get(r.dimension, 0) + 1
+    told = [r for r in known if counts[r.dimension] > 1]
+    order = sorted(range(len(told)), key=lambda i: (-abs(told[i].gap_mah), i))
+    return tuple(told[i] for i in order[:n])

@@ -230,12 +230,13 @@ def regime_rows(diagnosis: Diagnosis) -> dict[str, list[Any]]:
 
 
 def plot_gap_by_regime(diagnosis: Diagnosis, path: str | os.PathLike[str], *, dpi: int = 110) -> Path:
-    """The gap (mAh) by operating regime: one bar chart per dimension of :data:`REGIME_PANELS`.
+    """The net gap (mAh) by operating regime: one bar chart per dimension of :data:`REGIME_PANELS`.
 
-    Bars are the signed gap of each slice (measured - predicted charge, the model as
-    given, all logs) from :attr:`Diagnosis.localisation`, labelled with their share of the
-    dimension's gap and the time behind them; a dimension the logs cannot tell (only
-    ``"unknown"``) gets no panel and is named in the figure's note.
+    Bars are the net signed gap of each slice (measured - predicted charge, the model as
+    given, all logs) from :attr:`Diagnosis.localisation`, with its 95 % bootstrap interval
+    as an error bar, labelled with the gap as a percentage of the slice's own measured
+    charge and the time behind it; a dimension the logs cannot tell (only ``"unknown"``)
+    gets no panel and is named in the figure's note.
 
     Raises
     ------
@@ -260,19 +261,25 @@ def plot_gap_by_regime(diagnosis: Diagnosis, path: str | os.PathLike[str], *, dp
     for ax, (dim, rs) in zip(axes.ravel(), rows.items()):
         y = np.arange(len(rs))
         gaps = np.array([r.gap_mah for r in rs])
-        bars = ax.barh(y, gaps, color=np.where(gaps >= 0, "#de2d26", "#3182bd"), alpha=0.8)
-        ax.bar_label(bars, [f"{r.share_pct:.0f} %, {fmt_number(r.duration_s, 3)} s" for r in rs], padding=3, fontsize=7)
+        lo = np.array([r.gap_interval_mah[0] for r in rs])
+        hi = np.array([r.gap_interval_mah[1] for r in rs])
+        err = np.nan_to_num(np.maximum(np.stack([gaps - lo, hi - gaps]), 0.0))
+        bars = ax.barh(y, gaps, xerr=err, color=np.where(gaps >= 0, "#de2d26", "#3182bd"), alpha=0.8,
+                       error_kw={"elinewidth": 0.8, "capsize": 2, "ecolor": "0.3"})
+        ax.bar_label(bars, [f"{fmt_number(r.gap_pct, 2)} % of its charge, {fmt_number(r.duration_s, 3)} s" for r in rs],
+                     padding=3, fontsize=7)
         ax.set_yticks(y, [r.label for r in rs], fontsize=8)
         ax.invert_yaxis()
         ax.axvline(0.0, color="k", lw=0.6)
         ax.margins(x=0.3)
         ax.set_title(dim, fontsize=10)
-        ax.set_xlabel("gap (mAh)", fontsize=8)
+        ax.set_xlabel("net gap (mAh)", fontsize=8)
         ax.grid(axis="x", alpha=0.3)
     for ax in axes.ravel()[len(rows):]:
         ax.set_visible(False)
     note = f"; not known from these logs: {', '.join(missing)}" if missing else ""
-    fig.suptitle(f"where the gap lies (model as given, all logs; bar = measured - predicted charge){note}", fontsize=10)
+    fig.suptitle(f"where the gap lies (model as given, all logs; bar = net measured - predicted charge, "
+                 f"95 % interval over {diagnosis.localisation_units}){note}", fontsize=10)
     fig.tight_layout()
     return save_closed(fig, target, dpi)
 

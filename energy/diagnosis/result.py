@@ -11,10 +11,13 @@ from terrain.atomic import write_json_atomic, write_text_atomic
 from terrain.checks import fmt_number
 
 from ..models.base import CurrentModel
-from .localise import GapShare
+from .localise import GapShare, largest_slices
 from .residuals import GapSummary
 
-__all__ = ["EffectScore", "WaterfallStep", "Diagnosis"]
+__all__ = ["EffectScore", "WaterfallStep", "Diagnosis", "MARKDOWN_SLICES"]
+
+#: Slices of the localisation listed in :meth:`Diagnosis.to_markdown` (the largest ``|net gap|``).
+MARKDOWN_SLICES = 10
 
 
 @dataclass(frozen=True)
@@ -72,8 +75,8 @@ class WaterfallStep:
         return asdict(self)
 
 
-def _pct(x: float) -> str:
-    return f"{fmt_number(abs(x), 2)} %"
+def _signed(x: float, digits: int = 3) -> str:
+    return ("+" if x > 0 else "") + fmt_number(x, digits)
 
 
 @dataclass(frozen=True, eq=False)
@@ -86,7 +89,9 @@ class Diagnosis:
         Held-out gap of the model as given and of the corrected model (each sample
         predicted by the fold that held it out).
     localisation : tuple of GapShare
-        Where the gap of the model as given lies, on all logs.
+        Where the gap of the model as given lies, on all logs: every slice of every
+        dimension, each ranked by its net signed gap with a 95 % bootstrap interval
+        (:func:`~energy.diagnosis.localise_gap`); :meth:`largest_slices` picks the largest.
     ranking : tuple of EffectScore
         Every candidate: the chosen effects in the order they were added (each the best
         addition to those before it), then the others by what they would add to the chosen
@@ -129,12 +134,23 @@ class Diagnosis:
         """The ranking entry of ``name``, or None."""
         return next((s for s in self.ranking if s.name == name), None)
 
+    def largest_slices(self, n: int = MARKDOWN_SLICES) -> tuple[GapShare, ...]:
+        """The ``n`` slices of :attr:`localisation` with the largest ``|net gap|`` over all dimensions
+        (:func:`~energy.diagnosis.localise.largest_slices`: unknown and one-slice dimensions left out)."""
+        return largest_slices(self.localisation, n)
+
+    @property
+    def localisation_units(self) -> str:
+        """What the slices' intervals resample: ``"runs"``, or ``"time sections"`` of a single run."""
+        return "runs" if self.before.n_runs > 1 else "time sections"
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (the corrected model is named by class, not embedded)."""
         return {
             "before": self.before.to_dict(),
             "after": self.after.to_dict(),
             "localisation": [r.to_dict() for r in self.localisation],
+            "localisation_units": self.localisation_units,
             "ranking": [s.to_dict() for s in self.ranking],
             "chosen": list(self.chosen),
             "waterfall": [w.to_dict() for w in self.waterfall],
@@ -149,14 +165,27 @@ class Diagnosis:
         return write_json_atomic(path, self.to_dict())
 
     def to_markdown(self) -> str:
-        """A plain-words report: verdict, where the gap lies, the ranking and the waterfall."""
+        """A one-page report: the verdict, the largest slices of the gap, the effect ranking and the waterfall.
+
+        The full slice table is in :meth:`to_dict` (``"localisation"``), not here.
+        """
         lines = ["# Sim-to-real gap diagnosis", ""]
         lines += [f"- {s}" for s in self.verdict]
+        top = self.largest_slices()
         lines += ["", "## Where the gap lies (model as given, all logs)", "",
-                  "| dimension | slice | gap (mAh) | share | samples | runs |", "|---|---|---|---|---|---|"]
-        for r in self.localisation:
-            lines.append(f"| {r.dimension} | {r.label} | {fmt_number(r.gap_mah, 3)} | {_pct(r.share_pct)} | "
-                         f"{r.n_samples} | {r.n_runs} |")
+                  f"Net gap = measured - predicted charge (mAh; positive: the model predicts too little), with its "
+                  f"95 % bootstrap interval over {self.localisation_units}. The {len(top)} largest of "
+                  f"{len(self.localisation)} slices by |net gap|; every slice is in diagnosis.json (localisation).", ""]
+        if top:
+            lines += ["| dimension | slice | net gap (mAh) | 95 % interval | of its charge | time (s) | runs |",
+                      "|---|---|---|---|---|---|---|"]
+            for r in top:
+                lo, hi = r.gap_interval_mah
+                lines.append(f"| {r.dimension} | {r.label} | {_signed(r.gap_mah)} | {fmt_number(lo, 3)} … "
+                             f"{fmt_number(hi, 3)} | {_signed(r.gap_pct)} % | {fmt_number(r.duration_s, 4)} | "
+                             f"{r.n_runs} |")
+        else:
+            lines.append("No slice tells where: every dimension has one known slice only.")
         lines += ["", f"## Candidate effects (held-out shrink, split by {self.split})", "",
                   "Ranked by what each adds to the chosen effects above it; *alone* is the effect on its own.", "",
                   "| rank | effect | kind | adds | 95 % interval | alone | parameters |",

@@ -2,12 +2,21 @@
 
 import dataclasses
 import inspect
+import json
 
 import numpy as np
 import pytest
 
-from energy import DataError, InvalidParameterError, LinearCurrentModel, NotFittedError, UnknownNameError
-from energy.diagnosis import CorrectedCurrentModel, Diagnosis, Effect, EffectParameter, diagnose
+from energy import (
+    CurrentModel,
+    DataError,
+    InteractionLog,
+    InvalidParameterError,
+    LinearCurrentModel,
+    NotFittedError,
+    UnknownNameError,
+)
+from energy.diagnosis import CorrectedCurrentModel, Diagnosis, Effect, EffectParameter, diagnose, localise_gap
 from energy.diagnosis.scenarios import null_scenario, scenario
 
 CANDIDATES = ["turning_resistance", "gear_losses", "current_gain", "idle_current", "mass"]
@@ -73,6 +82,70 @@ def test_result_serialises(turning, tmp_path):
     assert "Waterfall" in md and "turning_resistance" in md
     with pytest.raises(dataclasses.FrozenInstanceError):
         d.chosen = ()
+
+
+def test_the_verdict_quotes_the_largest_net_slice(turning):
+    _, _, d = turning
+    top = d.largest_slices(1)[0]
+    first = d.verdict[0]
+    assert first.startswith("The gap is ") and "largest net slice" in first
+    assert f"{top.dimension} {top.label!r}" in first and "95 % interval" in first
+    assert "% of it " not in first  # no share of absolute gaps any more
+    assert d.to_dict()["localisation_units"] == "runs"
+
+
+def test_the_report_is_one_page_and_the_json_keeps_every_slice(turning, tmp_path):
+    _, _, d = turning
+    t = np.arange(0.0, 600.0, 0.1)  # two 10-minute runs: 150 time sections of 8 s
+    v = 0.5 + 0.4 * np.sin(t / 7.0)
+    w = 0.6 * np.sin(t / 5.0)
+    logs = [InteractionLog(t, v, w, 1.0 + np.abs(w) + k, 1.0 + np.abs(w), t, np.full(t.size, 9.81)) for k in (0, 1)]
+    rows = localise_gap(logs, [np.ones((t.size, 2)), np.ones((t.size, 2))])
+    assert sum(r.dimension == "time" for r in rows) == 150
+    big = dataclasses.replace(d, localisation=rows)
+    md = big.to_markdown()
+    where = md.split("## Where the gap lies")[1].split("##")[0]
+    table = [line for line in where.splitlines() if line.startswith("| ") and not line.startswith("| dimension")]
+    assert len(table) == 10
+    assert len(md.splitlines()) < 60
+    doc = json.loads(big.write_json(tmp_path / "diagnosis.json").read_text())
+    assert len(doc["localisation"]) == len(rows)
+    assert {"gap_mah", "gap_pct", "measured_mah", "gap_interval_mah", "share_pct"} <= set(doc["localisation"][0])
+
+
+class _ExactToy(CurrentModel):
+    """Predicts ``1 + 2|v| + 4|omega|`` A per side: what the logs below draw, but for a miss by regime."""
+
+    def _fit(self, logs):
+        self.fitted_ = True
+
+    def _predict(self, log):
+        base = 1.0 + 2.0 * np.abs(log.v_mps) + 4.0 * np.abs(log.omega_radps)
+        return np.column_stack([base, base])
+
+    def _state(self):
+        return {}
+
+    def _load_state(self, state):
+        self.fitted_ = True
+
+
+def test_when_slices_cancel_the_verdict_says_so():
+    """0.6 A too little in pivots, as much too much driving straight: the net gap is near 0 and
+    the verdict says the largest slice outweighs it, rather than a share of absolute gaps."""
+    logs = []
+    for k in range(3):
+        t = np.arange(0.0, 40.0, 0.1)
+        phase = (np.floor(t / 5.0).astype(int) + k) % 2  # 5 s straight, 5 s pivot
+        v = np.where(phase == 0, 0.6, 0.0)
+        w = np.where(phase == 0, 0.0, 0.7)
+        base = 1.0 + 2.0 * np.abs(v) + 4.0 * np.abs(w) + np.where(phase == 1, 0.6, -0.6)
+        logs.append(InteractionLog(t, v, w, base, base, t, np.full(t.size, 9.81)))
+    d = diagnose(_ExactToy().fit(logs), logs, effects=["current_gain"], n_bootstrap=20)
+    assert abs(d.before.charge_error_pct) < 1.0
+    top = d.largest_slices(1)[0]
+    assert top.label in ("pivot", "0.5-1 m/s", "straight") and abs(top.gap_pct) > 5.0
+    assert "slices of opposite sign cancel" in d.verdict[0]
 
 
 def test_null_finds_no_unmodelled_effect():

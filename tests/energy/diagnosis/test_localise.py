@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from energy import PAPER_GROUNDS, InteractionLog, LogMeta, TruthSimulator, charge_mah, robot_preset
-from energy.diagnosis.localise import DIMENSIONS, GapShare, localise_gap, shares_of, time_labels
+from energy.diagnosis.localise import DIMENSIONS, GapShare, largest_slices, localise_gap, shares_of, time_labels
 from energy.diagnosis.residuals import gap_summary
 from terrain import flat_map, ramp_map
 from terrain.errors import DataError, InvalidParameterError, UnknownNameError
@@ -146,6 +146,100 @@ def test_a_perfect_model_has_zero_shares_everywhere():
     rows = localise_gap([make_log(v, w, left, right)], [np.column_stack([left, right])])
     assert all(r.gap_mah == 0.0 and r.share_pct == 0.0 for r in rows)
     assert not any(math.isnan(r.share_pct) for r in rows)
+    assert all(r.gap_interval_mah == (0.0, 0.0) and (r.gap_pct == 0.0 or r.measured_mah == 0.0) for r in rows)
+
+
+def test_slices_of_opposite_sign_rank_by_their_net_gap_while_the_whole_gap_cancels():
+    """Too little in pivots, as much too much while driving straight: the whole gap is 0, yet
+    each of the two slices holds a net gap of its own, with its sign and its share of the
+    slice's charge; nothing is said as a share of absolute gaps."""
+    v, w = stop_turn_go()
+    left, right = measured(v, w)
+    log = make_log(v, w, left, right)
+    pivot = (np.abs(v) < 0.05) & (np.abs(w) >= 0.1)
+    straight = (np.abs(v) >= 0.05) & (np.abs(w) < 0.1)
+    pred = np.column_stack([left, right])
+    pred[pivot] -= 1.0
+    pred[straight] += 1.0  # as many samples as the pivot: the misses cancel
+    rows = localise_gap([log], [pred])
+    q = charge_mah(log.time_s, np.where(pivot, 2.0, 0.0))  # 1 A on each side
+    assert abs(gap_summary([log], [pred]).gap_mah) < 0.01 * q  # (up to the half-weight of the first sample)
+    turning = shares_of(rows, "turning")
+    assert {r.label: np.sign(r.gap_mah) for r in turning[:2]} == {"pivot": 1.0, "straight": -1.0}
+    piv = next(r for r in turning if r.label == "pivot")
+    assert piv.gap_mah == pytest.approx(q, rel=1e-9)
+    assert piv.measured_mah == pytest.approx(charge_mah(log.time_s, np.where(pivot, left + right, 0.0)), rel=1e-9)
+    assert piv.gap_pct == pytest.approx(100.0 * piv.gap_mah / piv.measured_mah)
+    top = largest_slices(rows, 4)
+    assert {(r.dimension, r.label) for r in top[:2]} <= {("turning", "pivot"), ("turning", "straight"),
+                                                        ("speed", "pivot"), ("speed", "0.5-1 m/s")}
+    assert abs(top[0].gap_mah) == pytest.approx(q, rel=1e-6)
+    speed = {r.label: r for r in shares_of(rows, "speed")}
+    assert speed["pivot"].gap_mah == pytest.approx(q, rel=1e-9)  # pivots are not lumped with standstill
+    assert speed["standstill"].gap_mah == pytest.approx(0.0, abs=1e-12)
+
+
+def _pivot_misses(n_runs, miss_runs):
+    v, w = stop_turn_go(50)
+    left, right = measured(v, w)
+    pivot = (np.abs(v) < 0.05) & (np.abs(w) >= 0.1)
+    logs, preds = [], []
+    for k in range(n_runs):
+        scale = 1.0 + 0.05 * k  # runs differ a little
+        logs.append(make_log(v, w, left * scale, right * scale))
+        pred = np.column_stack([left, right]) * scale
+        if k in miss_runs:
+            pred[pivot] -= 1.0 + 0.2 * k
+        preds.append(pred)
+    return logs, preds
+
+
+def test_the_interval_of_a_slice_resamples_runs_and_is_seeded():
+    logs, preds = _pivot_misses(6, range(6))  # every run misses in its pivots
+    rows = localise_gap(logs, preds)
+    piv = next(r for r in shares_of(rows, "turning") if r.label == "pivot")
+    lo, hi = piv.gap_interval_mah
+    assert 0.0 < lo <= piv.gap_mah <= hi
+    assert rows == localise_gap(logs, preds)  # seeded: the same intervals
+    other = localise_gap(logs, preds, seed=1)
+    assert next(r for r in shares_of(other, "turning") if r.label == "pivot").gap_interval_mah != (lo, hi)
+    assert [r.gap_mah for r in other] == [r.gap_mah for r in rows]  # the gaps themselves do not depend on it
+    one_run = localise_gap(*_pivot_misses(6, [0]))  # one run of six misses: it may well not recur
+    piv1 = next(r for r in shares_of(one_run, "turning") if r.label == "pivot")
+    assert piv1.gap_mah > 0 and piv1.gap_interval_mah[0] == pytest.approx(0.0, abs=1e-12)
+    assert piv1.gap_interval_mah[1] > piv1.gap_mah
+
+
+def test_with_one_run_the_interval_resamples_its_time_sections():
+    v = np.tile(np.concatenate([np.full(40, 0.6), np.zeros(40)]), 10)  # 80 s: 10 sections of 8 s
+    w = np.tile(np.concatenate([np.zeros(40), np.full(40, 0.8)]), 10)
+    left, right = measured(v, w)
+    log = make_log(v, w, left, right)
+    pred = np.column_stack([left, right]) - 0.5  # the model is 0.5 A low everywhere
+    rows = localise_gap([log], [pred])
+    assert len(shares_of(rows, "time")) == 10
+    for r in rows:
+        lo, hi = r.gap_interval_mah
+        assert math.isfinite(lo) and lo <= hi, r
+    side = shares_of(rows, "side")[0]
+    assert side.gap_interval_mah[0] > 0.0  # the same miss in every section: a short interval above 0
+
+
+def test_largest_slices_leave_out_unknown_and_one_slice_dimensions():
+    v, w = stop_turn_go(20)
+    left, right = measured(v, w)
+    log = make_log(v, w, left, right, ground_label="grass")  # one ground; no map: grade and space unknown
+    pred = np.column_stack([left, right]) * 0.7
+    rows = localise_gap([log], [pred])
+    top = largest_slices(rows, 50)
+    dims = {r.dimension for r in top}
+    assert not dims & {"ground", "grade", "space"}
+    assert "unknown" not in {r.label for r in top}
+    gaps = [abs(r.gap_mah) for r in top]
+    assert gaps == sorted(gaps, reverse=True)
+    assert len(largest_slices(rows)) == 10 and largest_slices(rows, 3) == top[:3]
+    with pytest.raises(InvalidParameterError, match="n must be"):
+        largest_slices(rows, 0)
 
 
 def test_bad_input_is_named():
@@ -164,5 +258,7 @@ def test_bad_input_is_named():
         localise_gap([log], [good], terrain="map.tif")
     with pytest.raises(InvalidParameterError, match="section_s must be a real number"):
         localise_gap([log], [good], section_s="8")
+    with pytest.raises(InvalidParameterError, match="n_bootstrap"):
+        localise_gap([log], [good], n_bootstrap=0)
     with pytest.raises(UnknownNameError, match="dimension must be one of"):
         shares_of(localise_gap([log], [good]), "weather")
