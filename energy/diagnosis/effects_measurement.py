@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..logs import InteractionLog
+from ..models.base import CurrentModel
 from .effect_base import Effect, EffectParameter
 
 __all__ = ["MEASUREMENT_CANDIDATES", "IMU_LAG_GRID_S", "CurrentGainEffect", "CurrentOffsetEffect", "IdleCurrentEffect",
@@ -100,9 +101,36 @@ class TimeLagEffect(Effect):
         return np.column_stack([np.interp(shifted, t, predicted_a[:, k]) for k in range(predicted_a.shape[1])])
 
 
+#: Switches of a model configuration that make it read the IMU stream (those of
+#: :class:`~energy.models.config.EstimatorConfig`): value when the feature is off.
+_IMU_FEATURES_OFF: dict[str, Any] = {"local_spectrum": False, "run_features": "none", "use_yaw_slip": False}
+
+
 def reads_vibration(model: Any) -> bool:
-    """Whether ``model`` predicts from the IMU stream (a vibration band in its configuration)."""
-    return getattr(getattr(model, "config", None), "band_hz", None) is not None
+    """Whether ``model`` predicts from the IMU stream, read from what it declares (no model is run).
+
+    - A model wrapping another (``model.base``, a :class:`~energy.models.base.CurrentModel`:
+      the corrected and the adapted models) reads it when the wrapped one does.
+    - Otherwise its configuration decides: the resolved one of a fitted model
+      (``config_``, e.g. the vibration estimator's
+      :class:`~energy.models.config.EstimatorConfig`), else ``config`` when it is not a
+      preset name. A configuration with a vibration band (``band_hz``) reads the IMU unless
+      it has the estimator's feature switches and every one is off (no local spectrum, no
+      run features, no yaw-rate slip).
+
+    An unfitted estimator configured by a preset name is not resolved here (that would load
+    torch): fitted models, the only ones the diagnosis takes, carry ``config_``.
+    """
+    inner = getattr(model, "base", None)
+    if isinstance(inner, CurrentModel) and inner is not model:
+        return reads_vibration(inner)
+    cfg = getattr(model, "config_", None)
+    if cfg is None:
+        cfg = getattr(model, "config", None)
+    if cfg is None or isinstance(cfg, str) or getattr(cfg, "band_hz", None) is None:
+        return False
+    switches = {k: getattr(cfg, k) for k in _IMU_FEATURES_OFF if hasattr(cfg, k)}
+    return not switches or any(v != _IMU_FEATURES_OFF[k] for k, v in switches.items())
 
 
 class ImuLagEffect(Effect):
@@ -123,7 +151,9 @@ class ImuLagEffect(Effect):
     period_s: float = 0.0
 
     def applies_to(self, model: Any) -> bool:
-        return reads_vibration(model)
+        # a corrected model that already carries an IMU lag has it
+        has = any(getattr(e, "name", None) == self.name for e in getattr(model, "effects_", ()))
+        return reads_vibration(model) and not has
 
     def unsupported(self, logs: Sequence[Any], terrain: Any, model: Any = None) -> str | None:
         if any(getattr(log, "accel_time_s", None) is None or len(log.accel_time_s) < 2 for log in logs):

@@ -5,8 +5,8 @@ import types
 import numpy as np
 import pytest
 
-from energy import CurrentModel, InteractionLog, LinearCurrentModel
-from energy.diagnosis import diagnose, effect
+from energy import CurrentModel, InteractionLog, LinearCurrentModel, LogMeta, PhysicsCurrentModel
+from energy.diagnosis import CorrectedCurrentModel, diagnose, effect
 from energy.diagnosis.effects_measurement import reads_vibration
 
 TRUE_LAG_S = 0.17
@@ -89,3 +89,53 @@ def test_imu_lag_composes_as_a_difference():
     shifted = InteractionLog(logs[0].time_s, logs[0].v_mps, logs[0].omega_radps, logs[0].current_left_a,
                              logs[0].current_right_a, logs[0].accel_time_s - 0.2, logs[0].accel_z_mps2)
     assert np.allclose(e.apply(np.array([0.2]), base, prep), model.predict(shifted))  # a grid lag is exact
+
+
+def test_wrapped_models_read_the_imu_when_their_base_does_and_switched_off_features_do_not():
+    logs = _logs(0.0, n_logs=2)
+    toy = VibrationToyModel().fit(_logs(0.0, seed=1))
+    corrected = CorrectedCurrentModel(toy, ["current_gain"]).fit(logs)
+    assert reads_vibration(corrected) and effect("imu_lag").applies_to(corrected)
+    lagged = CorrectedCurrentModel(toy, ["imu_lag"]).fit(logs)
+    assert not effect("imu_lag").applies_to(lagged)  # it has one already
+    assert not reads_vibration(CorrectedCurrentModel(LinearCurrentModel().fit(logs), ["current_gain"]).fit(logs))
+    off = types.SimpleNamespace(band_hz=(1.0, 12.0), local_spectrum=False, run_features="none", use_yaw_slip=False)
+    quiet = VibrationToyModel().fit(logs)
+    quiet.config_ = off  # a fitted configuration with every IMU feature off
+    assert not reads_vibration(quiet)
+    quiet.config_ = types.SimpleNamespace(**{**vars(off), "run_features": "bands"})
+    assert reads_vibration(quiet)
+
+
+def _estimator_log(seed, duration_s=12.0):
+    """10 Hz drive, 100 Hz IMU; the current follows the motion and the vibration envelope."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, duration_s, 0.1)
+    p1, p2 = rng.uniform(0, 2 * np.pi, 2)
+    v = 0.45 + 0.35 * np.sin(2 * np.pi * t / 7.0 + p1)
+    w = 0.6 * np.sin(2 * np.pi * t / 5.0 + p2)
+    ta = np.arange(0.0, t[-1] + 0.005, 0.01)
+    env = 1.0 + 0.5 * np.sin(2 * np.pi * ta / 3.0 + p1) ** 2
+    az = 9.81 + 0.3 * env * rng.standard_normal(ta.size)
+    shake = np.interp(t, ta, env)
+    left = 0.5 + 4.0 * v + 3.0 * np.maximum(-w, 0) + np.maximum(w, 0) + shake
+    right = 0.5 + 4.0 * v + 3.0 * np.maximum(w, 0) + np.maximum(-w, 0) + shake
+    return InteractionLog(t, v, w, left, right, ta, az, meta=LogMeta(source=f"synthetic-{seed}", ground_label="g"))
+
+
+def test_a_fitted_vibration_estimator_is_offered_imu_lag_and_a_physics_model_is_not():
+    """The estimator is configured by a preset name (``config="default"``): what it reads is in its
+    fitted ``config_``, not in ``config``. A physics model never reads the IMU."""
+    pytest.importorskip("torch")
+    from energy import VibrationCurrentEstimator
+
+    logs = [_estimator_log(s) for s in range(3)]
+    est = VibrationCurrentEstimator("default", seed=0, n_threads=1).fit(logs)  # about 1 s on a CPU
+    assert est.config == "default" and reads_vibration(est)
+    d = diagnose(est, logs, effects=["imu_lag", "current_gain"], n_bootstrap=20)
+    assert "imu_lag" not in d.skipped and d.score("imu_lag") is not None
+    assert reads_vibration(CorrectedCurrentModel(est, ["current_gain"]).fit(logs))
+    physics = PhysicsCurrentModel("husky").fit(logs)
+    assert not reads_vibration(physics)
+    d2 = diagnose(physics, logs, effects=["imu_lag", "current_gain"], n_bootstrap=20)
+    assert "imu_lag" in d2.skipped and d2.score("imu_lag") is None
