@@ -354,6 +354,7 @@ def log_battery_power_w(
     *,
     current_convention: str = "motor",
     electronics: bool = True,
+    current_offset_a: float | None = None,
 ) -> np.ndarray:
     """Battery-side power (W) of every drive sample of a log: drive sides plus electronics.
 
@@ -381,6 +382,11 @@ def log_battery_power_w(
     ``sensor_power_per_mps_w * |v|``) and control-board power (standby / start-up / stable,
     from the log's speeds and times) are added; the logged drive currents do not hold them.
 
+    The current sensor's rest offset (``current_offset_a``, default the robot's
+    ``rest_current_a``) is a measurement, never paid by the battery: it is subtracted from
+    the logged currents first (a clamped side that logged 0 then counts as back-driven,
+    i.e. nothing without regeneration).
+
     Parameters
     ----------
     log : InteractionLog
@@ -389,6 +395,8 @@ def log_battery_power_w(
     current_convention : {"motor", "battery"}
     electronics : bool
         Add the sensor and control-board power.
+    current_offset_a : float, optional
+        What the sensor logs at rest (A, >= 0); ``None``: ``robot.rest_current_a``.
 
     Returns
     -------
@@ -407,7 +415,7 @@ def log_battery_power_w(
     >>> robot = robot_preset("husky")
     >>> log = InteractionLog([0.0, 1.0], [0.0, 0.0], [0.0, 0.0], [1.0, 1.0], [2.0, 2.0], [0.0, 1.0], [9.8, 9.8])
     >>> p = log_battery_power_w(log, robot, current_convention="battery", electronics=False)
-    >>> p.tolist() == [3.0 * robot.battery_voltage_v] * 2
+    >>> bool(np.allclose(p, (3.0 - 2 * robot.rest_current_a) * robot.battery_voltage_v))  # the rest offset is not paid
     True
     """
     if not isinstance(log, InteractionLog):
@@ -416,7 +424,9 @@ def log_battery_power_w(
         raise InvalidParameterError(f"robot must be a RobotParams, got {type(robot).__name__!r}")
     check_choice("current_convention", current_convention, CURRENT_CONVENTIONS)
     log.require_currents("log_battery_power_w")
-    currents = np.column_stack([log.current_left_a, log.current_right_a])  # (N, 2) [left, right]
+    offset = robot.rest_current_a if current_offset_a is None else check_real("current_offset_a", current_offset_a,
+                                                                              low=0.0)
+    currents = np.column_stack([log.current_left_a, log.current_right_a]) - offset  # (N, 2) [left, right]
     if current_convention == "battery":
         volts = robot.battery_voltage_v if log.battery_voltage_v is None else log.battery_voltage_v
         drive = volts * currents.sum(axis=1)

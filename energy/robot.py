@@ -140,6 +140,13 @@ class RobotParams:
     yaw_inertia_kg_m2 : float or None
         Body inertia about the vertical axis (>= 0). ``None`` (default) takes a uniform
         box of ``(wheelbase + 2 r) x track``: ``m (L**2 + B**2) / 12``.
+    rest_current_a : float
+        Current (>= 0, A) each side's current sensor logs while the robot stands still
+        (:func:`energy.logs.at_rest`): the sensor's rest offset. It is a *measurement*: it is
+        in every logged sample (before the driver's clamp at 0) but makes no torque and is
+        never paid by the battery — :func:`energy.log_battery_power_w` removes it from logged
+        currents, :class:`~energy.physics.PhysicsEnergyModel` never includes it, and
+        :class:`~energy.PhysicsCurrentModel` predicts it at rest. Default 0.
 
     Raises
     ------
@@ -168,6 +175,7 @@ class RobotParams:
     turn_rate_radps: float
     regen_efficiency: float = 0.0
     yaw_inertia_kg_m2: float | None = None
+    rest_current_a: float = 0.0
 
     def __post_init__(self) -> None:
         own = "RobotParams"
@@ -200,6 +208,7 @@ class RobotParams:
         check_real("regen_efficiency", self.regen_efficiency, low=0.0, high=1.0, owner=own)
         if self.yaw_inertia_kg_m2 is not None:
             check_real("yaw_inertia_kg_m2", self.yaw_inertia_kg_m2, low=0.0, owner=own)
+        check_real("rest_current_a", self.rest_current_a, low=0.0, owner=own)
 
     @property
     def effective_yaw_inertia_kg_m2(self) -> float:

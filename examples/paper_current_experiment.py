@@ -64,7 +64,7 @@ PAPER_WHOLE_RUN_ERROR_PCT = {
 }
 #: Current measurement of the synthetic runs (Husky-like: 0.13 A steps, 0.59 A idle).
 NOISE = NoiseModel(current_noise_std_a=0.15, outlier_rate=0.002, outlier_magnitude_a=2.0,
-                   quantisation_step_a=0.13, idle_current_a=0.59, side_gain_std=0.02,
+                   quantisation_step_a=0.13, current_offset_a=0.59, side_gain_std=0.02,
                    accel_noise_std_mps2=0.02)
 
 

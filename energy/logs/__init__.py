@@ -3,7 +3,8 @@
 Modules: :mod:`~energy.logs.meta` (run metadata), :mod:`~energy.logs.gaps` (the gap rule
 shared with the readers), :mod:`~energy.logs.arrays` (the stream fields and the validation
 of the log's arrays), :mod:`~energy.logs.joining` (concatenation),
-:mod:`~energy.logs.interaction_log` (the log itself). Readers of files live in
+:mod:`~energy.logs.interaction_log` (the log itself), :mod:`~energy.logs.rest` (which samples
+stand still). Readers of files live in
 :mod:`energy.io`.
 """
 
@@ -11,6 +12,7 @@ from .arrays import DRIVE_FIELDS, IMU_FIELDS, OPTIONAL_FIELDS
 from .gaps import DEFAULT_GAP_FACTOR, check_gap_factor, gap_steps, median_period_s
 from .interaction_log import RESAMPLE_METHODS, InteractionLog
 from .meta import VELOCITY_SOURCES, LogMeta
+from .rest import REST_ACCEL_MPS2, REST_ALPHA_RADPS2, REST_OMEGA_RADPS, REST_SPEED_MPS, at_rest, rest_samples
 
 __all__ = [
     "LogMeta",
@@ -24,4 +26,10 @@ __all__ = [
     "DRIVE_FIELDS",
     "IMU_FIELDS",
     "OPTIONAL_FIELDS",
+    "at_rest",
+    "rest_samples",
+    "REST_ACCEL_MPS2",
+    "REST_ALPHA_RADPS2",
+    "REST_SPEED_MPS",
+    "REST_OMEGA_RADPS",
 ]

@@ -18,9 +18,16 @@ __all__ = ["NoiseModel", "measure_currents", "measure_battery"]
 class NoiseModel:
     """How the drive currents and the accelerometer are measured.
 
-    The logged current of a side is, in this order: ``gain * (I_motoring + idle)`` plus
+    The logged current of a side is, in this order: ``gain * (I_motoring + offset)`` plus
     Gaussian noise, plus outlier spikes; braking (negative) values set to 0 when
     ``clip_negative``; rounded to multiples of ``quantisation_step_a``.
+
+    Everything here changes what is *logged*, never what the battery pays: the simulator's
+    battery power (``TruthRun.breakdown.total_power_w``, the pack's logged voltage and
+    current) comes from the physics alone. In particular ``current_offset_a`` is the current
+    sensor's rest offset (what it reads with the wheels still, as the real Husky's does),
+    not a drag: a robot that knows it (``RobotParams.rest_current_a``) removes it when it
+    turns logged currents into battery power (:func:`energy.log_battery_power_w`).
 
     Parameters
     ----------
@@ -33,8 +40,9 @@ class NoiseModel:
     quantisation_step_a : float
         Resolution of the current sensor (>= 0; 0 = none), A. BorealTC's Husky logs show
         steps of about 0.13 A.
-    idle_current_a : float
-        Current drawn by a standing drive (>= 0), A (BorealTC: about 0.59 A).
+    current_offset_a : float
+        The sensor's rest offset (>= 0), A, added to every logged sample (BorealTC's Husky
+        logs 0 or 0.59 A standing still; the Husky preset's ``rest_current_a`` is 0.59 A).
     clip_negative : bool
         Report braking currents as 0, like the Husky driver.
     side_gain_std : float
@@ -60,7 +68,7 @@ class NoiseModel:
     outlier_rate: float = 0.002
     outlier_magnitude_a: float = 2.0
     quantisation_step_a: float = 0.13
-    idle_current_a: float = 0.59
+    current_offset_a: float = 0.59
     clip_negative: bool = True
     side_gain_std: float = 0.0
     accel_noise_std_mps2: float = 0.02
@@ -71,7 +79,7 @@ class NoiseModel:
     def __post_init__(self) -> None:
         own = "NoiseModel"
         for name in ("current_noise_std_a", "outlier_magnitude_a", "quantisation_step_a",
-                     "idle_current_a", "side_gain_std", "accel_noise_std_mps2", "battery_current_noise_rel",
+                     "current_offset_a", "side_gain_std", "accel_noise_std_mps2", "battery_current_noise_rel",
                      "battery_current_noise_std_a", "battery_voltage_noise_std_v"):
             check_real(name, getattr(self, name), low=0.0, owner=own)
         check_real("outlier_rate", self.outlier_rate, low=0.0, high=1.0, owner=own)
@@ -79,11 +87,11 @@ class NoiseModel:
 
     @classmethod
     def off(cls) -> NoiseModel:
-        """No noise, outliers, quantisation, idle current, clipping or gains: the logged
+        """No noise, outliers, quantisation, rest offset, clipping or gains: the logged
         currents are the physics model's motoring currents, the acceleration has no sensor
         noise, the battery voltage and pack current are exact."""
         return cls(current_noise_std_a=0.0, outlier_rate=0.0, outlier_magnitude_a=0.0,
-                   quantisation_step_a=0.0, idle_current_a=0.0, clip_negative=False,
+                   quantisation_step_a=0.0, current_offset_a=0.0, clip_negative=False,
                    side_gain_std=0.0, accel_noise_std_mps2=0.0, battery_current_noise_rel=0.0,
                    battery_current_noise_std_a=0.0, battery_voltage_noise_std_v=0.0)
 
@@ -95,13 +103,13 @@ def measure_currents(
 
     ``rngs`` holds the generators ``"side_gain"``, ``"current_noise"`` and ``"outliers"``
     (each drawn from only when its component is on, so switching one off leaves the
-    others' draws unchanged). Clean: gains, idle current and clipping; measured: plus
+    others' draws unchanged). Clean: gains, rest offset and clipping; measured: plus
     noise, outliers and quantisation.
     """
     nm = noise
     n = drive_a.shape[0]
     gain = np.exp(nm.side_gain_std * rngs["side_gain"].standard_normal(2)) if nm.side_gain_std > 0 else np.ones(2)
-    clean = gain * (drive_a + nm.idle_current_a)
+    clean = gain * (drive_a + nm.current_offset_a)
     meas = clean.copy()
     if nm.current_noise_std_a > 0:
         meas += nm.current_noise_std_a * rngs["current_noise"].standard_normal((n, 2))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -64,10 +66,38 @@ def test_log_power_reproduces_physics_battery_power():
     v = np.where(t < 3.0, 0.6 * np.minimum(t, 1.0), 0.0)
     w = np.where(t >= 3.0, 0.5 * np.minimum(t - 3.0, 1.0), 0.1)
     run = sim.run_commands(t, v, w, ground="grass")
-    p = log_battery_power_w(run.log, robot)
+    # NoiseModel.off(): a sensor without rest offset, so none is removed
+    p = log_battery_power_w(run.log, robot, current_offset_a=0.0)
     np.testing.assert_allclose(p, run.breakdown.total_power_w, rtol=1e-9, atol=1e-9)
-    drive = log_battery_power_w(run.log, robot, electronics=False)
+    drive = log_battery_power_w(run.log, robot, electronics=False, current_offset_a=0.0)
     np.testing.assert_allclose(drive, run.breakdown.drive_power_w, rtol=1e-9, atol=1e-9)
+
+
+def test_the_sensor_rest_offset_is_logged_but_never_paid():
+    # The same drive logged by a sensor with the Husky's rest offset (0.59 A on every sample):
+    # the robot, which knows its sensor (rest_current_a), books the physics' battery power; the
+    # offset reaches the logged currents only. Booked as if it were drawn current, it would cost.
+    robot = robot_preset("husky")
+    assert robot.rest_current_a == 0.59
+    effects = [e for e in EFFECTS if e != "longitudinal_slip"]
+    noise = dataclasses.replace(NoiseModel.off(), current_offset_a=0.59)
+    sim = TruthSimulator(robot, {"grass": ground_preset("grass")}, effects=effects, noise=noise,
+                         velocity_time_constant_s=0.0, seed=1)
+    t = np.arange(600) * 0.01
+    v = np.where(t < 3.0, 0.6 * np.minimum(t, 1.0), 0.0)
+    w = np.where(t >= 3.0, 0.5 * np.minimum(t - 3.0, 1.0), 0.1)
+    run = sim.run_commands(t, v, w, ground="grass")
+    bare = TruthSimulator(robot, {"grass": ground_preset("grass")}, effects=effects, noise=NoiseModel.off(),
+                          velocity_time_constant_s=0.0, seed=1).run_commands(t, v, w, ground="grass")
+    np.testing.assert_allclose(run.log.current_left_a - bare.log.current_left_a, 0.59, atol=1e-12)  # logged
+    np.testing.assert_allclose(run.breakdown.total_power_w, bare.breakdown.total_power_w)  # not paid
+    np.testing.assert_allclose(log_battery_power_w(run.log, robot), run.breakdown.total_power_w, rtol=1e-9,
+                               atol=1e-9)
+    paid = log_battery_power_w(run.log, robot, current_offset_a=0.0)
+    # booked as drawn current, the offset would add 5 % and more to this drive's energy
+    assert np.trapezoid(paid - run.breakdown.total_power_w, t) > 0.05 * np.trapezoid(run.breakdown.total_power_w, t)
+    with pytest.raises(InvalidParameterError, match="current_offset_a"):
+        log_battery_power_w(run.log, robot, current_offset_a=-0.1)
 
 
 def test_log_power_battery_convention_and_errors():

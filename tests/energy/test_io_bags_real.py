@@ -224,8 +224,9 @@ def test_the_battery_power_of_a_log_uses_its_measured_voltage(bags):
     husky = read_rosbag(bags["husky"][0], **HUSKY)
     robot = robot_preset("husky")
     power = log_battery_power_w(husky, robot, current_convention="battery", electronics=False)
-    np.testing.assert_allclose(power, husky.battery_voltage_v * (husky.current_left_a + husky.current_right_a))
-    assert not np.allclose(power, robot.battery_voltage_v * (husky.current_left_a + husky.current_right_a))
+    drawn = husky.current_left_a + husky.current_right_a - 2 * robot.rest_current_a  # the rest offset is not drawn
+    np.testing.assert_allclose(power, husky.battery_voltage_v * drawn)
+    assert not np.allclose(power, robot.battery_voltage_v * drawn)
     jackal = read_rosbag(bags["jackal"][0], "/odometry/filtered")
     with pytest.raises(DataError, match="log_battery_power_w needs measured drive currents"):
         log_battery_power_w(jackal, robot, current_convention="battery")

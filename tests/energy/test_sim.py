@@ -104,14 +104,14 @@ def test_noiseless_currents_are_the_physics_motoring_currents() -> None:
     np.testing.assert_allclose(logged, expected, rtol=1e-12, atol=1e-12)
     assert logged.min() < 0  # braking shows as negative without clipping
     # idle offset and clipping like the Husky driver
-    sim2 = TruthSimulator(HUSKY, PAPER_GROUNDS, noise=quiet(idle_current_a=0.59, clip_negative=True))
+    sim2 = TruthSimulator(HUSKY, PAPER_GROUNDS, noise=quiet(current_offset_a=0.59, clip_negative=True))
     log2 = sim2.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground="coated_wood", slope_rad=0.05)
     np.testing.assert_allclose(log2.current_left_a, np.maximum(expected[:, 0] + 0.59, 0.0), atol=1e-12)
     np.testing.assert_allclose(log2.current_right_a, np.maximum(expected[:, 1] + 0.59, 0.0), atol=1e-12)
 
 
 def test_pivot_draws_on_both_sides_and_a_braked_inner_side_reads_zero() -> None:
-    sim = TruthSimulator(HUSKY, PAPER_GROUNDS, noise=quiet(idle_current_a=0.0))
+    sim = TruthSimulator(HUSKY, PAPER_GROUNDS, noise=quiet(current_offset_a=0.0))
     t, v, w = steady(1000, 0.0, 1.0)
     pivot = sim.simulate_commands(t, v, w, ground="coated_wood")
     assert pivot.current_left_a[-1] > 1.0 and pivot.current_right_a[-1] > 1.0
@@ -172,7 +172,7 @@ def test_quantisation_step_is_visible() -> None:
 
 
 def test_noise_std_matches_configuration() -> None:
-    sim = TruthSimulator(HUSKY, PAPER_GROUNDS, noise=quiet(current_noise_std_a=0.3, idle_current_a=3.0))
+    sim = TruthSimulator(HUSKY, PAPER_GROUNDS, noise=quiet(current_noise_std_a=0.3, current_offset_a=3.0))
     t, v, w = steady(20000, 0.4)
     run = sim.run_commands(t, v, w, ground="coated_wood", seed=3)
     resid = np.column_stack([run.log.current_left_a, run.log.current_right_a]) - run.clean_current_a
@@ -193,7 +193,7 @@ def test_outlier_rate_and_magnitude() -> None:
 
 
 def test_side_gain_spreads_runs() -> None:
-    sim = TruthSimulator(HUSKY, PAPER_GROUNDS, noise=quiet(side_gain_std=0.1, idle_current_a=1.0))
+    sim = TruthSimulator(HUSKY, PAPER_GROUNDS, noise=quiet(side_gain_std=0.1, current_offset_a=1.0))
     t, v, w = steady(200, 0.4)
     ratios = [sim.run_commands(t, v, w, ground="coated_wood", seed=s).clean_current_a[-1] for s in range(20)]
     r = np.array(ratios)
@@ -404,8 +404,8 @@ def test_seed_follows_the_one_seed_rule(seed: object) -> None:
 def test_string_numbers_name_the_parameter() -> None:
     with pytest.raises(InvalidParameterError, match="TruthSimulator.accel_rate_hz must be a real number, got 'fast'"):
         TruthSimulator(HUSKY, PAPER_GROUNDS, accel_rate_hz="fast")  # type: ignore[arg-type]
-    with pytest.raises(InvalidParameterError, match="NoiseModel.idle_current_a must be a real number"):
-        NoiseModel(idle_current_a="0.5")  # type: ignore[arg-type]
+    with pytest.raises(InvalidParameterError, match="NoiseModel.current_offset_a must be a real number"):
+        NoiseModel(current_offset_a="0.5")  # type: ignore[arg-type]
     with pytest.raises(InvalidParameterError, match="NoiseModel.clip_negative must be True or False"):
         NoiseModel(clip_negative="no")  # type: ignore[arg-type]
     with pytest.raises(InvalidParameterError, match=r"VibrationSignature.peak_frequencies_hz\[0\] must be a real"):
