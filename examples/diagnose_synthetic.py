@@ -41,10 +41,10 @@ def main(argv: list[str] | None = None) -> dict[str, float | str]:
         p = excitation_commands(duration_s, seed=k, omega_sign="both")
         logs.append(truth.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground="coated_wood", seed=100 + k))
 
-    # the model under test: no turning resistance; idle current calibrated at standstill
+    # the model under test: no turning resistance; its rest level calibrated at standstill
     t = np.arange(500) * 0.01
     standstill = truth.simulate_commands(t, 0.0 * t, 0.0 * t, ground="coated_wood", seed=99)
-    model = PhysicsCurrentModel(husky, PAPER_GROUNDS["coated_wood"], fit_parameters=("idle_current_a",),
+    model = PhysicsCurrentModel(husky, PAPER_GROUNDS["coated_wood"], fit_parameters=("rest_current_a",),
                                 effects=EFFECTS_WITHOUT_TURNING).fit([standstill])
 
     d = diagnose(model, logs, seed=0, n_bootstrap=100)

@@ -170,7 +170,7 @@ def run_scenario() -> tuple[list[CaseResult], CaseResult, PhysicsEnergyModel]:
 # ------------------------------------------------------------------ the ablation from data
 #: Current measurement at the paper robot's scale (it draws about 0.1 A at most; the pack about 0.3 A).
 PAPER_NOISE = NoiseModel(current_noise_std_a=0.002, outlier_rate=0.0, outlier_magnitude_a=0.0,
-                         quantisation_step_a=0.001, idle_current_a=0.005, clip_negative=True, side_gain_std=0.0,
+                         quantisation_step_a=0.001, current_offset_a=0.005, clip_negative=True, side_gain_std=0.0,
                          battery_current_noise_std_a=0.005, battery_current_noise_rel=0.01,
                          battery_voltage_noise_std_v=0.01)
 #: The paper robot's 12 V pack (the capacity does not matter here).
@@ -227,12 +227,12 @@ def paper_route_runs(n_runs: int = 10, seed: int = 0,
 
 
 def base_model(seed: int = 0) -> PhysicsCurrentModel:
-    """The paper's base (DC motor with armature heat), its idle current calibrated on 5 s at rest."""
+    """The paper's base (DC motor with armature heat), its rest level calibrated on 5 s at rest."""
     robot = robot_preset("paper_seed")
     sim = TruthSimulator(robot, {g: ground_preset(g) for g in _GROUNDS}, noise=PAPER_NOISE, seed=0)
     t = np.arange(500) * DT_S
     rest = sim.simulate_commands(t, np.zeros_like(t), np.zeros_like(t), ground=_GROUNDS[0], seed=seed + 999)
-    return PhysicsCurrentModel(robot=robot, ground=ground_preset(_GROUNDS[0]), fit_parameters=("idle_current_a",),
+    return PhysicsCurrentModel(robot=robot, ground=ground_preset(_GROUNDS[0]), fit_parameters=("rest_current_a",),
                                effects=("armature_heat",)).fit([rest])
 
 

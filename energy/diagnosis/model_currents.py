@@ -12,7 +12,7 @@ import numpy as np
 from terrain.errors import DataError, InvalidParameterError
 
 from ..ground import GroundParams
-from ..logs import InteractionLog
+from ..logs import InteractionLog, rest_samples
 from ..models.baselines import PhysicsCurrentModel
 from ..params import ground_preset, robot_preset
 from ..physics import EFFECTS, PhysicsEnergyModel
@@ -31,7 +31,7 @@ TABLE_NODES = 129
 
 @dataclass(frozen=True)
 class PhysicsBasis:
-    """The physics a model stands on: robot, ground, effects switched on, idle current.
+    """The physics a model stands on: robot, ground, effects switched on, idle current, rest level.
 
     For a fitted :class:`~energy.PhysicsCurrentModel` these are its fitted values; for any
     other model a reference (the robot's preset on asphalt, every drive effect) from which
@@ -44,6 +44,7 @@ class PhysicsBasis:
     idle_current_a: float
     fitted_chi: bool
     is_model: bool
+    rest_current_a: tuple[float, float] = (0.0, 0.0)
 
 
 def physics_basis(model: Any, robot: Any = None) -> PhysicsBasis:
@@ -56,7 +57,8 @@ def physics_basis(model: Any, robot: Any = None) -> PhysicsBasis:
     """
     if isinstance(model, PhysicsCurrentModel) and model.is_fitted:
         return PhysicsBasis(model.robot_, model.ground_, tuple(model.effects_), float(model.idle_current_a_),
-                            "track_width_multiplier" in model.fitted_, True)
+                            "track_width_multiplier" in model.fitted_, True,
+                            (float(model.rest_current_a_[0]), float(model.rest_current_a_[1])))
     if robot is None:
         rb = robot_preset("husky")
     elif isinstance(robot, str):
@@ -65,7 +67,8 @@ def physics_basis(model: Any, robot: Any = None) -> PhysicsBasis:
         rb = robot
     else:
         raise InvalidParameterError(f"robot must be None, a preset name or a RobotParams, got {robot!r:.80}")
-    return PhysicsBasis(rb, ground_preset("asphalt"), DRIVE_EFFECTS, 0.0, False, False)
+    return PhysicsBasis(rb, ground_preset("asphalt"), DRIVE_EFFECTS, 0.0, False, False,
+                        (rb.rest_current_a, rb.rest_current_a))
 
 
 def measured_side_speeds(log: InteractionLog, robot: RobotParams) -> bool:
@@ -128,11 +131,12 @@ def motoring_currents_a(basis: PhysicsBasis, log: InteractionLog, *, effects: tu
 def unclipped_prediction(model: Any, log: InteractionLog, basis: PhysicsBasis | None = None) -> np.ndarray:
     """The model's ``[left, right]`` prediction before its clamp at 0 (N, 2), A.
 
-    A :class:`~energy.PhysicsCurrentModel`: idle current plus motoring current; any other
-    model: ``model.predict(log)``.
+    A :class:`~energy.PhysicsCurrentModel`: its rest level plus motoring current, plus the
+    idle current where the log moves; any other model: ``model.predict(log)``.
     """
     if basis is not None and basis.is_model:
-        return basis.idle_current_a + motoring_currents_a(basis, log)
+        idle = np.where(rest_samples(log)[:, None], 0.0, basis.idle_current_a)
+        return np.asarray(basis.rest_current_a) + idle + motoring_currents_a(basis, log)
     return np.asarray(model.predict(log), dtype=np.float64)
 
 

@@ -88,7 +88,7 @@ def power_inputs(basis: PhysicsBasis, log: InteractionLog) -> PowerInputs:
     rb = basis.robot
     res = basis_breakdown(basis, log)
     omega_m = np.abs(np.asarray(res.motor_speed_radps))
-    current = log_currents(log) - basis.idle_current_a
+    current = log_currents(log) - np.asarray(basis.rest_current_a)  # the sensor's rest offset is not drawn
     t, v, w = log.time_s, log.v_mps, log.omega_radps
     stopped = control_power(rb.replace(control_standby_power_w=1.0, control_stable_power_w=0.0,
                                        control_startup_power_w=0.0), v, w, t)

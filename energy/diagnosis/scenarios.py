@@ -248,12 +248,12 @@ class Scenario:
     def true_values(self) -> dict[str, float]:
         """The truth's values by physical name (robot, motor and ground fields, measurement
         alterations), to compare fitted effect parameters with."""
-        return self._values(self.robot, self.ground, self.noise.idle_current_a)
+        return self._values(self.robot, self.ground, self.noise.current_offset_a)
 
     def model_values(self) -> dict[str, float]:
         """The model's values by the same names (its nominal robot and ground, no alteration)."""
         out = self._values(self.model_robot or self.robot, self.model_ground or self.ground,
-                           self.noise.idle_current_a if self.model_idle else 0.0)
+                           self.noise.current_offset_a if self.model_idle else 0.0)
         out.update(gain_left=1.0, gain_right=1.0, offset_left_a=0.0, offset_right_a=0.0, lag_s=0.0)
         return out
 
@@ -278,14 +278,14 @@ class Scenario:
             if self.lag_s > 0:
                 cur = np.column_stack([np.interp(time_s - self.lag_s, time_s, cur[:, k]) for k in range(2)])
             cur = np.asarray(self.current_gain) * cur + np.asarray(self.current_offset_a)
-        noise = self.noise if idle else dataclasses.replace(self.noise, idle_current_a=0.0)
+        noise = self.noise if idle else dataclasses.replace(self.noise, current_offset_a=0.0)
         streams = np.random.SeedSequence(seed).spawn(3)
         rngs = {k: np.random.default_rng(s) for k, s in zip(("current_noise", "outliers", "side_gain"), streams)}
         return measure_currents(noise, cur, rngs)
 
     def _silent_noise(self) -> NoiseModel:
         return NoiseModel(current_noise_std_a=0.0, outlier_rate=0.0, outlier_magnitude_a=0.0, quantisation_step_a=0.0,
-                          idle_current_a=0.0, clip_negative=False, side_gain_std=0.0,
+                          current_offset_a=0.0, clip_negative=False, side_gain_std=0.0,
                           accel_noise_std_mps2=self.noise.accel_noise_std_mps2)
 
     def _runs(self, seed: int | None, *, world: str = "truth") -> list[tuple[Any, np.ndarray, int]]:
@@ -345,9 +345,12 @@ class Scenario:
 
     def make_model(self, seed: int | None = 0) -> CurrentModel:
         """The model under test: a fitted :class:`~energy.PhysicsCurrentModel` lacking the
-        withheld effects, its idle current calibrated on :meth:`calibration_log`."""
-        model = PhysicsCurrentModel(robot=self.model_robot or self.robot, ground=self.model_ground or self.ground,
-                                    fit_parameters=("idle_current_a",) if self.model_idle else (),
+        withheld effects, its rest level calibrated on :meth:`calibration_log`."""
+        robot = self.model_robot or self.robot
+        if not self.model_idle:  # the model knows no rest level at all
+            robot = robot.replace(rest_current_a=0.0)
+        model = PhysicsCurrentModel(robot=robot, ground=self.model_ground or self.ground,
+                                    fit_parameters=("rest_current_a",) if self.model_idle else (),
                                     effects=self.model_effects)
         return model.fit([self.calibration_log(seed)])
 

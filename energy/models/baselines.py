@@ -6,7 +6,7 @@
   squares; fit one per ground.
 - :class:`PhysicsCurrentModel`: the physics model of :class:`~energy.physics.PhysicsEnergyModel`
   with a few ground coefficients (rolling resistance, lateral friction) and an idle current
-  fitted to the logs by bounded non-linear least squares.
+  fitted to the logs by bounded non-linear least squares, and a rest level of its own.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from scipy import optimize
 from terrain.checks import check_bool, real_array
 from terrain.errors import DataError, InvalidParameterError, UnknownNameError
 
-from ..logs import InteractionLog
+from ..logs import InteractionLog, at_rest, rest_samples
 from ..params import GroundParams, MotorParams, RobotParams, ground_preset, robot_preset
 from ..physics import EFFECTS, PhysicsEnergyModel
 from .base import CurrentModel, log_currents
@@ -130,6 +130,7 @@ PHYSICS_FIT_PARAMETERS: dict[str, tuple[float, float]] = {
     "lateral_friction_coef": (0.0, 3.0),
     "viscous_friction_coef_s_per_m": (0.0, 5.0),
     "idle_current_a": (0.0, 20.0),
+    "rest_current_a": (0.0, 20.0),
     "track_width_multiplier": (1.0, 5.0),
 }
 _DRIVE_EFFECTS = tuple(e for e in EFFECTS if e not in ("sensor", "control"))
@@ -161,9 +162,15 @@ def _ground_from_plain(value: Any) -> str | GroundParams:
 class PhysicsCurrentModel(CurrentModel):
     """The physics model's per-side motor current, with ground coefficients fitted to logs.
 
-    Prediction per side: ``max(idle_current_a + I_motor * sign(omega_motor), 0)`` with
+    Prediction per side: ``max(rest + idle + I_motor * sign(omega_motor), 0)`` with
     ``I_motor`` the ``motor_current_a`` of :meth:`PhysicsEnergyModel.power` for the logged
-    ``v``, ``omega``, their time derivatives (``numpy.gradient``) and zero slope. The
+    ``v``, ``omega``, their time derivatives (``numpy.gradient``) and zero slope, and
+    ``idle`` only where the log moves (not :func:`energy.logs.at_rest`): standing still the
+    model predicts the rest level ``rest_current_a_`` (the physics draws no current at
+    rest). The rest level is what the current sensor logs with the wheels still (a sensor
+    offset, in every sample: ``robot.rest_current_a``, or the mean of the logs' rest samples
+    per side when ``"rest_current_a"`` is fitted); the idle current is the speed-independent
+    current of *driving* on top of it. The
     current is taken in the direction of rotation (positive when motoring forwards *or*
     backwards, negative when back-driven), as drivers log it; the clamp at 0 models drivers
     that log motoring current only (BorealTC: never negative, exact zeros on a back-driven
@@ -183,7 +190,11 @@ class PhysicsCurrentModel(CurrentModel):
         values, the others (e.g. slip coefficients) are kept.
     fit_parameters : tuple of str
         Names from :data:`PHYSICS_FIT_PARAMETERS` to fit (default: rolling resistance,
-        lateral friction, idle current).
+        lateral friction, idle current, rest level). ``"rest_current_a"`` is fitted apart,
+        in closed form: the mean current of each side over the rest samples (a side keeps
+        ``robot.rest_current_a`` when the logs never stand still); the others by least
+        squares on the moving samples. ``()``: the model as given (``fit`` only checks
+        the logs).
     effects : tuple of str or None
         Physics effects (``None``: all drive effects, i.e. :data:`EFFECTS` without the
         electronics ``"sensor"`` and ``"control"``, which draw no motor current).
@@ -197,6 +208,9 @@ class PhysicsCurrentModel(CurrentModel):
     robot_ : RobotParams
         Robot (with the fitted ``track_width_multiplier`` when fitted).
     idle_current_a_ : float
+        Current on top of the rest level while moving (A).
+    rest_current_a_ : numpy.ndarray, shape (2,)
+        ``[left, right]`` rest level (A).
     fitted_ : dict of str to float
         The fitted values by name.
     cost_ : float
@@ -206,7 +220,8 @@ class PhysicsCurrentModel(CurrentModel):
     _param_names = ("robot", "ground", "fit_parameters", "effects", "clip_negative")
 
     def __init__(self, robot: str | RobotParams = "husky", ground: str | GroundParams = "asphalt",
-                 fit_parameters: Sequence[str] = ("rolling_resistance_coef", "lateral_friction_coef", "idle_current_a"),
+                 fit_parameters: Sequence[str] = ("rolling_resistance_coef", "lateral_friction_coef", "idle_current_a",
+                                                  "rest_current_a"),
                  effects: Sequence[str] | None = None, clip_negative: bool = True) -> None:
         self.robot = robot
         self.ground = ground
@@ -249,7 +264,7 @@ class PhysicsCurrentModel(CurrentModel):
         return (log.v_mps, log.omega_radps, np.gradient(log.v_mps, log.time_s), np.gradient(log.omega_radps, log.time_s))
 
     def _current(self, robot: RobotParams, ground: GroundParams, idle_a: float, effects: tuple[str, ...],
-                 log: InteractionLog, fitted_chi: bool) -> np.ndarray:
+                 log: InteractionLog, fitted_chi: bool, rest_a: np.ndarray) -> np.ndarray:
         model = PhysicsEnergyModel(self._log_robot(robot, log, fitted_chi), effects)
         v, w, a, alpha = self._inputs(log)
         res = model.power(v, w, ground, accel_mps2=a, alpha_radps2=alpha, time_s=log.time_s)
@@ -257,12 +272,24 @@ class PhysicsCurrentModel(CurrentModel):
         # current in the direction of rotation: > 0 motoring (either way round), < 0 back-driven
         sign = np.sign(res.motor_speed_radps)
         motoring = np.where(sign != 0, i_m * sign, np.abs(i_m))
-        cur = idle_a + motoring
+        cur = rest_a + motoring + np.where(at_rest(v, w, a, alpha)[:, None], 0.0, idle_a)
         return np.maximum(cur, 0.0) if self.clip_negative else cur
+
+    @staticmethod
+    def _rest_level(robot: RobotParams, logs: list[InteractionLog], fit: bool) -> np.ndarray:
+        """Per-side rest level: the mean of the logs' rest samples (``fit``, sides with any), else the robot's."""
+        level = np.full(2, float(robot.rest_current_a))
+        if not fit:
+            return level
+        rest = np.concatenate([log_currents(log)[rest_samples(log)] for log in logs])
+        if rest.shape[0]:
+            level = rest.mean(axis=0)
+        return level
 
     def _apply(self, robot: RobotParams, ground: GroundParams, theta: np.ndarray,
                names: tuple[str, ...]) -> tuple[RobotParams, GroundParams, float]:
         values = dict(zip(names, theta.tolist()))
+        values.pop("rest_current_a", None)  # fitted apart (closed form)
         idle = values.pop("idle_current_a", 0.0)
         chi = values.pop("track_width_multiplier", None)
         if chi is not None:
@@ -275,8 +302,10 @@ class PhysicsCurrentModel(CurrentModel):
         return self._check()
 
     def _fit(self, logs: list[InteractionLog]) -> None:
-        robot, ground, names, model = self._check()
+        robot, ground, all_names, model = self._check()
         effects = model.effects
+        rest_a = self._rest_level(robot, logs, "rest_current_a" in all_names)
+        names = tuple(n for n in all_names if n != "rest_current_a")
         truth = np.concatenate([log_currents(log) for log in logs]).ravel()
         fitted_chi = "track_width_multiplier" in names
         start = []
@@ -296,7 +325,8 @@ class PhysicsCurrentModel(CurrentModel):
 
         def residual(theta: np.ndarray) -> np.ndarray:
             r, g, idle = self._apply(robot, ground, theta, names)
-            pred = np.concatenate([self._current(r, g, idle, effects, log, fitted_chi) for log in logs]).ravel()
+            pred = np.concatenate([self._current(r, g, idle, effects, log, fitted_chi, rest_a)
+                                   for log in logs]).ravel()
             return pred - truth
 
         if names:
@@ -309,13 +339,16 @@ class PhysicsCurrentModel(CurrentModel):
         self.robot_ = r
         self.ground_ = g
         self.idle_current_a_ = float(idle)
+        self.rest_current_a_ = rest_a
         self.fitted_ = dict(zip(names, (float(x) for x in theta)))
+        if "rest_current_a" in all_names:
+            self.fitted_.update(rest_left_a=float(rest_a[0]), rest_right_a=float(rest_a[1]))
         self.cost_ = float(np.mean(residual(theta) ** 2))
         self.effects_ = effects
 
     def _predict(self, log: InteractionLog) -> np.ndarray:
         return self._current(self.robot_, self.ground_, self.idle_current_a_, self.effects_, log,
-                             "track_width_multiplier" in self.fitted_)
+                             "track_width_multiplier" in self.fitted_, self.rest_current_a_)
 
     def _params_to_plain(self) -> dict[str, Any]:
         return {
@@ -341,6 +374,7 @@ class PhysicsCurrentModel(CurrentModel):
             "robot": dataclasses.asdict(self.robot_),
             "ground": dataclasses.asdict(self.ground_),
             "idle_current_a": self.idle_current_a_,
+            "rest_current_a": self.rest_current_a_.tolist(),
             "fitted": dict(self.fitted_),
             "cost": self.cost_,
             "effects": list(self.effects_),
@@ -350,9 +384,15 @@ class PhysicsCurrentModel(CurrentModel):
         self.robot_ = _robot_from_plain({"__robot__": state["robot"]})
         self.ground_ = GroundParams(**state["ground"])
         self.idle_current_a_ = float(state["idle_current_a"])
+        if "rest_current_a" in state:
+            self.rest_current_a_ = real_array("rest_current_a", state["rest_current_a"]).reshape(2)
+        else:  # a file from before the rest level: its idle current was the level at rest and the base of driving
+            self.rest_current_a_ = np.full(2, self.idle_current_a_)
+            self.idle_current_a_ = 0.0
         self.fitted_ = {str(k): float(v) for k, v in state["fitted"].items()}
         self.cost_ = float(state["cost"])
         self.effects_ = tuple(str(e) for e in state["effects"])
         PhysicsEnergyModel(self.robot_, self.effects_)  # validates the effect names
-        if not all(math.isfinite(v) for v in self.fitted_.values()) or not math.isfinite(self.idle_current_a_):
+        if (not all(math.isfinite(v) for v in self.fitted_.values()) or not math.isfinite(self.idle_current_a_)
+                or not np.all(np.isfinite(self.rest_current_a_))):
             raise ValueError("non-finite fitted coefficient")

@@ -62,7 +62,7 @@ from ..features import (
     window_starts,
     yaw_slip_features,
 )
-from ..logs import InteractionLog
+from ..logs import InteractionLog, rest_samples
 from .base import CurrentModel, ModelRecord, log_currents, package_versions
 from .baselines import PhysicsCurrentModel
 from .config import EstimatorConfig, estimator_preset
@@ -132,6 +132,11 @@ class VibrationCurrentEstimator(CurrentModel):
     n_train_windows_ : int
     physics_ : PhysicsCurrentModel or None
         The fitted physics prior (``config.physics_prior``), or None.
+    rest_current_a_ : numpy.ndarray, shape (2,), or None
+        ``[left, right]`` current predicted where a log stands still
+        (:func:`energy.logs.rest_samples`): the prior's rest level, or without a prior the
+        mean of the training logs' rest samples; ``None`` (no rest sample in training and no
+        prior, or a file from before the rest level): the networks predict rest too.
 
     Examples
     --------
@@ -258,6 +263,7 @@ class VibrationCurrentEstimator(CurrentModel):
     # ------------------------------------------------------------------- fit
     def _fit(self, logs: list[InteractionLog]) -> None:
         cfg = self._check_params()
+        raw_logs = list(logs)
         with _threads(self.n_threads):
             cur = np.concatenate([log_currents(lg) for lg in logs])
             if cfg.absolute_currents:
@@ -304,6 +310,16 @@ class VibrationCurrentEstimator(CurrentModel):
             self.networks_ = networks
             self.history_ = tuple(histories)
             self.n_train_windows_ = len(train)
+            self.rest_current_a_ = self._rest_level(raw_logs)
+
+    def _rest_level(self, logs: list[InteractionLog]) -> np.ndarray | None:
+        """Standing still is its own level, not the networks' business: the prior's, else the training mean."""
+        if self.physics_ is not None:
+            return np.asarray(self.physics_.rest_current_a_, dtype=np.float64).copy()
+        rest = np.concatenate([log_currents(lg)[rest_samples(lg)] for lg in logs])
+        if self.config_.absolute_currents:
+            rest = np.abs(rest)
+        return rest.mean(axis=0) if rest.shape[0] else None
 
     def _residual_log(self, log: InteractionLog) -> InteractionLog:
         prior = self.physics_.predict(log)
@@ -338,6 +354,8 @@ class VibrationCurrentEstimator(CurrentModel):
             out = out + self.physics_.predict(log)
         if self.config_.clip_output:
             out = np.clip(out, self.current_range_a_[0], self.current_range_a_[1])
+        if self.rest_current_a_ is not None:
+            out[rest_samples(log)] = self.rest_current_a_
         return out
 
     def predict(self, log: InteractionLog) -> np.ndarray:
@@ -350,7 +368,7 @@ class VibrationCurrentEstimator(CurrentModel):
         starts, after it ends, or after the last grid time — take the nearest grid
         prediction (the ends are held, not extrapolated). The physics prior, when
         configured, is then added at ``log.time_s``, and ``clip_output`` clips the result
-        to ``current_range_a_``.
+        to ``current_range_a_``. Samples that stand still take ``rest_current_a_``.
 
         Parameters, returns and errors as :meth:`CurrentModel.predict`; the ``DataError``
         here means the streams do not overlap, or overlap for less than one window.
@@ -384,6 +402,7 @@ class VibrationCurrentEstimator(CurrentModel):
             "history": [h.to_dict() for h in self.history_],
             "n_train_windows": self.n_train_windows_,
             "physics": None if self.physics_ is None else _record_to_plain(self.physics_.to_record()),
+            "rest_current_a": None if self.rest_current_a_ is None else self.rest_current_a_.tolist(),
         }
 
     def _load_state(self, state: dict[str, Any]) -> None:
@@ -420,6 +439,8 @@ class VibrationCurrentEstimator(CurrentModel):
             prior = state["physics"]
             record = ModelRecord(str(prior.get("model_class", "PhysicsCurrentModel")), prior["params"], prior["state"])
             self.physics_ = PhysicsCurrentModel.from_record(record, "the estimator's physics prior")
+        rest = state.get("rest_current_a")  # absent in files from before the rest level: the networks predict rest
+        self.rest_current_a_ = None if rest is None else real_array("rest_current_a", rest).reshape(2)
 
     def _versions(self) -> dict[str, str]:
         return package_versions(torch=str(torch.__version__))

@@ -84,7 +84,9 @@ def test_physics_model_recovers_ground_coefficients_from_its_own_currents():
     model = PhysicsCurrentModel("husky", "asphalt").fit(logs)
     assert model.fitted_["rolling_resistance_coef"] == pytest.approx(0.06, rel=0.05)
     assert model.fitted_["lateral_friction_coef"] == pytest.approx(0.4, rel=0.05)
-    assert model.idle_current_a_ == pytest.approx(0.8, abs=0.05)
+    # no sample stands still: the husky's rest level (0.59 A) is kept and the idle current is the rest of 0.8 A
+    assert model.rest_current_a_.tolist() == [0.59, 0.59]
+    assert model.rest_current_a_ + model.idle_current_a_ == pytest.approx([0.8, 0.8], abs=0.05)
     assert model.ground_.rolling_resistance_coef == pytest.approx(0.06, rel=0.05)
     assert model.cost_ < 1e-3
     assert model.score(logs) > 0.99
