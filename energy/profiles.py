@@ -28,6 +28,7 @@ __all__ = [
     "drivable_waypoints",
     "move_duration_s",
     "planned_durations_s",
+    "terrain_along",
 ]
 
 #: Default acceleration limits of the stop-turn-go profile (m/s^2, rad/s^2).
@@ -282,3 +283,35 @@ def planned_durations_s(points_m: np.ndarray, start_heading_rad: float | None, s
     turn = np.abs(np.angle(np.exp(1j * (heading - prev))))
     return (move_duration_s(turn, turn_rate_radps, yaw_accel_radps2),
             move_duration_s(np.hypot(d[:, 0], d[:, 1]), speed_mps, accel_mps2))
+
+
+def terrain_along(terrain: Any, x_m: Any, y_m: Any, heading_rad: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """What a pose meets on a map: its cell, the pitch along its heading and the tilt of the vertical.
+
+    The pitch is ``arctan(grad_x cos h + grad_y sin h)`` (positive uphill) and the cosine of
+    the tilt ``1 / sqrt(1 + |grad|**2)``, from the bilinearly interpolated gradients; the
+    truth simulator and the physics forecast of a driven profile use this one rule.
+
+    Parameters
+    ----------
+    terrain : TerrainMap
+    x_m, y_m, heading_rad : array_like, shape (N,)
+        Poses (m, m, rad).
+
+    Returns
+    -------
+    rows, cols : numpy.ndarray of int
+    slope_rad, cos_tilt : numpy.ndarray of float
+
+    Raises
+    ------
+    OutOfBoundsError
+        A pose off the map.
+    """
+    x = np.asarray(x_m, dtype=np.float64)
+    y = np.asarray(y_m, dtype=np.float64)
+    h = np.asarray(heading_rad, dtype=np.float64)
+    rows, cols = terrain.rowcol(x, y)
+    gx = np.asarray(terrain.sample("grad_x", x, y, method="bilinear"), dtype=np.float64)
+    gy = np.asarray(terrain.sample("grad_y", x, y, method="bilinear"), dtype=np.float64)
+    return rows, cols, np.arctan(gx * np.cos(h) + gy * np.sin(h)), 1.0 / np.sqrt(1.0 + gx * gx + gy * gy)

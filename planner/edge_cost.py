@@ -176,6 +176,12 @@ class EnergyCost(CostQueries):
         #: Cells whose table row content differs from the cost this one was derived from
         #: (:meth:`with_tables`); ``None`` for a cost built from scratch.
         self.changed_cells: np.ndarray | None = None
+        #: The physics model that priced the tables (:meth:`from_model` with a
+        #: :class:`energy.PhysicsEnergyModel`) and its ground parameters per table row, so a
+        #: mission forecast can price the whole driven profile (:func:`planner.profile_forecast_w`);
+        #: ``None`` otherwise.
+        self.physics_model: PhysicsEnergyModel | None = None
+        self.ground_params: tuple[Any, ...] | None = None
         self.prep_time_s = time.perf_counter() - t0
 
     def with_tables(
@@ -244,6 +250,7 @@ class EnergyCost(CostQueries):
         new.changed_cells = self._changed_cells(new)
         new.changed_cells.setflags(write=False)
         new.results = ResultCache(CACHE_SIZE)
+        new.physics_model, new.ground_params = None, None  # other tables: not that physics model's any more
         new.lattices = {stride: lat.refreshed(new, new.changed_cells) for stride, lat in self.lattices.items()}
         new.prep_time_s = time.perf_counter() - t0
         return new
@@ -370,6 +377,8 @@ class EnergyCost(CostQueries):
             turn_rate_radps=float(turn_rate_radps),
             ground_labels=tuple(labels),
         )
+        if isinstance(model, PhysicsEnergyModel):
+            cost.physics_model, cost.ground_params = model, tuple(params_rows)
         cost.prep_time_s = time.perf_counter() - t0
         return cost
 

@@ -27,7 +27,7 @@ from ..commands import CommandProfile, command_series, uniform_step_s
 from ..ground import GroundParams
 from ..logs import InteractionLog, LogMeta
 from ..physics import EFFECTS, PhysicsEnergyModel
-from ..profiles import waypoint_commands
+from ..profiles import terrain_along, waypoint_commands
 from ..robot import GRAVITY_MPS2, RobotParams
 from .noise import NoiseModel, measure_battery, measure_currents
 from .presets import VIBRATION_PRESETS
@@ -337,7 +337,7 @@ class TruthSimulator:
                                         start_heading_rad=start_heading_rad)
         pose = np.asarray(profile.pose_xyh)
         x, y, h = pose[:, 0], pose[:, 1], pose[:, 2]
-        rows, cols = terrain.rowcol(x, y)  # OutOfBoundsError off the map
+        rows, cols, slope, cos_tilt = terrain_along(terrain, x, y, h)  # OutOfBoundsError off the map
         if not allow_obstacles:
             blocked = terrain.obstacle[rows, cols]
             if blocked.any():
@@ -347,10 +347,6 @@ class TruthSimulator:
                     "pass allow_obstacles=True to drive through it"
                 )
         gidx = self._map_ground_index(terrain, rows, cols, x, y)
-        gx = np.asarray(terrain.sample("grad_x", x, y, method="bilinear"), dtype=np.float64)
-        gy = np.asarray(terrain.sample("grad_y", x, y, method="bilinear"), dtype=np.float64)
-        slope = np.arctan(gx * np.cos(h) + gy * np.sin(h))
-        cos_tilt = 1.0 / np.sqrt(1.0 + gx * gx + gy * gy)
         return self._simulate(np.asarray(profile.time_s), np.asarray(profile.v_mps), np.asarray(profile.omega_radps),
                               gidx, slope, cos_tilt, pose, self._seed(seed), "drive")
 

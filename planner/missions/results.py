@@ -109,6 +109,9 @@ class MissionResult:
         When the battery ran out (its state of charge reached 0), or None.
     depleted_xy_m : (float, float) or None
         Where (interpolated along the driven path).
+    forecast : {"edges", "profile"}
+        What priced ``budget.predicted_energy_j``: the route's edge energies, or the physics
+        model over the whole driven profile (see :func:`planner.simulate_mission`).
 
     Derived: ``n_samples``, ``duration_s``, ``feasible``, ``completed``. Methods:
     :meth:`to_json_dict`, :meth:`save_json`, :meth:`plot`.
@@ -145,6 +148,7 @@ class MissionResult:
     log: InteractionLog
     depleted_time_s: float | None = None
     depleted_xy_m: tuple[float, float] | None = None
+    forecast: str = "edges"
 
     def __post_init__(self) -> None:
         if self.status not in MISSION_STATUSES:
@@ -249,6 +253,7 @@ class MissionResult:
             if self.depleted_time_s is None
             else {"time_s": self.depleted_time_s, "xy_m": list(self.depleted_xy_m)},
             "truth_energy_j": None if not math.isfinite(self.truth_energy_j) else self.truth_energy_j,
+            "forecast": self.forecast,
             "duration_s": self.duration_s,
             "series_every": int(series_every),
             "series": series,

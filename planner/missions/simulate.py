@@ -23,9 +23,10 @@ along the segment); a log without a pose is assumed to follow the velocity profi
 first sample and is assigned by time.
 
 Actual power: :func:`energy.log_battery_power_w` on the driven log (drive power from the
-logged side currents plus the robot's electronics), so driving with a
-:class:`~energy.truth.TruthSimulator` and replaying the log it produced give the same
-result, and the actual energy is booked like the physics model that priced the route.
+logged side currents, less the current sensor's rest offset, plus the robot's electronics),
+so driving with a :class:`~energy.truth.TruthSimulator` and replaying the log it produced
+(with the same ``current_offset_a``) give the same result, and the actual energy is booked
+like the physics model that priced the route. The sensor's offset is logged, never paid.
 """
 
 from __future__ import annotations
@@ -56,10 +57,14 @@ from terrain.errors import DataError, GridMismatchError, InvalidParameterError, 
 
 from ..edge_cost import EnergyCost
 from ..route import Route
+from .forecast import profile_forecast_w, segment_forecasts_j
 from .results import MissionResult
 from .tracking import route_speed_mps, segments_by_pose
 
 __all__ = ["simulate_mission"]
+
+#: Time step (s) of the profile the physics forecast prices.
+_FORECAST_DT_S = 0.05
 
 
 @dataclass(frozen=True)
@@ -94,6 +99,8 @@ def simulate_mission(
     start_heading_rad: float | None = None,
     current_convention: str = "motor",
     electronics: bool = True,
+    current_offset_a: float | None = None,
+    forecast: str = "auto",
     waypoint_tolerance_m: float | None = None,
     stop_at_reserve: bool = False,
     seed: int | None = None,
@@ -139,6 +146,19 @@ def simulate_mission(
     electronics : bool
         Add the robot's sensor and control-board power to the logged drive power (keep it
         equal to whether the planning model includes them).
+    current_offset_a : float, optional
+        The rest offset of the current sensor that logged the drive (A, >= 0): logged, never
+        paid, so removed before the currents become battery power. ``None``: the truth
+        simulator's own sensor (``truth.noise.current_offset_a``), or for a replayed log the
+        robot's ``rest_current_a``.
+    forecast : {"auto", "profile", "edges"}
+        The predicted energy: ``"profile"`` prices the whole stop-turn-go profile (ramps,
+        pivots, the electronics over the longer drive) with the physics model that priced
+        ``cost`` (:func:`planner.missions.forecast.profile_forecast_w`; a cost from
+        :meth:`EnergyCost.from_model` with a :class:`energy.PhysicsEnergyModel` or
+        ``from_presets``); ``"edges"`` adds up the route's (or ``cost``'s) segment and turn
+        energies, steady driving at the planning speed; ``"auto"`` (default): ``"profile"``
+        where ``cost`` has a physics model, else ``"edges"``.
     waypoint_tolerance_m : float, optional
         How close to a segment's end (and to the goal) a logged pose must come (m);
         default half a map cell.
@@ -179,13 +199,26 @@ def simulate_mission(
     # the named steps below run in this order; each checks what it is given
     _check_inputs(terrain, route, robot, battery, truth, cost, current_convention)
     stop_at_reserve = check_bool("stop_at_reserve", stop_at_reserve)
+    check_choice("forecast", forecast, ("auto", "profile", "edges"))
+    if forecast == "profile" and (cost is None or cost.physics_model is None):
+        raise InvalidParameterError("forecast='profile' needs a cost built with a PhysicsEnergyModel "
+                                    "(EnergyCost.from_model or from_presets); use forecast='edges'")
     prof = _profile(terrain, route, robot, cost, speed_mps, accel_mps2, turn_rate_radps, yaw_accel_radps2,
                     waypoint_tolerance_m, start_heading_rad)
     straight_pred, turn_pred = _segment_predictions(route, cost)
-    seg_pred = straight_pred + turn_pred
     pts, kept = drivable_waypoints(route.waypoints_m)
     turn_s, straight_s = planned_durations_s(pts, prof.start_heading_rad, prof.speed_mps, prof.accel_mps2,
                                              prof.turn_rate_radps, prof.yaw_accel_radps2)
+    if forecast != "edges" and cost is not None and cost.physics_model is not None:
+        profile = prof.commands(pts, _FORECAST_DT_S)
+        turn_kept, straight_kept = segment_forecasts_j(np.asarray(profile.time_s), profile_forecast_w(cost, profile),
+                                                       turn_s, straight_s)
+        turn_pred, straight_pred = np.zeros_like(turn_pred), np.zeros_like(straight_pred)
+        turn_pred[kept], straight_pred[kept] = turn_kept, straight_kept
+        forecast = "profile"
+    else:
+        forecast = "edges"
+    seg_pred = straight_pred + turn_pred
 
     log, truth_power, source = _drive_or_replay(terrain, truth, pts, prof, seed)
     t = log.time_s - log.time_s[0]
@@ -194,7 +227,10 @@ def simulate_mission(
     xy, heading, sub = _track(terrain, log, t, pts, turn_s, straight_s, prof)
     seg_index = kept[sub]
 
-    power = log_battery_power_w(log, robot, current_convention=current_convention, electronics=electronics)
+    if current_offset_a is None and isinstance(truth, TruthSimulator):
+        current_offset_a = truth.noise.current_offset_a
+    power = log_battery_power_w(log, robot, current_convention=current_convention, electronics=electronics,
+                                current_offset_a=current_offset_a)
     discharge, log, end = _discharge(battery, log, t, power, stop_at_reserve)
     aborted = end < len(t)
     sl = slice(0, end)
@@ -253,6 +289,7 @@ def simulate_mission(
         log=log,
         depleted_time_s=empty_t,
         depleted_xy_m=empty_xy,
+        forecast=forecast,
     )
 
 

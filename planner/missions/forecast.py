@@ -1,0 +1,85 @@
+"""The physics forecast of a mission: the planning model over the whole stop-turn-go profile.
+
+Edge costs price steady driving at the planning speed plus turns in place; a driven route
+also starts and stops at every waypoint, pivots with a trapezoidal yaw rate and spends the
+extra seconds of those ramps with its electronics on. :func:`profile_forecast_w` prices that
+profile with the very physics model (robot, effects, ground parameters) that priced the
+cost's tables, on the map's ground and slope under every pose (the rule of
+:func:`energy.profiles.terrain_along`, which the truth simulator uses too), and
+:func:`segment_forecasts_j` splits it into the turn and the straight of each route segment,
+the way :func:`planner.simulate_mission` books them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from energy import CommandProfile
+from energy.profiles import terrain_along
+from terrain.errors import InvalidParameterError
+
+from ..edge_cost import EnergyCost
+
+__all__ = ["profile_forecast_w", "segment_forecasts_j"]
+
+
+def profile_forecast_w(cost: EnergyCost, profile: CommandProfile) -> np.ndarray:
+    """Battery power (W) at every sample of a command profile, by the physics model that priced ``cost``.
+
+    Parameters
+    ----------
+    cost : EnergyCost
+        Built by :meth:`EnergyCost.from_model` (or ``from_presets``) with a
+        :class:`energy.PhysicsEnergyModel`.
+    profile : CommandProfile
+        Commands with poses on ``cost``'s map (e.g. :func:`energy.drive_profile`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+
+    Raises
+    ------
+    InvalidParameterError
+        A cost without a physics model, a profile without poses.
+    OutOfBoundsError
+        A pose off the map.
+    """
+    if not isinstance(cost, EnergyCost) or cost.physics_model is None or cost.ground_params is None:
+        raise InvalidParameterError("cost carries no physics model (build it with EnergyCost.from_model and a "
+                                    "PhysicsEnergyModel, or from_presets) to forecast a profile with")
+    if not isinstance(profile, CommandProfile) or profile.pose_xyh is None:
+        raise InvalidParameterError("profile must be a CommandProfile with poses (pose_xyh)")
+    t = np.asarray(profile.time_s, dtype=np.float64)
+    v = np.asarray(profile.v_mps, dtype=np.float64)
+    w = np.asarray(profile.omega_radps, dtype=np.float64)
+    pose = np.asarray(profile.pose_xyh, dtype=np.float64)
+    rows, cols, slope, _ = terrain_along(cost.terrain, pose[:, 0], pose[:, 1], pose[:, 2])
+    ground_index = np.asarray(cost.ground_rows)[rows, cols]
+    res = cost.physics_model.power(v, w, list(cost.ground_params), accel_mps2=np.gradient(v, t),
+                                   alpha_radps2=np.gradient(w, t), slope_rad=slope, time_s=t,
+                                   ground_index=ground_index)
+    return np.asarray(res.total_power_w, dtype=np.float64)
+
+
+def segment_forecasts_j(time_s: np.ndarray, power_w: np.ndarray, turn_s: np.ndarray,
+                        straight_s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The energy (J) of the turn and of the straight of each drivable segment of a profile.
+
+    ``turn_s`` / ``straight_s`` are the planned durations
+    (:func:`energy.profiles.planned_durations_s`) in the order the profile drives them;
+    the power is integrated (trapezoid) between those time marks.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 3.0, 31)
+    >>> turn, straight = segment_forecasts_j(t, np.full(31, 2.0), np.array([1.0]), np.array([2.0]))
+    >>> [round(float(turn[0]), 9), round(float(straight[0]), 9)]
+    [2.0, 4.0]
+    """
+    t = np.asarray(time_s, dtype=np.float64) - float(time_s[0])
+    p = np.asarray(power_w, dtype=np.float64)
+    cumulative = np.concatenate(([0.0], np.cumsum(0.5 * (p[1:] + p[:-1]) * np.diff(t))))
+    marks = np.concatenate(([0.0], np.cumsum(np.column_stack([turn_s, straight_s]).ravel())))
+    parts = np.diff(np.interp(marks, t, cumulative))
+    return parts[0::2], parts[1::2]
