@@ -45,8 +45,9 @@ def add_data_options(parser: Any) -> None:
                       "currents interpolated onto them (e.g. a 1 Hz status message beside 10-50 Hz odometry)")
 
 
-def logs_from_args(args: argparse.Namespace, require_currents: bool) -> list[InteractionLog]:
-    """The logs at ``--data`` (of ``--grounds`` when the command has it), read with the bag flags.
+def logs_from_args(args: argparse.Namespace, require_currents: bool, *, flag: str = "--data") -> list[InteractionLog]:
+    """The logs at ``--data`` (or at the path of another ``flag`` read like it, e.g.
+    ``--calibration-data``; of ``--grounds`` when the command has it), read with the bag flags.
 
     Raises
     ------
@@ -63,5 +64,6 @@ def logs_from_args(args: argparse.Namespace, require_currents: bool) -> list[Int
         current_unit=args.current_unit,
         drive_clock=args.drive_clock,
     )
-    return read_logs(args.data, getattr(args, "grounds", None), bag=bag, require_currents=require_currents,
-                     ground_label=args.ground_label, name="--data")
+    path = getattr(args, flag.lstrip("-").replace("-", "_"))
+    return read_logs(path, getattr(args, "grounds", None), bag=bag, require_currents=require_currents,
+                     ground_label=args.ground_label, name=flag)

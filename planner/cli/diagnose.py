@@ -41,7 +41,9 @@ def add_parser(sub: Any) -> None:
         help="diagnose a current model's gap on logs: where it lies, which effect causes it, how far it shrinks",
     )
     p.add_argument("--model", required=True, metavar="physics|estimator|FILE",
-                   help="'physics' (fitted on the data), 'estimator' (trained on the data) or a saved model file")
+                   help="'physics' (the robot and ground presets as given, or fitted on --calibration-data), "
+                   "'estimator' (trained on --calibration-data) or a saved model file; never refitted on the "
+                   "logs it diagnoses")
     p.add_argument("--robot", default=None, metavar="NAME",
                    help=f"robot preset of the physics ({', '.join(sorted(ROBOT_PRESETS))}; default husky)")
     p.add_argument("--ground", default=None, metavar="NAME",
@@ -50,6 +52,9 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--without", nargs="+", default=[], metavar="EFFECT",
                    help="--model physics: physics effects to switch off (diagnose a reduced model)")
     add_data_options(p)
+    p.add_argument("--calibration-data", type=Path, default=None, metavar="DIR|FILE",
+                   help="other runs (read like --data) to fit the physics model's coefficients on, or to train the "
+                   "estimator on; they are not diagnosed and must not be among --data's")
     p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder")
     p.add_argument("--effects", nargs="+", default=None, metavar="EFFECT",
                    help="candidate effects (default: the whole catalogue)")
@@ -84,6 +89,19 @@ def _check_flags(args: argparse.Namespace) -> None:
         for flag, value in (("--ground", args.ground), ("--without", args.without)):
             if value:
                 raise InvalidParameterError(f"{flag} applies to --model physics only, got --model {args.model!r}")
+    if kind == "file" and args.calibration_data is not None:
+        raise InvalidParameterError("--calibration-data applies to --model physics or estimator; a saved model is "
+                                    "diagnosed as it is")
+    if kind == "estimator" and args.calibration_data is None:
+        raise InvalidParameterError("--model estimator needs --calibration-data DIR: the estimator has no preset, and "
+                                    "training it on the logs it diagnoses would hide the gap (or give a saved model file)")
+    if args.calibration_data is not None:
+        if not args.calibration_data.exists():
+            raise InvalidParameterError(f"--calibration-data {str(args.calibration_data)!r} does not exist")
+        cal, data = args.calibration_data.resolve(), args.data.resolve()
+        if cal == data or data in cal.parents or cal in data.parents:
+            raise InvalidParameterError(f"--calibration-data {str(args.calibration_data)!r} overlaps --data "
+                                        f"{str(args.data)!r}: calibrate on runs that are not diagnosed")
     if args.ground is not None and args.ground not in GROUND_PRESETS:
         raise UnknownNameError(f"--ground {args.ground!r} is not a ground preset; known: {sorted(GROUND_PRESETS)!r}")
     _check_effect_names("--without", args.without, DRIVE_EFFECTS, "not physics drive effects")
@@ -96,23 +114,49 @@ def _check_flags(args: argparse.Namespace) -> None:
     check_dask_flags(args)
 
 
+def _runs(logs: list[InteractionLog]) -> str:
+    return f"{len(logs)} run{'s' if len(logs) != 1 else ''}"
+
+
+def _calibration_logs(args: argparse.Namespace, logs: list[InteractionLog]) -> list[InteractionLog] | None:
+    """The ``--calibration-data`` logs (none of them a diagnosed run), or None."""
+    if args.calibration_data is None:
+        return None
+    cal = logs_from_args(args, require_currents=True, flag="--calibration-data")
+    diagnosed = {log.meta.source for log in logs if log.meta.source}
+    shared = sorted({log.meta.source for log in cal} & diagnosed)
+    if shared:
+        raise InvalidParameterError(f"--calibration-data holds runs that --data diagnoses too: {shared[:3]!r}; "
+                                    "calibrate on runs that are not diagnosed")
+    return cal
+
+
 def _model(args: argparse.Namespace, logs: list[InteractionLog]) -> tuple[Any, str]:
-    """The model under diagnosis and a sentence saying where it comes from."""
-    n = f"{len(logs)} run{'s' if len(logs) != 1 else ''}"
+    """The model under diagnosis and a sentence saying where it comes from.
+
+    Never fitted on the logs it diagnoses: a preset as given, a model fitted or trained on
+    ``--calibration-data``, or a saved file.
+    """
+    cal = _calibration_logs(args, logs)
     if args.model == "physics":
-        grounds = {log.meta.ground_label for log in logs}
+        grounds = {log.meta.ground_label for log in (cal or logs)}
         ground = args.ground or (grounds.pop() if len(grounds) == 1 and grounds <= set(GROUND_PRESETS) else "asphalt")
         robot = args.robot or "husky"
         effects = tuple(e for e in DRIVE_EFFECTS if e not in args.without)
-        model = PhysicsCurrentModel(robot, ground, effects=None if not args.without else effects).fit(logs)
         without = f" without {', '.join(args.without)}" if args.without else " (every drive effect)"
+        if cal is None:
+            model = PhysicsCurrentModel(robot, ground, fit_parameters=(),
+                                        effects=None if not args.without else effects).fit(logs)
+            return model, (f"model: physics, the {robot} and {ground} presets as given{without}, not fitted on the "
+                           f"{_runs(logs)} it is diagnosed on (--calibration-data DIR fits its coefficients on other runs)")
+        model = PhysicsCurrentModel(robot, ground, effects=None if not args.without else effects).fit(cal)
         fitted = ", ".join(f"{k} = {fmt_number(v, 4)}" for k, v in model.fitted_.items())
         return model, (f"model: physics, {robot} starting from {ground}{without}; its coefficients fitted on the "
-                       f"same {n} it is diagnosed on ({fitted}); the diagnosis scores held-out data")
+                       f"{_runs(cal)} of {args.calibration_data} ({fitted}), which are not diagnosed")
     if args.model == "estimator":
-        model = new_current_model("estimator", seed=args.seed, progress=not args.quiet).fit(logs)
-        return model, (f"model: the vibration estimator, trained on the same {n} it is diagnosed on (the input "
-                       "model only); the diagnosis itself fits and scores effects on held-out data")
+        model = new_current_model("estimator", seed=args.seed, progress=not args.quiet).fit(cal)
+        return model, (f"model: the vibration estimator, trained on the {_runs(cal)} of {args.calibration_data}, "
+                       "which are not diagnosed")
     model = load_current_model(args.model)
     return model, f"model: {type(model).__name__} loaded from {args.model}"
 

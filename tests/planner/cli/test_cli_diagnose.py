@@ -47,12 +47,28 @@ def test_physics_without_an_effect_writes_every_file(data, tmp_path, capsys):
     assert all((tmp_path / "out" / f).read_bytes()[:8] == PNG for f in FIGURES)
     doc = json.loads((tmp_path / "out" / "diagnosis.json").read_text())
     assert doc["split"] == "runs" and doc["waterfall"][0]["label"] == "as given"
-    assert "fitted on the same 3 runs it is diagnosed on" in out and "without turning_resistance" in out
+    assert "presets as given" in out and "not fitted on the 3 runs it is diagnosed on" in out
+    assert "without turning_resistance" in out
     assert doc["verdict"][0] in out  # the verdict is printed ...
     assert "charge err %" in out and "as given" in out  # ... and the waterfall as a table
     corrected = load_current_model(tmp_path / "out" / "corrected_model.zip")
     assert type(corrected).__name__ == "CorrectedCurrentModel"
     assert err == ""  # --quiet: no progress bars
+
+
+def test_the_physics_model_is_calibrated_on_other_runs_only(data, tmp_path, capsys):
+    # --calibration-data fits the coefficients on runs that are not diagnosed, and says which
+    rc, out, err = _run(capsys, "--model", "physics", "--without", "turning_resistance", "--ground", "coated_wood",
+                        "--data", data / "logs" / "run_0.csv", "--calibration-data", data / "logs" / "run_1.csv",
+                        "--split", "blocks", "--effects", "turning_resistance", "--out", tmp_path / "out", "--quiet")
+    assert rc == 0, err
+    assert "fitted on the 1 run of" in out and "which are not diagnosed" in out and "run_1.csv" in out
+    # the same runs on both sides, or one folder inside the other, are refused before any work
+    for cal in (data / "logs" / "run_0.csv", data / "logs"):
+        rc, out, err = _run(capsys, "--model", "physics", "--data", data / "logs" / "run_0.csv", "--calibration-data",
+                            cal, "--out", tmp_path / "x")
+        assert rc == 2 and "calibrate on runs that are not diagnosed" in err
+    assert not (tmp_path / "x").exists()
 
 
 def test_a_saved_model_on_one_csv_file_without_a_map_skips_the_map_figure(data, tmp_path, capsys):
@@ -72,6 +88,8 @@ def test_a_saved_model_on_one_csv_file_without_a_map_skips_the_map_figure(data, 
     (["--model", "physics", "--robot", "rover"], "--robot"),
     (["--model", "estimator", "--without", "inertia"], "--without applies to --model physics only"),
     (["--model", "no_such_model.zip"], "--model must be 'physics', 'estimator' or a model file"),
+    (["--model", "estimator"], "--model estimator needs --calibration-data"),
+    (["--model", "physics", "--calibration-data", "no_such_folder"], "--calibration-data 'no_such_folder' does not"),
     (["--model", "physics", "--seed", "-1"], "--seed"),
     (["--model", "physics", "--workers", "0"], "--workers must be a positive number"),
     (["--model", "physics", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "exclude each other"),
