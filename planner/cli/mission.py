@@ -206,7 +206,7 @@ def run_monte_carlo(args: argparse.Namespace, tmap: Any, label: str, start: tupl
             client = stack.enter_context(dask_client(args.workers, args.scheduler, quiet=not args.verbose,
                                                      flags=("--workers", "--scheduler")))
         result = simulate_missions_mc(tmap, route, battery, args.monte_carlo, robot=robot, speed_mps=args.speed,
-                                      seed=args.seed, client=client, progress=True)
+                                      seed=args.seed, client=client, progress=True, cost=cost)
         if client is not None:  # where it ran, as the user named it
             result = dataclasses.replace(result, where=args.scheduler or "local cluster")
     json_path = result.write_json(args.out / "monte_carlo.json")

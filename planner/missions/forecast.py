@@ -14,13 +14,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from energy import CommandProfile
+from energy import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, CommandProfile, drive_profile
 from energy.profiles import terrain_along
 from terrain.errors import InvalidParameterError
 
 from ..edge_cost import EnergyCost
+from ..route import Route
 
-__all__ = ["profile_forecast_w", "segment_forecasts_j"]
+__all__ = ["profile_forecast_w", "segment_forecasts_j", "route_forecast_j"]
+
+#: Time step (s) of the profile a forecast prices.
+FORECAST_DT_S = 0.05
 
 
 def profile_forecast_w(cost: EnergyCost, profile: CommandProfile) -> np.ndarray:
@@ -83,3 +87,27 @@ def segment_forecasts_j(time_s: np.ndarray, power_w: np.ndarray, turn_s: np.ndar
     marks = np.concatenate(([0.0], np.cumsum(np.column_stack([turn_s, straight_s]).ravel())))
     parts = np.diff(np.interp(marks, t, cumulative))
     return parts[0::2], parts[1::2]
+
+
+def route_forecast_j(cost: EnergyCost, route: Route, *, speed_mps: float | None = None,
+                     accel_mps2: float = DEFAULT_ACCEL_MPS2, turn_rate_radps: float | None = None,
+                     yaw_accel_radps2: float = DEFAULT_YAW_ACCEL_RADPS2) -> float:
+    """Forecast battery energy (J) of driving ``route`` stop-turn-go, by the physics model that priced ``cost``.
+
+    The profile of :func:`planner.simulate_mission` (:func:`energy.drive_profile` at
+    ``speed_mps``, default ``cost.speed_mps``, and ``turn_rate_radps``, default
+    ``cost.turn_rate_radps``) priced by :func:`profile_forecast_w`.
+
+    Raises
+    ------
+    InvalidParameterError
+        A cost without a physics model, a route that was not found, bad profile values.
+    """
+    if not isinstance(route, Route) or not route.found:
+        raise InvalidParameterError("route must be a found Route")
+    profile = drive_profile(route.waypoints_m, cost.speed_mps if speed_mps is None else speed_mps,
+                            turn_rate_radps=cost.turn_rate_radps if turn_rate_radps is None else turn_rate_radps,
+                            dt_s=FORECAST_DT_S, accel_mps2=accel_mps2, yaw_accel_radps2=yaw_accel_radps2)
+    power = profile_forecast_w(cost, profile)
+    t = np.asarray(profile.time_s, dtype=np.float64)
+    return float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(t)))

@@ -27,6 +27,7 @@ from terrain.errors import InvalidParameterError, UnknownNameError
 from ..route import Route
 from .monte_carlo_result import MonteCarloResult
 from .monte_carlo_sampling import MissionDistributions
+from .forecast import route_forecast_j
 from .simulate import simulate_mission
 from .tracking import route_speed_mps
 
@@ -105,6 +106,7 @@ def simulate_missions_mc(
     workers: int | None = None,
     scheduler: str | None = None,
     progress: bool = False,
+    cost: Any = None,
 ) -> MonteCarloResult:
     """Drive one route ``n`` times with drawn parameters: the risk of crossing the reserve and the energy percentiles.
 
@@ -138,6 +140,11 @@ def simulate_missions_mc(
         ``distributed.Client``, a new local cluster of ``workers`` processes, or a scheduler.
     progress : bool
         Show a tqdm bar over the missions (over the completed tasks on dask).
+    cost : EnergyCost, optional
+        The cost that planned the route: when it carries its physics model, the study's
+        ``predicted_energy_j`` is that model's forecast of the driven stop-turn-go profile at
+        the nominal speed (:func:`planner.missions.forecast.route_forecast_j`), else the
+        route's edge energy.
 
     Returns
     -------
@@ -209,10 +216,13 @@ def simulate_missions_mc(
         elapsed = time.perf_counter() - t0
     table = np.array(rows, dtype=np.float64)
     k = len(setup.grounds)
+    predicted_j = route.energy_j
+    if cost is not None and getattr(cost, "physics_model", None) is not None:
+        predicted_j = route_forecast_j(cost, route, speed_mps=nominal)
     cols = table[:, k:].T
     return MonteCarloResult(
         seed=seed, entropy=used, distributions=distributions, battery=battery,
-        predicted_energy_j=route.energy_j, ground_names=tuple(sorted(setup.grounds)), ground_scale=table[:, :k],
+        predicted_energy_j=predicted_j, ground_names=tuple(sorted(setup.grounds)), ground_scale=table[:, :k],
         payload_kg=cols[0], capacity_ah=cols[1], internal_resistance_ohm=cols[2], speed_mps=cols[3],
         energy_j=cols[4], charge_mah=cols[5], duration_s=cols[6], arrival_soc=cols[7], min_soc=cols[8],
         below_reserve=cols[9] > 0.5, depleted=cols[10] > 0.5, where=where, n_workers=n_used,

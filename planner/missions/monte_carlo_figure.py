@@ -16,7 +16,7 @@ __all__ = ["plot_monte_carlo"]
 def plot_monte_carlo(result: Any, path: str | os.PathLike[str], *, title: str | None = None, dpi: int = 110) -> Path:
     """Write a PNG of a :class:`~planner.missions.monte_carlo_result.MonteCarloResult`.
 
-    Left: histogram of the mission energy (Wh) with its P50, P90 and P99, the planned
+    Left: histogram of the mission energy (Wh) with its P50, P90 and P99, the forecast
     energy and the battery's usable energy above the reserve (nominal capacity), missions
     that went below the reserve stacked in red. Right: the exceedance curve, the
     probability that a mission needs more than a given energy (log scale).
@@ -48,7 +48,7 @@ def plot_monte_carlo(result: Any, path: str | os.PathLike[str], *, title: str | 
     ax_h.hist([e_wh[~below], e_wh[below]], bins=bins, stacked=True, color=["tab:blue", "tab:red"],
               label=["reserve kept", "below the reserve"])
     marks = [(pct["p50"], "P50", "k", "-"), (pct["p90"], "P90", "k", "--"), (pct["p99"], "P99", "k", ":"),
-             (planned_wh, "planned", "tab:gray", "-.")]
+             (planned_wh, "forecast", "tab:gray", "-.")]
     lo, hi = min(float(e_wh.min()), planned_wh), float(e_wh.max())
     span = max(hi - lo, 1e-6)
     usable_label = f"usable above the reserve (nominal) {usable_wh:.2f} Wh"

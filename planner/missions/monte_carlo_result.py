@@ -44,7 +44,8 @@ class MonteCarloResult:
     battery : Battery
         The nominal battery (each sample fades its capacity and sets its resistance).
     predicted_energy_j : float
-        The route's planned energy (nominal parameters, the planner's model).
+        The planner's forecast (nominal parameters, the planner's model): of the driven
+        profile when the study had the planning cost, else the route's edge energy.
     ground_names : tuple of str
         Columns of ``ground_scale``.
     ground_scale : ndarray, shape (N, n_grounds)
@@ -182,7 +183,7 @@ class MonteCarloResult:
             f"{self.n} missions (seed {self.entropy if self.seed is None else self.seed}) in {self.elapsed_s:.1f} s on "
             f"{self.n_workers} worker(s) ({self.where})",
             f"energy: P50 {pct['p50']:.2f} Wh, P90 {pct['p90']:.2f} Wh, P99 {pct['p99']:.2f} Wh "
-            f"(planned {self.predicted_energy_j / 3600.0:.2f} Wh with nominal parameters)",
+            f"(forecast {self.predicted_energy_j / 3600.0:.2f} Wh with nominal parameters)",
             f"below the {b.min_reserve_pct:g} % reserve in {np.count_nonzero(self.below_reserve)} of {self.n} missions: "
             f"P = {100 * self.p_below_reserve:.1f} % (95 % interval {100 * lo:.1f}-{100 * hi:.1f} %); "
             f"battery {b.capacity_ah:g} Ah nominal, {self.capacity_ah.min():.2f}-{self.capacity_ah.max():.2f} Ah after fade",

@@ -57,14 +57,11 @@ from terrain.errors import DataError, GridMismatchError, InvalidParameterError, 
 
 from ..edge_cost import EnergyCost
 from ..route import Route
-from .forecast import profile_forecast_w, segment_forecasts_j
+from .forecast import FORECAST_DT_S, profile_forecast_w, segment_forecasts_j
 from .results import MissionResult
 from .tracking import route_speed_mps, segments_by_pose
 
 __all__ = ["simulate_mission"]
-
-#: Time step (s) of the profile the physics forecast prices.
-_FORECAST_DT_S = 0.05
 
 
 @dataclass(frozen=True)
@@ -210,7 +207,7 @@ def simulate_mission(
     turn_s, straight_s = planned_durations_s(pts, prof.start_heading_rad, prof.speed_mps, prof.accel_mps2,
                                              prof.turn_rate_radps, prof.yaw_accel_radps2)
     if forecast != "edges" and cost is not None and cost.physics_model is not None:
-        profile = prof.commands(pts, _FORECAST_DT_S)
+        profile = prof.commands(pts, FORECAST_DT_S)
         turn_kept, straight_kept = segment_forecasts_j(np.asarray(profile.time_s), profile_forecast_w(cost, profile),
                                                        turn_s, straight_s)
         turn_pred, straight_pred = np.zeros_like(turn_pred), np.zeros_like(straight_pred)
