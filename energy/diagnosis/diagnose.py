@@ -27,7 +27,7 @@ from .regimes import check_terrain
 from .residuals import GapSummary, gap_summary
 from .result import Diagnosis, EffectScore, WaterfallStep
 from .runner import SetRunner
-from .selection import SIGNIFICANT_SHRINK_PCT, score_entry, select_effects, significant
+from .selection import SIGNIFICANT_SHRINK_PCT, plausible_alternative, score_entry, select_effects, significant
 from .split import Split, make_split
 
 __all__ = ["SIGNIFICANT_SHRINK_PCT", "diagnose"]
@@ -121,7 +121,9 @@ def _verdict(before: GapSummary, after: GapSummary, ranking: Sequence[EffectScor
     for k, n in enumerate(chosen):
         s = by_name[n]
         lo, hi = s.added_interval_pct
-        what = "A learned residual correction (last resort, not physics)" if s.kind == "learned" else f"{n} ({s.kind})"
+        doubt = s.kind != "learned" and s.doubtful
+        what = ("A learned residual correction (last resort, not physics)" if s.kind == "learned"
+                else f"{n} ({s.kind}{'; doubtful' if doubt else ''})")
         if k == 0:
             out.append(f"{what} explains {fmt_number(s.added_pct, 3)} % of the squared current gap on {held} "
                        f"(95 % interval {fmt_number(lo, 3)} … {fmt_number(hi, 3)} %).")
@@ -129,6 +131,19 @@ def _verdict(before: GapSummary, after: GapSummary, ranking: Sequence[EffectScor
             out.append(f"Then {what}, fitted jointly with the effects before it, explains a further "
                        f"{fmt_number(s.added_pct, 3)} points (95 % interval {fmt_number(lo, 3)} … {fmt_number(hi, 3)}; "
                        f"{fmt_number(s.shrink_pct, 3)} % alone).")
+        if doubt:
+            a_lo, a_hi = s.shrink_interval_pct
+            text = f"{n} is doubtful: {'; '.join(s.flags)}."
+            alt = plausible_alternative(s, ranking, chosen)
+            if alt is not None:
+                text += (f" {alt.alone_summary} explains a similar held-out gap with plausible values "
+                         f"({fmt_number(alt.shrink_pct, 3)} % alone, within {n}'s 95 % interval "
+                         f"{fmt_number(a_lo, 3)} … {fmt_number(a_hi, 3)} %): the likelier cause.")
+            else:
+                text += (f" No candidate with plausible values explains a similar held-out gap (within {n}'s 95 % "
+                         f"interval {fmt_number(a_lo, 3)} … {fmt_number(a_hi, 3)} % alone): {n} may stand in for "
+                         "an effect outside the catalogue.")
+            out.append(text)
     if chosen:
         shrink = 100.0 * (1.0 - (after.rmse_a / before.rmse_a) ** 2) if before.rmse_a > 0 else 0.0
         text = (f"With {', '.join(chosen)} added, the squared current gap on {held} shrinks by "

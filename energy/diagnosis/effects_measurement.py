@@ -11,15 +11,22 @@ import numpy as np
 
 from ..logs import InteractionLog
 from ..models.base import CurrentModel
-from .effect_base import Effect, EffectParameter
+from .effect_base import GAIN_PLAUSIBLE, Effect, EffectParameter
 
-__all__ = ["MEASUREMENT_CANDIDATES", "IMU_LAG_GRID_S", "CurrentGainEffect", "CurrentOffsetEffect", "IdleCurrentEffect",
-           "TimeLagEffect", "ImuLagEffect", "reads_vibration"]
+__all__ = ["MEASUREMENT_CANDIDATES", "IMU_LAG_GRID_S", "OFFSET_PLAUSIBLE_A", "LAG_PLAUSIBLE_S", "CurrentGainEffect",
+           "CurrentOffsetEffect", "IdleCurrentEffect", "TimeLagEffect", "ImuLagEffect", "reads_vibration"]
 
 #: Measurement-effect candidates, in the order they are composed.
 MEASUREMENT_CANDIDATES: tuple[str, ...] = ("idle_current", "current_offset", "current_gain", "time_lag", "imu_lag")
 #: Lags (s) at which :class:`ImuLagEffect` re-predicts a log; its fit interpolates between them.
 IMU_LAG_GRID_S: tuple[float, ...] = (-0.4, -0.3, -0.2, -0.1, 0.0, 0.1, 0.2, 0.3, 0.4)
+#: Plausible current offsets and idle currents (A).
+OFFSET_PLAUSIBLE_A = (-1.0, 1.0)
+#: Plausible lags between streams (s).
+LAG_PLAUSIBLE_S = (-0.5, 0.5)
+_OFFSET_NOTE = "a sensor zero or an idle draw of at most 1 A"
+_GAIN_NOTE = "a current sensor's calibration error"
+_LAG_NOTE = "a logging delay of at most half a second"
 
 
 class IdleCurrentEffect(Effect):
@@ -27,7 +34,8 @@ class IdleCurrentEffect(Effect):
 
     name = "idle_current"
     kind = "measurement"
-    parameters = (EffectParameter("idle_current_a", 0.0, -5.0, 5.0, "A", "idle_current_a"),)
+    parameters = (EffectParameter("idle_current_a", 0.0, -5.0, 5.0, "A", "idle_current_a", *OFFSET_PLAUSIBLE_A,
+                                  _OFFSET_NOTE),)
     description = "idle current (same on both sides)"
 
     def prepare(self, model: Any, log: InteractionLog) -> None:
@@ -42,8 +50,8 @@ class CurrentOffsetEffect(Effect):
 
     name = "current_offset"
     kind = "measurement"
-    parameters = (EffectParameter("offset_left_a", 0.0, -5.0, 5.0, "A"),
-                  EffectParameter("offset_right_a", 0.0, -5.0, 5.0, "A"))
+    parameters = (EffectParameter("offset_left_a", 0.0, -5.0, 5.0, "A", None, *OFFSET_PLAUSIBLE_A, _OFFSET_NOTE),
+                  EffectParameter("offset_right_a", 0.0, -5.0, 5.0, "A", None, *OFFSET_PLAUSIBLE_A, _OFFSET_NOTE))
     description = "per-side current offset"
 
     def prepare(self, model: Any, log: InteractionLog) -> None:
@@ -58,8 +66,8 @@ class CurrentGainEffect(Effect):
 
     name = "current_gain"
     kind = "measurement"
-    parameters = (EffectParameter("gain_left", 1.0, 0.3, 3.0, "1", "gain_left"),
-                  EffectParameter("gain_right", 1.0, 0.3, 3.0, "1", "gain_right"))
+    parameters = (EffectParameter("gain_left", 1.0, 0.3, 3.0, "1", "gain_left", *GAIN_PLAUSIBLE, _GAIN_NOTE),
+                  EffectParameter("gain_right", 1.0, 0.3, 3.0, "1", "gain_right", *GAIN_PLAUSIBLE, _GAIN_NOTE))
     description = "per-side current gain"
 
     def prepare(self, model: Any, log: InteractionLog) -> None:
@@ -78,7 +86,7 @@ class TimeLagEffect(Effect):
 
     name = "time_lag"
     kind = "measurement"
-    parameters = (EffectParameter("lag_s", 0.0, -0.5, 0.5, "s", "lag_s"),)
+    parameters = (EffectParameter("lag_s", 0.0, -0.5, 0.5, "s", "lag_s", *LAG_PLAUSIBLE_S, _LAG_NOTE),)
     description = "time lag between the motion and the current streams"
     period_s: float = 0.0
 
@@ -146,7 +154,8 @@ class ImuLagEffect(Effect):
 
     name = "imu_lag"
     kind = "measurement"
-    parameters = (EffectParameter("lag_s", 0.0, IMU_LAG_GRID_S[0], IMU_LAG_GRID_S[-1], "s", "imu_lag_s"),)
+    parameters = (EffectParameter("lag_s", 0.0, IMU_LAG_GRID_S[0], IMU_LAG_GRID_S[-1], "s", "imu_lag_s",
+                                  *LAG_PLAUSIBLE_S, _LAG_NOTE),)
     description = "time lag between the IMU and the drive streams"
     period_s: float = 0.0
 

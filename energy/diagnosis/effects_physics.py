@@ -8,15 +8,17 @@ from typing import Any
 
 import numpy as np
 
+from terrain.checks import fmt_number
 from terrain.errors import DataError
 from terrain.terrain_map import TerrainMap
 
 from ..logs import InteractionLog
 from ..models.baselines import PhysicsCurrentModel
-from .effect_base import BasisEffect, Effect, EffectParameter
+from .effect_base import GAIN_PLAUSIBLE, BasisEffect, Effect, EffectParameter
 from .model_currents import ParameterTable, PhysicsBasis, motoring_currents_a
 
-__all__ = ["PHYSICS_CANDIDATES", "PARAMETER_CANDIDATES", "PhysicsTermEffect", "SlopeEffect", "MassEffect",
+__all__ = ["PHYSICS_CANDIDATES", "PARAMETER_CANDIDATES", "ROLLING_RESISTANCE_PLAUSIBLE",
+           "PhysicsTermEffect", "SlopeEffect", "MassEffect",
            "TrackWidthEffect", "RollingResistanceEffect", "MotorConstantEffect", "Reprediction", "log_ground_labels"]
 
 #: Physics effects offered as candidates (those that change the motor current).
@@ -28,7 +30,10 @@ PHYSICS_CANDIDATES: tuple[str, ...] = (
 #: Parameter-error candidates of a physics model.
 PARAMETER_CANDIDATES: tuple[str, ...] = ("mass", "track_width", "rolling_resistance", "motor_constant")
 
-_GAIN = EffectParameter("gain", 1.0, 0.0, 3.0, "1", None)
+_GAIN = EffectParameter("gain", 1.0, 0.0, 3.0, "1", None, *GAIN_PLAUSIBLE,
+                        "the physics' own term, within the usual error of its parameters")
+#: Plausible rolling-resistance coefficients, hard to soft ground.
+ROLLING_RESISTANCE_PLAUSIBLE = (0.005, 0.4)
 
 
 def _is_physics(model: Any) -> bool:
@@ -146,6 +151,12 @@ class _RepredictEffect(BasisEffect):
         """Per-sample parameter slot (None: one parameter for every sample)."""
         return None
 
+    def priors(self, prepared: Sequence[Any] = ()) -> np.ndarray:
+        """The model's own value of the parameter (every slot), read from the preparation's basis."""
+        if prepared and isinstance(prepared[0], Reprediction):
+            return np.full(self.n_parameters, float(self.nominal(prepared[0].basis)))
+        return self.initial
+
     def prepare(self, model: Any, log: InteractionLog) -> Reprediction:
         b = self.basis(model)
         idx = self.index(log)
@@ -176,11 +187,21 @@ class MassEffect(_RepredictEffect):
     """A mass (payload) error: the physics re-predicted with ``mass_kg * mass_scale``."""
 
     name = "mass"
-    parameters = (EffectParameter("mass_scale", 1.0, 0.5, 2.0, "1", "mass_kg"),)
+    parameters = (EffectParameter("mass_scale", 1.0, 0.25, 4.0, "1", "mass_kg", 0.5, 2.5,
+                                  "0.5x-2.5x the robot's mass: a payload, not another robot"),)
     description = "mass / payload error (scale on the robot's mass)"
 
     def nominal(self, b: PhysicsBasis) -> float:
         return 1.0
+
+    def describe(self, values: Any, prepared: Sequence[Any] = ()) -> str:
+        scale = float(np.asarray(values, dtype=np.float64).reshape(-1)[0])
+        if not prepared or not isinstance(prepared[0], Reprediction):
+            return f"mass x{fmt_number(scale, 3)}"
+        mass = float(prepared[0].basis.robot.mass_kg)
+        change = mass * (scale - 1.0)
+        return (f"mass {'+' if change >= 0 else '-'}{fmt_number(abs(change), 3)} kg (x{fmt_number(scale, 3)} of the "
+                f"robot's {fmt_number(mass, 4)} kg)")
 
     def repredict(self, b: PhysicsBasis, log: InteractionLog, value: float, index: Any = None) -> np.ndarray:
         return motoring_currents_a(b, log, robot=b.robot.replace(mass_kg=b.robot.mass_kg * value))
@@ -190,7 +211,8 @@ class TrackWidthEffect(_RepredictEffect):
     """An error of the effective skid-steer track width (``track_width_multiplier``)."""
 
     name = "track_width"
-    parameters = (EffectParameter("track_width_multiplier", 1.5, 1.0, 5.0, "1", "track_width_multiplier"),)
+    parameters = (EffectParameter("track_width_multiplier", 1.5, 1.0, 5.0, "1", "track_width_multiplier", 1.0, 3.0,
+                                  "skid steering turns about an effective track of 1-3x the geometric one"),)
     description = "effective track width of skid steering (ICR multiplier)"
 
     def applies_to(self, model: Any) -> bool:
@@ -218,6 +240,12 @@ def log_ground_labels(log: InteractionLog) -> np.ndarray | None:
     if log.meta.ground_label is not None:
         return np.full(len(log), log.meta.ground_label)
     return None
+
+
+def _rolling_parameters(labels: Sequence[str]) -> tuple[EffectParameter, ...]:
+    return tuple(EffectParameter(f"rolling_resistance_coef_{g}", 0.02, 0.0, 1.0, "1", f"{g}.rolling_resistance_coef",
+                                 *ROLLING_RESISTANCE_PLAUSIBLE, "wheels or tracks on ground, hard to soft")
+                 for g in labels)
 
 
 class RollingResistanceEffect(_RepredictEffect):
@@ -252,16 +280,14 @@ class RollingResistanceEffect(_RepredictEffect):
             return out
         found = [log_ground_labels(log) for log in logs]
         out.labels = tuple(sorted({str(x) for lab in found if lab is not None for x in np.unique(lab)}))
-        out.parameters = tuple(EffectParameter(f"rolling_resistance_coef_{g}", 0.02, 0.0, 1.0, "1",
-                                               f"{g}.rolling_resistance_coef") for g in out.labels)
+        out.parameters = _rolling_parameters(out.labels)
         return out
 
     def with_labels(self, labels: Sequence[str]) -> RollingResistanceEffect:
         """The effect for these ground labels (used when loading a corrected model)."""
         out = RollingResistanceEffect()
         out.labels = tuple(str(g) for g in labels)
-        out.parameters = tuple(EffectParameter(f"rolling_resistance_coef_{g}", 0.02, 0.0, 1.0, "1",
-                                               f"{g}.rolling_resistance_coef") for g in out.labels)
+        out.parameters = _rolling_parameters(out.labels)
         return out
 
     def spec(self) -> dict[str, Any]:
@@ -313,8 +339,12 @@ class MotorConstantEffect(_RepredictEffect):
     """A motor-constant error: the motoring current divided by ``torque_constant_scale``."""
 
     name = "motor_constant"
-    parameters = (EffectParameter("torque_constant_scale", 1.0, 0.5, 2.0, "1", "torque_constant_nm_per_a"),)
+    parameters = (EffectParameter("torque_constant_scale", 1.0, 0.5, 2.0, "1", "torque_constant_nm_per_a", 0.8, 1.25,
+                                  "a motor's constant strays by some per cent from its rating, with heat"),)
     description = "motor torque-constant error (scale on Kt)"
+
+    def nominal(self, b: PhysicsBasis) -> float:
+        return 1.0
 
     def prepare(self, model: Any, log: InteractionLog) -> Reprediction:
         b = self.basis(model)

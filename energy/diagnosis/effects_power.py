@@ -36,13 +36,27 @@ class ElectricalEffect(BasisEffect):
     def prepare(self, model: Any, log: Any) -> PowerInputs:
         return power_inputs(self.basis(model), log)
 
+    def basis_values(self, inputs: Sequence[PowerInputs]) -> list[float]:  # pragma: no cover - abstract
+        """What the model's basis counts for each parameter (0 when the effect is off in it)."""
+        raise NotImplementedError
+
+    def priors(self, prepared: Sequence[Any] = ()) -> np.ndarray:
+        """What the model's electrical basis already counts (its robot's value, or 0 with the effect off)."""
+        if prepared and all(isinstance(p, PowerInputs) for p in prepared):
+            return np.asarray(self.basis_values(prepared), dtype=np.float64)
+        return self.initial
+
 
 class ArmatureHeatEffect(ElectricalEffect):
     """Copper loss ``Ra I^2`` per side with a fitted armature resistance (battery side as the physics)."""
 
     name = "armature_heat"
-    parameters = (EffectParameter("armature_resistance_ohm", 0.1, 0.0, 1000.0, "ohm", "armature_resistance_ohm"),)
+    parameters = (EffectParameter("armature_resistance_ohm", 0.1, 0.0, 1000.0, "ohm", "armature_resistance_ohm",
+                                  0.01, 100.0, "a drive motor's winding"),)
     description = "armature heat Ra I^2 (fitted resistance)"
+
+    def basis_values(self, inputs: Sequence[PowerInputs]) -> list[float]:
+        return [inputs[0].ra0_ohm]
 
     def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: PowerInputs) -> np.ndarray:
         p = prepared
@@ -55,9 +69,14 @@ class SensorPowerEffect(ElectricalEffect):
     """Sensor power ``P_s + k |v|`` (W): a constant and a part growing with the speed."""
 
     name = "sensor"
-    parameters = (EffectParameter("sensor_power_w", 1.0, 0.0, 500.0, "W", "sensor_power_w"),
-                  EffectParameter("sensor_power_per_mps_w", 0.5, 0.0, 100.0, "W s/m", "sensor_power_per_mps_w"))
+    parameters = (EffectParameter("sensor_power_w", 1.0, 0.0, 500.0, "W", "sensor_power_w", 0.0, 200.0,
+                                  "the sensors of a field robot"),
+                  EffectParameter("sensor_power_per_mps_w", 0.5, 0.0, 100.0, "W s/m", "sensor_power_per_mps_w", 0.0,
+                                  50.0, "sensing that works harder with speed"))
     description = "sensor power (constant + per m/s)"
+
+    def basis_values(self, inputs: Sequence[PowerInputs]) -> list[float]:
+        return [inputs[0].sensor0[0], inputs[0].sensor0[1]]
 
     def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: PowerInputs) -> np.ndarray:
         p = prepared
@@ -70,9 +89,17 @@ class ControlPowerEffect(ElectricalEffect):
     after each start from rest adds the robot's rated start-up excess over its stable power)."""
 
     name = "control"
-    parameters = (EffectParameter("control_standby_power_w", 1.0, 0.0, 500.0, "W", "control_standby_power_w"),
-                  EffectParameter("control_stable_power_w", 1.0, 0.0, 500.0, "W", "control_stable_power_w"))
+    parameters = (EffectParameter("control_standby_power_w", 1.0, 0.0, 500.0, "W", "control_standby_power_w", 0.0,
+                                  200.0, "a robot's computers and drivers"),
+                  EffectParameter("control_stable_power_w", 1.0, 0.0, 500.0, "W", "control_stable_power_w", 0.0,
+                                  200.0, "a robot's computers and drivers"))
     description = "control-board power (standby when stopped, stable when moving)"
+
+    def basis_values(self, inputs: Sequence[PowerInputs]) -> list[float]:
+        control = np.concatenate([p.control0_w for p in inputs])
+        stopped = np.concatenate([p.stopped for p in inputs]) > 0.5
+        stable = ~stopped & ~(np.concatenate([p.startup for p in inputs]) > 0.5)
+        return [float(np.median(control[m])) if m.any() else float("nan") for m in (stopped, stable)]
 
     def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: PowerInputs) -> np.ndarray:
         p = prepared

@@ -41,6 +41,22 @@ class EffectScore:
         above it that were chosen (equal to ``shrink_pct`` for the first).
     added_interval_pct : (float, float)
         95 % bootstrap interval of ``added_pct``.
+    priors : dict of str to float
+        Per parameter, the value that changes nothing: the model's own value of a parameter
+        the effect re-predicts (mass scale 1, its rolling resistance, motor-constant scale 1),
+        1 for a gain, 0 for an offset or a lag (:meth:`Effect.priors`).
+    plausible : dict of str to (float, float)
+        Per parameter, its physical plausible range (separate from the wider fitting bounds).
+    flags : tuple of str
+        What makes the fitted values doubtful and why: a value outside its plausible range,
+        a value pinned at a fitting bound. Empty when every value is plausible.
+    doubtful : bool
+        ``bool(flags)``.
+    summary : str
+        The fitted values in plain words (e.g. ``"mass +80 kg (x1.8 of the robot's 100 kg)"``).
+    alone_parameters, alone_flags, alone_summary
+        The same for the effect fitted on its own (what ``shrink_pct`` scores): a candidate
+        can look plausible beside the chosen effects and implausible alone, or the reverse.
     """
 
     name: str
@@ -51,13 +67,37 @@ class EffectScore:
     n_parameters: int
     added_pct: float = float("nan")
     added_interval_pct: tuple[float, float] = (float("nan"), float("nan"))
+    priors: dict[str, float] = field(default_factory=dict)
+    plausible: dict[str, tuple[float, float]] = field(default_factory=dict)
+    flags: tuple[str, ...] = ()
+    doubtful: bool = False
+    summary: str = ""
+    alone_parameters: dict[str, float] = field(default_factory=dict)
+    alone_flags: tuple[str, ...] = ()
+    alone_summary: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict."""
         d = asdict(self)
         d["shrink_interval_pct"] = list(self.shrink_interval_pct)
         d["added_interval_pct"] = list(self.added_interval_pct)
+        d["plausible"] = {k: list(v) for k, v in self.plausible.items()}
+        d["flags"] = list(self.flags)
+        d["alone_flags"] = list(self.alone_flags)
         return d
+
+    def parameter_text(self) -> str:
+        """Each fitted value beside its prior and plausible range: ``"mass_scale = 1.8 (prior 1; plausible 0.5 … 2.5)"``."""
+        parts = []
+        for n, v in self.parameters.items():
+            extra = []
+            if n in self.priors:
+                extra.append(f"prior {fmt_number(self.priors[n], 4)}")
+            if n in self.plausible:
+                lo, hi = self.plausible[n]
+                extra.append(f"plausible {fmt_number(lo, 3)} … {fmt_number(hi, 3)}")
+            parts.append(f"{n} = {fmt_number(v, 4)}" + (f" ({'; '.join(extra)})" if extra else ""))
+        return ", ".join(parts)
 
 
 @dataclass(frozen=True)
@@ -187,14 +227,20 @@ class Diagnosis:
         else:
             lines.append("No slice tells where: every dimension has one known slice only.")
         lines += ["", f"## Candidate effects (held-out shrink, split by {self.split})", "",
-                  "Ranked by what each adds to the chosen effects above it; *alone* is the effect on its own.", "",
-                  "| rank | effect | kind | adds | 95 % interval | alone | parameters |",
-                  "|---|---|---|---|---|---|---|"]
+                  "Ranked by what each adds to the chosen effects above it; *alone* is the effect on its own. "
+                  "Each fitted value beside its prior (the value that changes nothing) and its plausible range; "
+                  "flags: a value outside it or pinned at a fitting bound (doubtful), also of the effect fitted alone.", "",
+                  "| rank | effect | kind | adds | 95 % interval | alone | parameters | flags |",
+                  "|---|---|---|---|---|---|---|---|"]
         for k, s in enumerate(self.ranking, 1):
             lo, hi = s.added_interval_pct
-            params = ", ".join(f"{n} = {fmt_number(v, 4)}" for n, v in s.parameters.items())
-            lines.append(f"| {k} | {s.name} | {s.kind} | {fmt_number(s.added_pct, 3)} % | "
-                         f"{fmt_number(lo, 3)} … {fmt_number(hi, 3)} % | {fmt_number(s.shrink_pct, 3)} % | {params} |")
+            flags = list(s.flags)
+            if s.alone_flags and s.alone_parameters != s.parameters:
+                flags.append("fitted alone: " + "; ".join(s.alone_flags))
+            flags = "; ".join(flags) if flags else "–"
+            lines.append(f"| {k} | {s.name}{' (chosen)' if s.name in self.chosen else ''} | {s.kind} | "
+                         f"{fmt_number(s.added_pct, 3)} % | {fmt_number(lo, 3)} … {fmt_number(hi, 3)} % | "
+                         f"{fmt_number(s.shrink_pct, 3)} % | {s.parameter_text()} | {flags} |")
         if self.skipped:
             lines += ["", "Not scored: " + "; ".join(f"{n} ({why})" for n, why in self.skipped.items()) + "."]
         lines += ["", "## Waterfall (held-out)", "",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from .effect_base import Effect
 from .fit import (
@@ -18,20 +19,33 @@ from .result import EffectScore
 from .runner import SetRunner
 from .split import Split
 
-__all__ = ["SIGNIFICANT_SHRINK_PCT", "Selection", "score_entry", "significant", "select_effects"]
+__all__ = ["SIGNIFICANT_SHRINK_PCT", "Selection", "score_entry", "significant", "select_effects",
+           "plausible_alternative"]
 
 #: An effect is added only when it shrinks the held-out gap by at least this much (points of %).
 SIGNIFICANT_SHRINK_PCT = 2.0
 
 
 def score_entry(e: Effect, none: SetScore, alone: SetScore, current: SetScore, trial: SetScore, n_bootstrap: int,
-                seed: int | None) -> EffectScore:
-    """``e`` alone (``alone`` against ``none``) and added to the chosen set (``trial`` against ``current``)."""
+                seed: int | None, prepared: Sequence[Any] = ()) -> EffectScore:
+    """``e`` alone (``alone`` against ``none``) and added to the chosen set (``trial`` against ``current``).
+
+    The fitted values (medians over the folds of ``trial``) come with their priors (read from
+    ``prepared``, the effect's per-log preparation, when given), plausible ranges and flags.
+    """
     lo, hi = bootstrap_shrink_interval_pct(none, alone, n_bootstrap=n_bootstrap, seed=seed)
     added = shrink_pct(none, trial) - shrink_pct(none, current)
     interval = bootstrap_gain_interval_pct(none, current, trial, n_bootstrap=n_bootstrap, seed=seed)
-    return EffectScore(e.name, e.kind, e.values_dict(trial.median_values()[-1]), shrink_pct(none, alone), (lo, hi),
-                       e.n_parameters, added, interval)
+    values, alone_values = trial.median_values()[-1], alone.median_values()[-1]
+    names = [p.name for p in e.parameters]
+    low, high = e.plausible_ranges()
+    flags = e.plausibility_flags(values)
+    return EffectScore(e.name, e.kind, e.values_dict(values), shrink_pct(none, alone), (lo, hi), e.n_parameters, added,
+                       interval, priors=dict(zip(names, (float(x) for x in e.priors(prepared)))),
+                       plausible={n: (float(a), float(b)) for n, a, b in zip(names, low, high)}, flags=flags,
+                       doubtful=bool(flags), summary=e.describe(values, prepared),
+                       alone_parameters=e.values_dict(alone_values), alone_flags=e.plausibility_flags(alone_values),
+                       alone_summary=e.describe(alone_values, prepared))
 
 
 def significant(current: SetScore, trial: SetScore, none: SetScore, n_bootstrap: int, seed: int | None) -> bool:
@@ -82,11 +96,27 @@ def select_effects(usable: Sequence[Effect], data: DiagnosisData, split: Split, 
         best = min(eligible, key=lambda e: trials[e.name].sse_units.sum())
         if not significant(sets[-1], trials[best.name], none, n_bootstrap, seed):
             break
-        scores[best.name] = score_entry(best, none, alone[best.name], sets[-1], trials[best.name], n_bootstrap, seed)
+        scores[best.name] = score_entry(best, none, alone[best.name], sets[-1], trials[best.name], n_bootstrap, seed,
+                                        data.prepared.get(best.name, ()))
         chosen.append(best)
         sets.append(trials[best.name])
         remaining.remove(best)
     remaining.sort(key=lambda e: trials[e.name].sse_units.sum())
-    scores.update({e.name: score_entry(e, none, alone[e.name], sets[-1], trials[e.name], n_bootstrap, seed)
-                   for e in remaining})
+    scores.update({e.name: score_entry(e, none, alone[e.name], sets[-1], trials[e.name], n_bootstrap, seed,
+                                       data.prepared.get(e.name, ())) for e in remaining})
     return Selection(none, alone, tuple(chosen), tuple(sets), scores, tuple(chosen) + tuple(remaining))
+
+
+def plausible_alternative(doubtful: EffectScore, ranking: Sequence[EffectScore],
+                          chosen: Sequence[str] = ()) -> EffectScore | None:
+    """The likelier cause of the gap a doubtful effect explains, or None.
+
+    Among the candidates of ``ranking`` other than ``doubtful``, not in ``chosen`` and not
+    learned, whose fit on its own has no flags (``alone_flags``), those whose held-out
+    shrink alone lies within ``doubtful``'s 95 % interval (``shrink_interval_pct``) explain
+    a similar gap with plausible values; the one with the largest shrink is returned.
+    """
+    lo, hi = doubtful.shrink_interval_pct
+    similar = [s for s in ranking if s.name != doubtful.name and s.name not in chosen and s.kind != "learned"
+               and not s.alone_flags and lo <= s.shrink_pct <= hi]
+    return max(similar, key=lambda s: s.shrink_pct, default=None)
