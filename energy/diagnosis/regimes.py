@@ -4,18 +4,21 @@ Every label is computed from the log's own fields, vectorised over its samples; 
 thresholds are the module constants below. A dimension the log cannot inform (no pose, no
 map, no ground label) is labelled :data:`UNKNOWN_LABEL` rather than guessed.
 
-- **motion class** — one definition, shared with any module that needs it (import
-  :func:`at_rest` and :func:`pivoting`): a sample is *at rest* (standstill) when ``|v| <``
-  :data:`STANDSTILL_SPEED_MPS` (0.05 m/s) **and** ``|omega| <`` :data:`TURN_RATE_RADPS`
-  (0.1 rad/s); it *pivots* (turns on the spot) when ``|v| < STANDSTILL_SPEED_MPS`` and
-  ``|omega| >= TURN_RATE_RADPS``; otherwise it moves.
-- **speed** — ``"standstill"`` (at rest), ``"pivot"`` (pivoting), then bins of ``|v_mps|``
-  with edges :data:`SPEED_EDGES_MPS`: ``"0.05-0.25 m/s"``, ``"0.25-0.5 m/s"``,
-  ``"0.5-1 m/s"``, ``"> 1 m/s"``. A pivot draws the largest currents of a skid-steer robot,
-  a standstill the smallest: they are never one bin.
-- **turning** — ``"pivot"`` (pivoting, as above); ``"arc"``: moving, ``|omega| >=
-  TURN_RATE_RADPS`` and curvature ``|omega| / |v| >=`` :data:`ARC_CURVATURE_PER_M`;
-  ``"standstill"``: at rest; ``"straight"``: the rest.
+- **motion class** — a sample is *at rest* (standstill) by the library's one definition,
+  :func:`energy.logs.rest_samples` (``|v|`` and ``|omega|`` below
+  :data:`~energy.logs.REST_SPEED_MPS` and :data:`~energy.logs.REST_OMEGA_RADPS`, neither
+  starting nor stopping): the samples where the current models predict their rest level.
+  It *pivots* (turns on the spot, :func:`pivoting`) when ``|v| <``
+  :data:`STANDSTILL_SPEED_MPS` (0.05 m/s) and ``|omega| >=`` :data:`TURN_RATE_RADPS`
+  (0.1 rad/s). Otherwise it drives, if slowly (creeping, starting, stopping).
+- **speed** — ``"standstill"`` (at rest), ``"pivot"`` (pivoting), ``"< 0.05 m/s"`` (slower
+  than :data:`STANDSTILL_SPEED_MPS`, neither), then bins of ``|v_mps|`` with edges
+  :data:`SPEED_EDGES_MPS`: ``"0.05-0.25 m/s"``, ``"0.25-0.5 m/s"``, ``"0.5-1 m/s"``,
+  ``"> 1 m/s"``. A pivot draws the largest currents of a skid-steer robot, a standstill the
+  smallest: they are never one slice.
+- **turning** — ``"standstill"`` (at rest); ``"pivot"`` (pivoting); ``"arc"``: neither,
+  ``|omega| >= TURN_RATE_RADPS`` and curvature ``|omega| / |v| >=``
+  :data:`ARC_CURVATURE_PER_M`; ``"straight"``: the rest.
 - **acceleration** — rate of change of the speed ``|v|`` after a centred moving average of
   :data:`ACCEL_SMOOTHING_S`: ``"accelerating"`` above :data:`ACCEL_THRESHOLD_MPS2`,
   ``"braking"`` below its negative, ``"steady"`` between.
@@ -41,7 +44,7 @@ import numpy as np
 from terrain.errors import DataError, InvalidParameterError
 from terrain.terrain_map import TerrainMap
 
-from ..logs import InteractionLog
+from ..logs import InteractionLog, rest_samples
 
 __all__ = [
     "UNKNOWN_LABEL",
@@ -60,7 +63,6 @@ __all__ = [
     "GRADE_LABELS",
     "SPACE_BLOCK_M",
     "check_terrain",
-    "at_rest",
     "pivoting",
     "speed_labels",
     "turning_labels",
@@ -81,12 +83,13 @@ REGIME_DIMENSIONS = ("speed", "turning", "acceleration", "grade", "ground", "spa
 
 #: Inner edges of the speed bins of ``|v|`` (m/s); below the first, a sample is at rest or pivots.
 SPEED_EDGES_MPS = (0.05, 0.25, 0.5, 1.0)
-#: Labels of the speed dimension, slowest first: at rest, pivoting, then the bins of ``|v|``.
-SPEED_LABELS = ("standstill", "pivot", "0.05-0.25 m/s", "0.25-0.5 m/s", "0.5-1 m/s", "> 1 m/s")
-#: Below this ``|v|`` the robot is not moving forward or back (m/s): at rest or pivoting.
+#: Labels of the speed dimension, slowest first: at rest, pivoting, slower than the first
+#: edge (neither), then the bins of ``|v|``.
+SPEED_LABELS = ("standstill", "pivot", "< 0.05 m/s", "0.05-0.25 m/s", "0.25-0.5 m/s", "0.5-1 m/s", "> 1 m/s")
+#: Below this ``|v|`` the robot hardly moves forward or back (m/s): with ``|omega|`` from
+#: :data:`TURN_RATE_RADPS` on, it pivots.
 STANDSTILL_SPEED_MPS = SPEED_EDGES_MPS[0]
-#: From this ``|omega|`` on the robot is turning (rad/s); below it, with ``|v|`` below
-#: :data:`STANDSTILL_SPEED_MPS`, it is at rest.
+#: From this ``|omega|`` on the robot is turning (rad/s).
 TURN_RATE_RADPS = 0.1
 #: From this curvature ``|omega| / |v|`` on a moving turn is an arc (1/m; radius <= 5 m).
 ARC_CURVATURE_PER_M = 0.2
@@ -134,11 +137,10 @@ def _labelled(codes: np.ndarray, labels: tuple[str, ...]) -> np.ndarray:
     return out
 
 
-def at_rest(v_mps: Any, omega_radps: Any) -> Any:
-    """Whether the robot stands still: ``|v| <`` :data:`STANDSTILL_SPEED_MPS` and ``|omega| <`` :data:`TURN_RATE_RADPS`.
+def pivoting(v_mps: Any, omega_radps: Any) -> Any:
+    """Whether the robot turns on the spot: ``|v| <`` :data:`STANDSTILL_SPEED_MPS` and ``|omega| >=`` :data:`TURN_RATE_RADPS`.
 
-    The one definition of standstill of the diagnosis (the ``"standstill"`` speed and
-    turning slices); a pivot (turning on the spot) is not at rest, see :func:`pivoting`.
+    Never at rest (:func:`energy.logs.at_rest` needs ``|omega|`` far below the turn rate).
 
     Parameters
     ----------
@@ -154,36 +156,27 @@ def at_rest(v_mps: Any, omega_radps: Any) -> Any:
 
     Examples
     --------
-    >>> at_rest(0.0, 0.0), at_rest(0.01, -0.05), at_rest(0.0, 0.5), at_rest(0.3, 0.0)
-    (True, True, False, False)
-    >>> at_rest([0.0, 0.2], 0.0).tolist()
-    [True, False]
-    """
-    out = (np.abs(np.asarray(v_mps, dtype=np.float64)) < STANDSTILL_SPEED_MPS) & (
-        np.abs(np.asarray(omega_radps, dtype=np.float64)) < TURN_RATE_RADPS)
-    return bool(out) if out.ndim == 0 else out
-
-
-def pivoting(v_mps: Any, omega_radps: Any) -> Any:
-    """Whether the robot turns on the spot: ``|v| <`` :data:`STANDSTILL_SPEED_MPS` and ``|omega| >=`` :data:`TURN_RATE_RADPS`.
-
-    Takes and returns as :func:`at_rest`; a sample is at rest, pivoting, or moving.
-
-    Examples
-    --------
     >>> pivoting(0.0, 0.5), pivoting(0.0, -0.1), pivoting(0.0, 0.0), pivoting(0.5, 0.5)
     (True, True, False, False)
+    >>> pivoting([0.0, 0.2], 0.5).tolist()
+    [True, False]
     """
     out = (np.abs(np.asarray(v_mps, dtype=np.float64)) < STANDSTILL_SPEED_MPS) & (
         np.abs(np.asarray(omega_radps, dtype=np.float64)) >= TURN_RATE_RADPS)
     return bool(out) if out.ndim == 0 else out
 
 
+def _motion_codes(log: InteractionLog) -> np.ndarray:
+    """0 at rest, 1 pivoting, 2 driving, per sample."""
+    return np.where(rest_samples(log), 0, np.where(pivoting(log.v_mps, log.omega_radps), 1, 2))
+
+
 def speed_labels(log: InteractionLog) -> np.ndarray:
-    """Speed class of each sample: ``"standstill"``, ``"pivot"`` or a bin of :data:`SPEED_EDGES_MPS` (module notes)."""
+    """Speed class of each sample: ``"standstill"``, ``"pivot"``, ``"< 0.05 m/s"`` or a bin of :data:`SPEED_EDGES_MPS`."""
     log = _checked_log(log)
     bins = np.digitize(np.abs(log.v_mps), SPEED_EDGES_MPS)  # 0: below the first edge
-    codes = np.where(bins == 0, np.where(pivoting(log.v_mps, log.omega_radps), 1, 0), bins + 1)
+    motion = _motion_codes(log)
+    codes = np.where(motion < 2, motion, bins + 2)
     return _labelled(codes, SPEED_LABELS)
 
 
@@ -191,10 +184,9 @@ def turning_labels(log: InteractionLog) -> np.ndarray:
     """``"standstill"``, ``"straight"``, ``"arc"`` or ``"pivot"`` per sample (see module notes)."""
     log = _checked_log(log)
     speed, rate = np.abs(log.v_mps), np.abs(log.omega_radps)
-    moving = speed >= STANDSTILL_SPEED_MPS
-    turning = rate >= TURN_RATE_RADPS
-    arc = moving & turning & (rate >= ARC_CURVATURE_PER_M * speed)
-    codes = np.where(moving, np.where(arc, 2, 1), np.where(pivoting(speed, rate), 3, 0))
+    arc = (rate >= TURN_RATE_RADPS) & (rate >= ARC_CURVATURE_PER_M * speed)
+    motion = _motion_codes(log)
+    codes = np.where(motion == 0, 0, np.where(motion == 1, 3, np.where(arc, 2, 1)))
     return _labelled(codes, TURNING_LABELS)
 
 

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from energy import InteractionLog, LogMeta
+from energy.logs import rest_samples
 from energy.diagnosis.regimes import (
     OFF_MAP_LABEL,
     REGIME_DIMENSIONS,
@@ -15,7 +16,6 @@ from energy.diagnosis.regimes import (
     STANDSTILL_SPEED_MPS,
     TURN_RATE_RADPS,
     acceleration_labels,
-    at_rest,
     grade_labels,
     ground_labels,
     motion_grade_rad,
@@ -40,42 +40,47 @@ def make_log(v_mps, omega_radps=None, *, dt_s=0.01, pose_xyh=None, ground=None, 
 
 def test_speed_bins_use_the_magnitude_and_lower_edges_belong_to_the_upper_bin():
     log = make_log([0.0, -0.04, 0.05, 0.2, -0.3, 0.5, 0.99, 1.0, 1.5])
+    # the first two are slow but not at rest: the speed changes at 4 m/s^2 there (a start)
     assert speed_labels(log).tolist() == [
-        "standstill", "standstill", "0.05-0.25 m/s", "0.05-0.25 m/s", "0.25-0.5 m/s", "0.5-1 m/s", "0.5-1 m/s",
+        "< 0.05 m/s", "< 0.05 m/s", "0.05-0.25 m/s", "0.05-0.25 m/s", "0.25-0.5 m/s", "0.5-1 m/s", "0.5-1 m/s",
         "> 1 m/s", "> 1 m/s",
     ]
 
 
+def _blocks(*pairs, n=10, dt_s=0.1):
+    """Blocks of ``n`` samples at constant (v, omega)."""
+    v = np.concatenate([np.full(n, a) for a, _ in pairs])
+    w = np.concatenate([np.full(n, b) for _, b in pairs])
+    return make_log(v, w, dt_s=dt_s)
+
+
 def test_a_pivot_is_its_own_speed_class_apart_from_standstill():
-    v = [0.0, 0.0, -0.04, 0.01, 0.2, 0.0]
-    w = [0.0, 0.5, -0.8, 0.05, 0.6, -0.1]
-    assert speed_labels(make_log(v, w)).tolist() == [
-        "standstill", "pivot", "pivot", "standstill", "0.05-0.25 m/s", "pivot",
-    ]
+    log = _blocks((0.0, 0.0), (0.0, 0.5), (0.0, 0.0), (0.03, 0.0), (0.2, 0.6), (0.0, -0.1))
+    labels = speed_labels(log).tolist()
+    assert labels[:9] == ["standstill"] * 9 and labels[9] == "< 0.05 m/s"  # the last still sample starts a turn
+    assert labels[10:20] == ["pivot"] * 10
+    assert labels[21:29] == ["standstill"] * 8
+    assert labels[31:39] == ["< 0.05 m/s"] * 8  # creeping: neither at rest nor pivoting
+    assert labels[40:50] == ["0.05-0.25 m/s"] * 10 and labels[50:] == ["pivot"] * 10
 
 
-def test_at_rest_and_pivoting_are_the_one_public_definition():
-    v = np.array([0.0, 0.049, 0.05, 0.0, 0.0, -0.03, 0.7])
-    w = np.array([0.0, -0.099, 0.0, 0.1, -2.0, 0.02, 0.0])
-    rest, pivot = at_rest(v, w), pivoting(v, w)
-    assert rest.tolist() == [True, True, False, False, False, True, False]
-    assert pivot.tolist() == [False, False, False, True, True, False, False]
-    assert not np.any(rest & pivot)
-    assert at_rest(0.0, 0.0) is True and pivoting(0.0, 0.0) is False  # scalars give bools
-    assert at_rest(STANDSTILL_SPEED_MPS, 0.0) is False and at_rest(0.0, TURN_RATE_RADPS) is False
-    # the regime labels use exactly this definition
-    log = make_log(v, w)
-    assert (speed_labels(log) == "standstill").tolist() == rest.tolist()
-    assert (turning_labels(log) == "standstill").tolist() == rest.tolist()
-    assert (speed_labels(log) == "pivot").tolist() == pivot.tolist()
-    assert (turning_labels(log) == "pivot").tolist() == pivot.tolist()
+def test_standstill_is_the_librarys_rest_and_pivots_are_pivoting():
+    log = _blocks((0.0, 0.0), (0.0, 0.5), (0.004, 0.0), (0.03, 0.05), (0.5, 0.0), (0.0, -2.0), (0.0, 0.0))
+    rest, pivot = rest_samples(log), pivoting(log.v_mps, log.omega_radps)
+    assert rest.sum() > 20 and pivot.sum() == 20 and not np.any(rest & pivot)
+    for labels in (speed_labels(log), turning_labels(log)):
+        np.testing.assert_array_equal(labels == "standstill", rest)
+        np.testing.assert_array_equal(labels == "pivot", pivot)
+    assert pivoting(0.0, 0.5) is True and pivoting(0.0, 0.0) is False and pivoting(STANDSTILL_SPEED_MPS, 1.0) is False
+    assert pivoting(0.0, TURN_RATE_RADPS) is True
 
 
 def test_turning_tells_pivot_arc_straight_and_standstill():
-    v = [0.0, 0.0, 0.01, 0.5, 0.5, 0.5, 1.0, -0.5]
-    w = [0.0, 0.5, -0.8, 0.0, 0.05, 0.3, 0.15, -0.4]
+    v = [0.0, 0.0, 0.0, 0.0, 0.01, 0.5, 0.5, 0.5, 1.0, -0.5]
+    w = [0.0, 0.0, 0.0, 0.5, -0.8, 0.0, 0.05, 0.3, 0.15, -0.4]
+    # the third sample is still but a turn starts from it (not at rest): driving straight, slowly
     assert turning_labels(make_log(v, w)).tolist() == [
-        "standstill", "pivot", "pivot", "straight", "straight", "arc", "straight", "arc",
+        "standstill", "standstill", "straight", "pivot", "pivot", "straight", "straight", "arc", "straight", "arc",
     ]
 
 
