@@ -6,8 +6,11 @@ diagnosis (``energy.diagnose(..., split="runs")``: effects fitted on some of the
 runs, scored on the others) runs on the odd-numbered ones, so neither the model nor an
 effect is ever scored on a run it was fitted on. Models under test:
 
+- ``physics as given``: the CLI's default (``terrawatt diagnose --model physics``), the
+  Husky and ground presets with nothing fitted;
 - ``physics``: ``PhysicsCurrentModel(robot="husky", ground=<the ground's preset>)`` with its
-  default fitted coefficients (rolling resistance, lateral friction, idle current), per ground;
+  default fitted coefficients (rolling resistance, lateral friction, idle current, rest level),
+  per ground, fitted on the even runs (``--calibration-data`` in the CLI);
 - ``physics -turning_resistance`` / ``physics -coulomb_friction``: the same with one physics
   effect switched off (deliberately reduced: the diagnosis should find it);
 - ``physics (asphalt preset)`` on all grounds at once: one ground's coefficients for every
@@ -16,9 +19,11 @@ effect is ever scored on a run it was fitted on. Models under test:
   fit runs of the grounds given by ``--estimator-grounds`` (training takes minutes).
 
 It prints one row per (model, ground): the held-out gap before (whole-set charge error %,
-median 8 s section error %, RMSE A), where it lies (the two largest regime slices), the
-effects chosen, the held-out shrink of the squared current gap (%), the gap after, and
-what is left unexplained; then writes everything (rankings with intervals, verdicts) as JSON.
+median 8 s section error %, RMSE A), the rest samples' mean absolute error (A), where it lies
+(the two slices of largest net gap), the effects chosen (``?`` marks one whose fitted values
+are flagged implausible), the held-out shrink of the squared current gap (%), the gap after,
+and what is left unexplained; then writes everything (rankings with intervals, fitted values
+beside their priors, flags, verdicts) as JSON.
 
 Usage::
 
@@ -37,8 +42,13 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from energy import PhysicsCurrentModel, new_current_model, read_borealtc
 from energy.diagnosis import diagnose
+from energy.diagnosis.localise import largest_slices
+from energy.logs import rest_samples
+from energy.models.base import log_currents
 from energy.physics import EFFECTS
 from terrain.atomic import write_json_atomic
 
@@ -68,15 +78,25 @@ def _model(kind: str, ground: str, without: str | None, seed: int) -> Any:
     if kind == "estimator":
         return new_current_model("estimator", seed=seed, n_threads=1)
     effects = None if without is None else tuple(e for e in DRIVE_EFFECTS if e != without)
+    if kind == "preset":
+        return PhysicsCurrentModel(robot="husky", ground=ground, effects=effects, fit_parameters=())
     return PhysicsCurrentModel(robot="husky", ground=ground, effects=effects)
 
 
 def _where(d: Any, n: int = 2) -> list[dict[str, Any]]:
-    rows = [r for r in d.localisation if r.dimension in WHERE and r.n_samples]
-    multi = {dim for dim in WHERE if sum(1 for r in rows if r.dimension == dim) > 1}
-    rows = sorted((r for r in rows if r.dimension in multi), key=lambda r: -r.share_pct)
-    return [{"dimension": r.dimension, "label": r.label, "share_pct": r.share_pct, "gap_mah": r.gap_mah,
-             "duration_s": r.duration_s, "n_runs": r.n_runs} for r in rows[:n]]
+    rows = [r for r in largest_slices(d.localisation, 50) if r.dimension in WHERE][:n]
+    return [{"dimension": r.dimension, "label": r.label, "gap_mah": r.gap_mah, "gap_pct": r.gap_pct,
+             "gap_interval_mah": list(r.gap_interval_mah), "duration_s": r.duration_s, "n_runs": r.n_runs}
+            for r in rows]
+
+
+def rest_error_a(model: Any, logs: list[Any]) -> dict[str, Any]:
+    """The model's error on the logs' rest samples (wheels still, not accelerating): count, mean per side, MAE."""
+    err = [model.predict(log)[m] - log_currents(log)[m] for log in logs for m in [rest_samples(log)] if m.any()]
+    if not err:
+        return {"n": 0, "mean_a": [float("nan")] * 2, "mae_a": float("nan")}
+    e = np.concatenate(err)
+    return {"n": int(e.shape[0]), "mean_a": e.mean(axis=0).tolist(), "mae_a": float(np.abs(e).mean())}
 
 
 def run_case(case: dict[str, Any], data: str, seed: int, n_bootstrap: int) -> dict[str, Any]:
@@ -93,14 +113,18 @@ def run_case(case: dict[str, Any], data: str, seed: int, n_bootstrap: int) -> di
     d = diagnose(model, diag_logs, split="runs", seed=seed, n_bootstrap=n_bootstrap)
     t_diag = time.perf_counter() - t0
     shrink = d.waterfall[-1].shrink_pct
+    by_name = {s.name: s for s in d.ranking}
     return {
         "model": case["label"], "ground": case["ground"], "n_fit_runs": len(fit_logs), "n_runs": len(diag_logs),
         "n_samples": sum(len(g) for g in diag_logs), "fit_s": t_fit, "diagnose_s": t_diag,
         "before": d.before.to_dict(), "after": d.after.to_dict(), "where": _where(d),
+        "rest": rest_error_a(model, diag_logs),
+        "doubtful": [n for n in d.chosen if getattr(by_name[n], "doubtful", False)],
         "chosen": list(d.chosen), "learned_chosen": any(s.kind == "learned" for s in d.ranking if s.name in d.chosen),
         "shrink_pct": shrink, "unexplained_pct": 100.0 - shrink,
         "top": [{"name": s.name, "kind": s.kind, "shrink_pct": s.shrink_pct,
-                 "interval_pct": list(s.shrink_interval_pct), "parameters": dict(s.parameters)} for s in d.ranking[:5]],
+                 "interval_pct": list(s.shrink_interval_pct), "parameters": dict(s.parameters),
+                 "flags": list(getattr(s, "flags", ()))} for s in d.ranking[:5]],
         "waterfall": [w.to_dict() for w in d.waterfall], "verdict": list(d.verdict), "skipped": dict(d.skipped),
     }
 
@@ -110,6 +134,8 @@ def cases(grounds: list[str], estimator_grounds: list[str], estimator_runs: int 
     out = []
     for g in grounds:
         preset = PRESETS.get(g, "asphalt")
+        out.append({"label": "physics as given", "kind": "preset", "ground": g, "preset": preset, "without": None,
+                    "runs": None})
         out.append({"label": "physics", "kind": "physics", "ground": g, "preset": preset, "without": None, "runs": None})
         for w in REDUCED:
             out.append({"label": f"physics -{w}", "kind": "physics", "ground": g, "preset": preset, "without": w,
@@ -124,7 +150,7 @@ def cases(grounds: list[str], estimator_grounds: list[str], estimator_runs: int 
 
 
 def _where_text(where: list[dict[str, Any]]) -> str:
-    return "; ".join(f"{w['dimension']} {w['label']} {w['share_pct']:.0f} %" for w in where)
+    return "; ".join(f"{w['dimension']} {w['label']} {w['gap_mah']:+.0f} mAh" for w in where)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -156,14 +182,15 @@ def main(argv: list[str] | None = None) -> int:
         rows = [run_case(*p) for p in params]
     wall = time.perf_counter() - t0
 
-    print(f"{'model':<28} {'ground':<9} {'runs':>4} | {'before: Q %':>11} {'sect %':>6} {'RMSE':>5} | "
+    print(f"{'model':<28} {'ground':<9} {'runs':>4} | {'before: Q %':>11} {'sect %':>6} {'RMSE':>5} {'rest':>5} | "
           f"{'shrink %':>8} | {'after: Q %':>10} {'sect %':>6} {'RMSE':>5} | chosen; where the gap lies")
     for r in rows:
         b, a = r["before"], r["after"]
+        chosen = ", ".join(n + ("?" if n in r["doubtful"] else "") for n in r["chosen"]) or "-"
         print(f"{r['model']:<28} {r['ground']:<9} {r['n_runs']:>4} | {b['charge_error_pct']:>11.1f} "
-              f"{b['section_error_pct']:>6.1f} {b['rmse_a']:>5.2f} | {r['shrink_pct']:>8.1f} | "
+              f"{b['section_error_pct']:>6.1f} {b['rmse_a']:>5.2f} {r['rest']['mae_a']:>5.2f} | {r['shrink_pct']:>8.1f} | "
               f"{a['charge_error_pct']:>10.1f} {a['section_error_pct']:>6.1f} {a['rmse_a']:>5.2f} | "
-              f"{', '.join(r['chosen']) or '-'}; {_where_text(r['where'])}")
+              f"{chosen}; {_where_text(r['where'])}")
     print("\nbest candidates alone (held-out shrink %, 95 % interval):")
     for r in rows:
         top = ", ".join(f"{t['name']} {t['shrink_pct']:.1f} [{t['interval_pct'][0]:.1f}, {t['interval_pct'][1]:.1f}]"

@@ -5,6 +5,8 @@ import dataclasses
 import numpy as np
 import pytest
 
+from energy.logs import at_rest, rest_samples
+
 from energy import (
     EFFECTS,
     ConstantCurrentModel,
@@ -124,3 +126,40 @@ def test_physics_model_persists_custom_robot_and_ground(tmp_path):
     again = PhysicsCurrentModel.load(model.save(tmp_path / "p.pt"))
     assert again.robot == robot and again.ground == ground
     assert np.array_equal(again.predict(logs[0]), model.predict(logs[0]))
+
+
+def _with_stops(seed, rest_a, moving_extra_a, robot, ground):
+    """A log that stands still (speeds exactly 0) for its first and last 5 s: at rest the sensor
+    logs ``rest_a`` per side, moving it logs rest + extra + the physics' motoring current."""
+    t, v, w = _motion(seed)
+    still = (t < 5.0) | (t >= t[-1] - 5.0)
+    v, w = np.where(still, 0.0, v), np.where(still, 0.0, w)
+    model = PhysicsEnergyModel(robot, DRIVE_EFFECTS)
+    res = model.power(v, w, ground, accel_mps2=np.gradient(v, t), alpha_radps2=np.gradient(w, t), time_s=t)
+    sign = np.sign(res.motor_speed_radps)  # in the direction of rotation; from rest, the current that starts it
+    motoring = np.where(sign != 0, res.motor_current_a * sign, np.abs(res.motor_current_a))
+    rest = at_rest(v, w, np.gradient(v, t), np.gradient(w, t))  # still, and not starting or stopping
+    cur = np.maximum(np.asarray(rest_a) + motoring + np.where(rest, 0.0, moving_extra_a)[:, None], 0.0)
+    return _log(t, v, w, cur[:, 0], cur[:, 1])
+
+
+def test_rest_is_a_level_of_its_own_apart_from_the_idle_current_of_driving():
+    # Standing still the sensor reads 0.35 / 0.5 A; driving adds 1.5 A of speed-independent current.
+    # One idle constant (the old model) had to split the difference; the rest level takes the rest.
+    robot, ground = robot_preset("husky"), ground_preset("asphalt")
+    logs = [_with_stops(s, [0.35, 0.5], 1.5, robot, ground) for s in (0, 1)]
+    model = PhysicsCurrentModel("husky", "asphalt", fit_parameters=("idle_current_a", "rest_current_a")).fit(logs)
+    assert model.rest_current_a_ == pytest.approx([0.35, 0.5], abs=1e-9)
+    assert model.fitted_["rest_left_a"] == pytest.approx(0.35) and model.fitted_["rest_right_a"] == pytest.approx(0.5)
+    assert model.idle_current_a_ == pytest.approx(1.5, abs=0.02)
+    for log in logs:
+        rest = rest_samples(log)
+        assert rest.sum() >= 80  # the stops, less the samples where the robot starts or stops
+        np.testing.assert_allclose(model.predict(log)[rest], np.tile([0.35, 0.5], (rest.sum(), 1)), atol=1e-9)
+    # not fitted: the robot's rest level (the Husky's sensor: 0.59 A), nothing learned from the logs
+    given = PhysicsCurrentModel("husky", "asphalt", fit_parameters=()).fit(logs)
+    assert given.rest_current_a_.tolist() == [0.59, 0.59] and given.idle_current_a_ == 0.0 and given.fitted_ == {}
+    # logs that never stand still keep the robot's rest level even when it is fitted
+    moving = PhysicsCurrentModel("husky", "asphalt", fit_parameters=("rest_current_a",)).fit(
+        [_physics_truth(0, 0.06, 0.4, 0.8, robot, ground)])
+    assert moving.rest_current_a_.tolist() == [0.59, 0.59]

@@ -21,6 +21,7 @@ from energy import (
     WindowDataset,
     WindowSpec,
     estimator_preset,
+    load_current_model,
     read_borealtc,
     train_network,
     window_starts,
@@ -325,3 +326,29 @@ def test_fits_a_real_borealtc_run():
     pred = est.predict(short[2])
     assert pred.shape == (len(short[2]), 2) and np.all(np.isfinite(pred))
     assert np.all(pred >= 0.0)  # clipped to the (non-negative) training range
+
+
+def _stopping(seed: int) -> InteractionLog:
+    """_log with the robot standing still (speeds exactly 0) for 6 s in the middle, where the sensor logs
+    0.3 A left and 0.6 A right."""
+    log = _log(seed)
+    t = log.time_s
+    still = (t >= 17.0) & (t < 23.0)
+    v, w = np.where(still, 0.0, log.v_mps), np.where(still, 0.0, log.omega_radps)
+    left = np.where(still, 0.3, log.current_left_a)
+    right = np.where(still, 0.6, log.current_right_a)
+    return InteractionLog(t, v, w, left, right, log.accel_time_s, log.accel_z_mps2, meta=log.meta)
+
+
+@pytest.mark.parametrize("prior", [None, "husky"])
+def test_standing_still_is_predicted_at_the_rest_level_not_by_the_networks(prior, tmp_path):
+    from energy.logs import rest_samples
+
+    train, test = [_stopping(0), _stopping(1)], _stopping(2)
+    est = VibrationCurrentEstimator(_small(physics_prior=prior, max_epochs=3, patience=None), seed=0).fit(train)
+    np.testing.assert_allclose(est.rest_current_a_, [0.3, 0.6], atol=1e-9)
+    rest = rest_samples(test)
+    assert 40 <= rest.sum() < 60  # the 6 s stop at 10 Hz, less its first and last samples
+    np.testing.assert_allclose(est.predict(test)[rest], np.tile([0.3, 0.6], (rest.sum(), 1)), atol=1e-9)
+    est.save(tmp_path / "m.zip")
+    np.testing.assert_array_equal(load_current_model(tmp_path / "m.zip").predict(test), est.predict(test))
