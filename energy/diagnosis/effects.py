@@ -15,6 +15,7 @@ from .effects_measurement import (
     CurrentOffsetEffect,
     IdleCurrentEffect,
     ImuLagEffect,
+    RestCurrentEffect,
     TimeLagEffect,
 )
 from .effects_physics import (
@@ -22,6 +23,7 @@ from .effects_physics import (
     PHYSICS_CANDIDATES,
     MassEffect,
     MotorConstantEffect,
+    LateralFrictionEffect,
     PhysicsTermEffect,
     RollingResistanceEffect,
     SlopeEffect,
@@ -47,8 +49,10 @@ _CLASSES: dict[str, Any] = {
     "mass": MassEffect,
     "track_width": TrackWidthEffect,
     "rolling_resistance": RollingResistanceEffect,
+    "lateral_friction": LateralFrictionEffect,
     "motor_constant": MotorConstantEffect,
     "idle_current": IdleCurrentEffect,
+    "rest_current": RestCurrentEffect,
     "current_offset": CurrentOffsetEffect,
     "current_gain": CurrentGainEffect,
     "time_lag": TimeLagEffect,

@@ -1,4 +1,4 @@
-"""Measurement candidates: per-side current gain and offset, an idle current, time lags between streams."""
+"""Measurement candidates: per-side current gain and offset, an idle current, the level at rest, time lags between streams."""
 
 from __future__ import annotations
 
@@ -9,15 +9,16 @@ from typing import Any
 
 import numpy as np
 
-from ..logs import InteractionLog
+from ..logs import InteractionLog, rest_samples
 from ..models.base import CurrentModel
 from .effect_base import GAIN_PLAUSIBLE, Effect, EffectParameter
 
 __all__ = ["MEASUREMENT_CANDIDATES", "IMU_LAG_GRID_S", "OFFSET_PLAUSIBLE_A", "LAG_PLAUSIBLE_S", "CurrentGainEffect",
-           "CurrentOffsetEffect", "IdleCurrentEffect", "TimeLagEffect", "ImuLagEffect", "reads_vibration"]
+           "CurrentOffsetEffect", "IdleCurrentEffect", "RestCurrentEffect", "TimeLagEffect", "ImuLagEffect", "reads_vibration"]
 
 #: Measurement-effect candidates, in the order they are composed.
-MEASUREMENT_CANDIDATES: tuple[str, ...] = ("idle_current", "current_offset", "current_gain", "time_lag", "imu_lag")
+MEASUREMENT_CANDIDATES: tuple[str, ...] = ("idle_current", "rest_current", "current_offset", "current_gain", "time_lag",
+                                           "imu_lag")
 #: Lags (s) at which :class:`ImuLagEffect` re-predicts a log; its fit interpolates between them.
 IMU_LAG_GRID_S: tuple[float, ...] = (-0.4, -0.3, -0.2, -0.1, 0.0, 0.1, 0.2, 0.3, 0.4)
 #: Plausible current offsets and idle currents (A).
@@ -43,6 +44,33 @@ class IdleCurrentEffect(Effect):
 
     def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: Any) -> np.ndarray:
         return predicted_a + values[0]
+
+
+class RestCurrentEffect(Effect):
+    """The level the sensor logs standing still is off: ``I + [rest_left, rest_right]`` at the
+    rest samples (:func:`energy.logs.rest_samples`: wheels still, not accelerating) only.
+
+    Standing still is not driving: a model whose rest level is wrong (e.g. an idle current
+    that also carries the current of driving) is off there and nowhere else, which no offset
+    of the whole prediction can fix.
+    """
+
+    name = "rest_current"
+    kind = "measurement"
+    parameters = (EffectParameter("rest_left_a", 0.0, -5.0, 5.0, "A", None, *OFFSET_PLAUSIBLE_A, _OFFSET_NOTE),
+                  EffectParameter("rest_right_a", 0.0, -5.0, 5.0, "A", None, *OFFSET_PLAUSIBLE_A, _OFFSET_NOTE))
+    description = "level of the current logged standing still (per side)"
+
+    def unsupported(self, logs: Sequence[Any], terrain: Any, model: Any = None) -> str | None:
+        if not any(rest_samples(log).any() for log in logs if len(log) > 0):
+            return "no log stands still"
+        return None
+
+    def prepare(self, model: Any, log: InteractionLog) -> np.ndarray:
+        return rest_samples(log)[:, None].astype(np.float64)
+
+    def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: np.ndarray) -> np.ndarray:
+        return predicted_a + prepared * values[None, :2]
 
 
 class CurrentOffsetEffect(Effect):

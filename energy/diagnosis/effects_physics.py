@@ -19,7 +19,7 @@ from .model_currents import ParameterTable, PhysicsBasis, motoring_currents_a
 
 __all__ = ["PHYSICS_CANDIDATES", "PARAMETER_CANDIDATES", "ROLLING_RESISTANCE_PLAUSIBLE",
            "PhysicsTermEffect", "SlopeEffect", "MassEffect",
-           "TrackWidthEffect", "RollingResistanceEffect", "MotorConstantEffect", "Reprediction", "log_ground_labels"]
+           "TrackWidthEffect", "RollingResistanceEffect", "LateralFrictionEffect", "MotorConstantEffect", "Reprediction", "log_ground_labels"]
 
 #: Physics effects offered as candidates (those that change the motor current).
 PHYSICS_CANDIDATES: tuple[str, ...] = (
@@ -28,7 +28,8 @@ PHYSICS_CANDIDATES: tuple[str, ...] = (
     "speed_saturation",
 )
 #: Parameter-error candidates of a physics model.
-PARAMETER_CANDIDATES: tuple[str, ...] = ("mass", "track_width", "rolling_resistance", "motor_constant")
+PARAMETER_CANDIDATES: tuple[str, ...] = ("mass", "track_width", "rolling_resistance", "lateral_friction",
+                                         "motor_constant")
 
 _GAIN = EffectParameter("gain", 1.0, 0.0, 3.0, "1", None, *GAIN_PLAUSIBLE,
                         "the physics' own term, within the usual error of its parameters")
@@ -231,6 +232,29 @@ class TrackWidthEffect(_RepredictEffect):
 
     def repredict(self, b: PhysicsBasis, log: InteractionLog, value: float, index: Any = None) -> np.ndarray:
         return motoring_currents_a(b, log, robot=b.robot.replace(track_width_multiplier=value))
+
+
+class LateralFrictionEffect(_RepredictEffect):
+    """An error of the lateral friction coefficient of the model's skid-steer turning resistance.
+
+    Offered to a physics model that has ``turning_resistance`` (without it the coefficient
+    does nothing; the ``turning_resistance`` candidate then adds the term itself): the
+    turning moment of a model whose term is right in form but wrong in size.
+    """
+
+    name = "lateral_friction"
+    parameters = (EffectParameter("lateral_friction_coef", 0.5, 0.0, 2.0, "1", "lateral_friction_coef", 0.1, 1.0,
+                                  "sliding friction of wheels or tracks: ice ~0.1 to rubber on concrete ~1"),)
+    description = "lateral friction coefficient of skid-steer turning (the model's turning resistance re-sized)"
+
+    def applies_to(self, model: Any) -> bool:
+        return _is_physics(model) and "turning_resistance" in model.effects_
+
+    def nominal(self, b: PhysicsBasis) -> float:
+        return float(b.ground.effective_lateral_friction_coef)
+
+    def repredict(self, b: PhysicsBasis, log: InteractionLog, value: float, index: Any = None) -> np.ndarray:
+        return motoring_currents_a(b, log, ground=b.ground.replace(lateral_friction_coef=value))
 
 
 def log_ground_labels(log: InteractionLog) -> np.ndarray | None:

@@ -68,7 +68,7 @@ from terrain.procedural import flat_map, ramp_map
 from terrain.terrain_map import TerrainMap
 
 from ..ground import GroundParams
-from ..logs import InteractionLog
+from ..logs import InteractionLog, at_rest
 from ..models.base import CurrentModel
 from ..models.baselines import PhysicsCurrentModel
 from ..params import ground_preset, robot_preset
@@ -91,6 +91,7 @@ PARAMETER_EFFECTS: dict[str, str] = {
     "mass": "15 kg payload: truth 65 kg, model 50 kg",
     "track_width": "effective track multiplier: truth 2.25, model 1.875",
     "rolling_resistance": "rolling resistance of the ground: truth 1.6 x the model's",
+    "lateral_friction": "lateral friction of skid steering: truth 1.5 x the model's",
     "motor_constant": "torque constant: truth 0.85 x the model's (current / 0.85)",
 }
 #: Measurement effects and how the truth logs are altered.
@@ -99,6 +100,7 @@ MEASUREMENT_EFFECTS: dict[str, str] = {
     "current_offset": "per-side current offset: left +0.25 A, right -0.15 A",
     "time_lag": "the current stream lags the drive stream by 0.12 s",
     "idle_current": "the model has no idle current (truth 0.59 A)",
+    "rest_current": "standing still the sensor reads 0 (its deadband), the model its 0.59 A offset",
 }
 #: Catalogued effects no drive-current log can show, and why: their scenarios log battery power.
 POWER_ONLY_EFFECTS: dict[str, str] = {"armature_heat": "copper loss changes the electrical power, not the motor current",
@@ -133,6 +135,12 @@ class WithheldGap:
         return dataclasses.asdict(self)
 
 
+def _rest(run: Any) -> np.ndarray:
+    """Where a truth run stands still, from the speeds it drove (as its log reports them)."""
+    t, v, w = run.log.time_s, run.actual_v_mps, run.actual_omega_radps
+    return at_rest(v, w, np.gradient(v, t), np.gradient(w, t))
+
+
 def _husky_variant(**motor: float) -> RobotParams:
     rb = robot_preset("husky")
     return rb.replace(motor=dataclasses.replace(rb.motor, **motor)) if motor else rb
@@ -165,6 +173,9 @@ class Scenario:
         Measurement of the logged currents (idle current, noise, outliers, quantisation).
     current_gain, current_offset_a : (float, float)
         Per-side gain and offset applied to the truth currents (measurement effects).
+    rest_shift_a : (float, float)
+        Per-side shift of the truth currents where the robot stands still
+        (:func:`energy.logs.at_rest` of the tracked speeds; a measurement effect).
     lag_s : float
         Delay of the current stream behind the drive stream (s).
     model_idle : bool
@@ -189,6 +200,7 @@ class Scenario:
     noise: NoiseModel = field(default_factory=NoiseModel)
     current_gain: tuple[float, float] = (1.0, 1.0)
     current_offset_a: tuple[float, float] = (0.0, 0.0)
+    rest_shift_a: tuple[float, float] = (0.0, 0.0)
     lag_s: float = 0.0
     model_idle: bool = True
     power_logs: bool = False
@@ -217,7 +229,8 @@ class Scenario:
         check_int("n_runs", self.n_runs, low=2, owner=own)
         check_real("run_duration_s", self.run_duration_s, low=5.0, high=600.0, owner=own)
         check_real("lag_s", self.lag_s, low=0.0, high=2.0, owner=own)
-        for k, pair in (("current_gain", self.current_gain), ("current_offset_a", self.current_offset_a)):
+        for k, pair in (("current_gain", self.current_gain), ("current_offset_a", self.current_offset_a),
+                        ("rest_shift_a", self.rest_shift_a)):
             if len(tuple(pair)) != 2:
                 raise InvalidParameterError(f"Scenario.{k} must be a pair (left, right), got {pair!r}")
             for v in pair:
@@ -254,7 +267,8 @@ class Scenario:
         """The model's values by the same names (its nominal robot and ground, no alteration)."""
         out = self._values(self.model_robot or self.robot, self.model_ground or self.ground,
                            self.noise.current_offset_a if self.model_idle else 0.0)
-        out.update(gain_left=1.0, gain_right=1.0, offset_left_a=0.0, offset_right_a=0.0, lag_s=0.0)
+        out.update(gain_left=1.0, gain_right=1.0, offset_left_a=0.0, offset_right_a=0.0, rest_left_a=0.0,
+                   rest_right_a=0.0, lag_s=0.0)
         return out
 
     def _values(self, robot: RobotParams, ground: GroundParams, idle: float) -> dict[str, float]:
@@ -267,17 +281,20 @@ class Scenario:
         out["lateral_friction_coef"] = float(ground.effective_lateral_friction_coef)
         out.update(gain_left=float(self.current_gain[0]), gain_right=float(self.current_gain[1]),
                    offset_left_a=float(self.current_offset_a[0]), offset_right_a=float(self.current_offset_a[1]),
+                   rest_left_a=float(self.rest_shift_a[0]), rest_right_a=float(self.rest_shift_a[1]),
                    lag_s=float(self.lag_s), idle_current_a=float(idle))
         return out
 
     # ------------------------------------------------------------ generation
     def _measure(self, motoring: np.ndarray, time_s: np.ndarray, seed: int, *, altered: bool,
-                 idle: bool = True) -> tuple[np.ndarray, np.ndarray]:
+                 idle: bool = True, rest: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         cur = motoring
         if altered:
             if self.lag_s > 0:
                 cur = np.column_stack([np.interp(time_s - self.lag_s, time_s, cur[:, k]) for k in range(2)])
             cur = np.asarray(self.current_gain) * cur + np.asarray(self.current_offset_a)
+            if rest is not None and any(self.rest_shift_a):
+                cur = cur + rest[:, None] * np.asarray(self.rest_shift_a)
         noise = self.noise if idle else dataclasses.replace(self.noise, current_offset_a=0.0)
         streams = np.random.SeedSequence(seed).spawn(3)
         rngs = {k: np.random.default_rng(s) for k, s in zip(("current_noise", "outliers", "side_gain"), streams)}
@@ -321,7 +338,7 @@ class Scenario:
         logs = []
         for k, (run, motoring, run_seed) in enumerate(self._runs(seed)):
             log = run.log
-            _, meas = self._measure(motoring, log.time_s, run_seed, altered=True)
+            _, meas = self._measure(motoring, log.time_s, run_seed, altered=True, rest=_rest(run))
             notes = f"withheld-effect scenario {self.name!r}, run {k}; {log.meta.notes}"
             meta = dataclasses.replace(log.meta, velocity_source="measured", notes=notes)
             volts = amps = None
@@ -382,7 +399,7 @@ def withheld_gap(sc: Scenario, seed: int | None = 0) -> WithheldGap:
                           [np.asarray(r.breakdown.total_power_w) for r, _, _ in model], measured, _DT_S)
     for (run, mot, rs), (_, mot_m, _) in zip(truth, model):
         t = run.log.time_s
-        clean, meas = sc._measure(mot, t, rs, altered=True)
+        clean, meas = sc._measure(mot, t, rs, altered=True, rest=_rest(run))
         clean_m, _ = sc._measure(mot_m, t, rs, altered=False, idle=sc.model_idle)
         to_mah = _DT_S / 3.6
         q += float(clean.sum()) * to_mah
@@ -432,6 +449,8 @@ def _make_scenarios() -> dict[str, Scenario]:
                  robot=husky.replace(track_width_multiplier=2.25), model_robot=husky),
         Scenario("rolling_resistance", ("rolling_resistance",), "mixed", ground=snow.replace(
             rolling_resistance_coef=1.6 * snow.rolling_resistance_coef), model_ground=snow),
+        Scenario("lateral_friction", ("lateral_friction",), "pivots_arcs", ground=wood.replace(
+            lateral_friction_coef=1.5 * wood.effective_lateral_friction_coef), model_ground=wood),
         Scenario("motor_constant", ("motor_constant",), "mixed", ground=wood,
                  robot=_husky_variant(torque_constant_nm_per_a=0.85 * 0.044, back_emf_v_s_per_rad=0.85 * 0.044,
                                       max_torque_nm=0.85 * 0.044 * 30.0),
@@ -440,6 +459,7 @@ def _make_scenarios() -> dict[str, Scenario]:
         Scenario("current_offset", ("current_offset",), "mixed", ground=wood, current_offset_a=(0.25, -0.15)),
         Scenario("time_lag", ("time_lag",), "start_stop", ground=wood, lag_s=0.12),
         Scenario("idle_current", ("idle_current",), "mixed", ground=wood, model_idle=False),
+        Scenario("rest_current", ("rest_current",), "start_stop", ground=wood, rest_shift_a=(-0.59, -0.59)),
     ]
     for name, why in POWER_ONLY_EFFECTS.items():
         s.append(Scenario(name, (name,), "pivots_arcs" if name == "armature_heat" else "mixed", ground=wood,
