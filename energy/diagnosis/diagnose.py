@@ -176,8 +176,11 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
     ranked by held-out shrink, then added greedily (the set refitted jointly) while the next
     one improves the held-out gap significantly (bootstrap lower bound > 0 and at least
     :data:`SIGNIFICANT_SHRINK_PCT` points). When no catalogued effect is significant, the
-    learned residual correction is tried, labelled as such. Nothing is scored on the data
-    it was fitted on; the inputs are not modified.
+    learned residual correction is scored, labelled as such, and the verdict says what it
+    would explain; it is added to the corrected model only when asked for by name
+    (``effects=[..., "learned_residual"]``): a correction that is not physics, fitted to the
+    very gap it explains, is never slipped in. Nothing is scored on the data it was fitted
+    on; the inputs are not modified.
 
     Parameters
     ----------
@@ -191,7 +194,8 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
     terrain : TerrainMap, optional
         The map the runs drove on (slope effect, grade and space localisation).
     effects : sequence of str or Effect, optional
-        Candidates (default: the whole catalogue but the learned correction).
+        Candidates (default: the whole catalogue but the learned correction, which is then
+        scored but never added).
     split : {"runs", "blocks"}
     n_blocks : int
         Folds of runs (at most the number of runs), or blocks per run (>= 2).
@@ -255,7 +259,7 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
     runner = SetRunner(data, sp, client=client, progress=progress)
     try:
         return _select(model, items, predictions, terrain, robot, usable, learned, skipped, sp, data, runner,
-                       section_s, n_bootstrap, seed, power)
+                       section_s, n_bootstrap, seed, power, learned_requested=effects is not None)
     finally:
         runner.close()
 
@@ -263,19 +267,28 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
 def _select(model: CurrentModel, items: list[InteractionLog], predictions: list[np.ndarray], terrain: Any,
             robot: Any, usable: list[Effect], learned: Effect | None, skipped: dict[str, str], sp: Split,
             data: DiagnosisData, runner: SetRunner, section_s: float, n_bootstrap: int,
-            seed: int | None, power: PowerDiagnosis | None = None) -> Diagnosis:
-    """Rank, add greedily, build the waterfall, the verdict and the corrected model."""
+            seed: int | None, power: PowerDiagnosis | None = None, *, learned_requested: bool = False) -> Diagnosis:
+    """Rank, add greedily, build the waterfall, the verdict and the corrected model (the learned
+    correction only when ``learned_requested``: it was named among the candidates)."""
     sel = select_effects(usable, data, sp, runner, n_bootstrap, seed)
     none = sel.none
     chosen, sets, scores, order = list(sel.chosen), list(sel.sets), dict(sel.scores), list(sel.order)
+    learned_note = None
     if not chosen and learned is not None:
         s = score_effect_set([learned], data, sp)
         scores[learned.name] = score_entry(learned, none, s, none, s, n_bootstrap, seed)
         order.append(learned)
         if significant(none, s, none, n_bootstrap, seed):
-            chosen.append(learned)
-            sets.append(s)
-            order = [learned] + order[:-1]
+            if learned_requested:
+                chosen.append(learned)
+                sets.append(s)
+                order = [learned] + order[:-1]
+            else:
+                lo, hi = scores[learned.name].shrink_interval_pct
+                learned_note = (f"A learned residual correction (not physics) would explain "
+                                f"{fmt_number(scores[learned.name].shrink_pct, 3)} % of the squared current gap "
+                                f"(95 % interval {fmt_number(lo, 3)} … {fmt_number(hi, 3)} %); it is not added to the "
+                                "corrected model unless asked for (effects=[..., 'learned_residual']).")
 
     ranking = tuple(scores[e.name] for e in order)
     waterfall = [_step("as given", items, none, none, section_s)]
@@ -286,5 +299,7 @@ def _select(model: CurrentModel, items: list[InteractionLog], predictions: list[
     corrected = CorrectedCurrentModel(model, list(chosen), robot, terrain).fit(items)
     names = tuple(e.name for e in chosen)
     verdict = _verdict(before, after, ranking, names, localisation, skipped, sp.kind, power)
+    if learned_note is not None:
+        verdict = (*verdict[:2], learned_note, *verdict[2:])
     return Diagnosis(before, after, localisation, ranking, names, tuple(waterfall), verdict, corrected, skipped, sp.kind,
                      power)
