@@ -32,6 +32,7 @@ __all__ = [
     "LinearCurrentModel",
     "PhysicsCurrentModel",
     "PHYSICS_FIT_PARAMETERS",
+    "DEFAULT_FIT_PARAMETERS",
 ]
 
 _trapezoid = getattr(np, "trapezoid", None) or np.trapz
@@ -124,6 +125,9 @@ class LinearCurrentModel(CurrentModel):
         self.coef_ = real_array("coef", state["coef"]).reshape(4, 2)
 
 
+#: What :class:`PhysicsCurrentModel` fits by default: quantities the logs can tell apart.
+DEFAULT_FIT_PARAMETERS: tuple[str, ...] = ("rolling_resistance_coef", "lateral_friction_coef", "rest_current_a")
+
 #: Quantities :class:`PhysicsCurrentModel` can fit, with their bounds.
 PHYSICS_FIT_PARAMETERS: dict[str, tuple[float, float]] = {
     "rolling_resistance_coef": (0.0, 2.0),
@@ -189,8 +193,12 @@ class PhysicsCurrentModel(CurrentModel):
         Starting ground (preset name or parameters); the fitted coefficients replace its
         values, the others (e.g. slip coefficients) are kept.
     fit_parameters : tuple of str
-        Names from :data:`PHYSICS_FIT_PARAMETERS` to fit (default: rolling resistance,
-        lateral friction, idle current, rest level). ``"rest_current_a"`` is fitted apart,
+        Names from :data:`PHYSICS_FIT_PARAMETERS` to fit (default
+        :data:`DEFAULT_FIT_PARAMETERS`: rolling resistance, lateral friction, rest level; not
+        the idle current, which on level ground is a constant current while moving just as
+        rolling resistance is, so a fit of both cannot tell them apart and the idle current
+        takes what is physics — and then a payload, which scales rolling resistance, can no
+        longer be told from a current gain). ``"rest_current_a"`` is fitted apart,
         in closed form: the mean current of each side over the rest samples (a side keeps
         ``robot.rest_current_a`` when the logs never stand still); the others by least
         squares on the moving samples. ``()``: the model as given (``fit`` only checks
@@ -220,8 +228,7 @@ class PhysicsCurrentModel(CurrentModel):
     _param_names = ("robot", "ground", "fit_parameters", "effects", "clip_negative")
 
     def __init__(self, robot: str | RobotParams = "husky", ground: str | GroundParams = "asphalt",
-                 fit_parameters: Sequence[str] = ("rolling_resistance_coef", "lateral_friction_coef", "idle_current_a",
-                                                  "rest_current_a"),
+                 fit_parameters: Sequence[str] = DEFAULT_FIT_PARAMETERS,
                  effects: Sequence[str] | None = None, clip_negative: bool = True) -> None:
         self.robot = robot
         self.ground = ground

@@ -65,6 +65,10 @@ from ..features import (
 from ..logs import InteractionLog, rest_samples
 from .base import CurrentModel, ModelRecord, log_currents, package_versions
 from .baselines import PhysicsCurrentModel
+
+#: What the physics prior fits: the networks learn the residual, so the best fit matters, not which
+#: constant current (idle or rolling resistance) carries it.
+PRIOR_FIT_PARAMETERS = ("rolling_resistance_coef", "lateral_friction_coef", "idle_current_a", "rest_current_a")
 from .config import EstimatorConfig, estimator_preset
 from .data import WindowDataset
 from .ensemble import train_ensemble
@@ -271,7 +275,8 @@ class VibrationCurrentEstimator(CurrentModel):
             self.current_range_a_ = np.stack([cur.min(axis=0), cur.max(axis=0)])
             self.physics_ = None
             if cfg.physics_prior is not None:
-                self.physics_ = PhysicsCurrentModel(robot=cfg.physics_prior).fit(logs)
+                prior = PhysicsCurrentModel(robot=cfg.physics_prior, fit_parameters=PRIOR_FIT_PARAMETERS)
+                self.physics_ = prior.fit(logs)
                 logs = [self._residual_log(lg) for lg in logs]
             rate = cfg.rate_hz if cfg.rate_hz is not None else float(np.median([lg.drive_rate_hz for lg in logs]))
             grids = [self._grid_log(lg, rate, cfg.resample_method) for lg in logs]
