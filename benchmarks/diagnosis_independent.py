@@ -90,8 +90,9 @@ HITS: dict[str, tuple[str, ...]] = {
     "none": (),
     # +80 kg: the catalogue's mass parameter scales every mass term, as the payload does
     "payload": ("mass",),
-    # Wong's radius-dependent lateral coefficient: the catalogue's turning resistance
-    "turning": ("turning_resistance",),
+    # Wong's radius-dependent lateral coefficient: the catalogue's turning resistance, or, for a
+    # base that has the term (fitted to ~0 on calibration runs without it), its coefficient re-sized
+    "turning": ("turning_resistance", "lateral_friction"),
     # a gain on the left side's logged current
     "left_gain": ("current_gain",),
     # the drive stream's clock late against the IMU's: the catalogue's clock offset between the

@@ -8,20 +8,21 @@ import numpy as np
 
 from ..logs import InteractionLog
 from .effect_base import Effect, EffectParameter
+from .regimes import pivoting
 
 __all__ = ["LEARNED_FEATURES", "LearnedResidualEffect", "regime_features"]
 
 #: Names of the regime features of :func:`regime_features`.
 LEARNED_FEATURES: tuple[str, ...] = ("one", "abs_v", "abs_omega", "accel", "abs_accel", "abs_v_omega", "pivot")
 _RIDGE = 1e-2  # per sample-count penalty weight
-_PIVOT_MPS, _TURN_RADPS = 0.05, 0.05
 
 
 def regime_features(log: InteractionLog) -> np.ndarray:
-    """Regime features of each sample (N, 7): 1, |v|, |omega|, dv/dt, |dv/dt|, |v omega|, pivot (0/1)."""
+    """Regime features of each sample (N, 7): 1, |v|, |omega|, dv/dt, |dv/dt|, |v omega|, pivot (0/1,
+    :func:`~energy.diagnosis.regimes.pivoting`: the localisation's pivot class)."""
     v, w, t = log.v_mps, log.omega_radps, log.time_s
     acc = np.gradient(v, t) if len(log) > 1 else np.zeros(len(log))
-    pivot = ((np.abs(v) < _PIVOT_MPS) & (np.abs(w) > _TURN_RADPS)).astype(np.float64)
+    pivot = np.asarray(pivoting(v, w), dtype=np.float64)
     return np.column_stack([np.ones(len(log)), np.abs(v), np.abs(w), acc, np.abs(acc), np.abs(v * w), pivot])
 
 

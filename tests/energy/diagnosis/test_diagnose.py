@@ -252,3 +252,24 @@ def test_a_client_that_is_not_one(turning):
         diagnose(model, logs, effects=CANDIDATES, client="tcp://localhost:8786")
     with pytest.raises(InvalidParameterError, match="progress"):
         diagnose(model, logs, effects=CANDIDATES, progress="yes")
+
+
+def test_the_learned_correction_is_reported_but_never_added_unless_asked_for():
+    # A gap no catalogued effect has the shape of (+4 A per m/s x rad/s of |v omega| on both sides,
+    # no physical law): by default the learned correction is scored and the verdict says what it
+    # would explain, but the corrected model stays the model as given; named, it is added.
+    sc = dataclasses.replace(null_scenario(), n_runs=4, run_duration_s=12.0)
+    model = sc.make_model(seed=0)
+    logs = []
+    for log in sc.make_logs(seed=0):
+        bump = 4.0 * np.abs(log.v_mps * log.omega_radps)
+        logs.append(dataclasses.replace(log, current_left_a=log.current_left_a + bump,
+                                        current_right_a=log.current_right_a + bump))
+    d = diagnose(model, logs, seed=0, n_bootstrap=50)
+    learned = {s.name: s for s in d.ranking}["learned_residual"]
+    assert d.chosen == () and learned.shrink_pct > 30.0  # it would explain much of the gap ...
+    assert "learned_residual" not in d.chosen and not d.corrected_model.effects_  # ... and is not slipped in
+    assert any("learned residual correction (not physics) would explain" in line for line in d.verdict)
+    asked = diagnose(model, logs, seed=0, n_bootstrap=50,
+                     effects=["coulomb_friction", "viscous_friction", "learned_residual"])
+    assert "learned_residual" in asked.chosen
