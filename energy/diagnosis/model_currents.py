@@ -131,12 +131,12 @@ def motoring_currents_a(basis: PhysicsBasis, log: InteractionLog, *, effects: tu
 def unclipped_prediction(model: Any, log: InteractionLog, basis: PhysicsBasis | None = None) -> np.ndarray:
     """The model's ``[left, right]`` prediction before its clamp at 0 (N, 2), A.
 
-    A :class:`~energy.PhysicsCurrentModel`: its rest level plus motoring current, plus the
-    idle current where the log moves; any other model: ``model.predict(log)``.
+    A :class:`~energy.PhysicsCurrentModel`: its rest level, plus the idle and the motoring
+    current where the log moves; any other model: ``model.predict(log)``.
     """
     if basis is not None and basis.is_model:
-        idle = np.where(rest_samples(log)[:, None], 0.0, basis.idle_current_a)
-        return np.asarray(basis.rest_current_a) + idle + motoring_currents_a(basis, log)
+        moving = basis.idle_current_a + motoring_currents_a(basis, log)
+        return np.asarray(basis.rest_current_a) + np.where(rest_samples(log)[:, None], 0.0, moving)
     return np.asarray(model.predict(log), dtype=np.float64)
 
 

@@ -433,7 +433,10 @@ def _make_scenarios() -> dict[str, Scenario]:
         Scenario("coulomb_friction", ("coulomb_friction",), "mixed", ground=snow),
         Scenario("viscous_friction", ("viscous_friction",), "speed_sweep", ground=snow),
         Scenario("inertia", ("inertia",), "start_stop", ground=wood),
-        Scenario("static_friction", ("static_friction",), "pivot_go", ground=sand),
+        Scenario("static_friction", ("static_friction",), "pivot_go", ground=sand, excitable=False,
+                 note="the truth starts moving within one sample of a command, so the breakaway excess at "
+                      "standstill never shows; it used to, only because a stopped robot crept on at a few "
+                      "um/s with its breakaway force applied for the whole rest"),
         Scenario("stribeck", ("stribeck",), "creep", ground=sand),
         Scenario("longitudinal_slip", ("longitudinal_slip",), "start_stop", ground=loose_snow),
         Scenario("lateral_slip", ("lateral_slip",), "tight_arcs", ground=loose_snow),

@@ -168,10 +168,10 @@ class PhysicsCurrentModel(CurrentModel):
 
     Prediction per side: ``max(rest + idle + I_motor * sign(omega_motor), 0)`` with
     ``I_motor`` the ``motor_current_a`` of :meth:`PhysicsEnergyModel.power` for the logged
-    ``v``, ``omega``, their time derivatives (``numpy.gradient``) and zero slope, and
-    ``idle`` only where the log moves (not :func:`energy.logs.at_rest`): standing still the
-    model predicts the rest level ``rest_current_a_`` (the physics draws no current at
-    rest). The rest level is what the current sensor logs with the wheels still (a sensor
+    ``v``, ``omega``, their time derivatives (``numpy.gradient``) and zero slope, where the
+    log moves; standing still (:func:`energy.logs.at_rest`) the rest level
+    ``rest_current_a_`` alone: a robot at rest pushes against nothing, whatever friction
+    law the physics applies to a speed of a few mm/s read off jittery odometry. The rest level is what the current sensor logs with the wheels still (a sensor
     offset, in every sample: ``robot.rest_current_a``, or the mean of the logs' rest samples
     per side when ``"rest_current_a"`` is fitted); the idle current is the speed-independent
     current of *driving* on top of it. The
@@ -279,7 +279,7 @@ class PhysicsCurrentModel(CurrentModel):
         # current in the direction of rotation: > 0 motoring (either way round), < 0 back-driven
         sign = np.sign(res.motor_speed_radps)
         motoring = np.where(sign != 0, i_m * sign, np.abs(i_m))
-        cur = rest_a + motoring + np.where(at_rest(v, w, a, alpha)[:, None], 0.0, idle_a)
+        cur = rest_a + np.where(at_rest(v, w, a, alpha)[:, None], 0.0, idle_a + motoring)
         return np.maximum(cur, 0.0) if self.clip_negative else cur
 
     @staticmethod

@@ -25,7 +25,7 @@ from terrain.terrain_map import UNKNOWN_GROUND, TerrainMap
 from ..battery import Battery
 from ..commands import CommandProfile, command_series, uniform_step_s
 from ..ground import GroundParams
-from ..logs import InteractionLog, LogMeta
+from ..logs import REST_OMEGA_RADPS, REST_SPEED_MPS, InteractionLog, LogMeta
 from ..physics import EFFECTS, PhysicsEnergyModel
 from ..profiles import terrain_along, waypoint_commands
 from ..robot import GRAVITY_MPS2, RobotParams
@@ -406,8 +406,14 @@ class TruthSimulator:
             table[j] = lookup[name]
         return table[inverse.reshape(-1)]
 
-    def _track(self, cmd: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        """First-order tracking (steady at the first command) and its backward derivative."""
+    def _track(self, cmd: np.ndarray, dt: float, still_below: float) -> tuple[np.ndarray, np.ndarray]:
+        """First-order tracking (steady at the first command) and its backward derivative.
+
+        Commanded to stop, the robot stops: once the tracked value of a zero command falls
+        below ``still_below`` it is 0 (and so is its rate), instead of creeping towards 0 for
+        ever with full Coulomb friction at a few mm/s. The rate is the unsnapped one
+        elsewhere, so the stop adds no spike of acceleration.
+        """
         tau = self.velocity_time_constant_s
         if tau > 0:
             a = math.exp(-dt / tau)
@@ -416,6 +422,8 @@ class TruthSimulator:
         else:
             out = cmd.copy()
         rate = np.diff(out, prepend=out[0]) / dt
+        still = (cmd == 0.0) & (np.abs(out) < still_below)
+        out[still], rate[still] = 0.0, 0.0
         return out, rate
 
     def _simulate(self, t: np.ndarray, v_cmd: np.ndarray, w_cmd: np.ndarray, gidx: np.ndarray,
@@ -427,8 +435,8 @@ class TruthSimulator:
         streams = dict(zip(_STREAMS, ss.spawn(len(_STREAMS))))
         rngs = {k: np.random.default_rng(s) for k, s in streams.items()}
 
-        v, acc = self._track(v_cmd, dt)
-        w, alpha = self._track(w_cmd, dt)
+        v, acc = self._track(v_cmd, dt, REST_SPEED_MPS)
+        w, alpha = self._track(w_cmd, dt, REST_OMEGA_RADPS)
         half_track = self.robot.track_width_multiplier * self.robot.track_width_m / 2.0
         wheel_speed = np.maximum(np.abs(v), np.abs(w) * half_track)
         travel = np.concatenate(([0.0], np.cumsum(0.5 * (wheel_speed[1:] + wheel_speed[:-1]) * np.diff(t))))
