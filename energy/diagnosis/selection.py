@@ -77,7 +77,8 @@ class Selection:
 def select_effects(usable: Sequence[Effect], data: DiagnosisData, split: Split, runner: SetRunner,
                    n_bootstrap: int, seed: int | None) -> Selection:
     """Rank ``usable`` by held-out shrink; add greedily (every remaining candidate refitted jointly
-    with the chosen ones at each step) while the next one is :func:`significant`."""
+    with the chosen ones at each step) while the next one is :func:`significant`. Of candidates
+    the held-out data cannot tell apart, one with plausible fitted values goes first."""
     none = score_effect_set([], data, split)
     alone = dict(zip((e.name for e in usable), runner.score([[e] for e in usable], "candidates alone")))
     chosen: list[Effect] = []
@@ -93,7 +94,7 @@ def select_effects(usable: Sequence[Effect], data: DiagnosisData, split: Split, 
         eligible = [e for e in remaining if not e.negligible(trials[e.name].median_values()[-1])]
         if not eligible:
             break
-        best = min(eligible, key=lambda e: trials[e.name].sse_units.sum())
+        best = _likeliest(eligible, trials, none, n_bootstrap, seed)
         if not significant(sets[-1], trials[best.name], none, n_bootstrap, seed):
             break
         scores[best.name] = score_entry(best, none, alone[best.name], sets[-1], trials[best.name], n_bootstrap, seed,
@@ -105,6 +106,23 @@ def select_effects(usable: Sequence[Effect], data: DiagnosisData, split: Split, 
     scores.update({e.name: score_entry(e, none, alone[e.name], sets[-1], trials[e.name], n_bootstrap, seed,
                                        data.prepared.get(e.name, ())) for e in remaining})
     return Selection(none, alone, tuple(chosen), tuple(sets), scores, tuple(chosen) + tuple(remaining))
+
+
+def _likeliest(eligible: Sequence[Effect], trials: dict[str, SetScore], none: SetScore, n_bootstrap: int,
+               seed: int | None) -> Effect:
+    """The candidate to add next: the best held-out fit, unless its fitted values are implausible
+    and a candidate with plausible values explains the held-out gap as well — one the best does
+    not beat :func:`significant`-ly. The data cannot tell those two apart; physics can."""
+    by_fit = sorted(eligible, key=lambda e: trials[e.name].sse_units.sum())
+    best = by_fit[0]
+    if not best.plausibility_flags(trials[best.name].median_values()[-1]):
+        return best
+    for alt in by_fit[1:]:
+        if alt.kind == "learned" or alt.plausibility_flags(trials[alt.name].median_values()[-1]):
+            continue
+        if not significant(trials[alt.name], trials[best.name], none, n_bootstrap, seed):
+            return alt
+    return best
 
 
 def plausible_alternative(doubtful: EffectScore, ranking: Sequence[EffectScore],
