@@ -11,7 +11,7 @@ import numpy as np
 
 from ..logs import InteractionLog, rest_samples
 from ..models.base import CurrentModel
-from .effect_base import GAIN_PLAUSIBLE, Effect, EffectParameter
+from .effect_base import GAIN_PLAUSIBLE, BasisEffect, Effect, EffectParameter
 
 __all__ = ["MEASUREMENT_CANDIDATES", "IMU_LAG_GRID_S", "OFFSET_PLAUSIBLE_A", "LAG_PLAUSIBLE_S", "CurrentGainEffect",
            "CurrentOffsetEffect", "IdleCurrentEffect", "RestCurrentEffect", "TimeLagEffect", "ImuLagEffect", "reads_vibration"]
@@ -89,20 +89,27 @@ class CurrentOffsetEffect(Effect):
         return predicted_a + values[None, :2]
 
 
-class CurrentGainEffect(Effect):
-    """A per-side current gain (sensor calibration, wear): ``I * [gain_left, gain_right]``."""
+class CurrentGainEffect(BasisEffect):
+    """A per-side current gain (sensor calibration, wear) on the current above the sensor's rest
+    offset: ``rest + (I - rest) * [gain_left, gain_right]``.
+
+    The rest level (the model's, or the robot's ``rest_current_a`` for a model that is not a
+    physics one) is what the sensor reads with no current drawn; a gain error scales what is
+    drawn, not that zero — scaling it too would make a gain pay for an offset.
+    """
 
     name = "current_gain"
     kind = "measurement"
     parameters = (EffectParameter("gain_left", 1.0, 0.3, 3.0, "1", "gain_left", *GAIN_PLAUSIBLE, _GAIN_NOTE),
                   EffectParameter("gain_right", 1.0, 0.3, 3.0, "1", "gain_right", *GAIN_PLAUSIBLE, _GAIN_NOTE))
-    description = "per-side current gain"
+    description = "per-side current gain (above the rest offset)"
 
-    def prepare(self, model: Any, log: InteractionLog) -> None:
-        return None
+    def prepare(self, model: Any, log: InteractionLog) -> np.ndarray:
+        return np.asarray(self.basis(model).rest_current_a, dtype=np.float64)
 
-    def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: Any) -> np.ndarray:
-        return predicted_a * values[None, :2]
+    def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: np.ndarray) -> np.ndarray:
+        rest = prepared[None, :]
+        return rest + (predicted_a - rest) * values[None, :2]
 
 
 class TimeLagEffect(Effect):

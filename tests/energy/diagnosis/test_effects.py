@@ -71,8 +71,10 @@ def test_physics_term_is_the_model_with_the_effect_on(model, log):
 
 def test_measurement_effects_vectorised(model, log):
     base = np.column_stack([np.linspace(0, 1, len(log)), np.linspace(1, 2, len(log))])
-    g = effect("current_gain")
-    np.testing.assert_allclose(g.apply(np.array([2.0, 0.5]), base, g.prepare(model, log)), base * [2.0, 0.5])
+    g = effect("current_gain")  # a gain of what is drawn above the sensor's rest offset (the model's: 0.59 A)
+    rest = model.rest_current_a_
+    np.testing.assert_allclose(g.apply(np.array([2.0, 0.5]), base, g.prepare(model, log)),
+                               rest + (base - rest) * [2.0, 0.5])
     o = effect("current_offset")
     np.testing.assert_allclose(o.apply(np.array([0.1, -0.2]), base, None), base + [0.1, -0.2])
     lag = effect("time_lag")

@@ -5,7 +5,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from energy import DataError, InteractionLog, LinearCurrentModel
+from energy import DataError, InteractionLog, LinearCurrentModel, robot_preset
 from energy.diagnosis import effect, make_split
 from energy.diagnosis.fit import (
     bootstrap_shrink_interval_pct,
@@ -16,6 +16,9 @@ from energy.diagnosis.fit import (
 )
 
 
+REST_A = robot_preset("husky").rest_current_a
+
+
 def _logs(n_logs=4, n=300, gain=(1.3, 0.8), seed=0):
     rng = np.random.default_rng(seed)
     out = []
@@ -23,7 +26,8 @@ def _logs(n_logs=4, n=300, gain=(1.3, 0.8), seed=0):
         t = np.arange(n) * 0.05
         v = 0.5 + 0.3 * np.sin(t + k)
         base = 1.0 + 2.0 * v
-        cur = base[:, None] * np.array(gain) + 0.05 * rng.standard_normal((n, 2))
+        # the gain scales what is drawn above the sensor's rest offset (the reference Husky's 0.59 A)
+        cur = REST_A + (base[:, None] - REST_A) * np.array(gain) + 0.05 * rng.standard_normal((n, 2))
         out.append(InteractionLog(t, v, np.zeros(n), cur[:, 0], cur[:, 1], t, np.full(n, 9.81)))
     return out
 
