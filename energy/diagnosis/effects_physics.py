@@ -188,8 +188,8 @@ class MassEffect(_RepredictEffect):
     """A mass (payload) error: the physics re-predicted with ``mass_kg * mass_scale``."""
 
     name = "mass"
-    parameters = (EffectParameter("mass_scale", 1.0, 0.25, 4.0, "1", "mass_kg", 0.5, 2.5,
-                                  "0.5x-2.5x the robot's mass: a payload, not another robot"),)
+    parameters = (EffectParameter("mass_scale", 1.0, 0.25, 4.0, "1", "mass_kg", 0.5, 3.0,
+                                  "0.5x-3x the robot's mass: a payload up to twice its own, not another robot"),)
     description = "mass / payload error (scale on the robot's mass)"
 
     def nominal(self, b: PhysicsBasis) -> float:

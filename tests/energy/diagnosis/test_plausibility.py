@@ -32,7 +32,7 @@ def test_an_effect_parameter_has_a_plausible_range_defaulting_to_its_bounds():
 
 def test_every_catalogued_effect_states_physical_ranges_narrower_than_its_fit():
     expected = {
-        "mass": {"mass_scale": (0.5, 2.5)},
+        "mass": {"mass_scale": (0.5, 3.0)},
         "motor_constant": {"torque_constant_scale": (0.8, 1.25)},
         "current_gain": {"gain_left": (0.8, 1.25), "gain_right": (0.8, 1.25)},
         "current_offset": {"offset_left_a": (-1.0, 1.0), "offset_right_a": (-1.0, 1.0)},
