@@ -150,6 +150,10 @@ class Diagnosis:
     power : PowerDiagnosis or None
         The power stage (electrical effects on battery power) when every log carries battery
         voltage and pack current; None otherwise.
+    model_note : str
+        Where the model under test comes from (a preset as given, runs it was calibrated on,
+        a file), when the caller states it (``dataclasses.replace(d, model_note=...)``, as
+        ``terrawatt diagnose`` does); the report's first line.
     """
 
     before: GapSummary
@@ -163,6 +167,7 @@ class Diagnosis:
     skipped: dict[str, str] = field(default_factory=dict)
     split: str = "runs"
     power: Any = None
+    model_note: str = ""
 
     @property
     def found(self) -> bool:
@@ -195,6 +200,7 @@ class Diagnosis:
             "chosen": list(self.chosen),
             "waterfall": [w.to_dict() for w in self.waterfall],
             "verdict": list(self.verdict),
+            "model_note": self.model_note,
             "skipped": dict(self.skipped),
             "split": self.split,
             "corrected_model": type(self.corrected_model).__name__,
@@ -210,6 +216,8 @@ class Diagnosis:
         The full slice table is in :meth:`to_dict` (``"localisation"``), not here.
         """
         lines = ["# Sim-to-real gap diagnosis", ""]
+        if self.model_note:
+            lines += [f"Model under test: {self.model_note}", ""]
         lines += [f"- {s}" for s in self.verdict]
         top = self.largest_slices()
         lines += ["", "## Where the gap lies (model as given, all logs)", "",

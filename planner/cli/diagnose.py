@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import sys
 import warnings
 from pathlib import Path
@@ -199,6 +200,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
             print(f"scoring effects on {client_worker_count(client)} dask workers", flush=True)
         diagnosis = diagnose(model, logs, terrain=terrain, effects=args.effects, split=args.split, seed=args.seed,
                              robot=robot, client=client, progress=not args.quiet)
+    diagnosis = dataclasses.replace(diagnosis, model_note=origin.removeprefix("model: "))
     args.out.mkdir(parents=True, exist_ok=True)
     written = [diagnosis.write_json(args.out / "diagnosis.json"), diagnosis.write_markdown(args.out / "diagnosis.md"),
                diagnosis.corrected_model.save(args.out / "corrected_model.zip")]

@@ -63,6 +63,9 @@ def test_the_physics_model_is_calibrated_on_other_runs_only(data, tmp_path, caps
                         "--split", "blocks", "--effects", "turning_resistance", "--out", tmp_path / "out", "--quiet")
     assert rc == 0, err
     assert "fitted on the 1 run of" in out and "which are not diagnosed" in out and "run_1.csv" in out
+    # the report says which runs calibrated the model
+    assert "which are not diagnosed" in json.loads((tmp_path / "out" / "diagnosis.json").read_text())["model_note"]
+    assert "Model under test: physics" in (tmp_path / "out" / "diagnosis.md").read_text()
     # the same runs on both sides, or one folder inside the other, are refused before any work
     for cal in (data / "logs" / "run_0.csv", data / "logs"):
         rc, out, err = _run(capsys, "--model", "physics", "--data", data / "logs" / "run_0.csv", "--calibration-data",
