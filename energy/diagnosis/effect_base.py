@@ -21,8 +21,9 @@ __all__ = ["EFFECT_KINDS", "AT_BOUND_FRACTION", "GAIN_PLAUSIBLE", "EffectParamet
 EFFECT_KINDS = ("parameter", "physics", "learned", "measurement", "electrical")
 
 
-#: A fitted value within this fraction of its fitting range from a bound is *at* the bound.
-AT_BOUND_FRACTION = 1e-3
+#: A fitted value within this fraction of its fitting range from a bound is *at* the bound (a bounded
+#: least-squares fit stops on it; 1e-3 of a 0-1000 ohm range flagged 0.3 ohm as pinned at 0).
+AT_BOUND_FRACTION = 1e-6
 #: Plausible range of a gain on a modelled quantity (a physics term, a current sensor): its usual error.
 GAIN_PLAUSIBLE = (0.8, 1.25)
 

@@ -11,9 +11,9 @@ import numpy as np
 
 from ..logs import InteractionLog, rest_samples
 from ..models.base import CurrentModel
-from .effect_base import GAIN_PLAUSIBLE, BasisEffect, Effect, EffectParameter
+from .effect_base import BasisEffect, Effect, EffectParameter
 
-__all__ = ["MEASUREMENT_CANDIDATES", "IMU_LAG_GRID_S", "OFFSET_PLAUSIBLE_A", "LAG_PLAUSIBLE_S", "CurrentGainEffect",
+__all__ = ["MEASUREMENT_CANDIDATES", "IMU_LAG_GRID_S", "OFFSET_PLAUSIBLE_A", "SENSOR_GAIN_PLAUSIBLE", "LAG_PLAUSIBLE_S", "CurrentGainEffect",
            "CurrentOffsetEffect", "IdleCurrentEffect", "RestCurrentEffect", "TimeLagEffect", "ImuLagEffect", "reads_vibration"]
 
 #: Measurement-effect candidates, in the order they are composed.
@@ -26,7 +26,9 @@ OFFSET_PLAUSIBLE_A = (-1.0, 1.0)
 #: Plausible lags between streams (s).
 LAG_PLAUSIBLE_S = (-0.5, 0.5)
 _OFFSET_NOTE = "a sensor zero or an idle draw of at most 1 A"
-_GAIN_NOTE = "a current sensor's calibration error"
+_GAIN_NOTE = "a current sensor's calibration error (uncalibrated driver channels are off by tens of %)"
+#: Plausible gains of a current sensor channel.
+SENSOR_GAIN_PLAUSIBLE = (0.7, 1.4)
 _LAG_NOTE = "a logging delay of at most half a second"
 
 
@@ -100,8 +102,8 @@ class CurrentGainEffect(BasisEffect):
 
     name = "current_gain"
     kind = "measurement"
-    parameters = (EffectParameter("gain_left", 1.0, 0.3, 3.0, "1", "gain_left", *GAIN_PLAUSIBLE, _GAIN_NOTE),
-                  EffectParameter("gain_right", 1.0, 0.3, 3.0, "1", "gain_right", *GAIN_PLAUSIBLE, _GAIN_NOTE))
+    parameters = (EffectParameter("gain_left", 1.0, 0.3, 3.0, "1", "gain_left", *SENSOR_GAIN_PLAUSIBLE, _GAIN_NOTE),
+                  EffectParameter("gain_right", 1.0, 0.3, 3.0, "1", "gain_right", *SENSOR_GAIN_PLAUSIBLE, _GAIN_NOTE))
     description = "per-side current gain (above the rest offset)"
 
     def prepare(self, model: Any, log: InteractionLog) -> np.ndarray:

@@ -77,8 +77,8 @@ class Selection:
 def select_effects(usable: Sequence[Effect], data: DiagnosisData, split: Split, runner: SetRunner,
                    n_bootstrap: int, seed: int | None) -> Selection:
     """Rank ``usable`` by held-out shrink; add greedily (every remaining candidate refitted jointly
-    with the chosen ones at each step) while the next one is :func:`significant`. Of candidates
-    the held-out data cannot tell apart, one with plausible fitted values goes first."""
+    with the chosen ones at each step) while the next one is :func:`significant`. A candidate
+    with plausible fitted values that is significant goes before one with implausible values."""
     none = score_effect_set([], data, split)
     alone = dict(zip((e.name for e in usable), runner.score([[e] for e in usable], "candidates alone")))
     chosen: list[Effect] = []
@@ -94,7 +94,7 @@ def select_effects(usable: Sequence[Effect], data: DiagnosisData, split: Split, 
         eligible = [e for e in remaining if not e.negligible(trials[e.name].median_values()[-1])]
         if not eligible:
             break
-        best = _likeliest(eligible, trials, none, n_bootstrap, seed)
+        best = _likeliest(eligible, trials, sets[-1], none, n_bootstrap, seed)
         if not significant(sets[-1], trials[best.name], none, n_bootstrap, seed):
             break
         scores[best.name] = score_entry(best, none, alone[best.name], sets[-1], trials[best.name], n_bootstrap, seed,
@@ -108,19 +108,23 @@ def select_effects(usable: Sequence[Effect], data: DiagnosisData, split: Split, 
     return Selection(none, alone, tuple(chosen), tuple(sets), scores, tuple(chosen) + tuple(remaining))
 
 
-def _likeliest(eligible: Sequence[Effect], trials: dict[str, SetScore], none: SetScore, n_bootstrap: int,
-               seed: int | None) -> Effect:
+def _likeliest(eligible: Sequence[Effect], trials: dict[str, SetScore], current: SetScore, none: SetScore,
+               n_bootstrap: int, seed: int | None) -> Effect:
     """The candidate to add next: the best held-out fit, unless its fitted values are implausible
-    and a candidate with plausible values explains the held-out gap as well — one the best does
-    not beat :func:`significant`-ly. The data cannot tell those two apart; physics can."""
+    and a candidate with plausible values improves the held-out gap significantly and by at least
+    half as much — then the best-fitting of those. An implausible value (a current gain of 1.7, a
+    motor constant x1.5) is no explanation while a plausible one explains a comparable part of the
+    gap; what it fits beyond it is left to the next steps, which may take it (doubtful)."""
     by_fit = sorted(eligible, key=lambda e: trials[e.name].sse_units.sum())
     best = by_fit[0]
     if not best.plausibility_flags(trials[best.name].median_values()[-1]):
         return best
+    gain = shrink_pct(none, trials[best.name]) - shrink_pct(none, current)
     for alt in by_fit[1:]:
         if alt.kind == "learned" or alt.plausibility_flags(trials[alt.name].median_values()[-1]):
             continue
-        if not significant(trials[alt.name], trials[best.name], none, n_bootstrap, seed):
+        alt_gain = shrink_pct(none, trials[alt.name]) - shrink_pct(none, current)
+        if alt_gain >= 0.5 * gain and significant(current, trials[alt.name], none, n_bootstrap, seed):
             return alt
     return best
 
