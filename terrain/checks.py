@@ -43,6 +43,7 @@ __all__ = [
     "real_array",
     "readonly",
     "fmt_number",
+    "fmt_pct",
 ]
 
 #: Seeds are ``None`` or integers in ``[0, SEED_LIMIT)`` (numpy's and OMPL's common range).
@@ -58,6 +59,21 @@ def _describe(value: object) -> str:
     if len(text) > 80:
         text = text[:77] + "..."
     return f"{text} ({type(value).__name__})"
+
+
+def fmt_pct(value: float) -> str:
+    """A percentage for people: two significant digits, but never fewer than its whole part
+    (``-100.3`` reads ``-100``, not ``-1e+02``).
+
+    Examples
+    --------
+    >>> fmt_pct(-100.3), fmt_pct(5.94), fmt_pct(0.0123), fmt_pct(1234.5)
+    ('-100', '5.9', '0.012', '1234')
+    """
+    v = float(value)
+    if not math.isfinite(v) or abs(v) < 1.0:
+        return fmt_number(v, 2)
+    return fmt_number(v, max(2, len(str(int(abs(v))))))
 
 
 def fmt_number(value: float, digits: int = 4) -> str:

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_bool, check_int, check_real, check_seed, fmt_number
+from terrain.checks import check_bool, check_int, check_real, check_seed, fmt_number, fmt_pct
 from terrain.dask_client import check_client
 from terrain.errors import DataError, InvalidParameterError, NotFittedError
 
@@ -100,9 +100,9 @@ def _top_share(localisation: Sequence[GapShare]) -> str:
     text = (f"; the largest net slice is {best.dimension} {best.label!r}: {sign}{fmt_number(best.gap_mah, 3)} mAh "
             f"(95 % interval {fmt_number(lo, 3)} … {fmt_number(hi, 3)} mAh)")
     if math.isfinite(best.gap_pct):
-        text += f", {sign}{fmt_number(best.gap_pct, 2)} % of that slice's charge"
+        text += f", {sign}{fmt_pct(best.gap_pct)} % of that slice's charge"
     if total_s > 0:
-        text += f", in {fmt_number(100.0 * best.duration_s / total_s, 2)} % of the time"
+        text += f", in {fmt_pct(100.0 * best.duration_s / total_s)} % of the time"
     if abs(best.gap_mah) > abs(whole) * (1.0 + 1e-9) + 1e-12:
         text += f" — more than the whole net gap of {fmt_number(whole, 3)} mAh: slices of opposite sign cancel in the total"
     return text
@@ -112,7 +112,7 @@ def _verdict(before: GapSummary, after: GapSummary, ranking: Sequence[EffectScor
              localisation: Sequence[GapShare], skipped: dict[str, str], split: str,
              power: PowerDiagnosis | None = None) -> tuple[str, ...]:
     held = "held-out runs" if split == "runs" else "held-out blocks"
-    out = [f"The gap is {fmt_number(before.charge_error_pct, 2)} % of the charge (RMSE "
+    out = [f"The gap is {fmt_pct(before.charge_error_pct)} % of the charge (RMSE "
            f"{fmt_number(before.rmse_a, 3)} A){_top_share(localisation)}."]
     by_name = {s.name: s for s in ranking}
     physical = [n for n in chosen if by_name[n].kind != "learned"]
@@ -148,8 +148,8 @@ def _verdict(before: GapSummary, after: GapSummary, ranking: Sequence[EffectScor
         shrink = 100.0 * (1.0 - (after.rmse_a / before.rmse_a) ** 2) if before.rmse_a > 0 else 0.0
         text = (f"With {', '.join(chosen)} added, the squared current gap on {held} shrinks by "
                 f"{fmt_number(shrink, 3)} % (RMSE {fmt_number(before.rmse_a, 3)} -> {fmt_number(after.rmse_a, 3)} A) "
-                f"and the charge error goes from {fmt_number(before.charge_error_pct, 2)} % to "
-                f"{fmt_number(after.charge_error_pct, 2)} %")
+                f"and the charge error goes from {fmt_pct(before.charge_error_pct)} % to "
+                f"{fmt_pct(after.charge_error_pct)} %")
         if abs(after.charge_error_pct) > abs(before.charge_error_pct):
             text += ": the whole-run charge gets worse, the correction fits the current's shape, not its total"
         out.append(text + ".")

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from terrain.atomic import check_output_path, save_figure
-from terrain.checks import check_int, check_real, fmt_number
+from terrain.checks import check_int, check_real, fmt_number, fmt_pct
 from terrain.errors import DataError, GridMismatchError, InvalidParameterError
 from terrain.terrain_map import TerrainMap
 
@@ -266,7 +266,7 @@ def plot_gap_by_regime(diagnosis: Diagnosis, path: str | os.PathLike[str], *, dp
         err = np.nan_to_num(np.maximum(np.stack([gaps - lo, hi - gaps]), 0.0))
         bars = ax.barh(y, gaps, xerr=err, color=np.where(gaps >= 0, "#de2d26", "#3182bd"), alpha=0.8,
                        error_kw={"elinewidth": 0.8, "capsize": 2, "ecolor": "0.3"})
-        ax.bar_label(bars, [f"{fmt_number(r.gap_pct, 2)} % of its charge, {fmt_number(r.duration_s, 3)} s" for r in rs],
+        ax.bar_label(bars, [f"{fmt_pct(r.gap_pct)} % of its charge, {fmt_number(r.duration_s, 3)} s" for r in rs],
                      padding=3, fontsize=7)
         ax.set_yticks(y, [r.label for r in rs], fontsize=8)
         ax.invert_yaxis()

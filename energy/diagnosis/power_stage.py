@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import fmt_number
+from terrain.checks import fmt_number, fmt_pct
 
 from ..logs import InteractionLog
 from .effect_base import Effect
@@ -61,9 +61,9 @@ def power_verdict(before: PowerGapSummary, after: PowerGapSummary, ranking: Sequ
     """Plain sentences on the battery-power gap: how large, what explains it, what cannot be told apart."""
     held = "held-out runs" if split == "runs" else "held-out blocks"
     out = [f"Battery power (voltage x pack current, in every log): the model's electrical basis, fed the measured "
-           f"drive currents, misses {fmt_number(before.energy_error_pct, 2)} % of the battery energy (RMSE "
-           f"{fmt_number(before.rmse_w, 3)} W); {fmt_number(before.stopped_gap_pct, 2)} % of that gap falls while the "
-           f"robot stands still ({fmt_number(before.stopped_time_pct, 2)} % of the time)."]
+           f"drive currents, misses {fmt_pct(before.energy_error_pct)} % of the battery energy (RMSE "
+           f"{fmt_number(before.rmse_w, 3)} W); {fmt_pct(before.stopped_gap_pct)} % of that gap falls while the "
+           f"robot stands still ({fmt_pct(before.stopped_time_pct)} % of the time)."]
     by_name = {s.name: s for s in ranking}
     if not chosen:
         out.append("No unmodelled electrical effect found: no electrical candidate ("
@@ -77,7 +77,7 @@ def power_verdict(before: PowerGapSummary, after: PowerGapSummary, ranking: Sequ
         out.append(f"{lead} explains {fmt_number(s.added_pct, 3)} % of the squared power gap on {held} (95 % interval "
                    f"{fmt_number(lo, 3)} … {fmt_number(hi, 3)} %).")
     out.append(f"With {', '.join(chosen)} added, the battery-energy error on {held} goes from "
-               f"{fmt_number(before.energy_error_pct, 2)} % to {fmt_number(after.energy_error_pct, 2)} % (RMSE "
+               f"{fmt_pct(before.energy_error_pct)} % to {fmt_pct(after.energy_error_pct)} % (RMSE "
                f"{fmt_number(before.rmse_w, 3)} -> {fmt_number(after.rmse_w, 3)} W).")
     first = by_name[chosen[0]]
     for s in ranking:
