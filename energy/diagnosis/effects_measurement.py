@@ -1,4 +1,4 @@
-"""Measurement candidates: per-side current gain and offset, an idle current, the level at rest, time lags between streams."""
+"""Measurement candidates: per-side current gain and offset, idle and rest levels, time lags between streams."""
 
 from __future__ import annotations
 
@@ -13,8 +13,20 @@ from ..logs import InteractionLog, rest_samples
 from ..models.base import CurrentModel
 from .effect_base import BasisEffect, Effect, EffectParameter
 
-__all__ = ["MEASUREMENT_CANDIDATES", "IMU_LAG_GRID_S", "OFFSET_PLAUSIBLE_A", "SENSOR_GAIN_PLAUSIBLE", "LAG_PLAUSIBLE_S", "CurrentGainEffect",
-           "CurrentOffsetEffect", "IdleCurrentEffect", "RestCurrentEffect", "TimeLagEffect", "ImuLagEffect", "reads_vibration"]
+__all__ = [
+    "MEASUREMENT_CANDIDATES",
+    "IMU_LAG_GRID_S",
+    "OFFSET_PLAUSIBLE_A",
+    "SENSOR_GAIN_PLAUSIBLE",
+    "LAG_PLAUSIBLE_S",
+    "CurrentGainEffect",
+    "CurrentOffsetEffect",
+    "IdleCurrentEffect",
+    "RestCurrentEffect",
+    "TimeLagEffect",
+    "ImuLagEffect",
+    "reads_vibration",
+]
 
 #: Measurement-effect candidates, in the order they are composed.
 MEASUREMENT_CANDIDATES: tuple[str, ...] = ("idle_current", "rest_current", "current_offset", "current_gain", "time_lag",

@@ -5,8 +5,9 @@
 - :class:`LinearCurrentModel`: per side ``I = a + b |v| + c |omega| + d dv/dt`` by least
   squares; fit one per ground.
 - :class:`PhysicsCurrentModel`: the physics model of :class:`~energy.physics.PhysicsEnergyModel`
-  with a few ground coefficients (rolling resistance, lateral friction) and an idle current
-  fitted to the logs by bounded non-linear least squares, and a rest level of its own.
+  with a few ground coefficients (rolling resistance, lateral friction; optionally an idle
+  current) fitted to the logs by bounded non-linear least squares, and a rest level of its
+  own for standing still.
 """
 
 from __future__ import annotations
@@ -171,11 +172,11 @@ class PhysicsCurrentModel(CurrentModel):
     ``v``, ``omega``, their time derivatives (``numpy.gradient``) and zero slope, where the
     log moves; standing still (:func:`energy.logs.at_rest`) the rest level
     ``rest_current_a_`` alone: a robot at rest pushes against nothing, whatever friction
-    law the physics applies to a speed of a few mm/s read off jittery odometry. The rest level is what the current sensor logs with the wheels still (a sensor
-    offset, in every sample: ``robot.rest_current_a``, or the mean of the logs' rest samples
-    per side when ``"rest_current_a"`` is fitted); the idle current is the speed-independent
-    current of *driving* on top of it. The
-    current is taken in the direction of rotation (positive when motoring forwards *or*
+    law the physics applies to a speed of a few mm/s read off jittery odometry. The rest
+    level is what the current sensor logs with the wheels still (a sensor offset, in every
+    sample: ``robot.rest_current_a``, or the mean of the logs' rest samples per side when
+    ``"rest_current_a"`` is fitted); the idle current is the speed-independent current of
+    *driving* on top of it. The current is taken in the direction of rotation (positive when motoring forwards *or*
     backwards, negative when back-driven), as drivers log it; the clamp at 0 models drivers
     that log motoring current only (BorealTC: never negative, exact zeros on a back-driven
     inner side); disable it with ``clip_negative=False``.
