@@ -130,6 +130,9 @@ class Effect:
     kind: str = "physics"
     parameters: tuple[EffectParameter, ...] = ()
     description: str = ""
+    #: Values of the first parameter a fit scans before it starts (best one first): for a
+    #: non-convex parameter such as a lag, whose least-squares fit stops at a kink near its start.
+    scan: tuple[float, ...] = ()
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(name={self.name!r}, kind={self.kind!r}, n_parameters={self.n_parameters})"

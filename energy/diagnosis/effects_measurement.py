@@ -138,6 +138,7 @@ class TimeLagEffect(Effect):
     parameters = (EffectParameter("lag_s", 0.0, -0.5, 0.5, "s", "lag_s", *LAG_PLAUSIBLE_S, _LAG_NOTE),)
     description = "time lag between the motion and the current streams"
     period_s: float = 0.0
+    scan = tuple(np.round(np.arange(-0.5, 0.5001, 0.02), 2).tolist())
 
     def bind(self, logs: Sequence[Any], terrain: Any = None, robot: Any = None) -> Effect:
         out = copy.copy(self)
@@ -207,6 +208,7 @@ class ImuLagEffect(Effect):
                                   *LAG_PLAUSIBLE_S, _LAG_NOTE),)
     description = "time lag between the IMU and the drive streams"
     period_s: float = 0.0
+    scan = IMU_LAG_GRID_S
 
     def applies_to(self, model: Any) -> bool:
         # a corrected model that already carries an IMU lag has it

@@ -122,6 +122,20 @@ def _fit_rows(effects: Sequence[Effect], data: DiagnosisData, masks: Sequence[np
         parts.extend(e.penalty(v) for e, v in zip(effects, vals))
         return np.concatenate(parts)
 
+    # a non-convex parameter (a lag: the fit of an interpolated shift stops at a kink near its start)
+    # is first scanned over its effect's grid, the others held, and the fit starts from the best
+    offset = 0
+    for e in effects:
+        if e.scan and start is None:
+            def cost(value: float, i: int = offset) -> float:
+                theta = x0.copy()
+                theta[i] = value
+                return float(np.sum(residual(theta) ** 2))
+            grid = [v for v in e.scan if lo[offset] <= v <= hi[offset]]
+            if grid:
+                x0[offset] = min(grid, key=cost)
+        offset += e.n_parameters
+
     sol = optimize.least_squares(residual, x0, bounds=(lo, hi), method="trf", diff_step=1e-4, x_scale="jac",
                                  max_nfev=200)
     return _unpack(effects, sol.x)

@@ -275,3 +275,25 @@ def test_json_and_plot(flat_mission, flat, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["mission.json", "mission.png"]  # no temp files left
     with pytest.raises(InvalidParameterError, match="series_every must be >= 1"):
         res.to_json_dict(series_every=0)
+
+
+def test_diagnosing_mission_logs_names_what_the_truth_does_differently():
+    # Missions on one ground, driven by the default truth (noise, the sensor's rest offset, and a 0.1 s
+    # velocity lag behind the commanded speeds the log records), diagnosed against the planning physics
+    # as given: the lag is named first and fitted near 0.1 s; the flat map's slope is credited nothing.
+    from energy import PhysicsCurrentModel, diagnose
+
+    tmap = flat_map((60, 60), 1.0, ground="grass")
+    grass = {"grass": ground_preset("grass")}
+    cost = EnergyCost.from_presets(tmap, speed_mps=0.5)
+    logs = []
+    for k, wp in enumerate(([[5.5, 5.5], [30.5, 5.5], [45.5, 30.5]], [[50.5, 8.5], [10.5, 40.5], [40.5, 55.5]],
+                            [[8.5, 30.5], [30.5, 30.5], [55.5, 55.5]])):
+        sim = TruthSimulator(ROBOT, grass, current_rate_hz=50.0, seed=k)
+        logs.append(simulate_mission(tmap, evaluate_route(cost, wp), ROBOT, Battery(20.0, 24.0), truth=sim,
+                                     cost=cost).log)
+    model = PhysicsCurrentModel("husky", "grass", fit_parameters=()).fit(logs)
+    d = diagnose(model, logs, terrain=tmap, seed=0, n_bootstrap=50)
+    assert d.chosen[0] == "time_lag"
+    assert d.score("time_lag").parameters["lag_s"] == pytest.approx(0.1, abs=0.03)
+    assert "slope" not in d.chosen
