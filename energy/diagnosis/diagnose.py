@@ -87,7 +87,7 @@ def _step(label: str, logs: list[InteractionLog], s: SetScore, none: SetScore, s
     return WaterfallStep(label, g.charge_error_pct, g.section_error_pct, g.rmse_a, shrink_pct(none, s))
 
 
-def _top_share(localisation: Sequence[GapShare]) -> str:
+def _largest_slice_clause(localisation: Sequence[GapShare]) -> str:
     """The clause on the largest net slice (``largest_slices``), or ``""`` when no slice tells where."""
     top = largest_slices(localisation, 1)
     if not top:
@@ -113,7 +113,7 @@ def _verdict(before: GapSummary, after: GapSummary, ranking: Sequence[EffectScor
              power: PowerDiagnosis | None = None) -> tuple[str, ...]:
     held = "held-out runs" if split == "runs" else "held-out blocks"
     out = [f"The gap is {fmt_pct(before.charge_error_pct)} % of the charge (RMSE "
-           f"{fmt_number(before.rmse_a, 3)} A){_top_share(localisation)}."]
+           f"{fmt_number(before.rmse_a, 3)} A){_largest_slice_clause(localisation)}."]
     by_name = {s.name: s for s in ranking}
     physical = [n for n in chosen if by_name[n].kind != "learned"]
     if not physical:

@@ -34,8 +34,7 @@ class EffectParameter:
 
     ``low`` / ``high`` bound the least-squares fit (wide: a fit should rarely stop there);
     ``plausible_low`` / ``plausible_high`` are the *physical* range a value must lie in to
-    be believed (a payload of up to 1.5 times the robot's mass, a rolling resistance of
-    0.005-0.4), by default the fitting bounds, with ``plausible_note`` saying why.
+    be believed (a mass of up to 3 times the robot's, a rolling resistance of 0.005-0.4), by default the fitting bounds, with ``plausible_note`` saying why.
     ``true_name`` names the simulator / physics quantity the parameter estimates, when
     there is one (e.g. ``"mass_kg"``), so a benchmark can compare it with the truth.
 

@@ -17,9 +17,9 @@ from ..models.baselines import PhysicsCurrentModel
 from .effect_base import GAIN_PLAUSIBLE, BasisEffect, Effect, EffectParameter
 from .model_currents import ParameterTable, PhysicsBasis, motoring_currents_a
 
-__all__ = ["PHYSICS_CANDIDATES", "PARAMETER_CANDIDATES", "ROLLING_RESISTANCE_PLAUSIBLE",
-           "PhysicsTermEffect", "SlopeEffect", "MassEffect",
-           "TrackWidthEffect", "RollingResistanceEffect", "LateralFrictionEffect", "MotorConstantEffect", "Reprediction", "log_ground_labels"]
+__all__ = ["PHYSICS_CANDIDATES", "PARAMETER_CANDIDATES", "ROLLING_RESISTANCE_PLAUSIBLE", "PhysicsTermEffect",
+           "SlopeEffect", "MassEffect", "TrackWidthEffect", "RollingResistanceEffect", "LateralFrictionEffect",
+           "MotorConstantEffect", "Reprediction", "log_ground_labels"]
 
 #: Physics effects offered as candidates (those that change the motor current).
 PHYSICS_CANDIDATES: tuple[str, ...] = (

@@ -51,7 +51,7 @@ class EffectScore:
         What makes the fitted values doubtful and why: a value outside its plausible range,
         a value pinned at a fitting bound. Empty when every value is plausible.
     doubtful : bool
-        ``bool(flags)``.
+        ``bool(flags)`` (a property; in :meth:`to_dict` too).
     summary : str
         The fitted values in plain words (e.g. ``"mass +80 kg (x1.8 of the robot's 100 kg)"``).
     alone_parameters, alone_flags, alone_summary
@@ -70,7 +70,6 @@ class EffectScore:
     priors: dict[str, float] = field(default_factory=dict)
     plausible: dict[str, tuple[float, float]] = field(default_factory=dict)
     flags: tuple[str, ...] = ()
-    doubtful: bool = False
     summary: str = ""
     alone_parameters: dict[str, float] = field(default_factory=dict)
     alone_flags: tuple[str, ...] = ()
@@ -83,8 +82,14 @@ class EffectScore:
         d["added_interval_pct"] = list(self.added_interval_pct)
         d["plausible"] = {k: list(v) for k, v in self.plausible.items()}
         d["flags"] = list(self.flags)
+        d["doubtful"] = self.doubtful
         d["alone_flags"] = list(self.alone_flags)
         return d
+
+    @property
+    def doubtful(self) -> bool:
+        """Whether the fitted values are flagged (outside their plausible range or at a fitting bound)."""
+        return bool(self.flags)
 
     def parameter_text(self) -> str:
         """Each fitted value beside its prior and plausible range: ``"mass_scale = 1.8 (prior 1; plausible 0.5 … 2.5)"``."""

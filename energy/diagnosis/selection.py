@@ -39,11 +39,11 @@ def score_entry(e: Effect, none: SetScore, alone: SetScore, current: SetScore, t
     values, alone_values = trial.median_values()[-1], alone.median_values()[-1]
     names = [p.name for p in e.parameters]
     low, high = e.plausible_ranges()
-    flags = e.plausibility_flags(values)
     return EffectScore(e.name, e.kind, e.values_dict(values), shrink_pct(none, alone), (lo, hi), e.n_parameters, added,
                        interval, priors=dict(zip(names, (float(x) for x in e.priors(prepared)))),
-                       plausible={n: (float(a), float(b)) for n, a, b in zip(names, low, high)}, flags=flags,
-                       doubtful=bool(flags), summary=e.describe(values, prepared),
+                       plausible={n: (float(a), float(b)) for n, a, b in zip(names, low, high)},
+                       flags=e.plausibility_flags(values),
+                       summary=e.describe(values, prepared),
                        alone_parameters=e.values_dict(alone_values), alone_flags=e.plausibility_flags(alone_values),
                        alone_summary=e.describe(alone_values, prepared))
 

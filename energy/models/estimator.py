@@ -65,15 +65,15 @@ from ..features import (
 from ..logs import InteractionLog, rest_samples
 from .base import CurrentModel, ModelRecord, log_currents, package_versions
 from .baselines import PhysicsCurrentModel
-
-#: What the physics prior fits: the networks learn the residual, so the best fit matters, not which
-#: constant current (idle or rolling resistance) carries it.
-PRIOR_FIT_PARAMETERS = ("rolling_resistance_coef", "lateral_friction_coef", "idle_current_a", "rest_current_a")
 from .config import EstimatorConfig, estimator_preset
 from .data import WindowDataset
 from .ensemble import train_ensemble
 from .net import CurrentNet, CurrentNetConfig
 from .training import TrainingHistory, train_network
+
+#: What the physics prior fits: the networks learn the residual, so the best fit matters, not which
+#: constant current (idle or rolling resistance) carries it.
+PRIOR_FIT_PARAMETERS = ("rolling_resistance_coef", "lateral_friction_coef", "idle_current_a", "rest_current_a")
 
 __all__ = ["VibrationCurrentEstimator"]
 

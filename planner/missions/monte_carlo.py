@@ -25,9 +25,10 @@ from terrain.dask_client import check_client, client_worker_count, dask_client
 from terrain.errors import InvalidParameterError, UnknownNameError
 
 from ..route import Route
+from ..edge_cost import EnergyCost
+from .forecast import route_forecast_j
 from .monte_carlo_result import MonteCarloResult
 from .monte_carlo_sampling import MissionDistributions
-from .forecast import route_forecast_j
 from .simulate import simulate_mission
 from .tracking import route_speed_mps
 
@@ -106,7 +107,7 @@ def simulate_missions_mc(
     workers: int | None = None,
     scheduler: str | None = None,
     progress: bool = False,
-    cost: Any = None,
+    cost: EnergyCost | None = None,
 ) -> MonteCarloResult:
     """Drive one route ``n`` times with drawn parameters: the risk of crossing the reserve and the energy percentiles.
 
@@ -191,6 +192,11 @@ def simulate_missions_mc(
     setup = MissionSetup(terrain, route, robot, _grounds(terrain, grounds), battery, distributions, nominal,
                          check_real("current_rate_hz", current_rate_hz, low=0.0, low_inclusive=False))
     TruthSimulator(robot, setup.grounds, current_rate_hz=setup.current_rate_hz)  # what every sample meets, checked once
+    if cost is not None and not isinstance(cost, EnergyCost):
+        raise InvalidParameterError(f"cost must be an EnergyCost or None, got {type(cost).__name__!r}")
+    predicted_j = route.energy_j  # the forecast, before any mission runs
+    if cost is not None and cost.physics_model is not None:
+        predicted_j = route_forecast_j(cost, route, speed_mps=nominal)
     client = check_client(client, "missions")
     n_workers = 1 if workers is None else check_int("workers", workers, low=1)
     if client is not None and (n_workers > 1 or scheduler is not None):
@@ -216,9 +222,6 @@ def simulate_missions_mc(
         elapsed = time.perf_counter() - t0
     table = np.array(rows, dtype=np.float64)
     k = len(setup.grounds)
-    predicted_j = route.energy_j
-    if cost is not None and getattr(cost, "physics_model", None) is not None:
-        predicted_j = route_forecast_j(cost, route, speed_mps=nominal)
     cols = table[:, k:].T
     return MonteCarloResult(
         seed=seed, entropy=used, distributions=distributions, battery=battery,
