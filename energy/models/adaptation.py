@@ -33,7 +33,7 @@ from terrain.checks import check_choice, check_real, real_array
 from terrain.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog
-from .base import CurrentModel, ModelRecord, check_logs, log_currents
+from .base import CurrentModel, ModelRecord, TrainingSummary, check_logs, log_currents
 from .loading import model_class
 
 __all__ = [
@@ -189,6 +189,15 @@ class AdaptedCurrentModel(CurrentModel):
         self.adapted_on_s_ = float(sum(lg.duration_s for lg in logs))
         self.n_samples_ = int(sum(len(lg) for lg in logs))
         self.nonnegative_ = bool(all(np.all(y >= 0) for y in truths))
+
+    def _training_summary(self, logs: list[InteractionLog]) -> TrainingSummary:
+        own = TrainingSummary.from_logs(logs)
+        base = getattr(self.base_model, "trained_on_", None)
+        return own if base is None else base.merged(own)
+
+    def ground_vibration(self, ground: str) -> tuple[np.ndarray, np.ndarray] | None:
+        """The base model's (:meth:`CurrentModel.ground_vibration`)."""
+        return self.base_model.ground_vibration(ground)
 
     def _design(self, log: InteractionLog, pred: np.ndarray, side: int) -> np.ndarray:
         if self.method == "gain_offset":

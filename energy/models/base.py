@@ -43,6 +43,7 @@ from terrain.errors import (
 )
 
 from ..logs import InteractionLog
+from .forecast import CurrentForecast
 
 __all__ = [
     "CURRENT_MODEL_FORMAT",
@@ -50,6 +51,7 @@ __all__ = [
     "LEGACY_FORMAT_VERSIONS",
     "CurrentModel",
     "ModelRecord",
+    "TrainingSummary",
     "check_logs",
     "log_currents",
     "package_versions",
@@ -118,6 +120,57 @@ class ModelRecord:
     state: dict[str, Any]
     versions: dict[str, Any] = field(default_factory=dict)
     format_version: int = CURRENT_MODEL_FORMAT_VERSION
+    trained_on: dict[str, Any] | None = None
+
+
+@dataclass(frozen=True)
+class TrainingSummary:
+    """What a model was fitted on: robots, grounds (seconds of driving each) and runs.
+
+    Saved in the model file (``trained_on``) so that a planner can refuse a model of another
+    robot or one that never drove a ground of the map; files without it read as ``None``.
+
+    Attributes
+    ----------
+    robots : tuple of str
+        ``meta.robot`` of the logs (``"unknown"`` where a log does not say).
+    grounds : dict of str to float
+        Seconds of driving per ``meta.ground_label`` (logs without a label under ``"unlabelled"``).
+    runs : int
+        Number of logs.
+    """
+
+    robots: tuple[str, ...]
+    grounds: dict[str, float]
+    runs: int
+
+    @classmethod
+    def from_logs(cls, logs: Sequence[InteractionLog]) -> TrainingSummary:
+        grounds: dict[str, float] = {}
+        for lg in logs:
+            key = str(lg.meta.ground_label) if lg.meta.ground_label is not None else "unlabelled"
+            grounds[key] = grounds.get(key, 0.0) + float(lg.duration_s)
+        return cls(tuple(sorted({str(lg.meta.robot) for lg in logs})), grounds, len(logs))
+
+    def merged(self, other: TrainingSummary) -> TrainingSummary:
+        """Both summaries together (e.g. a model and the data it was adapted on)."""
+        grounds = dict(self.grounds)
+        for g, s in other.grounds.items():
+            grounds[g] = grounds.get(g, 0.0) + s
+        return TrainingSummary(tuple(sorted(set(self.robots) | set(other.robots))), grounds, self.runs + other.runs)
+
+    def to_plain(self) -> dict[str, Any]:
+        return {"robots": list(self.robots), "grounds": dict(self.grounds), "runs": self.runs}
+
+    @classmethod
+    def from_plain(cls, value: Any) -> TrainingSummary | None:
+        """The summary of a file entry; ``None`` for a missing or malformed one (older files)."""
+        try:
+            robots = tuple(str(r) for r in value["robots"])
+            grounds = {str(k): float(v) for k, v in dict(value["grounds"]).items()}
+            return cls(robots, grounds, int(value["runs"]))
+        except (KeyError, TypeError, ValueError, OverflowError):
+            return None
 
 
 # ------------------------------------------------------------------ file format
@@ -167,6 +220,7 @@ def write_model_file(path: str | os.PathLike[str], record: ModelRecord) -> Path:
         "params": _encode(record.params, arrays),
         "state": _encode(record.state, arrays),
         "versions": _encode(record.versions, arrays),
+        "trained_on": _encode(record.trained_on, arrays),
     }
     with atomic_open(target, "wb") as fh, zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED) as archive:
         archive.writestr(_JSON_ENTRY, json.dumps(header, indent=1))
@@ -256,8 +310,10 @@ def read_model_file(path: str | os.PathLike[str]) -> ModelRecord:
         if not isinstance(data[key], kind):
             raise FileFormatError(f"{where}: the {key!r} entry must be a {kind.__name__}, got {type(data[key]).__name__}")
     versions = data.get("versions")
+    trained_on = data.get("trained_on")
     return ModelRecord(data["model_class"], data["params"], data["state"],
-                       versions if isinstance(versions, dict) else {}, int(data["format_version"]))
+                       versions if isinstance(versions, dict) else {}, int(data["format_version"]),
+                       trained_on if isinstance(trained_on, dict) else None)
 
 
 # --------------------------------------------------------------------- contract
@@ -334,10 +390,21 @@ class CurrentModel:
         self._clear_fitted()  # refit from scratch
         try:
             self._fit(items)
+            self.trained_on_ = self._training_summary(items)
         except BaseException:
             self._clear_fitted()  # never leave a half-fitted model behind
             raise
         return self
+
+    def _training_summary(self, logs: list[InteractionLog]) -> TrainingSummary:
+        """What :attr:`trained_on_` records for a fit on ``logs`` (a wrapper adds its base's)."""
+        return TrainingSummary.from_logs(logs)
+
+    @property
+    def training_summary(self) -> TrainingSummary | None:
+        """Robots, grounds and runs the model was fitted on (``None`` for a file saved before this was recorded)."""
+        self._check_fitted()
+        return getattr(self, "trained_on_", None)
 
     def _clear_fitted(self) -> None:
         for k in [k for k in vars(self) if k.endswith("_") and not k.startswith("_")]:
@@ -373,6 +440,37 @@ class CurrentModel:
         if out.shape != (len(log), 2):  # internal contract of subclasses
             raise RuntimeError(f"{type(self).__name__}._predict returned shape {out.shape!r}, expected {(len(log), 2)!r}")
         return out
+
+    def predict_distribution(self, log: InteractionLog) -> CurrentForecast:
+        """The forecast of the log's drive currents with its interval (see :mod:`energy.models.forecast`).
+
+        ``mean_a`` equals :meth:`predict`; ``run_sd_a`` is the spread shared by the whole run
+        on one ground (what the model does not know about the ground plus how runs differ),
+        ``sample_sd_a`` the spread independent per sample. A model without an interval
+        (:attr:`gives_interval` False) returns zero spreads.
+
+        Raises
+        ------
+        As :meth:`predict`.
+        """
+        mean = self.predict(log)
+        return self._distribution(log, mean)
+
+    def ground_vibration(self, ground: str) -> tuple[np.ndarray, np.ndarray] | None:
+        """``(time_s, accel_z_mps2)`` recorded on ``ground`` in training, for a model conditioned on vibration; else None.
+
+        A planner pricing a ground class of its map with such a model feeds it this stretch
+        (the model cannot know the vibration of a ground it is not driving).
+        """
+        return None
+
+    @property
+    def gives_interval(self) -> bool:
+        """Whether :meth:`predict_distribution` returns non-zero spreads."""
+        return False
+
+    def _distribution(self, log: InteractionLog, mean: np.ndarray) -> CurrentForecast:
+        return CurrentForecast.point(log.time_s, mean)
 
     def score(self, logs: InteractionLog | Sequence[InteractionLog]) -> float:
         """Coefficient of determination R² of the per-sample currents, both sides pooled.
@@ -427,7 +525,9 @@ class CurrentModel:
             Before :meth:`fit`.
         """
         self._check_fitted()
-        return ModelRecord(type(self).__name__, self._params_to_plain(), self._state(), self._versions())
+        summary = getattr(self, "trained_on_", None)
+        return ModelRecord(type(self).__name__, self._params_to_plain(), self._state(), self._versions(),
+                           trained_on=None if summary is None else summary.to_plain())
 
     @classmethod
     def from_record(cls, record: ModelRecord, source: str = "the record") -> CurrentModel:
@@ -457,6 +557,8 @@ class CurrentModel:
             raise FileFormatError(f"{source}: the {name} parameters or state are incomplete or inconsistent: {exc}") from exc
         if not model.is_fitted:
             raise FileFormatError(f"{source}: the {name} state restores no fitted attribute")
+        if record.trained_on is not None:
+            model.trained_on_ = TrainingSummary.from_plain(record.trained_on)
         return model
 
     def save(self, path: str | os.PathLike[str]) -> Path:

@@ -316,6 +316,7 @@ class VibrationCurrentEstimator(CurrentModel):
             self.history_ = tuple(histories)
             self.n_train_windows_ = len(train)
             self.rest_current_a_ = self._rest_level(raw_logs)
+            self.ground_vibration_ = _ground_vibration(raw_logs)
 
     def _rest_level(self, logs: list[InteractionLog]) -> np.ndarray | None:
         """Standing still is its own level, not the networks' business: the prior's, else the training mean."""
@@ -408,6 +409,7 @@ class VibrationCurrentEstimator(CurrentModel):
             "n_train_windows": self.n_train_windows_,
             "physics": None if self.physics_ is None else _record_to_plain(self.physics_.to_record()),
             "rest_current_a": None if self.rest_current_a_ is None else self.rest_current_a_.tolist(),
+            "ground_vibration": {g: {"time_s": t, "accel_z_mps2": a} for g, (t, a) in self.ground_vibration_.items()},
         }
 
     def _load_state(self, state: dict[str, Any]) -> None:
@@ -446,9 +448,45 @@ class VibrationCurrentEstimator(CurrentModel):
             self.physics_ = PhysicsCurrentModel.from_record(record, "the estimator's physics prior")
         rest = state.get("rest_current_a")  # absent in files from before the rest level: the networks predict rest
         self.rest_current_a_ = None if rest is None else real_array("rest_current_a", rest).reshape(2)
+        vib = state.get("ground_vibration") or {}  # absent in files from before it was recorded
+        self.ground_vibration_ = {
+            str(g): (real_array("ground_vibration time_s", v["time_s"], ndim=1),
+                     real_array("ground_vibration accel_z_mps2", v["accel_z_mps2"], ndim=1))
+            for g, v in dict(vib).items()
+        }
+        for g, (t, a) in self.ground_vibration_.items():
+            if t.shape != a.shape or t.size < 2 or np.any(np.diff(t) <= 0):
+                raise ValueError(f"the recorded vibration of ground {g!r} is not an increasing time series")
+
+    def ground_vibration(self, ground: str) -> tuple[np.ndarray, np.ndarray] | None:
+        """The vertical acceleration of ``ground`` kept from training (the longest run's first seconds), or None.
+
+        Ground names match case-insensitively.
+        """
+        self._check_fitted()
+        key = str(ground).lower()
+        for g, (t, a) in self.ground_vibration_.items():
+            if g.lower() == key:
+                return t.copy(), a.copy()
+        return None
 
     def _versions(self) -> dict[str, str]:
         return package_versions(torch=str(torch.__version__))
+
+
+#: Seconds of vertical acceleration kept per training ground (:meth:`VibrationCurrentEstimator.ground_vibration`).
+GROUND_VIBRATION_S = 30.0
+
+
+def _ground_vibration(logs: list[InteractionLog]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Per labelled ground: the first :data:`GROUND_VIBRATION_S` seconds of its longest run's acceleration stream."""
+    out: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    for g in dict.fromkeys(str(lg.meta.ground_label) for lg in logs if lg.meta.ground_label is not None):
+        run = max((lg for lg in logs if str(lg.meta.ground_label) == g), key=lambda lg: lg.duration_s)
+        t = np.asarray(run.accel_time_s, dtype=np.float64)
+        keep = t <= t[0] + GROUND_VIBRATION_S
+        out[g] = (t[keep] - t[0], np.asarray(run.accel_z_mps2, dtype=np.float64)[keep])
+    return out
 
 
 def _legacy_band_edges(edges_hz: np.ndarray, span_s: float) -> np.ndarray:

@@ -1,0 +1,168 @@
+"""A current forecast with its interval: the mean and two kinds of spread, and what they mean for charge.
+
+A model's :meth:`~energy.models.CurrentModel.predict_distribution` returns a
+:class:`CurrentForecast`: per drive sample and side the mean current and two standard
+deviations that differ in how they add up over time:
+
+- ``run_sd_a``: the part of the error **shared by a whole run on one ground** — what the
+  model does not know about this ground and how one run differs from another (a softer
+  ground today, a heavier payload, another tyre pressure). It is fully correlated along the
+  run and between the two sides: over a stretch it adds up linearly, so it does not
+  average out with distance.
+- ``sample_sd_a``: the part independent from sample to sample (sensor noise, a bump): over
+  a stretch it adds up in quadrature and averages out.
+
+The charge of a stretch is then Gaussian with mean ``∫ mean dt`` and variance
+``(∫ run_sd dt)² + Σ (sample_sd Δt)²`` (per side; for both sides the run parts add
+linearly). A route crossing several grounds is priced the same way per ground, the grounds
+being independent of each other (see :func:`combine_ground_sds`).
+
+A model without an interval returns zero spreads (``has_interval`` False).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.stats import norm
+
+from terrain.checks import check_real
+from terrain.errors import InvalidParameterError
+
+__all__ = ["CurrentForecast", "ChargeForecast", "normal_quantile", "combine_ground_sds"]
+
+_trapezoid = getattr(np, "trapezoid", None) or np.trapz
+
+
+def normal_quantile(q: float) -> float:
+    """``z`` with ``P(Z <= z) = q`` for a standard normal ``Z`` (``q`` in (0, 1))."""
+    q = check_real("q", q, low=0.0, high=1.0, low_inclusive=False, high_inclusive=False)
+    return float(norm.ppf(q))
+
+
+def combine_ground_sds(sd_by_ground: Sequence[float]) -> float:
+    """Standard deviation of a sum of per-ground totals, the grounds independent: root of the sum of squares.
+
+    Within one ground the per-edge run-level spreads add linearly (one run on one ground
+    shares its error); the per-ground sums are then combined here.
+    """
+    arr = np.asarray(list(sd_by_ground), dtype=np.float64)
+    return float(math.sqrt(float(np.sum(arr**2)))) if arr.size else 0.0
+
+
+@dataclass(frozen=True)
+class ChargeForecast:
+    """Gaussian forecast of a charge (A s) per side and for both sides together.
+
+    Attributes
+    ----------
+    mean_as : ndarray, shape (2,)
+        ``[left, right]`` mean charge (A s).
+    sd_as : ndarray, shape (2,)
+        Their standard deviations (A s).
+    total_mean_as, total_sd_as : float
+        Both sides together (the run-level parts of the two sides fully correlated).
+    """
+
+    mean_as: np.ndarray
+    sd_as: np.ndarray
+    total_mean_as: float
+    total_sd_as: float
+
+    def interval(self, level: float) -> tuple[float, float]:
+        """Central ``level`` interval of the two sides' total charge (A s), e.g. ``level=0.8``: P10-P90."""
+        lv = check_real("level", level, low=0.0, high=1.0, low_inclusive=False, high_inclusive=False)
+        z = normal_quantile(0.5 + lv / 2.0)
+        return self.total_mean_as - z * self.total_sd_as, self.total_mean_as + z * self.total_sd_as
+
+    def quantile(self, q: float) -> float:
+        """The ``q`` quantile of the two sides' total charge (A s)."""
+        return self.total_mean_as + normal_quantile(q) * self.total_sd_as
+
+
+@dataclass(frozen=True)
+class CurrentForecast:
+    """Per drive sample and side: mean current and the run-level and per-sample standard deviations (A).
+
+    Parameters
+    ----------
+    time_s : ndarray, shape (N,)
+        The log's drive timestamps.
+    mean_a, run_sd_a, sample_sd_a : ndarray, shape (N, 2)
+        ``[left, right]``: the mean (what ``predict`` returns), the spread shared by the whole
+        run on one ground and the spread independent per sample (both >= 0).
+
+    Raises
+    ------
+    InvalidParameterError
+        Shapes that differ, non-finite values, negative spreads.
+    """
+
+    time_s: np.ndarray
+    mean_a: np.ndarray
+    run_sd_a: np.ndarray
+    sample_sd_a: np.ndarray
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.time_s, dtype=np.float64)
+        arrays = [np.asarray(getattr(self, n), dtype=np.float64) for n in ("mean_a", "run_sd_a", "sample_sd_a")]
+        if t.ndim != 1 or any(a.shape != (t.size, 2) for a in arrays):
+            raise InvalidParameterError(
+                f"CurrentForecast needs time_s of shape (N,) and (N, 2) arrays; got {t.shape!r} and "
+                f"{[a.shape for a in arrays]!r}"
+            )
+        if not (np.all(np.isfinite(t)) and all(np.all(np.isfinite(a)) for a in arrays)):
+            raise InvalidParameterError("CurrentForecast values must be finite")
+        if np.any(arrays[1] < 0) or np.any(arrays[2] < 0):
+            raise InvalidParameterError("CurrentForecast spreads must be >= 0")
+        for name, a in zip(("mean_a", "run_sd_a", "sample_sd_a"), arrays):
+            a.setflags(write=False)
+            object.__setattr__(self, name, a)
+        t.setflags(write=False)
+        object.__setattr__(self, "time_s", t)
+
+    @classmethod
+    def point(cls, time_s: np.ndarray, mean_a: np.ndarray) -> CurrentForecast:
+        """A forecast without an interval (both spreads zero)."""
+        zeros = np.zeros_like(np.asarray(mean_a, dtype=np.float64))
+        return cls(time_s, mean_a, zeros, zeros)
+
+    @property
+    def has_interval(self) -> bool:
+        """Whether any spread is non-zero."""
+        return bool(np.any(self.run_sd_a > 0) or np.any(self.sample_sd_a > 0))
+
+    @property
+    def sd_a(self) -> np.ndarray:
+        """Total per-sample standard deviation ``sqrt(run_sd² + sample_sd²)`` (A), shape (N, 2)."""
+        return np.sqrt(self.run_sd_a**2 + self.sample_sd_a**2)
+
+    def charge(self, mask: np.ndarray | None = None) -> ChargeForecast:
+        """The Gaussian forecast of the charge over the log (or the samples where ``mask`` is True).
+
+        The run-level spread is integrated like the mean (fully correlated in time and between
+        sides); the per-sample spread in quadrature with each sample's time step.
+        """
+        t, mean, run, white = self.time_s, self.mean_a, self.run_sd_a, self.sample_sd_a
+        if mask is not None:
+            m = np.asarray(mask, dtype=bool)
+            if m.shape != t.shape:
+                raise InvalidParameterError(f"mask must have shape {t.shape!r}, got {m.shape!r}")
+            t, mean, run, white = t[m], mean[m], run[m], white[m]
+        if t.size < 2:
+            zero = np.zeros(2)
+            return ChargeForecast(zero, zero.copy(), 0.0, 0.0)
+        dt = np.gradient(t)
+        q_mean = _trapezoid(mean, t, axis=0)
+        q_run = _trapezoid(run, t, axis=0)
+        q_white = np.sqrt(np.sum((white * dt[:, None]) ** 2, axis=0))
+        sd = np.sqrt(q_run**2 + q_white**2)
+        total_sd = math.sqrt(float(q_run.sum()) ** 2 + float(np.sum(q_white**2)))
+        return ChargeForecast(q_mean, sd, float(q_mean.sum()), total_sd)
+
+    def quantile_a(self, q: float) -> np.ndarray:
+        """Per-sample ``q`` quantile of the current (A), shape (N, 2)."""
+        return self.mean_a + normal_quantile(q) * self.sd_a
