@@ -60,10 +60,20 @@ from .missions import (
     simulate_missions_mc,
     validation_error,
 )
+from .model_cost import (
+    ModelCompatibilityWarning,
+    ModelGrounds,
+    check_model_robot,
+    model_energy_cost,
+    model_energy_model,
+    model_grounds,
+    robot_matches,
+)
 from .planning import OMPL_PLANNERS, PLANNERS, compare_route, plan_route, shortest_route
 from .reachability import lattice_move_energies, reachability
 from .reachability_result import REACH_FORMAT_VERSION, REACH_LAYERS, Reachability
 from .refine import refine_route, relax_path, string_pull
+from .risk import RouteEnergyInterval, risk_cost, route_energy_interval
 from .route import ROUTE_STATUSES, Route, RouteComparison, evaluate_route
 from .route_geojson import GEOJSON_FORMAT_VERSION, routes_geojson, write_geojson
 from .settings import PlannerSettings
@@ -77,6 +87,17 @@ __all__ = [
     "warm_up_kernels",
     "LearnedEnergyModel",
     "LearnedModelTable",
+    # saved current models as edge costs, route intervals and risk
+    "model_energy_cost",
+    "model_energy_model",
+    "model_grounds",
+    "ModelGrounds",
+    "check_model_robot",
+    "robot_matches",
+    "ModelCompatibilityWarning",
+    "RouteEnergyInterval",
+    "route_energy_interval",
+    "risk_cost",
     "DEFAULT_TABLE_SPEEDS_MPS",
     "DEFAULT_TABLE_OMEGAS_RADPS",
     # planners and routes

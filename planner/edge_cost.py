@@ -46,6 +46,7 @@ from .refine import relax_path
 from .tables import (
     DEFAULT_GRADE_SAMPLES,
     DEFAULT_TURN_SAMPLES,
+    check_spread_tables,
     check_table_sizes,
     check_tables,
     ground_table_rows,
@@ -99,6 +100,11 @@ class EnergyCost(CostQueries):
         Rate of turning in place (rad/s), used for durations.
     ground_labels : tuple of str, optional
         A label per table row (ground names), for messages.
+    grade_sd_table_j_per_m, turn_sd_table_j : ndarray, optional
+        Run-level standard deviations of the two tables (same shapes, finite, >= 0), from a
+        model with a predictive interval (:class:`~planner.LearnedEnergyModel`); both or
+        neither. They do not change any query of this class: :mod:`planner.risk` reads them
+        for route energy intervals and risk-aware costs.
 
     The segment, path and turn queries come from :class:`~planner.cost_queries.CostQueries`.
 
@@ -135,6 +141,8 @@ class EnergyCost(CostQueries):
         battery_voltage_v: float,
         turn_rate_radps: float,
         ground_labels: tuple[str, ...] | None = None,
+        grade_sd_table_j_per_m: np.ndarray | None = None,
+        turn_sd_table_j: np.ndarray | None = None,
     ) -> None:
         t0 = time.perf_counter()
         if not isinstance(terrain, TerrainMap):
@@ -157,6 +165,10 @@ class EnergyCost(CostQueries):
         self.grade_max = math.tan(self.max_slope_rad)
         self.grade_table_j_per_m = grade_table
         self.turn_table_j = turn_table
+        #: Run-level standard deviations of the tables (J per horizontal metre, J), or None
+        #: when the cost's model gives no interval (see :attr:`has_interval`).
+        self.grade_sd_table_j_per_m, self.turn_sd_table_j = check_spread_tables(
+            grade_table, turn_table, grade_sd_table_j_per_m, turn_sd_table_j)
         self.ground_rows = rows.astype(np.int32)
         self.blocked = np.asarray(terrain.obstacle) | (np.asarray(terrain["slope"]) > self.max_slope_rad)
         for arr in (self.ground_rows, self.blocked):
@@ -191,6 +203,8 @@ class EnergyCost(CostQueries):
         ground_rows: np.ndarray | None = None,
         *,
         ground_labels: tuple[str, ...] | None = None,
+        grade_sd_table_j_per_m: np.ndarray | None = None,
+        turn_sd_table_j: np.ndarray | None = None,
     ) -> EnergyCost:
         """The same map geometry with new energy tables (a table-only refresh, e.g. after a model update).
 
@@ -211,6 +225,9 @@ class EnergyCost(CostQueries):
             New per-cell rows (default: the current ones).
         ground_labels : tuple of str, optional
             Labels of the new rows.
+        grade_sd_table_j_per_m, turn_sd_table_j : ndarray, optional
+            Standard deviations of the new tables (as in the constructor); default none
+            (new tables do not inherit the spreads of the old ones).
 
         Returns
         -------
@@ -243,6 +260,8 @@ class EnergyCost(CostQueries):
         new.ground_labels = labels
         new.grade_table_j_per_m = grade_table
         new.turn_table_j = turn_table
+        new.grade_sd_table_j_per_m, new.turn_sd_table_j = check_spread_tables(
+            grade_table, turn_table, grade_sd_table_j_per_m, turn_sd_table_j)
         new.ground_rows = rows.astype(np.int32)
         new.ground_rows.setflags(write=False)
         new.arrays = self.arrays.with_tables(new.ground_rows, self.blocked, grade_table, turn_table)
@@ -254,6 +273,12 @@ class EnergyCost(CostQueries):
         new.lattices = {stride: lat.refreshed(new, new.changed_cells) for stride, lat in self.lattices.items()}
         new.prep_time_s = time.perf_counter() - t0
         return new
+
+    @property
+    def has_interval(self) -> bool:
+        """Whether the tables carry run-level standard deviations with some spread > 0."""
+        return self.grade_sd_table_j_per_m is not None and bool(
+            np.any(self.grade_sd_table_j_per_m > 0) or np.any(self.turn_sd_table_j > 0))
 
     def _changed_cells(self, other: EnergyCost) -> np.ndarray:
         """Free cells whose grade-table row content differs between ``self`` and ``other``."""

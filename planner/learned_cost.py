@@ -16,6 +16,18 @@ the robot's electronics (sensor and stable control-board power of
 - ``energy_per_metre_j[k] = P(speeds_mps[k]) / speeds_mps[k]`` (J/m, flat ground),
 - ``turn_energy_per_rad_j[k] = P(omegas_radps[k]) / omegas_radps[k]`` (J/rad).
 
+**Interval.** A model with a predictive interval (``gives_interval``, e.g. the
+:class:`energy.VibrationCurrentEstimator`) is asked ``predict_distribution`` instead (one call
+too; its mean is ``predict``'s). Its run-level spread ``run_sd_a`` (shared by a whole run on
+one ground, both sides fully correlated) becomes the standard deviation of the battery power,
+``(P(mean + run_sd) - P(mean - run_sd)) / 2`` through the same
+:func:`energy.log_battery_power_w` path, averaged over the settled tail like the mean (fully
+correlated: it does not average out), and is tabulated per metre and per radian
+(:attr:`LearnedModelTable.energy_per_metre_sd_j`, ``turn_energy_per_rad_sd_j``). The
+electronics and the physics slope term carry no spread. :meth:`LearnedEnergyModel.energy_cost`
+then gives the :class:`EnergyCost` standard-deviation tables, which :mod:`planner.risk` adds
+up along a route. The per-sample spread averages out over a route and is not used.
+
 **Vibration input.** Models conditioned on vibration (the
 :class:`energy.VibrationCurrentEstimator`) need an acceleration stream. The synthetic log
 carries the vertical acceleration observed where the model was trained: register it with
@@ -76,8 +88,14 @@ from terrain import (
 from terrain.checks import check_choice, check_real, real_array
 
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
-from .learned_table import LearnedModelTable, increasing_grid, predict_currents
-from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES, check_table_sizes, tabulate
+from .learned_table import (
+    LearnedModelTable,
+    increasing_grid,
+    model_gives_interval,
+    predict_current_spread,
+    predict_currents,
+)
+from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES, check_table_sizes, tabulate, tabulate_spread
 
 __all__ = [
     "LearnedEnergyModel",
@@ -240,15 +258,21 @@ class LearnedEnergyModel:
             return cached[1]
         t0 = time.perf_counter()
         log, keep = self._synthetic_log(mid)
-        pred = predict_currents(model, log, self._label(mid))
-        plog = InteractionLog(log.time_s, log.v_mps, log.omega_radps, pred[:, 0], pred[:, 1], log.accel_time_s,
-                              log.accel_z_mps2, meta=log.meta)
-        drive_w = log_battery_power_w(plog, self.robot, current_convention=self.current_convention, electronics=False)
+        run_sd = None
+        if model_gives_interval(model):
+            pred, run_sd = predict_current_spread(model, log, self._label(mid))
+        else:
+            pred = predict_currents(model, log, self._label(mid))
+        drive_w = self._drive_power_w(log, pred)
         n_levels = self.speeds_mps.size + self.omegas_radps.size
         level = np.arange(len(log)) * n_levels // len(log)
         sel = level[keep]
         counts = np.bincount(sel, minlength=n_levels)
         mean_drive_w = np.bincount(sel, weights=drive_w[keep], minlength=n_levels) / counts
+        sd_w = None
+        if run_sd is not None:  # both sides and every sample fully correlated: the spreads add linearly
+            half_w = 0.5 * np.abs(self._drive_power_w(log, pred + run_sd) - self._drive_power_w(log, pred - run_sd))
+            sd_w = np.bincount(sel, weights=half_w[keep], minlength=n_levels) / counts
         mean_current = np.column_stack([np.bincount(sel, weights=pred[keep, k], minlength=n_levels) / counts
                                         for k in range(2)])
         levels_v = np.concatenate([self.speeds_mps, np.zeros(self.omegas_radps.size)])
@@ -263,11 +287,24 @@ class LearnedEnergyModel:
                 f"model {mid} predicts negative battery power (J/m {e_per_m.tolist()!r}, J/rad "
                 f"{e_per_rad.tolist()!r}); edge costs must be >= 0"
             )
+        sd_per_m = None if sd_w is None else sd_w[:ns] / self.speeds_mps
+        sd_per_rad = None if sd_w is None else sd_w[ns:] / self.omegas_radps
         table = LearnedModelTable(mid, self.speeds_mps, e_per_m, self.omegas_radps, e_per_rad, mean_current,
-                                  time.perf_counter() - t0)
+                                  time.perf_counter() - t0, sd_per_m, sd_per_rad)
         self._tables[mid] = (id(model), table)
         self.table_builds += 1
         return table
+
+    def _drive_power_w(self, log: InteractionLog, currents_a: np.ndarray) -> np.ndarray:
+        """Battery power (W) of the drive sides of ``log`` drawing ``currents_a`` (N, 2), electronics off."""
+        plog = InteractionLog(log.time_s, log.v_mps, log.omega_radps, currents_a[:, 0], currents_a[:, 1],
+                              log.accel_time_s, log.accel_z_mps2, meta=log.meta)
+        return log_battery_power_w(plog, self.robot, current_convention=self.current_convention, electronics=False)
+
+    @property
+    def gives_interval(self) -> bool:
+        """Whether some model in use has a predictive interval (its table carries spreads > 0)."""
+        return any(self.table(int(m)).has_interval for m in self.registry.model_ids_in_use().tolist())
 
     def profile_energy_j(self, terrain: TerrainMap, profile: CommandProfile, *, speed_mps: float | None = None) -> float:
         """Predicted battery energy (J) of driving a command profile across the map.
@@ -430,6 +467,26 @@ class LearnedEnergyModel:
         angles = np.abs(np.asarray(heading_change_rad, dtype=np.float64))
         return angles * self.table(int(ground)).turn_energy_per_rad_at(self.turn_rate_radps)
 
+    def energy_per_metre_sd_j(self, speed_mps: float, grade: Any, ground: int) -> np.ndarray:
+        """Run-level standard deviation (J per metre travelled) of :meth:`energy_per_metre_j`.
+
+        The learned flat-ground spread at ``speed_mps``, the same on every grade (the physics
+        slope term has none); 0 for a model without an interval.
+
+        Raises
+        ------
+        UnknownNameError
+            Unknown model id.
+        """
+        speed = check_real("speed_mps", speed_mps, low=0.0, low_inclusive=False)
+        grades = np.asarray(grade, dtype=np.float64)
+        return np.full(grades.shape, self.table(int(ground)).energy_per_metre_sd_at(speed))
+
+    def turn_energy_sd_j(self, heading_change_rad: Any, ground: int) -> np.ndarray:
+        """Run-level standard deviation (J) of :meth:`turn_energy_j`; 0 for a model without an interval."""
+        angles = np.abs(np.asarray(heading_change_rad, dtype=np.float64))
+        return angles * self.table(int(ground)).turn_energy_per_rad_sd_at(self.turn_rate_radps)
+
     # ------------------------------------------------------------------ edge costs
     def energy_cost(
         self,
@@ -444,7 +501,9 @@ class LearnedEnergyModel:
         """An :class:`EnergyCost` whose table rows are the models in use (cell row = its model).
 
         Equal to ``EnergyCost.from_model`` on a map whose ground classes are the model ids,
-        but only the tables of models not yet cached are computed.
+        but only the tables of models not yet cached are computed. When a model in use has
+        a predictive interval, the cost also carries the standard-deviation tables
+        (:func:`planner.tables.tabulate_spread`; zero rows for models without one).
 
         With ``previous`` (a cost this adapter made earlier for the same map, speed, slope
         limit and table sizes), the result is ``previous.with_tables(...)``: the map geometry
@@ -481,16 +540,21 @@ class LearnedEnergyModel:
         grade_table, turn_table = tabulate(
             self, speed, ids.tolist(), labels, max_slope_rad=slope, grade_samples=n_grade, turn_samples=n_turn
         )
+        grade_sd = turn_sd = None
+        if any(self.table(int(m)).energy_per_metre_sd_j is not None for m in ids.tolist()):
+            grade_sd, turn_sd = tabulate_spread(self, speed, ids.tolist(), labels, max_slope_rad=slope,
+                                                grade_samples=n_grade, turn_samples=n_turn)
         lut = np.zeros(int(ids.max()) + 1, dtype=np.int32)
         lut[ids] = np.arange(ids.size, dtype=np.int32)
         rows = lut[np.asarray(self.registry.model_id_map)]
         if previous is not None:
-            cost = previous.with_tables(grade_table, turn_table, rows, ground_labels=labels)
+            cost = previous.with_tables(grade_table, turn_table, rows, ground_labels=labels,
+                                        grade_sd_table_j_per_m=grade_sd, turn_sd_table_j=turn_sd)
             cost.prep_time_s = time.perf_counter() - t0
             return cost
         cost = EnergyCost(terrain, rows, grade_table, turn_table, speed_mps=speed, max_slope_rad=slope,
                           battery_voltage_v=self.robot.battery_voltage_v, turn_rate_radps=self.turn_rate_radps,
-                          ground_labels=labels)
+                          ground_labels=labels, grade_sd_table_j_per_m=grade_sd, turn_sd_table_j=turn_sd)
         cost.prep_time_s = time.perf_counter() - t0
         return cost
 

@@ -11,7 +11,7 @@ import numpy as np
 from energy import InteractionLog
 from terrain.errors import InvalidParameterError
 
-__all__ = ["LearnedModelTable", "predict_currents", "increasing_grid"]
+__all__ = ["LearnedModelTable", "predict_currents", "predict_current_spread", "model_gives_interval", "increasing_grid"]
 
 
 def increasing_grid(name: str, values: Sequence[float]) -> np.ndarray:
@@ -55,6 +55,38 @@ def predict_currents(model: Any, log: InteractionLog, label: str) -> np.ndarray:
     return pred
 
 
+def model_gives_interval(model: Any) -> bool:
+    """Whether ``model`` has a :meth:`~energy.CurrentModel.predict_distribution` with spreads (``gives_interval``)."""
+    return bool(getattr(model, "gives_interval", False)) and callable(getattr(model, "predict_distribution", None))
+
+
+def predict_current_spread(model: Any, log: InteractionLog, label: str) -> tuple[np.ndarray, np.ndarray]:
+    """``model.predict_distribution(log)`` checked: the mean and the run-level standard deviation, each ``(N, 2)`` (A).
+
+    Only the run-level spread (``run_sd_a``) is returned: it is the part shared by a whole
+    run on one ground, so it does not average out over a route; the per-sample spread does
+    (it shrinks as one over the square root of the samples) and is left out of planning.
+
+    Raises
+    ------
+    InvalidParameterError
+        The forecast is not finite ``(len(log), 2)`` arrays; ``label`` names the model.
+    """
+    try:
+        forecast = model.predict_distribution(log)
+        mean = np.asarray(forecast.mean_a, dtype=np.float64)
+        run_sd = np.asarray(forecast.run_sd_a, dtype=np.float64)
+    except (TypeError, ValueError, AttributeError) as exc:
+        raise InvalidParameterError(f"{label} could not forecast currents for a {len(log)}-sample log: {exc}") from exc
+    shape = (len(log), 2)
+    if mean.shape != shape or run_sd.shape != shape or not (np.all(np.isfinite(mean)) and np.all(np.isfinite(run_sd))):
+        raise InvalidParameterError(
+            f"{label} must forecast finite (N, 2) mean and run-level spread for a log of N={len(log)} samples, got "
+            f"shapes {mean.shape!r} and {run_sd.shape!r}"
+        )
+    return mean, run_sd
+
+
 @dataclass(frozen=True, eq=False)
 class LearnedModelTable:
     """Flat-ground energy tables of one current model (see :mod:`planner.learned_cost`).
@@ -75,6 +107,9 @@ class LearnedModelTable:
         The settled mean predicted ``[left, right]`` currents behind the tables (A).
     build_time_s : float
         Seconds spent building the table (prediction included).
+    energy_per_metre_sd_j, turn_energy_per_rad_sd_j : ndarray or None
+        Run-level standard deviations of the two tables (J/m, J/rad; shapes of the means),
+        from the model's predictive distribution; None for a model without an interval.
     """
 
     model_id: int
@@ -84,9 +119,16 @@ class LearnedModelTable:
     turn_energy_per_rad_j: np.ndarray
     mean_current_a: np.ndarray
     build_time_s: float
+    energy_per_metre_sd_j: np.ndarray | None = None
+    turn_energy_per_rad_sd_j: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        for name in ("speeds_mps", "energy_per_metre_j", "omegas_radps", "turn_energy_per_rad_j", "mean_current_a"):
+        if (self.energy_per_metre_sd_j is None) != (self.turn_energy_per_rad_sd_j is None):
+            raise InvalidParameterError("LearnedModelTable: the two spread tables go together (both or neither)")
+        names = ["speeds_mps", "energy_per_metre_j", "omegas_radps", "turn_energy_per_rad_j", "mean_current_a"]
+        if self.energy_per_metre_sd_j is not None:
+            names += ["energy_per_metre_sd_j", "turn_energy_per_rad_sd_j"]
+        for name in names:
             arr = np.array(getattr(self, name), dtype=np.float64)
             if not np.all(np.isfinite(arr)):
                 raise InvalidParameterError(f"LearnedModelTable.{name} must be finite, got {arr!r}")
@@ -96,6 +138,29 @@ class LearnedModelTable:
             raise InvalidParameterError("LearnedModelTable: energy_per_metre_j must match speeds_mps")
         if self.turn_energy_per_rad_j.shape != self.omegas_radps.shape:
             raise InvalidParameterError("LearnedModelTable: turn_energy_per_rad_j must match omegas_radps")
+        if self.energy_per_metre_sd_j is not None and (
+                self.energy_per_metre_sd_j.shape != self.speeds_mps.shape
+                or self.turn_energy_per_rad_sd_j.shape != self.omegas_radps.shape
+                or np.any(self.energy_per_metre_sd_j < 0) or np.any(self.turn_energy_per_rad_sd_j < 0)):
+            raise InvalidParameterError("LearnedModelTable: the spread tables must match their grids and be >= 0")
+
+    @property
+    def has_interval(self) -> bool:
+        """Whether the table carries spreads (some > 0)."""
+        return self.energy_per_metre_sd_j is not None and bool(
+            np.any(self.energy_per_metre_sd_j > 0) or np.any(self.turn_energy_per_rad_sd_j > 0))
+
+    def energy_per_metre_sd_at(self, speed_mps: float) -> float:
+        """Run-level standard deviation of the flat-ground J/m at ``speed_mps`` (0 without an interval)."""
+        if self.energy_per_metre_sd_j is None:
+            return 0.0
+        return float(np.interp(speed_mps, self.speeds_mps, self.energy_per_metre_sd_j))
+
+    def turn_energy_per_rad_sd_at(self, omega_radps: float) -> float:
+        """Run-level standard deviation of the J/rad at ``omega_radps`` (0 without an interval)."""
+        if self.turn_energy_per_rad_sd_j is None:
+            return 0.0
+        return float(np.interp(omega_radps, self.omegas_radps, self.turn_energy_per_rad_sd_j))
 
     def energy_per_metre_at(self, speed_mps: float) -> float:
         """Flat-ground J/m at ``speed_mps``, linearly interpolated (constant beyond the grid)."""

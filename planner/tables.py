@@ -28,6 +28,8 @@ __all__ = [
     "tabulate",
     "ground_table_rows",
     "check_tables",
+    "tabulate_spread",
+    "check_spread_tables",
 ]
 
 #: Default number of samples of each ground's energy-per-metre-vs-grade table (odd: grade 0 is a sample).
@@ -116,6 +118,87 @@ def tabulate(
         grade_table[i] = e * horizontal
         turn_table[i] = te
     return grade_table, turn_table
+
+
+def tabulate_spread(
+    model: Any,
+    speed_mps: float,
+    grounds: Sequence[Any],
+    labels: Sequence[str],
+    *,
+    max_slope_rad: float,
+    grade_samples: int,
+    turn_samples: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Standard-deviation tables of an energy model with an interval, one row per ground (shapes of :func:`tabulate`).
+
+    Row ``i`` holds ``model.energy_per_metre_sd_j(speed_mps, grades, grounds[i])`` (J per
+    metre travelled) times ``sqrt(1 + grade**2)`` on :func:`grade_grid`, and
+    ``model.turn_energy_sd_j(angles, grounds[i])`` on :func:`turn_grid`: the run-level
+    spread of each table entry (see :mod:`planner.risk` for how a route adds them up).
+
+    Raises
+    ------
+    InvalidParameterError
+        The model returned arrays of other shapes, or negative / non-finite spreads.
+    """
+    grades = grade_grid(max_slope_rad, grade_samples)
+    angles = turn_grid(turn_samples)
+    horizontal = np.sqrt(1.0 + grades**2)
+    grade_sd = np.empty((len(grounds), grades.size))
+    turn_sd = np.empty((len(grounds), angles.size))
+    for i, ground in enumerate(grounds):
+        e = np.asarray(model.energy_per_metre_sd_j(speed_mps, grades, ground), dtype=np.float64)
+        te = np.asarray(model.turn_energy_sd_j(angles, ground), dtype=np.float64)
+        if e.shape != grades.shape or te.shape != angles.shape:
+            raise InvalidParameterError(
+                f"model returned spread shapes {e.shape!r} / {te.shape!r} for {grades.shape!r} grades / "
+                f"{angles.shape!r} angles on ground {labels[i]!r}; expected the input shapes"
+            )
+        grade_sd[i] = e * horizontal
+        turn_sd[i] = te
+    return grade_sd, turn_sd
+
+
+def check_spread_tables(
+    grade_table: np.ndarray, turn_table: np.ndarray, grade_sd_table: Any, turn_sd_table: Any
+) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Validated read-only copies of an edge cost's standard-deviation tables (both or neither).
+
+    Parameters
+    ----------
+    grade_table, turn_table : ndarray
+        The checked mean tables (:func:`check_tables`); the spreads must have their shapes.
+    grade_sd_table, turn_sd_table : array_like or None
+        Run-level standard deviations (J per horizontal metre, J), finite and >= 0.
+
+    Returns
+    -------
+    (grade_sd, turn_sd) : ndarray or None
+
+    Raises
+    ------
+    InvalidParameterError
+        Only one of the two given, other shapes, negative or non-finite values.
+    """
+    if grade_sd_table is None and turn_sd_table is None:
+        return None, None
+    if grade_sd_table is None or turn_sd_table is None:
+        raise InvalidParameterError("grade_sd_table_j_per_m and turn_sd_table_j go together: give both or neither")
+    out = []
+    for name, value, like in (("grade_sd_table_j_per_m", grade_sd_table, grade_table),
+                              ("turn_sd_table_j", turn_sd_table, turn_table)):
+        try:
+            arr = np.array(value, dtype=np.float64, order="C", copy=True)
+        except (TypeError, ValueError) as exc:
+            raise InvalidParameterError(f"{name} must be an array of numbers: {exc}") from exc
+        if arr.shape != like.shape:
+            raise InvalidParameterError(f"{name} must have the shape of its mean table {like.shape!r}, got {arr.shape!r}")
+        if not np.all(np.isfinite(arr)) or np.any(arr < 0):
+            raise InvalidParameterError(f"{name} must hold finite standard deviations >= 0")
+        arr.setflags(write=False)
+        out.append(arr)
+    return out[0], out[1]
 
 
 def ground_table_rows(

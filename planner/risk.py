@@ -1,0 +1,245 @@
+"""Route energy intervals and risk-aware costs, from an edge cost's standard-deviation tables.
+
+A cost priced by a model with a predictive interval (:class:`~planner.LearnedEnergyModel`
+over a model whose ``gives_interval`` is True) carries, beside its mean tables, the
+**run-level** standard deviation of every table entry (:attr:`EnergyCost.grade_sd_table_j_per_m`,
+:attr:`EnergyCost.turn_sd_table_j`). That spread is the part of the model's error shared by a
+whole run on one ground (what the model does not know about the ground, how one run differs
+from another), so along a route it does not average out:
+
+- the route's **mean** energy is the sum of its edge means (:meth:`EnergyCost.path_energy_j`);
+- **within one ground** (one table row) the edge spreads add **linearly**;
+- the per-ground sums, grounds being independent of each other, combine by the **root of the
+  sum of squares** (:func:`energy.models.forecast.combine_ground_sds`).
+
+The route energy is then taken as Gaussian: :class:`RouteEnergyInterval` gives its P50, P90
+and central intervals.
+
+**Risk-aware planning.** :func:`risk_cost` returns the cost whose tables are
+``mean + z_Q * sd`` per entry, ``z_Q`` the standard normal ``Q`` quantile (floored at 0, an
+edge never pays back energy). A planner minimising it minimises
+
+``sum over edges (mean_e + z_Q sd_e) = mean_route + z_Q * sum over grounds S_g``
+
+with ``S_g`` the linear sum of spreads on ground ``g``. On a route over **one ground** that is
+exactly the route's ``Q`` quantile (its sd is ``S_g``). On a route over several independent
+grounds the route's sd is ``sqrt(sum S_g**2) <= sum S_g``: for ``Q > 0.5`` the objective is an
+**upper bound** of the route's ``Q`` quantile (conservative: it penalises crossing many
+uncertain grounds a little more than their independence warrants), for ``Q < 0.5`` a lower
+bound. The objective is still additive over edges, which the lattice and the OMPL objective
+need; the route that is finally reported is priced exactly (:func:`route_energy_interval`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from energy.models.forecast import combine_ground_sds, normal_quantile
+from terrain.checks import check_real
+from terrain.errors import InvalidParameterError
+
+from .edge_cost import EnergyCost
+from .points import as_points
+
+__all__ = ["RouteEnergyInterval", "route_energy_interval", "risk_cost", "check_risk_level", "INTERVAL_LEVEL"]
+
+#: Central interval reported beside P50 / P90 (0.8: P10-P90).
+INTERVAL_LEVEL = 0.8
+
+
+def check_risk_level(q: Any, name: str = "q") -> float:
+    """A risk level ``Q`` checked: a number in the open interval (0, 1).
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a number, or outside (0, 1); the message names ``name``.
+    """
+    return check_real(name, q, low=0.0, high=1.0, low_inclusive=False, high_inclusive=False)
+
+
+@dataclass(frozen=True)
+class RouteEnergyInterval:
+    """The Gaussian distribution of a route's battery energy under a model with an interval.
+
+    Attributes
+    ----------
+    mean_j : float
+        Mean energy (J): the sum of the edge means (turns included).
+    sd_j : float
+        Standard deviation (J): per ground the edge spreads summed linearly, the grounds
+        combined by root-sum-of-squares.
+    sd_by_ground_j : dict of str to float
+        The linear per-ground sums (J), keyed by the cost's row labels (grounds the route
+        does not cross are left out).
+
+    Raises
+    ------
+    InvalidParameterError
+        A negative or non-finite mean or spread.
+
+    Examples
+    --------
+    >>> iv = RouteEnergyInterval(1000.0, 100.0, {"sand": 100.0})
+    >>> round(iv.p90_j, 1), [round(x, 1) for x in iv.interval_j(0.8)]
+    (1128.2, [871.8, 1128.2])
+    """
+
+    mean_j: float
+    sd_j: float
+    sd_by_ground_j: dict[str, float]
+
+    def __post_init__(self) -> None:
+        for name in ("mean_j", "sd_j"):
+            value = float(getattr(self, name))
+            if not (math.isfinite(value) and value >= 0):
+                raise InvalidParameterError(f"RouteEnergyInterval.{name} must be a finite energy >= 0, got {value!r}")
+            object.__setattr__(self, name, value)
+        by = {str(k): float(v) for k, v in dict(self.sd_by_ground_j).items()}
+        if any(not (math.isfinite(v) and v >= 0) for v in by.values()):
+            raise InvalidParameterError(f"RouteEnergyInterval.sd_by_ground_j must hold finite spreads >= 0, got {by!r}")
+        object.__setattr__(self, "sd_by_ground_j", by)
+
+    def quantile_j(self, q: float) -> float:
+        """The ``q`` quantile of the route energy (J), ``q`` in (0, 1)."""
+        return self.mean_j + normal_quantile(check_risk_level(q)) * self.sd_j
+
+    @property
+    def p50_j(self) -> float:
+        """Median energy (J); the mean, the distribution being Gaussian."""
+        return self.mean_j
+
+    @property
+    def p90_j(self) -> float:
+        """90th percentile of the energy (J)."""
+        return self.quantile_j(0.9)
+
+    def interval_j(self, level: float = INTERVAL_LEVEL) -> tuple[float, float]:
+        """Central ``level`` interval of the energy (J), e.g. 0.8: (P10, P90)."""
+        lv = check_risk_level(level, "level")
+        return self.quantile_j(0.5 - lv / 2.0), self.quantile_j(0.5 + lv / 2.0)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The block route.json holds under ``energy_interval`` (J and Wh, units in the keys)."""
+        lo, hi = self.interval_j(INTERVAL_LEVEL)
+        return {
+            "distribution": "gaussian: per ground the run-level spreads add linearly, grounds independent",
+            "mean_j": self.mean_j,
+            "sd_j": self.sd_j,
+            "p50_j": self.p50_j,
+            "p90_j": self.p90_j,
+            "central_level": INTERVAL_LEVEL,
+            "central_interval_j": [lo, hi],
+            "mean_wh": self.mean_j / 3600.0,
+            "p50_wh": self.p50_j / 3600.0,
+            "p90_wh": self.p90_j / 3600.0,
+            "central_interval_wh": [lo / 3600.0, hi / 3600.0],
+            "sd_by_ground_j": dict(self.sd_by_ground_j),
+        }
+
+
+def _check_interval_cost(cost: Any) -> EnergyCost:
+    if not isinstance(cost, EnergyCost):
+        raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
+    if cost.grade_sd_table_j_per_m is None:
+        raise InvalidParameterError(
+            f"the cost ({cost!r}) carries no standard-deviation tables: its energy model gives no interval "
+            "(plan with a current model whose gives_interval is True)"
+        )
+    return cost
+
+
+def route_energy_interval(cost: EnergyCost, waypoints_m: Any) -> RouteEnergyInterval:
+    """The energy distribution of driving a polyline on ``cost`` (see the module docstring).
+
+    Each straight segment is walked cell by cell (:meth:`terrain.TerrainMap.segment_cells`):
+    a cell adds its horizontal length times its row's spread at the cell's grade in the
+    direction of travel (linear interpolation of :attr:`EnergyCost.grade_sd_table_j_per_m`,
+    as the mean tables are read); each turn adds its row's turn spread at the waypoint.
+
+    Parameters
+    ----------
+    cost : EnergyCost
+        A cost with standard-deviation tables (from a model with an interval).
+    waypoints_m : array_like, shape (K, 2)
+        The route (m).
+
+    Returns
+    -------
+    RouteEnergyInterval
+
+    Raises
+    ------
+    InvalidParameterError
+        A cost without spreads; a route that is not drivable (infinite energy); bad points.
+    OutOfBoundsError
+        A waypoint outside the map.
+    """
+    cost = _check_interval_cost(cost)
+    pts = as_points(waypoints_m, "waypoints_m")
+    mean = cost.path_energy_j(pts)
+    if not math.isfinite(mean):
+        raise InvalidParameterError("the route crosses a blocked cell or an undrivable grade: it has no energy interval")
+    sd_table, n_rows = cost.grade_sd_table_j_per_m, cost.grade_sd_table_j_per_m.shape[0]
+    n_grade = sd_table.shape[1]
+    step = 2.0 * cost.grade_max / (n_grade - 1)
+    gx, gy = cost.terrain["grad_x"], cost.terrain["grad_y"]
+    per_row = np.zeros(n_rows)
+    for a, b in zip(pts[:-1], pts[1:]):
+        length = math.hypot(b[0] - a[0], b[1] - a[1])
+        if length == 0.0:
+            continue
+        rows, cols, pieces = cost.terrain.segment_cells(tuple(a), tuple(b))
+        grade = (gx[rows, cols] * (b[0] - a[0]) + gy[rows, cols] * (b[1] - a[1])) / length
+        f = np.clip((grade + cost.grade_max) / step, 0.0, n_grade - 1.0)
+        i0 = np.minimum(np.floor(f).astype(np.int64), n_grade - 2)
+        w = f - i0
+        row = cost.ground_rows[rows, cols]
+        sd = sd_table[row, i0] * (1.0 - w) + sd_table[row, i0 + 1] * w
+        per_row += np.bincount(row, weights=np.asarray(pieces) * sd, minlength=n_rows)
+    angles, _ = cost.turn_energies_j(pts)
+    if np.any(angles > 0):
+        r, c = cost.terrain.rowcol(pts[:, 0], pts[:, 1])
+        row = cost.ground_rows[r, c]
+        grid = np.linspace(0.0, math.pi, cost.turn_sd_table_j.shape[1])
+        turn_sd = np.array([np.interp(ang, grid, cost.turn_sd_table_j[k]) for ang, k in zip(angles, row)])
+        per_row += np.bincount(row, weights=turn_sd, minlength=n_rows)
+    crossed = {cost.ground_labels[i]: float(per_row[i]) for i in np.flatnonzero(per_row > 0).tolist()}
+    return RouteEnergyInterval(mean, combine_ground_sds(per_row), crossed)
+
+
+def risk_cost(cost: EnergyCost, q: float) -> EnergyCost:
+    """The cost whose tables price every entry at its ``q`` quantile, ``mean + z_q * sd`` (floored at 0).
+
+    What ``plan --risk Q`` plans on: exactly the route's ``Q`` quantile on one ground, an upper
+    bound of it across independent grounds for ``Q > 0.5`` (module docstring). The result
+    shares the map geometry (:meth:`EnergyCost.with_tables`) and keeps the spreads, so
+    :func:`route_energy_interval` of a route planned on it can be computed on ``cost``.
+
+    Parameters
+    ----------
+    cost : EnergyCost
+        A cost with standard-deviation tables.
+    q : float
+        Risk level in (0, 1); 0.5 gives the mean cost.
+
+    Returns
+    -------
+    EnergyCost
+
+    Raises
+    ------
+    InvalidParameterError
+        ``q`` outside (0, 1); a cost without spreads.
+    """
+    q = check_risk_level(q)
+    cost = _check_interval_cost(cost)
+    z = normal_quantile(q)
+    grade = np.maximum(cost.grade_table_j_per_m + z * cost.grade_sd_table_j_per_m, 0.0)
+    turn = np.maximum(cost.turn_table_j + z * cost.turn_sd_table_j, 0.0)
+    return cost.with_tables(grade, turn, ground_labels=cost.ground_labels,
+                            grade_sd_table_j_per_m=cost.grade_sd_table_j_per_m, turn_sd_table_j=cost.turn_sd_table_j)
