@@ -36,13 +36,20 @@ _GROUND_COLOURS = {
 
 @dataclass(frozen=True)
 class RouteLine:
-    """One route to draw: a label, waypoints (m) and its energy (J)."""
+    """One route to draw: a label, waypoints (m) and its energy (J).
+
+    ``energy_band_j`` (optional): the central interval of the route energy (J, e.g. P10-P90
+    of :class:`planner.RouteEnergyInterval`) and ``band_level`` its level; the legend then
+    gives it and the route is drawn over a translucent halo marking that it is uncertain.
+    """
 
     label: str
     waypoints_m: np.ndarray
     energy_j: float
     colour: str | None = None
     linestyle: str = "-"
+    energy_band_j: tuple[float, float] | None = None
+    band_level: float = 0.8
 
 
 def view_bounds(
@@ -210,14 +217,13 @@ def plot_routes(
     default_colours = ["#d32f2f", "#1565c0", "#6a1b9a", "#ef6c00", "#00838f"]
     for i, route in enumerate(routes):
         wp = np.asarray(route.waypoints_m, float)
-        (line,) = ax.plot(
-            wp[:, 0],
-            wp[:, 1],
-            color=route.colour or default_colours[i % len(default_colours)],
-            linestyle=route.linestyle,
-            linewidth=2.2,
-            label=f"{route.label}: {route.energy_j:,.0f} J ({route.energy_j / 3600:.2f} Wh)",
-        )
+        colour = route.colour or default_colours[i % len(default_colours)]
+        label = f"{route.label}: {route.energy_j:,.0f} J ({route.energy_j / 3600:.2f} Wh)"
+        if route.energy_band_j is not None:
+            lo, hi = route.energy_band_j
+            label += f"\n  {100 * route.band_level:.0f} % interval {lo / 3600:.2f}-{hi / 3600:.2f} Wh"
+            ax.plot(wp[:, 0], wp[:, 1], color=colour, linewidth=9.0, alpha=0.25, solid_capstyle="round")
+        (line,) = ax.plot(wp[:, 0], wp[:, 1], color=colour, linestyle=route.linestyle, linewidth=2.2, label=label)
         handles.append(line)
     (s,) = ax.plot(*start_xy_m, marker="o", color="white", markeredgecolor="k", markersize=9, linestyle="", label="start")
     (g,) = ax.plot(*goal_xy_m, marker="*", color="gold", markeredgecolor="k", markersize=14, linestyle="", label="goal")

@@ -11,10 +11,14 @@ from pathlib import Path
 
 import numpy as np
 
-from energy import GROUND_PRESETS
+from energy import GROUND_PRESETS, CurrentModel, load_current_model, robot_preset
 from terrain import UNKNOWN_GROUND, InvalidParameterError, NodataError, TerrainMap, UnknownNameError
 from terrain.atomic import check_output_path
 from terrain.checks import fmt_number
+
+from ..edge_cost import EnergyCost
+from ..model_cost import model_energy_cost
+from ..risk import check_risk_level
 
 __all__ = [
     "add_map_options",
@@ -28,6 +32,10 @@ __all__ = [
     "draw_figure",
     "add_dask_options",
     "check_dask_flags",
+    "add_model_options",
+    "check_model_flags",
+    "load_model_arg",
+    "edge_cost_for",
 ]
 
 
@@ -178,3 +186,57 @@ def check_dask_flags(args: argparse.Namespace) -> None:
             f"--workers {args.workers!r} and --scheduler {args.scheduler!r} exclude each other: "
             "give --workers N for a local cluster or --scheduler ADDRESS for an existing one"
         )
+
+
+def add_model_options(p: argparse.ArgumentParser, *, risk: bool = False) -> None:
+    """``--model FILE`` and ``--model-ground NAME`` (and, with ``risk``, ``--risk Q``): edge costs from a saved model."""
+    p.add_argument(
+        "--model", type=Path, default=None, metavar="FILE",
+        help="price the edges with a saved current model (terrawatt train) instead of the physics presets: one per "
+             "ground class of the map, which the model must have driven, on the robot of --robot (the physics "
+             "model adds the slope term); --unknown-ground does not apply",
+    )
+    p.add_argument("--model-ground", default=None, metavar="NAME",
+                   help="with --model: price every cell as this training ground of the model (e.g. a map without "
+                        "ground classes when the model drove several grounds)")
+    if risk:
+        p.add_argument(
+            "--risk", type=float, default=None, metavar="Q",
+            help="with --model of a model with a predictive interval: plan on the Q quantile of energy (Q in (0, 1)): "
+                 "every edge costs mean + z_Q sd, which is the route's Q quantile on one ground and, for Q > 0.5, an "
+                 "upper bound of it across grounds (their errors are independent); default: the mean",
+        )
+
+
+def check_model_flags(args: argparse.Namespace) -> None:
+    """``--model``, ``--model-ground`` and ``--risk`` checked before any work (the file must exist)."""
+    model = getattr(args, "model", None)
+    if model is None:
+        for flag, value in (("--model-ground", getattr(args, "model_ground", None)),
+                            ("--risk", getattr(args, "risk", None))):
+            if value is not None:
+                raise InvalidParameterError(f"{flag} needs --model FILE (a saved current model; the physics presets "
+                                            "have no training grounds nor an interval)")
+        return
+    if not Path(model).is_file():
+        raise InvalidParameterError(f"--model {model} is not a file (write one with terrawatt train)")
+    if getattr(args, "risk", None) is not None:
+        check_risk_level(args.risk, "--risk")
+
+
+def load_model_arg(args: argparse.Namespace) -> CurrentModel | None:
+    """The model of ``--model`` (:func:`energy.load_current_model`), or None without the flag."""
+    if getattr(args, "model", None) is None:
+        return None
+    return load_current_model(args.model)
+
+
+def edge_cost_for(tmap: TerrainMap, *, robot: str, speed_mps: float, max_slope_rad: float,
+                  unknown_ground: str | None, model: CurrentModel | None = None,
+                  model_ground: str | None = None) -> EnergyCost:
+    """The edge costs of a command: the physics presets, or the saved ``model`` (:func:`planner.model_energy_cost`)."""
+    if model is None:
+        return EnergyCost.from_presets(tmap, robot=robot, speed_mps=speed_mps, max_slope_rad=max_slope_rad,
+                                       unknown_ground=unknown_ground)
+    return model_energy_cost(tmap, model, robot_preset(robot), speed_mps, model_ground=model_ground,
+                             max_slope_rad=max_slope_rad)

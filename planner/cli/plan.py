@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import functools
 import math
 import time
@@ -28,12 +29,17 @@ from .. import (
     warm_up_kernels,
 )
 from ..plot import RouteLine, plot_routes
+from ..risk import INTERVAL_LEVEL, RouteEnergyInterval, risk_cost, route_energy_interval
 from ..route_geojson import write_geojson
 from .common import (
     add_map_options,
+    add_model_options,
+    check_model_flags,
     check_outputs,
     check_positive,
     draw_figure,
+    edge_cost_for,
+    load_model_arg,
     max_slope_rad,
     read_map_args,
     unknown_ground,
@@ -68,6 +74,7 @@ def add_parsers(sub: Any) -> None:
         help="with --coarse-factor on a GeoTIFF DEM: read the DEM by windows, never whole (the coarse map tile by "
              "tile, the full resolution only in the corridor's window), for DEMs larger than memory",
     )
+    add_model_options(plan, risk=True)
     plan.set_defaults(run=run_plan_command)
 
 
@@ -102,6 +109,10 @@ def run_demo(args: argparse.Namespace) -> int:
 def run_plan_command(args: argparse.Namespace) -> int:
     """``terrawatt plan``: plan on a map file."""
     check_outputs(args.out, _OUTPUTS)
+    check_model_flags(args)
+    if args.model is not None and (args.windowed or args.coarse_factor is not None):
+        raise InvalidParameterError("--model plans on the whole map with --planner; it does not apply to "
+                                    "--coarse-factor / --windowed yet")
     if args.windowed:
         return _run_windowed(args)
     tmap = read_map_args(args)
@@ -129,10 +140,13 @@ def _run(args: argparse.Namespace, tmap: TerrainMap, start: tuple[float, float],
             unknown_ground=unknown_ground(args.unknown_ground, tmap), map_label=label, whole_map=args.whole_map,
         )
         return 0 if result["status"] == "exact" else 1
+    model = load_model_arg(args)
     result = run_plan(
         tmap, start, goal, planner=args.planner, time_limit_s=args.time_limit, max_evaluations=args.max_evaluations,
         seed=args.seed, out_dir=args.out, robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg,
-        unknown_ground=unknown_ground(args.unknown_ground, tmap), map_label=label, whole_map=args.whole_map,
+        unknown_ground=None if model is not None else unknown_ground(args.unknown_ground, tmap), map_label=label,
+        whole_map=args.whole_map, model=model, model_label=None if model is None else args.model.name,
+        model_ground=getattr(args, "model_ground", None), risk=getattr(args, "risk", None),
     )
     return 0 if result["status"] == "exact" else 1
 
@@ -217,17 +231,34 @@ def run_plan(
     unknown_ground: str | None,
     map_label: str,
     whole_map: bool = False,
+    model: Any = None,
+    model_label: str | None = None,
+    model_ground: str | None = None,
+    risk: float | None = None,
 ) -> dict[str, Any]:
     """Plan once with its comparison (shortest route, lattice optimum), print, write files.
 
     Writes ``route.json``, ``route.geojson`` (the found routes as LineStrings: WGS 84 when the
     map has a CRS, else local metres) and ``route.png`` (zoomed on the routes unless
-    ``whole_map``)."""
+    ``whole_map``).
+
+    With ``model`` (a saved current model, :func:`planner.model_energy_cost`) the edges are
+    priced by it; when it gives an interval, the route's energy distribution
+    (:func:`planner.route_energy_interval`: mean, P50, P90, central 80 %) is printed, written
+    to route.json (``routes.min_energy.energy_interval``) and shaded in route.png. With
+    ``risk`` Q the routes are planned on :func:`planner.risk_cost` (each edge at mean + z_Q sd):
+    the table then shows that objective, the interval line the route's true distribution.
+    Without ``model`` the output is that of the physics presets, unchanged."""
     slope_rad = max_slope_rad(max_slope_deg)
     compile_s = warm_up_kernels()  # compiled once per environment, then loaded from numba's cache
     t0 = time.perf_counter()
-    cost = EnergyCost.from_presets(tmap, robot=robot, speed_mps=speed_mps, max_slope_rad=slope_rad,
-                                   unknown_ground=unknown_ground)
+    mean_cost = edge_cost_for(tmap, robot=robot, speed_mps=speed_mps, max_slope_rad=slope_rad,
+                              unknown_ground=unknown_ground, model=model, model_ground=model_ground)
+    if risk is not None and not mean_cost.has_interval:
+        raise InvalidParameterError(
+            f"--risk {risk:g} needs a model with a predictive interval; the model {model_label or ''} gives none "
+            "(its spreads are all 0): plan without --risk, or with a model that has one")
+    cost = mean_cost if risk is None else risk_cost(mean_cost, risk)
     prep_s = time.perf_counter() - t0
     route = plan_route(
         tmap, start, goal, cost=cost, planner=planner, seed=seed, compare=True,
@@ -236,6 +267,7 @@ def run_plan(
     rows: list[dict[str, Any]] = []
     routes_json: dict[str, Any] = {}
     lines = []
+    interval: RouteEnergyInterval | None = None
     if route.found:
         shortest = route.comparison.shortest
         # the table's second row: the lattice planner with refinement (the route itself when it is one)
@@ -248,13 +280,22 @@ def run_plan(
             RouteLine(f"min-energy ({planner})", route.waypoints_m, route.energy_j, colour="#d32f2f"),
             RouteLine("shortest distance", shortest.waypoints_m, shortest.energy_j, colour="#1565c0", linestyle="--"),
         ]
+        interval = route_energy_interval(mean_cost, route.waypoints_m) if mean_cost.has_interval else None
+        if interval is not None:
+            lines[0] = dataclasses.replace(lines[0], energy_band_j=interval.interval_j(INTERVAL_LEVEL),
+                                           band_level=INTERVAL_LEVEL)
         routes_json = {
-            "min_energy": {**route.summary(), "waypoints_m": route.waypoints_m.tolist()},
+            "min_energy": {**route.summary(), "waypoints_m": route.waypoints_m.tolist(),
+                           **({"energy_interval": interval.to_dict()} if interval is not None else {})},
             "lattice": {**optimum.summary(), "waypoints_m": optimum.waypoints_m.tolist()},
             "shortest": {**shortest.summary(), "waypoints_m": shortest.waypoints_m.tolist()},
         }
     print(f"map: {map_label}  {tmap.shape[0]} x {tmap.shape[1]} cells of {tmap.cell_size_m:g} m; grounds {tmap.ground_names}")
     print(f"robot: {robot}, speed {speed_mps:g} m/s, max slope {max_slope_deg:g} deg; map preparation {prep_s:.2f} s")
+    if model is not None:
+        print(f"edge costs: model {model_label} ({type(model).__name__}) on grounds {list(mean_cost.ground_labels)}"
+              + (f"; planned on the {risk:g} quantile of energy (each edge at mean + z sd)" if risk is not None else "")
+              + ("" if mean_cost.has_interval else "; the model gives no interval"))
     budget = f"{max_evaluations} edge-cost evaluations" if max_evaluations is not None else f"time limit {time_limit_s:g} s"
     n_unknown = int(np.count_nonzero(np.asarray(tmap.ground) == UNKNOWN_GROUND))
     if n_unknown and unknown_ground:
@@ -269,6 +310,12 @@ def run_plan(
     else:
         _print_table(rows)
         print()
+        if interval is not None:
+            lo, hi = interval.interval_j(INTERVAL_LEVEL)
+            print(f"route energy (the model's interval): mean {interval.mean_j / 3600:.3f} Wh, P50 "
+                  f"{interval.p50_j / 3600:.3f} Wh, P90 {interval.p90_j / 3600:.3f} Wh, sd {interval.sd_j / 3600:.3f} Wh; "
+                  f"{100 * INTERVAL_LEVEL:.0f} % interval {lo / 3600:.3f}-{hi / 3600:.3f} Wh"
+                  + ("  (the table shows the planning objective)" if risk is not None else ""))
         if route.status == "exact":
             print(
                 f"energy saved vs shortest route: {route.energy_saved_pct:.1f} %  "
@@ -301,6 +348,11 @@ def run_plan(
         "table": rows,
         "routes": routes_json,
     }
+    if model is not None:  # default files stay as they were
+        result["model"] = {"file": model_label, "class": type(model).__name__, "model_ground": model_ground,
+                           "grounds": list(mean_cost.ground_labels), "gives_interval": mean_cost.has_interval,
+                           "risk_q": risk,
+                           "objective": "energy mean" if risk is None else f"{risk:g} quantile: mean + z sd per edge"}
     out_dir.mkdir(parents=True, exist_ok=True)
     json_path = write_json_atomic(out_dir / "route.json", result)
     written = [json_path]
