@@ -12,13 +12,17 @@ from terrain import InvalidParameterError
 from terrain.dask_client import dask_client
 from terrain.procedural import example_map
 
-from .. import PLANNERS, BatchPairs, EnergyCost, plan_batch, read_pairs_csv, read_sites_csv, warm_up_kernels
+from .. import PLANNERS, BatchPairs, plan_batch, read_pairs_csv, read_sites_csv, warm_up_kernels
 from .common import (
     add_dask_options,
     add_map_options,
+    add_model_options,
     check_dask_flags,
+    check_model_flags,
     check_outputs,
     check_positive,
+    edge_cost_for,
+    load_model_arg,
     max_slope_rad,
     read_map_args,
     unknown_ground,
@@ -59,6 +63,7 @@ def add_parser(sub: Any) -> None:
                        help="ground preset assumed where the map's ground class is unknown (-1); 'none' to refuse")
     batch.add_argument("--no-progress", action="store_true", help="no progress bar")
     batch.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
+    add_model_options(batch)
     batch.set_defaults(run=run_batch)
 
 
@@ -88,15 +93,17 @@ def run_batch(args: argparse.Namespace) -> int:
     planning failed (e.g. a start on an obstacle: the row's error says so).
     """
     _check_flags(args)
+    check_model_flags(args)
     check_outputs(args.out, _OUTPUTS)
     pairs = _read_pairs(args)
     if args.map == "example":
         tmap, label = example_map(), "bundled example map"
     else:
         tmap, label = read_map_args(args), Path(args.map).name
-    cost = EnergyCost.from_presets(tmap, robot=args.robot, speed_mps=args.speed,
-                                   max_slope_rad=max_slope_rad(args.max_slope_deg),
-                                   unknown_ground=unknown_ground(args.unknown_ground, tmap))
+    model = load_model_arg(args)
+    cost = edge_cost_for(tmap, robot=args.robot, speed_mps=args.speed, max_slope_rad=max_slope_rad(args.max_slope_deg),
+                         unknown_ground=None if model is not None else unknown_ground(args.unknown_ground, tmap),
+                         model=model, model_ground=args.model_ground)
     warm_up_kernels()
     with contextlib.ExitStack() as stack:
         client = None

@@ -15,13 +15,17 @@ from terrain.atomic import write_json_atomic
 from terrain.errors import InvalidParameterError
 from terrain.procedural import EXAMPLE_START_XY_M, example_map
 
-from .. import EnergyCost, Reachability, reachability, warm_up_kernels
+from .. import Reachability, reachability, warm_up_kernels
 from ..reachability import warm_up_reachability
 from .common import (
     add_map_options,
+    add_model_options,
+    check_model_flags,
     check_outputs,
     check_positive,
     draw_figure,
+    edge_cost_for,
+    load_model_arg,
     max_slope_rad,
     read_map_args,
     unknown_ground,
@@ -60,6 +64,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--unknown-ground", default="gravel",
                    help="ground preset assumed where the map's ground class is unknown (-1); 'none' to refuse such cells")
     p.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
+    add_model_options(p)
     p.set_defaults(run=run_reach)
 
 
@@ -84,6 +89,7 @@ def _check_flags(args: argparse.Namespace) -> None:
 def run_reach(args: argparse.Namespace) -> int:
     """``terrawatt reach``: writes reach.json, reach.png and the raster; exit 1 when no cell is reachable."""
     _check_flags(args)
+    check_model_flags(args)
     slope_rad = max_slope_rad(args.max_slope_deg)
     # Both raster names are checked: which one is written depends on the map, read after the check.
     check_outputs(args.out, ("reach.json", "reach.png", "reach.npz", "reach.tif"))
@@ -93,14 +99,15 @@ def run_reach(args: argparse.Namespace) -> int:
     else:
         tmap, label = read_map_args(args), args.map.name
     depot = tuple(args.depot) if args.depot is not None else EXAMPLE_START_XY_M
-    ground = unknown_ground(args.unknown_ground, tmap)
+    model = load_model_arg(args)
+    ground = None if model is not None else unknown_ground(args.unknown_ground, tmap)
     voltage_v = args.voltage if args.voltage is not None else robot.battery_voltage_v
     budget_j = args.battery_ah * voltage_v * S_PER_H
     reserve_j = budget_j * args.reserve / 100.0
     compile_s = warm_up_kernels() + warm_up_reachability()
     t0 = time.perf_counter()
-    cost = EnergyCost.from_presets(tmap, robot=args.robot, speed_mps=args.speed, max_slope_rad=slope_rad,
-                                   unknown_ground=ground)
+    cost = edge_cost_for(tmap, robot=args.robot, speed_mps=args.speed, max_slope_rad=slope_rad, unknown_ground=ground,
+                         model=model, model_ground=args.model_ground)
     prep_s = time.perf_counter() - t0
     reach = reachability(cost, depot, budget_j=budget_j, reserve_j=reserve_j, round_trip=args.round_trip)
     total_s = time.perf_counter() - t0
@@ -120,6 +127,9 @@ def run_reach(args: argparse.Namespace) -> int:
         "raster": raster.name,
         **reach.to_dict(),
     }
+    if model is not None:  # default files stay as they were
+        result["model"] = {"file": args.model.name, "class": type(model).__name__, "model_ground": args.model_ground,
+                           "grounds": list(cost.ground_labels)}
     json_path = write_json_atomic(args.out / "reach.json", result)
     png_path = draw_figure(args.out / "reach.png", lambda: reach.plot(
         args.out / "reach.png", title=f"terrawatt: energy reachability on {label}"))

@@ -26,7 +26,9 @@ from terrain.errors import InvalidParameterError, UnknownNameError
 
 from ..route import Route
 from ..edge_cost import EnergyCost
+from ..risk import route_energy_interval
 from .forecast import route_forecast_j
+from .monte_carlo_model import MC_DRAW_MODES, ModelMissionSetup
 from .monte_carlo_result import MonteCarloResult
 from .monte_carlo_sampling import MissionDistributions
 from .simulate import simulate_mission
@@ -108,6 +110,7 @@ def simulate_missions_mc(
     scheduler: str | None = None,
     progress: bool = False,
     cost: EnergyCost | None = None,
+    draw_from: str = "parameters",
 ) -> MonteCarloResult:
     """Drive one route ``n`` times with drawn parameters: the risk of crossing the reserve and the energy percentiles.
 
@@ -145,7 +148,15 @@ def simulate_missions_mc(
         The cost that planned the route: when it carries its physics model, the study's
         ``predicted_energy_j`` is that model's forecast of the driven stop-turn-go profile at
         the nominal speed (:func:`planner.missions.forecast.route_forecast_j`), else the
-        route's edge energy.
+        route's edge energy. When it carries a predictive interval (:mod:`planner.risk`), the
+        result's ``forecast`` is the route's energy distribution (P50, P90) on it.
+    draw_from : {"parameters", "model"}
+        ``"parameters"`` (default): each mission draws :class:`MissionDistributions` and
+        drives the route against a truth simulation. ``"model"``: each mission draws one
+        standard-normal factor per ground from the planning model's own predictive
+        distribution and prices every edge at ``mean + z_ground * sd``
+        (:mod:`planner.missions.monte_carlo_model`); needs ``cost`` with an interval;
+        ``ground_scale`` then holds the drawn factors ``z``.
 
     Returns
     -------
@@ -181,6 +192,11 @@ def simulate_missions_mc(
     robot = robot_preset(robot) if isinstance(robot, str) else robot
     if not isinstance(robot, RobotParams):
         raise InvalidParameterError(f"robot must be a RobotParams or a preset name, got {type(robot).__name__!r}")
+    if draw_from not in MC_DRAW_MODES:
+        raise InvalidParameterError(f"draw_from must be one of {MC_DRAW_MODES!r}, got {draw_from!r}")
+    if draw_from == "model" and distributions is not None:
+        raise InvalidParameterError("distributions are the typed ranges of draw_from='parameters'; "
+                                    "draw_from='model' draws from the model and takes none")
     distributions = MissionDistributions() if distributions is None else distributions
     if not isinstance(distributions, MissionDistributions):
         raise InvalidParameterError(f"distributions must be a MissionDistributions, got {type(distributions).__name__!r}")
@@ -189,14 +205,25 @@ def simulate_missions_mc(
     progress = check_bool("progress", progress)
     nominal = (route_speed_mps(terrain, route, robot.turn_rate_radps) if speed_mps is None
                else check_real("speed_mps", speed_mps, low=0.0, low_inclusive=False))
-    setup = MissionSetup(terrain, route, robot, _grounds(terrain, grounds), battery, distributions, nominal,
-                         check_real("current_rate_hz", current_rate_hz, low=0.0, low_inclusive=False))
-    TruthSimulator(robot, setup.grounds, current_rate_hz=setup.current_rate_hz)  # what every sample meets, checked once
+    rate_hz = check_real("current_rate_hz", current_rate_hz, low=0.0, low_inclusive=False)
     if cost is not None and not isinstance(cost, EnergyCost):
         raise InvalidParameterError(f"cost must be an EnergyCost or None, got {type(cost).__name__!r}")
-    predicted_j = route.energy_j  # the forecast, before any mission runs
-    if cost is not None and cost.physics_model is not None:
-        predicted_j = route_forecast_j(cost, route, speed_mps=nominal)
+    forecast = route_energy_interval(cost, route.waypoints_m) if cost is not None and cost.has_interval else None
+    setup: MissionSetup | ModelMissionSetup
+    if draw_from == "model":
+        if forecast is None:
+            raise InvalidParameterError(
+                "draw_from='model' draws from the planning model's predictive distribution: give cost= built by a "
+                "current model with an interval (e.g. planner.model_energy_cost); "
+                + ("no cost was given" if cost is None else "this cost has none"))
+        setup = ModelMissionSetup(forecast, battery, float(route.duration_s), nominal)
+        predicted_j = forecast.mean_j
+    else:
+        setup = MissionSetup(terrain, route, robot, _grounds(terrain, grounds), battery, distributions, nominal, rate_hz)
+        TruthSimulator(robot, setup.grounds, current_rate_hz=rate_hz)  # what every sample meets, checked once
+        predicted_j = route.energy_j  # the forecast, before any mission runs
+        if cost is not None and cost.physics_model is not None:
+            predicted_j = route_forecast_j(cost, route, speed_mps=nominal)
     client = check_client(client, "missions")
     n_workers = 1 if workers is None else check_int("workers", workers, low=1)
     if client is not None and (n_workers > 1 or scheduler is not None):
@@ -220,16 +247,17 @@ def simulate_missions_mc(
             rows = _run_on_cluster(client, setup, seqs, chunk_size, progress)
             n_used = client_worker_count(client)
         elapsed = time.perf_counter() - t0
-    table = np.array(rows, dtype=np.float64)
-    k = len(setup.grounds)
+    ground_names = setup.ground_names if draw_from == "model" else tuple(sorted(setup.grounds))
+    k = len(ground_names)
+    table = np.array(rows, dtype=np.float64).reshape(n, -1)
     cols = table[:, k:].T
     return MonteCarloResult(
         seed=seed, entropy=used, distributions=distributions, battery=battery,
-        predicted_energy_j=predicted_j, ground_names=tuple(sorted(setup.grounds)), ground_scale=table[:, :k],
+        predicted_energy_j=predicted_j, ground_names=ground_names, ground_scale=table[:, :k],
         payload_kg=cols[0], capacity_ah=cols[1], internal_resistance_ohm=cols[2], speed_mps=cols[3],
         energy_j=cols[4], charge_mah=cols[5], duration_s=cols[6], arrival_soc=cols[7], min_soc=cols[8],
         below_reserve=cols[9] > 0.5, depleted=cols[10] > 0.5, where=where, n_workers=n_used,
-        elapsed_s=elapsed,
+        elapsed_s=elapsed, draw_from=draw_from, forecast=forecast,
     )
 
 

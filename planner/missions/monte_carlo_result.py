@@ -17,6 +17,7 @@ from terrain.atomic import write_json_atomic, write_text_atomic
 from terrain.checks import check_real, readonly, real_array
 from terrain.errors import InvalidParameterError
 
+from ..risk import RouteEnergyInterval
 from .monte_carlo_figure import plot_monte_carlo
 from .monte_carlo_sampling import MissionDistributions
 
@@ -62,6 +63,13 @@ class MonteCarloResult:
         ``"in process"``, ``"local cluster"``, ``"given client"`` or a scheduler address.
     n_workers : int
     elapsed_s : float
+    draw_from : {"parameters", "model"}
+        What the missions drew: the typed ranges of ``distributions`` (a truth simulation
+        each), or the planning model's predictive distribution (``ground_scale`` then holds
+        the standard-normal factor drawn per ground, ``distributions`` is unused).
+    forecast : RouteEnergyInterval or None
+        The route's energy distribution on the planning cost when it has an interval (its
+        P50 / P90 are in the summary and the JSON).
     """
 
     seed: int | None
@@ -85,8 +93,14 @@ class MonteCarloResult:
     where: str = "in process"
     n_workers: int = 1
     elapsed_s: float = math.nan
+    draw_from: str = "parameters"
+    forecast: RouteEnergyInterval | None = None
 
     def __post_init__(self) -> None:
+        if self.draw_from not in ("parameters", "model"):
+            raise InvalidParameterError(f"draw_from must be 'parameters' or 'model', got {self.draw_from!r}")
+        if self.forecast is not None and not isinstance(self.forecast, RouteEnergyInterval):
+            raise InvalidParameterError(f"forecast must be a RouteEnergyInterval or None, got {self.forecast!r:.80}")
         n = np.asarray(self.energy_j).shape[0] if np.ndim(self.energy_j) == 1 else -1
         if n < 1:
             raise InvalidParameterError("energy_j must be a 1-D array of at least one sample")
@@ -153,6 +167,11 @@ class MonteCarloResult:
             "n_workers": self.n_workers,
             "elapsed_s": self.elapsed_s,
         }
+        if self.draw_from == "model":  # files of the typed ranges stay as they were
+            out["draw_from"] = "model"
+            del out["distributions"]
+        if self.forecast is not None:
+            out["forecast_interval"] = self.forecast.to_dict()
         if samples:
             out["ground_names"] = list(self.ground_names)
             out["samples"] = {"ground_scale": self.ground_scale.tolist(),
@@ -167,7 +186,8 @@ class MonteCarloResult:
         """Write the per-sample table (one line per sample, a column per ground factor), atomically."""
         buf = io.StringIO()
         writer = csv.writer(buf, lineterminator="\n")
-        writer.writerow(["sample", *(f"ground_scale_{g}" for g in self.ground_names), *SAMPLE_COLUMNS, *_FLAGS])
+        prefix = "ground_z" if self.draw_from == "model" else "ground_scale"
+        writer.writerow(["sample", *(f"{prefix}_{g}" for g in self.ground_names), *SAMPLE_COLUMNS, *_FLAGS])
         cols = [getattr(self, c) for c in SAMPLE_COLUMNS]
         for i in range(self.n):
             writer.writerow([i, *(repr(float(v)) for v in self.ground_scale[i]), *(repr(float(c[i])) for c in cols),
@@ -179,9 +199,18 @@ class MonteCarloResult:
         pct = self.energy_percentiles_wh
         lo, hi = self.p_below_reserve_ci95
         b = self.battery
+        lines = []
+        if self.draw_from == "model":
+            lines.append("drawn from the planning model's predictive distribution: one standard-normal factor per "
+                         f"ground ({', '.join(self.ground_names) or 'none with a spread'}), edges at mean + z sd")
+        if self.forecast is not None:
+            f = self.forecast
+            lines.append(f"route energy forecast (the model's interval): P50 {f.p50_j / 3600:.2f} Wh, "
+                         f"P90 {f.p90_j / 3600:.2f} Wh")
         return "\n".join([
             f"{self.n} missions (seed {self.entropy if self.seed is None else self.seed}) in {self.elapsed_s:.1f} s on "
             f"{self.n_workers} worker(s) ({self.where})",
+            *lines,
             f"energy: P50 {pct['p50']:.2f} Wh, P90 {pct['p90']:.2f} Wh, P99 {pct['p99']:.2f} Wh "
             f"(forecast {self.predicted_energy_j / 3600.0:.2f} Wh with nominal parameters)",
             f"below the {b.min_reserve_pct:g} % reserve in {np.count_nonzero(self.below_reserve)} of {self.n} missions: "

@@ -1,0 +1,72 @@
+"""The model-driven Monte Carlo mission: the route's energy drawn from the planning model's own predictive distribution.
+
+Where the edge cost carries run-level standard deviations (a current model with an interval,
+:mod:`planner.risk`), one mission of :func:`planner.simulate_missions_mc` with
+``draw_from="model"`` draws **one standard-normal factor** ``z_g`` **per ground** the route
+crosses and prices every edge on ground ``g`` at ``mean + z_g * sd``: the route energy is
+``mean + sum_g z_g S_g`` (``S_g`` the linear sum of the spreads on ``g``), the run-level error
+being shared by the whole run on one ground and independent between grounds: exactly the
+Gaussian of :class:`~planner.RouteEnergyInterval`, drawn. The energy is drawn from the battery
+at a constant power over the route's duration (:func:`energy.discharge_from_power`: internal
+resistance and Peukert as for a driven mission) and checked against the reserve
+(:func:`energy.energy_budget`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from energy import Battery, discharge_from_power, energy_budget
+
+from ..risk import RouteEnergyInterval
+
+__all__ = ["ModelMissionSetup", "MC_DRAW_MODES"]
+
+#: What a Monte Carlo mission draws: the typed parameter ranges (a truth simulation per mission) or the model's distribution.
+MC_DRAW_MODES = ("parameters", "model")
+
+
+@dataclass(frozen=True)
+class ModelMissionSetup:
+    """Everything a model-driven Monte Carlo sample needs besides its seed.
+
+    Attributes
+    ----------
+    forecast : RouteEnergyInterval
+        The route's energy distribution on the planning cost.
+    battery : Battery
+        The nominal battery.
+    duration_s : float
+        Duration of the route (s), over which the energy is drawn at constant power.
+    speed_mps : float
+        The nominal speed (recorded per sample; not drawn).
+    """
+
+    forecast: RouteEnergyInterval
+    battery: Battery
+    duration_s: float
+    speed_mps: float
+
+    @property
+    def ground_names(self) -> tuple[str, ...]:
+        """Grounds with a spread on the route, in the order of the drawn factors."""
+        return tuple(sorted(self.forecast.sd_by_ground_j))
+
+    def run(self, seq: np.random.SeedSequence) -> tuple[float, ...]:
+        """One mission: the factors ``z_g``, then the row of :class:`MissionSetup.run` (no payload, nominal battery)."""
+        rng = np.random.default_rng(seq)
+        names = self.ground_names
+        z = rng.standard_normal(len(names))
+        spread = np.array([self.forecast.sd_by_ground_j[g] for g in names])
+        energy_j = max(self.forecast.mean_j + float(np.dot(z, spread)), 0.0)
+        power_w = energy_j / self.duration_s
+        b = energy_budget(discharge_from_power(self.battery, [0.0, self.duration_s], [power_w, power_w]), energy_j)
+        return (*z.tolist(), 0.0, self.battery.capacity_ah, self.battery.internal_resistance_ohm, self.speed_mps,
+                float(b.actual_energy_j), float(b.actual_charge_mah), float(b.duration_s), float(b.arrival_soc),
+                float(b.arrival_soc), float(not b.feasible), float(b.depleted))
+
+    def run_chunk(self, seqs: list[np.random.SeedSequence]) -> list[tuple[float, ...]]:
+        """:meth:`run` over several seeds (one dask task)."""
+        return [self.run(q) for q in seqs]
