@@ -16,16 +16,21 @@ from terrain.checks import fmt_number
 from terrain.dask_client import dask_client
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
 
-from ..edge_cost import EnergyCost
+from ..edge_cost import DEFAULT_MAX_SLOPE_RAD
 from ..missions import AdaptiveSettings, fit_prior_model, run_adaptive_mission, simulate_missions_mc
+from ..model_cost import model_energy_model
 from ..planning import plan_route
 from .common import (
     add_dask_options,
     add_map_options,
+    add_model_options,
     check_dask_flags,
+    check_model_flags,
     check_outputs,
     check_positive,
     draw_figure,
+    edge_cost_for,
+    load_model_arg,
     read_map_args,
 )
 
@@ -59,6 +64,7 @@ def add_parser(sub: Any) -> None:
     mission.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     mission.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
     add_monte_carlo_options(mission)
+    add_model_options(mission, risk=True)
     mission.set_defaults(run=run_mission)
 
 
@@ -83,6 +89,12 @@ def run_mission(args: argparse.Namespace) -> int:
     """
     _check_flags(args)
     check_monte_carlo_flags(args)
+    check_model_flags(args)
+    if args.risk is not None and args.monte_carlo is None:
+        raise InvalidParameterError("--risk Q of mission checks the route's Q quantile against the usable battery in a "
+                                    "--monte-carlo N study; the adaptive mission does not take it yet")
+    if args.mc_draw == "model" and args.model is None:
+        raise InvalidParameterError("--mc-draw model draws from a saved model's predictive distribution: give --model FILE")
     check_outputs(args.out, _OUTPUTS if args.monte_carlo is None else _MC_OUTPUTS)
     if args.map == "example":
         tmap, label = example_map(), "bundled example map"
@@ -107,18 +119,25 @@ def run_mission(args: argparse.Namespace) -> int:
         voltage_v=args.battery_v if args.battery_v is not None else robot.battery_voltage_v,
         min_reserve_pct=args.reserve_pct,
     )
-    prior = fit_prior_model(truth, args.prior_ground, seed=args.seed)
+    model = load_model_arg(args)
     settings = AdaptiveSettings(
         speed_mps=args.speed,
         leg_length_m=args.leg_m,
         max_updates=0 if args.no_adapt else AdaptiveSettings().max_updates,
         seed=args.seed,
     )
-    registry = CellModelRegistry.from_terrain(tmap, prior, prior_name=f"{args.prior_ground}-prior")
+    learned = None
+    if model is not None:  # the saved model serves every ground class it drove (one model id each)
+        learned, _ = model_energy_model(tmap, model, robot, model_ground=args.model_ground,
+                                        physics_ground=grounds[args.prior_ground])
+        registry = learned.registry
+    else:
+        prior = fit_prior_model(truth, args.prior_ground, seed=args.seed)
+        registry = CellModelRegistry.from_terrain(tmap, prior, prior_name=f"{args.prior_ground}-prior")
     t0 = time.perf_counter()
     result = run_adaptive_mission(
         tmap, registry, robot, battery, truth, start, goal,
-        physics_ground=grounds[args.prior_ground], settings=settings,
+        physics_ground=grounds[args.prior_ground], settings=settings, learned=learned,
     )
     elapsed = time.perf_counter() - t0
     json_path = write_json_atomic(args.out / "mission.json", {**result.to_json_dict(), "computing_time_s": elapsed})
@@ -166,6 +185,10 @@ def add_monte_carlo_options(p: argparse.ArgumentParser) -> None:
                         "writes monte_carlo.json, .csv and .png")
     p.add_argument("--max-risk-pct", type=float, default=5.0, metavar="P",
                    help="--monte-carlo: exit 1 when more than P %% of the missions go below the reserve (default 5)")
+    p.add_argument("--mc-draw", choices=("parameters", "model"), default="parameters",
+                   help="--monte-carlo: draw the typed parameter ranges and simulate each mission (default), or draw "
+                        "from --model's predictive distribution (one standard-normal factor per ground, each edge at "
+                        "mean + z sd)")
     add_dask_options(p, "the --monte-carlo missions")
 
 
@@ -192,7 +215,12 @@ def run_monte_carlo(args: argparse.Namespace, tmap: Any, label: str, start: tupl
     battery = Battery(capacity_ah=args.battery_ah,
                       voltage_v=args.battery_v if args.battery_v is not None else robot.battery_voltage_v,
                       min_reserve_pct=args.reserve_pct)
-    cost = EnergyCost.from_presets(tmap, robot=args.robot, speed_mps=args.speed, unknown_ground=None)
+    model = load_model_arg(args)
+    cost = edge_cost_for(tmap, robot=args.robot, speed_mps=args.speed, max_slope_rad=DEFAULT_MAX_SLOPE_RAD,
+                         unknown_ground=None, model=model, model_ground=getattr(args, "model_ground", None))
+    if (args.risk is not None or args.mc_draw == "model") and not cost.has_interval:
+        raise InvalidParameterError(f"--risk and --mc-draw model need a model with a predictive interval; "
+                                    f"{args.model.name} gives none")
     route = plan_route(tmap, start, goal, cost=cost, planner="lattice", seed=args.seed)
     print(f"map: {label}; robot {args.robot}; battery {battery.capacity_ah:g} Ah at {battery.voltage_v:g} V, "
           f"reserve {battery.min_reserve_pct:g} %")
@@ -206,12 +234,19 @@ def run_monte_carlo(args: argparse.Namespace, tmap: Any, label: str, start: tupl
             client = stack.enter_context(dask_client(args.workers, args.scheduler, quiet=not args.verbose,
                                                      flags=("--workers", "--scheduler")))
         result = simulate_missions_mc(tmap, route, battery, args.monte_carlo, robot=robot, speed_mps=args.speed,
-                                      seed=args.seed, client=client, progress=True, cost=cost)
+                                      seed=args.seed, client=client, progress=True, cost=cost,
+                                      draw_from=args.mc_draw)
         if client is not None:  # where it ran, as the user named it
             result = dataclasses.replace(result, where=args.scheduler or "local cluster")
     json_path = result.write_json(args.out / "monte_carlo.json")
     csv_path = result.to_csv(args.out / "monte_carlo.csv")
     png_path = draw_figure(args.out / "monte_carlo.png", lambda: result.plot(args.out / "monte_carlo.png"))
     print(result.summary())
+    fits = True
+    if args.risk is not None:  # the reserve check on the forecast's quantile
+        need_j = result.forecast.quantile_j(args.risk)
+        fits = need_j <= battery.usable_energy_wh * 3600.0
+        print(f"reserve check at Q = {args.risk:g}: the route's {args.risk:g} quantile {need_j / 3600:.2f} Wh "
+              f"{'fits' if fits else 'does NOT fit'} the usable {battery.usable_energy_wh:.2f} Wh")
     print(f"wrote {json_path}, {csv_path}" + (f" and {png_path}" if png_path is not None else ""))
-    return 0 if 100.0 * result.p_below_reserve <= args.max_risk_pct else 1
+    return 0 if 100.0 * result.p_below_reserve <= args.max_risk_pct and fits else 1

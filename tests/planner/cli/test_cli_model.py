@@ -82,3 +82,24 @@ def test_risk_needs_a_model_with_an_interval(tmp_path, capsys, corridor_map, kno
     rc = main(["plan", "--map", str(files[0]), "--start", *START, "--goal", *GOAL, "--risk", "0.9",
                "--out", str(tmp_path / "x")])
     assert rc == 2 and "--risk needs --model FILE" in capsys.readouterr().err
+
+
+def test_mission_monte_carlo_draws_from_the_model_and_checks_the_reserve_at_a_quantile(tmp_path, capsys, corridor_map,
+                                                                                      known_model):
+    from terrain import TerrainMap
+
+    tmap = TerrainMap(corridor_map.elevation_m, 1.0, ground=corridor_map.ground, obstacle=corridor_map.obstacle,
+                      ground_names={0: "sand", 1: "gravel"})  # preset names: the mission simulates its grounds
+    grounds = {"sand": [9.0, 2.0, 4.0, 1.0], "gravel": [10.5, 2.5, 4.5, 0.0]}
+    model = known_model(trained_on=("sand", "gravel"), grounds=grounds).save(tmp_path / "m.tw")
+    common = ["mission", "--map", str(tmap.save(tmp_path / "m.npz")), "--start", *START, "--goal", *GOAL,
+              "--model", str(model), "--monte-carlo", "50", "--mc-draw", "model"]
+    rc = main([*common, "--battery-ah", "5", "--risk", "0.9", "--out", str(tmp_path / "big")])
+    text = capsys.readouterr().out
+    assert rc == 0 and "predictive distribution" in text and "reserve check at Q = 0.9" in text and "fits" in text
+    data = json.loads((tmp_path / "big" / "monte_carlo.json").read_text())
+    assert data["draw_from"] == "model" and data["forecast_interval"]["p90_j"] > data["forecast_interval"]["mean_j"]
+    rc = main([*common, "--battery-ah", "0.01", "--risk", "0.9", "--out", str(tmp_path / "small")])
+    assert rc == 1 and "does NOT fit" in capsys.readouterr().out
+    rc = main(["mission", "--battery-ah", "5", "--mc-draw", "model", "--monte-carlo", "5", "--out", str(tmp_path / "x")])
+    assert rc == 2 and "--mc-draw model" in capsys.readouterr().err
