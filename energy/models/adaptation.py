@@ -19,6 +19,16 @@ run and scored on the rest; the README has the table):
 - ``"gain"``: one gain per side, the measured over the predicted charge of the prefix (the
   baseline every update is compared with).
 - ``"gain_offset"``: per side ``a * predicted + b`` by the same ridge as ``"regime"``.
+- ``"bayes"``: Bayesian regression of the residual on the regime basis of
+  :mod:`energy.models.uncertainty` with the prior the base model learned across its
+  training runs and grounds (its :class:`~energy.models.uncertainty.IntervalModel`): the
+  residual of the new data is a ground offset (prior: the new-ground covariance, or none
+  on a ground the model knows) plus this run's own offset (prior: the run covariance),
+  seen through per-sample noise whose correlation time discounts seconds of data, not
+  samples. ``scope="run"`` forecasts the rest of the same run (ground + run offset);
+  ``scope="ground"`` forecasts *other* runs on the ground (ground offset only, the run
+  spread kept in the interval). It needs a base model with an interval
+  (:attr:`CurrentModel.gives_interval`), and its forecast carries the posterior interval.
 """
 
 from __future__ import annotations
@@ -34,18 +44,25 @@ from terrain.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog
 from .base import CurrentModel, ModelRecord, TrainingSummary, check_logs, log_currents
+from .forecast import CurrentForecast
+from .uncertainty import regime_design
 from .loading import model_class
 
 __all__ = [
     "ADAPT_METHODS",
+    "ADAPT_SCOPES",
     "MIN_ADAPT_SECONDS",
     "MIN_ADAPT_SAMPLES",
     "AdaptedCurrentModel",
     "adapt_current_model",
+    "choose_update",
 ]
 
 #: Update methods of :class:`AdaptedCurrentModel`, the default first.
-ADAPT_METHODS = ("regime", "gain", "gain_offset")
+ADAPT_METHODS = ("regime", "gain", "gain_offset", "bayes")
+#: What a ``"bayes"`` update forecasts: the rest of the same run, or other runs on the ground.
+ADAPT_SCOPES = ("run", "ground")
+_NOISE_FLOOR_A = 0.05  # least per-sample spread the Bayesian update assumes (A)
 #: Least duration (s) of new data an adaptation accepts by default (``min_seconds``).
 MIN_ADAPT_SECONDS = 5.0
 #: Least number of drive samples (both streams overlapping) an adaptation accepts.
@@ -60,6 +77,12 @@ def _regime_design(log: InteractionLog, side: int, turn_scale_radps: float) -> n
     sign = -1.0 if side == 0 else 1.0
     outer = (sign * log.omega_radps > 0).astype(np.float64)
     return np.column_stack([np.ones(len(log)), np.abs(log.v_mps), m, m * outer])
+
+
+def _precision(cov: np.ndarray) -> np.ndarray:
+    """Inverse of a prior covariance, regularised: a direction with no learned spread gets a tight but finite prior."""
+    scale = max(float(np.trace(cov)) / cov.shape[0], 1e-6)
+    return np.linalg.inv(cov + 1e-3 * scale * np.eye(cov.shape[0]))
 
 
 def _weights(log: InteractionLog) -> np.ndarray:
@@ -89,6 +112,9 @@ class AdaptedCurrentModel(CurrentModel):
         ``|omega|`` (rad/s) at which ``"regime"`` counts a sample as 76 % turning (> 0).
     min_seconds : float
         Least duration of adaptation data (s, >= 0); less raises a DataError.
+    scope : {"run", "ground"}
+        What a ``"bayes"`` update forecasts: the rest of the run it was fitted on, or other
+        runs on the same ground (see the module docstring); other methods ignore it.
 
     Attributes
     ----------
@@ -110,16 +136,17 @@ class AdaptedCurrentModel(CurrentModel):
         adapted.predict(log)
     """
 
-    _param_names = ("base", "method", "prior_s", "turn_scale_radps", "min_seconds")
-    _n_coefficients: ClassVar[dict[str, int]] = {"regime": 4, "gain": 1, "gain_offset": 2}
+    _param_names = ("base", "method", "prior_s", "turn_scale_radps", "min_seconds", "scope")
+    _n_coefficients: ClassVar[dict[str, int]] = {"regime": 4, "gain": 1, "gain_offset": 2, "bayes": 8}
 
     def __init__(self, base: CurrentModel, method: str = "regime", prior_s: float = 20.0,
-                 turn_scale_radps: float = 0.3, min_seconds: float = MIN_ADAPT_SECONDS) -> None:
+                 turn_scale_radps: float = 0.3, min_seconds: float = MIN_ADAPT_SECONDS, scope: str = "run") -> None:
         self.base = base
         self.method = method
         self.prior_s = prior_s
         self.turn_scale_radps = turn_scale_radps
         self.min_seconds = min_seconds
+        self.scope = scope
 
     @classmethod
     def adapting(cls, model: CurrentModel, log_prefix: InteractionLog | Sequence[InteractionLog],
@@ -145,6 +172,7 @@ class AdaptedCurrentModel(CurrentModel):
         check_real("prior_s", self.prior_s, low=0.0, low_inclusive=False)
         check_real("turn_scale_radps", self.turn_scale_radps, low=0.0, low_inclusive=False)
         check_real("min_seconds", self.min_seconds, low=0.0)
+        check_choice("scope", self.scope, ADAPT_SCOPES)
         base = self.base
         return base.base if isinstance(base, AdaptedCurrentModel) else base
 
@@ -164,7 +192,10 @@ class AdaptedCurrentModel(CurrentModel):
         preds = [base.predict(lg) for lg in logs]
         truths = [log_currents(lg) for lg in logs]
         coef = np.zeros((2, self._n_coefficients[self.method]))
-        for k in range(2):
+        self.posterior_cov_ = None
+        if self.method == "bayes":
+            coef, self.posterior_cov_ = self._fit_bayes(base, logs, preds, truths)
+        for k in range(2 if self.method != "bayes" else 0):
             if self.method == "gain":
                 q_pred = sum(float(_trapezoid(p[:, k], lg.time_s)) for p, lg in zip(preds, logs))
                 q_true = sum(float(_trapezoid(y[:, k], lg.time_s)) for y, lg in zip(truths, logs))
@@ -186,9 +217,88 @@ class AdaptedCurrentModel(CurrentModel):
         if not np.all(np.isfinite(coef)):
             raise DataError("the adaptation data gave a non-finite correction (non-finite currents or inputs?)")
         self.coefficients_ = coef
+        self.ground_ = logs[0].meta.ground_label
         self.adapted_on_s_ = float(sum(lg.duration_s for lg in logs))
         self.n_samples_ = int(sum(len(lg) for lg in logs))
         self.nonnegative_ = bool(all(np.all(y >= 0) for y in truths))
+
+    def _fit_bayes(self, base: CurrentModel, logs: list[InteractionLog], preds: list[np.ndarray],
+                   truths: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """Posterior mean (2, 8) and covariance (2, 8, 8) of ``[ground offset, run offset]`` per side."""
+        interval = getattr(base, "interval_", None)
+        if interval is None or not base.gives_interval:
+            raise DataError(f"method='bayes' needs a base model with a fitted interval; this {type(base).__name__} has "
+                            f"none (refit it, or use method='regime')")
+        ground = logs[0].meta.ground_label
+        known = bool(getattr(base, "knows_ground", lambda g: False)(ground))
+        run_cov = interval.covariance(ground, known=True)
+        if known:
+            ground_cov = np.zeros_like(run_cov)
+        else:
+            ground_cov = interval.new_ground_cov if interval.new_ground_cov is not None else run_cov
+        k_cols = run_cov.shape[1]
+        mean = np.zeros((2, 2 * k_cols))
+        cov = np.zeros((2, 2 * k_cols, 2 * k_cols))
+        for k in range(2):
+            x = np.concatenate([regime_design(lg, k, interval.turn_scale_radps) for lg in logs])
+            r = np.concatenate([y[:, k] - p[:, k] for y, p in zip(truths, preds)])
+            sd = np.concatenate([interval.sample_sd(lg)[:, k] for lg in logs])
+            w = np.concatenate([_weights(lg) for lg in logs]) / interval.correlation_s / np.maximum(sd, _NOISE_FLOOR_A) ** 2
+            xx = np.concatenate([x, x], axis=1)
+            prior = np.zeros((2 * k_cols, 2 * k_cols))
+            prior[:k_cols, :k_cols] = _precision(ground_cov[k])
+            prior[k_cols:, k_cols:] = _precision(run_cov[k])
+            a = (xx * w[:, None]).T @ xx + prior
+            cov[k] = np.linalg.inv(a)
+            cov[k] = 0.5 * (cov[k] + cov[k].T)
+            mean[k] = cov[k] @ ((xx * w[:, None]).T @ r)
+        return mean, cov
+
+    def _bayes_parts(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per side, the coefficients (2, 4) the forecast adds and their covariance (2, 4, 4) for its scope."""
+        k_cols = self.coefficients_.shape[1] // 2
+        if self.scope == "ground":
+            # the next run's own offset: the ground's run spread where the model learned one, else the pooled one
+            run_cov = self.base_model.interval_.covariance(self.ground_, known=True)
+            return self.coefficients_[:, :k_cols], self.posterior_cov_[:, :k_cols, :k_cols] + run_cov
+        lift = np.concatenate([np.eye(k_cols), np.eye(k_cols)], axis=1)
+        return (self.coefficients_[:, :k_cols] + self.coefficients_[:, k_cols:],
+                np.einsum("ij,sjk,lk->sil", lift, self.posterior_cov_, lift))
+
+    @property
+    def gives_interval(self) -> bool:
+        """Whether the base model gives one (a ``"bayes"`` update then gives its posterior interval)."""
+        return self.base_model.gives_interval
+
+    def _distribution(self, log: InteractionLog, mean: np.ndarray) -> CurrentForecast:
+        return self.correct_distribution(log, self.base_model.predict_distribution(log))
+
+    def correct_distribution(self, log: InteractionLog, base_forecast: CurrentForecast) -> CurrentForecast:
+        """The adapted forecast of ``log`` given the base model's forecast of it (no new base prediction).
+
+        The mean is :meth:`correct` of the base mean. A ``"bayes"`` update replaces the
+        base's learned run spread by its posterior (the members' disagreement is kept);
+        other updates are point corrections and keep the base's spreads.
+
+        Raises
+        ------
+        NotFittedError, InvalidParameterError
+            As :meth:`correct`; ``base_forecast`` is not a CurrentForecast of ``log``.
+        """
+        if not isinstance(base_forecast, CurrentForecast) or base_forecast.mean_a.shape != (len(log), 2):
+            raise InvalidParameterError(f"base_forecast must be the base model's CurrentForecast of the log, got "
+                                        f"{base_forecast!r:.80}")
+        mean = self.correct(log, base_forecast.mean_a)
+        if self.method != "bayes":
+            return CurrentForecast(log.time_s, mean, base_forecast.run_sd_a, base_forecast.sample_sd_a)
+        base = self.base_model
+        interval = base.interval_
+        known = bool(getattr(base, "knows_ground", lambda g: False)(log.meta.ground_label))
+        own = interval.run_sd_a(log, known=known)
+        ensemble = np.sqrt(np.maximum(base_forecast.run_sd_a**2 - own**2, 0.0))  # what the members disagree on
+        _, cov = self._bayes_parts()
+        run = np.sqrt(interval.run_sd_a(log, known=True, cov=cov) ** 2 + ensemble**2)
+        return CurrentForecast(log.time_s, mean, run, base_forecast.sample_sd_a)
 
     def _training_summary(self, logs: list[InteractionLog]) -> TrainingSummary:
         own = TrainingSummary.from_logs(logs)
@@ -200,6 +310,8 @@ class AdaptedCurrentModel(CurrentModel):
         return self.base_model.ground_vibration(ground)
 
     def _design(self, log: InteractionLog, pred: np.ndarray, side: int) -> np.ndarray:
+        if self.method == "bayes":
+            return regime_design(log, side, self.base_model.interval_.turn_scale_radps)
         if self.method == "gain_offset":
             return np.column_stack([pred[:, side], np.ones(len(log))])
         return _regime_design(log, side, self.turn_scale_radps)
@@ -234,6 +346,9 @@ class AdaptedCurrentModel(CurrentModel):
             raise InvalidParameterError(f"base_prediction must have shape {(len(log), 2)!r}, got {pred.shape!r}")
         if self.method == "gain":
             out = pred * self.coefficients_[:, 0][None, :]
+        elif self.method == "bayes":
+            coef, _ = self._bayes_parts()
+            out = np.column_stack([pred[:, k] + self._design(log, pred, k) @ coef[k] for k in range(2)])
         else:
             out = np.column_stack([pred[:, k] + self._design(log, pred, k) @ self.coefficients_[k] for k in range(2)])
         return np.maximum(out, 0.0) if self.nonnegative_ else out
@@ -257,7 +372,8 @@ class AdaptedCurrentModel(CurrentModel):
 
     def _state(self) -> dict[str, Any]:
         return {"coefficients": np.asarray(self.coefficients_), "adapted_on_s": self.adapted_on_s_,
-                "n_samples": self.n_samples_, "nonnegative": self.nonnegative_}
+                "n_samples": self.n_samples_, "nonnegative": self.nonnegative_, "ground": self.ground_,
+                "posterior_cov": self.posterior_cov_}
 
     def _load_state(self, state: dict[str, Any]) -> None:
         coef = real_array("coefficients", state["coefficients"], ndim=2)
@@ -267,13 +383,19 @@ class AdaptedCurrentModel(CurrentModel):
         self.adapted_on_s_ = float(state["adapted_on_s"])
         self.n_samples_ = int(state["n_samples"])
         self.nonnegative_ = bool(state["nonnegative"])
+        ground = state.get("ground")
+        self.ground_ = None if ground is None else str(ground)
+        post = state.get("posterior_cov")
+        self.posterior_cov_ = None if post is None else real_array("posterior_cov", post, ndim=3)
+        if self.method == "bayes" and (self.posterior_cov_ is None or self.posterior_cov_.shape != (2, 8, 8)):
+            raise ValueError("a 'bayes' update needs its (2, 8, 8) posterior covariance")
         if not math.isfinite(self.adapted_on_s_):
             raise ValueError("non-finite adapted_on_s")
 
 
 def adapt_current_model(model: CurrentModel, log_prefix: InteractionLog | Sequence[InteractionLog], *,
                         method: str = "regime", prior_s: float = 20.0, turn_scale_radps: float = 0.3,
-                        min_seconds: float = MIN_ADAPT_SECONDS) -> AdaptedCurrentModel:
+                        min_seconds: float = MIN_ADAPT_SECONDS, scope: str = "run") -> AdaptedCurrentModel:
     """A new model: ``model`` updated on a short stretch of new data (``model`` is not modified).
 
     Parameters
@@ -282,7 +404,7 @@ def adapt_current_model(model: CurrentModel, log_prefix: InteractionLog | Sequen
         A fitted model (an adapted one is re-adapted from its base).
     log_prefix : InteractionLog or sequence of InteractionLog
         New data with logged currents, e.g. the first 20 s of a run.
-    method, prior_s, turn_scale_radps, min_seconds
+    method, prior_s, turn_scale_radps, min_seconds, scope
         As :class:`AdaptedCurrentModel`.
 
     Returns
@@ -300,4 +422,52 @@ def adapt_current_model(model: CurrentModel, log_prefix: InteractionLog | Sequen
     if not isinstance(model, CurrentModel):
         raise InvalidParameterError(f"model must be a fitted CurrentModel, got {model!r:.80}")
     return AdaptedCurrentModel.adapting(model, log_prefix, method=method, prior_s=prior_s,
-                                        turn_scale_radps=turn_scale_radps, min_seconds=min_seconds)
+                                        turn_scale_radps=turn_scale_radps, min_seconds=min_seconds, scope=scope)
+
+
+def choose_update(model: CurrentModel, log_prefix: InteractionLog, *, scope: str = "run",
+                  holdout_fraction: float = 0.25) -> AdaptedCurrentModel | None:
+    """The adaptive loop's update with its fallback: the Bayesian update unless the gain does better on held-back data.
+
+    Both are fitted on the first ``1 - holdout_fraction`` of ``log_prefix`` and scored on its
+    last part (charge error of both sides); the better one is refitted on the whole prefix.
+    A base model without an interval, or a prefix too short to split, takes the gain; where
+    neither can be fitted, None.
+
+    Returns
+    -------
+    AdaptedCurrentModel or None
+        Its ``method`` says which update was chosen.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``model`` is not a fitted CurrentModel, ``log_prefix`` not an InteractionLog, a bad fraction.
+    """
+    if not isinstance(model, CurrentModel) or not model.is_fitted:
+        raise InvalidParameterError(f"model must be a fitted CurrentModel, got {model!r:.80}")
+    if not isinstance(log_prefix, InteractionLog):
+        raise InvalidParameterError(f"log_prefix must be an InteractionLog, got {log_prefix!r:.80}")
+    frac = check_real("holdout_fraction", holdout_fraction, low=0.0, high=1.0, low_inclusive=False, high_inclusive=False)
+    candidates = ["bayes", "gain"] if model.gives_interval else ["gain"]
+    t = log_prefix.time_s
+    cut = float(t[0] + (1.0 - frac) * (t[-1] - t[0]))
+    head, tail = log_prefix.slice(float(t[0]), cut), log_prefix.slice(cut, float(t[-1]) + 1e-9)
+    errors: dict[str, float] = {}
+    if len(candidates) > 1 and len(tail) > 2:
+        truth = float(np.sum(_trapezoid(log_currents(tail), tail.time_s, axis=0)))
+        base_tail = model.predict(tail)
+        for method in candidates:
+            try:
+                fitted = AdaptedCurrentModel(model, method=method, scope="run").fit(head)
+            except DataError:
+                continue
+            pred = float(np.sum(_trapezoid(fitted.correct(tail, base_tail), tail.time_s, axis=0)))
+            errors[method] = abs(pred - truth)
+    order = sorted(errors, key=errors.__getitem__) + [m for m in candidates if m not in errors]
+    for method in order:
+        try:
+            return AdaptedCurrentModel(model, method=method, scope=scope).fit(log_prefix)
+        except DataError:
+            continue
+    return None

@@ -89,6 +89,12 @@ class EstimatorConfig:
         Dropout after each hidden layer.
     n_members : int
         Ensemble size; members differ in seed, predictions are averaged.
+    member_folds : bool
+        A cross-validation ensemble: member ``m`` never trains on the runs whose index (in
+        the order given) is ``m`` modulo ``n_members``, so every training run has an
+        out-of-fold prediction — the residuals the forecast interval is fitted on
+        (:class:`~energy.models.uncertainty.IntervalModel`). Needs 2 training runs or more
+        (with fewer, every member sees everything and the interval is in-sample, marked so).
     max_epochs, batch_size, learning_rate, weight_decay, patience, loss
         Training settings (see :class:`TrainConfig`).
     validation_fraction : float
@@ -126,6 +132,7 @@ class EstimatorConfig:
     hidden_sizes: tuple[int, ...] = (64, 64)
     dropout: float = 0.1
     n_members: int = 5
+    member_folds: bool = True
     max_epochs: int = 60
     batch_size: int = 256
     learning_rate: float = 2e-3

@@ -20,6 +20,7 @@ import math
 import time
 from collections.abc import Sequence
 
+import numpy as np
 import torch
 from torch import nn
 from torch.nn import functional
@@ -99,12 +100,24 @@ class _Stack:
         return {k: v.detach().clone() for k, v in state.items()}
 
 
-def _member_losses(out: torch.Tensor, y: torch.Tensor, loss: str) -> torch.Tensor:
+def _member_losses(out: torch.Tensor, y: torch.Tensor, loss: str, weight: torch.Tensor | None = None) -> torch.Tensor:
+    """Per member, the mean loss over its windows (``weight`` (M, B): 1 where the member may see the window)."""
     if loss == "mse":
         per = (out - y) ** 2
     else:
         per = functional.huber_loss(out, y, reduction="none", delta=0.1)
-    return per.mean(dim=(1, 2))
+    if weight is None:
+        return per.mean(dim=(1, 2))
+    return (per.mean(dim=2) * weight).sum(dim=1) / weight.sum(dim=1).clamp(min=1.0)
+
+
+def _mask_weights(masks: np.ndarray | None, members: int, windows: int, name: str) -> torch.Tensor | None:
+    if masks is None:
+        return None
+    arr = np.asarray(masks)
+    if arr.dtype != bool or arr.shape != (members, windows):
+        raise InvalidParameterError(f"{name} must be a bool array of shape {(members, windows)!r}, got {arr.dtype} {arr.shape!r}")
+    return torch.as_tensor(arr, dtype=torch.float32)
 
 
 def train_ensemble(
@@ -115,8 +128,14 @@ def train_ensemble(
     seeds: Sequence[int],
     progress: bool = False,
     description: str = "training",
+    train_masks: np.ndarray | None = None,
+    validation_masks: np.ndarray | None = None,
 ) -> list[TrainingHistory]:
     """Train several CurrentNets of one configuration together; each ends as ``train_network`` would train it.
+
+    With ``train_masks`` each member learns only from its own windows (a cross-validation
+    ensemble: the windows a member never saw give out-of-fold predictions); without them,
+    every member sees every window.
 
     Parameters
     ----------
@@ -126,6 +145,9 @@ def train_ensemble(
         As :func:`~energy.models.training.train_network`.
     seeds : sequence of int
         One shuffling seed per member.
+    train_masks, validation_masks : ndarray of bool, shape (members, windows), optional
+        Which training / validation windows each member may use (every member at least one
+        training window); ``None``: all.
 
     Returns
     -------
@@ -154,6 +176,10 @@ def train_ensemble(
     from tqdm.auto import tqdm
 
     m_count = len(members)
+    t_weight = _mask_weights(train_masks, m_count, len(train), "train_masks")
+    v_weight = _mask_weights(validation_masks, m_count, len(validation) if has_val else 0, "validation_masks")
+    if t_weight is not None and bool((t_weight.sum(dim=1) == 0).any()):
+        raise InvalidParameterError("train_masks leave a member without a training window")
     stack = _Stack(members)
     gens = []
     for s in seeds:
@@ -184,18 +210,20 @@ def train_ensemble(
         for i in range(0, n, config.batch_size):
             idx = perms[:, i : i + config.batch_size]  # (M, B)
             opt.zero_grad(set_to_none=True)
-            losses = _member_losses(stack.forward(x_all[idx], run_table, idx_all[idx], True), y_all[idx], config.loss)
+            w = None if t_weight is None else torch.gather(t_weight, 1, idx)
+            losses = _member_losses(stack.forward(x_all[idx], run_table, idx_all[idx], True), y_all[idx], config.loss, w)
             losses.sum().backward()
             opt.step()
-            total += losses.detach() * idx.shape[1]
+            total += losses.detach() * (idx.shape[1] if w is None else w.sum(dim=1))
+        seen = n if t_weight is None else t_weight.sum(dim=1)
         for m in range(m_count):
             if active[m]:
-                train_losses[m].append(float(total[m]) / n)
+                train_losses[m].append(float(total[m]) / float(seen if t_weight is None else seen[m]))
         if has_val:
             with torch.no_grad():
                 m_in = vx[None].expand(m_count, *vx.shape)
                 vl = _member_losses(stack.forward(m_in, vtable, vidx[None].expand(m_count, -1), False),
-                                    vy[None].expand(m_count, *vy.shape), config.loss)
+                                    vy[None].expand(m_count, *vy.shape), config.loss, v_weight)
             for m in range(m_count):
                 if not active[m]:
                     continue

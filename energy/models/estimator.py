@@ -64,12 +64,14 @@ from ..features import (
 )
 from ..logs import InteractionLog, rest_samples
 from .base import CurrentModel, ModelRecord, log_currents, package_versions
+from .forecast import CurrentForecast
 from .baselines import PhysicsCurrentModel
 from .config import EstimatorConfig, estimator_preset
 from .data import WindowDataset
 from .ensemble import train_ensemble
 from .net import CurrentNet, CurrentNetConfig
 from .training import TrainingHistory, train_network
+from .uncertainty import IntervalModel
 
 #: What the physics prior fits: the networks learn the residual, so the best fit matters, not which
 #: constant current (idle or rolling resistance) carries it.
@@ -306,17 +308,38 @@ class VibrationCurrentEstimator(CurrentModel):
             root = _root_seed(self.seed)
             seeds = [_member_seed(root, m) for m in range(cfg.n_members)]
             networks = [CurrentNet(net_cfg, seed=s) for s in seeds]
+            folds = _member_folds(len(grids), cfg.n_members) if cfg.member_folds else None
             if len(networks) == 1:
                 histories = [train_network(networks[0], train, val, cfg.train_config(), seeds[0], self.progress,
                                            f"{cfg.name} member 1/1")]
             else:  # the members in lockstep, one batched step for all (same weights as one after another)
+                masks = (None, None) if folds is None else (_window_masks(folds, train, cfg.n_members),
+                                                            None if val is None else _window_masks(folds, val, cfg.n_members))
                 histories = train_ensemble(networks, train, val, cfg.train_config(), seeds, self.progress,
-                                           f"{cfg.name} {cfg.n_members} members")
+                                           f"{cfg.name} {cfg.n_members} members", *masks)
             self.networks_ = networks
             self.history_ = tuple(histories)
             self.n_train_windows_ = len(train)
             self.rest_current_a_ = self._rest_level(raw_logs)
             self.ground_vibration_ = _ground_vibration(raw_logs)
+            self.member_folds_ = None if folds is None or len(networks) == 1 else folds
+            self.interval_ = self._fit_interval(raw_logs, cfg)
+
+    def _fit_interval(self, logs: list[InteractionLog], cfg: EstimatorConfig) -> IntervalModel:
+        """The spreads of the forecast from out-of-fold residuals (and the prior's leave-one-ground-out residuals)."""
+        folds = self.member_folds_
+        residuals = []
+        for r, lg in enumerate(logs):
+            members = None if folds is None else [m for m in range(len(self.networks_)) if folds[r] == m]
+            residuals.append(log_currents(lg) - self._predict_with(lg, members or None))
+        by_ground: dict[str, list[tuple[InteractionLog, np.ndarray]]] = {}
+        grounds = list(dict.fromkeys(str(lg.meta.ground_label) for lg in logs if lg.meta.ground_label is not None))
+        if cfg.physics_prior is not None and len(grounds) >= 2:
+            for g in grounds:
+                others = [lg for lg in logs if str(lg.meta.ground_label) != g]
+                prior = PhysicsCurrentModel(robot=cfg.physics_prior, fit_parameters=PRIOR_FIT_PARAMETERS).fit(others)
+                by_ground[g] = [(lg, log_currents(lg) - prior.predict(lg)) for lg in logs if str(lg.meta.ground_label) == g]
+        return IntervalModel.fit(logs, residuals, cross_validated=folds is not None, new_ground_residuals=by_ground)
 
     def _rest_level(self, logs: list[InteractionLog]) -> np.ndarray | None:
         """Standing still is its own level, not the networks' business: the prior's, else the training mean."""
@@ -333,28 +356,33 @@ class VibrationCurrentEstimator(CurrentModel):
                                    current_right_a=log.current_right_a - prior[:, 1])
 
     # --------------------------------------------------------------- predict
-    def _predict_grid(self, grid: InteractionLog) -> np.ndarray:
+    def _member_grid(self, grid: InteractionLog, members: list[int] | None) -> np.ndarray:
+        """Each member's network output on the grid, shape (members, len(grid), 2)."""
         cfg = self.config_
         spec = WindowSpec.from_seconds(cfg.window_s, self.rate_hz_, cfg.predict_stride_s)
         data = self._dataset([grid], spec, cfg, with_targets=False)
-        with torch.no_grad():
-            outs = [net(*data.inputs(slice(None))).numpy().astype(np.float64) for net in self.networks_]
-        y = self.normalisers_["current"].inverse_transform(np.mean(outs, axis=0))  # (n, 2W)
+        nets = self.networks_ if members is None else [self.networks_[m] for m in members]
         w = spec.length_samples
-        per_window = np.stack([y[:, :w], y[:, w:]], axis=2)  # (n, W, 2)
         rows = (data.start[:, None] + np.arange(w)[None, :]).reshape(-1)
-        total = np.zeros((len(grid), 2))
         count = np.zeros(len(grid))
-        np.add.at(total, rows, per_window.reshape(-1, 2))
         np.add.at(count, rows, 1.0)
-        return total / count[:, None]
+        out = np.empty((len(nets), len(grid), 2))
+        with torch.no_grad():
+            for i, net in enumerate(nets):
+                y = self.normalisers_["current"].inverse_transform(net(*data.inputs(slice(None))).numpy().astype(np.float64))
+                per_window = np.stack([y[:, :w], y[:, w:]], axis=2)  # (n, W, 2)
+                total = np.zeros((len(grid), 2))
+                np.add.at(total, rows, per_window.reshape(-1, 2))
+                out[i] = total / count[:, None]
+        return out
 
-    def _predict(self, log: InteractionLog) -> np.ndarray:
-        with _threads(self.n_threads):
-            grid = self._grid_log(log, self.rate_hz_, self.config_.resample_method)
-            pred = self._predict_grid(grid)
-        # back onto the log's own timestamps; drive samples outside the overlap of the
-        # drive and acceleration streams take the nearest grid value (np.interp holds ends)
+    def _predict_grid(self, grid: InteractionLog) -> np.ndarray:
+        return self._member_grid(grid, None).mean(axis=0)
+
+    def _on_log(self, log: InteractionLog, grid: InteractionLog, pred: np.ndarray) -> np.ndarray:
+        """Grid currents back on the log's own timestamps, prior added, clipped, rest level set."""
+        # drive samples outside the overlap of the drive and acceleration streams take the
+        # nearest grid value (np.interp holds ends)
         out = np.column_stack([np.interp(log.time_s, grid.time_s, pred[:, k]) for k in range(2)])
         if self.physics_ is not None:
             out = out + self.physics_.predict(log)
@@ -363,6 +391,41 @@ class VibrationCurrentEstimator(CurrentModel):
         if self.rest_current_a_ is not None:
             out[rest_samples(log)] = self.rest_current_a_
         return out
+
+    def _predict_with(self, log: InteractionLog, members: list[int] | None) -> np.ndarray:
+        with _threads(self.n_threads):
+            grid = self._grid_log(log, self.rate_hz_, self.config_.resample_method)
+            pred = self._member_grid(grid, members).mean(axis=0)
+        return self._on_log(log, grid, pred)
+
+    def _predict(self, log: InteractionLog) -> np.ndarray:
+        return self._predict_with(log, None)
+
+    @property
+    def gives_interval(self) -> bool:
+        """Whether the model carries fitted spreads (models saved before them do not)."""
+        self._check_fitted()
+        return getattr(self, "interval_", None) is not None
+
+    def _distribution(self, log: InteractionLog, mean: np.ndarray) -> CurrentForecast:
+        interval = getattr(self, "interval_", None)
+        if interval is None:
+            return CurrentForecast.point(log.time_s, mean)
+        with _threads(self.n_threads):
+            grid = self._grid_log(log, self.rate_hz_, self.config_.resample_method)
+            members = self._member_grid(grid, None)
+        spread = np.column_stack([np.interp(log.time_s, grid.time_s, members[:, :, k].std(axis=0)) for k in range(2)])
+        spread[rest_samples(log)] = 0.0
+        known = self.knows_ground(log.meta.ground_label)
+        run = np.sqrt(interval.run_sd_a(log, known=known) ** 2 + spread**2)
+        return CurrentForecast(log.time_s, mean, run, interval.sample_sd(log))
+
+    def knows_ground(self, ground: str | None) -> bool:
+        """Whether the model was trained on ``ground`` (case-insensitive; an unlabelled log counts as a new ground)."""
+        summary = getattr(self, "trained_on_", None)
+        if ground is None or summary is None:
+            return False
+        return str(ground).lower() in {g.lower() for g in summary.grounds}
 
     def predict(self, log: InteractionLog) -> np.ndarray:
         """Predicted drive currents at the log's drive timestamps.
@@ -410,6 +473,8 @@ class VibrationCurrentEstimator(CurrentModel):
             "physics": None if self.physics_ is None else _record_to_plain(self.physics_.to_record()),
             "rest_current_a": None if self.rest_current_a_ is None else self.rest_current_a_.tolist(),
             "ground_vibration": {g: {"time_s": t, "accel_z_mps2": a} for g, (t, a) in self.ground_vibration_.items()},
+            "member_folds": None if self.member_folds_ is None else np.asarray(self.member_folds_),
+            "interval": None if self.interval_ is None else self.interval_.to_plain(),
         }
 
     def _load_state(self, state: dict[str, Any]) -> None:
@@ -457,6 +522,10 @@ class VibrationCurrentEstimator(CurrentModel):
         for g, (t, a) in self.ground_vibration_.items():
             if t.shape != a.shape or t.size < 2 or np.any(np.diff(t) <= 0):
                 raise ValueError(f"the recorded vibration of ground {g!r} is not an increasing time series")
+        folds = state.get("member_folds")  # absent in files from before the cross-validation ensemble
+        self.member_folds_ = None if folds is None else np.asarray(folds, dtype=np.int64).reshape(-1)
+        interval = state.get("interval")
+        self.interval_ = None if interval is None else IntervalModel.from_plain(interval)
 
     def ground_vibration(self, ground: str) -> tuple[np.ndarray, np.ndarray] | None:
         """The vertical acceleration of ``ground`` kept from training (the longest run's first seconds), or None.
@@ -476,6 +545,19 @@ class VibrationCurrentEstimator(CurrentModel):
 
 #: Seconds of vertical acceleration kept per training ground (:meth:`VibrationCurrentEstimator.ground_vibration`).
 GROUND_VIBRATION_S = 30.0
+
+
+def _member_folds(n_runs: int, n_members: int) -> np.ndarray | None:
+    """Fold (= the member that never sees it) of every training run: ``run % n_members``; None below 2 runs."""
+    if n_runs < 2 or n_members < 2:
+        return None
+    return np.arange(n_runs) % n_members
+
+
+def _window_masks(folds: np.ndarray, data: WindowDataset, n_members: int) -> np.ndarray:
+    """(members, windows): True where the member may learn from the window (its run is not in the member's fold)."""
+    run_fold = folds[data.run_index.numpy()]
+    return run_fold[None, :] != np.arange(n_members)[:, None]
 
 
 def _ground_vibration(logs: list[InteractionLog]) -> dict[str, tuple[np.ndarray, np.ndarray]]:

@@ -1,0 +1,242 @@
+"""How wrong a current model may be: run-to-run and new-ground spreads, fitted on residuals the model did not see.
+
+The error of a current model on a run is split in two (see :mod:`energy.models.forecast`):
+
+- a **run-level** part, shared by every sample of the run (the ground is softer today, the
+  payload heavier, the ground is one the model never drove). It is written in the *regime
+  basis* of the motion, per side ``phi(t) = [1, |v|, m, m * outer]`` with
+  ``m = tanh(|omega| / turn_scale)`` (0 straight, 1 turning) and ``outer`` 1 on the outer
+  side of a turn — the basis in which a nominal physics model is affine in its ground
+  parameters (rolling resistance acts while moving and grows with speed, lateral friction
+  while turning, mostly on the outer side). A run's error is ``phi(t) . beta`` with ``beta``
+  drawn from ``N(0, S)``: ``S`` is the **run covariance** of the ground (how runs of a
+  known ground differ from the model, fitted per ground where it has runs enough, else
+  pooled) plus, for a ground the model never drove, the **new-ground covariance** (how far
+  a ground left out of the fit lies from a model fitted on the others). The spread
+  ``sqrt(phi S phi)`` is heteroscedastic in speed, turn rate and ground.
+- a **per-sample** part (sensor noise, bumps): a standard deviation per side and regime
+  (rest, straight, turning) with an integrated correlation time ``correlation_s``; over a
+  stretch it averages out.
+
+:class:`IntervalModel.fit` estimates all of it from *out-of-fold* residuals (each training
+run predicted by ensemble members that never saw it — the cross-validation ensemble of
+:class:`~energy.models.VibrationCurrentEstimator`) and from leave-one-ground-out residuals
+of the physics prior (the new-ground covariance needs two grounds or more). The same
+quantities are the prior of the Bayesian few-shot update
+(:class:`~energy.models.AdaptedCurrentModel`, ``method="bayes"``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..logs import InteractionLog, rest_samples
+
+__all__ = ["REGIME_COLUMNS", "IntervalModel", "regime_design", "run_coefficients"]
+
+#: Columns of the regime basis (per side).
+REGIME_COLUMNS = ("offset A", "per |v| A s/m", "turning A", "outer turning A")
+#: Ridge penalty of a run's regime coefficients, in seconds of data showing no residual: a
+#: regime the run never drove keeps a coefficient near 0 instead of an arbitrary one.
+RUN_RIDGE_S = 2.0
+#: Default ``turn_scale_radps`` of the regime basis.
+DEFAULT_TURN_SCALE_RADPS = 0.3
+#: Regimes of the per-sample spread.
+SAMPLE_REGIMES = ("rest", "straight", "turning")
+_POOLED = "*"
+_MIN_GROUND_RUNS = 3  # a ground's own run covariance needs this many runs, else the pooled one
+
+
+def regime_design(log: InteractionLog, side: int, turn_scale_radps: float) -> np.ndarray:
+    """``[1, |v|, m, m * outer]`` per moving sample for one side (0 left, 1 right), zero at rest; shape (N, 4).
+
+    Standing still is the model's rest level (:func:`energy.logs.rest_samples`), not a
+    regime of driving: its spread is the per-sample one.
+    """
+    m = np.tanh(np.abs(log.omega_radps) / turn_scale_radps)
+    sign = -1.0 if side == 0 else 1.0
+    outer = (sign * log.omega_radps > 0).astype(np.float64)
+    moving = (~rest_samples(log)).astype(np.float64)
+    return np.column_stack([np.ones(len(log)), np.abs(log.v_mps), m, m * outer]) * moving[:, None]
+
+
+def sample_weights_s(log: InteractionLog) -> np.ndarray:
+    """The time each drive sample stands for (s)."""
+    return np.gradient(log.time_s) if len(log) > 1 else np.ones(len(log))
+
+
+def run_coefficients(log: InteractionLog, residual_a: np.ndarray, turn_scale_radps: float,
+                     ridge_s: float = RUN_RIDGE_S) -> np.ndarray:
+    """Per side, the regime coefficients of a residual current (time-weighted ridge fit), shape (2, 4)."""
+    w = sample_weights_s(log)
+    out = np.zeros((2, len(REGIME_COLUMNS)))
+    for k in range(2):
+        x = regime_design(log, k, turn_scale_radps)
+        a = (x * w[:, None]).T @ x + ridge_s * np.eye(x.shape[1])
+        out[k] = np.linalg.solve(a, (x * w[:, None]).T @ residual_a[:, k])
+    return out
+
+
+def _regime_of(log: InteractionLog, turn_scale_radps: float) -> np.ndarray:
+    """0 rest, 1 straight, 2 turning per sample."""
+    reg = np.where(np.tanh(np.abs(log.omega_radps) / turn_scale_radps) > 0.5, 2, 1)
+    reg[rest_samples(log)] = 0
+    return reg
+
+
+def _second_moment(rows: np.ndarray) -> np.ndarray:
+    """Mean of ``b b^T`` over the first axis, per side: rows (n, 2, k) -> (2, k, k)."""
+    return np.einsum("nsi,nsj->sij", rows, rows) / max(rows.shape[0], 1)
+
+
+def _quadratic_sd(x: np.ndarray, cov: np.ndarray) -> np.ndarray:
+    return np.sqrt(np.maximum(np.einsum("ni,ij,nj->n", x, cov, x), 0.0))
+
+
+@dataclass(frozen=True)
+class IntervalModel:
+    """The fitted spreads of a current model (see the module docstring).
+
+    Attributes
+    ----------
+    turn_scale_radps : float
+        Of the regime basis.
+    run_cov : dict of str to ndarray (2, 4, 4)
+        Per ground (training label, lower case) and pooled (``"*"``): the second moment of
+        the run-level regime coefficients of out-of-fold residuals, per side.
+    new_ground_cov : ndarray (2, 4, 4) or None
+        Added for a ground the model never drove; ``None`` when the training logs held one
+        ground only (nothing to learn it from: such a forecast carries the run spread only).
+    sample_sd_a : ndarray (2, 3)
+        Per side, the per-sample spread at rest, straight and turning (A).
+    correlation_s : float
+        Integrated correlation time of the per-sample residual (s).
+    cross_validated : bool
+        Whether the residuals were out-of-fold (False: in-sample, fewer than 2 training runs;
+        such spreads are too narrow).
+    n_runs : int
+        Training runs the spreads were fitted on.
+    """
+
+    turn_scale_radps: float
+    run_cov: dict[str, np.ndarray]
+    new_ground_cov: np.ndarray | None
+    sample_sd_a: np.ndarray
+    correlation_s: float
+    cross_validated: bool
+    n_runs: int
+
+    # ------------------------------------------------------------------ fit
+    @classmethod
+    def fit(cls, logs: Sequence[InteractionLog], residuals_a: Sequence[np.ndarray], *,
+            cross_validated: bool, new_ground_residuals: Mapping[str, Sequence[tuple[InteractionLog, np.ndarray]]] | None = None,
+            turn_scale_radps: float = DEFAULT_TURN_SCALE_RADPS) -> IntervalModel:
+        """Spreads from the residuals ``truth - prediction`` (N, 2) of each training log.
+
+        Parameters
+        ----------
+        logs, residuals_a
+            Training logs and their out-of-fold residual currents (A).
+        cross_validated : bool
+            Whether the residuals are out-of-fold.
+        new_ground_residuals : mapping of ground to [(log, residual)], optional
+            Per training ground, residuals of a model fitted without that ground (two grounds
+            or more give the new-ground covariance).
+        turn_scale_radps : float
+        """
+        coefs = np.stack([run_coefficients(lg, r, turn_scale_radps) for lg, r in zip(logs, residuals_a)])
+        labels = [str(lg.meta.ground_label).lower() if lg.meta.ground_label is not None else None for lg in logs]
+        run_cov = {_POOLED: _second_moment(coefs)}
+        for g in sorted({lb for lb in labels if lb is not None}):
+            rows = coefs[[i for i, lb in enumerate(labels) if lb == g]]
+            if rows.shape[0] >= _MIN_GROUND_RUNS:
+                run_cov[g] = _second_moment(rows)
+        # per-sample spread: what is left after each run's own regime fit
+        sq = np.zeros((2, len(SAMPLE_REGIMES)))
+        wt = np.zeros(len(SAMPLE_REGIMES))
+        lag_num = lag_den = 0.0
+        dts = []
+        for lg, r, b in zip(logs, residuals_a, coefs):
+            e = np.column_stack([r[:, k] - regime_design(lg, k, turn_scale_radps) @ b[k] for k in range(2)])
+            reg = _regime_of(lg, turn_scale_radps)
+            for j in range(len(SAMPLE_REGIMES)):
+                sel = reg == j
+                sq[:, j] += np.sum(e[sel] ** 2, axis=0)
+                wt[j] += sel.sum()
+            if len(lg) > 2:
+                lag_num += float(np.sum(e[1:] * e[:-1]))
+                lag_den += float(np.sum(e**2))
+                dts.append(float(np.median(np.diff(lg.time_s))))
+        overall = np.sqrt(sq.sum(axis=1) / max(wt.sum(), 1.0))
+        sample_sd = np.where(wt[None, :] >= 10, np.sqrt(sq / np.maximum(wt[None, :], 1.0)), overall[:, None])
+        rho = min(max(lag_num / lag_den, 0.0), 0.99) if lag_den > 0 else 0.0
+        dt = float(np.median(dts)) if dts else 0.1
+        correlation = min(max(dt * (1.0 + rho) / (1.0 - rho), dt), 10.0)
+        new_cov = None
+        if new_ground_residuals is not None and len(new_ground_residuals) >= 2:
+            means = []
+            for pairs in new_ground_residuals.values():
+                b = np.stack([run_coefficients(lg, r, turn_scale_radps) for lg, r in pairs])
+                w = np.array([lg.duration_s for lg, _ in pairs])
+                means.append(np.tensordot(w / w.sum(), b, axes=1))
+            new_cov = _second_moment(np.stack(means))
+        return cls(float(turn_scale_radps), run_cov, new_cov, sample_sd, float(correlation), bool(cross_validated),
+                   len(logs))
+
+    # ------------------------------------------------------------- queries
+    def knows(self, ground: str | None) -> bool:
+        """Whether ``ground`` had a run covariance of its own or is pooled among trained grounds."""
+        return ground is not None and str(ground).lower() in self.run_cov
+
+    def covariance(self, ground: str | None, *, known: bool) -> np.ndarray:
+        """The run-level covariance (2, 4, 4) for a run on ``ground``; ``known=False`` adds the new-ground part."""
+        key = str(ground).lower() if ground is not None else _POOLED
+        cov = self.run_cov.get(key, self.run_cov[_POOLED]).copy()
+        if not known and self.new_ground_cov is not None:
+            cov = cov + self.new_ground_cov
+        return cov
+
+    def run_sd_a(self, log: InteractionLog, *, known: bool, cov: np.ndarray | None = None) -> np.ndarray:
+        """Run-level spread per sample and side (A), shape (N, 2); ``cov`` overrides the covariance."""
+        c = self.covariance(log.meta.ground_label, known=known) if cov is None else cov
+        return np.column_stack([_quadratic_sd(regime_design(log, k, self.turn_scale_radps), c[k]) for k in range(2)])
+
+    def sample_sd(self, log: InteractionLog) -> np.ndarray:
+        """Per-sample spread (A), shape (N, 2)."""
+        reg = _regime_of(log, self.turn_scale_radps)
+        return self.sample_sd_a[:, reg].T.copy()
+
+    # --------------------------------------------------------- persistence
+    def to_plain(self) -> dict[str, Any]:
+        return {"turn_scale_radps": self.turn_scale_radps, "run_cov": dict(self.run_cov),
+                "new_ground_cov": self.new_ground_cov, "sample_sd_a": self.sample_sd_a,
+                "correlation_s": self.correlation_s, "cross_validated": self.cross_validated, "n_runs": self.n_runs}
+
+    @classmethod
+    def from_plain(cls, d: Mapping[str, Any]) -> IntervalModel:
+        """Rebuild from :meth:`to_plain` (raises ValueError / KeyError / TypeError on bad content)."""
+        k = len(REGIME_COLUMNS)
+
+        def cov(name: str, value: Any) -> np.ndarray:
+            arr = np.asarray(value, dtype=np.float64)
+            if arr.shape != (2, k, k) or not np.all(np.isfinite(arr)):
+                raise ValueError(f"{name} must be a finite (2, {k}, {k}) array")
+            return arr
+
+        run_cov = {str(g): cov(f"run_cov[{g}]", v) for g, v in dict(d["run_cov"]).items()}
+        if _POOLED not in run_cov:
+            raise ValueError("run_cov lacks the pooled entry")
+        new = d["new_ground_cov"]
+        sd = np.asarray(d["sample_sd_a"], dtype=np.float64)
+        if sd.shape != (2, len(SAMPLE_REGIMES)) or not np.all(np.isfinite(sd)) or np.any(sd < 0):
+            raise ValueError("sample_sd_a must be a finite non-negative (2, 3) array")
+        scale, corr = float(d["turn_scale_radps"]), float(d["correlation_s"])
+        if not (math.isfinite(scale) and scale > 0 and math.isfinite(corr) and corr > 0):
+            raise ValueError("turn_scale_radps and correlation_s must be finite and > 0")
+        return cls(scale, run_cov, None if new is None else cov("new_ground_cov", new), sd, corr,
+                   bool(d["cross_validated"]), int(d["n_runs"]))
