@@ -66,7 +66,6 @@ DEFAULT_MODEL_PHYSICS_GROUND = "asphalt"
 
 _UNNAMED_ROBOT = ("", "unknown")
 _UNNAMED_GROUND = "unlabelled"
-_VIBRATION_MODELS = ("VibrationCurrentEstimator",)
 
 
 class ModelCompatibilityWarning(TerrawattWarning):
@@ -132,12 +131,9 @@ def check_model_robot(model: CurrentModel, robot: RobotParams | str) -> list[str
 def uses_vibration(model: Any) -> bool:
     """Whether ``model`` is conditioned on the ground's vibration (the estimator, or a model adapted from one).
 
-    Read from the class names, so that checking a baseline never imports torch.
+    Asks the model (:attr:`energy.models.CurrentModel.uses_vibration`); anything else is not.
     """
-    base = getattr(model, "base_model", None)
-    if base is not None and uses_vibration(base):
-        return True
-    return any(cls.__name__ in _VIBRATION_MODELS for cls in type(model).__mro__)
+    return bool(getattr(model, "uses_vibration", False))
 
 
 @dataclass(frozen=True)

@@ -18,13 +18,22 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from .adaptation import ADAPT_METHODS, MIN_ADAPT_SAMPLES, MIN_ADAPT_SECONDS, AdaptedCurrentModel, adapt_current_model
+from .adaptation import (
+    ADAPT_METHODS,
+    ADAPT_SCOPES,
+    MIN_ADAPT_SAMPLES,
+    MIN_ADAPT_SECONDS,
+    AdaptedCurrentModel,
+    adapt_current_model,
+    choose_update,
+)
 from .base import (
     CURRENT_MODEL_FORMAT,
     CURRENT_MODEL_FORMAT_VERSION,
     LEGACY_FORMAT_VERSIONS,
     CurrentModel,
     ModelRecord,
+    TrainingSummary,
     check_logs,
     log_currents,
     read_model_file,
@@ -36,8 +45,10 @@ from .baselines import (
     LinearCurrentModel,
     PhysicsCurrentModel,
 )
+from .forecast import ChargeForecast, CurrentForecast
 from .kinds import CURRENT_MODEL_KINDS, new_current_model
 from .loading import MODEL_CLASSES, load_current_model, model_class
+from .uncertainty import IntervalModel
 
 #: Names that need torch, by the module that defines them (imported on first access).
 TORCH_NAMES: dict[str, str] = {
@@ -75,6 +86,10 @@ __all__ = [
     "LEGACY_FORMAT_VERSIONS",
     "CurrentModel",
     "ModelRecord",
+    "TrainingSummary",
+    "CurrentForecast",
+    "ChargeForecast",
+    "IntervalModel",
     "check_logs",
     "log_currents",
     "read_model_file",
@@ -93,6 +108,8 @@ __all__ = [
     "MIN_ADAPT_SAMPLES",
     "AdaptedCurrentModel",
     "adapt_current_model",
+    "choose_update",
+    "ADAPT_SCOPES",
     "TORCH_NAMES",
     *TORCH_NAMES,
 ]

@@ -266,6 +266,11 @@ class AdaptedCurrentModel(CurrentModel):
                 np.einsum("ij,sjk,lk->sil", lift, self.posterior_cov_, lift))
 
     @property
+    def uses_vibration(self) -> bool:
+        """The base model's."""
+        return self.base_model.uses_vibration
+
+    @property
     def gives_interval(self) -> bool:
         """Whether the base model gives one (a ``"bayes"`` update then gives its posterior interval)."""
         return self.base_model.gives_interval

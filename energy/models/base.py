@@ -469,6 +469,11 @@ class CurrentModel:
         """Whether :meth:`predict_distribution` returns non-zero spreads."""
         return False
 
+    @property
+    def uses_vibration(self) -> bool:
+        """Whether predictions depend on the log's vertical acceleration (then a planner must feed a ground's vibration)."""
+        return False
+
     def _distribution(self, log: InteractionLog, mean: np.ndarray) -> CurrentForecast:
         return CurrentForecast.point(log.time_s, mean)
 

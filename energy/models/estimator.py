@@ -402,6 +402,12 @@ class VibrationCurrentEstimator(CurrentModel):
         return self._predict_with(log, None)
 
     @property
+    def uses_vibration(self) -> bool:
+        """Whether the configuration reads the acceleration stream (local or whole-run spectra)."""
+        cfg = self._resolved_config()
+        return bool(cfg.local_spectrum or cfg.run_features != "none")
+
+    @property
     def gives_interval(self) -> bool:
         """Whether the model carries fitted spreads (models saved before them do not)."""
         self._check_fitted()

@@ -50,6 +50,7 @@ DEFAULT_TURN_SCALE_RADPS = 0.3
 SAMPLE_REGIMES = ("rest", "straight", "turning")
 _POOLED = "*"
 _MIN_GROUND_RUNS = 3  # a ground's own run covariance needs this many runs, else the pooled one
+_MAX_LAGS = 50  # lags (drive samples) of the per-sample residual's autocorrelation (~8 s at 6.5 Hz)
 
 
 def regime_design(log: InteractionLog, side: int, turn_scale_radps: float) -> np.ndarray:
@@ -92,6 +93,26 @@ def _regime_of(log: InteractionLog, turn_scale_radps: float) -> np.ndarray:
 def _second_moment(rows: np.ndarray) -> np.ndarray:
     """Mean of ``b b^T`` over the first axis, per side: rows (n, 2, k) -> (2, k, k)."""
     return np.einsum("nsi,nsj->sij", rows, rows) / max(rows.shape[0], 1)
+
+
+def _diagonal(cov: np.ndarray) -> np.ndarray:
+    """Per side, the covariance with its off-diagonal terms dropped."""
+    return np.stack([np.diag(np.diag(c)) for c in cov])
+
+
+def _shrunk(cov: np.ndarray, n: int) -> np.ndarray:
+    """Covariance estimated from ``n`` runs, shrunk towards its diagonal (fully at 4 runs, not at all from 20)."""
+    keep = min(max((n - _MIN_GROUND_RUNS) / 17.0, 0.0), 1.0)
+    return keep * cov + (1.0 - keep) * _diagonal(cov)
+
+
+def _integrated_time(acov: np.ndarray, dt: float) -> float:
+    """Integrated correlation time ``dt (1 + 2 sum rho_k)`` of a pooled autocovariance, summed until rho turns negative."""
+    if acov[0] <= 0:
+        return dt
+    rho = acov[1:] / acov[0]
+    stop = int(np.argmax(rho <= 0)) if np.any(rho <= 0) else rho.size
+    return dt * (1.0 + 2.0 * float(np.sum(rho[:stop])))
 
 
 def _quadratic_sd(x: np.ndarray, cov: np.ndarray) -> np.ndarray:
@@ -151,15 +172,15 @@ class IntervalModel:
         """
         coefs = np.stack([run_coefficients(lg, r, turn_scale_radps) for lg, r in zip(logs, residuals_a)])
         labels = [str(lg.meta.ground_label).lower() if lg.meta.ground_label is not None else None for lg in logs]
-        run_cov = {_POOLED: _second_moment(coefs)}
+        run_cov = {_POOLED: _shrunk(_second_moment(coefs), coefs.shape[0])}
         for g in sorted({lb for lb in labels if lb is not None}):
             rows = coefs[[i for i, lb in enumerate(labels) if lb == g]]
             if rows.shape[0] >= _MIN_GROUND_RUNS:
-                run_cov[g] = _second_moment(rows)
+                run_cov[g] = _shrunk(_second_moment(rows), rows.shape[0])
         # per-sample spread: what is left after each run's own regime fit
         sq = np.zeros((2, len(SAMPLE_REGIMES)))
         wt = np.zeros(len(SAMPLE_REGIMES))
-        lag_num = lag_den = 0.0
+        acov = np.zeros(_MAX_LAGS + 1)
         dts = []
         for lg, r, b in zip(logs, residuals_a, coefs):
             e = np.column_stack([r[:, k] - regime_design(lg, k, turn_scale_radps) @ b[k] for k in range(2)])
@@ -168,15 +189,14 @@ class IntervalModel:
                 sel = reg == j
                 sq[:, j] += np.sum(e[sel] ** 2, axis=0)
                 wt[j] += sel.sum()
-            if len(lg) > 2:
-                lag_num += float(np.sum(e[1:] * e[:-1]))
-                lag_den += float(np.sum(e**2))
+            for lag in range(min(_MAX_LAGS, len(lg) - 1) + 1):
+                acov[lag] += float(np.sum(e[lag:] * e[: len(e) - lag]))
+            if len(lg) > 1:
                 dts.append(float(np.median(np.diff(lg.time_s))))
         overall = np.sqrt(sq.sum(axis=1) / max(wt.sum(), 1.0))
         sample_sd = np.where(wt[None, :] >= 10, np.sqrt(sq / np.maximum(wt[None, :], 1.0)), overall[:, None])
-        rho = min(max(lag_num / lag_den, 0.0), 0.99) if lag_den > 0 else 0.0
         dt = float(np.median(dts)) if dts else 0.1
-        correlation = min(max(dt * (1.0 + rho) / (1.0 - rho), dt), 10.0)
+        correlation = min(max(_integrated_time(acov, dt), dt), 10.0)
         new_cov = None
         if new_ground_residuals is not None and len(new_ground_residuals) >= 2:
             means = []
@@ -184,7 +204,8 @@ class IntervalModel:
                 b = np.stack([run_coefficients(lg, r, turn_scale_radps) for lg, r in pairs])
                 w = np.array([lg.duration_s for lg, _ in pairs])
                 means.append(np.tensordot(w / w.sum(), b, axes=1))
-            new_cov = _second_moment(np.stack(means))
+            # a handful of grounds cannot tell how the columns co-vary: keep the variances only
+            new_cov = _diagonal(_second_moment(np.stack(means)))
         return cls(float(turn_scale_radps), run_cov, new_cov, sample_sd, float(correlation), bool(cross_validated),
                    len(logs))
 

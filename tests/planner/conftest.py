@@ -48,6 +48,10 @@ class GroundKeyedModel(CurrentModel):
     def gives_interval(self) -> bool:
         return any(g[3] > 0 for g in self.grounds.values())
 
+    @property
+    def uses_vibration(self) -> bool:
+        return True
+
     def ground_vibration(self, ground: str) -> tuple[np.ndarray, np.ndarray] | None:
         for name, g in self.grounds.items():
             if name.lower() == ground.lower() and name in self.recorded:
