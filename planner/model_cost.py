@@ -31,7 +31,7 @@ table for every id.
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -163,7 +163,8 @@ def _lookup(name: str, known: Sequence[str]) -> str | None:
     return next((k for k in known if k.lower() == key), None)
 
 
-def model_grounds(terrain: TerrainMap, summary: TrainingSummary | None, *, model_ground: str | None = None) -> ModelGrounds:
+def model_grounds(terrain: TerrainMap, summary: TrainingSummary | None, *,
+                  model_ground: str | Mapping[str, str] | None = None) -> ModelGrounds:
     """Match the map's ground classes with the grounds a model was trained on (module docstring).
 
     Parameters
@@ -173,8 +174,10 @@ def model_grounds(terrain: TerrainMap, summary: TrainingSummary | None, *, model
     summary : TrainingSummary or None
         The model's :attr:`~energy.CurrentModel.training_summary`; ``None`` (an older file):
         the map's class names are taken as they are, and unknown cells need ``model_ground``.
-    model_ground : str, optional
-        Price every cell as this training ground.
+    model_ground : str or mapping of str to str, optional
+        A name: price every cell as this training ground. A mapping of map class names to
+        training grounds: price those classes so (a class the model never drove, e.g.
+        ``{"grass": "asphalt"}``), the others by their own names.
 
     Returns
     -------
@@ -196,23 +199,31 @@ def model_grounds(terrain: TerrainMap, summary: TrainingSummary | None, *, model
     map_names = {gid: terrain.ground_names.get(gid, str(gid)) for gid in present if gid != UNKNOWN_GROUND}
     where = (f"the model was trained on grounds {list(known)!r}; the map has {sorted(map_names.values())!r}"
              + (" and cells of unknown ground" if UNKNOWN_GROUND in present else ""))
-    if model_ground is not None:
+    if isinstance(model_ground, str):
         chosen = _lookup(model_ground, known) if summary is not None else str(model_ground)
         if chosen is None:
             raise UnknownNameError(f"--model-ground {model_ground!r} is not a ground the model drove: {where}")
         return ModelGrounds({gid: chosen for gid in present}, known)
+    renamed = {} if model_ground is None else {str(k).strip().lower(): str(v) for k, v in dict(model_ground).items()}
+    unused = sorted(set(renamed) - {n.lower() for n in map_names.values()})
+    if unused:
+        raise UnknownNameError(f"--model-ground names map class(es) {unused!r} that the map does not have: {where}")
     by_class: dict[int, str] = {}
     missing = []
     for gid, name in map_names.items():
-        chosen = _lookup(name, known) if summary is not None else name
+        target = renamed.get(name.lower(), name)
+        chosen = _lookup(target, known) if summary is not None else target
+        if chosen is None and name.lower() in renamed:
+            raise UnknownNameError(f"--model-ground {name}={target} names a ground the model never drove: {where}")
         if chosen is None:
             missing.append(name)
         else:
             by_class[gid] = chosen
     if missing:
         raise UnknownNameError(
-            f"the model never drove the map's ground(s) {sorted(missing)!r}: {where}; train it on them, or give "
-            "--model-ground NAME to price every cell as one of the model's grounds"
+            f"the model never drove the map's ground(s) {sorted(missing)!r}: {where}; train it on them, give "
+            "--model-ground CLASS=NAME to price such a class as one of the model's grounds, or --model-ground NAME "
+            "to price every cell as one"
         )
     if UNKNOWN_GROUND in present:
         if len(known) != 1:
@@ -229,7 +240,7 @@ def model_energy_model(
     model: CurrentModel,
     robot: RobotParams,
     *,
-    model_ground: str | None = None,
+    model_ground: str | Mapping[str, str] | None = None,
     physics_ground: GroundParams | None = None,
 ) -> tuple[LearnedEnergyModel, ModelGrounds]:
     """A :class:`LearnedEnergyModel` over ``terrain`` serving ``model`` per ground class, checked (module docstring).
@@ -242,8 +253,8 @@ def model_energy_model(
         A fitted, saved-and-loaded (or fresh) current model.
     robot : RobotParams
         The robot preset planned for; the model must have been trained on it.
-    model_ground : str, optional
-        Price every cell as this training ground (:func:`model_grounds`).
+    model_ground : str or mapping of str to str, optional
+        As :func:`model_grounds`: one training ground for every cell, or map class names to training grounds.
     physics_ground : GroundParams, optional
         Ground of the physics slope term (default the ``asphalt`` preset).
 
@@ -296,7 +307,7 @@ def model_energy_cost(
     robot: RobotParams,
     speed_mps: float,
     *,
-    model_ground: str | None = None,
+    model_ground: str | Mapping[str, str] | None = None,
     physics_ground: GroundParams | None = None,
     max_slope_rad: float = DEFAULT_MAX_SLOPE_RAD,
     grade_samples: int = DEFAULT_GRADE_SAMPLES,

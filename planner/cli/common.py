@@ -6,7 +6,7 @@ import argparse
 import math
 import os
 import sys
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -196,9 +196,11 @@ def add_model_options(p: argparse.ArgumentParser, *, risk: bool = False) -> None
              "ground class of the map, which the model must have driven, on the robot of --robot (the physics "
              "model adds the slope term); --unknown-ground does not apply",
     )
-    p.add_argument("--model-ground", default=None, metavar="NAME",
-                   help="with --model: price every cell as this training ground of the model (e.g. a map without "
-                        "ground classes when the model drove several grounds)")
+    p.add_argument("--model-ground", default=None, nargs="+", metavar="NAME|CLASS=NAME",
+                   help="with --model: NAME prices every cell as this training ground of the model (e.g. a map "
+                        "without ground classes when the model drove several grounds); CLASS=NAME pairs price a "
+                        "map ground class the model never drove as one it did (e.g. grass=asphalt sand=snow), the "
+                        "other classes by their own names")
     if risk:
         p.add_argument(
             "--risk", type=float, default=None, metavar="Q",
@@ -220,8 +222,26 @@ def check_model_flags(args: argparse.Namespace) -> None:
         return
     if not Path(model).is_file():
         raise InvalidParameterError(f"--model {model} is not a file (write one with terrawatt train)")
+    if getattr(args, "model_ground", None) is not None:
+        args.model_ground = parse_model_ground(args.model_ground)
     if getattr(args, "risk", None) is not None:
         check_risk_level(args.risk, "--risk")
+
+
+def parse_model_ground(tokens: Sequence[str] | str) -> str | dict[str, str]:
+    """``--model-ground`` tokens: one ``NAME``, or ``CLASS=NAME`` pairs (a mapping of map class to training ground)."""
+    items = [tokens] if isinstance(tokens, str) else list(tokens)
+    if len(items) == 1 and "=" not in items[0]:
+        return items[0]
+    mapping: dict[str, str] = {}
+    for token in items:
+        cls, sep, name = token.partition("=")
+        if not sep or not cls.strip() or not name.strip():
+            raise InvalidParameterError(f"--model-ground takes one NAME or CLASS=NAME pairs, got {token!r}")
+        if cls.strip() in mapping:
+            raise InvalidParameterError(f"--model-ground names map class {cls.strip()!r} twice")
+        mapping[cls.strip()] = name.strip()
+    return mapping
 
 
 def load_model_arg(args: argparse.Namespace) -> CurrentModel | None:
@@ -233,7 +253,7 @@ def load_model_arg(args: argparse.Namespace) -> CurrentModel | None:
 
 def edge_cost_for(tmap: TerrainMap, *, robot: str, speed_mps: float, max_slope_rad: float,
                   unknown_ground: str | None, model: CurrentModel | None = None,
-                  model_ground: str | None = None) -> EnergyCost:
+                  model_ground: str | dict[str, str] | None = None) -> EnergyCost:
     """The edge costs of a command: the physics presets, or the saved ``model`` (:func:`planner.model_energy_cost`)."""
     if model is None:
         return EnergyCost.from_presets(tmap, robot=robot, speed_mps=speed_mps, max_slope_rad=max_slope_rad,

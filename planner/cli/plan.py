@@ -7,7 +7,7 @@ import dataclasses
 import functools
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -233,7 +233,7 @@ def run_plan(
     whole_map: bool = False,
     model: Any = None,
     model_label: str | None = None,
-    model_ground: str | None = None,
+    model_ground: str | Mapping[str, str] | None = None,
     risk: float | None = None,
 ) -> dict[str, Any]:
     """Plan once with its comparison (shortest route, lattice optimum), print, write files.

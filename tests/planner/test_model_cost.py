@@ -83,3 +83,25 @@ def test_a_model_without_an_interval_gives_a_cost_without_spread_tables(corridor
     flat = {"loam": [9.0, 2.0, 4.0, 0.0], "gravel": [10.5, 2.5, 4.5, 0.0]}
     cost = model_energy_cost(corridor_map, known_model(grounds=flat), HUSKY, 0.5)
     assert cost.grade_sd_table_j_per_m is None and not cost.has_interval
+
+
+def test_a_class_the_model_never_drove_can_be_priced_as_one_it_did(corridor_map, known_model):
+    model = known_model(trained_on=("loam",))  # never drove the map's gravel corridor
+    with pytest.raises(UnknownNameError, match="CLASS=NAME"):
+        model_grounds(corridor_map, model.training_summary)
+    plan = model_grounds(corridor_map, model.training_summary, model_ground={"Gravel": "loam"})
+    assert plan.by_class == {0: "loam", 1: "loam"}
+    with pytest.raises(UnknownNameError, match="does not have"):
+        model_grounds(corridor_map, model.training_summary, model_ground={"sand": "loam"})
+    with pytest.raises(UnknownNameError, match="never drove"):
+        model_grounds(corridor_map, model.training_summary, model_ground={"gravel": "snow"})
+
+
+def test_model_ground_tokens_parse_into_a_name_or_a_mapping():
+    from planner.cli.common import parse_model_ground
+
+    assert parse_model_ground(["snow"]) == "snow"
+    assert parse_model_ground(["grass=asphalt", "sand=snow"]) == {"grass": "asphalt", "sand": "snow"}
+    for bad in (["grass="], ["a=b", "a=c"], ["x", "y"]):
+        with pytest.raises(InvalidParameterError):
+            parse_model_ground(bad)
