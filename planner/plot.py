@@ -221,7 +221,8 @@ def plot_routes(
         label = f"{route.label}: {route.energy_j:,.0f} J ({route.energy_j / 3600:.2f} Wh)"
         if route.energy_band_j is not None:
             lo, hi = route.energy_band_j
-            label += f"\n  {100 * route.band_level:.0f} % interval {lo / 3600:.2f}-{hi / 3600:.2f} Wh"
+            label += (f"\n  energy mean {(lo + hi) / 2 / 3600:.2f} Wh, {100 * route.band_level:.0f} % interval "
+                      f"{lo / 3600:.2f}-{hi / 3600:.2f} Wh")
             ax.plot(wp[:, 0], wp[:, 1], color=colour, linewidth=9.0, alpha=0.25, solid_capstyle="round")
         (line,) = ax.plot(wp[:, 0], wp[:, 1], color=colour, linestyle=route.linestyle, linewidth=2.2, label=label)
         handles.append(line)

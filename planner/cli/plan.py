@@ -277,7 +277,8 @@ def run_plan(
                 _route_row("lattice + refinement", optimum, route.lattice_energy_j),
                 _route_row("shortest distance", shortest, route.lattice_energy_j)]
         lines = [
-            RouteLine(f"min-energy ({planner})", route.waypoints_m, route.energy_j, colour="#d32f2f"),
+            RouteLine(f"min-energy ({planner}{'' if risk is None else f', planned on the {risk:g} quantile'})",
+                      route.waypoints_m, route.energy_j, colour="#d32f2f"),
             RouteLine("shortest distance", shortest.waypoints_m, shortest.energy_j, colour="#1565c0", linestyle="--"),
         ]
         interval = route_energy_interval(mean_cost, route.waypoints_m) if mean_cost.has_interval else None
