@@ -101,7 +101,8 @@ def few_shot_scores(
                 continue
             prefix = run_a.slice(float(t[0]), float(t[0] + T))
             try:
-                upd = AdaptedCurrentModel(model, **settings.update_options()).fit(prefix)
+                # the other runs of the ground are forecast: a Bayesian update carries its ground offset only
+                upd = AdaptedCurrentModel(model, **settings.update_options(), scope="ground").fit(prefix)
             except DataError as exc:
                 skipped.append(f"{labels[a]} ({schedule}): no adaptation ({exc})")
                 continue

@@ -54,6 +54,7 @@ def add_parsers(sub: Any) -> None:
     """The ``demo`` and ``plan`` subcommands."""
     demo = sub.add_parser("demo", help="plan a minimum-energy route on the bundled example map")
     _add_plan_options(demo, default_time=1.0)
+    add_model_options(demo, risk=True)
     demo.set_defaults(run=run_demo)
     plan = sub.add_parser("plan", help="plan a minimum-energy route on a map file (.npz or GeoTIFF)")
     plan.add_argument("--map", type=Path, required=True, metavar="FILE", help=".npz map or .tif DEM")
@@ -103,6 +104,7 @@ def _add_plan_options(p: argparse.ArgumentParser, *, default_time: float) -> Non
 def run_demo(args: argparse.Namespace) -> int:
     """``terrawatt demo``: plan on the bundled example map."""
     check_outputs(args.out, _OUTPUTS)
+    check_model_flags(args)
     return _run(args, example_map(), EXAMPLE_START_XY_M, EXAMPLE_GOAL_XY_M, "bundled example map")
 
 
