@@ -25,7 +25,6 @@ from .adaptation import (
     MIN_ADAPT_SECONDS,
     AdaptedCurrentModel,
     adapt_current_model,
-    choose_update,
 )
 from .base import (
     CURRENT_MODEL_FORMAT,
@@ -108,7 +107,6 @@ __all__ = [
     "MIN_ADAPT_SAMPLES",
     "AdaptedCurrentModel",
     "adapt_current_model",
-    "choose_update",
     "ADAPT_SCOPES",
     "TORCH_NAMES",
     *TORCH_NAMES,

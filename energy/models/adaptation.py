@@ -55,7 +55,6 @@ __all__ = [
     "MIN_ADAPT_SAMPLES",
     "AdaptedCurrentModel",
     "adapt_current_model",
-    "choose_update",
 ]
 
 #: Update methods of :class:`AdaptedCurrentModel`, the default first.
@@ -63,6 +62,9 @@ ADAPT_METHODS = ("regime", "gain", "gain_offset", "bayes")
 #: What a ``"bayes"`` update forecasts: the rest of the same run, or other runs on the ground.
 ADAPT_SCOPES = ("run", "ground")
 _NOISE_FLOOR_A = 0.05  # least per-sample spread the Bayesian update assumes (A)
+#: Effective samples' worth of belief that a new stretch of data is as noisy as the training runs
+#: (``"bayes"``: the noise ratio of the data is shrunk towards 1 by this many samples).
+NOISE_PRIOR_SAMPLES = 10.0
 #: Least duration (s) of new data an adaptation accepts by default (``min_seconds``).
 MIN_ADAPT_SECONDS = 5.0
 #: Least number of drive samples (both streams overlapping) an adaptation accepts.
@@ -120,7 +122,15 @@ class AdaptedCurrentModel(CurrentModel):
     ----------
     coefficients_ : numpy.ndarray, shape (2, k)
         Per side: the gain (``"gain"``), ``[gain - 1, offset]`` (``"gain_offset"``) or the
-        regime residual coefficients ``[offset A, per |v| A s/m, turning A, outer turning A]``.
+        regime residual coefficients ``[offset A, per |v| A s/m, turning A, outer turning A]``;
+        ``"bayes"``: the posterior mean of the ground offset then the run offset (8 columns).
+    posterior_cov_ : numpy.ndarray, shape (2, 8, 8), or None
+        ``"bayes"``: their posterior covariance per side.
+    noise_ratio_ : float
+        ``"bayes"``: how much noisier (> 1) or calmer the adaptation data are than the training
+        runs, shrunk towards 1; scales the forecast's spreads (1 for other methods).
+    ground_ : str or None
+        The ground label of the adaptation data.
     adapted_on_s_ : float
         Duration of the adaptation data (s).
     n_samples_ : int
@@ -193,8 +203,9 @@ class AdaptedCurrentModel(CurrentModel):
         truths = [log_currents(lg) for lg in logs]
         coef = np.zeros((2, self._n_coefficients[self.method]))
         self.posterior_cov_ = None
+        self.noise_ratio_ = 1.0
         if self.method == "bayes":
-            coef, self.posterior_cov_ = self._fit_bayes(base, logs, preds, truths)
+            coef, self.posterior_cov_, self.noise_ratio_ = self._fit_bayes(base, logs, preds, truths)
         for k in range(2 if self.method != "bayes" else 0):
             if self.method == "gain":
                 q_pred = sum(float(_trapezoid(p[:, k], lg.time_s)) for p, lg in zip(preds, logs))
@@ -223,8 +234,15 @@ class AdaptedCurrentModel(CurrentModel):
         self.nonnegative_ = bool(all(np.all(y >= 0) for y in truths))
 
     def _fit_bayes(self, base: CurrentModel, logs: list[InteractionLog], preds: list[np.ndarray],
-                   truths: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-        """Posterior mean (2, 8) and covariance (2, 8, 8) of ``[ground offset, run offset]`` per side."""
+                   truths: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, float]:
+        """Posterior mean (2, 8) and covariance (2, 8, 8) of ``[ground offset, run offset]`` per side, and the noise ratio.
+
+        Two passes: the first with the per-sample spread the base model learned; the ratio of
+        the residual left by it to that spread (shrunk towards 1 by :data:`NOISE_PRIOR_SAMPLES`
+        effective samples) says whether this ground is noisier or calmer than the training
+        grounds, and the second pass weighs the data — and the forecast scales the run and
+        sample spreads — by it.
+        """
         interval = getattr(base, "interval_", None)
         if interval is None or not base.gives_interval:
             raise DataError(f"method='bayes' needs a base model with a fitted interval; this {type(base).__name__} has "
@@ -237,22 +255,33 @@ class AdaptedCurrentModel(CurrentModel):
         else:
             ground_cov = interval.new_ground_cov if interval.new_ground_cov is not None else run_cov
         k_cols = run_cov.shape[1]
-        mean = np.zeros((2, 2 * k_cols))
-        cov = np.zeros((2, 2 * k_cols, 2 * k_cols))
-        for k in range(2):
-            x = np.concatenate([regime_design(lg, k, interval.turn_scale_radps) for lg in logs])
-            r = np.concatenate([y[:, k] - p[:, k] for y, p in zip(truths, preds)])
-            sd = np.concatenate([interval.sample_sd(lg)[:, k] for lg in logs])
-            w = np.concatenate([_weights(lg) for lg in logs]) / interval.correlation_s / np.maximum(sd, _NOISE_FLOOR_A) ** 2
-            xx = np.concatenate([x, x], axis=1)
-            prior = np.zeros((2 * k_cols, 2 * k_cols))
-            prior[:k_cols, :k_cols] = _precision(ground_cov[k])
-            prior[k_cols:, k_cols:] = _precision(run_cov[k])
-            a = (xx * w[:, None]).T @ xx + prior
-            cov[k] = np.linalg.inv(a)
-            cov[k] = 0.5 * (cov[k] + cov[k].T)
-            mean[k] = cov[k] @ ((xx * w[:, None]).T @ r)
-        return mean, cov
+        xs = [np.concatenate([regime_design(lg, k, interval.turn_scale_radps, p[:, k]) for lg, p in zip(logs, preds)])
+              for k in range(2)]
+        rs = [np.concatenate([y[:, k] - p[:, k] for y, p in zip(truths, preds)]) for k in range(2)]
+        sds = [np.maximum(np.concatenate([interval.sample_sd(lg)[:, k] for lg in logs]), _NOISE_FLOOR_A) for k in range(2)]
+        dt = np.concatenate([_weights(lg) for lg in logs])
+
+        def solve(ratio: float) -> tuple[np.ndarray, np.ndarray]:
+            mean = np.zeros((2, 2 * k_cols))
+            cov = np.zeros((2, 2 * k_cols, 2 * k_cols))
+            for k in range(2):
+                w = dt / interval.correlation_s / (ratio * sds[k] ** 2)
+                xx = np.concatenate([xs[k], xs[k]], axis=1)
+                prior = np.zeros((2 * k_cols, 2 * k_cols))
+                prior[:k_cols, :k_cols] = _precision(ratio * ground_cov[k])
+                prior[k_cols:, k_cols:] = _precision(ratio * run_cov[k])
+                c = np.linalg.inv((xx * w[:, None]).T @ xx + prior)
+                cov[k] = 0.5 * (c + c.T)
+                mean[k] = cov[k] @ ((xx * w[:, None]).T @ rs[k])
+            return mean, cov
+
+        mean, _ = solve(1.0)
+        left = [rs[k] - np.concatenate([xs[k], xs[k]], axis=1) @ mean[k] for k in range(2)]
+        observed = float(sum(np.sum(dt * left[k] ** 2) for k in range(2)) / sum(np.sum(dt * sds[k] ** 2) for k in range(2)))
+        n_eff = float(dt.sum()) / interval.correlation_s
+        ratio = (n_eff * observed + NOISE_PRIOR_SAMPLES) / (n_eff + NOISE_PRIOR_SAMPLES)
+        mean, cov = solve(ratio)
+        return mean, cov, float(ratio)
 
     def _bayes_parts(self) -> tuple[np.ndarray, np.ndarray]:
         """Per side, the coefficients (2, 4) the forecast adds and their covariance (2, 4, 4) for its scope."""
@@ -260,7 +289,7 @@ class AdaptedCurrentModel(CurrentModel):
         if self.scope == "ground":
             # the next run's own offset: the ground's run spread where the model learned one, else the pooled one
             run_cov = self.base_model.interval_.covariance(self.ground_, known=True)
-            return self.coefficients_[:, :k_cols], self.posterior_cov_[:, :k_cols, :k_cols] + run_cov
+            return self.coefficients_[:, :k_cols], self.posterior_cov_[:, :k_cols, :k_cols] + self.noise_ratio_ * run_cov
         lift = np.concatenate([np.eye(k_cols), np.eye(k_cols)], axis=1)
         return (self.coefficients_[:, :k_cols] + self.coefficients_[:, k_cols:],
                 np.einsum("ij,sjk,lk->sil", lift, self.posterior_cov_, lift))
@@ -299,11 +328,11 @@ class AdaptedCurrentModel(CurrentModel):
         base = self.base_model
         interval = base.interval_
         known = bool(getattr(base, "knows_ground", lambda g: False)(log.meta.ground_label))
-        own = interval.run_sd_a(log, known=known)
+        own = interval.run_sd_a(log, base_forecast.mean_a, known=known)
         ensemble = np.sqrt(np.maximum(base_forecast.run_sd_a**2 - own**2, 0.0))  # what the members disagree on
         _, cov = self._bayes_parts()
-        run = np.sqrt(interval.run_sd_a(log, known=True, cov=cov) ** 2 + ensemble**2)
-        return CurrentForecast(log.time_s, mean, run, base_forecast.sample_sd_a)
+        run = np.sqrt(interval.run_sd_a(log, base_forecast.mean_a, known=True, cov=cov) ** 2 + ensemble**2)
+        return CurrentForecast(log.time_s, mean, run, base_forecast.sample_sd_a * math.sqrt(self.noise_ratio_))
 
     def _training_summary(self, logs: list[InteractionLog]) -> TrainingSummary:
         own = TrainingSummary.from_logs(logs)
@@ -316,7 +345,7 @@ class AdaptedCurrentModel(CurrentModel):
 
     def _design(self, log: InteractionLog, pred: np.ndarray, side: int) -> np.ndarray:
         if self.method == "bayes":
-            return regime_design(log, side, self.base_model.interval_.turn_scale_radps)
+            return regime_design(log, side, self.base_model.interval_.turn_scale_radps, pred[:, side])
         if self.method == "gain_offset":
             return np.column_stack([pred[:, side], np.ones(len(log))])
         return _regime_design(log, side, self.turn_scale_radps)
@@ -378,7 +407,7 @@ class AdaptedCurrentModel(CurrentModel):
     def _state(self) -> dict[str, Any]:
         return {"coefficients": np.asarray(self.coefficients_), "adapted_on_s": self.adapted_on_s_,
                 "n_samples": self.n_samples_, "nonnegative": self.nonnegative_, "ground": self.ground_,
-                "posterior_cov": self.posterior_cov_}
+                "posterior_cov": self.posterior_cov_, "noise_ratio": self.noise_ratio_}
 
     def _load_state(self, state: dict[str, Any]) -> None:
         coef = real_array("coefficients", state["coefficients"], ndim=2)
@@ -392,6 +421,9 @@ class AdaptedCurrentModel(CurrentModel):
         self.ground_ = None if ground is None else str(ground)
         post = state.get("posterior_cov")
         self.posterior_cov_ = None if post is None else real_array("posterior_cov", post, ndim=3)
+        self.noise_ratio_ = float(state.get("noise_ratio", 1.0))
+        if not (math.isfinite(self.noise_ratio_) and self.noise_ratio_ > 0):
+            raise ValueError(f"noise_ratio must be finite and > 0, got {self.noise_ratio_!r}")
         if self.method == "bayes" and (self.posterior_cov_ is None or self.posterior_cov_.shape != (2, 8, 8)):
             raise ValueError("a 'bayes' update needs its (2, 8, 8) posterior covariance")
         if not math.isfinite(self.adapted_on_s_):
@@ -429,50 +461,3 @@ def adapt_current_model(model: CurrentModel, log_prefix: InteractionLog | Sequen
     return AdaptedCurrentModel.adapting(model, log_prefix, method=method, prior_s=prior_s,
                                         turn_scale_radps=turn_scale_radps, min_seconds=min_seconds, scope=scope)
 
-
-def choose_update(model: CurrentModel, log_prefix: InteractionLog, *, scope: str = "run",
-                  holdout_fraction: float = 0.25) -> AdaptedCurrentModel | None:
-    """The adaptive loop's update with its fallback: the Bayesian update unless the gain does better on held-back data.
-
-    Both are fitted on the first ``1 - holdout_fraction`` of ``log_prefix`` and scored on its
-    last part (charge error of both sides); the better one is refitted on the whole prefix.
-    A base model without an interval, or a prefix too short to split, takes the gain; where
-    neither can be fitted, None.
-
-    Returns
-    -------
-    AdaptedCurrentModel or None
-        Its ``method`` says which update was chosen.
-
-    Raises
-    ------
-    InvalidParameterError
-        ``model`` is not a fitted CurrentModel, ``log_prefix`` not an InteractionLog, a bad fraction.
-    """
-    if not isinstance(model, CurrentModel) or not model.is_fitted:
-        raise InvalidParameterError(f"model must be a fitted CurrentModel, got {model!r:.80}")
-    if not isinstance(log_prefix, InteractionLog):
-        raise InvalidParameterError(f"log_prefix must be an InteractionLog, got {log_prefix!r:.80}")
-    frac = check_real("holdout_fraction", holdout_fraction, low=0.0, high=1.0, low_inclusive=False, high_inclusive=False)
-    candidates = ["bayes", "gain"] if model.gives_interval else ["gain"]
-    t = log_prefix.time_s
-    cut = float(t[0] + (1.0 - frac) * (t[-1] - t[0]))
-    head, tail = log_prefix.slice(float(t[0]), cut), log_prefix.slice(cut, float(t[-1]) + 1e-9)
-    errors: dict[str, float] = {}
-    if len(candidates) > 1 and len(tail) > 2:
-        truth = float(np.sum(_trapezoid(log_currents(tail), tail.time_s, axis=0)))
-        base_tail = model.predict(tail)
-        for method in candidates:
-            try:
-                fitted = AdaptedCurrentModel(model, method=method, scope="run").fit(head)
-            except DataError:
-                continue
-            pred = float(np.sum(_trapezoid(fitted.correct(tail, base_tail), tail.time_s, axis=0)))
-            errors[method] = abs(pred - truth)
-    order = sorted(errors, key=errors.__getitem__) + [m for m in candidates if m not in errors]
-    for method in order:
-        try:
-            return AdaptedCurrentModel(model, method=method, scope=scope).fit(log_prefix)
-        except DataError:
-            continue
-    return None

@@ -328,18 +328,21 @@ class VibrationCurrentEstimator(CurrentModel):
     def _fit_interval(self, logs: list[InteractionLog], cfg: EstimatorConfig) -> IntervalModel:
         """The spreads of the forecast from out-of-fold residuals (and the prior's leave-one-ground-out residuals)."""
         folds = self.member_folds_
-        residuals = []
+        residuals, predictions = [], []
         for r, lg in enumerate(logs):
             members = None if folds is None else [m for m in range(len(self.networks_)) if folds[r] == m]
-            residuals.append(log_currents(lg) - self._predict_with(lg, members or None))
-        by_ground: dict[str, list[tuple[InteractionLog, np.ndarray]]] = {}
+            predictions.append(self._predict_with(lg, members or None))
+            residuals.append(log_currents(lg) - predictions[-1])
+        by_ground: dict[str, list[tuple[InteractionLog, np.ndarray, np.ndarray]]] = {}
         grounds = list(dict.fromkeys(str(lg.meta.ground_label) for lg in logs if lg.meta.ground_label is not None))
         if cfg.physics_prior is not None and len(grounds) >= 2:
             for g in grounds:
                 others = [lg for lg in logs if str(lg.meta.ground_label) != g]
                 prior = PhysicsCurrentModel(robot=cfg.physics_prior, fit_parameters=PRIOR_FIT_PARAMETERS).fit(others)
-                by_ground[g] = [(lg, log_currents(lg) - prior.predict(lg)) for lg in logs if str(lg.meta.ground_label) == g]
-        return IntervalModel.fit(logs, residuals, cross_validated=folds is not None, new_ground_residuals=by_ground)
+                pairs = [(lg, prior.predict(lg)) for lg in logs if str(lg.meta.ground_label) == g]
+                by_ground[g] = [(lg, log_currents(lg) - p, p) for lg, p in pairs]
+        return IntervalModel.fit(logs, residuals, predictions, cross_validated=folds is not None,
+                                 new_ground_residuals=by_ground)
 
     def _rest_level(self, logs: list[InteractionLog]) -> np.ndarray | None:
         """Standing still is its own level, not the networks' business: the prior's, else the training mean."""
@@ -423,7 +426,7 @@ class VibrationCurrentEstimator(CurrentModel):
         spread = np.column_stack([np.interp(log.time_s, grid.time_s, members[:, :, k].std(axis=0)) for k in range(2)])
         spread[rest_samples(log)] = 0.0
         known = self.knows_ground(log.meta.ground_label)
-        run = np.sqrt(interval.run_sd_a(log, known=known) ** 2 + spread**2)
+        run = np.sqrt(interval.run_sd_a(log, mean, known=known) ** 2 + spread**2)
         return CurrentForecast(log.time_s, mean, run, interval.sample_sd(log))
 
     def knows_ground(self, ground: str | None) -> bool:

@@ -4,16 +4,22 @@ The error of a current model on a run is split in two (see :mod:`energy.models.f
 
 - a **run-level** part, shared by every sample of the run (the ground is softer today, the
   payload heavier, the ground is one the model never drove). It is written in the *regime
-  basis* of the motion, per side ``phi(t) = [1, |v|, m, m * outer]`` with
-  ``m = tanh(|omega| / turn_scale)`` (0 straight, 1 turning) and ``outer`` 1 on the outer
-  side of a turn — the basis in which a nominal physics model is affine in its ground
-  parameters (rolling resistance acts while moving and grows with speed, lateral friction
-  while turning, mostly on the outer side). A run's error is ``phi(t) . beta`` with ``beta``
-  drawn from ``N(0, S)``: ``S`` is the **run covariance** of the ground (how runs of a
+  basis* of the motion, per side ``phi(t) = [|I(t)|, 1, m, m * outer]`` while moving (zero
+  standing still) with ``I`` the predicted current, ``m = tanh(|omega| / turn_scale)``
+  (0 straight, 1 turning) and ``outer`` 1 on the outer side of a turn: a gain on the
+  predicted current plus the terms in which a nominal physics model is affine in its
+  ground parameters (rolling resistance adds a constant current while moving, lateral
+  friction one while turning, mostly on the outer side). One gain per side — the baseline
+  every update is compared with — is the special case ``[g - 1, 0, 0, 0]``. (Measured on
+  the shared logs against a purely additive basis ``[1, |v|, m, m * outer]`` and a purely
+  relative one, ``|I|`` times it: the additive one forecast snow best but a new ground's
+  p90 worse than the gain, the relative one never worse than the gain but snow worst; this
+  one nests the gain and forecast flooring best.) A run's error is ``phi(t) . beta`` with
+  ``beta`` drawn from ``N(0, S)``: ``S`` is the **run covariance** of the ground (how runs of a
   known ground differ from the model, fitted per ground where it has runs enough, else
   pooled) plus, for a ground the model never drove, the **new-ground covariance** (how far
   a ground left out of the fit lies from a model fitted on the others). The spread
-  ``sqrt(phi S phi)`` is heteroscedastic in speed, turn rate and ground.
+  ``sqrt(phi S phi)`` is heteroscedastic in the current level, turn rate and ground.
 - a **per-sample** part (sensor noise, bumps): a standard deviation per side and regime
   (rest, straight, turning) with an integrated correlation time ``correlation_s``; over a
   stretch it averages out.
@@ -40,7 +46,7 @@ from ..logs import InteractionLog, rest_samples
 __all__ = ["REGIME_COLUMNS", "IntervalModel", "regime_design", "run_coefficients"]
 
 #: Columns of the regime basis (per side).
-REGIME_COLUMNS = ("offset A", "per |v| A s/m", "turning A", "outer turning A")
+REGIME_COLUMNS = ("gain - 1", "offset A", "turning A", "outer turning A")
 #: Ridge penalty of a run's regime coefficients, in seconds of data showing no residual: a
 #: regime the run never drove keeps a coefficient near 0 instead of an arbitrary one.
 RUN_RIDGE_S = 2.0
@@ -53,17 +59,19 @@ _MIN_GROUND_RUNS = 3  # a ground's own run covariance needs this many runs, else
 _MAX_LAGS = 50  # lags (drive samples) of the per-sample residual's autocorrelation (~8 s at 6.5 Hz)
 
 
-def regime_design(log: InteractionLog, side: int, turn_scale_radps: float) -> np.ndarray:
-    """``[1, |v|, m, m * outer]`` per moving sample for one side (0 left, 1 right), zero at rest; shape (N, 4).
+def regime_design(log: InteractionLog, side: int, turn_scale_radps: float, level_a: np.ndarray) -> np.ndarray:
+    """``[|I|, 1, m, m * outer]`` per moving sample for one side (0 left, 1 right), zero at rest; shape (N, 4).
 
-    Standing still is the model's rest level (:func:`energy.logs.rest_samples`), not a
-    regime of driving: its spread is the per-sample one.
+    ``level_a`` is the model's predicted current of that side (N,). Standing still is the
+    model's rest level (:func:`energy.logs.rest_samples`), not a regime of driving: its
+    spread is the per-sample one.
     """
     m = np.tanh(np.abs(log.omega_radps) / turn_scale_radps)
     sign = -1.0 if side == 0 else 1.0
     outer = (sign * log.omega_radps > 0).astype(np.float64)
     moving = (~rest_samples(log)).astype(np.float64)
-    return np.column_stack([np.ones(len(log)), np.abs(log.v_mps), m, m * outer]) * moving[:, None]
+    level = np.abs(np.asarray(level_a, dtype=np.float64))
+    return np.column_stack([level, np.ones(len(log)), m, m * outer]) * moving[:, None]
 
 
 def sample_weights_s(log: InteractionLog) -> np.ndarray:
@@ -71,14 +79,20 @@ def sample_weights_s(log: InteractionLog) -> np.ndarray:
     return np.gradient(log.time_s) if len(log) > 1 else np.ones(len(log))
 
 
-def run_coefficients(log: InteractionLog, residual_a: np.ndarray, turn_scale_radps: float,
+def run_coefficients(log: InteractionLog, residual_a: np.ndarray, level_a: np.ndarray, turn_scale_radps: float,
                      ridge_s: float = RUN_RIDGE_S) -> np.ndarray:
-    """Per side, the regime coefficients of a residual current (time-weighted ridge fit), shape (2, 4)."""
+    """Per side, the regime coefficients of a residual current (time-weighted ridge fit), shape (2, 4).
+
+    ``level_a`` (N, 2) are the predictions the residual is of (the gain column's scale); the
+    gain's penalty is on the scale of the mean squared level, the others' in A².
+    """
     w = sample_weights_s(log)
     out = np.zeros((2, len(REGIME_COLUMNS)))
     for k in range(2):
-        x = regime_design(log, k, turn_scale_radps)
-        a = (x * w[:, None]).T @ x + ridge_s * np.eye(x.shape[1])
+        x = regime_design(log, k, turn_scale_radps, level_a[:, k])
+        scale = np.ones(x.shape[1])
+        scale[0] = max(float(np.average(level_a[:, k] ** 2, weights=w)), 0.25)
+        a = (x * w[:, None]).T @ x + ridge_s * np.diag(scale)
         out[k] = np.linalg.solve(a, (x * w[:, None]).T @ residual_a[:, k])
     return out
 
@@ -154,23 +168,26 @@ class IntervalModel:
 
     # ------------------------------------------------------------------ fit
     @classmethod
-    def fit(cls, logs: Sequence[InteractionLog], residuals_a: Sequence[np.ndarray], *,
-            cross_validated: bool, new_ground_residuals: Mapping[str, Sequence[tuple[InteractionLog, np.ndarray]]] | None = None,
+    def fit(cls, logs: Sequence[InteractionLog], residuals_a: Sequence[np.ndarray], predictions_a: Sequence[np.ndarray], *,
+            cross_validated: bool,
+            new_ground_residuals: Mapping[str, Sequence[tuple[InteractionLog, np.ndarray, np.ndarray]]] | None = None,
             turn_scale_radps: float = DEFAULT_TURN_SCALE_RADPS) -> IntervalModel:
         """Spreads from the residuals ``truth - prediction`` (N, 2) of each training log.
 
         Parameters
         ----------
-        logs, residuals_a
-            Training logs and their out-of-fold residual currents (A).
+        logs, residuals_a, predictions_a
+            Training logs, their out-of-fold residual currents and the predictions they are
+            residuals of (A, (N, 2) each; the basis is relative to the predictions).
         cross_validated : bool
             Whether the residuals are out-of-fold.
-        new_ground_residuals : mapping of ground to [(log, residual)], optional
-            Per training ground, residuals of a model fitted without that ground (two grounds
-            or more give the new-ground covariance).
+        new_ground_residuals : mapping of ground to [(log, residual, prediction)], optional
+            Per training ground, residuals (and predictions) of a model fitted without that
+            ground (two grounds or more give the new-ground covariance).
         turn_scale_radps : float
         """
-        coefs = np.stack([run_coefficients(lg, r, turn_scale_radps) for lg, r in zip(logs, residuals_a)])
+        coefs = np.stack([run_coefficients(lg, r, p, turn_scale_radps)
+                          for lg, r, p in zip(logs, residuals_a, predictions_a)])
         labels = [str(lg.meta.ground_label).lower() if lg.meta.ground_label is not None else None for lg in logs]
         run_cov = {_POOLED: _shrunk(_second_moment(coefs), coefs.shape[0])}
         for g in sorted({lb for lb in labels if lb is not None}):
@@ -182,8 +199,8 @@ class IntervalModel:
         wt = np.zeros(len(SAMPLE_REGIMES))
         acov = np.zeros(_MAX_LAGS + 1)
         dts = []
-        for lg, r, b in zip(logs, residuals_a, coefs):
-            e = np.column_stack([r[:, k] - regime_design(lg, k, turn_scale_radps) @ b[k] for k in range(2)])
+        for lg, r, p, b in zip(logs, residuals_a, predictions_a, coefs):
+            e = np.column_stack([r[:, k] - regime_design(lg, k, turn_scale_radps, p[:, k]) @ b[k] for k in range(2)])
             reg = _regime_of(lg, turn_scale_radps)
             for j in range(len(SAMPLE_REGIMES)):
                 sel = reg == j
@@ -201,8 +218,8 @@ class IntervalModel:
         if new_ground_residuals is not None and len(new_ground_residuals) >= 2:
             means = []
             for pairs in new_ground_residuals.values():
-                b = np.stack([run_coefficients(lg, r, turn_scale_radps) for lg, r in pairs])
-                w = np.array([lg.duration_s for lg, _ in pairs])
+                b = np.stack([run_coefficients(lg, r, p, turn_scale_radps) for lg, r, p in pairs])
+                w = np.array([lg.duration_s for lg, _, _ in pairs])
                 means.append(np.tensordot(w / w.sum(), b, axes=1))
             # a handful of grounds cannot tell how the columns co-vary: keep the variances only
             new_cov = _diagonal(_second_moment(np.stack(means)))
@@ -222,10 +239,11 @@ class IntervalModel:
             cov = cov + self.new_ground_cov
         return cov
 
-    def run_sd_a(self, log: InteractionLog, *, known: bool, cov: np.ndarray | None = None) -> np.ndarray:
-        """Run-level spread per sample and side (A), shape (N, 2); ``cov`` overrides the covariance."""
+    def run_sd_a(self, log: InteractionLog, mean_a: np.ndarray, *, known: bool, cov: np.ndarray | None = None) -> np.ndarray:
+        """Run-level spread per sample and side (A), shape (N, 2), of the forecast ``mean_a``; ``cov`` overrides the covariance."""
         c = self.covariance(log.meta.ground_label, known=known) if cov is None else cov
-        return np.column_stack([_quadratic_sd(regime_design(log, k, self.turn_scale_radps), c[k]) for k in range(2)])
+        return np.column_stack([_quadratic_sd(regime_design(log, k, self.turn_scale_radps, mean_a[:, k]), c[k])
+                                for k in range(2)])
 
     def sample_sd(self, log: InteractionLog) -> np.ndarray:
         """Per-sample spread (A), shape (N, 2)."""

@@ -9,7 +9,6 @@ from energy import InteractionLog, InvalidParameterError, LogMeta, VibrationCurr
 from energy.evaluation.intervals import IntervalRecord, charge_record, coverage, plot_reliability
 from energy.models import AdaptedCurrentModel, LinearCurrentModel, log_currents
 from terrain.errors import DataError
-from energy.models.adaptation import choose_update
 from energy.models.config import estimator_preset
 from energy.models.forecast import CurrentForecast, combine_ground_sds, normal_quantile
 from energy.logs import rest_samples
@@ -87,27 +86,34 @@ def test_interval_model_learns_the_run_to_run_spread_of_offsets():
         off = rng.normal(0.0, 0.8)  # a run-level offset of 0.8 A sd, plus per-sample noise
         logs.append(lg)
         residuals.append(off + 0.2 * rng.standard_normal((len(lg), 2)))
-    iv = IntervalModel.fit(logs, residuals, cross_validated=True)
+    level = np.full((len(logs[0]), 2), 3.0)
+    iv = IntervalModel.fit(logs, residuals, [np.full((len(lg), 2), 3.0) for lg in logs], cross_validated=True)
     # the offset shows in the run spread of a straight-and-turning run; the sample noise in sample_sd
-    sd = iv.run_sd_a(logs[0], known=True)
+    sd = iv.run_sd_a(logs[0], level, known=True)
     assert np.median(sd) == pytest.approx(0.8, rel=0.3)
     assert 0.15 < iv.sample_sd_a[:, 1:].max() < 0.3  # 0.2 A, plus what the ridge leaves of the offset
     assert iv.new_ground_cov is None  # one ground: nothing to learn a new ground's spread from
     back = IntervalModel.from_plain(iv.to_plain())
-    np.testing.assert_allclose(back.run_sd_a(logs[0], known=True), sd)
+    np.testing.assert_allclose(back.run_sd_a(logs[0], level, known=True), sd)
     bad = iv.to_plain() | {"sample_sd_a": -np.ones((2, 3))}
     with pytest.raises(ValueError):
         IntervalModel.from_plain(bad)
 
 
-def test_run_coefficients_reproduce_a_known_offset():
+def test_run_coefficients_reproduce_a_known_offset_and_a_known_gain():
     lg = _log(3)
-    coef = run_coefficients(lg, np.full((len(lg), 2), 1.5), 0.3)
-    fitted = np.column_stack([regime_design(lg, k, 0.3) @ coef[k] for k in range(2)])
+    level = np.column_stack([lg.current_left_a, lg.current_right_a])
+    gain = run_coefficients(lg, 0.25 * level, level, 0.3)  # measured = 1.25 x predicted
+    moving = ~rest_samples(lg)
+    refit = np.column_stack([regime_design(lg, k, 0.3, level[:, k]) @ gain[k] for k in range(2)])
+    assert np.mean(np.abs(refit[moving] - 0.25 * level[moving])) < 0.05 * np.mean(level)
+    assert np.all(gain[:, 0] > 0.1)  # the gain column carries a good part of it
+    coef = run_coefficients(lg, np.full((len(lg), 2), 1.5), level, 0.3)
+    fitted = np.column_stack([regime_design(lg, k, 0.3, level[:, k]) @ coef[k] for k in range(2)])
     assert np.median(fitted) == pytest.approx(1.5, rel=0.05)
-    moving = ~rest_samples(lg)  # standing still is the rest level's, not a regime of driving
+    # standing still is the rest level's, not a regime of driving
     # the ridge spreads a constant over correlated columns: close to it on most samples, exact nowhere
-    assert np.mean(np.abs(fitted[moving] - 1.5)) < 0.1 and np.all(fitted[~moving] == 0.0)
+    assert np.mean(np.abs(fitted[moving] - 1.5)) < 0.15 and np.all(fitted[~moving] == 0.0)
 
 
 # ------------------------------------------------------- estimator with an interval
@@ -150,15 +156,6 @@ def test_bayes_update_learns_a_new_ground_offset_and_narrows_its_interval(two_gr
     assert same_run.coefficients_.shape == (2, 8)
     with pytest.raises(DataError, match="interval"):
         AdaptedCurrentModel(LinearCurrentModel().fit(new_runs), method="bayes").fit(prefix)
-
-
-def test_fallback_takes_the_gain_without_an_interval(two_ground_estimator):
-    est, _ = two_ground_estimator
-    run = _log(40, "c", offset_a=1.0)
-    lin = LinearCurrentModel().fit([_log(1)])
-    assert choose_update(lin, run.slice(0.0, 20.0)).method == "gain"
-    chosen = choose_update(est, run.slice(0.0, 20.0), scope="ground")
-    assert chosen.method in ("bayes", "gain") and chosen.scope == "ground"
 
 
 # ----------------------------------------------------------------- calibration
