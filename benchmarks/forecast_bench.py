@@ -104,6 +104,8 @@ def loo_fold(logs: list, i: int, name: str, adapt_s: float) -> dict[str, Any]:
     whole = np.ones(len(log), dtype=bool)
     recs = [_record("known ground, unadapted", log, name, fc, whole)]
     rows = []
+    whole_row = {"ground": str(log.meta.ground_label), "run": name,
+                 "unadapted": _err_pct(_charges(t, fc.mean_a, whole), _charges(t, truth, whole))}
     rest = t >= t[0] + adapt_s
     if t[-1] - (t[0] + adapt_s) >= 10.0:
         prefix = log.slice(float(t[0]), float(t[0] + adapt_s))
@@ -116,7 +118,7 @@ def loo_fold(logs: list, i: int, name: str, adapt_s: float) -> dict[str, Any]:
             if method == "bayes" and f is not None:
                 recs.append(_record(f"known ground, after {adapt_s:g} s", log, name, f, rest))
         rows.append(row)
-    return {"rows": rows, "records": [r.to_dict() for r in recs]}
+    return {"rows": rows, "whole": whole_row, "records": [r.to_dict() for r in recs]}
 
 
 def few_shot_fold(logs: list, names: list[str], ground: str) -> dict[str, Any]:
@@ -218,12 +220,15 @@ def main(argv: list[str] | None = None) -> int:
     wall = time.perf_counter() - t0
     few = [r for res in results[: len(grounds)] for r in res["rows"]]
     loo = [r for res in results[len(grounds):] for r in res["rows"]]
+    loo_whole = [res["whole"] for res in results[len(grounds):]]
     records = [IntervalRecord(**{k: v for k, v in d.items() if k != "z"}) for res in results for d in res["records"]]
     few_summary = {f"{T:g} s": summarise(few, T) for T in ADAPT_SECONDS}
     loo_summary = summarise(loo, None)
+    whole_summary = summarise(loo_whole, None)
     cov = coverage(records, DEFAULT_LEVELS)
     for T in ADAPT_SECONDS:
         _table(f"Few shots on a new ground, T = {T:g} s", few_summary[f"{T:g} s"])
+    _table("Leave one run out, the held-out run whole (no adaptation)", whole_summary)
     _table("Leave one run out, 20 s of the held-out run, scored on its remainder", loo_summary)
     print("\nCoverage of held-out whole-run charge (both sides):")
     print(f"{'group':<30}" + "".join(f"{k:>9}" for k in ("50 %", "80 %", "95 %", "n", "median |z|")))
@@ -245,7 +250,7 @@ def main(argv: list[str] | None = None) -> int:
     write_json_atomic(args.out, {
         "benchmark": "forecast_bench", "targets": TARGETS, "wall_s": wall, "workers": args.workers,
         "machine": {"cpus": os.cpu_count(), "python": platform.python_version()},
-        "few_shot": few_summary, "loo_adapt_20s": loo_summary, "coverage": cov,
+        "few_shot": few_summary, "loo_whole": whole_summary, "loo_adapt_20s": loo_summary, "coverage": cov,
         "few_shot_rows": few, "loo_rows": loo, "records": [r.to_dict() for r in records],
     })
     print(f"wrote {args.out}")

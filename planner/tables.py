@@ -102,17 +102,24 @@ def tabulate(
     InvalidParameterError
         The model returned arrays of other shapes.
     """
+    return _table_rows(model.energy_per_metre_j, model.turn_energy_j, speed_mps, grounds, labels,
+                       max_slope_rad=max_slope_rad, grade_samples=grade_samples, turn_samples=turn_samples, what="")
+
+
+def _table_rows(per_metre: Any, per_turn: Any, speed_mps: float, grounds: Sequence[Any], labels: Sequence[str], *,
+                max_slope_rad: float, grade_samples: int, turn_samples: int, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """``per_metre(speed, grades, ground) * sqrt(1 + grade**2)`` and ``per_turn(angles, ground)`` per ground row."""
     grades = grade_grid(max_slope_rad, grade_samples)
     angles = turn_grid(turn_samples)
     horizontal = np.sqrt(1.0 + grades**2)
     grade_table = np.empty((len(grounds), grades.size))
     turn_table = np.empty((len(grounds), angles.size))
     for i, ground in enumerate(grounds):
-        e = np.asarray(model.energy_per_metre_j(speed_mps, grades, ground), dtype=np.float64)
-        te = np.asarray(model.turn_energy_j(angles, ground), dtype=np.float64)
+        e = np.asarray(per_metre(speed_mps, grades, ground), dtype=np.float64)
+        te = np.asarray(per_turn(angles, ground), dtype=np.float64)
         if e.shape != grades.shape or te.shape != angles.shape:
             raise InvalidParameterError(
-                f"model returned shapes {e.shape!r} / {te.shape!r} for {grades.shape!r} grades / "
+                f"model returned {what}shapes {e.shape!r} / {te.shape!r} for {grades.shape!r} grades / "
                 f"{angles.shape!r} angles on ground {labels[i]!r}; expected the input shapes"
             )
         grade_table[i] = e * horizontal
@@ -142,22 +149,9 @@ def tabulate_spread(
     InvalidParameterError
         The model returned arrays of other shapes, or negative / non-finite spreads.
     """
-    grades = grade_grid(max_slope_rad, grade_samples)
-    angles = turn_grid(turn_samples)
-    horizontal = np.sqrt(1.0 + grades**2)
-    grade_sd = np.empty((len(grounds), grades.size))
-    turn_sd = np.empty((len(grounds), angles.size))
-    for i, ground in enumerate(grounds):
-        e = np.asarray(model.energy_per_metre_sd_j(speed_mps, grades, ground), dtype=np.float64)
-        te = np.asarray(model.turn_energy_sd_j(angles, ground), dtype=np.float64)
-        if e.shape != grades.shape or te.shape != angles.shape:
-            raise InvalidParameterError(
-                f"model returned spread shapes {e.shape!r} / {te.shape!r} for {grades.shape!r} grades / "
-                f"{angles.shape!r} angles on ground {labels[i]!r}; expected the input shapes"
-            )
-        grade_sd[i] = e * horizontal
-        turn_sd[i] = te
-    return grade_sd, turn_sd
+    return _table_rows(model.energy_per_metre_sd_j, model.turn_energy_sd_j, speed_mps, grounds, labels,
+                       max_slope_rad=max_slope_rad, grade_samples=grade_samples, turn_samples=turn_samples,
+                       what="spread ")
 
 
 def check_spread_tables(
