@@ -44,6 +44,7 @@ from .baselines import (
     LinearCurrentModel,
     PhysicsCurrentModel,
 )
+from .calibration import DEFAULT_INTERVAL_FOLDS, fit_interval
 from .forecast import ChargeForecast, CurrentForecast
 from .kinds import CURRENT_MODEL_KINDS, new_current_model
 from .loading import MODEL_CLASSES, load_current_model, model_class
@@ -89,6 +90,8 @@ __all__ = [
     "CurrentForecast",
     "ChargeForecast",
     "IntervalModel",
+    "fit_interval",
+    "DEFAULT_INTERVAL_FOLDS",
     "check_logs",
     "log_currents",
     "read_model_file",

@@ -248,7 +248,7 @@ class AdaptedCurrentModel(CurrentModel):
             raise DataError(f"method='bayes' needs a base model with a fitted interval; this {type(base).__name__} has "
                             f"none (refit it, or use method='regime')")
         ground = logs[0].meta.ground_label
-        known = bool(getattr(base, "knows_ground", lambda g: False)(ground))
+        known = base.knows_ground(ground)
         run_cov = interval.covariance(ground, known=True)
         if known:
             ground_cov = np.zeros_like(run_cov)
@@ -327,7 +327,7 @@ class AdaptedCurrentModel(CurrentModel):
             return CurrentForecast(log.time_s, mean, base_forecast.run_sd_a, base_forecast.sample_sd_a)
         base = self.base_model
         interval = base.interval_
-        known = bool(getattr(base, "knows_ground", lambda g: False)(log.meta.ground_label))
+        known = base.knows_ground(log.meta.ground_label)
         own = interval.run_sd_a(log, base_forecast.mean_a, known=known)
         ensemble = np.sqrt(np.maximum(base_forecast.run_sd_a**2 - own**2, 0.0))  # what the members disagree on
         _, cov = self._bayes_parts()
@@ -391,7 +391,8 @@ class AdaptedCurrentModel(CurrentModel):
     def _params_to_plain(self) -> dict[str, Any]:
         rec = self.base_model.to_record()
         p = self.get_params()
-        p["base"] = {"model_class": rec.model_class, "params": rec.params, "state": rec.state}
+        p["base"] = {"model_class": rec.model_class, "params": rec.params, "state": rec.state,
+                     "trained_on": rec.trained_on, "interval": rec.interval}
         return p
 
     @classmethod
@@ -401,7 +402,9 @@ class AdaptedCurrentModel(CurrentModel):
         target = model_class(b["model_class"])  # imports the estimator (torch) only for it
         if target is None:
             raise KeyError(f"unknown base model class {b['model_class']!r:.80}")
-        p["base"] = target.from_record(ModelRecord(b["model_class"], b["params"], b["state"]), "the adapted model's base")
+        record = ModelRecord(b["model_class"], b["params"], b["state"], trained_on=b.get("trained_on"),
+                             interval=b.get("interval"))  # absent in files from before they were recorded
+        p["base"] = target.from_record(record, "the adapted model's base")
         return p
 
     def _state(self) -> dict[str, Any]:

@@ -44,6 +44,7 @@ from terrain.errors import (
 
 from ..logs import InteractionLog
 from .forecast import CurrentForecast
+from .uncertainty import IntervalModel
 
 __all__ = [
     "CURRENT_MODEL_FORMAT",
@@ -121,6 +122,7 @@ class ModelRecord:
     versions: dict[str, Any] = field(default_factory=dict)
     format_version: int = CURRENT_MODEL_FORMAT_VERSION
     trained_on: dict[str, Any] | None = None
+    interval: dict[str, Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -221,6 +223,7 @@ def write_model_file(path: str | os.PathLike[str], record: ModelRecord) -> Path:
         "state": _encode(record.state, arrays),
         "versions": _encode(record.versions, arrays),
         "trained_on": _encode(record.trained_on, arrays),
+        "interval": _encode(record.interval, arrays),
     }
     with atomic_open(target, "wb") as fh, zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED) as archive:
         archive.writestr(_JSON_ENTRY, json.dumps(header, indent=1))
@@ -311,9 +314,11 @@ def read_model_file(path: str | os.PathLike[str]) -> ModelRecord:
             raise FileFormatError(f"{where}: the {key!r} entry must be a {kind.__name__}, got {type(data[key]).__name__}")
     versions = data.get("versions")
     trained_on = data.get("trained_on")
+    interval = data.get("interval")
     return ModelRecord(data["model_class"], data["params"], data["state"],
                        versions if isinstance(versions, dict) else {}, int(data["format_version"]),
-                       trained_on if isinstance(trained_on, dict) else None)
+                       trained_on if isinstance(trained_on, dict) else None,
+                       interval if isinstance(interval, dict) else None)
 
 
 # --------------------------------------------------------------------- contract
@@ -466,16 +471,34 @@ class CurrentModel:
 
     @property
     def gives_interval(self) -> bool:
-        """Whether :meth:`predict_distribution` returns non-zero spreads."""
-        return False
+        """Whether :meth:`predict_distribution` returns non-zero spreads (the model carries a fitted ``interval_``).
 
-    @property
-    def uses_vibration(self) -> bool:
-        """Whether predictions depend on the log's vertical acceleration (then a planner must feed a ground's vibration)."""
-        return False
+        The estimator fits one as it trains (its cross-validation ensemble); any other model
+        gets one from :func:`energy.models.fit_interval`.
+        """
+        self._check_fitted()
+        return getattr(self, "interval_", None) is not None
+
+    def knows_ground(self, ground: str | None) -> bool:
+        """Whether the model was trained on ``ground`` (case-insensitive; an unlabelled log counts as a new ground)."""
+        summary = getattr(self, "trained_on_", None)
+        if ground is None or summary is None:
+            return False
+        return str(ground).lower() in {g.lower() for g in summary.grounds}
 
     def _distribution(self, log: InteractionLog, mean: np.ndarray) -> CurrentForecast:
-        return CurrentForecast.point(log.time_s, mean)
+        interval = getattr(self, "interval_", None)
+        if interval is None:
+            return CurrentForecast.point(log.time_s, mean)
+        run = interval.run_sd_a(log, mean, known=self.knows_ground(log.meta.ground_label))
+        extra = self._model_spread_a(log)
+        if extra is not None:
+            run = np.sqrt(run**2 + extra**2)
+        return CurrentForecast(log.time_s, mean, run, interval.sample_sd(log))
+
+    def _model_spread_a(self, log: InteractionLog) -> np.ndarray | None:
+        """A spread the model itself sees on this log, (N, 2) A (the estimator: its members' disagreement); None."""
+        return None
 
     def score(self, logs: InteractionLog | Sequence[InteractionLog]) -> float:
         """Coefficient of determination R² of the per-sample currents, both sides pooled.
@@ -531,8 +554,10 @@ class CurrentModel:
         """
         self._check_fitted()
         summary = getattr(self, "trained_on_", None)
+        interval = getattr(self, "interval_", None)
         return ModelRecord(type(self).__name__, self._params_to_plain(), self._state(), self._versions(),
-                           trained_on=None if summary is None else summary.to_plain())
+                           trained_on=None if summary is None else summary.to_plain(),
+                           interval=None if interval is None else interval.to_plain())
 
     @classmethod
     def from_record(cls, record: ModelRecord, source: str = "the record") -> CurrentModel:
@@ -564,6 +589,11 @@ class CurrentModel:
             raise FileFormatError(f"{source}: the {name} state restores no fitted attribute")
         if record.trained_on is not None:
             model.trained_on_ = TrainingSummary.from_plain(record.trained_on)
+        if record.interval is not None:
+            try:
+                model.interval_ = IntervalModel.from_plain(record.interval)
+            except _FAILURES as exc:
+                raise FileFormatError(f"{source}: the forecast interval is incomplete or inconsistent: {exc}") from exc
         return model
 
     def save(self, path: str | os.PathLike[str]) -> Path:

@@ -64,7 +64,6 @@ from ..features import (
 )
 from ..logs import InteractionLog, rest_samples
 from .base import CurrentModel, ModelRecord, log_currents, package_versions
-from .forecast import CurrentForecast
 from .baselines import PhysicsCurrentModel
 from .config import EstimatorConfig, estimator_preset
 from .data import WindowDataset
@@ -323,7 +322,8 @@ class VibrationCurrentEstimator(CurrentModel):
             self.rest_current_a_ = self._rest_level(raw_logs)
             self.ground_vibration_ = _ground_vibration(raw_logs)
             self.member_folds_ = None if folds is None or len(networks) == 1 else folds
-            self.interval_ = self._fit_interval(raw_logs, cfg)
+            if self.member_folds_ is not None:  # out-of-fold residuals at no extra training
+                self.interval_ = self._fit_interval(raw_logs, cfg)
 
     def _fit_interval(self, logs: list[InteractionLog], cfg: EstimatorConfig) -> IntervalModel:
         """The spreads of the forecast from out-of-fold residuals (and the prior's leave-one-ground-out residuals)."""
@@ -410,31 +410,14 @@ class VibrationCurrentEstimator(CurrentModel):
         cfg = self._resolved_config()
         return bool(cfg.local_spectrum or cfg.run_features != "none")
 
-    @property
-    def gives_interval(self) -> bool:
-        """Whether the model carries fitted spreads (models saved before them do not)."""
-        self._check_fitted()
-        return getattr(self, "interval_", None) is not None
-
-    def _distribution(self, log: InteractionLog, mean: np.ndarray) -> CurrentForecast:
-        interval = getattr(self, "interval_", None)
-        if interval is None:
-            return CurrentForecast.point(log.time_s, mean)
+    def _model_spread_a(self, log: InteractionLog) -> np.ndarray:
+        """The members' disagreement on this log (A, (N, 2)): what the model does not know; 0 standing still."""
         with _threads(self.n_threads):
             grid = self._grid_log(log, self.rate_hz_, self.config_.resample_method)
             members = self._member_grid(grid, None)
         spread = np.column_stack([np.interp(log.time_s, grid.time_s, members[:, :, k].std(axis=0)) for k in range(2)])
         spread[rest_samples(log)] = 0.0
-        known = self.knows_ground(log.meta.ground_label)
-        run = np.sqrt(interval.run_sd_a(log, mean, known=known) ** 2 + spread**2)
-        return CurrentForecast(log.time_s, mean, run, interval.sample_sd(log))
-
-    def knows_ground(self, ground: str | None) -> bool:
-        """Whether the model was trained on ``ground`` (case-insensitive; an unlabelled log counts as a new ground)."""
-        summary = getattr(self, "trained_on_", None)
-        if ground is None or summary is None:
-            return False
-        return str(ground).lower() in {g.lower() for g in summary.grounds}
+        return spread
 
     def predict(self, log: InteractionLog) -> np.ndarray:
         """Predicted drive currents at the log's drive timestamps.
@@ -483,7 +466,6 @@ class VibrationCurrentEstimator(CurrentModel):
             "rest_current_a": None if self.rest_current_a_ is None else self.rest_current_a_.tolist(),
             "ground_vibration": {g: {"time_s": t, "accel_z_mps2": a} for g, (t, a) in self.ground_vibration_.items()},
             "member_folds": None if self.member_folds_ is None else np.asarray(self.member_folds_),
-            "interval": None if self.interval_ is None else self.interval_.to_plain(),
         }
 
     def _load_state(self, state: dict[str, Any]) -> None:
@@ -533,8 +515,6 @@ class VibrationCurrentEstimator(CurrentModel):
                 raise ValueError(f"the recorded vibration of ground {g!r} is not an increasing time series")
         folds = state.get("member_folds")  # absent in files from before the cross-validation ensemble
         self.member_folds_ = None if folds is None else np.asarray(folds, dtype=np.int64).reshape(-1)
-        interval = state.get("interval")
-        self.interval_ = None if interval is None else IntervalModel.from_plain(interval)
 
     def ground_vibration(self, ground: str) -> tuple[np.ndarray, np.ndarray] | None:
         """The vertical acceleration of ``ground`` kept from training (the longest run's first seconds), or None.

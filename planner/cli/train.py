@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from energy import CURRENT_MODEL_KINDS, new_current_model
+from energy.models import DEFAULT_INTERVAL_FOLDS, fit_interval
 from terrain import InvalidParameterError
 from terrain.atomic import check_output_path
 
@@ -31,6 +32,11 @@ def add_parser(sub: Any) -> None:
         help="torch threads while training the estimator or paper model (default: torch's own setting)",
     )
     train.add_argument("--quiet", action="store_true", help="no progress bar with the training loss")
+    train.add_argument(
+        "--interval-folds", type=int, default=DEFAULT_INTERVAL_FOLDS, metavar="K",
+        help="the forecast interval of a model other than the estimator (whose ensemble gives its own): refit it K "
+             f"times leaving runs out, and once per ground left out (default {DEFAULT_INTERVAL_FOLDS}; 0: no interval)",
+    )
     add_band_option(train)
     train.set_defaults(run=run_train)
 
@@ -56,12 +62,18 @@ def run_train(args: argparse.Namespace) -> int:
     model = new_current_model(args.model, seed=args.seed, progress=learned and not args.quiet, n_threads=args.threads,
                               band_hz=band_hz)
     logs = logs_from_args(args, require_currents=True)
+    if args.interval_folds < 0 or args.interval_folds == 1:
+        raise InvalidParameterError(f"--interval-folds must be 0 (no interval) or >= 2, got {args.interval_folds}")
     t0 = time.perf_counter()
-    model.fit(logs)
+    if learned or args.interval_folds == 0 or len(logs) < 2:
+        model.fit(logs)
+    else:
+        fit_interval(model, logs, folds=args.interval_folds)
     elapsed = time.perf_counter() - t0
     path = model.save(args.out)
     band = getattr(getattr(model, "config_", None), "band_hz", None)
     band_text = f", vibration band {band[0]:g}-{band[1]:g} Hz" if band is not None else ""
+    interval = "with a forecast interval" if model.gives_interval else "without a forecast interval"
     print(f"fitted {args.model} on {len(logs)} runs ({sum(log.duration_s for log in logs):.0f} s of logs{band_text}) "
-          f"in {elapsed:.1f} s; wrote {path}")
+          f"{interval} in {elapsed:.1f} s; wrote {path}")
     return 0

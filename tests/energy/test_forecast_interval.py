@@ -7,7 +7,7 @@ import pytest
 
 from energy import InteractionLog, InvalidParameterError, LogMeta, VibrationCurrentEstimator, load_current_model
 from energy.evaluation.intervals import IntervalRecord, charge_record, coverage, plot_reliability
-from energy.models import AdaptedCurrentModel, LinearCurrentModel, log_currents
+from energy.models import AdaptedCurrentModel, LinearCurrentModel, fit_interval, log_currents
 from terrain.errors import DataError
 from energy.models.config import estimator_preset
 from energy.models.forecast import CurrentForecast, combine_ground_sds, normal_quantile
@@ -176,3 +176,25 @@ def test_charge_record_scores_a_model_forecast(two_ground_estimator):
     rec = charge_record(est, logs[1], group="known", run="r1")
     assert rec.sd_as > 0 and rec.true_as > 0
     assert abs(rec.z) < 5
+
+
+def test_fit_interval_gives_any_model_a_cross_validated_interval(tmp_path):
+    logs = [_log(s, "a", offset_a=0.3 * (s % 3)) for s in range(6)] + [_log(20 + s, "b", gain=1.3) for s in range(6)]
+    lin = fit_interval(LinearCurrentModel(), logs, folds=3)
+    assert lin.gives_interval and lin.interval_.cross_validated and lin.interval_.new_ground_cov is not None
+    known = lin.predict_distribution(logs[0]).charge()
+    assert known.total_sd_as > 0
+    np.testing.assert_allclose(lin.predict_distribution(logs[0]).mean_a, lin.predict(logs[0]))
+    unseen = dataclasses.replace(logs[0], meta=dataclasses.replace(logs[0].meta, ground_label="c"))
+    assert lin.predict_distribution(unseen).charge().total_sd_as > known.total_sd_as
+    back = load_current_model(lin.save(tmp_path / "lin.zip"))
+    assert back.gives_interval
+    assert back.predict_distribution(logs[0]).charge().total_sd_as == pytest.approx(known.total_sd_as)
+    adapted = back.adapt(logs[1].slice(0.0, 20.0), method="bayes")
+    again = load_current_model(adapted.save(tmp_path / "adapted.zip"))  # the base's interval travels with it
+    assert again.gives_interval
+    np.testing.assert_allclose(again.predict_distribution(logs[2]).run_sd_a, adapted.predict_distribution(logs[2]).run_sd_a)
+    with pytest.raises(DataError, match="at least 2"):
+        fit_interval(LinearCurrentModel(), logs[:1])
+    with pytest.raises(InvalidParameterError):
+        fit_interval(adapted, logs)
