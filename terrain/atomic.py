@@ -19,7 +19,7 @@ import os
 import re
 import shutil
 import tempfile
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, Any
@@ -38,6 +38,8 @@ __all__ = [
     "stale_temporaries",
     "remove_stale_temporaries",
     "check_output_path",
+    "refuse_overwriting_inputs",
+    "probe_writable",
 ]
 
 #: Permissions of written files (``mkstemp`` alone would leave them owner-only, 0600).
@@ -151,6 +153,75 @@ def check_output_path(path: str | os.PathLike[str], name: str = "path", *, direc
             if not parent.is_dir():
                 raise InvalidParameterError(f"{name} {str(target)!r} lies under {str(parent)!r}, which is a file")
             break
+    return target
+
+
+def _resolved(path: Path) -> Path:
+    try:
+        return path.resolve()
+    except (OSError, RuntimeError):  # a loop of symlinks: compare as given
+        return path.absolute()
+
+
+def refuse_overwriting_inputs(outputs: Iterable[str | os.PathLike[str]],
+                              inputs: Iterable[str | os.PathLike[str] | None], name: str = "--out") -> None:
+    """Refuse, before any work, an output that is (or would replace) one of the command's inputs.
+
+    An output file equal to an input file (the same path once resolved, or the same file on
+    disk through another link) and an output folder that is an input folder are refused;
+    ``None`` inputs (flags not given) are skipped.
+
+    Raises
+    ------
+    InvalidParameterError
+        Naming both paths.
+    """
+    from .errors import InvalidParameterError
+
+    ins = [Path(p) for p in inputs if p is not None]
+    for out in (Path(o) for o in outputs):
+        r_out = _resolved(out)
+        for inp in ins:
+            same = r_out == _resolved(inp)
+            if not same and out.exists() and inp.exists():
+                try:
+                    same = os.path.samefile(out, inp)
+                except OSError:
+                    same = False
+            if same:
+                raise InvalidParameterError(
+                    f"{name}: writing {str(out)!r} would replace the input {str(inp)!r}; give another output"
+                )
+
+
+def probe_writable(directory: str | os.PathLike[str], name: str = "--out") -> Path:
+    """Write and remove a probe file in ``directory``: an unwritable output fails now, not after the work.
+
+    Folders missing on the way are created for the probe and removed again, so a command that
+    fails later leaves nothing behind.
+
+    Raises
+    ------
+    InvalidParameterError
+        The folder cannot be created or written, naming it and the reason.
+    """
+    from .errors import InvalidParameterError
+
+    target = Path(directory)
+    created = [p for p in (target, *target.parents) if not p.exists()]
+    try:
+        target.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=".terrawatt-probe-", dir=target)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise InvalidParameterError(f"{name} {str(target)!r} is not writable: {exc.strerror or exc}") from exc
+    finally:
+        for folder in created:  # deepest first
+            try:
+                folder.rmdir()
+            except OSError:
+                break
     return target
 
 

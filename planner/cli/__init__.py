@@ -2,8 +2,10 @@
 
 Each subcommand module parses its flags, checks them (messages name the flags), checks its
 output paths before any work, calls public library functions and prints their result
-objects. Exit codes mean one thing each: 0 done, 1 no route / infeasible / does not fit,
-2 bad input (a user error is one line on stderr, never a traceback).
+objects. Exit codes mean one thing each (:data:`EXIT_CODES`): 0 done, 1 a valid negative
+answer (no route, infeasible, does not fit the battery, an error row in a batch), 2 bad input
+or usage (one line on stderr, never a traceback), 3 an internal error — a bug: one line
+saying so, the traceback with ``-v``.
 """
 
 from __future__ import annotations
@@ -11,21 +13,32 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
+import traceback
 from collections.abc import Sequence
 
 from terrain import TerrawattError
 
 from . import batch, diagnose, evaluate, mission, plan, predict, reach, train
 
-__all__ = ["main", "build_parser", "EXIT_OK", "EXIT_NOT_ACHIEVED", "EXIT_BAD_INPUT"]
+__all__ = ["main", "build_parser", "EXIT_OK", "EXIT_NOT_ACHIEVED", "EXIT_BAD_INPUT", "EXIT_INTERNAL", "EXIT_CODES"]
 
-#: Exit codes: done; no route, infeasible or does not fit; bad input.
-EXIT_OK, EXIT_NOT_ACHIEVED, EXIT_BAD_INPUT = 0, 1, 2
+#: Exit codes: done; a valid negative answer; bad input or usage; an internal error (a bug).
+EXIT_OK, EXIT_NOT_ACHIEVED, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
+#: What each exit code means (``--help`` prints it).
+EXIT_CODES = {
+    EXIT_OK: "done",
+    EXIT_NOT_ACHIEVED: "a valid negative answer: no route, infeasible, does not fit the battery, error rows in a batch",
+    EXIT_BAD_INPUT: "bad input or usage (one line on stderr)",
+    EXIT_INTERNAL: "internal error: a bug in terrawatt (one line; the traceback with -v)",
+}
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``terrawatt`` command."""
-    parser = argparse.ArgumentParser(prog="terrawatt", description="Energy-aware path planning for ground robots.")
+    parser = argparse.ArgumentParser(
+        prog="terrawatt", description="Energy-aware path planning for ground robots.",
+        epilog="exit codes: " + "; ".join(f"{code} {text}" for code, text in EXIT_CODES.items()),
+    )
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress")
     sub = parser.add_subparsers(dest="command", required=True)
     plan.add_parsers(sub)
@@ -43,7 +56,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``terrawatt`` console script; returns the exit code.
 
     Library errors (:class:`terrain.TerrawattError`) and operating-system errors (a missing
-    file, a folder without permission) are the user's input: one line on stderr, exit 2.
+    file, a folder without permission) are the user's input: one line on stderr, exit 2. Any
+    other exception is a bug: one line saying so (the traceback with ``-v``), exit 3 — so a
+    script can tell a crash from a valid "no".
     """
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -54,6 +69,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (TerrawattError, OSError) as exc:
         print(f"terrawatt: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except Exception as exc:  # noqa: BLE001 - the last line of defence: a bug, said so
+        if args.verbose:
+            traceback.print_exc()
+        where = "" if args.verbose else "; run with -v for the traceback"
+        print(f"terrawatt: internal error (a bug in terrawatt, please report it): {type(exc).__name__}: "
+              f"{str(exc)[:300]}{where}", file=sys.stderr)
+        return EXIT_INTERNAL
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -22,6 +22,7 @@ from .common import (
     check_outputs,
     check_positive,
     edge_cost_for,
+    input_paths,
     load_model_arg,
     max_slope_rad,
     read_map_args,
@@ -94,7 +95,7 @@ def run_batch(args: argparse.Namespace) -> int:
     """
     _check_flags(args)
     check_model_flags(args)
-    check_outputs(args.out, _OUTPUTS)
+    check_outputs(args.out, _OUTPUTS, input_paths(args))
     pairs = _read_pairs(args)
     if args.map == "example":
         tmap, label = example_map(), "bundled example map"

@@ -13,7 +13,7 @@ import numpy as np
 
 from energy import GROUND_PRESETS, CurrentModel, load_current_model, robot_preset
 from terrain import UNKNOWN_GROUND, InvalidParameterError, NodataError, TerrainMap, UnknownNameError
-from terrain.atomic import check_output_path
+from terrain.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
 from terrain.checks import fmt_number
 
 from ..edge_cost import EnergyCost
@@ -95,17 +95,51 @@ def read_map_args(args: argparse.Namespace) -> TerrainMap:
     return read_map_file(args.map, args.fill_nodata, getattr(args, "reproject", None), getattr(args, "cell_size", None))
 
 
-def check_outputs(directory: Path, files: Iterable[str] = ()) -> None:
-    """Before any work: ``directory`` can be a folder and each of ``files`` a file in it.
+def check_outputs(directory: Path, files: Iterable[str] = (), inputs: Iterable[Path | None] = ()) -> None:
+    """Before any work: ``directory`` can be a folder, each of ``files`` a file in it, none an input; it is writable.
+
+    ``inputs`` are the command's input paths (``None`` for a flag not given): no output may
+    be one of them or replace one, and the output folder may not be an input folder. The
+    folder is created and a probe file written and removed in it, so an unwritable output
+    fails now, in well under a second, not after the work.
 
     Raises
     ------
     InvalidParameterError
-        A path of the wrong kind (a file where the folder goes, a folder where a file goes).
+        A path of the wrong kind (a file where the folder goes, a folder where a file goes),
+        an output that would replace an input, an output folder that cannot be written.
     """
+    names = list(files)
+    ins = list(inputs)
     check_output_path(directory, "--out", directory=True)
-    for name in files:
+    for name in names:
         check_output_path(directory / name, f"--out {directory}: {name}")
+    refuse_overwriting_inputs([directory, *(directory / n for n in names)], ins)
+    probe_writable(directory)
+
+
+#: Flags whose values are input paths (a ``--model`` that names a kind, a ``--map example``, are not files).
+INPUT_FLAGS = ("map", "data", "pairs", "sites", "model", "calibration_data")
+
+
+def input_paths(args: argparse.Namespace) -> list[Path]:
+    """The input paths a command was given (the flags of :data:`INPUT_FLAGS` that name existing files or folders)."""
+    out = []
+    for flag in INPUT_FLAGS:
+        value = getattr(args, flag, None)
+        if value is None or value == "example":
+            continue
+        path = Path(value)
+        if path.exists():
+            out.append(path)
+    return out
+
+
+def check_output_file(path: Path, inputs: Iterable[Path | None] = (), flag: str = "--out") -> None:
+    """Before any work: ``path`` can be written as a file, is none of the inputs, and its folder is writable."""
+    check_output_path(path, flag)
+    refuse_overwriting_inputs([path], list(inputs), flag)
+    probe_writable(path.parent if str(path.parent) else Path("."), flag)
 
 
 def check_positive(flag: str, value: float | int) -> None:

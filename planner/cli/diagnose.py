@@ -27,7 +27,7 @@ from terrain import FigureWarning, InvalidParameterError, UnknownNameError
 from terrain.checks import check_seed, fmt_number
 from terrain.dask_client import client_worker_count, dask_client
 
-from .common import add_dask_options, add_map_options, check_dask_flags, check_outputs, read_map_args
+from .common import add_dask_options, add_map_options, check_dask_flags, check_outputs, input_paths, read_map_args
 from .data import add_data_options, logs_from_args
 
 __all__ = ["add_parser", "run_diagnose"]
@@ -186,7 +186,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     and a figure that fails is a warning on stderr, never a failed command.
     """
     _check_flags(args)
-    check_outputs(args.out, _OUTPUTS)
+    check_outputs(args.out, _OUTPUTS, input_paths(args))
     terrain = read_map_args(args) if args.map is not None else None
     logs = logs_from_args(args, require_currents=True)
     model, origin = _model(args, logs)

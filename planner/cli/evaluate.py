@@ -18,7 +18,7 @@ from terrain import InvalidParameterError
 from terrain.dask_client import dask_client
 
 from .band import LEARNED_KINDS, add_band_option, band_from_args
-from .common import add_dask_options, check_dask_flags, check_outputs, draw_figure
+from .common import add_dask_options, check_dask_flags, check_outputs, draw_figure, input_paths
 from .data import add_data_options, logs_from_args
 from .evaluate_adapt import ADAPT_OUTPUTS, adapt_settings_from_args, add_adapt_options, run_adapt_protocol
 
@@ -68,7 +68,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
         raise InvalidParameterError(
             f"--band applies to the estimator and paper models only, got --model {' '.join(args.models)}"
         )
-    check_outputs(args.out, _OUTPUTS if settings is None else ADAPT_OUTPUTS)
+    check_outputs(args.out, _OUTPUTS if settings is None else ADAPT_OUTPUTS, input_paths(args))
     with contextlib.ExitStack() as stack:
         client, workers = None, "1 worker (serial)"
         if args.workers > 1 or args.scheduler is not None:  # before reading: a missing extra or scheduler fails fast

@@ -30,6 +30,7 @@ from .common import (
     check_positive,
     draw_figure,
     edge_cost_for,
+    input_paths,
     load_model_arg,
     read_map_args,
 )
@@ -95,7 +96,7 @@ def run_mission(args: argparse.Namespace) -> int:
                                     "--monte-carlo N study; the adaptive mission does not take it yet")
     if args.mc_draw == "model" and args.model is None:
         raise InvalidParameterError("--mc-draw model draws from a saved model's predictive distribution: give --model FILE")
-    check_outputs(args.out, _OUTPUTS if args.monte_carlo is None else _MC_OUTPUTS)
+    check_outputs(args.out, _OUTPUTS if args.monte_carlo is None else _MC_OUTPUTS, input_paths(args))
     if args.map == "example":
         tmap, label = example_map(), "bundled example map"
         start = tuple(args.start) if args.start else EXAMPLE_START_XY_M

@@ -39,6 +39,7 @@ from .common import (
     check_positive,
     draw_figure,
     edge_cost_for,
+    input_paths,
     load_model_arg,
     max_slope_rad,
     read_map_args,
@@ -103,14 +104,14 @@ def _add_plan_options(p: argparse.ArgumentParser, *, default_time: float) -> Non
 
 def run_demo(args: argparse.Namespace) -> int:
     """``terrawatt demo``: plan on the bundled example map."""
-    check_outputs(args.out, _OUTPUTS)
+    check_outputs(args.out, _OUTPUTS, input_paths(args))
     check_model_flags(args)
     return _run(args, example_map(), EXAMPLE_START_XY_M, EXAMPLE_GOAL_XY_M, "bundled example map")
 
 
 def run_plan_command(args: argparse.Namespace) -> int:
     """``terrawatt plan``: plan on a map file."""
-    check_outputs(args.out, _OUTPUTS)
+    check_outputs(args.out, _OUTPUTS, input_paths(args))
     check_model_flags(args)
     if args.model is not None and (args.windowed or args.coarse_factor is not None):
         raise InvalidParameterError("--model plans on the whole map with --planner; it does not apply to "

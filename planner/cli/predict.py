@@ -15,7 +15,7 @@ from terrain import InvalidParameterError
 from terrain.atomic import write_json_atomic
 
 from .band import add_band_option, band_from_args
-from .common import check_outputs, draw_figure
+from .common import check_outputs, draw_figure, input_paths
 from .data import add_data_options, logs_from_args
 
 __all__ = ["add_parser", "run_predict"]
@@ -43,7 +43,7 @@ def add_parser(sub: Any) -> None:
 def run_predict(args: argparse.Namespace) -> int:
     """``terrawatt predict``: per-run charge errors of a saved model
     (:func:`energy.evaluation.score_current_model`), printed and written as JSON."""
-    check_outputs(args.out, ["predictions.json"])
+    check_outputs(args.out, ["predictions.json"], input_paths(args))
     if args.plots:
         check_outputs(args.out / "plots")
     band_hz = band_from_args(args)

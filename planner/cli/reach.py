@@ -25,6 +25,7 @@ from .common import (
     check_positive,
     draw_figure,
     edge_cost_for,
+    input_paths,
     load_model_arg,
     max_slope_rad,
     read_map_args,
@@ -92,7 +93,7 @@ def run_reach(args: argparse.Namespace) -> int:
     check_model_flags(args)
     slope_rad = max_slope_rad(args.max_slope_deg)
     # Both raster names are checked: which one is written depends on the map, read after the check.
-    check_outputs(args.out, ("reach.json", "reach.png", "reach.npz", "reach.tif"))
+    check_outputs(args.out, ("reach.json", "reach.png", "reach.npz", "reach.tif"), input_paths(args))
     robot = robot_preset(args.robot)
     if args.example:
         tmap, label = example_map(), "bundled example map"

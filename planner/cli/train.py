@@ -10,9 +10,9 @@ from typing import Any
 from energy import CURRENT_MODEL_KINDS, new_current_model
 from energy.models import DEFAULT_INTERVAL_FOLDS, fit_interval
 from terrain import InvalidParameterError
-from terrain.atomic import check_output_path
 
 from .band import LEARNED_KINDS, add_band_option, band_from_args
+from .common import check_output_file, input_paths
 from .data import add_data_options, logs_from_args
 
 __all__ = ["add_parser", "run_train"]
@@ -58,7 +58,7 @@ def run_train(args: argparse.Namespace) -> int:
     band_hz = band_from_args(args)
     if band_hz is not None and args.model not in LEARNED_KINDS:
         raise InvalidParameterError(f"--band applies to the estimator and paper models only, got --model {args.model!r}")
-    check_output_path(args.out, "--out")
+    check_output_file(args.out, input_paths(args))
     model = new_current_model(args.model, seed=args.seed, progress=learned and not args.quiet, n_threads=args.threads,
                               band_hz=band_hz)
     logs = logs_from_args(args, require_currents=True)

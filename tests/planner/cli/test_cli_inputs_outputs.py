@@ -1,0 +1,114 @@
+"""Tests of the CLI's safety rules: no command replaces its own input, unwritable outputs fail first, exit codes."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import planner.cli.plan as plan_cli
+from planner.cli import EXIT_BAD_INPUT, EXIT_CODES, EXIT_INTERNAL, build_parser, main
+from terrain.procedural import example_map
+
+FIXTURES = Path(__file__).resolve().parents[2] / "fixtures"
+
+
+def _err(capsys) -> str:
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and err.count("\n") == 1, err
+    return err
+
+
+def test_reach_refuses_an_output_that_would_replace_its_map(tmp_path, capsys):
+    out = tmp_path / "o"
+    out.mkdir()
+    src = example_map().save(out / "reach.npz")
+    before = src.read_bytes()
+    rc = main(["reach", "--map", str(src), "--depot", "10", "10", "--battery-ah", "5", "--out", str(out)])
+    assert rc == EXIT_BAD_INPUT
+    assert "would replace the input" in _err(capsys)
+    assert src.read_bytes() == before
+
+
+def test_batch_refuses_an_output_that_would_replace_its_pairs(tmp_path, capsys):
+    out = tmp_path / "o"
+    out.mkdir()
+    pairs = out / "batch.csv"
+    pairs.write_text("name,start_x_m,start_y_m,goal_x_m,goal_y_m\na,10,10,150,150\n")
+    before = pairs.read_bytes()
+    rc = main(["batch", "--map", "example", "--pairs", str(pairs), "--out", str(out), "--no-progress"])
+    assert rc == EXIT_BAD_INPUT
+    assert "would replace the input" in _err(capsys)
+    assert pairs.read_bytes() == before
+
+
+def test_train_refuses_to_write_its_model_over_its_data(tmp_path, capsys):
+    log = tmp_path / "log.csv"
+    shutil.copy(FIXTURES / "written_log.csv", log)
+    before = log.read_bytes()
+    rc = main(["train", "--data", str(log), "--model", "linear", "--out", str(log)])
+    assert rc == EXIT_BAD_INPUT
+    assert "would replace the input" in _err(capsys)
+    assert log.read_bytes() == before
+
+
+def test_diagnose_refuses_an_output_that_would_replace_its_model(tmp_path, capsys):
+    out = tmp_path / "o"
+    model = tmp_path / "m.zip"
+    assert main(["train", "--data", str(FIXTURES / "borealtc"), "--model", "linear", "--interval-folds", "0",
+                 "--out", str(model)]) == 0
+    out.mkdir()
+    inside = out / "corrected_model.zip"
+    shutil.copy(model, inside)
+    before = inside.read_bytes()
+    capsys.readouterr()
+    rc = main(["diagnose", "--model", str(inside), "--data", str(FIXTURES / "borealtc"), "--out", str(out)])
+    assert rc == EXIT_BAD_INPUT
+    assert "would replace the input" in _err(capsys)
+    assert inside.read_bytes() == before
+
+
+def test_an_unwritable_output_fails_before_any_work(tmp_path, capsys, monkeypatch):
+    import terrain.atomic as atomic
+
+    def no_write(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    planned = []
+    monkeypatch.setattr(atomic.tempfile, "mkstemp", no_write)
+    monkeypatch.setattr(plan_cli, "_run", lambda *a, **k: planned.append(1) or 0)
+    rc = main(["demo", "--out", str(tmp_path / "o")])
+    assert rc == EXIT_BAD_INPUT
+    assert "is not writable: Permission denied" in _err(capsys)
+    assert planned == []  # the planner never ran
+
+
+def test_an_internal_error_exits_3_with_one_line_and_the_traceback_under_v(tmp_path, capsys, monkeypatch):
+    def broken(*args, **kwargs):
+        raise ZeroDivisionError("a bug")
+
+    monkeypatch.setattr(plan_cli, "_run", broken)
+    assert main(["demo", "--out", str(tmp_path / "o")]) == EXIT_INTERNAL
+    err = _err(capsys)
+    assert "internal error (a bug in terrawatt" in err and "ZeroDivisionError: a bug" in err and "-v" in err
+    assert main(["-v", "demo", "--out", str(tmp_path / "o")]) == EXIT_INTERNAL
+    assert "Traceback" in capsys.readouterr().err
+
+
+def test_help_lists_the_exit_codes():
+    text = build_parser().format_help()
+    for code, meaning in EXIT_CODES.items():
+        assert f"{code} {meaning.split()[0]}" in " ".join(text.split())
+    assert np.array_equal(sorted(EXIT_CODES), [0, 1, 2, 3])
+
+
+def test_the_writability_probe_leaves_nothing_behind(tmp_path):
+    from terrain.atomic import probe_writable
+
+    probe_writable(tmp_path / "a" / "b")
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "kept").mkdir()
+    probe_writable(tmp_path / "kept")
+    assert list((tmp_path / "kept").iterdir()) == []
