@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from .containers import read_npz
 from .errors import FileFormatError, FormatVersionError
 
 __all__ = ["read_versioned_npz", "check_format_version"]
@@ -25,7 +26,7 @@ def check_format_version(found: Any, expected: int, what: str, path: str | os.Pa
     """
     try:
         version = int(found)
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:  # missing, text, inf
         raise FileFormatError(f"{what} file {str(path)!r} has no valid format version (got {found!r})") from exc
     if version != expected:
         raise FormatVersionError(
@@ -57,19 +58,16 @@ def read_versioned_npz(path: str | os.PathLike[str], *, magic: str, version: int
     Raises
     ------
     FileFormatError
-        Missing, corrupt (any failure to read the archive), not this kind of file, or without
-        a valid version.
+        Missing, corrupt (any failure to read the archive), content over the memory budget or
+        an entry whose header lies (:mod:`terrain.containers`), not this kind of file, or
+        without a valid version.
     FormatVersionError
         Another format version.
     """
     p = Path(path)
     if not p.is_file():
         raise FileFormatError(f"{what} file {str(p)!r} is missing (does not exist or is not a file)")
-    try:
-        with np.load(p, allow_pickle=False) as data:
-            content = {k: data[k] for k in data.files}
-    except Exception as exc:  # corrupt archives raise zipfile, zlib, EOF, TypeError (a .npy file), ...
-        raise FileFormatError(f"{what} file {str(p)!r} is corrupt or not a .npz file: {exc}") from exc
+    content = read_npz(p, what)  # sizes checked against the file and the memory budget before inflating
     found = content.get("__magic__")
     if found is None or found.shape != () or str(found.item()) != magic:
         raise FileFormatError(f"{str(p)!r} is a .npz file but not a terrawatt {what}")

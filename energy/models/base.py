@@ -26,6 +26,7 @@ import json
 import os
 import platform
 import zipfile
+import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,6 +35,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from terrain.atomic import atomic_open, check_output_path, remove_stale_temporaries
+from terrain.containers import check_zip_sizes, load_npy, read_zip_entry
 from terrain.errors import (
     DataError,
     FileFormatError,
@@ -191,17 +193,16 @@ def _encode(value: Any, arrays: list[np.ndarray]) -> Any:
     raise TypeError(f"cannot store a {type(value).__name__} in a current-model file")
 
 
-def _decode(value: Any, archive: zipfile.ZipFile) -> Any:
+def _decode(value: Any, archive: zipfile.ZipFile, where: str) -> Any:
     if isinstance(value, dict):
         if set(value) == {_ARRAY_KEY}:
             ref = value[_ARRAY_KEY]
             if not isinstance(ref, str):
                 raise TypeError(f"array reference {ref!r} is not an entry name")
-            with archive.open(ref) as fh:  # KeyError when the entry is missing
-                return np.load(io.BytesIO(fh.read()), allow_pickle=False)
-        return {k: _decode(v, archive) for k, v in value.items()}
+            return load_npy(read_zip_entry(archive, ref, where), where, f"entry {ref!r}")
+        return {k: _decode(v, archive, where) for k, v in value.items()}
     if isinstance(value, list):
-        return [_decode(v, archive) for v in value]
+        return [_decode(v, archive, where) for v in value]
     return value
 
 
@@ -290,20 +291,22 @@ def read_model_file(path: str | os.PathLike[str]) -> ModelRecord:
         raise FileFormatError(f"current-model file {where} does not exist or is not a file")
     try:
         with zipfile.ZipFile(p) as archive:
+            check_zip_sizes(archive, where)  # before anything is inflated
             names = set(archive.namelist())
             if _JSON_ENTRY in names:
-                data = json.loads(archive.read(_JSON_ENTRY).decode("utf-8"))
+                data = json.loads(read_zip_entry(archive, _JSON_ENTRY, where).decode("utf-8"))
                 if not isinstance(data, dict) or data.get("format") != CURRENT_MODEL_FORMAT:
                     raise FileFormatError(f"{where} is not a terrawatt current-model file (no format {CURRENT_MODEL_FORMAT!r})")
                 _check_version(where, data.get("format_version"), CURRENT_MODEL_FORMAT_VERSION)
-                data = {k: _decode(v, archive) for k, v in data.items()}
+                data = {k: _decode(v, archive, where) for k, v in data.items()}
             elif any(n.endswith("/data.pkl") for n in names):
                 data = None  # a torch checkpoint: format version 1
             else:
                 raise FileFormatError(f"{where} is not a terrawatt current-model file (no {_JSON_ENTRY!r} entry)")
     except FileFormatError:
         raise
-    except (zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, OSError, UnicodeDecodeError, *_FAILURES) as exc:
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, zlib.error, EOFError, OSError, UnicodeDecodeError, MemoryError,
+            *_FAILURES) as exc:
         raise FileFormatError(f"{where} is not a readable terrawatt current-model file: {exc}") from exc
     if data is None:
         data = _read_legacy(p, where)

@@ -488,6 +488,9 @@ class VibrationCurrentEstimator(CurrentModel):
         net_cfg = CurrentNetConfig(**nc)
         nets = []
         for weights in state["weights"]:
+            for name, value in weights.items():
+                if not np.all(np.isfinite(np.asarray(value, dtype=np.float64))):
+                    raise ValueError(f"network weight {name!r} holds non-finite values")
             net = CurrentNet(net_cfg, seed=0)  # every weight is replaced below
             net.load_state_dict({str(k): torch.from_numpy(np.asarray(v, dtype=np.float32)) for k, v in weights.items()})
             net.eval()

@@ -1,0 +1,153 @@
+"""Reading zip, ``.npz`` and ``.npy`` containers without trusting them.
+
+A container's header says how big its content is; a hostile or corrupt file lies. Every
+terrawatt reader of a zip archive (model files, map and registry ``.npz`` files) goes
+through here:
+
+- each entry's declared uncompressed size, and the sum over entries, must fit the memory
+  budget (:data:`MEMORY_BUDGET_BYTES`, ``TERRAWATT_MEMORY_BUDGET_BYTES`` in the environment)
+  before anything is inflated, and an entry is read with a hard cap at its declared size,
+  so a header that lies about it is caught instead of inflating without end;
+- an ``.npy`` entry's header (dtype and shape) must describe exactly the bytes that follow
+  (a 2⁴⁰-element shape over a few bytes is refused before any allocation), and object
+  dtypes (pickles) are refused;
+- every decoding failure (zlib, a bad zip, unicode, overflow, memory) becomes a
+  :class:`~terrain.errors.FileFormatError` naming the file and the entry.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import os
+import zipfile
+import zlib
+from typing import IO, Any
+
+import numpy as np
+
+from .errors import FileFormatError
+
+__all__ = ["MEMORY_BUDGET_BYTES", "memory_budget_bytes", "check_zip_sizes", "read_zip_entry", "load_npy", "read_npz"]
+
+#: Default memory budget of one container's content (bytes): 4 GiB.
+MEMORY_BUDGET_BYTES = 4 * 1024**3
+_DECODE_ERRORS = (zlib.error, zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, UnicodeDecodeError, OverflowError,
+                  MemoryError, ValueError, NotImplementedError, RuntimeError)
+
+
+def memory_budget_bytes() -> int:
+    """The budget in force: ``TERRAWATT_MEMORY_BUDGET_BYTES`` when set to a positive integer, else the default."""
+    raw = os.environ.get("TERRAWATT_MEMORY_BUDGET_BYTES", "")
+    try:
+        value = int(raw)
+    except ValueError:
+        return MEMORY_BUDGET_BYTES
+    return value if value > 0 else MEMORY_BUDGET_BYTES
+
+
+def _gib(n: int) -> str:
+    return f"{n / 1024**3:.3g} GiB" if n >= 1024**2 else f"{n} bytes"
+
+
+def check_zip_sizes(archive: zipfile.ZipFile, where: str, budget: int | None = None) -> None:
+    """Refuse an archive whose declared content (any entry, or all together) exceeds the budget.
+
+    Raises
+    ------
+    FileFormatError
+        Naming the file, the entry and both sizes.
+    """
+    limit = memory_budget_bytes() if budget is None else budget
+    total = 0
+    for info in archive.infolist():
+        if info.file_size > limit:
+            raise FileFormatError(f"{where}: entry {info.filename!r} declares {_gib(info.file_size)} uncompressed, "
+                                  f"more than the memory budget of {_gib(limit)}")
+        total += info.file_size
+    if total > limit:
+        raise FileFormatError(f"{where}: its entries declare {_gib(total)} uncompressed together, more than the "
+                              f"memory budget of {_gib(limit)}")
+
+
+def read_zip_entry(archive: zipfile.ZipFile, name: str, where: str) -> bytes:
+    """The bytes of entry ``name``, read with a hard cap at its declared size.
+
+    Raises
+    ------
+    FileFormatError
+        A missing entry, a stream that inflates past (or short of) its declared size, any
+        decoding error.
+    KeyError
+        Never: a missing entry is a FileFormatError naming it.
+    """
+    try:
+        info = archive.getinfo(name)
+    except KeyError as exc:
+        raise FileFormatError(f"{where} lacks the entry {name!r}") from exc
+    try:
+        fh: IO[bytes]
+        with archive.open(info) as fh:
+            data = fh.read(info.file_size + 1)
+    except _DECODE_ERRORS as exc:
+        raise FileFormatError(f"{where}: entry {name!r} is corrupt: {type(exc).__name__}: {exc}") from exc
+    if len(data) != info.file_size:
+        raise FileFormatError(f"{where}: entry {name!r} holds {len(data)} bytes, not the {info.file_size} its header "
+                              "declares")
+    return data
+
+
+def load_npy(data: bytes, where: str, field: str) -> np.ndarray:
+    """An ``.npy`` payload as an array, after checking that its header describes exactly its bytes.
+
+    Raises
+    ------
+    FileFormatError
+        Not an ``.npy`` payload, an object (pickled) dtype, a shape whose size differs from the
+        bytes present, any decoding error; the message names the file and ``field``.
+    """
+    buf = io.BytesIO(data)
+    try:
+        major, _ = np.lib.format.read_magic(buf)
+        if major == 1:
+            shape, _, dtype = np.lib.format.read_array_header_1_0(buf)
+        else:
+            shape, _, dtype = np.lib.format.read_array_header_2_0(buf)
+    except _DECODE_ERRORS + (TypeError, SyntaxError) as exc:
+        raise FileFormatError(f"{where}: {field} is not a readable .npy array: {exc}") from exc
+    if dtype.hasobject:
+        raise FileFormatError(f"{where}: {field} holds Python objects ({dtype}); terrawatt never loads pickles")
+    count = math.prod(int(n) for n in shape)
+    declared = count * dtype.itemsize
+    present = len(data) - buf.tell()
+    if declared != present:
+        raise FileFormatError(f"{where}: {field} declares shape {tuple(shape)} of {dtype} ({declared} bytes) but "
+                              f"holds {present} bytes")
+    buf.seek(0)
+    try:
+        return np.load(buf, allow_pickle=False)
+    except _DECODE_ERRORS + (TypeError,) as exc:
+        raise FileFormatError(f"{where}: {field} cannot be decoded: {exc}") from exc
+
+
+def read_npz(path: str | os.PathLike[str], what: str) -> dict[str, np.ndarray]:
+    """Every array of a ``.npz`` file, each checked as above (``what`` names the file kind in messages).
+
+    Raises
+    ------
+    FileFormatError
+        Not a zip archive, content over the memory budget, an entry that is not a checked
+        ``.npy`` array.
+    """
+    where = f"{what} file {str(path)!r}"
+    try:
+        archive = zipfile.ZipFile(path)
+    except (zipfile.BadZipFile, zipfile.LargeZipFile, OSError, EOFError, ValueError) as exc:
+        raise FileFormatError(f"{where} is corrupt or not a .npz file: {exc}") from exc
+    out: dict[str, Any] = {}
+    with archive:
+        check_zip_sizes(archive, where)
+        for name in archive.namelist():
+            key = name[:-4] if name.endswith(".npy") else name
+            out[key] = load_npy(read_zip_entry(archive, name, where), where, f"entry {name!r}")
+    return out

@@ -1,0 +1,109 @@
+"""Tests of terrain.containers: zip / .npz / .npy content checked before it is trusted."""
+
+from __future__ import annotations
+
+import io
+import json
+import zipfile
+
+import numpy as np
+import pytest
+
+from energy import LinearCurrentModel, load_current_model
+from energy.io import read_borealtc
+from terrain import FileFormatError, TerrainMap
+from terrain.containers import load_npy, read_npz
+
+from pathlib import Path
+
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"
+
+
+def _npy(arr: np.ndarray) -> bytes:
+    buf = io.BytesIO()
+    np.save(buf, arr, allow_pickle=False)
+    return buf.getvalue()
+
+
+def _rewrite(src: Path, dst: Path, replace: dict[str, bytes]) -> Path:
+    with zipfile.ZipFile(src) as a, zipfile.ZipFile(dst, "w", compression=zipfile.ZIP_DEFLATED) as b:
+        names = a.namelist()
+        for name in names:
+            b.writestr(name, replace.get(name, a.read(name)))
+        for name in set(replace) - set(names):
+            b.writestr(name, replace[name])
+    return dst
+
+
+def test_an_npy_header_declaring_a_huge_shape_is_refused_before_allocating():
+    data = _npy(np.zeros(4))
+    forged = data.replace(b"(4,)", b"(1099511627776,)")  # 2**40 elements over a few bytes
+    with pytest.raises(FileFormatError, match=r"declares shape \(1099511627776,\) of float64 \(8796093022208 bytes\) but holds"):
+        load_npy(forged, "f", "entry 'x'")
+    assert np.array_equal(load_npy(data, "f", "x"), np.zeros(4))
+
+
+def test_an_npy_with_python_objects_is_refused():
+    buf = io.BytesIO()
+    np.save(buf, np.array([{"a": 1}], dtype=object), allow_pickle=True)
+    with pytest.raises(FileFormatError, match="never loads pickles"):
+        load_npy(buf.getvalue(), "f", "x")
+
+
+@pytest.fixture(scope="module")
+def model_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("m") / "lin.zip"
+    return LinearCurrentModel().fit(read_borealtc(FIXTURES)).save(path)
+
+
+def test_a_model_file_over_the_memory_budget_is_refused_before_inflating(model_file, tmp_path, monkeypatch):
+    with zipfile.ZipFile(model_file) as a:
+        header = json.loads(a.read("model.json"))
+    big = _rewrite(model_file, tmp_path / "big.zip", {"arrays/99.npy": _npy(np.zeros(2_000_000))})  # 16 MB of zeros
+    assert big.stat().st_size < 200_000  # a small file that inflates 100 times
+    monkeypatch.setenv("TERRAWATT_MEMORY_BUDGET_BYTES", str(4_000_000))
+    with pytest.raises(FileFormatError, match="more than the memory budget"):
+        load_current_model(big)
+    assert header["format"] == "terrawatt-current-model"
+
+
+def test_a_corrupt_deflate_stream_is_a_file_format_error(model_file, tmp_path):
+    raw = bytearray(model_file.read_bytes())
+    with zipfile.ZipFile(model_file) as a:
+        info = a.getinfo("model.json")
+    start = info.header_offset + 30 + len(info.filename) + len(info.extra)
+    for k in range(start + 2, start + min(info.compress_size, 40)):
+        raw[k] ^= 0xFF
+    bad = tmp_path / "bad.zip"
+    bad.write_bytes(bytes(raw))
+    with pytest.raises(FileFormatError, match="bad.zip"):
+        load_current_model(bad)
+
+
+def test_a_map_whose_version_is_inf_is_a_file_format_error(tmp_path):
+    good = TerrainMap(np.zeros((4, 5)), 1.0).save(tmp_path / "m.npz")
+    content = read_npz(good, "map")
+    content["__version__"] = np.array(np.inf)
+    forged = tmp_path / "inf.npz"
+    np.savez_compressed(forged, **content)
+    with pytest.raises(FileFormatError, match="no valid format version"):
+        TerrainMap.load(forged)
+
+
+def test_nan_network_weights_do_not_load(tmp_path):
+    from energy import VibrationCurrentEstimator
+    from energy.models.config import estimator_preset
+
+    cfg = estimator_preset("default").replace(hidden_sizes=(4,), n_members=1, max_epochs=1, patience=None,
+                                              validation_fraction=0.0, physics_prior=None)
+    path = VibrationCurrentEstimator(cfg, seed=0).fit(read_borealtc(FIXTURES)).save(tmp_path / "e.zip")
+    with zipfile.ZipFile(path) as a:
+        header = json.loads(a.read("model.json"))
+    ref = header["state"]["weights"][0]
+    entry = next(iter(ref.values()))["__array__"]
+    with zipfile.ZipFile(path) as a:
+        arr = np.load(io.BytesIO(a.read(entry)))
+    arr = np.full_like(arr, np.nan)
+    bad = _rewrite(path, tmp_path / "nan.zip", {entry: _npy(arr)})
+    with pytest.raises(FileFormatError, match="non-finite"):
+        load_current_model(bad)
