@@ -44,7 +44,9 @@ bad input with a clear error instead of guessing:
 - an IMU whose vertical acceleration has gravity removed (median within
   +/-``GRAVITY_REMOVED_MAX_MPS2`` = 3 m/s^2 instead of about +9.81) is accepted:
   ``meta.gravity_removed`` is set and ``meta.notes`` says so (the vibration features remove
-  each segment's mean, so they do not need gravity).
+  each segment's mean, so they do not need gravity) — except a median of about 1
+  (``G_UNITS_BAND``): an IMU publishing in g, refused with a UnitError naming how to
+  declare the unit (CSV ``units={'accel_z': 'g'}``, bags ``accel_unit='g'``).
 - currents are optional where a source may lack them (a bag without current topics, a
   CSV without current columns): the log's ``has_currents`` is False and
   ``meta.missing_currents`` says what was missing; training and scoring refuse such logs

@@ -74,6 +74,8 @@ MAX_BATTERY_VOLTAGE_V = 200.0
 #: An IMU whose median vertical acceleration lies within +/- this (m/s^2) reports it with
 #: gravity removed (gravity included gives about +9.81, or 8.5 on a 30 deg slope).
 GRAVITY_REMOVED_MAX_MPS2 = 3.0
+#: |median| of a vertical acceleration that says "in g, gravity included" (1 g give or take a tilt).
+G_UNITS_BAND = (0.8, 1.25)
 
 #: Factors to SI of the units a reader accepts, per kind of quantity (the first is SI).
 UNIT_FACTORS: dict[str, dict[str, float]] = {
@@ -319,12 +321,21 @@ def bracket_accel(t_drive: np.ndarray, t_acc: np.ndarray) -> slice:
     return slice(ia, ib + 1)
 
 
-def gravity_note(name: str, accel_z_mps2: np.ndarray) -> str:
-    """A note when the vertical acceleration has gravity removed, else ``""``.
+def gravity_note(name: str, accel_z_mps2: np.ndarray, hint: str = "declare the acceleration's unit as g",
+                 check_g: bool = True) -> str:
+    """A note when the vertical acceleration has gravity removed, else ``""``; an IMU in g is refused.
 
     Gravity-free IMUs (e.g. a driver that publishes ``linear_acceleration`` minus gravity)
     give a median near 0 instead of about +9.81 m/s^2; the log is accepted (the vibration
-    features remove each segment's mean) and the note goes to its metadata.
+    features remove each segment's mean) and the note goes to its metadata. A median of
+    about 1 (within :data:`G_UNITS_BAND`) is an IMU publishing in g, gravity included: read as
+    m/s^2 its vibration would be ten times too small, so it is refused with ``hint`` (how
+    to declare the unit); ``check_g=False`` (the readers' ``check_units=False``) skips that.
+
+    Raises
+    ------
+    UnitError
+        The acceleration looks like it is in g.
 
     Examples
     --------
@@ -334,6 +345,11 @@ def gravity_note(name: str, accel_z_mps2: np.ndarray) -> str:
     ''
     """
     median = float(np.median(accel_z_mps2))
+    if check_g and G_UNITS_BAND[0] <= abs(median) <= G_UNITS_BAND[1]:
+        raise UnitError(
+            f"{name}: median {fmt_number(median, 3)} looks like an acceleration in g with gravity included "
+            f"(about 9.81 in m/s^2, about 0 with gravity removed); {hint}"
+        )
     if abs(median) >= GRAVITY_REMOVED_MAX_MPS2:
         return ""
     return (

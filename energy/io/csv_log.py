@@ -244,7 +244,7 @@ def read_csv_log(
     notes = [file_meta["notes"] or "", f"read from {src}", split_note]
     if file_meta["source"]:
         notes.append(f"original source: {file_meta['source']}")
-    gravity = gravity_note(colmap["accel_z"], ac["accel_z"])
+    gravity = gravity_note(colmap["accel_z"], ac["accel_z"], "declare it: units={'accel_z': 'g'}", check_units)
     if file_meta["gravity_removed"] is None and gravity:
         notes.append(gravity)
     declared = {f: u for f, u in units.items() if factors[f] != 1.0}

@@ -44,6 +44,8 @@ class BagTopics:
     voltage_field : str or None
         Battery voltage field of that status message (e.g. ``"battery_voltage"``).
     current_unit : {"A", "mA"}
+    accel_unit : {"m/s^2", "m/s2", "g"}
+        Unit of the IMU's ``linear_acceleration`` (some drivers publish g).
     drive_clock : {"currents", "velocity"}
         The drive stream on the current messages' times, or on the odometry's (currents
         interpolated onto them: a 1 Hz status message beside 10-50 Hz odometry).
@@ -67,6 +69,7 @@ class BagTopics:
     current_fields: tuple[str, str] | None = None
     voltage_field: str | None = None
     current_unit: str = "A"
+    accel_unit: str = "m/s^2"
     drive_clock: str = "currents"
 
     def __post_init__(self) -> None:
@@ -89,6 +92,7 @@ class BagTopics:
                     "too with current_fields (--current-fields)"
                 )
         check_choice("current_unit", self.current_unit, tuple(UNIT_FACTORS["current"]))
+        check_choice("accel_unit", self.accel_unit, tuple(UNIT_FACTORS["accel"]))
         check_choice("drive_clock", self.drive_clock, DRIVE_CLOCKS)
 
 
@@ -185,7 +189,7 @@ def read_logs(
         if LOG_SUFFIXES.get(item.suffix.lower()) == "csv":
             return read_csv_log(item, robot=None if robot == "unknown" else robot, ground_label=label, **common)
         return read_rosbag(item, bag.cmd_vel_topic, bag.imu_topic, bag.current_topics, current_fields=bag.current_fields,
-                           voltage_field=bag.voltage_field, current_unit=bag.current_unit,
+                           voltage_field=bag.voltage_field, current_unit=bag.current_unit, accel_unit=bag.accel_unit,
                            drive_clock=bag.drive_clock, robot=robot,
                            ground_label=label, **common)
 

@@ -93,6 +93,7 @@ def read_rosbag(
     drive_rate_hz: float = 10.0,
     drive_clock: str = "currents",
     current_unit: str = "A",
+    accel_unit: str = "m/s^2",
     robot: str = "unknown",
     ground_label: str | None = None,
     use_header_stamps: bool = True,
@@ -179,6 +180,11 @@ def read_rosbag(
     drive_clock : {"currents", "velocity"}
         Whose times the drive stream takes when the bag has currents (see Alignment).
     current_unit : {"A", "mA"}
+        Unit of the currents.
+    accel_unit : {"m/s^2", "m/s2", "g"}
+        Unit of the IMU's ``linear_acceleration`` (sensor_msgs/Imu says m/s^2; some drivers
+        publish g). An IMU whose vertical acceleration has a median of about 1 read as m/s^2
+        is refused (UnitError) rather than taken for a gravity-free one.
     robot, ground_label : metadata
     use_header_stamps : bool
     max_clock_offset_s : float
@@ -241,7 +247,9 @@ def read_rosbag(
     vcols = _velocity_columns(vel_type, [m for _, m in raw[cmd_vel_topic]])
     tv, vc, _ = clean_stream(src, cmd_vel_topic, secs[cmd_vel_topic], vcols, allow_gaps=allow_gaps or not measured, **clean)
     imu_msgs = [m for _, m in raw[imu_topic]]
-    icols = {"accel_z": np.array([m.linear_acceleration.z for m in imu_msgs], dtype=np.float64)}
+    check_choice("accel_unit", accel_unit, tuple(UNIT_FACTORS["accel"]))
+    icols = {"accel_z": np.array([m.linear_acceleration.z for m in imu_msgs], dtype=np.float64)
+             * UNIT_FACTORS["accel"][accel_unit]}
     if not all(float(m.angular_velocity_covariance[0]) == -1.0 for m in imu_msgs):
         icols["gyro_z"] = np.array([m.angular_velocity.z for m in imu_msgs], dtype=np.float64)
     else:
@@ -250,7 +258,9 @@ def read_rosbag(
     currents = _current_streams(src, cur_cols, secs, dict(allow_gaps=allow_gaps, **clean)) if present else None
     if check_units:
         _check_units(src, currents, opts.topics_cur, current_unit, (cmd_vel_topic, vc), (imu_topic, ti, ic))
-    gravity = gravity_note(f"{imu_topic} linear_acceleration.z", ic["accel_z"])
+    gravity = gravity_note(f"{imu_topic} linear_acceleration.z", ic["accel_z"],
+                           "give accel_unit='g' (CLI: --accel-unit g) for an IMU driver that publishes in g",
+                           check_units)
     if gravity:
         notes.append(gravity)
     log = align_streams(src, currents, (tv, vc, measured), (ti, ic), cmd_vel_timeout_s, opts.drive_rate_hz, notes,

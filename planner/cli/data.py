@@ -40,6 +40,8 @@ def add_data_options(parser: Any) -> None:
                       help="battery voltage field of that status message, e.g. battery_voltage")
     bags.add_argument("--current-unit", default=_DEFAULT.current_unit, choices=("A", "mA"),
                       help="unit of the bag's currents (default %(default)s)")
+    bags.add_argument("--accel-unit", default=_DEFAULT.accel_unit, choices=("m/s^2", "g"),
+                      help="unit of the bag's IMU linear_acceleration (default %(default)s; some drivers publish g)")
     bags.add_argument("--drive-clock", default=_DEFAULT.drive_clock, choices=DRIVE_CLOCKS,
                       help="drive samples at the current messages (default) or at the odometry messages, the "
                       "currents interpolated onto them (e.g. a 1 Hz status message beside 10-50 Hz odometry)")
@@ -62,6 +64,7 @@ def logs_from_args(args: argparse.Namespace, require_currents: bool, *, flag: st
         current_fields=None if args.current_fields is None else tuple(args.current_fields),
         voltage_field=args.voltage_field,
         current_unit=args.current_unit,
+        accel_unit=args.accel_unit,
         drive_clock=args.drive_clock,
     )
     path = getattr(args, flag.lstrip("-").replace("-", "_"))

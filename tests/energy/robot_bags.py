@@ -59,6 +59,7 @@ def write_robot_bag(
     status_hz: float | None = 10.0,
     cmd_vel: bool = False,
     gravity: bool = True,
+    in_g: bool = False,
     gyro: bool = True,
     duration_s: float = 6.0,
     seed: int = 0,
@@ -96,12 +97,14 @@ def write_robot_bag(
     msgs: list[tuple[int, str, str, object]] = []
     ti = ticks(imu_hz)
     az = (9.81 if gravity else 0.09) + 0.2 * rng.standard_normal(ti.size)
+    if in_g:  # a driver that publishes in g (the truth stays in m/s^2)
+        truth["az_published"] = az / 9.80665
     gz = 0.3 * np.sin(ti)
     truth.update(imu_t=ti, az=az, gz=gz)
     cov = np.zeros(9)
     gyro_cov = cov if gyro else np.r_[-1.0, np.zeros(8)]
     quat = T["geometry_msgs/msg/Quaternion"]
-    for t, a, g in zip(ti, az, gz):
+    for t, a, g in zip(ti, az / 9.80665 if in_g else az, gz):
         ns = BASE_NS + int(round(t * _S))
         m = T["sensor_msgs/msg/Imu"](
             header=header(ns), orientation=quat(x=0.0, y=0.0, z=0.0, w=1.0), orientation_covariance=cov,

@@ -230,3 +230,16 @@ def test_the_battery_power_of_a_log_uses_its_measured_voltage(bags):
     jackal = read_rosbag(bags["jackal"][0], "/odometry/filtered")
     with pytest.raises(DataError, match="log_battery_power_w needs measured drive currents"):
         log_battery_power_w(jackal, robot, current_convention="battery")
+
+
+@requires_rosbags
+def test_an_imu_publishing_in_g_is_refused_until_its_unit_is_given(tmp_path):
+    truth = write_robot_bag(tmp_path / "g.bag", in_g=True)
+    with pytest.raises(UnitError, match=r"looks like an acceleration in g.*--accel-unit g"):
+        read_rosbag(tmp_path / "g.bag", **HUSKY)
+    log = read_rosbag(tmp_path / "g.bag", **HUSKY, accel_unit="g")
+    assert not log.meta.gravity_removed
+    assert np.median(log.accel_z_mps2) == pytest.approx(np.median(truth["az"]), rel=2e-3)  # m/s^2 again
+    (via_layouts,) = read_logs(tmp_path / "g.bag", bag=BagTopics(**{**HUSKY, "current_topics": ("/status",)},
+                                                                 accel_unit="g"))
+    np.testing.assert_allclose(via_layouts.accel_z_mps2, log.accel_z_mps2)

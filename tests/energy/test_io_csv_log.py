@@ -438,3 +438,18 @@ def test_fuzz_csv_log_header(tmp_path, changes, raw):
 
 
 FUZZ_WRITTEN = Path(__file__).resolve().parents[1] / "fixtures" / "written_log.csv"
+
+
+def test_an_imu_column_in_g_is_refused_until_its_unit_is_declared(tmp_path):
+    t = np.arange(0.0, 4.0, 0.1)
+    ta = np.arange(0.0, 3.95, 0.01)
+    az_g = 1.0 + 0.02 * np.sin(ta * 40.0)  # an IMU publishing in g, gravity included
+    log = InteractionLog(t, np.full(t.size, 0.4), np.zeros(t.size), np.full(t.size, 2.0), np.full(t.size, 2.1),
+                         ta, az_g, meta=LogMeta(source="g.csv"))
+    path = write_csv_log(log, tmp_path / "g.csv")
+    with pytest.raises(UnitError, match=r"looks like an acceleration in g.*units=\{'accel_z': 'g'\}"):
+        read_csv_log(path)
+    fixed = read_csv_log(path, units={"accel_z": "g"})
+    np.testing.assert_allclose(fixed.accel_z_mps2, az_g * 9.80665)
+    assert not fixed.meta.gravity_removed
+    assert read_csv_log(path, check_units=False).meta.gravity_removed  # the user said: no unit checks
