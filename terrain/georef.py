@@ -122,6 +122,10 @@ def dem_band(src: Any, band: int | None, where: str, *, allow_geographic: bool =
     if not is_int or not 1 <= band <= src.count:
         raise InvalidParameterError(f"band must be an integer in 1..{src.count}, got {band!r}")
     band = int(band)
+    kind = np.dtype(src.dtypes[band - 1]).kind if src.dtypes[band - 1] in np.sctypeDict else "c"
+    if kind not in "iuf":  # complex (complex64, complex_int16...), bool, text: no elevations
+        raise FileFormatError(f"{where}: band {band} holds {src.dtypes[band - 1]} values; elevations are real "
+                              "numbers (integer or floating point)")
     transform, crs = src.transform, src.crs
     if transform.b != 0 or transform.d != 0:
         raise FileFormatError(

@@ -10,24 +10,28 @@ from typing import Any
 import numpy as np
 
 from .atomic import atomic_open, remove_stale_temporaries
-from .checks import check_int
+from .checks import check_int, fmt_number
 from .errors import (
     FileFormatError,
     GridMismatchError,
     InvalidParameterError,
     TerrawattError,
+    UnitError,
     UnknownNameError,
 )
 from .formats import read_versioned_npz
 from .grid import Grid
 from .surface import SURFACE_LAYERS, surface_layers
 
-__all__ = ["TerrainMap", "MAP_FORMAT_VERSION", "UNKNOWN_GROUND"]
+__all__ = ["TerrainMap", "MAP_FORMAT_VERSION", "UNKNOWN_GROUND", "MAX_ABS_ELEVATION_M"]
 
 #: Version of the ``.npz`` map format written by :meth:`TerrainMap.save`.
 MAP_FORMAT_VERSION = 1
 #: Ground-class value of cells whose ground is not known.
 UNKNOWN_GROUND = -1
+#: Largest |elevation| (m) a map accepts: 100 km, beyond the relief of any planet from its datum
+#: (a larger value is a nodata placeholder or another unit).
+MAX_ABS_ELEVATION_M = 1.0e5
 
 _DERIVED = SURFACE_LAYERS
 _MAP_MAGIC = "terrawatt-map"
@@ -103,6 +107,8 @@ class TerrainMap:
         obstacle: Any = None,
         crs: str | None = None,
     ) -> None:
+        if np.iscomplexobj(elevation_m):
+            raise InvalidParameterError("elevation_m holds complex numbers; elevations are real numbers (m)")
         try:
             elev = np.array(elevation_m, dtype=np.float64)
         except (TypeError, ValueError) as exc:
@@ -216,11 +222,19 @@ class TerrainMap:
                 f"layer {name!r} has shape {arr.shape!r}; this map's grid is {self.shape!r}"
             )
         if name == "elevation":
+            if np.iscomplexobj(arr) or arr.dtype.kind not in "biuf":
+                raise InvalidParameterError(f"elevation must hold real numbers (m), got dtype {arr.dtype}")
             arr = arr.astype(np.float64)
             if not np.all(np.isfinite(arr)):
                 n_bad = int(np.count_nonzero(~np.isfinite(arr)))
                 raise InvalidParameterError(
                     f"elevation has {n_bad} NaN/inf cells; fill nodata before building a TerrainMap"
+                )
+            if float(np.max(np.abs(arr))) > MAX_ABS_ELEVATION_M:
+                raise UnitError(
+                    f"elevation reaches {fmt_number(float(np.max(np.abs(arr))))} m, beyond the "
+                    f"{MAX_ABS_ELEVATION_M:g} m of any planetary relief: not elevations in metres (a nodata "
+                    "placeholder? millimetres?)"
                 )
             self._derived = {}
         elif name == "ground":

@@ -277,3 +277,30 @@ def test_a_mostly_vertical_dem_warns_but_is_read(rasterio, tmp_path):
         tmap = read_geotiff(path)
     np.testing.assert_array_equal(tmap.elevation_m, z[::-1])
 
+
+
+# -------------------------------------------------------------- hostile DEMs
+def test_a_complex_valued_dem_is_refused(rasterio, tmp_path):
+    data = (np.arange(20.0).reshape(4, 5) + 1j).astype(np.complex64)
+    path = write_raw(rasterio, tmp_path / "c.tif", data, north_up(rasterio, 0.0, 4.0, 1.0, 1.0))
+    with pytest.raises(FileFormatError, match="holds complex64 values; elevations are real"):
+        read_geotiff(path)
+    with pytest.raises(InvalidParameterError, match="complex"):
+        TerrainMap(data, 1.0)
+
+
+def test_a_sparse_dem_declaring_more_cells_than_memory_is_refused_before_reading(rasterio, tmp_path):
+    path = tmp_path / "huge.tif"
+    profile = dict(driver="GTiff", height=200_000, width=200_000, count=1, dtype="float32", tiled=True,
+                   blockxsize=256, blockysize=256, sparse_ok=True, compress="deflate",
+                   transform=north_up(rasterio, 0.0, 200_000.0, 1.0, 1.0), crs="EPSG:32633")
+    with rasterio.open(path, "w", **profile):
+        pass  # nothing written: a few kB declaring 4 * 10**10 cells
+    assert path.stat().st_size < 5_000_000
+    with pytest.raises(FileFormatError, match=r"declares 200000 x 200000 cells .* more than the memory budget"):
+        read_geotiff(path)
+
+
+def test_values_that_cannot_be_elevations_are_refused():
+    with pytest.raises(UnitError, match="not elevations in metres"):
+        TerrainMap(np.full((3, 3), 3.0e38), 1.0)
