@@ -7,12 +7,13 @@ extra, the timeout of an unreachable scheduler and the messages are the same eve
 
 from __future__ import annotations
 
+import concurrent.futures
 import contextlib
 import logging
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
-from terrain.checks import check_bool, check_int, check_real, check_text
+from terrain.checks import check_bool, check_int, check_real, check_text, fmt_number
 from terrain.errors import InvalidParameterError, OptionalDependencyError
 
 __all__ = ["dask_client", "check_client", "client_worker_count", "run_tasks", "DEFAULT_CONNECT_TIMEOUT_S"]
@@ -88,13 +89,7 @@ def dask_client(
         dask_log.setLevel(max(dask_log.getEffectiveLevel(), logging.WARNING))
     try:
         if scheduler is not None:
-            try:
-                client = Client(scheduler, timeout=timeout_s)
-            except (OSError, ValueError, TypeError) as exc:  # unreachable (TimeoutError is an OSError) or malformed
-                raise InvalidParameterError(
-                    f"{s_flag} {scheduler!r}: cannot connect to a dask scheduler there "
-                    f"({exc}); expected the address of a running scheduler, e.g. tcp://host:8786"
-                ) from exc
+            client = _connect(Client, scheduler, timeout_s, s_flag)
             with client:
                 yield client
         else:
@@ -103,6 +98,40 @@ def dask_client(
                 yield client
     finally:
         dask_log.setLevel(old_level)
+
+
+def _connect(client_class: Any, scheduler: str, timeout_s: float, s_flag: str) -> Any:
+    """``Client(scheduler)`` with one deadline over connect, handshake and first answer.
+
+    dask's own ``timeout`` covers the TCP connect, not a server that accepts and never
+    speaks (the handshake then waits forever) nor one that answers junk; the client is made
+    in a helper thread and abandoned when the deadline passes (``timeout_s`` plus 2 s for
+    dask's own start-up).
+    """
+    advice = "expected the address of a running dask scheduler, e.g. tcp://host:8786"
+    pool = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="terrawatt-dask-connect")
+    future = pool.submit(client_class, scheduler, timeout=timeout_s)
+    pool.shutdown(wait=False)  # never join a thread stuck in a handshake
+    try:
+        return future.result(timeout=timeout_s + 2.0)
+    except concurrent.futures.TimeoutError as exc:
+        future.add_done_callback(_close_late_client)
+        raise InvalidParameterError(
+            f"{s_flag} {scheduler!r}: no dask scheduler answered within {fmt_number(timeout_s)} s (a server that "
+            f"accepts the connection but never completes dask's handshake?); {advice}"
+        ) from exc
+    except Exception as exc:  # unreachable (TimeoutError is an OSError), malformed, junk answers (MemoryError...)
+        raise InvalidParameterError(
+            f"{s_flag} {scheduler!r}: cannot connect to a dask scheduler there ({type(exc).__name__}: "
+            f"{str(exc)[:200]}); {advice}"
+        ) from exc
+
+
+def _close_late_client(future: concurrent.futures.Future) -> None:
+    """Close a client whose connection completed after its deadline (nobody else will)."""
+    if not future.cancelled() and future.exception() is None:
+        with contextlib.suppress(Exception):
+            future.result().close()
 
 
 def check_client(client: Any, what: str = "tasks") -> Any:

@@ -267,6 +267,53 @@ def test_an_unreachable_scheduler_is_a_clear_error_after_the_timeout():
             pass
 
 
+class _Server:
+    """A TCP server on a free local port that accepts and then says ``reply`` (nothing: b"") and keeps the line open."""
+
+    def __init__(self, reply: bytes) -> None:
+        import threading
+
+        self.sock = socket.socket()
+        self.sock.bind(("127.0.0.1", 0))
+        self.sock.listen(4)
+        self.address = f"tcp://127.0.0.1:{self.sock.getsockname()[1]}"
+        self.reply, self.conns, self.stop = reply, [], threading.Event()
+        self.thread = threading.Thread(target=self._serve, daemon=True)
+        self.thread.start()
+
+    def _serve(self) -> None:
+        self.sock.settimeout(0.1)
+        while not self.stop.is_set():
+            try:
+                conn, _ = self.sock.accept()
+            except OSError:
+                continue
+            self.conns.append(conn)
+            if self.reply:
+                conn.sendall(self.reply)
+
+    def close(self) -> None:
+        self.stop.set()
+        self.thread.join()
+        for c in self.conns:
+            c.close()
+        self.sock.close()
+
+
+@pytest.mark.parametrize("reply", [b"", b"\xff" * 64 + b"not dask at all"], ids=["silent", "junk"])
+def test_a_scheduler_that_never_completes_the_handshake_is_a_clear_error_not_a_hang(reply):
+    pytest.importorskip("distributed", reason=_NO_DASK)
+    server = _Server(reply)
+    try:
+        with pytest.raises(InvalidParameterError, match=rf"scheduler '{server.address}': (no dask scheduler answered|"
+                                                        "cannot connect)"):
+            with dask_client(scheduler=server.address, timeout_s=0.5):
+                pass
+        assert server.conns  # it did connect: the deadline covered the handshake
+    finally:
+        server.close()
+
+
 def test_dask_client_refuses_workers_with_a_scheduler_and_names_the_missing_extra(monkeypatch):
     with pytest.raises(InvalidParameterError, match="--workers 2 and --scheduler 'tcp://h:1' exclude each other"):
         with dask_client(2, "tcp://h:1", flags=("--workers", "--scheduler")):
