@@ -8,11 +8,9 @@ import math
 import time
 from typing import Any
 
-import numpy as np
-
 from terrain.checks import check_bool, check_int, check_real, check_seed
 from terrain.dask_client import check_client, client_worker_count, dask_client
-from terrain.errors import InvalidParameterError, OutOfBoundsError, TerrawattError, UnknownNameError
+from terrain.errors import InvalidParameterError, TerrawattError, UnknownNameError
 
 from .batch_pairs import BatchPairs
 from .batch_result import BatchResult, BatchRow
@@ -87,18 +85,6 @@ def _shippable(cost: EnergyCost) -> EnergyCost:
     return shipped
 
 
-def _check_inside(cost: EnergyCost, pairs: BatchPairs) -> None:
-    """Every start and goal inside the map (a bad input for the whole batch, not one failed task)."""
-    for label, pts in (("start", pairs.starts_xy_m), ("goal", pairs.goals_xy_m)):
-        inside = np.asarray(cost.terrain.contains(pts[:, 0], pts[:, 1]), dtype=bool)
-        if not inside.all():
-            i = int(np.flatnonzero(~inside)[0])
-            raise OutOfBoundsError(
-                f"pair {pairs.names[i]!r}: {label} {tuple(pts[i].tolist())!r} m lies outside the map bounds "
-                f"{cost.terrain.bounds!r} ({int(np.count_nonzero(~inside))} {label}s outside)"
-            )
-
-
 def plan_batch(
     cost: EnergyCost,
     pairs: Any,
@@ -165,8 +151,6 @@ def plan_batch(
         budgets, seed or settings.
     UnknownNameError
         An unknown planner.
-    OutOfBoundsError
-        A start or goal outside the map (the message names the pair).
     OptionalDependencyError
         A cluster is asked for but dask.distributed is not installed.
 
@@ -200,7 +184,6 @@ def plan_batch(
             "client excludes workers and scheduler: give a distributed.Client, or workers=N for a local cluster, "
             "or scheduler=ADDRESS"
         )
-    _check_inside(cost, batch)
     opts = (planner, settings, time_limit_s, max_cost_evaluations, seed)
     with contextlib.ExitStack() as stack:
         where = "in process"

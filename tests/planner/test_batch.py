@@ -23,7 +23,6 @@ from planner import (
     FileFormatError,
     InvalidParameterError,
     OptionalDependencyError,
-    OutOfBoundsError,
     UnknownNameError,
     dask_client,
     plan_batch,
@@ -176,9 +175,10 @@ def test_sites_need_two_and_unique_names():
         BatchPairs.all_pairs([WEST, EAST], ["a", "a"])
 
 
-def test_a_point_outside_the_map_fails_the_batch_naming_the_pair(cost):
-    with pytest.raises(OutOfBoundsError, match=r"pair '1': goal \(55.0, 5.0\) m lies outside the map bounds"):
-        plan_batch(cost, [[*WEST, *EAST], [*WEST, 55.0, 5.0]], progress=False)
+def test_a_point_outside_the_map_is_an_error_row_like_any_failed_pair(cost):
+    res = plan_batch(cost, [[*WEST, *EAST], [*WEST, 55.0, 5.0]], progress=False)  # one rule for per-item failures
+    assert [r.status for r in res.rows] == ["exact", "error"]
+    assert res.rows[1].error.startswith("OutOfBoundsError") and "outside" in res.rows[1].error
 
 
 def _write(path, text):
