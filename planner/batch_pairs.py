@@ -126,20 +126,32 @@ def _points(name: str, value: Any) -> np.ndarray:
     return arr
 
 
+#: Largest points table (pairs, sites) read (bytes).
+MAX_TABLE_BYTES = 64 * 1024**2
+
+
 def _read_table(path: str | os.PathLike[str], required: Sequence[str], what: str) -> tuple[list[str] | None, np.ndarray]:
     """The optional ``name`` column and the ``required`` numeric columns of a CSV file."""
     p = Path(path)
-    with open(p, newline="", encoding="utf-8-sig") as fh:
-        reader = csv.DictReader(fh)
-        header = [h.strip() for h in (reader.fieldnames or [])]
-        missing = [c for c in required if c not in header]
-        if missing:
-            raise FileFormatError(
-                f"{what} file {p.name!r} lacks the column(s) {missing!r}; it has {header!r}; expected a header with "
-                f"{list(required)!r} (and optionally 'name')"
-            )
-        reader.fieldnames = header
-        rows = list(reader)
+    if p.exists() and not p.is_file():  # a FIFO or a device would block or never end (a missing file: OSError)
+        raise FileFormatError(f"{what} file {str(p)!r} is not a regular file")
+    if p.is_file() and p.stat().st_size > MAX_TABLE_BYTES:
+        raise FileFormatError(f"{what} file {str(p)!r} holds {p.stat().st_size} bytes; a table of points is at most "
+                              f"{MAX_TABLE_BYTES // 1024**2} MiB")
+    try:
+        with open(p, newline="", encoding="utf-8-sig") as fh:
+            reader = csv.DictReader(fh)
+            header = [h.strip() for h in (reader.fieldnames or [])]
+            missing = [c for c in required if c not in header]
+            if missing:
+                raise FileFormatError(
+                    f"{what} file {p.name!r} lacks the column(s) {missing!r}; it has {header!r}; expected a header "
+                    f"with {list(required)!r} (and optionally 'name')"
+                )
+            reader.fieldnames = header
+            rows = list(reader)
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise FileFormatError(f"{what} file {p.name!r} is not a UTF-8 CSV table: {exc}") from exc
     if not rows:
         raise DataError(f"{what} file {p.name!r} has a header but no rows")
     values = np.empty((len(rows), len(required)))

@@ -184,6 +184,9 @@ def read_logs(
     common = dict(repair=repair, allow_gaps=allow_gaps, gap_factor=gap_factor, check_units=check_units)
     if not root.exists():
         raise DataError(f"{name} {str(root)!r} does not exist; expected a log file or a folder of logs")
+    if not (root.is_file() or root.is_dir()):  # a FIFO, a socket, a device: reading would block or never end
+        raise DataError(f"{name} {str(root)!r} is neither a regular file nor a folder; expected a log file or a "
+                        "folder of logs")
 
     def one(item: Path, label: str | None = ground_label) -> InteractionLog:
         if LOG_SUFFIXES.get(item.suffix.lower()) == "csv":

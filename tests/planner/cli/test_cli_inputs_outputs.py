@@ -112,3 +112,23 @@ def test_the_writability_probe_leaves_nothing_behind(tmp_path):
     (tmp_path / "kept").mkdir()
     probe_writable(tmp_path / "kept")
     assert list((tmp_path / "kept").iterdir()) == []
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "mkfifo"), reason="named pipes need a POSIX system")
+def test_a_fifo_where_a_file_belongs_is_refused_not_a_hang(tmp_path, capsys):
+    import os
+
+    fifo = tmp_path / "log.csv"
+    os.mkfifo(fifo)
+    assert main(["batch", "--map", "example", "--pairs", str(fifo), "--out", str(tmp_path / "a"), "--no-progress"]) == 2
+    assert "is not a regular file" in _err(capsys)
+    assert main(["train", "--data", str(fifo), "--model", "linear", "--out", str(tmp_path / "m.zip")]) == 2
+    assert "neither a regular file nor a folder" in _err(capsys)
+
+
+def test_a_binary_pairs_file_is_bad_input_not_a_crash(tmp_path, capsys):
+    pairs = tmp_path / "pairs.csv"
+    pairs.write_bytes(bytes(range(256)) * 4)
+    rc = main(["batch", "--map", "example", "--pairs", str(pairs), "--out", str(tmp_path / "o"), "--no-progress"])
+    assert rc == EXIT_BAD_INPUT
+    assert "is not a UTF-8 CSV table" in _err(capsys)
