@@ -33,7 +33,7 @@ __all__ = ["MEMORY_BUDGET_BYTES", "memory_budget_bytes", "check_zip_sizes", "rea
 #: Default memory budget of one container's content (bytes): 4 GiB.
 MEMORY_BUDGET_BYTES = 4 * 1024**3
 _DECODE_ERRORS = (zlib.error, zipfile.BadZipFile, zipfile.LargeZipFile, EOFError, UnicodeDecodeError, OverflowError,
-                  MemoryError, ValueError, NotImplementedError, RuntimeError)
+                  MemoryError, ValueError, NotImplementedError, RuntimeError, OSError)  # OSError: bz2 / lzma streams
 
 
 def memory_budget_bytes() -> int:
@@ -142,7 +142,7 @@ def read_npz(path: str | os.PathLike[str], what: str) -> dict[str, np.ndarray]:
     where = f"{what} file {str(path)!r}"
     try:
         archive = zipfile.ZipFile(path)
-    except (zipfile.BadZipFile, zipfile.LargeZipFile, OSError, EOFError, ValueError) as exc:
+    except _DECODE_ERRORS as exc:  # incl. NotImplementedError: a zip version or compression it does not know
         raise FileFormatError(f"{where} is corrupt or not a .npz file: {exc}") from exc
     out: dict[str, Any] = {}
     with archive:
