@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from .checks import check_int, check_real
+from .checks import check_int, check_real, fmt_number
 from .errors import GridMismatchError, InvalidParameterError, OutOfBoundsError
 
 __all__ = ["Grid"]
@@ -146,7 +146,9 @@ class Grid:
         if not np.all(inside):
             bad = np.flatnonzero(~inside.ravel())[0]
             px, py = x.ravel()[bad], y.ravel()[bad]
-            raise OutOfBoundsError(f"point ({px!r}, {py!r}) m lies outside the map bounds {self.bounds!r}")
+            box = ", ".join(fmt_number(float(b), 10) for b in self.bounds)
+            raise OutOfBoundsError(f"point ({fmt_number(float(px), 10)}, {fmt_number(float(py), 10)}) m lies outside the "
+                                   f"map bounds ({box})")
         x0, y0 = self.origin_xy_m
         col = np.minimum(((x - x0) / self.cell_size_m).astype(np.int64), self.shape[1] - 1)
         row = np.minimum(((y - y0) / self.cell_size_m).astype(np.int64), self.shape[0] - 1)

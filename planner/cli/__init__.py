@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import re
 import sys
 import traceback
 from collections.abc import Sequence
@@ -31,6 +32,14 @@ EXIT_CODES = {
     EXIT_BAD_INPUT: "bad input or usage (one line on stderr)",
     EXIT_INTERNAL: "internal error: a bug in terrawatt (one line; the traceback with -v)",
 }
+
+
+_NUMPY_SCALAR = re.compile(r"np\.(?:float|int|uint|complex)\d*\(([^()]*)\)|np\.(?:bool_|True_|False_)\(([^()]*)\)")
+
+
+def plain_message(text: str) -> str:
+    """A message with numpy scalar reprs (``np.float64(10.0)``) shown as plain numbers (``10.0``): the last safety net."""
+    return _NUMPY_SCALAR.sub(lambda m: m.group(1) if m.group(1) is not None else m.group(2), text)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -67,7 +76,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return args.run(args)
     except (TerrawattError, OSError) as exc:
-        print(f"terrawatt: error: {exc}", file=sys.stderr)
+        print(f"terrawatt: error: {plain_message(str(exc))}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except Exception as exc:  # noqa: BLE001 - the last line of defence: a bug, said so
         if args.verbose:

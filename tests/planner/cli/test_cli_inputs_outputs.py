@@ -132,3 +132,20 @@ def test_a_binary_pairs_file_is_bad_input_not_a_crash(tmp_path, capsys):
     rc = main(["batch", "--map", "example", "--pairs", str(pairs), "--out", str(tmp_path / "o"), "--no-progress"])
     assert rc == EXIT_BAD_INPUT
     assert "is not a UTF-8 CSV table" in _err(capsys)
+
+
+def test_messages_show_plain_numbers_not_numpy_reprs(tmp_path, capsys, monkeypatch):
+    from planner.cli import plain_message
+    from terrain import Grid, InvalidParameterError, OutOfBoundsError
+
+    assert plain_message("got np.float64(10.0) and np.int64(3), np.True_") == "got 10.0 and 3, np.True_"
+    with pytest.raises(OutOfBoundsError) as info:
+        Grid((4, 5), 1.0).rowcol(np.float64(10.0), np.float64(2.5))
+    assert "np." not in str(info.value) and "(10, 2.5) m" in str(info.value)
+
+    def bad(*args, **kwargs):
+        raise InvalidParameterError(f"speed {np.float64(10.0)!r} too high")
+
+    monkeypatch.setattr(plan_cli, "_run", bad)
+    assert main(["demo", "--out", str(tmp_path / "o")]) == EXIT_BAD_INPUT
+    assert "speed 10.0 too high" in _err(capsys)
