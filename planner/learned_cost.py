@@ -95,7 +95,7 @@ from .learned_table import (
     predict_current_spread,
     predict_currents,
 )
-from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES, check_table_sizes, tabulate, tabulate_spread
+from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES, check_table_sizes, tabulate
 
 __all__ = [
     "LearnedEnergyModel",
@@ -503,7 +503,7 @@ class LearnedEnergyModel:
         Equal to ``EnergyCost.from_model`` on a map whose ground classes are the model ids,
         but only the tables of models not yet cached are computed. When a model in use has
         a predictive interval, the cost also carries the standard-deviation tables
-        (:func:`planner.tables.tabulate_spread`; zero rows for models without one).
+        (:func:`planner.tables.tabulate` with ``spread=True``; zero rows for models without one).
 
         With ``previous`` (a cost this adapter made earlier for the same map, speed, slope
         limit and table sizes), the result is ``previous.with_tables(...)``: the map geometry
@@ -542,8 +542,8 @@ class LearnedEnergyModel:
         )
         grade_sd = turn_sd = None
         if any(self.table(int(m)).energy_per_metre_sd_j is not None for m in ids.tolist()):
-            grade_sd, turn_sd = tabulate_spread(self, speed, ids.tolist(), labels, max_slope_rad=slope,
-                                                grade_samples=n_grade, turn_samples=n_turn)
+            grade_sd, turn_sd = tabulate(self, speed, ids.tolist(), labels, max_slope_rad=slope,
+                                         grade_samples=n_grade, turn_samples=n_turn, spread=True)
         lut = np.zeros(int(ids.max()) + 1, dtype=np.int32)
         lut[ids] = np.arange(ids.size, dtype=np.int32)
         rows = lut[np.asarray(self.registry.model_id_map)]

@@ -28,7 +28,6 @@ __all__ = [
     "tabulate",
     "ground_table_rows",
     "check_tables",
-    "tabulate_spread",
     "check_spread_tables",
 ]
 
@@ -72,6 +71,7 @@ def tabulate(
     max_slope_rad: float,
     grade_samples: int,
     turn_samples: int,
+    spread: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Grade and turn tables of an energy model, one row per ground (the one table builder).
 
@@ -92,6 +92,10 @@ def tabulate(
         A name per row, for messages.
     max_slope_rad, grade_samples, turn_samples
         The grade grid and the turn grid.
+    spread : bool
+        Tabulate the run-level standard deviation instead of the mean, from
+        ``model.energy_per_metre_sd_j`` / ``model.turn_energy_sd_j`` (a model with an
+        interval; see :mod:`planner.risk` for how a route adds the spreads up).
 
     Returns
     -------
@@ -102,6 +106,10 @@ def tabulate(
     InvalidParameterError
         The model returned arrays of other shapes.
     """
+    if spread:
+        return _table_rows(model.energy_per_metre_sd_j, model.turn_energy_sd_j, speed_mps, grounds, labels,
+                           max_slope_rad=max_slope_rad, grade_samples=grade_samples, turn_samples=turn_samples,
+                           what="spread ")
     return _table_rows(model.energy_per_metre_j, model.turn_energy_j, speed_mps, grounds, labels,
                        max_slope_rad=max_slope_rad, grade_samples=grade_samples, turn_samples=turn_samples, what="")
 
@@ -125,33 +133,6 @@ def _table_rows(per_metre: Any, per_turn: Any, speed_mps: float, grounds: Sequen
         grade_table[i] = e * horizontal
         turn_table[i] = te
     return grade_table, turn_table
-
-
-def tabulate_spread(
-    model: Any,
-    speed_mps: float,
-    grounds: Sequence[Any],
-    labels: Sequence[str],
-    *,
-    max_slope_rad: float,
-    grade_samples: int,
-    turn_samples: int,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Standard-deviation tables of an energy model with an interval, one row per ground (shapes of :func:`tabulate`).
-
-    Row ``i`` holds ``model.energy_per_metre_sd_j(speed_mps, grades, grounds[i])`` (J per
-    metre travelled) times ``sqrt(1 + grade**2)`` on :func:`grade_grid`, and
-    ``model.turn_energy_sd_j(angles, grounds[i])`` on :func:`turn_grid`: the run-level
-    spread of each table entry (see :mod:`planner.risk` for how a route adds them up).
-
-    Raises
-    ------
-    InvalidParameterError
-        The model returned arrays of other shapes, or negative / non-finite spreads.
-    """
-    return _table_rows(model.energy_per_metre_sd_j, model.turn_energy_sd_j, speed_mps, grounds, labels,
-                       max_slope_rad=max_slope_rad, grade_samples=grade_samples, turn_samples=turn_samples,
-                       what="spread ")
 
 
 def check_spread_tables(
