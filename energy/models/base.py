@@ -8,9 +8,12 @@ arguments; ``fit(logs)`` validates, sets attributes ending in ``_`` and returns 
 
 A fitted model is saved as one file (:meth:`CurrentModel.save`), written atomically
 through :mod:`terrain.atomic`: a zip archive holding ``model.json`` (the format, its
-version, the model class, the constructor parameters, the fitted state in plain types and
-the package versions) and one ``.npy`` entry per array of the state (numpy's own format,
-read without pickle). No torch is needed to write or read it: the estimator stores its
+version, the model class, the constructor parameters, the fitted state in plain types, the
+package versions, what the model was trained on — :class:`TrainingSummary` — and its
+forecast interval, :class:`~energy.models.uncertainty.IntervalModel`; the last two are
+optional, older files lack them) and one ``.npy`` entry per array of the state (numpy's
+own format, read without pickle, sizes checked by :mod:`terrain.containers` before
+anything is inflated). No torch is needed to write or read it: the estimator stores its
 network weights as arrays like any other state. Files of format version 1 (``torch.save``
 checkpoints of every model class) are still read; torch is imported only for them.
 
