@@ -52,8 +52,6 @@ MUTATIONS = ("truncate", "flip", "overwrite", "insert", "inflate")
 # ------------------------------------------------------------------ seeds and readers
 def write_seeds(folder: Path) -> dict[str, Path]:
     """One small real file (or folder) per reader."""
-    import numpy as np
-
     from energy import read_borealtc, write_csv_log
     from energy.models import LinearCurrentModel, fit_interval
     from terrain import procedural_map, write_geotiff
@@ -78,7 +76,6 @@ def write_seeds(folder: Path) -> dict[str, Path]:
     pairs = folder / "pairs.csv"
     pairs.write_text("name,start_x_m,start_y_m,goal_x_m,goal_y_m\na,2,2,20,20\nb,20,20,2,2\n")
     seeds["pairs"] = pairs
-    del np
     return seeds
 
 
@@ -110,10 +107,8 @@ def _read(kind: str, path: Path) -> Any:
         run = path.parent / "run"  # a one-run BorealTC folder: the mutated pro file beside its imu file
         ground = run / "FUZZ"
         ground.mkdir(parents=True, exist_ok=True)
-        stem = path.name.split(".")[0]
         shutil.copy(path, ground / "pro_00.csv")
         shutil.copy(_SEEDS["borealtc_imu"], ground / "imu_00.csv")
-        del stem
         return read_borealtc(run)
     if kind == "geotiff":
         from terrain import read_geotiff
