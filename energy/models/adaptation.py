@@ -304,8 +304,8 @@ class AdaptedCurrentModel(CurrentModel):
         """Whether the base model gives one (a ``"bayes"`` update then gives its posterior interval)."""
         return self.base_model.gives_interval
 
-    def _distribution(self, log: InteractionLog, mean: np.ndarray) -> CurrentForecast:
-        return self.correct_distribution(log, self.base_model.predict_distribution(log))
+    def _predict_distribution(self, log: InteractionLog) -> CurrentForecast:
+        return self.correct_distribution(log, self.base_model.predict_distribution(log))  # one base prediction
 
     def correct_distribution(self, log: InteractionLog, base_forecast: CurrentForecast) -> CurrentForecast:
         """The adapted forecast of ``log`` given the base model's forecast of it (no new base prediction).

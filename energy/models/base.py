@@ -444,9 +444,7 @@ class CurrentModel:
         DataError
             The log is too short for the model's windows.
         """
-        self._check_fitted()
-        if not isinstance(log, InteractionLog):
-            raise InvalidParameterError(f"log must be an InteractionLog, got {log!r:.80}")
+        self._check_log(log)
         out = np.asarray(self._predict(log), dtype=np.float64)
         if out.shape != (len(log), 2):  # internal contract of subclasses
             raise RuntimeError(f"{type(self).__name__}._predict returned shape {out.shape!r}, expected {(len(log), 2)!r}")
@@ -464,8 +462,17 @@ class CurrentModel:
         ------
         As :meth:`predict`.
         """
-        mean = self.predict(log)
-        return self._distribution(log, mean)
+        self._check_log(log)
+        return self._predict_distribution(log)
+
+    def _check_log(self, log: InteractionLog) -> None:
+        self._check_fitted()
+        if not isinstance(log, InteractionLog):
+            raise InvalidParameterError(f"log must be an InteractionLog, got {log!r:.80}")
+
+    def _predict_distribution(self, log: InteractionLog) -> CurrentForecast:
+        """The forecast of a checked log; models that see a spread of their own while predicting override it."""
+        return self._with_interval(log, self.predict(log))
 
     def ground_vibration(self, ground: str) -> tuple[np.ndarray, np.ndarray] | None:
         """``(time_s, accel_z_mps2)`` recorded on ``ground`` in training, for a model conditioned on vibration; else None.
@@ -492,19 +499,17 @@ class CurrentModel:
             return False
         return str(ground).lower() in {g.lower() for g in summary.grounds}
 
-    def _distribution(self, log: InteractionLog, mean: np.ndarray) -> CurrentForecast:
+    def _with_interval(self, log: InteractionLog, mean: np.ndarray, own_spread_a: np.ndarray | None = None
+                       ) -> CurrentForecast:
+        """``mean`` with the fitted interval's spreads (none without one); ``own_spread_a`` (N, 2) A is a spread the
+        model saw itself while predicting (the estimator: its members' disagreement), added to the run-level one."""
         interval = getattr(self, "interval_", None)
         if interval is None:
             return CurrentForecast.point(log.time_s, mean)
         run = interval.run_sd_a(log, mean, known=self.knows_ground(log.meta.ground_label))
-        extra = self._model_spread_a(log)
-        if extra is not None:
-            run = np.sqrt(run**2 + extra**2)
+        if own_spread_a is not None:
+            run = np.sqrt(run**2 + own_spread_a**2)
         return CurrentForecast(log.time_s, mean, run, interval.sample_sd(log))
-
-    def _model_spread_a(self, log: InteractionLog) -> np.ndarray | None:
-        """A spread the model itself sees on this log, (N, 2) A (the estimator: its members' disagreement); None."""
-        return None
 
     def score(self, logs: InteractionLog | Sequence[InteractionLog]) -> float:
         """Coefficient of determination R² of the per-sample currents, both sides pooled.

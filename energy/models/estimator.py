@@ -68,6 +68,7 @@ from .baselines import PhysicsCurrentModel
 from .config import EstimatorConfig, estimator_preset
 from .data import WindowDataset
 from .ensemble import train_ensemble
+from .forecast import CurrentForecast
 from .net import CurrentNet, CurrentNetConfig
 from .training import TrainingHistory, train_network
 from .uncertainty import IntervalModel
@@ -410,14 +411,17 @@ class VibrationCurrentEstimator(CurrentModel):
         cfg = self._resolved_config()
         return bool(cfg.local_spectrum or cfg.run_features != "none")
 
-    def _model_spread_a(self, log: InteractionLog) -> np.ndarray:
-        """The members' disagreement on this log (A, (N, 2)): what the model does not know; 0 standing still."""
+    def _predict_distribution(self, log: InteractionLog) -> CurrentForecast:
+        """The mean and the members' disagreement from one pass of the members (0 standing still), with the interval."""
         with _threads(self.n_threads):
             grid = self._grid_log(log, self.rate_hz_, self.config_.resample_method)
             members = self._member_grid(grid, None)
+        mean = self._on_log(log, grid, members.mean(axis=0))
+        if getattr(self, "interval_", None) is None:
+            return self._with_interval(log, mean)
         spread = np.column_stack([np.interp(log.time_s, grid.time_s, members[:, :, k].std(axis=0)) for k in range(2)])
         spread[rest_samples(log)] = 0.0
-        return spread
+        return self._with_interval(log, mean, spread)
 
     def predict(self, log: InteractionLog) -> np.ndarray:
         """Predicted drive currents at the log's drive timestamps.

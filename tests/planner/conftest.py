@@ -38,7 +38,8 @@ class GroundKeyedModel(CurrentModel):
         cur = np.where(np.abs(log.v_mps) > 0, drive, np.where(np.abs(log.omega_radps) > 0, turn, 0.0))
         return np.column_stack([cur, cur])
 
-    def _distribution(self, log: InteractionLog, mean: np.ndarray) -> CurrentForecast:
+    def _predict_distribution(self, log: InteractionLog) -> CurrentForecast:
+        mean = self.predict(log)
         sd = self._ground(log)[3]
         moving = (np.abs(log.v_mps) > 0) | (np.abs(log.omega_radps) > 0)
         run = np.where(moving, sd, 0.0)
