@@ -39,7 +39,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_optional_real, check_real, readonly, real_array
+from terrain.checks import check_optional_real, check_real, fmt_number, readonly, real_array
 from terrain.errors import DataError, InvalidParameterError
 
 __all__ = [
@@ -183,8 +183,9 @@ class Battery:
         over = p > self.max_power_w
         if np.any(over):
             raise InvalidParameterError(
-                f"power_w {float(np.max(p))!r} W exceeds the battery's maximum deliverable power "
-                f"V**2/(4 R) = {self.max_power_w!r} W (voltage_v={v!r}, internal_resistance_ohm={r!r}); "
+                f"power_w {fmt_number(float(np.max(p)))} W exceeds the battery's maximum deliverable power "
+                f"V**2/(4 R) = {fmt_number(self.max_power_w)} W (voltage_v={fmt_number(v)}, "
+                f"internal_resistance_ohm={fmt_number(r)}); "
                 "expected a smaller load or a smaller internal resistance"
             )
         disc = np.sqrt(v * v - 4.0 * r * p)

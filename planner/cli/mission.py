@@ -210,7 +210,8 @@ def run_monte_carlo(args: argparse.Namespace, tmap: Any, label: str, start: tupl
     """``terrawatt mission --monte-carlo N``: plan the lattice route, drive it N times with drawn parameters.
 
     Exit code 0 when at most ``--max-risk-pct`` % of the missions go below the reserve, 1
-    otherwise (or when there is no route).
+    otherwise, when there is no route, or when a mission failed (its row in monte_carlo.csv
+    says why; the statistics are over the completed missions).
     """
     robot = robot_preset(args.robot)
     battery = Battery(capacity_ah=args.battery_ah,
@@ -250,4 +251,4 @@ def run_monte_carlo(args: argparse.Namespace, tmap: Any, label: str, start: tupl
         print(f"reserve check at Q = {args.risk:g}: the route's {args.risk:g} quantile {need_j / 3600:.2f} Wh "
               f"{'fits' if fits else 'does NOT fit'} the usable {battery.usable_energy_wh:.2f} Wh")
     print(f"wrote {json_path}, {csv_path}" + (f" and {png_path}" if png_path is not None else ""))
-    return 0 if 100.0 * result.p_below_reserve <= args.max_risk_pct and fits else 1
+    return 0 if 100.0 * result.p_below_reserve <= args.max_risk_pct and fits and not result.n_failed else 1

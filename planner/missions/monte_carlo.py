@@ -29,7 +29,7 @@ from ..edge_cost import EnergyCost
 from ..risk import route_energy_interval
 from .forecast import route_forecast_j
 from .monte_carlo_model import MC_DRAW_MODES, ModelMissionSetup
-from .monte_carlo_result import MonteCarloResult
+from .monte_carlo_result import MonteCarloResult, mission_row
 from .monte_carlo_sampling import MissionDistributions
 from .simulate import simulate_mission
 from .tracking import route_speed_mps
@@ -54,22 +54,29 @@ class MissionSetup:
     nominal_speed_mps: float
     current_rate_hz: float
 
-    def run(self, seq: np.random.SeedSequence) -> tuple[float, ...]:
-        """One mission from one child seed: the drawn parameters, then the outcome, as a row of numbers."""
+    def run(self, seq: np.random.SeedSequence) -> tuple[tuple[float, ...], str]:
+        """One mission from one child seed: the drawn parameters, then the outcome, as a row of
+        numbers, and the error of a failed mission (:func:`mission_row`)."""
         rng = np.random.default_rng(seq)
         names = sorted(self.grounds)
         s = self.distributions.draw(rng, names, nominal_speed_mps=self.nominal_speed_mps)
         truth_seed = int(rng.integers(0, 2**32))
         robot = s.robot(self.robot)
         battery = s.battery(self.battery)
-        truth = TruthSimulator(robot, s.grounds(self.grounds), current_rate_hz=self.current_rate_hz, seed=truth_seed)
-        m = simulate_mission(self.terrain, self.route, robot, battery, truth, speed_mps=s.speed_mps, seed=truth_seed)
-        b = m.budget
-        return (*(s.ground_scale[g] for g in names), s.payload_kg, battery.capacity_ah, s.internal_resistance_ohm,
-                s.speed_mps, b.actual_energy_j, b.actual_charge_mah, b.duration_s, b.arrival_soc,
-                float(np.min(m.soc)), float(not b.feasible), float(b.depleted))
 
-    def run_chunk(self, seqs: list[np.random.SeedSequence]) -> list[tuple[float, ...]]:
+        def drive() -> tuple[float, ...]:
+            truth = TruthSimulator(robot, s.grounds(self.grounds), current_rate_hz=self.current_rate_hz,
+                                   seed=truth_seed)
+            m = simulate_mission(self.terrain, self.route, robot, battery, truth, speed_mps=s.speed_mps,
+                                 seed=truth_seed)
+            b = m.budget
+            return (b.actual_energy_j, b.actual_charge_mah, b.duration_s, b.arrival_soc, float(np.min(m.soc)),
+                    float(not b.feasible), float(b.depleted))
+
+        return mission_row((*(s.ground_scale[g] for g in names), s.payload_kg, battery.capacity_ah,
+                            s.internal_resistance_ohm, s.speed_mps), drive)
+
+    def run_chunk(self, seqs: list[np.random.SeedSequence]) -> list[tuple[tuple[float, ...], str]]:
         """:meth:`run` over several seeds (one dask task)."""
         return [self.run(q) for q in seqs]
 
@@ -161,6 +168,10 @@ def simulate_missions_mc(
     Returns
     -------
     MonteCarloResult
+        One row per mission. A mission that fails with a library error (e.g. a drawn pack
+        whose internal resistance cannot deliver the route's power) is a row of NaN outcomes
+        with its reason in ``errors``, and the others go on (as a failed pair in
+        :func:`planner.plan_batch`); the statistics are over the completed missions.
 
     Raises
     ------
@@ -249,7 +260,7 @@ def simulate_missions_mc(
         elapsed = time.perf_counter() - t0
     ground_names = setup.ground_names if draw_from == "model" else tuple(sorted(setup.grounds))
     k = len(ground_names)
-    table = np.array(rows, dtype=np.float64).reshape(n, -1)
+    table = np.array([row for row, _ in rows], dtype=np.float64).reshape(n, -1)
     cols = table[:, k:].T
     return MonteCarloResult(
         seed=seed, entropy=used, distributions=distributions, battery=battery,
@@ -257,12 +268,12 @@ def simulate_missions_mc(
         payload_kg=cols[0], capacity_ah=cols[1], internal_resistance_ohm=cols[2], speed_mps=cols[3],
         energy_j=cols[4], charge_mah=cols[5], duration_s=cols[6], arrival_soc=cols[7], min_soc=cols[8],
         below_reserve=cols[9] > 0.5, depleted=cols[10] > 0.5, where=where, n_workers=n_used,
-        elapsed_s=elapsed, draw_from=draw_from, forecast=forecast,
+        elapsed_s=elapsed, draw_from=draw_from, forecast=forecast, errors=tuple(err for _, err in rows),
     )
 
 
 def _run_on_cluster(client: Any, setup: MissionSetup, seqs: list[np.random.SeedSequence], chunk_size: int,
-                    progress: bool) -> list[tuple[float, ...]]:
+                    progress: bool) -> list[tuple[tuple[float, ...], str]]:
     """Chunks of missions as tasks on ``client``, the setup scattered once to every worker; rows in seed order."""
     from distributed import as_completed
     from tqdm.auto import tqdm
@@ -271,7 +282,7 @@ def _run_on_cluster(client: Any, setup: MissionSetup, seqs: list[np.random.SeedS
     chunks = [seqs[i:i + chunk_size] for i in range(0, len(seqs), chunk_size)]
     futures = [client.submit(MissionSetup.run_chunk, shared, chunk, pure=False) for chunk in chunks]
     position = {f.key: i for i, f in enumerate(futures)}
-    out: list[list[tuple[float, ...]]] = [[] for _ in futures]
+    out: list[list[tuple[tuple[float, ...], str]]] = [[] for _ in futures]
     try:
         with tqdm(total=len(seqs), desc="missions", disable=not progress) as bar:
             for fut in as_completed(futures):

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from terrain.atomic import check_output_path, save_figure
+from terrain.errors import InvalidParameterError
 
 __all__ = ["plot_monte_carlo"]
 
@@ -29,14 +30,18 @@ def plot_monte_carlo(result: Any, path: str | os.PathLike[str], *, title: str | 
     Raises
     ------
     InvalidParameterError
-        ``path`` cannot be written (a folder, or under a file); checked before drawing.
+        ``path`` cannot be written (a folder, or under a file); checked before drawing;
+        every mission failed (nothing to draw).
     """
     target = check_output_path(path, "path")
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    e_wh = np.asarray(result.energy_j) / 3600.0
-    below = np.asarray(result.below_reserve)
+    done = np.asarray(result.completed)
+    if not done.any():
+        raise InvalidParameterError(f"all {result.n} missions failed; there is no energy to draw")
+    e_wh = np.asarray(result.energy_j)[done] / 3600.0
+    below = np.asarray(result.below_reserve)[done]
     pct = result.energy_percentiles_wh
     usable_wh = result.battery.usable_energy_wh
     planned_wh = result.predicted_energy_j / 3600.0
@@ -44,7 +49,7 @@ def plot_monte_carlo(result: Any, path: str | os.PathLike[str], *, title: str | 
     fig = Figure(figsize=(12.0, 4.4))
     FigureCanvasAgg(fig)
     ax_h, ax_x = fig.subplots(1, 2)
-    bins = np.histogram_bin_edges(e_wh, bins=min(50, max(10, result.n // 20)))
+    bins = np.histogram_bin_edges(e_wh, bins=min(50, max(10, e_wh.size // 20)))
     ax_h.hist([e_wh[~below], e_wh[below]], bins=bins, stacked=True, color=["tab:blue", "tab:red"],
               label=["reserve kept", "below the reserve"])
     marks = [(pct["p50"], "P50", "k", "-"), (pct["p90"], "P90", "k", "--"), (pct["p99"], "P99", "k", ":"),
@@ -78,7 +83,8 @@ def plot_monte_carlo(result: Any, path: str | os.PathLike[str], *, title: str | 
     ax_x.set_xlabel("mission energy (Wh)")
     ax_x.set_ylabel("P(energy > x)")
     p = result.p_below_reserve
-    fig.suptitle(title or f"{result.n} missions: P(below the {result.battery.min_reserve_pct:g} % reserve) = "
+    failed = f" ({result.n_failed} failed)" if result.n_failed else ""
+    fig.suptitle(title or f"{result.n} missions{failed}: P(below the {result.battery.min_reserve_pct:g} % reserve) = "
                  f"{100 * p:.1f} %; P50 {pct['p50']:.2f} / P90 {pct['p90']:.2f} / P99 {pct['p99']:.2f} Wh",
                  fontsize=10)
     fig.tight_layout()

@@ -21,6 +21,7 @@ import numpy as np
 from energy import Battery, discharge_from_power, energy_budget
 
 from ..risk import RouteEnergyInterval
+from .monte_carlo_result import mission_row
 
 __all__ = ["ModelMissionSetup", "MC_DRAW_MODES"]
 
@@ -54,7 +55,7 @@ class ModelMissionSetup:
         """Grounds with a spread on the route, in the order of the drawn factors."""
         return tuple(sorted(self.forecast.sd_by_ground_j))
 
-    def run(self, seq: np.random.SeedSequence) -> tuple[float, ...]:
+    def run(self, seq: np.random.SeedSequence) -> tuple[tuple[float, ...], str]:
         """One mission: the factors ``z_g``, then the row of :class:`MissionSetup.run` (no payload, nominal battery)."""
         rng = np.random.default_rng(seq)
         names = self.ground_names
@@ -62,11 +63,16 @@ class ModelMissionSetup:
         spread = np.array([self.forecast.sd_by_ground_j[g] for g in names])
         energy_j = max(self.forecast.mean_j + float(np.dot(z, spread)), 0.0)
         power_w = energy_j / self.duration_s
-        b = energy_budget(discharge_from_power(self.battery, [0.0, self.duration_s], [power_w, power_w]), energy_j)
-        return (*z.tolist(), 0.0, self.battery.capacity_ah, self.battery.internal_resistance_ohm, self.speed_mps,
-                float(b.actual_energy_j), float(b.actual_charge_mah), float(b.duration_s), float(b.arrival_soc),
-                float(b.arrival_soc), float(not b.feasible), float(b.depleted))
 
-    def run_chunk(self, seqs: list[np.random.SeedSequence]) -> list[tuple[float, ...]]:
+        def drain() -> tuple[float, ...]:
+            b = energy_budget(discharge_from_power(self.battery, [0.0, self.duration_s], [power_w, power_w]),
+                              energy_j)
+            return (float(b.actual_energy_j), float(b.actual_charge_mah), float(b.duration_s), float(b.arrival_soc),
+                    float(b.arrival_soc), float(not b.feasible), float(b.depleted))
+
+        return mission_row((*z.tolist(), 0.0, self.battery.capacity_ah, self.battery.internal_resistance_ohm,
+                            self.speed_mps), drain)
+
+    def run_chunk(self, seqs: list[np.random.SeedSequence]) -> list[tuple[tuple[float, ...], str]]:
         """:meth:`run` over several seeds (one dask task)."""
         return [self.run(q) for q in seqs]

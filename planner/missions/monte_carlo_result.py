@@ -6,6 +6,7 @@ import csv
 import io
 import math
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -15,20 +16,41 @@ import numpy as np
 from energy import Battery
 from terrain.atomic import write_json_atomic, write_text_atomic
 from terrain.checks import check_real, readonly, real_array
-from terrain.errors import InvalidParameterError
+from terrain.errors import InvalidParameterError, TerrawattError
 
 from ..risk import RouteEnergyInterval
 from .monte_carlo_figure import plot_monte_carlo
 from .monte_carlo_sampling import MissionDistributions
 
-__all__ = ["MonteCarloResult", "MONTE_CARLO_FORMAT_VERSION", "SAMPLE_COLUMNS"]
+__all__ = ["MonteCarloResult", "MONTE_CARLO_FORMAT_VERSION", "SAMPLE_COLUMNS", "mission_row"]
 
-#: Version of the JSON layout written by :meth:`MonteCarloResult.write_json`.
-MONTE_CARLO_FORMAT_VERSION = 1
+#: Version of the JSON layout written by :meth:`MonteCarloResult.write_json` (2: per-sample
+#: ``error`` and ``n_failed``).
+MONTE_CARLO_FORMAT_VERSION = 2
 #: Per-sample numeric columns (besides the ground factors), in CSV order.
 SAMPLE_COLUMNS = ("payload_kg", "capacity_ah", "internal_resistance_ohm", "speed_mps", "energy_j", "charge_mah",
                   "duration_s", "arrival_soc", "min_soc")
 _FLAGS = ("below_reserve", "depleted")
+#: Outcome columns of a mission row (after the drawn ones): energy, charge, duration,
+#: arrival and lowest state of charge, the two flags.
+_N_OUTCOMES = 7
+_SHOWN_ERRORS = 5
+
+
+def mission_row(drawn: tuple[float, ...], outcome: Callable[[], tuple[float, ...]]) -> tuple[tuple[float, ...], str]:
+    """One Monte Carlo mission as ``(row, error)``: the drawn numbers, then ``outcome()``.
+
+    A library error raised by ``outcome`` (a drawn pack that cannot deliver the route's
+    power, a drawn robot that cannot follow it, ...) fails this mission alone: its outcome
+    columns are NaN (flags false) and ``error`` is ``"ExceptionType: message"``, as a
+    failed pair's row in :func:`planner.plan_batch`. Any other exception is a bug and
+    propagates.
+    """
+    try:
+        out = outcome()
+    except TerrawattError as exc:
+        return (*drawn, *([math.nan] * (_N_OUTCOMES - 2)), 0.0, 0.0), f"{type(exc).__name__}: {exc}"
+    return (*drawn, *out), ""
 
 
 @dataclass(frozen=True, eq=False)
@@ -70,6 +92,10 @@ class MonteCarloResult:
     forecast : RouteEnergyInterval or None
         The route's energy distribution on the planning cost when it has an interval (its
         P50 / P90 are in the summary and the JSON).
+    errors : tuple of str
+        Per sample, ``"ExceptionType: message"`` for a mission that failed with a library
+        error (its outcome columns NaN, flags false), else ``""``; empty means none failed.
+        The risk and the percentiles are over the completed missions (:attr:`completed`).
     """
 
     seed: int | None
@@ -95,6 +121,7 @@ class MonteCarloResult:
     elapsed_s: float = math.nan
     draw_from: str = "parameters"
     forecast: RouteEnergyInterval | None = None
+    errors: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.draw_from not in ("parameters", "model"):
@@ -119,28 +146,56 @@ class MonteCarloResult:
             raise InvalidParameterError(f"ground_scale must have shape ({n}, {len(self.ground_names)}), got {scale.shape!r}")
         object.__setattr__(self, "ground_scale", readonly(scale))
         object.__setattr__(self, "ground_names", tuple(self.ground_names))
+        errors = tuple(self.errors) if self.errors else ("",) * n
+        if len(errors) != n or not all(isinstance(e, str) for e in errors):
+            raise InvalidParameterError(f"errors must be {n} strings (one per sample) or empty, got {len(errors)}")
+        object.__setattr__(self, "errors", errors)
+        if any(bool(e) == bool(np.isfinite(x)) for e, x in zip(errors, self.energy_j)):
+            raise InvalidParameterError("a sample has error text exactly when its energy_j is not finite")
 
     @property
     def n(self) -> int:
-        """Number of samples."""
+        """Number of samples (completed and failed)."""
         return int(self.energy_j.shape[0])
 
     @property
+    def failed(self) -> np.ndarray:
+        """Per sample: the mission failed with a library error (see :attr:`errors`)."""
+        return np.array([bool(e) for e in self.errors], dtype=bool)
+
+    @property
+    def n_failed(self) -> int:
+        """Number of failed missions."""
+        return int(np.count_nonzero(self.failed))
+
+    @property
+    def completed(self) -> np.ndarray:
+        """Per sample: the mission was driven to its end (the samples the statistics use)."""
+        return ~self.failed
+
+    @property
     def p_below_reserve(self) -> float:
-        """Fraction of the missions whose state of charge went below the reserve."""
-        return float(np.mean(self.below_reserve))
+        """Fraction of the completed missions whose state of charge went below the reserve (NaN if none completed)."""
+        done = self.completed
+        return float(np.mean(self.below_reserve[done])) if done.any() else math.nan
 
     @property
     def p_below_reserve_ci95(self) -> tuple[float, float]:
         """95 % Wilson interval of :attr:`p_below_reserve` (binomial, :func:`scipy.stats.binomtest`)."""
         from scipy.stats import binomtest
 
-        ci = binomtest(int(np.count_nonzero(self.below_reserve)), self.n).proportion_ci(0.95, method="wilson")
+        done = self.completed
+        if not done.any():
+            return math.nan, math.nan
+        k = int(np.count_nonzero(self.below_reserve[done]))
+        ci = binomtest(k, int(np.count_nonzero(done))).proportion_ci(0.95, method="wilson")
         return float(ci.low), float(ci.high)
 
     def energy_percentile_j(self, q: float) -> float:
-        """The ``q``-th percentile (0-100) of the mission energy (J; linear interpolation)."""
-        return float(np.percentile(self.energy_j, check_real("q", q, low=0.0, high=100.0)))
+        """The ``q``-th percentile (0-100) of the completed missions' energy (J; linear interpolation; NaN if none)."""
+        q = check_real("q", q, low=0.0, high=100.0)
+        done = self.energy_j[self.completed]
+        return float(np.percentile(done, q)) if done.size else math.nan
 
     @property
     def energy_percentiles_wh(self) -> dict[str, float]:
@@ -153,6 +208,7 @@ class MonteCarloResult:
         out: dict[str, Any] = {
             "format_version": MONTE_CARLO_FORMAT_VERSION,
             "n": self.n,
+            "n_failed": self.n_failed,
             "seed": self.seed,
             "entropy": self.entropy,
             "distributions": self.distributions.to_dict(),
@@ -162,7 +218,9 @@ class MonteCarloResult:
             "p_below_reserve": self.p_below_reserve,
             "p_below_reserve_ci95": [lo, hi],
             "p_depleted": float(np.mean(self.depleted)),
-            "energy_wh": {**self.energy_percentiles_wh, "mean": float(np.mean(self.energy_j)) / 3600.0},
+            "energy_wh": {**self.energy_percentiles_wh,
+                          "mean": float(np.mean(self.energy_j[self.completed])) / 3600.0 if self.n_failed < self.n
+                          else math.nan},
             "where": self.where,
             "n_workers": self.n_workers,
             "elapsed_s": self.elapsed_s,
@@ -175,7 +233,8 @@ class MonteCarloResult:
         if samples:
             out["ground_names"] = list(self.ground_names)
             out["samples"] = {"ground_scale": self.ground_scale.tolist(),
-                              **{c: getattr(self, c).tolist() for c in (*SAMPLE_COLUMNS, *_FLAGS)}}
+                              **{c: getattr(self, c).tolist() for c in (*SAMPLE_COLUMNS, *_FLAGS)},
+                              "error": list(self.errors)}
         return out
 
     def write_json(self, path: str | os.PathLike[str], *, samples: bool = True) -> Path:
@@ -187,11 +246,11 @@ class MonteCarloResult:
         buf = io.StringIO()
         writer = csv.writer(buf, lineterminator="\n")
         prefix = "ground_z" if self.draw_from == "model" else "ground_scale"
-        writer.writerow(["sample", *(f"{prefix}_{g}" for g in self.ground_names), *SAMPLE_COLUMNS, *_FLAGS])
+        writer.writerow(["sample", *(f"{prefix}_{g}" for g in self.ground_names), *SAMPLE_COLUMNS, *_FLAGS, "error"])
         cols = [getattr(self, c) for c in SAMPLE_COLUMNS]
         for i in range(self.n):
             writer.writerow([i, *(repr(float(v)) for v in self.ground_scale[i]), *(repr(float(c[i])) for c in cols),
-                             *(str(bool(getattr(self, f)[i])).lower() for f in _FLAGS)])
+                             *(str(bool(getattr(self, f)[i])).lower() for f in _FLAGS), self.errors[i]])
         return write_text_atomic(path, buf.getvalue())
 
     def summary(self) -> str:
@@ -199,7 +258,16 @@ class MonteCarloResult:
         pct = self.energy_percentiles_wh
         lo, hi = self.p_below_reserve_ci95
         b = self.battery
+        done = self.completed
         lines = []
+        failures = []
+        if self.n_failed:
+            failures.append(f"{self.n_failed} of {self.n} missions failed (statistics over the "
+                            f"{self.n - self.n_failed} completed; the CSV's error column says why):")
+            shown = [(i, e) for i, e in enumerate(self.errors) if e][:_SHOWN_ERRORS]
+            failures += [f"  mission {i}: {e}" for i, e in shown]
+            if self.n_failed > len(shown):
+                failures.append(f"  ... and {self.n_failed - len(shown)} more")
         if self.draw_from == "model":
             lines.append("drawn from the planning model's predictive distribution: one standard-normal factor per "
                          f"ground ({', '.join(self.ground_names) or 'none with a spread'}), edges at mean + z sd")
@@ -213,9 +281,11 @@ class MonteCarloResult:
             *lines,
             f"energy: P50 {pct['p50']:.2f} Wh, P90 {pct['p90']:.2f} Wh, P99 {pct['p99']:.2f} Wh "
             f"(forecast {self.predicted_energy_j / 3600.0:.2f} Wh with nominal parameters)",
-            f"below the {b.min_reserve_pct:g} % reserve in {np.count_nonzero(self.below_reserve)} of {self.n} missions: "
+            f"below the {b.min_reserve_pct:g} % reserve in {np.count_nonzero(self.below_reserve)} of "
+            f"{int(np.count_nonzero(done))} missions: "
             f"P = {100 * self.p_below_reserve:.1f} % (95 % interval {100 * lo:.1f}-{100 * hi:.1f} %); "
             f"battery {b.capacity_ah:g} Ah nominal, {self.capacity_ah.min():.2f}-{self.capacity_ah.max():.2f} Ah after fade",
+            *failures,
         ])
 
     def plot(self, path: str | os.PathLike[str], *, title: str | None = None) -> Path:

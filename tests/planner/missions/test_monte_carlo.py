@@ -311,3 +311,61 @@ def test_with_the_planning_cost_the_forecast_prices_the_driven_profile(setup):
     p50 = float(np.median(profile.energy_j))
     assert abs(profile.predicted_energy_j - p50) < abs(edges.predicted_energy_j - p50)
     assert "forecast" in profile.summary()
+
+
+# ------------------------------------------------------------------ per-mission failures
+def test_a_failed_mission_is_an_error_row_and_the_others_go_on(setup, tmp_path):
+    # a 24 V pack of more than ~1.8 ohm cannot deliver the route's power: those missions fail alone
+    d = MissionDistributions(internal_resistance_ohm=(0.0, 4.0))
+    mc = _mc(setup, n=8, seed=1, distributions=d)
+    failed = mc.failed
+    assert 0 < mc.n_failed < mc.n and mc.n_failed == int(failed.sum())
+    assert all("InvalidParameterError: power_w" in e and "maximum deliverable power" in e
+               for e in np.asarray(mc.errors)[failed])
+    assert not any(np.asarray(mc.errors)[~failed])
+    assert np.all(np.isnan(mc.energy_j[failed])) and np.all(np.isfinite(mc.energy_j[~failed]))
+    assert not mc.below_reserve[failed].any() and not mc.depleted[failed].any()
+    # the failed missions kept their drawn parameters; the failures are the high-resistance draws
+    assert np.all(mc.internal_resistance_ohm[failed] > mc.internal_resistance_ohm[~failed].max())
+    # statistics over the completed missions
+    assert mc.energy_percentile_j(50) == pytest.approx(np.percentile(mc.energy_j[~failed], 50))
+    assert mc.p_below_reserve == pytest.approx(np.mean(mc.below_reserve[~failed]))
+    assert f"{mc.n_failed} of 8 missions failed" in mc.summary()
+    data = mc.to_dict()
+    assert data["n_failed"] == mc.n_failed and data["samples"]["error"] == list(mc.errors)
+    with open(mc.to_csv(tmp_path / "mc.csv"), newline="") as f:
+        rows = list(csv.DictReader(f))
+    assert [bool(r["error"]) for r in rows] == failed.tolist()
+    assert mc.plot(tmp_path / "mc.png").is_file()  # drawn from the completed missions
+    # the same rows in the same study, whatever the draws' outcome
+    assert np.array_equal(_mc(setup, n=8, seed=1, distributions=d).failed, failed)
+
+
+def test_a_study_where_every_mission_fails_reports_nan_statistics(setup):
+    mc = _mc(setup, n=3, seed=1, distributions=MissionDistributions(internal_resistance_ohm=(500.0, 1000.0)))
+    assert mc.n_failed == 3 and np.isnan(mc.p_below_reserve) and np.isnan(mc.energy_percentile_j(90))
+    assert np.isnan(mc.p_below_reserve_ci95[0]) and "3 of 3 missions failed" in mc.summary()
+    with pytest.raises(InvalidParameterError, match="all 3 missions failed"):
+        mc.plot("unused.png")
+
+
+def test_a_result_needs_error_text_exactly_for_missing_outcomes():
+    ok = {c: np.ones(2) for c in ("payload_kg", "capacity_ah", "internal_resistance_ohm", "speed_mps", "energy_j",
+                                  "charge_mah", "duration_s", "arrival_soc", "min_soc")}
+    common = dict(seed=0, entropy=0, distributions=FIXED, battery=Battery(1, 24), predicted_energy_j=1.0,
+                  ground_names=("a",), ground_scale=np.ones((2, 1)), below_reserve=np.zeros(2, bool),
+                  depleted=np.zeros(2, bool))
+    with pytest.raises(InvalidParameterError, match="error text exactly when its energy_j is not finite"):
+        MonteCarloResult(**common, **ok, errors=("", "DataError: x"))
+    with pytest.raises(InvalidParameterError, match="errors must be 2 strings"):
+        MonteCarloResult(**common, **ok, errors=("",))
+
+
+def test_cli_monte_carlo_with_failed_missions_writes_their_rows_and_exits_1(tmp_path, capsys):
+    # a 2 V pack delivers at most 1/R W: the missions that draw a resistance above a few mohm fail
+    rc = main(["mission", "--battery-ah", "50", "--battery-v", "2", "--monte-carlo", "4", "--seed", "3",
+               "--out", str(tmp_path / "o")])
+    out = capsys.readouterr().out
+    assert rc == 1 and "missions failed" in out and "maximum deliverable power" in out
+    data = json.loads((tmp_path / "o" / "monte_carlo.json").read_text())
+    assert data["n_failed"] >= 1 and len(data["samples"]["error"]) == 4
