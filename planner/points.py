@@ -1,4 +1,4 @@
-"""Coordinates in metres as checked ``(N, 2)`` arrays: the one point validator of the planner."""
+"""Points as checked ``(N, 2)`` arrays: the planner's one point validator, in metres or in WGS 84 longitude / latitude."""
 
 from __future__ import annotations
 
@@ -6,10 +6,12 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import real_array
-from terrain.errors import InvalidParameterError
+from terrain import DemWindows, TerrainMap
+from terrain.checks import fmt_number, real_array
+from terrain.errors import InvalidParameterError, OutOfBoundsError
+from terrain.georef import lonlat_bounds, lonlat_to_xy
 
-__all__ = ["as_points"]
+__all__ = ["as_points", "lonlat_points"]
 
 
 def as_points(xy: Any, name: str) -> np.ndarray:
@@ -29,3 +31,59 @@ def as_points(xy: Any, name: str) -> np.ndarray:
         bad = arr[~np.all(np.isfinite(arr), axis=1)][0]
         raise InvalidParameterError(f"{name} must be finite coordinates in metres, got {tuple(bad.tolist())!r}")
     return arr
+
+
+def lonlat_points(lonlat: Any, where: TerrainMap | DemWindows, name: str) -> np.ndarray:
+    """WGS 84 ``(lon, lat)`` points (degrees; ``(2,)`` or ``(N, 2)``) as the map's ``(N, 2)`` metres, each on the map.
+
+    The map's metres are its CRS's coordinates (:meth:`terrain.TerrainMap.lonlat_to_xy`).
+
+    Parameters
+    ----------
+    lonlat : array_like
+        Longitude, latitude pairs in degrees.
+    where : TerrainMap or DemWindows
+        The georeferenced map (its ``crs`` and ``grid``).
+    name : str
+        How messages name the points (``"start"``, ``"--start-lonlat"``).
+
+    Returns
+    -------
+    ndarray of float64, shape (N, 2)
+        ``(x_m, y_m)`` per point.
+
+    Raises
+    ------
+    InvalidParameterError
+        Another shape, NaN / inf or out-of-range degrees; a map without CRS.
+    OutOfBoundsError
+        A point off the map; the message gives it in both forms (lon / lat and the map's
+        x / y metres) with the map's bounds in both.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from terrain import TerrainMap
+    >>> tmap = TerrainMap(np.zeros((4, 4)), 30.0, (500000.0, 4982900.0), crs="EPSG:32633")
+    >>> lonlat_points((15.0, 45.0), tmap, "start").round(1).tolist()
+    [[500000.0, 4982950.4]]
+    """
+    arr = real_array(name, lonlat, finite=False)
+    if arr.ndim == 1 and arr.shape[0] == 2:
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise InvalidParameterError(f"{name} must have shape (N, 2) (lon_deg, lat_deg), got shape {arr.shape!r}")
+    x, y = lonlat_to_xy(arr[:, 0], arr[:, 1], where.crs)
+    xy = np.column_stack([x, y])
+    inside = np.asarray(where.grid.contains(xy[:, 0], xy[:, 1]))
+    if not np.all(inside):
+        i = int(np.flatnonzero(~inside)[0])
+        west, south, east, north = lonlat_bounds(where.grid.bounds, where.crs)
+        box = ", ".join(fmt_number(float(b), 10) for b in where.grid.bounds)
+        raise OutOfBoundsError(
+            f"{name} (lon {fmt_number(float(arr[i, 0]), 10)}, lat {fmt_number(float(arr[i, 1]), 10)}) is "
+            f"({fmt_number(float(xy[i, 0]), 10)}, {fmt_number(float(xy[i, 1]), 10)}) m in the map's CRS {where.crs}, "
+            f"outside the map bounds ({box}) m, which span lon {fmt_number(west, 8)} to {fmt_number(east, 8)}, "
+            f"lat {fmt_number(south, 8)} to {fmt_number(north, 8)}"
+        )
+    return xy

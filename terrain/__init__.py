@@ -25,7 +25,7 @@ from .errors import (
     UnitError,
     UnknownNameError,
 )
-from .georef import WGS84, transform_xy, utm_crs
+from .georef import WGS84, lonlat_to_xy, transform_xy, utm_crs, xy_to_lonlat
 from .geotiff import read_geotiff, write_geotiff
 from .grid import Grid
 from .io import read_map
@@ -78,6 +78,8 @@ __all__ = [
     "read_geotiff",
     "write_geotiff",
     "transform_xy",
+    "lonlat_to_xy",
+    "xy_to_lonlat",
     "utm_crs",
     "WGS84",
     "surface_layers",

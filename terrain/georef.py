@@ -20,6 +20,9 @@ __all__ = [
     "parse_crs",
     "utm_crs",
     "transform_xy",
+    "lonlat_to_xy",
+    "xy_to_lonlat",
+    "lonlat_bounds",
     "WGS84",
     "METRE_UNITS",
     "REPROJECT_ADVICE",
@@ -227,3 +230,110 @@ def transform_xy(xy: Any, src_crs: Any, dst_crs: Any) -> np.ndarray:
         return pts
     xs, ys = rasterio.warp.transform(src, dst, pts[:, 0].tolist(), pts[:, 1].tolist())
     return np.column_stack([np.asarray(xs, float), np.asarray(ys, float)])
+
+
+def _require_crs(crs: Any, what: str) -> Any:
+    """``crs`` as a rasterio CRS, or the error of a map that cannot take geographic points."""
+    if crs is None:
+        raise InvalidParameterError(
+            f"{what} has no CRS, so WGS 84 longitude / latitude cannot be placed on it: give points in its metres "
+            "(x, y), or use a georeferenced map (a GeoTIFF with a CRS)"
+        )
+    return parse_crs(crs, "crs") if isinstance(crs, str) else crs
+
+
+def lonlat_to_xy(lon_deg: Any, lat_deg: Any, crs: Any, *, what: str = "the map") -> tuple[Any, Any]:
+    """WGS 84 longitude / latitude (degrees) as coordinates of ``crs``: a map's ``x, y`` (m).
+
+    A georeferenced :class:`~terrain.TerrainMap`'s metres *are* its CRS's coordinates (its
+    ``origin_xy_m`` is the CRS position of its south-west corner; no local offset), so the
+    result is directly a point of the map. Scalars give floats, arrays arrays.
+
+    Parameters
+    ----------
+    lon_deg, lat_deg : float or array_like
+        Longitude in [-180, 180], latitude in [-90, 90] (degrees, WGS 84).
+    crs : str or rasterio CRS or None
+        The map's CRS (``tmap.crs``); ``None`` raises.
+    what : str
+        How messages name the map.
+
+    Returns
+    -------
+    (x, y)
+        Coordinates in ``crs`` (m for a projected CRS in metres).
+
+    Raises
+    ------
+    InvalidParameterError
+        ``crs`` is None (a map without CRS) or not understood; coordinates not finite or out
+        of range; a point the CRS cannot express (the transform gives NaN / inf).
+    OptionalDependencyError
+        rasterio is not installed.
+
+    Examples
+    --------
+    >>> x, y = lonlat_to_xy(15.0, 45.0, "EPSG:32633")  # the central meridian of UTM zone 33
+    >>> round(x, 3), round(y)
+    (500000.0, 4982950)
+    """
+    dst = _require_crs(crs, what)
+    lon, lat = np.broadcast_arrays(real_array("lon_deg", lon_deg, finite=False),
+                                   real_array("lat_deg", lat_deg, finite=False))
+    bad = ~(np.isfinite(lon) & np.isfinite(lat) & (np.abs(lon) <= 180.0) & (np.abs(lat) <= 90.0))
+    if np.any(bad):
+        i = int(np.flatnonzero(bad.ravel())[0])
+        raise InvalidParameterError(
+            f"longitude / latitude must be finite degrees, longitude in [-180, 180] and latitude in [-90, 90], got "
+            f"({fmt_number(float(lon.ravel()[i]), 10)}, {fmt_number(float(lat.ravel()[i]), 10)})"
+        )
+    xy = transform_xy(np.column_stack([lon.ravel(), lat.ravel()]), WGS84, dst)
+    if not np.all(np.isfinite(xy)):
+        i = int(np.flatnonzero(~np.all(np.isfinite(xy), axis=1))[0])
+        raise InvalidParameterError(
+            f"longitude / latitude ({fmt_number(float(lon.ravel()[i]), 10)}, {fmt_number(float(lat.ravel()[i]), 10)}) "
+            f"cannot be expressed in {what}'s CRS {dst.to_string()!r}"
+        )
+    if lon.ndim == 0:
+        return float(xy[0, 0]), float(xy[0, 1])
+    return xy[:, 0].reshape(lon.shape), xy[:, 1].reshape(lon.shape)
+
+
+def xy_to_lonlat(x_m: Any, y_m: Any, crs: Any, *, what: str = "the map") -> tuple[Any, Any]:
+    """Coordinates of ``crs`` (a map's ``x, y``) as WGS 84 longitude / latitude (degrees); the
+    inverse of :func:`lonlat_to_xy`.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``crs`` is None (a map without CRS) or not understood; coordinates not finite.
+
+    Examples
+    --------
+    >>> lon, lat = xy_to_lonlat(500000.0, 4982950.4, "EPSG:32633")
+    >>> round(lon, 6), round(lat, 4)
+    (15.0, 45.0)
+    """
+    src = _require_crs(crs, what)
+    x, y = np.broadcast_arrays(real_array("x_m", x_m), real_array("y_m", y_m))
+    ll = transform_xy(np.column_stack([x.ravel(), y.ravel()]), src, WGS84)
+    if x.ndim == 0:
+        return float(ll[0, 0]), float(ll[0, 1])
+    return ll[:, 0].reshape(x.shape), ll[:, 1].reshape(x.shape)
+
+
+def lonlat_bounds(
+    bounds: tuple[float, float, float, float], crs: Any, *, what: str = "the map"
+) -> tuple[float, float, float, float]:
+    """``(west, south, east, north)`` in degrees of a ``(xmin, ymin, xmax, ymax)`` box of ``crs``
+    (:func:`rasterio.warp.transform_bounds`, edges densified: the box's curved outline is covered).
+
+    Raises
+    ------
+    InvalidParameterError
+        ``crs`` is None or not understood.
+    """
+    rasterio = import_rasterio()
+    src = _require_crs(crs, what)
+    west, south, east, north = rasterio.warp.transform_bounds(src, WGS84, *bounds, densify_pts=21)
+    return float(west), float(south), float(east), float(north)

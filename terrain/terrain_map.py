@@ -20,6 +20,7 @@ from .errors import (
     UnknownNameError,
 )
 from .formats import read_versioned_npz
+from .georef import lonlat_to_xy, xy_to_lonlat
 from .grid import Grid
 from .surface import SURFACE_LAYERS, surface_layers
 
@@ -194,6 +195,28 @@ class TerrainMap:
     def xy(self, row: Any, col: Any) -> tuple[Any, Any]:
         """World coordinates (m) of cell centres."""
         return self._grid.xy(row, col)
+
+    def lonlat_to_xy(self, lon_deg: Any, lat_deg: Any) -> tuple[Any, Any]:
+        """World coordinates (m) of WGS 84 longitude / latitude points (scalar or array); no bounds check.
+
+        The map's metres are its CRS's coordinates (see :func:`terrain.georef.lonlat_to_xy`).
+
+        Raises
+        ------
+        InvalidParameterError
+            The map has no CRS; degrees out of range or not finite.
+        """
+        return lonlat_to_xy(lon_deg, lat_deg, self.crs)
+
+    def xy_to_lonlat(self, x_m: Any, y_m: Any) -> tuple[Any, Any]:
+        """WGS 84 longitude / latitude (degrees) of world points (m; scalar or array).
+
+        Raises
+        ------
+        InvalidParameterError
+            The map has no CRS; coordinates not finite.
+        """
+        return xy_to_lonlat(x_m, y_m, self.crs)
 
     def cell_centres(self) -> tuple[np.ndarray, np.ndarray]:
         """1-D arrays of the x (per column) and y (per row) coordinates of cell centres."""
