@@ -17,6 +17,11 @@ route evaluation. Collinear runs of moves are merged into single segments (same 
 A second graph with the same edges weighted by their length gives the shortest-distance
 route, straightened afterwards by pulling the string (greedy line-of-sight shortcuts).
 
+A lattice refreshed for new energy tables (:meth:`Lattice.refreshed`) records which moves
+changed energy (:attr:`Lattice.changed_moves`, ids ``node * 16 + k`` with ``k`` indexing
+:data:`LATTICE_OFFSETS`), so an incremental search (:class:`planner.replan.IncrementalPlanner`)
+repairs only what they touch.
+
 Two exact solvers give the same optimum: ``method="astar"`` (default), a compiled A* that
 stops once no open node can beat the best route found, with the heuristic
 ``min_energy_per_metre_j * |node - goal|`` (energy) or ``|node - goal|`` (length) — a lower
@@ -27,6 +32,7 @@ whole graph (the reference the tests compare A* with).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass
@@ -112,6 +118,11 @@ class Lattice:
         Seconds spent building both graphs.
     n_edges : int
         Number of directed edges.
+    changed_moves : ndarray of int64 or None
+        For a lattice made by :meth:`refreshed`: the ids ``node * 16 + k`` (``k`` indexing
+        :data:`LATTICE_OFFSETS`) of the moves whose energy differs from the lattice it was
+        refreshed from (a move appearing or vanishing included), ascending; ``None`` for a
+        lattice built from scratch.
 
     Raises
     ------
@@ -158,6 +169,9 @@ class Lattice:
         self._node_y = yc[self.node_rows]
         #: Directed moves whose energy was computed when this lattice was made (2 per walk).
         self.edges_computed = int(w.size - np.count_nonzero(self._out_of_grid_mask()))
+        self.changed_moves: np.ndarray | None = None
+        self._token = object()  # identifies this version of the weights (see changed_moves_since)
+        self._refreshed_from: object | None = None
         self.build_time_s = time.perf_counter() - t0
 
     def _out_of_grid_mask(self) -> np.ndarray:
@@ -205,8 +219,9 @@ class Lattice:
         Returns
         -------
         Lattice
-            A new lattice; ``edges_computed`` counts the directed moves recomputed and
-            ``build_time_s`` the seconds spent.
+            A new lattice; ``edges_computed`` counts the directed moves recomputed,
+            ``changed_moves`` lists the moves whose energy changed and ``build_time_s`` the
+            seconds spent.
 
         Raises
         ------
@@ -229,18 +244,21 @@ class Lattice:
         new = object.__new__(Lattice)
         new.__dict__.update(self.__dict__)
         new.cost = cost
+        new._token, new._refreshed_from = object(), self._token
         if not changed.any():
             new.edges_computed = 0
+            new.changed_moves = np.empty(0, dtype=np.int64)
             new.build_time_s = time.perf_counter() - t0
             return new
         sat = np.zeros((changed.shape[0] + 1, changed.shape[1] + 1), dtype=np.int32)
         np.cumsum(np.cumsum(changed, axis=0, dtype=np.int32), axis=1, out=sat[1:, 1:])
         data = self._data["energy"].copy()
         arr = cost.arrays
-        recomputed, flips = lattice_reweight(
+        recomputed, flips, moved = lattice_reweight(
             arr.cells, arr.grade_table, arr.geo, self.stride_cells, self._offset, self._ni, self._nj,
             _HALF, sat, self._pos, data,
         )
+        new.changed_moves = np.flatnonzero(moved.ravel())
         if int(flips.sum()):
             w = lattice_weights(arr.cells, arr.grade_table, arr.geo, self.stride_cells, self._offset,
                                 self._ni, self._nj, _HALF)
@@ -251,6 +269,83 @@ class Lattice:
             new.edges_computed = int(recomputed.sum())
         new.build_time_s = time.perf_counter() - t0
         return new
+
+    def changed_moves_since(self, other: Lattice) -> np.ndarray:
+        """Ids (``node * 16 + k``) of the moves whose energy differs between ``other`` and this lattice.
+
+        :attr:`changed_moves` when this lattice was refreshed from ``other`` (no work);
+        otherwise both lattices' move energies are compared (one pass over every move).
+
+        Parameters
+        ----------
+        other : Lattice
+            A lattice over the same node grid (e.g. an earlier version of this one).
+
+        Returns
+        -------
+        ndarray of int64
+            Ascending move ids; empty when ``other`` is this lattice.
+
+        Raises
+        ------
+        InvalidParameterError
+            ``other`` not a lattice over the same map grid, stride and node grid.
+        """
+        if not isinstance(other, Lattice):
+            raise InvalidParameterError(f"other must be a Lattice, got {type(other).__name__!r}")
+        if other is self or other._token is self._token:
+            return np.empty(0, dtype=np.int64)
+        if self._refreshed_from is other._token:
+            return self.changed_moves
+        if (other.stride_cells, other._ni, other._nj) != (self.stride_cells, self._ni, self._nj) or not (
+            other.cost.terrain is self.cost.terrain or other.cost.terrain.same_grid(self.cost.terrain)
+        ):
+            raise InvalidParameterError(
+                f"other must be a lattice over the same grid and node grid ({self._ni} x {self._nj} nodes at "
+                f"stride_cells={self.stride_cells}), got {other._ni} x {other._nj} at stride_cells={other.stride_cells}"
+            )
+        return np.flatnonzero(self.move_energies_j().ravel() != other.move_energies_j().ravel())
+
+    def move_energies_j(self, moves: np.ndarray | None = None) -> np.ndarray:
+        """Drive energies (J) of lattice moves; ``inf`` for a move that is not an edge.
+
+        Parameters
+        ----------
+        moves : ndarray of int, optional
+            Move ids ``node * 16 + k`` (``k`` indexing :data:`LATTICE_OFFSETS`); default all.
+
+        Returns
+        -------
+        ndarray of float
+            The energies of ``moves``, or of every move as a ``(n_nodes, 16)`` array.
+        """
+        pos = self._pos.ravel() if moves is None else self._pos.ravel()[np.asarray(moves, dtype=np.int64)]
+        out = np.full(pos.shape, np.inf)
+        ok = pos >= 0
+        out[ok] = self._data["energy"][pos[ok]]
+        return out.reshape(self._pos.shape) if moves is None else out
+
+    @property
+    def move_edges(self) -> np.ndarray:
+        """``(n_nodes, 16)`` index of each move's edge in :meth:`edge_weights` (-1: not an edge),
+        read-only; move ``k`` of node ``u`` goes to node ``u + LATTICE_OFFSETS[k] @ (n_cols, 1)``."""
+        view = self._pos.view()
+        view.setflags(write=False)
+        return view
+
+    def edge_weights(self, weight: str = "energy") -> np.ndarray:
+        """The edge weights in :meth:`graph`'s data order (a read-only view, not a copy).
+
+        Raises
+        ------
+        UnknownNameError
+            Unknown ``weight``.
+        """
+        if weight not in LATTICE_WEIGHTS:
+            raise UnknownNameError(f"weight must be one of {LATTICE_WEIGHTS!r}, got {weight!r}")
+        view = self._data[weight].view()
+        view.setflags(write=False)
+        return view
 
     @classmethod
     def for_cost(cls, cost: EnergyCost, stride_cells: int = 1) -> Lattice:
@@ -296,6 +391,46 @@ class Lattice:
         xy = self.node_xy(nodes)
         return nodes[np.hypot(xy[:, 0] - p[0], xy[:, 1] - p[1]) <= radius]
 
+    def joins(self, xy_m: np.ndarray, *, to_point: bool = False, weight: str = "energy") -> tuple[np.ndarray, np.ndarray]:
+        """The lattice nodes a query point is joined to, and the weights of the joining segments.
+
+        Parameters
+        ----------
+        xy_m : ndarray, shape (2,)
+            A point on the map (m), already checked.
+        to_point : bool
+            False: segments from the point to the nodes (a start); True: from the nodes to
+            the point (a goal).
+        weight : {"energy", "length"}
+
+        Returns
+        -------
+        nodes : ndarray of int64
+            Nodes within 1.5 strides whose joining segment is drivable.
+        weights : ndarray of float
+            Drive energy (J) or length (m) of each joining segment.
+        """
+        p = np.asarray(xy_m, dtype=np.float64)
+        nodes = self._nearby_nodes(p)
+        xy = self.node_xy(nodes)
+        ends = np.broadcast_to(p, xy.shape)
+        e = self.cost.segment_energy_j(xy, ends) if to_point else self.cost.segment_energy_j(ends, xy)
+        if weight == "length":
+            e = np.where(np.isfinite(e), np.hypot(*(xy - p).T), np.inf)
+        ok = np.isfinite(e)
+        return nodes[ok].astype(np.int64), e[ok]
+
+    def path_via(self, start_xy_m: np.ndarray, nodes: list[int] | np.ndarray, goal_xy_m: np.ndarray,
+                 objective: float, weight: str = "energy", solve_time_s: float = 0.0) -> LatticePath:
+        """The :class:`LatticePath` of the route ``start, nodes..., goal`` (collinear runs merged);
+        not found when ``objective`` is not finite."""
+        if not math.isfinite(objective):
+            return LatticePath(False, np.empty((0, 2)), math.inf, weight, solve_time_s)
+        nodes = np.asarray(nodes, dtype=np.int64)
+        mid = self.node_xy(nodes) if nodes.size else np.empty((0, 2))
+        waypoints = _merge_collinear(np.vstack([start_xy_m, mid, goal_xy_m]))
+        return LatticePath(True, waypoints, float(objective), weight, solve_time_s)
+
     def shortest_path(
         self,
         start_xy_m: tuple[float, float],
@@ -336,27 +471,18 @@ class Lattice:
         self.cost.check_inside(pts, "start/goal")
         start, goal = pts
         cost = self.cost
-        src = self._nearby_nodes(start)
-        dst = self._nearby_nodes(goal)
-        src_xy = self.node_xy(src)
-        dst_xy = self.node_xy(dst)
-        e_src = cost.segment_energy_j(np.broadcast_to(start, src_xy.shape), src_xy)
-        e_dst = cost.segment_energy_j(dst_xy, np.broadcast_to(goal, dst_xy.shape))
+        src, e_src = self.joins(start, weight=weight)
+        dst, e_dst = self.joins(goal, to_point=True, weight=weight)
         e_direct = float(cost.segment_energy_j(start, goal)[0])
         if weight == "length":
-            e_src = np.where(np.isfinite(e_src), np.hypot(*(src_xy - start).T), np.inf)
-            e_dst = np.where(np.isfinite(e_dst), np.hypot(*(goal - dst_xy).T), np.inf)
             e_direct = float(np.hypot(*(goal - start))) if math.isfinite(e_direct) else math.inf
-        ok_src = np.isfinite(e_src)
-        ok_dst = np.isfinite(e_dst)
         best = e_direct
         best_nodes: list[int] = []
-        if ok_src.any() and ok_dst.any() and method == "astar":
+        if src.size and dst.size and method == "astar":
             h_per_m = cost.min_energy_per_metre_j if weight == "energy" else 1.0
             total, last, pred = astar(
                 self._indptr, self._indices, self._data[weight], self._node_x, self._node_y, self._nj,
-                src[ok_src].astype(np.int64), e_src[ok_src], dst[ok_dst].astype(np.int64), e_dst[ok_dst],
-                float(goal[0]), float(goal[1]), float(h_per_m), best,
+                src, e_src, dst, e_dst, float(goal[0]), float(goal[1]), float(h_per_m), best,
             )
             if last >= 0 and total < best:
                 best = float(total)
@@ -366,11 +492,11 @@ class Lattice:
                     chain.append(node)
                     node = int(pred[node])
                 best_nodes = chain[::-1]
-        elif ok_src.any() and ok_dst.any():
+        elif src.size and dst.size:
             n = self.n_nodes
-            data = np.concatenate([self._data[weight], e_src[ok_src]])
-            indices = np.concatenate([self._indices, src[ok_src].astype(np.int32)])
-            indptr = np.append(self._indptr, np.int32(self._indptr[-1] + ok_src.sum()))
+            data = np.concatenate([self._data[weight], e_src])
+            indices = np.concatenate([self._indices, src.astype(np.int32)])
+            indptr = np.append(self._indptr, np.int32(self._indptr[-1] + src.size))
             graph = csr_matrix((data, indices, indptr), shape=(n + 1, n + 1))
             dist, pred = dijkstra(graph, directed=True, indices=n, return_predecessors=True)
             total = dist[dst] + e_dst
@@ -383,12 +509,8 @@ class Lattice:
                     chain.append(node)
                     node = int(pred[node])
                 best_nodes = chain[::-1]
-        elapsed = time.perf_counter() - t0
-        if not math.isfinite(best):
-            return LatticePath(False, np.empty((0, 2)), math.inf, weight, elapsed)
-        mid = self.node_xy(np.array(best_nodes, dtype=np.int64)) if best_nodes else np.empty((0, 2))
-        waypoints = _merge_collinear(np.vstack([start, mid, goal]))
-        return LatticePath(True, waypoints, best, weight, time.perf_counter() - t0)
+        path = self.path_via(start, best_nodes, goal, best, weight)
+        return dataclasses.replace(path, solve_time_s=time.perf_counter() - t0)
 
 
 def _merge_collinear(pts: np.ndarray) -> np.ndarray:

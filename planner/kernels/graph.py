@@ -165,11 +165,13 @@ def _lattice_reweight(cells, table, geo, stride, offset, ni, nj, half, changed_s
     ``changed_sat`` is the summed-area table of the changed-cell mask (shape rows+1, cols+1);
     ``pos[node, k]`` is the index in ``data`` of move ``k`` of ``node`` (-1: no edge). Returns
     per node-row counts of recomputed moves and of edges whose presence would change (an
-    absent edge becoming finite or a present one becoming ``inf``).
+    absent edge becoming finite or a present one becoming ``inf``), and a ``(ni * nj, 2 * nh)``
+    mask (uint8) of the moves whose energy changed (``inf`` standing for an absent edge).
     """
     nh = half.shape[0]
     recomputed = np.zeros(ni, np.int64)
     flips = np.zeros(ni, np.int64)
+    changed = np.zeros((ni * nj, 2 * nh), np.uint8)
     for i in numba.prange(ni):
         ra = i * stride + offset
         ya = geo[1] + (ra + 0.5) * geo[2]
@@ -196,16 +198,22 @@ def _lattice_reweight(cells, table, geo, stride, offset, ni, nj, half, changed_s
                 recomputed[i] += 2
                 tgt = ti * nj + tj
                 p = pos[src, k]
+                old = data[p] if p >= 0 else math.inf
+                if ef != old:
+                    changed[src, k] = 1
                 if p >= 0:
                     data[p] = ef
                 if (p >= 0) != (ef < math.inf):
                     flips[i] += 1
                 p = pos[tgt, nh + k]
+                old = data[p] if p >= 0 else math.inf
+                if eb != old:
+                    changed[tgt, nh + k] = 1
                 if p >= 0:
                     data[p] = eb
                 if (p >= 0) != (eb < math.inf):
                     flips[i] += 1
-    return recomputed, flips
+    return recomputed, flips, changed
 
 
 lattice_weights_serial, lattice_weights_parallel = compile_variants(_lattice_weights)
@@ -221,7 +229,8 @@ def lattice_weights(cells, table, geo, stride, offset, ni, nj, half):
 
 
 def lattice_reweight(cells, table, geo, stride, offset, ni, nj, half, changed_sat, pos, data):
-    """Recompute in ``data`` the moves whose cell box holds a changed cell (see ``_lattice_reweight``);
+    """Recompute in ``data`` the moves whose cell box holds a changed cell (see ``_lattice_reweight``:
+    returns the recomputed and flipped counts per node row and the mask of changed moves);
     the serial or parallel kernel by the number of moves to scan."""
     parallel = use_parallel(ni * nj * half.shape[0])
     kernel = lattice_reweight_parallel if parallel else lattice_reweight_serial

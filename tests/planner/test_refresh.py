@@ -141,3 +141,37 @@ def test_graph_is_a_copy_and_names_its_weight():
     assert lat.graph().data.min() > 0
     with pytest.raises(UnknownNameError, match="weight"):
         lat.graph("time")
+
+
+@pytest.mark.parametrize("stride", [1, 2])
+def test_refresh_reports_exactly_the_moves_whose_energy_changed(stride):
+    cost = _cost(seed=1)
+    lat = Lattice.for_cost(cost, stride)
+    assert lat.changed_moves is None
+    grade, turn = _tables(3)
+    grade[1] *= 0.6  # cheaper
+    grade[2, grade.shape[1] // 2 + 3:] = np.inf  # and edges vanish: the structure is rebuilt
+    for g in (grade, _tables(3)[0] * np.array([[1.0], [1.3], [1.0]])):
+        new = Lattice.for_cost(cost.with_tables(g, turn), stride)
+        before, after = lat.move_energies_j(), new.move_energies_j()
+        assert before.shape == (lat.n_nodes, 16)
+        expected = np.flatnonzero(before.ravel() != after.ravel())
+        assert expected.size > 0 and np.array_equal(new.changed_moves, expected)
+        assert np.array_equal(new.changed_moves_since(lat), expected)
+        assert np.array_equal(lat.changed_moves_since(new), expected)  # compared move by move
+        assert np.array_equal(new.move_energies_j(expected), after.ravel()[expected])
+    assert Lattice.for_cost(cost.with_tables(*_tables(3)), stride).changed_moves.size == 0
+    assert lat.changed_moves_since(lat).size == 0
+
+
+def test_move_views_match_the_graph_and_are_read_only():
+    lat = Lattice(_cost(), 1)
+    g = lat.graph()
+    assert np.array_equal(lat.edge_weights(), g.data)
+    pos = lat.move_edges
+    assert pos.shape == (lat.n_nodes, 16) and not pos.flags.writeable and not lat.edge_weights().flags.writeable
+    u = 200
+    k = np.flatnonzero(pos[u] >= 0)
+    assert np.array_equal(np.sort(pos[u, k]), np.arange(g.indptr[u], g.indptr[u + 1]))
+    with pytest.raises(InvalidParameterError, match="same grid"):
+        lat.changed_moves_since(Lattice(_cost(), 2))
