@@ -39,7 +39,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from terrain.checks import check_choice, check_real, real_array
+from terrain.checks import check_bool, check_choice, check_int, check_real, check_text, real_array
 from terrain.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog
@@ -417,14 +417,14 @@ class AdaptedCurrentModel(CurrentModel):
         if coef.shape != (2, self._n_coefficients[self.method]):
             raise ValueError(f"coefficients of shape {coef.shape!r} do not fit method {self.method!r}")
         self.coefficients_ = coef
-        self.adapted_on_s_ = float(state["adapted_on_s"])
-        self.n_samples_ = int(state["n_samples"])
-        self.nonnegative_ = bool(state["nonnegative"])
+        self.adapted_on_s_ = check_real("adapted_on_s", state["adapted_on_s"], low=0.0)
+        self.n_samples_ = check_int("n_samples", state["n_samples"], low=0)
+        self.nonnegative_ = check_bool("nonnegative", state["nonnegative"])
         ground = state.get("ground")
-        self.ground_ = None if ground is None else str(ground)
+        self.ground_ = None if ground is None else check_text("ground", ground)
         post = state.get("posterior_cov")
         self.posterior_cov_ = None if post is None else real_array("posterior_cov", post, ndim=3)
-        self.noise_ratio_ = float(state.get("noise_ratio", 1.0))
+        self.noise_ratio_ = check_real("noise_ratio", state.get("noise_ratio", 1.0))
         if not (math.isfinite(self.noise_ratio_) and self.noise_ratio_ > 0):
             raise ValueError(f"noise_ratio must be finite and > 0, got {self.noise_ratio_!r}")
         if self.method == "bayes" and (self.posterior_cov_ is None or self.posterior_cov_.shape != (2, 8, 8)):

@@ -30,7 +30,7 @@ import os
 import platform
 import zipfile
 import zlib
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
@@ -38,6 +38,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from terrain.atomic import atomic_open, check_output_path, remove_stale_temporaries
+from terrain.checks import check_int, check_real
 from terrain.containers import check_zip_sizes, load_npy, read_zip_entry
 from terrain.errors import (
     DataError,
@@ -170,14 +171,24 @@ class TrainingSummary:
         return {"robots": list(self.robots), "grounds": dict(self.grounds), "runs": self.runs}
 
     @classmethod
-    def from_plain(cls, value: Any) -> TrainingSummary | None:
-        """The summary of a file entry; ``None`` for a missing or malformed one (older files)."""
-        try:
-            robots = tuple(str(r) for r in value["robots"])
-            grounds = {str(k): float(v) for k, v in dict(value["grounds"]).items()}
-            return cls(robots, grounds, int(value["runs"]))
-        except (KeyError, TypeError, ValueError, OverflowError):
-            return None
+    def from_plain(cls, value: Any) -> TrainingSummary:
+        """The summary of a file entry (:meth:`to_plain`).
+
+        Raises
+        ------
+        InvalidParameterError
+            A malformed entry: robots not a list of strings, grounds not a mapping of
+            names to non-negative seconds, runs not a non-negative integer.
+        """
+        if not isinstance(value, Mapping) or set(value) != {"robots", "grounds", "runs"}:
+            raise InvalidParameterError("the training summary must hold exactly 'robots', 'grounds' and 'runs'")
+        robots, grounds = value["robots"], value["grounds"]
+        if not isinstance(robots, list) or not all(isinstance(r, str) for r in robots):
+            raise InvalidParameterError("the training summary's robots must be a list of names")
+        if not isinstance(grounds, Mapping):
+            raise InvalidParameterError("the training summary's grounds must map names to seconds")
+        seconds = {str(k): check_real(f"seconds on {k!r}", v, low=0.0) for k, v in grounds.items()}
+        return cls(tuple(robots), seconds, check_int("runs", value["runs"], low=0))
 
 
 # ------------------------------------------------------------------ file format
@@ -599,7 +610,10 @@ class CurrentModel:
         if not model.is_fitted:
             raise FileFormatError(f"{source}: the {name} state restores no fitted attribute")
         if record.trained_on is not None:
-            model.trained_on_ = TrainingSummary.from_plain(record.trained_on)
+            try:
+                model.trained_on_ = TrainingSummary.from_plain(record.trained_on)
+            except _FAILURES as exc:
+                raise FileFormatError(f"{source}: the training summary is malformed: {exc}") from exc
         if record.interval is not None:
             try:
                 model.interval_ = IntervalModel.from_plain(record.interval)

@@ -155,7 +155,8 @@ class EstimatorConfig:
         for name in ("train_stride_s", "predict_stride_s"):
             if getattr(self, name) is not None:
                 check_real(name, getattr(self, name), low=0.0, low_inclusive=False, owner=own)
-        for name in ("absolute_inputs", "absolute_currents", "local_spectrum", "clip_output", "use_yaw_slip"):
+        for name in ("absolute_inputs", "absolute_currents", "local_spectrum", "clip_output", "use_yaw_slip",
+                     "member_folds"):
             check_bool(f"{own}.{name}", getattr(self, name))
         check_choice(f"{own}.run_features", self.run_features, RUN_FEATURES)
         check_choice(f"{own}.spectrum_scaling", self.spectrum_scaling, SPECTRUM_SCALINGS)

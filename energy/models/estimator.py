@@ -521,7 +521,12 @@ class VibrationCurrentEstimator(CurrentModel):
             if t.shape != a.shape or t.size < 2 or np.any(np.diff(t) <= 0):
                 raise ValueError(f"the recorded vibration of ground {g!r} is not an increasing time series")
         folds = state.get("member_folds")  # absent in files from before the cross-validation ensemble
-        self.member_folds_ = None if folds is None else np.asarray(folds, dtype=np.int64).reshape(-1)
+        if folds is not None:
+            folds = np.asarray(folds)
+            if folds.ndim != 1 or folds.dtype.kind not in "iu" or np.any((folds < 0) | (folds >= len(nets))):
+                raise ValueError(f"member_folds must be a list of member indices below {len(nets)}")
+            folds = folds.astype(np.int64)
+        self.member_folds_ = folds
 
     def ground_vibration(self, ground: str) -> tuple[np.ndarray, np.ndarray] | None:
         """The vertical acceleration of ``ground`` kept from training (the longest run's first seconds), or None.

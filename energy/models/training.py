@@ -9,6 +9,7 @@ seeded generator, as :class:`~energy.models.net.CurrentNet` does.
 from __future__ import annotations
 
 import math
+import numbers
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -16,7 +17,7 @@ from typing import Any
 import torch
 from torch import nn
 
-from terrain.checks import check_choice, check_int, check_real, check_seed
+from terrain.checks import check_bool, check_choice, check_int, check_real, check_seed
 from terrain.errors import InvalidParameterError
 
 from .data import WindowDataset
@@ -95,8 +96,17 @@ class TrainingHistory:
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> TrainingHistory:
         """Rebuild from :meth:`to_dict` output."""
-        return cls(tuple(d["train_loss"]), tuple(d["validation_loss"]), int(d["best_epoch"]),
-                   bool(d["stopped_early"]), float(d["duration_s"]))
+        def losses(name: str) -> tuple[float, ...]:
+            value = d[name]
+            if not isinstance(value, (list, tuple)):
+                raise InvalidParameterError(f"TrainingHistory.{name} must be a list of numbers, got {type(value).__name__}")
+            if any(isinstance(v, bool) or not isinstance(v, numbers.Real) for v in value):
+                raise InvalidParameterError(f"TrainingHistory.{name} must be a list of numbers")
+            return tuple(float(v) for v in value)  # NaN stands for an epoch without validation
+
+        return cls(losses("train_loss"), losses("validation_loss"), check_int("TrainingHistory.best_epoch",
+                   d["best_epoch"], low=0), check_bool("TrainingHistory.stopped_early", d["stopped_early"]),
+                   check_real("TrainingHistory.duration_s", d["duration_s"], low=0.0))
 
 
 def _loss_fn(name: str) -> nn.Module:

@@ -41,6 +41,8 @@ from typing import Any
 
 import numpy as np
 
+from terrain.checks import check_bool, check_int
+
 from ..logs import InteractionLog, rest_samples
 
 __all__ = ["REGIME_COLUMNS", "IntervalModel", "regime_design", "run_coefficients"]
@@ -278,4 +280,4 @@ class IntervalModel:
         if not (math.isfinite(scale) and scale > 0 and math.isfinite(corr) and corr > 0):
             raise ValueError("turn_scale_radps and correlation_s must be finite and > 0")
         return cls(scale, run_cov, None if new is None else cov("new_ground_cov", new), sd, corr,
-                   bool(d["cross_validated"]), int(d["n_runs"]))
+                   check_bool("cross_validated", d["cross_validated"]), check_int("n_runs", d["n_runs"], low=0))

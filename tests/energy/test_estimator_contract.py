@@ -240,6 +240,58 @@ def test_forged_values_inside_the_state_raise_file_format_error(data, tmp_path):
         load_current_model(path)
 
 
+def _leaf_paths(value, path=()):
+    """Paths to every plain leaf and list of a model.json section (array references excluded)."""
+    if isinstance(value, dict):
+        if set(value) == {"__array__"}:
+            return
+        for k, v in value.items():
+            yield from _leaf_paths(v, (*path, k))
+    elif isinstance(value, list):
+        if path:
+            yield path
+        for i, v in enumerate(value):
+            yield from _leaf_paths(v, (*path, i))
+    elif path:
+        yield path
+
+
+def test_a_value_of_another_kind_anywhere_in_the_file_is_refused(data, tmp_path):
+    # a list where a flag, a name, a number or a mapping belongs loaded before (bool([..]) and
+    # str([..]) accept anything): every plain entry of every section is replaced in turn by a
+    # list of numbers (where a single value belongs) and by a list of lists of strings, which
+    # is no valid value anywhere in the format
+    est = _tiny("default").fit(data[0])
+    from energy.models import fit_interval
+
+    models = {"estimator": est, "linear": fit_interval(LinearCurrentModel(), data[0], folds=2)}
+    models["adapted"] = models["linear"].adapt(data[1], method="bayes", scope="run")
+    for kind, model in models.items():
+        saved = model.save(tmp_path / f"{kind}.zip")
+        header = _header(saved)
+        paths = [(section, p) for section in ("params", "state", "trained_on", "interval")
+                 for p in _leaf_paths(header.get(section))]
+        assert len(paths) > 10, kind
+        for section, path in paths:
+            node = header[section]
+            for key in path:
+                node = node[key]
+            for value in ([["x"], ["y"]], *([] if isinstance(node, list) else [[1.0, 2.0]])):
+                forged = tmp_path / f"{kind}-forged.zip"
+                forged.write_bytes(saved.read_bytes())
+
+                def change(h, section=section, path=path, value=value):
+                    node = h[section]
+                    for key in path[:-1]:
+                        node = node[key]
+                    node[path[-1]] = value
+
+                _forge(forged, change)
+                with pytest.raises(FileFormatError):
+                    load_current_model(forged)
+                    pytest.fail(f"{kind}: {section}{list(path)} = {value!r} loaded")
+
+
 def test_truncated_random_and_foreign_files_raise_file_format_error(data, tmp_path):
     path = _tiny("default").fit(data[0]).save(tmp_path / "model.pt")
     raw = path.read_bytes()
