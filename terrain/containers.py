@@ -97,14 +97,17 @@ def read_zip_entry(archive: zipfile.ZipFile, name: str, where: str) -> bytes:
     return data
 
 
-def load_npy(data: bytes, where: str, field: str) -> np.ndarray:
+def load_npy(data: bytes, where: str, field: str, *, kinds: str | None = None) -> np.ndarray:
     """An ``.npy`` payload as an array, after checking that its header describes exactly its bytes.
+
+    ``kinds`` (numpy dtype kind letters, e.g. ``"iuf"``) restricts the dtypes accepted.
 
     Raises
     ------
     FileFormatError
-        Not an ``.npy`` payload, an object (pickled) dtype, a shape whose size differs from the
-        bytes present, any decoding error; the message names the file and ``field``.
+        Not an ``.npy`` payload, an object (pickled) dtype, a dtype outside ``kinds``, a shape
+        whose size differs from the bytes present, any decoding error; the message names the
+        file and ``field``.
     """
     buf = io.BytesIO(data)
     try:
@@ -117,6 +120,12 @@ def load_npy(data: bytes, where: str, field: str) -> np.ndarray:
         raise FileFormatError(f"{where}: {field} is not a readable .npy array: {exc}") from exc
     if dtype.hasobject:
         raise FileFormatError(f"{where}: {field} holds Python objects ({dtype}); terrawatt never loads pickles")
+    if kinds is not None and dtype.kind not in kinds:
+        names = {"b": "bool", "i": "integer", "u": "unsigned integer", "f": "real floating point", "c": "complex",
+                 "U": "text", "S": "bytes", "V": "raw records", "M": "datetime", "m": "timedelta"}
+        expected = " or ".join(names.get(k, k) for k in kinds)
+        raise FileFormatError(f"{where}: {field} holds {names.get(dtype.kind, dtype.kind)} values ({dtype}); "
+                              f"expected {expected}")
     count = math.prod(int(n) for n in shape)
     declared = count * dtype.itemsize
     present = len(data) - buf.tell()

@@ -213,7 +213,7 @@ def _decode(value: Any, archive: zipfile.ZipFile, where: str) -> Any:
             ref = value[_ARRAY_KEY]
             if not isinstance(ref, str):
                 raise TypeError(f"array reference {ref!r} is not an entry name")
-            return load_npy(read_zip_entry(archive, ref, where), where, f"entry {ref!r}")
+            return load_npy(read_zip_entry(archive, ref, where), where, f"entry {ref!r}", kinds="iuf")
         return {k: _decode(v, archive, where) for k, v in value.items()}
     if isinstance(value, list):
         return [_decode(v, archive, where) for v in value]

@@ -107,3 +107,13 @@ def test_nan_network_weights_do_not_load(tmp_path):
     bad = _rewrite(path, tmp_path / "nan.zip", {entry: _npy(arr)})
     with pytest.raises(FileFormatError, match="non-finite"):
         load_current_model(bad)
+
+
+@pytest.mark.parametrize(("array", "word"), [(np.ones(3) + 1j, "complex"), (np.ones(3) > 0, "bool"),
+                                             (np.array(["1.5", "2"]), "text")])
+def test_an_npy_entry_of_a_kind_not_asked_for_is_refused(array, word):
+    buf = io.BytesIO()
+    np.save(buf, array)
+    assert load_npy(buf.getvalue(), "f", "x").dtype == array.dtype  # no restriction asked
+    with pytest.raises(FileFormatError, match=rf"'f': x holds {word} values .* expected integer or unsigned"):
+        load_npy(buf.getvalue(), "'f'", "x", kinds="iuf")
