@@ -73,6 +73,7 @@ from .planning import OMPL_PLANNERS, PLANNERS, compare_route, plan_route, shorte
 from .reachability import lattice_move_energies, reachability
 from .reachability_result import REACH_FORMAT_VERSION, REACH_LAYERS, Reachability
 from .refine import refine_route, relax_path, string_pull
+from .replan import IncrementalPlanner
 from .risk import RouteEnergyInterval, risk_cost, route_energy_interval
 from .route import ROUTE_STATUSES, Route, RouteComparison, evaluate_route
 from .route_geojson import GEOJSON_FORMAT_VERSION, routes_geojson, write_geojson
@@ -103,6 +104,7 @@ __all__ = [
     # planners and routes
     "Lattice",
     "LatticePath",
+    "IncrementalPlanner",
     "string_pull",
     "plan_route",
     "refine_route",

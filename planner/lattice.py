@@ -391,7 +391,9 @@ class Lattice:
         xy = self.node_xy(nodes)
         return nodes[np.hypot(xy[:, 0] - p[0], xy[:, 1] - p[1]) <= radius]
 
-    def joins(self, xy_m: np.ndarray, *, to_point: bool = False, weight: str = "energy") -> tuple[np.ndarray, np.ndarray]:
+    def joins(
+        self, xy_m: np.ndarray, *, to_point: bool = False, weight: str = "energy"
+    ) -> tuple[np.ndarray, np.ndarray]:
         """The lattice nodes a query point is joined to, and the weights of the joining segments.
 
         Parameters

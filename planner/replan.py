@@ -1,0 +1,298 @@
+"""Incremental replanning on the lattice: D* Lite toward a fixed goal, repaired where move energies changed.
+
+An :class:`IncrementalPlanner` searches a :class:`~planner.Lattice` backwards from the goal
+(D* Lite, :mod:`planner.kernels.incremental`) and keeps its search state between calls.
+When the robot moves, :meth:`~IncrementalPlanner.plan` continues the search from the new
+start; when energies change (a model update refreshed the cost and its lattice with
+:meth:`EnergyCost.with_tables`), :meth:`~IncrementalPlanner.update` takes the refreshed
+lattice and marks only the nodes whose moves changed (:attr:`Lattice.changed_moves`), and
+the next search repairs the previous one from there instead of starting over.
+
+The answers are those of :meth:`Lattice.shortest_path` with ``weight="energy"``: the same
+joins of start and goal to the nearby nodes, the same direct start-goal segment (taken when
+no lattice route is cheaper), the same admissible heuristic
+``cost.min_energy_per_metre_j * |start - node|``, the same optimum (up to the order of
+the additions) and the same :class:`~planner.LatticePath` assembly. Among routes of equal
+energy the two searches may pick different ones. :meth:`~IncrementalPlanner.route` adds the
+post-processing of ``plan_route(planner="lattice")`` (refinement, costing).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+from terrain.checks import check_bool, check_seed
+from terrain.errors import InvalidParameterError
+
+from .coarse import check_free_point
+from .kernels.incremental import dstar_path, dstar_rekey, dstar_search, dstar_touch
+from .lattice import LATTICE_OFFSETS, Lattice, LatticePath
+from .planning import REFINE_DEFAULT_SEED
+from .points import as_points
+from .refine import refine_route
+from .route import Route, empty_route, evaluate_route
+from .settings import PlannerSettings
+
+__all__ = ["IncrementalPlanner"]
+
+
+class IncrementalPlanner:
+    """Minimum-energy lattice routes to one goal, replanned incrementally (D* Lite).
+
+    Parameters
+    ----------
+    lattice : Lattice
+        The lattice to search (its cost gives the energies and the heuristic).
+    goal_xy_m : (float, float)
+        The goal (m), fixed for the planner's life.
+
+    Attributes
+    ----------
+    lattice : Lattice
+        The lattice whose energies the search state reflects (the last one given to
+        :meth:`update`).
+    goal_xy_m : ndarray, shape (2,)
+    expanded : int
+        Nodes expanded by the last :meth:`plan` (a repair expands only what changed).
+    touched : int
+        Nodes whose moves or goal join changed in the last :meth:`update`.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``lattice`` not a :class:`Lattice`; a NaN goal.
+    OutOfBoundsError
+        Goal outside the map.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from energy import PhysicsEnergyModel, ground_preset, robot_preset
+    >>> from planner import EnergyCost, Lattice
+    >>> from terrain import flat_map
+    >>> tmap = flat_map((30, 40), 1.0)  # level asphalt, 1 m cells
+    >>> cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(robot_preset("husky")),
+    ...                              {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
+    >>> planner = IncrementalPlanner(Lattice.for_cost(cost), (35.0, 25.0))
+    >>> planner.plan((5.0, 5.0)).found
+    True
+    >>> cheaper = cost.with_tables(0.5 * cost.grade_table_j_per_m, cost.turn_table_j)  # a model update
+    >>> path = planner.replan((8.0, 6.0), Lattice.for_cost(cheaper))  # moved, and repaired
+    >>> bool(np.isclose(path.objective, Lattice(cheaper).shortest_path((8.0, 6.0), (35.0, 25.0)).objective))
+    True
+    """
+
+    def __init__(self, lattice: Lattice, goal_xy_m: tuple[float, float]) -> None:
+        if not isinstance(lattice, Lattice):
+            raise InvalidParameterError(f"lattice must be a Lattice, got {type(lattice).__name__!r}")
+        goal = as_points(goal_xy_m, "goal_xy_m")
+        lattice.cost.check_inside(goal, "goal_xy_m")
+        self.goal_xy_m = goal[0]
+        self.goal_xy_m.setflags(write=False)
+        ni, nj = lattice.node_rows.size, lattice.node_cols.size
+        n = lattice.n_nodes
+        self._nj = nj
+        self._delta = (LATTICE_OFFSETS[:, 0] * nj + LATTICE_OFFSETS[:, 1]).astype(np.int64)
+        self._col_x = lattice.node_xy(np.arange(nj))[:, 0].copy()
+        self._row_y = lattice.node_xy(np.arange(ni) * nj)[:, 1].copy()
+        self._g = np.full(n, math.inf)
+        self._rhs = np.full(n, math.inf)
+        self._exit = np.full(n, math.inf)
+        self._key1 = np.empty(n)
+        self._key2 = np.empty(n)
+        self._nodes = np.empty(n, np.int64)
+        self._where = np.full(n, -1, np.int64)
+        self._size = 0
+        self.lattice = lattice
+        self.expanded = 0
+        self.touched = 0
+        self._dst = np.empty(0, np.int64)
+        self._set_goal_joins()
+
+    @property
+    def cost(self) -> Any:
+        """The :class:`EnergyCost` of the current lattice."""
+        return self.lattice.cost
+
+    def _set_goal_joins(self) -> np.ndarray:
+        """Join the goal to the current lattice; the nodes whose join changed (old and new)."""
+        old = self._dst
+        self._exit[old] = math.inf
+        self._dst, e_dst = self.lattice.joins(self.goal_xy_m, to_point=True)
+        self._exit[self._dst] = e_dst
+        self._touch(np.union1d(old, self._dst))
+        return self._dst
+
+    def _touch(self, nodes: np.ndarray) -> None:
+        g = self.goal_xy_m
+        self._size = dstar_touch(
+            np.ascontiguousarray(nodes, dtype=np.int64), self.lattice.move_edges, self.lattice.edge_weights(),
+            self._delta, self._g, self._rhs, self._exit, self._key1, self._key2, self._nodes, self._where,
+            self._size, self._col_x, self._row_y, self._nj, float(g[0]), float(g[1]), 0.0,
+        )
+
+    def update(self, lattice: Lattice) -> IncrementalPlanner:
+        """Take new move energies: ``lattice`` is this planner's lattice refreshed for new tables.
+
+        Only the nodes whose moves changed (:meth:`Lattice.changed_moves_since`: free when
+        ``lattice`` was refreshed from the current one) and the goal's joins are looked at
+        again; the next :meth:`plan` repairs the search from them.
+
+        Parameters
+        ----------
+        lattice : Lattice
+            A lattice over the same node grid (normally ``Lattice.for_cost(new_cost, stride)``
+            after ``new_cost = cost.with_tables(...)``).
+
+        Returns
+        -------
+        IncrementalPlanner
+            ``self``; :attr:`touched` counts the nodes looked at again.
+
+        Raises
+        ------
+        InvalidParameterError
+            ``lattice`` not a lattice over the same map grid, stride and node grid.
+        """
+        if not isinstance(lattice, Lattice):
+            raise InvalidParameterError(f"lattice must be a Lattice, got {type(lattice).__name__!r}")
+        moves = lattice.changed_moves_since(self.lattice)
+        self.lattice = lattice
+        heads = moves // len(LATTICE_OFFSETS)  # ascending
+        if heads.size:
+            heads = heads[np.concatenate([[True], heads[1:] != heads[:-1]])]
+        self._touch(heads)
+        goal_side = self._set_goal_joins()
+        self.touched = int(np.union1d(heads, goal_side).size)
+        return self
+
+    def plan(self, start_xy_m: tuple[float, float]) -> LatticePath:
+        """The minimum-energy lattice route from ``start_xy_m`` to the goal, repairing the last search.
+
+        Parameters
+        ----------
+        start_xy_m : (float, float)
+            The start (m); it may differ from call to call (a moving robot).
+
+        Returns
+        -------
+        LatticePath
+            As :meth:`Lattice.shortest_path` (``weight="energy"``): ``found=False`` when no
+            route exists; ``solve_time_s`` is this call's time.
+
+        Raises
+        ------
+        InvalidParameterError, OutOfBoundsError
+            NaN start / start outside the map.
+        """
+        t0 = time.perf_counter()
+        pts = as_points(start_xy_m, "start_xy_m")
+        cost = self.cost
+        cost.check_inside(pts, "start_xy_m")
+        start, goal = pts[0], self.goal_xy_m
+        e_direct = float(cost.segment_energy_j(start, goal)[0])
+        src, e_src = self.lattice.joins(start)
+        nodes, objective = np.empty(0, np.int64), math.inf
+        self.expanded = 0
+        if src.size and self._dst.size:
+            pos, data = self.lattice.move_edges, self.lattice.edge_weights()
+            sx, sy, h_per_m = float(start[0]), float(start[1]), max(float(cost.min_energy_per_metre_j), 0.0)
+            dstar_rekey(self._g, self._rhs, self._key1, self._key2, self._nodes, self._where, self._size,
+                        self._col_x, self._row_y, self._nj, sx, sy, h_per_m)
+            best, self.expanded, self._size = dstar_search(
+                src, e_src, pos, data, self._delta, self._g, self._rhs, self._exit, self._key1, self._key2,
+                self._nodes, self._where, self._size, self._col_x, self._row_y, self._nj, sx, sy, h_per_m,
+            )
+            if best < e_direct:
+                nodes, objective = dstar_path(src, e_src, pos, data, self._delta, self._g, self._exit)
+        if not objective < e_direct:  # the direct segment (or nothing) is best, as in shortest_path
+            nodes, objective = np.empty(0, np.int64), e_direct
+        return self.lattice.path_via(start, nodes, goal, float(objective), "energy", time.perf_counter() - t0)
+
+    def replan(self, start_xy_m: tuple[float, float], lattice: Lattice | None = None) -> LatticePath:
+        """:meth:`update` with ``lattice`` (if given), then :meth:`plan` from ``start_xy_m``."""
+        if lattice is not None:
+            self.update(lattice)
+        return self.plan(start_xy_m)
+
+    def route(
+        self,
+        start_xy_m: tuple[float, float],
+        *,
+        seed: int | None = None,
+        refine: bool = True,
+        settings: PlannerSettings | None = None,
+    ) -> Route:
+        """The route ``plan_route(terrain, start, goal, cost=self.cost, planner="lattice")`` gives,
+        from this planner's incremental search.
+
+        The same checks (start and goal on free cells, in one connected region: else
+        ``"infeasible"``), the same fallback to the 1-cell lattice when a coarser one finds
+        nothing, the same refinement (:func:`refine_route`, seeded by ``seed`` or
+        ``REFINE_DEFAULT_SEED``) and costing (:func:`evaluate_route`).
+
+        Parameters
+        ----------
+        start_xy_m : (float, float)
+        seed : int, optional
+            Seed of the refinement.
+        refine : bool
+            Refine the lattice route (the planner's name then reads ``"lattice+refine"``).
+        settings : PlannerSettings, optional
+            Refinement steps and rounds.
+
+        Returns
+        -------
+        Route
+            ``"exact"`` or ``"infeasible"``; ``planning_time_s`` holds the search and the
+            refinement.
+
+        Raises
+        ------
+        InvalidParameterError
+            NaN start, start equal to the goal, bad seed or settings.
+        OutOfBoundsError
+            Start outside the map.
+        BlockedPositionError
+            Start or goal on a blocked cell.
+        """
+        settings = PlannerSettings() if settings is None else settings
+        if not isinstance(settings, PlannerSettings):
+            raise InvalidParameterError(f"settings must be a PlannerSettings, got {type(settings).__name__!r}")
+        refine = check_bool("refine", refine)
+        seed = check_seed(seed)
+        cost = self.cost
+        start = as_points(start_xy_m, "start_xy_m")
+        cost.check_inside(start, "start_xy_m")
+        start, goal = start[0], self.goal_xy_m
+        check_free_point(cost, "start_xy_m", start)
+        check_free_point(cost, "goal_xy_m", goal)
+        if np.array_equal(start, goal):
+            raise InvalidParameterError(
+                f"start equals goal ({start[0]!r}, {start[1]!r}) m: there is no route to plan; expected two "
+                "different points"
+            )
+        labels = cost.components()
+        rs, cs = cost.terrain.rowcol(start[0], start[1])
+        rg, cg = cost.terrain.rowcol(goal[0], goal[1])
+        if labels[rs, cs] != labels[rg, cg]:
+            return empty_route("infeasible", "lattice", 0.0, cost.battery_voltage_v)
+        t0 = time.perf_counter()
+        path = self.plan(start)
+        if not path.found and self.lattice.stride_cells > 1:  # a passage too narrow for the coarse lattice
+            path = Lattice.for_cost(cost, 1).shortest_path(start, goal, weight="energy")
+        elapsed = time.perf_counter() - t0
+        if not path.found:
+            return empty_route("infeasible", "lattice", elapsed, cost.battery_voltage_v)
+        waypoints, name = path.waypoints_m, "lattice"
+        if refine:
+            t0 = time.perf_counter()
+            waypoints = refine_route(cost, waypoints, seed=REFINE_DEFAULT_SEED if seed is None else seed,
+                                     max_steps=settings.refine_max_steps, rounds=settings.refine_rounds)
+            elapsed += time.perf_counter() - t0
+            name = "lattice+refine"
+        return evaluate_route(cost, waypoints, status="exact", planner=name, planning_time_s=elapsed)
