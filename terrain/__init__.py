@@ -29,6 +29,7 @@ from .georef import WGS84, lonlat_to_xy, transform_xy, utm_crs, xy_to_lonlat
 from .geotiff import read_geotiff, write_geotiff
 from .grid import Grid
 from .io import read_map
+from .landcover import LandcoverClasses, ground_classes_from_landcover, read_landcover_classes
 from .procedural import (
     EXAMPLE_GOAL_XY_M,
     EXAMPLE_START_XY_M,
@@ -93,6 +94,9 @@ __all__ = [
     "set_obstacles_from_polygons",
     "read_geojson",
     "apply_geojson",
+    "ground_classes_from_landcover",
+    "read_landcover_classes",
+    "LandcoverClasses",
     # per-cell current models
     "CellModelRegistry",
     "CurrentModelProtocol",

@@ -1,0 +1,386 @@
+"""Ground classes from a categorical land-cover raster (e.g. ESA WorldCover) and a code -> ground mapping.
+
+A land cover is a GeoTIFF of integer class codes in any CRS; a mapping (a small CSV file,
+:func:`read_landcover_classes`) names the ground of each code. :func:`ground_classes_from_landcover`
+warps the codes onto a georeferenced map's grid by majority (GDAL's mode resampling) and makes
+them the map's ground-class layer. Two ground names are reserved:
+
+- ``obstacle``: the code's cells become obstacles (water, buildings, dense forest...);
+- ``unknown``: the code's cells have unknown ground (``-1``), priced as the planner's
+  ``unknown_ground`` (``--unknown-ground``) says — the same as a code the mapping omits,
+  but stated.
+"""
+
+from __future__ import annotations
+
+import csv
+import logging
+import os
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from .containers import memory_budget_bytes
+from .errors import FileFormatError, InvalidParameterError
+from .georef import import_rasterio, lonlat_bounds, parse_crs
+from .terrain_map import UNKNOWN_GROUND, TerrainMap
+
+__all__ = [
+    "LandcoverClasses",
+    "read_landcover_classes",
+    "ground_classes_from_landcover",
+    "OBSTACLE_GROUND",
+    "UNKNOWN_GROUND_NAME",
+    "LANDCOVER_COLUMNS",
+    "MAX_CLASSES_BYTES",
+]
+
+logger = logging.getLogger(__name__)
+
+#: The ground name that makes a land-cover code an obstacle.
+OBSTACLE_GROUND = "obstacle"
+#: The ground name that leaves a land-cover code's ground unknown (``-1``).
+UNKNOWN_GROUND_NAME = "unknown"
+#: Columns of a classes file: required ``code`` and ``ground``, optional ``label`` (a description).
+LANDCOVER_COLUMNS = ("code", "ground", "label")
+#: Largest classes file read (bytes): a mapping is a few lines.
+MAX_CLASSES_BYTES = 1024**2
+_MAX_CODE = 2**31 - 1
+_NAME = re.compile(r"^[A-Za-z0-9_\-]+$")
+_CODE = re.compile(r"^[0-9]+$")
+_NODATA = np.iinfo(np.uint16).max  # category of "no land-cover value" in the warp
+
+
+@dataclass(frozen=True)
+class LandcoverClasses:
+    """The ground of each land-cover code.
+
+    Attributes
+    ----------
+    grounds_by_code : mapping int -> str
+        Ground name per code (read-only, sorted by code): a ground preset name such as
+        ``"grass"``, or :data:`OBSTACLE_GROUND` / :data:`UNKNOWN_GROUND_NAME`.
+
+    Raises
+    ------
+    InvalidParameterError
+        No codes, a code not an integer in [0, 2**31 - 1], a name that is not a non-empty
+        word (letters, digits, ``_``, ``-``).
+
+    Examples
+    --------
+    >>> classes = LandcoverClasses({10: "obstacle", 30: "grass", 50: "asphalt", 80: "obstacle"})
+    >>> classes.ground_names, classes.obstacle_codes
+    (('asphalt', 'grass'), (10, 80))
+    """
+
+    grounds_by_code: Mapping[int, str]
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.grounds_by_code, Mapping) or not self.grounds_by_code:
+            raise InvalidParameterError(
+                f"grounds_by_code must be a non-empty mapping of land-cover code to ground name, got "
+                f"{self.grounds_by_code!r:.120}"
+            )
+        clean: dict[int, str] = {}
+        for code, name in self.grounds_by_code.items():
+            if not isinstance(code, (int, np.integer)) or isinstance(code, bool) or not 0 <= code <= _MAX_CODE:
+                raise InvalidParameterError(f"land-cover codes must be integers in [0, {_MAX_CODE}], got {code!r}")
+            if not isinstance(name, str) or not _NAME.match(name):
+                raise InvalidParameterError(
+                    f"land-cover code {int(code)} needs a ground name (letters, digits, '_' or '-'), got {name!r}"
+                )
+            reserved = name.lower() in (OBSTACLE_GROUND, UNKNOWN_GROUND_NAME)
+            clean[int(code)] = name.lower() if reserved else name
+        object.__setattr__(self, "grounds_by_code", MappingProxyType(dict(sorted(clean.items()))))
+
+    @property
+    def ground_names(self) -> tuple[str, ...]:
+        """The grounds named (sorted), without the reserved ``obstacle`` and ``unknown``."""
+        reserved = (OBSTACLE_GROUND, UNKNOWN_GROUND_NAME)
+        return tuple(sorted({n for n in self.grounds_by_code.values() if n not in reserved}))
+
+    @property
+    def obstacle_codes(self) -> tuple[int, ...]:
+        """The codes whose cells are obstacles."""
+        return tuple(c for c, n in self.grounds_by_code.items() if n == OBSTACLE_GROUND)
+
+
+def read_landcover_classes(path: str | os.PathLike[str]) -> LandcoverClasses:
+    """Read a land-cover mapping: a UTF-8 CSV file with columns ``code,ground`` (and optionally ``label``).
+
+    One row per code; blank lines and lines starting with ``#`` are skipped. ``ground`` is a
+    ground name (a preset such as ``grass``), ``obstacle`` (the code's cells are impassable)
+    or ``unknown`` (their ground stays unknown). For ESA WorldCover, e.g.::
+
+        code,ground,label
+        10,obstacle,Tree cover
+        30,grass,Grassland
+        50,asphalt,Built-up
+        60,gravel,Bare / sparse vegetation
+        80,obstacle,Permanent water bodies
+
+    Codes the file omits (and the raster's nodata) leave the ground unknown.
+
+    Raises
+    ------
+    FileFormatError
+        A missing, non-regular, oversized (over :data:`MAX_CLASSES_BYTES`) or non-UTF-8 file;
+        a header without ``code`` and ``ground`` or with other columns; a row with another
+        number of fields, a code that is not a non-negative integer, a ground that is not a
+        name, a code given twice; no rows. The message names the file and the line.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> path = pathlib.Path(folder.name) / "classes.csv"
+    >>> _ = path.write_text("code,ground\\n10,obstacle\\n30,grass\\n")
+    >>> dict(read_landcover_classes(path).grounds_by_code)
+    {10: 'obstacle', 30: 'grass'}
+    >>> folder.cleanup()
+    """
+    p = Path(path)
+    where = f"land-cover classes file {str(p)!r}"
+    if not p.exists():
+        raise FileFormatError(f"{where} does not exist")
+    if not p.is_file():  # a FIFO or a device would block or never end
+        raise FileFormatError(f"{where} is not a regular file")
+    size = p.stat().st_size
+    if size > MAX_CLASSES_BYTES:
+        raise FileFormatError(f"{where} holds {size} bytes; a mapping of land-cover codes is at most "
+                              f"{MAX_CLASSES_BYTES // 1024} KiB")
+    with open(p, "rb") as fh:
+        raw = fh.read(MAX_CLASSES_BYTES + 1)
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise FileFormatError(f"{where} is not a UTF-8 text file: {exc}") from exc
+    header: list[str] | None = None
+    rows: dict[int, tuple[str, int]] = {}
+    for number, line in enumerate(text.splitlines(), start=1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        try:
+            fields = [f.strip() for f in next(csv.reader([line], strict=True))]
+        except csv.Error as exc:
+            raise FileFormatError(f"{where}, line {number}: not a CSV row: {exc}") from exc
+        if header is None:
+            header = _header(fields, where, number)
+            continue
+        if len(fields) != len(header):
+            raise FileFormatError(f"{where}, line {number}: {len(fields)} fields {fields!r}; the header has "
+                                  f"{len(header)} ({', '.join(header)})")
+        row = dict(zip(header, fields, strict=True))
+        code_text, name = row["code"], row["ground"]
+        if not _CODE.match(code_text) or int(code_text) > _MAX_CODE:
+            raise FileFormatError(f"{where}, line {number}: code {code_text!r} is not a land-cover code; expected an "
+                                  f"integer in [0, {_MAX_CODE}]")
+        if not _NAME.match(name):
+            raise FileFormatError(f"{where}, line {number}: ground {name!r} is not a ground name; expected a word "
+                                  f"such as 'grass', or '{OBSTACLE_GROUND}' or '{UNKNOWN_GROUND_NAME}'")
+        code = int(code_text)
+        if code in rows:
+            raise FileFormatError(f"{where}, line {number}: code {code} is given twice (first on line {rows[code][1]})")
+        rows[code] = (name, number)
+    if header is None:
+        raise FileFormatError(f"{where} is empty; expected a header 'code,ground' and one row per code")
+    if not rows:
+        raise FileFormatError(f"{where} has a header but no rows; expected one row per land-cover code")
+    return LandcoverClasses({code: name for code, (name, _) in rows.items()})
+
+
+def _header(fields: list[str], where: str, number: int) -> list[str]:
+    names = [f.lower() for f in fields]
+    missing = [c for c in ("code", "ground") if c not in names]
+    extra = [f for f in names if f not in LANDCOVER_COLUMNS]
+    if missing or extra or len(set(names)) != len(names):
+        raise FileFormatError(
+            f"{where}, line {number}: header {fields!r}; expected the columns 'code' and 'ground' (and optionally "
+            "'label'), each once" + (f"; {missing!r} missing" if missing else "")
+            + (f"; {extra!r} unknown" if extra else "")
+        )
+    return names
+
+
+def ground_classes_from_landcover(
+    tmap: TerrainMap,
+    path: str | os.PathLike[str],
+    classes: LandcoverClasses | Mapping[int, str] | str | os.PathLike[str],
+    *,
+    band: int | None = None,
+) -> TerrainMap:
+    """A copy of ``tmap`` whose ground classes (and obstacles) come from a land-cover raster.
+
+    The raster's codes are turned into grounds by ``classes`` and warped onto the map's grid
+    (:func:`rasterio.warp.reproject` from the raster's CRS to the map's) by majority: each map
+    cell takes the ground covering most of it (GDAL's ``mode`` resampling over the raster
+    cells it overlaps; codes of one ground count together). Nodata cells do not vote; codes
+    the mapping omits vote as unknown ground. Then, per map cell:
+
+    - a ground name: that ground (a name new to the map gets the next free class id; grounds
+      no cell takes get none);
+    - ``obstacle``: an obstacle (added to the map's obstacles; the ground is kept);
+    - ``unknown``, an omitted code, nodata, or outside the raster: the map's ground is kept
+      (unknown, ``-1``, for a GeoTIFF DEM), which the planner prices as its
+      ``unknown_ground`` (``--unknown-ground``).
+
+    Only the window of the raster around the map is read, and it must fit the memory budget
+    (:func:`terrain.containers.memory_budget_bytes`), so a continental tile can serve a
+    small map.
+
+    Parameters
+    ----------
+    tmap : TerrainMap
+        A map with a CRS (e.g. ``read_geotiff(dem, reproject_to="utm", cell_size_m=30)``).
+    path : str or path-like
+        Land-cover GeoTIFF: integer class codes (e.g. ESA WorldCover's uint8 codes), any CRS.
+    classes : LandcoverClasses, mapping of code to ground name, or path
+        The mapping, or its CSV file (:func:`read_landcover_classes`).
+    band : int, optional
+        1-based band of the codes; required when the file has several.
+
+    Returns
+    -------
+    TerrainMap
+        A new map; ``tmap`` is not modified.
+
+    Raises
+    ------
+    InvalidParameterError
+        The map has no CRS; the raster does not overlap the map; a band out of range.
+    FileFormatError
+        A missing or unreadable raster, one without CRS, with a rotated grid, of non-integer
+        values, several bands and no ``band``, a window over the memory budget; a bad
+        classes file (as :func:`read_landcover_classes`).
+    OptionalDependencyError
+        rasterio is not installed.
+    """
+    rasterio = import_rasterio()
+    from rasterio.enums import Resampling
+    from rasterio.warp import reproject, transform_bounds
+
+    if not isinstance(tmap, TerrainMap):
+        raise InvalidParameterError(f"tmap must be a TerrainMap, got {type(tmap).__name__}")
+    if not isinstance(classes, LandcoverClasses):
+        classes = LandcoverClasses(classes) if isinstance(classes, Mapping) else read_landcover_classes(classes)
+    if tmap.crs is None:
+        raise InvalidParameterError(
+            "the map has no CRS, so a land-cover raster cannot be placed on it; read a georeferenced DEM (a GeoTIFF "
+            "with a CRS) or set the map's crs"
+        )
+    map_crs = parse_crs(tmap.crs, "the map's crs")
+    p = Path(path)
+    where = f"land-cover GeoTIFF {str(p)!r}"
+    if not p.is_file():
+        raise FileFormatError(f"{where} does not exist" if not p.exists() else f"{where} is not a regular file")
+    try:
+        with rasterio.open(p) as src:
+            band = _code_band(src, band, where)
+            window = _window(src, transform_bounds(map_crs, src.crs, *tmap.bounds, densify_pts=21), where, tmap)
+            (r0, r1), (c0, c1) = window
+            need = (r1 - r0) * (c1 - c0) * (np.dtype(src.dtypes[band - 1]).itemsize + 1 + 8 + 2)
+            if need > memory_budget_bytes():
+                raise FileFormatError(
+                    f"{where}: the {r1 - r0} x {c1 - c0} cells around the map need {need / 1024**3:.3g} GiB to read, "
+                    f"more than the memory budget of {memory_budget_bytes() / 1024**3:.3g} GiB "
+                    "(TERRAWATT_MEMORY_BUDGET_BYTES); resample the land cover to a coarser grid first (gdalwarp -tr)"
+                )
+            win = rasterio.windows.Window(c0, r0, c1 - c0, r1 - r0)
+            data = src.read(band, window=win, masked=True)
+            src_transform, src_crs = src.window_transform(win), src.crs
+    except rasterio.errors.RasterioError as exc:
+        raise FileFormatError(f"cannot read {str(p)!r} as a raster: {exc}") from exc
+
+    labels = [*classes.ground_names, OBSTACLE_GROUND, UNKNOWN_GROUND_NAME]
+    category = {name: i for i, name in enumerate(labels)}
+    values, inverse = np.unique(np.ma.getdata(data), return_inverse=True)
+    lut = np.array([category[classes.grounds_by_code.get(int(v), UNKNOWN_GROUND_NAME)] for v in values.tolist()],
+                   dtype=np.uint16)
+    codes = lut[inverse.reshape(data.shape)]
+    codes[np.ma.getmaskarray(data)] = _NODATA
+    votes = np.bincount(inverse.ravel()[~np.ma.getmaskarray(data).ravel()], minlength=values.size)
+    unmapped = [int(v) for v in values[votes > 0].tolist() if int(v) not in classes.grounds_by_code]
+    if unmapped:
+        logger.info("%s: codes %s are not in the mapping; their cells vote as unknown ground", where, unmapped)
+    del data, inverse
+
+    rows, cols = tmap.shape
+    xmin, _, _, ymax = tmap.bounds
+    d = tmap.cell_size_m
+    warped = np.full((rows, cols), _NODATA, np.uint16)
+    try:
+        reproject(codes, warped, src_transform=src_transform, src_crs=src_crs, src_nodata=_NODATA,
+                  dst_transform=rasterio.Affine(d, 0.0, xmin, 0.0, -d, ymax), dst_crs=map_crs, dst_nodata=_NODATA,
+                  resampling=Resampling.mode)
+    except rasterio.errors.RasterioError as exc:  # pragma: no cover - GDAL refusing a valid pair of CRS
+        raise InvalidParameterError(f"cannot warp {where} onto the map's CRS {tmap.crs!r}: {exc}") from exc
+    warped = warped[::-1]  # north-up -> row grows with y
+
+    names = tmap.ground_names
+    ids = {name: gid for gid, name in names.items()}
+    ground = np.array(tmap.ground, copy=True)
+    for name in classes.ground_names:
+        cells = warped == category[name]
+        if not cells.any():  # a ground the map does not have gets no name
+            continue
+        if name not in ids:
+            ids[name] = max([*names, -1]) + 1
+            names[ids[name]] = name
+        ground[cells] = ids[name]
+    out = tmap.copy()
+    out.ground_names = names
+    out["ground"] = ground
+    out["obstacle"] = tmap.obstacle | (warped == category[OBSTACLE_GROUND])
+    logger.info("%s: %d of %d map cells took a ground, %d became obstacles, %d kept the map's ground", where,
+                int(np.count_nonzero(warped < category[OBSTACLE_GROUND])), warped.size,
+                int(np.count_nonzero(warped == category[OBSTACLE_GROUND])),
+                int(np.count_nonzero(warped > category[OBSTACLE_GROUND])))
+    return out
+
+
+def _code_band(src: Any, band: int | None, where: str) -> int:
+    """The checked band of class codes: integers, a CRS, no rotation."""
+    if band is None:
+        if src.count != 1:
+            raise FileFormatError(f"{where} has {src.count} bands; name the band of class codes with band=N "
+                                  f"(1..{src.count})")
+        band = 1
+    if not isinstance(band, (int, np.integer)) or isinstance(band, bool) or not 1 <= band <= src.count:
+        raise InvalidParameterError(f"band must be an integer in 1..{src.count}, got {band!r}")
+    dtype = src.dtypes[band - 1]
+    if dtype not in np.sctypeDict or np.dtype(dtype).kind not in "iu":
+        raise FileFormatError(f"{where}: band {band} holds {dtype} values; a land cover holds integer class codes "
+                              "(e.g. uint8)")
+    if src.crs is None:
+        raise FileFormatError(f"{where} has no CRS; a land cover is placed on the map by its CRS (set it first, "
+                              "e.g. gdal_edit -a_srs)")
+    t = src.transform
+    if t.b != 0 or t.d != 0:
+        raise FileFormatError(f"{where} has a rotated or sheared transform {tuple(t)[:6]!r}; warp it to a north-up "
+                              "grid first (e.g. gdalwarp)")
+    return int(band)
+
+
+def _window(src: Any, box: tuple[float, float, float, float], where: str,
+            tmap: TerrainMap) -> tuple[tuple[int, int], tuple[int, int]]:
+    """Rows and columns ``((r0, r1), (c0, c1))`` of the raster covering ``box`` (its CRS), two cells of margin."""
+    left, bottom, right, top = box
+    t = src.transform  # north-up or not, never rotated (checked)
+    cs = [(x - t.c) / t.a for x in (left, right)]
+    rs = [(y - t.f) / t.e for y in (bottom, top)]
+    r0, r1 = max(int(np.floor(min(rs))) - 2, 0), min(int(np.ceil(max(rs))) + 2, src.height)
+    c0, c1 = max(int(np.floor(min(cs))) - 2, 0), min(int(np.ceil(max(cs))) + 2, src.width)
+    if r1 <= r0 or c1 <= c0:
+        m = lonlat_bounds(tmap.bounds, tmap.crs)
+        s = lonlat_bounds(tuple(src.bounds), src.crs, what=where)
+        raise InvalidParameterError(
+            f"{where} does not overlap the map: it spans lon {s[0]:.5f} to {s[2]:.5f}, lat {s[1]:.5f} to {s[3]:.5f}; "
+            f"the map lon {m[0]:.5f} to {m[2]:.5f}, lat {m[1]:.5f} to {m[3]:.5f}"
+        )
+    return (r0, r1), (c0, c1)
