@@ -13,6 +13,11 @@ through here:
   dtypes (pickles) are refused;
 - every decoding failure (zlib, a bad zip, unicode, overflow, memory) becomes a
   :class:`~terrain.errors.FileFormatError` naming the file and the entry.
+
+The readers of other kinds check against the same budget: a text table
+(:func:`check_file_fits`, its size times its expansion once parsed), a bag (the messages
+of the topics read, :data:`energy.io.bag_messages.BAG_MESSAGE_BYTES` each) and a GeoTIFF
+(its declared raster).
 """
 
 from __future__ import annotations
@@ -28,7 +33,8 @@ import numpy as np
 
 from .errors import FileFormatError
 
-__all__ = ["MEMORY_BUDGET_BYTES", "memory_budget_bytes", "check_zip_sizes", "read_zip_entry", "load_npy", "read_npz"]
+__all__ = ["MEMORY_BUDGET_BYTES", "memory_budget_bytes", "check_zip_sizes", "check_file_fits", "read_zip_entry",
+           "load_npy", "read_npz", "over_budget_message"]
 
 #: Default memory budget of one container's content (bytes): 4 GiB.
 MEMORY_BUDGET_BYTES = 4 * 1024**3
@@ -48,6 +54,31 @@ def memory_budget_bytes() -> int:
 
 def _gib(n: int) -> str:
     return f"{n / 1024**3:.3g} GiB" if n >= 1024**2 else f"{n} bytes"
+
+
+def over_budget_message(where: str, what: str, need: int, budget: int) -> str:
+    """One message for every reader: what would not fit, the budget and how to raise it."""
+    return (f"{where}: {what} would take about {_gib(need)} in memory, more than the memory budget of {_gib(budget)}; "
+            "read a smaller file, or raise the budget with the environment variable TERRAWATT_MEMORY_BUDGET_BYTES")
+
+
+def check_file_fits(path: str | os.PathLike[str], where: str, expansion: float, what: str = "reading it") -> int:
+    """The size of ``path`` (bytes), after checking that ``expansion`` times it fits the memory budget.
+
+    Raises
+    ------
+    FileFormatError
+        The file cannot be stat'ed, or its expanded size exceeds the budget.
+    """
+    try:
+        size = os.stat(path).st_size
+    except OSError as exc:
+        raise FileFormatError(f"cannot read {where}: {exc.strerror or exc}") from exc
+    budget = memory_budget_bytes()
+    if size * expansion > budget:
+        raise FileFormatError(over_budget_message(where, f"{what} ({_gib(size)} on disk)", int(size * expansion),
+                                                  budget))
+    return size
 
 
 def check_zip_sizes(archive: zipfile.ZipFile, where: str, budget: int | None = None) -> None:

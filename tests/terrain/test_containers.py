@@ -117,3 +117,32 @@ def test_an_npy_entry_of_a_kind_not_asked_for_is_refused(array, word):
     assert load_npy(buf.getvalue(), "f", "x").dtype == array.dtype  # no restriction asked
     with pytest.raises(FileFormatError, match=rf"'f': x holds {word} values .* expected integer or unsigned"):
         load_npy(buf.getvalue(), "'f'", "x", kinds="iuf")
+
+
+def test_a_csv_log_or_a_bag_over_the_memory_budget_is_refused_before_it_is_read(tmp_path, monkeypatch):
+    from energy import read_csv_log, read_rosbag
+    from energy.io.bag_messages import BAG_MESSAGE_BYTES
+
+    log = read_borealtc(Path(__file__).resolve().parents[1] / "fixtures" / "borealtc")[0]
+    from energy import write_csv_log
+
+    path = write_csv_log(log, tmp_path / "log.csv")
+    assert len(read_csv_log(path)) == len(log)
+    size = path.stat().st_size
+    monkeypatch.setenv("TERRAWATT_MEMORY_BUDGET_BYTES", str(4 * size))  # below 8x the file
+    with pytest.raises(FileFormatError, match="more than the memory budget .* TERRAWATT_MEMORY_BUDGET_BYTES"):
+        read_csv_log(path)
+    pytest.importorskip("rosbags", reason="the bag reader needs the ros extra")
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "energy"))
+    from robot_bags import write_robot_bag
+
+    write_robot_bag(tmp_path / "h.bag", duration_s=4.0)  # 60 odometry, 120 imu, 40 status messages
+    topics = dict(current_fields=("left_driver_current", "right_driver_current"), voltage_field="battery_voltage",
+                  drive_clock="currents")
+    monkeypatch.setenv("TERRAWATT_MEMORY_BUDGET_BYTES", str(100 * BAG_MESSAGE_BYTES))
+    with pytest.raises(FileFormatError, match=r"the 2\d\d messages of topics .* more than the memory budget"):
+        read_rosbag(tmp_path / "h.bag", "/odometry/filtered", "/imu/data", "/status", **topics)
+    monkeypatch.delenv("TERRAWATT_MEMORY_BUDGET_BYTES")
+    assert len(read_rosbag(tmp_path / "h.bag", "/odometry/filtered", "/imu/data", "/status", **topics)) > 0
