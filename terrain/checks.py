@@ -32,6 +32,7 @@ from .errors import InvalidParameterError, UnknownNameError
 
 __all__ = [
     "SEED_LIMIT",
+    "plain_repr",
     "check_real",
     "check_optional_real",
     "check_int",
@@ -54,8 +55,21 @@ def _label(name: str, owner: str | None) -> str:
     return f"{owner}.{name}" if owner else name
 
 
+def plain_repr(value: object) -> str:
+    """``repr`` for messages, numpy scalars shown as the Python numbers they hold (``10.0``, not ``np.float64(10.0)``).
+
+    Examples
+    --------
+    >>> plain_repr(np.float64(10.0)), plain_repr(np.int64(3)), plain_repr("a")
+    ('10.0', '3', "'a'")
+    """
+    if isinstance(value, np.generic):
+        value = value.item()
+    return repr(value)
+
+
 def _describe(value: object) -> str:
-    text = repr(value)
+    text = plain_repr(value)
     if len(text) > 80:
         text = text[:77] + "..."
     return f"{text} ({type(value).__name__})"
@@ -138,10 +152,10 @@ def check_real(
         raise InvalidParameterError(f"{label} must be finite, got {fmt_number(value)}")
     if low is not None and (v < low or (v == low and not low_inclusive)):
         op = ">=" if low_inclusive else ">"
-        raise InvalidParameterError(f"{label} must be {op} {fmt_number(low)}, got {value!r}")
+        raise InvalidParameterError(f"{label} must be {op} {fmt_number(low)}, got {plain_repr(value)}")
     if high is not None and (v > high or (v == high and not high_inclusive)):
         op = "<=" if high_inclusive else "<"
-        raise InvalidParameterError(f"{label} must be {op} {fmt_number(high)}, got {value!r}")
+        raise InvalidParameterError(f"{label} must be {op} {fmt_number(high)}, got {plain_repr(value)}")
     return v
 
 
@@ -167,9 +181,9 @@ def check_int(
         raise InvalidParameterError(f"{label} must be an integer, got {_describe(value)}")
     v = int(value)
     if low is not None and v < low:
-        raise InvalidParameterError(f"{label} must be >= {low}, got {value!r}")
+        raise InvalidParameterError(f"{label} must be >= {low}, got {plain_repr(value)}")
     if high is not None and v > high:
-        raise InvalidParameterError(f"{label} must be <= {high}, got {value!r}")
+        raise InvalidParameterError(f"{label} must be <= {high}, got {plain_repr(value)}")
     return v
 
 

@@ -125,3 +125,16 @@ def test_numbers_are_rounded_for_people() -> None:
 def test_an_int_beyond_float_range_is_not_finite() -> None:
     with pytest.raises(InvalidParameterError, match="x must be finite"):
         check_real("x", 10**400)
+
+
+def test_messages_show_numpy_scalars_as_plain_numbers():
+    import numpy as np
+
+    from terrain.checks import check_int, check_real
+
+    with pytest.raises(InvalidParameterError, match=r"^speed must be <= 5, got 10\.0$"):
+        check_real("speed", np.float64(10.0), high=5.0)
+    with pytest.raises(InvalidParameterError, match=r"^n must be >= 1, got 0$"):
+        check_int("n", np.int64(0), low=1)
+    with pytest.raises(InvalidParameterError, match=r"got 'x' \(str\)$"):
+        check_real("speed", "x")
