@@ -248,14 +248,13 @@ def write_geotiff(
     data = tmap[layer]
     if data.dtype == bool:
         data = data.astype(np.uint8)
-    xmin, _, _, ymax = tmap.bounds
     profile: dict[str, Any] = {
         "driver": "GTiff",
         "height": tmap.shape[0],
         "width": tmap.shape[1],
         "count": 1,
         "dtype": data.dtype.name,
-        "transform": rasterio.Affine(tmap.cell_size_m, 0.0, xmin, 0.0, -tmap.cell_size_m, ymax),
+        "transform": tmap.grid.north_up_transform,
         "crs": tmap.crs,
         "nodata": UNKNOWN_GROUND if layer == "ground" else None,
         "compress": "deflate",

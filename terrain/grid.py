@@ -9,6 +9,11 @@ Convention: ``origin_xy_m`` is the lower-left (south-west) corner of cell ``(0, 
 index grows with ``y`` (north), column index with ``x`` (east); arrays are indexed
 ``[row, col]``. Cell ``(r, c)`` covers ``x in [x0 + c*d, x0 + (c+1)*d)``,
 ``y in [y0 + r*d, y0 + (r+1)*d)``; points on the far edges belong to the last row/column.
+
+In rasterio's terms (an :class:`affine.Affine` maps ``(col, row)`` to the ``(x, y)`` of a
+cell's corner) the arrays' transform is :attr:`Grid.transform`, ``Affine(d, 0, x0, 0, d,
+y0)``; a file holds them flipped, north row first, under :attr:`Grid.north_up_transform`,
+``Affine(d, 0, x0, 0, -d, y_max)``. :meth:`Grid.from_transform` takes either.
 """
 
 from __future__ import annotations
@@ -18,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from affine import Affine
 
 from .checks import check_int, check_real, fmt_number
 from .errors import GridMismatchError, InvalidParameterError, OutOfBoundsError
@@ -101,7 +107,57 @@ class Grid:
             )
         return cls((rows, cols), dx, (xmin, ymin))
 
+    @classmethod
+    def from_transform(cls, shape: tuple[int, int], transform: Affine) -> Grid:
+        """The grid of ``shape`` cells under an affine transform (rasterio's convention).
+
+        A north-up transform (``e < 0``, a file's: row 0 is the north row) and this
+        package's south-up one (``e > 0``, :attr:`transform`) give the same grid; the caller
+        flips a north-up array (``np.flipud``) to index it as this grid does.
+
+        Raises
+        ------
+        InvalidParameterError
+            A transform that is not an :class:`affine.Affine`, is rotated or sheared, or has
+            cells that are not square.
+
+        Examples
+        --------
+        >>> g = Grid((4, 5), 2.0, (10.0, 20.0))
+        >>> Grid.from_transform(g.shape, g.north_up_transform) == g == Grid.from_transform(g.shape, g.transform)
+        True
+        """
+        if not isinstance(transform, Affine):
+            raise InvalidParameterError(f"transform must be an affine.Affine, got {type(transform).__name__!r}")
+        a, b, c, d, e, f = transform[:6]
+        if b != 0.0 or d != 0.0:
+            raise InvalidParameterError(f"transform {tuple(transform[:6])!r} is rotated or sheared; expected a "
+                                        "north-up or south-up grid")
+        if not (a > 0 and math.isclose(abs(e), a, rel_tol=1e-9)):
+            raise InvalidParameterError(f"transform {tuple(transform[:6])!r} has cells of {fmt_number(a)} x "
+                                        f"{fmt_number(abs(e))}; expected square cells of positive size")
+        rows = check_int("shape[0]", shape[0], low=1)
+        return cls((rows, shape[1]), float(a), (float(c), float(f) if e > 0 else float(f + e * rows)))
+
     # ------------------------------------------------------------------ derived
+    @property
+    def transform(self) -> Affine:
+        """The affine transform of this package's arrays (row 0 south): ``transform @ (col, row)`` is a cell's south-west corner.
+
+        Examples
+        --------
+        >>> Grid((4, 5), 2.0, (10.0, 20.0)).transform @ (1, 3)
+        (12.0, 26.0)
+        """
+        x0, y0 = self.origin_xy_m
+        return Affine(self.cell_size_m, 0.0, x0, 0.0, self.cell_size_m, y0)
+
+    @property
+    def north_up_transform(self) -> Affine:
+        """The transform of the arrays flipped north row first, as GeoTIFF files hold them (rasterio's usual one)."""
+        xmin, _, _, ymax = self.bounds
+        return Affine(self.cell_size_m, 0.0, xmin, 0.0, -self.cell_size_m, ymax)
+
     @property
     def n_cells(self) -> int:
         """Number of cells."""

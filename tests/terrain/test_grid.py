@@ -59,3 +59,45 @@ def test_from_bounds() -> None:
 def test_bad_grids_name_the_parameter(args, pattern) -> None:
     with pytest.raises(InvalidParameterError, match=pattern):
         Grid(*args)
+
+
+# ------------------------------------------------------------------ affine transform
+def test_the_transform_converts_cells_and_metres_as_rowcol_and_xy_do():
+    from affine import Affine
+
+    g = Grid((4, 5), 2.0, (10.0, 20.0))
+    assert g.transform == Affine(2.0, 0.0, 10.0, 0.0, 2.0, 20.0)
+    assert g.north_up_transform == Affine(2.0, 0.0, 10.0, 0.0, -2.0, 28.0)
+    rows, cols = np.meshgrid(np.arange(4), np.arange(5), indexing="ij")
+    cx, cy = g.transform @ (cols + 0.5, rows + 0.5)
+    assert np.allclose((cx, cy), g.xy(rows, cols))
+    # the north-up transform indexes the flipped array: its row 0 is this grid's last row
+    nx, ny = g.north_up_transform @ (cols + 0.5, rows + 0.5)
+    assert np.allclose((nx, ny), g.xy(3 - rows, cols))
+    inv_c, inv_r = ~g.transform @ (cx, cy)
+    assert np.array_equal(np.floor(inv_r).astype(int), rows) and np.array_equal(np.floor(inv_c).astype(int), cols)
+    assert Grid.from_transform(g.shape, g.transform) == g == Grid.from_transform(g.shape, g.north_up_transform)
+
+
+def test_the_transform_agrees_with_rasterio():
+    rasterio = pytest.importorskip("rasterio", reason="rasterio is in the geo extra")
+    g = Grid((6, 3), 0.5, (-1.0, 4.0))
+    for r, c in [(0, 0), (5, 2), (2, 1)]:
+        assert rasterio.transform.xy(g.transform, r, c) == pytest.approx(g.xy(r, c))
+        x, y = g.xy(r, c)
+        assert rasterio.transform.rowcol(g.transform, x, y) == (r, c) == g.rowcol(x, y)
+        assert rasterio.transform.rowcol(g.north_up_transform, x, y) == (5 - r, c)
+
+
+@pytest.mark.parametrize(("transform", "match"), [
+    ("not affine", "must be an affine.Affine"),
+    ("rotated", "rotated or sheared"),
+    ("oblong", "square cells"),
+])
+def test_from_transform_refuses_what_is_not_a_square_grid(transform, match):
+    from affine import Affine
+
+    value = {"not affine": (1, 0, 0, 0, -1, 0), "rotated": Affine.rotation(10.0) @ Affine.scale(2.0),
+             "oblong": Affine(2.0, 0.0, 0.0, 0.0, -3.0, 0.0)}[transform]
+    with pytest.raises(InvalidParameterError, match=match):
+        Grid.from_transform((3, 3), value)
