@@ -2,9 +2,12 @@
 
 Choose a planner by name from :data:`PLANNERS`: the OMPL planners of
 :data:`~planner.ompl.OMPL_PLANNERS` (a 2-D problem over the map whose objective is the
-directed drive energy, :mod:`planner.ompl`) or ``"lattice"``, the fast path: the directed
-16-connected lattice optimum (:class:`~planner.Lattice`). With ``refine=True`` (default)
-every exact route is post-processed by :func:`~planner.refine_route`: OMPL's
+directed drive energy, :mod:`planner.ompl`), ``"lattice"``, the fast path: the directed
+16-connected lattice optimum (:class:`~planner.Lattice`), or ``"anyangle"``: Theta* on the
+drive energy in a corridor around a coarse lattice route (:mod:`planner.anyangle`), refined
+by its compiled polish (:func:`planner.anyangle.polish_path`) instead of the OMPL shortcuts.
+With ``refine=True`` (default) every other exact route is post-processed by
+:func:`~planner.refine_route`: OMPL's
 ``partialShortcutPath`` and ``perturbPath`` under the energy objective, then
 :func:`~planner.refine.relax_path`; each step is kept only when the route's true energy —
 segments plus turns, re-evaluated exactly — went down. Turn energies are not part of the
@@ -40,6 +43,7 @@ from terrain.errors import (
     UnknownNameError,
 )
 
+from .anyangle import anyangle_path, polish_path
 from .edge_cost import EnergyCost
 from .lattice import Lattice, LatticePath
 from .ompl import OMPL_PLANNERS
@@ -51,7 +55,9 @@ from .settings import PlannerSettings
 __all__ = ["plan_route", "shortest_route", "compare_route", "PLANNERS", "OMPL_PLANNERS", "REFINE_DEFAULT_SEED"]
 
 #: Every planner name :func:`plan_route` accepts.
-PLANNERS = OMPL_PLANNERS + ("lattice",)
+PLANNERS = OMPL_PLANNERS + ("anyangle", "lattice")
+#: Planners that ignore time budgets (deterministic searches).
+_UNTIMED = ("anyangle", "lattice")
 #: Seed of the refinement when :func:`plan_route` gets ``seed=None``.
 REFINE_DEFAULT_SEED = 0
 
@@ -191,11 +197,12 @@ def plan_route(
         Edge costs (see :meth:`EnergyCost.from_model`).
     planner : str
         One of :data:`PLANNERS`: ``"RRTstar"``, ``"InformedRRTstar"``, ``"SORRTstar"``,
-        ``"BITstar"``, ``"FMT"`` (OMPL, minimising drive energy) or ``"lattice"`` (the
-        directed 16-connected lattice optimum).
+        ``"BITstar"``, ``"FMT"`` (OMPL, minimising drive energy), ``"lattice"`` (the
+        directed 16-connected lattice optimum) or ``"anyangle"`` (Theta* around a coarse
+        lattice route, :func:`planner.anyangle.anyangle_path`; deterministic).
     time_limit_s : float or None
-        Wall-clock budget of the OMPL solve (s); ignored by ``"lattice"``. ``None``
-        requires ``max_cost_evaluations``.
+        Wall-clock budget of the OMPL solve (s); ignored by ``"lattice"`` and
+        ``"anyangle"``. ``None`` requires ``max_cost_evaluations`` (but for those two).
     seed : int, optional
         Seeds OMPL's RNG for the OMPL planners and the refinement (``None`` or an integer
         in ``[0, 2**32)``). ``None`` leaves OMPL planners unseeded and seeds the refinement
@@ -208,7 +215,9 @@ def plan_route(
         Post-process an exact route with :func:`refine_route` (OMPL energy shortcuts, then
         :meth:`EnergyCost.relax_path`), each step kept only if the true energy (turns
         included) went down. The route's ``planner`` then reads e.g. ``"RRTstar+refine"``;
-        the refinement time is part of ``planning_time_s``.
+        the refinement time is part of ``planning_time_s``. An ``"anyangle"`` route is
+        refined by :func:`planner.anyangle.polish_path` alone (kept only if it lowers the
+        true energy too).
     compare : bool
         Also compute the query's :class:`RouteComparison` (:func:`compare_route`: the
         shortest-distance route and the lattice optimum), stored as ``Route.comparison``
@@ -272,7 +281,7 @@ def plan_route(
         raise InvalidParameterError(
             f"start equals goal ({start[0]!r}, {start[1]!r}) m: there is no route to plan; expected two different points"
         )
-    if planner == "lattice" and time_limit_s is None and max_cost_evaluations is None:
+    if planner in _UNTIMED and time_limit_s is None and max_cost_evaluations is None:
         time_limit, max_evals = None, None
     else:
         time_limit, max_evals = _check_budget(time_limit_s, max_cost_evaluations)
@@ -301,7 +310,7 @@ def _plan(
     refine: bool,
     settings: PlannerSettings,
 ) -> Route:
-    """Search (lattice or OMPL), then refine an exact route; start and goal are checked and joined."""
+    """Search (lattice, any-angle or OMPL), then refine an exact route; start and goal are checked and joined."""
     if planner == "lattice":
         stride = settings.lattice_stride_cells
         lattice = Lattice.for_cost(cost, stride)  # building the graph is map preparation
@@ -315,6 +324,12 @@ def _plan(
             cost.results[("optimum", tuple(start.tolist()), tuple(goal.tolist()))] = path
         status = "exact" if path.found else "infeasible"
         waypoints = path.waypoints_m if path.found else None
+    elif planner == "anyangle":
+        any_path = anyangle_path(cost, start, goal, guide_stride_cells=settings.anyangle_guide_stride_cells,
+                                 corridor_cells=settings.anyangle_corridor_cells)
+        elapsed = any_path.solve_time_s
+        status = "exact" if any_path.found else "infeasible"
+        waypoints = any_path.waypoints_m if any_path.found else None
     else:
         status, waypoints, elapsed, _ = solve_ompl(
             cost.arrays, cost.min_energy_per_metre_j, start, goal, planner, time_limit, max_evals, seed, settings
@@ -322,10 +337,13 @@ def _plan(
     name = planner
     if waypoints is not None and status == "exact" and refine:
         t0 = time.perf_counter()
-        waypoints = refine_route(
-            cost, waypoints, seed=REFINE_DEFAULT_SEED if seed is None else seed,
-            max_steps=settings.refine_max_steps, rounds=settings.refine_rounds,
-        )
+        if planner == "anyangle":
+            waypoints = polish_path(cost, waypoints)
+        else:
+            waypoints = refine_route(
+                cost, waypoints, seed=REFINE_DEFAULT_SEED if seed is None else seed,
+                max_steps=settings.refine_max_steps, rounds=settings.refine_rounds,
+            )
         elapsed += time.perf_counter() - t0
         name = f"{planner}+refine"
     if waypoints is None:

@@ -1,4 +1,4 @@
-"""PlannerSettings: the tuning of every planner (OMPL planners, the lattice, the refinement)."""
+"""PlannerSettings: the tuning of every planner (OMPL planners, the lattice, the any-angle planner, the refinement)."""
 
 from __future__ import annotations
 
@@ -33,6 +33,13 @@ class PlannerSettings:
         Node spacing (cells) of the lattice used by the ``"lattice"`` planner (>= 1; the
         reference optimum of ``Route.optimality_ratio`` always uses 1). Coarser lattices
         solve faster; the refinement then recovers most of the difference.
+    anyangle_guide_stride_cells : int
+        Node spacing (cells, >= 1) of the lattice whose route guides the ``"anyangle"``
+        planner (:func:`planner.anyangle.anyangle_path`); a passage too narrow for it falls
+        back to 1.
+    anyangle_corridor_cells : int
+        Half-width (cells, >= 1) of the corridor around the guide that the ``"anyangle"``
+        planner's Theta* search may use.
     refine_max_steps : int
         Attempts of each OMPL refinement pass (``partialShortcutPath`` / ``perturbPath``), >= 1.
     refine_rounds : int
@@ -50,6 +57,8 @@ class PlannerSettings:
     fmt_samples: int = 500
     bit_samples_per_batch: int = 200
     lattice_stride_cells: int = 1
+    anyangle_guide_stride_cells: int = 2
+    anyangle_corridor_cells: int = 12
     refine_max_steps: int = 300
     refine_rounds: int = 2
 
@@ -62,5 +71,7 @@ class PlannerSettings:
         check_int("fmt_samples", self.fmt_samples, low=10, owner=owner)
         check_int("bit_samples_per_batch", self.bit_samples_per_batch, low=1, owner=owner)
         check_int("lattice_stride_cells", self.lattice_stride_cells, low=1, owner=owner)
+        check_int("anyangle_guide_stride_cells", self.anyangle_guide_stride_cells, low=1, owner=owner)
+        check_int("anyangle_corridor_cells", self.anyangle_corridor_cells, low=1, owner=owner)
         check_int("refine_max_steps", self.refine_max_steps, low=1, owner=owner)
         check_int("refine_rounds", self.refine_rounds, low=1, owner=owner)
