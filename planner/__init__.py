@@ -30,6 +30,7 @@ from .batch_result import BATCH_FORMAT_VERSION, BATCH_STATUSES, BatchResult, Bat
 from .coarse import COARSE_FALLBACKS, CoarseToFine, downsample_cost, plan_coarse_to_fine
 from .coarse_geotiff import plan_coarse_to_fine_geotiff
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
+from .energy_costmap import COSTMAP_STATISTICS, EnergyCostmap, energy_costmap, read_energy_geotiff, write_energy_geotiff
 from .kernels import CostArrays
 from .lattice import Lattice, LatticePath
 from .learned_cost import (
@@ -127,6 +128,12 @@ __all__ = [
     "routes_geojson",
     "write_geojson",
     "GEOJSON_FORMAT_VERSION",
+    # ROS 2 and Nav2 out: the route as a bag, Nav2 maps, energy costmaps
+    "energy_costmap",
+    "EnergyCostmap",
+    "COSTMAP_STATISTICS",
+    "write_energy_geotiff",
+    "read_energy_geotiff",
     # energy reachability
     "reachability",
     "Reachability",
