@@ -70,6 +70,7 @@ from .model_cost import (
     model_grounds,
     robot_matches,
 )
+from .nav2_map import Nav2Map, read_nav2_map, write_nav2_costmap, write_nav2_map
 from .planning import OMPL_PLANNERS, PLANNERS, compare_route, plan_route, shortest_route
 from .reachability import lattice_move_energies, reachability
 from .reachability_result import REACH_FORMAT_VERSION, REACH_LAYERS, Reachability
@@ -129,6 +130,10 @@ __all__ = [
     "write_geojson",
     "GEOJSON_FORMAT_VERSION",
     # ROS 2 and Nav2 out: the route as a bag, Nav2 maps, energy costmaps
+    "write_nav2_map",
+    "write_nav2_costmap",
+    "read_nav2_map",
+    "Nav2Map",
     "energy_costmap",
     "EnergyCostmap",
     "COSTMAP_STATISTICS",
