@@ -77,6 +77,7 @@ from .reachability_result import REACH_FORMAT_VERSION, REACH_LAYERS, Reachabilit
 from .refine import refine_route, relax_path, string_pull
 from .replan import IncrementalPlanner
 from .risk import RouteEnergyInterval, risk_cost, route_energy_interval
+from .ros_export import RouteBag, read_route_bag, route_pose_times_s, write_route_bag
 from .route import ROUTE_STATUSES, Route, RouteComparison, evaluate_route
 from .route_geojson import GEOJSON_FORMAT_VERSION, routes_geojson, write_geojson
 from .settings import PlannerSettings
@@ -130,6 +131,10 @@ __all__ = [
     "write_geojson",
     "GEOJSON_FORMAT_VERSION",
     # ROS 2 and Nav2 out: the route as a bag, Nav2 maps, energy costmaps
+    "write_route_bag",
+    "read_route_bag",
+    "RouteBag",
+    "route_pose_times_s",
     "write_nav2_map",
     "write_nav2_costmap",
     "read_nav2_map",

@@ -1,0 +1,411 @@
+"""ROS 2 out: a planned route as a ``nav_msgs/msg/Path`` with its energy and the map's CRS, in an MCAP bag.
+
+:func:`write_route_bag` writes one message on each of four topics (``topic_prefix``
+``/terrawatt`` by default), all logged at ``stamp_ns``:
+
+- ``<prefix>/route`` — ``nav_msgs/msg/Path`` in ``frame_id`` (``map``): one
+  ``geometry_msgs/msg/PoseStamped`` per waypoint, x and y the waypoint in the map frame
+  (map metres minus ``frame_origin_xy_m``), z the DEM's elevation there (bilinear, m), the
+  orientation the yaw of the segment leaving the waypoint (the last one keeps the yaw of
+  the segment arriving); each pose stamped ``stamp_ns`` plus the planned time at which the
+  robot leaves that waypoint (when the :class:`~planner.EnergyCost` is given).
+- ``<prefix>/route_energy`` — ``std_msgs/msg/Float64MultiArray``: the cumulative energy (J)
+  per pose, segments and turns spent on leaving it (as in the GeoJSON files); the last
+  equals the route's ``energy_j``.
+- ``<prefix>/map_crs`` — ``std_msgs/msg/String``: JSON with the map's CRS (string, WKT, EPSG
+  code), the map frame's origin in CRS coordinates, the frame and the map's bounds.
+- ``<prefix>/route_summary`` — ``std_msgs/msg/String``: JSON of :meth:`planner.Route.summary`.
+
+The bag is a single ``.mcap`` file, or a ROS 2 bag directory (``metadata.yaml`` and one MCAP
+file) for any other name; message definitions are those of ROS 2 Jazzy (the same for these
+types in every distribution) and the bag metadata is version 9, which ``ros2 bag`` reads
+from Jazzy on (Humble: ``ros2 bag reindex`` the directory first). Written atomically,
+byte-identical for the same inputs. :func:`read_route_bag` reads it back.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from terrain import TerrainMap
+from terrain.atomic import atomic_directory, atomic_path, check_output_path
+from terrain.checks import check_int, check_real, check_text, readonly
+from terrain.errors import FileFormatError, InvalidParameterError, OptionalDependencyError
+from terrain.georef import parse_crs
+
+from .edge_cost import EnergyCost
+from .route import Route
+
+__all__ = [
+    "ROUTE_BAG_FORMAT_VERSION",
+    "DEFAULT_TOPIC_PREFIX",
+    "RouteBag",
+    "route_pose_times_s",
+    "check_route_bag_path",
+    "write_route_bag",
+    "read_route_bag",
+]
+
+#: Version of the ``terrawatt`` JSON messages (map CRS, summary) of the bags written here.
+ROUTE_BAG_FORMAT_VERSION = 1
+#: Topic prefix of the four topics.
+DEFAULT_TOPIC_PREFIX = "/terrawatt"
+_PATH, _ENERGY, _CRS, _SUMMARY = "/route", "/route_energy", "/map_crs", "/route_summary"
+_TYPES = {_PATH: "nav_msgs/msg/Path", _ENERGY: "std_msgs/msg/Float64MultiArray",
+          _CRS: "std_msgs/msg/String", _SUMMARY: "std_msgs/msg/String"}
+_NS = 1_000_000_000
+
+
+def _rosbags() -> tuple[Any, Any, Any, Any]:
+    """``(Writer, StoragePlugin, AnyReader, typestore)`` of rosbags; OptionalDependencyError without it."""
+    try:
+        from rosbags.highlevel import AnyReader
+        from rosbags.rosbag2 import StoragePlugin, Writer
+        from rosbags.typesys import Stores, get_typestore
+    except ImportError as exc:
+        raise OptionalDependencyError(
+            "ROS 2 bags need the optional dependency 'rosbags': pip install 'terrawatt[ros]'"
+        ) from exc
+    return Writer, StoragePlugin, AnyReader, get_typestore(Stores.ROS2_JAZZY)
+
+
+@dataclass(frozen=True)
+class RouteBag:
+    """A route read back from a bag written by :func:`write_route_bag`.
+
+    Attributes
+    ----------
+    frame_id : str
+        The Path's frame.
+    stamp_ns : int
+        The Path's header stamp (ns).
+    positions_m : ndarray, shape (K, 3)
+        Pose positions in the map frame: x, y (m), z the elevation (m).
+    yaw_rad : ndarray, shape (K,)
+        Pose yaw from the orientation quaternion (rad, counter-clockwise from +x).
+    pose_stamps_ns : ndarray of int64, shape (K,)
+        Pose header stamps (ns).
+    cumulative_energy_j : ndarray, shape (K,)
+        Energy spent on leaving each pose (J).
+    crs : str or None
+        The map's CRS (None: local map metres).
+    crs_wkt : str or None
+        Its WKT (None without a CRS, or when the writer had no rasterio).
+    frame_origin_xy_m : (float, float)
+        The map frame's origin in map (CRS) coordinates.
+    summary : dict
+        The route's :meth:`~planner.Route.summary` (flat JSON values).
+    """
+
+    frame_id: str
+    stamp_ns: int
+    positions_m: np.ndarray
+    yaw_rad: np.ndarray
+    pose_stamps_ns: np.ndarray
+    cumulative_energy_j: np.ndarray
+    crs: str | None
+    crs_wkt: str | None
+    frame_origin_xy_m: tuple[float, float]
+    summary: dict[str, Any]
+
+    @property
+    def waypoints_m(self) -> np.ndarray:
+        """The poses' x, y back in map (CRS) coordinates: the route's waypoints."""
+        return self.positions_m[:, :2] + np.asarray(self.frame_origin_xy_m)
+
+
+def _check_route(route: Any) -> Route:
+    if not isinstance(route, Route):
+        raise InvalidParameterError(f"route must be a planner.Route, got {type(route).__name__!r}")
+    if not route.found:
+        raise InvalidParameterError(f"route has status {route.status!r} and no waypoints; only found routes are written")
+    return route
+
+
+def route_pose_times_s(route: Route, cost: EnergyCost) -> np.ndarray:
+    """Planned time (s) at which the robot leaves each waypoint: driving time of the segments
+    before it (surface length at the planning speed) plus the turns up to and at it.
+
+    The last equals ``route.duration_s`` (the start's is 0: no turn there).
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a found Route or not an EnergyCost; a cost whose speed and turn rate do not give
+        the route's duration (the route was planned with another cost).
+    """
+    _check_route(route)
+    if not isinstance(cost, EnergyCost):
+        raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
+    pts = route.waypoints_m
+    drive_s = np.array([cost.surface_length_m(pts[i:i + 2]) for i in range(pts.shape[0] - 1)]) / cost.speed_mps
+    angles, _ = cost.turn_energies_j(pts)
+    turn_s = np.asarray(angles, dtype=np.float64) / cost.turn_rate_radps
+    times = np.concatenate([[0.0], np.cumsum(drive_s)]) + np.cumsum(turn_s)
+    if not math.isclose(times[-1], route.duration_s, rel_tol=1e-9, abs_tol=1e-9):
+        raise InvalidParameterError(
+            f"cost gives the route a duration of {times[-1]!r} s, the route says {route.duration_s!r} s: "
+            "give the EnergyCost the route was planned with"
+        )
+    return times
+
+
+def _map_info(tmap: TerrainMap, frame_id: str, frame_origin: tuple[float, float]) -> dict[str, Any]:
+    """The ``map_crs`` message's content."""
+    crs, wkt, epsg = tmap.crs, None, None
+    if crs is not None:
+        try:
+            parsed = parse_crs(crs, "the map's crs")
+        except OptionalDependencyError:  # rasterio (geo extra) missing: the CRS string alone
+            parsed = None
+        if parsed is not None:
+            wkt, epsg = parsed.to_wkt(), parsed.to_epsg()
+    return {
+        "format_version": ROUTE_BAG_FORMAT_VERSION,
+        "frame_id": frame_id,
+        "crs": crs,
+        "crs_wkt": wkt,
+        "epsg": epsg,
+        "coordinate_system": (f"x east, y north in metres of {crs} minus the frame origin; z elevation (m)"
+                              if crs is not None else "local map metres (x east, y north) minus the frame origin; "
+                              "z elevation (m); the map has no CRS"),
+        "map_frame_origin_crs": list(frame_origin),
+        "map_bounds_crs": list(tmap.bounds),
+        "cell_size_m": tmap.cell_size_m,
+    }
+
+
+def _messages(route: Route, tmap: TerrainMap, ts: Any, *, cost: EnergyCost | None, stamp_ns: int, frame_id: str,
+              frame_origin: tuple[float, float]) -> dict[str, Any]:
+    """The four messages, by topic suffix."""
+    types = ts.types
+    pts = route.waypoints_m
+    z = np.atleast_1d(tmap.sample("elevation", pts[:, 0], pts[:, 1], method="bilinear")).astype(np.float64)
+    d = np.diff(pts, axis=0)
+    yaw = np.arctan2(d[:, 1], d[:, 0])
+    yaw = np.concatenate([yaw, yaw[-1:]])
+    times = route_pose_times_s(route, cost) if cost is not None else np.zeros(pts.shape[0])
+    pose_ns = stamp_ns + np.rint(times * _NS).astype(np.int64)
+
+    def header(ns: int) -> Any:
+        stamp = types["builtin_interfaces/msg/Time"](sec=int(ns // _NS), nanosec=int(ns % _NS))
+        return types["std_msgs/msg/Header"](stamp=stamp, frame_id=frame_id)
+
+    poses = []
+    for (x, y), h, psi, ns in zip(pts.tolist(), z.tolist(), yaw.tolist(), pose_ns.tolist(), strict=True):
+        position = types["geometry_msgs/msg/Point"](x=x - frame_origin[0], y=y - frame_origin[1], z=h)
+        quat = types["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(psi / 2.0), w=math.cos(psi / 2.0))
+        poses.append(types["geometry_msgs/msg/PoseStamped"](
+            header=header(ns), pose=types["geometry_msgs/msg/Pose"](position=position, orientation=quat)))
+    cumulative = np.cumsum(route.turn_energy_j) + np.concatenate([[0.0], np.cumsum(route.segment_energy_j)])
+    dim = types["std_msgs/msg/MultiArrayDimension"](label="pose_energy_j", size=len(poses), stride=len(poses))
+    energy = types["std_msgs/msg/Float64MultiArray"](
+        layout=types["std_msgs/msg/MultiArrayLayout"](dim=[dim], data_offset=0), data=cumulative.astype(np.float64))
+    text = types["std_msgs/msg/String"]
+    summary = {"format_version": ROUTE_BAG_FORMAT_VERSION, **{  # JSON has no NaN: a quantity not computed is null
+        k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in route.summary().items()}}
+    return {
+        _PATH: types["nav_msgs/msg/Path"](header=header(stamp_ns), poses=poses),
+        _ENERGY: energy,
+        _CRS: text(data=json.dumps(_map_info(tmap, frame_id, frame_origin), allow_nan=False)),
+        _SUMMARY: text(data=json.dumps(summary, allow_nan=False)),
+    }
+
+
+def _write_bag(bag_dir: Path, messages: dict[str, Any], ts: Any, prefix: str, stamp_ns: int) -> None:
+    """A ROS 2 bag directory (MCAP storage) holding one message per topic, all at ``stamp_ns``."""
+    writer_cls, plugin, _, _ = _rosbags()
+    with writer_cls(bag_dir, version=9, storage_plugin=plugin.MCAP) as writer:
+        for suffix, msg in messages.items():
+            conn = writer.add_connection(prefix + suffix, _TYPES[suffix], typestore=ts)
+            writer.write(conn, stamp_ns, ts.serialize_cdr(msg, _TYPES[suffix]))
+
+
+def _fsync(path: Path) -> None:
+    with open(path, "rb") as fh:
+        os.fsync(fh.fileno())
+
+
+def check_route_bag_path(path: str | os.PathLike[str], name: str = "path") -> tuple[Path, bool]:
+    """Check, before any work, that a route bag can be written at ``path``; return it and whether it is one ``.mcap`` file.
+
+    A name ending in ``.mcap`` is a single MCAP file; any other name a ROS 2 bag directory,
+    which may replace an existing directory only if that is a bag (holds ``metadata.yaml``).
+
+    Raises
+    ------
+    InvalidParameterError
+        A ``.bag`` / ``.db3`` name; a path of the wrong kind; a directory that is not a bag.
+    """
+    target = Path(path)
+    suffix = target.suffix.lower()
+    if suffix in (".bag", ".db3"):
+        raise InvalidParameterError(f"{name} {str(target)!r}: ROS 1 .bag and sqlite3 .db3 are not written; give a "
+                                    "'.mcap' file or a bag directory name")
+    single = suffix == ".mcap"
+    check_output_path(target, name, directory=not single)
+    if not single and target.is_dir() and not (target / "metadata.yaml").is_file():
+        raise InvalidParameterError(f"{name} {str(target)!r} is a directory that is not a ROS 2 bag (no metadata.yaml); "
+                                    "give a new name or a '.mcap' file")
+    return target, single
+
+
+def write_route_bag(
+    path: str | os.PathLike[str],
+    route: Route,
+    tmap: TerrainMap,
+    *,
+    cost: EnergyCost | None = None,
+    stamp_ns: int = 0,
+    frame_id: str = "map",
+    topic_prefix: str = DEFAULT_TOPIC_PREFIX,
+    frame_origin_xy_m: tuple[float, float] = (0.0, 0.0),
+) -> Path:
+    """Write a planned route, its energy and the map's CRS as a ROS 2 bag (MCAP), atomically.
+
+    Parameters
+    ----------
+    path : path-like
+        A ``.mcap`` file, or a ROS 2 bag directory for any other name (an existing one is
+        replaced only if it is a bag: it holds a ``metadata.yaml``).
+    route : Route
+        A found route (``exact`` or ``approximate``).
+    tmap : TerrainMap
+        The map it was planned on (elevations for z, the CRS).
+    cost : EnergyCost, optional
+        The edge costs it was planned with: the poses are then stamped with the planned time
+        of leaving each waypoint (:func:`route_pose_times_s`); without it, all with ``stamp_ns``.
+    stamp_ns : int
+        Time of the Path's header and of every message in the bag (ns since the epoch, >= 0).
+    frame_id : str
+        Frame of the Path and its poses.
+    topic_prefix : str
+        Namespace of the four topics (starts with ``/``).
+    frame_origin_xy_m : (float, float)
+        The map frame's origin in map (CRS) coordinates: poses are waypoints minus it. The
+        default puts the map frame on the map's coordinates; a local origin (e.g. the map's
+        lower-left corner) keeps UTM-sized numbers out of the poses.
+
+    Returns
+    -------
+    Path
+        The file or bag directory written.
+
+    Raises
+    ------
+    InvalidParameterError
+        A route not found or not a Route; bad stamp, frame, prefix or origin; a ``.bag`` /
+        ``.db3`` name; an existing directory that is not a bag; a cost that does not give the
+        route's duration.
+    OutOfBoundsError
+        A waypoint off the map.
+    GridMismatchError
+        ``cost`` priced on another grid than ``tmap``.
+    OptionalDependencyError
+        rosbags (the ``ros`` extra) is not installed.
+    """
+    target, single = check_route_bag_path(path)
+    _check_route(route)
+    if not isinstance(tmap, TerrainMap):
+        raise InvalidParameterError(f"tmap must be a TerrainMap, got {type(tmap).__name__!r}")
+    if cost is not None:
+        if not isinstance(cost, EnergyCost):
+            raise InvalidParameterError(f"cost must be an EnergyCost or None, got {type(cost).__name__!r}")
+        tmap.grid.check_same(cost.terrain.grid, "cost")
+    stamp = check_int("stamp_ns", stamp_ns, low=0)
+    check_text("frame_id", frame_id)
+    if not isinstance(topic_prefix, str) or not topic_prefix.startswith("/") or topic_prefix.endswith("/"):
+        raise InvalidParameterError(f"topic_prefix must start with '/' and not end with it, got {topic_prefix!r}")
+    try:
+        fx, fy = frame_origin_xy_m
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(f"frame_origin_xy_m must be (x, y) in metres, got {frame_origin_xy_m!r}") from exc
+    origin = (check_real("frame_origin_xy_m[0]", fx), check_real("frame_origin_xy_m[1]", fy))
+    _, _, _, ts = _rosbags()
+    messages = _messages(route, tmap, ts, cost=cost, stamp_ns=stamp, frame_id=frame_id, frame_origin=origin)
+    name = target.stem if single else target.name  # the MCAP file inside is named after the target
+    if single:
+        with atomic_path(target) as tmp:
+            work = tmp.with_name(tmp.name[: -len(".tmp")] + "_bag.tmp")  # a temporary of the same target
+            try:
+                _write_bag(work / name, messages, ts, topic_prefix, stamp)
+                os.replace(work / name / f"{name}.mcap", tmp)
+            finally:
+                shutil.rmtree(work, ignore_errors=True)
+        return target
+    with atomic_directory(target) as tmp:
+        _write_bag(tmp / name, messages, ts, topic_prefix, stamp)
+        for item in sorted((tmp / name).iterdir()):
+            os.replace(item, tmp / item.name)
+            _fsync(tmp / item.name)
+        (tmp / name).rmdir()
+    return target
+
+
+def read_route_bag(path: str | os.PathLike[str], *, topic_prefix: str = DEFAULT_TOPIC_PREFIX) -> RouteBag:
+    """Read a route written by :func:`write_route_bag` (a ``.mcap`` file or a bag directory).
+
+    Raises
+    ------
+    FileFormatError
+        Not a readable bag; a missing topic or not one message on it; energies and poses of
+        different counts; a CRS message that is not terrawatt's JSON, or of a newer version.
+    OptionalDependencyError
+        rosbags (the ``ros`` extra) is not installed.
+    """
+    _, _, any_reader, ts = _rosbags()
+    bag = Path(path)
+    if not bag.exists():
+        raise FileFormatError(f"bag {str(bag)!r} does not exist")
+    found: dict[str, list[Any]] = {}
+    try:
+        with any_reader([bag], default_typestore=ts) as reader:
+            for conn, _, raw in reader.messages():
+                if conn.topic.startswith(topic_prefix):
+                    found.setdefault(conn.topic[len(topic_prefix):], []).append(reader.deserialize(raw, conn.msgtype))
+    except Exception as exc:  # rosbags raises its own error classes per format
+        raise FileFormatError(f"cannot read bag {str(bag)!r}: {type(exc).__name__}: {exc}") from exc
+    for suffix in _TYPES:
+        if len(found.get(suffix, [])) != 1:
+            raise FileFormatError(f"bag {str(bag)!r} has {len(found.get(suffix, []))} messages on "
+                                  f"{topic_prefix + suffix!r}; a terrawatt route bag has one")
+    path_msg, energy_msg = found[_PATH][0], found[_ENERGY][0]
+    try:
+        info = json.loads(found[_CRS][0].data)
+        summary = json.loads(found[_SUMMARY][0].data)
+        version = int(info["format_version"])
+        origin = tuple(float(v) for v in info["map_frame_origin_crs"])
+    except (ValueError, KeyError, TypeError) as exc:
+        raise FileFormatError(f"bag {str(bag)!r}: {topic_prefix + _CRS!r} is not terrawatt's map JSON: {exc}") from exc
+    if not 1 <= version <= ROUTE_BAG_FORMAT_VERSION or len(origin) != 2:
+        raise FileFormatError(f"bag {str(bag)!r} has route bag format version {version!r}; this release reads 1 to "
+                              f"{ROUTE_BAG_FORMAT_VERSION}")
+    poses = path_msg.poses
+    positions = np.array([[p.pose.position.x, p.pose.position.y, p.pose.position.z] for p in poses], dtype=np.float64)
+    q = np.array([[p.pose.orientation.z, p.pose.orientation.w] for p in poses], dtype=np.float64)
+    stamps = np.array([int(p.header.stamp.sec) * _NS + int(p.header.stamp.nanosec) for p in poses], dtype=np.int64)
+    energy = np.asarray(energy_msg.data, dtype=np.float64)
+    if energy.shape != (len(poses),) or len(poses) < 2:
+        raise FileFormatError(f"bag {str(bag)!r} has {len(poses)} poses and {energy.size} energies; expected as many "
+                              "energies as poses, at least 2")
+    stamp = int(path_msg.header.stamp.sec) * _NS + int(path_msg.header.stamp.nanosec)
+    return RouteBag(
+        frame_id=str(path_msg.header.frame_id),
+        stamp_ns=stamp,
+        positions_m=readonly(positions.reshape(-1, 3)),
+        yaw_rad=readonly(2.0 * np.arctan2(q[:, 0], q[:, 1])),
+        pose_stamps_ns=readonly(stamps),
+        cumulative_energy_j=readonly(energy),
+        crs=info.get("crs"),
+        crs_wkt=info.get("crs_wkt"),
+        frame_origin_xy_m=(origin[0], origin[1]),
+        summary=summary,
+    )
