@@ -12,15 +12,29 @@ from typing import Any
 
 import numpy as np
 
+from terrain import TerrainMap
 from terrain.checks import readonly, real_array
 from terrain.errors import DataError, FileFormatError, InvalidParameterError
+from terrain.georef import lonlat_to_xy
 
-__all__ = ["BatchPairs", "read_pairs_csv", "read_sites_csv", "PAIR_COLUMNS", "SITE_COLUMNS"]
+__all__ = [
+    "BatchPairs",
+    "read_pairs_csv",
+    "read_sites_csv",
+    "PAIR_COLUMNS",
+    "PAIR_LONLAT_COLUMNS",
+    "SITE_COLUMNS",
+    "SITE_LONLAT_COLUMNS",
+]
 
 #: Columns a pairs CSV must have (an optional ``name`` column labels each pair).
 PAIR_COLUMNS = ("start_x_m", "start_y_m", "goal_x_m", "goal_y_m")
+#: The columns of a pairs CSV in WGS 84 degrees, instead of :data:`PAIR_COLUMNS`.
+PAIR_LONLAT_COLUMNS = ("start_lon", "start_lat", "goal_lon", "goal_lat")
 #: Columns a sites CSV must have (an optional ``name`` column labels each site).
 SITE_COLUMNS = ("x_m", "y_m")
+#: The columns of a sites CSV in WGS 84 degrees, instead of :data:`SITE_COLUMNS`.
+SITE_LONLAT_COLUMNS = ("lon", "lat")
 
 
 @dataclass(frozen=True, eq=False)
@@ -128,10 +142,17 @@ def _points(name: str, value: Any) -> np.ndarray:
 
 #: Largest points table (pairs, sites) read (bytes).
 MAX_TABLE_BYTES = 64 * 1024**2
+_RANGE_DEG = {"lon": 180.0, "lat": 90.0}
 
 
-def _read_table(path: str | os.PathLike[str], required: Sequence[str], what: str) -> tuple[list[str] | None, np.ndarray]:
-    """The optional ``name`` column and the ``required`` numeric columns of a CSV file."""
+def _read_table(
+    path: str | os.PathLike[str], column_sets: Sequence[tuple[Sequence[str], str]], what: str
+) -> tuple[list[str] | None, np.ndarray, int]:
+    """The optional ``name`` column and the numeric columns of one of ``column_sets`` (columns, unit) of a CSV file.
+
+    The first set is the default: the file must hold it whole unless it holds another set
+    whole (never two). Returns the names, the values and the index of the set found.
+    """
     p = Path(path)
     if p.exists() and not p.is_file():  # a FIFO or a device would block or never end (a missing file: OSError)
         raise FileFormatError(f"{what} file {str(p)!r} is not a regular file")
@@ -142,18 +163,28 @@ def _read_table(path: str | os.PathLike[str], required: Sequence[str], what: str
         with open(p, newline="", encoding="utf-8-sig") as fh:
             reader = csv.DictReader(fh)
             header = [h.strip() for h in (reader.fieldnames or [])]
-            missing = [c for c in required if c not in header]
-            if missing:
+            found = [k for k, (cols, _) in enumerate(column_sets) if all(c in header for c in cols)]
+            if len(found) > 1:
+                raise FileFormatError(
+                    f"{what} file {p.name!r} has both the columns {list(column_sets[found[0]][0])!r} and "
+                    f"{list(column_sets[found[1]][0])!r}; give the points one way"
+                )
+            if not found:
+                required = column_sets[0][0]
+                missing = [c for c in required if c not in header]
+                others = "".join(f", or {list(cols)!r} ({unit})" for cols, unit in column_sets[1:])
                 raise FileFormatError(
                     f"{what} file {p.name!r} lacks the column(s) {missing!r}; it has {header!r}; expected a header "
-                    f"with {list(required)!r} (and optionally 'name')"
+                    f"with {list(required)!r}{others} (and optionally 'name')"
                 )
+            kind = found[0]
             reader.fieldnames = header
             rows = list(reader)
     except (UnicodeDecodeError, csv.Error) as exc:
         raise FileFormatError(f"{what} file {p.name!r} is not a UTF-8 CSV table: {exc}") from exc
     if not rows:
         raise DataError(f"{what} file {p.name!r} has a header but no rows")
+    required, unit = column_sets[kind]
     values = np.empty((len(rows), len(required)))
     for i, row in enumerate(rows):
         for k, col in enumerate(required):
@@ -163,9 +194,12 @@ def _read_table(path: str | os.PathLike[str], required: Sequence[str], what: str
             except ValueError:
                 v = math.nan
             if not math.isfinite(v):
-                raise DataError(
-                    f"{what} file {p.name!r}, line {i + 2}: column {col!r} is {text!r}; expected a finite number of metres"
-                )
+                raise DataError(f"{what} file {p.name!r}, line {i + 2}: column {col!r} is {text!r}; expected a "
+                                f"finite number of {unit}")
+            limit = _RANGE_DEG.get(col.rsplit("_", 1)[-1]) if unit == "degrees" else None
+            if limit is not None and abs(v) > limit:
+                raise DataError(f"{what} file {p.name!r}, line {i + 2}: column {col!r} is {text!r}; expected degrees "
+                                f"in [-{limit:g}, {limit:g}]")
             values[i, k] = v
     names = None
     if "name" in header:
@@ -178,36 +212,64 @@ def _read_table(path: str | os.PathLike[str], required: Sequence[str], what: str
             if n in seen:
                 raise DataError(f"{what} file {p.name!r}, line {i + 2}: the name {n!r} is used twice; names must be unique")
             seen.add(n)
-    return names, values
+    return names, values, kind
 
 
-def read_pairs_csv(path: str | os.PathLike[str]) -> BatchPairs:
+def _metres(lonlat: np.ndarray, where: TerrainMap | None, path: str | os.PathLike[str], what: str) -> np.ndarray:
+    """``(N, 2k)`` columns of (lon, lat) pairs as the map's metres.
+
+    No bounds check: a point off the map is its row's error, as in metres."""
+    if where is None:
+        raise InvalidParameterError(
+            f"{what} file {Path(path).name!r} gives longitude / latitude; pass where=<the georeferenced map> to place "
+            "them on it"
+        )
+    out = np.empty_like(lonlat)
+    for k in range(0, lonlat.shape[1], 2):
+        x, y = lonlat_to_xy(lonlat[:, k], lonlat[:, k + 1], where.crs)
+        out[:, k], out[:, k + 1] = x, y
+    return out
+
+
+def read_pairs_csv(path: str | os.PathLike[str], where: TerrainMap | None = None) -> BatchPairs:
     """Pairs from a CSV file with columns ``start_x_m, start_y_m, goal_x_m, goal_y_m`` (and optionally ``name``).
+
+    The pairs may instead be given in WGS 84 degrees, columns ``start_lon, start_lat,
+    goal_lon, goal_lat``: ``where`` (the georeferenced map) then places them in its metres
+    (:meth:`terrain.TerrainMap.lonlat_to_xy`); a pair off the map is planned as an error
+    row, like one in metres.
 
     Raises
     ------
     FileNotFoundError
         No such file.
     FileFormatError
-        A required column is missing (the message lists the file's columns).
+        A required column is missing (the message lists the file's columns); both the
+        metre and the degree columns.
     DataError
-        No rows; an empty, non-numeric or NaN coordinate (the message gives the line and
-        column); an empty or repeated name.
+        No rows; an empty, non-numeric or NaN coordinate, degrees out of range (the message
+        gives the line and column); an empty or repeated name.
+    InvalidParameterError
+        Degrees without ``where``, or a ``where`` without CRS.
     """
-    names, values = _read_table(path, PAIR_COLUMNS, "pairs")
-    return BatchPairs.from_array(values, names)
+    names, values, kind = _read_table(path, ((PAIR_COLUMNS, "metres"), (PAIR_LONLAT_COLUMNS, "degrees")), "pairs")
+    return BatchPairs.from_array(values if kind == 0 else _metres(values, where, path, "pairs"), names)
 
 
-def read_sites_csv(path: str | os.PathLike[str]) -> tuple[tuple[str, ...], np.ndarray]:
-    """Sites from a CSV file with columns ``x_m, y_m`` (and optionally ``name``): names and an ``(N, 2)`` array.
+def read_sites_csv(
+    path: str | os.PathLike[str], where: TerrainMap | None = None
+) -> tuple[tuple[str, ...], np.ndarray]:
+    """Sites from a CSV file with columns ``x_m, y_m`` (or ``lon, lat`` in WGS 84 degrees, placed on the
+    georeferenced map ``where``), and optionally ``name``: names and an ``(N, 2)`` array of metres.
 
     Combine them with :meth:`BatchPairs.all_pairs`.
 
     Raises
     ------
-    FileNotFoundError, FileFormatError, DataError
+    FileNotFoundError, FileFormatError, DataError, InvalidParameterError
         As :func:`read_pairs_csv`.
     """
-    names, values = _read_table(path, SITE_COLUMNS, "sites")
+    names, values, kind = _read_table(path, ((SITE_COLUMNS, "metres"), (SITE_LONLAT_COLUMNS, "degrees")), "sites")
+    values = values if kind == 0 else _metres(values, where, path, "sites")
     labels = tuple(names) if names is not None else tuple(str(i) for i in range(values.shape[0]))
     return labels, readonly(values)
