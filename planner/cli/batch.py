@@ -8,7 +8,7 @@ import dataclasses
 from pathlib import Path
 from typing import Any
 
-from terrain import InvalidParameterError
+from terrain import InvalidParameterError, TerrainMap
 from terrain.dask_client import dask_client
 from terrain.procedural import example_map
 
@@ -17,6 +17,7 @@ from .common import (
     add_dask_options,
     add_map_options,
     add_model_options,
+    apply_landcover,
     check_dask_flags,
     check_model_flags,
     check_outputs,
@@ -47,8 +48,10 @@ def add_parser(sub: Any) -> None:
     add_map_options(batch)
     source = batch.add_mutually_exclusive_group(required=True)
     source.add_argument("--pairs", type=Path, metavar="CSV",
-                        help="pairs file: columns start_x_m, start_y_m, goal_x_m, goal_y_m (and optionally name)")
-    source.add_argument("--sites", type=Path, metavar="CSV", help="sites file: columns x_m, y_m (and optionally name)")
+                        help="pairs file: columns start_x_m, start_y_m, goal_x_m, goal_y_m, or start_lon, start_lat, "
+                             "goal_lon, goal_lat in WGS 84 degrees (on a map with a CRS), and optionally name")
+    source.add_argument("--sites", type=Path, metavar="CSV",
+                        help="sites file: columns x_m, y_m, or lon, lat in WGS 84 degrees, and optionally name")
     batch.add_argument("--all-pairs", action="store_true", help="with --sites: plan every ordered pair of sites")
     add_dask_options(batch, "the pairs")
     batch.add_argument("--planner", default="lattice", choices=PLANNERS, help="planner name (default lattice)")
@@ -80,10 +83,11 @@ def _check_flags(args: argparse.Namespace) -> None:
         check_positive("--max-evaluations", args.max_evaluations)
 
 
-def _read_pairs(args: argparse.Namespace) -> BatchPairs:
+def _read_pairs(args: argparse.Namespace, tmap: TerrainMap) -> BatchPairs:
+    """The pairs of ``--pairs`` or ``--sites``; degrees are placed on ``tmap`` by its CRS."""
     if args.pairs is not None:
-        return read_pairs_csv(args.pairs)
-    names, xy = read_sites_csv(args.sites)
+        return read_pairs_csv(args.pairs, tmap)
+    names, xy = read_sites_csv(args.sites, tmap)
     return BatchPairs.all_pairs(xy, names)
 
 
@@ -96,11 +100,11 @@ def run_batch(args: argparse.Namespace) -> int:
     _check_flags(args)
     check_model_flags(args)
     check_outputs(args.out, _OUTPUTS, input_paths(args))
-    pairs = _read_pairs(args)
     if args.map == "example":
-        tmap, label = example_map(), "bundled example map"
+        tmap, label = apply_landcover(args, example_map()), "bundled example map"
     else:
         tmap, label = read_map_args(args), Path(args.map).name
+    pairs = _read_pairs(args, tmap)
     model = load_model_arg(args)
     cost = edge_cost_for(tmap, robot=args.robot, speed_mps=args.speed, max_slope_rad=max_slope_rad(args.max_slope_deg),
                          unknown_ground=None if model is not None else unknown_ground(args.unknown_ground, tmap),

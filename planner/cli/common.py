@@ -12,18 +12,24 @@ from pathlib import Path
 import numpy as np
 
 from energy import GROUND_PRESETS, CurrentModel, load_current_model, robot_preset
-from terrain import UNKNOWN_GROUND, InvalidParameterError, NodataError, TerrainMap, UnknownNameError
+from terrain import UNKNOWN_GROUND, DemWindows, InvalidParameterError, NodataError, TerrainMap, UnknownNameError
 from terrain.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
 from terrain.checks import fmt_number
+from terrain.landcover import LandcoverClasses, ground_classes_from_landcover, read_landcover_classes
 
 from ..edge_cost import EnergyCost
 from ..model_cost import model_energy_cost
+from ..points import lonlat_points
 from ..risk import check_risk_level
 
 __all__ = [
     "add_map_options",
     "read_map_file",
     "read_map_args",
+    "landcover_classes_arg",
+    "apply_landcover",
+    "add_point_options",
+    "point_arg",
     "check_outputs",
     "check_positive",
     "max_slope_rad",
@@ -40,8 +46,8 @@ __all__ = [
 
 
 def add_map_options(p: argparse.ArgumentParser, *, reproject: bool = True) -> None:
-    """``--fill-nodata``, ``--reproject`` and ``--cell-size`` (read them with :func:`read_map_args`);
-    ``reproject=False`` offers ``--fill-nodata`` only."""
+    """``--fill-nodata``, ``--reproject``, ``--cell-size``, ``--landcover`` and ``--landcover-classes`` (read them
+    with :func:`read_map_args`); ``reproject=False`` offers no ``--reproject`` / ``--cell-size``."""
     p.add_argument(
         "--fill-nodata", choices=["nearest"], default=None,
         help="GeoTIFF DEMs: fill nodata cells from the nearest valid cell (default: refuse such DEMs)",
@@ -54,6 +60,16 @@ def add_map_options(p: argparse.ArgumentParser, *, reproject: bool = True) -> No
         )
         p.add_argument("--cell-size", type=float, default=None, metavar="M",
                        help="cell size (m) of the reprojected map; with --reproject")
+    p.add_argument(
+        "--landcover", type=Path, default=None, metavar="FILE",
+        help="ground classes from a land-cover GeoTIFF of integer codes (e.g. ESA WorldCover), in any CRS, warped "
+             "onto a map with a CRS by majority; with --landcover-classes",
+    )
+    p.add_argument(
+        "--landcover-classes", type=Path, default=None, metavar="CSV",
+        help="with --landcover: CSV 'code,ground' (optional 'label' column) naming each code's ground preset, or "
+             "'obstacle' (impassable) or 'unknown'; codes left out and nodata keep unknown ground (--unknown-ground)",
+    )
 
 
 def read_map_file(
@@ -91,8 +107,67 @@ def read_map_file(
 
 
 def read_map_args(args: argparse.Namespace) -> TerrainMap:
-    """The map of a command's ``--map``, ``--fill-nodata`` and (if offered) ``--reproject`` / ``--cell-size``."""
-    return read_map_file(args.map, args.fill_nodata, getattr(args, "reproject", None), getattr(args, "cell_size", None))
+    """The map of a command's ``--map``, ``--fill-nodata``, (if offered) ``--reproject`` / ``--cell-size`` and
+    ``--landcover`` / ``--landcover-classes`` (the classes file is read and checked before the map)."""
+    classes = landcover_classes_arg(args)
+    tmap = read_map_file(args.map, args.fill_nodata, getattr(args, "reproject", None), getattr(args, "cell_size", None))
+    return apply_landcover(args, tmap, classes)
+
+
+def landcover_classes_arg(args: argparse.Namespace) -> LandcoverClasses | None:
+    """The mapping of ``--landcover-classes`` (:func:`terrain.landcover.read_landcover_classes`), or None without
+    ``--landcover``; its grounds must be presets unless ``--model`` prices the grounds."""
+    landcover, classes = getattr(args, "landcover", None), getattr(args, "landcover_classes", None)
+    if (landcover is None) != (classes is None):
+        raise InvalidParameterError(
+            "--landcover and --landcover-classes go together: the land-cover raster and the CSV naming the ground of "
+            f"each of its codes (got --landcover {landcover}, --landcover-classes {classes})"
+        )
+    if classes is None:
+        return None
+    mapping = read_landcover_classes(classes)
+    if getattr(args, "model", None) is None:
+        check_grounds(mapping.ground_names, f"--landcover-classes {Path(classes).name}")
+    return mapping
+
+
+def apply_landcover(args: argparse.Namespace, tmap: TerrainMap, classes: LandcoverClasses | None = None) -> TerrainMap:
+    """``tmap`` with the ground classes of ``--landcover`` (:func:`terrain.landcover.ground_classes_from_landcover`),
+    or ``tmap`` itself without the flag; ``classes`` as read by :func:`landcover_classes_arg` (read here if None)."""
+    classes = landcover_classes_arg(args) if classes is None else classes
+    if classes is None:
+        return tmap
+    return ground_classes_from_landcover(tmap, args.landcover, classes)
+
+
+def add_point_options(p: argparse.ArgumentParser, name: str, what: str, *, required: bool,
+                      default: str = "") -> None:
+    """``--NAME X Y`` (the map's metres) or ``--NAME-lonlat LON LAT`` (WGS 84 degrees), one of them; read them
+    with :func:`point_arg`. ``what`` names the point in the help, ``default`` says what it is when not given."""
+    group = p.add_mutually_exclusive_group(required=required)
+    group.add_argument(f"--{name}", type=float, nargs=2, metavar=("X", "Y"), help=f"{what} (m){default}")
+    group.add_argument(
+        f"--{name}-lonlat", type=float, nargs=2, metavar=("LON", "LAT"),
+        help=f"{what} as WGS 84 longitude and latitude (degrees), placed on the map by its CRS; instead of --{name}",
+    )
+
+
+def point_arg(args: argparse.Namespace, name: str, where: TerrainMap | DemWindows) -> tuple[float, float] | None:
+    """The point of :func:`add_point_options` in the map's metres, or None when neither flag was given.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``--NAME-lonlat`` on a map without CRS, or degrees out of range.
+    OutOfBoundsError
+        ``--NAME-lonlat`` off the map (the message gives the point and the bounds in degrees and in metres).
+    """
+    lonlat = getattr(args, f"{name}_lonlat", None)
+    if lonlat is not None:
+        x, y = lonlat_points(lonlat, where, f"--{name}-lonlat")[0].tolist()
+        return x, y
+    xy = getattr(args, name, None)
+    return None if xy is None else (float(xy[0]), float(xy[1]))
 
 
 def check_outputs(directory: Path, files: Iterable[str] = (), inputs: Iterable[Path | None] = ()) -> None:
@@ -119,7 +194,7 @@ def check_outputs(directory: Path, files: Iterable[str] = (), inputs: Iterable[P
 
 
 #: Flags whose values are input paths (a ``--model`` that names a kind, a ``--map example``, are not files).
-INPUT_FLAGS = ("map", "data", "pairs", "sites", "model", "calibration_data")
+INPUT_FLAGS = ("map", "data", "pairs", "sites", "model", "calibration_data", "landcover", "landcover_classes")
 
 
 def input_paths(args: argparse.Namespace) -> list[Path]:

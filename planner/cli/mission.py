@@ -24,6 +24,8 @@ from .common import (
     add_dask_options,
     add_map_options,
     add_model_options,
+    add_point_options,
+    apply_landcover,
     check_dask_flags,
     check_model_flags,
     check_outputs,
@@ -32,6 +34,7 @@ from .common import (
     edge_cost_for,
     input_paths,
     load_model_arg,
+    point_arg,
     read_map_args,
 )
 
@@ -49,8 +52,8 @@ def add_parser(sub: Any) -> None:
     )
     mission.add_argument("--map", default="example", metavar="FILE", help=".npz map, .tif DEM or 'example' (default)")
     add_map_options(mission)
-    mission.add_argument("--start", type=float, nargs=2, metavar=("X", "Y"), help="start (m); default: the example's")
-    mission.add_argument("--goal", type=float, nargs=2, metavar=("X", "Y"), help="goal (m); default: the example's")
+    add_point_options(mission, "start", "start", required=False, default="; default: the example's")
+    add_point_options(mission, "goal", "goal", required=False, default="; default: the example's")
     mission.add_argument("--battery-ah", type=float, required=True, metavar="AH", help="battery capacity (Ah)")
     mission.add_argument("--battery-v", type=float, default=None, metavar="V", help="battery voltage (default: the robot's)")
     mission.add_argument("--reserve-pct", type=float, default=20.0, metavar="P", help="minimum reserve (%%, default 20)")
@@ -98,14 +101,15 @@ def run_mission(args: argparse.Namespace) -> int:
         raise InvalidParameterError("--mc-draw model draws from a saved model's predictive distribution: give --model FILE")
     check_outputs(args.out, _OUTPUTS if args.monte_carlo is None else _MC_OUTPUTS, input_paths(args))
     if args.map == "example":
-        tmap, label = example_map(), "bundled example map"
-        start = tuple(args.start) if args.start else EXAMPLE_START_XY_M
-        goal = tuple(args.goal) if args.goal else EXAMPLE_GOAL_XY_M
+        tmap, label = apply_landcover(args, example_map()), "bundled example map"
+        start = point_arg(args, "start", tmap) or EXAMPLE_START_XY_M
+        goal = point_arg(args, "goal", tmap) or EXAMPLE_GOAL_XY_M
     else:
-        if not (args.start and args.goal):
-            raise InvalidParameterError("--start and --goal are required with a map file")
+        if (args.start is None and args.start_lonlat is None) or (args.goal is None and args.goal_lonlat is None):
+            raise InvalidParameterError("--start and --goal (or --start-lonlat and --goal-lonlat) are required with a "
+                                        "map file")
         tmap, label = read_map_args(args), Path(args.map).name
-        start, goal = tuple(args.start), tuple(args.goal)
+        start, goal = point_arg(args, "start", tmap), point_arg(args, "goal", tmap)
     unknown = sorted(n for n in set(tmap.ground_names.values()) if n not in GROUND_PRESETS)
     if unknown:
         raise UnknownNameError(f"the map's grounds {unknown!r} have no preset; known grounds: {sorted(GROUND_PRESETS)!r}")

@@ -14,7 +14,14 @@ from typing import Any
 import numpy as np
 
 from energy import GROUND_PRESETS
-from terrain import UNKNOWN_GROUND, DemWindows, InvalidParameterError, TerrainMap, UnknownNameError
+from terrain import (
+    UNKNOWN_GROUND,
+    DemWindows,
+    InvalidParameterError,
+    OptionalDependencyError,
+    TerrainMap,
+    UnknownNameError,
+)
 from terrain.atomic import write_json_atomic
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
 
@@ -34,6 +41,7 @@ from ..route_geojson import write_geojson
 from .common import (
     add_map_options,
     add_model_options,
+    add_point_options,
     check_model_flags,
     check_outputs,
     check_positive,
@@ -42,6 +50,7 @@ from .common import (
     input_paths,
     load_model_arg,
     max_slope_rad,
+    point_arg,
     read_map_args,
     unknown_ground,
 )
@@ -60,8 +69,8 @@ def add_parsers(sub: Any) -> None:
     plan = sub.add_parser("plan", help="plan a minimum-energy route on a map file (.npz or GeoTIFF)")
     plan.add_argument("--map", type=Path, required=True, metavar="FILE", help=".npz map or .tif DEM")
     add_map_options(plan)
-    plan.add_argument("--start", type=float, nargs=2, required=True, metavar=("X", "Y"), help="start (m)")
-    plan.add_argument("--goal", type=float, nargs=2, required=True, metavar=("X", "Y"), help="goal (m)")
+    add_point_options(plan, "start", "start", required=True)
+    add_point_options(plan, "goal", "goal", required=True)
     _add_plan_options(plan, default_time=2.0)
     plan.add_argument(
         "--coarse-factor", type=int, default=None, metavar="F",
@@ -119,7 +128,7 @@ def run_plan_command(args: argparse.Namespace) -> int:
     if args.windowed:
         return _run_windowed(args)
     tmap = read_map_args(args)
-    return _run(args, tmap, tuple(args.start), tuple(args.goal), args.map.name)
+    return _run(args, tmap, point_arg(args, "start", tmap), point_arg(args, "goal", tmap), args.map.name)
 
 
 def _run(args: argparse.Namespace, tmap: TerrainMap, start: tuple[float, float], goal: tuple[float, float],
@@ -161,7 +170,7 @@ def _run_windowed(args: argparse.Namespace) -> int:
     if args.map.suffix.lower() not in (".tif", ".tiff"):
         raise InvalidParameterError(f"--windowed reads GeoTIFF DEMs (.tif, .tiff), got --map {args.map.name}")
     for flag, value in (("--fill-nodata", args.fill_nodata), ("--reproject", args.reproject),
-                        ("--cell-size", args.cell_size)):
+                        ("--cell-size", args.cell_size), ("--landcover", args.landcover)):
         if value is not None:
             raise InvalidParameterError(
                 f"--windowed reads the DEM as it is and cannot apply {flag} (it needs the whole map): fill or "
@@ -178,8 +187,10 @@ def _run_windowed(args: argparse.Namespace) -> int:
     if args.unknown_ground not in GROUND_PRESETS:
         raise UnknownNameError(f"--unknown-ground must be a ground preset, one of {sorted(GROUND_PRESETS)!r}, "
                                f"or 'none'; got {args.unknown_ground!r}")
+    with DemWindows(args.map) as dem:
+        start, goal = point_arg(args, "start", dem), point_arg(args, "goal", dem)
     result = run_windowed_plan(
-        args.map, tuple(args.start), tuple(args.goal), factor=args.coarse_factor, corridor_m=args.corridor,
+        args.map, start, goal, factor=args.coarse_factor, corridor_m=args.corridor,
         out_dir=args.out, robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg,
         unknown_ground=args.unknown_ground, whole_map=args.whole_map,
     )
@@ -212,6 +223,17 @@ def _print_table(rows: Sequence[dict[str, Any]]) -> None:
             f"{r['charge_mah']:>8.1f} {r['length_m']:>9.1f} {r['duration_s']:>8.1f} "
             f"{r['ratio_to_lattice_optimum']:>9.3f} {r['planning_time_s']:>7.3f}"
         )
+
+
+def _lonlat_fields(tmap: TerrainMap | None, start: tuple[float, float], goal: tuple[float, float]) -> dict[str, Any]:
+    """route.json's ``start_lonlat_deg`` / ``goal_lonlat_deg`` (WGS 84) when the map has a CRS, else nothing."""
+    if tmap is None or tmap.crs is None:
+        return {}
+    try:
+        lon, lat = tmap.xy_to_lonlat([start[0], goal[0]], [start[1], goal[1]])
+    except OptionalDependencyError:  # a .npz map with a CRS and no rasterio: its files stay in metres
+        return {}
+    return {"start_lonlat_deg": [lon[0], lat[0]], "goal_lonlat_deg": [lon[1], lat[1]]}
 
 
 def _finite_or_none(x: float) -> float | None:
@@ -340,6 +362,7 @@ def run_plan(
         "max_slope_deg": max_slope_deg,
         "start_xy_m": list(start),
         "goal_xy_m": list(goal),
+        **_lonlat_fields(tmap, start, goal),
         "planner": planner,
         "time_limit_s": time_limit_s if max_evaluations is None else None,
         "max_evaluations": max_evaluations,
@@ -454,7 +477,8 @@ def _report_coarse(plan: CoarseToFine, start: tuple[float, float], goal: tuple[f
         print(f"no route: status {route.status!r}")
     result = {
         "map": map_label, "map_crs": plan.coarse_map.crs if plan.coarse_map is not None else None, "robot": robot, "speed_mps": speed_mps, "max_slope_deg": max_slope_deg,
-        "start_xy_m": list(start), "goal_xy_m": list(goal), "planner": "coarse-to-fine",
+        "start_xy_m": list(start), "goal_xy_m": list(goal), **_lonlat_fields(plan.coarse_map, start, goal),
+        "planner": "coarse-to-fine",
         "map_preparation_s": prep_s, "kernel_compile_s": compile_s, "status": route.status, "windowed": windowed,
         "coarse_to_fine": {k: v for k, v in plan.summary().items() if k not in route.summary()},
         "routes": {"min_energy": {**route.summary(), "waypoints_m": route.waypoints_m.tolist()}} if route.found else {},

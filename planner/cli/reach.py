@@ -20,6 +20,8 @@ from ..reachability import warm_up_reachability
 from .common import (
     add_map_options,
     add_model_options,
+    add_point_options,
+    apply_landcover,
     check_model_flags,
     check_outputs,
     check_positive,
@@ -28,6 +30,7 @@ from .common import (
     input_paths,
     load_model_arg,
     max_slope_rad,
+    point_arg,
     read_map_args,
     unknown_ground,
 )
@@ -51,8 +54,9 @@ def add_parser(sub: Any) -> None:
     source.add_argument("--map", type=Path, metavar="FILE", help=".npz map or .tif DEM")
     source.add_argument("--example", action="store_true", help="the bundled example map")
     add_map_options(p)
-    p.add_argument("--depot", type=float, nargs=2, metavar=("X", "Y"),
-                   help="depot (m); required with --map, default with --example: the example's start")
+    add_point_options(p, "depot", "depot", required=False,
+                      default="; --depot or --depot-lonlat is required with --map, default with --example: the "
+                              "example's start")
     p.add_argument("--battery-ah", type=float, required=True, metavar="AH", help="battery capacity (Ah)")
     p.add_argument("--voltage", "--battery-v", dest="voltage", type=float, default=None, metavar="V",
                    help="battery voltage (default: the robot's)")
@@ -81,8 +85,9 @@ def _check_flags(args: argparse.Namespace) -> None:
         check_positive("--voltage", args.voltage)
     if not (math.isfinite(args.reserve) and 0.0 <= args.reserve < 100.0):
         raise InvalidParameterError(f"--reserve must be a percentage in [0, 100), got {args.reserve!r}")
-    if args.depot is None and args.map is not None:
-        raise InvalidParameterError("--depot X Y is required with --map (the depot in the map's metres)")
+    if args.depot is None and args.depot_lonlat is None and args.map is not None:
+        raise InvalidParameterError("--depot X Y is required with --map (the depot in the map's metres; or "
+                                    "--depot-lonlat LON LAT in degrees)")
     if args.depot is not None and not all(math.isfinite(v) for v in args.depot):
         raise InvalidParameterError(f"--depot must be two finite coordinates (m), got {args.depot!r}")
 
@@ -96,10 +101,10 @@ def run_reach(args: argparse.Namespace) -> int:
     check_outputs(args.out, ("reach.json", "reach.png", "reach.npz", "reach.tif"), input_paths(args))
     robot = robot_preset(args.robot)
     if args.example:
-        tmap, label = example_map(), "bundled example map"
+        tmap, label = apply_landcover(args, example_map()), "bundled example map"
     else:
         tmap, label = read_map_args(args), args.map.name
-    depot = tuple(args.depot) if args.depot is not None else EXAMPLE_START_XY_M
+    depot = point_arg(args, "depot", tmap) or EXAMPLE_START_XY_M
     model = load_model_arg(args)
     ground = None if model is not None else unknown_ground(args.unknown_ground, tmap)
     voltage_v = args.voltage if args.voltage is not None else robot.battery_voltage_v
