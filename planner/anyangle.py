@@ -68,7 +68,7 @@ __all__ = [
 
 #: Piece lengths (cells) of the successive polishing passes: coarse pieces move long
 #: stretches cheaply, short ones let the route bend where the ground changes.
-DEFAULT_POLISH_SPACINGS_CELLS = (8.0, 3.0)
+DEFAULT_POLISH_SPACINGS_CELLS = (8.0, 3.0, 1.5)
 
 
 @dataclass(frozen=True)
