@@ -254,11 +254,10 @@ class Lattice:
         np.cumsum(np.cumsum(changed, axis=0, dtype=np.int32), axis=1, out=sat[1:, 1:])
         data = self._data["energy"].copy()
         arr = cost.arrays
-        recomputed, flips, moved = lattice_reweight(
+        recomputed, flips, new.changed_moves = lattice_reweight(
             arr.cells, arr.grade_table, arr.geo, self.stride_cells, self._offset, self._ni, self._nj,
             _HALF, sat, self._pos, data,
         )
-        new.changed_moves = np.flatnonzero(moved.ravel())
         if int(flips.sum()):
             w = lattice_weights(arr.cells, arr.grade_table, arr.geo, self.stride_cells, self._offset,
                                 self._ni, self._nj, _HALF)

@@ -159,23 +159,33 @@ def _lattice_weights(cells, table, geo, stride, offset, ni, nj, half):  # pragma
     return w
 
 
-def _lattice_reweight(cells, table, geo, stride, offset, ni, nj, half, changed_sat, pos, data):  # pragma: no cover
+def _lattice_reweight(cells, table, geo, stride, offset, ni, nj, half, changed_sat, pos, data,
+                      i0=0, i1=-1, j0=0, j1=-1):  # pragma: no cover - compiled
     """Recompute, into ``data``, the energies of the edges whose cell box holds a changed cell.
 
     ``changed_sat`` is the summed-area table of the changed-cell mask (shape rows+1, cols+1);
-    ``pos[node, k]`` is the index in ``data`` of move ``k`` of ``node`` (-1: no edge). Returns
-    per node-row counts of recomputed moves and of edges whose presence would change (an
-    absent edge becoming finite or a present one becoming ``inf``), and a ``(ni * nj, 2 * nh)``
-    mask (uint8) of the moves whose energy changed (``inf`` standing for an absent edge).
+    ``pos[node, k]`` is the index in ``data`` of move ``k`` of ``node`` (-1: no edge). Only
+    the half-plane moves of the nodes in rows ``i0:i1`` and columns ``j0:j1`` are looked at
+    (default all; ``-1``: to the end). Returns per node-row counts of recomputed moves and of
+    edges whose presence would change (an absent edge becoming finite or a present one
+    becoming ``inf``), and a ``((min(ni, i1 + 2) - i0) * nj, 2 * nh)`` mask (uint8) of the
+    moves whose energy changed (``inf`` standing for an absent edge), its first row being
+    node ``i0 * nj``.
     """
     nh = half.shape[0]
+    if i1 < 0:
+        i1 = ni
+    if j1 < 0:
+        j1 = nj
     recomputed = np.zeros(ni, np.int64)
     flips = np.zeros(ni, np.int64)
-    changed = np.zeros((ni * nj, 2 * nh), np.uint8)
-    for i in numba.prange(ni):
+    first = i0 * nj
+    changed = np.zeros(((min(ni, i1 + 2) - i0) * nj, 2 * nh), np.uint8)
+    for ii in numba.prange(i1 - i0):
+        i = i0 + ii
         ra = i * stride + offset
         ya = geo[1] + (ra + 0.5) * geo[2]
-        for j in range(nj):
+        for j in range(j0, j1):
             ca = j * stride + offset
             xa = geo[0] + (ca + 0.5) * geo[2]
             src = i * nj + j
@@ -200,7 +210,7 @@ def _lattice_reweight(cells, table, geo, stride, offset, ni, nj, half, changed_s
                 p = pos[src, k]
                 old = data[p] if p >= 0 else math.inf
                 if ef != old:
-                    changed[src, k] = 1
+                    changed[src - first, k] = 1
                 if p >= 0:
                     data[p] = ef
                 if (p >= 0) != (ef < math.inf):
@@ -208,7 +218,7 @@ def _lattice_reweight(cells, table, geo, stride, offset, ni, nj, half, changed_s
                 p = pos[tgt, nh + k]
                 old = data[p] if p >= 0 else math.inf
                 if eb != old:
-                    changed[tgt, nh + k] = 1
+                    changed[tgt - first, nh + k] = 1
                 if p >= 0:
                     data[p] = eb
                 if (p >= 0) != (eb < math.inf):
@@ -229,9 +239,31 @@ def lattice_weights(cells, table, geo, stride, offset, ni, nj, half):
 
 
 def lattice_reweight(cells, table, geo, stride, offset, ni, nj, half, changed_sat, pos, data):
-    """Recompute in ``data`` the moves whose cell box holds a changed cell (see ``_lattice_reweight``:
-    returns the recomputed and flipped counts per node row and the mask of changed moves);
-    the serial or parallel kernel by the number of moves to scan."""
-    parallel = use_parallel(ni * nj * half.shape[0])
+    """Recompute in ``data`` the moves whose cell box holds a changed cell (see ``_lattice_reweight``).
+
+    Only the nodes whose moves can reach the changed cells' bounding box are scanned; the
+    serial or parallel kernel by the number of moves to scan. Returns the recomputed and
+    flipped counts per node row and the ascending ids ``node * 2 * len(half) + k`` of the
+    moves whose energy changed.
+    """
+    rows, cols = changed_sat.shape[0] - 1, changed_sat.shape[1] - 1
+    per_row = changed_sat[1:, cols] - changed_sat[:-1, cols]
+    per_col = changed_sat[rows, 1:] - changed_sat[rows, :-1]
+    nh = half.shape[0]
+    if not per_row.any():
+        return np.zeros(ni, np.int64), np.zeros(ni, np.int64), np.empty(0, np.int64)
+    reach = int(np.abs(half).max()) * stride  # farthest a move goes along an axis, in cells
+    r_min, r_max = np.flatnonzero(per_row)[[0, -1]]
+    c_min, c_max = np.flatnonzero(per_col)[[0, -1]]
+    # half-plane moves go down (row offsets >= 0): a node's box reaches rows [ra, ra + reach]
+    i0 = max(0, (int(r_min) - reach - offset) // stride)
+    i1 = min(ni, (int(r_max) - offset) // stride + 1)
+    j0 = max(0, (int(c_min) - reach - offset) // stride)
+    j1 = min(nj, (int(c_max) + reach - offset) // stride + 1)
+    if i1 <= i0 or j1 <= j0:
+        return np.zeros(ni, np.int64), np.zeros(ni, np.int64), np.empty(0, np.int64)
+    parallel = use_parallel((i1 - i0) * (j1 - j0) * nh)
     kernel = lattice_reweight_parallel if parallel else lattice_reweight_serial
-    return kernel(cells, table, geo, stride, offset, ni, nj, half, changed_sat, pos, data)
+    recomputed, flips, changed = kernel(cells, table, geo, stride, offset, ni, nj, half, changed_sat, pos, data,
+                                        i0, i1, j0, j1)
+    return recomputed, flips, np.flatnonzero(changed.ravel()) + i0 * nj * 2 * nh

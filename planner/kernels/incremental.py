@@ -187,7 +187,8 @@ def _start_value(src, src_cost, g):  # pragma: no cover - compiled
 @numba.njit(cache=True, nogil=True)
 def dstar_search(src, src_cost, pos, data, delta, g, rhs, exit_cost, key1, key2, nodes, where, size, col_x, row_y,
                  nj, sx, sy, h_per_m):  # pragma: no cover - compiled
-    """Expand open nodes until none can lower the virtual start's value ``min(src_cost + g[src])``.
+    """Expand open nodes until none can lower the virtual start's value ``min(src_cost + g[src])``:
+    until the smallest open key exceeds the start's key ``(value, value)``.
 
     The keys must be current (:func:`dstar_rekey` after the start or ``h_per_m`` moved).
     Returns the start's value (``inf``: the goal cannot be reached), the number of nodes
@@ -200,8 +201,8 @@ def dstar_search(src, src_cost, pos, data, delta, g, rhs, exit_cost, key1, key2,
         best = _start_value(src, src_cost, g)
         a1 = key1[0]
         a2 = key2[0]
-        if not _less(a1, a2, best, best):
-            break
+        if _less(best, best, a1, a2):
+            break  # ties are expanded: a join to the start may cost 0 (a start on a node)
         u = nodes[0]
         m = min(g[u], rhs[u])
         n1 = m + _h(u, col_x, row_y, nj, sx, sy, h_per_m)

@@ -30,9 +30,12 @@ def _cost(seed: int, shape: tuple[int, int] = (36, 44), obstacle_fraction: float
 
 
 def _free_point(cost: EnergyCost, rng: np.random.Generator) -> tuple[float, float]:
+    """A random point of a free cell: its centre (a lattice node at stride 1: a join of 0 J) or off it."""
     free = np.argwhere(~cost.blocked)
     r, c = free[rng.integers(len(free))]
     x, y = cost.terrain.xy(r, c)
+    if rng.random() < 0.5:
+        return float(x), float(y)
     return float(x + rng.uniform(-0.4, 0.4)), float(y + rng.uniform(-0.4, 0.4))
 
 
