@@ -54,6 +54,7 @@ from .common import (
     read_map_args,
     unknown_ground,
 )
+from .ros2 import add_ros2_arguments, check_ros2_outputs, write_ros2_outputs
 
 __all__ = ["add_parsers", "run_demo", "run_plan_command", "run_plan", "run_coarse_plan", "run_windowed_plan"]
 
@@ -65,6 +66,7 @@ def add_parsers(sub: Any) -> None:
     demo = sub.add_parser("demo", help="plan a minimum-energy route on the bundled example map")
     _add_plan_options(demo, default_time=1.0)
     add_model_options(demo, risk=True)
+    add_ros2_arguments(demo)
     demo.set_defaults(run=run_demo)
     plan = sub.add_parser("plan", help="plan a minimum-energy route on a map file (.npz or GeoTIFF)")
     plan.add_argument("--map", type=Path, required=True, metavar="FILE", help=".npz map or .tif DEM")
@@ -86,6 +88,7 @@ def add_parsers(sub: Any) -> None:
              "tile, the full resolution only in the corridor's window), for DEMs larger than memory",
     )
     add_model_options(plan, risk=True)
+    add_ros2_arguments(plan)
     plan.set_defaults(run=run_plan_command)
 
 
@@ -114,6 +117,7 @@ def _add_plan_options(p: argparse.ArgumentParser, *, default_time: float) -> Non
 def run_demo(args: argparse.Namespace) -> int:
     """``terrawatt demo``: plan on the bundled example map."""
     check_outputs(args.out, _OUTPUTS, input_paths(args))
+    check_ros2_outputs(args, input_paths(args), [args.out / n for n in _OUTPUTS])
     check_model_flags(args)
     return _run(args, example_map(), EXAMPLE_START_XY_M, EXAMPLE_GOAL_XY_M, "bundled example map")
 
@@ -121,6 +125,7 @@ def run_demo(args: argparse.Namespace) -> int:
 def run_plan_command(args: argparse.Namespace) -> int:
     """``terrawatt plan``: plan on a map file."""
     check_outputs(args.out, _OUTPUTS, input_paths(args))
+    check_ros2_outputs(args, input_paths(args), [args.out / n for n in _OUTPUTS])
     check_model_flags(args)
     if args.model is not None and (args.windowed or args.coarse_factor is not None):
         raise InvalidParameterError("--model plans on the whole map with --planner; it does not apply to "
@@ -158,7 +163,7 @@ def _run(args: argparse.Namespace, tmap: TerrainMap, start: tuple[float, float],
         seed=args.seed, out_dir=args.out, robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg,
         unknown_ground=None if model is not None else unknown_ground(args.unknown_ground, tmap), map_label=label,
         whole_map=args.whole_map, model=model, model_label=None if model is None else args.model.name,
-        model_ground=getattr(args, "model_ground", None), risk=getattr(args, "risk", None),
+        model_ground=getattr(args, "model_ground", None), risk=getattr(args, "risk", None), ros2=args,
     )
     return 0 if result["status"] == "exact" else 1
 
@@ -260,6 +265,7 @@ def run_plan(
     model_label: str | None = None,
     model_ground: str | Mapping[str, str] | None = None,
     risk: float | None = None,
+    ros2: argparse.Namespace | None = None,
 ) -> dict[str, Any]:
     """Plan once with its comparison (shortest route, lattice optimum), print, write files.
 
@@ -390,6 +396,8 @@ def run_plan(
         tmap, lines, start, goal, out_dir / "route.png", title=f"terrawatt: minimum-energy route on {map_label}",
         extent="map" if whole_map else "routes", max_slope_rad=slope_rad))
     written += [png_path] if png_path is not None else []
+    if ros2 is not None:
+        written += write_ros2_outputs(ros2, route, tmap, cost)
     print("\nwrote " + ", ".join(str(p) for p in written))
     return result
 

@@ -44,7 +44,8 @@ def _metres(lon, lat, crs="EPSG:32632"):
 def test_plan_from_lon_lat_on_a_geographic_dem_with_a_land_cover(scene, tmp_path, capsys):
     out = tmp_path / "out"
     rc = main(["plan", *_map_flags(scene), "--start-lonlat", *_ll(scene.start_lonlat),
-               "--goal-lonlat", *_ll(scene.goal_lonlat), "--planner", "lattice", "--out", str(out)])
+               "--goal-lonlat", *_ll(scene.goal_lonlat), "--planner", "lattice", "--out", str(out),
+               "--ros2-out", str(tmp_path / "route.mcap")])
     printed = capsys.readouterr().out
     assert rc == EXIT_OK
     assert "grounds {0: 'asphalt', 1: 'grass', 2: 'gravel'}" in printed  # a DEM alone has no ground classes
@@ -78,6 +79,20 @@ def test_plan_from_lon_lat_on_a_geographic_dem_with_a_land_cover(scene, tmp_path
     assert not tmap.obstacle[rows, cols].any()
     on_road = lengths[tmap.ground[rows, cols] == tmap.ground_id("asphalt")].sum() / lengths.sum()
     assert on_road > 0.6
+
+    # the route went to ROS 2 as well: the MCAP reads back, with rosbags alone, as a nav_msgs/Path of these waypoints
+    pytest.importorskip("rosbags", reason="the ROS 2 output needs the ros extra")
+    from rosbags.highlevel import AnyReader
+    from rosbags.typesys import Stores, get_typestore
+
+    with AnyReader([tmp_path / "route.mcap"], default_typestore=get_typestore(Stores.ROS2_JAZZY)) as reader:
+        [conn] = [c for c in reader.connections if c.topic == "/terrawatt/route"]
+        assert conn.msgtype == "nav_msgs/msg/Path"
+        [(_, _, raw)] = list(reader.messages(connections=[conn]))
+        path = reader.deserialize(raw, conn.msgtype)
+    assert path.header.frame_id == "map"
+    poses = np.array([[p.pose.position.x, p.pose.position.y] for p in path.poses])
+    assert np.allclose(poses, wp, atol=1e-9)
 
 
 def test_without_the_land_cover_the_route_does_not_know_the_road(scene, tmp_path, capsys):
