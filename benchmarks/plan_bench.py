@@ -18,13 +18,21 @@ different angles to the lattice directions) and reports
   library's planners minimise drive + turn energy (they trade a little drive energy for
   fewer turns), so every refined planner also runs on the lattice's own objective (turn
   table zeroed, ``[drive obj]``); each route is scored on the true cost, turns included,
-  and each target is checked on the objective the route minimised.
+  and each target is checked on the objective the route minimised;
+- the any-angle planner (``planner="anyangle"``: Theta* in a corridor around a coarse lattice
+  route, then its compiled polish) as a quality-versus-time curve on the lattice's objective:
+  several settings (guide stride, corridor width, raw or polished), each planned
+  ``--repeats`` times (median time; the planner is deterministic), and the stages of one
+  default run (guide route, Theta*, each polishing pass); times and ratios are also given
+  as ratios to the lattice + refinement on the same objective in the same run.
 
 All ratios are against baselines computed in the same run on the same machine; absolute times
 depend on the machine (the project's targets are stated for a 2-core machine). Usage::
 
     python benchmarks/plan_bench.py --out bench_plan.json          # full run (several minutes)
     python benchmarks/plan_bench.py --quick                         # small run (~1 minute)
+    python benchmarks/plan_bench.py --sizes 512 --budgets 0.1 0.25 0.5 --planners RRTstar BITstar \
+        --refine --no-parallel-table --out plan.json                # the any-angle target (~2 minutes)
 """
 
 from __future__ import annotations
@@ -50,6 +58,7 @@ from planner import (
     plan_route,
     warm_up_kernels,
 )
+from planner.anyangle import DEFAULT_POLISH_SPACINGS_CELLS, anyangle_path, polish_path, warm_up_anyangle
 from planner.kernels import variants
 from terrain.atomic import write_json_atomic
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map, procedural_map
@@ -62,6 +71,20 @@ QUERIES = (((0.05, 0.30), (0.95, 0.50)), ((0.08, 0.06), (0.92, 0.94)), ((0.30, 0
 # planning time is reported.
 FMT_PROBES = (100, 300)
 FMT_FILL = 0.5
+# Any-angle settings of the quality-versus-time curve: (label, guide stride, corridor cells, polished).
+ANYANGLE_SETTINGS = (
+    ("guide 4, corridor 6, raw", 4, 6, False),
+    ("guide 2, corridor 12, raw", 2, 12, False),
+    ("guide 4, corridor 6 + polish", 4, 6, True),
+    ("guide 2, corridor 12 + polish (default)", 2, 12, True),
+    ("guide 1, corridor 12 + polish", 1, 12, True),
+    ("guide 1, corridor 24 + polish", 1, 24, True),
+)
+#: Piece lengths (cells) of the long polish, the last point of the any-angle curve.
+LONG_POLISH_SPACINGS_CELLS = (8.0, 4.0, 2.0, 1.0)
+#: The any-angle target on 512^2 maps (lattice objective): median ratio and the slowest query.
+ANYANGLE_TARGET_RATIO = 0.983
+ANYANGLE_TARGET_S = 0.15
 
 
 def _free_point(
@@ -110,7 +133,7 @@ def _warm_up_planners() -> float:
     t0 = time.perf_counter()
     tmap = procedural_map((48, 48), 1.0, seed=1, n_ridges=0, obstacle_fraction=0.0)
     cost = _make_cost(tmap, "husky")
-    for planner in (*OMPL_PLANNERS, "lattice"):
+    for planner in (*OMPL_PLANNERS, "anyangle", "lattice"):
         plan_route(tmap, (3.5, 3.5), (44.5, 40.5), cost=cost, planner=planner, time_limit_s=0.05, seed=0,
                    settings=PlannerSettings(fmt_samples=50))
     return time.perf_counter() - t0
@@ -202,11 +225,17 @@ def _run_size(n: int, args: argparse.Namespace, rng: np.random.Generator) -> dic
     t0 = time.perf_counter()
     lattice = Lattice.for_cost(cost, 1)
     lattice_build_s = time.perf_counter() - t0
+    guide_stride = PlannerSettings().anyangle_guide_stride_cells
+    t0 = time.perf_counter()
+    Lattice.for_cost(cost, guide_stride)  # the any-angle planner's guide graph (carried to drive_cost)
+    guide_build_s = time.perf_counter() - t0
     prep = {
         "cells": n * n,
         "cost_tables_s": cost.prep_time_s,
         "lattice_graph_s": lattice_build_s,
         "map_preparation_s": cost.prep_time_s + lattice_build_s,
+        "anyangle_guide_graph_s": guide_build_s,
+        "anyangle_guide_stride_cells": guide_stride,
         "lattice_edges": lattice.n_edges,
         "blocked_fraction": float(cost.blocked.mean()),
     }
@@ -214,6 +243,7 @@ def _run_size(n: int, args: argparse.Namespace, rng: np.random.Generator) -> dic
     queries = _queries(cost, args.queries)
     drive_cost = cost.with_tables(cost.grade_table_j_per_m, np.zeros_like(cost.turn_table_j))
     runs: list[dict[str, Any]] = []
+    curve: list[dict[str, Any]] = []
     for qi, (start, goal) in enumerate(queries):
         t0 = time.perf_counter()
         optimum = lattice.shortest_path(start, goal)
@@ -236,7 +266,8 @@ def _run_size(n: int, args: argparse.Namespace, rng: np.random.Generator) -> dic
         # (planner, budget, refine, objective): "turns" is the library's objective (drive +
         # turn energy); "drive" plans with the turn table zeroed, the lattice's own objective.
         variants: list[tuple[str, float | None, bool, str]] = [
-            ("lattice", None, True, "turns"), ("lattice", None, True, "drive")
+            ("lattice", None, True, "turns"), ("lattice", None, True, "drive"),
+            ("anyangle", None, False, "drive"), ("anyangle", None, True, "turns"), ("anyangle", None, True, "drive"),
         ]
         for planner in args.planners:
             for budget in args.budgets:
@@ -276,7 +307,110 @@ def _run_size(n: int, args: argparse.Namespace, rng: np.random.Generator) -> dic
             })
             _progress(f"  {n}^2 q{qi} {runs[-1]['planner']:<22} budget {budget!s:>4}: {route.status:<11} "
                       f"{route.planning_time_s:6.3f} s  ratio {route.optimality_ratio:.4f}")
-    return {"size": n, "preparation": prep, "runs": runs}
+        curve.extend({**base, **row} for row in _anyangle_curve(tmap, drive_cost, start, goal, optimum.objective, args))
+    return {"size": n, "preparation": prep, "runs": runs, "anyangle_curve": curve}
+
+
+def _anyangle_curve(tmap, drive_cost: EnergyCost, start, goal, optimum_j: float,
+                    args: argparse.Namespace) -> list[dict[str, Any]]:
+    """Quality versus time of the any-angle planner on one query, on the lattice's objective.
+
+    One row per setting of :data:`ANYANGLE_SETTINGS` (``plan_route``, median time of
+    ``args.repeats`` runs) and one per stage of a default run (guide lattice route, Theta*,
+    each polishing pass; cumulative times), plus the lattice + refinement on the same
+    objective, run as often, as the reference of the time and ratio ratios.
+    """
+    rows: list[dict[str, Any]] = []
+
+    def timed(fn: Any) -> tuple[Any, float]:
+        times, out = [], None
+        for _ in range(args.repeats):
+            t0 = time.perf_counter()
+            out = fn()
+            times.append(time.perf_counter() - t0)
+        return out, statistics.median(times)
+
+    def lattice_refined() -> Any:
+        return plan_route(tmap, start, goal, cost=drive_cost, planner="lattice", seed=args.seed)
+
+    routes = [lattice_refined() for _ in range(args.repeats)]
+    ref_s = statistics.median(r.planning_time_s for r in routes)
+    ref_ratio = routes[0].drive_energy_j / optimum_j
+    rows.append({"planner": "curve: lattice+refine [drive obj]", "curve": "reference", "setting": "lattice+refine",
+                 "planning_time_s": ref_s, "ratio": ref_ratio, "time_over_lattice_refine": 1.0,
+                 "ratio_over_lattice_refine": 1.0})
+    for label, stride, width, polished in ANYANGLE_SETTINGS:
+        settings = PlannerSettings(anyangle_guide_stride_cells=stride, anyangle_corridor_cells=width)
+        Lattice.for_cost(drive_cost, stride)  # map preparation, not timed
+        routes = [plan_route(tmap, start, goal, cost=drive_cost, planner="anyangle", refine=polished,
+                             settings=settings) for _ in range(args.repeats)]
+        t = statistics.median(r.planning_time_s for r in routes)
+        ratio = routes[0].drive_energy_j / optimum_j
+        rows.append({"planner": f"curve: anyangle {label}", "curve": "settings", "setting": label,
+                     "planning_time_s": t, "ratio": ratio, "time_over_lattice_refine": t / ref_s,
+                     "ratio_over_lattice_refine": ratio / ref_ratio})
+    # the stages of one default run
+    default = PlannerSettings()
+    guide_lattice = Lattice.for_cost(drive_cost, default.anyangle_guide_stride_cells)
+    guide, t_guide = timed(lambda: guide_lattice.shortest_path(start, goal))
+    path, t_any = timed(lambda: anyangle_path(drive_cost, start, goal,
+                                              guide_stride_cells=default.anyangle_guide_stride_cells,
+                                              corridor_cells=default.anyangle_corridor_cells))
+    stages = [("guide lattice route", t_guide, drive_cost.path_energy_j(guide.waypoints_m)),
+              ("+ Theta* in the corridor", t_any, path.drive_energy_j)]
+    wp, total = path.waypoints_m, t_any
+    cell = drive_cost.terrain.cell_size_m
+    for spacing in DEFAULT_POLISH_SPACINGS_CELLS:
+        wp, t_pass = timed(lambda wp=wp, spacing=spacing: polish_path(drive_cost, wp, spacings_m=(spacing * cell,)))
+        total += t_pass
+        stages.append((f"+ polish, {spacing:g}-cell pieces", total, drive_cost.path_energy_j(wp)))
+    # more time: a long polish of the Theta* route (where the route's local optimum lies)
+    long_m = tuple(c * cell for c in LONG_POLISH_SPACINGS_CELLS)
+    wp, t_long = timed(lambda: polish_path(drive_cost, path.waypoints_m, spacings_m=long_m, step_min_m=0.01 * cell,
+                                           max_sweeps=1000))
+    stages.append(("+ long polish instead (8, 4, 2, 1 cells, 1 % steps)", t_any + t_long,
+                   drive_cost.path_energy_j(wp)))
+    for label, t, energy in stages:
+        rows.append({"planner": f"stage: {label}", "curve": "stages", "setting": label, "planning_time_s": t,
+                     "ratio": energy / optimum_j, "time_over_lattice_refine": t / ref_s,
+                     "ratio_over_lattice_refine": energy / optimum_j / ref_ratio})
+    for r in rows:
+        _progress(f"    {r['planner']:<52} {r['planning_time_s']:6.3f} s  ratio {r['ratio']:.4f}")
+    return rows
+
+
+def _summarise_curve(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Medians over queries of each point of the any-angle curve."""
+    rows = []
+    for res in results:
+        groups: dict[str, list[dict[str, Any]]] = {}
+        for run in res["anyangle_curve"]:
+            groups.setdefault(run["planner"], []).append(run)
+        for planner, runs in groups.items():
+            rows.append({
+                "size": res["size"],
+                "planner": planner,
+                "curve": runs[0]["curve"],
+                "n": len(runs),
+                "planning_time_s_median": statistics.median(r["planning_time_s"] for r in runs),
+                "planning_time_s_max": max(r["planning_time_s"] for r in runs),
+                "ratio_median": statistics.median(r["ratio"] for r in runs),
+                "ratio_max": max(r["ratio"] for r in runs),
+                "time_over_lattice_refine_median": statistics.median(r["time_over_lattice_refine"] for r in runs),
+                "ratio_over_lattice_refine_median": statistics.median(r["ratio_over_lattice_refine"] for r in runs),
+            })
+    return rows
+
+
+def _print_curve(rows: list[dict[str, Any]]) -> None:
+    print("\nany-angle quality vs time, lattice's objective (medians over queries; ratio = drive energy / lattice")
+    print("optimum; '/ lat+ref' = the any-angle value over the lattice + refinement's on the same query, same run)")
+    print(f"{'size':>6} {'point':<56} {'plan s':>7} {'max s':>6} {'ratio':>7} {'max':>7} "
+          f"{'s / lat+ref':>12} {'ratio / lat+ref':>16}")
+    for r in rows:
+        print(f"{r['size']:>5}² {r['planner']:<56} {r['planning_time_s_median']:7.3f} {r['planning_time_s_max']:6.3f} "
+              f"{r['ratio_median']:7.4f} {r['ratio_max']:7.4f} {r['time_over_lattice_refine_median']:12.3f} "
+              f"{r['ratio_over_lattice_refine_median']:16.4f}")
 
 
 def _progress(msg: str) -> None:
@@ -317,12 +451,12 @@ def _summarise(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
 def _print_tables(results: list[dict[str, Any]], rows: list[dict[str, Any]], compile_s: float) -> None:
     print(f"numba kernels compile/load: {compile_s:.2f} s (not part of map preparation)")
     print("\nmap preparation and edge-cost throughput")
-    print(f"{'size':>6} {'tables s':>9} {'lattice s':>10} {'prep s':>7} {'edges':>10} "
+    print(f"{'size':>6} {'tables s':>9} {'lattice s':>10} {'prep s':>7} {'guide s':>8} {'edges':>10} "
           f"{'bulk seg/s':>12} {'1-call seg/s':>13} {'blocked':>8}")
     for res in results:
         p = res["preparation"]
         print(f"{res['size']:>5}² {p['cost_tables_s']:9.3f} {p['lattice_graph_s']:10.3f} "
-              f"{p['map_preparation_s']:7.3f} "
+              f"{p['map_preparation_s']:7.3f} {p['anyangle_guide_graph_s']:8.3f} "
               f"{p['lattice_edges']:10d} {p['bulk_segments_per_s']:12.3g} {p['single_call_segments_per_s']:13.3g} "
               f"{p['blocked_fraction']:8.3f}")
     print("\nplanners (medians over queries; ratio = drive energy / 16-connected 1-cell lattice optimum;")
@@ -338,9 +472,20 @@ def _print_tables(results: list[dict[str, Any]], rows: list[dict[str, Any]], com
               f"{r['energy_saved_pct_median']:8.2f}")
 
 
-def _targets(results: list[dict[str, Any]], rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
+def _targets(results: list[dict[str, Any]], rows: list[dict[str, Any]],
+             curve_rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """The project's 512^2 targets, checked against this run."""
     out = []
+    for r in curve_rows:
+        if r["size"] == 512 and r["curve"] == "settings":
+            good = r["ratio_median"] <= ANYANGLE_TARGET_RATIO
+            fast = r["planning_time_s_max"] <= ANYANGLE_TARGET_S
+            out.append({
+                "target": f"512^2 {r['planner']} median ratio <= {ANYANGLE_TARGET_RATIO} within {ANYANGLE_TARGET_S} s",
+                "value": {k: r[k] for k in ("ratio_median", "ratio_max", "planning_time_s_median",
+                                            "planning_time_s_max", "time_over_lattice_refine_median")},
+                "met": bool(good and fast),
+            })
     for res in results:
         if res["size"] != 512:
             continue
@@ -384,6 +529,8 @@ def main(argv: list[str] | None = None) -> int:
                         choices=list(OMPL_PLANNERS), help="OMPL planners (the lattice planner always runs)")
     parser.add_argument("--refine", action="store_true", help="also run each OMPL planner with refinement")
     parser.add_argument("--queries", type=int, default=3, choices=[1, 2, 3], help="start/goal pairs per map")
+    parser.add_argument("--repeats", type=int, default=3,
+                        help="runs of each any-angle curve point (median time; the planner is deterministic)")
     parser.add_argument("--robot", default="husky", help="robot preset")
     parser.add_argument("--seed", type=int, default=0, help="map and planner seed")
     parser.add_argument("--quick", action="store_true", help="small run: 256^2, budgets 0.25/0.5, 2 queries")
@@ -395,7 +542,7 @@ def main(argv: list[str] | None = None) -> int:
         args.sizes, args.budgets, args.queries = [256], [0.25, 0.5], 2
         args.planners = ["RRTstar", "BITstar", "FMT"]
     rng = np.random.default_rng(args.seed)
-    compile_s = warm_up_kernels()
+    compile_s = warm_up_kernels() + warm_up_anyangle()
     warm_s = _warm_up_planners()
     parallel_rows = _parallel_table(args) if args.parallel_table else []
     results = []
@@ -403,16 +550,18 @@ def main(argv: list[str] | None = None) -> int:
         _progress(f"map {n}^2 ...")
         results.append(_run_size(n, args, rng))
     rows = _summarise(results)
+    curve_rows = _summarise_curve(results)
     _print_tables(results, rows, compile_s)
+    _print_curve(curve_rows)
     if parallel_rows:
         _print_parallel(parallel_rows)
-    targets = _targets(results, rows)
+    targets = _targets(results, rows, curve_rows)
     for t in targets:
         print(f"{'MET ' if t['met'] else 'NOT MET'} {t['target']}: {t['value']}")
     if args.out is not None:
         payload = {
             "benchmark": "plan_bench",
-            "version": 1,
+            "version": 2,
             "args": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()},
             "machine": {
                 "cpu_count": os.cpu_count(), "platform": platform.platform(), "python": platform.python_version()
@@ -421,6 +570,7 @@ def main(argv: list[str] | None = None) -> int:
             "planner_warm_up_s": warm_s,
             "sizes": results,
             "summary": rows,
+            "anyangle_curve": curve_rows,
             "parallel": parallel_rows,
             "targets": targets,
         }
