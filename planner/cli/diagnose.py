@@ -86,6 +86,11 @@ def _check_flags(args: argparse.Namespace) -> None:
                                     "no file")
     if args.robot is not None and args.robot not in ROBOT_PRESETS:
         raise UnknownNameError(f"--robot {args.robot!r} is not a robot preset; known: {sorted(ROBOT_PRESETS)!r}")
+    if args.map is None:
+        given = [f for f, v in (("--landcover", args.landcover), ("--landcover-classes", args.landcover_classes),
+                                ("--reproject", args.reproject), ("--cell-size", args.cell_size)) if v is not None]
+        if given:
+            raise InvalidParameterError(f"{', '.join(given)} describe(s) the map of --map MAP, which is not given")
     if kind != "physics":
         for flag, value in (("--ground", args.ground), ("--without", args.without)):
             if value:

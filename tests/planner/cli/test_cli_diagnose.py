@@ -96,6 +96,8 @@ def test_a_saved_model_on_one_csv_file_without_a_map_skips_the_map_figure(data, 
     (["--model", "physics", "--seed", "-1"], "--seed"),
     (["--model", "physics", "--workers", "0"], "--workers must be a positive number"),
     (["--model", "physics", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "exclude each other"),
+    (["--model", "physics", "--landcover", "lc.tif", "--landcover-classes", "c.csv"],
+     "--landcover, --landcover-classes describe(s) the map of --map MAP, which is not given"),
 ])
 def test_bad_flags_exit_2_naming_the_flag(data, tmp_path, capsys, extra, message):
     rc, out, err = _run(capsys, *extra, "--data", data / "logs", "--out", tmp_path / "out")
