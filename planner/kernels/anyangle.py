@@ -61,7 +61,7 @@ def corridor_index(cells, geo, xs, ys, radius_cells):  # pragma: no cover - comp
             for rr in range(max(r - w, 0), min(r + w + 1, nr)):
                 for cc in range(max(c - w, 0), min(c + w + 1, nc)):
                     mark[rr, cc] = True
-    index = np.full((nr, nc), -1, np.int64)
+    index = np.full((nr, nc), -1, np.int32)
     n = 0
     for r in range(nr):
         for c in range(nc):
