@@ -1,4 +1,4 @@
-"""Tests of planner.anyangle: Theta* on the energy objective in a corridor, its polish, and plan_route(planner="anyangle")."""
+"""Tests of planner.anyangle: Theta* on the energy objective in a corridor, its polish, planner="anyangle"."""
 
 from __future__ import annotations
 
