@@ -1,6 +1,6 @@
 """Diagnosis benchmark: withheld-effect scenarios x seeds against the issue's targets.
 
-For every single-effect scenario of :mod:`energy.diagnosis.scenarios` (logs from the truth
+For every single-effect scenario of :mod:`diagnosis_scenarios` (logs from the truth
 simulator that excite one catalogued effect, a physics model that lacks it) and each seed,
 runs ``energy.diagnosis.diagnose(model, logs, terrain=..., seed=seed)`` and reports the
 withheld gap over the noise (:func:`withheld_gap_ratio`), the rank of the withheld effect,
@@ -46,7 +46,7 @@ from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
 from energy.diagnosis import diagnose, effect
-from energy.diagnosis.scenarios import (
+from diagnosis_scenarios import (
     SCENARIOS,
     Scenario,
     null_scenario,

@@ -6,7 +6,7 @@ import numpy as np
 
 from terrain.checks import check_choice, check_real, check_seed
 
-from ..commands import CommandProfile
+from energy import CommandProfile
 
 __all__ = ["MANOEUVRES", "manoeuvre_commands"]
 

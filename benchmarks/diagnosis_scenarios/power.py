@@ -15,9 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from ..battery import Battery
-from ..robot import RobotParams
-from ..sim import NoiseModel, measure_battery
+from energy import Battery, NoiseModel, RobotParams
+from energy.sim import measure_battery
 
 __all__ = ["PACK_RESISTANCE_OHM", "PowerGap", "scenario_battery", "battery_streams", "power_gap"]
 

@@ -67,16 +67,24 @@ from terrain.errors import InvalidParameterError, UnknownNameError
 from terrain.procedural import flat_map, ramp_map
 from terrain.terrain_map import TerrainMap
 
-from ..ground import GroundParams
-from ..logs import InteractionLog, at_rest
-from ..models.base import CurrentModel
-from ..models.baselines import PhysicsCurrentModel
-from ..params import ground_preset, robot_preset
-from ..physics import EFFECTS
-from ..robot import RobotParams
-from ..sim import PAPER_GROUNDS, NoiseModel, TruthSimulator, measure_currents
+from energy import (
+    EFFECTS,
+    PAPER_GROUNDS,
+    CurrentModel,
+    GroundParams,
+    InteractionLog,
+    NoiseModel,
+    PhysicsCurrentModel,
+    RobotParams,
+    TruthSimulator,
+    ground_preset,
+    robot_preset,
+)
+from energy.logs import at_rest
+from energy.sim import measure_currents
+
 from .manoeuvres import MANOEUVRES, manoeuvre_commands
-from .scenario_power import PowerGap, battery_streams, power_gap
+from .power import PowerGap, battery_streams, power_gap
 
 __all__ = ["MEASUREMENT_EFFECTS", "PARAMETER_EFFECTS", "POWER_ONLY_EFFECTS", "Scenario",
            "WithheldGap", "SCENARIOS", "scenario", "pair_scenario", "null_scenario", "withheld_gap",

@@ -1,4 +1,9 @@
-"""Sim-to-real gap diagnosis: where a current model's gap lies, which unmodelled effect causes it, how far it shrinks."""
+"""Sim-to-real gap diagnosis: where a current model's gap lies, which unmodelled effect causes it, how far it shrinks.
+
+The withheld-effect scenarios that check it (truth-simulator logs with one effect left out
+of the model) are experiment scaffolding and live with the benchmarks, in
+``benchmarks/diagnosis_scenarios``.
+"""
 
 from .corrected import CorrectedCurrentModel
 from .diagnose import diagnose
@@ -12,32 +17,12 @@ from .power_result import PowerDiagnosis, PowerGapSummary, PowerWaterfallStep
 from .regimes import regime_labels
 from .residuals import GapSummary, gap_summary, residual_currents_a
 from .result import Diagnosis, EffectScore, WaterfallStep
-from .scenarios import (
-    POWER_ONLY_EFFECTS,
-    SCENARIOS,
-    Scenario,
-    WithheldGap,
-    null_scenario,
-    pair_scenario,
-    scenario,
-    withheld_gap,
-    withheld_gap_ratio,
-)
 from .split import SPLITS, Fold, Split, make_split
 
 __all__ = [
     "PowerDiagnosis",
     "PowerGapSummary",
     "PowerWaterfallStep",
-    "POWER_ONLY_EFFECTS",
-    "Scenario",
-    "SCENARIOS",
-    "WithheldGap",
-    "scenario",
-    "pair_scenario",
-    "null_scenario",
-    "withheld_gap",
-    "withheld_gap_ratio",
     "DRIVE_EFFECTS",
     "FIGURES",
     "DiagnosisFigures",

@@ -7,8 +7,8 @@ import pytest
 
 from energy import PhysicsCurrentModel
 from energy.diagnosis import EFFECTS_CATALOGUE, NOT_IDENTIFIABLE_FROM_CURRENT, diagnose
-from energy.diagnosis.manoeuvres import MANOEUVRES, manoeuvre_commands
-from energy.diagnosis.scenarios import (
+from diagnosis_scenarios import MANOEUVRES, manoeuvre_commands
+from diagnosis_scenarios import (
     POWER_ONLY_EFFECTS,
     SCENARIOS,
     Scenario,

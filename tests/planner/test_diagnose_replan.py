@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from energy import diagnose, ground_preset, robot_preset
-from energy.diagnosis.scenarios import scenario
+from diagnosis_scenarios import scenario
 from planner import LearnedEnergyModel, plan_route
 from terrain import CellModelRegistry, flat_map
 

@@ -7,7 +7,7 @@ import pytest
 
 from energy import InvalidParameterError, LinearCurrentModel, PhysicsCurrentModel, load_current_model
 from energy.diagnosis import CorrectedCurrentModel
-from energy.diagnosis.scenarios import scenario
+from diagnosis_scenarios import scenario
 
 
 @pytest.fixture(scope="module")

@@ -17,7 +17,7 @@ from energy import (
     UnknownNameError,
 )
 from energy.diagnosis import CorrectedCurrentModel, Diagnosis, Effect, EffectParameter, diagnose, localise_gap
-from energy.diagnosis.scenarios import null_scenario, scenario
+from diagnosis_scenarios import null_scenario, scenario
 
 CANDIDATES = ["turning_resistance", "gear_losses", "current_gain", "idle_current", "mass"]
 
@@ -211,7 +211,7 @@ def test_a_small_effect_beside_a_dominant_one_ranks_second():
     """Turning resistance (most of the charge) and inertia withheld together: ranked alone, the
     inertia term is hidden by the turning gap its fit absorbs; refitted jointly with the chosen
     turning term it is the next best addition, and the ranking says what it adds."""
-    from energy.diagnosis.scenarios import pair_scenario
+    from diagnosis_scenarios import pair_scenario
 
     sc = dataclasses.replace(pair_scenario("turning_resistance", "inertia"), run_duration_s=10.0)
     logs, model = sc.make_logs(0), sc.make_model(0)

@@ -22,7 +22,7 @@ from energy.diagnosis.plots import (
     plot_residual_time,
     plot_waterfall,
 )
-from energy.diagnosis.scenarios import scenario
+from diagnosis_scenarios import scenario
 from terrain import DataError, FigureWarning, GridMismatchError, InvalidParameterError, UnknownNameError
 
 PNG = b"\x89PNG\r\n\x1a\n"

@@ -82,7 +82,7 @@ def test_fewer_samples_than_parameters(setup):
 
 def test_parameter_errors_fit_on_the_interpolated_physics_as_on_the_exact():
     from energy.diagnosis.effects_physics import MassEffect
-    from energy.diagnosis.scenarios import scenario
+    from diagnosis_scenarios import scenario
 
     class ExactMass(MassEffect):
         apply_surrogate = MassEffect.apply  # re-predicts the physics at every evaluation

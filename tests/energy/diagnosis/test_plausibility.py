@@ -9,7 +9,7 @@ import pytest
 from energy import PAPER_GROUNDS, InvalidParameterError, PhysicsCurrentModel, TruthSimulator, robot_preset
 from energy.diagnosis import EFFECTS_CATALOGUE, EffectParameter, diagnose, effect
 from energy.diagnosis.effects_physics import MassEffect
-from energy.diagnosis.scenarios import scenario
+from diagnosis_scenarios import scenario
 from energy.sim import NoiseModel
 
 

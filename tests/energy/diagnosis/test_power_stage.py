@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from energy import NoiseModel
-from energy.diagnosis import POWER_ONLY_EFFECTS, PowerDiagnosis, diagnose
+from energy.diagnosis import PowerDiagnosis, diagnose
 from energy.diagnosis.model_currents import physics_basis
 from energy.diagnosis.power_data import power_inputs, predicted_battery_power_w
-from energy.diagnosis.scenarios import null_scenario, scenario
+from diagnosis_scenarios import POWER_ONLY_EFFECTS, null_scenario, scenario
 from terrain.errors import DataError
 
 N_BOOT = 50

@@ -10,7 +10,7 @@ import matplotlib.pyplot as plt
 import pytest
 
 from energy import load_current_model, write_csv_log
-from energy.diagnosis.scenarios import scenario
+from diagnosis_scenarios import scenario
 from planner.cli import diagnose as diagnose_cli
 from planner.cli import main
 

@@ -6,7 +6,7 @@ import dataclasses
 import json
 
 from energy import write_csv_log
-from energy.diagnosis.scenarios import scenario
+from diagnosis_scenarios import scenario
 from planner.cli import main
 
 
