@@ -46,6 +46,7 @@ from terrain.errors import InvalidParameterError, UnknownNameError
 
 from .edge_cost import EnergyCost
 from .kernels import astar, lattice_reweight, lattice_weights
+from .kernels.graph import reweight_band
 from .points import as_points
 
 __all__ = ["Lattice", "LatticePath", "LATTICE_OFFSETS", "LATTICE_WEIGHTS", "LATTICE_METHODS"]
@@ -195,8 +196,47 @@ class Lattice:
         self._indices = targets
         self._indptr = indptr
         step_m = np.hypot(LATTICE_OFFSETS[:, 0], LATTICE_OFFSETS[:, 1]) * s * self.cost.terrain.cell_size_m
-        self._data = {"energy": w[mask], "length": np.broadcast_to(step_m, w.shape)[mask]}
+        self._energy: np.ndarray | tuple = w[mask]  # or (base, patches): see _energy_data
+        self._length = np.broadcast_to(step_m, w.shape)[mask]
         self.n_edges = int(targets.size)
+
+    def _energy_data(self) -> np.ndarray:
+        """The energy weights, made whole on first use after a refresh.
+
+        A refreshed lattice holds its weights as ``(base, patches)``: its ancestor's array and
+        the slices ``(lo, values)`` recomputed since, applied in order (a refresh copies only
+        the slice of edges it may change, not every weight). The attribute is read and
+        replaced whole, so concurrent readers at worst both build the array.
+        """
+        e = self._energy
+        if isinstance(e, tuple):
+            base, patches = e
+            e = base.copy()
+            for lo, values in patches:
+                e[lo:lo + values.size] = values
+            self._energy = e
+        return e
+
+    def _energy_slice(self, lo: int, hi: int) -> np.ndarray:
+        """A copy of the energy weights ``[lo, hi)`` (without making the whole array)."""
+        e = self._energy
+        if not isinstance(e, tuple):
+            return e[lo:hi].copy()
+        base, patches = e
+        out = base[lo:hi].copy()
+        for plo, values in patches:
+            a, b = max(lo, plo), min(hi, plo + values.size)
+            if a < b:
+                out[a - lo:b - lo] = values[a - plo:b - plo]
+        return out
+
+    def _weights(self, weight: str) -> np.ndarray:
+        return self._energy_data() if weight == "energy" else self._length
+
+    @property
+    def _data(self) -> dict[str, np.ndarray]:
+        """Both weight arrays by name (the energies made whole)."""
+        return {"energy": self._energy_data(), "length": self._length}
 
     def refreshed(self, cost: EnergyCost, changed_cells: np.ndarray) -> Lattice:
         """This lattice over ``cost`` (same geometry, new tables), recomputing only changed edges.
@@ -215,6 +255,10 @@ class Lattice:
             map, blocked cells and grade grid).
         changed_cells : ndarray of bool, shape (rows, cols)
             Cells whose table row content changed.
+
+        Only the slice of edge weights the recomputed moves can fall in is copied: the new
+        lattice reads the others from this one's array (the whole array is made on its first
+        search or :meth:`graph` / :meth:`edge_weights` call; this lattice is never changed).
 
         Returns
         -------
@@ -252,11 +296,20 @@ class Lattice:
             return new
         sat = np.zeros((changed.shape[0] + 1, changed.shape[1] + 1), dtype=np.int32)
         np.cumsum(np.cumsum(changed, axis=0, dtype=np.int32), axis=1, out=sat[1:, 1:])
-        data = self._data["energy"].copy()
+        band = reweight_band(sat, self.stride_cells, self._offset, self._ni, self._nj, _HALF)
+        if band is None:  # no move reaches a changed cell
+            new.edges_computed = 0
+            new.changed_moves = np.empty(0, dtype=np.int64)
+            new.build_time_s = time.perf_counter() - t0
+            return new
+        # the moves scanned start in node rows i0:i1 and end by row i1 + 1: one slice of the edges
+        lo = int(self._indptr[band[0] * self._nj])
+        hi = int(self._indptr[min(self._ni, band[1] + 2) * self._nj])
+        values = self._energy_slice(lo, hi)
         arr = cost.arrays
         recomputed, flips, new.changed_moves = lattice_reweight(
             arr.cells, arr.grade_table, arr.geo, self.stride_cells, self._offset, self._ni, self._nj,
-            _HALF, sat, self._pos, data,
+            _HALF, sat, self._pos, values, band, lo,
         )
         if int(flips.sum()):
             w = lattice_weights(arr.cells, arr.grade_table, arr.geo, self.stride_cells, self._offset,
@@ -264,10 +317,31 @@ class Lattice:
             new._set_structure(w)
             new.edges_computed = int(w.size - np.count_nonzero(self._out_of_grid_mask()))
         else:
-            new._data = {"energy": data, "length": self._data["length"]}
+            new._energy = self._patched(lo, values)
             new.edges_computed = int(recomputed.sum())
         new.build_time_s = time.perf_counter() - t0
         return new
+
+    def _patched(self, lo: int, values: np.ndarray) -> np.ndarray | tuple:
+        """This lattice's energy weights with ``[lo, lo + values.size)`` replaced: the slice on top
+        of the same base (no copy), or a whole array once the slices cover half the edges."""
+        e = self._energy
+        base, patches = e if isinstance(e, tuple) else (e, ())
+        if lo == 0 and values.size == self.n_edges:
+            return values
+        patches = patches + ((lo, values),)
+        if sum(v.size for _, v in patches) <= self.n_edges // 2:
+            return base, patches
+        whole = base.copy()
+        for plo, v in patches:
+            whole[plo:plo + v.size] = v
+        return whole
+
+    def shares_structure(self, other: Lattice) -> bool:
+        """Whether ``other`` has this lattice's edges in the same order (it was refreshed from it,
+        or it from this, without an edge appearing or vanishing), so an edge index means the same
+        move in both."""
+        return isinstance(other, Lattice) and other._pos is self._pos
 
     def changed_moves_since(self, other: Lattice) -> np.ndarray:
         """Ids (``node * 16 + k``) of the moves whose energy differs between ``other`` and this lattice.
@@ -321,7 +395,17 @@ class Lattice:
         pos = self._pos.ravel() if moves is None else self._pos.ravel()[np.asarray(moves, dtype=np.int64)]
         out = np.full(pos.shape, np.inf)
         ok = pos >= 0
-        out[ok] = self._data["energy"][pos[ok]]
+        e = self._energy
+        if moves is None or not isinstance(e, tuple):
+            out[ok] = self._energy_data()[pos[ok]]
+        else:  # a few moves of a refreshed lattice: read through its slices
+            base, patches = e
+            q = pos[ok]
+            values = base[q]
+            for lo, v in patches:
+                inside = (q >= lo) & (q < lo + v.size)
+                values[inside] = v[q[inside] - lo]
+            out[ok] = values
         return out.reshape(self._pos.shape) if moves is None else out
 
     @property
@@ -342,7 +426,7 @@ class Lattice:
         """
         if weight not in LATTICE_WEIGHTS:
             raise UnknownNameError(f"weight must be one of {LATTICE_WEIGHTS!r}, got {weight!r}")
-        view = self._data[weight].view()
+        view = self._weights(weight).view()
         view.setflags(write=False)
         return view
 
@@ -368,7 +452,7 @@ class Lattice:
         if weight not in LATTICE_WEIGHTS:
             raise UnknownNameError(f"weight must be one of {LATTICE_WEIGHTS!r}, got {weight!r}")
         n = self.n_nodes
-        return csr_matrix((self._data[weight].copy(), self._indices.copy(), self._indptr.copy()), shape=(n, n))
+        return csr_matrix((self._weights(weight).copy(), self._indices.copy(), self._indptr.copy()), shape=(n, n))
 
     @property
     def n_nodes(self) -> int:
@@ -482,7 +566,7 @@ class Lattice:
         if src.size and dst.size and method == "astar":
             h_per_m = cost.min_energy_per_metre_j if weight == "energy" else 1.0
             total, last, pred = astar(
-                self._indptr, self._indices, self._data[weight], self._node_x, self._node_y, self._nj,
+                self._indptr, self._indices, self._weights(weight), self._node_x, self._node_y, self._nj,
                 src, e_src, dst, e_dst, float(goal[0]), float(goal[1]), float(h_per_m), best,
             )
             if last >= 0 and total < best:
@@ -495,7 +579,7 @@ class Lattice:
                 best_nodes = chain[::-1]
         elif src.size and dst.size:
             n = self.n_nodes
-            data = np.concatenate([self._data[weight], e_src])
+            data = np.concatenate([self._weights(weight), e_src])
             indices = np.concatenate([self._indices, src.astype(np.int32)])
             indptr = np.append(self._indptr, np.int32(self._indptr[-1] + src.size))
             graph = csr_matrix((data, indices, indptr), shape=(n + 1, n + 1))

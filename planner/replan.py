@@ -29,7 +29,7 @@ from terrain.checks import check_bool, check_seed
 from terrain.errors import InvalidParameterError
 
 from .coarse import check_free_point
-from .kernels.incremental import dstar_path, dstar_rekey, dstar_search, dstar_touch
+from .kernels.incremental import dstar_path, dstar_rekey, dstar_search, dstar_touch, reverse_moves
 from .lattice import LATTICE_OFFSETS, Lattice, LatticePath
 from .planning import REFINE_DEFAULT_SEED
 from .points import as_points
@@ -108,6 +108,7 @@ class IncrementalPlanner:
         self._where = np.full(n, -1, np.int64)
         self._size = 0
         self.lattice = lattice
+        self._bind(lattice)
         self.expanded = 0
         self.touched = 0
         self._dst = np.empty(0, np.int64)
@@ -117,6 +118,13 @@ class IncrementalPlanner:
     def cost(self) -> Any:
         """The :class:`EnergyCost` of the current lattice."""
         return self.lattice.cost
+
+    def _bind(self, lattice: Lattice) -> None:
+        """Take the lattice's structure: its move table, the reverse one, and a copy of its weights
+        (the planner's own, changed in place by :meth:`update`)."""
+        self._pos = lattice.move_edges
+        self._rev = reverse_moves(self._pos, self._delta)
+        self._data = lattice.edge_weights().copy()
 
     def _set_goal_joins(self) -> np.ndarray:
         """Join the goal to the current lattice; the nodes whose join changed (old and new)."""
@@ -130,8 +138,7 @@ class IncrementalPlanner:
     def _touch(self, nodes: np.ndarray) -> None:
         g = self.goal_xy_m
         self._size = dstar_touch(
-            np.ascontiguousarray(nodes, dtype=np.int64), self.lattice.move_edges, self.lattice.edge_weights(),
-            self._delta, self._g, self._rhs, self._exit, self._key1, self._key2, self._nodes, self._where,
+            np.ascontiguousarray(nodes, dtype=np.int64), self._pos, self._data, self._delta, self._g, self._rhs, self._exit, self._key1, self._key2, self._nodes, self._where,
             self._size, self._col_x, self._row_y, self._nj, float(g[0]), float(g[1]), 0.0,
         )
 
@@ -161,6 +168,12 @@ class IncrementalPlanner:
         if not isinstance(lattice, Lattice):
             raise InvalidParameterError(f"lattice must be a Lattice, got {type(lattice).__name__!r}")
         moves = lattice.changed_moves_since(self.lattice)
+        if lattice.shares_structure(self.lattice):  # write the new energies of the changed moves
+            edges = self._pos.ravel()[moves]
+            present = edges >= 0
+            self._data[edges[present]] = lattice.move_energies_j(moves[present])
+        else:  # edges appeared or vanished: a new structure
+            self._bind(lattice)
         self.lattice = lattice
         heads = moves // len(LATTICE_OFFSETS)  # ascending
         if heads.size:
@@ -199,12 +212,12 @@ class IncrementalPlanner:
         nodes, objective = np.empty(0, np.int64), math.inf
         self.expanded = 0
         if src.size and self._dst.size:
-            pos, data = self.lattice.move_edges, self.lattice.edge_weights()
+            pos, data = self._pos, self._data
             sx, sy, h_per_m = float(start[0]), float(start[1]), max(float(cost.min_energy_per_metre_j), 0.0)
             dstar_rekey(self._g, self._rhs, self._key1, self._key2, self._nodes, self._where, self._size,
                         self._col_x, self._row_y, self._nj, sx, sy, h_per_m)
             best, self.expanded, self._size = dstar_search(
-                src, e_src, pos, data, self._delta, self._g, self._rhs, self._exit, self._key1, self._key2,
+                src, e_src, pos, self._rev, data, self._delta, self._g, self._rhs, self._exit, self._key1, self._key2,
                 self._nodes, self._where, self._size, self._col_x, self._row_y, self._nj, sx, sy, h_per_m,
             )
             if best < e_direct:

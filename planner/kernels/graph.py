@@ -17,6 +17,7 @@ __all__ = [
     "astar",
     "lattice_weights",
     "lattice_reweight",
+    "reweight_band",
     "lattice_weights_serial",
     "lattice_weights_parallel",
     "lattice_reweight_serial",
@@ -160,17 +161,18 @@ def _lattice_weights(cells, table, geo, stride, offset, ni, nj, half):  # pragma
 
 
 def _lattice_reweight(cells, table, geo, stride, offset, ni, nj, half, changed_sat, pos, data,
-                      i0=0, i1=-1, j0=0, j1=-1):  # pragma: no cover - compiled
+                      i0=0, i1=-1, j0=0, j1=-1, data_lo=0):  # pragma: no cover - compiled
     """Recompute, into ``data``, the energies of the edges whose cell box holds a changed cell.
 
     ``changed_sat`` is the summed-area table of the changed-cell mask (shape rows+1, cols+1);
-    ``pos[node, k]`` is the index in ``data`` of move ``k`` of ``node`` (-1: no edge). Only
+    ``pos[node, k]`` is the index of move ``k`` of ``node`` among the edges (-1: no edge),
+    whose weight is ``data[pos - data_lo]`` (``data`` may hold a slice of the weights). Only
     the half-plane moves of the nodes in rows ``i0:i1`` and columns ``j0:j1`` are looked at
-    (default all; ``-1``: to the end). Returns per node-row counts of recomputed moves and of
-    edges whose presence would change (an absent edge becoming finite or a present one
-    becoming ``inf``), and a ``((min(ni, i1 + 2) - i0) * nj, 2 * nh)`` mask (uint8) of the
-    moves whose energy changed (``inf`` standing for an absent edge), its first row being
-    node ``i0 * nj``.
+    (default all; ``-1``: to the end); their edges lie in node rows ``i0:i1 + 2``. Returns
+    per node-row counts of recomputed moves and of edges whose presence would change (an
+    absent edge becoming finite or a present one becoming ``inf``), and a
+    ``((min(ni, i1 + 2) - i0) * nj, 2 * nh)`` mask (uint8) of the moves whose energy changed
+    (``inf`` standing for an absent edge), its first row being node ``i0 * nj``.
     """
     nh = half.shape[0]
     if i1 < 0:
@@ -207,21 +209,21 @@ def _lattice_reweight(cells, table, geo, stride, offset, ni, nj, half, changed_s
                 ef, eb = walk_pair(cells, table, geo, xa, ya, xb, yb, True)
                 recomputed[i] += 2
                 tgt = ti * nj + tj
-                p = pos[src, k]
-                old = data[p] if p >= 0 else math.inf
+                q = pos[src, k]
+                old = data[q - data_lo] if q >= 0 else math.inf
                 if ef != old:
                     changed[src - first, k] = 1
-                if p >= 0:
-                    data[p] = ef
-                if (p >= 0) != (ef < math.inf):
+                if q >= 0:
+                    data[q - data_lo] = ef
+                if (q >= 0) != (ef < math.inf):
                     flips[i] += 1
-                p = pos[tgt, nh + k]
-                old = data[p] if p >= 0 else math.inf
+                q = pos[tgt, nh + k]
+                old = data[q - data_lo] if q >= 0 else math.inf
                 if eb != old:
                     changed[tgt - first, nh + k] = 1
-                if p >= 0:
-                    data[p] = eb
-                if (p >= 0) != (eb < math.inf):
+                if q >= 0:
+                    data[q - data_lo] = eb
+                if (q >= 0) != (eb < math.inf):
                     flips[i] += 1
     return recomputed, flips, changed
 
@@ -238,20 +240,15 @@ def lattice_weights(cells, table, geo, stride, offset, ni, nj, half):
     return kernel(cells, table, geo, stride, offset, ni, nj, half)
 
 
-def lattice_reweight(cells, table, geo, stride, offset, ni, nj, half, changed_sat, pos, data):
-    """Recompute in ``data`` the moves whose cell box holds a changed cell (see ``_lattice_reweight``).
-
-    Only the nodes whose moves can reach the changed cells' bounding box are scanned; the
-    serial or parallel kernel by the number of moves to scan. Returns the recomputed and
-    flipped counts per node row and the ascending ids ``node * 2 * len(half) + k`` of the
-    moves whose energy changed.
-    """
+def reweight_band(changed_sat, stride, offset, ni, nj, half):
+    """Node rows ``i0:i1`` and columns ``j0:j1`` whose half-plane moves can reach a changed cell
+    (within their bounding box), from the changed-cell mask's summed-area table; ``None`` when
+    no move can."""
     rows, cols = changed_sat.shape[0] - 1, changed_sat.shape[1] - 1
     per_row = changed_sat[1:, cols] - changed_sat[:-1, cols]
-    per_col = changed_sat[rows, 1:] - changed_sat[rows, :-1]
-    nh = half.shape[0]
     if not per_row.any():
-        return np.zeros(ni, np.int64), np.zeros(ni, np.int64), np.empty(0, np.int64)
+        return None
+    per_col = changed_sat[rows, 1:] - changed_sat[rows, :-1]
     reach = int(np.abs(half).max()) * stride  # farthest a move goes along an axis, in cells
     r_min, r_max = np.flatnonzero(per_row)[[0, -1]]
     c_min, c_max = np.flatnonzero(per_col)[[0, -1]]
@@ -261,9 +258,23 @@ def lattice_reweight(cells, table, geo, stride, offset, ni, nj, half, changed_sa
     j0 = max(0, (int(c_min) - reach - offset) // stride)
     j1 = min(nj, (int(c_max) + reach - offset) // stride + 1)
     if i1 <= i0 or j1 <= j0:
-        return np.zeros(ni, np.int64), np.zeros(ni, np.int64), np.empty(0, np.int64)
+        return None
+    return i0, i1, j0, j1
+
+
+def lattice_reweight(cells, table, geo, stride, offset, ni, nj, half, changed_sat, pos, data, band, data_lo=0):
+    """Recompute in ``data`` the moves whose cell box holds a changed cell (see ``_lattice_reweight``).
+
+    Only the nodes of ``band`` (:func:`reweight_band`) are scanned; ``data`` holds the edge
+    weights from index ``data_lo`` on (at least the edges of node rows ``i0:i1 + 2``); the
+    serial or parallel kernel by the number of moves to scan. Returns the recomputed and
+    flipped counts per node row and the ascending ids ``node * 2 * len(half) + k`` of the
+    moves whose energy changed.
+    """
+    i0, i1, j0, j1 = band
+    nh = half.shape[0]
     parallel = use_parallel((i1 - i0) * (j1 - j0) * nh)
     kernel = lattice_reweight_parallel if parallel else lattice_reweight_serial
     recomputed, flips, changed = kernel(cells, table, geo, stride, offset, ni, nj, half, changed_sat, pos, data,
-                                        i0, i1, j0, j1)
+                                        i0, i1, j0, j1, data_lo)
     return recomputed, flips, np.flatnonzero(changed.ravel()) + i0 * nj * 2 * nh

@@ -8,10 +8,10 @@ cost-to-goal of node ``u`` found so far, ``rhs[u]`` its one-step look-ahead
 nodes with ``g != rhs`` under the lexicographic key
 ``(min(g, rhs) + h(start, u), min(g, rhs))``, ``h = h_per_m * |start - u|``.
 
-The graph is the lattice's CSR arrays read through its move table: ``pos[u, k]`` is the
-index in ``data`` of move ``k`` of node ``u`` (-1: no edge), which goes to
-``u + delta[k]``. The predecessors of ``v`` are therefore ``v - delta[k]`` over the moves
-``k`` present there: no reverse graph has to be stored. Node ``u`` sits at
+The graph is the lattice's edge weights ``data`` read through two move tables: ``pos[u, k]``
+is the index in ``data`` of move ``k`` of node ``u`` (-1: no edge), which goes to
+``u + delta[k]``; ``rev[v, k]`` is the index of move ``k`` into ``v``, from ``v - delta[k]``
+(the reverse graph: the in-edges of a node in one row). Node ``u`` sits at
 ``(col_x[u % nj], row_y[u // nj])``.
 
 State arrays (all of length ``n_nodes``, changed in place): ``g``, ``rhs``, ``exit_cost``
@@ -29,7 +29,20 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["dstar_touch", "dstar_rekey", "dstar_search", "dstar_path"]
+__all__ = ["reverse_moves", "dstar_touch", "dstar_rekey", "dstar_search", "dstar_path"]
+
+
+@numba.njit(cache=True, nogil=True)
+def reverse_moves(pos, delta):  # pragma: no cover - compiled
+    """The reverse move table ``rev[v, k] = pos[v - delta[k], k]`` (-1: no move ``k`` into ``v``)."""
+    n, nd = pos.shape
+    rev = np.full((n, nd), -1, np.int32)
+    for v in range(n):
+        for k in range(nd):
+            u = v - delta[k]
+            if 0 <= u < n:
+                rev[v, k] = pos[u, k]
+    return rev
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -185,8 +198,8 @@ def _start_value(src, src_cost, g):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def dstar_search(src, src_cost, pos, data, delta, g, rhs, exit_cost, key1, key2, nodes, where, size, col_x, row_y,
-                 nj, sx, sy, h_per_m):  # pragma: no cover - compiled
+def dstar_search(src, src_cost, pos, rev, data, delta, g, rhs, exit_cost, key1, key2, nodes, where, size, col_x,
+                 row_y, nj, sx, sy, h_per_m):  # pragma: no cover - compiled
     """Expand open nodes until none can lower the virtual start's value ``min(src_cost + g[src])``:
     until the smallest open key exceeds the start's key ``(value, value)``.
 
@@ -194,7 +207,6 @@ def dstar_search(src, src_cost, pos, data, delta, g, rhs, exit_cost, key1, key2,
     Returns the start's value (``inf``: the goal cannot be reached), the number of nodes
     expanded and the open set's new size.
     """
-    n = g.size
     nd = delta.size
     expanded = 0
     while size > 0:
@@ -215,12 +227,10 @@ def dstar_search(src, src_cost, pos, data, delta, g, rhs, exit_cost, key1, key2,
             size = _heap_remove(key1, key2, nodes, where, size, u)
             gu = g[u]
             for k in range(nd):
-                p = u - delta[k]
-                if p < 0 or p >= n:
-                    continue
-                q = pos[p, k]
+                q = rev[u, k]
                 if q < 0:
                     continue
+                p = u - delta[k]
                 t = data[q] + gu
                 if t < rhs[p]:
                     rhs[p] = t
@@ -230,12 +240,10 @@ def dstar_search(src, src_cost, pos, data, delta, g, rhs, exit_cost, key1, key2,
             g_old = g[u]
             g[u] = math.inf
             for k in range(nd):
-                p = u - delta[k]
-                if p < 0 or p >= n:
-                    continue
-                q = pos[p, k]
+                q = rev[u, k]
                 if q < 0:
                     continue
+                p = u - delta[k]
                 if rhs[p] == data[q] + g_old:
                     rhs[p] = _rhs_of(p, pos, data, delta, g, exit_cost)
                     size = _update_vertex(p, g, rhs, key1, key2, nodes, where, size, col_x, row_y, nj, sx, sy,

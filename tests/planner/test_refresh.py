@@ -175,3 +175,28 @@ def test_move_views_match_the_graph_and_are_read_only():
     assert np.array_equal(np.sort(pos[u, k]), np.arange(g.indptr[u], g.indptr[u + 1]))
     with pytest.raises(InvalidParameterError, match="same grid"):
         lat.changed_moves_since(Lattice(_cost(), 2))
+
+
+def test_chained_refreshes_of_small_patches_equal_fresh_builds_and_leave_their_ancestors_alone():
+    cost = _cost(seed=2)
+    lat = Lattice.for_cost(cost, 1)
+    reference = [(cost, lat.move_energies_j())]
+    grade, turn = _tables(3)
+    rows = cost.ground_rows.copy()
+    chain = [lat]
+    for step, (r, c) in enumerate(((3, 4), (20, 30), (21, 31), (35, 2), (10, 40))):
+        rows = rows.copy()
+        rows[r:r + 3, c:c + 3] = 3 + step  # a new table row on a 3 x 3 patch
+        grade = np.vstack([grade, (1.5 + 0.2 * step) * grade[:1]])
+        turn = np.vstack([turn, turn[:1]])
+        new_cost = reference[-1][0].with_tables(grade, turn, rows)
+        got = Lattice.for_cost(new_cost, 1)
+        # only the slice of the recomputed moves is held: the moves read through it
+        moves = got.changed_moves
+        fresh = Lattice(new_cost, 1).move_energies_j().ravel()
+        assert moves.size and np.array_equal(got.move_energies_j(moves), fresh[moves])
+        chain.append(got)
+        reference.append((new_cost, None))
+    for (c, _), got in reversed(list(zip(reference[1:], chain[1:]))):  # made whole in any order
+        _assert_same_lattice(got, Lattice(_fresh(c, c.grade_table_j_per_m, c.turn_table_j, c.ground_rows), 1))
+    assert np.array_equal(chain[0].move_energies_j(), reference[0][1])  # the first lattice never changes
