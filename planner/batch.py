@@ -16,7 +16,7 @@ from .batch_pairs import BatchPairs
 from .batch_result import BatchResult, BatchRow
 from .cache import CACHE_SIZE, ResultCache
 from .edge_cost import EnergyCost
-from .planning import PLANNERS, plan_route
+from .planning import GRAPH_PLANNERS, PLANNERS, plan_route
 from .settings import PlannerSettings
 
 __all__ = ["plan_batch", "plan_pair"]
@@ -174,7 +174,7 @@ def plan_batch(
         check_real("time_limit_s", time_limit_s, low=0.0, low_inclusive=False)
     if max_cost_evaluations is not None:
         check_int("max_cost_evaluations", max_cost_evaluations, low=1)
-    if planner != "lattice" and time_limit_s is None and max_cost_evaluations is None:
+    if planner not in GRAPH_PLANNERS and time_limit_s is None and max_cost_evaluations is None:
         raise InvalidParameterError("time_limit_s and max_cost_evaluations are both None; give at least one budget")
     progress = check_bool("progress", progress)
     client = check_client(client, "pairs")

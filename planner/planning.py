@@ -52,12 +52,13 @@ from .refine import refine_route, string_pull
 from .route import Route, RouteComparison, empty_route, evaluate_route
 from .settings import PlannerSettings
 
-__all__ = ["plan_route", "shortest_route", "compare_route", "PLANNERS", "OMPL_PLANNERS", "REFINE_DEFAULT_SEED"]
+__all__ = ["plan_route", "shortest_route", "compare_route", "PLANNERS", "OMPL_PLANNERS", "GRAPH_PLANNERS",
+           "REFINE_DEFAULT_SEED"]
 
 #: Every planner name :func:`plan_route` accepts.
 PLANNERS = OMPL_PLANNERS + ("anyangle", "lattice")
-#: Planners that ignore time budgets (deterministic searches).
-_UNTIMED = ("anyangle", "lattice")
+#: Planners that ignore time budgets (deterministic graph searches, run to their end).
+GRAPH_PLANNERS = ("anyangle", "lattice")
 #: Seed of the refinement when :func:`plan_route` gets ``seed=None``.
 REFINE_DEFAULT_SEED = 0
 
@@ -281,7 +282,7 @@ def plan_route(
         raise InvalidParameterError(
             f"start equals goal ({start[0]!r}, {start[1]!r}) m: there is no route to plan; expected two different points"
         )
-    if planner in _UNTIMED and time_limit_s is None and max_cost_evaluations is None:
+    if planner in GRAPH_PLANNERS and time_limit_s is None and max_cost_evaluations is None:
         time_limit, max_evals = None, None
     else:
         time_limit, max_evals = _check_budget(time_limit_s, max_cost_evaluations)

@@ -10,6 +10,7 @@ from terrain import TerrainMap
 
 from .edge_cost import EnergyCost
 from .kernels import graph, point_free, walk
+from .anyangle import warm_up_anyangle
 from .lattice import Lattice
 from .reachability import warm_up_reachability
 from .refine import relax_path, string_pull
@@ -56,4 +57,5 @@ def warm_up_kernels() -> float:
     cost.with_tables(2.0 * cost.grade_table_j_per_m, cost.turn_table_j)  # incremental lattice reweighting
     string_pull(cost, np.vstack([path.waypoints_m, [[0.5, 3.5]]]))
     warm_up_reachability()
+    warm_up_anyangle()
     return time.perf_counter() - t0

@@ -35,6 +35,7 @@ from .. import (
     plan_route,
     warm_up_kernels,
 )
+from ..planning import GRAPH_PLANNERS
 from ..plot import RouteLine, plot_routes
 from ..risk import INTERVAL_LEVEL, RouteEnergyInterval, risk_cost, route_energy_interval
 from ..route_geojson import write_geojson
@@ -329,6 +330,8 @@ def run_plan(
               + (f"; planned on the {risk:g} quantile of energy (each edge at mean + z sd)" if risk is not None else "")
               + ("" if mean_cost.has_interval else "; the model gives no interval"))
     budget = f"{max_evaluations} edge-cost evaluations" if max_evaluations is not None else f"time limit {time_limit_s:g} s"
+    if planner in GRAPH_PLANNERS:  # searches run to their end: no budget applies
+        budget = "no budget (a graph search)"
     n_unknown = int(np.count_nonzero(np.asarray(tmap.ground) == UNKNOWN_GROUND))
     if n_unknown and unknown_ground:
         print(f"ground class unknown in {n_unknown} of {tmap.ground.size} cells: priced as {unknown_ground!r} "
