@@ -18,7 +18,11 @@ predicted current per cell in the :class:`terrain.CellModelRegistry`, and where 
    keeps the new model only if it is better,
 4. refreshes the edge costs (only the new model's table is computed, and the lattice graph
    is reweighted only where cells changed model: ``energy_cost(..., previous=cost)``) and
-   replans from the current position.
+   replans from the current position. With the lattice planner the replan is incremental:
+   an :class:`~planner.replan.IncrementalPlanner` (D* Lite toward the goal), seeded after
+   the first plan, takes the refreshed lattice's changed moves and repairs its search from
+   the robot's position, then refines and costs the route as ``plan_route`` does (the same
+   lattice optimum; among routes of equal energy it may pick another one).
 
 Before exciting a flagged region, the loop tries the models it already has: the one that
 best explains what the last leg measured in the region (integrated current, both sides) is
@@ -81,9 +85,12 @@ from energy import (
 from terrain import CellModelRegistry, InvalidParameterError, TerrainMap
 from terrain.checks import fmt_number, real_array
 
+from ..lattice import Lattice
 from ..learned_cost import LearnedEnergyModel
 from ..planning import plan_route
+from ..replan import IncrementalPlanner
 from ..route import Route, evaluate_route
+from ..settings import PlannerSettings
 from .adaptive_results import AdaptiveResult, LegRecord, ReplanRecord, UpdateRecord
 from .legs import LegPredictor, split_polyline
 from .manoeuvres import excitation_manoeuvre
@@ -200,6 +207,7 @@ class _Loop:
         self.driven_j = self.excitation_j = self.update_wall = 0.0
         self.status, self.reason = "max_legs", f"stopped after max_legs={cfg.max_legs} legs"
         self.pending: list[float] = []  # remaining legs' predicted energies (J)
+        self.replanner: IncrementalPlanner | None = None  # the lattice planner's incremental search
         self.draw: list[tuple[np.ndarray, np.ndarray]] = []  # (time, battery power) of every drive and manoeuvre
 
     # ------------------------------------------------------------------ bookkeeping
@@ -229,6 +237,8 @@ class _Loop:
 
     def plan(self, pos: np.ndarray) -> Route:
         cfg = self.cfg
+        if self.replanner is not None:  # the lattice, searched incrementally
+            return self.replanner.route(tuple(pos), seed=cfg.seed)
         return plan_route(self.terrain, tuple(pos), tuple(self.goal), cost=self.cost, planner=cfg.planner,
                           time_limit_s=cfg.planner_time_limit_s, seed=cfg.seed, compare=False)
 
@@ -239,9 +249,16 @@ class _Loop:
         refresh = time.perf_counter() - t0
         self.pos = start
         self.route = self.initial_route = self.plan(start)
+        planning_s = self.route.planning_time_s
+        if self.cfg.planner == "lattice" and self.route.found:  # seed the incremental search for the replans
+            t0 = time.perf_counter()
+            lattice = Lattice.for_cost(self.cost, PlannerSettings().lattice_stride_cells)  # plan_route's lattice
+            self.replanner = IncrementalPlanner(lattice, tuple(self.goal))
+            self.replanner.plan(tuple(start))
+            planning_s += time.perf_counter() - t0
         self.pending = self.predictor.legs(self.route.waypoints_m, None) if self.route.found else []
         self.replans.append(ReplanRecord(0, "initial", sum(self.pending) if self.route.found else math.nan, math.nan,
-                                         True, refresh, self.route.planning_time_s, self.lem.table_builds - builds0))
+                                         True, refresh, planning_s, self.lem.table_builds - builds0))
         self.push(0.0, start[0], start[1], self.soc, 0.0, 0.0)
 
     # ------------------------------------------------------------------ one leg
@@ -455,6 +472,8 @@ class _Loop:
         t1 = time.perf_counter()
         builds0 = self.lem.table_builds
         self.cost = self.lem.energy_cost(self.terrain, self.cfg.speed_mps, previous=self.cost)  # reweighted
+        if self.replanner is not None:  # the changed moves of the refreshed lattice
+            self.replanner.update(Lattice.for_cost(self.cost, self.replanner.lattice.stride_cells))
         refresh = time.perf_counter() - t1
         old_energy = evaluate_route(self.cost, tail).energy_j if len(tail) >= 2 else 0.0
         route = self.plan(self.pos)

@@ -179,3 +179,37 @@ def test_bad_input():
         planner.route((30.5, 20.5))
     with pytest.raises(InvalidParameterError, match="settings"):
         planner.route((3.5, 3.5), settings={"refine_rounds": 1})
+
+
+def test_the_adaptive_loop_replans_incrementally_with_the_same_lattice_optimum(monkeypatch):
+    import planner.missions.adaptive as adaptive_module
+    from energy import Battery, LinearCurrentModel, TruthSimulator, excitation_commands, ground_preset, robot_preset
+    from planner import AdaptiveSettings, run_adaptive_mission
+    from terrain import CellModelRegistry
+
+    robot = robot_preset("husky")
+    truth = TruthSimulator(robot, {"asphalt": ground_preset("asphalt"), "sand": ground_preset("sand")}, seed=0)
+    ground = np.zeros((16, 40), int)
+    ground[4:12, 12:34] = 1
+    tmap = TerrainMap(np.zeros((16, 40)), 1.0, ground=ground, ground_names={0: "asphalt", 1: "sand"})
+    a = excitation_commands(20.0, speed_levels_mps=(0.2, 0.5, 0.8), omega_levels_radps=(0.0,), rest_s=0.0, seed=1)
+    b = excitation_commands(8.0, speed_levels_mps=(0.0,), omega_levels_radps=(0.5,), omega_sign="both",
+                            hold_s=(2.0, 3.0), rest_s=0.0, seed=2)
+    prior = LinearCurrentModel().fit([truth.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground="asphalt",
+                                                              seed=3 + i) for i, p in enumerate((a, b))])
+    calls = []
+    route = IncrementalPlanner.route
+
+    def checked_route(self, start_xy_m, **kwargs):
+        path = self.plan(start_xy_m)  # the repaired search answers as a full search of the refreshed cost
+        ref = Lattice(self.cost, 1).shortest_path(start_xy_m, tuple(self.goal_xy_m))
+        assert path.objective == pytest.approx(ref.objective, rel=1e-9)
+        calls.append(self.touched)
+        return route(self, start_xy_m, **kwargs)
+
+    monkeypatch.setattr(adaptive_module.IncrementalPlanner, "route", checked_route)
+    res = run_adaptive_mission(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0), truth,
+                               (2.5, 8.0), (37.5, 8.0), physics_ground=ground_preset("asphalt"),
+                               settings=AdaptiveSettings(leg_length_m=8.0, seed=0, max_updates=2))
+    assert res.status == "completed" and res.accepted_updates >= 1
+    assert len(calls) == len(res.replans) - 1 >= 1 and all(t > 0 for t in calls)  # every replan, after an update
