@@ -305,6 +305,8 @@ class Lattice:
         # the moves scanned start in node rows i0:i1 and end by row i1 + 1: one slice of the edges
         lo = int(self._indptr[band[0] * self._nj])
         hi = int(self._indptr[min(self._ni, band[1] + 2) * self._nj])
+        if hi - lo > self.n_edges // 2:  # most of the weights: copy them all, and hold a whole array
+            lo, hi = 0, self.n_edges
         values = self._energy_slice(lo, hi)
         arr = cost.arrays
         recomputed, flips, new.changed_moves = lattice_reweight(
