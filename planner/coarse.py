@@ -44,6 +44,7 @@ __all__ = [
     "corridor_mask",
     "search_corridor",
     "check_free_point",
+    "merge_straight",
 ]
 
 #: What a coarse-to-fine plan fell back to: nothing, a corridor four times wider, the whole map.
@@ -79,6 +80,9 @@ class CoarseToFine:
     fine_window_cells : int
         Full-resolution cells the fine stage read from the file, summed over the windows it
         read (0: the whole map was given in memory, :func:`plan_coarse_to_fine`).
+    fine_windows : tuple of (int, int, int, int)
+        The windows the fine stage read, in order, as map ``(row_start, row_stop, col_start,
+        col_stop)`` with their halo cells (empty for :func:`plan_coarse_to_fine`).
     coarse_map : TerrainMap or None
         The downsampled map the coarse route was planned on (elevation, blocked blocks as
         obstacles): a view of the whole map even when only windows of it were read.
@@ -100,6 +104,7 @@ class CoarseToFine:
     fine_time_s: float
     optimum_time_s: float
     fine_window_cells: int = 0
+    fine_windows: tuple[tuple[int, int, int, int], ...] = ()
     coarse_map: TerrainMap | None = field(default=None, repr=False, compare=False)
     fine_map: TerrainMap | None = field(default=None, repr=False, compare=False)
 
@@ -118,6 +123,8 @@ class CoarseToFine:
             "ratio_to_optimum": self.ratio_to_optimum, "fallback": self.fallback,
             "coarse_time_s": self.coarse_time_s, "fine_time_s": self.fine_time_s,
             "optimum_time_s": self.optimum_time_s, "fine_window_cells": self.fine_window_cells,
+            "fine_windows": len(self.fine_windows),
+            "fine_window_max_cells": max(((r1 - r0) * (c1 - c0) for r0, r1, c0, c1 in self.fine_windows), default=0),
         }
 
 
@@ -208,8 +215,8 @@ def _corridor(coarse: EnergyCost, waypoints: np.ndarray, width_m: float, f: int,
     return np.repeat(np.repeat(near, f, axis=0), f, axis=1)[: shape[0], : shape[1]]
 
 
-def _merge_straight(pts: np.ndarray) -> np.ndarray:
-    """Drop interior vertices where the polyline goes straight on (lattice moves in a row)."""
+def merge_straight(pts: np.ndarray) -> np.ndarray:
+    """Drop interior vertices where the polyline goes straight on (lattice moves in a row), ends kept."""
     if pts.shape[0] < 3:
         return pts
     seg = np.diff(pts, axis=0)
@@ -220,12 +227,15 @@ def _merge_straight(pts: np.ndarray) -> np.ndarray:
     return pts[np.concatenate([[True], ~straight, [True]])]
 
 
-def search_corridor(cost: EnergyCost, start: np.ndarray, goal: np.ndarray, inside: np.ndarray
-                    ) -> tuple[float, np.ndarray, int]:
+def search_corridor(cost: EnergyCost, start: np.ndarray, goal: np.ndarray, inside: np.ndarray, *,
+                    merge: bool = True) -> tuple[float, np.ndarray, int]:
     """Best 1-cell lattice route inside ``inside`` cells: (drive energy, waypoints, number of nodes).
 
     Start and goal join the free nodes within 1.5 cells; the straight segment start -> goal
-    is the route when no lattice route is cheaper (``inf`` energy: none at all)."""
+    is the route when no lattice route is cheaper (``inf`` energy: none at all). The
+    waypoints are start, every node of the route (a node may sit on start) and goal; with
+    ``merge`` (default) the nodes where the route goes straight on are dropped
+    (:func:`merge_straight`)."""
     free = inside & ~cost.blocked
     node_rows, node_cols = (a.astype(np.int64) for a in np.nonzero(free))
     n = node_rows.size
@@ -267,7 +277,8 @@ def search_corridor(cost: EnergyCost, start: np.ndarray, goal: np.ndarray, insid
                 chain.append(node)
                 node = int(pred[node])
     mid = np.column_stack([xs[chain[::-1]], ys[chain[::-1]]]) if chain else np.empty((0, 2))
-    return best, _merge_straight(np.vstack([start, mid, goal])), n
+    pts = np.vstack([start, mid, goal])
+    return best, merge_straight(pts) if merge else pts, n
 
 
 def check_free_point(cost: EnergyCost, name: str, point_xy_m: np.ndarray, row_col: tuple[int, int] | None = None
