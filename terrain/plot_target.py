@@ -1,0 +1,119 @@
+"""Where a figure goes: a PNG file the plotting function writes, or the caller's matplotlib axes.
+
+Every figure function of terrawatt takes an optional positional ``path`` and a keyword
+``ax=`` (a single-panel figure) or ``axes=`` (a figure of several panels); exactly one of
+the two is given. With ``path`` the function makes its own figure, saves it atomically and
+returns the path; with ``ax`` / ``axes`` it draws into the caller's axes, writes nothing,
+leaves the caller's figure layout alone and returns the axes it drew into, so figures can
+be composed. The checks here make that rule read the same in every module.
+
+Example
+-------
+>>> from matplotlib.figure import Figure
+>>> ax = Figure().subplots()
+>>> check_plot_target(None, ax) is None  # draw into ax
+True
+>>> len(check_axes(Figure().subplots(1, 2), 2, what="histogram, exceedance"))
+2
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .atomic import check_output_path
+from .errors import InvalidParameterError
+
+__all__ = ["check_plot_target", "check_ax", "check_axes"]
+
+
+def check_plot_target(path: Any, axes: Any, *, axes_name: str = "ax") -> Path | None:
+    """The checked output path, or ``None`` when the figure is to be drawn into ``axes``.
+
+    Call it before any work, so a bad path is refused before anything is drawn.
+
+    Parameters
+    ----------
+    path : str, os.PathLike or None
+        The PNG file to write.
+    axes : matplotlib Axes, sequence of them, or None
+        The caller's axes (checked by :func:`check_ax` / :func:`check_axes`, not here).
+    axes_name : str
+        The keyword the function takes the axes as (``"ax"`` or ``"axes"``), for messages.
+
+    Returns
+    -------
+    pathlib.Path or None
+
+    Raises
+    ------
+    InvalidParameterError
+        Both or neither of ``path`` and the axes given; ``path`` not a file name, a
+        directory, or under a file (:func:`terrain.atomic.check_output_path`).
+    """
+    if path is None and axes is None:
+        raise InvalidParameterError(
+            f"give either path (a PNG file to write) or {axes_name}= (matplotlib axes to draw into), got neither")
+    if path is not None and axes is not None:
+        raise InvalidParameterError(
+            f"give either path or {axes_name}=, not both: with {axes_name}= the figure is drawn into your axes and "
+            f"nothing is written (got path={str(path)!r:.80})")
+    if axes is not None:
+        return None
+    if not isinstance(path, (str, os.PathLike)):
+        raise InvalidParameterError(f"path must be a file name, got {type(path).__name__!r}")
+    return check_output_path(path, "path")
+
+
+def check_ax(ax: Any, name: str = "ax") -> Any:
+    """``ax`` if it is a matplotlib :class:`~matplotlib.axes.Axes`.
+
+    Raises
+    ------
+    InvalidParameterError
+        Anything else (e.g. a figure, or an array of axes given for one panel).
+    """
+    from matplotlib.axes import Axes
+
+    if not isinstance(ax, Axes):
+        raise InvalidParameterError(f"{name} must be a matplotlib Axes, got {type(ax).__name__!r}")
+    return ax
+
+
+def check_axes(axes: Any, n: int, *, what: str = "", name: str = "axes") -> tuple[Any, ...]:
+    """``axes`` as a tuple of ``n`` matplotlib Axes.
+
+    A sequence, a nested list or an array of axes (as ``Figure.subplots`` returns them) is
+    read in row-major order.
+
+    Parameters
+    ----------
+    axes : sequence or ndarray of matplotlib Axes
+    n : int
+        How many panels the figure has.
+    what : str
+        What the panels are, in order (e.g. ``"left, right"``), for the message.
+    name : str
+        The keyword, for messages.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a sequence of Axes, or not ``n`` of them.
+    """
+    from matplotlib.axes import Axes
+
+    if isinstance(axes, Axes) or isinstance(axes, (str, bytes)) or not hasattr(axes, "__len__"):
+        raise InvalidParameterError(
+            f"{name} must be a sequence of {n} matplotlib Axes{f' ({what})' if what else ''}, got {type(axes).__name__!r}")
+    flat = tuple(np.asarray(axes, dtype=object).ravel())
+    if len(flat) != n:
+        raise InvalidParameterError(
+            f"{name} must hold {n} matplotlib Axes{f' ({what})' if what else ''}, got {len(flat)}")
+    for k, ax in enumerate(flat):
+        check_ax(ax, f"{name}[{k}]")
+    return flat
