@@ -1,11 +1,20 @@
 """Figures of the current estimator: measured vs estimated current (Fig. 6), vibration spectra (Fig. 7).
 
-Both follow the layout of the vibration-current paper's figures and write PNG files
-atomically (:func:`terrain.atomic.save_figure`). A figure draws what the data has: spectra of
-logs whose IMU is too slow for the requested band are drawn up to the data's Nyquist
-frequency, with a warning and a note on the figure, instead of failing after the results
-that the figure illustrates are done. matplotlib is imported when a figure is drawn, with the non-interactive Agg
-backend, so these work on a robot or a CI machine without a display.
+Both follow the layout of the vibration-current paper's figures. A figure draws what the
+data has: spectra of logs whose IMU is too slow for the requested band are drawn up to the
+data's Nyquist frequency, with a warning and a note on the figure, instead of failing after
+the results that the figure illustrates are done.
+
+Where a figure goes (the rule of every terrawatt figure, :mod:`terrain.plot_target`): give
+exactly one of ``path`` or ``axes=``. With ``path`` the function makes its own figure, writes
+it as a PNG atomically (:func:`terrain.atomic.save_figure`) and returns the path; matplotlib
+then runs on the non-interactive Agg backend, so this works on a robot or a CI machine
+without a display. With ``axes=`` (a sequence of matplotlib Axes, one per panel) it draws
+into the caller's axes, writes nothing, leaves the caller's figure layout alone (no
+``tight_layout``) and returns the axes as a tuple, so figures can be composed. The figure's
+own title belongs to the figure and is drawn only with ``path``; with ``axes`` a ``title``
+you give goes on the first axes, and what is needed to read the panels (the spectra's axis
+unit, the note of a clipped band) is written on the axes themselves.
 """
 
 from __future__ import annotations
@@ -22,6 +31,7 @@ from scipy.ndimage import uniform_filter1d
 from terrain.atomic import save_figure
 from terrain.checks import check_int, check_real, fmt_number
 from terrain.errors import DataError, FigureWarning, GridMismatchError, InvalidParameterError
+from terrain.plot_target import check_axes, check_plot_target
 
 from .features import NYQUIST_TOLERANCE, accel_rate_hz, whole_run_spectrum
 from .logs import InteractionLog
@@ -71,13 +81,14 @@ def _band_for_data(logs: Sequence[Any], max_frequency_hz: float) -> tuple[float,
 def plot_current_estimate(
     log: InteractionLog,
     predicted_a: Any,
-    path: str | os.PathLike[str],
+    path: str | os.PathLike[str] | None = None,
     *,
+    axes: Sequence[Any] | None = None,
     window_samples: int = DEFAULT_SMOOTHING_SAMPLES,
     label: str = "estimate",
     title: str | None = None,
     dpi: int = 100,
-) -> Path:
+) -> Path | tuple[Any, ...]:
     """The paper's Fig. 6: measured current, its moving median and the estimate's, per side.
 
     One panel per drive side (left above right): the measured current in a light colour,
@@ -90,29 +101,35 @@ def plot_current_estimate(
         The run with its measured currents.
     predicted_a : array_like, shape (N, 2)
         Estimated ``[left, right]`` current (A) at ``log.time_s`` (``model.predict(log)``).
-    path : str or os.PathLike
-        PNG file to write.
+    path : str or os.PathLike, optional
+        PNG file to write (or give ``axes``).
+    axes : sequence of 2 matplotlib Axes, optional
+        Draw the left and right panels into these instead of writing a file.
     window_samples : int
         Moving-median window in drive samples (default 100, the paper's).
     label : str
         Name of the estimate in the legend.
     title : str, optional
-        Figure title (default: the log's source and ground).
+        Figure title (default: the log's source and ground); with ``axes``, the first
+        axes' title (none by default).
     dpi : int
+        Resolution of the PNG (with ``path``).
 
     Returns
     -------
-    pathlib.Path
-        The written file.
+    pathlib.Path or tuple of 2 Axes
+        The written file, or the axes drawn into.
 
     Raises
     ------
     GridMismatchError
         ``predicted_a`` is not of shape ``(len(log.time_s), 2)``.
     InvalidParameterError
-        ``log`` is not an InteractionLog, ``predicted_a`` holds non-finite values, or a bad
+        Both or neither of ``path`` and ``axes``, a bad ``path`` or not 2 axes; ``log`` is
+        not an InteractionLog, ``predicted_a`` holds non-finite values, or a bad
         ``window_samples``.
     """
+    target = check_plot_target(path, axes, axes_name="axes")
     if not isinstance(log, InteractionLog):
         raise InvalidParameterError(f"log must be an InteractionLog, got {type(log).__name__!r}")
     pred = np.asarray(predicted_a, dtype=float)
@@ -127,21 +144,33 @@ def plot_current_estimate(
     smooth_meas = moving_median(measured, window_samples)
     smooth_pred = moving_median(pred, window_samples)
     t = log.time_s - log.time_s[0]
+    if target is None:
+        panels = check_axes(axes, 2, what="left, right current")
+        _draw_currents(panels, t, measured, smooth_meas, smooth_pred, window_samples, label)
+        if title:
+            panels[0].set_title(title)
+        return panels
 
     plt = _pyplot()
-    fig, axes = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True)
-    for k, (ax, side) in enumerate(zip(axes, _SIDES)):
+    fig, panels = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True)
+    _draw_currents(panels, t, measured, smooth_meas, smooth_pred, window_samples, label)
+    ground = log.meta.ground_label or "unknown ground"
+    fig.suptitle(title or f"drive current: {Path(log.meta.source).name or 'run'} on {ground}")
+    fig.tight_layout()
+    return _save(fig, target, dpi)
+
+
+def _draw_currents(panels: Sequence[Any], t: np.ndarray, measured: np.ndarray, smooth_meas: np.ndarray,
+                   smooth_pred: np.ndarray, window_samples: int, label: str) -> None:
+    """Fig. 6's left and right panels, drawn into ``panels``."""
+    for k, (ax, side) in enumerate(zip(panels, _SIDES)):
         ax.plot(t, measured[:, k], color="#9ecae1", lw=0.8, label="measured")
         ax.plot(t, smooth_meas[:, k], color="#08519c", lw=1.8, label=f"measured, moving median ({window_samples})")
         ax.plot(t, smooth_pred[:, k], color="#d94801", lw=1.8, label=f"{label}, moving median ({window_samples})")
         ax.set_ylabel(f"{side} current (A)")
         ax.grid(alpha=0.3)
         ax.legend(loc="upper right", fontsize=8)
-    axes[-1].set_xlabel("time (s)")
-    ground = log.meta.ground_label or "unknown ground"
-    fig.suptitle(title or f"drive current: {Path(log.meta.source).name or 'run'} on {ground}")
-    fig.tight_layout()
-    return _save(fig, path, dpi)
+    panels[-1].set_xlabel("time (s)")
 
 
 def ground_spectra(
@@ -193,8 +222,9 @@ def ground_spectra(
 
 def plot_vibration_spectra(
     logs: Sequence[InteractionLog] | Mapping[str, np.ndarray],
-    path: str | os.PathLike[str],
+    path: str | os.PathLike[str] | None = None,
     *,
+    axes: Sequence[Any] | None = None,
     frequency_hz: Any = None,
     smoothing_bins: int = 25,
     n_bins: int = 2000,
@@ -202,7 +232,7 @@ def plot_vibration_spectra(
     scaling: str = "density",
     title: str | None = None,
     dpi: int = 100,
-) -> Path:
+) -> Path | tuple[Any, ...]:
     """The paper's Fig. 7: vertical-vibration spectrum per ground with a moving average.
 
     One panel per ground, sharing the axes: the spectrum in a light colour and its
@@ -223,8 +253,12 @@ def plot_vibration_spectra(
     logs : sequence of InteractionLog, or mapping of str to ndarray
         Runs (grouped by ground with :func:`ground_spectra`), or precomputed spectra per
         ground together with ``frequency_hz``.
-    path : str or os.PathLike
-        PNG file to write.
+    path : str or os.PathLike, optional
+        PNG file to write (or give ``axes``).
+    axes : sequence of matplotlib Axes, optional
+        One per ground, in the order grounds first appear in ``logs`` (or the mapping's
+        order): draw into these instead of writing a file. Each gets the y-axis label; the
+        note of a clipped band is added to the last one's x-axis label.
     frequency_hz : array_like, optional
         Frequencies of precomputed spectra (required with a mapping, ignored otherwise).
     smoothing_bins : int
@@ -234,16 +268,21 @@ def plot_vibration_spectra(
         :func:`energy.whole_run_spectrum`) when spectra are computed from logs; ``scaling``
         also names the y axis (say which one precomputed spectra use).
     title : str, optional
+        Figure title (default "vertical vibration spectra by ground"); with ``axes``, the
+        first axes' title (none by default).
     dpi : int
+        Resolution of the PNG (with ``path``).
 
     Returns
     -------
-    pathlib.Path
+    pathlib.Path or tuple of Axes
+        The written file, or the axes drawn into.
 
     Raises
     ------
     InvalidParameterError
-        Bad ``smoothing_bins``; a mapping without ``frequency_hz``; empty input.
+        Both or neither of ``path`` and ``axes``, a bad ``path``, or not one axes per
+        ground; bad ``smoothing_bins``; a mapping without ``frequency_hz``; empty input.
     GridMismatchError
         A precomputed spectrum whose length differs from ``frequency_hz``.
 
@@ -254,6 +293,7 @@ def plot_vibration_spectra(
         the 50 Hz default band of 50 Hz IMU logs): the spectra are drawn up to the lowest
         Nyquist frequency of the logs instead, and a note on the figure says so.
     """
+    target = check_plot_target(path, axes, axes_name="axes")
     check_int("smoothing_bins", smoothing_bins, low=1)
     note = ""
     if isinstance(logs, Mapping):
@@ -270,25 +310,41 @@ def plot_vibration_spectra(
         logs = list(logs)
         band_hz, note = _band_for_data(logs, check_real("max_frequency_hz", max_frequency_hz, low=0.0, low_inclusive=False))
         freq, spectra = ground_spectra(logs, n_bins=n_bins, max_frequency_hz=band_hz, scaling=scaling)
+    if scaling == "density":
+        ylabel = "amplitude spectral density (m/s²/√Hz)\nlevel independent of run length (runs differ in length)"
+    else:
+        ylabel = "amplitude (m/s²)"
+    if target is None:
+        panels = check_axes(axes, len(spectra), what="one per ground: " + ", ".join(map(repr, spectra)))
+        _draw_spectra(panels, freq, spectra, smoothing_bins)
+        for ax in panels:
+            ax.set_ylabel(ylabel, fontsize=9)
+        if note:
+            panels[-1].set_xlabel(f"frequency (Hz)\n{note}")
+        if title:
+            panels[0].set_title(title)
+        return panels
 
     plt = _pyplot()
-    fig, axes = plt.subplots(len(spectra), 1, figsize=(10, 2.4 * len(spectra) + 0.8), sharex=True, sharey=True,
+    fig, grid = plt.subplots(len(spectra), 1, figsize=(10, 2.4 * len(spectra) + 0.8), sharex=True, sharey=True,
                              squeeze=False)
-    for ax, (ground, spec) in zip(axes[:, 0], spectra.items()):
+    _draw_spectra(grid[:, 0], freq, spectra, smoothing_bins)
+    fig.supylabel(ylabel, fontsize=9)
+    fig.suptitle(title or "vertical vibration spectra by ground")
+    if note:
+        fig.text(0.5, 0.005, note, ha="center", va="bottom", fontsize=8, color="#a50f15")
+    fig.tight_layout(rect=(0, 0.03 if note else 0, 1, 1))
+    return _save(fig, target, dpi)
+
+
+def _draw_spectra(panels: Sequence[Any], freq: np.ndarray, spectra: Mapping[str, np.ndarray],
+                  smoothing_bins: int) -> None:
+    """Fig. 7's panels, one per ground, drawn into ``panels``."""
+    for ax, (ground, spec) in zip(panels, spectra.items()):
         ax.plot(freq, spec, color="#bdbdbd", lw=0.6, label="spectrum")
         ax.plot(freq, uniform_filter1d(spec, smoothing_bins, mode="nearest"), color="#238b45", lw=1.6,
                 label=f"moving average ({smoothing_bins} bins)")
         ax.set_title(ground, fontsize=10, loc="left")
         ax.grid(alpha=0.3)
         ax.legend(loc="upper right", fontsize=8)
-    axes[-1, 0].set_xlabel("frequency (Hz)")
-    if scaling == "density":
-        fig.supylabel("amplitude spectral density (m/s²/√Hz)\nlevel independent of run length (runs differ in length)",
-                      fontsize=9)
-    else:
-        fig.supylabel("amplitude (m/s²)", fontsize=9)
-    fig.suptitle(title or "vertical vibration spectra by ground")
-    if note:
-        fig.text(0.5, 0.005, note, ha="center", va="bottom", fontsize=8, color="#a50f15")
-    fig.tight_layout(rect=(0, 0.03 if note else 0, 1, 1))
-    return _save(fig, path, dpi)
+    panels[-1].set_xlabel("frequency (Hz)")

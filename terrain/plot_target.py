@@ -107,13 +107,12 @@ def check_axes(axes: Any, n: int, *, what: str = "", name: str = "axes") -> tupl
     """
     from matplotlib.axes import Axes
 
-    if isinstance(axes, Axes) or isinstance(axes, (str, bytes)) or not hasattr(axes, "__len__"):
-        raise InvalidParameterError(
-            f"{name} must be a sequence of {n} matplotlib Axes{f' ({what})' if what else ''}, got {type(axes).__name__!r}")
+    panels = f"{n} matplotlib Axes" + (f" ({what})" if what else "")
+    if isinstance(axes, (Axes, str, bytes)) or not hasattr(axes, "__len__"):
+        raise InvalidParameterError(f"{name} must be a sequence of {panels}, got {type(axes).__name__!r}")
     flat = tuple(np.asarray(axes, dtype=object).ravel())
     if len(flat) != n:
-        raise InvalidParameterError(
-            f"{name} must hold {n} matplotlib Axes{f' ({what})' if what else ''}, got {len(flat)}")
+        raise InvalidParameterError(f"{name} must hold {panels}, got {len(flat)}")
     for k, ax in enumerate(flat):
         check_ax(ax, f"{name}[{k}]")
     return flat
