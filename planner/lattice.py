@@ -248,6 +248,11 @@ class Lattice:
         grade becoming drivable or undrivable) the structure is rebuilt from all weights.
         The result's weights equal those of ``Lattice(cost, stride_cells)`` exactly.
 
+        Only the slice of edge weights the recomputed moves can fall in is copied: the new
+        lattice reads the others from this one's array, and makes its whole array on its first
+        search, :meth:`graph`, or :meth:`move_energies_j` of every move (this lattice is never
+        changed). :attr:`changed_moves` lists the moves whose energy changed.
+
         Parameters
         ----------
         cost : EnergyCost
@@ -255,10 +260,6 @@ class Lattice:
             map, blocked cells and grade grid).
         changed_cells : ndarray of bool, shape (rows, cols)
             Cells whose table row content changed.
-
-        Only the slice of edge weights the recomputed moves can fall in is copied: the new
-        lattice reads the others from this one's array (the whole array is made on its first
-        search or :meth:`graph` / :meth:`edge_weights` call; this lattice is never changed).
 
         Returns
         -------
@@ -339,12 +340,6 @@ class Lattice:
             whole[plo:plo + v.size] = v
         return whole
 
-    def shares_structure(self, other: Lattice) -> bool:
-        """Whether ``other`` has this lattice's edges in the same order (it was refreshed from it,
-        or it from this, without an edge appearing or vanishing), so an edge index means the same
-        move in both."""
-        return isinstance(other, Lattice) and other._pos is self._pos
-
     def changed_moves_since(self, other: Lattice) -> np.ndarray:
         """Ids (``node * 16 + k``) of the moves whose energy differs between ``other`` and this lattice.
 
@@ -409,28 +404,6 @@ class Lattice:
                 values[inside] = v[q[inside] - lo]
             out[ok] = values
         return out.reshape(self._pos.shape) if moves is None else out
-
-    @property
-    def move_edges(self) -> np.ndarray:
-        """``(n_nodes, 16)`` index of each move's edge in :meth:`edge_weights` (-1: not an edge),
-        read-only; move ``k`` of node ``u`` goes to node ``u + LATTICE_OFFSETS[k] @ (n_cols, 1)``."""
-        view = self._pos.view()
-        view.setflags(write=False)
-        return view
-
-    def edge_weights(self, weight: str = "energy") -> np.ndarray:
-        """The edge weights in :meth:`graph`'s data order (a read-only view, not a copy).
-
-        Raises
-        ------
-        UnknownNameError
-            Unknown ``weight``.
-        """
-        if weight not in LATTICE_WEIGHTS:
-            raise UnknownNameError(f"weight must be one of {LATTICE_WEIGHTS!r}, got {weight!r}")
-        view = self._weights(weight).view()
-        view.setflags(write=False)
-        return view
 
     @classmethod
     def for_cost(cls, cost: EnergyCost, stride_cells: int = 1) -> Lattice:

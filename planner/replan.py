@@ -29,7 +29,7 @@ from terrain.checks import check_bool, check_seed
 from terrain.errors import InvalidParameterError
 
 from .coarse import check_free_point
-from .kernels.incremental import dstar_path, dstar_rekey, dstar_search, dstar_touch, reverse_moves
+from .kernels.incremental import dstar_path, dstar_rekey, dstar_search, dstar_touch, reverse_weights
 from .lattice import LATTICE_OFFSETS, Lattice, LatticePath
 from .planning import REFINE_DEFAULT_SEED
 from .points import as_points
@@ -70,9 +70,10 @@ class IncrementalPlanner:
 
     Notes
     -----
-    The planner keeps its own copy of the edge energies (8 bytes per edge) and a reverse
-    move table (4 bytes per move), besides 6 arrays of one value per node: about 60 MB for
-    the 4.2 M edges of a 512 x 512 lattice. A repair costs about what changed: a patch of a
+    The planner keeps its own move energies, as two dense tables (the 16 moves out of and
+    into each node, ``inf`` where no edge: an edge appearing or vanishing is an energy
+    changing), besides 7 arrays of one value per node: about 300 bytes per node, 80 MB for
+    a 512 x 512 lattice. A repair costs about what changed: a patch of a
     few hundred cells across the route re-expands a part of the search, a model update over
     a quarter of the map about as much as a new search.
 
@@ -116,7 +117,8 @@ class IncrementalPlanner:
         self._where = np.full(n, -1, np.int64)
         self._size = 0
         self.lattice = lattice
-        self._bind(lattice)
+        self._fw = lattice.move_energies_j()  # the planner's own weights, changed in place by update
+        self._rw = reverse_weights(self._fw, self._delta)
         self.expanded = 0
         self.touched = 0
         self._dst = np.empty(0, np.int64)
@@ -126,13 +128,6 @@ class IncrementalPlanner:
     def cost(self) -> Any:
         """The :class:`EnergyCost` of the current lattice."""
         return self.lattice.cost
-
-    def _bind(self, lattice: Lattice) -> None:
-        """Take the lattice's structure: its move table, the reverse one, and a copy of its weights
-        (the planner's own, changed in place by :meth:`update`)."""
-        self._pos = lattice.move_edges
-        self._rev = reverse_moves(self._pos, self._delta)
-        self._data = lattice.edge_weights().copy()
 
     def _set_goal_joins(self) -> np.ndarray:
         """Join the goal to the current lattice; the nodes whose join changed (old and new)."""
@@ -146,7 +141,7 @@ class IncrementalPlanner:
     def _touch(self, nodes: np.ndarray) -> None:
         g = self.goal_xy_m
         self._size = dstar_touch(
-            np.ascontiguousarray(nodes, dtype=np.int64), self._pos, self._data, self._delta, self._g, self._rhs,
+            np.ascontiguousarray(nodes, dtype=np.int64), self._fw, self._delta, self._g, self._rhs,
             self._exit, self._key1, self._key2, self._nodes, self._where, self._size, self._col_x, self._row_y,
             self._nj, float(g[0]), float(g[1]), 0.0,
         )
@@ -177,12 +172,10 @@ class IncrementalPlanner:
         if not isinstance(lattice, Lattice):
             raise InvalidParameterError(f"lattice must be a Lattice, got {type(lattice).__name__!r}")
         moves = lattice.changed_moves_since(self.lattice)
-        if lattice.shares_structure(self.lattice):  # write the new energies of the changed moves
-            edges = self._pos.ravel()[moves]
-            present = edges >= 0
-            self._data[edges[present]] = lattice.move_energies_j(moves[present])
-        else:  # edges appeared or vanished: a new structure
-            self._bind(lattice)
+        energies = lattice.move_energies_j(moves)  # inf: the edge vanished
+        nodes, k = np.divmod(moves, len(LATTICE_OFFSETS))
+        self._fw[nodes, k] = energies
+        self._rw[nodes + self._delta[k], k] = energies  # a changed move stays on the node grid
         self.lattice = lattice
         heads = moves // len(LATTICE_OFFSETS)  # ascending
         if heads.size:
@@ -221,16 +214,15 @@ class IncrementalPlanner:
         nodes, objective = np.empty(0, np.int64), math.inf
         self.expanded = 0
         if src.size and self._dst.size:
-            pos, data = self._pos, self._data
             sx, sy, h_per_m = float(start[0]), float(start[1]), max(float(cost.min_energy_per_metre_j), 0.0)
             dstar_rekey(self._g, self._rhs, self._key1, self._key2, self._nodes, self._where, self._size,
                         self._col_x, self._row_y, self._nj, sx, sy, h_per_m)
             best, self.expanded, self._size = dstar_search(
-                src, e_src, pos, self._rev, data, self._delta, self._g, self._rhs, self._exit, self._key1, self._key2,
+                src, e_src, self._fw, self._rw, self._delta, self._g, self._rhs, self._exit, self._key1, self._key2,
                 self._nodes, self._where, self._size, self._col_x, self._row_y, self._nj, sx, sy, h_per_m,
             )
             if best < e_direct:
-                nodes, objective = dstar_path(src, e_src, pos, data, self._delta, self._g, self._exit)
+                nodes, objective = dstar_path(src, e_src, self._fw, self._delta, self._g, self._exit)
         if not objective < e_direct:  # the direct segment (or nothing) is best, as in shortest_path
             nodes, objective = np.empty(0, np.int64), e_direct
         return self.lattice.path_via(start, nodes, goal, float(objective), "energy", time.perf_counter() - t0)

@@ -8,10 +8,10 @@ cost-to-goal of node ``u`` found so far, ``rhs[u]`` its one-step look-ahead
 nodes with ``g != rhs`` under the lexicographic key
 ``(min(g, rhs) + h(start, u), min(g, rhs))``, ``h = h_per_m * |start - u|``.
 
-The graph is the lattice's edge weights ``data`` read through two move tables: ``pos[u, k]``
-is the index in ``data`` of move ``k`` of node ``u`` (-1: no edge), which goes to
-``u + delta[k]``; ``rev[v, k]`` is the index of move ``k`` into ``v``, from ``v - delta[k]``
-(the reverse graph: the in-edges of a node in one row). Node ``u`` sits at
+The graph is two dense move tables: ``fw[u, k]`` is the weight of move ``k`` of node ``u``,
+which goes to ``u + delta[k]`` (``inf``: no such edge), and ``rw[v, k] = fw[v - delta[k], k]``
+the weight of move ``k`` into ``v`` (the reverse graph: a node's in-edges in one row). An
+edge appearing or vanishing is a weight changing to or from ``inf``. Node ``u`` sits at
 ``(col_x[u % nj], row_y[u // nj])``.
 
 State arrays (all of length ``n_nodes``, changed in place): ``g``, ``rhs``, ``exit_cost``
@@ -29,20 +29,20 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["reverse_moves", "dstar_touch", "dstar_rekey", "dstar_search", "dstar_path"]
+__all__ = ["reverse_weights", "dstar_touch", "dstar_rekey", "dstar_search", "dstar_path"]
 
 
 @numba.njit(cache=True, nogil=True)
-def reverse_moves(pos, delta):  # pragma: no cover - compiled
-    """The reverse move table ``rev[v, k] = pos[v - delta[k], k]`` (-1: no move ``k`` into ``v``)."""
-    n, nd = pos.shape
-    rev = np.full((n, nd), -1, np.int32)
+def reverse_weights(fw, delta):  # pragma: no cover - compiled
+    """The reverse move table ``rw[v, k] = fw[v - delta[k], k]`` (``inf``: no move ``k`` into ``v``)."""
+    n, nd = fw.shape
+    rw = np.full((n, nd), np.inf)
     for v in range(n):
         for k in range(nd):
             u = v - delta[k]
             if 0 <= u < n:
-                rev[v, k] = pos[u, k]
-    return rev
+                rw[v, k] = fw[u, k]
+    return rw
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -140,13 +140,13 @@ def _h(u, col_x, row_y, nj, sx, sy, h_per_m):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def _rhs_of(u, pos, data, delta, g, exit_cost):  # pragma: no cover - compiled
+def _rhs_of(u, fw, delta, g, exit_cost):  # pragma: no cover - compiled
     """One-step look-ahead of ``u``: its exit to the goal or its best move plus the target's g."""
     r = exit_cost[u]
     for k in range(delta.size):
-        p = pos[u, k]
-        if p >= 0:
-            t = data[p] + g[u + delta[k]]
+        w = fw[u, k]
+        if w < math.inf:
+            t = w + g[u + delta[k]]
             if t < r:
                 r = t
     return r
@@ -164,13 +164,13 @@ def _update_vertex(u, g, rhs, key1, key2, nodes, where, size, col_x, row_y, nj, 
 
 
 @numba.njit(cache=True, nogil=True)
-def dstar_touch(touched, pos, data, delta, g, rhs, exit_cost, key1, key2, nodes, where, size, col_x, row_y, nj,
+def dstar_touch(touched, fw, delta, g, rhs, exit_cost, key1, key2, nodes, where, size, col_x, row_y, nj,
                 sx, sy, h_per_m):  # pragma: no cover - compiled
     """Recompute ``rhs`` of the ``touched`` nodes (whose out-moves or exit cost changed, already
-    written into ``data`` / ``exit_cost``) and fix their place in the open set; return its size."""
+    written into ``fw`` / ``exit_cost``) and fix their place in the open set; return its size."""
     for t in range(touched.size):
         u = touched[t]
-        rhs[u] = _rhs_of(u, pos, data, delta, g, exit_cost)
+        rhs[u] = _rhs_of(u, fw, delta, g, exit_cost)
         size = _update_vertex(u, g, rhs, key1, key2, nodes, where, size, col_x, row_y, nj, sx, sy, h_per_m)
     return size
 
@@ -198,12 +198,13 @@ def _start_value(src, src_cost, g):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
-def dstar_search(src, src_cost, pos, rev, data, delta, g, rhs, exit_cost, key1, key2, nodes, where, size, col_x,
+def dstar_search(src, src_cost, fw, rw, delta, g, rhs, exit_cost, key1, key2, nodes, where, size, col_x,
                  row_y, nj, sx, sy, h_per_m):  # pragma: no cover - compiled
     """Expand open nodes until none can lower the virtual start's value ``min(src_cost + g[src])``:
     until the smallest open key exceeds the start's key ``(value, value)``.
 
-    The keys must be current (:func:`dstar_rekey` after the start or ``h_per_m`` moved).
+    The keys must be current (:func:`dstar_rekey` after the start or ``h_per_m`` moved: no
+    key is ever outdated, unlike D* Lite's ``k_m`` scheme).
     Returns the start's value (``inf``: the goal cannot be reached), the number of nodes
     expanded and the open set's new size.
     """
@@ -215,23 +216,18 @@ def dstar_search(src, src_cost, pos, rev, data, delta, g, rhs, exit_cost, key1, 
         a2 = key2[0]
         if _less(best, best, a1, a2):
             break  # ties are expanded: a join to the start may cost 0 (a start on a node)
-        u = nodes[0]
-        m = min(g[u], rhs[u])
-        n1 = m + _h(u, col_x, row_y, nj, sx, sy, h_per_m)
-        if _less(a1, a2, n1, m):  # an outdated key: put it back with the current one
-            size = _heap_set(key1, key2, nodes, where, size, u, n1, m)
-            continue
+        u = nodes[0]  # its key is current: every key is (re)computed with this start and h_per_m
         expanded += 1
         if g[u] > rhs[u]:  # over-consistent: settle it and offer it to its predecessors
             g[u] = rhs[u]
             size = _heap_remove(key1, key2, nodes, where, size, u)
             gu = g[u]
             for k in range(nd):
-                q = rev[u, k]
-                if q < 0:
+                w = rw[u, k]
+                if w == math.inf:
                     continue
                 p = u - delta[k]
-                t = data[q] + gu
+                t = w + gu
                 if t < rhs[p]:
                     rhs[p] = t
                     size = _update_vertex(p, g, rhs, key1, key2, nodes, where, size, col_x, row_y, nj, sx, sy,
@@ -240,12 +236,12 @@ def dstar_search(src, src_cost, pos, rev, data, delta, g, rhs, exit_cost, key1, 
             g_old = g[u]
             g[u] = math.inf
             for k in range(nd):
-                q = rev[u, k]
-                if q < 0:
+                w = rw[u, k]
+                if w == math.inf:
                     continue
                 p = u - delta[k]
-                if rhs[p] == data[q] + g_old:
-                    rhs[p] = _rhs_of(p, pos, data, delta, g, exit_cost)
+                if rhs[p] == w + g_old:
+                    rhs[p] = _rhs_of(p, fw, delta, g, exit_cost)
                     size = _update_vertex(p, g, rhs, key1, key2, nodes, where, size, col_x, row_y, nj, sx, sy,
                                           h_per_m)
             size = _update_vertex(u, g, rhs, key1, key2, nodes, where, size, col_x, row_y, nj, sx, sy, h_per_m)
@@ -253,7 +249,7 @@ def dstar_search(src, src_cost, pos, rev, data, delta, g, rhs, exit_cost, key1, 
 
 
 @numba.njit(cache=True, nogil=True)
-def dstar_path(src, src_cost, pos, data, delta, g, exit_cost):  # pragma: no cover - compiled
+def dstar_path(src, src_cost, fw, delta, g, exit_cost):  # pragma: no cover - compiled
     """Follow the best successors from the virtual start to the goal after :func:`dstar_search`.
 
     Returns the lattice nodes of the route (empty if none) and its objective: the joining
@@ -277,20 +273,20 @@ def dstar_path(src, src_cost, pos, data, delta, g, exit_cost):  # pragma: no cov
         chain[count] = u
         count += 1
         be = exit_cost[u]
-        bq = -1
+        bw = math.inf
         bv = -1
         for k in range(delta.size):
-            q = pos[u, k]
-            if q < 0:
+            w = fw[u, k]
+            if w == math.inf:
                 continue
             v = u + delta[k]
-            t = data[q] + g[v]
+            t = w + g[v]
             if t < be:
                 be = t
-                bq = q
+                bw = w
                 bv = v
-        if bq < 0:
+        if bv < 0:
             return chain[:count], total + exit_cost[u]
-        total += data[bq]
+        total += bw
         u = bv
     return chain[:0], math.inf  # no descent to the goal (a zero-energy cycle): not expected
