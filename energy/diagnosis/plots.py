@@ -1,8 +1,18 @@
 """Figures of a diagnosis: effect ranking, waterfall, and :func:`plot_diagnosis`, which draws every figure.
 
-Each figure is a public function that draws one PNG through :func:`terrain.atomic.save_figure`
-and returns its path; the output path is checked before anything is drawn. The figures of
-where the gap lies (residual over time, by regime, on the map) are in
+Each figure is a public function. Where it goes (the rule of every terrawatt figure,
+:mod:`terrain.plot_target`): give exactly one of ``path`` or ``ax=`` (single-panel figures:
+the effect ranking, the gap map) / ``axes=`` (a sequence of one matplotlib Axes per panel).
+With ``path`` the function makes its own figure, writes one PNG through
+:func:`terrain.atomic.save_figure` and returns its path; the output path is checked before
+anything is drawn. With ``ax`` / ``axes`` it draws into the caller's axes, writes nothing,
+leaves the caller's figure layout alone (no ``tight_layout``) and returns the axes (a tuple
+for ``axes``), so figures can be composed. A figure's suptitle belongs to the figure it makes
+and is drawn only with ``path``; with ``axes`` it is left out (the panels keep their own
+titles, labels and legends). A colour bar is attached to ``ax.figure``, beside ``ax``.
+:func:`plot_diagnosis` writes a folder of figures and stays path-based.
+
+The figures of where the gap lies (residual over time, by regime, on the map) are in
 :mod:`energy.diagnosis.plots_gap` and re-exported here. :func:`plot_diagnosis` *skips* a
 figure whose data is missing (no poses or no map: no map figure) and says why in
 :attr:`DiagnosisFigures.skipped`; called on its own, such a figure raises
@@ -23,12 +33,12 @@ import numpy as np
 from terrain.atomic import check_output_path
 from terrain.checks import check_choice, check_int, fmt_number
 from terrain.errors import DataError, FigureWarning, InvalidParameterError
+from terrain.plot_target import check_ax, check_axes, check_plot_target
 from terrain.terrain_map import TerrainMap
 
 from .plots_gap import (
     REGIME_PANELS,
     checked_diagnosis,
-    figure_target,
     log_list,
     missing_map_reason,
     missing_regimes_reason,
@@ -63,37 +73,69 @@ FIGURES: dict[str, str] = {
 }
 
 _KIND_COLOURS = {"physics": "#3182bd", "parameter": "#31a354", "measurement": "#756bb1", "learned": "#969696"}
+_WATERFALL_PANELS = (("charge_error_pct", "whole-set charge error (%)", "#de2d26"),
+                     ("section_error_pct", "8 s section error (%)", "#fd8d3c"),
+                     ("rmse_a", "RMSE (A)", "#3182bd"))
 _NO_RANKING = "no effect ranking: no candidate effect was scored (every one was skipped for these data)"
 
 
 # ----------------------------------------------------------------- effect ranking
-def plot_effect_ranking(diagnosis: Diagnosis, path: str | os.PathLike[str], *, max_effects: int = 20,
-                        dpi: int = 110) -> Path:
+def plot_effect_ranking(diagnosis: Diagnosis, path: str | os.PathLike[str] | None = None, *, ax: Any = None,
+                        max_effects: int = 20, dpi: int = 110) -> Path | Any:
     """The effect ranking: what each candidate adds to the chosen effects above it (held-out, 95 % interval) and its shrink alone.
 
     Horizontal bars, best first, coloured by kind; effects the greedy selection chose are
     marked with their order, the learned correction is labelled as such.
 
+    Parameters
+    ----------
+    diagnosis : Diagnosis
+    path : path-like, optional
+        PNG file to write (or give ``ax``).
+    ax : matplotlib Axes, optional
+        Draw into these axes instead of writing a file.
+    max_effects : int
+        Draw the best this many candidates (>= 1).
+    dpi : int
+        Resolution of the PNG (with ``path``).
+
+    Returns
+    -------
+    pathlib.Path or Axes
+        The written file, or the axes drawn into.
+
     Raises
     ------
     InvalidParameterError
-        Not a Diagnosis; a bad ``path`` (checked before drawing) or ``max_effects``.
+        Not a Diagnosis; both or neither of ``path`` and ``ax``; a bad ``path`` (checked
+        before drawing), ``ax`` or ``max_effects``.
     DataError
         No candidate was scored.
     """
     diagnosis = checked_diagnosis(diagnosis)
-    target = figure_target(path)
+    target = check_plot_target(path, ax)
+    if target is None:
+        ax = check_ax(ax)
     max_effects = check_int("max_effects", max_effects, low=1)
     dpi = check_int("dpi", dpi, low=10, high=1200)
     if not diagnosis.ranking:
         raise DataError(_NO_RANKING)
     ranking = list(diagnosis.ranking[:max_effects])
-    order = {n: k + 1 for k, n in enumerate(diagnosis.chosen)}
+    if target is None:
+        _draw_ranking(ax, diagnosis, ranking)
+        return ax
 
-    plt = pyplot()
+    fig, ax = pyplot().subplots(figsize=(9, 0.38 * len(ranking) + 1.8))
+    _draw_ranking(ax, diagnosis, ranking)
+    fig.tight_layout()
+    return save_closed(fig, target, dpi)
+
+
+def _draw_ranking(ax: Any, diagnosis: Diagnosis, ranking: Sequence[Any]) -> None:
+    """The bars of :func:`plot_effect_ranking`, drawn into ``ax``."""
     from matplotlib.patches import Patch
 
-    fig, ax = plt.subplots(figsize=(9, 0.38 * len(ranking) + 1.8))
+    order = {n: k + 1 for k, n in enumerate(diagnosis.chosen)}
     y = np.arange(len(ranking))
     shrink = np.array([s.added_pct for s in ranking])
     lo = np.array([s.added_interval_pct[0] for s in ranking])
@@ -126,30 +168,55 @@ def plot_effect_ranking(diagnosis: Diagnosis, path: str | os.PathLike[str], *, m
     chosen = ", ".join(diagnosis.chosen) if diagnosis.chosen else "none"
     ax.set_title(f"candidate effects, added greedily{more}; chosen: {chosen}", fontsize=10)
     ax.grid(axis="x", alpha=0.3)
-    fig.tight_layout()
-    return save_closed(fig, target, dpi)
 
 
 # ----------------------------------------------------------------- waterfall
-def plot_waterfall(diagnosis: Diagnosis, path: str | os.PathLike[str], *, dpi: int = 110) -> Path:
+def plot_waterfall(diagnosis: Diagnosis, path: str | os.PathLike[str] | None = None, *,
+                   axes: Sequence[Any] | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:
     """The held-out waterfall: charge error (%), 8 s section error (%) and RMSE (A) after each added effect.
+
+    Parameters
+    ----------
+    diagnosis : Diagnosis
+    path : path-like, optional
+        PNG file to write (or give ``axes``).
+    axes : sequence of 3 matplotlib Axes, optional
+        Charge error, section error, RMSE: draw into these instead of writing a file.
+    dpi : int
+        Resolution of the PNG (with ``path``).
+
+    Returns
+    -------
+    pathlib.Path or tuple of 3 Axes
+        The written file, or the axes drawn into.
 
     Raises
     ------
     InvalidParameterError
-        Not a Diagnosis; a bad ``path`` (checked before drawing).
+        Not a Diagnosis; both or neither of ``path`` and ``axes``; a bad ``path`` (checked
+        before drawing); not 3 axes.
     """
     diagnosis = checked_diagnosis(diagnosis)
-    target = figure_target(path)
+    target = check_plot_target(path, axes, axes_name="axes")
     dpi = check_int("dpi", dpi, low=10, high=1200)
     steps = diagnosis.waterfall
-    plt = pyplot()
-    fig, axes = plt.subplots(1, 3, figsize=(4.0 * 3, 3.6 + 0.12 * len(steps)))
+    if target is None:
+        panels = check_axes(axes, 3, what="charge error, section error, RMSE")
+        _draw_waterfall(panels, steps)
+        return panels
+
+    fig, panels = pyplot().subplots(1, 3, figsize=(4.0 * 3, 3.6 + 0.12 * len(steps)))
+    _draw_waterfall(panels, steps)
+    held = "held-out runs" if diagnosis.split == "runs" else "held-out blocks"
+    fig.suptitle(f"how far the gap shrinks on {held}, effect by effect", fontsize=11)
+    fig.tight_layout()
+    return save_closed(fig, target, dpi)
+
+
+def _draw_waterfall(panels: Sequence[Any], steps: Sequence[Any]) -> None:
+    """The three panels of :func:`plot_waterfall`, drawn into ``panels``."""
     x = np.arange(len(steps))
-    panels = (("charge_error_pct", "whole-set charge error (%)", "#de2d26"),
-              ("section_error_pct", "8 s section error (%)", "#fd8d3c"),
-              ("rmse_a", "RMSE (A)", "#3182bd"))
-    for ax, (attr, title, colour) in zip(axes, panels):
+    for ax, (attr, title, colour) in zip(panels, _WATERFALL_PANELS):
         vals = np.array([getattr(w, attr) for w in steps], dtype=float)
         ax.bar(x, vals, color=colour, alpha=0.85)
         for k, v in enumerate(vals):
@@ -159,10 +226,6 @@ def plot_waterfall(diagnosis: Diagnosis, path: str | os.PathLike[str], *, dpi: i
         ax.set_title(title, fontsize=10)
         ax.margins(y=0.15)
         ax.grid(axis="y", alpha=0.3)
-    held = "held-out runs" if diagnosis.split == "runs" else "held-out blocks"
-    fig.suptitle(f"how far the gap shrinks on {held}, effect by effect", fontsize=11)
-    fig.tight_layout()
-    return save_closed(fig, target, dpi)
 
 
 # ----------------------------------------------------------------- all of them

@@ -1,6 +1,7 @@
 """Figures of where a gap lies: residual over time per side, gap by regime, gap on the map.
 
-The figure helpers shared with :mod:`energy.diagnosis.plots` (pyplot on Agg, save and
+Where a figure goes is the rule of :mod:`energy.diagnosis.plots` (give ``path`` or
+``ax=`` / ``axes=``; see there). The figure helpers shared with it (pyplot on Agg, save and
 close, argument checks, the reasons a figure's data is missing) live here too.
 """
 
@@ -14,9 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from terrain.atomic import check_output_path, save_figure
+from terrain.atomic import save_figure
 from terrain.checks import check_int, check_real, fmt_number, fmt_pct
 from terrain.errors import DataError, GridMismatchError, InvalidParameterError
+from terrain.plot_target import check_ax, check_axes, check_plot_target
 from terrain.terrain_map import TerrainMap
 
 from ..logs import InteractionLog
@@ -40,7 +42,6 @@ __all__ = [
     "save_closed",
     "checked_diagnosis",
     "log_list",
-    "figure_target",
     "regime_rows",
     "missing_regimes_reason",
     "missing_map_reason",
@@ -94,13 +95,6 @@ def log_list(logs: Any) -> list[Any]:
     return list(logs)
 
 
-def figure_target(path: Any) -> Path:
-    """A figure's output path, checked before drawing (not a folder, not under a file)."""
-    if not isinstance(path, (str, os.PathLike)):
-        raise InvalidParameterError(f"path must be a file name, got {type(path).__name__!r}")
-    return check_output_path(path, "path")
-
-
 # ----------------------------------------------------------------- residual over time
 def _runs_to_draw(gaps: Sequence[float], runs: Sequence[int] | None, max_runs: int) -> list[int]:
     n = len(gaps)
@@ -117,9 +111,10 @@ def _runs_to_draw(gaps: Sequence[float], runs: Sequence[int] | None, max_runs: i
     return chosen
 
 
-def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str], *, corrected: Any = None,
-                       runs: Sequence[int] | None = None, max_runs: int = 4, section_s: float = DEFAULT_SECTION_S,
-                       window_samples: int = DEFAULT_SMOOTHING_SAMPLES, dpi: int = 110) -> Path:
+def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str] | None = None, *,
+                       axes: Sequence[Any] | None = None, corrected: Any = None, runs: Sequence[int] | None = None,
+                       max_runs: int = 4, section_s: float = DEFAULT_SECTION_S,
+                       window_samples: int = DEFAULT_SMOOTHING_SAMPLES, dpi: int = 110) -> Path | tuple[Any, ...]:
     """Residual current (measured - predicted) over time per side, one panel per run, sections shaded.
 
     Each panel shows the left and right residual (thin) and their moving medians (thick);
@@ -132,8 +127,11 @@ def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str]
     logs : InteractionLog or sequence of InteractionLog
     predictions : array_like (N, 2) or sequence of them
         ``[left, right]`` predicted current (A) of the model as given, per log.
-    path : path-like
-        PNG file to write.
+    path : path-like, optional
+        PNG file to write (or give ``axes``).
+    axes : sequence of matplotlib Axes, optional
+        One per run drawn (``len(runs)``, or by default ``min(max_runs, number of logs)``):
+        draw into these instead of writing a file.
     corrected : sequence of array_like (N, 2), optional
         Predictions of the corrected model, per log (label says "in-sample" when it was
         fitted on these logs, as :attr:`Diagnosis.corrected_model` is).
@@ -147,20 +145,23 @@ def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str]
     window_samples : int
         Moving-median window (samples), >= 1.
     dpi : int
+        Resolution of the PNG (with ``path``).
 
     Returns
     -------
-    pathlib.Path
+    pathlib.Path or tuple of Axes
+        The written file, or the axes drawn into.
 
     Raises
     ------
     InvalidParameterError
-        ``path`` is a folder or lies under a file (checked before drawing); bad logs,
-        predictions, runs or numbers.
+        Both or neither of ``path`` and ``axes``; ``path`` is a folder or lies under a file
+        (checked before drawing); not one axes per run drawn; bad logs, predictions, runs
+        or numbers.
     DataError
         A log with fewer than 2 samples; non-finite predictions.
     """
-    target = figure_target(path)
+    target = check_plot_target(path, axes, axes_name="axes")
     max_runs = check_int("max_runs", max_runs, low=1, high=8)
     section_s = check_real("section_s", section_s, low=0.0, low_inclusive=False)
     window_samples = check_int("window_samples", window_samples, low=1)
@@ -169,10 +170,26 @@ def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str]
     after = checked_pairs(items, corrected)[1] if corrected is not None else None
     sample_gaps = [sample_gap_mah(log, p) for log, p in zip(items, preds)]
     chosen = _runs_to_draw([float(g.sum()) for g in sample_gaps], runs, max_runs)
+    if target is None:
+        what = f"one per run drawn: runs {', '.join(map(str, chosen))}; choose them with runs= or max_runs="
+        panels = check_axes(axes, len(chosen), what=what)
+        _draw_residual_runs(panels, items, preds, after, sample_gaps, chosen, section_s, window_samples)
+        return panels
 
     plt = pyplot()
-    fig, axes = plt.subplots(len(chosen), 1, figsize=(10, 2.6 * len(chosen) + 0.8), squeeze=False)
-    for ax, i in zip(axes[:, 0], chosen):
+    fig, grid = plt.subplots(len(chosen), 1, figsize=(10, 2.6 * len(chosen) + 0.8), squeeze=False)
+    _draw_residual_runs(grid[:, 0], items, preds, after, sample_gaps, chosen, section_s, window_samples)
+    which = "chosen" if runs is not None else "largest |gap|"
+    fig.suptitle(f"residual current (measured - predicted): runs {', '.join(map(str, chosen))} of {len(items)} ({which})")
+    fig.tight_layout()
+    return save_closed(fig, target, dpi)
+
+
+def _draw_residual_runs(panels: Sequence[Any], items: Sequence[InteractionLog], preds: Sequence[np.ndarray],
+                        after: Sequence[np.ndarray] | None, sample_gaps: Sequence[np.ndarray], chosen: Sequence[int],
+                        section_s: float, window_samples: int) -> None:
+    """The panels of :func:`plot_residual_time`, run ``chosen[k]`` into ``panels[k]``."""
+    for ax, i in zip(panels, chosen):
         log, pred = items[i], preds[i]
         t = log.time_s - log.time_s[0]
         res = np.column_stack([log.current_left_a, log.current_right_a]) - pred
@@ -206,13 +223,9 @@ def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str]
         ax.set_title(f"run {i}: {src}, {log.meta.ground_label or 'unknown ground'}, gap "
                      f"{fmt_number(float(sample_gaps[i].sum()), 3)} mAh", fontsize=9, loc="left", pad=12)
         ax.grid(alpha=0.3)
-    axes[0, 0].legend(loc="upper right", fontsize=7, ncol=2)
-    axes[-1, 0].set_xlabel(f"time from the run's start (s); shaded: {fmt_number(section_s)} s sections by their gap "
-                         "(mAh; red: predicted too little, blue: too much)")
-    which = "chosen" if runs is not None else "largest |gap|"
-    fig.suptitle(f"residual current (measured - predicted): runs {', '.join(map(str, chosen))} of {len(items)} ({which})")
-    fig.tight_layout()
-    return save_closed(fig, target, dpi)
+    panels[0].legend(loc="upper right", fontsize=7, ncol=2)
+    panels[-1].set_xlabel(f"time from the run's start (s); shaded: {fmt_number(section_s)} s sections by their gap "
+                          "(mAh; red: predicted too little, blue: too much)")
 
 
 # ----------------------------------------------------------------- gap by regime
@@ -229,36 +242,70 @@ def regime_rows(diagnosis: Diagnosis) -> dict[str, list[Any]]:
     return out
 
 
-def plot_gap_by_regime(diagnosis: Diagnosis, path: str | os.PathLike[str], *, dpi: int = 110) -> Path:
+def plot_gap_by_regime(diagnosis: Diagnosis, path: str | os.PathLike[str] | None = None, *,
+                       axes: Sequence[Any] | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:
     """The net gap (mAh) by operating regime: one bar chart per dimension of :data:`REGIME_PANELS`.
 
     Bars are the net signed gap of each slice (measured - predicted charge, the model as
     given, all logs) from :attr:`Diagnosis.localisation`, with its 95 % bootstrap interval
     as an error bar, labelled with the gap as a percentage of the slice's own measured
     charge and the time behind it; a dimension the logs cannot tell (only ``"unknown"``)
-    gets no panel and is named in the figure's note.
+    gets no panel and is named in the figure's note (drawn with ``path``).
+
+    Parameters
+    ----------
+    diagnosis : Diagnosis
+    path : path-like, optional
+        PNG file to write (or give ``axes``).
+    axes : sequence of matplotlib Axes, optional
+        One per dimension with a known slice (the keys of :func:`regime_rows`, in the
+        order of :data:`REGIME_PANELS`): draw into these instead of writing a file.
+    dpi : int
+        Resolution of the PNG (with ``path``).
+
+    Returns
+    -------
+    pathlib.Path or tuple of Axes
+        The written file, or the axes drawn into.
 
     Raises
     ------
     InvalidParameterError
-        Not a Diagnosis; a bad ``path`` (checked before drawing).
+        Not a Diagnosis; both or neither of ``path`` and ``axes``; a bad ``path``
+        (checked before drawing); not one axes per dimension drawn.
     DataError
         No dimension has a known slice.
     """
     diagnosis = checked_diagnosis(diagnosis)
-    target = figure_target(path)
+    target = check_plot_target(path, axes, axes_name="axes")
     dpi = check_int("dpi", dpi, low=10, high=1200)
     why = missing_regimes_reason(diagnosis)
     if why:
         raise DataError(why)
     rows = regime_rows(diagnosis)
-    missing = [d for d in REGIME_PANELS if d not in rows]
+    if target is None:
+        panels = check_axes(axes, len(rows), what="one per dimension: " + ", ".join(map(repr, rows)))
+        _draw_regimes(panels, rows)
+        return panels
 
     plt = pyplot()
     ncols = 3 if len(rows) > 2 else len(rows)
     nrows = -(-len(rows) // ncols)
-    fig, axes = plt.subplots(nrows, ncols, figsize=(4.2 * ncols, 3.2 * nrows + 0.6), squeeze=False)
-    for ax, (dim, rs) in zip(axes.ravel(), rows.items()):
+    fig, grid = plt.subplots(nrows, ncols, figsize=(4.2 * ncols, 3.2 * nrows + 0.6), squeeze=False)
+    _draw_regimes(grid.ravel()[:len(rows)], rows)
+    for ax in grid.ravel()[len(rows):]:
+        ax.set_visible(False)
+    missing = [d for d in REGIME_PANELS if d not in rows]
+    note = f"; not known from these logs: {', '.join(missing)}" if missing else ""
+    fig.suptitle(f"where the gap lies (model as given, all logs; bar = net measured - predicted charge, "
+                 f"95 % interval over {diagnosis.localisation_units}){note}", fontsize=10)
+    fig.tight_layout()
+    return save_closed(fig, target, dpi)
+
+
+def _draw_regimes(panels: Sequence[Any], rows: dict[str, list[Any]]) -> None:
+    """The panels of :func:`plot_gap_by_regime`, one dimension of ``rows`` per axes."""
+    for ax, (dim, rs) in zip(panels, rows.items()):
         y = np.arange(len(rs))
         gaps = np.array([r.gap_mah for r in rs])
         lo = np.array([r.gap_interval_mah[0] for r in rs])
@@ -275,13 +322,6 @@ def plot_gap_by_regime(diagnosis: Diagnosis, path: str | os.PathLike[str], *, dp
         ax.set_title(dim, fontsize=10)
         ax.set_xlabel("net gap (mAh)", fontsize=8)
         ax.grid(axis="x", alpha=0.3)
-    for ax in axes.ravel()[len(rows):]:
-        ax.set_visible(False)
-    note = f"; not known from these logs: {', '.join(missing)}" if missing else ""
-    fig.suptitle(f"where the gap lies (model as given, all logs; bar = net measured - predicted charge, "
-                 f"95 % interval over {diagnosis.localisation_units}){note}", fontsize=10)
-    fig.tight_layout()
-    return save_closed(fig, target, dpi)
 
 
 def missing_regimes_reason(diagnosis: Diagnosis) -> str:
@@ -319,13 +359,14 @@ def missing_map_reason(diagnosis: Diagnosis, terrain: Any, logs: Any) -> str:
     return ""
 
 
-def plot_gap_map(diagnosis: Diagnosis, terrain: TerrainMap, path: str | os.PathLike[str], *, logs: Any = None,
-                 dpi: int = 110) -> Path:
+def plot_gap_map(diagnosis: Diagnosis, terrain: TerrainMap, path: str | os.PathLike[str] | None = None, *,
+                 ax: Any = None, logs: Any = None, dpi: int = 110) -> Path | Any:
     """The gap on the map: the ``"space"`` rows of :attr:`Diagnosis.localisation` over a hillshade and contours.
 
     Each map block (about :data:`~energy.diagnosis.regimes.SPACE_BLOCK_M` wide) the runs
     crossed is coloured by its gap (mAh, red: the model predicts too little, blue: too
-    much), over a hillshade of the elevation; ``logs`` with poses add their tracks.
+    much), over a hillshade of the elevation; ``logs`` with poses add their tracks. The
+    colour bar is attached to the axes' figure, beside the axes.
 
     Parameters
     ----------
@@ -333,15 +374,25 @@ def plot_gap_map(diagnosis: Diagnosis, terrain: TerrainMap, path: str | os.PathL
         Run with ``terrain`` on logs with poses.
     terrain : TerrainMap
         The map the diagnosis ran on.
-    path : path-like
+    path : path-like, optional
+        PNG file to write (or give ``ax``).
+    ax : matplotlib Axes, optional
+        Draw into these axes instead of writing a file.
     logs : InteractionLog or sequence of them, optional
         Tracks to draw.
     dpi : int
+        Resolution of the PNG (with ``path``).
+
+    Returns
+    -------
+    pathlib.Path or Axes
+        The written file, or the axes drawn into.
 
     Raises
     ------
     InvalidParameterError
-        Not a Diagnosis or TerrainMap; a bad ``path`` (checked before drawing).
+        Not a Diagnosis or TerrainMap; both or neither of ``path`` and ``ax``; a bad
+        ``path`` (checked before drawing) or ``ax``.
     DataError
         No map blocks (logs without poses, no terrain); the message says which.
     GridMismatchError
@@ -349,7 +400,9 @@ def plot_gap_map(diagnosis: Diagnosis, terrain: TerrainMap, path: str | os.PathL
     """
     diagnosis = checked_diagnosis(diagnosis)
     terrain = check_terrain(terrain)
-    target = figure_target(path)
+    target = check_plot_target(path, ax)
+    if target is None:
+        ax = check_ax(ax)
     dpi = check_int("dpi", dpi, low=10, high=1200)
     why = missing_map_reason(diagnosis, terrain, logs)
     if why:
@@ -362,12 +415,23 @@ def plot_gap_map(diagnosis: Diagnosis, terrain: TerrainMap, path: str | os.PathL
             raise GridMismatchError(f"map block cells ({r0}-{r1}, {c0}-{c1}) lie outside the terrain's {rows} x {cols} "
                                     "cells; give the map the diagnosis ran on")
         raster[r0:r1 + 1, c0:c1 + 1] = gap
+    if target is None:
+        _draw_gap_map(ax, terrain, raster, blocks, logs)
+        return ax
+
+    fig, ax = pyplot().subplots(figsize=(7.5, 6.4))
+    _draw_gap_map(ax, terrain, raster, blocks, logs)
+    fig.tight_layout()
+    return save_closed(fig, target, dpi)
+
+
+def _draw_gap_map(ax: Any, terrain: TerrainMap, raster: np.ndarray, blocks: list[tuple[int, int, int, int, float]],
+                  logs: Any) -> None:
+    """The map of :func:`plot_gap_map`, drawn into ``ax`` (its colour bar beside ``ax`` in ``ax.figure``)."""
     from matplotlib.colors import LightSource
 
-    plt = pyplot()
     xmin, ymin, xmax, ymax = terrain.bounds
     extent = (xmin, xmax, ymin, ymax)
-    fig, ax = plt.subplots(figsize=(7.5, 6.4))
     shade = LightSource(azdeg=315, altdeg=45).hillshade(terrain.elevation_m, vert_exag=3.0, dx=terrain.cell_size_m,
                                                          dy=terrain.cell_size_m)
     ax.imshow(shade, cmap="gray", extent=extent, origin="lower", vmin=0, vmax=1, interpolation="bilinear")
@@ -380,7 +444,7 @@ def plot_gap_map(diagnosis: Diagnosis, terrain: TerrainMap, path: str | os.PathL
     lim = float(np.nanmax(np.abs(raster))) or 1.0
     im = ax.imshow(np.ma.masked_invalid(raster), cmap="RdBu_r", vmin=-lim, vmax=lim, alpha=0.75, extent=extent,
                    origin="lower", interpolation="nearest")
-    fig.colorbar(im, ax=ax, shrink=0.8, label="gap per block (mAh, measured - predicted)")
+    ax.figure.colorbar(im, ax=ax, shrink=0.8, label="gap per block (mAh, measured - predicted)")
     if logs is not None:
         for log in log_list(logs):
             if getattr(log, "pose_xyh", None) is not None:
@@ -396,5 +460,3 @@ def plot_gap_map(diagnosis: Diagnosis, terrain: TerrainMap, path: str | os.PathL
     ax.set_ylabel("y (m)")
     ax.set_title(f"gap on the map: {len(blocks)} blocks; largest {fmt_number(gap, 3)} mAh at cells "
                  f"({r0}-{r1}, {c0}-{c1})", fontsize=10)
-    fig.tight_layout()
-    return save_closed(fig, target, dpi)

@@ -165,3 +165,69 @@ def test_a_failing_figure_warns_when_asked_and_raises_otherwise(case, tmp_path, 
     assert "RuntimeError: no canvas" in out.failed["waterfall"]
     assert sum(issubclass(w.category, FigureWarning) for w in caught) == 2
     assert np.isfinite(d.before.rmse_a)  # the diagnosis is untouched
+
+
+# ----------------------------------------------------------------- drawn into the caller's axes
+def test_each_figure_draws_into_the_callers_axes_and_writes_nothing(case, tmp_path, monkeypatch):
+    from matplotlib.figure import Figure
+
+    from energy.diagnosis.plots_gap import regime_rows
+
+    d, logs, tmap = case
+    preds = [d.corrected_model.base.predict(log) for log in logs]
+    monkeypatch.chdir(tmp_path)
+    open_before = plt.get_fignums()
+    fig = Figure()
+    ax_map, ax_rank = fig.subplots(1, 2)
+    assert plot_gap_map(d, tmap, ax=ax_map, logs=logs) is ax_map
+    assert len(ax_map.images) == 2 and len(fig.axes) == 3  # hillshade and gap, the colour bar beside ax_map
+    assert ax_map.get_title().startswith("gap on the map")
+    assert plot_effect_ranking(d, ax=ax_rank, max_effects=3) is ax_rank
+    assert len(ax_rank.patches) == 3 and ax_rank.get_title().startswith("candidate effects")
+
+    water = Figure().subplots(1, 3)
+    assert plot_waterfall(d, axes=water) == tuple(water)
+    assert [a.get_title() for a in water] == ["whole-set charge error (%)", "8 s section error (%)", "RMSE (A)"]
+    assert all(len(a.patches) == len(d.waterfall) for a in water)
+    assert water[0].figure.get_suptitle() == ""  # the suptitle belongs to a figure the function makes
+
+    runs = Figure().subplots(2, 1)
+    assert plot_residual_time(logs, preds, axes=runs, runs=[2, 0], section_s=4.0) == tuple(runs)
+    assert [a.get_title(loc="left")[:6] for a in runs] == ["run 2:", "run 0:"]
+    assert all(len(a.lines) >= 4 for a in runs)
+
+    dims = list(regime_rows(d))  # the panels drawn: the dimensions with a known slice
+    regimes = tuple(Figure().subplots(1, len(dims), squeeze=False).ravel())
+    assert plot_gap_by_regime(d, axes=regimes) == regimes
+    assert [a.get_title() for a in regimes] == dims and all(a.patches for a in regimes)
+
+    assert list(tmp_path.iterdir()) == [] and plt.get_fignums() == open_before
+
+
+def test_a_figure_takes_a_path_or_axes_of_its_panel_count(case, tmp_path):
+    from matplotlib.figure import Figure
+
+    d, logs, tmap = case
+    preds = [d.corrected_model.base.predict(log) for log in logs]
+    fig = Figure()
+    one, two = fig.subplots(1, 2)
+    calls = {
+        "ax": [lambda p, **k: plot_gap_map(d, tmap, p, logs=logs, **k), lambda p, **k: plot_effect_ranking(d, p, **k)],
+        "axes": [lambda p, **k: plot_waterfall(d, p, **k), lambda p, **k: plot_residual_time(logs, preds, p, **k),
+                 lambda p, **k: plot_gap_by_regime(d, p, **k)],
+    }
+    for name, fns in calls.items():
+        for call in fns:
+            with pytest.raises(InvalidParameterError, match=f"either path .* or {name}=.*got neither"):
+                call(None)
+            with pytest.raises(InvalidParameterError, match=f"either path or {name}=, not both"):
+                call(tmp_path / "x.png", **{name: one if name == "ax" else [one]})
+    with pytest.raises(InvalidParameterError, match="ax must be a matplotlib Axes, got 'Figure'"):
+        plot_effect_ranking(d, ax=fig)
+    with pytest.raises(InvalidParameterError, match=r"axes must hold 3 .*\(charge error, section error, RMSE\), got 2"):
+        plot_waterfall(d, axes=[one, two])
+    with pytest.raises(InvalidParameterError, match=r"one per run drawn: runs 0, 1, 2; choose them with runs="):
+        plot_residual_time(logs, preds, axes=[one, two])
+    with pytest.raises(InvalidParameterError, match=r"one per dimension: 'speed'"):
+        plot_gap_by_regime(d, axes=[one])
+    assert list(tmp_path.iterdir()) == [] and not one.has_data() and not two.has_data()
