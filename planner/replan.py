@@ -29,7 +29,7 @@ from terrain.checks import check_bool, check_seed
 from terrain.errors import InvalidParameterError
 
 from .coarse import check_free_point
-from .kernels.incremental import dstar_path, dstar_rekey, dstar_search, dstar_touch, reverse_weights
+from .kernels.incremental import dstar_path, dstar_rekey, dstar_search, dstar_touch, reverse_weights, set_moves
 from .lattice import LATTICE_OFFSETS, Lattice, LatticePath
 from .planning import REFINE_DEFAULT_SEED
 from .points import as_points
@@ -172,14 +172,10 @@ class IncrementalPlanner:
         if not isinstance(lattice, Lattice):
             raise InvalidParameterError(f"lattice must be a Lattice, got {type(lattice).__name__!r}")
         moves = lattice.changed_moves_since(self.lattice)
-        energies = lattice.move_energies_j(moves)  # inf: the edge vanished
-        nodes, k = np.divmod(moves, len(LATTICE_OFFSETS))
-        self._fw[nodes, k] = energies
-        self._rw[nodes + self._delta[k], k] = energies  # a changed move stays on the node grid
+        # new energies (inf: the edge vanished) into both tables; a changed move stays on the grid
+        moves = np.ascontiguousarray(moves, dtype=np.int64)
+        heads = set_moves(moves, lattice.move_energies_j(moves), self._fw, self._rw, self._delta)
         self.lattice = lattice
-        heads = moves // len(LATTICE_OFFSETS)  # ascending
-        if heads.size:
-            heads = heads[np.concatenate([[True], heads[1:] != heads[:-1]])]
         self._touch(heads)
         goal_side = self._set_goal_joins()
         self.touched = int(np.union1d(heads, goal_side).size)

@@ -29,7 +29,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["reverse_weights", "dstar_touch", "dstar_rekey", "dstar_search", "dstar_path"]
+__all__ = ["reverse_weights", "set_moves", "dstar_touch", "dstar_rekey", "dstar_search", "dstar_path"]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -43,6 +43,24 @@ def reverse_weights(fw, delta):  # pragma: no cover - compiled
             if 0 <= u < n:
                 rw[v, k] = fw[u, k]
     return rw
+
+
+@numba.njit(cache=True, nogil=True)
+def set_moves(moves, energies, fw, rw, delta):  # pragma: no cover - compiled
+    """Write new ``energies`` of ``moves`` (ids ``node * nd + k``, ascending, on the node grid)
+    into both tables; return the nodes they leave from, ascending, each once."""
+    nd = delta.size
+    heads = np.empty(moves.size, np.int64)
+    count = 0
+    for t in range(moves.size):
+        u = moves[t] // nd
+        k = moves[t] - u * nd
+        fw[u, k] = energies[t]
+        rw[u + delta[k], k] = energies[t]
+        if count == 0 or heads[count - 1] != u:
+            heads[count] = u
+            count += 1
+    return heads[:count]
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
