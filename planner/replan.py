@@ -130,13 +130,14 @@ class IncrementalPlanner:
         return self.lattice.cost
 
     def _set_goal_joins(self) -> np.ndarray:
-        """Join the goal to the current lattice; the nodes whose join changed (old and new)."""
+        """Join the goal to the current lattice; the nodes looked at again (old and new joins)."""
         old = self._dst
         self._exit[old] = math.inf
         self._dst, e_dst = self.lattice.joins(self.goal_xy_m, to_point=True)
         self._exit[self._dst] = e_dst
-        self._touch(np.union1d(old, self._dst))
-        return self._dst
+        nodes = np.union1d(old, self._dst)
+        self._touch(nodes)
+        return nodes
 
     def _touch(self, nodes: np.ndarray) -> None:
         g = self.goal_xy_m
@@ -177,8 +178,10 @@ class IncrementalPlanner:
         heads = set_moves(moves, lattice.move_energies_j(moves), self._fw, self._rw, self._delta)
         self.lattice = lattice
         self._touch(heads)
-        goal_side = self._set_goal_joins()
-        self.touched = int(np.union1d(heads, goal_side).size)
+        goal_side = self._set_goal_joins()  # ascending
+        at = np.minimum(np.searchsorted(heads, goal_side), max(heads.size - 1, 0))
+        both = np.count_nonzero(heads[at] == goal_side) if heads.size else 0
+        self.touched = int(heads.size + goal_side.size - both)
         return self
 
     def plan(self, start_xy_m: tuple[float, float]) -> LatticePath:
