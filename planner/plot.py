@@ -1,4 +1,11 @@
-"""Plots of routes over a terrain map: hillshade, contours, ground classes, obstacles."""
+"""Plots of routes over a terrain map: hillshade, contours, ground classes, obstacles.
+
+Where the figure goes (the rule of every terrawatt figure, :mod:`terrain.plot_target`): give
+exactly one of ``path`` or ``ax=``. With ``path``, :func:`plot_routes` makes its own figure
+(matplotlib's Agg backend), writes a PNG atomically and returns the path; with ``ax`` it
+draws into the caller's axes, writes nothing, leaves the caller's figure layout alone (no
+``tight_layout``) and returns ``ax``, so a route map can be one panel of a larger figure.
+"""
 
 from __future__ import annotations
 
@@ -6,12 +13,14 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from terrain import TerrainMap
-from terrain.atomic import check_output_path, save_figure
+from terrain.atomic import save_figure
 from terrain.checks import check_choice, check_optional_real, check_real
+from terrain.plot_target import check_ax, check_plot_target
 
 __all__ = ["RouteLine", "plot_routes", "view_bounds", "PLOT_EXTENTS"]
 
@@ -93,15 +102,16 @@ def plot_routes(
     routes: Sequence[RouteLine],
     start_xy_m: tuple[float, float],
     goal_xy_m: tuple[float, float],
-    path: str | os.PathLike[str],
+    path: str | os.PathLike[str] | None = None,
     *,
+    ax: Any = None,
     title: str | None = None,
     dpi: int = 130,
     extent: str = "routes",
     margin_frac: float = 0.15,
     max_slope_rad: float | None = None,
-) -> Path:
-    """Draw routes over the map and write a PNG.
+) -> Path | Any:
+    """Draw routes over the map and write a PNG (or draw into ``ax``).
 
     The background is a hillshade of the elevation with contour lines, the ground classes
     as a translucent colour layer (legend by name), obstacles in black, the cells steeper
@@ -118,8 +128,15 @@ def plot_routes(
         Routes to draw, in legend order.
     start_xy_m, goal_xy_m : (float, float)
         Start and goal (m).
-    path : path-like
-        Output PNG file (written atomically).
+    path : path-like, optional
+        Output PNG file (written atomically); or give ``ax``.
+    ax : matplotlib Axes, optional
+        Draw into these axes instead of writing a file (the legend sits outside them, on
+        the right).
+    title : str, optional
+        Axes title (default "terrawatt: minimum-energy route").
+    dpi : int
+        Resolution of the PNG (with ``path``).
     extent : {"routes", "map"}
         Zoom on the routes and points with a margin (default), or show the whole map.
     margin_frac : float
@@ -129,24 +146,46 @@ def plot_routes(
 
     Returns
     -------
-    Path
-        The written file.
+    Path or Axes
+        The written file, or ``ax``.
 
     Raises
     ------
     InvalidParameterError
-        ``path`` is a directory or lies under a file (checked before drawing); a bad
-        ``margin_frac`` or ``max_slope_rad``.
+        Both or neither of ``path`` and ``ax``; ``path`` is a directory or lies under a file
+        (checked before drawing); ``ax`` is not a matplotlib Axes; a bad ``margin_frac`` or
+        ``max_slope_rad``.
     UnknownNameError
         ``extent`` not one of :data:`PLOT_EXTENTS`.
     """
-    path = check_output_path(path, "path")
+    target = check_plot_target(path, ax)
+    if target is None:
+        ax = check_ax(ax)
     max_slope_rad = check_optional_real("max_slope_rad", max_slope_rad, low=0.0, low_inclusive=False)
     view = view_bounds(tmap, routes, [start_xy_m, goal_xy_m], extent=extent, margin_frac=margin_frac)
+    if target is None:
+        _draw_routes(ax, tmap, routes, start_xy_m, goal_xy_m, view, title, max_slope_rad)
+        return ax
+
     import matplotlib
 
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(10.5, 7.2))
+    _draw_routes(ax, tmap, routes, start_xy_m, goal_xy_m, view, title, max_slope_rad)
+    fig.tight_layout()
+    try:
+        return save_figure(fig, target, dpi=dpi, format="png")
+    finally:
+        plt.close(fig)
+
+
+def _draw_routes(ax: Any, tmap: TerrainMap, routes: Sequence[RouteLine], start_xy_m: tuple[float, float],
+                 goal_xy_m: tuple[float, float], view: tuple[float, float, float, float], title: str | None,
+                 max_slope_rad: float | None) -> None:
+    """The route map of :func:`plot_routes`, drawn into ``ax`` over the ``view`` box (m)."""
+    import matplotlib
     from matplotlib.colors import LightSource, ListedColormap
     from matplotlib.patches import Patch
 
@@ -162,7 +201,6 @@ def plot_routes(
     xmax, ymax = x0 + c1 * d, y0 + r1 * d
     extent_xy = (xmin, xmax, ymin, ymax)
     z = tmap.elevation_m[window]
-    fig, ax = plt.subplots(figsize=(10.5, 7.2))
     light = LightSource(azdeg=315, altdeg=45)
     shade = light.hillshade(z[::-1], vert_exag=3.0, dx=d * step, dy=d * step)
     ax.imshow(shade, cmap="gray", extent=extent_xy, origin="upper", vmin=0, vmax=1, interpolation="bilinear")
@@ -172,7 +210,7 @@ def plot_routes(
     ground = tmap.ground[window]
     if names:
         ids = sorted(names)
-        cycle = plt.get_cmap("tab10")
+        cycle = matplotlib.colormaps["tab10"]
         colours = [_GROUND_COLOURS.get(names[k], cycle(i % 10)) for i, k in enumerate(ids)]
         index = np.full(ground.shape, np.nan)
         for i, k in enumerate(ids):
@@ -236,9 +274,3 @@ def plot_routes(
     ax.set_ylabel("y (m)")
     ax.set_title(title or "terrawatt: minimum-energy route")
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, framealpha=0.9)
-    fig.tight_layout()
-
-    try:
-        return save_figure(fig, path, dpi=dpi, format="png")
-    finally:
-        plt.close(fig)

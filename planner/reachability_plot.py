@@ -1,4 +1,12 @@
-"""The reachability figure: energy field in Wh with contours, the reachable area outlined, depot and obstacles."""
+"""The reachability figure: energy field in Wh with contours, the reachable area outlined, depot and obstacles.
+
+Where the figure goes (the rule of every terrawatt figure, :mod:`terrain.plot_target`): give
+exactly one of ``path`` or ``ax=``. With ``path``, :func:`plot_reachability` makes its own
+figure (matplotlib's Agg backend), writes a PNG atomically and returns the path; with ``ax``
+it draws into the caller's axes — its colour bar attached to ``ax.figure``, beside ``ax`` —
+writes nothing, leaves the caller's figure layout alone (no ``tight_layout``) and returns
+``ax``, so the map can be one panel of a larger figure.
+"""
 
 from __future__ import annotations
 
@@ -10,13 +18,15 @@ import numpy as np
 from scipy import ndimage
 
 from energy.battery import S_PER_H
-from terrain.atomic import check_output_path, save_figure
+from terrain.atomic import save_figure
+from terrain.plot_target import check_ax, check_plot_target
 
 __all__ = ["plot_reachability"]
 
 
-def plot_reachability(reach: Any, path: str | os.PathLike[str], *, title: str | None = None, dpi: int = 130) -> Path:
-    """Draw a :class:`~planner.Reachability` and write a PNG atomically.
+def plot_reachability(reach: Any, path: str | os.PathLike[str] | None = None, *, ax: Any = None,
+                      title: str | None = None, dpi: int = 130) -> Path | Any:
+    """Draw a :class:`~planner.Reachability` and write a PNG atomically (or draw into ``ax``).
 
     The field is the energy the budget applies to (round trip or one way) in Wh, with
     labelled contour lines in Wh; the edge between the cells reachable within
@@ -28,26 +38,48 @@ def plot_reachability(reach: Any, path: str | os.PathLike[str], *, title: str | 
     ----------
     reach : Reachability
         The result to draw.
-    path : path-like
-        Output PNG (checked before drawing).
+    path : path-like, optional
+        Output PNG (checked before drawing); or give ``ax``.
+    ax : matplotlib Axes, optional
+        Draw into these axes instead of writing a file (the colour bar goes beside them,
+        the legend below them).
     title : str, optional
-        Figure title (default: what is drawn and the reachable area).
+        Axes title (default: what is drawn and the reachable area).
+    dpi : int
+        Resolution of the PNG (with ``path``).
 
     Returns
     -------
-    Path
-        The written file.
+    Path or Axes
+        The written file, or ``ax``.
 
     Raises
     ------
     InvalidParameterError
-        ``path`` is a folder or lies under a file.
+        Both or neither of ``path`` and ``ax``; ``path`` is a folder or lies under a file;
+        ``ax`` is not a matplotlib Axes.
     """
-    path = check_output_path(path, "path")
+    target = check_plot_target(path, ax)
+    if target is None:
+        _draw_reachability(check_ax(ax), reach, title)
+        return ax
+
     import matplotlib
 
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(9.5, 7.2))
+    _draw_reachability(ax, reach, title)
+    fig.tight_layout()
+    try:
+        return save_figure(fig, target, dpi=dpi, format="png")
+    finally:
+        plt.close(fig)
+
+
+def _draw_reachability(ax: Any, reach: Any, title: str | None) -> None:
+    """The map of :func:`plot_reachability`, drawn into ``ax`` (its colour bar beside ``ax`` in ``ax.figure``)."""
     from matplotlib.colors import ListedColormap
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
@@ -58,7 +90,6 @@ def plot_reachability(reach: Any, path: str | os.PathLike[str], *, title: str | 
     extent = (xmin, xmax, ymin, ymax)
     energy_wh = reach.energy_j / S_PER_H
     finite = np.isfinite(energy_wh)
-    fig, ax = plt.subplots(figsize=(9.5, 7.2))
     handles: list = []
     cut_off = ~finite & ~reach.blocked
     if cut_off.any():
@@ -69,7 +100,7 @@ def plot_reachability(reach: Any, path: str | os.PathLike[str], *, title: str | 
         im = ax.imshow(np.ma.masked_invalid(energy_wh), cmap="viridis", extent=extent, origin="lower",
                        interpolation="nearest")
         what = "round trip" if reach.round_trip else "from the depot"
-        fig.colorbar(im, ax=ax, shrink=0.85, label=f"least energy {what} (Wh)")
+        ax.figure.colorbar(im, ax=ax, shrink=0.85, label=f"least energy {what} (Wh)")
         lo, hi = float(energy_wh[finite].min()), float(energy_wh[finite].max())
         if hi > lo:
             levels = MaxNLocator(nbins=10).tick_values(lo, hi)
@@ -111,8 +142,3 @@ def plot_reachability(reach: Any, path: str | os.PathLike[str], *, title: str | 
     trip = "round trip" if reach.round_trip else "one way"
     ax.set_title(title or f"terrawatt: energy reachability ({trip})")
     ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(0.0, -0.08), ncol=2, fontsize=8, framealpha=0.9)
-    fig.tight_layout()
-    try:
-        return save_figure(fig, path, dpi=dpi, format="png")
-    finally:
-        plt.close(fig)

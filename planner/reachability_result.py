@@ -310,10 +310,20 @@ class Reachability:
         except (TypeError, ValueError) as exc:
             raise FileFormatError(f"reachability file {str(p)!r} has malformed content: {exc}") from exc
 
-    def plot(self, path: str | os.PathLike[str], *, title: str | None = None, dpi: int = 130) -> Path:
+    def plot(self, path: str | os.PathLike[str] | None = None, *, ax: Any = None, title: str | None = None,
+             dpi: int = 130) -> Path | Any:
         """Draw the energy field (Wh, with contours), the reachable area outlined, the depot and
-        the blocked cells; write a PNG atomically (:func:`planner.reachability_plot.plot_reachability`)."""
-        return plot_reachability(self, path, title=title, dpi=dpi)
+        the blocked cells (:func:`planner.reachability_plot.plot_reachability`).
+
+        Give exactly one of ``path`` (write a PNG atomically and return the path) or ``ax``
+        (draw into these matplotlib axes, write nothing and return them).
+
+        Raises
+        ------
+        InvalidParameterError
+            Both or neither of ``path`` and ``ax``; a bad ``path`` or ``ax``.
+        """
+        return plot_reachability(self, path, ax=ax, title=title, dpi=dpi)
 
     def __repr__(self) -> str:
         return (
