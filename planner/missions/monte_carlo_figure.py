@@ -1,54 +1,101 @@
-"""The figure of a Monte Carlo mission study: energy histogram with P50/P90/P99 and the exceedance curve (written atomically)."""
+"""The figure of a Monte Carlo mission study: energy histogram with P50/P90/P99 and the exceedance curve.
+
+Where the figure goes (the rule of every terrawatt figure, :mod:`terrain.plot_target`): give
+exactly one of ``path`` or ``axes=`` (2 matplotlib Axes: histogram, exceedance curve). With
+``path``, :func:`plot_monte_carlo` makes its own figure (matplotlib's object API on the Agg
+canvas, no pyplot), writes a PNG atomically and returns the path; with ``axes`` it draws into
+the caller's axes, writes nothing, leaves the caller's figure layout alone (no
+``tight_layout``) and returns the axes as a tuple, so the study can be part of a larger
+figure. The suptitle (the reserve risk and the percentiles) belongs to the figure and is
+drawn only with ``path``; with ``axes`` a ``title`` you give goes on the first axes.
+"""
 
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from terrain.atomic import check_output_path, save_figure
+from terrain.atomic import save_figure
 from terrain.errors import InvalidParameterError
+from terrain.plot_target import check_axes, check_plot_target
 
 __all__ = ["plot_monte_carlo"]
 
 
-def plot_monte_carlo(result: Any, path: str | os.PathLike[str], *, title: str | None = None, dpi: int = 110) -> Path:
-    """Write a PNG of a :class:`~planner.missions.monte_carlo_result.MonteCarloResult`.
+def plot_monte_carlo(result: Any, path: str | os.PathLike[str] | None = None, *, axes: Sequence[Any] | None = None,
+                     title: str | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:
+    """Write a PNG of a :class:`~planner.missions.monte_carlo_result.MonteCarloResult` (or draw into ``axes``).
 
     Left: histogram of the mission energy (Wh) with its P50, P90 and P99, the forecast
     energy and the battery's usable energy above the reserve (nominal capacity), missions
     that went below the reserve stacked in red. Right: the exceedance curve, the
     probability that a mission needs more than a given energy (log scale).
 
+    Parameters
+    ----------
+    result : MonteCarloResult
+    path : path-like, optional
+        PNG file to write (or give ``axes``).
+    axes : sequence of 2 matplotlib Axes, optional
+        Histogram, exceedance curve: draw into these instead of writing a file.
+    title : str, optional
+        Figure title (default: the reserve risk and the percentiles); with ``axes``, the
+        first axes' title (none by default).
+    dpi : int
+        Resolution of the PNG (with ``path``).
+
     Returns
     -------
-    Path
-        The written file.
+    Path or tuple of 2 Axes
+        The written file, or the axes drawn into.
 
     Raises
     ------
     InvalidParameterError
-        ``path`` cannot be written (a folder, or under a file); checked before drawing;
-        every mission failed (nothing to draw).
+        Both or neither of ``path`` and ``axes``; ``path`` cannot be written (a folder, or
+        under a file) or not 2 axes, checked before drawing; every mission failed (nothing
+        to draw).
     """
-    target = check_output_path(path, "path")
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
+    target = check_plot_target(path, axes, axes_name="axes")
+    if target is None:
+        axes = check_axes(axes, 2, what="histogram, exceedance curve")
     done = np.asarray(result.completed)
     if not done.any():
         raise InvalidParameterError(f"all {result.n} missions failed; there is no energy to draw")
+    if target is None:
+        _draw_monte_carlo(axes, result)
+        if title:
+            axes[0].set_title(title)
+        return axes
+
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(12.0, 4.4))
+    FigureCanvasAgg(fig)
+    _draw_monte_carlo(fig.subplots(1, 2), result)
+    pct = result.energy_percentiles_wh
+    failed = f" ({result.n_failed} failed)" if result.n_failed else ""
+    fig.suptitle(title or f"{result.n} missions{failed}: P(below the {result.battery.min_reserve_pct:g} % reserve) = "
+                 f"{100 * result.p_below_reserve:.1f} %; P50 {pct['p50']:.2f} / P90 {pct['p90']:.2f} / "
+                 f"P99 {pct['p99']:.2f} Wh", fontsize=10)
+    fig.tight_layout()
+    return save_figure(fig, target, dpi=dpi)
+
+
+def _draw_monte_carlo(panels: Sequence[Any], result: Any) -> None:
+    """The histogram and the exceedance curve of :func:`plot_monte_carlo`, drawn into ``panels``."""
+    ax_h, ax_x = panels
+    done = np.asarray(result.completed)
     e_wh = np.asarray(result.energy_j)[done] / 3600.0
     below = np.asarray(result.below_reserve)[done]
     pct = result.energy_percentiles_wh
     usable_wh = result.battery.usable_energy_wh
     planned_wh = result.predicted_energy_j / 3600.0
-
-    fig = Figure(figsize=(12.0, 4.4))
-    FigureCanvasAgg(fig)
-    ax_h, ax_x = fig.subplots(1, 2)
     bins = np.histogram_bin_edges(e_wh, bins=min(50, max(10, e_wh.size // 20)))
     ax_h.hist([e_wh[~below], e_wh[below]], bins=bins, stacked=True, color=["tab:blue", "tab:red"],
               label=["reserve kept", "below the reserve"])
@@ -82,10 +129,3 @@ def plot_monte_carlo(result: Any, path: str | os.PathLike[str], *, title: str | 
     ax_x.set_xlim(*xlim)
     ax_x.set_xlabel("mission energy (Wh)")
     ax_x.set_ylabel("P(energy > x)")
-    p = result.p_below_reserve
-    failed = f" ({result.n_failed} failed)" if result.n_failed else ""
-    fig.suptitle(title or f"{result.n} missions{failed}: P(below the {result.battery.min_reserve_pct:g} % reserve) = "
-                 f"{100 * p:.1f} %; P50 {pct['p50']:.2f} / P90 {pct['p90']:.2f} / P99 {pct['p99']:.2f} Wh",
-                 fontsize=10)
-    fig.tight_layout()
-    return save_figure(fig, target, dpi=dpi)

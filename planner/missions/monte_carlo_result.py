@@ -288,6 +288,17 @@ class MonteCarloResult:
             *failures,
         ])
 
-    def plot(self, path: str | os.PathLike[str], *, title: str | None = None) -> Path:
-        """Write the histogram and exceedance figure (:func:`plot_monte_carlo`); return the path."""
-        return plot_monte_carlo(self, path, title=title)
+    def plot(self, path: str | os.PathLike[str] | None = None, *, axes: Any = None,
+             title: str | None = None) -> Path | tuple[Any, ...]:
+        """The histogram and exceedance figure (:func:`plot_monte_carlo`).
+
+        Give exactly one of ``path`` (write a PNG atomically and return the path) or
+        ``axes`` (2 matplotlib Axes to draw into; nothing is written and they are returned).
+
+        Raises
+        ------
+        InvalidParameterError
+            Both or neither of ``path`` and ``axes``; a bad ``path`` or not 2 axes; every
+            mission failed.
+        """
+        return plot_monte_carlo(self, path, axes=axes, title=title)
