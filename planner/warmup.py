@@ -12,6 +12,7 @@ from .edge_cost import EnergyCost
 from .kernels import graph, point_free, walk
 from .anyangle import warm_up_anyangle
 from .lattice import Lattice
+from .replan import IncrementalPlanner
 from .reachability import warm_up_reachability
 from .refine import relax_path, string_pull
 
@@ -53,8 +54,14 @@ def warm_up_kernels() -> float:
     data = np.zeros(0)
     for kernel in (graph.lattice_reweight_serial, graph.lattice_reweight_parallel):
         kernel(arr.cells, arr.grade_table, arr.geo, 1, 0, 4, 4, half, sat, pos, data)
-    path = Lattice.for_cost(cost, 1).shortest_path((0.5, 0.5), (3.5, 3.5), weight="length")
-    cost.with_tables(2.0 * cost.grade_table_j_per_m, cost.turn_table_j)  # incremental lattice reweighting
+    lattice = Lattice.for_cost(cost, 1)
+    path = lattice.shortest_path((0.5, 0.5), (3.5, 3.5), weight="length")
+    dearer = cost.with_tables(2.0 * cost.grade_table_j_per_m, cost.turn_table_j)  # incremental lattice reweighting
+    changed = np.zeros((4, 4), dtype=bool)
+    changed[1, 1] = True
+    replanner = IncrementalPlanner(lattice, (3.5, 3.5))  # D* Lite: search, then a repair after a refresh
+    replanner.plan((0.5, 0.5))
+    replanner.replan((0.5, 0.5), lattice.refreshed(dearer, changed))
     string_pull(cost, np.vstack([path.waypoints_m, [[0.5, 3.5]]]))
     warm_up_reachability()
     warm_up_anyangle()
