@@ -225,6 +225,19 @@ class AdaptiveResult:
         """Write :meth:`to_json_dict` atomically to ``path``; return the path."""
         return write_json_atomic(path, self.to_json_dict(series_every=series_every), indent=1, default=str)
 
-    def plot(self, path: str | os.PathLike[str], terrain: TerrainMap, registry: CellModelRegistry) -> Path:
-        """Four panels: route over cells coloured by model and by error, SoC, cumulative energy."""
-        return plot_adaptive_mission(self, path, terrain, registry)
+    def plot(self, path: str | os.PathLike[str] | None = None, terrain: TerrainMap | None = None,
+             registry: CellModelRegistry | None = None, *, axes: Any = None) -> Path | tuple[Any, ...]:
+        """Four panels: route over cells coloured by model and by error, SoC, cumulative energy
+        (:func:`~planner.missions.figures.plot_adaptive_mission`).
+
+        Give exactly one of ``path`` (write a PNG atomically and return the path) or ``axes``
+        (4 matplotlib Axes to draw into, row by row; nothing is written and they are
+        returned); ``terrain`` and ``registry`` are required.
+
+        Raises
+        ------
+        InvalidParameterError
+            Both or neither of ``path`` and ``axes``; a bad ``path`` or not 4 axes; no
+            ``terrain`` or ``registry``.
+        """
+        return plot_adaptive_mission(self, path, terrain, registry, axes=axes)

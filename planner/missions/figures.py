@@ -1,8 +1,19 @@
-"""Figures of mission results: the driven mission and the adaptive loop (written atomically)."""
+"""Figures of mission results: the driven mission and the adaptive loop.
+
+Where a figure goes (the rule of every terrawatt figure, :mod:`terrain.plot_target`): give
+exactly one of ``path`` or ``axes=`` (a sequence of matplotlib Axes, one per panel; an array
+from ``Figure.subplots`` is read row by row). With ``path`` the function makes its own figure
+(matplotlib's object API on the Agg canvas, no pyplot), writes a PNG atomically and returns
+the path; with ``axes`` it draws into the caller's axes — a colour bar attached to the axes'
+figure, beside its panel — writes nothing, leaves the caller's figure layout alone (no
+``tight_layout``) and returns the axes as a tuple. The suptitle belongs to the figure and is
+drawn only with ``path``; with ``axes`` a ``title`` you give goes on the first axes.
+"""
 
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -10,28 +21,69 @@ import numpy as np
 
 from terrain import CellModelRegistry, TerrainMap
 from terrain.atomic import save_figure
+from terrain.errors import InvalidParameterError
+from terrain.plot_target import check_axes, check_plot_target
 
 __all__ = ["plot_mission", "plot_adaptive_mission"]
 
 
-def plot_mission(result: Any, path: str | os.PathLike[str], terrain: TerrainMap | None = None, *,
-                 title: str | None = None, dpi: int = 110) -> Path:
-    """Write a PNG of a :class:`~planner.missions.results.MissionResult`: SoC over time,
-    predicted vs actual cumulative energy, and the driven path coloured by battery power
-    (over the map's elevation when ``terrain`` is given).
+def plot_mission(result: Any, path: str | os.PathLike[str] | None = None, terrain: TerrainMap | None = None, *,
+                 axes: Sequence[Any] | None = None, title: str | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:
+    """Write a PNG of a :class:`~planner.missions.results.MissionResult` (or draw into ``axes``):
+    SoC over time, predicted vs actual cumulative energy, and the driven path coloured by
+    battery power (over the map's elevation when ``terrain`` is given).
+
+    Parameters
+    ----------
+    result : MissionResult
+    path : path-like, optional
+        PNG file to write (or give ``axes``).
+    terrain : TerrainMap, optional
+        The map the mission ran on (drawn under the path).
+    axes : sequence of 3 matplotlib Axes, optional
+        State of charge, cumulative energy, map: draw into these instead of writing a file.
+    title : str, optional
+        Figure title (default: the status, energy and arrival state of charge); with
+        ``axes``, the first axes' title (none by default).
+    dpi : int
+        Resolution of the PNG (with ``path``).
 
     Returns
     -------
-    Path
-        The written file.
+    Path or tuple of 3 Axes
+        The written file, or the axes drawn into.
+
+    Raises
+    ------
+    InvalidParameterError
+        Both or neither of ``path`` and ``axes``; a bad ``path`` (checked before drawing)
+        or not 3 axes.
     """
+    target = check_plot_target(path, axes, axes_name="axes")
+    if target is None:
+        panels = check_axes(axes, 3, what="state of charge, cumulative energy, map")
+        _draw_mission(panels, result, terrain)
+        if title:
+            panels[0].set_title(title)
+        return panels
+
     from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.collections import LineCollection
     from matplotlib.figure import Figure
 
     fig = Figure(figsize=(13.5, 4.2))
     FigureCanvasAgg(fig)
-    ax_soc, ax_e, ax_map = fig.subplots(1, 3, gridspec_kw={"width_ratios": [1, 1, 1.1]})
+    _draw_mission(fig.subplots(1, 3, gridspec_kw={"width_ratios": [1, 1, 1.1]}), result, terrain)
+    fig.suptitle(title or f"mission {result.status}: {result.budget.actual_energy_wh:.2f} Wh, "
+                 f"arrival SoC {result.budget.arrival_soc_pct:.1f} %")
+    fig.tight_layout()
+    return save_figure(fig, target, dpi=dpi, format="png")
+
+
+def _draw_mission(panels: Sequence[Any], result: Any, terrain: TerrainMap | None) -> None:
+    """The three panels of :func:`plot_mission`, drawn into ``panels``."""
+    from matplotlib.collections import LineCollection
+
+    ax_soc, ax_e, ax_map = panels
     t = result.time_s
     reserve = result.budget.battery.min_reserve_pct
     ax_soc.plot(t, 100.0 * result.soc, color="tab:blue", label="state of charge")
@@ -60,7 +112,7 @@ def plot_mission(result: Any, path: str | os.PathLike[str], terrain: TerrainMap 
     lc = LineCollection(segs, cmap="plasma", linewidths=2.5)
     lc.set_array(0.5 * (result.power_w[:-1] + result.power_w[1:]))
     ax_map.add_collection(lc)
-    fig.colorbar(lc, ax=ax_map, label="battery power (W)")
+    ax_map.figure.colorbar(lc, ax=ax_map, label="battery power (W)")
     wp = result.route.waypoints_m
     ax_map.plot(wp[:, 0], wp[:, 1], "o", color="black", markersize=3, label="waypoints")
     if result.reserve_crossed_xy_m is not None:
@@ -70,31 +122,73 @@ def plot_mission(result: Any, path: str | os.PathLike[str], terrain: TerrainMap 
     ax_map.set_xlabel("x (m)")
     ax_map.set_ylabel("y (m)")
     ax_map.legend(loc="best", fontsize=8)
-    fig.suptitle(title or f"mission {result.status}: {result.budget.actual_energy_wh:.2f} Wh, "
-                 f"arrival SoC {result.budget.arrival_soc_pct:.1f} %")
-    fig.tight_layout()
-    return save_figure(fig, path, dpi=dpi, format="png")
 
 
-def plot_adaptive_mission(result: Any, path: str | os.PathLike[str], terrain: TerrainMap,
-                          registry: CellModelRegistry, *, dpi: int = 90) -> Path:
-    """Write a PNG of an :class:`~planner.missions.results.AdaptiveResult`: the route over
-    cells coloured by model and by error, the state of charge and the cumulative energy.
+def plot_adaptive_mission(result: Any, path: str | os.PathLike[str] | None = None, terrain: TerrainMap | None = None,
+                          registry: CellModelRegistry | None = None, *, axes: Sequence[Any] | None = None,
+                          dpi: int = 90) -> Path | tuple[Any, ...]:
+    """Write a PNG of an :class:`~planner.missions.adaptive_results.AdaptiveResult` (or draw
+    into ``axes``): the route over cells coloured by model and by error, the state of charge
+    and the cumulative energy.
+
+    Parameters
+    ----------
+    result : AdaptiveResult
+    path : path-like, optional
+        PNG file to write (or give ``axes``).
+    terrain : TerrainMap
+        The map the mission ran on (required).
+    registry : CellModelRegistry
+        The registry the mission updated (required).
+    axes : sequence of 4 matplotlib Axes, optional
+        Cells by model, cells by error, state of charge, cumulative energy (a 2 x 2 array
+        from ``Figure.subplots(2, 2)`` is read row by row): draw into these instead of
+        writing a file.
+    dpi : int
+        Resolution of the PNG (with ``path``).
 
     Returns
     -------
-    Path
-        The written file.
+    Path or tuple of 4 Axes
+        The written file, or the axes drawn into.
+
+    Raises
+    ------
+    InvalidParameterError
+        Both or neither of ``path`` and ``axes``; a bad ``path`` (checked before drawing)
+        or not 4 axes; no ``terrain`` or ``registry``.
     """
-    import matplotlib
+    target = check_plot_target(path, axes, axes_name="axes")
+    if not isinstance(terrain, TerrainMap):
+        raise InvalidParameterError(
+            f"terrain must be the TerrainMap the mission ran on, got {type(terrain).__name__!r}")
+    if not isinstance(registry, CellModelRegistry):
+        raise InvalidParameterError(
+            f"registry must be the CellModelRegistry the mission updated, got {type(registry).__name__!r}")
+    if target is None:
+        panels = check_axes(axes, 4, what="cells by model, cells by error, state of charge, cumulative energy")
+        _draw_adaptive_mission(panels, result, terrain, registry)
+        return panels
+
     from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.colors import BoundaryNorm, ListedColormap
     from matplotlib.figure import Figure
-    from matplotlib.patches import Patch
 
     fig = Figure(figsize=(11, 9))
     FigureCanvasAgg(fig)
-    ax = fig.subplots(2, 2)
+    _draw_adaptive_mission(fig.subplots(2, 2).ravel(), result, terrain, registry)
+    fig.suptitle(f"adaptive mission: {result.status}")
+    fig.tight_layout()
+    return save_figure(fig, target, dpi=dpi, format="png")
+
+
+def _draw_adaptive_mission(panels: Sequence[Any], result: Any, terrain: TerrainMap,
+                           registry: CellModelRegistry) -> None:
+    """The four panels of :func:`plot_adaptive_mission`, drawn into ``panels`` (row by row)."""
+    import matplotlib
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+    from matplotlib.patches import Patch
+
+    ax = np.asarray(panels, dtype=object).reshape(2, 2)
     x0, y0 = terrain.origin_xy_m
     rows, cols = terrain.shape
     ext = (x0, x0 + cols * terrain.cell_size_m, y0, y0 + rows * terrain.cell_size_m)
@@ -111,7 +205,7 @@ def plot_adaptive_mission(result: Any, path: str | os.PathLike[str], terrain: Te
     with np.errstate(invalid="ignore"):
         err = 100.0 * np.abs(registry.relative_error())
     im = ax[0, 1].imshow(err, origin="lower", extent=ext, cmap="magma", interpolation="nearest")
-    fig.colorbar(im, ax=ax[0, 1], label="|error| of current (%) since last reset")
+    ax[0, 1].figure.colorbar(im, ax=ax[0, 1], label="|error| of current (%) since last reset")
     ax[0, 1].set_title("cells by observed error")
     for a in (ax[0, 0], ax[0, 1]):
         wp = result.initial_route.waypoints_m
@@ -131,6 +225,3 @@ def plot_adaptive_mission(result: Any, path: str | os.PathLike[str], terrain: Te
     ax[1, 1].set_xlabel("time (s)")
     ax[1, 1].set_ylabel("cumulative energy (Wh)")
     ax[1, 1].legend()
-    fig.suptitle(f"adaptive mission: {result.status}")
-    fig.tight_layout()
-    return save_figure(fig, path, dpi=dpi, format="png")

@@ -275,19 +275,26 @@ class MissionResult:
         payload = json.dumps(self.to_json_dict(series_every=series_every), allow_nan=False)
         return write_text_atomic(path, payload)
 
-    def plot(self, path: str | os.PathLike[str], terrain: TerrainMap | None = None, *,
-             title: str | None = None, dpi: int = 110) -> Path:
-        """Write a PNG: SoC over time, predicted vs actual cumulative energy, and the driven
-        path coloured by battery power (over the map's elevation when ``terrain`` is given).
+    def plot(self, path: str | os.PathLike[str] | None = None, terrain: TerrainMap | None = None, *,
+             axes: Any = None, title: str | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:
+        """SoC over time, predicted vs actual cumulative energy, and the driven path coloured
+        by battery power (over the map's elevation when ``terrain`` is given):
+        :func:`~planner.missions.figures.plot_mission`.
 
-        Written atomically with matplotlib's Agg backend (no display needed).
+        Give exactly one of ``path`` (a PNG written atomically with matplotlib's Agg backend,
+        no display needed) or ``axes`` (3 matplotlib Axes to draw into; nothing is written).
 
         Returns
         -------
-        Path
-            The written file.
+        Path or tuple of 3 Axes
+            The written file, or the axes drawn into.
+
+        Raises
+        ------
+        InvalidParameterError
+            Both or neither of ``path`` and ``axes``; a bad ``path`` or not 3 axes.
         """
-        return plot_mission(self, path, terrain, title=title, dpi=dpi)
+        return plot_mission(self, path, terrain, axes=axes, title=title, dpi=dpi)
 
     def __repr__(self) -> str:
         b = self.budget
