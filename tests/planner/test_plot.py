@@ -1,4 +1,4 @@
-"""Tests of planner.plot: plot_routes writes a PNG atomically and checks its path before drawing, or draws into an ax."""
+"""Tests of planner.plot: plot_routes writes a PNG atomically (path checked before drawing) or draws into an ax."""
 
 from __future__ import annotations
 
