@@ -24,7 +24,8 @@ import numpy as np
 
 from .arrays import GEO_CELL, GEO_NCOLS, GEO_NROWS, GEO_X0, GEO_Y0
 from .graph import heap_pop, heap_set
-from .walk import turn_energy, walk_forward
+from .paths import drop_unpaid_vertices, vertex_energy_j
+from .walk import walk_forward
 
 __all__ = ["corridor_index", "theta_star", "polish_polyline", "NEIGHBOURS_8", "NEIGHBOURS_16"]
 
@@ -190,24 +191,6 @@ def theta_star(cells, table, geo, index, node_r, node_c, moves, sx, sy, gx, gy, 
 
 
 @numba.njit(cache=True, nogil=True)
-def _vertex_j(cells, table, turn_table, geo, xs, ys, i, x, y):  # pragma: no cover - compiled
-    """Energy terms that depend on vertex ``i`` placed at (x, y): its two segments and three turns."""
-    n = xs.shape[0]
-    e = walk_forward(cells, table, geo, xs[i - 1], ys[i - 1], x, y)
-    if e == math.inf:
-        return e
-    e += walk_forward(cells, table, geo, x, y, xs[i + 1], ys[i + 1])
-    if e == math.inf:
-        return e
-    if i - 2 >= 0:
-        e += turn_energy(cells, turn_table, geo, xs[i - 2], ys[i - 2], xs[i - 1], ys[i - 1], x, y)
-    e += turn_energy(cells, turn_table, geo, xs[i - 1], ys[i - 1], x, y, xs[i + 1], ys[i + 1])
-    if i + 2 < n:
-        e += turn_energy(cells, turn_table, geo, x, y, xs[i + 1], ys[i + 1], xs[i + 2], ys[i + 2])
-    return e
-
-
-@numba.njit(cache=True, nogil=True)
 def polish_polyline(cells, table, turn_table, geo, xs, ys, step0, step_min, max_sweeps, keep_rtol):
     """Pattern search on the interior vertices of a polyline, minimising drive + turn energy.
 
@@ -240,7 +223,7 @@ def polish_polyline(cells, table, turn_table, geo, xs, ys, step0, step_min, max_
             if h < step_min:
                 continue
             active = True
-            best = _vertex_j(cells, table, turn_table, geo, xs, ys, i, xs[i], ys[i])
+            best = vertex_energy_j(cells, table, turn_table, geo, xs, ys, i, xs[i], ys[i])
             bx = xs[i]
             by = ys[i]
             for k in range(8):
@@ -248,7 +231,7 @@ def polish_polyline(cells, table, turn_table, geo, xs, ys, step0, step_min, max_
                 y = ys[i] + h * dy[k]
                 if x < xmin or x > xmax or y < ymin or y > ymax:
                     continue
-                e = _vertex_j(cells, table, turn_table, geo, xs, ys, i, x, y)
+                e = vertex_energy_j(cells, table, turn_table, geo, xs, ys, i, x, y)
                 if e < best * (1.0 - 1e-12):
                     best = e
                     bx = x
@@ -264,25 +247,4 @@ def polish_polyline(cells, table, turn_table, geo, xs, ys, step0, step_min, max_
                 step[i] = 0.5 * h
         if not active:
             break
-    # Drop vertices that do not pay for themselves (compact the arrays as we go).
-    m = 1
-    for i in range(1, n - 1):
-        xp = xs[m - 1]
-        yp = ys[m - 1]
-        with_i = walk_forward(cells, table, geo, xp, yp, xs[i], ys[i])
-        with_i += walk_forward(cells, table, geo, xs[i], ys[i], xs[i + 1], ys[i + 1])
-        with_i += turn_energy(cells, turn_table, geo, xp, yp, xs[i], ys[i], xs[i + 1], ys[i + 1])
-        without = walk_forward(cells, table, geo, xp, yp, xs[i + 1], ys[i + 1])
-        if m - 2 >= 0:
-            with_i += turn_energy(cells, turn_table, geo, xs[m - 2], ys[m - 2], xp, yp, xs[i], ys[i])
-            without += turn_energy(cells, turn_table, geo, xs[m - 2], ys[m - 2], xp, yp, xs[i + 1], ys[i + 1])
-        if i + 2 < n:
-            with_i += turn_energy(cells, turn_table, geo, xs[i], ys[i], xs[i + 1], ys[i + 1], xs[i + 2], ys[i + 2])
-            without += turn_energy(cells, turn_table, geo, xp, yp, xs[i + 1], ys[i + 1], xs[i + 2], ys[i + 2])
-        if without > with_i * (1.0 + keep_rtol):
-            xs[m] = xs[i]
-            ys[m] = ys[i]
-            m += 1
-    xs[m] = xs[n - 1]
-    ys[m] = ys[n - 1]
-    return m + 1
+    return drop_unpaid_vertices(cells, table, turn_table, geo, xs, ys, n, keep_rtol)

@@ -10,17 +10,19 @@ import numpy as np
 from .arrays import GEO_CELL, GEO_NCOLS, GEO_NROWS, GEO_X0, GEO_Y0
 from .walk import turn_energy, walk_pair
 
-__all__ = ["relax_polyline", "string_pull_indices", "KEEP_RTOL"]
+__all__ = ["relax_polyline", "vertex_energy_j", "drop_unpaid_vertices", "string_pull_indices", "KEEP_RTOL"]
 
 #: Relative energy change treated as rounding noise (drops collinear vertices; accepts polishing).
 KEEP_RTOL = 1e-9
 
 
 @numba.njit(cache=True, nogil=True)
-def _local_j(cells, table, turn_table, geo, xs, ys, i, x, y):  # pragma: no cover - compiled
-    """Energy terms that depend on vertex i placed at (x, y): its two segments and three turns."""
+def vertex_energy_j(cells, table, turn_table, geo, xs, ys, i, x, y):  # pragma: no cover - compiled
+    """Energy terms that depend on vertex ``i`` placed at (x, y): its two segments and three turns."""
     n = xs.shape[0]
     e = walk_pair(cells, table, geo, xs[i - 1], ys[i - 1], x, y, False)[0]
+    if e == math.inf:
+        return e
     e += walk_pair(cells, table, geo, x, y, xs[i + 1], ys[i + 1], False)[0]
     if e == math.inf:
         return e
@@ -30,6 +32,35 @@ def _local_j(cells, table, turn_table, geo, xs, ys, i, x, y):  # pragma: no cove
     if i + 2 < n:
         e += turn_energy(cells, turn_table, geo, x, y, xs[i + 1], ys[i + 1], xs[i + 2], ys[i + 2])
     return e
+
+
+@numba.njit(cache=True, nogil=True)
+def drop_unpaid_vertices(cells, table, turn_table, geo, xs, ys, n, keep_rtol):  # pragma: no cover - compiled
+    """Drop the interior vertices of ``xs[:n]``/``ys[:n]`` whose removal does not raise the
+    energy (drive + turns) by more than ``keep_rtol`` relative; compacts in place (kept
+    vertices first) and returns how many are kept."""
+    m = 1
+    for i in range(1, n - 1):
+        # candidate: previous kept vertex (m-1) -> next vertex (i+1), skipping i
+        xp = xs[m - 1]
+        yp = ys[m - 1]
+        with_i = walk_pair(cells, table, geo, xp, yp, xs[i], ys[i], False)[0]
+        with_i += walk_pair(cells, table, geo, xs[i], ys[i], xs[i + 1], ys[i + 1], False)[0]
+        with_i += turn_energy(cells, turn_table, geo, xp, yp, xs[i], ys[i], xs[i + 1], ys[i + 1])
+        without = walk_pair(cells, table, geo, xp, yp, xs[i + 1], ys[i + 1], False)[0]
+        if m - 2 >= 0:
+            with_i += turn_energy(cells, turn_table, geo, xs[m - 2], ys[m - 2], xp, yp, xs[i], ys[i])
+            without += turn_energy(cells, turn_table, geo, xs[m - 2], ys[m - 2], xp, yp, xs[i + 1], ys[i + 1])
+        if i + 2 < n:
+            with_i += turn_energy(cells, turn_table, geo, xs[i], ys[i], xs[i + 1], ys[i + 1], xs[i + 2], ys[i + 2])
+            without += turn_energy(cells, turn_table, geo, xp, yp, xs[i + 1], ys[i + 1], xs[i + 2], ys[i + 2])
+        if without > with_i * (1.0 + keep_rtol):
+            xs[m] = xs[i]
+            ys[m] = ys[i]
+            m += 1
+    xs[m] = xs[n - 1]
+    ys[m] = ys[n - 1]
+    return m + 1
 
 
 @numba.njit(cache=True, nogil=True)
@@ -55,7 +86,7 @@ def relax_polyline(cells, table, turn_table, geo, xs, ys, step0, step_min, max_s
         sweeps += 1
         improved = False
         for i in range(1, n - 1):
-            best = _local_j(cells, table, turn_table, geo, xs, ys, i, xs[i], ys[i])
+            best = vertex_energy_j(cells, table, turn_table, geo, xs, ys, i, xs[i], ys[i])
             bx = xs[i]
             by = ys[i]
             for k in range(8):
@@ -63,7 +94,7 @@ def relax_polyline(cells, table, turn_table, geo, xs, ys, step0, step_min, max_s
                 y = ys[i] + step * dy[k]
                 if x < geo[GEO_X0] or x > xmax or y < geo[GEO_Y0] or y > ymax:
                     continue
-                e = _local_j(cells, table, turn_table, geo, xs, ys, i, x, y)
+                e = vertex_energy_j(cells, table, turn_table, geo, xs, ys, i, x, y)
                 if e < best * (1.0 - 1e-12):
                     best = e
                     bx = x
@@ -74,29 +105,7 @@ def relax_polyline(cells, table, turn_table, geo, xs, ys, step0, step_min, max_s
                 improved = True
         if not improved:
             step *= 0.5
-    # Drop vertices that do not pay for themselves (compact the arrays as we go).
-    m = 1
-    for i in range(1, n - 1):
-        # candidate: previous kept vertex (m-1) -> next vertex (i+1), skipping i
-        xp = xs[m - 1]
-        yp = ys[m - 1]
-        with_i = walk_pair(cells, table, geo, xp, yp, xs[i], ys[i], False)[0]
-        with_i += walk_pair(cells, table, geo, xs[i], ys[i], xs[i + 1], ys[i + 1], False)[0]
-        with_i += turn_energy(cells, turn_table, geo, xp, yp, xs[i], ys[i], xs[i + 1], ys[i + 1])
-        without = walk_pair(cells, table, geo, xp, yp, xs[i + 1], ys[i + 1], False)[0]
-        if m - 2 >= 0:
-            with_i += turn_energy(cells, turn_table, geo, xs[m - 2], ys[m - 2], xp, yp, xs[i], ys[i])
-            without += turn_energy(cells, turn_table, geo, xs[m - 2], ys[m - 2], xp, yp, xs[i + 1], ys[i + 1])
-        if i + 2 < n:
-            with_i += turn_energy(cells, turn_table, geo, xs[i], ys[i], xs[i + 1], ys[i + 1], xs[i + 2], ys[i + 2])
-            without += turn_energy(cells, turn_table, geo, xp, yp, xs[i + 1], ys[i + 1], xs[i + 2], ys[i + 2])
-        if without > with_i * (1.0 + KEEP_RTOL):
-            xs[m] = xs[i]
-            ys[m] = ys[i]
-            m += 1
-    xs[m] = xs[n - 1]
-    ys[m] = ys[n - 1]
-    return m + 1
+    return drop_unpaid_vertices(cells, table, turn_table, geo, xs, ys, n, KEEP_RTOL)
 
 
 @numba.njit(cache=True, nogil=True)
