@@ -1,4 +1,4 @@
-"""Coarse-to-fine planning straight from a GeoTIFF DEM larger than memory: the coarse map tile by tile, the fine stage on one window.
+"""Coarse-to-fine planning straight from a GeoTIFF DEM larger than memory: the coarse map tile by tile, the fine stage in windows.
 
 :func:`plan_coarse_to_fine_geotiff` is :func:`planner.plan_coarse_to_fine` without ever
 holding the whole raster (:class:`terrain.DemWindows`):
@@ -33,13 +33,16 @@ of a window (no obstacles, ground unknown) blocks exactly the cells whose slope
 (:func:`terrain.surface.surface_layers`, the formula TerrainMap uses) exceeds its
 ``max_slope_rad`` and gives every cell the unknown ground's table row, so the tile's blocked
 cells and rows are computed from those two facts of the cost priced on the first window —
-the same numbers, about three times faster.
+the same numbers, 1.6 times faster (41 vs 66 ms per 1024^2 tile, measured).
 
 With one window, the route, its energy and the coarse route equal those of
-``plan_coarse_to_fine(cost_from(read_geotiff(path)), ...)``: the same numbers go through the same operations, with cell
-coordinates counted from the window's corner instead of the map's (``origin + k * cell``
-sums): bit for bit when the origin and cell size are exact binary fractions (whole metres,
-as DEMs usually are), else within rounding (about 1e-12 relative).
+``plan_coarse_to_fine(cost_from(read_geotiff(path)), ...)``: the same numbers go through the
+same operations, with cell coordinates counted from the window's corner instead of the map's
+(``origin + k * cell`` sums): bit for bit when the origin and cell size are exact binary
+fractions (whole metres, as DEMs usually are), else within rounding (about 1e-12 relative).
+Chained windows give another route (junctions where the windows meet), a few tenths of a
+percent from it either way: a window's search may join its start and target by one straight
+segment, which the lattice does not have.
 """
 
 from __future__ import annotations
