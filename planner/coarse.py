@@ -89,7 +89,8 @@ class CoarseToFine:
     fine_map : TerrainMap or None
         The full-resolution map the route was searched and evaluated on: the cost's map, or
         the window of the map read by :func:`planner.plan_coarse_to_fine_geotiff` (in the
-        map's coordinates); None when no fine search ran.
+        map's coordinates); None when no fine search ran, or when it ran in chained windows
+        (no one window holds the route; ``fine_windows`` lists them).
     """
 
     route: Route
