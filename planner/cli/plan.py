@@ -88,6 +88,11 @@ def add_parsers(sub: Any) -> None:
         help="with --coarse-factor on a GeoTIFF DEM: read the DEM by windows, never whole (the coarse map tile by "
              "tile, the full resolution only in the corridor's window), for DEMs larger than memory",
     )
+    plan.add_argument(
+        "--fine-window-cells", type=int, default=None, metavar="N",
+        help="with --windowed: the most full-resolution cells the fine stage reads at once (default 8192^2, about "
+             "7 GiB once priced); a corridor whose bounding window is larger is followed in chained windows",
+    )
     add_model_options(plan, risk=True)
     add_ros2_arguments(plan)
     plan.set_defaults(run=run_plan_command)
@@ -186,6 +191,8 @@ def _run_windowed(args: argparse.Namespace) -> int:
     check_positive("--speed", args.speed)
     if args.corridor is not None:
         check_positive("--corridor", args.corridor)
+    if args.fine_window_cells is not None:
+        check_positive("--fine-window-cells", args.fine_window_cells)
     if args.unknown_ground.lower() == "none":
         raise InvalidParameterError(
             "a GeoTIFF DEM has no ground classes, so --unknown-ground none refuses every cell; give "
@@ -198,7 +205,7 @@ def _run_windowed(args: argparse.Namespace) -> int:
     result = run_windowed_plan(
         args.map, start, goal, factor=args.coarse_factor, corridor_m=args.corridor,
         out_dir=args.out, robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg,
-        unknown_ground=args.unknown_ground, whole_map=args.whole_map,
+        unknown_ground=args.unknown_ground, whole_map=args.whole_map, fine_window_cells=args.fine_window_cells,
     )
     return 0 if result["status"] == "exact" else 1
 
@@ -448,6 +455,7 @@ def run_windowed_plan(
     max_slope_deg: float,
     unknown_ground: str,
     whole_map: bool = False,
+    fine_window_cells: int | None = None,
 ) -> dict[str, Any]:
     """Plan coarse-to-fine from a GeoTIFF DEM read by windows (:func:`planner.plan_coarse_to_fine_geotiff`);
     print and write the files of :func:`run_coarse_plan` (route.png over the coarse map: the only whole view held)."""
@@ -457,7 +465,8 @@ def run_windowed_plan(
         grid = dem.grid
     cost_from = functools.partial(EnergyCost.from_presets, robot=robot, speed_mps=speed_mps, max_slope_rad=slope_rad,
                                   unknown_ground=unknown_ground)
-    plan = plan_coarse_to_fine_geotiff(path, start, goal, factor=factor, corridor_m=corridor_m, cost_from=cost_from)
+    plan = plan_coarse_to_fine_geotiff(path, start, goal, factor=factor, corridor_m=corridor_m, cost_from=cost_from,
+                                       fine_window_budget_cells=fine_window_cells)
     rows, cols = grid.shape
     print(f"map: {path.name}  {rows} x {cols} cells of {grid.cell_size_m:g} m, read by windows; ground unknown, "
           f"priced as {unknown_ground!r}")
@@ -499,7 +508,9 @@ def _report_coarse(plan: CoarseToFine, start: tuple[float, float], goal: tuple[f
     written = [write_json_atomic(out_dir / "route.json", result)]
     lines = []
     if route.found:
-        written.append(write_geojson({"min_energy": route}, fine_map, out_dir / "route.geojson"))
+        # chained fine windows leave no one fine map: the GeoJSON's elevations then come from the coarse map
+        written.append(write_geojson({"min_energy": route}, fine_map if fine_map is not None else plan.coarse_map,
+                                     out_dir / "route.geojson"))
         lines.append(RouteLine("coarse-to-fine", route.waypoints_m, route.energy_j, colour="#d32f2f"))
     title = f"terrawatt: coarse-to-fine route on {map_label}" + (f" (the x{factor} coarse map)"
                                                                   if plot_map is plan.coarse_map else "")

@@ -238,6 +238,24 @@ def test_plan_windowed_from_the_command_line_equals_the_whole_map_plan(dem_path,
     assert (tmp_path / "w" / "route.png").stat().st_size > 0
 
 
+def test_plan_windowed_in_chained_fine_windows_writes_its_files(dem_path, tmp_path, capsys):
+    from planner.cli import main
+
+    args = ["plan", "--map", str(dem_path), "--start", *map(str, START), "--goal", *map(str, GOAL),
+            "--coarse-factor", "4", "--windowed"]
+    assert main([*args, "--out", str(tmp_path / "one")]) == 0
+    assert main([*args, "--fine-window-cells", "2500", "--out", str(tmp_path / "chain")]) == 0
+    one, chain = (json.loads((tmp_path / d / "route.json").read_text()) for d in ("one", "chain"))
+    assert one["coarse_to_fine"]["fine_windows"] == 1 < chain["coarse_to_fine"]["fine_windows"]
+    assert chain["coarse_to_fine"]["fine_window_max_cells"] <= 2500
+    # no one fine map holds a chained route: the GeoJSON still comes, with the coarse map's elevations
+    feature = json.loads((tmp_path / "chain" / "route.geojson").read_text())["features"][0]
+    assert len(feature["geometry"]["coordinates"]) == len(chain["routes"]["min_energy"]["waypoints_m"])
+    assert chain["routes"]["min_energy"]["energy_j"] == pytest.approx(one["routes"]["min_energy"]["energy_j"], rel=0.03)
+    assert main([*args, "--fine-window-cells", "0", "--out", str(tmp_path / "bad")]) == 2
+    assert "--fine-window-cells must be a number > 0" in capsys.readouterr().err
+
+
 def test_plan_windowed_whole_map_figure_and_no_route(tmp_path, capsys):
     from planner.cli import main
 
