@@ -44,8 +44,8 @@ from energy.evaluation import (
     trim_to_overlap,
 )
 from energy.models import ADAPT_METHODS, train_network
-from terrain.atomic import write_json_atomic
-from terrain.dask_client import run_tasks
+from terrawatt_base.atomic import write_json_atomic
+from terrawatt_base.dask_client import run_tasks
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "borealtc"
 TARGETS = {"median_pct": 5.0, "p90_pct": 15.0, "sections_pct": 8.0}

@@ -53,7 +53,7 @@ from diagnosis_scenarios import (
     pair_scenario,
     withheld_gap,
 )
-from terrain.atomic import write_json_atomic
+from terrawatt_base.atomic import write_json_atomic
 
 # Pairs of comparable withheld gaps, then one where turning resistance (85 % of the charge)
 # dominates: the ranking is conditional (each candidate refitted with the effects chosen before

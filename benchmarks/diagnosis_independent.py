@@ -64,8 +64,8 @@ from typing import Any
 import numpy as np
 
 import energy
-from planner.cli import main as terrawatt
-from terrain.atomic import write_json_atomic
+from terrawatt_cli import main as terrawatt
+from terrawatt_base.atomic import write_json_atomic
 
 
 def _sibling(name: str) -> Any:

@@ -50,7 +50,7 @@ from energy.diagnosis.localise import largest_slices
 from energy.logs import rest_samples
 from energy.models.base import log_currents
 from energy.physics import EFFECTS
-from terrain.atomic import write_json_atomic
+from terrawatt_base.atomic import write_json_atomic
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "borealtc"
 #: Ground folder -> the physics ground preset of that ground.

@@ -50,7 +50,7 @@ from energy import (
     evaluate_current_models,
     read_borealtc,
 )
-from terrain.atomic import write_json_atomic
+from terrawatt_base.atomic import write_json_atomic
 
 DEFAULT_DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "borealtc"
 

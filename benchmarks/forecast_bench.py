@@ -39,9 +39,9 @@ from energy import read_borealtc
 from energy.evaluation import trim_to_overlap
 from energy.evaluation.intervals import DEFAULT_LEVELS, IntervalRecord, coverage, plot_reliability
 from energy.models import AdaptedCurrentModel, log_currents
-from terrain.atomic import write_json_atomic
-from terrain.dask_client import run_tasks
-from terrain.errors import DataError
+from terrawatt_base.atomic import write_json_atomic
+from terrawatt_base.dask_client import run_tasks
+from terrawatt_base.errors import DataError
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "borealtc"
 ADAPT_SECONDS = (10.0, 20.0, 40.0)

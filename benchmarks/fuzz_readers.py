@@ -227,7 +227,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=Path("out/fuzz_readers.json"))
     args = ap.parse_args(argv)
-    from terrain.atomic import write_json_atomic
+    from terrawatt_base.atomic import write_json_atomic
 
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:

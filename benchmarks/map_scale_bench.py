@@ -622,7 +622,7 @@ def main(argv: list[str] | None = None) -> int:
               "platform": platform.platform(), "load_start": load0, "load_end": os.getloadavg()},
               "wall_s": time.perf_counter() - t0}
     if args.out is not None:
-        from terrain.atomic import write_json_atomic
+        from terrawatt_base.atomic import write_json_atomic
 
         write_json_atomic(args.out, result)
         print(f"wrote {args.out}")

@@ -60,7 +60,7 @@ from planner import (
 )
 from planner.anyangle import DEFAULT_POLISH_SPACINGS_CELLS, anyangle_path, polish_path, warm_up_anyangle
 from planner.kernels import variants
-from terrain.atomic import write_json_atomic
+from terrawatt_base.atomic import write_json_atomic
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map, procedural_map
 
 # Start/goal as fractions of the map extent: about 12, 45 and 74 degrees from the x axis.

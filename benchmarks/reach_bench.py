@@ -47,7 +47,7 @@ from planner import EnergyCost, lattice_move_energies, reachability, warm_up_ker
 from planner.kernels import lattice_weights
 from planner.lattice import LATTICE_OFFSETS
 from planner.reachability import depot_links, warm_up_reachability
-from terrain.atomic import write_json_atomic
+from terrawatt_base.atomic import write_json_atomic
 from terrain.procedural import procedural_map
 
 #: The issue's target: a cold round-trip reachability on 2048^2 cells within this many seconds.

@@ -62,7 +62,7 @@ from planner import (
 )
 from planner.kernels import graph
 from terrain import CellModelRegistry, TerrainMap
-from terrain.atomic import write_json_atomic
+from terrawatt_base.atomic import write_json_atomic
 from terrain.procedural import procedural_map
 
 GROUNDS = ("asphalt", "grass", "sand", "snow")

@@ -42,7 +42,7 @@ from energy import (
     VibrationCurrentEstimator,
     read_borealtc_run,
 )
-from terrain.atomic import write_json_atomic
+from terrawatt_base.atomic import write_json_atomic
 
 TARGET_S = 20.0
 DURATION_S = 160.0

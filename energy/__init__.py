@@ -1,6 +1,6 @@
 """energy — what a motion costs: physics and learned current models, logs, metrics."""
 
-from terrain.errors import (
+from terrawatt_base.errors import (
     DataError,
     DataRepairWarning,
     FigureWarning,
@@ -278,7 +278,7 @@ __all__ = [
     "GapShare",
     "localise_gap",
     "regime_labels",
-    # errors and warnings its users meet (defined in terrain.errors, the one hierarchy)
+    # errors and warnings its users meet (defined in terrawatt_base.errors, the one hierarchy)
     "TerrawattError",
     "TerrawattWarning",
     "InvalidParameterError",

@@ -39,8 +39,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_optional_real, check_real, fmt_number, readonly, real_array
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.checks import check_optional_real, check_real, fmt_number, readonly, real_array
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 __all__ = [
     "Battery",
@@ -244,7 +244,7 @@ class Battery:
         ``energy_j`` (J) is >= 0; ``power_w`` (W) > 0 and at most :attr:`max_power_w`;
         ``soc`` in [0, 1]. Returns the state of charge after the draw, clamped at 0
         (:meth:`time_to_empty_s` says when a draw runs the pack out). Anything else raises
-        :class:`~terrain.errors.InvalidParameterError`.
+        :class:`~terrawatt_base.errors.InvalidParameterError`.
 
         Examples
         --------

@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_bool, check_choice, check_int, check_real, readonly
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_bool, check_choice, check_int, check_real, readonly
+from terrawatt_base.errors import InvalidParameterError
 
 from .battery import AS_PER_MAH, S_PER_H, Battery, Discharge
 from .ground import GroundParams

@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import readonly
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.checks import readonly
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 __all__ = ["CommandProfile", "command_series", "uniform_step_s", "UNIFORM_TIME_RTOL"]
 

@@ -89,7 +89,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.errors import InvalidParameterError
+from terrawatt_base.errors import InvalidParameterError
 
 from .ground import GroundParams
 from .power import PowerBreakdown

@@ -14,8 +14,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from terrain.checks import check_choice, check_real, check_seed
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_choice, check_real, check_seed
+from terrawatt_base.errors import InvalidParameterError
 
 from .commands import CommandProfile
 

@@ -11,8 +11,8 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass
 
-from terrain.checks import check_real, check_text
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_real, check_text
+from terrawatt_base.errors import InvalidParameterError
 
 __all__ = ["GroundParams"]
 

@@ -23,8 +23,8 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from terrain.checks import check_int, check_real, real_array
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.checks import check_int, check_real, real_array
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 __all__ = [
     "DEFAULT_SECTION_S",

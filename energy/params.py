@@ -11,7 +11,7 @@ ground coefficients to logs.
 
 from __future__ import annotations
 
-from terrain.errors import UnknownNameError
+from terrawatt_base.errors import UnknownNameError
 
 from .ground import GroundParams
 from .robot import DRIVE_KINDS, GRAVITY_MPS2, MotorParams, RobotParams

@@ -17,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_real, real_array
-from terrain.errors import DataError, InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import check_real, real_array
+from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 from .drivetrain import EFFECTS, GroundArrays, drive_power
 from .ground import GroundParams

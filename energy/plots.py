@@ -5,9 +5,9 @@ data has: spectra of logs whose IMU is too slow for the requested band are drawn
 data's Nyquist frequency, with a warning and a note on the figure, instead of failing after
 the results that the figure illustrates are done.
 
-Where a figure goes (the rule of every terrawatt figure, :mod:`terrain.plot_target`): give
+Where a figure goes (the rule of every terrawatt figure, :mod:`terrawatt_base.plot_target`): give
 exactly one of ``path`` or ``axes=``. With ``path`` the function makes its own figure, writes
-it as a PNG atomically (:func:`terrain.atomic.save_figure`) and returns the path; matplotlib
+it as a PNG atomically (:func:`terrawatt_base.atomic.save_figure`) and returns the path; matplotlib
 then runs on the non-interactive Agg backend, so this works on a robot or a CI machine
 without a display. With ``axes=`` (a sequence of matplotlib Axes, one per panel) it draws
 into the caller's axes, writes nothing, leaves the caller's figure layout alone (no
@@ -28,10 +28,10 @@ from typing import Any
 import numpy as np
 from scipy.ndimage import uniform_filter1d
 
-from terrain.atomic import save_figure
-from terrain.checks import check_int, check_real, fmt_number
-from terrain.errors import DataError, FigureWarning, GridMismatchError, InvalidParameterError
-from terrain.plot_target import check_axes, check_plot_target
+from terrawatt_base.atomic import save_figure
+from terrawatt_base.checks import check_int, check_real, fmt_number
+from terrawatt_base.errors import DataError, FigureWarning, GridMismatchError, InvalidParameterError
+from terrawatt_base.plot_target import check_axes, check_plot_target
 
 from .features import NYQUIST_TOLERANCE, accel_rate_hz, whole_run_spectrum
 from .logs import InteractionLog

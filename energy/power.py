@@ -7,8 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import readonly
-from terrain.errors import DataError, InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import readonly
+from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 __all__ = ["PowerBreakdown", "check_sample_times", "trapezoid"]
 

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.errors import InvalidParameterError
+from terrawatt_base.errors import InvalidParameterError
 
 from .logs import InteractionLog
 from .metrics import charge_mah

@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_optional_real, check_real
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_optional_real, check_real
+from terrawatt_base.errors import InvalidParameterError
 
 from .commands import CommandProfile
 

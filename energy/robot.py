@@ -15,8 +15,8 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Literal
 
-from terrain.checks import check_real, check_text
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_real, check_text
+from terrawatt_base.errors import InvalidParameterError
 
 __all__ = ["MotorParams", "RobotParams", "DRIVE_KINDS", "GRAVITY_MPS2"]
 

@@ -1,8 +1,8 @@
 """planner — where to drive: edge costs, OMPL and lattice planners, routes, missions, CLI."""
 
 from energy import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, drive_profile
-from terrain.dask_client import dask_client
-from terrain.errors import (
+from terrawatt_base.dask_client import dask_client
+from terrawatt_base.errors import (
     BlockedPositionError,
     DataError,
     DataRepairWarning,
@@ -185,7 +185,7 @@ __all__ = [
     "ADAPTIVE_STATUSES",
     "ADAPTIVE_FORMAT_VERSION",
     "UPDATE_SCOPES",
-    # errors and warnings its users meet (defined in terrain.errors, the one hierarchy)
+    # errors and warnings its users meet (defined in terrawatt_base.errors, the one hierarchy)
     "TerrawattError",
     "TerrawattWarning",
     "InvalidParameterError",

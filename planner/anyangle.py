@@ -52,8 +52,8 @@ from typing import Any
 import numpy as np
 
 from terrain import TerrainMap
-from terrain.checks import check_int, check_real
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_int, check_real
+from terrawatt_base.errors import InvalidParameterError
 
 from .edge_cost import EnergyCost
 from .kernels import KEEP_RTOL

@@ -8,9 +8,9 @@ import math
 import time
 from typing import Any
 
-from terrain.checks import check_bool, check_int, check_real, check_seed
-from terrain.dask_client import check_client, client_worker_count, dask_client
-from terrain.errors import InvalidParameterError, TerrawattError, UnknownNameError
+from terrawatt_base.checks import check_bool, check_int, check_real, check_seed
+from terrawatt_base.dask_client import check_client, client_worker_count, dask_client
+from terrawatt_base.errors import InvalidParameterError, TerrawattError, UnknownNameError
 
 from .batch_pairs import BatchPairs
 from .batch_result import BatchResult, BatchRow

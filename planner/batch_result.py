@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.atomic import write_json_atomic, write_text_atomic
-from terrain.errors import InvalidParameterError
+from terrawatt_base.atomic import write_json_atomic, write_text_atomic
+from terrawatt_base.errors import InvalidParameterError
 
 from .route import ROUTE_STATUSES
 

@@ -24,8 +24,8 @@ import numpy as np
 from scipy import ndimage
 
 from terrain import TerrainMap
-from terrain.checks import check_bool, check_int, check_optional_real
-from terrain.errors import BlockedPositionError, InvalidParameterError
+from terrawatt_base.checks import check_bool, check_int, check_optional_real
+from terrawatt_base.errors import BlockedPositionError, InvalidParameterError
 
 from .edge_cost import EnergyCost
 from .kernels import astar

@@ -35,7 +35,7 @@ import numpy as np
 from scipy import ndimage
 
 from terrain import ElevationWindow
-from terrain.errors import PlanningError
+from terrawatt_base.errors import PlanningError
 
 from .coarse import corridor_mask, merge_straight, search_corridor
 from .edge_cost import EnergyCost

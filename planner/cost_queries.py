@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.errors import InvalidParameterError, OutOfBoundsError
+from terrawatt_base.errors import InvalidParameterError, OutOfBoundsError
 
 from .kernels import walk_forward, walk_many
 from .points import as_points

@@ -36,8 +36,8 @@ import numpy as np
 
 from energy import GROUND_PRESETS, PhysicsEnergyModel, ground_preset, robot_preset
 from terrain import TerrainMap
-from terrain.checks import check_real
-from terrain.errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import check_real
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from .cache import CACHE_SIZE, ResultCache
 from .cost_queries import CostQueries

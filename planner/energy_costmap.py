@@ -26,9 +26,9 @@ from typing import Any
 import numpy as np
 
 from terrain import Grid
-from terrain.atomic import atomic_path, check_output_path
-from terrain.checks import check_choice, check_int, check_real, readonly
-from terrain.errors import FileFormatError, InvalidParameterError
+from terrawatt_base.atomic import atomic_path, check_output_path
+from terrawatt_base.checks import check_choice, check_int, check_real, readonly
+from terrawatt_base.errors import FileFormatError, InvalidParameterError
 from terrain.georef import import_rasterio
 
 from .edge_cost import EnergyCost

@@ -41,8 +41,8 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from terrain.checks import check_int
-from terrain.errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import check_int
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from .edge_cost import EnergyCost
 from .kernels import astar, lattice_reweight, lattice_weights

@@ -85,7 +85,7 @@ from terrain import (
     InvalidParameterError,
     TerrainMap,
 )
-from terrain.checks import check_choice, check_real, real_array
+from terrawatt_base.checks import check_choice, check_real, real_array
 
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
 from .learned_table import (

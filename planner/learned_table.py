@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from energy import InteractionLog
-from terrain.errors import InvalidParameterError
+from terrawatt_base.errors import InvalidParameterError
 
 __all__ = ["LearnedModelTable", "predict_currents", "predict_current_spread", "model_gives_interval", "increasing_grid"]
 

@@ -39,7 +39,7 @@ import numpy as np
 
 from energy import CurrentModel, GroundParams, RobotParams, ground_preset
 from terrain import CellModelRegistry, TerrainMap
-from terrain.errors import DataError, InvalidParameterError, TerrawattWarning, UnknownNameError
+from terrawatt_base.errors import DataError, InvalidParameterError, TerrawattWarning, UnknownNameError
 from terrain.terrain_map import UNKNOWN_GROUND
 
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost

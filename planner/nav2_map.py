@@ -28,9 +28,9 @@ from typing import Any
 import numpy as np
 
 from terrain import Grid, TerrainMap
-from terrain.atomic import atomic_open, check_output_path, write_text_atomic
-from terrain.checks import check_real, readonly
-from terrain.errors import FileFormatError, GridMismatchError, InvalidParameterError
+from terrawatt_base.atomic import atomic_open, check_output_path, write_text_atomic
+from terrawatt_base.checks import check_real, readonly
+from terrawatt_base.errors import FileFormatError, GridMismatchError, InvalidParameterError
 
 from .edge_cost import EnergyCost
 from .energy_costmap import EnergyCostmap

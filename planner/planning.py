@@ -34,8 +34,8 @@ from typing import Any
 import numpy as np
 
 from terrain import TerrainMap
-from terrain.checks import check_bool, check_int, check_real, check_seed
-from terrain.errors import (
+from terrawatt_base.checks import check_bool, check_int, check_real, check_seed
+from terrawatt_base.errors import (
     BlockedPositionError,
     GridMismatchError,
     InvalidParameterError,

@@ -1,6 +1,6 @@
 """Plots of routes over a terrain map: hillshade, contours, ground classes, obstacles.
 
-Where the figure goes (the rule of every terrawatt figure, :mod:`terrain.plot_target`): give
+Where the figure goes (the rule of every terrawatt figure, :mod:`terrawatt_base.plot_target`): give
 exactly one of ``path`` or ``ax=``. With ``path``, :func:`plot_routes` makes its own figure
 (matplotlib's Agg backend), writes a PNG atomically and returns the path; with ``ax`` it
 draws into the caller's axes, writes nothing, leaves the caller's figure layout alone (no
@@ -18,9 +18,9 @@ from typing import Any
 import numpy as np
 
 from terrain import TerrainMap
-from terrain.atomic import save_figure
-from terrain.checks import check_choice, check_optional_real, check_real
-from terrain.plot_target import check_ax, check_plot_target
+from terrawatt_base.atomic import save_figure
+from terrawatt_base.checks import check_choice, check_optional_real, check_real
+from terrawatt_base.plot_target import check_ax, check_plot_target
 
 __all__ = ["RouteLine", "plot_routes", "view_bounds", "PLOT_EXTENTS"]
 

@@ -7,8 +7,8 @@ from typing import Any
 import numpy as np
 
 from terrain import DemWindows, TerrainMap
-from terrain.checks import fmt_number, real_array
-from terrain.errors import InvalidParameterError, OutOfBoundsError
+from terrawatt_base.checks import fmt_number, real_array
+from terrawatt_base.errors import InvalidParameterError, OutOfBoundsError
 from terrain.georef import lonlat_bounds, lonlat_to_xy
 
 __all__ = ["as_points", "lonlat_points"]

@@ -31,8 +31,8 @@ from typing import Any
 import numpy as np
 
 from terrain import TerrainMap
-from terrain.checks import check_bool, check_real
-from terrain.errors import BlockedPositionError, InvalidParameterError
+from terrawatt_base.checks import check_bool, check_real
+from terrawatt_base.errors import BlockedPositionError, InvalidParameterError
 
 from .edge_cost import EnergyCost
 from .kernels import grid_dijkstra, unit_lattice_weights, unit_moves, use_parallel

@@ -1,6 +1,6 @@
 """The reachability figure: energy field in Wh with contours, the reachable area outlined, depot and obstacles.
 
-Where the figure goes (the rule of every terrawatt figure, :mod:`terrain.plot_target`): give
+Where the figure goes (the rule of every terrawatt figure, :mod:`terrawatt_base.plot_target`): give
 exactly one of ``path`` or ``ax=``. With ``path``, :func:`plot_reachability` makes its own
 figure (matplotlib's Agg backend), writes a PNG atomically and returns the path; with ``ax``
 it draws into the caller's axes — its colour bar attached to ``ax.figure``, beside ``ax`` —
@@ -18,8 +18,8 @@ import numpy as np
 from scipy import ndimage
 
 from energy.battery import S_PER_H
-from terrain.atomic import save_figure
-from terrain.plot_target import check_ax, check_plot_target
+from terrawatt_base.atomic import save_figure
+from terrawatt_base.plot_target import check_ax, check_plot_target
 
 __all__ = ["plot_reachability"]
 

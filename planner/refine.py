@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 from ompl import geometric as og
 
-from terrain.checks import check_bool, check_int, check_real, check_seed, real_array
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_bool, check_int, check_real, check_seed, real_array
+from terrawatt_base.errors import InvalidParameterError
 
 from .kernels import KEEP_RTOL, relax_polyline, string_pull_indices
 from .ompl.problem import EnergyProblem, ompl_log_level, seed_ompl

@@ -25,8 +25,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_bool, check_seed
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_bool, check_seed
+from terrawatt_base.errors import InvalidParameterError
 
 from .coarse import check_free_point
 from .kernels.incremental import dstar_path, dstar_rekey, dstar_search, dstar_touch, reverse_weights, set_moves

@@ -39,8 +39,8 @@ from typing import Any
 import numpy as np
 
 from energy.models.forecast import combine_ground_sds, normal_quantile
-from terrain.checks import check_real
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_real
+from terrawatt_base.errors import InvalidParameterError
 
 from .edge_cost import EnergyCost
 from .points import as_points

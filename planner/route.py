@@ -9,8 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import readonly, real_array
-from terrain.errors import InvalidParameterError, PlanningError
+from terrawatt_base.checks import readonly, real_array
+from terrawatt_base.errors import InvalidParameterError, PlanningError
 
 from .edge_cost import EnergyCost
 from .points import as_points

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from terrain.checks import check_int, check_real
+from terrawatt_base.checks import check_int, check_real
 
 __all__ = ["PlannerSettings"]
 

@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_int
-from terrain.errors import GridMismatchError, InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import check_int
+from terrawatt_base.errors import GridMismatchError, InvalidParameterError, UnknownNameError
 from terrain.terrain_map import UNKNOWN_GROUND, TerrainMap
 
 __all__ = [

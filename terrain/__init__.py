@@ -4,7 +4,7 @@ Public API: :class:`TerrainMap`, its builders (procedural, GeoTIFF, vector), the
 current-model registry and the library's exception hierarchy.
 """
 
-from .errors import (
+from terrawatt_base.errors import (
     BlockedPositionError,
     DataError,
     DataRepairWarning,

@@ -9,8 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from .checks import check_text, fmt_number, real_array
-from .errors import FileFormatError, InvalidParameterError, OptionalDependencyError, UnitError
+from terrawatt_base.checks import check_text, fmt_number, real_array
+from terrawatt_base.errors import FileFormatError, InvalidParameterError, OptionalDependencyError, UnitError
 
 __all__ = [
     "import_rasterio",

@@ -11,9 +11,9 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from .atomic import atomic_path
-from .containers import memory_budget_bytes
-from .errors import (
+from terrawatt_base.atomic import atomic_path
+from terrawatt_base.containers import memory_budget_bytes
+from terrawatt_base.errors import (
     DataRepairWarning,
     FileFormatError,
     ImplausibleDataWarning,

@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 from affine import Affine
 
-from .checks import check_int, check_real, fmt_number
-from .errors import GridMismatchError, InvalidParameterError, OutOfBoundsError
+from terrawatt_base.checks import check_int, check_real, fmt_number
+from terrawatt_base.errors import GridMismatchError, InvalidParameterError, OutOfBoundsError
 
 __all__ = ["Grid"]
 

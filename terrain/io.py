@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from .errors import FileFormatError, InvalidParameterError
+from terrawatt_base.errors import FileFormatError, InvalidParameterError
 from .geotiff import check_fill_method, read_geotiff
 from .terrain_map import TerrainMap
 
@@ -70,7 +70,7 @@ def read_map(
     >>> read_map(pathlib.Path(folder.name) / "site.png")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    terrain.errors.FileFormatError: cannot read a map from '...site.png': its suffix '.png' is not one of '.npz', '.tif', '.tiff'
+    terrawatt_base.errors.FileFormatError: cannot read a map from '...site.png': its suffix '.png' is not one of '.npz', '.tif', '.tiff'
     >>> folder.cleanup()
     """
     check_fill_method(fill_nodata)

@@ -25,8 +25,8 @@ from typing import Any
 
 import numpy as np
 
-from .containers import memory_budget_bytes
-from .errors import FileFormatError, InvalidParameterError
+from terrawatt_base.containers import memory_budget_bytes
+from terrawatt_base.errors import FileFormatError, InvalidParameterError
 from .georef import import_rasterio, lonlat_bounds, parse_crs
 from .terrain_map import UNKNOWN_GROUND, TerrainMap
 
@@ -231,7 +231,7 @@ def ground_classes_from_landcover(
       ``unknown_ground`` (``--unknown-ground``).
 
     Only the window of the raster around the map is read, and it must fit the memory budget
-    (:func:`terrain.containers.memory_budget_bytes`), so a continental tile can serve a
+    (:func:`terrawatt_base.containers.memory_budget_bytes`), so a continental tile can serve a
     small map.
 
     Parameters

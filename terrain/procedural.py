@@ -10,8 +10,8 @@ import numpy as np
 import scipy.fft
 from scipy import ndimage
 
-from .checks import check_int, check_real, check_seed, check_shape, check_text
-from .errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import check_int, check_real, check_seed, check_shape, check_text
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 from .terrain_map import UNKNOWN_GROUND, TerrainMap
 
 __all__ = [

@@ -9,9 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from .atomic import atomic_open, remove_stale_temporaries
-from .checks import check_int, fmt_number
-from .errors import (
+from terrawatt_base.atomic import atomic_open, remove_stale_temporaries
+from terrawatt_base.checks import check_int, fmt_number
+from terrawatt_base.errors import (
     FileFormatError,
     GridMismatchError,
     InvalidParameterError,
@@ -19,7 +19,7 @@ from .errors import (
     UnitError,
     UnknownNameError,
 )
-from .formats import read_versioned_npz
+from terrawatt_base.formats import read_versioned_npz
 from .georef import lonlat_to_xy, xy_to_lonlat
 from .grid import Grid
 from .surface import SURFACE_LAYERS, surface_layers

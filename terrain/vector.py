@@ -14,7 +14,7 @@ import numpy as np
 import shapely
 from shapely.geometry.base import BaseGeometry
 
-from .errors import (
+from terrawatt_base.errors import (
     FileFormatError,
     InvalidParameterError,
     TerrawattWarning,

@@ -13,6 +13,8 @@ import terrain
 # the tests as known-answer cases: importable as top-level modules, as the benchmark scripts import them
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
+from known_models import corridor_map, known_model  # noqa: E402, F401  (fixtures of the planner and CLI tests)
+
 #: Grade (dz/dx) of the ``ramp_map`` fixture.
 RAMP_GRADE = 0.1
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from terrain.checks import check_choice, check_real, check_seed
+from terrawatt_base.checks import check_choice, check_real, check_seed
 
 from energy import CommandProfile
 

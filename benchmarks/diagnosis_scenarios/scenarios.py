@@ -62,8 +62,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_choice, check_int, check_real, check_seed
-from terrain.errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import check_choice, check_int, check_real, check_seed
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 from terrain.procedural import flat_map, ramp_map
 from terrain.terrain_map import TerrainMap
 

@@ -8,8 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import real_array
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import real_array
+from terrawatt_base.errors import InvalidParameterError
 from terrain.terrain_map import TerrainMap
 
 from ..logs import InteractionLog

@@ -8,9 +8,9 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_bool, check_int, check_real, check_seed, fmt_number, fmt_pct
-from terrain.dask_client import check_client
-from terrain.errors import DataError, InvalidParameterError, NotFittedError
+from terrawatt_base.checks import check_bool, check_int, check_real, check_seed, fmt_number, fmt_pct
+from terrawatt_base.dask_client import check_client
+from terrawatt_base.errors import DataError, InvalidParameterError, NotFittedError
 
 from ..logs import InteractionLog
 from ..models.base import CurrentModel, check_logs, log_currents

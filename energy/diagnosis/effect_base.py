@@ -10,8 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_real, check_text, fmt_number
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_real, check_text, fmt_number
+from terrawatt_base.errors import InvalidParameterError
 
 from .model_currents import PhysicsBasis, physics_basis
 

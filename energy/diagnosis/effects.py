@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from terrain.errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from .effect_base import EFFECT_KINDS, Effect
 from .effects_learned import LearnedResidualEffect

@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 from scipy import optimize
 
-from terrain.checks import check_int, check_seed
-from terrain.errors import DataError
+from terrawatt_base.checks import check_int, check_seed
+from terrawatt_base.errors import DataError
 
 from ..logs import InteractionLog
 from ..models.base import log_currents

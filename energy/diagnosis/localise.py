@@ -32,7 +32,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from terrain.checks import check_choice, check_int, check_real, check_seed, fmt_number
+from terrawatt_base.checks import check_choice, check_int, check_real, check_seed, fmt_number
 
 from ..logs import InteractionLog
 from ..metrics import DEFAULT_SECTION_S

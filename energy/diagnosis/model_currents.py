@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..ground import GroundParams
 from ..logs import InteractionLog, rest_samples

@@ -1,10 +1,10 @@
 """Figures of a diagnosis: effect ranking, waterfall, and :func:`plot_diagnosis`, which draws every figure.
 
 Each figure is a public function. Where it goes (the rule of every terrawatt figure,
-:mod:`terrain.plot_target`): give exactly one of ``path`` or ``ax=`` (single-panel figures:
+:mod:`terrawatt_base.plot_target`): give exactly one of ``path`` or ``ax=`` (single-panel figures:
 the effect ranking, the gap map) / ``axes=`` (a sequence of one matplotlib Axes per panel).
 With ``path`` the function makes its own figure, writes one PNG through
-:func:`terrain.atomic.save_figure` and returns its path; the output path is checked before
+:func:`terrawatt_base.atomic.save_figure` and returns its path; the output path is checked before
 anything is drawn. With ``ax`` / ``axes`` it draws into the caller's axes, writes nothing,
 leaves the caller's figure layout alone (no ``tight_layout``) and returns the axes (a tuple
 for ``axes``), so figures can be composed. A figure's suptitle belongs to the figure it makes
@@ -16,7 +16,7 @@ The figures of where the gap lies (residual over time, by regime, on the map) ar
 :mod:`energy.diagnosis.plots_gap` and re-exported here. :func:`plot_diagnosis` *skips* a
 figure whose data is missing (no poses or no map: no map figure) and says why in
 :attr:`DiagnosisFigures.skipped`; called on its own, such a figure raises
-:class:`~terrain.errors.DataError` with that reason.
+:class:`~terrawatt_base.errors.DataError` with that reason.
 """
 
 from __future__ import annotations
@@ -30,10 +30,10 @@ from typing import Any
 
 import numpy as np
 
-from terrain.atomic import check_output_path
-from terrain.checks import check_choice, check_int, fmt_number
-from terrain.errors import DataError, FigureWarning, InvalidParameterError
-from terrain.plot_target import check_ax, check_axes, check_plot_target
+from terrawatt_base.atomic import check_output_path
+from terrawatt_base.checks import check_choice, check_int, fmt_number
+from terrawatt_base.errors import DataError, FigureWarning, InvalidParameterError
+from terrawatt_base.plot_target import check_ax, check_axes, check_plot_target
 from terrain.terrain_map import TerrainMap
 
 from .plots_gap import (
@@ -280,7 +280,7 @@ def plot_diagnosis(diagnosis: Diagnosis, directory: str | os.PathLike[str], *, l
     max_runs : int
         Panels of the residual-over-time figure.
     on_error : {"raise", "warn"}
-        A figure that fails while drawing raises, or warns (:class:`~terrain.errors.FigureWarning`)
+        A figure that fails while drawing raises, or warns (:class:`~terrawatt_base.errors.FigureWarning`)
         and is listed in :attr:`DiagnosisFigures.failed`. Bad arguments always raise.
     dpi : int
 

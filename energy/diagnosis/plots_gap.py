@@ -15,10 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from terrain.atomic import save_figure
-from terrain.checks import check_int, check_real, fmt_number, fmt_pct
-from terrain.errors import DataError, GridMismatchError, InvalidParameterError
-from terrain.plot_target import check_ax, check_axes, check_plot_target
+from terrawatt_base.atomic import save_figure
+from terrawatt_base.checks import check_int, check_real, fmt_number, fmt_pct
+from terrawatt_base.errors import DataError, GridMismatchError, InvalidParameterError
+from terrawatt_base.plot_target import check_ax, check_axes, check_plot_target
 from terrain.terrain_map import TerrainMap
 
 from ..logs import InteractionLog
@@ -72,7 +72,7 @@ def pyplot() -> Any:
 
 
 def save_closed(fig: Any, path: Path, dpi: int) -> Path:
-    """Write ``fig`` with :func:`terrain.atomic.save_figure`, close it, return the path."""
+    """Write ``fig`` with :func:`terrawatt_base.atomic.save_figure`, close it, return the path."""
     try:
         return save_figure(fig, path, dpi=dpi)
     finally:

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from terrain.errors import DataError
+from terrawatt_base.errors import DataError
 
 from ..drivetrain import battery_side_w, control_power
 from ..logs import InteractionLog

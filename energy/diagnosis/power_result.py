@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import fmt_number
+from terrawatt_base.checks import fmt_number
 
 from ..logs import InteractionLog
 from ..metrics import DEFAULT_SECTION_S, section_charges_mah, section_error_pct

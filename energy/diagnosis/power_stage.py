@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import fmt_number, fmt_pct
+from terrawatt_base.checks import fmt_number, fmt_pct
 
 from ..logs import InteractionLog
 from .effect_base import Effect

@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.errors import DataError, InvalidParameterError
 from terrain.terrain_map import TerrainMap
 
 from ..logs import InteractionLog, rest_samples

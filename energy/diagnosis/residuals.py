@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_real, fmt_number, real_array
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.checks import check_real, fmt_number, real_array
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog
 from ..metrics import DEFAULT_SECTION_S, charge_mah, section_charges_mah, section_error_pct

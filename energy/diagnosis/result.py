@@ -7,8 +7,8 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from terrain.atomic import write_json_atomic, write_text_atomic
-from terrain.checks import fmt_number
+from terrawatt_base.atomic import write_json_atomic, write_text_atomic
+from terrawatt_base.checks import fmt_number
 
 from ..models.base import CurrentModel
 from .localise import GapShare, largest_slices

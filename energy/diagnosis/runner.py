@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from terrain.dask_client import check_client, run_tasks
+from terrawatt_base.dask_client import check_client, run_tasks
 
 from .effect_base import Effect
 from .fit import DiagnosisData, SetScore, score_effect_set

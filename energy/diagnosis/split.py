@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from terrain.checks import check_choice, check_int, readonly
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.checks import check_choice, check_int, readonly
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog
 

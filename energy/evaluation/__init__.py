@@ -6,7 +6,7 @@ and :mod:`~energy.evaluation.scoring` (:func:`score_run`, the one per-run scorin
 the ``adapt`` protocol in :mod:`~energy.evaluation.adapt_protocol` (adapt on a held-out run's
 first seconds, score the rest), :mod:`~energy.evaluation.few_shot` (adapt on a ground left out
 of training) and :mod:`~energy.evaluation.adapt_results`; folds run here or on a dask cluster
-(:mod:`terrain.dask_client`).
+(:mod:`terrawatt_base.dask_client`).
 """
 
 from .adapt_protocol import (

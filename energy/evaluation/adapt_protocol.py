@@ -20,9 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_bool, check_choice, check_real, check_text
-from terrain.dask_client import check_client, run_tasks
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.checks import check_bool, check_choice, check_real, check_text
+from terrawatt_base.dask_client import check_client, run_tasks
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog
 from ..metrics import DEFAULT_SECTION_S, compare_currents

@@ -11,8 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.atomic import check_output_path, write_text_atomic
-from terrain.errors import UnknownNameError
+from terrawatt_base.atomic import check_output_path, write_text_atomic
+from terrawatt_base.errors import UnknownNameError
 
 from .results import json_plain
 

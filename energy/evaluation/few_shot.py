@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_text
-from terrain.dask_client import check_client
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.checks import check_text
+from terrawatt_base.dask_client import check_client
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog
 from ..metrics import compare_currents

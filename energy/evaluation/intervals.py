@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.errors import InvalidParameterError
+from terrawatt_base.errors import InvalidParameterError
 
 from ..logs import InteractionLog
 from ..models.base import CurrentModel, log_currents

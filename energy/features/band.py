@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from terrain.checks import check_real, fmt_number
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.checks import check_real, fmt_number
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 from .spectra import NYQUIST_TOLERANCE
 
@@ -41,7 +41,7 @@ def check_band_hz(band_hz: Any, name: str = "band_hz") -> tuple[float, float]:
     >>> check_band_hz((12.0, 1.0))
     Traceback (most recent call last):
     ...
-    terrain.errors.InvalidParameterError: band_hz must be (low_hz, high_hz) with low_hz < high_hz, got (12.0, 1.0)
+    terrawatt_base.errors.InvalidParameterError: band_hz must be (low_hz, high_hz) with low_hz < high_hz, got (12.0, 1.0)
     """
     if isinstance(band_hz, (str, bytes)) or not hasattr(band_hz, "__len__") or len(band_hz) != 2:
         raise InvalidParameterError(f"{name} must be a pair (low_hz, high_hz) of frequencies in Hz, got {band_hz!r:.80}")

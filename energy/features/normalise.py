@@ -7,8 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_bool, real_array
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.checks import check_bool, real_array
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 __all__ = [
     "SOURCE_SPEED_RANGE_MPS",

@@ -12,8 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_int, check_real, fmt_number, real_array
-from terrain.errors import DataError, InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import check_int, check_real, fmt_number, real_array
+from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 __all__ = [
     "SPECTRUM_SCALINGS",

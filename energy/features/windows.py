@@ -7,8 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_int, check_real
-from terrain.errors import DataError
+from terrawatt_base.checks import check_int, check_real
+from terrawatt_base.errors import DataError
 
 __all__ = ["DEFAULT_T_INTERVAL_S", "WindowSpec", "window_starts", "sliding_windows"]
 

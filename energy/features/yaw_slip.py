@@ -6,8 +6,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_real, real_array
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.checks import check_real, real_array
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 from .windows import WindowSpec, sliding_windows, window_starts
 

@@ -10,7 +10,7 @@ bad input with a clear error instead of guessing:
   naming the stream, the first offending index and time, and the count; each can be
   repaired on request with ``repair=("sort", "drop_duplicates", "interpolate_nans")``
   (applied in that order; each repair is logged through ``logging.getLogger(__name__)`` and
-  warned with :class:`~terrain.errors.DataRepairWarning` giving the count). NaN timestamps
+  warned with :class:`~terrawatt_base.errors.DataRepairWarning` giving the count). NaN timestamps
   are never repaired; ``interpolate_nans`` interpolates linearly in time from the nearest
   finite samples and holds the first/last finite value at the ends.
 - gaps: a step between consecutive samples of one stream larger than ``gap_factor``

@@ -8,9 +8,9 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import fmt_number
-from terrain.containers import memory_budget_bytes, over_budget_message
-from terrain.errors import DataError, FileFormatError, OptionalDependencyError
+from terrawatt_base.checks import fmt_number
+from terrawatt_base.containers import memory_budget_bytes, over_budget_message
+from terrawatt_base.errors import DataError, FileFormatError, OptionalDependencyError
 
 __all__ = [
     "Messages",

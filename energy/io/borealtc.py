@@ -9,8 +9,8 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from terrain.checks import check_text, fmt_number
-from terrain.errors import DataError, FileFormatError, InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import check_text, fmt_number
+from terrawatt_base.errors import DataError, FileFormatError, InvalidParameterError, UnknownNameError
 
 from ..logs import DEFAULT_GAP_FACTOR, InteractionLog, LogMeta, check_gap_factor
 from .cleaning import (

@@ -1,7 +1,7 @@
 """Stream cleaning and unit checks shared by every reader: repairs, gaps, plausible magnitudes.
 
 Thresholds are module constants (see :mod:`energy.io` for the rules). Each check raises a
-:class:`~terrain.errors.DataError` (or its subclass :class:`~terrain.errors.UnitError`)
+:class:`~terrawatt_base.errors.DataError` (or its subclass :class:`~terrawatt_base.errors.UnitError`)
 naming the source, the stream or column, the offending value rounded for people and the way
 out (a repair, ``allow_gaps=True`` or ``check_units=False``).
 """
@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_real, fmt_number
-from terrain.errors import DataError, DataRepairWarning, UnitError, UnknownNameError
+from terrawatt_base.checks import check_real, fmt_number
+from terrawatt_base.errors import DataError, DataRepairWarning, UnitError, UnknownNameError
 
 from ..logs import gap_steps
 
@@ -183,7 +183,7 @@ def clean_stream(
     (``"interpolate_nans"``), and no gap longer than ``gap_factor`` median periods unless
     ``allow_gaps``. ``extra`` holds non-numeric columns (labels) that follow the row
     operations but are neither checked for NaN nor interpolated. Each repair is logged and
-    warned with :class:`~terrain.errors.DataRepairWarning`.
+    warned with :class:`~terrawatt_base.errors.DataRepairWarning`.
 
     Raises
     ------
@@ -282,7 +282,7 @@ def check_timing(source: str, stream: str, t_s: np.ndarray) -> None:
     >>> check_timing("run.csv", "IMU stream", np.arange(0.0, 20_000.0, 10.0))
     Traceback (most recent call last):
     ...
-    terrain.errors.UnitError: run.csv: IMU stream: median rate 0.1 Hz is below the plausible 0.5 Hz ...
+    terrawatt_base.errors.UnitError: run.csv: IMU stream: median rate 0.1 Hz is below the plausible 0.5 Hz ...
     """
     if t_s.size == 0:
         return

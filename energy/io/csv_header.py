@@ -6,7 +6,7 @@ import json
 import math
 from typing import Any
 
-from terrain.errors import FileFormatError, FormatVersionError
+from terrawatt_base.errors import FileFormatError, FormatVersionError
 
 from ..logs import VELOCITY_SOURCES, LogMeta
 
@@ -81,7 +81,7 @@ def parse_log_header(line: str, source: str) -> dict[str, Any]:
     >>> parse_log_header('# terrawatt-log {"format_version": 1, "notes": 3}', "run.csv")
     Traceback (most recent call last):
     ...
-    terrain.errors.FileFormatError: run.csv: terrawatt-log header: 'notes' must be a string or null, got 3
+    terrawatt_base.errors.FileFormatError: run.csv: terrawatt-log header: 'notes' must be a string or null, got 3
     """
     payload = line[len(LOG_HEADER_PREFIX):].strip()
     if len(payload) > MAX_LOG_HEADER_CHARS:

@@ -11,9 +11,9 @@ from typing import Any
 
 import numpy as np
 
-from terrain.atomic import write_text_atomic
-from terrain.checks import fmt_number
-from terrain.errors import DataError, InvalidParameterError, UnknownNameError
+from terrawatt_base.atomic import write_text_atomic
+from terrawatt_base.checks import fmt_number
+from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 from ..logs import DEFAULT_GAP_FACTOR, VELOCITY_SOURCES, InteractionLog, LogMeta, check_gap_factor
 from .cleaning import (

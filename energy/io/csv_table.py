@@ -13,8 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.containers import check_file_fits
-from terrain.errors import DataError, FileFormatError
+from terrawatt_base.containers import check_file_fits
+from terrawatt_base.errors import DataError, FileFormatError
 
 __all__ = ["MISSING_TOKENS", "CsvText", "read_csv_text", "read_table"]
 

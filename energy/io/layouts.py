@@ -8,8 +8,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from terrain.checks import check_bool, check_choice, check_text
-from terrain.errors import DataError, InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import check_bool, check_choice, check_text
+from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 from ..logs import DEFAULT_GAP_FACTOR, InteractionLog
 from .borealtc import read_borealtc

@@ -19,8 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_bool, check_choice, check_optional_real, check_real, check_text
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.checks import check_bool, check_choice, check_optional_real, check_real, check_text
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..logs import DEFAULT_GAP_FACTOR, InteractionLog, LogMeta, check_gap_factor
 from .bag_align import CurrentStreams, align_streams

@@ -6,8 +6,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import fmt_number, real_array
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.checks import fmt_number, real_array
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 __all__ = [
     "DRIVE_FIELDS",

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_real
+from terrawatt_base.checks import check_real
 
 __all__ = ["DEFAULT_GAP_FACTOR", "check_gap_factor", "gap_steps", "median_period_s", "merged_gaps"]
 

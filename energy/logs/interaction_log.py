@@ -33,8 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_choice, check_real, fmt_number
-from terrain.errors import DataError, DataRepairWarning, InvalidParameterError
+from terrawatt_base.checks import check_choice, check_real, fmt_number
+from terrawatt_base.errors import DataError, DataRepairWarning, InvalidParameterError
 
 from .arrays import DRIVE_FIELDS, IMU_FIELDS, check_increasing, ground_array, log_vector, pose_array, stream_vector
 from .gaps import DEFAULT_GAP_FACTOR, check_gap_factor, median_period_s, merged_gaps

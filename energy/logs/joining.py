@@ -8,8 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import fmt_number
-from terrain.errors import DataError
+from terrawatt_base.checks import fmt_number
+from terrawatt_base.errors import DataError
 
 from .arrays import DRIVE_FIELDS, IMU_FIELDS
 

@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from terrain.checks import check_optional_real
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_optional_real
+from terrawatt_base.errors import InvalidParameterError
 
 __all__ = ["VELOCITY_SOURCES", "LogMeta"]
 

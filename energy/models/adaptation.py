@@ -39,8 +39,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from terrain.checks import check_bool, check_choice, check_int, check_real, check_text, real_array
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.checks import check_bool, check_choice, check_int, check_real, check_text, real_array
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog
 from .base import CurrentModel, ModelRecord, TrainingSummary, check_logs, log_currents

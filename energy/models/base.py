@@ -7,12 +7,12 @@ arguments; ``fit(logs)`` validates, sets attributes ending in ``_`` and returns 
 ``log.time_s``; ``score`` is R²).
 
 A fitted model is saved as one file (:meth:`CurrentModel.save`), written atomically
-through :mod:`terrain.atomic`: a zip archive holding ``model.json`` (the format, its
+through :mod:`terrawatt_base.atomic`: a zip archive holding ``model.json`` (the format, its
 version, the model class, the constructor parameters, the fitted state in plain types, the
 package versions, what the model was trained on — :class:`TrainingSummary` — and its
 forecast interval, :class:`~energy.models.uncertainty.IntervalModel`; the last two are
 optional, older files lack them) and one ``.npy`` entry per array of the state (numpy's
-own format, read without pickle, sizes checked by :mod:`terrain.containers` before
+own format, read without pickle, sizes checked by :mod:`terrawatt_base.containers` before
 anything is inflated). No torch is needed to write or read it: the estimator stores its
 network weights as arrays like any other state. Files of format version 1 (``torch.save``
 checkpoints of every model class) are still read; torch is imported only for them.
@@ -37,10 +37,10 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from terrain.atomic import atomic_open, check_output_path, remove_stale_temporaries
-from terrain.checks import check_int, check_real
-from terrain.containers import check_zip_sizes, load_npy, read_zip_entry
-from terrain.errors import (
+from terrawatt_base.atomic import atomic_open, check_output_path, remove_stale_temporaries
+from terrawatt_base.checks import check_int, check_real
+from terrawatt_base.containers import check_zip_sizes, load_npy, read_zip_entry
+from terrawatt_base.errors import (
     DataError,
     FileFormatError,
     FormatVersionError,

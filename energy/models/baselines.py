@@ -20,8 +20,8 @@ from typing import Any
 import numpy as np
 from scipy import optimize
 
-from terrain.checks import check_bool, real_array
-from terrain.errors import DataError, InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import check_bool, real_array
+from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 from ..logs import InteractionLog, at_rest, rest_samples
 from ..params import GroundParams, MotorParams, RobotParams, ground_preset, robot_preset

@@ -16,8 +16,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from terrain.checks import check_int
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.checks import check_int
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog
 from .base import CurrentModel, check_logs, log_currents

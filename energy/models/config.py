@@ -7,8 +7,8 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from terrain.checks import check_bool, check_choice, check_int, check_real, check_text
-from terrain.errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import check_bool, check_choice, check_int, check_real, check_text
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from ..features import DEFAULT_BAND_HZ, DEFAULT_T_INTERVAL_S, SPECTRUM_SCALINGS, check_band_hz
 from ..params import ROBOT_PRESETS

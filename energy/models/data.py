@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..features import WindowSpec
 

@@ -25,8 +25,8 @@ import torch
 from torch import nn
 from torch.nn import functional
 
-from terrain.checks import check_seed
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_seed
+from terrawatt_base.errors import InvalidParameterError
 
 from .data import WindowDataset
 from .net import CurrentNet, SeededDropout

@@ -44,8 +44,8 @@ from typing import Any
 import numpy as np
 import torch
 
-from terrain.checks import check_bool, check_int, check_seed, real_array
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.checks import check_bool, check_int, check_seed, real_array
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..features import (
     SOURCE_CURRENT_RANGE_A,

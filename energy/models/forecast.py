@@ -29,8 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.stats import norm
 
-from terrain.checks import check_real
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_real
+from terrawatt_base.errors import InvalidParameterError
 
 __all__ = ["CurrentForecast", "ChargeForecast", "normal_quantile", "combine_ground_sds"]
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-from terrain.checks import check_choice
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_choice
+from terrawatt_base.errors import InvalidParameterError
 
 from .base import CurrentModel
 from .baselines import ConstantCurrentModel, LinearCurrentModel, PhysicsCurrentModel

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import os
 
-from terrain.errors import FileFormatError
+from terrawatt_base.errors import FileFormatError
 
 from .base import CurrentModel, read_model_file
 from .baselines import ConstantCurrentModel, LinearCurrentModel, PhysicsCurrentModel

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import torch
 from torch import nn
 
-from terrain.checks import check_int, check_real, check_seed
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_int, check_real, check_seed
+from terrawatt_base.errors import InvalidParameterError
 
 __all__ = ["CurrentNetConfig", "CurrentNet", "SeededDropout"]
 

@@ -17,8 +17,8 @@ from typing import Any
 import torch
 from torch import nn
 
-from terrain.checks import check_bool, check_choice, check_int, check_real, check_seed
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_bool, check_choice, check_int, check_real, check_seed
+from terrawatt_base.errors import InvalidParameterError
 
 from .data import WindowDataset
 
@@ -138,7 +138,7 @@ def train_network(
         Scored after every epoch; required for early stopping.
     config : TrainConfig
     seed : int or None
-        Seed of the shuffling (:func:`terrain.checks.check_seed`; ``None``: fresh entropy).
+        Seed of the shuffling (:func:`terrawatt_base.checks.check_seed`; ``None``: fresh entropy).
     progress : bool
         Show a tqdm bar with the losses.
     description : str

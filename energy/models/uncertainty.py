@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from terrain.checks import check_bool, check_int
+from terrawatt_base.checks import check_bool, check_int
 
 from ..logs import InteractionLog, rest_samples
 

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from terrain.checks import check_bool, check_real
+from terrawatt_base.checks import check_bool, check_real
 
 from ..battery import Battery
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from terrain.errors import UnknownNameError
+from terrawatt_base.errors import UnknownNameError
 
 from ..params import GroundParams, ground_preset
 from .variation import GroundVariation

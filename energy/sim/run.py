@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from terrain.errors import InvalidParameterError
+from terrawatt_base.errors import InvalidParameterError
 
 from ..logs import InteractionLog
 from ..power import PowerBreakdown

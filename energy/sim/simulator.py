@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 from scipy import signal
 
-from terrain.checks import check_real, check_seed
-from terrain.errors import (
+from terrawatt_base.checks import check_real, check_seed
+from terrawatt_base.errors import (
     BlockedPositionError,
     InvalidParameterError,
     UnknownNameError,

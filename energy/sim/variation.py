@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from terrain.checks import check_real
+from terrawatt_base.checks import check_real
 
 from ..ground import GroundParams
 

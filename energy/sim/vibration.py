@@ -10,8 +10,8 @@ from typing import Any
 import numpy as np
 from scipy import signal
 
-from terrain.checks import check_real
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_real
+from terrawatt_base.errors import InvalidParameterError
 
 __all__ = ["VibrationSignature", "vibration_accel_mps2"]
 

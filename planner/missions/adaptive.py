@@ -83,7 +83,7 @@ from energy import (
     log_battery_power_w,
 )
 from terrain import CellModelRegistry, InvalidParameterError, TerrainMap
-from terrain.checks import fmt_number, real_array
+from terrawatt_base.checks import fmt_number, real_array
 
 from ..lattice import Lattice
 from ..learned_cost import LearnedEnergyModel

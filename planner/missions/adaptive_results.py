@@ -12,8 +12,8 @@ import numpy as np
 
 from energy import EnergyBudget
 from terrain import CellModelRegistry, TerrainMap
-from terrain.atomic import write_json_atomic
-from terrain.errors import InvalidParameterError
+from terrawatt_base.atomic import write_json_atomic
+from terrawatt_base.errors import InvalidParameterError
 
 from ..route import Route
 from .figures import plot_adaptive_mission

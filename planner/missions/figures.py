@@ -1,6 +1,6 @@
 """Figures of mission results: the driven mission and the adaptive loop.
 
-Where a figure goes (the rule of every terrawatt figure, :mod:`terrain.plot_target`): give
+Where a figure goes (the rule of every terrawatt figure, :mod:`terrawatt_base.plot_target`): give
 exactly one of ``path`` or ``axes=`` (a sequence of matplotlib Axes, one per panel; an array
 from ``Figure.subplots`` is read row by row). With ``path`` the function makes its own figure
 (matplotlib's object API on the Agg canvas, no pyplot), writes a PNG atomically and returns
@@ -20,9 +20,9 @@ from typing import Any
 import numpy as np
 
 from terrain import CellModelRegistry, TerrainMap
-from terrain.atomic import save_figure
-from terrain.errors import InvalidParameterError
-from terrain.plot_target import check_axes, check_plot_target
+from terrawatt_base.atomic import save_figure
+from terrawatt_base.errors import InvalidParameterError
+from terrawatt_base.plot_target import check_axes, check_plot_target
 
 __all__ = ["plot_mission", "plot_adaptive_mission"]
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from energy import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, CommandProfile, drive_profile
 from energy.profiles import terrain_along
-from terrain.errors import InvalidParameterError
+from terrawatt_base.errors import InvalidParameterError
 
 from ..edge_cost import EnergyCost
 from ..route import Route

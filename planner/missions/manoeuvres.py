@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from energy import InteractionLog, LinearCurrentModel, TruthSimulator, excitation_commands
-from terrain.checks import SEED_LIMIT, check_int
+from terrawatt_base.checks import SEED_LIMIT, check_int
 
 __all__ = ["excitation_manoeuvre", "fit_prior_model"]
 

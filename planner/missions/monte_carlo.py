@@ -20,9 +20,9 @@ import numpy as np
 
 from energy import GROUND_PRESETS, Battery, GroundParams, RobotParams, TruthSimulator, ground_preset, robot_preset
 from terrain import TerrainMap
-from terrain.checks import check_bool, check_int, check_real, check_seed
-from terrain.dask_client import check_client, client_worker_count, dask_client
-from terrain.errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import check_bool, check_int, check_real, check_seed
+from terrawatt_base.dask_client import check_client, client_worker_count, dask_client
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from ..route import Route
 from ..edge_cost import EnergyCost

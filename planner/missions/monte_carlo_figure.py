@@ -1,6 +1,6 @@
 """The figure of a Monte Carlo mission study: energy histogram with P50/P90/P99 and the exceedance curve.
 
-Where the figure goes (the rule of every terrawatt figure, :mod:`terrain.plot_target`): give
+Where the figure goes (the rule of every terrawatt figure, :mod:`terrawatt_base.plot_target`): give
 exactly one of ``path`` or ``axes=`` (2 matplotlib Axes: histogram, exceedance curve). With
 ``path``, :func:`plot_monte_carlo` makes its own figure (matplotlib's object API on the Agg
 canvas, no pyplot), writes a PNG atomically and returns the path; with ``axes`` it draws into
@@ -19,9 +19,9 @@ from typing import Any
 
 import numpy as np
 
-from terrain.atomic import save_figure
-from terrain.errors import InvalidParameterError
-from terrain.plot_target import check_axes, check_plot_target
+from terrawatt_base.atomic import save_figure
+from terrawatt_base.errors import InvalidParameterError
+from terrawatt_base.plot_target import check_axes, check_plot_target
 
 __all__ = ["plot_monte_carlo"]
 

@@ -14,9 +14,9 @@ from typing import Any
 import numpy as np
 
 from energy import Battery
-from terrain.atomic import write_json_atomic, write_text_atomic
-from terrain.checks import check_real, readonly, real_array
-from terrain.errors import InvalidParameterError, TerrawattError
+from terrawatt_base.atomic import write_json_atomic, write_text_atomic
+from terrawatt_base.checks import check_real, readonly, real_array
+from terrawatt_base.errors import InvalidParameterError, TerrawattError
 
 from ..risk import RouteEnergyInterval
 from .monte_carlo_figure import plot_monte_carlo

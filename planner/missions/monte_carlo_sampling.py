@@ -9,8 +9,8 @@ from typing import Any
 import numpy as np
 
 from energy import Battery, GroundParams, RobotParams
-from terrain.checks import check_real
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import check_real
+from terrawatt_base.errors import InvalidParameterError
 
 __all__ = ["MissionDistributions", "MissionSample"]
 

@@ -13,9 +13,9 @@ import numpy as np
 
 from energy import CURRENT_CONVENTIONS, EnergyBudget, InteractionLog
 from terrain import TerrainMap
-from terrain.atomic import write_text_atomic
-from terrain.checks import check_choice, check_int, readonly
-from terrain.errors import InvalidParameterError
+from terrawatt_base.atomic import write_text_atomic
+from terrawatt_base.checks import check_choice, check_int, readonly
+from terrawatt_base.errors import InvalidParameterError
 
 from ..route import Route
 from .figures import plot_mission

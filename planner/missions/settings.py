@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from terrain import InvalidParameterError, UpdatePolicy
-from terrain.checks import check_bool, check_int, check_real, check_seed
+from terrawatt_base.checks import check_bool, check_int, check_real, check_seed
 
 __all__ = ["UPDATE_SCOPES", "AdaptiveSettings"]
 

@@ -52,8 +52,8 @@ from energy import (
 )
 from energy.profiles import drivable_waypoints, planned_durations_s
 from terrain import TerrainMap
-from terrain.checks import check_bool, check_choice, check_optional_real, check_real, fmt_number
-from terrain.errors import DataError, GridMismatchError, InvalidParameterError, OutOfBoundsError
+from terrawatt_base.checks import check_bool, check_choice, check_optional_real, check_real, fmt_number
+from terrawatt_base.errors import DataError, GridMismatchError, InvalidParameterError, OutOfBoundsError
 
 from ..edge_cost import EnergyCost
 from ..route import Route

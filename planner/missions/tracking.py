@@ -7,8 +7,8 @@ import math
 import numpy as np
 
 from terrain import TerrainMap
-from terrain.checks import fmt_number
-from terrain.errors import InvalidParameterError
+from terrawatt_base.checks import fmt_number
+from terrawatt_base.errors import InvalidParameterError
 
 from ..route import Route
 

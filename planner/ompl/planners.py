@@ -11,7 +11,7 @@ import numpy as np
 from ompl import base as ob
 from ompl import geometric as og
 
-from terrain.errors import PlanningError
+from terrawatt_base.errors import PlanningError
 
 from ..kernels import CostArrays
 from ..settings import PlannerSettings

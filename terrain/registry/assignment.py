@@ -7,8 +7,8 @@ from typing import Literal
 
 import numpy as np
 
-from ..checks import check_int, readonly
-from ..errors import InvalidParameterError
+from terrawatt_base.checks import check_int, readonly
+from terrawatt_base.errors import InvalidParameterError
 from .cells import unflat
 from .records import PRIOR_MODEL_ID, RegistryVersion
 

@@ -7,8 +7,8 @@ from typing import Any, Literal
 import numpy as np
 from scipy import ndimage
 
-from ..checks import readonly
-from ..errors import DataError, InvalidParameterError
+from terrawatt_base.checks import readonly
+from terrawatt_base.errors import DataError, InvalidParameterError
 from ..grid import Grid
 from .cells import check_rows_cols, flat_cells, unflat
 from .records import Cells, FlaggedRegion, UpdatePolicy

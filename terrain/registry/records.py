@@ -9,8 +9,8 @@ from typing import Any, Literal, Protocol, Union, runtime_checkable
 
 import numpy as np
 
-from ..checks import check_int, check_real
-from ..errors import InvalidParameterError
+from terrawatt_base.checks import check_int, check_real
+from terrawatt_base.errors import InvalidParameterError
 
 __all__ = [
     "PRIOR_MODEL_ID",

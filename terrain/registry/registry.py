@@ -9,8 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from ..checks import check_real, check_shape, check_text
-from ..errors import GridMismatchError, InvalidParameterError
+from terrawatt_base.checks import check_real, check_shape, check_text
+from terrawatt_base.errors import GridMismatchError, InvalidParameterError
 from ..grid import Grid
 from ..terrain_map import TerrainMap
 from .assignment import CellAssignment
@@ -477,7 +477,7 @@ class CellModelRegistry(EvidenceMixin):
             When given, the registry must be on its grid (see :meth:`check_grid`).
 
         A registry that a :meth:`save` killed between its two renames left aside is moved
-        back first (with a :class:`~terrain.errors.RecoveryWarning`), and temporaries of
+        back first (with a :class:`~terrawatt_base.errors.RecoveryWarning`), and temporaries of
         dead saves of the same target are removed.
 
         Raises

@@ -8,13 +8,13 @@ A registry is one directory::
                     history versions (model, reason, validation errors)
     models/         one file per model, written by the caller's ``save_model``
 
-It is written through :func:`terrain.atomic.atomic_directory`: built in a temporary folder
+It is written through :func:`terrawatt_base.atomic.atomic_directory`: built in a temporary folder
 ``.<name>.<pid>.<random>.tmp`` beside the target and renamed into place; an existing
 registry is moved aside (into another such folder) only once the new one is complete, and
 removed once the new one is in place. A save killed between those two renames leaves no
 directory under the name and the previous registry in the aside folder:
 :func:`recover_interrupted_save` moves it back (with a
-:class:`~terrain.errors.RecoveryWarning`). Every save and load first recovers, then removes
+:class:`~terrawatt_base.errors.RecoveryWarning`). Every save and load first recovers, then removes
 the temporaries of dead saves of the same target, so leftovers never accumulate.
 """
 
@@ -33,10 +33,10 @@ from typing import Any
 
 import numpy as np
 
-from ..atomic import atomic_directory, fsync_directory, remove_stale_temporaries, stale_temporaries
-from ..checks import readonly
-from ..errors import FileFormatError, FormatVersionError, InvalidParameterError, RecoveryWarning
-from ..formats import check_format_version, read_versioned_npz
+from terrawatt_base.atomic import atomic_directory, fsync_directory, remove_stale_temporaries, stale_temporaries
+from terrawatt_base.checks import readonly
+from terrawatt_base.errors import FileFormatError, FormatVersionError, InvalidParameterError, RecoveryWarning
+from terrawatt_base.formats import check_format_version, read_versioned_npz
 from ..grid import Grid
 from .assignment import CellAssignment
 from .cells import unflat
@@ -184,7 +184,7 @@ def recover_interrupted_save(target: str | os.PathLike[str]) -> Path | None:
     Only acts when nothing is under ``target``'s name. The newest registry found in an
     aside folder of a dead save (``.<name>.<pid>.<random>.tmp/old``, or the
     ``.<name>.<random>.old/<name>`` holders of earlier releases) is renamed back, with a
-    :class:`~terrain.errors.RecoveryWarning`; its folder is removed. Returns ``None`` when
+    :class:`~terrawatt_base.errors.RecoveryWarning`; its folder is removed. Returns ``None`` when
     there was nothing to recover.
     """
     target = Path(target)

@@ -8,8 +8,8 @@ from collections.abc import Iterator, Mapping
 from types import MappingProxyType
 from typing import Any
 
-from ..checks import check_text
-from ..errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import check_text
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 from .records import CurrentModelProtocol, MetaValue, ModelRecord
 
 __all__ = ["ModelTable", "check_meta"]

@@ -18,7 +18,7 @@ from diagnosis_scenarios import (
     withheld_gap,
     withheld_gap_ratio,
 )
-from terrain.errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 EXCITABLE = [name for name, sc in SCENARIOS.items() if sc.excitable]
 

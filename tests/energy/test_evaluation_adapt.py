@@ -184,7 +184,7 @@ def _write_borealtc(folder, logs_by_ground):
 
 
 def test_cli_evaluate_protocol_adapt_and_few_shot(logs, tmp_path, capsys):
-    from planner.cli import main
+    from terrawatt_cli import main
 
     data = tmp_path / "logs"
     _write_borealtc(data, {"grass": logs[:3], "sand": logs[3:]})
@@ -208,7 +208,7 @@ def test_cli_evaluate_protocol_adapt_and_few_shot(logs, tmp_path, capsys):
     (["--adapt-threshold", "-3"], "--adapt-threshold"),
 ])
 def test_cli_bad_adapt_options_exit_2(logs, tmp_path, capsys, extra, match):
-    from planner.cli import main
+    from terrawatt_cli import main
 
     data = tmp_path / "logs"
     _write_borealtc(data, {"grass": logs[:2]})

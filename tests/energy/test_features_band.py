@@ -19,9 +19,9 @@ from energy import (
     read_borealtc,
 )
 from energy.features import DEFAULT_BAND_HZ, BandNotServedError, band_served, check_band_hz
-from planner.cli import evaluate as evaluate_cli
-from planner.cli import main
-from planner.cli import train as train_cli
+from terrawatt_cli import evaluate as evaluate_cli
+from terrawatt_cli import main
+from terrawatt_cli import train as train_cli
 from terrain import InvalidParameterError
 
 SHARED = Path(__file__).resolve().parents[3] / "shared" / "data" / "borealtc"

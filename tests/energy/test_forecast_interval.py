@@ -8,7 +8,7 @@ import pytest
 from energy import InteractionLog, InvalidParameterError, LogMeta, VibrationCurrentEstimator, load_current_model
 from energy.evaluation.intervals import IntervalRecord, charge_record, coverage, plot_reliability
 from energy.models import AdaptedCurrentModel, LinearCurrentModel, fit_interval, log_currents
-from terrain.errors import DataError
+from terrawatt_base.errors import DataError
 from energy.models.config import estimator_preset
 from energy.models.forecast import CurrentForecast, combine_ground_sds, normal_quantile
 from energy.logs import rest_samples

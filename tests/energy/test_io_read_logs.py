@@ -12,7 +12,7 @@ from robot_bags import requires_rosbags, write_robot_bag
 
 from energy import BagTopics, InteractionLog, LogMeta, new_current_model, read_borealtc, read_logs, write_csv_log
 from energy.io import LOG_SUFFIXES
-from planner.cli import main
+from terrawatt_cli import main
 from terrain import DataError, InvalidParameterError, UnknownNameError
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"

@@ -7,7 +7,7 @@ import pytest
 
 from energy import PAPER_GROUNDS, Battery, InteractionLog, NoiseModel, TruthSimulator, robot_preset
 from energy.io import read_csv_log, write_csv_log
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 
 def _log(n: int = 20, **kw) -> InteractionLog:

@@ -30,7 +30,7 @@ from planner import (
     read_pairs_csv,
     read_sites_csv,
 )
-from planner.cli import main
+from terrawatt_cli import main
 
 _NO_DASK = "planning on a cluster needs the distributed extra (dask[distributed])"
 #: A free cell west of the wall, one east of it, one below the gap and the wall itself (wall_map).

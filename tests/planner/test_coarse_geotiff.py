@@ -220,7 +220,7 @@ def test_bad_files(tmp_path):
 
 # ------------------------------------------------------------------ the command line
 def test_plan_windowed_from_the_command_line_equals_the_whole_map_plan(dem_path, tmp_path, capsys):
-    from planner.cli import main
+    from terrawatt_cli import main
 
     args = ["plan", "--map", str(dem_path), "--start", *map(str, START), "--goal", *map(str, GOAL),
             "--coarse-factor", "4"]
@@ -239,7 +239,7 @@ def test_plan_windowed_from_the_command_line_equals_the_whole_map_plan(dem_path,
 
 
 def test_plan_windowed_in_chained_fine_windows_writes_its_files(dem_path, tmp_path, capsys):
-    from planner.cli import main
+    from terrawatt_cli import main
 
     args = ["plan", "--map", str(dem_path), "--start", *map(str, START), "--goal", *map(str, GOAL),
             "--coarse-factor", "4", "--windowed"]
@@ -257,7 +257,7 @@ def test_plan_windowed_in_chained_fine_windows_writes_its_files(dem_path, tmp_pa
 
 
 def test_plan_windowed_whole_map_figure_and_no_route(tmp_path, capsys):
-    from planner.cli import main
+    from terrawatt_cli import main
 
     path = ridge_dem(tmp_path / "ridge.tif", (0, 0))
     rc = main(["plan", "--map", str(path), "--start", "4.5", "4.5", "--goal", "60.5", "4.5", "--coarse-factor", "4",
@@ -281,7 +281,7 @@ def test_plan_windowed_whole_map_figure_and_no_route(tmp_path, capsys):
     ],
 )
 def test_plan_windowed_flags_are_checked(dem_path, tmp_path, capsys, extra, message):
-    from planner.cli import main
+    from terrawatt_cli import main
 
     rc = main(["plan", "--map", str(dem_path), "--start", "5.5", "6.5", "--goal", "90.5", "120.5", "--windowed",
                *extra, "--out", str(tmp_path / "o")])
@@ -290,7 +290,7 @@ def test_plan_windowed_flags_are_checked(dem_path, tmp_path, capsys, extra, mess
 
 
 def test_plan_windowed_needs_a_geotiff(tmp_path, capsys):
-    from planner.cli import main
+    from terrawatt_cli import main
 
     npz = tmp_path / "map.npz"
     procedural_map((16, 16), 1.0, seed=0).save(npz)

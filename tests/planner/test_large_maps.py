@@ -321,7 +321,7 @@ def test_coarse_to_fine_refuses_a_blocked_start(tmp_path):
 
 
 def test_every_map_taking_command_reprojects_a_geographic_dem(tmp_path, capsys):
-    from planner.cli import main
+    from terrawatt_cli import main
 
     path = write_geographic_dem(tmp_path / "geo.tif")
     tmap = read_geotiff(path, reproject_to="utm", cell_size_m=20.0)

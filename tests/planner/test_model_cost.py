@@ -98,7 +98,7 @@ def test_a_class_the_model_never_drove_can_be_priced_as_one_it_did(corridor_map,
 
 
 def test_model_ground_tokens_parse_into_a_name_or_a_mapping():
-    from planner.cli.common import parse_model_ground
+    from terrawatt_cli.common import parse_model_ground
 
     assert parse_model_ground(["snow"]) == "snow"
     assert parse_model_ground(["grass=asphalt", "sand=snow"]) == {"grass": "asphalt", "sand": "snow"}

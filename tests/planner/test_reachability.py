@@ -26,7 +26,7 @@ from planner import (
     lattice_move_energies,
     reachability,
 )
-from planner.cli import main
+from terrawatt_cli import main
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 DEPOT = (17.3, 21.6)  # not a cell centre: joined to the nodes within 1.5 cells, like a lattice query's start

@@ -23,8 +23,8 @@ from planner import (
     route_pose_times_s,
     write_route_bag,
 )
-from planner.cli import main
-from planner.cli.ros2 import add_ros2_arguments, check_ros2_outputs, nav2_targets, write_ros2_outputs
+from terrawatt_cli import main
+from terrawatt_cli.ros2 import add_ros2_arguments, check_ros2_outputs, nav2_targets, write_ros2_outputs
 
 pytest.importorskip("rosbags", reason="ROS 2 bags need the ros extra (rosbags)")
 
@@ -214,7 +214,7 @@ def test_reading_what_is_not_a_route_bag_fails_clearly(tmp_path, wall):
         read_route_bag(tmp_path / "missing.mcap")
 
 
-# ---------------------------------------------------------------- the CLI's ROS 2 flags (planner.cli.ros2)
+# ---------------------------------------------------------------- the CLI's ROS 2 flags (terrawatt_cli.ros2)
 def _parse(argv: list[str]) -> argparse.Namespace:
     parser = argparse.ArgumentParser()
     add_ros2_arguments(parser)
@@ -283,7 +283,7 @@ def test_no_bag_for_a_route_not_found(tmp_path, wall, capsys):
 
 
 def test_plan_command_writes_ros2_and_nav2_outputs(tmp_path, capsys, wall):
-    """End to end through ``terrawatt plan``: passes once planner/cli/plan.py is wired to planner.cli.ros2."""
+    """End to end through ``terrawatt plan``: passes once terrawatt_cli/plan.py is wired to terrawatt_cli.ros2."""
     pytest.importorskip("rasterio", reason="--energy-costmap needs the geo extra (rasterio)")
     tmap, _, _ = wall
     path = tmap.save(tmp_path / "wall.npz")

@@ -9,7 +9,7 @@ import pytest
 import shapely.geometry
 
 from planner import EnergyCost, InvalidParameterError, UnknownNameError, evaluate_route, plan_route
-from planner.cli import main
+from terrawatt_cli import main
 from planner.plot import RouteLine, plot_routes, view_bounds
 from planner.route_geojson import GEOJSON_FORMAT_VERSION, routes_geojson, write_geojson
 from terrain import procedural_map, transform_xy

@@ -9,7 +9,7 @@ import stat
 import numpy as np
 import pytest
 
-from terrain.atomic import FILE_MODE, atomic_open, atomic_path, write_json_atomic, write_text_atomic
+from terrawatt_base.atomic import FILE_MODE, atomic_open, atomic_path, write_json_atomic, write_text_atomic
 
 
 def _leftovers(directory):

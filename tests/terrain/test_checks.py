@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from terrain import InvalidParameterError, UnknownNameError
-from terrain.checks import (
+from terrawatt_base.checks import (
     SEED_LIMIT,
     check_bool,
     check_choice,
@@ -130,7 +130,7 @@ def test_an_int_beyond_float_range_is_not_finite() -> None:
 def test_messages_show_numpy_scalars_as_plain_numbers():
     import numpy as np
 
-    from terrain.checks import check_int, check_real
+    from terrawatt_base.checks import check_int, check_real
 
     with pytest.raises(InvalidParameterError, match=r"^speed must be <= 5, got 10\.0$"):
         check_real("speed", np.float64(10.0), high=5.0)

@@ -1,4 +1,4 @@
-"""Tests of terrain.containers: zip / .npz / .npy content checked before it is trusted."""
+"""Tests of terrawatt_base.containers: zip / .npz / .npy content checked before it is trusted."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import pytest
 from energy import LinearCurrentModel, load_current_model
 from energy.io import read_borealtc
 from terrain import FileFormatError, TerrainMap
-from terrain.containers import load_npy, read_npz
+from terrawatt_base.containers import load_npy, read_npz
 
 from pathlib import Path
 

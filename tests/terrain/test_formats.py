@@ -7,8 +7,8 @@ import io
 import numpy as np
 import pytest
 
-from terrain.errors import FileFormatError, FormatVersionError
-from terrain.formats import check_format_version, read_versioned_npz
+from terrawatt_base.errors import FileFormatError, FormatVersionError
+from terrawatt_base.formats import check_format_version, read_versioned_npz
 
 MAGIC = "terrawatt-test"
 

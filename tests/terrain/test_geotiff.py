@@ -73,7 +73,7 @@ def test_north_up_file_is_flipped_so_rows_grow_with_y(rasterio, tmp_path):
     assert tmap.sample("elevation", 135.0, 205.0) == 11.0  # south-east pixel
 
 
-@pytest.mark.filterwarnings("ignore::terrain.errors.ImplausibleDataWarning")  # 1 m steps between 1 m cells
+@pytest.mark.filterwarnings("ignore::terrawatt_base.errors.ImplausibleDataWarning")  # 1 m steps between 1 m cells
 def test_south_up_and_east_left_files(rasterio, tmp_path):
     data = np.arange(6, dtype=np.float64).reshape(2, 3)
     south_up = rasterio.Affine(2.0, 0.0, 10.0, 0.0, 2.0, 20.0)  # file row 0 = south edge
@@ -142,7 +142,7 @@ def test_nodata_raises_by_default(rasterio, tmp_path):
         read_geotiff(nodata_file(rasterio, tmp_path))
 
 
-@pytest.mark.filterwarnings("ignore::terrain.errors.ImplausibleDataWarning")  # 1 m steps between 1 m cells
+@pytest.mark.filterwarnings("ignore::terrawatt_base.errors.ImplausibleDataWarning")  # 1 m steps between 1 m cells
 def test_nodata_filled_from_the_nearest_cell_on_request(rasterio, tmp_path):
     with pytest.warns(DataRepairWarning, match="filled 2 nodata cells"):
         tmap = read_geotiff(nodata_file(rasterio, tmp_path), fill_nodata="nearest")

@@ -7,7 +7,7 @@ import pytest
 from matplotlib.figure import Figure
 
 from terrain import InvalidParameterError
-from terrain.plot_target import check_ax, check_axes, check_plot_target
+from terrawatt_base.plot_target import check_ax, check_axes, check_plot_target
 
 
 def test_a_path_is_checked_and_returned(tmp_path):

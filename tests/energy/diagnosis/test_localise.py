@@ -12,7 +12,7 @@ from energy import PAPER_GROUNDS, InteractionLog, LogMeta, TruthSimulator, charg
 from energy.diagnosis.localise import DIMENSIONS, GapShare, largest_slices, localise_gap, shares_of, time_labels
 from energy.diagnosis.residuals import gap_summary
 from terrain import flat_map, ramp_map
-from terrain.errors import DataError, InvalidParameterError, UnknownNameError
+from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 
 def make_log(v_mps, omega_radps, left_a, right_a, *, dt_s=0.1, pose_xyh=None, ground=None, ground_label=None):

@@ -13,7 +13,7 @@ from energy.diagnosis import PowerDiagnosis, diagnose
 from energy.diagnosis.model_currents import physics_basis
 from energy.diagnosis.power_data import power_inputs, predicted_battery_power_w
 from diagnosis_scenarios import POWER_ONLY_EFFECTS, null_scenario, scenario
-from terrain.errors import DataError
+from terrawatt_base.errors import DataError
 
 N_BOOT = 50
 

@@ -26,7 +26,7 @@ from energy.diagnosis.regimes import (
     turning_labels,
 )
 from terrain import flat_map, ramp_map
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 
 def make_log(v_mps, omega_radps=None, *, dt_s=0.01, pose_xyh=None, ground=None, ground_label=None) -> InteractionLog:

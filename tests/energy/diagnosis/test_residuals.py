@@ -17,7 +17,7 @@ from energy.diagnosis.residuals import (
     sample_gap_mah,
     sample_weights_s,
 )
-from terrain.errors import DataError, InvalidParameterError
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 
 def make_log(time_s, left_a, right_a, v_mps=None, omega_radps=None) -> InteractionLog:

@@ -20,7 +20,7 @@ from planner import (
     simulate_mission,
     simulate_missions_mc,
 )
-from planner.cli import main
+from terrawatt_cli import main
 from planner.missions import MissionSample
 
 NOMINAL = Battery(2.0, 24.0)

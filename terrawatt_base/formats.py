@@ -59,7 +59,7 @@ def read_versioned_npz(path: str | os.PathLike[str], *, magic: str, version: int
     ------
     FileFormatError
         Missing, corrupt (any failure to read the archive), content over the memory budget or
-        an entry whose header lies (:mod:`terrain.containers`), not this kind of file, or
+        an entry whose header lies (:mod:`terrawatt_base.containers`), not this kind of file, or
         without a valid version.
     FormatVersionError
         Another format version.

@@ -1,4 +1,4 @@
-"""Planner test fixtures: a current model with a known mean and run-level spread per ground, and a two-corridor map."""
+"""Test fixtures of the planner and the command line: a current model with a known mean and run-level spread per ground, and a two-corridor map."""
 
 from __future__ import annotations
 

@@ -12,7 +12,7 @@ through here:
   (a 2⁴⁰-element shape over a few bytes is refused before any allocation), and object
   dtypes (pickles) are refused;
 - every decoding failure (zlib, a bad zip, unicode, overflow, memory) becomes a
-  :class:`~terrain.errors.FileFormatError` naming the file and the entry.
+  :class:`~terrawatt_base.errors.FileFormatError` naming the file and the entry.
 
 The readers of other kinds check against the same budget: a text table
 (:func:`check_file_fits`, its size times its expansion once parsed), a bag (the messages

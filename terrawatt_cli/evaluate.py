@@ -15,7 +15,7 @@ from energy import (
     plot_vibration_spectra,
 )
 from terrain import InvalidParameterError
-from terrain.dask_client import dask_client
+from terrawatt_base.dask_client import dask_client
 
 from .band import LEARNED_KINDS, add_band_option, band_from_args
 from .common import add_dask_options, check_dask_flags, check_outputs, draw_figure, input_paths

@@ -10,14 +10,14 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from terrain import InvalidParameterError, OptionalDependencyError, TerrainMap
-from terrain.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
+from terrawatt_base.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
 from terrain.georef import import_rasterio
 
-from ..edge_cost import EnergyCost
-from ..energy_costmap import energy_costmap, write_energy_geotiff
-from ..nav2_map import nav2_map_paths, write_nav2_costmap, write_nav2_map
-from ..ros_export import check_route_bag_path, write_route_bag
-from ..route import Route
+from planner.edge_cost import EnergyCost
+from planner.energy_costmap import energy_costmap, write_energy_geotiff
+from planner.nav2_map import nav2_map_paths, write_nav2_costmap, write_nav2_map
+from planner.ros_export import check_route_bag_path, write_route_bag
+from planner.route import Route
 
 __all__ = ["add_ros2_arguments", "nav2_targets", "check_ros2_outputs", "write_ros2_outputs"]
 

@@ -13,14 +13,14 @@ import numpy as np
 
 from energy import GROUND_PRESETS, CurrentModel, load_current_model, robot_preset
 from terrain import UNKNOWN_GROUND, DemWindows, InvalidParameterError, NodataError, TerrainMap, UnknownNameError
-from terrain.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
-from terrain.checks import fmt_number
+from terrawatt_base.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
+from terrawatt_base.checks import fmt_number
 from terrain.landcover import LandcoverClasses, ground_classes_from_landcover, read_landcover_classes
 
-from ..edge_cost import EnergyCost
-from ..model_cost import model_energy_cost
-from ..points import lonlat_points
-from ..risk import check_risk_level
+from planner.edge_cost import EnergyCost
+from planner.model_cost import model_energy_cost
+from planner.points import lonlat_points
+from planner.risk import check_risk_level
 
 __all__ = [
     "add_map_options",

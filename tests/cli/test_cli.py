@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 import terrain
-from planner.cli import main
+from terrawatt_cli import main
 from terrain import TerrawattWarning
 
-FIXTURES = Path(__file__).resolve().parents[2] / "fixtures" / "borealtc"
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
@@ -446,7 +446,7 @@ def test_a_missing_map_file_is_one_line_and_exit_2(tmp_path, capsys):
 
 
 def test_plan_output_folder_that_is_a_file_is_refused_before_planning(tmp_path, capsys, wall_map, monkeypatch):
-    import planner.cli.plan as plan_cli
+    import terrawatt_cli.plan as plan_cli
 
     path = wall_map.save(tmp_path / "wall.npz")
     out = tmp_path / "out"
@@ -463,7 +463,7 @@ def test_plan_output_folder_that_is_a_file_is_refused_before_planning(tmp_path, 
 
 
 def test_train_onto_a_directory_is_refused_before_training(tmp_path, capsys, monkeypatch):
-    import planner.cli.train as train_cli
+    import terrawatt_cli.train as train_cli
 
     monkeypatch.setattr(train_cli, "logs_from_args", lambda *a, **k: pytest.fail("read the logs before checking --out"))
     rc = main(["train", "--data", str(FIXTURES), "--model", "linear", "--out", str(tmp_path)])
@@ -477,7 +477,7 @@ def test_train_onto_a_directory_is_refused_before_training(tmp_path, capsys, mon
 
 
 def test_mission_output_taken_by_a_folder_is_refused_before_the_mission(tmp_path, capsys, monkeypatch):
-    import planner.cli.mission as mission_cli
+    import terrawatt_cli.mission as mission_cli
 
     path = _patch_map(tmp_path)
     (tmp_path / "out" / "mission.png").mkdir(parents=True)
@@ -489,7 +489,7 @@ def test_mission_output_taken_by_a_folder_is_refused_before_the_mission(tmp_path
 
 
 def test_evaluate_whose_figure_fails_still_succeeds_with_its_results(tmp_path, capsys, monkeypatch):
-    import planner.cli.evaluate as evaluate_cli
+    import terrawatt_cli.evaluate as evaluate_cli
     from terrain import InvalidParameterError
 
     def no_spectra(*args, **kwargs):

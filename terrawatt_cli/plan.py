@@ -22,10 +22,10 @@ from terrain import (
     TerrainMap,
     UnknownNameError,
 )
-from terrain.atomic import write_json_atomic
+from terrawatt_base.atomic import write_json_atomic
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
 
-from .. import (
+from planner import (
     PLANNERS,
     CoarseToFine,
     EnergyCost,
@@ -35,10 +35,10 @@ from .. import (
     plan_route,
     warm_up_kernels,
 )
-from ..planning import GRAPH_PLANNERS
-from ..plot import RouteLine, plot_routes
-from ..risk import INTERVAL_LEVEL, RouteEnergyInterval, risk_cost, route_energy_interval
-from ..route_geojson import write_geojson
+from planner.planning import GRAPH_PLANNERS
+from planner.plot import RouteLine, plot_routes
+from planner.risk import INTERVAL_LEVEL, RouteEnergyInterval, risk_cost, route_energy_interval
+from planner.route_geojson import write_geojson
 from .common import (
     add_map_options,
     add_model_options,

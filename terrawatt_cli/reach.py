@@ -11,12 +11,12 @@ from typing import Any
 from energy import robot_preset
 from energy.battery import S_PER_H
 from terrain import TerrainMap
-from terrain.atomic import write_json_atomic
-from terrain.errors import InvalidParameterError
+from terrawatt_base.atomic import write_json_atomic
+from terrawatt_base.errors import InvalidParameterError
 from terrain.procedural import EXAMPLE_START_XY_M, example_map
 
-from .. import Reachability, reachability, warm_up_kernels
-from ..reachability import warm_up_reachability
+from planner import Reachability, reachability, warm_up_kernels
+from planner.reachability import warm_up_reachability
 from .common import (
     add_map_options,
     add_model_options,

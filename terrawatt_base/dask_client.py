@@ -13,8 +13,8 @@ import logging
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
-from terrain.checks import check_bool, check_int, check_real, check_text, fmt_number
-from terrain.errors import InvalidParameterError, OptionalDependencyError
+from terrawatt_base.checks import check_bool, check_int, check_real, check_text, fmt_number
+from terrawatt_base.errors import InvalidParameterError, OptionalDependencyError
 
 __all__ = ["dask_client", "check_client", "client_worker_count", "run_tasks", "DEFAULT_CONNECT_TIMEOUT_S"]
 

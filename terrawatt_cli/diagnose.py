@@ -24,8 +24,8 @@ from energy import (
 )
 from energy.diagnosis import FIGURES
 from terrain import FigureWarning, InvalidParameterError, UnknownNameError
-from terrain.checks import check_seed, fmt_number
-from terrain.dask_client import client_worker_count, dask_client
+from terrawatt_base.checks import check_seed, fmt_number
+from terrawatt_base.dask_client import client_worker_count, dask_client
 
 from .common import add_dask_options, add_map_options, check_dask_flags, check_outputs, input_paths, read_map_args
 from .data import add_data_options, logs_from_args

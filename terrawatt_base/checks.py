@@ -3,7 +3,7 @@
 Every public function of ``terrain``, ``energy`` and ``planner`` checks its user-facing
 arguments through these, so one kind of argument follows one rule everywhere: a seed valid
 in one call is valid in every call, a string where a number is expected names the parameter,
-and every failure is an :class:`~terrain.errors.InvalidParameterError` (also a
+and every failure is an :class:`~terrawatt_base.errors.InvalidParameterError` (also a
 ``ValueError``) whose message names the parameter, shows the value and says what was
 expected.
 
@@ -14,7 +14,7 @@ Examples
 >>> check_real("speed_mps", "fast")
 Traceback (most recent call last):
 ...
-terrain.errors.InvalidParameterError: speed_mps must be a real number, got 'fast' (str)
+terrawatt_base.errors.InvalidParameterError: speed_mps must be a real number, got 'fast' (str)
 >>> check_seed(None), check_seed(7)
 (None, 7)
 """

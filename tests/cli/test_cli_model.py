@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from planner.cli import main
+from terrawatt_cli import main
 
 START, GOAL = ["2.5", "7.5"], ["27.5", "7.5"]
 Z90 = 1.2815515655446004

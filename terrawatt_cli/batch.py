@@ -9,10 +9,10 @@ from pathlib import Path
 from typing import Any
 
 from terrain import InvalidParameterError, TerrainMap
-from terrain.dask_client import dask_client
+from terrawatt_base.dask_client import dask_client
 from terrain.procedural import example_map
 
-from .. import PLANNERS, BatchPairs, plan_batch, read_pairs_csv, read_sites_csv, warm_up_kernels
+from planner import PLANNERS, BatchPairs, plan_batch, read_pairs_csv, read_sites_csv, warm_up_kernels
 from .common import (
     add_dask_options,
     add_map_options,

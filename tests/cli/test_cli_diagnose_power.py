@@ -7,7 +7,7 @@ import json
 
 from energy import write_csv_log
 from diagnosis_scenarios import scenario
-from planner.cli import main
+from terrawatt_cli import main
 
 
 def test_power_logs_add_the_power_stage(tmp_path, capsys):

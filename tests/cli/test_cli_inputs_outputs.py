@@ -8,11 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import planner.cli.plan as plan_cli
-from planner.cli import EXIT_BAD_INPUT, EXIT_CODES, EXIT_INTERNAL, build_parser, main
+import terrawatt_cli.plan as plan_cli
+from terrawatt_cli import EXIT_BAD_INPUT, EXIT_CODES, EXIT_INTERNAL, build_parser, main
 from terrain.procedural import example_map
 
-FIXTURES = Path(__file__).resolve().parents[2] / "fixtures"
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 
 
 def _err(capsys) -> str:
@@ -71,7 +71,7 @@ def test_diagnose_refuses_an_output_that_would_replace_its_model(tmp_path, capsy
 
 
 def test_an_unwritable_output_fails_before_any_work(tmp_path, capsys, monkeypatch):
-    import terrain.atomic as atomic
+    import terrawatt_base.atomic as atomic
 
     def no_write(*args, **kwargs):
         raise PermissionError(13, "Permission denied")
@@ -105,7 +105,7 @@ def test_help_lists_the_exit_codes():
 
 
 def test_the_writability_probe_leaves_nothing_behind(tmp_path):
-    from terrain.atomic import probe_writable
+    from terrawatt_base.atomic import probe_writable
 
     probe_writable(tmp_path / "a" / "b")
     assert list(tmp_path.iterdir()) == []
@@ -135,7 +135,7 @@ def test_a_binary_pairs_file_is_bad_input_not_a_crash(tmp_path, capsys):
 
 
 def test_messages_show_plain_numbers_not_numpy_reprs(tmp_path, capsys, monkeypatch):
-    from planner.cli import plain_message
+    from terrawatt_cli import plain_message
     from terrain import Grid, InvalidParameterError, OutOfBoundsError
 
     assert plain_message("got np.float64(10.0) and np.int64(3), np.True_") == "got 10.0 and 3, np.True_"

@@ -11,15 +11,15 @@ from typing import Any
 
 from energy import GROUND_PRESETS, Battery, TruthSimulator, ground_preset, robot_preset
 from terrain import CellModelRegistry, InvalidParameterError, UnknownNameError
-from terrain.atomic import write_json_atomic
-from terrain.checks import fmt_number
-from terrain.dask_client import dask_client
+from terrawatt_base.atomic import write_json_atomic
+from terrawatt_base.checks import fmt_number
+from terrawatt_base.dask_client import dask_client
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
 
-from ..edge_cost import DEFAULT_MAX_SLOPE_RAD
-from ..missions import AdaptiveSettings, fit_prior_model, run_adaptive_mission, simulate_missions_mc
-from ..model_cost import model_energy_model
-from ..planning import plan_route
+from planner.edge_cost import DEFAULT_MAX_SLOPE_RAD
+from planner.missions import AdaptiveSettings, fit_prior_model, run_adaptive_mission, simulate_missions_mc
+from planner.model_cost import model_energy_model
+from planner.planning import plan_route
 from .common import (
     add_dask_options,
     add_map_options,

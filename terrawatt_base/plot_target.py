@@ -53,7 +53,7 @@ def check_plot_target(path: Any, axes: Any, *, axes_name: str = "ax") -> Path | 
     ------
     InvalidParameterError
         Both or neither of ``path`` and the axes given; ``path`` not a file name, a
-        directory, or under a file (:func:`terrain.atomic.check_output_path`).
+        directory, or under a file (:func:`terrawatt_base.atomic.check_output_path`).
     """
     if path is None and axes is None:
         raise InvalidParameterError(

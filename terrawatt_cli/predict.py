@@ -12,7 +12,7 @@ from energy.evaluation import score_current_model
 from energy.features import BandNotServedError
 from energy.prediction import predict_runs
 from terrain import InvalidParameterError
-from terrain.atomic import write_json_atomic
+from terrawatt_base.atomic import write_json_atomic
 
 from .band import add_band_option, band_from_args
 from .common import check_outputs, draw_figure, input_paths
