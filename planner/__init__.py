@@ -1,4 +1,4 @@
-"""planner — where to drive: edge costs, OMPL and lattice planners, routes, missions, CLI."""
+"""planner — where to drive: edge costs, OMPL, lattice and any-angle planners, replanning, routes, missions, exports."""
 
 from energy import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, drive_profile
 from terrawatt_base.dask_client import dask_client
