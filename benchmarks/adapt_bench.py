@@ -35,7 +35,8 @@ from typing import Any
 import numpy as np
 
 import energy.models.estimator as estimator_module
-from energy import AdaptSettings, VibrationCurrentEstimator, evaluate_few_shot, read_borealtc
+from energy import VibrationCurrentEstimator, evaluate_few_shot, read_borealtc
+from energy.evaluation import AdaptSettings
 from energy.evaluation import (
     AdaptationResult,
     adaptation_scores,

@@ -50,14 +50,8 @@ from typing import Any
 import numpy as np
 
 from energy import PhysicsEnergyModel, ground_preset, robot_preset
-from planner import (
-    OMPL_PLANNERS,
-    EnergyCost,
-    Lattice,
-    PlannerSettings,
-    plan_route,
-    warm_up_kernels,
-)
+from planner import EnergyCost, Lattice, PlannerSettings, plan_route, warm_up_kernels
+from planner.ompl import OMPL_PLANNERS
 from planner.anyangle import DEFAULT_POLISH_SPACINGS_CELLS, anyangle_path, polish_path, warm_up_anyangle
 from planner.kernels import variants
 from terrawatt_base.atomic import write_json_atomic

@@ -43,7 +43,8 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from planner import EnergyCost, lattice_move_energies, reachability, warm_up_kernels
+from planner import EnergyCost, reachability, warm_up_kernels
+from planner.reachability import lattice_move_energies
 from planner.kernels import lattice_weights
 from planner.lattice import LATTICE_OFFSETS
 from planner.reachability import depot_links, warm_up_reachability

@@ -40,8 +40,8 @@ from energy import (
     LogMeta,
     PhysicsCurrentModel,
     VibrationCurrentEstimator,
-    read_borealtc_run,
 )
+from energy.io import read_borealtc_run
 from terrawatt_base.atomic import write_json_atomic
 
 TARGET_S = 20.0

@@ -1,297 +1,98 @@
 """energy — what a motion costs: physics and learned current models, logs, metrics."""
 
-from terrawatt_base.errors import (
-    DataError,
-    DataRepairWarning,
-    FigureWarning,
-    FileFormatError,
-    FormatVersionError,
-    GridMismatchError,
-    InvalidParameterError,
-    NotFittedError,
-    OptionalDependencyError,
-    OutOfBoundsError,
-    RecoveryWarning,
-    TerrawattError,
-    TerrawattWarning,
-    UnitError,
-    UnknownNameError,
-)
+from __future__ import annotations
 
-from .battery import Battery, Discharge, discharge_from_current, discharge_from_power
-from .budget import CURRENT_CONVENTIONS, EnergyBudget, energy_budget, log_battery_power_w
+from typing import Any
+
+from .battery import Battery, discharge_from_power
+from .budget import EnergyBudget, energy_budget
 from .commands import CommandProfile
-from .diagnosis import (
-    DRIVE_EFFECTS,
-    EFFECTS_CATALOGUE,
-    CorrectedCurrentModel,
-    Diagnosis,
-    Effect,
-    EffectParameter,
-    EffectScore,
-    GapShare,
-    GapSummary,
-    PowerDiagnosis,
-    WaterfallStep,
-    diagnose,
-    effect,
-    gap_summary,
-    localise_gap,
-    plot_diagnosis,
-    regime_labels,
-    residual_currents_a,
-)
-from .evaluation import (
-    AdaptationResult,
-    AdaptSettings,
-    EvaluationResult,
-    RunScore,
-    ScoreSummary,
-    evaluate_adaptation,
-    evaluate_current_models,
-    evaluate_few_shot,
-    score_current_model,
-)
+from .diagnosis import CorrectedCurrentModel, Diagnosis, diagnose
+from .drivetrain import EFFECTS
+from .evaluation import EvaluationResult, evaluate_adaptation, evaluate_current_models, evaluate_few_shot
 from .excitation import excitation_commands
-from .features import (
-    DEFAULT_BAND_HZ,
-    DEFAULT_T_INTERVAL_S,
-    SOURCE_CURRENT_RANGE_A,
-    SOURCE_OMEGA_RANGE_RADPS,
-    SOURCE_SPEED_RANGE_MPS,
-    BandNotServedError,
-    MinMaxNormaliser,
-    WindowSpec,
-    band_rms_spectra,
-    band_served,
-    check_band_hz,
-    log_band_edges_hz,
-    sliding_windows,
-    whole_run_band_spectrum,
-    whole_run_spectrum,
-    window_starts,
-    yaw_slip_features,
-)
-from .io import (
-    BagTopics,
-    read_borealtc,
-    read_borealtc_run,
-    read_csv_log,
-    read_logs,
-    read_rosbag,
-    write_csv_log,
-)
-from .logs import DEFAULT_GAP_FACTOR, InteractionLog, LogMeta
-from .metrics import (
-    CurrentErrors,
-    charge_mah,
-    compare_currents,
-    cumulative_charge_mah,
-    error_rate_pct,
-    moving_median,
-    rmse_a,
-    section_charges_mah,
-    section_error_pct,
-)
-from .models import (  # torch-free: the contract, its file format, the baselines, the loader
-    ADAPT_METHODS,
-    CURRENT_MODEL_FORMAT_VERSION,
-    CURRENT_MODEL_KINDS,
-    PHYSICS_FIT_PARAMETERS,
+from .ground import GroundParams
+from .io import BagTopics, read_borealtc, read_csv_log, read_logs, read_rosbag, write_csv_log
+from .logs import InteractionLog, LogMeta
+from .metrics import charge_mah, compare_currents
+from .models import (  # torch-free: the contract, the baselines, the loader
     AdaptedCurrentModel,
     ConstantCurrentModel,
     CurrentModel,
     LinearCurrentModel,
     PhysicsCurrentModel,
-    __getattr__,  # noqa: F401  (PEP 562: the torch names load on first use)
-    adapt_current_model,
     load_current_model,
     new_current_model,
 )
-from .params import (
-    DRIVE_KINDS,
-    GROUND_PRESETS,
-    ROBOT_PRESETS,
-    GroundParams,
-    MotorParams,
-    RobotParams,
-    ground_preset,
-    robot_preset,
-)
-from .physics import EFFECTS, PhysicsEnergyModel, PowerBreakdown
-from .plots import ground_spectra, plot_current_estimate, plot_vibration_spectra
-from .prediction import RunPrediction, predict_runs
-from .profiles import (
-    DEFAULT_ACCEL_MPS2,
-    DEFAULT_YAW_ACCEL_RADPS2,
-    drivable_waypoints,
-    drive_profile,
-    planned_durations_s,
-    waypoint_commands,
-)
-from .sim import (
-    PAPER_GROUNDS,
-    PAPER_VARIATION,
-    VIBRATION_PRESETS,
-    GroundVariation,
-    NoiseModel,
-    TruthRun,
-    TruthSimulator,
-    VibrationSignature,
-    vibration_preset,
-)
+from .params import GROUND_PRESETS, ROBOT_PRESETS, ground_preset, robot_preset
+from .robot import MotorParams, RobotParams
+from .physics import PhysicsEnergyModel, PowerBreakdown
+from .plots import plot_current_estimate, plot_vibration_spectra
+from .prediction import predict_runs
+from .profiles import drive_profile
+from .sim import NoiseModel, TruthSimulator
 
 __all__ = [
-    # parameters and the physics model
-    "MotorParams",
     "RobotParams",
+    "MotorParams",
     "GroundParams",
-    "DRIVE_KINDS",
-    "ROBOT_PRESETS",
-    "GROUND_PRESETS",
     "robot_preset",
     "ground_preset",
-    "EFFECTS",
+    "ROBOT_PRESETS",
+    "GROUND_PRESETS",
     "PhysicsEnergyModel",
+    "EFFECTS",
     "PowerBreakdown",
-    # interaction logs and readers
     "InteractionLog",
     "LogMeta",
-    "DEFAULT_GAP_FACTOR",
-    "read_borealtc_run",
+    "read_logs",
     "read_borealtc",
     "read_csv_log",
     "write_csv_log",
     "read_rosbag",
-    "read_logs",
     "BagTopics",
-    "predict_runs",
-    "RunPrediction",
-    # battery and budgets
-    "Battery",
-    "Discharge",
-    "EnergyBudget",
-    "CURRENT_CONVENTIONS",
-    "discharge_from_power",
-    "discharge_from_current",
-    "energy_budget",
-    "log_battery_power_w",
-    # truth simulator and command profiles
-    "CommandProfile",
-    "excitation_commands",
-    "waypoint_commands",
-    "drive_profile",
-    "DEFAULT_ACCEL_MPS2",
-    "DEFAULT_YAW_ACCEL_RADPS2",
-    "drivable_waypoints",
-    "planned_durations_s",
-    "TruthSimulator",
-    "TruthRun",
-    "NoiseModel",
-    "VibrationSignature",
-    "GroundVariation",
-    "PAPER_GROUNDS",
-    "PAPER_VARIATION",
-    "VIBRATION_PRESETS",
-    "vibration_preset",
-    # current models (estimator, baselines) and their evaluation
     "CurrentModel",
-    "load_current_model",
-    "CURRENT_MODEL_FORMAT_VERSION",
-    "VibrationCurrentEstimator",
-    "EstimatorConfig",
-    "ESTIMATOR_PRESETS",
-    "estimator_preset",
-    "CurrentNet",
-    "CurrentNetConfig",
-    "WindowDataset",
-    "TrainConfig",
-    "TrainingHistory",
-    "train_network",
     "ConstantCurrentModel",
     "LinearCurrentModel",
     "PhysicsCurrentModel",
-    "PHYSICS_FIT_PARAMETERS",
+    "VibrationCurrentEstimator",
+    "EstimatorConfig",
+    "estimator_preset",
+    "new_current_model",
+    "load_current_model",
+    "AdaptedCurrentModel",
     "evaluate_current_models",
-    "AdaptSettings",
-    "AdaptationResult",
     "evaluate_adaptation",
     "evaluate_few_shot",
-    "score_current_model",
-    "CURRENT_MODEL_KINDS",
-    "new_current_model",
     "EvaluationResult",
-    "RunScore",
-    "ScoreSummary",
-    # figures
-    "plot_current_estimate",
-    "plot_vibration_spectra",
-    "ground_spectra",
-    # vibration features
-    "DEFAULT_T_INTERVAL_S",
-    "WindowSpec",
-    "window_starts",
-    "sliding_windows",
-    "whole_run_spectrum",
-    "whole_run_band_spectrum",
-    "band_rms_spectra",
-    "log_band_edges_hz",
-    "MinMaxNormaliser",
-    "DEFAULT_BAND_HZ",
-    "BandNotServedError",
-    "check_band_hz",
-    "band_served",
-    "yaw_slip_features",
-    "SOURCE_SPEED_RANGE_MPS",
-    "SOURCE_OMEGA_RANGE_RADPS",
-    "SOURCE_CURRENT_RANGE_A",
-    # metrics
-    "charge_mah",
-    "cumulative_charge_mah",
-    "section_charges_mah",
-    "error_rate_pct",
-    "section_error_pct",
-    "rmse_a",
-    "moving_median",
-    "compare_currents",
-    "CurrentErrors",
-    # the sim-to-real gap diagnosis
-    "DRIVE_EFFECTS",
-    "plot_diagnosis",
+    "predict_runs",
+    "TruthSimulator",
+    "NoiseModel",
+    "CommandProfile",
+    "excitation_commands",
+    "drive_profile",
+    "Battery",
+    "energy_budget",
+    "EnergyBudget",
+    "discharge_from_power",
     "diagnose",
     "Diagnosis",
-    "PowerDiagnosis",
-    "EffectScore",
-    "WaterfallStep",
     "CorrectedCurrentModel",
-    # in-run adaptation
-    "ADAPT_METHODS",
-    "AdaptedCurrentModel",
-    "adapt_current_model",
-    "Effect",
-    "EffectParameter",
-    "EFFECTS_CATALOGUE",
-    "effect",
-    "GapSummary",
-    "gap_summary",
-    "residual_currents_a",
-    "GapShare",
-    "localise_gap",
-    "regime_labels",
-    # errors and warnings its users meet (defined in terrawatt_base.errors, the one hierarchy)
-    "TerrawattError",
-    "TerrawattWarning",
-    "InvalidParameterError",
-    "UnknownNameError",
-    "DataError",
-    "UnitError",
-    "FileFormatError",
-    "FormatVersionError",
-    "NotFittedError",
-    "GridMismatchError",
-    "OutOfBoundsError",
-    "OptionalDependencyError",
-    "DataRepairWarning",
-    "FigureWarning",
-    "RecoveryWarning",
+    "charge_mah",
+    "compare_currents",
+    "plot_current_estimate",
+    "plot_vibration_spectra",
 ]
+
+#: The torch-backed names: imported on first use (PEP 562), so ``import energy`` never imports torch.
+_TORCH_NAMES = ("VibrationCurrentEstimator", "EstimatorConfig", "estimator_preset")
+
+
+def __getattr__(name: str) -> Any:
+    if name in _TORCH_NAMES:
+        from . import models
+
+        value = getattr(models, name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'energy' has no attribute {name!r}")

@@ -25,14 +25,8 @@ from pathlib import Path
 import numpy as np
 
 from energy import Battery, TruthSimulator, ground_preset, robot_preset
-from planner import (
-    AdaptiveSettings,
-    LearnedEnergyModel,
-    fit_prior_model,
-    plan_route,
-    run_adaptive_mission,
-    simulate_mission,
-)
+from planner import AdaptiveSettings, LearnedEnergyModel, plan_route, run_adaptive_mission, simulate_mission
+from planner.missions import fit_prior_model
 from terrain import CellModelRegistry, TerrainMap
 
 

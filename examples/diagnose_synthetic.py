@@ -17,7 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from energy import PAPER_GROUNDS, PhysicsCurrentModel, TruthSimulator, excitation_commands, robot_preset
+from energy import PhysicsCurrentModel, TruthSimulator, excitation_commands, robot_preset
+from energy.sim import PAPER_GROUNDS
 from energy.diagnosis import diagnose
 
 EFFECTS_WITHOUT_TURNING = ("inertia", "slope", "static_friction", "coulomb_friction", "stribeck",

@@ -32,23 +32,21 @@ from pathlib import Path
 import numpy as np
 
 from energy import (
-    ESTIMATOR_PRESETS,
-    PAPER_GROUNDS,
-    PAPER_VARIATION,
     InteractionLog,
     LinearCurrentModel,
     NoiseModel,
     TruthSimulator,
     VibrationCurrentEstimator,
     charge_mah,
-    error_rate_pct,
     estimator_preset,
     excitation_commands,
     plot_current_estimate,
     plot_vibration_spectra,
     robot_preset,
-    section_charges_mah,
 )
+from energy.metrics import error_rate_pct, section_charges_mah
+from energy.models import ESTIMATOR_PRESETS
+from energy.sim import PAPER_GROUNDS, PAPER_VARIATION
 
 #: Length of one run (s), as in the paper.
 RUN_DURATION_S = 160.0

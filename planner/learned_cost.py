@@ -69,8 +69,6 @@ from typing import Any
 import numpy as np
 
 from energy import (
-    DEFAULT_ACCEL_MPS2,
-    DEFAULT_YAW_ACCEL_RADPS2,
     CommandProfile,
     GroundParams,
     InteractionLog,
@@ -78,8 +76,9 @@ from energy import (
     PhysicsEnergyModel,
     RobotParams,
     drive_profile,
-    log_battery_power_w,
 )
+from energy.budget import log_battery_power_w
+from energy.profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2
 from terrain import (
     CellModelRegistry,
     InvalidParameterError,

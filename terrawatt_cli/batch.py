@@ -12,7 +12,8 @@ from terrain import InvalidParameterError, TerrainMap
 from terrawatt_base.dask_client import dask_client
 from terrain.procedural import example_map
 
-from planner import PLANNERS, BatchPairs, plan_batch, read_pairs_csv, read_sites_csv, warm_up_kernels
+from planner import PLANNERS, BatchPairs, plan_batch, read_pairs_csv, warm_up_kernels
+from planner.batch_pairs import read_sites_csv
 from .common import (
     add_dask_options,
     add_map_options,

@@ -11,8 +11,6 @@ from pathlib import Path
 from typing import Any
 
 from energy import (
-    DRIVE_EFFECTS,
-    EFFECTS_CATALOGUE,
     GROUND_PRESETS,
     ROBOT_PRESETS,
     InteractionLog,
@@ -20,8 +18,8 @@ from energy import (
     diagnose,
     load_current_model,
     new_current_model,
-    plot_diagnosis,
 )
+from energy.diagnosis import DRIVE_EFFECTS, EFFECTS_CATALOGUE, plot_diagnosis
 from energy.diagnosis import FIGURES
 from terrain import FigureWarning, InvalidParameterError, UnknownNameError
 from terrawatt_base.checks import check_seed, fmt_number

@@ -8,12 +8,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from energy import (
-    CURRENT_MODEL_KINDS,
-    evaluate_current_models,
-    new_current_model,
-    plot_vibration_spectra,
-)
+from energy import evaluate_current_models, new_current_model, plot_vibration_spectra
+from energy.models import CURRENT_MODEL_KINDS
 from terrain import InvalidParameterError
 from terrawatt_base.dask_client import dask_client
 

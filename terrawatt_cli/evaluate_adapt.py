@@ -6,7 +6,9 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from energy import ADAPT_METHODS, AdaptationResult, AdaptSettings, evaluate_adaptation, evaluate_few_shot
+from energy import evaluate_adaptation, evaluate_few_shot
+from energy.evaluation import AdaptationResult, AdaptSettings
+from energy.models import ADAPT_METHODS
 from terrain import InvalidParameterError
 
 __all__ = ["PROTOCOLS", "ADAPT_OUTPUTS", "add_adapt_options", "adapt_settings_from_args", "run_adapt_protocol"]

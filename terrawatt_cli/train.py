@@ -7,7 +7,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from energy import CURRENT_MODEL_KINDS, new_current_model
+from energy import new_current_model
+from energy.models import CURRENT_MODEL_KINDS
 from energy.models import DEFAULT_INTERVAL_FOLDS, fit_interval
 from terrain import InvalidParameterError
 

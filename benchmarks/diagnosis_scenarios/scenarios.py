@@ -69,7 +69,6 @@ from terrain.terrain_map import TerrainMap
 
 from energy import (
     EFFECTS,
-    PAPER_GROUNDS,
     CurrentModel,
     GroundParams,
     InteractionLog,
@@ -80,6 +79,7 @@ from energy import (
     ground_preset,
     robot_preset,
 )
+from energy.sim import PAPER_GROUNDS
 from energy.logs import at_rest
 from energy.sim import measure_currents
 

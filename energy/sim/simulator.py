@@ -91,7 +91,8 @@ class TruthSimulator:
 
     Examples
     --------
-    >>> from energy import PAPER_GROUNDS, robot_preset
+    >>> from energy import robot_preset
+    >>> from energy.sim import PAPER_GROUNDS
     >>> sim = TruthSimulator(robot_preset("husky"), PAPER_GROUNDS, seed=0)
     >>> log = sim.simulate_commands([0.0, 0.01, 0.02], [0.4] * 3, [0.0] * 3, ground="coated_wood")
     >>> len(log), log.meta.ground_label
@@ -255,7 +256,8 @@ class TruthSimulator:
 
         Examples
         --------
-        >>> from energy import PAPER_GROUNDS, excitation_commands, robot_preset
+        >>> from energy import excitation_commands, robot_preset
+        >>> from energy.sim import PAPER_GROUNDS
         >>> sim = TruthSimulator(robot_preset("husky"), PAPER_GROUNDS)
         >>> p = excitation_commands(20.0, seed=1)
         >>> log = sim.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground="snow_over_concrete", seed=7)

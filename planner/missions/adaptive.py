@@ -80,8 +80,8 @@ from energy import (
     TruthSimulator,
     discharge_from_power,
     energy_budget,
-    log_battery_power_w,
 )
+from energy.budget import log_battery_power_w
 from terrain import CellModelRegistry, InvalidParameterError, TerrainMap
 from terrawatt_base.checks import fmt_number, real_array
 

@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from energy import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, CommandProfile, drive_profile
+from energy import CommandProfile, drive_profile
+from energy.profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2
 from energy.profiles import terrain_along
 from terrawatt_base.errors import InvalidParameterError
 

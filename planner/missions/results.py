@@ -11,7 +11,8 @@ from typing import Any
 
 import numpy as np
 
-from energy import CURRENT_CONVENTIONS, EnergyBudget, InteractionLog
+from energy import EnergyBudget, InteractionLog
+from energy.budget import CURRENT_CONVENTIONS
 from terrain import TerrainMap
 from terrawatt_base.atomic import write_text_atomic
 from terrawatt_base.checks import check_choice, check_int, readonly

@@ -37,19 +37,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from energy import (
-    CURRENT_CONVENTIONS,
-    DEFAULT_ACCEL_MPS2,
-    DEFAULT_YAW_ACCEL_RADPS2,
     Battery,
-    Discharge,
     InteractionLog,
     RobotParams,
     TruthSimulator,
     discharge_from_power,
     drive_profile,
     energy_budget,
-    log_battery_power_w,
 )
+from energy.battery import Discharge
+from energy.budget import CURRENT_CONVENTIONS, log_battery_power_w
+from energy.profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2
 from energy.profiles import drivable_waypoints, planned_durations_s
 from terrain import TerrainMap
 from terrawatt_base.checks import check_bool, check_choice, check_optional_real, check_real, fmt_number

@@ -6,7 +6,8 @@ from typing import Any
 
 import numpy as np
 
-from energy import CurrentModel, DataError, InteractionLog
+from energy import CurrentModel, InteractionLog
+from terrawatt_base.errors import DataError
 from terrain import CellModelRegistry, InvalidParameterError
 
 from ..learned_cost import predict_currents

@@ -128,7 +128,8 @@ def test_mission_writes_budget_json_and_plot(tmp_path, capsys):
 def _library_mission(path: Path):
     """The mission `terrawatt mission --map path --start 3 12 --goal 57 12 --battery-ah 20` runs, via the API."""
     from energy import Battery, TruthSimulator, ground_preset, robot_preset
-    from planner import AdaptiveSettings, fit_prior_model, run_adaptive_mission
+    from planner import AdaptiveSettings, run_adaptive_mission
+    from planner.missions import fit_prior_model
 
     tmap = terrain.read_map(path)
     robot = robot_preset("husky")
@@ -201,7 +202,8 @@ def test_train_then_predict_round_trip(tmp_path, capsys):
 @pytest.fixture
 def tiny_paper_preset(monkeypatch):
     """The ``paper`` preset shrunk to train in a second on the two short fixture runs."""
-    from energy import ESTIMATOR_PRESETS, estimator_preset
+    from energy import estimator_preset
+    from energy.models import ESTIMATOR_PRESETS
 
     small = estimator_preset("paper").replace(max_epochs=2, n_spectrum_bins=100, hidden_sizes=(8, 8, 8))
     monkeypatch.setitem(ESTIMATOR_PRESETS, "paper", small)

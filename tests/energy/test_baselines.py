@@ -10,17 +10,15 @@ from energy.logs import at_rest, rest_samples
 from energy import (
     EFFECTS,
     ConstantCurrentModel,
-    DataError,
     InteractionLog,
-    InvalidParameterError,
     LinearCurrentModel,
     LogMeta,
     PhysicsCurrentModel,
     PhysicsEnergyModel,
-    UnknownNameError,
     ground_preset,
     robot_preset,
 )
+from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 
 def _motion(seed: int, duration_s: float = 40.0, rate_hz: float = 10.0):

@@ -7,12 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from energy import (
-    Battery,
-    discharge_from_current,
-    discharge_from_power,
-    energy_budget,
-)
+from energy import Battery, discharge_from_power, energy_budget
+from energy.battery import discharge_from_current
 from terrain import DataError, InvalidParameterError
 
 

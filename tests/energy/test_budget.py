@@ -17,9 +17,9 @@ from energy import (
     discharge_from_power,
     energy_budget,
     ground_preset,
-    log_battery_power_w,
     robot_preset,
 )
+from energy.budget import log_battery_power_w
 from terrain import InvalidParameterError, UnknownNameError
 
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from energy import CommandProfile, waypoint_commands
+from energy import CommandProfile
+from energy.profiles import waypoint_commands
 from terrain import DataError, InvalidParameterError
 
 

@@ -7,25 +7,17 @@ import pytest
 import torch
 
 from energy import (
-    ESTIMATOR_PRESETS,
-    CurrentNet,
-    CurrentNetConfig,
-    DataError,
     EstimatorConfig,
     InteractionLog,
-    InvalidParameterError,
     LogMeta,
-    TrainConfig,
-    UnknownNameError,
     VibrationCurrentEstimator,
-    WindowDataset,
-    WindowSpec,
     estimator_preset,
     load_current_model,
     read_borealtc,
-    train_network,
-    window_starts,
 )
+from energy.features import WindowSpec, window_starts
+from energy.models import ESTIMATOR_PRESETS, CurrentNet, CurrentNetConfig, TrainConfig, WindowDataset, train_network
+from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 DATA = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "borealtc"
 

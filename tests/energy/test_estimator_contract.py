@@ -12,21 +12,18 @@ import pytest
 import torch
 
 from energy import (
-    CURRENT_MODEL_FORMAT_VERSION,
     ConstantCurrentModel,
     CurrentModel,
-    FileFormatError,
-    FormatVersionError,
     InteractionLog,
-    InvalidParameterError,
     LinearCurrentModel,
     LogMeta,
-    NotFittedError,
     PhysicsCurrentModel,
     VibrationCurrentEstimator,
     estimator_preset,
     load_current_model,
 )
+from energy.models import CURRENT_MODEL_FORMAT_VERSION
+from terrawatt_base.errors import FileFormatError, FormatVersionError, InvalidParameterError, NotFittedError
 
 LEGACY = Path(__file__).resolve().parents[1] / "fixtures" / "current_models_v1"
 

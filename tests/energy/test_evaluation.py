@@ -8,15 +8,13 @@ import pytest
 
 from energy import (
     ConstantCurrentModel,
-    DataError,
     EvaluationResult,
     InteractionLog,
-    InvalidParameterError,
     LinearCurrentModel,
     LogMeta,
-    UnknownNameError,
     evaluate_current_models,
 )
+from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 from terrain import TerrawattWarning
 
 

@@ -5,7 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from energy import DataError, InteractionLog, InvalidParameterError, LinearCurrentModel, LogMeta
+from energy import InteractionLog, LinearCurrentModel, LogMeta
+from terrawatt_base.errors import DataError, InvalidParameterError
 from energy.evaluation import (
     ADAPT_FILES,
     TRIGGER_SCHEDULE,

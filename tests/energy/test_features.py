@@ -5,13 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from energy import (
+from energy.features import (
     SOURCE_CURRENT_RANGE_A,
     SOURCE_SPEED_RANGE_MPS,
-    DataError,
-    InvalidParameterError,
     MinMaxNormaliser,
-    UnknownNameError,
     WindowSpec,
     band_rms_spectra,
     log_band_edges_hz,
@@ -20,6 +17,7 @@ from energy import (
     whole_run_spectrum,
     window_starts,
 )
+from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 
 # ------------------------------------------------------------------------ windows

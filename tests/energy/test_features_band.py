@@ -12,12 +12,12 @@ from scipy.signal import resample_poly
 from energy import (
     EstimatorConfig,
     VibrationCurrentEstimator,
-    band_rms_spectra,
     estimator_preset,
     load_current_model,
     new_current_model,
     read_borealtc,
 )
+from energy.features import band_rms_spectra
 from energy.features import DEFAULT_BAND_HZ, BandNotServedError, band_served, check_band_hz
 from terrawatt_cli import evaluate as evaluate_cli
 from terrawatt_cli import main

@@ -5,7 +5,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from energy import InteractionLog, InvalidParameterError, LogMeta, VibrationCurrentEstimator, load_current_model
+from energy import InteractionLog, LogMeta, VibrationCurrentEstimator, load_current_model
+from terrawatt_base.errors import InvalidParameterError
 from energy.evaluation.intervals import IntervalRecord, charge_record, coverage, plot_reliability
 from energy.models import AdaptedCurrentModel, LinearCurrentModel, fit_interval, log_currents
 from terrawatt_base.errors import DataError

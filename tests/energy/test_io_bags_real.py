@@ -13,8 +13,6 @@ from energy import (
     BagTopics,
     InteractionLog,
     LogMeta,
-    band_rms_spectra,
-    log_band_edges_hz,
     new_current_model,
     predict_runs,
     read_borealtc,
@@ -23,6 +21,7 @@ from energy import (
     read_rosbag,
     write_csv_log,
 )
+from energy.features import band_rms_spectra, log_band_edges_hz
 from terrain import DataError, InvalidParameterError, UnitError, UnknownNameError
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"
@@ -219,7 +218,8 @@ def test_a_slow_status_message_beside_fast_odometry_on_the_odometry_clock(tmp_pa
 
 
 def test_the_battery_power_of_a_log_uses_its_measured_voltage(bags):
-    from energy import log_battery_power_w, robot_preset
+    from energy import robot_preset
+    from energy.budget import log_battery_power_w
 
     husky = read_rosbag(bags["husky"][0], **HUSKY)
     robot = robot_preset("husky")

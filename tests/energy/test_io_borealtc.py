@@ -21,10 +21,8 @@ from energy_io_samples import (
 from hypothesis import given
 from hypothesis import strategies as st
 
-from energy import (
-    read_borealtc,
-    read_borealtc_run,
-)
+from energy import read_borealtc
+from energy.io import read_borealtc_run
 from terrain import (
     DataError,
     DataRepairWarning,

@@ -7,7 +7,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from energy import DEFAULT_GAP_FACTOR, InteractionLog, LogMeta
+from energy import InteractionLog, LogMeta
+from energy.logs import DEFAULT_GAP_FACTOR
 from terrain import (
     DataError,
     DataRepairWarning,

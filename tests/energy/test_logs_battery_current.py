@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from energy import PAPER_GROUNDS, Battery, InteractionLog, NoiseModel, TruthSimulator, robot_preset
+from energy import Battery, InteractionLog, NoiseModel, TruthSimulator, robot_preset
+from energy.sim import PAPER_GROUNDS
 from energy.io import read_csv_log, write_csv_log
 from terrawatt_base.errors import DataError, InvalidParameterError
 

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from robot_bags import requires_rosbags, write_robot_bag
 
-from energy import InteractionLog, LogMeta, read_borealtc, read_borealtc_run, read_csv_log, read_rosbag, write_csv_log
+from energy import InteractionLog, LogMeta, read_borealtc, read_csv_log, read_rosbag, write_csv_log
+from energy.io import read_borealtc_run
 from terrain import DataError, DataRepairWarning, InvalidParameterError, UnitError
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"

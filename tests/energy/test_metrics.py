@@ -5,12 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from energy import (
+from energy import charge_mah, compare_currents
+from energy.metrics import (
     CurrentErrors,
-    DataError,
-    InvalidParameterError,
-    charge_mah,
-    compare_currents,
     cumulative_charge_mah,
     error_rate_pct,
     moving_median,
@@ -18,6 +15,7 @@ from energy import (
     section_charges_mah,
     section_error_pct,
 )
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 
 def test_charge_of_constant_current_is_current_times_time():

@@ -5,19 +5,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from energy import (
-    ADAPT_METHODS,
-    AdaptedCurrentModel,
-    DataError,
-    FileFormatError,
-    InteractionLog,
-    InvalidParameterError,
-    LinearCurrentModel,
-    LogMeta,
-    NotFittedError,
-    adapt_current_model,
-    load_current_model,
-)
+from energy import AdaptedCurrentModel, InteractionLog, LinearCurrentModel, LogMeta, load_current_model
+from energy.models import ADAPT_METHODS, adapt_current_model
+from terrawatt_base.errors import DataError, FileFormatError, InvalidParameterError, NotFittedError
 from energy.models import MIN_ADAPT_SAMPLES, ModelRecord
 from terrain import UnknownNameError
 
@@ -215,7 +205,7 @@ def test_bad_models_and_logs(base):
 
 
 def test_the_adaptive_loop_can_adapt_instead_of_refitting(base):
-    from planner import adapted_model, validation_error
+    from planner.missions import adapted_model, validation_error
 
     run = _on_base(base, _log(18), offset_a=0.8)
     drive, held = run.slice(0.0, 30.0), run.slice(30.0, 60.0)

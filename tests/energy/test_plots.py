@@ -8,13 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from energy import (
-    InteractionLog,
-    LogMeta,
-    ground_spectra,
-    plot_current_estimate,
-    plot_vibration_spectra,
-)
+from energy import InteractionLog, LogMeta, plot_current_estimate, plot_vibration_spectra
+from energy.plots import ground_spectra
 from terrain import DataError, FigureWarning, GridMismatchError, InvalidParameterError
 
 PNG = b"\x89PNG\r\n\x1a\n"

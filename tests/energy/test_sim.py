@@ -8,18 +8,14 @@ import pytest
 from energy import (
     EFFECTS,
     GROUND_PRESETS,
-    PAPER_GROUNDS,
-    VIBRATION_PRESETS,
     CommandProfile,
-    GroundVariation,
     NoiseModel,
     PhysicsEnergyModel,
     TruthSimulator,
-    VibrationSignature,
     ground_preset,
     robot_preset,
-    vibration_preset,
 )
+from energy.sim import PAPER_GROUNDS, VIBRATION_PRESETS, GroundVariation, VibrationSignature, vibration_preset
 from terrain import (
     BlockedPositionError,
     DataError,

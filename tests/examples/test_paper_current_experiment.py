@@ -10,13 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from energy import (
-    PAPER_GROUNDS,
-    PAPER_VARIATION,
-    TruthSimulator,
-    charge_mah,
-    robot_preset,
-)
+from energy import TruthSimulator, charge_mah, robot_preset
+from energy.sim import PAPER_GROUNDS, PAPER_VARIATION
 
 SCRIPT = Path(__file__).resolve().parents[2] / "examples" / "paper_current_experiment.py"
 

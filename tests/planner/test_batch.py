@@ -13,22 +13,16 @@ import numpy as np
 import pytest
 
 import terrain
-from planner import (
-    BATCH_FORMAT_VERSION,
-    BatchPairs,
-    BatchResult,
-    BatchRow,
+from planner import BatchPairs, BatchResult, EnergyCost, plan_batch, plan_route, read_pairs_csv
+from planner.batch_pairs import read_sites_csv
+from planner.batch_result import BATCH_FORMAT_VERSION, BatchRow
+from terrawatt_base.dask_client import dask_client
+from terrawatt_base.errors import (
     DataError,
-    EnergyCost,
     FileFormatError,
     InvalidParameterError,
     OptionalDependencyError,
     UnknownNameError,
-    dask_client,
-    plan_batch,
-    plan_route,
-    read_pairs_csv,
-    read_sites_csv,
 )
 from terrawatt_cli import main
 

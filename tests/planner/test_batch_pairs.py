@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner import read_pairs_csv, read_sites_csv
+from planner import read_pairs_csv
+from planner.batch_pairs import read_sites_csv
 from terrain import DataError, FileFormatError, InvalidParameterError, TerrainMap, lonlat_to_xy
 
 pytest.importorskip("rasterio")

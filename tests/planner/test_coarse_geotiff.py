@@ -8,14 +8,9 @@ import json
 import numpy as np
 import pytest
 
-from planner import (
-    BlockedPositionError,
-    EnergyCost,
-    OutOfBoundsError,
-    downsample_cost,
-    plan_coarse_to_fine,
-    plan_coarse_to_fine_geotiff,
-)
+from planner import EnergyCost, plan_coarse_to_fine, plan_coarse_to_fine_geotiff
+from planner.coarse import downsample_cost
+from terrawatt_base.errors import BlockedPositionError, OutOfBoundsError
 from terrain import (
     FileFormatError,
     InvalidParameterError,

@@ -6,17 +6,9 @@ import numpy as np
 import pytest
 
 import terrain
-from planner import (
-    COSTMAP_STATISTICS,
-    EnergyCost,
-    EnergyCostmap,
-    FileFormatError,
-    InvalidParameterError,
-    UnknownNameError,
-    energy_costmap,
-    read_energy_geotiff,
-    write_energy_geotiff,
-)
+from planner import EnergyCost, energy_costmap
+from planner.energy_costmap import COSTMAP_STATISTICS, EnergyCostmap, read_energy_geotiff, write_energy_geotiff
+from terrawatt_base.errors import FileFormatError, InvalidParameterError, UnknownNameError
 
 
 def _per_metre(cost: EnergyCost, a, b) -> float:

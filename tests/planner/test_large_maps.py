@@ -273,7 +273,7 @@ def test_separated_points_are_infeasible():
 
 
 def test_downsampled_cost(hilly_cost):
-    from planner import downsample_cost
+    from planner.coarse import downsample_cost
 
     coarse = downsample_cost(hilly_cost, 4)
     assert coarse.shape == (30, 28) and coarse.terrain.cell_size_m == 4.0
@@ -301,7 +301,8 @@ def test_bad_coarse_to_fine_arguments(hilly_cost, kwargs, match):
 
 
 def test_bad_coarse_to_fine_points(hilly_cost):
-    from planner import OutOfBoundsError, plan_coarse_to_fine
+    from planner import plan_coarse_to_fine
+    from terrawatt_base.errors import OutOfBoundsError
 
     with pytest.raises(OutOfBoundsError):
         plan_coarse_to_fine(hilly_cost, (-1.0, 8.5), (100.5, 100.5))
@@ -312,7 +313,8 @@ def test_bad_coarse_to_fine_points(hilly_cost):
 
 
 def test_coarse_to_fine_refuses_a_blocked_start(tmp_path):
-    from planner import BlockedPositionError, EnergyCost, plan_coarse_to_fine
+    from planner import EnergyCost, plan_coarse_to_fine
+    from terrawatt_base.errors import BlockedPositionError
     from terrain import wall_map
 
     cost = EnergyCost.from_presets(wall_map((32, 32), 1.0, wall_col=16, ground="asphalt"))

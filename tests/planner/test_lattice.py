@@ -7,7 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from planner import EnergyCost, Lattice, LatticePath, string_pull
+from planner import EnergyCost, Lattice
+from planner.lattice import LatticePath
+from planner.refine import string_pull
 from terrain import InvalidParameterError, TerrainMap, UnknownNameError
 
 

@@ -3,14 +3,8 @@
 import numpy as np
 import pytest
 
-from energy import (
-    InteractionLog,
-    LogMeta,
-    PhysicsEnergyModel,
-    ground_preset,
-    log_battery_power_w,
-    robot_preset,
-)
+from energy import InteractionLog, LogMeta, PhysicsEnergyModel, ground_preset, robot_preset
+from energy.budget import log_battery_power_w
 from planner import EnergyCost, LearnedEnergyModel
 from terrain import (
     CellModelRegistry,
@@ -156,7 +150,7 @@ def test_energy_cost_with_previous_equals_fresh_and_reuses_lattice():
 
 def test_profile_energy_is_the_integral_of_the_cell_models_power():
     # a profile that crosses model b's two cells: each sample priced by the model under it
-    from planner import drive_profile
+    from energy import drive_profile
 
     robot, tmap, reg, lem, mid = _setup()
     profile = drive_profile([[1.5, 3.5], [12.5, 3.5]], 0.5, turn_rate_radps=lem.turn_rate_radps, dt_s=0.01)
@@ -177,7 +171,8 @@ def test_profile_energy_is_the_integral_of_the_cell_models_power():
 def test_route_prediction_prices_the_stops_the_edge_costs_miss():
     # a model equal to the truth: the profile prediction matches the driven energy, the edge costs do not
     from energy import Battery, LinearCurrentModel, TruthSimulator, excitation_commands
-    from planner import evaluate_route, simulate_mission
+    from planner import simulate_mission
+    from planner.route import evaluate_route
 
     robot = robot_preset("husky")
     truth = TruthSimulator(robot, {"asphalt": ground_preset("asphalt")}, seed=0)
@@ -218,7 +213,8 @@ class _BadLayout(ConstModel):
 
 @pytest.mark.parametrize("kind", ["three columns", "one column", "nan", "too short"])
 def test_models_whose_output_layout_does_not_match_are_refused_by_name(kind):
-    from planner import drive_profile, validation_error
+    from energy import drive_profile
+    from planner.missions import validation_error
 
     robot, tmap, reg, lem, _ = _setup()
     bad = reg.add_model(_BadLayout(kind), name="odd layout")

@@ -8,17 +8,11 @@ import numpy as np
 import pytest
 
 from energy import PhysicsEnergyModel, ground_preset, robot_preset
-from planner import (
-    OMPL_PLANNERS,
-    PLANNERS,
-    EnergyCost,
-    PlannerSettings,
-    RouteComparison,
-    compare_route,
-    plan_route,
-    refine_route,
-    shortest_route,
-)
+from planner import PLANNERS, EnergyCost, PlannerSettings, plan_route
+from planner.ompl import OMPL_PLANNERS
+from planner.planning import compare_route, shortest_route
+from planner.refine import refine_route
+from planner.route import RouteComparison
 from terrain import (
     BlockedPositionError,
     GridMismatchError,

@@ -13,18 +13,15 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 import terrain
-from planner import (
+from planner import EnergyCost, Lattice, Reachability, reachability
+from planner.reachability import lattice_move_energies
+from terrawatt_base.errors import (
     BlockedPositionError,
-    EnergyCost,
     FileFormatError,
     FormatVersionError,
     InvalidParameterError,
-    Lattice,
     OutOfBoundsError,
-    Reachability,
     UnknownNameError,
-    lattice_move_energies,
-    reachability,
 )
 from terrawatt_cli import main
 

@@ -5,7 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from energy import InteractionLog, LogMeta, log_battery_power_w, robot_preset
+from energy import InteractionLog, LogMeta, robot_preset
+from energy.budget import log_battery_power_w
 from planner import EnergyCost, RouteEnergyInterval, model_energy_cost, plan_route, risk_cost, route_energy_interval
 from terrain import InvalidParameterError, TerrainMap
 

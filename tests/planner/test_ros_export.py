@@ -10,19 +10,12 @@ import numpy as np
 import pytest
 
 import terrain
-from planner import (
-    EnergyCost,
-    FileFormatError,
-    GridMismatchError,
-    InvalidParameterError,
-    evaluate_route,
-    plan_route,
-    read_energy_geotiff,
-    read_nav2_map,
-    read_route_bag,
-    route_pose_times_s,
-    write_route_bag,
-)
+from planner import EnergyCost, plan_route, write_route_bag
+from planner.energy_costmap import read_energy_geotiff
+from planner.nav2_map import read_nav2_map
+from planner.ros_export import read_route_bag, route_pose_times_s
+from planner.route import evaluate_route
+from terrawatt_base.errors import FileFormatError, GridMismatchError, InvalidParameterError
 from terrawatt_cli import main
 from terrawatt_cli.ros2 import add_ros2_arguments, check_ros2_outputs, nav2_targets, write_ros2_outputs
 

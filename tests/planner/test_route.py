@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from planner import ROUTE_STATUSES, EnergyCost, Route, RouteComparison, evaluate_route
+from planner import EnergyCost, Route
+from planner.route import ROUTE_STATUSES, RouteComparison, evaluate_route
 from terrain import InvalidParameterError, OutOfBoundsError, PlanningError, TerrainMap
 
 

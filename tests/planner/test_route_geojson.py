@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 import shapely.geometry
 
-from planner import EnergyCost, InvalidParameterError, UnknownNameError, evaluate_route, plan_route
+from planner import EnergyCost, plan_route
+from planner.route import evaluate_route
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 from terrawatt_cli import main
 from planner.plot import RouteLine, plot_routes, view_bounds
 from planner.route_geojson import GEOJSON_FORMAT_VERSION, routes_geojson, write_geojson

@@ -5,7 +5,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from energy import InvalidParameterError, LinearCurrentModel, PhysicsCurrentModel, load_current_model
+from energy import LinearCurrentModel, PhysicsCurrentModel, load_current_model
+from terrawatt_base.errors import InvalidParameterError
 from energy.diagnosis import CorrectedCurrentModel
 from diagnosis_scenarios import scenario
 

@@ -7,15 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from energy import (
-    CurrentModel,
-    DataError,
-    InteractionLog,
-    InvalidParameterError,
-    LinearCurrentModel,
-    NotFittedError,
-    UnknownNameError,
-)
+from energy import CurrentModel, InteractionLog, LinearCurrentModel
+from terrawatt_base.errors import DataError, InvalidParameterError, NotFittedError, UnknownNameError
 from energy.diagnosis import CorrectedCurrentModel, Diagnosis, Effect, EffectParameter, diagnose, localise_gap
 from diagnosis_scenarios import null_scenario, scenario
 

@@ -3,14 +3,9 @@
 import numpy as np
 import pytest
 
-from energy import (
-    PAPER_GROUNDS,
-    InvalidParameterError,
-    PhysicsCurrentModel,
-    TruthSimulator,
-    UnknownNameError,
-    robot_preset,
-)
+from energy import PhysicsCurrentModel, TruthSimulator, robot_preset
+from energy.sim import PAPER_GROUNDS
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 from energy.diagnosis import EFFECTS_CATALOGUE, NOT_IDENTIFIABLE_FROM_CURRENT, EffectParameter, effect, effect_from_spec
 from energy.diagnosis.effects import resolve_effects
 from energy.diagnosis.model_currents import clamps_at_zero, physics_basis, unclipped_prediction

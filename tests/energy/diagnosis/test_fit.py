@@ -5,7 +5,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from energy import DataError, InteractionLog, LinearCurrentModel, robot_preset
+from energy import InteractionLog, LinearCurrentModel, robot_preset
+from terrawatt_base.errors import DataError
 from energy.diagnosis import effect, make_split
 from energy.diagnosis.fit import (
     bootstrap_shrink_interval_pct,

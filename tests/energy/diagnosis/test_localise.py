@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from energy import PAPER_GROUNDS, InteractionLog, LogMeta, TruthSimulator, charge_mah, robot_preset
+from energy import InteractionLog, LogMeta, TruthSimulator, charge_mah, robot_preset
+from energy.sim import PAPER_GROUNDS
 from energy.diagnosis.localise import DIMENSIONS, GapShare, largest_slices, localise_gap, shares_of, time_labels
 from energy.diagnosis.residuals import gap_summary
 from terrain import flat_map, ramp_map

@@ -6,7 +6,9 @@ import json
 import numpy as np
 import pytest
 
-from energy import PAPER_GROUNDS, InvalidParameterError, PhysicsCurrentModel, TruthSimulator, robot_preset
+from energy import PhysicsCurrentModel, TruthSimulator, robot_preset
+from energy.sim import PAPER_GROUNDS
+from terrawatt_base.errors import InvalidParameterError
 from energy.diagnosis import EFFECTS_CATALOGUE, EffectParameter, diagnose, effect
 from energy.diagnosis.effects_physics import MassEffect
 from diagnosis_scenarios import scenario

@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from energy import InteractionLog, LogMeta, charge_mah, section_charges_mah, section_error_pct
+from energy import InteractionLog, LogMeta, charge_mah
+from energy.metrics import section_charges_mah, section_error_pct
 from energy.diagnosis.residuals import (
     GapSummary,
     checked_pairs,

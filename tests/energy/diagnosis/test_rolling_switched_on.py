@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from energy import PAPER_GROUNDS, PhysicsCurrentModel, TruthSimulator, robot_preset
+from energy import PhysicsCurrentModel, TruthSimulator, robot_preset
+from energy.sim import PAPER_GROUNDS
 from energy.diagnosis import effect
 from energy.diagnosis.model_currents import motoring_currents_a, physics_basis, unclipped_prediction
 from energy.sim import NoiseModel
@@ -60,7 +61,7 @@ def test_switches_coulomb_on_with_a_coefficient_per_ground(model, logs):
 
 
 def test_table_interpolation_by_slot_equals_per_sample(model, logs):
-    from energy import InvalidParameterError
+    from terrawatt_base.errors import InvalidParameterError
     from energy.diagnosis.model_currents import ParameterTable
 
     log = logs[0]

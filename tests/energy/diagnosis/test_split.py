@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from energy import DataError, InteractionLog, InvalidParameterError, UnknownNameError
+from energy import InteractionLog
+from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 from energy.diagnosis import Fold, make_split
 
 

@@ -16,7 +16,8 @@ from energy import (
     ground_preset,
     robot_preset,
 )
-from planner import AdaptiveSettings, EnergyCost, evaluate_route, run_adaptive_mission, simulate_mission
+from planner import AdaptiveSettings, EnergyCost, run_adaptive_mission, simulate_mission
+from planner.route import evaluate_route
 from planner.missions.figures import plot_adaptive_mission, plot_mission
 from terrain import CellModelRegistry, InvalidParameterError, TerrainMap, flat_map
 

@@ -10,16 +10,15 @@ import pytest
 
 from energy import Battery, PhysicsEnergyModel, TruthSimulator, ground_preset, robot_preset
 from planner import (
-    MONTE_CARLO_FORMAT_VERSION,
     EnergyCost,
-    InvalidParameterError,
     MissionDistributions,
     MonteCarloResult,
-    UnknownNameError,
     plan_route,
     simulate_mission,
     simulate_missions_mc,
 )
+from planner.missions import MONTE_CARLO_FORMAT_VERSION
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 from terrawatt_cli import main
 from planner.missions import MissionSample
 

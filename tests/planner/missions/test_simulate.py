@@ -17,7 +17,9 @@ from energy import (
     ground_preset,
     robot_preset,
 )
-from planner import MISSION_FORMAT_VERSION, EnergyCost, evaluate_route, simulate_mission
+from planner import EnergyCost, simulate_mission
+from planner.missions import MISSION_FORMAT_VERSION
+from planner.route import evaluate_route
 from terrain import (
     DataError,
     GridMismatchError,
