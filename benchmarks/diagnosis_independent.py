@@ -64,6 +64,7 @@ from typing import Any
 import numpy as np
 
 import energy
+from energy.diagnosis import DRIVE_EFFECTS, EFFECTS_CATALOGUE
 from terrawatt_cli import main as terrawatt
 from terrawatt_base.atomic import write_json_atomic
 
@@ -152,9 +153,9 @@ BASES = ("preset", "calibrated", *REDUCED)
 VALUE_TOL = 0.2  # of the effect's size
 TARGETS = {"ranked_first_pct": 80.0, "median_hit_shrink_pct": 60.0, "null_pct": 95.0}
 
-_unknown = sorted({e for hits in HITS.values() for e in hits} - set(energy.EFFECTS_CATALOGUE))
+_unknown = sorted({e for hits in HITS.values() for e in hits} - set(EFFECTS_CATALOGUE))
 if _unknown:
-    raise SystemExit(f"hit effects {_unknown!r} are not in energy.EFFECTS_CATALOGUE {energy.EFFECTS_CATALOGUE!r}")
+    raise SystemExit(f"hit effects {_unknown!r} are not in energy.diagnosis.EFFECTS_CATALOGUE {EFFECTS_CATALOGUE!r}")
 
 
 def run_seed(seed: int, k: int, calibration: bool = False) -> int:
@@ -241,7 +242,7 @@ def _calibrated(seed: int, runs: int, folder: Path, reduced: tuple[str, str] | N
         term, coef = reduced
         default = inspect.signature(energy.PhysicsCurrentModel).parameters["fit_parameters"].default
         model = energy.PhysicsCurrentModel(
-            "husky", "flooring", effects=tuple(e for e in energy.DRIVE_EFFECTS if e != term),
+            "husky", "flooring", effects=tuple(e for e in DRIVE_EFFECTS if e != term),
             fit_parameters=tuple(p for p in default if p != coef),
         )
         name = f"calibrated_without_{term}.zip"
@@ -483,7 +484,7 @@ def main(argv: list[str] | None = None) -> int:
             "hits": HITS, "expect_found": EXPECT_FOUND, "reduced": REDUCED, "reduced_cases": REDUCED_CASES,
             "targets": TARGETS, "value_tolerance": VALUE_TOL,
             "case_effects": {c: dataclasses.asdict(sim.case_effects(c)) for c in args.cases},
-            "catalogue": list(energy.EFFECTS_CATALOGUE),
+            "catalogue": list(EFFECTS_CATALOGUE),
         },
         "machine": {"python": platform.python_version(), "platform": platform.platform()},
         "elapsed_s": elapsed,
