@@ -10,6 +10,7 @@ from .commands import CommandProfile
 from .diagnosis import CorrectedCurrentModel, Diagnosis, diagnose
 from .drivetrain import EFFECTS
 from .evaluation import EvaluationResult, evaluate_adaptation, evaluate_current_models, evaluate_few_shot
+from .energy_model import EnergyModel, IntervalEnergyModel
 from .excitation import excitation_commands
 from .ground import GroundParams
 from .io import BagTopics, read_borealtc, read_csv_log, read_logs, read_rosbag, write_csv_log
@@ -26,7 +27,7 @@ from .models import (  # torch-free: the contract, the baselines, the loader
 )
 from .params import GROUND_PRESETS, ROBOT_PRESETS, ground_preset, robot_preset
 from .robot import MotorParams, RobotParams
-from .physics import PhysicsEnergyModel, PowerBreakdown
+from .physics import PhysicsEnergyModel
 from .plots import plot_current_estimate, plot_vibration_spectra
 from .prediction import predict_runs
 from .profiles import drive_profile
@@ -42,7 +43,8 @@ __all__ = [
     "GROUND_PRESETS",
     "PhysicsEnergyModel",
     "EFFECTS",
-    "PowerBreakdown",
+    "EnergyModel",
+    "IntervalEnergyModel",
     "InteractionLog",
     "LogMeta",
     "read_logs",

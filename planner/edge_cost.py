@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from energy import GROUND_PRESETS, PhysicsEnergyModel, ground_preset, robot_preset
+from energy import GROUND_PRESETS, EnergyModel, PhysicsEnergyModel, ground_preset, robot_preset
 from terrain import TerrainMap
 from terrawatt_base.checks import check_real
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
@@ -64,7 +64,7 @@ __all__ = [
 DEFAULT_MAX_SLOPE_RAD = math.radians(20.0)
 
 
-def _model_turn_rate_radps(model: Any) -> float | None:
+def _model_turn_rate_radps(model: EnergyModel) -> float | None:
     for owner in (model, getattr(model, "robot", None)):
         value = getattr(owner, "turn_rate_radps", None)
         if value is not None:
@@ -296,7 +296,7 @@ class EnergyCost(CostQueries):
     def from_model(
         cls,
         terrain: TerrainMap,
-        model: Any,
+        model: EnergyModel,
         grounds: Mapping[str, Any] | Mapping[int, Any],
         speed_mps: float,
         *,
@@ -322,10 +322,10 @@ class EnergyCost(CostQueries):
         ----------
         terrain : TerrainMap
             The map.
-        model : energy model
-            Anything with ``energy_per_metre_j`` and ``turn_energy_j`` as in
-            :class:`energy.PhysicsEnergyModel` (and, optionally, a ``robot`` with
-            ``battery_voltage_v`` and ``turn_rate_radps``).
+        model : energy.EnergyModel
+            The energy model (``energy_per_metre_j`` and ``turn_energy_j``), e.g.
+            :class:`energy.PhysicsEnergyModel`; its cell classes are the map's grounds here
+            (and, optionally, a ``robot`` with ``battery_voltage_v`` and ``turn_rate_radps``).
         grounds : mapping
             Ground parameters per ground class of the map, keyed by class name (see
             ``terrain.ground_names``) or by class id. Every class present in the map's
@@ -369,6 +369,9 @@ class EnergyCost(CostQueries):
         t0 = time.perf_counter()
         if not isinstance(terrain, TerrainMap):
             raise InvalidParameterError(f"terrain must be a TerrainMap, got {type(terrain).__name__!r}")
+        if not isinstance(model, EnergyModel):
+            raise InvalidParameterError(f"model must be an energy.EnergyModel (energy_per_metre_j and turn_energy_j), "
+                                        f"got {type(model).__name__!r}")
         speed = check_real("speed_mps", speed_mps, low=0.0, low_inclusive=False)
         slope = check_real("max_slope_rad", max_slope_rad, low=0.0, high=math.pi / 2, low_inclusive=False,
                            high_inclusive=False)

@@ -432,8 +432,9 @@ class LearnedEnergyModel:
         return (np.asarray(phys(speed, grades, self.physics_ground, infeasible=infeasible), dtype=np.float64)
                 - float(phys(speed, 0.0, self.physics_ground, infeasible="capped")))
 
-    def energy_per_metre_j(self, speed_mps: float, grade: Any, ground: int) -> np.ndarray:
-        """J per metre travelled at ``speed_mps`` on ``grade`` for the model with id ``ground``.
+    def energy_per_metre_j(self, speed_mps: float, grade: Any, model_id: int, /) -> np.ndarray:
+        """J per metre travelled at ``speed_mps`` on ``grade`` for the model with id ``model_id``
+        (this model's cell class: :class:`energy.EnergyModel`).
 
         ``e_learned(v) + [e_physics(v, grade) - e_physics(v, 0)]``, floored at the
         electronics' J/m (see the module docstring).
@@ -452,11 +453,11 @@ class LearnedEnergyModel:
             raise InvalidParameterError(f"grade must be numbers, got {grade!r:.80}") from exc
         if np.any(np.isnan(grades)):
             raise InvalidParameterError("grade must not hold NaN")
-        flat = self.table(int(ground)).energy_per_metre_at(speed)
+        flat = self.table(int(model_id)).energy_per_metre_at(speed)
         return np.maximum(flat + self._slope_term_j(speed, grades), self._electronics_per_metre_j(speed))
 
-    def turn_energy_j(self, heading_change_rad: Any, ground: int) -> np.ndarray:
-        """J of turning in place by ``|heading_change_rad|`` at the robot's turn rate, model ``ground``.
+    def turn_energy_j(self, heading_change_rad: Any, model_id: int, /) -> np.ndarray:
+        """J of turning in place by ``|heading_change_rad|`` at the robot's turn rate, model ``model_id``.
 
         Raises
         ------
@@ -464,9 +465,9 @@ class LearnedEnergyModel:
             Unknown model id.
         """
         angles = np.abs(np.asarray(heading_change_rad, dtype=np.float64))
-        return angles * self.table(int(ground)).turn_energy_per_rad_at(self.turn_rate_radps)
+        return angles * self.table(int(model_id)).turn_energy_per_rad_at(self.turn_rate_radps)
 
-    def energy_per_metre_sd_j(self, speed_mps: float, grade: Any, ground: int) -> np.ndarray:
+    def energy_per_metre_sd_j(self, speed_mps: float, grade: Any, model_id: int, /) -> np.ndarray:
         """Run-level standard deviation (J per metre travelled) of :meth:`energy_per_metre_j`.
 
         The learned flat-ground spread at ``speed_mps``, the same on every grade (the physics
@@ -479,12 +480,12 @@ class LearnedEnergyModel:
         """
         speed = check_real("speed_mps", speed_mps, low=0.0, low_inclusive=False)
         grades = np.asarray(grade, dtype=np.float64)
-        return np.full(grades.shape, self.table(int(ground)).energy_per_metre_sd_at(speed))
+        return np.full(grades.shape, self.table(int(model_id)).energy_per_metre_sd_at(speed))
 
-    def turn_energy_sd_j(self, heading_change_rad: Any, ground: int) -> np.ndarray:
+    def turn_energy_sd_j(self, heading_change_rad: Any, model_id: int, /) -> np.ndarray:
         """Run-level standard deviation (J) of :meth:`turn_energy_j`; 0 for a model without an interval."""
         angles = np.abs(np.asarray(heading_change_rad, dtype=np.float64))
-        return angles * self.table(int(ground)).turn_energy_per_rad_sd_at(self.turn_rate_radps)
+        return angles * self.table(int(model_id)).turn_energy_per_rad_sd_at(self.turn_rate_radps)
 
     # ------------------------------------------------------------------ edge costs
     def energy_cost(

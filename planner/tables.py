@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from energy import EnergyModel, IntervalEnergyModel
 from terrawatt_base.checks import check_int
 from terrawatt_base.errors import GridMismatchError, InvalidParameterError, UnknownNameError
 from terrain.terrain_map import UNKNOWN_GROUND, TerrainMap
@@ -63,9 +64,9 @@ def turn_grid(turn_samples: int) -> np.ndarray:
 
 
 def tabulate(
-    model: Any,
+    model: EnergyModel | IntervalEnergyModel,
     speed_mps: float,
-    grounds: Sequence[Any],
+    cell_classes: Sequence[Any],
     labels: Sequence[str],
     *,
     max_slope_rad: float,
@@ -75,19 +76,21 @@ def tabulate(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Grade and turn tables of an energy model, one row per ground (the one table builder).
 
-    Row ``i`` holds ``model.energy_per_metre_j(speed_mps, grades, grounds[i])`` (J per metre
+    Row ``i`` holds ``model.energy_per_metre_j(speed_mps, grades, cell_classes[i])`` (J per metre
     *travelled*) times ``sqrt(1 + grade**2)`` (J per *horizontal* map metre) on
-    :func:`grade_grid`, and ``model.turn_energy_j(angles, grounds[i])`` on :func:`turn_grid`.
+    :func:`grade_grid`, and ``model.turn_energy_j(angles, cell_classes[i])`` on :func:`turn_grid`.
 
     Parameters
     ----------
-    model : energy model
-        Anything with ``energy_per_metre_j(speed, grades, ground)`` and
-        ``turn_energy_j(angles, ground)`` (the physics model, a learned model).
+    model : energy.EnergyModel
+        ``energy_per_metre_j(speed, grades, cell_class)`` and ``turn_energy_j(angles,
+        cell_class)`` (the physics model, a learned model); with ``spread``, an
+        :class:`energy.IntervalEnergyModel`.
     speed_mps : float
         Planning speed (m/s).
-    grounds : sequence
-        What the model takes as ``ground`` for each row (ground parameters, model ids).
+    cell_classes : sequence
+        The model's cell class of each row (ground parameters for the physics model, model
+        ids for a learned one).
     labels : sequence of str
         A name per row, for messages.
     max_slope_rad, grade_samples, turn_samples
@@ -99,7 +102,7 @@ def tabulate(
 
     Returns
     -------
-    grade_table, turn_table : ndarray, shape (len(grounds), grade_samples) and (len(grounds), turn_samples)
+    grade_table, turn_table : ndarray, shape (len(cell_classes), grade_samples) and (len(cell_classes), turn_samples)
 
     Raises
     ------
@@ -107,28 +110,28 @@ def tabulate(
         The model returned arrays of other shapes.
     """
     if spread:
-        return _table_rows(model.energy_per_metre_sd_j, model.turn_energy_sd_j, speed_mps, grounds, labels,
+        return _table_rows(model.energy_per_metre_sd_j, model.turn_energy_sd_j, speed_mps, cell_classes, labels,
                            max_slope_rad=max_slope_rad, grade_samples=grade_samples, turn_samples=turn_samples,
                            what="spread ")
-    return _table_rows(model.energy_per_metre_j, model.turn_energy_j, speed_mps, grounds, labels,
+    return _table_rows(model.energy_per_metre_j, model.turn_energy_j, speed_mps, cell_classes, labels,
                        max_slope_rad=max_slope_rad, grade_samples=grade_samples, turn_samples=turn_samples, what="")
 
 
-def _table_rows(per_metre: Any, per_turn: Any, speed_mps: float, grounds: Sequence[Any], labels: Sequence[str], *,
+def _table_rows(per_metre: Any, per_turn: Any, speed_mps: float, cell_classes: Sequence[Any], labels: Sequence[str], *,
                 max_slope_rad: float, grade_samples: int, turn_samples: int, what: str) -> tuple[np.ndarray, np.ndarray]:
-    """``per_metre(speed, grades, ground) * sqrt(1 + grade**2)`` and ``per_turn(angles, ground)`` per ground row."""
+    """``per_metre(speed, grades, c) * sqrt(1 + grade**2)`` and ``per_turn(angles, c)`` per cell class ``c``."""
     grades = grade_grid(max_slope_rad, grade_samples)
     angles = turn_grid(turn_samples)
     horizontal = np.sqrt(1.0 + grades**2)
-    grade_table = np.empty((len(grounds), grades.size))
-    turn_table = np.empty((len(grounds), angles.size))
-    for i, ground in enumerate(grounds):
-        e = np.asarray(per_metre(speed_mps, grades, ground), dtype=np.float64)
-        te = np.asarray(per_turn(angles, ground), dtype=np.float64)
+    grade_table = np.empty((len(cell_classes), grades.size))
+    turn_table = np.empty((len(cell_classes), angles.size))
+    for i, cell_class in enumerate(cell_classes):
+        e = np.asarray(per_metre(speed_mps, grades, cell_class), dtype=np.float64)
+        te = np.asarray(per_turn(angles, cell_class), dtype=np.float64)
         if e.shape != grades.shape or te.shape != angles.shape:
             raise InvalidParameterError(
                 f"model returned {what}shapes {e.shape!r} / {te.shape!r} for {grades.shape!r} grades / "
-                f"{angles.shape!r} angles on ground {labels[i]!r}; expected the input shapes"
+                f"{angles.shape!r} angles on {labels[i]!r}; expected the input shapes"
             )
         grade_table[i] = e * horizontal
         turn_table[i] = te
