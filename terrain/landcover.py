@@ -28,7 +28,7 @@ import numpy as np
 from terrawatt_base.containers import memory_budget_bytes
 from terrawatt_base.errors import FileFormatError, InvalidParameterError
 from .georef import import_rasterio, lonlat_bounds, parse_crs
-from .terrain_map import UNKNOWN_GROUND, TerrainMap
+from .terrain_map import TerrainMap
 
 __all__ = [
     "LandcoverClasses",

@@ -24,7 +24,6 @@ from .adaptation import (
     MIN_ADAPT_SAMPLES,
     MIN_ADAPT_SECONDS,
     AdaptedCurrentModel,
-    adapt_current_model,
 )
 from .base import (
     CURRENT_MODEL_FORMAT,
@@ -109,7 +108,6 @@ __all__ = [
     "MIN_ADAPT_SECONDS",
     "MIN_ADAPT_SAMPLES",
     "AdaptedCurrentModel",
-    "adapt_current_model",
     "ADAPT_SCOPES",
     "TORCH_NAMES",
     *TORCH_NAMES,

@@ -2,8 +2,9 @@
 
 :class:`AdaptedCurrentModel` wraps a fitted model (never modified) and adds, per side, a
 correction fitted on a short stretch of new data (``fit(logs)``: seconds, not a retraining).
-:meth:`CurrentModel.adapt` (``model.adapt(log_prefix)``) is the short spelling; adapting an
-adapted model refits the correction on its base, it does not stack corrections.
+``model.adapt(log_prefix, **options)`` (:meth:`CurrentModel.adapt`) is the one way to adapt
+a model: it builds and fits this class with the options checked; adapting an adapted model
+refits the correction on its base, it does not stack corrections.
 
 Methods (:data:`ADAPT_METHODS`), chosen by measurement on the BorealTC logs (leave one run
 out per ground, the default estimator adapted on the first 10 / 20 / 40 s of each held-out
@@ -54,7 +55,6 @@ __all__ = [
     "MIN_ADAPT_SECONDS",
     "MIN_ADAPT_SAMPLES",
     "AdaptedCurrentModel",
-    "adapt_current_model",
 ]
 
 #: Update methods of :class:`AdaptedCurrentModel`, the default first.
@@ -431,36 +431,3 @@ class AdaptedCurrentModel(CurrentModel):
             raise ValueError("a 'bayes' update needs its (2, 8, 8) posterior covariance")
         if not math.isfinite(self.adapted_on_s_):
             raise ValueError("non-finite adapted_on_s")
-
-
-def adapt_current_model(model: CurrentModel, log_prefix: InteractionLog | Sequence[InteractionLog], *,
-                        method: str = "regime", prior_s: float = 20.0, turn_scale_radps: float = 0.3,
-                        min_seconds: float = MIN_ADAPT_SECONDS, scope: str = "run") -> AdaptedCurrentModel:
-    """A new model: ``model`` updated on a short stretch of new data (``model`` is not modified).
-
-    Parameters
-    ----------
-    model : CurrentModel
-        A fitted model (an adapted one is re-adapted from its base).
-    log_prefix : InteractionLog or sequence of InteractionLog
-        New data with logged currents, e.g. the first 20 s of a run.
-    method, prior_s, turn_scale_radps, min_seconds, scope
-        As :class:`AdaptedCurrentModel`.
-
-    Returns
-    -------
-    AdaptedCurrentModel
-
-    Raises
-    ------
-    InvalidParameterError, UnknownNameError
-        ``model`` is not a fitted CurrentModel; a bad option; ``log_prefix`` is not logs.
-    DataError
-        Less than ``min_seconds`` or :data:`MIN_ADAPT_SAMPLES` samples of new data (the
-        message names both), or data the base model cannot predict.
-    """
-    if not isinstance(model, CurrentModel):
-        raise InvalidParameterError(f"model must be a fitted CurrentModel, got {model!r:.80}")
-    return AdaptedCurrentModel.adapting(model, log_prefix, method=method, prior_s=prior_s,
-                                        turn_scale_radps=turn_scale_radps, min_seconds=min_seconds, scope=scope)
-

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from energy import AdaptedCurrentModel, InteractionLog, LinearCurrentModel, LogMeta, load_current_model
-from energy.models import ADAPT_METHODS, adapt_current_model
+from energy.models import ADAPT_METHODS
 from terrawatt_base.errors import DataError, FileFormatError, InvalidParameterError, NotFittedError
 from energy.models import MIN_ADAPT_SAMPLES, ModelRecord
 from terrain import UnknownNameError
@@ -91,7 +91,7 @@ def test_straight_prefix_does_not_rescale_turns_unlike_the_gain(base):
 def test_gain_method_is_measured_over_predicted_charge_of_the_prefix(base):
     run = _log(6, offset_a=0.4)
     head = _head(run, 15.0)
-    adapted = adapt_current_model(base, head, method="gain")
+    adapted = base.adapt(head, method="gain")
     pred = base.predict(head)
     expect = np.trapezoid(np.column_stack([head.current_left_a, head.current_right_a]), head.time_s, axis=0) / \
         np.trapezoid(pred, head.time_s, axis=0)
@@ -194,10 +194,8 @@ def test_bad_models_and_logs(base):
     head = _head(_log(17), 20.0)
     with pytest.raises(InvalidParameterError, match="fitted CurrentModel"):
         LinearCurrentModel().adapt(head)
-    with pytest.raises(InvalidParameterError, match="fitted CurrentModel"):
-        adapt_current_model("linear", head)
     with pytest.raises(InvalidParameterError, match="log_prefix"):
-        adapt_current_model(base, [])
+        base.adapt([])
     with pytest.raises(InvalidParameterError, match="log_prefix"):
         base.adapt("run.csv")
     with pytest.raises(InvalidParameterError, match=r"unknown adaptation option\(s\) \['methd'\]"):

@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import energy
 from energy import drive_profile
 from energy.profiles import (
     DEFAULT_ACCEL_MPS2,
