@@ -35,6 +35,10 @@ CURRENT_CONVENTIONS = ("motor", "battery")
 class EnergyBudget:
     """Predicted vs actual energy of a mission against a battery.
 
+    Derived: ``predicted_energy_wh``, ``actual_energy_wh``, ``error_pct``, ``depleted``,
+    ``predicted_depleted``, ``arrival_soc_pct``, ``arrival_energy_wh``, ``reserve_margin_pct``,
+    ``reserve_margin_wh``, ``segment_error_pct``; :meth:`to_json_dict`.
+
     Attributes
     ----------
     battery : Battery
@@ -66,10 +70,6 @@ class EnergyBudget:
         Per-segment breakdown (J); empty when no segments were given. The actual energy
         of a segment is the integral over the sample intervals that start in it, so the
         segments add up to ``actual_energy_j``.
-
-    Derived: ``predicted_energy_wh``, ``actual_energy_wh``, ``error_pct``, ``depleted``,
-    ``predicted_depleted``, ``arrival_soc_pct``, ``arrival_energy_wh``, ``reserve_margin_pct``,
-    ``reserve_margin_wh``, ``segment_error_pct``; :meth:`to_json_dict`.
     """
 
     battery: Battery

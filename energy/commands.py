@@ -3,7 +3,7 @@
 A :class:`CommandProfile` is a uniformly sampled series of commanded linear speed and yaw
 rate (optionally with the reference pose the commands follow). Builders live beside it:
 :func:`energy.excitation_commands` (the paper's excitation pattern) and
-:func:`energy.waypoint_commands` / :func:`energy.drive_profile` (stop-turn-go along a route).
+:func:`energy.profiles.waypoint_commands` / :func:`energy.drive_profile` (stop-turn-go along a route).
 :func:`command_series` and :func:`uniform_step_s` are the checks of a command or log time
 series that the truth simulator shares.
 """

@@ -114,6 +114,8 @@ class PhysicsEnergyModel:
     ) -> PowerBreakdown:
         """Power of each sample, with per-side motor current and per-effect components.
 
+        All per-sample arguments broadcast to one 1-D shape ``(n,)``.
+
         Parameters
         ----------
         speed_mps : array_like
@@ -134,8 +136,6 @@ class PhysicsEnergyModel:
             interval (without it a moving robot's board is at its stable power).
         ground_index : array_like of int, optional
             Index into ``ground`` per sample (required when ``ground`` is a sequence).
-
-        All per-sample arguments broadcast to one 1-D shape ``(n,)``.
 
         Returns
         -------

@@ -93,7 +93,7 @@ def plot_current_estimate(
 
     One panel per drive side (left above right): the measured current in a light colour,
     its median moving average over ``window_samples`` samples, and the moving median of
-    the estimate over the same window (:func:`energy.moving_median`).
+    the estimate over the same window (:func:`energy.metrics.moving_median`).
 
     Parameters
     ----------
@@ -182,7 +182,7 @@ def ground_spectra(
 ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """Mean vertical-vibration spectrum of each ground's runs, on one frequency grid.
 
-    Every run's whole-run spectrum (:func:`energy.whole_run_spectrum`) is computed on the
+    Every run's whole-run spectrum (:func:`energy.features.whole_run_spectrum`) is computed on the
     same ``n_bins`` frequencies and the runs of a ground (``log.meta.ground_label``) are
     averaged. ``"density"`` scaling (default) gives broadband vibration the same level
     whatever the run length, so runs of different lengths can be averaged; with
@@ -265,7 +265,7 @@ def plot_vibration_spectra(
         Moving-average width in bins (>= 1).
     n_bins, max_frequency_hz, scaling :
         Frequency grid and scaling (``"density"``, the default, or ``"amplitude"``, see
-        :func:`energy.whole_run_spectrum`) when spectra are computed from logs; ``scaling``
+        :func:`energy.features.whole_run_spectrum`) when spectra are computed from logs; ``scaling``
         also names the y axis (say which one precomputed spectra use).
     title : str, optional
         Figure title (default "vertical vibration spectra by ground"); with ``axes``, the

@@ -38,7 +38,7 @@ class RunPrediction:
     energy_predicted_wh : float
         The integral of the log's ``battery_voltage_v * (I_left + I_right)`` over the
         predicted currents (Wh): the battery energy when the currents are battery-side, as
-        :func:`~energy.log_battery_power_w` with ``current_convention="battery"`` and no
+        :func:`~energy.budget.log_battery_power_w` with ``current_convention="battery"`` and no
         electronics; NaN for a log without battery voltage.
     has_currents : bool
     """

@@ -144,7 +144,7 @@ class RobotParams:
         Current (>= 0, A) each side's current sensor logs while the robot stands still
         (:func:`energy.logs.at_rest`): the sensor's rest offset. It is a *measurement*: it is
         in every logged sample (before the driver's clamp at 0) but makes no torque and is
-        never paid by the battery — :func:`energy.log_battery_power_w` removes it from logged
+        never paid by the battery — :func:`energy.budget.log_battery_power_w` removes it from logged
         currents, :class:`~energy.physics.PhysicsEnergyModel` never includes it, and
         :class:`~energy.PhysicsCurrentModel` predicts it at rest. Default 0.
 

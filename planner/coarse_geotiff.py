@@ -8,7 +8,7 @@ holding the whole raster (:class:`terrain.DemWindows`):
    ``cost_from`` and reduced to coarse cells (:func:`planner.coarse.coarse_layers`: block-mean
    elevation, majority blocked, most common table row), so memory holds one tile plus the
    coarse grid; a coarse block never straddles two tiles, so the coarse cost equals
-   :func:`planner.downsample_cost` of the whole-map cost. The coarse lattice route follows.
+   :func:`planner.coarse.downsample_cost` of the whole-map cost. The coarse lattice route follows.
 2. **fine stage** — the full-resolution window holding the corridor's bounding box (plus two
    cells for the lattice's moves and one halo cell for slopes) is read, priced with
    ``cost_from`` (a georeferenced TerrainMap: coordinates stay the map's) and searched as

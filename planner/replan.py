@@ -12,7 +12,7 @@ The answers are those of :meth:`Lattice.shortest_path` with ``weight="energy"``:
 joins of start and goal to the nearby nodes, the same direct start-goal segment (taken when
 no lattice route is cheaper), the same admissible heuristic
 ``cost.min_energy_per_metre_j * |start - node|``, the same optimum (up to the order of
-the additions) and the same :class:`~planner.LatticePath` assembly. Among routes of equal
+the additions) and the same :class:`~planner.lattice.LatticePath` assembly. Among routes of equal
 energy the two searches may pick different ones. :meth:`~IncrementalPlanner.route` adds the
 post-processing of ``plan_route(planner="lattice")`` (refinement, costing).
 """

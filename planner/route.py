@@ -44,7 +44,7 @@ class RouteComparison:
     ----------
     shortest : Route
         The shortest-distance route between the same points, evaluated
-        (:func:`planner.shortest_route`; status ``"infeasible"`` when there is none).
+        (:func:`planner.planning.shortest_route`; status ``"infeasible"`` when there is none).
     lattice_optimum_j : float
         Drive energy (J) of the minimum-energy route on the directed 16-connected 1-cell
         lattice (the reference optimum); NaN when that lattice joins no route.
@@ -80,6 +80,9 @@ class Route:
     produced them. Drive energy is the sum of the straight segments; the total adds the
     turns in place at the waypoints.
 
+    Derived (properties): ``found``, ``drive_energy_j``, ``energy_wh``, ``charge_mah``,
+    ``shortest_energy_j``, ``lattice_energy_j``, ``energy_saved_pct``, ``optimality_ratio``.
+
     Attributes
     ----------
     status : str
@@ -108,9 +111,6 @@ class Route:
     comparison : RouteComparison or None
         The baselines of the same query (``plan_route(..., compare=True)``); None when not
         computed.
-
-    Derived (properties): ``found``, ``drive_energy_j``, ``energy_wh``, ``charge_mah``,
-    ``shortest_energy_j``, ``lattice_energy_j``, ``energy_saved_pct``, ``optimality_ratio``.
 
     Raises
     ------

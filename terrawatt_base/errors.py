@@ -5,10 +5,10 @@ the builtin exception it resembles, so ``except ValueError`` keeps working for c
 do not know terrawatt. Messages name the parameter, show the bad value with ``!r`` and say
 what was expected.
 
-The whole hierarchy lives here, in ``terrain``, because ``terrain`` is the bottom layer and
-imports nothing above it; ``energy`` and ``planner`` subclass these classes rather than start
-their own. Each package's ``__init__`` re-exports the errors and warnings its users meet, so
-``from energy import DataError`` works without knowing where the class is defined.
+The whole hierarchy lives here, in the groundwork every package builds on; ``terrain``,
+``energy`` and ``planner`` raise and subclass these classes rather than start their own.
+``terrain``, the package every user imports first, names all of them
+(``from terrain import DataError``); ``energy`` and ``planner`` do not repeat them.
 """
 
 from __future__ import annotations

@@ -469,9 +469,24 @@ class CurrentModel:
         ``sample_sd_a`` the spread independent per sample. A model without an interval
         (:attr:`gives_interval` False) returns zero spreads.
 
+        Parameters
+        ----------
+        log : InteractionLog
+            As for :meth:`predict`.
+
+        Returns
+        -------
+        CurrentForecast
+            Mean and spreads of the ``[left, right]`` currents (A) at ``log.time_s``.
+
         Raises
         ------
-        As :meth:`predict`.
+        NotFittedError
+            Before :meth:`fit`.
+        InvalidParameterError
+            ``log`` is not an InteractionLog.
+        DataError
+            The log is too short for the model's windows.
         """
         self._check_log(log)
         return self._predict_distribution(log)

@@ -107,7 +107,7 @@ class EstimatorConfig:
         model as ``current_range_a_``).
     physics_prior : str or None
         Robot preset name (:data:`~energy.params.ROBOT_PRESETS`) of a physics prior: a
-        :class:`~energy.baselines.PhysicsCurrentModel` is fitted to the training logs
+        :class:`~energy.models.baselines.PhysicsCurrentModel` is fitted to the training logs
         first (rolling resistance, lateral friction, idle current) and the networks learn
         the residual current on top of it. ``None`` learns the currents directly (the
         paper).

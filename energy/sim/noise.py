@@ -27,7 +27,7 @@ class NoiseModel:
     current) comes from the physics alone. In particular ``current_offset_a`` is the current
     sensor's rest offset (what it reads with the wheels still, as the real Husky's does),
     not a drag: a robot that knows it (``RobotParams.rest_current_a``) removes it when it
-    turns logged currents into battery power (:func:`energy.log_battery_power_w`).
+    turns logged currents into battery power (:func:`energy.budget.log_battery_power_w`).
 
     Parameters
     ----------

@@ -57,6 +57,9 @@ _SERIES = (
 class MissionResult:
     """A driven (or replayed) route: time series and energy budget.
 
+    Derived: ``n_samples``, ``duration_s``, ``feasible``, ``completed``. Methods:
+    :meth:`to_json_dict`, :meth:`save_json`, :meth:`plot`.
+
     Attributes
     ----------
     status : str
@@ -99,7 +102,7 @@ class MissionResult:
         The velocity profile.
     current_convention : str
         How the side currents were turned into power (see
-        :func:`energy.log_battery_power_w`).
+        :func:`energy.budget.log_battery_power_w`).
     truth_energy_j : float
         Noise-free battery energy of the truth simulator over the same samples (J; NaN
         for a replay). ``budget.actual_energy_j`` is what the logged (measured) currents
@@ -113,9 +116,6 @@ class MissionResult:
     forecast : {"edges", "profile"}
         What priced ``budget.predicted_energy_j``: the route's edge energies, or the physics
         model over the whole driven profile (see :func:`planner.simulate_mission`).
-
-    Derived: ``n_samples``, ``duration_s``, ``feasible``, ``completed``. Methods:
-    :meth:`to_json_dict`, :meth:`save_json`, :meth:`plot`.
     """
 
     status: str

@@ -3,7 +3,7 @@
 :func:`simulate_mission` turns a :class:`~planner.route.Route` into a drivable velocity
 profile, drives it (or replays a log that drove it) and returns a :class:`MissionResult`:
 the time series (pose, speeds, side currents, battery power, cumulative Wh and mAh, state of
-charge, route segment) and an :class:`~energy.battery.EnergyBudget` comparing the predicted
+charge, route segment) and an :class:`~energy.budget.EnergyBudget` comparing the predicted
 energy with the actual one, with the reserve at arrival, the feasibility against the
 battery and a per-segment breakdown.
 
@@ -22,9 +22,9 @@ robot's closest approach to its end waypoint once it is within ``waypoint_tolera
 along the segment); a log without a pose is assumed to follow the velocity profile from its
 first sample and is assigned by time.
 
-Actual power: :func:`energy.log_battery_power_w` on the driven log (drive power from the
+Actual power: :func:`energy.budget.log_battery_power_w` on the driven log (drive power from the
 logged side currents, less the current sensor's rest offset, plus the robot's electronics),
-so driving with a :class:`~energy.truth.TruthSimulator` and replaying the log it produced
+so driving with a :class:`~energy.sim.TruthSimulator` and replaying the log it produced
 (with the same ``current_offset_a``) give the same result, and the actual energy is booked
 like the physics model that priced the route. The sensor's offset is logged, never paid.
 """
@@ -111,7 +111,7 @@ def simulate_mission(
     robot : RobotParams
         The robot that drives (for a TruthSimulator normally ``truth.robot``): its turn
         rate, and the motor constants and electronics that turn the logged currents into
-        battery power (:func:`energy.log_battery_power_w`).
+        battery power (:func:`energy.budget.log_battery_power_w`).
     battery : Battery
         Capacity, voltage, reserve and initial state of charge.
     truth : TruthSimulator or InteractionLog
@@ -137,7 +137,7 @@ def simulate_mission(
         Heading at the start; ``None`` starts facing the first segment. An initial turn is
         driven (and booked to segment 0) but not predicted.
     current_convention : {"motor", "battery"}
-        What the logged side currents measure (see :func:`energy.log_battery_power_w`).
+        What the logged side currents measure (see :func:`energy.budget.log_battery_power_w`).
     electronics : bool
         Add the robot's sensor and control-board power to the logged drive power (keep it
         equal to whether the planning model includes them).

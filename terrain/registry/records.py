@@ -134,6 +134,9 @@ class ModelRecord:
 class FlaggedRegion:
     """A connected region of flagged cells (from :meth:`CellModelRegistry.flagged_regions`).
 
+    A region can be passed wherever the registry accepts cells (``assign``,
+    ``propose_update``, ``reset_evidence``).
+
     Attributes
     ----------
     region_id : int
@@ -158,9 +161,6 @@ class FlaggedRegion:
         Samples recorded in the region.
     model_ids : tuple of int
         Models currently serving the region's cells.
-
-    A region can be passed wherever the registry accepts cells (``assign``,
-    ``propose_update``, ``reset_evidence``).
     """
 
     region_id: int

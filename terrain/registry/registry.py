@@ -47,7 +47,7 @@ class CellModelRegistry(EvidenceMixin):
     cell_size_m : float, optional
         Cell size, with ``origin_xy_m``: lets regions report world coordinates.
     origin_xy_m : (float, float), optional
-        Lower-left corner of cell (0, 0) (same convention as :class:`~terrain.grid.TerrainMap`).
+        Lower-left corner of cell (0, 0) (same convention as :class:`~terrain.terrain_map.TerrainMap`).
 
     Raises
     ------
@@ -467,6 +467,10 @@ class CellModelRegistry(EvidenceMixin):
     ) -> CellModelRegistry:
         """Read a registry written by :meth:`save`.
 
+        A registry that a :meth:`save` killed between its two renames left aside is moved
+        back first (with a :class:`~terrawatt_base.errors.RecoveryWarning`), and temporaries of
+        dead saves of the same target are removed.
+
         Parameters
         ----------
         directory : path
@@ -475,10 +479,6 @@ class CellModelRegistry(EvidenceMixin):
             Reads one model written by the ``save_model`` given to :meth:`save`.
         terrain : TerrainMap, optional
             When given, the registry must be on its grid (see :meth:`check_grid`).
-
-        A registry that a :meth:`save` killed between its two renames left aside is moved
-        back first (with a :class:`~terrawatt_base.errors.RecoveryWarning`), and temporaries of
-        dead saves of the same target are removed.
 
         Raises
         ------
