@@ -76,7 +76,8 @@ class EnergyCost(CostQueries):
     """Precomputed per-cell tables for the energy (J) of straight segments and turns on a map.
 
     Build it with :meth:`from_model`; the constructor takes ready tables (for custom cost
-    models and tests) and validates them.
+    models and tests) and validates them. The segment, path and turn queries come from
+    :class:`~planner.cost_queries.CostQueries`.
 
     Parameters
     ----------
@@ -105,8 +106,6 @@ class EnergyCost(CostQueries):
         model with a predictive interval (:class:`~planner.LearnedEnergyModel`); both or
         neither. They do not change any query of this class: :mod:`planner.risk` reads them
         for route energy intervals and risk-aware costs.
-
-    The segment, path and turn queries come from :class:`~planner.cost_queries.CostQueries`.
 
     Attributes
     ----------
@@ -190,7 +189,7 @@ class EnergyCost(CostQueries):
         self.changed_cells: np.ndarray | None = None
         #: The physics model that priced the tables (:meth:`from_model` with a
         #: :class:`energy.PhysicsEnergyModel`) and its ground parameters per table row, so a
-        #: mission forecast can price the whole driven profile (:func:`planner.profile_forecast_w`);
+        #: mission forecast can price the whole driven profile (:func:`planner.missions.forecast.profile_forecast_w`);
         #: ``None`` otherwise.
         self.physics_model: PhysicsEnergyModel | None = None
         self.ground_params: tuple[Any, ...] | None = None

@@ -9,7 +9,7 @@ of ``speeds_mps`` (straight driving, ``omega = 0``) and then each turn rate of
 predicted currents over the settled tail of every hold (the first ``settle_s`` seconds of
 each hold are left out, so step transients of models that use ``dv/dt`` or windows do not
 count). The predicted ``[left, right]`` motor currents become battery power with
-:func:`energy.log_battery_power_w` (``current_convention`` as there, electronics off), plus
+:func:`energy.budget.log_battery_power_w` (``current_convention`` as there, electronics off), plus
 the robot's electronics (sensor and stable control-board power of
 :class:`energy.PhysicsEnergyModel`), and are kept as tables:
 
@@ -21,7 +21,7 @@ the robot's electronics (sensor and stable control-board power of
 too; its mean is ``predict``'s). Its run-level spread ``run_sd_a`` (shared by a whole run on
 one ground, both sides fully correlated) becomes the standard deviation of the battery power,
 ``(P(mean + run_sd) - P(mean - run_sd)) / 2`` through the same
-:func:`energy.log_battery_power_w` path, averaged over the settled tail like the mean (fully
+:func:`energy.budget.log_battery_power_w` path, averaged over the settled tail like the mean (fully
 correlated: it does not average out), and is tabulated per metre and per radian
 (:attr:`LearnedModelTable.energy_per_metre_sd_j`, ``turn_energy_per_rad_sd_j``). The
 electronics and the physics slope term carry no spread. :meth:`LearnedEnergyModel.energy_cost`
@@ -137,7 +137,7 @@ class LearnedEnergyModel:
     rate_hz : float
         Sample rate of the synthetic log (Hz).
     current_convention : {"motor", "battery"}
-        What the models' currents are (see :func:`energy.log_battery_power_w`).
+        What the models' currents are (see :func:`energy.budget.log_battery_power_w`).
 
     Raises
     ------
@@ -310,7 +310,7 @@ class LearnedEnergyModel:
 
         Every sample's current comes from the model serving the cell under its pose (fed that
         model's vibration, :meth:`set_vibration`), turned into battery power with the same
-        bookkeeping as a driven log (:func:`energy.log_battery_power_w`, electronics
+        bookkeeping as a driven log (:func:`energy.budget.log_battery_power_w`, electronics
         included) and integrated over time; the physics slope term (module docstring) is
         added per metre along the path. Unlike the edge costs, which price steady driving at
         one speed plus turns in place, this prices the whole velocity profile: starting and
@@ -321,7 +321,7 @@ class LearnedEnergyModel:
         terrain : TerrainMap
             The registry's map.
         profile : CommandProfile
-            Commands with poses (e.g. :func:`planner.drive_profile`).
+            Commands with poses (e.g. :func:`energy.drive_profile`).
         speed_mps : float, optional
             Speed of the slope term's physics evaluation; default the profile's top speed.
 
@@ -383,13 +383,13 @@ class LearnedEnergyModel:
     ) -> float:
         """Predicted battery energy (J) of driving a route the way :func:`planner.simulate_mission` does.
 
-        :meth:`profile_energy_j` of :func:`planner.drive_profile` (stop, pivot at the robot's
+        :meth:`profile_energy_j` of :func:`energy.drive_profile` (stop, pivot at the robot's
         turn rate, drive each segment rest to rest at ``speed_mps``).
 
         Raises
         ------
         InvalidParameterError, OutOfBoundsError, GridMismatchError
-            As :func:`planner.drive_profile` and :meth:`profile_energy_j`.
+            As :func:`energy.drive_profile` and :meth:`profile_energy_j`.
         """
         profile = drive_profile(waypoints_m, speed_mps, turn_rate_radps=self.turn_rate_radps, dt_s=dt_s,
                                 accel_mps2=accel_mps2, yaw_accel_radps2=yaw_accel_radps2,

@@ -131,7 +131,8 @@ def check_model_robot(model: CurrentModel, robot: RobotParams | str) -> list[str
 def uses_vibration(model: Any) -> bool:
     """Whether ``model`` is conditioned on the ground's vibration (the estimator, or a model adapted from one).
 
-    Asks the model (:attr:`energy.models.CurrentModel.uses_vibration`); anything else is not.
+    Asks the model (``uses_vibration`` of :class:`energy.VibrationCurrentEstimator` and of a model
+    adapted from one); anything else is not.
     """
     return bool(getattr(model, "uses_vibration", False))
 

@@ -7,7 +7,7 @@ directed drive energy, :mod:`planner.ompl`), ``"lattice"``, the fast path: the d
 drive energy in a corridor around a coarse lattice route (:mod:`planner.anyangle`), refined
 by its compiled polish (:func:`planner.anyangle.polish_path`) instead of the OMPL shortcuts.
 With ``refine=True`` (default) every other exact route is post-processed by
-:func:`~planner.refine_route`: OMPL's
+:func:`~planner.refine.refine_route`: OMPL's
 ``partialShortcutPath`` and ``perturbPath`` under the energy objective, then
 :func:`~planner.refine.relax_path`; each step is kept only when the route's true energy —
 segments plus turns, re-evaluated exactly — went down. Turn energies are not part of the

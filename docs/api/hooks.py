@@ -45,13 +45,7 @@ HEADING_ID = re.compile(r'<h\d id="(?P<id>[^"]+)" class="doc doc-heading')
 
 #: Parts of the messages of griffe warnings shown at INFO level, each with its fix. Matched on the
 #: message alone, not the file or line, so that an entry holds while its module is restructured.
-KNOWN_DOCSTRING_WARNINGS = (
-    # planner/edge_cost.py, EnergyCost: the sentence "The segment, path and turn queries come
-    # from ..." after the Parameters section is read as a parameter named 'The'; fix: move it
-    # above "Parameters".
-    "No types or annotations for parameters ['The']",
-    "Parameter 'The' does not appear in the function signature",
-)
+KNOWN_DOCSTRING_WARNINGS: tuple[str, ...] = ()
 
 log = logging.getLogger("mkdocs.hooks.terrawatt")
 
