@@ -1,0 +1,88 @@
+"""The dask seam: argument checks, client checks and the serial task runner (no cluster is started)."""
+
+from __future__ import annotations
+
+import operator
+
+import pytest
+
+from terrawatt_base.dask_client import (
+    DEFAULT_CONNECT_TIMEOUT_S,
+    check_client,
+    client_worker_count,
+    dask_client,
+    run_tasks,
+)
+from terrawatt_base.errors import InvalidParameterError
+
+
+def test_default_connect_timeout_is_positive_seconds():
+    assert DEFAULT_CONNECT_TIMEOUT_S == 10.0
+
+
+def test_zero_workers_is_refused_naming_the_flag():
+    with pytest.raises(InvalidParameterError, match="workers"), dask_client(workers=0):
+        pass
+
+
+def test_several_workers_and_a_scheduler_exclude_each_other():
+    with pytest.raises(InvalidParameterError, match="exclude each other"), dask_client(
+        workers=2, scheduler="tcp://127.0.0.1:8786"
+    ):
+        pass
+
+
+def test_messages_use_the_callers_flag_names():
+    with pytest.raises(InvalidParameterError, match="--workers 3 and --scheduler 'tcp://h:1' exclude each other"):
+        with dask_client(workers=3, scheduler="tcp://h:1", flags=("--workers", "--scheduler")):
+            pass
+
+
+@pytest.mark.parametrize("timeout_s", [0.0, -1.0])
+def test_a_non_positive_timeout_is_refused(timeout_s):
+    with pytest.raises(InvalidParameterError, match="timeout_s"), dask_client(timeout_s=timeout_s):
+        pass
+
+
+def test_an_unreachable_scheduler_is_an_invalid_parameter():
+    # port 1 on the loopback: nothing listens, the connection is refused at once
+    with pytest.raises(InvalidParameterError, match="tcp://127.0.0.1:1"), dask_client(
+        scheduler="tcp://127.0.0.1:1", timeout_s=0.5
+    ):
+        pass
+
+
+def test_check_client_passes_none_through():
+    assert check_client(None) is None
+
+
+@pytest.mark.parametrize("bad", ["tcp://127.0.0.1:8786", 4, object()])
+def test_check_client_refuses_what_is_not_a_client(bad):
+    with pytest.raises(InvalidParameterError, match="client must be None .* or a distributed.Client"):
+        check_client(bad, "folds")
+
+
+def test_check_client_names_what_would_run():
+    with pytest.raises(InvalidParameterError, match="run the folds here"):
+        check_client("tcp://x:1", "folds")
+
+
+def test_no_client_counts_as_one_worker():
+    assert client_worker_count(None) == 1
+
+
+def test_run_tasks_without_a_client_yields_results_in_task_order():
+    tasks = [(operator.add, (1, 2)), (operator.mul, (3, 4)), (pow, (2, 10))]
+    assert list(run_tasks(tasks)) == [3, 12, 1024]
+
+
+def test_run_tasks_is_lazy_and_raises_a_tasks_exception_when_reached():
+    tasks = [(operator.add, (1, 2)), (operator.truediv, (1, 0))]
+    results = run_tasks(tasks, progress=False, description="division")
+    assert next(results) == 3
+    with pytest.raises(ZeroDivisionError):
+        next(results)
+
+
+def test_run_tasks_of_nothing_yields_nothing():
+    assert list(run_tasks([])) == []
