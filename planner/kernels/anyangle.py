@@ -24,7 +24,7 @@ import numpy as np
 
 from .arrays import GEO_CELL, GEO_NCOLS, GEO_NROWS, GEO_X0, GEO_Y0
 from .graph import heap_pop, heap_set
-from .paths import drop_unpaid_vertices, vertex_energy_j
+from .paths import drop_unpaid_vertices, move_vertex
 from .walk import walk_forward
 
 __all__ = ["corridor_index", "theta_star", "polish_polyline", "NEIGHBOURS_8", "NEIGHBOURS_16"]
@@ -206,13 +206,6 @@ def polish_polyline(cells, table, turn_table, geo, xs, ys, step0, step_min, max_
     n = xs.shape[0]
     if n < 3:
         return n
-    s2 = math.sqrt(0.5)
-    dx = np.array([1.0, -1.0, 0.0, 0.0, s2, -s2, s2, -s2])
-    dy = np.array([0.0, 0.0, 1.0, -1.0, s2, s2, -s2, -s2])
-    xmin = geo[GEO_X0]
-    ymin = geo[GEO_Y0]
-    xmax = xmin + geo[GEO_NCOLS] * geo[GEO_CELL]
-    ymax = ymin + geo[GEO_NROWS] * geo[GEO_CELL]
     step = np.full(n, step0, np.float64)
     step[0] = 0.0
     step[n - 1] = 0.0
@@ -223,22 +216,7 @@ def polish_polyline(cells, table, turn_table, geo, xs, ys, step0, step_min, max_
             if h < step_min:
                 continue
             active = True
-            best = vertex_energy_j(cells, table, turn_table, geo, xs, ys, i, xs[i], ys[i])
-            bx = xs[i]
-            by = ys[i]
-            for k in range(8):
-                x = xs[i] + h * dx[k]
-                y = ys[i] + h * dy[k]
-                if x < xmin or x > xmax or y < ymin or y > ymax:
-                    continue
-                e = vertex_energy_j(cells, table, turn_table, geo, xs, ys, i, x, y)
-                if e < best * (1.0 - 1e-12):
-                    best = e
-                    bx = x
-                    by = y
-            if bx != xs[i] or by != ys[i]:
-                xs[i] = bx
-                ys[i] = by
+            if move_vertex(cells, table, turn_table, geo, xs, ys, i, h):
                 if i > 1 and step[i - 1] < h:
                     step[i - 1] = h
                 if i < n - 2 and step[i + 1] < h:

@@ -10,10 +10,13 @@ import numpy as np
 from .arrays import GEO_CELL, GEO_NCOLS, GEO_NROWS, GEO_X0, GEO_Y0
 from .walk import turn_energy, walk_pair
 
-__all__ = ["relax_polyline", "vertex_energy_j", "drop_unpaid_vertices", "string_pull_indices", "KEEP_RTOL"]
+__all__ = ["relax_polyline", "vertex_energy_j", "move_vertex", "drop_unpaid_vertices", "string_pull_indices", "KEEP_RTOL"]
 
 #: Relative energy change treated as rounding noise (drops collinear vertices; accepts polishing).
 KEEP_RTOL = 1e-9
+#: The 8 unit directions a vertex tries (axes, then diagonals), in this order.
+_MOVE_X = np.array([1.0, -1.0, 0.0, 0.0, math.sqrt(0.5), -math.sqrt(0.5), math.sqrt(0.5), -math.sqrt(0.5)])
+_MOVE_Y = np.array([0.0, 0.0, 1.0, -1.0, math.sqrt(0.5), math.sqrt(0.5), -math.sqrt(0.5), -math.sqrt(0.5)])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -32,6 +35,35 @@ def vertex_energy_j(cells, table, turn_table, geo, xs, ys, i, x, y):  # pragma: 
     if i + 2 < n:
         e += turn_energy(cells, turn_table, geo, x, y, xs[i + 1], ys[i + 1], xs[i + 2], ys[i + 2])
     return e
+
+
+@numba.njit(cache=True, nogil=True)
+def move_vertex(cells, table, turn_table, geo, xs, ys, i, h):  # pragma: no cover - compiled
+    """Move vertex ``i`` by ``h`` (m) in the best of 8 directions if that strictly lowers the
+    energy terms it owns (:func:`vertex_energy_j`; a position off the map is never tried);
+    returns whether it moved."""
+    x0 = geo[GEO_X0]
+    y0 = geo[GEO_Y0]
+    xmax = x0 + geo[GEO_NCOLS] * geo[GEO_CELL]
+    ymax = y0 + geo[GEO_NROWS] * geo[GEO_CELL]
+    best = vertex_energy_j(cells, table, turn_table, geo, xs, ys, i, xs[i], ys[i])
+    bx = xs[i]
+    by = ys[i]
+    for k in range(8):
+        x = xs[i] + h * _MOVE_X[k]
+        y = ys[i] + h * _MOVE_Y[k]
+        if x < x0 or x > xmax or y < y0 or y > ymax:
+            continue
+        e = vertex_energy_j(cells, table, turn_table, geo, xs, ys, i, x, y)
+        if e < best * (1.0 - 1e-12):
+            best = e
+            bx = x
+            by = y
+    if bx != xs[i] or by != ys[i]:
+        xs[i] = bx
+        ys[i] = by
+        return True
+    return False
 
 
 @numba.njit(cache=True, nogil=True)
@@ -75,33 +107,13 @@ def relax_polyline(cells, table, turn_table, geo, xs, ys, step0, step_min, max_s
     n = xs.shape[0]
     if n < 3:
         return n
-    s2 = math.sqrt(0.5)
-    dx = np.array([1.0, -1.0, 0.0, 0.0, s2, -s2, s2, -s2])
-    dy = np.array([0.0, 0.0, 1.0, -1.0, s2, s2, -s2, -s2])
-    xmax = geo[GEO_X0] + geo[GEO_NCOLS] * geo[GEO_CELL]
-    ymax = geo[GEO_Y0] + geo[GEO_NROWS] * geo[GEO_CELL]
     step = step0
     sweeps = 0
     while step >= step_min and sweeps < max_sweeps:
         sweeps += 1
         improved = False
         for i in range(1, n - 1):
-            best = vertex_energy_j(cells, table, turn_table, geo, xs, ys, i, xs[i], ys[i])
-            bx = xs[i]
-            by = ys[i]
-            for k in range(8):
-                x = xs[i] + step * dx[k]
-                y = ys[i] + step * dy[k]
-                if x < geo[GEO_X0] or x > xmax or y < geo[GEO_Y0] or y > ymax:
-                    continue
-                e = vertex_energy_j(cells, table, turn_table, geo, xs, ys, i, x, y)
-                if e < best * (1.0 - 1e-12):
-                    best = e
-                    bx = x
-                    by = y
-            if bx != xs[i] or by != ys[i]:
-                xs[i] = bx
-                ys[i] = by
+            if move_vertex(cells, table, turn_table, geo, xs, ys, i, step):
                 improved = True
         if not improved:
             step *= 0.5
