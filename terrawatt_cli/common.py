@@ -3,16 +3,26 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import sys
-from collections.abc import Callable, Iterable, Sequence
+import warnings
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from energy import GROUND_PRESETS, CurrentModel, load_current_model, robot_preset
-from terrain import UNKNOWN_GROUND, DemWindows, InvalidParameterError, NodataError, TerrainMap, UnknownNameError
+from terrain import (
+    UNKNOWN_GROUND,
+    DemWindows,
+    FigureWarning,
+    InvalidParameterError,
+    NodataError,
+    TerrainMap,
+    UnknownNameError,
+)
 from terrawatt_base.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
 from terrawatt_base.checks import fmt_number
 from terrain.landcover import LandcoverClasses, ground_classes_from_landcover, read_landcover_classes
@@ -36,6 +46,7 @@ __all__ = [
     "unknown_ground",
     "check_grounds",
     "draw_figure",
+    "warn_figures",
     "add_dask_options",
     "check_dask_flags",
     "add_model_options",
@@ -275,6 +286,19 @@ def draw_figure(path: Path, draw: Callable[[], Path]) -> Path | None:
     except Exception as exc:  # noqa: BLE001 - any failure of a figure is reported, never fatal
         print(f"terrawatt: warning: could not draw {path}: {type(exc).__name__}: {exc}", file=sys.stderr)
         return None
+
+
+@contextlib.contextmanager
+def warn_figures() -> Iterator[None]:
+    """A figure that fails inside (a :class:`~terrain.FigureWarning`) is one line on stderr, as :func:`draw_figure`'s."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", FigureWarning)
+        yield
+    for w in caught:
+        if issubclass(w.category, FigureWarning):
+            print(f"terrawatt: warning: {w.message}", file=sys.stderr)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
 
 
 def add_dask_options(p: argparse.ArgumentParser, what: str) -> None:

@@ -453,7 +453,7 @@ def test_plan_output_folder_that_is_a_file_is_refused_before_planning(tmp_path, 
     path = wall_map.save(tmp_path / "wall.npz")
     out = tmp_path / "out"
     out.write_text("a file where the folder goes")
-    monkeypatch.setattr(plan_cli, "plan_route", lambda *a, **k: pytest.fail("planned before checking --out"))
+    monkeypatch.setattr(plan_cli, "plan_and_compare", lambda *a, **k: pytest.fail("planned before checking --out"))
     rc = main(["plan", "--map", str(path), "--start", "5", "5", "--goal", "35", "5", "--planner", "lattice",
                "--out", str(out)])
     assert rc == 2

@@ -1,0 +1,247 @@
+"""A coarse-to-fine plan reported: on a map in memory or on a GeoTIFF read by windows (CoarsePlanReport)."""
+
+from __future__ import annotations
+
+import functools
+import math
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from terrain import DemWindows, Grid, TerrainMap
+from terrawatt_base.atomic import write_json_atomic
+from terrawatt_base.checks import check_real
+
+from .coarse import CoarseToFine, plan_coarse_to_fine
+from .coarse_geotiff import plan_coarse_to_fine_geotiff
+from .edge_cost import EnergyCost
+from .figure_file import draw_figure
+from .plan_report import (
+    ROUTE_JSON_FORMAT,
+    ROUTE_JSON_FORMAT_VERSION,
+    compile_line,
+    lonlat_fields,
+    map_line,
+    route_row,
+    route_table,
+)
+from .plot import RouteLine, plot_routes
+from .route_geojson import write_geojson
+from .warmup import warm_up_kernels
+
+__all__ = ["CoarsePlanReport", "plan_coarse", "plan_coarse_windowed"]
+
+
+@dataclass(frozen=True)
+class CoarsePlanReport:
+    """A coarse-to-fine plan (:class:`planner.CoarseToFine`) ready to print and write, like :class:`PlanReport`.
+
+    Made by :func:`plan_coarse` (a map in memory) or :func:`plan_coarse_windowed` (a GeoTIFF
+    DEM read by windows). There is no comparison: it needs the whole 1-cell lattice.
+
+    Attributes
+    ----------
+    plan : CoarseToFine
+        The plan: its route, coarse route, corridor, fallback and times.
+    start_xy_m, goal_xy_m : (float, float)
+        Start and goal (m).
+    robot, speed_mps, max_slope_deg, unknown_ground
+        How the edges were priced (the physics presets).
+    map_label : str
+        How the map is named.
+    map_preparation_s, kernel_compile_s : float
+        Seconds to price the whole map (0 when read by windows); to compile the kernels.
+    windowed : bool
+        Whether the DEM was read by windows.
+    grid : Grid
+        The whole map's grid.
+    terrain : TerrainMap or None
+        The whole map, when it was given in memory.
+    """
+
+    plan: CoarseToFine
+    start_xy_m: tuple[float, float]
+    goal_xy_m: tuple[float, float]
+    robot: str
+    speed_mps: float
+    max_slope_deg: float
+    unknown_ground: str | None
+    map_label: str
+    map_preparation_s: float
+    kernel_compile_s: float
+    windowed: bool
+    grid: Grid
+    terrain: TerrainMap | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def route(self) -> Any:
+        """The full-resolution route."""
+        return self.plan.route
+
+    @property
+    def fine_map(self) -> TerrainMap | None:
+        """The full-resolution map the route lies on: the whole map, or the fine window read (None for chained
+        windows)."""
+        return self.plan.fine_map if self.windowed else self.terrain
+
+    def rows(self) -> list[dict[str, Any]]:
+        """The table's one row (:func:`planner.plan_report.route_row`), or none when no route was found."""
+        if not self.route.found:
+            return []
+        return [route_row(f"coarse-to-fine (x{self.plan.factor})", self.route, math.nan)]
+
+    def summary(self) -> str:
+        """What ``terrawatt plan --coarse-factor`` prints: the map, the robot, the stages and their times, the table."""
+        plan, (rows, cols) = self.plan, self.grid.shape
+        speed = f"robot: {self.robot}, speed {self.speed_mps:g} m/s, max slope {self.max_slope_deg:g} deg; "
+        if self.windowed:
+            lines = [f"map: {self.map_label}  {rows} x {cols} cells of {self.grid.cell_size_m:g} m, read by windows; "
+                     f"ground unknown, priced as {self.unknown_ground!r}",
+                     speed + f"full-resolution cells read by the fine stage: {plan.fine_window_cells} of {rows * cols} "
+                     f"({100 * plan.fine_window_cells / (rows * cols):.1f} %)"]
+        else:
+            lines = [map_line(self.map_label, self.terrain), speed + f"map preparation {self.map_preparation_s:.2f} s"]
+        lines += compile_line(self.kernel_compile_s)
+        lines += [f"start {self.start_xy_m} -> goal {self.goal_xy_m}; coarse-to-fine, factor {plan.factor}, corridor "
+                  f"{plan.corridor_m:g} m ({plan.corridor_cells} free cells searched; fallback: {plan.fallback})",
+                  f"coarse route {plan.coarse_time_s:.2f} s, corridor search {plan.fine_time_s:.2f} s", ""]
+        lines.append(route_table(self.rows()) if self.route.found else f"no route: status {self.route.status!r}")
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The content of route.json (as :meth:`PlanReport.to_dict`, with the coarse route and the stages)."""
+        plan, route = self.plan, self.route
+        return {
+            "format": ROUTE_JSON_FORMAT, "format_version": ROUTE_JSON_FORMAT_VERSION,
+            "map": self.map_label, "map_crs": plan.coarse_map.crs if plan.coarse_map is not None else None,
+            "robot": self.robot, "speed_mps": self.speed_mps, "max_slope_deg": self.max_slope_deg,
+            "start_xy_m": list(self.start_xy_m), "goal_xy_m": list(self.goal_xy_m),
+            **lonlat_fields(plan.coarse_map, self.start_xy_m, self.goal_xy_m),
+            "planner": "coarse-to-fine",
+            "map_preparation_s": self.map_preparation_s, "kernel_compile_s": self.kernel_compile_s,
+            "status": route.status, "windowed": self.windowed,
+            "coarse_to_fine": {k: v for k, v in plan.summary().items() if k not in route.summary()},
+            "routes": ({"min_energy": {**route.summary(), "waypoints_m": route.waypoints_m.tolist()}}
+                       if route.found else {}),
+            "coarse_waypoints_m": plan.coarse_waypoints_m.tolist(),
+        }
+
+    def plot(self, path: str | os.PathLike[str] | None = None, *, whole_map: bool = False, ax: Any = None) -> Any:
+        """The route over the fine map (zoomed on it), or over the coarse map (``whole_map`` of a windowed plan,
+        or no fine map: the only whole view held)."""
+        fine, coarse = self.fine_map, self.plan.coarse_map
+        shown = coarse if fine is None or (self.windowed and whole_map) else fine
+        lines = [RouteLine("coarse-to-fine", self.route.waypoints_m, self.route.energy_j, colour="#d32f2f")
+                 ] if self.route.found else []
+        title = f"terrawatt: coarse-to-fine route on {self.map_label}" + (
+            f" (the x{self.plan.factor} coarse map)" if shown is coarse else "")
+        return plot_routes(shown, lines, self.start_xy_m, self.goal_xy_m, path, ax=ax, title=title,
+                           extent="map" if whole_map else "routes", max_slope_rad=math.radians(self.max_slope_deg))
+
+    def write(self, out_dir: str | os.PathLike[str], *, whole_map: bool = False,
+              on_figure_error: str = "warn") -> list[Path]:
+        """Write route.json, route.geojson (when found) and route.png into ``out_dir``; return the files written.
+
+        The GeoJSON's elevations come from the fine map, or the coarse map when the fine stage
+        ran in chained windows (no one fine map holds the route). A figure that fails warns,
+        as :meth:`PlanReport.write`.
+        """
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        written = [write_json_atomic(out / "route.json", self.to_dict())]
+        if self.route.found:
+            where = self.fine_map if self.fine_map is not None else self.plan.coarse_map
+            written.append(write_geojson({"min_energy": self.route}, where, out / "route.geojson"))
+        png = draw_figure(out / "route.png", lambda: self.plot(out / "route.png", whole_map=whole_map),
+                          on_error=on_figure_error)
+        return written + ([png] if png is not None else [])
+
+
+def _check_slope(max_slope_deg: float) -> float:
+    return check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False, high_inclusive=False)
+
+
+def plan_coarse(
+    terrain: TerrainMap,
+    start_xy_m: tuple[float, float],
+    goal_xy_m: tuple[float, float],
+    *,
+    factor: int = 4,
+    corridor_m: float | None = None,
+    robot: str = "husky",
+    speed_mps: float = 0.5,
+    max_slope_deg: float = 20.0,
+    unknown_ground: str | None = "gravel",
+    map_label: str = "map",
+) -> CoarsePlanReport:
+    """Price a map in memory with the presets and plan coarse-to-fine on it (:func:`planner.plan_coarse_to_fine`).
+
+    Raises
+    ------
+    TerrawattError
+        As :meth:`EnergyCost.from_presets` and :func:`planner.plan_coarse_to_fine`.
+
+    Examples
+    --------
+    >>> from terrain import wall_map
+    >>> report = plan_coarse(wall_map((40, 40), 1.0, wall_col=20, gap_rows=(30, 34)), (5.0, 5.0), (35.0, 5.0))
+    >>> report.route.status, report.rows()[0]["route"]
+    ('exact', 'coarse-to-fine (x4)')
+    """
+    max_slope_deg = _check_slope(max_slope_deg)
+    compile_s = warm_up_kernels()
+    t0 = time.perf_counter()
+    cost = EnergyCost.from_presets(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=math.radians(max_slope_deg),
+                                   unknown_ground=unknown_ground)
+    prep_s = time.perf_counter() - t0
+    plan = plan_coarse_to_fine(cost, start_xy_m, goal_xy_m, factor=factor, corridor_m=corridor_m)
+    return CoarsePlanReport(
+        plan=plan, start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),
+        goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), robot=robot, speed_mps=speed_mps,
+        max_slope_deg=max_slope_deg, unknown_ground=unknown_ground, map_label=map_label, map_preparation_s=prep_s,
+        kernel_compile_s=compile_s, windowed=False, grid=terrain.grid, terrain=terrain,
+    )
+
+
+def plan_coarse_windowed(
+    path: str | os.PathLike[str],
+    start_xy_m: tuple[float, float],
+    goal_xy_m: tuple[float, float],
+    *,
+    factor: int = 4,
+    corridor_m: float | None = None,
+    robot: str = "husky",
+    speed_mps: float = 0.5,
+    max_slope_deg: float = 20.0,
+    unknown_ground: str = "gravel",
+    fine_window_cells: int | None = None,
+    map_label: str | None = None,
+) -> CoarsePlanReport:
+    """Plan coarse-to-fine on a GeoTIFF DEM read by windows, never whole (:func:`planner.plan_coarse_to_fine_geotiff`),
+    every window priced by the presets; ``fine_window_cells`` is its ``fine_window_budget_cells`` and ``map_label``
+    defaults to the file's name.
+
+    Raises
+    ------
+    TerrawattError
+        As :func:`planner.plan_coarse_to_fine_geotiff`.
+    OptionalDependencyError
+        rasterio is not installed.
+    """
+    max_slope_deg = _check_slope(max_slope_deg)
+    compile_s = warm_up_kernels()
+    with DemWindows(path) as dem:
+        grid = dem.grid
+    cost_from = functools.partial(EnergyCost.from_presets, robot=robot, speed_mps=speed_mps,
+                                  max_slope_rad=math.radians(max_slope_deg), unknown_ground=unknown_ground)
+    plan = plan_coarse_to_fine_geotiff(path, start_xy_m, goal_xy_m, factor=factor, corridor_m=corridor_m,
+                                       cost_from=cost_from, fine_window_budget_cells=fine_window_cells)
+    return CoarsePlanReport(
+        plan=plan, start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),
+        goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), robot=robot, speed_mps=speed_mps,
+        max_slope_deg=max_slope_deg, unknown_ground=unknown_ground,
+        map_label=Path(path).name if map_label is None else map_label, map_preparation_s=0.0,
+        kernel_compile_s=compile_s, windowed=True, grid=grid,
+    )

@@ -1,0 +1,473 @@
+"""A route planned with its comparison and reported: the printed table, route.json, GeoJSON and figure (PlanReport)."""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from terrain import UNKNOWN_GROUND, OptionalDependencyError, TerrainMap
+from terrawatt_base.atomic import write_json_atomic
+from terrawatt_base.checks import check_choice, check_real
+from terrawatt_base.errors import InvalidParameterError
+
+from .cost_source import edge_costs
+from .edge_cost import EnergyCost
+from .figure_file import draw_figure
+from .planning import GRAPH_PLANNERS, PLANNERS, plan_route
+from .plot import RouteLine, plot_routes
+from .risk import INTERVAL_LEVEL, RouteEnergyInterval, risk_cost, route_energy_interval
+from .route import Route
+from .route_geojson import write_geojson
+from .warmup import warm_up_kernels
+
+__all__ = [
+    "ROUTE_JSON_FORMAT",
+    "ROUTE_JSON_FORMAT_VERSION",
+    "PlanModel",
+    "PlanReport",
+    "plan_and_compare",
+    "route_row",
+    "route_table",
+    "lonlat_fields",
+    "map_line",
+    "compile_line",
+]
+
+#: route.json's ``format`` and ``format_version`` (written by :meth:`PlanReport.write` and the coarse-to-fine report).
+ROUTE_JSON_FORMAT = "terrawatt-route"
+ROUTE_JSON_FORMAT_VERSION = 1
+
+_TABLE_HEADER = (f"{'route':<26} {'status':<11} {'energy J':>10} {'Wh':>7} {'mAh':>8} {'length m':>9} {'time s':>8} "
+                 f"{'/ optimum':>9} {'plan s':>7}")
+
+
+def route_row(label: str, route: Route, optimum_j: float) -> dict[str, Any]:
+    """One row of the comparison table (route.json's ``table``): energy, charge, length, time, ratio to ``optimum_j``.
+
+    Energies are NaN for a route not found; the ratio is the drive energy over ``optimum_j``
+    for an exact route (NaN otherwise, or when ``optimum_j`` is not > 0).
+    """
+    ratio = route.drive_energy_j / optimum_j if route.status == "exact" and optimum_j > 0 else math.nan
+    return {
+        "route": label,
+        "status": route.status,
+        "energy_j": route.energy_j if route.found else math.nan,
+        "energy_wh": route.energy_wh if route.found else math.nan,
+        "charge_mah": route.charge_mah if route.found else math.nan,
+        "length_m": route.length_m,
+        "duration_s": route.duration_s,
+        "ratio_to_lattice_optimum": ratio,
+        "planning_time_s": route.planning_time_s,
+    }
+
+
+def route_table(rows: Sequence[Mapping[str, Any]]) -> str:
+    """Rows of :func:`route_row` as a fixed-width text table (a header, a rule, a line per row).
+
+    Examples
+    --------
+    >>> route_table([]).split()[:5]
+    ['route', 'status', 'energy', 'J', 'Wh']
+    """
+    lines = [_TABLE_HEADER, "-" * len(_TABLE_HEADER)]
+    for r in rows:
+        lines.append(
+            f"{r['route']:<26} {r['status']:<11} {r['energy_j']:>10.1f} {r['energy_wh']:>7.3f} "
+            f"{r['charge_mah']:>8.1f} {r['length_m']:>9.1f} {r['duration_s']:>8.1f} "
+            f"{r['ratio_to_lattice_optimum']:>9.3f} {r['planning_time_s']:>7.3f}"
+        )
+    return "\n".join(lines)
+
+
+def lonlat_fields(terrain: TerrainMap | None, start: Sequence[float], goal: Sequence[float]) -> dict[str, Any]:
+    """route.json's ``start_lonlat_deg`` / ``goal_lonlat_deg`` (WGS 84) when the map has a CRS, else nothing
+    (also for a map with a CRS but no rasterio to transform it: its files stay in metres)."""
+    if terrain is None or terrain.crs is None:
+        return {}
+    try:
+        lon, lat = terrain.xy_to_lonlat([start[0], goal[0]], [start[1], goal[1]])
+    except OptionalDependencyError:
+        return {}
+    return {"start_lonlat_deg": [lon[0], lat[0]], "goal_lonlat_deg": [lon[1], lat[1]]}
+
+
+def map_line(label: str, terrain: TerrainMap) -> str:
+    """``map: LABEL  R x C cells of S m; grounds {...}``: the first line of a plan's summary."""
+    return (f"map: {label}  {terrain.shape[0]} x {terrain.shape[1]} cells of {terrain.cell_size_m:g} m; "
+            f"grounds {terrain.ground_names}")
+
+
+def compile_line(compile_s: float) -> list[str]:
+    """The note on compiling the kernels when it took over a second (a first run in an environment), else nothing."""
+    if compile_s <= 1.0:
+        return []
+    return [f"(compiled the edge-cost kernels in {compile_s:.1f} s: first run in this environment; "
+            "not in the times below)"]
+
+
+def _finite_or_none(x: float) -> float | None:
+    return x if math.isfinite(x) else None
+
+
+@dataclass(frozen=True)
+class PlanModel:
+    """The saved current model that priced a plan's edges (route.json's ``model``).
+
+    Attributes
+    ----------
+    file : str
+        How the model is named (e.g. its file name).
+    class_name : str
+        The model's class.
+    model_ground : str, mapping or None
+        The ``model_ground`` it priced the map with (:func:`planner.model_energy_cost`).
+    grounds : tuple of str
+        The cost's ground labels.
+    gives_interval : bool
+        Whether the cost has a predictive interval.
+    risk_q : float or None
+        The quantile planned on (:func:`planner.risk_cost`), or None for the mean.
+    """
+
+    file: str
+    class_name: str
+    model_ground: str | Mapping[str, str] | None
+    grounds: tuple[str, ...]
+    gives_interval: bool
+    risk_q: float | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """route.json's ``model`` block."""
+        return {"file": self.file, "class": self.class_name, "model_ground": self.model_ground,
+                "grounds": list(self.grounds), "gives_interval": self.gives_interval, "risk_q": self.risk_q,
+                "objective": ("energy mean" if self.risk_q is None
+                              else f"{self.risk_q:g} quantile: mean + z sd per edge")}
+
+    def line(self) -> str:
+        """The summary's ``edge costs: model ...`` line."""
+        return (f"edge costs: model {self.file} ({self.class_name}) on grounds {list(self.grounds)}"
+                + (f"; planned on the {self.risk_q:g} quantile of energy (each edge at mean + z sd)"
+                   if self.risk_q is not None else "")
+                + ("" if self.gives_interval else "; the model gives no interval"))
+
+
+@dataclass(frozen=True)
+class PlanReport:
+    """A minimum-energy route compared with the shortest route and the lattice optimum, ready to print and write.
+
+    Made by :func:`plan_and_compare`. :meth:`summary` is the text ``terrawatt plan`` prints,
+    :meth:`to_dict` the content of route.json, :meth:`write` writes route.json, route.geojson
+    and route.png.
+
+    Attributes
+    ----------
+    route : Route
+        The minimum-energy route of ``planner``, with its comparison (:class:`RouteComparison`).
+    lattice : Route or None
+        The lattice planner's route with refinement (``route`` itself when the planner is the
+        lattice); None when ``route`` was not found.
+    interval : RouteEnergyInterval or None
+        The route's energy distribution, when the cost has a predictive interval.
+    start_xy_m, goal_xy_m : (float, float)
+        Start and goal (m).
+    planner, seed, time_limit_s, max_evaluations
+        How the route was planned (:func:`planner.plan_route`).
+    robot, speed_mps, max_slope_deg, unknown_ground
+        How the edges were priced.
+    map_label : str
+        How the map is named.
+    map_preparation_s, kernel_compile_s : float
+        Seconds to price the map; to compile (or load) the kernels beforehand.
+    model : PlanModel or None
+        The saved model that priced the edges, or None for the physics presets.
+    terrain : TerrainMap
+        The map.
+    cost : EnergyCost
+        The cost the routes were planned on (the risk cost with ``risk``).
+    """
+
+    route: Route
+    lattice: Route | None
+    interval: RouteEnergyInterval | None
+    start_xy_m: tuple[float, float]
+    goal_xy_m: tuple[float, float]
+    planner: str
+    seed: int | None
+    time_limit_s: float | None
+    max_evaluations: int | None
+    robot: str
+    speed_mps: float
+    max_slope_deg: float
+    unknown_ground: str | None
+    map_label: str
+    map_preparation_s: float
+    kernel_compile_s: float
+    model: PlanModel | None = None
+    terrain: TerrainMap = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
+    cost: EnergyCost = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
+
+    @property
+    def shortest(self) -> Route | None:
+        """The shortest-distance route of the comparison (None when the route has none)."""
+        return None if self.route.comparison is None else self.route.comparison.shortest
+
+    @property
+    def risk_q(self) -> float | None:
+        """The quantile of energy planned on, or None (the mean)."""
+        return None if self.model is None else self.model.risk_q
+
+    def rows(self) -> list[dict[str, Any]]:
+        """The comparison table's rows (:func:`route_row`): min-energy, lattice + refinement, shortest; none
+        when no route was found."""
+        if not self.route.found:
+            return []
+        optimum_j = self.route.lattice_energy_j
+        return [route_row(f"min-energy ({self.planner})", self.route, optimum_j),
+                route_row("lattice + refinement", self.lattice, optimum_j),
+                route_row("shortest distance", self.shortest, optimum_j)]
+
+    def table(self) -> str:
+        """The comparison table as text (:func:`route_table`)."""
+        return route_table(self.rows())
+
+    def _budget(self) -> str:
+        if self.planner in GRAPH_PLANNERS:  # searches run to their end: no budget applies
+            return "no budget (a graph search)"
+        if self.max_evaluations is not None:
+            return f"{self.max_evaluations} edge-cost evaluations"
+        return f"time limit {self.time_limit_s:g} s"
+
+    def summary(self) -> str:
+        """What ``terrawatt plan`` prints: the map, robot and planner, the table, the interval, the saving."""
+        t, route = self.terrain, self.route
+        lines = [map_line(self.map_label, t),
+                 f"robot: {self.robot}, speed {self.speed_mps:g} m/s, max slope {self.max_slope_deg:g} deg; "
+                 f"map preparation {self.map_preparation_s:.2f} s"]
+        if self.model is not None:
+            lines.append(self.model.line())
+        n_unknown = int(np.count_nonzero(np.asarray(t.ground) == UNKNOWN_GROUND))
+        if n_unknown and self.unknown_ground:
+            lines.append(f"ground class unknown in {n_unknown} of {t.ground.size} cells: priced as "
+                         f"{self.unknown_ground!r} (--unknown-ground NAME to choose, 'none' to refuse them)")
+        lines.append(f"start {self.start_xy_m} -> goal {self.goal_xy_m}; planner {self.planner}, {self._budget()}, "
+                     f"seed {self.seed}")
+        lines += compile_line(self.kernel_compile_s)
+        lines.append("")
+        if not route.found:
+            lines.append(f"no route: status {route.status!r} after {route.planning_time_s:.3f} s")
+            return "\n".join(lines)
+        lines += [self.table(), ""]
+        if self.interval is not None:
+            iv = self.interval
+            lo, hi = iv.interval_j(INTERVAL_LEVEL)
+            lines.append(f"route energy (the model's interval): mean {iv.mean_j / 3600:.3f} Wh, P50 "
+                         f"{iv.p50_j / 3600:.3f} Wh, P90 {iv.p90_j / 3600:.3f} Wh, sd {iv.sd_j / 3600:.3f} Wh; "
+                         f"{100 * INTERVAL_LEVEL:.0f} % interval {lo / 3600:.3f}-{hi / 3600:.3f} Wh"
+                         + ("  (the table shows the planning objective)" if self.risk_q is not None else ""))
+        if route.status == "exact":
+            lines.append(f"energy saved vs shortest route: {route.energy_saved_pct:.1f} %  "
+                         f"(min-energy {route.energy_j:.0f} J vs shortest {route.shortest_energy_j:.0f} J); "
+                         f"drive energy / 16-connected lattice optimum: {route.optimality_ratio:.3f}")
+        else:
+            short_m = math.dist(route.waypoints_m[-1], self.goal_xy_m)
+            lines.append(f"the {self.planner} route is {route.status}: it ends {short_m:.1f} m short of the goal, so "
+                         "it is not compared with the shortest route; give the planner more time")
+        return "\n".join(lines)
+
+    def _routes(self) -> dict[str, Route]:
+        if not self.route.found:
+            return {}
+        return {"min_energy": self.route, "lattice": self.lattice, "shortest": self.shortest}
+
+    def to_dict(self) -> dict[str, Any]:
+        """The content of route.json: the query, how it was planned, the table and every route with its waypoints.
+
+        NaN is written as null (:func:`terrawatt_base.atomic.write_json_atomic`).
+        """
+        route = self.route
+        routes = {name: {**r.summary(), "waypoints_m": r.waypoints_m.tolist()} for name, r in self._routes().items()}
+        if self.interval is not None:
+            routes["min_energy"]["energy_interval"] = self.interval.to_dict()
+        result = {
+            "format": ROUTE_JSON_FORMAT,
+            "format_version": ROUTE_JSON_FORMAT_VERSION,
+            "map": self.map_label,
+            "map_crs": self.terrain.crs,
+            "robot": self.robot,
+            "speed_mps": self.speed_mps,
+            "max_slope_deg": self.max_slope_deg,
+            "start_xy_m": list(self.start_xy_m),
+            "goal_xy_m": list(self.goal_xy_m),
+            **lonlat_fields(self.terrain, self.start_xy_m, self.goal_xy_m),
+            "planner": self.planner,
+            "time_limit_s": self.time_limit_s if self.max_evaluations is None else None,
+            "max_evaluations": self.max_evaluations,
+            "seed": self.seed,
+            "map_preparation_s": self.map_preparation_s,
+            "kernel_compile_s": self.kernel_compile_s,
+            "status": route.status,
+            "energy_saved_pct": _finite_or_none(route.energy_saved_pct) if route.found else None,
+            "optimality_ratio": _finite_or_none(route.optimality_ratio) if route.found else None,
+            "table": self.rows(),
+            "routes": routes,
+        }
+        if self.model is not None:  # files planned on the presets stay as they were
+            result["model"] = self.model.to_dict()
+        return result
+
+    def plot(self, path: str | os.PathLike[str] | None = None, *, whole_map: bool = False, ax: Any = None) -> Any:
+        """The map with the minimum-energy and the shortest routes (:func:`planner.plot.plot_routes`), zoomed on
+        the routes unless ``whole_map``; the route's energy interval shaded when there is one."""
+        lines = []
+        if self.route.found:
+            risk = "" if self.risk_q is None else f", planned on the {self.risk_q:g} quantile"
+            band = {} if self.interval is None else {"energy_band_j": self.interval.interval_j(INTERVAL_LEVEL),
+                                                     "band_level": INTERVAL_LEVEL}
+            lines = [RouteLine(f"min-energy ({self.planner}{risk})", self.route.waypoints_m, self.route.energy_j,
+                               colour="#d32f2f", **band),
+                     RouteLine("shortest distance", self.shortest.waypoints_m, self.shortest.energy_j,
+                               colour="#1565c0", linestyle="--")]
+        return plot_routes(self.terrain, lines, self.start_xy_m, self.goal_xy_m, path, ax=ax,
+                           title=f"terrawatt: minimum-energy route on {self.map_label}",
+                           extent="map" if whole_map else "routes", max_slope_rad=math.radians(self.max_slope_deg))
+
+    def write(self, out_dir: str | os.PathLike[str], *, whole_map: bool = False,
+              on_figure_error: str = "warn") -> list[Path]:
+        """Write route.json, route.geojson (the routes found; WGS 84 when the map has a CRS) and route.png into
+        ``out_dir`` (created), each atomically; return the files written.
+
+        A figure that fails warns (:class:`~terrawatt_base.errors.FigureWarning`) and is left out,
+        unless ``on_figure_error="raise"`` (:func:`planner.figure_file.draw_figure`).
+        """
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        written = [write_json_atomic(out / "route.json", self.to_dict())]
+        found = {name: r for name, r in self._routes().items() if r.found}
+        if found:
+            written.append(write_geojson(found, self.terrain, out / "route.geojson"))
+        png = draw_figure(out / "route.png", lambda: self.plot(out / "route.png", whole_map=whole_map),
+                          on_error=on_figure_error)
+        return written + ([png] if png is not None else [])
+
+
+def plan_and_compare(
+    terrain: TerrainMap,
+    start_xy_m: tuple[float, float],
+    goal_xy_m: tuple[float, float],
+    *,
+    planner: str = "RRTstar",
+    robot: str = "husky",
+    speed_mps: float = 0.5,
+    max_slope_deg: float = 20.0,
+    unknown_ground: str | None = "gravel",
+    seed: int | None = 0,
+    time_limit_s: float | None = 1.0,
+    max_evaluations: int | None = None,
+    model: Any = None,
+    model_label: str | None = None,
+    model_ground: str | Mapping[str, str] | None = None,
+    risk: float | None = None,
+    map_label: str = "map",
+    risk_name: str = "risk",
+) -> PlanReport:
+    """Plan a minimum-energy route and compare it with the shortest route and the lattice optimum.
+
+    The kernels are compiled (or loaded) first (:func:`planner.warm_up_kernels`), the map is
+    priced (:func:`planner.cost_source.edge_costs`: the physics presets, or ``model``), the
+    route planned with ``compare=True`` (:func:`planner.plan_route`) and, for a planner other
+    than the lattice, the lattice route with refinement planned too (the table's second row).
+
+    Parameters
+    ----------
+    terrain : TerrainMap
+        The map.
+    start_xy_m, goal_xy_m : (float, float)
+        Start and goal (m).
+    planner : str
+        One of :data:`planner.PLANNERS`.
+    robot, speed_mps, unknown_ground
+        As :meth:`EnergyCost.from_presets` (``unknown_ground`` not with ``model``).
+    max_slope_deg : float
+        Steepest drivable slope (degrees, in (0, 90)).
+    seed, time_limit_s, max_evaluations
+        As :func:`planner.plan_route` (``max_evaluations`` is its ``max_cost_evaluations``
+        and, when given, replaces the time limit).
+    model : CurrentModel, optional
+        A saved current model pricing the edges (:func:`planner.model_energy_cost`); when
+        it gives an interval, the route's energy distribution is reported
+        (:func:`planner.route_energy_interval`).
+    model_label : str, optional
+        How the model is named (default its class name).
+    model_ground : str or mapping, optional
+        With ``model``: as :func:`planner.model_energy_cost`.
+    risk : float, optional
+        With a model that has an interval: plan on the ``risk`` quantile of energy
+        (:func:`planner.risk_cost`).
+    map_label : str
+        How the map is named in the summary, the figure and route.json.
+    risk_name : str
+        How messages name ``risk`` (the command line passes ``"--risk"``).
+
+    Returns
+    -------
+    PlanReport
+
+    Raises
+    ------
+    InvalidParameterError
+        A bad number; ``risk`` with a model that gives no interval.
+    UnknownNameError
+        ``planner`` not one of :data:`planner.PLANNERS`.
+    TerrawattError
+        As :func:`planner.plan_route` (points off the map or blocked, start equal to goal).
+
+    Examples
+    --------
+    >>> from terrain import wall_map
+    >>> report = plan_and_compare(wall_map((40, 40), 1.0, wall_col=20, gap_rows=(30, 34)), (5.0, 5.0),
+    ...                           (35.0, 5.0), planner="lattice", map_label="wall")
+    >>> report.route.status, [row["route"] for row in report.rows()]
+    ('exact', ['min-energy (lattice)', 'lattice + refinement', 'shortest distance'])
+    """
+    check_choice("planner", planner, PLANNERS)
+    max_slope_deg = check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False,
+                               high_inclusive=False)
+    compile_s = warm_up_kernels()  # compiled once per environment, then loaded from numba's cache
+    t0 = time.perf_counter()
+    mean_cost = edge_costs(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=math.radians(max_slope_deg),
+                           unknown_ground=unknown_ground if model is None else None, model=model,
+                           model_ground=model_ground)
+    if risk is not None and not mean_cost.has_interval:
+        raise InvalidParameterError(
+            f"{risk_name} {risk:g} needs a model with a predictive interval; the model {model_label or ''} gives none "
+            f"(its spreads are all 0): plan without {risk_name}, or with a model that has one")
+    cost = mean_cost if risk is None else risk_cost(mean_cost, risk)
+    prep_s = time.perf_counter() - t0
+    route = plan_route(terrain, start_xy_m, goal_xy_m, cost=cost, planner=planner, seed=seed, compare=True,
+                       time_limit_s=None if max_evaluations is not None else time_limit_s,
+                       max_cost_evaluations=max_evaluations)
+    lattice = interval = None
+    if route.found:
+        lattice = route if planner == "lattice" else plan_route(terrain, start_xy_m, goal_xy_m, cost=cost,
+                                                                planner="lattice", seed=seed, compare=False)
+        interval = route_energy_interval(mean_cost, route.waypoints_m) if mean_cost.has_interval else None
+    plan_model = None
+    if model is not None:
+        plan_model = PlanModel(file=model_label or type(model).__name__, class_name=type(model).__name__,
+                               model_ground=model_ground, grounds=tuple(mean_cost.ground_labels),
+                               gives_interval=bool(mean_cost.has_interval), risk_q=risk)
+    return PlanReport(
+        route=route, lattice=lattice, interval=interval,
+        start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])), goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])),
+        planner=planner, seed=seed, time_limit_s=time_limit_s, max_evaluations=max_evaluations, robot=robot,
+        speed_mps=speed_mps, max_slope_deg=max_slope_deg, unknown_ground=unknown_ground if model is None else None,
+        map_label=map_label, map_preparation_s=prep_s, kernel_compile_s=compile_s, model=plan_model,
+        terrain=terrain, cost=cost,
+    )
