@@ -17,34 +17,6 @@ from terrain import (
 from terrain.registry.evidence import relative_error
 
 
-# ------------------------------------------------------------------------ policy
-def test_policy_defaults_and_clear_level() -> None:
-    p = UpdatePolicy(threshold_pct=12.0, min_samples=5, hysteresis_pct=4.5, min_region_cells=2)
-    assert p.clear_below_pct == pytest.approx(7.5)
-    assert isinstance(p.min_samples, int) and p.min_samples == 5
-
-
-@pytest.mark.parametrize(
-    ("kwargs", "match"),
-    [
-        ({"threshold_pct": 0.0}, "threshold_pct must be > 0"),
-        ({"threshold_pct": -5.0}, "threshold_pct must be > 0"),
-        ({"threshold_pct": float("nan")}, "threshold_pct must be finite"),
-        ({"threshold_pct": "10"}, "threshold_pct must be a real number"),
-        ({"min_samples": 0}, "min_samples must be >= 1"),
-        ({"min_samples": 2.5}, "min_samples must be an integer"),
-        ({"min_samples": True}, "min_samples must be an integer"),
-        ({"hysteresis_pct": -1.0}, "hysteresis_pct must be >= 0"),
-        ({"threshold_pct": 5.0, "hysteresis_pct": 5.0}, "hysteresis_pct must be >= 0 and < threshold_pct"),
-        ({"hysteresis_pct": float("inf")}, "hysteresis_pct must be finite"),
-        ({"min_region_cells": 0}, "min_region_cells must be >= 1"),
-    ],
-)
-def test_policy_rejects_bad_values(kwargs: dict, match: str) -> None:
-    with pytest.raises(InvalidParameterError, match=match):
-        UpdatePolicy(**kwargs)
-
-
 # ----------------------------------------------------------------------- record
 def test_record_sums_match_hand_computation() -> None:
     reg = registry((3, 3))

@@ -1,4 +1,4 @@
-"""DemWindows: blocks of a GeoTIFF DEM with halo cells, equal to the whole map where it matters."""
+"""terrain.windows: DemWindows blocks with halo cells, and the windowed surface layers, equal to the whole map."""
 
 from __future__ import annotations
 
@@ -10,10 +10,12 @@ from terrain import (
     FileFormatError,
     InvalidParameterError,
     NodataError,
+    UnknownNameError,
     procedural_map,
     read_geotiff,
     write_geotiff,
 )
+from terrain.windows import WINDOW_LAYERS, iter_surface_windows, windowed_surface
 
 rasterio = pytest.importorskip("rasterio", reason="GeoTIFF support needs the geo extra (rasterio)")
 
@@ -82,3 +84,41 @@ def test_nodata_is_named_only_in_the_blocks_that_hold_it(tmp_path):
         assert np.all(dem.read(slice(0, 6), slice(0, 6)).elevation_m == 1.0)
         with pytest.raises(NodataError, match=r"1 nodata/NaN cells in map rows 9..11, cols 9..11"):
             dem.read(slice(10, 11), slice(10, 11))
+
+
+def test_window_layers_are_the_elevation_and_the_surface_layers():
+    assert WINDOW_LAYERS == ("elevation", "slope", "aspect", "grad_x", "grad_y")
+
+
+def test_surface_windows_tile_the_map_with_the_whole_maps_values(dem_path):
+    whole = read_geotiff(dem_path)
+    seen = np.zeros((41, 29), int)
+    tiles = list(iter_surface_windows(dem_path, window_cells=8))
+    assert len(tiles) == 6 * 4  # ceil(41 / 8) x ceil(29 / 8)
+    assert (tiles[0].rows, tiles[0].cols) == (slice(0, 8), slice(0, 8))  # southern row of tiles first
+    for tile in tiles:
+        seen[tile.rows, tile.cols] += 1
+        assert set(tile.layers) == set(WINDOW_LAYERS)
+        for name in WINDOW_LAYERS:
+            assert np.array_equal(tile.layers[name], whole[name][tile.rows, tile.cols]), name
+    assert np.all(seen == 1)
+
+
+def test_windowed_surface_equals_the_whole_map_in_memory_and_on_disk(dem_path, tmp_path):
+    whole = read_geotiff(dem_path)
+    in_memory = windowed_surface(dem_path, window_cells=7)
+    assert set(in_memory) == set(WINDOW_LAYERS)
+    for name in WINDOW_LAYERS:
+        assert in_memory[name].dtype == np.float64 and np.array_equal(in_memory[name], whole[name]), name
+    on_disk = windowed_surface(dem_path, window_cells=16, layers=("slope",), out_dir=tmp_path / "layers")
+    assert list(on_disk) == ["slope"] and sorted(p.name for p in (tmp_path / "layers").iterdir()) == ["slope.npy"]
+    assert isinstance(on_disk["slope"], np.memmap) and np.array_equal(on_disk["slope"], whole["slope"])
+
+
+def test_windowed_surface_refuses_unknown_or_no_layers_and_a_tiny_window(dem_path):
+    with pytest.raises(UnknownNameError, match="layers"):
+        windowed_surface(dem_path, layers=("roughness",))
+    with pytest.raises(InvalidParameterError, match="layers must name at least one of"):
+        windowed_surface(dem_path, layers=())
+    with pytest.raises(InvalidParameterError, match="window_cells"):
+        next(iter_surface_windows(dem_path, window_cells=1))
