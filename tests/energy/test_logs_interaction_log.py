@@ -1,4 +1,4 @@
-"""Tests of energy.logs: InteractionLog validation, resampling, slicing, joining, gap splits."""
+"""Tests of energy.logs.interaction_log: InteractionLog validation, resampling, slicing, joining, gap splits."""
 
 from __future__ import annotations
 
@@ -6,6 +6,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from log_samples import make_log
 
 from energy import InteractionLog, LogMeta
 from energy.logs import DEFAULT_GAP_FACTOR
@@ -15,24 +16,6 @@ from terrain import (
     InvalidParameterError,
     UnknownNameError,
 )
-
-
-def make_log(n: int = 11, drive_dt: float = 0.1, m: int = 101, accel_dt: float = 0.01, **kw) -> InteractionLog:
-    """Linear ramps with known values: v = t, omega = 2t, I_L = 1 + t, I_R = 3 - t, a_z = 9.81 + t."""
-    t = np.arange(n) * drive_dt
-    ta = np.arange(m) * accel_dt
-    args = dict(
-        time_s=t,
-        v_mps=t.copy(),
-        omega_radps=2 * t,
-        current_left_a=1 + t,
-        current_right_a=3 - t,
-        accel_time_s=ta,
-        accel_z_mps2=9.81 + ta,
-        meta=LogMeta(robot="testbot", source="synthetic", ground_label="sand"),
-    )
-    args.update(kw)
-    return InteractionLog(**args)
 
 
 # ------------------------------------------------------------------ construction
@@ -123,19 +106,6 @@ def test_pose_and_ground_validation():
         make_log(ground=["a", ""] + ["a"] * 9)
     log = make_log(ground=np.array(["a"] * 11, dtype=object))
     assert log.ground.dtype.kind == "U" and not log.ground.flags.writeable
-
-
-def test_meta_validation():
-    with pytest.raises(InvalidParameterError, match="velocity_source must be one of"):
-        LogMeta(velocity_source="guessed")
-    with pytest.raises(InvalidParameterError, match="track_width_m must be > 0"):
-        LogMeta(track_width_m=0.0)
-    with pytest.raises(InvalidParameterError, match="robot must be a str"):
-        LogMeta(robot=3)
-    with pytest.raises(InvalidParameterError, match="ground_label must be a non-empty str"):
-        LogMeta(ground_label="")
-    with pytest.raises(InvalidParameterError, match="meta must be a LogMeta"):
-        make_log(meta={"robot": "x"})
 
 
 def test_ground_labels_from_meta_or_samples():
