@@ -4,19 +4,14 @@ from __future__ import annotations
 
 import argparse
 import math
-import time
 from pathlib import Path
 from typing import Any
 
-from energy import robot_preset
-from energy.battery import S_PER_H
 from terrain import TerrainMap
-from terrawatt_base.atomic import write_json_atomic
 from terrawatt_base.errors import InvalidParameterError
 from terrain.procedural import EXAMPLE_START_XY_M, example_map
 
-from planner import Reachability, reachability, warm_up_kernels
-from planner.reachability import warm_up_reachability
+from planner.reach_report import reach_on_battery
 from .common import (
     add_map_options,
     add_model_options,
@@ -25,14 +20,13 @@ from .common import (
     check_model_flags,
     check_outputs,
     check_positive,
-    draw_figure,
-    edge_cost_for,
     input_paths,
     load_model_arg,
     max_slope_rad,
     point_arg,
     read_map_args,
     unknown_ground,
+    warn_figures,
 )
 
 __all__ = ["add_parser", "run_reach"]
@@ -96,83 +90,22 @@ def run_reach(args: argparse.Namespace) -> int:
     """``terrawatt reach``: writes reach.json, reach.png and the raster; exit 1 when no cell is reachable."""
     _check_flags(args)
     check_model_flags(args)
-    slope_rad = max_slope_rad(args.max_slope_deg)
+    max_slope_rad(args.max_slope_deg)
     # Both raster names are checked: which one is written depends on the map, read after the check.
     check_outputs(args.out, ("reach.json", "reach.png", "reach.npz", "reach.tif"), input_paths(args))
-    robot = robot_preset(args.robot)
     if args.example:
         tmap, label = apply_landcover(args, example_map()), "bundled example map"
     else:
         tmap, label = read_map_args(args), args.map.name
     depot = point_arg(args, "depot", tmap) or EXAMPLE_START_XY_M
     model = load_model_arg(args)
-    ground = None if model is not None else unknown_ground(args.unknown_ground, tmap)
-    voltage_v = args.voltage if args.voltage is not None else robot.battery_voltage_v
-    budget_j = args.battery_ah * voltage_v * S_PER_H
-    reserve_j = budget_j * args.reserve / 100.0
-    compile_s = warm_up_kernels() + warm_up_reachability()
-    t0 = time.perf_counter()
-    cost = edge_cost_for(tmap, robot=args.robot, speed_mps=args.speed, max_slope_rad=slope_rad, unknown_ground=ground,
-                         model=model, model_ground=args.model_ground)
-    prep_s = time.perf_counter() - t0
-    reach = reachability(cost, depot, budget_j=budget_j, reserve_j=reserve_j, round_trip=args.round_trip)
-    total_s = time.perf_counter() - t0
-    args.out.mkdir(parents=True, exist_ok=True)
-    raster = reach.write(args.out / _raster_name(args, tmap))
-    result = {
-        "map": label,
-        "robot": args.robot,
-        "speed_mps": args.speed,
-        "max_slope_deg": args.max_slope_deg,
-        "battery_ah": args.battery_ah,
-        "battery_voltage_v": voltage_v,
-        "reserve_pct": args.reserve,
-        "map_preparation_s": prep_s,
-        "total_time_s": total_s,
-        "kernel_compile_s": compile_s,
-        "raster": raster.name,
-        **reach.to_dict(),
-    }
-    if model is not None:  # default files stay as they were
-        result["model"] = {"file": args.model.name, "class": type(model).__name__, "model_ground": args.model_ground,
-                           "grounds": list(cost.ground_labels)}
-    json_path = write_json_atomic(args.out / "reach.json", result)
-    png_path = draw_figure(args.out / "reach.png", lambda: reach.plot(
-        args.out / "reach.png", title=f"terrawatt: energy reachability on {label}"))
-    _print_summary(reach, tmap, label, args, voltage_v, prep_s, total_s)
-    if compile_s > 1.0:
-        print(f"(compiled the kernels in {compile_s:.1f} s: first run in this environment; not in the times above)")
-    print(f"\nwrote {raster}, {json_path}" + (f" and {png_path}" if png_path is not None else ""))
-    return 0 if reach.n_reachable_cells else 1
-
-
-def _print_summary(reach: Reachability, tmap: TerrainMap, label: str, args: argparse.Namespace, voltage_v: float,
-                   prep_s: float, total_s: float) -> None:
-    def wh(j: float) -> str:
-        return "-" if math.isnan(j) else f"{j / S_PER_H:.2f} Wh"
-
-    budget_wh = reach.budget_j / S_PER_H if reach.budget_j is not None else math.nan
-    print(f"map: {label}  {tmap.shape[0]} x {tmap.shape[1]} cells of {tmap.cell_size_m:g} m")
-    print(f"robot: {args.robot}, speed {args.speed:g} m/s, max slope {args.max_slope_deg:g} deg")
-    print(f"battery {args.battery_ah:g} Ah at {voltage_v:g} V = {budget_wh:.1f} Wh; reserve {args.reserve:g} % "
-          f"-> {reach.usable_energy_j / S_PER_H:.1f} Wh usable {'there and back' if reach.round_trip else 'one way'}")
-    print(f"depot {reach.depot_xy_m}")
-    print()
-    rows = [
-        ("reachable area", f"{reach.reachable_area_m2:,.0f} m^2 ({100 * reach.reachable_fraction:.1f} % of free cells)"),
-        ("reachable cells", f"{reach.n_reachable_cells:,}"),
-        ("farthest reachable", "-" if math.isnan(reach.farthest_reachable_m) else f"{reach.farthest_reachable_m:,.1f} m"),
-        ("max one-way energy", wh(reach.max_forward_energy_j)),
-    ]
-    if reach.round_trip:
-        rows.append(("max round-trip energy", wh(reach.max_round_trip_energy_j)))
-    rows += [
-        ("map preparation", f"{prep_s:.2f} s"),
-        ("lattice moves", f"{reach.graph_time_s:.2f} s"),
-        ("search", f"{reach.search_time_s:.2f} s"),
-        ("total", f"{total_s:.2f} s"),
-    ]
-    for name, value in rows:
-        print(f"{name:<24} {value}")
-    if not reach.n_reachable_cells:
-        print("\nno cell is reachable within the usable energy: a larger battery or a smaller --reserve")
+    report = reach_on_battery(
+        tmap, depot, battery_ah=args.battery_ah, voltage_v=args.voltage, reserve_pct=args.reserve,
+        round_trip=args.round_trip, robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg,
+        unknown_ground=None if model is not None else unknown_ground(args.unknown_ground, tmap), model=model,
+        model_label=None if model is None else args.model.name, model_ground=args.model_ground, map_label=label)
+    with warn_figures():
+        written = report.write(args.out, raster=_raster_name(args, tmap))
+    print(report.summary())
+    print(f"\nwrote {written[0]}, {written[1]}" + (f" and {written[2]}" if len(written) > 2 else ""))
+    return 0 if report.reach.n_reachable_cells else 1

@@ -1,0 +1,225 @@
+"""Reachability on one battery, reported: the printed figures, reach.json, the raster and the figure (ReachReport)."""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from energy import robot_preset
+from energy.battery import S_PER_H
+from terrain import TerrainMap
+from terrawatt_base.atomic import write_json_atomic
+from terrawatt_base.checks import check_real
+
+from .cost_source import edge_costs
+from .figure_file import draw_figure
+from .plan_report import PlanModel
+from .reachability import reachability, warm_up_reachability
+from .reachability_result import Reachability
+from .warmup import warm_up_kernels
+
+__all__ = ["ReachReport", "reach_on_battery"]
+
+
+@dataclass(frozen=True)
+class ReachReport:
+    """The least energy from a depot to every cell (and back) within a battery, ready to print and write.
+
+    Made by :func:`reach_on_battery`. :meth:`summary` is the text ``terrawatt reach`` prints,
+    :meth:`to_dict` the content of reach.json, :meth:`write` writes the raster, reach.json and
+    reach.png.
+
+    Attributes
+    ----------
+    reach : Reachability
+        The energy rasters, the budget and the reachable cells.
+    map_label : str
+        How the map is named.
+    robot, speed_mps, max_slope_deg
+        How the edges were priced.
+    battery_ah, voltage_v, reserve_pct : float
+        The battery: capacity (Ah), voltage (V), share kept in reserve (%).
+    map_preparation_s, total_time_s, kernel_compile_s : float
+        Seconds to price the map; to price it and search; to compile the kernels beforehand.
+    model : PlanModel or None
+        The saved model that priced the edges, or None for the physics presets.
+    terrain : TerrainMap
+        The map.
+    """
+
+    reach: Reachability
+    map_label: str
+    robot: str
+    speed_mps: float
+    max_slope_deg: float
+    battery_ah: float
+    voltage_v: float
+    reserve_pct: float
+    map_preparation_s: float
+    total_time_s: float
+    kernel_compile_s: float
+    model: PlanModel | None = None
+    terrain: TerrainMap = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
+
+    def summary(self) -> str:
+        """What ``terrawatt reach`` prints: the map, robot and battery, then the reachable area and the times."""
+        reach, t = self.reach, self.terrain
+
+        def wh(j: float) -> str:
+            return "-" if math.isnan(j) else f"{j / S_PER_H:.2f} Wh"
+
+        budget_wh = reach.budget_j / S_PER_H if reach.budget_j is not None else math.nan
+        lines = [
+            f"map: {self.map_label}  {t.shape[0]} x {t.shape[1]} cells of {t.cell_size_m:g} m",
+            f"robot: {self.robot}, speed {self.speed_mps:g} m/s, max slope {self.max_slope_deg:g} deg",
+            f"battery {self.battery_ah:g} Ah at {self.voltage_v:g} V = {budget_wh:.1f} Wh; reserve {self.reserve_pct:g} "
+            f"% -> {reach.usable_energy_j / S_PER_H:.1f} Wh usable {'there and back' if reach.round_trip else 'one way'}",
+            f"depot {reach.depot_xy_m}",
+            "",
+        ]
+        farthest = reach.farthest_reachable_m
+        rows = [
+            ("reachable area", f"{reach.reachable_area_m2:,.0f} m^2 ({100 * reach.reachable_fraction:.1f} % of free "
+                               "cells)"),
+            ("reachable cells", f"{reach.n_reachable_cells:,}"),
+            ("farthest reachable", "-" if math.isnan(farthest) else f"{farthest:,.1f} m"),
+            ("max one-way energy", wh(reach.max_forward_energy_j)),
+        ]
+        if reach.round_trip:
+            rows.append(("max round-trip energy", wh(reach.max_round_trip_energy_j)))
+        rows += [("map preparation", f"{self.map_preparation_s:.2f} s"), ("lattice moves", f"{reach.graph_time_s:.2f} s"),
+                 ("search", f"{reach.search_time_s:.2f} s"), ("total", f"{self.total_time_s:.2f} s")]
+        lines += [f"{name:<24} {value}" for name, value in rows]
+        if not reach.n_reachable_cells:
+            lines += ["", "no cell is reachable within the usable energy: a larger battery or a smaller --reserve"]
+        if self.kernel_compile_s > 1.0:
+            lines.append(f"(compiled the kernels in {self.kernel_compile_s:.1f} s: first run in this environment; not "
+                         "in the times above)")
+        return "\n".join(lines)
+
+    def to_dict(self, raster: str | None = None) -> dict[str, Any]:
+        """The content of reach.json: the query, the battery, the times, ``raster`` (the raster file's name) and
+        :meth:`Reachability.to_dict`."""
+        result = {
+            "map": self.map_label,
+            "robot": self.robot,
+            "speed_mps": self.speed_mps,
+            "max_slope_deg": self.max_slope_deg,
+            "battery_ah": self.battery_ah,
+            "battery_voltage_v": self.voltage_v,
+            "reserve_pct": self.reserve_pct,
+            "map_preparation_s": self.map_preparation_s,
+            "total_time_s": self.total_time_s,
+            "kernel_compile_s": self.kernel_compile_s,
+            "raster": raster,
+            **self.reach.to_dict(),
+        }
+        if self.model is not None:  # files priced by the presets stay as they were
+            m = self.model.to_dict()
+            result["model"] = {k: m[k] for k in ("file", "class", "model_ground", "grounds")}
+        return result
+
+    def write(self, out_dir: str | os.PathLike[str], *, raster: str | None = None,
+              on_figure_error: str = "warn") -> list[Path]:
+        """Write the raster (``raster``: ``reach.tif`` or ``reach.npz``; default ``reach.tif`` when the map has a
+        CRS, else ``reach.npz``), reach.json and reach.png into ``out_dir``; return the files written.
+
+        A figure that fails warns and is left out (:func:`planner.figure_file.draw_figure`).
+        """
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        name = raster if raster is not None else ("reach.tif" if self.terrain.crs else "reach.npz")
+        written = [self.reach.write(out / name)]
+        written.append(write_json_atomic(out / "reach.json", self.to_dict(written[0].name)))
+        png = draw_figure(out / "reach.png", lambda: self.reach.plot(
+            out / "reach.png", title=f"terrawatt: energy reachability on {self.map_label}"), on_error=on_figure_error)
+        return written + ([png] if png is not None else [])
+
+
+def reach_on_battery(
+    terrain: TerrainMap,
+    depot_xy_m: tuple[float, float],
+    *,
+    battery_ah: float,
+    voltage_v: float | None = None,
+    reserve_pct: float = 20.0,
+    round_trip: bool = False,
+    robot: str = "husky",
+    speed_mps: float = 0.5,
+    max_slope_deg: float = 20.0,
+    unknown_ground: str | None = "gravel",
+    model: Any = None,
+    model_label: str | None = None,
+    model_ground: str | Mapping[str, str] | None = None,
+    map_label: str = "map",
+) -> ReachReport:
+    """The cells a battery reaches from a depot (:func:`planner.reachability`), with its budget and timings.
+
+    The budget is ``battery_ah * voltage_v`` (in J), the reserve ``reserve_pct`` % of it.
+
+    Parameters
+    ----------
+    terrain : TerrainMap
+        The map.
+    depot_xy_m : (float, float)
+        The depot (m).
+    battery_ah : float
+        Capacity (Ah, > 0).
+    voltage_v : float, optional
+        Voltage (V); default the robot preset's battery voltage.
+    reserve_pct : float
+        Share of the battery kept in reserve (%, in [0, 100)).
+    round_trip : bool
+        Budget the way there and back.
+    robot, speed_mps, max_slope_deg, unknown_ground, model, model_ground
+        How the edges are priced (:func:`planner.cost_source.edge_costs`; ``unknown_ground``
+        not with ``model``).
+    model_label : str, optional
+        How the model is named in reach.json (default its class name).
+    map_label : str
+        How the map is named.
+
+    Returns
+    -------
+    ReachReport
+
+    Raises
+    ------
+    InvalidParameterError
+        A bad number.
+    TerrawattError
+        As :func:`planner.cost_source.edge_costs` and :func:`planner.reachability`.
+
+    Examples
+    --------
+    >>> from terrain import flat_map
+    >>> report = reach_on_battery(flat_map((20, 20), 1.0, ground="asphalt"), (10.0, 10.0), battery_ah=0.01)
+    >>> report.reach.n_reachable_cells > 0, report.voltage_v
+    (True, 24.0)
+    """
+    battery_ah = check_real("battery_ah", battery_ah, low=0.0, low_inclusive=False)
+    reserve_pct = check_real("reserve_pct", reserve_pct, low=0.0, high=100.0, high_inclusive=False)
+    max_slope_deg = check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False,
+                               high_inclusive=False)
+    voltage_v = robot_preset(robot).battery_voltage_v if voltage_v is None else check_real(
+        "voltage_v", voltage_v, low=0.0, low_inclusive=False)
+    budget_j = battery_ah * voltage_v * S_PER_H
+    compile_s = warm_up_kernels() + warm_up_reachability()
+    t0 = time.perf_counter()
+    cost = edge_costs(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=math.radians(max_slope_deg),
+                      unknown_ground=unknown_ground if model is None else None, model=model, model_ground=model_ground)
+    prep_s = time.perf_counter() - t0
+    reach = reachability(cost, depot_xy_m, budget_j=budget_j, reserve_j=budget_j * reserve_pct / 100.0,
+                         round_trip=round_trip)
+    total_s = time.perf_counter() - t0
+    plan_model = None if model is None else PlanModel(
+        file=model_label or type(model).__name__, class_name=type(model).__name__, model_ground=model_ground,
+        grounds=tuple(cost.ground_labels), gives_interval=bool(cost.has_interval))
+    return ReachReport(reach=reach, map_label=map_label, robot=robot, speed_mps=speed_mps, max_slope_deg=max_slope_deg,
+                       battery_ah=battery_ah, voltage_v=voltage_v, reserve_pct=reserve_pct, map_preparation_s=prep_s,
+                       total_time_s=total_s, kernel_compile_s=compile_s, model=plan_model, terrain=terrain)
