@@ -1,4 +1,4 @@
-"""Tests of energy.sim: the truth simulator's currents, noise, vibration, map driving, errors."""
+"""Tests of energy.sim.simulator: the truth simulator's currents, noise, vibration, map driving, errors."""
 
 from __future__ import annotations
 
@@ -7,7 +7,6 @@ import pytest
 
 from energy import (
     EFFECTS,
-    GROUND_PRESETS,
     CommandProfile,
     NoiseModel,
     PhysicsEnergyModel,
@@ -437,9 +436,3 @@ def test_bad_configuration() -> None:
     t, v, w = steady(100)
     with pytest.raises(InvalidParameterError, match="Nyquist"):
         sim.simulate_commands(t, v, w, ground="coated_wood")
-
-
-def test_presets_cover_every_ground_preset() -> None:
-    assert set(GROUND_PRESETS) | set(PAPER_GROUNDS) <= set(VIBRATION_PRESETS)
-    sim = TruthSimulator(HUSKY, GROUND_PRESETS)
-    assert sim.ground_names == tuple(GROUND_PRESETS)
