@@ -5,32 +5,16 @@ from __future__ import annotations
 import dataclasses
 
 import pytest
+from params_samples import sample_robot
 
 from energy import (
     GROUND_PRESETS,
     ROBOT_PRESETS,
     GroundParams,
-    MotorParams,
-    RobotParams,
     ground_preset,
     robot_preset,
 )
 from terrain import InvalidParameterError, UnknownNameError
-
-
-def _motor(**kw: object) -> MotorParams:
-    base = dict(torque_constant_nm_per_a=0.05, back_emf_v_s_per_rad=0.05,
-                armature_resistance_ohm=0.5, max_torque_nm=1.0, max_speed_radps=500.0)
-    base.update(kw)
-    return MotorParams(**base)
-
-
-def _robot(**kw: object) -> RobotParams:
-    base = dict(name="r", mass_kg=10.0, wheel_radius_m=0.1, track_width_m=0.4,
-                wheelbase_m=0.3, battery_voltage_v=24.0, drive_kind="skid_steer",
-                motor=_motor(), max_speed_mps=1.0, max_omega_radps=2.0, turn_rate_radps=0.5)
-    base.update(kw)
-    return RobotParams(**base)
 
 
 def test_paper_seed_preset_has_the_paper_constants() -> None:
@@ -96,68 +80,13 @@ def test_unhashable_preset_name() -> None:
         robot_preset(["husky"])  # type: ignore[arg-type]
 
 
-@pytest.mark.parametrize(
-    ("field", "value", "match"),
-    [
-        ("mass_kg", -1.0, r"RobotParams\.mass_kg must be > 0, got -1\.0"),
-        ("mass_kg", float("nan"), "mass_kg must be finite"),
-        ("wheel_radius_m", 0.0, "wheel_radius_m must be > 0"),
-        ("drive_kind", "tracked", "drive_kind must be one of"),
-        ("track_width_multiplier", 0.5, "track_width_multiplier must be >= 1, got 0.5"),
-        ("regen_efficiency", 1.5, "regen_efficiency must be <= 1, got 1.5"),
-        ("driven_sides", 4, "driven_sides must be 2"),
-        ("motor", "big", "motor must be a MotorParams"),
-        ("name", "", "name must be a non-empty string"),
-        ("mass_kg", "10", "mass_kg must be a real number, got '10' \\(str\\)"),
-        ("wheel_radius_m", None, "wheel_radius_m must be a real number"),
-        ("name", 7, "RobotParams.name must be a non-empty string"),
-    ],
-)
-def test_robot_validation(field: str, value: object, match: str) -> None:
-    with pytest.raises(InvalidParameterError, match=match):
-        _robot(**{field: value})
-
-
-@pytest.mark.parametrize(
-    ("field", "value", "match"),
-    [
-        ("torque_constant_nm_per_a", 0.0, "torque_constant_nm_per_a must be > 0"),
-        ("gear_efficiency", 1.2, "gear_efficiency must be <= 1, got 1.2"),
-        ("gear_efficiency", 0.0, "gear_efficiency must be > 0"),
-        ("rotor_inertia_kg_m2", -1e-3, "rotor_inertia_kg_m2 must be >= 0"),
-        ("max_speed_radps", float("inf"), "max_speed_radps must be finite"),
-    ],
-)
-def test_motor_validation(field: str, value: object, match: str) -> None:
-    with pytest.raises(InvalidParameterError, match=match):
-        _motor(**{field: value})
-
-
-def test_ground_string_coefficient_names_the_parameter() -> None:
-    with pytest.raises(InvalidParameterError, match="GroundParams.rolling_resistance_coef must be a real number"):
-        GroundParams(name="g", static_friction_coef=0.5, coulomb_friction_coef=0.5,
-                     rolling_resistance_coef="0.01")  # type: ignore[arg-type]
-
-
-def test_ground_validation() -> None:
-    with pytest.raises(InvalidParameterError, match="static_friction_coef must be >= coulomb"):
-        GroundParams(name="g", static_friction_coef=0.3, coulomb_friction_coef=0.5,
-                     rolling_resistance_coef=0.01)
-    with pytest.raises(InvalidParameterError, match="rolling_resistance_coef must be >= 0"):
-        GroundParams(name="g", static_friction_coef=0.5, coulomb_friction_coef=0.5,
-                     rolling_resistance_coef=-0.01)
-    with pytest.raises(InvalidParameterError, match="coulomb_friction_coef must be > 0"):
-        GroundParams(name="g", static_friction_coef=0.5, coulomb_friction_coef=0.0,
-                     rolling_resistance_coef=0.01)
-
-
 def test_defaults_follow_replacements() -> None:
     g = GroundParams(name="g", static_friction_coef=0.6, coulomb_friction_coef=0.5,
                      rolling_resistance_coef=0.01)
     assert g.effective_lateral_friction_coef == 0.5
     assert g.replace(coulomb_friction_coef=0.4).effective_lateral_friction_coef == 0.4
     assert g.replace(lateral_friction_coef=0.2).effective_lateral_friction_coef == 0.2
-    r = _robot()
+    r = sample_robot()
     assert r.effective_yaw_inertia_kg_m2 == pytest.approx(10.0 * (0.5**2 + 0.4**2) / 12.0)
     assert r.replace(mass_kg=20.0).effective_yaw_inertia_kg_m2 == pytest.approx(
         2 * r.effective_yaw_inertia_kg_m2)
