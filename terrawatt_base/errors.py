@@ -24,12 +24,14 @@ __all__ = [
     "NotFittedError",
     "DataError",
     "UnitError",
+    "NodataError",
     "PlanningError",
     "BlockedPositionError",
     "OptionalDependencyError",
     "TerrawattWarning",
     "DataRepairWarning",
     "RecoveryWarning",
+    "FigureWarning",
     "ImplausibleDataWarning",
 ]
 

@@ -238,6 +238,8 @@ def test_the_errors_have_one_home_and_terrain_names_them() -> None:
     import terrain
     import terrawatt_base.errors as errors
 
+    classes = {n for n, v in vars(errors).items() if isinstance(v, type) and v.__module__ == errors.__name__}
+    assert set(errors.__all__) == classes  # the module names every class it defines
     for name in errors.__all__:
         assert name in terrain.__all__ and getattr(terrain, name) is getattr(errors, name)
     for pkg in ("energy", "planner"):
