@@ -1,69 +1,10 @@
-"""Tests of energy.features: windows, whole-run and local spectra, min-max normalisers."""
-
-import math
+"""Tests of energy.features.spectra: whole-run and local (band RMS) spectra of the vertical acceleration."""
 
 import numpy as np
 import pytest
 
-from energy.features import (
-    SOURCE_CURRENT_RANGE_A,
-    SOURCE_SPEED_RANGE_MPS,
-    MinMaxNormaliser,
-    WindowSpec,
-    band_rms_spectra,
-    log_band_edges_hz,
-    sliding_windows,
-    whole_run_band_spectrum,
-    whole_run_spectrum,
-    window_starts,
-)
+from energy.features import band_rms_spectra, log_band_edges_hz, whole_run_band_spectrum, whole_run_spectrum
 from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
-
-
-# ------------------------------------------------------------------------ windows
-def test_paper_t_interval_is_ten_samples_at_100_hz():
-    spec = WindowSpec.from_seconds(0.1, rate_hz=100.0)
-    assert (spec.length_samples, spec.stride_samples) == (10, 10)
-    assert WindowSpec.from_seconds() == spec  # the default t_interval
-    assert spec.length_s == pytest.approx(0.1) and spec.stride_s == pytest.approx(0.1)
-
-
-def test_window_in_seconds_at_the_borealtc_drive_rate():
-    spec = WindowSpec.from_seconds(1.0, rate_hz=6.5, stride_s=0.1)
-    assert spec.length_samples == 6  # round(6.5) to even
-    assert spec.stride_samples == 1  # never below one sample
-    assert spec.length_s == pytest.approx(6 / 6.5)
-
-
-@pytest.mark.parametrize("kwargs", [dict(length_s=0.0, rate_hz=10.0), dict(length_s=1.0, rate_hz=-1.0),
-                                    dict(length_s=1.0, rate_hz=10.0, stride_s=math.nan)])
-def test_window_spec_rejects_bad_values(kwargs):
-    with pytest.raises(InvalidParameterError, match=r"(length_s must be > 0|rate_hz must be > 0|stride_s must be finite)"):
-        WindowSpec.from_seconds(**kwargs)
-    with pytest.raises(InvalidParameterError, match="length_samples"):
-        WindowSpec(0, 1, 10.0)
-
-
-def test_window_starts_cover_the_end():
-    spec = WindowSpec(length_samples=4, stride_samples=3, rate_hz=10.0)
-    starts = window_starts(12, spec)
-    assert starts.tolist() == [0, 3, 6, 8]
-    covered = np.zeros(12, bool)
-    for s in starts:
-        covered[s : s + 4] = True
-    assert covered.all()
-    assert window_starts(4, spec).tolist() == [0]
-    with pytest.raises(DataError, match="shorter than one window"):
-        window_starts(3, spec)
-
-
-def test_sliding_windows_content():
-    x = np.arange(10.0)
-    spec = WindowSpec(3, 3, 1.0)
-    w = sliding_windows(x, spec)
-    assert w.tolist() == [[0, 1, 2], [3, 4, 5], [6, 7, 8], [7, 8, 9]]
-    two = sliding_windows(np.column_stack([x, -x]), spec)
-    assert two.shape == (4, 3, 2) and two[1, 0, 1] == -3.0
 
 
 # ---------------------------------------------------------------- whole-run spectrum
@@ -197,30 +138,3 @@ def test_whole_run_band_spectrum_is_the_average_rms():
     assert spec[k] == pytest.approx(0.5, rel=0.05)
     assert spec.sum() == pytest.approx(spec[k], rel=0.1)
 
-
-# --------------------------------------------------------------------- normalisers
-def test_source_ranges_with_absolute_values():
-    speed = MinMaxNormaliser(*SOURCE_SPEED_RANGE_MPS, absolute=True)
-    assert speed.transform(np.array([-0.5, 0.25, 1.5])).tolist() == [0.5, 0.25, 1.5]  # never clipped
-    cur = MinMaxNormaliser(*SOURCE_CURRENT_RANGE_A)
-    assert cur.transform(5.0) == pytest.approx(0.5)
-    assert cur.inverse_transform(cur.transform(np.array([1.0, 7.0]))).tolist() == pytest.approx([1.0, 7.0])
-
-
-def test_fitted_ranges_per_column_or_global():
-    x = np.array([[0.0, 10.0, 3.0], [2.0, 20.0, 3.0]])
-    per = MinMaxNormaliser.from_data(x)
-    assert per.transform(x).tolist() == [[0.0, 0.0, 0.0], [1.0, 1.0, 0.0]]  # constant column: shifted only
-    glob = MinMaxNormaliser.from_data(x, per_column=False)
-    assert glob.low.shape == () and glob.transform(x).max() == pytest.approx(1.0)
-    again = MinMaxNormaliser.from_dict(per.to_dict())
-    assert np.array_equal(again.transform(x), per.transform(x))
-
-
-def test_normaliser_validates():
-    with pytest.raises(InvalidParameterError, match="high >= low"):
-        MinMaxNormaliser(1.0, 0.0)
-    with pytest.raises(DataError, match="non-finite"):
-        MinMaxNormaliser.from_data([1.0, math.nan])
-    with pytest.raises(InvalidParameterError, match="keys"):
-        MinMaxNormaliser.from_dict({"low": 0.0})
