@@ -10,6 +10,7 @@ import sys
 import warnings
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -25,6 +26,7 @@ from terrain import (
 )
 from terrawatt_base.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
 from terrawatt_base.checks import fmt_number
+from terrawatt_base.dask_client import dask_client
 from terrain.landcover import LandcoverClasses, ground_classes_from_landcover, read_landcover_classes
 
 from planner.edge_cost import EnergyCost
@@ -49,6 +51,7 @@ __all__ = [
     "warn_figures",
     "add_dask_options",
     "check_dask_flags",
+    "dask_client_arg",
     "add_model_options",
     "check_model_flags",
     "load_model_arg",
@@ -319,6 +322,16 @@ def check_dask_flags(args: argparse.Namespace) -> None:
             f"--workers {args.workers!r} and --scheduler {args.scheduler!r} exclude each other: "
             "give --workers N for a local cluster or --scheduler ADDRESS for an existing one"
         )
+
+
+@contextlib.contextmanager
+def dask_client_arg(args: argparse.Namespace) -> Iterator[Any]:
+    """The dask client of ``--workers N`` / ``--scheduler ADDRESS`` (closed on leaving), or None to run here."""
+    if args.workers == 1 and args.scheduler is None:
+        yield None
+        return
+    with dask_client(args.workers, args.scheduler, quiet=not args.verbose, flags=("--workers", "--scheduler")) as client:
+        yield client
 
 
 def add_model_options(p: argparse.ArgumentParser, *, risk: bool = False) -> None:

@@ -3,23 +3,16 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
-import dataclasses
-import time
 from pathlib import Path
 from typing import Any
 
-from energy import GROUND_PRESETS, Battery, TruthSimulator, ground_preset, robot_preset
-from terrain import CellModelRegistry, InvalidParameterError, UnknownNameError
-from terrawatt_base.atomic import write_json_atomic
+from energy import GROUND_PRESETS
+from terrain import InvalidParameterError, UnknownNameError
 from terrawatt_base.checks import fmt_number
-from terrawatt_base.dask_client import dask_client
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
 
-from planner.edge_cost import DEFAULT_MAX_SLOPE_RAD
-from planner.missions import AdaptiveSettings, fit_prior_model, run_adaptive_mission, simulate_missions_mc
-from planner.model_cost import model_energy_model
-from planner.planning import plan_route
+from planner.missions.mission_report import check_preset_grounds, simulate_adaptive_mission
+from planner.missions.monte_carlo_report import monte_carlo_mission
 from .common import (
     add_dask_options,
     add_map_options,
@@ -30,12 +23,12 @@ from .common import (
     check_model_flags,
     check_outputs,
     check_positive,
-    draw_figure,
-    edge_cost_for,
+    dask_client_arg,
     input_paths,
     load_model_arg,
     point_arg,
     read_map_args,
+    warn_figures,
 )
 
 __all__ = ["add_parser", "run_mission", "add_monte_carlo_options", "check_monte_carlo_flags", "run_monte_carlo"]
@@ -110,75 +103,19 @@ def run_mission(args: argparse.Namespace) -> int:
                                         "map file")
         tmap, label = read_map_args(args), Path(args.map).name
         start, goal = point_arg(args, "start", tmap), point_arg(args, "goal", tmap)
-    unknown = sorted(n for n in set(tmap.ground_names.values()) if n not in GROUND_PRESETS)
-    if unknown:
-        raise UnknownNameError(f"the map's grounds {unknown!r} have no preset; known grounds: {sorted(GROUND_PRESETS)!r}")
+    check_preset_grounds(tmap)
     if args.monte_carlo is not None:
         return run_monte_carlo(args, tmap, label, start, goal)
-    robot = robot_preset(args.robot)
-    names = set(tmap.ground_names.values()) | {args.prior_ground}
-    grounds = {name: ground_preset(name) for name in names}
-    truth = TruthSimulator(robot, grounds, seed=args.seed)
-    battery = Battery(
-        capacity_ah=args.battery_ah,
-        voltage_v=args.battery_v if args.battery_v is not None else robot.battery_voltage_v,
-        min_reserve_pct=args.reserve_pct,
-    )
-    model = load_model_arg(args)
-    settings = AdaptiveSettings(
-        speed_mps=args.speed,
-        leg_length_m=args.leg_m,
-        max_updates=0 if args.no_adapt else AdaptiveSettings().max_updates,
-        seed=args.seed,
-    )
-    learned = None
-    if model is not None:  # the saved model serves every ground class it drove (one model id each)
-        learned, _ = model_energy_model(tmap, model, robot, model_ground=args.model_ground,
-                                        physics_ground=grounds[args.prior_ground])
-        registry = learned.registry
-    else:
-        prior = fit_prior_model(truth, args.prior_ground, seed=args.seed)
-        registry = CellModelRegistry.from_terrain(tmap, prior, prior_name=f"{args.prior_ground}-prior")
-    t0 = time.perf_counter()
-    result = run_adaptive_mission(
-        tmap, registry, robot, battery, truth, start, goal,
-        physics_ground=grounds[args.prior_ground], settings=settings, learned=learned,
-    )
-    elapsed = time.perf_counter() - t0
-    json_path = write_json_atomic(args.out / "mission.json", {**result.to_json_dict(), "computing_time_s": elapsed})
-    png_path = draw_figure(args.out / "mission.png", lambda: result.plot(args.out / "mission.png", tmap, registry))
-    _print_summary(args, result, battery, label, start, goal, elapsed)
-    print(f"wrote {json_path}" + (f" and {png_path}" if png_path is not None else ""))
-    return 0 if result.status == "completed" else 1
-
-
-def _percent(value: float) -> str:
-    return "n/a" if value != value else f"{value:.1f} %"  # NaN: nothing to compare
-
-
-def _print_summary(args: argparse.Namespace, result: Any, battery: Battery, label: str, start: tuple, goal: tuple,
-                   elapsed: float) -> None:
-    budget = result.budget
-    route0 = result.initial_route
-    print(f"map: {label}; robot {args.robot}; battery {battery.capacity_ah:g} Ah at {battery.voltage_v:g} V "
-          f"({battery.energy_capacity_wh:.0f} Wh, {battery.usable_energy_wh:.0f} Wh above the "
-          f"{battery.min_reserve_pct:g} % reserve)")
-    print(f"start {start} -> goal {goal}; prior trained on {args.prior_ground}; "
-          f"adaptive updates {'off' if args.no_adapt else 'on'}")
-    print(f"status: {result.status} — {result.reason}")
-    print(f"first plan (prior models):  {budget.predicted_energy_wh:8.2f} Wh  {route0.length_m:7.1f} m  "
-          f"({'fits' if budget.predicted_feasible else 'does NOT fit'} the usable {battery.usable_energy_wh:.0f} Wh)")
-    print(f"driven (actual):            {result.driven_energy_j / 3600:8.2f} Wh  in {len(result.legs)} legs")
-    print(f"excitation manoeuvres:      {result.excitation_energy_j / 3600:8.2f} Wh")
-    print(f"prediction error before / after updates: {_percent(result.error_before_update_pct)} / "
-          f"{_percent(result.error_after_update_pct)}")
-    print(f"updates accepted: {result.accepted_updates} of {len(result.updates)}; route changes {result.route_changes}")
-    for line in result.skipped_updates:
-        print(f"skipped update {line}")
-    if budget.depleted:
-        print(f"the battery ran out {budget.depleted_time_s:.1f} s into the mission")
-    print(f"final state of charge {budget.arrival_soc_pct:.1f} % (margin {budget.reserve_margin_pct:+.1f} points "
-          f"above the reserve); loop computing {elapsed:.1f} s")
+    report = simulate_adaptive_mission(
+        tmap, start, goal, battery_ah=args.battery_ah, battery_v=args.battery_v, reserve_pct=args.reserve_pct,
+        robot=args.robot, speed_mps=args.speed, prior_ground=args.prior_ground, leg_m=args.leg_m,
+        adapt=not args.no_adapt, seed=args.seed, model=load_model_arg(args), model_ground=args.model_ground,
+        map_label=label)
+    with warn_figures():
+        written = report.write(args.out)
+    print(report.summary())
+    print(f"wrote {written[0]}" + (f" and {written[1]}" if len(written) > 1 else ""))
+    return 0 if report.completed else 1
 
 
 # ------------------------------------------------------------------ --monte-carlo N
@@ -217,42 +154,18 @@ def run_monte_carlo(args: argparse.Namespace, tmap: Any, label: str, start: tupl
     otherwise, when there is no route, or when a mission failed (its row in monte_carlo.csv
     says why; the statistics are over the completed missions).
     """
-    robot = robot_preset(args.robot)
-    battery = Battery(capacity_ah=args.battery_ah,
-                      voltage_v=args.battery_v if args.battery_v is not None else robot.battery_voltage_v,
-                      min_reserve_pct=args.reserve_pct)
     model = load_model_arg(args)
-    cost = edge_cost_for(tmap, robot=args.robot, speed_mps=args.speed, max_slope_rad=DEFAULT_MAX_SLOPE_RAD,
-                         unknown_ground=None, model=model, model_ground=getattr(args, "model_ground", None))
-    if (args.risk is not None or args.mc_draw == "model") and not cost.has_interval:
-        raise InvalidParameterError(f"--risk and --mc-draw model need a model with a predictive interval; "
-                                    f"{args.model.name} gives none")
-    route = plan_route(tmap, start, goal, cost=cost, planner="lattice", seed=args.seed)
-    print(f"map: {label}; robot {args.robot}; battery {battery.capacity_ah:g} Ah at {battery.voltage_v:g} V, "
-          f"reserve {battery.min_reserve_pct:g} %")
-    if not route.found:
-        print(f"no route from {start} to {goal}: status {route.status!r}")
+    with dask_client_arg(args) as client:
+        report = monte_carlo_mission(
+            tmap, start, goal, args.monte_carlo, battery_ah=args.battery_ah, battery_v=args.battery_v,
+            reserve_pct=args.reserve_pct, robot=args.robot, speed_mps=args.speed, seed=args.seed, model=model,
+            model_label=None if model is None else args.model.name, model_ground=args.model_ground, risk=args.risk,
+            draw_from=args.mc_draw, max_risk_pct=args.max_risk_pct, client=client,
+            where=args.scheduler or "local cluster", progress=True, map_label=label, flags=("--risk", "--mc-draw"))
+    print(report.summary())
+    if report.result is None:
         return 1
-    print(f"route: {route.length_m:.1f} m, planned {route.energy_wh:.2f} Wh; {args.monte_carlo} missions", flush=True)
-    with contextlib.ExitStack() as stack:
-        client = None
-        if args.workers > 1 or args.scheduler is not None:
-            client = stack.enter_context(dask_client(args.workers, args.scheduler, quiet=not args.verbose,
-                                                     flags=("--workers", "--scheduler")))
-        result = simulate_missions_mc(tmap, route, battery, args.monte_carlo, robot=robot, speed_mps=args.speed,
-                                      seed=args.seed, client=client, progress=True, cost=cost,
-                                      draw_from=args.mc_draw)
-        if client is not None:  # where it ran, as the user named it
-            result = dataclasses.replace(result, where=args.scheduler or "local cluster")
-    json_path = result.write_json(args.out / "monte_carlo.json")
-    csv_path = result.to_csv(args.out / "monte_carlo.csv")
-    png_path = draw_figure(args.out / "monte_carlo.png", lambda: result.plot(args.out / "monte_carlo.png"))
-    print(result.summary())
-    fits = True
-    if args.risk is not None:  # the reserve check on the forecast's quantile
-        need_j = result.forecast.quantile_j(args.risk)
-        fits = need_j <= battery.usable_energy_wh * 3600.0
-        print(f"reserve check at Q = {args.risk:g}: the route's {args.risk:g} quantile {need_j / 3600:.2f} Wh "
-              f"{'fits' if fits else 'does NOT fit'} the usable {battery.usable_energy_wh:.2f} Wh")
-    print(f"wrote {json_path}, {csv_path}" + (f" and {png_path}" if png_path is not None else ""))
-    return 0 if 100.0 * result.p_below_reserve <= args.max_risk_pct and fits and not result.n_failed else 1
+    with warn_figures():
+        written = report.write(args.out)
+    print(f"wrote {written[0]}, {written[1]}" + (f" and {written[2]}" if len(written) > 2 else ""))
+    return 0 if report.ok else 1

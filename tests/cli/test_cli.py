@@ -483,7 +483,7 @@ def test_mission_output_taken_by_a_folder_is_refused_before_the_mission(tmp_path
 
     path = _patch_map(tmp_path)
     (tmp_path / "out" / "mission.png").mkdir(parents=True)
-    monkeypatch.setattr(mission_cli, "run_adaptive_mission", lambda *a, **k: pytest.fail("ran before checking --out"))
+    monkeypatch.setattr(mission_cli, "simulate_adaptive_mission", lambda *a, **k: pytest.fail("ran before checking --out"))
     rc = main(["mission", "--map", str(path), "--start", "3", "12", "--goal", "57", "12", "--battery-ah", "20",
                "--out", str(tmp_path / "out")])
     assert rc == 2

@@ -1,0 +1,222 @@
+"""An adaptive mission in simulation against a battery, set up from names and reported (MissionReport)."""
+
+from __future__ import annotations
+
+import math
+import os
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from energy import GROUND_PRESETS, Battery, TruthSimulator, ground_preset, robot_preset
+from terrain import CellModelRegistry, TerrainMap
+from terrawatt_base.atomic import write_json_atomic
+from terrawatt_base.checks import check_bool, check_real
+from terrawatt_base.errors import UnknownNameError
+
+from ..figure_file import draw_figure
+from ..model_cost import model_energy_model
+from .adaptive import run_adaptive_mission
+from .adaptive_results import AdaptiveResult
+from .manoeuvres import fit_prior_model
+from .settings import AdaptiveSettings
+
+__all__ = ["MissionReport", "simulate_adaptive_mission", "mission_battery", "check_preset_grounds"]
+
+
+def check_preset_grounds(terrain: TerrainMap) -> None:
+    """Every ground of the map a preset (the truth simulator drives presets), or an error naming those that are not.
+
+    Raises
+    ------
+    UnknownNameError
+        A ground of the map has no preset.
+    """
+    unknown = sorted(n for n in set(terrain.ground_names.values()) if n not in GROUND_PRESETS)
+    if unknown:
+        raise UnknownNameError(f"the map's grounds {unknown!r} have no preset; known grounds: {sorted(GROUND_PRESETS)!r}")
+
+
+def mission_battery(robot: str, capacity_ah: float, voltage_v: float | None = None, reserve_pct: float = 20.0) -> Battery:
+    """The :class:`energy.Battery` of a mission: ``voltage_v`` defaults to the robot preset's battery voltage."""
+    voltage = robot_preset(robot).battery_voltage_v if voltage_v is None else voltage_v
+    return Battery(capacity_ah=capacity_ah, voltage_v=voltage, min_reserve_pct=reserve_pct)
+
+
+def _percent(value: float) -> str:
+    return "n/a" if math.isnan(value) else f"{value:.1f} %"  # NaN: nothing to compare
+
+
+@dataclass(frozen=True)
+class MissionReport:
+    """An adaptive mission (:class:`AdaptiveResult`) with its battery and setting, ready to print and write.
+
+    Made by :func:`simulate_adaptive_mission`. :meth:`summary` is the text ``terrawatt mission``
+    prints, :meth:`to_dict` the content of mission.json, :meth:`write` writes mission.json and
+    mission.png.
+
+    Attributes
+    ----------
+    result : AdaptiveResult
+        The mission: status, legs, updates, the budget.
+    battery : Battery
+        The battery driven against.
+    map_label, robot, prior_ground : str
+        How the map is named; the robot preset; the ground the prior model was trained on.
+    adapt : bool
+        Whether the models were updated on the way.
+    start_xy_m, goal_xy_m : (float, float)
+        Start and goal (m).
+    computing_time_s : float
+        Seconds the loop took.
+    terrain : TerrainMap
+        The map.
+    registry : CellModelRegistry
+        The per-cell models after the mission.
+    """
+
+    result: AdaptiveResult
+    battery: Battery
+    map_label: str
+    robot: str
+    prior_ground: str
+    adapt: bool
+    start_xy_m: tuple[float, float]
+    goal_xy_m: tuple[float, float]
+    computing_time_s: float
+    terrain: TerrainMap = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
+    registry: CellModelRegistry = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
+
+    @property
+    def completed(self) -> bool:
+        """Whether the robot reached the goal."""
+        return self.result.status == "completed"
+
+    def summary(self) -> str:
+        """What ``terrawatt mission`` prints: battery, status, plan against drive, errors, updates, final charge."""
+        result, battery = self.result, self.battery
+        budget, route0 = result.budget, result.initial_route
+        lines = [
+            f"map: {self.map_label}; robot {self.robot}; battery {battery.capacity_ah:g} Ah at {battery.voltage_v:g} V "
+            f"({battery.energy_capacity_wh:.0f} Wh, {battery.usable_energy_wh:.0f} Wh above the "
+            f"{battery.min_reserve_pct:g} % reserve)",
+            f"start {self.start_xy_m} -> goal {self.goal_xy_m}; prior trained on {self.prior_ground}; "
+            f"adaptive updates {'on' if self.adapt else 'off'}",
+            f"status: {result.status} — {result.reason}",
+            f"first plan (prior models):  {budget.predicted_energy_wh:8.2f} Wh  {route0.length_m:7.1f} m  "
+            f"({'fits' if budget.predicted_feasible else 'does NOT fit'} the usable {battery.usable_energy_wh:.0f} Wh)",
+            f"driven (actual):            {result.driven_energy_j / 3600:8.2f} Wh  in {len(result.legs)} legs",
+            f"excitation manoeuvres:      {result.excitation_energy_j / 3600:8.2f} Wh",
+            f"prediction error before / after updates: {_percent(result.error_before_update_pct)} / "
+            f"{_percent(result.error_after_update_pct)}",
+            f"updates accepted: {result.accepted_updates} of {len(result.updates)}; route changes {result.route_changes}",
+        ]
+        lines += [f"skipped update {line}" for line in result.skipped_updates]
+        if budget.depleted:
+            lines.append(f"the battery ran out {budget.depleted_time_s:.1f} s into the mission")
+        lines.append(f"final state of charge {budget.arrival_soc_pct:.1f} % (margin {budget.reserve_margin_pct:+.1f} "
+                     f"points above the reserve); loop computing {self.computing_time_s:.1f} s")
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The content of mission.json: :meth:`AdaptiveResult.to_json_dict` and ``computing_time_s``."""
+        return {**self.result.to_json_dict(), "computing_time_s": self.computing_time_s}
+
+    def write(self, out_dir: str | os.PathLike[str], *, on_figure_error: str = "warn") -> list[Path]:
+        """Write mission.json and mission.png into ``out_dir``; return the files written (a figure that fails
+        warns and is left out, :func:`planner.figure_file.draw_figure`)."""
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        written = [write_json_atomic(out / "mission.json", self.to_dict())]
+        png = draw_figure(out / "mission.png", lambda: self.result.plot(out / "mission.png", self.terrain,
+                                                                          self.registry), on_error=on_figure_error)
+        return written + ([png] if png is not None else [])
+
+
+def simulate_adaptive_mission(
+    terrain: TerrainMap,
+    start_xy_m: tuple[float, float],
+    goal_xy_m: tuple[float, float],
+    *,
+    battery_ah: float,
+    battery_v: float | None = None,
+    reserve_pct: float = 20.0,
+    robot: str = "husky",
+    speed_mps: float = 0.5,
+    prior_ground: str = "asphalt",
+    leg_m: float = 10.0,
+    adapt: bool = True,
+    seed: int = 0,
+    model: Any = None,
+    model_ground: str | Mapping[str, str] | None = None,
+    map_label: str = "map",
+) -> MissionReport:
+    """Drive from start to goal in the truth simulator against a battery, learning current models on the way.
+
+    The truth simulator (seeded) drives the map's grounds, which must be presets. Without
+    ``model``, the robot starts with a prior linear model fitted on ``prior_ground``
+    (:func:`planner.missions.fit_prior_model`) in every cell; with ``model`` (a saved current
+    model), that model serves each ground class it drove (:func:`planner.model_cost.model_energy_model`).
+    Then :func:`planner.missions.run_adaptive_mission` plans, drives ``leg_m`` legs, compares,
+    updates (unless not ``adapt``) and replans.
+
+    Parameters
+    ----------
+    terrain : TerrainMap
+        The map; its grounds are presets.
+    start_xy_m, goal_xy_m : (float, float)
+        Start and goal (m).
+    battery_ah, battery_v, reserve_pct
+        The battery (:func:`mission_battery`).
+    robot : str
+        Robot preset.
+    speed_mps, leg_m, seed
+        Driving speed (m/s), route driven between comparisons (m), seed of the simulator.
+    prior_ground : str
+        Ground preset of the prior model, and the physics ground of the edge costs.
+    adapt : bool
+        Update the models on the way (False: drive the first plan).
+    model, model_ground
+        A saved current model instead of the prior, and how it serves the map's grounds.
+    map_label : str
+        How the map is named.
+
+    Returns
+    -------
+    MissionReport
+
+    Raises
+    ------
+    UnknownNameError
+        A ground of the map, or ``prior_ground``, without a preset.
+    InvalidParameterError
+        A bad number.
+    """
+    check_preset_grounds(terrain)
+    if prior_ground not in GROUND_PRESETS:
+        raise UnknownNameError(f"prior_ground {prior_ground!r} has no preset; known grounds: {sorted(GROUND_PRESETS)!r}")
+    check_real("leg_m", leg_m, low=0.0, low_inclusive=False)
+    adapt = check_bool("adapt", adapt)
+    robot_params = robot_preset(robot)
+    grounds = {name: ground_preset(name) for name in set(terrain.ground_names.values()) | {prior_ground}}
+    truth = TruthSimulator(robot_params, grounds, seed=seed)
+    battery = mission_battery(robot, battery_ah, battery_v, reserve_pct)
+    settings = AdaptiveSettings(speed_mps=speed_mps, leg_length_m=leg_m,
+                                max_updates=AdaptiveSettings().max_updates if adapt else 0, seed=seed)
+    learned = None
+    if model is not None:  # the saved model serves every ground class it drove (one model id each)
+        learned, _ = model_energy_model(terrain, model, robot_params, model_ground=model_ground,
+                                        physics_ground=grounds[prior_ground])
+        registry = learned.registry
+    else:
+        prior = fit_prior_model(truth, prior_ground, seed=seed)
+        registry = CellModelRegistry.from_terrain(terrain, prior, prior_name=f"{prior_ground}-prior")
+    t0 = time.perf_counter()
+    result = run_adaptive_mission(terrain, registry, robot_params, battery, truth, start_xy_m, goal_xy_m,
+                                  physics_ground=grounds[prior_ground], settings=settings, learned=learned)
+    return MissionReport(result=result, battery=battery, map_label=map_label, robot=robot, prior_ground=prior_ground,
+                         adapt=adapt, start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),
+                         goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])),
+                         computing_time_s=time.perf_counter() - t0, terrain=terrain, registry=registry)

@@ -1,0 +1,88 @@
+"""Tests of planner.missions.mission_report: simulate_adaptive_mission and MissionReport."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+import terrain
+from terrain import FigureWarning, InvalidParameterError, TerrainMap, UnknownNameError
+
+import planner.missions.mission_report as mission_report_module
+from planner.missions import AdaptiveResult
+from planner.missions.mission_report import (
+    MissionReport,
+    check_preset_grounds,
+    mission_battery,
+    simulate_adaptive_mission,
+)
+
+START, GOAL = (3.0, 12.0), (37.0, 12.0)
+
+
+@pytest.fixture(scope="module")
+def report() -> MissionReport:
+    wall = terrain.wall_map((40, 40), 1.0, wall_col=20, gap_rows=(10, 14))
+    return simulate_adaptive_mission(wall, START, GOAL, battery_ah=20.0, map_label="wall", seed=0)
+
+
+def test_the_mission_reaches_the_goal_on_its_battery(report):
+    assert isinstance(report.result, AdaptiveResult) and report.completed and report.result.status == "completed"
+    assert report.battery.capacity_ah == 20.0 and report.battery.voltage_v == 24.0  # the husky's
+    assert report.battery.min_reserve_pct == 20.0 and report.adapt and report.prior_ground == "asphalt"
+    assert report.registry is not None and report.computing_time_s > 0
+
+
+def test_the_summary_says_battery_plan_drive_and_final_charge(report):
+    lines = report.summary().splitlines()
+    assert lines[0] == "map: wall; robot husky; battery 20 Ah at 24 V (480 Wh, 384 Wh above the 20 % reserve)"
+    assert lines[1] == "start (3.0, 12.0) -> goal (37.0, 12.0); prior trained on asphalt; adaptive updates on"
+    assert lines[2] == "status: completed — reached the goal"
+    assert lines[3].startswith("first plan (prior models): ") and "(fits the usable 384 Wh)" in lines[3]
+    assert lines[4].startswith("driven (actual): ") and f"in {len(report.result.legs)} legs" in lines[4]
+    assert lines[-1].startswith("final state of charge ") and "loop computing" in lines[-1]
+
+
+def test_mission_json_and_figure(report, tmp_path):
+    written = report.write(tmp_path)
+    assert [p.name for p in written] == ["mission.json", "mission.png"]
+    data = json.loads((tmp_path / "mission.json").read_text())
+    assert data["status"] == "completed" and data["computing_time_s"] == report.computing_time_s
+    assert data == json.loads(json.dumps(report.to_dict(), allow_nan=True).replace("NaN", "null"))
+
+
+def test_a_figure_that_fails_warns(report, tmp_path, monkeypatch):
+    monkeypatch.setattr(type(report.result), "plot", lambda *a, **k: 1 / 0)
+    with pytest.warns(FigureWarning, match="mission.png: ZeroDivisionError"):
+        assert [p.name for p in report.write(tmp_path)] == ["mission.json"]
+
+
+def test_without_adaptation_no_update_is_made():
+    flat = terrain.flat_map((10, 30), 1.0, ground="grass")
+    report = simulate_adaptive_mission(flat, (2.0, 5.0), (27.0, 5.0), battery_ah=20.0, adapt=False, leg_m=5.0)
+    assert report.result.updates == () and "adaptive updates off" in report.summary()
+
+
+def test_grounds_without_presets_are_refused(corridor_map):
+    with pytest.raises(UnknownNameError, match=r"the map's grounds \['Loam'\] have no preset"):
+        check_preset_grounds(corridor_map)
+    with pytest.raises(UnknownNameError, match="have no preset"):
+        simulate_adaptive_mission(corridor_map, (2.5, 7.5), (27.5, 7.5), battery_ah=5.0)
+    flat = TerrainMap(corridor_map.elevation_m, 1.0, obstacle=corridor_map.obstacle)
+    with pytest.raises(UnknownNameError, match="prior_ground 'lava'"):
+        simulate_adaptive_mission(flat, (2.5, 7.5), (27.5, 7.5), battery_ah=5.0, prior_ground="lava")
+    with pytest.raises(InvalidParameterError, match="leg_m"):
+        simulate_adaptive_mission(flat, (2.5, 7.5), (27.5, 7.5), battery_ah=5.0, leg_m=0.0)
+
+
+def test_the_battery_voltage_defaults_to_the_robot():
+    from energy import robot_preset
+
+    assert mission_battery("jackal", 2.0).voltage_v == robot_preset("jackal").battery_voltage_v
+    assert mission_battery("husky", 2.0, 12.0, 10.0).min_reserve_pct == 10.0
+
+
+def test_the_module_names_its_api():
+    assert set(mission_report_module.__all__) == {"MissionReport", "simulate_adaptive_mission", "mission_battery",
+                                                  "check_preset_grounds"}
