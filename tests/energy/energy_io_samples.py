@@ -12,7 +12,7 @@ import pytest
 from hypothesis import HealthCheck, settings
 
 __all__ = [
-    "FIXTURES", "BOREALTC_FIX", "GENERIC", "SHARED_BOREALTC", "GENERIC_COLUMNS", "GENERIC_UNITS",
+    "FIXTURES", "BOREALTC_FIX", "GENERIC", "FUZZ_WRITTEN", "SHARED_BOREALTC", "GENERIC_COLUMNS", "GENERIC_UNITS",
     "read_rows", "copy_run", "edit_lines", "shared_data_or_skip", "HAVE_ROSBAGS", "requires_rosbags",
     "BASE_NS", "MS", "bag_content", "write_bag", "fuzz_examples", "fuzz_settings", "mutate_bytes",
 ]
@@ -20,6 +20,7 @@ __all__ = [
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 BOREALTC_FIX = FIXTURES / "borealtc"
 GENERIC = FIXTURES / "generic_ma.csv"
+FUZZ_WRITTEN = FIXTURES / "written_log.csv"  # a log written by write_csv_log, header included
 SHARED_BOREALTC = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "borealtc"
 GENERIC_COLUMNS = {
     "time": "stamp_ms",

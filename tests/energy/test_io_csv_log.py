@@ -1,10 +1,8 @@
-"""Tests of energy.io.csv_log: the generic CSV layout (reader, writer, the terrawatt-log header)."""
+"""Tests of energy.io.csv_log: the generic CSV layout (reader, writer); its header line is in test_io_csv_header.py."""
 
 from __future__ import annotations
 
-import json
 import logging
-import re
 import shutil
 import warnings
 from pathlib import Path
@@ -13,6 +11,7 @@ import numpy as np
 import pytest
 from energy_io_samples import (
     BOREALTC_FIX,
+    FUZZ_WRITTEN,
     GENERIC,
     GENERIC_COLUMNS,
     GENERIC_UNITS,
@@ -33,8 +32,6 @@ from energy import (
 from terrain import (
     DataError,
     DataRepairWarning,
-    FileFormatError,
-    FormatVersionError,
     InvalidParameterError,
     TerrawattError,
     UnitError,
@@ -269,85 +266,7 @@ def test_write_rejects_bad_labels_and_objects(tmp_path):
     assert not any(tmp_path.iterdir())
 
 
-def test_csv_format_version_and_corrupt_header(tmp_path):
-    log = read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS)
-    path = write_csv_log(log, tmp_path / "v.csv")
-    edit_lines(path, lambda ls: [ls[0].replace('"format_version": 1', '"format_version": 2')] + ls[1:])
-    with pytest.raises(FormatVersionError, match="format version 2"):
-        read_csv_log(path)
-    edit_lines(path, lambda ls: ["# terrawatt-log {not json"] + ls[1:])
-    with pytest.raises(FileFormatError, match="corrupt terrawatt-log header"):
-        read_csv_log(path)
-
-
-
 # ===================================================================== hostile input
-def _long_log_file(tmp_path: Path) -> Path:
-    """A generic CSV log of 1000 rows (well past 8 KiB)."""
-    t = np.arange(500) * 0.1
-    ta = np.arange(2000) * 0.025
-    log = InteractionLog(t, np.full(500, 0.5), np.zeros(500), np.full(500, 2.0), np.full(500, 2.5), ta,
-                         np.full(2000, 9.81), meta=LogMeta(robot="r", notes="long"))
-    return write_csv_log(log, tmp_path / "long.csv")
-
-
-def test_csv_invalid_utf8_byte_beyond_8_kib(tmp_path):
-    path = _long_log_file(tmp_path)
-    data = bytearray(path.read_bytes())
-    at = data.index(b"\n", 20_000) + 2
-    data[at : at + 2] = b"\xc3("  # a lead byte without its continuation
-    path.write_bytes(bytes(data))
-    line = data.count(b"\n", 0, at) + 1
-    with pytest.raises(FileFormatError, match=rf"long\.csv' is not a UTF-8 text CSV file: byte {at} \(line {line}\) is "
-                                              r"b'\\xc3', which is not valid UTF-8"):
-        read_csv_log(path)
-    with pytest.raises(FileFormatError, match=rf"byte {at} \(line {line}\)"):
-        read_csv_log(path, rates="single", repair=("interpolate_nans",))
-
-
-def test_csv_header_notes_not_a_string(tmp_path):
-    path = write_csv_log(read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS), tmp_path / "n.csv")
-    edit_lines(path, lambda ls: [re.sub(r'"notes": "[^"]*"', '"notes": 5', ls[0])] + ls[1:])
-    with pytest.raises(FileFormatError, match=r"n\.csv: terrawatt-log header: 'notes' must be a string or null, got 5"):
-        read_csv_log(path)
-
-
-def test_csv_header_nested_100000_deep(tmp_path):
-    path = write_csv_log(read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS), tmp_path / "deep.csv")
-    edit_lines(path, lambda ls: ["# terrawatt-log " + "[" * 100_000] + ls[1:])
-    with pytest.raises(FileFormatError, match=r"deep\.csv: corrupt terrawatt-log header line .*nested too deeply"):
-        read_csv_log(path)
-    edit_lines(path, lambda ls: ["# terrawatt-log " + '{"a": ' * 100_000] + ls[1:])
-    with pytest.raises(FileFormatError, match="corrupt terrawatt-log header"):
-        read_csv_log(path)
-
-
-@pytest.mark.parametrize(("key", "value", "expected"), [
-    ("robot", "[1, 2]", "a string or null"),
-    ("source", "{}", "a string or null"),
-    ("ground_label", '""', "a non-empty string or null"),
-    ("velocity_source", '"guessed"', r"one of \['commanded', 'measured'\] or null"),
-    ("track_width_m", '"wide"', "a finite number > 0 or null"),
-    ("track_width_m", "-0.5", "a finite number > 0 or null"),
-    ("track_width_m", "1e999", "a finite number > 0 or null"),
-    ("start_time_ns", "1.5", "a 64-bit integer or null"),
-    ("start_time_ns", "true", "a 64-bit integer or null"),
-    ("start_time_ns", str(2**70), "a 64-bit integer or null"),
-])
-def test_csv_header_values_of_the_wrong_type(tmp_path, key, value, expected):
-    path = write_csv_log(read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS), tmp_path / "t.csv")
-    edit_lines(path, lambda ls: [re.sub(rf'"{key}": ([^,}}]*)', f'"{key}": {value}', ls[0])] + ls[1:])
-    with pytest.raises(FileFormatError, match=rf"terrawatt-log header: '{key}' must be {expected}"):
-        read_csv_log(path)
-
-
-def test_csv_header_format_version_true_is_not_1(tmp_path):
-    path = write_csv_log(read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS), tmp_path / "v.csv")
-    edit_lines(path, lambda ls: [ls[0].replace('"format_version": 1', '"format_version": true')] + ls[1:])
-    with pytest.raises(FormatVersionError, match="format version True"):
-        read_csv_log(path)
-
-
 def test_csv_times_in_ms_declared_as_s_are_a_unit_error():
     units = dict(GENERIC_UNITS, time="s")  # the fixture's stamps are ms
     with pytest.raises(UnitError, match=r"generic_ma\.csv: drive stream: median rate 0\.01 Hz is below the plausible 0.5 Hz "
@@ -404,40 +323,6 @@ def test_fuzz_csv_random_bytes(tmp_path, data):
     _read_quietly(path)
     path.write_bytes(b"time_s,v_mps,omega_radps,current_left_a,current_right_a,accel_z_mps2\n" + data)
     _read_quietly(path, check_units=False)
-
-
-JSON = st.recursive(
-    st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=8),
-    lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=6), inner, max_size=3),
-    max_leaves=8,
-)
-HEADER_KEYS = ["format_version", "robot", "source", "ground_label", "velocity_source", "track_width_m", "notes",
-               "start_time_ns"]
-
-
-@fuzz_settings(80)
-@given(changes=st.dictionaries(st.sampled_from(HEADER_KEYS), JSON, max_size=4), raw=st.one_of(st.none(), st.text(max_size=60)))
-def test_fuzz_csv_log_header(tmp_path, changes, raw):
-    """Any header line (random JSON values for its keys, or random text) reads or raises a
-    TerrawattError; a read log's metadata are of the documented types.
-
-    Long run: ``TERRAWATT_FUZZ_EXAMPLES=20 python -m pytest -q tests/energy -k fuzz``.
-    """
-    lines = FUZZ_WRITTEN.read_text().splitlines()
-    head = json.loads(lines[0][len("# terrawatt-log "):])
-    head.update(changes)
-    first = "# terrawatt-log " + (json.dumps(head) if raw is None else raw)
-    path = tmp_path / "h.csv"
-    path.write_text("\n".join([first.replace("\n", " ").replace("\r", " ")] + lines[1:]) + "\n")
-    try:
-        log = read_csv_log(path)
-    except TerrawattError:
-        return
-    assert isinstance(log.meta.notes, str) and isinstance(log.meta.robot, str)
-    assert log.meta.start_time_ns is None or isinstance(log.meta.start_time_ns, int)
-
-
-FUZZ_WRITTEN = Path(__file__).resolve().parents[1] / "fixtures" / "written_log.csv"
 
 
 def test_an_imu_column_in_g_is_refused_until_its_unit_is_declared(tmp_path):

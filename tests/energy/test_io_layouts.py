@@ -1,4 +1,4 @@
-"""energy.io.read_logs: every layout at one path, and the commands (train, evaluate, predict, diagnose) that read through it."""
+"""Tests of energy.io.layouts: read_logs (every layout at one path), BagTopics, the commands that read through it."""
 
 from __future__ import annotations
 
