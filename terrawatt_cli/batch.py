@@ -3,17 +3,16 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import dataclasses
 from pathlib import Path
 from typing import Any
 
 from terrain import InvalidParameterError, TerrainMap
-from terrawatt_base.dask_client import dask_client
 from terrain.procedural import example_map
 
 from planner import PLANNERS, BatchPairs, plan_batch, read_pairs_csv, warm_up_kernels
 from planner.batch_pairs import read_sites_csv
+from planner.cost_source import edge_costs
 from .common import (
     add_dask_options,
     add_map_options,
@@ -23,7 +22,7 @@ from .common import (
     check_model_flags,
     check_outputs,
     check_positive,
-    edge_cost_for,
+    dask_client_arg,
     input_paths,
     load_model_arg,
     max_slope_rad,
@@ -34,7 +33,6 @@ from .common import (
 __all__ = ["add_parser", "run_batch"]
 
 _OUTPUTS = ("batch.csv", "batch.json")
-_FLAGS = ("--workers", "--scheduler")
 
 
 def add_parser(sub: Any) -> None:
@@ -107,15 +105,11 @@ def run_batch(args: argparse.Namespace) -> int:
         tmap, label = read_map_args(args), Path(args.map).name
     pairs = _read_pairs(args, tmap)
     model = load_model_arg(args)
-    cost = edge_cost_for(tmap, robot=args.robot, speed_mps=args.speed, max_slope_rad=max_slope_rad(args.max_slope_deg),
-                         unknown_ground=None if model is not None else unknown_ground(args.unknown_ground, tmap),
-                         model=model, model_ground=args.model_ground)
+    cost = edge_costs(tmap, robot=args.robot, speed_mps=args.speed, max_slope_rad=max_slope_rad(args.max_slope_deg),
+                      unknown_ground=None if model is not None else unknown_ground(args.unknown_ground, tmap),
+                      model=model, model_ground=args.model_ground)
     warm_up_kernels()
-    with contextlib.ExitStack() as stack:
-        client = None
-        if args.workers > 1 or args.scheduler is not None:  # a missing extra or scheduler fails before planning
-            client = stack.enter_context(dask_client(args.workers, args.scheduler, quiet=not args.verbose,
-                                                     flags=_FLAGS))
+    with dask_client_arg(args) as client:  # a missing extra or scheduler fails before planning
         print(f"map: {label}  {tmap.shape[0]} x {tmap.shape[1]} cells of {tmap.cell_size_m:g} m; "
               f"{len(pairs)} pairs; planner {args.planner}", flush=True)
         result = plan_batch(cost, pairs, planner=args.planner, seed=args.seed, client=client,

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from energy import GROUND_PRESETS, CurrentModel, load_current_model, robot_preset
+from energy import GROUND_PRESETS, CurrentModel, load_current_model
 from terrain import (
     UNKNOWN_GROUND,
     DemWindows,
@@ -29,8 +29,6 @@ from terrawatt_base.checks import fmt_number
 from terrawatt_base.dask_client import dask_client
 from terrain.landcover import LandcoverClasses, ground_classes_from_landcover, read_landcover_classes
 
-from planner.edge_cost import EnergyCost
-from planner.model_cost import model_energy_cost
 from planner.points import lonlat_points
 from planner.risk import check_risk_level
 
@@ -55,7 +53,6 @@ __all__ = [
     "add_model_options",
     "check_model_flags",
     "load_model_arg",
-    "edge_cost_for",
 ]
 
 
@@ -395,14 +392,3 @@ def load_model_arg(args: argparse.Namespace) -> CurrentModel | None:
     if getattr(args, "model", None) is None:
         return None
     return load_current_model(args.model)
-
-
-def edge_cost_for(tmap: TerrainMap, *, robot: str, speed_mps: float, max_slope_rad: float,
-                  unknown_ground: str | None, model: CurrentModel | None = None,
-                  model_ground: str | dict[str, str] | None = None) -> EnergyCost:
-    """The edge costs of a command: the physics presets, or the saved ``model`` (:func:`planner.model_energy_cost`)."""
-    if model is None:
-        return EnergyCost.from_presets(tmap, robot=robot, speed_mps=speed_mps, max_slope_rad=max_slope_rad,
-                                       unknown_ground=unknown_ground)
-    return model_energy_cost(tmap, model, robot_preset(robot), speed_mps, model_ground=model_ground,
-                             max_slope_rad=max_slope_rad)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import dataclasses
 import sys
 import warnings
@@ -23,9 +22,17 @@ from energy.diagnosis import DRIVE_EFFECTS, EFFECTS_CATALOGUE, plot_diagnosis
 from energy.diagnosis import FIGURES
 from terrain import FigureWarning, InvalidParameterError, UnknownNameError
 from terrawatt_base.checks import check_seed, fmt_number
-from terrawatt_base.dask_client import client_worker_count, dask_client
+from terrawatt_base.dask_client import client_worker_count
 
-from .common import add_dask_options, add_map_options, check_dask_flags, check_outputs, input_paths, read_map_args
+from .common import (
+    add_dask_options,
+    add_map_options,
+    check_dask_flags,
+    check_outputs,
+    dask_client_arg,
+    input_paths,
+    read_map_args,
+)
 from .data import add_data_options, logs_from_args
 
 __all__ = ["add_parser", "run_diagnose"]
@@ -195,11 +202,8 @@ def run_diagnose(args: argparse.Namespace) -> int:
     model, origin = _model(args, logs)
     print(origin, flush=True)
     robot = args.robot if args.model != "physics" else None
-    with contextlib.ExitStack() as stack:
-        client = None
-        if args.workers > 1 or args.scheduler is not None:
-            client = stack.enter_context(dask_client(args.workers, args.scheduler, quiet=not args.verbose,
-                                                     flags=("--workers", "--scheduler")))
+    with dask_client_arg(args) as client:
+        if client is not None:
             print(f"scoring effects on {client_worker_count(client)} dask workers", flush=True)
         diagnosis = diagnose(model, logs, terrain=terrain, effects=args.effects, split=args.split, seed=args.seed,
                              robot=robot, client=client, progress=not args.quiet)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import contextlib
 import time
 from pathlib import Path
 from typing import Any
@@ -11,10 +10,9 @@ from typing import Any
 from energy import evaluate_current_models, new_current_model, plot_vibration_spectra
 from energy.models import CURRENT_MODEL_KINDS
 from terrain import InvalidParameterError
-from terrawatt_base.dask_client import dask_client
 
 from .band import LEARNED_KINDS, add_band_option, band_from_args
-from .common import add_dask_options, check_dask_flags, check_outputs, draw_figure, input_paths
+from .common import add_dask_options, check_dask_flags, check_outputs, dask_client_arg, draw_figure, input_paths
 from .data import add_data_options, logs_from_args
 from .evaluate_adapt import ADAPT_OUTPUTS, adapt_settings_from_args, add_adapt_options, run_adapt_protocol
 
@@ -65,14 +63,10 @@ def run_evaluate(args: argparse.Namespace) -> int:
             f"--band applies to the estimator and paper models only, got --model {' '.join(args.models)}"
         )
     check_outputs(args.out, _OUTPUTS if settings is None else ADAPT_OUTPUTS, input_paths(args))
-    with contextlib.ExitStack() as stack:
-        client, workers = None, "1 worker (serial)"
-        if args.workers > 1 or args.scheduler is not None:  # before reading: a missing extra or scheduler fails fast
-            client = stack.enter_context(
-                dask_client(args.workers, args.scheduler, quiet=not args.verbose, flags=("--workers", "--scheduler"))
-            )
-            where = args.scheduler if args.scheduler is not None else "a local cluster"
-            workers = f"{len(client.nthreads())} dask workers ({where})"
+    with dask_client_arg(args) as client:  # before reading: a missing extra or scheduler fails fast
+        workers = "1 worker (serial)"
+        if client is not None:
+            workers = f"{len(client.nthreads())} dask workers ({args.scheduler or 'a local cluster'})"
             print(f"evaluating on {workers}", flush=True)
         logs = logs_from_args(args, require_currents=True)
         models = {name: new_current_model(name, seed=args.seed, band_hz=band_hz if name in LEARNED_KINDS else None)
