@@ -3,16 +3,15 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
 from pathlib import Path
 from typing import Any
 
 from terrain import InvalidParameterError, TerrainMap
 from terrain.procedural import example_map
 
-from planner import PLANNERS, BatchPairs, plan_batch, read_pairs_csv, warm_up_kernels
+from planner import PLANNERS, BatchPairs, read_pairs_csv
 from planner.batch_pairs import read_sites_csv
-from planner.cost_source import edge_costs
+from planner.batch_report import plan_batch_on_map
 from .common import (
     add_dask_options,
     add_map_options,
@@ -105,23 +104,16 @@ def run_batch(args: argparse.Namespace) -> int:
         tmap, label = read_map_args(args), Path(args.map).name
     pairs = _read_pairs(args, tmap)
     model = load_model_arg(args)
-    cost = edge_costs(tmap, robot=args.robot, speed_mps=args.speed, max_slope_rad=max_slope_rad(args.max_slope_deg),
-                      unknown_ground=None if model is not None else unknown_ground(args.unknown_ground, tmap),
-                      model=model, model_ground=args.model_ground)
-    warm_up_kernels()
+    ground = None if model is not None else unknown_ground(args.unknown_ground, tmap)
+    max_slope_rad(args.max_slope_deg)
     with dask_client_arg(args) as client:  # a missing extra or scheduler fails before planning
-        print(f"map: {label}  {tmap.shape[0]} x {tmap.shape[1]} cells of {tmap.cell_size_m:g} m; "
-              f"{len(pairs)} pairs; planner {args.planner}", flush=True)
-        result = plan_batch(cost, pairs, planner=args.planner, seed=args.seed, client=client,
-                            time_limit_s=None if args.max_evaluations is not None else args.time_limit,
-                            max_cost_evaluations=args.max_evaluations, progress=not args.no_progress)
-        if client is not None:  # where it ran, as the user named it
-            result = dataclasses.replace(result, where=args.scheduler or "local cluster")
-    args.out.mkdir(parents=True, exist_ok=True)
-    csv_path = result.to_csv(args.out / "batch.csv")
-    json_path = result.write_json(args.out / "batch.json")
-    print(result.table())
-    print()
-    print(result.summary())
+        report = plan_batch_on_map(
+            tmap, pairs, planner=args.planner, robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg,
+            unknown_ground=ground, model=model, model_ground=args.model_ground, seed=args.seed, client=client,
+            time_limit_s=None if args.max_evaluations is not None else args.time_limit,
+            max_cost_evaluations=args.max_evaluations, where=args.scheduler or "local cluster",
+            progress=not args.no_progress, map_label=label)
+    csv_path, json_path = report.write(args.out)
+    print(report.summary())
     print(f"wrote {csv_path} and {json_path}")
-    return 0 if result.n_found == len(result) else 1
+    return 0 if report.all_found else 1

@@ -1,0 +1,49 @@
+"""Tests of planner.batch_report: plan_batch_on_map and BatchReport."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from terrain import InvalidParameterError
+
+from planner import BatchPairs, BatchResult, EnergyCost, plan_batch
+from planner.batch_report import BatchReport, plan_batch_on_map
+
+PAIRS = [[5.0, 5.0, 35.0, 5.0], [35.0, 5.0, 5.0, 5.0], [5.0, 5.0, 20.5, 5.5]]  # the last one ends in the wall
+
+
+@pytest.fixture
+def report(wall_map) -> BatchReport:
+    return plan_batch_on_map(wall_map, BatchPairs.from_array(PAIRS, ["there", "back", "wall"]), progress=False,
+                             map_label="wall")
+
+
+def test_the_pairs_are_those_of_plan_batch_on_the_priced_map(report, wall_map):
+    assert isinstance(report.result, BatchResult) and len(report.result) == 3
+    same = plan_batch(EnergyCost.from_presets(wall_map), PAIRS, progress=False)
+    assert [r.energy_j for r in report.result.rows[:2]] == [r.energy_j for r in same.rows[:2]]
+    assert [r.status for r in report.result.rows] == ["exact", "exact", "error"] and not report.all_found
+    assert report.result.where == "in process"
+
+
+def test_the_summary_is_the_header_the_table_and_the_totals(report):
+    assert report.header() == "map: wall  40 x 40 cells of 1 m; 3 pairs; planner lattice"
+    assert report.summary() == "\n".join([report.header(), report.result.table(), "", report.result.summary()])
+
+
+def test_write_gives_csv_and_json(report, tmp_path):
+    csv_path, json_path = report.write(tmp_path / "out")
+    assert csv_path.name == "batch.csv" and json_path.name == "batch.json"
+    assert len(json.loads(json_path.read_text())["rows"]) == 3
+
+
+def test_a_model_prices_the_map(corridor_map, known_model):
+    report = plan_batch_on_map(corridor_map, [[2.5, 7.5, 27.5, 7.5]], model=known_model(), progress=False)
+    assert report.all_found and report.result.rows[0].status == "exact"
+
+
+def test_bad_slope_is_refused(wall_map):
+    with pytest.raises(InvalidParameterError, match="max_slope_deg"):
+        plan_batch_on_map(wall_map, PAIRS, max_slope_deg=-1.0, progress=False)
