@@ -1,10 +1,12 @@
 """Tests of energy.estimator: the vibration-conditioned current estimator, its net and trainer."""
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
+from interval_samples import fit_two_ground_estimator
 
 from energy import (
     EstimatorConfig,
@@ -344,3 +346,28 @@ def test_standing_still_is_predicted_at_the_rest_level_not_by_the_networks(prior
     np.testing.assert_allclose(est.predict(test)[rest], np.tile([0.3, 0.6], (rest.sum(), 1)), atol=1e-9)
     est.save(tmp_path / "m.zip")
     np.testing.assert_array_equal(load_current_model(tmp_path / "m.zip").predict(test), est.predict(test))
+
+
+# ------------------------------------------------------- estimator with an interval
+@pytest.fixture(scope="module")
+def two_ground_estimator():
+    return fit_two_ground_estimator()
+
+
+def test_cross_validation_ensemble_gives_an_interval_wider_on_a_new_ground(two_ground_estimator, tmp_path):
+    est, logs = two_ground_estimator
+    assert est.gives_interval and est.interval_.cross_validated
+    assert list(est.member_folds_) == [0, 1, 2, 0, 1, 2, 0, 1]
+    assert est.interval_.new_ground_cov is not None
+    known = est.predict_distribution(logs[0])
+    np.testing.assert_allclose(known.mean_a, est.predict(logs[0]))
+    assert known.has_interval
+    new = est.predict_distribution(dataclasses.replace(logs[0], meta=dataclasses.replace(logs[0].meta, ground_label="c")))
+    assert new.charge().total_sd_as > known.charge().total_sd_as
+    path = est.save(tmp_path / "m.zip")
+    back = load_current_model(path)
+    assert back.gives_interval
+    np.testing.assert_allclose(back.predict_distribution(logs[0]).run_sd_a, known.run_sd_a, rtol=1e-6)
+    assert back.training_summary.grounds.keys() == {"a", "b"}
+    assert back.ground_vibration("A") is not None and back.ground_vibration("c") is None
+

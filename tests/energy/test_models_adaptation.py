@@ -4,11 +4,12 @@ import dataclasses
 
 import numpy as np
 import pytest
+from interval_samples import fit_two_ground_estimator, interval_log
 
 from energy import AdaptedCurrentModel, InteractionLog, LinearCurrentModel, LogMeta, load_current_model
 from energy.models import ADAPT_METHODS
 from terrawatt_base.errors import DataError, FileFormatError, InvalidParameterError, NotFittedError
-from energy.models import MIN_ADAPT_SAMPLES, ModelRecord
+from energy.models import MIN_ADAPT_SAMPLES, ModelRecord, log_currents
 from terrain import UnknownNameError
 
 
@@ -213,3 +214,26 @@ def test_the_adaptive_loop_can_adapt_instead_of_refitting(base):
     assert adapted_model(LinearCurrentModel(), [drive]) is None  # not fitted: nothing to adapt
     with pytest.raises(UnknownNameError):
         adapted_model(base, [drive], method="retrain")
+
+
+# ------------------------------------------------------- the Bayesian update of an interval
+@pytest.fixture(scope="module")
+def two_ground_estimator():
+    return fit_two_ground_estimator()
+
+
+def test_bayes_update_learns_a_new_ground_offset_and_narrows_its_interval(two_ground_estimator):
+    est, _ = two_ground_estimator
+    new_runs = [interval_log(30 + s, "c", vibration=0.5, offset_a=2.0) for s in range(2)]
+    prefix = new_runs[0].slice(0.0, 20.0)
+    before = est.predict_distribution(new_runs[1]).charge()
+    ad = AdaptedCurrentModel(est, method="bayes", scope="ground").fit(prefix)
+    after = ad.predict_distribution(new_runs[1]).charge()
+    true = float(np.sum(np.trapezoid(log_currents(new_runs[1]), new_runs[1].time_s, axis=0)))
+    assert abs(after.total_mean_as - true) < 0.5 * abs(before.total_mean_as - true)
+    assert after.total_sd_as < before.total_sd_as
+    same_run = AdaptedCurrentModel(est, method="bayes", scope="run").fit(prefix)
+    assert same_run.coefficients_.shape == (2, 8)
+    with pytest.raises(DataError, match="interval"):
+        AdaptedCurrentModel(LinearCurrentModel().fit(new_runs), method="bayes").fit(prefix)
+

@@ -1,0 +1,33 @@
+"""Tests of energy.models.calibration: fit_interval gives any model a cross-validated forecast interval."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+from interval_samples import interval_log
+
+from energy import load_current_model
+from energy.models import LinearCurrentModel, fit_interval
+from terrawatt_base.errors import DataError, InvalidParameterError
+
+
+def test_fit_interval_gives_any_model_a_cross_validated_interval(tmp_path):
+    logs = [interval_log(s, "a", offset_a=0.3 * (s % 3)) for s in range(6)] + [interval_log(20 + s, "b", gain=1.3) for s in range(6)]
+    lin = fit_interval(LinearCurrentModel(), logs, folds=3)
+    assert lin.gives_interval and lin.interval_.cross_validated and lin.interval_.new_ground_cov is not None
+    known = lin.predict_distribution(logs[0]).charge()
+    assert known.total_sd_as > 0
+    np.testing.assert_allclose(lin.predict_distribution(logs[0]).mean_a, lin.predict(logs[0]))
+    unseen = dataclasses.replace(logs[0], meta=dataclasses.replace(logs[0].meta, ground_label="c"))
+    assert lin.predict_distribution(unseen).charge().total_sd_as > known.total_sd_as
+    back = load_current_model(lin.save(tmp_path / "lin.zip"))
+    assert back.gives_interval
+    assert back.predict_distribution(logs[0]).charge().total_sd_as == pytest.approx(known.total_sd_as)
+    adapted = back.adapt(logs[1].slice(0.0, 20.0), method="bayes")
+    again = load_current_model(adapted.save(tmp_path / "adapted.zip"))  # the base's interval travels with it
+    assert again.gives_interval
+    np.testing.assert_allclose(again.predict_distribution(logs[2]).run_sd_a, adapted.predict_distribution(logs[2]).run_sd_a)
+    with pytest.raises(DataError, match="at least 2"):
+        fit_interval(LinearCurrentModel(), logs[:1])
+    with pytest.raises(InvalidParameterError):
+        fit_interval(adapted, logs)

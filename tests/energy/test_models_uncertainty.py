@@ -1,0 +1,47 @@
+"""Tests of energy.models.uncertainty: IntervalModel (run-to-run and sample spread) and the per-run regime coefficients."""
+
+import numpy as np
+import pytest
+from interval_samples import interval_log
+
+from energy.logs import rest_samples
+from energy.models.uncertainty import IntervalModel, regime_design, run_coefficients
+
+
+def test_interval_model_learns_the_run_to_run_spread_of_offsets():
+    rng = np.random.default_rng(0)
+    logs, residuals = [], []
+    for s in range(40):
+        lg = interval_log(s, duration_s=20.0)
+        off = rng.normal(0.0, 0.8)  # a run-level offset of 0.8 A sd, plus per-sample noise
+        logs.append(lg)
+        residuals.append(off + 0.2 * rng.standard_normal((len(lg), 2)))
+    level = np.full((len(logs[0]), 2), 3.0)
+    iv = IntervalModel.fit(logs, residuals, [np.full((len(lg), 2), 3.0) for lg in logs], cross_validated=True)
+    # the offset shows in the run spread of a straight-and-turning run; the sample noise in sample_sd
+    sd = iv.run_sd_a(logs[0], level, known=True)
+    assert np.median(sd) == pytest.approx(0.8, rel=0.3)
+    assert 0.15 < iv.sample_sd_a[:, 1:].max() < 0.3  # 0.2 A, plus what the ridge leaves of the offset
+    assert iv.new_ground_cov is None  # one ground: nothing to learn a new ground's spread from
+    back = IntervalModel.from_plain(iv.to_plain())
+    np.testing.assert_allclose(back.run_sd_a(logs[0], level, known=True), sd)
+    bad = iv.to_plain() | {"sample_sd_a": -np.ones((2, 3))}
+    with pytest.raises(ValueError):
+        IntervalModel.from_plain(bad)
+
+
+def test_run_coefficients_reproduce_a_known_offset_and_a_known_gain():
+    lg = interval_log(3)
+    level = np.column_stack([lg.current_left_a, lg.current_right_a])
+    gain = run_coefficients(lg, 0.25 * level, level, 0.3)  # measured = 1.25 x predicted
+    moving = ~rest_samples(lg)
+    refit = np.column_stack([regime_design(lg, k, 0.3, level[:, k]) @ gain[k] for k in range(2)])
+    assert np.mean(np.abs(refit[moving] - 0.25 * level[moving])) < 0.05 * np.mean(level)
+    assert np.all(gain[:, 0] > 0.1)  # the gain column carries a good part of it
+    coef = run_coefficients(lg, np.full((len(lg), 2), 1.5), level, 0.3)
+    fitted = np.column_stack([regime_design(lg, k, 0.3, level[:, k]) @ coef[k] for k in range(2)])
+    assert np.median(fitted) == pytest.approx(1.5, rel=0.05)
+    # standing still is the rest level's, not a regime of driving
+    # the ridge spreads a constant over correlated columns: close to it on most samples, exact nowhere
+    assert np.mean(np.abs(fitted[moving] - 1.5)) < 0.15 and np.all(fitted[~moving] == 0.0)
+
