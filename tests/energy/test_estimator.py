@@ -1,4 +1,4 @@
-"""Tests of energy.estimator: the vibration-conditioned current estimator, its net and trainer."""
+"""Tests of energy.models.estimator: the vibration-conditioned current estimator (its net, trainer and config in test_models_{net,training,config}.py)."""
 
 import dataclasses
 from pathlib import Path
@@ -17,8 +17,8 @@ from energy import (
     load_current_model,
     read_borealtc,
 )
-from energy.features import WindowSpec, window_starts
-from energy.models import ESTIMATOR_PRESETS, CurrentNet, CurrentNetConfig, TrainConfig, WindowDataset, train_network
+from energy.features import window_starts
+from energy.models import TrainConfig, train_network
 from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 DATA = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "borealtc"
@@ -269,45 +269,6 @@ def test_bad_parameters_and_short_logs_raise():
     with pytest.raises(DataError):
         failed.fit(_log(0, duration_s=3.0))
     assert not failed.is_fitted  # nothing half-fitted left behind
-
-
-def test_config_round_trips_through_plain_dict():
-    for cfg in ESTIMATOR_PRESETS.values():
-        assert EstimatorConfig.from_dict(cfg.to_dict()) == cfg
-    with pytest.raises(InvalidParameterError, match="unknown EstimatorConfig field"):
-        EstimatorConfig.from_dict({"colour": "red"})
-
-
-def test_training_loop_knows_nothing_about_the_model():
-    class Affine(torch.nn.Module):
-        def __init__(self):
-            super().__init__()
-            self.lin = torch.nn.Linear(1, 1)
-
-        def forward(self, x, table, index):
-            return self.lin(x)
-
-    x = np.linspace(-1, 1, 64)[:, None]
-    ds = WindowDataset(x, np.zeros((1, 0)), np.zeros(64, int), np.arange(64), WindowSpec(1, 1, 1.0), y=2.0 * x + 0.5)
-    net = Affine()
-    hist = train_network(net, ds, None, TrainConfig(max_epochs=300, batch_size=16, learning_rate=0.05), seed=0)
-    assert net.lin.weight.item() == pytest.approx(2.0, abs=0.02)
-    assert net.lin.bias.item() == pytest.approx(0.5, abs=0.02)
-    assert hist.train_loss[-1] < hist.train_loss[0]
-    with pytest.raises(InvalidParameterError, match="validation"):
-        train_network(Affine(), ds, None, TrainConfig(patience=2), seed=0)
-
-
-def test_current_net_equals_one_dense_layer_over_run_and_window_features():
-    torch.manual_seed(0)
-    net = CurrentNet(CurrentNetConfig(3, 5, 2, hidden_sizes=(4,)))
-    x = torch.randn(6, 3)
-    table = torch.randn(2, 5)
-    idx = torch.tensor([0, 1, 1, 0, 0, 1])
-    w = torch.cat([net.run_in.weight, net.window_in.weight], dim=1)
-    h = torch.relu(torch.cat([table[idx], x], dim=1) @ w.T + net.window_in.bias)
-    expected = net.body[-1](h)
-    assert torch.allclose(net(x, table, idx), expected, atol=1e-6)
 
 
 def test_fits_a_real_borealtc_run():
