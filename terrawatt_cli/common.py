@@ -29,6 +29,7 @@ from terrawatt_base.checks import fmt_number
 from terrawatt_base.dask_client import dask_client
 from terrain.landcover import LandcoverClasses, ground_classes_from_landcover, read_landcover_classes
 
+from planner import figure_file
 from planner.points import lonlat_points
 from planner.risk import check_risk_level
 
@@ -276,16 +277,10 @@ def check_grounds(names: Iterable[str], flag: str) -> None:
 
 
 def draw_figure(path: Path, draw: Callable[[], Path]) -> Path | None:
-    """Call ``draw`` (which writes the figure ``path``); on any failure warn on stderr and return None.
-
-    A figure never fails a command whose results are already written: the failure is
-    reported as one line and the command's exit code stays that of its results.
-    """
-    try:
-        return draw()
-    except Exception as exc:  # noqa: BLE001 - any failure of a figure is reported, never fatal
-        print(f"terrawatt: warning: could not draw {path}: {type(exc).__name__}: {exc}", file=sys.stderr)
-        return None
+    """Call ``draw`` (which writes the figure ``path``); on any failure warn on stderr and return None
+    (:func:`planner.figure_file.draw_figure`): a figure never fails a command whose results are written."""
+    with warn_figures():
+        return figure_file.draw_figure(path, draw)
 
 
 @contextlib.contextmanager

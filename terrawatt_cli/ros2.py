@@ -14,9 +14,9 @@ from terrawatt_base.atomic import check_output_path, probe_writable, refuse_over
 from terrain.georef import import_rasterio
 
 from planner.edge_cost import EnergyCost
-from planner.energy_costmap import energy_costmap, write_energy_geotiff
-from planner.nav2_map import nav2_map_paths, write_nav2_costmap, write_nav2_map
-from planner.ros_export import check_route_bag_path, write_route_bag
+from planner.nav2_map import nav2_map_paths
+from planner.ros_export import check_route_bag_path
+from planner.ros_outputs import nav2_targets, write_ros_outputs
 from planner.route import Route
 
 __all__ = ["add_ros2_arguments", "nav2_targets", "check_ros2_outputs", "write_ros2_outputs"]
@@ -51,22 +51,6 @@ def add_ros2_arguments(parser: argparse.ArgumentParser) -> None:
         help="with --ros2-out / --nav2-map: the ROS map frame's origin in map (CRS) coordinates, e.g. the map's "
              "lower-left corner to keep UTM-sized numbers out of the poses (default 0 0: map coordinates as they are)",
     )
-
-
-def nav2_targets(value: str) -> tuple[Path, Path]:
-    """The YAML files of ``--nav2-map``: the occupancy map and the energy costmap.
-
-    ``DIR/`` (a trailing separator) or an existing folder: ``DIR/map.yaml`` and
-    ``DIR/map_energy.yaml``; ``NAME.yaml``: that file and ``NAME_energy.yaml``; any other
-    ``PREFIX``: ``PREFIX.yaml`` and ``PREFIX_energy.yaml``. Each PGM lies beside its YAML.
-    """
-    if value.endswith(("/", os.sep)) or Path(value).is_dir():
-        base = Path(value) / "map"
-    else:
-        base = Path(value)
-        if base.suffix.lower() in (".yaml", ".yml"):
-            base = base.with_suffix("")
-    return base.with_name(base.name + ".yaml"), base.with_name(base.name + "_energy.yaml")
 
 
 def _given(args: argparse.Namespace) -> list[str]:
@@ -132,27 +116,11 @@ def check_ros2_outputs(args: argparse.Namespace, inputs: Iterable[Path | None] =
 
 
 def write_ros2_outputs(args: argparse.Namespace, route: Route, tmap: TerrainMap, cost: EnergyCost) -> list[Path]:
-    """Write the outputs of the flags given (after :func:`check_ros2_outputs`); return the files written.
-
-    ``cost`` is the cost the route was planned with (the poses' times, the occupied cells, the
-    energy costmap). A route that was not found writes no bag (a line says so); the maps are
-    written all the same.
-    """
-    written: list[Path] = []
-    origin = _frame_origin(args)
-    if getattr(args, "ros2_out", None) is not None:
-        if route.found:
-            written.append(write_route_bag(args.ros2_out, route, tmap, cost=cost, frame_origin_xy_m=origin))
-        else:
-            print(f"no route (status {route.status!r}): --ros2-out {args.ros2_out} not written")
-    nav2 = getattr(args, "nav2_map", None)
-    tif = getattr(args, "energy_costmap", None)
-    costmap = energy_costmap(cost) if nav2 is not None or tif is not None else None
-    if nav2 is not None and costmap is not None:
-        occupancy_yaml, energy_yaml = nav2_targets(nav2)
-        for yaml_path in (write_nav2_map(occupancy_yaml, tmap, cost=cost, frame_origin_xy_m=origin),
-                          write_nav2_costmap(energy_yaml, costmap, frame_origin_xy_m=origin)):
-            written += [yaml_path, yaml_path.with_suffix(".pgm")]
-    if tif is not None and costmap is not None:
-        written.append(write_energy_geotiff(tif, costmap))
-    return written
+    """Write the outputs of the flags given, checked by :func:`check_ros2_outputs`, and return the files written
+    (:func:`planner.ros_outputs.write_ros_outputs`); a route not found writes no bag (a line says so)."""
+    bag = getattr(args, "ros2_out", None)
+    if bag is not None and not route.found:
+        print(f"no route (status {route.status!r}): --ros2-out {bag} not written")
+    return write_ros_outputs(route, tmap, cost, bag=bag, nav2_map=getattr(args, "nav2_map", None),
+                             energy_geotiff=getattr(args, "energy_costmap", None),
+                             frame_origin_xy_m=_frame_origin(args))

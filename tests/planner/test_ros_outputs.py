@@ -1,0 +1,58 @@
+"""Tests of planner.ros_outputs: nav2_targets and write_ros_outputs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planner import EnergyCost, plan_route
+from planner.ros_outputs import nav2_targets, write_ros_outputs
+
+
+@pytest.fixture
+def wall(wall_map):
+    cost = EnergyCost.from_presets(wall_map)
+    return wall_map, cost, plan_route(wall_map, (5.0, 5.0), (35.0, 5.0), cost=cost, planner="lattice")
+
+
+def test_nav2_targets_take_a_folder_a_yaml_or_a_prefix(tmp_path):
+    assert nav2_targets(f"{tmp_path}/new/") == (tmp_path / "new" / "map.yaml", tmp_path / "new" / "map_energy.yaml")
+    assert nav2_targets(tmp_path) == (tmp_path / "map.yaml", tmp_path / "map_energy.yaml")
+    assert nav2_targets(tmp_path / "site.yml") == (tmp_path / "site.yaml", tmp_path / "site_energy.yaml")
+    assert nav2_targets(f"{tmp_path}/site") == (tmp_path / "site.yaml", tmp_path / "site_energy.yaml")
+
+
+def test_nothing_asked_writes_nothing(wall, tmp_path):
+    assert write_ros_outputs(*wall) == []
+
+
+def test_the_nav2_maps_and_the_bag(wall, tmp_path):
+    pytest.importorskip("rosbags")
+    from planner.nav2_map import read_nav2_map
+    from planner.ros_export import read_route_bag
+
+    tmap, cost, route = wall
+    written = write_ros_outputs(route, tmap, cost, bag=tmp_path / "route.mcap", nav2_map=tmp_path / "nav2",
+                                frame_origin_xy_m=(1.0, 2.0))
+    assert written == [tmp_path / "route.mcap", tmp_path / "nav2.yaml", tmp_path / "nav2.pgm",
+                       tmp_path / "nav2_energy.yaml", tmp_path / "nav2_energy.pgm"]
+    bag = read_route_bag(tmp_path / "route.mcap")
+    np.testing.assert_allclose(bag.positions_m[:, :2], route.waypoints_m - [1.0, 2.0], atol=1e-9)
+    np.testing.assert_array_equal(read_nav2_map(tmp_path / "nav2.yaml").occupied, cost.blocked)
+
+
+def test_a_route_not_found_writes_no_bag_but_the_maps(wall, tmp_path):
+    tmap, cost, route = wall
+    lost = route.replace(status="timeout", waypoints_m=np.empty((0, 2)), segment_energy_j=[], turn_energy_j=[])
+    written = write_ros_outputs(lost, tmap, cost, bag=tmp_path / "route.mcap", nav2_map=f"{tmp_path}/")
+    assert written == [tmp_path / n for n in ("map.yaml", "map.pgm", "map_energy.yaml", "map_energy.pgm")]
+    assert not (tmp_path / "route.mcap").exists()
+
+
+def test_the_energy_geotiff(wall, tmp_path):
+    pytest.importorskip("rasterio")
+    from planner.energy_costmap import read_energy_geotiff
+
+    tmap, cost, route = wall
+    assert write_ros_outputs(route, tmap, cost, energy_geotiff=tmp_path / "e.tif") == [tmp_path / "e.tif"]
+    assert np.isnan(read_energy_geotiff(tmp_path / "e.tif").energy_per_metre_j[tmap.obstacle]).all()
