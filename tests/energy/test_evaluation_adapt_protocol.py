@@ -1,14 +1,14 @@
-"""Tests of the adapt protocol (energy.evaluation.adapt_protocol, few_shot, adapt_results)."""
+"""Tests of energy.evaluation.adapt_protocol: adapt on a run's first seconds, score its remainder (AdaptSettings, the trigger)."""
 
 import json
 
 import numpy as np
 import pytest
+from evaluation_samples import adapt_log, adapt_logs, adapt_settings
 
-from energy import InteractionLog, LinearCurrentModel, LogMeta
+from energy import InteractionLog, LinearCurrentModel
 from terrawatt_base.errors import DataError, InvalidParameterError
 from energy.evaluation import (
-    ADAPT_FILES,
     TRIGGER_SCHEDULE,
     AdaptationResult,
     AdaptSettings,
@@ -19,32 +19,14 @@ from energy.evaluation import (
 from terrain import UnknownNameError
 
 
-def _log(seed: int, ground: str, *, gain: float = 1.0, offset_a: float = 0.0, duration_s: float = 60.0) -> InteractionLog:
-    rng = np.random.default_rng(seed)
-    t = np.arange(0.0, duration_s, 0.2)
-    v = 0.4 + 0.2 * np.sin(2 * np.pi * t / rng.uniform(5, 9) + rng.uniform(0, 6))
-    w = 0.5 * np.sign(np.sin(2 * np.pi * t / 7.0 + rng.uniform(0, 6)))
-    left = gain * (0.5 + 3.0 * np.abs(v) + 2.0 * np.abs(w)) + offset_a
-    right = gain * (0.8 + 2.0 * np.abs(v) + 1.0 * np.abs(w)) + offset_a
-    ta = np.arange(0.0, t[-1] + 0.005, 0.05)
-    return InteractionLog(t, v, w, left, right, ta, np.full(ta.size, 9.81),
-                          meta=LogMeta(source=f"{ground}/pro_{seed:02d}.csv", ground_label=ground))
-
-
 @pytest.fixture(scope="module")
 def logs():
-    # each run draws more current than the others by its own offset: only adaptation can know it
-    return ([_log(i, "grass", offset_a=0.3 * i) for i in range(3)]
-            + [_log(10 + i, "sand", gain=2.0, offset_a=0.4 * i, duration_s=50.0) for i in range(3)])
-
-
-def _settings(**kw):
-    return AdaptSettings(adapt_seconds=(10.0, 20.0), **kw)
+    return adapt_logs()
 
 
 @pytest.fixture(scope="module")
 def result(logs):
-    return evaluate_adaptation(logs, LinearCurrentModel(), name="linear", settings=_settings())
+    return evaluate_adaptation(logs, LinearCurrentModel(), name="linear", settings=adapt_settings())
 
 
 def test_every_run_side_and_schedule_is_scored(result):
@@ -88,7 +70,7 @@ def test_scores_match_a_direct_adaptation(logs, result):
 
 
 def test_trigger_never_updates_a_model_within_the_threshold(logs):
-    exact = [_log(i, "grass") for i in range(2)]
+    exact = [adapt_log(i, "grass") for i in range(2)]
     model = LinearCurrentModel().fit(exact[:1])
     scores, skipped = adaptation_scores(model, exact[1], run="r", model_name="m",
                                         settings=AdaptSettings(adapt_seconds=(20.0,), threshold_pct=5.0))
@@ -99,33 +81,10 @@ def test_trigger_never_updates_a_model_within_the_threshold(logs):
 
 def test_short_runs_are_skipped_and_said_so(logs):
     model = LinearCurrentModel().fit(logs[:2])
-    short = _log(30, "grass", duration_s=25.0)
-    scores, skipped = adaptation_scores(model, short, run="grass/short", model_name="m", settings=_settings())
+    short = adapt_log(30, "grass", duration_s=25.0)
+    scores, skipped = adaptation_scores(model, short, run="grass/short", model_name="m", settings=adapt_settings())
     assert {s.schedule for s in scores} == {"10 s"}
     assert len(skipped) == 2 and all("min_remainder_s=10" in s for s in skipped)
-
-
-def test_writes_json_and_markdown(logs, tmp_path):
-    res = evaluate_adaptation(logs[:3], LinearCurrentModel(), name="linear", settings=_settings(trigger=False),
-                              out_dir=tmp_path / "out")
-    data = json.loads((tmp_path / "out" / ADAPT_FILES[0]).read_text())
-    assert data["format"] == "terrawatt-adaptation" and data["settings"]["adapt_seconds"] == [10.0, 20.0]
-    assert len(data["runs"]) == len(res.runs) == 3 * 2 * 2
-    md = (tmp_path / "out" / ADAPT_FILES[1]).read_text()
-    assert "| per_ground | grass | linear | 20 s | 6 |" in md
-
-
-def test_few_shot_adapts_on_one_run_of_a_ground_left_out(logs):
-    res = evaluate_few_shot(logs, LinearCurrentModel(), name="linear", settings=_settings(trigger=False))
-    assert {r.protocol for r in res.runs} == {"few_shot"}
-    # 2 target grounds x 3 adaptation runs x 2 T x 2 other runs x 2 sides
-    assert len(res.runs) == 2 * 3 * 2 * 2 * 2
-    assert all(r.adapt_run != r.run and r.ground == r.adapt_run.split("/")[0] for r in res.runs)
-    sand = res.summary_for("few_shot", "sand", "linear", "20 s")
-    assert sand.unadapted_median_pct > 30.0  # trained on grass only: half the current
-    assert sand.adapted_median_pct < 0.5 * sand.unadapted_median_pct
-    one = evaluate_few_shot(logs, LinearCurrentModel(), settings=_settings(trigger=False), target_grounds=["sand"])
-    assert {r.ground for r in one.runs} == {"sand"}
 
 
 @pytest.mark.parametrize(("kw", "match"), [
@@ -223,5 +182,5 @@ def test_cli_bad_adapt_options_exit_2(logs, tmp_path, capsys, extra, match):
 def test_folds_on_a_dask_client_give_the_serial_scores(logs, result):
     distributed = pytest.importorskip("distributed", reason="the client path needs the distributed extra")
     with distributed.Client(processes=False, n_workers=1, threads_per_worker=1, dashboard_address=":0") as client:
-        on_cluster = evaluate_adaptation(logs, LinearCurrentModel(), name="linear", settings=_settings(), client=client)
+        on_cluster = evaluate_adaptation(logs, LinearCurrentModel(), name="linear", settings=adapt_settings(), client=client)
     assert on_cluster.runs == result.runs

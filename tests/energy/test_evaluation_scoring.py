@@ -1,38 +1,26 @@
-"""Tests of energy.evaluation: leave-one-run-out per ground and ground-agnostic."""
+"""Tests of energy.evaluation.scoring: leave-one-run-out per ground and ground-agnostic, a prefit model scored."""
 
 import dataclasses
 import json
 
 import numpy as np
 import pytest
+from evaluation_samples import score_log, score_logs
 
 from energy import (
     ConstantCurrentModel,
     EvaluationResult,
     InteractionLog,
     LinearCurrentModel,
-    LogMeta,
     evaluate_current_models,
 )
 from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 from terrain import TerrawattWarning
 
 
-def _log(seed: int, ground: str, gain: float) -> InteractionLog:
-    rng = np.random.default_rng(seed)
-    t = np.arange(0.0, 30.0, 0.1)
-    v = 0.4 + 0.3 * np.sin(2 * np.pi * t / rng.uniform(5, 9) + rng.uniform(0, 6))
-    w = 0.4 * np.sin(2 * np.pi * t / 4.0 + rng.uniform(0, 6))
-    left = gain * (0.5 + 3.0 * np.abs(v) + 2.0 * np.abs(w))
-    right = gain * (0.8 + 2.0 * np.abs(v) + 1.0 * np.abs(w))
-    ta = np.arange(0.0, t[-1] + 0.005, 0.01)
-    return InteractionLog(t, v, w, left, right, ta, np.full(ta.size, 9.81),
-                          meta=LogMeta(source=f"{ground}/pro_{seed:02d}.csv", ground_label=ground))
-
-
 @pytest.fixture(scope="module")
 def logs():
-    return [_log(i, "grass", 1.0) for i in range(3)] + [_log(10 + i, "sand", 2.5) for i in range(3)]
+    return score_logs()
 
 
 @pytest.fixture(scope="module")
@@ -69,27 +57,6 @@ def test_scores_agree_with_a_direct_fit(logs, result):
     assert row.duration_s == pytest.approx(test.duration_s)
 
 
-def test_summary_percentiles(result):
-    rows = [r.whole_run_error_pct for r in result.runs
-            if (r.variant, r.model, r.ground) == ("ground_agnostic", "constant", "sand")]
-    s = result.summary_for("ground_agnostic", "sand", "constant")
-    assert s.whole_run_median_pct == pytest.approx(float(np.median(rows)))
-    assert s.whole_run_p90_pct == pytest.approx(float(np.percentile(rows, 90)))
-    with pytest.raises(UnknownNameError, match="no summary"):
-        result.summary_for("per_ground", "ice", "constant")
-
-
-def test_json_and_markdown_outputs(result, tmp_path):
-    path = result.write_json(tmp_path / "evaluation.json")
-    data = json.loads(path.read_text())
-    assert data["format_version"] == 1 and data["models"] == ["constant", "linear"]
-    assert len(data["runs"]) == len(result.runs) and len(data["summary"]) == len(result.summary)
-    md = result.to_markdown()
-    assert md.count("\n") == 2 + len(result.summary)
-    assert "| per_ground | sand | linear |" in md
-    assert result.write_markdown(tmp_path / "evaluation.md").read_text() == md
-
-
 class _SpyModel(ConstantCurrentModel):
     """Records, for every prediction, the run predicted and the runs the model was fitted on.
 
@@ -124,7 +91,7 @@ def test_no_fold_trains_on_its_held_out_run(logs, variant):
 
 
 def test_single_run_ground_is_skipped_with_a_warning(logs):
-    few = logs[:3] + [_log(20, "ice", 1.0)]
+    few = logs[:3] + [score_log(20, "ice", 1.0)]
     with pytest.warns(TerrawattWarning, match="'ice' has 1 run"):
         res = evaluate_current_models(few, {"linear": LinearCurrentModel()}, variants=("per_ground",))
     assert res.skipped and "ice" in res.skipped[0]
