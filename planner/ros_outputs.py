@@ -25,7 +25,7 @@ def nav2_targets(value: str | os.PathLike[str]) -> tuple[Path, Path]:
 
     Examples
     --------
-    >>> [p.name for p in nav2_targets("out/site")]
+    >>> [p.name for p in nav2_targets("maps/site.yaml")]
     ['site.yaml', 'site_energy.yaml']
     """
     text = os.fspath(value)
