@@ -8,28 +8,10 @@ import pytest
 
 from energy import PhysicsCurrentModel, TruthSimulator, robot_preset
 from energy.sim import PAPER_GROUNDS
-from terrawatt_base.errors import InvalidParameterError
 from energy.diagnosis import EFFECTS_CATALOGUE, EffectParameter, diagnose, effect
 from energy.diagnosis.effects_physics import MassEffect
 from diagnosis_scenarios import scenario
 from energy.sim import NoiseModel
-
-
-def test_an_effect_parameter_has_a_plausible_range_defaulting_to_its_bounds():
-    p = EffectParameter("g", 1.0, 0.0, 3.0, "1")
-    assert (p.plausible_low, p.plausible_high) == (0.0, 3.0)
-    q = EffectParameter("mass_scale", 1.0, 0.25, 4.0, "1", None, 0.5, 2.5, "a payload")
-    assert q.plausible(2.4) and not q.plausible(2.6) and not q.plausible(0.4)
-    assert q.flags(1.8) == ()
-    (outside,) = q.flags(3.0)
-    assert "mass_scale = 3" in outside and "outside its plausible 0.5 … 2.5" in outside and "a payload" in outside
-    pinned = q.flags(4.0)
-    assert len(pinned) == 2 and "pinned at its fitting bound 4" in pinned[1]
-    assert q.at_bound(0.25) == "low" and q.at_bound(1.0) is None
-    with pytest.raises(InvalidParameterError, match="plausible_low 2.0 must be below plausible_high 1.0"):
-        EffectParameter("g", 1.0, 0.0, 3.0, "1", None, 2.0, 1.0)
-    with pytest.raises(InvalidParameterError, match="plausible_high"):
-        EffectParameter("g", 1.0, 0.0, 3.0, "1", None, 0.5, float("nan"))
 
 
 def test_every_catalogued_effect_states_physical_ranges_narrower_than_its_fit():
