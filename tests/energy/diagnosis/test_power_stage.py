@@ -3,24 +3,14 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 
 import numpy as np
 import pytest
 
-from energy import NoiseModel
 from energy.diagnosis import PowerDiagnosis, diagnose
-from energy.diagnosis.model_currents import physics_basis
-from energy.diagnosis.power_data import power_inputs, predicted_battery_power_w
-from diagnosis_scenarios import POWER_ONLY_EFFECTS, null_scenario, scenario
+from diagnosis_scenarios import POWER_ONLY_EFFECTS
+from power_samples import N_BOOT, small_power_scenario
 from terrawatt_base.errors import DataError
-
-N_BOOT = 50
-
-
-def _small(name: str, **kw):
-    sc = scenario(name) if name != "null" else dataclasses.replace(null_scenario(), power_logs=True)
-    return dataclasses.replace(sc, n_runs=3, run_duration_s=12.0, **kw)
 
 
 @pytest.fixture(scope="module")
@@ -28,7 +18,7 @@ def found():
     """Each electrical scenario, small, seed 1: its scenario and its diagnosis."""
     out = {}
     for name in POWER_ONLY_EFFECTS:
-        sc = _small(name)
+        sc = small_power_scenario(name)
         out[name] = (sc, diagnose(sc.make_model(1), sc.make_logs(1), terrain=sc.terrain, seed=1, n_bootstrap=N_BOOT))
     return out
 
@@ -75,7 +65,7 @@ def test_sensor_and_control_are_said_to_be_hard_to_tell_apart(found):
 
 
 def test_null_with_power_logs_chooses_no_electrical_effect():
-    sc = _small("null")
+    sc = small_power_scenario("null")
     d = diagnose(sc.make_model(2), sc.make_logs(2), terrain=sc.terrain, seed=2, n_bootstrap=N_BOOT)
     assert d.power is not None and d.power.chosen == () and not d.power.found
     assert any("No unmodelled electrical effect found" in v for v in d.verdict)
@@ -83,26 +73,12 @@ def test_null_with_power_logs_chooses_no_electrical_effect():
     assert d.power.waterfall[0].label == "as given" and len(d.power.waterfall) == 1
 
 
-def test_predicted_power_from_clean_currents_equals_the_truth():
-    sc = dataclasses.replace(_small("null"), noise=NoiseModel.off())
-    model = sc.make_model(0)
-    basis = physics_basis(model)
-    for log in sc.make_logs(0):  # noise off: voltage x pack current is the truth's total battery power
-        pred = predicted_battery_power_w(power_inputs(basis, log))
-        assert float(np.max(log.battery_power_w)) > 100.0
-        # the basis re-estimates the motor speed (slip) from v and omega (central, not backward, differences):
-        # within 1 % but at a few samples of hard starts
-        close = np.isclose(pred, log.battery_power_w, rtol=0.01, atol=0.05)
-        assert close.mean() > 0.99
-        assert float(np.sqrt(np.mean((pred - log.battery_power_w) ** 2))) < 0.5
-
-
 def _strip(log):
     return dataclasses.replace(log, battery_voltage_v=None, battery_current_a=None)
 
 
 def test_logs_without_power_keep_todays_diagnosis_exactly():
-    sc = _small("sensor")
+    sc = small_power_scenario("sensor")
     model, logs = sc.make_model(0), sc.make_logs(0)
     with_power = diagnose(model, logs, terrain=sc.terrain, seed=0, n_bootstrap=N_BOOT)
     plain = diagnose(model, [_strip(lg) for lg in logs], terrain=sc.terrain, seed=0, n_bootstrap=N_BOOT)
@@ -121,17 +97,8 @@ def test_logs_without_power_keep_todays_diagnosis_exactly():
     assert "battery voltage and pack current" in asked.skipped["sensor"]
 
 
-def test_result_writes_the_power_stage(found, tmp_path):
-    _, d = found["control"]
-    doc = json.loads(d.write_json(tmp_path / "d.json").read_text())
-    assert doc["power"]["chosen"] == ["control"] and doc["power"]["waterfall"][0]["label"] == "as given"
-    assert doc["power"]["corrected_robot"]["control_standby_power_w"] > 0
-    md = d.to_markdown()
-    assert "## Battery power: electrical candidates" in md and "| + control |" in md
-
-
 def test_bad_battery_voltage_is_a_clear_error():
-    sc = _small("sensor")
+    sc = small_power_scenario("sensor")
     model, logs = sc.make_model(0), sc.make_logs(0)
     zero = dataclasses.replace(logs[1], battery_voltage_v=np.where(np.arange(len(logs[1])) == 7, 0.0,
                                                                    logs[1].battery_voltage_v))
