@@ -2,43 +2,19 @@
 
 import dataclasses
 import inspect
-import json
 
 import numpy as np
 import pytest
 
 from energy import CurrentModel, InteractionLog, LinearCurrentModel
 from terrawatt_base.errors import DataError, InvalidParameterError, NotFittedError, UnknownNameError
-from energy.diagnosis import CorrectedCurrentModel, Diagnosis, Effect, EffectParameter, diagnose, localise_gap
+from energy.diagnosis import CorrectedCurrentModel, Diagnosis, diagnose
 from diagnosis_scenarios import null_scenario, scenario
-
-CANDIDATES = ["turning_resistance", "gear_losses", "current_gain", "idle_current", "mass"]
-
-
-def _small(sc):
-    return dataclasses.replace(sc, n_runs=3, run_duration_s=8.0)
-
-
-class NoiseEffect(Effect):
-    """A pure-noise candidate: a gain on seeded random currents."""
-
-    name = "pure_noise"
-    kind = "measurement"
-    parameters = (EffectParameter("gain", 0.0, -5.0, 5.0, "A"),)
-
-    def prepare(self, model, log):
-        return np.random.default_rng(len(log)).standard_normal((len(log), 2))
-
-    def apply(self, values, predicted_a, prepared):
-        return predicted_a + values[0] * prepared
-
+from turning_samples import CANDIDATES, NoiseEffect, small_scenario, turning_diagnosis
 
 @pytest.fixture(scope="module")
 def turning():
-    sc = _small(scenario("turning_resistance"))
-    logs, model = sc.make_logs(0), sc.make_model(0)
-    return logs, model, diagnose(model, logs, terrain=sc.terrain, effects=CANDIDATES + [NoiseEffect()],
-                                 n_bootstrap=50)
+    return turning_diagnosis()
 
 
 def test_withheld_effect_ranks_first_and_closes_the_gap(turning):
@@ -67,16 +43,6 @@ def test_corrected_model_predicts_closer(turning):
     assert sum(err2) < 0.2 * sum(err)
 
 
-def test_result_serialises(turning, tmp_path):
-    _, _, d = turning
-    p = d.write_json(tmp_path / "diagnosis.json")
-    assert p.exists() and "ranking" in p.read_text()
-    md = d.to_markdown()
-    assert "Waterfall" in md and "turning_resistance" in md
-    with pytest.raises(dataclasses.FrozenInstanceError):
-        d.chosen = ()
-
-
 def test_the_verdict_quotes_the_largest_net_slice(turning):
     _, _, d = turning
     top = d.largest_slices(1)[0]
@@ -85,25 +51,6 @@ def test_the_verdict_quotes_the_largest_net_slice(turning):
     assert f"{top.dimension} {top.label!r}" in first and "95 % interval" in first
     assert "% of it " not in first  # no share of absolute gaps any more
     assert d.to_dict()["localisation_units"] == "runs"
-
-
-def test_the_report_is_one_page_and_the_json_keeps_every_slice(turning, tmp_path):
-    _, _, d = turning
-    t = np.arange(0.0, 600.0, 0.1)  # two 10-minute runs: 150 time sections of 8 s
-    v = 0.5 + 0.4 * np.sin(t / 7.0)
-    w = 0.6 * np.sin(t / 5.0)
-    logs = [InteractionLog(t, v, w, 1.0 + np.abs(w) + k, 1.0 + np.abs(w), t, np.full(t.size, 9.81)) for k in (0, 1)]
-    rows = localise_gap(logs, [np.ones((t.size, 2)), np.ones((t.size, 2))])
-    assert sum(r.dimension == "time" for r in rows) == 150
-    big = dataclasses.replace(d, localisation=rows)
-    md = big.to_markdown()
-    where = md.split("## Where the gap lies")[1].split("##")[0]
-    table = [line for line in where.splitlines() if line.startswith("| ") and not line.startswith("| dimension")]
-    assert len(table) == 10
-    assert len(md.splitlines()) < 60
-    doc = json.loads(big.write_json(tmp_path / "diagnosis.json").read_text())
-    assert len(doc["localisation"]) == len(rows)
-    assert {"gap_mah", "gap_pct", "measured_mah", "gap_interval_mah", "share_pct"} <= set(doc["localisation"][0])
 
 
 class _ExactToy(CurrentModel):
@@ -142,7 +89,7 @@ def test_when_slices_cancel_the_verdict_says_so():
 
 
 def test_null_finds_no_unmodelled_effect():
-    sc = _small(null_scenario())
+    sc = small_scenario(null_scenario())
     d = diagnose(sc.make_model(1), sc.make_logs(1), terrain=sc.terrain,
                  effects=["gear_losses", "current_gain", "idle_current", "time_lag"], n_bootstrap=50)
     assert d.chosen == ()
