@@ -4,8 +4,9 @@ import dataclasses
 
 import numpy as np
 import pytest
+from gain_samples import gained_logs_and_model
 
-from energy import InteractionLog, LinearCurrentModel, robot_preset
+from energy import InteractionLog
 from terrawatt_base.errors import DataError
 from energy.diagnosis import effect, make_split
 from energy.diagnosis.fit import (
@@ -17,29 +18,9 @@ from energy.diagnosis.fit import (
 )
 
 
-REST_A = robot_preset("husky").rest_current_a
-
-
-def _logs(n_logs=4, n=300, gain=(1.3, 0.8), seed=0):
-    rng = np.random.default_rng(seed)
-    out = []
-    for k in range(n_logs):
-        t = np.arange(n) * 0.05
-        v = 0.5 + 0.3 * np.sin(t + k)
-        base = 1.0 + 2.0 * v
-        # the gain scales what is drawn above the sensor's rest offset (the reference Husky's 0.59 A)
-        cur = REST_A + (base[:, None] - REST_A) * np.array(gain) + 0.05 * rng.standard_normal((n, 2))
-        out.append(InteractionLog(t, v, np.zeros(n), cur[:, 0], cur[:, 1], t, np.full(n, 9.81)))
-    return out
-
-
 @pytest.fixture(scope="module")
 def setup():
-    logs = _logs()
-    ungained = [InteractionLog(g.time_s, g.v_mps, g.omega_radps, 1 + 2 * g.v_mps, 1 + 2 * g.v_mps, g.time_s,
-                               g.accel_z_mps2) for g in logs]
-    model = LinearCurrentModel().fit(ungained)
-    return logs, model
+    return gained_logs_and_model()
 
 
 def test_gain_is_recovered_and_shrinks_the_held_out_gap(setup):
