@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from terrawatt_base.checks import readonly
+from terrawatt_base.checks import fmt_number, readonly
 from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 __all__ = ["PowerBreakdown", "check_sample_times", "trapezoid"]
@@ -28,12 +28,12 @@ def check_sample_times(time_s: Any, n: int) -> np.ndarray:
     if t.ndim != 1 or t.shape[0] != n:
         raise DataError(f"time_s must be 1-D with {n} samples, got shape {t.shape!r}")
     if not np.all(np.isfinite(t)):
-        raise DataError(f"time_s must be finite, got {t[~np.isfinite(t)][:3]!r}")
+        raise DataError(f"time_s must be finite, got {[float(v) for v in t[~np.isfinite(t)][:3]]!r}")
     if n > 1 and np.any(np.diff(t) <= 0):
         k = int(np.argmax(np.diff(t) <= 0))
         raise DataError(
-            f"time_s must be strictly increasing; time_s[{k}]={t[k]!r}, "
-            f"time_s[{k + 1}]={t[k + 1]!r}"
+            f"time_s must be strictly increasing; time_s[{k}]={fmt_number(float(t[k]), 10)}, "
+            f"time_s[{k + 1}]={fmt_number(float(t[k + 1]), 10)}"
         )
     return t
 
