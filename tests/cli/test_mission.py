@@ -1,0 +1,111 @@
+"""The ``terrawatt mission`` command (terrawatt_cli.mission): the adaptive mission end to end on a small patch map."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+import terrain
+from terrawatt_cli import main
+
+from cli_samples import is_png, one_line_error, patch_map
+
+
+def test_mission_writes_budget_json_and_plot(tmp_path, capsys):
+    path = patch_map(tmp_path)
+    rc = main(["mission", "--map", str(path), "--start", "3", "12", "--goal", "57", "12", "--battery-ah", "20",
+               "--out", str(tmp_path / "out")])
+    out = capsys.readouterr().out
+    assert rc == 0, out
+    data = json.loads((tmp_path / "out" / "mission.json").read_text())
+    assert data["status"] == "completed" and data["distance_to_goal_m"] == pytest.approx(0.0, abs=1e-6)
+    budget = data["budget"]
+    assert budget["battery"]["capacity_ah"] == 20 and budget["battery"]["min_reserve_pct"] == 20
+    used = (data["driven_energy_j"] + data["excitation_energy_j"]) / 3600.0
+    assert budget["actual_energy_wh"] == pytest.approx(used)
+    assert budget["reserve_margin_pct"] == pytest.approx(budget["arrival_soc_pct"] - 20.0)
+    assert data["accepted_updates"] >= 1  # the sand is unknown to the asphalt prior
+    assert is_png(tmp_path / "out" / "mission.png")
+    # the budget written and printed is the library's EnergyBudget of the same mission, not a CLI formula
+    expected = _library_mission(path).budget
+    assert budget == expected.to_json_dict()
+    assert f"final state of charge {expected.arrival_soc_pct:.1f} %" in out
+    assert f"{expected.predicted_energy_wh:8.2f} Wh" in out and "fits" in out
+
+
+def _library_mission(path: Path):
+    """The mission `terrawatt mission --map path --start 3 12 --goal 57 12 --battery-ah 20` runs, via the API."""
+    from energy import Battery, TruthSimulator, ground_preset, robot_preset
+    from planner import AdaptiveSettings, run_adaptive_mission
+    from planner.missions import fit_prior_model
+
+    tmap = terrain.read_map(path)
+    robot = robot_preset("husky")
+    grounds = {name: ground_preset(name) for name in ("asphalt", "sand")}
+    truth = TruthSimulator(robot, grounds, seed=0)
+    prior = fit_prior_model(truth, "asphalt", seed=0)
+    registry = terrain.CellModelRegistry.from_terrain(tmap, prior, prior_name="asphalt-prior")
+    return run_adaptive_mission(tmap, registry, robot, Battery(20.0, robot.battery_voltage_v, min_reserve_pct=20.0),
+                                truth, (3.0, 12.0), (57.0, 12.0), physics_ground=grounds["asphalt"],
+                                settings=AdaptiveSettings(speed_mps=0.5, leg_length_m=10.0, seed=0))
+
+
+def test_mission_without_adaptation_makes_no_update(tmp_path, capsys):
+    path = patch_map(tmp_path)
+    rc = main(["mission", "--map", str(path), "--start", "3", "12", "--goal", "57", "12", "--battery-ah", "20",
+               "--no-adapt", "--out", str(tmp_path / "out")])
+    assert rc == 0
+    data = json.loads((tmp_path / "out" / "mission.json").read_text())
+    assert data["updates"] == [] and data["excitation_energy_j"] == 0.0
+    capsys.readouterr()
+
+
+def test_mission_with_a_small_battery_stops_and_says_why(tmp_path, capsys):
+    path = patch_map(tmp_path)
+    rc = main(["mission", "--map", str(path), "--start", "3", "12", "--goal", "57", "12", "--battery-ah", "0.01",
+               "--out", str(tmp_path / "out")])
+    out = capsys.readouterr().out
+    assert rc == 1
+    data = json.loads((tmp_path / "out" / "mission.json").read_text())
+    assert data["status"] == "budget_exceeded"
+    assert "reserve" in data["reason"] and "does NOT fit" in out
+    assert data["budget"]["predicted_feasible"] is False
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [(["--battery-ah", "0"], "--battery-ah must be a number > 0, got 0"),
+     (["--battery-ah", "5", "--prior-ground", "lava"], "--prior-ground 'lava' has no preset"),
+     (["--battery-ah", "5", "--reserve-pct", "100"], "--reserve-pct must be in [0, 100), got 100"),
+     (["--battery-ah", "5", "--leg-m", "-1"], "--leg-m must be a number > 0, got -1")],
+)
+def test_mission_bad_input_is_an_error(tmp_path, capsys, extra, message):
+    path = patch_map(tmp_path)
+    rc = main(["mission", "--map", str(path), "--start", "3", "12", "--goal", "57", "12", *extra,
+               "--out", str(tmp_path / "out")])
+    assert rc == 2
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "out" / "mission.json").exists()
+
+
+def test_mission_with_start_equal_to_goal_says_so(tmp_path, capsys):
+    path = patch_map(tmp_path)
+    rc = main(["mission", "--map", str(path), "--start", "3", "12", "--goal", "3", "12", "--battery-ah", "20",
+               "--out", str(tmp_path / "out")])
+    assert rc == 2
+    assert "start equals goal" in one_line_error(capsys)
+    assert not (tmp_path / "out" / "mission.json").exists()
+
+
+def test_mission_output_taken_by_a_folder_is_refused_before_the_mission(tmp_path, capsys, monkeypatch):
+    import terrawatt_cli.mission as mission_cli
+
+    path = patch_map(tmp_path)
+    (tmp_path / "out" / "mission.png").mkdir(parents=True)
+    monkeypatch.setattr(mission_cli, "simulate_adaptive_mission", lambda *a, **k: pytest.fail("ran before checking --out"))
+    rc = main(["mission", "--map", str(path), "--start", "3", "12", "--goal", "57", "12", "--battery-ah", "20",
+               "--out", str(tmp_path / "out")])
+    assert rc == 2
+    assert "mission.png" in one_line_error(capsys)
