@@ -24,6 +24,7 @@ from .missions import (
 from .model_cost import model_energy_cost
 from .nav2_map import write_nav2_map
 from .planning import PLANNERS, plan_route
+from .problem import PlanningProblem
 from .reachability import reachability
 from .reachability_result import Reachability
 from .replan import IncrementalPlanner
@@ -39,6 +40,7 @@ __all__ = [
     "PlannerSettings",
     "PLANNERS",
     "plan_route",
+    "PlanningProblem",
     "Route",
     "Lattice",
     "IncrementalPlanner",

@@ -29,22 +29,18 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 from terrain import TerrainMap
 from terrawatt_base.checks import check_bool, check_int, check_real, check_seed
-from terrawatt_base.errors import (
-    BlockedPositionError,
-    GridMismatchError,
-    InvalidParameterError,
-    OutOfBoundsError,
-    UnknownNameError,
-)
+from terrawatt_base.errors import GridMismatchError, InvalidParameterError, UnknownNameError
 
 from .anyangle import anyangle_path, polish_path
 from .edge_cost import EnergyCost
+from .problem import PlanningProblem
 from .lattice import Lattice, LatticePath
 from .ompl import OMPL_PLANNERS
 from .ompl import solve as solve_ompl
@@ -52,10 +48,10 @@ from .refine import refine_route, string_pull
 from .route import Route, RouteComparison, empty_route, evaluate_route
 from .settings import PlannerSettings
 
-__all__ = ["plan_route", "shortest_route", "compare_route", "PLANNERS", "OMPL_PLANNERS", "GRAPH_PLANNERS",
-           "REFINE_DEFAULT_SEED"]
+__all__ = ["plan_route", "shortest_route", "compare_route", "PLANNERS", "PLANNER_SEARCHES", "PlannerSearch",
+           "OMPL_PLANNERS", "GRAPH_PLANNERS", "REFINE_DEFAULT_SEED"]
 
-#: Every planner name :func:`plan_route` accepts.
+#: Every planner name :func:`plan_route` accepts (the keys of :data:`PLANNER_SEARCHES`).
 PLANNERS = OMPL_PLANNERS + ("anyangle", "lattice")
 #: Planners that ignore time budgets (deterministic graph searches, run to their end).
 GRAPH_PLANNERS = ("anyangle", "lattice")
@@ -64,32 +60,6 @@ REFINE_DEFAULT_SEED = 0
 
 
 # --------------------------------------------------------------------------- input checks
-def _check_point(cost: EnergyCost, xy: Any, name: str) -> np.ndarray:
-    try:
-        p = np.asarray(xy, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise InvalidParameterError(f"{name} must be (x_m, y_m), got {xy!r}") from None
-    if p.shape != (2,):
-        raise InvalidParameterError(f"{name} must be (x_m, y_m), got {xy!r}")
-    if not np.all(np.isfinite(p)):
-        raise InvalidParameterError(f"{name} must be finite coordinates in metres, got {xy!r}")
-    if not cost.terrain.contains(p[0], p[1]):
-        raise OutOfBoundsError(f"{name} {tuple(p.tolist())!r} m lies outside the map bounds {cost.terrain.bounds!r}")
-    r, c = cost.terrain.rowcol(p[0], p[1])
-    if cost.blocked[r, c]:
-        if cost.terrain.obstacle[r, c]:
-            why = "on an obstacle"
-        else:
-            why = (
-                f"on ground steeper ({math.degrees(float(cost.terrain.slope_rad[r, c])):.1f} deg) than "
-                f"max_slope_rad ({math.degrees(cost.max_slope_rad):.1f} deg)"
-            )
-        raise BlockedPositionError(
-            f"{name} {tuple(p.tolist())!r} m lies {why} (cell row {r}, col {c}); expected a free cell"
-        )
-    return p
-
-
 def _check_budget(time_limit_s: Any, max_cost_evaluations: Any) -> tuple[float | None, int | None]:
     if max_cost_evaluations is not None:
         max_cost_evaluations = check_int("max_cost_evaluations", max_cost_evaluations, low=1)
@@ -100,21 +70,14 @@ def _check_budget(time_limit_s: Any, max_cost_evaluations: Any) -> tuple[float |
     return check_real("time_limit_s", time_limit_s, low=0.0, low_inclusive=False), max_cost_evaluations
 
 
-def _lattice_optimum(cost: EnergyCost, start: np.ndarray, goal: np.ndarray) -> LatticePath:
+def _lattice_optimum(problem: PlanningProblem) -> LatticePath:
     """The 1-cell lattice's minimum-energy path of a query (cached on the cost)."""
-    key = ("optimum", tuple(start.tolist()), tuple(goal.tolist()))
-    path = cost.results.get(key)
+    key = ("optimum", *problem.key)
+    path = problem.cost.results.get(key)
     if path is None:
-        path = Lattice.for_cost(cost, 1).shortest_path(start, goal, weight="energy")
-        cost.results[key] = path
+        path = Lattice.for_cost(problem.cost, 1).shortest_path(problem.start, problem.goal, weight="energy")
+        problem.cost.results[key] = path
     return path
-
-
-def _check_query(cost: Any, start_xy_m: Any, goal_xy_m: Any) -> tuple[np.ndarray, np.ndarray]:
-    """A checked (start, goal) pair on an EnergyCost (the shared start of every route query)."""
-    if not isinstance(cost, EnergyCost):
-        raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
-    return _check_point(cost, start_xy_m, "start_xy_m"), _check_point(cost, goal_xy_m, "goal_xy_m")
 
 
 def compare_route(cost: EnergyCost, start_xy_m: tuple[float, float], goal_xy_m: tuple[float, float]) -> RouteComparison:
@@ -129,16 +92,20 @@ def compare_route(cost: EnergyCost, start_xy_m: tuple[float, float], goal_xy_m: 
     InvalidParameterError, OutOfBoundsError, BlockedPositionError
         As :func:`plan_route` for bad start / goal points.
     """
-    start, goal = _check_query(cost, start_xy_m, goal_xy_m)
-    key = ("comparison", tuple(start.tolist()), tuple(goal.tolist()))
-    comparison = cost.results.get(key)
+    return _compare(PlanningProblem(cost, start_xy_m, goal_xy_m))
+
+
+def _compare(problem: PlanningProblem) -> RouteComparison:
+    """:func:`compare_route` of a checked problem."""
+    key = ("comparison", *problem.key)
+    comparison = problem.cost.results.get(key)
     if comparison is None:
-        optimum = _lattice_optimum(cost, start, goal)
+        optimum = _lattice_optimum(problem)
         comparison = RouteComparison(
-            shortest=shortest_route(cost, start, goal),
+            shortest=_shortest(problem),
             lattice_optimum_j=optimum.objective if optimum.found else math.nan,
         )
-        cost.results[key] = comparison
+        problem.cost.results[key] = comparison
     return comparison
 
 
@@ -160,7 +127,12 @@ def shortest_route(cost: EnergyCost, start_xy_m: tuple[float, float], goal_xy_m:
     InvalidParameterError, OutOfBoundsError, BlockedPositionError
         As :func:`plan_route` for bad start / goal points.
     """
-    start, goal = _check_query(cost, start_xy_m, goal_xy_m)
+    return _shortest(PlanningProblem(cost, start_xy_m, goal_xy_m))
+
+
+def _shortest(problem: PlanningProblem) -> Route:
+    """:func:`shortest_route` of a checked problem."""
+    cost, start, goal = problem.cost, problem.start, problem.goal
     t0 = time.perf_counter()
     if math.isfinite(cost.segment_energy_one_j(start[0], start[1], goal[0], goal[1])):
         pts = np.array([start, goal])
@@ -276,34 +248,75 @@ def plan_route(
         raise InvalidParameterError(f"settings must be a PlannerSettings, got {type(settings).__name__!r}")
     refine = check_bool("refine", refine)
     compare = check_bool("compare", compare)
-    start = _check_point(cost, start_xy_m, "start_xy_m")
-    goal = _check_point(cost, goal_xy_m, "goal_xy_m")
-    if np.array_equal(start, goal):
-        raise InvalidParameterError(
-            f"start equals goal ({start[0]!r}, {start[1]!r}) m: there is no route to plan; expected two different points"
-        )
+    problem = PlanningProblem(cost, start_xy_m, goal_xy_m)  # the points, checked once for the whole query
     if planner in GRAPH_PLANNERS and time_limit_s is None and max_cost_evaluations is None:
         time_limit, max_evals = None, None
     else:
         time_limit, max_evals = _check_budget(time_limit_s, max_cost_evaluations)
     seed = check_seed(seed)
 
-    labels = cost.components()
-    rs, cs = cost.terrain.rowcol(start[0], start[1])
-    rg, cg = cost.terrain.rowcol(goal[0], goal[1])
-    if labels[rs, cs] != labels[rg, cg]:
+    if not problem.connected:
         route = empty_route("infeasible", planner, 0.0, cost.battery_voltage_v)
     else:
-        route = _plan(cost, start, goal, planner, time_limit, max_evals, seed, refine, settings)
+        route = _plan(problem, planner, time_limit, max_evals, seed, refine, settings)
     if compare:
-        route = route.replace(comparison=compare_route(cost, start, goal))
+        route = route.replace(comparison=_compare(problem))
     return route
 
 
+# --------------------------------------------------------------------------- the planners, by name
+#: A search: ``(problem, time_limit_s, max_cost_evaluations, seed, settings) -> (status, waypoints or None, seconds)``.
+PlannerSearch = Callable[[PlanningProblem, "float | None", "int | None", "int | None", PlannerSettings],
+                         "tuple[str, np.ndarray | None, float]"]
+
+
+def _lattice_search(problem: PlanningProblem, time_limit: float | None, max_evals: int | None, seed: int | None,
+                    settings: PlannerSettings) -> tuple[str, np.ndarray | None, float]:
+    """The directed 16-connected lattice optimum (at the settings' stride; 1 cell where a passage is too narrow)."""
+    cost, start, goal = problem.cost, problem.start, problem.goal
+    stride = settings.lattice_stride_cells
+    lattice = Lattice.for_cost(cost, stride)  # building the graph is map preparation
+    t0 = time.perf_counter()
+    path = lattice.shortest_path(start, goal, weight="energy")
+    if not path.found and stride > 1:  # a passage too narrow for the coarse lattice
+        stride = 1
+        path = Lattice.for_cost(cost, 1).shortest_path(start, goal, weight="energy")
+    elapsed = time.perf_counter() - t0
+    if stride == 1:
+        cost.results[("optimum", *problem.key)] = path
+    return ("exact", path.waypoints_m, elapsed) if path.found else ("infeasible", None, elapsed)
+
+
+def _anyangle_search(problem: PlanningProblem, time_limit: float | None, max_evals: int | None, seed: int | None,
+                     settings: PlannerSettings) -> tuple[str, np.ndarray | None, float]:
+    """Theta* on the drive energy in a corridor around a coarse lattice route."""
+    path = anyangle_path(problem.cost, problem.start, problem.goal, guide_stride_cells=settings.anyangle_guide_stride_cells,
+                         corridor_cells=settings.anyangle_corridor_cells)
+    return ("exact", path.waypoints_m, path.solve_time_s) if path.found else ("infeasible", None, path.solve_time_s)
+
+
+def _ompl_search(name: str) -> PlannerSearch:
+    def search(problem: PlanningProblem, time_limit: float | None, max_evals: int | None, seed: int | None,
+               settings: PlannerSettings) -> tuple[str, np.ndarray | None, float]:
+        cost = problem.cost
+        status, waypoints, elapsed, _ = solve_ompl(cost.arrays, cost.min_energy_per_metre_j, problem.start,
+                                                   problem.goal, name, time_limit, max_evals, seed, settings)
+        return status, waypoints, elapsed
+
+    search.__doc__ = f"OMPL's {name} on the drive-energy objective."
+    return search
+
+
+#: Every planner :func:`plan_route` runs, by name: the one registry (:data:`PLANNERS` is its keys).
+PLANNER_SEARCHES: dict[str, PlannerSearch] = {
+    **{name: _ompl_search(name) for name in OMPL_PLANNERS},
+    "anyangle": _anyangle_search,
+    "lattice": _lattice_search,
+}
+
+
 def _plan(
-    cost: EnergyCost,
-    start: np.ndarray,
-    goal: np.ndarray,
+    problem: PlanningProblem,
     planner: str,
     time_limit: float | None,
     max_evals: int | None,
@@ -311,30 +324,9 @@ def _plan(
     refine: bool,
     settings: PlannerSettings,
 ) -> Route:
-    """Search (lattice, any-angle or OMPL), then refine an exact route; start and goal are checked and joined."""
-    if planner == "lattice":
-        stride = settings.lattice_stride_cells
-        lattice = Lattice.for_cost(cost, stride)  # building the graph is map preparation
-        t0 = time.perf_counter()
-        path = lattice.shortest_path(start, goal, weight="energy")
-        if not path.found and stride > 1:  # a passage too narrow for the coarse lattice
-            stride = 1
-            path = Lattice.for_cost(cost, 1).shortest_path(start, goal, weight="energy")
-        elapsed = time.perf_counter() - t0
-        if stride == 1:
-            cost.results[("optimum", tuple(start.tolist()), tuple(goal.tolist()))] = path
-        status = "exact" if path.found else "infeasible"
-        waypoints = path.waypoints_m if path.found else None
-    elif planner == "anyangle":
-        any_path = anyangle_path(cost, start, goal, guide_stride_cells=settings.anyangle_guide_stride_cells,
-                                 corridor_cells=settings.anyangle_corridor_cells)
-        elapsed = any_path.solve_time_s
-        status = "exact" if any_path.found else "infeasible"
-        waypoints = any_path.waypoints_m if any_path.found else None
-    else:
-        status, waypoints, elapsed, _ = solve_ompl(
-            cost.arrays, cost.min_energy_per_metre_j, start, goal, planner, time_limit, max_evals, seed, settings
-        )
+    """Search (the planner's entry of :data:`PLANNER_SEARCHES`), then refine an exact route and price it."""
+    cost = problem.cost
+    status, waypoints, elapsed = PLANNER_SEARCHES[planner](problem, time_limit, max_evals, seed, settings)
     name = planner
     if waypoints is not None and status == "exact" and refine:
         t0 = time.perf_counter()
