@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import json
 import math
@@ -13,9 +12,9 @@ import numpy as np
 import pytest
 
 import terrain
-from planner import BatchPairs, BatchResult, EnergyCost, plan_batch, plan_route, read_pairs_csv
+from planner import BatchPairs, EnergyCost, plan_batch, plan_route, read_pairs_csv
 from planner.batch_pairs import read_sites_csv
-from planner.batch_result import BATCH_FORMAT_VERSION, BatchRow
+from planner.batch_result import BatchRow
 from terrawatt_base.dask_client import dask_client
 from terrawatt_base.errors import (
     DataError,
@@ -26,15 +25,9 @@ from terrawatt_base.errors import (
 )
 from terrawatt_cli import main
 
+from batch_samples import EAST, EAST_LOW, ON_WALL, PAIRS, WEST, cost  # noqa: F401  (fixture)
+
 _NO_DASK = "planning on a cluster needs the distributed extra (dask[distributed])"
-#: A free cell west of the wall, one east of it, one below the gap and the wall itself (wall_map).
-WEST, EAST, EAST_LOW, ON_WALL = (5.5, 10.5), (35.5, 10.5), (30.5, 3.5), (20.5, 10.5)
-PAIRS = [[*WEST, *EAST], [*EAST, *WEST], [*WEST, *EAST_LOW], [*EAST_LOW, *EAST]]
-
-
-@pytest.fixture
-def cost(wall_map):
-    return EnergyCost.from_presets(wall_map)
 
 
 @pytest.fixture
@@ -321,36 +314,6 @@ def test_dask_client_refuses_workers_with_a_scheduler_and_names_the_missing_extr
             pass
 
 
-# ------------------------------------------------------------------ the result's files
-def test_the_result_writes_csv_and_json_with_nan_as_empty_and_null(cost, tmp_path):
-    res = plan_batch(cost, [*PAIRS[:2], [*ON_WALL, *EAST]], progress=False)
-    res.to_csv(tmp_path / "b.csv")
-    res.write_json(tmp_path / "b.json")
-    with open(tmp_path / "b.csv", newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    assert [r["status"] for r in rows] == ["exact", "exact", "error"]
-    assert float(rows[0]["energy_j"]) == res.rows[0].energy_j  # repr round-trips
-    assert rows[2]["energy_j"] == "" and rows[2]["error"].startswith("BlockedPositionError")
-    data = json.loads((tmp_path / "b.json").read_text())
-    assert data["format_version"] == BATCH_FORMAT_VERSION and data["n_pairs"] == 3
-    assert data["counts"]["error"] == 1 and data["rows"][2]["energy_j"] is None
-    assert data["rows"][0]["energy_saved_pct"] == pytest.approx(res.rows[0].energy_saved_pct)
-    assert res.to_dict()["median_energy_saved_pct"] == pytest.approx(res.median_saving_pct())
-
-
-def test_rows_and_results_check_themselves():
-    with pytest.raises(InvalidParameterError, match="status must be one of"):
-        BatchRow("a", 0.0, 0.0, 1.0, 1.0, "done")
-    with pytest.raises(InvalidParameterError, match="error text exactly when its status is 'error'"):
-        BatchRow("a", 0.0, 0.0, 1.0, 1.0, "error")
-    with pytest.raises(InvalidParameterError, match="rows must be BatchRow"):
-        BatchResult(({"name": "a"},), "lattice", "in process", 1, 1.0)
-    res = BatchResult((BatchRow("a", 0.0, 0.0, 1.0, 1.0, "infeasible"),), "lattice", "in process", 1, 0.0)
-    assert math.isnan(res.routes_per_s) and math.isnan(res.median_saving_pct())
-    with pytest.raises(InvalidParameterError, match="column must be one of"):
-        res.column("energy")
-
-
 # ------------------------------------------------------------------ terrawatt batch
 def _pairs_file(tmp_path, rows):
     lines = ["name,start_x_m,start_y_m,goal_x_m,goal_y_m", *(",".join(map(str, r)) for r in rows)]
@@ -424,15 +387,6 @@ def test_cli_batch_checks_the_output_folder_before_reading_anything(tmp_path, ca
     (tmp_path / "out").write_text("a file")
     rc = main(["batch", "--map", "example", "--pairs", str(tmp_path / "missing.csv"), "--out", str(tmp_path / "out")])
     assert rc == 2 and "is a file; expected a folder" in capsys.readouterr().err
-
-
-def test_the_table_shows_missing_numbers_as_dashes_and_cuts_long_batches(cost):
-    res = plan_batch(cost, [*PAIRS, [*ON_WALL, *EAST]], progress=False)
-    lines = res.table(max_rows=4).splitlines()
-    assert lines[0].split() == ["pair", "status", "energy", "Wh", "length", "m", "time", "s", "saved", "%"]
-    assert lines[2].split()[:2] == ["0", "exact"] and float(lines[2].split()[2]) == round(res.rows[0].energy_wh, 2)
-    assert lines[-1] == "... 1 more rows"
-    assert res.table().splitlines()[-1].split() == ["4", "error", "-", "-", "-", "-"]
 
 
 def test_an_ompl_planner_with_seed_and_work_bound_gives_the_same_rows_on_the_cluster(cost, local_client):

@@ -1,0 +1,53 @@
+"""Tests of planner.batch_result: BatchRow and BatchResult check themselves, write CSV and JSON, show a table."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+
+import pytest
+
+from planner import BatchResult, plan_batch
+from planner.batch_result import BATCH_FORMAT_VERSION, BatchRow
+from terrawatt_base.errors import InvalidParameterError
+
+from batch_samples import EAST, ON_WALL, PAIRS, cost  # noqa: F401  (fixture)
+
+
+def test_the_result_writes_csv_and_json_with_nan_as_empty_and_null(cost, tmp_path):
+    res = plan_batch(cost, [*PAIRS[:2], [*ON_WALL, *EAST]], progress=False)
+    res.to_csv(tmp_path / "b.csv")
+    res.write_json(tmp_path / "b.json")
+    with open(tmp_path / "b.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["status"] for r in rows] == ["exact", "exact", "error"]
+    assert float(rows[0]["energy_j"]) == res.rows[0].energy_j  # repr round-trips
+    assert rows[2]["energy_j"] == "" and rows[2]["error"].startswith("BlockedPositionError")
+    data = json.loads((tmp_path / "b.json").read_text())
+    assert data["format_version"] == BATCH_FORMAT_VERSION and data["n_pairs"] == 3
+    assert data["counts"]["error"] == 1 and data["rows"][2]["energy_j"] is None
+    assert data["rows"][0]["energy_saved_pct"] == pytest.approx(res.rows[0].energy_saved_pct)
+    assert res.to_dict()["median_energy_saved_pct"] == pytest.approx(res.median_saving_pct())
+
+
+def test_rows_and_results_check_themselves():
+    with pytest.raises(InvalidParameterError, match="status must be one of"):
+        BatchRow("a", 0.0, 0.0, 1.0, 1.0, "done")
+    with pytest.raises(InvalidParameterError, match="error text exactly when its status is 'error'"):
+        BatchRow("a", 0.0, 0.0, 1.0, 1.0, "error")
+    with pytest.raises(InvalidParameterError, match="rows must be BatchRow"):
+        BatchResult(({"name": "a"},), "lattice", "in process", 1, 1.0)
+    res = BatchResult((BatchRow("a", 0.0, 0.0, 1.0, 1.0, "infeasible"),), "lattice", "in process", 1, 0.0)
+    assert math.isnan(res.routes_per_s) and math.isnan(res.median_saving_pct())
+    with pytest.raises(InvalidParameterError, match="column must be one of"):
+        res.column("energy")
+
+
+def test_the_table_shows_missing_numbers_as_dashes_and_cuts_long_batches(cost):
+    res = plan_batch(cost, [*PAIRS, [*ON_WALL, *EAST]], progress=False)
+    lines = res.table(max_rows=4).splitlines()
+    assert lines[0].split() == ["pair", "status", "energy", "Wh", "length", "m", "time", "s", "saved", "%"]
+    assert lines[2].split()[:2] == ["0", "exact"] and float(lines[2].split()[2]) == round(res.rows[0].energy_wh, 2)
+    assert lines[-1] == "... 1 more rows"
+    assert res.table().splitlines()[-1].split() == ["4", "error", "-", "-", "-", "-"]
