@@ -17,35 +17,9 @@ from terrain import (
     UnknownNameError,
 )
 
+from edge_cost_samples import LinearModel, flat_terrain
+
 GRAVITY_MPS2 = 9.80665
-
-
-class _Robot:
-    battery_voltage_v = 24.0
-    turn_rate_radps = 0.5
-
-
-class LinearModel:
-    """Stand-in with a closed form: e(s) = a + b * max(s, 0) J per metre travelled, turns c J/rad."""
-
-    robot = _Robot()
-
-    def __init__(self, a: float = 50.0, b: float = 400.0, c: float = 30.0) -> None:
-        self.a, self.b, self.c = a, b, c
-
-    def energy_per_metre_j(self, speed_mps, grade, ground):
-        g = np.asarray(grade, dtype=float)
-        return self.a * ground + self.b * np.maximum(g, 0.0)
-
-    def turn_energy_j(self, heading_change_rad, ground):
-        return self.c * np.abs(np.asarray(heading_change_rad, dtype=float))
-
-
-def _flat(rows=20, cols=30, cell=1.0, origin=(0.0, 0.0), obstacle=None):
-    return TerrainMap(
-        np.zeros((rows, cols)), cell, origin,
-        ground=np.zeros((rows, cols), int), ground_names={0: "g"}, obstacle=obstacle,
-    )
 
 
 def _ramp(grade=0.1, rows=20, cols=40, cell=1.0):
@@ -82,7 +56,7 @@ def _reference_energy(cost: EnergyCost, a, b) -> float:
 
 # --------------------------------------------------------------------------- flat and exactness
 def test_flat_uniform_map_energy_proportional_to_length():
-    cost = EnergyCost.from_model(_flat(), LinearModel(a=50.0), {"g": 1.0}, speed_mps=0.5)
+    cost = EnergyCost.from_model(flat_terrain(), LinearModel(a=50.0), {"g": 1.0}, speed_mps=0.5)
     rng = np.random.default_rng(1)
     a = rng.uniform([0, 0], [30, 20], size=(200, 2))
     b = rng.uniform([0, 0], [30, 20], size=(200, 2))
@@ -114,7 +88,7 @@ def test_segment_energy_matches_reference_walk_on_rough_map():
 
 
 def test_zero_length_segment_costs_nothing():
-    cost = EnergyCost.from_model(_flat(), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    cost = EnergyCost.from_model(flat_terrain(), LinearModel(), {"g": 1.0}, speed_mps=0.5)
     assert cost.segment_energy_j([3.3, 4.4], [3.3, 4.4])[0] == 0.0
 
 
@@ -169,7 +143,7 @@ def test_too_steep_cells_are_blocked():
 def test_obstacle_blocks_segments_through_it_only():
     obstacle = np.zeros((20, 30), bool)
     obstacle[5:15, 10] = True
-    cost = EnergyCost.from_model(_flat(obstacle=obstacle), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    cost = EnergyCost.from_model(flat_terrain(obstacle=obstacle), LinearModel(), {"g": 1.0}, speed_mps=0.5)
     e = cost.segment_energy_j([[2.5, 10.5], [2.5, 17.5]], [[20.5, 10.5], [20.5, 17.5]])
     assert np.isinf(e[0]) and np.isfinite(e[1])
     assert cost.is_free([[10.5, 10.5], [10.5, 17.5]]).tolist() == [False, True]
@@ -178,15 +152,15 @@ def test_obstacle_blocks_segments_through_it_only():
 def test_corner_squeeze_between_diagonal_obstacles_is_blocked():
     obstacle = np.zeros((6, 6), bool)
     obstacle[2, 3] = obstacle[3, 2] = True  # touching only at the corner (3, 3)
-    cost = EnergyCost.from_model(_flat(6, 6, obstacle=obstacle), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    cost = EnergyCost.from_model(flat_terrain(6, 6, obstacle=obstacle), LinearModel(), {"g": 1.0}, speed_mps=0.5)
     # The diagonal from cell (2,2) to (3,3) passes exactly through the shared corner.
     assert np.isinf(cost.segment_energy_j([2.5, 2.5], [3.5, 3.5])[0])
     # One blocked side cell is enough (the robot is not a point); none blocked: free.
     one = obstacle.copy()
     one[3, 2] = False
-    cost_one = EnergyCost.from_model(_flat(6, 6, obstacle=one), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    cost_one = EnergyCost.from_model(flat_terrain(6, 6, obstacle=one), LinearModel(), {"g": 1.0}, speed_mps=0.5)
     assert np.isinf(cost_one.segment_energy_j([2.5, 2.5], [3.5, 3.5])[0])
-    free = EnergyCost.from_model(_flat(6, 6), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    free = EnergyCost.from_model(flat_terrain(6, 6), LinearModel(), {"g": 1.0}, speed_mps=0.5)
     assert free.segment_energy_j([2.5, 2.5], [3.5, 3.5])[0] == pytest.approx(50.0 * math.sqrt(2))
 
 
@@ -230,12 +204,12 @@ def test_physics_model_refuses_grades_beyond_the_climbing_limit_so_routes_climb_
 def test_speed_above_the_robot_maximum_is_refused():
     model = PhysicsEnergyModel(robot_preset("husky"))
     with pytest.raises(InvalidParameterError, match=r"speed_mps 5\.0 exceeds the robot's max_speed_mps 1\.0"):
-        EnergyCost.from_model(_flat(), model, {"g": ground_preset("asphalt")}, speed_mps=5.0)
+        EnergyCost.from_model(flat_terrain(), model, {"g": ground_preset("asphalt")}, speed_mps=5.0)
 
 
 # --------------------------------------------------------------------------- turns and paths
 def test_turn_energies_and_path_energy():
-    cost = EnergyCost.from_model(_flat(), LinearModel(a=50.0, c=30.0), {"g": 1.0}, speed_mps=0.5)
+    cost = EnergyCost.from_model(flat_terrain(), LinearModel(a=50.0, c=30.0), {"g": 1.0}, speed_mps=0.5)
     pts = np.array([[1.0, 1.0], [11.0, 1.0], [11.0, 1.0], [11.0, 6.0], [6.0, 1.0]])
     angles, turns = cost.turn_energies_j(pts)
     # Repeated point: the 90 degree turn is taken where the new heading starts (index 2).
@@ -251,53 +225,6 @@ def test_surface_length_on_ramp():
     assert cost.surface_length_m([[5.0, 3.0], [25.0, 3.0], [25.0, 13.0]]) == pytest.approx(
         20 * math.sqrt(1 + grade**2) + 10, rel=1e-9
     )
-
-
-def test_relax_path_straightens_zigzag_and_never_raises_energy():
-    cost = EnergyCost.from_model(_flat(), LinearModel(a=50.0, c=30.0), {"g": 1.0}, speed_mps=0.5)
-    zigzag = np.array([[1.0, 1.0], [6.0, 4.0], [11.0, 1.0], [16.0, 4.0], [25.0, 1.0]])
-    out = cost.relax_path(zigzag)
-    assert cost.path_energy_j(out) <= cost.path_energy_j(zigzag)
-    np.testing.assert_allclose(out, [[1.0, 1.0], [25.0, 1.0]], atol=0.05)
-    assert cost.path_energy_j(out) == pytest.approx(50.0 * 24.0, rel=1e-3)
-
-
-def test_relax_path_keeps_route_valid_around_obstacle():
-    obstacle = np.zeros((20, 30), bool)
-    obstacle[0:15, 15] = True
-    cost = EnergyCost.from_model(_flat(obstacle=obstacle), LinearModel(a=50.0, c=5.0), {"g": 1.0}, speed_mps=0.5)
-    route = np.array([[5.5, 5.5], [10.5, 17.5], [20.5, 17.5], [25.5, 5.5]])
-    out = cost.relax_path(route)
-    assert np.isfinite(cost.path_energy_j(out))
-    assert cost.path_energy_j(out) < cost.path_energy_j(route)
-    np.testing.assert_array_equal(out[[0, -1]], route[[0, -1]])
-
-
-def test_relax_path_refracts_at_a_ground_boundary_like_snell():
-    """Fast ground (y < 20 m) and ground twice as costly above: the optimum bends at the
-    boundary where 1 * sin(a1) = 2 * sin(a2); the crossing point is found by a 1-D search."""
-    from scipy.optimize import minimize_scalar
-
-    ground = np.zeros((40, 60), int)
-    ground[20:, :] = 1
-    tmap = TerrainMap(np.zeros((40, 60)), 1.0, ground=ground, ground_names={0: "fast", 1: "slow"})
-    model = LinearModel(a=50.0, c=0.5)
-    cost = EnergyCost.from_model(tmap, model, {"fast": 1.0, "slow": 2.0}, speed_mps=0.5)
-    a, b = np.array([5.0, 2.0]), np.array([50.0, 38.0])
-
-    def energy(x: float) -> float:
-        p = np.array([x, 20.0])
-        u, v = p - a, b - p
-        turn = abs(math.atan2(u[0] * v[1] - u[1] * v[0], u @ v))
-        return 50.0 * np.hypot(*u) + 100.0 * np.hypot(*v) + 0.5 * turn
-
-    best = minimize_scalar(energy, bounds=(a[0], b[0]), method="bounded", options={"xatol": 1e-6})
-    one = cost.relax_path([a, b], levels=1)
-    out = cost.relax_path([a, b])
-    assert cost.path_energy_j(out) <= cost.path_energy_j(one) <= cost.path_energy_j([a, b])
-    assert cost.path_energy_j(out) == pytest.approx(best.fun, rel=2e-4)
-    crossing = np.interp(20.0, out[:, 1], out[:, 0])  # y rises along the route
-    assert crossing == pytest.approx(best.x, abs=0.3)
 
 
 # --------------------------------------------------------------------------- heuristic
@@ -368,7 +295,7 @@ def test_grounds_keyed_by_class_id():
 )
 def test_from_model_rejects_bad_parameters(kwargs, match):
     with pytest.raises(InvalidParameterError, match=match):
-        EnergyCost.from_model(_flat(), LinearModel(), {"g": 1.0}, **kwargs)
+        EnergyCost.from_model(flat_terrain(), LinearModel(), {"g": 1.0}, **kwargs)
 
 
 def test_negative_or_nan_model_energy_rejected():
@@ -377,14 +304,14 @@ def test_negative_or_nan_model_energy_rejected():
             return 50.0 + 600.0 * np.asarray(grade, dtype=float)  # negative downhill
 
     with pytest.raises(InvalidParameterError, match="non-negative"):
-        EnergyCost.from_model(_flat(), Regen(), {"g": 1.0}, speed_mps=0.5)
+        EnergyCost.from_model(flat_terrain(), Regen(), {"g": 1.0}, speed_mps=0.5)
 
     class Broken(LinearModel):
         def turn_energy_j(self, heading_change_rad, ground):
             return np.full(np.shape(heading_change_rad), np.nan)
 
     with pytest.raises(InvalidParameterError, match="turn_table_j"):
-        EnergyCost.from_model(_flat(), Broken(), {"g": 1.0}, speed_mps=0.5)
+        EnergyCost.from_model(flat_terrain(), Broken(), {"g": 1.0}, speed_mps=0.5)
 
 
 def test_missing_voltage_or_turn_rate_raises():
@@ -392,17 +319,17 @@ def test_missing_voltage_or_turn_rate_raises():
         robot = None
 
     with pytest.raises(InvalidParameterError, match="battery_voltage_v"):
-        EnergyCost.from_model(_flat(), Bare(), {"g": 1.0}, speed_mps=0.5)
+        EnergyCost.from_model(flat_terrain(), Bare(), {"g": 1.0}, speed_mps=0.5)
     with pytest.raises(InvalidParameterError, match="turn_rate_radps"):
-        EnergyCost.from_model(_flat(), Bare(), {"g": 1.0}, speed_mps=0.5, battery_voltage_v=24.0)
+        EnergyCost.from_model(flat_terrain(), Bare(), {"g": 1.0}, speed_mps=0.5, battery_voltage_v=24.0)
     cost = EnergyCost.from_model(
-        _flat(), Bare(), {"g": 1.0}, speed_mps=0.5, battery_voltage_v=24.0, turn_rate_radps=1.0
+        flat_terrain(), Bare(), {"g": 1.0}, speed_mps=0.5, battery_voltage_v=24.0, turn_rate_radps=1.0
     )
     assert cost.battery_voltage_v == 24.0
 
 
 def test_constructor_checks_grid_and_tables():
-    tmap = _flat()
+    tmap = flat_terrain()
     ok = np.ones((1, 5))
     kw = {"speed_mps": 1.0, "battery_voltage_v": 24.0, "turn_rate_radps": 1.0}
     with pytest.raises(GridMismatchError):
@@ -433,14 +360,14 @@ def test_constructor_checks_grid_and_tables():
     ],
 )
 def test_segment_energy_rejects_bad_points(a, b, exc, match):
-    cost = EnergyCost.from_model(_flat(), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    cost = EnergyCost.from_model(flat_terrain(), LinearModel(), {"g": 1.0}, speed_mps=0.5)
     with pytest.raises(exc, match=match):
         cost.segment_energy_j(a, b)
 
 
 @pytest.mark.parametrize("name", ["starts_xy_m", "ends_xy_m"])
 def test_segment_energy_names_a_non_numeric_point(name):
-    cost = EnergyCost.from_model(_flat(), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    cost = EnergyCost.from_model(flat_terrain(), LinearModel(), {"g": 1.0}, speed_mps=0.5)
     points = {"starts_xy_m": [[1.0, 1.0]], "ends_xy_m": [[2.0, 2.0]]}
     points[name] = [["one", "two"]]
     with pytest.raises(InvalidParameterError, match=f"{name} must be a real number or an array of them"):
