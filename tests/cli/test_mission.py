@@ -12,6 +12,8 @@ from terrawatt_cli import main
 
 from cli_samples import is_png, one_line_error, patch_map
 
+_NO_DASK = "Monte Carlo on a cluster needs the distributed extra (dask[distributed])"
+
 
 def test_mission_writes_budget_json_and_plot(tmp_path, capsys):
     path = patch_map(tmp_path)
@@ -109,3 +111,57 @@ def test_mission_output_taken_by_a_folder_is_refused_before_the_mission(tmp_path
                "--out", str(tmp_path / "out")])
     assert rc == 2
     assert "mission.png" in one_line_error(capsys)
+
+
+def test_cli_monte_carlo_writes_its_files(tmp_path, capsys):
+    rc = main(["mission", "--battery-ah", "5", "--monte-carlo", "4", "--seed", "3", "--out", str(tmp_path / "o")])
+    out = capsys.readouterr().out
+    assert rc == 0
+    assert "4 missions (seed 3)" in out and "below the 20 % reserve in 0 of 4 missions" in out
+    for name in ("monte_carlo.json", "monte_carlo.csv", "monte_carlo.png"):
+        assert (tmp_path / "o" / name).is_file()
+    assert json.loads((tmp_path / "o" / "monte_carlo.json").read_text())["n"] == 4
+
+
+def test_cli_monte_carlo_above_the_risk_threshold_exits_1(tmp_path, capsys):
+    rc = main(["mission", "--battery-ah", "0.3", "--monte-carlo", "3", "--out", str(tmp_path / "o")])
+    assert rc == 1 and "below the 20 % reserve in 3 of 3 missions" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--monte-carlo", "0"], "--monte-carlo must be a number of missions >= 1, got 0"),
+        (["--workers", "2"], "--workers and --scheduler apply to --monte-carlo N only"),
+        (["--monte-carlo", "3", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "exclude each other"),
+        (["--monte-carlo", "3", "--max-risk-pct", "120"], "--max-risk-pct must be in [0, 100]"),
+    ],
+)
+def test_cli_monte_carlo_bad_flags_exit_2(tmp_path, capsys, extra, message):
+    rc = main(["mission", "--battery-ah", "5", *extra, "--out", str(tmp_path / "o")])
+    assert rc == 2 and message in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_cli_monte_carlo_on_a_scheduler_gives_the_in_process_study(tmp_path, capsys):
+    distributed = pytest.importorskip("distributed", reason=_NO_DASK)
+    base = ["mission", "--battery-ah", "0.5", "--monte-carlo", "4", "--seed", "5"]
+    assert main([*base, "--out", str(tmp_path / "here")]) == 1  # a 0.5 Ah pack is too small for some missions
+    # worker processes, as a real scheduler has (a second client on an in-process cluster from the same
+    # process shares its event loop thread; that pattern hung once in a full-suite run)
+    with distributed.LocalCluster(processes=True, n_workers=2, threads_per_worker=1,
+                                  dashboard_address=":0") as cluster:
+        assert main([*base, "--scheduler", cluster.scheduler_address, "--out", str(tmp_path / "there")]) == 1
+    assert f"on 2 worker(s) ({cluster.scheduler_address})" in capsys.readouterr().out
+    here, there = (json.loads((tmp_path / d / "monte_carlo.json").read_text()) for d in ("here", "there"))
+    assert here["energy_wh"] == there["energy_wh"] and here["samples"] == there["samples"]
+
+
+def test_cli_monte_carlo_with_failed_missions_writes_their_rows_and_exits_1(tmp_path, capsys):
+    # a 2 V pack delivers at most 1/R W: the missions that draw a resistance above a few mohm fail
+    rc = main(["mission", "--battery-ah", "50", "--battery-v", "2", "--monte-carlo", "4", "--seed", "3",
+               "--out", str(tmp_path / "o")])
+    out = capsys.readouterr().out
+    assert rc == 1 and "missions failed" in out and "maximum deliverable power" in out
+    data = json.loads((tmp_path / "o" / "monte_carlo.json").read_text())
+    assert data["n_failed"] >= 1 and len(data["samples"]["error"]) == 4
