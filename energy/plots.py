@@ -6,10 +6,11 @@ data's Nyquist frequency, with a warning and a note on the figure, instead of fa
 the results that the figure illustrates are done.
 
 Where a figure goes (the rule of every terrawatt figure, :mod:`terrawatt_base.plot_target`): give
-exactly one of ``path`` or ``axes=``. With ``path`` the function makes its own figure, writes
-it as a PNG atomically (:func:`terrawatt_base.atomic.save_figure`) and returns the path; matplotlib
-then runs on the non-interactive Agg backend, so this works on a robot or a CI machine
-without a display. With ``axes=`` (a sequence of matplotlib Axes, one per panel) it draws
+exactly one of ``path`` or ``axes=``. With ``path`` the function makes its own figure
+(:func:`terrawatt_base.plot_target.new_figure`: matplotlib's object API on an Agg canvas, no
+pyplot, the user's backend left alone), writes it as a PNG atomically
+(:func:`terrawatt_base.atomic.save_figure`) and returns the path, so this works on a robot or a
+CI machine without a display. With ``axes=`` (a sequence of matplotlib Axes, one per panel) it draws
 into the caller's axes, writes nothing, leaves the caller's figure layout alone (no
 ``tight_layout``) and returns the axes as a tuple, so figures can be composed. The figure's
 own title belongs to the figure and is drawn only with ``path``; with ``axes`` a ``title``
@@ -28,6 +29,7 @@ from typing import Any
 import numpy as np
 from scipy.ndimage import uniform_filter1d
 
+from terrawatt_base import plot_target
 from terrawatt_base.atomic import save_figure
 from terrawatt_base.checks import check_int, check_real, fmt_number
 from terrawatt_base.errors import DataError, FigureWarning, GridMismatchError, InvalidParameterError
@@ -40,22 +42,6 @@ from .metrics import DEFAULT_SMOOTHING_SAMPLES, moving_median
 __all__ = ["plot_current_estimate", "plot_vibration_spectra", "ground_spectra"]
 
 _SIDES = ("left", "right")
-
-
-def _pyplot() -> Any:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _save(fig: Any, path: str | os.PathLike[str], dpi: int) -> Path:
-    try:
-        return save_figure(fig, path, dpi=dpi)
-    finally:
-        _pyplot().close(fig)
 
 
 def _band_for_data(logs: Sequence[Any], max_frequency_hz: float) -> tuple[float, str]:
@@ -151,13 +137,12 @@ def plot_current_estimate(
             panels[0].set_title(title)
         return panels
 
-    plt = _pyplot()
-    fig, panels = plt.subplots(2, 1, figsize=(10, 6.5), sharex=True)
+    fig, panels = plot_target.new_figure((10, 6.5), 2, 1, sharex=True)
     _draw_currents(panels, t, measured, smooth_meas, smooth_pred, window_samples, label)
     ground = log.meta.ground_label or "unknown ground"
     fig.suptitle(title or f"drive current: {Path(log.meta.source).name or 'run'} on {ground}")
     fig.tight_layout()
-    return _save(fig, target, dpi)
+    return save_figure(fig, target, dpi=dpi)
 
 
 def _draw_currents(panels: Sequence[Any], t: np.ndarray, measured: np.ndarray, smooth_meas: np.ndarray,
@@ -325,16 +310,15 @@ def plot_vibration_spectra(
             panels[0].set_title(title)
         return panels
 
-    plt = _pyplot()
-    fig, grid = plt.subplots(len(spectra), 1, figsize=(10, 2.4 * len(spectra) + 0.8), sharex=True, sharey=True,
-                             squeeze=False)
+    fig, grid = plot_target.new_figure((10, 2.4 * len(spectra) + 0.8), len(spectra), 1, sharex=True, sharey=True,
+                                       squeeze=False)
     _draw_spectra(grid[:, 0], freq, spectra, smoothing_bins)
     fig.supylabel(ylabel, fontsize=9)
     fig.suptitle(title or "vertical vibration spectra by ground")
     if note:
         fig.text(0.5, 0.005, note, ha="center", va="bottom", fontsize=8, color="#a50f15")
     fig.tight_layout(rect=(0, 0.03 if note else 0, 1, 1))
-    return _save(fig, target, dpi)
+    return save_figure(fig, target, dpi=dpi)
 
 
 def _draw_spectra(panels: Sequence[Any], freq: np.ndarray, spectra: Mapping[str, np.ndarray],

@@ -13,11 +13,11 @@ from typing import Any
 from terrain import DemWindows, Grid, TerrainMap
 from terrawatt_base.atomic import write_json_atomic
 from terrawatt_base.checks import check_real
+from terrawatt_base.figure_file import draw_figure
 
 from .coarse import CoarseToFine, plan_coarse_to_fine
 from .coarse_geotiff import plan_coarse_to_fine_geotiff
 from .edge_cost import EnergyCost
-from .figure_file import draw_figure
 from .plan_report import (
     ROUTE_JSON_FORMAT,
     ROUTE_JSON_FORMAT_VERSION,

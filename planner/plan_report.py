@@ -16,10 +16,10 @@ from terrain import UNKNOWN_GROUND, OptionalDependencyError, TerrainMap
 from terrawatt_base.atomic import write_json_atomic
 from terrawatt_base.checks import check_choice, check_real
 from terrawatt_base.errors import InvalidParameterError
+from terrawatt_base.figure_file import draw_figure
 
 from .cost_source import edge_costs
 from .edge_cost import EnergyCost
-from .figure_file import draw_figure
 from .planning import GRAPH_PLANNERS, PLANNERS, plan_route
 from .plot import RouteLine, plot_routes
 from .risk import INTERVAL_LEVEL, RouteEnergyInterval, risk_cost, route_energy_interval
@@ -344,7 +344,7 @@ class PlanReport:
         ``out_dir`` (created), each atomically; return the files written.
 
         A figure that fails warns (:class:`~terrawatt_base.errors.FigureWarning`) and is left out,
-        unless ``on_figure_error="raise"`` (:func:`planner.figure_file.draw_figure`).
+        unless ``on_figure_error="raise"`` (:func:`terrawatt_base.figure_file.draw_figure`).
         """
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)

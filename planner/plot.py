@@ -2,9 +2,10 @@
 
 Where the figure goes (the rule of every terrawatt figure, :mod:`terrawatt_base.plot_target`): give
 exactly one of ``path`` or ``ax=``. With ``path``, :func:`plot_routes` makes its own figure
-(matplotlib's Agg backend), writes a PNG atomically and returns the path; with ``ax`` it
-draws into the caller's axes, writes nothing, leaves the caller's figure layout alone (no
-``tight_layout``) and returns ``ax``, so a route map can be one panel of a larger figure.
+(:func:`terrawatt_base.plot_target.new_figure`: matplotlib's object API on an Agg canvas, no
+pyplot), writes a PNG atomically and returns the path; with ``ax`` it draws into the caller's
+axes, writes nothing, leaves the caller's figure layout alone (no ``tight_layout``) and returns
+``ax``, so a route map can be one panel of a larger figure.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from terrain import TerrainMap
+from terrawatt_base import plot_target
 from terrawatt_base.atomic import save_figure
 from terrawatt_base.checks import check_choice, check_optional_real, check_real
 from terrawatt_base.plot_target import check_ax, check_plot_target
@@ -167,18 +169,10 @@ def plot_routes(
         _draw_routes(ax, tmap, routes, start_xy_m, goal_xy_m, view, title, max_slope_rad)
         return ax
 
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(10.5, 7.2))
+    fig, ax = plot_target.new_figure((10.5, 7.2))
     _draw_routes(ax, tmap, routes, start_xy_m, goal_xy_m, view, title, max_slope_rad)
     fig.tight_layout()
-    try:
-        return save_figure(fig, target, dpi=dpi, format="png")
-    finally:
-        plt.close(fig)
+    return save_figure(fig, target, dpi=dpi, format="png")
 
 
 def _draw_routes(ax: Any, tmap: TerrainMap, routes: Sequence[RouteLine], start_xy_m: tuple[float, float],

@@ -15,9 +15,9 @@ from energy.battery import S_PER_H
 from terrain import TerrainMap
 from terrawatt_base.atomic import write_json_atomic
 from terrawatt_base.checks import check_real
+from terrawatt_base.figure_file import draw_figure
 
 from .cost_source import edge_costs
-from .figure_file import draw_figure
 from .plan_report import PlanModel
 from .reachability import reachability, warm_up_reachability
 from .reachability_result import Reachability
@@ -129,7 +129,7 @@ class ReachReport:
         """Write the raster (``raster``: ``reach.tif`` or ``reach.npz``; default ``reach.tif`` when the map has a
         CRS, else ``reach.npz``), reach.json and reach.png into ``out_dir``; return the files written.
 
-        A figure that fails warns and is left out (:func:`planner.figure_file.draw_figure`).
+        A figure that fails warns and is left out (:func:`terrawatt_base.figure_file.draw_figure`).
         """
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)

@@ -2,8 +2,9 @@
 
 Where the figure goes (the rule of every terrawatt figure, :mod:`terrawatt_base.plot_target`): give
 exactly one of ``path`` or ``ax=``. With ``path``, :func:`plot_reachability` makes its own
-figure (matplotlib's Agg backend), writes a PNG atomically and returns the path; with ``ax``
-it draws into the caller's axes — its colour bar attached to ``ax.figure``, beside ``ax`` —
+figure (:func:`terrawatt_base.plot_target.new_figure`: matplotlib's object API on an Agg
+canvas, no pyplot), writes a PNG atomically and returns the path; with ``ax`` it draws into
+the caller's axes — its colour bar attached to ``ax.figure``, beside ``ax`` —
 writes nothing, leaves the caller's figure layout alone (no ``tight_layout``) and returns
 ``ax``, so the map can be one panel of a larger figure.
 """
@@ -18,6 +19,7 @@ import numpy as np
 from scipy import ndimage
 
 from energy.battery import S_PER_H
+from terrawatt_base import plot_target
 from terrawatt_base.atomic import save_figure
 from terrawatt_base.plot_target import check_ax, check_plot_target
 
@@ -64,18 +66,10 @@ def plot_reachability(reach: Any, path: str | os.PathLike[str] | None = None, *,
         _draw_reachability(check_ax(ax), reach, title)
         return ax
 
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(9.5, 7.2))
+    fig, ax = plot_target.new_figure((9.5, 7.2))
     _draw_reachability(ax, reach, title)
     fig.tight_layout()
-    try:
-        return save_figure(fig, target, dpi=dpi, format="png")
-    finally:
-        plt.close(fig)
+    return save_figure(fig, target, dpi=dpi, format="png")
 
 
 def _draw_reachability(ax: Any, reach: Any, title: str | None) -> None:

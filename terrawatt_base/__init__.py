@@ -11,7 +11,9 @@ Nothing here knows about maps, robots or routes:
 - :mod:`~terrawatt_base.containers` and :mod:`~terrawatt_base.formats`: zip / ``.npz`` /
   ``.npy`` containers read within a memory budget, versioned ``.npz`` files;
 - :mod:`~terrawatt_base.dask_client`: a dask.distributed client with deadlines;
-- :mod:`~terrawatt_base.plot_target`: where a figure goes (a file, or the caller's axes).
+- :mod:`~terrawatt_base.plot_target`: where a figure goes (a file, or the caller's axes) and the
+  figure made for a file (matplotlib's object API, never pyplot);
+- :mod:`~terrawatt_base.figure_file`: a report's figure drawn, or a ``FigureWarning`` when it fails.
 """
 
 #: Nothing is named here: import from the modules (``from terrawatt_base.errors import ...``).

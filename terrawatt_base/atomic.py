@@ -378,7 +378,9 @@ def save_figure(fig: Any, path: str | os.PathLike[str], *, dpi: int = 150, **sav
     """Write a matplotlib figure atomically; return the path.
 
     The format comes from ``path``'s suffix (PNG when it has none); ``savefig_kwargs`` go to
-    ``Figure.savefig``. The figure is left open: the caller owns it (and closes it).
+    ``Figure.savefig``. The figure is left as it is: the caller owns it (a figure made by
+    :func:`terrawatt_base.plot_target.new_figure` needs no closing; a pyplot figure is the
+    caller's to close).
     """
     target = Path(path)
     savefig_kwargs.setdefault("format", target.suffix.lstrip(".").lower() or "png")

@@ -5,7 +5,11 @@ Every figure function of terrawatt takes an optional positional ``path`` and a k
 the two is given. With ``path`` the function makes its own figure, saves it atomically and
 returns the path; with ``ax`` / ``axes`` it draws into the caller's axes, writes nothing,
 leaves the caller's figure layout alone and returns the axes it drew into, so figures can
-be composed. The checks here make that rule read the same in every module.
+be composed. The checks here make that rule read the same in every module, and
+:func:`new_figure` makes the figure of the ``path`` route: matplotlib's object API on an Agg
+canvas, never pyplot, so a library figure neither changes the user's backend
+(``matplotlib.use``) nor adds to pyplot's figures, and needs no display. The figure is then
+written by :func:`terrawatt_base.atomic.save_figure`; nothing needs closing.
 
 Example
 -------
@@ -15,6 +19,9 @@ Example
 True
 >>> len(check_axes(Figure().subplots(1, 2), 2, what="histogram, exceedance"))
 2
+>>> fig, (left, right) = new_figure((8.0, 3.0), 1, 2, sharey=True)
+>>> fig.get_size_inches().tolist(), type(fig.canvas).__name__
+([8.0, 3.0], 'FigureCanvasAgg')
 """
 
 from __future__ import annotations
@@ -28,7 +35,7 @@ import numpy as np
 from .atomic import check_output_path
 from .errors import InvalidParameterError
 
-__all__ = ["check_plot_target", "check_ax", "check_axes"]
+__all__ = ["check_plot_target", "check_ax", "check_axes", "new_figure"]
 
 
 def check_plot_target(path: Any, axes: Any, *, axes_name: str = "ax") -> Path | None:
@@ -116,3 +123,32 @@ def check_axes(axes: Any, n: int, *, what: str = "", name: str = "axes") -> tupl
     for k, ax in enumerate(flat):
         check_ax(ax, f"{name}[{k}]")
     return flat
+
+
+def new_figure(figsize: tuple[float, float], nrows: int = 1, ncols: int = 1, **subplots_kw: Any) -> tuple[Any, Any]:
+    """A new figure for a file and its axes: ``Figure(figsize=...)`` on an Agg canvas, no pyplot.
+
+    The one way a terrawatt function makes the figure it writes to ``path``: the user's
+    matplotlib backend and pyplot's list of open figures are left alone, and the figure goes
+    with its last reference (nothing to close).
+
+    Parameters
+    ----------
+    figsize : (float, float)
+        Width and height in inches.
+    nrows, ncols : int
+        The grid of axes.
+    **subplots_kw
+        Passed to :meth:`matplotlib.figure.Figure.subplots` (``sharex``, ``squeeze``, ...).
+
+    Returns
+    -------
+    (matplotlib.figure.Figure, Axes or ndarray of Axes)
+        The figure and what ``Figure.subplots`` returns.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=figsize)
+    FigureCanvasAgg(fig)
+    return fig, fig.subplots(nrows, ncols, **subplots_kw)

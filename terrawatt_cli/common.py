@@ -24,12 +24,12 @@ from terrain import (
     TerrainMap,
     UnknownNameError,
 )
+from terrawatt_base import figure_file
 from terrawatt_base.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
 from terrawatt_base.checks import fmt_number
 from terrawatt_base.dask_client import dask_client
 from terrain.landcover import LandcoverClasses, ground_classes_from_landcover, read_landcover_classes
 
-from planner import figure_file
 from planner.points import lonlat_points
 from planner.risk import check_risk_level
 
@@ -278,7 +278,7 @@ def check_grounds(names: Iterable[str], flag: str) -> None:
 
 def draw_figure(path: Path, draw: Callable[[], Path]) -> Path | None:
     """Call ``draw`` (which writes the figure ``path``); on any failure warn on stderr and return None
-    (:func:`planner.figure_file.draw_figure`): a figure never fails a command whose results are written."""
+    (:func:`terrawatt_base.figure_file.draw_figure`): a figure never fails a command whose results are written."""
     with warn_figures():
         return figure_file.draw_figure(path, draw)
 

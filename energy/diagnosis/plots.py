@@ -30,7 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from terrawatt_base.atomic import check_output_path
+from terrawatt_base import plot_target
+from terrawatt_base.atomic import check_output_path, save_figure
 from terrawatt_base.checks import check_choice, check_int, fmt_number
 from terrawatt_base.errors import DataError, FigureWarning, InvalidParameterError
 from terrawatt_base.plot_target import check_ax, check_axes, check_plot_target
@@ -45,8 +46,6 @@ from .plots_gap import (
     plot_gap_by_regime,
     plot_gap_map,
     plot_residual_time,
-    pyplot,
-    save_closed,
 )
 from .regimes import check_terrain
 from .result import Diagnosis
@@ -125,10 +124,10 @@ def plot_effect_ranking(diagnosis: Diagnosis, path: str | os.PathLike[str] | Non
         _draw_ranking(ax, diagnosis, ranking)
         return ax
 
-    fig, ax = pyplot().subplots(figsize=(9, 0.38 * len(ranking) + 1.8))
+    fig, ax = plot_target.new_figure((9, 0.38 * len(ranking) + 1.8))
     _draw_ranking(ax, diagnosis, ranking)
     fig.tight_layout()
-    return save_closed(fig, target, dpi)
+    return save_figure(fig, target, dpi=dpi)
 
 
 def _draw_ranking(ax: Any, diagnosis: Diagnosis, ranking: Sequence[Any]) -> None:
@@ -205,12 +204,12 @@ def plot_waterfall(diagnosis: Diagnosis, path: str | os.PathLike[str] | None = N
         _draw_waterfall(panels, steps)
         return panels
 
-    fig, panels = pyplot().subplots(1, 3, figsize=(4.0 * 3, 3.6 + 0.12 * len(steps)))
+    fig, panels = plot_target.new_figure((4.0 * 3, 3.6 + 0.12 * len(steps)), 1, 3)
     _draw_waterfall(panels, steps)
     held = "held-out runs" if diagnosis.split == "runs" else "held-out blocks"
     fig.suptitle(f"how far the gap shrinks on {held}, effect by effect", fontsize=11)
     fig.tight_layout()
-    return save_closed(fig, target, dpi)
+    return save_figure(fig, target, dpi=dpi)
 
 
 def _draw_waterfall(panels: Sequence[Any], steps: Sequence[Any]) -> None:

@@ -1,8 +1,10 @@
 """Figures of where a gap lies: residual over time per side, gap by regime, gap on the map.
 
 Where a figure goes is the rule of :mod:`energy.diagnosis.plots` (give ``path`` or
-``ax=`` / ``axes=``; see there). The figure helpers shared with it (pyplot on Agg, save and
-close, argument checks, the reasons a figure's data is missing) live here too.
+``ax=`` / ``axes=``; see there); a figure for ``path`` is made by
+:func:`terrawatt_base.plot_target.new_figure` (no pyplot) and written by
+:func:`terrawatt_base.atomic.save_figure`. The helpers shared with it (argument checks, the
+reasons a figure's data is missing) live here too.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from terrawatt_base import plot_target
 from terrawatt_base.atomic import save_figure
 from terrawatt_base.checks import check_int, check_real, fmt_number, fmt_pct
 from terrawatt_base.errors import DataError, GridMismatchError, InvalidParameterError
@@ -38,8 +41,6 @@ from .result import Diagnosis
 
 __all__ = [
     "REGIME_PANELS",
-    "pyplot",
-    "save_closed",
     "checked_diagnosis",
     "log_list",
     "regime_rows",
@@ -59,24 +60,6 @@ _SIDE_COLOURS = ("#08519c", "#d94801")
 _GAP_COLOURS = ("#fb6a4a", "#6baed6")  # shade of a section whose gap is >= 0 (model predicts too little), < 0
 _LABELLED_SECTIONS = 6  # sections of a run labelled with their gap: the largest |gap|
 _BLOCK = re.compile(r"^cells? \((\d+)(?:-(\d+))?, (\d+)(?:-(\d+))?\)$")
-
-
-def pyplot() -> Any:
-    """``matplotlib.pyplot`` on the non-interactive Agg backend."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def save_closed(fig: Any, path: Path, dpi: int) -> Path:
-    """Write ``fig`` with :func:`terrawatt_base.atomic.save_figure`, close it, return the path."""
-    try:
-        return save_figure(fig, path, dpi=dpi)
-    finally:
-        pyplot().close(fig)
 
 
 def checked_diagnosis(diagnosis: Any) -> Diagnosis:
@@ -176,13 +159,12 @@ def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str]
         _draw_residual_runs(panels, items, preds, after, sample_gaps, chosen, section_s, window_samples)
         return panels
 
-    plt = pyplot()
-    fig, grid = plt.subplots(len(chosen), 1, figsize=(10, 2.6 * len(chosen) + 0.8), squeeze=False)
+    fig, grid = plot_target.new_figure((10, 2.6 * len(chosen) + 0.8), len(chosen), 1, squeeze=False)
     _draw_residual_runs(grid[:, 0], items, preds, after, sample_gaps, chosen, section_s, window_samples)
     which = "chosen" if runs is not None else "largest |gap|"
     fig.suptitle(f"residual current (measured - predicted): runs {', '.join(map(str, chosen))} of {len(items)} ({which})")
     fig.tight_layout()
-    return save_closed(fig, target, dpi)
+    return save_figure(fig, target, dpi=dpi)
 
 
 def _draw_residual_runs(panels: Sequence[Any], items: Sequence[InteractionLog], preds: Sequence[np.ndarray],
@@ -288,10 +270,9 @@ def plot_gap_by_regime(diagnosis: Diagnosis, path: str | os.PathLike[str] | None
         _draw_regimes(panels, rows)
         return panels
 
-    plt = pyplot()
     ncols = 3 if len(rows) > 2 else len(rows)
     nrows = -(-len(rows) // ncols)
-    fig, grid = plt.subplots(nrows, ncols, figsize=(4.2 * ncols, 3.2 * nrows + 0.6), squeeze=False)
+    fig, grid = plot_target.new_figure((4.2 * ncols, 3.2 * nrows + 0.6), nrows, ncols, squeeze=False)
     _draw_regimes(grid.ravel()[:len(rows)], rows)
     for ax in grid.ravel()[len(rows):]:
         ax.set_visible(False)
@@ -300,7 +281,7 @@ def plot_gap_by_regime(diagnosis: Diagnosis, path: str | os.PathLike[str] | None
     fig.suptitle(f"where the gap lies (model as given, all logs; bar = net measured - predicted charge, "
                  f"95 % interval over {diagnosis.localisation_units}){note}", fontsize=10)
     fig.tight_layout()
-    return save_closed(fig, target, dpi)
+    return save_figure(fig, target, dpi=dpi)
 
 
 def _draw_regimes(panels: Sequence[Any], rows: dict[str, list[Any]]) -> None:
@@ -419,10 +400,10 @@ def plot_gap_map(diagnosis: Diagnosis, terrain: TerrainMap, path: str | os.PathL
         _draw_gap_map(ax, terrain, raster, blocks, logs)
         return ax
 
-    fig, ax = pyplot().subplots(figsize=(7.5, 6.4))
+    fig, ax = plot_target.new_figure((7.5, 6.4))
     _draw_gap_map(ax, terrain, raster, blocks, logs)
     fig.tight_layout()
-    return save_closed(fig, target, dpi)
+    return save_figure(fig, target, dpi=dpi)
 
 
 def _draw_gap_map(ax: Any, terrain: TerrainMap, raster: np.ndarray, blocks: list[tuple[int, int, int, int, float]],

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from terrawatt_base import plot_target
 from terrawatt_base.errors import InvalidParameterError
 
 from ..logs import InteractionLog
@@ -105,11 +106,12 @@ def plot_reliability(records: Sequence[IntervalRecord], ax: Any = None, *, title
     """Observed against nominal coverage of central intervals, one line per group; returns the axes.
 
     A line on the diagonal is an honest interval; below it, too narrow; above, too wide.
+    Without ``ax`` it draws into a new 4.8 x 4.4 in figure
+    (:func:`terrawatt_base.plot_target.new_figure`, no pyplot: the user's backend and open
+    figures are left alone); write it with ``ax.figure.savefig(...)``.
     """
-    import matplotlib.pyplot as plt
-
     if ax is None:
-        _, ax = plt.subplots(figsize=(4.8, 4.4))
+        _, ax = plot_target.new_figure((4.8, 4.4))
     levels = np.linspace(0.05, 0.95, 19)
     ax.plot([0, 1], [0, 1], color="0.6", lw=1, ls="--", label="honest")
     for group in dict.fromkeys(r.group for r in records):

@@ -15,8 +15,8 @@ from terrain import CellModelRegistry, TerrainMap
 from terrawatt_base.atomic import write_json_atomic
 from terrawatt_base.checks import check_bool, check_real
 from terrawatt_base.errors import UnknownNameError
+from terrawatt_base.figure_file import draw_figure
 
-from ..figure_file import draw_figure
 from ..model_cost import model_energy_model
 from .adaptive import run_adaptive_mission
 from .adaptive_results import AdaptiveResult
@@ -126,7 +126,7 @@ class MissionReport:
 
     def write(self, out_dir: str | os.PathLike[str], *, on_figure_error: str = "warn") -> list[Path]:
         """Write mission.json and mission.png into ``out_dir``; return the files written (a figure that fails
-        warns and is left out, :func:`planner.figure_file.draw_figure`)."""
+        warns and is left out, :func:`terrawatt_base.figure_file.draw_figure`)."""
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
         written = [write_json_atomic(out / "mission.json", self.to_dict())]

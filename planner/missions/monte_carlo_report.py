@@ -13,10 +13,10 @@ from energy import Battery, robot_preset
 from terrain import TerrainMap
 from terrawatt_base.checks import check_real
 from terrawatt_base.errors import InvalidParameterError
+from terrawatt_base.figure_file import draw_figure
 
 from ..cost_source import edge_costs
 from ..edge_cost import DEFAULT_MAX_SLOPE_RAD
-from ..figure_file import draw_figure
 from ..planning import plan_route
 from ..risk import check_risk_level
 from ..route import Route

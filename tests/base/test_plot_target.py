@@ -1,13 +1,20 @@
-"""Where a figure goes: exactly one of a path to write or the caller's axes, checked before drawing."""
+"""Where a figure goes: exactly one of a path to write or the caller's axes, checked before drawing; the figure made
+for a path is matplotlib's object API, so no library module touches the backend or pyplot."""
 
 from __future__ import annotations
+
+import ast
+from pathlib import Path
 
 import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
 from terrain import InvalidParameterError
-from terrawatt_base.plot_target import check_ax, check_axes, check_plot_target
+from terrawatt_base.atomic import save_figure
+from terrawatt_base.plot_target import check_ax, check_axes, check_plot_target, new_figure
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_a_path_is_checked_and_returned(tmp_path):
@@ -55,3 +62,55 @@ def test_several_axes_are_read_in_row_major_order():
         check_axes(pair[0], 2)
     with pytest.raises(InvalidParameterError, match=r"axes\[1\] must be a matplotlib Axes, got 'str'"):
         check_axes(np.array([pair[0], "x"], dtype=object), 2)
+
+
+def test_new_figure_is_an_agg_figure_with_its_axes():
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    fig, ax = new_figure((4.0, 3.0))
+    assert isinstance(fig, Figure) and isinstance(fig.canvas, FigureCanvasAgg)
+    assert fig.get_size_inches().tolist() == [4.0, 3.0] and fig.axes == [ax]
+    fig, grid = new_figure((6.0, 4.0), 2, 3, sharex=True, squeeze=False)
+    assert grid.shape == (2, 3) and grid[1, 2].get_shared_x_axes().joined(grid[0, 0], grid[1, 2])
+
+
+def test_a_figure_written_to_a_path_leaves_the_backend_and_pyplot_alone(tmp_path):
+    import matplotlib
+    import matplotlib.pyplot as plt
+
+    backend, open_before = matplotlib.get_backend(), plt.get_fignums()
+    fig, ax = new_figure((3.0, 2.0))
+    ax.plot([0, 1], [1, 0])
+    assert save_figure(fig, tmp_path / "a.png", dpi=50).read_bytes()[:4] == b"\x89PNG"
+    assert matplotlib.get_backend() == backend and plt.get_fignums() == open_before
+
+
+# the library's source: every package but the tests, examples and benchmarks
+LIBRARY = [ROOT / name for name in ("terrawatt_base", "terrain", "energy", "planner", "terrawatt_cli")]
+
+
+def _backend_or_pyplot_uses(path: Path) -> list[str]:
+    """``file:line: what`` for each ``matplotlib.use(...)`` call or pyplot / pylab import in ``path``."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+        what = None
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names if a.name in ("matplotlib.pyplot", "pylab")]
+            what = f"import {names[0]}" if names else None
+        elif isinstance(node, ast.ImportFrom):
+            if node.module in ("matplotlib.pyplot", "pylab") or (
+                    node.module == "matplotlib" and any(a.name in ("pyplot", "use") for a in node.names)):
+                what = f"from {node.module} import {', '.join(a.name for a in node.names)}"
+        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "use"
+              and isinstance(node.func.value, ast.Name) and node.func.value.id in ("matplotlib", "mpl")):
+            what = f"{node.func.value.id}.use(...)"
+        if what:
+            found.append(f"{path.relative_to(ROOT)}:{node.lineno}: {what}")
+    return found
+
+
+def test_no_library_module_sets_the_backend_or_imports_pyplot():
+    files = [p for package in LIBRARY for p in sorted(package.rglob("*.py"))]
+    assert len(files) > 50  # the packages were found
+    found = [hit for path in files for hit in _backend_or_pyplot_uses(path)]
+    assert not found, "a library figure must use new_figure (matplotlib's object API), not pyplot:\n" + "\n".join(found)

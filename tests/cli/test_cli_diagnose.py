@@ -6,11 +6,11 @@ import dataclasses
 import json
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import pytest
 
 from energy import load_current_model, write_csv_log
 from diagnosis_scenarios import scenario
+from terrawatt_base import plot_target
 from terrawatt_cli import diagnose as diagnose_cli
 from terrawatt_cli import main
 
@@ -140,7 +140,7 @@ def test_a_failing_figure_warns_and_the_command_still_succeeds(data, tmp_path, c
     def broken(*args, **kwargs):
         raise RuntimeError("no canvas")
 
-    monkeypatch.setattr(plt, "subplots", broken)
+    monkeypatch.setattr(plot_target, "new_figure", broken)
     rc, out, err = _run(capsys, "--model", data / "model.zip", "--data", data / "logs", "--out", tmp_path,
                         "--effects", "turning_resistance")
     assert rc == 0

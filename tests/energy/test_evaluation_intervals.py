@@ -24,6 +24,17 @@ def test_coverage_counts_records_inside_each_central_interval():
     assert len(ax.lines) == 2
 
 
+def test_reliability_plot_without_axes_makes_a_figure_outside_pyplot():
+    import matplotlib
+    import matplotlib.pyplot as plt
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    backend, open_before = matplotlib.get_backend(), plt.get_fignums()
+    ax = plot_reliability([IntervalRecord("g", "x", "r0", true_as=10.5, mean_as=10.0, sd_as=1.0)])
+    assert isinstance(ax.figure.canvas, FigureCanvasAgg) and ax.figure.get_size_inches().tolist() == [4.8, 4.4]
+    assert matplotlib.get_backend() == backend and plt.get_fignums() == open_before
+
+
 
 def test_charge_record_scores_a_model_forecast(two_ground_estimator):
     est, logs = two_ground_estimator

@@ -10,12 +10,17 @@ from terrain import InvalidParameterError, flat_map
 
 
 def test_plot_routes_writes_a_png(tmp_path):
+    import matplotlib
+    import matplotlib.pyplot as plt
+
+    backend, open_before = matplotlib.get_backend(), plt.get_fignums()
     tmap = flat_map((10, 12), 1.0)
     line = RouteLine("straight", np.array([[0.5, 0.5], [11.5, 9.5]]), 123.0)
     out = plot_routes(tmap, [line], (0.5, 0.5), (11.5, 9.5), tmp_path / "route.png")
     assert out == tmp_path / "route.png"
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["route.png"]  # no temporary left
+    assert matplotlib.get_backend() == backend and plt.get_fignums() == open_before  # pyplot left alone
 
 
 def test_plot_routes_refuses_a_directory_before_drawing(tmp_path):

@@ -130,29 +130,26 @@ def test_the_zoom_contains_the_route_with_a_margin_inside_the_map():
         view_bounds(tmap, [line], margin_frac=-1.0)
 
 
-def test_plot_zooms_and_hatches_the_steep_cells(tmp_path):
-    import matplotlib.pyplot as plt
+def test_plot_zooms_and_hatches_the_steep_cells(tmp_path, monkeypatch):
+    from terrawatt_base import plot_target
 
     tmap = procedural_map((120, 160), 1.0, seed=3, ridge_slope_deg=40.0)
     line = RouteLine("r", np.array([[20.0, 20.0], [60.0, 50.0]]), 10.0)
     captured = {}
-    original = plt.close
+    original = plot_target.new_figure
 
-    def keep(fig):
-        captured["fig"] = fig
+    def keep(*args, **kwargs):
+        captured["fig"], axes = original(*args, **kwargs)
+        return captured["fig"], axes
 
-    plt.close = keep
-    try:
-        out = plot_routes(tmap, [line], (20.0, 20.0), (60.0, 50.0), tmp_path / "z.png", max_slope_rad=np.radians(10.0))
-    finally:
-        plt.close = original
+    monkeypatch.setattr(plot_target, "new_figure", keep)
+    out = plot_routes(tmap, [line], (20.0, 20.0), (60.0, 50.0), tmp_path / "z.png", max_slope_rad=np.radians(10.0))
     ax = captured["fig"].axes[0]
     x0, x1 = ax.get_xlim()
     y0, y1 = ax.get_ylim()
     assert x0 <= 20.0 and x1 >= 60.0 and y0 <= 20.0 and y1 >= 50.0 and x1 - x0 < 100.0
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert any("steeper than 10 deg" in t for t in labels)
-    plt.close(captured["fig"])
     assert out.read_bytes()[:4] == b"\x89PNG"
     with pytest.raises(InvalidParameterError, match="max_slope_rad"):
         plot_routes(tmap, [line], (20.0, 20.0), (60.0, 50.0), tmp_path / "y.png", max_slope_rad=-1.0)

@@ -24,6 +24,7 @@ from energy.diagnosis.plots import (
 )
 from diagnosis_scenarios import scenario
 from terrain import DataError, FigureWarning, GridMismatchError, InvalidParameterError, UnknownNameError
+from terrawatt_base import plot_target
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -45,7 +46,7 @@ def _no_drawing(monkeypatch):
     def refuse(*args, **kwargs):
         raise AssertionError("drew a figure although the path was refused")
 
-    monkeypatch.setattr(plt, "subplots", refuse)
+    monkeypatch.setattr(plot_target, "new_figure", refuse)
 
 
 def test_every_figure_is_written_with_no_temporary_left(case, tmp_path):
@@ -155,7 +156,7 @@ def test_a_failing_figure_warns_when_asked_and_raises_otherwise(case, tmp_path, 
     def broken(*args, **kwargs):
         raise RuntimeError("no canvas")
 
-    monkeypatch.setattr(plt, "subplots", broken)
+    monkeypatch.setattr(plot_target, "new_figure", broken)
     with pytest.raises(RuntimeError, match="no canvas"):
         plot_diagnosis(d, tmp_path, figures=["waterfall"])
     with warnings.catch_warnings(record=True) as caught:

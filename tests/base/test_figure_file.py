@@ -1,4 +1,4 @@
-"""Tests of planner.figure_file: a figure drawn, or a FigureWarning."""
+"""Tests of terrawatt_base.figure_file: a figure drawn, or a FigureWarning."""
 
 from __future__ import annotations
 
@@ -6,9 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from terrain import FigureWarning, UnknownNameError
-
-from planner.figure_file import draw_figure
+from terrawatt_base.errors import FigureWarning, UnknownNameError
+from terrawatt_base.figure_file import draw_figure
 
 
 def _broken() -> Path:

@@ -7,8 +7,8 @@ import warnings
 from collections.abc import Callable
 from pathlib import Path
 
-from terrawatt_base.checks import check_choice
-from terrawatt_base.errors import FigureWarning
+from .checks import check_choice
+from .errors import FigureWarning
 
 __all__ = ["FIGURE_ERRORS", "draw_figure"]
 
