@@ -3,22 +3,13 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
 
 import numpy as np
 import pytest
 
-from energy import (
-    Battery,
-    NoiseModel,
-    PhysicsEnergyModel,
-    TruthSimulator,
-    ground_preset,
-    robot_preset,
-)
+from energy import Battery, PhysicsEnergyModel, TruthSimulator, ground_preset
 from planner import EnergyCost, simulate_mission
-from planner.missions import MISSION_FORMAT_VERSION
 from planner.route import evaluate_route
 from terrain import (
     DataError,
@@ -30,31 +21,7 @@ from terrain import (
     ramp_map,
 )
 
-ROBOT = robot_preset("husky")
-GROUNDS = {"asphalt": ground_preset("asphalt")}
-L_ROUTE = [[2.5, 2.5], [35.5, 2.5], [35.5, 25.5]]
-
-
-@pytest.fixture(scope="module")
-def flat():
-    tmap = flat_map((30, 40), 1.0)
-    cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(ROBOT), GROUNDS, speed_mps=0.5)
-    return tmap, cost
-
-
-@pytest.fixture(scope="module")
-def clean_sim():
-    # Noise off and parameters equal to the planner's model: the apples-to-apples truth.
-    return TruthSimulator(ROBOT, GROUNDS, noise=NoiseModel.off(), velocity_time_constant_s=0.0,
-                          current_rate_hz=50.0, seed=0)
-
-
-@pytest.fixture(scope="module")
-def flat_mission(flat, clean_sim):
-    tmap, cost = flat
-    route = evaluate_route(cost, L_ROUTE)
-    return route, simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=cost,
-                                   forecast="edges")
+from simulate_samples import GROUNDS, ROBOT, clean_sim, flat, flat_mission  # noqa: F401  (fixtures)
 
 
 def test_flat_mission_matches_planner_prediction(flat_mission):
@@ -260,23 +227,6 @@ def test_bad_inputs(flat, flat_mission, clean_sim):
     other = EnergyCost.from_model(flat_map((30, 41), 1.0), PhysicsEnergyModel(ROBOT), GROUNDS, speed_mps=0.5)
     with pytest.raises(GridMismatchError, match="cost was built on a grid"):
         simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=other)
-
-
-def test_json_and_plot(flat_mission, flat, tmp_path):
-    tmap, _ = flat
-    _, res = flat_mission
-    path = res.save_json(tmp_path / "mission.json", series_every=25)
-    data = json.loads(path.read_text())
-    assert data["format_version"] == MISSION_FORMAT_VERSION and data["status"] == "completed"
-    assert data["budget"]["actual_energy_j"] == pytest.approx(res.budget.actual_energy_j)
-    assert data["reserve_crossing"] is None
-    n = len(range(0, res.n_samples, 25)) + (0 if (res.n_samples - 1) % 25 == 0 else 1)
-    assert len(data["series"]["soc"]) == n and data["series"]["time_s"][-1] == res.time_s[-1]
-    png = res.plot(tmp_path / "mission.png", tmap)
-    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["mission.json", "mission.png"]  # no temp files left
-    with pytest.raises(InvalidParameterError, match="series_every must be >= 1"):
-        res.to_json_dict(series_every=0)
 
 
 def test_diagnosing_mission_logs_names_what_the_truth_does_differently():

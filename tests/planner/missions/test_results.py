@@ -1,0 +1,29 @@
+"""Tests of planner.missions.results: MissionResult JSON (its series thinned) and figure files."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from planner.missions import MISSION_FORMAT_VERSION
+from terrain import InvalidParameterError
+
+from simulate_samples import clean_sim, flat, flat_mission  # noqa: F401  (fixtures)
+
+
+def test_json_and_plot(flat_mission, flat, tmp_path):
+    tmap, _ = flat
+    _, res = flat_mission
+    path = res.save_json(tmp_path / "mission.json", series_every=25)
+    data = json.loads(path.read_text())
+    assert data["format_version"] == MISSION_FORMAT_VERSION and data["status"] == "completed"
+    assert data["budget"]["actual_energy_j"] == pytest.approx(res.budget.actual_energy_j)
+    assert data["reserve_crossing"] is None
+    n = len(range(0, res.n_samples, 25)) + (0 if (res.n_samples - 1) % 25 == 0 else 1)
+    assert len(data["series"]["soc"]) == n and data["series"]["time_s"][-1] == res.time_s[-1]
+    png = res.plot(tmp_path / "mission.png", tmap)
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mission.json", "mission.png"]  # no temp files left
+    with pytest.raises(InvalidParameterError, match="series_every must be >= 1"):
+        res.to_json_dict(series_every=0)
