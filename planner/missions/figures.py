@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from terrain import CellModelRegistry, TerrainMap
+from terrawatt_base import plot_target
 from terrawatt_base.atomic import save_figure
 from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.plot_target import check_axes, check_plot_target
@@ -67,12 +68,8 @@ def plot_mission(result: Any, path: str | os.PathLike[str] | None = None, terrai
             panels[0].set_title(title)
         return panels
 
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(13.5, 4.2))
-    FigureCanvasAgg(fig)
-    _draw_mission(fig.subplots(1, 3, gridspec_kw={"width_ratios": [1, 1, 1.1]}), result, terrain)
+    fig, axes = plot_target.new_figure((13.5, 4.2), 1, 3, gridspec_kw={"width_ratios": [1, 1, 1.1]})
+    _draw_mission(axes, result, terrain)
     fig.suptitle(title or f"mission {result.status}: {result.budget.actual_energy_wh:.2f} Wh, "
                  f"arrival SoC {result.budget.arrival_soc_pct:.1f} %")
     fig.tight_layout()
@@ -170,12 +167,8 @@ def plot_adaptive_mission(result: Any, path: str | os.PathLike[str] | None = Non
         _draw_adaptive_mission(panels, result, terrain, registry)
         return panels
 
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(11, 9))
-    FigureCanvasAgg(fig)
-    _draw_adaptive_mission(fig.subplots(2, 2).ravel(), result, terrain, registry)
+    fig, axes = plot_target.new_figure((11, 9), 2, 2)
+    _draw_adaptive_mission(axes.ravel(), result, terrain, registry)
     fig.suptitle(f"adaptive mission: {result.status}")
     fig.tight_layout()
     return save_figure(fig, target, dpi=dpi, format="png")

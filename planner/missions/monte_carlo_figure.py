@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from terrawatt_base import plot_target
 from terrawatt_base.atomic import save_figure
 from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.plot_target import check_axes, check_plot_target
@@ -72,12 +73,8 @@ def plot_monte_carlo(result: Any, path: str | os.PathLike[str] | None = None, *,
             axes[0].set_title(title)
         return axes
 
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(12.0, 4.4))
-    FigureCanvasAgg(fig)
-    _draw_monte_carlo(fig.subplots(1, 2), result)
+    fig, axes = plot_target.new_figure((12.0, 4.4), 1, 2)
+    _draw_monte_carlo(axes, result)
     pct = result.energy_percentiles_wh
     failed = f" ({result.n_failed} failed)" if result.n_failed else ""
     fig.suptitle(title or f"{result.n} missions{failed}: P(below the {result.battery.min_reserve_pct:g} % reserve) = "
