@@ -1,4 +1,4 @@
-"""A closed-form stand-in energy model and a flat single-ground map, shared by the edge cost and refine tests."""
+"""A closed-form stand-in energy model and flat, ramp and rough maps, shared by the edge cost, cost query and refine tests."""
 
 from __future__ import annotations
 
@@ -33,3 +33,18 @@ def flat_terrain(rows=20, cols=30, cell=1.0, origin=(0.0, 0.0), obstacle=None):
         np.zeros((rows, cols)), cell, origin,
         ground=np.zeros((rows, cols), int), ground_names={0: "g"}, obstacle=obstacle,
     )
+
+
+def ramp_terrain(grade=0.1, rows=20, cols=40, cell=1.0):
+    x = (np.arange(cols) + 0.5) * cell
+    return TerrainMap(
+        np.broadcast_to(grade * x, (rows, cols)), cell, ground=np.zeros((rows, cols), int), ground_names={0: "asphalt"}
+    )
+
+
+def rough_terrain(seed=0, n=48, cell=0.5):
+    rng = np.random.default_rng(seed)
+    z = np.cumsum(np.cumsum(rng.normal(0, 0.01, (n, n)), axis=0), axis=1)
+    ground = (rng.random((n, n)) < 0.3).astype(int)
+    obstacle = rng.random((n, n)) < 0.03
+    return TerrainMap(z, cell, (5.0, -3.0), ground=ground, ground_names={0: "a", 1: "b"}, obstacle=obstacle)

@@ -8,33 +8,12 @@ import numpy as np
 import pytest
 
 from energy import PhysicsEnergyModel, ground_preset, robot_preset
-from planner import EnergyCost, Lattice
-from terrain import (
-    GridMismatchError,
-    InvalidParameterError,
-    OutOfBoundsError,
-    TerrainMap,
-    UnknownNameError,
-)
+from planner import EnergyCost
+from terrain import GridMismatchError, InvalidParameterError, TerrainMap, UnknownNameError
 
-from edge_cost_samples import LinearModel, flat_terrain
+from edge_cost_samples import LinearModel, flat_terrain, ramp_terrain, rough_terrain
 
 GRAVITY_MPS2 = 9.80665
-
-
-def _ramp(grade=0.1, rows=20, cols=40, cell=1.0):
-    x = (np.arange(cols) + 0.5) * cell
-    return TerrainMap(
-        np.broadcast_to(grade * x, (rows, cols)), cell, ground=np.zeros((rows, cols), int), ground_names={0: "asphalt"}
-    )
-
-
-def _rough(seed=0, n=48, cell=0.5):
-    rng = np.random.default_rng(seed)
-    z = np.cumsum(np.cumsum(rng.normal(0, 0.01, (n, n)), axis=0), axis=1)
-    ground = (rng.random((n, n)) < 0.3).astype(int)
-    obstacle = rng.random((n, n)) < 0.03
-    return TerrainMap(z, cell, (5.0, -3.0), ground=ground, ground_names={0: "a", 1: "b"}, obstacle=obstacle)
 
 
 def _reference_energy(cost: EnergyCost, a, b) -> float:
@@ -65,7 +44,7 @@ def test_flat_uniform_map_energy_proportional_to_length():
 
 
 def test_segment_energy_matches_reference_walk_on_rough_map():
-    tmap = _rough()
+    tmap = rough_terrain()
     cost = EnergyCost.from_model(tmap, LinearModel(), {"a": 1.0, "b": 2.5}, speed_mps=0.5, max_slope_rad=0.6)
     xmin, ymin, xmax, ymax = tmap.bounds
     rng = np.random.default_rng(2)
@@ -95,7 +74,7 @@ def test_zero_length_segment_costs_nothing():
 # --------------------------------------------------------------------------- direction and slope
 def test_uphill_exceeds_downhill_by_gravity_term_closed_form():
     grade, length = 0.1, 30.0
-    cost = EnergyCost.from_model(_ramp(grade), LinearModel(a=50.0, b=400.0), {"asphalt": 1.0}, speed_mps=0.5)
+    cost = EnergyCost.from_model(ramp_terrain(grade), LinearModel(a=50.0, b=400.0), {"asphalt": 1.0}, speed_mps=0.5)
     up, down = cost.segment_energy_j([[5.0, 10.0], [35.0, 10.0]], [[35.0, 10.0], [5.0, 10.0]])
     factor = math.sqrt(1 + grade**2)  # per metre travelled -> per horizontal metre
     # rel 1e-5: the table interpolates sqrt(1 + s^2) linearly between grade samples.
@@ -108,20 +87,20 @@ def test_uphill_exceeds_downhill_by_gravity_term_physics_model():
     grade, length = 0.1, 30.0
     robot = robot_preset("husky")
     model = PhysicsEnergyModel(robot)
-    cost = EnergyCost.from_model(_ramp(grade), model, {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
+    cost = EnergyCost.from_model(ramp_terrain(grade), model, {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
     up, down = cost.segment_energy_j([[5.0, 10.0], [35.0, 10.0]], [[35.0, 10.0], [5.0, 10.0]])
     potential_j = robot.mass_kg * GRAVITY_MPS2 * grade * length
     # The battery pays at least the potential energy going up, and gravity only helps going down.
     assert up - down >= potential_j
     assert up - down < 4.0 * potential_j
-    flat = EnergyCost.from_model(_ramp(0.0), model, {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
+    flat = EnergyCost.from_model(ramp_terrain(0.0), model, {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
     e_flat = flat.segment_energy_j([5.0, 10.0], [35.0, 10.0])[0]
     assert up > e_flat and down < up
 
 
 def test_diagonal_on_ramp_sees_projected_grade():
     grade = 0.2
-    cost = EnergyCost.from_model(_ramp(grade), LinearModel(a=0.0, b=100.0), {"asphalt": 1.0}, speed_mps=0.5)
+    cost = EnergyCost.from_model(ramp_terrain(grade), LinearModel(a=0.0, b=100.0), {"asphalt": 1.0}, speed_mps=0.5)
     a, b = np.array([5.0, 2.0]), np.array([25.0, 17.0])
     length = float(np.hypot(*(b - a)))
     s = grade * (b[0] - a[0]) / length
@@ -130,7 +109,7 @@ def test_diagonal_on_ramp_sees_projected_grade():
 
 
 def test_too_steep_cells_are_blocked():
-    tmap = _ramp(0.5)  # 26.6 deg
+    tmap = ramp_terrain(0.5)  # 26.6 deg
     cost = EnergyCost.from_model(tmap, LinearModel(), {"asphalt": 1.0}, speed_mps=0.5, max_slope_rad=math.radians(20))
     assert cost.blocked.all()
     assert np.isinf(cost.segment_energy_j([1.0, 1.0], [9.0, 9.0])[0])
@@ -170,7 +149,7 @@ def test_undrivable_grade_blocks_one_direction_only():
             g = np.asarray(grade, dtype=float)
             return np.where(g > 0.05, np.inf, 50.0)
 
-    cost = EnergyCost.from_model(_ramp(0.1), Steep(), {"asphalt": 1.0}, speed_mps=0.5)
+    cost = EnergyCost.from_model(ramp_terrain(0.1), Steep(), {"asphalt": 1.0}, speed_mps=0.5)
     up, down = cost.segment_energy_j([[5.0, 10.0], [35.0, 10.0]], [[35.0, 10.0], [5.0, 10.0]])
     assert np.isinf(up) and np.isfinite(down)
     across = cost.segment_energy_j([10.0, 2.0], [10.0, 18.0])[0]  # along the contour: grade 0
@@ -207,60 +186,9 @@ def test_speed_above_the_robot_maximum_is_refused():
         EnergyCost.from_model(flat_terrain(), model, {"g": ground_preset("asphalt")}, speed_mps=5.0)
 
 
-# --------------------------------------------------------------------------- turns and paths
-def test_turn_energies_and_path_energy():
-    cost = EnergyCost.from_model(flat_terrain(), LinearModel(a=50.0, c=30.0), {"g": 1.0}, speed_mps=0.5)
-    pts = np.array([[1.0, 1.0], [11.0, 1.0], [11.0, 1.0], [11.0, 6.0], [6.0, 1.0]])
-    angles, turns = cost.turn_energies_j(pts)
-    # Repeated point: the 90 degree turn is taken where the new heading starts (index 2).
-    np.testing.assert_allclose(angles, [0, 0, math.pi / 2, 3 * math.pi / 4, 0], atol=1e-12)
-    np.testing.assert_allclose(turns, 30.0 * angles, rtol=1e-9, atol=1e-12)
-    length = 10 + 5 + math.hypot(5, 5)
-    assert cost.path_energy_j(pts) == pytest.approx(50.0 * length + 30.0 * (math.pi / 2 + 3 * math.pi / 4), rel=1e-9)
-
-
-def test_surface_length_on_ramp():
-    grade = 0.2
-    cost = EnergyCost.from_model(_ramp(grade), LinearModel(), {"asphalt": 1.0}, speed_mps=0.5)
-    assert cost.surface_length_m([[5.0, 3.0], [25.0, 3.0], [25.0, 13.0]]) == pytest.approx(
-        20 * math.sqrt(1 + grade**2) + 10, rel=1e-9
-    )
-
-
-# --------------------------------------------------------------------------- heuristic
-def test_lower_bound_is_admissible():
-    tmap = _rough(seed=3, n=40, cell=1.0)
-    model = PhysicsEnergyModel(robot_preset("husky"))
-    grounds = {"a": ground_preset("asphalt"), "b": ground_preset("grass")}
-    cost = EnergyCost.from_model(tmap, model, grounds, speed_mps=0.5, max_slope_rad=0.6)
-    assert cost.min_energy_per_metre_j > 0
-    lattice = Lattice(cost)
-    rng = np.random.default_rng(4)
-    free = np.argwhere(~cost.blocked)
-    xs, ys = tmap.cell_centres()
-    checked = 0
-    for _ in range(25):
-        (r0, c0), (r1, c1) = free[rng.choice(len(free), 2, replace=False)]
-        a, b = np.array([xs[c0], ys[r0]]), np.array([xs[c1], ys[r1]])
-        bound = cost.lower_bound_j(a, b)[0]
-        path = lattice.shortest_path(a, b)
-        if path.found:
-            assert bound <= path.objective * (1 + 1e-12)
-            checked += 1
-        e = cost.segment_energy_j(a, b)[0]
-        assert bound <= e * (1 + 1e-12)
-    assert checked >= 10
-    # Random (valid) polylines cost at least the bound too.
-    pts = rng.uniform([xs[0], ys[0]], [xs[-1], ys[-1]], size=(200, 3, 2))
-    for poly in pts:
-        e = cost.segment_energy_j(poly[:-1], poly[1:]).sum()
-        if np.isfinite(e):
-            assert cost.lower_bound_j(poly[0], poly[-1])[0] <= e * (1 + 1e-12)
-
-
 # --------------------------------------------------------------------------- construction errors
 def test_unknown_ground_class_without_params_raises():
-    tmap = _rough()
+    tmap = rough_terrain()
     with pytest.raises(UnknownNameError, match="'b'"):
         EnergyCost.from_model(tmap, LinearModel(), {"a": 1.0}, speed_mps=0.5)
 
@@ -275,7 +203,7 @@ def test_unknown_ground_cells_need_unknown_ground():
 
 
 def test_grounds_keyed_by_class_id():
-    cost = EnergyCost.from_model(_rough(), LinearModel(a=10.0), {0: 1.0, 1: 3.0}, speed_mps=0.5, max_slope_rad=0.6)
+    cost = EnergyCost.from_model(rough_terrain(), LinearModel(a=10.0), {0: 1.0, 1: 3.0}, speed_mps=0.5, max_slope_rad=0.6)
     assert cost.grade_table_j_per_m.shape == (2, 513)
     assert cost.grade_table_j_per_m[1, 256] == pytest.approx(30.0)
 
@@ -349,31 +277,6 @@ def test_constructor_checks_grid_and_tables():
     assert ok.flags.writeable and not cost.grade_table_j_per_m.flags.writeable
 
 
-@pytest.mark.parametrize(
-    ("a", "b", "exc", "match"),
-    [
-        ([[math.nan, 1.0]], [[2.0, 2.0]], InvalidParameterError, "finite"),
-        ([[1.0, 1.0]], [[2.0, math.inf]], InvalidParameterError, "finite"),
-        ([[1.0, 1.0]], [[31.0, 2.0]], OutOfBoundsError, "outside"),
-        ([[1.0, 1.0, 1.0]], [[2.0, 2.0, 2.0]], InvalidParameterError, "shape"),
-        ([[1.0, 1.0], [2.0, 2.0]], [[2.0, 2.0]], InvalidParameterError, "equal shapes"),
-    ],
-)
-def test_segment_energy_rejects_bad_points(a, b, exc, match):
-    cost = EnergyCost.from_model(flat_terrain(), LinearModel(), {"g": 1.0}, speed_mps=0.5)
-    with pytest.raises(exc, match=match):
-        cost.segment_energy_j(a, b)
-
-
-@pytest.mark.parametrize("name", ["starts_xy_m", "ends_xy_m"])
-def test_segment_energy_names_a_non_numeric_point(name):
-    cost = EnergyCost.from_model(flat_terrain(), LinearModel(), {"g": 1.0}, speed_mps=0.5)
-    points = {"starts_xy_m": [[1.0, 1.0]], "ends_xy_m": [[2.0, 2.0]]}
-    points[name] = [["one", "two"]]
-    with pytest.raises(InvalidParameterError, match=f"{name} must be a real number or an array of them"):
-        cost.segment_energy_j(points["starts_xy_m"], points["ends_xy_m"])
-
-
 # --------------------------------------------------------------------------- from_presets
 def _preset_map(names=("asphalt", "grass"), unknown=False):
     ground = np.zeros((12, 16), int)
@@ -408,15 +311,3 @@ def test_from_presets_refuses_unknown_names_and_bad_speeds():
         EnergyCost.from_presets(_preset_map(), robot="no such robot")
     with pytest.raises(InvalidParameterError, match="terrain must be a TerrainMap"):
         EnergyCost.from_presets(np.zeros((4, 4)))
-
-
-def test_arrays_are_the_read_only_kernel_seam():
-    cost = EnergyCost.from_model(_ramp(), LinearModel(), {"asphalt": 1.0}, speed_mps=0.5)
-    arr = cost.arrays
-    assert arr.grid == cost.terrain.grid
-    assert arr.cells.shape == cost.shape + (3,)
-    assert np.array_equal(arr.cells[..., 2] < 0, cost.blocked)
-    assert arr.grade_table is cost.grade_table_j_per_m and arr.turn_table is cost.turn_table_j
-    for a in (arr.cells, arr.grade_table, arr.turn_table, arr.geo):
-        assert not a.flags.writeable
-    assert arr.grade_max == pytest.approx(math.tan(cost.max_slope_rad))

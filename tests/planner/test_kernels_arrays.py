@@ -1,0 +1,24 @@
+"""Tests of planner.kernels.arrays: CostArrays, the read-only seam between an EnergyCost and the kernels."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from planner import EnergyCost
+
+from edge_cost_samples import LinearModel, ramp_terrain
+
+
+def test_arrays_are_the_read_only_kernel_seam():
+    cost = EnergyCost.from_model(ramp_terrain(), LinearModel(), {"asphalt": 1.0}, speed_mps=0.5)
+    arr = cost.arrays
+    assert arr.grid == cost.terrain.grid
+    assert arr.cells.shape == cost.shape + (3,)
+    assert np.array_equal(arr.cells[..., 2] < 0, cost.blocked)
+    assert arr.grade_table is cost.grade_table_j_per_m and arr.turn_table is cost.turn_table_j
+    for a in (arr.cells, arr.grade_table, arr.turn_table, arr.geo):
+        assert not a.flags.writeable
+    assert arr.grade_max == pytest.approx(math.tan(cost.max_slope_rad))
