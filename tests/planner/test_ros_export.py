@@ -1,8 +1,7 @@
-"""ROS 2 out: a route as a nav_msgs/Path bag (MCAP file or bag directory) read back, and the plan command's ROS 2 flags."""
+"""ROS 2 out: a route as a nav_msgs/Path bag (MCAP file or bag directory) read back."""
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 
@@ -11,13 +10,9 @@ import pytest
 
 import terrain
 from planner import EnergyCost, plan_route, write_route_bag
-from planner.energy_costmap import read_energy_geotiff
-from planner.nav2_map import read_nav2_map
 from planner.ros_export import read_route_bag, route_pose_times_s
 from planner.route import evaluate_route
 from terrawatt_base.errors import FileFormatError, GridMismatchError, InvalidParameterError
-from terrawatt_cli import main
-from terrawatt_cli.ros2 import add_ros2_arguments, check_ros2_outputs, nav2_targets, write_ros2_outputs
 
 pytest.importorskip("rosbags", reason="ROS 2 bags need the ros extra (rosbags)")
 
@@ -207,95 +202,3 @@ def test_reading_what_is_not_a_route_bag_fails_clearly(tmp_path, wall):
         read_route_bag(tmp_path / "missing.mcap")
 
 
-# ---------------------------------------------------------------- the CLI's ROS 2 flags (terrawatt_cli.ros2)
-def _parse(argv: list[str]) -> argparse.Namespace:
-    parser = argparse.ArgumentParser()
-    add_ros2_arguments(parser)
-    return parser.parse_args(argv)
-
-
-def test_nav2_targets_take_a_folder_a_yaml_or_a_prefix(tmp_path):
-    assert nav2_targets(f"{tmp_path}/new/") == (tmp_path / "new" / "map.yaml", tmp_path / "new" / "map_energy.yaml")
-    assert nav2_targets(str(tmp_path)) == (tmp_path / "map.yaml", tmp_path / "map_energy.yaml")
-    assert nav2_targets(f"{tmp_path}/site.yaml") == (tmp_path / "site.yaml", tmp_path / "site_energy.yaml")
-    assert nav2_targets(f"{tmp_path}/site") == (tmp_path / "site.yaml", tmp_path / "site_energy.yaml")
-
-
-def test_the_ros2_flags_write_the_bag_the_nav2_maps_and_the_costmap(tmp_path, wall, capsys):
-    pytest.importorskip("rasterio", reason="--energy-costmap needs the geo extra (rasterio)")
-    tmap, cost, route = wall
-    args = _parse(["--ros2-out", str(tmp_path / "route.mcap"), "--nav2-map", str(tmp_path / "nav2" / "site"),
-                   "--energy-costmap", str(tmp_path / "energy.tif"), "--map-frame-origin", "2", "3"])
-    check_ros2_outputs(args, [])
-    written = write_ros2_outputs(args, route, tmap, cost)
-    nav2 = tmp_path / "nav2"
-    assert written == [tmp_path / "route.mcap", nav2 / "site.yaml", nav2 / "site.pgm", nav2 / "site_energy.yaml",
-                       nav2 / "site_energy.pgm", tmp_path / "energy.tif"]
-    bag = read_route_bag(tmp_path / "route.mcap")
-    np.testing.assert_allclose(bag.positions_m[:, :2], route.waypoints_m - [2.0, 3.0], rtol=0, atol=1e-9)
-    occupancy = read_nav2_map(nav2 / "site.yaml")
-    assert occupancy.grid.origin_xy_m == (-2.0, -3.0)
-    np.testing.assert_array_equal(occupancy.occupied, cost.blocked)
-    assert read_nav2_map(nav2 / "site_energy.yaml").mode == "raw"
-    assert np.isnan(read_energy_geotiff(tmp_path / "energy.tif").energy_per_metre_j[tmap.obstacle]).all()
-    capsys.readouterr()
-
-
-def test_the_ros2_flags_are_checked_before_any_work(tmp_path):
-    check_ros2_outputs(_parse([]), [])  # nothing asked: nothing to check
-    with pytest.raises(InvalidParameterError, match="--map-frame-origin applies to"):
-        check_ros2_outputs(_parse(["--map-frame-origin", "1", "2"]), [])
-    with pytest.raises(InvalidParameterError, match="finite"):
-        check_ros2_outputs(_parse(["--nav2-map", str(tmp_path / "m"), "--map-frame-origin", "nan", "0"]), [])
-    dem = tmp_path / "dem.tif"
-    dem.write_bytes(b"")
-    with pytest.raises(InvalidParameterError, match="would replace the input"):
-        check_ros2_outputs(_parse(["--energy-costmap", str(dem)]), [dem])
-    with pytest.raises(InvalidParameterError, match="'.tif' or '.tiff'"):
-        check_ros2_outputs(_parse(["--energy-costmap", str(tmp_path / "energy.png")]), [])
-    with pytest.raises(InvalidParameterError, match="sqlite3"):
-        check_ros2_outputs(_parse(["--ros2-out", str(tmp_path / "route.db3")]), [])
-    with pytest.raises(InvalidParameterError, match="is also the command's own output"):
-        check_ros2_outputs(_parse(["--ros2-out", str(tmp_path / "route.json")]), [], [tmp_path / "route.json"])
-    with pytest.raises(InvalidParameterError, match="is also written for --ros2-out"):
-        check_ros2_outputs(_parse(["--ros2-out", str(tmp_path / "m.yaml"), "--nav2-map", str(tmp_path / "m")]), [])
-    coarse = _parse(["--nav2-map", str(tmp_path / "m")])
-    coarse.coarse_factor = 4
-    with pytest.raises(InvalidParameterError, match="need the whole map"):
-        check_ros2_outputs(coarse, [])
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["dem.tif"]  # nothing written by the checks
-
-
-def test_no_bag_for_a_route_not_found(tmp_path, wall, capsys):
-    tmap, cost, route = wall
-    lost = route.replace(status="timeout", waypoints_m=np.empty((0, 2)), segment_energy_j=[], turn_energy_j=[])
-    args = _parse(["--ros2-out", str(tmp_path / "route.mcap"), "--nav2-map", f"{tmp_path}/"])
-    assert write_ros2_outputs(args, lost, tmap, cost) == [tmp_path / n for n in
-                                                          ("map.yaml", "map.pgm", "map_energy.yaml", "map_energy.pgm")]
-    assert "not written" in capsys.readouterr().out and not (tmp_path / "route.mcap").exists()
-
-
-def test_plan_command_writes_ros2_and_nav2_outputs(tmp_path, capsys, wall):
-    """End to end through ``terrawatt plan``: passes once terrawatt_cli/plan.py is wired to terrawatt_cli.ros2."""
-    pytest.importorskip("rasterio", reason="--energy-costmap needs the geo extra (rasterio)")
-    tmap, _, _ = wall
-    path = tmap.save(tmp_path / "wall.npz")
-    out = tmp_path / "out"
-    rc = main(["plan", "--map", str(path), "--start", "5", "5", "--goal", "35", "5", "--planner", "lattice",
-               "--out", str(out), "--ros2-out", str(out / "route.mcap"), "--nav2-map", str(out / "nav2"),
-               "--energy-costmap", str(out / "energy.tif")])
-    printed = capsys.readouterr().out
-    assert rc == 0
-    data = json.loads((out / "route.json").read_text())
-    bag = read_route_bag(out / "route.mcap")
-    np.testing.assert_allclose(bag.waypoints_m, data["routes"]["min_energy"]["waypoints_m"], rtol=0, atol=1e-9)
-    assert bag.cumulative_energy_j[-1] == pytest.approx(data["routes"]["min_energy"]["energy_j"], rel=1e-12)
-    assert read_nav2_map(out / "nav2.yaml").occupied[:, 20].sum() == 36  # the wall: 40 rows but the 4-row gap
-    assert (out / "nav2_energy.pgm").is_file() and (out / "energy.tif").is_file()
-    assert "route.mcap" in printed and "nav2.yaml" in printed
-    # an output that would replace the input DEM is refused before any work
-    dem = terrain.write_geotiff(tmap, tmp_path / "wall.tif")
-    rc = main(["plan", "--map", str(dem), "--start", "5", "5", "--goal", "35", "5", "--planner", "lattice",
-               "--out", str(tmp_path / "out2"), "--energy-costmap", str(dem)])
-    assert rc == 2 and "would replace the input" in capsys.readouterr().err
-    assert not (tmp_path / "out2").exists()
