@@ -25,7 +25,7 @@ def test_turn_energies_and_path_energy():
     assert cost.path_energy_j(pts) == pytest.approx(50.0 * length + 30.0 * (math.pi / 2 + 3 * math.pi / 4), rel=1e-9)
 
 
-def test_surface_length_onramp_terrain():
+def test_surface_length_on_ramp():
     grade = 0.2
     cost = EnergyCost.from_model(ramp_terrain(grade), LinearModel(), {"asphalt": 1.0}, speed_mps=0.5)
     assert cost.surface_length_m([[5.0, 3.0], [25.0, 3.0], [25.0, 13.0]]) == pytest.approx(
