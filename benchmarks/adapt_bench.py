@@ -36,9 +36,9 @@ import numpy as np
 
 import energy.models.estimator as estimator_module
 from energy import VibrationCurrentEstimator, evaluate_few_shot, read_borealtc
-from energy.evaluation import AdaptSettings
 from energy.evaluation import (
     AdaptationResult,
+    AdaptSettings,
     adaptation_scores,
     run_names,
     summarise_adapt_scores,

@@ -44,10 +44,9 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from planner import EnergyCost, reachability, warm_up_kernels
-from planner.reachability import lattice_move_energies
+from planner.reachability import depot_links, lattice_move_energies, warm_up_reachability
 from planner.kernels import lattice_weights
 from planner.lattice import LATTICE_OFFSETS
-from planner.reachability import depot_links, warm_up_reachability
 from terrawatt_base.atomic import write_json_atomic
 from terrain.procedural import procedural_map
 

@@ -18,8 +18,7 @@ from energy import (
     load_current_model,
     new_current_model,
 )
-from energy.diagnosis import DRIVE_EFFECTS, EFFECTS_CATALOGUE, plot_diagnosis
-from energy.diagnosis import FIGURES
+from energy.diagnosis import DRIVE_EFFECTS, EFFECTS_CATALOGUE, FIGURES, plot_diagnosis
 from terrain import FigureWarning, InvalidParameterError, UnknownNameError
 from terrawatt_base.checks import check_seed, fmt_number
 from terrawatt_base.dask_client import client_worker_count

@@ -8,8 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from energy import new_current_model
-from energy.models import CURRENT_MODEL_KINDS
-from energy.models import DEFAULT_INTERVAL_FOLDS, fit_interval
+from energy.models import CURRENT_MODEL_KINDS, DEFAULT_INTERVAL_FOLDS, fit_interval
 from terrain import InvalidParameterError
 
 from .band import LEARNED_KINDS, add_band_option, band_from_args

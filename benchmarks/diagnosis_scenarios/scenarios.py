@@ -79,9 +79,8 @@ from energy import (
     ground_preset,
     robot_preset,
 )
-from energy.sim import PAPER_GROUNDS
+from energy.sim import PAPER_GROUNDS, measure_currents
 from energy.logs import at_rest
-from energy.sim import measure_currents
 
 from .manoeuvres import MANOEUVRES, manoeuvre_commands
 from .power import PowerGap, battery_streams, power_gap

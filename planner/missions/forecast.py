@@ -15,8 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from energy import CommandProfile, drive_profile
-from energy.profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2
-from energy.profiles import terrain_along
+from energy.profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, terrain_along
 from terrawatt_base.errors import InvalidParameterError
 
 from ..edge_cost import EnergyCost

@@ -47,8 +47,7 @@ from energy import (
 )
 from energy.battery import Discharge
 from energy.budget import CURRENT_CONVENTIONS, log_battery_power_w
-from energy.profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2
-from energy.profiles import drivable_waypoints, planned_durations_s
+from energy.profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, drivable_waypoints, planned_durations_s
 from terrain import TerrainMap
 from terrawatt_base.checks import check_bool, check_choice, check_optional_real, check_real, fmt_number
 from terrawatt_base.errors import DataError, GridMismatchError, InvalidParameterError, OutOfBoundsError

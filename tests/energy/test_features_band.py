@@ -17,11 +17,8 @@ from energy import (
     new_current_model,
     read_borealtc,
 )
-from energy.features import band_rms_spectra
-from energy.features import DEFAULT_BAND_HZ, BandNotServedError, band_served, check_band_hz
-from terrawatt_cli import evaluate as evaluate_cli
-from terrawatt_cli import main
-from terrawatt_cli import train as train_cli
+from energy.features import DEFAULT_BAND_HZ, BandNotServedError, band_rms_spectra, band_served, check_band_hz
+from terrawatt_cli import evaluate as evaluate_cli, main, train as train_cli
 from terrain import InvalidParameterError
 
 SHARED = Path(__file__).resolve().parents[3] / "shared" / "data" / "borealtc"

@@ -7,9 +7,8 @@ import pytest
 from interval_samples import fit_two_ground_estimator, interval_log
 
 from energy import AdaptedCurrentModel, InteractionLog, LinearCurrentModel, LogMeta, load_current_model
-from energy.models import ADAPT_METHODS
+from energy.models import ADAPT_METHODS, MIN_ADAPT_SAMPLES, ModelRecord, log_currents
 from terrawatt_base.errors import DataError, FileFormatError, InvalidParameterError, NotFittedError
-from energy.models import MIN_ADAPT_SAMPLES, ModelRecord, log_currents
 from terrain import UnknownNameError
 
 

@@ -10,10 +10,10 @@ from energy.profiles import (
     DEFAULT_ACCEL_MPS2,
     DEFAULT_YAW_ACCEL_RADPS2,
     drivable_waypoints,
+    move_duration_s,
     planned_durations_s,
     waypoint_commands,
 )
-from energy.profiles import move_duration_s
 from terrain import InvalidParameterError
 
 _trapezoid = getattr(np, "trapezoid", None) or np.trapz

@@ -7,9 +7,15 @@ import pytest
 
 import terrain
 from planner import EnergyCost, energy_costmap, write_nav2_map
-from planner.nav2_map import read_nav2_map, write_nav2_costmap
+from planner.nav2_map import (
+    NAV2_FREE_PIXEL,
+    NAV2_OCCUPIED_PIXEL,
+    NAV2_UNKNOWN_PIXEL,
+    read_nav2_map,
+    read_pgm,
+    write_nav2_costmap,
+)
 from terrawatt_base.errors import FileFormatError, GridMismatchError, InvalidParameterError
-from planner.nav2_map import NAV2_FREE_PIXEL, NAV2_OCCUPIED_PIXEL, NAV2_UNKNOWN_PIXEL, read_pgm
 
 
 @pytest.fixture

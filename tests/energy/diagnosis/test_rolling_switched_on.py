@@ -4,10 +4,9 @@ import numpy as np
 import pytest
 
 from energy import PhysicsCurrentModel, TruthSimulator, robot_preset
-from energy.sim import PAPER_GROUNDS
+from energy.sim import PAPER_GROUNDS, NoiseModel
 from energy.diagnosis import effect
 from energy.diagnosis.model_currents import motoring_currents_a, physics_basis, unclipped_prediction
-from energy.sim import NoiseModel
 
 GROUNDS = ("coated_wood", "snow_over_concrete")
 
