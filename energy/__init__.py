@@ -9,8 +9,8 @@ from .budget import EnergyBudget, energy_budget
 from .commands import CommandProfile
 from .diagnosis import CorrectedCurrentModel, Diagnosis, diagnose
 from .drivetrain import EFFECTS
-from .evaluation import EvaluationResult, evaluate_adaptation, evaluate_current_models, evaluate_few_shot
 from .energy_model import EnergyModel, IntervalEnergyModel
+from .evaluation import EvaluationResult, evaluate_adaptation, evaluate_current_models, evaluate_few_shot
 from .excitation import excitation_commands
 from .ground import GroundParams
 from .io import BagTopics, read_borealtc, read_csv_log, read_logs, read_rosbag, write_csv_log
@@ -26,11 +26,11 @@ from .models import (  # torch-free: the contract, the baselines, the loader
     new_current_model,
 )
 from .params import GROUND_PRESETS, ROBOT_PRESETS, ground_preset, robot_preset
-from .robot import MotorParams, RobotParams
 from .physics import PhysicsEnergyModel
 from .plots import plot_current_estimate, plot_vibration_spectra
 from .prediction import predict_runs
 from .profiles import drive_profile
+from .robot import MotorParams, RobotParams
 from .sim import NoiseModel, TruthSimulator
 
 __all__ = [
