@@ -28,11 +28,11 @@ import numpy as np
 from terrawatt_base.checks import check_bool, check_seed
 from terrawatt_base.errors import InvalidParameterError
 
-from .coarse import check_free_point
 from .kernels.incremental import dstar_path, dstar_rekey, dstar_search, dstar_touch, reverse_weights, set_moves
 from .lattice import LATTICE_OFFSETS, Lattice, LatticePath
 from .planning import REFINE_DEFAULT_SEED
 from .points import as_points
+from .problem import PlanningProblem
 from .refine import refine_route
 from .route import Route, empty_route, evaluate_route
 from .settings import PlannerSettings
@@ -279,20 +279,9 @@ class IncrementalPlanner:
         refine = check_bool("refine", refine)
         seed = check_seed(seed)
         cost = self.cost
-        start = as_points(start_xy_m, "start_xy_m")
-        cost.check_inside(start, "start_xy_m")
-        start, goal = start[0], self.goal_xy_m
-        check_free_point(cost, "start_xy_m", start)
-        check_free_point(cost, "goal_xy_m", goal)
-        if np.array_equal(start, goal):
-            raise InvalidParameterError(
-                f"start equals goal ({start[0]!r}, {start[1]!r}) m: there is no route to plan; expected two "
-                "different points"
-            )
-        labels = cost.components()
-        rs, cs = cost.terrain.rowcol(start[0], start[1])
-        rg, cg = cost.terrain.rowcol(goal[0], goal[1])
-        if labels[rs, cs] != labels[rg, cg]:
+        problem = PlanningProblem(cost, start_xy_m, self.goal_xy_m)  # the query's checks, as plan_route makes them
+        start, goal = problem.start, problem.goal
+        if not problem.connected:
             return empty_route("infeasible", "lattice", 0.0, cost.battery_voltage_v)
         t0 = time.perf_counter()
         path = self.plan(start)
