@@ -8,13 +8,21 @@ of the model) are experiment scaffolding and live with the benchmarks, in
 from .corrected import CorrectedCurrentModel
 from .diagnose import diagnose
 from .effect_base import EFFECT_KINDS, BasisEffect, Effect, EffectParameter
-from .effects import EFFECTS_CATALOGUE, NOT_IDENTIFIABLE_FROM_CURRENT, effect, effect_from_spec
+from .effects import EFFECTS_CATALOGUE, NOT_IDENTIFIABLE_FROM_CURRENT, check_effect_names, effect, effect_from_spec
 from .localise import GapShare, localise_gap
 from .model_currents import DRIVE_EFFECTS
-from .plots import FIGURES, DiagnosisFigures, plot_diagnosis, plot_effect_ranking, plot_waterfall
+from .model_source import (
+    DEFAULT_SOURCE_NAMES,
+    MODEL_SOURCES,
+    ModelUnderDiagnosis,
+    check_model_source,
+    model_under_diagnosis,
+)
+from .plots import FIGURES, DiagnosisFigures, plot_diagnosis, plot_effect_ranking, plot_waterfall, skipped_figures
 from .plots_gap import plot_gap_by_regime, plot_gap_map, plot_residual_time
 from .power_result import PowerDiagnosis, PowerGapSummary, PowerWaterfallStep
 from .regimes import regime_labels
+from .report import DIAGNOSIS_FILES, DiagnosisReport, diagnose_report
 from .residuals import GapSummary, gap_summary, residual_currents_a
 from .result import Diagnosis, EffectScore, WaterfallStep
 from .split import SPLITS, Fold, Split, make_split
@@ -27,6 +35,15 @@ __all__ = [
     "FIGURES",
     "DiagnosisFigures",
     "plot_diagnosis",
+    "skipped_figures",
+    "MODEL_SOURCES",
+    "DEFAULT_SOURCE_NAMES",
+    "ModelUnderDiagnosis",
+    "check_model_source",
+    "model_under_diagnosis",
+    "DIAGNOSIS_FILES",
+    "DiagnosisReport",
+    "diagnose_report",
     "plot_effect_ranking",
     "plot_waterfall",
     "plot_gap_by_regime",
@@ -50,6 +67,7 @@ __all__ = [
     "diagnose",
     "effect",
     "effect_from_spec",
+    "check_effect_names",
     "gap_summary",
     "localise_gap",
     "make_split",

@@ -33,7 +33,7 @@ from .effects_power import ArmatureHeatEffect, ControlPowerEffect, SensorPowerEf
 from .power_data import POWER_EFFECTS
 
 __all__ = ["EFFECTS_CATALOGUE", "NOT_IDENTIFIABLE_FROM_CURRENT", "LEARNED_EFFECT", "effect", "effect_from_spec",
-           "resolve_effects", "composition_order"]
+           "check_effect_names", "resolve_effects", "composition_order"]
 
 #: Name of the last-resort learned correction (not part of the default candidates).
 LEARNED_EFFECT = "learned_residual"
@@ -98,6 +98,31 @@ def effect_from_spec(spec: Any) -> Effect:
             raise InvalidParameterError(f"rolling_resistance labels must be a list of str, got {labels!r:.80}")
         out = out.with_labels(labels)
     return out
+
+
+def check_effect_names(names: Sequence[str], name: str = "effects") -> tuple[str, ...]:
+    """Effect names from the catalogue, each once, checked before any work; errors say ``name``.
+
+    Raises
+    ------
+    UnknownNameError
+        A name not in :data:`EFFECTS_CATALOGUE` (the message lists the names).
+    InvalidParameterError
+        Not a sequence of strings, or a name twice.
+
+    Examples
+    --------
+    >>> check_effect_names(["inertia", "idle_current"])
+    ('inertia', 'idle_current')
+    """
+    if isinstance(names, str) or not isinstance(names, Sequence) or not all(isinstance(e, str) for e in names):
+        raise InvalidParameterError(f"{name} must be a sequence of effect names, got {names!r:.80}")
+    bad = [e for e in names if e not in EFFECTS_CATALOGUE]
+    if bad:
+        raise UnknownNameError(f"{name} {bad!r}: not in the catalogue; expected names from {list(EFFECTS_CATALOGUE)!r}")
+    if len(set(names)) != len(names):
+        raise InvalidParameterError(f"{name} names an effect twice: {list(names)!r}")
+    return tuple(names)
 
 
 def resolve_effects(effects: Sequence[Any] | None) -> list[Effect]:

@@ -60,6 +60,7 @@ __all__ = [
     "plot_effect_ranking",
     "plot_waterfall",
     "plot_diagnosis",
+    "skipped_figures",
 ]
 
 #: Figure names of :func:`plot_diagnosis` and their file names, in drawing order.
@@ -253,6 +254,43 @@ class DiagnosisFigures:
         return "\n".join(lines)
 
 
+def skipped_figures(diagnosis: Diagnosis, *, logs: Any = None, terrain: TerrainMap | None = None) -> dict[str, str]:
+    """The figures of :func:`plot_diagnosis` whose data is missing, and why (figure name -> reason).
+
+    Parameters
+    ----------
+    diagnosis : Diagnosis
+    logs : InteractionLog or sequence of them, optional
+        The logs the diagnosis ran on.
+    terrain : TerrainMap, optional
+        The map the diagnosis ran on.
+
+    Returns
+    -------
+    dict of str to str
+        In the order of :data:`FIGURES`; empty when every figure can be drawn.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a Diagnosis, not a TerrainMap, logs that are not InteractionLogs.
+    """
+    diagnosis = checked_diagnosis(diagnosis)
+    terrain = check_terrain(terrain)
+    skipped: dict[str, str] = {}
+    if logs is None:
+        skipped["residual_time"] = "no residual over time: no logs given"
+    why = missing_regimes_reason(diagnosis)
+    if why:
+        skipped["gap_by_regime"] = why
+    why = missing_map_reason(diagnosis, terrain, logs)
+    if why:
+        skipped["gap_map"] = why
+    if not diagnosis.ranking:
+        skipped["effect_ranking"] = _NO_RANKING
+    return skipped
+
+
 def plot_diagnosis(diagnosis: Diagnosis, directory: str | os.PathLike[str], *, logs: Any = None,
                    predictions: Any = None, terrain: TerrainMap | None = None, figures: Sequence[str] | None = None,
                    max_runs: int = 4, on_error: str = "raise", dpi: int = 110) -> DiagnosisFigures:
@@ -309,17 +347,7 @@ def plot_diagnosis(diagnosis: Diagnosis, directory: str | os.PathLike[str], *, l
     folder = check_output_path(directory, "directory", directory=True)
     paths = {n: check_output_path(folder / FIGURES[n], f"directory {str(folder)!r}: {FIGURES[n]}") for n in names}
 
-    skipped: dict[str, str] = {}
-    if logs is None:
-        skipped["residual_time"] = "no residual over time: no logs given"
-    why = missing_regimes_reason(diagnosis)
-    if why:
-        skipped["gap_by_regime"] = why
-    why = missing_map_reason(diagnosis, terrain, logs)
-    if why:
-        skipped["gap_map"] = why
-    if not diagnosis.ranking:
-        skipped["effect_ranking"] = _NO_RANKING
+    skipped = skipped_figures(diagnosis, logs=logs, terrain=terrain)
 
     def residual(path: Path) -> Path:
         items = log_list(logs)

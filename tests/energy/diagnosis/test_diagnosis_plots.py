@@ -21,6 +21,7 @@ from energy.diagnosis.plots import (
     plot_gap_map,
     plot_residual_time,
     plot_waterfall,
+    skipped_figures,
 )
 from diagnosis_scenarios import scenario
 from terrain import DataError, FigureWarning, GridMismatchError, InvalidParameterError, UnknownNameError
@@ -232,3 +233,17 @@ def test_a_figure_takes_a_path_or_axes_of_its_panel_count(case, tmp_path):
     with pytest.raises(InvalidParameterError, match=r"one per dimension: 'speed'"):
         plot_gap_by_regime(d, axes=[one])
     assert list(tmp_path.iterdir()) == [] and not one.has_data() and not two.has_data()
+
+
+def test_the_skipped_figures_are_known_before_drawing(case, tmp_path):
+    d, logs, tmap = case
+    assert skipped_figures(d, logs=logs, terrain=tmap) == {}
+    skipped = skipped_figures(d)
+    assert list(skipped) == ["residual_time", "gap_map"] and "no logs given" in skipped["residual_time"]
+    assert skipped == plot_diagnosis(d, tmp_path, figures=["residual_time", "gap_map"]).skipped
+    assert "no candidate effect" in skipped_figures(dataclasses.replace(d, ranking=()), logs=logs,
+                                                    terrain=tmap)["effect_ranking"]
+    with pytest.raises(InvalidParameterError, match="diagnosis must be a Diagnosis"):
+        skipped_figures("d")
+    with pytest.raises(InvalidParameterError, match="terrain must be a TerrainMap"):
+        skipped_figures(d, terrain="map")

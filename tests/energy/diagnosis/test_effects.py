@@ -20,3 +20,16 @@ def test_catalogue_names_every_drive_effect_and_lookup():
         resolve_effects(["mass", "mass"])
     with pytest.raises(InvalidParameterError, match="must be a dict"):
         effect_from_spec("mass")
+
+
+def test_effect_names_are_checked_before_any_work_naming_the_caller():
+    from energy.diagnosis import check_effect_names
+
+    assert check_effect_names(["mass", "idle_current"]) == ("mass", "idle_current")
+    with pytest.raises(UnknownNameError, match=r"--effects \['warp_drive'\]: not in the catalogue"):
+        check_effect_names(["mass", "warp_drive"], "--effects")
+    with pytest.raises(InvalidParameterError, match="effects names an effect twice"):
+        check_effect_names(["mass", "mass"])
+    for bad in ("mass", [1, 2], None):
+        with pytest.raises(InvalidParameterError, match="sequence of effect names"):
+            check_effect_names(bad)

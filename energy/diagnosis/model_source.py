@@ -1,0 +1,228 @@
+"""The model a diagnosis diagnoses: the physics as given or fitted on calibration runs, the estimator, or a file."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from terrawatt_base.checks import check_bool, check_seed, fmt_number
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+
+from ..logs import InteractionLog
+from ..models.base import CurrentModel
+from ..models.baselines import PhysicsCurrentModel
+from ..models.kinds import new_current_model
+from ..models.loading import load_current_model
+from ..params import GROUND_PRESETS, ROBOT_PRESETS
+from .model_currents import DRIVE_EFFECTS
+
+__all__ = ["MODEL_SOURCES", "DEFAULT_SOURCE_NAMES", "ModelUnderDiagnosis", "check_model_source",
+           "model_under_diagnosis"]
+
+#: The model sources named by a word; anything else is a saved model file.
+MODEL_SOURCES = ("physics", "estimator")
+#: How messages name the arguments of :func:`check_model_source` (a caller passes its own, e.g. its flags).
+DEFAULT_SOURCE_NAMES = {"model": "model", "robot": "robot", "ground": "ground", "without": "without",
+                        "calibration": "calibration_logs", "logs": "logs"}
+
+
+@dataclass(frozen=True)
+class ModelUnderDiagnosis:
+    """A fitted model to diagnose and a sentence saying where it comes from.
+
+    Attributes
+    ----------
+    model : CurrentModel
+        Fitted, never on the logs it diagnoses.
+    note : str
+        Where it comes from (:attr:`energy.diagnosis.Diagnosis.model_note`).
+    kind : {"physics", "estimator", "file"}
+    robot : str or None
+        The robot preset asked for; for a model that is not the physics, the robot of the
+        diagnosis' reference physics (:func:`energy.diagnose`'s ``robot``).
+    """
+
+    model: CurrentModel
+    note: str
+    kind: str
+    robot: str | None = None
+
+    @property
+    def reference_robot(self) -> str | None:
+        """``robot`` for :func:`energy.diagnose`: None for the physics model (it is its own reference)."""
+        return None if self.kind == "physics" else self.robot
+
+
+def _names(names: Mapping[str, str] | None) -> dict[str, str]:
+    out = dict(DEFAULT_SOURCE_NAMES)
+    if names is not None:
+        if not isinstance(names, Mapping) or not all(isinstance(v, str) for v in names.values()):
+            raise InvalidParameterError(f"names must be a mapping of argument to name, got {names!r:.80}")
+        unknown = sorted(set(names) - set(out))
+        if unknown:
+            raise UnknownNameError(f"names has keys {unknown!r}; expected some of {sorted(out)!r}")
+        out.update(names)
+    return out
+
+
+def check_model_source(model: str | os.PathLike[str], *, calibration: Any = None, robot: str | None = None,
+                       ground: str | None = None, without: Sequence[str] = (),
+                       names: Mapping[str, str] | None = None) -> str:
+    """Check a model source and the options that go with it, before any work; return its kind.
+
+    Parameters
+    ----------
+    model : str or path-like
+        ``"physics"`` (the robot and ground presets), ``"estimator"`` (trained on the
+        calibration runs) or a saved model file.
+    calibration : any, optional
+        The calibration runs, or anything that stands for them (e.g. their path); None for none.
+    robot, ground : str, optional
+        Robot and (physics only) starting ground presets.
+    without : sequence of str
+        Physics only: drive effects (:data:`DRIVE_EFFECTS`) switched off, each once.
+    names : mapping, optional
+        How messages name the arguments (keys of :data:`DEFAULT_SOURCE_NAMES`, e.g.
+        ``{"model": "--model"}``).
+
+    Returns
+    -------
+    str
+        ``"physics"``, ``"estimator"`` or ``"file"``.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a source word nor a file; ``ground`` or ``without`` for another model than the
+        physics; calibration runs for a file; the estimator without them; an effect twice.
+    UnknownNameError
+        A robot or ground that is no preset, an effect that is no drive effect.
+
+    Examples
+    --------
+    >>> check_model_source("physics", without=["inertia"])
+    'physics'
+    """
+    n = _names(names)
+    if not isinstance(model, (str, os.PathLike)):
+        raise InvalidParameterError(f"{n['model']} must be a string or a path, got {type(model).__name__}")
+    kind = str(model) if str(model) in MODEL_SOURCES else "file"
+    if kind == "file" and not Path(model).is_file():
+        raise InvalidParameterError(f"{n['model']} must be 'physics', 'estimator' or a model file; {str(model)!r} is "
+                                    "no file")
+    if robot is not None and robot not in ROBOT_PRESETS:
+        raise UnknownNameError(f"{n['robot']} {robot!r} is not a robot preset; known: {sorted(ROBOT_PRESETS)!r}")
+    without = list(without)
+    if kind != "physics":
+        for key, value in (("ground", ground), ("without", without)):
+            if value:
+                raise InvalidParameterError(f"{n[key]} applies to {n['model']} physics only, got {n['model']} "
+                                            f"{str(model)!r}")
+    if kind == "file" and calibration is not None:
+        raise InvalidParameterError(f"{n['calibration']} applies to {n['model']} physics or estimator; a saved model "
+                                    "is diagnosed as it is")
+    if kind == "estimator" and calibration is None:
+        raise InvalidParameterError(f"{n['model']} estimator needs {n['calibration']}: the estimator has no preset, "
+                                    "and training it on the logs it diagnoses would hide the gap (or give a saved "
+                                    "model file)")
+    if ground is not None and ground not in GROUND_PRESETS:
+        raise UnknownNameError(f"{n['ground']} {ground!r} is not a ground preset; known: {sorted(GROUND_PRESETS)!r}")
+    bad = [e for e in without if e not in DRIVE_EFFECTS]
+    if bad:
+        raise UnknownNameError(f"{n['without']} {bad!r}: not physics drive effects; expected names from "
+                               f"{list(DRIVE_EFFECTS)!r}")
+    if len(set(without)) != len(without):
+        raise InvalidParameterError(f"{n['without']} names an effect twice: {without!r}")
+    return kind
+
+
+def _runs(logs: Sequence[InteractionLog]) -> str:
+    return f"{len(logs)} run{'s' if len(logs) != 1 else ''}"
+
+
+def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[InteractionLog], *,
+                          calibration_logs: Sequence[InteractionLog] | None = None,
+                          calibration_label: str = "the calibration logs", robot: str | None = None,
+                          ground: str | None = None, without: Sequence[str] = (), seed: int | None = 0,
+                          progress: bool = False, names: Mapping[str, str] | None = None) -> ModelUnderDiagnosis:
+    """The model to diagnose on ``logs``, never fitted on them, and where it comes from.
+
+    ``"physics"``: the ``robot`` (default husky) and ``ground`` presets as given (the
+    ground defaults to the logs' when they share one preset, else asphalt), or their
+    coefficients fitted on ``calibration_logs``; ``without`` switches drive effects off.
+    ``"estimator"``: the vibration estimator trained on ``calibration_logs``. A file: the
+    saved model, as it is.
+
+    Parameters
+    ----------
+    model : str or path-like
+        ``"physics"``, ``"estimator"`` or a saved model file (:func:`check_model_source`).
+    logs : sequence of InteractionLog
+        The logs to diagnose.
+    calibration_logs : sequence of InteractionLog, optional
+        Other runs to fit the physics' coefficients on or to train the estimator on; none of
+        them a diagnosed run (by ``meta.source``).
+    calibration_label : str
+        How the note names the calibration runs (e.g. their folder).
+    robot, ground, without
+        As :func:`check_model_source`.
+    seed : int or None
+        Seed of the estimator's training.
+    progress : bool
+        The estimator's progress bar.
+    names : mapping, optional
+        How messages name the arguments (:func:`check_model_source`).
+
+    Returns
+    -------
+    ModelUnderDiagnosis
+
+    Raises
+    ------
+    InvalidParameterError
+        As :func:`check_model_source`; calibration runs that are also diagnosed; no logs.
+    UnknownNameError
+        As :func:`check_model_source`.
+    TerrawattError
+        As the models' ``fit`` and :func:`energy.load_current_model`.
+    """
+    n = _names(names)
+    kind = check_model_source(model, calibration=calibration_logs, robot=robot, ground=ground, without=without,
+                              names=names)
+    seed = check_seed(seed)
+    progress = check_bool("progress", progress)
+    logs = list(logs)
+    if not logs or not all(isinstance(log, InteractionLog) for log in logs):
+        raise InvalidParameterError("logs must be a non-empty sequence of InteractionLog")
+    cal = None if calibration_logs is None else list(calibration_logs)
+    if cal is not None:
+        diagnosed = {log.meta.source for log in logs if log.meta.source}
+        shared = sorted({log.meta.source for log in cal} & diagnosed)
+        if shared:
+            raise InvalidParameterError(f"{n['calibration']} holds runs that {n['logs']} diagnoses too: {shared[:3]!r}; "
+                                        "calibrate on runs that are not diagnosed")
+    if kind == "physics":
+        grounds = {log.meta.ground_label for log in (cal or logs)}
+        ground = ground or (grounds.pop() if len(grounds) == 1 and grounds <= set(GROUND_PRESETS) else "asphalt")
+        robot_name = robot or "husky"
+        effects = None if not without else tuple(e for e in DRIVE_EFFECTS if e not in without)
+        off = f" without {', '.join(without)}" if without else " (every drive effect)"
+        if cal is None:
+            fitted = PhysicsCurrentModel(robot_name, ground, fit_parameters=(), effects=effects).fit(logs)
+            return ModelUnderDiagnosis(fitted, (
+                f"physics, the {robot_name} and {ground} presets as given{off}, not fitted on the {_runs(logs)} it is "
+                f"diagnosed on ({n['calibration']} fits its coefficients on other runs)"), kind, robot)
+        fitted = PhysicsCurrentModel(robot_name, ground, effects=effects).fit(cal)
+        values = ", ".join(f"{k} = {fmt_number(v, 4)}" for k, v in fitted.fitted_.items())
+        return ModelUnderDiagnosis(fitted, (
+            f"physics, {robot_name} starting from {ground}{off}; its coefficients fitted on the {_runs(cal)} of "
+            f"{calibration_label} ({values}), which are not diagnosed"), kind, robot)
+    if kind == "estimator":
+        trained = new_current_model("estimator", seed=seed, progress=progress).fit(cal)
+        return ModelUnderDiagnosis(trained, (f"the vibration estimator, trained on the {_runs(cal)} of "
+                                             f"{calibration_label}, which are not diagnosed"), kind, robot)
+    loaded = load_current_model(model)
+    return ModelUnderDiagnosis(loaded, f"{type(loaded).__name__} loaded from {model}", kind, robot)

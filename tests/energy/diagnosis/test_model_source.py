@@ -1,0 +1,92 @@
+"""Tests of energy.diagnosis.model_source: the model under diagnosis, checked before any work, never fitted on its logs."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+from diagnosis_scenarios import scenario
+
+from energy import PhysicsCurrentModel
+from energy.diagnosis import DEFAULT_SOURCE_NAMES, ModelUnderDiagnosis, check_model_source, model_under_diagnosis
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+
+FLAGS = {"model": "--model", "robot": "--robot", "ground": "--ground", "without": "--without",
+         "calibration": "--calibration-data", "logs": "--data"}
+
+
+@pytest.fixture(scope="module")
+def runs():
+    """Three 8 s runs of the turning case (its ground a preset), each its own source, and a physics model."""
+    sc = dataclasses.replace(scenario("turning_resistance"), n_runs=3, run_duration_s=8.0)
+    logs = [dataclasses.replace(log, meta=dataclasses.replace(log.meta, source=f"run_{k}.csv"))
+            for k, log in enumerate(sc.make_logs(0))]
+    return logs, sc.make_model(0)
+
+
+def test_the_kind_of_each_source(tmp_path, runs):
+    path = runs[1].save(tmp_path / "m.zip")
+    assert check_model_source("physics", robot="husky", ground="asphalt", without=["inertia"]) == "physics"
+    assert check_model_source("estimator", calibration=[1]) == "estimator"
+    assert check_model_source(path) == check_model_source(str(path)) == "file"
+    assert set(FLAGS) == set(DEFAULT_SOURCE_NAMES)
+
+
+@pytest.mark.parametrize("model, kwargs, error, message", [
+    ("nowhere.zip", {}, InvalidParameterError, "model must be 'physics', 'estimator' or a model file; 'nowhere.zip'"),
+    (3, {}, InvalidParameterError, "model must be a string or a path"),
+    ("physics", {"robot": "rover"}, UnknownNameError, "robot 'rover' is not a robot preset"),
+    ("physics", {"ground": "lava"}, UnknownNameError, "ground 'lava' is not a ground preset"),
+    ("physics", {"without": ["warp"]}, UnknownNameError, r"without \['warp'\]: not physics drive effects"),
+    ("physics", {"without": ["inertia", "inertia"]}, InvalidParameterError, "without names an effect twice"),
+    ("estimator", {"ground": "sand"}, InvalidParameterError, "ground applies to model physics only"),
+    ("estimator", {"calibration": None, "without": ["inertia"]}, InvalidParameterError, "without applies to model"),
+    ("estimator", {}, InvalidParameterError, "model estimator needs calibration_logs"),
+])
+def test_bad_sources_are_refused_naming_the_argument(model, kwargs, error, message):
+    with pytest.raises(error, match=message):
+        check_model_source(model, **kwargs)
+
+
+def test_messages_name_the_callers_flags(tmp_path, runs):
+    path = runs[1].save(tmp_path / "m.zip")
+    with pytest.raises(InvalidParameterError, match="--calibration-data applies to --model physics or estimator"):
+        check_model_source(path, calibration="cal", names=FLAGS)
+    with pytest.raises(InvalidParameterError, match="--without applies to --model physics only, got --model"):
+        check_model_source("estimator", calibration="cal", without=["inertia"], names=FLAGS)
+    with pytest.raises(UnknownNameError, match="names has keys"):
+        check_model_source("physics", names={"flag": "--flag"})
+
+
+def test_the_physics_as_given_is_not_fitted_on_the_logs(runs):
+    logs, _ = runs
+    src = model_under_diagnosis("physics", logs, without=["turning_resistance"])
+    assert isinstance(src, ModelUnderDiagnosis) and isinstance(src.model, PhysicsCurrentModel)
+    assert src.kind == "physics" and src.reference_robot is None
+    ground = logs[0].meta.ground_label
+    assert src.note.startswith(f"physics, the husky and {ground} presets as given without turning_resistance")
+    assert "not fitted on the 3 runs it is diagnosed on" in src.note
+    assert src.model.fitted_ == {}  # no coefficient fitted
+    every = model_under_diagnosis("physics", logs, ground="asphalt", robot="husky")
+    assert "husky and asphalt presets as given (every drive effect)" in every.note
+
+
+def test_the_physics_is_calibrated_on_other_runs_only(runs):
+    logs, _ = runs
+    src = model_under_diagnosis("physics", logs[:1], calibration_logs=logs[1:], calibration_label="cal/")
+    assert "coefficients fitted on the 2 runs of cal/" in src.note and "which are not diagnosed" in src.note
+    assert src.model.fitted_ and all(f"{k} = " in src.note for k in src.model.fitted_)
+    with pytest.raises(InvalidParameterError, match=r"--calibration-data holds runs that --data diagnoses too: "
+                       r"\['run_1.csv'\]; calibrate on runs that are not diagnosed"):
+        model_under_diagnosis("physics", logs[:2], calibration_logs=logs[1:], names=FLAGS)
+    with pytest.raises(InvalidParameterError, match="logs must be a non-empty sequence"):
+        model_under_diagnosis("physics", [])
+
+
+def test_a_saved_model_is_loaded_as_it_is(tmp_path, runs):
+    logs, model = runs
+    path = model.save(tmp_path / "m.zip")
+    src = model_under_diagnosis(path, logs, robot="husky")
+    assert src.kind == "file" and src.reference_robot == "husky"
+    assert src.note == f"{type(model).__name__} loaded from {path}"
+    assert (src.model.predict(logs[0]) == model.predict(logs[0])).all()
