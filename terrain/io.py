@@ -1,15 +1,19 @@
-"""read_map: one entry point that reads a map file by its suffix (.npz, or a GeoTIFF DEM)."""
+"""read_map: one entry point that reads a map file by its suffix (.npz, or a GeoTIFF DEM), with its options."""
 
 from __future__ import annotations
 
+import math
 import os
+from collections.abc import Collection, Mapping
 from pathlib import Path
 
-from terrawatt_base.errors import FileFormatError, InvalidParameterError
+from terrawatt_base.checks import fmt_number
+from terrawatt_base.errors import FileFormatError, InvalidParameterError, NodataError, UnknownNameError
 from .geotiff import check_fill_method, read_geotiff
+from .landcover import LandcoverClasses, ground_classes_from_landcover, read_landcover_classes
 from .terrain_map import TerrainMap
 
-__all__ = ["read_map", "MAP_SUFFIXES"]
+__all__ = ["read_map", "read_map_with_options", "MAP_SUFFIXES", "MAP_OPTIONS"]
 
 #: The suffixes :func:`read_map` reads (case-insensitive).
 MAP_SUFFIXES = (".npz", ".tif", ".tiff")
@@ -90,3 +94,115 @@ def read_map(
         f"cannot read a map from {str(p)!r}: its suffix {p.suffix!r} is not one of "
         f"{', '.join(repr(s) for s in MAP_SUFFIXES)}"
     )
+
+
+#: The options of :func:`read_map_with_options`, as its messages name them by default.
+MAP_OPTIONS = ("fill_nodata", "reproject_to", "cell_size_m", "landcover", "landcover_classes")
+
+
+def read_map_with_options(
+    source: str | os.PathLike[str] | TerrainMap,
+    *,
+    fill_nodata: str | None = None,
+    reproject_to: str | None = None,
+    cell_size_m: float | None = None,
+    landcover: str | os.PathLike[str] | None = None,
+    landcover_classes: str | os.PathLike[str] | None = None,
+    known_grounds: Collection[str] | None = None,
+    names: Mapping[str, str] | None = None,
+) -> TerrainMap:
+    """A map file read with its options (:func:`read_map`), then its ground classes from a land cover.
+
+    The land-cover classes file is read (:func:`~terrain.landcover.read_landcover_classes`)
+    and checked before the map, so a bad mapping fails before a long read; then the map is
+    read, and its ground classes come from ``landcover``
+    (:func:`~terrain.landcover.ground_classes_from_landcover`).
+
+    Parameters
+    ----------
+    source : str, path-like or TerrainMap
+        The map file, or a map already in memory (then only the land cover applies).
+    fill_nodata, reproject_to, cell_size_m : optional
+        As :func:`read_map`; ``reproject_to`` and ``cell_size_m`` go together.
+    landcover, landcover_classes : path-like, optional
+        A land-cover GeoTIFF and the CSV naming each code's ground; they go together.
+    known_grounds : collection of str, optional
+        The ground names the classes file may use (e.g. the ground presets); None accepts any.
+    names : mapping, optional
+        How messages name each of :data:`MAP_OPTIONS` (e.g. ``{"fill_nodata": "--fill-nodata"}``);
+        default the parameters' own names.
+
+    Returns
+    -------
+    TerrainMap
+
+    Raises
+    ------
+    InvalidParameterError
+        One of a pair without the other; ``cell_size_m`` not > 0; reading options with a map in memory.
+    NodataError
+        A DEM with nodata cells and no ``fill_nodata``; the message says how to fill them.
+    UnknownNameError
+        A classes file naming a ground not in ``known_grounds``.
+    TerrawattError
+        As :func:`read_map`, :func:`~terrain.landcover.read_landcover_classes` and
+        :func:`~terrain.landcover.ground_classes_from_landcover`.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from terrain import flat_map
+    >>> folder = tempfile.TemporaryDirectory()
+    >>> path = flat_map((4, 6), 0.5).save(pathlib.Path(folder.name) / "site.npz")
+    >>> read_map_with_options(path).shape
+    (4, 6)
+    >>> read_map_with_options(path, cell_size_m=5.0, names={"reproject_to": "--reproject", "cell_size_m": "--cell-size"})
+    Traceback (most recent call last):
+    ...
+    terrawatt_base.errors.InvalidParameterError: --reproject and --cell-size go together: e.g. --reproject utm --cell-size 5 (got --reproject None, --cell-size 5.0)
+    >>> folder.cleanup()
+    """
+    name = {key: key for key in MAP_OPTIONS} | dict(names or {})
+    if (landcover is None) != (landcover_classes is None):
+        lc, lcc = name["landcover"], name["landcover_classes"]
+        raise InvalidParameterError(
+            f"{lc} and {lcc} go together: the land-cover raster and the CSV naming the ground of each of its codes "
+            f"(got {lc} {landcover}, {lcc} {landcover_classes})")
+    classes: LandcoverClasses | None = None
+    if landcover_classes is not None:
+        classes = read_landcover_classes(landcover_classes)
+        unknown = sorted(set(classes.ground_names) - set(known_grounds if known_grounds is not None else
+                                                          classes.ground_names))
+        if unknown:
+            raise UnknownNameError(f"{name['landcover_classes']} {Path(landcover_classes).name}: grounds {unknown!r} "
+                                   f"have no preset; known grounds: {sorted(known_grounds or ())!r}")
+    if isinstance(source, TerrainMap):
+        if fill_nodata is not None or reproject_to is not None or cell_size_m is not None:
+            raise InvalidParameterError("fill_nodata, reproject_to and cell_size_m apply to a map file, not to a map "
+                                        "in memory")
+        tmap = source
+    else:
+        tmap = _read_named(source, fill_nodata, reproject_to, cell_size_m, name)
+    return tmap if classes is None else ground_classes_from_landcover(tmap, landcover, classes)
+
+
+def _read_named(path: str | os.PathLike[str], fill_nodata: str | None, reproject_to: str | None,
+                cell_size_m: float | None, name: Mapping[str, str]) -> TerrainMap:
+    """:func:`read_map`, its messages naming the options as ``name`` does."""
+    rep, cell = name["reproject_to"], name["cell_size_m"]
+    if (reproject_to is None) != (cell_size_m is None):
+        raise InvalidParameterError(f"{rep} and {cell} go together: e.g. {rep} utm {cell} 5 "
+                                    f"(got {rep} {reproject_to}, {cell} {cell_size_m})")
+    if cell_size_m is not None and not (math.isfinite(cell_size_m) and cell_size_m > 0):
+        raise InvalidParameterError(f"{cell} must be a number > 0, got {fmt_number(cell_size_m)}")
+    try:
+        return read_map(path, fill_nodata=fill_nodata, reproject_to=reproject_to, cell_size_m=cell_size_m)
+    except NodataError as exc:
+        raise NodataError(f"{Path(path).name} has {exc.n_nodata} nodata cells of {exc.n_cells}; give "
+                          f"{name['fill_nodata']} nearest to fill them from the nearest valid cell",
+                          n_nodata=exc.n_nodata, n_cells=exc.n_cells) from exc
+    except InvalidParameterError as exc:
+        text = str(exc)
+        if reproject_to is None or not text.startswith(("reproject_to", "cell_size_m")):
+            raise
+        raise InvalidParameterError(text.replace("reproject_to", rep).replace("cell_size_m", cell)) from exc

@@ -40,3 +40,53 @@ def test_options_that_cannot_apply(tmp_path, flat_map):
         read_map(path, fill_nodata="mean")
     with pytest.raises(FileFormatError, match="does not exist|missing"):
         read_map(tmp_path / "none.npz")
+
+
+def test_read_map_with_options_reads_a_map_and_names_its_options_as_asked(tmp_path, ramp_map):
+    from terrain.io import read_map_with_options
+
+    path = ramp_map.save(tmp_path / "m.npz")
+    assert read_map_with_options(path).same_grid(ramp_map)
+    flags = {"reproject_to": "--reproject", "cell_size_m": "--cell-size", "landcover": "--landcover",
+             "landcover_classes": "--landcover-classes"}
+    with pytest.raises(InvalidParameterError, match="--reproject and --cell-size go together"):
+        read_map_with_options(path, reproject_to="utm", names=flags)
+    with pytest.raises(InvalidParameterError, match="reproject_to and cell_size_m go together"):
+        read_map_with_options(path, cell_size_m=5.0)
+    with pytest.raises(InvalidParameterError, match="--cell-size must be a number > 0, got -5"):
+        read_map_with_options(path, reproject_to="utm", cell_size_m=-5.0, names=flags)
+    with pytest.raises(InvalidParameterError, match="--landcover and --landcover-classes go together"):
+        read_map_with_options(path, landcover=tmp_path / "lc.tif", names=flags)
+    with pytest.raises(InvalidParameterError, match="apply to a map file, not to a map in memory"):
+        read_map_with_options(ramp_map, fill_nodata="nearest")
+    assert read_map_with_options(ramp_map) is ramp_map
+
+
+def test_read_map_with_options_checks_the_classes_grounds_before_the_map(tmp_path):
+    from terrain.io import read_map_with_options
+
+    classes = tmp_path / "classes.csv"
+    classes.write_text("code,ground\n10,grass\n20,lava\n")
+    with pytest.raises(UnknownNameError, match=r"--landcover-classes classes\.csv: grounds \['lava'\] have no preset"):
+        read_map_with_options(tmp_path / "missing.npz", landcover=tmp_path / "lc.tif", landcover_classes=classes,
+                              known_grounds=("grass", "sand"), names={"landcover_classes": "--landcover-classes"})
+    with pytest.raises(FileFormatError):  # any ground accepted: the missing map is next
+        read_map_with_options(tmp_path / "missing.npz", landcover=tmp_path / "lc.tif", landcover_classes=classes)
+
+
+def test_read_map_with_options_phrases_the_nodata_advice_with_its_names(tmp_path, ramp_map):
+    rasterio = pytest.importorskip("rasterio")
+    from terrain import NodataError
+    from terrain.io import read_map_with_options
+
+    elevation = ramp_map.elevation_m.astype(np.float32)
+    elevation[0, 0] = -9999.0
+    path = tmp_path / "holes.tif"
+    with rasterio.open(path, "w", driver="GTiff", width=elevation.shape[1], height=elevation.shape[0], count=1,
+                       dtype="float32", crs="EPSG:32633", nodata=-9999.0,
+                       transform=rasterio.Affine(1.0, 0.0, 500000.0, 0.0, -1.0, 4980000.0)) as dst:
+        dst.write(elevation, 1)
+    with pytest.raises(NodataError, match="holes.tif has 1 nodata cells of .*; give --fill-nodata nearest") as err:
+        read_map_with_options(path, names={"fill_nodata": "--fill-nodata"})
+    assert err.value.n_nodata == 1
+    assert read_map_with_options(path, fill_nodata="nearest").shape == ramp_map.shape
