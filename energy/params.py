@@ -11,7 +11,10 @@ ground coefficients to logs.
 
 from __future__ import annotations
 
-from terrawatt_base.errors import UnknownNameError
+import numpy as np
+
+from terrain import UNKNOWN_GROUND, TerrainMap
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from .ground import GroundParams
 from .robot import DRIVE_KINDS, GRAVITY_MPS2, MotorParams, RobotParams
@@ -26,6 +29,7 @@ __all__ = [
     "GROUND_PRESETS",
     "robot_preset",
     "ground_preset",
+    "resolve_unknown_ground",
 ]
 
 
@@ -257,3 +261,53 @@ def ground_preset(name: str) -> GroundParams:
         raise UnknownNameError(
             f"ground preset {name!r} is unknown; expected one of {sorted(GROUND_PRESETS)!r}"
         ) from None
+
+
+def resolve_unknown_ground(name: str, terrain: TerrainMap | None, *, flag: str = "unknown_ground") -> str | None:
+    """The ground preset assumed on cells of unknown ground: ``name``, or None for ``"none"`` (refuse them).
+
+    Parameters
+    ----------
+    name : str
+        A ground preset name, or ``"none"`` (any case).
+    terrain : TerrainMap or None
+        The map it applies to; None for a map without ground classes (a DEM read by windows),
+        whose every cell is of unknown ground.
+    flag : str
+        How messages name the setting (the command line passes ``"--unknown-ground"``).
+
+    Returns
+    -------
+    str or None
+
+    Raises
+    ------
+    UnknownNameError
+        ``name`` is neither a ground preset nor ``"none"``.
+    InvalidParameterError
+        ``"none"`` where the map has cells of unknown ground.
+
+    Examples
+    --------
+    >>> from terrain import flat_map
+    >>> resolve_unknown_ground("sand", None), resolve_unknown_ground("none", flat_map((2, 2), 1.0, ground="ice"))
+    ('sand', None)
+    """
+    if not isinstance(name, str):
+        raise UnknownNameError(f"{flag} must be a ground preset name or 'none', got {name!r}")
+    if name.lower() == "none":
+        if terrain is None:
+            raise InvalidParameterError(f"a GeoTIFF DEM has no ground classes, so {flag} none refuses every cell; give "
+                                        f"{flag} NAME, one of {sorted(GROUND_PRESETS)!r}")
+        if not isinstance(terrain, TerrainMap):
+            raise InvalidParameterError(f"terrain must be a TerrainMap or None, got {type(terrain).__name__}")
+        n = int(np.count_nonzero(np.asarray(terrain.ground) == UNKNOWN_GROUND))
+        if n:
+            raise InvalidParameterError(
+                f"the map's ground class is unknown in {n} of {terrain.ground.size} cells and {flag} none refuses "
+                f"them; give {flag} NAME, one of {sorted(GROUND_PRESETS)!r}")
+        return None
+    if name not in GROUND_PRESETS:
+        raise UnknownNameError(f"{flag} must be a ground preset, one of {sorted(GROUND_PRESETS)!r}, or 'none'; "
+                               f"got {name!r}")
+    return name

@@ -92,3 +92,24 @@ def test_defaults_follow_replacements() -> None:
         2 * r.effective_yaw_inertia_kg_m2)
     with pytest.raises(InvalidParameterError, match="mass_kg"):
         r.replace(mass_kg=-2.0)
+
+
+def test_resolve_unknown_ground_names_a_preset_or_refuses_unknown_cells():
+    import numpy as np
+
+    from energy.params import resolve_unknown_ground
+    from terrain import InvalidParameterError, TerrainMap, UnknownNameError, flat_map
+
+    assert resolve_unknown_ground("sand", None) == "sand"
+    assert resolve_unknown_ground("None", flat_map((3, 3), 1.0, ground="ice")) is None
+    ground = np.zeros((4, 5), dtype=int)
+    ground[0, :2] = -1
+    holes = TerrainMap(np.zeros((4, 5)), 1.0, ground=ground, ground_names={0: "asphalt"})
+    with pytest.raises(InvalidParameterError, match="unknown in 2 of 20 cells and --unknown-ground none refuses"):
+        resolve_unknown_ground("none", holes, flag="--unknown-ground")
+    with pytest.raises(InvalidParameterError, match="no ground classes, so unknown_ground none refuses every cell"):
+        resolve_unknown_ground("none", None)
+    with pytest.raises(UnknownNameError, match="unknown_ground must be a ground preset, .* or 'none'; got 'lava'"):
+        resolve_unknown_ground("lava", holes)
+    with pytest.raises(UnknownNameError):
+        resolve_unknown_ground(3, holes)
