@@ -11,7 +11,7 @@ from terrawatt_base.checks import fmt_number, real_array
 from terrawatt_base.errors import InvalidParameterError, OutOfBoundsError
 from terrain.georef import lonlat_bounds, lonlat_to_xy
 
-__all__ = ["as_points", "lonlat_points"]
+__all__ = ["as_points", "lonlat_points", "point_on_map"]
 
 
 def as_points(xy: Any, name: str) -> np.ndarray:
@@ -87,3 +87,50 @@ def lonlat_points(lonlat: Any, where: TerrainMap | DemWindows, name: str) -> np.
             f"lat {fmt_number(south, 8)} to {fmt_number(north, 8)}"
         )
     return xy
+
+
+def point_on_map(
+    xy_m: Any, lonlat: Any, where: TerrainMap | DemWindows, *, names: tuple[str, str] = ("xy_m", "lonlat")
+) -> tuple[float, float] | None:
+    """One point given either in the map's metres or in WGS 84 degrees, as the map's ``(x_m, y_m)``.
+
+    Parameters
+    ----------
+    xy_m : (float, float) or None
+        The point in the map's metres.
+    lonlat : (float, float) or None
+        The point as longitude and latitude (degrees), placed by the map's CRS (:func:`lonlat_points`).
+    where : TerrainMap or DemWindows
+        The map.
+    names : (str, str)
+        How messages name ``xy_m`` and ``lonlat`` (the command line passes ``("--start", "--start-lonlat")``).
+
+    Returns
+    -------
+    (float, float) or None
+        The point; None when neither is given.
+
+    Raises
+    ------
+    InvalidParameterError
+        Both given; not two finite coordinates; degrees on a map without CRS or out of range.
+    OutOfBoundsError
+        Degrees off the map (the message gives the point and the bounds in both forms).
+
+    Examples
+    --------
+    >>> from terrain import flat_map
+    >>> point_on_map((1, 2), None, flat_map((4, 4), 1.0)), point_on_map(None, None, flat_map((4, 4), 1.0))
+    ((1.0, 2.0), None)
+    """
+    if xy_m is not None and lonlat is not None:
+        raise InvalidParameterError(f"give {names[0]} or {names[1]}, not both")
+    if lonlat is not None:
+        x, y = lonlat_points(lonlat, where, names[1])[0].tolist()
+        return x, y
+    if xy_m is None:
+        return None
+    arr = real_array(names[0], xy_m, finite=False).ravel()
+    if arr.shape != (2,) or not np.all(np.isfinite(arr)):
+        raise InvalidParameterError(f"{names[0]} must be two finite coordinates (m), got {arr.tolist()!r}")
+    return float(arr[0]), float(arr[1])

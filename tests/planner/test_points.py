@@ -40,3 +40,18 @@ def test_lon_lat_on_a_map_without_crs_is_refused():
 def test_bad_shapes_are_refused(utm_map):
     with pytest.raises(InvalidParameterError, match=r"start must have shape \(N, 2\) \(lon_deg, lat_deg\)"):
         lonlat_points((15.0, 45.0, 3.0), utm_map, "start")
+
+
+def test_point_on_map_takes_metres_or_degrees_and_names_them(utm_map):
+    from planner.points import point_on_map
+
+    assert point_on_map(None, None, utm_map) is None
+    assert point_on_map([500010, 4982910], None, utm_map) == (500010.0, 4982910.0)
+    x, y = point_on_map(None, (15.0, 45.0), utm_map)
+    np.testing.assert_allclose([x, y], lonlat_points((15.0, 45.0), utm_map, "p")[0])
+    with pytest.raises(InvalidParameterError, match=r"--depot must be two finite coordinates \(m\), got \[nan, 5.0\]"):
+        point_on_map([float("nan"), 5.0], None, utm_map, names=("--depot", "--depot-lonlat"))
+    with pytest.raises(InvalidParameterError, match="give xy_m or lonlat, not both"):
+        point_on_map((1.0, 2.0), (15.0, 45.0), utm_map)
+    with pytest.raises(OutOfBoundsError, match="--goal-lonlat"):
+        point_on_map(None, (16.0, 45.0), utm_map, names=("--goal", "--goal-lonlat"))
