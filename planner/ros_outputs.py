@@ -2,18 +2,27 @@
 
 from __future__ import annotations
 
+import importlib.util
+import math
 import os
+from collections.abc import Iterable, Mapping
 from pathlib import Path
+from typing import Any
 
-from terrain import TerrainMap
+from terrain import InvalidParameterError, OptionalDependencyError, TerrainMap
+from terrawatt_base.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
+from terrain.georef import import_rasterio
 
 from .edge_cost import EnergyCost
 from .energy_costmap import energy_costmap, write_energy_geotiff
-from .nav2_map import write_nav2_costmap, write_nav2_map
-from .ros_export import write_route_bag
+from .nav2_map import nav2_map_paths, write_nav2_costmap, write_nav2_map
+from .ros_export import check_route_bag_path, write_route_bag
 from .route import Route
 
-__all__ = ["nav2_targets", "write_ros_outputs"]
+__all__ = ["nav2_targets", "check_ros_outputs", "write_ros_outputs", "ROS_OUTPUTS"]
+
+#: The outputs of :func:`write_ros_outputs`, as :func:`check_ros_outputs`' messages name them by default.
+ROS_OUTPUTS = ("bag", "nav2_map", "energy_geotiff", "frame_origin_xy_m")
 
 
 def nav2_targets(value: str | os.PathLike[str]) -> tuple[Path, Path]:
@@ -85,3 +94,77 @@ def write_ros_outputs(
     if energy_geotiff is not None and costmap is not None:
         written.append(write_energy_geotiff(energy_geotiff, costmap))
     return written
+
+
+def check_ros_outputs(
+    *,
+    bag: str | os.PathLike[str] | None = None,
+    nav2_map: str | os.PathLike[str] | None = None,
+    energy_geotiff: str | os.PathLike[str] | None = None,
+    frame_origin_xy_m: Any = None,
+    inputs: Iterable[str | os.PathLike[str] | None] = (),
+    others: Iterable[str | os.PathLike[str]] = (),
+    names: Mapping[str, str] | None = None,
+) -> None:
+    """Before any work: the outputs :func:`write_ros_outputs` would write can be written, and their extras are installed.
+
+    Parameters
+    ----------
+    bag, nav2_map, energy_geotiff, frame_origin_xy_m : optional
+        As :func:`write_ros_outputs`; ``frame_origin_xy_m`` None when not given (it needs ``bag`` or ``nav2_map``).
+    inputs : iterable of path-like
+        The caller's input files (None for one not given): no output may replace one.
+    others : iterable of path-like
+        The other files the caller writes: no output may be one of them, nor two outputs one path.
+    names : mapping, optional
+        How messages name each of :data:`ROS_OUTPUTS` (e.g. ``{"bag": "--ros2-out"}``); default the parameters'.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``frame_origin_xy_m`` alone or not two finite numbers; a path of the wrong kind or
+        suffix; an output that would replace an input or another output; an unwritable folder.
+    OptionalDependencyError
+        ``bag`` without rosbags, ``energy_geotiff`` without rasterio.
+
+    Examples
+    --------
+    >>> check_ros_outputs()  # nothing asked: nothing to check
+    >>> check_ros_outputs(frame_origin_xy_m=(1.0, 2.0))
+    Traceback (most recent call last):
+    ...
+    terrawatt_base.errors.InvalidParameterError: frame_origin_xy_m applies to bag and nav2_map; give one of them
+    """
+    name = {key: key for key in ROS_OUTPUTS} | dict(names or {})
+    origin = name["frame_origin_xy_m"]
+    if frame_origin_xy_m is not None and bag is None and nav2_map is None:
+        raise InvalidParameterError(f"{origin} applies to {name['bag']} and {name['nav2_map']}; give one of them")
+    if frame_origin_xy_m is not None and not (len(frame_origin_xy_m) == 2 and all(
+            isinstance(v, (int, float)) and math.isfinite(v) for v in frame_origin_xy_m)):
+        raise InvalidParameterError(f"{origin} must be two finite numbers (m), got {list(frame_origin_xy_m)!r}")
+    outputs: list[tuple[str, Path]] = []
+    if bag is not None:
+        if importlib.util.find_spec("rosbags") is None:
+            raise OptionalDependencyError(f"{name['bag']} needs the optional dependency 'rosbags': "
+                                          "pip install 'terrawatt[ros]'")
+        outputs.append((name["bag"], check_route_bag_path(bag, name["bag"])[0]))
+    if nav2_map is not None:
+        for yaml_path in nav2_targets(nav2_map):
+            outputs += [(name["nav2_map"], p) for p in nav2_map_paths(yaml_path, name["nav2_map"])]
+    if energy_geotiff is not None:
+        import_rasterio()
+        target = check_output_path(energy_geotiff, name["energy_geotiff"])
+        if target.suffix.lower() not in (".tif", ".tiff"):
+            raise InvalidParameterError(f"{name['energy_geotiff']} writes a GeoTIFF ending in '.tif' or '.tiff', "
+                                        f"got {str(target)!r}")
+        outputs.append((name["energy_geotiff"], target))
+    ins = [Path(p) for p in inputs if p is not None]
+    taken = {Path(os.path.abspath(p)): "the command's own output" for p in others}
+    for flag, path in outputs:
+        refuse_overwriting_inputs([path], ins, flag)
+        key = Path(os.path.abspath(path))
+        if key in taken:
+            raise InvalidParameterError(f"{flag}: {str(path)!r} is also {taken[key]}; give another name")
+        taken[key] = f"written for {flag}"
+    for flag, path in outputs:
+        probe_writable(path.parent if str(path.parent) else Path("."), flag)

@@ -56,3 +56,31 @@ def test_the_energy_geotiff(wall, tmp_path):
     tmap, cost, route = wall
     assert write_ros_outputs(route, tmap, cost, energy_geotiff=tmp_path / "e.tif") == [tmp_path / "e.tif"]
     assert np.isnan(read_energy_geotiff(tmp_path / "e.tif").energy_per_metre_j[tmap.obstacle]).all()
+
+
+def test_check_ros_outputs_refuses_bad_targets_before_any_work(tmp_path):
+    from planner.ros_outputs import check_ros_outputs
+    from terrain import InvalidParameterError
+
+    check_ros_outputs()
+    check_ros_outputs(nav2_map=tmp_path / "site", frame_origin_xy_m=(1.0, 2.0), others=[tmp_path / "route.json"])
+    with pytest.raises(InvalidParameterError, match="--map-frame-origin applies to --ros2-out and --nav2-map"):
+        check_ros_outputs(frame_origin_xy_m=(1.0, 2.0), names={"frame_origin_xy_m": "--map-frame-origin",
+                                                              "bag": "--ros2-out", "nav2_map": "--nav2-map"})
+    with pytest.raises(InvalidParameterError, match="frame_origin_xy_m must be two finite numbers"):
+        check_ros_outputs(nav2_map=tmp_path / "site", frame_origin_xy_m=(np.nan, 0.0))
+    with pytest.raises(InvalidParameterError, match="nav2_map: .*site.yaml' is also the command's own output"):
+        check_ros_outputs(nav2_map=tmp_path / "site", others=[tmp_path / "site.yaml"])
+    (tmp_path / "in.pgm").write_text("x")
+    with pytest.raises(InvalidParameterError, match="would replace the input"):
+        check_ros_outputs(nav2_map=tmp_path / "in", inputs=[tmp_path / "in.pgm", None])
+
+
+def test_check_ros_outputs_checks_the_geotiff_suffix(tmp_path):
+    pytest.importorskip("rasterio")
+    from planner.ros_outputs import check_ros_outputs
+    from terrain import InvalidParameterError
+
+    check_ros_outputs(energy_geotiff=tmp_path / "energy.tif")
+    with pytest.raises(InvalidParameterError, match="energy_geotiff writes a GeoTIFF ending in '.tif' or '.tiff'"):
+        check_ros_outputs(energy_geotiff=tmp_path / "energy.png")
