@@ -58,6 +58,7 @@ __all__ = [
     "uses_vibration",
     "model_energy_model",
     "model_energy_cost",
+    "parse_model_ground",
     "DEFAULT_MODEL_PHYSICS_GROUND",
 ]
 
@@ -335,3 +336,44 @@ def model_energy_cost(
     lem, _ = model_energy_model(terrain, model, robot, model_ground=model_ground, physics_ground=physics_ground)
     return lem.energy_cost(terrain, speed_mps, max_slope_rad=max_slope_rad, grade_samples=grade_samples,
                            turn_samples=turn_samples)
+
+
+def parse_model_ground(tokens: Sequence[str] | str, name: str = "model_ground") -> str | dict[str, str]:
+    """``model_ground`` from words: one ``NAME`` (every cell priced as this training ground), or ``CLASS=NAME`` pairs.
+
+    Parameters
+    ----------
+    tokens : str or sequence of str
+        One training-ground name, or ``CLASS=NAME`` pairs (a map class priced as a training ground).
+    name : str
+        How messages name the setting (the command line passes ``"--model-ground"``).
+
+    Returns
+    -------
+    str or dict
+        The name, or the mapping of map class to training ground (:func:`model_energy_cost`'s ``model_ground``).
+
+    Raises
+    ------
+    InvalidParameterError
+        A pair without a class or a name, a class named twice, several words that are not pairs.
+
+    Examples
+    --------
+    >>> parse_model_ground(["snow"]), parse_model_ground(["grass=asphalt", "sand=snow"])
+    ('snow', {'grass': 'asphalt', 'sand': 'snow'})
+    """
+    items = [tokens] if isinstance(tokens, str) else list(tokens)
+    if not items or not all(isinstance(t, str) for t in items):
+        raise InvalidParameterError(f"{name} takes one NAME or CLASS=NAME pairs, got {tokens!r}")
+    if len(items) == 1 and "=" not in items[0]:
+        return items[0]
+    mapping: dict[str, str] = {}
+    for token in items:
+        cls, sep, ground = token.partition("=")
+        if not sep or not cls.strip() or not ground.strip():
+            raise InvalidParameterError(f"{name} takes one NAME or CLASS=NAME pairs, got {token!r}")
+        if cls.strip() in mapping:
+            raise InvalidParameterError(f"{name} names map class {cls.strip()!r} twice")
+        mapping[cls.strip()] = ground.strip()
+    return mapping

@@ -99,10 +99,20 @@ def test_a_class_the_model_never_drove_can_be_priced_as_one_it_did(corridor_map,
 
 
 def test_model_ground_tokens_parse_into_a_name_or_a_mapping():
-    from terrawatt_cli.common import parse_model_ground
+    from planner.model_cost import parse_model_ground
 
     assert parse_model_ground(["snow"]) == "snow"
     assert parse_model_ground(["grass=asphalt", "sand=snow"]) == {"grass": "asphalt", "sand": "snow"}
     for bad in (["grass="], ["a=b", "a=c"], ["x", "y"]):
         with pytest.raises(InvalidParameterError):
             parse_model_ground(bad)
+
+
+def test_parse_model_ground_names_the_setting_as_asked():
+    from planner.model_cost import parse_model_ground
+
+    assert parse_model_ground("snow") == "snow"
+    with pytest.raises(InvalidParameterError, match="--model-ground names map class 'a' twice"):
+        parse_model_ground(["a=b", "a=c"], "--model-ground")
+    with pytest.raises(InvalidParameterError, match="model_ground takes one NAME or CLASS=NAME pairs"):
+        parse_model_ground([])
