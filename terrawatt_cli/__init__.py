@@ -69,8 +69,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     other exception is a bug: one line saying so (the traceback with ``-v``), exit 3 — so a
     script can tell a crash from a valid "no".
     """
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)  # a flag's value checked while parsing (common.Checked) may fail here
+    except TerrawattError as exc:
+        print(f"terrawatt: error: {plain_message(str(exc))}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     try:

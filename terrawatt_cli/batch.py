@@ -6,28 +6,15 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from energy.params import resolve_unknown_ground
 from terrain import InvalidParameterError, TerrainMap
-from terrain.procedural import example_map
 
 from planner import PLANNERS, BatchPairs, read_pairs_csv
 from planner.batch_pairs import read_sites_csv
 from planner.batch_report import plan_batch_on_map
-from .common import (
-    add_dask_options,
-    add_map_options,
-    add_model_options,
-    apply_landcover,
-    check_dask_flags,
-    check_model_flags,
-    check_outputs,
-    check_positive,
-    dask_client_arg,
-    input_paths,
-    load_model_arg,
-    max_slope_rad,
-    read_map_args,
-    unknown_ground,
-)
+from .common import (add_dask_options, add_map_options, add_model_options, add_planner_options, add_robot_options,
+                     check_dask_flags, check_model_flags, check_outputs, dask_client_arg, input_paths, load_model_arg,
+                     map_arg)
 
 __all__ = ["add_parser", "run_batch"]
 
@@ -52,33 +39,11 @@ def add_parser(sub: Any) -> None:
                         help="sites file: columns x_m, y_m, or lon, lat in WGS 84 degrees, and optionally name")
     batch.add_argument("--all-pairs", action="store_true", help="with --sites: plan every ordered pair of sites")
     add_dask_options(batch, "the pairs")
-    batch.add_argument("--planner", default="lattice", choices=PLANNERS, help="planner name (default lattice)")
-    batch.add_argument("--time-limit", type=float, default=1.0, metavar="S", help="OMPL planners: time budget per pair (s)")
-    batch.add_argument("--max-evaluations", type=int, default=None, metavar="N",
-                       help="OMPL planners: stop each pair after N edge-cost evaluations instead of --time-limit; "
-                            "with --seed the rows are then the same on every run and any number of workers")
-    batch.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    batch.add_argument("--robot", default="husky", help="robot preset (default husky)")
-    batch.add_argument("--speed", type=float, default=0.5, metavar="M/S", help="planning speed (default 0.5 m/s)")
-    batch.add_argument("--max-slope-deg", type=float, default=20.0, help="steepest drivable slope (default 20 deg)")
-    batch.add_argument("--unknown-ground", default="gravel",
-                       help="ground preset assumed where the map's ground class is unknown (-1); 'none' to refuse")
+    add_planner_options(batch, planner="lattice", time_s=1.0, choices=PLANNERS)
+    add_robot_options(batch)
     batch.add_argument("--no-progress", action="store_true", help="no progress bar")
-    batch.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
     add_model_options(batch)
     batch.set_defaults(run=run_batch)
-
-
-def _check_flags(args: argparse.Namespace) -> None:
-    if args.sites is not None and not args.all_pairs:
-        raise InvalidParameterError("--sites needs --all-pairs (every ordered pair of the sites is planned)")
-    if args.all_pairs and args.sites is None:
-        raise InvalidParameterError("--all-pairs needs --sites CSV")
-    check_dask_flags(args)
-    check_positive("--speed", args.speed)
-    check_positive("--time-limit", args.time_limit)
-    if args.max_evaluations is not None:
-        check_positive("--max-evaluations", args.max_evaluations)
 
 
 def _read_pairs(args: argparse.Namespace, tmap: TerrainMap) -> BatchPairs:
@@ -95,17 +60,16 @@ def run_batch(args: argparse.Namespace) -> int:
     Exit code 0 when every pair has a route, 1 when some pair has none (infeasible) or its
     planning failed (e.g. a start on an obstacle: the row's error says so).
     """
-    _check_flags(args)
+    if (args.sites is not None) != args.all_pairs:
+        raise InvalidParameterError("--sites needs --all-pairs (every ordered pair of the sites is planned)"
+                                    if args.sites is not None else "--all-pairs needs --sites CSV")
+    check_dask_flags(args)
     check_model_flags(args)
     check_outputs(args.out, _OUTPUTS, input_paths(args))
-    if args.map == "example":
-        tmap, label = apply_landcover(args, example_map()), "bundled example map"
-    else:
-        tmap, label = read_map_args(args), Path(args.map).name
+    tmap, label = map_arg(args)
     pairs = _read_pairs(args, tmap)
     model = load_model_arg(args)
-    ground = None if model is not None else unknown_ground(args.unknown_ground, tmap)
-    max_slope_rad(args.max_slope_deg)
+    ground = None if model is not None else resolve_unknown_ground(args.unknown_ground, tmap, flag="--unknown-ground")
     with dask_client_arg(args) as client:  # a missing extra or scheduler fails before planning
         report = plan_batch_on_map(
             tmap, pairs, planner=args.planner, robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg,

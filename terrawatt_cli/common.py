@@ -1,185 +1,141 @@
-"""Options and checks the ``terrawatt`` subcommands share: map reading, output paths, flags."""
+"""Options and checks the ``terrawatt`` subcommands share: map reading, points, outputs, flags, dask, models."""
 
 from __future__ import annotations
 
 import argparse
 import contextlib
 import math
-import os
 import sys
 import warnings
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from energy import GROUND_PRESETS, CurrentModel, load_current_model
-from terrain import (
-    UNKNOWN_GROUND,
-    DemWindows,
-    FigureWarning,
-    InvalidParameterError,
-    NodataError,
-    TerrainMap,
-    UnknownNameError,
-)
+from terrain import DemWindows, FigureWarning, InvalidParameterError, TerrainMap
+from terrain.io import read_map_with_options
+from terrain.procedural import example_map
 from terrawatt_base import figure_file
 from terrawatt_base.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
 from terrawatt_base.checks import fmt_number
 from terrawatt_base.dask_client import dask_client
-from terrain.landcover import LandcoverClasses, ground_classes_from_landcover, read_landcover_classes
 
-from planner.points import lonlat_points
+from planner.model_cost import parse_model_ground
+from planner.points import point_on_map
 from planner.risk import check_risk_level
 
 __all__ = [
-    "add_map_options",
-    "read_map_file",
-    "read_map_args",
-    "landcover_classes_arg",
-    "apply_landcover",
-    "add_point_options",
-    "point_arg",
-    "check_outputs",
-    "check_positive",
-    "max_slope_rad",
-    "unknown_ground",
-    "check_grounds",
-    "draw_figure",
-    "warn_figures",
-    "add_dask_options",
-    "check_dask_flags",
-    "dask_client_arg",
-    "add_model_options",
-    "check_model_flags",
-    "load_model_arg",
+    "Checked", "bounded", "positive", "add_map_options", "read_map_args", "map_arg", "add_point_options", "point_arg",
+    "add_robot_options", "add_planner_options", "check_outputs", "input_paths", "check_output_file", "draw_figure",
+    "warn_figures", "add_dask_options", "check_dask_flags", "dask_client_arg", "add_model_options",
+    "check_model_flags", "load_model_arg",
 ]
+
+
+class Checked(argparse.Action):
+    """Store ``check(value, flag)``: a bad value fails while parsing with the library's error naming the flag (exit 2,
+    one line: :func:`terrawatt_cli.main`)."""
+
+    def __init__(self, option_strings: list[str], dest: str, check: Callable[[Any, str], Any], **kwargs: Any) -> None:
+        super().__init__(option_strings, dest, **kwargs)
+        self.check = check
+
+    def __call__(self, parser: Any, namespace: argparse.Namespace, values: Any, option_string: Any = None) -> None:
+        setattr(namespace, self.dest, self.check(values, self.option_strings[0]))
+
+
+def bounded(expected: str, ok: Callable[[float], bool]) -> Callable[[float, str], float]:
+    """A :class:`Checked` check: the value if ``ok(value)``, else "FLAG must be ``expected``, got VALUE"."""
+    def check(value: float, flag: str) -> float:
+        if not ok(value):
+            raise InvalidParameterError(f"{flag} must be {expected}, got {fmt_number(value)}")
+        return value
+    return check
+
+
+positive = bounded("a number > 0", lambda v: math.isfinite(v) and v > 0)
+_MAP_FLAGS = {"fill_nodata": "--fill-nodata", "reproject_to": "--reproject", "cell_size_m": "--cell-size",
+              "landcover": "--landcover", "landcover_classes": "--landcover-classes"}
 
 
 def add_map_options(p: argparse.ArgumentParser, *, reproject: bool = True) -> None:
     """``--fill-nodata``, ``--reproject``, ``--cell-size``, ``--landcover`` and ``--landcover-classes`` (read them
     with :func:`read_map_args`); ``reproject=False`` offers no ``--reproject`` / ``--cell-size``."""
-    p.add_argument(
-        "--fill-nodata", choices=["nearest"], default=None,
-        help="GeoTIFF DEMs: fill nodata cells from the nearest valid cell (default: refuse such DEMs)",
-    )
+    p.add_argument("--fill-nodata", choices=["nearest"], default=None,
+                   help="GeoTIFF DEMs: fill nodata cells from the nearest valid cell (default: refuse such DEMs)")
     if reproject:
-        p.add_argument(
-            "--reproject", default=None, metavar="utm|EPSG:N",
-            help="GeoTIFF DEMs: reproject to the UTM zone of the DEM's centre ('utm') or to a projected CRS in "
-                 "metres (e.g. EPSG:32633); needed for DEMs in geographic coordinates (EPSG:4326); with --cell-size",
-        )
+        p.add_argument("--reproject", default=None, metavar="utm|EPSG:N",
+                       help="GeoTIFF DEMs: reproject to the UTM zone of the DEM's centre ('utm') or to a projected CRS "
+                            "in metres (e.g. EPSG:32633); needed for DEMs in geographic coordinates (EPSG:4326); "
+                            "with --cell-size")
         p.add_argument("--cell-size", type=float, default=None, metavar="M",
                        help="cell size (m) of the reprojected map; with --reproject")
-    p.add_argument(
-        "--landcover", type=Path, default=None, metavar="FILE",
-        help="ground classes from a land-cover GeoTIFF of integer codes (e.g. ESA WorldCover), in any CRS, warped "
-             "onto a map with a CRS by majority; with --landcover-classes",
-    )
-    p.add_argument(
-        "--landcover-classes", type=Path, default=None, metavar="CSV",
-        help="with --landcover: CSV 'code,ground' (optional 'label' column) naming each code's ground preset, or "
-             "'obstacle' (impassable) or 'unknown'; codes left out and nodata keep unknown ground (--unknown-ground)",
-    )
+    p.add_argument("--landcover", type=Path, default=None, metavar="FILE",
+                   help="ground classes from a land-cover GeoTIFF of integer codes (e.g. ESA WorldCover), in any CRS, "
+                        "warped onto a map with a CRS by majority; with --landcover-classes")
+    p.add_argument("--landcover-classes", type=Path, default=None, metavar="CSV",
+                   help="with --landcover: CSV 'code,ground' (optional 'label' column) naming each code's ground "
+                        "preset, or 'obstacle' (impassable) or 'unknown'; codes left out and nodata keep unknown "
+                        "ground (--unknown-ground)")
 
 
-def read_map_file(
-    path: str | os.PathLike[str],
-    fill_nodata: str | None,
-    reproject: str | None = None,
-    cell_size: float | None = None,
-) -> TerrainMap:
-    """:func:`terrain.read_map`, its advice phrased with the CLI's ``--fill-nodata nearest``,
-    ``--reproject`` and ``--cell-size``."""
-    from terrain import read_map
-
-    if (reproject is None) != (cell_size is None):
-        raise InvalidParameterError(
-            "--reproject and --cell-size go together: e.g. --reproject utm --cell-size 5 "
-            f"(got --reproject {reproject}, --cell-size {cell_size})"
-        )
-    if cell_size is not None:
-        check_positive("--cell-size", cell_size)
-    try:
-        return read_map(path, fill_nodata=fill_nodata, reproject_to=reproject, cell_size_m=cell_size)
-    except NodataError as exc:
-        raise NodataError(
-            f"{Path(path).name} has {exc.n_nodata} nodata cells of {exc.n_cells}; give "
-            "--fill-nodata nearest to fill them from the nearest valid cell",
-            n_nodata=exc.n_nodata,
-            n_cells=exc.n_cells,
-        ) from exc
-    except InvalidParameterError as exc:
-        text = str(exc)
-        if reproject is None or not text.startswith(("reproject_to", "cell_size_m")):
-            raise
-        raise InvalidParameterError(text.replace("reproject_to", "--reproject").replace("cell_size_m", "--cell-size")
-                                    ) from exc
+def read_map_args(args: argparse.Namespace, source: Any = None) -> TerrainMap:
+    """The map of ``--map`` (or ``source``, a map in memory) with the options of :func:`add_map_options`
+    (:func:`terrain.io.read_map_with_options`; the classes' grounds must be presets unless ``--model`` prices them)."""
+    return read_map_with_options(
+        args.map if source is None else source, fill_nodata=None if source is not None else args.fill_nodata,
+        reproject_to=None if source is not None else getattr(args, "reproject", None),
+        cell_size_m=None if source is not None else getattr(args, "cell_size", None),
+        landcover=getattr(args, "landcover", None), landcover_classes=getattr(args, "landcover_classes", None),
+        known_grounds=GROUND_PRESETS if getattr(args, "model", None) is None else None, names=_MAP_FLAGS)
 
 
-def read_map_args(args: argparse.Namespace) -> TerrainMap:
-    """The map of a command's ``--map``, ``--fill-nodata``, (if offered) ``--reproject`` / ``--cell-size`` and
-    ``--landcover`` / ``--landcover-classes`` (the classes file is read and checked before the map)."""
-    classes = landcover_classes_arg(args)
-    tmap = read_map_file(args.map, args.fill_nodata, getattr(args, "reproject", None), getattr(args, "cell_size", None))
-    return apply_landcover(args, tmap, classes)
+def map_arg(args: argparse.Namespace) -> tuple[TerrainMap, str]:
+    """The map of ``--map`` (the bundled one for ``example`` or without ``--map``) and how to name it."""
+    if args.map is None or str(args.map) == "example":
+        return read_map_args(args, example_map()), "bundled example map"
+    return read_map_args(args), Path(args.map).name
 
 
-def landcover_classes_arg(args: argparse.Namespace) -> LandcoverClasses | None:
-    """The mapping of ``--landcover-classes`` (:func:`terrain.landcover.read_landcover_classes`), or None without
-    ``--landcover``; its grounds must be presets unless ``--model`` prices the grounds."""
-    landcover, classes = getattr(args, "landcover", None), getattr(args, "landcover_classes", None)
-    if (landcover is None) != (classes is None):
-        raise InvalidParameterError(
-            "--landcover and --landcover-classes go together: the land-cover raster and the CSV naming the ground of "
-            f"each of its codes (got --landcover {landcover}, --landcover-classes {classes})"
-        )
-    if classes is None:
-        return None
-    mapping = read_landcover_classes(classes)
-    if getattr(args, "model", None) is None:
-        check_grounds(mapping.ground_names, f"--landcover-classes {Path(classes).name}")
-    return mapping
-
-
-def apply_landcover(args: argparse.Namespace, tmap: TerrainMap, classes: LandcoverClasses | None = None) -> TerrainMap:
-    """``tmap`` with the ground classes of ``--landcover`` (:func:`terrain.landcover.ground_classes_from_landcover`),
-    or ``tmap`` itself without the flag; ``classes`` as read by :func:`landcover_classes_arg` (read here if None)."""
-    classes = landcover_classes_arg(args) if classes is None else classes
-    if classes is None:
-        return tmap
-    return ground_classes_from_landcover(tmap, args.landcover, classes)
-
-
-def add_point_options(p: argparse.ArgumentParser, name: str, what: str, *, required: bool,
-                      default: str = "") -> None:
-    """``--NAME X Y`` (the map's metres) or ``--NAME-lonlat LON LAT`` (WGS 84 degrees), one of them; read them
-    with :func:`point_arg`. ``what`` names the point in the help, ``default`` says what it is when not given."""
+def add_point_options(p: argparse.ArgumentParser, name: str, what: str, *, required: bool, default: str = "") -> None:
+    """``--NAME X Y`` (the map's metres) or ``--NAME-lonlat LON LAT`` (WGS 84 degrees), one of them (:func:`point_arg`)."""
     group = p.add_mutually_exclusive_group(required=required)
     group.add_argument(f"--{name}", type=float, nargs=2, metavar=("X", "Y"), help=f"{what} (m){default}")
-    group.add_argument(
-        f"--{name}-lonlat", type=float, nargs=2, metavar=("LON", "LAT"),
-        help=f"{what} as WGS 84 longitude and latitude (degrees), placed on the map by its CRS; instead of --{name}",
-    )
+    group.add_argument(f"--{name}-lonlat", type=float, nargs=2, metavar=("LON", "LAT"),
+                       help=f"{what} as WGS 84 longitude and latitude (degrees), placed on the map by its CRS; "
+                            f"instead of --{name}")
 
 
 def point_arg(args: argparse.Namespace, name: str, where: TerrainMap | DemWindows) -> tuple[float, float] | None:
-    """The point of :func:`add_point_options` in the map's metres, or None when neither flag was given.
+    """The point of :func:`add_point_options` in the map's metres (:func:`planner.points.point_on_map`), or None."""
+    return point_on_map(getattr(args, name, None), getattr(args, f"{name}_lonlat", None), where,
+                        names=(f"--{name}", f"--{name}-lonlat"))
 
-    Raises
-    ------
-    InvalidParameterError
-        ``--NAME-lonlat`` on a map without CRS, or degrees out of range.
-    OutOfBoundsError
-        ``--NAME-lonlat`` off the map (the message gives the point and the bounds in degrees and in metres).
-    """
-    lonlat = getattr(args, f"{name}_lonlat", None)
-    if lonlat is not None:
-        x, y = lonlat_points(lonlat, where, f"--{name}-lonlat")[0].tolist()
-        return x, y
-    xy = getattr(args, name, None)
-    return None if xy is None else (float(xy[0]), float(xy[1]))
+
+def add_robot_options(p: argparse.ArgumentParser, *, speed: str = "planning speed", slope: bool = True) -> None:
+    """``--robot``, ``--speed``, ``--out`` and (with ``slope``) ``--max-slope-deg`` and ``--unknown-ground``."""
+    p.add_argument("--robot", default="husky", help="robot preset: paper_seed, jackal or husky (default husky)")
+    p.add_argument("--speed", type=float, default=0.5, action=Checked, check=positive, metavar="M/S",
+                   help=f"{speed} (default 0.5 m/s)")
+    p.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
+    if slope:
+        p.add_argument("--max-slope-deg", type=float, default=20.0, action=Checked,
+                       check=bounded("between 0 and 90 degrees (exclusive)", lambda v: 0.0 < v < 90.0),
+                       help="steepest drivable slope (default 20 deg)")
+        p.add_argument("--unknown-ground", default="gravel",
+                       help="ground preset assumed where the map's ground class is unknown (-1); 'none' to refuse "
+                            "such cells")
+
+
+def add_planner_options(p: argparse.ArgumentParser, *, planner: str, time_s: float, choices: Iterable[str]) -> None:
+    """``--planner``, ``--time-limit``, ``--max-evaluations`` and ``--seed``."""
+    p.add_argument("--planner", default=planner, choices=list(choices), help=f"planner name (default {planner})")
+    p.add_argument("--time-limit", type=float, default=time_s, action=Checked, check=positive, metavar="S",
+                   help="OMPL planners: planning time budget (s; per pair in a batch)")
+    p.add_argument("--max-evaluations", type=int, default=None, action=Checked, check=positive, metavar="N",
+                   help="work bound of OMPL planners: stop after N edge-cost evaluations instead of after "
+                        "--time-limit; with --seed the route is then the same on every run, machine and worker")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
 
 
 def check_outputs(directory: Path, files: Iterable[str] = (), inputs: Iterable[Path | None] = ()) -> None:
@@ -197,11 +153,10 @@ def check_outputs(directory: Path, files: Iterable[str] = (), inputs: Iterable[P
         an output that would replace an input, an output folder that cannot be written.
     """
     names = list(files)
-    ins = list(inputs)
     check_output_path(directory, "--out", directory=True)
     for name in names:
         check_output_path(directory / name, f"--out {directory}: {name}")
-    refuse_overwriting_inputs([directory, *(directory / n for n in names)], ins)
+    refuse_overwriting_inputs([directory, *(directory / n for n in names)], list(inputs))
     probe_writable(directory)
 
 
@@ -211,15 +166,8 @@ INPUT_FLAGS = ("map", "data", "pairs", "sites", "model", "calibration_data", "la
 
 def input_paths(args: argparse.Namespace) -> list[Path]:
     """The input paths a command was given (the flags of :data:`INPUT_FLAGS` that name existing files or folders)."""
-    out = []
-    for flag in INPUT_FLAGS:
-        value = getattr(args, flag, None)
-        if value is None or value == "example":
-            continue
-        path = Path(value)
-        if path.exists():
-            out.append(path)
-    return out
+    values = (getattr(args, flag, None) for flag in INPUT_FLAGS)
+    return [Path(v) for v in values if v is not None and v != "example" and Path(v).exists()]
 
 
 def check_output_file(path: Path, inputs: Iterable[Path | None] = (), flag: str = "--out") -> None:
@@ -227,53 +175,6 @@ def check_output_file(path: Path, inputs: Iterable[Path | None] = (), flag: str 
     check_output_path(path, flag)
     refuse_overwriting_inputs([path], list(inputs), flag)
     probe_writable(path.parent if str(path.parent) else Path("."), flag)
-
-
-def check_positive(flag: str, value: float | int) -> None:
-    """``value`` a finite number > 0, or an error naming ``flag``."""
-    if not (math.isfinite(value) and value > 0):
-        raise InvalidParameterError(f"{flag} must be a number > 0, got {fmt_number(value)}")
-
-
-def max_slope_rad(max_slope_deg: float) -> float:
-    """``--max-slope-deg`` in radians, checked: in (0, 90) degrees."""
-    if not (math.isfinite(max_slope_deg) and 0.0 < max_slope_deg < 90.0):
-        raise InvalidParameterError(
-            f"--max-slope-deg must be between 0 and 90 degrees (exclusive), got {fmt_number(max_slope_deg)}"
-        )
-    return math.radians(max_slope_deg)
-
-
-def unknown_ground(name: str, tmap: TerrainMap) -> str | None:
-    """``--unknown-ground``: a ground preset name, or None for ``none``; checked against the map.
-
-    Raises
-    ------
-    UnknownNameError
-        Not a preset name nor ``none``.
-    InvalidParameterError
-        ``none`` on a map with cells of unknown ground.
-    """
-    if name.lower() == "none":
-        n = int(np.count_nonzero(np.asarray(tmap.ground) == UNKNOWN_GROUND))
-        if n:
-            raise InvalidParameterError(
-                f"the map's ground class is unknown in {n} of {tmap.ground.size} cells and --unknown-ground none "
-                f"refuses them; give --unknown-ground NAME, one of {sorted(GROUND_PRESETS)!r}"
-            )
-        return None
-    if name not in GROUND_PRESETS:
-        raise UnknownNameError(
-            f"--unknown-ground must be a ground preset, one of {sorted(GROUND_PRESETS)!r}, or 'none'; got {name!r}"
-        )
-    return name
-
-
-def check_grounds(names: Iterable[str], flag: str) -> None:
-    """Every name a ground preset, or an error naming ``flag`` and the known grounds."""
-    unknown = sorted(n for n in set(names) if n not in GROUND_PRESETS)
-    if unknown:
-        raise UnknownNameError(f"{flag}: grounds {unknown!r} have no preset; known grounds: {sorted(GROUND_PRESETS)!r}")
 
 
 def draw_figure(path: Path, draw: Callable[[], Path]) -> Path | None:
@@ -328,62 +229,34 @@ def dask_client_arg(args: argparse.Namespace) -> Iterator[Any]:
 
 def add_model_options(p: argparse.ArgumentParser, *, risk: bool = False) -> None:
     """``--model FILE`` and ``--model-ground NAME`` (and, with ``risk``, ``--risk Q``): edge costs from a saved model."""
-    p.add_argument(
-        "--model", type=Path, default=None, metavar="FILE",
-        help="price the edges with a saved current model (terrawatt train) instead of the physics presets: one per "
-             "ground class of the map, which the model must have driven, on the robot of --robot (the physics "
-             "model adds the slope term); --unknown-ground does not apply",
-    )
-    p.add_argument("--model-ground", default=None, nargs="+", metavar="NAME|CLASS=NAME",
+    p.add_argument("--model", type=Path, default=None, metavar="FILE",
+                   help="price the edges with a saved current model (terrawatt train) instead of the physics presets: "
+                        "one per ground class of the map, which the model must have driven, on the robot of --robot "
+                        "(the physics model adds the slope term); --unknown-ground does not apply")
+    p.add_argument("--model-ground", default=None, nargs="+", metavar="NAME|CLASS=NAME", action=Checked,
+                   check=parse_model_ground,
                    help="with --model: NAME prices every cell as this training ground of the model (e.g. a map "
                         "without ground classes when the model drove several grounds); CLASS=NAME pairs price a "
                         "map ground class the model never drove as one it did (e.g. grass=asphalt sand=snow), the "
                         "other classes by their own names")
     if risk:
-        p.add_argument(
-            "--risk", type=float, default=None, metavar="Q",
-            help="with --model of a model with a predictive interval: plan on the Q quantile of energy (Q in (0, 1)): "
-                 "every edge costs mean + z_Q sd, which is the route's Q quantile on one ground and, for Q > 0.5, an "
-                 "upper bound of it across grounds (their errors are independent); default: the mean",
-        )
+        p.add_argument("--risk", type=float, default=None, metavar="Q", action=Checked, check=check_risk_level,
+                       help="with --model of a model with a predictive interval: plan on the Q quantile of energy (Q "
+                            "in (0, 1)): every edge costs mean + z_Q sd, which is the route's Q quantile on one "
+                            "ground and, for Q > 0.5, an upper bound of it across grounds (their errors are "
+                            "independent); default: the mean")
 
 
 def check_model_flags(args: argparse.Namespace) -> None:
-    """``--model``, ``--model-ground`` and ``--risk`` checked before any work (the file must exist)."""
-    model = getattr(args, "model", None)
-    if model is None:
-        for flag, value in (("--model-ground", getattr(args, "model_ground", None)),
-                            ("--risk", getattr(args, "risk", None))):
-            if value is not None:
-                raise InvalidParameterError(f"{flag} needs --model FILE (a saved current model; the physics presets "
-                                            "have no training grounds nor an interval)")
-        return
-    if not Path(model).is_file():
-        raise InvalidParameterError(f"--model {model} is not a file (write one with terrawatt train)")
-    if getattr(args, "model_ground", None) is not None:
-        args.model_ground = parse_model_ground(args.model_ground)
-    if getattr(args, "risk", None) is not None:
-        check_risk_level(args.risk, "--risk")
-
-
-def parse_model_ground(tokens: Sequence[str] | str) -> str | dict[str, str]:
-    """``--model-ground`` tokens: one ``NAME``, or ``CLASS=NAME`` pairs (a mapping of map class to training ground)."""
-    items = [tokens] if isinstance(tokens, str) else list(tokens)
-    if len(items) == 1 and "=" not in items[0]:
-        return items[0]
-    mapping: dict[str, str] = {}
-    for token in items:
-        cls, sep, name = token.partition("=")
-        if not sep or not cls.strip() or not name.strip():
-            raise InvalidParameterError(f"--model-ground takes one NAME or CLASS=NAME pairs, got {token!r}")
-        if cls.strip() in mapping:
-            raise InvalidParameterError(f"--model-ground names map class {cls.strip()!r} twice")
-        mapping[cls.strip()] = name.strip()
-    return mapping
+    """``--model-ground`` and ``--risk`` need ``--model``, whose file must exist; checked before any work."""
+    if args.model is not None and not Path(args.model).is_file():
+        raise InvalidParameterError(f"--model {args.model} is not a file (write one with terrawatt train)")
+    for flag, value in (("--model-ground", args.model_ground), ("--risk", getattr(args, "risk", None))):
+        if args.model is None and value is not None:
+            raise InvalidParameterError(f"{flag} needs --model FILE (a saved current model; the physics presets "
+                                        "have no training grounds nor an interval)")
 
 
 def load_model_arg(args: argparse.Namespace) -> CurrentModel | None:
     """The model of ``--model`` (:func:`energy.load_current_model`), or None without the flag."""
-    if getattr(args, "model", None) is None:
-        return None
-    return load_current_model(args.model)
+    return None if args.model is None else load_current_model(args.model)

@@ -3,25 +3,19 @@
 from __future__ import annotations
 
 import argparse
-import importlib.util
-import math
-import os
 from collections.abc import Iterable
 from pathlib import Path
 
-from terrain import InvalidParameterError, OptionalDependencyError, TerrainMap
-from terrawatt_base.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
-from terrain.georef import import_rasterio
+from terrain import InvalidParameterError, TerrainMap
 
 from planner.edge_cost import EnergyCost
-from planner.nav2_map import nav2_map_paths
-from planner.ros_export import check_route_bag_path
-from planner.ros_outputs import nav2_targets, write_ros_outputs
+from planner.ros_outputs import check_ros_outputs, nav2_targets, write_ros_outputs
 from planner.route import Route
 
 __all__ = ["add_ros2_arguments", "nav2_targets", "check_ros2_outputs", "write_ros2_outputs"]
 
-_FLAGS = ("ros2_out", "nav2_map", "energy_costmap")
+_FLAGS = {"bag": "--ros2-out", "nav2_map": "--nav2-map", "energy_geotiff": "--energy-costmap",
+          "frame_origin_xy_m": "--map-frame-origin"}
 
 
 def add_ros2_arguments(parser: argparse.ArgumentParser) -> None:
@@ -53,74 +47,27 @@ def add_ros2_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _given(args: argparse.Namespace) -> list[str]:
-    return ["--" + f.replace("_", "-") for f in _FLAGS if getattr(args, f, None) is not None]
-
-
-def _frame_origin(args: argparse.Namespace) -> tuple[float, float]:
-    origin = getattr(args, "map_frame_origin", None)
-    return (0.0, 0.0) if origin is None else (float(origin[0]), float(origin[1]))
-
-
 def check_ros2_outputs(args: argparse.Namespace, inputs: Iterable[Path | None] = (),
                        others: Iterable[Path] = ()) -> None:
-    """Before any work: the ROS 2 / Nav2 outputs can be written, replace no input, and their extras are installed.
-
-    ``inputs`` are the command's input paths, ``others`` the files it writes besides these
-    (e.g. ``--out``'s route.json): no output may be one of them, nor two outputs one path.
-
-    Raises
-    ------
-    InvalidParameterError
-        A flag with coarse-to-fine planning (no whole map); ``--map-frame-origin`` alone; a
-        path of the wrong kind or suffix; an output that would replace an input or another
-        output; an unwritable folder.
-    OptionalDependencyError
-        ``--ros2-out`` without rosbags, ``--energy-costmap`` without rasterio.
-    """
-    given = _given(args)
-    if getattr(args, "map_frame_origin", None) is not None and not {"--ros2-out", "--nav2-map"} & set(given):
-        raise InvalidParameterError("--map-frame-origin applies to --ros2-out and --nav2-map; give one of them")
-    if not given:
-        return
-    if getattr(args, "coarse_factor", None) is not None or getattr(args, "windowed", False):
+    """Before any work: the outputs asked for can be written, replace none of ``inputs`` nor ``others`` (the command's
+    own files), and their extras are installed (:func:`planner.ros_outputs.check_ros_outputs`); they need the whole
+    map (not with ``--coarse-factor`` / ``--windowed``)."""
+    given = [flag for flag in ("--ros2-out", "--nav2-map", "--energy-costmap")
+             if getattr(args, flag[2:].replace("-", "_"), None) is not None]
+    if given and (getattr(args, "coarse_factor", None) is not None or getattr(args, "windowed", False)):
         raise InvalidParameterError(f"{', '.join(given)} need the whole map: plan without --coarse-factor / --windowed")
-    origin = getattr(args, "map_frame_origin", None)
-    if origin is not None and not all(math.isfinite(v) for v in origin):
-        raise InvalidParameterError(f"--map-frame-origin must be two finite numbers (m), got {list(origin)!r}")
-    outputs: list[tuple[str, Path]] = []
-    if getattr(args, "ros2_out", None) is not None:
-        if importlib.util.find_spec("rosbags") is None:
-            raise OptionalDependencyError("--ros2-out needs the optional dependency 'rosbags': pip install 'terrawatt[ros]'")
-        target, _ = check_route_bag_path(args.ros2_out, "--ros2-out")
-        outputs.append(("--ros2-out", target))
-    if getattr(args, "nav2_map", None) is not None:
-        for yaml_path in nav2_targets(args.nav2_map):
-            outputs += [("--nav2-map", p) for p in nav2_map_paths(yaml_path, "--nav2-map")]
-    if getattr(args, "energy_costmap", None) is not None:
-        import_rasterio()
-        target = check_output_path(args.energy_costmap, "--energy-costmap")
-        if target.suffix.lower() not in (".tif", ".tiff"):
-            raise InvalidParameterError(f"--energy-costmap writes a GeoTIFF ending in '.tif' or '.tiff', got {str(target)!r}")
-        outputs.append(("--energy-costmap", target))
-    ins = list(inputs)
-    taken = {Path(os.path.abspath(p)): "the command's own output" for p in others}
-    for flag, path in outputs:
-        refuse_overwriting_inputs([path], ins, flag)
-        key = Path(os.path.abspath(path))
-        if key in taken:
-            raise InvalidParameterError(f"{flag}: {str(path)!r} is also {taken[key]}; give another name")
-        taken[key] = f"written for {flag}"
-    for flag, path in outputs:
-        probe_writable(path.parent if str(path.parent) else Path("."), flag)
+    check_ros_outputs(bag=getattr(args, "ros2_out", None), nav2_map=getattr(args, "nav2_map", None),
+                      energy_geotiff=getattr(args, "energy_costmap", None),
+                      frame_origin_xy_m=getattr(args, "map_frame_origin", None), inputs=inputs, others=others,
+                      names=_FLAGS)
 
 
 def write_ros2_outputs(args: argparse.Namespace, route: Route, tmap: TerrainMap, cost: EnergyCost) -> list[Path]:
     """Write the outputs of the flags given, checked by :func:`check_ros2_outputs`, and return the files written
     (:func:`planner.ros_outputs.write_ros_outputs`); a route not found writes no bag (a line says so)."""
-    bag = getattr(args, "ros2_out", None)
+    bag, origin = getattr(args, "ros2_out", None), getattr(args, "map_frame_origin", None)
     if bag is not None and not route.found:
         print(f"no route (status {route.status!r}): --ros2-out {bag} not written")
     return write_ros_outputs(route, tmap, cost, bag=bag, nav2_map=getattr(args, "nav2_map", None),
                              energy_geotiff=getattr(args, "energy_costmap", None),
-                             frame_origin_xy_m=_frame_origin(args))
+                             frame_origin_xy_m=(0.0, 0.0) if origin is None else (float(origin[0]), float(origin[1])))
