@@ -12,7 +12,7 @@ from terrawatt_base.checks import fmt_number
 from terrawatt_base.errors import DataError
 from terrain.terrain_map import TerrainMap
 
-from ..logs import InteractionLog
+from ..logs import InteractionLog, log_slope_rad
 from ..models.baselines import PhysicsCurrentModel
 from .effect_base import GAIN_PLAUSIBLE, BasisEffect, Effect, EffectParameter
 from .model_currents import ParameterTable, PhysicsBasis, motoring_currents_a
@@ -70,15 +70,6 @@ class PhysicsTermEffect(BasisEffect):
         return predicted_a + values[0] * prepared
 
 
-def log_slope_rad(terrain: TerrainMap, log: InteractionLog) -> np.ndarray:
-    """Pitch along the heading at each pose of ``log`` on ``terrain`` (as the truth simulator drives)."""
-    pose = log.pose_xyh
-    x, y, h = pose[:, 0], pose[:, 1], pose[:, 2]
-    gx = np.asarray(terrain.sample("grad_x", x, y, method="bilinear"), dtype=np.float64)
-    gy = np.asarray(terrain.sample("grad_y", x, y, method="bilinear"), dtype=np.float64)
-    return np.arctan(gx * np.cos(h) + gy * np.sin(h))
-
-
 class SlopeEffect(BasisEffect):
     """Gravity along the slope (pitch from the map under the logged poses), as a gain on its current.
 
@@ -90,6 +81,10 @@ class SlopeEffect(BasisEffect):
     parameters = (_GAIN,)
     description = "slope: gravity along the pitch under the logged poses (needs a map)"
     terrain: Any = None
+
+    def applies_to(self, model: Any) -> bool:
+        # a physics model given the map already drives the slope under its poses
+        return not (_is_physics(model) and model.terrain is not None)
 
     def unsupported(self, logs: Sequence[Any], terrain: Any, model: Any = None) -> str | None:
         if not isinstance(terrain, TerrainMap):
@@ -251,10 +246,10 @@ class LateralFrictionEffect(_RepredictEffect):
         return _is_physics(model) and "turning_resistance" in model.effects_
 
     def nominal(self, b: PhysicsBasis) -> float:
-        return float(b.ground.effective_lateral_friction_coef)
+        return float(np.mean([g.effective_lateral_friction_coef for g in b.grounds()]))
 
     def repredict(self, b: PhysicsBasis, log: InteractionLog, value: float, index: Any = None) -> np.ndarray:
-        return motoring_currents_a(b, log, ground=b.ground.replace(lateral_friction_coef=value))
+        return motoring_currents_a(b, log, ground=b.replace_grounds(lateral_friction_coef=value))
 
 
 def log_ground_labels(log: InteractionLog) -> np.ndarray | None:
@@ -322,7 +317,7 @@ class RollingResistanceEffect(_RepredictEffect):
         return "coulomb_friction" not in b.effects
 
     def nominal(self, b: PhysicsBasis) -> float:
-        return 0.0 if self._switched_on(b) else float(b.ground.rolling_resistance_coef)
+        return 0.0 if self._switched_on(b) else float(np.mean([g.rolling_resistance_coef for g in b.grounds()]))
 
     def index(self, log: InteractionLog) -> np.ndarray:
         lab = log_ground_labels(log)
@@ -333,8 +328,11 @@ class RollingResistanceEffect(_RepredictEffect):
     def _grounds(self, b: PhysicsBasis, values: Sequence[float]) -> list[Any]:
         # samples of grounds not listed keep the model's physics: its coefficient, or none when
         # Coulomb friction is switched on here
-        other = b.ground.replace(rolling_resistance_coef=0.0) if self._switched_on(b) else b.ground
-        return [b.ground.replace(rolling_resistance_coef=float(v)) for v in values] + [other]
+        # (a model with a ground per label has each listed label's own ground; it refuses unknown labels)
+        own = [b.ground.get(g, b.grounds()[0]) if isinstance(b.ground, dict) else b.ground for g in self.labels]
+        first = own[0] if own else b.grounds()[0]
+        other = first.replace(rolling_resistance_coef=0.0) if self._switched_on(b) else first
+        return [g.replace(rolling_resistance_coef=float(v)) for g, v in zip(own, values)] + [other]
 
     def _currents(self, b: PhysicsBasis, log: InteractionLog, grounds: list[Any], index: Any) -> np.ndarray:
         effects = tuple(b.effects) + ("coulomb_friction",) if self._switched_on(b) else None

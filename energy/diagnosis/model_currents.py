@@ -12,8 +12,8 @@ import numpy as np
 from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..ground import GroundParams
-from ..logs import InteractionLog, rest_samples
-from ..models.baselines import PhysicsCurrentModel
+from ..logs import InteractionLog, log_slope_rad, rest_samples
+from ..models.baselines import PhysicsCurrentModel, ground_slots
 from ..params import ground_preset, robot_preset
 from ..physics import EFFECTS, PhysicsEnergyModel
 from ..power import PowerBreakdown
@@ -33,18 +33,34 @@ TABLE_NODES = 129
 class PhysicsBasis:
     """The physics a model stands on: robot, ground, effects switched on, idle current, rest level.
 
-    For a fitted :class:`~energy.PhysicsCurrentModel` these are its fitted values; for any
-    other model a reference (the robot's preset on asphalt, every drive effect) from which
-    the physics terms are offered as additive candidates.
+    For a fitted :class:`~energy.PhysicsCurrentModel` these are its fitted values (``ground``
+    one GroundParams or its per-label mapping, ``terrain`` the map whose slope it reads); for
+    any other model a reference (the robot's preset on asphalt, every drive effect, level
+    ground) from which the physics terms are offered as additive candidates.
     """
 
     robot: RobotParams
-    ground: GroundParams
+    ground: GroundParams | dict[str, GroundParams]
     effects: tuple[str, ...]
     idle_current_a: float
     fitted_chi: bool
     is_model: bool
     rest_current_a: tuple[float, float] = (0.0, 0.0)
+    terrain: Any = None
+
+    def grounds(self) -> list[GroundParams]:
+        """Every ground of the basis (one, or one per label)."""
+        return list(self.ground.values()) if isinstance(self.ground, dict) else [self.ground]
+
+    def replace_grounds(self, **changes: float) -> GroundParams | dict[str, GroundParams]:
+        """The basis's ground (or each of its per-label grounds) with ``changes``."""
+        if isinstance(self.ground, dict):
+            return {g: p.replace(**changes) for g, p in self.ground.items()}
+        return self.ground.replace(**changes)
+
+    def slope_rad(self, log: InteractionLog) -> Any:
+        """The slope the basis drives ``log`` on: the pitch under its poses on ``terrain``, else level (0)."""
+        return 0.0 if self.terrain is None else log_slope_rad(self.terrain, log)
 
 
 def physics_basis(model: Any, robot: Any = None) -> PhysicsBasis:
@@ -56,9 +72,9 @@ def physics_basis(model: Any, robot: Any = None) -> PhysicsBasis:
         ``robot`` is neither None, a preset name nor a RobotParams.
     """
     if isinstance(model, PhysicsCurrentModel) and model.is_fitted:
-        return PhysicsBasis(model.robot_, model.ground_, tuple(model.effects_), float(model.idle_current_a_),
+        return PhysicsBasis(model.robot_, model.fitted_ground, tuple(model.effects_), float(model.idle_current_a_),
                             "track_width_multiplier" in model.fitted_, True,
-                            (float(model.rest_current_a_[0]), float(model.rest_current_a_[1])))
+                            (float(model.rest_current_a_[0]), float(model.rest_current_a_[1])), model.terrain)
     if robot is None:
         rb = robot_preset("husky")
     elif isinstance(robot, str):
@@ -88,10 +104,13 @@ def _log_robot(robot: RobotParams, log: InteractionLog, fitted_chi: bool) -> Rob
 
 def basis_breakdown(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[str, ...] | None = None,
                     robot: RobotParams | None = None, ground: Any = None, ground_index: Any = None,
-                    slope_rad: Any = 0.0) -> PowerBreakdown:
+                    slope_rad: Any = None) -> PowerBreakdown:
     """The :class:`~energy.power.PowerBreakdown` of the physics of ``basis`` (or the given
     ``effects`` / ``robot`` / ``ground``) for the log's ``v``, ``omega``, their time
-    derivatives and ``slope_rad``, with the log's track multiplier rule.
+    derivatives and ``slope_rad`` (default the basis's), with the log's track multiplier rule.
+
+    ``ground`` (or the basis's) may be one GroundParams, a per-label mapping (each sample
+    takes its label's) or a list indexed by ``ground_index``.
 
     Raises
     ------
@@ -103,13 +122,17 @@ def basis_breakdown(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[
     rb = _log_robot(basis.robot if robot is None else robot, log, basis.fitted_chi)
     model = PhysicsEnergyModel(rb, basis.effects if effects is None else effects)
     t, v, w = log.time_s, log.v_mps, log.omega_radps
-    return model.power(v, w, basis.ground if ground is None else ground, accel_mps2=np.gradient(v, t),
-                       alpha_radps2=np.gradient(w, t), slope_rad=slope_rad, time_s=t, ground_index=ground_index)
+    ground = basis.ground if ground is None else ground
+    if ground_index is None:
+        ground, ground_index = ground_slots(ground, log)
+    slope = basis.slope_rad(log) if slope_rad is None else slope_rad
+    return model.power(v, w, ground, accel_mps2=np.gradient(v, t), alpha_radps2=np.gradient(w, t),
+                       slope_rad=slope, time_s=t, ground_index=ground_index)
 
 
 def motoring_currents_a(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[str, ...] | None = None,
                         robot: RobotParams | None = None, ground: Any = None, ground_index: Any = None,
-                        slope_rad: Any = 0.0) -> np.ndarray:
+                        slope_rad: Any = None) -> np.ndarray:
     """Per-side motor current in the direction of rotation (N, 2), A, no idle, no clamp.
 
     The physics of ``basis`` (or the given ``effects`` / ``robot`` / ``ground``, which may be

@@ -4,7 +4,7 @@ Modules: :mod:`~energy.logs.meta` (run metadata), :mod:`~energy.logs.gaps` (the 
 shared with the readers), :mod:`~energy.logs.arrays` (the stream fields and the validation
 of the log's arrays), :mod:`~energy.logs.joining` (concatenation),
 :mod:`~energy.logs.interaction_log` (the log itself), :mod:`~energy.logs.rest` (which samples
-stand still). Readers of files live in
+stand still), :mod:`~energy.logs.slope` (the pitch under a run's poses on a map). Readers of files live in
 :mod:`energy.io`.
 """
 
@@ -13,6 +13,7 @@ from .gaps import DEFAULT_GAP_FACTOR, check_gap_factor, gap_steps, median_period
 from .interaction_log import RESAMPLE_METHODS, InteractionLog
 from .meta import VELOCITY_SOURCES, LogMeta
 from .rest import REST_ACCEL_MPS2, REST_ALPHA_RADPS2, REST_OMEGA_RADPS, REST_SPEED_MPS, at_rest, rest_samples
+from .slope import log_slope_rad
 
 __all__ = [
     "LogMeta",
@@ -28,6 +29,7 @@ __all__ = [
     "OPTIONAL_FIELDS",
     "at_rest",
     "rest_samples",
+    "log_slope_rad",
     "REST_ACCEL_MPS2",
     "REST_ALPHA_RADPS2",
     "REST_SPEED_MPS",

@@ -12,18 +12,20 @@
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 from scipy import optimize
 
+from terrain.terrain_map import TerrainMap
 from terrawatt_base.checks import check_bool, real_array
 from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
-from ..logs import InteractionLog, at_rest, rest_samples
+from ..logs import InteractionLog, at_rest, log_slope_rad, rest_samples
 from ..params import GroundParams, MotorParams, RobotParams, ground_preset, robot_preset
 from ..physics import EFFECTS, PhysicsEnergyModel
 from .base import CurrentModel, log_currents
@@ -34,6 +36,7 @@ __all__ = [
     "PhysicsCurrentModel",
     "PHYSICS_FIT_PARAMETERS",
     "DEFAULT_FIT_PARAMETERS",
+    "ground_slots",
 ]
 
 _trapezoid = getattr(np, "trapezoid", None) or np.trapz
@@ -164,13 +167,60 @@ def _ground_from_plain(value: Any) -> str | GroundParams:
     return GroundParams(**value["__ground__"]) if isinstance(value, dict) else value
 
 
+#: Fitted quantities that are coefficients of a ground (fitted per label with a mapping of grounds).
+_GROUND_COEFFICIENTS = ("rolling_resistance_coef", "lateral_friction_coef", "viscous_friction_coef_s_per_m")
+
+
+def _check_ground(ground: Any) -> GroundParams | dict[str, GroundParams]:
+    """One ground (preset name or parameters) or a non-empty mapping of labels to grounds."""
+    def one(g: Any, where: str) -> GroundParams:
+        out = ground_preset(g) if isinstance(g, str) else g
+        if not isinstance(out, GroundParams):
+            raise InvalidParameterError(f"{where} must be a preset name or GroundParams, got {g!r:.80}")
+        return out
+
+    if isinstance(ground, Mapping):
+        if not ground:
+            raise InvalidParameterError("ground must name at least one ground label when it is a mapping")
+        for label in ground:
+            if not isinstance(label, str) or not label.strip():
+                raise InvalidParameterError(f"ground labels must be non-blank strings, got {label!r:.80}")
+        return {label: one(g, f"ground[{label!r}]") for label, g in ground.items()}
+    return one(ground, "ground")
+
+
+def ground_slots(ground: GroundParams | Mapping[str, GroundParams],
+                 log: InteractionLog) -> tuple[GroundParams | list[GroundParams], np.ndarray | None]:
+    """The ground of each sample of ``log``: ``(ground, None)`` for one ground, else the list of
+    grounds and each sample's index into it, by the log's ground labels.
+
+    Raises
+    ------
+    DataError
+        A mapping of grounds and a log without ground labels, or with a label it lacks.
+    """
+    if not isinstance(ground, Mapping):
+        return ground, None
+    labels = log.ground_labels
+    if labels is None:
+        raise DataError(f"a physics model with a ground per label needs ground labels in the log; "
+                        f"{log.meta.source!r} has none")
+    names = list(ground)
+    found, index = np.unique(np.asarray(labels).astype(str), return_inverse=True)
+    missing = sorted(set(found.tolist()) - set(names))
+    if missing:
+        raise DataError(f"{log.meta.source!r} drives on {missing!r}, which the model's grounds {names!r} lack")
+    lookup = np.array([names.index(g) for g in found.tolist()], dtype=np.intp)
+    return [ground[g] for g in names], lookup[index]
+
+
 class PhysicsCurrentModel(CurrentModel):
     """The physics model's per-side motor current, with ground coefficients fitted to logs.
 
     Prediction per side: ``max(rest + idle + I_motor * sign(omega_motor), 0)`` with
     ``I_motor`` the ``motor_current_a`` of :meth:`PhysicsEnergyModel.power` for the logged
-    ``v``, ``omega``, their time derivatives (``numpy.gradient``) and zero slope, where the
-    log moves; standing still (:func:`energy.logs.at_rest`) the rest level
+    ``v``, ``omega``, their time derivatives (``numpy.gradient``) and the slope (level
+    ground, or the pitch under the logged poses on ``terrain``), where the log moves; standing still (:func:`energy.logs.at_rest`) the rest level
     ``rest_current_a_`` alone: a robot at rest pushes against nothing, whatever friction
     law the physics applies to a speed of a few mm/s read off jittery odometry. The rest
     level is what the current sensor logs with the wheels still (a sensor offset, in every
@@ -190,9 +240,13 @@ class PhysicsCurrentModel(CurrentModel):
     ----------
     robot : str or RobotParams
         Robot preset name (default ``"husky"``) or parameters.
-    ground : str or GroundParams
+    ground : str, GroundParams or mapping of str to (str or GroundParams)
         Starting ground (preset name or parameters); the fitted coefficients replace its
-        values, the others (e.g. slip coefficients) are kept.
+        values, the others (e.g. slip coefficients) are kept. A mapping gives each ground
+        label of the logs (``InteractionLog.ground_labels``, per sample) its own ground, as
+        a planner prices each cell by its ground: a log with a label the mapping lacks is a
+        ``DataError``; fitted ground coefficients are then fitted per label
+        (``fitted_["grass.rolling_resistance_coef"]``).
     fit_parameters : tuple of str
         Names from :data:`PHYSICS_FIT_PARAMETERS` to fit (default
         :data:`DEFAULT_FIT_PARAMETERS`: rolling resistance, lateral friction, rest level; not
@@ -209,11 +263,17 @@ class PhysicsCurrentModel(CurrentModel):
         electronics ``"sensor"`` and ``"control"``, which draw no motor current).
     clip_negative : bool
         Clamp predicted currents at 0.
+    terrain : TerrainMap, optional
+        The map the logs drove on: the slope under their poses enters the physics (every log
+        needs poses), as it does when planning on that map; without it, level ground. Not
+        stored in the model file: give it again after loading with :meth:`with_terrain`.
 
     Attributes
     ----------
-    ground_ : GroundParams
-        Ground with the fitted coefficients.
+    ground_ : GroundParams or None
+        Ground with the fitted coefficients (None for a mapping of grounds).
+    grounds_ : dict of str to GroundParams
+        Per-label grounds with their fitted coefficients (empty for a single ground).
     robot_ : RobotParams
         Robot (with the fitted ``track_width_multiplier`` when fitted).
     idle_current_a_ : float
@@ -226,24 +286,28 @@ class PhysicsCurrentModel(CurrentModel):
         Final mean squared residual (A^2).
     """
 
-    _param_names = ("robot", "ground", "fit_parameters", "effects", "clip_negative")
+    _param_names = ("robot", "ground", "fit_parameters", "effects", "clip_negative", "terrain")
 
-    def __init__(self, robot: str | RobotParams = "husky", ground: str | GroundParams = "asphalt",
+    def __init__(self, robot: str | RobotParams = "husky",
+                 ground: str | GroundParams | Mapping[str, str | GroundParams] = "asphalt",
                  fit_parameters: Sequence[str] = DEFAULT_FIT_PARAMETERS,
-                 effects: Sequence[str] | None = None, clip_negative: bool = True) -> None:
+                 effects: Sequence[str] | None = None, clip_negative: bool = True,
+                 terrain: TerrainMap | None = None) -> None:
         self.robot = robot
         self.ground = ground
         self.fit_parameters = fit_parameters
         self.effects = effects
         self.clip_negative = clip_negative
+        self.terrain = terrain
 
-    def _check(self) -> tuple[RobotParams, GroundParams, tuple[str, ...], PhysicsEnergyModel]:
+    def _check(self) -> tuple[RobotParams, GroundParams | dict[str, GroundParams], tuple[str, ...],
+                              PhysicsEnergyModel]:
         robot = robot_preset(self.robot) if isinstance(self.robot, str) else self.robot
         if not isinstance(robot, RobotParams):
             raise InvalidParameterError(f"robot must be a preset name or RobotParams, got {self.robot!r:.80}")
-        ground = ground_preset(self.ground) if isinstance(self.ground, str) else self.ground
-        if not isinstance(ground, GroundParams):
-            raise InvalidParameterError(f"ground must be a preset name or GroundParams, got {self.ground!r:.80}")
+        ground = _check_ground(self.ground)
+        if self.terrain is not None and not isinstance(self.terrain, TerrainMap):
+            raise InvalidParameterError(f"terrain must be a TerrainMap or None, got {type(self.terrain).__name__!r}")
         if isinstance(self.fit_parameters, str):
             raise InvalidParameterError(f"fit_parameters must be a sequence of names, not a string: {self.fit_parameters!r}")
         names = tuple(self.fit_parameters)
@@ -271,11 +335,14 @@ class PhysicsCurrentModel(CurrentModel):
             raise DataError(f"the physics model needs at least 2 drive samples per log, got {len(log)} ({log.meta.source!r})")
         return (log.v_mps, log.omega_radps, np.gradient(log.v_mps, log.time_s), np.gradient(log.omega_radps, log.time_s))
 
-    def _current(self, robot: RobotParams, ground: GroundParams, idle_a: float, effects: tuple[str, ...],
-                 log: InteractionLog, fitted_chi: bool, rest_a: np.ndarray) -> np.ndarray:
+    def _current(self, robot: RobotParams, ground: GroundParams | dict[str, GroundParams], idle_a: float,
+                 effects: tuple[str, ...], log: InteractionLog, fitted_chi: bool, rest_a: np.ndarray) -> np.ndarray:
         model = PhysicsEnergyModel(self._log_robot(robot, log, fitted_chi), effects)
         v, w, a, alpha = self._inputs(log)
-        res = model.power(v, w, ground, accel_mps2=a, alpha_radps2=alpha, time_s=log.time_s)
+        grounds, index = ground_slots(ground, log)
+        slope = 0.0 if self.terrain is None else log_slope_rad(self.terrain, log)
+        res = model.power(v, w, grounds, accel_mps2=a, alpha_radps2=alpha, slope_rad=slope, time_s=log.time_s,
+                          ground_index=index)
         i_m = res.motor_current_a
         # current in the direction of rotation: > 0 motoring (either way round), < 0 back-driven
         sign = np.sign(res.motor_speed_radps)
@@ -294,42 +361,63 @@ class PhysicsCurrentModel(CurrentModel):
             level = rest.mean(axis=0)
         return level
 
-    def _apply(self, robot: RobotParams, ground: GroundParams, theta: np.ndarray,
-               names: tuple[str, ...]) -> tuple[RobotParams, GroundParams, float]:
+    @staticmethod
+    def _fit_names(names: tuple[str, ...], ground: GroundParams | dict[str, GroundParams]) -> tuple[str, ...]:
+        """The fitted quantities: with a mapping of grounds, each ground coefficient once per label."""
+        if not isinstance(ground, dict):
+            return names
+        return tuple(f"{g}.{n}" if n in _GROUND_COEFFICIENTS else n
+                     for n in names for g in (ground if n in _GROUND_COEFFICIENTS else (None,)))
+
+    @staticmethod
+    def _apply(robot: RobotParams, ground: GroundParams | dict[str, GroundParams], theta: np.ndarray,
+               names: tuple[str, ...]) -> tuple[RobotParams, GroundParams | dict[str, GroundParams], float]:
         values = dict(zip(names, theta.tolist()))
-        values.pop("rest_current_a", None)  # fitted apart (closed form)
         idle = values.pop("idle_current_a", 0.0)
         chi = values.pop("track_width_multiplier", None)
         if chi is not None:
             robot = dataclasses.replace(robot, track_width_multiplier=chi)
-        if values:
+        if isinstance(ground, dict):
+            per: dict[str, dict[str, float]] = {}
+            for key, value in values.items():
+                label, coef = key.rsplit(".", 1)
+                per.setdefault(label, {})[coef] = value
+            ground = {g: (p.replace(**per[g]) if g in per else p) for g, p in ground.items()}
+        elif values:
             ground = ground.replace(**values)
         return robot, ground, idle
 
-    def _check_params(self) -> tuple[RobotParams, GroundParams, tuple[str, ...], PhysicsEnergyModel]:
+    @staticmethod
+    def _start(name: str, robot: RobotParams, ground: GroundParams | dict[str, GroundParams]) -> float:
+        coef = name.rsplit(".", 1)[-1]
+        g = ground[name.rsplit(".", 1)[0]] if isinstance(ground, dict) and coef in _GROUND_COEFFICIENTS else ground
+        if coef == "idle_current_a":
+            x0 = 0.5
+        elif coef == "track_width_multiplier":
+            x0 = robot.track_width_multiplier
+        elif coef == "lateral_friction_coef":
+            x0 = g.effective_lateral_friction_coef
+        else:
+            x0 = getattr(g, coef)
+        lo, hi = PHYSICS_FIT_PARAMETERS[coef]
+        return min(max(x0, lo), hi)
+
+    def _check_params(self) -> tuple[RobotParams, GroundParams | dict[str, GroundParams], tuple[str, ...],
+                                     PhysicsEnergyModel]:
         return self._check()
 
     def _fit(self, logs: list[InteractionLog]) -> None:
         robot, ground, all_names, model = self._check()
         effects = model.effects
+        for log in logs:
+            ground_slots(ground, log)  # every label known before any work
         rest_a = self._rest_level(robot, logs, "rest_current_a" in all_names)
-        names = tuple(n for n in all_names if n != "rest_current_a")
+        names = self._fit_names(tuple(n for n in all_names if n != "rest_current_a"), ground)
         truth = np.concatenate([log_currents(log) for log in logs]).ravel()
         fitted_chi = "track_width_multiplier" in names
-        start = []
-        for n in names:
-            lo, hi = PHYSICS_FIT_PARAMETERS[n]
-            if n == "idle_current_a":
-                x0 = 0.5
-            elif n == "track_width_multiplier":
-                x0 = robot.track_width_multiplier
-            elif n == "lateral_friction_coef":
-                x0 = ground.effective_lateral_friction_coef
-            else:
-                x0 = getattr(ground, n)
-            start.append(min(max(x0, lo), hi))
-        lower = np.array([PHYSICS_FIT_PARAMETERS[n][0] for n in names])
-        upper = np.array([PHYSICS_FIT_PARAMETERS[n][1] for n in names])
+        start = [self._start(n, robot, ground) for n in names]
+        lower = np.array([PHYSICS_FIT_PARAMETERS[n.rsplit(".", 1)[-1]][0] for n in names])
+        upper = np.array([PHYSICS_FIT_PARAMETERS[n.rsplit(".", 1)[-1]][1] for n in names])
 
         def residual(theta: np.ndarray) -> np.ndarray:
             r, g, idle = self._apply(robot, ground, theta, names)
@@ -345,7 +433,8 @@ class PhysicsCurrentModel(CurrentModel):
             theta = np.zeros(0)
         r, g, idle = self._apply(robot, ground, theta, names)
         self.robot_ = r
-        self.ground_ = g
+        self.ground_ = None if isinstance(g, dict) else g
+        self.grounds_ = dict(g) if isinstance(g, dict) else {}
         self.idle_current_a_ = float(idle)
         self.rest_current_a_ = rest_a
         self.fitted_ = dict(zip(names, (float(x) for x in theta)))
@@ -354,43 +443,81 @@ class PhysicsCurrentModel(CurrentModel):
         self.cost_ = float(np.mean(residual(theta) ** 2))
         self.effects_ = effects
 
+    @property
+    def fitted_ground(self) -> GroundParams | dict[str, GroundParams]:
+        """The fitted ground: one GroundParams, or the per-label mapping."""
+        self._check_fitted()
+        return self.ground_ if self.ground_ is not None else self.grounds_
+
+    def with_terrain(self, terrain: TerrainMap) -> PhysicsCurrentModel:
+        """This fitted model on ``terrain``: the slope under the logged poses enters its physics (e.g. after loading)."""
+        if not isinstance(terrain, TerrainMap):
+            raise InvalidParameterError(f"terrain must be a TerrainMap, got {type(terrain).__name__!r}")
+        self._check_fitted()
+        out = copy.copy(self)
+        out.terrain = terrain
+        return out
+
     def _predict(self, log: InteractionLog) -> np.ndarray:
-        return self._current(self.robot_, self.ground_, self.idle_current_a_, self.effects_, log,
+        return self._current(self.robot_, self.fitted_ground, self.idle_current_a_, self.effects_, log,
                              "track_width_multiplier" in self.fitted_, self.rest_current_a_)
 
     def _params_to_plain(self) -> dict[str, Any]:
+        ground = ({"__grounds__": {g: _ground_to_plain(p) for g, p in self.ground.items()}}
+                  if isinstance(self.ground, Mapping) else _ground_to_plain(self.ground))
         return {
             "robot": _robot_to_plain(self.robot),
-            "ground": _ground_to_plain(self.ground),
+            "ground": ground,
             "fit_parameters": list(self.fit_parameters),
             "effects": None if self.effects is None else list(self.effects),
             "clip_negative": self.clip_negative,
+            "terrain": None,  # a map is not stored in a model file (with_terrain after loading)
         }
 
     @classmethod
     def _params_from_plain(cls, params: dict[str, Any]) -> dict[str, Any]:
         p = dict(params)
         p["robot"] = _robot_from_plain(p["robot"])
-        p["ground"] = _ground_from_plain(p["ground"])
+        g = p["ground"]
+        if isinstance(g, dict) and "__grounds__" in g:
+            if not isinstance(g["__grounds__"], dict):
+                raise ValueError("'__grounds__' must map ground labels to grounds")
+            p["ground"] = {str(k): _ground_from_plain(v) for k, v in g["__grounds__"].items()}
+        else:
+            p["ground"] = _ground_from_plain(g)
         p["fit_parameters"] = tuple(p["fit_parameters"])
         if p.get("effects") is not None:
             p["effects"] = tuple(p["effects"])
+        if p.get("terrain") is not None:
+            raise ValueError("a model file stores no map: 'terrain' must be null")
+        p["terrain"] = None
         return p
 
     def _state(self) -> dict[str, Any]:
-        return {
+        state = {
             "robot": dataclasses.asdict(self.robot_),
-            "ground": dataclasses.asdict(self.ground_),
+            "ground": None if self.ground_ is None else dataclasses.asdict(self.ground_),
             "idle_current_a": self.idle_current_a_,
             "rest_current_a": self.rest_current_a_.tolist(),
             "fitted": dict(self.fitted_),
             "cost": self.cost_,
             "effects": list(self.effects_),
         }
+        if self.grounds_:
+            state["grounds"] = {g: dataclasses.asdict(p) for g, p in self.grounds_.items()}
+        return state
 
     def _load_state(self, state: dict[str, Any]) -> None:
         self.robot_ = _robot_from_plain({"__robot__": state["robot"]})
-        self.ground_ = GroundParams(**state["ground"])
+        grounds = state.get("grounds")
+        if grounds is not None:
+            if not isinstance(grounds, dict) or not grounds:
+                raise ValueError("'grounds' must map ground labels to grounds")
+            self.grounds_ = {str(k): GroundParams(**v) for k, v in grounds.items()}
+            self.ground_ = None
+        else:
+            self.ground_ = GroundParams(**state["ground"])
+            self.grounds_ = {}
         self.idle_current_a_ = float(state["idle_current_a"])
         if "rest_current_a" in state:
             self.rest_current_a_ = real_array("rest_current_a", state["rest_current_a"]).reshape(2)

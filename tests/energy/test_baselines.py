@@ -164,3 +164,97 @@ def test_rest_is_a_level_of_its_own_apart_from_the_idle_current_of_driving():
     moving = PhysicsCurrentModel("husky", "asphalt", fit_parameters=("rest_current_a",)).fit(
         [_physics_truth(0, 0.06, 0.4, 0.8, robot, ground)])
     assert moving.rest_current_a_.tolist() == [0.59, 0.59]
+
+
+def _two_ground_log(seed, robot, grounds, labels, crr, meta=None, slope_rad=0.0, pose=None):
+    """Currents of the physics on a per-sample ground (``labels`` indexes ``grounds``), rolling resistance ``crr``."""
+    t, v, w = _motion(seed)
+    names = list(grounds)
+    truth = [grounds[g].replace(rolling_resistance_coef=c) for g, c in zip(names, crr)]
+    res = PhysicsEnergyModel(robot, DRIVE_EFFECTS).power(
+        v, w, truth, accel_mps2=np.gradient(v, t), alpha_radps2=np.gradient(w, t), slope_rad=slope_rad, time_s=t,
+        ground_index=labels)
+    cur = np.maximum(0.59 + res.motor_current_a * np.sign(res.motor_speed_radps), 0.0)
+    ta = np.arange(0.0, t[-1] + 0.005, 0.01)
+    return InteractionLog(t, v, w, cur[:, 0], cur[:, 1], ta, np.full(ta.size, 9.81), meta=meta or LogMeta(),
+                          ground=np.array(names)[labels], pose_xyh=pose)
+
+
+def test_a_ground_per_label_predicts_each_sample_on_its_own_ground():
+    robot = robot_preset("husky")
+    grounds = {"grass": ground_preset("grass"), "asphalt": ground_preset("asphalt")}
+    t, _, _ = _motion(0)
+    labels = (t > 15.0).astype(int)  # grass, then asphalt
+    log = _two_ground_log(0, robot, grounds, labels, [grounds["grass"].rolling_resistance_coef,
+                                                       grounds["asphalt"].rolling_resistance_coef])
+    both = PhysicsCurrentModel("husky", {"grass": "grass", "asphalt": "asphalt"}, fit_parameters=()).fit(log)
+    np.testing.assert_allclose(both.predict(log), log_currents_of(log), atol=1e-9)
+    assert both.ground_ is None and set(both.grounds_) == {"grass", "asphalt"}
+    # one ground for the whole log is wrong on the other ground's samples only
+    grass_only = PhysicsCurrentModel("husky", "grass", fit_parameters=()).fit(log).predict(log)
+    np.testing.assert_allclose(grass_only[labels == 0], both.predict(log)[labels == 0], atol=1e-9)
+    assert np.abs(grass_only[labels == 1] - both.predict(log)[labels == 1]).max() > 0.1
+
+
+def log_currents_of(log):
+    return np.column_stack([log.current_left_a, log.current_right_a])
+
+
+def test_a_ground_per_label_fits_each_ground_its_own_coefficient(tmp_path):
+    robot = robot_preset("husky")
+    grounds = {"grass": ground_preset("grass"), "asphalt": ground_preset("asphalt")}
+    logs = []
+    for seed in (0, 1):
+        t, _, _ = _motion(seed)
+        labels = ((t // 10.0) % 2).astype(int)  # alternating 10 s stretches
+        logs.append(_two_ground_log(seed, robot, grounds, labels, [0.09, 0.03]))
+    model = PhysicsCurrentModel("husky", grounds, fit_parameters=("rolling_resistance_coef",)).fit(logs)
+    assert model.fitted_["grass.rolling_resistance_coef"] == pytest.approx(0.09, rel=0.03)
+    assert model.fitted_["asphalt.rolling_resistance_coef"] == pytest.approx(0.03, rel=0.03)
+    assert model.grounds_["grass"].rolling_resistance_coef == pytest.approx(0.09, rel=0.03)
+    again = PhysicsCurrentModel.load(model.save(tmp_path / "per_ground.zip"))
+    assert set(again.ground) == {"grass", "asphalt"}
+    assert np.array_equal(again.predict(logs[0]), model.predict(logs[0]))
+
+
+def test_a_ground_per_label_refuses_logs_it_cannot_place():
+    grounds = {"grass": "grass", "asphalt": "asphalt"}
+    t, v, w = _motion(0)
+    bare = _log(t, v, w, np.ones(t.size), np.ones(t.size))
+    with pytest.raises(DataError, match="needs ground labels"):
+        PhysicsCurrentModel("husky", grounds, fit_parameters=()).fit(bare)
+    snow = _log(t, v, w, np.ones(t.size), np.ones(t.size), LogMeta(ground_label="snow"))
+    with pytest.raises(DataError, match=r"drives on \['snow'\]"):
+        PhysicsCurrentModel("husky", grounds, fit_parameters=()).fit(snow)
+    with pytest.raises(InvalidParameterError, match="at least one ground label"):
+        PhysicsCurrentModel("husky", {}).fit(snow)
+    with pytest.raises(InvalidParameterError, match=r"ground\['grass'\] must be"):
+        PhysicsCurrentModel("husky", {"grass": 3.0}).fit(snow)
+
+
+def test_a_model_on_a_map_drives_the_slope_under_its_poses(tmp_path):
+    from terrain.procedural import ramp_map
+
+    robot, ground = robot_preset("husky"), ground_preset("asphalt")
+    tmap = ramp_map((80, 80), 1.0, grade=0.15, axis="x")
+    t, v, w = _motion(0)
+    heading = np.cumsum(w) * (t[1] - t[0])
+    x = 10.0 + np.cumsum(v * np.cos(heading)) * (t[1] - t[0]) * 0.5
+    y = 40.0 + np.cumsum(v * np.sin(heading)) * (t[1] - t[0]) * 0.5
+    pose = np.column_stack([x, y, heading])
+    slope = np.arctan(0.15 * np.cos(heading))
+    log = _two_ground_log(0, robot, {"asphalt": ground}, np.zeros(t.size, dtype=int),
+                          [ground.rolling_resistance_coef], slope_rad=slope, pose=pose)
+    on_map = PhysicsCurrentModel("husky", "asphalt", fit_parameters=(), terrain=tmap).fit(log)
+    np.testing.assert_allclose(on_map.predict(log), log_currents_of(log), atol=1e-9)
+    level = PhysicsCurrentModel("husky", "asphalt", fit_parameters=()).fit(log)
+    assert np.abs(level.predict(log) - log_currents_of(log)).max() > 1.0
+    # the map is not stored in the file: the loaded model is on level ground until given it again
+    loaded = PhysicsCurrentModel.load(on_map.save(tmp_path / "on_map.zip"))
+    assert loaded.terrain is None
+    np.testing.assert_array_equal(loaded.predict(log), level.predict(log))
+    np.testing.assert_array_equal(loaded.with_terrain(tmap).predict(log), on_map.predict(log))
+    with pytest.raises(DataError, match="needs its poses"):
+        on_map.predict(dataclasses.replace(log, pose_xyh=None))
+    with pytest.raises(InvalidParameterError, match="terrain must be a TerrainMap"):
+        PhysicsCurrentModel(terrain="map.npz").fit(log)

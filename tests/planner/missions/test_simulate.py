@@ -249,3 +249,29 @@ def test_diagnosing_mission_logs_names_what_the_truth_does_differently():
     assert d.chosen[0] == "time_lag"
     assert d.score("time_lag").parameters["lag_s"] == pytest.approx(0.1, abs=0.03)
     assert "slope" not in d.chosen
+
+
+def test_diagnosing_example_map_missions_against_the_planning_physics_names_the_lag():
+    # Missions on the bundled example map (grass and asphalt, hills), driven by the default truth,
+    # diagnosed against the physics the planner priced them with: the presets of each cell's ground
+    # (a ground per label) and the slope under the poses (the map). What the truth does differently
+    # is its 0.1 s velocity lag (and the sensor's rest offset, which both carry): the lag is named,
+    # alone, near 0.1 s.
+    from energy import PhysicsCurrentModel, diagnose
+    from planner import plan_route
+    from terrain import example_map
+
+    tmap = example_map()
+    cost = EnergyCost.from_presets(tmap, speed_mps=0.5)
+    grounds = {g: ground_preset(g) for g in tmap.ground_names.values()}
+    logs = []
+    for k, (start, goal) in enumerate((((10, 10), (40, 70)), ((30, 20), (80, 60)), ((5, 60), (62, 36))) * 2):
+        route = plan_route(tmap, start, goal, cost=cost, planner="lattice")
+        sim = TruthSimulator(ROBOT, grounds, current_rate_hz=50.0, seed=k)
+        logs.append(simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=sim, cost=cost).log)
+    driven = sorted({str(g) for log in logs for g in np.unique(log.ground)})
+    assert driven == ["asphalt", "grass"]
+    planning = PhysicsCurrentModel(ROBOT, {g: g for g in driven}, fit_parameters=(), terrain=tmap).fit(logs)
+    d = diagnose(planning, logs, terrain=tmap, seed=0, n_bootstrap=50)
+    assert d.chosen == ("time_lag",)
+    assert d.score("time_lag").parameters["lag_s"] == pytest.approx(0.1, abs=0.03)
