@@ -25,7 +25,7 @@ from .regimes import regime_labels
 from .report import DIAGNOSIS_FILES, DiagnosisReport, diagnose_report
 from .residuals import GapSummary, gap_summary, residual_currents_a
 from .result import Diagnosis, EffectScore, WaterfallStep
-from .split import SPLITS, Fold, Split, make_split
+from .fit import SPLITS, Fold, Split, make_split
 
 __all__ = [
     "PowerDiagnosis",

@@ -17,7 +17,16 @@ from ..models.base import CurrentModel, check_logs, log_currents
 from .corrected import CorrectedCurrentModel
 from .effect_base import Effect
 from .effects import LEARNED_EFFECT, NOT_IDENTIFIABLE_FROM_CURRENT, effect, resolve_effects
-from .fit import DiagnosisData, SetScore, prepare_data, score_effect_set, shrink_pct
+from .fit import (
+    DiagnosisData,
+    SetRunner,
+    SetScore,
+    Split,
+    make_split,
+    prepare_data,
+    score_effect_set,
+    shrink_pct,
+)
 from .localise import GapShare, largest_slices, localise_gap
 from .model_currents import physics_basis
 from .power_data import power_logs_missing
@@ -26,9 +35,7 @@ from .power_stage import diagnose_power
 from .regimes import check_terrain
 from .residuals import GapSummary, gap_summary
 from .result import Diagnosis, EffectScore, WaterfallStep
-from .runner import SetRunner
 from .selection import SIGNIFICANT_SHRINK_PCT, plausible_alternative, score_entry, select_effects, significant
-from .split import Split, make_split
 
 __all__ = ["SIGNIFICANT_SHRINK_PCT", "diagnose"]
 

@@ -1,13 +1,15 @@
-"""Fitting candidate effects on calibration data and scoring them on held-out data, vectorised.
+"""Held-out fitting: folds of the logs, candidate effects fitted on calibration data and scored on held-out data.
 
-An effect set is fitted with :func:`scipy.optimize.least_squares` on the residual vector of
-all calibration samples (every column: both drive sides, or the one battery power) of a fold
-and scored on that fold's held-out samples;
-every sample is held out exactly once, so the pooled held-out squared error of a set is a
-fair measure of what it explains. There is no function here that scores a set on the data
-it was fitted on: :func:`score_effect_set` takes a :class:`~energy.diagnosis.split.Split`,
-whose folds never overlap, and :func:`fit_effect_set` (used for the final corrected model)
-returns values, never a score.
+:func:`make_split` cuts the logs into folds (whole runs held out, or contiguous blocks of
+every run) that hold out every sample exactly once. An effect set is fitted with
+:func:`scipy.optimize.least_squares` on the residual vector of all calibration samples (every
+column: both drive sides, or the one battery power) of a fold and scored on that fold's
+held-out samples, vectorised; so the pooled held-out squared error of a set is a fair measure
+of what it explains. There is no function here that scores a set on the data it was fitted
+on: :func:`score_effect_set` takes a :class:`Split`, whose folds never overlap, and
+:func:`fit_effect_set` (used for the final corrected model) returns values, never a score.
+:class:`SetRunner` scores many sets, one after another or as tasks on a dask.distributed
+client.
 """
 
 from __future__ import annotations
@@ -19,18 +21,133 @@ from typing import Any
 import numpy as np
 from scipy import optimize
 
-from terrawatt_base.checks import check_int, check_seed
-from terrawatt_base.errors import DataError
+from terrawatt_base.checks import check_choice, check_int, check_seed, readonly
+from terrawatt_base.dask_client import check_client, run_tasks
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog
 from ..models.base import log_currents
 from .effect_base import Effect
 from .effects import composition_order
 from .model_currents import PhysicsBasis, clamps_at_zero, unclipped_prediction
-from .split import Split
 
-__all__ = ["DiagnosisData", "SetScore", "prepare_data", "compose", "fit_effect_set", "score_effect_set",
-           "bootstrap_shrink_interval_pct", "bootstrap_gain_interval_pct", "shrink_pct"]
+__all__ = ["SPLITS", "Fold", "Split", "make_split", "DiagnosisData", "SetScore", "prepare_data", "compose",
+           "fit_effect_set", "score_effect_set", "SetRunner", "bootstrap_shrink_interval_pct",
+           "bootstrap_gain_interval_pct", "shrink_pct"]
+
+#: Split kinds: whole runs held out, or contiguous blocks of every run.
+SPLITS = ("runs", "blocks")
+
+
+@dataclass(frozen=True, eq=False)
+class Fold:
+    """One fold: per log, boolean masks of the calibration and the held-out samples (never both)."""
+
+    calibration: tuple[np.ndarray, ...]
+    held_out: tuple[np.ndarray, ...]
+
+    def __post_init__(self) -> None:
+        if len(self.calibration) != len(self.held_out):
+            raise InvalidParameterError("a Fold needs one calibration and one held-out mask per log")
+        for k, (c, h) in enumerate(zip(self.calibration, self.held_out)):
+            if c.shape != h.shape or c.dtype != bool or h.dtype != bool:
+                raise InvalidParameterError(f"fold masks of log {k} must be boolean arrays of one shape")
+            if np.any(c & h):
+                raise InvalidParameterError(f"log {k}: a sample is both calibration and held out")
+        object.__setattr__(self, "calibration", tuple(readonly(c) for c in self.calibration))
+        object.__setattr__(self, "held_out", tuple(readonly(h) for h in self.held_out))
+
+    @property
+    def n_calibration(self) -> int:
+        """Number of calibration samples."""
+        return int(sum(int(c.sum()) for c in self.calibration))
+
+    @property
+    def n_held_out(self) -> int:
+        """Number of held-out samples."""
+        return int(sum(int(h.sum()) for h in self.held_out))
+
+
+@dataclass(frozen=True, eq=False)
+class Split:
+    """Folds that hold out every sample exactly once, and the bootstrap unit of each sample.
+
+    Attributes
+    ----------
+    kind : {"runs", "blocks"}
+    folds : tuple of Fold
+    units : tuple of numpy.ndarray
+        Per log, the integer unit (a run, or a block of a run) of each sample; the
+        bootstrap intervals resample these units.
+    n_units : int
+    """
+
+    kind: str
+    folds: tuple[Fold, ...]
+    units: tuple[np.ndarray, ...]
+    n_units: int
+
+    def __post_init__(self) -> None:
+        seen = [np.zeros(u.shape, dtype=np.int64) for u in self.units]
+        for fold in self.folds:
+            for k, h in enumerate(fold.held_out):
+                seen[k] += h
+        if any(np.any(s != 1) for s in seen):
+            raise InvalidParameterError("a Split must hold out every sample exactly once")
+
+
+def make_split(logs: Sequence[InteractionLog], kind: str = "runs", n_blocks: int = 5) -> Split:
+    """Split ``logs`` into calibration and held-out parts.
+
+    ``"runs"``: ``min(n_blocks, len(logs))`` folds of whole runs (run ``i`` in fold
+    ``i % K``); ``"blocks"``: every run cut into ``n_blocks`` contiguous blocks of equal
+    duration, fold ``k`` holding out block ``k`` of every run (never interleaved samples,
+    which leak through autocorrelation).
+
+    Raises
+    ------
+    UnknownNameError
+        ``kind`` not in :data:`SPLITS`.
+    InvalidParameterError
+        ``n_blocks`` not an integer >= 2.
+    DataError
+        A split that leaves no held-out or no calibration data: ``"runs"`` with a single
+        log, ``"blocks"`` with a run shorter than ``n_blocks`` samples.
+    """
+    check_choice("split", kind, SPLITS)
+    n_blocks = check_int("n_blocks", n_blocks, low=2)
+    sizes = [len(log) for log in logs]
+    if kind == "runs":
+        if len(logs) < 2:
+            raise DataError(
+                f"split='runs' needs at least 2 runs to hold one out, got {len(logs)}; use split='blocks' for a single run"
+            )
+        k = min(n_blocks, len(logs))
+        units = tuple(np.full(n, i, dtype=np.int64) for i, n in enumerate(sizes))
+        fold_of = [i % k for i in range(len(logs))]
+        folds = tuple(
+            Fold(tuple(np.full(n, fold_of[i] != f) for i, n in enumerate(sizes)),
+                 tuple(np.full(n, fold_of[i] == f) for i, n in enumerate(sizes)))
+            for f in range(k)
+        )
+        return Split("runs", folds, units, len(logs))
+    short = [i for i, n in enumerate(sizes) if n < n_blocks]
+    if short:
+        raise DataError(
+            f"split='blocks' with n_blocks={n_blocks} leaves no held-out data for run(s) {short!r} "
+            f"({[sizes[i] for i in short]!r} samples)"
+        )
+    blocks = []
+    for log in logs:
+        t = log.time_s
+        edges = np.linspace(t[0], t[-1], n_blocks + 1)
+        b = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, n_blocks - 1)
+        if np.unique(b).size != n_blocks:  # uneven clocks: fall back to equal sample counts
+            b = (np.arange(len(log)) * n_blocks) // len(log)
+        blocks.append(b)
+    units = tuple(i * n_blocks + b for i, b in enumerate(blocks))
+    folds = tuple(Fold(tuple(b != f for b in blocks), tuple(b == f for b in blocks)) for f in range(n_blocks))
+    return Split("blocks", folds, units, len(logs) * n_blocks)
 
 
 @dataclass(frozen=True, eq=False)
@@ -237,3 +354,36 @@ def bootstrap_gain_interval_pct(none: SetScore, current: SetScore, trial: SetSco
     gain = (current.sse_units[idx].sum(axis=1) - trial.sse_units[idx].sum(axis=1)) / np.where(sn > 0, sn, 1.0)
     tail = (1.0 - level) / 2.0 * 100.0
     return float(np.percentile(100.0 * gain, tail)), float(np.percentile(100.0 * gain, 100.0 - tail))
+
+
+class SetRunner:
+    """Scores effect sets on one :class:`DiagnosisData` and :class:`Split`, here or on ``client``.
+
+    On a client the data and the split go to every worker once (``scatter(broadcast=True)``);
+    each set is one task. Results come back in the order asked, equal to the serial ones
+    (the fits are deterministic least squares). ``progress`` shows a tqdm bar per batch.
+    """
+
+    def __init__(self, data: DiagnosisData, split: Split, *, client: Any = None, progress: bool = False) -> None:
+        self.data, self.split = data, split
+        self.client = check_client(client, "candidate effect sets")
+        self.progress = bool(progress)
+        self._remote: tuple[Any, Any] | None = None
+
+    def score(self, sets: Sequence[Sequence[Effect]], desc: str = "effect sets") -> list[SetScore]:
+        """The held-out score of each set in ``sets``, in order."""
+        if self.client is None or len(sets) < 2:
+            data, split = self.data, self.split
+        else:
+            if self._remote is None:
+                self._remote = tuple(self.client.scatter([self.data, self.split], broadcast=True, hash=False))
+            data, split = self._remote
+        tasks = [(score_effect_set, (list(s), data, split)) for s in sets]
+        client = self.client if len(sets) >= 2 else None
+        return list(run_tasks(tasks, client=client, progress=self.progress, description=desc))
+
+    def close(self) -> None:
+        """Release the scattered data on the cluster."""
+        if self.client is not None and self._remote is not None:
+            self.client.cancel(list(self._remote))
+            self._remote = None

@@ -19,14 +19,12 @@ from terrawatt_base.checks import fmt_number, fmt_pct
 
 from ..logs import InteractionLog
 from .effect_base import Effect
-from .fit import DiagnosisData, SetScore, fit_effect_set, shrink_pct
+from .fit import DiagnosisData, SetRunner, SetScore, Split, fit_effect_set, shrink_pct
 from .model_currents import PhysicsBasis, physics_basis
 from .power_data import check_power_logs, power_inputs, predicted_battery_power_w
 from .power_result import PowerDiagnosis, PowerGapSummary, PowerWaterfallStep, power_gap_summary
 from .result import EffectScore
-from .runner import SetRunner
 from .selection import select_effects
-from .split import Split
 
 __all__ = ["diagnose_power", "power_verdict"]
 

@@ -9,15 +9,15 @@ from typing import Any
 from .effect_base import Effect
 from .fit import (
     DiagnosisData,
+    SetRunner,
     SetScore,
+    Split,
     bootstrap_gain_interval_pct,
     bootstrap_shrink_interval_pct,
     score_effect_set,
     shrink_pct,
 )
 from .result import EffectScore
-from .runner import SetRunner
-from .split import Split
 
 __all__ = ["SIGNIFICANT_SHRINK_PCT", "Selection", "score_entry", "significant", "select_effects",
            "plausible_alternative"]

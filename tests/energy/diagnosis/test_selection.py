@@ -4,9 +4,8 @@ import pytest
 from gain_samples import gained_logs_and_model
 
 from energy.diagnosis import effect, make_split
-from energy.diagnosis.fit import prepare_data, score_effect_set
+from energy.diagnosis.fit import SetRunner, prepare_data, score_effect_set
 from energy.diagnosis.result import EffectScore
-from energy.diagnosis.runner import SetRunner
 from energy.diagnosis.selection import SIGNIFICANT_SHRINK_PCT, plausible_alternative, select_effects, significant
 
 
