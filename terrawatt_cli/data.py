@@ -1,22 +1,29 @@
-"""The ``--data`` option and the bag flags of the commands that read logs (:func:`energy.io.read_logs`)."""
+"""The options of the commands that read logs: ``--data`` and the bag flags (:func:`energy.io.read_logs`), ``--band``."""
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 from energy import InteractionLog
+from energy.features import DEFAULT_BAND_HZ, check_band_hz
 from energy.io import DRIVE_CLOCKS, LOG_SUFFIXES, BagTopics, read_logs
+from terrain import InvalidParameterError
 
-__all__ = ["add_data_options", "logs_from_args"]
+__all__ = ["LEARNED_KINDS", "add_data_options", "logs_from_args", "add_band_option", "band_from_args"]
 
 _DEFAULT = BagTopics()
+#: Model kinds whose features have a vibration band.
+LEARNED_KINDS = ("estimator", "paper")
 
 
-def add_data_options(parser: Any) -> None:
-    """Add ``--data``, ``--ground-label`` and the bag flags (``--cmd-vel-topic``, ``--imu-topic``, ``--current-topics``,
-    ``--current-fields``, ``--voltage-field``, ``--current-unit``, ``--drive-clock``) to a subcommand's parser."""
+def add_data_options(parser: Any, *, grounds: bool = False) -> None:
+    """Add ``--data``, ``--ground-label`` (and with ``grounds`` ``--grounds``) and the bag flags (``--cmd-vel-topic``,
+    ``--imu-topic``, ``--current-topics``, ``--current-fields``, ``--voltage-field``, ``--current-unit``,
+    ``--accel-unit``, ``--drive-clock``: the fields of :class:`energy.io.BagTopics`) to a subcommand's parser."""
     parser.add_argument(
         "--data", type=Path, required=True, metavar="DIR|FILE",
         help=f"logs: a BorealTC folder (GROUND/imu_NN.csv + pro_NN.csv), a CSV log, a bag "
@@ -25,6 +32,9 @@ def add_data_options(parser: Any) -> None:
     )
     parser.add_argument("--ground-label", default=None, metavar="NAME",
                         help="ground label of the bags and CSV logs outside ground folders")
+    if grounds:
+        parser.add_argument("--grounds", nargs="+", metavar="NAME",
+                            help="ground folders (or the logs' ground labels) to use (default all)")
     bags = parser.add_argument_group("bags (--data .bag, .db3, .mcap or a ROS 2 bag folder)")
     bags.add_argument("--cmd-vel-topic", default=_DEFAULT.cmd_vel_topic, metavar="TOPIC",
                       help="geometry_msgs/Twist commands or nav_msgs/Odometry (default %(default)s)")
@@ -48,25 +58,28 @@ def add_data_options(parser: Any) -> None:
 
 
 def logs_from_args(args: argparse.Namespace, require_currents: bool, *, flag: str = "--data") -> list[InteractionLog]:
-    """The logs at ``--data`` (or at the path of another ``flag`` read like it, e.g.
-    ``--calibration-data``; of ``--grounds`` when the command has it), read with the bag flags.
-
-    Raises
-    ------
-    TerrawattError
-        As :func:`energy.io.read_logs` (messages name ``--data`` and the flags); with
-        ``require_currents`` a log without currents.
-    """
-    bag = BagTopics(
-        cmd_vel_topic=args.cmd_vel_topic,
-        imu_topic=args.imu_topic,
-        current_topics=tuple(args.current_topics),
-        current_fields=None if args.current_fields is None else tuple(args.current_fields),
-        voltage_field=args.voltage_field,
-        current_unit=args.current_unit,
-        accel_unit=args.accel_unit,
-        drive_clock=args.drive_clock,
-    )
+    """The logs at ``--data`` (or at another ``flag`` read like it; of ``--grounds`` if given), read with the bag flags
+    (:func:`energy.io.read_logs`: errors name the flags; with ``require_currents`` a log without currents)."""
+    bag = BagTopics(**{f.name: getattr(args, f.name) for f in dataclasses.fields(BagTopics)})
     path = getattr(args, flag.lstrip("-").replace("-", "_"))
     return read_logs(path, getattr(args, "grounds", None), bag=bag, require_currents=require_currents,
                      ground_label=args.ground_label, name=flag)
+
+
+def add_band_option(parser: Any, help_text: str | None = None) -> None:
+    """Add ``--band LO HI`` (two frequencies in Hz) to a subcommand's parser."""
+    lo, hi = DEFAULT_BAND_HZ
+    parser.add_argument("--band", nargs=2, type=float, metavar=("LO", "HI"), help=help_text or (
+        f"frequency band (Hz) of the vibration features of the estimator and paper models, 0 <= LO < HI "
+        f"(default: the estimator's {lo:g} {hi:g}, served by any IMU of {2 * hi:g} Hz or more; the paper's 0 50)"))
+
+
+def band_from_args(args: argparse.Namespace, kinds: Sequence[str] | None = None) -> tuple[float, float] | None:
+    """The checked ``--band`` (errors name it), or None without it; with ``kinds`` (of ``--model``) one must be learned."""
+    if args.band is None:
+        return None
+    band = check_band_hz(tuple(args.band), "--band")
+    if kinds is not None and not set(kinds) & set(LEARNED_KINDS):
+        raise InvalidParameterError(f"--band applies to the estimator and paper models only, got --model "
+                                    f"{' '.join(kinds)}")
+    return band

@@ -29,6 +29,7 @@ from .adapt_results import (
     summarise_adapt_scores,
 )
 from .few_shot import evaluate_few_shot, few_shot_scores
+from .prediction_report import FIGURES_FOLDER, PREDICTIONS_FILE, PredictionReport, predict_report
 from .results import (
     EVALUATION_FILES,
     EVALUATION_FORMAT_VERSION,
@@ -78,4 +79,8 @@ __all__ = [
     "evaluate_adaptation",
     "few_shot_scores",
     "evaluate_few_shot",
+    "PREDICTIONS_FILE",
+    "FIGURES_FOLDER",
+    "PredictionReport",
+    "predict_report",
 ]

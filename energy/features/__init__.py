@@ -28,7 +28,7 @@ the source ranges (v 0–1 m/s, omega 0–1 rad/s, current 0–10 000 mA, absolu
 constants, spectrum ranges fitted on training data; both are stored with a model.
 """
 
-from .band import DEFAULT_BAND_HZ, BandNotServedError, band_served, check_band_hz, require_band
+from .band import DEFAULT_BAND_HZ, BandNotServedError, band_served, check_band_hz, check_model_band, require_band
 from .normalise import (
     SOURCE_CURRENT_RANGE_A,
     SOURCE_OMEGA_RANGE_RADPS,
@@ -66,6 +66,7 @@ __all__ = [
     "DEFAULT_BAND_HZ",
     "BandNotServedError",
     "check_band_hz",
+    "check_model_band",
     "band_served",
     "require_band",
     "YAW_SLIP_FLOOR_RADPS",

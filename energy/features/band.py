@@ -9,7 +9,7 @@ from terrawatt_base.errors import DataError, InvalidParameterError
 
 from .spectra import NYQUIST_TOLERANCE
 
-__all__ = ["DEFAULT_BAND_HZ", "BandNotServedError", "check_band_hz", "band_served", "require_band"]
+__all__ = ["DEFAULT_BAND_HZ", "BandNotServedError", "check_band_hz", "check_model_band", "band_served", "require_band"]
 
 #: Default band of the vibration features (Hz): served by every IMU of 25 Hz or more
 #: (the Husky's 30 Hz, the Jackal's 50 Hz, BorealTC's 100 Hz). On the BorealTC logs
@@ -50,6 +50,46 @@ def check_band_hz(band_hz: Any, name: str = "band_hz") -> tuple[float, float]:
     if not low < high:
         raise InvalidParameterError(f"{name} must be (low_hz, high_hz) with low_hz < high_hz, got ({low!r}, {high!r})")
     return (low, high)
+
+
+def check_model_band(model: Any, band_hz: Any, name: str = "band_hz", label: str = "model") -> None:
+    """Refuse a model whose vibration band does not lie within ``band_hz`` (the band the logs' IMU serves).
+
+    Parameters
+    ----------
+    model : CurrentModel
+        A fitted model; only the estimator and paper models (``config_.band_hz``) have a band.
+    band_hz : (float, float) or None
+        The band the IMU serves (validated as :func:`check_band_hz`); None checks nothing.
+    name : str
+        How messages name ``band_hz`` (e.g. a flag).
+    label : str
+        How messages name the model (e.g. its file).
+
+    Raises
+    ------
+    InvalidParameterError
+        A bad ``band_hz``; a band for a model without one.
+    BandNotServedError
+        The model's band reaches outside ``band_hz`` (the message says how to retrain it).
+
+    Examples
+    --------
+    >>> check_model_band(object(), None)
+    """
+    if band_hz is None:
+        return
+    lo_served, hi_served = check_band_hz(band_hz, name)
+    config = getattr(model, "config_", None)
+    if config is None or not hasattr(config, "band_hz"):
+        raise InvalidParameterError(f"{name} applies to estimator and paper model files; {label!r} holds a "
+                                    f"{type(model).__name__}")
+    lo, hi = config.band_hz
+    if lo < lo_served or hi > hi_served:
+        raise BandNotServedError(
+            f"the model {label!r} was trained on the vibration band {lo:g}-{hi:g} Hz, which does not lie within "
+            f"{name} {lo_served:g} {hi_served:g}; retrain it with terrawatt train --band LO HI inside that band"
+        )
 
 
 def band_served(top_hz: float, rate_hz: float) -> bool:

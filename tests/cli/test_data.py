@@ -1,4 +1,4 @@
-"""Tests of terrawatt_cli.data: the ``--data`` and bag options read logs."""
+"""Tests of terrawatt_cli.data: the ``--data`` and bag options read logs; the ``--band LO HI`` option and its check."""
 
 from __future__ import annotations
 
@@ -6,7 +6,8 @@ import argparse
 
 import pytest
 
-from terrawatt_cli.data import add_data_options, logs_from_args
+from terrawatt_cli.data import add_band_option, add_data_options, band_from_args, logs_from_args
+from terrain import InvalidParameterError
 from terrawatt_base.errors import TerrawattError
 
 from cli_samples import FIXTURES
@@ -31,3 +32,27 @@ def test_bag_flags_have_their_defaults():
 def test_a_missing_data_path_names_the_flag(tmp_path):
     with pytest.raises(TerrawattError, match="--data"):
         logs_from_args(_parse("--data", str(tmp_path / "nowhere")), require_currents=False)
+
+
+def _parse_band(*argv: str) -> argparse.Namespace:
+    parser = argparse.ArgumentParser()
+    add_band_option(parser)
+    return parser.parse_args(list(argv))
+
+
+def test_a_band_is_two_frequencies_and_none_without_the_flag():
+    assert band_from_args(_parse_band("--band", "1", "20")) == (1.0, 20.0)
+    assert band_from_args(_parse_band()) is None
+
+
+@pytest.mark.parametrize("band", [("20", "1"), ("-1", "5"), ("0", "inf"), ("nan", "5")])
+def test_a_bad_band_is_refused_naming_the_flag(band):
+    with pytest.raises(InvalidParameterError, match="--band"):
+        band_from_args(_parse_band("--band", *band))
+
+
+def test_a_band_needs_a_learned_model_among_the_kinds():
+    assert band_from_args(_parse_band("--band", "1", "20"), ["linear", "paper"]) == (1.0, 20.0)
+    with pytest.raises(InvalidParameterError, match="--band applies to the estimator and paper models only, "
+                       "got --model linear constant"):
+        band_from_args(_parse_band("--band", "1", "20"), ["linear", "constant"])

@@ -267,3 +267,19 @@ def test_cli_band_with_a_baseline_exits_2(tmp_path, capsys):
     rc = main(["predict", "--model", str(path), "--data", str(FIXTURES), "--band", "1", "12",
                "--out", str(tmp_path / "out")])
     assert rc == 2 and "holds a LinearCurrentModel" in capsys.readouterr().err
+
+
+def test_check_model_band_refuses_a_model_outside_the_served_band():
+    from energy.features import check_model_band
+
+    est = new_current_model("estimator", band_hz=(0.0, 25.0))
+    est.config_ = est.config  # as fitted: the band is the config's
+    check_model_band(est, None)
+    check_model_band(est, (0.0, 30.0), "--band", "est.zip")
+    with pytest.raises(BandNotServedError, match=r"'est.zip' was trained on the vibration band 0-25 Hz.*--band 0 15"):
+        check_model_band(est, (0.0, 15.0), "--band", "est.zip")
+    with pytest.raises(InvalidParameterError, match="--band applies to estimator and paper model files; 'lin.zip' "
+                       "holds a LinearCurrentModel"):
+        check_model_band(new_current_model("linear"), (0.0, 15.0), "--band", "lin.zip")
+    with pytest.raises(InvalidParameterError, match="band_hz"):
+        check_model_band(est, (15.0, 0.0))
