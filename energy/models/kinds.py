@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib
 from typing import Any
 
 from terrawatt_base.checks import check_choice
@@ -49,8 +48,11 @@ def new_current_model(
         if band_hz is not None:
             raise InvalidParameterError(f"band_hz applies to the estimator and paper models only, got kind {kind!r}")
         return _BASELINES[kind]()
-    estimator = importlib.import_module(f"{__package__}.estimator")
+    # the learned models need torch: imported here, when asked for, so a baseline never imports it
+    from .config import estimator_preset
+    from .estimator import VibrationCurrentEstimator
+
     config: Any = _PRESETS[kind]  # a preset's name, kept as a name in saved parameters
     if band_hz is not None:
-        config = importlib.import_module(f"{__package__}.config").estimator_preset(config).replace(band_hz=band_hz)
-    return estimator.VibrationCurrentEstimator(config, seed=seed, progress=progress, n_threads=n_threads)
+        config = estimator_preset(config).replace(band_hz=band_hz)
+    return VibrationCurrentEstimator(config, seed=seed, progress=progress, n_threads=n_threads)
