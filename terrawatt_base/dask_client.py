@@ -16,7 +16,7 @@ from typing import Any
 from terrawatt_base.checks import check_bool, check_int, check_real, check_text, fmt_number
 from terrawatt_base.errors import InvalidParameterError, OptionalDependencyError
 
-__all__ = ["dask_client", "check_client", "client_worker_count", "run_tasks", "DEFAULT_CONNECT_TIMEOUT_S"]
+__all__ = ["dask_client", "check_dask_options", "check_client", "client_worker_count", "run_tasks", "DEFAULT_CONNECT_TIMEOUT_S"]
 
 #: Seconds to wait for a dask scheduler to answer before giving up.
 DEFAULT_CONNECT_TIMEOUT_S = 10.0
@@ -73,11 +73,7 @@ def dask_client(
     timeout_s = check_real("timeout_s", timeout_s, low=0.0, low_inclusive=False)
     if scheduler is not None:
         check_text(s_flag, scheduler)
-        if workers > 1:
-            raise InvalidParameterError(
-                f"{w_flag} {workers!r} and {s_flag} {scheduler!r} exclude each other: "
-                f"give {w_flag} N for a local cluster or {s_flag} ADDRESS for an existing one"
-            )
+    check_dask_options(workers, scheduler, flags=flags)
     try:
         from distributed import Client, LocalCluster
     except ImportError as exc:
@@ -98,6 +94,34 @@ def dask_client(
                 yield client
     finally:
         dask_log.setLevel(old_level)
+
+
+def check_dask_options(workers: int = 1, scheduler: str | None = None, *,
+                       flags: tuple[str, str] = ("workers", "scheduler")) -> None:
+    """Check where :func:`dask_client` would run, before any work: ``workers`` a positive int, not both ``workers > 1``
+    and ``scheduler``; ``flags`` name the two options in the messages.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``workers`` not an int >= 1; both ``workers > 1`` and ``scheduler``.
+
+    Examples
+    --------
+    >>> check_dask_options(2)
+    >>> check_dask_options(2, "tcp://host:8786", flags=("--workers", "--scheduler"))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    terrawatt_base.errors.InvalidParameterError: --workers 2 and --scheduler 'tcp://host:8786' exclude each other: ...
+    """
+    w_flag, s_flag = flags
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise InvalidParameterError(f"{w_flag} must be a positive number of processes, got {workers!r}")
+    if scheduler is not None and workers > 1:
+        raise InvalidParameterError(
+            f"{w_flag} {workers!r} and {s_flag} {scheduler!r} exclude each other: "
+            f"give {w_flag} N for a local cluster or {s_flag} ADDRESS for an existing one"
+        )
 
 
 def _connect(client_class: Any, scheduler: str, timeout_s: float, s_flag: str) -> Any:

@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import operator
+import re
 
 import pytest
 
 from terrawatt_base.dask_client import (
     DEFAULT_CONNECT_TIMEOUT_S,
     check_client,
+    check_dask_options,
     client_worker_count,
     dask_client,
     run_tasks,
@@ -86,3 +88,23 @@ def test_run_tasks_is_lazy_and_raises_a_tasks_exception_when_reached():
 
 def test_run_tasks_of_nothing_yields_nothing():
     assert list(run_tasks([])) == []
+
+
+@pytest.mark.parametrize(
+    ("workers", "scheduler", "message"),
+    [(0, None, "--workers must be a positive number of processes, got 0"),
+     (1.5, None, "--workers must be a positive number of processes, got 1.5"),
+     (True, None, "--workers must be a positive number of processes, got True"),
+     (2, "tcp://h:1", "--workers 2 and --scheduler 'tcp://h:1' exclude each other: give --workers N for a local "
+                      "cluster or --scheduler ADDRESS for an existing one")],
+)
+def test_dask_options_are_checked_without_starting_anything(workers, scheduler, message):
+    with pytest.raises(InvalidParameterError, match=re.escape(message)):
+        check_dask_options(workers, scheduler, flags=("--workers", "--scheduler"))
+
+
+def test_dask_options_that_go_together_pass():
+    for workers, scheduler in ((1, None), (4, None), (1, "tcp://h:1")):
+        assert check_dask_options(workers, scheduler) is None
+    with pytest.raises(InvalidParameterError, match="^workers must be"):
+        check_dask_options(-1)  # named as the parameter by default
