@@ -6,13 +6,14 @@ import functools
 import math
 import os
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from terrain import DemWindows, Grid, TerrainMap
+from terrain import DemWindows, Grid, InvalidParameterError, TerrainMap
 from terrawatt_base.atomic import write_json_atomic
-from terrawatt_base.checks import check_real
+from terrawatt_base.checks import check_bool, check_real
 from terrawatt_base.figure_file import draw_figure
 
 from .coarse import CoarseToFine, plan_coarse_to_fine
@@ -31,7 +32,7 @@ from .plot import RouteLine, plot_routes
 from .route_geojson import write_geojson
 from .warmup import warm_up_kernels
 
-__all__ = ["CoarsePlanReport", "plan_coarse", "plan_coarse_windowed"]
+__all__ = ["CoarsePlanReport", "plan_coarse", "plan_coarse_windowed", "check_coarse_options", "COARSE_OPTIONS"]
 
 
 @dataclass(frozen=True)
@@ -158,6 +159,10 @@ class CoarsePlanReport:
                           on_error=on_figure_error)
         return written + ([png] if png is not None else [])
 
+#: The options :func:`check_coarse_options` names in its messages (``names`` keys).
+COARSE_OPTIONS = ("factor", "corridor_m", "windowed", "path", "model", "planner", "fill_nodata", "reproject_to",
+                  "cell_size_m", "landcover")
+
 
 def _check_slope(max_slope_deg: float) -> float:
     return check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False, high_inclusive=False)
@@ -245,3 +250,76 @@ def plan_coarse_windowed(
         map_label=Path(path).name if map_label is None else map_label, map_preparation_s=0.0,
         kernel_compile_s=compile_s, windowed=True, grid=grid,
     )
+
+
+def check_coarse_options(
+    *,
+    factor: int | None = None,
+    corridor_m: float | None = None,
+    windowed: bool = False,
+    path: str | os.PathLike[str] | None = None,
+    model: Any = None,
+    fill_nodata: str | None = None,
+    reproject_to: str | None = None,
+    cell_size_m: float | None = None,
+    landcover: Any = None,
+    names: Mapping[str, str] | None = None,
+) -> None:
+    """Refuse, before any work, what coarse-to-fine planning cannot do with the options of a plan.
+
+    A corridor or a windowed read needs a coarse ``factor``; a saved ``model`` prices the whole
+    map only (not :func:`plan_coarse`, nor :func:`plan_coarse_windowed`); a windowed read takes a
+    GeoTIFF ``path`` as it is, so none of the options of :func:`terrain.io.read_map_with_options`
+    that need the whole map (``fill_nodata``, ``reproject_to``, ``cell_size_m``, ``landcover``).
+
+    Parameters
+    ----------
+    factor : int, optional
+        The coarse factor (None: the plan is not coarse-to-fine).
+    corridor_m : float, optional
+        The corridor half-width asked for.
+    windowed : bool
+        Whether the DEM at ``path`` is to be read by windows.
+    path : path-like, optional
+        The map file (checked with ``windowed``).
+    model : object, optional
+        A saved current model pricing the edges (only whether it is given counts).
+    fill_nodata, reproject_to, cell_size_m, landcover
+        Options of :func:`terrain.io.read_map_with_options` asked for (only whether each is given counts).
+    names : mapping of str to str, optional
+        How messages name each parameter above and ``"planner"`` (the CLI passes its flags); a
+        parameter not in it is named as itself.
+
+    Raises
+    ------
+    InvalidParameterError
+        An option that coarse-to-fine planning, or a windowed read, cannot take.
+
+    Examples
+    --------
+    >>> check_coarse_options(factor=4, corridor_m=30.0)
+    >>> check_coarse_options(corridor_m=30.0)
+    Traceback (most recent call last):
+    ...
+    terrawatt_base.errors.InvalidParameterError: corridor_m applies to coarse-to-fine planning; give factor F too
+    """
+    n = {key: key for key in COARSE_OPTIONS} | dict(names or {})
+    windowed = check_bool(n["windowed"], windowed)
+    if corridor_m is not None and factor is None:
+        raise InvalidParameterError(f"{n['corridor_m']} applies to coarse-to-fine planning; give {n['factor']} F too")
+    if model is not None and (factor is not None or windowed):
+        raise InvalidParameterError(f"{n['model']} plans on the whole map with {n['planner']}; it does not apply to "
+                                    f"{n['factor']} / {n['windowed']} yet")
+    if not windowed:
+        return
+    if factor is None:
+        raise InvalidParameterError(f"{n['windowed']} plans coarse-to-fine; give {n['factor']} F too")
+    if path is None or Path(path).suffix.lower() not in (".tif", ".tiff"):
+        raise InvalidParameterError(f"{n['windowed']} reads GeoTIFF DEMs (.tif, .tiff), got {n['path']} "
+                                    f"{None if path is None else Path(path).name}")
+    for key, value in (("fill_nodata", fill_nodata), ("reproject_to", reproject_to), ("cell_size_m", cell_size_m),
+                       ("landcover", landcover)):
+        if value is not None:
+            raise InvalidParameterError(
+                f"{n['windowed']} reads the DEM as it is and cannot apply {n[key]} (it needs the whole map): fill or "
+                f"reproject the DEM first (gdal_fillnodata, gdalwarp), or plan without {n['windowed']}")

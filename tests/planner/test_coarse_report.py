@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import pytest
 
@@ -11,7 +12,7 @@ import terrain
 from terrain import InvalidParameterError
 from terrain.procedural import procedural_map
 
-from planner.coarse_report import CoarsePlanReport, plan_coarse, plan_coarse_windowed
+from planner.coarse_report import CoarsePlanReport, check_coarse_options, plan_coarse, plan_coarse_windowed
 from planner.plan_report import ROUTE_JSON_FORMAT_VERSION, route_table
 
 START, GOAL = (5.0, 5.0), (35.0, 5.0)
@@ -74,3 +75,36 @@ def test_a_windowed_plan_equals_the_plan_in_memory(tmp_path):
                                                          "planning_time_s": w["routes"]["min_energy"]["planning_time_s"]}}
     assert [p.name for p in windowed.write(tmp_path / "w", whole_map=True)] == ["route.json", "route.geojson",
                                                                                  "route.png"]
+
+
+_FLAGS = {"factor": "--coarse-factor", "corridor_m": "--corridor", "windowed": "--windowed", "path": "--map",
+          "model": "--model", "planner": "--planner", "fill_nodata": "--fill-nodata", "reproject_to": "--reproject",
+          "cell_size_m": "--cell-size", "landcover": "--landcover"}
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [({"corridor_m": 30.0}, "--corridor applies to coarse-to-fine planning; give --coarse-factor F too"),
+     ({"factor": 4, "model": "m.zip"}, "--model plans on the whole map with --planner; it does not apply to "
+                                       "--coarse-factor / --windowed yet"),
+     ({"windowed": True, "path": "dem.tif"}, "--windowed plans coarse-to-fine; give --coarse-factor F too"),
+     ({"factor": 4, "windowed": True, "path": "map.npz"}, "--windowed reads GeoTIFF DEMs (.tif, .tiff), got --map "
+                                                          "map.npz"),
+     ({"factor": 4, "windowed": True, "path": "dem.tif", "cell_size_m": 5.0}, "--windowed reads the DEM as it is "
+      "and cannot apply --cell-size (it needs the whole map): fill or reproject the DEM first (gdal_fillnodata, "
+      "gdalwarp), or plan without --windowed"),
+     ({"factor": 4, "windowed": True, "path": "dem.TIF", "landcover": "lc.tif"}, "cannot apply --landcover"),
+     ({"windowed": "yes"}, "--windowed must be")],
+)
+def test_coarse_options_it_cannot_take_are_refused_naming_them(options, message):
+    with pytest.raises(InvalidParameterError, match=re.escape(message)):
+        check_coarse_options(**options, names=_FLAGS)
+
+
+def test_coarse_options_it_can_take_pass_and_unnamed_options_are_named_as_themselves():
+    assert check_coarse_options() is None
+    assert check_coarse_options(model="m.zip", fill_nodata="nearest", cell_size_m=5.0) is None  # not coarse
+    assert check_coarse_options(factor=4, corridor_m=30.0, windowed=True, path="dem.tiff") is None
+    assert check_coarse_options(factor=4, fill_nodata="nearest") is None  # in memory: the map is read whole
+    with pytest.raises(InvalidParameterError, match="^windowed reads the DEM as it is and cannot apply fill_nodata"):
+        check_coarse_options(factor=4, windowed=True, path="dem.tif", fill_nodata="nearest")
