@@ -33,7 +33,8 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--robot", default=None, metavar="NAME",
                    help=f"robot preset of the physics ({', '.join(sorted(ROBOT_PRESETS))}; default husky)")
     p.add_argument("--ground", default=None, metavar="NAME", help="--model physics: starting ground preset "
-                   "(default: the logs' ground when they share one preset, else asphalt)")
+                   "(default: the logs' ground; each sample its own label's preset when they drive on several, as "
+                   "a mission's logs; else asphalt). With --map, the physics as given drives the map's slope")
     p.add_argument("--without", nargs="+", default=[], metavar="EFFECT",
                    help="--model physics: physics effects to switch off (diagnose a reduced model)")
     add_data_options(p)
@@ -89,7 +90,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     cal = None if args.calibration_data is None else logs_from_args(args, True, flag="--calibration-data")
     source = model_under_diagnosis(args.model, logs, calibration_logs=cal, calibration_label=str(args.calibration_data),
                                    robot=args.robot, ground=args.ground, without=args.without, seed=args.seed,
-                                   progress=not args.quiet, names=_NAMES)
+                                   progress=not args.quiet, names=_NAMES, terrain=terrain)
     print(f"model: {source.note}", flush=True)
     with dask_client_arg(args) as client:
         if client is not None:

@@ -11,6 +11,8 @@ from typing import Any
 from terrawatt_base.checks import check_bool, check_seed, fmt_number
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
+from terrain.terrain_map import TerrainMap
+
 from ..logs import InteractionLog
 from ..models.base import CurrentModel
 from ..models.baselines import PhysicsCurrentModel
@@ -143,16 +145,50 @@ def _runs(logs: Sequence[InteractionLog]) -> str:
     return f"{len(logs)} run{'s' if len(logs) != 1 else ''}"
 
 
+def _labels(logs: Sequence[InteractionLog]) -> set[str] | None:
+    """The ground labels the logs drive on (per sample, or each run's label); None if a log has none."""
+    found: set[str] = set()
+    for log in logs:
+        labels = log.ground_labels
+        if labels is None:
+            return None
+        found.update(str(g) for g in set(labels.tolist()))
+    return found
+
+
+def _physics_ground(ground: str | None, labels: set[str] | None, needed: set[str] | None) -> str | dict[str, str]:
+    """The ground(s) of the physics: as asked; else the logs' one preset, or a preset per label when they
+    drive on several presets that cover the ``needed`` labels (those of the diagnosed logs); else asphalt."""
+    if ground is not None:
+        return ground
+    if labels and labels <= set(GROUND_PRESETS):
+        if len(labels) == 1:
+            return next(iter(labels))
+        if needed is not None and needed <= labels:
+            return {g: g for g in sorted(labels)}
+    return "asphalt"
+
+
+def _ground_text(ground: str | dict[str, str]) -> str:
+    return ground if isinstance(ground, str) else ", ".join(ground) + " (a preset per ground label)"
+
+
 def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[InteractionLog], *,
                           calibration_logs: Sequence[InteractionLog] | None = None,
                           calibration_label: str = "the calibration logs", robot: str | None = None,
                           ground: str | None = None, without: Sequence[str] = (), seed: int | None = 0,
-                          progress: bool = False, names: Mapping[str, str] | None = None) -> ModelUnderDiagnosis:
+                          progress: bool = False, names: Mapping[str, str] | None = None,
+                          terrain: TerrainMap | None = None) -> ModelUnderDiagnosis:
     """The model to diagnose on ``logs``, never fitted on them, and where it comes from.
 
-    ``"physics"``: the ``robot`` (default husky) and ``ground`` presets as given (the
-    ground defaults to the logs' when they share one preset, else asphalt), or their
+    ``"physics"``: the ``robot`` (default husky) and ``ground`` presets as given, or their
     coefficients fitted on ``calibration_logs``; ``without`` switches drive effects off.
+    Without ``ground``, the logs' ground: their one preset, or — when they drive on several
+    presets (per-sample labels, as a mission's logs) — each sample on its own label's preset,
+    as a planner prices each cell (calibrated: per-label coefficients, when the calibration
+    runs cover every diagnosed label); else asphalt. As given on ``terrain`` with poses in
+    every log, the physics drives the map's slope under the logged poses, as the planner
+    priced it (the ``slope`` candidate is then part of the model); otherwise level ground.
     ``"estimator"``: the vibration estimator trained on ``calibration_logs``. A file: the
     saved model, as it is.
 
@@ -175,6 +211,8 @@ def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[Interact
         The estimator's progress bar.
     names : mapping, optional
         How messages name the arguments (:func:`check_model_source`).
+    terrain : TerrainMap, optional
+        The map the diagnosed runs drove on (the physics as given drives its slope).
 
     Returns
     -------
@@ -204,22 +242,28 @@ def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[Interact
         if shared:
             raise InvalidParameterError(f"{n['calibration']} holds runs that {n['logs']} diagnoses too: {shared[:3]!r}; "
                                         "calibrate on runs that are not diagnosed")
+    if terrain is not None and not isinstance(terrain, TerrainMap):
+        raise InvalidParameterError(f"terrain must be a TerrainMap or None, got {type(terrain).__name__!r}")
     if kind == "physics":
-        grounds = {log.meta.ground_label for log in (cal or logs)}
-        ground = ground or (grounds.pop() if len(grounds) == 1 and grounds <= set(GROUND_PRESETS) else "asphalt")
         robot_name = robot or "husky"
         effects = None if not without else tuple(e for e in DRIVE_EFFECTS if e not in without)
         off = f" without {', '.join(without)}" if without else " (every drive effect)"
         if cal is None:
-            fitted = PhysicsCurrentModel(robot_name, ground, fit_parameters=(), effects=effects).fit(logs)
+            ground_of = _physics_ground(ground, _labels(logs), _labels(logs))
+            on_map = terrain is not None and all(log.pose_xyh is not None for log in logs)
+            fitted = PhysicsCurrentModel(robot_name, ground_of, fit_parameters=(), effects=effects,
+                                         terrain=terrain if on_map else None).fit(logs)
+            where = " on the map's slope under the logged poses" if on_map else ""
             return ModelUnderDiagnosis(fitted, (
-                f"physics, the {robot_name} and {ground} presets as given{off}, not fitted on the {_runs(logs)} it is "
-                f"diagnosed on ({n['calibration']} fits its coefficients on other runs)"), kind, robot)
-        fitted = PhysicsCurrentModel(robot_name, ground, effects=effects).fit(cal)
+                f"physics, the {robot_name} and {_ground_text(ground_of)} presets as given{off}{where}, not fitted on "
+                f"the {_runs(logs)} it is diagnosed on ({n['calibration']} fits its coefficients on other runs)"),
+                kind, robot)
+        ground_of = _physics_ground(ground, _labels(cal), _labels(logs))
+        fitted = PhysicsCurrentModel(robot_name, ground_of, effects=effects).fit(cal)
         values = ", ".join(f"{k} = {fmt_number(v, 4)}" for k, v in fitted.fitted_.items())
         return ModelUnderDiagnosis(fitted, (
-            f"physics, {robot_name} starting from {ground}{off}; its coefficients fitted on the {_runs(cal)} of "
-            f"{calibration_label} ({values}), which are not diagnosed"), kind, robot)
+            f"physics, {robot_name} starting from {_ground_text(ground_of)}{off}; its coefficients fitted on the "
+            f"{_runs(cal)} of {calibration_label} ({values}), which are not diagnosed"), kind, robot)
     if kind == "estimator":
         trained = new_current_model("estimator", seed=seed, progress=progress).fit(cal)
         return ModelUnderDiagnosis(trained, (f"the vibration estimator, trained on the {_runs(cal)} of "

@@ -90,3 +90,46 @@ def test_a_saved_model_is_loaded_as_it_is(tmp_path, runs):
     assert src.kind == "file" and src.reference_robot == "husky"
     assert src.note == f"{type(model).__name__} loaded from {path}"
     assert (src.model.predict(logs[0]) == model.predict(logs[0])).all()
+
+
+def _relabelled(logs, labels_of):
+    """The logs with per-sample ground labels ``labels_of(n)`` (an array of n names)."""
+    return [dataclasses.replace(log, ground=labels_of(len(log)),
+                                meta=dataclasses.replace(log.meta, ground_label=None)) for log in logs]
+
+
+def _two_grounds(n):
+    import numpy as np
+
+    return np.where(np.arange(n) < n // 2, "grass", "asphalt")
+
+
+def test_physics_as_given_drives_each_sample_on_its_own_ground_and_the_maps_slope(runs):
+    tmap = dataclasses.replace(scenario("turning_resistance"), n_runs=3, run_duration_s=8.0).terrain
+    logs = _relabelled(runs[0], _two_grounds)
+    level = model_under_diagnosis("physics", logs)
+    assert level.model.ground == {"asphalt": "asphalt", "grass": "grass"}
+    assert level.model.terrain is None
+    assert "asphalt, grass (a preset per ground label) presets as given" in level.note
+    on_map = model_under_diagnosis("physics", logs, terrain=tmap)
+    assert on_map.model.terrain is tmap and "on the map's slope under the logged poses" in on_map.note
+    # without poses the map cannot be read under the runs: level ground (the slope stays a candidate)
+    bare = [dataclasses.replace(log, pose_xyh=None) for log in logs]
+    assert model_under_diagnosis("physics", bare, terrain=tmap).model.terrain is None
+    # a ground asked for is used for every sample, as before
+    assert model_under_diagnosis("physics", logs, ground="snow").model.ground == "snow"
+    with pytest.raises(InvalidParameterError, match="terrain must be a TerrainMap"):
+        model_under_diagnosis("physics", logs, terrain="map.npz")
+
+
+def test_calibrated_physics_fits_a_ground_per_label_only_when_the_calibration_covers_the_diagnosed_grounds(runs):
+    import numpy as np
+
+    logs = _relabelled(runs[0], _two_grounds)
+    diagnosed, cal = logs[:1], [dataclasses.replace(log, meta=dataclasses.replace(log.meta, source=f"cal_{k}"))
+                                for k, log in enumerate(logs[1:])]
+    covered = model_under_diagnosis("physics", diagnosed, calibration_logs=cal)
+    assert covered.model.ground == {"asphalt": "asphalt", "grass": "grass"}
+    assert {"grass.rolling_resistance_coef", "asphalt.rolling_resistance_coef"} <= set(covered.model.fitted_)
+    other = _relabelled(cal, lambda n: np.where(np.arange(n) < n // 2, "grass", "snow"))
+    assert model_under_diagnosis("physics", diagnosed, calibration_logs=other).model.ground == "asphalt"
