@@ -10,8 +10,9 @@ from terrain import TerrainMap
 
 from .edge_cost import EnergyCost
 from .kernels import graph, point_free, walk
+from .kernels.corridor import corridor_weights_parallel, corridor_weights_serial
 from .anyangle import warm_up_anyangle
-from .lattice import Lattice
+from .lattice import LATTICE_OFFSETS, Lattice
 from .replan import IncrementalPlanner
 from .reachability import warm_up_reachability
 from .refine import relax_path, string_pull
@@ -54,6 +55,10 @@ def warm_up_kernels() -> float:
     data = np.zeros(0)
     for kernel in (graph.lattice_reweight_serial, graph.lattice_reweight_parallel):
         kernel(arr.cells, arr.grade_table, arr.geo, 1, 0, 4, 4, half, sat, pos, data)
+    rows, cols = (a.astype(np.int64) for a in np.nonzero(np.ones((4, 4), dtype=bool)))
+    index = np.arange(16, dtype=np.int32).reshape(4, 4)
+    for kernel in (corridor_weights_serial, corridor_weights_parallel):  # coarse-to-fine's corridor graph
+        kernel(arr.cells, arr.grade_table, arr.geo, rows, cols, index, LATTICE_OFFSETS[:8])
     lattice = Lattice.for_cost(cost, 1)
     path = lattice.shortest_path((0.5, 0.5), (3.5, 3.5), weight="length")
     dearer = cost.with_tables(2.0 * cost.grade_table_j_per_m, cost.turn_table_j)  # incremental lattice reweighting
