@@ -18,23 +18,28 @@ from terrain.procedural import example_map
 from terrawatt_base import figure_file
 from terrawatt_base.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
 from terrawatt_base.checks import fmt_number
-from terrawatt_base.dask_client import dask_client
+from terrawatt_base.dask_client import check_dask_options, dask_client
 
 from planner.model_cost import parse_model_ground
 from planner.points import point_on_map
 from planner.risk import check_risk_level
 
 __all__ = [
-    "Checked", "bounded", "positive", "add_map_options", "read_map_args", "map_arg", "add_point_options", "point_arg",
-    "add_robot_options", "add_planner_options", "check_outputs", "input_paths", "check_output_file", "draw_figure",
-    "warn_figures", "add_dask_options", "check_dask_flags", "dask_client_arg", "add_model_options",
-    "check_model_flags", "load_model_arg",
+    "Checked", "bounded", "positive", "MAP_FLAGS", "add_map_options", "read_map_args", "map_arg", "add_point_options",
+    "point_arg", "add_robot_options", "add_planner_options", "check_outputs", "INPUT_FLAGS", "input_paths",
+    "check_output_file", "draw_figure", "warn_figures", "add_dask_options", "check_dask_flags", "dask_client_arg",
+    "add_model_options", "check_model_flags", "load_model_arg",
 ]
+
+#: The flags of the map options, by their names in :func:`terrain.io.read_map_with_options`.
+MAP_FLAGS = {"fill_nodata": "--fill-nodata", "reproject_to": "--reproject", "cell_size_m": "--cell-size",
+             "landcover": "--landcover", "landcover_classes": "--landcover-classes"}
+#: Flags whose values are input paths (a ``--model`` that names a kind, a ``--map example``, are not files).
+INPUT_FLAGS = ("map", "data", "pairs", "sites", "model", "calibration_data", "landcover", "landcover_classes")
 
 
 class Checked(argparse.Action):
-    """Store ``check(value, flag)``: a bad value fails while parsing with the library's error naming the flag (exit 2,
-    one line: :func:`terrawatt_cli.main`)."""
+    """Store ``check(value, flag)``: a bad value fails while parsing, one line naming the flag, exit 2."""
 
     def __init__(self, option_strings: list[str], dest: str, check: Callable[[Any, str], Any], **kwargs: Any) -> None:
         super().__init__(option_strings, dest, **kwargs)
@@ -54,40 +59,38 @@ def bounded(expected: str, ok: Callable[[float], bool]) -> Callable[[float, str]
 
 
 positive = bounded("a number > 0", lambda v: math.isfinite(v) and v > 0)
-_MAP_FLAGS = {"fill_nodata": "--fill-nodata", "reproject_to": "--reproject", "cell_size_m": "--cell-size",
-              "landcover": "--landcover", "landcover_classes": "--landcover-classes"}
 
 
 def add_map_options(p: argparse.ArgumentParser, *, reproject: bool = True) -> None:
-    """``--fill-nodata``, ``--reproject``, ``--cell-size``, ``--landcover`` and ``--landcover-classes`` (read them
-    with :func:`read_map_args`); ``reproject=False`` offers no ``--reproject`` / ``--cell-size``."""
+    """The map options of :data:`MAP_FLAGS` (read by :func:`read_map_args`); without ``--reproject`` / ``--cell-size``
+    if not ``reproject``."""
     p.add_argument("--fill-nodata", choices=["nearest"], default=None,
                    help="GeoTIFF DEMs: fill nodata cells from the nearest valid cell (default: refuse such DEMs)")
     if reproject:
         p.add_argument("--reproject", default=None, metavar="utm|EPSG:N",
                        help="GeoTIFF DEMs: reproject to the UTM zone of the DEM's centre ('utm') or to a projected CRS "
-                            "in metres (e.g. EPSG:32633); needed for DEMs in geographic coordinates (EPSG:4326); "
-                            "with --cell-size")
+                            "in metres (e.g. EPSG:32633), as DEMs in geographic coordinates (EPSG:4326) need; with "
+                            "--cell-size")
         p.add_argument("--cell-size", type=float, default=None, metavar="M",
                        help="cell size (m) of the reprojected map; with --reproject")
     p.add_argument("--landcover", type=Path, default=None, metavar="FILE",
                    help="ground classes from a land-cover GeoTIFF of integer codes (e.g. ESA WorldCover), in any CRS, "
                         "warped onto a map with a CRS by majority; with --landcover-classes")
     p.add_argument("--landcover-classes", type=Path, default=None, metavar="CSV",
-                   help="with --landcover: CSV 'code,ground' (optional 'label' column) naming each code's ground "
-                        "preset, or 'obstacle' (impassable) or 'unknown'; codes left out and nodata keep unknown "
-                        "ground (--unknown-ground)")
+                   help="CSV 'code,ground' (optional 'label' column) naming each code's ground preset, or 'obstacle' "
+                        "(impassable) or 'unknown'; codes left out and nodata are unknown ground (--unknown-ground)")
 
 
 def read_map_args(args: argparse.Namespace, source: Any = None) -> TerrainMap:
-    """The map of ``--map`` (or ``source``, a map in memory) with the options of :func:`add_map_options`
-    (:func:`terrain.io.read_map_with_options`; the classes' grounds must be presets unless ``--model`` prices them)."""
+    """The map of ``--map`` (or ``source``, a map in memory) with its options (:func:`terrain.io.read_map_with_options`;
+    the classes' grounds must be presets unless ``--model`` prices them)."""
+    whole = source is None
     return read_map_with_options(
-        args.map if source is None else source, fill_nodata=None if source is not None else args.fill_nodata,
-        reproject_to=None if source is not None else getattr(args, "reproject", None),
-        cell_size_m=None if source is not None else getattr(args, "cell_size", None),
+        args.map if whole else source, fill_nodata=args.fill_nodata if whole else None,
+        reproject_to=getattr(args, "reproject", None) if whole else None,
+        cell_size_m=getattr(args, "cell_size", None) if whole else None,
         landcover=getattr(args, "landcover", None), landcover_classes=getattr(args, "landcover_classes", None),
-        known_grounds=GROUND_PRESETS if getattr(args, "model", None) is None else None, names=_MAP_FLAGS)
+        known_grounds=GROUND_PRESETS if getattr(args, "model", None) is None else None, names=MAP_FLAGS)
 
 
 def map_arg(args: argparse.Namespace) -> tuple[TerrainMap, str]:
@@ -139,29 +142,15 @@ def add_planner_options(p: argparse.ArgumentParser, *, planner: str, time_s: flo
 
 
 def check_outputs(directory: Path, files: Iterable[str] = (), inputs: Iterable[Path | None] = ()) -> None:
-    """Before any work: ``directory`` can be a folder, each of ``files`` a file in it, none an input; it is writable.
-
-    ``inputs`` are the command's input paths (``None`` for a flag not given): no output may
-    be one of them or replace one, and the output folder may not be an input folder. The
-    folder is created and a probe file written and removed in it, so an unwritable output
-    fails now, in well under a second, not after the work.
-
-    Raises
-    ------
-    InvalidParameterError
-        A path of the wrong kind (a file where the folder goes, a folder where a file goes),
-        an output that would replace an input, an output folder that cannot be written.
-    """
+    """Before any work: ``directory`` is a writable folder (created; a probe file written and removed), each of
+    ``files`` a file in it, none an input nor replacing one (``inputs``: the command's input paths, None for a flag
+    not given)."""
     names = list(files)
     check_output_path(directory, "--out", directory=True)
     for name in names:
         check_output_path(directory / name, f"--out {directory}: {name}")
     refuse_overwriting_inputs([directory, *(directory / n for n in names)], list(inputs))
     probe_writable(directory)
-
-
-#: Flags whose values are input paths (a ``--model`` that names a kind, a ``--map example``, are not files).
-INPUT_FLAGS = ("map", "data", "pairs", "sites", "model", "calibration_data", "landcover", "landcover_classes")
 
 
 def input_paths(args: argparse.Namespace) -> list[Path]:
@@ -178,15 +167,14 @@ def check_output_file(path: Path, inputs: Iterable[Path | None] = (), flag: str 
 
 
 def draw_figure(path: Path, draw: Callable[[], Path]) -> Path | None:
-    """Call ``draw`` (which writes the figure ``path``); on any failure warn on stderr and return None
-    (:func:`terrawatt_base.figure_file.draw_figure`): a figure never fails a command whose results are written."""
+    """``draw()`` (which writes the figure ``path``), or None and a warning on stderr if it fails."""
     with warn_figures():
         return figure_file.draw_figure(path, draw)
 
 
 @contextlib.contextmanager
 def warn_figures() -> Iterator[None]:
-    """A figure that fails inside (a :class:`~terrain.FigureWarning`) is one line on stderr, as :func:`draw_figure`'s."""
+    """A figure that fails inside (a :class:`~terrain.FigureWarning`) is one line on stderr."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", FigureWarning)
         yield
@@ -207,14 +195,8 @@ def add_dask_options(p: argparse.ArgumentParser, what: str) -> None:
 
 
 def check_dask_flags(args: argparse.Namespace) -> None:
-    """``--workers`` and ``--scheduler`` of :func:`add_dask_options`, checked before any work."""
-    if args.workers < 1:
-        raise InvalidParameterError(f"--workers must be a positive number of processes, got {args.workers!r}")
-    if args.scheduler is not None and args.workers > 1:
-        raise InvalidParameterError(
-            f"--workers {args.workers!r} and --scheduler {args.scheduler!r} exclude each other: "
-            "give --workers N for a local cluster or --scheduler ADDRESS for an existing one"
-        )
+    """``--workers`` and ``--scheduler``, checked before any work (``dask_client.check_dask_options``)."""
+    check_dask_options(args.workers, args.scheduler, flags=("--workers", "--scheduler"))
 
 
 @contextlib.contextmanager
@@ -235,16 +217,14 @@ def add_model_options(p: argparse.ArgumentParser, *, risk: bool = False) -> None
                         "(the physics model adds the slope term); --unknown-ground does not apply")
     p.add_argument("--model-ground", default=None, nargs="+", metavar="NAME|CLASS=NAME", action=Checked,
                    check=parse_model_ground,
-                   help="with --model: NAME prices every cell as this training ground of the model (e.g. a map "
-                        "without ground classes when the model drove several grounds); CLASS=NAME pairs price a "
-                        "map ground class the model never drove as one it did (e.g. grass=asphalt sand=snow), the "
-                        "other classes by their own names")
+                   help="with --model: NAME prices every cell as this training ground of the model (e.g. a map without "
+                        "classes); CLASS=NAME pairs price a map class the model never drove as one it did (e.g. "
+                        "grass=asphalt), the other classes by their own names")
     if risk:
         p.add_argument("--risk", type=float, default=None, metavar="Q", action=Checked, check=check_risk_level,
                        help="with --model of a model with a predictive interval: plan on the Q quantile of energy (Q "
-                            "in (0, 1)): every edge costs mean + z_Q sd, which is the route's Q quantile on one "
-                            "ground and, for Q > 0.5, an upper bound of it across grounds (their errors are "
-                            "independent); default: the mean")
+                            "in (0, 1)), every edge at mean + z_Q sd: the route's Q quantile on one ground, for Q > "
+                            "0.5 an upper bound of it across grounds; default: the mean")
 
 
 def check_model_flags(args: argparse.Namespace) -> None:

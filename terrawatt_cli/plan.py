@@ -7,13 +7,13 @@ from pathlib import Path
 from typing import Any
 
 from energy.params import resolve_unknown_ground
-from terrain import DemWindows, InvalidParameterError, TerrainMap
+from terrain import DemWindows, TerrainMap
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
 
 from planner import PLANNERS
-from planner.coarse_report import plan_coarse, plan_coarse_windowed
+from planner.coarse_report import check_coarse_options, plan_coarse, plan_coarse_windowed
 from planner.plan_report import plan_and_compare
-from .common import (Checked, add_map_options, add_model_options, add_planner_options, add_point_options,
+from .common import (MAP_FLAGS, Checked, add_map_options, add_model_options, add_planner_options, add_point_options,
                      add_robot_options, bounded, check_model_flags, check_outputs, input_paths, load_model_arg,
                      point_arg, positive, read_map_args, warn_figures)
 from .ros2 import add_ros2_arguments, check_ros2_outputs, write_ros2_outputs
@@ -21,6 +21,8 @@ from .ros2 import add_ros2_arguments, check_ros2_outputs, write_ros2_outputs
 __all__ = ["add_parsers", "run_demo", "run_plan_command"]
 
 _OUTPUTS = ("route.json", "route.geojson", "route.png")
+_COARSE_FLAGS = {**MAP_FLAGS, "factor": "--coarse-factor", "corridor_m": "--corridor", "windowed": "--windowed",
+                 "path": "--map", "model": "--model", "planner": "--planner"}
 
 
 def add_parsers(sub: Any) -> None:
@@ -39,13 +41,11 @@ def add_parsers(sub: Any) -> None:
     plan.add_argument("--corridor", type=float, default=None, metavar="M", action=Checked, check=positive,
                       help="with --coarse-factor: corridor half-width (m; default three coarse cells)")
     plan.add_argument("--windowed", action="store_true",
-                      help="with --coarse-factor on a GeoTIFF DEM: read the DEM by windows, never whole (the coarse "
-                           "map tile by tile, the full resolution only in the corridor's window), for DEMs larger "
-                           "than memory")
+                      help="with --coarse-factor on a GeoTIFF DEM: read the DEM by windows, never whole (the full "
+                           "resolution only in the corridor's window), for DEMs larger than memory")
     plan.add_argument("--fine-window-cells", type=int, default=None, metavar="N", action=Checked, check=positive,
                       help="with --windowed: the most full-resolution cells the fine stage reads at once (default "
-                           "8192^2, about 7 GiB once priced); a corridor whose bounding window is larger is followed "
-                           "in chained windows")
+                           "8192^2, about 7 GiB once priced); a larger corridor is followed in chained windows")
     for p, time_s, run in ((demo, 1.0, run_demo), (plan, 2.0, run_plan_command)):
         add_planner_options(p, planner="RRTstar", time_s=time_s, choices=PLANNERS)
         add_robot_options(p)
@@ -57,16 +57,9 @@ def add_parsers(sub: Any) -> None:
 
 
 def _check_flags(args: argparse.Namespace) -> None:
-    """Outputs, ROS 2 outputs and flags that go together, before any work."""
     check_outputs(args.out, _OUTPUTS, input_paths(args))
     check_ros2_outputs(args, input_paths(args), [args.out / n for n in _OUTPUTS])
     check_model_flags(args)
-    coarse = getattr(args, "coarse_factor", None) is not None
-    if getattr(args, "corridor", None) is not None and not coarse:
-        raise InvalidParameterError("--corridor applies to coarse-to-fine planning; give --coarse-factor F too")
-    if args.model is not None and (coarse or getattr(args, "windowed", False)):
-        raise InvalidParameterError("--model plans on the whole map with --planner; it does not apply to "
-                                    "--coarse-factor / --windowed yet")
 
 
 def run_demo(args: argparse.Namespace) -> int:
@@ -78,8 +71,17 @@ def run_demo(args: argparse.Namespace) -> int:
 def run_plan_command(args: argparse.Namespace) -> int:
     """``terrawatt plan``: on a map file (coarse-to-fine with ``--coarse-factor``, by windows with ``--windowed``)."""
     _check_flags(args)
+    check_coarse_options(factor=args.coarse_factor, corridor_m=args.corridor, windowed=args.windowed, path=args.map,
+                         model=args.model, fill_nodata=args.fill_nodata, reproject_to=args.reproject,
+                         cell_size_m=args.cell_size, landcover=args.landcover, names=_COARSE_FLAGS)
     if args.windowed:
-        return _run_windowed(args)
+        ground = resolve_unknown_ground(args.unknown_ground, None, flag="--unknown-ground")
+        with DemWindows(args.map) as dem:
+            start, goal = point_arg(args, "start", dem), point_arg(args, "goal", dem)
+        return _finish(args, plan_coarse_windowed(
+            args.map, start, goal, factor=args.coarse_factor, corridor_m=args.corridor, robot=args.robot,
+            speed_mps=args.speed, max_slope_deg=args.max_slope_deg, unknown_ground=ground,
+            fine_window_cells=args.fine_window_cells))
     tmap = read_map_args(args)
     return _run(args, tmap, point_arg(args, "start", tmap), point_arg(args, "goal", tmap), args.map.name)
 
@@ -98,27 +100,6 @@ def _run(args: argparse.Namespace, tmap: TerrainMap, start: tuple[float, float],
         max_evaluations=args.max_evaluations, unknown_ground=ground, model=model,
         model_label=None if model is None else args.model.name, model_ground=args.model_ground, risk=args.risk,
         risk_name="--risk", **common), ros2=True)
-
-
-def _run_windowed(args: argparse.Namespace) -> int:
-    """``terrawatt plan --windowed``: its flags checked before any work, then the plan."""
-    if args.coarse_factor is None:
-        raise InvalidParameterError("--windowed plans coarse-to-fine; give --coarse-factor F too")
-    if args.map.suffix.lower() not in (".tif", ".tiff"):
-        raise InvalidParameterError(f"--windowed reads GeoTIFF DEMs (.tif, .tiff), got --map {args.map.name}")
-    for flag, value in (("--fill-nodata", args.fill_nodata), ("--reproject", args.reproject),
-                        ("--cell-size", args.cell_size), ("--landcover", args.landcover)):
-        if value is not None:
-            raise InvalidParameterError(
-                f"--windowed reads the DEM as it is and cannot apply {flag} (it needs the whole map): fill or "
-                "reproject the DEM first (gdal_fillnodata, gdalwarp), or plan without --windowed")
-    ground = resolve_unknown_ground(args.unknown_ground, None, flag="--unknown-ground")
-    with DemWindows(args.map) as dem:
-        start, goal = point_arg(args, "start", dem), point_arg(args, "goal", dem)
-    return _finish(args, plan_coarse_windowed(
-        args.map, start, goal, factor=args.coarse_factor, corridor_m=args.corridor, robot=args.robot,
-        speed_mps=args.speed, max_slope_deg=args.max_slope_deg, unknown_ground=ground,
-        fine_window_cells=args.fine_window_cells))
 
 
 def _finish(args: argparse.Namespace, report: Any, *, ros2: bool = False) -> int:
