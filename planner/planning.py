@@ -39,6 +39,7 @@ from terrawatt_base.checks import check_bool, check_int, check_real, check_seed
 from terrawatt_base.errors import GridMismatchError, InvalidParameterError, UnknownNameError
 
 from .anyangle import anyangle_path, polish_path
+from .coarse import plan_coarse_to_fine
 from .edge_cost import EnergyCost
 from .problem import PlanningProblem
 from .lattice import Lattice, LatticePath
@@ -52,9 +53,9 @@ __all__ = ["plan_route", "shortest_route", "compare_route", "PLANNERS", "PLANNER
            "OMPL_PLANNERS", "GRAPH_PLANNERS", "REFINE_DEFAULT_SEED"]
 
 #: Every planner name :func:`plan_route` accepts (the keys of :data:`PLANNER_SEARCHES`).
-PLANNERS = OMPL_PLANNERS + ("anyangle", "lattice")
+PLANNERS = OMPL_PLANNERS + ("anyangle", "coarse", "lattice")
 #: Planners that ignore time budgets (deterministic graph searches, run to their end).
-GRAPH_PLANNERS = ("anyangle", "lattice")
+GRAPH_PLANNERS = ("anyangle", "coarse", "lattice")
 #: Seed of the refinement when :func:`plan_route` gets ``seed=None``.
 REFINE_DEFAULT_SEED = 0
 
@@ -171,11 +172,13 @@ def plan_route(
     planner : str
         One of :data:`PLANNERS`: ``"RRTstar"``, ``"InformedRRTstar"``, ``"SORRTstar"``,
         ``"BITstar"``, ``"FMT"`` (OMPL, minimising drive energy), ``"lattice"`` (the
-        directed 16-connected lattice optimum) or ``"anyangle"`` (Theta* around a coarse
-        lattice route, :func:`planner.anyangle.anyangle_path`; deterministic).
+        directed 16-connected lattice optimum), ``"anyangle"`` (Theta* around a coarse
+        lattice route, :func:`planner.anyangle.anyangle_path`) or ``"coarse"``
+        (coarse-to-fine for big maps, :func:`planner.coarse.plan_coarse_to_fine`, tuned by
+        ``settings.coarse_factor`` / ``coarse_corridor_m``); the last three deterministic.
     time_limit_s : float or None
-        Wall-clock budget of the OMPL solve (s); ignored by ``"lattice"`` and
-        ``"anyangle"``. ``None`` requires ``max_cost_evaluations`` (but for those two).
+        Wall-clock budget of the OMPL solve (s); ignored by the graph planners
+        (:data:`GRAPH_PLANNERS`). ``None`` requires ``max_cost_evaluations`` (but for those).
     seed : int, optional
         Seeds OMPL's RNG for the OMPL planners and the refinement (``None`` or an integer
         in ``[0, 2**32)``). ``None`` leaves OMPL planners unseeded and seeds the refinement
@@ -295,6 +298,18 @@ def _anyangle_search(problem: PlanningProblem, time_limit: float | None, max_eva
     return ("exact", path.waypoints_m, path.solve_time_s) if path.found else ("infeasible", None, path.solve_time_s)
 
 
+def _coarse_search(problem: PlanningProblem, time_limit: float | None, max_evals: int | None, seed: int | None,
+                   settings: PlannerSettings) -> tuple[str, np.ndarray | None, float]:
+    """Coarse-to-fine: the lattice on a cost ``settings.coarse_factor`` times coarser, then the 1-cell lattice in a
+    corridor around that route (:func:`planner.coarse.plan_coarse_to_fine`)."""
+    found = plan_coarse_to_fine(problem.cost, problem.start, problem.goal, factor=settings.coarse_factor,
+                                corridor_m=settings.coarse_corridor_m)
+    route = found.route
+    if route.status != "exact":
+        return route.status, None, route.planning_time_s
+    return "exact", route.waypoints_m, route.planning_time_s
+
+
 def _ompl_search(name: str) -> PlannerSearch:
     def search(problem: PlanningProblem, time_limit: float | None, max_evals: int | None, seed: int | None,
                settings: PlannerSettings) -> tuple[str, np.ndarray | None, float]:
@@ -311,6 +326,7 @@ def _ompl_search(name: str) -> PlannerSearch:
 PLANNER_SEARCHES: dict[str, PlannerSearch] = {
     **{name: _ompl_search(name) for name in OMPL_PLANNERS},
     "anyangle": _anyangle_search,
+    "coarse": _coarse_search,
     "lattice": _lattice_search,
 }
 

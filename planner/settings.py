@@ -1,4 +1,4 @@
-"""PlannerSettings: the tuning of every planner (OMPL planners, the lattice, the any-angle planner, the refinement)."""
+"""PlannerSettings: the tuning of every planner (OMPL planners, the lattice, any-angle, coarse-to-fine, the refinement)."""
 
 from __future__ import annotations
 
@@ -44,6 +44,13 @@ class PlannerSettings:
         Attempts of each OMPL refinement pass (``partialShortcutPath`` / ``perturbPath``), >= 1.
     refine_rounds : int
         Number of (shortcut, perturb) rounds (>= 1).
+    coarse_factor : int
+        Downsampling factor (>= 2) of the ``"coarse"`` planner (coarse-to-fine,
+        :func:`planner.coarse.plan_coarse_to_fine`): its coarse lattice has ``factor**2``
+        times fewer nodes.
+    coarse_corridor_m : float or None
+        Half-width (m, > 0) of the ``"coarse"`` planner's full-resolution corridor; ``None``:
+        three coarse cells.
 
     Raises
     ------
@@ -61,6 +68,8 @@ class PlannerSettings:
     anyangle_corridor_cells: int = 12
     refine_max_steps: int = 300
     refine_rounds: int = 2
+    coarse_factor: int = 4
+    coarse_corridor_m: float | None = None
 
     def __post_init__(self) -> None:
         owner = "PlannerSettings"
@@ -75,3 +84,6 @@ class PlannerSettings:
         check_int("anyangle_corridor_cells", self.anyangle_corridor_cells, low=1, owner=owner)
         check_int("refine_max_steps", self.refine_max_steps, low=1, owner=owner)
         check_int("refine_rounds", self.refine_rounds, low=1, owner=owner)
+        check_int("coarse_factor", self.coarse_factor, low=2, owner=owner)
+        if self.coarse_corridor_m is not None:
+            check_real("coarse_corridor_m", self.coarse_corridor_m, low=0.0, low_inclusive=False, owner=owner)

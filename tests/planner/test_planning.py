@@ -373,3 +373,21 @@ def test_bad_flags_are_refused():
         plan_route(*args, cost=_cost(tmap), time_limit_s="1 s")
     with pytest.raises(InvalidParameterError, match="PlannerSettings.fmt_samples must be an integer"):
         PlannerSettings(fmt_samples=500.0)
+
+
+def test_coarse_to_fine_is_a_planner_by_name_tuned_by_the_settings():
+    # plan_route(planner="coarse") is plan_coarse_to_fine at the settings' factor and corridor, then refined
+    from planner.coarse import plan_coarse_to_fine
+
+    tmap = _hill_map()
+    cost = _cost(tmap)
+    start, goal = (5.0, 25.0), (75.0, 25.0)
+    for factor, corridor in ((4, None), (8, 6.0)):
+        settings = PlannerSettings(coarse_factor=factor, coarse_corridor_m=corridor)
+        raw = plan_route(tmap, start, goal, cost=cost, planner="coarse", settings=settings, refine=False)
+        direct = plan_coarse_to_fine(cost, start, goal, factor=factor, corridor_m=corridor).route
+        assert raw.planner == "coarse" and raw.status == "exact"
+        np.testing.assert_array_equal(raw.waypoints_m, direct.waypoints_m)
+        assert raw.energy_j == pytest.approx(direct.energy_j, rel=1e-12)
+        refined = plan_route(tmap, start, goal, cost=cost, planner="coarse", settings=settings, seed=0)
+        assert refined.planner == "coarse+refine" and refined.energy_j <= raw.energy_j + 1e-9

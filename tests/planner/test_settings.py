@@ -30,6 +30,8 @@ def test_defaults_are_valid_and_frozen():
         ({"anyangle_corridor_cells": 0}, "anyangle_corridor_cells"),
         ({"refine_max_steps": 0}, "refine_max_steps"),
         ({"refine_rounds": 0}, "refine_rounds"),
+        ({"coarse_factor": 1}, "coarse_factor"),
+        ({"coarse_corridor_m": 0.0}, "coarse_corridor_m"),
     ],
 )
 def test_values_out_of_range_are_refused_by_name(kwargs, match):
