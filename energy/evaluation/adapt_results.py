@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from dataclasses import asdict, dataclass
@@ -13,6 +12,7 @@ import numpy as np
 
 from terrawatt_base.atomic import check_output_path, write_text_atomic
 from terrawatt_base.errors import UnknownNameError
+from terrawatt_base.formats import result_document, write_result_json
 
 from .results import json_plain
 
@@ -169,9 +169,9 @@ class AdaptationResult:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-types form (NaN becomes ``None``), as written to ``adapt.json``."""
-        return json_plain({"format": "terrawatt-adaptation", "format_version": ADAPT_FORMAT_VERSION,
-                       "settings": dict(self.settings), "skipped": list(self.skipped),
-                       "summary": [asdict(s) for s in self.summary], "runs": [asdict(r) for r in self.runs]})
+        return json_plain(result_document("adaptation", ADAPT_FORMAT_VERSION, {
+            "settings": dict(self.settings), "skipped": list(self.skipped),
+            "summary": [asdict(s) for s in self.summary], "runs": [asdict(r) for r in self.runs]}))
 
     def to_markdown(self) -> str:
         """A markdown table: per protocol, ground, model and schedule, unadapted | adapted | gain baseline."""
@@ -207,7 +207,7 @@ class AdaptationResult:
         folder = check_adapt_dir(out_dir)
         folder.mkdir(parents=True, exist_ok=True)
         json_name, md_name = ADAPT_FILES
-        return (write_text_atomic(folder / json_name, json.dumps(self.to_dict(), indent=1, allow_nan=False) + "\n"),
+        return (write_result_json(folder / json_name, self.to_dict()),
                 write_text_atomic(folder / md_name, self.to_markdown()))
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from dataclasses import asdict, dataclass
@@ -12,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from terrawatt_base.atomic import check_output_path, write_text_atomic
+from terrawatt_base.formats import result_document, write_result_json
 from terrawatt_base.errors import UnknownNameError
 
 __all__ = [
@@ -167,20 +167,18 @@ class EvaluationResult:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-types form (NaN becomes ``None``), as written to ``evaluation.json``."""
-        return json_plain({
-            "format": "terrawatt-evaluation",
-            "format_version": EVALUATION_FORMAT_VERSION,
+        return json_plain(result_document("evaluation", EVALUATION_FORMAT_VERSION, {
             "section_s": self.section_s,
             "models": list(self.models),
             "variants": list(self.variants),
             "skipped": list(self.skipped),
             "summary": [asdict(s) for s in self.summary],
             "runs": [asdict(r) for r in self.runs],
-        })
+        }))
 
     def write_json(self, path: str | os.PathLike[str]) -> Path:
-        """Write :meth:`to_dict` as JSON, atomically."""
-        return write_text_atomic(path, json.dumps(self.to_dict(), indent=1, allow_nan=False) + "\n")
+        """Write :meth:`to_dict` as JSON, atomically (:func:`terrawatt_base.formats.write_result_json`)."""
+        return write_result_json(path, self.to_dict())
 
     def to_markdown(self) -> str:
         """A markdown table of the summary: per variant, ground and model."""

@@ -16,6 +16,7 @@ from energy.evaluation import (
     summarise_adapt_scores,
 )
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.formats import read_result_json
 
 
 @pytest.fixture(scope="module")
@@ -28,6 +29,7 @@ def test_writes_json_and_markdown(logs, tmp_path):
                               out_dir=tmp_path / "out")
     data = json.loads((tmp_path / "out" / ADAPT_FILES[0]).read_text())
     assert data["format"] == "terrawatt-adaptation" and data["settings"]["adapt_seconds"] == [10.0, 20.0]
+    assert read_result_json(tmp_path / "out" / ADAPT_FILES[0], "adaptation", 1) == data  # through the one result codec
     assert len(data["runs"]) == len(res.runs) == 3 * 2 * 2
     md = (tmp_path / "out" / ADAPT_FILES[1]).read_text()
     assert "| per_ground | grass | linear | 20 s | 6 |" in md

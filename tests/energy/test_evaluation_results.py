@@ -11,6 +11,7 @@ from energy import ConstantCurrentModel, LinearCurrentModel, evaluate_current_mo
 from energy.evaluation import EVALUATION_FILES, EvaluationResult, RunScore, check_evaluation_dir, summarise_scores
 from energy.evaluation.results import json_plain
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.formats import read_result_json
 
 
 @pytest.fixture(scope="module")
@@ -76,6 +77,7 @@ def test_a_result_with_nan_and_skipped_grounds_writes_its_folder(tmp_path):
     assert (json_path.name, md_path.name) == EVALUATION_FILES
     data = json.loads(json_path.read_text())
     assert data["format"] == "terrawatt-evaluation" and data["runs"][0]["whole_run_error_pct"] is None
+    assert read_result_json(json_path, "evaluation", 1) == data  # through the one result codec
     md = md_path.read_text()
     assert "30 s sections median %" in md and md.endswith("Skipped: ground 'ice' has 1 run\n")
 
