@@ -1,4 +1,4 @@
-"""A mission as asked for by name: its options checked together once, its start and goal placed on the map (MissionRequest)."""
+"""A mission as asked for: its options checked together once, its start and goal placed on the map (MissionRequest)."""
 
 from __future__ import annotations
 
