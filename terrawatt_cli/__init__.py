@@ -1,12 +1,4 @@
-"""The ``terrawatt`` command line: the parser, one module per subcommand, and the exit codes.
-
-Each subcommand module parses its flags, checks them (messages name the flags), checks its
-output paths before any work, calls public library functions and prints their result
-objects. Exit codes mean one thing each (:data:`EXIT_CODES`): 0 done, 1 a valid negative
-answer (no route, infeasible, does not fit the battery, an error row in a batch), 2 bad input
-or usage (one line on stderr, never a traceback), 3 an internal error — a bug: one line
-saying so, the traceback with ``-v``.
-"""
+"""The ``terrawatt`` command line: the parser, one module per subcommand, the exit codes (:data:`EXIT_CODES`)."""
 
 from __future__ import annotations
 
@@ -51,24 +43,14 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress")
     sub = parser.add_subparsers(dest="command", required=True)
     plan.add_parsers(sub)
-    evaluate.add_parser(sub)
-    train.add_parser(sub)
-    mission.add_parser(sub)
-    predict.add_parser(sub)
-    diagnose.add_parser(sub)
-    reach.add_parser(sub)
-    batch.add_parser(sub)
+    for command in (evaluate, train, mission, predict, diagnose, reach, batch):
+        command.add_parser(sub)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``terrawatt`` console script; returns the exit code.
-
-    Library errors (:class:`terrain.TerrawattError`) and operating-system errors (a missing
-    file, a folder without permission) are the user's input: one line on stderr, exit 2. Any
-    other exception is a bug: one line saying so (the traceback with ``-v``), exit 3 — so a
-    script can tell a crash from a valid "no".
-    """
+    """Entry point of the ``terrawatt`` console script; returns the exit code (:data:`EXIT_CODES`): library and
+    operating-system errors are the user's input (one line, exit 2), any other exception a bug (exit 3)."""
     try:
         args = build_parser().parse_args(argv)  # a flag's value checked while parsing (common.Checked) may fail here
     except TerrawattError as exc:

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from energy.params import resolve_unknown_ground
-from terrain import InvalidParameterError, TerrainMap
+from terrain import InvalidParameterError
 
 from planner import PLANNERS, BatchPairs, read_pairs_csv
 from planner.batch_pairs import read_sites_csv
@@ -46,20 +46,8 @@ def add_parser(sub: Any) -> None:
     batch.set_defaults(run=run_batch)
 
 
-def _read_pairs(args: argparse.Namespace, tmap: TerrainMap) -> BatchPairs:
-    """The pairs of ``--pairs`` or ``--sites``; degrees are placed on ``tmap`` by its CRS."""
-    if args.pairs is not None:
-        return read_pairs_csv(args.pairs, tmap)
-    names, xy = read_sites_csv(args.sites, tmap)
-    return BatchPairs.all_pairs(xy, names)
-
-
 def run_batch(args: argparse.Namespace) -> int:
-    """``terrawatt batch``: plan the pairs, write batch.csv and batch.json, print the summary.
-
-    Exit code 0 when every pair has a route, 1 when some pair has none (infeasible) or its
-    planning failed (e.g. a start on an obstacle: the row's error says so).
-    """
+    """``terrawatt batch``: plan the pairs (degrees placed by the map's CRS), write batch.csv and batch.json."""
     if (args.sites is not None) != args.all_pairs:
         raise InvalidParameterError("--sites needs --all-pairs (every ordered pair of the sites is planned)"
                                     if args.sites is not None else "--all-pairs needs --sites CSV")
@@ -67,7 +55,11 @@ def run_batch(args: argparse.Namespace) -> int:
     check_model_flags(args)
     check_outputs(args.out, _OUTPUTS, input_paths(args))
     tmap, label = map_arg(args)
-    pairs = _read_pairs(args, tmap)
+    if args.pairs is not None:
+        pairs = read_pairs_csv(args.pairs, tmap)
+    else:
+        names, xy = read_sites_csv(args.sites, tmap)
+        pairs = BatchPairs.all_pairs(xy, names)
     model = load_model_arg(args)
     ground = None if model is not None else resolve_unknown_ground(args.unknown_ground, tmap, flag="--unknown-ground")
     with dask_client_arg(args) as client:  # a missing extra or scheduler fails before planning

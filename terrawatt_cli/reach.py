@@ -54,7 +54,7 @@ def run_reach(args: argparse.Namespace) -> int:
         raise InvalidParameterError("--depot X Y is required with --map (the depot in the map's metres; or "
                                     "--depot-lonlat LON LAT in degrees)")
     check_model_flags(args)
-    # Both raster names are checked: which one is written depends on the map, read after the check.
+    # both raster names: which one is written depends on the map, read after the check
     check_outputs(args.out, ("reach.json", "reach.png", "reach.npz", "reach.tif"), input_paths(args))
     tmap, label = map_arg(args)
     depot = point_arg(args, "depot", tmap) or EXAMPLE_START_XY_M
@@ -64,8 +64,8 @@ def run_reach(args: argparse.Namespace) -> int:
         tmap, depot, battery_ah=args.battery_ah, voltage_v=args.voltage, reserve_pct=args.reserve,
         round_trip=args.round_trip, robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg,
         unknown_ground=None if model else resolve_unknown_ground(args.unknown_ground, tmap, flag="--unknown-ground"),
-        model=model,
-        model_label=None if model is None else args.model.name, model_ground=args.model_ground, map_label=label)
+        model=model, model_label=None if model is None else args.model.name, model_ground=args.model_ground,
+        map_label=label)
     with warn_figures():
         written = report.write(args.out, raster="reach.tif" if geo else "reach.npz")
     print(report.summary())
