@@ -12,8 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from terrawatt_base.atomic import write_json_atomic, write_text_atomic
+from terrawatt_base.atomic import write_text_atomic
 from terrawatt_base.errors import InvalidParameterError
+from terrawatt_base.formats import result_document, write_result_json
 
 from .route import ROUTE_STATUSES
 
@@ -159,9 +160,9 @@ class BatchResult:
         return float(np.median(s)) if s.size else math.nan
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain JSON-friendly dict (NaN stays NaN here; :meth:`write_json` writes it as null)."""
-        return {
-            "format_version": BATCH_FORMAT_VERSION,
+        """Plain JSON-friendly result document, format ``terrawatt-batch`` (NaN stays NaN here; :meth:`write_json`
+        writes it as null)."""
+        return result_document("batch", BATCH_FORMAT_VERSION, {
             "planner": self.planner,
             "where": self.where,
             "n_workers": self.n_workers,
@@ -171,11 +172,11 @@ class BatchResult:
             "counts": {s: self.count(s) for s in BATCH_STATUSES},
             "median_energy_saved_pct": self.median_saving_pct(),
             "rows": [asdict(r) for r in self.rows],
-        }
+        })
 
     def write_json(self, path: str | os.PathLike[str]) -> Path:
-        """Write :meth:`to_dict` as JSON (atomically); return the path."""
-        return write_json_atomic(path, self.to_dict())
+        """Write :meth:`to_dict` as JSON atomically (:func:`~terrawatt_base.formats.write_result_json`); return it."""
+        return write_result_json(path, self.to_dict())
 
     def to_csv(self, path: str | os.PathLike[str]) -> Path:
         """Write one line per row (header: the :class:`BatchRow` fields; NaN as an empty cell), atomically."""

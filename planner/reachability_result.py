@@ -15,7 +15,7 @@ from energy.battery import S_PER_H
 from terrain import TerrainMap
 from terrawatt_base.atomic import atomic_open, check_output_path, remove_stale_temporaries
 from terrawatt_base.errors import FileFormatError, InvalidParameterError, UnknownNameError
-from terrawatt_base.formats import read_versioned_npz
+from terrawatt_base.formats import read_versioned_npz, result_document
 from terrain.geotiff import write_geotiff
 from terrain.grid import Grid
 
@@ -178,14 +178,14 @@ class Reachability:
         return self._max_over_reachable(self.round_trip_energy_j)
 
     def to_dict(self) -> dict[str, Any]:
-        """The scalar figures as a JSON-ready dict (energies in J and Wh; NaN left for the writer)."""
+        """The scalar figures as a JSON-ready result document, format ``terrawatt-reachability`` (energies in J and Wh;
+        NaN left for the writer, :func:`terrawatt_base.formats.write_result_json`)."""
 
         def wh(x: float | None) -> float | None:
             return None if x is None else x / S_PER_H
 
         rows, cols = self.grid.shape
-        return {
-            "format_version": REACH_FORMAT_VERSION,
+        return result_document("reachability", REACH_FORMAT_VERSION, {
             "depot_xy_m": list(self.depot_xy_m),
             "round_trip": self.round_trip,
             "budget_j": self.budget_j,
@@ -206,7 +206,7 @@ class Reachability:
                      "origin_xy_m": list(self.grid.origin_xy_m), "crs": self.crs},
             "graph_time_s": self.graph_time_s,
             "search_time_s": self.search_time_s,
-        }
+        })
 
     def layer(self, name: str) -> np.ndarray:
         """One raster by name, one of :data:`REACH_LAYERS` (``"reachable"`` as 0/1 uint8).

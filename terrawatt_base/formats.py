@@ -181,7 +181,9 @@ def write_result_json(path: str | os.PathLike[str], document: Mapping[str, Any])
     return write_json_atomic(path, dict(document), indent=RESULT_JSON_INDENT)
 
 
-def read_result_json(path: str | os.PathLike[str], kind: str, version: int, *, what: str | None = None) -> dict[str, Any]:
+def read_result_json(
+    path: str | os.PathLike[str], kind: str, version: int, *, what: str | None = None
+) -> dict[str, Any]:
     """A result document read back from ``path``, after checking its format name and version.
 
     Parameters

@@ -14,9 +14,10 @@ from typing import Any
 import numpy as np
 
 from energy import Battery
-from terrawatt_base.atomic import write_json_atomic, write_text_atomic
+from terrawatt_base.atomic import write_text_atomic
 from terrawatt_base.checks import check_real, readonly, real_array
 from terrawatt_base.errors import InvalidParameterError, TerrawattError
+from terrawatt_base.formats import result_document, write_result_json
 
 from ..risk import RouteEnergyInterval
 from .monte_carlo_figure import plot_monte_carlo
@@ -203,10 +204,10 @@ class MonteCarloResult:
         return {f"p{q}": self.energy_percentile_j(q) / 3600.0 for q in (50, 90, 99)}
 
     def to_dict(self, *, samples: bool = True) -> dict[str, Any]:
-        """Plain JSON-friendly dict: the summary and (``samples``) the per-sample columns."""
+        """Plain JSON-friendly result document, format ``terrawatt-monte-carlo``: the summary and (``samples``) the
+        per-sample columns."""
         lo, hi = self.p_below_reserve_ci95
-        out: dict[str, Any] = {
-            "format_version": MONTE_CARLO_FORMAT_VERSION,
+        out: dict[str, Any] = result_document("monte-carlo", MONTE_CARLO_FORMAT_VERSION, {
             "n": self.n,
             "n_failed": self.n_failed,
             "seed": self.seed,
@@ -224,7 +225,7 @@ class MonteCarloResult:
             "where": self.where,
             "n_workers": self.n_workers,
             "elapsed_s": self.elapsed_s,
-        }
+        })
         if self.draw_from == "model":  # files of the typed ranges stay as they were
             out["draw_from"] = "model"
             del out["distributions"]
@@ -238,8 +239,8 @@ class MonteCarloResult:
         return out
 
     def write_json(self, path: str | os.PathLike[str], *, samples: bool = True) -> Path:
-        """Write :meth:`to_dict` as JSON (atomically); return the path."""
-        return write_json_atomic(path, self.to_dict(samples=samples))
+        """Write :meth:`to_dict` as JSON atomically (:func:`~terrawatt_base.formats.write_result_json`); return it."""
+        return write_result_json(path, self.to_dict(samples=samples))
 
     def to_csv(self, path: str | os.PathLike[str]) -> Path:
         """Write the per-sample table (one line per sample, a column per ground factor), atomically."""

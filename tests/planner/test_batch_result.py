@@ -11,6 +11,7 @@ import pytest
 from planner import BatchResult, plan_batch
 from planner.batch_result import BATCH_FORMAT_VERSION, BatchRow
 from terrawatt_base.errors import InvalidParameterError
+from terrawatt_base.formats import read_result_json
 
 from batch_samples import EAST, ON_WALL, PAIRS, cost  # noqa: F401  (fixture)
 
@@ -29,6 +30,7 @@ def test_the_result_writes_csv_and_json_with_nan_as_empty_and_null(cost, tmp_pat
     assert data["counts"]["error"] == 1 and data["rows"][2]["energy_j"] is None
     assert data["rows"][0]["energy_saved_pct"] == pytest.approx(res.rows[0].energy_saved_pct)
     assert res.to_dict()["median_energy_saved_pct"] == pytest.approx(res.median_saving_pct())
+    assert read_result_json(tmp_path / "b.json", "batch", BATCH_FORMAT_VERSION) == data  # through the one result codec
 
 
 def test_rows_and_results_check_themselves():

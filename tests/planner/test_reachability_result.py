@@ -17,6 +17,7 @@ from reach_samples import DEPOT, hilly_cost, hilly_reach  # noqa: F401  (fixture
 def test_figures_and_to_dict(hilly_cost):
     reach = reachability(hilly_cost, DEPOT, budget_j=20_000.0, reserve_j=4_000.0, round_trip=True)
     d = json.loads(json.dumps(reach.to_dict()))
+    assert (d["format"], d["format_version"]) == ("terrawatt-reachability", 1)  # a result document (reach.json)
     assert d["usable_energy_j"] == 16_000.0 and d["usable_energy_wh"] == pytest.approx(16_000 / 3600)
     assert d["reachable_cells"] == int(reach.reachable.sum()) > 0
     assert d["reachable_area_m2"] == d["reachable_cells"] * 1.0

@@ -12,6 +12,7 @@ from energy import Battery
 from planner import MonteCarloResult
 from planner.missions import MONTE_CARLO_FORMAT_VERSION
 from terrawatt_base.errors import InvalidParameterError
+from terrawatt_base.formats import read_result_json
 
 from mc_samples import FIXED, run_mc, setup  # noqa: F401  (fixture)
 
@@ -27,6 +28,7 @@ def test_the_result_writes_its_table_json_and_figure(setup, tmp_path):
     assert rows[0]["below_reserve"] in ("true", "false") and "ground_scale_asphalt" in rows[0]
     data = json.loads((tmp_path / "mc.json").read_text())
     assert data["format_version"] == MONTE_CARLO_FORMAT_VERSION and data["n"] == 5 and data["seed"] == 7
+    assert read_result_json(tmp_path / "mc.json", "monte-carlo", MONTE_CARLO_FORMAT_VERSION) == data  # the one codec
     assert data["energy_wh"]["p90"] == pytest.approx(mc.energy_percentiles_wh["p90"])
     assert data["p_below_reserve"] == mc.p_below_reserve and len(data["samples"]["energy_j"]) == 5
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
