@@ -46,7 +46,7 @@ import numpy as np
 
 from energy import PhysicsCurrentModel, new_current_model, read_borealtc
 from energy.diagnosis import diagnose
-from energy.diagnosis.localise import largest_slices
+from energy.diagnosis.gap import largest_slices
 from energy.logs import rest_samples
 from energy.models.base import log_currents
 from energy.physics import EFFECTS

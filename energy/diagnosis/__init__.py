@@ -9,7 +9,7 @@ from .corrected import CorrectedCurrentModel
 from .diagnose import diagnose
 from .effect_base import EFFECT_KINDS, BasisEffect, Effect, EffectParameter
 from .effects import EFFECTS_CATALOGUE, NOT_IDENTIFIABLE_FROM_CURRENT, check_effect_names, effect, effect_from_spec
-from .localise import GapShare, localise_gap
+from .gap import GapShare, GapSummary, gap_summary, localise_gap, residual_currents_a
 from .model_currents import DRIVE_EFFECTS
 from .model_source import (
     DEFAULT_SOURCE_NAMES,
@@ -23,7 +23,6 @@ from .plots_gap import plot_gap_by_regime, plot_gap_map, plot_residual_time
 from .power_result import PowerDiagnosis, PowerGapSummary, PowerWaterfallStep
 from .regimes import regime_labels
 from .report import DIAGNOSIS_FILES, DiagnosisReport, diagnose_report
-from .residuals import GapSummary, gap_summary, residual_currents_a
 from .result import Diagnosis, EffectScore, WaterfallStep
 from .fit import SPLITS, Fold, Split, make_split
 

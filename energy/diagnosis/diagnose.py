@@ -27,13 +27,12 @@ from .fit import (
     score_effect_set,
     shrink_pct,
 )
-from .localise import GapShare, largest_slices, localise_gap
+from .gap import GapShare, GapSummary, gap_summary, largest_slices, localise_gap
 from .model_currents import physics_basis
 from .power_data import power_logs_missing
 from .power_result import PowerDiagnosis
 from .power_stage import diagnose_power
 from .regimes import check_terrain
-from .residuals import GapSummary, gap_summary
 from .result import Diagnosis, EffectScore, WaterfallStep
 from .selection import SIGNIFICANT_SHRINK_PCT, plausible_alternative, score_entry, select_effects, significant
 

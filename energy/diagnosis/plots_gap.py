@@ -26,7 +26,7 @@ from terrain.terrain_map import TerrainMap
 
 from ..logs import InteractionLog
 from ..metrics import DEFAULT_SECTION_S, DEFAULT_SMOOTHING_SAMPLES, moving_median
-from .localise import SIDES, time_labels
+from .gap import SIDES, checked_pairs, sample_gap_mah, time_labels
 from .regimes import (
     ACCELERATION_LABELS,
     GRADE_LABELS,
@@ -36,7 +36,6 @@ from .regimes import (
     UNKNOWN_LABEL,
     check_terrain,
 )
-from .residuals import checked_pairs, sample_gap_mah
 from .result import Diagnosis
 
 __all__ = [
@@ -101,7 +100,7 @@ def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str]
     """Residual current (measured - predicted) over time per side, one panel per run, sections shaded.
 
     Each panel shows the left and right residual (thin) and their moving medians (thick);
-    the ``section_s`` time sections of :func:`~energy.diagnosis.localise.time_labels` are
+    the ``section_s`` time sections of :func:`~energy.diagnosis.gap.time_labels` are
     shaded in proportion to the gap they carry (red: the model predicts too little, blue:
     too much), the six largest labelled with it (mAh). With ``corrected`` the residual of the corrected model is drawn dashed.
 

@@ -14,7 +14,7 @@ from terrawatt_base.checks import fmt_number
 from ..logs import InteractionLog
 from ..metrics import DEFAULT_SECTION_S, section_charges_mah, section_error_pct
 from ..robot import RobotParams
-from .residuals import sample_weights_s
+from .gap import sample_weights_s
 from .result import EffectScore
 
 __all__ = ["PowerGapSummary", "PowerWaterfallStep", "PowerDiagnosis", "power_gap_summary"]

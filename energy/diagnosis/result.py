@@ -11,8 +11,7 @@ from terrawatt_base.atomic import write_json_atomic, write_text_atomic
 from terrawatt_base.checks import fmt_number
 
 from ..models.base import CurrentModel
-from .localise import GapShare, largest_slices
-from .residuals import GapSummary
+from .gap import GapShare, GapSummary, largest_slices
 
 __all__ = ["EffectScore", "WaterfallStep", "Diagnosis", "MARKDOWN_SLICES"]
 
@@ -186,7 +185,7 @@ class Diagnosis:
 
     def largest_slices(self, n: int = MARKDOWN_SLICES) -> tuple[GapShare, ...]:
         """The ``n`` slices of :attr:`localisation` with the largest ``|net gap|`` over all dimensions
-        (:func:`~energy.diagnosis.localise.largest_slices`: unknown and one-slice dimensions left out)."""
+        (:func:`~energy.diagnosis.gap.largest_slices`: unknown and one-slice dimensions left out)."""
         return largest_slices(self.localisation, n)
 
     @property

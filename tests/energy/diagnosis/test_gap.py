@@ -1,4 +1,5 @@
-"""Tests of energy.diagnosis.localise: the gap split by time, regime, side and space, ranked."""
+"""Tests of energy.diagnosis.gap: residuals, per-sample gaps and the whole-set gap summary; where the gap lies
+(split by time, regime, side and space, ranked)."""
 
 from __future__ import annotations
 
@@ -9,14 +10,148 @@ import numpy as np
 import pytest
 
 from energy import InteractionLog, LogMeta, TruthSimulator, charge_mah, robot_preset
+from energy.diagnosis.gap import (
+    DIMENSIONS,
+    GapShare,
+    GapSummary,
+    checked_pairs,
+    gap_summary,
+    largest_slices,
+    localise_gap,
+    residual_currents_a,
+    sample_gap_mah,
+    sample_weights_s,
+    shares_of,
+    time_labels,
+)
+from energy.metrics import section_charges_mah, section_error_pct
 from energy.sim import PAPER_GROUNDS
-from energy.diagnosis.localise import DIMENSIONS, GapShare, largest_slices, localise_gap, shares_of, time_labels
-from energy.diagnosis.residuals import gap_summary
 from terrain import flat_map, ramp_map
 from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 
-def make_log(v_mps, omega_radps, left_a, right_a, *, dt_s=0.1, pose_xyh=None, ground=None, ground_label=None):
+def make_log(time_s, left_a, right_a, v_mps=None, omega_radps=None) -> InteractionLog:
+    t = np.asarray(time_s, dtype=float)
+    n = t.size
+    v = np.full(n, 0.5) if v_mps is None else v_mps
+    w = np.zeros(n) if omega_radps is None else omega_radps
+    return InteractionLog(t, v, w, left_a, right_a, t, np.full(n, 9.81), meta=LogMeta(ground_label="asphalt"))
+
+
+@pytest.fixture
+def uneven_log() -> InteractionLog:
+    rng = np.random.default_rng(3)
+    t = np.cumsum(rng.uniform(0.005, 0.02, 400))
+    return make_log(t, 2.0 + rng.normal(0, 0.3, 400), 1.5 + rng.normal(0, 0.3, 400))
+
+
+def test_residual_is_measured_minus_predicted_and_leaves_inputs_alone(uneven_log):
+    pred = np.column_stack([np.full(400, 1.0), np.full(400, 2.0)])
+    before = pred.copy()
+    res = residual_currents_a(uneven_log, pred)
+    assert res.shape == (400, 2)
+    np.testing.assert_allclose(res[:, 0], uneven_log.current_left_a - 1.0)
+    np.testing.assert_allclose(res[:, 1], uneven_log.current_right_a - 2.0)
+    np.testing.assert_array_equal(pred, before)
+    res[:] = 0.0  # a new array, not a view of the log
+    assert uneven_log.current_left_a[0] != 0.0
+
+
+def test_sample_weights_integrate_like_charge_mah(uneven_log):
+    w = sample_weights_s(uneven_log.time_s)
+    assert math.isclose(w.sum(), uneven_log.duration_s, rel_tol=1e-12)
+    q = float(np.sum(w * uneven_log.current_left_a)) / 3.6
+    assert math.isclose(q, charge_mah(uneven_log.time_s, uneven_log.current_left_a), rel_tol=1e-12)
+
+
+def test_sample_gaps_add_up_to_the_integrated_gap(uneven_log):
+    rng = np.random.default_rng(4)
+    pred = rng.uniform(0.0, 3.0, (400, 2))
+    g = sample_gap_mah(uneven_log, pred)
+    t = uneven_log.time_s
+    expected = (charge_mah(t, uneven_log.current_left_a) - charge_mah(t, pred[:, 0])
+                + charge_mah(t, uneven_log.current_right_a) - charge_mah(t, pred[:, 1]))
+    assert math.isclose(g.sum(), expected, rel_tol=1e-10)
+
+
+def test_gap_summary_of_a_one_amp_offset_on_one_side():
+    t = np.arange(37) * 100.0  # one hour
+    log = make_log(t, np.full(37, 3.0), np.full(37, 2.0))
+    pred = np.column_stack([np.full(37, 2.0), np.full(37, 2.0)])  # left misses 1 A
+    s = gap_summary([log], [pred])
+    assert isinstance(s, GapSummary)
+    assert s.measured_mah == pytest.approx(5000.0)
+    assert s.predicted_mah == pytest.approx(4000.0)
+    assert s.gap_mah == pytest.approx(1000.0)
+    assert s.charge_error_pct == pytest.approx(20.0)
+    assert s.rmse_a == pytest.approx(math.sqrt(0.5))
+    assert s.section_error_pct == pytest.approx(20.0)
+    assert (s.n_runs, s.n_samples, s.duration_s) == (1, 37, pytest.approx(3600.0))
+    d = s.to_dict()
+    assert set(d) == {"measured_mah", "predicted_mah", "gap_mah", "charge_error_pct", "section_error_pct",
+                      "rmse_a", "n_runs", "n_samples", "duration_s"}
+    json.dumps(d)
+    assert "1000 mAh" in str(s)
+
+
+def test_gap_summary_section_error_is_the_median_over_runs(uneven_log):
+    rng = np.random.default_rng(5)
+    logs = [uneven_log, make_log(np.arange(300) * 0.05, np.full(300, 2.0), np.full(300, 1.0))]
+    preds = [rng.uniform(1.0, 2.5, (len(log), 2)) for log in logs]
+    s = gap_summary(logs, preds, section_s=1.0)
+    per_run = []
+    for log, p in zip(logs, preds):
+        truth = np.concatenate([section_charges_mah(log.time_s, c, 1.0)[1]
+                                for c in (log.current_left_a, log.current_right_a)])
+        model = np.concatenate([section_charges_mah(log.time_s, p[:, k], 1.0)[1] for k in (0, 1)])
+        per_run.append(section_error_pct(model, truth))
+    assert s.section_error_pct == pytest.approx(float(np.median(per_run)))
+    assert s.n_runs == 2 and s.n_samples == 700
+    assert s.gap_mah == pytest.approx(s.measured_mah - s.predicted_mah)
+
+
+def test_a_single_log_with_a_single_prediction_is_accepted(uneven_log):
+    logs, preds = checked_pairs(uneven_log, np.ones((400, 2)))
+    assert logs == (uneven_log,) and preds[0].shape == (400, 2)
+
+
+def test_bad_input_is_named():
+    log = make_log(np.arange(10) * 0.1, np.ones(10), np.ones(10))
+    good = np.ones((10, 2))
+    with pytest.raises(DataError, match="logs is empty"):
+        gap_summary([], [])
+    with pytest.raises(InvalidParameterError, match="one array per log: 2 log"):
+        gap_summary([log, log], [good])
+    with pytest.raises(InvalidParameterError, match=r"predictions\[0\] must have shape \(10, 2\)"):
+        gap_summary([log], [np.ones((9, 2))])
+    with pytest.raises(InvalidParameterError, match=r"predicted_a must have shape \(10, 2\)"):
+        residual_currents_a(log, np.ones(10))
+    bad = good.copy()
+    bad[3, 1] = np.nan
+    with pytest.raises(DataError, match=r"predictions\[0\] must be finite; 1 NaN/inf value\(s\), first in row 3"):
+        gap_summary([log], [bad])
+    with pytest.raises(InvalidParameterError, match=r"logs\[1\] must be an InteractionLog"):
+        gap_summary([log, "run.csv"], [good, good])
+    with pytest.raises(InvalidParameterError, match="logs must be an InteractionLog or a sequence"):
+        gap_summary(42, [good])
+    with pytest.raises(InvalidParameterError, match="predictions must be a sequence"):
+        gap_summary([log], good)
+    with pytest.raises(InvalidParameterError, match="section_s must be > 0"):
+        gap_summary([log], [good], section_s=0.0)
+    one = make_log([0.0], [1.0], [1.0])
+    with pytest.raises(DataError, match="at least 2 samples"):
+        gap_summary([one], [np.ones((1, 2))])
+    silent = make_log(np.arange(10) * 0.1, np.zeros(10), np.zeros(10))
+    with pytest.raises(DataError, match="the logs carry no drive current"):
+        gap_summary([silent], [good])
+    with pytest.raises(DataError, match="at least 2 finite samples"):
+        sample_weights_s([1.0])
+    with pytest.raises(DataError, match="strictly increasing"):
+        sample_weights_s([0.0, 1.0, 1.0])
+
+
+# ---------------------------------------------------------------- where the gap lies
+def motion_log(v_mps, omega_radps, left_a, right_a, *, dt_s=0.1, pose_xyh=None, ground=None, ground_label=None):
     v = np.asarray(v_mps, dtype=float)
     n = v.size
     t = np.arange(n) * dt_s
@@ -39,7 +174,7 @@ def measured(v, w):
 def test_a_model_that_misses_only_while_pivoting_puts_all_the_gap_in_pivot():
     v, w = stop_turn_go()
     left, right = measured(v, w)
-    log = make_log(v, w, left, right)
+    log = motion_log(v, w, left, right)
     pred = np.column_stack([left, right])
     pivot = (np.abs(v) < 0.05) & (np.abs(w) > 0.1)
     pred[pivot] -= 2.0  # the model lacks turning resistance in pivots only
@@ -60,9 +195,9 @@ def test_a_model_wrong_on_one_ground_localises_to_that_ground():
     n = v.size
     per_sample = np.where(np.arange(n) < n // 2, "tiles", "snow")
     logs = [
-        make_log(v, w, left, right, ground_label="asphalt"),
-        make_log(v, w, left * 1.3, right * 1.3, ground_label="grass"),  # the model is 30 % low on grass
-        make_log(v, w, np.where(per_sample == "snow", left + 1.0, left), right, ground=per_sample),
+        motion_log(v, w, left, right, ground_label="asphalt"),
+        motion_log(v, w, left * 1.3, right * 1.3, ground_label="grass"),  # the model is 30 % low on grass
+        motion_log(v, w, np.where(per_sample == "snow", left + 1.0, left), right, ground=per_sample),
     ]
     preds = [np.column_stack([left, right])] * 3
     ground = shares_of(localise_gap(logs, preds), "ground")
@@ -77,7 +212,7 @@ def test_a_model_wrong_on_one_ground_localises_to_that_ground():
 def test_a_one_amp_offset_on_the_left_shows_in_side_left_with_its_exact_charge():
     v, w = stop_turn_go()
     left, right = measured(v, w)
-    log = make_log(v, w, left + 1.0, right)
+    log = motion_log(v, w, left + 1.0, right)
     pred = np.column_stack([left, right])
     side = shares_of(localise_gap(log, pred), "side")
     assert [r.label for r in side] == ["left", "right"]
@@ -87,12 +222,12 @@ def test_a_one_amp_offset_on_the_left_shows_in_side_left_with_its_exact_charge()
 
 
 def test_time_sections_follow_the_metrics_sections_and_carry_the_run():
-    log = make_log(np.full(201, 0.5), np.zeros(201), np.ones(201), np.ones(201))  # 20 s
+    log = motion_log(np.full(201, 0.5), np.zeros(201), np.ones(201), np.ones(201))  # 20 s
     labels = time_labels(log, 3)
     assert labels[0] == "run 3, 0-8 s" and labels[80] == "run 3, 8-16 s" and labels[-1] == "run 3, 16-20 s"
     pred = np.ones((201, 2))
     pred[110:120] = 0.0  # a miss between 11 and 12 s
-    logs = [make_log(np.full(201, 0.5), np.zeros(201), np.ones(201), np.ones(201)), log]
+    logs = [motion_log(np.full(201, 0.5), np.zeros(201), np.ones(201), np.ones(201)), log]
     time = shares_of(localise_gap(logs, [np.ones((201, 2)), pred]), "time")
     assert time[0].label == "run 1, 8-16 s" and time[0].share_pct == pytest.approx(100.0)
     assert len(time) == 6 and time[0].n_runs == 1
@@ -132,7 +267,7 @@ def test_a_miss_in_one_corner_of_the_map_tops_the_space_rows():
     x = np.linspace(1.0, 19.0, 181)
     pose = np.column_stack([x, np.full(181, 2.0), np.zeros(181)])
     v = np.full(181, 0.5)
-    log = make_log(v, np.zeros(181), np.ones(181), np.ones(181), pose_xyh=pose)
+    log = motion_log(v, np.zeros(181), np.ones(181), np.ones(181), pose_xyh=pose)
     pred = np.ones((181, 2))
     pred[x >= 15.5] = 0.5
     space = shares_of(localise_gap([log], [pred], terrain=tmap), "space")
@@ -144,7 +279,7 @@ def test_a_miss_in_one_corner_of_the_map_tops_the_space_rows():
 def test_a_perfect_model_has_zero_shares_everywhere():
     v, w = stop_turn_go(20)
     left, right = measured(v, w)
-    rows = localise_gap([make_log(v, w, left, right)], [np.column_stack([left, right])])
+    rows = localise_gap([motion_log(v, w, left, right)], [np.column_stack([left, right])])
     assert all(r.gap_mah == 0.0 and r.share_pct == 0.0 for r in rows)
     assert not any(math.isnan(r.share_pct) for r in rows)
     assert all(r.gap_interval_mah == (0.0, 0.0) and (r.gap_pct == 0.0 or r.measured_mah == 0.0) for r in rows)
@@ -156,7 +291,7 @@ def test_slices_of_opposite_sign_rank_by_their_net_gap_while_the_whole_gap_cance
     slice's charge; nothing is said as a share of absolute gaps."""
     v, w = stop_turn_go()
     left, right = measured(v, w)
-    log = make_log(v, w, left, right)
+    log = motion_log(v, w, left, right)
     pivot = (np.abs(v) < 0.05) & (np.abs(w) >= 0.1)
     straight = (np.abs(v) >= 0.05) & (np.abs(w) < 0.1)
     pred = np.column_stack([left, right])
@@ -187,7 +322,7 @@ def _pivot_misses(n_runs, miss_runs):
     logs, preds = [], []
     for k in range(n_runs):
         scale = 1.0 + 0.05 * k  # runs differ a little
-        logs.append(make_log(v, w, left * scale, right * scale))
+        logs.append(motion_log(v, w, left * scale, right * scale))
         pred = np.column_stack([left, right]) * scale
         if k in miss_runs:
             pred[pivot] -= 1.0 + 0.2 * k
@@ -215,7 +350,7 @@ def test_with_one_run_the_interval_resamples_its_time_sections():
     v = np.tile(np.concatenate([np.full(40, 0.6), np.zeros(40)]), 10)  # 80 s: 10 sections of 8 s
     w = np.tile(np.concatenate([np.zeros(40), np.full(40, 0.8)]), 10)
     left, right = measured(v, w)
-    log = make_log(v, w, left, right)
+    log = motion_log(v, w, left, right)
     pred = np.column_stack([left, right]) - 0.5  # the model is 0.5 A low everywhere
     rows = localise_gap([log], [pred])
     assert len(shares_of(rows, "time")) == 10
@@ -229,7 +364,7 @@ def test_with_one_run_the_interval_resamples_its_time_sections():
 def test_largest_slices_leave_out_unknown_and_one_slice_dimensions():
     v, w = stop_turn_go(20)
     left, right = measured(v, w)
-    log = make_log(v, w, left, right, ground_label="grass")  # one ground; no map: grade and space unknown
+    log = motion_log(v, w, left, right, ground_label="grass")  # one ground; no map: grade and space unknown
     pred = np.column_stack([left, right]) * 0.7
     rows = localise_gap([log], [pred])
     top = largest_slices(rows, 50)
@@ -243,9 +378,9 @@ def test_largest_slices_leave_out_unknown_and_one_slice_dimensions():
         largest_slices(rows, 0)
 
 
-def test_bad_input_is_named():
+def test_bad_localisation_input_is_named():
     v, w = stop_turn_go(5)
-    log = make_log(v, w, *measured(v, w))
+    log = motion_log(v, w, *measured(v, w))
     good = np.ones((v.size, 2))
     with pytest.raises(DataError, match="logs is empty"):
         localise_gap([], [])
