@@ -12,8 +12,8 @@ import numpy as np
 
 from energy import EnergyBudget
 from terrain import CellModelRegistry, TerrainMap
-from terrawatt_base.atomic import write_json_atomic
 from terrawatt_base.errors import InvalidParameterError
+from terrawatt_base.formats import result_document, write_result_json
 
 from ..route import Route
 from .figures import plot_adaptive_mission
@@ -180,7 +180,8 @@ class AdaptiveResult:
         return sum(p.route_changed for p in self.replans if p.reason != "initial")
 
     def to_json_dict(self, *, series_every: int = 10) -> dict[str, Any]:
-        """Plain JSON data (non-finite numbers become ``None``); series every ``series_every`` samples."""
+        """Plain JSON result document, format ``terrawatt-adaptive-mission`` (non-finite numbers become ``None``);
+        series every ``series_every`` samples."""
         def num(x: Any) -> Any:
             if isinstance(x, (float, np.floating)):
                 return float(x) if math.isfinite(x) else None
@@ -194,9 +195,7 @@ class AdaptiveResult:
             return {k: num(v) for k, v in vars(r).items()}
 
         k = max(1, int(series_every))
-        return {
-            "format": "terrawatt-adaptive-mission",
-            "format_version": ADAPTIVE_FORMAT_VERSION,
+        return result_document("adaptive-mission", ADAPTIVE_FORMAT_VERSION, {
             "status": self.status,
             "reason": self.reason,
             "final_xy_m": num(self.final_xy_m),
@@ -219,11 +218,11 @@ class AdaptiveResult:
             "replans": [rec(r) for r in self.replans],
             "series": {name: [num(v) for v in getattr(self, name)[::k].tolist()]
                        for name in ("time_s", "x_m", "y_m", "soc", "energy_j", "predicted_energy_j")},
-        }
+        })
 
     def save_json(self, path: str | os.PathLike[str], *, series_every: int = 10) -> Path:
-        """Write :meth:`to_json_dict` atomically to ``path``; return the path."""
-        return write_json_atomic(path, self.to_json_dict(series_every=series_every), indent=1, default=str)
+        """Write :meth:`to_json_dict` atomically to ``path`` (:func:`~terrawatt_base.formats.write_result_json`)."""
+        return write_result_json(path, self.to_json_dict(series_every=series_every))
 
     def plot(self, path: str | os.PathLike[str] | None = None, terrain: TerrainMap | None = None,
              registry: CellModelRegistry | None = None, *, axes: Any = None) -> Path | tuple[Any, ...]:

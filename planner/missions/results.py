@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from dataclasses import dataclass
@@ -14,9 +13,9 @@ import numpy as np
 from energy import EnergyBudget, InteractionLog
 from energy.budget import CURRENT_CONVENTIONS
 from terrain import TerrainMap
-from terrawatt_base.atomic import write_text_atomic
 from terrawatt_base.checks import check_choice, check_int, readonly
 from terrawatt_base.errors import InvalidParameterError
+from terrawatt_base.formats import result_document, write_result_json
 
 from ..route import Route
 from .figures import plot_mission
@@ -33,7 +32,6 @@ __all__ = [
 MISSION_STATUSES = ("completed", "reserve_violated")
 #: Version of the JSON written by :meth:`MissionResult.save_json`.
 MISSION_FORMAT_VERSION = 1
-_FORMAT_NAME = "terrawatt-mission"
 
 _SERIES = (
     "time_s",
@@ -203,7 +201,7 @@ class MissionResult:
 
     # ---------------------------------------------------------------- output
     def to_json_dict(self, *, series_every: int = 1) -> dict[str, Any]:
-        """JSON-ready values: format fields, settings, route, budget, crossing, series.
+        """JSON-ready result document, format ``terrawatt-mission``: settings, route, budget, crossing, series.
 
         Parameters
         ----------
@@ -227,9 +225,7 @@ class MissionResult:
         route["waypoints_m"] = self.route.waypoints_m.tolist()
         route["segment_energy_j"] = self.route.segment_energy_j.tolist()
         route["turn_energy_j"] = self.route.turn_energy_j.tolist()
-        return {
-            "format": _FORMAT_NAME,
-            "format_version": MISSION_FORMAT_VERSION,
+        return result_document("mission", MISSION_FORMAT_VERSION, {
             "status": self.status,
             "source": self.source,
             "settings": {
@@ -258,10 +254,11 @@ class MissionResult:
             "duration_s": self.duration_s,
             "series_every": int(series_every),
             "series": series,
-        }
+        })
 
     def save_json(self, path: str | os.PathLike[str], *, series_every: int = 1) -> Path:
-        """Write :meth:`to_json_dict` to a file atomically (temporary file, then rename).
+        """Write :meth:`to_json_dict` to a file atomically (:func:`~terrawatt_base.formats.write_result_json`:
+        a non-finite number is written as null).
 
         Returns
         -------
@@ -273,8 +270,7 @@ class MissionResult:
         InvalidParameterError
             ``series_every`` not an int >= 1.
         """
-        payload = json.dumps(self.to_json_dict(series_every=series_every), allow_nan=False)
-        return write_text_atomic(path, payload)
+        return write_result_json(path, self.to_json_dict(series_every=series_every))
 
     def plot(self, path: str | os.PathLike[str] | None = None, terrain: TerrainMap | None = None, *,
              axes: Any = None, title: str | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:

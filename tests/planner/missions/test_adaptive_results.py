@@ -12,6 +12,7 @@ from planner import EnergyCost
 from planner.missions.adaptive_results import ADAPTIVE_STATUSES, AdaptiveResult, LegRecord, ReplanRecord, UpdateRecord
 from planner.route import evaluate_route
 from terrain import InvalidParameterError, flat_map
+from terrawatt_base.formats import read_result_json
 
 
 def _leg(index: int, predicted: float, actual: float) -> LegRecord:
@@ -57,3 +58,5 @@ def test_the_status_is_checked_and_the_json_holds_the_records(tmp_path):
     res = _result(updates=[_update(1, True)], replans=[_replan(1, "update", 210.0, True)])
     data = json.loads(json.dumps(res.to_json_dict(series_every=10)))
     assert data["status"] == "completed" and len(data["legs"]) == 4 and data["updates"][0]["accepted"] is True
+    path = res.save_json(tmp_path / "adaptive.json", series_every=10)
+    assert read_result_json(path, "adaptive-mission", 1) == json.loads(json.dumps(data).replace("NaN", "null"))

@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import math
 
+import numpy as np
 import pytest
 
 from planner.missions import MISSION_FORMAT_VERSION
 from terrain import InvalidParameterError
+from terrawatt_base.formats import read_result_json
 
 from simulate_samples import clean_sim, flat, flat_mission  # noqa: F401  (fixtures)
 
@@ -27,3 +31,14 @@ def test_json_and_plot(flat_mission, flat, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["mission.json", "mission.png"]  # no temp files left
     with pytest.raises(InvalidParameterError, match="series_every must be >= 1"):
         res.to_json_dict(series_every=0)
+    assert read_result_json(path, "mission", MISSION_FORMAT_VERSION) == data  # through the one result codec
+
+
+def test_a_non_finite_sample_is_written_as_null(flat_mission, tmp_path):
+    _, res = flat_mission
+    power = res.power_w.copy()
+    power[1] = math.nan  # e.g. a replayed log without battery power
+    bad = dataclasses.replace(res, power_w=power)
+    data = json.loads(bad.save_json(tmp_path / "mission.json").read_text())  # a NaN raised ValueError before the codec
+    assert data["series"]["power_w"][1] is None
+    assert data["series"]["power_w"][2] == res.power_w[2] and np.isfinite(res.power_w[1])
