@@ -21,7 +21,6 @@ the temporaries of dead saves of the same target, so leftovers never accumulate.
 from __future__ import annotations
 
 import glob
-import json
 import os
 import re
 import shutil
@@ -36,7 +35,7 @@ import numpy as np
 from terrawatt_base.atomic import atomic_directory, fsync_directory, remove_stale_temporaries, stale_temporaries
 from terrawatt_base.checks import readonly
 from terrawatt_base.errors import FileFormatError, FormatVersionError, InvalidParameterError, RecoveryWarning
-from terrawatt_base.formats import check_format_version, read_versioned_npz
+from terrawatt_base.formats import read_result_json, read_versioned_npz, result_document, write_result_json
 from ..grid import Grid
 from .assignment import CellAssignment
 from .cells import unflat
@@ -65,7 +64,7 @@ HISTORY_FILE = "history.json"
 MODELS_DIR = "models"
 
 _MAGIC = "terrawatt-cell-model-registry"
-_HISTORY_MAGIC = "terrawatt-cell-model-history"
+_HISTORY_KIND = "cell-model-history"  # format "terrawatt-cell-model-history"
 _MODEL_FILE_RE = re.compile(r"^models/model-[0-9]+[A-Za-z0-9._-]*$")
 _SUFFIX_RE = re.compile(r"[A-Za-z0-9._-]+")
 
@@ -164,17 +163,11 @@ def _write_into(tmp: Path, parts: RegistryParts, save_model: Callable[[Any, Path
         np.savez_compressed(fh, **payload)
         fh.flush()
         os.fsync(fh.fileno())
-    history = {
-        "format": _HISTORY_MAGIC,
-        "format_version": REGISTRY_FORMAT_VERSION,
+    write_result_json(tmp / HISTORY_FILE, result_document(_HISTORY_KIND, REGISTRY_FORMAT_VERSION, {
         "next_version": parts.assignment.next_version,
         "models": model_entries,
         "versions": versions,
-    }
-    with open(tmp / HISTORY_FILE, "w", encoding="utf-8") as fh:
-        json.dump(history, fh, indent=1, allow_nan=False)
-        fh.flush()
-        os.fsync(fh.fileno())
+    }))
 
 
 # --------------------------------------------------------------------- recovery
@@ -236,7 +229,7 @@ def load_registry(directory: str | os.PathLike[str], load_model: Callable[[Path]
         raise FileFormatError(f"registry directory {str(root)!r} does not exist")
     arrays = read_versioned_npz(root / REGISTRY_FILE, magic=_MAGIC, version=REGISTRY_FORMAT_VERSION,
                                 what="cell-model registry")
-    history = _read_history(root / HISTORY_FILE)
+    history = read_result_json(root / HISTORY_FILE, _HISTORY_KIND, REGISTRY_FORMAT_VERSION, what="registry history")
     npz, hist = str(root / REGISTRY_FILE), str(root / HISTORY_FILE)
     try:
         shape = tuple(int(v) for v in arrays["shape"])
@@ -361,16 +354,3 @@ def _read_versions(
         except (TypeError, ValueError, AttributeError, InvalidParameterError) as exc:
             raise FileFormatError(f"{where}: invalid history: {exc}") from exc
     return versions
-
-
-def _read_history(path: Path) -> dict[str, Any]:
-    if not path.is_file():
-        raise FileFormatError(f"registry history {str(path)!r} is missing")
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
-        raise FileFormatError(f"registry history {str(path)!r} is corrupt: {exc}") from exc
-    if not isinstance(data, dict) or data.get("format") != _HISTORY_MAGIC:
-        raise FileFormatError(f"{str(path)!r} is not a terrawatt registry history")
-    check_format_version(data.get("format_version"), REGISTRY_FORMAT_VERSION, "registry history", path)
-    return data

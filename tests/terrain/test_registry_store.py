@@ -171,6 +171,11 @@ def test_load_corrupt_or_missing_pieces(tmp_path: Path) -> None:
     with pytest.raises(FileFormatError, match="history.json.*corrupt"):
         CellModelRegistry.load(d, load_gain)
 
+    d = fresh("foreign_history")
+    (d / "history.json").write_text(json.dumps({"format": "terrawatt-batch", "format_version": 1}))
+    with pytest.raises(FileFormatError, match="history.json' is not a terrawatt registry history"):
+        CellModelRegistry.load(d, load_gain)
+
     d = fresh("missing_history")
     (d / "history.json").unlink()
     with pytest.raises(FileFormatError, match="history.json.*missing"):
