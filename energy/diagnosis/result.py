@@ -7,16 +7,19 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from terrawatt_base.atomic import write_json_atomic, write_text_atomic
+from terrawatt_base.atomic import write_text_atomic
 from terrawatt_base.checks import fmt_number
+from terrawatt_base.formats import result_document, write_result_json
 
 from ..models.base import CurrentModel
 from .gap import GapShare, GapSummary, largest_slices
 
-__all__ = ["EffectScore", "WaterfallStep", "Diagnosis", "MARKDOWN_SLICES"]
+__all__ = ["EffectScore", "WaterfallStep", "Diagnosis", "MARKDOWN_SLICES", "DIAGNOSIS_FORMAT_VERSION"]
 
 #: Slices of the localisation listed in :meth:`Diagnosis.to_markdown` (the largest ``|net gap|``).
 MARKDOWN_SLICES = 10
+#: Version of the ``diagnosis.json`` layout (format ``terrawatt-diagnosis``) written by :meth:`Diagnosis.write_json`.
+DIAGNOSIS_FORMAT_VERSION = 1
 
 
 @dataclass(frozen=True)
@@ -194,8 +197,9 @@ class Diagnosis:
         return "runs" if self.before.n_runs > 1 else "time sections"
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dict (the corrected model is named by class, not embedded)."""
-        return {
+        """JSON-ready result document, format ``terrawatt-diagnosis`` (the corrected model is named by class, not
+        embedded; NaN left for the writer)."""
+        return result_document("diagnosis", DIAGNOSIS_FORMAT_VERSION, {
             "before": self.before.to_dict(),
             "after": self.after.to_dict(),
             "localisation": [r.to_dict() for r in self.localisation],
@@ -208,11 +212,11 @@ class Diagnosis:
             "skipped": dict(self.skipped),
             "split": self.split,
             "corrected_model": type(self.corrected_model).__name__,
-        } | ({} if self.power is None else {"power": self.power.to_dict()})
+        } | ({} if self.power is None else {"power": self.power.to_dict()}))
 
     def write_json(self, path: str | os.PathLike[str]) -> Path:
-        """Write :meth:`to_dict` to ``path`` atomically; return the path."""
-        return write_json_atomic(path, self.to_dict())
+        """Write :meth:`to_dict` to ``path`` atomically (:func:`~terrawatt_base.formats.write_result_json`)."""
+        return write_result_json(path, self.to_dict())
 
     def to_markdown(self) -> str:
         """A one-page report: the verdict, the largest slices of the gap, the effect ranking and the waterfall.

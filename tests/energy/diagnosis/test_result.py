@@ -10,7 +10,8 @@ from turning_samples import turning_diagnosis
 
 from energy import InteractionLog
 from energy.diagnosis import localise_gap
-from energy.diagnosis.result import MARKDOWN_SLICES, EffectScore, WaterfallStep
+from energy.diagnosis.result import DIAGNOSIS_FORMAT_VERSION, MARKDOWN_SLICES, EffectScore, WaterfallStep
+from terrawatt_base.formats import read_result_json
 
 
 @pytest.fixture(scope="module")
@@ -22,6 +23,8 @@ def test_result_serialises(turning, tmp_path):
     _, _, d = turning
     p = d.write_json(tmp_path / "diagnosis.json")
     assert p.exists() and "ranking" in p.read_text()
+    doc = read_result_json(p, "diagnosis", DIAGNOSIS_FORMAT_VERSION)  # through the one result codec
+    assert (doc["format"], doc["format_version"]) == ("terrawatt-diagnosis", 1) and doc["chosen"] == list(d.chosen)
     md = d.to_markdown()
     assert "Waterfall" in md and "turning_resistance" in md
     with pytest.raises(dataclasses.FrozenInstanceError):
