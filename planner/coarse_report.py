@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from terrain import DemWindows, Grid, InvalidParameterError, TerrainMap
-from terrawatt_base.atomic import write_json_atomic
+from terrawatt_base.formats import result_document, write_result_json
 from terrawatt_base.checks import check_bool, check_real
 from terrawatt_base.figure_file import draw_figure
 
@@ -20,7 +20,6 @@ from .coarse import CoarseToFine, plan_coarse_to_fine
 from .coarse_geotiff import plan_coarse_to_fine_geotiff
 from .edge_cost import EnergyCost
 from .plan_report import (
-    ROUTE_JSON_FORMAT,
     ROUTE_JSON_FORMAT_VERSION,
     compile_line,
     lonlat_fields,
@@ -114,8 +113,7 @@ class CoarsePlanReport:
     def to_dict(self) -> dict[str, Any]:
         """The content of route.json (as :meth:`PlanReport.to_dict`, with the coarse route and the stages)."""
         plan, route = self.plan, self.route
-        return {
-            "format": ROUTE_JSON_FORMAT, "format_version": ROUTE_JSON_FORMAT_VERSION,
+        return result_document("route", ROUTE_JSON_FORMAT_VERSION, {
             "map": self.map_label, "map_crs": plan.coarse_map.crs if plan.coarse_map is not None else None,
             "robot": self.robot, "speed_mps": self.speed_mps, "max_slope_deg": self.max_slope_deg,
             "start_xy_m": list(self.start_xy_m), "goal_xy_m": list(self.goal_xy_m),
@@ -127,7 +125,7 @@ class CoarsePlanReport:
             "routes": ({"min_energy": {**route.summary(), "waypoints_m": route.waypoints_m.tolist()}}
                        if route.found else {}),
             "coarse_waypoints_m": plan.coarse_waypoints_m.tolist(),
-        }
+        })
 
     def plot(self, path: str | os.PathLike[str] | None = None, *, whole_map: bool = False, ax: Any = None) -> Any:
         """The route over the fine map (zoomed on it), or over the coarse map (``whole_map`` of a windowed plan,
@@ -151,7 +149,7 @@ class CoarsePlanReport:
         """
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
-        written = [write_json_atomic(out / "route.json", self.to_dict())]
+        written = [write_result_json(out / "route.json", self.to_dict())]
         if self.route.found:
             where = self.fine_map if self.fine_map is not None else self.plan.coarse_map
             written.append(write_geojson({"min_energy": self.route}, where, out / "route.geojson"))

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from terrain import UNKNOWN_GROUND, OptionalDependencyError, TerrainMap
-from terrawatt_base.atomic import write_json_atomic
+from terrawatt_base.formats import format_name, result_document, write_result_json
 from terrawatt_base.checks import check_choice, check_real
 from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.figure_file import draw_figure
@@ -41,7 +41,7 @@ __all__ = [
 ]
 
 #: route.json's ``format`` and ``format_version`` (written by :meth:`PlanReport.write` and the coarse-to-fine report).
-ROUTE_JSON_FORMAT = "terrawatt-route"
+ROUTE_JSON_FORMAT = format_name("route")
 ROUTE_JSON_FORMAT_VERSION = 1
 
 _TABLE_HEADER = (f"{'route':<26} {'status':<11} {'energy J':>10} {'Wh':>7} {'mAh':>8} {'length m':>9} {'time s':>8} "
@@ -289,15 +289,14 @@ class PlanReport:
     def to_dict(self) -> dict[str, Any]:
         """The content of route.json: the query, how it was planned, the table and every route with its waypoints.
 
-        NaN is written as null (:func:`terrawatt_base.atomic.write_json_atomic`).
+        A result document (:func:`terrawatt_base.formats.result_document`); NaN is written as null
+        (:func:`terrawatt_base.formats.write_result_json`).
         """
         route = self.route
         routes = {name: {**r.summary(), "waypoints_m": r.waypoints_m.tolist()} for name, r in self._routes().items()}
         if self.interval is not None:
             routes["min_energy"]["energy_interval"] = self.interval.to_dict()
-        result = {
-            "format": ROUTE_JSON_FORMAT,
-            "format_version": ROUTE_JSON_FORMAT_VERSION,
+        result = result_document("route", ROUTE_JSON_FORMAT_VERSION, {
             "map": self.map_label,
             "map_crs": self.terrain.crs,
             "robot": self.robot,
@@ -317,7 +316,7 @@ class PlanReport:
             "optimality_ratio": _finite_or_none(route.optimality_ratio) if route.found else None,
             "table": self.rows(),
             "routes": routes,
-        }
+        })
         if self.model is not None:  # files planned on the presets stay as they were
             result["model"] = self.model.to_dict()
         return result
@@ -348,7 +347,7 @@ class PlanReport:
         """
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
-        written = [write_json_atomic(out / "route.json", self.to_dict())]
+        written = [write_result_json(out / "route.json", self.to_dict())]
         found = {name: r for name, r in self._routes().items() if r.found}
         if found:
             written.append(write_geojson(found, self.terrain, out / "route.geojson"))

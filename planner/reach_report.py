@@ -13,7 +13,7 @@ from typing import Any
 from energy import robot_preset
 from energy.battery import S_PER_H
 from terrain import TerrainMap
-from terrawatt_base.atomic import write_json_atomic
+from terrawatt_base.formats import result_document, write_result_json
 from terrawatt_base.checks import check_real
 from terrawatt_base.figure_file import draw_figure
 
@@ -103,9 +103,10 @@ class ReachReport:
         return "\n".join(lines)
 
     def to_dict(self, raster: str | None = None) -> dict[str, Any]:
-        """The content of reach.json: the query, the battery, the times, ``raster`` (the raster file's name) and
-        :meth:`Reachability.to_dict`."""
-        result = {
+        """The content of reach.json: a ``terrawatt-reachability`` result document (:meth:`Reachability.to_dict`)
+        with the query, the battery, the times and ``raster`` (the raster file's name)."""
+        reach = self.reach.to_dict()
+        result = result_document("reachability", reach.pop("format_version"), {
             "map": self.map_label,
             "robot": self.robot,
             "speed_mps": self.speed_mps,
@@ -117,8 +118,8 @@ class ReachReport:
             "total_time_s": self.total_time_s,
             "kernel_compile_s": self.kernel_compile_s,
             "raster": raster,
-            **self.reach.to_dict(),
-        }
+            **{k: v for k, v in reach.items() if k != "format"},
+        })
         if self.model is not None:  # files priced by the presets stay as they were
             m = self.model.to_dict()
             result["model"] = {k: m[k] for k in ("file", "class", "model_ground", "grounds")}
@@ -135,7 +136,7 @@ class ReachReport:
         out.mkdir(parents=True, exist_ok=True)
         name = raster if raster is not None else ("reach.tif" if self.terrain.crs else "reach.npz")
         written = [self.reach.write(out / name)]
-        written.append(write_json_atomic(out / "reach.json", self.to_dict(written[0].name)))
+        written.append(write_result_json(out / "reach.json", self.to_dict(written[0].name)))
         png = draw_figure(out / "reach.png", lambda: self.reach.plot(
             out / "reach.png", title=f"terrawatt: energy reachability on {self.map_label}"), on_error=on_figure_error)
         return written + ([png] if png is not None else [])

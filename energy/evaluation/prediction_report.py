@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from terrawatt_base.atomic import write_json_atomic
+from terrawatt_base.formats import result_document, write_result_json
 from terrawatt_base.checks import check_bool, check_choice, check_text
 from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.figure_file import draw_figure
@@ -20,10 +20,12 @@ from ..prediction import RunPrediction, predict_runs
 from .results import EvaluationResult
 from .scoring import score_current_model
 
-__all__ = ["PREDICTIONS_FILE", "FIGURES_FOLDER", "PredictionReport", "predict_report"]
+__all__ = ["PREDICTIONS_FILE", "PREDICTIONS_FORMAT_VERSION", "FIGURES_FOLDER", "PredictionReport", "predict_report"]
 
 #: The file :meth:`PredictionReport.write` writes, and the folder of its figures.
 PREDICTIONS_FILE = "predictions.json"
+#: Format version of an unscored ``predictions.json`` (``terrawatt-predictions``; a scored one is an evaluation).
+PREDICTIONS_FORMAT_VERSION = 1
 FIGURES_FOLDER = "plots"
 
 
@@ -80,10 +82,12 @@ class PredictionReport:
         return "\n".join(lines)
 
     def to_dict(self) -> dict[str, Any]:
-        """``predictions.json``: the model's label and the scores, or ``"scored": false`` and the predictions."""
+        """``predictions.json``: the scores (a ``terrawatt-evaluation`` result document) with the model's label, or
+        a ``terrawatt-predictions`` document with ``"scored": false`` and the predictions."""
         if self.scores is not None:
-            return {"model": self.label, **self.scores.to_dict()}
-        return {"model": self.label, "scored": False, "runs": [r.to_dict() for r in self.runs]}
+            return {**self.scores.to_dict(), "model": self.label}
+        return result_document("predictions", PREDICTIONS_FORMAT_VERSION,
+                               {"model": self.label, "scored": False, "runs": [r.to_dict() for r in self.runs]})
 
     def written_line(self, written: Sequence[Path], *, figures: bool = False) -> str:
         """The line saying what :meth:`write` wrote (``written``, its return) and, unscored, why there are no errors."""
@@ -107,7 +111,7 @@ class PredictionReport:
         check_choice("on_figure_error", on_figure_error, ("warn", "raise"))
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
-        written = [write_json_atomic(out / PREDICTIONS_FILE, self.to_dict())]
+        written = [write_result_json(out / PREDICTIONS_FILE, self.to_dict())]
         if not (figures and self.scored):
             return written
         for log in self.logs:

@@ -12,7 +12,7 @@ from typing import Any
 
 from energy import GROUND_PRESETS, Battery, TruthSimulator, ground_preset, robot_preset
 from terrain import CellModelRegistry, TerrainMap
-from terrawatt_base.atomic import write_json_atomic
+from terrawatt_base.formats import write_result_json
 from terrawatt_base.checks import check_bool, check_real
 from terrawatt_base.errors import UnknownNameError
 from terrawatt_base.figure_file import draw_figure
@@ -129,7 +129,7 @@ class MissionReport:
         warns and is left out, :func:`terrawatt_base.figure_file.draw_figure`)."""
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
-        written = [write_json_atomic(out / "mission.json", self.to_dict())]
+        written = [write_result_json(out / "mission.json", self.to_dict())]
         png = draw_figure(out / "mission.png", lambda: self.result.plot(out / "mission.png", self.terrain,
                                                                           self.registry), on_error=on_figure_error)
         return written + ([png] if png is not None else [])

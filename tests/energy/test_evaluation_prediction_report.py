@@ -11,6 +11,8 @@ from evaluation_samples import score_logs
 
 from energy import LinearCurrentModel
 from energy.evaluation import PREDICTIONS_FILE, PredictionReport, predict_report
+from energy.evaluation.prediction_report import PREDICTIONS_FORMAT_VERSION
+from terrawatt_base.formats import read_result_json
 from terrawatt_base import plot_target
 from terrawatt_base.errors import FigureWarning, InvalidParameterError, UnknownNameError
 
@@ -50,6 +52,7 @@ def test_logs_without_currents_are_predicted_only(fitted, tmp_path):
     assert report.to_dict()["scored"] is False
     written = report.write(tmp_path, figures=True)
     assert written == [tmp_path / PREDICTIONS_FILE] and not (tmp_path / "plots").exists()
+    assert read_result_json(written[0], "predictions", PREDICTIONS_FORMAT_VERSION)["scored"] is False
     assert report.written_line(written, figures=True) == (
         f"1 of 2 logs have no measured currents: predictions only, no errors; wrote {written[0]} "
         "(no figures: they compare with measured currents)")

@@ -14,6 +14,7 @@ from terrain.procedural import procedural_map
 
 from planner.coarse_report import CoarsePlanReport, check_coarse_options, plan_coarse, plan_coarse_windowed
 from planner.plan_report import ROUTE_JSON_FORMAT_VERSION, route_table
+from terrawatt_base.formats import read_result_json
 
 START, GOAL = (5.0, 5.0), (35.0, 5.0)
 
@@ -39,6 +40,7 @@ def test_a_coarse_plan_reports_one_row_and_its_stages(wall_map, tmp_path):
     written = report.write(tmp_path)
     assert [p.name for p in written] == ["route.json", "route.geojson", "route.png"]
     assert json.loads((tmp_path / "route.json").read_text())["coarse_waypoints_m"] == data["coarse_waypoints_m"]
+    assert read_result_json(tmp_path / "route.json", "route", ROUTE_JSON_FORMAT_VERSION)["planner"] == "coarse-to-fine"
 
 
 def test_a_coarse_plan_without_route(tmp_path):

@@ -24,6 +24,7 @@ from planner.plan_report import (
     route_row,
     route_table,
 )
+from terrawatt_base.formats import read_result_json
 
 START, GOAL = (5.0, 5.0), (35.0, 5.0)
 
@@ -82,6 +83,8 @@ def test_write_writes_json_geojson_and_figure(report, tmp_path):
     assert [p.name for p in written] == ["route.json", "route.geojson", "route.png"]
     data = json.loads((tmp_path / "out" / "route.json").read_text())
     assert data["routes"]["min_energy"]["energy_j"] == report.route.energy_j
+    # the one result codec reads it back: format terrawatt-route, its version
+    assert read_result_json(tmp_path / "out" / "route.json", "route", ROUTE_JSON_FORMAT_VERSION) == data
     names = [f["properties"]["name"] for f in json.loads((tmp_path / "out" / "route.geojson").read_text())["features"]]
     assert sorted(names) == ["lattice", "min_energy", "shortest"]
     assert (tmp_path / "out" / "route.png").read_bytes()[:4] == b"\x89PNG"

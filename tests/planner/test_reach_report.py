@@ -12,6 +12,8 @@ from terrain import FigureWarning, InvalidParameterError
 import planner.reach_report as reach_report_module
 from planner import Reachability
 from planner.reach_report import ReachReport, reach_on_battery
+from planner.reachability_result import REACH_FORMAT_VERSION
+from terrawatt_base.formats import read_result_json
 
 
 @pytest.fixture
@@ -58,6 +60,7 @@ def test_reach_json_and_the_files(report, tmp_path):
     written = report.write(tmp_path)
     assert [p.name for p in written] == ["reach.npz", "reach.json", "reach.png"]  # no CRS: the .npz raster
     data = json.loads((tmp_path / "reach.json").read_text())
+    assert read_result_json(tmp_path / "reach.json", "reachability", REACH_FORMAT_VERSION) == data
     assert data["raster"] == "reach.npz" and data["battery_voltage_v"] == 24.0 and data["reserve_pct"] == 25.0
     assert data["reachable_cells"] == 600 and data["map"] == "flat" and "model" not in data
     assert report.to_dict("x.npz")["raster"] == "x.npz"
