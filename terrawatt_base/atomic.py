@@ -31,6 +31,7 @@ __all__ = [
     "atomic_open",
     "atomic_directory",
     "write_bytes_atomic",
+    "json_finite",
     "write_text_atomic",
     "write_json_atomic",
     "save_figure",
@@ -345,14 +346,14 @@ def _json_default(obj: Any) -> Any:
     raise TypeError(f"cannot serialise {type(obj).__name__} as JSON")
 
 
-def _finite(obj: Any) -> Any:
-    """NaN and infinities become ``None`` (JSON has no such numbers)."""
+def json_finite(obj: Any) -> Any:
+    """``obj`` with NaN and infinities as ``None`` (JSON has no such numbers) and tuples as lists, ready for JSON."""
     if isinstance(obj, float):
         return obj if math.isfinite(obj) else None
     if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
+        return {k: json_finite(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [_finite(v) for v in obj]
+        return [json_finite(v) for v in obj]
     return obj
 
 
@@ -370,7 +371,7 @@ def write_json_atomic(
         from .errors import InvalidParameterError
 
         raise InvalidParameterError(f"data cannot be written as JSON to {str(path)!r}: {exc}") from exc
-    text = json.dumps(_finite(encoded), indent=indent, allow_nan=False) + "\n"
+    text = json.dumps(json_finite(encoded), indent=indent, allow_nan=False) + "\n"
     return write_text_atomic(path, text)
 
 

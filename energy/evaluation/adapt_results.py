@@ -10,11 +10,10 @@ from typing import Any
 
 import numpy as np
 
-from terrawatt_base.atomic import check_output_path, write_text_atomic
+from terrawatt_base.atomic import check_output_path, json_finite, write_text_atomic
 from terrawatt_base.errors import UnknownNameError
 from terrawatt_base.formats import result_document, write_result_json
 
-from .results import json_plain
 
 __all__ = [
     "ADAPT_PROTOCOLS",
@@ -169,7 +168,7 @@ class AdaptationResult:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-types form (NaN becomes ``None``), as written to ``adapt.json``."""
-        return json_plain(result_document("adaptation", ADAPT_FORMAT_VERSION, {
+        return json_finite(result_document("adaptation", ADAPT_FORMAT_VERSION, {
             "settings": dict(self.settings), "skipped": list(self.skipped),
             "summary": [asdict(s) for s in self.summary], "runs": [asdict(r) for r in self.runs]}))
 

@@ -10,12 +10,11 @@ from typing import Any
 
 import numpy as np
 
-from terrawatt_base.atomic import check_output_path, write_text_atomic
+from terrawatt_base.atomic import check_output_path, json_finite, write_text_atomic
 from terrawatt_base.formats import result_document, write_result_json
 from terrawatt_base.errors import UnknownNameError
 
 __all__ = [
-    "json_plain",
     "EVALUATION_VARIANTS",
     "PREFIT_VARIANT",
     "SCORE_VARIANTS",
@@ -113,17 +112,6 @@ def _summarise(variant: str, ground: str, model: str, scores: list[RunScore]) ->
     )
 
 
-def json_plain(value: Any) -> Any:
-    """``value`` with non-finite floats as None and tuples as lists, ready for JSON."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: json_plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [json_plain(v) for v in value]
-    return value
-
-
 @dataclass(frozen=True)
 class EvaluationResult:
     """All scores of :func:`evaluate_current_models` and their summaries.
@@ -167,7 +155,7 @@ class EvaluationResult:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-types form (NaN becomes ``None``), as written to ``evaluation.json``."""
-        return json_plain(result_document("evaluation", EVALUATION_FORMAT_VERSION, {
+        return json_finite(result_document("evaluation", EVALUATION_FORMAT_VERSION, {
             "section_s": self.section_s,
             "models": list(self.models),
             "variants": list(self.variants),

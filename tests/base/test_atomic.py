@@ -9,7 +9,7 @@ import stat
 import numpy as np
 import pytest
 
-from terrawatt_base.atomic import FILE_MODE, atomic_open, atomic_path, write_json_atomic, write_text_atomic
+from terrawatt_base.atomic import FILE_MODE, atomic_open, atomic_path, json_finite, write_json_atomic, write_text_atomic
 
 
 def _leftovers(directory):
@@ -57,3 +57,7 @@ def test_json_of_something_unserialisable_is_a_parameter_error_and_writes_nothin
     with pytest.raises(InvalidParameterError, match="cannot be written as JSON"):
         write_json_atomic(target, {"a": object()})
     assert not target.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_json_finite_turns_nan_into_null_and_tuples_into_lists():
+    assert json_finite({"a": (1.0, math.nan), "b": [math.inf, {"c": 2}]}) == {"a": [1.0, None], "b": [None, {"c": 2}]}

@@ -9,7 +9,6 @@ from evaluation_samples import score_logs
 
 from energy import ConstantCurrentModel, LinearCurrentModel, evaluate_current_models
 from energy.evaluation import EVALUATION_FILES, EvaluationResult, RunScore, check_evaluation_dir, summarise_scores
-from energy.evaluation.results import json_plain
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 from terrawatt_base.formats import read_result_json
 
@@ -63,10 +62,6 @@ def test_summaries_per_ground_then_all_with_undefined_scores_left_out():
     assert a.whole_run_median_pct == pytest.approx(2.0) and a.section_median_pct == pytest.approx(4.0)
     assert pooled.whole_run_median_pct == pytest.approx(3.0) and pooled.n_runs == 3
     assert pooled.whole_run_p90_pct == pytest.approx(float(np.percentile([1.0, 3.0, 10.0], 90)))
-
-
-def test_json_plain_turns_nan_into_null_and_tuples_into_lists():
-    assert json_plain({"a": (1.0, math.nan), "b": [math.inf, {"c": 2}]}) == {"a": [1.0, None], "b": [None, {"c": 2}]}
 
 
 def test_a_result_with_nan_and_skipped_grounds_writes_its_folder(tmp_path):
