@@ -255,7 +255,7 @@ class PlanReport:
         n_unknown = int(np.count_nonzero(np.asarray(t.ground) == UNKNOWN_GROUND))
         if n_unknown and self.unknown_ground:
             lines.append(f"ground class unknown in {n_unknown} of {t.ground.size} cells: priced as "
-                         f"{self.unknown_ground!r} (--unknown-ground NAME to choose, 'none' to refuse them)")
+                         f"{self.unknown_ground!r} (unknown_ground / --unknown-ground NAME to choose, None / 'none' to refuse them)")
         lines.append(f"start {self.start_xy_m} -> goal {self.goal_xy_m}; planner {self.planner}, {self._budget()}, "
                      f"seed {self.seed}")
         lines += compile_line(self.kernel_compile_s)

@@ -96,7 +96,7 @@ class ReachReport:
                  ("search", f"{reach.search_time_s:.2f} s"), ("total", f"{self.total_time_s:.2f} s")]
         lines += [f"{name:<24} {value}" for name, value in rows]
         if not reach.n_reachable_cells:
-            lines += ["", "no cell is reachable within the usable energy: a larger battery or a smaller --reserve"]
+            lines += ["", "no cell is reachable within the usable energy: a larger battery or a smaller reserve (reserve_pct, --reserve)"]
         if self.kernel_compile_s > 1.0:
             lines.append(f"(compiled the kernels in {self.kernel_compile_s:.1f} s: first run in this environment; not "
                          "in the times above)")
