@@ -11,13 +11,11 @@ from typing import Any
 from energy import InteractionLog
 from energy.features import DEFAULT_BAND_HZ, check_band_hz
 from energy.io import DRIVE_CLOCKS, LOG_SUFFIXES, BagTopics, read_logs
-from terrain import InvalidParameterError
+from energy.models import check_learned_band
 
-__all__ = ["LEARNED_KINDS", "add_data_options", "logs_from_args", "add_band_option", "band_from_args"]
+__all__ = ["add_data_options", "logs_from_args", "add_band_option", "band_from_args"]
 
 _DEFAULT = BagTopics()
-#: Model kinds whose features have a vibration band.
-LEARNED_KINDS = ("estimator", "paper")
 
 
 def add_data_options(parser: Any, *, grounds: bool = False) -> None:
@@ -75,11 +73,10 @@ def add_band_option(parser: Any, help_text: str | None = None) -> None:
 
 
 def band_from_args(args: argparse.Namespace, kinds: Sequence[str] | None = None) -> tuple[float, float] | None:
-    """The checked ``--band`` (errors name it), or None without it; with ``kinds`` (of ``--model``) one must be learned."""
+    """The checked ``--band`` (errors name it), or None without it; with ``kinds`` (of ``--model``) one must be learned
+    (:func:`energy.models.check_learned_band`)."""
     if args.band is None:
         return None
-    band = check_band_hz(tuple(args.band), "--band")
-    if kinds is not None and not set(kinds) & set(LEARNED_KINDS):
-        raise InvalidParameterError(f"--band applies to the estimator and paper models only, got --model "
-                                    f"{' '.join(kinds)}")
-    return band
+    if kinds is None:
+        return check_band_hz(tuple(args.band), "--band")
+    return check_learned_band(tuple(args.band), kinds, name="--band", kinds_name="--model")

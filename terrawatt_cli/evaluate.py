@@ -10,11 +10,11 @@ from typing import Any
 
 from energy import evaluate_adaptation, evaluate_current_models, evaluate_few_shot, new_current_model, plot_vibration_spectra
 from energy.evaluation import ADAPT_FILES, EVALUATION_FILES, AdaptSettings
-from energy.models import ADAPT_METHODS, CURRENT_MODEL_KINDS
+from energy.models import ADAPT_METHODS, CURRENT_MODEL_KINDS, LEARNED_KINDS
 from terrain import InvalidParameterError
 
 from .common import add_dask_options, check_dask_flags, check_outputs, dask_client_arg, draw_figure, input_paths
-from .data import LEARNED_KINDS, add_band_option, add_data_options, band_from_args, logs_from_args
+from .data import add_band_option, add_data_options, band_from_args, logs_from_args
 
 __all__ = ["PROTOCOLS", "add_parser", "add_adapt_options", "adapt_settings_from_args", "run_evaluate"]
 

@@ -3,18 +3,18 @@
 from __future__ import annotations
 
 import argparse
-import time
 from pathlib import Path
 from typing import Any
 
-from energy import new_current_model
-from energy.models import CURRENT_MODEL_KINDS, DEFAULT_INTERVAL_FOLDS, fit_interval
-from terrain import InvalidParameterError
+from energy.models import CURRENT_MODEL_KINDS, DEFAULT_INTERVAL_FOLDS, check_training_options, train_report
 
 from .common import check_output_file, input_paths
-from .data import LEARNED_KINDS, add_band_option, add_data_options, band_from_args, logs_from_args
+from .data import add_band_option, add_data_options, logs_from_args
 
 __all__ = ["add_parser", "run_train"]
+
+#: How the library's messages name the options of :func:`energy.models.train_report`: by their flags.
+_NAMES = {"kind": "--model", "n_threads": "--threads", "interval_folds": "--interval-folds", "band_hz": "--band"}
 
 
 def add_parser(sub: Any) -> None:
@@ -42,27 +42,10 @@ def run_train(args: argparse.Namespace) -> int:
     flags and the output path are checked before the logs are read, so a bad ``--out`` never costs
     a training. ``--band LO HI`` sets the learned models' vibration band (Hz).
     """
-    learned = args.model in LEARNED_KINDS
-    if args.threads is not None and args.threads < 1:
-        raise InvalidParameterError(f"--threads must be a positive number of threads, got {args.threads!r}")
-    if args.threads is not None and not learned:
-        raise InvalidParameterError(f"--threads applies to the estimator and paper models only, got --model {args.model!r}")
-    if args.interval_folds < 0 or args.interval_folds == 1:
-        raise InvalidParameterError(f"--interval-folds must be 0 (no interval) or >= 2, got {args.interval_folds}")
-    band_hz = band_from_args(args, [args.model])
+    options = dict(n_threads=args.threads, interval_folds=args.interval_folds, band_hz=args.band, names=_NAMES)
+    check_training_options(args.model, **options)
     check_output_file(args.out, input_paths(args))
-    model = new_current_model(args.model, seed=args.seed, progress=learned and not args.quiet, n_threads=args.threads,
-                              band_hz=band_hz)
-    logs = logs_from_args(args, require_currents=True)
-    t0 = time.perf_counter()
-    if learned or args.interval_folds == 0 or len(logs) < 2:
-        model.fit(logs)
-    else:
-        fit_interval(model, logs, folds=args.interval_folds)
-    elapsed, path = time.perf_counter() - t0, model.save(args.out)
-    band = getattr(getattr(model, "config_", None), "band_hz", None)
-    band_text = f", vibration band {band[0]:g}-{band[1]:g} Hz" if band is not None else ""
-    interval = "with a forecast interval" if model.gives_interval else "without a forecast interval"
-    print(f"fitted {args.model} on {len(logs)} runs ({sum(log.duration_s for log in logs):.0f} s of logs{band_text}) "
-          f"{interval} in {elapsed:.1f} s; wrote {path}")
+    report = train_report(args.model, logs_from_args(args, require_currents=True), seed=args.seed,
+                          progress=not args.quiet, **options)
+    print(report.summary(report.write(args.out)))
     return 0

@@ -3,6 +3,7 @@
 Modules: :mod:`~energy.models.base` (the :class:`CurrentModel` contract and its torch-free
 file format), :mod:`~energy.models.baselines` (constant, linear, fitted physics),
 :mod:`~energy.models.loading` (:func:`load_current_model`), :mod:`~energy.models.kinds` (models by name),
+:mod:`~energy.models.training_report` (a model of a kind trained on logs, reported),
 :mod:`~energy.models.adaptation` (in-run adaptation of a fitted model), and the torch estimator in three
 parts after minGPT: :mod:`~energy.models.net` (the network), :mod:`~energy.models.data`
 (the windowed dataset), :mod:`~energy.models.training` (the seeded training loop), plus
@@ -47,6 +48,14 @@ from .calibration import DEFAULT_INTERVAL_FOLDS, fit_interval
 from .forecast import ChargeForecast, CurrentForecast
 from .kinds import CURRENT_MODEL_KINDS, new_current_model
 from .loading import MODEL_CLASSES, load_current_model, model_class
+from .training_report import (
+    LEARNED_KINDS,
+    TRAINING_NAMES,
+    TrainingReport,
+    check_learned_band,
+    check_training_options,
+    train_report,
+)
 from .uncertainty import IntervalModel
 
 #: Names that need torch, by the module that defines them (imported on first access).
@@ -100,6 +109,12 @@ __all__ = [
     "load_current_model",
     "CURRENT_MODEL_KINDS",
     "new_current_model",
+    "LEARNED_KINDS",
+    "TRAINING_NAMES",
+    "check_learned_band",
+    "check_training_options",
+    "TrainingReport",
+    "train_report",
     "ConstantCurrentModel",
     "LinearCurrentModel",
     "PhysicsCurrentModel",

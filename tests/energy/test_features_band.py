@@ -18,7 +18,8 @@ from energy import (
     read_borealtc,
 )
 from energy.features import DEFAULT_BAND_HZ, BandNotServedError, band_rms_spectra, band_served, check_band_hz
-from terrawatt_cli import evaluate as evaluate_cli, main, train as train_cli
+from energy.models import training_report
+from terrawatt_cli import evaluate as evaluate_cli, main
 from terrain import InvalidParameterError
 
 SHARED = Path(__file__).resolve().parents[3] / "shared" / "data" / "borealtc"
@@ -189,14 +190,14 @@ def test_the_saved_model_keeps_its_band(model, logs, tmp_path):
 
 # ------------------------------------------------------------------ CLI
 def test_cli_train_band_is_stored_and_predict_checks_it(tmp_path, capsys, monkeypatch):
-    real = train_cli.new_current_model
+    real = training_report.new_current_model
 
     def small(kind, **kwargs):  # the estimator the flags ask for, trained for a few epochs only
         model = real(kind, **kwargs)
         model.config = model.config.replace(**TINY)
         return model
 
-    monkeypatch.setattr(train_cli, "new_current_model", small)
+    monkeypatch.setattr(training_report, "new_current_model", small)
     path = tmp_path / "est.zip"
     assert main(["train", "--data", str(FIXTURES), "--quiet", "--band", "0", "25", "--out", str(path)]) == 0
     assert "vibration band 0-25 Hz" in capsys.readouterr().out

@@ -1,0 +1,234 @@
+"""A current model of a kind trained on logs and reported: what it was fitted on, its interval, its file."""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from terrawatt_base.checks import check_bool, check_choice, check_int, check_seed
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+
+from ..features.band import check_band_hz
+from ..logs import InteractionLog
+from .base import CurrentModel, check_logs
+from .calibration import DEFAULT_INTERVAL_FOLDS, fit_interval
+from .kinds import CURRENT_MODEL_KINDS, new_current_model
+
+__all__ = ["LEARNED_KINDS", "TRAINING_NAMES", "check_learned_band", "check_training_options", "TrainingReport",
+           "train_report"]
+
+#: The learned kinds (torch): a progress bar, torch threads, a vibration band, an interval from their own ensemble.
+LEARNED_KINDS = ("estimator", "paper")
+#: How messages name the options of :func:`check_training_options` (a caller passes its own, e.g. its flags).
+TRAINING_NAMES = {"kind": "kind", "n_threads": "n_threads", "interval_folds": "interval_folds", "band_hz": "band_hz"}
+
+
+def _names(names: Mapping[str, str] | None, defaults: Mapping[str, str]) -> dict[str, str]:
+    out = dict(defaults)
+    if names is not None:
+        if not isinstance(names, Mapping) or not all(isinstance(v, str) for v in names.values()):
+            raise InvalidParameterError(f"names must be a mapping of argument to name, got {names!r:.80}")
+        unknown = sorted(set(names) - set(out))
+        if unknown:
+            raise UnknownNameError(f"names has keys {unknown!r}; expected some of {sorted(out)!r}")
+        out.update(names)
+    return out
+
+
+def check_learned_band(band_hz: Sequence[float] | None, kinds: Sequence[str], *, name: str = "band_hz",
+                       kinds_name: str = "kind") -> tuple[float, float] | None:
+    """A checked vibration band for models of ``kinds`` (one must be learned), or None without one.
+
+    Parameters
+    ----------
+    band_hz : pair of float or None
+        ``(low_hz, high_hz)`` (:func:`energy.features.check_band_hz`).
+    kinds : sequence of str
+        The model kinds it is for.
+    name, kinds_name : str
+        How messages name the band and the kinds (e.g. ``"--band"``, ``"--model"``).
+
+    Returns
+    -------
+    (float, float) or None
+
+    Raises
+    ------
+    InvalidParameterError
+        A bad band; a band while none of ``kinds`` is in :data:`LEARNED_KINDS`.
+
+    Examples
+    --------
+    >>> check_learned_band([0, 25], ["estimator", "linear"])
+    (0.0, 25.0)
+    """
+    if band_hz is None:
+        return None
+    band = check_band_hz(band_hz, name)
+    if not set(kinds) & set(LEARNED_KINDS):
+        raise InvalidParameterError(f"{name} applies to the estimator and paper models only, got {kinds_name} "
+                                    f"{' '.join(kinds)}")
+    return band
+
+
+def check_training_options(kind: str, *, n_threads: int | None = None, interval_folds: int = DEFAULT_INTERVAL_FOLDS,
+                           band_hz: Sequence[float] | None = None,
+                           names: Mapping[str, str] | None = None) -> tuple[float, float] | None:
+    """Check the options of :func:`train_report` before any work; return the checked band (or None).
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`~energy.models.CURRENT_MODEL_KINDS`.
+    n_threads : int, optional
+        Torch threads while training: learned kinds only, >= 1.
+    interval_folds : int
+        0 (no interval) or >= 2.
+    band_hz : pair of float, optional
+        The learned kinds' vibration band (Hz).
+    names : mapping, optional
+        How messages name the options (keys of :data:`TRAINING_NAMES`, e.g. ``{"n_threads": "--threads"}``).
+
+    Returns
+    -------
+    (float, float) or None
+        ``band_hz`` checked.
+
+    Raises
+    ------
+    InvalidParameterError
+        Threads not >= 1 or for a baseline; 1 or fewer than 0 interval folds; a bad band or one for a baseline.
+    UnknownNameError
+        ``kind`` is no model kind.
+
+    Examples
+    --------
+    >>> check_training_options("linear", n_threads=2, names={"n_threads": "--threads", "kind": "--model"})
+    Traceback (most recent call last):
+    ...
+    terrawatt_base.errors.InvalidParameterError: --threads applies to the estimator and paper models only, got --model 'linear'
+    """
+    n = _names(names, TRAINING_NAMES)
+    check_choice(n["kind"], kind, CURRENT_MODEL_KINDS)
+    if n_threads is not None:
+        if isinstance(n_threads, bool) or not isinstance(n_threads, int) or n_threads < 1:
+            raise InvalidParameterError(f"{n['n_threads']} must be a positive number of threads, got {n_threads!r}")
+        if kind not in LEARNED_KINDS:
+            raise InvalidParameterError(f"{n['n_threads']} applies to the estimator and paper models only, got "
+                                        f"{n['kind']} {kind!r}")
+    folds = check_int(n["interval_folds"], interval_folds)
+    if folds < 0 or folds == 1:
+        raise InvalidParameterError(f"{n['interval_folds']} must be 0 (no interval) or >= 2, got {folds}")
+    return check_learned_band(band_hz, [kind], name=n["band_hz"], kinds_name=n["kind"])
+
+
+@dataclass(frozen=True)
+class TrainingReport:
+    """A model of a kind fitted on logs, ready to save and to say what it is.
+
+    Made by :func:`train_report`. :meth:`summary` is the line ``terrawatt train`` prints,
+    :meth:`write` saves the model to one file.
+
+    Attributes
+    ----------
+    model : CurrentModel
+        The fitted model.
+    kind : str
+        Its kind (:data:`~energy.models.CURRENT_MODEL_KINDS`).
+    logs : tuple of InteractionLog
+        The runs it was fitted on.
+    fit_duration_s : float
+        Wall time of the fit (and of the interval's refits), s.
+    """
+
+    model: CurrentModel
+    kind: str
+    logs: tuple[InteractionLog, ...]
+    fit_duration_s: float
+
+    @property
+    def logs_duration_s(self) -> float:
+        """Seconds of logs it was fitted on."""
+        return float(sum(log.duration_s for log in self.logs))
+
+    @property
+    def band_hz(self) -> tuple[float, float] | None:
+        """The learned model's vibration band (Hz), or None for a baseline."""
+        band = getattr(getattr(self.model, "config_", None), "band_hz", None)
+        return None if band is None else (float(band[0]), float(band[1]))
+
+    def summary(self, written: str | os.PathLike[str] | None = None) -> str:
+        """What was fitted on what, with or without a forecast interval, in how long; with ``written`` (the file
+        :meth:`write` wrote) the file too."""
+        band = self.band_hz
+        band_text = f", vibration band {band[0]:g}-{band[1]:g} Hz" if band is not None else ""
+        interval = "with a forecast interval" if self.model.gives_interval else "without a forecast interval"
+        line = (f"fitted {self.kind} on {len(self.logs)} runs ({self.logs_duration_s:.0f} s of logs{band_text}) "
+                f"{interval} in {self.fit_duration_s:.1f} s")
+        return line if written is None else f"{line}; wrote {written}"
+
+    def write(self, path: str | os.PathLike[str]) -> Path:
+        """Save the model to ``path`` (one file, atomic: :meth:`CurrentModel.save`); return the path written."""
+        return self.model.save(path)
+
+
+def train_report(kind: str, logs: InteractionLog | Sequence[InteractionLog], *, seed: int | None = 0,
+                 progress: bool = False, n_threads: int | None = None, interval_folds: int = DEFAULT_INTERVAL_FOLDS,
+                 band_hz: Sequence[float] | None = None, names: Mapping[str, str] | None = None) -> TrainingReport:
+    """A new model of ``kind`` (:func:`~energy.models.new_current_model`) fitted on ``logs``, and reported.
+
+    A learned kind (:data:`LEARNED_KINDS`) is fitted as it is: its ensemble gives its own
+    interval. Any other kind gets a cross-validated interval (:func:`~energy.models.fit_interval`
+    with ``interval_folds`` folds) from two runs up, unless ``interval_folds`` is 0.
+
+    Parameters
+    ----------
+    kind : str
+        One of :data:`~energy.models.CURRENT_MODEL_KINDS`.
+    logs : InteractionLog or sequence of InteractionLog
+        Training runs with measured currents.
+    seed : int or None
+        Seed of the learned kinds.
+    progress : bool
+        The learned kinds' progress bar with the training loss (the baselines have none).
+    n_threads, interval_folds, band_hz, names
+        As :func:`check_training_options`.
+
+    Returns
+    -------
+    TrainingReport
+
+    Raises
+    ------
+    InvalidParameterError, UnknownNameError
+        As :func:`check_training_options`; no logs, a bad seed.
+    TerrawattError
+        As the model's ``fit`` and :func:`~energy.models.fit_interval`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from energy import InteractionLog
+    >>> t = np.arange(50) * 0.1
+    >>> log = InteractionLog(t, np.full(50, 0.5), np.zeros(50), np.full(50, 2.0), np.full(50, 2.1),
+    ...                      np.arange(500) * 0.01, np.full(500, 9.81))
+    >>> report = train_report("constant", log)
+    >>> report.kind, len(report.logs), report.model.gives_interval
+    ('constant', 1, False)
+    """
+    band = check_training_options(kind, n_threads=n_threads, interval_folds=interval_folds, band_hz=band_hz,
+                                  names=names)
+    seed = check_seed(seed)
+    learned = kind in LEARNED_KINDS
+    progress = check_bool("progress", progress) and learned
+    items = check_logs(logs)
+    model = new_current_model(kind, seed=seed, progress=progress, n_threads=n_threads, band_hz=band)
+    t0 = time.perf_counter()
+    if learned or interval_folds == 0 or len(items) < 2:
+        model.fit(items)
+    else:
+        fit_interval(model, items, folds=interval_folds)
+    return TrainingReport(model, kind, tuple(items), time.perf_counter() - t0)
