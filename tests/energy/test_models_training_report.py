@@ -1,0 +1,80 @@
+"""Tests of energy.models.training_report: a model of a kind trained on logs, its options checked, reported, saved."""
+
+from __future__ import annotations
+
+import pytest
+from evaluation_samples import score_logs
+
+from energy.models import (
+    LEARNED_KINDS,
+    TrainingReport,
+    check_learned_band,
+    check_training_options,
+    load_current_model,
+    train_report,
+)
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+
+FLAGS = {"kind": "--model", "n_threads": "--threads", "interval_folds": "--interval-folds", "band_hz": "--band"}
+
+
+def test_a_baseline_gets_a_cross_validated_interval_and_says_so(tmp_path):
+    logs = score_logs()
+    report = train_report("linear", logs, interval_folds=3)
+    assert isinstance(report, TrainingReport) and report.kind == "linear" and len(report.logs) == 6
+    assert report.model.gives_interval and report.band_hz is None and report.fit_duration_s >= 0.0
+    line = report.summary()
+    assert line.startswith(f"fitted linear on 6 runs ({report.logs_duration_s:.0f} s of logs) with a forecast interval")
+    path = report.write(tmp_path / "m.zip")
+    assert path == tmp_path / "m.zip" and load_current_model(path).gives_interval
+    assert report.summary(path) == f"{line}; wrote {path}"
+
+
+@pytest.mark.parametrize("folds, logs", [(0, score_logs()), (5, score_logs()[:1])])
+def test_no_interval_without_folds_or_with_one_run(folds, logs):
+    report = train_report("constant", logs, interval_folds=folds)
+    assert not report.model.gives_interval and "without a forecast interval" in report.summary()
+
+
+@pytest.mark.parametrize(
+    "kwargs, error, message",
+    [
+        ({"n_threads": 0}, InvalidParameterError, "--threads must be a positive number of threads, got 0"),
+        ({"kind": "linear", "n_threads": 2}, InvalidParameterError,
+         "--threads applies to the estimator and paper models only, got --model 'linear'"),
+        ({"interval_folds": 1}, InvalidParameterError, r"--interval-folds must be 0 \(no interval\) or >= 2, got 1"),
+        ({"interval_folds": -1}, InvalidParameterError, "--interval-folds must be 0"),
+        ({"band_hz": (5.0, 1.0)}, InvalidParameterError, "--band must be"),
+        ({"kind": "constant", "band_hz": (1.0, 20.0)}, InvalidParameterError,
+         "--band applies to the estimator and paper models only, got --model constant"),
+        ({"kind": "forest"}, UnknownNameError, "--model"),
+    ],
+)
+def test_bad_options_are_refused_naming_them(kwargs, error, message):
+    kind = kwargs.pop("kind", "paper")
+    with pytest.raises(error, match=message):
+        check_training_options(kind, names=FLAGS, **kwargs)
+    with pytest.raises(error, match=message):  # train_report checks them before fitting
+        train_report(kind, score_logs()[:1], names=FLAGS, **kwargs)
+
+
+def test_options_are_named_by_their_parameters_by_default_and_names_are_checked():
+    with pytest.raises(InvalidParameterError, match="n_threads applies to the estimator and paper models only, got kind"):
+        check_training_options("linear", n_threads=2)
+    with pytest.raises(UnknownNameError, match="names has keys"):
+        check_training_options("linear", names={"threads": "--threads"})
+    assert check_training_options("estimator", n_threads=2, band_hz=[0, 25]) == (0.0, 25.0)
+
+
+def test_a_band_needs_a_learned_kind():
+    assert set(LEARNED_KINDS) == {"estimator", "paper"}
+    assert check_learned_band(None, ["linear"]) is None
+    assert check_learned_band((1, 20), ["linear", "paper"]) == (1.0, 20.0)
+    with pytest.raises(InvalidParameterError, match="band_hz applies to the estimator and paper models only, got kind "
+                       "linear constant"):
+        check_learned_band((1, 20), ["linear", "constant"])
+
+
+def test_no_logs_is_refused():
+    with pytest.raises(InvalidParameterError, match="logs"):
+        train_report("constant", [])
