@@ -4,24 +4,24 @@
 from __future__ import annotations
 
 import argparse
-import time
 from pathlib import Path
 from typing import Any
 
-from energy import evaluate_adaptation, evaluate_current_models, evaluate_few_shot, new_current_model, plot_vibration_spectra
-from energy.evaluation import ADAPT_FILES, EVALUATION_FILES, AdaptSettings
-from energy.models import ADAPT_METHODS, CURRENT_MODEL_KINDS, LEARNED_KINDS
-from terrain import InvalidParameterError
+from energy.evaluation import (EVALUATION_PROTOCOLS, AdaptSettings, check_adapt_options, check_evaluation_options,
+                               evaluate_report, evaluation_files)
+from energy.models import ADAPT_METHODS, CURRENT_MODEL_KINDS
 
-from .common import add_dask_options, check_dask_flags, check_outputs, dask_client_arg, draw_figure, input_paths
-from .data import add_band_option, add_data_options, band_from_args, logs_from_args
+from .common import add_dask_options, check_dask_flags, check_outputs, dask_client_arg, input_paths, warn_figures
+from .data import add_band_option, add_data_options, logs_from_args
 
 __all__ = ["PROTOCOLS", "add_parser", "add_adapt_options", "adapt_settings_from_args", "run_evaluate"]
 
 #: ``--protocol`` choices: leave one run out (the default), adapt on each held-out run's
 #: first seconds, few shots on a ground left out of training.
-PROTOCOLS = ("loo", "adapt", "few-shot")
-
+PROTOCOLS = EVALUATION_PROTOCOLS
+#: How the library's messages name the options of :func:`energy.evaluation.evaluate_report`: by their flags.
+_NAMES = {"kinds": "--model", "protocol": "--protocol", "band_hz": "--band", "adapt_seconds": "--adapt-seconds",
+          "adapt_method": "--adapt-method", "adapt_threshold_pct": "--adapt-threshold"}
 
 def add_parser(sub: Any) -> None:
     """The ``evaluate`` subcommand."""
@@ -55,43 +55,29 @@ def add_adapt_options(parser: argparse.ArgumentParser) -> None:
 
 
 def adapt_settings_from_args(args: argparse.Namespace) -> AdaptSettings:
-    """The :class:`energy.evaluation.AdaptSettings` of the command line (bad values: errors naming the flag)."""
-    if bad := [t for t in args.adapt_seconds if not t > 0]:
-        raise InvalidParameterError(f"--adapt-seconds must be seconds > 0, got {bad[0]!r}")
-    if not args.adapt_threshold >= 0:
-        raise InvalidParameterError(f"--adapt-threshold must be a percentage >= 0, got {args.adapt_threshold!r}")
-    return AdaptSettings(adapt_seconds=tuple(args.adapt_seconds), method=args.adapt_method,
-                         threshold_pct=args.adapt_threshold, trigger=args.protocol == "adapt")
+    """The :class:`energy.evaluation.AdaptSettings` of the command line (:func:`energy.evaluation.check_adapt_options`:
+    bad values are errors naming the flag)."""
+    return check_adapt_options(args.protocol, adapt_seconds=args.adapt_seconds, adapt_method=args.adapt_method,
+                               adapt_threshold_pct=args.adapt_threshold, names=_NAMES)
 
 
 def run_evaluate(args: argparse.Namespace) -> int:
     """``terrawatt evaluate``: evaluation.json, evaluation.md and spectra.png (a figure that fails is a warning), or
-    adapt.json and adapt.md with ``--protocol adapt`` / ``few-shot``."""
+    adapt.json and adapt.md with ``--protocol adapt`` / ``few-shot`` (:func:`energy.evaluation.evaluate_report`)."""
     check_dask_flags(args)
-    kinds = args.models or (list(CURRENT_MODEL_KINDS) if args.protocol == "loo" else ["estimator"])
     settings = adapt_settings_from_args(args) if args.protocol != "loo" else None
-    band_hz = band_from_args(args, kinds)
-    check_outputs(args.out, (*EVALUATION_FILES, "spectra.png") if settings is None else ADAPT_FILES, input_paths(args))
+    check_evaluation_options(args.models, protocol=args.protocol, band_hz=args.band, names=_NAMES)
+    check_outputs(args.out, evaluation_files(args.protocol), input_paths(args))
     with dask_client_arg(args) as client:  # before reading: a missing extra or scheduler fails fast
         workers = "1 worker (serial)"
         if client is not None:
             workers = f"{len(client.nthreads())} dask workers ({args.scheduler or 'a local cluster'})"
             print(f"evaluating on {workers}", flush=True)
-        logs = logs_from_args(args, require_currents=True)
-        models = {name: new_current_model(name, seed=args.seed, band_hz=band_hz if name in LEARNED_KINDS else None)
-                  for name in kinds}
-        t0 = time.perf_counter()
-        if settings is None:
-            result = evaluate_current_models(logs, models, variants=args.variants, progress=True, client=client)
-        else:
-            run = evaluate_adaptation if args.protocol == "adapt" else evaluate_few_shot
-            result = run(logs, models, settings=settings, progress=True, client=client)
-        elapsed = time.perf_counter() - t0
-    written = [*result.write(args.out)]
-    if settings is None:
-        written.append(draw_figure(args.out / "spectra.png", lambda: plot_vibration_spectra(logs, args.out / "spectra.png")))
-    print(result.to_markdown())
-    names = [str(p) for p in written if p is not None]
-    files = ", ".join(names) if settings else ", ".join(names[:-1]) + " and " + names[-1]
-    print(f"\n{len(logs)} runs, {len(models)} models, {elapsed:.1f} s on {workers}; wrote {files}")
+        report = evaluate_report(logs_from_args(args, require_currents=True), args.models, protocol=args.protocol,
+                                 variants=args.variants, settings=settings, seed=args.seed, band_hz=args.band,
+                                 client=client, progress=True, names=_NAMES)
+    with warn_figures():
+        written = report.write(args.out)
+    print(report.summary())
+    print(f"\n{report.written_line(written, workers=workers)}")
     return 0

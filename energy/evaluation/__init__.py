@@ -5,7 +5,8 @@ and :mod:`~energy.evaluation.scoring` (:func:`score_run`, the one per-run scorin
 :func:`score_current_model` for a model fitted beforehand, :func:`evaluate_current_models`);
 the ``adapt`` protocol in :mod:`~energy.evaluation.adapt_protocol` (adapt on a held-out run's
 first seconds, score the rest), :mod:`~energy.evaluation.few_shot` (adapt on a ground left out
-of training) and :mod:`~energy.evaluation.adapt_results`; folds run here or on a dask cluster
+of training) and :mod:`~energy.evaluation.adapt_results`; models of named kinds evaluated by one protocol
+and reported in :mod:`~energy.evaluation.evaluation_report`; folds run here or on a dask cluster
 (:mod:`terrawatt_base.dask_client`).
 """
 
@@ -27,6 +28,16 @@ from .adapt_results import (
     AdaptSummary,
     check_adapt_dir,
     summarise_adapt_scores,
+)
+from .evaluation_report import (
+    EVALUATION_NAMES,
+    EVALUATION_PROTOCOLS,
+    SPECTRA_FILE,
+    EvaluationReport,
+    check_adapt_options,
+    check_evaluation_options,
+    evaluate_report,
+    evaluation_files,
 )
 from .few_shot import evaluate_few_shot, few_shot_scores
 from .prediction_report import FIGURES_FOLDER, PREDICTIONS_FILE, PredictionReport, predict_report
@@ -83,4 +94,12 @@ __all__ = [
     "FIGURES_FOLDER",
     "PredictionReport",
     "predict_report",
+    "EVALUATION_PROTOCOLS",
+    "EVALUATION_NAMES",
+    "SPECTRA_FILE",
+    "evaluation_files",
+    "check_adapt_options",
+    "check_evaluation_options",
+    "EvaluationReport",
+    "evaluate_report",
 ]

@@ -105,13 +105,13 @@ def test_evaluate_on_workers_without_distributed_names_the_extra(tmp_path, capsy
 
 
 def test_evaluate_whose_figure_fails_still_succeeds_with_its_results(tmp_path, capsys, monkeypatch):
-    import terrawatt_cli.evaluate as evaluate_cli
+    from energy.evaluation import evaluation_report
     from terrain import InvalidParameterError
 
     def no_spectra(*args, **kwargs):
         raise InvalidParameterError("band (0.5, 50.0) Hz exceeds the Nyquist frequency 25 Hz of a 50 Hz IMU")
 
-    monkeypatch.setattr(evaluate_cli, "plot_vibration_spectra", no_spectra)
+    monkeypatch.setattr(evaluation_report, "plot_vibration_spectra", no_spectra)
     data = tmp_path / "logs"
     shutil.copytree(FIXTURES, data)
     for kind in ("imu", "pro"):

@@ -18,8 +18,9 @@ from energy import (
     read_borealtc,
 )
 from energy.features import DEFAULT_BAND_HZ, BandNotServedError, band_rms_spectra, band_served, check_band_hz
+from energy.evaluation import evaluation_report
 from energy.models import training_report
-from terrawatt_cli import evaluate as evaluate_cli, main
+from terrawatt_cli import main
 from terrain import InvalidParameterError
 
 SHARED = Path(__file__).resolve().parents[3] / "shared" / "data" / "borealtc"
@@ -224,7 +225,7 @@ def test_cli_predicts_50hz_logs_with_a_model_trained_on_100hz_logs(model, logs, 
 
 @needs_shared
 def test_cli_evaluate_band_reaches_the_learned_models(logs, tmp_path, capsys, monkeypatch):
-    real, made = evaluate_cli.new_current_model, []
+    real, made = evaluation_report.new_current_model, []
 
     def small(kind, **kwargs):
         model = real(kind, **kwargs)
@@ -233,7 +234,7 @@ def test_cli_evaluate_band_reaches_the_learned_models(logs, tmp_path, capsys, mo
         made.append((kind, kwargs["band_hz"]))
         return model
 
-    monkeypatch.setattr(evaluate_cli, "new_current_model", small)
+    monkeypatch.setattr(evaluation_report, "new_current_model", small)
     out = tmp_path / "eval"
     assert main(["evaluate", "--data", str(logs["root"] / "train"), "--model", "estimator", "linear",
                  "--variants", "per_ground", "--band", "0", "14", "--out", str(out)]) == 0
