@@ -1,0 +1,103 @@
+"""Tests of energy.evaluation.evaluation_report: models of named kinds evaluated by one protocol, printed and written."""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import pytest
+from evaluation_samples import adapt_logs, score_logs
+
+from energy.evaluation import (
+    ADAPT_FILES,
+    EVALUATION_FILES,
+    EVALUATION_PROTOCOLS,
+    SPECTRA_FILE,
+    AdaptationResult,
+    EvaluationReport,
+    EvaluationResult,
+    check_adapt_options,
+    check_evaluation_options,
+    evaluate_report,
+    evaluation_files,
+)
+from energy.evaluation import evaluation_report
+from energy.models import CURRENT_MODEL_KINDS
+from terrawatt_base.errors import FigureWarning, InvalidParameterError, UnknownNameError
+
+FLAGS = {"kinds": "--model", "protocol": "--protocol", "band_hz": "--band", "adapt_seconds": "--adapt-seconds",
+         "adapt_method": "--adapt-method", "adapt_threshold_pct": "--adapt-threshold"}
+
+
+def test_leave_one_run_out_is_scored_and_written_with_the_spectra(tmp_path):
+    report = evaluate_report(score_logs(), ["constant", "linear"], variants=["per_ground"])
+    assert isinstance(report, EvaluationReport) and isinstance(report.result, EvaluationResult)
+    assert report.kinds == ("constant", "linear") and len(report.logs) == 6 and report.duration_s >= 0.0
+    assert report.summary() == report.result.to_markdown() and report.to_dict()["models"] == ["constant", "linear"]
+    written = report.write(tmp_path)
+    assert [p.name for p in written] == list(evaluation_files("loo")) == [*EVALUATION_FILES, SPECTRA_FILE]
+    assert json.loads(written[0].read_text())["models"] == ["constant", "linear"]
+    line = report.written_line(written)
+    assert line.startswith("6 runs, 2 models, ") and " s on 1 worker (serial); wrote " in line
+    assert line.endswith(f"{written[0]}, {written[1]} and {written[2]}")
+
+
+def test_a_figure_that_fails_is_a_warning_and_left_out(tmp_path, monkeypatch):
+    def no_spectra(*args, **kwargs):
+        raise RuntimeError("no canvas")
+
+    monkeypatch.setattr(evaluation_report, "plot_vibration_spectra", no_spectra)
+    report = evaluate_report(score_logs(), ["constant"], variants=["per_ground"])
+    with pytest.warns(FigureWarning, match="could not draw .*spectra.png: RuntimeError: no canvas"):
+        written = report.write(tmp_path)
+    assert [p.name for p in written] == list(EVALUATION_FILES) and not (tmp_path / SPECTRA_FILE).exists()
+    assert report.written_line(written, workers="2 dask workers").endswith(f"on 2 dask workers; wrote {written[0]} "
+                                                                           f"and {written[1]}")
+    with pytest.raises(RuntimeError, match="no canvas"):
+        report.write(tmp_path / "again", on_figure_error="raise")
+
+
+@pytest.mark.parametrize("protocol, trigger", [("adapt", True), ("few-shot", False)])
+def test_the_adapt_protocols_write_their_files_without_a_figure(tmp_path, protocol, trigger):
+    settings = check_adapt_options(protocol, adapt_seconds=[10.0])
+    assert settings.trigger is trigger and settings.adapt_seconds == (10.0,)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # skipped folds of the short samples
+        report = evaluate_report(adapt_logs(), ["linear"], protocol=protocol, settings=settings)
+    assert isinstance(report.result, AdaptationResult) and report.kinds == ("linear",)
+    written = report.write(tmp_path)
+    assert [p.name for p in written] == list(ADAPT_FILES) == list(evaluation_files(protocol))
+    assert report.written_line(written).endswith(f"wrote {written[0]}, {written[1]}")
+
+
+def test_the_default_kinds_follow_the_protocol_and_a_kind_named_twice_counts_once():
+    assert check_evaluation_options() == CURRENT_MODEL_KINDS
+    assert check_evaluation_options(protocol="few-shot") == ("estimator",)
+    assert check_evaluation_options(["linear", "linear", "constant"]) == ("linear", "constant")
+    assert EVALUATION_PROTOCOLS == ("loo", "adapt", "few-shot")
+
+
+@pytest.mark.parametrize(
+    "call, error, message",
+    [
+        (lambda: check_adapt_options(adapt_seconds=[10.0, 0.0], names=FLAGS), InvalidParameterError,
+         "--adapt-seconds must be seconds > 0, got 0.0"),
+        (lambda: check_adapt_options(adapt_threshold_pct=-1.0, names=FLAGS), InvalidParameterError,
+         "--adapt-threshold must be a percentage >= 0, got -1.0"),
+        (lambda: check_adapt_options(adapt_method="guess", names=FLAGS), UnknownNameError, "--adapt-method"),
+        (lambda: check_adapt_options("cv"), UnknownNameError, "protocol must be one of"),
+        (lambda: check_evaluation_options(["linear"], band_hz=(1.0, 12.0), names=FLAGS), InvalidParameterError,
+         "--band applies to the estimator and paper models only, got --model linear"),
+        (lambda: check_evaluation_options(["estimator"], band_hz=(12.0, 1.0), names=FLAGS), InvalidParameterError,
+         "--band must be"),
+        (lambda: check_evaluation_options(["forest"], names=FLAGS), UnknownNameError, "--model must be one of"),
+        (lambda: check_evaluation_options([]), InvalidParameterError, "kinds must name at least one model kind"),
+        (lambda: check_evaluation_options(names={"model": "--model"}), UnknownNameError, "names has keys"),
+        (lambda: evaluate_report(score_logs(), ["linear"], settings=check_adapt_options()), InvalidParameterError,
+         "settings applies to the adapt and few-shot protocols"),
+        (lambda: evaluate_report([], ["linear"]), InvalidParameterError, "logs"),
+    ],
+)
+def test_bad_options_are_refused_naming_them(call, error, message):
+    with pytest.raises(error, match=message):
+        call()
