@@ -18,7 +18,8 @@ from ..logs import InteractionLog
 from ..models.adaptation import ADAPT_METHODS
 from ..models.base import check_logs
 from ..models.kinds import CURRENT_MODEL_KINDS, new_current_model
-from ..models.training_report import LEARNED_KINDS, check_learned_band
+from ..models.kinds import LEARNED_KINDS
+from ..models.training_report import check_learned_band
 from ..plots import plot_vibration_spectra
 from .adapt_protocol import DEFAULT_ADAPT_SECONDS, AdaptSettings, evaluate_adaptation
 from .adapt_results import ADAPT_FILES, AdaptationResult

@@ -46,10 +46,9 @@ from .baselines import (
 )
 from .calibration import DEFAULT_INTERVAL_FOLDS, fit_interval
 from .forecast import ChargeForecast, CurrentForecast
-from .kinds import CURRENT_MODEL_KINDS, new_current_model
+from .kinds import CURRENT_MODEL_KINDS, LEARNED_KINDS, new_current_model
 from .loading import MODEL_CLASSES, load_current_model, model_class
 from .training_report import (
-    LEARNED_KINDS,
     TRAINING_NAMES,
     TrainingReport,
     check_learned_band,

@@ -10,14 +10,16 @@ from terrawatt_base.errors import InvalidParameterError
 from .base import CurrentModel
 from .baselines import ConstantCurrentModel, LinearCurrentModel, PhysicsCurrentModel
 
-__all__ = ["CURRENT_MODEL_KINDS", "new_current_model"]
+__all__ = ["CURRENT_MODEL_KINDS", "LEARNED_KINDS", "new_current_model"]
 
 #: Model kinds by name: ``estimator`` (the improved vibration-conditioned estimator, preset
 #: ``default``), ``paper`` (the source paper's network, preset ``paper``) and the baselines.
 CURRENT_MODEL_KINDS = ("estimator", "paper", "linear", "physics", "constant")
+#: The learned kinds (torch): a progress bar, torch threads, a vibration band, an interval from their own ensemble.
+LEARNED_KINDS = ("estimator", "paper")
 
 _BASELINES = {"linear": LinearCurrentModel, "physics": PhysicsCurrentModel, "constant": ConstantCurrentModel}
-_PRESETS = {"estimator": "default", "paper": "paper"}
+_PRESETS = dict(zip(LEARNED_KINDS, ("default", "paper")))
 
 
 def new_current_model(

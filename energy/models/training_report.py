@@ -15,13 +15,11 @@ from ..features.band import check_band_hz
 from ..logs import InteractionLog
 from .base import CurrentModel, check_logs
 from .calibration import DEFAULT_INTERVAL_FOLDS, fit_interval
-from .kinds import CURRENT_MODEL_KINDS, new_current_model
+from .kinds import CURRENT_MODEL_KINDS, LEARNED_KINDS, new_current_model
 
-__all__ = ["LEARNED_KINDS", "TRAINING_NAMES", "check_learned_band", "check_training_options", "TrainingReport",
+__all__ = ["TRAINING_NAMES", "check_learned_band", "check_training_options", "TrainingReport",
            "train_report"]
 
-#: The learned kinds (torch): a progress bar, torch threads, a vibration band, an interval from their own ensemble.
-LEARNED_KINDS = ("estimator", "paper")
 #: How messages name the options of :func:`check_training_options` (a caller passes its own, e.g. its flags).
 TRAINING_NAMES = {"kind": "kind", "n_threads": "n_threads", "interval_folds": "interval_folds", "band_hz": "band_hz"}
 
