@@ -13,7 +13,7 @@ from typing import Any
 
 from terrain import DemWindows, Grid, InvalidParameterError, TerrainMap
 from terrawatt_base.formats import result_document, write_result_json
-from terrawatt_base.checks import check_bool, check_real
+from terrawatt_base.checks import check_bool, check_real, option_names
 from terrawatt_base.figure_file import draw_figure
 
 from .coarse import CoarseToFine, plan_coarse_to_fine
@@ -301,7 +301,7 @@ def check_coarse_options(
     ...
     terrawatt_base.errors.InvalidParameterError: corridor_m applies to coarse-to-fine planning; give factor F too
     """
-    n = {key: key for key in COARSE_OPTIONS} | dict(names or {})
+    n = option_names(names, COARSE_OPTIONS)
     windowed = check_bool(n["windowed"], windowed)
     if corridor_m is not None and factor is None:
         raise InvalidParameterError(f"{n['corridor_m']} applies to coarse-to-fine planning; give {n['factor']} F too")

@@ -11,6 +11,7 @@ from typing import Any
 
 from terrain import InvalidParameterError, OptionalDependencyError, TerrainMap
 from terrawatt_base.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
+from terrawatt_base.checks import option_names
 from terrain.georef import import_rasterio
 
 from .edge_cost import EnergyCost
@@ -135,7 +136,7 @@ def check_ros_outputs(
     ...
     terrawatt_base.errors.InvalidParameterError: frame_origin_xy_m applies to bag and nav2_map; give one of them
     """
-    name = {key: key for key in ROS_OUTPUTS} | dict(names or {})
+    name = option_names(names, ROS_OUTPUTS)
     origin = name["frame_origin_xy_m"]
     if frame_origin_xy_m is not None and bag is None and nav2_map is None:
         raise InvalidParameterError(f"{origin} applies to {name['bag']} and {name['nav2_map']}; give one of them")

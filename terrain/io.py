@@ -7,7 +7,7 @@ import os
 from collections.abc import Collection, Mapping
 from pathlib import Path
 
-from terrawatt_base.checks import fmt_number
+from terrawatt_base.checks import fmt_number, option_names
 from terrawatt_base.errors import FileFormatError, InvalidParameterError, NodataError, UnknownNameError
 from .geotiff import check_fill_method, read_geotiff
 from .landcover import LandcoverClasses, ground_classes_from_landcover, read_landcover_classes
@@ -162,7 +162,7 @@ def read_map_with_options(
     terrawatt_base.errors.InvalidParameterError: --reproject and --cell-size go together: e.g. --reproject utm --cell-size 5 (got --reproject None, --cell-size 5.0)
     >>> folder.cleanup()
     """
-    name = {key: key for key in MAP_OPTIONS} | dict(names or {})
+    name = option_names(names, MAP_OPTIONS)
     if (landcover is None) != (landcover_classes is None):
         lc, lcc = name["landcover"], name["landcover_classes"]
         raise InvalidParameterError(

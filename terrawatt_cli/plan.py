@@ -11,7 +11,7 @@ from terrain import DemWindows, TerrainMap
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
 
 from planner import PLANNERS
-from planner.coarse_report import check_coarse_options, plan_coarse, plan_coarse_windowed
+from planner.coarse_report import COARSE_OPTIONS, check_coarse_options, plan_coarse, plan_coarse_windowed
 from planner.plan_report import plan_and_compare
 from .common import (MAP_FLAGS, Checked, add_map_options, add_model_options, add_planner_options, add_point_options,
                      add_robot_options, bounded, check_model_flags, check_outputs, input_paths, load_model_arg,
@@ -21,7 +21,7 @@ from .ros2 import add_ros2_arguments, check_ros2_outputs, write_ros2_outputs
 __all__ = ["add_parsers", "run_demo", "run_plan_command"]
 
 _OUTPUTS = ("route.json", "route.geojson", "route.png")
-_COARSE_FLAGS = {**MAP_FLAGS, "factor": "--coarse-factor", "corridor_m": "--corridor", "windowed": "--windowed",
+_COARSE_FLAGS = {**{k: v for k, v in MAP_FLAGS.items() if k in COARSE_OPTIONS}, "factor": "--coarse-factor", "corridor_m": "--corridor", "windowed": "--windowed",
                  "path": "--map", "model": "--model", "planner": "--planner"}
 
 

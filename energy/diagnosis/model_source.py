@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from terrawatt_base.checks import check_bool, check_seed, fmt_number
+from terrawatt_base.checks import check_bool, check_seed, fmt_number, option_names
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from terrain.terrain_map import TerrainMap
@@ -58,16 +58,6 @@ class ModelUnderDiagnosis:
         return None if self.kind == "physics" else self.robot
 
 
-def _names(names: Mapping[str, str] | None) -> dict[str, str]:
-    out = dict(DEFAULT_SOURCE_NAMES)
-    if names is not None:
-        if not isinstance(names, Mapping) or not all(isinstance(v, str) for v in names.values()):
-            raise InvalidParameterError(f"names must be a mapping of argument to name, got {names!r:.80}")
-        unknown = sorted(set(names) - set(out))
-        if unknown:
-            raise UnknownNameError(f"names has keys {unknown!r}; expected some of {sorted(out)!r}")
-        out.update(names)
-    return out
 
 
 def check_model_source(model: str | os.PathLike[str], *, calibration: Any = None, robot: str | None = None,
@@ -108,7 +98,7 @@ def check_model_source(model: str | os.PathLike[str], *, calibration: Any = None
     >>> check_model_source("physics", without=["inertia"])
     'physics'
     """
-    n = _names(names)
+    n = option_names(names, DEFAULT_SOURCE_NAMES)
     if not isinstance(model, (str, os.PathLike)):
         raise InvalidParameterError(f"{n['model']} must be a string or a path, got {type(model).__name__}")
     kind = str(model) if str(model) in MODEL_SOURCES else "file"
@@ -227,7 +217,7 @@ def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[Interact
     TerrawattError
         As the models' ``fit`` and :func:`energy.load_current_model`.
     """
-    n = _names(names)
+    n = option_names(names, DEFAULT_SOURCE_NAMES)
     kind = check_model_source(model, calibration=calibration_logs, robot=robot, ground=ground, without=without,
                               names=names)
     seed = check_seed(seed)

@@ -10,8 +10,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from terrawatt_base.checks import check_bool, check_choice, check_seed
-from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import check_bool, check_choice, check_seed, option_names
+from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.figure_file import draw_figure
 
 from ..logs import InteractionLog
@@ -39,16 +39,6 @@ EVALUATION_NAMES = {"kinds": "kinds", "protocol": "protocol", "band_hz": "band_h
 SPECTRA_FILE = "spectra.png"
 
 
-def _names(names: Mapping[str, str] | None) -> dict[str, str]:
-    out = dict(EVALUATION_NAMES)
-    if names is not None:
-        if not isinstance(names, Mapping) or not all(isinstance(v, str) for v in names.values()):
-            raise InvalidParameterError(f"names must be a mapping of argument to name, got {names!r:.80}")
-        unknown = sorted(set(names) - set(out))
-        if unknown:
-            raise UnknownNameError(f"names has keys {unknown!r}; expected some of {sorted(out)!r}")
-        out.update(names)
-    return out
 
 
 def evaluation_files(protocol: str = "loo") -> tuple[str, ...]:
@@ -101,7 +91,7 @@ def check_adapt_options(protocol: str = "adapt", *, adapt_seconds: Sequence[floa
     ...
     terrawatt_base.errors.InvalidParameterError: --adapt-seconds must be seconds > 0, got 0
     """
-    n = _names(names)
+    n = option_names(names, EVALUATION_NAMES)
     check_choice(n["protocol"], protocol, EVALUATION_PROTOCOLS)
     seconds = [adapt_seconds] if isinstance(adapt_seconds, numbers.Real) else list(adapt_seconds)
     if bad := [t for t in seconds if isinstance(t, bool) or not isinstance(t, numbers.Real) or not t > 0]:
@@ -147,7 +137,7 @@ def check_evaluation_options(kinds: Sequence[str] | None = None, *, protocol: st
     >>> check_evaluation_options(protocol="adapt")
     ('estimator',)
     """
-    n = _names(names)
+    n = option_names(names, EVALUATION_NAMES)
     check_choice(n["protocol"], protocol, EVALUATION_PROTOCOLS)
     if kinds is None:
         kinds = CURRENT_MODEL_KINDS if protocol == "loo" else ("estimator",)
@@ -262,7 +252,7 @@ def evaluate_report(logs: Sequence[InteractionLog], kinds: Sequence[str] | None 
         As the protocol's function.
     """
     kinds = check_evaluation_options(kinds, protocol=protocol, band_hz=band_hz, names=names)
-    band = check_learned_band(band_hz, kinds, name=_names(names)["band_hz"])
+    band = check_learned_band(band_hz, kinds, name=option_names(names, EVALUATION_NAMES)["band_hz"])
     seed = check_seed(seed)
     progress = check_bool("progress", progress)
     if protocol == "loo" and settings is not None:

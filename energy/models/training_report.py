@@ -8,8 +8,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from terrawatt_base.checks import check_bool, check_choice, check_int, check_seed
-from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import check_bool, check_choice, check_int, check_seed, option_names
+from terrawatt_base.errors import InvalidParameterError
 
 from ..features.band import check_band_hz
 from ..logs import InteractionLog
@@ -24,16 +24,6 @@ __all__ = ["TRAINING_NAMES", "check_learned_band", "check_training_options", "Tr
 TRAINING_NAMES = {"kind": "kind", "n_threads": "n_threads", "interval_folds": "interval_folds", "band_hz": "band_hz"}
 
 
-def _names(names: Mapping[str, str] | None, defaults: Mapping[str, str]) -> dict[str, str]:
-    out = dict(defaults)
-    if names is not None:
-        if not isinstance(names, Mapping) or not all(isinstance(v, str) for v in names.values()):
-            raise InvalidParameterError(f"names must be a mapping of argument to name, got {names!r:.80}")
-        unknown = sorted(set(names) - set(out))
-        if unknown:
-            raise UnknownNameError(f"names has keys {unknown!r}; expected some of {sorted(out)!r}")
-        out.update(names)
-    return out
 
 
 def check_learned_band(band_hz: Sequence[float] | None, kinds: Sequence[str], *, name: str = "band_hz",
@@ -109,7 +99,7 @@ def check_training_options(kind: str, *, n_threads: int | None = None, interval_
     ...
     terrawatt_base.errors.InvalidParameterError: --threads applies to the estimator and paper models only, got --model 'linear'
     """
-    n = _names(names, TRAINING_NAMES)
+    n = option_names(names, TRAINING_NAMES)
     check_choice(n["kind"], kind, CURRENT_MODEL_KINDS)
     if n_threads is not None:
         if isinstance(n_threads, bool) or not isinstance(n_threads, int) or n_threads < 1:

@@ -9,7 +9,7 @@ from typing import Any
 from energy import GROUND_PRESETS
 from terrain import TerrainMap
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M
-from terrawatt_base.checks import check_bool, check_choice, check_int
+from terrawatt_base.checks import check_bool, check_choice, check_int, option_names
 from terrawatt_base.dask_client import check_dask_options
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
@@ -90,9 +90,10 @@ class MissionRequest:
     names: Mapping[str, str] | None = field(default=None, repr=False, compare=False)
 
     def _name(self, key: str) -> str:
-        return (self.names or {}).get(key, key)
+        return option_names(self.names, MISSION_OPTIONS)[key]
 
     def __post_init__(self) -> None:
+        option_names(self.names, MISSION_OPTIONS)  # a bad mapping is refused when made
         n = self._name
         check_bool("on_example", self.on_example)
         if self.prior_ground not in GROUND_PRESETS:
