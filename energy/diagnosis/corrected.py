@@ -14,6 +14,7 @@ from terrain.terrain_map import TerrainMap
 
 from ..logs import InteractionLog
 from ..models.base import CurrentModel, ModelRecord
+from ..models.baselines import PhysicsCurrentModel
 from ..params import MotorParams, RobotParams
 from .effect_base import Effect
 from .effects import EFFECTS_CATALOGUE, effect_from_spec
@@ -96,11 +97,15 @@ class CorrectedCurrentModel(CurrentModel):
         return {e.name: e.values_dict(v) for e, v in zip(self.effects_, self.values_)}
 
     def with_terrain(self, terrain: TerrainMap) -> CorrectedCurrentModel:
-        """This fitted model with the map the slope effect reads (e.g. after loading)."""
+        """This fitted model with the map the slope effect reads (e.g. after loading); a physics base that drives
+        the map's slope gets it too."""
         self._check_fitted()
         if not isinstance(terrain, TerrainMap):
             raise InvalidParameterError(f"terrain must be a TerrainMap, got {type(terrain).__name__!r}")
-        out = CorrectedCurrentModel(self.base, self.effects, self.robot, terrain)
+        base = self.base
+        if isinstance(base, PhysicsCurrentModel) and base.is_fitted and base.on_map_:
+            base = base.with_terrain(terrain)
+        out = CorrectedCurrentModel(base, self.effects, self.robot, terrain)
         out.effects_ = tuple(e.bind([], terrain, self.robot) for e in self.effects_)
         out.values_ = self.values_
         return out

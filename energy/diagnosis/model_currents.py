@@ -156,8 +156,14 @@ def unclipped_prediction(model: Any, log: InteractionLog, basis: PhysicsBasis | 
 
     A :class:`~energy.PhysicsCurrentModel`: its rest level, plus the idle and the motoring
     current where the log moves; any other model: ``model.predict(log)``.
+
+    Raises
+    ------
+    DataError
+        A physics model that drives a map's slope but holds no map (loaded from a file).
     """
     if basis is not None and basis.is_model:
+        model.check_map()
         moving = basis.idle_current_a + motoring_currents_a(basis, log)
         return np.asarray(basis.rest_current_a) + np.where(rest_samples(log)[:, None], 0.0, moving)
     return np.asarray(model.predict(log), dtype=np.float64)

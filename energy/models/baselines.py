@@ -266,7 +266,8 @@ class PhysicsCurrentModel(CurrentModel):
     terrain : TerrainMap, optional
         The map the logs drove on: the slope under their poses enters the physics (every log
         needs poses), as it does when planning on that map; without it, level ground. Not
-        stored in the model file: give it again after loading with :meth:`with_terrain`.
+        stored in the model file, which records that the model needs one (``on_map_``): a
+        loaded model predicts only once given its map again with :meth:`with_terrain`.
 
     Attributes
     ----------
@@ -442,6 +443,7 @@ class PhysicsCurrentModel(CurrentModel):
             self.fitted_.update(rest_left_a=float(rest_a[0]), rest_right_a=float(rest_a[1]))
         self.cost_ = float(np.mean(residual(theta) ** 2))
         self.effects_ = effects
+        self.on_map_ = self.terrain is not None
 
     @property
     def fitted_ground(self) -> GroundParams | dict[str, GroundParams]:
@@ -456,9 +458,18 @@ class PhysicsCurrentModel(CurrentModel):
         self._check_fitted()
         out = copy.copy(self)
         out.terrain = terrain
+        out.on_map_ = True
         return out
 
+    def check_map(self) -> None:
+        """Raise :class:`DataError` when the model drives a map's slope (``on_map_``) but holds no map (a loaded file)."""
+        self._check_fitted()
+        if self.on_map_ and self.terrain is None:
+            raise DataError("this physics model drives the slope of the map it was fitted on, which a model file does "
+                            "not store; give the map again with with_terrain(tmap)")
+
     def _predict(self, log: InteractionLog) -> np.ndarray:
+        self.check_map()
         return self._current(self.robot_, self.fitted_ground, self.idle_current_a_, self.effects_, log,
                              "track_width_multiplier" in self.fitted_, self.rest_current_a_)
 
@@ -502,6 +513,7 @@ class PhysicsCurrentModel(CurrentModel):
             "fitted": dict(self.fitted_),
             "cost": self.cost_,
             "effects": list(self.effects_),
+            "on_map": bool(self.on_map_),
         }
         if self.grounds_:
             state["grounds"] = {g: dataclasses.asdict(p) for g, p in self.grounds_.items()}
@@ -527,6 +539,10 @@ class PhysicsCurrentModel(CurrentModel):
         self.fitted_ = {str(k): float(v) for k, v in state["fitted"].items()}
         self.cost_ = float(state["cost"])
         self.effects_ = tuple(str(e) for e in state["effects"])
+        on_map = state.get("on_map", False)  # files from before the map's slope: level ground
+        if not isinstance(on_map, bool):
+            raise ValueError("'on_map' must be true or false")
+        self.on_map_ = on_map
         PhysicsEnergyModel(self.robot_, self.effects_)  # validates the effect names
         if (not all(math.isfinite(v) for v in self.fitted_.values()) or not math.isfinite(self.idle_current_a_)
                 or not np.all(np.isfinite(self.rest_current_a_))):

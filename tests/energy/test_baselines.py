@@ -249,11 +249,14 @@ def test_a_model_on_a_map_drives_the_slope_under_its_poses(tmp_path):
     np.testing.assert_allclose(on_map.predict(log), log_currents_of(log), atol=1e-9)
     level = PhysicsCurrentModel("husky", "asphalt", fit_parameters=()).fit(log)
     assert np.abs(level.predict(log) - log_currents_of(log)).max() > 1.0
-    # the map is not stored in the file: the loaded model is on level ground until given it again
+    # the map is not stored in the file, which records that the model needs one: no silent level ground
     loaded = PhysicsCurrentModel.load(on_map.save(tmp_path / "on_map.zip"))
-    assert loaded.terrain is None
-    np.testing.assert_array_equal(loaded.predict(log), level.predict(log))
+    assert loaded.terrain is None and loaded.on_map_ and not level.on_map_
+    with pytest.raises(DataError, match=r"give the map again with with_terrain\(tmap\)"):
+        loaded.predict(log)
     np.testing.assert_array_equal(loaded.with_terrain(tmap).predict(log), on_map.predict(log))
+    np.testing.assert_array_equal(PhysicsCurrentModel.load(level.save(tmp_path / "level.zip")).predict(log),
+                                  level.predict(log))
     with pytest.raises(DataError, match="needs its poses"):
         on_map.predict(dataclasses.replace(log, pose_xyh=None))
     with pytest.raises(InvalidParameterError, match="terrain must be a TerrainMap"):

@@ -45,3 +45,19 @@ def test_bad_parameters(setup):
         CorrectedCurrentModel(LinearCurrentModel(), ["current_gain"]).fit(logs)
     with pytest.raises(InvalidParameterError, match="sequence of effect names"):
         CorrectedCurrentModel(LinearCurrentModel().fit(logs), "current_gain").fit(logs)
+
+
+def test_a_base_on_a_map_needs_its_map_again_after_loading(setup, tmp_path):
+    # the scenario's runs carry poses on its map: a physics base that drives the map's slope, corrected, saved,
+    # loaded: it refuses to predict on level ground until given the map, then predicts as before
+    from terrawatt_base.errors import DataError
+
+    logs, model = setup
+    tmap = dataclasses.replace(scenario("turning_resistance"), n_runs=2, run_duration_s=6.0).terrain
+    base = PhysicsCurrentModel(model.robot, model.ground, fit_parameters=(), effects=model.effects,
+                               terrain=tmap).fit(logs)
+    cm = CorrectedCurrentModel(base, ["turning_resistance"]).fit(logs)
+    back = load_current_model(cm.save(tmp_path / "on_map.zip"))
+    with pytest.raises(DataError, match="with_terrain"):
+        back.predict(logs[0])
+    np.testing.assert_allclose(back.with_terrain(tmap).predict(logs[0]), cm.predict(logs[0]))
