@@ -220,16 +220,17 @@ class PhysicsCurrentModel(CurrentModel):
     Prediction per side: ``max(rest + idle + I_motor * sign(omega_motor), 0)`` with
     ``I_motor`` the ``motor_current_a`` of :meth:`PhysicsEnergyModel.power` for the logged
     ``v``, ``omega``, their time derivatives (``numpy.gradient``) and the slope (level
-    ground, or the pitch under the logged poses on ``terrain``), where the log moves; standing still (:func:`energy.logs.at_rest`) the rest level
-    ``rest_current_a_`` alone: a robot at rest pushes against nothing, whatever friction
-    law the physics applies to a speed of a few mm/s read off jittery odometry. The rest
-    level is what the current sensor logs with the wheels still (a sensor offset, in every
-    sample: ``robot.rest_current_a``, or the mean of the logs' rest samples per side when
-    ``"rest_current_a"`` is fitted); the idle current is the speed-independent current of
-    *driving* on top of it. The current is taken in the direction of rotation (positive when motoring forwards *or*
-    backwards, negative when back-driven), as drivers log it; the clamp at 0 models drivers
-    that log motoring current only (BorealTC: never negative, exact zeros on a back-driven
-    inner side); disable it with ``clip_negative=False``.
+    ground, or the pitch under the logged poses on ``terrain``), where the log moves;
+    standing still (:func:`energy.logs.at_rest`) the rest level ``rest_current_a_`` alone:
+    a robot at rest pushes against nothing, whatever friction law the physics applies to a
+    speed of a few mm/s read off jittery odometry. The rest level is what the current sensor
+    logs with the wheels still (a sensor offset, in every sample: ``robot.rest_current_a``,
+    or the mean of the logs' rest samples per side when ``"rest_current_a"`` is fitted); the
+    idle current is the speed-independent current of *driving* on top of it. The current is
+    taken in the direction of rotation (positive when motoring forwards *or* backwards,
+    negative when back-driven), as drivers log it; the clamp at 0 models drivers that log
+    motoring current only (BorealTC: never negative, exact zeros on a back-driven inner
+    side); disable it with ``clip_negative=False``.
 
     When a log's speeds were *measured* from the wheels and ``omega`` derived with
     ``meta.track_width_m`` (as BorealTC's), the robot's ``track_width_multiplier`` is set to
@@ -452,7 +453,7 @@ class PhysicsCurrentModel(CurrentModel):
         return self.ground_ if self.ground_ is not None else self.grounds_
 
     def with_terrain(self, terrain: TerrainMap) -> PhysicsCurrentModel:
-        """This fitted model on ``terrain``: the slope under the logged poses enters its physics (e.g. after loading)."""
+        """This fitted model on ``terrain``: the slope under the logged poses enters its physics (after loading)."""
         if not isinstance(terrain, TerrainMap):
             raise InvalidParameterError(f"terrain must be a TerrainMap, got {type(terrain).__name__!r}")
         self._check_fitted()
@@ -462,7 +463,7 @@ class PhysicsCurrentModel(CurrentModel):
         return out
 
     def check_map(self) -> None:
-        """Raise :class:`DataError` when the model drives a map's slope (``on_map_``) but holds no map (a loaded file)."""
+        """Raise :class:`DataError` when the model drives a map's slope (``on_map_``) but holds no map (loaded)."""
         self._check_fitted()
         if self.on_map_ and self.terrain is None:
             raise DataError("this physics model drives the slope of the map it was fitted on, which a model file does "
