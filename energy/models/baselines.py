@@ -337,12 +337,18 @@ class PhysicsCurrentModel(CurrentModel):
             raise DataError(f"the physics model needs at least 2 drive samples per log, got {len(log)} ({log.meta.source!r})")
         return (log.v_mps, log.omega_radps, np.gradient(log.v_mps, log.time_s), np.gradient(log.omega_radps, log.time_s))
 
+    def _place(self, ground: GroundParams | dict[str, GroundParams],
+                log: InteractionLog) -> tuple[np.ndarray | None, np.ndarray | float]:
+        """Where ``log`` drives, whatever the coefficients: each sample's ground slot and the slope under it."""
+        return ground_slots(ground, log)[1], 0.0 if self.terrain is None else log_slope_rad(self.terrain, log)
+
     def _current(self, robot: RobotParams, ground: GroundParams | dict[str, GroundParams], idle_a: float,
-                 effects: tuple[str, ...], log: InteractionLog, fitted_chi: bool, rest_a: np.ndarray) -> np.ndarray:
+                 effects: tuple[str, ...], log: InteractionLog, fitted_chi: bool, rest_a: np.ndarray,
+                 place: tuple[np.ndarray | None, np.ndarray | float] | None = None) -> np.ndarray:
         model = PhysicsEnergyModel(self._log_robot(robot, log, fitted_chi), effects)
         v, w, a, alpha = self._inputs(log)
-        grounds, index = ground_slots(ground, log)
-        slope = 0.0 if self.terrain is None else log_slope_rad(self.terrain, log)
+        index, slope = self._place(ground, log) if place is None else place
+        grounds = list(ground.values()) if isinstance(ground, dict) else ground
         res = model.power(v, w, grounds, accel_mps2=a, alpha_radps2=alpha, slope_rad=slope, time_s=log.time_s,
                           ground_index=index)
         i_m = res.motor_current_a
@@ -411,8 +417,7 @@ class PhysicsCurrentModel(CurrentModel):
     def _fit(self, logs: list[InteractionLog]) -> None:
         robot, ground, all_names, model = self._check()
         effects = model.effects
-        for log in logs:
-            ground_slots(ground, log)  # every label known before any work
+        places = [self._place(ground, log) for log in logs]  # every label known before any work, computed once
         rest_a = self._rest_level(robot, logs, "rest_current_a" in all_names)
         names = self._fit_names(tuple(n for n in all_names if n != "rest_current_a"), ground)
         truth = np.concatenate([log_currents(log) for log in logs]).ravel()
@@ -423,8 +428,8 @@ class PhysicsCurrentModel(CurrentModel):
 
         def residual(theta: np.ndarray) -> np.ndarray:
             r, g, idle = self._apply(robot, ground, theta, names)
-            pred = np.concatenate([self._current(r, g, idle, effects, log, fitted_chi, rest_a)
-                                   for log in logs]).ravel()
+            pred = np.concatenate([self._current(r, g, idle, effects, log, fitted_chi, rest_a, place)
+                                   for log, place in zip(logs, places)]).ravel()
             return pred - truth
 
         if names:
