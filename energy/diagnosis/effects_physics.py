@@ -19,7 +19,7 @@ from .model_currents import ParameterTable, PhysicsBasis, motoring_currents_a
 
 __all__ = ["PHYSICS_CANDIDATES", "PARAMETER_CANDIDATES", "ROLLING_RESISTANCE_PLAUSIBLE", "PhysicsTermEffect",
            "SlopeEffect", "MassEffect", "TrackWidthEffect", "RollingResistanceEffect", "LateralFrictionEffect",
-           "MotorConstantEffect", "Reprediction", "log_ground_labels"]
+           "MotorConstantEffect", "Reprediction"]
 
 #: Physics effects offered as candidates (those that change the motor current).
 PHYSICS_CANDIDATES: tuple[str, ...] = (
@@ -252,15 +252,6 @@ class LateralFrictionEffect(_RepredictEffect):
         return motoring_currents_a(b, log, ground=b.replace_grounds(lateral_friction_coef=value))
 
 
-def log_ground_labels(log: InteractionLog) -> np.ndarray | None:
-    """Per-sample ground labels of a log (its ``ground`` or its run label), or None."""
-    if log.ground is not None:
-        return np.asarray(log.ground).astype(str)
-    if log.meta.ground_label is not None:
-        return np.full(len(log), log.meta.ground_label)
-    return None
-
-
 def _rolling_parameters(labels: Sequence[str]) -> tuple[EffectParameter, ...]:
     return tuple(EffectParameter(f"rolling_resistance_coef_{g}", 0.02, 0.0, 1.0, "1", f"{g}.rolling_resistance_coef",
                                  *ROLLING_RESISTANCE_PLAUSIBLE, "wheels or tracks on ground, hard to soft")
@@ -285,7 +276,7 @@ class RollingResistanceEffect(_RepredictEffect):
         return _is_physics(model)
 
     def unsupported(self, logs: Sequence[Any], terrain: Any, model: Any = None) -> str | None:
-        found = [log_ground_labels(log) for log in logs]
+        found = [log.ground_labels for log in logs]
         if any(lab is None for lab in found):
             return "needs ground labels in every log"
         n_grounds = len({str(x) for lab in found if lab is not None for x in np.unique(lab)})
@@ -297,7 +288,7 @@ class RollingResistanceEffect(_RepredictEffect):
         out = super().bind(logs, terrain, robot)
         if not logs:  # rebinding a loaded effect: keep its labels
             return out
-        found = [log_ground_labels(log) for log in logs]
+        found = [log.ground_labels for log in logs]
         out.labels = tuple(sorted({str(x) for lab in found if lab is not None for x in np.unique(lab)}))
         out.parameters = _rolling_parameters(out.labels)
         return out
@@ -320,10 +311,12 @@ class RollingResistanceEffect(_RepredictEffect):
         return 0.0 if self._switched_on(b) else float(np.mean([g.rolling_resistance_coef for g in b.grounds()]))
 
     def index(self, log: InteractionLog) -> np.ndarray:
-        lab = log_ground_labels(log)
+        lab = log.ground_labels
+        if lab is None:  # unlisted: the slot after the labels
+            return np.full(len(log), len(self.labels), dtype=np.intp)
+        found, inverse = np.unique(np.asarray(lab).astype(str), return_inverse=True)
         lookup = {g: k for k, g in enumerate(self.labels)}
-        idx = np.array([lookup.get(str(x), len(self.labels)) for x in (lab if lab is not None else [])], dtype=np.intp)
-        return idx if idx.size == len(log) else np.full(len(log), len(self.labels), dtype=np.intp)
+        return np.array([lookup.get(g, len(self.labels)) for g in found.tolist()], dtype=np.intp)[inverse]
 
     def _grounds(self, b: PhysicsBasis, values: Sequence[float]) -> list[Any]:
         # samples of grounds not listed keep the model's physics: its coefficient, or none when
