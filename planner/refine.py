@@ -18,7 +18,7 @@ from terrawatt_base.checks import check_bool, check_int, check_real, check_seed,
 from terrawatt_base.errors import InvalidParameterError
 
 from .kernels import KEEP_RTOL, relax_polyline, string_pull_indices
-from .ompl.problem import EnergyProblem, ompl_log_level, seed_ompl
+from .ompl.problem import EnergyProblem, ompl_session
 from .points import as_points
 
 __all__ = ["relax_path", "refine_route", "string_pull"]
@@ -171,8 +171,7 @@ def refine_route(
     relax = check_bool("relax", relax)
     if pts.shape[0] < 3:
         return relax_path(cost, pts) if relax else pts.copy()
-    with ompl_log_level():
-        seed_ompl(seed)
+    with ompl_session(seed):
         problem = EnergyProblem(cost.arrays, cost.min_energy_per_metre_j, pts[0], pts[-1])
         simplifier = og.PathSimplifier(problem.si, problem.pdef.getGoal(), problem.objective)
         best = pts.copy()

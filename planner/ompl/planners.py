@@ -15,7 +15,7 @@ from terrawatt_base.errors import PlanningError
 
 from ..kernels import CostArrays
 from ..settings import PlannerSettings
-from .problem import EnergyProblem, ompl_log_level, seed_ompl
+from .problem import EnergyProblem, ompl_session
 
 __all__ = ["OmplPlannerSpec", "OMPL_PLANNER_SPECS", "OMPL_PLANNERS", "make_planner", "solve"]
 
@@ -94,8 +94,7 @@ def solve(
     PlanningError
         OMPL returned another status (e.g. a crash or an invalid setup).
     """
-    with ompl_log_level():
-        seed_ompl(seed)
+    with ompl_session(seed):
         t0 = time.perf_counter()
         problem = EnergyProblem(arrays, min_energy_per_metre_j, start, goal, max_evaluations)
         planner = make_planner(name, problem, settings)

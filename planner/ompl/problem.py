@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import threading
 import time
 from collections.abc import Iterator
 from typing import Any
@@ -21,6 +22,7 @@ __all__ = [
     "FreeCellChecker",
     "WalkMotionValidator",
     "seed_ompl",
+    "ompl_session",
     "ompl_log_level",
     "ompl_seed",
     "STALL_CHECKS",
@@ -49,6 +51,22 @@ def seed_ompl(seed: int | None) -> None:
         return
     with ompl_log_level(ou.LOG_NONE):
         ou.RNG.setSeed(ompl_seed(seed))
+
+
+#: OMPL's seed is process-wide: a seed set in one thread while another thread's planner creates
+#: its RNGs changes that planner's samples (dask workers of one process are threads). Every solve
+#: and refinement holds this lock from its seed to its end (:func:`ompl_session`), so threads of
+#: one process run OMPL one at a time and a seeded result is the one it gives alone.
+_OMPL_LOCK = threading.RLock()
+
+
+@contextlib.contextmanager
+def ompl_session(seed: int | None) -> Iterator[None]:
+    """One OMPL solve or refinement: OMPL's lock held, its log at errors only, its RNG seeded
+    (:func:`seed_ompl`). Reproducible from the seed whatever other threads of the process do."""
+    with _OMPL_LOCK, ompl_log_level():
+        seed_ompl(seed)
+        yield
 
 
 @contextlib.contextmanager

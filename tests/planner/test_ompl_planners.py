@@ -28,3 +28,25 @@ def test_on_open_ground_a_seeded_solve_joins_start_and_goal_and_repeats():
     assert 0 < evaluations and planning_time_s >= 0.0
     again = solve(*args)
     assert again[0] == status and np.array_equal(again[1], waypoints)
+
+
+def test_seeded_solves_in_threads_of_one_process_repeat_the_solves_made_one_by_one():
+    """OMPL's seed is process-wide: a solve seeded in one thread while another thread's solve
+    creates its RNGs used to change that solve's samples (dask workers of one process are
+    threads). Each seeded solve must give what it gives alone."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    cost = flat_cost()
+    start, goal = np.array([2.5, 2.5]), np.array([27.5, 17.5])
+
+    def run(seed: int):
+        status, waypoints, _, evaluations = solve(cost.arrays, cost.min_energy_per_metre_j, start, goal,
+                                                  "RRTstar", None, 600, seed, PlannerSettings())
+        return status, waypoints.tobytes(), evaluations
+
+    seeds = [s % 4 for s in range(16)]
+    alone = {s: run(s) for s in set(seeds)}
+    assert len({a[1] for a in alone.values()}) == 4  # the seeds do give different routes
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        together = list(pool.map(run, seeds))
+    assert together == [alone[s] for s in seeds]
