@@ -459,7 +459,6 @@ class EnergyCost:
         """
         if not isinstance(terrain, TerrainMap):
             raise InvalidParameterError(f"terrain must be a TerrainMap, got {type(terrain).__name__!r}")
-        speed = check_real("speed_mps", speed_mps, low=0.0, low_inclusive=False)
         model = PhysicsEnergyModel(robot_preset(robot))
         grounds = {}
         for gid, name in terrain.ground_names.items():
@@ -471,7 +470,7 @@ class EnergyCost:
             grounds[gid] = ground_preset(name)
         unknown = None if unknown_ground is None else ground_preset(unknown_ground)
         return cls.from_model(
-            terrain, model, grounds, speed, unknown_ground=unknown, max_slope_rad=max_slope_rad
+            terrain, model, grounds, speed_mps, unknown_ground=unknown, max_slope_rad=max_slope_rad
         )
 
     def _min_energy_per_metre(self, dg: float) -> float:
