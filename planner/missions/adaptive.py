@@ -287,12 +287,12 @@ class _Loop:
             if outcome is None:  # the battery reached the reserve during the manoeuvre
                 return False
             changed |= outcome
+        if len(tail) < 2:  # the leg drove to the route's end: nothing to replan, even after an update
+            return self.stop("completed", "reached the goal")
         if changed:
             self.replan(leg_index, tail)
-        elif len(tail) >= 2:
-            self.route = evaluate_route(self.cost, tail, status="exact", planner=self.route.planner)
         else:
-            return self.stop("completed", "reached the goal")
+            self.route = evaluate_route(self.cost, tail, status="exact", planner=self.route.planner)
         return True
 
     def drive_leg(self, leg_index: int) -> tuple[np.ndarray, Any]:

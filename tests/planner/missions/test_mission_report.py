@@ -86,3 +86,14 @@ def test_the_battery_voltage_defaults_to_the_robot():
 def test_the_module_names_its_api():
     assert set(mission_report_module.__all__) == {"MissionReport", "simulate_adaptive_mission", "mission_battery",
                                                   "check_preset_grounds"}
+
+
+def test_an_update_after_the_last_leg_ends_the_mission_at_the_goal():
+    # On the example map, 20 m east of (10, 10) are two legs; the second one (on grass, unknown
+    # to the asphalt prior) is followed by an accepted update. The loop used to replan from the
+    # goal itself, and the mission failed with "start equals goal".
+    report = simulate_adaptive_mission(terrain.example_map(), (10.0, 10.0), (30.0, 10.0), battery_ah=20.0)
+    result = report.result
+    assert result.status == "completed" and result.distance_to_goal_m == pytest.approx(0.0, abs=1e-6)
+    last = len(result.legs) - 1
+    assert any(u.after_leg == last and u.accepted for u in result.updates)
