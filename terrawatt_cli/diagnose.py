@@ -13,7 +13,7 @@ from terrawatt_base.checks import check_seed
 from terrawatt_base.dask_client import client_worker_count
 
 from .common import (add_dask_options, add_map_options, check_dask_flags, check_outputs, dask_client_arg, input_paths,
-                     read_map_args, warn_figures)
+                     map_arg, warn_figures)
 from .data import add_data_options, logs_from_args
 
 __all__ = ["add_parser", "run_diagnose"]
@@ -46,8 +46,9 @@ def add_parser(sub: Any) -> None:
                    help="candidate effects (default: the whole catalogue)")
     p.add_argument("--split", choices=["runs", "blocks"], default="runs",
                    help="held-out data: other runs (default) or contiguous blocks of each run")
-    p.add_argument("--map", type=Path, default=None, metavar="FILE",
-                   help="the map the logs drove on (slope effect, grade and map localisation, the map figure)")
+    p.add_argument("--map", type=Path, default=None, metavar="FILE|example",
+                   help="the map the logs drove on (slope effect, grade and map localisation, the map figure); "
+                   "'example': the bundled map (of terrawatt mission's logs)")
     add_map_options(p)
     p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (and of the estimator's training)")
     add_dask_options(p, "the candidate effects' scoring")
@@ -85,7 +86,7 @@ def run_diagnose(args: argparse.Namespace) -> int:
     """
     _check_flags(args)
     check_outputs(args.out, DIAGNOSIS_FILES, input_paths(args))
-    terrain = read_map_args(args) if args.map is not None else None
+    terrain = map_arg(args)[0] if args.map is not None else None
     logs = logs_from_args(args, require_currents=True)
     cal = None if args.calibration_data is None else logs_from_args(args, True, flag="--calibration-data")
     source = model_under_diagnosis(args.model, logs, calibration_logs=cal, calibration_label=str(args.calibration_data),

@@ -5,7 +5,9 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from planner.missions.mission_report import simulate_adaptive_mission
+from terrain import InvalidParameterError
+
+from planner.missions.mission_report import check_logs_folder, simulate_adaptive_mission
 from planner.missions.monte_carlo_report import monte_carlo_mission
 from planner.missions.request import MissionRequest
 from .common import (Checked, add_dask_options, add_map_options, add_model_options, add_point_options,
@@ -40,6 +42,10 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--leg-m", type=float, default=10.0, metavar="M", action=Checked, check=positive,
                    help="route driven between comparisons (m)")
     p.add_argument("--no-adapt", action="store_true", help="drive the first plan without model updates")
+    p.add_argument("--logs", action="store_true",
+                   help="also write what the robot's sensors recorded on each leg as CSV logs, OUT/logs/leg_NNN.csv "
+                        "(commands, currents, IMU, poses, grounds): diagnose the planning model on them with "
+                        "terrawatt diagnose --data OUT/logs --model physics --map MAP")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--monte-carlo", type=int, default=None, metavar="N", action=Checked,
                    check=bounded("a number of missions >= 1", lambda v: v >= 1),
@@ -68,8 +74,12 @@ def run_mission(args: argparse.Namespace) -> int:
         workers=args.workers, scheduler=args.scheduler, model=args.model, risk=args.risk, draw_from=args.mc_draw,
         names=_NAMES)
     mc = args.monte_carlo is not None
+    if mc and args.logs:
+        raise InvalidParameterError("--logs writes the legs of one adaptive mission, not of --monte-carlo missions")
     check_outputs(args.out, ("monte_carlo.json", "monte_carlo.csv", "monte_carlo.png") if mc else
                   ("mission.json", "mission.png"), input_paths(args))
+    if args.logs:
+        check_logs_folder(args.out)
     tmap, label = map_arg(args)
     start, goal = request.points(tmap)
     model = load_model_arg(args)
@@ -79,9 +89,11 @@ def run_mission(args: argparse.Namespace) -> int:
             robot=args.robot, speed_mps=args.speed, prior_ground=args.prior_ground, leg_m=args.leg_m,
             adapt=not args.no_adapt, seed=args.seed, model=model, model_ground=args.model_ground, map_label=label)
         with warn_figures():
-            written = report.write(args.out)
+            written = report.write(args.out, logs=args.logs)
         print(report.summary())
-        print(f"wrote {written[0]}" + (f" and {written[1]}" if len(written) > 1 else ""))
+        legs = [p for p in written if p.suffix == ".csv"]
+        print("wrote " + ", ".join(str(p) for p in written if p not in legs)
+              + (f" and {len(legs)} leg logs in {legs[0].parent}" if legs else ""))
         return 0 if report.completed else 1
     with dask_client_arg(args) as client:
         study = monte_carlo_mission(

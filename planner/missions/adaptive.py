@@ -196,6 +196,7 @@ class _Loop:
         self.predictor = LegPredictor(lem, terrain, speed_mps=cfg.speed_mps, leg_length_m=cfg.leg_length_m,
                                       dt_s=1.0 / truth.current_rate_hz)
         self.legs: list[LegRecord] = []
+        self.leg_logs: list[InteractionLog] = []  # what the sensors recorded on each leg
         self.updates: list[UpdateRecord] = []
         self.replans: list[ReplanRecord] = []
         self.skipped: list[str] = []  # updates not attempted for lack of energy
@@ -305,6 +306,7 @@ class _Loop:
                               self.truth, self.cost, speed_mps=cfg.speed_mps, start_heading_rad=self.heading,
                               stop_at_reserve=True, seed=cfg.seed + 1000 + leg_index)
         budget = mr.budget
+        self.leg_logs.append(mr.log)
         self.legs.append(LegRecord(leg_index, (float(self.pos[0]), float(self.pos[1])),
                                    (float(mr.x_m[-1]), float(mr.y_m[-1])), leg_pred_j, float(budget.actual_energy_j),
                                    float(mr.duration_s), int(mr.n_samples), float(budget.predicted_energy_j)))
@@ -512,5 +514,5 @@ class _Loop:
             x_m=cat["x"], y_m=cat["y"], soc=cat["soc"], energy_j=cat["e"], predicted_energy_j=cat["p"],
             driven_energy_j=self.driven_j, excitation_energy_j=self.excitation_j,
             update_wall_time_s=self.update_wall, final_soc=self.soc, skipped_updates=tuple(self.skipped),
-            budget=self.budget(),
+            budget=self.budget(), leg_logs=tuple(self.leg_logs),
         )

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from energy import EnergyBudget
+from energy import EnergyBudget, InteractionLog
 from terrain import CellModelRegistry, TerrainMap
 from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.formats import result_document, write_result_json
@@ -111,6 +111,11 @@ class AdaptiveResult:
         The whole mission's battery draw (driving and excitation manoeuvres) against the
         first plan's predicted energy (:func:`energy.energy_budget`): arrival state of
         charge, reserve margin, whether the prediction fitted, where the pack ran out.
+    leg_logs : tuple of InteractionLog
+        What the robot's sensors recorded on each leg, in order (commands, currents, IMU,
+        poses, ground labels; the truth simulator's logs): the data to diagnose the planning
+        model's gap on (:meth:`planner.missions.MissionReport.write` with ``logs=True``).
+        Not in the JSON document.
     """
 
     status: str
@@ -133,6 +138,7 @@ class AdaptiveResult:
     final_soc: float
     skipped_updates: tuple[str, ...] = ()
     budget: EnergyBudget | None = None
+    leg_logs: tuple[InteractionLog, ...] = ()
 
     def __post_init__(self) -> None:
         if self.status not in ADAPTIVE_STATUSES:

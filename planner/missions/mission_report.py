@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -11,10 +12,12 @@ from pathlib import Path
 from typing import Any
 
 from energy import GROUND_PRESETS, Battery, TruthSimulator, ground_preset, robot_preset
+from energy.io import write_csv_log
 from terrain import CellModelRegistry, TerrainMap
-from terrawatt_base.formats import write_result_json
+from terrawatt_base.atomic import check_output_path
 from terrawatt_base.checks import check_bool, check_real
-from terrawatt_base.errors import UnknownNameError
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.formats import write_result_json
 from terrawatt_base.figure_file import draw_figure
 
 from ..model_cost import model_energy_model
@@ -23,7 +26,8 @@ from .adaptive_results import AdaptiveResult
 from .manoeuvres import fit_prior_model
 from .settings import AdaptiveSettings
 
-__all__ = ["MissionReport", "simulate_adaptive_mission", "mission_battery", "check_preset_grounds"]
+__all__ = ["MissionReport", "simulate_adaptive_mission", "mission_battery", "check_preset_grounds", "check_logs_folder",
+           "LOGS_FOLDER"]
 
 
 def check_preset_grounds(terrain: TerrainMap) -> None:
@@ -124,15 +128,61 @@ class MissionReport:
         """The content of mission.json: :meth:`AdaptiveResult.to_json_dict` and ``computing_time_s``."""
         return {**self.result.to_json_dict(), "computing_time_s": self.computing_time_s}
 
-    def write(self, out_dir: str | os.PathLike[str], *, on_figure_error: str = "warn") -> list[Path]:
+    def write(self, out_dir: str | os.PathLike[str], *, logs: bool = False, on_figure_error: str = "warn"
+              ) -> list[Path]:
         """Write mission.json and mission.png into ``out_dir``; return the files written (a figure that fails
-        warns and is left out, :func:`terrawatt_base.figure_file.draw_figure`)."""
+        warns and is left out, :func:`terrawatt_base.figure_file.draw_figure`).
+
+        With ``logs``, also each leg's log (:attr:`AdaptiveResult.leg_logs`) as a CSV log
+        ``logs/leg_NNN.csv`` (:func:`energy.io.write_csv_log`), a folder that ``terrawatt diagnose
+        --data`` and :func:`energy.io.read_logs` read: the previous mission's leg files there are
+        replaced, and a folder holding anything else is refused before anything is written
+        (:func:`check_logs_folder`).
+        """
         out = Path(out_dir)
+        if logs:
+            check_logs_folder(out)
         out.mkdir(parents=True, exist_ok=True)
         written = [write_result_json(out / "mission.json", self.to_dict())]
         png = draw_figure(out / "mission.png", lambda: self.result.plot(out / "mission.png", self.terrain,
                                                                           self.registry), on_error=on_figure_error)
-        return written + ([png] if png is not None else [])
+        written += [png] if png is not None else []
+        if logs:
+            folder = out / LOGS_FOLDER
+            folder.mkdir(exist_ok=True)
+            new = [folder / f"leg_{k:03d}.csv" for k in range(len(self.result.leg_logs))]
+            for path, log in zip(new, self.result.leg_logs):
+                written.append(write_csv_log(log, path))
+            for stale in sorted(set(_leg_files(folder)) - set(new)):
+                stale.unlink()
+        return written
+
+
+#: The folder of :meth:`MissionReport.write` (``logs=True``) that holds the legs' logs.
+LOGS_FOLDER = "logs"
+
+
+def _leg_files(folder: Path) -> list[Path]:
+    return [p for p in folder.iterdir() if re.fullmatch(r"leg_\d{3,}\.csv", p.name)] if folder.is_dir() else []
+
+
+def check_logs_folder(out_dir: str | os.PathLike[str]) -> Path:
+    """Before any work: ``out_dir/logs`` can take a mission's leg logs (missing, or a folder holding
+    nothing but an earlier mission's ``leg_NNN.csv`` files, which writing replaces); returns it.
+
+    Raises
+    ------
+    InvalidParameterError
+        It is a file, or a folder holding other files (they would be read as logs beside the legs').
+    """
+    folder = check_output_path(Path(out_dir) / LOGS_FOLDER, "the mission's logs folder", directory=True)
+    if folder.is_dir():
+        others = sorted(p.name for p in folder.iterdir() if p not in set(_leg_files(folder)))
+        if others:
+            raise InvalidParameterError(f"the mission's logs folder {str(folder)!r} holds other files ({others[:3]!r}"
+                                        f"{' ...' if len(others) > 3 else ''}): they would be read as logs beside the "
+                                        "legs'; give another output folder or move them")
+    return folder
 
 
 def simulate_adaptive_mission(

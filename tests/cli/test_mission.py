@@ -165,3 +165,48 @@ def test_cli_monte_carlo_with_failed_missions_writes_their_rows_and_exits_1(tmp_
     assert rc == 1 and "missions failed" in out and "maximum deliverable power" in out
     data = json.loads((tmp_path / "o" / "monte_carlo.json").read_text())
     assert data["n_failed"] >= 1 and len(data["samples"]["error"]) == 4
+
+
+def test_mission_logs_are_what_diagnose_reads_and_it_names_the_truths_lag(tmp_path, capsys):
+    # The CLI path from a simulated mission to its diagnosis: the legs' logs (what the sensors
+    # recorded) written by --logs, diagnosed against the planning physics as given on the map the
+    # mission drove. The truth differs from that physics by its 0.1 s velocity lag (and its
+    # sensor's rest offset, which is logged, never paid): the lag is named, alone.
+    from energy.io import read_logs
+
+    out = tmp_path / "out"
+    rc = main(["mission", "--start", "10", "10", "--goal", "40", "70", "--battery-ah", "20", "--logs", "--out", str(out)])
+    printed = capsys.readouterr().out
+    assert rc == 0, printed
+    legs = sorted((out / "logs").glob("leg_*.csv"))
+    data = json.loads((out / "mission.json").read_text())
+    assert len(legs) == len(data["legs"]) >= 2 and f"{len(legs)} leg logs in" in printed
+    logs = read_logs(out / "logs")
+    assert sum(len(log) for log in logs) == sum(leg["n_samples"] for leg in data["legs"])
+    assert all(log.pose_xyh is not None and log.ground is not None for log in logs)
+    rc = main(["diagnose", "--data", str(out / "logs"), "--model", "physics", "--map", "example", "--quiet",
+               "--out", str(tmp_path / "diag")])
+    assert rc == 0, capsys.readouterr()
+    diagnosis = json.loads((tmp_path / "diag" / "diagnosis.json").read_text())
+    assert diagnosis["chosen"] == ["time_lag"]
+    assert 0.0 < diagnosis["ranking"][0]["parameters"]["lag_s"] < 0.15
+
+
+def test_mission_logs_replace_an_earlier_missions_legs_and_refuse_other_files(tmp_path, capsys, monkeypatch):
+    import terrawatt_cli.mission as mission_cli
+
+    out = tmp_path / "out"
+    (out / "logs").mkdir(parents=True)
+    stale = out / "logs" / "leg_999.csv"
+    stale.write_text("an earlier mission's leg")
+    argv = ["mission", "--start", "10", "10", "--goal", "30", "10", "--battery-ah", "20", "--logs", "--out", str(out)]
+    assert main(argv) == 0
+    assert not stale.exists() and (out / "logs" / "leg_000.csv").is_file()
+    (out / "logs" / "notes.txt").write_text("mine")
+    monkeypatch.setattr(mission_cli, "simulate_adaptive_mission", lambda *a, **k: pytest.fail("ran before checking"))
+    capsys.readouterr()
+    assert main(argv) == 2
+    assert "holds other files (['notes.txt'])" in one_line_error(capsys)
+    assert (out / "logs" / "notes.txt").read_text() == "mine"
+    assert main(["mission", "--battery-ah", "20", "--monte-carlo", "3", "--logs", "--out", str(out)]) == 2
+    assert "--logs writes the legs of one adaptive mission" in one_line_error(capsys)

@@ -13,6 +13,7 @@ import planner.missions.mission_report as mission_report_module
 from planner.missions import AdaptiveResult
 from planner.missions.mission_report import (
     MissionReport,
+    check_logs_folder,
     check_preset_grounds,
     mission_battery,
     simulate_adaptive_mission,
@@ -52,6 +53,32 @@ def test_mission_json_and_figure(report, tmp_path):
     assert data == json.loads(json.dumps(report.to_dict(), allow_nan=True).replace("NaN", "null"))
 
 
+def test_the_legs_logs_are_what_the_mission_drove_and_read_back(report, tmp_path):
+    from energy.io import read_logs
+
+    legs = report.result.leg_logs
+    assert len(legs) == len(report.result.legs) and [len(log) for log in legs] == [
+        leg.n_samples for leg in report.result.legs]
+    written = report.write(tmp_path, logs=True)
+    csvs = [p for p in written if p.suffix == ".csv"]
+    assert [p.name for p in csvs] == [f"leg_{k:03d}.csv" for k in range(len(legs))]
+    back = read_logs(tmp_path / "logs")  # in name order
+    assert [len(log) for log in back] == [len(log) for log in legs]
+    first = back[0]
+    assert first.meta.source.endswith("leg_000.csv")
+    assert first.current_left_a.tolist() == legs[0].current_left_a.tolist()
+    assert first.pose_xyh.tolist() == legs[0].pose_xyh.tolist() and first.ground.tolist() == legs[0].ground.tolist()
+    assert "leg_logs" not in report.to_dict()
+
+
+def test_the_logs_folder_is_checked_before_writing(report, tmp_path):
+    assert check_logs_folder(tmp_path) == tmp_path / "logs"
+    (tmp_path / "logs").write_text("a file")
+    with pytest.raises(InvalidParameterError, match="is a file; expected a folder"):
+        report.write(tmp_path, logs=True)
+    assert not (tmp_path / "mission.json").exists()
+
+
 def test_a_figure_that_fails_warns(report, tmp_path, monkeypatch):
     monkeypatch.setattr(type(report.result), "plot", lambda *a, **k: 1 / 0)
     with pytest.warns(FigureWarning, match="mission.png: ZeroDivisionError"):
@@ -85,7 +112,7 @@ def test_the_battery_voltage_defaults_to_the_robot():
 
 def test_the_module_names_its_api():
     assert set(mission_report_module.__all__) == {"MissionReport", "simulate_adaptive_mission", "mission_battery",
-                                                  "check_preset_grounds"}
+                                                  "check_preset_grounds", "check_logs_folder", "LOGS_FOLDER"}
 
 
 def test_an_update_after_the_last_leg_ends_the_mission_at_the_goal():
