@@ -89,4 +89,7 @@ def test_read_map_with_options_phrases_the_nodata_advice_with_its_names(tmp_path
     with pytest.raises(NodataError, match="holes.tif has 1 nodata cells of .*; give --fill-nodata nearest") as err:
         read_map_with_options(path, names={"fill_nodata": "--fill-nodata"})
     assert err.value.n_nodata == 1
-    assert read_map_with_options(path, fill_nodata="nearest").shape == ramp_map.shape
+    from terrain import DataRepairWarning
+
+    with pytest.warns(DataRepairWarning, match="filled 1 nodata cells of GeoTIFF"):  # a repair is never silent
+        assert read_map_with_options(path, fill_nodata="nearest").shape == ramp_map.shape
