@@ -1,4 +1,4 @@
-"""The options of the commands that read logs: ``--data`` and the bag flags (:func:`energy.io.read_logs`), ``--band``."""
+"""The options of the commands that read logs: ``--data``, the bag and CSV flags (:func:`energy.io.read_logs`), ``--band``."""
 
 from __future__ import annotations
 
@@ -10,8 +10,11 @@ from typing import Any
 
 from energy import InteractionLog
 from energy.features import DEFAULT_BAND_HZ, check_band_hz
-from energy.io import DRIVE_CLOCKS, LOG_SUFFIXES, BagTopics, read_logs
+from energy.io import CSV_FIELDS, CSV_RATES, DRIVE_CLOCKS, LOG_SUFFIXES, BagTopics, CsvLayout, read_logs
 from energy.models import check_learned_band
+from terrain import InvalidParameterError, TerrawattError
+
+from .common import Checked
 
 __all__ = ["add_data_options", "logs_from_args", "add_band_option", "band_from_args"]
 
@@ -21,7 +24,9 @@ _DEFAULT = BagTopics()
 def add_data_options(parser: Any, *, grounds: bool = False) -> None:
     """Add ``--data``, ``--ground-label`` (and with ``grounds`` ``--grounds``) and the bag flags (``--cmd-vel-topic``,
     ``--imu-topic``, ``--current-topics``, ``--current-fields``, ``--voltage-field``, ``--current-unit``,
-    ``--accel-unit``, ``--drive-clock``: the fields of :class:`energy.io.BagTopics`) to a subcommand's parser."""
+    ``--accel-unit``, ``--drive-clock``: the fields of :class:`energy.io.BagTopics`) and the CSV flags
+    (``--csv-columns``, ``--csv-units``, ``--csv-rates``, ``--track-width``: :class:`energy.io.CsvLayout`) to a
+    subcommand's parser."""
     parser.add_argument(
         "--data", type=Path, required=True, metavar="DIR|FILE",
         help=f"logs: a BorealTC folder (GROUND/imu_NN.csv + pro_NN.csv), a CSV log, a bag "
@@ -53,6 +58,37 @@ def add_data_options(parser: Any, *, grounds: bool = False) -> None:
     bags.add_argument("--drive-clock", default=_DEFAULT.drive_clock, choices=DRIVE_CLOCKS,
                       help="drive samples at the current messages (default) or at the odometry messages, the "
                       "currents interpolated onto them (e.g. a 1 Hz status message beside 10-50 Hz odometry)")
+    csv = parser.add_argument_group("CSV logs of another layout (default: the layout terrawatt writes)")
+    csv.add_argument("--csv-columns", nargs="+", default=None, metavar="FIELD=COLUMN", action=Checked, check=_pairs,
+                     help=f"the column of each field, e.g. time=stamp_ms v=cmd_v omega=cmd_w current_left=iL "
+                     f"current_right=iR accel_z=az (fields: {', '.join(CSV_FIELDS)})")
+    csv.add_argument("--csv-units", nargs="+", default=None, metavar="FIELD=UNIT", action=Checked, check=_pairs,
+                     help="declared units of mapped fields, e.g. time=ms current_left=mA current_right=mA "
+                     "omega=deg/s accel_z=g (default SI)")
+    csv.add_argument("--csv-rates", choices=CSV_RATES, default="mixed",
+                     help="mixed: IMU and drive rows of different rates interleaved by time (default); single: "
+                     "one row per sample of both")
+    csv.add_argument("--track-width", type=float, default=None, metavar="M",
+                     help="with wheel speeds (--csv-columns speed_left=... speed_right=...): the track width (m)")
+
+
+def _pairs(values: Sequence[str], flag: str) -> dict[str, str]:
+    """``FIELD=VALUE`` words as a mapping (each field once), or an error naming ``flag``."""
+    out: dict[str, str] = {}
+    for word in values:
+        key, sep, value = word.partition("=")
+        if not sep or not key or not value or key in out:
+            raise InvalidParameterError(f"{flag} takes FIELD=VALUE words, each field once; got {word!r}")
+        out[key] = value
+    return out
+
+
+def _csv_layout(args: argparse.Namespace) -> CsvLayout:
+    """The :class:`energy.io.CsvLayout` of the CSV flags; its errors name them."""
+    try:
+        return CsvLayout(args.csv_columns, args.csv_units, args.csv_rates, args.track_width)
+    except TerrawattError as exc:
+        raise type(exc)(f"--csv-columns / --csv-units: {exc}") from None
 
 
 def logs_from_args(args: argparse.Namespace, require_currents: bool, *, flag: str = "--data") -> list[InteractionLog]:
@@ -60,8 +96,8 @@ def logs_from_args(args: argparse.Namespace, require_currents: bool, *, flag: st
     (:func:`energy.io.read_logs`: errors name the flags; with ``require_currents`` a log without currents)."""
     bag = BagTopics(**{f.name: getattr(args, f.name) for f in dataclasses.fields(BagTopics)})
     path = getattr(args, flag.lstrip("-").replace("-", "_"))
-    return read_logs(path, getattr(args, "grounds", None), bag=bag, require_currents=require_currents,
-                     ground_label=args.ground_label, name=flag)
+    return read_logs(path, getattr(args, "grounds", None), bag=bag, csv=_csv_layout(args),
+                     require_currents=require_currents, ground_label=args.ground_label, name=flag)
 
 
 def add_band_option(parser: Any, help_text: str | None = None) -> None:

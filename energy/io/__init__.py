@@ -77,7 +77,7 @@ from .cleaning import (
 )
 from .csv_header import CSV_LOG_FORMAT_VERSION
 from .csv_log import CSV_FIELDS, CSV_RATES, CSV_UNITS, DEFAULT_CSV_COLUMNS, read_csv_log, write_csv_log
-from .layouts import LOG_SUFFIXES, BagTopics, read_logs
+from .layouts import LOG_SUFFIXES, BagTopics, CsvLayout, read_logs
 from .rosbag import DRIVE_CLOCKS, MAX_CLOCK_OFFSET_S, read_rosbag
 
 __all__ = [
@@ -108,5 +108,6 @@ __all__ = [
     "read_rosbag",
     "LOG_SUFFIXES",
     "BagTopics",
+    "CsvLayout",
     "read_logs",
 ]

@@ -38,6 +38,7 @@ __all__ = [
     "DEFAULT_CSV_COLUMNS",
     "CSV_LOG_FORMAT_VERSION",
     "CSV_RATES",
+    "csv_field_map",
     "read_csv_log",
     "write_csv_log",
 ]
@@ -190,7 +191,7 @@ def read_csv_log(
     repairs = parse_repair(repair)
     gap_factor = check_gap_factor(gap_factor)
     explicit = columns is not None
-    colmap, units, factors = _field_map(columns, units)
+    colmap, units, factors = csv_field_map(columns, units)
     text = read_csv_text(path)
     file_meta = _file_meta(text)
     has_wheels, vel_fields, required = _velocity_fields(colmap)
@@ -204,6 +205,15 @@ def read_csv_log(
     optional_fields = [] if explicit else present_fields
     numeric_fields = required + (present_fields if explicit else [])
     text_fields = ["ground"] if "ground" in colmap else []
+    if not explicit:  # a file of another layout: say how to map it
+        missing = [colmap[f] for f in numeric_fields if colmap[f] not in text.names]
+        if missing:
+            raise DataError(
+                f"{src!r}: missing column(s) {missing!r} of the layout terrawatt writes; the header has {text.names!r}: "
+                "map the fields to your columns and declare their units (columns={'time': COLUMN, 'v': COLUMN, ...}, "
+                "units={'time': 'ms', ...}; on the command line --csv-columns time=COLUMN v=COLUMN ... --csv-units "
+                "time=ms ...)"
+            )
     table = read_table(
         text,
         [colmap[f] for f in numeric_fields],
@@ -277,10 +287,20 @@ def read_csv_log(
     )
 
 
-def _field_map(
+def csv_field_map(
     columns: Mapping[str, str] | None, units: Mapping[str, str] | None
 ) -> tuple[dict[str, str], dict[str, str], dict[str, float]]:
-    """(field -> column, field -> declared unit, field -> factor to SI), checked."""
+    """A CSV log's column map and declared units, checked before any file is read (as :func:`read_csv_log` takes
+    them): (field -> column, field -> declared unit, field -> factor to SI).
+
+    Raises
+    ------
+    UnknownNameError
+        A field that is not one of :data:`CSV_FIELDS`, a unit for a field that is not mapped, an
+        unknown unit.
+    InvalidParameterError
+        A column name that is not a non-empty string.
+    """
     colmap = dict(DEFAULT_CSV_COLUMNS if columns is None else columns)
     unknown = [f for f in colmap if f not in _FIELD_KIND]
     if unknown:

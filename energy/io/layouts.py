@@ -14,10 +14,10 @@ from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameE
 from ..logs import DEFAULT_GAP_FACTOR, InteractionLog
 from .borealtc import read_borealtc
 from .cleaning import UNIT_FACTORS
-from .csv_log import read_csv_log
+from .csv_log import CSV_RATES, csv_field_map, read_csv_log
 from .rosbag import DRIVE_CLOCKS, read_rosbag
 
-__all__ = ["LOG_SUFFIXES", "BagTopics", "read_logs"]
+__all__ = ["LOG_SUFFIXES", "BagTopics", "CsvLayout", "read_logs"]
 
 #: File suffixes :func:`read_logs` reads, and the reader of each.
 LOG_SUFFIXES = {".csv": "csv", ".bag": "bag", ".db3": "bag", ".mcap": "bag"}
@@ -105,11 +105,63 @@ def _names(name: str, value: Any, counts: tuple[int, ...]) -> tuple[str, ...]:
     return items
 
 
+@dataclass(frozen=True)
+class CsvLayout:
+    """How the CSV logs :func:`read_logs` meets name their columns and units (as :func:`~energy.io.read_csv_log`
+    takes them); the default is the layout :func:`~energy.io.write_csv_log` writes.
+
+    Parameters
+    ----------
+    columns : mapping field -> column name, optional
+        The column of each field (:data:`~energy.io.CSV_FIELDS`: ``time``, ``accel_z``, ``v`` and
+        ``omega`` or ``speed_left`` and ``speed_right``, ``current_left`` and ``current_right``,
+        optional ``x`` / ``y`` / ``heading``, ``gyro_z``, ``battery_voltage``, ``battery_current``,
+        ``ground``).
+    units : mapping field -> unit, optional
+        Declared units of the mapped fields (:data:`~energy.io.CSV_UNITS`); undeclared fields are SI.
+    rates : {"mixed", "single"}
+        Streams of different rates interleaved by time (default), or one row per sample of both.
+    track_width_m : float, optional
+        With wheel speeds (``speed_left`` / ``speed_right``): the track width that gives omega.
+
+    Raises
+    ------
+    UnknownNameError, InvalidParameterError
+        An unknown field, unit or ``rates``, an empty column name, a unit for a field not mapped;
+        checked when the layout is made, before any log is read.
+
+    Examples
+    --------
+    >>> CsvLayout({"time": "stamp_ms", "v": "cmd_v", "omega": "cmd_w", "accel_z": "az"}, {"time": "ms"}).rates
+    'mixed'
+    """
+
+    columns: dict[str, str] | None = None
+    units: dict[str, str] | None = None
+    rates: str = "mixed"
+    track_width_m: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.columns is None and self.units:
+            raise InvalidParameterError("units need columns: the default layout's columns are in SI units")
+        if self.columns is not None:
+            columns, units, _ = csv_field_map(self.columns, self.units)
+            object.__setattr__(self, "columns", columns)
+            object.__setattr__(self, "units", units)
+        check_choice("rates", self.rates, CSV_RATES)
+
+    def read(self, path: str | os.PathLike[str], **options: Any) -> InteractionLog:
+        """:func:`~energy.io.read_csv_log` of ``path`` in this layout (``options``: its other keywords)."""
+        return read_csv_log(path, self.columns, self.units, rates=self.rates, track_width_m=self.track_width_m,
+                            **options)
+
+
 def read_logs(
     path: str | os.PathLike[str],
     grounds: Sequence[str] | None = None,
     *,
     bag: BagTopics | None = None,
+    csv: CsvLayout | None = None,
     require_currents: bool = False,
     robot: str = "unknown",
     ground_label: str | None = None,
@@ -135,6 +187,8 @@ def read_logs(
         of the other logs. All by default.
     bag : BagTopics, optional
         Topics and fields of the bags (default :class:`BagTopics`).
+    csv : CsvLayout, optional
+        Columns and units of the CSV logs (default: the layout :func:`~energy.io.write_csv_log` writes).
     require_currents : bool
         Refuse a log without drive currents (for training, evaluation and diagnosis); by
         default such logs (a bag with no current topic) are read, enough to predict from.
@@ -161,7 +215,7 @@ def read_logs(
     UnknownNameError
         A requested ground that no log has.
     InvalidParameterError
-        ``bag`` not a BagTopics, bad flags.
+        ``bag`` not a BagTopics, ``csv`` not a CsvLayout, bad flags.
 
     Examples
     --------
@@ -179,6 +233,10 @@ def read_logs(
         bag = BagTopics()
     if not isinstance(bag, BagTopics):
         raise InvalidParameterError(f"bag must be a BagTopics, got {bag!r:.80}")
+    if csv is None:
+        csv = CsvLayout()
+    if not isinstance(csv, CsvLayout):
+        raise InvalidParameterError(f"csv must be a CsvLayout, got {csv!r:.80}")
     wanted = _grounds(grounds)
     root = Path(path)
     common = dict(repair=repair, allow_gaps=allow_gaps, gap_factor=gap_factor, check_units=check_units)
@@ -190,7 +248,7 @@ def read_logs(
 
     def one(item: Path, label: str | None = ground_label) -> InteractionLog:
         if LOG_SUFFIXES.get(item.suffix.lower()) == "csv":
-            return read_csv_log(item, robot=None if robot == "unknown" else robot, ground_label=label, **common)
+            return csv.read(item, robot=None if robot == "unknown" else robot, ground_label=label, **common)
         return read_rosbag(item, bag.cmd_vel_topic, bag.imu_topic, bag.current_topics, current_fields=bag.current_fields,
                            voltage_field=bag.voltage_field, current_unit=bag.current_unit, accel_unit=bag.accel_unit,
                            drive_clock=bag.drive_clock, robot=robot,

@@ -56,3 +56,31 @@ def test_a_band_needs_a_learned_model_among_the_kinds():
     with pytest.raises(InvalidParameterError, match="--band applies to the estimator and paper models only, "
                        "got --model linear constant"):
         band_from_args(_parse_band("--band", "1", "20"), ["linear", "constant"])
+
+
+def test_csv_flags_read_csv_logs_of_another_layout(tmp_path):
+    from energy import read_csv_log
+
+    generic = FIXTURES.parent / "generic_ma.csv"
+    args = _parse("--data", str(generic), "--csv-columns", "time=stamp_ms", "v=cmd_v", "omega=cmd_w",
+                  "current_left=left_mA", "current_right=right_mA", "accel_z=acc_z", "ground=label",
+                  "--csv-units", "time=ms", "current_left=mA", "current_right=mA", "omega=deg/s")
+    (log,) = logs_from_args(args, require_currents=True)
+    same = read_csv_log(generic, dict(args.csv_columns), dict(args.csv_units))
+    assert log.current_right_a.tolist() == same.current_right_a.tolist() and log.time_s[-1] == same.time_s[-1]
+
+
+@pytest.mark.parametrize(("argv", "match"), [
+    (["--csv-columns", "time"], "--csv-columns takes FIELD=VALUE words, each field once; got 'time'"),
+    (["--csv-columns", "time=a", "time=b"], "each field once; got 'time=b'"),
+    (["--csv-units", "=ms"], "--csv-units takes FIELD=VALUE words"),
+])
+def test_bad_csv_words_fail_while_parsing_naming_the_flag(argv, match):
+    with pytest.raises(TerrawattError, match=match):
+        _parse("--data", "x", *argv)
+
+
+def test_a_bad_csv_map_names_the_flags(tmp_path):
+    args = _parse("--data", str(FIXTURES), "--csv-columns", "tim=stamp_ms")
+    with pytest.raises(TerrawattError, match=r"--csv-columns / --csv-units: columns has unknown field\(s\) \['tim'\]"):
+        logs_from_args(args, require_currents=True)

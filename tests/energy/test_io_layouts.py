@@ -228,3 +228,48 @@ def test_every_command_accepts_a_csv_log_folder_and_refuses_a_missing_path(layou
     assert rc == 0, err
     rc, _, err = run_cli(capsys, command, "--data", tmp_path / "nowhere", *model)
     assert rc == 2 and "--data" in err and "does not exist" in err
+
+
+# --------------------------------------------------------------------------- CSV logs of another layout
+GENERIC = Path(__file__).resolve().parents[1] / "fixtures" / "generic_ma.csv"
+GENERIC_LAYOUT = dict(columns={"time": "stamp_ms", "v": "cmd_v", "omega": "cmd_w", "current_left": "left_mA",
+                               "current_right": "right_mA", "accel_z": "acc_z", "ground": "label"},
+                      units={"time": "ms", "current_left": "mA", "current_right": "mA", "omega": "deg/s"})
+
+
+def test_a_folder_of_csv_logs_of_another_layout_reads_as_read_csv_log_reads_each(tmp_path):
+    from energy import read_csv_log
+    from energy.io import CsvLayout
+
+    for name in ("a.csv", "b.csv"):
+        shutil.copy(GENERIC, tmp_path / name)
+    logs = read_logs(tmp_path, csv=CsvLayout(**GENERIC_LAYOUT), require_currents=True)
+    one = read_csv_log(GENERIC, GENERIC_LAYOUT["columns"], GENERIC_LAYOUT["units"])
+    assert len(logs) == 2
+    for log in logs:
+        assert log.time_s.tolist() == one.time_s.tolist() and log.current_left_a.tolist() == one.current_left_a.tolist()
+        assert log.omega_radps.tolist() == one.omega_radps.tolist() and log.ground.tolist() == one.ground.tolist()
+    assert one.current_left_a[0] == pytest.approx(1.0)  # 1000 mA, declared
+
+
+def test_a_csv_of_another_layout_without_its_map_says_how_to_give_one(tmp_path):
+    with pytest.raises(DataError, match=r"missing column\(s\) \['time_s', .* of the layout terrawatt writes; the header "
+                                        r"has \['stamp_ms'.*--csv-columns time=COLUMN"):
+        read_logs(GENERIC)
+
+
+@pytest.mark.parametrize(("kwargs", "error", "match"), [
+    ({"columns": {"tim": "t"}}, UnknownNameError, r"unknown field\(s\) \['tim'\]"),
+    ({"columns": {"time": ""}}, InvalidParameterError, "non-empty column names"),
+    ({"columns": {"time": "t"}, "units": {"v": "m/s"}}, UnknownNameError, r"field\(s\) \['v'\] that are not"),
+    ({"columns": {"time": "t"}, "units": {"time": "fortnights"}}, UnknownNameError, "unit 'fortnights'"),
+    ({"units": {"time": "ms"}}, InvalidParameterError, "units need columns"),
+    ({"rates": "double"}, UnknownNameError, "rates must be one of"),
+])
+def test_a_csv_layout_is_checked_when_made(kwargs, error, match):
+    from energy.io import CsvLayout
+
+    with pytest.raises(error, match=match):
+        CsvLayout(**kwargs)
+    with pytest.raises(InvalidParameterError, match="csv must be a CsvLayout"):
+        read_logs(GENERIC, csv=GENERIC_LAYOUT)
