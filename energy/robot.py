@@ -226,3 +226,33 @@ class RobotParams:
     def replace(self, **changes: object) -> RobotParams:
         """Return a copy with some fields changed (validated again)."""
         return dataclasses.replace(self, **changes)
+
+    def to_plain(self) -> dict[str, object]:
+        """The fields as plain values (the motor a nested mapping): what robot and model files store."""
+        return dataclasses.asdict(self)
+
+    @classmethod
+    def from_plain(cls, value: object, source: str = "robot parameters") -> RobotParams:
+        """The robot of :meth:`to_plain`'s mapping, validated; fields left out take their defaults.
+
+        Raises
+        ------
+        InvalidParameterError
+            Not a mapping, an unknown or missing field (the message names it and lists the
+            fields), or a value the parameters refuse.
+        """
+        def fields_of(kind: type, plain: object, where: str) -> dict[str, object]:
+            if not isinstance(plain, dict):
+                raise InvalidParameterError(f"{where} must be a mapping of fields, got {type(plain).__name__!r}")
+            known = [f.name for f in dataclasses.fields(kind)]
+            unknown = sorted(str(k) for k in plain if k not in known)
+            missing = [f.name for f in dataclasses.fields(kind) if f.name not in plain
+                       and f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING]
+            if unknown or missing:
+                raise InvalidParameterError(f"{where}: unknown field(s) {unknown!r}, missing field(s) {missing!r}; "
+                                            f"the fields are {known!r}")
+            return dict(plain)
+
+        d = fields_of(cls, value, source)
+        d["motor"] = MotorParams(**fields_of(MotorParams, d["motor"], f"{source}: motor"))
+        return cls(**d)

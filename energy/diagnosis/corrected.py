@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Sequence
 from typing import Any
 
@@ -15,7 +14,7 @@ from terrain.terrain_map import TerrainMap
 from ..logs import InteractionLog
 from ..models.base import CurrentModel, ModelRecord
 from ..models.baselines import PhysicsCurrentModel
-from ..params import MotorParams, RobotParams
+from ..params import RobotParams
 from .effect_base import Effect
 from .effects import EFFECTS_CATALOGUE, effect_from_spec
 from .fit import compose, fit_effect_set, prepare_data
@@ -25,15 +24,11 @@ __all__ = ["CorrectedCurrentModel"]
 
 
 def _robot_plain(robot: Any) -> Any:
-    return {"__robot__": dataclasses.asdict(robot)} if isinstance(robot, RobotParams) else robot
+    return {"__robot__": robot.to_plain()} if isinstance(robot, RobotParams) else robot
 
 
 def _robot_unplain(value: Any) -> Any:
-    if isinstance(value, dict):
-        d = dict(value["__robot__"])
-        d["motor"] = MotorParams(**d["motor"])
-        return RobotParams(**d)
-    return value
+    return RobotParams.from_plain(value["__robot__"]) if isinstance(value, dict) else value
 
 
 class CorrectedCurrentModel(CurrentModel):

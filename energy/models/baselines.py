@@ -26,7 +26,7 @@ from terrawatt_base.checks import check_bool, real_array
 from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 from ..logs import InteractionLog, at_rest, log_slope_rad, rest_samples
-from ..params import GroundParams, MotorParams, RobotParams, ground_preset, robot_preset
+from ..params import GroundParams, RobotParams, ground_preset, robot_preset
 from ..physics import EFFECTS, PhysicsEnergyModel
 from .base import CurrentModel, log_currents
 
@@ -145,18 +145,11 @@ _DRIVE_EFFECTS = tuple(e for e in EFFECTS if e not in ("sensor", "control"))
 
 
 def _robot_to_plain(robot: str | RobotParams) -> Any:
-    if isinstance(robot, str):
-        return robot
-    d = dataclasses.asdict(robot)
-    return {"__robot__": d}
+    return robot if isinstance(robot, str) else {"__robot__": robot.to_plain()}
 
 
 def _robot_from_plain(value: Any) -> str | RobotParams:
-    if isinstance(value, dict):
-        d = dict(value["__robot__"])
-        d["motor"] = MotorParams(**d["motor"])
-        return RobotParams(**d)
-    return value
+    return RobotParams.from_plain(value["__robot__"]) if isinstance(value, dict) else value
 
 
 def _ground_to_plain(ground: str | GroundParams) -> Any:
@@ -512,7 +505,7 @@ class PhysicsCurrentModel(CurrentModel):
 
     def _state(self) -> dict[str, Any]:
         state = {
-            "robot": dataclasses.asdict(self.robot_),
+            "robot": self.robot_.to_plain(),
             "ground": None if self.ground_ is None else dataclasses.asdict(self.ground_),
             "idle_current_a": self.idle_current_a_,
             "rest_current_a": self.rest_current_a_.tolist(),

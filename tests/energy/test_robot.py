@@ -43,3 +43,20 @@ def test_robot_validation(field: str, value: object, match: str) -> None:
 def test_motor_validation(field: str, value: object, match: str) -> None:
     with pytest.raises(InvalidParameterError, match=match):
         sample_motor(**{field: value})
+
+
+def test_a_robot_is_plain_values_and_back():
+    from energy import RobotParams, robot_preset
+
+    husky = robot_preset("husky")
+    plain = husky.to_plain()
+    assert isinstance(plain["motor"], dict) and RobotParams.from_plain(plain) == husky
+    del plain["rest_current_a"]  # a field with a default may be left out
+    assert RobotParams.from_plain(plain).rest_current_a == 0.0
+    del plain["mass_kg"]
+    with pytest.raises(InvalidParameterError, match=r"missing field\(s\) \['mass_kg'\]"):
+        RobotParams.from_plain(plain)
+    with pytest.raises(InvalidParameterError, match=r"my robot: motor: unknown field\(s\) \['kv'\]"):
+        RobotParams.from_plain({**husky.to_plain(), "motor": {**husky.motor.__dict__, "kv": 1.0}}, "my robot")
+    with pytest.raises(InvalidParameterError, match="must be a mapping of fields, got 'list'"):
+        RobotParams.from_plain([1, 2])
