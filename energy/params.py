@@ -11,10 +11,14 @@ ground coefficients to logs.
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import numpy as np
 
 from terrain import UNKNOWN_GROUND, TerrainMap
-from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.errors import FileFormatError, InvalidParameterError, UnknownNameError
+from terrawatt_base.formats import read_result_json, result_document, write_result_json
 
 from .ground import GroundParams
 from .robot import DRIVE_KINDS, GRAVITY_MPS2, MotorParams, RobotParams
@@ -29,6 +33,10 @@ __all__ = [
     "GROUND_PRESETS",
     "robot_preset",
     "ground_preset",
+    "robot_params",
+    "write_robot_file",
+    "read_robot_file",
+    "ROBOT_FILE_VERSION",
     "resolve_unknown_ground",
 ]
 
@@ -229,6 +237,84 @@ def robot_preset(name: str) -> RobotParams:
         raise UnknownNameError(
             f"robot preset {name!r} is unknown; expected one of {sorted(ROBOT_PRESETS)!r}"
         ) from None
+
+
+#: Format version of robot files (``terrawatt-robot``, :func:`write_robot_file`).
+ROBOT_FILE_VERSION = 1
+
+
+def write_robot_file(robot: RobotParams, path: str | os.PathLike[str]) -> Path:
+    """Write ``robot`` as a robot file: JSON (format ``terrawatt-robot``, versioned), written atomically.
+
+    Start from a preset and edit the numbers (SI units; :class:`RobotParams` says what each is),
+    then give the file wherever a robot is named (``--robot FILE.json``, :func:`robot_params`).
+
+    Raises
+    ------
+    InvalidParameterError
+        ``robot`` is not a RobotParams.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> path = write_robot_file(robot_preset("jackal"), Path(tempfile.mkdtemp()) / "jackal.json")
+    >>> read_robot_file(path) == robot_preset("jackal")
+    True
+    """
+    if not isinstance(robot, RobotParams):
+        raise InvalidParameterError(f"robot must be a RobotParams, got {type(robot).__name__!r}")
+    return write_result_json(path, result_document("robot", ROBOT_FILE_VERSION, {"robot": robot.to_plain()}))
+
+
+def read_robot_file(path: str | os.PathLike[str]) -> RobotParams:
+    """The robot of a robot file (:func:`write_robot_file`), validated.
+
+    Raises
+    ------
+    FileFormatError
+        Missing, not JSON, not a robot file, or parameters the robot refuses (the message
+        names the field).
+    FormatVersionError
+        Another format version.
+    """
+    document = read_result_json(path, "robot", ROBOT_FILE_VERSION)
+    try:
+        return RobotParams.from_plain(document.get("robot"), f"robot file {str(path)!r}")
+    except (InvalidParameterError, TypeError) as exc:
+        raise FileFormatError(f"robot file {str(path)!r} holds no valid robot: {exc}") from None
+
+
+def robot_params(robot: str | os.PathLike[str] | RobotParams, *, name: str = "robot") -> RobotParams:
+    """The robot that ``robot`` names: a :class:`RobotParams` as it is, a preset name
+    (:data:`ROBOT_PRESETS`), or a robot file (a path ending in ``.json``, :func:`read_robot_file`).
+
+    ``name`` is how messages call it (the command line passes ``"--robot"``).
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a RobotParams, a string or a path.
+    UnknownNameError
+        Neither a preset name nor a ``.json`` path.
+    FileFormatError, FormatVersionError
+        As :func:`read_robot_file`.
+
+    Examples
+    --------
+    >>> robot_params("husky") is robot_preset("husky"), robot_params(robot_preset("jackal")).name
+    (True, 'jackal')
+    """
+    if isinstance(robot, RobotParams):
+        return robot
+    if not isinstance(robot, (str, os.PathLike)):
+        raise InvalidParameterError(f"{name} must be a RobotParams, a preset name or a robot file (.json), got "
+                                    f"{type(robot).__name__!r}")
+    if isinstance(robot, str) and robot in ROBOT_PRESETS:
+        return ROBOT_PRESETS[robot]
+    if Path(robot).suffix.lower() == ".json":
+        return read_robot_file(robot)
+    raise UnknownNameError(f"{name} {robot!r:.80} is neither a robot preset ({', '.join(sorted(ROBOT_PRESETS))}) nor "
+                           "a robot file (.json, energy.params.write_robot_file)")
 
 
 def ground_preset(name: str) -> GroundParams:

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping
 from typing import Any
 
-from energy import robot_preset
+from energy.params import RobotParams, robot_params
 from terrain import TerrainMap
 
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
@@ -17,7 +18,7 @@ __all__ = ["edge_costs"]
 def edge_costs(
     terrain: TerrainMap,
     *,
-    robot: str = "husky",
+    robot: str | os.PathLike[str] | RobotParams = "husky",
     speed_mps: float = 0.5,
     max_slope_rad: float = DEFAULT_MAX_SLOPE_RAD,
     unknown_ground: str | None = "gravel",
@@ -30,8 +31,9 @@ def edge_costs(
     ----------
     terrain : TerrainMap
         The map to price.
-    robot : str
-        Robot preset name.
+    robot : str, path or RobotParams
+        A robot preset name, a robot file (``.json``) or a :class:`~energy.RobotParams`
+        (:func:`energy.params.robot_params`).
     speed_mps : float
         Planning speed (m/s).
     max_slope_rad : float
@@ -40,7 +42,7 @@ def edge_costs(
         Presets only: the ground preset of cells of unknown ground (None refuses them).
     model : CurrentModel, optional
         A fitted current model (e.g. :func:`energy.load_current_model`): the edges are priced
-        by :func:`planner.model_energy_cost` on ``robot_preset(robot)``; ``unknown_ground`` does
+        by :func:`planner.model_energy_cost` on ``robot_params(robot)``; ``unknown_ground`` does
         not apply.
     model_ground : str or mapping, optional
         With ``model``: as :func:`planner.model_energy_cost`.
@@ -63,5 +65,5 @@ def edge_costs(
     if model is None:
         return EnergyCost.from_presets(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=max_slope_rad,
                                        unknown_ground=unknown_ground)
-    return model_energy_cost(terrain, model, robot_preset(robot), speed_mps, model_ground=model_ground,
+    return model_energy_cost(terrain, model, robot_params(robot), speed_mps, model_ground=model_ground,
                              max_slope_rad=max_slope_rad)

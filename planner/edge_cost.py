@@ -28,13 +28,15 @@ through which the lattice, the refinement and the OMPL objective call them.
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
-from energy import GROUND_PRESETS, EnergyModel, PhysicsEnergyModel, ground_preset, robot_preset
+from energy import GROUND_PRESETS, EnergyModel, PhysicsEnergyModel, RobotParams, ground_preset
+from energy.params import robot_params
 from terrain import TerrainMap
 from terrawatt_base.checks import check_real
 from terrawatt_base.errors import InvalidParameterError, OutOfBoundsError, UnknownNameError
@@ -414,22 +416,23 @@ class EnergyCost:
         cls,
         terrain: TerrainMap,
         *,
-        robot: str = "husky",
+        robot: str | os.PathLike[str] | RobotParams = "husky",
         speed_mps: float = 0.5,
         max_slope_rad: float = DEFAULT_MAX_SLOPE_RAD,
         unknown_ground: str | None = "gravel",
     ) -> EnergyCost:
         """Physics-model edge costs on a map whose ground names are preset names.
 
-        :meth:`from_model` with :class:`energy.PhysicsEnergyModel` of ``robot_preset(robot)``
+        :meth:`from_model` with :class:`energy.PhysicsEnergyModel` of ``robot_params(robot)``
         and ``ground_preset(name)`` for every ground class of the map.
 
         Parameters
         ----------
         terrain : TerrainMap
             The map; each name of ``terrain.ground_names`` must be a ground preset.
-        robot : str
-            Robot preset name.
+        robot : str, path or RobotParams
+            A robot preset name, a robot file (``.json``) or a :class:`~energy.RobotParams`
+            (:func:`energy.params.robot_params`).
         speed_mps : float
             Planning speed (m/s, > 0).
         max_slope_rad : float
@@ -459,7 +462,7 @@ class EnergyCost:
         """
         if not isinstance(terrain, TerrainMap):
             raise InvalidParameterError(f"terrain must be a TerrainMap, got {type(terrain).__name__!r}")
-        model = PhysicsEnergyModel(robot_preset(robot))
+        model = PhysicsEnergyModel(robot_params(robot))
         grounds = {}
         for gid, name in terrain.ground_names.items():
             if name not in GROUND_PRESETS:

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from energy import robot_preset
+from energy.params import robot_params
 from energy.battery import S_PER_H
 from terrain import TerrainMap
 from terrawatt_base.formats import result_document, write_result_json
@@ -207,7 +207,7 @@ def reach_on_battery(
     reserve_pct = check_real("reserve_pct", reserve_pct, low=0.0, high=100.0, high_inclusive=False)
     max_slope_deg = check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False,
                                high_inclusive=False)
-    voltage_v = robot_preset(robot).battery_voltage_v if voltage_v is None else check_real(
+    voltage_v = robot_params(robot).battery_voltage_v if voltage_v is None else check_real(
         "voltage_v", voltage_v, low=0.0, low_inclusive=False)
     budget_j = battery_ah * voltage_v * S_PER_H
     compile_s = warm_up_kernels() + warm_up_reachability()

@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from energy import GROUND_PRESETS, CurrentModel, load_current_model
+from energy.params import robot_params
 from terrain import DemWindows, FigureWarning, InvalidParameterError, TerrainMap
 from terrain.io import read_map_with_options
 from terrain.procedural import example_map
@@ -26,7 +27,7 @@ from planner.risk import check_risk_level
 
 __all__ = [
     "Checked", "bounded", "positive", "MAP_FLAGS", "add_map_options", "read_map_args", "map_arg", "add_point_options",
-    "point_arg", "add_robot_options", "add_planner_options", "check_outputs", "INPUT_FLAGS", "input_paths",
+    "point_arg", "add_robot_options", "robot_arg", "add_planner_options", "check_outputs", "INPUT_FLAGS", "input_paths",
     "check_output_file", "draw_figure", "warn_figures", "add_dask_options", "check_dask_flags", "dask_client_arg",
     "add_model_options", "check_model_flags", "load_model_arg",
 ]
@@ -117,7 +118,9 @@ def point_arg(args: argparse.Namespace, name: str, where: TerrainMap | DemWindow
 
 def add_robot_options(p: argparse.ArgumentParser, *, speed: str = "planning speed", slope: bool = True) -> None:
     """``--robot``, ``--speed``, ``--out`` and (with ``slope``) ``--max-slope-deg`` and ``--unknown-ground``."""
-    p.add_argument("--robot", default="husky", help="robot preset: paper_seed, jackal or husky (default husky)")
+    p.add_argument("--robot", default="husky", metavar="NAME|FILE.json", action=Checked, check=robot_arg,
+                   help="robot preset: paper_seed, jackal or husky (default husky), or a robot file of your robot's "
+                        "parameters (energy.params.write_robot_file writes a preset's, to edit)")
     p.add_argument("--speed", type=float, default=0.5, action=Checked, check=positive, metavar="M/S",
                    help=f"{speed} (default 0.5 m/s)")
     p.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
@@ -128,6 +131,12 @@ def add_robot_options(p: argparse.ArgumentParser, *, speed: str = "planning spee
         p.add_argument("--unknown-ground", default="gravel",
                        help="ground preset assumed where the map's ground class is unknown (-1); 'none' to refuse "
                             "such cells")
+
+
+def robot_arg(value: str, flag: str) -> str:
+    """A :class:`Checked` check of ``--robot``: a preset name or a robot file that reads (:func:`energy.params.robot_params`)."""
+    robot_params(value, name=flag)
+    return value
 
 
 def add_planner_options(p: argparse.ArgumentParser, *, planner: str, time_s: float, choices: Iterable[str]) -> None:

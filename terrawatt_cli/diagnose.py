@@ -12,8 +12,8 @@ from terrain import InvalidParameterError
 from terrawatt_base.checks import check_seed
 from terrawatt_base.dask_client import client_worker_count
 
-from .common import (add_dask_options, add_map_options, check_dask_flags, check_outputs, dask_client_arg, input_paths,
-                     map_arg, warn_figures)
+from .common import (Checked, add_dask_options, add_map_options, check_dask_flags, check_outputs, dask_client_arg, input_paths,
+                     map_arg, robot_arg, warn_figures)
 from .data import add_data_options, logs_from_args
 
 __all__ = ["add_parser", "run_diagnose"]
@@ -30,8 +30,9 @@ def add_parser(sub: Any) -> None:
                    help="'physics' (the robot and ground presets as given, or fitted on --calibration-data), "
                    "'estimator' (trained on --calibration-data) or a saved model file; never refitted on the "
                    "logs it diagnoses")
-    p.add_argument("--robot", default=None, metavar="NAME",
-                   help=f"robot preset of the physics ({', '.join(sorted(ROBOT_PRESETS))}; default husky)")
+    p.add_argument("--robot", default=None, metavar="NAME|FILE.json", action=Checked, check=robot_arg,
+                   help=f"robot of the physics: a preset ({', '.join(sorted(ROBOT_PRESETS))}; default husky) or a "
+                   "robot file (energy.params.write_robot_file)")
     p.add_argument("--ground", default=None, metavar="NAME", help="--model physics: starting ground preset "
                    "(default: the logs' ground; each sample its own label's preset when they drive on several, as "
                    "a mission's logs; else asphalt). With --map, the physics as given drives the map's slope")

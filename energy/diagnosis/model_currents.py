@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import os
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -14,7 +15,7 @@ from terrawatt_base.errors import DataError, InvalidParameterError
 from ..ground import GroundParams
 from ..logs import InteractionLog, log_slope_rad, rest_samples
 from ..models.baselines import PhysicsCurrentModel, ground_slots
-from ..params import ground_preset, robot_preset
+from ..params import ground_preset, robot_params
 from ..physics import EFFECTS, PhysicsEnergyModel
 from ..power import PowerBreakdown
 from ..robot import RobotParams
@@ -75,14 +76,9 @@ def physics_basis(model: Any, robot: Any = None) -> PhysicsBasis:
         return PhysicsBasis(model.robot_, model.fitted_ground, tuple(model.effects_), float(model.idle_current_a_),
                             "track_width_multiplier" in model.fitted_, True,
                             (float(model.rest_current_a_[0]), float(model.rest_current_a_[1])), model.terrain)
-    if robot is None:
-        rb = robot_preset("husky")
-    elif isinstance(robot, str):
-        rb = robot_preset(robot)
-    elif isinstance(robot, RobotParams):
-        rb = robot
-    else:
-        raise InvalidParameterError(f"robot must be None, a preset name or a RobotParams, got {robot!r:.80}")
+    if robot is not None and not isinstance(robot, (str, os.PathLike, RobotParams)):
+        raise InvalidParameterError(f"robot must be None, a preset name, a robot file or a RobotParams, got {robot!r:.80}")
+    rb = robot_params("husky" if robot is None else robot)
     return PhysicsBasis(rb, ground_preset("asphalt"), DRIVE_EFFECTS, 0.0, False, False,
                         (rb.rest_current_a, rb.rest_current_a))
 

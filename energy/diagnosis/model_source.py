@@ -18,7 +18,7 @@ from ..models.base import CurrentModel
 from ..models.baselines import PhysicsCurrentModel
 from ..models.kinds import new_current_model
 from ..models.loading import load_current_model
-from ..params import GROUND_PRESETS, ROBOT_PRESETS
+from ..params import GROUND_PRESETS, ROBOT_PRESETS, RobotParams, robot_params
 from .model_currents import DRIVE_EFFECTS
 
 __all__ = ["MODEL_SOURCES", "DEFAULT_SOURCE_NAMES", "ModelUnderDiagnosis", "check_model_source",
@@ -105,8 +105,8 @@ def check_model_source(model: str | os.PathLike[str], *, calibration: Any = None
     if kind == "file" and not Path(model).is_file():
         raise InvalidParameterError(f"{n['model']} must be 'physics', 'estimator' or a model file; {str(model)!r} is "
                                     "no file")
-    if robot is not None and robot not in ROBOT_PRESETS:
-        raise UnknownNameError(f"{n['robot']} {robot!r} is not a robot preset; known: {sorted(ROBOT_PRESETS)!r}")
+    if robot is not None:
+        robot_params(robot, name=n["robot"])  # a preset, or a robot file read (and checked) now
     without = list(without)
     if kind != "physics":
         for key, value in (("ground", ground), ("without", without)):
@@ -161,6 +161,15 @@ def _physics_ground(ground: str | None, labels: set[str] | None, needed: set[str
 
 def _ground_text(ground: str | dict[str, str]) -> str:
     return ground if isinstance(ground, str) else ", ".join(ground) + " (a preset per ground label)"
+
+
+def _physics_robot(robot: str | os.PathLike[str] | None, flag: str) -> tuple[str | RobotParams, str]:
+    """The robot of the physics model (a preset by its name, as model files keep it; a robot file's
+    :class:`RobotParams`) and how the note names it."""
+    if robot is None or robot in ROBOT_PRESETS:
+        return robot or "husky", robot or "husky"
+    params = robot_params(robot, name=flag)
+    return params, f"{params.name} (robot file {Path(robot).name})"
 
 
 def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[InteractionLog], *,
@@ -235,13 +244,13 @@ def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[Interact
     if terrain is not None and not isinstance(terrain, TerrainMap):
         raise InvalidParameterError(f"terrain must be a TerrainMap or None, got {type(terrain).__name__!r}")
     if kind == "physics":
-        robot_name = robot or "husky"
+        physics_robot, robot_name = _physics_robot(robot, n["robot"])
         effects = None if not without else tuple(e for e in DRIVE_EFFECTS if e not in without)
         off = f" without {', '.join(without)}" if without else " (every drive effect)"
         if cal is None:
             ground_of = _physics_ground(ground, _labels(logs), _labels(logs))
             on_map = terrain is not None and all(log.pose_xyh is not None for log in logs)
-            fitted = PhysicsCurrentModel(robot_name, ground_of, fit_parameters=(), effects=effects,
+            fitted = PhysicsCurrentModel(physics_robot, ground_of, fit_parameters=(), effects=effects,
                                          terrain=terrain if on_map else None).fit(logs)
             where = " on the map's slope under the logged poses" if on_map else ""
             return ModelUnderDiagnosis(fitted, (
@@ -249,7 +258,7 @@ def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[Interact
                 f"the {_runs(logs)} it is diagnosed on ({n['calibration']} fits its coefficients on other runs)"),
                 kind, robot)
         ground_of = _physics_ground(ground, _labels(cal), _labels(logs))
-        fitted = PhysicsCurrentModel(robot_name, ground_of, effects=effects).fit(cal)
+        fitted = PhysicsCurrentModel(physics_robot, ground_of, effects=effects).fit(cal)
         values = ", ".join(f"{k} = {fmt_number(v, 4)}" for k, v in fitted.fitted_.items())
         return ModelUnderDiagnosis(fitted, (
             f"physics, {robot_name} starting from {_ground_text(ground_of)}{off}; its coefficients fitted on the "

@@ -11,7 +11,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from energy import GROUND_PRESETS, Battery, TruthSimulator, ground_preset, robot_preset
+from energy import GROUND_PRESETS, Battery, TruthSimulator, ground_preset
+from energy.params import robot_params
 from energy.io import write_csv_log
 from terrain import CellModelRegistry, TerrainMap
 from terrawatt_base.atomic import check_output_path
@@ -45,7 +46,7 @@ def check_preset_grounds(terrain: TerrainMap) -> None:
 
 def mission_battery(robot: str, capacity_ah: float, voltage_v: float | None = None, reserve_pct: float = 20.0) -> Battery:
     """The :class:`energy.Battery` of a mission: ``voltage_v`` defaults to the robot preset's battery voltage."""
-    voltage = robot_preset(robot).battery_voltage_v if voltage_v is None else voltage_v
+    voltage = robot_params(robot).battery_voltage_v if voltage_v is None else voltage_v
     return Battery(capacity_ah=capacity_ah, voltage_v=voltage, min_reserve_pct=reserve_pct)
 
 
@@ -221,7 +222,8 @@ def simulate_adaptive_mission(
     battery_ah, battery_v, reserve_pct
         The battery (:func:`mission_battery`).
     robot : str
-        Robot preset.
+        A robot preset name, a robot file (``.json``) or a :class:`~energy.RobotParams`
+        (:func:`energy.params.robot_params`).
     speed_mps, leg_m, seed
         Driving speed (m/s), route driven between comparisons (m), seed of the simulator.
     prior_ground : str
@@ -249,22 +251,22 @@ def simulate_adaptive_mission(
         raise UnknownNameError(f"prior_ground {prior_ground!r} has no preset; known grounds: {sorted(GROUND_PRESETS)!r}")
     check_real("leg_m", leg_m, low=0.0, low_inclusive=False)
     adapt = check_bool("adapt", adapt)
-    robot_params = robot_preset(robot)
+    robot_given = robot_params(robot)
     grounds = {name: ground_preset(name) for name in set(terrain.ground_names.values()) | {prior_ground}}
-    truth = TruthSimulator(robot_params, grounds, seed=seed)
+    truth = TruthSimulator(robot_given, grounds, seed=seed)
     battery = mission_battery(robot, battery_ah, battery_v, reserve_pct)
     settings = AdaptiveSettings(speed_mps=speed_mps, leg_length_m=leg_m,
                                 max_updates=AdaptiveSettings().max_updates if adapt else 0, seed=seed)
     learned = None
     if model is not None:  # the saved model serves every ground class it drove (one model id each)
-        learned, _ = model_energy_model(terrain, model, robot_params, model_ground=model_ground,
+        learned, _ = model_energy_model(terrain, model, robot_given, model_ground=model_ground,
                                         physics_ground=grounds[prior_ground])
         registry = learned.registry
     else:
         prior = fit_prior_model(truth, prior_ground, seed=seed)
         registry = CellModelRegistry.from_terrain(terrain, prior, prior_name=f"{prior_ground}-prior")
     t0 = time.perf_counter()
-    result = run_adaptive_mission(terrain, registry, robot_params, battery, truth, start_xy_m, goal_xy_m,
+    result = run_adaptive_mission(terrain, registry, robot_given, battery, truth, start_xy_m, goal_xy_m,
                                   physics_ground=grounds[prior_ground], settings=settings, learned=learned)
     return MissionReport(result=result, battery=battery, map_label=map_label, robot=robot, prior_ground=prior_ground,
                          adapt=adapt, start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),

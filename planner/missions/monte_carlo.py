@@ -18,7 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from energy import GROUND_PRESETS, Battery, GroundParams, RobotParams, TruthSimulator, ground_preset, robot_preset
+from energy import GROUND_PRESETS, Battery, GroundParams, RobotParams, TruthSimulator, ground_preset
+from energy.params import robot_params
 from terrain import TerrainMap
 from terrawatt_base.checks import check_bool, check_int, check_real, check_seed
 from terrawatt_base.dask_client import check_client, client_worker_count, dask_client
@@ -200,9 +201,7 @@ def simulate_missions_mc(
         raise InvalidParameterError(f"route must be a found Route, got {what!r}")
     if not isinstance(battery, Battery):
         raise InvalidParameterError(f"battery must be a Battery, got {type(battery).__name__!r}")
-    robot = robot_preset(robot) if isinstance(robot, str) else robot
-    if not isinstance(robot, RobotParams):
-        raise InvalidParameterError(f"robot must be a RobotParams or a preset name, got {type(robot).__name__!r}")
+    robot = robot_params(robot)
     if draw_from not in MC_DRAW_MODES:
         raise InvalidParameterError(f"draw_from must be one of {MC_DRAW_MODES!r}, got {draw_from!r}")
     if draw_from == "model" and distributions is not None:

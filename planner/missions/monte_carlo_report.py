@@ -9,7 +9,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from energy import Battery, robot_preset
+from energy import Battery
+from energy.params import robot_params
 from terrain import TerrainMap
 from terrawatt_base.checks import check_real
 from terrawatt_base.errors import InvalidParameterError
@@ -156,7 +157,8 @@ def monte_carlo_mission(
     battery_ah, battery_v, reserve_pct
         The battery (:func:`planner.missions.mission_report.mission_battery`).
     robot, speed_mps, seed
-        Robot preset, speed (m/s), seed of the draws and of the route's refinement.
+        Robot (a preset name or a robot file, :func:`energy.params.robot_params`), speed (m/s), seed of the draws
+        and of the route's refinement.
     model, model_ground
         A saved current model pricing the edges; how it serves the map's grounds.
     model_label : str, optional
@@ -203,7 +205,7 @@ def monte_carlo_mission(
     route = plan_route(terrain, start_xy_m, goal_xy_m, cost=cost, planner="lattice", seed=seed)
     result = None
     if route.found:
-        result = simulate_missions_mc(terrain, route, battery, n, robot=robot_preset(robot), speed_mps=speed_mps,
+        result = simulate_missions_mc(terrain, route, battery, n, robot=robot_params(robot), speed_mps=speed_mps,
                                       seed=seed, client=client, progress=progress, cost=cost, draw_from=draw_from)
         if client is not None and where is not None:  # where it ran, as the caller names it
             result = dataclasses.replace(result, where=where)

@@ -187,3 +187,26 @@ def test_plan_output_folder_that_is_a_file_is_refused_before_planning(tmp_path, 
     rc = main(["demo", "--planner", "lattice", "--out", str(tmp_path / "out2")])
     assert rc == 2
     assert "route.json" in one_line_error(capsys)
+
+
+def test_a_robot_file_plans_as_the_robot_it_holds(tmp_path, capsys):
+    # A user's robot: the jackal preset written to a file gives the jackal's route; the same
+    # robot 15 kg heavier, edited in the file, costs more on the same map.
+    from energy import robot_preset
+    from energy.params import write_robot_file
+
+    jackal = robot_preset("jackal")
+    write_robot_file(jackal, tmp_path / "mine.json")
+    write_robot_file(jackal.replace(mass_kg=jackal.mass_kg + 15.0), tmp_path / "loaded.json")
+    energy = {}
+    for robot in ("jackal", str(tmp_path / "mine.json"), str(tmp_path / "loaded.json")):
+        out = tmp_path / f"out_{len(energy)}"
+        assert main(["demo", "--planner", "lattice", "--robot", robot, "--out", str(out)]) == 0
+        energy[robot] = json.loads((out / "route.json").read_text())["routes"]["lattice"]["energy_j"]
+    assert energy[str(tmp_path / "mine.json")] == energy["jackal"]
+    assert energy[str(tmp_path / "loaded.json")] > 1.05 * energy["jackal"]
+    capsys.readouterr()
+    assert main(["demo", "--robot", str(tmp_path / "absent.json"), "--out", str(tmp_path / "x")]) == 2
+    assert "absent.json' is missing" in one_line_error(capsys)
+    assert main(["demo", "--robot", "rover", "--out", str(tmp_path / "x")]) == 2
+    assert "--robot 'rover' is neither a robot preset" in one_line_error(capsys)

@@ -113,3 +113,49 @@ def test_resolve_unknown_ground_names_a_preset_or_refuses_unknown_cells():
         resolve_unknown_ground("lava", holes)
     with pytest.raises(UnknownNameError):
         resolve_unknown_ground(3, holes)
+
+
+# --------------------------------------------------------------------------- robot files
+def test_a_robot_file_gives_back_the_robot_and_names_what_is_wrong(tmp_path):
+    import json
+
+    from energy.params import read_robot_file, robot_params, write_robot_file
+    from terrain import FileFormatError, FormatVersionError
+
+    rover = robot_preset("jackal").replace(name="rover", mass_kg=31.5, rest_current_a=0.4)
+    path = write_robot_file(rover, tmp_path / "rover.json")
+    document = json.loads(path.read_text())
+    assert document["format"] == "terrawatt-robot" and document["format_version"] == 1
+    assert read_robot_file(path) == rover == robot_params(str(path)) == robot_params(path)
+    document["robot"]["motor"]["gear_ratio"] = -2.0
+    (tmp_path / "bad.json").write_text(json.dumps(document))
+    with pytest.raises(FileFormatError, match="bad.json.* holds no valid robot: .*gear_ratio"):
+        read_robot_file(tmp_path / "bad.json")
+    document["robot"]["motor"]["gear_ratio"] = 2.0
+    document["robot"]["mass_lb"] = 70.0
+    (tmp_path / "typo.json").write_text(json.dumps(document))
+    with pytest.raises(FileFormatError, match=r"unknown field\(s\) \['mass_lb'\]"):
+        robot_params(tmp_path / "typo.json")
+    document["format_version"] = 2
+    (tmp_path / "future.json").write_text(json.dumps(document))
+    with pytest.raises(FormatVersionError):
+        read_robot_file(tmp_path / "future.json")
+    (tmp_path / "notes.json").write_text("{")
+    with pytest.raises(FileFormatError, match="corrupt"):
+        read_robot_file(tmp_path / "notes.json")
+    with pytest.raises(FileFormatError, match="missing"):
+        robot_params(tmp_path / "absent.json")
+
+
+def test_robot_params_takes_presets_robots_and_robot_files_only():
+    from energy.params import robot_params, write_robot_file
+
+    assert robot_params("husky") is robot_preset("husky")
+    jackal = robot_preset("jackal")
+    assert robot_params(jackal) is jackal
+    with pytest.raises(UnknownNameError, match=r"--robot 'rover' is neither a robot preset \(husky, jackal, "):
+        robot_params("rover", name="--robot")
+    with pytest.raises(InvalidParameterError, match="robot must be a RobotParams, a preset name or a robot file"):
+        robot_params(3)
+    with pytest.raises(InvalidParameterError, match="robot must be a RobotParams"):
+        write_robot_file("husky", "x.json")

@@ -35,7 +35,7 @@ def test_the_kind_of_each_source(tmp_path, runs):
 @pytest.mark.parametrize("model, kwargs, error, message", [
     ("nowhere.zip", {}, InvalidParameterError, "model must be 'physics', 'estimator' or a model file; 'nowhere.zip'"),
     (3, {}, InvalidParameterError, "model must be a string or a path"),
-    ("physics", {"robot": "rover"}, UnknownNameError, "robot 'rover' is not a robot preset"),
+    ("physics", {"robot": "rover"}, UnknownNameError, "robot 'rover' is neither a robot preset"),
     ("physics", {"ground": "lava"}, UnknownNameError, "ground 'lava' is not a ground preset"),
     ("physics", {"without": ["warp"]}, UnknownNameError, r"without \['warp'\]: not physics drive effects"),
     ("physics", {"without": ["inertia", "inertia"]}, InvalidParameterError, "without names an effect twice"),

@@ -102,7 +102,7 @@ def test_the_reserve_risk_follows_the_battery(setup):
         ({"current_rate_hz": 0.0}, InvalidParameterError, "current_rate_hz must be > 0"),
         ({"speed_mps": -0.5}, InvalidParameterError, "speed_mps must be > 0"),
         ({"battery": "2 Ah"}, InvalidParameterError, "battery must be a Battery"),
-        ({"robot": 3}, InvalidParameterError, "robot must be a RobotParams or a preset name"),
+        ({"robot": 3}, InvalidParameterError, "robot must be a RobotParams, a preset name or a robot file"),
         ({"robot": "rover9"}, UnknownNameError, "rover9"),
         ({"grounds": {"sand": ground_preset("sand")}}, UnknownNameError, r"grounds lacks the map's ground\(s\) \['asphalt'\]"),
         ({"distributions": {"payload_kg": (0, 1)}}, InvalidParameterError, "distributions must be a MissionDistributions"),
