@@ -27,7 +27,7 @@ from planner.risk import check_risk_level
 
 __all__ = [
     "Checked", "bounded", "positive", "MAP_FLAGS", "add_map_options", "read_map_args", "map_arg", "add_point_options",
-    "point_arg", "add_robot_options", "robot_arg", "add_planner_options", "check_outputs", "INPUT_FLAGS", "input_paths",
+    "point_arg", "add_robot_options", "add_physics_robot_option", "robot_arg", "add_planner_options", "check_outputs", "INPUT_FLAGS", "input_paths",
     "check_output_file", "draw_figure", "warn_figures", "add_dask_options", "check_dask_flags", "dask_client_arg",
     "add_model_options", "check_model_flags", "load_model_arg",
 ]
@@ -131,6 +131,12 @@ def add_robot_options(p: argparse.ArgumentParser, *, speed: str = "planning spee
         p.add_argument("--unknown-ground", default="gravel",
                        help="ground preset assumed where the map's ground class is unknown (-1); 'none' to refuse "
                             "such cells")
+
+
+def add_physics_robot_option(p: argparse.ArgumentParser) -> None:
+    """``--robot`` of the commands that fit current models: the physics model's robot."""
+    p.add_argument("--robot", default=None, metavar="NAME|FILE.json", action=Checked, check=robot_arg,
+                   help="the physics model's robot: a preset (husky, the default; jackal; paper_seed) or a robot file")
 
 
 def robot_arg(value: str, flag: str) -> str:

@@ -11,7 +11,7 @@ from energy.evaluation import (EVALUATION_PROTOCOLS, AdaptSettings, check_adapt_
                                evaluate_report, evaluation_files)
 from energy.models import ADAPT_METHODS, CURRENT_MODEL_KINDS
 
-from .common import add_dask_options, check_dask_flags, check_outputs, dask_client_arg, input_paths, warn_figures
+from .common import add_dask_options, add_physics_robot_option, check_dask_flags, check_outputs, dask_client_arg, input_paths, warn_figures
 from .data import add_band_option, add_data_options, logs_from_args
 
 __all__ = ["PROTOCOLS", "add_parser", "add_adapt_options", "adapt_settings_from_args", "run_evaluate"]
@@ -21,7 +21,7 @@ __all__ = ["PROTOCOLS", "add_parser", "add_adapt_options", "adapt_settings_from_
 PROTOCOLS = EVALUATION_PROTOCOLS
 #: How the library's messages name the options of :func:`energy.evaluation.evaluate_report`: by their flags.
 _NAMES = {"kinds": "--model", "protocol": "--protocol", "band_hz": "--band", "adapt_seconds": "--adapt-seconds",
-          "adapt_method": "--adapt-method", "adapt_threshold_pct": "--adapt-threshold"}
+          "adapt_method": "--adapt-method", "adapt_threshold_pct": "--adapt-threshold", "robot": "--robot"}
 
 def add_parser(sub: Any) -> None:
     """The ``evaluate`` subcommand."""
@@ -34,6 +34,7 @@ def add_parser(sub: Any) -> None:
     evaluate.add_argument("--variants", nargs="+", default=["per_ground", "ground_agnostic"],
                           choices=["per_ground", "ground_agnostic"], help="evaluation variants")
     evaluate.add_argument("--seed", type=int, default=0, help="random seed of the learned models")
+    add_physics_robot_option(evaluate)
     add_dask_options(evaluate, "the folds")
     add_band_option(evaluate)
     add_adapt_options(evaluate)
@@ -66,7 +67,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
     adapt.json and adapt.md with ``--protocol adapt`` / ``few-shot`` (:func:`energy.evaluation.evaluate_report`)."""
     check_dask_flags(args)
     settings = adapt_settings_from_args(args) if args.protocol != "loo" else None
-    check_evaluation_options(args.models, protocol=args.protocol, band_hz=args.band, names=_NAMES)
+    check_evaluation_options(args.models, protocol=args.protocol, band_hz=args.band, robot=args.robot, names=_NAMES)
     check_outputs(args.out, evaluation_files(args.protocol), input_paths(args))
     with dask_client_arg(args) as client:  # before reading: a missing extra or scheduler fails fast
         workers = "1 worker (serial)"
@@ -75,7 +76,7 @@ def run_evaluate(args: argparse.Namespace) -> int:
             print(f"evaluating on {workers}", flush=True)
         report = evaluate_report(logs_from_args(args, require_currents=True), args.models, protocol=args.protocol,
                                  variants=args.variants, settings=settings, seed=args.seed, band_hz=args.band,
-                                 client=client, progress=True, names=_NAMES)
+                                 robot=args.robot, client=client, progress=True, names=_NAMES)
     with warn_figures():
         written = report.write(args.out)
     print(report.summary())

@@ -8,13 +8,14 @@ from typing import Any
 
 from energy.models import CURRENT_MODEL_KINDS, DEFAULT_INTERVAL_FOLDS, check_training_options, train_report
 
-from .common import check_output_file, input_paths
+from .common import add_physics_robot_option, check_output_file, input_paths
 from .data import add_band_option, add_data_options, logs_from_args
 
 __all__ = ["add_parser", "run_train"]
 
 #: How the library's messages name the options of :func:`energy.models.train_report`: by their flags.
-_NAMES = {"kind": "--model", "n_threads": "--threads", "interval_folds": "--interval-folds", "band_hz": "--band"}
+_NAMES = {"kind": "--model", "n_threads": "--threads", "interval_folds": "--interval-folds", "band_hz": "--band",
+          "robot": "--robot"}
 
 
 def add_parser(sub: Any) -> None:
@@ -23,6 +24,7 @@ def add_parser(sub: Any) -> None:
     add_data_options(train, grounds=True)
     train.add_argument("--model", default="estimator", choices=list(CURRENT_MODEL_KINDS), help="model kind (default estimator)")
     train.add_argument("--seed", type=int, default=0, help="random seed")
+    add_physics_robot_option(train)
     train.add_argument("--out", type=Path, required=True, metavar="FILE", help="model file to write (e.g. model.zip)")
     train.add_argument("--threads", type=int, metavar="N", help="torch threads while training the estimator or paper "
                        "model (default: torch's own setting)")
@@ -42,7 +44,8 @@ def run_train(args: argparse.Namespace) -> int:
     flags and the output path are checked before the logs are read, so a bad ``--out`` never costs
     a training. ``--band LO HI`` sets the learned models' vibration band (Hz).
     """
-    options = dict(n_threads=args.threads, interval_folds=args.interval_folds, band_hz=args.band, names=_NAMES)
+    options = dict(n_threads=args.threads, interval_folds=args.interval_folds, band_hz=args.band, robot=args.robot,
+                   names=_NAMES)
     check_training_options(args.model, **options)
     check_output_file(args.out, input_paths(args))
     report = train_report(args.model, logs_from_args(args, require_currents=True), seed=args.seed,

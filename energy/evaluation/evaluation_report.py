@@ -17,9 +17,9 @@ from terrawatt_base.figure_file import draw_figure
 from ..logs import InteractionLog
 from ..models.adaptation import ADAPT_METHODS
 from ..models.base import check_logs
-from ..models.kinds import CURRENT_MODEL_KINDS, new_current_model
-from ..models.kinds import LEARNED_KINDS
+from ..models.kinds import CURRENT_MODEL_KINDS, LEARNED_KINDS, new_current_model
 from ..models.training_report import check_learned_band
+from ..params import robot_params
 from ..plots import plot_vibration_spectra
 from .adapt_protocol import DEFAULT_ADAPT_SECONDS, AdaptSettings, evaluate_adaptation
 from .adapt_results import ADAPT_FILES, AdaptationResult
@@ -34,7 +34,7 @@ __all__ = ["EVALUATION_PROTOCOLS", "EVALUATION_NAMES", "SPECTRA_FILE", "evaluati
 EVALUATION_PROTOCOLS = ("loo", "adapt", "few-shot")
 #: How messages name the options of :func:`evaluate_report` (a caller passes its own, e.g. its flags).
 EVALUATION_NAMES = {"kinds": "kinds", "protocol": "protocol", "band_hz": "band_hz", "adapt_seconds": "adapt_seconds",
-                    "adapt_method": "adapt_method", "adapt_threshold_pct": "adapt_threshold_pct"}
+                    "adapt_method": "adapt_method", "adapt_threshold_pct": "adapt_threshold_pct", "robot": "robot"}
 #: The figure of the leave-one-run-out report: the logs' vibration spectra per ground.
 SPECTRA_FILE = "spectra.png"
 
@@ -105,7 +105,7 @@ def check_adapt_options(protocol: str = "adapt", *, adapt_seconds: Sequence[floa
 
 
 def check_evaluation_options(kinds: Sequence[str] | None = None, *, protocol: str = "loo",
-                             band_hz: Sequence[float] | None = None,
+                             band_hz: Sequence[float] | None = None, robot: Any = None,
                              names: Mapping[str, str] | None = None) -> tuple[str, ...]:
     """Check the kinds, protocol and band of :func:`evaluate_report` before any work; return the kinds evaluated.
 
@@ -118,6 +118,8 @@ def check_evaluation_options(kinds: Sequence[str] | None = None, *, protocol: st
         One of :data:`EVALUATION_PROTOCOLS`.
     band_hz : pair of float, optional
         The learned kinds' vibration band (Hz); one of ``kinds`` must be learned.
+    robot : str, path or RobotParams, optional
+        The physics kind's robot (:func:`energy.params.robot_params`; default husky); ``kinds`` must hold physics.
     names : mapping, optional
         How messages name the options (keys of :data:`EVALUATION_NAMES`).
 
@@ -128,9 +130,11 @@ def check_evaluation_options(kinds: Sequence[str] | None = None, *, protocol: st
     Raises
     ------
     InvalidParameterError
-        No kinds, a bad band or one for baselines only.
+        No kinds, a bad band or one for baselines only, a robot without the physics kind.
     UnknownNameError
-        An unknown protocol or kind.
+        An unknown protocol or kind, a robot that is no preset nor robot file.
+    FileFormatError
+        A robot file that does not read.
 
     Examples
     --------
@@ -147,6 +151,11 @@ def check_evaluation_options(kinds: Sequence[str] | None = None, *, protocol: st
     for k in given:
         check_choice(n["kinds"], k, CURRENT_MODEL_KINDS)
     check_learned_band(band_hz, given, name=n["band_hz"], kinds_name=n["kinds"])
+    if robot is not None:
+        if "physics" not in given:
+            raise InvalidParameterError(f"{n['robot']} is the physics model's robot; {n['kinds']} "
+                                        f"{' '.join(given)} has no physics")
+        robot_params(robot, name=n["robot"])
     return tuple(dict.fromkeys(given))
 
 
@@ -213,8 +222,9 @@ class EvaluationReport:
 
 def evaluate_report(logs: Sequence[InteractionLog], kinds: Sequence[str] | None = None, *, protocol: str = "loo",
                     variants: Sequence[str] = EVALUATION_VARIANTS, settings: AdaptSettings | None = None,
-                    seed: int | None = 0, band_hz: Sequence[float] | None = None, client: Any = None,
-                    progress: bool = False, names: Mapping[str, str] | None = None) -> EvaluationReport:
+                    seed: int | None = 0, band_hz: Sequence[float] | None = None, robot: Any = None,
+                    client: Any = None, progress: bool = False,
+                    names: Mapping[str, str] | None = None) -> EvaluationReport:
     """New models of ``kinds`` (:func:`~energy.models.new_current_model`) evaluated on ``logs`` by ``protocol``.
 
     ``"loo"``: leave one run out (:func:`evaluate_current_models`, over ``variants``);
@@ -226,8 +236,9 @@ def evaluate_report(logs: Sequence[InteractionLog], kinds: Sequence[str] | None 
     ----------
     logs : sequence of InteractionLog
         Runs with measured currents and ground labels.
-    kinds, protocol, band_hz, names
-        As :func:`check_evaluation_options`; ``band_hz`` goes to the learned kinds only.
+    kinds, protocol, band_hz, robot, names
+        As :func:`check_evaluation_options`; ``band_hz`` goes to the learned kinds only, ``robot`` to
+        the physics kind.
     variants : sequence of str
         ``"loo"``: the variants (:data:`EVALUATION_VARIANTS`).
     settings : AdaptSettings, optional
@@ -251,7 +262,7 @@ def evaluate_report(logs: Sequence[InteractionLog], kinds: Sequence[str] | None 
     TerrawattError
         As the protocol's function.
     """
-    kinds = check_evaluation_options(kinds, protocol=protocol, band_hz=band_hz, names=names)
+    kinds = check_evaluation_options(kinds, protocol=protocol, band_hz=band_hz, robot=robot, names=names)
     band = check_learned_band(band_hz, kinds, name=option_names(names, EVALUATION_NAMES)["band_hz"])
     seed = check_seed(seed)
     progress = check_bool("progress", progress)
@@ -262,7 +273,8 @@ def evaluate_report(logs: Sequence[InteractionLog], kinds: Sequence[str] | None 
         if not isinstance(settings, AdaptSettings):
             raise InvalidParameterError(f"settings must be an AdaptSettings, got {settings!r:.80}")
     items = check_logs(logs)
-    models = {k: new_current_model(k, seed=seed, band_hz=band if k in LEARNED_KINDS else None) for k in kinds}
+    models = {k: new_current_model(k, seed=seed, band_hz=band if k in LEARNED_KINDS else None,
+                                   robot=robot if k == "physics" else None) for k in kinds}
     t0 = time.perf_counter()
     if protocol == "loo":
         result: EvaluationResult | AdaptationResult = evaluate_current_models(

@@ -7,6 +7,7 @@ from typing import Any
 from terrawatt_base.checks import check_choice
 from terrawatt_base.errors import InvalidParameterError
 
+from ..params import ROBOT_PRESETS, robot_params
 from .base import CurrentModel
 from .baselines import ConstantCurrentModel, LinearCurrentModel, PhysicsCurrentModel
 
@@ -24,21 +25,23 @@ _PRESETS = dict(zip(LEARNED_KINDS, ("default", "paper")))
 
 def new_current_model(
     kind: str, *, seed: int | None = 0, progress: bool = False, n_threads: int | None = None,
-    band_hz: tuple[float, float] | None = None,
+    band_hz: tuple[float, float] | None = None, robot: Any = None,
 ) -> CurrentModel:
     """A new unfitted current model of ``kind`` (one of :data:`CURRENT_MODEL_KINDS`).
 
     ``seed``, ``progress`` and ``n_threads`` configure the learned models (``estimator``,
     ``paper``, which import torch here); the baselines are deterministic and take none.
     ``band_hz`` (``(low_hz, high_hz)``) replaces the learned models' vibration band
-    (``EstimatorConfig.band_hz``); ``None`` keeps their preset's.
+    (``EstimatorConfig.band_hz``); ``None`` keeps their preset's. ``robot`` (a preset name, a
+    robot file or a RobotParams, :func:`energy.params.robot_params`) is the physics model's
+    robot (default husky); a preset stays a name in the model's file.
 
     Raises
     ------
     UnknownNameError
         ``kind`` is not one of :data:`CURRENT_MODEL_KINDS` (the message lists them).
     InvalidParameterError
-        A bad ``band_hz``, or a ``band_hz`` for a baseline.
+        A bad ``band_hz``, or a ``band_hz`` for a baseline; a ``robot`` for another kind than physics.
 
     Examples
     --------
@@ -46,6 +49,10 @@ def new_current_model(
     'LinearCurrentModel'
     """
     check_choice("kind", kind, CURRENT_MODEL_KINDS)
+    if robot is not None:
+        if kind != "physics":
+            raise InvalidParameterError(f"robot applies to the physics model only, got kind {kind!r}")
+        return PhysicsCurrentModel(robot if isinstance(robot, str) and robot in ROBOT_PRESETS else robot_params(robot))
     if kind in _BASELINES:
         if band_hz is not None:
             raise InvalidParameterError(f"band_hz applies to the estimator and paper models only, got kind {kind!r}")

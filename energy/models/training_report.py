@@ -7,12 +7,14 @@ import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from terrawatt_base.checks import check_bool, check_choice, check_int, check_seed, option_names
 from terrawatt_base.errors import InvalidParameterError
 
 from ..features.band import check_band_hz
 from ..logs import InteractionLog
+from ..params import robot_params
 from .base import CurrentModel, check_logs
 from .calibration import DEFAULT_INTERVAL_FOLDS, fit_interval
 from .kinds import CURRENT_MODEL_KINDS, LEARNED_KINDS, new_current_model
@@ -21,7 +23,8 @@ __all__ = ["TRAINING_NAMES", "check_learned_band", "check_training_options", "Tr
            "train_report"]
 
 #: How messages name the options of :func:`check_training_options` (a caller passes its own, e.g. its flags).
-TRAINING_NAMES = {"kind": "kind", "n_threads": "n_threads", "interval_folds": "interval_folds", "band_hz": "band_hz"}
+TRAINING_NAMES = {"kind": "kind", "n_threads": "n_threads", "interval_folds": "interval_folds", "band_hz": "band_hz",
+                  "robot": "robot"}
 
 
 
@@ -63,7 +66,7 @@ def check_learned_band(band_hz: Sequence[float] | None, kinds: Sequence[str], *,
 
 
 def check_training_options(kind: str, *, n_threads: int | None = None, interval_folds: int = DEFAULT_INTERVAL_FOLDS,
-                           band_hz: Sequence[float] | None = None,
+                           band_hz: Sequence[float] | None = None, robot: Any = None,
                            names: Mapping[str, str] | None = None) -> tuple[float, float] | None:
     """Check the options of :func:`train_report` before any work; return the checked band (or None).
 
@@ -77,6 +80,8 @@ def check_training_options(kind: str, *, n_threads: int | None = None, interval_
         0 (no interval) or >= 2.
     band_hz : pair of float, optional
         The learned kinds' vibration band (Hz).
+    robot : str, path or RobotParams, optional
+        The physics kind's robot (:func:`energy.params.robot_params`; default husky).
     names : mapping, optional
         How messages name the options (keys of :data:`TRAINING_NAMES`, e.g. ``{"n_threads": "--threads"}``).
 
@@ -88,9 +93,12 @@ def check_training_options(kind: str, *, n_threads: int | None = None, interval_
     Raises
     ------
     InvalidParameterError
-        Threads not >= 1 or for a baseline; 1 or fewer than 0 interval folds; a bad band or one for a baseline.
+        Threads not >= 1 or for a baseline; 1 or fewer than 0 interval folds; a bad band or one for a baseline; a
+        robot for another kind than physics.
     UnknownNameError
-        ``kind`` is no model kind.
+        ``kind`` is no model kind, ``robot`` no preset nor robot file.
+    FileFormatError
+        A robot file that does not read.
 
     Examples
     --------
@@ -107,6 +115,10 @@ def check_training_options(kind: str, *, n_threads: int | None = None, interval_
         if kind not in LEARNED_KINDS:
             raise InvalidParameterError(f"{n['n_threads']} applies to the estimator and paper models only, got "
                                         f"{n['kind']} {kind!r}")
+    if robot is not None:
+        if kind != "physics":
+            raise InvalidParameterError(f"{n['robot']} applies to the physics model only, got {n['kind']} {kind!r}")
+        robot_params(robot, name=n["robot"])
     folds = check_int(n["interval_folds"], interval_folds)
     if folds < 0 or folds == 1:
         raise InvalidParameterError(f"{n['interval_folds']} must be 0 (no interval) or >= 2, got {folds}")
@@ -165,7 +177,8 @@ class TrainingReport:
 
 def train_report(kind: str, logs: InteractionLog | Sequence[InteractionLog], *, seed: int | None = 0,
                  progress: bool = False, n_threads: int | None = None, interval_folds: int = DEFAULT_INTERVAL_FOLDS,
-                 band_hz: Sequence[float] | None = None, names: Mapping[str, str] | None = None) -> TrainingReport:
+                 band_hz: Sequence[float] | None = None, robot: Any = None,
+                 names: Mapping[str, str] | None = None) -> TrainingReport:
     """A new model of ``kind`` (:func:`~energy.models.new_current_model`) fitted on ``logs``, and reported.
 
     A learned kind (:data:`LEARNED_KINDS`) is fitted as it is: its ensemble gives its own
@@ -182,7 +195,7 @@ def train_report(kind: str, logs: InteractionLog | Sequence[InteractionLog], *, 
         Seed of the learned kinds.
     progress : bool
         The learned kinds' progress bar with the training loss (the baselines have none).
-    n_threads, interval_folds, band_hz, names
+    n_threads, interval_folds, band_hz, robot, names
         As :func:`check_training_options`.
 
     Returns
@@ -208,12 +221,12 @@ def train_report(kind: str, logs: InteractionLog | Sequence[InteractionLog], *, 
     ('constant', 1, False)
     """
     band = check_training_options(kind, n_threads=n_threads, interval_folds=interval_folds, band_hz=band_hz,
-                                  names=names)
+                                  robot=robot, names=names)
     seed = check_seed(seed)
     learned = kind in LEARNED_KINDS
     progress = check_bool("progress", progress) and learned
     items = check_logs(logs)
-    model = new_current_model(kind, seed=seed, progress=progress, n_threads=n_threads, band_hz=band)
+    model = new_current_model(kind, seed=seed, progress=progress, n_threads=n_threads, band_hz=band, robot=robot)
     t0 = time.perf_counter()
     if learned or interval_folds == 0 or len(items) < 2:
         model.fit(items)

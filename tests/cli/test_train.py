@@ -66,3 +66,19 @@ def test_train_onto_a_directory_is_refused_before_training(tmp_path, capsys, mon
     rc = main(["train", "--data", str(FIXTURES), "--model", "linear", "--out", str(blocker / "model.pt")])
     assert rc == 2
     assert "--out" in one_line_error(capsys)
+
+
+def test_train_physics_on_a_robot_file_keeps_that_robot(tmp_path, capsys):
+    from energy import load_current_model, robot_preset
+    from energy.params import write_robot_file
+
+    rover = robot_preset("jackal").replace(name="rover")
+    write_robot_file(rover, tmp_path / "rover.json")
+    rc = main(["train", "--data", str(FIXTURES), "--model", "physics", "--robot", str(tmp_path / "rover.json"),
+               "--out", str(tmp_path / "m.zip")])
+    assert rc == 0 and load_current_model(tmp_path / "m.zip").robot_ == rover
+    capsys.readouterr()
+    assert main(["train", "--data", str(FIXTURES), "--model", "linear", "--robot", "jackal",
+                 "--out", str(tmp_path / "l.zip")]) == 2
+    assert "--robot applies to the physics model only, got --model 'linear'" in one_line_error(capsys)
+    assert not (tmp_path / "l.zip").exists()

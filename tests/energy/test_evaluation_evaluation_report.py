@@ -96,8 +96,25 @@ def test_the_default_kinds_follow_the_protocol_and_a_kind_named_twice_counts_onc
         (lambda: evaluate_report(score_logs(), ["linear"], settings=check_adapt_options()), InvalidParameterError,
          "settings applies to the adapt and few-shot protocols"),
         (lambda: evaluate_report([], ["linear"]), InvalidParameterError, "logs"),
+        (lambda: check_evaluation_options(["linear"], robot="jackal", names={**FLAGS, "robot": "--robot"}),
+         InvalidParameterError, "--robot is the physics model's robot; --model linear has no physics"),
+        (lambda: check_evaluation_options(["physics"], robot="rover"), UnknownNameError,
+         "robot 'rover' is neither a robot preset"),
     ],
 )
 def test_bad_options_are_refused_naming_them(call, error, message):
     with pytest.raises(error, match=message):
         call()
+
+
+def test_the_physics_kind_is_evaluated_on_the_robot_given():
+    from energy import robot_preset
+
+    def rmse(report, model):
+        return {r["ground"]: r["rmse_median_a"] for r in report.to_dict()["summary"] if r["model"] == model}
+
+    heavy = robot_preset("husky").replace(mass_kg=120.0)
+    plain = evaluate_report(score_logs(), ["physics", "linear"], variants=["per_ground"])
+    other = evaluate_report(score_logs(), ["physics", "linear"], variants=["per_ground"], robot=heavy)
+    assert rmse(other, "linear") == rmse(plain, "linear")  # the robot is the physics model's only
+    assert rmse(other, "physics") != rmse(plain, "physics")

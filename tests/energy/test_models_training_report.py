@@ -78,3 +78,22 @@ def test_a_band_needs_a_learned_kind():
 def test_no_logs_is_refused():
     with pytest.raises(InvalidParameterError, match="logs"):
         train_report("constant", [])
+
+
+def test_the_physics_kind_is_fitted_on_the_robot_given_and_keeps_it(tmp_path):
+    from energy import robot_preset
+    from energy.params import write_robot_file
+
+    logs = score_logs()
+    rover = robot_preset("jackal").replace(name="rover", mass_kg=25.0)
+    write_robot_file(rover, tmp_path / "rover.json")
+    husky = train_report("physics", logs, interval_folds=0).model
+    report = train_report("physics", logs, interval_folds=0, robot=tmp_path / "rover.json")
+    assert husky.robot == "husky" and report.model.robot == rover and report.model.robot_ == rover
+    assert train_report("physics", logs, interval_folds=0, robot="jackal").model.robot == "jackal"  # a preset: its name
+    back = load_current_model(report.write(tmp_path / "physics.zip"))
+    assert back.robot_ == rover and (back.predict(logs[0]) == report.model.predict(logs[0])).all()
+    with pytest.raises(InvalidParameterError, match="--robot applies to the physics model only, got --model 'linear'"):
+        check_training_options("linear", robot="jackal", names={**FLAGS, "robot": "--robot"})
+    with pytest.raises(UnknownNameError, match="robot 'rover' is neither a robot preset"):
+        train_report("physics", logs, robot="rover")
