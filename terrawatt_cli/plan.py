@@ -15,7 +15,7 @@ from planner.coarse_report import COARSE_OPTIONS, check_coarse_options, plan_coa
 from planner.plan_report import plan_and_compare
 from .common import (MAP_FLAGS, Checked, add_map_options, add_model_options, add_planner_options, add_point_options,
                      add_robot_options, bounded, check_model_flags, check_outputs, input_paths, load_model_arg,
-                     point_arg, positive, read_map_args, warn_figures)
+                     map_arg, point_arg, positive, warn_figures)
 from .ros2 import add_ros2_arguments, check_ros2_outputs, write_ros2_outputs
 
 __all__ = ["add_parsers", "run_demo", "run_plan_command"]
@@ -29,7 +29,8 @@ def add_parsers(sub: Any) -> None:
     """The ``demo`` and ``plan`` subcommands."""
     demo = sub.add_parser("demo", help="plan a minimum-energy route on the bundled example map")
     plan = sub.add_parser("plan", help="plan a minimum-energy route on a map file (.npz or GeoTIFF)")
-    plan.add_argument("--map", type=Path, required=True, metavar="FILE", help=".npz map or .tif DEM")
+    plan.add_argument("--map", type=Path, required=True, metavar="FILE", help=".npz map, .tif DEM or 'example' (the "
+                      "bundled map)")
     add_map_options(plan)
     add_point_options(plan, "start", "start", required=True)
     add_point_options(plan, "goal", "goal", required=True)
@@ -82,8 +83,8 @@ def run_plan_command(args: argparse.Namespace) -> int:
             args.map, start, goal, factor=args.coarse_factor, corridor_m=args.corridor, robot=args.robot,
             speed_mps=args.speed, max_slope_deg=args.max_slope_deg, unknown_ground=ground,
             fine_window_cells=args.fine_window_cells))
-    tmap = read_map_args(args)
-    return _run(args, tmap, point_arg(args, "start", tmap), point_arg(args, "goal", tmap), args.map.name)
+    tmap, label = map_arg(args)
+    return _run(args, tmap, point_arg(args, "start", tmap), point_arg(args, "goal", tmap), label)
 
 
 def _run(args: argparse.Namespace, tmap: TerrainMap, start: tuple[float, float], goal: tuple[float, float],

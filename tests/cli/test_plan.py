@@ -210,3 +210,15 @@ def test_a_robot_file_plans_as_the_robot_it_holds(tmp_path, capsys):
     assert "absent.json' is missing" in one_line_error(capsys)
     assert main(["demo", "--robot", "rover", "--out", str(tmp_path / "x")]) == 2
     assert "--robot 'rover' is neither a robot preset" in one_line_error(capsys)
+
+
+def test_plan_on_the_example_map_is_the_demo(tmp_path, capsys):
+    from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M
+
+    assert main(["demo", "--planner", "lattice", "--out", str(tmp_path / "demo")]) == 0
+    assert main(["plan", "--map", "example", "--start", *map(str, EXAMPLE_START_XY_M), "--goal",
+                 *map(str, EXAMPLE_GOAL_XY_M), "--planner", "lattice", "--out", str(tmp_path / "plan")]) == 0
+    demo, plan = (json.loads((tmp_path / d / "route.json").read_text()) for d in ("demo", "plan"))
+    assert plan["map"] == demo["map"] == "bundled example map"
+    assert plan["routes"]["min_energy"]["waypoints_m"] == demo["routes"]["min_energy"]["waypoints_m"]
+    capsys.readouterr()
