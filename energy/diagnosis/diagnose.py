@@ -14,6 +14,7 @@ from terrawatt_base.errors import DataError, InvalidParameterError, NotFittedErr
 
 from ..logs import InteractionLog
 from ..models.base import CurrentModel, check_logs, log_currents
+from ..params import ROBOT_PRESETS, robot_params
 from .corrected import CorrectedCurrentModel
 from .effect_base import Effect
 from .effects import LEARNED_EFFECT, NOT_IDENTIFIABLE_FROM_CURRENT, effect, resolve_effects
@@ -211,8 +212,9 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
         Section length of the section error and the time localisation (s), > 0.
     n_bootstrap : int
         Bootstrap resamples (>= 1).
-    robot : str or RobotParams, optional
-        Robot of the reference physics for a model that is not a physics model.
+    robot : str, path or RobotParams, optional
+        Robot of the reference physics for a model that is not a physics model: a preset name,
+        a robot file or a RobotParams (:func:`energy.params.robot_params`).
     client : distributed.Client, optional
         Score the candidate sets as tasks on this dask client (the data go to each worker
         once); the result equals the serial one.
@@ -245,6 +247,8 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
     n_bootstrap = check_int("n_bootstrap", n_bootstrap, low=1)
     progress = check_bool("progress", progress)
     check_client(client, "candidate effect sets")
+    if robot is not None and not (isinstance(robot, str) and robot in ROBOT_PRESETS):
+        robot = robot_params(robot)  # a robot file read once: the corrected model keeps its parameters, not a path
     terrain = check_terrain(terrain)
     _check_currents(items)
     sp = make_split(items, split, n_blocks)
