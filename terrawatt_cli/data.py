@@ -14,7 +14,7 @@ from energy.io import CSV_FIELDS, CSV_RATES, DRIVE_CLOCKS, LOG_SUFFIXES, BagTopi
 from energy.models import check_learned_band
 from terrain import InvalidParameterError, TerrawattError
 
-from .common import Checked
+from .common import Checked, positive
 
 __all__ = ["add_data_options", "logs_from_args", "add_band_option", "band_from_args"]
 
@@ -68,7 +68,7 @@ def add_data_options(parser: Any, *, grounds: bool = False) -> None:
     csv.add_argument("--csv-rates", choices=CSV_RATES, default="mixed",
                      help="mixed: IMU and drive rows of different rates interleaved by time (default); single: "
                      "one row per sample of both")
-    csv.add_argument("--track-width", type=float, default=None, metavar="M",
+    csv.add_argument("--track-width", type=float, default=None, metavar="M", action=Checked, check=positive,
                      help="with wheel speeds (--csv-columns speed_left=... speed_right=...): the track width (m)")
 
 

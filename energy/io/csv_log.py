@@ -299,8 +299,11 @@ def csv_field_map(
         A field that is not one of :data:`CSV_FIELDS`, a unit for a field that is not mapped, an
         unknown unit.
     InvalidParameterError
-        A column name that is not a non-empty string.
+        ``columns`` or ``units`` not a mapping; a column name that is not a non-empty string.
     """
+    for what, value in (("columns", columns), ("units", units)):
+        if value is not None and not isinstance(value, Mapping):
+            raise InvalidParameterError(f"{what} must be a mapping of field names, got {type(value).__name__!r}")
     colmap = dict(DEFAULT_CSV_COLUMNS if columns is None else columns)
     unknown = [f for f in colmap if f not in _FIELD_KIND]
     if unknown:

@@ -13,7 +13,7 @@ from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameE
 
 from ..logs import DEFAULT_GAP_FACTOR, InteractionLog
 from .borealtc import read_borealtc
-from .cleaning import UNIT_FACTORS
+from .cleaning import UNIT_FACTORS, check_track_width
 from .csv_log import CSV_RATES, csv_field_map, read_csv_log
 from .rosbag import DRIVE_CLOCKS, read_rosbag
 
@@ -127,8 +127,8 @@ class CsvLayout:
     Raises
     ------
     UnknownNameError, InvalidParameterError
-        An unknown field, unit or ``rates``, an empty column name, a unit for a field not mapped;
-        checked when the layout is made, before any log is read.
+        An unknown field, unit or ``rates``, an empty column name, a unit for a field not mapped, a
+        bad track width; checked when the layout is made, before any log is read.
 
     Examples
     --------
@@ -149,6 +149,8 @@ class CsvLayout:
             object.__setattr__(self, "columns", columns)
             object.__setattr__(self, "units", units)
         check_choice("rates", self.rates, CSV_RATES)
+        if self.track_width_m is not None:
+            object.__setattr__(self, "track_width_m", check_track_width(self.track_width_m))
 
     def read(self, path: str | os.PathLike[str], **options: Any) -> InteractionLog:
         """:func:`~energy.io.read_csv_log` of ``path`` in this layout (``options``: its other keywords)."""

@@ -74,6 +74,7 @@ def test_csv_flags_read_csv_logs_of_another_layout(tmp_path):
     (["--csv-columns", "time"], "--csv-columns takes FIELD=VALUE words, each field once; got 'time'"),
     (["--csv-columns", "time=a", "time=b"], "each field once; got 'time=b'"),
     (["--csv-units", "=ms"], "--csv-units takes FIELD=VALUE words"),
+    (["--track-width", "0"], "--track-width must be a number > 0, got 0"),
 ])
 def test_bad_csv_words_fail_while_parsing_naming_the_flag(argv, match):
     with pytest.raises(TerrawattError, match=match):

@@ -265,6 +265,9 @@ def test_a_csv_of_another_layout_without_its_map_says_how_to_give_one(tmp_path):
     ({"columns": {"time": "t"}, "units": {"time": "fortnights"}}, UnknownNameError, "unit 'fortnights'"),
     ({"units": {"time": "ms"}}, InvalidParameterError, "units need columns"),
     ({"rates": "double"}, UnknownNameError, "rates must be one of"),
+    ({"columns": "time=t"}, InvalidParameterError, "columns must be a mapping of field names, got 'str'"),
+    ({"columns": {"time": "t"}, "units": "ms"}, InvalidParameterError, "units must be a mapping"),
+    ({"track_width_m": -0.5}, InvalidParameterError, "track_width_m must be > 0"),
 ])
 def test_a_csv_layout_is_checked_when_made(kwargs, error, match):
     from energy.io import CsvLayout
