@@ -62,8 +62,8 @@ def edge_costs(
     >>> edge_costs(flat_map((4, 4), 1.0, ground="asphalt")).terrain.shape
     (4, 4)
     """
+    params = robot_params(robot)  # a preset, a robot file or RobotParams: resolved once
     if model is None:
-        return EnergyCost.from_presets(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=max_slope_rad,
+        return EnergyCost.from_presets(terrain, robot=params, speed_mps=speed_mps, max_slope_rad=max_slope_rad,
                                        unknown_ground=unknown_ground)
-    return model_energy_cost(terrain, model, robot_params(robot), speed_mps, model_ground=model_ground,
-                             max_slope_rad=max_slope_rad)
+    return model_energy_cost(terrain, model, params, speed_mps, model_ground=model_ground, max_slope_rad=max_slope_rad)
