@@ -233,11 +233,6 @@ class Lattice:
     def _weights(self, weight: str) -> np.ndarray:
         return self._energy_data() if weight == "energy" else self._length
 
-    @property
-    def _data(self) -> dict[str, np.ndarray]:
-        """Both weight arrays by name (the energies made whole)."""
-        return {"energy": self._energy_data(), "length": self._length}
-
     def refreshed(self, cost: EnergyCost, changed_cells: np.ndarray) -> Lattice:
         """This lattice over ``cost`` (same geometry, new tables), recomputing only changed edges.
 

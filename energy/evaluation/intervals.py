@@ -11,7 +11,7 @@ new grounds, after adaptation...).
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
 
@@ -127,11 +127,3 @@ def plot_reliability(records: Sequence[IntervalRecord], ax: Any = None, *, title
     if title:
         ax.set_title(title, fontsize=9)
     return ax
-
-
-def records_by_group(records: Sequence[IntervalRecord]) -> Mapping[str, list[IntervalRecord]]:
-    """The records grouped by :attr:`IntervalRecord.group` (first-seen order)."""
-    out: dict[str, list[IntervalRecord]] = {}
-    for r in records:
-        out.setdefault(r.group, []).append(r)
-    return out

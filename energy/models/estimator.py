@@ -380,9 +380,6 @@ class VibrationCurrentEstimator(CurrentModel):
                 out[i] = total / count[:, None]
         return out
 
-    def _predict_grid(self, grid: InteractionLog) -> np.ndarray:
-        return self._member_grid(grid, None).mean(axis=0)
-
     def _on_log(self, log: InteractionLog, grid: InteractionLog, pred: np.ndarray) -> np.ndarray:
         """Grid currents back on the log's own timestamps, prior added, clipped, rest level set."""
         # drive samples outside the overlap of the drive and acceleration streams take the

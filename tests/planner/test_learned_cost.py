@@ -143,7 +143,7 @@ def test_energy_cost_with_previous_equals_fresh_and_reuses_lattice():
     assert np.array_equal(got.changed_cells, np.asarray(reg.model_id_map) == new)
     got_lat = Lattice.for_cost(got, 1)
     assert 0 < got_lat.edges_computed < lat.edges_computed
-    assert np.array_equal(got_lat._data["energy"], Lattice(ref, 1)._data["energy"])
+    assert np.array_equal(got_lat._weights("energy"), Lattice(ref, 1)._weights("energy"))
     with pytest.raises(InvalidParameterError, match="previous"):
         lem.energy_cost(tmap, 0.4, previous=cost)
 
