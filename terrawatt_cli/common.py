@@ -27,7 +27,8 @@ from planner.risk import check_risk_level
 
 __all__ = [
     "Checked", "bounded", "positive", "MAP_FLAGS", "add_map_options", "read_map_args", "map_arg", "add_point_options",
-    "point_arg", "add_robot_options", "add_physics_robot_option", "robot_arg", "add_planner_options", "check_outputs", "INPUT_FLAGS", "input_paths",
+    "point_arg", "add_robot_options", "add_physics_robot_option", "robot_arg", "add_planner_options", "check_outputs",
+    "INPUT_FLAGS", "input_paths",
     "check_output_file", "draw_figure", "warn_figures", "add_dask_options", "check_dask_flags", "dask_client_arg",
     "add_model_options", "check_model_flags", "load_model_arg",
 ]
@@ -36,7 +37,7 @@ __all__ = [
 MAP_FLAGS = {"fill_nodata": "--fill-nodata", "reproject_to": "--reproject", "cell_size_m": "--cell-size",
              "landcover": "--landcover", "landcover_classes": "--landcover-classes"}
 #: Flags whose values are input paths (a ``--model`` that names a kind, a ``--map example``, are not files).
-INPUT_FLAGS = ("map", "data", "pairs", "sites", "model", "calibration_data", "landcover", "landcover_classes")
+INPUT_FLAGS = ("map", "data", "pairs", "sites", "model", "calibration_data", "landcover", "landcover_classes", "robot")
 
 
 class Checked(argparse.Action):

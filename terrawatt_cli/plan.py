@@ -29,8 +29,8 @@ def add_parsers(sub: Any) -> None:
     """The ``demo`` and ``plan`` subcommands."""
     demo = sub.add_parser("demo", help="plan a minimum-energy route on the bundled example map")
     plan = sub.add_parser("plan", help="plan a minimum-energy route on a map file (.npz or GeoTIFF)")
-    plan.add_argument("--map", type=Path, required=True, metavar="FILE", help=".npz map, .tif DEM or 'example' (the "
-                      "bundled map)")
+    plan.add_argument("--map", type=Path, required=True, metavar="FILE|example",
+                      help=".npz map, .tif DEM or 'example' (the bundled map)")
     add_map_options(plan)
     add_point_options(plan, "start", "start", required=True)
     add_point_options(plan, "goal", "goal", required=True)

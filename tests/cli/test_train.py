@@ -82,3 +82,8 @@ def test_train_physics_on_a_robot_file_keeps_that_robot(tmp_path, capsys):
                  "--out", str(tmp_path / "l.zip")]) == 2
     assert "--robot applies to the physics model only, got --model 'linear'" in one_line_error(capsys)
     assert not (tmp_path / "l.zip").exists()
+    robot_file = (tmp_path / "rover.json").read_bytes()
+    assert main(["train", "--data", str(FIXTURES), "--model", "physics", "--robot", str(tmp_path / "rover.json"),
+                 "--out", str(tmp_path / "rover.json")]) == 2  # the robot file is an input: never overwritten
+    assert "would replace the input" in one_line_error(capsys)
+    assert (tmp_path / "rover.json").read_bytes() == robot_file
