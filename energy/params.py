@@ -34,6 +34,7 @@ __all__ = [
     "robot_preset",
     "ground_preset",
     "robot_params",
+    "robot_spec",
     "write_robot_file",
     "read_robot_file",
     "ROBOT_FILE_VERSION",
@@ -315,6 +316,25 @@ def robot_params(robot: str | os.PathLike[str] | RobotParams, *, name: str = "ro
         return read_robot_file(robot)
     raise UnknownNameError(f"{name} {robot!r:.80} is neither a robot preset ({', '.join(sorted(ROBOT_PRESETS))}) nor "
                            "a robot file (.json, energy.params.write_robot_file)")
+
+
+def robot_spec(robot: str | os.PathLike[str] | RobotParams, *, name: str = "robot") -> str | RobotParams:
+    """What a model keeps of a robot: a preset by its name (as model files record it), any other
+    robot (a robot file, a RobotParams) by its parameters, never by a path a saved model would need.
+
+    Raises
+    ------
+    InvalidParameterError, UnknownNameError, FileFormatError
+        As :func:`robot_params`.
+
+    Examples
+    --------
+    >>> robot_spec("husky"), robot_spec(robot_preset("jackal")).name
+    ('husky', 'jackal')
+    """
+    if isinstance(robot, str) and robot in ROBOT_PRESETS:
+        return robot
+    return robot_params(robot, name=name)
 
 
 def ground_preset(name: str) -> GroundParams:

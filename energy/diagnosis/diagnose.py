@@ -14,7 +14,7 @@ from terrawatt_base.errors import DataError, InvalidParameterError, NotFittedErr
 
 from ..logs import InteractionLog
 from ..models.base import CurrentModel, check_logs, log_currents
-from ..params import ROBOT_PRESETS, robot_params
+from ..params import robot_spec
 from .corrected import CorrectedCurrentModel
 from .effect_base import Effect
 from .effects import LEARNED_EFFECT, NOT_IDENTIFIABLE_FROM_CURRENT, effect, resolve_effects
@@ -247,8 +247,8 @@ def diagnose(model: CurrentModel, logs: InteractionLog | Sequence[InteractionLog
     n_bootstrap = check_int("n_bootstrap", n_bootstrap, low=1)
     progress = check_bool("progress", progress)
     check_client(client, "candidate effect sets")
-    if robot is not None and not (isinstance(robot, str) and robot in ROBOT_PRESETS):
-        robot = robot_params(robot)  # a robot file read once: the corrected model keeps its parameters, not a path
+    if robot is not None:
+        robot = robot_spec(robot)  # a robot file read once: the corrected model keeps its parameters, not a path
     terrain = check_terrain(terrain)
     _check_currents(items)
     sp = make_split(items, split, n_blocks)

@@ -18,7 +18,7 @@ from ..models.base import CurrentModel
 from ..models.baselines import PhysicsCurrentModel
 from ..models.kinds import new_current_model
 from ..models.loading import load_current_model
-from ..params import GROUND_PRESETS, ROBOT_PRESETS, RobotParams, robot_params
+from ..params import GROUND_PRESETS, RobotParams, robot_params, robot_spec
 from .model_currents import DRIVE_EFFECTS
 
 __all__ = ["MODEL_SOURCES", "DEFAULT_SOURCE_NAMES", "ModelUnderDiagnosis", "check_model_source",
@@ -166,10 +166,10 @@ def _ground_text(ground: str | dict[str, str]) -> str:
 def _physics_robot(robot: str | os.PathLike[str] | None, flag: str) -> tuple[str | RobotParams, str]:
     """The robot of the physics model (a preset by its name, as model files keep it; a robot file's
     :class:`RobotParams`) and how the note names it."""
-    if robot is None or robot in ROBOT_PRESETS:
-        return robot or "husky", robot or "husky"
-    params = robot_params(robot, name=flag)
-    return params, f"{params.name} (robot file {Path(robot).name})"
+    spec = robot_spec("husky" if robot is None else robot, name=flag)
+    if isinstance(spec, str):
+        return spec, spec
+    return spec, f"{spec.name} (robot file {Path(robot).name})" if isinstance(robot, (str, os.PathLike)) else spec.name
 
 
 def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[InteractionLog], *,

@@ -7,7 +7,7 @@ from typing import Any
 from terrawatt_base.checks import check_choice
 from terrawatt_base.errors import InvalidParameterError
 
-from ..params import ROBOT_PRESETS, robot_params
+from ..params import robot_spec
 from .base import CurrentModel
 from .baselines import ConstantCurrentModel, LinearCurrentModel, PhysicsCurrentModel
 
@@ -52,7 +52,7 @@ def new_current_model(
     if robot is not None:
         if kind != "physics":
             raise InvalidParameterError(f"robot applies to the physics model only, got kind {kind!r}")
-        return PhysicsCurrentModel(robot if isinstance(robot, str) and robot in ROBOT_PRESETS else robot_params(robot))
+        return PhysicsCurrentModel(robot_spec(robot))
     if kind in _BASELINES:
         if band_hz is not None:
             raise InvalidParameterError(f"band_hz applies to the estimator and paper models only, got kind {kind!r}")
