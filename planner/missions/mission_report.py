@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from energy import GROUND_PRESETS, Battery, TruthSimulator, ground_preset
+from energy import GROUND_PRESETS, Battery, RobotParams, TruthSimulator, ground_preset
 from energy.params import robot_params
 from energy.io import write_csv_log
 from terrain import CellModelRegistry, TerrainMap
@@ -44,7 +44,8 @@ def check_preset_grounds(terrain: TerrainMap) -> None:
         raise UnknownNameError(f"the map's grounds {unknown!r} have no preset; known grounds: {sorted(GROUND_PRESETS)!r}")
 
 
-def mission_battery(robot: str, capacity_ah: float, voltage_v: float | None = None, reserve_pct: float = 20.0) -> Battery:
+def mission_battery(robot: str | os.PathLike[str] | RobotParams, capacity_ah: float, voltage_v: float | None = None,
+                    reserve_pct: float = 20.0) -> Battery:
     """The :class:`energy.Battery` of a mission: ``voltage_v`` defaults to the robot preset's battery voltage."""
     voltage = robot_params(robot).battery_voltage_v if voltage_v is None else voltage_v
     return Battery(capacity_ah=capacity_ah, voltage_v=voltage, min_reserve_pct=reserve_pct)
@@ -254,7 +255,7 @@ def simulate_adaptive_mission(
     robot_given = robot_params(robot)
     grounds = {name: ground_preset(name) for name in set(terrain.ground_names.values()) | {prior_ground}}
     truth = TruthSimulator(robot_given, grounds, seed=seed)
-    battery = mission_battery(robot, battery_ah, battery_v, reserve_pct)
+    battery = mission_battery(robot_given, battery_ah, battery_v, reserve_pct)
     settings = AdaptiveSettings(speed_mps=speed_mps, leg_length_m=leg_m,
                                 max_updates=AdaptiveSettings().max_updates if adapt else 0, seed=seed)
     learned = None
