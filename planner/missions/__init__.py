@@ -1,4 +1,4 @@
-"""Missions: drive a route against a battery (:func:`simulate_mission`), the adaptive loop (:func:`run_adaptive_mission`) and Monte Carlo studies (:func:`simulate_missions_mc`)."""
+"""Missions: drive a route against a battery (:func:`simulate_mission`), the ride-along loop (:class:`Navigator`; in simulation :func:`run_adaptive_mission`) and Monte Carlo studies (:func:`simulate_missions_mc`)."""
 
 from .adaptive import run_adaptive_mission
 from .adaptive_results import (
@@ -9,13 +9,16 @@ from .adaptive_results import (
     ReplanRecord,
     UpdateRecord,
 )
-from .manoeuvres import excitation_manoeuvre, fit_prior_model
+from .decisions import NAVIGATOR_ACTIONS, Decision, ManoeuvreRequest, RemainingForecast
+from .manoeuvres import excitation_manoeuvre, excitation_profiles, fit_prior_model
 from .monte_carlo import DEFAULT_MC_CURRENT_RATE_HZ, MissionSetup, simulate_missions_mc
 from .monte_carlo_figure import plot_monte_carlo
 from .monte_carlo_result import MONTE_CARLO_FORMAT_VERSION, MonteCarloResult
 from .monte_carlo_sampling import MissionDistributions, MissionSample
 from .results import MISSION_FORMAT_VERSION, MISSION_STATUSES, MissionResult
-from .settings import UPDATE_SCOPES, AdaptiveSettings
+from .navigator import Navigator
+from .observations import CHUNK_FIELDS, observation_log
+from .settings import UPDATE_SCOPES, UPDATE_SOURCES, AdaptiveSettings
 from .simulate import simulate_mission
 from .updates import adapted_model, validation_error
 
@@ -25,8 +28,18 @@ __all__ = [
     "MISSION_STATUSES",
     "MISSION_FORMAT_VERSION",
     "run_adaptive_mission",
+    # the ride-along loop
+    "Navigator",
+    "Decision",
+    "NAVIGATOR_ACTIONS",
+    "RemainingForecast",
+    "ManoeuvreRequest",
+    "observation_log",
+    "CHUNK_FIELDS",
+    "UPDATE_SOURCES",
     "fit_prior_model",
     "excitation_manoeuvre",
+    "excitation_profiles",
     "validation_error",
     "adapted_model",
     "AdaptiveSettings",

@@ -111,6 +111,9 @@ class AdaptiveResult:
         The whole mission's battery draw (driving and excitation manoeuvres) against the
         first plan's predicted energy (:func:`energy.energy_budget`): arrival state of
         charge, reserve margin, whether the prediction fitted, where the pack ran out.
+    manoeuvre_logs : tuple of (int, InteractionLog)
+        Each excitation manoeuvre's runs, with the leg after which it was driven, on the
+        same clock as the legs.
     leg_logs : tuple of InteractionLog
         What the robot's sensors recorded on each leg, in order (commands, currents, IMU,
         poses, ground labels; the truth simulator's logs): the data to diagnose the planning
@@ -139,6 +142,7 @@ class AdaptiveResult:
     skipped_updates: tuple[str, ...] = ()
     budget: EnergyBudget | None = None
     leg_logs: tuple[InteractionLog, ...] = ()
+    manoeuvre_logs: tuple[tuple[int, InteractionLog], ...] = ()
 
     def __post_init__(self) -> None:
         if self.status not in ADAPTIVE_STATUSES:

@@ -8,7 +8,7 @@ from terrain import TerrainMap
 
 from ..learned_cost import LearnedEnergyModel
 
-__all__ = ["split_polyline", "LegPredictor"]
+__all__ = ["split_polyline", "cut_at_position", "LegPredictor"]
 
 
 def split_polyline(wp: np.ndarray, length_m: float) -> tuple[np.ndarray, np.ndarray]:
@@ -32,6 +32,37 @@ def split_polyline(wp: np.ndarray, length_m: float) -> tuple[np.ndarray, np.ndar
     if np.hypot(*(head[-1] - head[-2])) < 1e-9:
         head = head[:-1]
     if np.hypot(*(tail[1] - tail[0])) < 1e-9:
+        tail = tail[1:]
+    return head, tail
+
+
+def cut_at_position(wp: np.ndarray, xy_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A polyline cut where it passes closest to ``xy_m``: the part driven and the rest (sharing the cut point).
+
+    The closest point over all segments (the first one on ties); a robot that drove a leg of
+    the route stands at (or near) its end, which this finds again from the pose alone.
+
+    Examples
+    --------
+    >>> head, tail = cut_at_position(np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 5.0]]), np.array([6.0, 0.3]))
+    >>> head.tolist(), tail.tolist()
+    ([[0.0, 0.0], [6.0, 0.0]], [[6.0, 0.0], [10.0, 0.0], [10.0, 5.0]])
+    """
+    wp = np.asarray(wp, dtype=np.float64)
+    p = np.asarray(xy_m, dtype=np.float64)
+    if len(wp) < 2:
+        return wp.copy(), wp.copy()
+    a, d = wp[:-1], np.diff(wp, axis=0)
+    len2 = np.einsum("ij,ij->i", d, d)
+    f = np.clip(np.einsum("ij,ij->i", p - a, d) / np.where(len2 > 0, len2, 1.0), 0.0, 1.0)
+    q = a + f[:, None] * d
+    k = int(np.argmin(np.hypot(*(q - p).T)))
+    cut = q[k]
+    head = np.vstack([wp[: k + 1], cut])
+    tail = np.vstack([cut, wp[k + 1:]])
+    if len(head) >= 2 and np.hypot(*(head[-1] - head[-2])) < 1e-9:
+        head = head[:-1]
+    if len(tail) >= 2 and np.hypot(*(tail[1] - tail[0])) < 1e-9:
         tail = tail[1:]
     return head, tail
 

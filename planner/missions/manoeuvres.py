@@ -4,10 +4,39 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from energy import InteractionLog, LinearCurrentModel, TruthSimulator, excitation_commands
+from energy import CommandProfile, InteractionLog, LinearCurrentModel, TruthSimulator, excitation_commands
 from terrawatt_base.checks import SEED_LIMIT, check_int
 
-__all__ = ["excitation_manoeuvre", "fit_prior_model"]
+__all__ = ["excitation_profiles", "excitation_manoeuvre", "fit_prior_model"]
+
+
+def excitation_profiles(
+    *,
+    straight_s: float,
+    turn_s: float,
+    speeds_mps: Sequence[float],
+    omega_radps: float,
+    seed: int,
+    dt_s: float = 0.01,
+) -> tuple[CommandProfile, CommandProfile]:
+    """The excitation manoeuvre's commands: a straight run over ``speeds_mps`` (``straight_s``
+    seconds, no turning) and a pivot run at ``±omega_radps`` held 2-3 s (``turn_s`` seconds),
+    both without rests (:func:`energy.excitation_commands`, seeded ``seed`` and ``seed + 1``).
+
+    What :class:`~planner.Navigator` asks a robot to drive where its data cannot tell a model
+    apart; :func:`excitation_manoeuvre` drives it in the truth simulator.
+
+    Raises
+    ------
+    InvalidParameterError
+        Bad durations, levels or seed.
+    """
+    seed = check_int("seed", seed, low=0, high=SEED_LIMIT - 2)
+    straight = excitation_commands(straight_s, dt_s, speed_levels_mps=tuple(speeds_mps), omega_levels_radps=(0.0,),
+                                   rest_s=0.0, seed=seed)
+    turn = excitation_commands(turn_s, dt_s, speed_levels_mps=(0.0,), omega_levels_radps=(omega_radps,),
+                               omega_sign="both", hold_s=(2.0, 3.0), rest_s=0.0, seed=seed + 1)
+    return straight, turn
 
 
 def excitation_manoeuvre(
@@ -24,10 +53,8 @@ def excitation_manoeuvre(
 ) -> list[InteractionLog]:
     """Drive the excitation manoeuvre on ``ground`` in the truth simulator: two logs.
 
-    A straight run over ``speeds_mps`` (``straight_s`` seconds, no turning) and a pivot run
-    at ``±omega_radps`` held 2-3 s (``turn_s`` seconds), both without rests
-    (:func:`energy.excitation_commands`, seeded ``seed`` and ``seed + 1``), simulated with
-    seeds ``sim_seed`` and ``sim_seed + 1``.
+    The commands of :func:`excitation_profiles` (seeded ``seed``), simulated with seeds
+    ``sim_seed`` and ``sim_seed + 1``.
 
     Raises
     ------
@@ -36,14 +63,11 @@ def excitation_manoeuvre(
     UnknownNameError
         ``truth`` does not know ``ground``.
     """
-    seed = check_int("seed", seed, low=0, high=SEED_LIMIT - 2)
     sim_seed = check_int("sim_seed", sim_seed, low=0, high=SEED_LIMIT - 2)
-    straight = excitation_commands(straight_s, dt_s, speed_levels_mps=tuple(speeds_mps), omega_levels_radps=(0.0,),
-                                   rest_s=0.0, seed=seed)
-    turn = excitation_commands(turn_s, dt_s, speed_levels_mps=(0.0,), omega_levels_radps=(omega_radps,),
-                               omega_sign="both", hold_s=(2.0, 3.0), rest_s=0.0, seed=seed + 1)
+    profiles = excitation_profiles(straight_s=straight_s, turn_s=turn_s, speeds_mps=speeds_mps,
+                                   omega_radps=omega_radps, seed=seed, dt_s=dt_s)
     return [truth.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground=ground, seed=sim_seed + i)
-            for i, p in enumerate((straight, turn))]
+            for i, p in enumerate(profiles)]
 
 
 def fit_prior_model(truth: TruthSimulator, ground: str, seed: int = 1) -> LinearCurrentModel:

@@ -7,11 +7,15 @@ from dataclasses import dataclass, field
 from terrain import InvalidParameterError, UpdatePolicy
 from terrawatt_base.checks import check_bool, check_int, check_real, check_seed
 
-__all__ = ["UPDATE_SCOPES", "AdaptiveSettings"]
+__all__ = ["UPDATE_SCOPES", "UPDATE_SOURCES", "AdaptiveSettings"]
 
 #: Cells an update covers: every cell of the flagged region's ground class served by the same
 #: model(s) (``"ground_class"``), or only the flagged cells (``"region"``).
 UPDATE_SCOPES = ("ground_class", "region")
+#: What a flagged region's new model is fitted on first: an excitation manoeuvre the
+#: navigator requests (``"manoeuvre"``; driven data when the robot declines it), or what the
+#: robot drove there (``"driven"``; a manoeuvre is requested when that is too little).
+UPDATE_SOURCES = ("manoeuvre", "driven")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -52,6 +56,23 @@ class AdaptiveSettings:
         Also try the serving model updated in-run on the excitation data
         (:meth:`energy.CurrentModel.adapt`) and propose it instead of the refitted model when
         it validates better (the update is then recorded with kind ``"in_run"``).
+    update_source : {"manoeuvre", "driven"}
+        What a new model is fitted on first (:data:`UPDATE_SOURCES`).
+    min_driven_s : float
+        Driven data in an update's scope needed to fit on it (s, > 2); less asks for a manoeuvre.
+    history_s : float
+        Driven data the navigator keeps for updates (s, >= ``min_driven_s``): the memory
+        bound over hours of driving.
+    interval_level : float
+        Coverage of the remaining-energy forecast's central interval, in (0, 1).
+    risk : float or None
+        Upper quantile of the remaining energy that budget decisions use, in (0.5, 1); None:
+        the point forecast.
+    forecast_dt_s : float
+        Time step (s, > 0) of the stop-turn-go profiles the remaining legs are priced on.
+    forecast_prior_legs, forecast_prior_spread : float
+        Weight (legs, > 0) and relative spread (> 0) of the forecast's prior before this run
+        has shown anything (:mod:`planner.missions.remaining`).
     """
 
     speed_mps: float = 0.5
@@ -71,9 +92,29 @@ class AdaptiveSettings:
     goal_tolerance_m: float = 0.5
     seed: int = 0
     in_run_update: bool = False
+    update_source: str = "manoeuvre"
+    min_driven_s: float = 20.0
+    history_s: float = 600.0
+    interval_level: float = 0.8
+    risk: float | None = None
+    forecast_dt_s: float = 0.01
+    forecast_prior_legs: float = 2.0
+    forecast_prior_spread: float = 0.1
 
     def __post_init__(self) -> None:
         own = "AdaptiveSettings"
+        if self.update_source not in UPDATE_SOURCES:
+            raise InvalidParameterError(
+                f"{own}.update_source must be one of {list(UPDATE_SOURCES)!r}, got {self.update_source!r}")
+        check_real("min_driven_s", self.min_driven_s, low=2.0, low_inclusive=False, owner=own)
+        check_real("history_s", self.history_s, low=self.min_driven_s, owner=own)
+        check_real("interval_level", self.interval_level, low=0.0, low_inclusive=False, high=1.0,
+                   high_inclusive=False, owner=own)
+        if self.risk is not None:
+            check_real("risk", self.risk, low=0.5, low_inclusive=False, high=1.0, high_inclusive=False, owner=own)
+        check_real("forecast_dt_s", self.forecast_dt_s, low=0.0, low_inclusive=False, owner=own)
+        check_real("forecast_prior_legs", self.forecast_prior_legs, low=0.0, low_inclusive=False, owner=own)
+        check_real("forecast_prior_spread", self.forecast_prior_spread, low=0.0, low_inclusive=False, owner=own)
         for name in ("speed_mps", "leg_length_m", "planner_time_limit_s", "excitation_omega_radps", "goal_tolerance_m"):
             check_real(name, getattr(self, name), low=0.0, low_inclusive=False, owner=own)
         for name in ("excitation_duration_s", "turn_excitation_duration_s"):

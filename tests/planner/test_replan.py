@@ -182,7 +182,7 @@ def test_bad_input():
 
 
 def test_the_adaptive_loop_replans_incrementally_with_the_same_lattice_optimum(monkeypatch):
-    import planner.missions.adaptive as adaptive_module
+    import planner.missions.navigator as adaptive_module
     from energy import Battery, LinearCurrentModel, TruthSimulator, excitation_commands, ground_preset, robot_preset
     from planner import AdaptiveSettings, run_adaptive_mission
     from terrain import CellModelRegistry

@@ -1,0 +1,886 @@
+"""The ride-along navigator: the learning loop a robot's own code drives, live or from a recorded drive.
+
+:class:`Navigator` holds a map, the per-cell current models (a
+:class:`terrain.CellModelRegistry`), the robot, its battery and a goal. ``plan(start)`` gives
+the first route with its forecast; from then on the robot hands it what it measured,
+chunk by chunk (:meth:`Navigator.observe`: an :class:`energy.InteractionLog` slice or plain
+arrays, :mod:`planner.missions.observations`), and every call returns a
+:class:`~planner.missions.decisions.Decision`.
+
+Between checkpoints (every ``settings.leg_length_m`` driven, or where the caller says) a call
+only checks the chunk, books its energy against the battery and keeps it. At a checkpoint the
+loop of the design runs on what was driven since the last one:
+
+1. **compare per cell** — each sample's measured current against the current the model
+   serving its cell predicts (:meth:`terrain.CellModelRegistry.record`); the
+   :class:`terrain.UpdatePolicy` flags regions whose error passes its threshold;
+2. **update** each flagged region: a model the registry already holds that explains what was
+   measured there (``"reuse"``); else a new model (``model_factory``, default
+   :class:`energy.LinearCurrentModel`) fitted on **what the robot drove in the update's
+   scope** (the last ``settings.history_s`` of driving kept; the first ``1 -
+   validation_fraction`` of it to fit, the rest to validate, ``"driven"``), or on an
+   excitation manoeuvre the navigator requests where the driven data are too few
+   (``settings.update_source`` says which comes first; the robot's code decides whether to
+   run it, :meth:`Navigator.observe_manoeuvre` / :meth:`Navigator.decline_manoeuvre`); the
+   registry keeps the new model only if it validates better than the old
+   (:meth:`terrain.CellModelRegistry.propose_update`);
+3. **repair the route** — only the changed models' edge costs are recomputed, the incremental
+   lattice search (:class:`~planner.IncrementalPlanner`) repairs its search from the robot's
+   position, and the remaining legs are priced again;
+4. **decide** — arrived; a new route; or, when the forecast of what remains at the chosen risk
+   (:mod:`planner.missions.remaining`: the models' price corrected by this run's measured /
+   predicted energy, with its interval) would cross the reserve, return to the depot if the
+   way back fits, else stop.
+
+The state of charge is the battery's own (:func:`energy.discharge_from_power`) over the
+measured battery power where a chunk carries it (voltage × pack current), over the power of
+the logged drive currents otherwise (:func:`energy.budget.log_battery_power_w`), and over the
+models' predicted currents for a chunk without currents (forecast-only mode: nothing is
+learned). Consecutive chunks are integrated across their boundary.
+
+Every decision made at a checkpoint, and every decision that is not ``"continue"``, is kept
+in :attr:`Navigator.decisions` with its evidence. The driven data kept for updates is bounded
+by ``settings.history_s``; :meth:`Navigator.save` / :meth:`Navigator.load`
+(:mod:`planner.missions.navigator_state`) write and read the whole state atomically, so a
+robot that reboots mid-mission continues with the same decisions.
+
+:func:`~planner.run_adaptive_mission` is one client of this class: the truth simulator plays
+the robot and drives the manoeuvres it requests.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import deque
+from dataclasses import replace
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from energy import (
+    Battery,
+    EnergyBudget,
+    GroundParams,
+    InteractionLog,
+    LinearCurrentModel,
+    RobotParams,
+    discharge_from_power,
+    energy_budget,
+    ground_preset,
+)
+from energy.budget import log_battery_power_w
+from terrain import CellModelRegistry, DataError, InvalidParameterError, TerrainMap
+from terrawatt_base.checks import check_real, fmt_number, real_array
+
+from ..lattice import Lattice
+from ..learned_cost import LearnedEnergyModel
+from ..planning import plan_route
+from ..replan import IncrementalPlanner
+from ..route import Route, evaluate_route
+from ..settings import PlannerSettings
+from .adaptive_results import AdaptiveResult, LegRecord, ReplanRecord, UpdateRecord
+from .decisions import Decision, ManoeuvreRequest, RemainingForecast
+from .legs import LegPredictor, cut_at_position
+from .manoeuvres import excitation_profiles
+from .observations import observation_log
+from .remaining import remaining_forecast
+from .settings import AdaptiveSettings
+from .updates import adapted_model, best_other_model, charge_error, predicted_currents, validation_error
+
+__all__ = ["Navigator"]
+
+#: Phases of a navigator: before its first plan, driving, waiting for a requested manoeuvre, over.
+PHASES = ("idle", "driving", "manoeuvre", "finished")
+#: A gap between chunks longer than this (s) is not integrated across (the robot was off).
+MAX_JOIN_GAP_S = 5.0
+
+
+class Navigator:
+    """Plan, observe what the robot measured, learn per cell, repair the route, decide (module docstring).
+
+    Parameters
+    ----------
+    terrain : TerrainMap
+        The map (its ground classes segment update scopes; never priced by their names).
+    registry : CellModelRegistry
+        Per-cell models on the map's grid (changed in place by accepted updates).
+    robot : RobotParams
+        The robot (motor constants and electronics turn currents into battery power).
+    battery : Battery
+        Capacity, voltage, reserve and the state of charge at the start.
+    goal_xy_m : (float, float), optional
+        The goal in map metres; or ``goal_lonlat_deg`` (WGS 84, through the map's CRS).
+    goal_lonlat_deg : (float, float), optional
+    physics_ground : GroundParams, optional
+        Ground of the physics slope term of the learned edge costs (default the asphalt preset).
+    settings : AdaptiveSettings, optional
+    model_factory : callable, optional
+        Returns a new unfitted current model; default :class:`energy.LinearCurrentModel`.
+    learned : LearnedEnergyModel, optional
+        Edge-cost adapter over ``registry`` (to reuse its table cache).
+    depot_xy_m : (float, float), optional
+        Where to return when the rest of the mission does not fit (default: no return, stop).
+
+    Raises
+    ------
+    InvalidParameterError
+        Wrong argument types; both or neither of ``goal_xy_m`` and ``goal_lonlat_deg``;
+        ``learned`` bound to another registry.
+    GridMismatchError
+        ``registry`` on another grid.
+    OutOfBoundsError, BlockedPositionError
+        Goal or depot off the map or blocked (when planning).
+
+    Examples
+    --------
+    >>> from energy import Battery, LinearCurrentModel, robot_preset
+    >>> from terrain import CellModelRegistry, flat_map
+    >>> tmap = flat_map((20, 40), 1.0)
+    >>> nav = Navigator(tmap, CellModelRegistry.from_terrain(tmap, LinearCurrentModel()),  # doctest: +SKIP
+    ...                 robot_preset("husky"), Battery(20.0, 24.0), (35.0, 10.0))
+    """
+
+    def __init__(
+        self,
+        terrain: TerrainMap,
+        registry: CellModelRegistry,
+        robot: RobotParams,
+        battery: Battery,
+        goal_xy_m: tuple[float, float] | None = None,
+        *,
+        goal_lonlat_deg: tuple[float, float] | None = None,
+        physics_ground: GroundParams | None = None,
+        settings: AdaptiveSettings | None = None,
+        model_factory: Callable[[], Any] | None = None,
+        learned: LearnedEnergyModel | None = None,
+        depot_xy_m: tuple[float, float] | None = None,
+    ) -> None:
+        ground = ground_preset("asphalt") if physics_ground is None else physics_ground
+        for name, value, cls in (("terrain", terrain, TerrainMap), ("registry", registry, CellModelRegistry),
+                                 ("robot", robot, RobotParams), ("battery", battery, Battery),
+                                 ("physics_ground", ground, GroundParams)):
+            if not isinstance(value, cls):
+                raise InvalidParameterError(f"{name} must be a {cls.__name__}, got {type(value).__name__!r}")
+        registry.check_grid(terrain)
+        cfg = AdaptiveSettings() if settings is None else settings
+        if not isinstance(cfg, AdaptiveSettings):
+            raise InvalidParameterError(f"settings must be an AdaptiveSettings, got {type(cfg).__name__!r}")
+        lem = learned if learned is not None else LearnedEnergyModel(registry, robot, ground)
+        if lem.registry is not registry:
+            raise InvalidParameterError("learned must be a LearnedEnergyModel over the same registry")
+        if (goal_xy_m is None) == (goal_lonlat_deg is None):
+            raise InvalidParameterError("give the goal as goal_xy_m or as goal_lonlat_deg (exactly one)")
+        if goal_lonlat_deg is not None:
+            lonlat = real_array("goal_lonlat_deg", goal_lonlat_deg, ndim=1)
+            if lonlat.shape != (2,):
+                raise InvalidParameterError(f"goal_lonlat_deg must be a (lon, lat) pair, got {goal_lonlat_deg!r}")
+            goal_xy_m = tuple(float(v) for v in terrain.lonlat_to_xy(lonlat[0], lonlat[1]))
+        self.terrain, self.registry, self.robot, self.battery = terrain, registry, robot, battery
+        self.settings, self.learned, self.physics_ground = cfg, lem, ground
+        self.model_factory = LinearCurrentModel if model_factory is None else model_factory
+        self.goal_xy_m = _pair("goal_xy_m", goal_xy_m)
+        self.depot_xy_m = None if depot_xy_m is None else _pair("depot_xy_m", depot_xy_m)
+        self._predictor = LegPredictor(lem, terrain, speed_mps=cfg.speed_mps, leg_length_m=cfg.leg_length_m,
+                                       dt_s=cfg.forecast_dt_s)
+        self._init_state()
+
+    def _init_state(self) -> None:
+        """The mutable state (what :mod:`planner.missions.navigator_state` saves)."""
+        self.phase = "idle"
+        self.status, self.reason = "max_legs", ""
+        self.returning = False
+        self.position_xy_m = np.full(2, math.nan)
+        self.heading_rad: float | None = None
+        self.leg_start_xy_m = np.full(2, math.nan)
+        self.leg_start_heading_rad: float | None = None
+        self.leg_start_time_s = 0.0
+        self.time_s = math.nan  # the robot's clock: the last drive timestamp seen
+        self.soc = float(self.battery.initial_soc)
+        self.last_power = (math.nan, math.nan)  # (t, W) of the last sample booked
+        self.route: Route | None = None
+        self.initial_route: Route | None = None
+        self.cost: Any = None
+        self.replanner: IncrementalPlanner | None = None
+        self.pending: list[float] = []  # the models' price of each remaining leg (J)
+        self.observed: list[tuple[float, float]] = []  # (predicted, actual) legs since the models changed
+        self.legs: list[LegRecord] = []
+        self.updates: list[UpdateRecord] = []
+        self.replans: list[ReplanRecord] = []
+        self.skipped: list[str] = []
+        self.decisions: list[Decision] = []
+        self.validated: set[tuple[int, int]] = set()
+        self.segment: list[InteractionLog] = []  # chunks since the last checkpoint
+        self.segment_j = 0.0  # their battery energy
+        self.segment_m = 0.0  # distance driven since the last checkpoint
+        self.history: deque[tuple[InteractionLog, np.ndarray, np.ndarray]] = deque()  # (log, rows, cols)
+        self.queue: list[Any] = []  # flagged regions still to decide at this checkpoint
+        self.changed = False  # models changed at this checkpoint
+        self.checkpoint_evidence: dict[str, Any] = {}
+        self.request: ManoeuvreRequest | None = None
+        self.n_chunks = 0
+        self.e_total = self.p_total = self.driven_j = self.excitation_j = self.update_wall = 0.0
+        self.leg_power_w = 0.0
+        self.series: dict[str, list[np.ndarray]] = {k: [] for k in ("t", "x", "y", "soc", "e", "p")}
+        self.draw: list[tuple[np.ndarray, np.ndarray]] = []
+        self.vibrations: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    # ================================================================== public calls
+    def plan(self, start_xy_m: tuple[float, float], *, heading_rad: float | None = None,
+             time_s: float = 0.0) -> Decision:
+        """The first route from ``start_xy_m``, with its forecast (a ``"new_route"`` decision, or ``"stop"``).
+
+        Raises
+        ------
+        InvalidParameterError
+            Called twice; start equal to the goal (within ``settings.goal_tolerance_m``).
+        OutOfBoundsError, BlockedPositionError
+            Start or goal off the map or blocked.
+        """
+        if self.phase != "idle":
+            raise InvalidParameterError("plan() was already called: the navigator follows one mission")
+        start = _pair("start_xy_m", start_xy_m)
+        cfg = self.settings
+        if np.hypot(*(start - self.goal_xy_m)) <= cfg.goal_tolerance_m:
+            raise InvalidParameterError(
+                f"start equals goal: start {tuple(start.tolist())!r} m lies within goal_tolerance_m="
+                f"{fmt_number(cfg.goal_tolerance_m)} m of goal {tuple(self.goal_xy_m.tolist())!r} m; nothing to drive")
+        self.time_s = check_real("time_s", time_s)
+        self.position_xy_m = self.leg_start_xy_m = start
+        self.heading_rad = self.leg_start_heading_rad = None if heading_rad is None else check_real(
+            "heading_rad", heading_rad)
+        self.leg_start_time_s = self.time_s
+        t0 = time.perf_counter()
+        builds0 = self.learned.table_builds
+        self.cost = self.learned.energy_cost(self.terrain, cfg.speed_mps)
+        refresh = time.perf_counter() - t0
+        self.route = self.initial_route = self._search(start)
+        planning_s = self.route.planning_time_s
+        if cfg.planner == "lattice" and self.route.found:  # seed the incremental search for the replans
+            t0 = time.perf_counter()
+            self.replanner = IncrementalPlanner(
+                Lattice.for_cost(self.cost, PlannerSettings().lattice_stride_cells), tuple(self.goal_xy_m))
+            self.replanner.plan(tuple(start))
+            planning_s += time.perf_counter() - t0
+        self.pending = self._predictor.legs(self.route.waypoints_m, self.heading_rad) if self.route.found else []
+        self.replans.append(ReplanRecord(0, "initial", sum(self.pending) if self.route.found else math.nan,
+                                         math.nan, True, refresh, planning_s, self.learned.table_builds - builds0))
+        self._push(self.time_s, start[0], start[1], self.soc, 0.0, 0.0)
+        self.phase = "driving"
+        return self._closing_decision(None, "new_route", "the first plan", {})
+
+    def observe(self, chunk: Any, *, checkpoint: bool | None = None) -> Decision:
+        """Take what the robot measured since the last call; decide.
+
+        Parameters
+        ----------
+        chunk : InteractionLog or mapping of arrays
+            Time, pose, v / omega, optional currents, IMU and battery
+            (:func:`~planner.missions.observations.observation_log`).
+        checkpoint : bool, optional
+            Run the checkpoint (compare, update, replan) at this chunk's end (True), never
+            (False), or when ``settings.leg_length_m`` has been driven since the last one or
+            the goal is reached (None).
+
+        Returns
+        -------
+        Decision
+
+        Raises
+        ------
+        InvalidParameterError
+            Before :meth:`plan`; while a requested manoeuvre waits for its answer.
+        DataError, OutOfBoundsError, UnitError
+            A chunk refused (nothing of it is kept, the state is unchanged).
+        """
+        if self.phase == "idle":
+            raise InvalidParameterError("call plan(start_xy_m) before observe()")
+        if self.phase == "manoeuvre":
+            raise InvalidParameterError(
+                f"manoeuvre request {self.request.request_id} waits for its answer: observe_manoeuvre(logs) or "
+                "decline_manoeuvre()")
+        log = observation_log(chunk, self.terrain, previous_time_s=None if math.isnan(self.time_s) else self.time_s,
+                              name=f"chunk {self.n_chunks}", robot=self.robot.name if hasattr(self.robot, "name")
+                              else "unknown")
+        if self.phase == "finished":
+            return Decision("stop" if self.status != "completed" else "arrived",
+                            f"the mission is over ({self.status}): {self.reason}", float(log.time_s[-1]),
+                            _xy(self.position_xy_m))
+        self.n_chunks += 1
+        rows, cols = self.terrain.rowcol(log.pose_xyh[:, 0], log.pose_xyh[:, 1])
+        rows, cols = np.asarray(rows), np.asarray(cols)
+        energy_j, crossed = self._book(log, rows, cols, driving=True)
+        xy = log.pose_xyh[:, :2]
+        steps = np.hypot(*np.diff(np.vstack([self.position_xy_m, xy]), axis=0).T)
+        self.segment_m += float(steps.sum())
+        self.segment.append(log)
+        self.segment_j += energy_j
+        self.position_xy_m = xy[-1].copy()
+        self.heading_rad = float(log.pose_xyh[-1, 2])
+        if crossed:
+            self._close_leg(compare=False)
+            return self._finish("reserve_violated", (
+                f"the battery reached its {self.battery.min_reserve_pct:g} % reserve at "
+                f"{_xy(self.position_xy_m)!r} m during leg {len(self.legs) - 1}"), "stop")
+        near_goal = np.hypot(*(self.position_xy_m - self._target())) <= self.settings.goal_tolerance_m
+        if checkpoint is False or (checkpoint is None and self.segment_m < self.settings.leg_length_m
+                                   and not near_goal):
+            return Decision("continue", "driving", self.time_s, _xy(self.position_xy_m), self.forecast())
+        return self._checkpoint()
+
+    def observe_manoeuvre(self, logs: InteractionLog | Sequence[InteractionLog]) -> Decision:
+        """What the robot measured while driving the requested manoeuvre (its logs, in time order).
+
+        The manoeuvre is made on the spot: its logs need no poses. Its energy is booked as
+        excitation; a new model is fitted on the first ``1 - validation_fraction`` of each
+        log and validated with the old on the rest.
+
+        Raises
+        ------
+        InvalidParameterError
+            No manoeuvre was requested; not logs.
+        DataError
+            Logs out of time order or without currents.
+        """
+        if self.phase != "manoeuvre":
+            raise InvalidParameterError("no manoeuvre was requested: nothing to observe")
+        xlogs = [logs] if isinstance(logs, InteractionLog) else list(logs)
+        if not xlogs or not all(isinstance(x, InteractionLog) for x in xlogs):
+            raise InvalidParameterError("observe_manoeuvre takes an InteractionLog or a sequence of them")
+        prev = self.time_s
+        for i, xl in enumerate(xlogs):
+            xl.require_currents(f"manoeuvre log {i}")
+            if not float(xl.time_s[0]) > prev:
+                raise DataError(f"manoeuvre log {i} starts at t = {fmt_number(float(xl.time_s[0]), 9)} s, not after "
+                                f"{fmt_number(prev, 9)} s: time went backwards")
+            prev = float(xl.time_s[-1])
+        return self._excite(xlogs)
+
+    def decline_manoeuvre(self, reason: str = "declined by the robot") -> Decision:
+        """The robot will not drive the requested manoeuvre: fit on the driven data if there is
+        enough, else leave the region's model as it is (its evidence reset)."""
+        if self.phase != "manoeuvre":
+            raise InvalidParameterError("no manoeuvre was requested: nothing to decline")
+        req = self.request
+        self.phase, self.request = "driving", None
+        region = self.queue[0]
+        outcome = self._fit_driven(region, *self._scope(region))
+        if outcome is None:
+            self.skipped.append(f"after leg {len(self.legs) - 1}: no {req.ground!r} update, the manoeuvre was "
+                                f"{reason} and the driven data are too few")
+            self.registry.reset_evidence(region)
+        else:
+            self.changed |= outcome
+        self.queue.pop(0)
+        return self._work_queue()
+
+    # ------------------------------------------------------------------ read-outs
+    @property
+    def finished(self) -> bool:
+        """Whether the mission is over (arrived, stopped)."""
+        return self.phase == "finished"
+
+    @property
+    def pending_manoeuvre(self) -> ManoeuvreRequest | None:
+        """The manoeuvre waiting for an answer, if any."""
+        return self.request
+
+    def forecast(self) -> RemainingForecast:
+        """The energy of the rest of the mission as seen now (:mod:`planner.missions.remaining`)."""
+        cfg = self.settings
+        return remaining_forecast(self.pending, self.observed, level=cfg.interval_level, risk=cfg.risk,
+                                  prior_legs=cfg.forecast_prior_legs, prior_spread=cfg.forecast_prior_spread,
+                                  soc=self.soc, available_j=self._available_j())
+
+    def result(self) -> AdaptiveResult:
+        """The mission so far as an :class:`AdaptiveResult` (legs, updates, replans, series, budget)."""
+        cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in self.series.items()}
+        pos = self.position_xy_m
+        status = self.status if self.phase == "finished" else "max_legs"
+        reason = self.reason if self.phase == "finished" else "the mission is under way"
+        return AdaptiveResult(
+            status=status, reason=reason, final_xy_m=_xy(pos),
+            distance_to_goal_m=float(np.hypot(*(pos - self.goal_xy_m))), initial_route=self.initial_route,
+            legs=tuple(self.legs), updates=tuple(self.updates), replans=tuple(self.replans), time_s=cat["t"],
+            x_m=cat["x"], y_m=cat["y"], soc=cat["soc"], energy_j=cat["e"], predicted_energy_j=cat["p"],
+            driven_energy_j=self.driven_j, excitation_energy_j=self.excitation_j,
+            update_wall_time_s=self.update_wall, final_soc=self.soc, skipped_updates=tuple(self.skipped),
+            budget=self.budget(),
+        )
+
+    def budget(self) -> EnergyBudget:
+        """The whole mission's draw (driving and manoeuvres) against the first plan's prediction."""
+        first = self.replans[0].predicted_energy_j if self.replans else math.nan
+        predicted_j = first if math.isfinite(first) else 0.0
+        if self.draw:
+            t, p = (np.concatenate(parts) for parts in zip(*self.draw))
+        else:
+            span = self.initial_route.duration_s if self.initial_route is not None and self.initial_route.found else 0.0
+            t, p = np.array([0.0, span if span > 0 else 1.0]), np.zeros(2)
+        return energy_budget(discharge_from_power(self.battery, t - t[0], p), predicted_j)
+
+    # ================================================================== booking
+    def _power_w(self, log: InteractionLog, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+        """Battery power of each sample: measured, from the logged currents, or from the models."""
+        if log.has_battery_power:
+            return np.asarray(log.battery_power_w, dtype=np.float64)
+        if log.has_currents:
+            return log_battery_power_w(log, self.robot)
+        pred = predicted_currents(self.registry, log, rows, cols)
+        return log_battery_power_w(replace(log, current_left_a=pred[:, 0], current_right_a=pred[:, 1]), self.robot)
+
+    def _book(self, log: InteractionLog, rows: np.ndarray | None, cols: np.ndarray | None, *,
+              driving: bool) -> tuple[float, bool]:
+        """Draw the battery through one log (joined to the last sample booked): its energy (J,
+        to the reserve if reached) and whether the reserve was reached; the series are extended."""
+        if rows is None:
+            r, c = self.terrain.rowcol(*self.position_xy_m)
+            rows, cols = np.full(len(log), int(r)), np.full(len(log), int(c))
+        t = np.asarray(log.time_s, dtype=np.float64)
+        power = self._power_w(log, rows, cols)
+        t_last, p_last = self.last_power
+        joined = math.isfinite(t_last) and 0.0 < t[0] - t_last <= MAX_JOIN_GAP_S
+        tt = np.concatenate(([t_last], t)) if joined else t
+        pp = np.concatenate(([p_last], power)) if joined else power
+        if tt.size < 2:  # a single sample and nothing to join: no time has passed
+            tt, pp = np.array([t[0], t[0] + 1e-9]), np.array([power[0], power[0]])
+        d = discharge_from_power(self.battery.replace(initial_soc=self.soc), tt - tt[0], pp)
+        crossed = d.reserve_crossed_time_s is not None
+        k = len(tt) if not crossed else int(d.reserve_crossed_index)
+        energy = np.asarray(d.energy_j)
+        soc = np.asarray(d.soc)
+        if crossed:
+            tc = float(d.reserve_crossed_time_s)
+            e_end = float(np.interp(tc, tt - tt[0], energy))
+            soc_end = self.battery.reserve_soc
+        else:
+            e_end, soc_end = float(energy[-1]), float(soc[-1])
+        off = 1 if joined else 0
+        sel = slice(off, max(k, off + 1))
+        e_series = self.e_total + energy[sel]
+        p_series = self.p_total + self._progress_prediction(log)[: e_series.size]
+        xy = log.pose_xyh[:, :2] if log.pose_xyh is not None else np.tile(self.position_xy_m, (len(log), 1))
+        n = e_series.size
+        self._push(t[:n], xy[:n, 0], xy[:n, 1], soc[sel][:n], e_series, p_series)
+        draw_t = tt[off:k] if not crossed else np.append(tt[off:k], tt[0] + tc)
+        draw_p = pp[off:k] if not crossed else np.append(pp[off:k], np.interp(tc, tt - tt[0], pp))
+        self._add_draw(draw_t, draw_p)
+        self.e_total += e_end
+        if driving:
+            self.driven_j += e_end
+        else:
+            self.excitation_j += e_end
+        self.soc = float(soc_end)
+        self.time_s = float(t[-1])
+        self.last_power = (float(tt[min(k, len(tt)) - 1]), float(pp[min(k, len(pp)) - 1]))
+        return e_end, crossed or self.soc <= self.battery.reserve_soc + 1e-12 and self.battery.reserve_soc > 0
+
+    def _progress_prediction(self, log: InteractionLog) -> np.ndarray:
+        """The predicted energy of the leg under way, in proportion to the distance driven (J per sample)."""
+        leg_j = self.pending[0] if self.pending else 0.0
+        if log.pose_xyh is None or self.settings.leg_length_m <= 0:
+            return np.full(len(log), 0.0)
+        xy = log.pose_xyh[:, :2]
+        d = self.segment_m + np.cumsum(np.hypot(*np.diff(np.vstack([self.position_xy_m, xy]), axis=0).T))
+        return leg_j * np.minimum(d / self.settings.leg_length_m, 1.0)
+
+    def _push(self, t: Any, x: Any, y: Any, s: Any, e: Any, p: Any) -> None:
+        for key, arr in zip(("t", "x", "y", "soc", "e", "p"), (t, x, y, s, e, p)):
+            self.series[key].append(np.atleast_1d(np.asarray(arr, dtype=np.float64)))
+
+    def _add_draw(self, t: np.ndarray, power_w: np.ndarray) -> None:
+        """Book a battery draw (a series that starts where the last ended is moved on by a microsecond)."""
+        t = np.asarray(t, dtype=np.float64)
+        if t.size == 0:
+            return
+        if self.draw and t[0] <= self.draw[-1][0][-1]:
+            t = t + (self.draw[-1][0][-1] - t[0]) + 1e-6
+        self.draw.append((t, np.asarray(power_w, dtype=np.float64)))
+
+    def _available_j(self) -> float:
+        """Nominal energy above the reserve at the current state of charge (J)."""
+        return self.battery.replace(initial_soc=self.soc).usable_energy_wh * 3600.0
+
+    # ================================================================== the checkpoint
+    def _close_leg(self, *, compare: bool) -> InteractionLog | None:
+        """Record the leg driven since the last checkpoint; its log (None if nothing was driven)."""
+        if not self.segment:
+            return None
+        seg = self.segment[0] if len(self.segment) == 1 else InteractionLog.concatenate(self.segment)
+        head = np.vstack([self.leg_start_xy_m, self.position_xy_m])
+        tail: np.ndarray | None = None
+        if self.route is not None and self.route.found:
+            head, tail = cut_at_position(np.asarray(self.route.waypoints_m), self.position_xy_m)
+        leg_pred = self.pending.pop(0) if self.pending else self._predictor.leg(head, self.leg_start_heading_rad)
+        route_j = evaluate_route(self.cost, head).energy_j if len(head) >= 2 else 0.0
+        index = len(self.legs)
+        duration = float(seg.time_s[-1] - self.leg_start_time_s)
+        self.legs.append(LegRecord(index, _xy(self.leg_start_xy_m), _xy(self.position_xy_m), leg_pred,
+                                   self.segment_j, duration, len(seg), route_j))
+        self.observed.append((leg_pred, self.segment_j))
+        self.p_total += leg_pred
+        self.leg_power_w = self.segment_j / max(duration, 1e-9)
+        self.segment, self.segment_j, self.segment_m = [], 0.0, 0.0
+        self.leg_start_xy_m, self.leg_start_heading_rad = self.position_xy_m.copy(), self.heading_rad
+        self.leg_start_time_s = self.time_s
+        self._tail = tail
+        return seg
+
+    def _checkpoint(self) -> Decision:
+        """Close the leg, compare per cell, queue the flagged regions and work through them."""
+        seg = self._close_leg(compare=True)
+        self.changed, self.queue = False, []
+        evidence: dict[str, Any] = {"leg": self.legs[-1].index, "predicted_j": self.legs[-1].predicted_energy_j,
+                                    "actual_j": self.legs[-1].actual_energy_j}
+        if seg is not None and seg.has_currents:
+            rows, cols = (np.asarray(a) for a in self.terrain.rowcol(seg.pose_xyh[:, 0], seg.pose_xyh[:, 1]))
+            self._cmp = _Comparison(self.registry, seg, rows, cols)
+            self._remember(seg, rows, cols)
+            regions = list(self.registry.flagged_regions(self.settings.policy))
+            self.queue = regions
+            evidence["flagged"] = [{"ground": self._ground_name(r), "cells": int(r.cell_count),
+                                    "error_pct": 100.0 * float(r.relative_error)} for r in regions]
+        else:
+            evidence["flagged"] = []
+            evidence["mode"] = "forecast only (no currents)"
+        self.checkpoint_evidence = evidence
+        self._updates0 = len(self.updates)
+        return self._work_queue()
+
+    def _remember(self, seg: InteractionLog, rows: np.ndarray, cols: np.ndarray) -> None:
+        """Keep the leg for driven updates; forget the oldest beyond ``settings.history_s``."""
+        self.history.append((seg, rows, cols))
+        total = sum(float(s.duration_s) for s, _, _ in self.history)
+        while len(self.history) > 1 and total - float(self.history[0][0].duration_s) >= self.settings.history_s:
+            total -= float(self.history.popleft()[0].duration_s)
+
+    def _work_queue(self) -> Decision:
+        """Decide the queued regions one by one (a manoeuvre request pauses), then close the checkpoint."""
+        while self.queue:
+            if sum(u.kind == "excitation" for u in self.updates) >= self.settings.max_updates:
+                self.queue = []
+                break
+            outcome = self._update_region(self.queue[0])
+            if isinstance(outcome, Decision):  # a manoeuvre request, or the reserve reached
+                return outcome
+            self.changed |= bool(outcome)
+            self.queue.pop(0)
+        return self._close_checkpoint()
+
+    def _close_checkpoint(self) -> Decision:
+        """After the updates: arrived, or the route repaired and the budget checked."""
+        evidence = dict(self.checkpoint_evidence)
+        evidence["updates"] = [vars(u) for u in self.updates[self._updates0:]]
+        target = self._target()
+        tail = self._tail
+        at_end = tail is None or len(tail) < 2
+        if np.hypot(*(self.position_xy_m - target)) <= self.settings.goal_tolerance_m or at_end:
+            where = "the depot" if self.returning else "the goal"
+            return self._finish("completed", f"reached {where}", "arrived", evidence)
+        if len(self.legs) >= self.settings.max_legs:
+            return self._finish("max_legs", f"stopped after max_legs={self.settings.max_legs} legs", "stop", evidence)
+        action, why = "continue", "on route"
+        if self.changed:
+            changed = self._replan(tail)
+            if changed:
+                action, why = "new_route", "the models changed: " + "; ".join(
+                    f"{u.kind} update of {u.ground!r}" for u in self.updates[self._updates0:] if u.accepted)
+        else:
+            self.route = evaluate_route(self.cost, tail, status="exact", planner=self.route.planner)
+        return self._closing_decision(len(self.legs) - 1, action, why, evidence)
+
+    def _closing_decision(self, checkpoint: int | None, action: str, why: str, evidence: dict[str, Any]) -> Decision:
+        """The budget check on the route now; the decision, logged."""
+        if not self.route.found:
+            return self._finish("no_route", f"no route from {_xy(self.position_xy_m)} to the goal "
+                                            f"(planner status {self.route.status!r})", "stop", evidence)
+        fc = self.forecast()
+        if not fc.fits:
+            need = (f"the remaining route needs {fc.risk_j / 3600:.2f} Wh ("
+                    + ("predicted" if fc.risk is None else f"at risk {fc.risk:g}")
+                    + f") but only {max(fc.available_j, 0.0) / 3600:.2f} Wh are left above the "
+                    f"{self.battery.min_reserve_pct:g} % reserve")
+            back = self._return_route() if self.depot_xy_m is not None and not self.returning else None
+            if back is not None:
+                return self._decide("return", need + "; the way back to the depot fits", checkpoint, evidence,
+                                    route=back)
+            return self._finish("budget_exceeded", need, "stop", evidence)
+        return self._decide(action, why, checkpoint, evidence,
+                            route=self.route if action == "new_route" else None)
+
+    def _decide(self, action: str, reason: str, checkpoint: int | None, evidence: dict[str, Any], *,
+                route: Route | None = None, manoeuvre: ManoeuvreRequest | None = None) -> Decision:
+        fc = None if self.phase == "finished" else self.forecast()
+        d = Decision(action, reason, self.time_s, _xy(self.position_xy_m), fc, route, manoeuvre, checkpoint, evidence)
+        self.decisions.append(d)
+        return d
+
+    def _finish(self, status: str, reason: str, action: str, evidence: dict[str, Any] | None = None) -> Decision:
+        self.status, self.reason, self.phase = status, reason, "finished"
+        self.pending = []
+        return self._decide(action, reason, len(self.legs) - 1 if self.legs else None, evidence or {})
+
+    def _target(self) -> np.ndarray:
+        return self.depot_xy_m if self.returning else self.goal_xy_m
+
+    # ================================================================== updates
+    def _ground_name(self, region: Any) -> str:
+        r, c = region.representative_row_col
+        gid = int(self.terrain.ground[r, c])
+        return self.terrain.ground_names.get(gid, str(gid))
+
+    def _scope(self, region: Any) -> tuple[np.ndarray, int, str, int]:
+        """The cells an update of ``region`` covers, its ground class id and name, the old model id."""
+        r, c = region.representative_row_col
+        gid = int(self.terrain.ground[r, c])
+        ids = np.asarray(self.registry.model_id_map)
+        if self.settings.update_scope == "ground_class":
+            scope = (np.asarray(self.terrain.ground) == gid) & np.isin(ids, np.asarray(region.model_ids))
+        else:
+            scope = region.mask(self.registry.shape)
+        return scope, gid, self.terrain.ground_names.get(gid, str(gid)), int(ids[r, c])
+
+    def _update_region(self, region: Any) -> bool | Decision:
+        """Reuse a model, skip, fit on driven data, or request a manoeuvre."""
+        cfg, registry = self.settings, self.registry
+        w0 = time.perf_counter()
+        scope, gid, gname, old_id = self._scope(region)
+        if self._reuse(region, scope, gname, w0):
+            return True
+        if (gid, old_id) in self.validated:  # proved itself on fresh data of this ground: transients
+            registry.reset_evidence(region)
+            return False
+        if cfg.update_source == "driven":
+            outcome = self._fit_driven(region, scope, gid, gname, old_id)
+            if outcome is not None:
+                return outcome
+        x_e_est = self.leg_power_w * (cfg.excitation_duration_s + cfg.turn_excitation_duration_s)
+        if x_e_est > self._available_j() - sum(self.pending):
+            self.skipped.append(f"after leg {len(self.legs) - 1}: no {gname!r} update, its ~{x_e_est / 3600:.2f} Wh "
+                                "manoeuvre and the remaining route do not both fit above the reserve")
+            registry.reset_evidence(region)
+            return False
+        seed = cfg.seed + 10_000 + 10 * len(self.updates)
+        profiles = excitation_profiles(straight_s=cfg.excitation_duration_s, turn_s=cfg.turn_excitation_duration_s,
+                                       speeds_mps=cfg.excitation_speeds_mps, omega_radps=cfg.excitation_omega_radps,
+                                       seed=seed, dt_s=0.01)
+        self.request = ManoeuvreRequest(
+            request_id=len(self.updates), ground=gname, region_cells=int(region.cell_count),
+            xy_m=_xy(self.position_xy_m), profiles=profiles, duration_s=sum(p.duration_s for p in profiles),
+            estimated_energy_j=x_e_est, purpose=(
+                f"the {gname!r} region ({region.cell_count} cells) is off by {100 * region.relative_error:+.1f} % "
+                "and the driven data cannot tell a new model apart: a straight run over speed levels and pivots"))
+        self.phase = "manoeuvre"
+        self._w0 = w0
+        return self._decide("manoeuvre", self.request.purpose, len(self.legs) - 1, dict(self.checkpoint_evidence),
+                            manoeuvre=self.request)
+
+    def _reuse(self, region: Any, scope: np.ndarray, gname: str, w0: float) -> bool:
+        """Assign a model learned elsewhere that already explains what was measured in the region."""
+        cmp_ = self._cmp
+        in_region = region.mask(self.registry.shape)[cmp_.rows, cmp_.cols]
+        found = best_other_model(self.registry, cmp_.log, in_region, cmp_.meas, cmp_.dt, region.model_ids,
+                                 self.settings.policy.min_samples)
+        if found is None:
+            return False
+        mid, err = found
+        err_now = charge_error(cmp_.pred, cmp_.meas, cmp_.dt, in_region)
+        if not err < min(self.settings.policy.threshold_pct / 100.0, err_now):
+            return False
+        leg = len(self.legs) - 1
+        self.registry.assign(scope, mid, reason=(
+            f"reuse: model {mid} ({self.registry.model_record(mid).name!r}) explains the {gname!r} region "
+            f"driven in leg {leg} to {100 * err:.1f} % (the serving model: {100 * err_now:.1f} %)"))
+        wall = time.perf_counter() - w0
+        self.update_wall += wall
+        self.updates.append(UpdateRecord(leg, gname, region.cell_count, int(np.count_nonzero(scope)),
+                                         100.0 * region.relative_error, True, mid, err, err_now,
+                                         0.0, 0.0, wall, kind="reuse"))
+        self._models_changed()
+        return True
+
+    def _driven_runs(self, scope: np.ndarray) -> list[InteractionLog]:
+        """The kept driving inside ``scope``: contiguous runs of at least 1 s, oldest first."""
+        runs = []
+        for log, rows, cols in self.history:
+            inside = scope[rows, cols]
+            if not inside.any():
+                continue
+            edges = np.flatnonzero(np.diff(np.concatenate(([0], inside.astype(np.int8), [0]))))
+            for a, b in zip(edges[::2], edges[1::2]):
+                t0, t1 = float(log.time_s[a]), float(log.time_s[b - 1])
+                if t1 - t0 >= 1.0:
+                    try:
+                        runs.append(log.slice(t0, t1 + 1e-9))
+                    except Exception:  # noqa: BLE001  (a window without IMU samples: not usable)
+                        continue
+        return runs
+
+    def _fit_driven(self, region: Any, scope: np.ndarray, gid: int, gname: str, old_id: int) -> bool | None:
+        """Fit and validate a new model on the driving kept inside the scope; None when it is too little."""
+        cfg = self.settings
+        w0 = time.perf_counter()
+        runs = self._driven_runs(scope)
+        total = sum(float(r.duration_s) for r in runs)
+        if total < cfg.min_driven_s:
+            return None
+        cut_total = (1.0 - cfg.validation_fraction) * total
+        train, held, acc = [], [], 0.0
+        for r in runs:  # the first part of the driving to fit, the last to validate
+            d = float(r.duration_s)
+            if acc + d <= cut_total:
+                train.append(r)
+            elif acc >= cut_total:
+                held.append(r)
+            else:
+                cut = float(r.time_s[0]) + (cut_total - acc)
+                for part, into in (((float(r.time_s[0]), cut), train), ((cut, float(r.time_s[-1]) + 1e-9), held)):
+                    try:
+                        into.append(r.slice(*part))
+                    except Exception:  # noqa: BLE001  (too short a piece)
+                        pass
+            acc += d
+        if not train or not held:
+            return None
+        return self._propose(region, scope, gid, gname, old_id, train, held, "driven", 0.0, 0.0, w0, runs[0])
+
+    def _excite(self, xlogs: list[InteractionLog]) -> Decision:
+        """Book the manoeuvre's energy, fit and validate on it, go on with the queue."""
+        cfg = self.settings
+        req, region = self.request, self.queue[0]
+        self.phase, self.request = "driving", None
+        e0, t_start = self.excitation_j, self.time_s
+        crossed = False
+        for xl in xlogs:
+            _, crossed = self._book(xl, None, None, driving=False)
+            if crossed:
+                break
+        x_e, x_t = self.excitation_j - e0, self.time_s - t_start
+        if crossed:
+            self.update_wall += time.perf_counter() - self._w0
+            return self._finish("reserve_violated", (
+                f"the battery reached its {self.battery.min_reserve_pct:g} % reserve in the {req.ground!r} "
+                f"excitation manoeuvre at {_xy(self.position_xy_m)!r} m after leg {len(self.legs) - 1}; "
+                "no update was made from the incomplete data"), "stop")
+        train, held = [], []
+        for xl in xlogs:
+            cut = xl.time_s[0] + (1.0 - cfg.validation_fraction) * (xl.time_s[-1] - xl.time_s[0])
+            train.append(xl.slice(xl.time_s[0], cut))
+            held.append(xl.slice(cut, xl.time_s[-1] + 1.0))
+        scope, gid, gname, old_id = self._scope(region)
+        self.changed |= self._propose(region, scope, gid, gname, old_id, train, held, "excitation", x_e, x_t,
+                                      self._w0, xlogs[0])
+        self.queue.pop(0)
+        return self._work_queue()
+
+    def _propose(self, region: Any, scope: np.ndarray, gid: int, gname: str, old_id: int,
+                 train: list[InteractionLog], held: list[InteractionLog], kind: str, x_e: float, x_t: float,
+                 w0: float, vibration: InteractionLog) -> bool:
+        """Fit a new model on ``train``, validate new and old on ``held``; the registry keeps the better."""
+        registry = self.registry
+        new_model = self.model_factory().fit(train)
+        err_new = validation_error(new_model, held)
+        adapted = adapted_model(registry.model(old_id), train) if self.settings.in_run_update else None
+        err_adapted = validation_error(adapted, held) if adapted is not None else np.inf
+        if err_adapted < err_new:  # the serving model updated in-run validates better than a refit
+            new_model, err_new, kind = adapted, err_adapted, "in_run"
+        err_old = validation_error(registry.model(old_id), held)
+        leg = len(self.legs) - 1
+        decision = registry.propose_update(
+            scope, new_model, err_new, err_old, name=f"update{len(self.updates) + 1}-{gname}",
+            reason=f"region error {100 * region.relative_error:+.1f} % after leg {leg}",
+            meta={"ground": gname, "after_leg": leg, "data": kind})
+        if decision.accepted:
+            self.vibrations[int(decision.model_id)] = (np.asarray(vibration.accel_time_s),
+                                                       np.asarray(vibration.accel_z_mps2))
+            self.learned.set_vibration(decision.model_id, vibration.accel_time_s, vibration.accel_z_mps2)
+            self.validated.add((gid, int(decision.model_id)))
+            self._models_changed()
+        else:
+            self.validated.add((gid, old_id))
+            registry.reset_evidence(region)
+        wall = time.perf_counter() - w0
+        self.update_wall += wall
+        self.updates.append(UpdateRecord(leg, gname, region.cell_count, int(np.count_nonzero(scope)),
+                                         100.0 * region.relative_error, bool(decision.accepted), decision.model_id,
+                                         err_new, err_old, x_e, x_t, wall, kind))
+        return bool(decision.accepted)
+
+    def _models_changed(self) -> None:
+        """The in-run forecast correction starts again: the models it corrected are gone."""
+        self.observed = []
+
+    # ================================================================== planning
+    def _search(self, start: np.ndarray) -> Route:
+        cfg = self.settings
+        if self.replanner is not None:  # the lattice, searched incrementally
+            return self.replanner.route(tuple(start), seed=cfg.seed)
+        return plan_route(self.terrain, tuple(start), tuple(self._target()), cost=self.cost, planner=cfg.planner,
+                          time_limit_s=cfg.planner_time_limit_s, seed=cfg.seed, compare=False)
+
+    def _replan(self, tail: np.ndarray) -> bool:
+        """Refresh the edge costs for the changed models and replan from here; keep the old route
+        when the planner finds nothing better. Whether the route changed."""
+        t1 = time.perf_counter()
+        builds0 = self.learned.table_builds
+        self.cost = self.learned.energy_cost(self.terrain, self.settings.speed_mps, previous=self.cost)
+        if self.replanner is not None:
+            self.replanner.update(Lattice.for_cost(self.cost, self.replanner.lattice.stride_cells))
+        refresh = time.perf_counter() - t1
+        old_energy = evaluate_route(self.cost, tail).energy_j if len(tail) >= 2 else 0.0
+        route = self._search(self.position_xy_m)
+        if route.found:
+            same = route.waypoints_m.shape == tail.shape and np.allclose(route.waypoints_m, tail, atol=1e-6)
+            if not same and old_energy <= route.energy_j:  # nothing better: keep the old one
+                route, same = evaluate_route(self.cost, tail, status="exact", planner="kept"), True
+            self.pending = self._predictor.legs(route.waypoints_m, self.heading_rad)
+        else:
+            same, self.pending = False, []
+        self.route = route
+        self.update_wall += refresh
+        self.replans.append(ReplanRecord(len(self.legs) - 1, "update", sum(self.pending) if route.found else math.nan,
+                                         old_energy, not same, refresh, route.planning_time_s,
+                                         self.learned.table_builds - builds0))
+        return not same
+
+    def _return_route(self) -> Route | None:
+        """The route back to the depot, if it fits above the reserve at the risk level; the
+        navigator then heads there."""
+        back = plan_route(self.terrain, tuple(self.position_xy_m), tuple(self.depot_xy_m), cost=self.cost,
+                          planner="lattice", seed=self.settings.seed, compare=False)
+        if not back.found:
+            return None
+        pending = self._predictor.legs(back.waypoints_m, self.heading_rad)
+        cfg = self.settings
+        fc = remaining_forecast(pending, self.observed, level=cfg.interval_level, risk=cfg.risk,
+                                prior_legs=cfg.forecast_prior_legs, prior_spread=cfg.forecast_prior_spread,
+                                soc=self.soc, available_j=self._available_j())
+        if not fc.fits:
+            return None
+        self.returning, self.route, self.pending, self.replanner = True, back, pending, None
+        self.replans.append(ReplanRecord(len(self.legs) - 1, "return", sum(pending), math.nan, True, 0.0,
+                                         back.planning_time_s, 0))
+        return back
+
+
+class _Comparison:
+    """Measured and predicted current of one leg's samples, per cell (recorded in the registry)."""
+
+    def __init__(self, registry: CellModelRegistry, log: InteractionLog, rows: np.ndarray, cols: np.ndarray) -> None:
+        self.log, self.rows, self.cols = log, rows, cols
+        self.pred = predicted_currents(registry, log, rows, cols)
+        self.meas = np.column_stack([log.current_left_a, log.current_right_a])
+        self.dt = np.gradient(log.time_s)
+        registry.record(rows, cols, np.abs(self.meas), np.abs(self.pred), self.dt)
+
+
+def _pair(name: str, value: Any) -> np.ndarray:
+    arr = real_array(name, value, ndim=1)
+    if arr.shape != (2,):
+        raise InvalidParameterError(f"{name} must be an (x, y) pair, got {value!r}")
+    return arr.copy()
+
+
+def _xy(p: np.ndarray) -> tuple[float, float]:
+    return float(p[0]), float(p[1])

@@ -1,0 +1,81 @@
+"""The forecast of what remains of a mission, learning from this run as it goes (the in-run gain and its interval).
+
+The models price the remaining legs (``pending``: each leg's stop-turn-go profile, J). What
+this run has measured corrects that price: over the legs driven since the models last
+changed, the gain ``g = (sum(actual) + n0 * mean(predicted)) / (sum(predicted) + n0 *
+mean(predicted))`` — measured over predicted energy, shrunk toward 1 by ``n0`` prior legs.
+The spread ``s`` of a leg's log ratio ``log(actual / predicted)`` about its mean is pooled
+with a prior spread ``s0`` (weight ``n0``). The forecast of the rest is ``E = g * sum(pending)``
+with a standard deviation that adds what the gain does not know (``E * s / sqrt(n + n0)``: a
+systematic error over the whole rest) and what varies leg to leg (``g * s * sqrt(sum(pending^2))``).
+Central intervals and the risk quantile come from the normal distribution on that.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from scipy.stats import norm
+
+from .decisions import RemainingForecast
+
+__all__ = ["remaining_forecast"]
+
+
+def remaining_forecast(
+    pending_j: Sequence[float],
+    observed: Sequence[tuple[float, float]],
+    *,
+    level: float,
+    risk: float | None,
+    prior_legs: float,
+    prior_spread: float,
+    soc: float,
+    available_j: float,
+) -> RemainingForecast:
+    """The energy of the remaining legs with the in-run correction (see the module docstring).
+
+    Parameters
+    ----------
+    pending_j : sequence of float
+        The models' price of each remaining leg (J).
+    observed : sequence of (predicted_j, actual_j)
+        Legs driven since the models last changed.
+    level : float
+        Central interval's coverage, in (0, 1).
+    risk : float or None
+        Upper quantile decisions use (None: the point forecast).
+    prior_legs, prior_spread : float
+        ``n0`` and ``s0`` of the module docstring.
+    soc, available_j : float
+        State of charge and energy above the reserve now (J), carried into the result.
+
+    Returns
+    -------
+    RemainingForecast
+    """
+    p = np.asarray([float(x) for x in pending_j], dtype=np.float64)
+    obs = np.asarray([(a, b) for a, b in observed if a > 0 and b > 0], dtype=np.float64).reshape(-1, 2)
+    n = obs.shape[0]
+    model_j = float(p.sum())
+    if n:
+        mean_pred = float(obs[:, 0].mean())
+        gain = (float(obs[:, 1].sum()) + prior_legs * mean_pred) / (float(obs[:, 0].sum()) + prior_legs * mean_pred)
+    else:
+        gain = 1.0
+    if n >= 2:
+        s_n2 = float(np.var(np.log(obs[:, 1] / obs[:, 0]), ddof=1))
+        spread = math.sqrt((prior_legs * prior_spread ** 2 + (n - 1) * s_n2) / (prior_legs + n - 1))
+    else:
+        spread = prior_spread
+    energy = gain * model_j
+    sd = math.sqrt((energy * spread / math.sqrt(n + prior_legs)) ** 2 + (gain * spread) ** 2 * float(np.sum(p ** 2)))
+    z = float(norm.ppf(0.5 + level / 2.0))
+    risk_j = energy if risk is None else energy + float(norm.ppf(risk)) * sd
+    return RemainingForecast(
+        energy_j=energy, low_j=max(energy - z * sd, 0.0), high_j=energy + z * sd, level=level, risk_j=risk_j,
+        risk=risk, model_energy_j=model_j, gain=gain, spread=spread, legs_remaining=int(p.size),
+        legs_observed=n, soc=soc, available_j=available_j,
+    )
