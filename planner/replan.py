@@ -226,6 +226,38 @@ class IncrementalPlanner:
             nodes, objective = np.empty(0, np.int64), e_direct
         return self.lattice.path_via(start, nodes, goal, float(objective), "energy", time.perf_counter() - t0)
 
+    #: The search's arrays (besides the move energies, which follow from the lattice).
+    SEARCH_ARRAYS = ("g", "rhs", "exit", "key1", "key2", "nodes", "where", "dst")
+
+    def search_state(self) -> dict[str, np.ndarray]:
+        """The search's memory as arrays (copies), for :meth:`restore_search` in a planner built
+        again over the same lattice: a restored planner repairs exactly as this one would."""
+        out = {name: getattr(self, f"_{name}").copy() for name in self.SEARCH_ARRAYS}
+        out["size"] = np.array([self._size], np.int64)
+        return out
+
+    def restore_search(self, state: dict[str, np.ndarray]) -> IncrementalPlanner:
+        """Put back a :meth:`search_state` taken from a planner over this lattice (its moves'
+        energies must be this planner's).
+
+        Raises
+        ------
+        InvalidParameterError
+            Missing arrays, or arrays of another lattice's size.
+        """
+        n = self._g.size
+        for name in self.SEARCH_ARRAYS:
+            arr = state.get(name)
+            ref = getattr(self, f"_{name}")
+            if not isinstance(arr, np.ndarray) or (name != "dst" and arr.shape != ref.shape) or arr.ndim != 1:
+                raise InvalidParameterError(f"search state {name!r} missing or not of this lattice ({n} nodes)")
+            setattr(self, f"_{name}", np.ascontiguousarray(arr, dtype=ref.dtype))
+        size = state.get("size")
+        if not isinstance(size, np.ndarray) or size.shape != (1,) or not 0 <= int(size[0]) <= n:
+            raise InvalidParameterError("search state 'size' missing or out of range")
+        self._size = int(size[0])
+        return self
+
     def replan(self, start_xy_m: tuple[float, float], lattice: Lattice | None = None) -> LatticePath:
         """:meth:`update` with ``lattice`` (if given), then :meth:`plan` from ``start_xy_m``."""
         if lattice is not None:

@@ -136,8 +136,10 @@ class MissionReport:
         warns and is left out, :func:`terrawatt_base.figure_file.draw_figure`).
 
         With ``logs``, also each leg's log (:attr:`AdaptiveResult.leg_logs`) as a CSV log
-        ``logs/leg_NNN.csv`` (:func:`energy.io.write_csv_log`), a folder that ``terrawatt diagnose
-        --data`` and :func:`energy.io.read_logs` read: the previous mission's leg files there are
+        ``logs/leg_NNN.csv`` (:func:`energy.io.write_csv_log`) and each manoeuvre run
+        (:attr:`AdaptiveResult.manoeuvre_logs`) as ``logs/manoeuvre_NNN_K.csv`` (run K after leg
+        NNN), all on the robot's clock: a folder that ``terrawatt diagnose --data``,
+        ``terrawatt replay --data`` and :func:`energy.io.read_logs` read: the previous mission's leg files there are
         replaced, and a folder holding anything else is refused before anything is written
         (:func:`check_logs_folder`).
         """
@@ -155,6 +157,12 @@ class MissionReport:
             new = [folder / f"leg_{k:03d}.csv" for k in range(len(self.result.leg_logs))]
             for path, log in zip(new, self.result.leg_logs):
                 written.append(write_csv_log(log, path))
+            runs: dict[int, int] = {}
+            for after, log in self.result.manoeuvre_logs:
+                k = runs[after] = runs.get(after, -1) + 1
+                path = folder / f"manoeuvre_{after:03d}_{k}.csv"
+                new.append(path)
+                written.append(write_csv_log(log, path))
             for stale in sorted(set(_leg_files(folder)) - set(new)):
                 stale.unlink()
         return written
@@ -165,7 +173,16 @@ LOGS_FOLDER = "logs"
 
 
 def _leg_files(folder: Path) -> list[Path]:
-    return [p for p in folder.iterdir() if re.fullmatch(r"leg_\d{3,}\.csv", p.name)] if folder.is_dir() else []
+    """The files an earlier mission wrote there: exactly the names :meth:`MissionReport.write` gives
+    (``leg_NNN.csv``, ``manoeuvre_NNN_K.csv``; a user's ``leg_0042.csv`` is not one of them)."""
+    def ours(name: str) -> bool:
+        m = re.fullmatch(r"leg_(\d{3,})\.csv", name)
+        if m:
+            return name == f"leg_{int(m.group(1)):03d}.csv"
+        m = re.fullmatch(r"manoeuvre_(\d{3,})_(\d+)\.csv", name)
+        return m is not None and name == f"manoeuvre_{int(m.group(1)):03d}_{int(m.group(2))}.csv"
+
+    return [p for p in folder.iterdir() if p.is_file() and ours(p.name)] if folder.is_dir() else []
 
 
 def check_logs_folder(out_dir: str | os.PathLike[str]) -> Path:

@@ -51,10 +51,12 @@ the robot and drives the manoeuvres it requests.
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections import deque
 from dataclasses import replace
 from collections.abc import Callable, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -83,6 +85,7 @@ from ..settings import PlannerSettings
 from .adaptive_results import AdaptiveResult, LegRecord, ReplanRecord, UpdateRecord
 from .decisions import Decision, ManoeuvreRequest, RemainingForecast
 from .legs import LegPredictor, cut_at_position
+from .navigator_state import read_navigator_setup, restore_navigator_state, write_navigator_state
 from .manoeuvres import excitation_profiles
 from .observations import observation_log
 from .remaining import remaining_forecast
@@ -209,7 +212,7 @@ class Navigator:
         self.updates: list[UpdateRecord] = []
         self.replans: list[ReplanRecord] = []
         self.skipped: list[str] = []
-        self.decisions: list[Decision] = []
+        self.decisions: list[dict[str, Any]] = []  # every decision logged, as plain values
         self.validated: set[tuple[int, int]] = set()
         self.segment: list[InteractionLog] = []  # chunks since the last checkpoint
         self.segment_j = 0.0  # their battery energy
@@ -218,6 +221,10 @@ class Navigator:
         self.queue: list[Any] = []  # flagged regions still to decide at this checkpoint
         self.changed = False  # models changed at this checkpoint
         self.checkpoint_evidence: dict[str, Any] = {}
+        self.comparison: Comparison | None = None  # the last leg's comparison, while its regions are decided
+        self.tail: np.ndarray | None = None  # the route after the last checkpoint's cut
+        self.updates_at_checkpoint = 0  # updates made before this checkpoint
+        self._w0 = 0.0  # wall clock at the start of an update waiting for its manoeuvre
         self.request: ManoeuvreRequest | None = None
         self.n_chunks = 0
         self.e_total = self.p_total = self.driven_j = self.excitation_j = self.update_wall = 0.0
@@ -225,6 +232,8 @@ class Navigator:
         self.series: dict[str, list[np.ndarray]] = {k: [] for k in ("t", "x", "y", "soc", "e", "p")}
         self.draw: list[tuple[np.ndarray, np.ndarray]] = []
         self.vibrations: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self.model_map_at_start = np.asarray(self.registry.model_id_map).copy()
+        self.start_time_ns: int | None = None  # the recording's clock origin, when known (for bags written beside it)
 
     # ================================================================== public calls
     def plan(self, start_xy_m: tuple[float, float], *, heading_rad: float | None = None,
@@ -247,6 +256,7 @@ class Navigator:
                 f"start equals goal: start {tuple(start.tolist())!r} m lies within goal_tolerance_m="
                 f"{fmt_number(cfg.goal_tolerance_m)} m of goal {tuple(self.goal_xy_m.tolist())!r} m; nothing to drive")
         self.time_s = check_real("time_s", time_s)
+        self.model_map_at_start = np.asarray(self.registry.model_id_map).copy()
         self.position_xy_m = self.leg_start_xy_m = start
         self.heading_rad = self.leg_start_heading_rad = None if heading_rad is None else check_real(
             "heading_rad", heading_rad)
@@ -374,6 +384,40 @@ class Navigator:
             self.changed |= outcome
         self.queue.pop(0)
         return self._work_queue()
+
+    # ------------------------------------------------------------------ persistence
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the whole state to the directory ``path``, atomically (:mod:`planner.missions.navigator_state`).
+
+        Raises
+        ------
+        InvalidParameterError
+            ``path`` holds something else; a model without ``save``.
+        """
+        return write_navigator_state(self, path)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike[str], terrain: TerrainMap, *,
+             model_factory: Callable[[], Any] | None = None) -> Navigator:
+        """A navigator restored from :meth:`save` on its map; it continues with the same decisions.
+
+        Raises
+        ------
+        FileFormatError
+            Not a navigator state, another format version, a broken file.
+        GridMismatchError
+            ``terrain`` is not the map the state was saved on.
+        """
+        setup = read_navigator_setup(path, terrain)
+        nav = cls(terrain, setup["registry"], setup["robot"], setup["battery"], setup["goal_xy_m"],
+                  physics_ground=setup["physics_ground"], settings=setup["settings"], model_factory=model_factory,
+                  depot_xy_m=setup["depot_xy_m"])
+        restore_navigator_state(nav, path, setup["document"])
+        return nav
+
+    def resume_comparison(self, log: InteractionLog, rows: np.ndarray, cols: np.ndarray) -> None:
+        """The last leg's comparison again (not recorded twice), for regions still to decide after a restore."""
+        self.comparison = Comparison(self.registry, log, rows, cols)
 
     # ------------------------------------------------------------------ read-outs
     @property
@@ -524,7 +568,7 @@ class Navigator:
         self.segment, self.segment_j, self.segment_m = [], 0.0, 0.0
         self.leg_start_xy_m, self.leg_start_heading_rad = self.position_xy_m.copy(), self.heading_rad
         self.leg_start_time_s = self.time_s
-        self._tail = tail
+        self.tail = tail
         return seg
 
     def _checkpoint(self) -> Decision:
@@ -535,7 +579,8 @@ class Navigator:
                                     "actual_j": self.legs[-1].actual_energy_j}
         if seg is not None and seg.has_currents:
             rows, cols = (np.asarray(a) for a in self.terrain.rowcol(seg.pose_xyh[:, 0], seg.pose_xyh[:, 1]))
-            self._cmp = _Comparison(self.registry, seg, rows, cols)
+            self.comparison = Comparison(self.registry, seg, rows, cols)
+            self.comparison.record(self.registry)
             self._remember(seg, rows, cols)
             regions = list(self.registry.flagged_regions(self.settings.policy))
             self.queue = regions
@@ -545,7 +590,7 @@ class Navigator:
             evidence["flagged"] = []
             evidence["mode"] = "forecast only (no currents)"
         self.checkpoint_evidence = evidence
-        self._updates0 = len(self.updates)
+        self.updates_at_checkpoint = len(self.updates)
         return self._work_queue()
 
     def _remember(self, seg: InteractionLog, rows: np.ndarray, cols: np.ndarray) -> None:
@@ -571,9 +616,9 @@ class Navigator:
     def _close_checkpoint(self) -> Decision:
         """After the updates: arrived, or the route repaired and the budget checked."""
         evidence = dict(self.checkpoint_evidence)
-        evidence["updates"] = [vars(u) for u in self.updates[self._updates0:]]
+        evidence["updates"] = [vars(u) for u in self.updates[self.updates_at_checkpoint:]]
         target = self._target()
-        tail = self._tail
+        tail = self.tail
         at_end = tail is None or len(tail) < 2
         if np.hypot(*(self.position_xy_m - target)) <= self.settings.goal_tolerance_m or at_end:
             where = "the depot" if self.returning else "the goal"
@@ -585,7 +630,7 @@ class Navigator:
             changed = self._replan(tail)
             if changed:
                 action, why = "new_route", "the models changed: " + "; ".join(
-                    f"{u.kind} update of {u.ground!r}" for u in self.updates[self._updates0:] if u.accepted)
+                    f"{u.kind} update of {u.ground!r}" for u in self.updates[self.updates_at_checkpoint:] if u.accepted)
         else:
             self.route = evaluate_route(self.cost, tail, status="exact", planner=self.route.planner)
         return self._closing_decision(len(self.legs) - 1, action, why, evidence)
@@ -613,7 +658,7 @@ class Navigator:
                 route: Route | None = None, manoeuvre: ManoeuvreRequest | None = None) -> Decision:
         fc = None if self.phase == "finished" else self.forecast()
         d = Decision(action, reason, self.time_s, _xy(self.position_xy_m), fc, route, manoeuvre, checkpoint, evidence)
-        self.decisions.append(d)
+        self.decisions.append(d.to_dict())
         return d
 
     def _finish(self, status: str, reason: str, action: str, evidence: dict[str, Any] | None = None) -> Decision:
@@ -678,7 +723,7 @@ class Navigator:
 
     def _reuse(self, region: Any, scope: np.ndarray, gname: str, w0: float) -> bool:
         """Assign a model learned elsewhere that already explains what was measured in the region."""
-        cmp_ = self._cmp
+        cmp_ = self.comparison
         in_region = region.mask(self.registry.shape)[cmp_.rows, cmp_.cols]
         found = best_other_model(self.registry, cmp_.log, in_region, cmp_.meas, cmp_.dt, region.model_ids,
                                  self.settings.policy.min_samples)
@@ -864,15 +909,17 @@ class Navigator:
         return back
 
 
-class _Comparison:
-    """Measured and predicted current of one leg's samples, per cell (recorded in the registry)."""
+class Comparison:
+    """Measured and predicted current of one leg's samples, per cell (:meth:`record` puts them in the registry)."""
 
     def __init__(self, registry: CellModelRegistry, log: InteractionLog, rows: np.ndarray, cols: np.ndarray) -> None:
         self.log, self.rows, self.cols = log, rows, cols
         self.pred = predicted_currents(registry, log, rows, cols)
         self.meas = np.column_stack([log.current_left_a, log.current_right_a])
         self.dt = np.gradient(log.time_s)
-        registry.record(rows, cols, np.abs(self.meas), np.abs(self.pred), self.dt)
+
+    def record(self, registry: CellModelRegistry) -> None:
+        registry.record(self.rows, self.cols, np.abs(self.meas), np.abs(self.pred), self.dt)
 
 
 def _pair(name: str, value: Any) -> np.ndarray:
