@@ -24,7 +24,7 @@ _DEFAULT = BagTopics()
 def add_data_options(parser: Any, *, grounds: bool = False) -> None:
     """Add ``--data``, ``--ground-label`` (and with ``grounds`` ``--grounds``) and the bag flags (``--cmd-vel-topic``,
     ``--imu-topic``, ``--current-topics``, ``--current-fields``, ``--voltage-field``, ``--current-unit``,
-    ``--accel-unit``, ``--drive-clock``: the fields of :class:`energy.io.BagTopics`) and the CSV flags
+    ``--accel-unit``, ``--drive-clock``, ``--battery-topic``: the fields of :class:`energy.io.BagTopics`) and the CSV flags
     (``--csv-columns``, ``--csv-units``, ``--csv-rates``, ``--track-width``: :class:`energy.io.CsvLayout`) to a
     subcommand's parser."""
     parser.add_argument(
@@ -51,6 +51,8 @@ def add_data_options(parser: Any, *, grounds: bool = False) -> None:
                       "left_driver_current right_driver_current (husky_msgs/HuskyStatus on /status)")
     bags.add_argument("--voltage-field", default=None, metavar="FIELD",
                       help="battery voltage field of that status message, e.g. battery_voltage")
+    bags.add_argument("--battery-topic", default=None, metavar="TOPIC",
+                      help="sensor_msgs/BatteryState (voltage, current): the measured battery power (default none)")
     bags.add_argument("--current-unit", default=_DEFAULT.current_unit, choices=("A", "mA"),
                       help="unit of the bag's currents (default %(default)s)")
     bags.add_argument("--accel-unit", default=_DEFAULT.accel_unit, choices=("m/s^2", "g"),

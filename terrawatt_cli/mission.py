@@ -44,8 +44,10 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--no-adapt", action="store_true", help="drive the first plan without model updates")
     p.add_argument("--logs", action="store_true",
                    help="also write what the robot's sensors recorded on each leg as CSV logs, OUT/logs/leg_NNN.csv "
-                        "(commands, currents, IMU, poses, grounds): diagnose the planning model on them with "
-                        "terrawatt diagnose --data OUT/logs --model physics --map MAP")
+                        "(commands, currents, IMU, poses, grounds), each manoeuvre run as OUT/logs/manoeuvre_NNN_K.csv "
+                        "and the models it started with as OUT/start_registry/: diagnose the planning model on them "
+                        "with terrawatt diagnose --data OUT/logs --model physics --map MAP, or replay them with "
+                        "terrawatt replay --data OUT/logs --registry OUT/start_registry --goal X Y --battery-ah AH")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--monte-carlo", type=int, default=None, metavar="N", action=Checked,
                    check=bounded("a number of missions >= 1", lambda v: v >= 1),
@@ -91,9 +93,11 @@ def run_mission(args: argparse.Namespace) -> int:
         with warn_figures():
             written = report.write(args.out, logs=args.logs)
         print(report.summary())
-        legs = [p for p in written if p.suffix == ".csv"]
-        print("wrote " + ", ".join(str(p) for p in written if p not in legs)
-              + (f" and {len(legs)} leg logs in {legs[0].parent}" if legs else ""))
+        logs_written = [p for p in written if p.suffix == ".csv"]
+        legs = [p for p in logs_written if p.name.startswith("leg_")]
+        print("wrote " + ", ".join(str(p) for p in written if p not in logs_written)
+              + (f" and {len(legs)} leg logs and {len(logs_written) - len(legs)} manoeuvre runs in {legs[0].parent}"
+                 if legs else ""))
         return 0 if report.completed else 1
     with dask_client_arg(args) as client:
         study = monte_carlo_mission(

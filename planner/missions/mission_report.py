@@ -5,13 +5,14 @@ from __future__ import annotations
 import math
 import os
 import re
+import tempfile
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from energy import GROUND_PRESETS, Battery, RobotParams, TruthSimulator, ground_preset
+from energy import GROUND_PRESETS, Battery, RobotParams, TruthSimulator, ground_preset, load_current_model
 from energy.params import robot_params
 from energy.io import write_csv_log
 from terrain import CellModelRegistry, TerrainMap
@@ -28,7 +29,7 @@ from .manoeuvres import fit_prior_model
 from .settings import AdaptiveSettings
 
 __all__ = ["MissionReport", "simulate_adaptive_mission", "mission_battery", "check_preset_grounds", "check_logs_folder",
-           "LOGS_FOLDER"]
+           "LOGS_FOLDER", "START_REGISTRY"]
 
 
 def check_preset_grounds(terrain: TerrainMap) -> None:
@@ -81,6 +82,9 @@ class MissionReport:
         The map.
     registry : CellModelRegistry
         The per-cell models after the mission.
+    start_registry : CellModelRegistry or None
+        A copy of the per-cell models as the mission started: what a replay of its logs
+        starts from (written as ``start_registry/`` beside the logs).
     """
 
     result: AdaptiveResult
@@ -94,6 +98,7 @@ class MissionReport:
     computing_time_s: float
     terrain: TerrainMap = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
     registry: CellModelRegistry = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
+    start_registry: CellModelRegistry | None = field(default=None, repr=False, compare=False)
 
     @property
     def completed(self) -> bool:
@@ -139,7 +144,9 @@ class MissionReport:
         ``logs/leg_NNN.csv`` (:func:`energy.io.write_csv_log`) and each manoeuvre run
         (:attr:`AdaptiveResult.manoeuvre_logs`) as ``logs/manoeuvre_NNN_K.csv`` (run K after leg
         NNN), all on the robot's clock: a folder that ``terrawatt diagnose --data``,
-        ``terrawatt replay --data`` and :func:`energy.io.read_logs` read: the previous mission's leg files there are
+        ``terrawatt replay --data`` and :func:`energy.io.read_logs` read; and the models the
+        mission started with as ``start_registry/`` (:attr:`start_registry`, what ``terrawatt
+        replay --registry`` starts from): the previous mission's leg files there are
         replaced, and a folder holding anything else is refused before anything is written
         (:func:`check_logs_folder`).
         """
@@ -165,11 +172,15 @@ class MissionReport:
                 written.append(write_csv_log(log, path))
             for stale in sorted(set(_leg_files(folder)) - set(new)):
                 stale.unlink()
+            if self.start_registry is not None:
+                written.append(self.start_registry.save(out / START_REGISTRY, lambda model, p: model.save(p)))
         return written
 
 
 #: The folder of :meth:`MissionReport.write` (``logs=True``) that holds the legs' logs.
 LOGS_FOLDER = "logs"
+#: The folder of :meth:`MissionReport.write` (``logs=True``) that holds the models the mission started with.
+START_REGISTRY = "start_registry"
 
 
 def _leg_files(folder: Path) -> list[Path]:
@@ -201,6 +212,10 @@ def check_logs_folder(out_dir: str | os.PathLike[str]) -> Path:
             raise InvalidParameterError(f"the mission's logs folder {str(folder)!r} holds other files ({others[:3]!r}"
                                         f"{' ...' if len(others) > 3 else ''}): they would be read as logs beside the "
                                         "legs'; give another output folder or move them")
+    start = Path(out_dir) / START_REGISTRY
+    if start.exists() and not (start.is_dir() and ((start / "registry.npz").is_file() or not any(start.iterdir()))):
+        raise InvalidParameterError(f"{str(start)!r} exists and is not a registry the mission wrote: the models the "
+                                    "mission starts with cannot be written there")
     return folder
 
 
@@ -283,10 +298,19 @@ def simulate_adaptive_mission(
     else:
         prior = fit_prior_model(truth, prior_ground, seed=seed)
         registry = CellModelRegistry.from_terrain(terrain, prior, prior_name=f"{prior_ground}-prior")
+    start_registry = _snapshot(registry)
     t0 = time.perf_counter()
     result = run_adaptive_mission(terrain, registry, robot_given, battery, truth, start_xy_m, goal_xy_m,
                                   physics_ground=grounds[prior_ground], settings=settings, learned=learned)
     return MissionReport(result=result, battery=battery, map_label=map_label, robot=robot, prior_ground=prior_ground,
                          adapt=adapt, start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),
                          goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])),
-                         computing_time_s=time.perf_counter() - t0, terrain=terrain, registry=registry)
+                         computing_time_s=time.perf_counter() - t0, terrain=terrain, registry=registry,
+                         start_registry=start_registry)
+
+
+def _snapshot(registry: CellModelRegistry) -> CellModelRegistry:
+    """An independent copy of the registry as it is now (through its own files: what a replay starts from)."""
+    with tempfile.TemporaryDirectory(prefix="terrawatt-registry-") as tmp:
+        registry.save(Path(tmp) / "registry", lambda model, p: model.save(p))
+        return CellModelRegistry.load(Path(tmp) / "registry", load_current_model)

@@ -259,6 +259,7 @@ def replay_drive(
     state_path: str | os.PathLike[str] | None = None,
     save_every: int = 1,
     on_decision: Callable[[Any], None] | None = None,
+    learned: Any = None,
 ) -> ReplayResult:
     """Feed a recorded drive through a navigator in time order (see the module docstring).
 
@@ -287,6 +288,8 @@ def replay_drive(
         Save the navigator's state here every ``save_every`` checkpoints; resume from it if it exists.
     on_decision : callable, optional
         Called with each decision that is not ``"continue"`` (e.g. to print it).
+    learned : LearnedEnergyModel, optional
+        The edge-cost adapter over ``registry`` (e.g. with a saved model's recorded vibration).
 
     Returns
     -------
@@ -321,7 +324,7 @@ def replay_drive(
             raise InvalidParameterError("registry, robot and battery are needed unless resuming from a saved state")
         nav = Navigator(terrain, registry, robot, battery, goal_xy_m, goal_lonlat_deg=goal_lonlat_deg,
                         physics_ground=physics_ground, settings=settings, model_factory=model_factory,
-                        depot_xy_m=depot_xy_m)
+                        depot_xy_m=depot_xy_m, learned=learned)
         before = np.asarray(registry.model_id_map).copy()
         first = next(log for kind, log in items if kind == "drive")
         if first.pose_xyh is None:

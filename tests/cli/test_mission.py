@@ -179,9 +179,11 @@ def test_mission_logs_are_what_diagnose_reads_and_it_names_the_truths_lag(tmp_pa
     printed = capsys.readouterr().out
     assert rc == 0, printed
     legs = sorted((out / "logs").glob("leg_*.csv"))
+    runs = sorted((out / "logs").glob("manoeuvre_*.csv"))  # the excitation manoeuvres, two runs each
     data = json.loads((out / "mission.json").read_text())
-    assert len(legs) == len(data["legs"]) >= 2 and f"{len(legs)} leg logs in" in printed
-    logs = read_logs(out / "logs")
+    assert len(runs) == 2 * sum(u["kind"] == "excitation" for u in data["updates"])
+    assert len(legs) == len(data["legs"]) >= 2 and f"{len(legs)} leg logs and {len(runs)} manoeuvre runs in" in printed
+    logs = [read_logs(path)[0] for path in legs]
     assert sum(len(log) for log in logs) == sum(leg["n_samples"] for leg in data["legs"])
     assert all(log.pose_xyh is not None and log.ground is not None for log in logs)
     rc = main(["diagnose", "--data", str(out / "logs"), "--model", "physics", "--map", "example", "--quiet",

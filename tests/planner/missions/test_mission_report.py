@@ -112,7 +112,8 @@ def test_the_battery_voltage_defaults_to_the_robot():
 
 def test_the_module_names_its_api():
     assert set(mission_report_module.__all__) == {"MissionReport", "simulate_adaptive_mission", "mission_battery",
-                                                  "check_preset_grounds", "check_logs_folder", "LOGS_FOLDER"}
+                                                  "check_preset_grounds", "check_logs_folder", "LOGS_FOLDER",
+                                                  "START_REGISTRY"}
 
 
 def test_an_update_after_the_last_leg_ends_the_mission_at_the_goal():

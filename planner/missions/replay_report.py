@@ -1,0 +1,127 @@
+"""A recorded drive replayed from names and files: what ``terrawatt replay`` does, as one library call."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from energy import GROUND_PRESETS, InteractionLog, ground_preset, load_current_model
+from energy.params import robot_params
+from terrain import CellModelRegistry, TerrainMap
+from terrawatt_base.checks import check_real, option_names
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+
+from ..model_cost import model_energy_model
+from .mission_report import mission_battery
+from .replay import ReplayResult, replay_drive
+from .settings import AdaptiveSettings
+
+__all__ = ["replay_recording"]
+
+_OPTIONS = ("registry", "model", "physics_ground", "initial_soc", "state_path")
+
+
+def replay_recording(
+    terrain: TerrainMap,
+    logs: Sequence[InteractionLog],
+    goal_xy_m: tuple[float, float] | None = None,
+    *,
+    goal_lonlat_deg: tuple[float, float] | None = None,
+    battery_ah: float | None = None,
+    battery_v: float | None = None,
+    reserve_pct: float = 20.0,
+    initial_soc: float = 1.0,
+    robot: Any = "husky",
+    speed_mps: float = 0.5,
+    leg_m: float = 10.0,
+    seed: int = 0,
+    registry: str | os.PathLike[str] | CellModelRegistry | None = None,
+    model: Any = None,
+    model_ground: str | Mapping[str, str] | None = None,
+    physics_ground: str = "asphalt",
+    update_source: str = "manoeuvre",
+    risk: float | None = None,
+    interval_level: float = 0.8,
+    mode: str = "auto",
+    chunk_s: float = 1.0,
+    speed_up: float | None = None,
+    depot_xy_m: tuple[float, float] | None = None,
+    state_path: str | os.PathLike[str] | None = None,
+    on_decision: Callable[[Any], None] | None = None,
+    names: Mapping[str, str] | None = None,
+) -> ReplayResult:
+    """Replay a recorded drive through a navigator set up as ``terrawatt mission`` sets up its loop.
+
+    The models at the start: a saved registry (``registry``: a directory, e.g. the
+    ``start_registry/`` that ``mission --logs`` writes, or a :class:`terrain.CellModelRegistry`),
+    or one saved current model (``model``) serving every cell — per ground class through
+    :func:`planner.model_cost.model_energy_model` when ``model_ground`` says how. With a
+    ``state_path`` that holds a saved navigator, the replay resumes from it and these are not
+    needed.
+
+    Parameters
+    ----------
+    terrain : TerrainMap
+    logs : sequence of InteractionLog
+        The recording (:func:`energy.io.read_logs`).
+    goal_xy_m, goal_lonlat_deg : (float, float)
+    battery_ah, battery_v, reserve_pct, initial_soc
+        The battery (:func:`~planner.missions.mission_report.mission_battery`) and its state
+        of charge at the start.
+    robot : str, path or RobotParams
+        A preset name, a robot file or parameters.
+    speed_mps, leg_m, seed, update_source, risk, interval_level
+        The navigator's settings (:class:`AdaptiveSettings`).
+    registry, model, model_ground
+        The models at the start (above).
+    physics_ground : str
+        Ground preset of the physics slope term of the edge costs.
+    mode, chunk_s, speed_up, depot_xy_m, state_path, on_decision
+        As :func:`~planner.missions.replay.replay_drive`.
+    names : mapping, optional
+        How messages name the options (the CLI's flags).
+
+    Returns
+    -------
+    ReplayResult
+
+    Raises
+    ------
+    InvalidParameterError
+        Neither or both of ``registry`` and ``model`` (unless resuming); no battery; bad numbers.
+    UnknownNameError
+        ``physics_ground`` without a preset.
+    """
+    label = option_names(names, _OPTIONS)
+    resuming = state_path is not None and (Path(state_path) / "navigator.json").is_file()
+    if physics_ground not in GROUND_PRESETS:
+        raise UnknownNameError(f"{label['physics_ground']} {physics_ground!r} has no preset; known grounds: "
+                               f"{sorted(GROUND_PRESETS)!r}")
+    ground = ground_preset(physics_ground)
+    robot_given = robot_params(robot)
+    settings = AdaptiveSettings(speed_mps=speed_mps, leg_length_m=leg_m, seed=seed, update_source=update_source,
+                                risk=risk, interval_level=interval_level)
+    reg, learned, battery = None, None, None
+    if not resuming:
+        if (registry is None) == (model is None):
+            raise InvalidParameterError(f"give the models the drive starts with: {label['registry']} or "
+                                        f"{label['model']} (exactly one)")
+        if battery_ah is None:
+            raise InvalidParameterError("battery_ah is needed (the battery's capacity, Ah)")
+        check_real(label["initial_soc"], initial_soc, low=0.0, low_inclusive=False, high=1.0)
+        battery = mission_battery(robot_given, battery_ah, battery_v, reserve_pct).replace(initial_soc=initial_soc)
+        if isinstance(registry, CellModelRegistry):
+            reg = registry
+        elif registry is not None:
+            reg = CellModelRegistry.load(registry, load_current_model, terrain=terrain)
+        elif model_ground is not None:
+            learned, _ = model_energy_model(terrain, model, robot_given, model_ground=model_ground,
+                                            physics_ground=ground)
+            reg = learned.registry
+        else:
+            reg = CellModelRegistry.from_terrain(terrain, model)
+    return replay_drive(terrain, reg, robot_given, battery, logs, goal_xy_m, goal_lonlat_deg=goal_lonlat_deg,
+                        mode=mode, chunk_s=chunk_s, speed_up=speed_up, settings=settings, physics_ground=ground,
+                        depot_xy_m=depot_xy_m, state_path=state_path, on_decision=on_decision, learned=learned)
