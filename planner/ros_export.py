@@ -21,6 +21,12 @@ file) for any other name; message definitions are those of ROS 2 Jazzy (the same
 types in every distribution) and the bag metadata is version 9, which ``ros2 bag`` reads
 from Jazzy on (Humble: ``ros2 bag reindex`` the directory first). Written atomically,
 byte-identical for the same inputs. :func:`read_route_bag` reads it back.
+
+The pieces are public for the other bags of the package (:mod:`planner.replay_bag`): the rosbags
+seam (:func:`rosbags_api`), a header and a waypoint Path (:func:`header_message`,
+:func:`path_message`, read back by :func:`path_poses`), the checks of a prefix and a frame origin,
+the atomic writer of a ``.mcap`` file or bag directory (:func:`write_bag_messages`) and the reader
+of a prefix's topics (:func:`read_bag_topics`).
 """
 
 from __future__ import annotations
@@ -29,6 +35,7 @@ import json
 import math
 import os
 import shutil
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -52,6 +59,14 @@ __all__ = [
     "check_route_bag_path",
     "write_route_bag",
     "read_route_bag",
+    "rosbags_api",
+    "check_topic_prefix",
+    "check_frame_origin",
+    "header_message",
+    "path_message",
+    "path_poses",
+    "write_bag_messages",
+    "read_bag_topics",
 ]
 
 #: Version of the ``terrawatt`` JSON messages (map CRS, summary) of the bags written here.
@@ -64,8 +79,14 @@ _TYPES = {_PATH: "nav_msgs/msg/Path", _ENERGY: "std_msgs/msg/Float64MultiArray",
 _NS = 1_000_000_000
 
 
-def _rosbags() -> tuple[Any, Any, Any, Any]:
-    """``(Writer, StoragePlugin, AnyReader, typestore)`` of rosbags; OptionalDependencyError without it."""
+def rosbags_api() -> tuple[Any, Any, Any, Any]:
+    """``(Writer, StoragePlugin, AnyReader, typestore)`` of rosbags (the Jazzy typestore).
+
+    Raises
+    ------
+    OptionalDependencyError
+        rosbags (the ``ros`` extra) is not installed.
+    """
     try:
         from rosbags.highlevel import AnyReader
         from rosbags.rosbag2 import StoragePlugin, Writer
@@ -183,55 +204,228 @@ def _map_info(tmap: TerrainMap, frame_id: str, frame_origin: tuple[float, float]
     }
 
 
+def header_message(ts: Any, stamp_ns: int, frame_id: str) -> Any:
+    """A ``std_msgs/msg/Header`` stamped ``stamp_ns`` (ns, >= 0) in ``frame_id``, of the typestore ``ts``."""
+    types = ts.types
+    stamp = types["builtin_interfaces/msg/Time"](sec=int(stamp_ns // _NS), nanosec=int(stamp_ns % _NS))
+    return types["std_msgs/msg/Header"](stamp=stamp, frame_id=frame_id)
+
+
+def path_message(ts: Any, tmap: TerrainMap, waypoints_m: np.ndarray, *, stamp_ns: int, pose_stamps_ns: Any,
+                 frame_id: str, frame_origin_xy_m: tuple[float, float]) -> Any:
+    """Waypoints as a ``nav_msgs/msg/Path``: one pose each, on the DEM, heading along its segment.
+
+    Parameters
+    ----------
+    ts : rosbags typestore
+        The message types (:func:`rosbags_api`).
+    tmap : TerrainMap
+        The map: z is its elevation at each waypoint (bilinear, m).
+    waypoints_m : ndarray, shape (K, 2)
+        Waypoints in map (CRS) coordinates (m), K >= 1.
+    stamp_ns : int
+        The Path's header stamp (ns).
+    pose_stamps_ns : array_like of int, shape (K,)
+        Each pose's header stamp (ns).
+    frame_id : str
+        Frame of the Path and its poses.
+    frame_origin_xy_m : (float, float)
+        The frame's origin in map coordinates: pose x, y are the waypoints minus it.
+
+    Returns
+    -------
+    nav_msgs/msg/Path
+        Each pose's yaw is that of the segment leaving its waypoint (the last keeps the yaw of
+        the segment arriving; a single pose has yaw 0).
+
+    Raises
+    ------
+    OutOfBoundsError
+        A waypoint off the map.
+    """
+    types = ts.types
+    pts = np.asarray(waypoints_m, dtype=np.float64).reshape(-1, 2)
+    z = np.atleast_1d(tmap.sample("elevation", pts[:, 0], pts[:, 1], method="bilinear")).astype(np.float64)
+    d = np.diff(pts, axis=0)
+    yaw = np.arctan2(d[:, 1], d[:, 0])
+    yaw = np.concatenate([yaw, yaw[-1:]]) if yaw.size else np.zeros(pts.shape[0])
+    pose_ns = np.asarray(pose_stamps_ns, dtype=np.int64).reshape(-1)
+    poses = []
+    for (x, y), h, psi, ns in zip(pts.tolist(), z.tolist(), yaw.tolist(), pose_ns.tolist(), strict=True):
+        position = types["geometry_msgs/msg/Point"](x=x - frame_origin_xy_m[0], y=y - frame_origin_xy_m[1], z=h)
+        quat = types["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(psi / 2.0), w=math.cos(psi / 2.0))
+        poses.append(types["geometry_msgs/msg/PoseStamped"](
+            header=header_message(ts, ns, frame_id),
+            pose=types["geometry_msgs/msg/Pose"](position=position, orientation=quat)))
+    return types["nav_msgs/msg/Path"](header=header_message(ts, stamp_ns, frame_id), poses=poses)
+
+
+def path_poses(path_msg: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A ``nav_msgs/msg/Path``'s poses: positions (K, 3) (m), yaw (K,) from the quaternion (rad), header stamps (K,) (ns)."""
+    poses = path_msg.poses
+    positions = np.array([[p.pose.position.x, p.pose.position.y, p.pose.position.z] for p in poses], dtype=np.float64)
+    q = np.array([[p.pose.orientation.z, p.pose.orientation.w] for p in poses], dtype=np.float64).reshape(-1, 2)
+    stamps = np.array([int(p.header.stamp.sec) * _NS + int(p.header.stamp.nanosec) for p in poses], dtype=np.int64)
+    return positions.reshape(-1, 3), 2.0 * np.arctan2(q[:, 0], q[:, 1]), stamps
+
+
 def _messages(route: Route, tmap: TerrainMap, ts: Any, *, cost: EnergyCost | None, stamp_ns: int, frame_id: str,
               frame_origin: tuple[float, float]) -> dict[str, Any]:
     """The four messages, by topic suffix."""
     types = ts.types
     pts = route.waypoints_m
-    z = np.atleast_1d(tmap.sample("elevation", pts[:, 0], pts[:, 1], method="bilinear")).astype(np.float64)
-    d = np.diff(pts, axis=0)
-    yaw = np.arctan2(d[:, 1], d[:, 0])
-    yaw = np.concatenate([yaw, yaw[-1:]])
     times = route_pose_times_s(route, cost) if cost is not None else np.zeros(pts.shape[0])
     pose_ns = stamp_ns + np.rint(times * _NS).astype(np.int64)
-
-    def header(ns: int) -> Any:
-        stamp = types["builtin_interfaces/msg/Time"](sec=int(ns // _NS), nanosec=int(ns % _NS))
-        return types["std_msgs/msg/Header"](stamp=stamp, frame_id=frame_id)
-
-    poses = []
-    for (x, y), h, psi, ns in zip(pts.tolist(), z.tolist(), yaw.tolist(), pose_ns.tolist(), strict=True):
-        position = types["geometry_msgs/msg/Point"](x=x - frame_origin[0], y=y - frame_origin[1], z=h)
-        quat = types["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=math.sin(psi / 2.0), w=math.cos(psi / 2.0))
-        poses.append(types["geometry_msgs/msg/PoseStamped"](
-            header=header(ns), pose=types["geometry_msgs/msg/Pose"](position=position, orientation=quat)))
+    path = path_message(ts, tmap, pts, stamp_ns=stamp_ns, pose_stamps_ns=pose_ns, frame_id=frame_id,
+                        frame_origin_xy_m=frame_origin)
+    n_poses = len(path.poses)
     cumulative = np.cumsum(route.turn_energy_j) + np.concatenate([[0.0], np.cumsum(route.segment_energy_j)])
-    dim = types["std_msgs/msg/MultiArrayDimension"](label="pose_energy_j", size=len(poses), stride=len(poses))
+    dim = types["std_msgs/msg/MultiArrayDimension"](label="pose_energy_j", size=n_poses, stride=n_poses)
     energy = types["std_msgs/msg/Float64MultiArray"](
         layout=types["std_msgs/msg/MultiArrayLayout"](dim=[dim], data_offset=0), data=cumulative.astype(np.float64))
     text = types["std_msgs/msg/String"]
     summary = {"format_version": ROUTE_BAG_FORMAT_VERSION, **{  # JSON has no NaN: a quantity not computed is null
         k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in route.summary().items()}}
     return {
-        _PATH: types["nav_msgs/msg/Path"](header=header(stamp_ns), poses=poses),
+        _PATH: path,
         _ENERGY: energy,
         _CRS: text(data=json.dumps(_map_info(tmap, frame_id, frame_origin), allow_nan=False)),
         _SUMMARY: text(data=json.dumps(summary, allow_nan=False)),
     }
 
 
-def _write_bag(bag_dir: Path, messages: dict[str, Any], ts: Any, prefix: str, stamp_ns: int) -> None:
-    """A ROS 2 bag directory (MCAP storage) holding one message per topic, all at ``stamp_ns``."""
-    writer_cls, plugin, _, _ = _rosbags()
+def _write_bag(bag_dir: Path, topics: Sequence[tuple[str, str]], messages: Iterable[tuple[str, int, Any]],
+               ts: Any) -> None:
+    """A ROS 2 bag directory (MCAP storage): the messages in order, each topic's connection added at its first
+    message, the topics without messages last (in the order of ``topics``)."""
+    writer_cls, plugin, _, _ = rosbags_api()
+    types = dict(topics)
     with writer_cls(bag_dir, version=9, storage_plugin=plugin.MCAP) as writer:
-        for suffix, msg in messages.items():
-            conn = writer.add_connection(prefix + suffix, _TYPES[suffix], typestore=ts)
-            writer.write(conn, stamp_ns, ts.serialize_cdr(msg, _TYPES[suffix]))
+        conns: dict[str, Any] = {}
+        for topic, log_ns, msg in messages:
+            if topic not in conns:
+                conns[topic] = writer.add_connection(topic, types[topic], typestore=ts)
+            writer.write(conns[topic], log_ns, ts.serialize_cdr(msg, types[topic]))
+        for topic, msgtype in topics:
+            if topic not in conns:
+                conns[topic] = writer.add_connection(topic, msgtype, typestore=ts)
 
 
 def _fsync(path: Path) -> None:
     with open(path, "rb") as fh:
         os.fsync(fh.fileno())
+
+
+def check_topic_prefix(topic_prefix: Any, name: str = "topic_prefix") -> str:
+    """A topic namespace: a string that starts with ``/`` and does not end with it.
+
+    Raises
+    ------
+    InvalidParameterError
+        Anything else.
+    """
+    if not isinstance(topic_prefix, str) or not topic_prefix.startswith("/") or topic_prefix.endswith("/"):
+        raise InvalidParameterError(f"{name} must start with '/' and not end with it, got {topic_prefix!r}")
+    return topic_prefix
+
+
+def check_frame_origin(frame_origin_xy_m: Any, name: str = "frame_origin_xy_m") -> tuple[float, float]:
+    """A frame origin ``(x, y)`` in metres, both finite, as two floats.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a pair, or a coordinate not a finite real (the message names ``<name>[i]``).
+    """
+    try:
+        fx, fy = frame_origin_xy_m
+    except (TypeError, ValueError) as exc:
+        raise InvalidParameterError(f"{name} must be (x, y) in metres, got {frame_origin_xy_m!r}") from exc
+    return check_real(f"{name}[0]", fx), check_real(f"{name}[1]", fy)
+
+
+def write_bag_messages(path: str | os.PathLike[str], topics: Sequence[tuple[str, str]],
+                       messages: Iterable[tuple[str, int, Any]], ts: Any) -> Path:
+    """Write messages as a ROS 2 bag (MCAP) atomically: one ``.mcap`` file, or a bag directory for any other name.
+
+    Parameters
+    ----------
+    path : path-like
+        Checked by :func:`check_route_bag_path` (an existing directory is replaced only if it
+        is a bag).
+    topics : sequence of (str, str)
+        ``(topic, message type)`` of every connection. A topic's connection is added at its
+        first message; the topics without messages are declared all the same, last, in this
+        order.
+    messages : iterable of (str, int, message)
+        ``(topic, log time in ns, message)``, written in this order (each topic one of ``topics``).
+    ts : rosbags typestore
+        The types the messages are serialised with (:func:`rosbags_api`).
+
+    Returns
+    -------
+    Path
+        The file or bag directory written; byte-identical for the same arguments.
+
+    Raises
+    ------
+    InvalidParameterError
+        A path refused by :func:`check_route_bag_path`.
+    OptionalDependencyError
+        rosbags (the ``ros`` extra) is not installed.
+    """
+    target, single = check_route_bag_path(path)
+    name = target.stem if single else target.name  # the MCAP file inside is named after the target
+    if single:
+        with atomic_path(target) as tmp:
+            work = tmp.with_name(tmp.name[: -len(".tmp")] + "_bag.tmp")  # a temporary of the same target
+            try:
+                _write_bag(work / name, topics, messages, ts)
+                os.replace(work / name / f"{name}.mcap", tmp)
+            finally:
+                shutil.rmtree(work, ignore_errors=True)
+        return target
+    with atomic_directory(target) as tmp:
+        _write_bag(tmp / name, topics, messages, ts)
+        for item in sorted((tmp / name).iterdir()):
+            os.replace(item, tmp / item.name)
+            _fsync(tmp / item.name)
+        (tmp / name).rmdir()
+    return target
+
+
+def read_bag_topics(path: str | os.PathLike[str], topic_prefix: str) -> dict[str, tuple[str, list[tuple[int, Any]]]]:
+    """The topics under ``topic_prefix`` of a bag (``.mcap`` file or bag directory), deserialised.
+
+    Returns
+    -------
+    dict
+        By topic suffix (the name less the prefix): ``(message type, [(log time in ns,
+        message), ...])`` in bag order; a topic declared without messages has an empty list.
+
+    Raises
+    ------
+    FileFormatError
+        The bag does not exist or cannot be read.
+    OptionalDependencyError
+        rosbags (the ``ros`` extra) is not installed.
+    """
+    _, _, any_reader, ts = rosbags_api()
+    bag = Path(path)
+    if not bag.exists():
+        raise FileFormatError(f"bag {str(bag)!r} does not exist")
+    found: dict[str, tuple[str, list[tuple[int, Any]]]] = {}
+    try:
+        with any_reader([bag], default_typestore=ts) as reader:
+            for conn in reader.connections:
+                if conn.topic.startswith(topic_prefix):
+                    found.setdefault(conn.topic[len(topic_prefix):], (conn.msgtype, []))
+            for conn, log_ns, raw in reader.messages():
+                if conn.topic.startswith(topic_prefix):
+                    found[conn.topic[len(topic_prefix):]][1].append((int(log_ns), reader.deserialize(raw, conn.msgtype)))
+    except Exception as exc:  # rosbags raises its own error classes per format
+        raise FileFormatError(f"cannot read bag {str(bag)!r}: {type(exc).__name__}: {exc}") from exc
+    return found
 
 
 def check_route_bag_path(path: str | os.PathLike[str], name: str = "path") -> tuple[Path, bool]:
@@ -312,7 +506,7 @@ def write_route_bag(
     OptionalDependencyError
         rosbags (the ``ros`` extra) is not installed.
     """
-    target, single = check_route_bag_path(path)
+    target, _ = check_route_bag_path(path)
     _check_route(route)
     if not isinstance(tmap, TerrainMap):
         raise InvalidParameterError(f"tmap must be a TerrainMap, got {type(tmap).__name__!r}")
@@ -322,32 +516,12 @@ def write_route_bag(
         tmap.grid.check_same(cost.terrain.grid, "cost")
     stamp = check_int("stamp_ns", stamp_ns, low=0)
     check_text("frame_id", frame_id)
-    if not isinstance(topic_prefix, str) or not topic_prefix.startswith("/") or topic_prefix.endswith("/"):
-        raise InvalidParameterError(f"topic_prefix must start with '/' and not end with it, got {topic_prefix!r}")
-    try:
-        fx, fy = frame_origin_xy_m
-    except (TypeError, ValueError) as exc:
-        raise InvalidParameterError(f"frame_origin_xy_m must be (x, y) in metres, got {frame_origin_xy_m!r}") from exc
-    origin = (check_real("frame_origin_xy_m[0]", fx), check_real("frame_origin_xy_m[1]", fy))
-    _, _, _, ts = _rosbags()
+    check_topic_prefix(topic_prefix)
+    origin = check_frame_origin(frame_origin_xy_m)
+    _, _, _, ts = rosbags_api()
     messages = _messages(route, tmap, ts, cost=cost, stamp_ns=stamp, frame_id=frame_id, frame_origin=origin)
-    name = target.stem if single else target.name  # the MCAP file inside is named after the target
-    if single:
-        with atomic_path(target) as tmp:
-            work = tmp.with_name(tmp.name[: -len(".tmp")] + "_bag.tmp")  # a temporary of the same target
-            try:
-                _write_bag(work / name, messages, ts, topic_prefix, stamp)
-                os.replace(work / name / f"{name}.mcap", tmp)
-            finally:
-                shutil.rmtree(work, ignore_errors=True)
-        return target
-    with atomic_directory(target) as tmp:
-        _write_bag(tmp / name, messages, ts, topic_prefix, stamp)
-        for item in sorted((tmp / name).iterdir()):
-            os.replace(item, tmp / item.name)
-            _fsync(tmp / item.name)
-        (tmp / name).rmdir()
-    return target
+    return write_bag_messages(target, [(topic_prefix + suffix, _TYPES[suffix]) for suffix in messages],
+                              [(topic_prefix + suffix, stamp, msg) for suffix, msg in messages.items()], ts)
 
 
 def read_route_bag(path: str | os.PathLike[str], *, topic_prefix: str = DEFAULT_TOPIC_PREFIX) -> RouteBag:
@@ -361,18 +535,8 @@ def read_route_bag(path: str | os.PathLike[str], *, topic_prefix: str = DEFAULT_
     OptionalDependencyError
         rosbags (the ``ros`` extra) is not installed.
     """
-    _, _, any_reader, ts = _rosbags()
     bag = Path(path)
-    if not bag.exists():
-        raise FileFormatError(f"bag {str(bag)!r} does not exist")
-    found: dict[str, list[Any]] = {}
-    try:
-        with any_reader([bag], default_typestore=ts) as reader:
-            for conn, _, raw in reader.messages():
-                if conn.topic.startswith(topic_prefix):
-                    found.setdefault(conn.topic[len(topic_prefix):], []).append(reader.deserialize(raw, conn.msgtype))
-    except Exception as exc:  # rosbags raises its own error classes per format
-        raise FileFormatError(f"cannot read bag {str(bag)!r}: {type(exc).__name__}: {exc}") from exc
+    found = {suffix: [msg for _, msg in messages] for suffix, (_, messages) in read_bag_topics(bag, topic_prefix).items()}
     for suffix in _TYPES:
         if len(found.get(suffix, [])) != 1:
             raise FileFormatError(f"bag {str(bag)!r} has {len(found.get(suffix, []))} messages on "
@@ -388,20 +552,18 @@ def read_route_bag(path: str | os.PathLike[str], *, topic_prefix: str = DEFAULT_
     if not 1 <= version <= ROUTE_BAG_FORMAT_VERSION or len(origin) != 2:
         raise FileFormatError(f"bag {str(bag)!r} has route bag format version {version!r}; this release reads 1 to "
                               f"{ROUTE_BAG_FORMAT_VERSION}")
-    poses = path_msg.poses
-    positions = np.array([[p.pose.position.x, p.pose.position.y, p.pose.position.z] for p in poses], dtype=np.float64)
-    q = np.array([[p.pose.orientation.z, p.pose.orientation.w] for p in poses], dtype=np.float64)
-    stamps = np.array([int(p.header.stamp.sec) * _NS + int(p.header.stamp.nanosec) for p in poses], dtype=np.int64)
+    positions, yaw, stamps = path_poses(path_msg)
+    n_poses = positions.shape[0]
     energy = np.asarray(energy_msg.data, dtype=np.float64)
-    if energy.shape != (len(poses),) or len(poses) < 2:
-        raise FileFormatError(f"bag {str(bag)!r} has {len(poses)} poses and {energy.size} energies; expected as many "
+    if energy.shape != (n_poses,) or n_poses < 2:
+        raise FileFormatError(f"bag {str(bag)!r} has {n_poses} poses and {energy.size} energies; expected as many "
                               "energies as poses, at least 2")
     stamp = int(path_msg.header.stamp.sec) * _NS + int(path_msg.header.stamp.nanosec)
     return RouteBag(
         frame_id=str(path_msg.header.frame_id),
         stamp_ns=stamp,
-        positions_m=readonly(positions.reshape(-1, 3)),
-        yaw_rad=readonly(2.0 * np.arctan2(q[:, 0], q[:, 1])),
+        positions_m=readonly(positions),
+        yaw_rad=readonly(yaw),
         pose_stamps_ns=readonly(stamps),
         cumulative_energy_j=readonly(energy),
         crs=info.get("crs"),

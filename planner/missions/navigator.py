@@ -68,8 +68,6 @@ from energy import (
     InteractionLog,
     LinearCurrentModel,
     RobotParams,
-    discharge_from_power,
-    energy_budget,
     ground_preset,
 )
 from energy.budget import log_battery_power_w
@@ -83,6 +81,7 @@ from ..replan import IncrementalPlanner
 from ..route import Route, evaluate_route
 from ..settings import PlannerSettings
 from .adaptive_results import AdaptiveResult, LegRecord, ReplanRecord, UpdateRecord
+from .charge import ChargeAccount
 from .decisions import Decision, ManoeuvreRequest, RemainingForecast
 from .legs import LegPredictor, cut_at_position
 from .navigator_state import read_navigator_setup, restore_navigator_state, write_navigator_state
@@ -90,14 +89,21 @@ from .manoeuvres import excitation_profiles
 from .observations import observation_log
 from .remaining import remaining_forecast
 from .settings import AdaptiveSettings
-from .updates import adapted_model, best_other_model, charge_error, predicted_currents, validation_error
+from .updates import (
+    Comparison,
+    adapted_model,
+    best_other_model,
+    charge_error,
+    driven_runs,
+    predicted_currents,
+    split_runs,
+    validation_error,
+)
 
 __all__ = ["Navigator"]
 
 #: Phases of a navigator: before its first plan, driving, waiting for a requested manoeuvre, over.
 PHASES = ("idle", "driving", "manoeuvre", "finished")
-#: A gap between chunks longer than this (s) is not integrated across (the robot was off).
-MAX_JOIN_GAP_S = 5.0
 
 
 class Navigator:
@@ -200,8 +206,7 @@ class Navigator:
         self.leg_start_heading_rad: float | None = None
         self.leg_start_time_s = 0.0
         self.time_s = math.nan  # the robot's clock: the last drive timestamp seen
-        self.soc = float(self.battery.initial_soc)
-        self.last_power = (math.nan, math.nan)  # (t, W) of the last sample booked
+        self.charge = ChargeAccount(self.battery)
         self.route: Route | None = None
         self.initial_route: Route | None = None
         self.cost: Any = None
@@ -227,10 +232,7 @@ class Navigator:
         self._w0 = 0.0  # wall clock at the start of an update waiting for its manoeuvre
         self.request: ManoeuvreRequest | None = None
         self.n_chunks = 0
-        self.e_total = self.p_total = self.driven_j = self.excitation_j = self.update_wall = 0.0
-        self.leg_power_w = 0.0
-        self.series: dict[str, list[np.ndarray]] = {k: [] for k in ("t", "x", "y", "soc", "e", "p")}
-        self.draw: list[tuple[np.ndarray, np.ndarray]] = []
+        self.update_wall = self.leg_power_w = 0.0
         self.vibrations: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self.model_map_at_start = np.asarray(self.registry.model_id_map).copy()
         self.start_time_ns: int | None = None  # the recording's clock origin, when known (for bags written beside it)
@@ -276,7 +278,7 @@ class Navigator:
         self.pending = self._predictor.legs(self.route.waypoints_m, self.heading_rad) if self.route.found else []
         self.replans.append(ReplanRecord(0, "initial", sum(self.pending) if self.route.found else math.nan,
                                          math.nan, True, refresh, planning_s, self.learned.table_builds - builds0))
-        self._push(self.time_s, start[0], start[1], self.soc, 0.0, 0.0)
+        self.charge.push(self.time_s, start[0], start[1], self.soc, 0.0, 0.0)
         self.phase = "driving"
         return self._closing_decision(None, "new_route", "the first plan", {})
 
@@ -435,11 +437,16 @@ class Navigator:
         cfg = self.settings
         return remaining_forecast(self.pending, self.observed, level=cfg.interval_level, risk=cfg.risk,
                                   prior_legs=cfg.forecast_prior_legs, prior_spread=cfg.forecast_prior_spread,
-                                  soc=self.soc, available_j=self._available_j())
+                                  soc=self.soc, available_j=self.charge.available_j())
+
+    @property
+    def soc(self) -> float:
+        """State of charge now (measured power where the chunks carry it, else from the currents or the models)."""
+        return self.charge.soc
 
     def result(self) -> AdaptiveResult:
         """The mission so far as an :class:`AdaptiveResult` (legs, updates, replans, series, budget)."""
-        cat = {k: np.concatenate(v) if v else np.zeros(0) for k, v in self.series.items()}
+        cat = self.charge.arrays()
         pos = self.position_xy_m
         status = self.status if self.phase == "finished" else "max_legs"
         reason = self.reason if self.phase == "finished" else "the mission is under way"
@@ -448,7 +455,7 @@ class Navigator:
             distance_to_goal_m=float(np.hypot(*(pos - self.goal_xy_m))), initial_route=self.initial_route,
             legs=tuple(self.legs), updates=tuple(self.updates), replans=tuple(self.replans), time_s=cat["t"],
             x_m=cat["x"], y_m=cat["y"], soc=cat["soc"], energy_j=cat["e"], predicted_energy_j=cat["p"],
-            driven_energy_j=self.driven_j, excitation_energy_j=self.excitation_j,
+            driven_energy_j=self.charge.driven_j, excitation_energy_j=self.charge.excitation_j,
             update_wall_time_s=self.update_wall, final_soc=self.soc, skipped_updates=tuple(self.skipped),
             budget=self.budget(),
         )
@@ -456,13 +463,9 @@ class Navigator:
     def budget(self) -> EnergyBudget:
         """The whole mission's draw (driving and manoeuvres) against the first plan's prediction."""
         first = self.replans[0].predicted_energy_j if self.replans else math.nan
-        predicted_j = first if math.isfinite(first) else 0.0
-        if self.draw:
-            t, p = (np.concatenate(parts) for parts in zip(*self.draw))
-        else:
-            span = self.initial_route.duration_s if self.initial_route is not None and self.initial_route.found else 0.0
-            t, p = np.array([0.0, span if span > 0 else 1.0]), np.zeros(2)
-        return energy_budget(discharge_from_power(self.battery, t - t[0], p), predicted_j)
+        route = self.initial_route
+        return self.charge.budget(first if math.isfinite(first) else 0.0,
+                                  route.duration_s if route is not None and route.found else 0.0)
 
     # ================================================================== booking
     def _power_w(self, log: InteractionLog, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
@@ -476,49 +479,16 @@ class Navigator:
 
     def _book(self, log: InteractionLog, rows: np.ndarray | None, cols: np.ndarray | None, *,
               driving: bool) -> tuple[float, bool]:
-        """Draw the battery through one log (joined to the last sample booked): its energy (J,
-        to the reserve if reached) and whether the reserve was reached; the series are extended."""
+        """Draw the battery through one log (:meth:`ChargeAccount.book`): its energy (J, to the
+        reserve if reached) and whether the reserve was reached."""
         if rows is None:
             r, c = self.terrain.rowcol(*self.position_xy_m)
             rows, cols = np.full(len(log), int(r)), np.full(len(log), int(c))
-        t = np.asarray(log.time_s, dtype=np.float64)
-        power = self._power_w(log, rows, cols)
-        t_last, p_last = self.last_power
-        joined = math.isfinite(t_last) and 0.0 < t[0] - t_last <= MAX_JOIN_GAP_S
-        tt = np.concatenate(([t_last], t)) if joined else t
-        pp = np.concatenate(([p_last], power)) if joined else power
-        if tt.size < 2:  # a single sample and nothing to join: no time has passed
-            tt, pp = np.array([t[0], t[0] + 1e-9]), np.array([power[0], power[0]])
-        d = discharge_from_power(self.battery.replace(initial_soc=self.soc), tt - tt[0], pp)
-        crossed = d.reserve_crossed_time_s is not None
-        k = len(tt) if not crossed else int(d.reserve_crossed_index)
-        energy = np.asarray(d.energy_j)
-        soc = np.asarray(d.soc)
-        if crossed:
-            tc = float(d.reserve_crossed_time_s)
-            e_end = float(np.interp(tc, tt - tt[0], energy))
-            soc_end = self.battery.reserve_soc
-        else:
-            e_end, soc_end = float(energy[-1]), float(soc[-1])
-        off = 1 if joined else 0
-        sel = slice(off, max(k, off + 1))
-        e_series = self.e_total + energy[sel]
-        p_series = self.p_total + self._progress_prediction(log)[: e_series.size]
         xy = log.pose_xyh[:, :2] if log.pose_xyh is not None else np.tile(self.position_xy_m, (len(log), 1))
-        n = e_series.size
-        self._push(t[:n], xy[:n, 0], xy[:n, 1], soc[sel][:n], e_series, p_series)
-        draw_t = tt[off:k] if not crossed else np.append(tt[off:k], tt[0] + tc)
-        draw_p = pp[off:k] if not crossed else np.append(pp[off:k], np.interp(tc, tt - tt[0], pp))
-        self._add_draw(draw_t, draw_p)
-        self.e_total += e_end
-        if driving:
-            self.driven_j += e_end
-        else:
-            self.excitation_j += e_end
-        self.soc = float(soc_end)
-        self.time_s = float(t[-1])
-        self.last_power = (float(tt[min(k, len(tt)) - 1]), float(pp[min(k, len(pp)) - 1]))
-        return e_end, crossed or self.soc <= self.battery.reserve_soc + 1e-12 and self.battery.reserve_soc > 0
+        out = self.charge.book(log.time_s, self._power_w(log, rows, cols), xy, self._progress_prediction(log),
+                               driving=driving)
+        self.time_s = float(log.time_s[-1])
+        return out
 
     def _progress_prediction(self, log: InteractionLog) -> np.ndarray:
         """The predicted energy of the leg under way, in proportion to the distance driven (J per sample)."""
@@ -528,23 +498,6 @@ class Navigator:
         xy = log.pose_xyh[:, :2]
         d = self.segment_m + np.cumsum(np.hypot(*np.diff(np.vstack([self.position_xy_m, xy]), axis=0).T))
         return leg_j * np.minimum(d / self.settings.leg_length_m, 1.0)
-
-    def _push(self, t: Any, x: Any, y: Any, s: Any, e: Any, p: Any) -> None:
-        for key, arr in zip(("t", "x", "y", "soc", "e", "p"), (t, x, y, s, e, p)):
-            self.series[key].append(np.atleast_1d(np.asarray(arr, dtype=np.float64)))
-
-    def _add_draw(self, t: np.ndarray, power_w: np.ndarray) -> None:
-        """Book a battery draw (a series that starts where the last ended is moved on by a microsecond)."""
-        t = np.asarray(t, dtype=np.float64)
-        if t.size == 0:
-            return
-        if self.draw and t[0] <= self.draw[-1][0][-1]:
-            t = t + (self.draw[-1][0][-1] - t[0]) + 1e-6
-        self.draw.append((t, np.asarray(power_w, dtype=np.float64)))
-
-    def _available_j(self) -> float:
-        """Nominal energy above the reserve at the current state of charge (J)."""
-        return self.battery.replace(initial_soc=self.soc).usable_energy_wh * 3600.0
 
     # ================================================================== the checkpoint
     def _close_leg(self, *, compare: bool) -> InteractionLog | None:
@@ -563,7 +516,7 @@ class Navigator:
         self.legs.append(LegRecord(index, _xy(self.leg_start_xy_m), _xy(self.position_xy_m), leg_pred,
                                    self.segment_j, duration, len(seg), route_j))
         self.observed.append((leg_pred, self.segment_j))
-        self.p_total += leg_pred
+        self.charge.p_total += leg_pred
         self.leg_power_w = self.segment_j / max(duration, 1e-9)
         self.segment, self.segment_j, self.segment_m = [], 0.0, 0.0
         self.leg_start_xy_m, self.leg_start_heading_rad = self.position_xy_m.copy(), self.heading_rad
@@ -701,7 +654,7 @@ class Navigator:
             if outcome is not None:
                 return outcome
         x_e_est = self.leg_power_w * (cfg.excitation_duration_s + cfg.turn_excitation_duration_s)
-        if x_e_est > self._available_j() - sum(self.pending):
+        if x_e_est > self.charge.available_j() - sum(self.pending):
             self.skipped.append(f"after leg {len(self.legs) - 1}: no {gname!r} update, its ~{x_e_est / 3600:.2f} Wh "
                                 "manoeuvre and the remaining route do not both fit above the reserve")
             registry.reset_evidence(region)
@@ -745,47 +698,14 @@ class Navigator:
         self._models_changed()
         return True
 
-    def _driven_runs(self, scope: np.ndarray) -> list[InteractionLog]:
-        """The kept driving inside ``scope``: contiguous runs of at least 1 s, oldest first."""
-        runs = []
-        for log, rows, cols in self.history:
-            inside = scope[rows, cols]
-            if not inside.any():
-                continue
-            edges = np.flatnonzero(np.diff(np.concatenate(([0], inside.astype(np.int8), [0]))))
-            for a, b in zip(edges[::2], edges[1::2]):
-                t0, t1 = float(log.time_s[a]), float(log.time_s[b - 1])
-                if t1 - t0 >= 1.0:
-                    try:
-                        runs.append(log.slice(t0, t1 + 1e-9))
-                    except Exception:  # noqa: BLE001  (a window without IMU samples: not usable)
-                        continue
-        return runs
-
     def _fit_driven(self, region: Any, scope: np.ndarray, gid: int, gname: str, old_id: int) -> bool | None:
         """Fit and validate a new model on the driving kept inside the scope; None when it is too little."""
         cfg = self.settings
         w0 = time.perf_counter()
-        runs = self._driven_runs(scope)
-        total = sum(float(r.duration_s) for r in runs)
-        if total < cfg.min_driven_s:
+        runs = driven_runs(self.history, scope)
+        if sum(float(r.duration_s) for r in runs) < cfg.min_driven_s:
             return None
-        cut_total = (1.0 - cfg.validation_fraction) * total
-        train, held, acc = [], [], 0.0
-        for r in runs:  # the first part of the driving to fit, the last to validate
-            d = float(r.duration_s)
-            if acc + d <= cut_total:
-                train.append(r)
-            elif acc >= cut_total:
-                held.append(r)
-            else:
-                cut = float(r.time_s[0]) + (cut_total - acc)
-                for part, into in (((float(r.time_s[0]), cut), train), ((cut, float(r.time_s[-1]) + 1e-9), held)):
-                    try:
-                        into.append(r.slice(*part))
-                    except Exception:  # noqa: BLE001  (too short a piece)
-                        pass
-            acc += d
+        train, held = split_runs(runs, cfg.validation_fraction)
         if not train or not held:
             return None
         return self._propose(region, scope, gid, gname, old_id, train, held, "driven", 0.0, 0.0, w0, runs[0])
@@ -795,13 +715,13 @@ class Navigator:
         cfg = self.settings
         req, region = self.request, self.queue[0]
         self.phase, self.request = "driving", None
-        e0, t_start = self.excitation_j, self.time_s
+        e0, t_start = self.charge.excitation_j, self.time_s
         crossed = False
         for xl in xlogs:
             _, crossed = self._book(xl, None, None, driving=False)
             if crossed:
                 break
-        x_e, x_t = self.excitation_j - e0, self.time_s - t_start
+        x_e, x_t = self.charge.excitation_j - e0, self.time_s - t_start
         if crossed:
             self.update_wall += time.perf_counter() - self._w0
             return self._finish("reserve_violated", (
@@ -900,26 +820,13 @@ class Navigator:
         cfg = self.settings
         fc = remaining_forecast(pending, self.observed, level=cfg.interval_level, risk=cfg.risk,
                                 prior_legs=cfg.forecast_prior_legs, prior_spread=cfg.forecast_prior_spread,
-                                soc=self.soc, available_j=self._available_j())
+                                soc=self.soc, available_j=self.charge.available_j())
         if not fc.fits:
             return None
         self.returning, self.route, self.pending, self.replanner = True, back, pending, None
         self.replans.append(ReplanRecord(len(self.legs) - 1, "return", sum(pending), math.nan, True, 0.0,
                                          back.planning_time_s, 0))
         return back
-
-
-class Comparison:
-    """Measured and predicted current of one leg's samples, per cell (:meth:`record` puts them in the registry)."""
-
-    def __init__(self, registry: CellModelRegistry, log: InteractionLog, rows: np.ndarray, cols: np.ndarray) -> None:
-        self.log, self.rows, self.cols = log, rows, cols
-        self.pred = predicted_currents(registry, log, rows, cols)
-        self.meas = np.column_stack([log.current_left_a, log.current_right_a])
-        self.dt = np.gradient(log.time_s)
-
-    def record(self, registry: CellModelRegistry) -> None:
-        registry.record(self.rows, self.cols, np.abs(self.meas), np.abs(self.pred), self.dt)
 
 
 def _pair(name: str, value: Any) -> np.ndarray:

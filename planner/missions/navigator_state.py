@@ -51,8 +51,8 @@ _JSON, _NPZ, _REGISTRY = "navigator.json", "state.npz", "registry"
 _LOG_FIELDS = ("time_s", "v_mps", "omega_radps", "current_left_a", "current_right_a", "accel_time_s",
                "accel_z_mps2", "pose_xyh", "ground", "gyro_z_radps", "battery_voltage_v", "battery_current_a")
 _SCALARS = ("phase", "status", "reason", "returning", "heading_rad", "leg_start_heading_rad", "leg_start_time_s",
-            "time_s", "soc", "e_total", "p_total", "driven_j", "excitation_j", "update_wall", "leg_power_w",
-            "n_chunks", "segment_j", "segment_m", "changed", "updates_at_checkpoint", "start_time_ns")
+            "time_s", "update_wall", "leg_power_w", "n_chunks", "segment_j", "segment_m", "changed",
+            "updates_at_checkpoint", "start_time_ns")
 
 
 def _plain(x: Any) -> Any:
@@ -98,7 +98,7 @@ def write_navigator_state(nav: Any, path: str | os.PathLike[str]) -> Path:
             raise InvalidParameterError(f"model {mid} of the registry has no save(path): the state cannot be saved")
     arrays: dict[str, np.ndarray] = {
         "position_xy_m": nav.position_xy_m, "leg_start_xy_m": nav.leg_start_xy_m, "goal_xy_m": nav.goal_xy_m,
-        "last_power": np.asarray(nav.last_power, dtype=np.float64),
+        "last_power": np.asarray(nav.charge.last_power, dtype=np.float64),
         "model_map_at_start": np.asarray(nav.model_map_at_start),
     }
     routes = {}
@@ -109,10 +109,10 @@ def write_navigator_state(nav: Any, path: str | os.PathLike[str]) -> Path:
             routes[name] = {"status": r.status, "planner": r.planner, "planning_time_s": r.planning_time_s}
     if nav.tail is not None:
         arrays["tail"] = np.asarray(nav.tail)
-    for key, parts in nav.series.items():
-        arrays[f"series.{key}"] = np.concatenate(parts) if parts else np.zeros(0)
-    if nav.draw:
-        arrays["draw.t"], arrays["draw.p"] = (np.concatenate(p) for p in zip(*nav.draw))
+    for key, values in nav.charge.arrays().items():
+        arrays[f"series.{key}"] = values
+    if nav.charge.draw:
+        arrays["draw.t"], arrays["draw.p"] = (np.concatenate(p) for p in zip(*nav.charge.draw))
     metas = {"segment": [_log_arrays(f"segment{i}", log, arrays) for i, log in enumerate(nav.segment)],
              "history": [_log_arrays(f"history{i}", log, arrays) for i, (log, _, _) in enumerate(nav.history)]}
     for mid, (t, a) in nav.vibrations.items():
@@ -129,6 +129,7 @@ def write_navigator_state(nav: Any, path: str | os.PathLike[str]) -> Path:
         "robot": nav.robot.to_plain(), "battery": asdict(nav.battery), "physics_ground": asdict(nav.physics_ground),
         "settings": _plain(cfg), "depot_xy_m": None if nav.depot_xy_m is None else _plain(list(nav.depot_xy_m)),
         "scalars": {name: _plain(getattr(nav, name)) for name in _SCALARS},
+        "charge": {name: _plain(getattr(nav.charge, name)) for name in nav.charge.SCALARS},
         "routes": routes, "has_tail": nav.tail is not None, "vibration_ids": sorted(nav.vibrations),
         "pending": _plain(nav.pending), "observed": _plain(nav.observed),
         "legs": [_plain(vars(r)) for r in nav.legs], "updates": [_plain(vars(r)) for r in nav.updates],
@@ -136,7 +137,7 @@ def write_navigator_state(nav: Any, path: str | os.PathLike[str]) -> Path:
         "validated": sorted([list(p) for p in nav.validated]), "decisions": nav.decisions,
         "checkpoint_evidence": _plain(nav.checkpoint_evidence), "queue": queue,
         "request": None if nav.request is None else nav.request.to_dict(), "logs": metas,
-        "draw_parts": len(nav.draw), "has_search": nav.replanner is not None,
+        "draw_parts": len(nav.charge.draw), "has_search": nav.replanner is not None,
     })
     with atomic_directory(target) as tmp:
         write_result_json(tmp / _JSON, doc)
@@ -198,7 +199,9 @@ def restore_navigator_state(nav: Any, path: str | os.PathLike[str], document: di
             setattr(nav, name, math.nan if value is None and name in ("time_s",) else value)
         nav.position_xy_m = arrays["position_xy_m"].copy()
         nav.leg_start_xy_m = arrays["leg_start_xy_m"].copy()
-        nav.last_power = tuple(float(v) for v in arrays["last_power"])
+        for name, value in doc["charge"].items():
+            setattr(nav.charge, name, float(value))
+        nav.charge.last_power = tuple(float(v) for v in arrays["last_power"])
         nav.model_map_at_start = arrays["model_map_at_start"].copy()
         for mid in doc["vibration_ids"]:
             t, a = arrays[f"vibration{mid}.t"], arrays[f"vibration{mid}.a"]
@@ -211,8 +214,8 @@ def restore_navigator_state(nav: Any, path: str | os.PathLike[str], document: di
                                    planning_time_s=meta["planning_time_s"]) if len(wp) >= 2 else None
             setattr(nav, name, route)
         nav.tail = arrays["tail"].copy() if doc["has_tail"] else None
-        nav.series = {k: [arrays[f"series.{k}"]] for k in nav.series}
-        nav.draw = [(arrays["draw.t"], arrays["draw.p"])] if doc["draw_parts"] else []
+        nav.charge.series = {k: [arrays[f"series.{k}"]] for k in nav.charge.series}
+        nav.charge.draw = [(arrays["draw.t"], arrays["draw.p"])] if doc["draw_parts"] else []
         nav.segment = [_log(f"segment{i}", m, arrays) for i, m in enumerate(doc["logs"]["segment"])]
         for i, m in enumerate(doc["logs"]["history"]):
             log = _log(f"history{i}", m, arrays)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -12,7 +13,8 @@ from terrain import CellModelRegistry, InvalidParameterError
 
 from ..learned_cost import predict_currents
 
-__all__ = ["validation_error", "predicted_currents", "best_other_model", "charge_error", "adapted_model"]
+__all__ = ["validation_error", "predicted_currents", "best_other_model", "charge_error", "adapted_model", "Comparison",
+           "driven_runs", "split_runs"]
 
 
 def validation_error(model: Any, logs: list[InteractionLog]) -> float:
@@ -98,3 +100,62 @@ def adapted_model(model: Any, logs: list[InteractionLog], **options: Any) -> Cur
         return model.adapt(logs, **options)
     except DataError:  # too little data for an update: keep the model as it is
         return None
+
+
+class Comparison:
+    """Measured and predicted current of one leg's samples, per cell (:meth:`record` puts them in the registry)."""
+
+    def __init__(self, registry: CellModelRegistry, log: InteractionLog, rows: np.ndarray, cols: np.ndarray) -> None:
+        self.log, self.rows, self.cols = log, rows, cols
+        self.pred = predicted_currents(registry, log, rows, cols)
+        self.meas = np.column_stack([log.current_left_a, log.current_right_a])
+        self.dt = np.gradient(log.time_s)
+
+    def record(self, registry: CellModelRegistry) -> None:
+        """Add this leg's measured and predicted charge to the cells' evidence."""
+        registry.record(self.rows, self.cols, np.abs(self.meas), np.abs(self.pred), self.dt)
+
+
+def driven_runs(history: Iterable[tuple[InteractionLog, np.ndarray, np.ndarray]], scope: np.ndarray,
+                min_run_s: float = 1.0) -> list[InteractionLog]:
+    """The driving inside ``scope`` (a boolean cell mask) of the kept legs ``(log, rows, cols)``:
+    contiguous runs of at least ``min_run_s`` seconds, oldest first."""
+    runs = []
+    for log, rows, cols in history:
+        inside = scope[rows, cols]
+        if not inside.any():
+            continue
+        edges = np.flatnonzero(np.diff(np.concatenate(([0], inside.astype(np.int8), [0]))))
+        for a, b in zip(edges[::2], edges[1::2]):
+            t0, t1 = float(log.time_s[a]), float(log.time_s[b - 1])
+            if t1 - t0 >= min_run_s:
+                try:
+                    runs.append(log.slice(t0, t1 + 1e-9))
+                except DataError:  # a window without IMU samples: not usable
+                    continue
+    return runs
+
+
+def split_runs(runs: list[InteractionLog], validation_fraction: float) -> tuple[list[InteractionLog], list[InteractionLog]]:
+    """The first ``1 - validation_fraction`` of the runs' driving time to fit on, the rest to validate
+    on (the run that straddles the cut is cut)."""
+    total = sum(float(r.duration_s) for r in runs)
+    cut_total = (1.0 - validation_fraction) * total
+    train: list[InteractionLog] = []
+    held: list[InteractionLog] = []
+    acc = 0.0
+    for r in runs:
+        d = float(r.duration_s)
+        if acc + d <= cut_total:
+            train.append(r)
+        elif acc >= cut_total:
+            held.append(r)
+        else:
+            cut = float(r.time_s[0]) + (cut_total - acc)
+            for (a, b), into in (((float(r.time_s[0]), cut), train), ((cut, float(r.time_s[-1]) + 1e-9), held)):
+                try:
+                    into.append(r.slice(a, b))
+                except (DataError, InvalidParameterError):  # too short a piece
+                    pass
+        acc += d
+    return train, held
