@@ -50,6 +50,7 @@ the robot and drives the manoeuvres it requests.
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import time
@@ -72,6 +73,7 @@ from energy import (
 )
 from energy.budget import log_battery_power_w
 from terrain import CellModelRegistry, DataError, InvalidParameterError, TerrainMap
+from terrawatt_base.atomic import json_finite
 from terrawatt_base.checks import check_real, fmt_number, real_array
 
 from ..lattice import Lattice
@@ -81,7 +83,7 @@ from ..replan import IncrementalPlanner
 from ..route import Route, evaluate_route
 from ..settings import PlannerSettings
 from .adaptive_results import AdaptiveResult, LegRecord, ReplanRecord, UpdateRecord
-from .charge import ChargeAccount
+from .charge import MAX_JOIN_GAP_S, ChargeAccount
 from .decisions import Decision, ManoeuvreRequest, RemainingForecast
 from .legs import LegPredictor, cut_at_position
 from .navigator_state import read_navigator_setup, restore_navigator_state, write_navigator_state
@@ -207,6 +209,7 @@ class Navigator:
         self.leg_start_time_s = 0.0
         self.time_s = math.nan  # the robot's clock: the last drive timestamp seen
         self.charge = ChargeAccount(self.battery)
+        self.power_context: InteractionLog | None = None  # the last seconds booked (the control board's start-up)
         self.route: Route | None = None
         self.initial_route: Route | None = None
         self.cost: Any = None
@@ -469,13 +472,24 @@ class Navigator:
 
     # ================================================================== booking
     def _power_w(self, log: InteractionLog, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
-        """Battery power of each sample: measured, from the logged currents, or from the models."""
+        """Battery power of each sample: measured, from the logged currents, or from the models.
+
+        Power from currents includes the control board's start-up after a start from rest, which
+        depends on the samples before the chunk: the last seconds of the previous chunk (its
+        ``context``) are joined in front, so a drive priced chunk by chunk is priced as a whole."""
         if log.has_battery_power:
             return np.asarray(log.battery_power_w, dtype=np.float64)
-        if log.has_currents:
-            return log_battery_power_w(log, self.robot)
-        pred = predicted_currents(self.registry, log, rows, cols)
-        return log_battery_power_w(replace(log, current_left_a=pred[:, 0], current_right_a=pred[:, 1]), self.robot)
+        if not log.has_currents:
+            pred = predicted_currents(self.registry, log, rows, cols)
+            log = replace(log, current_left_a=pred[:, 0], current_right_a=pred[:, 1])
+        ctx = self.power_context
+        both = None
+        if ctx is not None and float(log.time_s[0]) - float(ctx.time_s[-1]) <= MAX_JOIN_GAP_S:
+            both = _joined(ctx, log)
+        self.power_context = _tail(log if both is None else both, self.robot.startup_duration_s + 1.0)
+        if both is not None:
+            return log_battery_power_w(both, self.robot)[len(ctx):]
+        return log_battery_power_w(log, self.robot)
 
     def _book(self, log: InteractionLog, rows: np.ndarray | None, cols: np.ndarray | None, *,
               driving: bool) -> tuple[float, bool]:
@@ -611,7 +625,7 @@ class Navigator:
                 route: Route | None = None, manoeuvre: ManoeuvreRequest | None = None) -> Decision:
         fc = None if self.phase == "finished" else self.forecast()
         d = Decision(action, reason, self.time_s, _xy(self.position_xy_m), fc, route, manoeuvre, checkpoint, evidence)
-        self.decisions.append(d.to_dict())
+        self.decisions.append(json.loads(json.dumps(json_finite(d.to_dict()))))  # plain JSON, as saved
         return d
 
     def _finish(self, status: str, reason: str, action: str, evidence: dict[str, Any] | None = None) -> Decision:
@@ -827,6 +841,26 @@ class Navigator:
         self.replans.append(ReplanRecord(len(self.legs) - 1, "return", sum(pending), math.nan, True, 0.0,
                                          back.planning_time_s, 0))
         return back
+
+
+def _tail(log: InteractionLog, seconds: float) -> InteractionLog:
+    """The drive samples of the last ``seconds`` of a log (with currents; IMU reduced to its bounds)."""
+    t = log.time_s
+    k = int(np.searchsorted(t, float(t[-1]) - seconds))
+    sel = slice(k, None)
+    return InteractionLog(t[sel], log.v_mps[sel], log.omega_radps[sel], log.current_left_a[sel],
+                          log.current_right_a[sel], t[[k, -1]] if t.size - k > 1 else t[sel],
+                          np.zeros(2 if t.size - k > 1 else 1))
+
+
+def _joined(first: InteractionLog, second: InteractionLog) -> InteractionLog | None:
+    """The drive streams of two logs one after the other (None when the second does not follow the first)."""
+    if not float(second.time_s[0]) > float(first.time_s[-1]) or second.current_left_a is None:
+        return None
+    cat = (lambda name: np.concatenate([getattr(first, name), getattr(second, name)]))
+    t = cat("time_s")
+    return InteractionLog(t, cat("v_mps"), cat("omega_radps"), cat("current_left_a"), cat("current_right_a"),
+                          t[[0, -1]], np.zeros(2))
 
 
 def _pair(name: str, value: Any) -> np.ndarray:
