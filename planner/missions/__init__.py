@@ -15,9 +15,9 @@ from .monte_carlo import DEFAULT_MC_CURRENT_RATE_HZ, MissionSetup, simulate_miss
 from .monte_carlo_figure import plot_monte_carlo
 from .monte_carlo_result import MONTE_CARLO_FORMAT_VERSION, MonteCarloResult
 from .monte_carlo_sampling import MissionDistributions, MissionSample
-from .results import MISSION_FORMAT_VERSION, MISSION_STATUSES, MissionResult
 from .navigator import Navigator
 from .observations import CHUNK_FIELDS, observation_log
+from .results import MISSION_FORMAT_VERSION, MISSION_STATUSES, MissionResult
 from .settings import UPDATE_SCOPES, UPDATE_SOURCES, AdaptiveSettings
 from .simulate import simulate_mission
 from .updates import adapted_model, validation_error

@@ -77,6 +77,9 @@ class RemainingForecast:
         State of charge now.
     available_j : float
         Energy above the reserve now (J).
+    unseen_j : float
+        The models' price of the rest on ground classes the robot has not driven yet (J): the
+        part of the interval that no leg of this run has shown.
     """
 
     energy_j: float
@@ -92,6 +95,7 @@ class RemainingForecast:
     legs_observed: int
     soc: float
     available_j: float
+    unseen_j: float = 0.0
 
     @property
     def fits(self) -> bool:

@@ -55,8 +55,8 @@ import math
 import os
 import time
 from collections import deque
-from dataclasses import replace
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -87,19 +87,13 @@ from .charge import MAX_JOIN_GAP_S, ChargeAccount
 from .decisions import Decision, ManoeuvreRequest, RemainingForecast
 from .legs import LegPredictor, cut_at_position
 from .navigator_state import read_navigator_setup, restore_navigator_state, write_navigator_state
-from .manoeuvres import excitation_profiles
 from .observations import observation_log
+from .region_updates import RegionUpdates, as_xy
 from .remaining import remaining_forecast
 from .settings import AdaptiveSettings
 from .updates import (
     Comparison,
-    adapted_model,
-    best_other_model,
-    charge_error,
-    driven_runs,
     predicted_currents,
-    split_runs,
-    validation_error,
 )
 
 __all__ = ["Navigator"]
@@ -108,7 +102,7 @@ __all__ = ["Navigator"]
 PHASES = ("idle", "driving", "manoeuvre", "finished")
 
 
-class Navigator:
+class Navigator(RegionUpdates):
     """Plan, observe what the robot measured, learn per cell, repair the route, decide (module docstring).
 
     Parameters
@@ -187,7 +181,7 @@ class Navigator:
             lonlat = real_array("goal_lonlat_deg", goal_lonlat_deg, ndim=1)
             if lonlat.shape != (2,):
                 raise InvalidParameterError(f"goal_lonlat_deg must be a (lon, lat) pair, got {goal_lonlat_deg!r}")
-            goal_xy_m = tuple(float(v) for v in terrain.lonlat_to_xy(lonlat[0], lonlat[1]))
+            goal_xy_m = tuple(float(v) for v in terrain.lonlat_toas_xy(lonlat[0], lonlat[1]))
         self.terrain, self.registry, self.robot, self.battery = terrain, registry, robot, battery
         self.settings, self.learned, self.physics_ground = cfg, lem, ground
         self.model_factory = LinearCurrentModel if model_factory is None else model_factory
@@ -216,6 +210,9 @@ class Navigator:
         self.replanner: IncrementalPlanner | None = None
         self.pending: list[float] = []  # the models' price of each remaining leg (J)
         self.observed: list[tuple[float, float]] = []  # (predicted, actual) legs since the models changed
+        self.pooled = (0.0, 0.0)  # squared log-ratio deviations and their dof over the earlier stretches
+        self.class_samples: dict[int, int] = {}  # samples driven on each ground class in this run
+        self._unseen_cache: tuple[Any, list[float]] | None = None
         self.legs: list[LegRecord] = []
         self.updates: list[UpdateRecord] = []
         self.replans: list[ReplanRecord] = []
@@ -318,10 +315,12 @@ class Navigator:
         log = observation_log(chunk, self.terrain, previous_time_s=None if math.isnan(self.time_s) else self.time_s,
                               name=f"chunk {self.n_chunks}", robot=self.robot.name if hasattr(self.robot, "name")
                               else "unknown")
-        if self.phase == "finished":
+        if self.phase == "finished":  # the battery still pays for what the robot does; nothing is learned
+            self._book(log, None, None, driving=True)
+            self.position_xy_m = log.pose_xyh[-1, :2].copy()
             return Decision("stop" if self.status != "completed" else "arrived",
-                            f"the mission is over ({self.status}): {self.reason}", float(log.time_s[-1]),
-                            _xy(self.position_xy_m))
+                            f"the mission is over ({self.status}): {self.reason}", self.time_s,
+                            as_xy(self.position_xy_m))
         self.n_chunks += 1
         rows, cols = self.terrain.rowcol(log.pose_xyh[:, 0], log.pose_xyh[:, 1])
         rows, cols = np.asarray(rows), np.asarray(cols)
@@ -337,11 +336,11 @@ class Navigator:
             self._close_leg(compare=False)
             return self._finish("reserve_violated", (
                 f"the battery reached its {self.battery.min_reserve_pct:g} % reserve at "
-                f"{_xy(self.position_xy_m)!r} m during leg {len(self.legs) - 1}"), "stop")
+                f"{as_xy(self.position_xy_m)!r} m during leg {len(self.legs) - 1}"), "stop")
         near_goal = np.hypot(*(self.position_xy_m - self._target())) <= self.settings.goal_tolerance_m
         if checkpoint is False or (checkpoint is None and self.segment_m < self.settings.leg_length_m
                                    and not near_goal):
-            return Decision("continue", "driving", self.time_s, _xy(self.position_xy_m), self.forecast())
+            return Decision("continue", "driving", self.time_s, as_xy(self.position_xy_m), self.forecast())
         return self._checkpoint()
 
     def observe_manoeuvre(self, logs: InteractionLog | Sequence[InteractionLog]) -> Decision:
@@ -437,10 +436,38 @@ class Navigator:
 
     def forecast(self) -> RemainingForecast:
         """The energy of the rest of the mission as seen now (:mod:`planner.missions.remaining`)."""
+        route = self.route.waypoints_m if self.route is not None and self.route.found else np.zeros((0, 2))
+        return self._forecast_of(self.pending, route)
+
+    def _forecast_of(self, pending: list[float], waypoints: np.ndarray) -> RemainingForecast:
+        """The forecast of driving ``waypoints``, priced leg by leg as ``pending``."""
         cfg = self.settings
-        return remaining_forecast(self.pending, self.observed, level=cfg.interval_level, risk=cfg.risk,
+        return remaining_forecast(pending, self.observed, level=cfg.interval_level, risk=cfg.risk,
                                   prior_legs=cfg.forecast_prior_legs, prior_spread=cfg.forecast_prior_spread,
-                                  soc=self.soc, available_j=self.charge.available_j())
+                                  soc=self.soc, available_j=self.charge.available_j(), pooled=self.pooled,
+                                  unseen_j=self._unseen_j(waypoints, float(sum(pending))),
+                                  unseen_spread=cfg.forecast_unseen_spread)
+
+    def _unseen_j(self, waypoints: np.ndarray, energy_j: float) -> list[float]:
+        """The share of ``energy_j`` on each ground class of the route that this run has not driven
+        (by length along the route, sampled every half cell; cached per route and classes seen)."""
+        if len(waypoints) < 2 or energy_j <= 0:
+            return []
+        seen = frozenset(c for c, n in self.class_samples.items() if n >= self.settings.policy.min_samples)
+        key = (waypoints.shape, waypoints.tobytes(), seen)
+        if self._unseen_cache is not None and self._unseen_cache[0] == key:
+            return [energy_j * f for f in self._unseen_cache[1]]
+        seg = np.diff(waypoints, axis=0)
+        length = np.hypot(seg[:, 0], seg[:, 1])
+        step = 0.5 * self.terrain.cell_size_m
+        pts = np.vstack([waypoints[i] + np.linspace(0.0, 1.0, max(int(length[i] / step), 1), endpoint=False)[:, None]
+                         * seg[i] for i in range(len(seg)) if length[i] > 0] or [waypoints[:1]])
+        r, c = self.terrain.rowcol(pts[:, 0], pts[:, 1])
+        classes = np.asarray(self.terrain.ground)[np.asarray(r), np.asarray(c)]
+        values, counts = np.unique(classes, return_counts=True)
+        fractions = [float(n) / classes.size for v, n in zip(values.tolist(), counts.tolist()) if int(v) not in seen]
+        self._unseen_cache = (key, fractions)
+        return [energy_j * f for f in fractions]
 
     @property
     def soc(self) -> float:
@@ -454,7 +481,7 @@ class Navigator:
         status = self.status if self.phase == "finished" else "max_legs"
         reason = self.reason if self.phase == "finished" else "the mission is under way"
         return AdaptiveResult(
-            status=status, reason=reason, final_xy_m=_xy(pos),
+            status=status, reason=reason, final_xy_m=as_xy(pos),
             distance_to_goal_m=float(np.hypot(*(pos - self.goal_xy_m))), initial_route=self.initial_route,
             legs=tuple(self.legs), updates=tuple(self.updates), replans=tuple(self.replans), time_s=cat["t"],
             x_m=cat["x"], y_m=cat["y"], soc=cat["soc"], energy_j=cat["e"], predicted_energy_j=cat["p"],
@@ -527,7 +554,7 @@ class Navigator:
         route_j = evaluate_route(self.cost, head).energy_j if len(head) >= 2 else 0.0
         index = len(self.legs)
         duration = float(seg.time_s[-1] - self.leg_start_time_s)
-        self.legs.append(LegRecord(index, _xy(self.leg_start_xy_m), _xy(self.position_xy_m), leg_pred,
+        self.legs.append(LegRecord(index, as_xy(self.leg_start_xy_m), as_xy(self.position_xy_m), leg_pred,
                                    self.segment_j, duration, len(seg), route_j))
         self.observed.append((leg_pred, self.segment_j))
         self.charge.p_total += leg_pred
@@ -548,6 +575,7 @@ class Navigator:
             rows, cols = (np.asarray(a) for a in self.terrain.rowcol(seg.pose_xyh[:, 0], seg.pose_xyh[:, 1]))
             self.comparison = Comparison(self.registry, seg, rows, cols)
             self.comparison.record(self.registry)
+            self._count_classes(rows, cols)
             self._remember(seg, rows, cols)
             regions = list(self.registry.flagged_regions(self.settings.policy))
             self.queue = regions
@@ -556,9 +584,18 @@ class Navigator:
         else:
             evidence["flagged"] = []
             evidence["mode"] = "forecast only (no currents)"
+            if seg is not None:
+                self._count_classes(*(np.asarray(a) for a in self.terrain.rowcol(seg.pose_xyh[:, 0],
+                                                                                 seg.pose_xyh[:, 1])))
         self.checkpoint_evidence = evidence
         self.updates_at_checkpoint = len(self.updates)
         return self._work_queue()
+
+    def _count_classes(self, rows: np.ndarray, cols: np.ndarray) -> None:
+        """Count the samples driven on each ground class (a class driven enough is no longer unseen)."""
+        values, counts = np.unique(np.asarray(self.terrain.ground)[rows, cols], return_counts=True)
+        for v, n in zip(values.tolist(), counts.tolist()):
+            self.class_samples[int(v)] = self.class_samples.get(int(v), 0) + int(n)
 
     def _remember(self, seg: InteractionLog, rows: np.ndarray, cols: np.ndarray) -> None:
         """Keep the leg for driven updates; forget the oldest beyond ``settings.history_s``."""
@@ -605,7 +642,7 @@ class Navigator:
     def _closing_decision(self, checkpoint: int | None, action: str, why: str, evidence: dict[str, Any]) -> Decision:
         """The budget check on the route now; the decision, logged."""
         if not self.route.found:
-            return self._finish("no_route", f"no route from {_xy(self.position_xy_m)} to the goal "
+            return self._finish("no_route", f"no route from {as_xy(self.position_xy_m)} to the goal "
                                             f"(planner status {self.route.status!r})", "stop", evidence)
         fc = self.forecast()
         if not fc.fits:
@@ -624,7 +661,7 @@ class Navigator:
     def _decide(self, action: str, reason: str, checkpoint: int | None, evidence: dict[str, Any], *,
                 route: Route | None = None, manoeuvre: ManoeuvreRequest | None = None) -> Decision:
         fc = None if self.phase == "finished" else self.forecast()
-        d = Decision(action, reason, self.time_s, _xy(self.position_xy_m), fc, route, manoeuvre, checkpoint, evidence)
+        d = Decision(action, reason, self.time_s, as_xy(self.position_xy_m), fc, route, manoeuvre, checkpoint, evidence)
         self.decisions.append(json.loads(json.dumps(json_finite(d.to_dict()))))  # plain JSON, as saved
         return d
 
@@ -635,160 +672,6 @@ class Navigator:
 
     def _target(self) -> np.ndarray:
         return self.depot_xy_m if self.returning else self.goal_xy_m
-
-    # ================================================================== updates
-    def _ground_name(self, region: Any) -> str:
-        r, c = region.representative_row_col
-        gid = int(self.terrain.ground[r, c])
-        return self.terrain.ground_names.get(gid, str(gid))
-
-    def _scope(self, region: Any) -> tuple[np.ndarray, int, str, int]:
-        """The cells an update of ``region`` covers, its ground class id and name, the old model id."""
-        r, c = region.representative_row_col
-        gid = int(self.terrain.ground[r, c])
-        ids = np.asarray(self.registry.model_id_map)
-        if self.settings.update_scope == "ground_class":
-            scope = (np.asarray(self.terrain.ground) == gid) & np.isin(ids, np.asarray(region.model_ids))
-        else:
-            scope = region.mask(self.registry.shape)
-        return scope, gid, self.terrain.ground_names.get(gid, str(gid)), int(ids[r, c])
-
-    def _update_region(self, region: Any) -> bool | Decision:
-        """Reuse a model, skip, fit on driven data, or request a manoeuvre."""
-        cfg, registry = self.settings, self.registry
-        w0 = time.perf_counter()
-        scope, gid, gname, old_id = self._scope(region)
-        if self._reuse(region, scope, gname, w0):
-            return True
-        if (gid, old_id) in self.validated:  # proved itself on fresh data of this ground: transients
-            registry.reset_evidence(region)
-            return False
-        if cfg.update_source == "driven":
-            outcome = self._fit_driven(region, scope, gid, gname, old_id)
-            if outcome is not None:
-                return outcome
-        x_e_est = self.leg_power_w * (cfg.excitation_duration_s + cfg.turn_excitation_duration_s)
-        if x_e_est > self.charge.available_j() - sum(self.pending):
-            self.skipped.append(f"after leg {len(self.legs) - 1}: no {gname!r} update, its ~{x_e_est / 3600:.2f} Wh "
-                                "manoeuvre and the remaining route do not both fit above the reserve")
-            registry.reset_evidence(region)
-            return False
-        seed = cfg.seed + 10_000 + 10 * len(self.updates)
-        profiles = excitation_profiles(straight_s=cfg.excitation_duration_s, turn_s=cfg.turn_excitation_duration_s,
-                                       speeds_mps=cfg.excitation_speeds_mps, omega_radps=cfg.excitation_omega_radps,
-                                       seed=seed, dt_s=0.01)
-        self.request = ManoeuvreRequest(
-            request_id=len(self.updates), ground=gname, region_cells=int(region.cell_count),
-            xy_m=_xy(self.position_xy_m), profiles=profiles, duration_s=sum(p.duration_s for p in profiles),
-            estimated_energy_j=x_e_est, purpose=(
-                f"the {gname!r} region ({region.cell_count} cells) is off by {100 * region.relative_error:+.1f} % "
-                "and the driven data cannot tell a new model apart: a straight run over speed levels and pivots"))
-        self.phase = "manoeuvre"
-        self._w0 = w0
-        return self._decide("manoeuvre", self.request.purpose, len(self.legs) - 1, dict(self.checkpoint_evidence),
-                            manoeuvre=self.request)
-
-    def _reuse(self, region: Any, scope: np.ndarray, gname: str, w0: float) -> bool:
-        """Assign a model learned elsewhere that already explains what was measured in the region."""
-        cmp_ = self.comparison
-        in_region = region.mask(self.registry.shape)[cmp_.rows, cmp_.cols]
-        found = best_other_model(self.registry, cmp_.log, in_region, cmp_.meas, cmp_.dt, region.model_ids,
-                                 self.settings.policy.min_samples)
-        if found is None:
-            return False
-        mid, err = found
-        err_now = charge_error(cmp_.pred, cmp_.meas, cmp_.dt, in_region)
-        if not err < min(self.settings.policy.threshold_pct / 100.0, err_now):
-            return False
-        leg = len(self.legs) - 1
-        self.registry.assign(scope, mid, reason=(
-            f"reuse: model {mid} ({self.registry.model_record(mid).name!r}) explains the {gname!r} region "
-            f"driven in leg {leg} to {100 * err:.1f} % (the serving model: {100 * err_now:.1f} %)"))
-        wall = time.perf_counter() - w0
-        self.update_wall += wall
-        self.updates.append(UpdateRecord(leg, gname, region.cell_count, int(np.count_nonzero(scope)),
-                                         100.0 * region.relative_error, True, mid, err, err_now,
-                                         0.0, 0.0, wall, kind="reuse"))
-        self._models_changed()
-        return True
-
-    def _fit_driven(self, region: Any, scope: np.ndarray, gid: int, gname: str, old_id: int) -> bool | None:
-        """Fit and validate a new model on the driving kept inside the scope; None when it is too little."""
-        cfg = self.settings
-        w0 = time.perf_counter()
-        runs = driven_runs(self.history, scope)
-        if sum(float(r.duration_s) for r in runs) < cfg.min_driven_s:
-            return None
-        train, held = split_runs(runs, cfg.validation_fraction)
-        if not train or not held:
-            return None
-        return self._propose(region, scope, gid, gname, old_id, train, held, "driven", 0.0, 0.0, w0, runs[0])
-
-    def _excite(self, xlogs: list[InteractionLog]) -> Decision:
-        """Book the manoeuvre's energy, fit and validate on it, go on with the queue."""
-        cfg = self.settings
-        req, region = self.request, self.queue[0]
-        self.phase, self.request = "driving", None
-        e0, t_start = self.charge.excitation_j, self.time_s
-        crossed = False
-        for xl in xlogs:
-            _, crossed = self._book(xl, None, None, driving=False)
-            if crossed:
-                break
-        x_e, x_t = self.charge.excitation_j - e0, self.time_s - t_start
-        if crossed:
-            self.update_wall += time.perf_counter() - self._w0
-            return self._finish("reserve_violated", (
-                f"the battery reached its {self.battery.min_reserve_pct:g} % reserve in the {req.ground!r} "
-                f"excitation manoeuvre at {_xy(self.position_xy_m)!r} m after leg {len(self.legs) - 1}; "
-                "no update was made from the incomplete data"), "stop")
-        train, held = [], []
-        for xl in xlogs:
-            cut = xl.time_s[0] + (1.0 - cfg.validation_fraction) * (xl.time_s[-1] - xl.time_s[0])
-            train.append(xl.slice(xl.time_s[0], cut))
-            held.append(xl.slice(cut, xl.time_s[-1] + 1.0))
-        scope, gid, gname, old_id = self._scope(region)
-        self.changed |= self._propose(region, scope, gid, gname, old_id, train, held, "excitation", x_e, x_t,
-                                      self._w0, xlogs[0])
-        self.queue.pop(0)
-        return self._work_queue()
-
-    def _propose(self, region: Any, scope: np.ndarray, gid: int, gname: str, old_id: int,
-                 train: list[InteractionLog], held: list[InteractionLog], kind: str, x_e: float, x_t: float,
-                 w0: float, vibration: InteractionLog) -> bool:
-        """Fit a new model on ``train``, validate new and old on ``held``; the registry keeps the better."""
-        registry = self.registry
-        new_model = self.model_factory().fit(train)
-        err_new = validation_error(new_model, held)
-        adapted = adapted_model(registry.model(old_id), train) if self.settings.in_run_update else None
-        err_adapted = validation_error(adapted, held) if adapted is not None else np.inf
-        if err_adapted < err_new:  # the serving model updated in-run validates better than a refit
-            new_model, err_new, kind = adapted, err_adapted, "in_run"
-        err_old = validation_error(registry.model(old_id), held)
-        leg = len(self.legs) - 1
-        decision = registry.propose_update(
-            scope, new_model, err_new, err_old, name=f"update{len(self.updates) + 1}-{gname}",
-            reason=f"region error {100 * region.relative_error:+.1f} % after leg {leg}",
-            meta={"ground": gname, "after_leg": leg, "data": kind})
-        if decision.accepted:
-            self.vibrations[int(decision.model_id)] = (np.asarray(vibration.accel_time_s),
-                                                       np.asarray(vibration.accel_z_mps2))
-            self.learned.set_vibration(decision.model_id, vibration.accel_time_s, vibration.accel_z_mps2)
-            self.validated.add((gid, int(decision.model_id)))
-            self._models_changed()
-        else:
-            self.validated.add((gid, old_id))
-            registry.reset_evidence(region)
-        wall = time.perf_counter() - w0
-        self.update_wall += wall
-        self.updates.append(UpdateRecord(leg, gname, region.cell_count, int(np.count_nonzero(scope)),
-                                         100.0 * region.relative_error, bool(decision.accepted), decision.model_id,
-                                         err_new, err_old, x_e, x_t, wall, kind))
-        return bool(decision.accepted)
-
-    def _models_changed(self) -> None:
-        """The in-run forecast correction starts again: the models it corrected are gone."""
-        self.observed = []
 
     # ================================================================== planning
     def _search(self, start: np.ndarray) -> Route:
@@ -831,11 +714,7 @@ class Navigator:
         if not back.found:
             return None
         pending = self._predictor.legs(back.waypoints_m, self.heading_rad)
-        cfg = self.settings
-        fc = remaining_forecast(pending, self.observed, level=cfg.interval_level, risk=cfg.risk,
-                                prior_legs=cfg.forecast_prior_legs, prior_spread=cfg.forecast_prior_spread,
-                                soc=self.soc, available_j=self.charge.available_j())
-        if not fc.fits:
+        if not self._forecast_of(pending, back.waypoints_m).fits:
             return None
         self.returning, self.route, self.pending, self.replanner = True, back, pending, None
         self.replans.append(ReplanRecord(len(self.legs) - 1, "return", sum(pending), math.nan, True, 0.0,
@@ -868,7 +747,3 @@ def _pair(name: str, value: Any) -> np.ndarray:
     if arr.shape != (2,):
         raise InvalidParameterError(f"{name} must be an (x, y) pair, got {value!r}")
     return arr.copy()
-
-
-def _xy(p: np.ndarray) -> tuple[float, float]:
-    return float(p[0]), float(p[1])

@@ -20,7 +20,6 @@ Functions here read and write a navigator's attributes; they never import its cl
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from dataclasses import asdict, fields
@@ -114,6 +113,7 @@ def write_navigator_state(nav: Any, path: str | os.PathLike[str]) -> Path:
     if nav.charge.draw:
         arrays["draw.t"], arrays["draw.p"] = (np.concatenate(p) for p in zip(*nav.charge.draw))
     metas = {"segment": [_log_arrays(f"segment{i}", log, arrays) for i, log in enumerate(nav.segment)],
+             "context": [] if nav.power_context is None else [_log_arrays("context0", nav.power_context, arrays)],
              "history": [_log_arrays(f"history{i}", log, arrays) for i, (log, _, _) in enumerate(nav.history)]}
     for mid, (t, a) in nav.vibrations.items():
         arrays[f"vibration{mid}.t"], arrays[f"vibration{mid}.a"] = t, a
@@ -131,7 +131,8 @@ def write_navigator_state(nav: Any, path: str | os.PathLike[str]) -> Path:
         "scalars": {name: _plain(getattr(nav, name)) for name in _SCALARS},
         "charge": {name: _plain(getattr(nav.charge, name)) for name in nav.charge.SCALARS},
         "routes": routes, "has_tail": nav.tail is not None, "vibration_ids": sorted(nav.vibrations),
-        "pending": _plain(nav.pending), "observed": _plain(nav.observed),
+        "pending": _plain(nav.pending), "observed": _plain(nav.observed), "pooled": _plain(list(nav.pooled)),
+        "class_samples": [[int(k), int(v)] for k, v in sorted(nav.class_samples.items())],
         "legs": [_plain(vars(r)) for r in nav.legs], "updates": [_plain(vars(r)) for r in nav.updates],
         "replans": [_plain(vars(r)) for r in nav.replans], "skipped": list(nav.skipped),
         "validated": sorted([list(p) for p in nav.validated]), "decisions": nav.decisions,
@@ -228,6 +229,10 @@ def restore_navigator_state(nav: Any, path: str | os.PathLike[str], document: di
             nav.replanner.restore_search({k.split(".", 1)[1]: v for k, v in arrays.items() if k.startswith("search.")})
         nav.pending = [float(v) for v in doc["pending"]]
         nav.observed = [(float(a), float(b)) for a, b in doc["observed"]]
+        nav.pooled = (float(doc["pooled"][0]), float(doc["pooled"][1]))
+        nav.class_samples = {int(k): int(v) for k, v in doc["class_samples"]}
+        ctx = doc["logs"]["context"]
+        nav.power_context = _log("context0", ctx[0], arrays) if ctx else None
         nav.legs = [LegRecord(**{**r, "start_xy_m": tuple(r["start_xy_m"]), "end_xy_m": tuple(r["end_xy_m"])})
                     for r in doc["legs"]]
         nav.updates = [UpdateRecord(**{k: (_num(v) if k.startswith("validation_error") else v)

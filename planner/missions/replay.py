@@ -339,49 +339,56 @@ def replay_drive(
     t_first = float(items[0][1].time_s[0])
     chunks, saves_due, unused = 0, 0, 0.0
     i = 0
+    def report(d: Any) -> None:
+        nonlocal saves_due
+        if d.action != "continue" and on_decision is not None:
+            on_decision(d)
+        if d.checkpoint is not None or d.action != "continue":
+            saves_due += 1
+            if state is not None and saves_due >= save_every and nav.pending_manoeuvre is None and not nav.finished:
+                nav.save(state)
+                saves_due = 0
+
+    def answer(next_index: int) -> int:
+        """Answer the waiting manoeuvre with the recording's manoeuvre runs at ``next_index`` (or decline it);
+        the index after them."""
+        while nav.pending_manoeuvre is not None:
+            runs = []
+            while next_index < len(items) and items[next_index][0] == "manoeuvre":
+                runs.append(items[next_index][1])
+                next_index += 1
+            report(nav.observe_manoeuvre(runs) if runs else nav.decline_manoeuvre("not in the recording"))
+        return next_index
+
+    i = 0
     while i < len(items):
         kind, log = items[i]
         if nav.finished:
             unused += sum(float(lg.duration_s) for k, lg in items[i:] if k == "drive" and lg.time_s[-1] > nav.time_s)
             break
-        if nav.pending_manoeuvre is not None:
-            runs = []
-            while i < len(items) and items[i][0] == "manoeuvre":
-                runs.append(items[i][1])
-                i += 1
-            d = nav.observe_manoeuvre(runs) if runs else nav.decline_manoeuvre("not in the recording")
-        elif kind == "manoeuvre":  # a manoeuvre the navigator did not ask for here (or already seen)
+        if nav.pending_manoeuvre is not None:  # waiting since a checkpoint at the end of the last drive log
+            i = answer(i)
+            continue
+        if kind == "manoeuvre" or float(log.time_s[-1]) <= nav.time_s:  # not asked for here, or seen before a restart
             i += 1
             continue
-        elif float(log.time_s[-1]) <= nav.time_s:  # seen before the restart
-            i += 1
-            continue
+        if mode == "legs":
+            rest = log if float(log.time_s[0]) > nav.time_s else log.slice(nav.time_s + 1e-12, float(log.time_s[-1]) + 1.0)
+            pieces = [rest]
         else:
-            pieces = [log if float(log.time_s[0]) > nav.time_s else log.slice(nav.time_s + 1e-12, math.inf)] \
-                if mode == "legs" else _chunks(log, chunk_s, nav.time_s)
-            d = None
-            for k, piece in enumerate(pieces):
-                if nav.finished or nav.pending_manoeuvre is not None:
-                    break
-                if speed_up is not None:
-                    ahead = (float(piece.time_s[-1]) - t_first) / speed_up - (time.perf_counter() - w0)
-                    if ahead > 0:
-                        time.sleep(ahead)
-                d = nav.observe(piece, checkpoint=True if mode == "legs" else None)
-                chunks += 1
-                if d.action != "continue" and on_decision is not None:
-                    on_decision(d)
-                if d.checkpoint is not None or d.action != "continue":
-                    saves_due += 1
-                    if state is not None and saves_due >= save_every and nav.pending_manoeuvre is None:
-                        nav.save(state)
-                        saves_due = 0
-            i += 1
-            continue
-        if on_decision is not None and d.action != "continue":
-            on_decision(d)
-        if state is not None and not nav.finished and nav.pending_manoeuvre is None:
-            nav.save(state)
+            pieces = _chunks(log, chunk_s, nav.time_s)
+        i += 1
+        for n, piece in enumerate(pieces):
+            if nav.finished:
+                break
+            if speed_up is not None:
+                ahead = (float(piece.time_s[-1]) - t_first) / speed_up - (time.perf_counter() - w0)
+                if ahead > 0:
+                    time.sleep(ahead)
+            report(nav.observe(piece, checkpoint=True if mode == "legs" else None))
+            chunks += 1
+            if nav.pending_manoeuvre is not None:  # runs recorded after this log answer it; mid-log: declined
+                i = answer(i) if n == len(pieces) - 1 else answer(len(items))
     if state is not None:
         nav.save(state)
     drive_s = float(max(float(lg.time_s[-1]) for _, lg in items) - t_first)

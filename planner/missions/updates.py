@@ -8,8 +8,8 @@ from typing import Any
 import numpy as np
 
 from energy import CurrentModel, InteractionLog
-from terrawatt_base.errors import DataError
 from terrain import CellModelRegistry, InvalidParameterError
+from terrawatt_base.errors import DataError
 
 from ..learned_cost import predict_currents
 

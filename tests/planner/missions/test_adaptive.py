@@ -196,7 +196,7 @@ def test_the_budget_is_the_batterys_own_over_driving_and_manoeuvres():
 def test_the_in_run_update_is_tried_and_proposed_when_it_validates_better(monkeypatch):
     """With in_run_update the loop also adapts the serving model on the excitation data; a
     stand-in update that fits the held-back data exactly must win over the refit."""
-    import planner.missions.navigator as adaptive_module
+    import planner.missions.region_updates as adaptive_module
 
     robot, truth, tmap, prior = _world()
     calls = []
