@@ -7,11 +7,25 @@ from pathlib import Path
 from typing import Any
 
 from planner.missions.replay_report import replay_recording
-from planner.model_cost import parse_model_ground
 from planner.missions.settings import UPDATE_SOURCES
+from planner.model_cost import parse_model_ground
 from planner.risk import check_risk_level
-from .common import (Checked, add_map_options, add_point_options, bounded, check_model_flags, check_outputs,
-                     input_paths, load_model_arg, map_arg, point_arg, positive, robot_arg, warn_figures)
+
+from .common import (
+    Checked,
+    add_map_options,
+    add_point_options,
+    bounded,
+    check_model_flags,
+    check_outputs,
+    input_paths,
+    load_model_arg,
+    map_arg,
+    point_arg,
+    positive,
+    robot_arg,
+    warn_figures,
+)
 from .data import add_data_options, logs_from_args
 
 __all__ = ["add_parser", "run_replay"]

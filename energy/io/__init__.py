@@ -1,4 +1,4 @@
-"""Readers and writers of interaction logs: BorealTC CSV, generic CSV, ROS 1/2 bags and MCAP.
+"""Readers and writers of interaction logs: BorealTC CSV, generic CSV, ROS 1/2 bags and MCAP, live ROS messages.
 
 :func:`read_logs` reads every log at a path whatever its layout (a BorealTC folder, a CSV
 log, a bag, or a folder of them); the CLI's ``--data`` goes through it.
@@ -54,10 +54,17 @@ bad input with a clear error instead of guessing:
 - the gyro yaw rate (``gyro_z_radps``, on the IMU clock) and the battery voltage
   (``battery_voltage_v``, on the drive clock) are read where the source has them.
 
+Writers: :func:`write_csv_log`, and :func:`write_drive_bag` — logs (a drive or its legs, one
+after another on one clock) as a ROS 2 MCAP file or a ROS 1 bag of odometry, IMU, current,
+battery and GPS topics (:class:`DriveBagTopics`), which :func:`read_rosbag` reads back and
+:func:`read_navsat` reads the GPS fixes of. :func:`log_from_messages` makes the log of live
+ROS messages (a robot node's buffers), the log a bag of the same messages gives.
+
 Modules: :mod:`~energy.io.cleaning` (the checks above), :mod:`~energy.io.csv_table` (CSV
 decoding and parsing), :mod:`~energy.io.borealtc`, :mod:`~energy.io.csv_log` (+ its header
 line, :mod:`~energy.io.csv_header`), :mod:`~energy.io.rosbag` (+ :mod:`~energy.io.bag_messages`,
-:mod:`~energy.io.bag_align`), :mod:`~energy.io.layouts` (:func:`read_logs`).
+:mod:`~energy.io.bag_align`), :mod:`~energy.io.layouts` (:func:`read_logs`),
+:mod:`~energy.io.ros_messages` (logs to messages and back), :mod:`~energy.io.drive_bag`.
 """
 
 from .borealtc import BOREALTC_TRACK_WIDTH_M, read_borealtc, read_borealtc_run
@@ -77,7 +84,9 @@ from .cleaning import (
 )
 from .csv_header import CSV_LOG_FORMAT_VERSION
 from .csv_log import CSV_FIELDS, CSV_RATES, CSV_UNITS, DEFAULT_CSV_COLUMNS, read_csv_log, write_csv_log
+from .drive_bag import NavSatTrack, read_navsat, write_drive_bag
 from .layouts import LOG_SUFFIXES, BagTopics, CsvLayout, read_logs
+from .ros_messages import DriveBagTopics, log_from_messages
 from .rosbag import DRIVE_CLOCKS, MAX_CLOCK_OFFSET_S, read_rosbag
 
 __all__ = [
@@ -110,4 +119,9 @@ __all__ = [
     "BagTopics",
     "CsvLayout",
     "read_logs",
+    "DriveBagTopics",
+    "write_drive_bag",
+    "NavSatTrack",
+    "read_navsat",
+    "log_from_messages",
 ]

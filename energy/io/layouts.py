@@ -49,12 +49,15 @@ class BagTopics:
     drive_clock : {"currents", "velocity"}
         The drive stream on the current messages' times, or on the odometry's (currents
         interpolated onto them: a 1 Hz status message beside 10-50 Hz odometry).
+    battery_topic : str or None
+        A ``sensor_msgs/BatteryState`` topic: battery voltage and pack current on the drive
+        clock, read when the bag has it (see :func:`~energy.io.read_rosbag`).
 
     Raises
     ------
     InvalidParameterError, UnknownNameError
         Empty or non-string names, the wrong number of topics or fields, a voltage field
-        without current fields, an unknown unit.
+        without current fields, a voltage field beside a battery topic, an unknown unit.
 
     Examples
     --------
@@ -71,6 +74,7 @@ class BagTopics:
     current_unit: str = "A"
     accel_unit: str = "m/s^2"
     drive_clock: str = "currents"
+    battery_topic: str | None = None
 
     def __post_init__(self) -> None:
         check_text("cmd_vel_topic", self.cmd_vel_topic)
@@ -94,6 +98,13 @@ class BagTopics:
         check_choice("current_unit", self.current_unit, tuple(UNIT_FACTORS["current"]))
         check_choice("accel_unit", self.accel_unit, tuple(UNIT_FACTORS["accel"]))
         check_choice("drive_clock", self.drive_clock, DRIVE_CLOCKS)
+        if self.battery_topic is not None:
+            check_text("battery_topic", self.battery_topic)
+            if self.voltage_field is not None:
+                raise InvalidParameterError(
+                    f"battery_topic {self.battery_topic!r} and voltage_field {self.voltage_field!r} (--voltage-field) "
+                    "both give the battery voltage; name one of them"
+                )
 
 
 def _names(name: str, value: Any, counts: tuple[int, ...]) -> tuple[str, ...]:
@@ -251,7 +262,8 @@ def read_logs(
     def one(item: Path, label: str | None = ground_label) -> InteractionLog:
         if LOG_SUFFIXES.get(item.suffix.lower()) == "csv":
             return csv.read(item, robot=None if robot == "unknown" else robot, ground_label=label, **common)
-        return read_rosbag(item, bag.cmd_vel_topic, bag.imu_topic, bag.current_topics, current_fields=bag.current_fields,
+        return read_rosbag(item, bag.cmd_vel_topic, bag.imu_topic, bag.current_topics, battery_topic=bag.battery_topic,
+                           current_fields=bag.current_fields,
                            voltage_field=bag.voltage_field, current_unit=bag.current_unit, accel_unit=bag.accel_unit,
                            drive_clock=bag.drive_clock, robot=robot,
                            ground_label=label, **common)

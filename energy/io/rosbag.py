@@ -4,9 +4,12 @@
 (:func:`~energy.io.bag_messages.read_messages`, with the message types a ROS 1 bag defines
 in its connection headers), puts each topic on one clock
 (:func:`~energy.io.bag_messages.topic_times`), builds the velocity, IMU and current streams
-(currents from ``std_msgs`` topics or fields of a status message picked by name), checks and
-cleans them like every reader (:mod:`energy.io.cleaning`) and aligns them on their overlap
-(:func:`~energy.io.bag_align.align_streams`).
+(currents from ``std_msgs`` topics or fields of a status message picked by name; battery
+voltage and current from a ``sensor_msgs/BatteryState`` topic), checks and cleans them like
+every reader (:mod:`energy.io.cleaning`) and aligns them on their overlap
+(:func:`~energy.io.bag_align.align_streams`). Everything after the reading is
+:func:`log_from_topic_messages`, which :mod:`energy.io.ros_messages` also calls on live
+messages: a chunk of messages and a bag of the same messages give the same log.
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from terrawatt_base.checks import check_bool, check_choice, check_optional_real, check_real, check_text
+from terrawatt_base.checks import check_bool, check_choice, check_optional_real, check_real, check_text, fmt_number
 from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..logs import DEFAULT_GAP_FACTOR, InteractionLog, LogMeta, check_gap_factor
@@ -47,7 +50,7 @@ from .cleaning import (
     parse_repair,
 )
 
-__all__ = ["MAX_CLOCK_OFFSET_S", "DRIVE_CLOCKS", "read_rosbag"]
+__all__ = ["MAX_CLOCK_OFFSET_S", "DRIVE_CLOCKS", "read_rosbag", "log_from_topic_messages"]
 
 _LOG = logging.getLogger(__name__)
 
@@ -63,6 +66,7 @@ _ODOM_TYPES = ("nav_msgs/msg/Odometry",)
 _IMU_TYPES = ("sensor_msgs/msg/Imu",)
 _SCALAR_TYPES = ("std_msgs/msg/Float64", "std_msgs/msg/Float32")
 _ARRAY_TYPES = ("std_msgs/msg/Float64MultiArray", "std_msgs/msg/Float32MultiArray")
+_BATTERY_TYPES = ("sensor_msgs/msg/BatteryState",)
 _FIELDS_HINT = (
     "; for a status message (e.g. husky_msgs/msg/HuskyStatus) name its current fields with "
     "current_fields (--current-fields left_driver_current right_driver_current)"
@@ -87,6 +91,7 @@ def read_rosbag(
     imu_topic: str = "/imu/data",
     current_topics: str | Sequence[str] = ("/drive/current_left", "/drive/current_right"),
     *,
+    battery_topic: str | None = None,
     current_fields: Sequence[str] | None = None,
     voltage_field: str | None = None,
     require_currents: bool = False,
@@ -133,6 +138,13 @@ def read_rosbag(
       topics were missing) — enough to predict from; training and scoring refuse it.
       ``require_currents=True`` (implied by ``current_fields`` or ``voltage_field``)
       makes a missing topic an error instead.
+    - ``battery_topic`` (optional): ``sensor_msgs/msg/BatteryState``; ``voltage`` (V) goes to
+      ``battery_voltage_v`` and ``current`` to ``battery_current_a`` with its sign turned
+      (BatteryState's current is negative when discharging, the log's pack current positive);
+      a current that is NaN in every message (the ROS mark of "not measured") is left out.
+      Read when the topic is in the bag; when it is not, the log has no battery fields and
+      ``meta.notes`` says so. A status message's ``voltage_field`` is the other source of
+      the voltage: name one of them.
 
     Timestamps: a topic whose messages carry a header uses the header stamps when
     ``use_header_stamps`` and every stamp is non-zero; otherwise (and for std_msgs
@@ -152,7 +164,10 @@ def read_rosbag(
     currents, or with ``drive_clock="velocity"``, at the odometry messages, or with
     commands only on a uniform grid at ``drive_rate_hz``, the currents (and voltage) then
     interpolated linearly onto them — for a status message at 1 Hz beside odometry at
-    10-50 Hz.
+    10-50 Hz. The battery topic's voltage and current are interpolated linearly onto the
+    drive times too; its span does not cut the overlap: drive samples before its first or
+    after its last message take that message's values, within ``gap_factor`` of its median
+    periods (further out a DataError, unless ``allow_gaps``).
     Commands are held (zero-order hold) from the last message at or before each drive
     time; with ``cmd_vel_timeout_s`` set, a command older than that — or no command yet —
     counts as zero (robots stop when commands stop). With ``cmd_vel_timeout_s=None`` the
@@ -167,6 +182,8 @@ def read_rosbag(
         ``.bag`` file, ROS 2 bag directory, or the ``.db3`` / ``.mcap`` file inside one.
     cmd_vel_topic, imu_topic, current_topics : str
         Topic names (see above).
+    battery_topic : str, optional
+        A ``sensor_msgs/msg/BatteryState`` topic (see above).
     current_fields : (str, str), optional
         Left and right current fields of the message on the one current topic.
     voltage_field : str, optional
@@ -215,17 +232,92 @@ def read_rosbag(
         ``allow_gaps`` work as in the CSV readers).
     UnitError, UnknownNameError, InvalidParameterError
         As documented in :mod:`energy.io` (with ``check_units``, also a current or IMU
-        topic whose rate lies outside [0.5 Hz, 10 kHz]); unknown ``current_unit``; bad
-        timeout or ``max_clock_offset_s``.
+        topic whose rate lies outside [0.5 Hz, 10 kHz], a battery voltage above 200 V);
+        unknown ``current_unit``; bad timeout or ``max_clock_offset_s``; both
+        ``battery_topic`` and ``voltage_field``.
+    """
+    import_rosbags()
+    options = dict(
+        battery_topic=battery_topic, current_fields=current_fields, voltage_field=voltage_field,
+        require_currents=require_currents, drive_rate_hz=drive_rate_hz, drive_clock=drive_clock,
+        current_unit=current_unit, accel_unit=accel_unit, robot=robot, ground_label=ground_label,
+        use_header_stamps=use_header_stamps, max_clock_offset_s=max_clock_offset_s, cmd_vel_timeout_s=cmd_vel_timeout_s,
+        repair=repair, allow_gaps=allow_gaps, gap_factor=gap_factor, check_units=check_units,
+    )
+    opts = _check_arguments(current_unit, cmd_vel_timeout_s, max_clock_offset_s, ground_label, current_topics,
+                            current_fields, voltage_field, require_currents, drive_rate_hz, drive_clock, battery_topic)
+    parse_repair(repair)
+    check_gap_factor(gap_factor)
+    bag = bag_path(path)
+    optional = (() if opts.require else opts.topics_cur) + ((battery_topic,) if battery_topic is not None else ())
+    raw, types = read_messages(bag, (cmd_vel_topic, imu_topic) + (opts.topics_cur if opts.require else ()), optional)
+    return log_from_topic_messages(str(bag), raw, types, cmd_vel_topic, imu_topic, current_topics, **options)
+
+
+def log_from_topic_messages(
+    src: str,
+    raw: Messages,
+    types: dict[str, str],
+    cmd_vel_topic: str = "/cmd_vel",
+    imu_topic: str = "/imu/data",
+    current_topics: str | Sequence[str] = ("/drive/current_left", "/drive/current_right"),
+    *,
+    battery_topic: str | None = None,
+    current_fields: Sequence[str] | None = None,
+    voltage_field: str | None = None,
+    require_currents: bool = False,
+    drive_rate_hz: float = 10.0,
+    drive_clock: str = "currents",
+    current_unit: str = "A",
+    accel_unit: str = "m/s^2",
+    robot: str = "unknown",
+    ground_label: str | None = None,
+    use_header_stamps: bool = True,
+    max_clock_offset_s: float = MAX_CLOCK_OFFSET_S,
+    cmd_vel_timeout_s: float | None = 0.5,
+    repair: str | Iterable[str] = (),
+    allow_gaps: bool = False,
+    gap_factor: float = DEFAULT_GAP_FACTOR,
+    check_units: bool = True,
+    container: str = "the bag",
+) -> InteractionLog:
+    """The interaction log of messages grouped by topic, as :func:`read_rosbag` builds it from a bag's.
+
+    The seam between reading a bag and building its log: :func:`read_rosbag` reads the
+    messages and calls this; :func:`energy.io.ros_messages.log_from_messages` calls it on
+    messages received live, so both give the same log for the same messages. Needs no
+    ``rosbags``: messages are read by field name (rosbags dataclasses or rclpy messages).
+
+    Parameters
+    ----------
+    src : str
+        The source's name in messages and ``meta.source`` (a bag path).
+    raw : dict topic -> list of (int, message)
+        Per topic, its messages with their receive times (ns), in receive order.
+    types : dict topic -> str
+        Per topic, its message type (``"nav_msgs/msg/Odometry"``, ...).
+    cmd_vel_topic, imu_topic, current_topics, battery_topic, current_fields, ...
+        As :func:`read_rosbag`: a current or battery topic not in ``raw`` is a missing topic.
+    container : str
+        What held the messages, in the note of missing current topics (``"the bag"``).
+
+    Returns
+    -------
+    InteractionLog
+
+    Raises
+    ------
+    DataError, UnitError, UnknownNameError, InvalidParameterError
+        As :func:`read_rosbag`; also the velocity or IMU topic not in ``raw``.
     """
     opts = _check_arguments(current_unit, cmd_vel_timeout_s, max_clock_offset_s, ground_label, current_topics,
-                            current_fields, voltage_field, require_currents, drive_rate_hz, drive_clock)
+                            current_fields, voltage_field, require_currents, drive_rate_hz, drive_clock, battery_topic)
     repairs = parse_repair(repair)
     gap_factor = check_gap_factor(gap_factor)
-    bag = bag_path(path)
-    src = str(bag)
-    raw, types = read_messages(bag, (cmd_vel_topic, imu_topic) + (opts.topics_cur if opts.require else ()),
-                               () if opts.require else opts.topics_cur)
+    needed = (cmd_vel_topic, imu_topic) + (opts.topics_cur if opts.require else ())
+    absent = [t for t in needed if t not in raw or t not in types]
+    if absent:
+        raise DataError(f"{src}: topic(s) {absent!r} not in {container}; it has {sorted(raw)!r}")
     vel_type = expect_type(src, raw, types, cmd_vel_topic, _TWIST_TYPES + _ODOM_TYPES)
     expect_type(src, raw, types, imu_topic, _IMU_TYPES)
     present = [t for t in opts.topics_cur if t in raw]
@@ -233,12 +325,18 @@ def read_rosbag(
         raise DataError(f"{src}: current topic {present[0]!r} is in the bag but "
                         f"{[t for t in opts.topics_cur if t not in raw]!r} is not (current_topics)")
     missing_currents = "" if present else (
-        f"current topic(s) {list(opts.topics_cur)!r} not in the bag, which has {sorted(types)!r}")
+        f"current topic(s) {list(opts.topics_cur)!r} not in {container}, which has {sorted(types)!r}")
     if missing_currents:
         _LOG.info("%s: no currents: %s", src, missing_currents)
     cur_cols = _current_columns(src, raw, types, opts, current_unit) if present else {}
-    wanted = (cmd_vel_topic, imu_topic, *present)
     notes: list[str] = []
+    battery = battery_topic is not None and battery_topic in raw
+    if battery:
+        expect_type(src, raw, types, battery_topic, _BATTERY_TYPES)
+    elif battery_topic is not None:
+        notes.append(f"no battery: topic {battery_topic!r} not in {container}")
+        _LOG.info("%s: no battery: topic %r not in %s", src, battery_topic, container)
+    wanted = (cmd_vel_topic, imu_topic, *present, *((battery_topic,) if battery else ()))
     times_ns = {t: topic_times(src, t, raw[t], use_header_stamps, max_clock_offset_s, notes) for t in wanted}
     origin = int(min(s.min() for s in times_ns.values()))
     secs = {t: (s - origin).astype(np.float64) / 1e9 for t, s in times_ns.items()}
@@ -256,8 +354,13 @@ def read_rosbag(
         notes.append(f"{imu_topic}: no gyro (angular_velocity_covariance[0] == -1)")
     ti, ic, _ = clean_stream(src, imu_topic, secs[imu_topic], icols, allow_gaps=allow_gaps, **clean)
     currents = _current_streams(src, cur_cols, secs, dict(allow_gaps=allow_gaps, **clean)) if present else None
+    if battery:
+        tb, bc, _ = clean_stream(src, battery_topic, secs[battery_topic], _battery_columns(battery_topic, raw, notes),
+                                 allow_gaps=allow_gaps, **clean)
     if check_units:
         _check_units(src, currents, opts.topics_cur, current_unit, (cmd_vel_topic, vc), (imu_topic, ti, ic))
+        if battery:
+            _check_battery_units(src, battery_topic, tb, bc)
     gravity = gravity_note(f"{imu_topic} linear_acceleration.z", ic["accel_z"],
                            "give accel_unit='g' (CLI: --accel-unit g) for an IMU driver that publishes in g",
                            check_units)
@@ -265,6 +368,8 @@ def read_rosbag(
         notes.append(gravity)
     log = align_streams(src, currents, (tv, vc, measured), (ti, ic), cmd_vel_timeout_s, opts.drive_rate_hz, notes,
                         opts.on_currents)
+    if battery:
+        log.update(_battery_on_drive(src, battery_topic, tb, bc, log["time_s"], gap_factor, allow_gaps, notes))
     if missing_currents:
         notes.append(f"no currents: {missing_currents}")
     meta = LogMeta(
@@ -283,9 +388,9 @@ def read_rosbag(
 def _check_arguments(
     current_unit: Any, cmd_vel_timeout_s: Any, max_clock_offset_s: Any, ground_label: Any, current_topics: Any,
     current_fields: Any, voltage_field: Any, require_currents: Any, drive_rate_hz: Any, drive_clock: Any,
+    battery_topic: Any = None,
 ) -> _Options:
-    """Check the options (after the optional dependency)."""
-    import_rosbags()
+    """Check the options."""
     check_choice("current_unit", current_unit, tuple(UNIT_FACTORS["current"]))
     check_optional_real("cmd_vel_timeout_s", cmd_vel_timeout_s, low=0.0, low_inclusive=False)
     check_real("max_clock_offset_s", max_clock_offset_s, low=0.0, low_inclusive=False)
@@ -319,6 +424,13 @@ def _check_arguments(
             "voltage_field (--voltage-field) is read beside the currents of a status message: name them too "
             "with current_fields (--current-fields)"
         )
+    if battery_topic is not None:
+        check_text("battery_topic", battery_topic)
+        if voltage_field is not None:
+            raise InvalidParameterError(
+                f"battery_topic {battery_topic!r} and voltage_field {voltage_field!r} (--voltage-field) both give the "
+                "battery voltage; name one of them"
+            )
     return _Options(topics_cur, fields, voltage_field, require or fields is not None, rate, drive_clock == "currents")
 
 
@@ -385,6 +497,51 @@ def _check_units(
         check_limit(src, f"{imu_topic} angular_velocity.z", ic["gyro_z"], MAX_OMEGA_RADPS, "rad/s",
                     "gyro rates look like deg/s")
     check_timing(src, imu_topic, ti)
+
+
+def _battery_columns(topic: str, raw: Messages, notes: list[str]) -> dict[str, np.ndarray]:
+    """Voltage (V) and pack current (A, positive discharging) of the BatteryState messages."""
+    msgs = [m for _, m in raw[topic]]
+    cols = {"voltage": np.array([m.voltage for m in msgs], dtype=np.float64)}
+    current = -np.array([m.current for m in msgs], dtype=np.float64)  # BatteryState: negative when discharging
+    if np.isnan(current).all():
+        notes.append(f"{topic}: no pack current (NaN in every message)")
+    else:
+        cols["current"] = current
+    return cols
+
+
+def _check_battery_units(src: str, topic: str, tb: np.ndarray, bc: dict[str, np.ndarray]) -> None:
+    check_limit(src, f"{topic} voltage", bc["voltage"], MAX_BATTERY_VOLTAGE_V, "V", "the voltage looks like mV")
+    if "current" in bc:
+        check_current(src, f"{topic} current", bc["current"], "A")
+    check_timing(src, topic, tb)
+
+
+def _battery_on_drive(
+    src: str, topic: str, tb: np.ndarray, bc: dict[str, np.ndarray], td: np.ndarray, gap_factor: float,
+    allow_gaps: bool, notes: list[str],
+) -> dict[str, np.ndarray]:
+    """The battery voltage and pack current interpolated onto the drive times ``td``.
+
+    Drive samples outside the battery stream take its first or last value, up to ``gap_factor``
+    of its median periods away (a DataError further out, unless ``allow_gaps``).
+    """
+    reach = gap_factor * float(np.median(np.diff(tb))) if tb.size > 1 else 0.0
+    before, after = float(tb[0] - td[0]), float(td[-1] - tb[-1])
+    if max(before, after) > reach and not allow_gaps:
+        raise DataError(
+            f"{src}: topic {topic!r} spans [{fmt_number(float(tb[0]), 9)}, {fmt_number(float(tb[-1]), 9)}] s but the "
+            f"drive stream [{fmt_number(float(td[0]), 9)}, {fmt_number(float(td[-1]), 9)}] s, more than {gap_factor:g} "
+            "of its median periods further; pass allow_gaps=True to hold its first and last values there"
+        )
+    held = int(np.sum((td < tb[0]) | (td > tb[-1])))
+    notes.append(f"{topic}: battery interpolated linearly onto the drive times"
+                 + (f" ({held} drive sample(s) outside its span hold its first or last value)" if held else ""))
+    out = {"battery_voltage_v": np.interp(td, tb, bc["voltage"])}
+    if "current" in bc:
+        out["battery_current_a"] = np.interp(td, tb, bc["current"])
+    return out
 
 
 def _velocity_columns(vel_type: str, msgs: list[Any]) -> dict[str, np.ndarray]:
