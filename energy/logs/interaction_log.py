@@ -390,15 +390,16 @@ class InteractionLog:
         t1_s = check_real("t1_s", t1_s)
         if not t1_s > t0_s:
             raise InvalidParameterError(f"t1_s must be > t0_s, got t0_s={t0_s!r}, t1_s={t1_s!r}")
-        d = (self.time_s >= t0_s) & (self.time_s < t1_s)
-        a = (self.accel_time_s >= t0_s) & (self.accel_time_s < t1_s)
-        if not d.any() or not a.any():
-            which = "drive" if not d.any() else "acceleration"
+        # both clocks are strictly increasing: the window is a contiguous range of each (no mask over the run)
+        d = slice(*np.searchsorted(self.time_s, [t0_s, t1_s], side="left").tolist())
+        a = slice(*np.searchsorted(self.accel_time_s, [t0_s, t1_s], side="left").tolist())
+        if d.stop <= d.start or a.stop <= a.start:
+            which = "drive" if d.stop <= d.start else "acceleration"
             raise DataError(f"slice [{t0_s!r}, {t1_s!r}) s holds no {which} sample")
         return self._subset(d, a)
 
-    def _subset(self, d: np.ndarray, a: np.ndarray, note: str = "") -> InteractionLog:
-        def cut(name: str, mask: np.ndarray) -> np.ndarray | None:
+    def _subset(self, d: np.ndarray | slice, a: np.ndarray | slice, note: str = "") -> InteractionLog:
+        def cut(name: str, mask: np.ndarray | slice) -> np.ndarray | None:
             values = getattr(self, name)
             return None if values is None else values[mask]
 

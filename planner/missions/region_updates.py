@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from energy import InteractionLog
+from terrain import DataError
 
 from .adaptive_results import UpdateRecord
 from .decisions import Decision, ManoeuvreRequest
@@ -126,7 +127,10 @@ class RegionUpdates:
         train, held = split_runs(runs, cfg.validation_fraction)
         if not train or not held:
             return None
-        return self._propose(region, scope, gid, gname, old_id, train, held, "driven", 0.0, 0.0, w0, runs[0])
+        try:
+            return self._propose(region, scope, gid, gname, old_id, train, held, "driven", 0.0, 0.0, w0, runs[0])
+        except DataError:  # the model cannot be fitted on these pieces: as if they were too few
+            return None
 
     def _excite(self, xlogs: list[InteractionLog]) -> Decision:
         """Book the manoeuvre's energy, fit and validate on it, go on with the queue."""
@@ -171,7 +175,7 @@ class RegionUpdates:
         err_old = validation_error(registry.model(old_id), held)
         leg = len(self.legs) - 1
         decision = registry.propose_update(
-            scope, new_model, err_new, err_old, name=f"update{len(self.updates) + 1}-{gname}",
+            scope, new_model, err_new, err_old, name=f"update{len(registry.model_ids)}-{gname}",
             reason=f"region error {100 * region.relative_error:+.1f} % after leg {leg}",
             meta={"ground": gname, "after_leg": leg, "data": kind})
         if decision.accepted:

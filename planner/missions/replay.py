@@ -46,7 +46,7 @@ from .navigator import Navigator
 from .replay_figure import plot_replay
 from .settings import AdaptiveSettings
 
-__all__ = ["REPLAY_FORMAT_VERSION", "MANOEUVRE_FILE", "drive_items", "replay_drive", "ReplayResult"]
+__all__ = ["REPLAY_FORMAT_VERSION", "MANOEUVRE_FILE", "drive_items", "drive_chunks", "replay_drive", "ReplayResult"]
 
 _LOG = logging.getLogger(__name__)
 
@@ -84,24 +84,30 @@ def drive_items(logs: Sequence[Any]) -> list[tuple[str, InteractionLog]]:
     return items
 
 
-def _chunks(log: InteractionLog, chunk_s: float, after_s: float) -> list[InteractionLog]:
-    """The log's samples after ``after_s`` cut on a grid of ``chunk_s`` from its first sample."""
-    t = log.time_s
+def drive_chunks(log: InteractionLog, chunk_s: float, after_s: float) -> list[InteractionLog]:
+    """The log's samples after ``after_s`` cut on a grid of ``chunk_s`` from its first sample; a window
+    without a drive or an IMU sample is joined to the next one (nothing is dropped)."""
+    t, ta = log.time_s, log.accel_time_s
     t0 = float(t[0])
-    keep = t > after_s
-    if not keep.any():
+    if not float(t[-1]) > after_s:
         return []
-    edges = t0 + chunk_s * np.arange(math.floor((float(t[keep][0]) - t0) / chunk_s),
-                                     math.floor((float(t[-1]) - t0) / chunk_s) + 2)
-    out = []
-    for a, b in zip(edges[:-1], edges[1:]):
-        lo = max(a, after_s + 1e-12) if a <= after_s else a
-        if not np.any((t >= lo) & (t < b)):
-            continue
-        try:
-            out.append(log.slice(lo, b))
-        except DataError:  # no IMU sample in this window: join it to the next one
-            continue
+    start = after_s + 1e-12 if after_s >= t0 else t0
+    first = float(t[np.searchsorted(t, start, side="left")])
+    edges = t0 + chunk_s * np.arange(math.floor((first - t0) / chunk_s) + 1, math.floor((float(t[-1]) - t0) / chunk_s) + 1)
+    edges = np.concatenate(([start], edges[edges > start], [float(t[-1]) + 1.0]))
+    nd = np.diff(np.searchsorted(t, edges, side="left"))
+    na = np.diff(np.searchsorted(ta, edges, side="left"))
+    out, lo = [], edges[0]
+    for k in range(len(edges) - 1):
+        if (nd[k] == 0 or na[k] == 0) and k < len(edges) - 2:
+            continue  # joined to the next window (lo stays)
+        if nd[k] > 0 or out == []:
+            try:
+                out.append(log.slice(lo, float(edges[k + 1])))
+            except DataError:  # the recording's end holds no IMU sample: the drive samples go with the last chunk
+                if out:
+                    out[-1] = log.slice(float(out[-1].time_s[0]), float(edges[k + 1]))
+        lo = float(edges[k + 1])
     return out
 
 
@@ -376,7 +382,7 @@ def replay_drive(
             rest = log if float(log.time_s[0]) > nav.time_s else log.slice(nav.time_s + 1e-12, float(log.time_s[-1]) + 1.0)
             pieces = [rest]
         else:
-            pieces = _chunks(log, chunk_s, nav.time_s)
+            pieces = drive_chunks(log, chunk_s, nav.time_s)
         i += 1
         for n, piece in enumerate(pieces):
             if nav.finished:

@@ -154,8 +154,10 @@ def split_runs(runs: list[InteractionLog], validation_fraction: float) -> tuple[
             cut = float(r.time_s[0]) + (cut_total - acc)
             for (a, b), into in (((float(r.time_s[0]), cut), train), ((cut, float(r.time_s[-1]) + 1e-9), held)):
                 try:
-                    into.append(r.slice(a, b))
+                    piece = r.slice(a, b)
                 except (DataError, InvalidParameterError):  # too short a piece
-                    pass
+                    continue
+                if len(piece) >= 2:  # a model fits on two drive samples at least
+                    into.append(piece)
         acc += d
     return train, held

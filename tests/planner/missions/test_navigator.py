@@ -350,3 +350,32 @@ def test_a_broken_state_is_a_file_format_error(tmp_path):
         nav.save(tmp_path / "other")
     assert (tmp_path / "other" / "x.txt").read_text() == "mine"
     assert math.isfinite(nav.soc)
+
+
+def test_a_drive_cut_in_chunks_loses_no_sample():
+    from energy import InteractionLog
+    from planner.missions.replay import drive_chunks as _chunks
+
+    t = np.arange(300) / 15.0  # 15 Hz drive, 10 Hz IMU: many 0.05 s windows hold no IMU sample
+    log = InteractionLog(t, np.full(300, 0.5), np.zeros(300), np.ones(300), np.ones(300), np.arange(200) / 10.0,
+                         np.full(200, 9.81), pose_xyh=np.column_stack([t, t, t]))
+    for chunk_s, after in ((0.05, -1.0), (1.0, -1.0), (0.05, 3.0)):
+        pieces = drive_chunks(log, chunk_s, after)
+        joined = np.concatenate([p.time_s for p in pieces])
+        np.testing.assert_array_equal(joined, t[t > after])
+        assert all(len(p.accel_time_s) for p in pieces)
+
+
+def test_a_long_drive_is_replayed_in_chunks_with_checkpoints_by_distance():
+    from energy import InteractionLog
+
+    robot, truth, tmap, prior = _world()
+    res = run_adaptive_mission(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0), truth,
+                               START, GOAL, physics_ground=ground_preset("asphalt"), settings=SETTINGS)
+    drive = InteractionLog.concatenate(res.leg_logs)  # one recording: the legs' rests kept, no manoeuvre in it
+    out = replay_drive(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0), [drive], GOAL,
+                       settings=SETTINGS, physics_ground=ground_preset("asphalt"), chunk_s=0.5)
+    nav = out.navigator
+    assert out.mode == "drive" and out.chunks > 50 and nav.status == "completed"
+    assert len(nav.legs) >= 4 and any(u.accepted for u in nav.updates)  # manoeuvres declined: learned from driving
+    assert nav.charge.driven_j == pytest.approx(res.driven_energy_j, rel=0.02)
