@@ -354,7 +354,7 @@ def test_a_broken_state_is_a_file_format_error(tmp_path):
 
 def test_a_drive_cut_in_chunks_loses_no_sample():
     from energy import InteractionLog
-    from planner.missions.replay import drive_chunks as _chunks
+    from planner.missions.replay import drive_chunks
 
     t = np.arange(300) / 15.0  # 15 Hz drive, 10 Hz IMU: many 0.05 s windows hold no IMU sample
     log = InteractionLog(t, np.full(300, 0.5), np.zeros(300), np.ones(300), np.ones(300), np.arange(200) / 10.0,
