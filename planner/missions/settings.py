@@ -69,7 +69,8 @@ class AdaptiveSettings:
         Upper quantile of the remaining energy that budget decisions use, in (0.5, 1); None:
         the point forecast.
     forecast_dt_s : float
-        Time step (s, > 0) of the stop-turn-go profiles the remaining legs are priced on.
+        Time step (s, > 0) of the stop-turn-go profiles the remaining legs are priced on (0.05 s:
+        the example mission's forecasts as at 0.01 s within 0.1 %, five times fewer samples to price).
     forecast_prior_legs, forecast_prior_spread : float
         Weight (legs, > 0) and relative spread (> 0) of the forecast's prior before this run
         has shown anything (:mod:`planner.missions.remaining`).
@@ -101,7 +102,7 @@ class AdaptiveSettings:
     history_s: float = 600.0
     interval_level: float = 0.8
     risk: float | None = None
-    forecast_dt_s: float = 0.01
+    forecast_dt_s: float = 0.05
     forecast_prior_legs: float = 2.0
     forecast_prior_spread: float = 0.1
     forecast_unseen_spread: float = 0.4
