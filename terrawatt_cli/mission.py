@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 from typing import Any
 
 from terrain import InvalidParameterError
@@ -48,6 +49,10 @@ def add_parser(sub: Any) -> None:
                         "and the models it started with as OUT/start_registry/: diagnose the planning model on them "
                         "with terrawatt diagnose --data OUT/logs --model physics --map MAP, or replay them with "
                         "terrawatt replay --data OUT/logs --registry OUT/start_registry --goal X Y --battery-ah AH")
+    p.add_argument("--drive-bag", type=Path, default=None, metavar="FILE.mcap|FILE.bag",
+                   help="also write the legs the robot drove as one recorded drive: a ROS 2 MCAP (.mcap) or a ROS 1 "
+                        "bag (.bag) of odometry, IMU, currents (and GPS on a map with a CRS); replay it with terrawatt "
+                        "replay --data FILE --cmd-vel-topic /odom")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.add_argument("--monte-carlo", type=int, default=None, metavar="N", action=Checked,
                    check=bounded("a number of missions >= 1", lambda v: v >= 1),
@@ -76,8 +81,11 @@ def run_mission(args: argparse.Namespace) -> int:
         workers=args.workers, scheduler=args.scheduler, model=args.model, risk=args.risk, draw_from=args.mc_draw,
         names=_NAMES)
     mc = args.monte_carlo is not None
-    if mc and args.logs:
-        raise InvalidParameterError("--logs writes the legs of one adaptive mission, not of --monte-carlo missions")
+    if mc and (args.logs or args.drive_bag is not None):
+        raise InvalidParameterError("--logs and --drive-bag write the legs of one adaptive mission, not of "
+                                    "--monte-carlo missions")
+    if args.drive_bag is not None and args.drive_bag.suffix not in (".mcap", ".bag"):
+        raise InvalidParameterError(f"--drive-bag {args.drive_bag} must end in .mcap (ROS 2) or .bag (ROS 1)")
     check_outputs(args.out, ("monte_carlo.json", "monte_carlo.csv", "monte_carlo.png") if mc else
                   ("mission.json", "mission.png"), input_paths(args))
     if args.logs:
@@ -92,6 +100,8 @@ def run_mission(args: argparse.Namespace) -> int:
             adapt=not args.no_adapt, seed=args.seed, model=model, model_ground=args.model_ground, map_label=label)
         with warn_figures():
             written = report.write(args.out, logs=args.logs)
+        if args.drive_bag is not None:
+            written.append(report.write_drive_bag(args.drive_bag))
         print(report.summary())
         logs_written = [p for p in written if p.suffix == ".csv"]
         legs = [p for p in logs_written if p.name.startswith("leg_")]

@@ -12,9 +12,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from energy import GROUND_PRESETS, Battery, RobotParams, TruthSimulator, ground_preset, load_current_model
 from energy.params import robot_params
-from energy.io import write_csv_log
+from energy.io import write_csv_log, write_drive_bag
 from terrain import CellModelRegistry, TerrainMap
 from terrawatt_base.atomic import check_output_path
 from terrawatt_base.checks import check_bool, check_real
@@ -175,6 +177,27 @@ class MissionReport:
             if self.start_registry is not None:
                 written.append(self.start_registry.save(out / START_REGISTRY, lambda model, p: model.save(p)))
         return written
+
+
+    def write_drive_bag(self, path: str | os.PathLike[str]) -> Path:
+        """The legs the robot drove as one recorded drive, a ROS 2 MCAP (``.mcap``) or a ROS 1 bag
+        (``.bag``): odometry (map poses), IMU, drive currents and, on a map with a CRS, GPS fixes
+        (:func:`energy.io.write_drive_bag`). The manoeuvre runs are not in it (they were made on
+        the spot, without poses): a replay of the bag learns from the driving. Atomic.
+
+        Raises
+        ------
+        InvalidParameterError
+            A path of another suffix; a mission that drove no leg.
+        """
+        legs = self.result.leg_logs
+        if not legs:
+            raise InvalidParameterError("the mission drove no leg: there is no drive to write")
+        lonlat = None
+        if self.terrain is not None and self.terrain.crs is not None:
+            lonlat = [np.column_stack(self.terrain.xy_to_lonlat(log.pose_xyh[:, 0], log.pose_xyh[:, 1]))
+                      for log in legs]
+        return write_drive_bag(list(legs), path, lonlat_deg=lonlat)
 
 
 #: The folder of :meth:`MissionReport.write` (``logs=True``) that holds the legs' logs.
