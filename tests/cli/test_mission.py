@@ -211,4 +211,8 @@ def test_mission_logs_replace_an_earlier_missions_legs_and_refuse_other_files(tm
     assert "holds other files (['notes.txt'])" in one_line_error(capsys)
     assert (out / "logs" / "notes.txt").read_text() == "mine"
     assert main(["mission", "--battery-ah", "20", "--monte-carlo", "3", "--logs", "--out", str(out)]) == 2
-    assert "--logs writes the legs of one adaptive mission" in one_line_error(capsys)
+    assert "--logs and --drive-bag write the legs of one adaptive mission" in one_line_error(capsys)
+    (out / "logs" / "notes.txt").unlink()
+    mine = out / "logs" / "leg_0042.csv"  # a user's file of a name the mission never writes: refused, never deleted
+    mine.write_text("mine")
+    assert main(argv) == 2 and "leg_0042.csv" in one_line_error(capsys) and mine.read_text() == "mine"
