@@ -261,7 +261,7 @@ def _cut(log: InteractionLog, d0: int, d1: int, a0: int, a1: int) -> Interaction
 
 def replay_chunks(log: InteractionLog, chunk_s: float) -> list[InteractionLog]:
     """The chunks ``replay_drive`` cuts (its own private function: boolean windows over the whole log)."""
-    return replay_module._chunks(log, chunk_s, -math.inf)  # noqa: SLF001 - the exact cutting replay_drive times
+    return replay_module.drive_chunks(log, chunk_s, -math.inf)  # the exact cutting replay_drive times
 
 
 # ======================================================================== measurement helpers
