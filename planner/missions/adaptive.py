@@ -33,7 +33,6 @@ import numpy as np
 
 from energy import Battery, GroundParams, InteractionLog, RobotParams, TruthSimulator
 from terrain import CellModelRegistry, InvalidParameterError, TerrainMap
-from terrawatt_base.checks import fmt_number, real_array
 
 from ..learned_cost import LearnedEnergyModel
 from ..route import evaluate_route
@@ -100,30 +99,12 @@ def run_adaptive_mission(
     InvalidParameterError
         Start equals goal (within ``settings.goal_tolerance_m``): nothing to drive.
     """
-    for name, value, cls in (("terrain", terrain, TerrainMap), ("registry", registry, CellModelRegistry),
-                             ("robot", robot, RobotParams), ("battery", battery, Battery),
-                             ("truth", truth, TruthSimulator), ("physics_ground", physics_ground, GroundParams)):
-        if not isinstance(value, cls):
-            raise InvalidParameterError(f"{name} must be a {cls.__name__}, got {type(value).__name__!r}")
-    registry.check_grid(terrain)
-    cfg = AdaptiveSettings() if settings is None else settings
-    if not isinstance(cfg, AdaptiveSettings):
-        raise InvalidParameterError(f"settings must be an AdaptiveSettings, got {type(cfg).__name__!r}")
-    lem = learned if learned is not None else LearnedEnergyModel(registry, robot, physics_ground)
-    if lem.registry is not registry:
-        raise InvalidParameterError("learned must be a LearnedEnergyModel over the same registry")
-    start = real_array("start_xy_m", start_xy_m, ndim=1)
-    goal = real_array("goal_xy_m", goal_xy_m, ndim=1)
-    if start.shape != (2,) or goal.shape != (2,):
-        raise InvalidParameterError(f"start_xy_m and goal_xy_m must be (x, y) pairs, got {start_xy_m!r}, {goal_xy_m!r}")
-    if np.hypot(*(start - goal)) <= cfg.goal_tolerance_m:
-        raise InvalidParameterError(
-            f"start equals goal: start {tuple(start.tolist())!r} m lies within goal_tolerance_m="
-            f"{fmt_number(cfg.goal_tolerance_m)} m of goal {tuple(goal.tolist())!r} m; nothing to drive"
-        )
-    nav = Navigator(terrain, registry, robot, battery, tuple(goal), physics_ground=physics_ground, settings=cfg,
-                    model_factory=model_factory, learned=lem)
-    decision = nav.plan(tuple(start), time_s=0.0)
+    if not isinstance(truth, TruthSimulator):
+        raise InvalidParameterError(f"truth must be a TruthSimulator, got {type(truth).__name__!r}")
+    nav = Navigator(terrain, registry, robot, battery, goal_xy_m, physics_ground=physics_ground, settings=settings,
+                    model_factory=model_factory, learned=learned)  # it checks the rest
+    cfg = nav.settings
+    decision = nav.plan(start_xy_m, time_s=0.0)
     dt = 1.0 / truth.current_rate_hz
     leg_logs: list[InteractionLog] = []
     manoeuvre_logs: list[tuple[int, InteractionLog]] = []
