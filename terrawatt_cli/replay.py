@@ -6,7 +6,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from planner.missions.replay_report import replay_recording
+from energy.io import read_navsat
+from planner.missions.replay_report import place_by_gps, replay_recording
 from planner.missions.settings import UPDATE_SOURCES
 from planner.model_cost import parse_model_ground
 from planner.risk import check_risk_level
@@ -85,6 +86,9 @@ def add_parser(sub: Any) -> None:
                    help="pace the replay at N times real time (default: as fast as possible)")
     p.add_argument("--state", type=Path, default=None, metavar="DIR",
                    help="save the navigator's state here at each checkpoint; resume from it when it exists")
+    p.add_argument("--gps-topic", default=None, metavar="TOPIC",
+                   help="place the drive on the map by the bag's sensor_msgs/NavSatFix fixes (through the map's CRS) "
+                        "instead of its odometry's positions")
     p.add_argument("--no-mcap", action="store_true", help="do not write replay.mcap")
     p.add_argument("--seed", type=int, default=0, help="seed of the navigator's refinement and manoeuvres (default 0)")
     p.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
@@ -100,6 +104,9 @@ def run_replay(args: argparse.Namespace) -> int:
     check_outputs(args.out, files, [*input_paths(args), args.data])
     tmap, label = map_arg(args)
     logs = logs_from_args(args, require_currents=False)
+    if args.gps_topic is not None:
+        track = read_navsat(args.data, args.gps_topic, start_time_ns=logs[0].meta.start_time_ns)
+        logs = place_by_gps(logs, track, tmap)
     goal = point_arg(args, "goal", tmap)
     if goal is None:  # the recording's last pose
         last = max(logs, key=lambda log: float(log.time_s[-1]))

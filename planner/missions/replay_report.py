@@ -4,23 +4,64 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from energy import GROUND_PRESETS, InteractionLog, ground_preset, load_current_model
 from energy.params import robot_params
 from terrain import CellModelRegistry, TerrainMap
 from terrawatt_base.checks import check_real, option_names
-from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 from ..model_cost import model_energy_model
 from .mission_report import mission_battery
 from .replay import ReplayResult, replay_drive
 from .settings import AdaptiveSettings
 
-__all__ = ["replay_recording"]
+__all__ = ["replay_recording", "place_by_gps"]
 
 _OPTIONS = ("registry", "model", "physics_ground", "initial_soc", "state_path")
+
+
+def place_by_gps(logs: Sequence[InteractionLog], track: Any, terrain: TerrainMap,
+                 max_gap_s: float = 2.0) -> list[InteractionLog]:
+    """The logs with their positions from GPS fixes (a :class:`energy.io.NavSatTrack` on the logs'
+    clock) projected through the map's CRS and interpolated onto the drive timestamps; the heading
+    stays the log's (odometry) where it has one, else the track's direction of travel.
+
+    Raises
+    ------
+    InvalidParameterError
+        The map has no CRS.
+    DataError
+        Fewer than two fixes; a drive sample farther than ``max_gap_s`` from any fix.
+    """
+    if terrain.crs is None:
+        raise InvalidParameterError("GPS fixes are placed on a map through its CRS, and this map has none")
+    ok = np.isfinite(track.lon_deg) & np.isfinite(track.lat_deg) & (np.asarray(track.status) >= 0)
+    t = np.asarray(track.time_s)[ok]
+    if t.size < 2:
+        raise DataError(f"the GPS topic {track.topic!r} of {track.source!r} holds fewer than two fixes")
+    x, y = (np.asarray(v, dtype=np.float64) for v in terrain.lonlat_to_xy(track.lon_deg[ok], track.lat_deg[ok]))
+    out = []
+    for log in logs:
+        ts = log.time_s
+        near = np.abs(ts[:, None] - t[np.clip(np.searchsorted(t, ts)[:, None] + np.array([-1, 0]), 0, t.size - 1)])
+        far = near.min(axis=1) > max_gap_s
+        if far.any():
+            i = int(np.argmax(far))
+            raise DataError(f"{log.meta.source!r}: no GPS fix within {max_gap_s:g} s of the drive sample at "
+                            f"t = {float(ts[i]):.3f} s")
+        xi, yi = np.interp(ts, t, x), np.interp(ts, t, y)
+        if log.pose_xyh is not None:
+            heading = log.pose_xyh[:, 2]
+        else:
+            heading = np.arctan2(np.gradient(yi), np.gradient(xi))
+        out.append(replace(log, pose_xyh=np.column_stack([xi, yi, heading])))
+    return out
 
 
 def replay_recording(

@@ -65,3 +65,36 @@ def test_replay_refuses_what_it_cannot_start_from(tmp_path, capsys):
                "--drive-bag", str(tmp_path / "x.txt"),
                "--out", str(tmp_path / "m2")])
     assert rc == 2 and ".mcap" in one_line_error(capsys)
+
+
+def test_a_drive_with_gps_is_placed_on_the_map_through_its_crs(tmp_path, capsys):
+    import numpy as np
+
+    import terrain
+    from energy.io import BagTopics, read_logs, read_navsat
+
+    ground = np.zeros((24, 60), dtype=int)
+    ground[6:18, 20:40] = 1
+    utm = terrain.TerrainMap(np.zeros((24, 60)), 1.0, origin_xy_m=(500_000.0, 5_000_000.0), crs="EPSG:32632",
+                             ground=ground, ground_names={0: "asphalt", 1: "sand"})
+    path = utm.save(tmp_path / "utm.npz")
+    out = tmp_path / "mission"
+    rc = main(["mission", "--map", str(path), "--start", "500003", "5000012", "--goal", "500057", "5000012",
+               "--battery-ah", "20", "--logs", "--drive-bag", str(tmp_path / "drive.bag"), "--out", str(out)])
+    assert rc == 0, capsys.readouterr()
+    capsys.readouterr()
+    drive = read_logs(tmp_path / "drive.bag", bag=BagTopics(cmd_vel_topic="/odom"))[0]
+    track = read_navsat(tmp_path / "drive.bag", start_time_ns=drive.meta.start_time_ns)
+    x, y = utm.lonlat_to_xy(track.lon_deg, track.lat_deg)  # the fixes are the odometry's positions, through the CRS
+    np.testing.assert_allclose(np.interp(drive.time_s, track.time_s, x), drive.pose_xyh[:, 0], atol=1e-3)
+    rc = main(["replay", "--data", str(tmp_path / "drive.bag"), "--cmd-vel-topic", "/odom", "--gps-topic", "/gps/fix",
+               "--map", str(path), "--registry", str(out / "start_registry"), "--goal", "500057", "5000012",
+               "--battery-ah", "20", "--no-mcap", "--out", str(tmp_path / "replay")])
+    printed = capsys.readouterr().out
+    assert rc == 0, printed
+    data = json.loads((tmp_path / "replay" / "replay.json").read_text())
+    assert data["status"] == "completed" and data["mode"] == "drive"
+    rc = main(["replay", "--data", str(tmp_path / "drive.bag"), "--cmd-vel-topic", "/odom", "--gps-topic", "/gps/fix",
+               "--registry", str(out / "start_registry"), "--goal", "150", "150", "--battery-ah", "20",
+               "--out", str(tmp_path / "r2")])  # the example map has no CRS
+    assert rc == 2 and "CRS" in one_line_error(capsys)
