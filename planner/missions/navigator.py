@@ -686,9 +686,11 @@ class Navigator(RegionUpdates):
         when the planner finds nothing better. Whether the route changed."""
         t1 = time.perf_counter()
         builds0 = self.learned.table_builds
-        self.cost = self.learned.energy_cost(self.terrain, self.settings.speed_mps, previous=self.cost)
+        previous = self.cost
+        self.cost = self.learned.energy_cost(self.terrain, self.settings.speed_mps, previous=previous)
         if self.replanner is not None:
             self.replanner.update(Lattice.for_cost(self.cost, self.replanner.lattice.stride_cells))
+        previous.lattices.clear()  # a lattice and its cost hold each other: freed now, not at the next full GC
         refresh = time.perf_counter() - t1
         old_energy = evaluate_route(self.cost, tail).energy_j if len(tail) >= 2 else 0.0
         route = self._search(self.position_xy_m)
