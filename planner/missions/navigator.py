@@ -138,13 +138,9 @@ class Navigator(RegionUpdates):
     OutOfBoundsError, BlockedPositionError
         Goal or depot off the map or blocked (when planning).
 
-    Examples
-    --------
-    >>> from energy import Battery, LinearCurrentModel, robot_preset
-    >>> from terrain import CellModelRegistry, flat_map
-    >>> tmap = flat_map((20, 40), 1.0)
-    >>> nav = Navigator(tmap, CellModelRegistry.from_terrain(tmap, LinearCurrentModel()),  # doctest: +SKIP
-    ...                 robot_preset("husky"), Battery(20.0, 24.0), (35.0, 10.0))
+    Notes
+    -----
+    A walk-through (plain arrays, decisions, the state on disk, replays): ``docs/ride_along.md``.
     """
 
     def __init__(
@@ -333,7 +329,7 @@ class Navigator(RegionUpdates):
         self.position_xy_m = xy[-1].copy()
         self.heading_rad = float(log.pose_xyh[-1, 2])
         if crossed:
-            self._close_leg(compare=False)
+            self._close_leg()
             return self._finish("reserve_violated", (
                 f"the battery reached its {self.battery.min_reserve_pct:g} % reserve at "
                 f"{as_xy(self.position_xy_m)!r} m during leg {len(self.legs) - 1}"), "stop")
@@ -541,7 +537,7 @@ class Navigator(RegionUpdates):
         return leg_j * np.minimum(d / self.settings.leg_length_m, 1.0)
 
     # ================================================================== the checkpoint
-    def _close_leg(self, *, compare: bool) -> InteractionLog | None:
+    def _close_leg(self) -> InteractionLog | None:
         """Record the leg driven since the last checkpoint; its log (None if nothing was driven)."""
         if not self.segment:
             return None
@@ -567,7 +563,7 @@ class Navigator(RegionUpdates):
 
     def _checkpoint(self) -> Decision:
         """Close the leg, compare per cell, queue the flagged regions and work through them."""
-        seg = self._close_leg(compare=True)
+        seg = self._close_leg()
         self.changed, self.queue = False, []
         evidence: dict[str, Any] = {"leg": self.legs[-1].index, "predicted_j": self.legs[-1].predicted_energy_j,
                                     "actual_j": self.legs[-1].actual_energy_j}
