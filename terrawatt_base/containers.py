@@ -31,7 +31,7 @@ from typing import IO, Any
 
 import numpy as np
 
-from .errors import FileFormatError
+from .errors import FileFormatError, InvalidParameterError
 
 __all__ = ["MEMORY_BUDGET_BYTES", "memory_budget_bytes", "check_zip_sizes", "check_file_fits", "read_zip_entry",
            "load_npy", "read_npz", "over_budget_message"]
@@ -43,13 +43,23 @@ _DECODE_ERRORS = (zlib.error, zipfile.BadZipFile, zipfile.LargeZipFile, EOFError
 
 
 def memory_budget_bytes() -> int:
-    """The budget in force: ``TERRAWATT_MEMORY_BUDGET_BYTES`` when set to a positive integer, else the default."""
-    raw = os.environ.get("TERRAWATT_MEMORY_BUDGET_BYTES", "")
-    try:
-        value = int(raw)
-    except ValueError:
+    """The budget in force: ``TERRAWATT_MEMORY_BUDGET_BYTES`` (a positive whole number of bytes) when set,
+    else the default.
+
+    Raises
+    ------
+    InvalidParameterError
+        The variable is set to anything else (``0``, ``-5``, ``abc``, ``1e3``): never silently replaced.
+    """
+    raw = os.environ.get("TERRAWATT_MEMORY_BUDGET_BYTES")
+    if raw is None or raw.strip() == "":
         return MEMORY_BUDGET_BYTES
-    return value if value > 0 else MEMORY_BUDGET_BYTES
+    text = raw.strip().replace("_", "")
+    if not text.isdigit() or int(text) <= 0:
+        raise InvalidParameterError(
+            f"TERRAWATT_MEMORY_BUDGET_BYTES must be a positive whole number of bytes (e.g. {MEMORY_BUDGET_BYTES} for "
+            f"4 GiB), got {raw!r}; unset it for the default")
+    return int(text)
 
 
 def _gib(n: int) -> str:

@@ -146,3 +146,17 @@ def test_a_csv_log_or_a_bag_over_the_memory_budget_is_refused_before_it_is_read(
         read_rosbag(tmp_path / "h.bag", "/odometry/filtered", "/imu/data", "/status", **topics)
     monkeypatch.delenv("TERRAWATT_MEMORY_BUDGET_BYTES")
     assert len(read_rosbag(tmp_path / "h.bag", "/odometry/filtered", "/imu/data", "/status", **topics)) > 0
+
+
+@pytest.mark.parametrize("raw", ["0", "-5", "abc", "1e3", "1e30", "4.5"])
+def test_a_budget_variable_that_is_not_a_byte_count_is_refused_not_replaced(monkeypatch, raw):
+    from terrawatt_base.containers import memory_budget_bytes
+    from terrawatt_base.errors import InvalidParameterError
+
+    monkeypatch.setenv("TERRAWATT_MEMORY_BUDGET_BYTES", raw)
+    with pytest.raises(InvalidParameterError, match="TERRAWATT_MEMORY_BUDGET_BYTES must be a positive whole number"):
+        memory_budget_bytes()
+    monkeypatch.setenv("TERRAWATT_MEMORY_BUDGET_BYTES", "1_000_000")
+    assert memory_budget_bytes() == 1_000_000
+    monkeypatch.setenv("TERRAWATT_MEMORY_BUDGET_BYTES", "")
+    assert memory_budget_bytes() == 4 * 1024**3
