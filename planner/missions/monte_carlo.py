@@ -21,6 +21,7 @@ import numpy as np
 from energy import GROUND_PRESETS, Battery, GroundParams, RobotParams, TruthSimulator, ground_preset
 from energy.params import robot_params
 from terrain import TerrainMap
+from terrawatt_base.containers import memory_budget_bytes
 from terrawatt_base.checks import check_bool, check_int, check_real, check_seed
 from terrawatt_base.dask_client import check_client, client_worker_count, dask_client
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
@@ -35,7 +36,11 @@ from .monte_carlo_sampling import MissionDistributions
 from .simulate import simulate_mission
 from .tracking import route_speed_mps
 
-__all__ = ["simulate_missions_mc", "MissionSetup", "DEFAULT_MC_CURRENT_RATE_HZ"]
+__all__ = ["simulate_missions_mc", "MissionSetup", "DEFAULT_MC_CURRENT_RATE_HZ", "MC_SAMPLE_BYTES"]
+
+#: Bytes one Monte Carlo mission is planned to hold (its seed sequence, drawn parameters and outcome
+#: row): a study's size is checked against the memory budget before any seed is spawned.
+MC_SAMPLE_BYTES = 4096
 
 #: Current sampling rate (Hz) of the truth simulator of each Monte Carlo mission: a mission's
 #: energy moves by < 0.2 % from 100 Hz (its P50/P90/P99 by ~0.1 %), at a quarter of the work.
@@ -194,6 +199,11 @@ def simulate_missions_mc(
         print(mc.summary()); mc.plot("mc.png")
     """
     n = check_int("n", n, low=1)
+    if n * MC_SAMPLE_BYTES > memory_budget_bytes():  # before a seed is spawned: a billion would exhaust memory
+        raise InvalidParameterError(
+            f"n={n} missions would hold about {n * MC_SAMPLE_BYTES / 1024**3:.3g} GiB of seeds and results, more than "
+            f"the memory budget of {memory_budget_bytes() / 1024**3:.3g} GiB (TERRAWATT_MEMORY_BUDGET_BYTES); at most "
+            f"{memory_budget_bytes() // MC_SAMPLE_BYTES} missions")
     if not isinstance(terrain, TerrainMap):
         raise InvalidParameterError(f"terrain must be a TerrainMap, got {type(terrain).__name__!r}")
     if not isinstance(route, Route) or not route.found:
