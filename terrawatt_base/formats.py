@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from .atomic import write_json_atomic
-from .containers import read_npz
+from .containers import check_file_fits, read_npz
 from .errors import FileFormatError, FormatVersionError, InvalidParameterError
 
 __all__ = [
@@ -43,10 +43,11 @@ def check_format_version(found: Any, expected: int, what: str, path: str | os.Pa
     FormatVersionError
         Another version.
     """
-    try:
-        version = int(found)
-    except (TypeError, ValueError, OverflowError) as exc:  # missing, text, inf
-        raise FileFormatError(f"{what} file {str(path)!r} has no valid format version (got {found!r})") from exc
+    value = found.item() if isinstance(found, np.ndarray) and found.ndim == 0 else found  # a .npz entry
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        # 1.9, true, "1" or a missing entry are not version 1: never read a file as a version it does not name
+        raise FileFormatError(f"{what} file {str(path)!r} has no valid format version (an integer; got {found!r})")
+    version = int(value)
     if version != expected:
         raise FormatVersionError(
             f"{what} file {str(path)!r} has format version {version!r}; this terrawatt reads version {expected}"
@@ -215,6 +216,7 @@ def read_result_json(
     p = Path(path)
     if not p.is_file():
         raise FileFormatError(f"{what} file {str(p)!r} is missing (does not exist or is not a file)")
+    check_file_fits(p, f"{what} file {str(p)!r}", 8.0)  # parsed JSON takes several times its text
     try:
         data = json.loads(p.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:

@@ -140,11 +140,27 @@ def test_a_robot_file_gives_back_the_robot_and_names_what_is_wrong(tmp_path):
     (tmp_path / "future.json").write_text(json.dumps(document))
     with pytest.raises(FormatVersionError):
         read_robot_file(tmp_path / "future.json")
+    for odd in (1.9, True, "1", 1.0, None):  # never read as version 1 (issue 29)
+        document["format_version"] = odd
+        (tmp_path / "odd.json").write_text(json.dumps(document))
+        with pytest.raises(FileFormatError, match="no valid format version"):
+            read_robot_file(tmp_path / "odd.json")
     (tmp_path / "notes.json").write_text("{")
     with pytest.raises(FileFormatError, match="corrupt"):
         read_robot_file(tmp_path / "notes.json")
     with pytest.raises(FileFormatError, match="missing"):
         robot_params(tmp_path / "absent.json")
+
+
+def test_a_robot_file_larger_than_the_memory_budget_is_refused_before_it_is_read(tmp_path, monkeypatch):
+    from energy.params import read_robot_file, write_robot_file
+    from terrain import FileFormatError
+
+    path = write_robot_file(robot_preset("husky"), tmp_path / "big.json")
+    with open(path, "a") as fh:  # a sparse 8 GiB tail: nothing is allocated to make it
+        fh.truncate(8 * 1024**3)
+    with pytest.raises(FileFormatError, match="memory budget"):
+        read_robot_file(path)
 
 
 def test_robot_params_takes_presets_robots_and_robot_files_only():
