@@ -299,7 +299,8 @@ def csv_field_map(
         A field that is not one of :data:`CSV_FIELDS`, a unit for a field that is not mapped, an
         unknown unit.
     InvalidParameterError
-        ``columns`` or ``units`` not a mapping; a column name that is not a non-empty string.
+        ``columns`` or ``units`` not a mapping; a column name that is not a non-empty string; two
+        fields mapped to one column.
     """
     for what, value in (("columns", columns), ("units", units)):
         if value is not None and not isinstance(value, Mapping):
@@ -311,6 +312,11 @@ def csv_field_map(
     bad = {f: c for f, c in colmap.items() if not isinstance(c, str) or not c}
     if bad:
         raise InvalidParameterError(f"columns must map fields to non-empty column names, got {bad!r}")
+    shared = {c: sorted(f for f, col in colmap.items() if col == c) for c in set(colmap.values())}
+    shared = {c: fields for c, fields in shared.items() if len(fields) > 1}
+    if shared:
+        raise InvalidParameterError(f"columns maps several fields to one column: {shared!r}; each field needs its "
+                                    "own column")
     units = dict(units or {})
     unknown = [f for f in units if f not in colmap or f == "ground"]
     if unknown:

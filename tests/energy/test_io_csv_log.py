@@ -102,7 +102,7 @@ def test_generic_csv_bad_maps():
     with pytest.raises(DataError, match=r"missing column\(s\) \['nope'\]"):
         read_csv_log(GENERIC, {**GENERIC_COLUMNS, "accel_z": "nope"}, GENERIC_UNITS)
     with pytest.raises(InvalidParameterError, match="all of x, y, heading or none"):
-        read_csv_log(GENERIC, {**GENERIC_COLUMNS, "x": "cmd_v"}, GENERIC_UNITS)
+        read_csv_log(GENERIC, {**GENERIC_COLUMNS, "x": "pose_x"}, GENERIC_UNITS)
 
 
 def test_generic_csv_wheel_speeds(tmp_path):

@@ -261,6 +261,8 @@ def test_a_csv_of_another_layout_without_its_map_says_how_to_give_one(tmp_path):
 @pytest.mark.parametrize(("kwargs", "error", "match"), [
     ({"columns": {"tim": "t"}}, UnknownNameError, r"unknown field\(s\) \['tim'\]"),
     ({"columns": {"time": ""}}, InvalidParameterError, "non-empty column names"),
+    ({"columns": {"time": "t", "current_left": "i", "current_right": "i"}}, InvalidParameterError,
+     r"several fields to one column: \{'i': \['current_left', 'current_right'\]\}"),
     ({"columns": {"time": "t"}, "units": {"v": "m/s"}}, UnknownNameError, r"field\(s\) \['v'\] that are not"),
     ({"columns": {"time": "t"}, "units": {"time": "fortnights"}}, UnknownNameError, "unit 'fortnights'"),
     ({"units": {"time": "ms"}}, InvalidParameterError, "units need columns"),
