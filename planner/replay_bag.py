@@ -196,14 +196,6 @@ def _check_forecasts(forecasts: Any) -> dict[str, np.ndarray]:
     return out
 
 
-def _plain(obj: Any) -> Any:
-    """numpy arrays and scalars as JSON values (NaN as null)."""
-    tolist = getattr(obj, "tolist", None)
-    if callable(tolist):
-        return json_finite(tolist())
-    raise TypeError(f"{type(obj).__name__} is not JSON-able")
-
-
 def _check_decisions(decisions: Any) -> list[tuple[float, str]]:
     out = []
     for i, (t, decision) in enumerate(_pairs("decisions", decisions)):
@@ -211,7 +203,7 @@ def _check_decisions(decisions: Any) -> list[tuple[float, str]]:
             raise InvalidParameterError(f"decisions[{i}][1] must be a dict (Decision.to_dict()), "
                                         f"got {type(decision).__name__!r}")
         try:
-            text = json.dumps(json_finite(dict(decision)), allow_nan=False, default=_plain)
+            text = json.dumps(json_finite(dict(decision)), allow_nan=False)
         except (TypeError, ValueError) as exc:
             raise InvalidParameterError(f"decisions[{i}][1] is not JSON-able: {exc}") from exc
         out.append((t, text))

@@ -24,6 +24,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import IO, Any
 
+import numpy as np
+
 __all__ = [
     "FILE_MODE",
     "DIR_MODE",
@@ -347,11 +349,18 @@ def _json_default(obj: Any) -> Any:
 
 
 def json_finite(obj: Any) -> Any:
-    """``obj`` with NaN and infinities as ``None`` (JSON has no such numbers) and tuples as lists, ready for JSON."""
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
+    """``obj`` ready for JSON: NaN and infinities as ``None`` (JSON has no such numbers), tuples and numpy
+    arrays as lists, numpy scalars as plain numbers and booleans."""
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if math.isfinite(obj) else None
     if isinstance(obj, dict):
         return {k: json_finite(v) for k, v in obj.items()}
+    if isinstance(obj, np.ndarray):
+        return json_finite(obj.tolist())
     if isinstance(obj, (list, tuple)):
         return [json_finite(v) for v in obj]
     return obj

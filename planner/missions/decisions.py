@@ -21,13 +21,12 @@ shown so far (the in-run gain), with a central interval and the value at the ris
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
 
 from energy import CommandProfile
+from terrawatt_base.atomic import json_finite
 
 from ..route import Route
 
@@ -35,17 +34,6 @@ __all__ = ["NAVIGATOR_ACTIONS", "RemainingForecast", "ManoeuvreRequest", "Decisi
 
 #: What a :class:`Decision` asks the robot to do.
 NAVIGATOR_ACTIONS = ("continue", "new_route", "manoeuvre", "return", "stop", "arrived")
-
-
-def _num(x: Any) -> Any:
-    """A JSON-able number (non-finite: None)."""
-    if isinstance(x, (bool, np.bool_)):
-        return bool(x)
-    if isinstance(x, (int, np.integer)):
-        return int(x)
-    if isinstance(x, (float, np.floating)):
-        return float(x) if math.isfinite(x) else None
-    return x
 
 
 @dataclass(frozen=True)
@@ -104,7 +92,7 @@ class RemainingForecast:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-able values."""
-        return {k: _num(v) for k, v in vars(self).items()}
+        return {k: json_finite(v) for k, v in vars(self).items()}
 
 
 @dataclass(frozen=True, eq=False)
@@ -142,8 +130,8 @@ class ManoeuvreRequest:
         """Plain JSON-able values (the commands as lists)."""
         return {
             "request_id": self.request_id, "ground": self.ground, "region_cells": self.region_cells,
-            "xy_m": [_num(v) for v in self.xy_m], "duration_s": _num(self.duration_s),
-            "estimated_energy_j": _num(self.estimated_energy_j), "purpose": self.purpose,
+            "xy_m": [json_finite(v) for v in self.xy_m], "duration_s": json_finite(self.duration_s),
+            "estimated_energy_j": json_finite(self.estimated_energy_j), "purpose": self.purpose,
             "profiles": [{"time_s": p.time_s.tolist(), "v_mps": p.v_mps.tolist(),
                           "omega_radps": p.omega_radps.tolist()} for p in self.profiles],
         }
@@ -189,8 +177,8 @@ class Decision:
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-able values (the route as its waypoints and summary; the manoeuvre without its commands)."""
         out: dict[str, Any] = {
-            "action": self.action, "reason": self.reason, "time_s": _num(self.time_s),
-            "xy_m": [_num(v) for v in self.xy_m], "checkpoint": self.checkpoint,
+            "action": self.action, "reason": self.reason, "time_s": json_finite(self.time_s),
+            "xy_m": [json_finite(v) for v in self.xy_m], "checkpoint": self.checkpoint,
             "forecast": None if self.forecast is None else self.forecast.to_dict(),
             "route": None if self.route is None else {"summary": self.route.summary(),
                                                       "waypoints_m": self.route.waypoints_m.tolist()},

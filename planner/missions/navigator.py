@@ -309,8 +309,7 @@ class Navigator(RegionUpdates):
                 f"manoeuvre request {self.request.request_id} waits for its answer: observe_manoeuvre(logs) or "
                 "decline_manoeuvre()")
         log = observation_log(chunk, self.terrain, previous_time_s=None if math.isnan(self.time_s) else self.time_s,
-                              name=f"chunk {self.n_chunks}", robot=self.robot.name if hasattr(self.robot, "name")
-                              else "unknown")
+                              name=f"chunk {self.n_chunks}", robot=self.robot.name)
         if self.phase == "finished":  # the battery still pays for what the robot does; nothing is learned
             self._book(log, None, None, driving=True)
             self.position_xy_m = log.pose_xyh[-1, :2].copy()

@@ -30,7 +30,7 @@ import numpy as np
 
 from energy import Battery, CommandProfile, GroundParams, InteractionLog, LogMeta, RobotParams, load_current_model
 from terrain import CellModelRegistry, FileFormatError, FlaggedRegion, InvalidParameterError, TerrainMap, UpdatePolicy
-from terrawatt_base.atomic import atomic_directory, check_output_path
+from terrawatt_base.atomic import atomic_directory, check_output_path, json_finite
 from terrawatt_base.containers import read_npz
 from terrawatt_base.formats import read_result_json, result_document, write_result_json
 
@@ -52,20 +52,6 @@ _LOG_FIELDS = ("time_s", "v_mps", "omega_radps", "current_left_a", "current_righ
 _SCALARS = ("phase", "status", "reason", "returning", "heading_rad", "leg_start_heading_rad", "leg_start_time_s",
             "time_s", "update_wall", "leg_power_w", "n_chunks", "segment_j", "segment_m", "changed",
             "updates_at_checkpoint", "start_time_ns")
-
-
-def _plain(x: Any) -> Any:
-    if isinstance(x, (np.floating, float)):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    if isinstance(x, (np.bool_,)):
-        return bool(x)
-    if isinstance(x, (tuple, list)):
-        return [_plain(v) for v in x]
-    if isinstance(x, dict):
-        return {k: _plain(v) for k, v in x.items()}
-    return x
 
 
 def _num(x: Any) -> float:
@@ -123,20 +109,20 @@ def write_navigator_state(nav: Any, path: str | os.PathLike[str]) -> Path:
     queue = []
     for i, region in enumerate(nav.queue):
         arrays[f"queue{i}.rows"], arrays[f"queue{i}.cols"] = region.rows, region.cols
-        queue.append({f.name: _plain(getattr(region, f.name)) for f in fields(region) if f.name not in ("rows", "cols")})
+        queue.append({f.name: json_finite(getattr(region, f.name)) for f in fields(region) if f.name not in ("rows", "cols")})
     cfg = asdict(nav.settings)
     doc = result_document(_KIND, NAVIGATOR_FORMAT_VERSION, {
         "robot": nav.robot.to_plain(), "battery": asdict(nav.battery), "physics_ground": asdict(nav.physics_ground),
-        "settings": _plain(cfg), "depot_xy_m": None if nav.depot_xy_m is None else _plain(list(nav.depot_xy_m)),
-        "scalars": {name: _plain(getattr(nav, name)) for name in _SCALARS},
-        "charge": {name: _plain(getattr(nav.charge, name)) for name in nav.charge.SCALARS},
+        "settings": json_finite(cfg), "depot_xy_m": None if nav.depot_xy_m is None else json_finite(list(nav.depot_xy_m)),
+        "scalars": {name: json_finite(getattr(nav, name)) for name in _SCALARS},
+        "charge": {name: json_finite(getattr(nav.charge, name)) for name in nav.charge.SCALARS},
         "routes": routes, "has_tail": nav.tail is not None, "vibration_ids": sorted(nav.vibrations),
-        "pending": _plain(nav.pending), "observed": _plain(nav.observed), "pooled": _plain(list(nav.pooled)),
+        "pending": json_finite(nav.pending), "observed": json_finite(nav.observed), "pooled": json_finite(list(nav.pooled)),
         "class_samples": [[int(k), int(v)] for k, v in sorted(nav.class_samples.items())],
-        "legs": [_plain(vars(r)) for r in nav.legs], "updates": [_plain(vars(r)) for r in nav.updates],
-        "replans": [_plain(vars(r)) for r in nav.replans], "skipped": list(nav.skipped),
+        "legs": [json_finite(vars(r)) for r in nav.legs], "updates": [json_finite(vars(r)) for r in nav.updates],
+        "replans": [json_finite(vars(r)) for r in nav.replans], "skipped": list(nav.skipped),
         "validated": sorted([list(p) for p in nav.validated]), "decisions": nav.decisions,
-        "checkpoint_evidence": _plain(nav.checkpoint_evidence), "queue": queue,
+        "checkpoint_evidence": json_finite(nav.checkpoint_evidence), "queue": queue,
         "request": None if nav.request is None else nav.request.to_dict(), "logs": metas,
         "draw_parts": len(nav.charge.draw), "has_search": nav.replanner is not None,
     })
