@@ -10,6 +10,7 @@ from __future__ import annotations
 import concurrent.futures
 import contextlib
 import logging
+import threading
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
@@ -133,9 +134,19 @@ def _connect(client_class: Any, scheduler: str, timeout_s: float, s_flag: str) -
     dask's own start-up).
     """
     advice = "expected the address of a running dask scheduler, e.g. tcp://host:8786"
-    pool = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="terrawatt-dask-connect")
-    future = pool.submit(client_class, scheduler, timeout=timeout_s)
-    pool.shutdown(wait=False)  # never join a thread stuck in a handshake
+    future: concurrent.futures.Future = concurrent.futures.Future()
+
+    def connect() -> None:
+        if not future.set_running_or_notify_cancel():
+            return
+        try:
+            future.set_result(client_class(scheduler, timeout=timeout_s))
+        except BaseException as exc:  # handed to the waiting caller, never lost in the thread
+            future.set_exception(exc)
+
+    # a daemon thread, never a pool's worker: an executor's threads are joined at interpreter
+    # exit, so a thread stuck in a handshake would keep the process alive after the error
+    threading.Thread(target=connect, name="terrawatt-dask-connect", daemon=True).start()
     try:
         return future.result(timeout=timeout_s + 2.0)
     except concurrent.futures.TimeoutError as exc:

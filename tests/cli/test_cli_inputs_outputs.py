@@ -149,3 +149,32 @@ def test_messages_show_plain_numbers_not_numpy_reprs(tmp_path, capsys, monkeypat
     monkeypatch.setattr(plan_cli, "_run", bad)
     assert main(["demo", "--out", str(tmp_path / "o")]) == EXIT_BAD_INPUT
     assert "speed 10.0 too high" in _err(capsys)
+
+
+def test_batch_against_a_server_that_never_speaks_fails_and_the_process_exits(tmp_path):
+    """A scheduler address that accepts the connection and never answers: exit 2 with one line, and the process
+    ends (the abandoned connect thread must not be joined at interpreter exit)."""
+    import socket
+    import subprocess
+    import sys
+
+    pairs = tmp_path / "pairs.csv"
+    pairs.write_text("name,start_x_m,start_y_m,goal_x_m,goal_y_m\na,10,10,150,150\n")
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen(4)  # the kernel completes the TCP handshake; nobody ever reads or writes
+        address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+        # the CLI as a user runs it, with the connect deadline shortened from 10 s to keep the test fast
+        code = (
+            "import sys, terrawatt_base.dask_client as d; d.dask_client.__wrapped__.__kwdefaults__['timeout_s'] = 0.5; "
+            "from terrawatt_cli import main; sys.exit(main(sys.argv[1:]))"
+        )
+        argv = ["batch", "--map", "example", "--pairs", str(pairs), "--out", str(tmp_path / "o"),
+                "--no-progress", "--scheduler", address]
+        try:
+            done = subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True, timeout=60)
+        except subprocess.TimeoutExpired:
+            pytest.fail("the CLI process did not exit after failing to reach a silent scheduler")
+    assert done.returncode == EXIT_BAD_INPUT, done.stderr
+    assert "no dask scheduler answered within 0.5 s" in done.stderr
+    assert "Traceback" not in done.stderr
