@@ -108,6 +108,11 @@ def routes_geojson(
         _route_fields(route, f"route {name!r}")
         wp = np.asarray(route.waypoints_m, dtype=float)
         xy = wp if out_crs is None or out_crs == map_crs else transform_xy(wp, map_crs, out_crs)
+        if not np.all(np.isfinite(xy)):
+            raise InvalidParameterError(
+                f"route {name!r} leaves the domain of the output CRS {text!r}: a waypoint has no coordinates there; "
+                "write it in the map's CRS or in WGS 84"
+            )
         coords = xy.tolist()
         if isinstance(where, TerrainMap):
             z = np.atleast_1d(where.sample("elevation", wp[:, 0], wp[:, 1], method="bilinear"))

@@ -215,6 +215,9 @@ def utm_crs(lon_deg: float, lat_deg: float) -> str:
 def transform_xy(xy: Any, src_crs: Any, dst_crs: Any) -> np.ndarray:
     """Points ``(N, 2)`` from one CRS to another (:func:`rasterio.warp.transform`).
 
+    A point the target CRS cannot express (outside a projection's domain) comes back as
+    ``(nan, nan)``; callers that need every point check for it and say which.
+
     Raises
     ------
     InvalidParameterError
@@ -228,8 +231,20 @@ def transform_xy(xy: Any, src_crs: Any, dst_crs: Any) -> np.ndarray:
     dst = parse_crs(dst_crs, "dst_crs") if isinstance(dst_crs, str) else dst_crs
     if pts.shape[0] == 0:
         return pts
-    xs, ys = rasterio.warp.transform(src, dst, pts[:, 0].tolist(), pts[:, 1].tolist())
+    try:
+        xs, ys = rasterio.warp.transform(src, dst, pts[:, 0].tolist(), pts[:, 1].tolist())
+    except Exception:  # noqa: BLE001 - GDAL refuses the whole batch for one point outside the projection's domain
+        return np.array([_transform_one(rasterio, src, dst, p) for p in pts], dtype=float).reshape(-1, 2)
     return np.column_stack([np.asarray(xs, float), np.asarray(ys, float)])
+
+
+def _transform_one(rasterio: Any, src: Any, dst: Any, point: np.ndarray) -> tuple[float, float]:
+    """One point through :func:`rasterio.warp.transform`; ``(nan, nan)`` where the CRS cannot express it."""
+    try:
+        (x,), (y,) = rasterio.warp.transform(src, dst, [float(point[0])], [float(point[1])])
+    except Exception:  # noqa: BLE001 - GDAL's CPLE errors: "Point outside of projection domain"
+        return math.nan, math.nan
+    return float(x), float(y)
 
 
 def _require_crs(crs: Any, what: str) -> Any:
@@ -306,7 +321,8 @@ def xy_to_lonlat(x_m: Any, y_m: Any, crs: Any, *, what: str = "the map") -> tupl
     Raises
     ------
     InvalidParameterError
-        ``crs`` is None (a map without CRS) or not understood; coordinates not finite.
+        ``crs`` is None (a map without CRS) or not understood; coordinates not finite or outside
+        the projection's domain.
 
     Examples
     --------
@@ -317,6 +333,12 @@ def xy_to_lonlat(x_m: Any, y_m: Any, crs: Any, *, what: str = "the map") -> tupl
     src = _require_crs(crs, what)
     x, y = np.broadcast_arrays(real_array("x_m", x_m), real_array("y_m", y_m))
     ll = transform_xy(np.column_stack([x.ravel(), y.ravel()]), src, WGS84)
+    if not np.all(np.isfinite(ll)):
+        i = int(np.flatnonzero(~np.all(np.isfinite(ll), axis=1))[0])
+        raise InvalidParameterError(
+            f"point ({fmt_number(float(x.ravel()[i]), 10)}, {fmt_number(float(y.ravel()[i]), 10)}) of {what}'s CRS "
+            f"{src.to_string()!r} has no longitude / latitude (outside the projection's domain)"
+        )
     if x.ndim == 0:
         return float(ll[0, 0]), float(ll[0, 1])
     return ll[:, 0].reshape(x.shape), ll[:, 1].reshape(x.shape)

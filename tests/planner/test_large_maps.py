@@ -13,6 +13,7 @@ from terrain import (
     NodataError,
     UnknownNameError,
     iter_surface_windows,
+    lonlat_to_xy,
     procedural_map,
     read_geotiff,
     read_map,
@@ -21,6 +22,7 @@ from terrain import (
     utm_crs,
     windowed_surface,
     write_geotiff,
+    xy_to_lonlat,
 )
 
 rasterio = pytest.importorskip("rasterio", reason="GeoTIFF support needs the geo extra (rasterio)")
@@ -240,3 +242,18 @@ def test_every_map_taking_command_reprojects_a_geographic_dem(tmp_path, capsys):
         rc = main(argv + ["--reproject", "utm", "--out", str(tmp_path / "o")])
         err = capsys.readouterr().err
         assert rc == 2 and "--reproject and --cell-size go together" in err, (argv[0], err)
+
+
+def test_a_point_outside_the_projections_domain_is_named_not_a_gdal_error():
+    """(0, 0) lies 99 degrees of longitude from UTM zone 14's central meridian: GDAL refuses the whole batch;
+    the other points still transform and the bad one comes back NaN, then a clear error by lon/lat."""
+    xy = transform_xy([[-99.0, 35.0], [0.0, 0.0]], "EPSG:4326", "EPSG:32614")
+    assert np.all(np.isfinite(xy[0])) and np.all(np.isnan(xy[1]))
+    np.testing.assert_allclose(xy[0], transform_xy([[-99.0, 35.0]], "EPSG:4326", "EPSG:32614")[0])
+    with pytest.raises(InvalidParameterError, match=r"\(0, 0\) cannot be expressed in the map's CRS 'EPSG:32614'"):
+        lonlat_to_xy(0.0, 0.0, "EPSG:32614")
+
+
+def test_a_map_point_without_longitude_latitude_is_named():
+    with pytest.raises(InvalidParameterError, match=r"\(1e\+300, 0\) of the map's CRS 'EPSG:32614' has no longitude"):
+        xy_to_lonlat(1e300, 0.0, "EPSG:32614")
