@@ -12,7 +12,7 @@ import numpy as np
 from scipy import ndimage
 
 from terrawatt_base.atomic import atomic_path
-from terrawatt_base.containers import memory_budget_bytes
+from terrawatt_base.containers import memory_limit_bytes, over_budget_message
 from terrawatt_base.errors import (
     DataRepairWarning,
     FileFormatError,
@@ -126,13 +126,11 @@ def read_geotiff(
         with rasterio.open(path) as src:
             info = dem_band(src, band, where, allow_geographic=reproject_to is not None)
             need = int(src.width) * int(src.height) * 17  # float64 values + the mask + float64 workspace
-            if need > memory_budget_bytes():
-                raise FileFormatError(
-                    f"{where} declares {src.width} x {src.height} cells ({need / 1024**3:.3g} GiB to read whole), "
-                    f"more than the memory budget of {memory_budget_bytes() / 1024**3:.3g} GiB "
-                    "(TERRAWATT_MEMORY_BUDGET_BYTES); read it by windows: terrain.iter_surface_windows, or "
-                    "terrawatt plan --windowed --coarse-factor F"
-                )
+            if need > memory_limit_bytes():
+                raise FileFormatError(over_budget_message(
+                    where, f"its {src.width} x {src.height} cells read whole", need,
+                    advice="read it by windows: terrain.iter_surface_windows, or terrawatt plan --windowed "
+                           "--coarse-factor F"))
             if reproject_to is None:
                 data = src.read(info.band, masked=True)
                 values = np.ma.getdata(data).astype(np.float64)  # in place from here: big DEMs

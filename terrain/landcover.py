@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from terrawatt_base.containers import memory_budget_bytes
+from terrawatt_base.containers import memory_limit_bytes, over_budget_message
 from terrawatt_base.errors import FileFormatError, InvalidParameterError
 from .georef import import_rasterio, lonlat_bounds, parse_crs
 from .terrain_map import TerrainMap
@@ -231,7 +231,7 @@ def ground_classes_from_landcover(
       ``unknown_ground`` (``--unknown-ground``).
 
     Only the window of the raster around the map is read, and it must fit the memory budget
-    (:func:`terrawatt_base.containers.memory_budget_bytes`), so a continental tile can serve a
+    (:func:`terrawatt_base.containers.memory_limit_bytes`), so a continental tile can serve a
     small map.
 
     Parameters
@@ -285,12 +285,10 @@ def ground_classes_from_landcover(
             window = _window(src, transform_bounds(map_crs, src.crs, *tmap.bounds, densify_pts=21), where, tmap)
             (r0, r1), (c0, c1) = window
             need = (r1 - r0) * (c1 - c0) * (np.dtype(src.dtypes[band - 1]).itemsize + 1 + 8 + 2)
-            if need > memory_budget_bytes():
-                raise FileFormatError(
-                    f"{where}: the {r1 - r0} x {c1 - c0} cells around the map need {need / 1024**3:.3g} GiB to read, "
-                    f"more than the memory budget of {memory_budget_bytes() / 1024**3:.3g} GiB "
-                    "(TERRAWATT_MEMORY_BUDGET_BYTES); resample the land cover to a coarser grid first (gdalwarp -tr)"
-                )
+            if need > memory_limit_bytes():
+                raise FileFormatError(over_budget_message(
+                    where, f"the {r1 - r0} x {c1 - c0} cells around the map", need,
+                    advice="resample the land cover to a coarser grid first (gdalwarp -tr)"))
             win = rasterio.windows.Window(c0, r0, c1 - c0, r1 - r0)
             data = src.read(band, window=win, masked=True)
             src_transform, src_crs = src.window_transform(win), src.crs

@@ -33,7 +33,7 @@ import numpy as np
 
 from .errors import FileFormatError, InvalidParameterError
 
-__all__ = ["MEMORY_BUDGET_BYTES", "memory_budget_bytes", "check_zip_sizes", "check_file_fits", "read_zip_entry",
+__all__ = ["MEMORY_BUDGET_BYTES", "memory_budget_bytes", "memory_limit_bytes", "physical_memory_bytes", "check_zip_sizes", "check_file_fits", "read_zip_entry",
            "load_npy", "read_npz", "over_budget_message"]
 
 #: Default memory budget of one container's content (bytes): 4 GiB.
@@ -62,14 +62,50 @@ def memory_budget_bytes() -> int:
     return int(text)
 
 
+def physical_memory_bytes() -> int | None:
+    """This machine's physical memory (bytes), or ``None`` where the system does not say."""
+    try:
+        pages, page = os.sysconf("SC_PHYS_PAGES"), os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):  # not POSIX, or the names are unknown here
+        return None
+    return int(pages) * int(page) if pages > 0 and page > 0 else None
+
+
+def memory_limit_bytes() -> int:
+    """What one reading may take: the budget (:func:`memory_budget_bytes`), but never more than this
+    machine's physical memory: a budget raised past it lets a 40 GiB raster through only to die in
+    the middle of reading with MemoryError; the limit refuses it first (:func:`over_budget_message`
+    then names the machine's memory).
+
+    Raises
+    ------
+    InvalidParameterError
+        The budget variable is set to something that is not a positive whole number of bytes.
+    """
+    budget = memory_budget_bytes()
+    physical = physical_memory_bytes()
+    return budget if physical is None else min(budget, physical)
+
+
 def _gib(n: int) -> str:
     return f"{n / 1024**3:.3g} GiB" if n >= 1024**2 else f"{n} bytes"
 
 
-def over_budget_message(where: str, what: str, need: int, budget: int) -> str:
-    """One message for every reader: what would not fit, the budget and how to raise it."""
-    return (f"{where}: {what} would take about {_gib(need)} in memory, more than the memory budget of {_gib(budget)}; "
-            "read a smaller file, or raise the budget with the environment variable TERRAWATT_MEMORY_BUDGET_BYTES")
+def over_budget_message(where: str, what: str, need: int, limit: int | None = None, advice: str | None = None) -> str:
+    """One message for every reader: what would not fit, the limit it passes and what to do.
+
+    ``limit`` is the one that was checked (by default :func:`memory_limit_bytes`); where it is the
+    machine's physical memory rather than the budget, the message says so, since raising the budget
+    cannot help. ``advice`` replaces the default ("read a smaller file").
+    """
+    limit = memory_limit_bytes() if limit is None else limit
+    physical = physical_memory_bytes()
+    todo = advice or "read a smaller file"
+    if physical is not None and limit >= physical:
+        return (f"{where}: {what} would take about {_gib(need)} in memory, more than this machine has "
+                f"({_gib(physical)}); {todo}")
+    return (f"{where}: {what} would take about {_gib(need)} in memory, more than the memory budget of {_gib(limit)}; "
+            f"{todo}, or raise the budget with the environment variable TERRAWATT_MEMORY_BUDGET_BYTES")
 
 
 def check_file_fits(path: str | os.PathLike[str], where: str, expansion: float, what: str = "reading it") -> int:
@@ -84,10 +120,10 @@ def check_file_fits(path: str | os.PathLike[str], where: str, expansion: float, 
         size = os.stat(path).st_size
     except OSError as exc:
         raise FileFormatError(f"cannot read {where}: {exc.strerror or exc}") from exc
-    budget = memory_budget_bytes()
-    if size * expansion > budget:
+    limit = memory_limit_bytes()
+    if size * expansion > limit:
         raise FileFormatError(over_budget_message(where, f"{what} ({_gib(size)} on disk)", int(size * expansion),
-                                                  budget))
+                                                  limit))
     return size
 
 
@@ -99,7 +135,7 @@ def check_zip_sizes(archive: zipfile.ZipFile, where: str, budget: int | None = N
     FileFormatError
         Naming the file, the entry and both sizes.
     """
-    limit = memory_budget_bytes() if budget is None else budget
+    limit = memory_limit_bytes() if budget is None else budget
     total = 0
     for info in archive.infolist():
         if info.file_size > limit:

@@ -63,6 +63,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (TerrawattError, OSError) as exc:
         print(f"terrawatt: error: {plain_message(str(exc))}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except MemoryError:  # what no size check foresaw (other programs took the memory meanwhile)
+        print("terrawatt: error: this machine ran out of memory for the inputs given; use smaller inputs (a smaller "
+              "map, --windowed, fewer missions) or free memory", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except Exception as exc:  # noqa: BLE001 - the last line of defence: a bug, said so
         if args.verbose:
             traceback.print_exc()

@@ -9,7 +9,7 @@ from typing import Any
 import numpy as np
 
 from terrawatt_base.checks import fmt_number
-from terrawatt_base.containers import memory_budget_bytes, over_budget_message
+from terrawatt_base.containers import memory_limit_bytes, over_budget_message
 from terrawatt_base.errors import DataError, FileFormatError, OptionalDependencyError
 
 __all__ = [
@@ -83,7 +83,7 @@ def read_messages(bag: Path, wanted: tuple[str, ...], optional: tuple[str, ...] 
                 raise DataError(f"{bag}: topic(s) {missing!r} not in the bag; it has {available!r}")
             raw: Messages = {t: [] for t in (*wanted, *optional) if t in available}
             conns = [c for c in reader.connections if c.topic in raw]
-            budget = memory_budget_bytes()
+            budget = memory_limit_bytes()
             limit = budget // BAG_MESSAGE_BYTES
             declared = sum(int(getattr(c, "msgcount", 0) or 0) for c in conns)
             if declared > limit:

@@ -21,7 +21,7 @@ import numpy as np
 from energy import GROUND_PRESETS, Battery, GroundParams, RobotParams, TruthSimulator, ground_preset
 from energy.params import robot_params
 from terrain import TerrainMap
-from terrawatt_base.containers import memory_budget_bytes
+from terrawatt_base.containers import memory_limit_bytes, over_budget_message
 from terrawatt_base.checks import check_bool, check_int, check_real, check_seed
 from terrawatt_base.dask_client import check_client, client_worker_count, dask_client
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
@@ -199,11 +199,11 @@ def simulate_missions_mc(
         print(mc.summary()); mc.plot("mc.png")
     """
     n = check_int("n", n, low=1)
-    if n * MC_SAMPLE_BYTES > memory_budget_bytes():  # before a seed is spawned: a billion would exhaust memory
-        raise InvalidParameterError(
-            f"n={n} missions would hold about {n * MC_SAMPLE_BYTES / 1024**3:.3g} GiB of seeds and results, more than "
-            f"the memory budget of {memory_budget_bytes() / 1024**3:.3g} GiB (TERRAWATT_MEMORY_BUDGET_BYTES); at most "
-            f"{memory_budget_bytes() // MC_SAMPLE_BYTES} missions")
+    limit = memory_limit_bytes()
+    if n * MC_SAMPLE_BYTES > limit:  # before a seed is spawned: a billion would exhaust memory
+        raise InvalidParameterError(over_budget_message(
+            f"n={n} missions", "their seeds and results", n * MC_SAMPLE_BYTES, limit,
+            advice=f"run at most {limit // MC_SAMPLE_BYTES} missions"))
     if not isinstance(terrain, TerrainMap):
         raise InvalidParameterError(f"terrain must be a TerrainMap, got {type(terrain).__name__!r}")
     if not isinstance(route, Route) or not route.found:

@@ -97,6 +97,16 @@ def test_an_internal_error_exits_3_with_one_line_and_the_traceback_under_v(tmp_p
     assert "Traceback" in capsys.readouterr().err
 
 
+def test_running_out_of_memory_is_said_as_such_not_as_a_bug(tmp_path, capsys, monkeypatch):
+    def exhausted(*args, **kwargs):
+        raise MemoryError
+
+    monkeypatch.setattr(plan_cli, "_run", exhausted)
+    assert main(["demo", "--out", str(tmp_path / "o")]) == EXIT_BAD_INPUT
+    err = _err(capsys)
+    assert "ran out of memory" in err and "internal error" not in err
+
+
 def test_help_lists_the_exit_codes():
     text = build_parser().format_help()
     for code, meaning in EXIT_CODES.items():

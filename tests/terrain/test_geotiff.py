@@ -289,7 +289,7 @@ def test_a_complex_valued_dem_is_refused(rasterio, tmp_path):
         TerrainMap(data, 1.0)
 
 
-def test_a_sparse_dem_declaring_more_cells_than_memory_is_refused_before_reading(rasterio, tmp_path):
+def test_a_sparse_dem_declaring_more_cells_than_memory_is_refused_before_reading(rasterio, tmp_path, monkeypatch):
     path = tmp_path / "huge.tif"
     profile = dict(driver="GTiff", height=200_000, width=200_000, count=1, dtype="float32", tiled=True,
                    blockxsize=256, blockysize=256, sparse_ok=True, compress="deflate",
@@ -297,8 +297,15 @@ def test_a_sparse_dem_declaring_more_cells_than_memory_is_refused_before_reading
     with rasterio.open(path, "w", **profile):
         pass  # nothing written: a few kB declaring 4 * 10**10 cells
     assert path.stat().st_size < 5_000_000
-    with pytest.raises(FileFormatError, match=r"declares 200000 x 200000 cells .* more than the memory budget"):
+    with pytest.raises(FileFormatError, match=r"its 200000 x 200000 cells read whole .* more than the memory budget"):
         read_geotiff(path)
+    # a budget raised past what the machine has cannot let it through to die with MemoryError midway
+    with monkeypatch.context() as m:
+        m.setenv("TERRAWATT_MEMORY_BUDGET_BYTES", str(2**62))
+        m.setattr("terrawatt_base.containers.physical_memory_bytes", lambda: 24 * 1024**3)
+        with pytest.raises(FileFormatError, match=r"would take about 633 GiB in memory, more than this machine has "
+                                                  r"\(24 GiB\); read it by windows"):
+            read_geotiff(path)
 
 
 def test_values_that_cannot_be_elevations_are_refused():

@@ -179,7 +179,7 @@ def test_only_the_window_around_the_map_is_read(rasterio, tmp_path, utm_map, mon
     out = ground_classes_from_landcover(utm_map, path, MAPPING)
     assert (out.ground == out.ground_id("grass")).all()
     monkeypatch.setenv("TERRAWATT_MEMORY_BUDGET_BYTES", "2000")
-    with pytest.raises(FileFormatError, match=r"the \d+ x \d+ cells around the map need .* than the memory budget"):
+    with pytest.raises(FileFormatError, match=r"the \d+ x \d+ cells around the map would take .* than the memory budget"):
         ground_classes_from_landcover(utm_map, path, MAPPING)
 
 
