@@ -46,7 +46,7 @@ from terrawatt_base.errors import DataError, InvalidParameterError
 from ..logs import InteractionLog
 from .base import CurrentModel, ModelRecord, TrainingSummary, check_logs, log_currents
 from .forecast import CurrentForecast
-from .uncertainty import regime_design
+from .uncertainty import MAX_RUN_VARIANCE, check_covariances, regime_design
 from .loading import model_class
 
 __all__ = [
@@ -429,5 +429,9 @@ class AdaptedCurrentModel(CurrentModel):
             raise ValueError(f"noise_ratio must be finite and > 0, got {self.noise_ratio_!r}")
         if self.method == "bayes" and (self.posterior_cov_ is None or self.posterior_cov_.shape != (2, 8, 8)):
             raise ValueError("a 'bayes' update needs its (2, 8, 8) posterior covariance")
+        if self.posterior_cov_ is not None:
+            check_covariances("posterior_cov", self.posterior_cov_, MAX_RUN_VARIANCE)
+        if self.noise_ratio_ > 1e6:
+            raise ValueError(f"noise_ratio {self.noise_ratio_:.3g} is beyond any plausible one (at most 1e6)")
         if not math.isfinite(self.adapted_on_s_):
             raise ValueError("non-finite adapted_on_s")

@@ -61,6 +61,29 @@ _MIN_GROUND_RUNS = 3  # a ground's own run covariance needs this many runs, else
 _MAX_LAGS = 50  # lags (drive samples) of the per-sample residual's autocorrelation (~8 s at 6.5 Hz)
 
 
+#: Largest variance a run-level regime coefficient may have in a saved model: a gain sd of 1000
+#: or an offset sd of 1000 A is already no forecast; a file beyond it is corrupt or hostile.
+MAX_RUN_VARIANCE = 1e6
+#: Largest per-sample spread of a saved model (A).
+MAX_SAMPLE_SD_A = 1e3
+
+
+def check_covariances(name: str, cov: np.ndarray, max_variance: float) -> None:
+    """Raise ValueError unless every ``cov[s]`` (per side) is a symmetric positive semi-definite matrix whose
+    variances are at most ``max_variance``: negative, negated or ×1e30 variances mean nothing as a spread (a
+    negated one *narrows* the interval it should widen; a huge one prints negative energies)."""
+    for s, c in enumerate(cov):
+        scale = max(float(np.max(np.abs(c))), 1e-300)
+        if not np.allclose(c, c.T, rtol=1e-9, atol=1e-12 * scale):
+            raise ValueError(f"{name}[{s}] is not symmetric: not a covariance")
+        if np.any(np.diag(c) < 0) or float(np.linalg.eigvalsh(c).min()) < -1e-9 * scale:
+            raise ValueError(f"{name}[{s}] has a negative variance (it is not positive semi-definite): a spread cannot "
+                             "be negative")
+        if float(np.max(np.diag(c))) > max_variance:
+            raise ValueError(f"{name}[{s}] has a variance of {float(np.max(np.diag(c))):.3g}, beyond any plausible "
+                             f"spread (at most {max_variance:g})")
+
+
 def regime_design(log: InteractionLog, side: int, turn_scale_radps: float, level_a: np.ndarray) -> np.ndarray:
     """``[|I|, 1, m, m * outer]`` per moving sample for one side (0 left, 1 right), zero at rest; shape (N, 4).
 
@@ -267,6 +290,7 @@ class IntervalModel:
             arr = np.asarray(value, dtype=np.float64)
             if arr.shape != (2, k, k) or not np.all(np.isfinite(arr)):
                 raise ValueError(f"{name} must be a finite (2, {k}, {k}) array")
+            check_covariances(name, arr, MAX_RUN_VARIANCE)
             return arr
 
         run_cov = {str(g): cov(f"run_cov[{g}]", v) for g, v in dict(d["run_cov"]).items()}
@@ -276,8 +300,14 @@ class IntervalModel:
         sd = np.asarray(d["sample_sd_a"], dtype=np.float64)
         if sd.shape != (2, len(SAMPLE_REGIMES)) or not np.all(np.isfinite(sd)) or np.any(sd < 0):
             raise ValueError("sample_sd_a must be a finite non-negative (2, 3) array")
+        if np.any(sd > MAX_SAMPLE_SD_A):
+            raise ValueError(f"sample_sd_a holds {float(sd.max()):.3g} A, more than a drive current's plausible spread "
+                             f"({MAX_SAMPLE_SD_A:g} A): not the spread of a current model")
         scale, corr = float(d["turn_scale_radps"]), float(d["correlation_s"])
         if not (math.isfinite(scale) and scale > 0 and math.isfinite(corr) and corr > 0):
             raise ValueError("turn_scale_radps and correlation_s must be finite and > 0")
+        if scale > 100.0 or corr > 3600.0:
+            raise ValueError(f"turn_scale_radps {scale:.3g} rad/s or correlation_s {corr:.3g} s is beyond any robot's "
+                             "(at most 100 rad/s and 3600 s)")
         return cls(scale, run_cov, None if new is None else cov("new_ground_cov", new), sd, corr,
                    check_bool("cross_validated", d["cross_validated"]), check_int("n_runs", d["n_runs"], low=0))

@@ -31,3 +31,42 @@ def test_fit_interval_gives_any_model_a_cross_validated_interval(tmp_path):
         fit_interval(LinearCurrentModel(), logs[:1])
     with pytest.raises(InvalidParameterError):
         fit_interval(adapted, logs)
+
+
+def _fitted(tmp_path):
+    logs = [interval_log(s, "a", offset_a=0.3 * (s % 3)) for s in range(4)] + [interval_log(20 + s, "b", gain=1.3) for s in range(4)]
+    return fit_interval(LinearCurrentModel(), logs, folds=2), logs
+
+
+@pytest.mark.parametrize(("tamper", "message"), [
+    (lambda c: -c, "negative variance"),  # negated: would narrow the interval it should widen
+    (lambda c: c - 2.0 * np.diag(np.diag(c[0]))[None], "negative variance"),
+    (lambda c: c * 1e30, "beyond any plausible spread"),  # would print negative energies
+    (lambda c: c + np.triu(np.ones_like(c[0]), 1)[None], "not symmetric"),
+])
+def test_a_model_file_whose_interval_means_nothing_is_refused(tmp_path, tamper, message):
+    from terrawatt_base.errors import FileFormatError
+
+    lin, _ = _fitted(tmp_path)
+    iv = lin.interval_
+    lin.interval_ = dataclasses.replace(iv, run_cov={g: tamper(c) for g, c in iv.run_cov.items()})
+    path = lin.save(tmp_path / "bad.zip")
+    with pytest.raises(FileFormatError, match=message):
+        load_current_model(path)
+    lin.interval_ = dataclasses.replace(iv, new_ground_cov=tamper(iv.new_ground_cov))
+    with pytest.raises(FileFormatError, match=message):
+        load_current_model(lin.save(tmp_path / "bad_new.zip"))
+    lin.interval_ = dataclasses.replace(iv, sample_sd_a=iv.sample_sd_a * 1e30)
+    with pytest.raises(FileFormatError, match="plausible spread"):
+        load_current_model(lin.save(tmp_path / "bad_sd.zip"))
+
+
+def test_an_adapted_model_whose_posterior_is_not_a_covariance_is_refused(tmp_path):
+    from terrawatt_base.errors import FileFormatError
+
+    lin, logs = _fitted(tmp_path)
+    adapted = lin.adapt(logs[1].slice(0.0, 20.0), method="bayes")
+    assert load_current_model(adapted.save(tmp_path / "ok.zip")).gives_interval
+    adapted.posterior_cov_ = -adapted.posterior_cov_
+    with pytest.raises(FileFormatError, match="posterior_cov.*negative variance"):
+        load_current_model(adapted.save(tmp_path / "neg.zip"))
