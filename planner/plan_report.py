@@ -22,7 +22,7 @@ from .cost_source import edge_costs
 from .edge_cost import EnergyCost
 from .planning import GRAPH_PLANNERS, PLANNERS, plan_route
 from .plot import RouteLine, plot_routes
-from .risk import INTERVAL_LEVEL, RouteEnergyInterval, risk_cost, route_energy_interval
+from .risk import INTERVAL_LEVEL, RouteEnergyInterval, check_planning_risk, risk_cost, route_energy_interval
 from .route import Route
 from .route_geojson import write_geojson
 from .warmup import warm_up_kernels
@@ -436,6 +436,8 @@ def plan_and_compare(
     ('exact', ['min-energy (lattice)', 'lattice + refinement', 'shortest distance'])
     """
     check_choice("planner", planner, PLANNERS)
+    if risk is not None:
+        check_planning_risk(risk, risk_name)
     max_slope_deg = check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False,
                                high_inclusive=False)
     compile_s = warm_up_kernels()  # compiled once per environment, then loaded from numba's cache

@@ -45,7 +45,8 @@ from terrawatt_base.errors import InvalidParameterError
 from .edge_cost import EnergyCost
 from .points import as_points
 
-__all__ = ["RouteEnergyInterval", "route_energy_interval", "risk_cost", "check_risk_level", "INTERVAL_LEVEL"]
+__all__ = ["RouteEnergyInterval", "route_energy_interval", "risk_cost", "check_risk_level", "check_planning_risk",
+           "INTERVAL_LEVEL"]
 
 #: Central interval reported beside P50 / P90 (0.8: P10-P90).
 INTERVAL_LEVEL = 0.8
@@ -60,6 +61,36 @@ def check_risk_level(q: Any, name: str = "q") -> float:
         Not a number, or outside (0, 1); the message names ``name``.
     """
     return check_real(name, q, low=0.0, high=1.0, low_inclusive=False, high_inclusive=False)
+
+
+def check_planning_risk(q: Any, name: str = "risk") -> float:
+    """A risk level to plan or decide on: a number in [0.5, 1).
+
+    Planning on a quantile below the median plans on luck: ``--risk 1e-9`` priced every edge at
+    mean - 6 sd, floored at 0, and reported a route "costing" 0 J. :func:`risk_cost` and
+    :meth:`RouteEnergyInterval.quantile_j` still take any level in (0, 1) (a P10 is a fine thing to
+    report); what a route is chosen or a mission is judged on is at least the median.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a number, outside (0, 1), or below 0.5; the message names ``name``.
+
+    Examples
+    --------
+    >>> check_planning_risk(0.9)
+    0.9
+    >>> check_planning_risk(0.1, "--risk")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    terrawatt_base.errors.InvalidParameterError: --risk 0.1 lies below the median: ...
+    """
+    q = check_risk_level(q, name)
+    if q < 0.5:
+        raise InvalidParameterError(
+            f"{name} {q:g} lies below the median: planning on it assumes the energy comes out lower than it does in "
+            f"{100 * (1 - q):.4g} % of runs; give a level in [0.5, 1), e.g. 0.9 (0.5 plans on the mean)")
+    return q
 
 
 @dataclass(frozen=True)

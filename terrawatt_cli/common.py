@@ -23,7 +23,7 @@ from terrawatt_base.dask_client import check_dask_options, dask_client
 
 from planner.model_cost import parse_model_ground
 from planner.points import point_on_map
-from planner.risk import check_risk_level
+from planner.risk import check_planning_risk
 
 __all__ = [
     "Checked", "bounded", "positive", "MAP_FLAGS", "add_map_options", "read_map_args", "map_arg", "add_point_options",
@@ -237,9 +237,9 @@ def add_model_options(p: argparse.ArgumentParser, *, risk: bool = False) -> None
                         "classes); CLASS=NAME pairs price a map class the model never drove as one it did (e.g. "
                         "grass=asphalt), the other classes by their own names")
     if risk:
-        p.add_argument("--risk", type=float, default=None, metavar="Q", action=Checked, check=check_risk_level,
+        p.add_argument("--risk", type=float, default=None, metavar="Q", action=Checked, check=check_planning_risk,
                        help="with --model of a model with a predictive interval: plan on the Q quantile of energy (Q "
-                            "in (0, 1)), every edge at mean + z_Q sd: the route's Q quantile on one ground, for Q > "
+                            "in [0.5, 1)), every edge at mean + z_Q sd: the route's Q quantile on one ground, for Q > "
                             "0.5 an upper bound of it across grounds; default: the mean")
 
 

@@ -10,7 +10,7 @@ from energy.io import read_navsat
 from planner.missions.replay_report import place_by_gps, replay_recording
 from planner.missions.settings import UPDATE_SOURCES
 from planner.model_cost import parse_model_ground
-from planner.risk import check_risk_level
+from planner.risk import check_planning_risk
 
 from .common import (
     Checked,
@@ -75,8 +75,8 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--update-source", choices=UPDATE_SOURCES, default="manoeuvre",
                    help="fit a flagged region's model on the recording's manoeuvres first (default; declined when the "
                         "recording holds none: then on the driving) or on the driving first")
-    p.add_argument("--risk", type=float, default=None, metavar="Q", action=Checked, check=check_risk_level,
-                   help="decide on the Q quantile of the remaining energy (Q in (0.5, 1); default the forecast)")
+    p.add_argument("--risk", type=float, default=None, metavar="Q", action=Checked, check=check_planning_risk,
+                   help="decide on the Q quantile of the remaining energy (Q in [0.5, 1); default the forecast)")
     p.add_argument("--mode", choices=("auto", "legs", "drive"), default="auto",
                    help="legs: each log a leg, checked at its end; drive: one drive cut in --chunk-s chunks; auto "
                         "(default): legs for several logs")

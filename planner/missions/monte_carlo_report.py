@@ -19,7 +19,7 @@ from terrawatt_base.figure_file import draw_figure
 from ..cost_source import edge_costs
 from ..edge_cost import DEFAULT_MAX_SLOPE_RAD
 from ..planning import plan_route
-from ..risk import check_risk_level
+from ..risk import check_planning_risk
 from ..route import Route
 from .mission_report import check_preset_grounds, mission_battery
 from .monte_carlo import simulate_missions_mc
@@ -194,7 +194,7 @@ def monte_carlo_mission(
     check_preset_grounds(terrain)
     max_risk_pct = check_real("max_risk_pct", max_risk_pct, low=0.0, high=100.0)
     if risk is not None:
-        check_risk_level(risk, flags[0])
+        check_planning_risk(risk, flags[0])
     battery = mission_battery(robot, battery_ah, battery_v, reserve_pct)
     cost = edge_costs(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=DEFAULT_MAX_SLOPE_RAD,
                       unknown_ground=None, model=model, model_ground=model_ground)

@@ -14,7 +14,7 @@ from terrawatt_base.dask_client import check_dask_options
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from ..points import point_on_map
-from ..risk import check_risk_level
+from ..risk import check_planning_risk
 from .mission_report import check_preset_grounds
 from .monte_carlo_model import MC_DRAW_MODES
 
@@ -105,7 +105,7 @@ class MissionRequest:
             check_int(n("monte_carlo"), self.monte_carlo, low=1)
         check_dask_options(self.workers, self.scheduler, flags=(n("workers"), n("scheduler")))
         if self.risk is not None:
-            check_risk_level(self.risk, n("risk"))
+            check_planning_risk(self.risk, n("risk"))
             if self.monte_carlo is None:
                 raise InvalidParameterError(
                     f"{n('risk')} Q of mission checks the route's Q quantile against the usable battery in a "

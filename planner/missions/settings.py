@@ -117,7 +117,7 @@ class AdaptiveSettings:
         check_real("interval_level", self.interval_level, low=0.0, low_inclusive=False, high=1.0,
                    high_inclusive=False, owner=own)
         if self.risk is not None:
-            check_real("risk", self.risk, low=0.5, low_inclusive=False, high=1.0, high_inclusive=False, owner=own)
+            check_real("risk", self.risk, low=0.5, high=1.0, high_inclusive=False, owner=own)
         check_real("forecast_dt_s", self.forecast_dt_s, low=0.0, low_inclusive=False, owner=own)
         check_real("forecast_prior_legs", self.forecast_prior_legs, low=0.0, low_inclusive=False, owner=own)
         check_real("forecast_prior_spread", self.forecast_prior_spread, low=0.0, low_inclusive=False, owner=own)

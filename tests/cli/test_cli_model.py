@@ -50,8 +50,8 @@ def test_plan_with_a_model_prints_and_writes_the_interval_and_risk_changes_the_c
     assert not _crosses_loam(risky)  # the certain gravel corridor
     assert risky["routes"]["min_energy"]["energy_interval"]["sd_j"] == 0.0
     assert risky["routes"]["min_energy"]["energy_interval"]["p90_j"] < iv["p90_j"]
-    rc, out10 = _plan(tmp_path, files, "--risk", "0.1")
-    assert rc == 0 and _crosses_loam(json.loads((out10 / "route.json").read_text()))
+    rc, out50 = _plan(tmp_path, files, "--risk", "0.5")  # the median: the mean route again
+    assert rc == 0 and _crosses_loam(json.loads((out50 / "route.json").read_text()))
 
 
 def test_plan_without_a_model_writes_no_interval_or_model_block(tmp_path, capsys, wall_map):
@@ -67,6 +67,7 @@ def test_plan_without_a_model_writes_no_interval_or_model_block(tmp_path, capsys
     (["--robot", "jackal"], "trained on robot(s) ['husky_a200'], not on the robot preset 'jackal'"),
     (["--model-ground", "sand"], "--model-ground 'sand' is not a ground the model drove"),
     (["--risk", "1.5"], "--risk must be"),
+    (["--risk", "1e-9"], "--risk 1e-09 lies below the median"),  # mean - 6 sd floored at 0: a route "costing" 0 J
 ])
 def test_plan_with_an_incompatible_model_or_bad_flags_is_exit_2(tmp_path, capsys, files, extra, message):
     rc, _ = _plan(tmp_path, files, *extra)
