@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from energy import CurrentModel, GroundParams, RobotParams, ground_preset
+from energy.logs import named_robots, robot_matches
 from terrain import CellModelRegistry, TerrainMap
 from terrawatt_base.errors import DataError, InvalidParameterError, TerrawattWarning, UnknownNameError
 from terrain.terrain_map import UNKNOWN_GROUND
@@ -65,23 +66,11 @@ __all__ = [
 #: Ground preset of the physics slope term when a saved model prices the map.
 DEFAULT_MODEL_PHYSICS_GROUND = "asphalt"
 
-_UNNAMED_ROBOT = ("", "unknown")
 _UNNAMED_GROUND = "unlabelled"
 
 
 class ModelCompatibilityWarning(TerrawattWarning):
     """A saved model could not be fully checked against the robot (unnamed robot, no training summary)."""
-
-
-def robot_matches(preset_name: str, log_robot: str) -> bool:
-    """Whether a log's robot name is the robot preset ``preset_name`` (the preset name contained in it, any case).
-
-    Examples
-    --------
-    >>> robot_matches("husky", "Husky_A200"), robot_matches("husky", "jackal")
-    (True, False)
-    """
-    return str(preset_name).strip().lower() in str(log_robot).strip().lower()
 
 
 def check_model_robot(model: CurrentModel, robot: RobotParams | str) -> list[str]:
@@ -114,7 +103,7 @@ def check_model_robot(model: CurrentModel, robot: RobotParams | str) -> list[str
         notes.append(f"the model file does not say which robot it was trained on (saved before that was "
                      f"recorded): assumed to be {name!r}")
     else:
-        named = [r for r in summary.robots if r.strip().lower() not in _UNNAMED_ROBOT]
+        named = [r for r in summary.robots if named_robots([r])]
         other = [r for r in named if not robot_matches(name, r)]
         if other:
             raise InvalidParameterError(

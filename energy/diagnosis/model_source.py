@@ -2,18 +2,21 @@
 
 from __future__ import annotations
 
+import hashlib
 import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from terrawatt_base.checks import check_bool, check_seed, fmt_number, option_names
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from terrain.terrain_map import TerrainMap
 
-from ..logs import InteractionLog
+from ..logs import InteractionLog, named_robots, rest_samples, robot_matches
 from ..models.base import CurrentModel
 from ..models.baselines import PhysicsCurrentModel
 from ..models.kinds import new_current_model
@@ -22,7 +25,7 @@ from ..params import GROUND_PRESETS, RobotParams, robot_params, robot_spec
 from .model_currents import DRIVE_EFFECTS
 
 __all__ = ["MODEL_SOURCES", "DEFAULT_SOURCE_NAMES", "ModelUnderDiagnosis", "check_model_source",
-           "model_under_diagnosis"]
+           "check_calibration_logs", "model_under_diagnosis", "MIN_CALIBRATION_DRIVING_S"]
 
 #: The model sources named by a word; anything else is a saved model file.
 MODEL_SOURCES = ("physics", "estimator")
@@ -172,6 +175,104 @@ def _physics_robot(robot: str | os.PathLike[str] | None, flag: str) -> tuple[str
     return spec, f"{spec.name} (robot file {Path(robot).name})" if isinstance(robot, (str, os.PathLike)) else spec.name
 
 
+#: Least driving (s, moving samples over all runs) a model can be calibrated on: below it the fit
+#: has fewer samples than a drive's few seconds of transients (a one-second run is refused).
+MIN_CALIBRATION_DRIVING_S = 5.0
+#: Below this much driving (s) the calibration is used but the note says its coefficients are uncertain.
+SHORT_CALIBRATION_DRIVING_S = 60.0
+_NO_CURRENT_A = 1e-6
+
+
+def _driving_s(log: InteractionLog) -> float:
+    """Seconds of driving (moving samples, each standing for its share of the clock) in ``log``."""
+    if len(log) < 2:
+        return 0.0
+    return float(np.sum(np.gradient(log.time_s)[~rest_samples(log)]))
+
+
+def _content_key(log: InteractionLog) -> bytes:
+    """A digest of what a run measured (commands and currents, not its clock or its name): equal for a copy."""
+    h = hashlib.sha256()
+    for arr in (log.v_mps, log.omega_radps, log.current_left_a, log.current_right_a):
+        h.update(np.ascontiguousarray(arr, dtype=np.float64).tobytes())
+    return h.digest()
+
+
+def check_calibration_logs(cal: Sequence[InteractionLog], logs: Sequence[InteractionLog], *,
+                           robot: str | os.PathLike[str] | None = None,
+                           names: Mapping[str, str] | None = None) -> str:
+    """Check that ``cal`` can calibrate a model to diagnose ``logs``; returns a note ("" or what to beware of).
+
+    Calibration runs must be other runs of the same robot with currents: a copy of a diagnosed
+    run (same file, or the same commands and currents under another name) would fit the model to
+    the gap it is meant to find; runs with no current (all zero) or with no driving teach the fit
+    nothing; another robot's runs (a Jackal's logs for a Husky model) calibrate another machine.
+
+    Parameters
+    ----------
+    cal, logs : sequence of InteractionLog
+        The calibration runs and the diagnosed runs.
+    robot : str or path-like, optional
+        The physics' robot (a preset name, or a robot file whose robot name is compared); None
+        compares the runs' robots with each other only.
+    names : mapping, optional
+        How messages name the arguments (:data:`DEFAULT_SOURCE_NAMES`' keys).
+
+    Returns
+    -------
+    str
+        ``""``, or a clause for the model's note when the calibration drives less than
+        :data:`SHORT_CALIBRATION_DRIVING_S`.
+
+    Raises
+    ------
+    InvalidParameterError
+        A calibration run that is a diagnosed run (by source or by content), one without
+        current, of another robot, or less than :data:`MIN_CALIBRATION_DRIVING_S` of driving in all.
+    """
+    n = option_names(names, DEFAULT_SOURCE_NAMES)
+    cal_flag, logs_flag = n["calibration"], n["logs"]
+    if not cal or not all(isinstance(log, InteractionLog) for log in cal):
+        raise InvalidParameterError(f"{cal_flag} must be a non-empty sequence of InteractionLog")
+    diagnosed = {log.meta.source for log in logs if log.meta.source}
+    shared = sorted({log.meta.source for log in cal} & diagnosed)
+    if shared:
+        raise InvalidParameterError(f"{cal_flag} holds runs that {logs_flag} diagnoses too: {shared[:3]!r}; "
+                                    "calibrate on runs that are not diagnosed")
+    keys = {_content_key(log): log.meta.source for log in logs}
+    copies = [(log.meta.source, keys[k]) for log in cal if (k := _content_key(log)) in keys]
+    if copies:
+        raise InvalidParameterError(
+            f"{cal_flag} holds copies of diagnosed runs (the same commands and currents): "
+            f"{', '.join(f'{a!r} = {b!r}' for a, b in copies[:3])}; calibrate on runs that are not diagnosed")
+    silent = [log.meta.source for log in cal
+              if not (np.nanmax(np.abs(np.concatenate([log.current_left_a, log.current_right_a])), initial=0.0)
+                      > _NO_CURRENT_A)]
+    if silent:
+        raise InvalidParameterError(
+            f"{cal_flag} holds runs without drive current (every sample 0 A): {silent[:3]!r}; a model cannot be "
+            "calibrated on them: check the current columns or topics")
+    spec = None if robot is None else robot_spec(robot, name=n["robot"])
+    target = named_robots(log.meta.robot for log in logs)
+    if spec is not None:
+        target = [spec if isinstance(spec, str) else spec.name]
+    cal_robots = named_robots(log.meta.robot for log in cal)
+    other = [r for r in cal_robots if target and not any(robot_matches(t, r) or robot_matches(r, t) for t in target)]
+    if other:
+        raise InvalidParameterError(
+            f"{cal_flag} holds runs of robot(s) {other!r}, not of {target!r} that {logs_flag} diagnoses: calibrate on "
+            "runs of the same robot")
+    driving = sum(_driving_s(log) for log in cal)
+    if driving < MIN_CALIBRATION_DRIVING_S:
+        raise InvalidParameterError(
+            f"{cal_flag} drives {fmt_number(driving, 3)} s in all, fewer than the {fmt_number(MIN_CALIBRATION_DRIVING_S)} "
+            "s a calibration needs; give longer runs")
+    if driving < SHORT_CALIBRATION_DRIVING_S:
+        return (f" (only {fmt_number(driving, 3)} s of driving: its coefficients are uncertain, and so is what the "
+                "diagnosis attributes to them)")
+    return ""
+
+
 def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[InteractionLog], *,
                           calibration_logs: Sequence[InteractionLog] | None = None,
                           calibration_label: str = "the calibration logs", robot: str | None = None,
@@ -235,12 +336,9 @@ def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[Interact
     if not logs or not all(isinstance(log, InteractionLog) for log in logs):
         raise InvalidParameterError("logs must be a non-empty sequence of InteractionLog")
     cal = None if calibration_logs is None else list(calibration_logs)
+    short_note = ""
     if cal is not None:
-        diagnosed = {log.meta.source for log in logs if log.meta.source}
-        shared = sorted({log.meta.source for log in cal} & diagnosed)
-        if shared:
-            raise InvalidParameterError(f"{n['calibration']} holds runs that {n['logs']} diagnoses too: {shared[:3]!r}; "
-                                        "calibrate on runs that are not diagnosed")
+        short_note = check_calibration_logs(cal, logs, robot=robot if kind == "physics" else None, names=names)
     if terrain is not None and not isinstance(terrain, TerrainMap):
         raise InvalidParameterError(f"terrain must be a TerrainMap or None, got {type(terrain).__name__!r}")
     if kind == "physics":
@@ -262,10 +360,10 @@ def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[Interact
         values = ", ".join(f"{k} = {fmt_number(v, 4)}" for k, v in fitted.fitted_.items())
         return ModelUnderDiagnosis(fitted, (
             f"physics, {robot_name} starting from {_ground_text(ground_of)}{off}; its coefficients fitted on the "
-            f"{_runs(cal)} of {calibration_label} ({values}), which are not diagnosed"), kind, robot)
+            f"{_runs(cal)} of {calibration_label} ({values}), which are not diagnosed{short_note}"), kind, robot)
     if kind == "estimator":
         trained = new_current_model("estimator", seed=seed, progress=progress).fit(cal)
         return ModelUnderDiagnosis(trained, (f"the vibration estimator, trained on the {_runs(cal)} of "
-                                             f"{calibration_label}, which are not diagnosed"), kind, robot)
+                                             f"{calibration_label}, which are not diagnosed{short_note}"), kind, robot)
     loaded = load_current_model(model)
     return ModelUnderDiagnosis(loaded, f"{type(loaded).__name__} loaded from {model}", kind, robot)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -9,10 +10,34 @@ import numpy as np
 from terrawatt_base.checks import check_optional_real
 from terrawatt_base.errors import InvalidParameterError
 
-__all__ = ["VELOCITY_SOURCES", "LogMeta"]
+__all__ = ["VELOCITY_SOURCES", "LogMeta", "robot_matches", "named_robots"]
 
 #: Allowed values of :attr:`LogMeta.velocity_source`.
 VELOCITY_SOURCES = ("commanded", "measured")
+#: Robot names that name no robot (a log that does not say which robot drove it).
+UNNAMED_ROBOTS = ("", "unknown")
+
+
+def robot_matches(preset_name: str, log_robot: str) -> bool:
+    """Whether a log's robot name is the robot ``preset_name`` (the preset name contained in it, any case).
+
+    Examples
+    --------
+    >>> robot_matches("husky", "Husky_A200"), robot_matches("husky", "jackal")
+    (True, False)
+    """
+    return str(preset_name).strip().lower() in str(log_robot).strip().lower()
+
+
+def named_robots(names: Iterable[str]) -> list[str]:
+    """The distinct robot names that name a robot (not :data:`UNNAMED_ROBOTS`), sorted.
+
+    Examples
+    --------
+    >>> named_robots(["husky", "unknown", "", "husky", "Jackal"])
+    ['Jackal', 'husky']
+    """
+    return sorted({str(n) for n in names if str(n).strip().lower() not in UNNAMED_ROBOTS})
 
 
 @dataclass(frozen=True)

@@ -83,6 +83,35 @@ def test_the_physics_is_calibrated_on_other_runs_only(runs):
         model_under_diagnosis("physics", [])
 
 
+def _renamed(log, **meta):
+    return dataclasses.replace(log, meta=dataclasses.replace(log.meta, **meta))
+
+
+def test_calibration_runs_that_cannot_calibrate_are_refused_naming_them(runs):
+    import numpy as np
+
+    logs, _ = runs
+    diagnosed, cal = logs[:1], logs[1:]
+    # a byte-identical copy of a diagnosed run under another name, its clock shifted
+    copy = dataclasses.replace(_renamed(logs[0], source="copy.csv"), time_s=logs[0].time_s + 100.0)
+    with pytest.raises(InvalidParameterError, match=r"copies of diagnosed runs .* 'copy.csv' = 'run_0.csv'"):
+        model_under_diagnosis("physics", diagnosed, calibration_logs=[*cal, copy], names=FLAGS)
+    silent = dataclasses.replace(_renamed(logs[1], source="zero.csv"), current_left_a=np.zeros(len(logs[1])),
+                                 current_right_a=np.zeros(len(logs[1])))
+    with pytest.raises(InvalidParameterError, match=r"without drive current .* \['zero.csv'\]"):
+        model_under_diagnosis("physics", diagnosed, calibration_logs=[silent])
+    jackal = [_renamed(log, robot="jackal") for log in cal]
+    with pytest.raises(InvalidParameterError, match=r"robot\(s\) \['jackal'\], not of \['husky'\]"):
+        model_under_diagnosis("physics", diagnosed, calibration_logs=jackal, robot="husky")
+    with pytest.raises(InvalidParameterError, match=r"robot\(s\) \['jackal'\], not of \['husky'\]"):
+        model_under_diagnosis("estimator", diagnosed, calibration_logs=jackal)  # the diagnosed runs name it
+    one_second = logs[1].slice(2.0, 3.0)
+    with pytest.raises(InvalidParameterError, match=r"drives [\d.]+ s in all, fewer than the 5 s"):
+        model_under_diagnosis("physics", diagnosed, calibration_logs=[one_second])
+    short = model_under_diagnosis("physics", diagnosed, calibration_logs=cal)  # 16 s: used, said to be short
+    assert "s of driving: its coefficients are uncertain" in short.note
+
+
 def test_a_saved_model_is_loaded_as_it_is(tmp_path, runs):
     logs, model = runs
     path = model.save(tmp_path / "m.zip")
