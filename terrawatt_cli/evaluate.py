@@ -7,9 +7,10 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from energy.evaluation import (EVALUATION_PROTOCOLS, AdaptSettings, check_adapt_options, check_evaluation_options,
-                               evaluate_report, evaluation_files)
+from energy.evaluation import (DEFAULT_ADAPT_SECONDS, EVALUATION_PROTOCOLS, AdaptSettings, check_adapt_options,
+                               check_evaluation_options, evaluate_report, evaluation_files)
 from energy.models import ADAPT_METHODS, CURRENT_MODEL_KINDS
+from terrawatt_base.errors import InvalidParameterError
 
 from .common import (add_dask_options, add_physics_robot_option, check_dask_flags, check_outputs, dask_client_arg,
                      input_paths, warn_figures)
@@ -48,26 +49,40 @@ def add_adapt_options(parser: argparse.ArgumentParser) -> None:
                         "adapt: also adapt each held-out run's model on its first --adapt-seconds and score the rest "
                         "beside the unadapted model and the per-side gain baseline; few-shot: train on the other "
                         "grounds, adapt on seconds of one run of a ground, score its other runs")
-    parser.add_argument("--adapt-seconds", type=float, nargs="+", default=[10.0, 20.0, 40.0], metavar="T",
-                        help="seconds of each run the model adapts on (default 10 20 40)")
-    parser.add_argument("--adapt-method", choices=ADAPT_METHODS, default=ADAPT_METHODS[0],
+    # defaults None: a flag the user gave is told apart from one left out (--protocol loo takes none of them)
+    parser.add_argument("--adapt-seconds", type=float, nargs="+", default=None, metavar="T",
+                        help="seconds of each run the model adapts on (default "
+                             f"{' '.join(f'{t:g}' for t in DEFAULT_ADAPT_SECONDS)})")
+    parser.add_argument("--adapt-method", choices=ADAPT_METHODS, default=None,
                         help=f"the in-run update (default {ADAPT_METHODS[0]})")
-    parser.add_argument("--adapt-threshold", type=float, default=10.0, metavar="PCT",
-                        help="adapt protocol: the running charge error (%%) above which the trigger schedule updates")
+    parser.add_argument("--adapt-threshold", type=float, default=None, metavar="PCT",
+                        help="adapt protocol: the running charge error (%%) above which the trigger schedule updates "
+                             "(default 10)")
 
 
-def adapt_settings_from_args(args: argparse.Namespace) -> AdaptSettings:
+def adapt_settings_from_args(args: argparse.Namespace) -> AdaptSettings | None:
     """The :class:`energy.evaluation.AdaptSettings` of the command line (:func:`energy.evaluation.check_adapt_options`:
-    bad values are errors naming the flag)."""
-    return check_adapt_options(args.protocol, adapt_seconds=args.adapt_seconds, adapt_method=args.adapt_method,
-                               adapt_threshold_pct=args.adapt_threshold, names=_NAMES)
+    bad values are errors naming the flag); None for ``--protocol loo``, which refuses the adapt flags."""
+    given = {"--adapt-seconds": args.adapt_seconds, "--adapt-method": args.adapt_method,
+             "--adapt-threshold": args.adapt_threshold}
+    if args.protocol == "loo" and (flags := [f for f, v in given.items() if v is not None]):
+        raise InvalidParameterError(f"{', '.join(flags)} appl{'ies' if len(flags) == 1 else 'y'} to --protocol adapt "
+                                    "or few-shot, not to loo (the default): add --protocol adapt or few-shot")
+    if args.protocol == "loo":
+        return None
+    if args.protocol == "few-shot" and args.adapt_threshold is not None:
+        raise InvalidParameterError("--adapt-threshold sets the trigger schedule of --protocol adapt; few-shot has none")
+    return check_adapt_options(
+        args.protocol, adapt_seconds=DEFAULT_ADAPT_SECONDS if args.adapt_seconds is None else args.adapt_seconds,
+        adapt_method=args.adapt_method or ADAPT_METHODS[0],
+        adapt_threshold_pct=10.0 if args.adapt_threshold is None else args.adapt_threshold, names=_NAMES)
 
 
 def run_evaluate(args: argparse.Namespace) -> int:
     """``terrawatt evaluate``: evaluation.json, evaluation.md and spectra.png (a figure that fails is a warning), or
     adapt.json and adapt.md with ``--protocol adapt`` / ``few-shot`` (:func:`energy.evaluation.evaluate_report`)."""
     check_dask_flags(args)
-    settings = adapt_settings_from_args(args) if args.protocol != "loo" else None
+    settings = adapt_settings_from_args(args)
     check_evaluation_options(args.models, protocol=args.protocol, band_hz=args.band, robot=args.robot, names=_NAMES)
     check_outputs(args.out, evaluation_files(args.protocol), input_paths(args))
     with dask_client_arg(args) as client:  # before reading: a missing extra or scheduler fails fast

@@ -335,6 +335,9 @@ def collect_adaptation(tasks: list[tuple[Any, tuple[Any, ...]]], settings: Adapt
     for rows, notes in run_tasks(tasks, client=client, progress=progress, description=description):
         scores += rows
         notes_all += notes
+    if not scores:
+        raise DataError(f"no run could be scored at any adapt time ({'; '.join(notes_all[:3]) or 'no runs'}"
+                        f"{' ...' if len(notes_all) > 3 else ''})")
     result = AdaptationResult(tuple(scores), summarise_adapt_scores(scores), settings.to_dict(), tuple(notes_all))
     if out_dir is not None:
         result.write(out_dir)

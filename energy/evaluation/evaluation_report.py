@@ -84,7 +84,7 @@ def check_adapt_options(protocol: str = "adapt", *, adapt_seconds: Sequence[floa
 
     Examples
     --------
-    >>> check_adapt_options("few-shot", adapt_seconds=[5]).trigger
+    >>> check_adapt_options("few-shot", adapt_seconds=[10]).trigger
     False
     >>> check_adapt_options(adapt_seconds=[10, 0], names={"adapt_seconds": "--adapt-seconds"})
     Traceback (most recent call last):
@@ -96,6 +96,11 @@ def check_adapt_options(protocol: str = "adapt", *, adapt_seconds: Sequence[floa
     seconds = [adapt_seconds] if isinstance(adapt_seconds, numbers.Real) else list(adapt_seconds)
     if bad := [t for t in seconds if isinstance(t, bool) or not isinstance(t, numbers.Real) or not t > 0]:
         raise InvalidParameterError(f"{n['adapt_seconds']} must be seconds > 0, got {bad[0]!r}")
+    least = AdaptSettings.min_seconds  # the update's own minimum of driving in its prefix
+    if bad := [t for t in seconds if t <= least]:
+        raise InvalidParameterError(
+            f"{n['adapt_seconds']} {bad[0]:g}: the update needs more than {least:g} s of driving in the seconds it "
+            f"adapts on, so no run could adapt on {bad[0]:g} s; give seconds > {least:g}, e.g. 10 20 40")
     threshold = adapt_threshold_pct
     if isinstance(threshold, bool) or not isinstance(threshold, numbers.Real) or not threshold >= 0:
         raise InvalidParameterError(f"{n['adapt_threshold_pct']} must be a percentage >= 0, got {threshold!r}")
@@ -220,6 +225,18 @@ class EvaluationReport:
         return written
 
 
+def _check_runs_long_enough(items: Sequence[InteractionLog], settings: AdaptSettings, protocol: str, flag: str) -> None:
+    """Before any training: every adapt time T leaves some run to score (``"adapt"``: T plus the scored
+    remainder; ``"few-shot"``: T itself), else the table of T would be empty."""
+    need_after = settings.min_remainder_s if protocol == "adapt" else 0.0
+    longest = max(log.duration_s for log in items)
+    if bad := [t for t in settings.adapt_seconds if t + need_after > longest]:
+        what = f"{bad[0]:g} s plus the {need_after:g} s scored after them" if need_after else f"{bad[0]:g} s"
+        raise InvalidParameterError(
+            f"{flag} {bad[0]:g}: no run lasts {what} (the longest lasts {longest:.1f} s), so nothing would be "
+            f"scored; give seconds up to {max(longest - need_after, 0.0):.1f}")
+
+
 def evaluate_report(logs: Sequence[InteractionLog], kinds: Sequence[str] | None = None, *, protocol: str = "loo",
                     variants: Sequence[str] = EVALUATION_VARIANTS, settings: AdaptSettings | None = None,
                     seed: int | None = 0, band_hz: Sequence[float] | None = None, robot: Any = None,
@@ -273,6 +290,8 @@ def evaluate_report(logs: Sequence[InteractionLog], kinds: Sequence[str] | None 
         if not isinstance(settings, AdaptSettings):
             raise InvalidParameterError(f"settings must be an AdaptSettings, got {settings!r:.80}")
     items = check_logs(logs)
+    if protocol != "loo":
+        _check_runs_long_enough(items, settings, protocol, option_names(names, EVALUATION_NAMES)["adapt_seconds"])
     models = {k: new_current_model(k, seed=seed, band_hz=band if k in LEARNED_KINDS else None,
                                    robot=robot if k == "physics" else None) for k in kinds}
     t0 = time.perf_counter()

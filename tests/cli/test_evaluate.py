@@ -131,23 +131,30 @@ def _parse(*argv: str) -> argparse.Namespace:
     return parser.parse_args(list(argv))
 
 
-def test_defaults_give_the_leave_one_out_protocol_without_trigger():
+def test_defaults_give_the_leave_one_out_protocol_and_the_adapt_defaults_elsewhere():
     args = _parse()
     assert args.protocol == "loo" and PROTOCOLS[0] == "loo"
-    s = adapt_settings_from_args(args)
+    assert adapt_settings_from_args(args) is None
+    s = adapt_settings_from_args(_parse("--protocol", "few-shot"))
     assert s.adapt_seconds == (10.0, 20.0, 40.0) and s.threshold_pct == 10.0 and not s.trigger
 
 
 def test_the_adapt_protocol_triggers_on_its_threshold():
-    s = adapt_settings_from_args(_parse("--protocol", "adapt", "--adapt-seconds", "5", "--adapt-threshold", "3"))
-    assert s.trigger and s.adapt_seconds == (5.0,) and s.threshold_pct == 3.0
+    s = adapt_settings_from_args(_parse("--protocol", "adapt", "--adapt-seconds", "8", "--adapt-threshold", "3"))
+    assert s.trigger and s.adapt_seconds == (8.0,) and s.threshold_pct == 3.0
 
 
 @pytest.mark.parametrize(
     ("argv", "match"),
     [
-        (["--adapt-seconds", "10", "0"], "--adapt-seconds must be seconds > 0, got 0.0"),
-        (["--adapt-threshold", "-1"], "--adapt-threshold must be a percentage >= 0, got -1.0"),
+        (["--protocol", "adapt", "--adapt-seconds", "10", "0"], "--adapt-seconds must be seconds > 0, got 0.0"),
+        (["--protocol", "adapt", "--adapt-threshold", "-1"], "--adapt-threshold must be a percentage >= 0, got -1.0"),
+        # the update's own minimum: no run could adapt on 5 s, the table would be empty
+        (["--protocol", "few-shot", "--adapt-seconds", "5"], "--adapt-seconds 5: the update needs more than 5 s"),
+        # given with the default protocol, they were ignored
+        (["--adapt-seconds", "20"], "--adapt-seconds applies to --protocol adapt or few-shot, not to loo"),
+        (["--adapt-method", "bayes", "--adapt-threshold", "3"], "--adapt-method, --adapt-threshold apply to"),
+        (["--protocol", "few-shot", "--adapt-threshold", "3"], "few-shot has none"),
     ],
 )
 def test_bad_adapt_flags_are_refused_naming_the_flag(argv, match):

@@ -166,6 +166,8 @@ def test_cli_evaluate_protocol_adapt_and_few_shot(logs, tmp_path, capsys):
 @pytest.mark.parametrize(("extra", "match"), [
     (["--adapt-seconds", "0"], "--adapt-seconds"),
     (["--adapt-threshold", "-3"], "--adapt-threshold"),
+    # longer than every run: the table was empty and the exit 0
+    (["--adapt-seconds", "20", "1e9"], "--adapt-seconds 1e+09: no run lasts 1e+09 s plus the 10 s scored after"),
 ])
 def test_cli_bad_adapt_options_exit_2(logs, tmp_path, capsys, extra, match):
     from terrawatt_cli import main
