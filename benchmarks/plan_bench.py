@@ -19,6 +19,9 @@ different angles to the lattice directions) and reports
   fewer turns), so every refined planner also runs on the lattice's own objective (turn
   table zeroed, ``[drive obj]``); each route is scored on the true cost, turns included,
   and each target is checked on the objective the route minimised;
+- the heading lattice (:mod:`planner.heading_lattice`, the search that pays for its turns)
+  beside the heading-free A* on the same 1-cell lattice: median query times and their ratio,
+  the heading query's added peak memory (forked child, VmHWM) and each answer's price;
 - the any-angle planner (``planner="anyangle"``: Theta* in a corridor around a coarse lattice
   route, then its compiled polish) as a quality-versus-time curve on the lattice's objective:
   several settings (guide stride, corridor width, raw or polished), each planned
@@ -202,6 +205,70 @@ def _parallel_table(args: argparse.Namespace) -> list[dict[str, Any]]:
         r["numba_threads"] = numba.get_num_threads()
         r["threshold_walks"] = variants.PARALLEL_MIN_WALKS
     return rows
+
+
+def _peak_rss_delta_bytes(fn: Any) -> int:
+    """Peak resident memory ``fn`` adds (bytes), measured in a forked child (its high-water mark minus
+    its resident size before the call); -1 where /proc is not there."""
+    import multiprocessing
+
+    def child(conn: Any) -> None:
+        def rss(key: str) -> int:
+            for line in Path("/proc/self/status").read_text().splitlines():
+                if line.startswith(key):
+                    return int(line.split()[1]) * 1024
+            return -1
+
+        before = rss("VmRSS:")
+        fn()
+        conn.send(rss("VmHWM:") - before)
+        conn.close()
+
+    if not Path("/proc/self/status").exists():
+        return -1
+    ctx = multiprocessing.get_context("fork")
+    parent, child_conn = ctx.Pipe()
+    proc = ctx.Process(target=child, args=(child_conn,))
+    proc.start()
+    value = parent.recv()
+    proc.join()
+    return int(value)
+
+
+def _heading_table(args: argparse.Namespace) -> list[dict[str, Any]]:
+    """The heading lattice (drive + turns over node x 16 headings) beside the heading-free A* on the same lattice:
+    median query times and their ratio, the heading query's added peak memory, and the price of each answer."""
+    from planner.heading_lattice import heading_shortest_path
+
+    rows = []
+    for n in args.sizes:
+        tmap = procedural_map((n, n), 1.0, seed=args.seed)
+        cost = _make_cost(tmap, args.robot)
+        lattice = Lattice.for_cost(cost, 1)
+        for k, (start, goal) in enumerate(_queries(cost, args.queries)):
+            free = lattice.shortest_path(start, goal)
+            heading = heading_shortest_path(lattice, start, goal)
+            t_free = _best_time(lambda s=start, g=goal: lattice.shortest_path(s, g), args.repeats)
+            t_head = _best_time(lambda s=start, g=goal: heading_shortest_path(lattice, s, g), args.repeats)
+            peak = _peak_rss_delta_bytes(lambda s=start, g=goal: heading_shortest_path(lattice, s, g))
+            rows.append({
+                "cells": f"{n}^2", "query": k, "heading_free_s": t_free, "heading_s": t_head,
+                "ratio": t_head / t_free, "heading_peak_added_mib": peak / 2**20 if peak >= 0 else None,
+                "heading_free_drive_j": free.objective, "heading_free_priced_j": cost.path_energy_j(free.waypoints_m),
+                "heading_j": heading.objective,
+            })
+    return rows
+
+
+def _print_heading(rows: list[dict[str, Any]]) -> None:
+    print("\nheading lattice (node x 16 headings, drive + turns) beside the heading-free A* (median seconds; energies "
+          "in J: the heading-free route's drive objective, its price with turns, the heading lattice's optimum)")
+    print(f"{'cells':<8} {'query':>5} {'free s':>8} {'heading s':>10} {'ratio':>6} {'peak MiB':>9} {'free drive':>11} "
+          f"{'free priced':>12} {'heading':>10}")
+    for r in rows:
+        peak = "n/a" if r["heading_peak_added_mib"] is None else f"{r['heading_peak_added_mib']:.0f}"
+        print(f"{r['cells']:<8} {r['query']:5d} {r['heading_free_s']:8.3f} {r['heading_s']:10.3f} {r['ratio']:6.2f} "
+              f"{peak:>9} {r['heading_free_drive_j']:11.0f} {r['heading_free_priced_j']:12.0f} {r['heading_j']:10.0f}")
 
 
 def _print_parallel(rows: list[dict[str, Any]]) -> None:
@@ -531,6 +598,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=None, help="write results as JSON here")
     parser.add_argument("--no-parallel-table", dest="parallel_table", action="store_false",
                         help="skip the serial vs parallel kernel table")
+    parser.add_argument("--no-heading-table", dest="heading_table", action="store_false",
+                        help="skip the heading lattice beside the heading-free A*")
     args = parser.parse_args(argv)
     if args.quick:
         args.sizes, args.budgets, args.queries = [256], [0.25, 0.5], 2
@@ -549,7 +618,20 @@ def main(argv: list[str] | None = None) -> int:
     _print_curve(curve_rows)
     if parallel_rows:
         _print_parallel(parallel_rows)
+    heading_rows = _heading_table(args) if args.heading_table else []
+    if heading_rows:
+        _print_heading(heading_rows)
     targets = _targets(results, rows, curve_rows)
+    if heading_rows:
+        at512 = [r for r in heading_rows if r["cells"] == "512^2"]
+        if at512:
+            worst = max(r["ratio"] for r in at512)
+            peaks = [r["heading_peak_added_mib"] for r in at512 if r["heading_peak_added_mib"] is not None]
+            targets.append({"target": "512^2 heading-lattice query <= 8x the heading-free A*", "met": worst <= 8.0,
+                            "value": f"worst {worst:.2f}x"})
+            if peaks:
+                targets.append({"target": "512^2 heading-lattice query <= 2 GiB", "met": max(peaks) <= 2048,
+                                "value": f"{max(peaks):.0f} MiB added at most"})
     for t in targets:
         print(f"{'MET ' if t['met'] else 'NOT MET'} {t['target']}: {t['value']}")
     if args.out is not None:
@@ -566,6 +648,7 @@ def main(argv: list[str] | None = None) -> int:
             "summary": rows,
             "anyangle_curve": curve_rows,
             "parallel": parallel_rows,
+            "heading": heading_rows,
             "targets": targets,
         }
         write_json_atomic(args.out, _clean(payload), indent=1)

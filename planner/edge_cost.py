@@ -611,14 +611,26 @@ class EnergyCost:
             turn = np.abs((np.diff(heading) + math.pi) % (2 * math.pi) - math.pi)
             angles[nonzero[1:]] = turn  # waypoint index where segment nonzero[j] starts
         r, c = self.terrain.rowcol(pts[:, 0], pts[:, 1])
-        rows = self.ground_rows[r, c]
+        return angles, self.turn_energy_at(self.ground_rows[r, c], angles)
+
+    def turn_energy_at(self, rows: Any, angles_rad: Any) -> np.ndarray:
+        """Turn-in-place energy (J) of table ``rows`` at heading changes ``angles_rad`` (in [0, pi]):
+        the turn table linearly interpolated, 0 where the angle is 0. The one rule that prices a
+        turn: :meth:`turn_energies_j` (every route's turns) and the heading lattice's arcs use it.
+
+        Parameters
+        ----------
+        rows, angles_rad : array_like of int / float, broadcast together
+            Rows of :attr:`turn_table_j` (as :attr:`ground_rows`) and unsigned heading changes.
+        """
+        rows = np.asarray(rows, dtype=np.int64)
+        angles = np.asarray(angles_rad, dtype=np.float64)
         n_turn = self.turn_table_j.shape[1]
         f = angles / math.pi * (n_turn - 1)
         i0 = np.minimum(np.floor(f).astype(np.int64), n_turn - 2)
         w = f - i0
         energies = self.turn_table_j[rows, i0] * (1 - w) + self.turn_table_j[rows, i0 + 1] * w
-        energies[angles == 0] = 0.0
-        return angles, energies
+        return np.where(angles == 0, 0.0, energies)
 
     def path_energy_j(self, waypoints_m: Any) -> float:
         """Total energy (J) of a polyline: every segment plus the turns at its waypoints.

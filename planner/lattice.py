@@ -10,9 +10,11 @@ Both directions of a pair are costed in one cell walk by the compiled kernels of
 
 A query joins the start and goal points to the lattice nodes within ``1.5 * stride`` cells
 (plus the direct start-goal segment), so a lattice route is ``start, node, ..., node, goal``.
-The lattice optimum is the minimum *drive* energy over such routes; turn energies are not
-part of the graph search (a heading-free lattice cannot see them) but are part of every
-route evaluation. Collinear runs of moves are merged into single segments (same energy).
+This lattice's optimum is the minimum *drive* energy over such routes: a heading-free graph
+cannot see turns, which every route evaluation prices. The planner searches the same moves
+over (node, heading) instead (:mod:`planner.heading_lattice`), whose optimum pays for its
+turns; this lattice's weights are its arcs' drive part. Collinear runs of moves are merged
+into single segments (same energy).
 
 A second graph with the same edges weighted by their length gives the shortest-distance
 route, straightened afterwards by pulling the string (greedy line-of-sight shortcuts).

@@ -51,10 +51,10 @@ _TABLE_HEADER = (f"{'route':<26} {'status':<11} {'energy J':>10} {'Wh':>7} {'mAh
 def route_row(label: str, route: Route, optimum_j: float) -> dict[str, Any]:
     """One row of the comparison table (route.json's ``table``): energy, charge, length, time, ratio to ``optimum_j``.
 
-    Energies are NaN for a route not found; the ratio is the drive energy over ``optimum_j``
-    for an exact route (NaN otherwise, or when ``optimum_j`` is not > 0).
+    Energies are NaN for a route not found; the ratio is the energy (drive and turns) over
+    ``optimum_j`` for an exact route (NaN otherwise, or when ``optimum_j`` is not > 0).
     """
-    ratio = route.drive_energy_j / optimum_j if route.status == "exact" and optimum_j > 0 else math.nan
+    ratio = route.energy_j / optimum_j if route.status == "exact" and optimum_j > 0 else math.nan
     return {
         "route": label,
         "status": route.status,
@@ -274,7 +274,7 @@ class PlanReport:
         if route.status == "exact":
             lines.append(f"energy saved vs shortest route: {route.energy_saved_pct:.1f} %  "
                          f"(min-energy {route.energy_j:.0f} J vs shortest {route.shortest_energy_j:.0f} J); "
-                         f"drive energy / 16-connected lattice optimum: {route.optimality_ratio:.3f}")
+                         f"energy / heading-lattice optimum (turns in both): {route.optimality_ratio:.3f}")
         else:
             short_m = math.dist(route.waypoints_m[-1], self.goal_xy_m)
             lines.append(f"the {self.planner} route is {route.status}: it ends {short_m:.1f} m short of the goal, so "

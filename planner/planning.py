@@ -2,16 +2,18 @@
 
 Choose a planner by name from :data:`PLANNERS`: the OMPL planners of
 :data:`~planner.ompl.OMPL_PLANNERS` (a 2-D problem over the map whose objective is the
-directed drive energy, :mod:`planner.ompl`), ``"lattice"``, the fast path: the directed
-16-connected lattice optimum (:class:`~planner.Lattice`), or ``"anyangle"``: Theta* on the
+directed drive energy, :mod:`planner.ompl`), ``"lattice"``, the fast path: the optimum of the
+16-connected lattice searched over node and heading, drive and turns
+(:mod:`planner.heading_lattice`), or ``"anyangle"``: Theta* on the
 drive energy in a corridor around a coarse lattice route (:mod:`planner.anyangle`), refined
 by its compiled polish (:func:`planner.anyangle.polish_path`) instead of the OMPL shortcuts.
 With ``refine=True`` (default) every other exact route is post-processed by
 :func:`~planner.refine.refine_route`: OMPL's
 ``partialShortcutPath`` and ``perturbPath`` under the energy objective, then
 :func:`~planner.refine.relax_path`; each step is kept only when the route's true energy —
-segments plus turns, re-evaluated exactly — went down. Turn energies are not part of the
-search (a 2-D state has no heading); every route is evaluated with them.
+segments plus turns, re-evaluated exactly — went down. The lattice's search minimises that
+price (its states carry the heading); the OMPL and any-angle searches minimise drive energy
+alone (a 2-D state has no heading), and their refinement adds the turns.
 
 Determinism: the lattice search is exact and the refinement is seeded (``seed``, or 0 when
 ``seed=None``), so a lattice plan is the same in every run. OMPL planners are seeded only by
@@ -42,6 +44,7 @@ from .anyangle import anyangle_path, polish_path
 from .coarse import plan_coarse_to_fine
 from .edge_cost import EnergyCost
 from .problem import PlanningProblem
+from .heading_lattice import heading_shortest_path
 from .lattice import Lattice, LatticePath
 from .ompl import OMPL_PLANNERS
 from .ompl import solve as solve_ompl
@@ -72,11 +75,11 @@ def _check_budget(time_limit_s: Any, max_cost_evaluations: Any) -> tuple[float |
 
 
 def _lattice_optimum(problem: PlanningProblem) -> LatticePath:
-    """The 1-cell lattice's minimum-energy path of a query (cached on the cost)."""
+    """The 1-cell heading lattice's minimum-energy path of a query, turns included (cached on the cost)."""
     key = ("optimum", *problem.key)
     path = problem.cost.results.get(key)
     if path is None:
-        path = Lattice.for_cost(problem.cost, 1).shortest_path(problem.start, problem.goal, weight="energy")
+        path = heading_shortest_path(Lattice.for_cost(problem.cost, 1), problem.start, problem.goal)
         problem.cost.results[key] = path
     return path
 
@@ -172,7 +175,7 @@ def plan_route(
     planner : str
         One of :data:`PLANNERS`: ``"RRTstar"``, ``"InformedRRTstar"``, ``"SORRTstar"``,
         ``"BITstar"``, ``"FMT"`` (OMPL, minimising drive energy), ``"lattice"`` (the
-        directed 16-connected lattice optimum), ``"anyangle"`` (Theta* around a coarse
+        heading lattice's optimum, drive and turns), ``"anyangle"`` (Theta* around a coarse
         lattice route, :func:`planner.anyangle.anyangle_path`) or ``"coarse"``
         (coarse-to-fine for big maps, :func:`planner.coarse.plan_coarse_to_fine`, tuned by
         ``settings.coarse_factor`` / ``coarse_corridor_m``); the last three deterministic.
@@ -275,15 +278,16 @@ PlannerSearch = Callable[[PlanningProblem, "float | None", "int | None", "int | 
 
 def _lattice_search(problem: PlanningProblem, time_limit: float | None, max_evals: int | None, seed: int | None,
                     settings: PlannerSettings) -> tuple[str, np.ndarray | None, float]:
-    """The directed 16-connected lattice optimum (at the settings' stride; 1 cell where a passage is too narrow)."""
+    """The heading lattice's optimum, drive and turns (at the settings' stride; 1 cell where a passage is too
+    narrow)."""
     cost, start, goal = problem.cost, problem.start, problem.goal
     stride = settings.lattice_stride_cells
     lattice = Lattice.for_cost(cost, stride)  # building the graph is map preparation
     t0 = time.perf_counter()
-    path = lattice.shortest_path(start, goal, weight="energy")
+    path = heading_shortest_path(lattice, start, goal)
     if not path.found and stride > 1:  # a passage too narrow for the coarse lattice
         stride = 1
-        path = Lattice.for_cost(cost, 1).shortest_path(start, goal, weight="energy")
+        path = heading_shortest_path(Lattice.for_cost(cost, 1), start, goal)
     elapsed = time.perf_counter() - t0
     if stride == 1:
         cost.results[("optimum", *problem.key)] = path

@@ -192,4 +192,14 @@ def refine_route(
         del simplifier, problem
     if relax:
         best = relax_path(cost, best)
-    return best
+    return drop_repeats(best)
+
+
+def drop_repeats(pts: np.ndarray) -> np.ndarray:
+    """``pts`` without consecutive repeated points (a zero-length segment costs nothing and its turn is
+    priced across it: the price is unchanged, and a robot's command profile refuses repeated waypoints)."""
+    keep = np.concatenate([[True], np.any(np.diff(pts, axis=0) != 0, axis=1)])
+    if not keep[-1]:  # keep the goal itself, dropping the copy before it
+        keep[np.flatnonzero(keep)[-1]] = False
+        keep[-1] = True
+    return pts[keep] if not keep.all() else pts

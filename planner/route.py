@@ -46,8 +46,10 @@ class RouteComparison:
         The shortest-distance route between the same points, evaluated
         (:func:`planner.planning.shortest_route`; status ``"infeasible"`` when there is none).
     lattice_optimum_j : float
-        Drive energy (J) of the minimum-energy route on the directed 16-connected 1-cell
-        lattice (the reference optimum); NaN when that lattice joins no route.
+        Energy (J), drive and turns, of the minimum-energy route on the 1-cell heading lattice
+        (:mod:`planner.heading_lattice`: the 16-connected lattice searched over node and heading,
+        the reference optimum of the price every route reports); NaN when that lattice joins no
+        route.
 
     Raises
     ------
@@ -179,7 +181,8 @@ class Route:
 
     @property
     def drive_energy_j(self) -> float:
-        """Sum of the segment energies (J), without turns; the quantity planners minimise."""
+        """Sum of the segment energies (J), without turns (the OMPL planners' objective; the lattice planner
+        and the refinement minimise :attr:`energy_j`, turns included)."""
         return float(self.segment_energy_j.sum()) if self.found else _NAN
 
     @property
@@ -201,8 +204,8 @@ class Route:
 
     @property
     def lattice_energy_j(self) -> float:
-        """Drive energy (J) of the minimum-energy route on the directed 16-connected 1-cell
-        lattice (the reference optimum); NaN when not compared or when there is none."""
+        """Energy (J), drive and turns, of the minimum-energy route on the 1-cell heading lattice
+        (the reference optimum); NaN when not compared or when there is none."""
         return _NAN if self.comparison is None else self.comparison.lattice_optimum_j
 
     @property
@@ -217,11 +220,11 @@ class Route:
 
     @property
     def optimality_ratio(self) -> float:
-        """Drive energy divided by the lattice optimum (< 1: better than the 16-connected lattice);
-        NaN unless the route reaches the goal (``exact``)."""
+        """Energy (drive and turns) divided by the heading lattice's optimum of the same price (< 1:
+        better than any 16-connected lattice route); NaN unless the route reaches the goal (``exact``)."""
         if not (self.status == "exact" and math.isfinite(self.lattice_energy_j) and self.lattice_energy_j > 0):
             return _NAN
-        return self.drive_energy_j / self.lattice_energy_j
+        return self.energy_j / self.lattice_energy_j
 
     def raise_for_status(self) -> Route:
         """Return ``self`` if the route reaches the goal (``exact``), else raise.

@@ -12,6 +12,7 @@ from .edge_cost import EnergyCost
 from .kernels import graph, point_free, walk
 from .kernels.corridor import corridor_weights_parallel, corridor_weights_serial
 from .anyangle import warm_up_anyangle
+from .heading_lattice import heading_shortest_path
 from .lattice import LATTICE_OFFSETS, Lattice
 from .replan import IncrementalPlanner
 from .reachability import warm_up_reachability
@@ -61,6 +62,7 @@ def warm_up_kernels() -> float:
         kernel(arr.cells, arr.grade_table, arr.geo, rows, cols, index, LATTICE_OFFSETS[:8])
     lattice = Lattice.for_cost(cost, 1)
     path = lattice.shortest_path((0.5, 0.5), (3.5, 3.5), weight="length")
+    heading_shortest_path(lattice, (0.5, 0.5), (3.5, 2.5))  # the heading lattice: cost-to-go, then its A*
     dearer = cost.with_tables(2.0 * cost.grade_table_j_per_m, cost.turn_table_j)  # incremental lattice reweighting
     changed = np.zeros((4, 4), dtype=bool)
     changed[1, 1] = True

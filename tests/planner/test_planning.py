@@ -110,7 +110,9 @@ def test_every_planner_prefers_the_gentler_detour_around_a_hill(planner):
     assert np.abs(route.waypoints_m[:, 1] - 25.0).max() > 8.0  # it left the hill's crest line
     assert route.energy_saved_pct > 5.0
     assert route.shortest_energy_j == pytest.approx(straight)
-    assert 0.95 < route.optimality_ratio < 1.02
+    # against the heading lattice's optimum (drive and turns): a refined lattice route never worse, an any-angle
+    # route often better (fewer turns than 16 directions allow)
+    assert route.optimality_ratio < (1.0 + 1e-9 if planner == "lattice" else 1.02)
 
 
 def test_unrefined_route_reports_the_raw_planner():
@@ -344,7 +346,7 @@ def test_comparisons_only_when_asked_and_once_per_query():
     assert shortest.planner == "shortest" and shortest.status == "exact"
     assert route.shortest_energy_j == shortest.energy_j == pytest.approx(cost.path_energy_j([start, goal]))
     assert route.lattice_energy_j == route.comparison.lattice_optimum_j > 0
-    assert route.energy_saved_pct > 5.0 and 0.95 < route.optimality_ratio < 1.02
+    assert route.energy_saved_pct > 5.0 and route.optimality_ratio <= 1.0 + 1e-9  # refined from the lattice optimum
     again = plan_route(tmap, start, goal, cost=cost, planner="RRTstar", seed=1, time_limit_s=None,
                        max_cost_evaluations=3000, compare=True)
     assert again.comparison is route.comparison  # computed once, cached on the cost

@@ -1,0 +1,156 @@
+"""Compiled search of the heading lattice: states (node, heading), arcs a turn then a move.
+
+The heading lattice (:class:`planner.heading_lattice.HeadingLattice`) is the state lattice of
+the 16-connected node grid: a state ``s = node * 16 + h`` is "at ``node``, having arrived by
+move ``h``" (``h`` indexing ``LATTICE_OFFSETS``). Its arcs are implicit: from ``(u, h)``, move
+``k`` leads to ``(u + offset_k, k)`` at ``turn[row(u), h, k] + w(u, k)``, the turn in place at
+``u`` from heading ``h`` to ``k`` (the cost's turn table, read at the node's cell) plus the move's
+drive energy (the heading-free lattice's weight ``data[pos[u, k]]``; ``pos < 0``: no move).
+Nothing of size ``states x 16`` is stored.
+
+A query enters from a virtual start: a start-joined node ``s`` is left by move ``k`` at
+``e_src + turn_src[i, k] + w(s, k)`` (``turn_src``: the turn at ``s`` from the joining
+segment's heading to ``k``), and leaves to a virtual goal from state ``(v, h)`` at
+``exit_cost[exit_of[v], h]`` (the turn at ``v`` onto the goal segment plus its energy).
+
+The heuristic is the heading-free lattice's exact cost-to-go, from a backward Dijkstra
+(:func:`backward_cost_to_go`): turns cost nothing there, so it is a lower bound of the
+heading lattice's cost-to-go, and consistent (it satisfies ``h(u) <= w(u, k) + h(v)``, and
+turns only add). The backward search may stop at a bound ``upper`` on the answer: nodes it
+did not settle get the last key it popped, which keeps the heuristic consistent.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from .graph import heap_pop, heap_set
+
+__all__ = ["backward_cost_to_go", "heading_astar"]
+
+_N_MOVES = 16
+
+
+@numba.njit(cache=True, nogil=True)
+def backward_cost_to_go(pos, data, offsets, ni, nj, dst, dst_cost, upper):  # pragma: no cover - compiled
+    """Heading-free cost (J) from every node to the virtual goal (reached from ``dst`` at ``dst_cost``).
+
+    Dijkstra on the reversed moves: node ``v`` is reached from ``u = v - offset_k`` at
+    ``data[pos[u, k]]``. Stops once the smallest open key exceeds ``upper``; every node not
+    settled then (unreachable ones included) gets that key, a lower bound of its cost. Returns
+    the cost per node (float64, ``n = ni * nj``).
+    """
+    n = ni * nj
+    h = np.full(n, np.inf)
+    settled = np.zeros(n, np.bool_)
+    keys = np.empty(n)
+    nodes = np.empty(n, np.int64)
+    where = np.full(n, -1, np.int64)
+    size = 0
+    for k in range(dst.size):
+        v = dst[k]
+        if dst_cost[k] < h[v]:
+            h[v] = dst_cost[k]
+            size = heap_set(keys, nodes, where, size, v, dst_cost[k])
+    floor = np.inf
+    while size > 0:
+        key, v, size = heap_pop(keys, nodes, where, size)
+        if key > upper:
+            floor = key
+            break
+        settled[v] = True
+        iv = v // nj
+        jv = v - iv * nj
+        for k in range(_N_MOVES):
+            iu = iv - offsets[k, 0]
+            ju = jv - offsets[k, 1]
+            if iu < 0 or iu >= ni or ju < 0 or ju >= nj:
+                continue
+            u = iu * nj + ju
+            if settled[u]:
+                continue
+            p = pos[u, k]
+            if p < 0:
+                continue
+            nu = key + data[p]
+            if nu < h[u]:
+                h[u] = nu
+                size = heap_set(keys, nodes, where, size, u, nu)
+    if floor < np.inf:
+        for v in range(n):
+            if not settled[v]:
+                h[v] = floor
+    return h
+
+
+@numba.njit(cache=True, nogil=True)
+def heading_astar(pos, data, offsets, nj, node_row, turn, src, src_cost, turn_src, exit_of, exit_cost,
+                  h_node, upper):  # pragma: no cover - compiled
+    """A* over the heading lattice's states (module docstring).
+
+    Parameters: ``pos`` (n, 16) move -> weight index (-1: none) and ``data`` the weights;
+    ``offsets`` (16, 2) node-grid moves; ``node_row`` (n,) the turn table row of each node's
+    cell (-1: blocked); ``turn`` (rows, 16, 16) turn energies by heading pair; ``src`` /
+    ``src_cost`` the start-joined nodes and their joining energies, ``turn_src`` (len(src), 16)
+    their first turns; ``exit_of`` (n,) a node's row in ``exit_cost`` (len(dst), 16), -1 for a
+    node not joined to the goal; ``h_node`` (n,) the heuristic; ``upper`` the best total known
+    (a route that takes no lattice move).
+
+    Returns the best total (``upper`` if none is lower), the last state of that route (-1:
+    none) and the predecessor array (-1: entered from the virtual start).
+    """
+    n = pos.shape[0]
+    ns = n * _N_MOVES
+    nj_ = nj
+    g = np.full(ns, np.inf)
+    pred = np.full(ns, -2, np.int64)
+    closed = np.zeros(ns, np.bool_)
+    keys = np.empty(ns)
+    nodes = np.empty(ns, np.int64)
+    where = np.full(ns, -1, np.int64)
+    size = 0
+    best = upper
+    best_state = -1
+    for i in range(src.size):
+        u = src[i]
+        for k in range(_N_MOVES):
+            p = pos[u, k]
+            if p < 0:
+                continue
+            v = u + offsets[k, 0] * nj_ + offsets[k, 1]
+            s = v * _N_MOVES + k
+            gv = src_cost[i] + turn_src[i, k] + data[p]
+            if gv < g[s]:
+                g[s] = gv
+                pred[s] = -1
+                size = heap_set(keys, nodes, where, size, s, gv + h_node[v])
+    while size > 0:
+        f, s, size = heap_pop(keys, nodes, where, size)
+        if f >= best:
+            break  # no open state can lead to a cheaper route
+        closed[s] = True
+        gs = g[s]
+        u = s // _N_MOVES
+        h = s - u * _N_MOVES
+        e = exit_of[u]
+        if e >= 0 and gs + exit_cost[e, h] < best:
+            best = gs + exit_cost[e, h]
+            best_state = s
+        row = node_row[u]
+        for k in range(_N_MOVES):
+            p = pos[u, k]
+            if p < 0:
+                continue
+            v = u + offsets[k, 0] * nj_ + offsets[k, 1]
+            t = v * _N_MOVES + k
+            if closed[t]:
+                continue
+            nv = gs + turn[row, h, k] + data[p]
+            if nv < g[t]:
+                g[t] = nv
+                pred[t] = s
+                size = heap_set(keys, nodes, where, size, t, nv + h_node[v])
+    return best, best_state, pred

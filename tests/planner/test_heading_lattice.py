@@ -1,0 +1,127 @@
+"""The heading lattice: its A* equals scipy's Dijkstra over the same state graph, and its optimum is the reported price."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from energy import PhysicsEnergyModel, ground_preset, robot_preset
+from planner import EnergyCost, Lattice, plan_route
+from planner.heading_lattice import HEADING_COUNT, heading_shortest_path, move_turn_angles
+from planner.route import evaluate_route
+from terrain import example_map, procedural_map
+from terrawatt_base.errors import UnknownNameError
+
+
+def robot_family(seed: int):
+    """A robot of the issue's family: turn rate 0.02-2 rad/s (log-uniform), turning resistance 0-1, electronics
+    0.5-3 x the Husky's; and grounds with that turning resistance."""
+    rng = np.random.default_rng(seed)
+    husky = robot_preset("husky")
+    scale = rng.uniform(0.5, 3.0)
+    robot = husky.replace(
+        name=f"family_{seed}", turn_rate_radps=float(np.exp(rng.uniform(np.log(0.02), np.log(2.0)))),
+        sensor_power_w=husky.sensor_power_w * scale, control_stable_power_w=husky.control_stable_power_w * scale,
+        control_standby_power_w=husky.control_standby_power_w * scale)
+    lateral = float(rng.uniform(0.0, 1.0))
+    return robot, lateral
+
+
+def family_cost(tmap, seed: int) -> EnergyCost:
+    robot, lateral = robot_family(seed)
+    grounds = {name: ground_preset(name).replace(lateral_friction_coef=lateral)
+               for name in sorted(set(tmap.ground_names.values()))}
+    return EnergyCost.from_model(tmap, PhysicsEnergyModel(robot), grounds, speed_mps=0.5)
+
+
+def _free_points(cost, rng, n):
+    free = np.argwhere(~cost.blocked)
+    xc, yc = cost.terrain.cell_centres()
+    picks = free[rng.choice(len(free), size=2 * n, replace=False)]
+    jitter = rng.uniform(-0.3, 0.3, size=(2 * n, 2)) * cost.terrain.cell_size_m
+    pts = np.column_stack([xc[picks[:, 1]], yc[picks[:, 0]]]) + jitter
+    return [(tuple(pts[2 * k]), tuple(pts[2 * k + 1])) for k in range(n)]
+
+
+def test_the_turn_between_two_moves_is_their_heading_change():
+    ang = move_turn_angles()
+    assert ang.shape == (HEADING_COUNT, HEADING_COUNT)
+    np.testing.assert_allclose(np.diag(ang), 0.0)
+    np.testing.assert_allclose(ang[np.arange(8), np.arange(8) + 8], math.pi)  # a move and its reverse
+    np.testing.assert_allclose(ang[0, 2], math.pi / 4)  # east, then north-east (row +1, col +1)
+    np.testing.assert_allclose(ang, ang.T)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_astar_equals_the_scipy_dijkstra_over_the_state_graph_and_the_price_of_its_route(seed):
+    rng = np.random.default_rng(100 + seed)
+    tmap = procedural_map((26, 34), 1.0, seed=seed)
+    cost = family_cost(tmap, seed)
+    lattice = Lattice(cost, stride_cells=1 + seed % 2)
+    for start, goal in _free_points(cost, rng, 3):
+        fast = heading_shortest_path(lattice, start, goal, method="astar")
+        ref = heading_shortest_path(lattice, start, goal, method="dijkstra")
+        assert fast.found == ref.found
+        if not ref.found:
+            continue
+        assert fast.objective == pytest.approx(ref.objective, rel=1e-9, abs=1e-9)
+        # the optimum is exactly what a route is priced at: its drive and its turns
+        assert cost.path_energy_j(fast.waypoints_m) == pytest.approx(fast.objective, rel=1e-9)
+        # and no heading-free lattice route priced with its turns is cheaper
+        free = lattice.shortest_path(start, goal, weight="energy")
+        assert free.objective <= fast.objective * (1 + 1e-12)
+        assert fast.objective <= cost.path_energy_j(free.waypoints_m) * (1 + 1e-12)
+
+
+def test_a_slow_turning_robot_trades_drive_energy_for_fewer_turns():
+    tmap = procedural_map((40, 40), 1.0, seed=3)
+    husky = robot_preset("husky")
+    grounds = {g: ground_preset(g) for g in set(tmap.ground_names.values())}
+    slow = EnergyCost.from_model(tmap, PhysicsEnergyModel(husky.replace(turn_rate_radps=0.02)), grounds, 0.5)
+    lattice = Lattice(slow, 1)
+    start, goal = (2.5, 3.0), (36.0, 31.5)
+    free = lattice.shortest_path(start, goal)
+    heading = heading_shortest_path(lattice, start, goal)
+    _, free_turns = slow.turn_energies_j(free.waypoints_m)
+    _, turns = slow.turn_energies_j(heading.waypoints_m)
+    assert turns.sum() < free_turns.sum()  # fewer or gentler turns ...
+    assert heading.objective < slow.path_energy_j(free.waypoints_m)  # ... for less energy in all
+
+
+def test_direct_and_single_node_routes_are_candidates_and_bad_methods_are_refused():
+    tmap = procedural_map((20, 20), 1.0, seed=1)
+    cost = EnergyCost.from_presets(tmap)
+    lattice = Lattice(cost, 1)
+    start = (5.5, 5.5)
+    path = heading_shortest_path(lattice, start, (6.2, 5.9))  # neighbours: the straight segment
+    assert path.found and path.waypoints_m.shape == (2, 2)
+    assert path.objective == pytest.approx(cost.path_energy_j(path.waypoints_m))
+    with pytest.raises(UnknownNameError, match="method must be one of"):
+        heading_shortest_path(lattice, start, (10.0, 10.0), method="bfs")
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_min_energy_route_costs_no_more_than_the_shortest_or_the_heading_free_route(seed):
+    """The issue's family on the bundled map and procedural maps (the benchmark runs 20 maps)."""
+    rng = np.random.default_rng(seed)
+    tmap = example_map() if seed == 0 else procedural_map((48, 48), 1.0, seed=seed)
+    cost = family_cost(tmap, seed)
+    for start, goal in _free_points(cost, rng, 2):
+        route = plan_route(tmap, start, goal, cost=cost, planner="lattice", compare=True)
+        if route.status != "exact":
+            continue
+        free = Lattice.for_cost(cost, 1).shortest_path(start, goal)
+        assert route.energy_j <= route.shortest_energy_j * (1 + 1e-9)
+        assert route.energy_j <= evaluate_route(cost, free.waypoints_m).energy_j * (1 + 1e-9)
+        assert route.optimality_ratio <= 1.0 + 1e-9  # refined from the heading lattice's optimum
+
+
+def test_refinement_never_returns_repeated_waypoints():
+    from planner.refine import drop_repeats
+
+    pts = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 0.0], [2.0, 1.0], [3.0, 1.0], [3.0, 1.0]])
+    np.testing.assert_array_equal(drop_repeats(pts), [[0, 0], [1, 0], [2, 1], [3, 1]])
+    clean = pts[[0, 1, 3]]
+    assert drop_repeats(clean) is clean
