@@ -20,7 +20,7 @@ from terrawatt_base.figure_file import draw_figure
 
 from .cost_source import edge_costs
 from .edge_cost import EnergyCost
-from .planning import GRAPH_PLANNERS, PLANNERS, plan_route
+from .planning import GRAPH_PLANNERS, PLANNERS, plan_route, search_objective
 from .plot import RouteLine, plot_routes
 from .risk import INTERVAL_LEVEL, RouteEnergyInterval, check_planning_risk, risk_cost, route_energy_interval
 from .route import Route
@@ -306,6 +306,7 @@ class PlanReport:
             "goal_xy_m": list(self.goal_xy_m),
             **lonlat_fields(self.terrain, self.start_xy_m, self.goal_xy_m),
             "planner": self.planner,
+            "search_objective": search_objective(self.planner),
             "time_limit_s": self.time_limit_s if self.max_evaluations is None else None,
             "max_evaluations": self.max_evaluations,
             "seed": self.seed,

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from terrain import TerrainMap
-from terrawatt_base.checks import check_bool, check_int, check_real, check_seed
+from terrawatt_base.checks import check_bool, check_choice, check_int, check_real, check_seed
 from terrawatt_base.errors import GridMismatchError, InvalidParameterError, UnknownNameError
 
 from .anyangle import anyangle_path, polish_path
@@ -53,7 +53,7 @@ from .route import Route, RouteComparison, empty_route, evaluate_route
 from .settings import PlannerSettings
 
 __all__ = ["plan_route", "shortest_route", "compare_route", "PLANNERS", "PLANNER_SEARCHES", "PlannerSearch",
-           "OMPL_PLANNERS", "GRAPH_PLANNERS", "REFINE_DEFAULT_SEED"]
+           "OMPL_PLANNERS", "GRAPH_PLANNERS", "REFINE_DEFAULT_SEED", "search_objective"]
 
 #: Every planner name :func:`plan_route` accepts (the keys of :data:`PLANNER_SEARCHES`).
 PLANNERS = OMPL_PLANNERS + ("anyangle", "coarse", "lattice")
@@ -61,6 +61,17 @@ PLANNERS = OMPL_PLANNERS + ("anyangle", "coarse", "lattice")
 GRAPH_PLANNERS = ("anyangle", "coarse", "lattice")
 #: Seed of the refinement when :func:`plan_route` gets ``seed=None``.
 REFINE_DEFAULT_SEED = 0
+
+
+def search_objective(planner: str) -> str:
+    """What ``planner``'s search minimises, in words (route.json's ``search_objective``): the lattice the
+    reported price itself, drive and turns; the others drive energy, their turns paid only through the
+    refinement, which keeps a step only when drive and turns together went down."""
+    check_choice("planner", planner, PLANNERS)
+    if planner == "lattice":
+        return "drive and turn energy (the heading lattice's optimum: the price every route reports)"
+    return ("drive energy (a search without heading cannot see turns); the refinement keeps only steps that "
+            "lower drive and turn energy together")
 
 
 # --------------------------------------------------------------------------- input checks

@@ -26,7 +26,8 @@ def test_demo_plans_on_the_bundled_map_and_writes_json_and_plot(tmp_path, capsys
     # the saving printed is the saving between the two routes written
     assert saved == pytest.approx(100.0 * (1 - energies["min_energy"] / energies["shortest"]), rel=1e-9)
     assert saved > 5.0  # the example map is built so that the straight line climbs a hill and crosses sand
-    assert data["optimality_ratio"] < 1.02  # against the heading lattice's optimum, turns included in both
+    assert data["optimality_ratio"] <= 1.0 + 1e-9  # refined from the heading lattice's optimum, turns in both
+    assert data["search_objective"].startswith("drive and turn energy")  # what the lattice's search minimised
     assert is_png(tmp_path / "route.png")
 
 

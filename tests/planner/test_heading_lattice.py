@@ -125,3 +125,14 @@ def test_refinement_never_returns_repeated_waypoints():
     np.testing.assert_array_equal(drop_repeats(pts), [[0, 0], [1, 0], [2, 1], [3, 1]])
     clean = pts[[0, 1, 3]]
     assert drop_repeats(clean) is clean
+
+
+def test_each_planner_says_what_its_search_minimised():
+    from planner.planning import PLANNERS, search_objective
+
+    assert search_objective("lattice").startswith("drive and turn energy")
+    for name in PLANNERS:
+        if name != "lattice":
+            assert search_objective(name).startswith("drive energy (a search without heading cannot see turns)")
+    with pytest.raises(UnknownNameError):
+        search_objective("dijkstra")
