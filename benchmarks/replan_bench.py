@@ -6,8 +6,10 @@ simulated excitation run of that ground), the script times, for each lattice str
 
 (a) full map preparation from scratch: every model's table (one batched prediction each),
     the :class:`EnergyCost` and the lattice graph (the baseline, measured in the same run),
-    and a search from scratch (``Lattice.shortest_path``, A*); the incremental planner's
-    first search (:class:`planner.IncrementalPlanner`, D* Lite from the goal) is timed too;
+    and a search from scratch (:func:`planner.heading_lattice.heading_shortest_path`: the heading
+    lattice's A*, drive and turns, as ``plan_route(planner="lattice")`` searches); the incremental
+    planner's first search (:class:`planner.IncrementalPlanner`, D* Lite from the goal over the same
+    states) is timed too;
 (b) two model updates, one after the other:
 
     - ``patch``: a new model on a 20 x 20 cell patch across the middle of the current route;
@@ -60,6 +62,7 @@ from planner import (
     plan_route,
     warm_up_kernels,
 )
+from planner.heading_lattice import heading_shortest_path
 from planner.kernels import graph
 from terrain import CellModelRegistry, TerrainMap
 from terrawatt_base.atomic import write_json_atomic
@@ -147,7 +150,7 @@ def run(size: int, repeats: int, strides: tuple[int, ...], seed: int, patch_cell
             start = _free_point(cost, (0.05, 0.3), labels, main)
             goal = _free_point(cost, (0.95, 0.7), labels, main)
             t0 = time.perf_counter()
-            first = lat.shortest_path(start, goal)
+            first = heading_shortest_path(lat, start, goal)
             base["scratch_search_s"].append(time.perf_counter() - t0)
             t0 = time.perf_counter()
             planner = IncrementalPlanner(lat, goal)
@@ -175,7 +178,7 @@ def run(size: int, repeats: int, strides: tuple[int, ...], seed: int, patch_cell
                 repair = time.perf_counter() - t0
                 # the same replan from scratch on the refreshed lattice, and with refinement
                 t0 = time.perf_counter()
-                ref = lat2.shortest_path(start, goal)
+                ref = heading_shortest_path(lat2, start, goal)
                 search = time.perf_counter() - t0
                 t0 = time.perf_counter()
                 route = plan_route(tmap, start, goal, cost=cost2, planner="lattice", compare=False,

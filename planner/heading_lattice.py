@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import Any
 
 import numpy as np
 from scipy.sparse import csr_matrix
@@ -40,7 +41,8 @@ from .kernels.heading import backward_cost_to_go, heading_astar
 from .lattice import LATTICE_METHODS, LATTICE_OFFSETS, Lattice, LatticePath
 from .points import as_points
 
-__all__ = ["heading_shortest_path", "HEADING_COUNT", "move_turn_angles"]
+__all__ = ["heading_shortest_path", "HEADING_COUNT", "move_turn_angles", "node_turns", "start_joins", "goal_exits",
+           "no_move_route"]
 
 #: Headings of the heading lattice: one per lattice move.
 HEADING_COUNT = LATTICE_OFFSETS.shape[0]
@@ -55,10 +57,61 @@ def _turn_angle(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.abs((b - a + math.pi) % (2 * math.pi) - math.pi)
 
 
+#: Heading (rad, in map cell units (row, col)) of each lattice move.
+_MOVE_HEADING = _heading_rad(LATTICE_OFFSETS[:, 0].astype(float), LATTICE_OFFSETS[:, 1].astype(float))
+
+
 def move_turn_angles() -> np.ndarray:
     """(16, 16) unsigned angle (rad) of the turn from arriving by move ``h`` to leaving by move ``k``."""
-    heading = _heading_rad(LATTICE_OFFSETS[:, 0].astype(float), LATTICE_OFFSETS[:, 1].astype(float))
-    return _turn_angle(heading[:, None], heading[None, :])
+    return _turn_angle(_MOVE_HEADING[:, None], _MOVE_HEADING[None, :])
+
+
+def node_turns(lattice: Lattice) -> tuple[np.ndarray, np.ndarray]:
+    """The turn prices of ``lattice``'s nodes: each node's turn table row (0 on a blocked cell: it has no
+    move) and the turn energy (J) of every row by heading pair, shape (rows, 16, 16)."""
+    cost = lattice.cost
+    cells = np.ix_(lattice.node_rows, lattice.node_cols)
+    node_row = np.where(cost.blocked[cells], 0, cost.ground_rows[cells]).ravel().astype(np.int64)
+    rows = np.arange(cost.turn_table_j.shape[0])[:, None, None]
+    return node_row, np.ascontiguousarray(cost.turn_energy_at(rows, move_turn_angles()[None, :, :]))
+
+
+def _cell_units(lattice: Lattice, xy: np.ndarray) -> np.ndarray:
+    """Points (m) in map cell units (row, col): headings are measured there (a uniform scale of x, y)."""
+    terrain = lattice.cost.terrain
+    x0, y0 = terrain.origin_xy_m
+    xy = np.atleast_2d(xy)
+    return np.column_stack([xy[:, 1] - y0, xy[:, 0] - x0]) / terrain.cell_size_m
+
+
+def _node_units(lattice: Lattice, nodes: np.ndarray) -> np.ndarray:
+    return _cell_units(lattice, lattice.node_xy(nodes))
+
+
+def start_joins(lattice: Lattice, start: np.ndarray, node_row: np.ndarray,
+                turn_row: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The nodes the start joins, their joining energies, the first turn (J) at each onto each move,
+    shape (len(src), 16), and each joining segment's heading (rad; ``nan`` for a zero-length join,
+    which has no heading and so no turn)."""
+    src, e_src = lattice.joins(start)
+    rc = _node_units(lattice, src) - _cell_units(lattice, start)
+    heading = np.where(np.hypot(rc[:, 0], rc[:, 1]) > 0, _heading_rad(rc[:, 0], rc[:, 1]), np.nan)
+    ang = _turn_angle(heading[:, None], _MOVE_HEADING[None, :])
+    turn = np.where(np.isfinite(heading)[:, None], turn_row(node_row[src][:, None], np.nan_to_num(ang)), 0.0)
+    return src, e_src, turn, heading
+
+
+def goal_exits(lattice: Lattice, goal: np.ndarray, node_row: np.ndarray,
+               turn_row: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The nodes joined to the goal, their segments' energies, the exit cost (J) from each with each
+    heading (the turn onto the goal segment plus its energy), shape (len(dst), 16), and each exit
+    segment's heading (``nan``: zero length, no turn)."""
+    dst, e_dst = lattice.joins(goal, to_point=True)
+    rc = _cell_units(lattice, goal) - _node_units(lattice, dst)
+    heading = np.where(np.hypot(rc[:, 0], rc[:, 1]) > 0, _heading_rad(rc[:, 0], rc[:, 1]), np.nan)
+    ang = _turn_angle(_MOVE_HEADING[None, :], heading[:, None])
+    turn = np.where(np.isfinite(heading)[:, None], turn_row(node_row[dst][:, None], np.nan_to_num(ang)), 0.0)
+    return dst, e_dst, e_dst[:, None] + turn, heading
 
 
 class _Query:
@@ -66,55 +119,22 @@ class _Query:
 
     def __init__(self, lattice: Lattice, start: np.ndarray, goal: np.ndarray) -> None:
         cost = lattice.cost
-        self.lattice = lattice
-        self.src, self.e_src = lattice.joins(start)
-        self.dst, self.e_dst = lattice.joins(goal, to_point=True)
-        rows = cost.ground_rows[np.ix_(lattice.node_rows, lattice.node_cols)].ravel()
-        self.node_row = np.where(cost.blocked[np.ix_(lattice.node_rows, lattice.node_cols)].ravel(), 0, rows)
-        self.node_row = self.node_row.astype(np.int64)
-        n_rows = cost.turn_table_j.shape[0]
-        angles = move_turn_angles()
-        self.turn = cost.turn_energy_at(np.arange(n_rows)[:, None, None], angles[None, :, :])
-        move_heading = _heading_rad(LATTICE_OFFSETS[:, 0].astype(float), LATTICE_OFFSETS[:, 1].astype(float))
-        # the sign of y per row does not change an unsigned angle: headings in (row, col) units throughout
-        sxy = self._node_rc(self.src)
-        dxy = self._node_rc(self.dst)
-        srow, scol = self._point_rc(start)
-        grow, gcol = self._point_rc(goal)
-        join_len = np.hypot(sxy[:, 0] - srow, sxy[:, 1] - scol)
-        join_heading = _heading_rad(sxy[:, 0] - srow, sxy[:, 1] - scol)
-        ang = _turn_angle(join_heading[:, None], move_heading[None, :])
-        self.turn_src = np.where(join_len[:, None] > 0,
-                                 cost.turn_energy_at(self.node_row[self.src][:, None], ang), 0.0)
-        exit_len = np.hypot(grow - dxy[:, 0], gcol - dxy[:, 1])
-        exit_heading = _heading_rad(grow - dxy[:, 0], gcol - dxy[:, 1])
-        ang = _turn_angle(move_heading[None, :], exit_heading[:, None])
-        exit_turn = np.where(exit_len[:, None] > 0, cost.turn_energy_at(self.node_row[self.dst][:, None], ang), 0.0)
-        self.exit_cost = self.e_dst[:, None] + exit_turn
+        self.node_row, self.turn = node_turns(lattice)
+        self.src, self.e_src, self.turn_src, join_heading = start_joins(lattice, start, self.node_row,
+                                                                        cost.turn_energy_at)
+        self.dst, self.e_dst, self.exit_cost, exit_heading = goal_exits(lattice, goal, self.node_row,
+                                                                        cost.turn_energy_at)
         self.exit_of = np.full(lattice.n_nodes, -1, dtype=np.int64)
         self.exit_of[self.dst] = np.arange(self.dst.size)
         # routes of no lattice move: start -> joined node -> goal, the turn at the node
-        both = np.intersect1d(self.src, self.dst)
-        self.via_total = np.full(both.size, math.inf)
-        self.via = both
-        if both.size:
-            i = np.searchsorted(self.src, both) if np.all(np.diff(self.src) > 0) else _index_of(self.src, both)
-            j = _index_of(self.dst, both)
-            ang = _turn_angle(join_heading[i], exit_heading[j])
-            turn = np.where((join_len[i] > 0) & (exit_len[j] > 0), cost.turn_energy_at(self.node_row[both], ang), 0.0)
+        self.via = np.intersect1d(self.src, self.dst)
+        self.via_total = np.full(self.via.size, math.inf)
+        if self.via.size:
+            i, j = _index_of(self.src, self.via), _index_of(self.dst, self.via)
+            a, b = join_heading[i], exit_heading[j]
+            both = np.isfinite(a) & np.isfinite(b)
+            turn = np.where(both, cost.turn_energy_at(self.node_row[self.via], np.nan_to_num(_turn_angle(a, b))), 0.0)
             self.via_total = self.e_src[i] + turn + self.e_dst[j]
-
-    def _node_rc(self, nodes: np.ndarray) -> np.ndarray:
-        """Node positions in map cell units (row, col) of the node grid's cells (centres)."""
-        lat = self.lattice
-        nj = lat.node_cols.size
-        return np.column_stack([lat.node_rows[nodes // nj], lat.node_cols[nodes % nj]]).astype(float) + 0.5
-
-    def _point_rc(self, p: np.ndarray) -> tuple[float, float]:
-        terrain = self.lattice.cost.terrain
-        x0, y0 = terrain.origin_xy_m
-        d = terrain.cell_size_m
-        return (float(p[1]) - y0) / d, (float(p[0]) - x0) / d
 
 
 def _index_of(sorted_or_not: np.ndarray, values: np.ndarray) -> np.ndarray:
@@ -157,11 +177,7 @@ def heading_shortest_path(lattice: Lattice, start_xy_m: tuple[float, float], goa
     cost.check_inside(pts, "start/goal")
     start, goal = pts
     q = _Query(lattice, start, goal)
-    best = float(cost.segment_energy_j(start, goal)[0])  # the direct segment: no turn
-    nodes: list[int] = []
-    if q.via.size and float(q.via_total.min()) < best:
-        k = int(np.argmin(q.via_total))
-        best, nodes = float(q.via_total[k]), [int(q.via[k])]
+    best, nodes = _no_move_route(cost, q, start, goal)
     if q.src.size and q.dst.size:
         solve = _astar if method == "astar" else _dijkstra
         total, chain = solve(lattice, q, start, goal, best)
@@ -169,6 +185,23 @@ def heading_shortest_path(lattice: Lattice, start_xy_m: tuple[float, float], goa
             best, nodes = total, chain
     path = lattice.path_via(start, nodes, goal, best, "energy")
     return LatticePath(path.found, path.waypoints_m, path.objective, "energy", time.perf_counter() - t0)
+
+
+def _no_move_route(cost: Any, q: _Query, start: np.ndarray, goal: np.ndarray) -> tuple[float, list[int]]:
+    """The best route of no lattice move: the direct segment (no turn) or start, one joined node, goal."""
+    best = float(cost.segment_energy_j(start, goal)[0])
+    nodes: list[int] = []
+    if q.via.size and float(q.via_total.min()) < best:
+        k = int(np.argmin(q.via_total))
+        best, nodes = float(q.via_total[k]), [int(q.via[k])]
+    return best, nodes
+
+
+def no_move_route(lattice: Lattice, start_xy_m: Any, goal_xy_m: Any) -> tuple[float, list[int]]:
+    """Energy (J) and nodes of the best route between two checked points that takes no lattice move: the
+    direct segment, or a node joined to both with its turn (an incremental search adds the rest)."""
+    start, goal = np.asarray(start_xy_m, float), np.asarray(goal_xy_m, float)
+    return _no_move_route(lattice.cost, _Query(lattice, start, goal), start, goal)
 
 
 def _upper_bound(lattice: Lattice, q: _Query, start: np.ndarray, goal: np.ndarray, best: float) -> float:

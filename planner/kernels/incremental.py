@@ -29,7 +29,8 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["reverse_weights", "set_moves", "dstar_touch", "dstar_rekey", "dstar_search", "dstar_path"]
+__all__ = ["reverse_weights", "set_moves", "dstar_touch", "dstar_rekey", "dstar_search", "dstar_path", "heading_touch",
+           "heading_rekey", "heading_search", "heading_path"]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -307,4 +308,180 @@ def dstar_path(src, src_cost, fw, delta, g, exit_cost):  # pragma: no cover - co
             return chain[:count], total + exit_cost[u]
         total += bw
         u = bv
+    return chain[:0], math.inf  # no descent to the goal (a zero-energy cycle): not expected
+
+
+# ------------------------------------------------------------------ the heading lattice's states
+# The same D* Lite over the heading lattice's states ``s = u * nd + h`` (at node ``u``, arrived by
+# move ``h``; see :mod:`planner.kernels.heading`): ``g[s]`` / ``rhs[s]`` per state, ``exit_cost[s]`` the
+# exit to the goal from ``u`` with heading ``h`` (its turn included), and a move ``k`` from state
+# ``(u, h)`` costing ``turn[node_row[u], h, k] + fw[u, k]`` to state ``(u + delta[k], k)``. The
+# predecessors of state ``(v, k)`` are the ``nd`` states of node ``v - delta[k]``. The heuristic
+# ``h_per_m * |start - u|`` of the node serves all its states.
+
+@numba.njit(cache=True, nogil=True)
+def _rhs_of_state(s, fw, delta, turn, node_row, g, exit_cost):  # pragma: no cover - compiled
+    nd = delta.size
+    u = s // nd
+    h = s - u * nd
+    r = exit_cost[s]
+    row = node_row[u]
+    for k in range(nd):
+        w = fw[u, k]
+        if w < math.inf:
+            t = turn[row, h, k] + w + g[(u + delta[k]) * nd + k]
+            if t < r:
+                r = t
+    return r
+
+
+@numba.njit(cache=True, nogil=True)
+def _update_state(s, nd, g, rhs, key1, key2, nodes, where, size, col_x, row_y, nj, sx, sy, h_per_m):  # pragma: no cover
+    if g[s] != rhs[s]:
+        m = min(g[s], rhs[s])
+        return _heap_set(key1, key2, nodes, where, size, s, m + _h(s // nd, col_x, row_y, nj, sx, sy, h_per_m), m)
+    if where[s] >= 0:
+        return _heap_remove(key1, key2, nodes, where, size, s)
+    return size
+
+
+@numba.njit(cache=True, nogil=True)
+def heading_touch(touched_nodes, fw, delta, turn, node_row, g, rhs, exit_cost, key1, key2, nodes, where, size,
+                  col_x, row_y, nj, sx, sy, h_per_m):  # pragma: no cover - compiled
+    """Recompute ``rhs`` of every state of the ``touched_nodes`` (whose out-moves or exits changed) and fix
+    their place in the open set; return its size."""
+    nd = delta.size
+    for t in range(touched_nodes.size):
+        u = touched_nodes[t]
+        for h in range(nd):
+            s = u * nd + h
+            rhs[s] = _rhs_of_state(s, fw, delta, turn, node_row, g, exit_cost)
+            size = _update_state(s, nd, g, rhs, key1, key2, nodes, where, size, col_x, row_y, nj, sx, sy, h_per_m)
+    return size
+
+
+@numba.njit(cache=True, nogil=True)
+def heading_rekey(g, rhs, key1, key2, nodes, where, size, nd, col_x, row_y, nj, sx, sy, h_per_m):  # pragma: no cover
+    """:func:`dstar_rekey` for states (the heuristic of a state is its node's)."""
+    for i in range(size):
+        s = nodes[i]
+        m = min(g[s], rhs[s])
+        key1[i] = m + _h(s // nd, col_x, row_y, nj, sx, sy, h_per_m)
+        key2[i] = m
+    for i in range(size // 2 - 1, -1, -1):
+        _sift_down(key1, key2, nodes, where, size, i)
+
+
+@numba.njit(cache=True, nogil=True)
+def _heading_start_value(src, src_cost, turn_src, fw, delta, g):  # pragma: no cover - compiled
+    """The virtual start's value: the best first move of a start-joined node, its first turn included."""
+    nd = delta.size
+    best = math.inf
+    for i in range(src.size):
+        u = src[i]
+        for k in range(nd):
+            w = fw[u, k]
+            if w == math.inf:
+                continue
+            t = src_cost[i] + turn_src[i, k] + w + g[(u + delta[k]) * nd + k]
+            if t < best:
+                best = t
+    return best
+
+
+@numba.njit(cache=True, nogil=True)
+def heading_search(src, src_cost, turn_src, fw, rw, delta, turn, node_row, g, rhs, exit_cost, key1, key2, nodes,
+                   where, size, col_x, row_y, nj, sx, sy, h_per_m):  # pragma: no cover - compiled
+    """:func:`dstar_search` over the heading lattice's states; returns the start's value, the states
+    expanded and the open set's size."""
+    nd = delta.size
+    expanded = 0
+    while size > 0:
+        best = _heading_start_value(src, src_cost, turn_src, fw, delta, g)
+        if _less(best, best, key1[0], key2[0]):
+            break
+        s = nodes[0]
+        expanded += 1
+        v = s // nd
+        k = s - v * nd
+        if g[s] > rhs[s]:  # over-consistent: settle it, offer it to the states of the node it is entered from
+            g[s] = rhs[s]
+            size = _heap_remove(key1, key2, nodes, where, size, s)
+            w = rw[v, k]
+            if w < math.inf:
+                p = v - delta[k]
+                row = node_row[p]
+                for h in range(nd):
+                    q = p * nd + h
+                    t = turn[row, h, k] + w + g[s]
+                    if t < rhs[q]:
+                        rhs[q] = t
+                        size = _update_state(q, nd, g, rhs, key1, key2, nodes, where, size, col_x, row_y, nj,
+                                             sx, sy, h_per_m)
+        else:  # under-consistent: forget its value; the states that relied on it look again
+            g_old = g[s]
+            g[s] = math.inf
+            w = rw[v, k]
+            if w < math.inf:
+                p = v - delta[k]
+                row = node_row[p]
+                for h in range(nd):
+                    q = p * nd + h
+                    if rhs[q] == turn[row, h, k] + w + g_old:
+                        rhs[q] = _rhs_of_state(q, fw, delta, turn, node_row, g, exit_cost)
+                        size = _update_state(q, nd, g, rhs, key1, key2, nodes, where, size, col_x, row_y, nj,
+                                             sx, sy, h_per_m)
+            size = _update_state(s, nd, g, rhs, key1, key2, nodes, where, size, col_x, row_y, nj, sx, sy, h_per_m)
+    return _heading_start_value(src, src_cost, turn_src, fw, delta, g), expanded, size
+
+
+@numba.njit(cache=True, nogil=True)
+def heading_path(src, src_cost, turn_src, fw, delta, turn, node_row, g, exit_cost):  # pragma: no cover - compiled
+    """:func:`dstar_path` over states: the route's nodes (from its start-joined node) and its objective."""
+    nd = delta.size
+    n = fw.shape[0]
+    chain = np.empty(n + 1, np.int64)
+    best = math.inf
+    first = -1
+    s = -1
+    total = math.inf
+    for i in range(src.size):
+        u = src[i]
+        for k in range(nd):
+            w = fw[u, k]
+            if w == math.inf:
+                continue
+            t = src_cost[i] + turn_src[i, k] + w + g[(u + delta[k]) * nd + k]
+            if t < best:
+                best = t
+                first = u
+                s = (u + delta[k]) * nd + k
+                total = src_cost[i] + turn_src[i, k] + w
+    if s < 0:
+        return chain[:0], math.inf
+    chain[0] = first
+    count = 1
+    while count <= n:
+        u = s // nd
+        h = s - u * nd
+        chain[count] = u
+        count += 1
+        be = exit_cost[s]
+        bt = math.inf
+        bs = -1
+        row = node_row[u]
+        for k in range(nd):
+            w = fw[u, k]
+            if w == math.inf:
+                continue
+            step = turn[row, h, k] + w
+            t = step + g[(u + delta[k]) * nd + k]
+            if t < be:
+                be = t
+                bt = step
+                bs = (u + delta[k]) * nd + k
+        if bs < 0:
+            return chain[:count], total + exit_cost[s]
+        total += bt
+        s = bs
     return chain[:0], math.inf  # no descent to the goal (a zero-energy cycle): not expected

@@ -44,7 +44,7 @@ from .settings import AdaptiveSettings
 
 __all__ = ["NAVIGATOR_FORMAT_VERSION", "write_navigator_state", "read_navigator_setup", "restore_navigator_state"]
 
-NAVIGATOR_FORMAT_VERSION = 1
+NAVIGATOR_FORMAT_VERSION = 2  # 2: the replanner searches over heading (16 states per node)
 _KIND = "navigator"
 _JSON, _NPZ, _REGISTRY = "navigator.json", "state.npz", "registry"
 _LOG_FIELDS = ("time_s", "v_mps", "omega_radps", "current_left_a", "current_right_a", "accel_time_s",

@@ -62,7 +62,7 @@ def test_the_summary_says_map_robot_budget_and_saving(report):
     assert lines[2] == "start (5.0, 5.0) -> goal (35.0, 5.0); planner lattice, no budget (a graph search), seed 0"
     assert report.table() in text
     assert lines[-1].startswith("energy saved vs shortest route: ")
-    assert f"drive energy / 16-connected lattice optimum: {report.route.optimality_ratio:.3f}" in lines[-1]
+    assert f"energy / heading-lattice optimum (turns in both): {report.route.optimality_ratio:.3f}" in lines[-1]
 
 
 def test_route_json_holds_the_query_the_table_and_every_route(report):
@@ -172,7 +172,7 @@ def test_helpers_rows_table_lonlat_compile_line(report):
     row = route_row("lost", lost, 100.0)
     assert math.isnan(row["energy_j"]) and math.isnan(row["ratio_to_lattice_optimum"])
     assert math.isnan(route_row("x", report.route, 0.0)["ratio_to_lattice_optimum"])
-    table = route_table([route_row("x", report.route, report.route.drive_energy_j)]).splitlines()
+    table = route_table([route_row("x", report.route, report.route.energy_j)]).splitlines()
     assert len(table) == 3 and set(table[1]) == {"-"} and table[2].split()[-2] == "1.000"
     assert lonlat_fields(None, START, GOAL) == {} and lonlat_fields(report.terrain, START, GOAL) == {}
     assert compile_line(0.5) == [] and compile_line(2.0)[0].startswith("(compiled the edge-cost kernels in 2.0 s")

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from planner import EnergyCost, IncrementalPlanner, Lattice, plan_route
+from planner.heading_lattice import heading_shortest_path
 from terrain import BlockedPositionError, InvalidParameterError, OutOfBoundsError, TerrainMap
 from terrain.procedural import procedural_map
 
@@ -40,12 +41,17 @@ def _free_point(cost: EnergyCost, rng: np.random.Generator) -> tuple[float, floa
 
 
 def _check_equal(planner: IncrementalPlanner, start: tuple[float, float], stride: int) -> None:
-    """The incremental answer equals a fresh lattice's full search on the current cost."""
+    """The incremental answer equals a fresh lattice's full search on the current cost (over heading, drive and
+    turns, or heading-free, as the planner searches)."""
     got = planner.plan(start)
-    ref = Lattice(planner.cost, stride).shortest_path(start, tuple(planner.goal_xy_m))
+    fresh = Lattice(planner.cost, stride)
+    goal = tuple(planner.goal_xy_m)
+    ref = heading_shortest_path(fresh, start, goal) if planner.heading else fresh.shortest_path(start, goal)
     assert got.found == ref.found
     if ref.found:
         assert got.objective == pytest.approx(ref.objective, rel=1e-9)
+        if planner.heading:  # the price every route reports, turns included
+            assert planner.cost.path_energy_j(got.waypoints_m) == pytest.approx(got.objective, rel=1e-9)
         # the route's own energy (its joins and moves) is the objective it reports
         assert got.waypoints_m[0].tolist() == list(start) and np.allclose(got.waypoints_m[-1], planner.goal_xy_m)
     else:
@@ -76,11 +82,12 @@ def _updates(cost: EnergyCost, rng: np.random.Generator) -> list[tuple[str, np.n
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 @pytest.mark.parametrize("stride", [1, 2])
-def test_incremental_replans_equal_full_searches_after_random_updates(seed, stride):
+@pytest.mark.parametrize("heading", [True, False])
+def test_incremental_replans_equal_full_searches_after_random_updates(seed, stride, heading):
     rng = np.random.default_rng(100 * seed + stride)
     cost = _cost(seed)
     goal = _free_point(cost, rng)
-    planner = IncrementalPlanner(Lattice.for_cost(cost, stride), goal)
+    planner = IncrementalPlanner(Lattice.for_cost(cost, stride), goal, heading=heading)
     for _ in range(3):  # a moving start, no change of energies
         _check_equal(planner, _free_point(cost, rng), stride)
     for kind, grade, turn, rows in _updates(cost, rng):
