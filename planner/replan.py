@@ -178,10 +178,12 @@ class IncrementalPlanner:
         changed), ascending; the planner takes the new prices."""
         node_row, turn = node_turns(lattice)
         old_row, old_turn = self._node_row, self._turn
-        pairs, inverse = np.unique(np.column_stack([old_row, node_row]), axis=0, return_inverse=True)
-        same = np.array([np.array_equal(old_turn[a], turn[b]) for a, b in pairs])
+        k = min(old_turn.shape[0], turn.shape[0])
+        table_changed = np.ones(turn.shape[0], dtype=bool)  # rows new to the table count as changed
+        table_changed[:k] = np.any(old_turn[:k] != turn[:k], axis=(1, 2))
+        moved = old_row != node_row  # a node whose cell now reads another row (equal tables: touched anyway)
         self._node_row, self._turn = node_row, turn
-        return np.flatnonzero(~same[inverse.ravel()]).astype(np.int64)
+        return np.flatnonzero(moved | table_changed[node_row]).astype(np.int64)
 
     def update(self, lattice: Lattice) -> IncrementalPlanner:
         """Take new move energies: ``lattice`` is this planner's lattice refreshed for new tables.
