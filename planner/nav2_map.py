@@ -34,6 +34,7 @@ from terrawatt_base.errors import FileFormatError, GridMismatchError, InvalidPar
 
 from .edge_cost import EnergyCost
 from .energy_costmap import EnergyCostmap
+from .ros_export import check_frame_origin
 
 __all__ = [
     "NAV2_OCCUPIED_PIXEL",
@@ -157,18 +158,10 @@ def nav2_map_paths(path: str | os.PathLike[str], name: str = "path") -> tuple[Pa
     return target, check_output_path(target.with_suffix(".pgm"), name)
 
 
-def _frame_origin(frame_origin_xy_m: Any) -> tuple[float, float]:
-    try:
-        fx, fy = frame_origin_xy_m
-    except (TypeError, ValueError) as exc:
-        raise InvalidParameterError(f"frame_origin_xy_m must be (x, y) in metres, got {frame_origin_xy_m!r}") from exc
-    return check_real("frame_origin_xy_m[0]", fx), check_real("frame_origin_xy_m[1]", fy)
-
-
 def _write_pair(yaml_path: Path, pgm_path: Path, pixels: np.ndarray, grid: Grid, frame_origin_xy_m: Any, *,
                 mode: str, comments: list[str]) -> Path:
     """The PGM (rows flipped: first row north), then the YAML that names it; each atomically."""
-    fx, fy = _frame_origin(frame_origin_xy_m)
+    fx, fy = check_frame_origin(frame_origin_xy_m, bounds=grid.bounds)
     rows, cols = pixels.shape
     header = f"P5\n# terrawatt {mode} map, first row north\n{cols} {rows}\n255\n".encode("ascii")
     with atomic_open(pgm_path, "wb") as fh:
@@ -216,7 +209,9 @@ def write_nav2_map(
         Cells of unknown content (e.g. filled from DEM nodata); they take precedence.
     frame_origin_xy_m : (float, float)
         The map frame's origin in the map's coordinates: the YAML's origin is the map's
-        lower-left corner minus it. Default: the map frame is the map's coordinates.
+        lower-left corner minus it. Default: the map frame is the map's coordinates. Any other
+        origin must lie within :data:`~planner.ros_export.MAX_FRAME_ORIGIN_DISTANCE_M` of the
+        map's bounds (:func:`~planner.ros_export.check_frame_origin`).
 
     Returns
     -------
@@ -227,7 +222,8 @@ def write_nav2_map(
     ------
     InvalidParameterError
         A path not ending in ``.yaml`` / ``.yml`` or a folder; not a TerrainMap; ``unknown``
-        of another shape or not boolean; a non-finite frame origin.
+        of another shape or not boolean; a frame origin not finite or farther than
+        :data:`~planner.ros_export.MAX_FRAME_ORIGIN_DISTANCE_M` from the map.
     GridMismatchError
         ``cost`` priced on another grid.
 
@@ -298,7 +294,8 @@ def write_nav2_costmap(
     Raises
     ------
     InvalidParameterError
-        A bad path; not an EnergyCostmap; ``top_j_per_m`` not finite and > 0.
+        A bad path; not an EnergyCostmap; ``top_j_per_m`` not finite and > 0; a frame origin
+        not finite or farther than :data:`~planner.ros_export.MAX_FRAME_ORIGIN_DISTANCE_M` from the map.
     """
     yaml_path, pgm_path = nav2_map_paths(path)
     if not isinstance(costmap, EnergyCostmap):

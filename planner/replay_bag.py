@@ -246,7 +246,8 @@ def write_replay_bag(
         Frame of the Paths and their poses.
     frame_origin_xy_m : (float, float), optional
         The frame's origin in map coordinates: poses are waypoints minus it. None: (0, 0), the
-        frame on the map's coordinates.
+        frame on the map's coordinates. Any other origin must lie within
+        :data:`~planner.ros_export.MAX_FRAME_ORIGIN_DISTANCE_M` of the map's bounds.
     topic_prefix : str
         Namespace of the three topics (starts with ``/``).
     start_time_ns : int
@@ -262,9 +263,10 @@ def write_replay_bag(
     ------
     InvalidParameterError
         A ``.bag`` / ``.db3`` name or an existing directory that is not a bag; not a
-        TerrainMap; a bad frame, prefix, origin or start; an input of the wrong kind or shape
-        (waypoints not (N, 2), forecast arrays not 1-D, of unequal lengths, missing or unknown
-        keys, a time not finite, an infinite value); a decision not a JSON-able dict.
+        TerrainMap; a bad frame, prefix, origin (not finite, or too far from the map) or
+        start; an input of the wrong kind or shape (waypoints not (N, 2), forecast arrays not
+        1-D, of unequal lengths, missing or unknown keys, a time not finite, an infinite
+        value); a decision not a JSON-able dict.
     DataError
         The times of an input decrease, or put a message before the clock's 0 (or past 2**63 ns).
     OutOfBoundsError
@@ -288,7 +290,7 @@ def write_replay_bag(
         raise InvalidParameterError(f"terrain must be a TerrainMap, got {type(terrain).__name__!r}")
     check_text("frame_id", frame_id)
     check_topic_prefix(topic_prefix)
-    origin = (0.0, 0.0) if frame_origin_xy_m is None else check_frame_origin(frame_origin_xy_m)
+    origin = (0.0, 0.0) if frame_origin_xy_m is None else check_frame_origin(frame_origin_xy_m, bounds=terrain.bounds)
     start = check_int("start_time_ns", start_time_ns, low=0)
     routes = _check_replans(replans)
     columns = _check_forecasts(forecasts)

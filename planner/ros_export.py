@@ -62,6 +62,7 @@ __all__ = [
     "rosbags_api",
     "check_topic_prefix",
     "check_frame_origin",
+    "MAX_FRAME_ORIGIN_DISTANCE_M",
     "header_message",
     "path_message",
     "path_poses",
@@ -73,6 +74,10 @@ __all__ = [
 ROUTE_BAG_FORMAT_VERSION = 1
 #: Topic prefix of the four topics.
 DEFAULT_TOPIC_PREFIX = "/terrawatt"
+#: Farthest a map frame origin other than (0, 0) may lie from the map's bounds (m): 10 000 km, a quarter of the way
+#: round the Earth. A frame origin is a point of the site's neighbourhood (its corner, a survey mark, a UTM zone's
+#: (500000, 0)); one farther away is a unit or typing slip, and poses relative to it lose their precision.
+MAX_FRAME_ORIGIN_DISTANCE_M = 1.0e7
 _PATH, _ENERGY, _CRS, _SUMMARY = "/route", "/route_energy", "/map_crs", "/route_summary"
 _TYPES = {_PATH: "nav_msgs/msg/Path", _ENERGY: "std_msgs/msg/Float64MultiArray",
           _CRS: "std_msgs/msg/String", _SUMMARY: "std_msgs/msg/String"}
@@ -329,19 +334,50 @@ def check_topic_prefix(topic_prefix: Any, name: str = "topic_prefix") -> str:
     return topic_prefix
 
 
-def check_frame_origin(frame_origin_xy_m: Any, name: str = "frame_origin_xy_m") -> tuple[float, float]:
-    """A frame origin ``(x, y)`` in metres, both finite, as two floats.
+def check_frame_origin(frame_origin_xy_m: Any, name: str = "frame_origin_xy_m", *,
+                       bounds: tuple[float, float, float, float] | None = None) -> tuple[float, float]:
+    """A frame origin ``(x, y)`` in metres, both finite, as two floats; with ``bounds``, near the map.
+
+    Parameters
+    ----------
+    frame_origin_xy_m : (float, float)
+        The map frame's origin in the map's coordinates (m).
+    name : str
+        How messages name it (the command line passes ``"--map-frame-origin"``).
+    bounds : (xmin, ymin, xmax, ymax), optional
+        The map's bounds (m): an origin other than ``(0, 0)`` (the map's own coordinates,
+        always accepted) must then lie within :data:`MAX_FRAME_ORIGIN_DISTANCE_M` of them.
 
     Raises
     ------
     InvalidParameterError
-        Not a pair, or a coordinate not a finite real (the message names ``<name>[i]``).
+        Not a pair, or a coordinate not a finite real (the message names ``<name>[i]``); with
+        ``bounds``, an origin farther from the map than :data:`MAX_FRAME_ORIGIN_DISTANCE_M`.
+
+    Examples
+    --------
+    >>> check_frame_origin((500_000.0, 5_100_000.0), bounds=(500_000.0, 5_100_000.0, 501_000.0, 5_101_000.0))
+    (500000.0, 5100000.0)
+    >>> check_frame_origin((1e308, 0.0), bounds=(0.0, 0.0, 100.0, 100.0))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    terrawatt_base.errors.InvalidParameterError: frame_origin_xy_m (1e+308, 0) lies 1e+308 m from the map ...
     """
     try:
         fx, fy = frame_origin_xy_m
     except (TypeError, ValueError) as exc:
         raise InvalidParameterError(f"{name} must be (x, y) in metres, got {frame_origin_xy_m!r}") from exc
-    return check_real(f"{name}[0]", fx), check_real(f"{name}[1]", fy)
+    fx, fy = check_real(f"{name}[0]", fx), check_real(f"{name}[1]", fy)
+    if bounds is None or (fx == 0.0 and fy == 0.0):
+        return fx, fy
+    xmin, ymin, xmax, ymax = (float(b) for b in bounds)
+    distance = math.hypot(max(xmin - fx, 0.0, fx - xmax), max(ymin - fy, 0.0, fy - ymax))
+    if not distance <= MAX_FRAME_ORIGIN_DISTANCE_M:  # an overflow to inf included
+        raise InvalidParameterError(
+            f"{name} ({fx:g}, {fy:g}) lies {distance:.3g} m from the map (x {xmin:g} to {xmax:g}, y {ymin:g} to "
+            f"{ymax:g} m); a map frame origin other than (0, 0) must lie within {MAX_FRAME_ORIGIN_DISTANCE_M:g} m of "
+            "the map's bounds: give it in the map's coordinates, in metres")
+    return fx, fy
 
 
 def write_bag_messages(path: str | os.PathLike[str], topics: Sequence[tuple[str, str]],
@@ -486,7 +522,8 @@ def write_route_bag(
     frame_origin_xy_m : (float, float)
         The map frame's origin in map (CRS) coordinates: poses are waypoints minus it. The
         default puts the map frame on the map's coordinates; a local origin (e.g. the map's
-        lower-left corner) keeps UTM-sized numbers out of the poses.
+        lower-left corner) keeps UTM-sized numbers out of the poses. Any other origin must lie
+        within :data:`MAX_FRAME_ORIGIN_DISTANCE_M` of the map's bounds (:func:`check_frame_origin`).
 
     Returns
     -------
@@ -496,9 +533,10 @@ def write_route_bag(
     Raises
     ------
     InvalidParameterError
-        A route not found or not a Route; bad stamp, frame, prefix or origin; a ``.bag`` /
-        ``.db3`` name; an existing directory that is not a bag; a cost that does not give the
-        route's duration.
+        A route not found or not a Route; bad stamp, frame, prefix or origin (not finite, or
+        farther than :data:`MAX_FRAME_ORIGIN_DISTANCE_M` from the map); a ``.bag`` / ``.db3``
+        name; an existing directory that is not a bag; a cost that does not give the route's
+        duration.
     OutOfBoundsError
         A waypoint off the map.
     GridMismatchError
@@ -517,7 +555,7 @@ def write_route_bag(
     stamp = check_int("stamp_ns", stamp_ns, low=0)
     check_text("frame_id", frame_id)
     check_topic_prefix(topic_prefix)
-    origin = check_frame_origin(frame_origin_xy_m)
+    origin = check_frame_origin(frame_origin_xy_m, bounds=tmap.bounds)
     _, _, _, ts = rosbags_api()
     messages = _messages(route, tmap, ts, cost=cost, stamp_ns=stamp, frame_id=frame_id, frame_origin=origin)
     return write_bag_messages(target, [(topic_prefix + suffix, _TYPES[suffix]) for suffix in messages],

@@ -9,6 +9,12 @@ them the map's ground-class layer. Two ground names are reserved:
 - ``unknown``: the code's cells have unknown ground (``-1``), priced as the planner's
   ``unknown_ground`` (``--unknown-ground``) says — the same as a code the mapping omits,
   but stated.
+
+A raster and a mapping that have nothing to say about the map are refused: a land cover
+that is all nodata over the map, or whose codes there are none of the mapping's, is a
+:class:`DataError`. One that leaves more than :data:`UNKNOWN_SHARE_WARNING` of the map's
+cells without a ground for no stated reason (nodata, off the raster, codes the mapping
+omits) is used, with an :class:`ImplausibleDataWarning` that names the codes and their shares.
 """
 
 from __future__ import annotations
@@ -17,8 +23,9 @@ import csv
 import logging
 import os
 import re
+import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
@@ -26,9 +33,9 @@ from typing import Any
 import numpy as np
 
 from terrawatt_base.containers import memory_limit_bytes, over_budget_message
-from terrawatt_base.errors import FileFormatError, InvalidParameterError
+from terrawatt_base.errors import DataError, FileFormatError, ImplausibleDataWarning, InvalidParameterError
 from .georef import import_rasterio, lonlat_bounds, parse_crs
-from .terrain_map import TerrainMap
+from .terrain_map import UNKNOWN_GROUND, TerrainMap
 
 __all__ = [
     "LandcoverClasses",
@@ -38,6 +45,7 @@ __all__ = [
     "UNKNOWN_GROUND_NAME",
     "LANDCOVER_COLUMNS",
     "MAX_CLASSES_BYTES",
+    "UNKNOWN_SHARE_WARNING",
 ]
 
 logger = logging.getLogger(__name__)
@@ -53,7 +61,14 @@ MAX_CLASSES_BYTES = 1024**2
 _MAX_CODE = 2**31 - 1
 _NAME = re.compile(r"^[A-Za-z0-9_\-]+$")
 _CODE = re.compile(r"^[0-9]+$")
+#: Share of the map's cells above which :func:`ground_classes_from_landcover` warns that the land cover leaves
+#: them unknown for no stated reason (nodata, off the raster, a code the mapping omits; not a code mapped to
+#: ``unknown``): a quarter of the map priced as the planner's ``unknown_ground`` is seldom what was meant.
+UNKNOWN_SHARE_WARNING = 0.25
 _NODATA = np.iinfo(np.uint16).max  # category of "no land-cover value" in the warp
+_OFF_INDEX = np.iinfo(np.uint32).max  # a map cell centre off the raster, in the warp of code indices
+_NODATA_INDEX = _OFF_INDEX - 1  # a map cell centre on a nodata cell
+_FEW = 8  # codes listed in a message
 
 
 @dataclass(frozen=True)
@@ -65,12 +80,15 @@ class LandcoverClasses:
     grounds_by_code : mapping int -> str
         Ground name per code (read-only, sorted by code): a ground preset name such as
         ``"grass"``, or :data:`OBSTACLE_GROUND` / :data:`UNKNOWN_GROUND_NAME`.
+    source : str or None
+        The classes file it was read from (:func:`read_landcover_classes` sets it), for
+        messages; not compared.
 
     Raises
     ------
     InvalidParameterError
         No codes, a code not an integer in [0, 2**31 - 1], a name that is not a non-empty
-        word (letters, digits, ``_``, ``-``).
+        word (letters, digits, ``_``, ``-``); a ``source`` that is not a string.
 
     Examples
     --------
@@ -80,8 +98,11 @@ class LandcoverClasses:
     """
 
     grounds_by_code: Mapping[int, str]
+    source: str | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
+        if self.source is not None and not isinstance(self.source, str):
+            raise InvalidParameterError(f"source must be a file name (str) or None, got {self.source!r:.120}")
         if not isinstance(self.grounds_by_code, Mapping) or not self.grounds_by_code:
             raise InvalidParameterError(
                 f"grounds_by_code must be a non-empty mapping of land-cover code to ground name, got "
@@ -109,6 +130,10 @@ class LandcoverClasses:
     def obstacle_codes(self) -> tuple[int, ...]:
         """The codes whose cells are obstacles."""
         return tuple(c for c, n in self.grounds_by_code.items() if n == OBSTACLE_GROUND)
+
+    def describe(self) -> str:
+        """How messages name the mapping: its classes file, or ``the mapping`` when made in memory."""
+        return "the mapping" if self.source is None else f"land-cover classes file {self.source!r}"
 
 
 def read_landcover_classes(path: str | os.PathLike[str]) -> LandcoverClasses:
@@ -192,7 +217,7 @@ def read_landcover_classes(path: str | os.PathLike[str]) -> LandcoverClasses:
         raise FileFormatError(f"{where} is empty; expected a header 'code,ground' and one row per code")
     if not rows:
         raise FileFormatError(f"{where} has a header but no rows; expected one row per land-cover code")
-    return LandcoverClasses({code: name for code, (name, _) in rows.items()})
+    return LandcoverClasses({code: name for code, (name, _) in rows.items()}, source=str(p))
 
 
 def _header(fields: list[str], where: str, number: int) -> list[str]:
@@ -234,6 +259,15 @@ def ground_classes_from_landcover(
     (:func:`terrawatt_base.containers.memory_limit_bytes`), so a continental tile can serve a
     small map.
 
+    The land cover must have something to say about the map: a window that is all nodata,
+    or whose codes are none of the mapping's, is refused (the raster or the classes file is
+    not the one meant). When more than :data:`UNKNOWN_SHARE_WARNING` of the map's cells (by
+    the code at each cell's centre) take no ground because they are nodata, off the raster or
+    a code the mapping omits, the map is made all the same with an
+    :class:`~terrawatt_base.errors.ImplausibleDataWarning` naming those codes, their shares and
+    the mapping's codes found nowhere over the map. Codes mapped to ``unknown`` are stated
+    and never warned about.
+
     Parameters
     ----------
     tmap : TerrainMap
@@ -254,12 +288,22 @@ def ground_classes_from_landcover(
     ------
     InvalidParameterError
         The map has no CRS; the raster does not overlap the map; a band out of range.
+    DataError
+        Over the map, the raster holds only nodata, or only codes the mapping lacks (the
+        message lists the codes it holds and the mapping's).
     FileFormatError
         A missing or unreadable raster, one without CRS, with a rotated grid, of non-integer
         values, several bands and no ``band``, a window over the memory budget; a bad
         classes file (as :func:`read_landcover_classes`).
     OptionalDependencyError
         rasterio is not installed.
+
+    Warns
+    -----
+    ImplausibleDataWarning
+        More than :data:`UNKNOWN_SHARE_WARNING` of the map's cells end with unknown ground
+        because they are nodata, off the raster or of codes the mapping omits (cells the map
+        already gave a ground, or obstacles, do not count).
     """
     rasterio = import_rasterio()
     from rasterio.enums import Resampling
@@ -284,41 +328,54 @@ def ground_classes_from_landcover(
             band = _code_band(src, band, where)
             window = _window(src, transform_bounds(map_crs, src.crs, *tmap.bounds, densify_pts=21), where, tmap)
             (r0, r1), (c0, c1) = window
-            need = (r1 - r0) * (c1 - c0) * (np.dtype(src.dtypes[band - 1]).itemsize + 1 + 8 + 2)
+            # the codes and their mask, their index (int64, then uint32), their category (uint16)
+            need = (r1 - r0) * (c1 - c0) * (np.dtype(src.dtypes[band - 1]).itemsize + 1 + 8 + 4 + 2)
             if need > memory_limit_bytes():
                 raise FileFormatError(over_budget_message(
                     where, f"the {r1 - r0} x {c1 - c0} cells around the map", need,
                     advice="resample the land cover to a coarser grid first (gdalwarp -tr)"))
             win = rasterio.windows.Window(c0, r0, c1 - c0, r1 - r0)
             data = src.read(band, window=win, masked=True)
-            src_transform, src_crs = src.window_transform(win), src.crs
+            src_transform, src_crs, src_nodata = src.window_transform(win), src.crs, src.nodata
     except rasterio.errors.RasterioError as exc:
         raise FileFormatError(f"cannot read {str(p)!r} as a raster: {exc}") from exc
 
     labels = [*classes.ground_names, OBSTACLE_GROUND, UNKNOWN_GROUND_NAME]
     category = {name: i for i, name in enumerate(labels)}
     values, inverse = np.unique(np.ma.getdata(data), return_inverse=True)
+    inverse = inverse.reshape(data.shape)
+    nodata_cells = np.ma.getmaskarray(data)
+    del data
+    votes = np.bincount(inverse[~nodata_cells], minlength=values.size)
+    present = [int(v) for v in values[votes > 0].tolist()]
+    _check_codes(present, classes, where, inverse.shape, src_nodata)
     lut = np.array([category[classes.grounds_by_code.get(int(v), UNKNOWN_GROUND_NAME)] for v in values.tolist()],
                    dtype=np.uint16)
-    codes = lut[inverse.reshape(data.shape)]
-    codes[np.ma.getmaskarray(data)] = _NODATA
-    votes = np.bincount(inverse.ravel()[~np.ma.getmaskarray(data).ravel()], minlength=values.size)
-    unmapped = [int(v) for v in values[votes > 0].tolist() if int(v) not in classes.grounds_by_code]
+    codes = lut[inverse]
+    codes[nodata_cells] = _NODATA
+    index = inverse.astype(np.uint32)  # the code at each cell, for the shares over the map
+    index[nodata_cells] = _NODATA_INDEX
+    del inverse, nodata_cells
+    unmapped = [c for c in present if c not in classes.grounds_by_code]
     if unmapped:
-        logger.info("%s: codes %s are not in the mapping; their cells vote as unknown ground", where, unmapped)
-    del data, inverse
+        logger.info("%s: codes %s are not in %s; their cells vote as unknown ground", where, unmapped,
+                    classes.describe())
 
     rows, cols = tmap.shape
     xmin, _, _, ymax = tmap.bounds
     d = tmap.cell_size_m
+    dst_transform = rasterio.Affine(d, 0.0, xmin, 0.0, -d, ymax)
     warped = np.full((rows, cols), _NODATA, np.uint16)
+    at_centre = np.full((rows, cols), _OFF_INDEX, np.uint32)
     try:
         reproject(codes, warped, src_transform=src_transform, src_crs=src_crs, src_nodata=_NODATA,
-                  dst_transform=rasterio.Affine(d, 0.0, xmin, 0.0, -d, ymax), dst_crs=map_crs, dst_nodata=_NODATA,
-                  resampling=Resampling.mode)
+                  dst_transform=dst_transform, dst_crs=map_crs, dst_nodata=_NODATA, resampling=Resampling.mode)
+        reproject(index, at_centre, src_transform=src_transform, src_crs=src_crs, dst_transform=dst_transform,
+                  dst_crs=map_crs, dst_nodata=_OFF_INDEX, resampling=Resampling.nearest)
     except rasterio.errors.RasterioError as exc:  # pragma: no cover - GDAL refusing a valid pair of CRS
         raise InvalidParameterError(f"cannot warp {where} onto the map's CRS {tmap.crs!r}: {exc}") from exc
-    warped = warped[::-1]  # north-up -> row grows with y
+    del codes, index
+    warped, at_centre = warped[::-1], at_centre[::-1]  # north-up -> row grows with y
 
     names = tmap.ground_names
     ids = {name: gid for gid, name in names.items()}
@@ -335,11 +392,76 @@ def ground_classes_from_landcover(
     out.ground_names = names
     out["ground"] = ground
     out["obstacle"] = tmap.obstacle | (warped == category[OBSTACLE_GROUND])
+    _warn_unknown_share(at_centre, (ground == UNKNOWN_GROUND) & ~out.obstacle, values, present, classes, where)
     logger.info("%s: %d of %d map cells took a ground, %d became obstacles, %d kept the map's ground", where,
                 int(np.count_nonzero(warped < category[OBSTACLE_GROUND])), warped.size,
                 int(np.count_nonzero(warped == category[OBSTACLE_GROUND])),
                 int(np.count_nonzero(warped > category[OBSTACLE_GROUND])))
     return out
+
+
+def _few(codes: list[int]) -> str:
+    """At most :data:`_FEW` codes, and how many more."""
+    shown = ", ".join(str(c) for c in codes[:_FEW])
+    return f"[{shown}{f', ... ({len(codes) - _FEW} more)' if len(codes) > _FEW else ''}]"
+
+
+def _percent(share: float) -> str:
+    """A share as a whole percentage, never rounded to 0 % or 100 % when it is not."""
+    if 0.0 < share < 0.01:
+        return "< 1 %"
+    if 0.99 < share < 1.0:
+        return "> 99 %"
+    return f"{100 * share:.0f} %"
+
+
+def _check_codes(present: list[int], classes: LandcoverClasses, where: str, window: tuple[int, int],
+                 nodata: float | None) -> None:
+    """Refuse a window with no code (all nodata), or with none of the mapping's codes."""
+    cells = f"the {window[0]} x {window[1]} raster cells over the map"
+    if not present:
+        value = "" if nodata is None else f" (value {nodata:g})"
+        raise DataError(
+            f"{where} holds only nodata{value} in {cells}: there is no land cover to take ground classes from; "
+            "is it the land cover of this area?")
+    if not any(c in classes.grounds_by_code for c in present):
+        raise DataError(
+            f"{where} holds codes {_few(present)} in {cells}, none of them in {classes.describe()} (codes "
+            f"{_few(list(classes.grounds_by_code))}): no cell would take a ground; are the raster and the classes "
+            "file of the same land-cover product?")
+
+
+def _warn_unknown_share(at_centre: np.ndarray, unknown: np.ndarray, values: np.ndarray, present: list[int],
+                        classes: LandcoverClasses, where: str) -> None:
+    """Warn when more than :data:`UNKNOWN_SHARE_WARNING` of the map's cells end with unknown ground (``unknown``:
+    passable cells of unknown ground) for no stated reason: their centre is nodata, off the raster or of a code the
+    mapping omits (``at_centre``: the index into ``values`` of the code at each cell's centre, or a sentinel)."""
+    n = at_centre.size
+    stated = np.array([classes.grounds_by_code.get(int(v)) == UNKNOWN_GROUND_NAME for v in values.tolist()]
+                      + [False, False])  # ... and the nodata and off-raster sentinels, last
+    index = np.where(at_centre < values.size, at_centre, values.size + (at_centre == _OFF_INDEX)).astype(np.intp)
+    counts = np.bincount(index[unknown & ~stated[index]], minlength=values.size + 2)
+    names = [f"code {int(v)}" if int(v) not in classes.grounds_by_code else "mixed cells"
+             for v in values.tolist()] + ["nodata", "off the raster"]
+    parts: dict[str, int] = {}
+    for name, k in zip(names, counts.tolist(), strict=True):
+        if k:
+            parts[name] = parts.get(name, 0) + int(k)
+    ranked = sorted(parts.items(), key=lambda p: -p[1])
+    share = sum(parts.values()) / n
+    absent = [c for c in classes.grounds_by_code if c not in present]
+    if absent:
+        logger.info("%s: codes %s of %s are nowhere over the map", where, absent, classes.describe())
+    if share <= UNKNOWN_SHARE_WARNING:
+        return
+    listed = ", ".join(f"{what}: {_percent(k / n)}" for what, k in ranked[:_FEW])
+    more = f", and {len(ranked) - _FEW} more codes" if len(ranked) > _FEW else ""
+    missing = (f"; codes {_few(absent)} of {classes.describe()} are nowhere over the map" if absent else "")
+    warnings.warn(
+        f"{where} leaves {_percent(share)} of the map's cells with unknown ground ({listed}{more}), priced as the "
+        f"planner's unknown_ground (--unknown-ground){missing}; map the omitted codes in the classes file, or give a "
+        "land cover that covers the map",
+        ImplausibleDataWarning, stacklevel=3)
 
 
 def _code_band(src: Any, band: int | None, where: str) -> int:

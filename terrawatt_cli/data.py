@@ -71,7 +71,8 @@ def add_data_options(parser: Any, *, grounds: bool = False) -> None:
                      help="mixed: IMU and drive rows of different rates interleaved by time (default); single: "
                      "one row per sample of both")
     csv.add_argument("--track-width", type=float, default=None, metavar="M", action=Checked, check=positive,
-                     help="with wheel speeds (--csv-columns speed_left=... speed_right=...): the track width (m)")
+                     help="with wheel speeds (--csv-columns speed_left=... speed_right=...): the track width (m) "
+                     "that derives omega; refused with v / omega columns")
 
 
 def _pairs(values: Sequence[str], flag: str) -> dict[str, str]:
@@ -86,11 +87,13 @@ def _pairs(values: Sequence[str], flag: str) -> dict[str, str]:
 
 
 def _csv_layout(args: argparse.Namespace) -> CsvLayout:
-    """The :class:`energy.io.CsvLayout` of the CSV flags; its errors name them."""
+    """The :class:`energy.io.CsvLayout` of the CSV flags; its errors name them (a ``--track-width`` beside ``v`` /
+    ``omega`` columns: its own message names it)."""
     try:
-        return CsvLayout(args.csv_columns, args.csv_units, args.csv_rates, args.track_width)
+        layout = CsvLayout(args.csv_columns, args.csv_units, args.csv_rates)
     except TerrawattError as exc:
         raise type(exc)(f"--csv-columns / --csv-units: {exc}") from None
+    return layout if args.track_width is None else dataclasses.replace(layout, track_width_m=args.track_width)
 
 
 def logs_from_args(args: argparse.Namespace, require_currents: bool, *, flag: str = "--data") -> list[InteractionLog]:

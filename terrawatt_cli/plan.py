@@ -13,6 +13,7 @@ from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_ma
 from planner import PLANNERS
 from planner.coarse_report import COARSE_OPTIONS, check_coarse_options, plan_coarse, plan_coarse_windowed
 from planner.plan_report import plan_and_compare
+from planner.ros_export import check_frame_origin
 from .common import (MAP_FLAGS, Checked, add_map_options, add_model_options, add_planner_options, add_point_options,
                      add_robot_options, bounded, check_model_flags, check_outputs, input_paths, load_model_arg,
                      map_arg, point_arg, positive, warn_figures)
@@ -89,6 +90,8 @@ def run_plan_command(args: argparse.Namespace) -> int:
 
 def _run(args: argparse.Namespace, tmap: TerrainMap, start: tuple[float, float], goal: tuple[float, float],
          label: str) -> int:
+    if getattr(args, "map_frame_origin", None) is not None:  # before planning: near the map (the writers check it too)
+        check_frame_origin(args.map_frame_origin, "--map-frame-origin", bounds=tmap.bounds)
     common = dict(robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg, map_label=label)
     ground = None if args.model is not None else resolve_unknown_ground(args.unknown_ground, tmap,
                                                                         flag="--unknown-ground")

@@ -12,9 +12,9 @@ from terrawatt_base.checks import check_bool, check_choice, check_text
 from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 from ..logs import DEFAULT_GAP_FACTOR, InteractionLog
-from .borealtc import read_borealtc
+from .borealtc import BOREALTC_TRACK_WIDTH_M, read_borealtc
 from .cleaning import UNIT_FACTORS, check_track_width
-from .csv_log import CSV_RATES, csv_field_map, read_csv_log
+from .csv_log import CSV_RATES, DEFAULT_CSV_COLUMNS, csv_field_map, read_csv_log
 from .rosbag import DRIVE_CLOCKS, read_rosbag
 
 __all__ = ["LOG_SUFFIXES", "BagTopics", "CsvLayout", "read_logs"]
@@ -134,12 +134,16 @@ class CsvLayout:
         Streams of different rates interleaved by time (default), or one row per sample of both.
     track_width_m : float, optional
         With wheel speeds (``speed_left`` / ``speed_right``): the track width that gives omega.
+        Only then: a layout of ``v`` and ``omega`` has no omega to derive, so a track width
+        there is refused (when the layout is made; with the default layout, when a CSV log is
+        read) rather than recorded as the one omega came from.
 
     Raises
     ------
     UnknownNameError, InvalidParameterError
         An unknown field, unit or ``rates``, an empty column name, a unit for a field not mapped, a
-        bad track width; checked when the layout is made, before any log is read.
+        bad track width or one beside ``v`` / ``omega`` columns; checked when the layout is made,
+        before any log is read (a track width with the default layout: by :meth:`read`).
 
     Examples
     --------
@@ -162,9 +166,31 @@ class CsvLayout:
         check_choice("rates", self.rates, CSV_RATES)
         if self.track_width_m is not None:
             object.__setattr__(self, "track_width_m", check_track_width(self.track_width_m))
+            if self.columns is not None:
+                self._check_track_width()
+
+    def _check_track_width(self) -> None:
+        """Refuse a track width beside v / omega columns: there is no omega to derive with it."""
+        columns = DEFAULT_CSV_COLUMNS if self.columns is None else self.columns
+        if self.track_width_m is None or "speed_left" in columns or "speed_right" in columns:
+            return
+        whose = "the default layout's" if self.columns is None else "the layout's"
+        raise InvalidParameterError(
+            f"track_width_m (--track-width) {self.track_width_m:g} derives omega from wheel speeds (speed_left / "
+            f"speed_right columns), but {whose} velocities are v and omega ({columns.get('v')!r}, "
+            f"{columns.get('omega')!r}): there is no omega to derive; drop the track width, or map the wheel speeds "
+            "instead (--csv-columns speed_left=COLUMN speed_right=COLUMN)")
 
     def read(self, path: str | os.PathLike[str], **options: Any) -> InteractionLog:
-        """:func:`~energy.io.read_csv_log` of ``path`` in this layout (``options``: its other keywords)."""
+        """:func:`~energy.io.read_csv_log` of ``path`` in this layout (``options``: its other keywords).
+
+        Raises
+        ------
+        InvalidParameterError
+            A track width with the default layout (v and omega columns), refused here rather
+            than when the layout was made, as it may be meant for logs of another kind.
+        """
+        self._check_track_width()
         return read_csv_log(path, self.columns, self.units, rates=self.rates, track_width_m=self.track_width_m,
                             **options)
 
@@ -201,7 +227,8 @@ def read_logs(
     bag : BagTopics, optional
         Topics and fields of the bags (default :class:`BagTopics`).
     csv : CsvLayout, optional
-        Columns and units of the CSV logs (default: the layout :func:`~energy.io.write_csv_log` writes).
+        Columns and units of the CSV logs (default: the layout :func:`~energy.io.write_csv_log` writes);
+        refused where no CSV log is read.
     require_currents : bool
         Refuse a log without drive currents (for training, evaluation and diagnosis); by
         default such logs (a bag with no current topic) are read, enough to predict from.
@@ -228,7 +255,9 @@ def read_logs(
     UnknownNameError
         A requested ground that no log has.
     InvalidParameterError
-        ``bag`` not a BagTopics, ``csv`` not a CsvLayout, bad flags.
+        ``bag`` not a BagTopics, ``csv`` not a CsvLayout, bad flags; a ``csv`` layout other
+        than the default where no CSV log is read (a BorealTC folder, bags only), which it
+        would not apply to.
 
     Examples
     --------
@@ -272,18 +301,23 @@ def read_logs(
         if root.suffix.lower() not in LOG_SUFFIXES:
             raise DataError(f"{name} {str(root)!r}: unknown log file type {root.suffix!r}; expected one of "
                             f"{sorted(LOG_SUFFIXES)!r} or a folder")
-        logs = [one(root)]
+        items = [(root, ground_label)]
     elif (root / "metadata.yaml").exists():
-        logs = [one(root)]  # a ROS 2 bag folder
+        items = [(root, ground_label)]  # a ROS 2 bag folder
     elif any(sub.is_dir() and any(sub.glob("imu_*.csv")) for sub in root.iterdir()):
+        _no_csv_layout(csv, f"{name} {str(root)!r} is read as a BorealTC folder (GROUND/imu_NN.csv + pro_NN.csv), "
+                            f"whose columns, units and track width ({BOREALTC_TRACK_WIDTH_M:g} m) are the format's own")
         return _required(read_borealtc(root, grounds=grounds, **common), require_currents)
     else:
-        logs = [one(p) for p in _log_items(root)]
+        items = [(p, ground_label) for p in _log_items(root)]
         for sub in sorted(p for p in root.iterdir() if p.is_dir() and not (p / "metadata.yaml").exists()):
-            logs += [one(p, sub.name.lower()) for p in _log_items(sub)]  # a ground folder
-        if not logs:
+            items += [(p, sub.name.lower()) for p in _log_items(sub)]  # a ground folder
+        if not items:
             raise DataError(f"{name} {str(root)!r} holds no logs: expected BorealTC ground folders, log files "
                             f"({', '.join(sorted(LOG_SUFFIXES))}), ROS 2 bag folders, or ground folders of them")
+    if not any(LOG_SUFFIXES.get(p.suffix.lower()) == "csv" for p, _ in items):
+        _no_csv_layout(csv, f"{name} {str(root)!r} holds no CSV log, only bags (read with the bag options)")
+    logs = [one(p, label) for p, label in items]
     if wanted is not None:
         labels = sorted({str(log.meta.ground_label) for log in logs})
         unknown = [g for g in wanted if g not in {label.lower() for label in labels}]
@@ -292,6 +326,18 @@ def read_logs(
                                    f"the logs' labels: {labels!r}")
         logs = [log for log in logs if log.meta.ground_label is not None and log.meta.ground_label.lower() in wanted]
     return _required(logs, require_currents)
+
+
+def _no_csv_layout(csv: CsvLayout, why: str) -> None:
+    """Refuse a CSV layout other than the default for logs that no CSV reader reads (``why`` says what they are)."""
+    default = CsvLayout()
+    if csv == default:
+        return
+    given = {"columns": csv.columns, "units": csv.units, "rates": csv.rates, "track_width_m": csv.track_width_m}
+    got = ", ".join(f"{k}={v!r}" for k, v in given.items() if v and v != getattr(default, k))
+    raise InvalidParameterError(
+        f"csv (--csv-columns, --csv-units, --csv-rates, --track-width) applies to CSV logs only, and {why}; give no "
+        f"CSV layout for them (got {got})")
 
 
 def _log_items(folder: Path) -> list[Path]:

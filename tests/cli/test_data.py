@@ -6,11 +6,12 @@ import argparse
 
 import pytest
 
+from terrawatt_cli import EXIT_BAD_INPUT, main
 from terrawatt_cli.data import add_band_option, add_data_options, band_from_args, logs_from_args
 from terrain import InvalidParameterError
 from terrawatt_base.errors import TerrawattError
 
-from cli_samples import FIXTURES
+from cli_samples import FIXTURES, one_line_error
 
 
 def _parse(*argv: str) -> argparse.Namespace:
@@ -85,3 +86,31 @@ def test_a_bad_csv_map_names_the_flags(tmp_path):
     args = _parse("--data", str(FIXTURES), "--csv-columns", "tim=stamp_ms")
     with pytest.raises(TerrawattError, match=r"--csv-columns / --csv-units: columns has unknown field\(s\) \['tim'\]"):
         logs_from_args(args, require_currents=True)
+
+
+def test_csv_flags_for_a_borealtc_folder_are_refused_naming_them():
+    args = _parse("--data", str(FIXTURES), "--csv-columns", "time=stamp_ms", "v=cmd_v", "omega=cmd_w", "accel_z=az")
+    with pytest.raises(InvalidParameterError, match=r"applies to CSV logs only, and --data '.*borealtc' is read as a "
+                                                    r"BorealTC folder"):
+        logs_from_args(args, require_currents=True)
+
+
+def test_a_track_width_with_v_and_omega_columns_is_refused_naming_it():
+    generic = FIXTURES.parent / "generic_ma.csv"
+    args = _parse("--data", str(generic), "--csv-columns", "time=stamp_ms", "v=cmd_v", "omega=cmd_w",
+                  "current_left=left_mA", "current_right=right_mA", "accel_z=acc_z", "--track-width", "0.55")
+    with pytest.raises(InvalidParameterError, match=r"^track_width_m \(--track-width\) 0\.55 derives omega from wheel "
+                                                    r"speeds .*the layout's velocities are v and omega"):
+        logs_from_args(args, require_currents=True)
+
+
+@pytest.mark.parametrize("flags", [["--data", "BOREALTC", "--csv-rates", "single"],
+                                   ["--data", "BOREALTC", "--track-width", "0.5"],
+                                   ["--data", "GENERIC", "--csv-columns", "time=stamp_ms", "v=cmd_v", "omega=cmd_w",
+                                    "current_left=left_mA", "current_right=right_mA", "accel_z=acc_z",
+                                    "--csv-units", "time=ms", "--track-width", "0.55"]])
+def test_ignored_csv_flags_exit_2_with_one_line(tmp_path, capsys, flags):
+    paths = {"BOREALTC": str(FIXTURES), "GENERIC": str(FIXTURES.parent / "generic_ma.csv")}
+    rc = main(["train", "--model", "physics", *[paths.get(f, f) for f in flags], "--out", str(tmp_path / "m")])
+    assert rc == EXIT_BAD_INPUT
+    assert "--track-width" in one_line_error(capsys) and not (tmp_path / "m").exists()

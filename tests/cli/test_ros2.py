@@ -64,6 +64,17 @@ def test_the_ros2_flags_write_the_bag_the_nav2_maps_and_the_costmap(tmp_path, wa
     capsys.readouterr()
 
 
+def test_a_map_frame_origin_far_from_the_map_is_refused_before_planning(tmp_path, capsys):
+    rc = main(["plan", "--map", "example", "--start", "5", "5", "--goal", "40", "40", "--planner", "lattice",
+               "--nav2-map", str(tmp_path / "nav2" / "site"), "--ros2-out", str(tmp_path / "route.mcap"),
+               "--map-frame-origin", "1e308", "0", "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1
+    assert err.startswith("terrawatt: error: --map-frame-origin (1e+308, 0) lies 1e+308 m from the map (x 0 to ")
+    assert "must lie within 1e+07 m of the map's bounds" in err
+    assert list(tmp_path.iterdir()) == []  # nothing planned, nothing written
+
+
 def test_the_ros2_flags_are_checked_before_any_work(tmp_path):
     check_ros2_outputs(_parse([]), [])  # nothing asked: nothing to check
     with pytest.raises(InvalidParameterError, match="--map-frame-origin applies to"):

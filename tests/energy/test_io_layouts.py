@@ -278,3 +278,51 @@ def test_a_csv_layout_is_checked_when_made(kwargs, error, match):
         CsvLayout(**kwargs)
     with pytest.raises(InvalidParameterError, match="csv must be a CsvLayout"):
         read_logs(GENERIC, csv=GENERIC_LAYOUT)
+
+
+# --------------------------------------------------------------------------- a CSV layout where it cannot apply
+@pytest.mark.parametrize(("kwargs", "given"), [
+    ({"columns": GENERIC_LAYOUT["columns"]}, r"columns=\{'time': 'stamp_ms'"),
+    ({"rates": "single"}, r"rates='single'"),
+    ({"track_width_m": 0.5}, r"track_width_m=0\.5"),  # BorealTC logs are wheel speeds, but their own track width
+])
+def test_a_csv_layout_for_a_borealtc_folder_is_refused_not_ignored(kwargs, given):
+    from energy.io import CsvLayout
+
+    with pytest.raises(InvalidParameterError, match=(
+            r"^csv \(--csv-columns, --csv-units, --csv-rates, --track-width\) applies to CSV logs only, and --data "
+            r"'.*borealtc' is read as a BorealTC folder \(GROUND/imu_NN\.csv \+ pro_NN\.csv\), whose columns, units "
+            r"and track width \(0\.555 m\) are the format's own; give no CSV layout for them \(got " + given)):
+        read_logs(FIXTURES, csv=CsvLayout(**kwargs), name="--data")
+    assert len(read_logs(FIXTURES, csv=CsvLayout())) == len(read_borealtc(FIXTURES))  # the default layout: no layout
+
+
+@requires_rosbags
+def test_a_csv_layout_for_bags_only_is_refused_not_ignored(bag_layouts):
+    from energy.io import CsvLayout
+
+    for path in (bag_layouts["ros1"], bag_layouts["mixed"]):
+        with pytest.raises(InvalidParameterError, match=r"applies to CSV logs only, and path '.*' holds no CSV log, "
+                                                        r"only bags \(read with the bag options\)"):
+            read_logs(path, bag=HUSKY, csv=CsvLayout(rates="single"))
+
+
+def test_a_track_width_beside_v_and_omega_columns_is_refused_not_recorded(tmp_path):
+    from energy.io import CsvLayout
+
+    with pytest.raises(InvalidParameterError, match=(
+            r"track_width_m \(--track-width\) 0\.5 derives omega from wheel speeds \(speed_left / speed_right "
+            r"columns\), but the layout's velocities are v and omega \('cmd_v', 'cmd_w'\): there is no omega to "
+            r"derive; drop the track width, or map the wheel speeds instead \(--csv-columns speed_left=COLUMN "
+            r"speed_right=COLUMN\)")):
+        CsvLayout(**GENERIC_LAYOUT, track_width_m=0.5)
+    default = CsvLayout(track_width_m=0.5)  # maybe meant for logs of another kind: refused when a CSV log is read
+    with pytest.raises(InvalidParameterError, match=r"but the default layout's velocities are v and omega "
+                                                    r"\('v_mps', 'omega_radps'\)"):
+        read_logs(csv_run(tmp_path / "run.csv"), csv=default)
+    wheels = tmp_path / "wheels.csv"
+    wheels.write_text("t,wl,wr,il,ir,az\n0,0.1,0.3,1.5,2.5,9.8\n0.5,0.2,0.2,1.6,2.4,9.7\n1.0,0.4,0.0,1.7,2.3,9.9\n")
+    layout = CsvLayout({"time": "t", "speed_left": "wl", "speed_right": "wr", "current_left": "il",
+                        "current_right": "ir", "accel_z": "az"}, rates="single", track_width_m=0.5)
+    (log,) = read_logs(wheels, csv=layout)
+    assert log.meta.track_width_m == 0.5 and log.omega_radps[0] == pytest.approx(0.4)

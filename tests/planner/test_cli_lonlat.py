@@ -145,17 +145,23 @@ def test_lon_lat_on_a_map_without_crs_is_refused(tmp_path, capsys, wall_map):
          r"--landcover-classes bad\.csv: grounds \['meadow'\] have no preset"),
         (["--landcover", "LC", "--landcover-classes", "BROKEN"],
          r"broken\.csv', line 2: code 'ten' is not a land-cover code"),
+        (["--landcover", "LC", "--landcover-classes", "OTHER"],  # another product's codes: every cell unknown
+         r"landcover\.tif' holds codes \[10, 30, 40, 50, 60, 80\] in the \d+ x \d+ raster cells over the map, none of "
+         r"them in land-cover classes file '.*other\.csv' \(codes \[1, 2\]\): no cell would take a ground"),
     ],
 )
 def test_bad_landcover_flags_are_refused(scene, tmp_path, capsys, flags, message):
     (tmp_path / "bad.csv").write_text("code,ground\n30,meadow\n")
     (tmp_path / "broken.csv").write_text("code,ground\nten,grass\n")
-    paths = {"LC": str(scene.landcover), "BAD": str(tmp_path / "bad.csv"), "BROKEN": str(tmp_path / "broken.csv")}
+    (tmp_path / "other.csv").write_text("code,ground\n1,grass\n2,obstacle\n")
+    paths = {"LC": str(scene.landcover), "BAD": str(tmp_path / "bad.csv"), "BROKEN": str(tmp_path / "broken.csv"),
+             "OTHER": str(tmp_path / "other.csv")}
     rc = main(["plan", *_map_flags(scene, landcover=False), *[paths.get(f, f) for f in flags],
                "--start-lonlat", *_ll(scene.start_lonlat), "--goal-lonlat", *_ll(scene.goal_lonlat),
                "--out", str(tmp_path / "o")])
     assert rc == EXIT_BAD_INPUT
-    assert re.search(message, capsys.readouterr().err)
+    err = capsys.readouterr().err
+    assert re.search(message, err) and err.count("\n") == 1
 
 
 def test_windowed_plans_take_lon_lat_but_no_land_cover(scene, tmp_path, capsys):

@@ -68,6 +68,22 @@ def test_a_frame_origin_moves_the_yaml_origin(tmp_path, marked_map):
     assert _yaml_lines(tmp_path / "site.yaml")["origin"] == "[6.0, 14.5, 0.0]"
 
 
+@pytest.mark.parametrize("origin", [(1e308, 0.0), (0.0, -1e308), (10.0, 20.0 + 1.0e7 + 3.0), (-1e7, -1e7)])
+def test_a_frame_origin_far_from_the_map_is_refused_before_writing(tmp_path, marked_map, origin):
+    """1e308 would be written into the YAML (or overflow to -inf); an origin is a point near the site."""
+    costmap = energy_costmap(EnergyCost.from_presets(marked_map))
+    with pytest.raises(InvalidParameterError, match=r"^frame_origin_xy_m \(.*\) lies .* m from the map \(x 10 to "
+                                                    r"13\.5, y 20 to 22\.5 m\); a map frame origin other than \(0, 0\) "
+                                                    r"must lie within 1e\+07 m of the map's bounds"):
+        write_nav2_map(tmp_path / "site.yaml", marked_map, frame_origin_xy_m=origin)
+    with pytest.raises(InvalidParameterError, match="must lie within 1e"):
+        write_nav2_costmap(tmp_path / "energy.yaml", costmap, frame_origin_xy_m=origin)
+    assert list(tmp_path.iterdir()) == []
+    far_but_plausible = (10.0, 20.0 + 1.0e7 - 3.0)  # e.g. a UTM zone's (500000, 0) seen from a southern site
+    write_nav2_map(tmp_path / "site.yaml", marked_map, frame_origin_xy_m=far_but_plausible)
+    write_nav2_map(tmp_path / "zero.yaml", terrain.flat_map((3, 3), 1.0, origin_xy_m=(3e7, 0.0)))  # (0, 0): as it is
+
+
 def test_unknown_cells_are_205_and_nav2_reads_them_as_unknown(tmp_path, marked_map):
     unknown = np.zeros(marked_map.shape, bool)
     unknown[2, 1:3] = True

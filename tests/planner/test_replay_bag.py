@@ -226,6 +226,8 @@ def test_bad_inputs_are_refused(tmp_path, hills, inputs, match):
     ("replay.mcap", {"frame_id": " "}, "frame_id"),
     ("replay.mcap", {"topic_prefix": "/terrawatt/"}, "topic_prefix"),
     ("replay.mcap", {"frame_origin_xy_m": (0.0, math.nan)}, r"frame_origin_xy_m\[1\]"),
+    ("replay.mcap", {"frame_origin_xy_m": (0.0, 1e308)},
+     r"frame_origin_xy_m \(0, 1e\+308\) lies 1e\+308 m from the map"),
 ])
 def test_bad_arguments_are_refused(tmp_path, hills, name, kwargs, match):
     with pytest.raises(InvalidParameterError, match=match):

@@ -169,6 +169,9 @@ def test_a_folder_that_is_not_a_bag_is_never_replaced(tmp_path, wall):
     ("route.mcap", {"frame_id": " "}, "frame_id"),
     ("route.mcap", {"topic_prefix": "terrawatt"}, "topic_prefix"),
     ("route.mcap", {"frame_origin_xy_m": (0.0, math.nan)}, r"frame_origin_xy_m\[1\]"),
+    ("route.mcap", {"frame_origin_xy_m": (1e308, 0.0)},
+     r"frame_origin_xy_m \(1e\+308, 0\) lies 1e\+308 m from the map \(x 0 to 40, y 0 to 40 m\); a map frame origin "
+     r"other than \(0, 0\) must lie within 1e\+07 m of the map's bounds: give it in the map's coordinates, in metres"),
 ])
 def test_bad_arguments_are_refused(tmp_path, wall, name, kwargs, match):
     tmap, cost, route = wall

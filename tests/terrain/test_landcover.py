@@ -8,7 +8,9 @@ from geo_fixtures import CLASSES, LAKE_UV, ROAD_U, lonlat, write_geo_scene
 
 from terrain import (
     UNKNOWN_GROUND,
+    DataError,
     FileFormatError,
+    ImplausibleDataWarning,
     InvalidParameterError,
     LandcoverClasses,
     TerrainMap,
@@ -122,7 +124,9 @@ def test_each_map_cell_takes_the_majority_ground_of_its_land_cover_cells(rasteri
     ]
     codes = np.block([[_sub_cells(*b) for b in row] for row in blocks])
     path = _write_codes(rasterio, tmp_path / "lc.tif", codes, _aligned(rasterio))
-    out = ground_classes_from_landcover(utm_map, path, MAPPING)
+    with pytest.warns(ImplausibleDataWarning, match=r"leaves 50 % of the map's cells with unknown ground \(off the "
+                                                    r"raster: 25 %.*code 40: 8 %"):
+        out = ground_classes_from_landcover(utm_map, path, MAPPING)
     assert out.ground_names == {0: "asphalt", 1: "grass"}
     a, gr, u = 0, 1, UNKNOWN_GROUND
     expected_north_first = [
@@ -145,7 +149,7 @@ def test_a_map_with_grounds_keeps_them_where_the_land_cover_says_nothing(rasteri
     codes = np.full((9, 6), GRASS, np.uint8)
     codes[:, :3] = ROAD  # the western map column is road, the next grass; the rest lies off the land cover
     path = _write_codes(rasterio, tmp_path / "lc.tif", codes, _aligned(rasterio))
-    out = ground_classes_from_landcover(tmap, path, MAPPING)
+    out = ground_classes_from_landcover(tmap, path, MAPPING)  # half off the land cover, but sand: no warning
     assert out.ground_names == {0: "sand", 1: "asphalt", 2: "grass"}
     assert out.ground.tolist() == [[1, 2, 0, 0]] * 3
 
@@ -210,3 +214,56 @@ def test_bad_land_covers_are_refused(rasterio, tmp_path, utm_map):
     text.write_text("not a raster")
     with pytest.raises(FileFormatError, match="cannot read .* as a raster"):
         ground_classes_from_landcover(utm_map, text, MAPPING)
+
+
+# ------------------------------------------------------------------ a land cover with nothing to say
+def test_a_land_cover_all_nodata_over_the_map_is_refused(rasterio, tmp_path, utm_map):
+    """Nodata around the map (valid codes far away) would leave every cell unknown without a word."""
+    codes = np.full((60, 60), NODATA, np.uint8)
+    codes[-5:, -5:] = GRASS  # valid codes, but not near the map
+    path = _write_codes(rasterio, tmp_path / "lc.tif", codes, _aligned(rasterio))
+    with pytest.raises(DataError, match=r"land-cover GeoTIFF '.*lc\.tif' holds only nodata \(value 0\) in the 11 x 14 "
+                                        r"raster cells over the map: there is no land cover .*is it the land cover of"):
+        ground_classes_from_landcover(utm_map, path, MAPPING)
+
+
+def test_a_classes_file_none_of_whose_codes_the_raster_holds_is_refused(rasterio, tmp_path, utm_map):
+    codes = np.full((9, 12), GRASS, np.uint8)
+    codes[:, :6] = CROPS
+    path = _write_codes(rasterio, tmp_path / "lc.tif", codes, _aligned(rasterio))
+    other = tmp_path / "other_product.csv"
+    other.write_text("code,ground\n1,grass\n2,asphalt\n3,obstacle\n", encoding="utf-8")
+    with pytest.raises(DataError, match=r"'.*lc\.tif' holds codes \[30, 40\] in the \d+ x \d+ raster cells over the "
+                                        r"map, none of them in land-cover classes file '.*other_product\.csv' \(codes "
+                                        r"\[1, 2, 3\]\): no cell would take a ground"):
+        ground_classes_from_landcover(utm_map, path, other)
+    many = {code: "grass" for code in range(100, 120)}
+    with pytest.raises(DataError, match=r"none of them in the mapping \(codes \[100, 101, .*, 107, "
+                                        r"\.\.\. \(12 more\)\]\)"):
+        ground_classes_from_landcover(utm_map, path, many)
+
+
+def test_a_land_cover_leaving_much_of_the_map_unknown_warns_which_codes_and_what_share(rasterio, tmp_path, utm_map):
+    codes = np.full((9, 12), GRASS, np.uint8)
+    codes[:, :6] = CROPS  # the western half of the map: a code the mapping omits
+    codes[:3, 6:9] = NODATA  # one northern cell
+    path = _write_codes(rasterio, tmp_path / "lc.tif", codes, _aligned(rasterio))
+    with pytest.warns(ImplausibleDataWarning) as caught:
+        out = ground_classes_from_landcover(utm_map, path, MAPPING)
+    (warning,) = [w for w in caught if issubclass(w.category, ImplausibleDataWarning)]
+    assert str(warning.message) == (
+        f"land-cover GeoTIFF {str(path)!r} leaves 58 % of the map's cells with unknown ground (code 40: 50 %, "
+        "nodata: 8 %), priced as the planner's unknown_ground (--unknown-ground); codes [50, 80] of the mapping are "
+        "nowhere over the map; map the omitted codes in the classes file, or give a land cover that covers the map")
+    assert (out.ground[:, 2:] == out.ground_id("grass")).sum() == 5 and (out.ground[:, :2] == UNKNOWN_GROUND).all()
+
+
+def test_stated_unknown_codes_absent_classes_and_small_gaps_do_not_warn(rasterio, tmp_path, utm_map, recwarn):
+    codes = np.full((9, 12), GRASS, np.uint8)
+    codes[:, :6] = CROPS
+    codes[:3, 9:] = NODATA  # a twelfth of the map
+    path = _write_codes(rasterio, tmp_path / "lc.tif", codes, _aligned(rasterio))
+    # crops stated unknown; road and water absent from this small map (a whole-product mapping)
+    out = ground_classes_from_landcover(utm_map, path, {**MAPPING, CROPS: "unknown"})
+    assert not [w for w in recwarn if issubclass(w.category, ImplausibleDataWarning)]
+    assert (out.ground[:, :2] == UNKNOWN_GROUND).all()
