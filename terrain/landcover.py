@@ -203,13 +203,15 @@ def read_landcover_classes(path: str | os.PathLike[str]) -> LandcoverClasses:
                                   f"{len(header)} ({', '.join(header)})")
         row = dict(zip(header, fields, strict=True))
         code_text, name = row["code"], row["ground"]
-        if not _CODE.match(code_text) or int(code_text) > _MAX_CODE:
-            raise FileFormatError(f"{where}, line {number}: code {code_text!r} is not a land-cover code; expected an "
-                                  f"integer in [0, {_MAX_CODE}]")
+        # a code of more digits than the largest is refused before int() (which refuses past 4300 digits)
+        digits = code_text.lstrip("0") or "0"
+        if not _CODE.match(code_text) or len(digits) > len(str(_MAX_CODE)) or int(digits) > _MAX_CODE:
+            raise FileFormatError(f"{where}, line {number}: code {code_text[:20]!r}{'...' if len(code_text) > 20 else ''} "
+                                  f"is not a land-cover code; expected an integer in [0, {_MAX_CODE}]")
         if not _NAME.match(name):
             raise FileFormatError(f"{where}, line {number}: ground {name!r} is not a ground name; expected a word "
                                   f"such as 'grass', or '{OBSTACLE_GROUND}' or '{UNKNOWN_GROUND_NAME}'")
-        code = int(code_text)
+        code = int(digits)
         if code in rows:
             raise FileFormatError(f"{where}, line {number}: code {code} is given twice (first on line {rows[code][1]})")
         rows[code] = (name, number)
