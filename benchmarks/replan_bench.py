@@ -6,10 +6,11 @@ simulated excitation run of that ground), the script times, for each lattice str
 
 (a) full map preparation from scratch: every model's table (one batched prediction each),
     the :class:`EnergyCost` and the lattice graph (the baseline, measured in the same run),
-    and a search from scratch (:func:`planner.heading_lattice.heading_shortest_path`: the heading
-    lattice's A*, drive and turns, as ``plan_route(planner="lattice")`` searches); the incremental
-    planner's first search (:class:`planner.IncrementalPlanner`, D* Lite from the goal over the same
-    states) is timed too;
+    and a search from scratch (``Lattice.shortest_path``, A*); the incremental planner's
+    first search (:class:`planner.IncrementalPlanner` with ``heading=False``, D* Lite from the
+    goal) is timed too. These are the heading-free searches (drive energy alone): the heading
+    lattice's answers (``heading=True``, the default, and ``plan_route(planner="lattice")``) are
+    searched from scratch, timed by ``plan_bench.py``'s heading table;
 (b) two model updates, one after the other:
 
     - ``patch``: a new model on a 20 x 20 cell patch across the middle of the current route;
@@ -62,7 +63,6 @@ from planner import (
     plan_route,
     warm_up_kernels,
 )
-from planner.heading_lattice import heading_shortest_path
 from planner.kernels import graph
 from terrain import CellModelRegistry, TerrainMap
 from terrawatt_base.atomic import write_json_atomic
@@ -97,7 +97,7 @@ def _warm_up() -> float:
     tmap = TerrainMap(np.zeros((6, 6)), 1.0)
     cost = EnergyCost(tmap, np.zeros((6, 6), np.int32), np.ones((1, 3)), np.ones((1, 2)), speed_mps=1.0,
                       battery_voltage_v=1.0, turn_rate_radps=1.0)
-    planner = IncrementalPlanner(Lattice.for_cost(cost, 1), (5.5, 5.5))
+    planner = IncrementalPlanner(Lattice.for_cost(cost, 1), (5.5, 5.5), heading=False)
     planner.plan((0.5, 0.5))
     planner.replan((0.5, 1.5), Lattice.for_cost(cost.with_tables(2.0 * cost.grade_table_j_per_m, cost.turn_table_j), 1))
     arr, half = cost.arrays, np.array([(0, 1), (1, 0)], dtype=np.int64)
@@ -150,10 +150,10 @@ def run(size: int, repeats: int, strides: tuple[int, ...], seed: int, patch_cell
             start = _free_point(cost, (0.05, 0.3), labels, main)
             goal = _free_point(cost, (0.95, 0.7), labels, main)
             t0 = time.perf_counter()
-            first = heading_shortest_path(lat, start, goal)
+            first = lat.shortest_path(start, goal)
             base["scratch_search_s"].append(time.perf_counter() - t0)
             t0 = time.perf_counter()
-            planner = IncrementalPlanner(lat, goal)
+            planner = IncrementalPlanner(lat, goal, heading=False)  # the incremental search: heading-free
             planner.plan(start)
             base["incremental_first_s"].append(time.perf_counter() - t0)
             for sc in SCENARIOS:
@@ -178,7 +178,7 @@ def run(size: int, repeats: int, strides: tuple[int, ...], seed: int, patch_cell
                 repair = time.perf_counter() - t0
                 # the same replan from scratch on the refreshed lattice, and with refinement
                 t0 = time.perf_counter()
-                ref = heading_shortest_path(lat2, start, goal)
+                ref = lat2.shortest_path(start, goal)
                 search = time.perf_counter() - t0
                 t0 = time.perf_counter()
                 route = plan_route(tmap, start, goal, cost=cost2, planner="lattice", compare=False,

@@ -125,8 +125,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"robot {r}: {rows[-1]['routes']} routes", file=sys.stderr, flush=True)
     slow = robot_preset("husky").replace(turn_rate_radps=0.02)
     tmap = example_map()
-    case = _one(tmap, family_cost(tmap, slow, ground_preset("grass").lateral_friction_coef or 0.0),
-                EXAMPLE_START_XY_M, EXAMPLE_GOAL_XY_M)
+    case = _one(tmap, EnergyCost.from_presets(tmap, robot=slow), EXAMPLE_START_XY_M, EXAMPLE_GOAL_XY_M)  # the presets
     print(f"{'robot':>5} {'turn rad/s':>10} {'lat. fric':>9} {'elec W':>7} {'routes':>6} {'max/shortest':>12} "
           f"{'max/heading-free':>16} {'saved %':>8} {'turns %':>8} {'free turns %':>12}")
     for row in rows:

@@ -41,8 +41,7 @@ from .kernels.heading import backward_cost_to_go, heading_astar
 from .lattice import LATTICE_METHODS, LATTICE_OFFSETS, Lattice, LatticePath
 from .points import as_points
 
-__all__ = ["heading_shortest_path", "HEADING_COUNT", "move_turn_angles", "node_turns", "start_joins", "goal_exits",
-           "no_move_route"]
+__all__ = ["heading_shortest_path", "HEADING_COUNT", "move_turn_angles"]
 
 #: Headings of the heading lattice: one per lattice move.
 HEADING_COUNT = LATTICE_OFFSETS.shape[0]
@@ -66,7 +65,7 @@ def move_turn_angles() -> np.ndarray:
     return _turn_angle(_MOVE_HEADING[:, None], _MOVE_HEADING[None, :])
 
 
-def node_turns(lattice: Lattice) -> tuple[np.ndarray, np.ndarray]:
+def _node_turns(lattice: Lattice) -> tuple[np.ndarray, np.ndarray]:
     """The turn prices of ``lattice``'s nodes: each node's turn table row (0 on a blocked cell: it has no
     move) and the turn energy (J) of every row by heading pair, shape (rows, 16, 16)."""
     cost = lattice.cost
@@ -88,7 +87,7 @@ def _node_units(lattice: Lattice, nodes: np.ndarray) -> np.ndarray:
     return _cell_units(lattice, lattice.node_xy(nodes))
 
 
-def start_joins(lattice: Lattice, start: np.ndarray, node_row: np.ndarray,
+def _start_joins(lattice: Lattice, start: np.ndarray, node_row: np.ndarray,
                 turn_row: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The nodes the start joins, their joining energies, the first turn (J) at each onto each move,
     shape (len(src), 16), and each joining segment's heading (rad; ``nan`` for a zero-length join,
@@ -101,7 +100,7 @@ def start_joins(lattice: Lattice, start: np.ndarray, node_row: np.ndarray,
     return src, e_src, turn, heading
 
 
-def goal_exits(lattice: Lattice, goal: np.ndarray, node_row: np.ndarray,
+def _goal_exits(lattice: Lattice, goal: np.ndarray, node_row: np.ndarray,
                turn_row: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The nodes joined to the goal, their segments' energies, the exit cost (J) from each with each
     heading (the turn onto the goal segment plus its energy), shape (len(dst), 16), and each exit
@@ -119,10 +118,10 @@ class _Query:
 
     def __init__(self, lattice: Lattice, start: np.ndarray, goal: np.ndarray) -> None:
         cost = lattice.cost
-        self.node_row, self.turn = node_turns(lattice)
-        self.src, self.e_src, self.turn_src, join_heading = start_joins(lattice, start, self.node_row,
+        self.node_row, self.turn = _node_turns(lattice)
+        self.src, self.e_src, self.turn_src, join_heading = _start_joins(lattice, start, self.node_row,
                                                                         cost.turn_energy_at)
-        self.dst, self.e_dst, self.exit_cost, exit_heading = goal_exits(lattice, goal, self.node_row,
+        self.dst, self.e_dst, self.exit_cost, exit_heading = _goal_exits(lattice, goal, self.node_row,
                                                                         cost.turn_energy_at)
         self.exit_of = np.full(lattice.n_nodes, -1, dtype=np.int64)
         self.exit_of[self.dst] = np.arange(self.dst.size)
@@ -195,13 +194,6 @@ def _no_move_route(cost: Any, q: _Query, start: np.ndarray, goal: np.ndarray) ->
         k = int(np.argmin(q.via_total))
         best, nodes = float(q.via_total[k]), [int(q.via[k])]
     return best, nodes
-
-
-def no_move_route(lattice: Lattice, start_xy_m: Any, goal_xy_m: Any) -> tuple[float, list[int]]:
-    """Energy (J) and nodes of the best route between two checked points that takes no lattice move: the
-    direct segment, or a node joined to both with its turn (an incremental search adds the rest)."""
-    start, goal = np.asarray(start_xy_m, float), np.asarray(goal_xy_m, float)
-    return _no_move_route(lattice.cost, _Query(lattice, start, goal), start, goal)
 
 
 def _upper_bound(lattice: Lattice, q: _Query, start: np.ndarray, goal: np.ndarray, best: float) -> float:

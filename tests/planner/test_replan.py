@@ -120,7 +120,7 @@ def test_update_from_a_lattice_that_skipped_versions_and_back():
 def test_a_repair_far_from_the_route_expands_little():
     cost = _cost(4, shape=(60, 60), obstacle_fraction=0.0)
     start, goal = (5.5, 30.5), (54.5, 30.5)
-    planner = IncrementalPlanner(Lattice.for_cost(cost, 1), goal)
+    planner = IncrementalPlanner(Lattice.for_cost(cost, 1), goal, heading=False)  # the incremental (D* Lite) search
     planner.plan(start)
     first = planner.expanded
     rows = np.asarray(cost.ground_rows).copy()
@@ -164,6 +164,20 @@ def test_route_equals_plan_route_lattice():
         if ref.status == "exact":
             assert got.energy_j == pytest.approx(ref.energy_j, rel=1e-9)
     assert planner.route(start, refine=False).planner == "lattice"
+
+
+def test_the_heading_planner_reuses_an_answer_only_while_nothing_changed():
+    rng = np.random.default_rng(3)
+    cost = _cost(6)
+    goal, start = _free_point(cost, rng), _free_point(cost, rng)
+    planner = IncrementalPlanner(Lattice.for_cost(cost, 1), goal)
+    first = planner.plan(start)
+    assert planner.plan(start).objective == first.objective  # reused
+    dearer = cost.with_tables(*_tables([3.0, 3.0, 3.0]))
+    planner.update(Lattice.for_cost(dearer, 1))
+    again = planner.plan(start)
+    assert again.objective == pytest.approx(heading_shortest_path(Lattice(dearer, 1), start, goal).objective, rel=1e-12)
+    assert again.objective > first.objective
 
 
 def test_bad_input():
