@@ -36,6 +36,15 @@ MAX_ABS_ELEVATION_M = 1.0e5
 
 _DERIVED = SURFACE_LAYERS
 _MAP_MAGIC = "terrawatt-map"
+#: The dtype kinds each standard entry of a map file may hold (what :meth:`TerrainMap.save` writes; other layers keep
+#: the dtype they were given). A text or boolean entry where numbers belong is a damaged or forged file, not a value to
+#: convert.
+_ENTRY_KINDS = {"__cell_size_m__": ("iuf", "a real number"), "__origin_xy_m__": ("iuf", "real numbers"),
+                "__crs__": ("U", "text"), "__ground_ids__": ("iu", "integers"), "__ground_names__": ("U", "text"),
+                "layer:elevation": ("iuf", "real numbers (m)"), "layer:ground": ("iu", "integer class ids"),
+                "layer:obstacle": ("b", "booleans")}
+_NAMES = {"b": "booleans", "i": "integers", "u": "integers", "f": "real numbers", "c": "complex numbers", "U": "text",
+          "S": "bytes", "V": "raw records", "M": "dates", "m": "durations"}
 
 
 class TerrainMap:
@@ -498,13 +507,20 @@ class TerrainMap:
         Raises
         ------
         FileFormatError
-            Missing, corrupt or foreign file.
+            Missing, corrupt or foreign file; an entry of another kind of values than the writer's
+            (text or booleans for a number, a cell size or an elevation).
         FormatVersionError
             A file of another format version.
         """
         path = Path(path)
         remove_stale_temporaries(path)
         content = read_versioned_npz(path, magic=_MAP_MAGIC, version=MAP_FORMAT_VERSION, what="map")
+        for key, (kinds, expected) in _ENTRY_KINDS.items():
+            arr = content.get(key)
+            if arr is not None and arr.dtype.kind not in kinds:
+                found = _NAMES.get(arr.dtype.kind, "values")
+                raise FileFormatError(f"map file {str(path)!r}: entry {key!r} holds {found} ({arr.dtype}); expected "
+                                      f"{expected}")
         try:
             names = dict(
                 zip(content["__ground_ids__"].tolist(), content["__ground_names__"].tolist(), strict=True)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -221,6 +222,9 @@ def read_result_json(
         data = json.loads(p.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
         raise FileFormatError(f"{what} file {str(p)!r} is corrupt (not JSON): {exc}") from exc
+    except ValueError:  # json reads an integer past Python's int() digit limit as a ValueError
+        raise FileFormatError(f"{what} file {str(p)!r} is corrupt: it holds an integer of more than "
+                              f"{sys.get_int_max_str_digits()} digits") from None
     found = data.get("format") if isinstance(data, dict) else None
     if found != name:
         raise FileFormatError(f"{str(p)!r} is not a terrawatt {what} (format {found!r}, expected {name!r})")

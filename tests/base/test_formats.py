@@ -101,6 +101,17 @@ def test_written_json_is_strict_with_nan_and_inf_as_null_and_numpy_as_plain(tmp_
     assert [p.name for p in path.parent.iterdir()] == ["r.json"]  # no temporary left
 
 
+
+def test_an_integer_past_pythons_digit_limit_is_a_format_error(tmp_path):
+    # found by benchmarks/fuzz_readers.py (the robot-file kind): json raised a bare ValueError
+    path = tmp_path / "long.json"
+    path.write_text('{"format": "terrawatt-thing", "format_version": 2, "n": ' + "9" * 5000 + "}")
+    with pytest.raises(FileFormatError, match=r"long.json.* is corrupt: it holds an integer of more than 4300 digits"):
+        read_result_json(path, "thing", 2)
+    path.write_text('{"format": "terrawatt-thing", "format_version": ' + "1" * 4301 + "}")
+    with pytest.raises(FileFormatError, match="more than 4300 digits"):
+        read_result_json(path, "thing", 2, what="robot")
+
 def test_only_documents_are_written(tmp_path):
     with pytest.raises(InvalidParameterError, match="needs a 'format' starting with 'terrawatt-'"):
         write_result_json(tmp_path / "a.json", {"format_version": 1, "x": 1})

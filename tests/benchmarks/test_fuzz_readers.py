@@ -29,4 +29,5 @@ def test_mutated_files_give_library_errors_or_results_under_a_memory_limit(tmp_p
     assert sum(counts["all"].values()) == 540
     assert counts["all"].get("library error", 0) > 0 and counts["all"].get("ok", 0) > 0  # both answers occur
     assert set(counts) - {"all"} == {"model", "estimator_model", "map", "csv_log", "borealtc_pro", "geotiff", "rosbag",
-                                     "pairs"}
+                                     "pairs", "robot", "csv_layout", "landcover_classes", "interval_model"}
+    assert all(counts[kind].get("library error", 0) > 0 for kind in set(counts) - {"all"})  # every reader is reached

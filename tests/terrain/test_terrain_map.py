@@ -430,6 +430,25 @@ def test_load_terrawatt_file_missing_entries(tmp_path):
 
 
 
+@pytest.mark.parametrize(("entry", "retype", "match"), [
+    ("__cell_size_m__", lambda a: a > 0, r"'__cell_size_m__' holds booleans \(bool\); expected a real number"),
+    ("__cell_size_m__", lambda a: a.astype(str), r"'__cell_size_m__' holds text .*expected a real number"),
+    ("layer:elevation", lambda a: a > 0, r"'layer:elevation' holds booleans \(bool\); expected real numbers"),
+    ("layer:elevation", lambda a: a.astype(str), "'layer:elevation' holds text"),
+    ("layer:ground", lambda a: a.astype(np.float64), "'layer:ground' holds real numbers .*expected integer class ids"),
+    ("layer:obstacle", lambda a: a.astype(np.int8), "'layer:obstacle' holds integers .*expected booleans"),
+])
+def test_load_refuses_an_entry_retyped_under_a_valid_crc(tmp_path, ramp_map, entry, retype, match):
+    # found by tests/test_readers_properties.py: a boolean cell size read as 1.0, a text elevation parsed as numbers
+    with np.load(ramp_map.save(tmp_path / "m.npz")) as data:
+        content = dict(data)
+    content[entry] = retype(content[entry])
+    np.savez_compressed(tmp_path / "retyped.npz", **content)
+    with pytest.raises(FileFormatError, match=match):
+        TerrainMap.load(tmp_path / "retyped.npz")
+
+
+
 # ------------------------------------------------------------------ hostile input
 @pytest.mark.parametrize(
     ("args", "match"),
