@@ -312,8 +312,9 @@ def read_geojson(path: str | os.PathLike[str]) -> list[tuple[BaseGeometry, dict[
         doc = json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError as exc:
         raise FileFormatError(f"GeoJSON file {str(path)!r} does not exist") from exc
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:  # "[" * 10**5 nests too deep
-        raise FileFormatError(f"{str(path)!r} is not a readable JSON file: {exc!r}") from exc
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:  # "[" * 10**5 nests too deep
+        # ValueError: JSONDecodeError, and an integer past Python's 4300-digit int() limit
+        raise FileFormatError(f"{str(path)!r} is not a readable JSON file: {type(exc).__name__}: {str(exc)[:200]}") from exc
     kind = doc.get("type") if isinstance(doc, dict) else None
     if kind == "FeatureCollection":
         features = doc.get("features")

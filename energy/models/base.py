@@ -332,6 +332,9 @@ def read_model_file(path: str | os.PathLike[str]) -> ModelRecord:
     versions = data.get("versions")
     trained_on = data.get("trained_on")
     interval = data.get("interval")
+    for key, value in (("trained_on", trained_on), ("interval", interval)):
+        if value is not None and not isinstance(value, dict):  # dropping it would silently change the model
+            raise FileFormatError(f"{where}: the {key!r} entry must be a mapping or absent, got {type(value).__name__}")
     return ModelRecord(data["model_class"], data["params"], data["state"],
                        versions if isinstance(versions, dict) else {}, int(data["format_version"]),
                        trained_on if isinstance(trained_on, dict) else None,

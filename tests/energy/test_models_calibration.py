@@ -70,3 +70,27 @@ def test_an_adapted_model_whose_posterior_is_not_a_covariance_is_refused(tmp_pat
     adapted.posterior_cov_ = -adapted.posterior_cov_
     with pytest.raises(FileFormatError, match="posterior_cov.*negative variance"):
         load_current_model(adapted.save(tmp_path / "neg.zip"))
+
+
+@pytest.mark.parametrize("block", ["interval", "trained_on"])
+def test_a_model_file_whose_interval_or_training_block_is_not_a_mapping_is_refused(tmp_path, block):
+    """Dropping such a block would load a model without its interval (or training record) without a word."""
+    import json
+    import zipfile
+
+    from terrawatt_base.errors import FileFormatError
+
+    lin, _ = _fitted(tmp_path)
+    path = lin.save(tmp_path / "m.zip")
+    with zipfile.ZipFile(path) as z:
+        entries = {i.filename: z.read(i.filename) for i in z.infolist()}
+    name = next(n for n in entries if n.endswith(".json"))
+    doc = json.loads(entries[name])
+    assert block in doc, sorted(doc)
+    doc[block] = "not a mapping"
+    entries[name] = json.dumps(doc).encode()
+    with zipfile.ZipFile(tmp_path / "bad.zip", "w") as z:
+        for n, data in entries.items():
+            z.writestr(n, data)
+    with pytest.raises(FileFormatError, match=f"the '{block}' entry must be a mapping or absent, got str"):
+        load_current_model(tmp_path / "bad.zip")

@@ -179,6 +179,7 @@ def test_read_geojson_single_feature_and_bare_geometry(tmp_path):
     [
         ("{not json", "not a readable JSON file"),
         ("[" * 100_000, "not a readable JSON file.*RecursionError"),
+        ('{"type": "Feature", "n": ' + "9" * 5000 + "}", "not a readable JSON file.*4300 digits"),
         ("[1, 2]", "not GeoJSON"),
         ('{"type": "FeatureCollection"}', "needs a 'features' list"),
         (
