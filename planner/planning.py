@@ -53,7 +53,7 @@ from .route import Route, RouteComparison, empty_route, evaluate_route
 from .settings import PlannerSettings
 
 __all__ = ["plan_route", "shortest_route", "compare_route", "PLANNERS", "PLANNER_SEARCHES", "PlannerSearch",
-           "OMPL_PLANNERS", "GRAPH_PLANNERS", "REFINE_DEFAULT_SEED", "search_objective", "refined_or_shortest"]
+           "OMPL_PLANNERS", "GRAPH_PLANNERS", "REFINE_DEFAULT_SEED", "search_objective", "refine_planned"]
 
 #: Every planner name :func:`plan_route` accepts (the keys of :data:`PLANNER_SEARCHES`).
 PLANNERS = OMPL_PLANNERS + ("anyangle", "coarse", "lattice")
@@ -290,8 +290,23 @@ def plan_route(
     return route
 
 
-def refined_or_shortest(problem: PlanningProblem, waypoints: np.ndarray, seed: int | None,
-                        settings: PlannerSettings) -> tuple[np.ndarray, bool]:
+def refine_planned(problem: PlanningProblem, planner: str, waypoints: np.ndarray, seed: int | None,
+                   settings: PlannerSettings) -> tuple[np.ndarray, str]:
+    """A search's exact route refined (an any-angle route by its polish, any other by :func:`refine_route`),
+    or the shortest route refined when that is cheaper (:func:`_refined_or_shortest`); and the
+    route's planner name (``"lattice+refine"``, ``"... (from the shortest route)"``)."""
+    cost = problem.cost
+    if planner == "anyangle":
+        waypoints = polish_path(cost, waypoints)
+    else:
+        waypoints = refine_route(cost, waypoints, seed=REFINE_DEFAULT_SEED if seed is None else seed,
+                                 max_steps=settings.refine_max_steps, rounds=settings.refine_rounds)
+    waypoints, from_shortest = _refined_or_shortest(problem, waypoints, seed, settings)
+    return waypoints, f"{planner}+refine (from the shortest route)" if from_shortest else f"{planner}+refine"
+
+
+def _refined_or_shortest(problem: PlanningProblem, waypoints: np.ndarray, seed: int | None,
+                         settings: PlannerSettings) -> tuple[np.ndarray, bool]:
     """``waypoints`` (a refined route), or the shortest-distance route refined the same way when it is cheaper;
     and whether it was.
 
@@ -390,17 +405,7 @@ def _plan(
     name = planner
     if waypoints is not None and status == "exact" and refine:
         t0 = time.perf_counter()
-        if planner == "anyangle":
-            waypoints = polish_path(cost, waypoints)
-        else:
-            waypoints = refine_route(
-                cost, waypoints, seed=REFINE_DEFAULT_SEED if seed is None else seed,
-                max_steps=settings.refine_max_steps, rounds=settings.refine_rounds,
-            )
-        name = f"{planner}+refine"
-        waypoints, from_shortest = refined_or_shortest(problem, waypoints, seed, settings)
-        if from_shortest:
-            name = f"{planner}+refine (from the shortest route)"
+        waypoints, name = refine_planned(problem, planner, waypoints, seed, settings)
         elapsed += time.perf_counter() - t0
     if waypoints is None:
         return empty_route(status, name, elapsed, cost.battery_voltage_v)

@@ -40,10 +40,9 @@ from terrawatt_base.errors import InvalidParameterError
 from .kernels.incremental import dstar_path, dstar_rekey, dstar_search, dstar_touch, reverse_weights, set_moves
 from .heading_lattice import heading_shortest_path
 from .lattice import LATTICE_OFFSETS, Lattice, LatticePath
-from .planning import REFINE_DEFAULT_SEED, refined_or_shortest
+from .planning import refine_planned
 from .points import as_points
 from .problem import PlanningProblem
-from .refine import refine_route
 from .route import Route, empty_route, evaluate_route
 from .settings import PlannerSettings
 
@@ -124,6 +123,7 @@ class IncrementalPlanner:
         self._delta = (LATTICE_OFFSETS[:, 0] * nj + LATTICE_OFFSETS[:, 1]).astype(np.int64)
         self._col_x = lattice.node_xy(np.arange(nj))[:, 0].copy()
         self._row_y = lattice.node_xy(np.arange(ni) * nj)[:, 1].copy()
+        n = 0 if self.heading else n  # the heading search keeps no incremental state
         self._g = np.full(n, math.inf)
         self._rhs = np.full(n, math.inf)
         self._exit = np.full(n, math.inf)
@@ -133,11 +133,13 @@ class IncrementalPlanner:
         self._where = np.full(n, -1, np.int64)
         self._size = 0
         self.lattice = lattice
-        self._fw = lattice.move_energies_j()  # the planner's own weights, changed in place by update
-        self._rw = reverse_weights(self._fw, self._delta)
         self.expanded = 0
         self.touched = 0
         self._dst = np.empty(0, np.int64)
+        if self.heading:  # no incremental state: the heading lattice is searched again (module docstring)
+            return
+        self._fw = lattice.move_energies_j()  # the planner's own weights, changed in place by update
+        self._rw = reverse_weights(self._fw, self._delta)
         self._set_goal_joins()
 
     @property
@@ -190,6 +192,10 @@ class IncrementalPlanner:
             raise InvalidParameterError(f"lattice must be a Lattice, got {type(lattice).__name__!r}")
         moves = lattice.changed_moves_since(self.lattice)
         self._answer = None
+        if self.heading:
+            self.lattice = lattice
+            self.touched = int(np.unique(moves // LATTICE_OFFSETS.shape[0]).size)
+            return self
         # new energies (inf: the edge vanished) into both tables; a changed move stays on the grid
         moves = np.ascontiguousarray(moves, dtype=np.int64)
         heads = set_moves(moves, lattice.move_energies_j(moves), self._fw, self._rw, self._delta)
@@ -254,7 +260,10 @@ class IncrementalPlanner:
 
     def search_state(self) -> dict[str, np.ndarray]:
         """The search's memory as arrays (copies), for :meth:`restore_search` in a planner built
-        again over the same lattice: a restored planner repairs exactly as this one would."""
+        again over the same lattice: a restored planner repairs exactly as this one would (empty
+        with ``heading``, which keeps no search between calls)."""
+        if self.heading:
+            return {}
         out = {name: getattr(self, f"_{name}").copy() for name in self.SEARCH_ARRAYS}
         out["size"] = np.array([self._size], np.int64)
         return out
@@ -268,6 +277,8 @@ class IncrementalPlanner:
         InvalidParameterError
             Missing arrays, or arrays of another lattice's size.
         """
+        if self.heading:
+            return self
         n = self._g.size
         for name in self.SEARCH_ARRAYS:
             arr = state.get(name)
@@ -300,9 +311,9 @@ class IncrementalPlanner:
 
         The same checks (start and goal on free cells, in one connected region: else
         ``"infeasible"``), the same fallback to the 1-cell lattice when a coarser one finds
-        nothing, the same refinement (:func:`refine_route`, seeded by ``seed`` or
+        nothing, the same refinement (:func:`~planner.refine.refine_route`, seeded by ``seed`` or
         ``REFINE_DEFAULT_SEED``), the same shortest-route candidate
-        (:func:`~planner.planning.refined_or_shortest`) and costing (:func:`evaluate_route`).
+        (:func:`~planner.planning.refine_planned`) and costing (:func:`evaluate_route`).
 
         Parameters
         ----------
@@ -350,9 +361,6 @@ class IncrementalPlanner:
         waypoints, name = path.waypoints_m, "lattice"
         if refine:
             t0 = time.perf_counter()
-            waypoints = refine_route(cost, waypoints, seed=REFINE_DEFAULT_SEED if seed is None else seed,
-                                     max_steps=settings.refine_max_steps, rounds=settings.refine_rounds)
-            waypoints, from_shortest = refined_or_shortest(problem, waypoints, seed, settings)
+            waypoints, name = refine_planned(problem, "lattice", waypoints, seed, settings)
             elapsed += time.perf_counter() - t0
-            name = "lattice+refine (from the shortest route)" if from_shortest else "lattice+refine"
         return evaluate_route(cost, waypoints, status="exact", planner=name, planning_time_s=elapsed)

@@ -15,25 +15,22 @@ from terrain import example_map, procedural_map
 from terrawatt_base.errors import UnknownNameError
 
 
-def robot_family(seed: int):
-    """A robot of the issue's family: turn rate 0.02-2 rad/s (log-uniform), turning resistance 0-1, electronics
-    0.5-3 x the Husky's; and grounds with that turning resistance."""
-    rng = np.random.default_rng(seed)
-    husky = robot_preset("husky")
-    scale = rng.uniform(0.5, 3.0)
-    robot = husky.replace(
-        name=f"family_{seed}", turn_rate_radps=float(np.exp(rng.uniform(np.log(0.02), np.log(2.0)))),
-        sensor_power_w=husky.sensor_power_w * scale, control_stable_power_w=husky.control_stable_power_w * scale,
-        control_standby_power_w=husky.control_standby_power_w * scale)
-    lateral = float(rng.uniform(0.0, 1.0))
-    return robot, lateral
+def _turn_family():
+    """benchmarks/turn_family.py: the issue's seeded robot family, shared with the benchmark."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / "turn_family.py"
+    spec = importlib.util.spec_from_file_location("turn_family", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def family_cost(tmap, seed: int) -> EnergyCost:
-    robot, lateral = robot_family(seed)
-    grounds = {name: ground_preset(name).replace(lateral_friction_coef=lateral)
-               for name in sorted(set(tmap.ground_names.values()))}
-    return EnergyCost.from_model(tmap, PhysicsEnergyModel(robot), grounds, speed_mps=0.5)
+    family = _turn_family()
+    robot, lateral = family.robot_family(seed)
+    return family.family_cost(tmap, robot, lateral)
 
 
 def _free_points(cost, rng, n):
