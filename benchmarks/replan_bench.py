@@ -8,9 +8,10 @@ simulated excitation run of that ground), the script times, for each lattice str
     the :class:`EnergyCost` and the lattice graph (the baseline, measured in the same run),
     and a search from scratch (``Lattice.shortest_path``, A*); the incremental planner's
     first search (:class:`planner.IncrementalPlanner` with ``heading=False``, D* Lite from the
-    goal) is timed too. These are the heading-free searches (drive energy alone): the heading
-    lattice's answers (``heading=True``, the default, and ``plan_route(planner="lattice")``) are
-    searched from scratch, timed by ``plan_bench.py``'s heading table;
+    goal) is timed too. These are the heading-free searches (drive energy alone); the heading
+    lattice's (drive and turns: ``heading=True``, the default, and ``plan_route(planner="lattice")``)
+    are timed beside them: a search from scratch (:func:`heading_shortest_path`) and the
+    replanner's first search;
 (b) two model updates, one after the other:
 
     - ``patch``: a new model on a 20 x 20 cell patch across the middle of the current route;
@@ -23,6 +24,10 @@ simulated excitation run of that ground), the script times, for each lattice str
     moves changed) and ``plan`` (repairs the previous search from the same start), side by
     side with a search from scratch on the refreshed lattice and ``plan_route(planner="lattice")``
     (search + route refinement).
+
+The heading replanner keeps its heuristic (lowered where moves got cheaper) and its
+workspace; after each update its ``heading_update_s`` + ``heading_repair_s`` (a search) are set
+against a heading search from scratch on the refreshed lattice, whose energy it must equal.
 
 ``incremental_s`` = refresh + update + repair; ``speedup_vs_scratch`` = (preparation + search
 from scratch) / ``incremental_s``; ``speedup_vs_full_replan`` = (refresh + search from
@@ -63,6 +68,7 @@ from planner import (
     plan_route,
     warm_up_kernels,
 )
+from planner.heading_lattice import heading_shortest_path
 from planner.kernels import graph
 from terrain import CellModelRegistry, TerrainMap
 from terrawatt_base.atomic import write_json_atomic
@@ -133,7 +139,8 @@ def run(size: int, repeats: int, strides: tuple[int, ...], seed: int, patch_cell
     changed_ground = "sand"
     rows_out: list[dict[str, Any]] = []
     for stride in strides:
-        base: dict[str, list[float]] = {k: [] for k in ("prep_s", "scratch_search_s", "incremental_first_s")}
+        base: dict[str, list[float]] = {k: [] for k in ("prep_s", "scratch_search_s", "incremental_first_s",
+                                                          "heading_scratch_s", "heading_first_s")}
         per: dict[str, dict[str, list[Any]]] = {sc: {} for sc in SCENARIOS}
         for rep in range(repeats):
             reg = CellModelRegistry.from_terrain(tmap, models[GROUNDS[0]], prior_name=GROUNDS[0])
@@ -156,6 +163,13 @@ def run(size: int, repeats: int, strides: tuple[int, ...], seed: int, patch_cell
             planner = IncrementalPlanner(lat, goal, heading=False)  # the incremental search: heading-free
             planner.plan(start)
             base["incremental_first_s"].append(time.perf_counter() - t0)
+            t0 = time.perf_counter()
+            heading_shortest_path(lat, start, goal)
+            base["heading_scratch_s"].append(time.perf_counter() - t0)
+            t0 = time.perf_counter()
+            hplanner = IncrementalPlanner(lat, goal)  # the heading lattice's replanner (drive and turns)
+            hplanner.plan(start)
+            base["heading_first_s"].append(time.perf_counter() - t0)
             for sc in SCENARIOS:
                 # (b) one model changes: on a patch across the route, or on every cell of one class
                 if sc == "patch":
@@ -180,13 +194,25 @@ def run(size: int, repeats: int, strides: tuple[int, ...], seed: int, patch_cell
                 t0 = time.perf_counter()
                 ref = lat2.shortest_path(start, goal)
                 search = time.perf_counter() - t0
+                # the heading lattice: the replanner's update + search, and a search from scratch
+                t0 = time.perf_counter()
+                hplanner.update(lat2)
+                h_update = time.perf_counter() - t0
+                t0 = time.perf_counter()
+                hpath = hplanner.plan(start)
+                h_repair = time.perf_counter() - t0
+                t0 = time.perf_counter()
+                href = heading_shortest_path(lat2, start, goal)
+                h_search = time.perf_counter() - t0
                 t0 = time.perf_counter()
                 route = plan_route(tmap, start, goal, cost=cost2, planner="lattice", compare=False,
                                    settings=PlannerSettings(lattice_stride_cells=stride))
                 plan_route_s = time.perf_counter() - t0
                 rec = per[sc]
                 for key, value in (("refresh_s", refresh), ("reweight_s", lat2.build_time_s), ("update_s", update),
-                                   ("repair_s", repair), ("search_s", search), ("plan_route_s", plan_route_s)):
+                                   ("repair_s", repair), ("search_s", search), ("plan_route_s", plan_route_s),
+                                   ("heading_update_s", h_update), ("heading_repair_s", h_repair),
+                                   ("heading_search_s", h_search)):
                     rec.setdefault(key, []).append(value)
                 if rep == 0:
                     rel = abs(path.objective - ref.objective) / ref.objective if ref.found else float("nan")
@@ -201,6 +227,9 @@ def run(size: int, repeats: int, strides: tuple[int, ...], seed: int, patch_cell
                         "energy_rel_diff_vs_scratch": rel,
                         "same_found": bool(path.found == ref.found),
                         "route_found": bool(route.found),
+                        "heading_states_touched": int(hplanner.expanded),
+                        "heading_energy_rel_diff_vs_scratch": (abs(hpath.objective - href.objective) / href.objective
+                                                               if href.found else float("nan")),
                     }
                     if sc == SCENARIOS[-1]:  # exactness of the refreshed weights (not timed)
                         fresh = Lattice(LearnedEnergyModel(reg, robot, ground_preset("asphalt")).energy_cost(
@@ -225,6 +254,12 @@ def run(size: int, repeats: int, strides: tuple[int, ...], seed: int, patch_cell
                 "speedup_vs_scratch": (b["prep_s"] + b["scratch_search_s"]) / incremental,
                 "speedup_vs_full_replan": (m["refresh_s"] + m["search_s"]) / incremental,
                 "repair_speedup_vs_search": m["search_s"] / (m["update_s"] + m["repair_s"]),
+                "heading_incremental_s": m["refresh_s"] + m["heading_update_s"] + m["heading_repair_s"],
+                "heading_speedup_vs_scratch": (b["prep_s"] + b["heading_scratch_s"])
+                / (m["refresh_s"] + m["heading_update_s"] + m["heading_repair_s"]),
+                "heading_speedup_vs_full_replan": (m["refresh_s"] + m["heading_search_s"])
+                / (m["refresh_s"] + m["heading_update_s"] + m["heading_repair_s"]),
+                "heading_repair_speedup_vs_search": m["heading_search_s"] / (m["heading_update_s"] + m["heading_repair_s"]),
                 **per[sc]["facts"],
             })
     return {
@@ -262,6 +297,15 @@ def _print(res: dict[str, Any]) -> None:
             cells.append(f"{v:>12.3g}" if c == "energy_rel_diff_vs_scratch" else
                          f"{v:>12.4f}" if isinstance(v, float) else f"{v!s:>12}")
         print(" ".join(cells))
+    print("\nheading lattice (drive and turns): the replanner's update + search against a search from scratch")
+    hcols = ("stride_cells", "update", "heading_first_s", "heading_scratch_s", "heading_update_s", "heading_repair_s",
+             "heading_search_s", "heading_incremental_s", "heading_speedup_vs_scratch",
+             "heading_speedup_vs_full_replan", "heading_repair_speedup_vs_search", "heading_states_touched",
+             "heading_energy_rel_diff_vs_scratch")
+    print(" ".join(f"{c.replace('heading_', '')[:12]:>12s}" for c in hcols))
+    for r in res["results"]:
+        print(" ".join(f"{r[c]:>12.3g}" if c.endswith("rel_diff_vs_scratch") else f"{r[c]:>12.4f}"
+                       if isinstance(r[c], float) else f"{r[c]!s:>12}" for c in hcols))
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:

@@ -34,14 +34,16 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from terrawatt_base.errors import UnknownNameError
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from .kernels import astar
-from .kernels.heading import backward_cost_to_go, heading_astar
+from .kernels.heading import backward_cost_to_go, heading_astar, heading_reset, heading_search
+from .kernels.heading import lower_cost_to_go as lower_kernel
 from .lattice import LATTICE_METHODS, LATTICE_OFFSETS, Lattice, LatticePath
 from .points import as_points
 
-__all__ = ["heading_shortest_path", "HEADING_COUNT", "move_turn_angles"]
+__all__ = ["heading_shortest_path", "heading_cost_to_go", "lower_cost_to_go", "HeadingWorkspace", "HEADING_COUNT",
+           "move_turn_angles"]
 
 #: Headings of the heading lattice: one per lattice move.
 HEADING_COUNT = LATTICE_OFFSETS.shape[0]
@@ -142,7 +144,8 @@ def _index_of(sorted_or_not: np.ndarray, values: np.ndarray) -> np.ndarray:
 
 
 def heading_shortest_path(lattice: Lattice, start_xy_m: tuple[float, float], goal_xy_m: tuple[float, float],
-                          method: str = "astar") -> LatticePath:
+                          method: str = "astar", *, cost_to_go: np.ndarray | None = None,
+                          workspace: HeadingWorkspace | None = None) -> LatticePath:
     """The minimum of drive plus turn energy over ``lattice``'s routes from start to goal.
 
     Parameters
@@ -154,6 +157,13 @@ def heading_shortest_path(lattice: Lattice, start_xy_m: tuple[float, float], goa
     method : {"astar", "dijkstra"}
         The compiled A* (module docstring) or scipy's Dijkstra over the explicit state graph
         (the reference; memory 16 times the heading-free graph's).
+    cost_to_go : ndarray, shape (lattice.n_nodes,), optional
+        The A*'s heuristic: a consistent lower bound of each node's heading-free cost to this
+        goal (:func:`heading_cost_to_go` computes one, :func:`lower_cost_to_go` keeps one
+        valid after weights change). Default: computed for this query. A replanner passes
+        the one it keeps (a wrong bound gives a wrong answer: it is not checked).
+    workspace : HeadingWorkspace, optional
+        The A*'s state arrays, reused between queries (default: fresh arrays).
 
     Returns
     -------
@@ -178,8 +188,10 @@ def heading_shortest_path(lattice: Lattice, start_xy_m: tuple[float, float], goa
     q = _Query(lattice, start, goal)
     best, nodes = _no_move_route(cost, q, start, goal)
     if q.src.size and q.dst.size:
-        solve = _astar if method == "astar" else _dijkstra
-        total, chain = solve(lattice, q, start, goal, best)
+        if method == "astar":
+            total, chain = _astar(lattice, q, start, goal, best, cost_to_go, workspace)
+        else:
+            total, chain = _dijkstra(lattice, q, start, goal, best)
         if chain and total < best:
             best, nodes = total, chain
     path = lattice.path_via(start, nodes, goal, best, "energy")
@@ -212,21 +224,117 @@ def _upper_bound(lattice: Lattice, q: _Query, start: np.ndarray, goal: np.ndarra
     return min(best, lattice.cost.path_energy_j(path.waypoints_m))
 
 
-def _astar(lattice: Lattice, q: _Query, start: np.ndarray, goal: np.ndarray, best: float) -> tuple[float, list[int]]:
-    data = lattice._energy_data()
+def _cost_to_go(lattice: Lattice, q: _Query, start: np.ndarray, goal: np.ndarray, best: float) -> np.ndarray:
+    """The heading-free cost-to-go, bounded by a feasible heading-lattice route's price (module docstring)."""
     upper = _upper_bound(lattice, q, start, goal, best)
-    h = backward_cost_to_go(lattice._pos, data, LATTICE_OFFSETS, lattice._ni, lattice._nj, q.dst, q.e_dst,
-                            upper * (1 + 1e-12) + 1e-9)
-    total, last, pred = heading_astar(lattice._pos, data, LATTICE_OFFSETS, lattice._nj, q.node_row, q.turn,
-                                      q.src, q.e_src, q.turn_src, q.exit_of, q.exit_cost, h, best)
-    if last < 0:
-        return math.inf, []
+    return backward_cost_to_go(lattice._pos, lattice._energy_data(), LATTICE_OFFSETS, lattice._ni, lattice._nj,
+                               q.dst, q.e_dst, upper * (1 + 1e-12) + 1e-9)
+
+
+def heading_cost_to_go(lattice: Lattice, start_xy_m: tuple[float, float], goal_xy_m: tuple[float, float]) -> np.ndarray:
+    """Each node's heading-free cost (J) to the goal: the heading A*'s heuristic, for reuse.
+
+    Exact where it is below the price (turns included) of the heading-free route from
+    ``start_xy_m``; every other node gets that bound (a lower bound of its cost), so the array
+    stays a consistent lower bound, valid for any start (tightest for routes no dearer than
+    this one). Keep it valid after weights change with :func:`lower_cost_to_go`.
+
+    Returns
+    -------
+    ndarray, shape (lattice.n_nodes,)
+        Float64 (J).
+
+    Raises
+    ------
+    InvalidParameterError, OutOfBoundsError
+        NaN points / points outside the map.
+    """
+    pts = as_points([start_xy_m, goal_xy_m], "start/goal")
+    lattice.cost.check_inside(pts, "start/goal")
+    start, goal = pts
+    q = _Query(lattice, start, goal)
+    if not (q.src.size and q.dst.size):
+        return np.zeros(lattice.n_nodes)  # no lattice route: any zero bound is consistent
+    best, _ = _no_move_route(lattice.cost, q, start, goal)
+    return _cost_to_go(lattice, q, start, goal, best)
+
+
+def lower_cost_to_go(cost_to_go: np.ndarray, lattice: Lattice, moves: np.ndarray, goal_xy_m: tuple[float, float]) -> int:
+    """Keep a :func:`heading_cost_to_go` array a consistent lower bound after move energies changed.
+
+    ``cost_to_go`` was valid for the lattice before the change; ``lattice`` is the refreshed
+    one and ``moves`` the ids of the moves whose energy changed (:meth:`Lattice.changed_moves_since`).
+    Where energies rose the old values remain lower bounds; where a move or a goal join got
+    cheaper, the lowering is propagated (:func:`planner.kernels.heading.lower_cost_to_go`),
+    in place. Returns the number of nodes lowered.
+    """
+    moves = np.asarray(moves, dtype=np.int64)
+    u, k = np.divmod(moves, HEADING_COUNT)
+    w = lattice.move_energies_j(moves)
+    ok = np.isfinite(w)
+    v = u[ok] + LATTICE_OFFSETS[k[ok], 0] * lattice._nj + LATTICE_OFFSETS[k[ok], 1]
+    offer = w[ok] + cost_to_go[v]
+    dst, e_dst = lattice.joins(as_points(goal_xy_m, "goal_xy_m")[0], to_point=True)
+    seeds = np.concatenate([u[ok], dst]).astype(np.int64)
+    seed_cost = np.concatenate([offer, e_dst]).astype(float)
+    return int(lower_kernel(lattice._pos, lattice._energy_data(), LATTICE_OFFSETS, lattice._ni, lattice._nj,
+                            cost_to_go, seeds, seed_cost))
+
+
+class HeadingWorkspace:
+    """The heading A*'s arrays (one entry per state, 41 bytes: 172 MB at 512^2 nodes), kept between queries.
+
+    A search from scratch allocates (and the system zeroes) these arrays for every query,
+    about half its time on a large lattice; a replanner keeps one workspace and each search
+    puts back only the entries it touched.
+    """
+
+    def __init__(self, n_nodes: int) -> None:
+        ns = int(n_nodes) * HEADING_COUNT
+        self.n_nodes = int(n_nodes)
+        self.g = np.full(ns, np.inf)
+        self.pred = np.full(ns, -2, np.int64)
+        self.closed = np.zeros(ns, np.bool_)
+        self.keys = np.empty(ns)
+        self.heap = np.empty(ns, np.int64)
+        self.where = np.full(ns, -1, np.int64)
+        self.touched = np.empty(ns, np.int64)
+        #: States the last search touched.
+        self.last_touched = 0
+
+
+def _astar(lattice: Lattice, q: _Query, start: np.ndarray, goal: np.ndarray, best: float,
+           h: np.ndarray | None = None, ws: HeadingWorkspace | None = None) -> tuple[float, list[int]]:
+    data = lattice._energy_data()
+    if h is None:
+        h = _cost_to_go(lattice, q, start, goal, best)
+    elif h.shape != (lattice.n_nodes,):
+        raise InvalidParameterError(f"cost_to_go must have one value per lattice node ({lattice.n_nodes}), "
+                                    f"got shape {h.shape}")
+    args = (lattice._pos, data, LATTICE_OFFSETS, lattice._nj, q.node_row, q.turn, q.src, q.e_src, q.turn_src,
+            q.exit_of, q.exit_cost, h, best)
+    if ws is None:
+        total, last, pred = heading_astar(*args)
+        return (math.inf, []) if last < 0 else (float(total), _state_nodes(lattice, _chain(pred, int(last))))
+    if ws.n_nodes != lattice.n_nodes:
+        raise InvalidParameterError(f"workspace is for {ws.n_nodes} nodes, the lattice has {lattice.n_nodes}")
+    total, last, count = heading_search(*args, ws.g, ws.pred, ws.closed, ws.keys, ws.heap, ws.where, ws.touched)
+    try:
+        chain = [] if last < 0 else _chain(ws.pred, int(last))
+    finally:
+        heading_reset(ws.touched, count, ws.g, ws.pred, ws.closed, ws.where)
+        ws.last_touched = int(count)
+    return (math.inf, []) if last < 0 else (float(total), _state_nodes(lattice, chain))
+
+
+def _chain(pred: np.ndarray, last: int) -> list[int]:
+    """The states of a route, first to last, from the predecessor array."""
     states = []
-    s = int(last)
+    s = last
     while s >= 0:
         states.append(s)
         s = int(pred[s])
-    return float(total), _state_nodes(lattice, states[::-1])
+    return states[::-1]
 
 
 def _state_nodes(lattice: Lattice, states: list[int]) -> list[int]:

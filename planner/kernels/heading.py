@@ -29,7 +29,7 @@ import numpy as np
 
 from .graph import heap_pop, heap_set
 
-__all__ = ["backward_cost_to_go", "heading_astar"]
+__all__ = ["backward_cost_to_go", "heading_astar", "heading_reset", "heading_search", "lower_cost_to_go"]
 
 _N_MOVES = 16
 
@@ -89,7 +89,7 @@ def backward_cost_to_go(pos, data, offsets, ni, nj, dst, dst_cost, upper):  # pr
 @numba.njit(cache=True, nogil=True)
 def heading_astar(pos, data, offsets, nj, node_row, turn, src, src_cost, turn_src, exit_of, exit_cost,
                   h_node, upper):  # pragma: no cover - compiled
-    """A* over the heading lattice's states (module docstring).
+    """A* over the heading lattice's states (module docstring), in fresh arrays.
 
     Parameters: ``pos`` (n, 16) move -> weight index (-1: none) and ``data`` the weights;
     ``offsets`` (16, 2) node-grid moves; ``node_row`` (n,) the turn table row of each node's
@@ -102,16 +102,31 @@ def heading_astar(pos, data, offsets, nj, node_row, turn, src, src_cost, turn_sr
     Returns the best total (``upper`` if none is lower), the last state of that route (-1:
     none) and the predecessor array (-1: entered from the virtual start).
     """
-    n = pos.shape[0]
-    ns = n * _N_MOVES
-    nj_ = nj
+    ns = pos.shape[0] * _N_MOVES
     g = np.full(ns, np.inf)
     pred = np.full(ns, -2, np.int64)
     closed = np.zeros(ns, np.bool_)
-    keys = np.empty(ns)
-    nodes = np.empty(ns, np.int64)
     where = np.full(ns, -1, np.int64)
+    touched = np.empty(ns, np.int64)
+    best, best_state, _ = heading_search(pos, data, offsets, nj, node_row, turn, src, src_cost, turn_src, exit_of,
+                                         exit_cost, h_node, upper, g, pred, closed, np.empty(ns),
+                                         np.empty(ns, np.int64), where, touched)
+    return best, best_state, pred
+
+
+@numba.njit(cache=True, nogil=True)
+def heading_search(pos, data, offsets, nj, node_row, turn, src, src_cost, turn_src, exit_of, exit_cost,
+                   h_node, upper, g, pred, closed, keys, nodes, where, touched):  # pragma: no cover - compiled
+    """The A* of :func:`heading_astar` in a caller's workspace of one entry per state.
+
+    ``g`` (inf), ``pred`` (-2), ``closed`` (False) and ``where`` (-1) must hold those values on
+    entry; ``keys`` / ``nodes`` are the heap's storage. Every state whose entries the search
+    changes is listed once in ``touched``; returns the best total, its last state and how many
+    states are listed (:func:`heading_reset` puts the workspace back).
+    """
+    nj_ = nj
     size = 0
+    count = 0
     best = upper
     best_state = -1
     for i in range(src.size):
@@ -123,7 +138,10 @@ def heading_astar(pos, data, offsets, nj, node_row, turn, src, src_cost, turn_sr
             v = u + offsets[k, 0] * nj_ + offsets[k, 1]
             s = v * _N_MOVES + k
             gv = src_cost[i] + turn_src[i, k] + data[p]
-            if gv < g[s]:
+            if gv < g[s] and gv + h_node[v] < best:
+                if g[s] == np.inf:
+                    touched[count] = s
+                    count += 1
                 g[s] = gv
                 pred[s] = -1
                 size = heap_set(keys, nodes, where, size, s, gv + h_node[v])
@@ -149,8 +167,66 @@ def heading_astar(pos, data, offsets, nj, node_row, turn, src, src_cost, turn_sr
             if closed[t]:
                 continue
             nv = gs + turn[row, h, k] + data[p]
-            if nv < g[t]:
+            if nv < g[t] and nv + h_node[v] < best:  # a state that cannot beat the best route is not kept
+                if g[t] == np.inf:
+                    touched[count] = t
+                    count += 1
                 g[t] = nv
                 pred[t] = s
                 size = heap_set(keys, nodes, where, size, t, nv + h_node[v])
-    return best, best_state, pred
+    return best, best_state, count
+
+
+@numba.njit(cache=True, nogil=True)
+def heading_reset(touched, count, g, pred, closed, where):  # pragma: no cover - compiled
+    """Put back the workspace entries of the ``count`` states a :func:`heading_search` listed."""
+    for i in range(count):
+        s = touched[i]
+        g[s] = np.inf
+        pred[s] = -2
+        closed[s] = False
+        where[s] = -1
+
+
+@numba.njit(cache=True, nogil=True)
+def lower_cost_to_go(pos, data, offsets, ni, nj, h, seeds, seed_cost):  # pragma: no cover - compiled
+    """Lower ``h`` in place where moves got cheaper, keeping it a consistent lower bound.
+
+    ``h`` is a consistent lower bound of the heading-free cost to the goal under the old
+    weights (as :func:`backward_cost_to_go` gives). Where weights rose it still is one; where a
+    move got cheaper (or appeared) or a goal join did, ``seeds`` / ``seed_cost`` give the node
+    and the new value that move offers it (``data[pos[u, k]] + h[v]``, or the join's energy).
+    The lowering is propagated backwards (Dijkstra on the reversed moves, each node settled at
+    most once), so afterwards ``h[u] <= data[pos[u, k]] + h[v]`` for every move again and ``h`` is
+    a lower bound of the new cost-to-go. Returns the number of nodes lowered.
+    """
+    n = ni * nj
+    keys = np.empty(n)
+    nodes = np.empty(n, np.int64)
+    where = np.full(n, -1, np.int64)
+    size = 0
+    for i in range(seeds.size):
+        u = seeds[i]
+        if seed_cost[i] < h[u]:
+            h[u] = seed_cost[i]
+            size = heap_set(keys, nodes, where, size, u, seed_cost[i])
+    lowered = 0
+    while size > 0:
+        key, v, size = heap_pop(keys, nodes, where, size)
+        lowered += 1
+        iv = v // nj
+        jv = v - iv * nj
+        for k in range(_N_MOVES):
+            iu = iv - offsets[k, 0]
+            ju = jv - offsets[k, 1]
+            if iu < 0 or iu >= ni or ju < 0 or ju >= nj:
+                continue
+            u = iu * nj + ju
+            p = pos[u, k]
+            if p < 0:
+                continue
+            nu = key + data[p]
+            if nu < h[u]:
+                h[u] = nu
+                size = heap_set(keys, nodes, where, size, u, nu)
+    return lowered

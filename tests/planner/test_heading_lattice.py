@@ -9,10 +9,19 @@ import pytest
 
 from energy import PhysicsEnergyModel, ground_preset, robot_preset
 from planner import EnergyCost, Lattice, plan_route
-from planner.heading_lattice import HEADING_COUNT, heading_shortest_path, move_turn_angles
+from planner.heading_lattice import (
+    HEADING_COUNT,
+    HeadingWorkspace,
+    heading_cost_to_go,
+    heading_shortest_path,
+    lower_cost_to_go,
+    move_turn_angles,
+)
+from planner.kernels.heading import backward_cost_to_go
+from planner.lattice import LATTICE_OFFSETS
 from planner.route import evaluate_route
 from terrain import example_map, procedural_map
-from terrawatt_base.errors import UnknownNameError
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 
 def _turn_family():
@@ -133,3 +142,70 @@ def test_each_planner_says_what_its_search_minimised():
             assert search_objective(name).startswith("drive energy (a search without heading cannot see turns)")
     with pytest.raises(UnknownNameError):
         search_objective("dijkstra")
+
+
+def _exact_cost_to_go(lattice, goal):
+    """Each node's heading-free cost to ``goal`` (an unbounded backward Dijkstra), and the goal's joins."""
+    dst, e_dst = lattice.joins(np.asarray(goal, float), to_point=True)
+    return backward_cost_to_go(lattice._pos, lattice._energy_data(), LATTICE_OFFSETS, lattice._ni, lattice._nj,
+                               dst, e_dst, math.inf), dst, e_dst
+
+
+def _assert_consistent_lower_bound(h, lattice, goal):
+    exact, dst, e_dst = _exact_cost_to_go(lattice, goal)
+    assert np.all(h <= exact * (1 + 1e-12) + 1e-9)  # a lower bound of the cost-to-go (inf: unreachable)
+    moves = lattice.move_energies_j()
+    u, k = np.nonzero(np.isfinite(moves))
+    v = u + LATTICE_OFFSETS[k, 0] * lattice._nj + LATTICE_OFFSETS[k, 1]
+    assert np.all(h[u] <= moves[u, k] + h[v] + 1e-9)  # consistent along every move
+    assert np.all(h[dst] <= e_dst + 1e-9)  # and on the goal's joins
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_kept_cost_to_go_stays_a_consistent_lower_bound_through_rises_and_drops(seed):
+    """The replanner's heuristic after updates: lowered where moves got cheaper, kept where dearer; the A* with it
+    (and a reused workspace) still finds the heading optimum."""
+    rng = np.random.default_rng(500 + seed)
+    tmap = procedural_map((30, 38), 1.0, seed=seed, obstacle_fraction=0.04)
+    cost = family_cost(tmap, seed)
+    lattice = Lattice(cost, 1)
+    (start, goal), = _free_points(cost, rng, 1)
+    h = heading_cost_to_go(lattice, start, goal)
+    _assert_consistent_lower_bound(h, lattice, goal)
+    ws = HeadingWorkspace(lattice.n_nodes)
+    lowered = 0
+    route = heading_shortest_path(lattice, start, goal)
+    for step in range(6):
+        rows = np.asarray(cost.ground_rows).copy()
+        # a patch about a point of the route (where the bound is exact), or anywhere
+        x, y = route.waypoints_m[rng.integers(len(route.waypoints_m))] if step < 3 else (np.inf, np.inf)
+        r, c = (np.clip(np.array(cost.terrain.rowcol(x, y)) - 4, 0, np.array(rows.shape) - 8) if np.isfinite(x)
+                else (rng.integers(0, rows.shape[0] - 8), rng.integers(0, rows.shape[1] - 8)))
+        rows[r:r + 8, c:c + 8] = cost.grade_table_j_per_m.shape[0]  # a patch moves to a new table row
+        factor = (0.2, 4.0)[step % 2]  # cheaper, then dearer ground
+        grade = np.vstack([cost.grade_table_j_per_m, factor * cost.grade_table_j_per_m[:1]])
+        turn = np.vstack([cost.turn_table_j, cost.turn_table_j[:1]])
+        new = cost.with_tables(grade, turn, rows)
+        new_lattice = Lattice(new, 1)
+        lowered += lower_cost_to_go(h, new_lattice, new_lattice.changed_moves_since(lattice), goal)
+        cost, lattice = new, new_lattice
+        _assert_consistent_lower_bound(h, lattice, goal)
+        s = _free_points(cost, rng, 1)[0][0]
+        got = heading_shortest_path(lattice, s, goal, cost_to_go=h, workspace=ws)
+        ref = heading_shortest_path(lattice, s, goal, method="dijkstra")
+        assert got.found == ref.found
+        if ref.found:
+            assert got.objective == pytest.approx(ref.objective, rel=1e-9)
+        assert np.all(np.isinf(ws.g)) and np.all(ws.pred == -2) and not ws.closed.any() and np.all(ws.where == -1)
+    assert lowered > 0  # the cheaper patches lowered the bound somewhere
+
+
+def test_a_cost_to_go_or_workspace_of_another_lattice_is_refused():
+    tmap = procedural_map((20, 24), 1.0, seed=1)
+    cost = family_cost(tmap, 1)
+    lattice = Lattice(cost, 1)
+    start, goal = (3.5, 3.5), (18.5, 15.5)
+    with pytest.raises(InvalidParameterError, match="cost_to_go"):
+        heading_shortest_path(lattice, start, goal, cost_to_go=np.zeros(5))
+    with pytest.raises(InvalidParameterError, match="workspace"):
+        heading_shortest_path(lattice, start, goal, workspace=HeadingWorkspace(7))

@@ -82,8 +82,12 @@ def _updates(cost: EnergyCost, rng: np.random.Generator) -> list[tuple[str, np.n
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 @pytest.mark.parametrize("stride", [1, 2])
-@pytest.mark.parametrize("heading", [True, False])
-def test_incremental_replans_equal_full_searches_after_random_updates(seed, stride, heading):
+@pytest.mark.parametrize("heading, refresh_share", [(True, IncrementalPlanner.REFRESH_SHARE), (True, np.inf),
+                                                    (False, IncrementalPlanner.REFRESH_SHARE)])
+def test_incremental_replans_equal_full_searches_after_random_updates(seed, stride, heading, refresh_share,
+                                                                      monkeypatch):
+    """``refresh_share`` inf: the heading planner's heuristic is never computed again, only kept valid."""
+    monkeypatch.setattr(IncrementalPlanner, "REFRESH_SHARE", refresh_share)
     rng = np.random.default_rng(100 * seed + stride)
     cost = _cost(seed)
     goal = _free_point(cost, rng)
