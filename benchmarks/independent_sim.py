@@ -65,6 +65,7 @@ import os
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -73,6 +74,7 @@ from energy.io import write_csv_log
 
 __all__ = [
     "CASES",
+    "DRIVING",
     "SimEffects",
     "case_effects",
     "command_segments",
@@ -214,10 +216,16 @@ def case_effects(spec: str) -> SimEffects:
 # ---------------------------------------------------------------------------- excitation
 #: Segment kinds and their probabilities.
 _KINDS = ("straight", "arc", "pivot", "stop")
-_KIND_P = (0.35, 0.25, 0.22, 0.18)
+#: Driving styles: the probabilities of straight, arc, pivot and stop segments.
+DRIVING: dict[str, tuple[float, ...]] = {
+    "mixed": (0.35, 0.25, 0.22, 0.18),
+    "turning": (0.10, 0.45, 0.35, 0.10),  # turning-heavy: where a payload and a turning resistance look alike
+    "straights": (0.90, 0.0, 0.0, 0.10),  # long straights: a payload and a rolling resistance look alike
+}
 
 
-def command_segments(duration_s: float, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def command_segments(duration_s: float, rng: np.random.Generator,
+                     driving: str = "mixed") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A teleoperation-like command schedule: (segment start times, v, omega).
 
     A rest of 2-3 s first (the standstill current), then straights at 0.2-0.9 m/s, arcs
@@ -233,7 +241,7 @@ def command_segments(duration_s: float, rng: np.random.Generator) -> tuple[np.nd
     t = float(rng.uniform(2.0, 3.0))
     end = duration_s - 1.5
     while t < end:
-        kind = _KINDS[int(rng.choice(len(_KINDS), p=_KIND_P))]
+        kind = _KINDS[int(rng.choice(len(_KINDS), p=DRIVING[driving]))]
         sign = 1.0 if rng.random() < 0.5 else -1.0
         if kind == "straight":
             v, w, d = rng.uniform(0.2, 0.9), 0.0, rng.uniform(4.0, 10.0)
@@ -318,7 +326,8 @@ def _quantise(current_a: np.ndarray) -> np.ndarray:
 
 
 def simulate_run(seed: int, effects: SimEffects = SimEffects(), duration_s: float | None = None,
-                 *, ideal: bool = False, label: str = "") -> InteractionLog:
+                 *, ideal: bool = False, label: str = "", driving: str = "mixed",
+                 commands: Any = None) -> InteractionLog:
     """One simulated Husky run on flooring-like hard ground.
 
     Parameters
@@ -335,6 +344,12 @@ def simulate_run(seed: int, effects: SimEffects = SimEffects(), duration_s: floa
         IMU), as the reference of the noise floor.
     label : str
         Case label written into ``meta.notes``.
+    driving : str
+        The driving style of the random commands, a key of :data:`DRIVING`.
+    commands : CommandProfile, optional
+        Drive these commands instead (an :class:`energy.CommandProfile`: the robot follows
+        them within its controller's limits, as any command); the run then lasts as long as
+        the profile and ``duration_s`` is ignored.
 
     Returns
     -------
@@ -352,19 +367,27 @@ def simulate_run(seed: int, effects: SimEffects = SimEffects(), duration_s: floa
     if not isinstance(effects, SimEffects):
         raise TypeError(f"effects must be a SimEffects, got {effects!r}")
     cmd_rng, cur_rng, imu_rng, run_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4))
+    if driving not in DRIVING:
+        raise KeyError(f"unknown driving {driving!r}; expected one of {sorted(DRIVING)!r}")
+    if commands is not None:
+        duration_s = float(commands.time_s[-1] - commands.time_s[0])
     if duration_s is None:
         duration_s = float(run_rng.uniform(*DURATION_RANGE_S))
     else:
         run_rng.uniform(*DURATION_RANGE_S)  # the same draws whether or not it is given
-    if not (math.isfinite(duration_s) and duration_s >= 10.0):
-        raise ValueError(f"duration_s must be >= 10 s, got {duration_s!r}")
+    if not (math.isfinite(duration_s) and duration_s >= (5.0 if commands is not None else 10.0)):
+        raise ValueError(f"duration_s must be >= 10 s (5 s for a command profile), got {duration_s!r}")
     side_gain = run_rng.normal(1.0, SIDE_GAIN_SPREAD, 2)
     gyro_bias = run_rng.normal(0.0, GYRO_BIAS_SPREAD_RADPS)
 
     # motion and motor currents on a fine grid from -PAD_S (at rest) to the end
     dt = 1.0 / SIM_RATE_HZ
     grid = np.arange(-PAD_S, duration_s + PAD_S + dt, dt)
-    starts, v_cmd, w_cmd = command_segments(duration_s, cmd_rng)
+    if commands is None:
+        starts, v_cmd, w_cmd = command_segments(duration_s, cmd_rng, driving)
+    else:  # the profile's samples as holds (its own ramps are kept: each sample is a short segment)
+        starts = np.asarray(commands.time_s, float) - float(commands.time_s[0])
+        v_cmd, w_cmd = np.asarray(commands.v_mps, float), np.asarray(commands.omega_radps, float)
     v = _ramped(starts, v_cmd, ACCEL_LIMIT_MPS2, grid)
     w = _ramped(starts, w_cmd, ALPHA_LIMIT_RADPS2, grid)
     i_left, i_right = _side_currents(v, w, dt, effects)

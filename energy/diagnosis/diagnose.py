@@ -23,6 +23,7 @@ from .fit import (
     SetRunner,
     SetScore,
     Split,
+    bootstrap_gain_interval_pct,
     make_split,
     prepare_data,
     score_effect_set,
@@ -34,8 +35,17 @@ from .power_data import power_logs_missing
 from .power_result import PowerDiagnosis
 from .power_stage import diagnose_power
 from .regimes import check_terrain
-from .result import Diagnosis, EffectScore, WaterfallStep
-from .selection import SIGNIFICANT_SHRINK_PCT, plausible_alternative, score_entry, select_effects, significant
+from .result import Diagnosis, EffectScore, Tie, WaterfallStep
+from .separating import SeparatingDrive, residual_noise, separating_drive
+from .selection import (
+    SIGNIFICANT_SHRINK_PCT,
+    Selection,
+    plausible_alternative,
+    score_entry,
+    select_effects,
+    significant,
+    units_needed,
+)
 
 __all__ = ["SIGNIFICANT_SHRINK_PCT", "diagnose"]
 
@@ -117,7 +127,8 @@ def _largest_slice_clause(localisation: Sequence[GapShare]) -> str:
 
 def _verdict(before: GapSummary, after: GapSummary, ranking: Sequence[EffectScore], chosen: Sequence[str],
              localisation: Sequence[GapShare], skipped: dict[str, str], split: str,
-             power: PowerDiagnosis | None = None) -> tuple[str, ...]:
+             power: PowerDiagnosis | None = None, ties: Sequence[Tie] = (),
+             drives: Sequence[SeparatingDrive] = ()) -> tuple[str, ...]:
     held = "held-out runs" if split == "runs" else "held-out blocks"
     out = [f"The gap is {fmt_pct(before.charge_error_pct)} % of the charge (RMSE "
            f"{fmt_number(before.rmse_a, 3)} A){_largest_slice_clause(localisation)}."]
@@ -138,6 +149,10 @@ def _verdict(before: GapSummary, after: GapSummary, ranking: Sequence[EffectScor
             out.append(f"Then {what}, fitted jointly with the effects before it, explains a further "
                        f"{fmt_number(s.added_pct, 3)} points (95 % interval {fmt_number(lo, 3)} … {fmt_number(hi, 3)}; "
                        f"{fmt_number(s.shrink_pct, 3)} % alone).")
+        tie = next((t for t in ties if t.chosen == n), None)
+        if tie is not None:
+            out.append(tie.sentence())
+            out.extend(d.sentence() for d in drives if d.effects[0] == n)
         if doubt:
             a_lo, a_hi = s.shrink_interval_pct
             text = f"{n} is doubtful: {'; '.join(s.flags)}."
@@ -308,8 +323,96 @@ def _select(model: CurrentModel, items: list[InteractionLog], predictions: list[
     localisation = localise_gap(items, predictions, terrain=terrain, section_s=section_s)
     corrected = CorrectedCurrentModel(model, list(chosen), robot, terrain).fit(items)
     names = tuple(e.name for e in chosen)
-    verdict = _verdict(before, after, ranking, names, localisation, skipped, sp.kind, power)
+    ties = _ties(sel, data)
+    drives = _separating_drives(sel, ties, data, model, items, robot, terrain)
+    more = _more_data(sel, data, model, items, robot, terrain, sp) if not sel.chosen else {}
+    verdict = _verdict(before, after, ranking, names, localisation, skipped, sp.kind, power, ties, drives)
+    if more:
+        verdict = (*verdict[:2], more["sentence"], *verdict[2:])
     if learned_note is not None:
         verdict = (*verdict[:2], learned_note, *verdict[2:])
     return Diagnosis(before, after, localisation, ranking, names, tuple(waterfall), verdict, corrected, skipped, sp.kind,
-                     power)
+                     power, ties=ties, separating_drives=drives, more_data=more)
+
+
+def _separating_drives(sel: Selection, ties: Sequence[Tie], data: DiagnosisData, model: CurrentModel,
+                       items: list[InteractionLog], robot: Any, terrain: Any) -> tuple[SeparatingDrive, ...]:
+    """Per tied pair, the drive that tells the two fitted explanations apart (:func:`separating_drive`),
+    within the speeds and yaw rates the runs drove and the robot's limits."""
+    if not ties:
+        return ()
+    vmax, wmax = _drive_limits(model, items, robot)
+    by_name = {e.name: e for e in sel.order}
+    out = []
+    for tie in ties:
+        k = sel.chosen.index(by_name[tie.chosen])
+        base = list(sel.chosen[:k])
+        models = {n: CorrectedCurrentModel(model, base + [by_name[n]], robot, terrain).fit(items) for n in tie.effects}
+        noise, spread, rho = residual_noise(data.measured, sel.trials[k][tie.chosen].held_out_a)
+        for alt in tie.alternatives:
+            drive = separating_drive((tie.chosen, alt), models, items[0], noise, spread, rho, vmax, wmax)
+            if drive is not None:
+                out.append(drive)
+    return tuple(out)
+
+
+def _drive_limits(model: CurrentModel, items: list[InteractionLog], robot: Any) -> tuple[float, float]:
+    """Speed and yaw rate a test drive may use: what the runs drove, within the robot's limits."""
+    basis = physics_basis(model, robot)
+    vmax = min(basis.robot.max_speed_mps, max(float(np.max(np.abs(log.v_mps))) for log in items))
+    wmax = min(basis.robot.max_omega_radps, max(float(np.max(np.abs(log.omega_radps))) for log in items))
+    return vmax, wmax
+
+
+def _more_data(sel: Selection, data: DiagnosisData, model: CurrentModel, items: list[InteractionLog], robot: Any,
+               terrain: Any, sp: Split) -> dict[str, Any]:
+    """Where nothing is significant: how many more runs (or blocks) like these would make the likeliest
+    candidate so (:func:`units_needed`), and the test drive that would show it with fewer."""
+    top = next((e for e in sel.order if e.kind != "learned"), None)
+    if top is None:
+        return {}
+    unit = "runs" if sp.kind == "runs" else "blocks"
+    trial = sel.alone[top.name]
+    mean, sd, need = units_needed(sel.none, sel.none, trial)
+    words = top.describe(trial.median_values()[-1], data.prepared.get(top.name, ()))
+    out: dict[str, Any] = {"effect": top.name, "explanation": words, "units": unit, "n_units": int(sp.n_units),
+                           "mean_gain_pct": mean, "unit_sd_pct": sd, "units_needed": need, "drive": None}
+    text = (f"The likeliest candidate, {words}, adds {fmt_number(mean, 3)} points on average over the "
+            f"{sp.n_units} {unit} (spread {fmt_number(sd, 3)} points from one to the next)")
+    if need is None:
+        text += (f": below the {fmt_number(SIGNIFICANT_SHRINK_PCT, 2)} points a finding needs, more {unit} like these "
+                 "would not make it one")
+    else:
+        text += f": about {need} {unit} like these would make it significant at 95 %"
+        vmax, wmax = _drive_limits(model, items, robot)
+        models = {"as_given": CorrectedCurrentModel(model, [], robot, terrain).fit(items),
+                  top.name: CorrectedCurrentModel(model, [top], robot, terrain).fit(items)}
+        noise, spread, rho = residual_noise(data.measured, sel.none.held_out_a)
+        drive = separating_drive(("as_given", top.name), models, items[0], noise, spread, rho, vmax, wmax)
+        if drive is not None:
+            out["drive"] = drive.to_dict()
+            text += (f", or {drive.best.repeats} repeat{'s' if drive.best.repeats != 1 else ''} of "
+                     f"{drive.best.description} ({fmt_number(drive.best.duration_s, 3)} s), where it changes the "
+                     f"current by {fmt_number(drive.expected_difference_a, 3)} A RMS")
+    out["sentence"] = text + "."
+    return out
+
+
+def _ties(sel: Selection, data: DiagnosisData) -> tuple[Tie, ...]:
+    """The :class:`Tie` of each chosen effect whose step the data cannot settle, fitted values as at that step."""
+    out = []
+    for k, (best, alts) in enumerate(zip(sel.chosen, sel.ties)):
+        if not alts:
+            continue
+        trials, current, none = sel.trials[k], sel.sets[k], sel.none
+
+        def added(e: Effect) -> float:
+            return shrink_pct(none, trials[e.name]) - shrink_pct(none, current)
+
+        words = {e.name: e.describe(trials[e.name].median_values()[-1], data.prepared.get(e.name, ()))
+                 for e in (best, *alts)}
+        out.append(Tie(best.name, tuple(a.name for a in alts), words, {e.name: added(e) for e in (best, *alts)},
+                       {a.name: bootstrap_gain_interval_pct(none, trials[a.name], trials[best.name],
+                                                            n_bootstrap=sel.n_bootstrap, seed=sel.seed)
+                        for a in alts}))
+    return tuple(out)

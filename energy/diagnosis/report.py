@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from terrawatt_base.atomic import save_figure
 from terrawatt_base.checks import check_choice
 from terrawatt_base.errors import FigureWarning, InvalidParameterError
 from terrain.terrain_map import TerrainMap
@@ -109,7 +110,19 @@ class DiagnosisReport:
             figures = plot_diagnosis(d, out, logs=list(self.logs), terrain=self.terrain, on_error=on_figure_error)
         for name, why in figures.failed.items():
             warnings.warn(f"could not draw {out / FIGURES[name]}: {why}", FigureWarning, stacklevel=2)
-        return written + list(figures.written.values())
+        written += list(figures.written.values())
+        for drive in d.separating_drives:  # what to drive to tell tied explanations apart, and its figure
+            written.append(drive.write_csv(out))
+            path = out / f"{drive.file_stem}.png"
+            try:
+                save_figure(drive.plot(), path)
+            except Exception as exc:  # noqa: BLE001 - a figure never fails the report
+                if on_figure_error == "raise":
+                    raise
+                warnings.warn(f"could not draw {path}: {type(exc).__name__}: {exc}", FigureWarning, stacklevel=2)
+            else:
+                written.append(path)
+        return written
 
 
 def diagnose_report(source: ModelUnderDiagnosis, logs: Sequence[InteractionLog], *, terrain: TerrainMap | None = None,

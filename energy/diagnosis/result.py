@@ -14,7 +14,7 @@ from terrawatt_base.formats import result_document, write_result_json
 from ..models.base import CurrentModel
 from .gap import GapShare, GapSummary, largest_slices
 
-__all__ = ["EffectScore", "WaterfallStep", "Diagnosis", "MARKDOWN_SLICES", "DIAGNOSIS_FORMAT_VERSION"]
+__all__ = ["EffectScore", "Tie", "WaterfallStep", "Diagnosis", "MARKDOWN_SLICES", "DIAGNOSIS_FORMAT_VERSION"]
 
 #: Slices of the localisation listed in :meth:`Diagnosis.to_markdown` (the largest ``|net gap|``).
 MARKDOWN_SLICES = 10
@@ -108,6 +108,53 @@ class EffectScore:
 
 
 @dataclass(frozen=True)
+class Tie:
+    """Explanations the runs cannot tell apart: the chosen effect and the candidates as good as it.
+
+    Attributes
+    ----------
+    chosen : str
+        The effect the selection added (the corrected model is built from it, one of the set).
+    alternatives : tuple of str
+        Candidates with plausible values that would have been as significant, whose paired
+        held-out difference from ``chosen`` the bootstrap cannot order at 95 %.
+    explanations : dict of str to str
+        Each effect of the set in physical terms, fitted at that step ("mass +29 kg (x1.58 ...)").
+    added_pct : dict of str to float
+        What each would add at that step (points of the original squared gap).
+    difference_interval_pct : dict of str to (float, float)
+        Per alternative, the 95 % interval of ``added(chosen) - added(alternative)`` (holds 0).
+    """
+
+    chosen: str
+    alternatives: tuple[str, ...]
+    explanations: dict[str, str]
+    added_pct: dict[str, float]
+    difference_interval_pct: dict[str, tuple[float, float]]
+
+    @property
+    def effects(self) -> tuple[str, ...]:
+        """The set: the chosen effect first."""
+        return (self.chosen, *self.alternatives)
+
+    def sentence(self) -> str:
+        """The verdict's sentence on the tie."""
+        parts = [self.explanations[n] for n in self.effects]
+        listed = ", ".join(parts[:-1]) + f" or {parts[-1]}"
+        shares = " / ".join(fmt_number(self.added_pct[n], 3) for n in self.effects)
+        ranges = "; ".join(f"{self.chosen} - {a}: {fmt_number(lo, 3)} … {fmt_number(hi, 3)} points"
+                           for a, (lo, hi) in self.difference_interval_pct.items())
+        return (f"{listed}: these runs cannot tell them apart (they explain {shares} % of the squared gap; 95 % "
+                f"interval of the paired difference, {ranges}); the corrected model uses {self.chosen}, one of the set.")
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict."""
+        return {"chosen": self.chosen, "alternatives": list(self.alternatives), "effects": list(self.effects),
+                "explanations": dict(self.explanations), "added_pct": dict(self.added_pct),
+                "difference_interval_pct": {k: list(v) for k, v in self.difference_interval_pct.items()}}
+
+
+@dataclass(frozen=True)
 class WaterfallStep:
     """The held-out gap after one more effect: whole-set charge error, 8 s section error, RMSE, shrink."""
 
@@ -161,6 +208,17 @@ class Diagnosis:
         Where the model under test comes from (a preset as given, runs it was calibrated on,
         a file), when the caller states it (``dataclasses.replace(d, model_note=...)``, as
         ``terrawatt diagnose`` does); the report's first line.
+    ties : tuple of Tie
+        Per chosen effect whose step the runs cannot settle, the set of indistinguishable
+        explanations (``diagnosis.json``: ``"indistinguishable"``).
+    separating_drives : tuple of SeparatingDrive
+        Per pair of tied explanations, the test drive that tells them apart
+        (:mod:`energy.diagnosis.separating`; ``diagnosis.json``: ``"separating_drives"``).
+    more_data : dict
+        Where no candidate is significant: the likeliest one (``effect``, ``explanation``), its
+        mean gain and spread per unit (points), the ``units_needed`` (runs or blocks like these;
+        None when more would not do), the test drive that would show it (``drive``) and the
+        verdict's ``sentence``; empty otherwise.
     """
 
     before: GapSummary
@@ -175,6 +233,9 @@ class Diagnosis:
     split: str = "runs"
     power: Any = None
     model_note: str = ""
+    ties: tuple[Tie, ...] = ()
+    separating_drives: tuple[Any, ...] = ()
+    more_data: dict[str, Any] = field(default_factory=dict)
 
     @property
     def found(self) -> bool:
@@ -212,6 +273,9 @@ class Diagnosis:
             "skipped": dict(self.skipped),
             "split": self.split,
             "corrected_model": type(self.corrected_model).__name__,
+            "indistinguishable": [t.to_dict() for t in self.ties],
+            "separating_drives": [d.to_dict() for d in self.separating_drives],
+            "more_data": dict(self.more_data),
         } | ({} if self.power is None else {"power": self.power.to_dict()}))
 
     def write_json(self, path: str | os.PathLike[str]) -> Path:

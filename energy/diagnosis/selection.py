@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
+
+import numpy as np
 
 from .effect_base import Effect
 from .fit import (
@@ -20,7 +23,7 @@ from .fit import (
 from .result import EffectScore
 
 __all__ = ["SIGNIFICANT_SHRINK_PCT", "Selection", "score_entry", "significant", "select_effects",
-           "plausible_alternative"]
+           "plausible_alternative", "tied_with", "units_needed"]
 
 #: An effect is added only when it shrinks the held-out gap by at least this much (points of %).
 SIGNIFICANT_SHRINK_PCT = 2.0
@@ -63,7 +66,9 @@ class Selection:
     ``none``: the held-out score of the data as given; ``alone``: each candidate on its own;
     ``chosen`` / ``sets``: the effects added, in order, and the held-out score after each
     (``sets[0]`` is ``none``); ``scores``: every candidate's :class:`EffectScore`; ``order``:
-    the chosen ones, then the rest by what they would add (best first).
+    the chosen ones, then the rest by what they would add (best first); ``ties``: per chosen
+    effect, the candidates the data cannot tell from it (:func:`tied_with`), and ``trials``
+    the scores of the candidates at that step (the chosen effect's among them).
     """
 
     none: SetScore
@@ -72,6 +77,10 @@ class Selection:
     sets: tuple[SetScore, ...]
     scores: dict[str, EffectScore]
     order: tuple[Effect, ...]
+    ties: tuple[tuple[Effect, ...], ...] = ()
+    trials: tuple[dict[str, SetScore], ...] = ()
+    n_bootstrap: int = 200
+    seed: int | None = 0
 
 
 def select_effects(usable: Sequence[Effect], data: DiagnosisData, split: Split, runner: SetRunner,
@@ -86,6 +95,8 @@ def select_effects(usable: Sequence[Effect], data: DiagnosisData, split: Split, 
     scores: dict[str, EffectScore] = {}
     remaining = list(usable)
     trials = dict(alone)
+    ties: list[tuple[Effect, ...]] = []
+    step_trials: list[dict[str, SetScore]] = []
     while remaining:
         # every remaining candidate refitted jointly with the chosen ones: the ranking is conditional
         trials = (dict(alone) if not chosen else dict(zip(
@@ -99,13 +110,43 @@ def select_effects(usable: Sequence[Effect], data: DiagnosisData, split: Split, 
             break
         scores[best.name] = score_entry(best, none, alone[best.name], sets[-1], trials[best.name], n_bootstrap, seed,
                                         data.prepared.get(best.name, ()))
+        ties.append(tied_with(best, eligible, trials, sets[-1], none, n_bootstrap, seed))
+        step_trials.append(trials)
         chosen.append(best)
         sets.append(trials[best.name])
         remaining.remove(best)
     remaining.sort(key=lambda e: trials[e.name].sse_units.sum())
     scores.update({e.name: score_entry(e, none, alone[e.name], sets[-1], trials[e.name], n_bootstrap, seed,
                                        data.prepared.get(e.name, ())) for e in remaining})
-    return Selection(none, alone, tuple(chosen), tuple(sets), scores, tuple(chosen) + tuple(remaining))
+    return Selection(none, alone, tuple(chosen), tuple(sets), scores, tuple(chosen) + tuple(remaining), tuple(ties),
+                     tuple(step_trials), n_bootstrap, seed)
+
+
+def tied_with(best: Effect, eligible: Sequence[Effect], trials: dict[str, SetScore], current: SetScore,
+              none: SetScore, n_bootstrap: int, seed: int | None) -> tuple[Effect, ...]:
+    """The candidates these data cannot tell from ``best`` as the next effect.
+
+    A physical candidate (not learned) with plausible fitted values that would itself be
+    :func:`significant`, and that explains about as much: what it adds lies within the 95 %
+    interval of what ``best`` adds, or the paired bootstrap cannot order the two (the 95 %
+    interval of ``added(best) - added(alt)`` over the resampled units, the same runs or blocks
+    in both, holds 0). Ordered by held-out fit, best first.
+    """
+    if best.kind == "learned":
+        return ()
+    lo_best, hi_best = bootstrap_gain_interval_pct(none, current, trials[best.name], n_bootstrap=n_bootstrap, seed=seed)
+    out = []
+    for alt in sorted(eligible, key=lambda e: trials[e.name].sse_units.sum()):
+        if alt.name == best.name or alt.kind == "learned" or alt.plausibility_flags(trials[alt.name].median_values()[-1]):
+            continue
+        if not significant(current, trials[alt.name], none, n_bootstrap, seed):
+            continue
+        added = shrink_pct(none, trials[alt.name]) - shrink_pct(none, current)
+        lo, _ = bootstrap_gain_interval_pct(none, trials[alt.name], trials[best.name], n_bootstrap=n_bootstrap,
+                                            seed=seed)
+        if lo_best <= added <= hi_best or lo <= 0.0:
+            out.append(alt)
+    return tuple(out)
 
 
 def _likeliest(eligible: Sequence[Effect], trials: dict[str, SetScore], current: SetScore, none: SetScore,
@@ -142,3 +183,22 @@ def plausible_alternative(doubtful: EffectScore, ranking: Sequence[EffectScore],
     similar = [s for s in ranking if s.name != doubtful.name and s.name not in chosen and s.kind != "learned"
                and not s.alone_flags and lo <= s.shrink_pct <= hi]
     return max(similar, key=lambda s: s.shrink_pct, default=None)
+
+
+def units_needed(none: SetScore, current: SetScore, trial: SetScore, level_z: float = 1.959963984540054) -> tuple[float, float, int | None]:
+    """How many units (runs or blocks) like these would make ``trial``'s gain over ``current`` significant.
+
+    Each unit's own gain ``100 (sse_current - sse_trial) / sse_none`` (points of the gap, on
+    that unit) has a mean ``m`` and a spread ``s`` over the units; the bootstrap's lower bound
+    clears 0 once ``m > z s / sqrt(n)``, so ``n = ceil((z s / m)^2)`` (at least one more than
+    now when it does not yet). Returns ``(m, s, n)``; ``n`` is None when no number of units
+    would do: the mean gain is not positive or is below :data:`SIGNIFICANT_SHRINK_PCT`.
+    """
+    base = np.where(none.sse_units > 0, none.sse_units, 1.0)
+    gains = 100.0 * (current.sse_units - trial.sse_units) / base
+    m = float(np.mean(gains))
+    s = float(np.std(gains, ddof=1)) if gains.size > 1 else math.inf
+    if not (m >= SIGNIFICANT_SHRINK_PCT) or not math.isfinite(s):
+        return m, s, None
+    n = max(int(math.ceil((level_z * s / m) ** 2)), 2)
+    return m, s, max(n, gains.size + 1)
