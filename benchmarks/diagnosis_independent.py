@@ -219,6 +219,8 @@ def _score(d: dict[str, Any], case: str) -> dict[str, Any]:
         "verdict": d.get("verdict", []),
         "flags": _flags(d),
         "chosen_flagged": [n for n in chosen if n in _flags(d).get("ranking", {})],
+        # a tie named on the first chosen effect (diagnosis.json "indistinguishable")
+        "tie_on_first": bool(chosen) and any(t.get("chosen") == chosen[0] for t in d.get("indistinguishable", []) or []),
         "hit_flagged": bool(hit and hit in _flags(d).get("ranking", {})),
     }
 
@@ -376,6 +378,9 @@ def _stats(sel: list[dict[str, Any]]) -> dict[str, Any]:
         "median_attainable_shrink_pct": _median([r["attainable_shrink_pct"] for r in want
                                                  if r["attainable_shrink_pct"] is not None]),
         "median_total_shrink_pct": _median([r["total_shrink_pct"] or 0.0 for r in want]),
+        # a clear winner (the hit chosen first) with no tie named on it (target >= 90 %)
+        "clear_no_tie_pct": _pct(sum(not r.get("tie_on_first") for r in want if r["chosen_first"]),
+                                 sum(r["chosen_first"] for r in want)),
         "n_null_expected": len(null),
         "null_pct": _pct(sum(r["nothing_added"] for r in null), len(null)),
         "null_catalogue_pct": _pct(sum(not r["found"] for r in null), len(null)),
@@ -399,7 +404,7 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
 def summary_table(summary: dict[str, Any]) -> str:
     """The summary rows and the targets."""
     head = (f"{'set':<30} {'n':>3} {'ranked 1st %':>12} {'chosen 1st %':>12} {'value ok':>8} {'med hit shrink %':>16} "
-            f"{'med attain %':>12} {'med total %':>11} {'n null':>6} {'null %':>7} {'no catalogued %':>15}")
+            f"{'med attain %':>12} {'med total %':>11} {'no tie %':>8} {'n null':>6} {'null %':>7} {'no catalogued %':>15}")
     lines = [head, "-" * len(head)]
     groups = [(f"base {b}", s) for b, s in summary["by_base"].items()]
     groups += [("calibrated, all variants", summary["calibrated_all"])]
@@ -408,13 +413,15 @@ def summary_table(summary: dict[str, Any]) -> str:
         lines.append(f"{label:<30} {s['n_found_expected']:>3} {_f(s['ranked_first_pct']):>12} "
                      f"{_f(s['chosen_first_pct']):>12} {s['ranked_first_value_ok']:>8} "
                      f"{_f(s['median_hit_shrink_pct']):>16} {_f(s['median_attainable_shrink_pct']):>12} "
-                     f"{_f(s['median_total_shrink_pct']):>11} {s['n_null_expected']:>6} {_f(s['null_pct']):>7} "
+                     f"{_f(s['median_total_shrink_pct']):>11} {_f(s['clear_no_tie_pct']):>8} "
+                     f"{s['n_null_expected']:>6} {_f(s['null_pct']):>7} "
                      f"{_f(s['null_catalogue_pct']):>15}")
     lines.append(f"targets: ranked first >= {TARGETS['ranked_first_pct']:.0f} %, median hit shrink >= "
                  f"{TARGETS['median_hit_shrink_pct']:.0f} %, null ('nothing found and nothing added') >= "
                  f"{TARGETS['null_pct']:.0f} %. n: diagnoses where a hit is expected; n null: none and lag on the "
                  f"calibrated bases (the preset is not this robot); 'no catalogued': no catalogued effect chosen "
-                 f"(a learned residual allowed); value ok: ranked-first hits whose fitted size is within "
+                 f"(a learned residual allowed); no tie: of the hits chosen first, those with no tie named on "
+                 f"them (target >= 90 %); value ok: ranked-first hits whose fitted size is within "
                  f"{VALUE_TOL:.0%} of the truth (added mass, left/right gain excess, lag)")
     return "\n".join(lines)
 

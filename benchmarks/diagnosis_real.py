@@ -126,6 +126,10 @@ def run_case(case: dict[str, Any], data: str, seed: int, n_bootstrap: int) -> di
                  "interval_pct": list(s.shrink_interval_pct), "parameters": dict(s.parameters),
                  "flags": list(getattr(s, "flags", ()))} for s in d.ranking[:5]],
         "waterfall": [w.to_dict() for w in d.waterfall], "verdict": list(d.verdict), "skipped": dict(d.skipped),
+        "ties": [t.to_dict() for t in d.ties],
+        "separating_drives": [x.to_dict() for x in d.separating_drives],
+        "more_data": {k: v for k, v in d.more_data.items() if k != "drive"}
+        | ({"drive": d.more_data["drive"]["drive"]} if d.more_data.get("drive") else {}),
     }
 
 
@@ -196,6 +200,23 @@ def main(argv: list[str] | None = None) -> int:
         top = ", ".join(f"{t['name']} {t['shrink_pct']:.1f} [{t['interval_pct'][0]:.1f}, {t['interval_pct'][1]:.1f}]"
                         for t in r["top"][:3])
         print(f"  {r['model']:<28} {r['ground']:<9} {top}")
+    print("\nwhat would settle the top candidate (significant: settled on these runs; otherwise the runs like these "
+          "that would make it significant, and the test drive that would show it):")
+    for r in rows:
+        more, ties = r["more_data"], r["ties"]
+        if r["chosen"]:
+            text = f"settled: {r['chosen'][0]} significant on {r['n_runs']} runs"
+            if ties:
+                text += "; tied with " + ", ".join(ties[0]["alternatives"])
+        elif more:
+            need = more["units_needed"]
+            text = (f"{more['effect']} +{more['mean_gain_pct']:.1f} points (spread {more['unit_sd_pct']:.1f}): "
+                    + (f"~{need} runs" if need is not None else "more runs would not do (below 2 points)"))
+            if more.get("drive"):
+                text += f", or {more['drive']['repeats']} x {more['drive']['description']}"
+        else:
+            text = "no candidate"
+        print(f"  {r['model']:<28} {r['ground']:<9} {text}")
     print(f"\n{len(rows)} cases, wall {wall:.0f} s, {args.workers} worker(s), {os.cpu_count()} cores")
     if args.out is not None:
         write_json_atomic(args.out, {"protocol": "per ground: model fitted on the even-numbered runs, diagnosed "

@@ -144,6 +144,8 @@ class SimEffects:
         ``PAD_S``): a lag between the motion and the current, not between the streams.
     speed_friction_n_s2_per_m2 : float
         ``c_sq`` of the speed-squared resistance per side (N s^2 / m^2, >= 0).
+    rotor_inertia_scale : float
+        Multiplies the rotating parts' inertia ``m_rot`` (> 0; e.g. a heavier wheel or gearbox).
     """
 
     payload_kg: float = 0.0
@@ -152,6 +154,7 @@ class SimEffects:
     drive_lag_s: float = 0.0
     current_lag_s: float = 0.0
     speed_friction_n_s2_per_m2: float = 0.0
+    rotor_inertia_scale: float = 1.0
 
     def __post_init__(self) -> None:
         checks = {
@@ -161,6 +164,7 @@ class SimEffects:
             "drive_lag_s": abs(self.drive_lag_s) < PAD_S,
             "current_lag_s": abs(self.drive_lag_s + self.current_lag_s) < PAD_S,
             "speed_friction_n_s2_per_m2": self.speed_friction_n_s2_per_m2 >= 0.0,
+            "rotor_inertia_scale": self.rotor_inertia_scale > 0.0,
         }
         for name, ok in checks.items():
             value = getattr(self, name)
@@ -221,7 +225,11 @@ DRIVING: dict[str, tuple[float, ...]] = {
     "mixed": (0.35, 0.25, 0.22, 0.18),
     "turning": (0.10, 0.45, 0.35, 0.10),  # turning-heavy: where a payload and a turning resistance look alike
     "straights": (0.90, 0.0, 0.0, 0.10),  # long straights: a payload and a rolling resistance look alike
+    "pivots": (0.0, 0.0, 0.85, 0.15),  # turning on the spot only: a payload and a turning resistance look alike
+    "cruise": (1.0, 0.0, 0.0, 0.0),  # one speed, no stops: a current gain and an offset look alike
 }
+#: The one speed of ``"cruise"`` driving (m/s).
+CRUISE_SPEED_MPS = 0.6
 
 
 def command_segments(duration_s: float, rng: np.random.Generator,
@@ -245,6 +253,8 @@ def command_segments(duration_s: float, rng: np.random.Generator,
         sign = 1.0 if rng.random() < 0.5 else -1.0
         if kind == "straight":
             v, w, d = rng.uniform(0.2, 0.9), 0.0, rng.uniform(4.0, 10.0)
+            if driving == "cruise":
+                v = CRUISE_SPEED_MPS
         elif kind == "arc":
             v = rng.uniform(0.3, 0.7)
             v, w, d = v, sign * v / rng.uniform(0.6, 3.0), rng.uniform(3.0, 7.0)
@@ -288,7 +298,7 @@ def _side_currents(v: np.ndarray, w: np.ndarray, dt_s: float, fx: SimEffects) ->
     a = np.gradient(v, dt_s)
     alpha = np.gradient(w, dt_s)
     yaw_inertia = m * (WHEELBASE_M**2 + b**2) / 12.0
-    m_rot = (GEAR_RATIO**2 * ROTOR_INERTIA_KG_M2 + 2.0 * WHEEL_INERTIA_KG_M2) / WHEEL_RADIUS_M**2
+    m_rot = fx.rotor_inertia_scale * (GEAR_RATIO**2 * ROTOR_INERTIA_KG_M2 + 2.0 * WHEEL_INERTIA_KG_M2) / WHEEL_RADIUS_M**2
     if fx.turning_mu_max > 0.0:
         radius = np.abs(v) / np.maximum(np.abs(w), 1e-9)
         mu_lat = fx.turning_mu_max / (0.925 + 0.15 * radius / b)

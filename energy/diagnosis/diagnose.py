@@ -23,7 +23,6 @@ from .fit import (
     SetRunner,
     SetScore,
     Split,
-    bootstrap_gain_interval_pct,
     make_split,
     prepare_data,
     score_effect_set,
@@ -36,7 +35,8 @@ from .power_result import PowerDiagnosis
 from .power_stage import diagnose_power
 from .regimes import check_terrain
 from .result import Diagnosis, EffectScore, Tie, WaterfallStep
-from .separating import SeparatingDrive, residual_noise, separating_drive
+from .noise import residual_noise
+from .separating import SeparatingDrive, separating_drive
 from .selection import (
     SIGNIFICANT_SHRINK_PCT,
     Selection,
@@ -44,6 +44,7 @@ from .selection import (
     score_entry,
     select_effects,
     significant,
+    unit_gain_interval,
     units_needed,
 )
 
@@ -341,27 +342,35 @@ def _separating_drives(sel: Selection, ties: Sequence[Tie], data: DiagnosisData,
     within the speeds and yaw rates the runs drove and the robot's limits."""
     if not ties:
         return ()
-    vmax, wmax = _drive_limits(model, items, robot)
+    vmax, wmax, amax = _drive_limits(model, items, robot)
     by_name = {e.name: e for e in sel.order}
     out = []
     for tie in ties:
         k = sel.chosen.index(by_name[tie.chosen])
         base = list(sel.chosen[:k])
         models = {n: CorrectedCurrentModel(model, base + [by_name[n]], robot, terrain).fit(items) for n in tie.effects}
-        noise, spread, rho = residual_noise(data.measured, sel.trials[k][tie.chosen].held_out_a)
-        for alt in tie.alternatives:
-            drive = separating_drive((tie.chosen, alt), models, items[0], noise, spread, rho, vmax, wmax)
-            if drive is not None:
-                out.append(drive)
+        noise = residual_noise(data.measured, sel.trials[k][tie.chosen].held_out_a, items)
+        before = CorrectedCurrentModel(model, base, robot, terrain).fit(items)
+        drive = separating_drive(tie.effects, models, items[0], noise, vmax, wmax, amax, base=before)
+        if drive is not None:
+            out.append(drive)
     return tuple(out)
 
 
-def _drive_limits(model: CurrentModel, items: list[InteractionLog], robot: Any) -> tuple[float, float]:
-    """Speed and yaw rate a test drive may use: what the runs drove, within the robot's limits."""
+#: A test drive stays within this share of the robot's top speed and yaw rate.
+DRIVE_LIMIT_SHARE = 0.8
+
+
+def _drive_limits(model: CurrentModel, items: list[InteractionLog], robot: Any) -> tuple[float, float, float]:
+    """Speed, yaw rate and acceleration a test drive may use: :data:`DRIVE_LIMIT_SHARE` of the robot's
+    top speed and yaw rate (where the explanations differ most is often where the runs never went:
+    a gain and an offset agree at the one current the runs drew), and the runs' own hard starts
+    (the 95th percentile of their accelerations)."""
     basis = physics_basis(model, robot)
-    vmax = min(basis.robot.max_speed_mps, max(float(np.max(np.abs(log.v_mps))) for log in items))
-    wmax = min(basis.robot.max_omega_radps, max(float(np.max(np.abs(log.omega_radps))) for log in items))
-    return vmax, wmax
+    vmax = DRIVE_LIMIT_SHARE * basis.robot.max_speed_mps
+    wmax = DRIVE_LIMIT_SHARE * basis.robot.max_omega_radps
+    accel = np.concatenate([np.abs(np.gradient(log.v_mps, log.time_s)) for log in items if len(log) > 2] or [np.zeros(1)])
+    return vmax, wmax, float(np.percentile(accel, 95))
 
 
 def _more_data(sel: Selection, data: DiagnosisData, model: CurrentModel, items: list[InteractionLog], robot: Any,
@@ -384,14 +393,15 @@ def _more_data(sel: Selection, data: DiagnosisData, model: CurrentModel, items: 
                  "would not make it one")
     else:
         text += f": about {need} {unit} like these would make it significant at 95 %"
-        vmax, wmax = _drive_limits(model, items, robot)
-        models = {"as_given": CorrectedCurrentModel(model, [], robot, terrain).fit(items),
-                  top.name: CorrectedCurrentModel(model, [top], robot, terrain).fit(items)}
-        noise, spread, rho = residual_noise(data.measured, sel.none.held_out_a)
-        drive = separating_drive(("as_given", top.name), models, items[0], noise, spread, rho, vmax, wmax)
-        if drive is not None:
+        vmax, wmax, amax = _drive_limits(model, items, robot)
+        as_given = CorrectedCurrentModel(model, [], robot, terrain).fit(items)
+        models = {"as_given": as_given, top.name: CorrectedCurrentModel(model, [top], robot, terrain).fit(items)}
+        noise = residual_noise(data.measured, sel.none.held_out_a, items)
+        # the candidate as the explanation to confirm, the model as given as the one to beat
+        drive = separating_drive((top.name, "as_given"), models, items[0], noise, vmax, wmax, amax, base=as_given)
+        if drive is not None and drive.separated:
             out["drive"] = drive.to_dict()
-            text += (f", or {drive.best.repeats} repeat{'s' if drive.best.repeats != 1 else ''} of "
+            text += (f", or {drive.repeats} run{'s' if drive.repeats != 1 else ''} of "
                      f"{drive.best.description} ({fmt_number(drive.best.duration_s, 3)} s), where it changes the "
                      f"current by {fmt_number(drive.expected_difference_a, 3)} A RMS")
     out["sentence"] = text + "."
@@ -412,7 +422,7 @@ def _ties(sel: Selection, data: DiagnosisData) -> tuple[Tie, ...]:
         words = {e.name: e.describe(trials[e.name].median_values()[-1], data.prepared.get(e.name, ()))
                  for e in (best, *alts)}
         out.append(Tie(best.name, tuple(a.name for a in alts), words, {e.name: added(e) for e in (best, *alts)},
-                       {a.name: bootstrap_gain_interval_pct(none, trials[a.name], trials[best.name],
-                                                            n_bootstrap=sel.n_bootstrap, seed=sel.seed)
+                       {a.name: unit_gain_interval(none, trials[a.name], trials[best.name], sel.n_bootstrap,
+                                                   sel.seed)
                         for a in alts}))
     return tuple(out)

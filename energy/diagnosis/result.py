@@ -122,15 +122,18 @@ class Tie:
         Each effect of the set in physical terms, fitted at that step ("mass +29 kg (x1.58 ...)").
     added_pct : dict of str to float
         What each would add at that step (points of the original squared gap).
-    difference_interval_pct : dict of str to (float, float)
-        Per alternative, the 95 % interval of ``added(chosen) - added(alternative)`` (holds 0).
+    run_difference_pct : dict of str to (float, float, float)
+        Per alternative, how far ``chosen`` is ahead of it per run (or block), in points of that
+        unit's own gap: the mean over the units and its 95 % bootstrap interval
+        (:func:`~energy.diagnosis.selection.unit_gain_interval`; a tie: no unit puts it 2 points
+        ahead, or the interval holds 0).
     """
 
     chosen: str
     alternatives: tuple[str, ...]
     explanations: dict[str, str]
     added_pct: dict[str, float]
-    difference_interval_pct: dict[str, tuple[float, float]]
+    run_difference_pct: dict[str, tuple[float, float, float]]
 
     @property
     def effects(self) -> tuple[str, ...]:
@@ -142,16 +145,18 @@ class Tie:
         parts = [self.explanations[n] for n in self.effects]
         listed = ", ".join(parts[:-1]) + f" or {parts[-1]}"
         shares = " / ".join(fmt_number(self.added_pct[n], 3) for n in self.effects)
-        ranges = "; ".join(f"{self.chosen} - {a}: {fmt_number(lo, 3)} … {fmt_number(hi, 3)} points"
-                           for a, (lo, hi) in self.difference_interval_pct.items())
-        return (f"{listed}: these runs cannot tell them apart (they explain {shares} % of the squared gap; 95 % "
-                f"interval of the paired difference, {ranges}); the corrected model uses {self.chosen}, one of the set.")
+        ahead = "; ".join(f"{self.chosen} ahead of {a} by {fmt_number(m, 2)} points of a run's gap (95 % interval "
+                          f"{fmt_number(lo, 2)} … {fmt_number(hi, 2)})"
+                          for a, (m, lo, hi) in self.run_difference_pct.items())
+        return (f"{listed}: these runs cannot tell them apart (they explain {shares} % of the squared gap; {ahead}); "
+                f"the corrected model uses {self.chosen}, one of the set.")
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict."""
         return {"chosen": self.chosen, "alternatives": list(self.alternatives), "effects": list(self.effects),
                 "explanations": dict(self.explanations), "added_pct": dict(self.added_pct),
-                "difference_interval_pct": {k: list(v) for k, v in self.difference_interval_pct.items()}}
+                "run_difference_pct": {k: dict(zip(("mean", "low", "high"), v))
+                                       for k, v in self.run_difference_pct.items()}}
 
 
 @dataclass(frozen=True)

@@ -7,15 +7,16 @@ searches a library of such manoeuvres, each within the speeds and yaw rates the 
 drove (the fitted models are trusted there, not beyond), for the one on which the two fitted
 models' predicted currents differ most against what the runs say a repeat of it would scatter:
 
-- the logs' noise: the within-run spread of the chosen model's held-out residual (per sample,
-  ``noise_a``), inflated by its lag-1 autocorrelation (correlated samples count less);
+- the logs' noise: the white part of the chosen model's held-out residual per logged sample,
+  in each sample's turning regime (:mod:`energy.diagnosis.noise`);
 - the run-to-run spread: the spread of the per-run mean residual beyond what the noise gives
   (``run_spread_a``, a per-run offset that no drive averages away).
 
 With ``d(t)`` the difference of the two predictions over the drive (both sides), a repeat is
 scored by projecting its residual against the first model on ``d``: ``T = sum(r d) / sum(d^2)``
 is about 0 when the first model is right and 1 when the second is; its standard deviation per
-repeat is ``sqrt(kappa noise^2 / sum(d^2) + run_spread^2 ((sum d_L)^2 + (sum d_R)^2) / sum(d^2)^2)``.
+repeat is ``sqrt(sum(d^2 noise^2) / sum(d^2)^2 + run_spread^2 ((sum d_L)^2 + (sum d_R)^2) / sum(d^2)^2)``
+(sums over the samples the runs' logging rate gives the drive).
 The separation per repeat is ``z = 1 / sd``; deciding at ``T = 0.5`` is right with 95 %
 probability after ``ceil((2 * 1.645 / z)^2)`` repeats. The expected difference is also given as
 an RMS current (A) and in noise units (``RMS(d) / noise_a``).
@@ -39,14 +40,24 @@ from terrawatt_base.plot_target import new_figure
 from ..commands import CommandProfile
 from ..logs import InteractionLog
 from ..models.base import log_currents
+from .noise import ResidualNoise
+from .selection import SIGNIFICANT_SHRINK_PCT
 
-__all__ = ["SeparatingDrive", "DriveCandidate", "manoeuvre_library", "separating_drive", "residual_noise",
-           "REPEAT_Z", "MAX_DRIVE_S"]
+__all__ = ["SeparatingDrive", "DriveCandidate", "PairSeparation", "manoeuvre_library", "separating_drive",
+           "drive_log", "REPEAT_Z", "MAX_DRIVE_S", "MAX_REPEATS", "ORDER_PCT"]
 
 #: One-sided 95 % normal quantile: a repeat count is enough when the midpoint decision errs < 5 %.
 REPEAT_Z = 1.6448536269514722
 #: Longest drive of the library (s), rests included.
 MAX_DRIVE_S = 60.0
+#: A pair that needs more runs of the best drive than this is called equivalent on the library's drives.
+MAX_REPEATS = 20
+#: Below these the runs never drove / turned: the library holds no manoeuvre that does.
+MIN_SPEED_MPS = 0.05
+MIN_OMEGA_RADPS = 0.05
+#: Points of a unit's gap by which one explanation must lead on average to be ordered (the
+#: diagnosis's significance threshold).
+ORDER_PCT = SIGNIFICANT_SHRINK_PCT
 _REST_S = 2.0
 _ACCEL_MPS2 = 0.5  # command ramps: gentle, within any ground robot's limits
 _ALPHA_RADPS2 = 1.0
@@ -54,111 +65,160 @@ _GRAVITY_MPS2 = 9.80665
 
 
 @dataclass(frozen=True)
-class DriveCandidate:
-    """One manoeuvre of the library, scored for a pair of fitted models."""
+class PairSeparation:
+    """How one manoeuvre separates the chosen explanation from one alternative: the RMS difference
+    of their currents (A), the same over the noise's RMS on the drive, the separation per run and
+    the runs that settle the pair."""
 
-    name: str
-    description: str
-    duration_s: float
     difference_rms_a: float
+    noise_units: float
     z_per_repeat: float
     repeats: int
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict."""
+        return {"difference_rms_a": self.difference_rms_a, "noise_units": self.noise_units,
+                "z_per_repeat": self.z_per_repeat, "repeats": self.repeats}
+
+
+@dataclass(frozen=True)
+class DriveCandidate:
+    """One manoeuvre of the library, scored against every alternative of a tie."""
+
+    name: str
+    description: str
+    duration_s: float
+    pairs: dict[str, PairSeparation]
+
+    def separable(self, limit: int) -> dict[str, PairSeparation]:
+        """The pairs this drive settles within ``limit`` repeats."""
+        return {k: v for k, v in self.pairs.items() if v.repeats <= limit}
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict."""
         return {"name": self.name, "description": self.description, "duration_s": self.duration_s,
-                "difference_rms_a": self.difference_rms_a, "z_per_repeat": self.z_per_repeat,
-                "repeats": self.repeats}
+                "pairs": {k: v.to_dict() for k, v in self.pairs.items()}}
 
 
 @dataclass(frozen=True, eq=False)
 class SeparatingDrive:
-    """The drive that separates two tied explanations, with what each predicts on it.
+    """The drive that separates tied explanations, with what each predicts on it.
 
     Attributes
     ----------
-    effects : (str, str)
-        The chosen effect and the alternative it is tied with.
+    effects : tuple of str
+        The chosen effect, then the alternatives it is tied with (for a candidate that is
+        not significant: ``("as_given", candidate)``).
     best : DriveCandidate
-        The chosen manoeuvre (largest separation per repeat; the shorter of equals).
+        The chosen manoeuvre: the largest separation per repeat of its worst separable pair
+        (the shorter of equals).
     profile : CommandProfile
         Its commands (v, omega over time), from rest to rest.
     predictions : dict of str to ndarray
         Per effect, the fitted model's predicted (left, right) current (A) over ``profile``.
     noise_a, run_spread_a : float
-        The logs' per-sample noise and run-to-run spread (module docstring), A.
+        The logs' per-sample noise over this drive (its samples' regimes' RMS) and their
+        run-to-run spread (:mod:`energy.diagnosis.noise`), A.
     autocorrelation : float
-        Lag-1 autocorrelation of the residual (the noise's inflation ``(1 + r) / (1 - r)``).
+        Lag-1 autocorrelation of the runs' residual (how slowly its misfit varies; informative).
+    equivalent : tuple of str
+        Alternatives no drive of the library separates from the chosen one within
+        :data:`MAX_REPEATS` repeats: on these manoeuvres they are the same explanation.
     library : tuple of DriveCandidate
         Every manoeuvre scored, best first.
     models : dict of str to CurrentModel
-        The two fitted models (each the diagnosed model with the effects chosen before the tie
-        and one of the pair), fitted on all the runs.
+        The fitted models (each the diagnosed model with the effects chosen before the tie
+        and one of the set), fitted on all the runs.
     """
 
-    effects: tuple[str, str]
+    effects: tuple[str, ...]
     best: DriveCandidate
     profile: CommandProfile
     predictions: dict[str, np.ndarray]
     noise_a: float
     run_spread_a: float
     autocorrelation: float
+    equivalent: tuple[str, ...] = ()
     library: tuple[DriveCandidate, ...] = field(default_factory=tuple)
     models: dict[str, Any] = field(default_factory=dict)
 
     @property
+    def separated(self) -> dict[str, PairSeparation]:
+        """The alternatives this drive separates from the chosen effect, with how."""
+        return {k: v for k, v in self.best.pairs.items() if k not in self.equivalent}
+
+    @property
+    def repeats(self) -> int:
+        """Runs of the drive that settle every separable pair at 95 % (0: none is separable)."""
+        return max((v.repeats for v in self.separated.values()), default=0)
+
+    @property
     def expected_difference_a(self) -> float:
-        """RMS difference of the two predicted currents over the drive (A, both sides)."""
-        return self.best.difference_rms_a
+        """The smallest RMS difference (A, both sides) between the chosen model's currents and a separable
+        alternative's over the drive (nan: none is separable)."""
+        return min((v.difference_rms_a for v in self.separated.values()), default=math.nan)
 
     @property
     def noise_units(self) -> float:
-        """:attr:`expected_difference_a` in units of the logs' per-sample noise."""
-        return self.expected_difference_a / self.noise_a if self.noise_a > 0 else math.inf
+        """The smallest difference of a separable pair per sample over the noise's RMS on the drive (nan: none)."""
+        return min((v.noise_units for v in self.separated.values()), default=math.nan)
 
     @property
     def file_stem(self) -> str:
-        """``separating_drive_<chosen>_vs_<alternative>``: the name of its CSV and figure."""
-        return f"separating_drive_{self.effects[0]}_vs_{self.effects[1]}"
+        """``separating_drive_<chosen>``: the name of its CSV and figure."""
+        return f"separating_drive_{self.effects[0]}"
 
     def sentence(self) -> str:
-        """The verdict's sentence: what to drive, how long, the expected difference, the repeats."""
-        a, b = self.effects
-        return (f"To tell {a} from {b}, drive {self.best.description} ({fmt_number(self.best.duration_s, 3)} s; "
-                f"{self.file_stem}.csv): the two fitted models' currents differ there by "
-                f"{fmt_number(self.expected_difference_a, 3)} A RMS, {fmt_number(self.noise_units, 3)} x the logs' "
-                f"noise of {fmt_number(self.noise_a, 3)} A; "
-                f"{'one run of it settles' if self.best.repeats == 1 else f'{self.best.repeats} runs of it settle'} "
-                f"the choice at 95 % (run-to-run spread {fmt_number(self.run_spread_a, 3)} A).")
+        """The verdict's sentence: what to drive, how long, the expected differences, the repeats."""
+        chosen = self.effects[0]
+        out = []
+        if self.separated:
+            diffs = ", ".join(f"{fmt_number(v.difference_rms_a, 3)} A RMS from {k}" for k, v in self.separated.items())
+            n = self.repeats
+            out.append(f"To tell {chosen} from {' and '.join(self.separated)}, drive {self.best.description} "
+                       f"({fmt_number(self.best.duration_s, 3)} s; {self.file_stem}.csv): the fitted models' currents "
+                       f"differ there by {diffs} (the logs' noise is {fmt_number(self.noise_a, 3)} A, the run-to-run "
+                       f"spread {fmt_number(self.run_spread_a, 3)} A); "
+                       f"{'one run of it settles' if n == 1 else f'{n} runs of it settle'} the choice at 95 %.")
+        if self.equivalent:
+            out.append(f"No drive of the library separates {chosen} from {' or '.join(self.equivalent)} within "
+                       f"{MAX_REPEATS} runs: on straights, arcs, pivots and stops they predict the same currents.")
+        return " ".join(out)
 
-    def score(self, log: InteractionLog) -> dict[str, float]:
-        """How a driven repeat (``log``, with currents) scores: each model's RMS error, the measured difference
-        ``sqrt(|MSE_b - MSE_a|)`` (comparable with :attr:`expected_difference_a`), and the projection ``T``
-        (about 0: the first explanation; about 1: the second)."""
-        a, b = self.effects
+    def score(self, log: InteractionLog) -> dict[str, dict[str, float]]:
+        """How a driven repeat (``log``, with currents) scores, per alternative: the RMS error of the chosen and
+        the alternative model, the measured difference ``sqrt(|MSE_alt - MSE_chosen|)`` (comparable with the
+        expected ``difference_rms_a``) and the projection ``T`` (about 0: the chosen explanation; about 1: the
+        alternative)."""
+        chosen = self.effects[0]
         meas = log_currents(log)
-        pa, pb = (np.asarray(self.models[n].predict(log), dtype=float) for n in (a, b))
-        mse_a, mse_b = float(np.mean((meas - pa) ** 2)), float(np.mean((meas - pb) ** 2))
-        d = pb - pa
-        den = float(np.sum(d**2))
-        t = float(np.sum((meas - pa) * d) / den) if den > 0 else math.nan
-        return {f"rmse_{a}_a": math.sqrt(mse_a), f"rmse_{b}_a": math.sqrt(mse_b),
-                "measured_difference_a": math.sqrt(abs(mse_b - mse_a)), "projection": t}
+        pa = np.asarray(self.models[chosen].predict(log), dtype=float)
+        out = {}
+        for alt in self.effects[1:]:
+            pb = np.asarray(self.models[alt].predict(log), dtype=float)
+            mse_a, mse_b = float(np.mean((meas - pa) ** 2)), float(np.mean((meas - pb) ** 2))
+            d = pb - pa
+            den = float(np.sum(d**2))
+            out[alt] = {"rmse_chosen_a": math.sqrt(mse_a), "rmse_alternative_a": math.sqrt(mse_b),
+                        "measured_difference_a": math.sqrt(abs(mse_b - mse_a)),
+                        "projection": float(np.sum((meas - pa) * d) / den) if den > 0 else math.nan}
+        return out
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict (the profile and predictions are in the CSV)."""
         return {"effects": list(self.effects), "drive": self.best.to_dict(), "csv": f"{self.file_stem}.csv",
-                "expected_difference_a": self.expected_difference_a, "noise_units": self.noise_units,
-                "noise_a": self.noise_a, "run_spread_a": self.run_spread_a, "autocorrelation": self.autocorrelation,
+                "repeats": self.repeats, "expected_difference_a": self.expected_difference_a,
+                "noise_units": self.noise_units, "noise_a": self.noise_a, "run_spread_a": self.run_spread_a,
+                "autocorrelation": self.autocorrelation, "equivalent": list(self.equivalent),
                 "library": [c.to_dict() for c in self.library]}
 
     def to_csv(self) -> str:
-        """The command profile with both predictions: ``time_s, v_mps, omega_radps`` (what the robot drives)
+        """The command profile with every prediction: ``time_s, v_mps, omega_radps`` (what the robot drives)
         then each model's left / right current (A)."""
-        a, b = self.effects
-        pa, pb = self.predictions[a], self.predictions[b]
-        head = f"time_s,v_mps,omega_radps,{a}_left_a,{a}_right_a,{b}_left_a,{b}_right_a"
-        rows = np.column_stack([self.profile.time_s, self.profile.v_mps, self.profile.omega_radps, pa, pb])
+        names = list(self.predictions)
+        head = "time_s,v_mps,omega_radps," + ",".join(f"{n}_left_a,{n}_right_a" for n in names)
+        rows = np.column_stack([self.profile.time_s, self.profile.v_mps, self.profile.omega_radps,
+                                *(self.predictions[n] for n in names)])
         return head + "\n" + "\n".join(",".join(f"{x:.6g}" for x in r) for r in rows) + "\n"
 
     def write_csv(self, folder: str | os.PathLike[str]) -> Path:
@@ -166,7 +226,7 @@ class SeparatingDrive:
         return write_text_atomic(Path(folder) / f"{self.file_stem}.csv", self.to_csv())
 
     def plot(self, ax: Any = None) -> Any:
-        """The commands and the two predictions over the drive (matplotlib); returns the figure."""
+        """The commands and the predictions over the drive (matplotlib); returns the figure."""
         if ax is None:
             fig, (ax_cmd, ax) = new_figure((8, 5.5), 2, 1, sharex=True, height_ratios=(1, 2))
         else:
@@ -177,20 +237,21 @@ class SeparatingDrive:
             ax_cmd.plot(t, self.profile.omega_radps, label="omega (rad/s)")
             ax_cmd.set_ylabel("command")
             ax_cmd.legend(loc="upper right", fontsize=8)
-            ax_cmd.set_title(f"Separating drive: {self.best.description}")
-        for (name, pred), color in zip(self.predictions.items(), ("tab:blue", "tab:red")):
+            ax_cmd.set_title(f"Separating drive: {self.best.description}", fontsize=10)
+        colors = ("tab:blue", "tab:red", "tab:green", "tab:purple", "tab:brown", "tab:gray")
+        for (name, pred), color in zip(self.predictions.items(), colors * 4):
             ax.plot(t, pred[:, 0], "-", color=color, label=f"{name}: left")
             ax.plot(t, pred[:, 1], ":", color=color, lw=2, label=f"{name}: right")
         ax.set_xlabel("time (s)")
         ax.set_ylabel("predicted current (A)")
-        ax.set_title(f"difference {fmt_number(self.expected_difference_a, 3)} A RMS = "
-                     f"{fmt_number(self.noise_units, 3)} x noise; {self.best.repeats} repeat(s) for 95 %", fontsize=9)
+        ax.set_title(f"smallest difference {fmt_number(self.expected_difference_a, 3)} A RMS = "
+                     f"{fmt_number(self.noise_units, 3)} x noise; {self.repeats} run(s) for 95 %", fontsize=9)
         ax.legend(fontsize=8, ncol=2)
         fig.tight_layout()
         return fig
 
 
-def _ramp(targets: Sequence[tuple[float, float, float]], dt_s: float) -> CommandProfile:
+def _ramp(targets: Sequence[tuple[float, float, float]], dt_s: float, accel_mps2: float = _ACCEL_MPS2) -> CommandProfile:
     """Commands from ``(hold_s, v, omega)`` holds, each reached at a bounded rate, from rest to rest."""
     segments = [(_REST_S, 0.0, 0.0), *targets, (_REST_S, 0.0, 0.0)]
     v_out, w_out = [], []
@@ -198,12 +259,12 @@ def _ramp(targets: Sequence[tuple[float, float, float]], dt_s: float) -> Command
     for hold, tv, tw in segments:
         n = max(int(round(hold / dt_s)), 1)
         for _ in range(n):
-            v += float(np.clip(tv - v, -_ACCEL_MPS2 * dt_s, _ACCEL_MPS2 * dt_s))
+            v += float(np.clip(tv - v, -accel_mps2 * dt_s, accel_mps2 * dt_s))
             w += float(np.clip(tw - w, -_ALPHA_RADPS2 * dt_s, _ALPHA_RADPS2 * dt_s))
             v_out.append(v)
             w_out.append(w)
     while abs(v) > 1e-12 or abs(w) > 1e-12:  # come back to rest
-        v -= float(np.clip(v, -_ACCEL_MPS2 * dt_s, _ACCEL_MPS2 * dt_s))
+        v -= float(np.clip(v, -accel_mps2 * dt_s, accel_mps2 * dt_s))
         w -= float(np.clip(w, -_ALPHA_RADPS2 * dt_s, _ALPHA_RADPS2 * dt_s))
         v_out.append(v)
         w_out.append(w)
@@ -212,14 +273,18 @@ def _ramp(targets: Sequence[tuple[float, float, float]], dt_s: float) -> Command
 
 
 def manoeuvre_library(max_speed_mps: float, max_omega_radps: float, dt_s: float = 0.1,
-                      hold_s: float = 20.0) -> list[tuple[str, str, CommandProfile]]:
+                      hold_s: float = 20.0, max_accel_mps2: float = _ACCEL_MPS2) -> list[tuple[str, str, CommandProfile]]:
     """The manoeuvres searched: (name, description, commands), each from rest to rest, at most
     :data:`MAX_DRIVE_S`, within ``max_speed_mps`` and ``max_omega_radps``.
 
     Straights at constant speed (three speeds), arcs (four radii), pivots (two yaw rates, left
-    then right), stop-and-go cycles (accelerations and stops) and a slow creep.
+    then right), stop-and-go cycles (accelerations at ``max_accel_mps2``, at least the gentle
+    0.5 m/s² of the other ramps, and stops) and a slow creep; none that
+    drives (turns) when ``max_speed_mps`` (``max_omega_radps``) is below :data:`MIN_SPEED_MPS`
+    (:data:`MIN_OMEGA_RADPS`): runs that never drove (turned) say nothing of it.
     """
     vmax, wmax = float(max_speed_mps), float(max_omega_radps)
+    vmax, wmax = (vmax if vmax >= MIN_SPEED_MPS else 0.0), (wmax if wmax >= MIN_OMEGA_RADPS else 0.0)
     out: list[tuple[str, str, CommandProfile]] = []
     if vmax > 0:
         for frac in (0.35, 0.65, 0.95):
@@ -234,10 +299,12 @@ def manoeuvre_library(max_speed_mps: float, max_omega_radps: float, dt_s: float 
                             f"{fmt_number(hold_s / 2, 2)} s left then right",
                             _ramp([(hold_s / 2, v, w), (hold_s / 2, v, -w)], dt_s)))
         go = 0.8 * vmax
-        ramp = go / _ACCEL_MPS2
-        cycles = max(int((MAX_DRIVE_S - 2 * _REST_S) // (2 * ramp + 3.0)) // 2, 2)
-        out.append(("stop_and_go", f"{cycles} stops and starts to {fmt_number(go, 2)} m/s (1.5 s holds)",
-                    _ramp([(ramp + 1.5, go, 0.0), (ramp + 1.5, 0.0, 0.0)] * cycles, dt_s)))
+        accel = max(float(max_accel_mps2), _ACCEL_MPS2)  # the starts as hard as the runs' (gentle at least)
+        ramp = go / accel
+        cycles = max(int(1.5 * hold_s // (2 * ramp + 3.0)), 2)
+        out.append(("stop_and_go", f"{cycles} stops and starts to {fmt_number(go, 2)} m/s at "
+                    f"{fmt_number(accel, 2)} m/s² (1.5 s holds)",
+                    _ramp([(ramp + 1.5, go, 0.0), (ramp + 1.5, 0.0, 0.0)] * cycles, dt_s, accel)))
         out.append(("creep", f"a creep at {fmt_number(0.1 * vmax, 2)} m/s held {fmt_number(hold_s, 2)} s",
                     _ramp([(hold_s, 0.1 * vmax, 0.0)], dt_s)))
     if wmax > 0:
@@ -265,52 +332,87 @@ def drive_log(profile: CommandProfile, like: InteractionLog) -> InteractionLog:
                           gyro_z_radps=np.interp(ta, t, profile.omega_radps))
 
 
-def residual_noise(measured: Sequence[np.ndarray], predicted: Sequence[np.ndarray]) -> tuple[float, float, float]:
-    """The logs' noise of a model's (held-out) residual: per-sample within-run spread (A), run-to-run
-    spread of the per-run mean beyond it (A), lag-1 autocorrelation of the within-run residual."""
-    res = [np.asarray(m, float) - np.asarray(p, float) for m, p in zip(measured, predicted)]
-    within = [r - r.mean(axis=0) for r in res]
-    noise = float(np.sqrt(np.mean(np.concatenate([w.ravel() ** 2 for w in within]))))
-    num = sum(float(np.sum(w[1:] * w[:-1])) for w in within if len(w) > 1)
-    den = sum(float(np.sum(w**2)) for w in within)
-    rho = float(np.clip(num / den, 0.0, 0.95)) if den > 0 else 0.0
-    spread = 0.0
-    if len(res) > 1:
-        means = np.array([r.mean(axis=0) for r in res])  # (runs, sides)
-        expect = np.mean([noise**2 * (1 + rho) / (1 - rho) / max(len(r), 1) for r in res])
-        spread = float(math.sqrt(max(float(np.var(means, axis=0, ddof=1).mean()) - expect, 0.0)))
-    return noise, spread, rho
+def separating_drive(effects: Sequence[str], models: dict[str, Any], like: InteractionLog, noise: ResidualNoise,
+                     max_speed_mps: float, max_omega_radps: float, max_accel_mps2: float = _ACCEL_MPS2, *,
+                     base: Any = None) -> SeparatingDrive | None:
+    """Search the library (:func:`manoeuvre_library`, each manoeuvre alone and each two in a row
+    within :data:`MAX_DRIVE_S`) for the drive that separates ``effects[0]``'s fitted model from
+    every other one of ``effects``, against the runs' ``noise``
+    (:func:`~energy.diagnosis.noise.residual_noise`, per turning regime).
 
-
-def separating_drive(effects: tuple[str, str], models: dict[str, Any], like: InteractionLog, noise_a: float,
-                     run_spread_a: float, autocorrelation: float, max_speed_mps: float,
-                     max_omega_radps: float) -> SeparatingDrive | None:
-    """Search :func:`manoeuvre_library` for the drive that separates the fitted ``models`` of ``effects``.
-
-    Returns None when no manoeuvre makes the two predictions differ (they are the same model
-    on every drive the library holds).
+    The best drive is the one whose predictions differ most against the noise sample by sample
+    (its worst pair's RMS difference over the noise's RMS): a difference of several noise units
+    at every sample holds even where neither fitted model is exact, where a small difference
+    summed over many samples would rest on their being exact. A pair's runs of a drive are what
+    its matched-filter test needs at 95 % (module docstring);
+    given ``base`` (the model without the step's effect, whose gap the diagnosis scores), a
+    drive must also be one run of which tells the pair apart as the diagnosis judges it: the
+    chosen model's expected gain over the alternative on it, in points of the run's own gap
+    (effect and noise), at least :data:`ORDER_PCT` (a drive that does not is no separating
+    drive, however many runs of it). Drives that settle every pair some drive settles within
+    :data:`MAX_REPEATS` runs come first (the other pairs are :attr:`SeparatingDrive.equivalent`),
+    then the largest difference in noise units, then the shortest. Returns None when the library holds no drive (runs that
+    neither drove nor turned).
     """
-    a, b = effects
-    scored = []
+    chosen, alts = effects[0], list(effects[1:])
+    spread = noise.run_spread_a  # the noise is white (noise.residual_noise): each logged sample counts
     dt = 0.1
-    kappa = (1 + autocorrelation) / (1 - autocorrelation)
-    for name, text, profile in manoeuvre_library(max_speed_mps, max_omega_radps, dt):
+    f = like.drive_rate_hz * dt  # the noise is per logged sample: logged at the runs' rate, f samples per one here
+    scored = []
+    for name, text, profile in _drives(max_speed_mps, max_omega_radps, dt, max_accel_mps2):
         log = drive_log(profile, like)
-        pa, pb = (np.asarray(models[n].predict(log), dtype=float) for n in (a, b))
-        d = pb - pa
-        ss = float(np.sum(d**2))
-        if not ss > 0:
-            continue
-        # the noise is per logged sample: the drive, logged at the runs' rate, gives ``f`` samples per one here
-        f = like.drive_rate_hz * dt
-        var_t = kappa * noise_a**2 / (ss * f) + run_spread_a**2 * float(np.sum(d.sum(axis=0) ** 2)) / ss**2
-        z = 1.0 / math.sqrt(var_t) if var_t > 0 else math.inf
-        repeats = max(int(math.ceil((2 * REPEAT_Z / z) ** 2)), 1) if math.isfinite(z) else 1
-        cand = DriveCandidate(name, text, float(profile.duration_s), float(math.sqrt(ss / d.size)), z, repeats)
-        scored.append((cand, profile, {a: pa, b: pb}))
+        preds = {n: np.asarray(models[n].predict(log), dtype=float) for n in effects}
+        sigma2 = noise.per_sample(log)[:, None] ** 2  # each sample's noise: its regime's
+        gap2 = (float(np.sum((preds[chosen] - np.asarray(base.predict(log), dtype=float)) ** 2))
+                if base is not None else math.nan)
+        pairs = {}
+        for alt in alts:
+            d = preds[alt] - preds[chosen]
+            ss = float(np.sum(d**2))
+            var_t = (float(np.sum(d**2 * sigma2)) / (ss**2 * f)
+                     + spread**2 * float(np.sum(d.sum(axis=0) ** 2)) / ss**2 if ss > 0 else math.inf)
+            z = 1.0 / math.sqrt(var_t) if var_t > 0 else math.inf
+            repeats = (max(int(math.ceil((2 * REPEAT_Z / z) ** 2)), 1) if 0 < z < math.inf
+                       else (1 if z == math.inf else 10**9))
+            if math.isfinite(gap2):
+                # a run's gain in points of its own gap, if the chosen model is right up to the noise
+                gain = 100.0 * ss / (gap2 + float(np.sum(sigma2)) * d.shape[1]) if ss > 0 else 0.0
+                repeats = repeats if gain >= ORDER_PCT else 10**9
+            rms = float(math.sqrt(ss / d.size))
+            pairs[alt] = PairSeparation(rms, rms / math.sqrt(float(np.mean(sigma2))) if np.any(sigma2) else math.inf,
+                                        z, min(repeats, 10**9))
+        scored.append((DriveCandidate(name, text, float(profile.duration_s), pairs), profile, preds))
     if not scored:
         return None
-    scored.sort(key=lambda c: (-c[0].z_per_repeat, c[0].duration_s))
+    equivalent = tuple(a for a in alts if min(c.pairs[a].repeats for c, _, _ in scored) > MAX_REPEATS)
+    live = [a for a in alts if a not in equivalent] or alts
+
+    def settles(c: DriveCandidate) -> bool:
+        return all(c.pairs[a].repeats <= MAX_REPEATS for a in live)
+
+    def clearest(c: DriveCandidate) -> float:  # the worst pair's difference per sample, in noise units
+        return min(c.pairs[a].noise_units for a in live)
+
+    # drives that settle every separable pair, then the largest difference against the noise, then the shortest
+    scored.sort(key=lambda c: (not settles(c[0]), -clearest(c[0]), c[0].duration_s))
     best, profile, preds = scored[0]
-    return SeparatingDrive((a, b), best, profile, preds, float(noise_a), float(run_spread_a), float(autocorrelation),
-                           tuple(c[0] for c in scored), {a: models[a], b: models[b]})
+    drive_noise = float(np.sqrt(np.mean(noise.per_sample(drive_log(profile, like)) ** 2)))
+    return SeparatingDrive(tuple(effects), best, profile, preds, drive_noise, float(spread), float(noise.autocorrelation),
+                           equivalent, tuple(c[0] for c in scored), {n: models[n] for n in effects})
+
+
+def _drives(max_speed_mps: float, max_omega_radps: float, dt: float,
+            accel: float) -> list[tuple[str, str, CommandProfile]]:
+    """The library's manoeuvres alone (20 s holds) and each two of them in a row (10 s holds) within a minute."""
+    single = manoeuvre_library(max_speed_mps, max_omega_radps, dt, max_accel_mps2=accel)
+    half = manoeuvre_library(max_speed_mps, max_omega_radps, dt, hold_s=10.0, max_accel_mps2=accel)
+    out = list(single)
+    for i, (na, ta, pa) in enumerate(half):
+        for nb, tb, pb in half[i + 1:]:
+            if pa.duration_s + pb.duration_s > MAX_DRIVE_S:
+                continue
+            t = np.concatenate([pa.time_s, pa.time_s[-1] + dt + pb.time_s])
+            out.append((f"{na}+{nb}", f"{ta}, then {tb}",
+                        CommandProfile(t, np.concatenate([pa.v_mps, pb.v_mps]),
+                                       np.concatenate([pa.omega_radps, pb.omega_radps]))))
+    return out
