@@ -129,7 +129,9 @@ def run_case(case: dict[str, Any], data: str, seed: int, n_bootstrap: int) -> di
         "ties": [t.to_dict() for t in d.ties],
         "separating_drives": [x.to_dict() for x in d.separating_drives],
         "more_data": {k: v for k, v in d.more_data.items() if k != "drive"}
-        | ({"drive": d.more_data["drive"]["drive"]} if d.more_data.get("drive") else {}),
+        | ({"drive": {"description": d.more_data["drive"]["drive"]["description"],
+                      "duration_s": d.more_data["drive"]["drive"]["duration_s"],
+                      "repeats": d.more_data["drive"]["repeats"]}} if d.more_data.get("drive") else {}),
     }
 
 

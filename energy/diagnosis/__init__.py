@@ -23,7 +23,9 @@ from .plots_gap import plot_gap_by_regime, plot_gap_map, plot_residual_time
 from .power_result import PowerDiagnosis, PowerGapSummary, PowerWaterfallStep
 from .regimes import regime_labels
 from .report import DIAGNOSIS_FILES, DiagnosisReport, diagnose_report
-from .result import Diagnosis, EffectScore, WaterfallStep
+from .result import Diagnosis, EffectScore, Tie, WaterfallStep
+from .noise import ResidualNoise, residual_noise
+from .separating import DriveCandidate, PairSeparation, SeparatingDrive, manoeuvre_library, separating_drive
 from .fit import SPLITS, Fold, Split, make_split
 
 __all__ = [
@@ -63,6 +65,14 @@ __all__ = [
     "SPLITS",
     "Split",
     "WaterfallStep",
+    "Tie",
+    "SeparatingDrive",
+    "DriveCandidate",
+    "PairSeparation",
+    "ResidualNoise",
+    "residual_noise",
+    "manoeuvre_library",
+    "separating_drive",
     "diagnose",
     "effect",
     "effect_from_spec",

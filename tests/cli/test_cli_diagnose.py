@@ -145,3 +145,34 @@ def test_a_failing_figure_warns_and_the_command_still_succeeds(data, tmp_path, c
     assert rc == 0
     assert "terrawatt: warning: could not draw" in err and "RuntimeError: no canvas" in err
     assert {p.name for p in Path(tmp_path).iterdir()} == {"diagnosis.json", "diagnosis.md", "corrected_model.zip"}
+
+
+def test_a_tie_writes_its_separating_drive_as_commands_and_a_figure(tmp_path, capsys):
+    """A payload seen on straights at one speed each: mass, rolling resistance and an offset tie; the command
+    writes the drive that tells them apart (the commands a robot can drive, each model's currents) and its figure."""
+    import numpy as np
+
+    from energy import PhysicsCurrentModel, TruthSimulator, ground_preset, robot_preset
+
+    husky = robot_preset("husky")
+    laden = TruthSimulator(husky.replace(mass_kg=1.6 * husky.mass_kg), {"asphalt": ground_preset("asphalt")},
+                           velocity_time_constant_s=0.0, seed=0)
+    t = np.arange(0.0, 30.0, 0.05)
+    (tmp_path / "logs").mkdir()
+    runs = [laden.simulate_commands(t, np.full(t.size, 0.4 + 0.1 * k), 0 * t, ground="asphalt", seed=k) for k in range(4)]
+    for k, log in enumerate(runs):
+        write_csv_log(log, tmp_path / "logs" / f"run_{k}.csv")
+    PhysicsCurrentModel("husky", "asphalt", fit_parameters=()).fit(runs[:1]).save(tmp_path / "model.zip")
+    rc, out, err = _run(capsys, "--model", tmp_path / "model.zip", "--data", tmp_path / "logs", "--out", tmp_path / "out",
+                        "--effects", "mass", "rolling_resistance", "current_offset", "--quiet")
+    assert rc == 0, err
+    doc = json.loads((tmp_path / "out" / "diagnosis.json").read_text())
+    (tie,) = doc["indistinguishable"]
+    assert tie["chosen"] == "mass" and set(tie["alternatives"]) == {"rolling_resistance", "current_offset"}
+    (drive,) = doc["separating_drives"]
+    stem = f"separating_drive_{tie['chosen']}"
+    assert drive["csv"] == f"{stem}.csv" and drive["drive"]["duration_s"] <= 60.0
+    table = np.loadtxt(tmp_path / "out" / f"{stem}.csv", delimiter=",", skiprows=1)
+    assert table.shape[1] == 3 + 2 * 3 and np.all(np.diff(table[:, 0]) > 0)  # time, v, omega, then 3 models x 2 sides
+    assert (tmp_path / "out" / f"{stem}.png").read_bytes()[:8] == PNG
+    assert "cannot tell them apart" in out and "To tell mass from" in out
