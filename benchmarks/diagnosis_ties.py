@@ -32,7 +32,6 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import platform
 import statistics
 import sys
@@ -46,19 +45,8 @@ import energy
 from energy.diagnosis import diagnose
 from terrawatt_base.atomic import write_json_atomic
 
-
-def _sibling(name: str) -> Any:
-    """Import ``benchmarks/<name>.py`` by path (benchmarks/ is no package)."""
-    if name in sys.modules:
-        return sys.modules[name]
-    spec = importlib.util.spec_from_file_location(name, Path(__file__).resolve().parent / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
-
-
-sim = _sibling("independent_sim")
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/ is no package: its siblings by path
+import independent_sim as sim  # noqa: E402
 
 #: The pairs: calibration effects, diagnosed effects, driving, the speed above which the runs are
 #: kept (None: whole runs), the catalogue effects that are the truth, how to read its size and the size.

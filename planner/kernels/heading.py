@@ -29,7 +29,8 @@ import numpy as np
 
 from .graph import heap_pop, heap_set
 
-__all__ = ["backward_cost_to_go", "heading_astar", "heading_reset", "heading_search", "lower_cost_to_go"]
+__all__ = ["backward_cost_to_go", "backward_lower", "heading_astar", "heading_reset", "heading_search",
+           "lower_cost_to_go"]
 
 _N_MOVES = 16
 
@@ -38,30 +39,47 @@ _N_MOVES = 16
 def backward_cost_to_go(pos, data, offsets, ni, nj, dst, dst_cost, upper):  # pragma: no cover - compiled
     """Heading-free cost (J) from every node to the virtual goal (reached from ``dst`` at ``dst_cost``).
 
-    Dijkstra on the reversed moves: node ``v`` is reached from ``u = v - offset_k`` at
-    ``data[pos[u, k]]``. Stops once the smallest open key exceeds ``upper``; every node not
-    settled then (unreachable ones included) gets that key, a lower bound of its cost. Returns
-    the cost per node (float64, ``n = ni * nj``).
+    Dijkstra on the reversed moves (:func:`backward_lower` from nothing known): node ``v`` is
+    reached from ``u = v - offset_k`` at ``data[pos[u, k]]``. Stops once the smallest open key
+    exceeds ``upper``; every node not settled then (unreachable ones included) gets that key, a
+    lower bound of its cost. Returns the cost per node (float64, ``n = ni * nj``).
+    """
+    h = np.full(ni * nj, np.inf)
+    _, floor = backward_lower(pos, data, offsets, ni, nj, h, dst, dst_cost, upper)
+    if floor < np.inf:
+        for v in range(h.size):
+            if h[v] > floor:  # not settled: its key is at least the floor
+                h[v] = floor
+    return h
+
+
+@numba.njit(cache=True, nogil=True)
+def backward_lower(pos, data, offsets, ni, nj, h, seeds, seed_cost, upper):  # pragma: no cover - compiled
+    """Lower the cost-to-go ``h`` in place from ``seeds`` (each offered ``seed_cost``), backwards.
+
+    Dijkstra on the reversed moves from the seeds whose offer is below ``h``: a node popped at
+    key ``k`` offers ``k + data[pos[u, k]]`` to each ``u`` that moves into it. Stops once the
+    smallest open key exceeds ``upper``. Returns the number of nodes settled and that stopping
+    key (inf when the search ran out): nodes not settled hold ``h`` at or above it.
     """
     n = ni * nj
-    h = np.full(n, np.inf)
-    settled = np.zeros(n, np.bool_)
     keys = np.empty(n)
     nodes = np.empty(n, np.int64)
     where = np.full(n, -1, np.int64)
     size = 0
-    for k in range(dst.size):
-        v = dst[k]
-        if dst_cost[k] < h[v]:
-            h[v] = dst_cost[k]
-            size = heap_set(keys, nodes, where, size, v, dst_cost[k])
+    for i in range(seeds.size):
+        u = seeds[i]
+        if seed_cost[i] < h[u]:
+            h[u] = seed_cost[i]
+            size = heap_set(keys, nodes, where, size, u, seed_cost[i])
+    settled = 0
     floor = np.inf
     while size > 0:
         key, v, size = heap_pop(keys, nodes, where, size)
         if key > upper:
             floor = key
             break
-        settled[v] = True
+        settled += 1
         iv = v // nj
         jv = v - iv * nj
         for k in range(_N_MOVES):
@@ -70,8 +88,6 @@ def backward_cost_to_go(pos, data, offsets, ni, nj, dst, dst_cost, upper):  # pr
             if iu < 0 or iu >= ni or ju < 0 or ju >= nj:
                 continue
             u = iu * nj + ju
-            if settled[u]:
-                continue
             p = pos[u, k]
             if p < 0:
                 continue
@@ -79,11 +95,7 @@ def backward_cost_to_go(pos, data, offsets, ni, nj, dst, dst_cost, upper):  # pr
             if nu < h[u]:
                 h[u] = nu
                 size = heap_set(keys, nodes, where, size, u, nu)
-    if floor < np.inf:
-        for v in range(n):
-            if not settled[v]:
-                h[v] = floor
-    return h
+    return settled, floor
 
 
 @numba.njit(cache=True, nogil=True)
@@ -196,37 +208,9 @@ def lower_cost_to_go(pos, data, offsets, ni, nj, h, seeds, seed_cost):  # pragma
     weights (as :func:`backward_cost_to_go` gives). Where weights rose it still is one; where a
     move got cheaper (or appeared) or a goal join did, ``seeds`` / ``seed_cost`` give the node
     and the new value that move offers it (``data[pos[u, k]] + h[v]``, or the join's energy).
-    The lowering is propagated backwards (Dijkstra on the reversed moves, each node settled at
-    most once), so afterwards ``h[u] <= data[pos[u, k]] + h[v]`` for every move again and ``h`` is
-    a lower bound of the new cost-to-go. Returns the number of nodes lowered.
+    The lowering is propagated backwards (:func:`backward_lower`, each node settled at most
+    once), so afterwards ``h[u] <= data[pos[u, k]] + h[v]`` for every move again and ``h`` is a
+    lower bound of the new cost-to-go. Returns the number of nodes lowered.
     """
-    n = ni * nj
-    keys = np.empty(n)
-    nodes = np.empty(n, np.int64)
-    where = np.full(n, -1, np.int64)
-    size = 0
-    for i in range(seeds.size):
-        u = seeds[i]
-        if seed_cost[i] < h[u]:
-            h[u] = seed_cost[i]
-            size = heap_set(keys, nodes, where, size, u, seed_cost[i])
-    lowered = 0
-    while size > 0:
-        key, v, size = heap_pop(keys, nodes, where, size)
-        lowered += 1
-        iv = v // nj
-        jv = v - iv * nj
-        for k in range(_N_MOVES):
-            iu = iv - offsets[k, 0]
-            ju = jv - offsets[k, 1]
-            if iu < 0 or iu >= ni or ju < 0 or ju >= nj:
-                continue
-            u = iu * nj + ju
-            p = pos[u, k]
-            if p < 0:
-                continue
-            nu = key + data[p]
-            if nu < h[u]:
-                h[u] = nu
-                size = heap_set(keys, nodes, where, size, u, nu)
+    lowered, _ = backward_lower(pos, data, offsets, ni, nj, h, seeds, seed_cost, np.inf)
     return lowered
