@@ -338,8 +338,8 @@ def _select(model: CurrentModel, items: list[InteractionLog], predictions: list[
 
 def _separating_drives(sel: Selection, ties: Sequence[Tie], data: DiagnosisData, model: CurrentModel,
                        items: list[InteractionLog], robot: Any, terrain: Any) -> tuple[SeparatingDrive, ...]:
-    """Per tied pair, the drive that tells the two fitted explanations apart (:func:`separating_drive`),
-    within the speeds and yaw rates the runs drove and the robot's limits."""
+    """Per tie, the drive that tells its fitted explanations apart (:func:`separating_drive`), within
+    :data:`DRIVE_LIMIT_SHARE` of the robot's limits (:func:`_drive_limits`)."""
     if not ties:
         return ()
     vmax, wmax, amax = _drive_limits(model, items, robot)
@@ -400,7 +400,7 @@ def _more_data(sel: Selection, data: DiagnosisData, model: CurrentModel, items: 
         # the candidate as the explanation to confirm, the model as given as the one to beat
         drive = separating_drive((top.name, "as_given"), models, items[0], noise, vmax, wmax, amax, base=as_given)
         if drive is not None and drive.separated:
-            out["drive"] = drive.to_dict()
+            out["drive"] = {k: v for k, v in drive.to_dict().items() if k != "csv"}  # described, not written
             text += (f", or {drive.repeats} run{'s' if drive.repeats != 1 else ''} of "
                      f"{drive.best.description} ({fmt_number(drive.best.duration_s, 3)} s), where it changes the "
                      f"current by {fmt_number(drive.expected_difference_a, 3)} A RMS")
@@ -411,12 +411,13 @@ def _more_data(sel: Selection, data: DiagnosisData, model: CurrentModel, items: 
 def _ties(sel: Selection, data: DiagnosisData) -> tuple[Tie, ...]:
     """The :class:`Tie` of each chosen effect whose step the data cannot settle, fitted values as at that step."""
     out = []
+    none = sel.none
     for k, (best, alts) in enumerate(zip(sel.chosen, sel.ties)):
         if not alts:
             continue
-        trials, current, none = sel.trials[k], sel.sets[k], sel.none
+        trials, current = sel.trials[k], sel.sets[k]
 
-        def added(e: Effect) -> float:
+        def added(e: Effect, trials: dict[str, SetScore] = trials, current: SetScore = current) -> float:
             return shrink_pct(none, trials[e.name]) - shrink_pct(none, current)
 
         words = {e.name: e.describe(trials[e.name].median_values()[-1], data.prepared.get(e.name, ()))

@@ -22,8 +22,6 @@ did not settle get the last key it popped, which keeps the heuristic consistent.
 
 from __future__ import annotations
 
-import math
-
 import numba
 import numpy as np
 
