@@ -152,3 +152,16 @@ def test_residual_noise_separates_the_noise_from_a_run_to_run_offset():
     assert got.noise_a == pytest.approx(0.1, rel=0.05)
     assert got.run_spread_a == pytest.approx(float(np.std(offsets, ddof=1)), rel=0.1)
     assert got.autocorrelation < 0.1 and got.kappa == pytest.approx(1.0, abs=0.25)
+
+
+def test_two_explanations_that_predict_the_same_currents_everywhere_are_called_equivalent(tied):
+    """No drive of the library separates a model from itself: the pair is equivalent, and the sentence says so."""
+    from energy.diagnosis import ResidualNoise, separating_drive
+
+    logs, d = tied
+    model = d.corrected_model
+    noise = ResidualNoise(0.1, 0.0, 0.0)
+    drive = separating_drive(("a", "b"), {"a": model, "b": model}, logs[0], noise, 1.0, 1.0)
+    assert drive.equivalent == ("b",) and drive.separated == {} and drive.repeats == 0
+    assert "No drive of the library separates a from b" in drive.sentence()
+    assert not drive.sentence().startswith("To tell")
