@@ -351,7 +351,7 @@ def _separating_drives(sel: Selection, ties: Sequence[Tie], data: DiagnosisData,
         models = {n: CorrectedCurrentModel(model, base + [by_name[n]], robot, terrain).fit(items) for n in tie.effects}
         noise = residual_noise(data.measured, sel.trials[k][tie.chosen].held_out_a, items)
         before = CorrectedCurrentModel(model, base, robot, terrain).fit(items)
-        drive = separating_drive(tie.effects, models, items[0], noise, vmax, wmax, amax, base=before)
+        drive = separating_drive(tie.effects, models, items[0], noise, vmax, wmax, amax, base=before, terrain=terrain)
         if drive is not None:
             out.append(drive)
     return tuple(out)
@@ -398,7 +398,8 @@ def _more_data(sel: Selection, data: DiagnosisData, model: CurrentModel, items: 
         models = {"as_given": as_given, top.name: CorrectedCurrentModel(model, [top], robot, terrain).fit(items)}
         noise = residual_noise(data.measured, sel.none.held_out_a, items)
         # the candidate as the explanation to confirm, the model as given as the one to beat
-        drive = separating_drive((top.name, "as_given"), models, items[0], noise, vmax, wmax, amax, base=as_given)
+        drive = separating_drive((top.name, "as_given"), models, items[0], noise, vmax, wmax, amax, base=as_given,
+                                 terrain=terrain)
         if drive is not None and drive.separated:
             out["drive"] = {k: v for k, v in drive.to_dict().items() if k != "csv"}  # described, not written
             text += (f", or {drive.repeats} run{'s' if drive.repeats != 1 else ''} of "

@@ -44,7 +44,7 @@ from .noise import ResidualNoise
 from .selection import SIGNIFICANT_SHRINK_PCT
 
 __all__ = ["SeparatingDrive", "DriveCandidate", "PairSeparation", "manoeuvre_library", "separating_drive",
-           "drive_log", "REPEAT_Z", "MAX_DRIVE_S", "MAX_REPEATS", "ORDER_PCT"]
+           "drive_log", "slope_drive", "REPEAT_Z", "MAX_DRIVE_S", "MAX_REPEATS", "ORDER_PCT"]
 
 #: One-sided 95 % normal quantile: a repeat count is enough when the midpoint decision errs < 5 %.
 REPEAT_Z = 1.6448536269514722
@@ -315,14 +315,69 @@ def manoeuvre_library(max_speed_mps: float, max_omega_radps: float, dt_s: float 
     return [m for m in out if m[2].duration_s <= MAX_DRIVE_S + 1e-9]
 
 
+def _integrated_pose(profile: CommandProfile, start: tuple[float, float, float]) -> np.ndarray:
+    """The pose (x, y, heading) of ``profile`` driven as commanded from ``start``."""
+    t = profile.time_s
+    heading = start[2] + np.concatenate([[0.0], np.cumsum(0.5 * (profile.omega_radps[1:] + profile.omega_radps[:-1])
+                                                          * np.diff(t))])
+    ds = np.concatenate([[0.0], 0.5 * (profile.v_mps[1:] + profile.v_mps[:-1]) * np.diff(t)])
+    return np.column_stack([start[0] + np.cumsum(ds * np.cos(heading)), start[1] + np.cumsum(ds * np.sin(heading)),
+                            heading])
+
+
+def slope_drive(terrain: Any, max_speed_mps: float, dt_s: float = 0.1,
+                max_slope_rad: float = math.radians(20.0)) -> tuple[str, str, CommandProfile] | None:
+    """Up and back down the steepest straight of ``terrain`` the robot may drive, within a minute.
+
+    Among the free cells no steeper than ``max_slope_rad``, the steepest whose straight along the
+    uphill direction (up to 10 m, and half the map's smaller side) stays on free cells of the map;
+    driven up at half of ``max_speed_mps``, a 2 s stop, then back down in reverse. The commands
+    carry their pose on the map (the models read the slope under it). None when the map is level
+    or no such straight exists.
+    """
+    slope = np.asarray(terrain["slope"])
+    free = ~np.asarray(terrain.obstacle) & (slope <= max_slope_rad) & np.isfinite(slope)
+    if not free.any() or float(np.max(np.where(free, slope, 0.0))) < math.radians(1.0) or max_speed_mps <= 0:
+        return None
+    v = 0.5 * float(max_speed_mps)
+    rows, cols = slope.shape
+    length = min(10.0, 0.5 * min(rows, cols) * terrain.cell_size_m,
+                 v * (MAX_DRIVE_S - 2 * _REST_S - 2.0 - 4 * v / _ACCEL_MPS2) / 2.0)
+    gx, gy = np.asarray(terrain["grad_x"]), np.asarray(terrain["grad_y"])
+    order = np.argsort(np.where(free, slope, -1.0), axis=None)[::-1][:200]
+    for idx in order:
+        r, c = np.unravel_index(idx, slope.shape)
+        if not free[r, c] or slope[r, c] < math.radians(1.0):
+            break
+        ux, uy = float(gx[r, c]), float(gy[r, c])
+        norm = math.hypot(ux, uy)
+        ux, uy = ux / norm, uy / norm
+        x, y = terrain.xy(r, c)
+        s = np.linspace(-length / 2, length / 2, max(int(length / (0.5 * terrain.cell_size_m)), 2))
+        px, py = x + s * ux, y + s * uy
+        if not np.all(terrain.contains(px, py)):
+            continue
+        pr, pc = terrain.rowcol(px, py)
+        if not np.all(free[pr, pc]):
+            continue
+        hold = length / v
+        profile = _ramp([(hold, v, 0.0), (2.0, 0.0, 0.0), (hold, -v, 0.0)], dt_s)
+        heading = math.atan2(uy, ux)
+        pose = _integrated_pose(profile, (float(px[0]), float(py[0]), heading))
+        grade = math.degrees(float(slope[r, c]))
+        text = (f"up and back down the {fmt_number(grade, 2)}° slope at ({fmt_number(float(x), 4)}, "
+                f"{fmt_number(float(y), 4)}) m, {fmt_number(length, 2)} m each way at {fmt_number(v, 2)} m/s")
+        return ("slope", text, CommandProfile(profile.time_s, profile.v_mps, profile.omega_radps, pose))
+    return None
+
+
 def drive_log(profile: CommandProfile, like: InteractionLog) -> InteractionLog:
     """A log of ``profile`` driven as commanded (no currents), with the conventions of ``like``: its
-    velocity source and track width, its ground label, a level IMU (gravity alone, gyro = omega)."""
+    velocity source and track width, its ground label, a level IMU (gravity alone, gyro = omega);
+    its pose is the profile's (a drive placed on a map), else none (level ground wherever it is)."""
     t = profile.time_s
     ta = np.arange(0.0, float(t[-1]) + 1e-9, 0.01)
-    heading = np.concatenate([[0.0], np.cumsum(0.5 * (profile.omega_radps[1:] + profile.omega_radps[:-1]) * np.diff(t))])
-    ds = np.concatenate([[0.0], 0.5 * (profile.v_mps[1:] + profile.v_mps[:-1]) * np.diff(t)])
-    pose = np.column_stack([np.cumsum(ds * np.cos(heading)), np.cumsum(ds * np.sin(heading)), heading])
+    pose = profile.pose_xyh  # on a map (the slope drive), or none: the manoeuvre is driven on level ground
     ground = None
     if like.ground is not None and len(like.ground):
         labels, counts = np.unique(np.asarray(like.ground, dtype=str), return_counts=True)
@@ -334,11 +389,11 @@ def drive_log(profile: CommandProfile, like: InteractionLog) -> InteractionLog:
 
 def separating_drive(effects: Sequence[str], models: dict[str, Any], like: InteractionLog, noise: ResidualNoise,
                      max_speed_mps: float, max_omega_radps: float, max_accel_mps2: float = _ACCEL_MPS2, *,
-                     base: Any = None) -> SeparatingDrive | None:
+                     base: Any = None, terrain: Any = None) -> SeparatingDrive | None:
     """Search the library (:func:`manoeuvre_library`, each manoeuvre alone and each two in a row
-    within :data:`MAX_DRIVE_S`) for the drive that separates ``effects[0]``'s fitted model from
-    every other one of ``effects``, against the runs' ``noise``
-    (:func:`~energy.diagnosis.noise.residual_noise`, per turning regime).
+    within :data:`MAX_DRIVE_S`; with a ``terrain`` map, also :func:`slope_drive`) for the drive that
+    separates ``effects[0]``'s fitted model from every other one of ``effects``, against the
+    runs' ``noise`` (:func:`~energy.diagnosis.noise.residual_noise`, per turning regime).
 
     The best drive is the one whose predictions differ most against the noise sample by sample
     (its worst pair's RMS difference over the noise's RMS): a difference of several noise units
@@ -359,7 +414,7 @@ def separating_drive(effects: Sequence[str], models: dict[str, Any], like: Inter
     dt = 0.1
     f = like.drive_rate_hz * dt  # the noise is per logged sample: logged at the runs' rate, f samples per one here
     scored = []
-    for name, text, profile in _drives(max_speed_mps, max_omega_radps, dt, max_accel_mps2):
+    for name, text, profile in _drives(max_speed_mps, max_omega_radps, dt, max_accel_mps2, terrain):
         log = drive_log(profile, like)
         preds = {n: np.asarray(models[n].predict(log), dtype=float) for n in effects}
         sigma2 = noise.per_sample(log)[:, None] ** 2  # each sample's noise: its regime's
@@ -401,10 +456,16 @@ def separating_drive(effects: Sequence[str], models: dict[str, Any], like: Inter
                            equivalent, tuple(c[0] for c in scored), {n: models[n] for n in effects})
 
 
-def _drives(max_speed_mps: float, max_omega_radps: float, dt: float,
-            accel: float) -> list[tuple[str, str, CommandProfile]]:
-    """The library's manoeuvres alone (20 s holds) and each two of them in a row (10 s holds) within a minute."""
+def _drives(max_speed_mps: float, max_omega_radps: float, dt: float, accel: float,
+            terrain: Any = None) -> list[tuple[str, str, CommandProfile]]:
+    """The library's manoeuvres alone (20 s holds) and each two of them in a row (10 s holds) within a
+    minute; with a map, its slope drive (alone: it is driven where it is), and every drive placed
+    on the map (from its most level free spot near the centre; one that would leave the map or
+    cross an obstacle is left out)."""
     single = manoeuvre_library(max_speed_mps, max_omega_radps, dt, max_accel_mps2=accel)
+    slope = slope_drive(terrain, max_speed_mps, dt) if terrain is not None else None
+    if slope is not None:
+        single.append(slope)
     half = manoeuvre_library(max_speed_mps, max_omega_radps, dt, hold_s=10.0, max_accel_mps2=accel)
     out = list(single)
     for i, (na, ta, pa) in enumerate(half):
@@ -415,4 +476,40 @@ def _drives(max_speed_mps: float, max_omega_radps: float, dt: float,
             out.append((f"{na}+{nb}", f"{ta}, then {tb}",
                         CommandProfile(t, np.concatenate([pa.v_mps, pb.v_mps]),
                                        np.concatenate([pa.omega_radps, pb.omega_radps]))))
-    return out
+    if terrain is None:
+        return out
+    start = _level_start(terrain)
+    placed = []
+    for name, text, profile in out:  # driven where the map lets it: on the map, off obstacles
+        if profile.pose_xyh is None:
+            pose = _integrated_pose(profile, start)
+            if not _on_free_ground(terrain, pose):
+                continue
+            profile = CommandProfile(profile.time_s, profile.v_mps, profile.omega_radps, pose)
+        placed.append((name, text, profile))
+    return placed
+
+
+def _level_start(terrain: Any) -> tuple[float, float, float]:
+    """Where the manoeuvres that are not tied to a place start on a map: the free cell nearest its centre
+    among those within 2° of level (else the least steep free cell), heading +x."""
+    slope = np.asarray(terrain["slope"])
+    free = ~np.asarray(terrain.obstacle) & np.isfinite(slope)
+    rows, cols = np.indices(slope.shape)
+    centre = ((slope.shape[0] - 1) / 2.0, (slope.shape[1] - 1) / 2.0)
+    far = np.hypot(rows - centre[0], cols - centre[1])
+    level = free & (slope <= math.radians(2.0))
+    score = np.where(level, far, np.inf) if level.any() else np.where(free, slope, np.inf)
+    r, c = np.unravel_index(int(np.argmin(score)), slope.shape)
+    x, y = terrain.xy(r, c)
+    return float(x), float(y), 0.0
+
+
+def _on_free_ground(terrain: Any, pose: np.ndarray) -> bool:
+    """Whether every pose of a drive lies on the map and off its obstacles."""
+    x, y = pose[:, 0], pose[:, 1]
+    if not np.all(terrain.contains(x, y)):
+        return False
+    r, c = terrain.rowcol(x, y)
+    return not bool(np.any(np.asarray(terrain.obstacle)[r, c]))
+

@@ -165,3 +165,38 @@ def test_two_explanations_that_predict_the_same_currents_everywhere_are_called_e
     assert drive.equivalent == ("b",) and drive.separated == {} and drive.repeats == 0
     assert "No drive of the library separates a from b" in drive.sentence()
     assert not drive.sentence().startswith("To tell")
+
+
+def test_on_a_map_the_library_drives_up_a_slope_where_a_payload_and_a_rolling_resistance_part():
+    """A payload seen on level straights across an inclined plane: on the slope (gravity scales with the mass, not
+    with the rolling resistance) the two fitted models part by about an ampere; every drive is placed on the map."""
+    from terrain import TerrainMap
+
+    husky = robot_preset("husky")
+    n = 60
+    plane = TerrainMap(0.15 * np.tile(np.arange(n, dtype=float), (n, 1)), 1.0, ground=np.zeros((n, n), int),
+                       ground_names={0: "asphalt"})  # rising 0.15 m per metre of x: 8.5 degrees
+    laden = TruthSimulator(husky.replace(mass_kg=1.6 * husky.mass_kg), {"asphalt": ground_preset("asphalt")},
+                           velocity_time_constant_s=0.0, seed=0)
+    t = np.arange(0.0, 30.0, 0.05)
+    runs = []
+    for k in range(4):  # along +y: level
+        v = 0.4 + 0.1 * k
+        pose = np.column_stack([np.full(t.size, 10.0 + 10 * k), np.minimum(5.0 + v * t, 55.0), np.full(t.size, np.pi / 2)])
+        runs.append(laden.simulate_commands(t, np.full(t.size, v), 0 * t, ground="asphalt", seed=k, pose_xyh=pose))
+    model = PhysicsCurrentModel("husky", "asphalt", fit_parameters=(), terrain=plane).fit(runs[:1])
+    d = diagnose(model, runs, effects=["mass", "rolling_resistance", "current_offset"], terrain=plane, seed=0)
+    (drive,) = d.separating_drives
+    assert drive.effects[0] == "mass" and "rolling_resistance" in drive.effects
+    (slope,) = [c for c in drive.library if c.name == "slope"]
+    assert "8.5° slope" in slope.description and slope.duration_s <= MAX_DRIVE_S
+    assert slope.pairs["rolling_resistance"].difference_rms_a > 0.5 and slope.pairs["rolling_resistance"].repeats == 1
+    # the slope drive's own commands: up along the gradient (+x), a stop, back down in reverse, on the map
+    from energy.diagnosis.separating import slope_drive
+
+    _, _, profile = slope_drive(plane, 0.8)
+    x = profile.pose_xyh[:, 0]
+    assert np.all(plane.contains(x, profile.pose_xyh[:, 1])) and np.ptp(profile.pose_xyh[:, 1]) < 1e-9
+    assert x[np.argmax(x)] - x[0] == pytest.approx(x[np.argmax(x)] - x[-1], abs=0.05)  # back where it started
+    assert np.max(profile.v_mps) > 0 > np.min(profile.v_mps)
+    assert slope_drive(TerrainMap(np.zeros((20, 20)), 1.0), 0.8) is None  # a level map has no slope to drive
