@@ -2,13 +2,14 @@
 
 When the diagnosed runs cannot tell two fitted explanations apart (a :class:`~energy.diagnosis.result.Tie`:
 a payload or a turning resistance, a current gain or an offset), a field engineer drives a test
-that separates them: straights at constant speed, arcs, pivots, stops and starts. This module
-searches a library of such manoeuvres, each within the speeds and yaw rates the runs themselves
-drove (the fitted models are trusted there, not beyond), for the one on which the two fitted
-models' predicted currents differ most against what the runs say a repeat of it would scatter:
+that separates them: straights at constant speed, arcs, pivots, stops and starts, a slope. This
+module searches a library of such manoeuvres, within the robot's limits (the explanations often
+part where the runs never went: a gain and an offset agree at the one current they drew), for
+the one on which the fitted models' predicted currents differ most against what the runs say a
+repeat of it would scatter:
 
-- the logs' noise: the white part of the chosen model's held-out residual per logged sample,
-  in each sample's turning regime (:mod:`energy.diagnosis.noise`);
+- the logs' noise: the white part of the measured current per logged sample, in each sample's
+  turning regime (:mod:`energy.diagnosis.noise`);
 - the run-to-run spread: the spread of the per-run mean residual beyond what the noise gives
   (``run_spread_a``, a per-run offset that no drive averages away).
 
@@ -19,7 +20,9 @@ repeat is ``sqrt(sum(d^2 noise^2) / sum(d^2)^2 + run_spread^2 ((sum d_L)^2 + (su
 (sums over the samples the runs' logging rate gives the drive).
 The separation per repeat is ``z = 1 / sd``; deciding at ``T = 0.5`` is right with 95 %
 probability after ``ceil((2 * 1.645 / z)^2)`` repeats. The expected difference is also given as
-an RMS current (A) and in noise units (``RMS(d) / noise_a``).
+an RMS current (A) and in noise units (``RMS(d) / noise_a``). Both assume that one of the fitted
+models is right up to the noise; where neither is (a misfit both share), a driven repeat shows a
+smaller difference than expected: :meth:`SeparatingDrive.score` measures it.
 """
 
 from __future__ import annotations
