@@ -154,8 +154,9 @@ def tied_with(best: Effect, eligible: Sequence[Effect], trials: dict[str, SetSco
             continue
         if not significant(current, trials[alt.name], none, n_bootstrap, seed):
             continue
-        _, lo, _ = unit_gain_interval(none, trials[alt.name], trials[best.name], n_bootstrap, rng_seed)
-        if float(np.max(unit_gains(none, trials[alt.name], trials[best.name]))) < SIGNIFICANT_SHRINK_PCT or lo <= 0.0:
+        gains = unit_gains(none, trials[alt.name], trials[best.name])
+        _, lo, _ = _mean_interval(gains, n_bootstrap, rng_seed)
+        if float(np.max(gains)) < SIGNIFICANT_SHRINK_PCT or lo <= 0.0:
             out.append(alt)
     return tuple(out)
 
@@ -163,10 +164,13 @@ def tied_with(best: Effect, eligible: Sequence[Effect], trials: dict[str, SetSco
 def unit_gain_interval(none: SetScore, worse: SetScore, better: SetScore, n_bootstrap: int,
                        seed: int | None) -> tuple[float, float, float]:
     """The mean of :func:`unit_gains` over the units and its 95 % bootstrap interval (units resampled)."""
-    gains = unit_gains(none, worse, better)
-    rng = np.random.default_rng(check_seed(seed))
-    means = gains[rng.integers(0, gains.size, size=(n_bootstrap, gains.size))].mean(axis=1)
-    return float(np.mean(gains)), float(np.percentile(means, 2.5)), float(np.percentile(means, 97.5))
+    return _mean_interval(unit_gains(none, worse, better), n_bootstrap, check_seed(seed))
+
+
+def _mean_interval(values: np.ndarray, n_bootstrap: int, seed: int | None) -> tuple[float, float, float]:
+    rng = np.random.default_rng(seed)
+    means = values[rng.integers(0, values.size, size=(n_bootstrap, values.size))].mean(axis=1)
+    return float(np.mean(values)), float(np.percentile(means, 2.5)), float(np.percentile(means, 97.5))
 
 
 def _likeliest(eligible: Sequence[Effect], trials: dict[str, SetScore], current: SetScore, none: SetScore,

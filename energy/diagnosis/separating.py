@@ -439,10 +439,11 @@ def separating_drive(effects: Sequence[str], models: dict[str, Any], like: Inter
             rms = float(math.sqrt(ss / d.size))
             pairs[alt] = PairSeparation(rms, rms / math.sqrt(float(np.mean(sigma2))) if np.any(sigma2) else math.inf,
                                         z, min(repeats, 10**9))
-        scored.append((DriveCandidate(name, text, float(profile.duration_s), pairs), profile, preds))
+        scored.append((DriveCandidate(name, text, float(profile.duration_s), pairs), profile, preds,
+                       float(np.sqrt(np.mean(sigma2)))))
     if not scored:
         return None
-    equivalent = tuple(a for a in alts if min(c.pairs[a].repeats for c, _, _ in scored) > MAX_REPEATS)
+    equivalent = tuple(a for a in alts if min(c[0].pairs[a].repeats for c in scored) > MAX_REPEATS)
     live = [a for a in alts if a not in equivalent] or alts
 
     def settles(c: DriveCandidate) -> bool:
@@ -453,8 +454,7 @@ def separating_drive(effects: Sequence[str], models: dict[str, Any], like: Inter
 
     # drives that settle every separable pair, then the largest difference against the noise, then the shortest
     scored.sort(key=lambda c: (not settles(c[0]), -clearest(c[0]), c[0].duration_s))
-    best, profile, preds = scored[0]
-    drive_noise = float(np.sqrt(np.mean(noise.per_sample(drive_log(profile, like)) ** 2)))
+    best, profile, preds, drive_noise = scored[0]
     return SeparatingDrive(tuple(effects), best, profile, preds, drive_noise, float(spread), float(noise.autocorrelation),
                            equivalent, tuple(c[0] for c in scored), {n: models[n] for n in effects})
 
