@@ -127,7 +127,7 @@ def _adapt_fold(proto: VibrationCurrentEstimator, train: list, test: Any, run: s
     model = proto.clone().fit(train)
     rows, notes = [], []
     for name, st in settings:
-        r, n = adaptation_scores(model, test, run=run, model_name=name, settings=st)
+        r, _, n = adaptation_scores(model, test, run=run, model_name=name, settings=st)
         rows += r
         notes += n if name == settings[0][0] else []
     return rows, notes

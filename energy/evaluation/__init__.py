@@ -3,7 +3,8 @@
 Modules: :mod:`~energy.evaluation.results` (the score records, their summaries and files)
 and :mod:`~energy.evaluation.scoring` (:func:`score_run`, the one per-run scoring,
 :func:`score_current_model` for a model fitted beforehand, :func:`evaluate_current_models`);
-the ``adapt`` protocol in :mod:`~energy.evaluation.adapt_protocol` (adapt on a held-out run's
+what the battery pays for a run (both sides through the pack, the interval's coverage) in
+:mod:`~energy.evaluation.run_totals`; the ``adapt`` protocol in :mod:`~energy.evaluation.adapt_protocol` (adapt on a held-out run's
 first seconds, score the rest), :mod:`~energy.evaluation.few_shot` (adapt on a ground left out
 of training) and :mod:`~energy.evaluation.adapt_results`; models of named kinds evaluated by one protocol
 and reported in :mod:`~energy.evaluation.evaluation_report`; folds run here or on a dask cluster
@@ -32,6 +33,7 @@ from .adapt_results import (
 from .evaluation_report import (
     EVALUATION_NAMES,
     EVALUATION_PROTOCOLS,
+    RELIABILITY_FILE,
     SPECTRA_FILE,
     EvaluationReport,
     check_adapt_options,
@@ -41,6 +43,7 @@ from .evaluation_report import (
 )
 from .few_shot import evaluate_few_shot, few_shot_scores
 from .prediction_report import FIGURES_FOLDER, PREDICTIONS_FILE, PredictionReport, predict_report
+from .run_totals import VARIANTS, RunTotal, pack_energy_j, run_totals, summarise_totals
 from .results import (
     EVALUATION_FILES,
     EVALUATION_FORMAT_VERSION,
@@ -97,6 +100,12 @@ __all__ = [
     "EVALUATION_PROTOCOLS",
     "EVALUATION_NAMES",
     "SPECTRA_FILE",
+    "RELIABILITY_FILE",
+    "RunTotal",
+    "VARIANTS",
+    "pack_energy_j",
+    "run_totals",
+    "summarise_totals",
     "evaluation_files",
     "check_adapt_options",
     "check_evaluation_options",

@@ -24,11 +24,15 @@ from terrawatt_base.checks import check_bool, check_choice, check_real, check_te
 from terrawatt_base.dask_client import check_client, run_tasks
 from terrawatt_base.errors import DataError, InvalidParameterError
 
+from ..battery import Battery
 from ..logs import InteractionLog
 from ..metrics import DEFAULT_SECTION_S, compare_currents
 from ..models.adaptation import ADAPT_METHODS, AdaptedCurrentModel
 from ..models.base import CurrentModel, log_currents
+from ..params import robot_params
+from ..robot import RobotParams
 from .adapt_results import TRIGGER_SCHEDULE, AdaptationResult, AdaptScore, check_adapt_dir, summarise_adapt_scores
+from .run_totals import RunTotal, run_totals
 from .scoring import check_runs, run_names, trim_to_overlap
 
 __all__ = [
@@ -73,6 +77,11 @@ class AdaptSettings:
         The update (:class:`~energy.models.AdaptedCurrentModel`).
     section_s : float
         Section length of the section error (s).
+    robot : str or RobotParams
+        The robot that drove the logs (a preset name, a robot file or the parameters): its
+        motors turn the currents into the pack energy of :class:`~energy.evaluation.RunTotal`.
+    battery : Battery, optional
+        Its pack (voltage, internal resistance); default the robot's nominal voltage, ideal.
     """
 
     adapt_seconds: tuple[float, ...] = DEFAULT_ADAPT_SECONDS
@@ -86,9 +95,14 @@ class AdaptSettings:
     turn_scale_radps: float = 0.3
     min_seconds: float = 5.0
     section_s: float = DEFAULT_SECTION_S
+    robot: str | RobotParams = "husky"
+    battery: Battery | None = None
 
     def __post_init__(self) -> None:
         own = "AdaptSettings"
+        robot_params(self.robot, name=f"{own}.robot")  # a bad robot fails here, before any fold
+        if self.battery is not None and not isinstance(self.battery, Battery):
+            raise InvalidParameterError(f"{own}.battery must be a Battery or None, got {self.battery!r:.80}")
         seconds = self.adapt_seconds
         if isinstance(seconds, (str, bytes)) or not isinstance(seconds, Sequence) or not seconds:
             raise InvalidParameterError(f"{own}.adapt_seconds must be a non-empty sequence of seconds > 0, got {seconds!r:.80}")
@@ -106,7 +120,12 @@ class AdaptSettings:
         """Plain-types form."""
         d = asdict(self)
         d["adapt_seconds"] = list(self.adapt_seconds)
+        d["robot"] = self.robot if isinstance(self.robot, str) else self.robot.name
         return d
+
+    def robot_params(self) -> RobotParams:
+        """The robot that drove the logs, as parameters."""
+        return robot_params(self.robot, name="AdaptSettings.robot")
 
     def update_options(self) -> dict[str, Any]:
         """Keyword arguments of :class:`~energy.models.AdaptedCurrentModel` besides the base."""
@@ -168,13 +187,16 @@ def adaptation_scores(
     run: str,
     model_name: str,
     settings: AdaptSettings | None = None,
-) -> tuple[list[AdaptScore], list[str]]:
+) -> tuple[list[AdaptScore], list[RunTotal], list[str]]:
     """Score one fitted model on one held-out run under every schedule of ``settings``.
 
     Returns
     -------
     scores : list of AdaptScore
         Two per schedule (left, right) that the run is long enough for.
+    totals : list of RunTotal
+        Per schedule, the remainder's pack energy and total charge, unadapted, adapted and
+        with the gain baseline (the trigger schedule's patchwork of updates has no interval).
     skipped : list of str
         The schedules left out and why.
 
@@ -196,12 +218,15 @@ def adaptation_scores(
     check_text("model_name", model_name)
     t = log.time_s
     truth = log_currents(log)
-    base_pred = model.predict(log)
+    base_fc = model.predict_distribution(log)
+    base_pred = base_fc.mean_a
+    robot = settings.robot_params()
     ground = str(log.meta.ground_label)
     plans: list[tuple[str, float]] = [(schedule_name(s), s) for s in settings.adapt_seconds]
     if settings.trigger:
         plans.append((TRIGGER_SCHEDULE, settings.trigger_from_s))
     scores: list[AdaptScore] = []
+    totals: list[RunTotal] = []
     skipped: list[str] = []
     for schedule, start in plans:
         rem = t >= t[0] + start
@@ -211,6 +236,7 @@ def adaptation_scores(
                            f"less than min_remainder_s={settings.min_remainder_s:g}")
             continue
         n_updates = 0
+        adapted_fc = None
         if schedule == TRIGGER_SCHEDULE:
             adapted, n_updates = _triggered(model, log, base_pred, settings)
         else:
@@ -219,7 +245,8 @@ def adaptation_scores(
             except DataError as exc:
                 skipped.append(f"{run} ({schedule}): no adaptation ({exc})")
                 continue
-            adapted, n_updates = upd.correct(log, base_pred), 1
+            adapted_fc, n_updates = upd.correct_distribution(log, base_fc), 1
+            adapted = adapted_fc.mean_a
         gain = _gain(base_pred, truth, t, ~rem)
         e_none = _errors(t[rem], truth[rem], base_pred[rem], settings.section_s)
         e_adapt = _errors(t[rem], truth[rem], adapted[rem], settings.section_s)
@@ -228,11 +255,14 @@ def adaptation_scores(
             scores.append(AdaptScore(
                 "per_ground", ground, run, run, model_name, side, schedule, float(start), remainder_s, n_updates,
                 *e_none[k], *e_adapt[k], *e_gain[k]))
-    return scores, skipped
+        totals += run_totals(log, {"unadapted": (base_pred, base_fc), "adapted": (adapted, adapted_fc),
+                                   "gain": (gain, None)}, protocol="per_ground", run=run, adapt_run=run,
+                             model=model_name, schedule=schedule, robot=robot, battery=settings.battery, mask=rem)
+    return scores, totals, skipped
 
 
 def _adapt_fold(proto: CurrentModel, train: list[InteractionLog], test: InteractionLog, run: str,
-                model_name: str, settings: AdaptSettings) -> tuple[list[AdaptScore], list[str]]:
+                model_name: str, settings: AdaptSettings) -> tuple[list[AdaptScore], list[RunTotal], list[str]]:
     """Fit a fresh copy of ``proto`` on ``train`` and score it on ``test`` (module-level for dask)."""
     model = proto.clone().fit(train)
     return adaptation_scores(model, test, run=run, model_name=model_name, settings=settings)
@@ -328,17 +358,20 @@ def evaluate_adaptation(
 
 def collect_adaptation(tasks: list[tuple[Any, tuple[Any, ...]]], settings: AdaptSettings, skipped: list[str], *,
                        client: Any, progress: bool, description: str, out_dir: Any) -> AdaptationResult:
-    """Run fold tasks (each returns ``(scores, notes)``) here or on ``client``; the result, written to
-    ``out_dir`` when given."""
+    """Run fold tasks (each returns ``(scores, totals, notes)``) here or on ``client``; the result,
+    written to ``out_dir`` when given."""
     scores: list[AdaptScore] = []
+    totals: list[RunTotal] = []
     notes_all = list(skipped)
-    for rows, notes in run_tasks(tasks, client=client, progress=progress, description=description):
+    for rows, run_rows, notes in run_tasks(tasks, client=client, progress=progress, description=description):
         scores += rows
+        totals += run_rows
         notes_all += notes
     if not scores:
         raise DataError(f"no run could be scored at any adapt time ({'; '.join(notes_all[:3]) or 'no runs'}"
                         f"{' ...' if len(notes_all) > 3 else ''})")
-    result = AdaptationResult(tuple(scores), summarise_adapt_scores(scores), settings.to_dict(), tuple(notes_all))
+    result = AdaptationResult(tuple(scores), summarise_adapt_scores(scores), settings.to_dict(), tuple(notes_all),
+                              tuple(totals))
     if out_dir is not None:
         result.write(out_dir)
     return result

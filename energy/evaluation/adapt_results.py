@@ -14,6 +14,8 @@ from terrawatt_base.atomic import check_output_path, json_finite, write_text_ato
 from terrawatt_base.errors import UnknownNameError
 from terrawatt_base.formats import result_document, write_result_json
 
+from .run_totals import RunTotal, plot_totals_reliability, summarise_totals, totals_markdown
+
 
 __all__ = [
     "ADAPT_PROTOCOLS",
@@ -35,8 +37,9 @@ ADAPT_PROTOCOLS = ("per_ground", "few_shot")
 TRIGGER_SCHEDULE = "trigger"
 #: Files :meth:`AdaptationResult.write` writes.
 ADAPT_FILES = ("adapt.json", "adapt.md")
-#: Version of the ``adapt.json`` layout.
-ADAPT_FORMAT_VERSION = 1
+#: Version of the ``adapt.json`` layout (2: the runs' pack energy, total charge and interval coverage,
+#: ``totals`` and ``total_summary``).
+ADAPT_FORMAT_VERSION = 2
 _ALL = "all"
 
 
@@ -143,12 +146,27 @@ class AdaptationResult:
         The protocol's settings (method, prior, threshold, minimum remainder...).
     skipped : tuple of str
         Runs or grounds left out and why (e.g. a remainder shorter than the minimum).
+    totals : tuple of RunTotal
+        What the battery pays: per scored run, schedule and variant, the pack energy and
+        total charge of both sides, with the forecast's interval
+        (:mod:`~energy.evaluation.run_totals`); summarised by :meth:`total_summary`.
     """
 
     runs: tuple[AdaptScore, ...]
     summary: tuple[AdaptSummary, ...]
     settings: dict[str, Any]
     skipped: tuple[str, ...] = ()
+    totals: tuple[RunTotal, ...] = ()
+
+    def total_summary(self) -> list[dict[str, Any]]:
+        """Per protocol, ground (then all), model, schedule and variant: pack energy and total charge
+        errors (median, p90 %) and the coverage of the 50 / 80 / 95 % intervals
+        (:func:`~energy.evaluation.run_totals.summarise_totals`)."""
+        return summarise_totals(self.totals)
+
+    def plot_reliability(self, ax: Any = None) -> Any:
+        """Observed against nominal coverage of the total-charge intervals per protocol, ground and variant."""
+        return plot_totals_reliability(self.totals, ax, title="held-out total charge (both sides)")
 
     def summary_for(self, protocol: str, ground: str, model: str, schedule: str) -> AdaptSummary:
         """The summary row of one protocol, ground (or ``"all"``), model and schedule.
@@ -170,14 +188,22 @@ class AdaptationResult:
         """Plain-types form (NaN becomes ``None``), as written to ``adapt.json``."""
         return json_finite(result_document("adaptation", ADAPT_FORMAT_VERSION, {
             "settings": dict(self.settings), "skipped": list(self.skipped),
-            "summary": [asdict(s) for s in self.summary], "runs": [asdict(r) for r in self.runs]}))
+            "total_summary": self.total_summary(), "summary": [asdict(s) for s in self.summary],
+            "totals": [t.to_dict() for t in self.totals], "runs": [asdict(r) for r in self.runs]}))
 
     def to_markdown(self) -> str:
-        """A markdown table: per protocol, ground, model and schedule, unadapted | adapted | gain baseline."""
+        """Two markdown tables: what the battery pays (both sides through the pack, total charge and its
+        interval's coverage) first, then per side: per protocol, ground, model and schedule, unadapted |
+        adapted | gain baseline."""
         def f(x: float, nd: int = 1) -> str:
             return "–" if not math.isfinite(x) else f"{x:.{nd}f}"
 
-        lines = [
+        lines = []
+        if self.totals:
+            lines += ["Both sides through the pack (pack energy, total charge; coverage of the total charge's "
+                      "central intervals, % of the forecasts with one):", "",
+                      totals_markdown(self.total_summary()), "Per side (charge of each motor channel):", ""]
+        lines += [
             "| protocol | ground | model | adapt on | values | unadapted median / p90 % | adapted median / p90 % | "
             "gain median / p90 % | sections unadapted / adapted / gain % | RMSE unadapted / adapted / gain A | updates |",
             "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|",

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from terrawatt_base.atomic import save_figure
 from terrawatt_base.checks import check_bool, check_choice, check_seed, option_names
 from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.figure_file import draw_figure
@@ -37,8 +38,9 @@ EVALUATION_NAMES = {"kinds": "kinds", "protocol": "protocol", "band_hz": "band_h
                     "adapt_method": "adapt_method", "adapt_threshold_pct": "adapt_threshold_pct", "robot": "robot"}
 #: The figure of the leave-one-run-out report: the logs' vibration spectra per ground.
 SPECTRA_FILE = "spectra.png"
-
-
+#: The reliability figure of the ``adapt`` and ``few-shot`` protocols: observed against nominal coverage of the
+#: held-out total charge's intervals per protocol, ground and forecast.
+RELIABILITY_FILE = "adapt_reliability.png"
 
 
 def evaluation_files(protocol: str = "loo") -> tuple[str, ...]:
@@ -47,10 +49,10 @@ def evaluation_files(protocol: str = "loo") -> tuple[str, ...]:
     Examples
     --------
     >>> evaluation_files("loo"), evaluation_files("adapt")
-    (('evaluation.json', 'evaluation.md', 'spectra.png'), ('adapt.json', 'adapt.md'))
+    (('evaluation.json', 'evaluation.md', 'spectra.png'), ('adapt.json', 'adapt.md', 'adapt_reliability.png'))
     """
     check_choice("protocol", protocol, EVALUATION_PROTOCOLS)
-    return (*EVALUATION_FILES, SPECTRA_FILE) if protocol == "loo" else ADAPT_FILES
+    return (*EVALUATION_FILES, SPECTRA_FILE) if protocol == "loo" else (*ADAPT_FILES, RELIABILITY_FILE)
 
 
 def check_adapt_options(protocol: str = "adapt", *, adapt_seconds: Sequence[float] = DEFAULT_ADAPT_SECONDS,
@@ -220,8 +222,11 @@ class EvaluationReport:
         if self.protocol == "loo":
             png = out / SPECTRA_FILE
             done = draw_figure(png, lambda: plot_vibration_spectra(list(self.logs), png), on_error=on_figure_error)
-            if done is not None:
-                written.append(done)
+        else:
+            png = out / RELIABILITY_FILE
+            done = draw_figure(png, lambda: save_figure(self.result.plot_reliability().figure, png), on_error=on_figure_error)
+        if done is not None:
+            written.append(done)
         return written
 
 

@@ -26,6 +26,7 @@ from ..models.adaptation import AdaptedCurrentModel
 from ..models.base import CurrentModel, log_currents
 from .adapt_protocol import AdaptSettings, collect_adaptation, named_models, schedule_name
 from .adapt_results import AdaptationResult, AdaptScore, check_adapt_dir
+from .run_totals import RunTotal, run_totals
 from .scoring import check_runs, run_names, trim_to_overlap
 
 __all__ = ["few_shot_scores", "evaluate_few_shot"]
@@ -49,7 +50,7 @@ def few_shot_scores(
     *,
     model_name: str,
     settings: AdaptSettings | None = None,
-) -> tuple[list[AdaptScore], list[str]]:
+) -> tuple[list[AdaptScore], list[RunTotal], list[str]]:
     """Score a model fitted without the runs' ground: adapt on each run's first seconds, test on the others.
 
     Parameters
@@ -69,6 +70,9 @@ def few_shot_scores(
     -------
     scores : list of AdaptScore
         Protocol ``"few_shot"``: one per adaptation run, T, test run and side.
+    totals : list of RunTotal
+        One per adaptation run, T, test run and variant: the test run's pack energy and total
+        charge, unadapted, adapted and with the gain baseline.
     skipped : list of str
         Adaptation runs shorter than T + ``min_seconds`` (nothing left after T would be
         needed, but the update needs its seconds).
@@ -88,9 +92,12 @@ def few_shot_scores(
         raise InvalidParameterError(f"runs must be at least 2 InteractionLogs with one name each, got {len(items)} "
                                     f"runs and {len(labels)} names")
     check_text("model_name", model_name)
-    base = [model.predict(r) for r in items]
+    robot = settings.robot_params()
+    base_fc = [model.predict_distribution(r) for r in items]
+    base = [fc.mean_a for fc in base_fc]
     plain = [_errs(r, p, settings.section_s) for r, p in zip(items, base)]
     scores: list[AdaptScore] = []
+    totals: list[RunTotal] = []
     skipped: list[str] = []
     for a, run_a in enumerate(items):
         t = run_a.time_s
@@ -114,17 +121,24 @@ def few_shot_scores(
             for b, run_b in enumerate(items):
                 if b == a:
                     continue
-                e_ad = _errs(run_b, upd.correct(run_b, base[b]), settings.section_s)
-                e_g = _errs(run_b, base[b] * gain[None, :], settings.section_s)
+                fc_ad = upd.correct_distribution(run_b, base_fc[b])
+                pred_g = base[b] * gain[None, :]
+                e_ad = _errs(run_b, fc_ad.mean_a, settings.section_s)
+                e_g = _errs(run_b, pred_g, settings.section_s)
+                totals += run_totals(run_b, {"unadapted": (base[b], base_fc[b]), "adapted": (fc_ad.mean_a, fc_ad),
+                                             "gain": (pred_g, None)}, protocol="few_shot", run=labels[b],
+                                     adapt_run=labels[a], model=model_name, schedule=schedule, robot=robot,
+                                     battery=settings.battery)
                 for k, side in enumerate(("left", "right")):
                     scores.append(AdaptScore(
                         "few_shot", str(run_b.meta.ground_label), labels[b], labels[a], model_name, side, schedule,
                         float(T), run_b.duration_s, 1, *plain[b][k], *e_ad[k], *e_g[k]))
-    return scores, skipped
+    return scores, totals, skipped
 
 
 def _few_shot_fold(proto: CurrentModel, train: list[InteractionLog], target: list[InteractionLog],
-                   names: list[str], model_name: str, settings: AdaptSettings) -> tuple[list[AdaptScore], list[str]]:
+                   names: list[str], model_name: str,
+                   settings: AdaptSettings) -> tuple[list[AdaptScore], list[RunTotal], list[str]]:
     """Fit a fresh copy of ``proto`` on ``train`` (other grounds) and score it few-shot on ``target`` (module-level for dask)."""
     model = proto.clone().fit(train)
     return few_shot_scores(model, target, names, model_name=model_name, settings=settings)

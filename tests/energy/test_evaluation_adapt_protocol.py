@@ -72,7 +72,7 @@ def test_scores_match_a_direct_adaptation(logs, result):
 def test_trigger_never_updates_a_model_within_the_threshold(logs):
     exact = [adapt_log(i, "grass") for i in range(2)]
     model = LinearCurrentModel().fit(exact[:1])
-    scores, skipped = adaptation_scores(model, exact[1], run="r", model_name="m",
+    scores, totals, skipped = adaptation_scores(model, exact[1], run="r", model_name="m",
                                         settings=AdaptSettings(adapt_seconds=(20.0,), threshold_pct=5.0))
     trig = [s for s in scores if s.schedule == TRIGGER_SCHEDULE]
     assert len(trig) == 2 and all(s.n_updates == 0 for s in trig) and not skipped
@@ -82,7 +82,7 @@ def test_trigger_never_updates_a_model_within_the_threshold(logs):
 def test_short_runs_are_skipped_and_said_so(logs):
     model = LinearCurrentModel().fit(logs[:2])
     short = adapt_log(30, "grass", duration_s=25.0)
-    scores, skipped = adaptation_scores(model, short, run="grass/short", model_name="m", settings=adapt_settings())
+    scores, totals, skipped = adaptation_scores(model, short, run="grass/short", model_name="m", settings=adapt_settings())
     assert {s.schedule for s in scores} == {"10 s"}
     assert len(skipped) == 2 and all("min_remainder_s=10" in s for s in skipped)
 

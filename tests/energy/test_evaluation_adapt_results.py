@@ -9,6 +9,7 @@ from evaluation_samples import adapt_logs, adapt_settings
 from energy import LinearCurrentModel
 from energy.evaluation import (
     ADAPT_FILES,
+    ADAPT_FORMAT_VERSION,
     AdaptationResult,
     AdaptScore,
     check_adapt_dir,
@@ -29,7 +30,7 @@ def test_writes_json_and_markdown(logs, tmp_path):
                               out_dir=tmp_path / "out")
     data = json.loads((tmp_path / "out" / ADAPT_FILES[0]).read_text())
     assert data["format"] == "terrawatt-adaptation" and data["settings"]["adapt_seconds"] == [10.0, 20.0]
-    assert read_result_json(tmp_path / "out" / ADAPT_FILES[0], "adaptation", 1) == data  # through the one result codec
+    assert read_result_json(tmp_path / "out" / ADAPT_FILES[0], "adaptation", ADAPT_FORMAT_VERSION) == data  # through the one result codec
     assert len(data["runs"]) == len(res.runs) == 3 * 2 * 2
     md = (tmp_path / "out" / ADAPT_FILES[1]).read_text()
     assert "| per_ground | grass | linear | 20 s | 6 |" in md

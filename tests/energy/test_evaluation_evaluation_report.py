@@ -10,6 +10,7 @@ from evaluation_samples import adapt_logs, score_logs
 
 from energy.evaluation import (
     ADAPT_FILES,
+    RELIABILITY_FILE,
     EVALUATION_FILES,
     EVALUATION_PROTOCOLS,
     SPECTRA_FILE,
@@ -58,7 +59,7 @@ def test_a_figure_that_fails_is_a_warning_and_left_out(tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize("protocol, trigger", [("adapt", True), ("few-shot", False)])
-def test_the_adapt_protocols_write_their_files_without_a_figure(tmp_path, protocol, trigger):
+def test_the_adapt_protocols_write_their_files_and_reliability_figure(tmp_path, protocol, trigger):
     settings = check_adapt_options(protocol, adapt_seconds=[10.0])
     assert settings.trigger is trigger and settings.adapt_seconds == (10.0,)
     with warnings.catch_warnings():
@@ -66,8 +67,8 @@ def test_the_adapt_protocols_write_their_files_without_a_figure(tmp_path, protoc
         report = evaluate_report(adapt_logs(), ["linear"], protocol=protocol, settings=settings)
     assert isinstance(report.result, AdaptationResult) and report.kinds == ("linear",)
     written = report.write(tmp_path)
-    assert [p.name for p in written] == list(ADAPT_FILES) == list(evaluation_files(protocol))
-    assert report.written_line(written).endswith(f"wrote {written[0]}, {written[1]}")
+    assert [p.name for p in written] == [*ADAPT_FILES, RELIABILITY_FILE] == list(evaluation_files(protocol))
+    assert report.written_line(written).endswith(f"wrote {written[0]}, {written[1]}, {written[2]}")
 
 
 def test_the_default_kinds_follow_the_protocol_and_a_kind_named_twice_counts_once():

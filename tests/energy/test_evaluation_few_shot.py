@@ -28,7 +28,7 @@ def test_few_shot_adapts_on_one_run_of_a_ground_left_out(logs):
 
 def test_few_shot_scores_of_one_ground(logs):
     model = LinearCurrentModel().fit(logs[:3])  # grass only
-    scores, skipped = few_shot_scores(model, logs[3:5], ["sand/a", "sand/b"], model_name="m",
+    scores, totals, skipped = few_shot_scores(model, logs[3:5], ["sand/a", "sand/b"], model_name="m",
                                       settings=adapt_settings(trigger=False))
     assert not skipped
     assert {(s.run, s.adapt_run) for s in scores} == {("sand/a", "sand/b"), ("sand/b", "sand/a")}
