@@ -14,7 +14,7 @@ from terrawatt_base.atomic import check_output_path, json_finite, write_text_ato
 from terrawatt_base.errors import UnknownNameError
 from terrawatt_base.formats import result_document, write_result_json
 
-from .run_totals import RunTotal, plot_totals_reliability, summarise_totals, totals_markdown
+from .run_totals import TOTALS_HEADING, RunTotal, plot_totals_reliability, summarise_totals, totals_markdown
 
 
 __all__ = [
@@ -200,8 +200,7 @@ class AdaptationResult:
 
         lines = []
         if self.totals:
-            lines += ["Both sides through the pack (pack energy, total charge; coverage of the total charge's "
-                      "central intervals, % of the forecasts with one):", "",
+            lines += [TOTALS_HEADING, "",
                       totals_markdown(self.total_summary()), "Per side (charge of each motor channel):", ""]
         lines += [
             "| protocol | ground | model | adapt on | values | unadapted median / p90 % | adapted median / p90 % | "

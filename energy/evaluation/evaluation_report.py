@@ -38,9 +38,9 @@ EVALUATION_NAMES = {"kinds": "kinds", "protocol": "protocol", "band_hz": "band_h
                     "adapt_method": "adapt_method", "adapt_threshold_pct": "adapt_threshold_pct", "robot": "robot"}
 #: The figure of the leave-one-run-out report: the logs' vibration spectra per ground.
 SPECTRA_FILE = "spectra.png"
-#: The reliability figure of the ``adapt`` and ``few-shot`` protocols: observed against nominal coverage of the
-#: held-out total charge's intervals per protocol, ground and forecast.
-RELIABILITY_FILE = "adapt_reliability.png"
+#: The reliability figure of every protocol: observed against nominal coverage of the held-out total charge's
+#: intervals per protocol, ground and forecast.
+RELIABILITY_FILE = "reliability.png"
 
 
 def evaluation_files(protocol: str = "loo") -> tuple[str, ...]:
@@ -49,10 +49,10 @@ def evaluation_files(protocol: str = "loo") -> tuple[str, ...]:
     Examples
     --------
     >>> evaluation_files("loo"), evaluation_files("adapt")
-    (('evaluation.json', 'evaluation.md', 'spectra.png'), ('adapt.json', 'adapt.md', 'adapt_reliability.png'))
+    (('evaluation.json', 'evaluation.md', 'spectra.png', 'reliability.png'), ('adapt.json', 'adapt.md', 'reliability.png'))
     """
     check_choice("protocol", protocol, EVALUATION_PROTOCOLS)
-    return (*EVALUATION_FILES, SPECTRA_FILE) if protocol == "loo" else (*ADAPT_FILES, RELIABILITY_FILE)
+    return (*EVALUATION_FILES, SPECTRA_FILE, RELIABILITY_FILE) if protocol == "loo" else (*ADAPT_FILES, RELIABILITY_FILE)
 
 
 def check_adapt_options(protocol: str = "adapt", *, adapt_seconds: Sequence[float] = DEFAULT_ADAPT_SECONDS,
@@ -210,8 +210,9 @@ class EvaluationReport:
                 f"wrote {files}")
 
     def write(self, out_dir: str | os.PathLike[str], *, on_figure_error: str = "warn") -> list[Path]:
-        """Write the result's JSON and markdown into ``out_dir`` (created) and, leaving one run out, the logs'
-        vibration spectra (:data:`SPECTRA_FILE`); return the files written.
+        """Write the result's JSON and markdown into ``out_dir`` (created), leaving one run out the logs'
+        vibration spectra (:data:`SPECTRA_FILE`), and the reliability of the total charge's intervals
+        (:data:`RELIABILITY_FILE`); return the files written.
 
         A figure that fails warns (:class:`~terrawatt_base.errors.FigureWarning`) and is left out,
         unless ``on_figure_error="raise"``.
@@ -219,14 +220,13 @@ class EvaluationReport:
         check_choice("on_figure_error", on_figure_error, ("warn", "raise"))
         out = Path(out_dir)
         written = [*self.result.write(out)]
+        figures = [(out / RELIABILITY_FILE, lambda p: save_figure(self.result.plot_reliability().figure, p))]
         if self.protocol == "loo":
-            png = out / SPECTRA_FILE
-            done = draw_figure(png, lambda: plot_vibration_spectra(list(self.logs), png), on_error=on_figure_error)
-        else:
-            png = out / RELIABILITY_FILE
-            done = draw_figure(png, lambda: save_figure(self.result.plot_reliability().figure, png), on_error=on_figure_error)
-        if done is not None:
-            written.append(done)
+            figures.insert(0, (out / SPECTRA_FILE, lambda p: plot_vibration_spectra(list(self.logs), p)))
+        for png, draw in figures:
+            done = draw_figure(png, lambda png=png, draw=draw: draw(png), on_error=on_figure_error)
+            if done is not None:
+                written.append(done)
         return written
 
 

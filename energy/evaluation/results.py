@@ -14,6 +14,8 @@ from terrawatt_base.atomic import check_output_path, json_finite, write_text_ato
 from terrawatt_base.formats import result_document, write_result_json
 from terrawatt_base.errors import UnknownNameError
 
+from .run_totals import TOTALS_HEADING, RunTotal, plot_totals_reliability, summarise_totals, totals_markdown
+
 __all__ = [
     "EVALUATION_VARIANTS",
     "PREFIT_VARIANT",
@@ -34,8 +36,9 @@ EVALUATION_VARIANTS = ("per_ground", "ground_agnostic")
 PREFIT_VARIANT = "prefit"
 #: Every variant a :class:`RunScore` may carry.
 SCORE_VARIANTS = (*EVALUATION_VARIANTS, PREFIT_VARIANT)
-#: Version of the ``evaluation.json`` layout.
-EVALUATION_FORMAT_VERSION = 1
+#: Version of the ``evaluation.json`` layout (2: each run's pack energy, total charge and interval
+#: coverage, ``totals`` and ``total_summary``).
+EVALUATION_FORMAT_VERSION = 2
 #: Files :meth:`EvaluationResult.write` writes into its folder.
 EVALUATION_FILES = ("evaluation.json", "evaluation.md")
 #: Drive sides, in the column order of a model's predictions.
@@ -128,6 +131,10 @@ class EvaluationResult:
     section_s : float
     skipped : tuple of str
         Grounds left out of the per-ground variant and why.
+    totals : tuple of RunTotal
+        What the battery pays: per held-out run, the pack energy and total charge of both
+        sides with the model's interval (protocol ``"loo"``, schedule the variant);
+        summarised by :meth:`total_summary`.
     """
 
     runs: tuple[RunScore, ...]
@@ -136,6 +143,16 @@ class EvaluationResult:
     variants: tuple[str, ...]
     section_s: float
     skipped: tuple[str, ...] = ()
+    totals: tuple[RunTotal, ...] = ()
+
+    def total_summary(self) -> list[dict[str, Any]]:
+        """Per variant, ground (then all) and model: pack energy and total charge errors (median, p90 %)
+        and the coverage of the 50 / 80 / 95 % intervals (:func:`~energy.evaluation.run_totals.summarise_totals`)."""
+        return summarise_totals(self.totals)
+
+    def plot_reliability(self, ax: Any = None) -> Any:
+        """Observed against nominal coverage of the total-charge intervals per variant and ground."""
+        return plot_totals_reliability(self.totals, ax, title="held-out total charge (both sides)")
 
     def summary_for(self, variant: str, ground: str, model: str) -> ScoreSummary:
         """The summary row of one variant, ground (or ``"all"``) and model.
@@ -160,7 +177,9 @@ class EvaluationResult:
             "models": list(self.models),
             "variants": list(self.variants),
             "skipped": list(self.skipped),
+            "total_summary": self.total_summary(),
             "summary": [asdict(s) for s in self.summary],
+            "totals": [t.to_dict() for t in self.totals],
             "runs": [asdict(r) for r in self.runs],
         }))
 
@@ -169,11 +188,16 @@ class EvaluationResult:
         return write_result_json(path, self.to_dict())
 
     def to_markdown(self) -> str:
-        """A markdown table of the summary: per variant, ground and model."""
+        """Markdown tables: what the battery pays (both sides through the pack, total charge and its
+        interval's coverage) first, then per side: per variant, ground and model."""
         def f(x: float, nd: int = 1) -> str:
             return "–" if not math.isfinite(x) else f"{x:.{nd}f}"
 
-        lines = [
+        lines = []
+        if self.totals:
+            lines += [TOTALS_HEADING, "", totals_markdown(self.total_summary()), "Per side (charge of each motor channel):",
+                      ""]
+        lines += [
             f"| variant | ground | model | runs | whole-run median % | whole-run p90 % | "
             f"{self.section_s:g} s sections median % | sections p90 % | RMSE median A |",
             "|---|---|---|---:|---:|---:|---:|---:|---:|",

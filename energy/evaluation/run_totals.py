@@ -40,12 +40,15 @@ from ..models.forecast import CurrentForecast, normal_quantile
 from ..robot import RobotParams
 from .intervals import DEFAULT_LEVELS, IntervalRecord, plot_reliability
 
-__all__ = ["RunTotal", "VARIANTS", "pack_energy_j", "run_totals", "summarise_totals", "totals_markdown",
+__all__ = ["RunTotal", "VARIANTS", "TOTALS_HEADING", "pack_energy_j", "run_totals", "summarise_totals", "totals_markdown",
            "plot_totals_reliability"]
 
 #: The forecasts a run is scored with: the model as fitted, adapted, and the gain baseline.
 VARIANTS = ("unadapted", "adapted", "gain")
 _ALL = "all"
+#: The line above the battery's table in a result's markdown.
+TOTALS_HEADING = ("Both sides through the pack (pack energy, total charge; coverage of the total charge's central "
+                  "intervals, % of the forecasts with one):")
 _trapezoid = getattr(np, "trapezoid", None) or np.trapz
 
 
@@ -190,13 +193,14 @@ def summarise_totals(totals: Sequence[RunTotal], levels: Sequence[float] = DEFAU
 
 
 def totals_markdown(rows: Sequence[dict[str, Any]], levels: Sequence[float] = DEFAULT_LEVELS) -> str:
-    """The battery's table: pack energy and total charge errors, and the intervals' coverage, one row per summary."""
+    """The battery's table: pack energy and total charge errors, and the intervals' coverage, one row per summary
+    (``schedule``: the adapt time, or the leave-one-run-out variant)."""
     def f(x: Any, nd: int = 1) -> str:
         return "–" if x is None or not math.isfinite(x) else f"{x:.{nd}f}"
 
     cov = " / ".join(f"{100 * lv:g}" for lv in levels)
     lines = [
-        f"| protocol | ground | model | adapt on | forecast | runs | pack energy median / p90 % | "
+        f"| protocol | ground | model | schedule | forecast | runs | pack energy median / p90 % | "
         f"total charge median / p90 % | coverage {cov} % | median \\|z\\| |",
         "|---|---|---|---|---|---:|---:|---:|---:|---:|",
     ]

@@ -34,9 +34,13 @@ from terrawatt_base.errors import (
     UnknownNameError,
 )
 
+from ..battery import Battery
 from ..logs import InteractionLog
 from ..metrics import DEFAULT_SECTION_S, compare_currents
 from ..models.base import CurrentModel, log_currents
+from ..params import robot_params
+from ..robot import RobotParams
+from .run_totals import RunTotal, run_totals
 from .results import (
     EVALUATION_VARIANTS,
     PREFIT_VARIANT,
@@ -82,11 +86,17 @@ def score_run(
     model_name: str,
     section_s: float = DEFAULT_SECTION_S,
     fit_duration_s: float = math.nan,
-) -> list[RunScore]:
-    """Score a fitted ``model`` on one run: one :class:`RunScore` per side (left, right).
+    robot: str | RobotParams = "husky",
+    battery: Battery | None = None,
+) -> tuple[list[RunScore], list[RunTotal]]:
+    """Score a fitted ``model`` on one run: one :class:`RunScore` per side (left, right) and the run's total.
 
     The one place where a run's predicted currents are compared with the logged ones
-    (:func:`~energy.metrics.compare_currents`): whole-run error %, section error % and RMSE.
+    (:func:`~energy.metrics.compare_currents`): whole-run error %, section error % and RMSE
+    per side; and what the battery pays (:class:`~energy.evaluation.RunTotal`, protocol
+    ``"loo"``, schedule ``variant``): the pack energy of both sides through ``battery``
+    (default the ``robot``'s nominal voltage, ideal) and the total charge with the model's
+    interval.
 
     Raises
     ------
@@ -96,7 +106,8 @@ def score_run(
         ``log`` has no measured currents.
     """
     measured = log_currents(log)  # a log without currents: DataError naming the missing topics
-    pred = model.predict(log)
+    fc = model.predict_distribution(log)
+    pred = fc.mean_a
     truth = (measured[:, 0], measured[:, 1])
     rows = []
     for k, side in enumerate(SIDES):
@@ -107,7 +118,9 @@ def score_run(
             charge_predicted_mah=e.charge_predicted_mah, whole_run_error_pct=e.whole_run_error_pct,
             section_error_pct=e.section_error_pct, rmse_a=e.rmse_a, fit_duration_s=fit_duration_s,
         ))
-    return rows
+    totals = run_totals(log, {"unadapted": (pred, fc)}, protocol="loo", run=run, adapt_run=run, model=model_name,
+                        schedule=variant, robot=robot_params(robot), battery=battery)
+    return rows, totals
 
 
 def _score_fold(
@@ -118,8 +131,8 @@ def _score_fold(
     model_name: str,
     proto: CurrentModel,
     section_s: float,
-) -> list[RunScore]:
-    """Fit a fresh copy of ``proto`` on ``train_logs`` and score it on ``log``: one row per side.
+) -> tuple[list[RunScore], list[RunTotal]]:
+    """Fit a fresh copy of ``proto`` on ``train_logs`` and score it on ``log``: one row per side, and the total.
 
     Module-level so that dask workers can unpickle it by reference.
     """
@@ -173,12 +186,15 @@ def score_current_model(
     items = check_runs(logs)
     names = run_names(items)
     scores: list[RunScore] = []
+    totals: list[RunTotal] = []
     for run, log in zip(names, items):
-        scores += score_run(model, log, variant=PREFIT_VARIANT, run=run, model_name=name, section_s=section_s)
+        rows, run_rows = score_run(model, log, variant=PREFIT_VARIANT, run=run, model_name=name, section_s=section_s)
+        scores += rows
+        totals += run_rows
     grounds = list(dict.fromkeys(str(log.meta.ground_label) for log in items))
     variants = (PREFIT_VARIANT,)
     summary = summarise_scores(scores, variants, grounds, (name,))
-    return EvaluationResult(tuple(scores), summary, (name,), variants, float(section_s))
+    return EvaluationResult(tuple(scores), summary, (name,), variants, float(section_s), totals=tuple(totals))
 
 
 def check_runs(logs: Any, *, labelled: bool = False, what: str = "the evaluation") -> list[InteractionLog]:
@@ -213,7 +229,7 @@ def _score_on_cluster(
     models: Mapping[str, CurrentModel],
     section_s: float,
     progress: bool,
-) -> list[RunScore]:
+) -> tuple[list[RunScore], list[RunTotal]]:
     """Every (fold, model) pair as one task on ``client``; rows in the serial order."""
     from distributed import as_completed
     from tqdm.auto import tqdm
@@ -228,7 +244,7 @@ def _score_on_cluster(
         for mname, proto in models.items()
     ]
     position = {f.key: i for i, f in enumerate(futures)}
-    rows: list[list[RunScore]] = [[] for _ in futures]
+    rows: list[tuple[list[RunScore], list[RunTotal]]] = [([], []) for _ in futures]
     try:
         with tqdm(total=len(futures), desc="evaluation tasks", disable=not progress) as bar:
             for fut in as_completed(futures):
@@ -237,7 +253,7 @@ def _score_on_cluster(
     except BaseException:
         client.cancel(futures + scattered)  # drop the tasks still queued or running
         raise
-    return [row for task_rows in rows for row in task_rows]
+    return [row for task_rows, _ in rows for row in task_rows], [row for _, task_rows in rows for row in task_rows]
 
 
 def evaluate_current_models(
@@ -366,17 +382,21 @@ def evaluate_current_models(
         folds += [("ground_agnostic", i, [j for j in range(len(items)) if j != i]) for i in range(len(items))]
 
     scores: list[RunScore] = []
+    totals: list[RunTotal] = []
     if client is not None:
-        scores = _score_on_cluster(client, items, names, folds, models, section_s, progress)
+        scores, totals = _score_on_cluster(client, items, names, folds, models, section_s, progress)
     else:
         from tqdm.auto import tqdm
 
         for variant, test, train in tqdm(folds, desc="evaluation folds", disable=not progress):
             train_logs = [items[j] for j in train]
             for mname, proto in models.items():
-                scores += _score_fold(variant, names[test], items[test], train_logs, mname, proto, section_s)
+                rows, run_rows = _score_fold(variant, names[test], items[test], train_logs, mname, proto, section_s)
+                scores += rows
+                totals += run_rows
     summary = summarise_scores(scores, chosen, grounds, tuple(models))
-    result = EvaluationResult(tuple(scores), summary, tuple(models), chosen, float(section_s), tuple(skipped))
+    result = EvaluationResult(tuple(scores), summary, tuple(models), chosen, float(section_s), tuple(skipped),
+                              tuple(totals))
     if out_dir is not None:
         result.write(out_dir)
     return result

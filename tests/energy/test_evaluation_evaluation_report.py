@@ -36,11 +36,11 @@ def test_leave_one_run_out_is_scored_and_written_with_the_spectra(tmp_path):
     assert report.kinds == ("constant", "linear") and len(report.logs) == 6 and report.duration_s >= 0.0
     assert report.summary() == report.result.to_markdown() and report.to_dict()["models"] == ["constant", "linear"]
     written = report.write(tmp_path)
-    assert [p.name for p in written] == list(evaluation_files("loo")) == [*EVALUATION_FILES, SPECTRA_FILE]
+    assert [p.name for p in written] == list(evaluation_files("loo")) == [*EVALUATION_FILES, SPECTRA_FILE, RELIABILITY_FILE]
     assert json.loads(written[0].read_text())["models"] == ["constant", "linear"]
     line = report.written_line(written)
     assert line.startswith("6 runs, 2 models, ") and " s on 1 worker (serial); wrote " in line
-    assert line.endswith(f"{written[0]}, {written[1]} and {written[2]}")
+    assert line.endswith(f"{written[0]}, {written[1]}, {written[2]} and {written[3]}")
 
 
 def test_a_figure_that_fails_is_a_warning_and_left_out(tmp_path, monkeypatch):
@@ -51,9 +51,9 @@ def test_a_figure_that_fails_is_a_warning_and_left_out(tmp_path, monkeypatch):
     report = evaluate_report(score_logs(), ["constant"], variants=["per_ground"])
     with pytest.warns(FigureWarning, match="could not draw .*spectra.png: RuntimeError: no canvas"):
         written = report.write(tmp_path)
-    assert [p.name for p in written] == list(EVALUATION_FILES) and not (tmp_path / SPECTRA_FILE).exists()
-    assert report.written_line(written, workers="2 dask workers").endswith(f"on 2 dask workers; wrote {written[0]} "
-                                                                           f"and {written[1]}")
+    assert [p.name for p in written] == [*EVALUATION_FILES, RELIABILITY_FILE] and not (tmp_path / SPECTRA_FILE).exists()
+    assert report.written_line(written, workers="2 dask workers").endswith(f"on 2 dask workers; wrote {written[0]}, "
+                                                                           f"{written[1]} and {written[2]}")
     with pytest.raises(RuntimeError, match="no canvas"):
         report.write(tmp_path / "again", on_figure_error="raise")
 

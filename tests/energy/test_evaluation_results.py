@@ -8,7 +8,7 @@ import pytest
 from evaluation_samples import score_logs
 
 from energy import ConstantCurrentModel, LinearCurrentModel, evaluate_current_models
-from energy.evaluation import EVALUATION_FILES, EvaluationResult, RunScore, check_evaluation_dir, summarise_scores
+from energy.evaluation import EVALUATION_FILES, EVALUATION_FORMAT_VERSION, EvaluationResult, RunScore, check_evaluation_dir, summarise_scores
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 from terrawatt_base.formats import read_result_json
 
@@ -31,10 +31,13 @@ def test_summary_percentiles(result):
 def test_json_and_markdown_outputs(result, tmp_path):
     path = result.write_json(tmp_path / "evaluation.json")
     data = json.loads(path.read_text())
-    assert data["format_version"] == 1 and data["models"] == ["constant", "linear"]
+    assert data["format_version"] == EVALUATION_FORMAT_VERSION and data["models"] == ["constant", "linear"]
     assert len(data["runs"]) == len(result.runs) and len(data["summary"]) == len(result.summary)
     md = result.to_markdown()
-    assert md.count("\n") == 2 + len(result.summary)
+    battery, per_side = md.split("Per side (charge of each motor channel):")
+    assert per_side.strip().count("\n") == 1 + len(result.summary)  # header, rule and one row per summary
+    assert battery.count("| loo | all | linear | ground_agnostic | unadapted |") == 1  # the battery table: one row each
+    assert len(data["totals"]) == len(result.runs) // 2 and len(data["total_summary"]) == len(result.total_summary())
     assert "| per_ground | sand | linear |" in md
     assert result.write_markdown(tmp_path / "evaluation.md").read_text() == md
 
@@ -72,7 +75,7 @@ def test_a_result_with_nan_and_skipped_grounds_writes_its_folder(tmp_path):
     assert (json_path.name, md_path.name) == EVALUATION_FILES
     data = json.loads(json_path.read_text())
     assert data["format"] == "terrawatt-evaluation" and data["runs"][0]["whole_run_error_pct"] is None
-    assert read_result_json(json_path, "evaluation", 1) == data  # through the one result codec
+    assert read_result_json(json_path, "evaluation", EVALUATION_FORMAT_VERSION) == data  # through the one result codec
     md = md_path.read_text()
     assert "30 s sections median %" in md and md.endswith("Skipped: ground 'ice' has 1 run\n")
 
