@@ -187,6 +187,10 @@ def heading_shortest_path(lattice: Lattice, start_xy_m: tuple[float, float], goa
     start, goal = pts
     q = _Query(lattice, start, goal)
     best, nodes = _no_move_route(cost, q, start, goal)
+    if workspace is not None and workspace.incumbent is not None and method == "astar":
+        bound, suffix = _incumbent(lattice, q, workspace.incumbent)
+        if bound < best:  # a lattice route of the last answer: the A* need only beat it
+            best, nodes = bound, suffix
     if q.src.size and q.dst.size:
         if method == "astar":
             total, chain = _astar(lattice, q, start, goal, best, cost_to_go, workspace)
@@ -194,6 +198,8 @@ def heading_shortest_path(lattice: Lattice, start_xy_m: tuple[float, float], goa
             total, chain = _dijkstra(lattice, q, start, goal, best)
         if chain and total < best:
             best, nodes = total, chain
+    if workspace is not None:
+        workspace.incumbent = np.asarray(nodes, dtype=np.int64)
     path = lattice.path_via(start, nodes, goal, best, "energy")
     return LatticePath(path.found, path.waypoints_m, path.objective, "energy", time.perf_counter() - t0)
 
@@ -286,7 +292,10 @@ class HeadingWorkspace:
 
     A search from scratch allocates (and the system zeroes) these arrays for every query,
     about half its time on a large lattice; a replanner keeps one workspace and each search
-    puts back only the entries it touched.
+    puts back only the entries it touched. It also keeps the last answer's node chain: a
+    replan after new energies or a few metres of driving starts from that route's price on
+    the new lattice (from the node where the new start joins it), so the A* keeps no state
+    that cannot beat it.
     """
 
     def __init__(self, n_nodes: int) -> None:
@@ -301,6 +310,9 @@ class HeadingWorkspace:
         self.touched = np.empty(ns, np.int64)
         #: States the last search touched.
         self.last_touched = 0
+        #: The node chain of the last answer (None before the first): the next query's incumbent,
+        #: re-priced on its lattice from wherever its start joins the chain (:func:`_incumbent`).
+        self.incumbent: np.ndarray | None = None
 
 
 def _astar(lattice: Lattice, q: _Query, start: np.ndarray, goal: np.ndarray, best: float,
@@ -325,6 +337,50 @@ def _astar(lattice: Lattice, q: _Query, start: np.ndarray, goal: np.ndarray, bes
         heading_reset(ws.touched, count, ws.g, ws.pred, ws.closed, ws.where)
         ws.last_touched = int(count)
     return (math.inf, []) if last < 0 else (float(total), _state_nodes(lattice, chain))
+
+
+#: Move index of each node-grid step (row, col) in [-2, 2]^2, offset by 2 (-1: no lattice move).
+_MOVE_OF_STEP = np.full((5, 5), -1, dtype=np.int64)
+_MOVE_OF_STEP[LATTICE_OFFSETS[:, 0] + 2, LATTICE_OFFSETS[:, 1] + 2] = np.arange(HEADING_COUNT)
+
+
+def _incumbent(lattice: Lattice, q: _Query, chain: np.ndarray) -> tuple[float, list[int]]:
+    """The cheapest lattice route of this query that ends like ``chain`` (an earlier answer's nodes).
+
+    For every node of the chain (but its last) that the start joins: the joining segment,
+    the turn onto the chain's next move, then the chain's moves and turns priced on this
+    lattice, and the exit to this query's goal from the chain's last node. Returns its total
+    and its nodes, or inf and no nodes when the start joins no node of the chain, a move of
+    the suffix no longer exists, or the last node is not joined to this goal.
+    """
+    nodes = np.asarray(chain, dtype=np.int64)
+    if nodes.size < 2 or not q.src.size or np.any((nodes < 0) | (nodes >= lattice.n_nodes)):
+        return math.inf, []
+    nj = lattice._nj
+    rows, cols = np.divmod(nodes, nj)
+    dr, dc = np.diff(rows), np.diff(cols)
+    if np.any(np.abs(dr) > 2) or np.any(np.abs(dc) > 2):
+        return math.inf, []
+    moves = _MOVE_OF_STEP[dr + 2, dc + 2]
+    exit_row = q.exit_of[nodes[-1]]
+    if np.any(moves < 0) or exit_row < 0:
+        return math.inf, []
+    pos = lattice._pos[nodes[:-1], moves]
+    drive = np.where(pos >= 0, lattice._energy_data()[np.maximum(pos, 0)], math.inf)
+    turns = np.zeros(moves.size)
+    turns[1:] = q.turn[q.node_row[nodes[1:-1]], moves[:-1], moves[1:]]  # at each inner node of the chain
+    # from node i of the chain: its move, then every later node's turn and move, then the exit
+    arcs = drive + turns
+    suffix = np.cumsum(arcs[::-1])[::-1] - turns + q.exit_cost[exit_row, moves[-1]]
+    where = {int(n): i for i, n in enumerate(nodes[:-1])}  # a chain node's last place
+    best, first = math.inf, -1
+    for j, node in enumerate(q.src):
+        i = where.get(int(node))
+        if i is not None:
+            total = float(q.e_src[j] + q.turn_src[j, moves[i]] + suffix[i])
+            if total < best:
+                best, first = total, i
+    return (best, [int(n) for n in nodes[first:]]) if first >= 0 else (math.inf, [])
 
 
 def _chain(pred: np.ndarray, last: int) -> list[int]:

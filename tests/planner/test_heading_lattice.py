@@ -209,3 +209,47 @@ def test_a_cost_to_go_or_workspace_of_another_lattice_is_refused():
         heading_shortest_path(lattice, start, goal, cost_to_go=np.zeros(5))
     with pytest.raises(InvalidParameterError, match="workspace"):
         heading_shortest_path(lattice, start, goal, workspace=HeadingWorkspace(7))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_the_last_answer_bounds_the_next_search_along_the_drive(seed):
+    """A workspace keeps the last answer: re-priced from where the moved start joins it (the same price on an
+    unchanged lattice), it bounds the next A*, whose answer still equals scipy's Dijkstra after energies change."""
+    from planner.heading_lattice import _incumbent, _Query
+
+    rng = np.random.default_rng(700 + seed)
+    tmap = procedural_map((30, 38), 1.0, seed=seed, obstacle_fraction=0.12)  # obstacles: routes of lattice moves, not the direct segment
+    cost = family_cost(tmap, seed)
+    lattice = Lattice(cost, 1)
+    ws = HeadingWorkspace(lattice.n_nodes)
+    for start, goal in sorted(_free_points(cost, rng, 12), key=lambda p: -math.dist(*p)):
+        first = heading_shortest_path(lattice, start, goal, workspace=ws)
+        if ws.incumbent.size >= 8:
+            break  # a lattice route of many moves to drive along (not the direct segment)
+    assert first.found and ws.incumbent.size >= 8
+    bound, nodes = _incumbent(lattice, _Query(lattice, np.asarray(start), np.asarray(goal)), ws.incumbent)
+    assert bound == pytest.approx(first.objective, rel=1e-9) and nodes == list(ws.incumbent)
+    chain = ws.incumbent.copy()
+    used = 0
+    for step in range(min(5, (chain.size - 2) // 2)):
+        # drive along the first route, then a patch across it gets cheaper or dearer
+        s = tuple(lattice.node_xy(chain[2 * step + 2:2 * step + 3])[0] + rng.uniform(-0.2, 0.2, 2))
+        rows = np.asarray(cost.ground_rows).copy()
+        r, c = np.clip(np.array(cost.terrain.rowcol(*s)) - 3, 0, np.array(rows.shape) - 6)
+        rows[r:r + 6, c:c + 6] = cost.grade_table_j_per_m.shape[0]
+        grade = np.vstack([cost.grade_table_j_per_m, (0.3, 3.0)[step % 2] * cost.grade_table_j_per_m[:1]])
+        cost = cost.with_tables(grade, np.vstack([cost.turn_table_j, cost.turn_table_j[:1]]), rows)
+        lattice = Lattice(cost, 1)
+        q = _Query(lattice, np.asarray(s), np.asarray(goal))
+        used += math.isfinite(_incumbent(lattice, q, ws.incumbent)[0])
+        got = heading_shortest_path(lattice, s, goal, workspace=ws)
+        ref = heading_shortest_path(lattice, s, goal, method="dijkstra")
+        assert got.found == ref.found
+        if ref.found:
+            assert got.objective == pytest.approx(ref.objective, rel=1e-9)
+            assert lattice.cost.path_energy_j(got.waypoints_m) == pytest.approx(got.objective, rel=1e-9)
+    assert used >= 2  # the moved starts joined the last route: its price bounded the search
+    q = _Query(lattice, np.asarray(start), np.asarray(goal))
+    assert math.isfinite(_incumbent(lattice, q, chain)[0])
+    chain[1] = chain[0] + 3 * lattice._nj  # no lattice move between the first two nodes
+    assert _incumbent(lattice, q, chain) == (math.inf, [])
