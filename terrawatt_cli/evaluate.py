@@ -23,7 +23,8 @@ __all__ = ["PROTOCOLS", "add_parser", "add_adapt_options", "adapt_settings_from_
 PROTOCOLS = EVALUATION_PROTOCOLS
 #: How the library's messages name the options of :func:`energy.evaluation.evaluate_report`: by their flags.
 _NAMES = {"kinds": "--model", "protocol": "--protocol", "band_hz": "--band", "adapt_seconds": "--adapt-seconds",
-          "adapt_method": "--adapt-method", "adapt_threshold_pct": "--adapt-threshold", "robot": "--robot"}
+          "adapt_method": "--adapt-method", "adapt_threshold_pct": "--adapt-threshold", "adapt_shrink": "--adapt-shrink",
+          "robot": "--robot"}
 
 def add_parser(sub: Any) -> None:
     """The ``evaluate`` subcommand."""
@@ -55,6 +56,9 @@ def add_adapt_options(parser: argparse.ArgumentParser) -> None:
                              f"{' '.join(f'{t:g}' for t in DEFAULT_ADAPT_SECONDS)})")
     parser.add_argument("--adapt-method", choices=ADAPT_METHODS, default=None,
                         help=f"the in-run update (default {ADAPT_METHODS[0]})")
+    parser.add_argument("--adapt-shrink", action=argparse.BooleanOptionalAction, default=None,
+                        help="scale the update by the evidence of the seconds it adapts on (default on; "
+                             "--no-adapt-shrink follows the prefix fully)")
     parser.add_argument("--adapt-threshold", type=float, default=None, metavar="PCT",
                         help="adapt protocol: the running charge error (%%) above which the trigger schedule updates "
                              "(default 10)")
@@ -64,7 +68,7 @@ def adapt_settings_from_args(args: argparse.Namespace) -> AdaptSettings | None:
     """The :class:`energy.evaluation.AdaptSettings` of the command line (:func:`energy.evaluation.check_adapt_options`:
     bad values are errors naming the flag); None for ``--protocol loo``, which refuses the adapt flags."""
     given = {"--adapt-seconds": args.adapt_seconds, "--adapt-method": args.adapt_method,
-             "--adapt-threshold": args.adapt_threshold}
+             "--adapt-threshold": args.adapt_threshold, "--adapt-shrink": args.adapt_shrink}
     if args.protocol == "loo" and (flags := [f for f, v in given.items() if v is not None]):
         raise InvalidParameterError(f"{', '.join(flags)} appl{'ies' if len(flags) == 1 else 'y'} to --protocol adapt "
                                     "or few-shot, not to loo (the default): add --protocol adapt or few-shot")
@@ -75,7 +79,8 @@ def adapt_settings_from_args(args: argparse.Namespace) -> AdaptSettings | None:
     return check_adapt_options(
         args.protocol, adapt_seconds=DEFAULT_ADAPT_SECONDS if args.adapt_seconds is None else args.adapt_seconds,
         adapt_method=args.adapt_method or ADAPT_METHODS[0],
-        adapt_threshold_pct=10.0 if args.adapt_threshold is None else args.adapt_threshold, names=_NAMES)
+        adapt_threshold_pct=10.0 if args.adapt_threshold is None else args.adapt_threshold,
+        adapt_shrink=True if args.adapt_shrink is None else args.adapt_shrink, names=_NAMES)
 
 
 def run_evaluate(args: argparse.Namespace) -> int:

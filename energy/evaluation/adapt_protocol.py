@@ -73,7 +73,7 @@ class AdaptSettings:
         Trigger: the scored remainder starts this many seconds into the run.
     min_remainder_s : float
         A run whose remainder after T is shorter is not scored for that T (listed as skipped).
-    method, prior_s, turn_scale_radps, min_seconds
+    method, prior_s, turn_scale_radps, min_seconds, shrink
         The update (:class:`~energy.models.AdaptedCurrentModel`).
     section_s : float
         Section length of the section error (s).
@@ -94,6 +94,7 @@ class AdaptSettings:
     prior_s: float = 20.0
     turn_scale_radps: float = 0.3
     min_seconds: float = 5.0
+    shrink: bool = False
     section_s: float = DEFAULT_SECTION_S
     robot: str | RobotParams = "husky"
     battery: Battery | None = None
@@ -115,6 +116,7 @@ class AdaptSettings:
         for name in ("trigger_from_s", "min_remainder_s", "min_seconds"):
             check_real(name, getattr(self, name), low=0.0, owner=own)
         check_choice(f"{own}.method", self.method, ADAPT_METHODS)
+        check_bool(f"{own}.shrink", self.shrink)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-types form."""
@@ -130,7 +132,7 @@ class AdaptSettings:
     def update_options(self) -> dict[str, Any]:
         """Keyword arguments of :class:`~energy.models.AdaptedCurrentModel` besides the base."""
         return {"method": self.method, "prior_s": self.prior_s, "turn_scale_radps": self.turn_scale_radps,
-                "min_seconds": self.min_seconds}
+                "min_seconds": self.min_seconds, "shrink": self.shrink}
 
 
 def _errors(t: np.ndarray, truth: np.ndarray, pred: np.ndarray, section_s: float) -> list[tuple[float, float, float]]:

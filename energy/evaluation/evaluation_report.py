@@ -35,7 +35,8 @@ __all__ = ["EVALUATION_PROTOCOLS", "EVALUATION_NAMES", "SPECTRA_FILE", "evaluati
 EVALUATION_PROTOCOLS = ("loo", "adapt", "few-shot")
 #: How messages name the options of :func:`evaluate_report` (a caller passes its own, e.g. its flags).
 EVALUATION_NAMES = {"kinds": "kinds", "protocol": "protocol", "band_hz": "band_hz", "adapt_seconds": "adapt_seconds",
-                    "adapt_method": "adapt_method", "adapt_threshold_pct": "adapt_threshold_pct", "robot": "robot"}
+                    "adapt_method": "adapt_method", "adapt_threshold_pct": "adapt_threshold_pct",
+                    "adapt_shrink": "adapt_shrink", "robot": "robot"}
 #: The figure of the leave-one-run-out report: the logs' vibration spectra per ground.
 SPECTRA_FILE = "spectra.png"
 #: The reliability figure of every protocol: observed against nominal coverage of the held-out total charge's
@@ -57,7 +58,7 @@ def evaluation_files(protocol: str = "loo") -> tuple[str, ...]:
 
 def check_adapt_options(protocol: str = "adapt", *, adapt_seconds: Sequence[float] = DEFAULT_ADAPT_SECONDS,
                         adapt_method: str = ADAPT_METHODS[0], adapt_threshold_pct: float = 10.0,
-                        names: Mapping[str, str] | None = None) -> AdaptSettings:
+                        adapt_shrink: bool = True, names: Mapping[str, str] | None = None) -> AdaptSettings:
     """The :class:`AdaptSettings` of the adapt options, checked; the trigger schedule runs with ``protocol="adapt"``.
 
     Parameters
@@ -70,6 +71,9 @@ def check_adapt_options(protocol: str = "adapt", *, adapt_seconds: Sequence[floa
         The in-run update (:data:`~energy.models.ADAPT_METHODS`).
     adapt_threshold_pct : float
         The running charge error (%, >= 0) above which the trigger schedule updates.
+    adapt_shrink : bool
+        Scale the update's correction by the evidence of its prefix
+        (:class:`~energy.models.AdaptedCurrentModel` ``shrink``).
     names : mapping, optional
         How messages name the options (keys of :data:`EVALUATION_NAMES`, e.g. ``{"adapt_seconds": "--adapt-seconds"}``).
 
@@ -107,8 +111,9 @@ def check_adapt_options(protocol: str = "adapt", *, adapt_seconds: Sequence[floa
     if isinstance(threshold, bool) or not isinstance(threshold, numbers.Real) or not threshold >= 0:
         raise InvalidParameterError(f"{n['adapt_threshold_pct']} must be a percentage >= 0, got {threshold!r}")
     check_choice(n["adapt_method"], adapt_method, ADAPT_METHODS)
+    check_bool(n["adapt_shrink"], adapt_shrink)
     return AdaptSettings(adapt_seconds=tuple(seconds), method=adapt_method, threshold_pct=threshold,
-                         trigger=protocol == "adapt")
+                         shrink=adapt_shrink, trigger=protocol == "adapt")
 
 
 def check_evaluation_options(kinds: Sequence[str] | None = None, *, protocol: str = "loo",

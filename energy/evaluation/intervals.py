@@ -11,6 +11,7 @@ new grounds, after adaptation...).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
@@ -18,11 +19,12 @@ from typing import Any
 import numpy as np
 
 from terrawatt_base import plot_target
+from terrawatt_base.checks import check_real
 from terrawatt_base.errors import InvalidParameterError
 
 from ..logs import InteractionLog
 from ..models.base import CurrentModel, log_currents
-from ..models.forecast import normal_quantile
+from ..models.forecast import central_level
 
 __all__ = ["DEFAULT_LEVELS", "IntervalRecord", "charge_record", "coverage", "plot_reliability"]
 
@@ -41,7 +43,9 @@ class IntervalRecord:
         What the record belongs to (e.g. ``"known ground"``, ``"new ground, 20 s"``).
     ground, run : str
     true_as, mean_as, sd_as : float
-        Measured charge, forecast mean and standard deviation (A s).
+        Measured charge, forecast mean and scale (A s).
+    dof : float
+        The forecast's degrees of freedom (``inf``: Gaussian).
     """
 
     group: str
@@ -50,6 +54,7 @@ class IntervalRecord:
     true_as: float
     mean_as: float
     sd_as: float
+    dof: float = math.inf
 
     @property
     def z(self) -> float:
@@ -80,7 +85,12 @@ def charge_record(model: CurrentModel, log: InteractionLog, *, group: str, run: 
     q = fc.charge(sel)
     truth = log_currents(log)[sel]
     true_as = float(np.sum(_trapezoid(truth, log.time_s[sel], axis=0))) if sel.sum() > 1 else 0.0
-    return IntervalRecord(group, str(log.meta.ground_label), run, true_as, q.total_mean_as, q.total_sd_as)
+    return IntervalRecord(group, str(log.meta.ground_label), run, true_as, q.total_mean_as, q.total_sd_as, q.dof)
+
+
+def _levels_needed(records: Sequence[IntervalRecord]) -> np.ndarray:
+    """Per record, the least central interval level of its own predictive that holds the measurement."""
+    return central_level([r.z for r in records], [r.dof for r in records])
 
 
 def coverage(records: Sequence[IntervalRecord], levels: Sequence[float] = DEFAULT_LEVELS) -> dict[str, dict[str, float]]:
@@ -91,11 +101,14 @@ def coverage(records: Sequence[IntervalRecord], levels: Sequence[float] = DEFAUL
     InvalidParameterError
         A level outside (0, 1).
     """
-    z_by_level = {lv: normal_quantile(0.5 + lv / 2.0) for lv in levels}
+    for lv in levels:
+        check_real("level", lv, low=0.0, high=1.0, low_inclusive=False, high_inclusive=False)
     out: dict[str, dict[str, float]] = {}
     for group in dict.fromkeys(r.group for r in records):
-        zs = np.array([abs(r.z) for r in records if r.group == group])
-        row = {f"{100 * lv:g} %": float(np.mean(zs <= z)) for lv, z in z_by_level.items()}
+        mine = [r for r in records if r.group == group]
+        zs = np.array([abs(r.z) for r in mine])
+        need = _levels_needed(mine)
+        row = {f"{100 * lv:g} %": float(np.mean(need <= lv)) for lv in levels}
         row["n"] = float(zs.size)
         row["median |z|"] = float(np.median(zs))
         out[group] = row
@@ -115,9 +128,9 @@ def plot_reliability(records: Sequence[IntervalRecord], ax: Any = None, *, title
     levels = np.linspace(0.05, 0.95, 19)
     ax.plot([0, 1], [0, 1], color="0.6", lw=1, ls="--", label="honest")
     for group in dict.fromkeys(r.group for r in records):
-        zs = np.array([abs(r.z) for r in records if r.group == group])
-        observed = [float(np.mean(zs <= normal_quantile(0.5 + lv / 2.0))) for lv in levels]
-        ax.plot(levels, observed, marker="o", ms=3, label=f"{group} (n = {zs.size})")
+        need = _levels_needed([r for r in records if r.group == group])
+        observed = [float(np.mean(need <= lv)) for lv in levels]
+        ax.plot(levels, observed, marker="o", ms=3, label=f"{group} (n = {need.size})")
     ax.set_xlabel("nominal coverage of the central interval")
     ax.set_ylabel("observed coverage (held-out whole-run charge)")
     ax.set_xlim(0, 1)

@@ -36,7 +36,7 @@ from ..battery import Battery
 from ..budget import log_battery_power_w
 from ..logs import InteractionLog
 from ..models.base import log_currents
-from ..models.forecast import CurrentForecast, normal_quantile
+from ..models.forecast import CurrentForecast, central_level
 from ..robot import RobotParams
 from .intervals import DEFAULT_LEVELS, IntervalRecord, plot_reliability
 
@@ -57,8 +57,9 @@ class RunTotal:
     """One forecast of a scored run (both sides) against the measurement.
 
     ``true_j`` / ``pred_j`` the pack energy (J), ``true_as`` / ``mean_as`` the total charge of
-    both motor channels (A s), ``sd_as`` the forecast's standard deviation of that charge
-    (NaN: no interval). ``run`` is the scored run, ``adapt_run`` the run adapted on (the same
+    both motor channels (A s), ``sd_as`` the forecast's scale of that charge (NaN: no
+    interval) and ``dof`` its degrees of freedom (``inf``: Gaussian; a Student-t on a ground
+    the model never drove). ``run`` is the scored run, ``adapt_run`` the run adapted on (the same
     run for the per-ground protocol, whose scored part is the remainder after ``schedule``).
     """
 
@@ -74,6 +75,7 @@ class RunTotal:
     true_as: float
     mean_as: float
     sd_as: float
+    dof: float = math.inf
 
     def __post_init__(self) -> None:
         if self.variant not in VARIANTS:
@@ -95,6 +97,12 @@ class RunTotal:
         if not self.sd_as > 0:
             return math.nan
         return (self.true_as - self.mean_as) / self.sd_as
+
+    @property
+    def level_needed(self) -> float:
+        """The least central interval level of the forecast's own predictive that holds the measurement (NaN
+        without an interval): covered at level ``L`` when ``<= L``."""
+        return float(central_level(self.z, self.dof))
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self) | {"energy_error_pct": self.energy_error_pct, "charge_error_pct": self.charge_error_pct,
@@ -145,11 +153,12 @@ def run_totals(log: InteractionLog, forecasts: dict[str, tuple[np.ndarray, Curre
     out = []
     for variant, (mean_a, fc) in forecasts.items():
         mean_as = float(np.sum(_trapezoid(np.asarray(mean_a)[sel], t, axis=0))) if sel.sum() > 1 else 0.0
-        sd = math.nan
+        sd, dof = math.nan, math.inf
         if fc is not None and fc.has_interval:
-            sd = float(fc.charge(sel).total_sd_as)
+            charge = fc.charge(sel)
+            sd, dof = float(charge.total_sd_as), charge.dof
         out.append(RunTotal(protocol, str(log.meta.ground_label), run, adapt_run, model, schedule, variant,
-                            true_j, pack_energy_j(log, mean_a, robot, battery, sel), true_as, mean_as, sd))
+                            true_j, pack_energy_j(log, mean_a, robot, battery, sel), true_as, mean_as, sd, dof))
     return out
 
 
@@ -176,6 +185,8 @@ def summarise_totals(totals: Sequence[RunTotal], levels: Sequence[float] = DEFAU
     for key in order:
         rs = groups[key]
         zs = np.array([abs(r.z) for r in rs])
+        need = np.array([r.level_needed for r in rs])
+        need = need[np.isfinite(zs)]
         zs = zs[np.isfinite(zs)]
         row: dict[str, Any] = dict(zip(("protocol", "ground", "model", "schedule", "variant"), key))
         row |= {"n": len(rs),
@@ -185,8 +196,7 @@ def summarise_totals(totals: Sequence[RunTotal], levels: Sequence[float] = DEFAU
                 "charge_p90_pct": _pct([r.charge_error_pct for r in rs], 90),
                 "n_interval": int(zs.size)}
         for lv in levels:
-            row[f"coverage_{100 * lv:g}_pct"] = (100.0 * float(np.mean(zs <= normal_quantile(0.5 + lv / 2.0)))
-                                                 if zs.size else math.nan)
+            row[f"coverage_{100 * lv:g}_pct"] = 100.0 * float(np.mean(need <= lv)) if zs.size else math.nan
         row["median_abs_z"] = float(np.median(zs)) if zs.size else math.nan
         rows.append(row)
     return rows
@@ -216,5 +226,5 @@ def plot_totals_reliability(totals: Sequence[RunTotal], ax: Any = None, *, title
     """Observed against nominal coverage of the total-charge intervals, one line per protocol, ground and
     variant (the adapt times pooled); forecasts without an interval are left out."""
     records = [IntervalRecord(f"{r.protocol}, {r.ground}, {r.variant}", r.ground, r.run, r.true_as,
-                              r.mean_as, r.sd_as) for r in totals if r.sd_as > 0]
+                              r.mean_as, r.sd_as, r.dof) for r in totals if r.sd_as > 0]
     return plot_reliability(records, ax, title=title)

@@ -30,6 +30,16 @@ run and scored on the rest; the README has the table):
   ``scope="ground"`` forecasts *other* runs on the ground (ground offset only, the run
   spread kept in the interval). It needs a base model with an interval
   (:attr:`CurrentModel.gives_interval`), and its forecast carries the posterior interval.
+
+``shrink=True`` (the point updates, with a base model that gives an interval) moves a
+correction only as far as the evidence carries it: per side, the charge the prefix's residual
+adds up to (``obs``, A s) is compared with the variance the base model's interval expects of it
+with no correction at all (``V``: the per-sample noise over the prefix, counted in correlation
+times, plus, with ``scope="ground"``, the run-to-run spread of a whole run's offset, which a
+correction fitted on one run cannot carry to another), and the correction is scaled by the
+positive-part James–Stein factor ``max(0, 1 - V / obs**2)``. A prefix whose residual is within
+what noise and run spread explain leaves the model as it was; a large, clear residual is
+followed almost fully.
 """
 
 from __future__ import annotations
@@ -115,8 +125,12 @@ class AdaptedCurrentModel(CurrentModel):
     min_seconds : float
         Least duration of adaptation data (s, >= 0); less raises a DataError.
     scope : {"run", "ground"}
-        What a ``"bayes"`` update forecasts: the rest of the run it was fitted on, or other
-        runs on the same ground (see the module docstring); other methods ignore it.
+        What the update forecasts: the rest of the run it was fitted on, or other runs on the
+        same ground (see the module docstring); the point updates use it only with ``shrink``.
+    shrink : bool
+        Scale a point update's correction by the evidence of the prefix (module docstring);
+        ignored by ``"bayes"`` (its posterior already weighs the evidence) and where the base
+        model gives no interval.
 
     Attributes
     ----------
@@ -137,6 +151,8 @@ class AdaptedCurrentModel(CurrentModel):
         Its drive samples.
     nonnegative_ : bool
         Whether predictions are clamped at 0.
+    shrink_ : numpy.ndarray, shape (2,)
+        Per side, the factor the correction was scaled by (1 without ``shrink``).
 
     Examples
     --------
@@ -146,17 +162,19 @@ class AdaptedCurrentModel(CurrentModel):
         adapted.predict(log)
     """
 
-    _param_names = ("base", "method", "prior_s", "turn_scale_radps", "min_seconds", "scope")
+    _param_names = ("base", "method", "prior_s", "turn_scale_radps", "min_seconds", "scope", "shrink")
     _n_coefficients: ClassVar[dict[str, int]] = {"regime": 4, "gain": 1, "gain_offset": 2, "bayes": 8}
 
     def __init__(self, base: CurrentModel, method: str = "regime", prior_s: float = 20.0,
-                 turn_scale_radps: float = 0.3, min_seconds: float = MIN_ADAPT_SECONDS, scope: str = "run") -> None:
+                 turn_scale_radps: float = 0.3, min_seconds: float = MIN_ADAPT_SECONDS, scope: str = "run",
+                 shrink: bool = False) -> None:
         self.base = base
         self.method = method
         self.prior_s = prior_s
         self.turn_scale_radps = turn_scale_radps
         self.min_seconds = min_seconds
         self.scope = scope
+        self.shrink = shrink
 
     @classmethod
     def adapting(cls, model: CurrentModel, log_prefix: InteractionLog | Sequence[InteractionLog],
@@ -183,6 +201,7 @@ class AdaptedCurrentModel(CurrentModel):
         check_real("turn_scale_radps", self.turn_scale_radps, low=0.0, low_inclusive=False)
         check_real("min_seconds", self.min_seconds, low=0.0)
         check_choice("scope", self.scope, ADAPT_SCOPES)
+        check_bool("shrink", self.shrink)
         base = self.base
         return base.base if isinstance(base, AdaptedCurrentModel) else base
 
@@ -225,6 +244,13 @@ class AdaptedCurrentModel(CurrentModel):
                 scale[0] = max(float(np.average(np.abs(x[:, 0]), weights=w)), 0.5) ** 2
             a = (x * w[:, None]).T @ x + np.diag(self.prior_s * scale)
             coef[k] = np.linalg.solve(a, (x * w[:, None]).T @ r)
+        self.shrink_ = np.ones(2)
+        if self.shrink and self.method != "bayes" and base.gives_interval:
+            self.shrink_ = self._evidence(base, logs, preds, truths)
+            if self.method == "gain":  # a gain moves from 1
+                coef = 1.0 + (coef - 1.0) * self.shrink_[:, None]
+            else:
+                coef = coef * self.shrink_[:, None]
         if not np.all(np.isfinite(coef)):
             raise DataError("the adaptation data gave a non-finite correction (non-finite currents or inputs?)")
         self.coefficients_ = coef
@@ -232,6 +258,22 @@ class AdaptedCurrentModel(CurrentModel):
         self.adapted_on_s_ = float(sum(lg.duration_s for lg in logs))
         self.n_samples_ = int(sum(len(lg) for lg in logs))
         self.nonnegative_ = bool(all(np.all(y >= 0) for y in truths))
+
+    def _evidence(self, base: CurrentModel, logs: list[InteractionLog], preds: list[np.ndarray],
+                  truths: list[np.ndarray]) -> np.ndarray:
+        """Per side, ``max(0, 1 - V / obs**2)``: how far the prefix's residual charge stands out of what the base expects."""
+        interval = base.interval_
+        obs, var = np.zeros(2), np.zeros(2)
+        for lg, p, y in zip(logs, preds, truths):
+            t = lg.time_s
+            obs += _trapezoid(y - p, t, axis=0)
+            # white noise of correlation time c over the prefix: variance of its integral ~ sum(sd^2 dt) * c
+            var += np.sum(interval.sample_sd(lg) ** 2 * np.gradient(t)[:, None], axis=0) * interval.correlation_s
+            if self.scope == "ground":  # a run's own offset is not the ground's: it does not carry to other runs
+                var += _trapezoid(interval.run_sd_a(lg, p, known=True), t, axis=0) ** 2
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lam = np.where(obs**2 > 0, 1.0 - var / obs**2, 0.0)
+        return np.clip(np.nan_to_num(lam, nan=0.0), 0.0, 1.0)
 
     def _fit_bayes(self, base: CurrentModel, logs: list[InteractionLog], preds: list[np.ndarray],
                    truths: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, float]:
@@ -324,7 +366,7 @@ class AdaptedCurrentModel(CurrentModel):
                                         f"{base_forecast!r:.80}")
         mean = self.correct(log, base_forecast.mean_a)
         if self.method != "bayes":
-            return CurrentForecast(log.time_s, mean, base_forecast.run_sd_a, base_forecast.sample_sd_a)
+            return CurrentForecast(log.time_s, mean, base_forecast.run_sd_a, base_forecast.sample_sd_a, base_forecast.dof)
         base = self.base_model
         interval = base.interval_
         known = base.knows_ground(log.meta.ground_label)
@@ -332,7 +374,8 @@ class AdaptedCurrentModel(CurrentModel):
         ensemble = np.sqrt(np.maximum(base_forecast.run_sd_a**2 - own**2, 0.0))  # what the members disagree on
         _, cov = self._bayes_parts()
         run = np.sqrt(interval.run_sd_a(log, base_forecast.mean_a, known=True, cov=cov) ** 2 + ensemble**2)
-        return CurrentForecast(log.time_s, mean, run, base_forecast.sample_sd_a * math.sqrt(self.noise_ratio_))
+        return CurrentForecast(log.time_s, mean, run, base_forecast.sample_sd_a * math.sqrt(self.noise_ratio_),
+                               base_forecast.dof)
 
     def _training_summary(self, logs: list[InteractionLog]) -> TrainingSummary:
         own = TrainingSummary.from_logs(logs)
@@ -410,7 +453,8 @@ class AdaptedCurrentModel(CurrentModel):
     def _state(self) -> dict[str, Any]:
         return {"coefficients": np.asarray(self.coefficients_), "adapted_on_s": self.adapted_on_s_,
                 "n_samples": self.n_samples_, "nonnegative": self.nonnegative_, "ground": self.ground_,
-                "posterior_cov": self.posterior_cov_, "noise_ratio": self.noise_ratio_}
+                "posterior_cov": self.posterior_cov_, "noise_ratio": self.noise_ratio_,
+                "shrink": np.asarray(self.shrink_)}
 
     def _load_state(self, state: dict[str, Any]) -> None:
         coef = real_array("coefficients", state["coefficients"], ndim=2)
@@ -425,6 +469,10 @@ class AdaptedCurrentModel(CurrentModel):
         post = state.get("posterior_cov")
         self.posterior_cov_ = None if post is None else real_array("posterior_cov", post, ndim=3)
         self.noise_ratio_ = check_real("noise_ratio", state.get("noise_ratio", 1.0))
+        factors = real_array("shrink", state.get("shrink", np.ones(2)), ndim=1)  # absent before shrink existed
+        if factors.shape != (2,) or np.any(factors < 0) or np.any(factors > 1):
+            raise ValueError(f"shrink factors must be 2 values in [0, 1], got {factors!r:.80}")
+        self.shrink_ = factors
         if not (math.isfinite(self.noise_ratio_) and self.noise_ratio_ > 0):
             raise ValueError(f"noise_ratio must be finite and > 0, got {self.noise_ratio_!r}")
         if self.method == "bayes" and (self.posterior_cov_ is None or self.posterior_cov_.shape != (2, 8, 8)):

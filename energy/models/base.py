@@ -26,6 +26,7 @@ from __future__ import annotations
 import importlib.metadata
 import io
 import json
+import math
 import os
 import platform
 import zipfile
@@ -535,10 +536,12 @@ class CurrentModel:
         interval = getattr(self, "interval_", None)
         if interval is None:
             return CurrentForecast.point(log.time_s, mean)
-        run = interval.run_sd_a(log, mean, known=self.knows_ground(log.meta.ground_label))
+        known = self.knows_ground(log.meta.ground_label)
+        run = interval.run_sd_a(log, mean, known=known)
         if own_spread_a is not None:
             run = np.sqrt(run**2 + own_spread_a**2)
-        return CurrentForecast(log.time_s, mean, run, interval.sample_sd(log))
+        return CurrentForecast(log.time_s, mean, run, interval.sample_sd(log),
+                               math.inf if known else interval.new_ground_dof)
 
     def score(self, logs: InteractionLog | Sequence[InteractionLog]) -> float:
         """Coefficient of determination R² of the per-sample currents, both sides pooled.

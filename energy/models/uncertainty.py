@@ -181,6 +181,9 @@ class IntervalModel:
         such spreads are too narrow).
     n_runs : int
         Training runs the spreads were fitted on.
+    n_grounds : int
+        Grounds the new-ground covariance was learned from (0: none, or a file from before
+        it was recorded).
     """
 
     turn_scale_radps: float
@@ -190,6 +193,19 @@ class IntervalModel:
     correlation_s: float
     cross_validated: bool
     n_runs: int
+    n_grounds: int = 0
+
+    @property
+    def new_ground_dof(self) -> float:
+        """Degrees of freedom of a forecast on a ground the model never drove.
+
+        The new-ground covariance is the second moment of ``n_grounds`` left-out grounds'
+        offsets, so the variance of a new ground is itself a ``n_grounds``-degree estimate
+        and the forecast is a Student-t with as many degrees of freedom (heavy-tailed with two
+        or three grounds, near Gaussian with many). ``inf`` (Gaussian) without a new-ground
+        covariance or a recorded count.
+        """
+        return float(self.n_grounds) if self.new_ground_cov is not None and self.n_grounds > 0 else math.inf
 
     # ------------------------------------------------------------------ fit
     @classmethod
@@ -239,8 +255,9 @@ class IntervalModel:
         sample_sd = np.where(wt[None, :] >= 10, np.sqrt(sq / np.maximum(wt[None, :], 1.0)), overall[:, None])
         dt = float(np.median(dts)) if dts else 0.1
         correlation = min(max(_integrated_time(acov, dt), dt), 10.0)
-        new_cov = None
+        new_cov, n_grounds = None, 0
         if new_ground_residuals is not None and len(new_ground_residuals) >= 2:
+            n_grounds = len(new_ground_residuals)
             means = []
             for pairs in new_ground_residuals.values():
                 b = np.stack([run_coefficients(lg, r, p, turn_scale_radps) for lg, r, p in pairs])
@@ -249,7 +266,7 @@ class IntervalModel:
             # a handful of grounds cannot tell how the columns co-vary: keep the variances only
             new_cov = _diagonal(_second_moment(np.stack(means)))
         return cls(float(turn_scale_radps), run_cov, new_cov, sample_sd, float(correlation), bool(cross_validated),
-                   len(logs))
+                   len(logs), n_grounds)
 
     # ------------------------------------------------------------- queries
     def knows(self, ground: str | None) -> bool:
@@ -279,7 +296,8 @@ class IntervalModel:
     def to_plain(self) -> dict[str, Any]:
         return {"turn_scale_radps": self.turn_scale_radps, "run_cov": dict(self.run_cov),
                 "new_ground_cov": self.new_ground_cov, "sample_sd_a": self.sample_sd_a,
-                "correlation_s": self.correlation_s, "cross_validated": self.cross_validated, "n_runs": self.n_runs}
+                "correlation_s": self.correlation_s, "cross_validated": self.cross_validated, "n_runs": self.n_runs,
+                "n_grounds": self.n_grounds}
 
     @classmethod
     def from_plain(cls, d: Mapping[str, Any]) -> IntervalModel:
@@ -310,4 +328,5 @@ class IntervalModel:
             raise ValueError(f"turn_scale_radps {scale:.3g} rad/s or correlation_s {corr:.3g} s is beyond any robot's "
                              "(at most 100 rad/s and 3600 s)")
         return cls(scale, run_cov, None if new is None else cov("new_ground_cov", new), sd, corr,
-                   check_bool("cross_validated", d["cross_validated"]), check_int("n_runs", d["n_runs"], low=0))
+                   check_bool("cross_validated", d["cross_validated"]), check_int("n_runs", d["n_runs"], low=0),
+                   check_int("n_grounds", d.get("n_grounds", 0), low=0))  # absent before it was recorded

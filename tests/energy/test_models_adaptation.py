@@ -236,3 +236,42 @@ def test_bayes_update_learns_a_new_ground_offset_and_narrows_its_interval(two_gr
     with pytest.raises(DataError, match="interval"):
         AdaptedCurrentModel(LinearCurrentModel().fit(new_runs), method="bayes").fit(prefix)
 
+
+
+# ------------------------------------------------------- the evidence shrink of a point update
+def test_shrink_keeps_a_residual_within_noise_and_follows_a_clear_one(two_ground_estimator):
+    est, train = two_ground_estimator
+    known = train[1].slice(0.0, 20.0)  # a ground the model was fitted on: the residual is noise
+    plain = AdaptedCurrentModel(est, method="regime").fit(known)
+    shrunk = AdaptedCurrentModel(est, method="regime", shrink=True, scope="ground").fit(known)
+    assert np.all(plain.shrink_ == 1.0)
+    assert np.all(shrunk.shrink_ < 0.5)
+    assert np.all(np.abs(shrunk.coefficients_) <= np.abs(plain.coefficients_) + 1e-12)
+    far = interval_log(40, "c", vibration=0.5, offset_a=3.0).slice(0.0, 20.0)  # 3 A off on every sample
+    clear = AdaptedCurrentModel(est, method="regime", shrink=True, scope="ground").fit(far)
+    assert np.all(clear.shrink_ > 0.8)
+    run = AdaptedCurrentModel(est, method="regime", shrink=True, scope="run").fit(far)
+    assert np.all(run.shrink_ >= clear.shrink_)  # a run's own offset carries to the rest of that run
+
+
+def test_shrink_moves_a_gain_from_one_and_is_saved(two_ground_estimator, tmp_path):
+    est, train = two_ground_estimator
+    prefix = train[0].slice(0.0, 20.0)
+    plain = AdaptedCurrentModel(est, method="gain").fit(prefix)
+    shrunk = AdaptedCurrentModel(est, method="gain", shrink=True, scope="ground").fit(prefix)
+    np.testing.assert_allclose(shrunk.coefficients_[:, 0] - 1.0, (plain.coefficients_[:, 0] - 1.0) * shrunk.shrink_)
+    path = tmp_path / "shrunk.zip"
+    shrunk.save(path)
+    back = load_current_model(path)
+    np.testing.assert_array_equal(back.shrink_, shrunk.shrink_)
+    np.testing.assert_allclose(back.predict(train[2]), shrunk.predict(train[2]))
+
+
+def test_shrink_is_ignored_without_an_interval_and_by_bayes(base, two_ground_estimator):
+    run = _log(3, offset_a=1.0)
+    assert np.all(base.adapt(_head(run, 20.0), shrink=True).shrink_ == 1.0)  # a model without an interval
+    est, train = two_ground_estimator
+    bayes = AdaptedCurrentModel(est, method="bayes", shrink=True).fit(train[1].slice(0.0, 20.0))
+    assert np.all(bayes.shrink_ == 1.0)
+    with pytest.raises(InvalidParameterError, match="shrink"):
+        base.adapt(_head(run, 20.0), shrink="yes")

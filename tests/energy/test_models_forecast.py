@@ -5,7 +5,13 @@ import pytest
 from interval_samples import interval_log
 
 from energy.models import LinearCurrentModel
-from energy.models.forecast import CurrentForecast, combine_ground_sds, normal_quantile
+from energy.models.forecast import (
+    CurrentForecast,
+    central_level,
+    combine_ground_sds,
+    normal_quantile,
+    predictive_quantile,
+)
 from terrawatt_base.errors import InvalidParameterError
 
 
@@ -46,3 +52,25 @@ def test_models_without_an_interval_give_a_point_forecast():
     assert lin.training_summary.grounds == {"g": pytest.approx(2 * logs[0].duration_s)}
     assert lin.training_summary.robots == ("husky_a200",)
 
+
+
+def test_a_forecast_with_few_degrees_of_freedom_has_heavier_tails_and_is_judged_by_its_own_quantiles():
+    t = np.arange(0.0, 10.0, 0.1)
+    mean = np.ones((t.size, 2))
+    gauss = CurrentForecast(t, mean, np.full((t.size, 2), 0.2), np.zeros((t.size, 2)))
+    heavy = CurrentForecast(t, mean, np.full((t.size, 2), 0.2), np.zeros((t.size, 2)), dof=3.0)
+    g, h = gauss.charge(), heavy.charge()
+    assert g.dof == np.inf and h.dof == 3.0 and h.total_sd_as == g.total_sd_as
+    assert h.quantile(0.5) == pytest.approx(g.quantile(0.5))
+    assert h.quantile(0.95) - h.total_mean_as == pytest.approx(predictive_quantile(0.95, 3.0) * h.total_sd_as)
+    assert h.quantile(0.95) > g.quantile(0.95) and h.interval(0.8)[0] < g.interval(0.8)[0]
+    assert predictive_quantile(0.9, 1e9) == pytest.approx(normal_quantile(0.9), abs=1e-6)
+    # drawn from the Student-t itself, its own central intervals hold at their nominal level
+    z = np.random.default_rng(0).standard_t(3.0, 20000)
+    need = central_level(z, 3.0)
+    for level in (0.5, 0.8, 0.95):
+        assert np.mean(need <= level) == pytest.approx(level, abs=0.01)
+    assert np.mean(central_level(z) <= 0.95) < 0.93  # judged as Gaussian they are too narrow
+    assert np.isnan(central_level(np.nan)) and central_level(0.0) == 0.0
+    with pytest.raises(InvalidParameterError, match="dof"):
+        CurrentForecast(t, mean, np.zeros((t.size, 2)), np.zeros((t.size, 2)), dof=0.0)

@@ -45,3 +45,20 @@ def test_run_coefficients_reproduce_a_known_offset_and_a_known_gain():
     # the ridge spreads a constant over correlated columns: close to it on most samples, exact nowhere
     assert np.mean(np.abs(fitted[moving] - 1.5)) < 0.15 and np.all(fitted[~moving] == 0.0)
 
+
+
+def test_a_new_ground_forecast_is_a_student_t_with_as_many_degrees_of_freedom_as_grounds_taught_it():
+    from interval_samples import fit_two_ground_estimator, interval_log
+
+    from energy.models.uncertainty import IntervalModel
+
+    est, train = fit_two_ground_estimator()
+    assert est.interval_.n_grounds == 2 and est.interval_.new_ground_dof == 2.0
+    assert est.predict_distribution(train[0]).dof == np.inf  # a ground it trained on: Gaussian
+    new = est.predict_distribution(interval_log(50, "c"))
+    assert new.dof == 2.0 and new.charge().dof == 2.0
+    assert est.adapt(interval_log(51, "c").slice(0.0, 20.0)).predict_distribution(interval_log(52, "c")).dof == 2.0
+    plain = est.interval_.to_plain()
+    assert IntervalModel.from_plain(plain).n_grounds == 2
+    del plain["n_grounds"]  # a model file from before the count was recorded keeps its Gaussian forecasts
+    assert IntervalModel.from_plain(plain).new_ground_dof == np.inf
