@@ -229,7 +229,10 @@ def log_band_edges_hz(
     k[0] = max(k[0], 1)
     for i in range(1, k.size):  # at most a few dozen edges
         k[i] = max(k[i], k[i - 1] + 1)
-    top = int(math.floor(hi / res + 1e-9)) + 1
+    # 0.1 % of slack on the top frequency: the rate of a jittered IMU is measured to about that,
+    # and one whose median rate is 100.015 Hz (bins of 1.00015 Hz) keeps the bands of a 100 Hz one
+    # instead of losing the last bin to rounding
+    top = int(math.floor(hi / res * (1.0 + 1e-3) + 1e-9)) + 1
     if k[-1] > top:
         raise InvalidParameterError(
             f"n_bands={n_bands!r} bands of at least one {res:.4g} Hz bin do not fit between "

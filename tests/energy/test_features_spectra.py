@@ -86,6 +86,18 @@ def test_log_band_edges_give_every_band_a_bin():
         log_band_edges_hz(4, 10.0, 5.0, 1.0)
 
 
+def test_a_jittered_imu_rate_keeps_its_bands():
+    """An IMU whose median rate is a hair above 100 Hz (bins of 1.00015 Hz) gets the 12 bands of 1-12 Hz a 100 Hz one gets."""
+    nominal = log_band_edges_hz(12, 1.0, 12.0, 1.0)
+    for rate in (100.005, 100.015, 100.08):
+        res = rate / 100
+        jittered = log_band_edges_hz(12, max(1.0, res), 12.0, res)
+        assert jittered.size == nominal.size == 13
+        np.testing.assert_allclose(jittered, nominal, rtol=1e-3)
+    with pytest.raises(InvalidParameterError, match="do not fit"):
+        log_band_edges_hz(12, 1.0, 12.0, 1.01)  # a whole percent short of the last bin is still short
+
+
 def test_band_rms_places_a_sinusoid_in_its_band():
     t = np.arange(3000) / 100.0
     a = 9.81 + np.sqrt(2.0) * np.sin(2 * np.pi * 10.0 * t)  # RMS 1 at 10 Hz
