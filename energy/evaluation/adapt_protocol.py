@@ -94,7 +94,7 @@ class AdaptSettings:
     prior_s: float = 20.0
     turn_scale_radps: float = 0.3
     min_seconds: float = 5.0
-    shrink: bool = False
+    shrink: bool = True
     section_s: float = DEFAULT_SECTION_S
     robot: str | RobotParams = "husky"
     battery: Battery | None = None

@@ -242,7 +242,7 @@ def test_bayes_update_learns_a_new_ground_offset_and_narrows_its_interval(two_gr
 def test_shrink_keeps_a_residual_within_noise_and_follows_a_clear_one(two_ground_estimator):
     est, train = two_ground_estimator
     known = train[1].slice(0.0, 20.0)  # a ground the model was fitted on: the residual is noise
-    plain = AdaptedCurrentModel(est, method="regime").fit(known)
+    plain = AdaptedCurrentModel(est, method="regime", shrink=False).fit(known)
     shrunk = AdaptedCurrentModel(est, method="regime", shrink=True, scope="ground").fit(known)
     assert np.all(plain.shrink_ == 1.0)
     assert np.all(shrunk.shrink_ < 0.5)
@@ -257,7 +257,7 @@ def test_shrink_keeps_a_residual_within_noise_and_follows_a_clear_one(two_ground
 def test_shrink_moves_a_gain_from_one_and_is_saved(two_ground_estimator, tmp_path):
     est, train = two_ground_estimator
     prefix = train[0].slice(0.0, 20.0)
-    plain = AdaptedCurrentModel(est, method="gain").fit(prefix)
+    plain = AdaptedCurrentModel(est, method="gain", shrink=False).fit(prefix)
     shrunk = AdaptedCurrentModel(est, method="gain", shrink=True, scope="ground").fit(prefix)
     np.testing.assert_allclose(shrunk.coefficients_[:, 0] - 1.0, (plain.coefficients_[:, 0] - 1.0) * shrunk.shrink_)
     path = tmp_path / "shrunk.zip"
