@@ -302,11 +302,7 @@ DRIVING: dict[str, tuple[float, ...]] = {
     "straights": (0.90, 0.0, 0.0, 0.10),  # long straights: a payload and a rolling resistance look alike
     "pivots": (0.0, 0.0, 0.85, 0.15),  # turning on the spot only: a payload and a turning resistance look alike
     "cruise": (1.0, 0.0, 0.0, 0.0),  # one speed, no stops: a current gain and an offset look alike
-    "gentle": (1.0, 0.0, 0.0, 0.0),  # straights, speed changes at GENTLE_ACCEL_MPS2: a payload and a rolling
-    # resistance look alike (the inertia a payload adds shows only in hard starts)
 }
-#: The acceleration limit of ``"gentle"`` driving (m/s^2; the others drive at ``ACCEL_LIMIT_MPS2``).
-GENTLE_ACCEL_MPS2 = 0.15
 #: The one speed of ``"cruise"`` driving (m/s).
 CRUISE_SPEED_MPS = 0.6
 
@@ -494,8 +490,7 @@ def simulate_run(seed: int, effects: SimEffects = SimEffects(), duration_s: floa
     else:  # the profile's samples as holds (its own ramps are kept: each sample is a short segment)
         starts = np.asarray(commands.time_s, float) - float(commands.time_s[0])
         v_cmd, w_cmd = np.asarray(commands.v_mps, float), np.asarray(commands.omega_radps, float)
-    v = _ramped(starts, v_cmd, GENTLE_ACCEL_MPS2 if driving == "gentle" and commands is None else ACCEL_LIMIT_MPS2,
-                grid)
+    v = _ramped(starts, v_cmd, ACCEL_LIMIT_MPS2, grid)
     w = _ramped(starts, w_cmd, ALPHA_LIMIT_RADPS2, grid)
     heading = h0 + np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * dt)])
     x = x0 + np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt * np.cos(heading[:-1]))])
