@@ -11,6 +11,17 @@ Each pair is a case where the diagnosed runs cannot tell the true cause from a l
   (``"cruise"``) cropped to the cruising part (above 90 % of that speed: no rests, no starts):
   at one current, a gain and an offset are the same. The truth: ``current_gain`` (gain_left / gain_right - 1 = 0.25).
 
+- ``mass_vs_rolling``: the robot 30 kg heavier than its calibration runs, on runs at one speed
+  cropped to the cruising part (as ``gain_vs_offset``: no starts, whose inertia would show the
+  mass) across the level part of a map with a 10° ramp (:func:`slope_map`, the independent
+  simulator's :data:`SLOPE`): on level ground a payload scales the rolling resistance and
+  nothing else, so a larger rolling resistance (or an idle current, or an offset: at one speed
+  all are one constant) fits as well; uphill, gravity scales with the mass and not with the
+  rolling resistance. The diagnosis is
+  given the map (the model calibrated on level runs is put on it), so its separating drive
+  may go up and back down the ramp; the drive is simulated where the diagnosis placed it.
+  The truth: ``mass`` (mass scale - 1 = 0.6).
+
 Protocol per pair and seed: 6 calibration runs of the robot before the change (mixed
 driving) fit ``PhysicsCurrentModel("husky", "flooring")``; 6 diagnosed runs with the change;
 ``diagnose`` (the library call ``terrawatt diagnose`` makes). Recorded: whether a tie holding
@@ -20,8 +31,11 @@ by the independent simulator with the change, as many runs as asked (at most ``-
 the measured difference on the first against the expected one, and the diagnosis again with
 those runs added to the data: the truth first, its fitted value within 20 %, a tie left.
 
-Not covered here (the independent simulator has no slope, and its inertia case is not yet
-designed): mass against rolling resistance on a slope, inertia against a sensor lag.
+For a pair on a map, the difference is also given in noise units over the drive's samples on
+the ramp (``noise_units_ramp``), where the two explanations part.
+
+Not covered here: inertia against a sensor lag (the catalogue has no rotor-inertia candidate:
+docs/results.md, issue 31).
 
 Usage::
 
@@ -39,17 +53,45 @@ import time
 from pathlib import Path
 from typing import Any
 
+import math
+
 import numpy as np
 
 import energy
 from energy.diagnosis import diagnose
+from terrain import TerrainMap
 from terrawatt_base.atomic import write_json_atomic
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/ is no package: its siblings by path
 import independent_sim as sim  # noqa: E402
 
+#: The ramp of the map pairs: rising 10° along +x from x = 70 m to 90 m, a plateau beyond (the manoeuvres
+#: the diagnosis places near the map's centre, 20 m from its foot, drive on level ground).
+SLOPE = sim.Slope(math.radians(10.0), start_m=70.0, length_m=20.0)
+#: The map's extent (m, from the origin) and cell size: room for a straight run of 90 s along +y.
+MAP_EXTENT_M = (100.0, 100.0)
+MAP_CELL_M = 1.0
+
+
+def slope_map() -> TerrainMap:
+    """The independent simulator's :data:`SLOPE` as the map the diagnosis is given: its elevation at the
+    cell centres over :data:`MAP_EXTENT_M`, flooring everywhere."""
+    cols, rows = (int(round(e / MAP_CELL_M)) for e in MAP_EXTENT_M)
+    x = (np.arange(cols) + 0.5) * MAP_CELL_M
+    y = (np.arange(rows) + 0.5) * MAP_CELL_M
+    xx, yy = np.meshgrid(x, y)
+    return TerrainMap(SLOPE.elevation_m(xx, yy), MAP_CELL_M, ground=np.zeros((rows, cols), np.int16),
+                      ground_names={0: "flooring"})
+
+
+def _level_start(k: int) -> tuple[float, float, float]:
+    """Where diagnosed run ``k`` of a map pair starts: on the level part, heading +y (along the contour)."""
+    return 5.0 + 3.0 * k, 5.0, math.pi / 2
+
+
 #: The pairs: calibration effects, diagnosed effects, driving, the speed above which the runs are
-#: kept (None: whole runs), the catalogue effects that are the truth, how to read its size and the size.
+#: kept (None: whole runs), the catalogue effects that are the truth, how to read its size and the size;
+#: ``slope``: the runs and the drive on the ramp's map (the diagnosed runs start at ``_level_start``).
 PAIRS: dict[str, dict[str, Any]] = {
     "payload_vs_turning": {
         "calibration": sim.SimEffects(turning_mu_max=0.4),
@@ -62,6 +104,12 @@ PAIRS: dict[str, dict[str, Any]] = {
         "diagnosed": sim.SimEffects(left_gain=1.25),
         "driving": "cruise", "crop": 0.9 * sim.CRUISE_SPEED_MPS, "truth": ("current_gain",),
         "value": ("gain_ratio", 0.25),
+    },
+    "mass_vs_rolling": {
+        "calibration": sim.SimEffects(),
+        "diagnosed": sim.SimEffects(payload_kg=30.0),
+        "driving": "cruise", "crop": 0.9 * sim.CRUISE_SPEED_MPS, "truth": ("mass",),
+        "value": ("mass_scale", 30.0 / sim.MASS_KG), "slope": SLOPE,
     },
 }
 TARGETS = {"tie_named_pct": 100.0, "truth_first_after_pct": 90.0, "value_ok_after_pct": 90.0,
@@ -93,11 +141,16 @@ def run_pair(name: str, seed: int, max_repeats: int) -> dict[str, Any]:
     pair = PAIRS[name]
     cal = [sim.simulate_run(50_000 + 1000 * seed + k, pair["calibration"]) for k in range(RUNS)]
     model = energy.PhysicsCurrentModel("husky", "flooring").fit(cal)
-    logs = [sim.simulate_run(10_000 + 1000 * seed + k, pair["diagnosed"], driving=pair["driving"]) for k in range(RUNS)]
+    slope = pair.get("slope")
+    terrain = None if slope is None else slope_map()
+    if terrain is not None:
+        model = model.with_terrain(terrain)  # calibrated on level runs, put on the map the runs drive
+    logs = [sim.simulate_run(10_000 + 1000 * seed + k, pair["diagnosed"], driving=pair["driving"], slope=slope,
+                             start_pose=None if slope is None else _level_start(k)) for k in range(RUNS)]
     if pair["crop"] is not None:
         logs = [_moving_part(log, pair["crop"]) for log in logs]
     t0 = time.perf_counter()
-    d = diagnose(model, logs)
+    d = diagnose(model, logs, terrain=terrain)
     row: dict[str, Any] = {"pair": name, "seed": seed, "diagnose_s": time.perf_counter() - t0,
                            "chosen": list(d.chosen), "ties": [t.to_dict() for t in d.ties]}
     truth = set(pair["truth"])
@@ -110,16 +163,20 @@ def run_pair(name: str, seed: int, max_repeats: int) -> dict[str, Any]:
         "expected_difference_a": drive.expected_difference_a, "noise_a": drive.noise_a,
         "noise_units": drive.noise_units, "equivalent": list(drive.equivalent),
         "z_min": min((p.z_per_repeat for p in drive.separated.values()), default=None)}
+    if drive is not None and slope is not None and drive.separated:
+        row["drive"]["noise_units_ramp"] = _noise_units_on(drive, slope)
     if drive is None or not drive.separated:
         return row
     n = min(max(drive.repeats, 1), max_repeats)
-    runs = [sim.simulate_run(70_000 + 1000 * seed + r, pair["diagnosed"], commands=drive.profile) for r in range(n)]
+    start = None if drive.profile.pose_xyh is None else tuple(drive.profile.pose_xyh[0])
+    runs = [sim.simulate_run(70_000 + 1000 * seed + r, pair["diagnosed"], commands=drive.profile, slope=slope,
+                             start_pose=start if slope is not None else None) for r in range(n)]
     scores = drive.score(runs[0])
     row["measured_over_expected"] = {alt: scores[alt]["measured_difference_a"] / drive.best.pairs[alt].difference_rms_a
                                      for alt in drive.separated}
     row["projection"] = {alt: scores[alt]["projection"] for alt in drive.separated}
     row["drive_runs"] = n
-    after = diagnose(model, logs + runs)
+    after = diagnose(model, logs + runs, terrain=terrain)
     row["chosen_after"] = list(after.chosen)
     row["truth_first_after"] = bool(after.chosen) and after.chosen[0] in truth
     row["tie_after"] = any(truth & set(t.effects) for t in after.ties)
@@ -128,6 +185,20 @@ def run_pair(name: str, seed: int, max_repeats: int) -> dict[str, Any]:
     row["value_after"] = {"fitted": value, "truth": size}
     row["value_ok_after"] = value is not None and abs(value / size - 1.0) <= VALUE_TOL
     return row
+
+
+def _noise_units_on(drive: Any, slope: Any) -> float | None:
+    """The drive's smallest difference of a separable pair in noise units over its samples on the ramp
+    (None: none of them is)."""
+    pose = drive.profile.pose_xyh
+    if pose is None:
+        return None
+    on = slope.on_ramp(pose[:, 0], pose[:, 1])
+    if not on.any():
+        return None
+    chosen = drive.predictions[drive.effects[0]]
+    return min(float(np.sqrt(np.mean((drive.predictions[alt][on] - chosen[on]) ** 2))) / drive.noise_a
+               for alt in drive.separated)
 
 
 def _pct(flags: list[bool]) -> float | None:
@@ -154,9 +225,15 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, Any]:
             "runs_median": statistics.median([r["drive_runs"] for r in driven]) if driven else None,
             "z_min": min((r["drive"]["z_min"] for r in driven), default=None),
             "noise_units_median": statistics.median([r["drive"]["noise_units"] for r in driven]) if driven else None,
+            "noise_units_ramp_range": _range([r["drive"].get("noise_units_ramp") for r in driven]),
             "measured_over_expected_range": (min(ratios), max(ratios)) if ratios else None,
         }
     return out
+
+
+def _range(values: list[float | None]) -> tuple[float, float] | None:
+    got = [v for v in values if v is not None]
+    return (min(got), max(got)) if got else None
 
 
 def _f(x: Any, fmt: str = ".1f") -> str:
@@ -167,15 +244,16 @@ def table(summary: dict[str, Any]) -> str:
     """The summary as a text table."""
     head = (f"{'pair':<20} {'seeds':>5} {'tie named %':>11} {'1st before %':>12} {'driven':>6} {'1st after %':>11} "
             f"{'value ok %':>10} {'tie left %':>10} {'drive s':>7} {'runs':>4} {'z min':>6} {'x noise':>7} "
-            f"{'meas/exp':>11}")
+            f"{'meas/exp':>11} {'x noise ramp':>12}")
     lines = [head, "-" * len(head)]
     for name, s in summary.items():
-        rng = s["measured_over_expected_range"]
+        rng, ramp = s["measured_over_expected_range"], s["noise_units_ramp_range"]
         lines.append(f"{name:<20} {s['seeds']:>5} {_f(s['tie_named_pct']):>11} {_f(s['truth_first_before_pct']):>12} "
                      f"{s['driven']:>6} {_f(s['truth_first_after_pct']):>11} {_f(s['value_ok_after_pct']):>10} "
                      f"{_f(s['tie_left_after_pct']):>10} {_f(s['drive_s_max']):>7} {_f(s['runs_median'], '.0f'):>4} "
                      f"{_f(s['z_min']):>6} {_f(s['noise_units_median'], '.2f'):>7} "
-                     f"{'–' if rng is None else f'{rng[0]:.2f}-{rng[1]:.2f}':>11}")
+                     f"{'–' if rng is None else f'{rng[0]:.2f}-{rng[1]:.2f}':>11} "
+                     f"{'–' if ramp is None else f'{ramp[0]:.2f}-{ramp[1]:.2f}':>12}")
     return "\n".join(lines)
 
 

@@ -26,6 +26,13 @@ Physics (SI, per side s in {L, R}, sigma_L = -1, sigma_R = +1), integrated on a 
   Stribeck nor linear viscous).
 - ``payload``: the mass ``m = 50 kg + payload`` in every mass term (rolling, inertia, yaw
   inertia, turning moment).
+- ``slope`` (a :class:`Slope`, the ground the robot drives on: level when None): with the
+  ground rising at ``theta`` along the uphill heading ``psi`` (a ramp between two distances
+  along it, level before and after; a plane when unbounded), the pitch along the heading ``h``
+  is ``atan(tan(theta) cos(h - psi))``; gravity pulls ``F_g,s = m g sin(pitch) / 2`` per side
+  back down, and the normal force (rolling, turning) is ``m g cos(theta)``. The robot's pose is
+  integrated from its true motion from ``start_pose``; standing still on a slope, the motors
+  hold it (the current of the holding torque).
 - DC motor per side, motoring only: wheel torque ``T_s = F_s r``; the motor current in the
   direction of rotation is ``I_s = max(T_s sign(v_s), 0) / (eta N K_t)``: a back-driven
   (braking) side logs 0, as the Husky driver does.
@@ -46,6 +53,9 @@ Measurement (BorealTC-like, PHYSICS_NOTES "What the real logs show"):
 - ``current_lag`` (a lag a current model can see, unlike ``lag``): the currents' stamps run ``current_lag_s``
   late against the speeds and the IMU (the sample stamped t holds the speeds of t and the
   currents of ``t - current_lag_s``).
+
+Poses: with a ``slope`` or a ``start_pose`` the drive stream carries the true pose
+(``pose_xyh``: x, y in m, heading in rad) at each sample, else none (as before).
 
 Randomness: one :class:`numpy.random.SeedSequence` per run, spawned into separate streams
 for the excitation, the current noise, the IMU and the run-level gains, so the same seed
@@ -76,6 +86,7 @@ __all__ = [
     "CASES",
     "DRIVING",
     "SimEffects",
+    "Slope",
     "case_effects",
     "command_segments",
     "simulate_run",
@@ -170,6 +181,70 @@ class SimEffects:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and ok):
                 raise ValueError(f"SimEffects.{name} is out of range: {value!r}")
+
+
+@dataclass(frozen=True)
+class Slope:
+    """The ground the robot drives on: rising at ``angle_rad`` along ``uphill_heading_rad`` between the
+    distances ``start_m`` and ``start_m + length_m`` along that heading from the origin, level before
+    and after (a ramp up to a plateau); unbounded (the defaults), an inclined plane.
+
+    Parameters
+    ----------
+    angle_rad : float
+        Inclination of the ramp (rad, in [0, 30°]).
+    uphill_heading_rad : float
+        Direction in which the ground rises (rad, counter-clockwise from +x).
+    start_m, length_m : float
+        Where the ramp starts along the uphill heading (m, -inf: everywhere below) and its length
+        (m, > 0, inf: everywhere above).
+
+    Examples
+    --------
+    >>> ramp = Slope(math.radians(10.0), start_m=30.0, length_m=20.0)
+    >>> [round(float(z), 3) for z in ramp.elevation_m(np.array([0.0, 40.0, 60.0]), np.zeros(3))]
+    [0.0, 1.763, 3.527]
+    """
+
+    angle_rad: float
+    uphill_heading_rad: float = 0.0
+    start_m: float = -math.inf
+    length_m: float = math.inf
+
+    def __post_init__(self) -> None:
+        checks = {
+            "angle_rad": math.isfinite(self.angle_rad) and 0.0 <= self.angle_rad <= math.radians(30.0),
+            "uphill_heading_rad": math.isfinite(self.uphill_heading_rad),
+            "start_m": not math.isnan(self.start_m) and self.start_m < math.inf,
+            "length_m": not math.isnan(self.length_m) and self.length_m > 0.0,
+        }
+        for name, ok in checks.items():
+            if not ok:
+                raise ValueError(f"Slope.{name} is out of range: {getattr(self, name)!r}")
+
+    def _along(self, x_m: np.ndarray, y_m: np.ndarray) -> np.ndarray:
+        return x_m * math.cos(self.uphill_heading_rad) + y_m * math.sin(self.uphill_heading_rad)
+
+    def on_ramp(self, x_m: np.ndarray, y_m: np.ndarray) -> np.ndarray:
+        """Whether each point lies on the inclined part."""
+        s = self._along(np.asarray(x_m, float), np.asarray(y_m, float))
+        return (s >= self.start_m) & (s - self.start_m <= self.length_m)
+
+    def elevation_m(self, x_m: np.ndarray, y_m: np.ndarray) -> np.ndarray:
+        """Height of the ground at each point (m; 0 at the ramp's foot, or along the line through the
+        origin across the heading for a plane)."""
+        s = self._along(np.asarray(x_m, float), np.asarray(y_m, float))
+        foot = self.start_m if math.isfinite(self.start_m) else 0.0
+        return math.tan(self.angle_rad) * (np.clip(s, self.start_m, self.start_m + self.length_m) - foot)
+
+    def pitch_rad(self, x_m: np.ndarray, y_m: np.ndarray, heading_rad: np.ndarray) -> np.ndarray:
+        """Pitch along each heading at each point (rad, positive nose-up)."""
+        grade = np.where(self.on_ramp(x_m, y_m), math.tan(self.angle_rad), 0.0)
+        return np.arctan(grade * np.cos(np.asarray(heading_rad, float) - self.uphill_heading_rad))
+
+    def cos_tilt(self, x_m: np.ndarray, y_m: np.ndarray) -> np.ndarray:
+        """Cosine of the ground's inclination at each point (the share of the weight pressing on it)."""
+        return np.where(self.on_ramp(x_m, y_m), math.cos(self.angle_rad), 1.0)
 
 
 #: The benchmark's cases: one effect each (its default size), and ``none``.
@@ -290,9 +365,12 @@ def _ramped(starts: np.ndarray, target: np.ndarray, limit: float, grid: np.ndarr
 
 
 # ---------------------------------------------------------------------------- physics
-def _side_currents(v: np.ndarray, w: np.ndarray, dt_s: float, fx: SimEffects) -> tuple[np.ndarray, ...]:
-    """Motor currents (A, motoring only) of the left and right sides on the simulation grid."""
+def _side_currents(v: np.ndarray, w: np.ndarray, dt_s: float, fx: SimEffects, pitch: Any = 0.0,
+                   cos_tilt: Any = 1.0) -> tuple[np.ndarray, ...]:
+    """Motor currents (A, motoring only) of the left and right sides on the simulation grid, on ground
+    pitched by ``pitch`` (rad, along the heading) and inclined by ``arccos(cos_tilt)``."""
     m = MASS_KG + fx.payload_kg
+    cos_tilt = np.asarray(cos_tilt, float)  # the share of the weight that is the normal force
     b = TRACK_WIDTH_M
     half_wheelbase = WHEELBASE_M / 2.0
     a = np.gradient(v, dt_s)
@@ -302,7 +380,7 @@ def _side_currents(v: np.ndarray, w: np.ndarray, dt_s: float, fx: SimEffects) ->
     if fx.turning_mu_max > 0.0:
         radius = np.abs(v) / np.maximum(np.abs(w), 1e-9)
         mu_lat = fx.turning_mu_max / (0.925 + 0.15 * radius / b)
-        turn_couple = mu_lat * m * GRAVITY_MPS2 * half_wheelbase / b * np.tanh(w / 0.01)
+        turn_couple = mu_lat * m * GRAVITY_MPS2 * cos_tilt * half_wheelbase / b * np.tanh(w / 0.01)
     else:
         turn_couple = np.zeros_like(v)
     out = []
@@ -310,7 +388,8 @@ def _side_currents(v: np.ndarray, w: np.ndarray, dt_s: float, fx: SimEffects) ->
         v_s = v + sigma * ICR_EXPANSION * b * w / 2.0
         a_s = a + sigma * ICR_EXPANSION * b * alpha / 2.0
         force = (
-            0.5 * ROLLING_RESISTANCE_COEF * m * GRAVITY_MPS2 * np.tanh(v_s / 0.01)
+            0.5 * ROLLING_RESISTANCE_COEF * m * GRAVITY_MPS2 * cos_tilt * np.tanh(v_s / 0.01)
+            + 0.5 * m * GRAVITY_MPS2 * np.sin(pitch)
             + 0.5 * m * a
             + sigma * yaw_inertia * alpha / b
             + m_rot * a_s
@@ -337,7 +416,8 @@ def _quantise(current_a: np.ndarray) -> np.ndarray:
 
 def simulate_run(seed: int, effects: SimEffects = SimEffects(), duration_s: float | None = None,
                  *, ideal: bool = False, label: str = "", driving: str = "mixed",
-                 commands: Any = None) -> InteractionLog:
+                 commands: Any = None, slope: Slope | None = None,
+                 start_pose: Sequence[float] | None = None) -> InteractionLog:
     """One simulated Husky run on flooring-like hard ground.
 
     Parameters
@@ -360,12 +440,18 @@ def simulate_run(seed: int, effects: SimEffects = SimEffects(), duration_s: floa
         Drive these commands instead (an :class:`energy.CommandProfile`: the robot follows
         them within its controller's limits, as any command); the run then lasts as long as
         the profile and ``duration_s`` is ignored.
+    slope : Slope, optional
+        The ground driven on (default: level everywhere); its pitch under the robot's pose enters
+        the physics.
+    start_pose : (x_m, y_m, heading_rad), optional
+        Where the run starts (default the origin, heading +x).
 
     Returns
     -------
     InteractionLog
-        Drive stream ~6.5 Hz (measured v, omega; left/right currents), IMU 100 Hz
-        (vertical acceleration with gravity, gyro yaw rate);
+        Drive stream ~6.5 Hz (measured v, omega; left/right currents; the true pose when a
+        ``slope`` or a ``start_pose`` is given), IMU 100 Hz (vertical acceleration with gravity,
+        gyro yaw rate);
         ``LogMeta(robot="husky", source="independent-sim", ground_label="flooring")``.
 
     Examples
@@ -379,6 +465,12 @@ def simulate_run(seed: int, effects: SimEffects = SimEffects(), duration_s: floa
     cmd_rng, cur_rng, imu_rng, run_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(4))
     if driving not in DRIVING:
         raise KeyError(f"unknown driving {driving!r}; expected one of {sorted(DRIVING)!r}")
+    if slope is not None and not isinstance(slope, Slope):
+        raise TypeError(f"slope must be a Slope or None, got {slope!r}")
+    placed = slope is not None or start_pose is not None
+    x0, y0, h0 = (0.0, 0.0, 0.0) if start_pose is None else (float(c) for c in start_pose)
+    if not all(math.isfinite(c) for c in (x0, y0, h0)):
+        raise ValueError(f"start_pose must be three finite numbers (x_m, y_m, heading_rad), got {start_pose!r}")
     if commands is not None:
         duration_s = float(commands.time_s[-1] - commands.time_s[0])
     if duration_s is None:
@@ -400,7 +492,14 @@ def simulate_run(seed: int, effects: SimEffects = SimEffects(), duration_s: floa
         v_cmd, w_cmd = np.asarray(commands.v_mps, float), np.asarray(commands.omega_radps, float)
     v = _ramped(starts, v_cmd, ACCEL_LIMIT_MPS2, grid)
     w = _ramped(starts, w_cmd, ALPHA_LIMIT_RADPS2, grid)
-    i_left, i_right = _side_currents(v, w, dt, effects)
+    heading = h0 + np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * dt)])
+    x = x0 + np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt * np.cos(heading[:-1]))])
+    y = y0 + np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt * np.sin(heading[:-1]))])
+    if slope is None:
+        pitch, cos_tilt = np.zeros_like(v), np.ones_like(v)
+    else:
+        pitch, cos_tilt = slope.pitch_rad(x, y, heading), slope.cos_tilt(x, y)
+    i_left, i_right = _side_currents(v, w, dt, effects, pitch, cos_tilt)
 
     # drive stream: stamps late by drive_lag_s against the motion (and the IMU)
     td = _stamps(duration_s, DRIVE_RATE_HZ, DRIVE_JITTER_S, cur_rng)
@@ -414,6 +513,7 @@ def simulate_run(seed: int, effects: SimEffects = SimEffects(), duration_s: floa
         logged.append(reading if ideal else _quantise(reading + noise))
     v_log = np.interp(t_true, grid, v) + cur_rng.normal(0.0, ODOMETRY_NOISE_MPS, td.size)
     w_log = np.interp(t_true, grid, w) + cur_rng.normal(0.0, ODOMETRY_NOISE_RADPS, td.size)
+    pose = (np.column_stack([np.interp(t_true, grid, q) for q in (x, y, heading)]) if placed else None)
 
     # IMU stream on the true clock
     ta = _stamps(duration_s, IMU_RATE_HZ, IMU_JITTER_S, imu_rng)
@@ -422,13 +522,13 @@ def simulate_run(seed: int, effects: SimEffects = SimEffects(), duration_s: floa
     tread_hz = v_a * TREAD_LUGS / (2.0 * np.pi * WHEEL_RADIUS_M)
     phase = 2.0 * np.pi * np.concatenate([[0.0], np.cumsum(0.5 * (tread_hz[1:] + tread_hz[:-1]) * np.diff(ta))])
     vib_std = 0.03 + 0.25 * v_a + 0.2 * np.abs(w_a)
-    accel_z = GRAVITY_MPS2 + vib_std * imu_rng.normal(0.0, 1.0, ta.size) + 0.15 * v_a * np.sin(phase)
+    accel_z = GRAVITY_MPS2 * np.interp(ta, grid, cos_tilt) + vib_std * imu_rng.normal(0.0, 1.0, ta.size) + 0.15 * v_a * np.sin(phase)
     gyro = w_a + gyro_bias + imu_rng.normal(0.0, GYRO_NOISE_RADPS, ta.size)
 
     notes = f"independent Husky simulator, seed {seed}" + (f", case {label}" if label else "")
     return InteractionLog(
         time_s=td, v_mps=v_log, omega_radps=w_log, current_left_a=logged[0], current_right_a=logged[1],
-        accel_time_s=ta, accel_z_mps2=accel_z, gyro_z_radps=gyro,
+        accel_time_s=ta, accel_z_mps2=accel_z, gyro_z_radps=gyro, pose_xyh=pose,
         meta=LogMeta(robot="husky", source="independent-sim", ground_label="flooring", velocity_source="measured",
                      track_width_m=ICR_EXPANSION * TRACK_WIDTH_M, notes=notes),
     )

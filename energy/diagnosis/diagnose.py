@@ -325,7 +325,7 @@ def _select(model: CurrentModel, items: list[InteractionLog], predictions: list[
     corrected = CorrectedCurrentModel(model, list(chosen), robot, terrain).fit(items)
     names = tuple(e.name for e in chosen)
     ties = _ties(sel, data)
-    drives = _separating_drives(sel, ties, data, model, items, robot, terrain)
+    drives = _separating_drives(sel, ties, data, model, items, robot, terrain, sp)
     more = _more_data(sel, data, model, items, robot, terrain, sp) if not sel.chosen else {}
     verdict = _verdict(before, after, ranking, names, localisation, skipped, sp.kind, power, ties, drives)
     if more:
@@ -337,9 +337,10 @@ def _select(model: CurrentModel, items: list[InteractionLog], predictions: list[
 
 
 def _separating_drives(sel: Selection, ties: Sequence[Tie], data: DiagnosisData, model: CurrentModel,
-                       items: list[InteractionLog], robot: Any, terrain: Any) -> tuple[SeparatingDrive, ...]:
+                       items: list[InteractionLog], robot: Any, terrain: Any, sp: Split) -> tuple[SeparatingDrive, ...]:
     """Per tie, the drive that tells its fitted explanations apart (:func:`separating_drive`), within
-    :data:`DRIVE_LIMIT_SHARE` of the robot's limits (:func:`_drive_limits`)."""
+    :data:`DRIVE_LIMIT_SHARE` of the robot's limits (:func:`_drive_limits`), with as many runs as the
+    split's units need to order the pair."""
     if not ties:
         return ()
     vmax, wmax, amax = _drive_limits(model, items, robot)
@@ -351,10 +352,16 @@ def _separating_drives(sel: Selection, ties: Sequence[Tie], data: DiagnosisData,
         models = {n: CorrectedCurrentModel(model, base + [by_name[n]], robot, terrain).fit(items) for n in tie.effects}
         noise = residual_noise(data.measured, sel.trials[k][tie.chosen].held_out_a, items)
         before = CorrectedCurrentModel(model, base, robot, terrain).fit(items)
-        drive = separating_drive(tie.effects, models, items[0], noise, vmax, wmax, amax, base=before, terrain=terrain)
+        drive = separating_drive(tie.effects, models, items[0], noise, vmax, wmax, amax, base=before, terrain=terrain,
+                                 **_units(sp, items))
         if drive is not None:
             out.append(drive)
     return tuple(out)
+
+
+def _units(sp: Split, items: list[InteractionLog]) -> dict[str, int]:
+    """The units the split resamples and how many a run adds (1, or its blocks)."""
+    return {"n_units": int(sp.n_units), "units_per_run": max(int(round(sp.n_units / max(len(items), 1))), 1)}
 
 
 #: A test drive stays within this share of the robot's top speed and yaw rate.

@@ -129,11 +129,14 @@ def basis_breakdown(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[
 def motoring_currents_a(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[str, ...] | None = None,
                         robot: RobotParams | None = None, ground: Any = None, ground_index: Any = None,
                         slope_rad: Any = None) -> np.ndarray:
-    """Per-side motor current in the direction of rotation (N, 2), A, no idle, no clamp.
+    """Per-side motor current in the direction of rotation (N, 2), A, no idle, no clamp; 0 at rest.
 
     The physics of ``basis`` (or the given ``effects`` / ``robot`` / ``ground``, which may be
     a list of GroundParams with ``ground_index``) for the log's ``v``, ``omega``, their time
-    derivatives and ``slope_rad`` — what :class:`~energy.PhysicsCurrentModel` predicts.
+    derivatives and ``slope_rad`` — what :class:`~energy.PhysicsCurrentModel` predicts: where
+    the log stands still (:func:`energy.logs.rest_samples`) no motoring current, as the model
+    predicts its rest level alone there (a robot standing on a slope is not charged the
+    current of holding it, and a candidate that scales gravity changes nothing at rest).
 
     Raises
     ------
@@ -144,7 +147,8 @@ def motoring_currents_a(basis: PhysicsBasis, log: InteractionLog, *, effects: tu
                           slope_rad=slope_rad)
     i_m = np.asarray(res.motor_current_a)
     sign = np.sign(np.asarray(res.motor_speed_radps))
-    return np.where(sign != 0, i_m * sign, np.abs(i_m))
+    motoring = np.where(sign != 0, i_m * sign, np.abs(i_m))
+    return np.where(rest_samples(log)[:, None], 0.0, motoring)
 
 
 def unclipped_prediction(model: Any, log: InteractionLog, basis: PhysicsBasis | None = None) -> np.ndarray:

@@ -23,6 +23,13 @@ probability after ``ceil((2 * 1.645 / z)^2)`` repeats. The expected difference i
 an RMS current (A) and in noise units (``RMS(d) / noise_a``). Both assume that one of the fitted
 models is right up to the noise; where neither is (a misfit both share), a driven repeat shows a
 smaller difference than expected: :meth:`SeparatingDrive.score` measures it.
+
+The diagnosis itself orders a tied pair by the runs: the 95 % bootstrap interval of the mean lead
+per run (the runs resampled) must clear 0. Where the runs already diagnosed do not order the pair,
+that interval clears 0 only once fewer than 2.5 % of the resamples hold none of the drive's runs,
+``(N / (N + n))^(N + n) < 0.025`` for ``N`` runs diagnosed and ``n`` runs of the drive (4 runs for
+6 diagnosed ones, however clear each of them is): :func:`runs_to_order`. A drive's
+:attr:`SeparatingDrive.repeats` is the larger of the two counts.
 """
 
 from __future__ import annotations
@@ -47,7 +54,8 @@ from .noise import ResidualNoise
 from .selection import SIGNIFICANT_SHRINK_PCT
 
 __all__ = ["SeparatingDrive", "DriveCandidate", "PairSeparation", "manoeuvre_library", "separating_drive",
-           "drive_log", "slope_drive", "REPEAT_Z", "MAX_DRIVE_S", "MAX_REPEATS", "ORDER_PCT"]
+           "drive_log", "slope_drive", "runs_to_order", "REPEAT_Z", "MAX_DRIVE_S", "MAX_REPEATS", "ORDER_PCT",
+           "ORDER_TAIL"]
 
 #: One-sided 95 % normal quantile: a repeat count is enough when the midpoint decision errs < 5 %.
 REPEAT_Z = 1.6448536269514722
@@ -61,6 +69,8 @@ MIN_OMEGA_RADPS = 0.05
 #: Points of a unit's gap by which one explanation must lead on average to be ordered (the
 #: diagnosis's significance threshold).
 ORDER_PCT = SIGNIFICANT_SHRINK_PCT
+#: The lower tail of the diagnosis's 95 % bootstrap interval, which must clear 0 for a pair to be ordered.
+ORDER_TAIL = 0.025
 _REST_S = 2.0
 _ACCEL_MPS2 = 0.5  # command ramps: gentle, within any ground robot's limits
 _ALPHA_RADPS2 = 1.0
@@ -144,6 +154,7 @@ class SeparatingDrive:
     equivalent: tuple[str, ...] = ()
     library: tuple[DriveCandidate, ...] = field(default_factory=tuple)
     models: dict[str, Any] = field(default_factory=dict)
+    runs_to_order: int = 1
 
     @property
     def separated(self) -> dict[str, PairSeparation]:
@@ -152,8 +163,12 @@ class SeparatingDrive:
 
     @property
     def repeats(self) -> int:
-        """Runs of the drive that settle every separable pair at 95 % (0: none is separable)."""
-        return max((v.repeats for v in self.separated.values()), default=0)
+        """Runs of the drive that settle every separable pair at 95 % (0: none is separable): what its
+        matched-filter test needs, and at least what the diagnosis's ordering of the runs needs
+        (:attr:`runs_to_order`)."""
+        if not self.separated:
+            return 0
+        return max(max(v.repeats for v in self.separated.values()), self.runs_to_order)
 
     @property
     def expected_difference_a(self) -> float:
@@ -213,6 +228,7 @@ class SeparatingDrive:
                 "repeats": self.repeats, "expected_difference_a": self.expected_difference_a,
                 "noise_units": self.noise_units, "noise_a": self.noise_a, "run_spread_a": self.run_spread_a,
                 "autocorrelation": self.autocorrelation, "equivalent": list(self.equivalent),
+                "runs_to_order": self.runs_to_order,
                 "library": [c.to_dict() for c in self.library]}
 
     def to_csv(self) -> str:
@@ -252,6 +268,25 @@ class SeparatingDrive:
         ax.legend(fontsize=8, ncol=2)
         fig.tight_layout()
         return fig
+
+
+def runs_to_order(n_units: int, units_per_run: int = 1, tail: float = ORDER_TAIL) -> int:
+    """Runs of a separating drive that let the diagnosis order a pair its ``n_units`` units (runs, or
+    blocks) do not: the fewest ``n`` with ``(N / (N + n u))^(N + n u) < tail`` (``u`` units per run),
+    so that fewer than ``tail`` of the bootstrap's resamples of the units hold none of the drive's.
+
+    Examples
+    --------
+    >>> runs_to_order(6), runs_to_order(2), runs_to_order(6, units_per_run=5)
+    (4, 3, 1)
+    """
+    n_units, per = int(n_units), max(int(units_per_run), 1)
+    if n_units < 1:
+        return 1
+    n = 1
+    while (n_units / (n_units + n * per)) ** (n_units + n * per) >= tail:
+        n += 1
+    return n
 
 
 def _ramp(targets: Sequence[tuple[float, float, float]], dt_s: float, accel_mps2: float = _ACCEL_MPS2) -> CommandProfile:
@@ -392,7 +427,8 @@ def drive_log(profile: CommandProfile, like: InteractionLog) -> InteractionLog:
 
 def separating_drive(effects: Sequence[str], models: dict[str, Any], like: InteractionLog, noise: ResidualNoise,
                      max_speed_mps: float, max_omega_radps: float, max_accel_mps2: float = _ACCEL_MPS2, *,
-                     base: Any = None, terrain: Any = None) -> SeparatingDrive | None:
+                     base: Any = None, terrain: Any = None, n_units: int = 0,
+                     units_per_run: int = 1) -> SeparatingDrive | None:
     """Search the library (:func:`manoeuvre_library`, each manoeuvre alone and each two in a row
     within :data:`MAX_DRIVE_S`; with a ``terrain`` map, also :func:`slope_drive`) for the drive that
     separates ``effects[0]``'s fitted model from every other one of ``effects``, against the
@@ -409,7 +445,9 @@ def separating_drive(effects: Sequence[str], models: dict[str, Any], like: Inter
     (effect and noise), at least :data:`ORDER_PCT` (a drive that does not is no separating
     drive, however many runs of it). Drives that settle every pair some drive settles within
     :data:`MAX_REPEATS` runs come first (the other pairs are :attr:`SeparatingDrive.equivalent`),
-    then the largest difference in noise units, then the shortest. Returns None when the library holds no drive (runs that
+    then the largest difference in noise units, then the shortest. ``n_units`` (and ``units_per_run``): the
+    units the diagnosis resamples, from which :func:`runs_to_order` gives the least runs of the drive it
+    asks for (0: one run). Returns None when the library holds no drive (runs that
     neither drove nor turned).
     """
     chosen, alts = effects[0], list(effects[1:])
@@ -456,7 +494,8 @@ def separating_drive(effects: Sequence[str], models: dict[str, Any], like: Inter
     scored.sort(key=lambda c: (not settles(c[0]), -clearest(c[0]), c[0].duration_s))
     best, profile, preds, drive_noise = scored[0]
     return SeparatingDrive(tuple(effects), best, profile, preds, drive_noise, float(spread), float(noise.autocorrelation),
-                           equivalent, tuple(c[0] for c in scored), {n: models[n] for n in effects})
+                           equivalent, tuple(c[0] for c in scored), {n: models[n] for n in effects},
+                           runs_to_order(n_units, units_per_run) if n_units > 0 else 1)
 
 
 def _drives(max_speed_mps: float, max_omega_radps: float, dt: float, accel: float,

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import doctest
 import importlib.util
+import math
 import sys
 from pathlib import Path
 
@@ -216,6 +217,57 @@ def test_case_effects():
         sim.case_effects("none:1")
     with pytest.raises(ValueError, match="drive_lag_s"):
         sim.SimEffects(drive_lag_s=5.0)
+
+
+def _cruise(seed=SEED, **kw):
+    return sim.simulate_run(seed, duration_s=30.0, driving="cruise", **kw)
+
+
+def test_uphill_draws_more_than_level_than_downhill():
+    """On a 10° plane, a straight at one speed: uphill the motors lift the robot (gravity, m g sin 10° = 85 N,
+    well above the 15 N of rolling); downhill gravity pushes harder than rolling holds back, so the back-driven
+    motors log the rest level; the same seed, the same noise."""
+    plane = sim.Slope(math.radians(10.0))
+    level = _cruise()
+    up = _cruise(slope=plane, start_pose=(0.0, 0.0, 0.0))
+    down = _cruise(slope=plane, start_pose=(0.0, 0.0, math.pi))
+    across = _cruise(slope=plane, start_pose=(0.0, 0.0, math.pi / 2))  # level along the contour
+    cruising = np.abs(level.v_mps) > 0.5
+    mean = {k: currents(log)[cruising].mean() for k, log in
+            {"up": up, "level": level, "down": down, "across": across}.items()}
+    assert mean["up"] > mean["level"] + 2.0 > mean["down"] + 2.0, mean
+    assert mean["down"] == pytest.approx(sim.REST_CURRENT_A, abs=0.1)
+    assert mean["across"] == pytest.approx(mean["level"], abs=0.1)  # level along the contour (cos 10° of the weight)
+    # the gravity term as the physics gives it, per side through the drivetrain
+    lift_a = (0.5 * sim.MASS_KG * sim.GRAVITY_MPS2 * math.sin(math.radians(10.0)) * sim.WHEEL_RADIUS_M
+              / (sim.GEAR_EFFICIENCY * sim.GEAR_RATIO * sim.TORQUE_CONSTANT_NM_PER_A))
+    assert mean["up"] - mean["level"] == pytest.approx(lift_a, rel=0.1)
+    np.testing.assert_array_equal(level.v_mps, up.v_mps)  # the slope changes the currents, not the motion
+    assert level.pose_xyh is None and up.pose_xyh is not None  # poses only where the run is placed
+
+
+def test_start_pose_is_honoured_and_a_ramp_only_pitches_its_band():
+    ramp = sim.Slope(math.radians(10.0), uphill_heading_rad=math.pi / 2, start_m=5.0, length_m=5.0)
+    log = _cruise(start_pose=(3.0, -4.0, math.pi / 2))
+    pose = log.pose_xyh
+    np.testing.assert_allclose(pose[0], [3.0, -4.0, math.pi / 2], atol=1e-9)
+    assert np.ptp(pose[:, 0]) < 1e-6 and pose[-1, 1] - pose[0, 1] == pytest.approx(
+        np.sum(0.5 * (log.v_mps[1:] + log.v_mps[:-1]) * np.diff(log.time_s)), rel=0.02)  # driven along +y
+    on = _cruise(slope=ramp, start_pose=(3.0, -4.0, math.pi / 2))
+    np.testing.assert_array_equal(on.pose_xyh, pose)
+    climbing = ramp.on_ramp(pose[:, 0], pose[:, 1]) & (np.abs(log.v_mps) > 0.5)
+    level = ~ramp.on_ramp(pose[:, 0], pose[:, 1]) & (np.abs(log.v_mps) > 0.5)
+    assert climbing.sum() > 5 and level.sum() > 20
+    assert currents(on)[climbing].mean() > currents(log)[climbing].mean() + 2.0
+    assert np.abs(currents(on)[level] - currents(log)[level]).mean() < 0.05
+    assert ramp.elevation_m(np.zeros(3), np.array([0.0, 7.0, 40.0])).tolist() == pytest.approx(
+        [0.0, 2.0 * math.tan(math.radians(10.0)), 5.0 * math.tan(math.radians(10.0))])
+    with pytest.raises(ValueError, match="start_pose"):
+        _cruise(start_pose=(0.0, math.nan, 0.0))
+    with pytest.raises(ValueError, match="angle_rad"):
+        sim.Slope(math.radians(45.0))
+    with pytest.raises(TypeError, match="slope must be a Slope"):
+        _cruise(slope=0.1)
 
 
 def test_docstring_examples():

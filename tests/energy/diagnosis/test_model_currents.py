@@ -16,3 +16,28 @@ def test_parameter_table_is_exact_at_nodes_and_linear_between():
     expected = base * np.array([0.0, 0.49, 3.125, 4.0, 4.0])[:, None]
     np.testing.assert_allclose(table.at(per_sample), expected)
     assert table.nodes.size == 6 and table.n_computed == 6
+
+
+def test_motoring_currents_are_zero_where_the_log_stands_still_even_on_a_slope():
+    """The model predicts its rest level alone where the robot stands still; so do the candidates' physics terms:
+    standing on a slope, gravity is not charged as motoring current (a mass candidate changes nothing at rest)."""
+    from energy import InteractionLog, LogMeta
+    from energy.diagnosis.model_currents import motoring_currents_a, physics_basis
+    from energy.logs import rest_samples
+
+    t = np.arange(0.0, 12.0, 0.1)
+    v = np.where((t > 3.0) & (t < 8.0), 0.5, 0.0)
+    ta = np.arange(0.0, 12.0, 0.01)
+    log = InteractionLog(t, v, np.zeros_like(t), np.ones_like(t), np.ones_like(t), ta, np.full(ta.size, 9.81),
+                         meta=LogMeta(robot="husky"))
+    basis = physics_basis(object())  # the reference physics of the robot, every drive effect (gravity too)
+    rest = rest_samples(log)
+    assert rest.sum() > 40 and (~rest).sum() > 40
+    for slope in (0.0, 0.17):
+        cur = motoring_currents_a(basis, log, slope_rad=np.full(t.size, slope))
+        assert np.all(cur[rest] == 0.0)
+        assert np.all(cur[(t > 3.5) & (t < 7.5)] > 0.0)  # climbing or level, the cruising robot draws
+    heavy = motoring_currents_a(basis, log, robot=basis.robot.replace(mass_kg=2.0 * basis.robot.mass_kg),
+                                slope_rad=np.full(t.size, 0.17))
+    cruising = (t > 3.5) & (t < 7.5)
+    assert np.all(heavy[rest] == 0.0) and np.all(heavy[cruising] > cur[cruising])

@@ -15,7 +15,7 @@ from energy.diagnosis.fit import SetScore
 from energy.diagnosis.report import DiagnosisReport
 from energy.diagnosis.selection import SIGNIFICANT_SHRINK_PCT, units_needed
 from energy.diagnosis.noise import residual_noise
-from energy.diagnosis.separating import MAX_DRIVE_S, MAX_REPEATS, manoeuvre_library
+from energy.diagnosis.separating import MAX_DRIVE_S, MAX_REPEATS, manoeuvre_library, runs_to_order
 
 from gain_samples import gained_logs_and_model
 
@@ -65,6 +65,9 @@ def test_the_separating_drive_differs_most_and_a_simulated_repeat_agrees_with_it
     settling = [c for c in drive.library if c.pairs[alt].repeats <= MAX_REPEATS]
     assert drive.best.pairs[alt].noise_units == max(c.pairs[alt].noise_units for c in settling)
     assert drive.expected_difference_a > 0 and drive.repeats >= 1
+    # as many runs as the diagnosis's ordering of the runs needs: none of 4 runs orders the pair, so 3 more
+    assert drive.runs_to_order == runs_to_order(len(logs)) == 3 and drive.repeats >= 3
+    assert drive.to_dict()["runs_to_order"] == 3
     # within the robot's limits
     husky = robot_preset("husky")
     assert np.max(np.abs(drive.profile.omega_radps)) <= 0.8 * husky.max_omega_radps + 1e-9
@@ -200,3 +203,16 @@ def test_on_a_map_the_library_drives_up_a_slope_where_a_payload_and_a_rolling_re
     assert x[np.argmax(x)] - x[0] == pytest.approx(x[np.argmax(x)] - x[-1], abs=0.05)  # back where it started
     assert np.max(profile.v_mps) > 0 > np.min(profile.v_mps)
     assert slope_drive(TerrainMap(np.zeros((20, 20)), 1.0), 0.8) is None  # a level map has no slope to drive
+
+
+def test_runs_to_order_leaves_under_2_5_percent_of_resamples_without_a_driven_run():
+    from energy.diagnosis.separating import ORDER_TAIL
+
+    for n_units, per in ((2, 1), (4, 1), (6, 1), (12, 1), (30, 5)):
+        n = runs_to_order(n_units, per)
+        total = n_units + n * per
+        assert (n_units / total) ** total < ORDER_TAIL  # enough
+        if n > 1:
+            fewer = n_units + (n - 1) * per
+            assert (n_units / fewer) ** fewer >= ORDER_TAIL  # and no more than needed
+    assert runs_to_order(6) == 4 and runs_to_order(0) == 1
