@@ -48,6 +48,7 @@ from .refine import relax_path
 from .tables import (
     DEFAULT_GRADE_SAMPLES,
     DEFAULT_TURN_SAMPLES,
+    check_spread_dof,
     check_spread_tables,
     check_table_sizes,
     check_tables,
@@ -108,6 +109,11 @@ class EnergyCost:
         model with a predictive interval (:class:`~planner.LearnedEnergyModel`); both or
         neither. They do not change any query of this class: :mod:`planner.risk` reads them
         for route energy intervals and risk-aware costs.
+    spread_dof : sequence of float, optional
+        Per table row, the degrees of freedom of the distribution the row's spreads are the
+        scale of: ``inf`` for a Gaussian, finite for the Student-t of a ground the model never
+        drove (:attr:`energy.models.forecast.CurrentForecast.dof`). Default: every row ``inf``;
+        only with the spread tables.
 
     Attributes
     ----------
@@ -144,6 +150,7 @@ class EnergyCost:
         ground_labels: tuple[str, ...] | None = None,
         grade_sd_table_j_per_m: np.ndarray | None = None,
         turn_sd_table_j: np.ndarray | None = None,
+        spread_dof: tuple[float, ...] | None = None,
     ) -> None:
         t0 = time.perf_counter()
         if not isinstance(terrain, TerrainMap):
@@ -170,6 +177,8 @@ class EnergyCost:
         #: when the cost's model gives no interval (see :attr:`has_interval`).
         self.grade_sd_table_j_per_m, self.turn_sd_table_j = check_spread_tables(
             grade_table, turn_table, grade_sd_table_j_per_m, turn_sd_table_j)
+        #: Degrees of freedom of each row's spreads (``inf``: Gaussian), one per table row.
+        self.spread_dof = check_spread_dof(spread_dof, grade_table.shape[0], self.grade_sd_table_j_per_m is not None)
         self.ground_rows = rows.astype(np.int32)
         self.blocked = np.asarray(terrain.obstacle) | (np.asarray(terrain["slope"]) > self.max_slope_rad)
         for arr in (self.ground_rows, self.blocked):
@@ -206,6 +215,7 @@ class EnergyCost:
         ground_labels: tuple[str, ...] | None = None,
         grade_sd_table_j_per_m: np.ndarray | None = None,
         turn_sd_table_j: np.ndarray | None = None,
+        spread_dof: tuple[float, ...] | None = None,
     ) -> EnergyCost:
         """The same map geometry with new energy tables (a table-only refresh, e.g. after a model update).
 
@@ -229,6 +239,8 @@ class EnergyCost:
         grade_sd_table_j_per_m, turn_sd_table_j : ndarray, optional
             Standard deviations of the new tables (as in the constructor); default none
             (new tables do not inherit the spreads of the old ones).
+        spread_dof : sequence of float, optional
+            Degrees of freedom of the new rows' spreads (as in the constructor; default all ``inf``).
 
         Returns
         -------
@@ -263,6 +275,7 @@ class EnergyCost:
         new.turn_table_j = turn_table
         new.grade_sd_table_j_per_m, new.turn_sd_table_j = check_spread_tables(
             grade_table, turn_table, grade_sd_table_j_per_m, turn_sd_table_j)
+        new.spread_dof = check_spread_dof(spread_dof, grade_table.shape[0], new.grade_sd_table_j_per_m is not None)
         new.ground_rows = rows.astype(np.int32)
         new.ground_rows.setflags(write=False)
         new.arrays = self.arrays.with_tables(new.ground_rows, self.blocked, grade_table, turn_table)

@@ -23,10 +23,12 @@ one ground, both sides fully correlated) becomes the standard deviation of the b
 ``(P(mean + run_sd) - P(mean - run_sd)) / 2`` through the same
 :func:`energy.budget.log_battery_power_w` path, averaged over the settled tail like the mean (fully
 correlated: it does not average out), and is tabulated per metre and per radian
-(:attr:`LearnedModelTable.energy_per_metre_sd_j`, ``turn_energy_per_rad_sd_j``). The
-electronics and the physics slope term carry no spread. :meth:`LearnedEnergyModel.energy_cost`
-then gives the :class:`EnergyCost` standard-deviation tables, which :mod:`planner.risk` adds
-up along a route. The per-sample spread averages out over a route and is not used.
+(:attr:`LearnedModelTable.energy_per_metre_sd_j`, ``turn_energy_per_rad_sd_j``), with the
+forecast's degrees of freedom (:attr:`LearnedModelTable.dof`: ``inf``, a Gaussian, or the
+Student-t of a ground the model never drove). The electronics and the physics slope term carry
+no spread. :meth:`LearnedEnergyModel.energy_cost` then gives the :class:`EnergyCost`
+standard-deviation tables and each row's degrees of freedom (:attr:`EnergyCost.spread_dof`),
+which :mod:`planner.risk` adds up along a route. The per-sample spread averages out over a route and is not used.
 
 **Vibration input.** Models conditioned on vibration (the
 :class:`energy.VibrationCurrentEstimator`) need an acceleration stream. The synthetic log
@@ -257,9 +259,9 @@ class LearnedEnergyModel:
             return cached[1]
         t0 = time.perf_counter()
         log, keep = self._synthetic_log(mid)
-        run_sd = None
+        run_sd, dof = None, math.inf
         if model_gives_interval(model):
-            pred, run_sd = predict_current_spread(model, log, self._label(mid))
+            pred, run_sd, dof = predict_current_spread(model, log, self._label(mid))
         else:
             pred = predict_currents(model, log, self._label(mid))
         drive_w = self._drive_power_w(log, pred)
@@ -289,7 +291,7 @@ class LearnedEnergyModel:
         sd_per_m = None if sd_w is None else sd_w[:ns] / self.speeds_mps
         sd_per_rad = None if sd_w is None else sd_w[ns:] / self.omegas_radps
         table = LearnedModelTable(mid, self.speeds_mps, e_per_m, self.omegas_radps, e_per_rad, mean_current,
-                                  time.perf_counter() - t0, sd_per_m, sd_per_rad)
+                                  time.perf_counter() - t0, sd_per_m, sd_per_rad, dof)
         self._tables[mid] = (id(model), table)
         self.table_builds += 1
         return table
@@ -540,21 +542,24 @@ class LearnedEnergyModel:
         grade_table, turn_table = tabulate(
             self, speed, ids.tolist(), labels, max_slope_rad=slope, grade_samples=n_grade, turn_samples=n_turn
         )
-        grade_sd = turn_sd = None
+        grade_sd = turn_sd = spread_dof = None
         if any(self.table(int(m)).energy_per_metre_sd_j is not None for m in ids.tolist()):
             grade_sd, turn_sd = tabulate(self, speed, ids.tolist(), labels, max_slope_rad=slope,
                                          grade_samples=n_grade, turn_samples=n_turn, spread=True)
+            spread_dof = tuple(self.table(int(m)).dof for m in ids.tolist())
         lut = np.zeros(int(ids.max()) + 1, dtype=np.int32)
         lut[ids] = np.arange(ids.size, dtype=np.int32)
         rows = lut[np.asarray(self.registry.model_id_map)]
         if previous is not None:
             cost = previous.with_tables(grade_table, turn_table, rows, ground_labels=labels,
-                                        grade_sd_table_j_per_m=grade_sd, turn_sd_table_j=turn_sd)
+                                        grade_sd_table_j_per_m=grade_sd, turn_sd_table_j=turn_sd,
+                                        spread_dof=spread_dof)
             cost.prep_time_s = time.perf_counter() - t0
             return cost
         cost = EnergyCost(terrain, rows, grade_table, turn_table, speed_mps=speed, max_slope_rad=slope,
                           battery_voltage_v=self.robot.battery_voltage_v, turn_rate_radps=self.turn_rate_radps,
-                          ground_labels=labels, grade_sd_table_j_per_m=grade_sd, turn_sd_table_j=turn_sd)
+                          ground_labels=labels, grade_sd_table_j_per_m=grade_sd, turn_sd_table_j=turn_sd,
+                          spread_dof=spread_dof)
         cost.prep_time_s = time.perf_counter() - t0
         return cost
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -9,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from energy import InteractionLog
+from energy.models.forecast import check_dof
 from terrawatt_base.errors import InvalidParameterError
 
 __all__ = ["LearnedModelTable", "predict_currents", "predict_current_spread", "model_gives_interval", "increasing_grid"]
@@ -60,22 +62,28 @@ def model_gives_interval(model: Any) -> bool:
     return bool(getattr(model, "gives_interval", False)) and callable(getattr(model, "predict_distribution", None))
 
 
-def predict_current_spread(model: Any, log: InteractionLog, label: str) -> tuple[np.ndarray, np.ndarray]:
-    """``model.predict_distribution(log)`` checked: the mean and the run-level standard deviation, each ``(N, 2)`` (A).
+def predict_current_spread(model: Any, log: InteractionLog, label: str) -> tuple[np.ndarray, np.ndarray, float]:
+    """``model.predict_distribution(log)`` checked: the mean and the run-level standard deviation, each ``(N, 2)`` (A),
+    and the forecast's degrees of freedom.
 
     Only the run-level spread (``run_sd_a``) is returned: it is the part shared by a whole
     run on one ground, so it does not average out over a route; the per-sample spread does
     (it shrinks as one over the square root of the samples) and is left out of planning.
+    The degrees of freedom (``dof``: ``inf`` for a Gaussian forecast, finite for the
+    Student-t of a ground the model never drove; a forecast without one is Gaussian) say
+    which distribution the spread is the scale of.
 
     Raises
     ------
     InvalidParameterError
-        The forecast is not finite ``(len(log), 2)`` arrays; ``label`` names the model.
+        The forecast is not finite ``(len(log), 2)`` arrays, or its ``dof`` is not > 0;
+        ``label`` names the model.
     """
     try:
         forecast = model.predict_distribution(log)
         mean = np.asarray(forecast.mean_a, dtype=np.float64)
         run_sd = np.asarray(forecast.run_sd_a, dtype=np.float64)
+        dof = check_dof(getattr(forecast, "dof", math.inf), f"{label}'s forecast dof")
     except (TypeError, ValueError, AttributeError) as exc:
         raise InvalidParameterError(f"{label} could not forecast currents for a {len(log)}-sample log: {exc}") from exc
     shape = (len(log), 2)
@@ -84,7 +92,7 @@ def predict_current_spread(model: Any, log: InteractionLog, label: str) -> tuple
             f"{label} must forecast finite (N, 2) mean and run-level spread for a log of N={len(log)} samples, got "
             f"shapes {mean.shape!r} and {run_sd.shape!r}"
         )
-    return mean, run_sd
+    return mean, run_sd, dof
 
 
 @dataclass(frozen=True, eq=False)
@@ -110,6 +118,10 @@ class LearnedModelTable:
     energy_per_metre_sd_j, turn_energy_per_rad_sd_j : ndarray or None
         Run-level standard deviations of the two tables (J/m, J/rad; shapes of the means),
         from the model's predictive distribution; None for a model without an interval.
+    dof : float
+        Degrees of freedom of the predictive the spreads are the scale of: ``inf`` (the
+        default) for a Gaussian, finite for the Student-t of a ground the model never drove
+        (:attr:`energy.models.forecast.CurrentForecast.dof`).
     """
 
     model_id: int
@@ -121,8 +133,10 @@ class LearnedModelTable:
     build_time_s: float
     energy_per_metre_sd_j: np.ndarray | None = None
     turn_energy_per_rad_sd_j: np.ndarray | None = None
+    dof: float = math.inf
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "dof", check_dof(self.dof, "LearnedModelTable.dof"))
         if (self.energy_per_metre_sd_j is None) != (self.turn_energy_per_rad_sd_j is None):
             raise InvalidParameterError("LearnedModelTable: the two spread tables go together (both or neither)")
         names = ["speeds_mps", "energy_per_metre_j", "omegas_radps", "turn_energy_per_rad_j", "mean_current_a"]

@@ -270,6 +270,8 @@ class PlanReport:
             lines.append(f"route energy (the model's interval): mean {iv.mean_j / 3600:.3f} Wh, P50 "
                          f"{iv.p50_j / 3600:.3f} Wh, P90 {iv.p90_j / 3600:.3f} Wh, sd {iv.sd_j / 3600:.3f} Wh; "
                          f"{100 * INTERVAL_LEVEL:.0f} % interval {lo / 3600:.3f}-{hi / 3600:.3f} Wh"
+                         + ("" if math.isinf(iv.dof) else f", Student-t with {iv.dof:g} dof (a ground the model "
+                                                          "never drove)")
                          + ("  (the table shows the planning objective)" if self.risk_q is not None else ""))
         if route.status == "exact":
             lines.append(f"energy saved vs shortest route: {route.energy_saved_pct:.1f} %  "

@@ -12,33 +12,43 @@ from another), so along a route it does not average out:
 - the per-ground sums, grounds being independent of each other, combine by the **root of the
   sum of squares** (:func:`energy.models.forecast.combine_ground_sds`).
 
-The route energy is then taken as Gaussian: :class:`RouteEnergyInterval` gives its P50, P90
-and central intervals.
+**Shape.** Each row's spreads are the scale of the model's predictive on that ground
+(:attr:`EnergyCost.spread_dof`): a Gaussian (``dof = inf``) where the model knows the ground, a
+**Student-t** with as many degrees of freedom as grounds taught the new-ground spread where it
+never drove it (:mod:`energy.models.forecast`). The same predictive gives every interval the
+planner reports: :class:`RouteEnergyInterval` (P50, P90, central intervals) takes the route's
+energy as a Student-t with the **least** degrees of freedom of the grounds it crosses with a
+spread (a Gaussian when all are known); the Monte Carlo missions draw each ground's factor from
+its own predictive (:mod:`planner.missions.monte_carlo_model`); the navigator's forecast of what
+remains uses the same quantile (:mod:`planner.missions.remaining`).
 
 **Risk-aware planning.** :func:`risk_cost` returns the cost whose tables are
-``mean + z_Q * sd`` per entry, ``z_Q`` the standard normal ``Q`` quantile (floored at 0, an
-edge never pays back energy). A planner minimising it minimises
+``mean + z_Q * sd`` per entry, ``z_Q`` the ``Q`` quantile of the row's standardised predictive
+(:func:`energy.models.forecast.predictive_quantile` with the row's degrees of freedom: the
+standard normal's on a known ground), floored at 0 (an edge never pays back energy). A planner
+minimising it minimises
 
-``sum over edges (mean_e + z_Q sd_e) = mean_route + z_Q * sum over grounds S_g``
+``sum over edges (mean_e + z_Q,g(e) sd_e) = mean_route + sum over grounds z_Q,g S_g``
 
 with ``S_g`` the linear sum of spreads on ground ``g``. On a route over **one ground** that is
-exactly the route's ``Q`` quantile (its sd is ``S_g``). On a route over several independent
-grounds the route's sd is ``sqrt(sum S_g**2) <= sum S_g``: for ``Q > 0.5`` the objective is an
-**upper bound** of the route's ``Q`` quantile (conservative: it penalises crossing many
-uncertain grounds a little more than their independence warrants), for ``Q < 0.5`` a lower
-bound. The objective is still additive over edges, which the lattice and the OMPL objective
-need; the route that is finally reported is priced exactly (:func:`route_energy_interval`).
+exactly the route's ``Q`` quantile (its sd is ``S_g``, its degrees of freedom those of ``g``).
+On a route over several independent grounds the route's sd is ``sqrt(sum S_g**2) <= sum S_g``:
+for ``Q > 0.5`` the objective is an **upper bound** of the route's ``Q`` quantile
+(conservative: it penalises crossing many uncertain grounds a little more than their
+independence warrants), for ``Q < 0.5`` a lower bound. The objective is still additive over
+edges, which the lattice and the OMPL objective need; the route that is finally reported is
+priced exactly (:func:`route_energy_interval`).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from energy.models.forecast import combine_ground_sds, normal_quantile
+from energy.models.forecast import check_dof, combine_ground_sds, predictive_quantile
 from terrawatt_base.checks import check_real
 from terrawatt_base.errors import InvalidParameterError
 
@@ -95,7 +105,7 @@ def check_planning_risk(q: Any, name: str = "risk") -> float:
 
 @dataclass(frozen=True)
 class RouteEnergyInterval:
-    """The Gaussian distribution of a route's battery energy under a model with an interval.
+    """The distribution of a route's battery energy under a model with an interval: a mean, a scale and a tail.
 
     Attributes
     ----------
@@ -107,22 +117,35 @@ class RouteEnergyInterval:
     sd_by_ground_j : dict of str to float
         The linear per-ground sums (J), keyed by the cost's row labels (grounds the route
         does not cross are left out).
+    dof : float
+        Degrees of freedom of the Student-t the quantiles are read from (``inf``, the
+        default: Gaussian): the least of the grounds the route crosses with a non-zero spread.
+        A sum of independent Student-t's with other degrees of freedom has no closed form;
+        the least is **conservative** (its tails are the heaviest of the parts'), exact on a
+        route over one ground or over grounds that share one value.
+    dof_by_ground : dict of str to float
+        Each crossed ground's own degrees of freedom (keys of ``sd_by_ground_j``; a ground
+        left out has ``dof``): what a Monte Carlo draw of the route draws per ground.
 
     Raises
     ------
     InvalidParameterError
-        A negative or non-finite mean or spread.
+        A negative or non-finite mean or spread, degrees of freedom not > 0.
 
     Examples
     --------
     >>> iv = RouteEnergyInterval(1000.0, 100.0, {"sand": 100.0})
     >>> round(iv.p90_j, 1), [round(x, 1) for x in iv.interval_j(0.8)]
     (1128.2, [871.8, 1128.2])
+    >>> round(RouteEnergyInterval(1000.0, 100.0, {"sand": 100.0}, dof=3.0).p90_j, 1)  # a ground never driven
+    1163.8
     """
 
     mean_j: float
     sd_j: float
     sd_by_ground_j: dict[str, float]
+    dof: float = math.inf
+    dof_by_ground: dict[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for name in ("mean_j", "sd_j"):
@@ -134,14 +157,24 @@ class RouteEnergyInterval:
         if any(not (math.isfinite(v) and v >= 0) for v in by.values()):
             raise InvalidParameterError(f"RouteEnergyInterval.sd_by_ground_j must hold finite spreads >= 0, got {by!r}")
         object.__setattr__(self, "sd_by_ground_j", by)
+        object.__setattr__(self, "dof", check_dof(self.dof, "RouteEnergyInterval.dof"))
+        dofs = {str(k): check_dof(v, "RouteEnergyInterval.dof_by_ground") for k, v in dict(self.dof_by_ground).items()}
+        if set(dofs) - set(by):
+            raise InvalidParameterError(f"RouteEnergyInterval.dof_by_ground names grounds without a spread: "
+                                        f"{sorted(set(dofs) - set(by))!r}")
+        object.__setattr__(self, "dof_by_ground", dofs)
+
+    def ground_dof(self, ground: str) -> float:
+        """The degrees of freedom of ``ground``'s factor (its own, else the route's :attr:`dof`)."""
+        return self.dof_by_ground.get(str(ground), self.dof)
 
     def quantile_j(self, q: float) -> float:
-        """The ``q`` quantile of the route energy (J), ``q`` in (0, 1)."""
-        return self.mean_j + normal_quantile(check_risk_level(q)) * self.sd_j
+        """The ``q`` quantile of the route energy (J), ``q`` in (0, 1): ``mean + predictive_quantile(q, dof) * sd``."""
+        return self.mean_j + predictive_quantile(check_risk_level(q), self.dof) * self.sd_j
 
     @property
     def p50_j(self) -> float:
-        """Median energy (J); the mean, the distribution being Gaussian."""
+        """Median energy (J); the mean, the distribution (Gaussian or Student-t) being symmetric."""
         return self.mean_j
 
     @property
@@ -157,8 +190,9 @@ class RouteEnergyInterval:
     def to_dict(self) -> dict[str, Any]:
         """The block route.json holds under ``energy_interval`` (J and Wh, units in the keys)."""
         lo, hi = self.interval_j(INTERVAL_LEVEL)
-        return {
-            "distribution": "gaussian: per ground the run-level spreads add linearly, grounds independent",
+        shape = "gaussian" if math.isinf(self.dof) else f"student-t with {self.dof:g} degrees of freedom"
+        out = {
+            "distribution": f"{shape}: per ground the run-level spreads add linearly, grounds independent",
             "mean_j": self.mean_j,
             "sd_j": self.sd_j,
             "p50_j": self.p50_j,
@@ -171,6 +205,10 @@ class RouteEnergyInterval:
             "central_interval_wh": [lo / 3600.0, hi / 3600.0],
             "sd_by_ground_j": dict(self.sd_by_ground_j),
         }
+        if not math.isinf(self.dof):  # a Gaussian's block stays as it was
+            out["dof"] = self.dof
+            out["dof_by_ground"] = {g: (d if math.isfinite(d) else None) for g, d in self.dof_by_ground.items()}
+        return out
 
 
 def _check_interval_cost(cost: Any) -> EnergyCost:
@@ -190,7 +228,9 @@ def route_energy_interval(cost: EnergyCost, waypoints_m: Any) -> RouteEnergyInte
     Each straight segment is walked cell by cell (:meth:`terrain.TerrainMap.segment_cells`):
     a cell adds its horizontal length times its row's spread at the cell's grade in the
     direction of travel (linear interpolation of :attr:`EnergyCost.grade_sd_table_j_per_m`,
-    as the mean tables are read); each turn adds its row's turn spread at the waypoint.
+    as the mean tables are read); each turn adds its row's turn spread at the waypoint. The
+    interval's degrees of freedom are the least of :attr:`EnergyCost.spread_dof` over the rows
+    the route crosses with a spread > 0 (``inf``, a Gaussian, when none is finite).
 
     Parameters
     ----------
@@ -239,13 +279,18 @@ def route_energy_interval(cost: EnergyCost, waypoints_m: Any) -> RouteEnergyInte
         grid = np.linspace(0.0, math.pi, cost.turn_sd_table_j.shape[1])
         turn_sd = np.array([np.interp(ang, grid, cost.turn_sd_table_j[k]) for ang, k in zip(angles, row)])
         per_row += np.bincount(row, weights=turn_sd, minlength=n_rows)
-    crossed = {cost.ground_labels[i]: float(per_row[i]) for i in np.flatnonzero(per_row > 0).tolist()}
-    return RouteEnergyInterval(mean, combine_ground_sds(per_row), crossed)
+    spread = np.flatnonzero(per_row > 0).tolist()
+    crossed = {cost.ground_labels[i]: float(per_row[i]) for i in spread}
+    dofs = {cost.ground_labels[i]: cost.spread_dof[i] for i in spread}
+    return RouteEnergyInterval(mean, combine_ground_sds(per_row), crossed, min(dofs.values(), default=math.inf), dofs)
 
 
 def risk_cost(cost: EnergyCost, q: float) -> EnergyCost:
     """The cost whose tables price every entry at its ``q`` quantile, ``mean + z_q * sd`` (floored at 0).
 
+    ``z_q`` is read per table row from the row's predictive
+    (:func:`~energy.models.forecast.predictive_quantile` with :attr:`EnergyCost.spread_dof`):
+    the standard normal's on a ground the model knows, a Student-t's on one it never drove.
     What ``plan --risk Q`` plans on: exactly the route's ``Q`` quantile on one ground, an upper
     bound of it across independent grounds for ``Q > 0.5`` (module docstring). The result
     shares the map geometry (:meth:`EnergyCost.with_tables`) and keeps the spreads, so
@@ -269,8 +314,9 @@ def risk_cost(cost: EnergyCost, q: float) -> EnergyCost:
     """
     q = check_risk_level(q)
     cost = _check_interval_cost(cost)
-    z = normal_quantile(q)
+    z = np.array([predictive_quantile(q, dof) for dof in cost.spread_dof])[:, None]  # per row
     grade = np.maximum(cost.grade_table_j_per_m + z * cost.grade_sd_table_j_per_m, 0.0)
     turn = np.maximum(cost.turn_table_j + z * cost.turn_sd_table_j, 0.0)
     return cost.with_tables(grade, turn, ground_labels=cost.ground_labels,
-                            grade_sd_table_j_per_m=cost.grade_sd_table_j_per_m, turn_sd_table_j=cost.turn_sd_table_j)
+                            grade_sd_table_j_per_m=cost.grade_sd_table_j_per_m, turn_sd_table_j=cost.turn_sd_table_j,
+                            spread_dof=cost.spread_dof)

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from energy import EnergyModel, IntervalEnergyModel
+from energy.models.forecast import check_dof
 from terrawatt_base.checks import check_int
 from terrawatt_base.errors import GridMismatchError, InvalidParameterError, UnknownNameError
 from terrain.terrain_map import UNKNOWN_GROUND, TerrainMap
@@ -30,6 +31,7 @@ __all__ = [
     "ground_table_rows",
     "check_tables",
     "check_spread_tables",
+    "check_spread_dof",
 ]
 
 #: Default number of samples of each ground's energy-per-metre-vs-grade table (odd: grade 0 is a sample).
@@ -177,6 +179,42 @@ def check_spread_tables(
         arr.setflags(write=False)
         out.append(arr)
     return out[0], out[1]
+
+
+def check_spread_dof(spread_dof: Any, n_rows: int, has_spreads: bool) -> tuple[float, ...]:
+    """Validated degrees of freedom of an edge cost's spread tables, one per table row (``inf``: Gaussian).
+
+    Parameters
+    ----------
+    spread_dof : sequence of float or None
+        Per table row, the degrees of freedom of the Student-t the row's spreads are the
+        scale of (> 0; ``inf`` for a Gaussian); None: every row Gaussian.
+    n_rows : int
+        Number of table rows.
+    has_spreads : bool
+        Whether the cost carries spread tables (degrees of freedom without them are refused).
+
+    Returns
+    -------
+    tuple of float
+        ``n_rows`` values (all ``inf`` for None).
+
+    Raises
+    ------
+    InvalidParameterError
+        Another length, a value not > 0, degrees of freedom without spread tables.
+    """
+    if spread_dof is None:
+        return (math.inf,) * n_rows
+    if not has_spreads:
+        raise InvalidParameterError("spread_dof goes with grade_sd_table_j_per_m and turn_sd_table_j: give them too")
+    try:
+        values = tuple(check_dof(d, "spread_dof") for d in spread_dof)
+    except TypeError as exc:
+        raise InvalidParameterError(f"spread_dof must be a sequence of numbers, got {spread_dof!r:.80}") from exc
+    if len(values) != n_rows:
+        raise InvalidParameterError(f"spread_dof must hold one value per table row ({n_rows}), got {len(values)}")
+    return values
 
 
 def ground_table_rows(

@@ -64,8 +64,8 @@ def add_parser(sub: Any) -> None:
                    help="--monte-carlo: exit 1 when more than P %% of the missions go below the reserve (default 5)")
     p.add_argument("--mc-draw", choices=("parameters", "model"), default="parameters",
                    help="--monte-carlo: draw the typed parameter ranges and simulate each mission (default), or draw "
-                        "from --model's predictive distribution (one standard-normal factor per ground, each edge at "
-                        "mean + z sd)")
+                        "from --model's predictive distribution (one factor per ground, standard normal or Student-t on a "
+                        "ground the model never drove, each edge at mean + z sd)")
     add_dask_options(p, "the --monte-carlo missions")
     add_model_options(p, risk=True)
     p.set_defaults(run=run_mission)

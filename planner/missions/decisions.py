@@ -21,6 +21,7 @@ shown so far (the in-run gain), with a central interval and the value at the ris
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -68,6 +69,10 @@ class RemainingForecast:
     unseen_j : float
         The models' price of the rest on ground classes the robot has not driven yet (J): the
         part of the interval that no leg of this run has shown.
+    dof : float
+        Degrees of freedom of the predictive the interval and the risk quantile are read from
+        (``inf``, the default: the normal distribution; the route energy interval's,
+        :attr:`planner.RouteEnergyInterval.dof`).
     """
 
     energy_j: float
@@ -84,6 +89,7 @@ class RemainingForecast:
     soc: float
     available_j: float
     unseen_j: float = 0.0
+    dof: float = math.inf
 
     @property
     def fits(self) -> bool:
@@ -91,8 +97,8 @@ class RemainingForecast:
         return self.risk_j <= self.available_j
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain JSON-able values."""
-        return {k: json_finite(v) for k, v in vars(self).items()}
+        """Plain JSON-able values (``dof`` only when finite: a Gaussian forecast's record stays as it was)."""
+        return {k: json_finite(v) for k, v in vars(self).items() if k != "dof" or math.isfinite(v)}
 
 
 @dataclass(frozen=True, eq=False)

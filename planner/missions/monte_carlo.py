@@ -166,8 +166,9 @@ def simulate_missions_mc(
     draw_from : {"parameters", "model"}
         ``"parameters"`` (default): each mission draws :class:`MissionDistributions` and
         drives the route against a truth simulation. ``"model"``: each mission draws one
-        standard-normal factor per ground from the planning model's own predictive
-        distribution and prices every edge at ``mean + z_ground * sd``
+        factor per ground from the planning model's own predictive distribution (standard
+        normal, Student-t on a ground the model never drove) and prices every edge at
+        ``mean + z_ground * sd``
         (:mod:`planner.missions.monte_carlo_model`); needs ``cost`` with an interval;
         ``ground_scale`` then holds the drawn factors ``z``.
 

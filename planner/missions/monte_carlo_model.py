@@ -2,11 +2,18 @@
 
 Where the edge cost carries run-level standard deviations (a current model with an interval,
 :mod:`planner.risk`), one mission of :func:`planner.simulate_missions_mc` with
-``draw_from="model"`` draws **one standard-normal factor** ``z_g`` **per ground** the route
-crosses and prices every edge on ground ``g`` at ``mean + z_g * sd``: the route energy is
-``mean + sum_g z_g S_g`` (``S_g`` the linear sum of the spreads on ``g``), the run-level error
-being shared by the whole run on one ground and independent between grounds: exactly the
-Gaussian of :class:`~planner.RouteEnergyInterval`, drawn. The energy is drawn from the battery
+``draw_from="model"`` draws **one factor** ``z_g`` **per ground** the route crosses from that
+ground's standardised predictive — standard normal where the model knows the ground, Student-t
+with the ground's degrees of freedom where it never drove it
+(:attr:`~planner.RouteEnergyInterval.dof_by_ground`) — and prices every edge on ground ``g`` at
+``mean + z_g * sd``: the route energy is ``mean + sum_g z_g S_g`` (``S_g`` the linear sum of the
+spreads on ``g``), the run-level error being shared by the whole run on one ground and
+independent between grounds: the distribution of :class:`~planner.RouteEnergyInterval`, drawn
+(on one ground, or grounds of one shape, exactly its quantiles; across grounds of different
+degrees of freedom the interval's least is the conservative side). The standard normals are
+drawn first, as for an all-Gaussian route; a Student-t factor is its normal divided by
+``sqrt(chi2_dof / dof)`` (one chi-square draw per such ground, after them), so a route whose
+grounds are all known draws exactly as before. The energy is drawn from the battery
 at a constant power over the route's duration (:func:`energy.discharge_from_power`: internal
 resistance and Peukert as for a driven mission) and checked against the reserve
 (:func:`energy.energy_budget`).
@@ -60,6 +67,10 @@ class ModelMissionSetup:
         rng = np.random.default_rng(seq)
         names = self.ground_names
         z = rng.standard_normal(len(names))
+        dof = np.array([self.forecast.ground_dof(g) for g in names])
+        heavy = np.isfinite(dof)
+        if np.any(heavy):  # Student-t: a normal over the root of a chi-square by its degrees of freedom
+            z[heavy] /= np.sqrt(rng.chisquare(dof[heavy]) / dof[heavy])
         spread = np.array([self.forecast.sd_by_ground_j[g] for g in names])
         energy_j = max(self.forecast.mean_j + float(np.dot(z, spread)), 0.0)
         power_w = energy_j / self.duration_s

@@ -89,7 +89,7 @@ class MonteCarloResult:
     draw_from : {"parameters", "model"}
         What the missions drew: the typed ranges of ``distributions`` (a truth simulation
         each), or the planning model's predictive distribution (``ground_scale`` then holds
-        the standard-normal factor drawn per ground, ``distributions`` is unused).
+        the factor drawn per ground, standard normal or Student-t, ``distributions`` is unused).
     forecast : RouteEnergyInterval or None
         The route's energy distribution on the planning cost when it has an interval (its
         P50 / P90 are in the summary and the JSON).
@@ -270,8 +270,12 @@ class MonteCarloResult:
             if self.n_failed > len(shown):
                 failures.append(f"  ... and {self.n_failed - len(shown)} more")
         if self.draw_from == "model":
-            lines.append("drawn from the planning model's predictive distribution: one standard-normal factor per "
-                         f"ground ({', '.join(self.ground_names) or 'none with a spread'}), edges at mean + z sd")
+            heavy = self.forecast is not None and any(math.isfinite(self.forecast.ground_dof(g))
+                                                      for g in self.forecast.sd_by_ground_j)
+            factor = ("one factor per ground (Student-t on a ground the model never drove, else standard normal)"
+                      if heavy else "one standard-normal factor per ground")
+            lines.append(f"drawn from the planning model's predictive distribution: {factor} "
+                         f"({', '.join(self.ground_names) or 'none with a spread'}), edges at mean + z sd")
         if self.forecast is not None:
             f = self.forecast
             lines.append(f"route energy forecast (the model's interval): P50 {f.p50_j / 3600:.2f} Wh, "

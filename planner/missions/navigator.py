@@ -80,6 +80,7 @@ from ..lattice import Lattice
 from ..learned_cost import LearnedEnergyModel
 from ..planning import plan_route
 from ..replan import IncrementalPlanner
+from ..risk import route_energy_interval
 from ..route import Route, evaluate_route
 from ..settings import PlannerSettings
 from .adaptive_results import AdaptiveResult, LegRecord, ReplanRecord, UpdateRecord
@@ -209,6 +210,7 @@ class Navigator(RegionUpdates):
         self.pooled = (0.0, 0.0)  # squared log-ratio deviations and their dof over the earlier stretches
         self.class_samples: dict[int, int] = {}  # samples driven on each ground class in this run
         self._unseen_cache: tuple[Any, list[float]] | None = None
+        self._dof_cache: tuple[Any, bytes, float] | None = None  # (cost, route, its interval's dof)
         self.legs: list[LegRecord] = []
         self.updates: list[UpdateRecord] = []
         self.replans: list[ReplanRecord] = []
@@ -441,7 +443,26 @@ class Navigator(RegionUpdates):
                                   prior_legs=cfg.forecast_prior_legs, prior_spread=cfg.forecast_prior_spread,
                                   soc=self.soc, available_j=self.charge.available_j(), pooled=self.pooled,
                                   unseen_j=self._unseen_j(waypoints, float(sum(pending))),
-                                  unseen_spread=cfg.forecast_unseen_spread)
+                                  unseen_spread=cfg.forecast_unseen_spread, dof=self._route_dof(waypoints))
+
+    def _route_dof(self, waypoints: np.ndarray) -> float:
+        """The degrees of freedom of ``waypoints``' energy interval on the planning cost
+        (:func:`planner.route_energy_interval`): ``inf`` (the normal distribution) without an
+        interval or where every row is Gaussian; cached per cost and route. A route the cost
+        cannot price (it crosses what the last update blocked) takes the least of every row's."""
+        cost = self.cost
+        if len(waypoints) < 2 or cost is None or not cost.has_interval or not any(
+                math.isfinite(d) for d in cost.spread_dof):
+            return math.inf
+        key = waypoints.tobytes() + repr(waypoints.shape).encode()
+        if self._dof_cache is not None and self._dof_cache[0] is cost and self._dof_cache[1] == key:
+            return self._dof_cache[2]
+        try:
+            dof = route_energy_interval(cost, waypoints).dof
+        except InvalidParameterError:
+            dof = min(cost.spread_dof)
+        self._dof_cache = (cost, key, dof)
+        return dof
 
     def _unseen_j(self, waypoints: np.ndarray, energy_j: float) -> list[float]:
         """The share of ``energy_j`` on each ground class of the route that this run has not driven

@@ -13,7 +13,10 @@ leg (``g * s * sqrt(sum(pending^2))``) and what no leg of this run has shown: th
 rest on each ground class the robot has not driven yet, ``E_c``, off by a relative spread
 ``s_u`` as a whole (``s_u * sqrt(sum_c E_c^2)``; a model on a ground it has not seen is off by
 37-55 % on the real logs' few-shot protocol, ``s_u`` = 0.4 by default). Central intervals and
-the risk quantile come from the normal distribution on that.
+the risk quantile are read from the same predictive as the route's energy interval
+(:func:`energy.models.forecast.predictive_quantile` with the ``dof`` of the route's
+:class:`~planner.RouteEnergyInterval` on the planning cost): the normal distribution where the
+models know every ground the rest crosses, a Student-t where one of them was never driven.
 """
 
 from __future__ import annotations
@@ -22,7 +25,8 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
-from scipy.stats import norm
+
+from energy.models.forecast import check_dof, predictive_quantile
 
 from .decisions import RemainingForecast
 
@@ -42,6 +46,7 @@ def remaining_forecast(
     pooled: tuple[float, float] = (0.0, 0.0),
     unseen_j: Sequence[float] = (),
     unseen_spread: float = 0.0,
+    dof: float = math.inf,
 ) -> RemainingForecast:
     """The energy of the remaining legs with the in-run correction (see the module docstring).
 
@@ -66,11 +71,16 @@ def remaining_forecast(
         The models' price of the rest on each ground class not driven yet (J).
     unseen_spread : float
         ``s_u``.
+    dof : float
+        Degrees of freedom of the predictive the quantiles are read from (``inf``, the
+        default: the normal distribution): the route interval's
+        (:attr:`~planner.RouteEnergyInterval.dof`).
 
     Returns
     -------
     RemainingForecast
     """
+    dof = check_dof(dof)
     p = np.asarray([float(x) for x in pending_j], dtype=np.float64)
     obs = np.asarray([(a, b) for a, b in observed if a > 0 and b > 0], dtype=np.float64).reshape(-1, 2)
     n = obs.shape[0]
@@ -80,19 +90,19 @@ def remaining_forecast(
         gain = (float(obs[:, 1].sum()) + prior_legs * mean_pred) / (float(obs[:, 0].sum()) + prior_legs * mean_pred)
     else:
         gain = 1.0
-    ss, dof = float(pooled[0]), float(pooled[1])
+    ss, ss_dof = float(pooled[0]), float(pooled[1])
     if n >= 2:
         r = np.log(obs[:, 1] / obs[:, 0])
-        ss, dof = ss + float(np.sum((r - r.mean()) ** 2)), dof + n - 1
-    spread = math.sqrt((prior_legs * prior_spread ** 2 + ss) / (prior_legs + dof))
+        ss, ss_dof = ss + float(np.sum((r - r.mean()) ** 2)), ss_dof + n - 1
+    spread = math.sqrt((prior_legs * prior_spread ** 2 + ss) / (prior_legs + ss_dof))
     energy = gain * model_j
     u = gain * unseen_spread * math.sqrt(float(np.sum(np.square(np.asarray(unseen_j, dtype=np.float64)))))
     sd = math.sqrt((energy * spread / math.sqrt(n + prior_legs)) ** 2 + (gain * spread) ** 2 * float(np.sum(p ** 2))
                    + u ** 2)
-    z = float(norm.ppf(0.5 + level / 2.0))
-    risk_j = energy if risk is None else energy + float(norm.ppf(risk)) * sd
+    z = predictive_quantile(0.5 + level / 2.0, dof)
+    risk_j = energy if risk is None else energy + predictive_quantile(risk, dof) * sd
     return RemainingForecast(
         energy_j=energy, low_j=max(energy - z * sd, 0.0), high_j=energy + z * sd, level=level, risk_j=risk_j,
         risk=risk, model_energy_j=model_j, gain=gain, spread=spread, legs_remaining=int(p.size),
-        legs_observed=n, soc=soc, available_j=available_j, unseen_j=float(np.sum(unseen_j)),
+        legs_observed=n, soc=soc, available_j=available_j, unseen_j=float(np.sum(unseen_j)), dof=dof,
     )
