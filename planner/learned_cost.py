@@ -86,7 +86,7 @@ from terrain import (
     InvalidParameterError,
     TerrainMap,
 )
-from terrawatt_base.checks import check_choice, check_real, real_array
+from terrawatt_base.checks import check_choice, check_real, check_text, real_array
 
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
 from .learned_table import (
@@ -186,6 +186,7 @@ class LearnedEnergyModel:
         self._physics = PhysicsEnergyModel(robot)
         self._electronics = PhysicsEnergyModel(robot, effects=("sensor", "control"))
         self._vibration: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._grounds: dict[int, str] = {}
         self._tables: dict[int, tuple[int, LearnedModelTable]] = {}  # id -> (id(model object), table)
         self._slope_delta: dict[tuple[float, bytes], np.ndarray] = {}  # (speed, grades) -> slope term
         #: Number of per-model tables computed so far (cache misses).
@@ -213,6 +214,25 @@ class LearnedEnergyModel:
         self._vibration[int(model_id)] = (t - t[0], a)
         self._tables.pop(int(model_id), None)
 
+    def set_ground(self, model_id: int, ground: str) -> None:
+        """The ground model ``model_id`` prices its cells as (a training ground's name, e.g. ``"snow"``).
+
+        Its forecasts are asked for that ground: a ground the model drove gives that ground's
+        own run spread (Gaussian), any other the new-ground spread (a Student-t, see
+        :mod:`energy.models.forecast`); without one every cell is a ground the model never
+        drove. Invalidates that model's cached table.
+
+        Raises
+        ------
+        UnknownNameError
+            Unknown model id.
+        InvalidParameterError
+            ``ground`` is not a non-empty string.
+        """
+        self.registry.model(model_id)  # UnknownNameError
+        self._grounds[int(model_id)] = check_text("ground", ground)
+        self._tables.pop(int(model_id), None)
+
     # ------------------------------------------------------------------ tables
     def _accel_signal(self, model_id: int, duration_s: float) -> tuple[np.ndarray, np.ndarray]:
         """Vertical acceleration for model ``model_id`` over ``[0, duration_s + 1]`` s: its stored
@@ -236,7 +256,8 @@ class LearnedEnergyModel:
         at, accel = self._accel_signal(model_id, float(t[-1]))
         zeros = np.zeros(n)
         log = InteractionLog(t, v, w, zeros, zeros, at, accel,
-                             meta=LogMeta(robot=self.robot.name, source=f"learned-cost table of model {model_id}"))
+                             meta=LogMeta(robot=self.robot.name, source=f"learned-cost table of model {model_id}",
+                                          ground_label=self._grounds.get(model_id)))
         # settled tail of each hold
         settle = int(round(self.settle_s * self.rate_hz))
         keep = (np.arange(n) % n_hold) >= settle

@@ -289,6 +289,13 @@ def model_energy_model(
                              physics_ground if physics_ground is not None else ground_preset(DEFAULT_MODEL_PHYSICS_GROUND))
     for g, (t, a) in vibration.items():
         lem.set_vibration(ids[g], t, a)
+    # a class named as the training ground it is priced by is that ground: its own spread; a class the model
+    # never drove, priced as one it did (--model-ground grass=asphalt), keeps the new-ground spread of the mapping
+    class_names = getattr(terrain, "ground_names", None) or {}
+    for g in names:
+        mapped = [str(class_names.get(gid, "")).lower() for gid, tg in plan.by_class.items() if tg == g]
+        if mapped and all(m == g.lower() for m in mapped):
+            lem.set_ground(ids[g], g)
     return lem, plan
 
 

@@ -165,3 +165,19 @@ def test_degrees_of_freedom_are_checked_where_they_enter(world):
         RouteEnergyInterval(1000.0, 100.0, {"sand": 100.0}, dof=-1.0)
     with pytest.raises(InvalidParameterError, match="without a spread"):
         RouteEnergyInterval(1000.0, 100.0, {"sand": 100.0}, dof=3.0, dof_by_ground={"clay": 3.0})
+
+
+def test_a_class_named_as_a_training_ground_is_priced_with_that_ground_s_own_gaussian_spread(linear_model):
+    # class 0 is "a", a ground the model drove; class 1 "grass" is priced as "a" by the user's mapping only
+    ground = np.zeros((6, 30), int)
+    ground[3:] = 1
+    tmap = TerrainMap(np.zeros((6, 30)), 1.0, ground=ground, ground_names={0: "a", 1: "grass"})
+    from planner import model_energy_cost
+
+    named = model_energy_cost(tmap, linear_model, robot_preset("husky"), 0.5, model_ground={"grass": "b"})
+    assert dict(zip(named.ground_labels, named.spread_dof)) == {"a": math.inf, "b": 3.0}
+    mapped = model_energy_cost(tmap, linear_model, robot_preset("husky"), 0.5, model_ground={"a": "b", "grass": "a"})
+    row_named, row_mapped = named.ground_labels.index("a"), mapped.ground_labels.index("a")
+    assert mapped.spread_dof[row_mapped] == 3.0  # "a" now also prices grass, a ground the model never drove
+    # the ground's own run spread is narrower than the spread of a ground the model never drove
+    assert np.all(named.grade_sd_table_j_per_m[row_named] < mapped.grade_sd_table_j_per_m[row_mapped])
