@@ -45,7 +45,7 @@ from .registry import (
     CellModelRegistry,
     CurrentModelProtocol,
     FlaggedRegion,
-    ModelRecord,
+    ModelEntry,
     RegistryVersion,
     UpdateDecision,
     UpdatePolicy,
@@ -104,7 +104,7 @@ __all__ = [
     "FlaggedRegion",
     "RegistryVersion",
     "UpdateDecision",
-    "ModelRecord",
+    "ModelEntry",
     "REGISTRY_FORMAT_VERSION",
     "PRIOR_MODEL_ID",
     # errors and warnings

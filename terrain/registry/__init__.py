@@ -49,7 +49,7 @@ from .records import (
     PRIOR_MODEL_ID,
     CurrentModelProtocol,
     FlaggedRegion,
-    ModelRecord,
+    ModelEntry,
     RegistryVersion,
     UpdateDecision,
     UpdatePolicy,
@@ -64,7 +64,7 @@ __all__ = [
     "FlaggedRegion",
     "RegistryVersion",
     "UpdateDecision",
-    "ModelRecord",
+    "ModelEntry",
     "REGISTRY_FORMAT_VERSION",
     "PRIOR_MODEL_ID",
 ]

@@ -18,7 +18,7 @@ __all__ = [
     "Cells",
     "CurrentModelProtocol",
     "UpdatePolicy",
-    "ModelRecord",
+    "ModelEntry",
     "FlaggedRegion",
     "RegistryVersion",
     "UpdateDecision",
@@ -121,7 +121,7 @@ class UpdatePolicy:
 
 
 @dataclass(frozen=True, eq=False)
-class ModelRecord:
+class ModelEntry:
     """One entry of the model table: id, unique name and metadata (the model itself is
     returned by :meth:`CellModelRegistry.model`)."""
 

@@ -21,7 +21,7 @@ from .records import (
     Cells,
     CurrentModelProtocol,
     MetaValue,
-    ModelRecord,
+    ModelEntry,
     RegistryVersion,
     UpdateDecision,
 )
@@ -229,7 +229,7 @@ class CellModelRegistry(EvidenceMixin):
         """
         return self._table.model(model_id)
 
-    def model_record(self, model_id: int) -> ModelRecord:
+    def model_record(self, model_id: int) -> ModelEntry:
         """Id, name and metadata of a model.
 
         Raises

@@ -10,7 +10,7 @@ from typing import Any
 
 from terrawatt_base.checks import check_text
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
-from .records import CurrentModelProtocol, MetaValue, ModelRecord
+from .records import CurrentModelProtocol, MetaValue, ModelEntry
 
 __all__ = ["ModelTable", "check_meta"]
 
@@ -72,12 +72,12 @@ class ModelTable:
 
     def __init__(self) -> None:
         self._models: dict[int, Any] = {}
-        self._records: dict[int, ModelRecord] = {}
+        self._records: dict[int, ModelEntry] = {}
 
     def __len__(self) -> int:
         return len(self._records)
 
-    def __iter__(self) -> Iterator[ModelRecord]:
+    def __iter__(self) -> Iterator[ModelEntry]:
         return iter(self._records.values())
 
     @property
@@ -109,7 +109,7 @@ class ModelTable:
         clean = self.check_new(model, name, meta)
         model_id = len(self._records)
         self._models[model_id] = model
-        self._records[model_id] = ModelRecord(model_id, name, clean)
+        self._records[model_id] = ModelEntry(model_id, name, clean)
         return model_id
 
     def check_id(self, model_id: object) -> int:
@@ -130,7 +130,7 @@ class ModelTable:
         """The model with id ``model_id`` (raises :class:`UnknownNameError` for an unknown id)."""
         return self._models[self.check_id(model_id)]
 
-    def record(self, model_id: object) -> ModelRecord:
+    def record(self, model_id: object) -> ModelEntry:
         """Id, name and metadata of a model (raises :class:`UnknownNameError` for an unknown id)."""
         return self._records[self.check_id(model_id)]
 

@@ -10,7 +10,7 @@ from terrain import (
     CurrentModelProtocol,
     FlaggedRegion,
     InvalidParameterError,
-    ModelRecord,
+    ModelEntry,
     RegistryVersion,
     UpdatePolicy,
 )
@@ -83,7 +83,7 @@ def test_policy_is_keyword_only():
 
 # ----------------------------------------------------------------------- records
 def test_a_model_record_has_empty_read_only_metadata_by_default():
-    rec = ModelRecord(2, "snow")
+    rec = ModelEntry(2, "snow")
     assert (rec.model_id, rec.name, dict(rec.meta)) == (2, "snow", {})
     with pytest.raises(TypeError):
         rec.meta["k"] = 1  # type: ignore[index]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from registry_models import GainModel
 
-from terrain import InvalidParameterError, ModelRecord, UnknownNameError
+from terrain import InvalidParameterError, ModelEntry, UnknownNameError
 from terrain.registry.table import ModelTable, check_meta
 
 
@@ -44,7 +44,7 @@ def test_models_get_ids_in_the_order_added():
     assert table.model(1) is snow and table.model(np.int64(0)) is physics
     assert table.id_of("snow") == 1
     rec = table.record(1)
-    assert isinstance(rec, ModelRecord) and (rec.model_id, rec.name, dict(rec.meta)) == (1, "snow", {"epochs": 40})
+    assert isinstance(rec, ModelEntry) and (rec.model_id, rec.name, dict(rec.meta)) == (1, "snow", {"epochs": 40})
     assert [r.name for r in table] == ["physics", "snow"]
 
 
