@@ -60,7 +60,7 @@ from terrawatt_base.errors import DataError, InvalidParameterError
 from ..logs import InteractionLog
 from .base import CurrentModel, ModelRecord, TrainingSummary, check_logs, log_currents
 from .forecast import CurrentForecast
-from .uncertainty import MAX_RUN_VARIANCE, check_covariances, regime_design
+from .uncertainty import MAX_RUN_VARIANCE, check_covariances, regime_design, sample_weights_s
 from .loading import model_class
 
 __all__ = [
@@ -99,11 +99,6 @@ def _precision(cov: np.ndarray) -> np.ndarray:
     """Inverse of a prior covariance, regularised: a direction with no learned spread gets a tight but finite prior."""
     scale = max(float(np.trace(cov)) / cov.shape[0], 1e-6)
     return np.linalg.inv(cov + 1e-3 * scale * np.eye(cov.shape[0]))
-
-
-def _weights(log: InteractionLog) -> np.ndarray:
-    """Sample weights = the time each sample stands for (s)."""
-    return np.gradient(log.time_s) if len(log) > 1 else np.ones(len(log))
 
 
 class AdaptedCurrentModel(CurrentModel):
@@ -242,7 +237,7 @@ class AdaptedCurrentModel(CurrentModel):
                 continue
             x = np.concatenate([self._design(lg, p, k) for lg, p in zip(logs, preds)])
             r = np.concatenate([y[:, k] - p[:, k] for y, p in zip(truths, preds)])
-            w = np.concatenate([_weights(lg) for lg in logs])
+            w = np.concatenate([sample_weights_s(lg) for lg in logs])
             scale = np.ones(x.shape[1])
             if self.method == "gain_offset":  # the gain's column is in A: penalise it on the current's scale
                 scale[0] = max(float(np.average(np.abs(x[:, 0]), weights=w)), 0.5) ** 2
@@ -272,7 +267,7 @@ class AdaptedCurrentModel(CurrentModel):
             t = lg.time_s
             obs += _trapezoid(y - p, t, axis=0)
             # white noise of correlation time c over the prefix: variance of its integral ~ sum(sd^2 dt) * c
-            var += np.sum(interval.sample_sd(lg) ** 2 * np.gradient(t)[:, None], axis=0) * interval.correlation_s
+            var += np.sum(interval.sample_sd(lg) ** 2 * sample_weights_s(lg)[:, None], axis=0) * interval.correlation_s
             if self.scope == "ground":  # a run's own offset is not the ground's: it does not carry to other runs
                 var += _trapezoid(interval.run_sd_a(lg, p, known=True), t, axis=0) ** 2
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -305,7 +300,7 @@ class AdaptedCurrentModel(CurrentModel):
               for k in range(2)]
         rs = [np.concatenate([y[:, k] - p[:, k] for y, p in zip(truths, preds)]) for k in range(2)]
         sds = [np.maximum(np.concatenate([interval.sample_sd(lg)[:, k] for lg in logs]), _NOISE_FLOOR_A) for k in range(2)]
-        dt = np.concatenate([_weights(lg) for lg in logs])
+        dt = np.concatenate([sample_weights_s(lg) for lg in logs])
 
         def solve(ratio: float) -> tuple[np.ndarray, np.ndarray]:
             mean = np.zeros((2, 2 * k_cols))
