@@ -754,7 +754,10 @@ def _joined(first: InteractionLog, second: InteractionLog) -> InteractionLog | N
     """The drive streams of two logs one after the other (None when the second does not follow the first)."""
     if not float(second.time_s[0]) > float(first.time_s[-1]) or second.current_left_a is None:
         return None
-    cat = (lambda name: np.concatenate([getattr(first, name), getattr(second, name)]))
+
+    def cat(name: str) -> np.ndarray:
+        return np.concatenate([getattr(first, name), getattr(second, name)])
+
     t = cat("time_s")
     return InteractionLog(t, cat("v_mps"), cat("omega_radps"), cat("current_left_a"), cat("current_right_a"),
                           t[[0, -1]], np.zeros(2))
