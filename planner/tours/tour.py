@@ -1,0 +1,183 @@
+"""plan_tour: which sites each robot visits on one charge, in what order, so that it comes back above its reserve at Q."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from terrawatt_base.checks import check_real, check_seed
+from terrawatt_base.errors import BlockedPositionError, InvalidParameterError
+
+from ..edge_cost import EnergyCost
+from ..risk import RouteEnergyInterval, check_planning_risk
+from .pricing import PairPrices, price_pairs
+from .result import RobotTour, TourLeg, TourResult
+from .sites import TourRobot, TourSites
+from .solver import TourProblem, solve_tours
+
+__all__ = ["plan_tour", "TOO_FAR", "NOT_WORTH_IT", "NO_ROUTE"]
+
+#: Why a site is left out: no robot can go there and back above its reserve at Q.
+TOO_FAR = "too far at Q: no robot reaches it and comes back above its reserve at the risk level"
+#: Why a site is left out: reachable alone, but the charge is spent on sites of more value.
+NOT_WORTH_IT = "not worth it: reachable alone, but the charge at Q goes to sites of more value (capacity)"
+#: Why a site is left out: no route joins it to a depot.
+NO_ROUTE = "no route: obstacles or slopes separate it from every depot"
+
+
+def _robots(robots: Any) -> tuple[TourRobot, ...]:
+    out = (robots,) if isinstance(robots, TourRobot) else tuple(robots) if isinstance(robots, Sequence) else None
+    if not out or not all(isinstance(r, TourRobot) for r in out):
+        raise InvalidParameterError(f"robots must be a TourRobot or a non-empty sequence of them, got {robots!r:.120}")
+    names = [r.name for r in out]
+    if len(set(names)) != len(names):
+        out = tuple(TourRobot(r.battery, r.depot_xy_m, f"robot {k}") for k, r in enumerate(out))
+    return out
+
+
+def plan_tour(
+    cost: EnergyCost,
+    sites: TourSites,
+    robots: TourRobot | Sequence[TourRobot],
+    *,
+    risk: float = 0.9,
+    time_limit_s: float = 10.0,
+    seed: int = 0,
+    workers: int | None = None,
+    client: Any = None,
+    solver: str = "pyvrp",
+    map_label: str = "map",
+    progress: bool = False,
+) -> TourResult:
+    """Choose and order the sites each robot visits to maximise the value collected, every tour at risk level
+    ``risk`` coming back above its reserve.
+
+    Every ordered pair of depots and sites is priced on ``cost`` (:func:`planner.tours.pricing.price_pairs`:
+    the planner's lattice routes, their mean energy and run-level spread per ground; asymmetric), the
+    prize-collecting routing problem is solved by PyVRP on conservative integer arc prices, and each
+    chosen tour is checked on its own quantile (the spreads of one ground add along the whole tour),
+    capacities tightened and the problem solved again until every tour holds
+    (:mod:`planner.tours.solver`).
+
+    Parameters
+    ----------
+    cost : EnergyCost
+        The map's edge costs (with an interval for risk levels to mean anything; without one,
+        the mean is the price at every level).
+    sites : TourSites
+        The candidate sites; one off the map or on a blocked cell is an error row, the others are kept.
+    robots : TourRobot or sequence of TourRobot
+        The fleet: battery, reserve and depot each.
+    risk : float
+        The level Q in [0.5, 1).
+    time_limit_s : float
+        The solver's time limit per solve (s); it usually stops earlier (no improvement).
+    seed : int
+        The solver's seed.
+    workers, client
+        Where the legs are priced (:func:`planner.plan_batch`'s dask path).
+    solver : {"pyvrp", "ortools"}
+        The routing solver ("ortools" needs the ``bench`` extra).
+    map_label : str
+        How the result names the map.
+    progress : bool
+        A progress bar over the pricing.
+
+    Returns
+    -------
+    TourResult
+        Status ``"nothing reachable"`` when no robot can visit any site and come back at Q.
+
+    Raises
+    ------
+    InvalidParameterError
+        Bad arguments; a risk level below 0.5; a depot off the map.
+    BlockedPositionError
+        A depot on a blocked cell.
+
+    Examples
+    --------
+    >>> from energy import Battery
+    >>> from terrain import flat_map
+    >>> cost = EnergyCost.from_presets(flat_map((40, 40), 1.0))
+    >>> sites = TourSites(("a", "b", "far"), [[10.0, 10.0], [20.0, 10.0], [39.0, 39.0]], value=[1, 2, 5])
+    >>> res = plan_tour(cost, sites, TourRobot(Battery(0.1, 24.0), (2.0, 2.0)))
+    >>> res.tours[0].value, sorted(res.left_out)
+    (3.0, ['far'])
+    """
+    if not isinstance(cost, EnergyCost):
+        raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
+    if not isinstance(sites, TourSites):
+        raise InvalidParameterError(f"sites must be a TourSites, got {type(sites).__name__!r}")
+    fleet = _robots(robots)
+    q = check_planning_risk(risk, "risk")
+    time_limit_s = check_real("time_limit_s", time_limit_s, low=0.0, low_inclusive=False)
+    seed = check_seed(seed) or 0
+    depots = sorted({r.depot_xy_m for r in fleet})
+    dxy = np.array(depots, dtype=float)
+    cost.check_inside(dxy, "depot")
+    r, c = cost.terrain.rowcol(dxy[:, 0], dxy[:, 1])
+    if np.any(np.asarray(cost.blocked)[r, c]):
+        bad = depots[int(np.flatnonzero(np.asarray(cost.blocked)[r, c])[0])]
+        raise BlockedPositionError(f"depot {bad!r} m lies on a blocked cell (an obstacle or a slope above the limit)")
+    errors = sites.check_on(cost)
+    kept = [k for k, n in enumerate(sites.names) if n not in errors]
+    depot_names = ["depot"] if len(depots) == 1 else [f"depot {k}" for k in range(len(depots))]
+    names = depot_names + [sites.names[k] for k in kept]
+    pts = np.vstack([dxy, sites.xy_m[kept]]) if kept else dxy
+    prices = price_pairs(cost, pts, names, risk=q, workers=workers, client=client, progress=progress)
+    nd = len(depots)
+    value = np.concatenate([np.zeros(nd), sites.value[kept]])
+    service = np.concatenate([np.zeros(nd), sites.service_energy_j[kept]])
+    depot_points = np.array([depots.index(rb.depot_xy_m) for rb in fleet])
+    budgets = np.array([rb.budget_j for rb in fleet])
+    site_points = np.arange(nd, len(names))
+    whole = TourProblem.build(prices, q, budgets, depot_points, site_points, value, service)
+    left_out: dict[str, str] = {}
+    candidates = []
+    for p in site_points.tolist():
+        if not any(np.isfinite(prices.mean_j[d, p]) and np.isfinite(prices.mean_j[p, d]) for d in range(nd)):
+            left_out[names[p]] = NO_ROUTE
+        elif not any(whole.tour_units(k, [p]) <= whole.capacity_units[k] for k in range(len(fleet))):
+            left_out[names[p]] = TOO_FAR
+        elif value[p] <= 0:
+            left_out[names[p]] = NOT_WORTH_IT
+        else:
+            candidates.append(p)
+    values = {sites.names[k]: float(sites.value[k]) for k in kept}
+    where_xy = {n: (float(x), float(y)) for n, (x, y) in zip(sites.names, sites.xy_m.tolist())}
+    if not candidates:
+        return TourResult("nothing reachable", q, tuple(_tour(prices, rb, [], d, service, value, q)
+                                                        for rb, d in zip(fleet, depot_points.tolist())),
+                          left_out, errors, values, solver, prices.pricing_time_s, 0.0, 0, prices.where, map_label,
+                          where_xy, cost.terrain, cost)
+    outcome = solve_tours(prices, q, budgets, depot_points, candidates, value, service, solver=solver,
+                          time_limit_s=time_limit_s, seed=seed)
+    chosen = {p for t in outcome.tours for p in t}
+    for p in candidates:
+        if p not in chosen:
+            left_out[names[p]] = NOT_WORTH_IT
+    tours = tuple(_tour(prices, rb, t, d, service, value, q)
+                  for rb, t, d in zip(fleet, outcome.tours, depot_points.tolist()))
+    return TourResult("planned", q, tours, left_out, errors, values, outcome.solver, prices.pricing_time_s,
+                      outcome.solve_time_s, outcome.rounds, prices.where, map_label, where_xy, cost.terrain, cost)
+
+
+def _tour(prices: PairPrices, robot: TourRobot, sites: list[int], depot: int, service: np.ndarray,
+          value: np.ndarray, q: float) -> RobotTour:
+    """One robot's :class:`RobotTour` from its point indices."""
+    seq = [depot, *sites, depot] if sites else []
+    legs, cumulative = [], []
+    served = 0.0
+    for k, (a, b) in enumerate(zip(seq[:-1], seq[1:])):
+        leg_iv = prices.tour_interval([a, b])
+        legs.append(TourLeg(prices.names[a], prices.names[b], prices.waypoints[a][b], leg_iv,
+                            float(prices.duration_s[a, b])))
+        served += float(service[b])
+        cumulative.append(prices.tour_interval(seq[:k + 2], served))
+    energy = cumulative[-1] if cumulative else RouteEnergyInterval(0.0, 0.0, {})
+    return RobotTour(robot.name, robot.battery, robot.depot_xy_m, tuple(prices.names[p] for p in sites), tuple(legs),
+                     tuple(float(service[p]) for p in sites), float(value[sites].sum()) if sites else 0.0, energy,
+                     tuple(cumulative), robot.budget_j, q)
