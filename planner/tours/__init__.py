@@ -7,10 +7,11 @@ from .pricing import PairPrices, price_pairs
 from .result import RobotTour, TourLeg, TourResult
 from .sites import TourRobot, TourSites, read_tour_sites_csv
 from .solver import TourProblem, solve_tours
-from .tour import plan_tour
+from .tour import plan_tour, plan_tour_on_map
 
 __all__ = [
     "plan_tour",
+    "plan_tour_on_map",
     "TourResult",
     "TourSites",
     "TourRobot",

@@ -314,10 +314,18 @@ class TourResult:
             ax.fill_between(x, 100 * tour.soc(hi_q), 100 * tour.soc(lo_q), color=line.get_color(), alpha=0.25)
             ax.plot(x, 100 * tour.soc(self.risk), ls="--", color=line.get_color(), label=f"{tour.robot} at Q")
             ax.axhline(tour.battery.min_reserve_pct, color="k", lw=0.8, ls=":")
-        ax.set_xlabel("leg")
+        driven = [t for t in self.tours if t.legs]
+        if len(driven) == 1:
+            places = ["depot", *driven[0].sites, "depot"]
+            ax.set_xticks(range(len(places)), places, rotation=45 if len(places) > 8 else 0, fontsize=7)
+            ax.set_xlabel("arrival at")
+        else:
+            ax.set_xlabel("legs driven")
         ax.set_ylabel("state of charge (%)")
-        ax.set_title(f"state of charge along the tours (band P10-P90; dashed: at Q = {self.risk:g}; dotted: reserve)")
-        ax.legend(fontsize=8)
+        ax.set_title(f"state of charge along the tours\nband P10-P90; dashed: at Q = {self.risk:g}; dotted: reserve",
+                     fontsize=10)
+        if any(t.legs for t in self.tours):
+            ax.legend(fontsize=8)
         return save_figure(ax.figure, target) if target is not None else None
 
     def write(self, out_dir: str | os.PathLike[str], *, bag: bool = False, on_figure_error: str = "warn") -> list[Path]:

@@ -2,14 +2,20 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import math
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
-from terrawatt_base.checks import check_real, check_seed
+from terrawatt_base.checks import check_int, check_real, check_seed
 from terrawatt_base.errors import BlockedPositionError, InvalidParameterError
 
+from energy import Battery
+from energy.params import robot_params
+from terrain import TerrainMap
+
+from ..cost_source import edge_costs
 from ..edge_cost import EnergyCost
 from ..risk import RouteEnergyInterval, check_planning_risk
 from .pricing import PairPrices, price_pairs
@@ -17,7 +23,7 @@ from .result import RobotTour, TourLeg, TourResult
 from .sites import TourRobot, TourSites
 from .solver import TourProblem, solve_tours
 
-__all__ = ["plan_tour", "TOO_FAR", "NOT_WORTH_IT", "NO_ROUTE"]
+__all__ = ["plan_tour", "plan_tour_on_map", "TOO_FAR", "NOT_WORTH_IT", "NO_ROUTE"]
 
 #: Why a site is left out: no robot can go there and back above its reserve at Q.
 TOO_FAR = "too far at Q: no robot reaches it and comes back above its reserve at the risk level"
@@ -181,3 +187,50 @@ def _tour(prices: PairPrices, robot: TourRobot, sites: list[int], depot: int, se
     return RobotTour(robot.name, robot.battery, robot.depot_xy_m, tuple(prices.names[p] for p in sites), tuple(legs),
                      tuple(float(service[p]) for p in sites), float(value[sites].sum()) if sites else 0.0, energy,
                      tuple(cumulative), robot.budget_j, q)
+
+
+def plan_tour_on_map(
+    terrain: TerrainMap,
+    sites: TourSites,
+    depot_xy_m: tuple[float, float],
+    *,
+    battery_ah: float,
+    voltage_v: float | None = None,
+    reserve_pct: float = 20.0,
+    n_robots: int = 1,
+    risk: float = 0.9,
+    robot: str = "husky",
+    speed_mps: float = 0.5,
+    max_slope_deg: float = 20.0,
+    unknown_ground: str | None = "gravel",
+    model: Any = None,
+    model_ground: str | Mapping[str, str] | None = None,
+    time_limit_s: float = 10.0,
+    seed: int = 0,
+    workers: int | None = None,
+    client: Any = None,
+    map_label: str = "map",
+    progress: bool = False,
+) -> TourResult:
+    """:func:`plan_tour` on a map priced as ``terrawatt tour`` prices it: ``n_robots`` alike robots with one depot.
+
+    The edges are priced by the presets or a saved ``model`` (:func:`planner.cost_source.edge_costs`);
+    each robot's battery is ``battery_ah`` at ``voltage_v`` (default the robot's) keeping
+    ``reserve_pct`` % in reserve.
+
+    Raises
+    ------
+    InvalidParameterError
+        Bad numbers (a non-positive capacity, a reserve outside [0, 100), fewer than one robot), as
+        :func:`plan_tour`.
+    """
+    battery_ah = check_real("battery_ah", battery_ah, low=0.0, low_inclusive=False)
+    n_robots = check_int("n_robots", n_robots, low=1)
+    slope = check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False, high_inclusive=False)
+    voltage = robot_params(robot).battery_voltage_v if voltage_v is None else voltage_v
+    battery = Battery(battery_ah, voltage, min_reserve_pct=reserve_pct)
+    cost = edge_costs(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=math.radians(slope),
+                      unknown_ground=unknown_ground if model is None else None, model=model, model_ground=model_ground)
+    fleet = [TourRobot(battery, depot_xy_m, f"robot {k}") for k in range(n_robots)]
+    return plan_tour(cost, sites, fleet, risk=risk, time_limit_s=time_limit_s, seed=seed, workers=workers,
+                     client=client, map_label=map_label, progress=progress)
