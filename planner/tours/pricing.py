@@ -119,12 +119,13 @@ def price_from(search_cost: EnergyCost, cost: EnergyCost, i: int, xy_m: np.ndarr
     mean[i], dur[i] = 0.0, 0.0
     paths = Lattice.for_cost(search_cost).paths_from(tuple(xy_m[i]), xy_m)
     index = {label: k for k, label in enumerate(cost.ground_labels)}
+    walked: dict = {}  # the legs of one search share most of their segments
     for j, path in enumerate(paths):
         if j == i or not path.found:
             continue
         pts = path.waypoints_m
         if cost.has_interval:
-            iv = route_energy_interval(cost, pts)
+            iv = route_energy_interval(cost, pts, segment_cache=walked)
             mean[j] = iv.mean_j
             for label, s in iv.sd_by_ground_j.items():
                 sd[j, index[label]] = s

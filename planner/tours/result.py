@@ -22,6 +22,7 @@ from ..risk import INTERVAL_LEVEL, RouteEnergyInterval
 from ..route import Route, evaluate_route
 from ..ros_export import write_route_bag
 from ..route_geojson import write_geojson
+from .pricing import PairPrices
 
 __all__ = ["TourLeg", "RobotTour", "TourResult", "TOUR_FORMAT_VERSION", "TOUR_STATUSES"]
 
@@ -175,8 +176,8 @@ class TourResult:
         How the map is named.
     sites_xy_m : dict of str to (float, float)
         Where each site is (m).
-    terrain, cost
-        The map and its edge costs (not in the JSON).
+    terrain, cost, prices
+        The map, its edge costs and the priced legs (not in the JSON).
     """
 
     status: str
@@ -194,6 +195,7 @@ class TourResult:
     sites_xy_m: dict[str, tuple[float, float]] = field(default_factory=dict)
     terrain: TerrainMap = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
     cost: EnergyCost = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
+    prices: PairPrices | None = field(default=None, repr=False, compare=False)
 
     @property
     def value(self) -> float:

@@ -93,10 +93,11 @@ class TourProblem:
 
 
 def solve_pyvrp(problem: TourProblem, time_limit_s: float = 10.0, seed: int = 0,
-                no_improvement: int = 20_000) -> list[list[int]]:
+                no_improvement: int | None = None) -> list[list[int]]:
     """Each robot's sites (point indices, in visiting order) by PyVRP's hybrid genetic search.
 
-    Stops after ``no_improvement`` iterations without a better solution or ``time_limit_s``.
+    Stops after ``no_improvement`` iterations without a better solution (default
+    ``max(2000, 100 * sites)``) or after ``time_limit_s``.
     """
     import pyvrp
     from pyvrp.stop import MaxRuntime, MultipleCriteria, NoImprovement
@@ -119,8 +120,11 @@ def solve_pyvrp(problem: TourProblem, time_limit_s: float = 10.0, seed: int = 0,
         for b in range(len(order)):
             if a != b:
                 model.add_edge(locs[a], locs[b], int(sub[a, b]))
-    stop = MultipleCriteria([MaxRuntime(float(time_limit_s)), NoImprovement(int(no_improvement))])
-    result = model.solve(stop, seed=int(seed), display=False, collect_stats=False)
+    patience = max(2000, 100 * problem.site_points.size) if no_improvement is None else int(no_improvement)
+    stop = MultipleCriteria([MaxRuntime(float(time_limit_s)), NoImprovement(patience)])
+    # the prizes dwarf an arc (value first): let the penalty on excess energy grow as large as a prize
+    params = pyvrp.SolveParams(penalty=pyvrp.PenaltyParams(max_penalty=max(1e5, 10.0 * float(problem.prize.max()))))
+    result = model.solve(stop, seed=int(seed), display=False, collect_stats=False, params=params)
     tours: list[list[int]] = [[] for _ in problem.depot_points]
     if not result.best.is_feasible():
         return tours

@@ -56,6 +56,7 @@ def plan_tour(
     solver: str = "pyvrp",
     map_label: str = "map",
     progress: bool = False,
+    prices: PairPrices | None = None,
 ) -> TourResult:
     """Choose and order the sites each robot visits to maximise the value collected, every tour at risk level
     ``risk`` coming back above its reserve.
@@ -90,6 +91,10 @@ def plan_tour(
         How the result names the map.
     progress : bool
         A progress bar over the pricing.
+    prices : PairPrices, optional
+        The legs already priced (``result.prices`` of an earlier call on the same cost, depots and sites):
+        solve again at another level, battery or with another solver without pricing again (the legs'
+        routes stay those searched at the earlier level).
 
     Returns
     -------
@@ -133,7 +138,11 @@ def plan_tour(
     depot_names = ["depot"] if len(depots) == 1 else [f"depot {k}" for k in range(len(depots))]
     names = depot_names + [sites.names[k] for k in kept]
     pts = np.vstack([dxy, sites.xy_m[kept]]) if kept else dxy
-    prices = price_pairs(cost, pts, names, risk=q, workers=workers, client=client, progress=progress)
+    if prices is None:
+        prices = price_pairs(cost, pts, names, risk=q, workers=workers, client=client, progress=progress)
+    elif not isinstance(prices, PairPrices) or prices.names != tuple(names) or not np.allclose(prices.xy_m, pts):
+        raise InvalidParameterError("prices must be the PairPrices of these depots and sites (result.prices of an "
+                                    "earlier plan_tour on the same inputs)")
     nd = len(depots)
     value = np.concatenate([np.zeros(nd), sites.value[kept]])
     service = np.concatenate([np.zeros(nd), sites.service_energy_j[kept]])
@@ -158,7 +167,7 @@ def plan_tour(
         return TourResult("nothing reachable", q, tuple(_tour(prices, rb, [], d, service, value, q)
                                                         for rb, d in zip(fleet, depot_points.tolist())),
                           left_out, errors, values, solver, prices.pricing_time_s, 0.0, 0, prices.where, map_label,
-                          where_xy, cost.terrain, cost)
+                          where_xy, cost.terrain, cost, prices)
     outcome = solve_tours(prices, q, budgets, depot_points, candidates, value, service, solver=solver,
                           time_limit_s=time_limit_s, seed=seed)
     chosen = {p for t in outcome.tours for p in t}
@@ -168,7 +177,8 @@ def plan_tour(
     tours = tuple(_tour(prices, rb, t, d, service, value, q)
                   for rb, t, d in zip(fleet, outcome.tours, depot_points.tolist()))
     return TourResult("planned", q, tours, left_out, errors, values, outcome.solver, prices.pricing_time_s,
-                      outcome.solve_time_s, outcome.rounds, prices.where, map_label, where_xy, cost.terrain, cost)
+                      outcome.solve_time_s, outcome.rounds, prices.where, map_label, where_xy, cost.terrain, cost,
+                      prices)
 
 
 def _tour(prices: PairPrices, robot: TourRobot, sites: list[int], depot: int, service: np.ndarray,
