@@ -39,7 +39,8 @@ def _robots(robots: Any) -> tuple[TourRobot, ...]:
         raise InvalidParameterError(f"robots must be a TourRobot or a non-empty sequence of them, got {robots!r:.120}")
     names = [r.name for r in out]
     if len(set(names)) != len(names):
-        out = tuple(TourRobot(r.battery, r.depot_xy_m, f"robot {k}") for k, r in enumerate(out))
+        dup = next(n for n in names if names.count(n) > 1)
+        raise InvalidParameterError(f"robot names must be unique; {dup!r} appears {names.count(dup)} times")
     return out
 
 
@@ -164,7 +165,8 @@ def plan_tour(
     values = {sites.names[k]: float(sites.value[k]) for k in kept}
     where_xy = {n: (float(x), float(y)) for n, (x, y) in zip(sites.names, sites.xy_m.tolist())}
     if not candidates:
-        return TourResult("nothing reachable", q, tuple(_tour(prices, rb, [], d, service, value, q)
+        reachable = any(why == NOT_WORTH_IT for why in left_out.values())  # reachable, but worth nothing
+        return TourResult("planned" if reachable else "nothing reachable", q, tuple(_tour(prices, rb, [], d, service, value, q)
                                                         for rb, d in zip(fleet, depot_points.tolist())),
                           left_out, errors, values, solver, prices.pricing_time_s, 0.0, 0, prices.where, map_label,
                           where_xy, cost.terrain, cost, prices)
