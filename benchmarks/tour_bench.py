@@ -93,7 +93,8 @@ def timing_part(args: argparse.Namespace) -> dict[str, Any]:
     res = plan_tour(cost, sites, robots, risk=args.risk, time_limit_s=args.pyvrp_s, prices=prices)
     solve_s = time.perf_counter() - t0
     budgets = [r.budget_j for r in robots]
-    cands = [int(k) + 1 for k, n in enumerate(sites.names) if n in res.visited or res.left_out.get(n, "").startswith("not")]
+    cands = [k + 1 for k, n in enumerate(sites.names)
+             if n in res.visited or res.left_out.get(n, "").startswith("not worth")]
     value = np.concatenate([[0.0], sites.value])
     problem = TourProblem.build(prices, args.risk, budgets, [0] * args.robots, cands, value, np.zeros(len(pts)))
     compare = {}

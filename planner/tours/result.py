@@ -12,10 +12,10 @@ import numpy as np
 from energy import Battery
 from energy.battery import S_PER_H
 from terrain import TerrainMap
+from terrawatt_base.atomic import save_figure
 from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import result_document, write_result_json
 from terrawatt_base.plot_target import check_ax, check_plot_target, new_figure
-from terrawatt_base.atomic import save_figure
 
 from ..edge_cost import EnergyCost
 from ..risk import INTERVAL_LEVEL, RouteEnergyInterval
@@ -243,7 +243,8 @@ class TourResult:
             "left_out": [{"site": k, "reason": v} for k, v in self.left_out.items()],
             "errors": [{"site": k, "error": v} for k, v in self.errors.items()],
             "values": dict(self.values),
-            "sites_xy_m": {k: list(v) for k, v in self.sites_xy_m.items()}, "solver": self.solver, "pricing_time_s": self.pricing_time_s,
+            "sites_xy_m": {k: list(v) for k, v in self.sites_xy_m.items()}, "solver": self.solver,
+            "pricing_time_s": self.pricing_time_s,
             "solve_time_s": self.solve_time_s, "solve_rounds": self.solve_rounds, "where": self.where,
         })
 

@@ -166,10 +166,9 @@ def plan_tour(
     where_xy = {n: (float(x), float(y)) for n, (x, y) in zip(sites.names, sites.xy_m.tolist())}
     if not candidates:
         reachable = any(why == NOT_WORTH_IT for why in left_out.values())  # reachable, but worth nothing
-        return TourResult("planned" if reachable else "nothing reachable", q, tuple(_tour(prices, rb, [], d, service, value, q)
-                                                        for rb, d in zip(fleet, depot_points.tolist())),
-                          left_out, errors, values, solver, prices.pricing_time_s, 0.0, 0, prices.where, map_label,
-                          where_xy, cost.terrain, cost, prices)
+        empty = tuple(_tour(prices, rb, [], d, service, value, q) for rb, d in zip(fleet, depot_points.tolist()))
+        return TourResult("planned" if reachable else "nothing reachable", q, empty, left_out, errors, values, solver,
+                          prices.pricing_time_s, 0.0, 0, prices.where, map_label, where_xy, cost.terrain, cost, prices)
     outcome = solve_tours(prices, q, budgets, depot_points, candidates, value, service, solver=solver,
                           time_limit_s=time_limit_s, seed=seed)
     chosen = {p for t in outcome.tours for p in t}

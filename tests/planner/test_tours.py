@@ -16,6 +16,7 @@ from planner.tours import (TourProblem, TourRobot, TourSites, plan_tour, price_p
 from planner.tours.solver import solve_pyvrp
 from planner.tours.tour import NOT_WORTH_IT, TOO_FAR
 from terrain import DataError, InvalidParameterError, TerrainMap, flat_map
+from terrain.georef import xy_to_lonlat
 
 
 def _with_interval(cost: EnergyCost, rel_sd: float = 0.15) -> EnergyCost:
@@ -163,6 +164,32 @@ def test_bad_sites_raise_the_librarys_errors(tmp_path):
     cost = EnergyCost.from_presets(flat_map((20, 20), 1.0))
     with pytest.raises(InvalidParameterError, match="risk 0.2 lies below the median"):
         plan_tour(cost, TourSites(("a",), [[5.0, 5.0]]), TourRobot(Battery(1.0, 24.0), (2.0, 2.0)), risk=0.2)
+    twins = [TourRobot(Battery(1.0, 24.0), (2.0, 2.0), "r")] * 2
+    with pytest.raises(InvalidParameterError, match="robot names must be unique; 'r' appears 2 times"):
+        plan_tour(cost, TourSites(("a",), [[5.0, 5.0]]), twins)
+    with pytest.raises(InvalidParameterError, match="needs? .*georeferenced|CRS"):
+        TourSites.from_lonlat(("a",), [[10.0, 46.0]], flat_map((20, 20), 1.0))
+
+
+def test_sites_in_degrees_are_placed_by_the_maps_crs(tmp_path):
+    pytest.importorskip("rasterio", reason="degrees need the geo extra (rasterio's transforms)")
+    tmap = flat_map((20, 20), 10.0, origin_xy_m=(500000.0, 5100000.0))
+    tmap.crs = "EPSG:32632"
+    xy = np.array([[500055.0, 5100045.0], [500120.0, 5100150.0]])
+    lon, lat = xy_to_lonlat(xy[:, 0], xy[:, 1], tmap.crs)
+    sites = TourSites.from_lonlat(("a", "b"), np.column_stack([lon, lat]), tmap, value=[1.0, 2.0])
+    assert np.allclose(sites.xy_m, xy, atol=1e-3)
+    csv = tmp_path / "sites.csv"
+    csv.write_text("name,lon,lat,value\n" + "".join(f"{n},{x!r},{y!r},{v}\n" for n, x, y, v in
+                                                     zip("ab", lon.tolist(), lat.tolist(), (1, 2))))
+    read = read_tour_sites_csv(csv, tmap)
+    assert read.names == ("a", "b") and np.allclose(read.xy_m, xy, atol=1e-3) and read.value.tolist() == [1.0, 2.0]
+
+
+def test_sites_all_worth_nothing_are_a_plan_without_tours():
+    cost = EnergyCost.from_presets(flat_map((20, 20), 1.0))
+    res = plan_tour(cost, TourSites(("a",), [[5.0, 5.0]], value=[0.0]), TourRobot(Battery(1.0, 24.0), (2.0, 2.0)))
+    assert res.status == "planned" and res.visited == () and res.left_out == {"a": NOT_WORTH_IT}
 
 
 def test_a_battery_that_reaches_no_site_answers_nothing_reachable():
