@@ -236,3 +236,15 @@ def test_monte_carlo_of_the_tours_ends_above_the_reserve_about_as_often_as_q(hil
         assert check.draw_from == "model" and "above the reserve" in check.summary()
     assert shares[0.9] >= 0.88
     assert shares[0.5] < shares[0.9] - 0.1  # the knob means something
+
+
+def test_each_robots_tour_is_written_as_a_ros2_bag(tmp_path, hills_cost):
+    pytest.importorskip("rosbags", reason="the ROS 2 output needs the ros extra")
+    from planner.ros_export import read_route_bag
+
+    sites = TourSites(("a", "b"), [[10.0, 10.0], [30.0, 30.0]])
+    res = plan_tour(hills_cost, sites, TourRobot(Battery(0.2, 24.0), (20.0, 20.0)))
+    written = res.write(tmp_path, bag=True)
+    assert tmp_path / "tour_0.mcap" in written
+    bag = read_route_bag(tmp_path / "tour_0.mcap")
+    assert np.allclose(bag.waypoints_m[0], (20.0, 20.0)) and np.allclose(bag.waypoints_m[-1], (20.0, 20.0))
