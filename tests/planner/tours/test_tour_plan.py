@@ -32,6 +32,7 @@ def _exhaustive(problem: TourProblem) -> float:
                     best = max(best, sum(value[s] for s in seq))
     return best
 
+
 def _problem(cost: EnergyCost, sites: TourSites, robots: list[TourRobot], q: float) -> TourProblem:
     """The integer problem plan_tour solves, built from the same pricing (one depot)."""
     depot = robots[0].depot_xy_m
@@ -40,6 +41,7 @@ def _problem(cost: EnergyCost, sites: TourSites, robots: list[TourRobot], q: flo
     value = np.concatenate([[0.0], sites.value])
     return TourProblem.build(prices, q, [r.budget_j for r in robots], [0] * len(robots),
                              np.arange(1, len(pts)), value, np.concatenate([[0.0], sites.service_energy_j]))
+
 
 @pytest.mark.parametrize("n_sites, n_robots, q, ah", [(8, 1, 0.9, 0.12), (8, 1, 0.5, 0.12), (6, 2, 0.9, 0.06)])
 def test_the_tours_value_equals_the_exhaustive_optimum(hills_cost, n_sites, n_robots, q, ah):
@@ -57,6 +59,7 @@ def test_the_tours_value_equals_the_exhaustive_optimum(hills_cost, n_sites, n_ro
         assert tour.arrival_soc_at_risk >= tour.battery.reserve_soc - 1e-12
     assert set(res.visited) | set(res.left_out) == set(sites.names)
 
+
 def test_a_higher_risk_level_visits_no_more():
     cost = with_interval(EnergyCost.from_presets(hills_map()), rel_sd=0.3)
     rng = np.random.default_rng(3)
@@ -64,6 +67,7 @@ def test_a_higher_risk_level_visits_no_more():
     robot = TourRobot(Battery(0.1, 24.0), (20.0, 20.0))
     values = [plan_tour(cost, sites, robot, risk=q).value for q in (0.5, 0.9, 0.99)]
     assert values[0] >= values[1] >= values[2] and values[0] > values[2]
+
 
 def test_uphill_and_downhill_priced_apart_choose_the_cheaper_direction():
     """Over a ridge a loop costs another energy each way round; a symmetric cost prices both the same, so it
@@ -88,6 +92,7 @@ def test_uphill_and_downhill_priced_apart_choose_the_cheaper_direction():
     assert tight.value == 2 and len(sym_tours[0]) == 1
     assert tight.tours[0].energy.mean_j <= budget_j
 
+
 def test_a_battery_that_reaches_no_site_answers_nothing_reachable():
     cost = EnergyCost.from_presets(flat_map((40, 40), 1.0))
     sites = TourSites(("a", "b"), [[30.0, 30.0], [35.0, 5.0]])
@@ -95,6 +100,7 @@ def test_a_battery_that_reaches_no_site_answers_nothing_reachable():
     assert res.status == "nothing reachable" and res.value == 0
     assert res.left_out == {"a": TOO_FAR, "b": TOO_FAR}
     assert "nothing reachable" in res.summary()
+
 
 def test_sites_all_worth_nothing_are_a_plan_without_tours():
     cost = EnergyCost.from_presets(flat_map((20, 20), 1.0))

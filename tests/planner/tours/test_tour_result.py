@@ -36,6 +36,7 @@ def test_the_result_writes_json_geojson_and_figures_and_names_the_left_out(tmp_p
     assert len(geo["features"]) == len(robot["legs"])
     assert "robot 0" in res.summary()
 
+
 def test_each_robots_tour_is_written_as_a_ros2_bag(tmp_path, hills_cost):
     pytest.importorskip("rosbags", reason="the ROS 2 output needs the ros extra")
     from planner.ros_export import read_route_bag

@@ -26,6 +26,7 @@ def test_a_site_off_the_map_or_on_an_obstacle_is_an_error_row_and_the_others_are
     doc = res.to_dict()
     assert {e["site"] for e in doc["errors"]} == {"off", "rock"}
 
+
 def test_bad_sites_raise_the_librarys_errors(tmp_path):
     with pytest.raises(InvalidParameterError, match="unique; 'a' appears 2 times"):
         TourSites(("a", "a"), [[1.0, 1.0], [2.0, 2.0]])
@@ -51,6 +52,7 @@ def test_bad_sites_raise_the_librarys_errors(tmp_path):
         plan_tour(cost, TourSites(("a",), [[5.0, 5.0]]), twins)
     with pytest.raises(InvalidParameterError, match="needs? .*georeferenced|CRS"):
         TourSites.from_lonlat(("a",), [[10.0, 46.0]], flat_map((20, 20), 1.0))
+
 
 def test_sites_in_degrees_are_placed_by_the_maps_crs(tmp_path):
     pytest.importorskip("rasterio", reason="degrees need the geo extra (rasterio's transforms)")

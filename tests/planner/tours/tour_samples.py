@@ -17,6 +17,7 @@ def with_interval(cost: EnergyCost, rel_sd: float = 0.15) -> EnergyCost:
     return cost.with_tables(cost.grade_table_j_per_m, cost.turn_table_j, ground_labels=cost.ground_labels,
                             grade_sd_table_j_per_m=sd, turn_sd_table_j=np.abs(rel_sd * cost.turn_table_j))
 
+
 def hills_map() -> TerrainMap:
     """40 x 40 cells of 1 m: two round hills on asphalt, sand on the east half (two grounds)."""
     y, x = np.mgrid[0:40, 0:40] + 0.5
@@ -24,9 +25,11 @@ def hills_map() -> TerrainMap:
     ground = np.where(x > 20, 1, 0)
     return TerrainMap(z, 1.0, ground=ground, ground_names={0: "asphalt", 1: "sand"})
 
+
 @pytest.fixture(scope="module")
 def hills_cost() -> EnergyCost:
     return with_interval(EnergyCost.from_presets(hills_map()))
+
 
 def ridge_map() -> TerrainMap:
     """40 x 40 cells of 1 m of snow: a north-south ridge (y >= 10) whose west face (grade 0.25) snow cannot climb
