@@ -19,7 +19,7 @@ from .edge_cost import EnergyCost
 from .planning import GRAPH_PLANNERS, PLANNERS, plan_route
 from .settings import PlannerSettings
 
-__all__ = ["plan_batch", "plan_pair"]
+__all__ = ["plan_batch", "plan_pair", "shippable_cost"]
 
 
 def plan_pair(
@@ -74,7 +74,7 @@ def _plan_pair_task(cost: EnergyCost, name: str, start_xy_m: tuple[float, float]
         return _error_row(name, start_xy_m, goal_xy_m, exc)
 
 
-def _shippable(cost: EnergyCost) -> EnergyCost:
+def shippable_cost(cost: EnergyCost) -> EnergyCost:
     """A shallow copy of ``cost`` without its caches (lattice graphs, results): what goes to the workers.
 
     Each worker builds the lattice graph once, on its first task, and keeps it on its copy.
@@ -221,7 +221,7 @@ def _plan_on_cluster(client: Any, cost: EnergyCost, batch: BatchPairs, opts: tup
     from distributed import as_completed
     from tqdm.auto import tqdm
 
-    [shared] = client.scatter([_shippable(cost)], broadcast=True, hash=False)
+    [shared] = client.scatter([shippable_cost(cost)], broadcast=True, hash=False)
     futures = [
         client.submit(_plan_pair_task, shared, batch.names[i], tuple(batch.starts_xy_m[i].tolist()),
                       tuple(batch.goals_xy_m[i].tolist()), *opts, pure=False)

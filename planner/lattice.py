@@ -570,6 +570,73 @@ class Lattice:
         return dataclasses.replace(path, solve_time_s=time.perf_counter() - t0)
 
 
+    def paths_from(self, start_xy_m: tuple[float, float], goals_xy_m: object,
+                   weight: str = "energy") -> list[LatticePath]:
+        """Best lattice routes from one start to many goals: one Dijkstra over the whole lattice.
+
+        Each answer equals :meth:`shortest_path` ``(start, goal, weight)`` in objective (ties may
+        pick another route of the same weight): the start joins its nodes, one single-source
+        search labels every node, and each goal takes its best joining node (or the direct
+        segment). Pricing every ordered pair of ``N`` sites costs ``N`` searches, not ``N**2``.
+
+        Parameters
+        ----------
+        start_xy_m : (float, float)
+            The start (m).
+        goals_xy_m : array_like, shape (M, 2)
+            The goals (m).
+        weight : {"energy", "length"}
+
+        Returns
+        -------
+        list of LatticePath
+            One per goal, in order (``found=False`` where the lattice joins none).
+
+        Raises
+        ------
+        UnknownNameError
+            Unknown ``weight``.
+        InvalidParameterError, OutOfBoundsError
+            NaN points / points outside the map.
+        """
+        t0 = time.perf_counter()
+        if weight not in LATTICE_WEIGHTS:
+            raise UnknownNameError(f"weight must be one of {LATTICE_WEIGHTS!r}, got {weight!r}")
+        start = as_points([start_xy_m], "start")[0]
+        goals = as_points(goals_xy_m, "goals_xy_m")
+        self.cost.check_inside(np.vstack([start, goals]), "start/goals")
+        src, e_src = self.joins(start, weight=weight)
+        n = self.n_nodes
+        dist = pred = None
+        if src.size:
+            data = np.concatenate([self._weights(weight), e_src])
+            indices = np.concatenate([self._indices, src.astype(np.int32)])
+            indptr = np.append(self._indptr, np.int32(self._indptr[-1] + src.size))
+            graph = csr_matrix((data, indices, indptr), shape=(n + 1, n + 1))
+            dist, pred = dijkstra(graph, directed=True, indices=n, return_predecessors=True)
+        direct = self.cost.segment_energy_j(np.broadcast_to(start, goals.shape), goals)
+        if weight == "length":
+            direct = np.where(np.isfinite(direct), np.hypot(*(goals - start).T), np.inf)
+        out = []
+        for goal, best in zip(goals, direct.tolist()):
+            nodes: list[int] = []
+            if dist is not None:
+                dst, e_dst = self.joins(goal, to_point=True, weight=weight)
+                if dst.size:
+                    total = dist[dst] + e_dst
+                    k = int(np.argmin(total))
+                    if total[k] < best:
+                        best = float(total[k])
+                        node = int(dst[k])
+                        while node != n and node >= 0:
+                            nodes.append(node)
+                            node = int(pred[node])
+                        nodes.reverse()
+            out.append(self.path_via(start, nodes, goal, best, weight))
+        elapsed = time.perf_counter() - t0
+        return [dataclasses.replace(p, solve_time_s=elapsed) for p in out]
+
+
 def _merge_collinear(pts: np.ndarray) -> np.ndarray:
     """Drop interior vertices where the polyline goes straight on (and repeated points)."""
     if pts.shape[0] < 3:

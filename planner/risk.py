@@ -222,7 +222,9 @@ def _check_interval_cost(cost: Any) -> EnergyCost:
     return cost
 
 
-def route_energy_interval(cost: EnergyCost, waypoints_m: Any) -> RouteEnergyInterval:
+def route_energy_interval(cost: EnergyCost, waypoints_m: Any, *,
+                          segment_cache: dict[tuple[float, float, float, float], np.ndarray] | None = None
+                          ) -> RouteEnergyInterval:
     """The energy distribution of driving a polyline on ``cost`` (see the module docstring).
 
     Each straight segment is walked cell by cell (:meth:`terrain.TerrainMap.segment_cells`):
@@ -238,6 +240,10 @@ def route_energy_interval(cost: EnergyCost, waypoints_m: Any) -> RouteEnergyInte
         A cost with standard-deviation tables (from a model with an interval).
     waypoints_m : array_like, shape (K, 2)
         The route (m).
+    segment_cache : dict, optional
+        Per-segment spreads already walked, keyed by ``(x0, y0, x1, y1)``, filled as segments are
+        walked: many routes of one cost that share segments (e.g. the legs of one shortest-path
+        tree, :mod:`planner.tours.pricing`) walk each segment once. Only for one cost.
 
     Returns
     -------
@@ -255,23 +261,16 @@ def route_energy_interval(cost: EnergyCost, waypoints_m: Any) -> RouteEnergyInte
     mean = cost.path_energy_j(pts)
     if not math.isfinite(mean):
         raise InvalidParameterError("the route crosses a blocked cell or an undrivable grade: it has no energy interval")
-    sd_table, n_rows = cost.grade_sd_table_j_per_m, cost.grade_sd_table_j_per_m.shape[0]
-    n_grade = sd_table.shape[1]
-    step = 2.0 * cost.grade_max / (n_grade - 1)
-    gx, gy = cost.terrain["grad_x"], cost.terrain["grad_y"]
+    n_rows = cost.grade_sd_table_j_per_m.shape[0]
     per_row = np.zeros(n_rows)
-    for a, b in zip(pts[:-1], pts[1:]):
-        length = math.hypot(b[0] - a[0], b[1] - a[1])
-        if length == 0.0:
-            continue
-        rows, cols, pieces = cost.terrain.segment_cells(tuple(a), tuple(b))
-        grade = (gx[rows, cols] * (b[0] - a[0]) + gy[rows, cols] * (b[1] - a[1])) / length
-        f = np.clip((grade + cost.grade_max) / step, 0.0, n_grade - 1.0)
-        i0 = np.minimum(np.floor(f).astype(np.int64), n_grade - 2)
-        w = f - i0
-        row = cost.ground_rows[rows, cols]
-        sd = sd_table[row, i0] * (1.0 - w) + sd_table[row, i0 + 1] * w
-        per_row += np.bincount(row, weights=np.asarray(pieces) * sd, minlength=n_rows)
+    for a, b in zip(pts[:-1].tolist(), pts[1:].tolist()):
+        key = (a[0], a[1], b[0], b[1])
+        seg = None if segment_cache is None else segment_cache.get(key)
+        if seg is None:
+            seg = _segment_spreads(cost, a, b)
+            if segment_cache is not None:
+                segment_cache[key] = seg
+        per_row += seg
     angles, _ = cost.turn_energies_j(pts)
     if np.any(angles > 0):
         r, c = cost.terrain.rowcol(pts[:, 0], pts[:, 1])
@@ -283,6 +282,25 @@ def route_energy_interval(cost: EnergyCost, waypoints_m: Any) -> RouteEnergyInte
     crossed = {cost.ground_labels[i]: float(per_row[i]) for i in spread}
     dofs = {cost.ground_labels[i]: cost.spread_dof[i] for i in spread}
     return RouteEnergyInterval(mean, combine_ground_sds(per_row), crossed, min(dofs.values(), default=math.inf), dofs)
+
+
+def _segment_spreads(cost: EnergyCost, a: list[float], b: list[float]) -> np.ndarray:
+    """The linear spread sums (J) per cost row of driving the straight segment ``a -> b`` (cell by cell)."""
+    sd_table = cost.grade_sd_table_j_per_m
+    n_rows, n_grade = sd_table.shape
+    length = math.hypot(b[0] - a[0], b[1] - a[1])
+    if length == 0.0:
+        return np.zeros(n_rows)
+    step = 2.0 * cost.grade_max / (n_grade - 1)
+    gx, gy = cost.terrain["grad_x"], cost.terrain["grad_y"]
+    rows, cols, pieces = cost.terrain.segment_cells(tuple(a), tuple(b))
+    grade = (gx[rows, cols] * (b[0] - a[0]) + gy[rows, cols] * (b[1] - a[1])) / length
+    f = np.clip((grade + cost.grade_max) / step, 0.0, n_grade - 1.0)
+    i0 = np.minimum(np.floor(f).astype(np.int64), n_grade - 2)
+    w = f - i0
+    row = cost.ground_rows[rows, cols]
+    sd = sd_table[row, i0] * (1.0 - w) + sd_table[row, i0 + 1] * w
+    return np.bincount(row, weights=np.asarray(pieces) * sd, minlength=n_rows)
 
 
 def risk_cost(cost: EnergyCost, q: float) -> EnergyCost:

@@ -11,7 +11,7 @@ from collections.abc import Sequence
 
 from terrain import TerrawattError
 
-from . import batch, diagnose, evaluate, mission, plan, predict, reach, replay, train
+from . import batch, diagnose, evaluate, mission, plan, predict, reach, replay, tour, train
 
 __all__ = ["main", "build_parser", "EXIT_OK", "EXIT_NOT_ACHIEVED", "EXIT_BAD_INPUT", "EXIT_INTERNAL", "EXIT_CODES"]
 
@@ -43,7 +43,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("-v", "--verbose", action="store_true", help="log progress")
     sub = parser.add_subparsers(dest="command", required=True)
     plan.add_parsers(sub)
-    for command in (evaluate, train, mission, replay, predict, diagnose, reach, batch):
+    for command in (evaluate, train, mission, replay, predict, diagnose, reach, batch, tour):
         command.add_parser(sub)
     return parser
 

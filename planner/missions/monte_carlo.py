@@ -28,7 +28,7 @@ from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from ..route import Route
 from ..edge_cost import EnergyCost
-from ..risk import route_energy_interval
+from ..risk import RouteEnergyInterval, route_energy_interval
 from .forecast import route_forecast_j
 from .monte_carlo_model import MC_DRAW_MODES, ModelMissionSetup
 from .monte_carlo_result import MonteCarloResult, mission_row
@@ -124,6 +124,7 @@ def simulate_missions_mc(
     progress: bool = False,
     cost: EnergyCost | None = None,
     draw_from: str = "parameters",
+    forecast: RouteEnergyInterval | None = None,
 ) -> MonteCarloResult:
     """Drive one route ``n`` times with drawn parameters: the risk of crossing the reserve and the energy percentiles.
 
@@ -171,6 +172,10 @@ def simulate_missions_mc(
         ``mean + z_ground * sd``
         (:mod:`planner.missions.monte_carlo_model`); needs ``cost`` with an interval;
         ``ground_scale`` then holds the drawn factors ``z``.
+    forecast : RouteEnergyInterval, optional
+        The route's energy distribution, instead of :func:`planner.route_energy_interval` of
+        ``route`` on ``cost``: what ``draw_from="model"`` draws from (e.g. a tour's, whose legs
+        and service energy are priced apart, :func:`planner.tours.simulate_tours_mc`).
 
     Returns
     -------
@@ -229,7 +234,10 @@ def simulate_missions_mc(
     rate_hz = check_real("current_rate_hz", current_rate_hz, low=0.0, low_inclusive=False)
     if cost is not None and not isinstance(cost, EnergyCost):
         raise InvalidParameterError(f"cost must be an EnergyCost or None, got {type(cost).__name__!r}")
-    forecast = route_energy_interval(cost, route.waypoints_m) if cost is not None and cost.has_interval else None
+    if forecast is not None and not isinstance(forecast, RouteEnergyInterval):
+        raise InvalidParameterError(f"forecast must be a RouteEnergyInterval or None, got {type(forecast).__name__!r}")
+    if forecast is None and cost is not None and cost.has_interval:
+        forecast = route_energy_interval(cost, route.waypoints_m)
     setup: MissionSetup | ModelMissionSetup
     if draw_from == "model":
         if forecast is None:

@@ -1,0 +1,26 @@
+"""planner.tours — many sites on one charge: which to visit, in what order, and what is left when back (issue 33)."""
+
+from __future__ import annotations
+
+from .check import simulate_tours_mc
+from .pricing import PairPrices, price_pairs
+from .result import RobotTour, TourLeg, TourResult
+from .sites import TourRobot, TourSites, read_tour_sites_csv
+from .solver import TourProblem, solve_tours
+from .tour import plan_tour, plan_tour_on_map
+
+__all__ = [
+    "plan_tour",
+    "plan_tour_on_map",
+    "TourResult",
+    "TourSites",
+    "TourRobot",
+    "read_tour_sites_csv",
+    "RobotTour",
+    "TourLeg",
+    "PairPrices",
+    "price_pairs",
+    "TourProblem",
+    "solve_tours",
+    "simulate_tours_mc",
+]

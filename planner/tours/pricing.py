@@ -1,0 +1,237 @@
+"""Every ordered pair of a tour's points priced on the map: one lattice search per point, here or as dask tasks.
+
+A leg ``i -> j`` is the lattice route that minimises the leg's price at the risk level (on
+:func:`planner.risk_cost` when the cost carries an interval, as ``plan --risk`` does; else the
+mean), found by :meth:`planner.Lattice.paths_from`: one Dijkstra per point, not one per pair.
+The leg is then priced on the cost itself: its mean energy (drive and turns,
+:meth:`EnergyCost.path_energy_j`, the plan price), its run-level spread per ground
+(:func:`planner.route_energy_interval`, linear within a ground) and its duration. Legs are
+directed: uphill != downhill, so the matrices are asymmetric.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from energy.models.forecast import combine_ground_sds, normal_quantile
+from terrawatt_base.checks import check_int
+from terrawatt_base.dask_client import check_client, client_worker_count, dask_client
+from terrawatt_base.errors import InvalidParameterError
+
+from ..batch import shippable_cost
+from ..edge_cost import EnergyCost
+from ..lattice import Lattice
+from ..risk import RouteEnergyInterval, check_risk_level, risk_cost, route_energy_interval
+
+__all__ = ["PairPrices", "price_pairs", "price_from"]
+
+
+@dataclass(frozen=True, eq=False)
+class PairPrices:
+    """The priced legs between every ordered pair of points (depots and sites).
+
+    Attributes
+    ----------
+    names : tuple of str
+        One per point.
+    xy_m : ndarray, shape (P, 2)
+        The points (m).
+    mean_j : ndarray, shape (P, P)
+        Mean energy of leg ``i -> j`` (J; ``inf`` where no route joins them, 0 on the diagonal).
+    sd_by_ground_j : ndarray, shape (P, P, G)
+        The leg's run-level spread per ground (J; linear sums, zeros without an interval).
+    ground_labels : tuple of str
+        The ``G`` grounds (the cost's row labels).
+    duration_s : ndarray, shape (P, P)
+        Driving time of each leg (s).
+    waypoints : tuple of tuple of ndarray or None
+        ``waypoints[i][j]`` the leg's route (m), None where there is none.
+    pricing_time_s : float
+        Seconds to price them.
+    where : str
+        ``"in process"``, ``"local cluster"`` or ``"given client"``.
+    n_workers : int
+        Processes that priced them.
+    """
+
+    names: tuple[str, ...]
+    xy_m: np.ndarray
+    mean_j: np.ndarray
+    sd_by_ground_j: np.ndarray
+    ground_labels: tuple[str, ...]
+    duration_s: np.ndarray
+    waypoints: tuple[tuple[np.ndarray | None, ...], ...]
+    pricing_time_s: float
+    where: str = "in process"
+    n_workers: int = 1
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    def arc_quantile_j(self, q: float) -> np.ndarray:
+        """Each leg's own ``q`` quantile (J): ``mean + z_q * sqrt(sum_g S_g**2)`` (``inf`` where no route).
+
+        For ``q >= 0.5`` a sum of these along a tour is never below the tour's own quantile (the
+        spreads of one ground add along the whole tour: the norm of a sum is at most the sum of
+        the norms), so a capacity on them is conservative.
+        """
+        z = normal_quantile(check_risk_level(q))
+        sd = np.sqrt(np.sum(self.sd_by_ground_j ** 2, axis=2))
+        return self.mean_j + z * sd
+
+    def tour_interval(self, points: Any, extra_mean_j: float = 0.0) -> RouteEnergyInterval:
+        """The energy distribution of driving the legs ``points[0] -> points[1] -> ...`` in one run.
+
+        The spreads of one ground add linearly along the whole tour; grounds combine by the root of
+        the sum of squares (as :func:`planner.route_energy_interval` does for one route).
+        ``extra_mean_j`` (e.g. the sites' service energy) is added to the mean.
+        """
+        idx = np.asarray(points, dtype=np.int64)
+        if idx.size < 2:
+            return RouteEnergyInterval(float(extra_mean_j), 0.0, {})
+        a, b = idx[:-1], idx[1:]
+        mean = float(np.sum(self.mean_j[a, b])) + float(extra_mean_j)
+        if not math.isfinite(mean):
+            raise InvalidParameterError(f"the tour {idx.tolist()!r} uses a leg that no route joins")
+        per_ground = np.sum(self.sd_by_ground_j[a, b], axis=0)
+        by = {self.ground_labels[g]: float(per_ground[g]) for g in np.flatnonzero(per_ground > 0).tolist()}
+        return RouteEnergyInterval(mean, combine_ground_sds(per_ground), by)
+
+
+def price_from(search_cost: EnergyCost, cost: EnergyCost, i: int, xy_m: np.ndarray
+               ) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, list[np.ndarray | None]]:
+    """Price every leg from point ``i`` to the points ``xy_m``: one search on ``search_cost``'s lattice.
+
+    Returns ``(i, mean_j, sd_by_ground_j, duration_s, waypoints)``, one entry per point (the task of
+    :func:`price_pairs`, module-level so dask workers import it by reference).
+    """
+    n, g = xy_m.shape[0], len(cost.ground_labels)
+    mean = np.full(n, math.inf)
+    sd = np.zeros((n, g))
+    dur = np.full(n, math.inf)
+    ways: list[np.ndarray | None] = [None] * n
+    mean[i], dur[i] = 0.0, 0.0
+    paths = Lattice.for_cost(search_cost).paths_from(tuple(xy_m[i]), xy_m)
+    index = {label: k for k, label in enumerate(cost.ground_labels)}
+    walked: dict = {}  # the legs of one search share most of their segments
+    for j, path in enumerate(paths):
+        if j == i or not path.found:
+            continue
+        pts = path.waypoints_m
+        if cost.has_interval:
+            iv = route_energy_interval(cost, pts, segment_cache=walked)
+            mean[j] = iv.mean_j
+            for label, s in iv.sd_by_ground_j.items():
+                sd[j, index[label]] = s
+        else:
+            mean[j] = cost.path_energy_j(pts)
+        angles, _ = cost.turn_energies_j(pts)
+        length = float(np.sum(np.hypot(*np.diff(pts, axis=0).T)))
+        dur[j] = length / cost.speed_mps + float(np.sum(angles)) / cost.turn_rate_radps
+        ways[j] = pts
+    return i, mean, sd, dur, ways
+
+
+def price_pairs(
+    cost: EnergyCost,
+    xy_m: Any,
+    names: Any,
+    *,
+    risk: float = 0.9,
+    workers: int | None = None,
+    client: Any = None,
+    progress: bool = False,
+) -> PairPrices:
+    """Price every ordered pair of points on ``cost``: one lattice search per point, here or on dask.
+
+    Parameters
+    ----------
+    cost : EnergyCost
+        The map's edge costs (with or without an interval).
+    xy_m : array_like, shape (P, 2)
+        The points (m), already checked to lie on free cells.
+    names : sequence of str
+        One per point.
+    risk : float
+        The level the legs are searched at (:func:`planner.risk_cost`; ignored without an interval).
+    workers : int, optional
+        ``None`` or 1: here; N > 1: a local dask cluster of N processes (one task per point, the
+        costs scattered once, as :func:`planner.plan_batch`).
+    client : distributed.Client, optional
+        Price on this client's cluster instead.
+    progress : bool
+        Show a tqdm bar over the points.
+
+    Returns
+    -------
+    PairPrices
+
+    Raises
+    ------
+    InvalidParameterError
+        Not an EnergyCost; bad points or names; ``client`` with ``workers`` > 1.
+    """
+    if not isinstance(cost, EnergyCost):
+        raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
+    pts = np.asarray(xy_m, dtype=float)
+    if pts.ndim != 2 or pts.shape[1] != 2 or pts.shape[0] < 1 or not np.all(np.isfinite(pts)):
+        raise InvalidParameterError(f"xy_m must be (P, 2) finite points, got shape {pts.shape!r}")
+    names = tuple(names)
+    if len(names) != pts.shape[0]:
+        raise InvalidParameterError(f"names must name the {pts.shape[0]} points, got {len(names)}")
+    q = check_risk_level(risk, "risk")
+    search = risk_cost(cost, q) if cost.has_interval else cost
+    client = check_client(client, "points")
+    n_workers = 1 if workers is None else check_int("workers", workers, low=1)
+    if client is not None and n_workers > 1:
+        raise InvalidParameterError("client excludes workers: give a distributed.Client or workers=N")
+    p = pts.shape[0]
+    with contextlib.ExitStack() as stack:
+        where = "in process" if client is None else "given client"
+        if client is None and n_workers > 1:
+            client = stack.enter_context(dask_client(n_workers, None))
+            where = "local cluster"
+        t0 = time.perf_counter()
+        if client is None:
+            from tqdm.auto import tqdm
+
+            rows = [price_from(search, cost, i, pts) for i in tqdm(range(p), desc="legs", disable=not progress)]
+            n_used = 1
+        else:
+            rows = _price_on_cluster(client, search, cost, pts, progress)
+            n_used = client_worker_count(client)
+        elapsed = time.perf_counter() - t0
+    rows.sort(key=lambda r: r[0])
+    return PairPrices(
+        names=names, xy_m=pts, mean_j=np.array([r[1] for r in rows]), sd_by_ground_j=np.array([r[2] for r in rows]),
+        ground_labels=tuple(cost.ground_labels), duration_s=np.array([r[3] for r in rows]),
+        waypoints=tuple(tuple(r[4]) for r in rows), pricing_time_s=elapsed, where=where, n_workers=n_used)
+
+
+def _price_on_cluster(client: Any, search: EnergyCost, cost: EnergyCost, pts: np.ndarray, progress: bool) -> list:
+    """One task per point on ``client``, the costs scattered once to every worker."""
+    from distributed import as_completed
+    from tqdm.auto import tqdm
+
+    shipped_cost = shippable_cost(cost)
+    shipped_search = shipped_cost if search is cost else shippable_cost(search)
+    [s_search, s_cost] = client.scatter([shipped_search, shipped_cost], broadcast=True, hash=False)
+    futures = [client.submit(price_from, s_search, s_cost, i, pts, pure=False) for i in range(pts.shape[0])]
+    rows = []
+    try:
+        with tqdm(total=len(futures), desc="legs", disable=not progress) as bar:
+            for fut in as_completed(futures):
+                rows.append(fut.result())
+                bar.update()
+    except BaseException:
+        client.cancel(futures)
+        raise
+    finally:
+        client.cancel([s_search, s_cost])
+    return rows

@@ -1,0 +1,354 @@
+"""A planned tour: per robot the ordered sites, the legs with their energy intervals, the state of charge and its band."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from energy import Battery
+from energy.battery import S_PER_H
+from terrain import TerrainMap
+from terrawatt_base.atomic import save_figure
+from terrawatt_base.figure_file import draw_figure
+from terrawatt_base.formats import result_document, write_result_json
+from terrawatt_base.plot_target import check_ax, check_plot_target, new_figure
+
+from ..edge_cost import EnergyCost
+from ..risk import INTERVAL_LEVEL, RouteEnergyInterval
+from ..route import Route, evaluate_route
+from ..ros_export import write_route_bag
+from ..route_geojson import write_geojson
+from .pricing import PairPrices
+
+__all__ = ["TourLeg", "RobotTour", "TourResult", "TOUR_FORMAT_VERSION", "TOUR_STATUSES"]
+
+#: Version of tour.json (format ``terrawatt-tour``).
+TOUR_FORMAT_VERSION = 1
+#: What a tour query answers: tours were planned, or no site is reachable at Q by any robot.
+TOUR_STATUSES = ("planned", "nothing reachable")
+
+
+@dataclass(frozen=True)
+class TourLeg:
+    """One leg of a tour: from a place to the next, the planner's route and its energy.
+
+    Attributes
+    ----------
+    start, end : str
+        Names of the depot / sites it joins.
+    waypoints_m : ndarray, shape (K, 2)
+        The route (m).
+    energy : RouteEnergyInterval
+        The leg's energy distribution (mean, sd; the drive and turns, not the service).
+    duration_s : float
+        Driving time (s).
+    """
+
+    start: str
+    end: str
+    waypoints_m: np.ndarray = field(repr=False)
+    energy: RouteEnergyInterval
+    duration_s: float
+
+    def to_dict(self) -> dict[str, Any]:
+        """The leg in tour.json."""
+        lo, hi = self.energy.interval_j(INTERVAL_LEVEL)
+        return {"from": self.start, "to": self.end, "energy_j": self.energy.mean_j, "sd_j": self.energy.sd_j,
+                "interval_j": [lo, hi], "duration_s": self.duration_s,
+                "waypoints_m": np.asarray(self.waypoints_m).tolist()}
+
+
+@dataclass(frozen=True)
+class RobotTour:
+    """One robot's tour: depot, the sites in order, back to the depot.
+
+    Attributes
+    ----------
+    robot : str
+        The robot's name.
+    battery : Battery
+        Its pack (capacity, voltage, reserve, initial charge).
+    depot_xy_m : (float, float)
+        Its depot (m).
+    sites : tuple of str
+        The sites visited, in order.
+    legs : tuple of TourLeg
+        ``depot -> sites[0] -> ... -> depot`` (empty when no site is visited).
+    service_energy_j : tuple of float
+        Energy spent at each visited site (J).
+    value : float
+        The sum of the visited sites' values.
+    energy : RouteEnergyInterval
+        The whole tour's energy (legs and service; the spreads of one ground add along the tour).
+    cumulative : tuple of RouteEnergyInterval
+        The energy spent by the end of each leg (at each arrival, service included).
+    budget_j : float
+        What the battery may spend above its reserve (J).
+    risk : float
+        The level Q the tour holds at.
+    """
+
+    robot: str
+    battery: Battery
+    depot_xy_m: tuple[float, float]
+    sites: tuple[str, ...]
+    legs: tuple[TourLeg, ...]
+    service_energy_j: tuple[float, ...]
+    value: float
+    energy: RouteEnergyInterval
+    cumulative: tuple[RouteEnergyInterval, ...]
+    budget_j: float
+    risk: float
+
+    @property
+    def energy_at_risk_j(self) -> float:
+        """The tour's energy at Q (J)."""
+        return self.energy.quantile_j(self.risk) if self.legs else 0.0
+
+    @property
+    def duration_s(self) -> float:
+        """Driving time of the tour (s; service time not included)."""
+        return float(sum(leg.duration_s for leg in self.legs))
+
+    def soc(self, q: float | None = None) -> np.ndarray:
+        """State of charge (fraction) at the depot and after each leg: at the mean, or at energy quantile ``q``."""
+        spent = [0.0] + [c.mean_j if q is None else c.quantile_j(q) for c in self.cumulative]
+        return self.battery.initial_soc - np.asarray(spent) / self.battery.energy_capacity_j
+
+    @property
+    def arrival_soc_at_risk(self) -> float:
+        """State of charge back at the depot with the tour's energy at Q."""
+        return float(self.soc(self.risk)[-1]) if self.legs else self.battery.initial_soc
+
+    def to_dict(self) -> dict[str, Any]:
+        """The robot's block in tour.json."""
+        lo_q, hi_q = 0.5 - INTERVAL_LEVEL / 2, 0.5 + INTERVAL_LEVEL / 2
+        return {
+            "robot": self.robot, "depot_xy_m": list(self.depot_xy_m), "sites": list(self.sites),
+            "value": self.value, "battery_ah": self.battery.capacity_ah, "voltage_v": self.battery.voltage_v,
+            "reserve_pct": self.battery.min_reserve_pct, "budget_j": self.budget_j,
+            "energy": self.energy.to_dict(), "energy_at_risk_j": self.energy_at_risk_j,
+            "duration_s": self.duration_s, "service_energy_j": list(self.service_energy_j),
+            "legs": [leg.to_dict() for leg in self.legs],
+            "soc": {"places": ["depot", *self.sites, "depot"][:len(self.legs) + 1],
+                    "mean": self.soc().tolist(), "at_risk": self.soc(self.risk).tolist(),
+                    "band_level": INTERVAL_LEVEL, "band_low": self.soc(hi_q).tolist(),
+                    "band_high": self.soc(lo_q).tolist()},
+            "arrival_soc_at_risk": self.arrival_soc_at_risk,
+        }
+
+
+@dataclass(frozen=True)
+class TourResult:
+    """Which sites each robot visits, in what order, and what is left when it is back.
+
+    Made by :func:`planner.tours.plan_tour`; :meth:`summary` prints it, :meth:`to_dict` is tour.json,
+    :meth:`plot` draws the tours on the map and :meth:`plot_soc` the state of charge, :meth:`write`
+    writes them all.
+
+    Attributes
+    ----------
+    status : str
+        One of :data:`TOUR_STATUSES`.
+    risk : float
+        The level Q every tour holds at (its energy at Q leaves the reserve).
+    tours : tuple of RobotTour
+        One per robot.
+    left_out : dict of str to str
+        Sites not visited and why (too far at Q; not worth it; no route).
+    errors : dict of str to str
+        Sites that could not be considered (off the map, on an obstacle): the error rows.
+    values : dict of str to float
+        Every site's value.
+    solver : str
+        The routing solver.
+    pricing_time_s, solve_time_s : float
+        Seconds to price the legs and to choose and order the sites.
+    solve_rounds : int
+        Solves until every tour held at its own quantile.
+    where : str
+        Where the legs were priced.
+    map_label : str
+        How the map is named.
+    sites_xy_m : dict of str to (float, float)
+        Where each site is (m).
+    terrain, cost, prices
+        The map, its edge costs and the priced legs (not in the JSON).
+    """
+
+    status: str
+    risk: float
+    tours: tuple[RobotTour, ...]
+    left_out: dict[str, str]
+    errors: dict[str, str]
+    values: dict[str, float]
+    solver: str
+    pricing_time_s: float
+    solve_time_s: float
+    solve_rounds: int = 1
+    where: str = "in process"
+    map_label: str = "map"
+    sites_xy_m: dict[str, tuple[float, float]] = field(default_factory=dict)
+    terrain: TerrainMap = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
+    cost: EnergyCost = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
+    prices: PairPrices | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def value(self) -> float:
+        """The value collected by all robots."""
+        return float(sum(t.value for t in self.tours))
+
+    @property
+    def visited(self) -> tuple[str, ...]:
+        """Every visited site."""
+        return tuple(s for t in self.tours for s in t.sites)
+
+    def summary(self) -> str:
+        """What ``terrawatt tour`` prints: per robot its sites, energy at Q and arrival charge; what was left out."""
+        n = len(self.values) + len(self.errors)
+        lines = [f"tour on {self.map_label}: {n} sites, {len(self.tours)} robot(s), risk level Q = {self.risk:g}",
+                 f"status: {self.status}; value {self.value:g} of {sum(self.values.values()):g} "
+                 f"({len(self.visited)} sites visited)"]
+        for t in self.tours:
+            lo, hi = t.energy.interval_j(INTERVAL_LEVEL)
+            lines.append(
+                f"  {t.robot}: {len(t.sites)} sites, value {t.value:g}; energy {t.energy.mean_j / S_PER_H:.1f} Wh "
+                f"(P10-P90 {lo / S_PER_H:.1f}-{hi / S_PER_H:.1f}), at Q {t.energy_at_risk_j / S_PER_H:.1f} of "
+                f"{t.budget_j / S_PER_H:.1f} Wh above the reserve; back with {100 * t.arrival_soc_at_risk:.1f} % at Q "
+                f"(reserve {t.battery.min_reserve_pct:g} %)")
+            if t.sites:
+                lines.append("    depot -> " + " -> ".join(t.sites) + " -> depot")
+        reasons: dict[str, list[str]] = {}
+        for name, why in {**self.errors, **self.left_out}.items():
+            reasons.setdefault(why.split(":")[0], []).append(name)
+        for why, names in reasons.items():
+            shown = ", ".join(names[:8]) + (f", ... ({len(names)})" if len(names) > 8 else "")
+            lines.append(f"left out, {why}: {shown}")
+        lines.append(f"pricing {self.pricing_time_s:.2f} s ({self.where}), solving {self.solve_time_s:.2f} s "
+                     f"({self.solver}, {self.solve_rounds} round(s))")
+        if self.status == "nothing reachable":
+            lines.append("nothing reachable: no site can be visited and left with the reserve at Q; "
+                         "a larger battery, a lower reserve or a lower risk level")
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict[str, Any]:
+        """tour.json: a ``terrawatt-tour`` result document (``format_version`` :data:`TOUR_FORMAT_VERSION`)."""
+        return result_document("tour", TOUR_FORMAT_VERSION, {
+            "status": self.status, "map": self.map_label, "risk": self.risk, "value": self.value,
+            "robots": [t.to_dict() for t in self.tours],
+            "left_out": [{"site": k, "reason": v} for k, v in self.left_out.items()],
+            "errors": [{"site": k, "error": v} for k, v in self.errors.items()],
+            "values": dict(self.values),
+            "sites_xy_m": {k: list(v) for k, v in self.sites_xy_m.items()}, "solver": self.solver,
+            "pricing_time_s": self.pricing_time_s,
+            "solve_time_s": self.solve_time_s, "solve_rounds": self.solve_rounds, "where": self.where,
+        })
+
+    def leg_routes(self) -> dict[str, Route]:
+        """Every leg as a :class:`planner.Route` on the cost, named ``"robot: from -> to"``."""
+        return {f"{t.robot}: {leg.start} -> {leg.end}": evaluate_route(self.cost, leg.waypoints_m, planner="tour")
+                for t in self.tours for leg in t.legs}
+
+    def tour_route(self, robot: int) -> Route:
+        """One robot's whole tour as one :class:`planner.Route` (its legs joined)."""
+        legs = self.tours[robot].legs
+        pts = np.vstack([legs[0].waypoints_m] + [leg.waypoints_m[1:] for leg in legs[1:]])
+        return evaluate_route(self.cost, pts, planner="tour")
+
+    def plot(self, path: str | os.PathLike[str] | None = None, *, ax: Any = None) -> Path | None:
+        """The tours on the map (elevation shaded, obstacles dark, sites by value; left-out sites hollow)."""
+        target = check_plot_target(path, ax)
+        if ax is None:
+            fig, ax = new_figure((7.0, 6.5))
+        else:
+            check_ax(ax)
+        from matplotlib.colors import LightSource
+
+        t = self.terrain
+        xmin, ymin, xmax, ymax = t.bounds
+        step = max(1, int(np.ceil(max(t.shape) / 800)))
+        z = np.asarray(t.elevation_m)[::step, ::step]
+        if np.ptp(z) > 0:
+            shade = LightSource(azdeg=315, altdeg=45).hillshade(z[::-1], vert_exag=3.0, dx=t.cell_size_m * step,
+                                                                 dy=t.cell_size_m * step)
+        else:
+            shade = np.full(z.shape, 0.8)
+        ax.imshow(shade, cmap="gray", extent=(xmin, xmax, ymin, ymax), origin="upper", vmin=0, vmax=1)
+        blocked = np.asarray(self.cost.blocked)[::step, ::step] if self.cost is not None else None
+        if blocked is not None and blocked.any():
+            ax.imshow(np.ma.masked_where(~blocked, blocked.astype(float)), cmap="Greys", vmin=0, vmax=1.2,
+                      extent=(xmin, xmax, ymin, ymax), origin="lower", alpha=0.8)
+        left = [k for k in self.left_out if k in self.values]
+        colours = ["tab:red", "tab:blue", "tab:purple", "tab:orange", "tab:green", "tab:brown"]
+        for k, tour in enumerate(self.tours):
+            c = colours[k % len(colours)]
+            for j, leg in enumerate(tour.legs):
+                w = leg.waypoints_m
+                ax.plot(w[:, 0], w[:, 1], color=c, lw=1.5, label=f"{tour.robot} ({tour.value:g})" if j == 0 else None)
+            ax.plot(*tour.depot_xy_m, marker="s", color=c, ms=9, mec="k")
+        xy = self.sites_xy_m
+        for names, style in ((self.visited, dict(color="k")), (left, dict(mfc="none", mec="k"))):
+            pts = np.array([xy[n] for n in names if n in xy]).reshape(-1, 2)
+            ax.plot(pts[:, 0], pts[:, 1], "o", ms=4, ls="none", **style)
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        ax.set_title(f"tours at Q = {self.risk:g}: value {self.value:g}, {len(self.visited)} sites")
+        if self.tours and any(t.legs for t in self.tours):
+            ax.legend(loc="upper right", fontsize=8)
+        return save_figure(ax.figure, target) if target is not None else None
+
+    def plot_soc(self, path: str | os.PathLike[str] | None = None, *, ax: Any = None) -> Path | None:
+        """State of charge along each tour (per leg): the mean, the P10-P90 band, the value at Q and the reserve."""
+        target = check_plot_target(path, ax)
+        if ax is None:
+            fig, ax = new_figure((7.0, 4.0))
+        else:
+            check_ax(ax)
+        lo_q, hi_q = 0.5 - INTERVAL_LEVEL / 2, 0.5 + INTERVAL_LEVEL / 2
+        for k, tour in enumerate(self.tours):
+            if not tour.legs:
+                continue
+            x = np.arange(len(tour.legs) + 1)
+            line, = ax.plot(x, 100 * tour.soc(), marker=".", label=f"{tour.robot} mean")
+            ax.fill_between(x, 100 * tour.soc(hi_q), 100 * tour.soc(lo_q), color=line.get_color(), alpha=0.25)
+            ax.plot(x, 100 * tour.soc(self.risk), ls="--", color=line.get_color(), label=f"{tour.robot} at Q")
+            ax.axhline(tour.battery.min_reserve_pct, color="k", lw=0.8, ls=":")
+        driven = [t for t in self.tours if t.legs]
+        if len(driven) == 1:
+            places = ["depot", *driven[0].sites, "depot"]
+            ax.set_xticks(range(len(places)), places, rotation=45 if len(places) > 8 else 0, fontsize=7)
+            ax.set_xlabel("arrival at")
+        else:
+            ax.set_xlabel("legs driven")
+        ax.set_ylabel("state of charge (%)")
+        ax.set_title(f"state of charge along the tours\nband P10-P90; dashed: at Q = {self.risk:g}; dotted: reserve",
+                     fontsize=10)
+        if any(t.legs for t in self.tours):
+            ax.legend(fontsize=8)
+        return save_figure(ax.figure, target) if target is not None else None
+
+    def write(self, out_dir: str | os.PathLike[str], *, bag: bool = False, on_figure_error: str = "warn") -> list[Path]:
+        """Write tour.json, tour.geojson (every leg), tour.png, tour_soc.png and, with ``bag``, each robot's tour as a
+        ROS 2 bag (``tour_<k>.mcap``) into ``out_dir``; return the files written."""
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        written = [write_result_json(out / "tour.json", self.to_dict())]
+        routes = self.leg_routes() if self.cost is not None else {}
+        if routes:
+            written.append(write_geojson(routes, self.terrain, out / "tour.geojson"))
+        if self.terrain is not None:
+            for name, draw in (("tour.png", self.plot), ("tour_soc.png", self.plot_soc)):
+                png = draw_figure(out / name, lambda d=draw, n=name: d(out / n), on_error=on_figure_error)
+                if png is not None:
+                    written.append(png)
+        if bag:
+            for k, tour in enumerate(self.tours):
+                if tour.legs:
+                    written.append(write_route_bag(out / f"tour_{k}.mcap", self.tour_route(k), self.terrain,
+                                                   cost=self.cost))
+        return written
+

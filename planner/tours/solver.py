@@ -1,0 +1,228 @@
+"""Which sites, in what order: the prize-collecting, energy-capacitated routing problem solved by PyVRP.
+
+Each robot is a vehicle of its own (its depot, its budget above the reserve as the maximum
+"distance"); each site a client with ``required=False`` and a prize. Arcs are each leg's own
+quantile at Q (:meth:`PairPrices.arc_quantile_j`) plus the service energy of the site it
+arrives at, rounded **up** to integer units of the largest budget / :data:`UNITS`; budgets are
+rounded down. Prizes are the values (to :data:`VALUE_SCALE`) times one more than all budgets'
+units, so the solver maximises the value first and spends the least energy on it second.
+
+The chosen tours are then checked on their own quantile (:meth:`PairPrices.tour_interval`: the
+spreads of one ground add along the whole tour); a tour above its budget tightens that robot's
+capacity by the excess and the problem is solved again, until every tour holds.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from terrawatt_base.errors import InvalidParameterError, OptionalDependencyError
+
+from .pricing import PairPrices
+
+__all__ = ["TourProblem", "solve_pyvrp", "solve_ortools", "solve_tours", "UNITS", "VALUE_SCALE", "SOLVERS"]
+
+#: Integer units of the largest budget (an arc is rounded up by less than one).
+UNITS = 100_000
+#: Values are compared to 1 / VALUE_SCALE.
+VALUE_SCALE = 100
+#: Routing solvers by name.
+SOLVERS = ("pyvrp", "ortools")
+_MAX_ROUNDS = 8
+
+
+@dataclass(frozen=True, eq=False)
+class TourProblem:
+    """The routing problem in integer units, as the solver sees it.
+
+    Attributes
+    ----------
+    arc_units : ndarray of int64, shape (P, P)
+        Conservative price of leg ``i -> j`` (service at ``j`` included); larger than every
+        capacity where no route joins them.
+    capacity_units : ndarray of int64, shape (R,)
+        Each robot's budget at Q.
+    depot_points : ndarray of int, shape (R,)
+        Each robot's depot (a point index).
+    site_points : ndarray of int, shape (S,)
+        The candidate sites (point indices).
+    prize : ndarray of int64, shape (S,)
+        Each candidate's prize.
+    unit_j : float
+        Joules per unit.
+    """
+
+    arc_units: np.ndarray
+    capacity_units: np.ndarray
+    depot_points: np.ndarray
+    site_points: np.ndarray
+    prize: np.ndarray
+    unit_j: float
+
+    @classmethod
+    def build(cls, prices: PairPrices, q: float, budgets_j: Any, depot_points: Any, site_points: Any,
+              values: Any, service_j: Any) -> TourProblem:
+        """The problem of visiting ``site_points`` (values, service energies per point index) at risk ``q``."""
+        budgets = np.asarray(budgets_j, dtype=float)
+        unit = max(float(budgets.max()), 1.0) / UNITS
+        cap = np.floor(budgets / unit).astype(np.int64)
+        arc = prices.arc_quantile_j(q) + np.asarray(service_j, dtype=float)[None, :]
+        big = int(cap.max()) * 4 + 1
+        units = np.where(np.isfinite(arc), np.ceil(np.minimum(arc, big * unit) / unit - 1e-9), big).astype(np.int64)
+        np.fill_diagonal(units, 0)
+        sites = np.asarray(site_points, dtype=np.int64)
+        weight = int(cap.sum()) + 1
+        prize = np.round(np.asarray(values, dtype=float)[sites] * VALUE_SCALE).astype(np.int64) * weight
+        return cls(units, cap, np.asarray(depot_points, dtype=np.int64), sites, prize, unit)
+
+    def tour_units(self, robot: int, sites: Any) -> int:
+        """Units of the closed tour ``depot, sites..., depot`` of ``robot``."""
+        d = int(self.depot_points[robot])
+        seq = [d, *[int(s) for s in sites], d]
+        return int(sum(self.arc_units[a, b] for a, b in zip(seq[:-1], seq[1:])))
+
+    def with_capacity(self, capacity_units: Any) -> TourProblem:
+        """The same problem with other capacities."""
+        return TourProblem(self.arc_units, np.asarray(capacity_units, dtype=np.int64), self.depot_points,
+                           self.site_points, self.prize, self.unit_j)
+
+
+def solve_pyvrp(problem: TourProblem, time_limit_s: float = 10.0, seed: int = 0,
+                no_improvement: int | None = None) -> list[list[int]]:
+    """Each robot's sites (point indices, in visiting order) by PyVRP's hybrid genetic search.
+
+    Stops after ``no_improvement`` iterations without a better solution (default
+    ``max(2000, 100 * sites)``) or after ``time_limit_s``.
+    """
+    import pyvrp
+    from pyvrp.stop import MaxRuntime, MultipleCriteria, NoImprovement
+
+    if problem.site_points.size == 0:
+        return [[] for _ in problem.depot_points]
+    model = pyvrp.Model()
+    depots = sorted(set(problem.depot_points.tolist()))
+    order = depots + problem.site_points.tolist()  # model location k is point order[k]
+    locs = [model.add_location(float(k), 0.0) for k in range(len(order))]
+    depot_of = {p: model.add_depot(locs[k]) for k, p in enumerate(depots)}
+    for r, (d, cap) in enumerate(zip(problem.depot_points.tolist(), problem.capacity_units.tolist())):
+        model.add_vehicle_type(1, start_depot=depot_of[d], end_depot=depot_of[d], max_distance=int(cap),
+                               name=f"robot {r}")
+    for k, prize in enumerate(problem.prize.tolist()):
+        model.add_client(locs[len(depots) + k], prize=int(prize), required=False)
+    idx = np.asarray(order)
+    sub = problem.arc_units[np.ix_(idx, idx)]
+    for a in range(len(order)):
+        for b in range(len(order)):
+            if a != b:
+                model.add_edge(locs[a], locs[b], int(sub[a, b]))
+    patience = max(2000, 100 * problem.site_points.size) if no_improvement is None else int(no_improvement)
+    stop = MultipleCriteria([MaxRuntime(float(time_limit_s)), NoImprovement(patience)])
+    # the prizes dwarf an arc (value first): let the penalty on excess energy grow as large as a prize
+    params = pyvrp.SolveParams(penalty=pyvrp.PenaltyParams(max_penalty=max(1e5, 10.0 * float(problem.prize.max()))))
+    result = model.solve(stop, seed=int(seed), display=False, collect_stats=False, params=params)
+    tours: list[list[int]] = [[] for _ in problem.depot_points]
+    if not result.best.is_feasible():
+        return tours
+    for route in result.best.routes():
+        visits = [problem.site_points[a.idx].item() for a in route if a.is_client()]
+        tours[route.vehicle_type()] = visits
+    return tours
+
+
+def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list[int]]:
+    """Each robot's sites by OR-Tools' routing solver (disjunctions with the prizes as penalties), for comparison.
+
+    Raises
+    ------
+    OptionalDependencyError
+        OR-Tools is not installed (the ``bench`` extra).
+    """
+    try:
+        from ortools.constraint_solver import pywrapcp, routing_enums_pb2
+    except ImportError as exc:
+        raise OptionalDependencyError("solver 'ortools' needs OR-Tools: pip install 'terrawatt[bench]'") from exc
+    if problem.site_points.size == 0:
+        return [[] for _ in problem.depot_points]
+    depots = sorted(set(problem.depot_points.tolist()))
+    order = depots + problem.site_points.tolist()
+    idx = np.asarray(order)
+    sub = problem.arc_units[np.ix_(idx, idx)]
+    loc = {p: k for k, p in enumerate(depots)}
+    starts = [loc[d] for d in problem.depot_points.tolist()]
+    manager = pywrapcp.RoutingIndexManager(len(order), len(starts), starts, starts)
+    routing = pywrapcp.RoutingModel(manager)
+    matrix = sub.tolist()
+
+    def arc(i: int, j: int) -> int:
+        return matrix[manager.IndexToNode(i)][manager.IndexToNode(j)]
+
+    cb = routing.RegisterTransitCallback(arc)
+    routing.SetArcCostEvaluatorOfAllVehicles(cb)
+    routing.AddDimensionWithVehicleCapacity(cb, 0, [int(c) for c in problem.capacity_units], True, "energy")
+    for k, prize in enumerate(problem.prize.tolist()):
+        routing.AddDisjunction([manager.NodeToIndex(len(depots) + k)], int(prize))
+    params = pywrapcp.DefaultRoutingSearchParameters()
+    params.first_solution_strategy = routing_enums_pb2.FirstSolutionStrategy.PATH_CHEAPEST_ARC
+    params.local_search_metaheuristic = routing_enums_pb2.LocalSearchMetaheuristic.GUIDED_LOCAL_SEARCH
+    params.time_limit.FromMilliseconds(int(1000 * time_limit_s))
+    solution = routing.SolveWithParameters(params)
+    tours: list[list[int]] = [[] for _ in problem.depot_points]
+    if solution is None:
+        return tours
+    for r in range(len(starts)):
+        i = routing.Start(r)
+        while not routing.IsEnd(i):
+            node = manager.IndexToNode(i)
+            if node >= len(depots):
+                tours[r].append(int(problem.site_points[node - len(depots)]))
+            i = solution.Value(routing.NextVar(i))
+    return tours
+
+
+@dataclass(frozen=True)
+class SolverOutcome:
+    """The chosen tours and how they were found."""
+
+    tours: list[list[int]]
+    problem: TourProblem
+    solver: str
+    solve_time_s: float
+    rounds: int
+
+
+def solve_tours(prices: PairPrices, q: float, budgets_j: Any, depot_points: Any, site_points: Any, values: Any,
+                service_j: Any, *, solver: str = "pyvrp", time_limit_s: float = 10.0, seed: int = 0) -> SolverOutcome:
+    """Solve, check each tour on its own quantile, tighten and solve again until every tour holds.
+
+    Raises
+    ------
+    InvalidParameterError
+        An unknown solver.
+    """
+    if solver not in SOLVERS:
+        raise InvalidParameterError(f"solver must be one of {SOLVERS!r}, got {solver!r}")
+    t0 = time.perf_counter()
+    budgets = np.asarray(budgets_j, dtype=float)
+    service = np.asarray(service_j, dtype=float)
+    problem = TourProblem.build(prices, q, budgets, depot_points, site_points, values, service)
+    tours: list[list[int]] = [[] for _ in budgets]
+    for rounds in range(1, _MAX_ROUNDS + 1):
+        tours = (solve_pyvrp(problem, time_limit_s, seed) if solver == "pyvrp"
+                 else solve_ortools(problem, time_limit_s))
+        cap = problem.capacity_units.copy()
+        holds = True
+        for r, sites in enumerate(tours):
+            d = int(problem.depot_points[r])
+            need = prices.tour_interval([d, *sites, d], float(service[sites].sum())).quantile_j(q)
+            if need > budgets[r]:
+                holds = False
+                cap[r] = int(math.floor(cap[r] * budgets[r] / need)) - 1
+        if holds:
+            break
+        problem = problem.with_capacity(np.maximum(cap, 0))
+    return SolverOutcome(tours, problem, solver, time.perf_counter() - t0, rounds)

@@ -1,0 +1,247 @@
+"""plan_tour: which sites each robot visits on one charge, in what order, so that it comes back above its reserve at Q."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from terrawatt_base.checks import check_int, check_real, check_seed
+from terrawatt_base.errors import BlockedPositionError, InvalidParameterError
+
+from energy import Battery
+from energy.params import robot_params
+from terrain import TerrainMap
+
+from ..cost_source import edge_costs
+from ..edge_cost import EnergyCost
+from ..risk import RouteEnergyInterval, check_planning_risk
+from .pricing import PairPrices, price_pairs
+from .result import RobotTour, TourLeg, TourResult
+from .sites import TourRobot, TourSites
+from .solver import TourProblem, solve_tours
+
+__all__ = ["plan_tour", "plan_tour_on_map", "TOO_FAR", "NOT_WORTH_IT", "NO_ROUTE"]
+
+#: Why a site is left out: no robot can go there and back above its reserve at Q.
+TOO_FAR = "too far at Q: no robot reaches it and comes back above its reserve at the risk level"
+#: Why a site is left out: reachable alone, but the charge is spent on sites of more value.
+NOT_WORTH_IT = "not worth it: reachable alone, but the charge at Q goes to sites of more value (capacity)"
+#: Why a site is left out: no route joins it to a depot.
+NO_ROUTE = "no route: obstacles or slopes separate it from every depot"
+
+
+def _robots(robots: Any) -> tuple[TourRobot, ...]:
+    out = (robots,) if isinstance(robots, TourRobot) else tuple(robots) if isinstance(robots, Sequence) else None
+    if not out or not all(isinstance(r, TourRobot) for r in out):
+        raise InvalidParameterError(f"robots must be a TourRobot or a non-empty sequence of them, got {robots!r:.120}")
+    names = [r.name for r in out]
+    if len(set(names)) != len(names):
+        dup = next(n for n in names if names.count(n) > 1)
+        raise InvalidParameterError(f"robot names must be unique; {dup!r} appears {names.count(dup)} times")
+    return out
+
+
+def plan_tour(
+    cost: EnergyCost,
+    sites: TourSites,
+    robots: TourRobot | Sequence[TourRobot],
+    *,
+    risk: float = 0.9,
+    time_limit_s: float = 10.0,
+    seed: int = 0,
+    workers: int | None = None,
+    client: Any = None,
+    solver: str = "pyvrp",
+    map_label: str = "map",
+    progress: bool = False,
+    prices: PairPrices | None = None,
+) -> TourResult:
+    """Choose and order the sites each robot visits to maximise the value collected, every tour at risk level
+    ``risk`` coming back above its reserve.
+
+    Every ordered pair of depots and sites is priced on ``cost`` (:func:`planner.tours.pricing.price_pairs`:
+    the planner's lattice routes, their mean energy and run-level spread per ground; asymmetric), the
+    prize-collecting routing problem is solved by PyVRP on conservative integer arc prices, and each
+    chosen tour is checked on its own quantile (the spreads of one ground add along the whole tour),
+    capacities tightened and the problem solved again until every tour holds
+    (:mod:`planner.tours.solver`).
+
+    Parameters
+    ----------
+    cost : EnergyCost
+        The map's edge costs (with an interval for risk levels to mean anything; without one,
+        the mean is the price at every level).
+    sites : TourSites
+        The candidate sites; one off the map or on a blocked cell is an error row, the others are kept.
+    robots : TourRobot or sequence of TourRobot
+        The fleet: battery, reserve and depot each.
+    risk : float
+        The level Q in [0.5, 1).
+    time_limit_s : float
+        The solver's time limit per solve (s); it usually stops earlier (no improvement).
+    seed : int
+        The solver's seed.
+    workers, client
+        Where the legs are priced (:func:`planner.plan_batch`'s dask path).
+    solver : {"pyvrp", "ortools"}
+        The routing solver ("ortools" needs the ``bench`` extra).
+    map_label : str
+        How the result names the map.
+    progress : bool
+        A progress bar over the pricing.
+    prices : PairPrices, optional
+        The legs already priced (``result.prices`` of an earlier call on the same cost, depots and sites):
+        solve again at another level, battery or with another solver without pricing again (the legs'
+        routes stay those searched at the earlier level).
+
+    Returns
+    -------
+    TourResult
+        Status ``"nothing reachable"`` when no robot can visit any site and come back at Q.
+
+    Raises
+    ------
+    InvalidParameterError
+        Bad arguments; a risk level below 0.5; a depot off the map.
+    BlockedPositionError
+        A depot on a blocked cell.
+
+    Examples
+    --------
+    >>> from energy import Battery
+    >>> from terrain import flat_map
+    >>> cost = EnergyCost.from_presets(flat_map((40, 40), 1.0))
+    >>> sites = TourSites(("a", "b", "far"), [[10.0, 10.0], [20.0, 10.0], [39.0, 39.0]], value=[1, 2, 5])
+    >>> res = plan_tour(cost, sites, TourRobot(Battery(0.1, 24.0), (2.0, 2.0)))
+    >>> res.tours[0].value, sorted(res.left_out)
+    (3.0, ['far'])
+    """
+    if not isinstance(cost, EnergyCost):
+        raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
+    if not isinstance(sites, TourSites):
+        raise InvalidParameterError(f"sites must be a TourSites, got {type(sites).__name__!r}")
+    fleet = _robots(robots)
+    q = check_planning_risk(risk, "risk")
+    time_limit_s = check_real("time_limit_s", time_limit_s, low=0.0, low_inclusive=False)
+    seed = check_seed(seed) or 0
+    depots = sorted({r.depot_xy_m for r in fleet})
+    dxy = np.array(depots, dtype=float)
+    cost.check_inside(dxy, "depot")
+    r, c = cost.terrain.rowcol(dxy[:, 0], dxy[:, 1])
+    if np.any(np.asarray(cost.blocked)[r, c]):
+        bad = depots[int(np.flatnonzero(np.asarray(cost.blocked)[r, c])[0])]
+        raise BlockedPositionError(f"depot {bad!r} m lies on a blocked cell (an obstacle or a slope above the limit)")
+    errors = sites.check_on(cost)
+    kept = [k for k, n in enumerate(sites.names) if n not in errors]
+    depot_names = ["depot"] if len(depots) == 1 else [f"depot {k}" for k in range(len(depots))]
+    names = depot_names + [sites.names[k] for k in kept]
+    pts = np.vstack([dxy, sites.xy_m[kept]]) if kept else dxy
+    if prices is None:
+        prices = price_pairs(cost, pts, names, risk=q, workers=workers, client=client, progress=progress)
+    elif not isinstance(prices, PairPrices) or prices.names != tuple(names) or not np.allclose(prices.xy_m, pts):
+        raise InvalidParameterError("prices must be the PairPrices of these depots and sites (result.prices of an "
+                                    "earlier plan_tour on the same inputs)")
+    nd = len(depots)
+    value = np.concatenate([np.zeros(nd), sites.value[kept]])
+    service = np.concatenate([np.zeros(nd), sites.service_energy_j[kept]])
+    depot_points = np.array([depots.index(rb.depot_xy_m) for rb in fleet])
+    budgets = np.array([rb.budget_j for rb in fleet])
+    site_points = np.arange(nd, len(names))
+    whole = TourProblem.build(prices, q, budgets, depot_points, site_points, value, service)
+    left_out: dict[str, str] = {}
+    candidates = []
+    for p in site_points.tolist():
+        if not any(np.isfinite(prices.mean_j[d, p]) and np.isfinite(prices.mean_j[p, d]) for d in range(nd)):
+            left_out[names[p]] = NO_ROUTE
+        elif not any(whole.tour_units(k, [p]) <= whole.capacity_units[k] for k in range(len(fleet))):
+            left_out[names[p]] = TOO_FAR
+        elif value[p] <= 0:
+            left_out[names[p]] = NOT_WORTH_IT
+        else:
+            candidates.append(p)
+    values = {sites.names[k]: float(sites.value[k]) for k in kept}
+    where_xy = {n: (float(x), float(y)) for n, (x, y) in zip(sites.names, sites.xy_m.tolist())}
+    if not candidates:
+        reachable = any(why == NOT_WORTH_IT for why in left_out.values())  # reachable, but worth nothing
+        empty = tuple(_tour(prices, rb, [], d, service, value, q) for rb, d in zip(fleet, depot_points.tolist()))
+        return TourResult("planned" if reachable else "nothing reachable", q, empty, left_out, errors, values, solver,
+                          prices.pricing_time_s, 0.0, 0, prices.where, map_label, where_xy, cost.terrain, cost, prices)
+    outcome = solve_tours(prices, q, budgets, depot_points, candidates, value, service, solver=solver,
+                          time_limit_s=time_limit_s, seed=seed)
+    chosen = {p for t in outcome.tours for p in t}
+    for p in candidates:
+        if p not in chosen:
+            left_out[names[p]] = NOT_WORTH_IT
+    tours = tuple(_tour(prices, rb, t, d, service, value, q)
+                  for rb, t, d in zip(fleet, outcome.tours, depot_points.tolist()))
+    return TourResult("planned", q, tours, left_out, errors, values, outcome.solver, prices.pricing_time_s,
+                      outcome.solve_time_s, outcome.rounds, prices.where, map_label, where_xy, cost.terrain, cost,
+                      prices)
+
+
+def _tour(prices: PairPrices, robot: TourRobot, sites: list[int], depot: int, service: np.ndarray,
+          value: np.ndarray, q: float) -> RobotTour:
+    """One robot's :class:`RobotTour` from its point indices."""
+    seq = [depot, *sites, depot] if sites else []
+    legs, cumulative = [], []
+    served = 0.0
+    for k, (a, b) in enumerate(zip(seq[:-1], seq[1:])):
+        leg_iv = prices.tour_interval([a, b])
+        legs.append(TourLeg(prices.names[a], prices.names[b], prices.waypoints[a][b], leg_iv,
+                            float(prices.duration_s[a, b])))
+        served += float(service[b])
+        cumulative.append(prices.tour_interval(seq[:k + 2], served))
+    energy = cumulative[-1] if cumulative else RouteEnergyInterval(0.0, 0.0, {})
+    return RobotTour(robot.name, robot.battery, robot.depot_xy_m, tuple(prices.names[p] for p in sites), tuple(legs),
+                     tuple(float(service[p]) for p in sites), float(value[sites].sum()) if sites else 0.0, energy,
+                     tuple(cumulative), robot.budget_j, q)
+
+
+def plan_tour_on_map(
+    terrain: TerrainMap,
+    sites: TourSites,
+    depot_xy_m: tuple[float, float],
+    *,
+    battery_ah: float,
+    voltage_v: float | None = None,
+    reserve_pct: float = 20.0,
+    n_robots: int = 1,
+    risk: float = 0.9,
+    robot: str = "husky",
+    speed_mps: float = 0.5,
+    max_slope_deg: float = 20.0,
+    unknown_ground: str | None = "gravel",
+    model: Any = None,
+    model_ground: str | Mapping[str, str] | None = None,
+    time_limit_s: float = 10.0,
+    seed: int = 0,
+    workers: int | None = None,
+    client: Any = None,
+    map_label: str = "map",
+    progress: bool = False,
+) -> TourResult:
+    """:func:`plan_tour` on a map priced as ``terrawatt tour`` prices it: ``n_robots`` alike robots with one depot.
+
+    The edges are priced by the presets or a saved ``model`` (:func:`planner.cost_source.edge_costs`);
+    each robot's battery is ``battery_ah`` at ``voltage_v`` (default the robot's) keeping
+    ``reserve_pct`` % in reserve.
+
+    Raises
+    ------
+    InvalidParameterError
+        Bad numbers (a non-positive capacity, a reserve outside [0, 100), fewer than one robot), as
+        :func:`plan_tour`.
+    """
+    battery_ah = check_real("battery_ah", battery_ah, low=0.0, low_inclusive=False)
+    n_robots = check_int("n_robots", n_robots, low=1)
+    slope = check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False, high_inclusive=False)
+    voltage = robot_params(robot).battery_voltage_v if voltage_v is None else voltage_v
+    battery = Battery(battery_ah, voltage, min_reserve_pct=reserve_pct)
+    cost = edge_costs(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=math.radians(slope),
+                      unknown_ground=unknown_ground if model is None else None, model=model, model_ground=model_ground)
+    fleet = [TourRobot(battery, depot_xy_m, f"robot {k}") for k in range(n_robots)]
+    return plan_tour(cost, sites, fleet, risk=risk, time_limit_s=time_limit_s, seed=seed, workers=workers,
+                     client=client, map_label=map_label, progress=progress)

@@ -1,0 +1,85 @@
+"""``terrawatt tour``: which sites to visit on one charge, in what order, and what is left when back (:func:`planner.tours.plan_tour`)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from energy.params import resolve_unknown_ground
+from terrain import InvalidParameterError
+
+from planner.risk import check_planning_risk
+from planner.tours import plan_tour_on_map, read_tour_sites_csv
+from .common import (Checked, add_dask_options, add_map_options, add_model_options, add_point_options,
+                     add_robot_options, bounded, check_dask_flags, check_model_flags, check_outputs, dask_client_arg,
+                     input_paths, load_model_arg, map_arg, point_arg, positive, warn_figures)
+
+__all__ = ["add_parser", "run_tour"]
+
+_OUTPUTS = ("tour.json", "tour.geojson", "tour.png", "tour_soc.png")
+
+
+def add_parser(sub: Any) -> None:
+    """The ``tour`` subcommand."""
+    p = sub.add_parser(
+        "tour",
+        help="many sites on one charge: which sites each robot visits, in what order, coming back above its reserve "
+             "at a risk level; writes tour.json, tour.geojson, tour.png and tour_soc.png",
+        description="Prices every ordered pair of the depot and the sites on the map (uphill != downhill; on dask "
+                    "with --workers), then chooses and orders the sites with PyVRP to maximise the value visited while "
+                    "every robot's tour, at the Q quantile of its energy, returns above the reserve. Exit 0 with "
+                    "tours, 1 when nothing is reachable, 2 on bad input.",
+    )
+    p.add_argument("--map", required=True, metavar="FILE", help=".npz map, .tif DEM or 'example' (the bundled map)")
+    add_map_options(p)
+    p.add_argument("--sites", type=Path, required=True, metavar="CSV",
+                   help="sites file (as batch's): columns name, x_m, y_m or name, lon, lat in WGS 84 degrees; "
+                        "optional value (default 1), service_energy_j, service_time_s")
+    add_point_options(p, "depot", "the depot every robot starts from and comes back to", required=True)
+    p.add_argument("--battery-ah", type=float, required=True, metavar="AH", action=Checked, check=positive,
+                   help="each robot's battery capacity (Ah)")
+    p.add_argument("--voltage", "--battery-v", dest="voltage", type=float, default=None, metavar="V", action=Checked,
+                   check=positive, help="battery voltage (default: the robot's)")
+    p.add_argument("--reserve", "--reserve-pct", dest="reserve", type=float, default=20.0, metavar="PCT",
+                   action=Checked, check=bounded("a percentage in [0, 100)", lambda v: 0.0 <= v < 100.0),
+                   help="share of the battery kept in reserve (%%, default 20)")
+    p.add_argument("--robots", type=int, default=1, metavar="N", action=Checked,
+                   check=bounded("an integer >= 1", lambda v: v >= 1), help="robots sharing the sites (default 1)")
+    p.add_argument("--risk", dest="tour_risk", type=float, default=0.9, metavar="Q", action=Checked,
+                   check=check_planning_risk,
+                   help="risk level Q in [0.5, 1) (default 0.9): every tour's energy at its Q quantile leaves the "
+                        "reserve (with --model of a model with an interval; the presets' price is exact)")
+    p.add_argument("--time-limit", type=float, default=10.0, metavar="S", action=Checked, check=positive,
+                   help="the routing solver's time limit per solve (s, default 10)")
+    p.add_argument("--seed", type=int, default=0, help="the routing solver's seed (default 0)")
+    p.add_argument("--bag", action="store_true", help="also write each robot's tour as a ROS 2 bag (tour_<k>.mcap)")
+    add_dask_options(p, "the pricing of the legs")
+    add_robot_options(p)
+    add_model_options(p)
+    p.set_defaults(run=run_tour)
+
+
+def run_tour(args: argparse.Namespace) -> int:
+    """``terrawatt tour``: plan the tours, write their files, print the summary; exit 1 when nothing is reachable."""
+    if args.robots != int(args.robots):
+        raise InvalidParameterError(f"--robots must be an integer >= 1, got {args.robots!r}")
+    check_dask_flags(args)
+    check_model_flags(args)
+    check_outputs(args.out, _OUTPUTS, input_paths(args))
+    tmap, label = map_arg(args)
+    depot = point_arg(args, "depot", tmap)
+    sites = read_tour_sites_csv(args.sites, tmap)
+    model = load_model_arg(args)
+    ground = None if model is not None else resolve_unknown_ground(args.unknown_ground, tmap, flag="--unknown-ground")
+    with dask_client_arg(args) as client:
+        result = plan_tour_on_map(
+            tmap, sites, depot, battery_ah=args.battery_ah, voltage_v=args.voltage, reserve_pct=args.reserve,
+            n_robots=int(args.robots), risk=args.tour_risk, robot=args.robot, speed_mps=args.speed,
+            max_slope_deg=args.max_slope_deg, unknown_ground=ground, model=model, model_ground=args.model_ground,
+            time_limit_s=args.time_limit, seed=args.seed, client=client, map_label=label)
+    with warn_figures():
+        written = result.write(args.out, bag=args.bag)
+    print(result.summary())
+    print("\nwrote " + ", ".join(str(w) for w in written))
+    return 0 if result.status == "planned" else 1

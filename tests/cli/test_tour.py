@@ -1,0 +1,55 @@
+"""The ``terrawatt tour`` command (terrawatt_cli.tour): the files, the names in tour.json, nothing reachable, bad input."""
+
+from __future__ import annotations
+
+import json
+
+from terrawatt_cli import main
+
+from cli_samples import PNG_MAGIC
+
+
+def _sites(tmp_path, rows):
+    path = tmp_path / "sites.csv"
+    path.write_text("name,x_m,y_m,value\n" + "".join(f"{r}\n" for r in rows))
+    return path
+
+
+def test_cli_plans_the_tours_and_writes_them(tmp_path, capsys, wall_map):
+    tmap = wall_map.save(tmp_path / "wall.npz")
+    sites = _sites(tmp_path, ["pump,5.5,35.5,2", "gate,30.5,31.5,1", "shed,35.5,5.5,1", "rock,20.5,10.5,3",
+                              "away,90,90,1"])
+    out = tmp_path / "out"
+    rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "0.2",
+               "--voltage", "24", "--robots", "2", "--risk", "0.9", "--out", str(out)])
+    text = capsys.readouterr().out
+    assert rc == 0, text
+    doc = json.loads((out / "tour.json").read_text())
+    assert doc["format"] == "terrawatt-tour" and doc["status"] == "planned" and len(doc["robots"]) == 2
+    visited = [s for r in doc["robots"] for s in r["sites"]]
+    assert set(visited) <= {"pump", "gate", "shed"} and visited
+    assert {e["site"] for e in doc["errors"]} == {"away", "rock"}  # off the map; on the wall
+    assert (out / "tour.png").read_bytes()[:8] == PNG_MAGIC and (out / "tour_soc.png").read_bytes()[:8] == PNG_MAGIC
+    assert (out / "tour.geojson").is_file()
+    assert "robot 1" in text and "wrote" in text
+
+
+def test_cli_a_battery_that_reaches_nothing_exits_1_and_says_so(tmp_path, capsys, wall_map):
+    tmap = wall_map.save(tmp_path / "wall.npz")
+    sites = _sites(tmp_path, ["pump,5.5,35.5,2", "shed,35.5,5.5,1"])
+    rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "0.0001",
+               "--out", str(tmp_path / "out")])
+    captured = capsys.readouterr()
+    assert rc == 1 and "nothing reachable" in captured.out and "Traceback" not in captured.err
+
+
+def test_cli_bad_sites_are_one_line_and_exit_2(tmp_path, capsys, wall_map):
+    tmap = wall_map.save(tmp_path / "wall.npz")
+    sites = _sites(tmp_path, ["pump,5.5,35.5,-2"])
+    rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "1",
+               "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert rc == 2 and "value must be >= 0" in err and err.count("\n") == 1
+    rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "1",
+               "--risk", "0.3", "--out", str(tmp_path / "out")])
+    assert rc == 2 and "below the median" in capsys.readouterr().err
