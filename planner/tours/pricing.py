@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from energy.models.forecast import combine_ground_sds, normal_quantile
+from energy.models.forecast import combine_ground_sds, predictive_quantile
 from terrawatt_base.checks import check_int
 from terrawatt_base.dask_client import check_client, client_worker_count, dask_client
 from terrawatt_base.errors import InvalidParameterError
@@ -58,6 +58,9 @@ class PairPrices:
         ``"in process"``, ``"local cluster"`` or ``"given client"``.
     n_workers : int
         Processes that priced them.
+    ground_dof : tuple of float
+        Per ground, the degrees of freedom of its spread (the cost's ``spread_dof``: ``inf`` for a
+        Gaussian, a Student-t on a ground the model never drove; empty: all Gaussian).
     """
 
     names: tuple[str, ...]
@@ -70,18 +73,30 @@ class PairPrices:
     pricing_time_s: float
     where: str = "in process"
     n_workers: int = 1
+    ground_dof: tuple[float, ...] = ()
 
     def __len__(self) -> int:
         return len(self.names)
 
-    def arc_quantile_j(self, q: float) -> np.ndarray:
-        """Each leg's own ``q`` quantile (J): ``mean + z_q * sqrt(sum_g S_g**2)`` (``inf`` where no route).
+    def _dof(self, g: int) -> float:
+        return float(self.ground_dof[g]) if self.ground_dof else math.inf
 
-        For ``q >= 0.5`` a sum of these along a tour is never below the tour's own quantile (the
-        spreads of one ground add along the whole tour: the norm of a sum is at most the sum of
-        the norms), so a capacity on them is conservative.
+    def arc_quantile_j(self, q: float) -> np.ndarray:
+        """Each leg's own ``q`` quantile (J): ``mean + t_q * sqrt(sum_g S_g**2)`` (``inf`` where no route).
+
+        ``t_q`` is the quantile of the leg's predictive: the least degrees of freedom of the
+        grounds it crosses (a Gaussian's ``z_q`` where every one is Gaussian), as
+        :func:`planner.route_energy_interval` gives a route. For ``q >= 0.5`` a sum of these
+        along a tour is never below the tour's own quantile (the spreads of one ground add along
+        the whole tour: the norm of a sum is at most the sum of the norms; a tour's degrees of
+        freedom are at least its heaviest leg's), so a capacity on them is conservative.
         """
-        z = normal_quantile(check_risk_level(q))
+        q = check_risk_level(q)
+        crossed = self.sd_by_ground_j > 0
+        dof = np.full(self.mean_j.shape, math.inf)
+        for g in range(len(self.ground_labels)):
+            dof = np.where(crossed[:, :, g], np.minimum(dof, self._dof(g)), dof)
+        z = np.vectorize(lambda d: predictive_quantile(q, d), otypes=[float])(dof)
         sd = np.sqrt(np.sum(self.sd_by_ground_j ** 2, axis=2))
         return self.mean_j + z * sd
 
@@ -100,8 +115,10 @@ class PairPrices:
         if not math.isfinite(mean):
             raise InvalidParameterError(f"the tour {idx.tolist()!r} uses a leg that no route joins")
         per_ground = np.sum(self.sd_by_ground_j[a, b], axis=0)
-        by = {self.ground_labels[g]: float(per_ground[g]) for g in np.flatnonzero(per_ground > 0).tolist()}
-        return RouteEnergyInterval(mean, combine_ground_sds(per_ground), by)
+        crossed = np.flatnonzero(per_ground > 0).tolist()
+        by = {self.ground_labels[g]: float(per_ground[g]) for g in crossed}
+        dofs = {self.ground_labels[g]: self._dof(g) for g in crossed}
+        return RouteEnergyInterval(mean, combine_ground_sds(per_ground), by, min(dofs.values(), default=math.inf), dofs)
 
 
 def price_from(search_cost: EnergyCost, cost: EnergyCost, i: int, xy_m: np.ndarray
@@ -211,7 +228,8 @@ def price_pairs(
     return PairPrices(
         names=names, xy_m=pts, mean_j=np.array([r[1] for r in rows]), sd_by_ground_j=np.array([r[2] for r in rows]),
         ground_labels=tuple(cost.ground_labels), duration_s=np.array([r[3] for r in rows]),
-        waypoints=tuple(tuple(r[4]) for r in rows), pricing_time_s=elapsed, where=where, n_workers=n_used)
+        waypoints=tuple(tuple(r[4]) for r in rows), pricing_time_s=elapsed, where=where, n_workers=n_used,
+        ground_dof=tuple(float(d) for d in getattr(cost, "spread_dof", ()) or ()))
 
 
 def _price_on_cluster(client: Any, search: EnergyCost, cost: EnergyCost, pts: np.ndarray, progress: bool) -> list:
