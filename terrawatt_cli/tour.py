@@ -61,7 +61,8 @@ def add_parser(sub: Any) -> None:
 
 
 def run_tour(args: argparse.Namespace) -> int:
-    """``terrawatt tour``: plan the tours, write their files, print the summary; exit 1 when nothing is reachable."""
+    """``terrawatt tour``: plan the tours, write their files, print the summary; exit 1 when nothing is reachable or
+    a site is an error row (the others planned and written), as ``batch`` does for its rows."""
     if args.robots != int(args.robots):
         raise InvalidParameterError(f"--robots must be an integer >= 1, got {args.robots!r}")
     check_dask_flags(args)
@@ -82,4 +83,4 @@ def run_tour(args: argparse.Namespace) -> int:
         written = result.write(args.out, bag=args.bag)
     print(result.summary())
     print("\nwrote " + ", ".join(str(w) for w in written))
-    return 0 if result.status == "planned" else 1
+    return 0 if result.status == "planned" and not result.errors else 1

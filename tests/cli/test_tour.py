@@ -23,7 +23,7 @@ def test_cli_plans_the_tours_and_writes_them(tmp_path, capsys, wall_map):
     rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "0.2",
                "--voltage", "24", "--robots", "2", "--risk", "0.9", "--out", str(out)])
     text = capsys.readouterr().out
-    assert rc == 0, text
+    assert rc == 1, text  # two sites are error rows (as batch's rows); the others are planned and written
     doc = json.loads((out / "tour.json").read_text())
     assert doc["format"] == "terrawatt-tour" and doc["status"] == "planned" and len(doc["robots"]) == 2
     visited = [s for r in doc["robots"] for s in r["sites"]]
@@ -53,3 +53,13 @@ def test_cli_bad_sites_are_one_line_and_exit_2(tmp_path, capsys, wall_map):
     rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "1",
                "--risk", "0.3", "--out", str(tmp_path / "out")])
     assert rc == 2 and "below the median" in capsys.readouterr().err
+
+
+def test_cli_sites_all_on_the_map_exit_0(tmp_path, capsys, wall_map):
+    tmap = wall_map.save(tmp_path / "wall.npz")
+    sites = _sites(tmp_path, ["pump,5.5,35.5,2", "shed,35.5,5.5,1"])
+    rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "0.2",
+               "--voltage", "24", "--out", str(tmp_path / "out")])
+    text = capsys.readouterr().out
+    assert rc == 0, text
+    assert json.loads((tmp_path / "out" / "tour.json").read_text())["errors"] == []
