@@ -1,0 +1,125 @@
+"""The golden cases: each runs one versioned output through the CLI a user runs, on small seeded inputs."""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import io
+import shutil
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+import terrain
+from terrawatt_cli import main
+
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
+
+
+def _cli(*argv: object, expect: int = 0) -> None:
+    """Run ``terrawatt *argv`` in process, its printout swallowed; fail on an unexpected exit code."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rc = main([str(a) for a in argv])
+    if rc != expect:
+        raise AssertionError(f"terrawatt {' '.join(map(str, argv))} exited {rc}, expected {expect}:\n"
+                             f"{out.getvalue()}\n{err.getvalue()}")
+
+
+def patch_map(folder: Path) -> Path:
+    """60 x 24 m of 1 m cells: a gentle ramp of asphalt, a sand band across the straight line, a short wall."""
+    ground = np.zeros((24, 60), dtype=int)
+    ground[6:18, 20:40] = 1
+    z = np.tile(0.02 * np.arange(60.0), (24, 1))
+    obstacle = np.zeros((24, 60), dtype=bool)
+    obstacle[0:8, 45] = True
+    tmap = terrain.TerrainMap(z, 1.0, ground=ground, ground_names={0: "asphalt", 1: "sand"}, obstacle=obstacle)
+    return tmap.save(folder / "patch.npz")
+
+
+def case_map(work: Path) -> dict[str, Path]:
+    return {"map/patch.npz": patch_map(work)}
+
+
+def case_plan(work: Path) -> dict[str, Path]:
+    path = patch_map(work)
+    out = work / "plan"
+    _cli("plan", "--map", path, "--start", 3, 12, "--goal", 57, 12, "--planner", "lattice", "--out", out)
+    return {f"plan/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_batch(work: Path) -> dict[str, Path]:
+    path = patch_map(work)
+    pairs = work / "pairs.csv"
+    pairs.write_text("name,start_x_m,start_y_m,goal_x_m,goal_y_m\n"
+                     "across,3,12,57,12\nup,10,3,50,20\nback,55,20,5,5\n")
+    out = work / "batch"
+    _cli("batch", "--map", path, "--pairs", pairs, "--planner", "lattice", "--no-progress", "--out", out)
+    return {f"batch/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_reach(work: Path) -> dict[str, Path]:
+    path = patch_map(work)
+    out = work / "reach"
+    _cli("reach", "--map", path, "--depot", 5.5, 5.5, "--battery-ah", 0.05, "--voltage", 24, "--reserve", 10,
+         "--round-trip", "--out", out)
+    return {f"reach/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_mission(work: Path) -> dict[str, Path]:
+    path = patch_map(work)
+    out = work / "mission"
+    _cli("mission", "--map", path, "--start", 16, 12, "--goal", 30, 12, "--battery-ah", 20, "--speed", 1.0, "--leg-m", 8,
+         "--out", out)
+    return {f"mission/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_monte_carlo(work: Path) -> dict[str, Path]:
+    path = patch_map(work)
+    out = work / "monte_carlo"
+    _cli("mission", "--map", path, "--start", 3, 12, "--goal", 57, 12, "--battery-ah", 5, "--monte-carlo", 4,
+         "--seed", 3, "--out", out)
+    return {f"monte_carlo/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_train(work: Path) -> dict[str, Path]:
+    files = {}
+    for kind in ("linear", "physics"):
+        target = work / f"{kind}.zip"
+        _cli("train", "--data", FIXTURES / "borealtc", "--model", kind, "--seed", 0, "--out", target)
+        files[f"train/{kind}.zip"] = target
+    return files
+
+
+def case_evaluate(work: Path) -> dict[str, Path]:
+    data = work / "logs"
+    shutil.copytree(FIXTURES / "borealtc", data)
+    for kind in ("imu", "pro"):  # a second asphalt run, so leave-one-run-out has something to train on
+        shutil.copy(data / "ASPHALT" / f"{kind}_00.csv", data / "ASPHALT" / f"{kind}_01.csv")
+    out = work / "evaluate"
+    _cli("evaluate", "--data", data, "--model", "constant", "linear", "physics", "--seed", 0, "--out", out)
+    return {f"evaluate/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_diagnose(work: Path) -> dict[str, Path]:
+    from diagnosis_scenarios import scenario
+
+    from energy import write_csv_log
+
+    sc = dataclasses.replace(scenario("turning_resistance"), n_runs=3, run_duration_s=8.0)
+    (work / "logs").mkdir()
+    for k, log in enumerate(sc.make_logs(0)):
+        write_csv_log(log, work / "logs" / f"run_{k}.csv")
+    sc.terrain.save(work / "map.npz")
+    out = work / "diagnose"
+    _cli("diagnose", "--model", "physics", "--without", "turning_resistance", "--ground", "coated_wood",
+         "--data", work / "logs", "--map", work / "map.npz", "--seed", 1, "--quiet", "--out", out)
+    return {f"diagnose/{p.name}": p for p in sorted(out.iterdir())}
+
+
+CASES: dict[str, Callable[[Path], dict[str, Path]]] = {
+    name.removeprefix("case_"): fn for name, fn in sorted(globals().items()) if name.startswith("case_")
+}

@@ -1,0 +1,28 @@
+"""Golden-file tests: every versioned output, written by the CLI a user runs on small seeded inputs, is the
+committed copy under ``tests/golden/data/`` (see ``golden_files`` for what is compared and masked).
+
+They guard restructures that must change nothing (issue 34): a route, batch, reach, mission, Monte Carlo,
+diagnosis, evaluation, model file or map that comes out different fails here with the first differing
+keys and lines.
+
+A deliberate change of an output: regenerate the copies and commit their diff with the change::
+
+    TERRAWATT_REGEN_GOLDEN=1 python -m pytest tests/golden      # or
+    python tests/golden/regenerate.py [case ...]
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from golden_cases import CASES
+from golden_files import check_case, members, regenerating, write_case
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_output_is_its_golden_copy(case, tmp_path):
+    produced = members(CASES[case](tmp_path))
+    if regenerating():
+        write_case(case, produced)
+        return
+    check_case(case, produced)
