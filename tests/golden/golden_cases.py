@@ -120,6 +120,63 @@ def case_diagnose(work: Path) -> dict[str, Path]:
     return {f"diagnose/{p.name}": p for p in sorted(out.iterdir())}
 
 
+
+
+def case_plan_model(work: Path) -> dict[str, Path]:
+    path = patch_map(work)
+    model = work / "linear.zip"
+    _cli("train", "--data", FIXTURES / "borealtc", "--model", "linear", "--seed", 0, "--out", model)
+    out = work / "plan_model"
+    _cli("plan", "--map", path, "--start", 3, 12, "--goal", 57, 12, "--planner", "lattice", "--model", model,
+         "--model-ground", "sand=snow", "--risk", 0.9, "--out", out)
+    return {f"plan_model/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_predict(work: Path) -> dict[str, Path]:
+    model = work / "linear.zip"
+    _cli("train", "--data", FIXTURES / "borealtc", "--model", "linear", "--seed", 0, "--out", model)
+    out = work / "predict"
+    with contextlib.chdir(work):  # predictions.json records --model as given: a relative path, the same in every run
+        _cli("predict", "--model", model.name, "--data", FIXTURES / "borealtc", "--out", out)
+    return {f"predict/{p.name}": p for p in sorted(out.iterdir()) if p.is_file()}
+
+
+def case_diagnose_power(work: Path) -> dict[str, Path]:
+    from diagnosis_scenarios import scenario
+
+    from energy import write_csv_log
+
+    sc = dataclasses.replace(scenario("control"), n_runs=3, run_duration_s=8.0)
+    (work / "logs").mkdir()
+    for k, log in enumerate(sc.make_logs(0)):
+        write_csv_log(log, work / "logs" / f"run_{k}.csv")
+    out = work / "diagnose_power"
+    _cli("diagnose", "--model", "physics", "--ground", "coated_wood", "--data", work / "logs", "--seed", 1, "--quiet",
+         "--effects", "idle_current", "sensor", "control", "--out", out)
+    return {f"diagnose_power/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_replay(work: Path) -> dict[str, Path]:
+    path = patch_map(work)
+    mission = work / "mission"
+    _cli("mission", "--map", path, "--start", 16, 12, "--goal", 30, 12, "--battery-ah", 20, "--speed", 1.0,
+         "--leg-m", 8, "--logs", "--out", mission)
+    out = work / "replay"
+    with contextlib.chdir(work):  # the navigator's state records the logs' paths as given: relative, the same in every run
+        _cli("replay", "--data", "mission/logs", "--map", path.name, "--registry", "mission/start_registry",
+             "--goal", 30, 12, "--battery-ah", 20, "--speed", 1.0, "--no-mcap", "--state", "state", "--out", "replay")
+    files = {f"replay/logs/{p.name}": p for p in sorted((mission / "logs").iterdir())}
+    files |= {f"replay/start_registry/{p.name}": p for p in sorted((mission / "start_registry").iterdir())}
+    files |= {f"replay/state/{p.name}": p for p in sorted((work / "state").iterdir())}
+    return files | {f"replay/{p.name}": p for p in sorted(out.iterdir())}
+
+
+#: Outputs compared by digest rather than in full (``fnmatch`` patterns of golden paths): the replay's inputs
+#: and saved state hold seconds of samples (the CSV logs' format shows in a digest's first lines).
+DIGESTED = ("replay/logs/*", "replay/state/state.npz/*", "replay/*/registry.npz/*charge_c.npy",
+            "replay/*/registry.npz/sample_count.npy")
+
+#: Each case by name: a function of an empty work folder returning its outputs, ``{"<case>/<name>": path}``.
 CASES: dict[str, Callable[[Path], dict[str, Path]]] = {
     name.removeprefix("case_"): fn for name, fn in sorted(globals().items()) if name.startswith("case_")
 }

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import csv
 import difflib
+import fnmatch
 import hashlib
 import io
 import json
@@ -34,7 +35,7 @@ from urllib.parse import quote
 
 import numpy as np
 
-__all__ = ["GOLDEN", "MASK", "MASKED_KEYS", "REGEN_ENV", "check_case", "members", "regenerating", "write_case"]
+__all__ = ["GOLDEN", "MASK", "DIGEST_OVER_BYTES", "MASKED_KEYS", "REGEN_ENV", "check_case", "members", "regenerating", "write_case"]
 
 GOLDEN = Path(__file__).resolve().parent / "data"
 REGEN_ENV = "TERRAWATT_REGEN_GOLDEN"
@@ -51,10 +52,16 @@ MASKED_KEYS = frozenset({
     "kernel_compile_s", "map_preparation_s",  # route.json, reach.json
     "planning_time_s",  # route.json, route.geojson, batch.json, batch.csv, mission.json
     "refresh_time_s", "update_wall_time_s", "wall_time_s",  # mission.json
+    "update_wall",  # navigator.json (scalars): seconds, though its name does not say so
     "routes_per_s",  # batch.json: routes / elapsed_s
     # the environment: {"terrawatt": ..., "numpy": ..., "python": ...} in a model file's model.json
     "versions",
 })
+
+#: An output (or archive member) larger than this, in bytes after masking, is compared by its digest
+#: (``<name>.digest.json``: size, SHA-256, an array's dtype, shape and range, a text's first and last lines)
+#: instead of a full golden copy, as are those a case names in ``golden_cases.DIGESTED``: the copies stay small.
+DIGEST_OVER_BYTES = 100_000
 
 _KEYS = "|".join(sorted(MASKED_KEYS))
 # a masked key's value in JSON text: a number, a string, a literal, or an object without nested objects
@@ -93,6 +100,31 @@ def mask_csv_text(text: str) -> str:
     return out.getvalue()
 
 
+def _digest(key: str, data: bytes) -> bytes:
+    """A large output's stand-in: its size and SHA-256, and what a reader needs to see a change: an array's
+    dtype, shape and range, a text's first and last lines."""
+    doc: dict = {"bytes": len(data), "sha256": hashlib.sha256(data).hexdigest()}
+    if key.endswith(".npy"):
+        arr = np.load(io.BytesIO(data), allow_pickle=False)
+        doc |= {"dtype": str(arr.dtype), "shape": list(arr.shape)}
+        if arr.size and (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
+            finite = arr[np.isfinite(arr)] if np.issubdtype(arr.dtype, np.floating) else arr
+            doc |= {"finite": int(finite.size), "first": arr.ravel()[:4].tolist()}
+            if finite.size:
+                doc |= {"min": finite.min().item(), "max": finite.max().item()}
+    else:
+        lines = data.decode("utf-8", "replace").splitlines()
+        doc |= {"lines": len(lines), "head": lines[:6], "tail": lines[-3:]}
+    return (json.dumps(doc, indent=1) + "\n").encode()
+
+
+def _stored(key: str, data: bytes, digested: tuple[str, ...]) -> dict[str, bytes]:
+    """``{key: data}``, or ``{key + ".digest.json": digest}`` for a large or ``digested`` member."""
+    if len(data) > DIGEST_OVER_BYTES or any(fnmatch.fnmatchcase(key, pattern) for pattern in digested):
+        return {f"{key}.digest.json": _digest(key, data)}
+    return {key: data}
+
+
 def _pixels(data: bytes) -> dict:
     import matplotlib.image
 
@@ -108,25 +140,30 @@ def _text_member(name: str, data: bytes) -> bytes:
     return data
 
 
-def members(files: dict[str, Path]) -> dict[str, bytes]:
-    """The compared members of a case's outputs ``{"<case>/<name>": path}``, keyed by golden path."""
+def members(files: dict[str, Path], digested: tuple[str, ...] = ()) -> dict[str, bytes]:
+    """The compared members of a case's outputs ``{"<case>/<name>": path}`` (a path may be a folder), keyed by
+    golden path; members matching a ``digested`` pattern (``fnmatch``) are compared by their digest."""
     out: dict[str, bytes] = {}
     figures: dict[str, dict[str, dict]] = {}
-    for key, path in sorted(files.items()):
+    expanded = {}
+    for key, path in files.items():  # a folder stands for the files in it
+        found = sorted(p for p in path.rglob("*") if p.is_file()) if path.is_dir() else [path]
+        expanded |= {key + p.as_posix().removeprefix(path.as_posix()): p for p in found}
+    for key, path in sorted(expanded.items()):
         data = path.read_bytes()
         case, name = key.split("/", 1)
         if name.endswith(".png"):
             figures.setdefault(case, {})[name] = _pixels(data)
-        elif name.endswith((".zip", ".npz")):
+        elif name.endswith((".zip", ".npz")) or data[:4] == b"PK\x03\x04":  # a registry's model files have no suffix
             with zipfile.ZipFile(io.BytesIO(data)) as archive:
                 for member in sorted(archive.namelist()):
                     content = archive.read(member)
                     if member.endswith(".npy") and Path(member).stem in MASKED_KEYS:
                         content = MASK.encode()
                     # a member's name as a portable file name ("layer:ground.npy" -> "layer%3Aground.npy")
-                    out[f"{key}/{quote(member, safe='/')}"] = _text_member(member, content)
+                    out.update(_stored(f"{key}/{quote(member, safe='/')}", _text_member(member, content), digested))
         else:
-            out[key] = _text_member(name, data)
+            out.update(_stored(key, _text_member(name, data), digested))
     for case, table in figures.items():
         out[f"{case}/figures.json"] = (json.dumps(table, indent=1, sort_keys=True) + "\n").encode()
     return out

@@ -18,7 +18,7 @@ def main(argv: list[str] | None = None) -> int:
     for folder in (HERE, HERE.parents[1] / "benchmarks", HERE.parents[1]):
         if str(folder) not in sys.path:
             sys.path.insert(0, str(folder))
-    from golden_cases import CASES
+    from golden_cases import CASES, DIGESTED
     from golden_files import GOLDEN, members, write_case
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -27,7 +27,7 @@ def main(argv: list[str] | None = None) -> int:
     names = parser.parse_args(argv).cases or sorted(CASES)
     for name in names:
         with tempfile.TemporaryDirectory() as work:
-            produced = members(CASES[name](Path(work)))
+            produced = members(CASES[name](Path(work)), DIGESTED)
         write_case(name, produced)
         print(f"{name}: {len(produced)} golden file(s) in {GOLDEN.relative_to(HERE.parents[1])}/{name}/")
     return 0
