@@ -122,6 +122,17 @@ def case_diagnose(work: Path) -> dict[str, Path]:
 
 
 
+def case_plan_exports(work: Path) -> dict[str, Path]:
+    """The route and map for ROS 2 / Nav2 (needs the ros and geo extras: rosbags, rasterio)."""
+    path = patch_map(work)
+    out = work / "plan_exports"
+    _cli("plan", "--map", path, "--start", 3, 12, "--goal", 57, 12, "--planner", "lattice", "--ros2-out",
+         out / "route.mcap", "--nav2-map", out / "nav2" / "", "--energy-costmap", out / "energy.tif",
+         "--map-frame-origin", 2, 1, "--out", out)
+    return {f"plan_exports/{p.name}": p for p in sorted(out.iterdir()) if p.name not in ("route.json", "route.geojson",
+                                                                                      "route.png")}
+
+
 def case_plan_model(work: Path) -> dict[str, Path]:
     path = patch_map(work)
     model = work / "linear.zip"
@@ -175,6 +186,9 @@ def case_replay(work: Path) -> dict[str, Path]:
 #: and saved state hold seconds of samples (the CSV logs' format shows in a digest's first lines).
 DIGESTED = ("replay/logs/*", "replay/state/state.npz/*", "replay/*/registry.npz/*charge_c.npy",
             "replay/*/registry.npz/sample_count.npy")
+
+#: The optional packages a case needs (the extras a user installs for those outputs): skipped without them.
+NEEDS = {"plan_exports": ("rasterio", "rosbags")}
 
 #: Each case by name: a function of an empty work folder returning its outputs, ``{"<case>/<name>": path}``.
 CASES: dict[str, Callable[[Path], dict[str, Path]]] = {

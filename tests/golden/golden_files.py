@@ -11,7 +11,10 @@ An output file is turned into *members* (name -> bytes) before it is compared:
   is replaced by :data:`MASK`;
 - ``.png`` figures: the decoded pixels (shape and SHA-256 of the RGBA array), not the PNG bytes (whose
   metadata names the matplotlib version), all figures of a case in one ``figures.json``;
-- any other file (``.md``): its bytes.
+- ``.mcap`` ROS 2 bags: the messages they hold, as JSON (``<name>.messages.json``; the route's summary
+  message carries a planning time), masked as above;
+- any other file (``.md``, ``.yaml``, ``.pgm``, ``.tif``): its bytes;
+- an output larger than :data:`DIGEST_OVER_BYTES`, or named in ``golden_cases.DIGESTED``: its digest.
 
 The golden copy of output ``<case>/<name>`` is ``data/<case>/<name>`` (an archive's members under
 ``data/<case>/<name>/``). Setting ``TERRAWATT_REGEN_GOLDEN=1`` (or running ``regenerate.py``) rewrites
@@ -21,6 +24,7 @@ them instead of comparing.
 from __future__ import annotations
 
 import csv
+import dataclasses
 import difflib
 import fnmatch
 import hashlib
@@ -125,6 +129,35 @@ def _stored(key: str, data: bytes, digested: tuple[str, ...]) -> dict[str, bytes
     return {key: data}
 
 
+def _plain(value):
+    """A deserialised ROS message as JSON values: dataclass fields in order, arrays as lists, a JSON string parsed."""
+    if dataclasses.is_dataclass(value):
+        return {"__msgtype__": getattr(value, "__msgtype__", type(value).__name__)} | {
+            f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, str) and value.startswith("{"):
+        try:
+            return json.loads(value)
+        except ValueError:
+            return value
+    return value
+
+
+def _bag_messages(path: Path) -> bytes:
+    """A ROS 2 bag (``.mcap``) as JSON text: each topic's type and its messages with their log times (ns)."""
+    from planner.ros_export import read_bag_topics
+
+    topics = read_bag_topics(path, "/")
+    doc = {f"/{topic}": {"type": msgtype, "messages": [{"log_time_ns": t, "message": _plain(m)} for t, m in messages]}
+           for topic, (msgtype, messages) in sorted(topics.items())}
+    return mask_json_text(json.dumps(doc, indent=1) + "\n").encode()
+
+
 def _pixels(data: bytes) -> dict:
     import matplotlib.image
 
@@ -154,6 +187,8 @@ def members(files: dict[str, Path], digested: tuple[str, ...] = ()) -> dict[str,
         case, name = key.split("/", 1)
         if name.endswith(".png"):
             figures.setdefault(case, {})[name] = _pixels(data)
+        elif name.endswith(".mcap"):  # compared as the messages it holds: a timing sits in a message's JSON text
+            out.update(_stored(f"{key}.messages.json", _bag_messages(path), digested))
         elif name.endswith((".zip", ".npz")) or data[:4] == b"PK\x03\x04":  # a registry's model files have no suffix
             with zipfile.ZipFile(io.BytesIO(data)) as archive:
                 for member in sorted(archive.namelist()):
@@ -213,7 +248,11 @@ def _describe(key: str, golden: bytes, output: bytes) -> str:
                 extra = f", largest difference {np.nanmax(np.abs(a.astype(float) - b.astype(float))):.6g}"
         return (f"{lines[0]}: {len(bad)} of {a.size} values differ, first at {first}: golden "
                 f"{a[first].tolist()!r}, output {b[first].tolist()!r}{extra}")
-    text_a, text_b = golden.decode("utf-8", "replace"), output.decode("utf-8", "replace")
+    try:
+        text_a, text_b = golden.decode("utf-8"), output.decode("utf-8")
+    except UnicodeDecodeError:  # a binary file (GeoTIFF, PGM): where the bytes part
+        first = next((i for i, (x, y) in enumerate(zip(golden, output)) if x != y), min(len(golden), len(output)))
+        return f"{lines[0]}: binary, {len(golden)} bytes golden, {len(output)} output, first difference at byte {first}"
     if key.endswith((".json", ".geojson")):
         try:
             paths = _json_paths(json.loads(text_a), json.loads(text_b))
