@@ -133,6 +133,31 @@ def case_plan_exports(work: Path) -> dict[str, Path]:
                                                                                       "route.png")}
 
 
+def case_plan_coarse(work: Path) -> dict[str, Path]:
+    """Coarse-to-fine (the route.json of another door): the lattice on a map 4 times coarser, then a corridor."""
+    path = patch_map(work)
+    out = work / "plan_coarse"
+    _cli("plan", "--map", path, "--start", 3, 12, "--goal", 57, 12, "--coarse-factor", 4, "--out", out)
+    return {f"plan_coarse/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_evaluate_adapt(work: Path) -> dict[str, Path]:
+    """The adapt protocol on simulated 25 s runs (the BorealTC fixture's runs are too short to adapt on)."""
+    from energy import TruthSimulator, excitation_commands, ground_preset, robot_preset, write_csv_log
+
+    truth = TruthSimulator(robot_preset("husky"), {g: ground_preset(g) for g in ("asphalt", "sand")}, seed=0)
+    for g, ground in enumerate(("asphalt", "sand")):
+        (work / "logs" / ground.upper()).mkdir(parents=True)
+        for k in range(2):
+            p = excitation_commands(25.0, seed=10 * g + k)
+            log = truth.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground=ground, seed=100 + 10 * g + k)
+            write_csv_log(log, work / "logs" / ground.upper() / f"run_{k}.csv")
+    out = work / "evaluate_adapt"
+    _cli("evaluate", "--data", work / "logs", "--model", "linear", "--protocol", "adapt", "--adapt-seconds", 10,
+         "--seed", 0, "--out", out)
+    return {f"evaluate_adapt/{p.name}": p for p in sorted(out.iterdir())}
+
+
 def case_plan_model(work: Path) -> dict[str, Path]:
     path = patch_map(work)
     model = work / "linear.zip"

@@ -54,6 +54,7 @@ MASKED_KEYS = frozenset({
     "fit_duration_s", "fit_duration_median_s",  # evaluation.json
     "graph_time_s", "search_time_s", "total_time_s",  # reach.json, reach.npz
     "kernel_compile_s", "map_preparation_s",  # route.json, reach.json
+    "coarse_time_s", "fine_time_s",  # route.json of plan --coarse-factor
     "planning_time_s",  # route.json, route.geojson, batch.json, batch.csv, mission.json
     "refresh_time_s", "update_wall_time_s", "wall_time_s",  # mission.json
     "update_wall",  # navigator.json (scalars): seconds, though its name does not say so
