@@ -158,6 +158,22 @@ def case_evaluate_adapt(work: Path) -> dict[str, Path]:
     return {f"evaluate_adapt/{p.name}": p for p in sorted(out.iterdir())}
 
 
+def case_library(work: Path) -> dict[str, Path]:
+    """The versioned files only the library writes: a robot file, a simulated mission's ``MissionResult``."""
+    from energy import Battery, TruthSimulator, ground_preset, robot_preset
+    from energy.params import write_robot_file
+    from planner import EnergyCost, plan_route, simulate_mission
+
+    tmap = terrain.read_map(patch_map(work))
+    husky = robot_preset("husky")
+    cost = EnergyCost.from_presets(tmap, robot=husky, speed_mps=0.5)
+    route = plan_route(tmap, (3.0, 12.0), (57.0, 12.0), cost=cost, planner="lattice")
+    truth = TruthSimulator(husky, {g: ground_preset(g) for g in ("asphalt", "sand")}, seed=0)
+    mission = simulate_mission(tmap, route, husky, Battery(20.0, husky.battery_voltage_v), truth, cost, seed=1)
+    return {"library/husky.json": write_robot_file(husky, work / "husky.json"),
+            "library/mission.json": mission.save_json(work / "mission.json", series_every=200)}
+
+
 def case_plan_model(work: Path) -> dict[str, Path]:
     path = patch_map(work)
     model = work / "linear.zip"
