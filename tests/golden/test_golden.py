@@ -1,9 +1,11 @@
 """Golden-file tests: every versioned output, written by the CLI a user runs on small seeded inputs, is the
 committed copy under ``tests/golden/data/`` (see ``golden_files`` for what is compared and masked).
 
-They guard restructures that must change nothing (issue 34): a route, batch, reach, mission, Monte Carlo,
-diagnosis, evaluation, model file or map that comes out different fails here with the first differing
-keys and lines.
+They guard restructures that must change nothing (issue 34): a route (and its GeoJSON, ROS 2 bag, Nav2 maps,
+costmap), batch, reach, mission, Monte Carlo, replay and navigator state, registry, diagnosis, evaluation,
+adaptation, predictions, model file, robot file or map that comes out different fails here with the first
+differing keys and lines. Wall-clock timings and package versions are masked (``golden_files.MASKED_KEYS``);
+the cases and what each compares are listed in ``tests/golden/README.md``.
 
 A deliberate change of an output: regenerate the copies and commit their diff with the change::
 
