@@ -308,7 +308,7 @@ def simulate_adaptive_mission(
     check_real("leg_m", leg_m, low=0.0, low_inclusive=False)
     adapt = check_bool("adapt", adapt)
     robot_given = robot_params(robot)
-    grounds = {name: ground_preset(name) for name in set(terrain.ground_names.values()) | {prior_ground}}
+    grounds = {name: ground_preset(name) for name in sorted(set(terrain.ground_names.values()) | {prior_ground})}
     truth = TruthSimulator(robot_given, grounds, seed=seed)
     battery = mission_battery(robot_given, battery_ah, battery_v, reserve_pct)
     settings = AdaptiveSettings(speed_mps=speed_mps, leg_length_m=leg_m,

@@ -1,0 +1,237 @@
+"""The golden cases: each runs one versioned output through the CLI a user runs, on small seeded inputs."""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import io
+import shutil
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+import terrain
+from terrawatt_cli import main
+
+FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
+
+
+def _cli(*argv: object, expect: int = 0) -> None:
+    """Run ``terrawatt *argv`` in process, its printout swallowed; fail on an unexpected exit code."""
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        rc = main([str(a) for a in argv])
+    if rc != expect:
+        raise AssertionError(f"terrawatt {' '.join(map(str, argv))} exited {rc}, expected {expect}:\n"
+                             f"{out.getvalue()}\n{err.getvalue()}")
+
+
+def patch_map(folder: Path) -> Path:
+    """60 x 24 m of 1 m cells: a gentle ramp of asphalt, a sand band across the straight line, a short wall."""
+    ground = np.zeros((24, 60), dtype=int)
+    ground[6:18, 20:40] = 1
+    z = np.tile(0.02 * np.arange(60.0), (24, 1))
+    obstacle = np.zeros((24, 60), dtype=bool)
+    obstacle[0:8, 45] = True
+    tmap = terrain.TerrainMap(z, 1.0, ground=ground, ground_names={0: "asphalt", 1: "sand"}, obstacle=obstacle)
+    return tmap.save(folder / "patch.npz")
+
+
+def case_map(work: Path) -> dict[str, Path]:
+    return {"map/patch.npz": patch_map(work)}
+
+
+def case_plan(work: Path) -> dict[str, Path]:
+    path = patch_map(work)
+    out = work / "plan"
+    _cli("plan", "--map", path, "--start", 3, 12, "--goal", 57, 12, "--planner", "lattice", "--out", out)
+    return {f"plan/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_batch(work: Path) -> dict[str, Path]:
+    path = patch_map(work)
+    pairs = work / "pairs.csv"
+    pairs.write_text("name,start_x_m,start_y_m,goal_x_m,goal_y_m\n"
+                     "across,3,12,57,12\nup,10,3,50,20\nback,55,20,5,5\n")
+    out = work / "batch"
+    _cli("batch", "--map", path, "--pairs", pairs, "--planner", "lattice", "--no-progress", "--out", out)
+    return {f"batch/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_reach(work: Path) -> dict[str, Path]:
+    path = patch_map(work)
+    out = work / "reach"
+    _cli("reach", "--map", path, "--depot", 5.5, 5.5, "--battery-ah", 0.05, "--voltage", 24, "--reserve", 10,
+         "--round-trip", "--out", out)
+    return {f"reach/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_mission(work: Path) -> dict[str, Path]:
+    path = patch_map(work)
+    out = work / "mission"
+    _cli("mission", "--map", path, "--start", 16, 12, "--goal", 30, 12, "--battery-ah", 20, "--speed", 1.0, "--leg-m", 8,
+         "--out", out)
+    return {f"mission/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_monte_carlo(work: Path) -> dict[str, Path]:
+    path = patch_map(work)
+    out = work / "monte_carlo"
+    _cli("mission", "--map", path, "--start", 3, 12, "--goal", 57, 12, "--battery-ah", 5, "--monte-carlo", 4,
+         "--seed", 3, "--out", out)
+    return {f"monte_carlo/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_train(work: Path) -> dict[str, Path]:
+    files = {}
+    for kind in ("linear", "physics"):
+        target = work / f"{kind}.zip"
+        _cli("train", "--data", FIXTURES / "borealtc", "--model", kind, "--seed", 0, "--out", target)
+        files[f"train/{kind}.zip"] = target
+    return files
+
+
+def case_evaluate(work: Path) -> dict[str, Path]:
+    data = work / "logs"
+    shutil.copytree(FIXTURES / "borealtc", data)
+    for kind in ("imu", "pro"):  # a second asphalt run, so leave-one-run-out has something to train on
+        shutil.copy(data / "ASPHALT" / f"{kind}_00.csv", data / "ASPHALT" / f"{kind}_01.csv")
+    out = work / "evaluate"
+    _cli("evaluate", "--data", data, "--model", "constant", "linear", "physics", "--seed", 0, "--out", out)
+    return {f"evaluate/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_diagnose(work: Path) -> dict[str, Path]:
+    from diagnosis_scenarios import scenario
+
+    from energy import write_csv_log
+
+    sc = dataclasses.replace(scenario("turning_resistance"), n_runs=3, run_duration_s=8.0)
+    (work / "logs").mkdir()
+    for k, log in enumerate(sc.make_logs(0)):
+        write_csv_log(log, work / "logs" / f"run_{k}.csv")
+    sc.terrain.save(work / "map.npz")
+    out = work / "diagnose"
+    _cli("diagnose", "--model", "physics", "--without", "turning_resistance", "--ground", "coated_wood",
+         "--data", work / "logs", "--map", work / "map.npz", "--seed", 1, "--quiet", "--out", out)
+    return {f"diagnose/{p.name}": p for p in sorted(out.iterdir())}
+
+
+
+
+def case_plan_exports(work: Path) -> dict[str, Path]:
+    """The route and map for ROS 2 / Nav2 (needs the ros and geo extras: rosbags, rasterio)."""
+    path = patch_map(work)
+    out = work / "plan_exports"
+    _cli("plan", "--map", path, "--start", 3, 12, "--goal", 57, 12, "--planner", "lattice", "--ros2-out",
+         out / "route.mcap", "--nav2-map", out / "nav2" / "", "--energy-costmap", out / "energy.tif",
+         "--map-frame-origin", 2, 1, "--out", out)
+    return {f"plan_exports/{p.name}": p for p in sorted(out.iterdir()) if p.name not in ("route.json", "route.geojson",
+                                                                                      "route.png")}
+
+
+def case_plan_coarse(work: Path) -> dict[str, Path]:
+    """Coarse-to-fine (the route.json of another door): the lattice on a map 4 times coarser, then a corridor."""
+    path = patch_map(work)
+    out = work / "plan_coarse"
+    _cli("plan", "--map", path, "--start", 3, 12, "--goal", 57, 12, "--coarse-factor", 4, "--out", out)
+    return {f"plan_coarse/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_evaluate_adapt(work: Path) -> dict[str, Path]:
+    """The adapt protocol on simulated 25 s runs (the BorealTC fixture's runs are too short to adapt on)."""
+    from energy import TruthSimulator, excitation_commands, ground_preset, robot_preset, write_csv_log
+
+    truth = TruthSimulator(robot_preset("husky"), {g: ground_preset(g) for g in ("asphalt", "sand")}, seed=0)
+    for g, ground in enumerate(("asphalt", "sand")):
+        (work / "logs" / ground.upper()).mkdir(parents=True)
+        for k in range(2):
+            p = excitation_commands(25.0, seed=10 * g + k)
+            log = truth.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground=ground, seed=100 + 10 * g + k)
+            write_csv_log(log, work / "logs" / ground.upper() / f"run_{k}.csv")
+    out = work / "evaluate_adapt"
+    _cli("evaluate", "--data", work / "logs", "--model", "linear", "--protocol", "adapt", "--adapt-seconds", 10,
+         "--seed", 0, "--out", out)
+    return {f"evaluate_adapt/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_library(work: Path) -> dict[str, Path]:
+    """The versioned files only the library writes: a robot file, a simulated mission's ``MissionResult``."""
+    from energy import Battery, TruthSimulator, ground_preset, robot_preset
+    from energy.params import write_robot_file
+    from planner import EnergyCost, plan_route, simulate_mission
+
+    tmap = terrain.read_map(patch_map(work))
+    husky = robot_preset("husky")
+    cost = EnergyCost.from_presets(tmap, robot=husky, speed_mps=0.5)
+    route = plan_route(tmap, (3.0, 12.0), (57.0, 12.0), cost=cost, planner="lattice")
+    truth = TruthSimulator(husky, {g: ground_preset(g) for g in ("asphalt", "sand")}, seed=0)
+    mission = simulate_mission(tmap, route, husky, Battery(20.0, husky.battery_voltage_v), truth, cost, seed=1)
+    return {"library/husky.json": write_robot_file(husky, work / "husky.json"),
+            "library/mission.json": mission.save_json(work / "mission.json", series_every=200)}
+
+
+def case_plan_model(work: Path) -> dict[str, Path]:
+    path = patch_map(work)
+    model = work / "linear.zip"
+    _cli("train", "--data", FIXTURES / "borealtc", "--model", "linear", "--seed", 0, "--out", model)
+    out = work / "plan_model"
+    _cli("plan", "--map", path, "--start", 3, 12, "--goal", 57, 12, "--planner", "lattice", "--model", model,
+         "--model-ground", "sand=snow", "--risk", 0.9, "--out", out)
+    return {f"plan_model/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_predict(work: Path) -> dict[str, Path]:
+    model = work / "linear.zip"
+    _cli("train", "--data", FIXTURES / "borealtc", "--model", "linear", "--seed", 0, "--out", model)
+    out = work / "predict"
+    with contextlib.chdir(work):  # predictions.json records --model as given: a relative path, the same in every run
+        _cli("predict", "--model", model.name, "--data", FIXTURES / "borealtc", "--out", out)
+    return {f"predict/{p.name}": p for p in sorted(out.iterdir()) if p.is_file()}
+
+
+def case_diagnose_power(work: Path) -> dict[str, Path]:
+    from diagnosis_scenarios import scenario
+
+    from energy import write_csv_log
+
+    sc = dataclasses.replace(scenario("control"), n_runs=3, run_duration_s=8.0)
+    (work / "logs").mkdir()
+    for k, log in enumerate(sc.make_logs(0)):
+        write_csv_log(log, work / "logs" / f"run_{k}.csv")
+    out = work / "diagnose_power"
+    _cli("diagnose", "--model", "physics", "--ground", "coated_wood", "--data", work / "logs", "--seed", 1, "--quiet",
+         "--effects", "idle_current", "sensor", "control", "--out", out)
+    return {f"diagnose_power/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_replay(work: Path) -> dict[str, Path]:
+    path = patch_map(work)
+    mission = work / "mission"
+    _cli("mission", "--map", path, "--start", 16, 12, "--goal", 30, 12, "--battery-ah", 20, "--speed", 1.0,
+         "--leg-m", 8, "--logs", "--out", mission)
+    out = work / "replay"
+    with contextlib.chdir(work):  # the navigator's state records the logs' paths as given: relative, the same in every run
+        _cli("replay", "--data", "mission/logs", "--map", path.name, "--registry", "mission/start_registry",
+             "--goal", 30, 12, "--battery-ah", 20, "--speed", 1.0, "--no-mcap", "--state", "state", "--out", "replay")
+    files = {f"replay/logs/{p.name}": p for p in sorted((mission / "logs").iterdir())}
+    files |= {f"replay/start_registry/{p.name}": p for p in sorted((mission / "start_registry").iterdir())}
+    files |= {f"replay/state/{p.name}": p for p in sorted((work / "state").iterdir())}
+    return files | {f"replay/{p.name}": p for p in sorted(out.iterdir())}
+
+
+#: Outputs compared by digest rather than in full (``fnmatch`` patterns of golden paths): the replay's inputs
+#: and saved state hold seconds of samples (the CSV logs' format shows in a digest's first lines).
+DIGESTED = ("replay/logs/*", "replay/state/state.npz/*", "replay/*/registry.npz/*charge_c.npy",
+            "replay/*/registry.npz/sample_count.npy")
+
+#: The optional packages a case needs (the extras a user installs for those outputs): skipped without them.
+NEEDS = {"plan_exports": ("rasterio", "rosbags")}
+
+#: Each case by name: a function of an empty work folder returning its outputs, ``{"<case>/<name>": path}``.
+CASES: dict[str, Callable[[Path], dict[str, Path]]] = {
+    name.removeprefix("case_"): fn for name, fn in sorted(globals().items()) if name.startswith("case_")
+}
