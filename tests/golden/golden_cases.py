@@ -122,6 +122,18 @@ def case_diagnose(work: Path) -> dict[str, Path]:
 
 
 
+def case_tour(work: Path) -> dict[str, Path]:
+    """Two robots' tours of five sites (one on the wall: an error row, exit 1), the solver stopped by no improvement."""
+    path = patch_map(work)
+    sites = work / "sites.csv"
+    sites.write_text("name,x_m,y_m,value\npump,10.5,20.5,2\ngate,30.5,3.5,1\nshed,55.5,20.5,3\n"
+                     "well,50.5,5.5,1\nrock,45.5,3.5,5\n")
+    out = work / "tour"
+    _cli("tour", "--map", path, "--sites", sites, "--depot", 3.5, 12.5, "--battery-ah", 0.14, "--voltage", 24,
+         "--robots", 2, "--risk", 0.9, "--out", out, expect=1)
+    return {f"tour/{p.name}": p for p in sorted(out.iterdir())}
+
+
 def case_plan_exports(work: Path) -> dict[str, Path]:
     """The route and map for ROS 2 / Nav2 (needs the ros and geo extras: rosbags, rasterio)."""
     path = patch_map(work)

@@ -59,6 +59,7 @@ MASKED_KEYS = frozenset({
     "refresh_time_s", "update_wall_time_s", "wall_time_s",  # mission.json
     "update_wall",  # navigator.json (scalars): seconds, though its name does not say so
     "routes_per_s",  # batch.json: routes / elapsed_s
+    "pricing_time_s", "solve_time_s",  # tour.json
     # the environment: {"terrawatt": ..., "numpy": ..., "python": ...} in a model file's model.json
     "versions",
 })
