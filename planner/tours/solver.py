@@ -7,6 +7,12 @@ arrives at, rounded **up** to integer units of the largest budget / :data:`UNITS
 rounded down. Prizes are the values (to :data:`VALUE_SCALE`) times one more than all budgets'
 units, so the solver maximises the value first and spends the least energy on it second.
 
+Time is counted in integer seconds: each leg's driving time (turns included) rounded **up**, each
+site's service time rounded up as the client's ``service_duration``, and each site's time window
+``(earliest_s, latest_s)`` as the client's ``tw_early`` (rounded up) / ``tw_late`` (rounded down),
+so a tour on time in integer seconds is on time in the real ones. Every robot leaves its depot at 0;
+one that arrives early waits until ``earliest_s`` (PyVRP's semantics); service starts by ``latest_s``.
+
 The chosen tours are then checked on their own quantile (:meth:`PairPrices.tour_interval`: the
 spreads of one ground add along the whole tour); a tour above its budget tightens that robot's
 capacity by the excess and the problem is solved again, until every tour holds.
@@ -14,6 +20,7 @@ capacity by the excess and the problem is solved again, until every tour holds.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass
@@ -25,7 +32,8 @@ from terrawatt_base.errors import InvalidParameterError, OptionalDependencyError
 
 from .pricing import PairPrices
 
-__all__ = ["TourProblem", "solve_pyvrp", "solve_ortools", "solve_tours", "UNITS", "VALUE_SCALE", "SOLVERS"]
+__all__ = ["TourProblem", "solve_pyvrp", "solve_ortools", "solve_tours", "UNITS", "VALUE_SCALE", "SOLVERS",
+           "HORIZON_S"]
 
 #: Integer units of the largest budget (an arc is rounded up by less than one).
 UNITS = 100_000
@@ -34,6 +42,8 @@ VALUE_SCALE = 100
 #: Routing solvers by name.
 SOLVERS = ("pyvrp", "ortools")
 _MAX_ROUNDS = 8
+#: Seconds that stand for "never" (no window's end; a leg without a route).
+HORIZON_S = 10**12
 
 
 @dataclass(frozen=True, eq=False)
@@ -55,6 +65,14 @@ class TourProblem:
         Each candidate's prize.
     unit_j : float
         Joules per unit.
+    drive_s : ndarray of int64, shape (P, P)
+        Driving time of leg ``i -> j`` (turns included), whole seconds rounded up (:data:`HORIZON_S` where
+        no route joins them).
+    service_s : ndarray of int64, shape (P,)
+        Service time at each point, whole seconds rounded up (0 at the depots).
+    window_s : ndarray of int64, shape (P, 2)
+        When service may start at each point, ``(earliest, latest)`` in whole seconds from the departure
+        (``(0, HORIZON_S)`` without a window).
     """
 
     arc_units: np.ndarray
@@ -63,11 +81,30 @@ class TourProblem:
     site_points: np.ndarray
     prize: np.ndarray
     unit_j: float
+    drive_s: np.ndarray = None  # type: ignore[assignment]
+    service_s: np.ndarray = None  # type: ignore[assignment]
+    window_s: np.ndarray = None  # type: ignore[assignment]
+
+    def __post_init__(self) -> None:
+        n = self.arc_units.shape[0]
+        if self.drive_s is None:
+            object.__setattr__(self, "drive_s", np.zeros((n, n), dtype=np.int64))
+        if self.service_s is None:
+            object.__setattr__(self, "service_s", np.zeros(n, dtype=np.int64))
+        if self.window_s is None:
+            object.__setattr__(self, "window_s", np.tile(np.array([0, HORIZON_S], dtype=np.int64), (n, 1)))
+
+    @property
+    def has_windows(self) -> bool:
+        """Whether a candidate site has a time window."""
+        w = self.window_s[self.site_points]
+        return bool(np.any(w[:, 0] > 0) or np.any(w[:, 1] < HORIZON_S))
 
     @classmethod
     def build(cls, prices: PairPrices, q: float, budgets_j: Any, depot_points: Any, site_points: Any,
-              values: Any, service_j: Any) -> TourProblem:
-        """The problem of visiting ``site_points`` (values, service energies per point index) at risk ``q``."""
+              values: Any, service_j: Any, service_time_s: Any = None, window_s: Any = None) -> TourProblem:
+        """The problem of visiting ``site_points`` (values, service energies, service times and time windows
+        ``(earliest_s, latest_s)`` per point index; no service time and no windows by default) at risk ``q``."""
         budgets = np.asarray(budgets_j, dtype=float)
         unit = max(float(budgets.max()), 1.0) / UNITS
         cap = np.floor(budgets / unit).astype(np.int64)
@@ -78,7 +115,16 @@ class TourProblem:
         sites = np.asarray(site_points, dtype=np.int64)
         weight = int(cap.sum()) + 1
         prize = np.round(np.asarray(values, dtype=float)[sites] * VALUE_SCALE).astype(np.int64) * weight
-        return cls(units, cap, np.asarray(depot_points, dtype=np.int64), sites, prize, unit)
+        dur = np.asarray(prices.duration_s, dtype=float)
+        drive = np.where(np.isfinite(dur), np.ceil(np.minimum(dur, HORIZON_S) - 1e-9), HORIZON_S).astype(np.int64)
+        np.fill_diagonal(drive, 0)
+        n = units.shape[0]
+        service_s = (np.zeros(n, dtype=np.int64) if service_time_s is None
+                     else np.ceil(np.asarray(service_time_s, dtype=float) - 1e-9).astype(np.int64))
+        win = np.tile([0.0, float(HORIZON_S)], (n, 1)) if window_s is None else np.asarray(window_s, dtype=float)
+        windows = np.column_stack([np.ceil(np.minimum(win[:, 0], HORIZON_S) - 1e-9),
+                                   np.floor(np.minimum(win[:, 1], HORIZON_S) + 1e-9)]).astype(np.int64)
+        return cls(units, cap, np.asarray(depot_points, dtype=np.int64), sites, prize, unit, drive, service_s, windows)
 
     def tour_units(self, robot: int, sites: Any) -> int:
         """Units of the closed tour ``depot, sites..., depot`` of ``robot``."""
@@ -86,10 +132,26 @@ class TourProblem:
         seq = [d, *[int(s) for s in sites], d]
         return int(sum(self.arc_units[a, b] for a, b in zip(seq[:-1], seq[1:])))
 
+    def timeline(self, robot: int, sites: Any) -> tuple[list[int], list[int], int] | None:
+        """Arrival and start of service at each of ``sites`` (whole s) and the return to the depot on the tour
+        ``depot, sites..., depot`` of ``robot`` leaving at 0, waiting at a site reached before its earliest
+        start; ``None`` when service cannot start at some site by its latest."""
+        t, here = 0, int(self.depot_points[robot])
+        arrivals, starts = [], []
+        for s in sites:
+            s = int(s)
+            arrive = t + int(self.drive_s[here, s])
+            start = max(arrive, int(self.window_s[s, 0]))
+            if start > int(self.window_s[s, 1]):
+                return None
+            arrivals.append(arrive)
+            starts.append(start)
+            t, here = start + int(self.service_s[s]), s
+        return arrivals, starts, t + int(self.drive_s[here, int(self.depot_points[robot])])
+
     def with_capacity(self, capacity_units: Any) -> TourProblem:
         """The same problem with other capacities."""
-        return TourProblem(self.arc_units, np.asarray(capacity_units, dtype=np.int64), self.depot_points,
-                           self.site_points, self.prize, self.unit_j)
+        return dataclasses.replace(self, capacity_units=np.asarray(capacity_units, dtype=np.int64))
 
 
 def solve_pyvrp(problem: TourProblem, time_limit_s: float = 10.0, seed: int = 0,
@@ -111,15 +173,18 @@ def solve_pyvrp(problem: TourProblem, time_limit_s: float = 10.0, seed: int = 0,
     depot_of = {p: model.add_depot(locs[k]) for k, p in enumerate(depots)}
     for r, (d, cap) in enumerate(zip(problem.depot_points.tolist(), problem.capacity_units.tolist())):
         model.add_vehicle_type(1, start_depot=depot_of[d], end_depot=depot_of[d], max_distance=int(cap),
-                               name=f"robot {r}")
-    for k, prize in enumerate(problem.prize.tolist()):
-        model.add_client(locs[len(depots) + k], prize=int(prize), required=False)
+                               tw_early=0, start_late=0, name=f"robot {r}")  # leaves at 0
+    for k, (p, prize) in enumerate(zip(problem.site_points.tolist(), problem.prize.tolist())):
+        early, late = (int(v) for v in problem.window_s[p])
+        model.add_client(locs[len(depots) + k], prize=int(prize), required=False,
+                         service_duration=int(problem.service_s[p]), tw_early=early, tw_late=late)
     idx = np.asarray(order)
     sub = problem.arc_units[np.ix_(idx, idx)]
+    drive = problem.drive_s[np.ix_(idx, idx)]
     for a in range(len(order)):
         for b in range(len(order)):
             if a != b:
-                model.add_edge(locs[a], locs[b], int(sub[a, b]))
+                model.add_edge(locs[a], locs[b], int(sub[a, b]), duration=int(drive[a, b]))
     patience = max(2000, 100 * problem.site_points.size) if no_improvement is None else int(no_improvement)
     stop = MultipleCriteria([MaxRuntime(float(time_limit_s)), NoImprovement(patience)])
     # the prizes dwarf an arc (value first): let the penalty on excess energy grow as large as a prize
@@ -141,7 +206,12 @@ def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list
     ------
     OptionalDependencyError
         OR-Tools is not installed (the ``bench`` extra).
+    InvalidParameterError
+        A site has a time window (this comparison path counts only the energy).
     """
+    if problem.has_windows:
+        raise InvalidParameterError("solver 'ortools' does not take time windows (it compares the energy-only "
+                                    "problem); use solver='pyvrp' for sites with time_window_s")
     try:
         from ortools.constraint_solver import pywrapcp, routing_enums_pb2
     except ImportError as exc:
@@ -196,20 +266,22 @@ class SolverOutcome:
 
 
 def solve_tours(prices: PairPrices, q: float, budgets_j: Any, depot_points: Any, site_points: Any, values: Any,
-                service_j: Any, *, solver: str = "pyvrp", time_limit_s: float = 10.0, seed: int = 0) -> SolverOutcome:
+                service_j: Any, *, solver: str = "pyvrp", time_limit_s: float = 10.0, seed: int = 0,
+                service_time_s: Any = None, window_s: Any = None) -> SolverOutcome:
     """Solve, check each tour on its own quantile, tighten and solve again until every tour holds.
 
     Raises
     ------
     InvalidParameterError
-        An unknown solver.
+        An unknown solver; time windows with solver "ortools".
     """
     if solver not in SOLVERS:
         raise InvalidParameterError(f"solver must be one of {SOLVERS!r}, got {solver!r}")
     t0 = time.perf_counter()
     budgets = np.asarray(budgets_j, dtype=float)
     service = np.asarray(service_j, dtype=float)
-    problem = TourProblem.build(prices, q, budgets, depot_points, site_points, values, service)
+    problem = TourProblem.build(prices, q, budgets, depot_points, site_points, values, service, service_time_s,
+                                window_s)
     tours: list[list[int]] = [[] for _ in budgets]
     for rounds in range(1, _MAX_ROUNDS + 1):
         tours = (solve_pyvrp(problem, time_limit_s, seed) if solver == "pyvrp"
