@@ -35,7 +35,8 @@ def add_parser(sub: Any) -> None:
     add_map_options(p)
     p.add_argument("--sites", type=Path, required=True, metavar="CSV",
                    help="sites file (as batch's): columns name, x_m, y_m or name, lon, lat in WGS 84 degrees; "
-                        "optional value (default 1), service_energy_j, service_time_s")
+                        "optional value (default 1), service_energy_j, service_time_s, and a time window "
+                        "tw_start_s, tw_end_s (s from the departure; both columns or neither, empty cells: none)")
     add_point_options(p, "depot", "the depot every robot starts from and comes back to", required=True)
     p.add_argument("--battery-ah", type=float, required=True, metavar="AH", action=Checked, check=positive,
                    help="each robot's battery capacity (Ah)")
