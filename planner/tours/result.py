@@ -98,6 +98,8 @@ class RobotTour:
         there (s): later than the arrival when it waits for the site's time window to open.
     return_s : float
         When it is back at its depot (s; driving, waiting and service).
+    max_duration_s : float or None
+        The robot's longest tour (s), if it has one.
     """
 
     robot: str
@@ -115,6 +117,7 @@ class RobotTour:
     arrival_s: tuple[float, ...] = ()
     service_start_s: tuple[float, ...] = ()
     return_s: float = 0.0
+    max_duration_s: float | None = None
 
     @property
     def energy_at_risk_j(self) -> float:
@@ -147,6 +150,7 @@ class RobotTour:
             "duration_s": self.duration_s, "service_energy_j": list(self.service_energy_j),
             "service_time_s": list(self.service_time_s), "arrival_s": list(self.arrival_s),
             "service_start_s": list(self.service_start_s), "return_s": self.return_s,
+            "max_duration_s": self.max_duration_s,
             "legs": [leg.to_dict() for leg in self.legs],
             "soc": {"places": ["depot", *self.sites, "depot"][:len(self.legs) + 1],
                     "mean": self.soc().tolist(), "at_risk": self.soc(self.risk).tolist(),
@@ -174,7 +178,7 @@ class TourResult:
         One per robot.
     left_out : dict of str to str
         Sites not visited and why (:data:`planner.tours.tour.REASONS`: no route; too far at Q; outside its
-        time window; not worth it).
+        time window; too long for the robots' max_duration_s; not worth it).
     errors : dict of str to str
         Sites that could not be considered (off the map, on an obstacle): the error rows.
     values : dict of str to float
@@ -242,7 +246,8 @@ class TourResult:
                 lines.append("    depot -> " + " -> ".join(t.sites) + " -> depot")
                 times = [f"{n} {a:.0f}" + (f" (waits until {b:.0f})" if b > a else "")
                          for n, a, b in zip(t.sites, t.arrival_s, t.service_start_s)]
-                lines.append(f"    arrives (s): {', '.join(times)}; back at {t.return_s:.0f} s")
+                limit = f" (at most {t.max_duration_s:g} s)" if t.max_duration_s is not None else ""
+                lines.append(f"    arrives (s): {', '.join(times)}; back at {t.return_s:.0f} s{limit}")
         reasons: dict[str, list[str]] = {}
         for name, why in {**self.errors, **self.left_out}.items():
             reasons.setdefault(why.split(":")[0], []).append(name)

@@ -1,4 +1,4 @@
-"""The sites of a tour (name, place, value, service, time window) and the robots that visit them (battery, reserve, depot)."""
+"""The sites of a tour (name, place, value, service, time window) and the robots that visit them (battery, depot)."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import numpy as np
 from energy import Battery
 from terrain import TerrainMap
 from terrain.georef import lonlat_to_xy
-from terrawatt_base.checks import readonly, real_array
+from terrawatt_base.checks import check_real, readonly, real_array
 from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..batch_pairs import read_sites_csv
@@ -84,8 +84,8 @@ class TourSites:
     time_window_s : ndarray, shape (N, 2)
         When service may start at each site, ``(earliest_s, latest_s)`` in seconds from the robots'
         departure; given as one pair or ``None`` (no window) per site, or ``None`` for no windows at all.
-        A site without a window holds (and may be given) ``(0, inf)``. A robot arriving early waits until ``earliest_s``;
-        one that cannot arrive by ``latest_s`` cannot visit the site.
+        A site without a window holds (and may be given) ``(0, inf)``. A robot arriving early waits
+        until ``earliest_s``; one that cannot arrive by ``latest_s`` cannot visit the site.
 
     Raises
     ------
@@ -184,6 +184,9 @@ class TourRobot:
         Where its tour starts and ends (m).
     name : str
         How the result calls it.
+    max_duration_s : float, optional
+        The longest its tour may last, from leaving the depot at 0 to being back (s; driving, waiting and
+        service); ``None``: no limit.
 
     Examples
     --------
@@ -195,6 +198,7 @@ class TourRobot:
     battery: Battery
     depot_xy_m: tuple[float, float]
     name: str = "robot 0"
+    max_duration_s: float | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.battery, Battery):
@@ -205,6 +209,9 @@ class TourRobot:
         if not isinstance(self.name, str) or not self.name:
             raise InvalidParameterError(f"name must be a non-empty string, got {self.name!r}")
         object.__setattr__(self, "depot_xy_m", (float(xy[0]), float(xy[1])))
+        if self.max_duration_s is not None:
+            object.__setattr__(self, "max_duration_s", check_real("max_duration_s", self.max_duration_s, low=0.0,
+                                                                  low_inclusive=False))
 
     @property
     def budget_j(self) -> float:

@@ -11,7 +11,8 @@ Time is counted in integer seconds: each leg's driving time (turns included) rou
 site's service time rounded up as the client's ``service_duration``, and each site's time window
 ``(earliest_s, latest_s)`` as the client's ``tw_early`` (rounded up) / ``tw_late`` (rounded down),
 so a tour on time in integer seconds is on time in the real ones. Every robot leaves its depot at 0;
-one that arrives early waits until ``earliest_s`` (PyVRP's semantics); service starts by ``latest_s``.
+one that arrives early waits until ``earliest_s`` (PyVRP's semantics); service starts by ``latest_s``;
+a robot's ``max_duration_s`` (rounded down) is its vehicle's ``shift_duration``.
 
 The chosen tours are then checked on their own quantile (:meth:`PairPrices.tour_interval`: the
 spreads of one ground add along the whole tour); a tour above its budget tightens that robot's
@@ -73,6 +74,8 @@ class TourProblem:
     window_s : ndarray of int64, shape (P, 2)
         When service may start at each point, ``(earliest, latest)`` in whole seconds from the departure
         (``(0, HORIZON_S)`` without a window).
+    shift_s : ndarray of int64, shape (R,)
+        Each robot's longest tour, whole seconds rounded down (:data:`HORIZON_S`: no limit).
     """
 
     arc_units: np.ndarray
@@ -84,6 +87,7 @@ class TourProblem:
     drive_s: np.ndarray = None  # type: ignore[assignment]
     service_s: np.ndarray = None  # type: ignore[assignment]
     window_s: np.ndarray = None  # type: ignore[assignment]
+    shift_s: np.ndarray = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         n = self.arc_units.shape[0]
@@ -93,6 +97,8 @@ class TourProblem:
             object.__setattr__(self, "service_s", np.zeros(n, dtype=np.int64))
         if self.window_s is None:
             object.__setattr__(self, "window_s", np.tile(np.array([0, HORIZON_S], dtype=np.int64), (n, 1)))
+        if self.shift_s is None:
+            object.__setattr__(self, "shift_s", np.full(len(self.depot_points), HORIZON_S, dtype=np.int64))
 
     @property
     def has_windows(self) -> bool:
@@ -102,9 +108,11 @@ class TourProblem:
 
     @classmethod
     def build(cls, prices: PairPrices, q: float, budgets_j: Any, depot_points: Any, site_points: Any,
-              values: Any, service_j: Any, service_time_s: Any = None, window_s: Any = None) -> TourProblem:
+              values: Any, service_j: Any, service_time_s: Any = None, window_s: Any = None,
+              max_duration_s: Any = None) -> TourProblem:
         """The problem of visiting ``site_points`` (values, service energies, service times and time windows
-        ``(earliest_s, latest_s)`` per point index; no service time and no windows by default) at risk ``q``."""
+        ``(earliest_s, latest_s)`` per point index; no service time and no windows by default) at risk ``q``, each
+        robot's tour lasting at most its ``max_duration_s`` (``None`` or inf: no limit)."""
         budgets = np.asarray(budgets_j, dtype=float)
         unit = max(float(budgets.max()), 1.0) / UNITS
         cap = np.floor(budgets / unit).astype(np.int64)
@@ -124,7 +132,11 @@ class TourProblem:
         win = np.tile([0.0, float(HORIZON_S)], (n, 1)) if window_s is None else np.asarray(window_s, dtype=float)
         windows = np.column_stack([np.ceil(np.minimum(win[:, 0], HORIZON_S) - 1e-9),
                                    np.floor(np.minimum(win[:, 1], HORIZON_S) + 1e-9)]).astype(np.int64)
-        return cls(units, cap, np.asarray(depot_points, dtype=np.int64), sites, prize, unit, drive, service_s, windows)
+        shift = (np.full(len(budgets), float(HORIZON_S)) if max_duration_s is None
+                 else np.array([HORIZON_S if v is None else v for v in max_duration_s], dtype=float))
+        shift_s = np.floor(np.minimum(shift, HORIZON_S) + 1e-9).astype(np.int64)
+        return cls(units, cap, np.asarray(depot_points, dtype=np.int64), sites, prize, unit, drive, service_s, windows,
+                   shift_s)
 
     def tour_units(self, robot: int, sites: Any) -> int:
         """Units of the closed tour ``depot, sites..., depot`` of ``robot``."""
@@ -135,7 +147,8 @@ class TourProblem:
     def timeline(self, robot: int, sites: Any) -> tuple[list[int], list[int], int] | None:
         """Arrival and start of service at each of ``sites`` (whole s) and the return to the depot on the tour
         ``depot, sites..., depot`` of ``robot`` leaving at 0, waiting at a site reached before its earliest
-        start; ``None`` when service cannot start at some site by its latest."""
+        start; ``None`` when service cannot start at some site by its latest or the robot is back after its
+        longest tour."""
         t, here = 0, int(self.depot_points[robot])
         arrivals, starts = [], []
         for s in sites:
@@ -147,7 +160,8 @@ class TourProblem:
             arrivals.append(arrive)
             starts.append(start)
             t, here = start + int(self.service_s[s]), s
-        return arrivals, starts, t + int(self.drive_s[here, int(self.depot_points[robot])])
+        back = t + int(self.drive_s[here, int(self.depot_points[robot])])
+        return (arrivals, starts, back) if back <= int(self.shift_s[robot]) else None
 
     def with_capacity(self, capacity_units: Any) -> TourProblem:
         """The same problem with other capacities."""
@@ -173,7 +187,8 @@ def solve_pyvrp(problem: TourProblem, time_limit_s: float = 10.0, seed: int = 0,
     depot_of = {p: model.add_depot(locs[k]) for k, p in enumerate(depots)}
     for r, (d, cap) in enumerate(zip(problem.depot_points.tolist(), problem.capacity_units.tolist())):
         model.add_vehicle_type(1, start_depot=depot_of[d], end_depot=depot_of[d], max_distance=int(cap),
-                               tw_early=0, start_late=0, name=f"robot {r}")  # leaves at 0
+                               tw_early=0, start_late=0, shift_duration=int(problem.shift_s[r]),
+                               name=f"robot {r}")  # leaves at 0
     for k, (p, prize) in enumerate(zip(problem.site_points.tolist(), problem.prize.tolist())):
         early, late = (int(v) for v in problem.window_s[p])
         model.add_client(locs[len(depots) + k], prize=int(prize), required=False,
@@ -207,11 +222,11 @@ def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list
     OptionalDependencyError
         OR-Tools is not installed (the ``bench`` extra).
     InvalidParameterError
-        A site has a time window (this comparison path counts only the energy).
+        A site has a time window or a robot a longest tour (this comparison path counts only the energy).
     """
-    if problem.has_windows:
-        raise InvalidParameterError("solver 'ortools' does not take time windows (it compares the energy-only "
-                                    "problem); use solver='pyvrp' for sites with time_window_s")
+    if problem.has_windows or np.any(problem.shift_s < HORIZON_S):
+        raise InvalidParameterError("solver 'ortools' does not take time windows nor robots' max_duration_s (it "
+                                    "compares the energy-only problem); use solver='pyvrp' for them")
     try:
         from ortools.constraint_solver import pywrapcp, routing_enums_pb2
     except ImportError as exc:
@@ -267,7 +282,7 @@ class SolverOutcome:
 
 def solve_tours(prices: PairPrices, q: float, budgets_j: Any, depot_points: Any, site_points: Any, values: Any,
                 service_j: Any, *, solver: str = "pyvrp", time_limit_s: float = 10.0, seed: int = 0,
-                service_time_s: Any = None, window_s: Any = None) -> SolverOutcome:
+                service_time_s: Any = None, window_s: Any = None, max_duration_s: Any = None) -> SolverOutcome:
     """Solve, check each tour on its own quantile, tighten and solve again until every tour holds.
 
     Raises
@@ -281,7 +296,7 @@ def solve_tours(prices: PairPrices, q: float, budgets_j: Any, depot_points: Any,
     budgets = np.asarray(budgets_j, dtype=float)
     service = np.asarray(service_j, dtype=float)
     problem = TourProblem.build(prices, q, budgets, depot_points, site_points, values, service, service_time_s,
-                                window_s)
+                                window_s, max_duration_s)
     tours: list[list[int]] = [[] for _ in budgets]
     for rounds in range(1, _MAX_ROUNDS + 1):
         tours = (solve_pyvrp(problem, time_limit_s, seed) if solver == "pyvrp"

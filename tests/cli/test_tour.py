@@ -83,3 +83,10 @@ def test_cli_reads_time_windows_and_writes_the_arrival_times(tmp_path, capsys, w
     assert 400.0 <= start["shed"] <= 900.0 and len(robot["arrival_s"]) == 2 and robot["return_s"] > start["shed"]
     assert robot["service_time_s"] == [{"pump": 10.0, "shed": 0.0}[s] for s in robot["sites"]]
     assert [e["site"] for e in doc["left_out"]] == ["shut"] and "outside its time window" in text
+    rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "1",
+               "--voltage", "24", "--max-duration", "5000", "--out", str(tmp_path / "out2")])
+    assert rc == 0 and "at most 5000 s" in capsys.readouterr().out
+    assert json.loads((tmp_path / "out2" / "tour.json").read_text())["robots"][0]["max_duration_s"] == 5000.0
+    rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "1",
+               "--max-duration", "0", "--out", str(tmp_path / "out3")])
+    assert rc == 2 and "--max-duration" in capsys.readouterr().err

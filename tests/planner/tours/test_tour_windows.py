@@ -1,4 +1,4 @@
-"""Time windows and service time of a tour (planner.tours): the exhaustive optimum with windows, a window that
+"""Time windows, service time and longest tours (planner.tours): the exhaustive optimum with windows, a window that
 changes the order, a site outside its window, the timeline in the result, the errors."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import pytest
 from energy import Battery
 from planner import EnergyCost
 from planner.tours import TourProblem, TourRobot, TourSites, plan_tour, price_pairs, read_tour_sites_csv
-from planner.tours.tour import OUTSIDE_WINDOW, TOO_FAR
+from planner.tours.tour import NOT_WORTH_IT, OUTSIDE_WINDOW, TOO_FAR, TOO_LONG
 from terrain import DataError, InvalidParameterError, flat_map
 
 from tour_samples import hills_cost, ridge_map  # noqa: F401  (fixture)
@@ -150,3 +150,18 @@ def test_the_ortools_path_refuses_windows():
     sites = TourSites(("a",), [[5.0, 5.0]], time_window_s=[(0.0, 100.0)])
     with pytest.raises(InvalidParameterError, match="solver 'ortools' does not take time windows"):
         plan_tour(cost, sites, TourRobot(Battery(1.0, 24.0), (2.0, 2.0)), solver="ortools")
+
+
+def test_a_robots_longest_tour_bounds_its_sites():
+    cost = EnergyCost.from_presets(flat_map((40, 40), 1.0))
+    sites = TourSites(("a", "b", "far"), [[10.0, 2.0], [2.0, 10.0], [38.0, 38.0]], value=[2.0, 1.0, 5.0],
+                      service_time_s=[30.0, 30.0, 0.0])
+    free = plan_tour(cost, sites, TourRobot(Battery(1.0, 24.0), (2.0, 2.0)))
+    assert set(free.visited) == {"a", "b", "far"} and free.tours[0].return_s > 100.0
+    # about 16 s each way to a and b, 30 s at each: one of them fits in 80 s, not both; far never does
+    res = plan_tour(cost, sites, TourRobot(Battery(1.0, 24.0), (2.0, 2.0), max_duration_s=80.0))
+    assert res.tours[0].sites == ("a",) and res.tours[0].return_s <= 80.0
+    assert res.left_out == {"b": NOT_WORTH_IT, "far": TOO_LONG}
+    assert res.to_dict()["robots"][0]["max_duration_s"] == 80.0 and "at most 80 s" in res.summary()
+    with pytest.raises(InvalidParameterError, match="max_duration_s"):
+        TourRobot(Battery(1.0, 24.0), (2.0, 2.0), max_duration_s=0.0)
