@@ -257,8 +257,10 @@ class TourResult:
         lines.append(f"pricing {self.pricing_time_s:.2f} s ({self.where}), solving {self.solve_time_s:.2f} s "
                      f"({self.solver}, {self.solve_rounds} round(s))")
         if self.status == "nothing reachable":
-            lines.append("nothing reachable: no site can be visited and left with the reserve at Q; "
-                         "a larger battery, a lower reserve or a lower risk level")
+            timed = any(why.startswith(("outside its time window", "too long")) for why in self.left_out.values())
+            lines.append("nothing reachable: no site can be visited and left with the reserve at Q"
+                         + (" in time" if timed else "") + "; a larger battery, a lower reserve or a lower risk level"
+                         + (", wider time windows or a longer max duration" if timed else ""))
         return "\n".join(lines)
 
     def to_dict(self) -> dict[str, Any]:

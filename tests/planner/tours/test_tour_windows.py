@@ -112,6 +112,9 @@ def test_a_site_whose_window_closes_before_any_robot_arrives_is_left_out_as_such
     doc = res.to_dict()
     assert doc["robots"][0]["service_start_s"] == [100.0] and doc["time_windows_s"]["shut"] == [0.0, 20.0]
     assert {e["reason"] for e in doc["left_out"]} == {OUTSIDE_WINDOW, TOO_FAR}
+    alone = plan_tour(cost, TourSites(("shut",), [[30.0, 10.0]], time_window_s=[(0.0, 20.0)]),
+                      TourRobot(Battery(0.1, 24.0), (2.0, 2.0)))
+    assert alone.status == "nothing reachable" and "wider time windows" in alone.summary()
 
 
 def test_bad_windows_raise_the_librarys_errors_naming_the_site(tmp_path):
