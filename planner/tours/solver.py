@@ -217,16 +217,15 @@ def solve_pyvrp(problem: TourProblem, time_limit_s: float = 10.0, seed: int = 0,
 def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list[int]]:
     """Each robot's sites by OR-Tools' routing solver (disjunctions with the prizes as penalties), for comparison.
 
+    With time windows or longest tours, a time dimension (transit: the service where the arc leaves, then
+    the drive; slack: the waiting) holds each site's start of service in its window and each robot's
+    return within its longest tour, as PyVRP does.
+
     Raises
     ------
     OptionalDependencyError
         OR-Tools is not installed (the ``bench`` extra).
-    InvalidParameterError
-        A site has a time window or a robot a longest tour (this comparison path counts only the energy).
     """
-    if problem.has_windows or np.any(problem.shift_s < HORIZON_S):
-        raise InvalidParameterError("solver 'ortools' does not take time windows nor robots' max_duration_s (it "
-                                    "compares the energy-only problem); use solver='pyvrp' for them")
     try:
         from ortools.constraint_solver import pywrapcp, routing_enums_pb2
     except ImportError as exc:
@@ -251,6 +250,8 @@ def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list
     routing.AddDimensionWithVehicleCapacity(cb, 0, [int(c) for c in problem.capacity_units], True, "energy")
     for k, prize in enumerate(problem.prize.tolist()):
         routing.AddDisjunction([manager.NodeToIndex(len(depots) + k)], int(prize))
+    if problem.has_windows or np.any(problem.shift_s < HORIZON_S):
+        _ortools_time(problem, routing, manager, idx, len(depots))
     params = pywrapcp.DefaultRoutingSearchParameters()
     params.first_solution_strategy = routing_enums_pb2.FirstSolutionStrategy.PATH_CHEAPEST_ARC
     params.local_search_metaheuristic = routing_enums_pb2.LocalSearchMetaheuristic.GUIDED_LOCAL_SEARCH
@@ -267,6 +268,25 @@ def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list
                 tours[r].append(int(problem.site_points[node - len(depots)]))
             i = solution.Value(routing.NextVar(i))
     return tours
+
+
+def _ortools_time(problem: TourProblem, routing: Any, manager: Any, idx: np.ndarray, n_depots: int) -> None:
+    """OR-Tools' time dimension: leave at 0, wait at will, serve each site in its window, be back in time."""
+    drive = problem.drive_s[np.ix_(idx, idx)].tolist()
+    service = problem.service_s[idx].tolist()
+
+    def travel(i: int, j: int) -> int:
+        a, b = manager.IndexToNode(i), manager.IndexToNode(j)
+        return service[a] + drive[a][b]
+
+    horizon = HORIZON_S - 1  # a leg without a route never fits
+    routing.AddDimension(routing.RegisterTransitCallback(travel), horizon, horizon, True, "time")
+    clock = routing.GetDimensionOrDie("time")
+    for k, p in enumerate(problem.site_points.tolist()):
+        early, late = (int(v) for v in problem.window_s[p])
+        clock.CumulVar(manager.NodeToIndex(n_depots + k)).SetRange(early, min(late, horizon))
+    for r, shift in enumerate(problem.shift_s.tolist()):
+        clock.CumulVar(routing.End(r)).SetMax(min(int(shift), horizon))
 
 
 @dataclass(frozen=True)
@@ -288,7 +308,7 @@ def solve_tours(prices: PairPrices, q: float, budgets_j: Any, depot_points: Any,
     Raises
     ------
     InvalidParameterError
-        An unknown solver; time windows with solver "ortools".
+        An unknown solver.
     """
     if solver not in SOLVERS:
         raise InvalidParameterError(f"solver must be one of {SOLVERS!r}, got {solver!r}")

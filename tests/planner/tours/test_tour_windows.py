@@ -24,7 +24,7 @@ def _problem(cost: EnergyCost, sites: TourSites, robots: list[TourRobot], q: flo
     return TourProblem.build(prices, q, [r.budget_j for r in robots], [0] * len(robots), np.arange(1, len(pts)),
                              np.concatenate([[0.0], sites.value]), np.concatenate([[0.0], sites.service_energy_j]),
                              np.concatenate([[0.0], sites.service_time_s]),
-                             np.vstack([[0.0, np.inf], sites.time_window_s]))
+                             np.vstack([[0.0, np.inf], sites.time_window_s]), [r.max_duration_s for r in robots])
 
 
 def _on_time(problem: TourProblem, tour: tuple[int, ...]) -> bool:
@@ -36,7 +36,7 @@ def _on_time(problem: TourProblem, tour: tuple[int, ...]) -> bool:
         if start > problem.window_s[s, 1]:
             return False
         t, here = start + int(problem.service_s[s]), s
-    return True
+    return t + int(problem.drive_s[here, problem.depot_points[0]]) <= problem.shift_s[0]  # back within its longest
 
 
 def _exhaustive(problem: TourProblem, windows: bool = True) -> int:
@@ -52,20 +52,21 @@ def _exhaustive(problem: TourProblem, windows: bool = True) -> int:
     return best
 
 
+def _windowed_sites(seed: int, n: int, depot: tuple[float, float]) -> TourSites:
+    """``n`` sites on the hills map, a third only early, a third only late (150-190 s), the others open."""
+    rng = np.random.default_rng(seed)
+    xy = rng.uniform(3.0, 37.0, size=(n, 2))
+    straight_s = np.hypot(*(xy - depot).T) / 0.5  # a lower bound of each site's first arrival (0.5 m/s)
+    windows = [(0.0, 1.6 * straight_s[k] + 5.0) if k % 3 == 0 else (150.0, 190.0) if k % 3 == 1 else None
+               for k in range(n)]
+    return TourSites(tuple(f"s{k}" for k in range(n)), xy, value=rng.integers(1, 6, n).astype(float),
+                     service_time_s=rng.uniform(0.0, 15.0, n), time_window_s=windows)
+
+
 @pytest.mark.parametrize("seed", [5, 11])
 def test_the_tours_value_with_windows_equals_the_exhaustive_optimum(hills_cost, seed):
-    rng = np.random.default_rng(seed)
-    n = 8
-    xy = rng.uniform(3.0, 37.0, size=(n, 2))
     depot = (20.0, 20.0)
-    straight_s = np.hypot(*(xy - depot).T) / 0.5  # a lower bound of each site's first arrival (0.5 m/s)
-    windows: list[tuple[float, float] | None] = []
-    for k in range(n):  # some sites only early, some only late, the others open
-        kind = k % 3
-        windows.append((0.0, 1.6 * straight_s[k] + 5.0) if kind == 0 else
-                       (150.0, 150.0 + 40.0) if kind == 1 else None)
-    sites = TourSites(tuple(f"s{k}" for k in range(n)), xy, value=rng.integers(1, 6, n).astype(float),
-                      service_time_s=rng.uniform(0.0, 15.0, n), time_window_s=windows)
+    sites = _windowed_sites(seed, 8, depot)
     robot = TourRobot(Battery(0.2, 24.0, min_reserve_pct=20.0), depot)
     res = plan_tour(hills_cost, sites, robot, risk=0.9, seed=1)
     problem = _problem(hills_cost, sites, [robot], 0.9)
@@ -147,12 +148,21 @@ def test_bad_windows_raise_the_librarys_errors_naming_the_site(tmp_path):
     assert read.time_window_s.tolist() == [[5.0, 60.0], [0.0, np.inf]] and read.service_time_s.tolist() == [12.0, 0.0]
 
 
-def test_the_ortools_path_refuses_windows():
+@pytest.mark.parametrize("seed, shift_s", [(2, 10_000), (0, 200)])  # the windows bind; the longest tour binds
+def test_the_ortools_path_keeps_the_windows_and_finds_the_same_optimum(hills_cost, seed, shift_s):
     pytest.importorskip("ortools", reason="the comparison solver needs the bench extra")
-    cost = EnergyCost.from_presets(flat_map((20, 20), 1.0))
-    sites = TourSites(("a",), [[5.0, 5.0]], time_window_s=[(0.0, 100.0)])
-    with pytest.raises(InvalidParameterError, match="solver 'ortools' does not take time windows"):
-        plan_tour(cost, sites, TourRobot(Battery(1.0, 24.0), (2.0, 2.0)), solver="ortools")
+    sites = _windowed_sites(seed, 6, (20.0, 20.0))
+    robot = TourRobot(Battery(0.2, 24.0, min_reserve_pct=20.0), (20.0, 20.0), max_duration_s=shift_s)
+    problem = _problem(hills_cost, sites, [robot], 0.9)
+    best = _exhaustive(problem)
+    assert _exhaustive(problem, windows=False) > best
+    prices = plan_tour(hills_cost, sites, robot).prices
+    res = plan_tour(hills_cost, sites, robot, solver="ortools", time_limit_s=1.0, prices=prices)
+    assert round(res.value * 100) * (int(problem.capacity_units.sum()) + 1) == best
+    w = dict(zip(sites.names, sites.time_window_s.tolist()))
+    tour = res.tours[0]
+    assert all(w[n][0] <= t <= w[n][1] for n, t in zip(tour.sites, tour.service_start_s))
+    assert tour.return_s <= shift_s
 
 
 def test_a_robots_longest_tour_bounds_its_sites():
