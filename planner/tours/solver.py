@@ -10,7 +10,8 @@ units, so the solver maximises the value first and spends the least energy on it
 Time is counted in integer seconds: each leg's driving time (turns included) rounded **up**, each
 site's service time rounded up as the client's ``service_duration``, and each site's time window
 ``(earliest_s, latest_s)`` as the client's ``tw_early`` (rounded up) / ``tw_late`` (rounded down),
-so a tour on time in integer seconds is on time in the real ones. Every robot leaves its depot at 0;
+so a tour on time in integer seconds is on time in the real ones (a window that holds no whole
+second becomes ``(0, 0)``: closed to every robot that has to drive there). Every robot leaves its depot at 0;
 one that arrives early waits until ``earliest_s`` (PyVRP's semantics); service starts by ``latest_s``;
 a robot's ``max_duration_s`` (rounded down) is its vehicle's ``shift_duration``.
 
@@ -132,6 +133,7 @@ class TourProblem:
         win = np.tile([0.0, float(HORIZON_S)], (n, 1)) if window_s is None else np.asarray(window_s, dtype=float)
         windows = np.column_stack([np.ceil(np.minimum(win[:, 0], HORIZON_S) - 1e-9),
                                    np.floor(np.minimum(win[:, 1], HORIZON_S) + 1e-9)]).astype(np.int64)
+        windows[windows[:, 0] > windows[:, 1]] = 0  # no whole second inside: only a site at the depot is on time
         shift = (np.full(len(budgets), float(HORIZON_S)) if max_duration_s is None
                  else np.array([HORIZON_S if v is None else v for v in max_duration_s], dtype=float))
         shift_s = np.floor(np.minimum(shift, HORIZON_S) + 1e-9).astype(np.int64)
