@@ -35,7 +35,8 @@ def add_parser(sub: Any) -> None:
     add_map_options(p)
     p.add_argument("--sites", type=Path, required=True, metavar="CSV",
                    help="sites file (as batch's): columns name, x_m, y_m or name, lon, lat in WGS 84 degrees; "
-                        "optional value (default 1), service_energy_j, service_time_s")
+                        "optional value (default 1), service_energy_j, service_time_s, and a time window "
+                        "tw_start_s, tw_end_s (s from the departure; both columns or neither, empty cells: none)")
     add_point_options(p, "depot", "the depot every robot starts from and comes back to", required=True)
     p.add_argument("--battery-ah", type=float, required=True, metavar="AH", action=Checked, check=positive,
                    help="each robot's battery capacity (Ah)")
@@ -44,6 +45,9 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--reserve", "--reserve-pct", dest="reserve", type=float, default=20.0, metavar="PCT",
                    action=Checked, check=bounded("a percentage in [0, 100)", lambda v: 0.0 <= v < 100.0),
                    help="share of the battery kept in reserve (%%, default 20)")
+    p.add_argument("--max-duration", type=float, default=None, metavar="S", action=Checked, check=positive,
+                   help="each robot's longest tour, from leaving the depot to being back (s; driving, waiting and "
+                        "service; default: no limit)")
     p.add_argument("--robots", type=int, default=1, metavar="N", action=Checked,
                    check=bounded("an integer >= 1", lambda v: v >= 1), help="robots sharing the sites (default 1)")
     p.add_argument("--risk", dest="tour_risk", type=float, default=0.9, metavar="Q", action=Checked,
@@ -76,9 +80,10 @@ def run_tour(args: argparse.Namespace) -> int:
     with dask_client_arg(args) as client:
         result = plan_tour_on_map(
             tmap, sites, depot, battery_ah=args.battery_ah, voltage_v=args.voltage, reserve_pct=args.reserve,
-            n_robots=int(args.robots), risk=args.tour_risk, robot=args.robot, speed_mps=args.speed,
-            max_slope_deg=args.max_slope_deg, unknown_ground=ground, model=model, model_ground=args.model_ground,
-            time_limit_s=args.time_limit, seed=args.seed, client=client, map_label=label)
+            n_robots=int(args.robots), max_duration_s=args.max_duration, risk=args.tour_risk, robot=args.robot,
+            speed_mps=args.speed, max_slope_deg=args.max_slope_deg, unknown_ground=ground, model=model,
+            model_ground=args.model_ground, time_limit_s=args.time_limit, seed=args.seed, client=client,
+            map_label=label)
     with warn_figures():
         written = result.write(args.out, bag=args.bag)
     print(result.summary())

@@ -26,8 +26,9 @@ from .pricing import PairPrices
 
 __all__ = ["TourLeg", "RobotTour", "TourResult", "TOUR_FORMAT_VERSION", "TOUR_STATUSES"]
 
-#: Version of tour.json (format ``terrawatt-tour``).
-TOUR_FORMAT_VERSION = 1
+#: Version of tour.json (format ``terrawatt-tour``); 2: each robot's timeline (service time, arrival, start of
+#: service, return) and the sites' time windows.
+TOUR_FORMAT_VERSION = 2
 #: What a tour query answers: tours were planned, or no site is reachable at Q by any robot.
 TOUR_STATUSES = ("planned", "nothing reachable")
 
@@ -90,6 +91,15 @@ class RobotTour:
         What the battery may spend above its reserve (J).
     risk : float
         The level Q the tour holds at.
+    service_time_s : tuple of float
+        Time spent at each visited site (s).
+    arrival_s, service_start_s : tuple of float
+        When the robot, leaving its depot at 0, arrives at each visited site and when it starts its service
+        there (s): later than the arrival when it waits for the site's time window to open.
+    return_s : float
+        When it is back at its depot (s; driving, waiting and service).
+    max_duration_s : float or None
+        The robot's longest tour (s), if it has one.
     """
 
     robot: str
@@ -103,6 +113,11 @@ class RobotTour:
     cumulative: tuple[RouteEnergyInterval, ...]
     budget_j: float
     risk: float
+    service_time_s: tuple[float, ...] = ()
+    arrival_s: tuple[float, ...] = ()
+    service_start_s: tuple[float, ...] = ()
+    return_s: float = 0.0
+    max_duration_s: float | None = None
 
     @property
     def energy_at_risk_j(self) -> float:
@@ -111,7 +126,7 @@ class RobotTour:
 
     @property
     def duration_s(self) -> float:
-        """Driving time of the tour (s; service time not included)."""
+        """Driving time of the tour (s; service time and waiting not included: :attr:`return_s` counts them)."""
         return float(sum(leg.duration_s for leg in self.legs))
 
     def soc(self, q: float | None = None) -> np.ndarray:
@@ -133,6 +148,9 @@ class RobotTour:
             "reserve_pct": self.battery.min_reserve_pct, "budget_j": self.budget_j,
             "energy": self.energy.to_dict(), "energy_at_risk_j": self.energy_at_risk_j,
             "duration_s": self.duration_s, "service_energy_j": list(self.service_energy_j),
+            "service_time_s": list(self.service_time_s), "arrival_s": list(self.arrival_s),
+            "service_start_s": list(self.service_start_s), "return_s": self.return_s,
+            "max_duration_s": self.max_duration_s,
             "legs": [leg.to_dict() for leg in self.legs],
             "soc": {"places": ["depot", *self.sites, "depot"][:len(self.legs) + 1],
                     "mean": self.soc().tolist(), "at_risk": self.soc(self.risk).tolist(),
@@ -159,7 +177,8 @@ class TourResult:
     tours : tuple of RobotTour
         One per robot.
     left_out : dict of str to str
-        Sites not visited and why (too far at Q; not worth it; no route).
+        Sites not visited and why (:data:`planner.tours.tour.REASONS`: no route; too far at Q; outside its
+        time window; too long for the robots' max_duration_s; not worth it).
     errors : dict of str to str
         Sites that could not be considered (off the map, on an obstacle): the error rows.
     values : dict of str to float
@@ -178,6 +197,8 @@ class TourResult:
         Where each site is (m).
     terrain, cost, prices
         The map, its edge costs and the priced legs (not in the JSON).
+    time_windows_s : dict of str to (float, float)
+        The sites that have a time window: ``(earliest_s, latest_s)`` from the departure.
     """
 
     status: str
@@ -196,6 +217,7 @@ class TourResult:
     terrain: TerrainMap = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
     cost: EnergyCost = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
     prices: PairPrices | None = field(default=None, repr=False, compare=False)
+    time_windows_s: dict[str, tuple[float, float]] = field(default_factory=dict)
 
     @property
     def value(self) -> float:
@@ -222,6 +244,10 @@ class TourResult:
                 f"(reserve {t.battery.min_reserve_pct:g} %)")
             if t.sites:
                 lines.append("    depot -> " + " -> ".join(t.sites) + " -> depot")
+                times = [f"{n} {a:.0f}" + (f" (waits until {b:.0f})" if b > a else "")
+                         for n, a, b in zip(t.sites, t.arrival_s, t.service_start_s)]
+                limit = f" (at most {t.max_duration_s:g} s)" if t.max_duration_s is not None else ""
+                lines.append(f"    arrives (s): {', '.join(times)}; back at {t.return_s:.0f} s{limit}")
         reasons: dict[str, list[str]] = {}
         for name, why in {**self.errors, **self.left_out}.items():
             reasons.setdefault(why.split(":")[0], []).append(name)
@@ -231,8 +257,10 @@ class TourResult:
         lines.append(f"pricing {self.pricing_time_s:.2f} s ({self.where}), solving {self.solve_time_s:.2f} s "
                      f"({self.solver}, {self.solve_rounds} round(s))")
         if self.status == "nothing reachable":
-            lines.append("nothing reachable: no site can be visited and left with the reserve at Q; "
-                         "a larger battery, a lower reserve or a lower risk level")
+            timed = any(why.startswith(("outside its time window", "too long")) for why in self.left_out.values())
+            lines.append("nothing reachable: no site can be visited and left with the reserve at Q"
+                         + (" in time" if timed else "") + "; a larger battery, a lower reserve or a lower risk level"
+                         + (", wider time windows or a longer max duration" if timed else ""))
         return "\n".join(lines)
 
     def to_dict(self) -> dict[str, Any]:
@@ -243,7 +271,8 @@ class TourResult:
             "left_out": [{"site": k, "reason": v} for k, v in self.left_out.items()],
             "errors": [{"site": k, "error": v} for k, v in self.errors.items()],
             "values": dict(self.values),
-            "sites_xy_m": {k: list(v) for k, v in self.sites_xy_m.items()}, "solver": self.solver,
+            "sites_xy_m": {k: list(v) for k, v in self.sites_xy_m.items()},
+            "time_windows_s": {k: list(v) for k, v in self.time_windows_s.items()}, "solver": self.solver,
             "pricing_time_s": self.pricing_time_s,
             "solve_time_s": self.solve_time_s, "solve_rounds": self.solve_rounds, "where": self.where,
         })

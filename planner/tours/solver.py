@@ -7,6 +7,14 @@ arrives at, rounded **up** to integer units of the largest budget / :data:`UNITS
 rounded down. Prizes are the values (to :data:`VALUE_SCALE`) times one more than all budgets'
 units, so the solver maximises the value first and spends the least energy on it second.
 
+Time is counted in integer seconds: each leg's driving time (turns included) rounded **up**, each
+site's service time rounded up as the client's ``service_duration``, and each site's time window
+``(earliest_s, latest_s)`` as the client's ``tw_early`` (rounded up) / ``tw_late`` (rounded down),
+so a tour on time in integer seconds is on time in the real ones (a window that holds no whole
+second becomes ``(0, 0)``: closed to every robot that has to drive there). Every robot leaves its depot at 0;
+one that arrives early waits until ``earliest_s`` (PyVRP's semantics); service starts by ``latest_s``;
+a robot's ``max_duration_s`` (rounded down) is its vehicle's ``shift_duration``.
+
 The chosen tours are then checked on their own quantile (:meth:`PairPrices.tour_interval`: the
 spreads of one ground add along the whole tour); a tour above its budget tightens that robot's
 capacity by the excess and the problem is solved again, until every tour holds.
@@ -14,6 +22,7 @@ capacity by the excess and the problem is solved again, until every tour holds.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass
@@ -25,7 +34,8 @@ from terrawatt_base.errors import InvalidParameterError, OptionalDependencyError
 
 from .pricing import PairPrices
 
-__all__ = ["TourProblem", "solve_pyvrp", "solve_ortools", "solve_tours", "UNITS", "VALUE_SCALE", "SOLVERS"]
+__all__ = ["TourProblem", "solve_pyvrp", "solve_ortools", "solve_tours", "UNITS", "VALUE_SCALE", "SOLVERS",
+           "HORIZON_S"]
 
 #: Integer units of the largest budget (an arc is rounded up by less than one).
 UNITS = 100_000
@@ -34,6 +44,8 @@ VALUE_SCALE = 100
 #: Routing solvers by name.
 SOLVERS = ("pyvrp", "ortools")
 _MAX_ROUNDS = 8
+#: Seconds that stand for "never" (no window's end; a leg without a route).
+HORIZON_S = 10**12
 
 
 @dataclass(frozen=True, eq=False)
@@ -55,6 +67,16 @@ class TourProblem:
         Each candidate's prize.
     unit_j : float
         Joules per unit.
+    drive_s : ndarray of int64, shape (P, P)
+        Driving time of leg ``i -> j`` (turns included), whole seconds rounded up (:data:`HORIZON_S` where
+        no route joins them).
+    service_s : ndarray of int64, shape (P,)
+        Service time at each point, whole seconds rounded up (0 at the depots).
+    window_s : ndarray of int64, shape (P, 2)
+        When service may start at each point, ``(earliest, latest)`` in whole seconds from the departure
+        (``(0, HORIZON_S)`` without a window).
+    shift_s : ndarray of int64, shape (R,)
+        Each robot's longest tour, whole seconds rounded down (:data:`HORIZON_S`: no limit).
     """
 
     arc_units: np.ndarray
@@ -63,11 +85,35 @@ class TourProblem:
     site_points: np.ndarray
     prize: np.ndarray
     unit_j: float
+    drive_s: np.ndarray = None  # type: ignore[assignment]
+    service_s: np.ndarray = None  # type: ignore[assignment]
+    window_s: np.ndarray = None  # type: ignore[assignment]
+    shift_s: np.ndarray = None  # type: ignore[assignment]
+
+    def __post_init__(self) -> None:
+        n = self.arc_units.shape[0]
+        if self.drive_s is None:
+            object.__setattr__(self, "drive_s", np.zeros((n, n), dtype=np.int64))
+        if self.service_s is None:
+            object.__setattr__(self, "service_s", np.zeros(n, dtype=np.int64))
+        if self.window_s is None:
+            object.__setattr__(self, "window_s", np.tile(np.array([0, HORIZON_S], dtype=np.int64), (n, 1)))
+        if self.shift_s is None:
+            object.__setattr__(self, "shift_s", np.full(len(self.depot_points), HORIZON_S, dtype=np.int64))
+
+    @property
+    def has_windows(self) -> bool:
+        """Whether a candidate site has a time window."""
+        w = self.window_s[self.site_points]
+        return bool(np.any(w[:, 0] > 0) or np.any(w[:, 1] < HORIZON_S))
 
     @classmethod
     def build(cls, prices: PairPrices, q: float, budgets_j: Any, depot_points: Any, site_points: Any,
-              values: Any, service_j: Any) -> TourProblem:
-        """The problem of visiting ``site_points`` (values, service energies per point index) at risk ``q``."""
+              values: Any, service_j: Any, service_time_s: Any = None, window_s: Any = None,
+              max_duration_s: Any = None) -> TourProblem:
+        """The problem of visiting ``site_points`` (values, service energies, service times and time windows
+        ``(earliest_s, latest_s)`` per point index; no service time and no windows by default) at risk ``q``, each
+        robot's tour lasting at most its ``max_duration_s`` (``None`` or inf: no limit)."""
         budgets = np.asarray(budgets_j, dtype=float)
         unit = max(float(budgets.max()), 1.0) / UNITS
         cap = np.floor(budgets / unit).astype(np.int64)
@@ -78,7 +124,21 @@ class TourProblem:
         sites = np.asarray(site_points, dtype=np.int64)
         weight = int(cap.sum()) + 1
         prize = np.round(np.asarray(values, dtype=float)[sites] * VALUE_SCALE).astype(np.int64) * weight
-        return cls(units, cap, np.asarray(depot_points, dtype=np.int64), sites, prize, unit)
+        dur = np.asarray(prices.duration_s, dtype=float)
+        drive = np.where(np.isfinite(dur), np.ceil(np.minimum(dur, HORIZON_S) - 1e-9), HORIZON_S).astype(np.int64)
+        np.fill_diagonal(drive, 0)
+        n = units.shape[0]
+        service_s = (np.zeros(n, dtype=np.int64) if service_time_s is None
+                     else np.ceil(np.asarray(service_time_s, dtype=float) - 1e-9).astype(np.int64))
+        win = np.tile([0.0, float(HORIZON_S)], (n, 1)) if window_s is None else np.asarray(window_s, dtype=float)
+        windows = np.column_stack([np.ceil(np.minimum(win[:, 0], HORIZON_S) - 1e-9),
+                                   np.floor(np.minimum(win[:, 1], HORIZON_S) + 1e-9)]).astype(np.int64)
+        windows[windows[:, 0] > windows[:, 1]] = 0  # no whole second inside: only a site at the depot is on time
+        shift = (np.full(len(budgets), float(HORIZON_S)) if max_duration_s is None
+                 else np.array([HORIZON_S if v is None else v for v in max_duration_s], dtype=float))
+        shift_s = np.floor(np.minimum(shift, HORIZON_S) + 1e-9).astype(np.int64)
+        return cls(units, cap, np.asarray(depot_points, dtype=np.int64), sites, prize, unit, drive, service_s, windows,
+                   shift_s)
 
     def tour_units(self, robot: int, sites: Any) -> int:
         """Units of the closed tour ``depot, sites..., depot`` of ``robot``."""
@@ -86,10 +146,28 @@ class TourProblem:
         seq = [d, *[int(s) for s in sites], d]
         return int(sum(self.arc_units[a, b] for a, b in zip(seq[:-1], seq[1:])))
 
+    def timeline(self, robot: int, sites: Any) -> tuple[list[int], list[int], int] | None:
+        """Arrival and start of service at each of ``sites`` (whole s) and the return to the depot on the tour
+        ``depot, sites..., depot`` of ``robot`` leaving at 0, waiting at a site reached before its earliest
+        start; ``None`` when service cannot start at some site by its latest or the robot is back after its
+        longest tour."""
+        t, here = 0, int(self.depot_points[robot])
+        arrivals, starts = [], []
+        for s in sites:
+            s = int(s)
+            arrive = t + int(self.drive_s[here, s])
+            start = max(arrive, int(self.window_s[s, 0]))
+            if start > int(self.window_s[s, 1]):
+                return None
+            arrivals.append(arrive)
+            starts.append(start)
+            t, here = start + int(self.service_s[s]), s
+        back = t + int(self.drive_s[here, int(self.depot_points[robot])])
+        return (arrivals, starts, back) if back <= int(self.shift_s[robot]) else None
+
     def with_capacity(self, capacity_units: Any) -> TourProblem:
         """The same problem with other capacities."""
-        return TourProblem(self.arc_units, np.asarray(capacity_units, dtype=np.int64), self.depot_points,
-                           self.site_points, self.prize, self.unit_j)
+        return dataclasses.replace(self, capacity_units=np.asarray(capacity_units, dtype=np.int64))
 
 
 def solve_pyvrp(problem: TourProblem, time_limit_s: float = 10.0, seed: int = 0,
@@ -111,15 +189,19 @@ def solve_pyvrp(problem: TourProblem, time_limit_s: float = 10.0, seed: int = 0,
     depot_of = {p: model.add_depot(locs[k]) for k, p in enumerate(depots)}
     for r, (d, cap) in enumerate(zip(problem.depot_points.tolist(), problem.capacity_units.tolist())):
         model.add_vehicle_type(1, start_depot=depot_of[d], end_depot=depot_of[d], max_distance=int(cap),
-                               name=f"robot {r}")
-    for k, prize in enumerate(problem.prize.tolist()):
-        model.add_client(locs[len(depots) + k], prize=int(prize), required=False)
+                               tw_early=0, start_late=0, shift_duration=int(problem.shift_s[r]),
+                               name=f"robot {r}")  # leaves at 0
+    for k, (p, prize) in enumerate(zip(problem.site_points.tolist(), problem.prize.tolist())):
+        early, late = (int(v) for v in problem.window_s[p])
+        model.add_client(locs[len(depots) + k], prize=int(prize), required=False,
+                         service_duration=int(problem.service_s[p]), tw_early=early, tw_late=late)
     idx = np.asarray(order)
     sub = problem.arc_units[np.ix_(idx, idx)]
+    drive = problem.drive_s[np.ix_(idx, idx)]
     for a in range(len(order)):
         for b in range(len(order)):
             if a != b:
-                model.add_edge(locs[a], locs[b], int(sub[a, b]))
+                model.add_edge(locs[a], locs[b], int(sub[a, b]), duration=int(drive[a, b]))
     patience = max(2000, 100 * problem.site_points.size) if no_improvement is None else int(no_improvement)
     stop = MultipleCriteria([MaxRuntime(float(time_limit_s)), NoImprovement(patience)])
     # the prizes dwarf an arc (value first): let the penalty on excess energy grow as large as a prize
@@ -136,6 +218,10 @@ def solve_pyvrp(problem: TourProblem, time_limit_s: float = 10.0, seed: int = 0,
 
 def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list[int]]:
     """Each robot's sites by OR-Tools' routing solver (disjunctions with the prizes as penalties), for comparison.
+
+    With time windows or longest tours, a time dimension (transit: the service where the arc leaves, then
+    the drive; slack: the waiting) holds each site's start of service in its window and each robot's
+    return within its longest tour, as PyVRP does.
 
     Raises
     ------
@@ -166,6 +252,8 @@ def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list
     routing.AddDimensionWithVehicleCapacity(cb, 0, [int(c) for c in problem.capacity_units], True, "energy")
     for k, prize in enumerate(problem.prize.tolist()):
         routing.AddDisjunction([manager.NodeToIndex(len(depots) + k)], int(prize))
+    if problem.has_windows or np.any(problem.shift_s < HORIZON_S):
+        _ortools_time(problem, routing, manager, idx, len(depots))
     params = pywrapcp.DefaultRoutingSearchParameters()
     params.first_solution_strategy = routing_enums_pb2.FirstSolutionStrategy.PATH_CHEAPEST_ARC
     params.local_search_metaheuristic = routing_enums_pb2.LocalSearchMetaheuristic.GUIDED_LOCAL_SEARCH
@@ -184,6 +272,25 @@ def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list
     return tours
 
 
+def _ortools_time(problem: TourProblem, routing: Any, manager: Any, idx: np.ndarray, n_depots: int) -> None:
+    """OR-Tools' time dimension: leave at 0, wait at will, serve each site in its window, be back in time."""
+    drive = problem.drive_s[np.ix_(idx, idx)].tolist()
+    service = problem.service_s[idx].tolist()
+
+    def travel(i: int, j: int) -> int:
+        a, b = manager.IndexToNode(i), manager.IndexToNode(j)
+        return service[a] + drive[a][b]
+
+    horizon = HORIZON_S - 1  # a leg without a route never fits
+    routing.AddDimension(routing.RegisterTransitCallback(travel), horizon, horizon, True, "time")
+    clock = routing.GetDimensionOrDie("time")
+    for k, p in enumerate(problem.site_points.tolist()):
+        early, late = (int(v) for v in problem.window_s[p])
+        clock.CumulVar(manager.NodeToIndex(n_depots + k)).SetRange(early, min(late, horizon))
+    for r, shift in enumerate(problem.shift_s.tolist()):
+        clock.CumulVar(routing.End(r)).SetMax(min(int(shift), horizon))
+
+
 @dataclass(frozen=True)
 class SolverOutcome:
     """The chosen tours and how they were found."""
@@ -196,7 +303,8 @@ class SolverOutcome:
 
 
 def solve_tours(prices: PairPrices, q: float, budgets_j: Any, depot_points: Any, site_points: Any, values: Any,
-                service_j: Any, *, solver: str = "pyvrp", time_limit_s: float = 10.0, seed: int = 0) -> SolverOutcome:
+                service_j: Any, *, solver: str = "pyvrp", time_limit_s: float = 10.0, seed: int = 0,
+                service_time_s: Any = None, window_s: Any = None, max_duration_s: Any = None) -> SolverOutcome:
     """Solve, check each tour on its own quantile, tighten and solve again until every tour holds.
 
     Raises
@@ -209,7 +317,8 @@ def solve_tours(prices: PairPrices, q: float, budgets_j: Any, depot_points: Any,
     t0 = time.perf_counter()
     budgets = np.asarray(budgets_j, dtype=float)
     service = np.asarray(service_j, dtype=float)
-    problem = TourProblem.build(prices, q, budgets, depot_points, site_points, values, service)
+    problem = TourProblem.build(prices, q, budgets, depot_points, site_points, values, service, service_time_s,
+                                window_s, max_duration_s)
     tours: list[list[int]] = [[] for _ in budgets]
     for rounds in range(1, _MAX_ROUNDS + 1):
         tours = (solve_pyvrp(problem, time_limit_s, seed) if solver == "pyvrp"

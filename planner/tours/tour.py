@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -21,9 +22,10 @@ from ..risk import RouteEnergyInterval, check_planning_risk
 from .pricing import PairPrices, price_pairs
 from .result import RobotTour, TourLeg, TourResult
 from .sites import TourRobot, TourSites
-from .solver import TourProblem, solve_tours
+from .solver import HORIZON_S, TourProblem, solve_tours
 
-__all__ = ["plan_tour", "plan_tour_on_map", "TOO_FAR", "NOT_WORTH_IT", "NO_ROUTE"]
+__all__ = ["plan_tour", "plan_tour_on_map", "TOO_FAR", "NOT_WORTH_IT", "NO_ROUTE", "OUTSIDE_WINDOW", "TOO_LONG",
+           "REASONS"]
 
 #: Why a site is left out: no robot can go there and back above its reserve at Q.
 TOO_FAR = "too far at Q: no robot reaches it and comes back above its reserve at the risk level"
@@ -31,6 +33,13 @@ TOO_FAR = "too far at Q: no robot reaches it and comes back above its reserve at
 NOT_WORTH_IT = "not worth it: reachable alone, but the charge at Q goes to sites of more value (capacity)"
 #: Why a site is left out: no route joins it to a depot.
 NO_ROUTE = "no route: obstacles or slopes separate it from every depot"
+#: Why a site is left out: every robot that could reach it on its charge arrives after its window closes.
+OUTSIDE_WINDOW = ("outside its time window: no robot that reaches it at Q can get there (straight from its depot) "
+                  "before the window closes")
+#: Why a site is left out: every robot that could reach it in time is back after its ``max_duration_s``.
+TOO_LONG = "too long: no robot that reaches it at Q and in time is back within its max_duration_s"
+#: Every reason a site is left out, in the order they are tested.
+REASONS = (NO_ROUTE, TOO_FAR, OUTSIDE_WINDOW, TOO_LONG, NOT_WORTH_IT)
 
 
 def _robots(robots: Any) -> tuple[TourRobot, ...]:
@@ -147,43 +156,76 @@ def plan_tour(
     nd = len(depots)
     value = np.concatenate([np.zeros(nd), sites.value[kept]])
     service = np.concatenate([np.zeros(nd), sites.service_energy_j[kept]])
+    timing = _Timing(prices.duration_s, np.concatenate([np.zeros(nd), sites.service_time_s[kept]]),
+                     np.vstack([np.tile([0.0, np.inf], (nd, 1)), sites.time_window_s[kept]]))
     depot_points = np.array([depots.index(rb.depot_xy_m) for rb in fleet])
     budgets = np.array([rb.budget_j for rb in fleet])
     site_points = np.arange(nd, len(names))
-    whole = TourProblem.build(prices, q, budgets, depot_points, site_points, value, service)
+    shifts = [rb.max_duration_s for rb in fleet]
+    whole = TourProblem.build(prices, q, budgets, depot_points, site_points, value, service, timing.service_s,
+                              timing.window_s, shifts)
+    open_ = dataclasses.replace(whole, shift_s=np.full(len(fleet), HORIZON_S, dtype=np.int64))
     left_out: dict[str, str] = {}
     candidates = []
     for p in site_points.tolist():
+        fits = [k for k in range(len(fleet)) if whole.tour_units(k, [p]) <= whole.capacity_units[k]]
         if not any(np.isfinite(prices.mean_j[d, p]) and np.isfinite(prices.mean_j[p, d]) for d in range(nd)):
             left_out[names[p]] = NO_ROUTE
-        elif not any(whole.tour_units(k, [p]) <= whole.capacity_units[k] for k in range(len(fleet))):
+        elif not fits:
             left_out[names[p]] = TOO_FAR
+        elif all(open_.timeline(k, [p]) is None for k in fits):
+            left_out[names[p]] = OUTSIDE_WINDOW
+        elif all(whole.timeline(k, [p]) is None for k in fits):
+            left_out[names[p]] = TOO_LONG
         elif value[p] <= 0:
             left_out[names[p]] = NOT_WORTH_IT
         else:
             candidates.append(p)
     values = {sites.names[k]: float(sites.value[k]) for k in kept}
     where_xy = {n: (float(x), float(y)) for n, (x, y) in zip(sites.names, sites.xy_m.tolist())}
+    windows = {n: (float(e), float(late)) for n, (e, late) in zip(sites.names, sites.time_window_s.tolist())
+               if e > 0 or np.isfinite(late)}
     if not candidates:
         reachable = any(why == NOT_WORTH_IT for why in left_out.values())  # reachable, but worth nothing
-        empty = tuple(_tour(prices, rb, [], d, service, value, q) for rb, d in zip(fleet, depot_points.tolist()))
+        empty = tuple(_tour(prices, rb, [], d, service, value, q, timing)
+                      for rb, d in zip(fleet, depot_points.tolist()))
         return TourResult("planned" if reachable else "nothing reachable", q, empty, left_out, errors, values, solver,
-                          prices.pricing_time_s, 0.0, 0, prices.where, map_label, where_xy, cost.terrain, cost, prices)
+                          prices.pricing_time_s, 0.0, 0, prices.where, map_label, where_xy, cost.terrain, cost, prices,
+                          windows)
     outcome = solve_tours(prices, q, budgets, depot_points, candidates, value, service, solver=solver,
-                          time_limit_s=time_limit_s, seed=seed)
+                          time_limit_s=time_limit_s, seed=seed, service_time_s=timing.service_s,
+                          window_s=timing.window_s, max_duration_s=shifts)
     chosen = {p for t in outcome.tours for p in t}
     for p in candidates:
         if p not in chosen:
             left_out[names[p]] = NOT_WORTH_IT
-    tours = tuple(_tour(prices, rb, t, d, service, value, q)
+    tours = tuple(_tour(prices, rb, t, d, service, value, q, timing)
                   for rb, t, d in zip(fleet, outcome.tours, depot_points.tolist()))
     return TourResult("planned", q, tours, left_out, errors, values, outcome.solver, prices.pricing_time_s,
                       outcome.solve_time_s, outcome.rounds, prices.where, map_label, where_xy, cost.terrain, cost,
-                      prices)
+                      prices, windows)
+
+
+class _Timing:
+    """Driving times (s) per leg, service time (s) and time window (s) per point: a tour's timeline."""
+
+    def __init__(self, drive_s: np.ndarray, service_s: np.ndarray, window_s: np.ndarray) -> None:
+        self.drive_s, self.service_s, self.window_s = np.asarray(drive_s, float), service_s, window_s
+
+    def walk(self, seq: list[int]) -> tuple[tuple[float, ...], tuple[float, ...], float]:
+        """Arrival and start of service at each site of ``depot, sites..., depot`` leaving at 0 (waiting until a
+        window opens), and the return to the depot (s)."""
+        t, arrivals, starts = 0.0, [], []
+        for a, b in zip(seq[:-2], seq[1:-1]):
+            arrivals.append(t + float(self.drive_s[a, b]))
+            starts.append(max(arrivals[-1], float(self.window_s[b, 0])))
+            t = starts[-1] + float(self.service_s[b])
+        back = t + float(self.drive_s[seq[-2], seq[-1]]) if seq else 0.0
+        return tuple(arrivals), tuple(starts), back
 
 
 def _tour(prices: PairPrices, robot: TourRobot, sites: list[int], depot: int, service: np.ndarray,
-          value: np.ndarray, q: float) -> RobotTour:
+          value: np.ndarray, q: float, timing: _Timing) -> RobotTour:
     """One robot's :class:`RobotTour` from its point indices."""
     seq = [depot, *sites, depot] if sites else []
     legs, cumulative = [], []
@@ -195,9 +237,11 @@ def _tour(prices: PairPrices, robot: TourRobot, sites: list[int], depot: int, se
         served += float(service[b])
         cumulative.append(prices.tour_interval(seq[:k + 2], served))
     energy = cumulative[-1] if cumulative else RouteEnergyInterval(0.0, 0.0, {})
+    arrivals, starts, back = timing.walk(seq)
     return RobotTour(robot.name, robot.battery, robot.depot_xy_m, tuple(prices.names[p] for p in sites), tuple(legs),
                      tuple(float(service[p]) for p in sites), float(value[sites].sum()) if sites else 0.0, energy,
-                     tuple(cumulative), robot.budget_j, q)
+                     tuple(cumulative), robot.budget_j, q, tuple(float(timing.service_s[p]) for p in sites),
+                     arrivals, starts, back, robot.max_duration_s)
 
 
 def plan_tour_on_map(
@@ -209,6 +253,7 @@ def plan_tour_on_map(
     voltage_v: float | None = None,
     reserve_pct: float = 20.0,
     n_robots: int = 1,
+    max_duration_s: float | None = None,
     risk: float = 0.9,
     robot: str = "husky",
     speed_mps: float = 0.5,
@@ -227,7 +272,7 @@ def plan_tour_on_map(
 
     The edges are priced by the presets or a saved ``model`` (:func:`planner.cost_source.edge_costs`);
     each robot's battery is ``battery_ah`` at ``voltage_v`` (default the robot's) keeping
-    ``reserve_pct`` % in reserve.
+    ``reserve_pct`` % in reserve; each tour lasts at most ``max_duration_s`` (s; ``None``: no limit).
 
     Raises
     ------
@@ -242,6 +287,6 @@ def plan_tour_on_map(
     battery = Battery(battery_ah, voltage, min_reserve_pct=reserve_pct)
     cost = edge_costs(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=math.radians(slope),
                       unknown_ground=unknown_ground if model is None else None, model=model, model_ground=model_ground)
-    fleet = [TourRobot(battery, depot_xy_m, f"robot {k}") for k in range(n_robots)]
+    fleet = [TourRobot(battery, depot_xy_m, f"robot {k}", max_duration_s) for k in range(n_robots)]
     return plan_tour(cost, sites, fleet, risk=risk, time_limit_s=time_limit_s, seed=seed, workers=workers,
                      client=client, map_label=map_label, progress=progress)

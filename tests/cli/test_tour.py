@@ -63,3 +63,30 @@ def test_cli_sites_all_on_the_map_exit_0(tmp_path, capsys, wall_map):
     text = capsys.readouterr().out
     assert rc == 0, text
     assert json.loads((tmp_path / "out" / "tour.json").read_text())["errors"] == []
+
+
+def test_cli_reads_time_windows_and_writes_the_arrival_times(tmp_path, capsys, wall_map):
+    tmap = wall_map.save(tmp_path / "wall.npz")
+    sites = tmp_path / "sites.csv"
+    sites.write_text("name,x_m,y_m,value,service_time_s,tw_start_s,tw_end_s\n"
+                     "pump,5.5,35.5,2,10,,\nshed,35.5,5.5,1,0,400,900\nshut,30.5,31.5,5,0,0,5\n")
+    out = tmp_path / "out"
+    rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "1",
+               "--voltage", "24", "--out", str(out)])
+    text = capsys.readouterr().out
+    assert rc == 0, text
+    doc = json.loads((out / "tour.json").read_text())
+    robot = doc["robots"][0]
+    assert set(robot["sites"]) == {"pump", "shed"} and doc["time_windows_s"] == {"shed": [400.0, 900.0],
+                                                                                  "shut": [0.0, 5.0]}
+    start = dict(zip(robot["sites"], robot["service_start_s"]))
+    assert 400.0 <= start["shed"] <= 900.0 and len(robot["arrival_s"]) == 2 and robot["return_s"] > start["shed"]
+    assert robot["service_time_s"] == [{"pump": 10.0, "shed": 0.0}[s] for s in robot["sites"]]
+    assert [e["site"] for e in doc["left_out"]] == ["shut"] and "outside its time window" in text
+    rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "1",
+               "--voltage", "24", "--max-duration", "5000", "--out", str(tmp_path / "out2")])
+    assert rc == 0 and "at most 5000 s" in capsys.readouterr().out
+    assert json.loads((tmp_path / "out2" / "tour.json").read_text())["robots"][0]["max_duration_s"] == 5000.0
+    rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "1",
+               "--max-duration", "0", "--out", str(tmp_path / "out3")])
+    assert rc == 2 and "--max-duration" in capsys.readouterr().err
