@@ -31,7 +31,13 @@ from .plot import RouteLine, plot_routes
 from .route_geojson import write_geojson
 from .warmup import warm_up_kernels
 
-__all__ = ["CoarsePlanReport", "plan_coarse", "plan_coarse_windowed", "check_coarse_options", "COARSE_OPTIONS"]
+__all__ = ["CoarsePlanReport", "plan_coarse", "plan_coarse_windowed", "check_coarse_options", "COARSE_OPTIONS",
+           "COARSE_SEARCH_OBJECTIVE"]
+
+#: What coarse-to-fine minimises (route.json's ``search_objective``): its corridor search has no heading, so the
+#: route it returns is the least drive energy in the corridor and its turns are priced but not searched over.
+COARSE_SEARCH_OBJECTIVE = ("drive energy in the corridor (the coarse-to-fine search has no heading: the route's "
+                           "turns are priced, not minimised)")
 
 
 @dataclass(frozen=True)
@@ -119,6 +125,7 @@ class CoarsePlanReport:
             "start_xy_m": list(self.start_xy_m), "goal_xy_m": list(self.goal_xy_m),
             **lonlat_fields(plan.coarse_map, self.start_xy_m, self.goal_xy_m),
             "planner": "coarse-to-fine",
+            "search_objective": COARSE_SEARCH_OBJECTIVE,
             "map_preparation_s": self.map_preparation_s, "kernel_compile_s": self.kernel_compile_s,
             "status": route.status, "windowed": self.windowed,
             "coarse_to_fine": {k: v for k, v in plan.summary().items() if k not in route.summary()},
