@@ -338,7 +338,7 @@ class TourResult:
         else:
             check_ax(ax)
         lo_q, hi_q = 0.5 - INTERVAL_LEVEL / 2, 0.5 + INTERVAL_LEVEL / 2
-        for k, tour in enumerate(self.tours):
+        for tour in self.tours:
             if not tour.legs:
                 continue
             x = np.arange(len(tour.legs) + 1)
