@@ -550,24 +550,31 @@ class Lattice:
                     node = int(pred[node])
                 best_nodes = chain[::-1]
         elif src.size and dst.size:
-            n = self.n_nodes
-            data = np.concatenate([self._weights(weight), e_src])
-            indices = np.concatenate([self._indices, src.astype(np.int32)])
-            indptr = np.append(self._indptr, np.int32(self._indptr[-1] + src.size))
-            graph = csr_matrix((data, indices, indptr), shape=(n + 1, n + 1))
-            dist, pred = dijkstra(graph, directed=True, indices=n, return_predecessors=True)
-            total = dist[dst] + e_dst
-            k = int(np.argmin(total))
-            if total[k] < best:
-                best = float(total[k])
-                node = int(dst[k])
-                chain = []
-                while node != n and node >= 0:
-                    chain.append(node)
-                    node = int(pred[node])
-                best_nodes = chain[::-1]
+            best, best_nodes = self._best_exit(*self._from_source(src, e_src, weight), dst, e_dst, best)
         path = self.path_via(start, best_nodes, goal, best, weight)
         return dataclasses.replace(path, solve_time_s=time.perf_counter() - t0)
+
+    def _from_source(self, src: np.ndarray, e_src: np.ndarray, weight: str) -> tuple[np.ndarray, np.ndarray]:
+        """scipy's Dijkstra from a virtual source joined to the nodes ``src`` at ``e_src``: (dist, pred) of every node."""
+        n = self.n_nodes
+        data = np.concatenate([self._weights(weight), e_src])
+        indices = np.concatenate([self._indices, src.astype(np.int32)])
+        indptr = np.append(self._indptr, np.int32(self._indptr[-1] + src.size))
+        graph = csr_matrix((data, indices, indptr), shape=(n + 1, n + 1))
+        return dijkstra(graph, directed=True, indices=n, return_predecessors=True)
+
+    def _best_exit(self, dist: np.ndarray, pred: np.ndarray, dst: np.ndarray, e_dst: np.ndarray,
+                   best: float) -> tuple[float, list[int]]:
+        """The cheapest way out through the nodes ``dst`` (at ``e_dst``) if it beats ``best``: (energy, node chain)."""
+        total = dist[dst] + e_dst
+        k = int(np.argmin(total))
+        if not total[k] < best:
+            return best, []
+        chain, node = [], int(dst[k])
+        while node != self.n_nodes and node >= 0:
+            chain.append(node)
+            node = int(pred[node])
+        return float(total[k]), chain[::-1]
 
 
     def paths_from(self, start_xy_m: tuple[float, float], goals_xy_m: object,
@@ -606,32 +613,17 @@ class Lattice:
         goals = as_points(goals_xy_m, "goals_xy_m")
         self.cost.check_inside(np.vstack([start, goals]), "start/goals")
         src, e_src = self.joins(start, weight=weight)
-        n = self.n_nodes
-        dist = pred = None
-        if src.size:
-            data = np.concatenate([self._weights(weight), e_src])
-            indices = np.concatenate([self._indices, src.astype(np.int32)])
-            indptr = np.append(self._indptr, np.int32(self._indptr[-1] + src.size))
-            graph = csr_matrix((data, indices, indptr), shape=(n + 1, n + 1))
-            dist, pred = dijkstra(graph, directed=True, indices=n, return_predecessors=True)
+        searched = self._from_source(src, e_src, weight) if src.size else None
         direct = self.cost.segment_energy_j(np.broadcast_to(start, goals.shape), goals)
         if weight == "length":
             direct = np.where(np.isfinite(direct), np.hypot(*(goals - start).T), np.inf)
         out = []
         for goal, best in zip(goals, direct.tolist()):
             nodes: list[int] = []
-            if dist is not None:
+            if searched is not None:
                 dst, e_dst = self.joins(goal, to_point=True, weight=weight)
                 if dst.size:
-                    total = dist[dst] + e_dst
-                    k = int(np.argmin(total))
-                    if total[k] < best:
-                        best = float(total[k])
-                        node = int(dst[k])
-                        while node != n and node >= 0:
-                            nodes.append(node)
-                            node = int(pred[node])
-                        nodes.reverse()
+                    best, nodes = self._best_exit(*searched, dst, e_dst, best)
             out.append(self.path_via(start, nodes, goal, best, weight))
         elapsed = time.perf_counter() - t0
         return [dataclasses.replace(p, solve_time_s=elapsed) for p in out]
