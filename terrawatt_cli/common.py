@@ -26,7 +26,7 @@ from planner.points import point_on_map
 from planner.risk import check_planning_risk
 
 __all__ = [
-    "Checked", "bounded", "positive", "MAP_FLAGS", "add_map_options", "read_map_args", "map_arg", "add_point_options",
+    "Checked", "bounded", "positive", "add_battery_options", "MAP_FLAGS", "add_map_options", "read_map_args", "map_arg", "add_point_options",
     "point_arg", "add_robot_options", "add_physics_robot_option", "robot_arg", "add_planner_options", "check_outputs",
     "INPUT_FLAGS", "input_paths",
     "check_output_file", "draw_figure", "warn_figures", "add_dask_options", "check_dask_flags", "dask_client_arg",
@@ -115,6 +115,17 @@ def point_arg(args: argparse.Namespace, name: str, where: TerrainMap | DemWindow
     """The point of :func:`add_point_options` in the map's metres (:func:`planner.points.point_on_map`), or None."""
     return point_on_map(getattr(args, name, None), getattr(args, f"{name}_lonlat", None), where,
                         names=(f"--{name}", f"--{name}-lonlat"))
+
+
+def add_battery_options(p: argparse.ArgumentParser, capacity: str = "battery capacity (Ah)") -> None:
+    """``--battery-ah`` (required), ``--voltage`` / ``--battery-v`` and ``--reserve`` / ``--reserve-pct`` (default 20 %)."""
+    p.add_argument("--battery-ah", type=float, required=True, metavar="AH", action=Checked, check=positive,
+                   help=capacity)
+    p.add_argument("--voltage", "--battery-v", dest="voltage", type=float, default=None, metavar="V", action=Checked,
+                   check=positive, help="battery voltage (default: the robot's)")
+    p.add_argument("--reserve", "--reserve-pct", dest="reserve", type=float, default=20.0, metavar="PCT",
+                   action=Checked, check=bounded("a percentage in [0, 100)", lambda v: 0.0 <= v < 100.0),
+                   help="share of the battery kept in reserve (%%, in [0, 100), default 20)")
 
 
 def add_robot_options(p: argparse.ArgumentParser, *, speed: str = "planning speed", slope: bool = True) -> None:

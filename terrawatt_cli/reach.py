@@ -11,9 +11,8 @@ from terrain import InvalidParameterError
 from terrain.procedural import EXAMPLE_START_XY_M
 
 from planner.reach_report import reach_on_battery
-from .common import (Checked, add_map_options, add_model_options, add_point_options, add_robot_options, bounded,
-                     check_model_flags, check_outputs, input_paths, load_model_arg, map_arg, point_arg, positive,
-                     warn_figures)
+from .common import (add_battery_options, add_map_options, add_model_options, add_point_options, add_robot_options,
+                     check_model_flags, check_outputs, input_paths, load_model_arg, map_arg, point_arg, warn_figures)
 
 __all__ = ["add_parser", "run_reach"]
 
@@ -35,13 +34,7 @@ def add_parser(sub: Any) -> None:
     add_point_options(p, "depot", "depot", required=False,
                       default="; --depot or --depot-lonlat is required with --map, default with --example: the "
                               "example's start")
-    p.add_argument("--battery-ah", type=float, required=True, metavar="AH", action=Checked, check=positive,
-                   help="battery capacity (Ah)")
-    p.add_argument("--voltage", "--battery-v", dest="voltage", type=float, default=None, metavar="V", action=Checked,
-                   check=positive, help="battery voltage (default: the robot's)")
-    p.add_argument("--reserve", "--reserve-pct", dest="reserve", type=float, default=20.0, metavar="PCT",
-                   action=Checked, check=bounded("a percentage in [0, 100)", lambda v: 0.0 <= v < 100.0),
-                   help="share of the battery kept in reserve (%%, in [0, 100), default 20)")
+    add_battery_options(p)
     p.add_argument("--round-trip", action="store_true", help="budget the way there and back (default: one way)")
     add_robot_options(p, speed="driving speed")
     add_model_options(p)

@@ -11,9 +11,9 @@ from terrain import InvalidParameterError
 
 from planner.risk import check_planning_risk
 from planner.tours import plan_tour_on_map, read_tour_sites_csv
-from .common import (Checked, add_dask_options, add_map_options, add_model_options, add_point_options,
-                     add_robot_options, bounded, check_dask_flags, check_model_flags, check_outputs, dask_client_arg,
-                     input_paths, load_model_arg, map_arg, point_arg, positive, warn_figures)
+from .common import (Checked, add_battery_options, add_dask_options, add_map_options, add_model_options,
+                    add_point_options, add_robot_options, bounded, check_dask_flags, check_model_flags, check_outputs,
+                    dask_client_arg, input_paths, load_model_arg, map_arg, point_arg, positive, warn_figures)
 
 __all__ = ["add_parser", "run_tour"]
 
@@ -38,13 +38,7 @@ def add_parser(sub: Any) -> None:
                         "optional value (default 1), service_energy_j, service_time_s, and a time window "
                         "tw_start_s, tw_end_s (s from the departure; both columns or neither, empty cells: none)")
     add_point_options(p, "depot", "the depot every robot starts from and comes back to", required=True)
-    p.add_argument("--battery-ah", type=float, required=True, metavar="AH", action=Checked, check=positive,
-                   help="each robot's battery capacity (Ah)")
-    p.add_argument("--voltage", "--battery-v", dest="voltage", type=float, default=None, metavar="V", action=Checked,
-                   check=positive, help="battery voltage (default: the robot's)")
-    p.add_argument("--reserve", "--reserve-pct", dest="reserve", type=float, default=20.0, metavar="PCT",
-                   action=Checked, check=bounded("a percentage in [0, 100)", lambda v: 0.0 <= v < 100.0),
-                   help="share of the battery kept in reserve (%%, default 20)")
+    add_battery_options(p, "each robot's battery capacity (Ah)")
     p.add_argument("--max-duration", type=float, default=None, metavar="S", action=Checked, check=positive,
                    help="each robot's longest tour, from leaving the depot to being back (s; driving, waiting and "
                         "service; default: no limit)")
