@@ -12,8 +12,8 @@ from terrain import InvalidParameterError
 from planner.risk import check_planning_risk
 from planner.tours import plan_tour_on_map, read_tour_sites_csv
 from .common import (Checked, add_battery_options, add_dask_options, add_map_options, add_model_options,
-                    add_point_options, add_robot_options, bounded, check_dask_flags, check_model_flags, check_outputs,
-                    dask_client_arg, input_paths, load_model_arg, map_arg, point_arg, positive, warn_figures)
+                     add_point_options, add_robot_options, bounded, check_dask_flags, check_model_flags, check_outputs,
+                     dask_client_arg, input_paths, load_model_arg, map_arg, point_arg, positive, warn_figures)
 
 __all__ = ["add_parser", "run_tour"]
 
