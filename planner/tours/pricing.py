@@ -96,7 +96,9 @@ class PairPrices:
         dof = np.full(self.mean_j.shape, math.inf)
         for g in range(len(self.ground_labels)):
             dof = np.where(crossed[:, :, g], np.minimum(dof, self._dof(g)), dof)
-        z = np.vectorize(lambda d: predictive_quantile(q, d), otypes=[float])(dof)
+        z = np.empty_like(dof)
+        for d in np.unique(dof):  # a few distinct degrees of freedom: one quantile each
+            z[dof == d] = predictive_quantile(q, float(d))
         sd = np.sqrt(np.sum(self.sd_by_ground_j ** 2, axis=2))
         return self.mean_j + z * sd
 
