@@ -25,6 +25,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -34,7 +35,7 @@ from terrawatt_base.errors import InvalidParameterError, OptionalDependencyError
 
 from .pricing import PairPrices
 
-__all__ = ["TourProblem", "solve_pyvrp", "solve_ortools", "solve_tours", "UNITS", "VALUE_SCALE", "SOLVERS",
+__all__ = ["TourProblem", "walk_timeline", "solve_pyvrp", "solve_ortools", "solve_tours", "UNITS", "VALUE_SCALE", "SOLVERS",
            "HORIZON_S"]
 
 #: Integer units of the largest budget (an arc is rounded up by less than one).
@@ -46,6 +47,21 @@ SOLVERS = ("pyvrp", "ortools")
 _MAX_ROUNDS = 8
 #: Seconds that stand for "never" (no window's end; a leg without a route).
 HORIZON_S = 10**12
+
+
+def walk_timeline(drive_s: np.ndarray, service_s: np.ndarray, window_s: np.ndarray,
+                  seq: Sequence[int]) -> tuple[list[Any], list[Any], Any]:
+    """Arrival and start of service at each site of the tour ``seq`` (``depot, sites..., depot``, point
+    indices) leaving at 0 and waiting where a window has not opened yet, and the return to the depot: in the
+    arrays' own units (the solver's whole seconds, or the result's seconds); a start past a window's latest is
+    returned as it is (the caller decides)."""
+    t, arrivals, starts = drive_s.dtype.type(0), [], []
+    for a, b in zip(seq[:-2], seq[1:-1]):
+        arrivals.append(t + drive_s[a, b])
+        starts.append(max(arrivals[-1], window_s[b, 0]))
+        t = starts[-1] + service_s[b]
+    back = t + drive_s[seq[-2], seq[-1]] if len(seq) >= 2 else t
+    return arrivals, starts, back
 
 
 @dataclass(frozen=True, eq=False)
@@ -151,18 +167,11 @@ class TourProblem:
         ``depot, sites..., depot`` of ``robot`` leaving at 0, waiting at a site reached before its earliest
         start; ``None`` when service cannot start at some site by its latest or the robot is back after its
         longest tour."""
-        t, here = 0, int(self.depot_points[robot])
-        arrivals, starts = [], []
-        for s in sites:
-            s = int(s)
-            arrive = t + int(self.drive_s[here, s])
-            start = max(arrive, int(self.window_s[s, 0]))
-            if start > int(self.window_s[s, 1]):
-                return None
-            arrivals.append(arrive)
-            starts.append(start)
-            t, here = start + int(self.service_s[s]), s
-        back = t + int(self.drive_s[here, int(self.depot_points[robot])])
+        d = int(self.depot_points[robot])
+        seq = [d, *[int(s) for s in sites], d]
+        arrivals, starts, back = walk_timeline(self.drive_s, self.service_s, self.window_s, seq)
+        if any(start > self.window_s[s, 1] for s, start in zip(seq[1:-1], starts)):
+            return None
         return (arrivals, starts, back) if back <= int(self.shift_s[robot]) else None
 
     def with_capacity(self, capacity_units: Any) -> TourProblem:

@@ -22,7 +22,7 @@ from ..risk import RouteEnergyInterval, check_planning_risk
 from .pricing import PairPrices, price_pairs
 from .result import RobotTour, TourLeg, TourResult
 from .sites import TourRobot, TourSites
-from .solver import HORIZON_S, TourProblem, solve_tours
+from .solver import HORIZON_S, TourProblem, solve_tours, walk_timeline
 
 __all__ = ["plan_tour", "plan_tour_on_map", "TOO_FAR", "NOT_WORTH_IT", "NO_ROUTE", "OUTSIDE_WINDOW", "TOO_LONG",
            "REASONS"]
@@ -215,13 +215,11 @@ class _Timing:
     def walk(self, seq: list[int]) -> tuple[tuple[float, ...], tuple[float, ...], float]:
         """Arrival and start of service at each site of ``depot, sites..., depot`` leaving at 0 (waiting until a
         window opens), and the return to the depot (s)."""
-        t, arrivals, starts = 0.0, [], []
-        for a, b in zip(seq[:-2], seq[1:-1]):
-            arrivals.append(t + float(self.drive_s[a, b]))
-            starts.append(max(arrivals[-1], float(self.window_s[b, 0])))
-            t = starts[-1] + float(self.service_s[b])
-        back = t + float(self.drive_s[seq[-2], seq[-1]]) if seq else 0.0
-        return tuple(arrivals), tuple(starts), back
+        if not seq:
+            return (), (), 0.0
+        arrivals, starts, back = walk_timeline(self.drive_s, np.asarray(self.service_s, float),
+                                               np.asarray(self.window_s, float), seq)
+        return tuple(map(float, arrivals)), tuple(map(float, starts)), float(back)
 
 
 def _tour(prices: PairPrices, robot: TourRobot, sites: list[int], depot: int, service: np.ndarray,
