@@ -65,7 +65,8 @@ def run_tour(args: argparse.Namespace) -> int:
         raise InvalidParameterError(f"--robots must be an integer >= 1, got {args.robots!r}")
     check_dask_flags(args)
     check_model_flags(args)
-    check_outputs(args.out, _OUTPUTS, input_paths(args))
+    bags = tuple(f"tour_{k}.mcap" for k in range(int(args.robots))) if args.bag else ()
+    check_outputs(args.out, _OUTPUTS + bags, input_paths(args))  # the bags too: none may replace an input
     tmap, label = map_arg(args)
     depot = point_arg(args, "depot", tmap)
     sites = read_tour_sites_csv(args.sites, tmap)

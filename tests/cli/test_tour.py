@@ -90,3 +90,16 @@ def test_cli_reads_time_windows_and_writes_the_arrival_times(tmp_path, capsys, w
     rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "1",
                "--max-duration", "0", "--out", str(tmp_path / "out3")])
     assert rc == 2 and "--max-duration" in capsys.readouterr().err
+
+
+def test_cli_a_bag_that_would_replace_an_input_is_refused_before_any_work(tmp_path, capsys, wall_map):
+    out = tmp_path / "out"
+    out.mkdir()
+    tmap = wall_map.save(tmp_path / "wall.npz")
+    sites = out / "tour_0.mcap"  # the sites file given as input sits where robot 0's bag would go
+    sites.write_text("name,x_m,y_m,value\npump,5.5,35.5,2\n")
+    before = sites.read_bytes()
+    rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "0.2",
+               "--voltage", "24", "--bag", "--out", str(out)])
+    assert rc == 2 and "tour_0.mcap" in capsys.readouterr().err
+    assert sites.read_bytes() == before and not (out / "tour.json").exists()
