@@ -7,6 +7,7 @@ from .batch_pairs import BatchPairs, read_pairs_csv
 from .batch_result import BatchResult
 from .coarse import CoarseToFine, plan_coarse_to_fine
 from .coarse_geotiff import plan_coarse_to_fine_geotiff
+from .cost_spec import CostSpec
 from .edge_cost import EnergyCost
 from .energy_costmap import energy_costmap
 from .lattice import Lattice
@@ -37,6 +38,7 @@ from .settings import PlannerSettings
 from .warmup import warm_up_kernels
 
 __all__ = [
+    "CostSpec",
     "EnergyCost",
     "PlannerSettings",
     "PLANNERS",

@@ -3,20 +3,18 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 import os
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from terrain import TerrainMap
-from terrawatt_base.checks import check_real
+from terrawatt_base.checks import check_instance
 
 from .batch import plan_batch
 from .batch_pairs import BatchPairs
 from .batch_result import BatchResult
-from .cost_source import edge_costs
+from .cost_spec import CostSpec
 from .warmup import warm_up_kernels
 
 __all__ = ["BatchReport", "plan_batch_on_map"]
@@ -73,12 +71,7 @@ def plan_batch_on_map(
     pairs: BatchPairs | Any,
     *,
     planner: str = "lattice",
-    robot: str = "husky",
-    speed_mps: float = 0.5,
-    max_slope_deg: float = 20.0,
-    unknown_ground: str | None = "gravel",
-    model: Any = None,
-    model_ground: str | Mapping[str, str] | None = None,
+    pricing: CostSpec | None = None,
     time_limit_s: float | None = 1.0,
     max_cost_evaluations: int | None = None,
     seed: int | None = 0,
@@ -87,7 +80,7 @@ def plan_batch_on_map(
     progress: bool = True,
     map_label: str = "map",
 ) -> BatchReport:
-    """Price ``terrain`` (:func:`planner.cost_source.edge_costs`) and plan every pair on it (:func:`planner.plan_batch`).
+    """Price ``terrain`` (:meth:`planner.cost_spec.CostSpec.build`) and plan every pair on it (:func:`planner.plan_batch`).
 
     Parameters
     ----------
@@ -97,10 +90,9 @@ def plan_batch_on_map(
         As :func:`planner.plan_batch`.
     planner, time_limit_s, max_cost_evaluations, seed, client, progress
         As :func:`planner.plan_batch`; ``where`` says how the result names ``client``'s cluster.
-    robot, speed_mps, unknown_ground, model, model_ground
-        How the edges are priced (``unknown_ground`` not with ``model``).
-    max_slope_deg : float
-        Steepest drivable slope (degrees, in (0, 90)).
+    pricing : CostSpec, optional
+        How the edges are priced (:class:`planner.cost_spec.CostSpec`, default ``CostSpec()``; its
+        ``risk`` is not used: every pair at the mean).
     map_label : str
         How the map is named.
 
@@ -111,7 +103,7 @@ def plan_batch_on_map(
     Raises
     ------
     TerrawattError
-        As :func:`planner.cost_source.edge_costs` and :func:`planner.plan_batch`.
+        As :meth:`planner.cost_spec.CostSpec.build` and :func:`planner.plan_batch`.
 
     Examples
     --------
@@ -120,10 +112,8 @@ def plan_batch_on_map(
     >>> report.all_found, report.header()
     (True, 'map: map  20 x 20 cells of 1 m; 1 pairs; planner lattice')
     """
-    max_slope_deg = check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False,
-                               high_inclusive=False)
-    cost = edge_costs(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=math.radians(max_slope_deg),
-                      unknown_ground=unknown_ground if model is None else None, model=model, model_ground=model_ground)
+    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    cost = pricing.build(terrain)
     warm_up_kernels()
     result = plan_batch(cost, pairs, planner=planner, seed=seed, client=client, time_limit_s=time_limit_s,
                         max_cost_evaluations=max_cost_evaluations, progress=progress)

@@ -14,15 +14,14 @@ import numpy as np
 
 from terrain import UNKNOWN_GROUND, OptionalDependencyError, TerrainMap
 from terrawatt_base.formats import format_name, result_document, write_result_json
-from terrawatt_base.checks import check_choice, check_real
-from terrawatt_base.errors import InvalidParameterError
+from terrawatt_base.checks import check_choice, check_instance
 from terrawatt_base.figure_file import draw_figure
 
-from .cost_source import edge_costs
+from .cost_spec import CostSpec, PlanModel
 from .edge_cost import EnergyCost
 from .planning import GRAPH_PLANNERS, PLANNERS, plan_route, search_objective
 from .plot import RouteLine, plot_routes
-from .risk import INTERVAL_LEVEL, RouteEnergyInterval, check_planning_risk, risk_cost, route_energy_interval
+from .risk import INTERVAL_LEVEL, RouteEnergyInterval, route_energy_interval
 from .route import Route
 from .route_geojson import write_geojson
 from .warmup import warm_up_kernels
@@ -114,48 +113,6 @@ def compile_line(compile_s: float) -> list[str]:
 
 def _finite_or_none(x: float) -> float | None:
     return x if math.isfinite(x) else None
-
-
-@dataclass(frozen=True)
-class PlanModel:
-    """The saved current model that priced a plan's edges (route.json's ``model``).
-
-    Attributes
-    ----------
-    file : str
-        How the model is named (e.g. its file name).
-    class_name : str
-        The model's class.
-    model_ground : str, mapping or None
-        The ``model_ground`` it priced the map with (:func:`planner.model_energy_cost`).
-    grounds : tuple of str
-        The cost's ground labels.
-    gives_interval : bool
-        Whether the cost has a predictive interval.
-    risk_q : float or None
-        The quantile planned on (:func:`planner.risk_cost`), or None for the mean.
-    """
-
-    file: str
-    class_name: str
-    model_ground: str | Mapping[str, str] | None
-    grounds: tuple[str, ...]
-    gives_interval: bool
-    risk_q: float | None = None
-
-    def to_dict(self) -> dict[str, Any]:
-        """route.json's ``model`` block."""
-        return {"file": self.file, "class": self.class_name, "model_ground": self.model_ground,
-                "grounds": list(self.grounds), "gives_interval": self.gives_interval, "risk_q": self.risk_q,
-                "objective": ("energy mean" if self.risk_q is None
-                              else f"{self.risk_q:g} quantile: mean + z sd per edge")}
-
-    def line(self) -> str:
-        """The summary's ``edge costs: model ...`` line."""
-        return (f"edge costs: model {self.file} ({self.class_name}) on grounds {list(self.grounds)}"
-                + (f"; planned on the {self.risk_q:g} quantile of energy (each edge at mean + z sd)"
-                   if self.risk_q is not None else "")
-                + ("" if self.gives_interval else "; the model gives no interval"))
 
 
 @dataclass(frozen=True)
@@ -365,24 +322,16 @@ def plan_and_compare(
     goal_xy_m: tuple[float, float],
     *,
     planner: str = "RRTstar",
-    robot: str = "husky",
-    speed_mps: float = 0.5,
-    max_slope_deg: float = 20.0,
-    unknown_ground: str | None = "gravel",
+    pricing: CostSpec | None = None,
     seed: int | None = 0,
     time_limit_s: float | None = 1.0,
     max_evaluations: int | None = None,
-    model: Any = None,
-    model_label: str | None = None,
-    model_ground: str | Mapping[str, str] | None = None,
-    risk: float | None = None,
     map_label: str = "map",
-    risk_name: str = "risk",
 ) -> PlanReport:
     """Plan a minimum-energy route and compare it with the shortest route and the lattice optimum.
 
     The kernels are compiled (or loaded) first (:func:`planner.warm_up_kernels`), the map is
-    priced (:func:`planner.cost_source.edge_costs`: the physics presets, or ``model``), the
+    priced (:meth:`planner.cost_spec.CostSpec.build`: the physics presets, or a saved model), the
     route planned with ``compare=True`` (:func:`planner.plan_route`) and, for a planner other
     than the lattice, the lattice route with refinement planned too (the table's second row).
 
@@ -394,28 +343,17 @@ def plan_and_compare(
         Start and goal (m).
     planner : str
         One of :data:`planner.PLANNERS`.
-    robot, speed_mps, unknown_ground
-        As :meth:`EnergyCost.from_presets` (``unknown_ground`` not with ``model``).
-    max_slope_deg : float
-        Steepest drivable slope (degrees, in (0, 90)).
+    pricing : CostSpec, optional
+        How the map is priced (:class:`planner.cost_spec.CostSpec`: the robot, speed, slope limit,
+        the physics presets or a saved current model, a risk level); default ``CostSpec()``, the
+        husky presets at 0.5 m/s. With a model that gives an interval, the route's energy
+        distribution is reported (:func:`planner.route_energy_interval`); with its ``risk`` the
+        route is planned on that quantile of energy (:func:`planner.risk_cost`).
     seed, time_limit_s, max_evaluations
         As :func:`planner.plan_route` (``max_evaluations`` is its ``max_cost_evaluations``
         and, when given, replaces the time limit).
-    model : CurrentModel, optional
-        A saved current model pricing the edges (:func:`planner.model_energy_cost`); when
-        it gives an interval, the route's energy distribution is reported
-        (:func:`planner.route_energy_interval`).
-    model_label : str, optional
-        How the model is named (default its class name).
-    model_ground : str or mapping, optional
-        With ``model``: as :func:`planner.model_energy_cost`.
-    risk : float, optional
-        With a model that has an interval: plan on the ``risk`` quantile of energy
-        (:func:`planner.risk_cost`).
     map_label : str
         How the map is named in the summary, the figure and route.json.
-    risk_name : str
-        How messages name ``risk`` (the command line passes ``"--risk"``).
 
     Returns
     -------
@@ -424,7 +362,7 @@ def plan_and_compare(
     Raises
     ------
     InvalidParameterError
-        A bad number; ``risk`` with a model that gives no interval.
+        A bad number; a ``risk`` with a model that gives no interval.
     UnknownNameError
         ``planner`` not one of :data:`planner.PLANNERS`.
     TerrawattError
@@ -439,20 +377,11 @@ def plan_and_compare(
     ('exact', ['min-energy (lattice)', 'lattice + refinement', 'shortest distance'])
     """
     check_choice("planner", planner, PLANNERS)
-    if risk is not None:
-        check_planning_risk(risk, risk_name)
-    max_slope_deg = check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False,
-                               high_inclusive=False)
+    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
     compile_s = warm_up_kernels()  # compiled once per environment, then loaded from numba's cache
     t0 = time.perf_counter()
-    mean_cost = edge_costs(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=math.radians(max_slope_deg),
-                           unknown_ground=unknown_ground if model is None else None, model=model,
-                           model_ground=model_ground)
-    if risk is not None and not mean_cost.has_interval:
-        raise InvalidParameterError(
-            f"{risk_name} {risk:g} needs a model with a predictive interval; the model {model_label or ''} gives none "
-            f"(its spreads are all 0): plan without {risk_name}, or with a model that has one")
-    cost = mean_cost if risk is None else risk_cost(mean_cost, risk)
+    mean_cost = pricing.build(terrain)
+    cost = pricing.at_risk(mean_cost)
     prep_s = time.perf_counter() - t0
     route = plan_route(terrain, start_xy_m, goal_xy_m, cost=cost, planner=planner, seed=seed, compare=True,
                        time_limit_s=None if max_evaluations is not None else time_limit_s,
@@ -462,16 +391,11 @@ def plan_and_compare(
         lattice = route if planner == "lattice" else plan_route(terrain, start_xy_m, goal_xy_m, cost=cost,
                                                                 planner="lattice", seed=seed, compare=False)
         interval = route_energy_interval(mean_cost, route.waypoints_m) if mean_cost.has_interval else None
-    plan_model = None
-    if model is not None:
-        plan_model = PlanModel(file=model_label or type(model).__name__, class_name=type(model).__name__,
-                               model_ground=model_ground, grounds=tuple(mean_cost.ground_labels),
-                               gives_interval=bool(mean_cost.has_interval), risk_q=risk)
     return PlanReport(
         route=route, lattice=lattice, interval=interval,
         start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])), goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])),
-        planner=planner, seed=seed, time_limit_s=time_limit_s, max_evaluations=max_evaluations, robot=robot,
-        speed_mps=speed_mps, max_slope_deg=max_slope_deg, unknown_ground=unknown_ground if model is None else None,
-        map_label=map_label, map_preparation_s=prep_s, kernel_compile_s=compile_s, model=plan_model,
+        planner=planner, seed=seed, time_limit_s=time_limit_s, max_evaluations=max_evaluations, robot=pricing.robot,
+        speed_mps=pricing.speed_mps, max_slope_deg=pricing.max_slope_deg, unknown_ground=pricing.preset_unknown_ground,
+        map_label=map_label, map_preparation_s=prep_s, kernel_compile_s=compile_s, model=pricing.plan_model(mean_cost),
         terrain=terrain, cost=cost,
     )

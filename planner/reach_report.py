@@ -5,20 +5,17 @@ from __future__ import annotations
 import math
 import os
 import time
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from energy.params import robot_params
 from energy.battery import S_PER_H
 from terrain import TerrainMap
 from terrawatt_base.formats import result_document, write_result_json
-from terrawatt_base.checks import check_real
+from terrawatt_base.checks import check_instance, check_real
 from terrawatt_base.figure_file import draw_figure
 
-from .cost_source import edge_costs
-from .plan_report import PlanModel
+from .cost_spec import CostSpec, PlanModel
 from .reachability import reachability, warm_up_reachability
 from .reachability_result import Reachability
 from .warmup import warm_up_kernels
@@ -150,13 +147,7 @@ def reach_on_battery(
     voltage_v: float | None = None,
     reserve_pct: float = 20.0,
     round_trip: bool = False,
-    robot: str = "husky",
-    speed_mps: float = 0.5,
-    max_slope_deg: float = 20.0,
-    unknown_ground: str | None = "gravel",
-    model: Any = None,
-    model_label: str | None = None,
-    model_ground: str | Mapping[str, str] | None = None,
+    pricing: CostSpec | None = None,
     map_label: str = "map",
 ) -> ReachReport:
     """The cells a battery reaches from a depot (:func:`planner.reachability`), with its budget and timings.
@@ -177,11 +168,9 @@ def reach_on_battery(
         Share of the battery kept in reserve (%, in [0, 100)).
     round_trip : bool
         Budget the way there and back.
-    robot, speed_mps, max_slope_deg, unknown_ground, model, model_ground
-        How the edges are priced (:func:`planner.cost_source.edge_costs`; ``unknown_ground``
-        not with ``model``).
-    model_label : str, optional
-        How the model is named in reach.json (default its class name).
+    pricing : CostSpec, optional
+        How the edges are priced (:class:`planner.cost_spec.CostSpec`, default ``CostSpec()``; its
+        ``risk`` is not used: the reach is at the mean).
     map_label : str
         How the map is named.
 
@@ -194,7 +183,7 @@ def reach_on_battery(
     InvalidParameterError
         A bad number.
     TerrawattError
-        As :func:`planner.cost_source.edge_costs` and :func:`planner.reachability`.
+        As :meth:`planner.cost_spec.CostSpec.build` and :func:`planner.reachability`.
 
     Examples
     --------
@@ -205,22 +194,18 @@ def reach_on_battery(
     """
     battery_ah = check_real("battery_ah", battery_ah, low=0.0, low_inclusive=False)
     reserve_pct = check_real("reserve_pct", reserve_pct, low=0.0, high=100.0, high_inclusive=False)
-    max_slope_deg = check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False,
-                               high_inclusive=False)
-    voltage_v = robot_params(robot).battery_voltage_v if voltage_v is None else check_real(
+    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    voltage_v = pricing.params.battery_voltage_v if voltage_v is None else check_real(
         "voltage_v", voltage_v, low=0.0, low_inclusive=False)
     budget_j = battery_ah * voltage_v * S_PER_H
     compile_s = warm_up_kernels() + warm_up_reachability()
     t0 = time.perf_counter()
-    cost = edge_costs(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=math.radians(max_slope_deg),
-                      unknown_ground=unknown_ground if model is None else None, model=model, model_ground=model_ground)
+    cost = pricing.build(terrain)
     prep_s = time.perf_counter() - t0
     reach = reachability(cost, depot_xy_m, budget_j=budget_j, reserve_j=budget_j * reserve_pct / 100.0,
                          round_trip=round_trip)
     total_s = time.perf_counter() - t0
-    plan_model = None if model is None else PlanModel(
-        file=model_label or type(model).__name__, class_name=type(model).__name__, model_ground=model_ground,
-        grounds=tuple(cost.ground_labels), gives_interval=bool(cost.has_interval))
-    return ReachReport(reach=reach, map_label=map_label, robot=robot, speed_mps=speed_mps, max_slope_deg=max_slope_deg,
-                       battery_ah=battery_ah, voltage_v=voltage_v, reserve_pct=reserve_pct, map_preparation_s=prep_s,
-                       total_time_s=total_s, kernel_compile_s=compile_s, model=plan_model, terrain=terrain)
+    return ReachReport(reach=reach, map_label=map_label, robot=pricing.robot, speed_mps=pricing.speed_mps,
+                       max_slope_deg=pricing.max_slope_deg, battery_ah=battery_ah, voltage_v=voltage_v,
+                       reserve_pct=reserve_pct, map_preparation_s=prep_s, total_time_s=total_s,
+                       kernel_compile_s=compile_s, model=pricing.plan_model(cost, with_risk=False), terrain=terrain)

@@ -7,16 +7,32 @@ from pathlib import Path
 from typing import Any
 
 from energy.params import resolve_unknown_ground
-from terrain import DemWindows, TerrainMap
-from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
-
 from planner import PLANNERS
 from planner.coarse_report import COARSE_OPTIONS, check_coarse_options, plan_coarse, plan_coarse_windowed
 from planner.plan_report import plan_and_compare
 from planner.ros_export import check_frame_origin
-from .common import (MAP_FLAGS, Checked, add_map_options, add_model_options, add_planner_options, add_point_options,
-                     add_robot_options, bounded, check_model_flags, check_outputs, input_paths, load_model_arg,
-                     map_arg, point_arg, positive, warn_figures)
+from terrain import DemWindows, TerrainMap
+from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
+
+from .common import (
+    MAP_FLAGS,
+    Checked,
+    add_map_options,
+    add_model_options,
+    add_planner_options,
+    add_point_options,
+    add_robot_options,
+    bounded,
+    check_model_flags,
+    check_outputs,
+    input_paths,
+    load_model_arg,
+    map_arg,
+    point_arg,
+    positive,
+    pricing_arg,
+    warn_figures,
+)
 from .ros2 import add_ros2_arguments, check_ros2_outputs, write_ros2_outputs
 
 __all__ = ["add_parsers", "run_demo", "run_plan_command"]
@@ -98,12 +114,10 @@ def _run(args: argparse.Namespace, tmap: TerrainMap, start: tuple[float, float],
     if getattr(args, "coarse_factor", None) is not None:
         return _finish(args, plan_coarse(tmap, start, goal, factor=args.coarse_factor, corridor_m=args.corridor,
                                          unknown_ground=ground, **common))
-    model = load_model_arg(args)
     return _finish(args, plan_and_compare(
-        tmap, start, goal, planner=args.planner, seed=args.seed, time_limit_s=args.time_limit,
-        max_evaluations=args.max_evaluations, unknown_ground=ground, model=model,
-        model_label=None if model is None else args.model.name, model_ground=args.model_ground, risk=args.risk,
-        risk_name="--risk", **common), ros2=True)
+        tmap, start, goal, planner=args.planner, pricing=pricing_arg(args, tmap, load_model_arg(args)),
+        seed=args.seed, time_limit_s=args.time_limit, max_evaluations=args.max_evaluations, map_label=label),
+        ros2=True)
 
 
 def _finish(args: argparse.Namespace, report: Any, *, ros2: bool = False) -> int:

@@ -6,10 +6,10 @@ import json
 
 import pytest
 
-from terrain import InvalidParameterError
-
 from planner import BatchPairs, BatchResult, EnergyCost, plan_batch
 from planner.batch_report import BatchReport, plan_batch_on_map
+from planner.cost_spec import CostSpec
+from terrain import InvalidParameterError
 
 PAIRS = [[5.0, 5.0, 35.0, 5.0], [35.0, 5.0, 5.0, 5.0], [5.0, 5.0, 20.5, 5.5]]  # the last one ends in the wall
 
@@ -40,10 +40,11 @@ def test_write_gives_csv_and_json(report, tmp_path):
 
 
 def test_a_model_prices_the_map(corridor_map, known_model):
-    report = plan_batch_on_map(corridor_map, [[2.5, 7.5, 27.5, 7.5]], model=known_model(), progress=False)
+    report = plan_batch_on_map(corridor_map, [[2.5, 7.5, 27.5, 7.5]], pricing=CostSpec(model=known_model()),
+                               progress=False)
     assert report.all_found and report.result.rows[0].status == "exact"
 
 
 def test_bad_slope_is_refused(wall_map):
     with pytest.raises(InvalidParameterError, match="max_slope_deg"):
-        plan_batch_on_map(wall_map, PAIRS, max_slope_deg=-1.0, progress=False)
+        plan_batch_on_map(wall_map, PAIRS, pricing=CostSpec(max_slope_deg=-1.0), progress=False)

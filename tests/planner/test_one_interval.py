@@ -20,6 +20,7 @@ from planner import (
     route_energy_interval,
     simulate_missions_mc,
 )
+from planner.cost_spec import CostSpec
 from planner.plan_report import plan_and_compare
 from terrain import CellModelRegistry, InvalidParameterError, TerrainMap
 
@@ -94,8 +95,8 @@ def test_the_model_s_new_ground_dof_reaches_the_cost_rows_and_the_route_interval
 def test_plan_with_a_model_reports_the_t_interval_of_a_ground_it_never_drove(linear_model):
     # what `terrawatt plan --model FILE --model-ground a --risk 0.9` reports on a map of grass
     tmap = TerrainMap(np.zeros((6, 30)), 1.0, ground=np.zeros((6, 30), int), ground_names={0: "grass"})
-    report = plan_and_compare(tmap, (2.5, 2.5), (27.5, 2.5), planner="lattice", model=linear_model,
-                              model_ground="a", risk=0.9)
+    report = plan_and_compare(tmap, (2.5, 2.5), (27.5, 2.5), planner="lattice",
+                              pricing=CostSpec(model=linear_model, model_ground="a", risk=0.9))
     iv = report.interval
     assert iv.dof == 3.0 and iv.p90_j == pytest.approx(iv.mean_j + predictive_quantile(0.9, 3.0) * iv.sd_j)
     assert report.route.energy_j == pytest.approx(iv.p90_j, rel=1e-9)  # planned on exactly that quantile
