@@ -7,8 +7,8 @@ from pathlib import Path
 from typing import Any
 
 from planner import PLANNERS, BatchPairs, read_pairs_csv
+from planner.batch import plan_batch_on_map
 from planner.batch_pairs import read_sites_csv
-from planner.batch_report import plan_batch_on_map
 from terrain import InvalidParameterError
 
 from .common import (
