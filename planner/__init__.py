@@ -30,9 +30,10 @@ from .problem import PlanningProblem
 from .reachability import reachability
 from .reachability_result import Reachability
 from .replan import IncrementalPlanner
-from .risk import RouteEnergyInterval, risk_cost, route_energy_interval
+from .risk import RouteEnergyInterval, risk_cost
 from .ros_export import write_route_bag
 from .route import Route
+from .route_price import price_route
 from .route_geojson import write_geojson
 from .settings import PlannerSettings
 from .warmup import warm_up_kernels
@@ -50,7 +51,7 @@ __all__ = [
     "warm_up_kernels",
     "LearnedEnergyModel",
     "model_energy_cost",
-    "route_energy_interval",
+    "price_route",
     "RouteEnergyInterval",
     "risk_cost",
     "plan_coarse_to_fine",

@@ -575,12 +575,12 @@ class LearnedEnergyModel:
             cost = previous.with_tables(grade_table, turn_table, rows, ground_labels=labels,
                                         grade_sd_table_j_per_m=grade_sd, turn_sd_table_j=turn_sd,
                                         spread_dof=spread_dof)
-            cost.prep_time_s = time.perf_counter() - t0
-            return cost
-        cost = EnergyCost(terrain, rows, grade_table, turn_table, speed_mps=speed, max_slope_rad=slope,
-                          battery_voltage_v=self.robot.battery_voltage_v, turn_rate_radps=self.turn_rate_radps,
-                          ground_labels=labels, grade_sd_table_j_per_m=grade_sd, turn_sd_table_j=turn_sd,
-                          spread_dof=spread_dof)
+        else:
+            cost = EnergyCost(terrain, rows, grade_table, turn_table, speed_mps=speed, max_slope_rad=slope,
+                              battery_voltage_v=self.robot.battery_voltage_v, turn_rate_radps=self.turn_rate_radps,
+                              ground_labels=labels, grade_sd_table_j_per_m=grade_sd, turn_sd_table_j=turn_sd,
+                              spread_dof=spread_dof)
+        cost.learned_model = self  # a route's whole drive profile is priced by this model (price_route)
         cost.prep_time_s = time.perf_counter() - t0
         return cost
 

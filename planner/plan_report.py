@@ -13,17 +13,18 @@ from typing import Any
 import numpy as np
 
 from terrain import UNKNOWN_GROUND, OptionalDependencyError, TerrainMap
-from terrawatt_base.formats import format_name, result_document, write_result_json
 from terrawatt_base.checks import check_choice, check_instance
 from terrawatt_base.figure_file import draw_figure
+from terrawatt_base.formats import format_name, result_document, write_result_json
 
 from .cost_spec import CostSpec, PlanModel
 from .edge_cost import EnergyCost
 from .planning import GRAPH_PLANNERS, PLANNERS, plan_route, search_objective
 from .plot import RouteLine, plot_routes
-from .risk import INTERVAL_LEVEL, RouteEnergyInterval, route_energy_interval
+from .risk import INTERVAL_LEVEL, RouteEnergyInterval
 from .route import Route
 from .route_geojson import write_geojson
+from .route_price import price_route
 from .warmup import warm_up_kernels
 
 __all__ = [
@@ -347,7 +348,7 @@ def plan_and_compare(
         How the map is priced (:class:`planner.cost_spec.CostSpec`: the robot, speed, slope limit,
         the physics presets or a saved current model, a risk level); default ``CostSpec()``, the
         husky presets at 0.5 m/s. With a model that gives an interval, the route's energy
-        distribution is reported (:func:`planner.route_energy_interval`); with its ``risk`` the
+        distribution is reported (:func:`planner.route_price.price_route`); with its ``risk`` the
         route is planned on that quantile of energy (:func:`planner.risk_cost`).
     seed, time_limit_s, max_evaluations
         As :func:`planner.plan_route` (``max_evaluations`` is its ``max_cost_evaluations``
@@ -390,7 +391,7 @@ def plan_and_compare(
     if route.found:
         lattice = route if planner == "lattice" else plan_route(terrain, start_xy_m, goal_xy_m, cost=cost,
                                                                 planner="lattice", seed=seed, compare=False)
-        interval = route_energy_interval(mean_cost, route.waypoints_m) if mean_cost.has_interval else None
+        interval = price_route(mean_cost, route) if mean_cost.has_interval else None
     return PlanReport(
         route=route, lattice=lattice, interval=interval,
         start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])), goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])),

@@ -80,8 +80,8 @@ from ..lattice import Lattice
 from ..learned_cost import LearnedEnergyModel
 from ..planning import plan_route
 from ..replan import IncrementalPlanner
-from ..risk import route_energy_interval
 from ..route import Route, evaluate_route
+from ..route_price import price_route
 from ..settings import PlannerSettings
 from .adaptive_results import AdaptiveResult, LegRecord, ReplanRecord, UpdateRecord
 from .charge import MAX_JOIN_GAP_S, ChargeAccount
@@ -447,7 +447,7 @@ class Navigator(RegionUpdates):
 
     def _route_dof(self, waypoints: np.ndarray) -> float:
         """The degrees of freedom of ``waypoints``' energy interval on the planning cost
-        (:func:`planner.route_energy_interval`): ``inf`` (the normal distribution) without an
+        (:func:`planner.route_price.price_route`): ``inf`` (the normal distribution) without an
         interval or where every row is Gaussian; cached per cost and route. A route the cost
         cannot price (it crosses what the last update blocked) takes the least of every row's."""
         cost = self.cost
@@ -458,7 +458,7 @@ class Navigator(RegionUpdates):
         if self._dof_cache is not None and self._dof_cache[0] is cost and self._dof_cache[1] == key:
             return self._dof_cache[2]
         try:
-            dof = route_energy_interval(cost, waypoints).dof
+            dof = price_route(cost, waypoints, interval=True).dof
         except InvalidParameterError:
             dof = min(cost.spread_dof)
         self._dof_cache = (cost, key, dof)
