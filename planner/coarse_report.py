@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 import math
 import os
 import time
@@ -13,12 +12,12 @@ from typing import Any
 
 from terrain import DemWindows, Grid, InvalidParameterError, TerrainMap
 from terrawatt_base.formats import result_document, write_result_json
-from terrawatt_base.checks import check_bool, check_real, option_names
+from terrawatt_base.checks import check_bool, check_instance, option_names
 from terrawatt_base.figure_file import draw_figure
 
 from .coarse import CoarseToFine, plan_coarse_to_fine
 from .coarse_geotiff import plan_coarse_to_fine_geotiff
-from .edge_cost import EnergyCost
+from .cost_spec import CostSpec
 from .plan_report import (
     ROUTE_JSON_FORMAT_VERSION,
     compile_line,
@@ -169,8 +168,12 @@ COARSE_OPTIONS = ("factor", "corridor_m", "windowed", "path", "model", "planner"
                   "cell_size_m", "landcover")
 
 
-def _check_slope(max_slope_deg: float) -> float:
-    return check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False, high_inclusive=False)
+def _presets_only(pricing: CostSpec | None) -> CostSpec:
+    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    if pricing.model is not None or pricing.risk is not None:
+        raise InvalidParameterError("coarse-to-fine prices the map with the physics presets: give pricing without a "
+                                    "model and a risk level", parameter="pricing")
+    return pricing
 
 
 def plan_coarse(
@@ -180,18 +183,19 @@ def plan_coarse(
     *,
     factor: int = 4,
     corridor_m: float | None = None,
-    robot: str = "husky",
-    speed_mps: float = 0.5,
-    max_slope_deg: float = 20.0,
-    unknown_ground: str | None = "gravel",
+    pricing: CostSpec | None = None,
     map_label: str = "map",
 ) -> CoarsePlanReport:
     """Price a map in memory with the presets and plan coarse-to-fine on it (:func:`planner.plan_coarse_to_fine`).
 
+    ``pricing`` (:class:`planner.cost_spec.CostSpec`, default ``CostSpec()``) prices the map with the
+    physics presets: coarse-to-fine takes no saved model and no risk level.
+
     Raises
     ------
     TerrawattError
-        As :meth:`EnergyCost.from_presets` and :func:`planner.plan_coarse_to_fine`.
+        As :meth:`planner.cost_spec.CostSpec.build` and :func:`planner.plan_coarse_to_fine`;
+        ``pricing`` with a model or a risk level.
 
     Examples
     --------
@@ -200,17 +204,17 @@ def plan_coarse(
     >>> report.route.status, report.rows()[0]["route"]
     ('exact', 'coarse-to-fine (x4)')
     """
-    max_slope_deg = _check_slope(max_slope_deg)
+    pricing = _presets_only(pricing)
     compile_s = warm_up_kernels()
     t0 = time.perf_counter()
-    cost = EnergyCost.from_presets(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=math.radians(max_slope_deg),
-                                   unknown_ground=unknown_ground)
+    cost = pricing.build(terrain)
     prep_s = time.perf_counter() - t0
     plan = plan_coarse_to_fine(cost, start_xy_m, goal_xy_m, factor=factor, corridor_m=corridor_m)
     return CoarsePlanReport(
         plan=plan, start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),
-        goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), robot=robot, speed_mps=speed_mps,
-        max_slope_deg=max_slope_deg, unknown_ground=unknown_ground, map_label=map_label, map_preparation_s=prep_s,
+        goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), robot=pricing.robot, speed_mps=pricing.speed_mps,
+        max_slope_deg=pricing.max_slope_deg, unknown_ground=pricing.unknown_ground, map_label=map_label,
+        map_preparation_s=prep_s,
         kernel_compile_s=compile_s, windowed=False, grid=terrain.grid, terrain=terrain,
     )
 
@@ -222,16 +226,14 @@ def plan_coarse_windowed(
     *,
     factor: int = 4,
     corridor_m: float | None = None,
-    robot: str = "husky",
-    speed_mps: float = 0.5,
-    max_slope_deg: float = 20.0,
-    unknown_ground: str = "gravel",
+    pricing: CostSpec | None = None,
     fine_window_cells: int | None = None,
     map_label: str | None = None,
 ) -> CoarsePlanReport:
     """Plan coarse-to-fine on a GeoTIFF DEM read by windows, never whole (:func:`planner.plan_coarse_to_fine_geotiff`),
-    every window priced by the presets; ``fine_window_cells`` is its ``fine_window_budget_cells`` and ``map_label``
-    defaults to the file's name.
+    every window priced by ``pricing`` (:meth:`planner.cost_spec.CostSpec.build`: the presets; every cell of a DEM
+    without classes is of its unknown ground, which must name a preset); ``fine_window_cells`` is its
+    ``fine_window_budget_cells`` and ``map_label`` defaults to the file's name.
 
     Raises
     ------
@@ -240,18 +242,16 @@ def plan_coarse_windowed(
     OptionalDependencyError
         rasterio is not installed.
     """
-    max_slope_deg = _check_slope(max_slope_deg)
+    pricing = _presets_only(pricing)
     compile_s = warm_up_kernels()
     with DemWindows(path) as dem:
         grid = dem.grid
-    cost_from = functools.partial(EnergyCost.from_presets, robot=robot, speed_mps=speed_mps,
-                                  max_slope_rad=math.radians(max_slope_deg), unknown_ground=unknown_ground)
     plan = plan_coarse_to_fine_geotiff(path, start_xy_m, goal_xy_m, factor=factor, corridor_m=corridor_m,
-                                       cost_from=cost_from, fine_window_budget_cells=fine_window_cells)
+                                       cost_from=pricing.build, fine_window_budget_cells=fine_window_cells)
     return CoarsePlanReport(
         plan=plan, start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),
-        goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), robot=robot, speed_mps=speed_mps,
-        max_slope_deg=max_slope_deg, unknown_ground=unknown_ground,
+        goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), robot=pricing.robot, speed_mps=pricing.speed_mps,
+        max_slope_deg=pricing.max_slope_deg, unknown_ground=pricing.unknown_ground,
         map_label=Path(path).name if map_label is None else map_label, map_preparation_s=0.0,
         kernel_compile_s=compile_s, windowed=True, grid=grid,
     )
