@@ -7,13 +7,17 @@ at the mean or at a risk level. A :class:`CostSpec` holds those choices, checked
 entry points (:func:`planner.plan_report.plan_and_compare`, the batch, reach, mission, Monte
 Carlo, replay and tour entry points) take one instead of threading them one by one, and
 :meth:`CostSpec.build` is the one door to a map's edge costs (:meth:`CostSpec.at_risk` the one
-to its risk-priced twin). :class:`PlanModel` is what an output says of the model that priced it.
+to its risk-priced twin). :meth:`CostSpec.price` is the prologue every entry point shared (compile the
+kernels, price the map, at the risk level, timed): its :class:`PricedMap` is the header of every
+answer on a priced map (the map, the robot, the pricing, the timings), and :class:`PlanModel` what
+an output says of the model that priced it.
 """
 
 from __future__ import annotations
 
 import math
 import os
+import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -26,8 +30,9 @@ from terrawatt_base.errors import InvalidParameterError
 from .edge_cost import EnergyCost
 from .model_cost import model_energy_cost
 from .risk import check_planning_risk, risk_cost
+from .warmup import warm_up_kernels
 
-__all__ = ["CostSpec", "PlanModel"]
+__all__ = ["CostSpec", "PricedMap", "PlanModel"]
 
 
 @dataclass(frozen=True)
@@ -216,3 +221,69 @@ class CostSpec:
         return PlanModel(file=self.model_name, class_name=type(self.model).__name__, model_ground=self.model_ground,
                          grounds=tuple(cost.ground_labels), gives_interval=bool(cost.has_interval),
                          risk_q=self.risk if with_risk else None)
+
+    def price(self, terrain: TerrainMap, *, map_label: str = "map") -> PricedMap:
+        """Compile (or load) the kernels, then price ``terrain`` (:meth:`build`, :meth:`at_risk`), timed.
+
+        The prologue of every entry point on a priced map; the kernels' compile time is kept
+        apart from the map preparation.
+
+        Returns
+        -------
+        PricedMap
+
+        Raises
+        ------
+        TerrawattError
+            As :meth:`build` and :meth:`at_risk`.
+        """
+        compile_s = warm_up_kernels()  # compiled once per environment, then loaded from numba's cache
+        t0 = time.perf_counter()
+        mean_cost = self.build(terrain)
+        cost = self.at_risk(mean_cost)
+        return PricedMap(self, map_label, terrain, mean_cost, cost, time.perf_counter() - t0, compile_s)
+
+
+@dataclass(frozen=True, eq=False)
+class PricedMap:
+    """A map priced by a :class:`CostSpec`: its costs, and the header of every answer on it.
+
+    Made by :meth:`CostSpec.price` (or, for a map read by windows and never whole, with only the
+    spec, the label and the times).
+
+    Attributes
+    ----------
+    spec : CostSpec
+        How the map was priced.
+    map_label : str
+        How the map is named.
+    terrain : TerrainMap or None
+        The map (None when it was read by windows).
+    mean_cost, cost : EnergyCost or None
+        The edge costs at the mean; the ones to plan on (at the spec's risk level, else the mean).
+    map_preparation_s, kernel_compile_s : float
+        Seconds to price the map; to compile (or load) the kernels beforehand.
+    """
+
+    spec: CostSpec
+    map_label: str
+    terrain: TerrainMap | None = field(default=None, repr=False)
+    mean_cost: EnergyCost | None = field(default=None, repr=False)
+    cost: EnergyCost | None = field(default=None, repr=False)
+    map_preparation_s: float = 0.0
+    kernel_compile_s: float = 0.0
+
+    @property
+    def model(self) -> PlanModel | None:
+        """What outputs say of the saved model that priced the map (with the risk level), or None for the presets."""
+        return None if self.mean_cost is None else self.spec.plan_model(self.mean_cost)
+
+    def robot_line(self) -> str:
+        """``robot: NAME, speed V m/s, max slope D deg``: how the edges were priced, for a summary."""
+        s = self.spec
+        return f"robot: {s.robot}, speed {s.speed_mps:g} m/s, max slope {s.max_slope_deg:g} deg"
+
+    def fields(self) -> dict[str, Any]:
+        """The robot, speed and slope limit under the keys the result files give them."""
+        s = self.spec
+        return {"robot": s.robot, "speed_mps": s.speed_mps, "max_slope_deg": s.max_slope_deg}

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import os
-import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,7 +16,7 @@ from terrawatt_base.checks import check_choice, check_instance
 from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import format_name, result_document, write_result_json
 
-from .cost_spec import CostSpec, PlanModel
+from .cost_spec import CostSpec, PlanModel, PricedMap
 from .edge_cost import EnergyCost
 from .planning import GRAPH_PLANNERS, PLANNERS, plan_route, search_objective
 from .plot import RouteLine, plot_routes
@@ -25,7 +24,6 @@ from .risk import INTERVAL_LEVEL, RouteEnergyInterval
 from .route import Route
 from .route_geojson import write_geojson
 from .route_price import price_route
-from .warmup import warm_up_kernels
 
 __all__ = [
     "ROUTE_JSON_FORMAT",
@@ -137,18 +135,9 @@ class PlanReport:
         Start and goal (m).
     planner, seed, time_limit_s, max_evaluations
         How the route was planned (:func:`planner.plan_route`).
-    robot, speed_mps, max_slope_deg, unknown_ground
-        How the edges were priced.
-    map_label : str
-        How the map is named.
-    map_preparation_s, kernel_compile_s : float
-        Seconds to price the map; to compile (or load) the kernels beforehand.
-    model : PlanModel or None
-        The saved model that priced the edges, or None for the physics presets.
-    terrain : TerrainMap
-        The map.
-    cost : EnergyCost
-        The cost the routes were planned on (the risk cost with ``risk``).
+    priced : PricedMap
+        The map and how it was priced (robot, speed, slope limit, model, risk), with the times:
+        the header of the summary and of route.json.
     """
 
     route: Route
@@ -160,16 +149,22 @@ class PlanReport:
     seed: int | None
     time_limit_s: float | None
     max_evaluations: int | None
-    robot: str
-    speed_mps: float
-    max_slope_deg: float
-    unknown_ground: str | None
-    map_label: str
-    map_preparation_s: float
-    kernel_compile_s: float
-    model: PlanModel | None = None
-    terrain: TerrainMap = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
-    cost: EnergyCost = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
+    priced: PricedMap = field(repr=False, compare=False)
+
+    @property
+    def terrain(self) -> TerrainMap:
+        """The map."""
+        return self.priced.terrain
+
+    @property
+    def cost(self) -> EnergyCost:
+        """The cost the routes were planned on (the risk cost with a risk level)."""
+        return self.priced.cost
+
+    @property
+    def model(self) -> PlanModel | None:
+        """The saved model that priced the edges, or None for the physics presets."""
+        return self.priced.model
 
     @property
     def shortest(self) -> Route | None:
@@ -204,19 +199,18 @@ class PlanReport:
 
     def summary(self) -> str:
         """What ``terrawatt plan`` prints: the map, robot and planner, the table, the interval, the saving."""
-        t, route = self.terrain, self.route
-        lines = [map_line(self.map_label, t),
-                 f"robot: {self.robot}, speed {self.speed_mps:g} m/s, max slope {self.max_slope_deg:g} deg; "
-                 f"map preparation {self.map_preparation_s:.2f} s"]
+        t, route, priced = self.terrain, self.route, self.priced
+        lines = [map_line(priced.map_label, t), f"{priced.robot_line()}; map preparation {priced.map_preparation_s:.2f} s"]
         if self.model is not None:
             lines.append(self.model.line())
         n_unknown = int(np.count_nonzero(np.asarray(t.ground) == UNKNOWN_GROUND))
-        if n_unknown and self.unknown_ground:
+        unknown_ground = priced.spec.preset_unknown_ground
+        if n_unknown and unknown_ground:
             lines.append(f"ground class unknown in {n_unknown} of {t.ground.size} cells: priced as "
-                         f"{self.unknown_ground!r} (unknown_ground / --unknown-ground NAME to choose, None / 'none' to refuse them)")
+                         f"{unknown_ground!r} (unknown_ground / --unknown-ground NAME to choose, None / 'none' to refuse them)")
         lines.append(f"start {self.start_xy_m} -> goal {self.goal_xy_m}; planner {self.planner}, {self._budget()}, "
                      f"seed {self.seed}")
-        lines += compile_line(self.kernel_compile_s)
+        lines += compile_line(priced.kernel_compile_s)
         lines.append("")
         if not route.found:
             lines.append(f"no route: status {route.status!r} after {route.planning_time_s:.3f} s")
@@ -257,11 +251,9 @@ class PlanReport:
         if self.interval is not None:
             routes["min_energy"]["energy_interval"] = self.interval.to_dict()
         result = result_document("route", ROUTE_JSON_FORMAT_VERSION, {
-            "map": self.map_label,
+            "map": self.priced.map_label,
             "map_crs": self.terrain.crs,
-            "robot": self.robot,
-            "speed_mps": self.speed_mps,
-            "max_slope_deg": self.max_slope_deg,
+            **self.priced.fields(),
             "start_xy_m": list(self.start_xy_m),
             "goal_xy_m": list(self.goal_xy_m),
             **lonlat_fields(self.terrain, self.start_xy_m, self.goal_xy_m),
@@ -270,8 +262,8 @@ class PlanReport:
             "time_limit_s": self.time_limit_s if self.max_evaluations is None else None,
             "max_evaluations": self.max_evaluations,
             "seed": self.seed,
-            "map_preparation_s": self.map_preparation_s,
-            "kernel_compile_s": self.kernel_compile_s,
+            "map_preparation_s": self.priced.map_preparation_s,
+            "kernel_compile_s": self.priced.kernel_compile_s,
             "status": route.status,
             "energy_saved_pct": _finite_or_none(route.energy_saved_pct) if route.found else None,
             "optimality_ratio": _finite_or_none(route.optimality_ratio) if route.found else None,
@@ -295,8 +287,8 @@ class PlanReport:
                      RouteLine("shortest distance", self.shortest.waypoints_m, self.shortest.energy_j,
                                colour="#1565c0", linestyle="--")]
         return plot_routes(self.terrain, lines, self.start_xy_m, self.goal_xy_m, path, ax=ax,
-                           title=f"terrawatt: minimum-energy route on {self.map_label}",
-                           extent="map" if whole_map else "routes", max_slope_rad=math.radians(self.max_slope_deg))
+                           title=f"terrawatt: minimum-energy route on {self.priced.map_label}",
+                           extent="map" if whole_map else "routes", max_slope_rad=self.priced.spec.max_slope_rad)
 
     def write(self, out_dir: str | os.PathLike[str], *, whole_map: bool = False,
               on_figure_error: str = "warn") -> list[Path]:
@@ -379,11 +371,8 @@ def plan_and_compare(
     """
     check_choice("planner", planner, PLANNERS)
     pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
-    compile_s = warm_up_kernels()  # compiled once per environment, then loaded from numba's cache
-    t0 = time.perf_counter()
-    mean_cost = pricing.build(terrain)
-    cost = pricing.at_risk(mean_cost)
-    prep_s = time.perf_counter() - t0
+    priced = pricing.price(terrain, map_label=map_label)
+    mean_cost, cost = priced.mean_cost, priced.cost
     route = plan_route(terrain, start_xy_m, goal_xy_m, cost=cost, planner=planner, seed=seed, compare=True,
                        time_limit_s=None if max_evaluations is not None else time_limit_s,
                        max_cost_evaluations=max_evaluations)
@@ -395,8 +384,5 @@ def plan_and_compare(
     return PlanReport(
         route=route, lattice=lattice, interval=interval,
         start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])), goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])),
-        planner=planner, seed=seed, time_limit_s=time_limit_s, max_evaluations=max_evaluations, robot=pricing.robot,
-        speed_mps=pricing.speed_mps, max_slope_deg=pricing.max_slope_deg, unknown_ground=pricing.preset_unknown_ground,
-        map_label=map_label, map_preparation_s=prep_s, kernel_compile_s=compile_s, model=pricing.plan_model(mean_cost),
-        terrain=terrain, cost=cost,
+        planner=planner, seed=seed, time_limit_s=time_limit_s, max_evaluations=max_evaluations, priced=priced,
     )

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import time
@@ -11,14 +12,13 @@ from typing import Any
 
 from energy.battery import S_PER_H
 from terrain import TerrainMap
-from terrawatt_base.formats import result_document, write_result_json
 from terrawatt_base.checks import check_instance, check_real
 from terrawatt_base.figure_file import draw_figure
+from terrawatt_base.formats import result_document, write_result_json
 
-from .cost_spec import CostSpec, PlanModel
+from .cost_spec import CostSpec, PlanModel, PricedMap
 from .reachability import reachability, warm_up_reachability
 from .reachability_result import Reachability
-from .warmup import warm_up_kernels
 
 __all__ = ["ReachReport", "reach_on_battery"]
 
@@ -35,45 +35,43 @@ class ReachReport:
     ----------
     reach : Reachability
         The energy rasters, the budget and the reachable cells.
-    map_label : str
-        How the map is named.
-    robot, speed_mps, max_slope_deg
-        How the edges were priced.
+    priced : PricedMap
+        The map and how it was priced, with the times (its map preparation; the kernels' compile
+        time includes the reachability kernels').
     battery_ah, voltage_v, reserve_pct : float
         The battery: capacity (Ah), voltage (V), share kept in reserve (%).
-    map_preparation_s, total_time_s, kernel_compile_s : float
-        Seconds to price the map; to price it and search; to compile the kernels beforehand.
-    model : PlanModel or None
-        The saved model that priced the edges, or None for the physics presets.
-    terrain : TerrainMap
-        The map.
+    total_time_s : float
+        Seconds to price the map and search.
     """
 
     reach: Reachability
-    map_label: str
-    robot: str
-    speed_mps: float
-    max_slope_deg: float
+    priced: PricedMap = field(repr=False, compare=False)
     battery_ah: float
     voltage_v: float
     reserve_pct: float
-    map_preparation_s: float
     total_time_s: float
-    kernel_compile_s: float
-    model: PlanModel | None = None
-    terrain: TerrainMap = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
+
+    @property
+    def terrain(self) -> TerrainMap:
+        """The map."""
+        return self.priced.terrain
+
+    @property
+    def model(self) -> PlanModel | None:
+        """The saved model that priced the edges, or None for the physics presets."""
+        return self.priced.model
 
     def summary(self) -> str:
         """What ``terrawatt reach`` prints: the map, robot and battery, then the reachable area and the times."""
-        reach, t = self.reach, self.terrain
+        reach, t, priced = self.reach, self.terrain, self.priced
 
         def wh(j: float) -> str:
             return "-" if math.isnan(j) else f"{j / S_PER_H:.2f} Wh"
 
         budget_wh = reach.budget_j / S_PER_H if reach.budget_j is not None else math.nan
         lines = [
-            f"map: {self.map_label}  {t.shape[0]} x {t.shape[1]} cells of {t.cell_size_m:g} m",
-            f"robot: {self.robot}, speed {self.speed_mps:g} m/s, max slope {self.max_slope_deg:g} deg",
+            f"map: {priced.map_label}  {t.shape[0]} x {t.shape[1]} cells of {t.cell_size_m:g} m",
+            priced.robot_line(),
             f"battery {self.battery_ah:g} Ah at {self.voltage_v:g} V = {budget_wh:.1f} Wh; reserve {self.reserve_pct:g} "
             f"% -> {reach.usable_energy_j / S_PER_H:.1f} Wh usable {'there and back' if reach.round_trip else 'one way'}",
             f"depot {reach.depot_xy_m}",
@@ -89,13 +87,13 @@ class ReachReport:
         ]
         if reach.round_trip:
             rows.append(("max round-trip energy", wh(reach.max_round_trip_energy_j)))
-        rows += [("map preparation", f"{self.map_preparation_s:.2f} s"), ("lattice moves", f"{reach.graph_time_s:.2f} s"),
+        rows += [("map preparation", f"{priced.map_preparation_s:.2f} s"), ("lattice moves", f"{reach.graph_time_s:.2f} s"),
                  ("search", f"{reach.search_time_s:.2f} s"), ("total", f"{self.total_time_s:.2f} s")]
         lines += [f"{name:<24} {value}" for name, value in rows]
         if not reach.n_reachable_cells:
             lines += ["", "no cell is reachable within the usable energy: a larger battery or a smaller reserve (reserve_pct, --reserve)"]
-        if self.kernel_compile_s > 1.0:
-            lines.append(f"(compiled the kernels in {self.kernel_compile_s:.1f} s: first run in this environment; not "
+        if priced.kernel_compile_s > 1.0:
+            lines.append(f"(compiled the kernels in {priced.kernel_compile_s:.1f} s: first run in this environment; not "
                          "in the times above)")
         return "\n".join(lines)
 
@@ -104,16 +102,14 @@ class ReachReport:
         with the query, the battery, the times and ``raster`` (the raster file's name)."""
         reach = self.reach.to_dict()
         result = result_document("reachability", reach.pop("format_version"), {
-            "map": self.map_label,
-            "robot": self.robot,
-            "speed_mps": self.speed_mps,
-            "max_slope_deg": self.max_slope_deg,
+            "map": self.priced.map_label,
+            **self.priced.fields(),
             "battery_ah": self.battery_ah,
             "battery_voltage_v": self.voltage_v,
             "reserve_pct": self.reserve_pct,
-            "map_preparation_s": self.map_preparation_s,
+            "map_preparation_s": self.priced.map_preparation_s,
             "total_time_s": self.total_time_s,
-            "kernel_compile_s": self.kernel_compile_s,
+            "kernel_compile_s": self.priced.kernel_compile_s,
             "raster": raster,
             **{k: v for k, v in reach.items() if k != "format"},
         })
@@ -135,7 +131,8 @@ class ReachReport:
         written = [self.reach.write(out / name)]
         written.append(write_result_json(out / "reach.json", self.to_dict(written[0].name)))
         png = draw_figure(out / "reach.png", lambda: self.reach.plot(
-            out / "reach.png", title=f"terrawatt: energy reachability on {self.map_label}"), on_error=on_figure_error)
+            out / "reach.png", title=f"terrawatt: energy reachability on {self.priced.map_label}"),
+            on_error=on_figure_error)
         return written + ([png] if png is not None else [])
 
 
@@ -198,14 +195,12 @@ def reach_on_battery(
     voltage_v = pricing.params.battery_voltage_v if voltage_v is None else check_real(
         "voltage_v", voltage_v, low=0.0, low_inclusive=False)
     budget_j = battery_ah * voltage_v * S_PER_H
-    compile_s = warm_up_kernels() + warm_up_reachability()
-    t0 = time.perf_counter()
-    cost = pricing.build(terrain)
-    prep_s = time.perf_counter() - t0
-    reach = reachability(cost, depot_xy_m, budget_j=budget_j, reserve_j=budget_j * reserve_pct / 100.0,
+    reach_compile_s = warm_up_reachability()
+    priced = dataclasses.replace(pricing, risk=None).price(terrain, map_label=map_label)  # the reach is at the mean
+    priced = dataclasses.replace(priced, kernel_compile_s=priced.kernel_compile_s + reach_compile_s)
+    t1 = time.perf_counter()
+    reach = reachability(priced.cost, depot_xy_m, budget_j=budget_j, reserve_j=budget_j * reserve_pct / 100.0,
                          round_trip=round_trip)
-    total_s = time.perf_counter() - t0
-    return ReachReport(reach=reach, map_label=map_label, robot=pricing.robot, speed_mps=pricing.speed_mps,
-                       max_slope_deg=pricing.max_slope_deg, battery_ah=battery_ah, voltage_v=voltage_v,
-                       reserve_pct=reserve_pct, map_preparation_s=prep_s, total_time_s=total_s,
-                       kernel_compile_s=compile_s, model=pricing.plan_model(cost, with_risk=False), terrain=terrain)
+    total_s = priced.map_preparation_s + time.perf_counter() - t1
+    return ReachReport(reach=reach, priced=priced, battery_ah=battery_ah, voltage_v=voltage_v,
+                       reserve_pct=reserve_pct, total_time_s=total_s)

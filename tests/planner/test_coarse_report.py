@@ -68,7 +68,7 @@ def test_a_windowed_plan_equals_the_plan_in_memory(tmp_path):
     start, goal = (5.5, 6.5), (90.5, 120.5)
     windowed = plan_coarse_windowed(dem, start, goal, factor=4)
     whole = plan_coarse(terrain.read_map(dem), start, goal, factor=4, map_label="dem.tif")
-    assert windowed.windowed and windowed.map_label == "dem.tif" and windowed.map_preparation_s == 0.0
+    assert windowed.windowed and windowed.priced.map_label == "dem.tif" and windowed.priced.map_preparation_s == 0.0
     assert windowed.terrain is None and windowed.grid.shape == (131, 97)
     assert windowed.route.energy_j == whole.route.energy_j
     lines = windowed.summary().splitlines()

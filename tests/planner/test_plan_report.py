@@ -136,7 +136,7 @@ def test_a_model_prices_the_edges_and_gives_the_interval(corridor_map, known_mod
     model = known_model()
     report = plan_and_compare(corridor_map, (2.5, 7.5), (27.5, 7.5), planner="lattice",
                               pricing=CostSpec(model=model, model_label="husky.tw", unknown_ground="gravel"))
-    assert report.unknown_ground is None  # a model prices every ground itself
+    assert report.priced.spec.preset_unknown_ground is None  # a model prices every ground itself
     assert report.model == PlanModel(file="husky.tw", class_name="GroundKeyedModel", model_ground=None,
                                      grounds=("loam", "gravel"), gives_interval=True, risk_q=None)
     assert report.interval is not None and report.interval.sd_j > 0

@@ -27,7 +27,7 @@ def test_the_budget_is_capacity_times_voltage_less_the_reserve(report, flat_map)
     assert report.reach.budget_j == pytest.approx(0.2 * 24.0 * 3600.0)
     assert report.reach.reserve_j == pytest.approx(0.25 * report.reach.budget_j)
     assert report.reach.n_reachable_cells == flat_map.ground.size  # a flat 15 x 10 m map on 17 kJ: everywhere
-    assert report.total_time_s >= report.map_preparation_s >= 0.0 and report.model is None
+    assert report.total_time_s >= report.priced.map_preparation_s >= 0.0 and report.model is None
 
 
 def test_the_voltage_defaults_to_the_robot(flat_map):
