@@ -33,8 +33,8 @@ from .replan import IncrementalPlanner
 from .risk import RouteEnergyInterval, risk_cost
 from .ros_export import write_route_bag
 from .route import Route
-from .route_price import price_route
 from .route_geojson import write_geojson
+from .route_price import price_route
 from .settings import PlannerSettings
 from .warmup import warm_up_kernels
 

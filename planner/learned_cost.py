@@ -1,7 +1,7 @@
 """Edge costs from learned current models: per-model energy tables from one batched prediction.
 
 A :class:`LearnedEnergyModel` turns the current models of a
-:class:`~terrain.CellModelRegistry` into planner edge costs.
+:class:`~planner.registry.CellModelRegistry` into planner edge costs.
 
 For every model it runs **one** ``predict`` call on a synthetic log that holds each speed
 of ``speeds_mps`` (straight driving, ``omega = 0``) and then each turn rate of
@@ -81,11 +81,7 @@ from energy import (
 )
 from energy.budget import log_battery_power_w
 from energy.profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2
-from terrain import (
-    CellModelRegistry,
-    InvalidParameterError,
-    TerrainMap,
-)
+from terrain import InvalidParameterError, TerrainMap
 from terrawatt_base.checks import check_choice, check_real, check_text, real_array
 
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
@@ -96,6 +92,7 @@ from .learned_table import (
     predict_current_spread,
     predict_currents,
 )
+from .registry import CellModelRegistry
 from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES, check_table_sizes, tabulate
 
 __all__ = [

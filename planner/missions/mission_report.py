@@ -14,17 +14,18 @@ from typing import Any
 import numpy as np
 
 from energy import GROUND_PRESETS, Battery, RobotParams, TruthSimulator, ground_preset, load_current_model
-from energy.params import robot_params
 from energy.io import write_csv_log, write_drive_bag
-from terrain import CellModelRegistry, TerrainMap
+from energy.params import robot_params
+from terrain import TerrainMap
 from terrawatt_base.atomic import check_output_path
 from terrawatt_base.checks import check_bool, check_instance, check_real
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
-from terrawatt_base.formats import write_result_json
 from terrawatt_base.figure_file import draw_figure
+from terrawatt_base.formats import write_result_json
 
 from ..cost_spec import CostSpec
 from ..model_cost import model_energy_model
+from ..registry import CellModelRegistry
 from .adaptive import run_adaptive_mission
 from .adaptive_results import AdaptiveResult
 from .manoeuvres import fit_prior_model

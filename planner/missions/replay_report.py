@@ -11,12 +11,13 @@ from typing import Any
 import numpy as np
 
 from energy import GROUND_PRESETS, InteractionLog, ground_preset, load_current_model
-from terrain import CellModelRegistry, TerrainMap
+from terrain import TerrainMap
 from terrawatt_base.checks import check_instance, check_real, option_names
 from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 from ..cost_spec import CostSpec
 from ..model_cost import model_energy_model
+from ..registry import CellModelRegistry
 from .mission_report import mission_battery
 from .replay import ReplayResult, replay_drive
 from .settings import AdaptiveSettings
@@ -92,7 +93,7 @@ def replay_recording(
     """Replay a recorded drive through a navigator set up as ``terrawatt mission`` sets up its loop.
 
     The models at the start: a saved registry (``registry``: a directory, e.g. the
-    ``start_registry/`` that ``mission --logs`` writes, or a :class:`terrain.CellModelRegistry`),
+    ``start_registry/`` that ``mission --logs`` writes, or a :class:`planner.registry.CellModelRegistry`),
     or one saved current model (``model``) serving every cell — per ground class through
     :func:`planner.model_cost.model_energy_model` when ``model_ground`` says how. With a
     ``state_path`` that holds a saved navigator, the replay resumes from it and these are not

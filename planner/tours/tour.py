@@ -8,11 +8,10 @@ from typing import Any
 
 import numpy as np
 
-from terrawatt_base.checks import check_instance, check_int, check_real, check_seed
-from terrawatt_base.errors import BlockedPositionError, InvalidParameterError
-
 from energy import Battery
 from terrain import TerrainMap
+from terrawatt_base.checks import check_instance, check_int, check_real, check_seed
+from terrawatt_base.errors import BlockedPositionError, InvalidParameterError
 
 from ..cost_spec import CostSpec
 from ..edge_cost import EnergyCost

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import json
 
-from terrawatt_cli import main
-
 from cli_samples import PNG_MAGIC
+
+from terrawatt_cli import main
 
 
 def _sites(tmp_path, rows):

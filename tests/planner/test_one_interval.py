@@ -22,7 +22,8 @@ from planner import (
 )
 from planner.cost_spec import CostSpec
 from planner.plan_report import plan_and_compare
-from terrain import CellModelRegistry, InvalidParameterError, TerrainMap
+from planner.registry import CellModelRegistry
+from terrain import InvalidParameterError, TerrainMap
 
 GRASS_START, GRASS_GOAL = (2.5, 2.5), (37.5, 2.5)  # the bottom strip: a ground the linear model never drove
 LOAM_START, LOAM_GOAL = (2.5, 8.5), (37.5, 8.5)  # the top strip: the known model's loam, a Gaussian forecast

@@ -34,7 +34,7 @@ def _learned_cost():
     """A map priced by a learned model (constant currents per cell model) and the model itself."""
     from energy import ground_preset, robot_preset
     from planner import LearnedEnergyModel
-    from terrain import CellModelRegistry
+    from planner.registry import CellModelRegistry
     from tests.planner.test_learned_cost import ConstModel
 
     tmap = flat_map((12, 16), 1.0, ground="asphalt")
