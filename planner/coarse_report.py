@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from terrain import DemWindows, Grid, InvalidParameterError, TerrainMap
-from terrawatt_base.checks import check_bool, check_instance, option_names
+from terrawatt_base.checks import check_bool, check_instance
 from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import result_document, write_result_json
 
@@ -253,7 +252,6 @@ def check_coarse_options(
     reproject_to: str | None = None,
     cell_size_m: float | None = None,
     landcover: Any = None,
-    names: Mapping[str, str] | None = None,
 ) -> None:
     """Refuse, before any work, what coarse-to-fine planning cannot do with the options of a plan.
 
@@ -261,6 +259,8 @@ def check_coarse_options(
     map only (not :func:`plan_coarse`, nor :func:`plan_coarse_windowed`); a windowed read takes a
     GeoTIFF ``path`` as it is, so none of the options of :func:`terrain.io.read_map_with_options`
     that need the whole map (``fill_nodata``, ``reproject_to``, ``cell_size_m``, ``landcover``).
+    Messages name the parameters (and ``planner``) as :data:`COARSE_OPTIONS`, and the error
+    carries them (:attr:`terrain.TerrawattError.parameter`) for a front end to say them its way.
 
     Parameters
     ----------
@@ -276,9 +276,6 @@ def check_coarse_options(
         A saved current model pricing the edges (only whether it is given counts).
     fill_nodata, reproject_to, cell_size_m, landcover
         Options of :func:`terrain.io.read_map_with_options` asked for (only whether each is given counts).
-    names : mapping of str to str, optional
-        How messages name each parameter above and ``"planner"`` (the CLI passes its flags); a
-        parameter not in it is named as itself.
 
     Raises
     ------
@@ -293,23 +290,24 @@ def check_coarse_options(
     ...
     terrawatt_base.errors.InvalidParameterError: corridor_m applies to coarse-to-fine planning; give factor F too
     """
-    n = option_names(names, COARSE_OPTIONS)
-    windowed = check_bool(n["windowed"], windowed)
+    windowed = check_bool("windowed", windowed)
     if corridor_m is not None and factor is None:
-        raise InvalidParameterError(f"{n['corridor_m']} applies to coarse-to-fine planning; give {n['factor']} F too")
+        raise InvalidParameterError("corridor_m applies to coarse-to-fine planning; give factor F too",
+                                    parameter=("corridor_m", "factor"))
     if model is not None and (factor is not None or windowed):
-        raise InvalidParameterError(f"{n['model']} plans on the whole map with {n['planner']}; it does not apply to "
-                                    f"{n['factor']} / {n['windowed']} yet")
+        raise InvalidParameterError("model plans on the whole map with planner; it does not apply to factor / windowed "
+                                    "yet", parameter=("model", "planner", "factor", "windowed"))
     if not windowed:
         return
     if factor is None:
-        raise InvalidParameterError(f"{n['windowed']} plans coarse-to-fine; give {n['factor']} F too")
+        raise InvalidParameterError("windowed plans coarse-to-fine; give factor F too", parameter=("windowed", "factor"))
     if path is None or Path(path).suffix.lower() not in (".tif", ".tiff"):
-        raise InvalidParameterError(f"{n['windowed']} reads GeoTIFF DEMs (.tif, .tiff), got {n['path']} "
-                                    f"{None if path is None else Path(path).name}")
+        raise InvalidParameterError(f"windowed reads GeoTIFF DEMs (.tif, .tiff), got path "
+                                    f"{None if path is None else Path(path).name}", parameter=("windowed", "path"))
     for key, value in (("fill_nodata", fill_nodata), ("reproject_to", reproject_to), ("cell_size_m", cell_size_m),
                        ("landcover", landcover)):
         if value is not None:
             raise InvalidParameterError(
-                f"{n['windowed']} reads the DEM as it is and cannot apply {n[key]} (it needs the whole map): fill or "
-                f"reproject the DEM first (gdal_fillnodata, gdalwarp), or plan without {n['windowed']}")
+                f"windowed reads the DEM as it is and cannot apply {key} (it needs the whole map): fill or "
+                f"reproject the DEM first (gdal_fillnodata, gdalwarp), or plan without windowed",
+                parameter=("windowed", key))

@@ -180,12 +180,12 @@ def check_int(
     if isinstance(value, np.ndarray) and value.ndim == 0:
         value = value[()]
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
-        raise InvalidParameterError(f"{label} must be an integer, got {_describe(value)}")
+        raise InvalidParameterError(f"{label} must be an integer, got {_describe(value)}", parameter=name)
     v = int(value)
     if low is not None and v < low:
-        raise InvalidParameterError(f"{label} must be >= {low}, got {plain_repr(value)}")
+        raise InvalidParameterError(f"{label} must be >= {low}, got {plain_repr(value)}", parameter=name)
     if high is not None and v > high:
-        raise InvalidParameterError(f"{label} must be <= {high}, got {plain_repr(value)}")
+        raise InvalidParameterError(f"{label} must be <= {high}, got {plain_repr(value)}", parameter=name)
     return v
 
 
@@ -238,7 +238,7 @@ def check_text(name: str, value: Any, *, owner: str | None = None) -> str:
         Not a string, or blank.
     """
     if not isinstance(value, str) or not value.strip():
-        raise InvalidParameterError(f"{_label(name, owner)} must be a non-empty string, got {_describe(value)}")
+        raise InvalidParameterError(f"{_label(name, owner)} must be a non-empty string, got {_describe(value)}", parameter=name)
     return value
 
 
@@ -252,7 +252,7 @@ def check_choice(name: str, value: Any, choices: Iterable[str]) -> str:
     """
     options = tuple(choices)
     if not isinstance(value, str) or value not in options:
-        raise UnknownNameError(f"{name} must be one of {list(options)!r}, got {value!r}")
+        raise UnknownNameError(f"{name} must be one of {list(options)!r}, got {value!r}", parameter=name)
     return value
 
 
@@ -319,7 +319,7 @@ def check_instance(name: str, value: Any, kind: type, what: str | None = None) -
 def check_bool(name: str, value: Any) -> bool:
     """A real ``bool`` (numpy's too): ``"no"`` or ``0`` are refused rather than read as truth values."""
     if not isinstance(value, (bool, np.bool_)):
-        raise InvalidParameterError(f"{name} must be True or False, got {_describe(value)}")
+        raise InvalidParameterError(f"{name} must be True or False, got {_describe(value)}", parameter=name)
     return bool(value)
 
 
@@ -338,17 +338,17 @@ def real_array(name: str, value: Any, *, ndim: int | None = None, finite: bool =
     try:
         raw = np.asarray(value)
     except (TypeError, ValueError) as exc:  # ragged nested sequences
-        raise InvalidParameterError(f"{name} must be a real number or an array of them, got {_describe(value)}") from exc
+        raise InvalidParameterError(f"{name} must be a real number or an array of them, got {_describe(value)}", parameter=name) from exc
     if raw.dtype.kind not in "iuf":  # booleans, strings ("0.5" is not parsed), objects, complex
         raise InvalidParameterError(
             f"{name} must be a real number or an array of them, got {_describe(value)} of dtype {raw.dtype}"
         )
     arr = np.array(raw, dtype=np.float64, copy=True)
     if ndim is not None and arr.ndim != ndim:
-        raise InvalidParameterError(f"{name} must be a {ndim}-D array, got shape {arr.shape!r}")
+        raise InvalidParameterError(f"{name} must be a {ndim}-D array, got shape {arr.shape!r}", parameter=name)
     if finite and not np.all(np.isfinite(arr)):
         n_bad = int(np.count_nonzero(~np.isfinite(arr)))
-        raise InvalidParameterError(f"{name} has {n_bad} NaN/inf entries of {arr.size}; expected finite values")
+        raise InvalidParameterError(f"{name} has {n_bad} NaN/inf entries of {arr.size}; expected finite values", parameter=name)
     return arr
 
 

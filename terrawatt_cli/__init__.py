@@ -34,25 +34,31 @@ def plain_message(text: str) -> str:
     return _NUMPY_SCALAR.sub(lambda m: m.group(1) if m.group(1) is not None else m.group(2), text)
 
 
-#: The library's parameters a message may name, and the flags that set them (a library error names the
-#: parameter, :attr:`terrain.TerrawattError.parameter`; the command line says it by its flag).
+#: The library's parameters a message may name, and the flags that set them, in every command (a library error names
+#: the parameter, :attr:`terrain.TerrawattError.parameter`; the command line says it by its flag). A command adds
+#: its own (``set_defaults(flag_names=...)``).
 PARAMETER_FLAGS = {"risk": "--risk", "draw_from": "--mc-draw", "workers": "--workers", "scheduler": "--scheduler",
                    "model_ground": "--model-ground", "unknown_ground": "--unknown-ground"}
 
 
-def error_message(exc: BaseException) -> str:
-    """The one line ``terrawatt`` prints for a user's error: the parameters the error names said by their flags.
+def error_message(exc: BaseException, flags: dict[str, str] | None = None) -> str:
+    """The one line ``terrawatt`` prints for a user's error: the parameters the error names said by their flags
+    (``flags`` first, then :data:`PARAMETER_FLAGS`).
 
     Examples
     --------
     >>> from terrain import InvalidParameterError
     >>> error_message(InvalidParameterError("risk 0.1 lies below the median: plan without risk", parameter="risk"))
     '--risk 0.1 lies below the median: plan without --risk'
+    >>> error_message(InvalidParameterError("corridor_m needs factor", parameter=("corridor_m", "factor")),
+    ...               {"corridor_m": "--corridor", "factor": "--coarse-factor"})
+    '--corridor needs --coarse-factor'
     """
     text = plain_message(str(exc))
     names = getattr(exc, "parameter", None)
+    known = PARAMETER_FLAGS | (flags or {})
     for name in (names,) if isinstance(names, str) else (names or ()):
-        flag = PARAMETER_FLAGS.get(name)
+        flag = known.get(name)
         if flag is not None:
             text = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", flag, text)
     return text
@@ -85,7 +91,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return args.run(args)
     except (TerrawattError, OSError) as exc:
-        print(f"terrawatt: error: {error_message(exc)}", file=sys.stderr)
+        print(f"terrawatt: error: {error_message(exc, getattr(args, 'flag_names', None))}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except MemoryError:  # what no size check foresaw (other programs took the memory meanwhile)
         print("terrawatt: error: this machine ran out of memory for the inputs given; use smaller inputs (a smaller "

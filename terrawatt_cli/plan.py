@@ -37,8 +37,9 @@ from .ros2 import add_ros2_arguments, check_ros2_outputs, write_ros2_outputs
 __all__ = ["add_parsers", "run_demo", "run_plan_command"]
 
 _OUTPUTS = ("route.json", "route.geojson", "route.png")
-_COARSE_FLAGS = {**{k: v for k, v in MAP_FLAGS.items() if k in COARSE_OPTIONS}, "factor": "--coarse-factor", "corridor_m": "--corridor", "windowed": "--windowed",
-                 "path": "--map", "model": "--model", "planner": "--planner"}
+#: How ``plan`` names the parameters of the library's messages (:func:`terrawatt_cli.error_message`).
+_FLAGS = {**{k: v for k, v in MAP_FLAGS.items() if k in COARSE_OPTIONS}, "factor": "--coarse-factor",
+          "corridor_m": "--corridor", "windowed": "--windowed", "path": "--map", "model": "--model", "planner": "--planner"}
 
 
 def add_parsers(sub: Any) -> None:
@@ -70,7 +71,7 @@ def add_parsers(sub: Any) -> None:
                        help="draw the whole map in route.png (default: zoom on the routes with a margin)")
         add_model_options(p, risk=True)
         add_ros2_arguments(p)
-        p.set_defaults(run=run)
+        p.set_defaults(run=run, flag_names=_FLAGS)
 
 
 def _check_flags(args: argparse.Namespace) -> None:
@@ -90,7 +91,7 @@ def run_plan_command(args: argparse.Namespace) -> int:
     _check_flags(args)
     check_coarse_options(factor=args.coarse_factor, corridor_m=args.corridor, windowed=args.windowed, path=args.map,
                          model=args.model, fill_nodata=args.fill_nodata, reproject_to=args.reproject,
-                         cell_size_m=args.cell_size, landcover=args.landcover, names=_COARSE_FLAGS)
+                         cell_size_m=args.cell_size, landcover=args.landcover)
     if args.windowed:
         pricing = pricing_arg(args, None)
         with DemWindows(args.map) as dem:

@@ -148,6 +148,9 @@ def test_plan_with_start_equal_to_goal_says_so(tmp_path, capsys, wall_map):
         (["--unknown-ground", "lava"], "--unknown-ground must be a ground preset"),
         (["--speed", "0"], "--speed must be a number > 0, got 0"),
         (["--time-limit", "-1"], "--time-limit must be a number > 0, got -1"),
+        # refused by the library, which names its parameters; the command line says them as its flags
+        (["--corridor", "30"], "--corridor applies to coarse-to-fine planning; give --coarse-factor F too"),
+        (["--coarse-factor", "4", "--windowed"], "--windowed reads GeoTIFF DEMs (.tif, .tiff), got --map wall.npz"),
     ],
 )
 def test_plan_flags_are_checked_and_named_as_flags(tmp_path, capsys, wall_map, extra, message):
