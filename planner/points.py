@@ -72,7 +72,8 @@ def lonlat_points(lonlat: Any, where: TerrainMap | DemWindows, name: str) -> np.
     if arr.ndim == 1 and arr.shape[0] == 2:
         arr = arr[None, :]
     if arr.ndim != 2 or arr.shape[1] != 2:
-        raise InvalidParameterError(f"{name} must have shape (N, 2) (lon_deg, lat_deg), got shape {arr.shape!r}")
+        raise InvalidParameterError(f"{name} must have shape (N, 2) (lon_deg, lat_deg), got shape {arr.shape!r}",
+                                    parameter=name)
     x, y = lonlat_to_xy(arr[:, 0], arr[:, 1], where.crs)
     xy = np.column_stack([x, y])
     inside = np.asarray(where.grid.contains(xy[:, 0], xy[:, 1]))
@@ -84,7 +85,7 @@ def lonlat_points(lonlat: Any, where: TerrainMap | DemWindows, name: str) -> np.
             f"{name} (lon {fmt_number(float(arr[i, 0]), 10)}, lat {fmt_number(float(arr[i, 1]), 10)}) is "
             f"({fmt_number(float(xy[i, 0]), 10)}, {fmt_number(float(xy[i, 1]), 10)}) m in the map's CRS {where.crs}, "
             f"outside the map bounds ({box}) m, which span lon {fmt_number(west, 8)} to {fmt_number(east, 8)}, "
-            f"lat {fmt_number(south, 8)} to {fmt_number(north, 8)}"
+            f"lat {fmt_number(south, 8)} to {fmt_number(north, 8)}", parameter=name
         )
     return xy
 
@@ -103,7 +104,8 @@ def point_on_map(
     where : TerrainMap or DemWindows
         The map.
     names : (str, str)
-        How messages name ``xy_m`` and ``lonlat`` (the command line passes ``("--start", "--start-lonlat")``).
+        How messages name ``xy_m`` and ``lonlat``: the caller's own parameters (e.g. ``("start",
+        "start_lonlat")``), which the errors carry (:attr:`~terrawatt_base.errors.TerrawattError.parameter`).
 
     Returns
     -------
@@ -124,7 +126,7 @@ def point_on_map(
     ((1.0, 2.0), None)
     """
     if xy_m is not None and lonlat is not None:
-        raise InvalidParameterError(f"give {names[0]} or {names[1]}, not both")
+        raise InvalidParameterError(f"give {names[0]} or {names[1]}, not both", parameter=tuple(names))
     if lonlat is not None:
         x, y = lonlat_points(lonlat, where, names[1])[0].tolist()
         return x, y
@@ -132,5 +134,6 @@ def point_on_map(
         return None
     arr = real_array(names[0], xy_m, finite=False).ravel()
     if arr.shape != (2,) or not np.all(np.isfinite(arr)):
-        raise InvalidParameterError(f"{names[0]} must be two finite coordinates (m), got {arr.tolist()!r}")
+        raise InvalidParameterError(f"{names[0]} must be two finite coordinates (m), got {arr.tolist()!r}",
+                                    parameter=names[0])
     return float(arr[0]), float(arr[1])

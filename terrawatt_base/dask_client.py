@@ -32,7 +32,6 @@ def dask_client(
     *,
     quiet: bool = True,
     timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S,
-    flags: tuple[str, str] = ("workers", "scheduler"),
 ) -> Iterator[Any]:
     """A ``distributed.Client`` on ``scheduler``, or on a new local cluster of ``workers`` processes.
 
@@ -50,8 +49,6 @@ def dask_client(
         Silence dask's INFO log while the client is open.
     timeout_s : float
         Seconds to wait for ``scheduler`` to answer (> 0).
-    flags : (str, str)
-        How messages name the two options (the CLI passes ``("--workers", "--scheduler")``).
 
     Raises
     ------
@@ -59,7 +56,8 @@ def dask_client(
         dask.distributed is not installed.
     InvalidParameterError
         ``workers < 1``; both ``workers > 1`` and ``scheduler``; no dask scheduler answers at
-        ``scheduler`` within ``timeout_s``.
+        ``scheduler`` within ``timeout_s`` (the error names ``workers`` / ``scheduler`` as its
+        parameters, :attr:`~terrawatt_base.errors.TerrawattError.parameter`).
 
     Examples
     --------
@@ -68,25 +66,24 @@ def dask_client(
         with dask_client(workers=2) as client:
             result = plan_batch(cost, pairs, client=client)
     """
-    w_flag, s_flag = flags
-    workers = check_int(w_flag, workers, low=1)
+    workers = check_int("workers", workers, low=1)
     quiet = check_bool("quiet", quiet)
     timeout_s = check_real("timeout_s", timeout_s, low=0.0, low_inclusive=False)
     if scheduler is not None:
-        check_text(s_flag, scheduler)
-    check_dask_options(workers, scheduler, flags=flags)
+        check_text("scheduler", scheduler)
+    check_dask_options(workers, scheduler)
     try:
         from distributed import Client, LocalCluster
     except ImportError as exc:
-        option = f"{s_flag} {scheduler}" if scheduler is not None else f"{w_flag} {workers}"
-        raise OptionalDependencyError(f"{option} needs dask.distributed; {_INSTALL}") from exc
+        name, value = ("scheduler", scheduler) if scheduler is not None else ("workers", workers)
+        raise OptionalDependencyError(f"{name} {value} needs dask.distributed; {_INSTALL}", parameter=name) from exc
     dask_log = logging.getLogger("distributed")  # configured by the import above
     old_level = dask_log.level
     if quiet:
         dask_log.setLevel(max(dask_log.getEffectiveLevel(), logging.WARNING))
     try:
         if scheduler is not None:
-            client = _connect(Client, scheduler, timeout_s, s_flag)
+            client = _connect(Client, scheduler, timeout_s)
             with client:
                 yield client
         else:
@@ -97,10 +94,9 @@ def dask_client(
         dask_log.setLevel(old_level)
 
 
-def check_dask_options(workers: int = 1, scheduler: str | None = None, *,
-                       flags: tuple[str, str] = ("workers", "scheduler")) -> None:
+def check_dask_options(workers: int = 1, scheduler: str | None = None) -> None:
     """Check where :func:`dask_client` would run, before any work: ``workers`` a positive int, not both ``workers > 1``
-    and ``scheduler``; ``flags`` name the two options in the messages.
+    and ``scheduler`` (the error names them as its parameters).
 
     Raises
     ------
@@ -110,22 +106,22 @@ def check_dask_options(workers: int = 1, scheduler: str | None = None, *,
     Examples
     --------
     >>> check_dask_options(2)
-    >>> check_dask_options(2, "tcp://host:8786", flags=("--workers", "--scheduler"))  # doctest: +ELLIPSIS
+    >>> check_dask_options(2, "tcp://host:8786")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    terrawatt_base.errors.InvalidParameterError: --workers 2 and --scheduler 'tcp://host:8786' exclude each other: ...
+    terrawatt_base.errors.InvalidParameterError: workers 2 and scheduler 'tcp://host:8786' exclude each other: ...
     """
-    w_flag, s_flag = flags
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise InvalidParameterError(f"{w_flag} must be a positive number of processes, got {workers!r}")
+        raise InvalidParameterError(f"workers must be a positive number of processes, got {workers!r}",
+                                    parameter="workers")
     if scheduler is not None and workers > 1:
         raise InvalidParameterError(
-            f"{w_flag} {workers!r} and {s_flag} {scheduler!r} exclude each other: "
-            f"give {w_flag} N for a local cluster or {s_flag} ADDRESS for an existing one"
-        )
+            f"workers {workers!r} and scheduler {scheduler!r} exclude each other: "
+            f"give workers N for a local cluster or scheduler ADDRESS for an existing one",
+            parameter=("workers", "scheduler"))
 
 
-def _connect(client_class: Any, scheduler: str, timeout_s: float, s_flag: str) -> Any:
+def _connect(client_class: Any, scheduler: str, timeout_s: float) -> Any:
     """``Client(scheduler)`` with one deadline over connect, handshake and first answer.
 
     dask's own ``timeout`` covers the TCP connect, not a server that accepts and never
@@ -152,13 +148,13 @@ def _connect(client_class: Any, scheduler: str, timeout_s: float, s_flag: str) -
     except concurrent.futures.TimeoutError as exc:
         future.add_done_callback(_close_late_client)
         raise InvalidParameterError(
-            f"{s_flag} {scheduler!r}: no dask scheduler answered within {fmt_number(timeout_s)} s (a server that "
-            f"accepts the connection but never completes dask's handshake?); {advice}"
+            f"`scheduler` {scheduler!r}: no dask scheduler answered within {fmt_number(timeout_s)} s (a server that "
+            f"accepts the connection but never completes dask's handshake?); {advice}", parameter="scheduler"
         ) from exc
     except Exception as exc:  # unreachable (TimeoutError is an OSError), malformed, junk answers (MemoryError...)
         raise InvalidParameterError(
-            f"{s_flag} {scheduler!r}: cannot connect to a dask scheduler there ({type(exc).__name__}: "
-            f"{str(exc)[:200]}); {advice}"
+            f"`scheduler` {scheduler!r}: cannot connect to a dask scheduler there ({type(exc).__name__}: "
+            f"{str(exc)[:200]}); {advice}", parameter="scheduler"
         ) from exc
 
 

@@ -45,8 +45,9 @@ class TerrawattError(Exception):
         The message (as for :class:`Exception`).
     parameter : str or tuple of str, optional
         The library parameter(s) the error is about, when there are (e.g. ``"risk"``), named so in
-        the message: a front end that calls them by other words (the command line's ``--risk``)
-        renames them there, so the library never names a front end's flags.
+        the message (in backticks where the word also stands as prose: ```model```): a front end
+        that calls them by other words (the command line's ``--risk``) renames them there, so the
+        library never names a front end's flags.
 
     Examples
     --------

@@ -45,21 +45,27 @@ def error_message(exc: BaseException, flags: dict[str, str] | None = None) -> st
     """The one line ``terrawatt`` prints for a user's error: the parameters the error names said by their flags
     (``flags`` first, then :data:`PARAMETER_FLAGS`).
 
+    A parameter the message quotes in backticks (```model```) is replaced there only: the message
+    marked which words are the parameter (``"draw_from 'model' ... a saved model: give `model`"``);
+    one it does not quote is replaced wherever it stands as a whole word.
+
     Examples
     --------
     >>> from terrain import InvalidParameterError
     >>> error_message(InvalidParameterError("risk 0.1 lies below the median: plan without risk", parameter="risk"))
     '--risk 0.1 lies below the median: plan without --risk'
-    >>> error_message(InvalidParameterError("corridor_m needs factor", parameter=("corridor_m", "factor")),
-    ...               {"corridor_m": "--corridor", "factor": "--coarse-factor"})
-    '--corridor needs --coarse-factor'
+    >>> error_message(InvalidParameterError("`model` prices the map like a model", parameter="model"),
+    ...               {"model": "--model"})
+    '--model prices the map like a model'
     """
     text = plain_message(str(exc))
     names = getattr(exc, "parameter", None)
     known = PARAMETER_FLAGS | (flags or {})
     for name in (names,) if isinstance(names, str) else (names or ()):
-        flag = known.get(name)
-        if flag is not None:
+        flag, marked = known.get(name), f"`{name}`"
+        if marked in text:
+            text = text.replace(marked, flag or marked)
+        elif flag is not None:
             text = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", flag, text)
     return text
 

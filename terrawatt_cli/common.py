@@ -13,6 +13,10 @@ from typing import Any
 
 from energy import GROUND_PRESETS, CurrentModel, load_current_model
 from energy.params import resolve_unknown_ground, robot_params
+from planner.cost_spec import CostSpec
+from planner.model_cost import parse_model_ground
+from planner.points import point_on_map
+from planner.risk import check_planning_risk
 from terrain import DemWindows, FigureWarning, InvalidParameterError, TerrainMap
 from terrain.io import read_map_with_options
 from terrain.procedural import example_map
@@ -20,11 +24,6 @@ from terrawatt_base import figure_file
 from terrawatt_base.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
 from terrawatt_base.checks import fmt_number
 from terrawatt_base.dask_client import check_dask_options, dask_client
-
-from planner.cost_spec import CostSpec
-from planner.model_cost import parse_model_ground
-from planner.points import point_on_map
-from planner.risk import check_planning_risk
 
 __all__ = [
     "pricing_arg",
@@ -225,7 +224,7 @@ def add_dask_options(p: argparse.ArgumentParser, what: str) -> None:
 
 def check_dask_flags(args: argparse.Namespace) -> None:
     """``--workers`` and ``--scheduler``, checked before any work (``dask_client.check_dask_options``)."""
-    check_dask_options(args.workers, args.scheduler, flags=("--workers", "--scheduler"))
+    check_dask_options(args.workers, args.scheduler)
 
 
 @contextlib.contextmanager
@@ -234,7 +233,7 @@ def dask_client_arg(args: argparse.Namespace) -> Iterator[Any]:
     if args.workers == 1 and args.scheduler is None:
         yield None
         return
-    with dask_client(args.workers, args.scheduler, quiet=not args.verbose, flags=("--workers", "--scheduler")) as client:
+    with dask_client(args.workers, args.scheduler, quiet=not args.verbose) as client:
         yield client
 
 

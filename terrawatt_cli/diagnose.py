@@ -7,13 +7,29 @@ from pathlib import Path
 from typing import Any
 
 from energy import ROBOT_PRESETS
-from energy.diagnosis import DIAGNOSIS_FILES, check_effect_names, check_model_source, diagnose_report, model_under_diagnosis
+from energy.diagnosis import (
+    DIAGNOSIS_FILES,
+    check_effect_names,
+    check_model_source,
+    diagnose_report,
+    model_under_diagnosis,
+)
 from terrain import InvalidParameterError
 from terrawatt_base.checks import check_seed
 from terrawatt_base.dask_client import client_worker_count
 
-from .common import (Checked, add_dask_options, add_map_options, check_dask_flags, check_outputs, dask_client_arg,
-                     input_paths, map_arg, robot_arg, warn_figures)
+from .common import (
+    Checked,
+    add_dask_options,
+    add_map_options,
+    check_dask_flags,
+    check_outputs,
+    dask_client_arg,
+    input_paths,
+    map_arg,
+    robot_arg,
+    warn_figures,
+)
 from .data import add_data_options, logs_from_args
 
 __all__ = ["add_parser", "run_diagnose"]

@@ -7,13 +7,27 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from energy.evaluation import (DEFAULT_ADAPT_SECONDS, EVALUATION_PROTOCOLS, AdaptSettings, check_adapt_options,
-                               check_evaluation_options, evaluate_report, evaluation_files)
+from energy.evaluation import (
+    DEFAULT_ADAPT_SECONDS,
+    EVALUATION_PROTOCOLS,
+    AdaptSettings,
+    check_adapt_options,
+    check_evaluation_options,
+    evaluate_report,
+    evaluation_files,
+)
 from energy.models import ADAPT_METHODS, CURRENT_MODEL_KINDS
 from terrawatt_base.errors import InvalidParameterError
 
-from .common import (add_dask_options, add_physics_robot_option, check_dask_flags, check_outputs, dask_client_arg,
-                     input_paths, warn_figures)
+from .common import (
+    add_dask_options,
+    add_physics_robot_option,
+    check_dask_flags,
+    check_outputs,
+    dask_client_arg,
+    input_paths,
+    warn_figures,
+)
 from .data import add_band_option, add_data_options, logs_from_args
 
 __all__ = ["PROTOCOLS", "add_parser", "add_adapt_options", "adapt_settings_from_args", "run_evaluate"]

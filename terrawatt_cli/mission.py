@@ -32,7 +32,8 @@ from .common import (
 
 __all__ = ["add_parser", "run_mission"]
 
-_NAMES = {"start": "--start", "start_lonlat": "--start-lonlat", "goal": "--goal", "goal_lonlat": "--goal-lonlat",
+#: How ``mission`` names the parameters of the library's messages (:func:`terrawatt_cli.error_message`).
+_FLAGS = {"start": "--start", "start_lonlat": "--start-lonlat", "goal": "--goal", "goal_lonlat": "--goal-lonlat",
           "prior_ground": "--prior-ground", "monte_carlo": "--monte-carlo", "workers": "--workers",
           "scheduler": "--scheduler", "model": "--model", "risk": "--risk", "draw_from": "--mc-draw"}
 
@@ -83,7 +84,7 @@ def add_parser(sub: Any) -> None:
                         "ground the model never drove, each edge at mean + z sd)")
     add_dask_options(p, "the --monte-carlo missions")
     add_model_options(p, risk=True)
-    p.set_defaults(run=run_mission)
+    p.set_defaults(run=run_mission, flag_names=_FLAGS)
 
 
 def run_mission(args: argparse.Namespace) -> int:
@@ -94,7 +95,7 @@ def run_mission(args: argparse.Namespace) -> int:
         on_example=args.map == "example", start=args.start, start_lonlat=args.start_lonlat, goal=args.goal,
         goal_lonlat=args.goal_lonlat, prior_ground=args.prior_ground, monte_carlo=args.monte_carlo,
         workers=args.workers, scheduler=args.scheduler, model=args.model, risk=args.risk, draw_from=args.mc_draw,
-        names=_NAMES)
+)
     mc = args.monte_carlo is not None
     if mc and (args.logs or args.drive_bag is not None):
         raise InvalidParameterError("--logs and --drive-bag write the legs of one adaptive mission, not of "

@@ -32,7 +32,8 @@ from .data import add_data_options, logs_from_args
 
 __all__ = ["add_parser", "run_replay"]
 
-_NAMES = {"registry": "--registry", "model": "--model", "physics_ground": "--physics-ground",
+#: How ``replay`` names the parameters of the library's messages (:func:`terrawatt_cli.error_message`).
+_FLAGS = {"registry": "--registry", "pricing.model": "--model", "physics_ground": "--physics-ground",
           "initial_soc": "--soc", "state_path": "--state"}
 
 
@@ -93,7 +94,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--no-mcap", action="store_true", help="do not write replay.mcap")
     p.add_argument("--seed", type=int, default=0, help="seed of the navigator's refinement and manoeuvres (default 0)")
     p.add_argument("--out", type=Path, default=Path("out"), metavar="DIR", help="output directory (default out/)")
-    p.set_defaults(run=run_replay)
+    p.set_defaults(run=run_replay, flag_names=_FLAGS)
 
 
 def run_replay(args: argparse.Namespace) -> int:
@@ -123,7 +124,7 @@ def run_replay(args: argparse.Namespace) -> int:
         initial_soc=args.soc, pricing=pricing_arg(args, tmap, model), leg_m=args.leg_m, seed=args.seed,
         registry=args.registry, physics_ground=args.physics_ground, update_source=args.update_source, mode=args.mode,
         chunk_s=args.chunk_s, speed_up=args.speed_up, depot_xy_m=point_arg(args, "depot", tmap),
-        state_path=args.state, on_decision=say, names=_NAMES)
+        state_path=args.state, on_decision=say)
     print(f"map: {label}")
     print(result.summary())
     with warn_figures():

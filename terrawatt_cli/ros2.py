@@ -6,11 +6,10 @@ import argparse
 from collections.abc import Iterable
 from pathlib import Path
 
-from terrain import InvalidParameterError, TerrainMap
-
 from planner.edge_cost import EnergyCost
 from planner.ros_outputs import check_ros_outputs, nav2_targets, write_ros_outputs
 from planner.route import Route
+from terrain import InvalidParameterError, TerrainMap
 
 __all__ = ["add_ros2_arguments", "nav2_targets", "check_ros2_outputs", "write_ros2_outputs"]
 

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -12,7 +12,7 @@ import numpy as np
 
 from energy import GROUND_PRESETS, InteractionLog, ground_preset, load_current_model
 from terrain import TerrainMap
-from terrawatt_base.checks import check_instance, check_real, option_names
+from terrawatt_base.checks import check_instance, check_real
 from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 from ..cost_spec import CostSpec
@@ -23,9 +23,6 @@ from .replay import ReplayResult, replay_drive
 from .settings import AdaptiveSettings
 
 __all__ = ["replay_recording", "place_by_gps"]
-
-_OPTIONS = ("registry", "model", "physics_ground", "initial_soc", "state_path")
-
 
 def place_by_gps(logs: Sequence[InteractionLog], track: Any, terrain: TerrainMap,
                  max_gap_s: float = 2.0) -> list[InteractionLog]:
@@ -88,7 +85,6 @@ def replay_recording(
     depot_xy_m: tuple[float, float] | None = None,
     state_path: str | os.PathLike[str] | None = None,
     on_decision: Callable[[Any], None] | None = None,
-    names: Mapping[str, str] | None = None,
 ) -> ReplayResult:
     """Replay a recorded drive through a navigator set up as ``terrawatt mission`` sets up its loop.
 
@@ -121,8 +117,6 @@ def replay_recording(
         Ground preset of the physics slope term of the edge costs.
     mode, chunk_s, speed_up, depot_xy_m, state_path, on_decision
         As :func:`~planner.missions.replay.replay_drive`.
-    names : mapping, optional
-        How messages name the options (the CLI's flags).
 
     Returns
     -------
@@ -135,11 +129,10 @@ def replay_recording(
     UnknownNameError
         ``physics_ground`` without a preset.
     """
-    label = option_names(names, _OPTIONS)
     resuming = state_path is not None and (Path(state_path) / "navigator.json").is_file()
     if physics_ground not in GROUND_PRESETS:
-        raise UnknownNameError(f"{label['physics_ground']} {physics_ground!r} has no preset; known grounds: "
-                               f"{sorted(GROUND_PRESETS)!r}")
+        raise UnknownNameError(f"physics_ground {physics_ground!r} has no preset; known grounds: "
+                               f"{sorted(GROUND_PRESETS)!r}", parameter="physics_ground")
     ground = ground_preset(physics_ground)
     pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
     robot_given, model = pricing.params, pricing.model
@@ -148,11 +141,11 @@ def replay_recording(
     reg, learned, battery = None, None, None
     if not resuming:
         if (registry is None) == (model is None):
-            raise InvalidParameterError(f"give the models the drive starts with: {label['registry']} or "
-                                        f"{label['model']} (exactly one)")
+            raise InvalidParameterError("give the models the drive starts with: registry or pricing.model (exactly one)",
+                                        parameter=("registry", "pricing.model"))
         if battery_ah is None:
             raise InvalidParameterError("battery_ah is needed (the battery's capacity, Ah)")
-        check_real(label["initial_soc"], initial_soc, low=0.0, low_inclusive=False, high=1.0)
+        check_real("initial_soc", initial_soc, low=0.0, low_inclusive=False, high=1.0)
         battery = mission_battery(robot_given, battery_ah, battery_v, reserve_pct).replace(initial_soc=initial_soc)
         if isinstance(registry, CellModelRegistry):
             reg = registry

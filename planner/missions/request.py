@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 from energy import GROUND_PRESETS
 from terrain import TerrainMap
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M
-from terrawatt_base.checks import check_bool, check_choice, check_int, option_names
+from terrawatt_base.checks import check_bool, check_choice, check_int
 from terrawatt_base.dask_client import check_dask_options
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
@@ -20,7 +19,8 @@ from .monte_carlo_model import MC_DRAW_MODES
 
 __all__ = ["MissionRequest", "MISSION_OPTIONS"]
 
-#: The options :class:`MissionRequest` names in its messages (``names`` keys).
+#: The options :class:`MissionRequest` names in its messages (and its errors carry,
+#: :attr:`~terrawatt_base.errors.TerrawattError.parameter`).
 MISSION_OPTIONS = ("start", "start_lonlat", "goal", "goal_lonlat", "prior_ground", "monte_carlo", "workers",
                    "scheduler", "model", "risk", "draw_from")
 
@@ -53,9 +53,6 @@ class MissionRequest:
         A study's risk level in (0, 1).
     draw_from : {"parameters", "model"}
         What a study draws; ``"model"`` needs ``model``.
-    names : mapping of str to str or None
-        How messages name the options of :data:`MISSION_OPTIONS` (the CLI passes its flags); an
-        option not in it is named as itself.
 
     Raises
     ------
@@ -87,36 +84,31 @@ class MissionRequest:
     model: Any = None
     risk: float | None = None
     draw_from: str = "parameters"
-    names: Mapping[str, str] | None = field(default=None, repr=False, compare=False)
-
-    def _name(self, key: str) -> str:
-        return option_names(self.names, MISSION_OPTIONS)[key]
 
     def __post_init__(self) -> None:
-        option_names(self.names, MISSION_OPTIONS)  # a bad mapping is refused when made
-        n = self._name
         check_bool("on_example", self.on_example)
         if self.prior_ground not in GROUND_PRESETS:
-            raise UnknownNameError(f"{n('prior_ground')} {self.prior_ground!r} has no preset; known grounds: "
-                                   f"{sorted(GROUND_PRESETS)!r}")
+            raise UnknownNameError(f"prior_ground {self.prior_ground!r} has no preset; known grounds: "
+                                   f"{sorted(GROUND_PRESETS)!r}", parameter="prior_ground")
         if self.monte_carlo is None and (self.workers != 1 or self.scheduler is not None):
-            raise InvalidParameterError(f"{n('workers')} and {n('scheduler')} apply to {n('monte_carlo')} N only")
+            raise InvalidParameterError("workers and scheduler apply to monte_carlo N only",
+                                        parameter=("workers", "scheduler", "monte_carlo"))
         if self.monte_carlo is not None:
-            check_int(n("monte_carlo"), self.monte_carlo, low=1)
-        check_dask_options(self.workers, self.scheduler, flags=(n("workers"), n("scheduler")))
+            check_int("monte_carlo", self.monte_carlo, low=1)
+        check_dask_options(self.workers, self.scheduler)
         if self.risk is not None:
-            check_planning_risk(self.risk, n("risk"))
+            check_planning_risk(self.risk, "risk")
             if self.monte_carlo is None:
                 raise InvalidParameterError(
-                    f"{n('risk')} Q of mission checks the route's Q quantile against the usable battery in a "
-                    f"{n('monte_carlo')} N study; the adaptive mission does not take it yet")
-        if check_choice(n("draw_from"), self.draw_from, MC_DRAW_MODES) == "model" and self.model is None:
-            raise InvalidParameterError(f"{n('draw_from')} model draws from a saved model's predictive distribution: "
-                                        f"give {n('model')} FILE")
+                    "risk Q of mission checks the route's Q quantile against the usable battery in a monte_carlo N "
+                    "study; the adaptive mission does not take it yet", parameter=("risk", "monte_carlo"))
+        if check_choice("draw_from", self.draw_from, MC_DRAW_MODES) == "model" and self.model is None:
+            raise InvalidParameterError("`draw_from` model draws from a saved model's predictive distribution: give "
+                                        "`model` FILE", parameter=("draw_from", "model"))
         if not self.on_example and (
                 (self.start is None and self.start_lonlat is None) or (self.goal is None and self.goal_lonlat is None)):
-            raise InvalidParameterError(f"{n('start')} and {n('goal')} (or {n('start_lonlat')} and "
-                                        f"{n('goal_lonlat')}) are required with a map file")
+            raise InvalidParameterError("start and goal (or start_lonlat and goal_lonlat) are required with a map file",
+                                        parameter=("start", "goal", "start_lonlat", "goal_lonlat"))
 
     def points(self, terrain: TerrainMap) -> tuple[tuple[float, float], tuple[float, float]]:
         """Start and goal in ``terrain``'s metres (:func:`planner.points.point_on_map`; the example's when not given),
@@ -131,8 +123,7 @@ class MissionRequest:
         UnknownNameError
             A ground of the map without a preset (:func:`planner.missions.mission_report.check_preset_grounds`).
         """
-        n = self._name
-        start = point_on_map(self.start, self.start_lonlat, terrain, names=(n("start"), n("start_lonlat")))
-        goal = point_on_map(self.goal, self.goal_lonlat, terrain, names=(n("goal"), n("goal_lonlat")))
+        start = point_on_map(self.start, self.start_lonlat, terrain, names=("start", "start_lonlat"))
+        goal = point_on_map(self.goal, self.goal_lonlat, terrain, names=("goal", "goal_lonlat"))
         check_preset_grounds(terrain)
         return start or EXAMPLE_START_XY_M, goal or EXAMPLE_GOAL_XY_M

@@ -246,10 +246,10 @@ def _free_port() -> int:
 def test_an_unreachable_scheduler_is_a_clear_error_after_the_timeout():
     pytest.importorskip("distributed", reason=_NO_DASK)
     address = f"tcp://127.0.0.1:{_free_port()}"
-    with pytest.raises(InvalidParameterError, match=rf"scheduler '{address}': cannot connect to a dask scheduler"):
+    with pytest.raises(InvalidParameterError, match=rf"`scheduler` '{address}': cannot connect to a dask scheduler"):
         with dask_client(scheduler=address, timeout_s=0.5):
             pass
-    with pytest.raises(InvalidParameterError, match=r"scheduler 'nowhere': cannot connect"):
+    with pytest.raises(InvalidParameterError, match=r"`scheduler` 'nowhere': cannot connect"):
         with dask_client(scheduler="nowhere", timeout_s=0.5):
             pass
 
@@ -292,7 +292,7 @@ def test_a_scheduler_that_never_completes_the_handshake_is_a_clear_error_not_a_h
     pytest.importorskip("distributed", reason=_NO_DASK)
     server = _Server(reply)
     try:
-        with pytest.raises(InvalidParameterError, match=rf"scheduler '{server.address}': (no dask scheduler answered|"
+        with pytest.raises(InvalidParameterError, match=rf"`scheduler` '{server.address}': (no dask scheduler answered|"
                                                         "cannot connect)"):
             with dask_client(scheduler=server.address, timeout_s=0.5):
                 pass
@@ -307,9 +307,10 @@ def test_a_scheduler_that_never_completes_the_handshake_is_a_clear_error_not_a_h
 
 
 def test_dask_client_refuses_workers_with_a_scheduler_and_names_the_missing_extra(monkeypatch):
-    with pytest.raises(InvalidParameterError, match="--workers 2 and --scheduler 'tcp://h:1' exclude each other"):
-        with dask_client(2, "tcp://h:1", flags=("--workers", "--scheduler")):
+    with pytest.raises(InvalidParameterError, match="workers 2 and scheduler 'tcp://h:1' exclude each other") as err:
+        with dask_client(2, "tcp://h:1"):
             pass
+    assert err.value.parameter == ("workers", "scheduler")
     with pytest.raises(InvalidParameterError, match="workers must be >= 1"):
         with dask_client(0):
             pass
