@@ -123,7 +123,7 @@ class CostSpec:
     speed_mps: float = 0.5
     max_slope_deg: float = 20.0
     unknown_ground: str | None = "gravel"
-    model: Any = field(default=None, compare=False)
+    model: Any = None
     model_label: str | None = None
     model_ground: str | Mapping[str, str] | None = None
     risk: float | None = None
