@@ -334,9 +334,10 @@ class TourResult:
         return {f"{t.robot}: {leg.start} -> {leg.end}": evaluate_route(self.cost, leg.waypoints_m, planner="tour")
                 for t in self.tours for leg in t.legs}
 
-    def tour_route(self, robot: int) -> Route:
-        """One robot's whole tour as one :class:`planner.Route` (its legs joined)."""
-        legs = self.tours[robot].legs
+    def tour_route(self, robot: int, legs: slice = slice(None)) -> Route:
+        """One robot's whole tour (or the slice ``legs`` of its legs, e.g. a segment between charges) as one
+        :class:`planner.Route` (its legs joined)."""
+        legs = self.tours[robot].legs[legs]
         pts = np.vstack([legs[0].waypoints_m] + [leg.waypoints_m[1:] for leg in legs[1:]])
         return evaluate_route(self.cost, pts, planner="tour")
 
