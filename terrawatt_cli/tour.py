@@ -10,7 +10,7 @@ from energy.params import resolve_unknown_ground
 from terrain import InvalidParameterError
 
 from planner.risk import check_planning_risk
-from planner.tours import plan_tour_on_map, read_tour_sites_csv
+from planner.tours import plan_tour_on_map, read_tour_chargers_csv, read_tour_sites_csv
 from .common import (Checked, add_battery_options, add_dask_options, add_map_options, add_model_options,
                      add_point_options, add_robot_options, bounded, check_dask_flags, check_model_flags, check_outputs,
                      dask_client_arg, input_paths, load_model_arg, map_arg, point_arg, positive, warn_figures)
@@ -37,6 +37,11 @@ def add_parser(sub: Any) -> None:
                    help="sites file (as batch's): columns name, x_m, y_m or name, lon, lat in WGS 84 degrees; "
                         "optional value (default 1), service_energy_j, service_time_s, and a time window "
                         "tw_start_s, tw_end_s (s from the departure; both columns or neither, empty cells: none)")
+    p.add_argument("--chargers", type=Path, default=None, metavar="CSV",
+                   help="charging points the robots may stop at between sites, each stop charging to full (laid out as "
+                        "the sites file: name, x_m, y_m or name, lon, lat; optional power_w (W; empty: at once), "
+                        "connection_time_s (default 0) and max_visits (stops of the whole fleet, default 2)); the "
+                        "energy then holds at Q per segment between charges; solved by OR-Tools (the bench extra)")
     add_point_options(p, "depot", "the depot every robot starts from and comes back to", required=True)
     add_battery_options(p, "each robot's battery capacity (Ah)")
     p.add_argument("--max-duration", type=float, default=None, metavar="S", action=Checked, check=positive,
@@ -70,6 +75,7 @@ def run_tour(args: argparse.Namespace) -> int:
     tmap, label = map_arg(args)
     depot = point_arg(args, "depot", tmap)
     sites = read_tour_sites_csv(args.sites, tmap)
+    chargers = read_tour_chargers_csv(args.chargers, tmap) if args.chargers is not None else None
     model = load_model_arg(args)
     ground = None if model is not None else resolve_unknown_ground(args.unknown_ground, tmap, flag="--unknown-ground")
     with dask_client_arg(args) as client:
@@ -78,7 +84,7 @@ def run_tour(args: argparse.Namespace) -> int:
             n_robots=int(args.robots), max_duration_s=args.max_duration, risk=args.tour_risk, robot=args.robot,
             speed_mps=args.speed, max_slope_deg=args.max_slope_deg, unknown_ground=ground, model=model,
             model_ground=args.model_ground, time_limit_s=args.time_limit, seed=args.seed, client=client,
-            map_label=label)
+            map_label=label, chargers=chargers)
     with warn_figures():
         written = result.write(args.out, bag=args.bag)
     print(result.summary())

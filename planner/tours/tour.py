@@ -301,8 +301,10 @@ def plan_tour_on_map(
     client: Any = None,
     map_label: str = "map",
     progress: bool = False,
+    chargers: TourChargers | None = None,
 ) -> TourResult:
-    """:func:`plan_tour` on a map priced as ``terrawatt tour`` prices it: ``n_robots`` alike robots with one depot.
+    """:func:`plan_tour` on a map priced as ``terrawatt tour`` prices it: ``n_robots`` alike robots with one depot (and
+    the ``chargers`` they may stop at).
 
     The edges are priced by the presets or a saved ``model`` (:func:`planner.cost_source.edge_costs`);
     each robot's battery is ``battery_ah`` at ``voltage_v`` (default the robot's) keeping
@@ -323,4 +325,4 @@ def plan_tour_on_map(
                       unknown_ground=unknown_ground if model is None else None, model=model, model_ground=model_ground)
     fleet = [TourRobot(battery, depot_xy_m, f"robot {k}", max_duration_s) for k in range(n_robots)]
     return plan_tour(cost, sites, fleet, risk=risk, time_limit_s=time_limit_s, seed=seed, workers=workers,
-                     client=client, map_label=map_label, progress=progress)
+                     client=client, map_label=map_label, progress=progress, chargers=chargers)
