@@ -400,7 +400,7 @@ def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list
     params.first_solution_strategy = routing_enums_pb2.FirstSolutionStrategy.PATH_CHEAPEST_ARC
     params.local_search_metaheuristic = routing_enums_pb2.LocalSearchMetaheuristic.GUIDED_LOCAL_SEARCH
     params.time_limit.FromMilliseconds(int(1000 * time_limit_s))
-    solution = routing.SolveWithParameters(params)
+    solution = _solve_charging(routing, params, time_limit_s) if copies else routing.SolveWithParameters(params)
     tours: list[list[int]] = [[] for _ in problem.depot_points]
     if solution is None:
         return tours
@@ -412,6 +412,31 @@ def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list
                 tours[r].append(int(order[node]))
             i = solution.Value(routing.NextVar(i))
     return tours
+
+
+def _solve_charging(routing: Any, params: Any, time_limit_s: float) -> Any:
+    """With chargers: OR-Tools' depth-first (complete) search for at most half the time limit, then its guided local
+    search from the best it found for the rest.
+
+    The local search alone moves one or two stops at a time, each move feasible, and a better tour
+    often needs a site and a charging stop inserted together (e.g. a second charger on the way to a far
+    site): it stalls in such local optima. The complete search finds those tours on small problems
+    (it exhausts the tree well within the time) and gives the local search a start on large ones."""
+    from ortools.constraint_solver import pywrapcp
+
+    exact = pywrapcp.DefaultRoutingSearchParameters()
+    exact.CopyFrom(params)
+    exact.use_depth_first_search = True
+    exact.time_limit.FromMilliseconds(int(500 * time_limit_s))
+    t0 = time.perf_counter()
+    first = routing.SolveWithParameters(exact)
+    rest = pywrapcp.DefaultRoutingSearchParameters()
+    rest.CopyFrom(params)
+    rest.time_limit.FromMilliseconds(max(int(1000 * (time_limit_s - (time.perf_counter() - t0))), 1))
+    if first is None:
+        return routing.SolveWithParameters(rest)
+    better = routing.SolveFromAssignmentWithParameters(first, rest)
+    return better if better is not None else first
 
 
 def _ortools_charging(problem: TourProblem, routing: Any, manager: Any, matrix: list[list[int]], n_fixed: int) -> None:
