@@ -381,7 +381,9 @@ class TourResult:
             ax.plot(ch[:, 0], ch[:, 1], marker="P", ms=9, ls="none", color="gold", mec="k", label="charger")
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
-        ax.set_title(f"tours at Q = {self.risk:g}: value {self.value:g}, {len(self.visited)} sites")
+        charges = sum(len(t.charging_stops) for t in self.tours)
+        ax.set_title(f"tours at Q = {self.risk:g}: value {self.value:g}, {len(self.visited)} sites"
+                     + (f", {charges} charging stop(s)" if charges else ""))
         if self.tours and any(t.legs for t in self.tours):
             ax.legend(loc="upper right", fontsize=8)
         return save_figure(ax.figure, target) if target is not None else None
