@@ -106,6 +106,9 @@ class RobotTour:
         The robot's longest tour (s), if it has one.
     charging_stops : tuple of int
         Indices into :attr:`stops` of the stops at chargers, where the battery is charged to full.
+    waiting_energy_j : tuple of float
+        Energy spent waiting at each stop for its window to open (J): the robot's standby power times the
+        wait (in :attr:`cumulative` and :attr:`energy` with the service).
     """
 
     robot: str
@@ -125,6 +128,7 @@ class RobotTour:
     return_s: float = 0.0
     max_duration_s: float | None = None
     charging_stops: tuple[int, ...] = ()
+    waiting_energy_j: tuple[float, ...] = ()
 
     @property
     def stops(self) -> tuple[str, ...]:
@@ -188,6 +192,7 @@ class RobotTour:
             "service_time_s": list(self.service_time_s), "arrival_s": list(self.arrival_s),
             "service_start_s": list(self.service_start_s), "return_s": self.return_s,
             "max_duration_s": self.max_duration_s, "stops": list(self.stops),
+            "waiting_energy_j": list(self.waiting_energy_j),
             "charging_stops": list(self.charging_stops),
             "segments": [{"to": ([*self.stops, "depot"])[k], "energy": iv.to_dict(),
                           "energy_at_risk_j": iv.quantile_j(self.risk), "budget_j": b}

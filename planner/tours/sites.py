@@ -307,6 +307,10 @@ class TourRobot:
     max_duration_s : float, optional
         The longest its tour may last, from leaving the depot at 0 to being back (s; driving, waiting and
         service); ``None``: no limit.
+    standby_power_w : float
+        What the robot draws while it waits for a site's window to open (W, >= 0; default 0): its electronics
+        at standstill (sensors and the control board's standby; the edge costs carry them while driving).
+        :func:`planner.tours.plan_tour_on_map` takes the robot's ``sensor_power_w + control_standby_power_w``.
 
     Examples
     --------
@@ -319,6 +323,7 @@ class TourRobot:
     depot_xy_m: tuple[float, float]
     name: str = "robot 0"
     max_duration_s: float | None = None
+    standby_power_w: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.battery, Battery):
@@ -332,6 +337,7 @@ class TourRobot:
         if self.max_duration_s is not None:
             object.__setattr__(self, "max_duration_s", check_real("max_duration_s", self.max_duration_s, low=0.0,
                                                                   low_inclusive=False))
+        object.__setattr__(self, "standby_power_w", check_real("standby_power_w", self.standby_power_w, low=0.0))
 
     @property
     def budget_j(self) -> float:

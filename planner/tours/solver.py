@@ -120,6 +120,9 @@ class TourProblem:
         segment's own quantile is checked against.
     service_j : ndarray, shape (P,)
         Service energy at each point (J).
+    standby_w : ndarray, shape (R,)
+        What each robot draws while it waits for a window to open (W): the waiting's energy is not in the
+        arcs (it depends on the order), so the solver does not see it; the check of each tour counts it.
     """
 
     arc_units: np.ndarray
@@ -139,6 +142,7 @@ class TourProblem:
     budget_j: np.ndarray = None  # type: ignore[assignment]
     full_budget_j: np.ndarray = None  # type: ignore[assignment]
     service_j: np.ndarray = None  # type: ignore[assignment]
+    standby_w: np.ndarray = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         n = self.arc_units.shape[0]
@@ -153,6 +157,8 @@ class TourProblem:
             object.__setattr__(self, "full_budget_j", np.asarray(self.full_units, dtype=float) * self.unit_j)
         if self.service_j is None:
             object.__setattr__(self, "service_j", np.zeros(n))
+        if self.standby_w is None:
+            object.__setattr__(self, "standby_w", np.zeros(len(self.depot_points)))
         if self.drive_s is None:
             object.__setattr__(self, "drive_s", np.zeros((n, n), dtype=np.int64))
         if self.service_s is None:
@@ -281,6 +287,15 @@ class TourProblem:
             return None
         return (arrivals, starts, back) if back <= int(self.shift_s[robot]) else None
 
+    def waiting_j(self, robot: int, stops: Any) -> list[float]:
+        """The energy ``robot`` spends waiting at each of ``stops`` for its window to open (J; its standby power
+        times the wait, on the solver's whole seconds)."""
+        if not self.standby_w[robot] or not stops:
+            return [0.0] * len(stops)
+        d = int(self.depot_points[robot])
+        arrivals, starts, _ = walk_timeline(self.drive_s, self.service_s, self.window_s, [d, *stops, d])
+        return [float(self.standby_w[robot]) * float(b - a) for a, b in zip(arrivals, starts)]
+
     def with_capacity(self, capacity_units: Any, full_units: Any = None) -> TourProblem:
         """The same problem with other capacities (and, with chargers, other capacities after a charge)."""
         full = self.full_units if full_units is None else np.asarray(full_units, dtype=np.int64)
@@ -408,8 +423,8 @@ def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list
         i = routing.Start(r)
         while not routing.IsEnd(i):
             node = manager.IndexToNode(i)
-            if node >= len(depots):
-                tours[r].append(int(order[node]))
+            if node >= len(depots) and (not tours[r] or tours[r][-1] != order[node]):  # two copies of one charger
+                tours[r].append(int(order[node]))  # in a row are one stop (a leg of nothing, one charge to full)
             i = solution.Value(routing.NextVar(i))
     return tours
 
@@ -522,9 +537,11 @@ def solve_tours(prices: PairPrices, problem: TourProblem, *, solver: str | None 
         holds = True
         for r, stops in enumerate(tours):
             factor = 1.0
+            waiting = iter([*problem.waiting_j(r, stops), 0.0])  # per point after the depot (none back there)
             for k, seg in enumerate(problem.segments(r, stops)):
                 budget = problem.budget_j[r] if k == 0 else problem.full_budget_j[r]
-                need = prices.tour_interval(seg, float(problem.service_j[seg[1:]].sum())).quantile_j(q)
+                waited = sum(next(waiting) for _ in seg[1:])
+                need = prices.tour_interval(seg, float(problem.service_j[seg[1:]].sum()) + waited).quantile_j(q)
                 if need > budget:
                     factor = min(factor, budget / need)
             if factor < 1.0:

@@ -191,8 +191,10 @@ def plan_tour(
     shifts = [rb.max_duration_s for rb in fleet]
 
     def problem(points: Any) -> TourProblem:
-        built = TourProblem.build(prices, q, budgets, depot_points, points, value, service, timing.service_s,
-                                  timing.window_s, shifts, [rb.full_budget_j for rb in fleet])
+        built = dataclasses.replace(
+            TourProblem.build(prices, q, budgets, depot_points, points, value, service, timing.service_s,
+                              timing.window_s, shifts, [rb.full_budget_j for rb in fleet]),
+            standby_w=np.array([rb.standby_power_w for rb in fleet]))
         return built.with_chargers(charger_points, chargers.max_visits) if chargers is not None else built
 
     whole = problem(site_points)
@@ -259,23 +261,24 @@ def _tour(prices: PairPrices, robot: TourRobot, stops: list[int], depot: int, se
     afresh after each charge."""
     seq = [depot, *stops, depot] if stops else []
     sites = [p for p in stops if p not in chargers]
+    arrivals, starts, back = timing.walk(seq)
+    waiting = [robot.standby_power_w * (b - a) for a, b in zip(arrivals, starts)]  # electronics while it waits
     legs, cumulative = [], []
     first, served = 0, 0.0
     for k, (a, b) in enumerate(zip(seq[:-1], seq[1:])):
         legs.append(TourLeg(prices.names[a], prices.names[b], prices.waypoints[a][b], prices.tour_interval([a, b]),
                             float(prices.duration_s[a, b])))
-        served += float(service[b])
+        served += float(service[b]) + (waiting[k] if k < len(waiting) else 0.0)
         cumulative.append(prices.tour_interval(seq[first:k + 2], served))  # since the depot or the last charge
         if b in chargers:
             first, served = k + 1, 0.0
-    energy = (prices.tour_interval(seq, float(service[sites].sum())) if seq
+    energy = (prices.tour_interval(seq, float(service[sites].sum()) + sum(waiting)) if seq
               else RouteEnergyInterval(0.0, 0.0, {}))
-    arrivals, starts, back = timing.walk(seq)
     return RobotTour(robot.name, robot.battery, robot.depot_xy_m, tuple(prices.names[p] for p in sites), tuple(legs),
                      tuple(float(service[p]) for p in stops), float(value[sites].sum()) if sites else 0.0, energy,
                      tuple(cumulative), robot.budget_j, q, tuple(float(timing.service_s[p]) for p in stops),
                      arrivals, starts, back, robot.max_duration_s,
-                     tuple(k for k, p in enumerate(stops) if p in chargers))
+                     tuple(k for k, p in enumerate(stops) if p in chargers), tuple(waiting))
 
 
 def plan_tour_on_map(
@@ -308,7 +311,8 @@ def plan_tour_on_map(
 
     The edges are priced by the presets or a saved ``model`` (:func:`planner.cost_source.edge_costs`);
     each robot's battery is ``battery_ah`` at ``voltage_v`` (default the robot's) keeping
-    ``reserve_pct`` % in reserve; each tour lasts at most ``max_duration_s`` (s; ``None``: no limit).
+    ``reserve_pct`` % in reserve; each tour lasts at most ``max_duration_s`` (s; ``None``: no limit); waiting
+    for a window draws the robot's ``sensor_power_w + control_standby_power_w``.
 
     Raises
     ------
@@ -319,10 +323,12 @@ def plan_tour_on_map(
     battery_ah = check_real("battery_ah", battery_ah, low=0.0, low_inclusive=False)
     n_robots = check_int("n_robots", n_robots, low=1)
     slope = check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False, high_inclusive=False)
-    voltage = robot_params(robot).battery_voltage_v if voltage_v is None else voltage_v
+    params = robot_params(robot)
+    voltage = params.battery_voltage_v if voltage_v is None else voltage_v
+    standby_w = params.sensor_power_w + params.control_standby_power_w  # what it draws waiting for a window
     battery = Battery(battery_ah, voltage, min_reserve_pct=reserve_pct)
     cost = edge_costs(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=math.radians(slope),
                       unknown_ground=unknown_ground if model is None else None, model=model, model_ground=model_ground)
-    fleet = [TourRobot(battery, depot_xy_m, f"robot {k}", max_duration_s) for k in range(n_robots)]
+    fleet = [TourRobot(battery, depot_xy_m, f"robot {k}", max_duration_s, standby_w) for k in range(n_robots)]
     return plan_tour(cost, sites, fleet, risk=risk, time_limit_s=time_limit_s, seed=seed, workers=workers,
                      client=client, map_label=map_label, progress=progress, chargers=chargers)
