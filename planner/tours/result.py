@@ -299,7 +299,8 @@ class TourResult:
                 f"{100 * t.arrival_soc_at_risk:.1f} % at Q (reserve {t.battery.min_reserve_pct:g} %)")
             if t.sites:
                 shown = [f"[charge {n}]" if k in t.charging_stops else n for k, n in enumerate(t.stops)]
-                lines.append("    depot -> " + " -> ".join(shown) + " -> depot")
+                home = t.legs[0].start  # "depot", or "depot <k>" with several
+                lines.append(f"    {home} -> " + " -> ".join(shown) + f" -> {home}")
                 times = [f"{n} {a:.0f}" + (f" (waits until {b:.0f})" if b > a else "")
                          for n, a, b in zip(t.stops, t.arrival_s, t.service_start_s)]
                 limit = f" (at most {t.max_duration_s:g} s)" if t.max_duration_s is not None else ""

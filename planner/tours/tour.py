@@ -284,7 +284,7 @@ def _tour(prices: PairPrices, robot: TourRobot, stops: list[int], depot: int, se
 def plan_tour_on_map(
     terrain: TerrainMap,
     sites: TourSites,
-    depot_xy_m: tuple[float, float],
+    depot_xy_m: tuple[float, float] | Sequence[tuple[float, float]],
     *,
     battery_ah: float,
     voltage_v: float | None = None,
@@ -306,8 +306,8 @@ def plan_tour_on_map(
     progress: bool = False,
     chargers: TourChargers | None = None,
 ) -> TourResult:
-    """:func:`plan_tour` on a map priced as ``terrawatt tour`` prices it: ``n_robots`` alike robots with one depot (and
-    the ``chargers`` they may stop at).
+    """:func:`plan_tour` on a map priced as ``terrawatt tour`` prices it: ``n_robots`` alike robots with one depot, or
+    one each (``depot_xy_m`` a sequence of ``n_robots`` points), and the ``chargers`` they may stop at.
 
     The edges are priced by the presets or a saved ``model`` (:func:`planner.cost_source.edge_costs`);
     each robot's battery is ``battery_ah`` at ``voltage_v`` (default the robot's) keeping
@@ -317,8 +317,8 @@ def plan_tour_on_map(
     Raises
     ------
     InvalidParameterError
-        Bad numbers (a non-positive capacity, a reserve outside [0, 100), fewer than one robot), as
-        :func:`plan_tour`.
+        Bad numbers (a non-positive capacity, a reserve outside [0, 100), fewer than one robot), several depots
+        but not one per robot, as :func:`plan_tour`.
     """
     battery_ah = check_real("battery_ah", battery_ah, low=0.0, low_inclusive=False)
     n_robots = check_int("n_robots", n_robots, low=1)
@@ -329,6 +329,11 @@ def plan_tour_on_map(
     battery = Battery(battery_ah, voltage, min_reserve_pct=reserve_pct)
     cost = edge_costs(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=math.radians(slope),
                       unknown_ground=unknown_ground if model is None else None, model=model, model_ground=model_ground)
-    fleet = [TourRobot(battery, depot_xy_m, f"robot {k}", max_duration_s, standby_w) for k in range(n_robots)]
+    depots = np.asarray(depot_xy_m, dtype=float)
+    depots = depots.reshape(-1, 2) if depots.ndim == 2 else np.tile(depots, (n_robots, 1))
+    if depots.shape[0] != n_robots:
+        raise InvalidParameterError(f"depot_xy_m must be one point or one per robot (n_robots={n_robots}), got "
+                                    f"{depots.shape[0]} points")
+    fleet = [TourRobot(battery, tuple(depots[k]), f"robot {k}", max_duration_s, standby_w) for k in range(n_robots)]
     return plan_tour(cost, sites, fleet, risk=risk, time_limit_s=time_limit_s, seed=seed, workers=workers,
                      client=client, map_label=map_label, progress=progress, chargers=chargers)

@@ -131,3 +131,19 @@ def test_cli_chargers_let_a_far_site_be_visited_and_tour_json_names_the_stops(tm
     rc = main(args + ["--chargers", str(chargers), "--out", str(tmp_path / "bad")])
     err = capsys.readouterr().err
     assert rc == 2 and "charger 'dock' is off the map" in err and err.count("\n") == 1
+
+
+def test_cli_one_depot_per_robot(tmp_path, capsys, wall_map):
+    tmap = wall_map.save(tmp_path / "wall.npz")
+    sites = _sites(tmp_path, ["pump,5.5,35.5,1", "shed,35.5,5.5,1"])
+    args = ["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--depot", "35.5", "35.5",
+            "--battery-ah", "0.1", "--voltage", "24"]
+    rc = main(args + ["--out", str(tmp_path / "out")])
+    text = capsys.readouterr().out
+    assert rc == 0, text
+    doc = json.loads((tmp_path / "out" / "tour.json").read_text())
+    assert [r["depot_xy_m"] for r in doc["robots"]] == [[5.5, 5.5], [35.5, 35.5]]  # --robots defaults to 2
+    assert "depot 1 ->" in text
+    rc = main(args + ["--robots", "3", "--out", str(tmp_path / "bad")])
+    err = capsys.readouterr().err
+    assert rc == 2 and "--depot is given 2 times but --robots is 3" in err
