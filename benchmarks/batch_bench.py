@@ -46,8 +46,8 @@ import numpy as np
 from energy import Battery
 from planner import EnergyCost, Lattice, plan_batch, plan_route, simulate_missions_mc, warm_up_kernels
 from planner.cache import CACHE_SIZE, ResultCache
-from terrawatt_base.atomic import write_json_atomic
 from terrain.procedural import procedural_map
+from terrawatt_base.atomic import write_json_atomic
 
 
 def _need(module: str, extra: str) -> Any:

@@ -45,7 +45,6 @@ import time
 from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
-from energy.diagnosis import diagnose, effect
 from diagnosis_scenarios import (
     SCENARIOS,
     Scenario,
@@ -53,6 +52,8 @@ from diagnosis_scenarios import (
     pair_scenario,
     withheld_gap,
 )
+
+from energy.diagnosis import diagnose, effect
 from terrawatt_base.atomic import write_json_atomic
 
 # Pairs of comparable withheld gaps, then one where turning resistance (85 % of the charge)

@@ -65,8 +65,8 @@ import numpy as np
 
 import energy
 from energy.diagnosis import DRIVE_EFFECTS, EFFECTS_CATALOGUE
-from terrawatt_cli import main as terrawatt
 from terrawatt_base.atomic import write_json_atomic
+from terrawatt_cli import main as terrawatt
 
 
 def _sibling(name: str) -> Any:

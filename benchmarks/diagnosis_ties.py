@@ -46,14 +46,13 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import math
 import platform
 import statistics
 import sys
 import time
 from pathlib import Path
 from typing import Any
-
-import math
 
 import numpy as np
 

@@ -84,13 +84,11 @@ code,ground,label
 # ------------------------------------------------------------------ seeds and readers
 def write_seeds(folder: Path) -> dict[str, Path]:
     """One small real file (or folder) per reader."""
-    from energy import read_borealtc, robot_preset, write_csv_log
+    from energy import VibrationCurrentEstimator, read_borealtc, robot_preset, write_csv_log
     from energy.models import LinearCurrentModel, fit_interval
+    from energy.models.config import estimator_preset
     from energy.params import write_robot_file
     from terrain import procedural_map, write_geotiff
-
-    from energy import VibrationCurrentEstimator
-    from energy.models.config import estimator_preset
 
     logs = read_borealtc(FIXTURES)
     seeds = {"model": fit_interval(LinearCurrentModel(), logs, folds=2).save(folder / "model.zip")}

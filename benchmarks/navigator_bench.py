@@ -77,7 +77,7 @@ from planner.missions import adaptive as adaptive_module  # noqa: E402
 from planner.missions import fit_prior_model, run_adaptive_mission  # noqa: E402
 from planner.missions import replay as replay_module  # noqa: E402
 from planner.missions.replay import replay_drive  # noqa: E402
-from terrain import CellModelRegistry  # noqa: E402
+from planner.registry import CellModelRegistry  # noqa: E402
 from terrain.procedural import procedural_map  # noqa: E402
 from terrawatt_base.atomic import write_json_atomic  # noqa: E402
 

@@ -76,8 +76,9 @@ from energy.sim import VIBRATION_PRESETS, GroundVariation
 from planner import AdaptiveSettings, Navigator, simulate_mission
 from planner.missions import fit_prior_model
 from planner.missions.legs import split_polyline
+from planner.registry import CellModelRegistry
 from planner.route import evaluate_route
-from terrain import CellModelRegistry, TerrainMap
+from terrain import TerrainMap
 from terrawatt_base.errors import DataError
 
 __all__ = [

@@ -54,11 +54,11 @@ import numpy as np
 
 from energy import PhysicsEnergyModel, ground_preset, robot_preset
 from planner import EnergyCost, Lattice, PlannerSettings, plan_route, warm_up_kernels
-from planner.ompl import OMPL_PLANNERS
 from planner.anyangle import DEFAULT_POLISH_SPACINGS_CELLS, anyangle_path, polish_path, warm_up_anyangle
 from planner.kernels import variants
-from terrawatt_base.atomic import write_json_atomic
+from planner.ompl import OMPL_PLANNERS
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map, procedural_map
+from terrawatt_base.atomic import write_json_atomic
 
 # Start/goal as fractions of the map extent: about 12, 45 and 74 degrees from the x axis.
 QUERIES = (((0.05, 0.30), (0.95, 0.50)), ((0.08, 0.06), (0.92, 0.94)), ((0.30, 0.05), (0.55, 0.95)))

@@ -44,11 +44,11 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from planner import EnergyCost, reachability, warm_up_kernels
-from planner.reachability import depot_links, lattice_move_energies, warm_up_reachability
 from planner.kernels import lattice_weights
 from planner.lattice import LATTICE_OFFSETS
-from terrawatt_base.atomic import write_json_atomic
+from planner.reachability import depot_links, lattice_move_energies, warm_up_reachability
 from terrain.procedural import procedural_map
+from terrawatt_base.atomic import write_json_atomic
 
 #: The issue's target: a cold round-trip reachability on 2048^2 cells within this many seconds.
 TARGET_S = 3.0

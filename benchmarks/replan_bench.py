@@ -70,9 +70,10 @@ from planner import (
 )
 from planner.heading_lattice import heading_shortest_path
 from planner.kernels import graph
-from terrain import CellModelRegistry, TerrainMap
-from terrawatt_base.atomic import write_json_atomic
+from planner.registry import CellModelRegistry
+from terrain import TerrainMap
 from terrain.procedural import procedural_map
+from terrawatt_base.atomic import write_json_atomic
 
 GROUNDS = ("asphalt", "grass", "sand", "snow")
 SPEED_MPS = 0.5

@@ -43,16 +43,15 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from energy import (Battery, TruthSimulator, VibrationCurrentEstimator, ground_preset, load_current_model,
-                    robot_preset)
+from energy import Battery, TruthSimulator, VibrationCurrentEstimator, ground_preset, load_current_model, robot_preset
 from energy.models.config import estimator_preset
 from energy.sim import GroundVariation
 from planner import EnergyCost, model_energy_cost, warm_up_kernels
 from planner.tours import TourChargers, TourRobot, TourSites, plan_tour, price_pairs, simulate_tours_mc
 from planner.tours.solver import TourProblem, solve_ortools, solve_pyvrp
-from terrawatt_base.atomic import write_json_atomic
 from terrain import TerrainMap, example_map
 from terrain.procedural import procedural_map
+from terrawatt_base.atomic import write_json_atomic
 
 
 def with_spread(cost: EnergyCost, rel_sd: float) -> EnergyCost:

@@ -8,7 +8,7 @@ belongs to the model:
 - :class:`energy.PhysicsEnergyModel`: the ground parameters of a ground
   (:class:`energy.GroundParams`) — the map's ground classes are its cell classes;
 - :class:`planner.LearnedEnergyModel`: the id of a current model in a per-cell registry
-  (:class:`terrain.CellModelRegistry`) — the cells that model serves are one class.
+  (:class:`planner.registry.CellModelRegistry`) — the cells that model serves are one class.
 
 So ``ground`` always means a ground (its name, class id or parameters) in this library, and
 the argument the protocol passes is called ``cell_class``. A model whose forecasts carry an

@@ -27,7 +27,8 @@ import numpy as np
 from energy import Battery, TruthSimulator, ground_preset, robot_preset
 from planner import AdaptiveSettings, LearnedEnergyModel, plan_route, run_adaptive_mission, simulate_mission
 from planner.missions import fit_prior_model
-from terrain import CellModelRegistry, TerrainMap
+from planner.registry import CellModelRegistry
+from terrain import TerrainMap
 
 
 def scenario(quick: bool = False) -> tuple[TerrainMap, tuple[float, float], tuple[float, float]]:

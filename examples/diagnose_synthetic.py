@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from energy import PhysicsCurrentModel, TruthSimulator, excitation_commands, robot_preset
-from energy.sim import PAPER_GROUNDS
 from energy.diagnosis import diagnose
+from energy.sim import PAPER_GROUNDS
 
 EFFECTS_WITHOUT_TURNING = ("inertia", "slope", "static_friction", "coulomb_friction", "stribeck",
                            "viscous_friction", "longitudinal_slip", "lateral_slip", "gear_losses",

@@ -28,6 +28,7 @@ from pathlib import Path
 
 import energy
 import planner
+import planner.registry
 import terrain
 from energy.io.ros_messages import log_from_messages
 from energy.params import robot_params
@@ -60,7 +61,7 @@ class NavigatorNode:
             self.nav = planner.Navigator.load(self.state, self.tmap)
             self.log.info(f"navigator state restored from {self.state}")
         else:
-            registry = terrain.CellModelRegistry.from_terrain(self.tmap, energy.load_current_model(self.p["model"]))
+            registry = planner.registry.CellModelRegistry.from_terrain(self.tmap, energy.load_current_model(self.p["model"]))
             robot = robot_params(self.p["robot"])
             battery = energy.Battery(capacity_ah=self.p["battery_capacity_ah"], voltage_v=robot.battery_voltage_v,
                                      min_reserve_pct=self.p["min_reserve_pct"], initial_soc=self.p["initial_soc"])

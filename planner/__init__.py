@@ -7,6 +7,7 @@ from .batch_pairs import BatchPairs, read_pairs_csv
 from .batch_result import BatchResult
 from .coarse import CoarseToFine, plan_coarse_to_fine
 from .coarse_geotiff import plan_coarse_to_fine_geotiff
+from .cost_spec import CostSpec
 from .edge_cost import EnergyCost
 from .energy_costmap import energy_costmap
 from .lattice import Lattice
@@ -29,14 +30,16 @@ from .problem import PlanningProblem
 from .reachability import reachability
 from .reachability_result import Reachability
 from .replan import IncrementalPlanner
-from .risk import RouteEnergyInterval, risk_cost, route_energy_interval
+from .risk import RouteEnergyInterval, risk_cost
 from .ros_export import write_route_bag
 from .route import Route
 from .route_geojson import write_geojson
+from .route_price import price_route
 from .settings import PlannerSettings
 from .warmup import warm_up_kernels
 
 __all__ = [
+    "CostSpec",
     "EnergyCost",
     "PlannerSettings",
     "PLANNERS",
@@ -48,7 +51,7 @@ __all__ = [
     "warm_up_kernels",
     "LearnedEnergyModel",
     "model_energy_cost",
-    "route_energy_interval",
+    "price_route",
     "RouteEnergyInterval",
     "risk_cost",
     "plan_coarse_to_fine",

@@ -4,22 +4,26 @@ from __future__ import annotations
 
 import contextlib
 import copy
+import dataclasses
 import math
 import time
 from typing import Any
 
-from terrawatt_base.checks import check_bool, check_int, check_real, check_seed
+from terrain import TerrainMap
+from terrawatt_base.checks import check_bool, check_instance, check_int, check_real, check_seed
 from terrawatt_base.dask_client import check_client, client_worker_count, dask_client
 from terrawatt_base.errors import InvalidParameterError, TerrawattError, UnknownNameError
 
 from .batch_pairs import BatchPairs
 from .batch_result import BatchResult, BatchRow
 from .cache import CACHE_SIZE, ResultCache
+from .cost_spec import CostSpec
 from .edge_cost import EnergyCost
 from .planning import GRAPH_PLANNERS, PLANNERS, plan_route
 from .settings import PlannerSettings
+from .warmup import warm_up_kernels
 
-__all__ = ["plan_batch", "plan_pair", "shippable_cost"]
+__all__ = ["plan_batch", "plan_batch_on_map", "plan_pair", "shippable_cost"]
 
 
 def plan_pair(
@@ -200,7 +204,7 @@ def plan_batch(
             rows = _plan_on_cluster(client, cost, batch, opts, progress)
             n_used = client_worker_count(client)
         elapsed = time.perf_counter() - t0
-    return BatchResult(tuple(rows), planner, where, n_used, elapsed)
+    return BatchResult(tuple(rows), planner, where, n_used, elapsed, terrain=cost.terrain)
 
 
 def _plan_here(cost: EnergyCost, batch: BatchPairs, opts: tuple, progress: bool) -> list[BatchRow]:
@@ -244,3 +248,60 @@ def _plan_on_cluster(client: Any, cost: EnergyCost, batch: BatchPairs, opts: tup
     finally:
         client.cancel([shared])
     return rows  # type: ignore[return-value]
+
+
+def plan_batch_on_map(
+    terrain: TerrainMap,
+    pairs: BatchPairs | Any,
+    *,
+    planner: str = "lattice",
+    pricing: CostSpec | None = None,
+    time_limit_s: float | None = 1.0,
+    max_cost_evaluations: int | None = None,
+    seed: int | None = 0,
+    client: Any = None,
+    where: str | None = None,
+    progress: bool = True,
+    map_label: str = "map",
+) -> BatchResult:
+    """Price ``terrain`` (:meth:`planner.cost_spec.CostSpec.build`) and plan every pair on it (:func:`planner.plan_batch`).
+
+    Parameters
+    ----------
+    terrain : TerrainMap
+        The map.
+    pairs : BatchPairs or array-like
+        As :func:`planner.plan_batch`.
+    planner, time_limit_s, max_cost_evaluations, seed, client, progress
+        As :func:`planner.plan_batch`; ``where`` says how the result names ``client``'s cluster.
+    pricing : CostSpec, optional
+        How the edges are priced (:class:`planner.cost_spec.CostSpec`, default ``CostSpec()``; its
+        ``risk`` is not used: every pair at the mean).
+    map_label : str
+        How the map is named.
+
+    Returns
+    -------
+    BatchResult
+        With ``map_label`` and the map.
+
+    Raises
+    ------
+    TerrawattError
+        As :meth:`planner.cost_spec.CostSpec.build` and :func:`planner.plan_batch`.
+
+    Examples
+    --------
+    >>> from terrain import flat_map
+    >>> report = plan_batch_on_map(flat_map((20, 20), 1.0), [[2.0, 2.0, 15.0, 12.0]], progress=False)
+    >>> report.all_found, report.header()
+    (True, 'map: map  20 x 20 cells of 1 m; 1 pairs; planner lattice')
+    """
+    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    cost = pricing.build(terrain)
+    warm_up_kernels()
+    result = plan_batch(cost, pairs, planner=planner, seed=seed, client=client, time_limit_s=time_limit_s,
+                        max_cost_evaluations=max_cost_evaluations, progress=progress)
+    if client is not None and where is not None:  # where it ran, as the caller names it
+        result = dataclasses.replace(result, where=where)
+    return dataclasses.replace(result, map_label=map_label)

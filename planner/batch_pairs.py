@@ -13,9 +13,9 @@ from typing import Any
 import numpy as np
 
 from terrain import TerrainMap
+from terrain.georef import lonlat_to_xy
 from terrawatt_base.checks import readonly, real_array
 from terrawatt_base.errors import DataError, FileFormatError, InvalidParameterError
-from terrain.georef import lonlat_to_xy
 
 __all__ = [
     "BatchPairs",

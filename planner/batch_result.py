@@ -1,4 +1,5 @@
-"""BatchResult: one row per (start, goal) pair of a batch (energy, length, time, status, saving, error), as CSV and JSON."""
+"""BatchResult: one row per (start, goal) pair of a batch (energy, length, time, status, saving, error): the printed
+summary, batch.csv and batch.json."""
 
 from __future__ import annotations
 
@@ -6,12 +7,13 @@ import csv
 import io
 import math
 import os
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from terrain import TerrainMap
 from terrawatt_base.atomic import write_text_atomic
 from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.formats import result_document, write_result_json
@@ -85,7 +87,11 @@ _COLUMNS = tuple(f.name for f in fields(BatchRow))
 
 @dataclass(frozen=True)
 class BatchResult:
-    """The rows of a batch, in the order of its pairs, and how it ran.
+    """The rows of a batch, in the order of its pairs, how it ran and on which map.
+
+    Made by :func:`planner.plan_batch` (and :func:`planner.batch.plan_batch_on_map`, which prices
+    the map first). :meth:`summary` is the text ``terrawatt batch`` prints, :meth:`write` writes
+    batch.csv and batch.json.
 
     Attributes
     ----------
@@ -99,6 +105,10 @@ class BatchResult:
     elapsed_s : float
         Wall time of the planning (shipping the cost to the workers included, starting a
         local cluster not).
+    map_label : str
+        How the map is named.
+    terrain : TerrainMap, optional
+        The map the pairs were planned on (not part of the JSON).
 
     Examples
     --------
@@ -112,6 +122,8 @@ class BatchResult:
     where: str
     n_workers: int
     elapsed_s: float
+    map_label: str = "map"
+    terrain: TerrainMap | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         rows = tuple(self.rows)
@@ -130,6 +142,11 @@ class BatchResult:
     def n_found(self) -> int:
         """Pairs with a route."""
         return sum(r.found for r in self.rows)
+
+    @property
+    def all_found(self) -> bool:
+        """Whether every pair has a route."""
+        return self.n_found == len(self.rows)
 
     @property
     def n_errors(self) -> int:
@@ -202,7 +219,23 @@ class BatchResult:
             lines.append(f"... {len(self.rows) - max_rows} more rows")
         return "\n".join(lines)
 
+    def header(self) -> str:
+        """``map: LABEL  R x C cells of S m; N pairs; planner NAME``: the first line of the summary."""
+        t = self.terrain
+        grid = "" if t is None else f"  {t.shape[0]} x {t.shape[1]} cells of {t.cell_size_m:g} m"
+        return f"map: {self.map_label}{grid}; {len(self.rows)} pairs; planner {self.planner}"
+
     def summary(self) -> str:
+        """What ``terrawatt batch`` prints: :meth:`header`, the table of the pairs (:meth:`table`), :meth:`totals`."""
+        return "\n".join([self.header(), self.table(), "", self.totals()])
+
+    def write(self, out_dir: str | os.PathLike[str]) -> list[Path]:
+        """Write batch.csv and batch.json into ``out_dir`` (created); return them."""
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        return [self.to_csv(out / "batch.csv"), self.write_json(out / "batch.json")]
+
+    def totals(self) -> str:
         """A few lines for people: counts by status, throughput, median saving, the errors."""
         counts = ", ".join(f"{self.count(s)} {s}" for s in BATCH_STATUSES if self.count(s))
         lines = [

@@ -58,9 +58,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from terrain import DemWindows, ElevationWindow, TerrainMap
+from terrain.surface import surface_layers
 from terrawatt_base.checks import check_int, check_optional_real
 from terrawatt_base.errors import InvalidParameterError, OutOfBoundsError, PlanningError
-from terrain.surface import surface_layers
 
 from .coarse import (
     COARSE_FALLBACKS,

@@ -2,23 +2,21 @@
 
 from __future__ import annotations
 
-import functools
 import math
 import os
-import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from terrain import DemWindows, Grid, InvalidParameterError, TerrainMap
-from terrawatt_base.formats import result_document, write_result_json
-from terrawatt_base.checks import check_bool, check_real, option_names
+from terrawatt_base.checks import check_bool, check_instance, option_names
 from terrawatt_base.figure_file import draw_figure
+from terrawatt_base.formats import result_document, write_result_json
 
 from .coarse import CoarseToFine, plan_coarse_to_fine
 from .coarse_geotiff import plan_coarse_to_fine_geotiff
-from .edge_cost import EnergyCost
+from .cost_spec import CostSpec, PricedMap
 from .plan_report import (
     ROUTE_JSON_FORMAT_VERSION,
     compile_line,
@@ -53,33 +51,27 @@ class CoarsePlanReport:
         The plan: its route, coarse route, corridor, fallback and times.
     start_xy_m, goal_xy_m : (float, float)
         Start and goal (m).
-    robot, speed_mps, max_slope_deg, unknown_ground
-        How the edges were priced (the physics presets).
-    map_label : str
-        How the map is named.
-    map_preparation_s, kernel_compile_s : float
-        Seconds to price the whole map (0 when read by windows); to compile the kernels.
+    priced : PricedMap
+        The map and how it was priced (the physics presets), with the times: the whole map priced
+        in memory, or, read by windows, only the spec, the label and the compile time (the map
+        preparation is 0: each window is priced as it is read).
     windowed : bool
         Whether the DEM was read by windows.
     grid : Grid
         The whole map's grid.
-    terrain : TerrainMap or None
-        The whole map, when it was given in memory.
     """
 
     plan: CoarseToFine
     start_xy_m: tuple[float, float]
     goal_xy_m: tuple[float, float]
-    robot: str
-    speed_mps: float
-    max_slope_deg: float
-    unknown_ground: str | None
-    map_label: str
-    map_preparation_s: float
-    kernel_compile_s: float
+    priced: PricedMap = field(repr=False, compare=False)
     windowed: bool
     grid: Grid
-    terrain: TerrainMap | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def terrain(self) -> TerrainMap | None:
+        """The whole map, when it was given in memory."""
+        return self.priced.terrain
 
     @property
     def route(self) -> Any:
@@ -100,16 +92,16 @@ class CoarsePlanReport:
 
     def summary(self) -> str:
         """What ``terrawatt plan --coarse-factor`` prints: the map, the robot, the stages and their times, the table."""
-        plan, (rows, cols) = self.plan, self.grid.shape
-        speed = f"robot: {self.robot}, speed {self.speed_mps:g} m/s, max slope {self.max_slope_deg:g} deg; "
+        plan, (rows, cols), priced = self.plan, self.grid.shape, self.priced
+        speed = priced.robot_line() + "; "
         if self.windowed:
-            lines = [f"map: {self.map_label}  {rows} x {cols} cells of {self.grid.cell_size_m:g} m, read by windows; "
-                     f"ground unknown, priced as {self.unknown_ground!r}",
+            lines = [f"map: {priced.map_label}  {rows} x {cols} cells of {self.grid.cell_size_m:g} m, read by windows; "
+                     f"ground unknown, priced as {priced.spec.unknown_ground!r}",
                      speed + f"full-resolution cells read by the fine stage: {plan.fine_window_cells} of {rows * cols} "
                      f"({100 * plan.fine_window_cells / (rows * cols):.1f} %)"]
         else:
-            lines = [map_line(self.map_label, self.terrain), speed + f"map preparation {self.map_preparation_s:.2f} s"]
-        lines += compile_line(self.kernel_compile_s)
+            lines = [map_line(priced.map_label, self.terrain), speed + f"map preparation {priced.map_preparation_s:.2f} s"]
+        lines += compile_line(priced.kernel_compile_s)
         lines += [f"start {self.start_xy_m} -> goal {self.goal_xy_m}; coarse-to-fine, factor {plan.factor}, corridor "
                   f"{plan.corridor_m:g} m ({plan.corridor_cells} free cells searched; fallback: {plan.fallback})",
                   f"coarse route {plan.coarse_time_s:.2f} s, corridor search {plan.fine_time_s:.2f} s", ""]
@@ -120,13 +112,13 @@ class CoarsePlanReport:
         """The content of route.json (as :meth:`PlanReport.to_dict`, with the coarse route and the stages)."""
         plan, route = self.plan, self.route
         return result_document("route", ROUTE_JSON_FORMAT_VERSION, {
-            "map": self.map_label, "map_crs": plan.coarse_map.crs if plan.coarse_map is not None else None,
-            "robot": self.robot, "speed_mps": self.speed_mps, "max_slope_deg": self.max_slope_deg,
+            "map": self.priced.map_label, "map_crs": plan.coarse_map.crs if plan.coarse_map is not None else None,
+            **self.priced.fields(),
             "start_xy_m": list(self.start_xy_m), "goal_xy_m": list(self.goal_xy_m),
             **lonlat_fields(plan.coarse_map, self.start_xy_m, self.goal_xy_m),
             "planner": "coarse-to-fine",
             "search_objective": COARSE_SEARCH_OBJECTIVE,
-            "map_preparation_s": self.map_preparation_s, "kernel_compile_s": self.kernel_compile_s,
+            "map_preparation_s": self.priced.map_preparation_s, "kernel_compile_s": self.priced.kernel_compile_s,
             "status": route.status, "windowed": self.windowed,
             "coarse_to_fine": {k: v for k, v in plan.summary().items() if k not in route.summary()},
             "routes": ({"min_energy": {**route.summary(), "waypoints_m": route.waypoints_m.tolist()}}
@@ -141,10 +133,10 @@ class CoarsePlanReport:
         shown = coarse if fine is None or (self.windowed and whole_map) else fine
         lines = [RouteLine("coarse-to-fine", self.route.waypoints_m, self.route.energy_j, colour="#d32f2f")
                  ] if self.route.found else []
-        title = f"terrawatt: coarse-to-fine route on {self.map_label}" + (
+        title = f"terrawatt: coarse-to-fine route on {self.priced.map_label}" + (
             f" (the x{self.plan.factor} coarse map)" if shown is coarse else "")
         return plot_routes(shown, lines, self.start_xy_m, self.goal_xy_m, path, ax=ax, title=title,
-                           extent="map" if whole_map else "routes", max_slope_rad=math.radians(self.max_slope_deg))
+                           extent="map" if whole_map else "routes", max_slope_rad=self.priced.spec.max_slope_rad)
 
     def write(self, out_dir: str | os.PathLike[str], *, whole_map: bool = False,
               on_figure_error: str = "warn") -> list[Path]:
@@ -169,8 +161,12 @@ COARSE_OPTIONS = ("factor", "corridor_m", "windowed", "path", "model", "planner"
                   "cell_size_m", "landcover")
 
 
-def _check_slope(max_slope_deg: float) -> float:
-    return check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False, high_inclusive=False)
+def _presets_only(pricing: CostSpec | None) -> CostSpec:
+    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    if pricing.model is not None or pricing.risk is not None:
+        raise InvalidParameterError("coarse-to-fine prices the map with the physics presets: give pricing without a "
+                                    "model and a risk level", parameter="pricing")
+    return pricing
 
 
 def plan_coarse(
@@ -180,18 +176,19 @@ def plan_coarse(
     *,
     factor: int = 4,
     corridor_m: float | None = None,
-    robot: str = "husky",
-    speed_mps: float = 0.5,
-    max_slope_deg: float = 20.0,
-    unknown_ground: str | None = "gravel",
+    pricing: CostSpec | None = None,
     map_label: str = "map",
 ) -> CoarsePlanReport:
     """Price a map in memory with the presets and plan coarse-to-fine on it (:func:`planner.plan_coarse_to_fine`).
 
+    ``pricing`` (:class:`planner.cost_spec.CostSpec`, default ``CostSpec()``) prices the map with the
+    physics presets: coarse-to-fine takes no saved model and no risk level.
+
     Raises
     ------
     TerrawattError
-        As :meth:`EnergyCost.from_presets` and :func:`planner.plan_coarse_to_fine`.
+        As :meth:`planner.cost_spec.CostSpec.build` and :func:`planner.plan_coarse_to_fine`;
+        ``pricing`` with a model or a risk level.
 
     Examples
     --------
@@ -200,18 +197,11 @@ def plan_coarse(
     >>> report.route.status, report.rows()[0]["route"]
     ('exact', 'coarse-to-fine (x4)')
     """
-    max_slope_deg = _check_slope(max_slope_deg)
-    compile_s = warm_up_kernels()
-    t0 = time.perf_counter()
-    cost = EnergyCost.from_presets(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=math.radians(max_slope_deg),
-                                   unknown_ground=unknown_ground)
-    prep_s = time.perf_counter() - t0
-    plan = plan_coarse_to_fine(cost, start_xy_m, goal_xy_m, factor=factor, corridor_m=corridor_m)
+    priced = _presets_only(pricing).price(terrain, map_label=map_label)
+    plan = plan_coarse_to_fine(priced.cost, start_xy_m, goal_xy_m, factor=factor, corridor_m=corridor_m)
     return CoarsePlanReport(
         plan=plan, start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),
-        goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), robot=robot, speed_mps=speed_mps,
-        max_slope_deg=max_slope_deg, unknown_ground=unknown_ground, map_label=map_label, map_preparation_s=prep_s,
-        kernel_compile_s=compile_s, windowed=False, grid=terrain.grid, terrain=terrain,
+        goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), priced=priced, windowed=False, grid=terrain.grid,
     )
 
 
@@ -222,16 +212,14 @@ def plan_coarse_windowed(
     *,
     factor: int = 4,
     corridor_m: float | None = None,
-    robot: str = "husky",
-    speed_mps: float = 0.5,
-    max_slope_deg: float = 20.0,
-    unknown_ground: str = "gravel",
+    pricing: CostSpec | None = None,
     fine_window_cells: int | None = None,
     map_label: str | None = None,
 ) -> CoarsePlanReport:
     """Plan coarse-to-fine on a GeoTIFF DEM read by windows, never whole (:func:`planner.plan_coarse_to_fine_geotiff`),
-    every window priced by the presets; ``fine_window_cells`` is its ``fine_window_budget_cells`` and ``map_label``
-    defaults to the file's name.
+    every window priced by ``pricing`` (:meth:`planner.cost_spec.CostSpec.build`: the presets; every cell of a DEM
+    without classes is of its unknown ground, which must name a preset); ``fine_window_cells`` is its
+    ``fine_window_budget_cells`` and ``map_label`` defaults to the file's name.
 
     Raises
     ------
@@ -240,20 +228,17 @@ def plan_coarse_windowed(
     OptionalDependencyError
         rasterio is not installed.
     """
-    max_slope_deg = _check_slope(max_slope_deg)
+    pricing = _presets_only(pricing)
     compile_s = warm_up_kernels()
     with DemWindows(path) as dem:
         grid = dem.grid
-    cost_from = functools.partial(EnergyCost.from_presets, robot=robot, speed_mps=speed_mps,
-                                  max_slope_rad=math.radians(max_slope_deg), unknown_ground=unknown_ground)
     plan = plan_coarse_to_fine_geotiff(path, start_xy_m, goal_xy_m, factor=factor, corridor_m=corridor_m,
-                                       cost_from=cost_from, fine_window_budget_cells=fine_window_cells)
+                                       cost_from=pricing.build, fine_window_budget_cells=fine_window_cells)
     return CoarsePlanReport(
         plan=plan, start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),
-        goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), robot=robot, speed_mps=speed_mps,
-        max_slope_deg=max_slope_deg, unknown_ground=unknown_ground,
-        map_label=Path(path).name if map_label is None else map_label, map_preparation_s=0.0,
-        kernel_compile_s=compile_s, windowed=True, grid=grid,
+        goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])),
+        priced=PricedMap(pricing, Path(path).name if map_label is None else map_label, kernel_compile_s=compile_s),
+        windowed=True, grid=grid,
     )
 
 

@@ -200,10 +200,13 @@ class EnergyCost:
         self.changed_cells: np.ndarray | None = None
         #: The physics model that priced the tables (:meth:`from_model` with a
         #: :class:`energy.PhysicsEnergyModel`) and its ground parameters per table row, so a
-        #: mission forecast can price the whole driven profile (:func:`planner.missions.forecast.profile_forecast_w`);
+        #: mission forecast can price the whole driven profile (:func:`planner.route_price.profile_forecast_w`);
         #: ``None`` otherwise.
         self.physics_model: PhysicsEnergyModel | None = None
         self.ground_params: tuple[Any, ...] | None = None
+        #: The learned model that priced the tables (:meth:`planner.LearnedEnergyModel.energy_cost`), so
+        #: :func:`planner.route_price.price_route` can price a route's whole drive profile with it; ``None`` otherwise.
+        self.learned_model: Any = None
         self.prep_time_s = time.perf_counter() - t0
 
     def with_tables(
@@ -284,6 +287,7 @@ class EnergyCost:
         new.changed_cells.setflags(write=False)
         new.results = ResultCache(CACHE_SIZE)
         new.physics_model, new.ground_params = None, None  # other tables: not that physics model's any more
+        new.learned_model = None
         new.lattices = {stride: lat.refreshed(new, new.changed_cells) for stride, lat in self.lattices.items()}
         new.prep_time_s = time.perf_counter() - t0
         return new

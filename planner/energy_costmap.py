@@ -26,10 +26,10 @@ from typing import Any
 import numpy as np
 
 from terrain import Grid
+from terrain.georef import import_rasterio
 from terrawatt_base.atomic import atomic_path, check_output_path
 from terrawatt_base.checks import check_choice, check_int, check_real, readonly
 from terrawatt_base.errors import FileFormatError, InvalidParameterError
-from terrain.georef import import_rasterio
 
 from .edge_cost import EnergyCost
 

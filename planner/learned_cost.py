@@ -1,7 +1,7 @@
 """Edge costs from learned current models: per-model energy tables from one batched prediction.
 
 A :class:`LearnedEnergyModel` turns the current models of a
-:class:`~terrain.CellModelRegistry` into planner edge costs.
+:class:`~planner.registry.CellModelRegistry` into planner edge costs.
 
 For every model it runs **one** ``predict`` call on a synthetic log that holds each speed
 of ``speeds_mps`` (straight driving, ``omega = 0``) and then each turn rate of
@@ -81,11 +81,7 @@ from energy import (
 )
 from energy.budget import log_battery_power_w
 from energy.profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2
-from terrain import (
-    CellModelRegistry,
-    InvalidParameterError,
-    TerrainMap,
-)
+from terrain import InvalidParameterError, TerrainMap
 from terrawatt_base.checks import check_choice, check_real, check_text, real_array
 
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
@@ -96,6 +92,7 @@ from .learned_table import (
     predict_current_spread,
     predict_currents,
 )
+from .registry import CellModelRegistry
 from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES, check_table_sizes, tabulate
 
 __all__ = [
@@ -575,12 +572,12 @@ class LearnedEnergyModel:
             cost = previous.with_tables(grade_table, turn_table, rows, ground_labels=labels,
                                         grade_sd_table_j_per_m=grade_sd, turn_sd_table_j=turn_sd,
                                         spread_dof=spread_dof)
-            cost.prep_time_s = time.perf_counter() - t0
-            return cost
-        cost = EnergyCost(terrain, rows, grade_table, turn_table, speed_mps=speed, max_slope_rad=slope,
-                          battery_voltage_v=self.robot.battery_voltage_v, turn_rate_radps=self.turn_rate_radps,
-                          ground_labels=labels, grade_sd_table_j_per_m=grade_sd, turn_sd_table_j=turn_sd,
-                          spread_dof=spread_dof)
+        else:
+            cost = EnergyCost(terrain, rows, grade_table, turn_table, speed_mps=speed, max_slope_rad=slope,
+                              battery_voltage_v=self.robot.battery_voltage_v, turn_rate_radps=self.turn_rate_radps,
+                              ground_labels=labels, grade_sd_table_j_per_m=grade_sd, turn_sd_table_j=turn_sd,
+                              spread_dof=spread_dof)
+        cost.learned_model = self  # a route's whole drive profile is priced by this model (price_route)
         cost.prep_time_s = time.perf_counter() - t0
         return cost
 

@@ -39,12 +39,13 @@ import numpy as np
 
 from energy import CurrentModel, GroundParams, RobotParams, ground_preset
 from energy.logs import named_robots, robot_matches
-from terrain import CellModelRegistry, TerrainMap
-from terrawatt_base.errors import DataError, InvalidParameterError, TerrawattWarning, UnknownNameError
+from terrain import TerrainMap
 from terrain.terrain_map import UNKNOWN_GROUND
+from terrawatt_base.errors import DataError, InvalidParameterError, TerrawattWarning, UnknownNameError
 
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
 from .learned_cost import LearnedEnergyModel
+from .registry import CellModelRegistry
 from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES
 
 if TYPE_CHECKING:  # annotations only: energy does not export the summary's class at the top level

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import os
-import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -13,19 +12,18 @@ from typing import Any
 import numpy as np
 
 from terrain import UNKNOWN_GROUND, OptionalDependencyError, TerrainMap
-from terrawatt_base.formats import format_name, result_document, write_result_json
-from terrawatt_base.checks import check_choice, check_real
-from terrawatt_base.errors import InvalidParameterError
+from terrawatt_base.checks import check_choice, check_instance
 from terrawatt_base.figure_file import draw_figure
+from terrawatt_base.formats import format_name, result_document, write_result_json
 
-from .cost_source import edge_costs
+from .cost_spec import CostSpec, PlanModel, PricedMap
 from .edge_cost import EnergyCost
 from .planning import GRAPH_PLANNERS, PLANNERS, plan_route, search_objective
 from .plot import RouteLine, plot_routes
-from .risk import INTERVAL_LEVEL, RouteEnergyInterval, check_planning_risk, risk_cost, route_energy_interval
+from .risk import INTERVAL_LEVEL, RouteEnergyInterval
 from .route import Route
 from .route_geojson import write_geojson
-from .warmup import warm_up_kernels
+from .route_price import price_route
 
 __all__ = [
     "ROUTE_JSON_FORMAT",
@@ -117,48 +115,6 @@ def _finite_or_none(x: float) -> float | None:
 
 
 @dataclass(frozen=True)
-class PlanModel:
-    """The saved current model that priced a plan's edges (route.json's ``model``).
-
-    Attributes
-    ----------
-    file : str
-        How the model is named (e.g. its file name).
-    class_name : str
-        The model's class.
-    model_ground : str, mapping or None
-        The ``model_ground`` it priced the map with (:func:`planner.model_energy_cost`).
-    grounds : tuple of str
-        The cost's ground labels.
-    gives_interval : bool
-        Whether the cost has a predictive interval.
-    risk_q : float or None
-        The quantile planned on (:func:`planner.risk_cost`), or None for the mean.
-    """
-
-    file: str
-    class_name: str
-    model_ground: str | Mapping[str, str] | None
-    grounds: tuple[str, ...]
-    gives_interval: bool
-    risk_q: float | None = None
-
-    def to_dict(self) -> dict[str, Any]:
-        """route.json's ``model`` block."""
-        return {"file": self.file, "class": self.class_name, "model_ground": self.model_ground,
-                "grounds": list(self.grounds), "gives_interval": self.gives_interval, "risk_q": self.risk_q,
-                "objective": ("energy mean" if self.risk_q is None
-                              else f"{self.risk_q:g} quantile: mean + z sd per edge")}
-
-    def line(self) -> str:
-        """The summary's ``edge costs: model ...`` line."""
-        return (f"edge costs: model {self.file} ({self.class_name}) on grounds {list(self.grounds)}"
-                + (f"; planned on the {self.risk_q:g} quantile of energy (each edge at mean + z sd)"
-                   if self.risk_q is not None else "")
-                + ("" if self.gives_interval else "; the model gives no interval"))
-
-
-@dataclass(frozen=True)
 class PlanReport:
     """A minimum-energy route compared with the shortest route and the lattice optimum, ready to print and write.
 
@@ -179,18 +135,9 @@ class PlanReport:
         Start and goal (m).
     planner, seed, time_limit_s, max_evaluations
         How the route was planned (:func:`planner.plan_route`).
-    robot, speed_mps, max_slope_deg, unknown_ground
-        How the edges were priced.
-    map_label : str
-        How the map is named.
-    map_preparation_s, kernel_compile_s : float
-        Seconds to price the map; to compile (or load) the kernels beforehand.
-    model : PlanModel or None
-        The saved model that priced the edges, or None for the physics presets.
-    terrain : TerrainMap
-        The map.
-    cost : EnergyCost
-        The cost the routes were planned on (the risk cost with ``risk``).
+    priced : PricedMap
+        The map and how it was priced (robot, speed, slope limit, model, risk), with the times:
+        the header of the summary and of route.json.
     """
 
     route: Route
@@ -202,16 +149,22 @@ class PlanReport:
     seed: int | None
     time_limit_s: float | None
     max_evaluations: int | None
-    robot: str
-    speed_mps: float
-    max_slope_deg: float
-    unknown_ground: str | None
-    map_label: str
-    map_preparation_s: float
-    kernel_compile_s: float
-    model: PlanModel | None = None
-    terrain: TerrainMap = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
-    cost: EnergyCost = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
+    priced: PricedMap = field(repr=False, compare=False)
+
+    @property
+    def terrain(self) -> TerrainMap:
+        """The map."""
+        return self.priced.terrain
+
+    @property
+    def cost(self) -> EnergyCost:
+        """The cost the routes were planned on (the risk cost with a risk level)."""
+        return self.priced.cost
+
+    @property
+    def model(self) -> PlanModel | None:
+        """The saved model that priced the edges, or None for the physics presets."""
+        return self.priced.model
 
     @property
     def shortest(self) -> Route | None:
@@ -246,19 +199,18 @@ class PlanReport:
 
     def summary(self) -> str:
         """What ``terrawatt plan`` prints: the map, robot and planner, the table, the interval, the saving."""
-        t, route = self.terrain, self.route
-        lines = [map_line(self.map_label, t),
-                 f"robot: {self.robot}, speed {self.speed_mps:g} m/s, max slope {self.max_slope_deg:g} deg; "
-                 f"map preparation {self.map_preparation_s:.2f} s"]
+        t, route, priced = self.terrain, self.route, self.priced
+        lines = [map_line(priced.map_label, t), f"{priced.robot_line()}; map preparation {priced.map_preparation_s:.2f} s"]
         if self.model is not None:
             lines.append(self.model.line())
         n_unknown = int(np.count_nonzero(np.asarray(t.ground) == UNKNOWN_GROUND))
-        if n_unknown and self.unknown_ground:
+        unknown_ground = priced.spec.preset_unknown_ground
+        if n_unknown and unknown_ground:
             lines.append(f"ground class unknown in {n_unknown} of {t.ground.size} cells: priced as "
-                         f"{self.unknown_ground!r} (unknown_ground / --unknown-ground NAME to choose, None / 'none' to refuse them)")
+                         f"{unknown_ground!r} (unknown_ground / --unknown-ground NAME to choose, None / 'none' to refuse them)")
         lines.append(f"start {self.start_xy_m} -> goal {self.goal_xy_m}; planner {self.planner}, {self._budget()}, "
                      f"seed {self.seed}")
-        lines += compile_line(self.kernel_compile_s)
+        lines += compile_line(priced.kernel_compile_s)
         lines.append("")
         if not route.found:
             lines.append(f"no route: status {route.status!r} after {route.planning_time_s:.3f} s")
@@ -299,11 +251,9 @@ class PlanReport:
         if self.interval is not None:
             routes["min_energy"]["energy_interval"] = self.interval.to_dict()
         result = result_document("route", ROUTE_JSON_FORMAT_VERSION, {
-            "map": self.map_label,
+            "map": self.priced.map_label,
             "map_crs": self.terrain.crs,
-            "robot": self.robot,
-            "speed_mps": self.speed_mps,
-            "max_slope_deg": self.max_slope_deg,
+            **self.priced.fields(),
             "start_xy_m": list(self.start_xy_m),
             "goal_xy_m": list(self.goal_xy_m),
             **lonlat_fields(self.terrain, self.start_xy_m, self.goal_xy_m),
@@ -312,8 +262,8 @@ class PlanReport:
             "time_limit_s": self.time_limit_s if self.max_evaluations is None else None,
             "max_evaluations": self.max_evaluations,
             "seed": self.seed,
-            "map_preparation_s": self.map_preparation_s,
-            "kernel_compile_s": self.kernel_compile_s,
+            "map_preparation_s": self.priced.map_preparation_s,
+            "kernel_compile_s": self.priced.kernel_compile_s,
             "status": route.status,
             "energy_saved_pct": _finite_or_none(route.energy_saved_pct) if route.found else None,
             "optimality_ratio": _finite_or_none(route.optimality_ratio) if route.found else None,
@@ -337,8 +287,8 @@ class PlanReport:
                      RouteLine("shortest distance", self.shortest.waypoints_m, self.shortest.energy_j,
                                colour="#1565c0", linestyle="--")]
         return plot_routes(self.terrain, lines, self.start_xy_m, self.goal_xy_m, path, ax=ax,
-                           title=f"terrawatt: minimum-energy route on {self.map_label}",
-                           extent="map" if whole_map else "routes", max_slope_rad=math.radians(self.max_slope_deg))
+                           title=f"terrawatt: minimum-energy route on {self.priced.map_label}",
+                           extent="map" if whole_map else "routes", max_slope_rad=self.priced.spec.max_slope_rad)
 
     def write(self, out_dir: str | os.PathLike[str], *, whole_map: bool = False,
               on_figure_error: str = "warn") -> list[Path]:
@@ -365,24 +315,16 @@ def plan_and_compare(
     goal_xy_m: tuple[float, float],
     *,
     planner: str = "RRTstar",
-    robot: str = "husky",
-    speed_mps: float = 0.5,
-    max_slope_deg: float = 20.0,
-    unknown_ground: str | None = "gravel",
+    pricing: CostSpec | None = None,
     seed: int | None = 0,
     time_limit_s: float | None = 1.0,
     max_evaluations: int | None = None,
-    model: Any = None,
-    model_label: str | None = None,
-    model_ground: str | Mapping[str, str] | None = None,
-    risk: float | None = None,
     map_label: str = "map",
-    risk_name: str = "risk",
 ) -> PlanReport:
     """Plan a minimum-energy route and compare it with the shortest route and the lattice optimum.
 
     The kernels are compiled (or loaded) first (:func:`planner.warm_up_kernels`), the map is
-    priced (:func:`planner.cost_source.edge_costs`: the physics presets, or ``model``), the
+    priced (:meth:`planner.cost_spec.CostSpec.build`: the physics presets, or a saved model), the
     route planned with ``compare=True`` (:func:`planner.plan_route`) and, for a planner other
     than the lattice, the lattice route with refinement planned too (the table's second row).
 
@@ -394,28 +336,17 @@ def plan_and_compare(
         Start and goal (m).
     planner : str
         One of :data:`planner.PLANNERS`.
-    robot, speed_mps, unknown_ground
-        As :meth:`EnergyCost.from_presets` (``unknown_ground`` not with ``model``).
-    max_slope_deg : float
-        Steepest drivable slope (degrees, in (0, 90)).
+    pricing : CostSpec, optional
+        How the map is priced (:class:`planner.cost_spec.CostSpec`: the robot, speed, slope limit,
+        the physics presets or a saved current model, a risk level); default ``CostSpec()``, the
+        husky presets at 0.5 m/s. With a model that gives an interval, the route's energy
+        distribution is reported (:func:`planner.route_price.price_route`); with its ``risk`` the
+        route is planned on that quantile of energy (:func:`planner.risk_cost`).
     seed, time_limit_s, max_evaluations
         As :func:`planner.plan_route` (``max_evaluations`` is its ``max_cost_evaluations``
         and, when given, replaces the time limit).
-    model : CurrentModel, optional
-        A saved current model pricing the edges (:func:`planner.model_energy_cost`); when
-        it gives an interval, the route's energy distribution is reported
-        (:func:`planner.route_energy_interval`).
-    model_label : str, optional
-        How the model is named (default its class name).
-    model_ground : str or mapping, optional
-        With ``model``: as :func:`planner.model_energy_cost`.
-    risk : float, optional
-        With a model that has an interval: plan on the ``risk`` quantile of energy
-        (:func:`planner.risk_cost`).
     map_label : str
         How the map is named in the summary, the figure and route.json.
-    risk_name : str
-        How messages name ``risk`` (the command line passes ``"--risk"``).
 
     Returns
     -------
@@ -424,7 +355,7 @@ def plan_and_compare(
     Raises
     ------
     InvalidParameterError
-        A bad number; ``risk`` with a model that gives no interval.
+        A bad number; a ``risk`` with a model that gives no interval.
     UnknownNameError
         ``planner`` not one of :data:`planner.PLANNERS`.
     TerrawattError
@@ -439,21 +370,9 @@ def plan_and_compare(
     ('exact', ['min-energy (lattice)', 'lattice + refinement', 'shortest distance'])
     """
     check_choice("planner", planner, PLANNERS)
-    if risk is not None:
-        check_planning_risk(risk, risk_name)
-    max_slope_deg = check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False,
-                               high_inclusive=False)
-    compile_s = warm_up_kernels()  # compiled once per environment, then loaded from numba's cache
-    t0 = time.perf_counter()
-    mean_cost = edge_costs(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=math.radians(max_slope_deg),
-                           unknown_ground=unknown_ground if model is None else None, model=model,
-                           model_ground=model_ground)
-    if risk is not None and not mean_cost.has_interval:
-        raise InvalidParameterError(
-            f"{risk_name} {risk:g} needs a model with a predictive interval; the model {model_label or ''} gives none "
-            f"(its spreads are all 0): plan without {risk_name}, or with a model that has one")
-    cost = mean_cost if risk is None else risk_cost(mean_cost, risk)
-    prep_s = time.perf_counter() - t0
+    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    priced = pricing.price(terrain, map_label=map_label)
+    mean_cost, cost = priced.mean_cost, priced.cost
     route = plan_route(terrain, start_xy_m, goal_xy_m, cost=cost, planner=planner, seed=seed, compare=True,
                        time_limit_s=None if max_evaluations is not None else time_limit_s,
                        max_cost_evaluations=max_evaluations)
@@ -461,17 +380,9 @@ def plan_and_compare(
     if route.found:
         lattice = route if planner == "lattice" else plan_route(terrain, start_xy_m, goal_xy_m, cost=cost,
                                                                 planner="lattice", seed=seed, compare=False)
-        interval = route_energy_interval(mean_cost, route.waypoints_m) if mean_cost.has_interval else None
-    plan_model = None
-    if model is not None:
-        plan_model = PlanModel(file=model_label or type(model).__name__, class_name=type(model).__name__,
-                               model_ground=model_ground, grounds=tuple(mean_cost.ground_labels),
-                               gives_interval=bool(mean_cost.has_interval), risk_q=risk)
+        interval = price_route(mean_cost, route) if mean_cost.has_interval else None
     return PlanReport(
         route=route, lattice=lattice, interval=interval,
         start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])), goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])),
-        planner=planner, seed=seed, time_limit_s=time_limit_s, max_evaluations=max_evaluations, robot=robot,
-        speed_mps=speed_mps, max_slope_deg=max_slope_deg, unknown_ground=unknown_ground if model is None else None,
-        map_label=map_label, map_preparation_s=prep_s, kernel_compile_s=compile_s, model=plan_model,
-        terrain=terrain, cost=cost,
+        planner=planner, seed=seed, time_limit_s=time_limit_s, max_evaluations=max_evaluations, priced=priced,
     )

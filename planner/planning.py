@@ -43,11 +43,11 @@ from terrawatt_base.errors import GridMismatchError, InvalidParameterError, Unkn
 from .anyangle import anyangle_path, polish_path
 from .coarse import plan_coarse_to_fine
 from .edge_cost import EnergyCost
-from .problem import PlanningProblem
 from .heading_lattice import heading_shortest_path
 from .lattice import Lattice, LatticePath
 from .ompl import OMPL_PLANNERS
 from .ompl import solve as solve_ompl
+from .problem import PlanningProblem
 from .refine import refine_route, string_pull
 from .route import Route, RouteComparison, empty_route, evaluate_route
 from .settings import PlannerSettings

@@ -7,9 +7,9 @@ from typing import Any
 import numpy as np
 
 from terrain import DemWindows, TerrainMap
+from terrain.georef import lonlat_bounds, lonlat_to_xy
 from terrawatt_base.checks import fmt_number, real_array
 from terrawatt_base.errors import InvalidParameterError, OutOfBoundsError
-from terrain.georef import lonlat_bounds, lonlat_to_xy
 
 __all__ = ["as_points", "lonlat_points", "point_on_map"]
 

@@ -2,26 +2,23 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import time
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from energy.params import robot_params
 from energy.battery import S_PER_H
 from terrain import TerrainMap
-from terrawatt_base.formats import result_document, write_result_json
-from terrawatt_base.checks import check_real
+from terrawatt_base.checks import check_instance, check_real
 from terrawatt_base.figure_file import draw_figure
+from terrawatt_base.formats import result_document, write_result_json
 
-from .cost_source import edge_costs
-from .plan_report import PlanModel
+from .cost_spec import CostSpec, PlanModel, PricedMap
 from .reachability import reachability, warm_up_reachability
 from .reachability_result import Reachability
-from .warmup import warm_up_kernels
 
 __all__ = ["ReachReport", "reach_on_battery"]
 
@@ -38,45 +35,43 @@ class ReachReport:
     ----------
     reach : Reachability
         The energy rasters, the budget and the reachable cells.
-    map_label : str
-        How the map is named.
-    robot, speed_mps, max_slope_deg
-        How the edges were priced.
+    priced : PricedMap
+        The map and how it was priced, with the times (its map preparation; the kernels' compile
+        time includes the reachability kernels').
     battery_ah, voltage_v, reserve_pct : float
         The battery: capacity (Ah), voltage (V), share kept in reserve (%).
-    map_preparation_s, total_time_s, kernel_compile_s : float
-        Seconds to price the map; to price it and search; to compile the kernels beforehand.
-    model : PlanModel or None
-        The saved model that priced the edges, or None for the physics presets.
-    terrain : TerrainMap
-        The map.
+    total_time_s : float
+        Seconds to price the map and search.
     """
 
     reach: Reachability
-    map_label: str
-    robot: str
-    speed_mps: float
-    max_slope_deg: float
+    priced: PricedMap = field(repr=False, compare=False)
     battery_ah: float
     voltage_v: float
     reserve_pct: float
-    map_preparation_s: float
     total_time_s: float
-    kernel_compile_s: float
-    model: PlanModel | None = None
-    terrain: TerrainMap = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
+
+    @property
+    def terrain(self) -> TerrainMap:
+        """The map."""
+        return self.priced.terrain
+
+    @property
+    def model(self) -> PlanModel | None:
+        """The saved model that priced the edges, or None for the physics presets."""
+        return self.priced.model
 
     def summary(self) -> str:
         """What ``terrawatt reach`` prints: the map, robot and battery, then the reachable area and the times."""
-        reach, t = self.reach, self.terrain
+        reach, t, priced = self.reach, self.terrain, self.priced
 
         def wh(j: float) -> str:
             return "-" if math.isnan(j) else f"{j / S_PER_H:.2f} Wh"
 
         budget_wh = reach.budget_j / S_PER_H if reach.budget_j is not None else math.nan
         lines = [
-            f"map: {self.map_label}  {t.shape[0]} x {t.shape[1]} cells of {t.cell_size_m:g} m",
-            f"robot: {self.robot}, speed {self.speed_mps:g} m/s, max slope {self.max_slope_deg:g} deg",
+            f"map: {priced.map_label}  {t.shape[0]} x {t.shape[1]} cells of {t.cell_size_m:g} m",
+            priced.robot_line(),
             f"battery {self.battery_ah:g} Ah at {self.voltage_v:g} V = {budget_wh:.1f} Wh; reserve {self.reserve_pct:g} "
             f"% -> {reach.usable_energy_j / S_PER_H:.1f} Wh usable {'there and back' if reach.round_trip else 'one way'}",
             f"depot {reach.depot_xy_m}",
@@ -92,13 +87,13 @@ class ReachReport:
         ]
         if reach.round_trip:
             rows.append(("max round-trip energy", wh(reach.max_round_trip_energy_j)))
-        rows += [("map preparation", f"{self.map_preparation_s:.2f} s"), ("lattice moves", f"{reach.graph_time_s:.2f} s"),
+        rows += [("map preparation", f"{priced.map_preparation_s:.2f} s"), ("lattice moves", f"{reach.graph_time_s:.2f} s"),
                  ("search", f"{reach.search_time_s:.2f} s"), ("total", f"{self.total_time_s:.2f} s")]
         lines += [f"{name:<24} {value}" for name, value in rows]
         if not reach.n_reachable_cells:
             lines += ["", "no cell is reachable within the usable energy: a larger battery or a smaller reserve (reserve_pct, --reserve)"]
-        if self.kernel_compile_s > 1.0:
-            lines.append(f"(compiled the kernels in {self.kernel_compile_s:.1f} s: first run in this environment; not "
+        if priced.kernel_compile_s > 1.0:
+            lines.append(f"(compiled the kernels in {priced.kernel_compile_s:.1f} s: first run in this environment; not "
                          "in the times above)")
         return "\n".join(lines)
 
@@ -107,16 +102,14 @@ class ReachReport:
         with the query, the battery, the times and ``raster`` (the raster file's name)."""
         reach = self.reach.to_dict()
         result = result_document("reachability", reach.pop("format_version"), {
-            "map": self.map_label,
-            "robot": self.robot,
-            "speed_mps": self.speed_mps,
-            "max_slope_deg": self.max_slope_deg,
+            "map": self.priced.map_label,
+            **self.priced.fields(),
             "battery_ah": self.battery_ah,
             "battery_voltage_v": self.voltage_v,
             "reserve_pct": self.reserve_pct,
-            "map_preparation_s": self.map_preparation_s,
+            "map_preparation_s": self.priced.map_preparation_s,
             "total_time_s": self.total_time_s,
-            "kernel_compile_s": self.kernel_compile_s,
+            "kernel_compile_s": self.priced.kernel_compile_s,
             "raster": raster,
             **{k: v for k, v in reach.items() if k != "format"},
         })
@@ -138,7 +131,8 @@ class ReachReport:
         written = [self.reach.write(out / name)]
         written.append(write_result_json(out / "reach.json", self.to_dict(written[0].name)))
         png = draw_figure(out / "reach.png", lambda: self.reach.plot(
-            out / "reach.png", title=f"terrawatt: energy reachability on {self.map_label}"), on_error=on_figure_error)
+            out / "reach.png", title=f"terrawatt: energy reachability on {self.priced.map_label}"),
+            on_error=on_figure_error)
         return written + ([png] if png is not None else [])
 
 
@@ -150,13 +144,7 @@ def reach_on_battery(
     voltage_v: float | None = None,
     reserve_pct: float = 20.0,
     round_trip: bool = False,
-    robot: str = "husky",
-    speed_mps: float = 0.5,
-    max_slope_deg: float = 20.0,
-    unknown_ground: str | None = "gravel",
-    model: Any = None,
-    model_label: str | None = None,
-    model_ground: str | Mapping[str, str] | None = None,
+    pricing: CostSpec | None = None,
     map_label: str = "map",
 ) -> ReachReport:
     """The cells a battery reaches from a depot (:func:`planner.reachability`), with its budget and timings.
@@ -177,11 +165,9 @@ def reach_on_battery(
         Share of the battery kept in reserve (%, in [0, 100)).
     round_trip : bool
         Budget the way there and back.
-    robot, speed_mps, max_slope_deg, unknown_ground, model, model_ground
-        How the edges are priced (:func:`planner.cost_source.edge_costs`; ``unknown_ground``
-        not with ``model``).
-    model_label : str, optional
-        How the model is named in reach.json (default its class name).
+    pricing : CostSpec, optional
+        How the edges are priced (:class:`planner.cost_spec.CostSpec`, default ``CostSpec()``; its
+        ``risk`` is not used: the reach is at the mean).
     map_label : str
         How the map is named.
 
@@ -194,7 +180,7 @@ def reach_on_battery(
     InvalidParameterError
         A bad number.
     TerrawattError
-        As :func:`planner.cost_source.edge_costs` and :func:`planner.reachability`.
+        As :meth:`planner.cost_spec.CostSpec.build` and :func:`planner.reachability`.
 
     Examples
     --------
@@ -205,22 +191,16 @@ def reach_on_battery(
     """
     battery_ah = check_real("battery_ah", battery_ah, low=0.0, low_inclusive=False)
     reserve_pct = check_real("reserve_pct", reserve_pct, low=0.0, high=100.0, high_inclusive=False)
-    max_slope_deg = check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False,
-                               high_inclusive=False)
-    voltage_v = robot_params(robot).battery_voltage_v if voltage_v is None else check_real(
+    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    voltage_v = pricing.params.battery_voltage_v if voltage_v is None else check_real(
         "voltage_v", voltage_v, low=0.0, low_inclusive=False)
     budget_j = battery_ah * voltage_v * S_PER_H
-    compile_s = warm_up_kernels() + warm_up_reachability()
-    t0 = time.perf_counter()
-    cost = edge_costs(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=math.radians(max_slope_deg),
-                      unknown_ground=unknown_ground if model is None else None, model=model, model_ground=model_ground)
-    prep_s = time.perf_counter() - t0
-    reach = reachability(cost, depot_xy_m, budget_j=budget_j, reserve_j=budget_j * reserve_pct / 100.0,
+    reach_compile_s = warm_up_reachability()
+    priced = dataclasses.replace(pricing, risk=None).price(terrain, map_label=map_label)  # the reach is at the mean
+    priced = dataclasses.replace(priced, kernel_compile_s=priced.kernel_compile_s + reach_compile_s)
+    t1 = time.perf_counter()
+    reach = reachability(priced.cost, depot_xy_m, budget_j=budget_j, reserve_j=budget_j * reserve_pct / 100.0,
                          round_trip=round_trip)
-    total_s = time.perf_counter() - t0
-    plan_model = None if model is None else PlanModel(
-        file=model_label or type(model).__name__, class_name=type(model).__name__, model_ground=model_ground,
-        grounds=tuple(cost.ground_labels), gives_interval=bool(cost.has_interval))
-    return ReachReport(reach=reach, map_label=map_label, robot=robot, speed_mps=speed_mps, max_slope_deg=max_slope_deg,
-                       battery_ah=battery_ah, voltage_v=voltage_v, reserve_pct=reserve_pct, map_preparation_s=prep_s,
-                       total_time_s=total_s, kernel_compile_s=compile_s, model=plan_model, terrain=terrain)
+    total_s = priced.map_preparation_s + time.perf_counter() - t1
+    return ReachReport(reach=reach, priced=priced, battery_ah=battery_ah, voltage_v=voltage_v,
+                       reserve_pct=reserve_pct, total_time_s=total_s)

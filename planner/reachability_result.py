@@ -13,11 +13,11 @@ import numpy as np
 
 from energy.battery import S_PER_H
 from terrain import TerrainMap
+from terrain.geotiff import write_geotiff
+from terrain.grid import Grid
 from terrawatt_base.atomic import atomic_open, check_output_path, remove_stale_temporaries
 from terrawatt_base.errors import FileFormatError, InvalidParameterError, UnknownNameError
 from terrawatt_base.formats import read_versioned_npz, result_document
-from terrain.geotiff import write_geotiff
-from terrain.grid import Grid
 
 from .reachability_plot import plot_reachability
 

@@ -45,8 +45,8 @@ import numpy as np
 from terrawatt_base.checks import check_bool, check_seed
 from terrawatt_base.errors import InvalidParameterError
 
-from .kernels.incremental import dstar_path, dstar_rekey, dstar_search, dstar_touch, reverse_weights, set_moves
 from .heading_lattice import HeadingWorkspace, heading_cost_to_go, heading_shortest_path, lower_cost_to_go
+from .kernels.incremental import dstar_path, dstar_rekey, dstar_search, dstar_touch, reverse_weights, set_moves
 from .lattice import LATTICE_OFFSETS, Lattice, LatticePath
 from .planning import refine_planned
 from .points import as_points

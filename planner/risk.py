@@ -99,7 +99,7 @@ def check_planning_risk(q: Any, name: str = "risk") -> float:
     if q < 0.5:
         raise InvalidParameterError(
             f"{name} {q:g} lies below the median: planning on it assumes the energy comes out lower than it does in "
-            f"{100 * (1 - q):.4g} % of runs; give a level in [0.5, 1), e.g. 0.9 (0.5 plans on the mean)")
+            f"{100 * (1 - q):.4g} % of runs; give a level in [0.5, 1), e.g. 0.9 (0.5 plans on the mean)", parameter=name)
     return q
 
 

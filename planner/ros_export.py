@@ -43,10 +43,10 @@ from typing import Any
 import numpy as np
 
 from terrain import TerrainMap
+from terrain.georef import parse_crs
 from terrawatt_base.atomic import atomic_directory, atomic_path, check_output_path
 from terrawatt_base.checks import check_int, check_real, check_text, readonly
 from terrawatt_base.errors import FileFormatError, InvalidParameterError, OptionalDependencyError
-from terrain.georef import parse_crs
 
 from .edge_cost import EnergyCost
 from .route import Route

@@ -10,9 +10,9 @@ from pathlib import Path
 from typing import Any
 
 from terrain import InvalidParameterError, OptionalDependencyError, TerrainMap
+from terrain.georef import import_rasterio
 from terrawatt_base.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
 from terrawatt_base.checks import option_names
-from terrain.georef import import_rasterio
 
 from .edge_cost import EnergyCost
 from .energy_costmap import energy_costmap, write_energy_geotiff

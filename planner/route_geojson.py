@@ -10,10 +10,10 @@ from typing import Any
 import numpy as np
 
 from terrain import Grid, TerrainMap
+from terrain.georef import WGS84, parse_crs, transform_xy
 from terrawatt_base.atomic import check_output_path, write_json_atomic
 from terrawatt_base.checks import check_text
 from terrawatt_base.errors import InvalidParameterError
-from terrain.georef import WGS84, parse_crs, transform_xy
 
 __all__ = ["GEOJSON_FORMAT_VERSION", "routes_geojson", "write_geojson"]
 

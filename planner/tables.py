@@ -17,9 +17,9 @@ import numpy as np
 
 from energy import EnergyModel, IntervalEnergyModel
 from energy.models.forecast import check_dof
+from terrain.terrain_map import UNKNOWN_GROUND, TerrainMap
 from terrawatt_base.checks import check_int
 from terrawatt_base.errors import GridMismatchError, InvalidParameterError, UnknownNameError
-from terrain.terrain_map import UNKNOWN_GROUND, TerrainMap
 
 __all__ = [
     "DEFAULT_GRADE_SAMPLES",

@@ -8,15 +8,15 @@ import numpy as np
 
 from terrain import TerrainMap
 
+from .anyangle import warm_up_anyangle
 from .edge_cost import EnergyCost
+from .heading_lattice import heading_shortest_path
 from .kernels import graph, point_free, walk
 from .kernels.corridor import corridor_weights_parallel, corridor_weights_serial
-from .anyangle import warm_up_anyangle
-from .heading_lattice import heading_shortest_path
 from .lattice import LATTICE_OFFSETS, Lattice
-from .replan import IncrementalPlanner
 from .reachability import warm_up_reachability
 from .refine import relax_path, string_pull
+from .replan import IncrementalPlanner
 
 __all__ = ["warm_up_kernels"]
 

@@ -1,7 +1,8 @@
 """terrain — where the robot drives: a georeferenced stack of raster layers.
 
-Public API: :class:`TerrainMap`, its builders (procedural, GeoTIFF, vector), the per-cell
-current-model registry and the library's exception hierarchy.
+Public API: :class:`TerrainMap`, its builders (procedural, GeoTIFF, vector) and the library's
+exception hierarchy (the per-cell current-model registry lives beside its users, in
+:mod:`planner.registry`).
 """
 
 from terrawatt_base.errors import (
@@ -25,6 +26,7 @@ from terrawatt_base.errors import (
     UnitError,
     UnknownNameError,
 )
+
 from .georef import WGS84, lonlat_to_xy, transform_xy, utm_crs, xy_to_lonlat
 from .geotiff import read_geotiff, write_geotiff
 from .grid import Grid
@@ -38,17 +40,6 @@ from .procedural import (
     procedural_map,
     ramp_map,
     wall_map,
-)
-from .registry import (
-    PRIOR_MODEL_ID,
-    REGISTRY_FORMAT_VERSION,
-    CellModelRegistry,
-    CurrentModelProtocol,
-    FlaggedRegion,
-    ModelEntry,
-    RegistryVersion,
-    UpdateDecision,
-    UpdatePolicy,
 )
 from .surface import surface_layers
 from .terrain_map import MAP_FORMAT_VERSION, UNKNOWN_GROUND, TerrainMap
@@ -97,16 +88,6 @@ __all__ = [
     "ground_classes_from_landcover",
     "read_landcover_classes",
     "LandcoverClasses",
-    # per-cell current models
-    "CellModelRegistry",
-    "CurrentModelProtocol",
-    "UpdatePolicy",
-    "FlaggedRegion",
-    "RegistryVersion",
-    "UpdateDecision",
-    "ModelEntry",
-    "REGISTRY_FORMAT_VERSION",
-    "PRIOR_MODEL_ID",
     # errors and warnings
     "TerrawattError",
     "InvalidParameterError",

@@ -21,6 +21,7 @@ from terrawatt_base.errors import (
     NodataError,
     UnknownNameError,
 )
+
 from .georef import dem_band, import_rasterio
 from .reproject import warp_band
 from .terrain_map import UNKNOWN_GROUND, TerrainMap

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from terrawatt_base.checks import fmt_number, option_names
 from terrawatt_base.errors import FileFormatError, InvalidParameterError, NodataError, UnknownNameError
+
 from .geotiff import check_fill_method, read_geotiff
 from .landcover import LandcoverClasses, ground_classes_from_landcover, read_landcover_classes
 from .terrain_map import TerrainMap

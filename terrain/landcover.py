@@ -34,6 +34,7 @@ import numpy as np
 
 from terrawatt_base.containers import memory_limit_bytes, over_budget_message
 from terrawatt_base.errors import DataError, FileFormatError, ImplausibleDataWarning, InvalidParameterError
+
 from .georef import import_rasterio, lonlat_bounds, parse_crs
 from .terrain_map import UNKNOWN_GROUND, TerrainMap
 

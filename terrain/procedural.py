@@ -12,6 +12,7 @@ from scipy import ndimage
 
 from terrawatt_base.checks import check_int, check_real, check_seed, check_shape, check_text
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+
 from .terrain_map import UNKNOWN_GROUND, TerrainMap
 
 __all__ = [

@@ -9,6 +9,7 @@ import numpy as np
 
 from terrawatt_base.checks import check_real, check_text, fmt_number
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+
 from .georef import DemBand, check_metric_crs, import_rasterio, parse_crs, transform_xy, utm_crs
 
 __all__ = ["WarpedDem", "RESAMPLING_METHODS", "target_crs", "warp_band"]

@@ -20,6 +20,7 @@ from terrawatt_base.errors import (
     UnknownNameError,
 )
 from terrawatt_base.formats import read_versioned_npz
+
 from .georef import lonlat_to_xy, xy_to_lonlat
 from .grid import Grid
 from .surface import SURFACE_LAYERS, surface_layers

@@ -20,6 +20,7 @@ from terrawatt_base.errors import (
     TerrawattWarning,
     UnknownNameError,
 )
+
 from .terrain_map import TerrainMap
 
 __all__ = [

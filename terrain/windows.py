@@ -24,6 +24,7 @@ import numpy as np
 from terrawatt_base.atomic import atomic_directory
 from terrawatt_base.checks import check_choice, check_int
 from terrawatt_base.errors import FileFormatError, InvalidParameterError, NodataError
+
 from .georef import DemBand, dem_band, import_rasterio
 from .grid import Grid
 from .surface import SURFACE_LAYERS, surface_layers

@@ -41,6 +41,7 @@ __all__ = [
     "check_text",
     "check_choice",
     "check_bool",
+    "check_instance",
     "option_names",
     "real_array",
     "readonly",
@@ -144,19 +145,19 @@ def check_real(
     if isinstance(value, np.ndarray) and value.ndim == 0:
         value = value[()]
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise InvalidParameterError(f"{label} must be a real number, got {_describe(value)}")
+        raise InvalidParameterError(f"{label} must be a real number, got {_describe(value)}", parameter=name)
     try:
         v = float(value)
     except OverflowError:  # an int beyond float range, e.g. 10**400
         v = math.inf
     if not math.isfinite(v):
-        raise InvalidParameterError(f"{label} must be finite, got {fmt_number(value)}")
+        raise InvalidParameterError(f"{label} must be finite, got {fmt_number(value)}", parameter=name)
     if low is not None and (v < low or (v == low and not low_inclusive)):
         op = ">=" if low_inclusive else ">"
-        raise InvalidParameterError(f"{label} must be {op} {fmt_number(low)}, got {plain_repr(value)}")
+        raise InvalidParameterError(f"{label} must be {op} {fmt_number(low)}, got {plain_repr(value)}", parameter=name)
     if high is not None and (v > high or (v == high and not high_inclusive)):
         op = "<=" if high_inclusive else "<"
-        raise InvalidParameterError(f"{label} must be {op} {fmt_number(high)}, got {plain_repr(value)}")
+        raise InvalidParameterError(f"{label} must be {op} {fmt_number(high)}, got {plain_repr(value)}", parameter=name)
     return v
 
 
@@ -283,6 +284,36 @@ def option_names(names: Mapping[str, str] | None, options: Iterable[str] | Mappi
     if unknown:
         raise UnknownNameError(f"names has keys {unknown!r}; expected some of {sorted(out)!r}")
     return out | dict(names)
+
+
+def check_instance(name: str, value: Any, kind: type, what: str | None = None) -> Any:
+    """``value`` itself if it is a ``kind``, else an :class:`InvalidParameterError` naming ``name``.
+
+    Parameters
+    ----------
+    name : str
+        The parameter's name, as the caller spells it.
+    value : object
+        The value to check.
+    kind : type
+        The class it must be an instance of.
+    what : str, optional
+        How the message names the class (default ``"a <class name>"``).
+
+    Examples
+    --------
+    >>> check_instance("n", 3, int)
+    3
+    >>> check_instance("n", "3", int)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    terrawatt_base.errors.InvalidParameterError: n must be an int, got '3' (str)
+    """
+    if not isinstance(value, kind):
+        if what is None:
+            what = ("an " if kind.__name__[:1] in "AEIOUaeiou" else "a ") + kind.__name__
+        raise InvalidParameterError(f"{name} must be {what}, got {_describe(value)}", parameter=name)
+    return value
 
 
 def check_bool(name: str, value: Any) -> bool:

@@ -37,7 +37,27 @@ __all__ = [
 
 
 class TerrawattError(Exception):
-    """Root of every exception raised by terrawatt."""
+    """Root of every exception raised by terrawatt.
+
+    Parameters
+    ----------
+    *args
+        The message (as for :class:`Exception`).
+    parameter : str or tuple of str, optional
+        The library parameter(s) the error is about, when there are (e.g. ``"risk"``), named so in
+        the message: a front end that calls them by other words (the command line's ``--risk``)
+        renames them there, so the library never names a front end's flags.
+
+    Examples
+    --------
+    >>> err = InvalidParameterError("risk 0.1 lies below the median", parameter="risk")
+    >>> err.parameter, str(err)
+    ('risk', 'risk 0.1 lies below the median')
+    """
+
+    def __init__(self, *args: object, parameter: str | tuple[str, ...] | None = None) -> None:
+        super().__init__(*args)
+        self.parameter = parameter
 
 
 class InvalidParameterError(TerrawattError, ValueError):

@@ -34,6 +34,30 @@ def plain_message(text: str) -> str:
     return _NUMPY_SCALAR.sub(lambda m: m.group(1) if m.group(1) is not None else m.group(2), text)
 
 
+#: The library's parameters a message may name, and the flags that set them (a library error names the
+#: parameter, :attr:`terrain.TerrawattError.parameter`; the command line says it by its flag).
+PARAMETER_FLAGS = {"risk": "--risk", "draw_from": "--mc-draw", "workers": "--workers", "scheduler": "--scheduler",
+                   "model_ground": "--model-ground", "unknown_ground": "--unknown-ground"}
+
+
+def error_message(exc: BaseException) -> str:
+    """The one line ``terrawatt`` prints for a user's error: the parameters the error names said by their flags.
+
+    Examples
+    --------
+    >>> from terrain import InvalidParameterError
+    >>> error_message(InvalidParameterError("risk 0.1 lies below the median: plan without risk", parameter="risk"))
+    '--risk 0.1 lies below the median: plan without --risk'
+    """
+    text = plain_message(str(exc))
+    names = getattr(exc, "parameter", None)
+    for name in (names,) if isinstance(names, str) else (names or ()):
+        flag = PARAMETER_FLAGS.get(name)
+        if flag is not None:
+            text = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", flag, text)
+    return text
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``terrawatt`` command."""
     parser = argparse.ArgumentParser(
@@ -54,14 +78,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         args = build_parser().parse_args(argv)  # a flag's value checked while parsing (common.Checked) may fail here
     except TerrawattError as exc:
-        print(f"terrawatt: error: {plain_message(str(exc))}", file=sys.stderr)
+        print(f"terrawatt: error: {error_message(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING,
                         format="%(levelname)s %(name)s: %(message)s")
     try:
         return args.run(args)
     except (TerrawattError, OSError) as exc:
-        print(f"terrawatt: error: {plain_message(str(exc))}", file=sys.stderr)
+        print(f"terrawatt: error: {error_message(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except MemoryError:  # what no size check foresaw (other programs took the memory meanwhile)
         print("terrawatt: error: this machine ran out of memory for the inputs given; use smaller inputs (a smaller "

@@ -6,15 +6,26 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from energy.params import resolve_unknown_ground
+from planner import PLANNERS, BatchPairs, read_pairs_csv
+from planner.batch import plan_batch_on_map
+from planner.batch_pairs import read_sites_csv
 from terrain import InvalidParameterError
 
-from planner import PLANNERS, BatchPairs, read_pairs_csv
-from planner.batch_pairs import read_sites_csv
-from planner.batch_report import plan_batch_on_map
-from .common import (add_dask_options, add_map_options, add_model_options, add_planner_options, add_robot_options,
-                     check_dask_flags, check_model_flags, check_outputs, dask_client_arg, input_paths, load_model_arg,
-                     map_arg)
+from .common import (
+    add_dask_options,
+    add_map_options,
+    add_model_options,
+    add_planner_options,
+    add_robot_options,
+    check_dask_flags,
+    check_model_flags,
+    check_outputs,
+    dask_client_arg,
+    input_paths,
+    load_model_arg,
+    map_arg,
+    pricing_arg,
+)
 
 __all__ = ["add_parser", "run_batch"]
 
@@ -60,12 +71,10 @@ def run_batch(args: argparse.Namespace) -> int:
     else:
         names, xy = read_sites_csv(args.sites, tmap)
         pairs = BatchPairs.all_pairs(xy, names)
-    model = load_model_arg(args)
-    ground = None if model is not None else resolve_unknown_ground(args.unknown_ground, tmap, flag="--unknown-ground")
+    pricing = pricing_arg(args, tmap, load_model_arg(args))
     with dask_client_arg(args) as client:  # a missing extra or scheduler fails before planning
         report = plan_batch_on_map(
-            tmap, pairs, planner=args.planner, robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg,
-            unknown_ground=ground, model=model, model_ground=args.model_ground, seed=args.seed, client=client,
+            tmap, pairs, planner=args.planner, pricing=pricing, seed=args.seed, client=client,
             time_limit_s=None if args.max_evaluations is not None else args.time_limit,
             max_cost_evaluations=args.max_evaluations, where=args.scheduler or "local cluster",
             progress=not args.no_progress, map_label=label)

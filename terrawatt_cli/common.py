@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 
 from energy import GROUND_PRESETS, CurrentModel, load_current_model
-from energy.params import robot_params
+from energy.params import resolve_unknown_ground, robot_params
 from terrain import DemWindows, FigureWarning, InvalidParameterError, TerrainMap
 from terrain.io import read_map_with_options
 from terrain.procedural import example_map
@@ -21,11 +21,13 @@ from terrawatt_base.atomic import check_output_path, probe_writable, refuse_over
 from terrawatt_base.checks import fmt_number
 from terrawatt_base.dask_client import check_dask_options, dask_client
 
+from planner.cost_spec import CostSpec
 from planner.model_cost import parse_model_ground
 from planner.points import point_on_map
 from planner.risk import check_planning_risk
 
 __all__ = [
+    "pricing_arg",
     "Checked", "bounded", "positive", "add_battery_options", "MAP_FLAGS", "add_map_options", "read_map_args", "map_arg", "add_point_options",
     "point_arg", "add_robot_options", "add_physics_robot_option", "robot_arg", "add_planner_options", "check_outputs",
     "INPUT_FLAGS", "input_paths",
@@ -262,6 +264,18 @@ def check_model_flags(args: argparse.Namespace) -> None:
         if args.model is None and value is not None:
             raise InvalidParameterError(f"{flag} needs --model FILE (a saved current model; the physics presets "
                                         "have no training grounds nor an interval)")
+
+
+def pricing_arg(args: argparse.Namespace, terrain: TerrainMap | None, model: CurrentModel | None = None) -> CostSpec:
+    """The :class:`planner.CostSpec` of the command's flags: ``--robot``, ``--speed``, ``--max-slope-deg``,
+    ``--unknown-ground`` (not with a model), ``--model`` (loaded: ``model``), ``--model-ground``, ``--risk``; a flag
+    the command does not have takes the spec's default (``--unknown-ground``: none, refusing such cells)."""
+    ground = None
+    if model is None and getattr(args, "unknown_ground", None) is not None:
+        ground = resolve_unknown_ground(args.unknown_ground, terrain, flag="--unknown-ground")
+    return CostSpec(robot=args.robot, speed_mps=args.speed, max_slope_deg=getattr(args, "max_slope_deg", 20.0),
+                    unknown_ground=ground, model=model, model_label=None if model is None else Path(args.model).name,
+                    model_ground=getattr(args, "model_ground", None), risk=getattr(args, "risk", None))
 
 
 def load_model_arg(args: argparse.Namespace) -> CurrentModel | None:

@@ -6,14 +6,29 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from terrain import InvalidParameterError
-
 from planner.missions.mission_report import check_logs_folder, simulate_adaptive_mission
 from planner.missions.monte_carlo_report import monte_carlo_mission
 from planner.missions.request import MissionRequest
-from .common import (Checked, add_dask_options, add_map_options, add_model_options, add_point_options,
-                     add_robot_options, bounded, check_model_flags, check_outputs, dask_client_arg, input_paths,
-                     load_model_arg, map_arg, positive, warn_figures)
+from terrain import InvalidParameterError
+
+from .common import (
+    Checked,
+    add_dask_options,
+    add_map_options,
+    add_model_options,
+    add_point_options,
+    add_robot_options,
+    bounded,
+    check_model_flags,
+    check_outputs,
+    dask_client_arg,
+    input_paths,
+    load_model_arg,
+    map_arg,
+    positive,
+    pricing_arg,
+    warn_figures,
+)
 
 __all__ = ["add_parser", "run_mission"]
 
@@ -92,12 +107,12 @@ def run_mission(args: argparse.Namespace) -> int:
         check_logs_folder(args.out)
     tmap, label = map_arg(args)
     start, goal = request.points(tmap)
-    model = load_model_arg(args)
+    pricing = pricing_arg(args, tmap, load_model_arg(args))
     if not mc:
         report = simulate_adaptive_mission(
             tmap, start, goal, battery_ah=args.battery_ah, battery_v=args.battery_v, reserve_pct=args.reserve_pct,
-            robot=args.robot, speed_mps=args.speed, prior_ground=args.prior_ground, leg_m=args.leg_m,
-            adapt=not args.no_adapt, seed=args.seed, model=model, model_ground=args.model_ground, map_label=label)
+            pricing=pricing, prior_ground=args.prior_ground, leg_m=args.leg_m, adapt=not args.no_adapt,
+            seed=args.seed, map_label=label)
         with warn_figures():
             written = report.write(args.out, logs=args.logs)
         if args.drive_bag is not None:
@@ -112,10 +127,9 @@ def run_mission(args: argparse.Namespace) -> int:
     with dask_client_arg(args) as client:
         study = monte_carlo_mission(
             tmap, start, goal, args.monte_carlo, battery_ah=args.battery_ah, battery_v=args.battery_v,
-            reserve_pct=args.reserve_pct, robot=args.robot, speed_mps=args.speed, seed=args.seed, model=model,
-            model_label=None if model is None else args.model.name, model_ground=args.model_ground, risk=args.risk,
-            draw_from=args.mc_draw, max_risk_pct=args.max_risk_pct, client=client,
-            where=args.scheduler or "local cluster", progress=True, map_label=label, flags=("--risk", "--mc-draw"))
+            reserve_pct=args.reserve_pct, pricing=pricing, seed=args.seed, draw_from=args.mc_draw,
+            max_risk_pct=args.max_risk_pct, client=client, where=args.scheduler or "local cluster", progress=True,
+            map_label=label)
     print(study.summary())
     if study.result is None:
         return 1

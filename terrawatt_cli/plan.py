@@ -6,17 +6,32 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from energy.params import resolve_unknown_ground
-from terrain import DemWindows, TerrainMap
-from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
-
 from planner import PLANNERS
 from planner.coarse_report import COARSE_OPTIONS, check_coarse_options, plan_coarse, plan_coarse_windowed
 from planner.plan_report import plan_and_compare
 from planner.ros_export import check_frame_origin
-from .common import (MAP_FLAGS, Checked, add_map_options, add_model_options, add_planner_options, add_point_options,
-                     add_robot_options, bounded, check_model_flags, check_outputs, input_paths, load_model_arg,
-                     map_arg, point_arg, positive, warn_figures)
+from terrain import DemWindows, TerrainMap
+from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
+
+from .common import (
+    MAP_FLAGS,
+    Checked,
+    add_map_options,
+    add_model_options,
+    add_planner_options,
+    add_point_options,
+    add_robot_options,
+    bounded,
+    check_model_flags,
+    check_outputs,
+    input_paths,
+    load_model_arg,
+    map_arg,
+    point_arg,
+    positive,
+    pricing_arg,
+    warn_figures,
+)
 from .ros2 import add_ros2_arguments, check_ros2_outputs, write_ros2_outputs
 
 __all__ = ["add_parsers", "run_demo", "run_plan_command"]
@@ -77,12 +92,11 @@ def run_plan_command(args: argparse.Namespace) -> int:
                          model=args.model, fill_nodata=args.fill_nodata, reproject_to=args.reproject,
                          cell_size_m=args.cell_size, landcover=args.landcover, names=_COARSE_FLAGS)
     if args.windowed:
-        ground = resolve_unknown_ground(args.unknown_ground, None, flag="--unknown-ground")
+        pricing = pricing_arg(args, None)
         with DemWindows(args.map) as dem:
             start, goal = point_arg(args, "start", dem), point_arg(args, "goal", dem)
         return _finish(args, plan_coarse_windowed(
-            args.map, start, goal, factor=args.coarse_factor, corridor_m=args.corridor, robot=args.robot,
-            speed_mps=args.speed, max_slope_deg=args.max_slope_deg, unknown_ground=ground,
+            args.map, start, goal, factor=args.coarse_factor, corridor_m=args.corridor, pricing=pricing,
             fine_window_cells=args.fine_window_cells))
     tmap, label = map_arg(args)
     return _run(args, tmap, point_arg(args, "start", tmap), point_arg(args, "goal", tmap), label)
@@ -92,18 +106,13 @@ def _run(args: argparse.Namespace, tmap: TerrainMap, start: tuple[float, float],
          label: str) -> int:
     if getattr(args, "map_frame_origin", None) is not None:  # before planning: near the map (the writers check it too)
         check_frame_origin(args.map_frame_origin, "--map-frame-origin", bounds=tmap.bounds)
-    common = dict(robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg, map_label=label)
-    ground = None if args.model is not None else resolve_unknown_ground(args.unknown_ground, tmap,
-                                                                        flag="--unknown-ground")
     if getattr(args, "coarse_factor", None) is not None:
         return _finish(args, plan_coarse(tmap, start, goal, factor=args.coarse_factor, corridor_m=args.corridor,
-                                         unknown_ground=ground, **common))
-    model = load_model_arg(args)
+                                         pricing=pricing_arg(args, tmap), map_label=label))
     return _finish(args, plan_and_compare(
-        tmap, start, goal, planner=args.planner, seed=args.seed, time_limit_s=args.time_limit,
-        max_evaluations=args.max_evaluations, unknown_ground=ground, model=model,
-        model_label=None if model is None else args.model.name, model_ground=args.model_ground, risk=args.risk,
-        risk_name="--risk", **common), ros2=True)
+        tmap, start, goal, planner=args.planner, pricing=pricing_arg(args, tmap, load_model_arg(args)),
+        seed=args.seed, time_limit_s=args.time_limit, max_evaluations=args.max_evaluations, map_label=label),
+        ros2=True)
 
 
 def _finish(args: argparse.Namespace, report: Any, *, ros2: bool = False) -> int:

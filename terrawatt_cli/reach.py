@@ -6,13 +6,25 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from energy.params import resolve_unknown_ground
+from planner.reach_report import reach_on_battery
 from terrain import InvalidParameterError
 from terrain.procedural import EXAMPLE_START_XY_M
 
-from planner.reach_report import reach_on_battery
-from .common import (add_battery_options, add_map_options, add_model_options, add_point_options, add_robot_options,
-                     check_model_flags, check_outputs, input_paths, load_model_arg, map_arg, point_arg, warn_figures)
+from .common import (
+    add_battery_options,
+    add_map_options,
+    add_model_options,
+    add_point_options,
+    add_robot_options,
+    check_model_flags,
+    check_outputs,
+    input_paths,
+    load_model_arg,
+    map_arg,
+    point_arg,
+    pricing_arg,
+    warn_figures,
+)
 
 __all__ = ["add_parser", "run_reach"]
 
@@ -51,14 +63,11 @@ def run_reach(args: argparse.Namespace) -> int:
     check_outputs(args.out, ("reach.json", "reach.png", "reach.npz", "reach.tif"), input_paths(args))
     tmap, label = map_arg(args)
     depot = point_arg(args, "depot", tmap) or EXAMPLE_START_XY_M
-    model = load_model_arg(args)
+    pricing = pricing_arg(args, tmap, load_model_arg(args))
     geo = bool(tmap.crs) or str(args.map).lower().endswith((".tif", ".tiff"))
     report = reach_on_battery(
         tmap, depot, battery_ah=args.battery_ah, voltage_v=args.voltage, reserve_pct=args.reserve,
-        round_trip=args.round_trip, robot=args.robot, speed_mps=args.speed, max_slope_deg=args.max_slope_deg,
-        unknown_ground=None if model else resolve_unknown_ground(args.unknown_ground, tmap, flag="--unknown-ground"),
-        model=model, model_label=None if model is None else args.model.name, model_ground=args.model_ground,
-        map_label=label)
+        round_trip=args.round_trip, pricing=pricing, map_label=label)
     with warn_figures():
         written = report.write(args.out, raster="reach.tif" if geo else "reach.npz")
     print(report.summary())

@@ -24,6 +24,7 @@ from .common import (
     map_arg,
     point_arg,
     positive,
+    pricing_arg,
     robot_arg,
     warn_figures,
 )
@@ -119,9 +120,8 @@ def run_replay(args: argparse.Namespace) -> int:
 
     result = replay_recording(
         tmap, logs, goal, battery_ah=args.battery_ah, battery_v=args.battery_v, reserve_pct=args.reserve_pct,
-        initial_soc=args.soc, robot=args.robot, speed_mps=args.speed, leg_m=args.leg_m, seed=args.seed,
-        registry=args.registry, model=model, model_ground=args.model_ground,
-        physics_ground=args.physics_ground, update_source=args.update_source, risk=args.risk, mode=args.mode,
+        initial_soc=args.soc, pricing=pricing_arg(args, tmap, model), leg_m=args.leg_m, seed=args.seed,
+        registry=args.registry, physics_ground=args.physics_ground, update_source=args.update_source, mode=args.mode,
         chunk_s=args.chunk_s, speed_up=args.speed_up, depot_xy_m=point_arg(args, "depot", tmap),
         state_path=args.state, on_decision=say, names=_NAMES)
     print(f"map: {label}")

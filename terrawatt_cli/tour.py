@@ -6,15 +6,30 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from energy.params import resolve_unknown_ground
-from terrain import InvalidParameterError
-
 from planner.points import point_on_map
 from planner.risk import check_planning_risk
 from planner.tours import plan_tour_on_map, read_tour_chargers_csv, read_tour_sites_csv
-from .common import (Checked, add_battery_options, add_dask_options, add_map_options, add_model_options,
-                     add_robot_options, bounded, check_dask_flags, check_model_flags, check_outputs,
-                     dask_client_arg, input_paths, load_model_arg, map_arg, positive, warn_figures)
+from terrain import InvalidParameterError
+
+from .common import (
+    Checked,
+    add_battery_options,
+    add_dask_options,
+    add_map_options,
+    add_model_options,
+    add_robot_options,
+    bounded,
+    check_dask_flags,
+    check_model_flags,
+    check_outputs,
+    dask_client_arg,
+    input_paths,
+    load_model_arg,
+    map_arg,
+    positive,
+    pricing_arg,
+    warn_figures,
+)
 
 __all__ = ["add_parser", "run_tour"]
 
@@ -90,14 +105,12 @@ def run_tour(args: argparse.Namespace) -> int:
                            names=("--depot", "--depot-lonlat")) for xy in given]
     sites = read_tour_sites_csv(args.sites, tmap)
     chargers = read_tour_chargers_csv(args.chargers, tmap) if args.chargers is not None else None
-    model = load_model_arg(args)
-    ground = None if model is not None else resolve_unknown_ground(args.unknown_ground, tmap, flag="--unknown-ground")
+    pricing = pricing_arg(args, tmap, load_model_arg(args))
     with dask_client_arg(args) as client:
         result = plan_tour_on_map(
-            tmap, sites, depots[0] if len(depots) == 1 else depots, battery_ah=args.battery_ah, voltage_v=args.voltage, reserve_pct=args.reserve,
-            n_robots=robots, max_duration_s=args.max_duration, risk=args.tour_risk, robot=args.robot,
-            speed_mps=args.speed, max_slope_deg=args.max_slope_deg, unknown_ground=ground, model=model,
-            model_ground=args.model_ground, time_limit_s=args.time_limit, seed=args.seed, client=client,
+            tmap, sites, depots[0] if len(depots) == 1 else depots, battery_ah=args.battery_ah,
+            voltage_v=args.voltage, reserve_pct=args.reserve, n_robots=robots, max_duration_s=args.max_duration,
+            risk=args.tour_risk, pricing=pricing, time_limit_s=args.time_limit, seed=args.seed, client=client,
             map_label=label, chargers=chargers)
     with warn_figures():
         written = result.write(args.out, bag=args.bag)

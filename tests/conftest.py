@@ -1,8 +1,11 @@
-"""Shared fixtures: small maps whose answers are known exactly (flat, ramp, wall)."""
+"""Shared fixtures: small maps whose answers are known exactly (flat, ramp, wall); process ids of a finished and of a
+running process (saves killed long ago, or in progress elsewhere)."""
 
 from __future__ import annotations
 
+import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -44,3 +47,22 @@ def wall_map() -> terrain.TerrainMap:
     """40 x 40 flat cells of 1 m, all asphalt, with an obstacle wall along column 20
     (x in [20, 21) m) open only at rows 30-33 (y in [30, 34) m)."""
     return terrain.wall_map((40, 40), 1.0, wall_col=20, gap_rows=(30, 34), ground="asphalt")
+
+
+@pytest.fixture
+def dead_pid() -> int:
+    """The pid of a process that has finished (and been reaped): a save killed long ago."""
+    proc = subprocess.Popen([sys.executable, "-c", "pass"])
+    proc.wait()
+    return proc.pid
+
+
+@pytest.fixture
+def live_pid() -> Iterator[int]:
+    """The pid of a process that is still running: a save in progress elsewhere."""
+    proc = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        yield proc.pid
+    finally:
+        proc.kill()
+        proc.wait()

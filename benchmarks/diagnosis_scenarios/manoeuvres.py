@@ -4,9 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from terrawatt_base.checks import check_choice, check_real, check_seed
-
 from energy import CommandProfile
+from terrawatt_base.checks import check_choice, check_real, check_seed
 
 __all__ = ["MANOEUVRES", "manoeuvre_commands"]
 

@@ -62,11 +62,6 @@ from typing import Any
 
 import numpy as np
 
-from terrawatt_base.checks import check_choice, check_int, check_real, check_seed
-from terrawatt_base.errors import InvalidParameterError, UnknownNameError
-from terrain.procedural import flat_map, ramp_map
-from terrain.terrain_map import TerrainMap
-
 from energy import (
     EFFECTS,
     CurrentModel,
@@ -79,8 +74,12 @@ from energy import (
     ground_preset,
     robot_preset,
 )
-from energy.sim import PAPER_GROUNDS, measure_currents
 from energy.logs import at_rest
+from energy.sim import PAPER_GROUNDS, measure_currents
+from terrain.procedural import flat_map, ramp_map
+from terrain.terrain_map import TerrainMap
+from terrawatt_base.checks import check_choice, check_int, check_real, check_seed
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from .manoeuvres import MANOEUVRES, manoeuvre_commands
 from .power import PowerGap, battery_streams, power_gap

@@ -32,9 +32,10 @@ from typing import Any
 import numpy as np
 
 from energy import Battery, GroundParams, InteractionLog, RobotParams, TruthSimulator
-from terrain import CellModelRegistry, InvalidParameterError, TerrainMap
+from terrain import InvalidParameterError, TerrainMap
 
 from ..learned_cost import LearnedEnergyModel
+from ..registry import CellModelRegistry
 from ..route import evaluate_route
 from .adaptive_results import AdaptiveResult
 from .legs import split_polyline

@@ -11,10 +11,11 @@ from typing import Any
 import numpy as np
 
 from energy import EnergyBudget, InteractionLog
-from terrain import CellModelRegistry, TerrainMap
+from terrain import TerrainMap
 from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.formats import result_document, write_result_json
 
+from ..registry import CellModelRegistry
 from ..route import Route
 from .figures import plot_adaptive_mission
 

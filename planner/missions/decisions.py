@@ -25,7 +25,6 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-
 from energy import CommandProfile
 from terrawatt_base.atomic import json_finite
 

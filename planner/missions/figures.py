@@ -19,11 +19,13 @@ from typing import Any
 
 import numpy as np
 
-from terrain import CellModelRegistry, TerrainMap
+from terrain import TerrainMap
 from terrawatt_base import plot_target
 from terrawatt_base.atomic import save_figure
 from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.plot_target import check_axes, check_plot_target
+
+from ..registry import CellModelRegistry
 
 __all__ = ["plot_mission", "plot_adaptive_mission"]
 

@@ -7,7 +7,6 @@ import os
 import re
 import tempfile
 import time
-from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -15,16 +14,18 @@ from typing import Any
 import numpy as np
 
 from energy import GROUND_PRESETS, Battery, RobotParams, TruthSimulator, ground_preset, load_current_model
-from energy.params import robot_params
 from energy.io import write_csv_log, write_drive_bag
-from terrain import CellModelRegistry, TerrainMap
+from energy.params import robot_params
+from terrain import TerrainMap
 from terrawatt_base.atomic import check_output_path
-from terrawatt_base.checks import check_bool, check_real
+from terrawatt_base.checks import check_bool, check_instance, check_real
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
-from terrawatt_base.formats import write_result_json
 from terrawatt_base.figure_file import draw_figure
+from terrawatt_base.formats import write_result_json
 
+from ..cost_spec import CostSpec
 from ..model_cost import model_energy_model
+from ..registry import CellModelRegistry
 from .adaptive import run_adaptive_mission
 from .adaptive_results import AdaptiveResult
 from .manoeuvres import fit_prior_model
@@ -250,14 +251,11 @@ def simulate_adaptive_mission(
     battery_ah: float,
     battery_v: float | None = None,
     reserve_pct: float = 20.0,
-    robot: str = "husky",
-    speed_mps: float = 0.5,
+    pricing: CostSpec | None = None,
     prior_ground: str = "asphalt",
     leg_m: float = 10.0,
     adapt: bool = True,
     seed: int = 0,
-    model: Any = None,
-    model_ground: str | Mapping[str, str] | None = None,
     map_label: str = "map",
 ) -> MissionReport:
     """Drive from start to goal in the truth simulator against a battery, learning current models on the way.
@@ -277,17 +275,17 @@ def simulate_adaptive_mission(
         Start and goal (m).
     battery_ah, battery_v, reserve_pct
         The battery (:func:`mission_battery`).
-    robot : str
-        A robot preset name, a robot file (``.json``) or a :class:`~energy.RobotParams`
-        (:func:`energy.params.robot_params`).
-    speed_mps, leg_m, seed
-        Driving speed (m/s), route driven between comparisons (m), seed of the simulator.
+    pricing : CostSpec, optional
+        The robot, its driving speed and, with a saved current model, the model serving the map's
+        grounds instead of the prior (:class:`planner.cost_spec.CostSpec`; default ``CostSpec()``).
+        The mission prices its edges by the per-cell models it learns, so the spec's slope limit,
+        unknown ground and risk do not apply.
+    leg_m, seed
+        Route driven between comparisons (m), seed of the simulator.
     prior_ground : str
         Ground preset of the prior model, and the physics ground of the edge costs.
     adapt : bool
         Update the models on the way (False: drive the first plan).
-    model, model_ground
-        A saved current model instead of the prior, and how it serves the map's grounds.
     map_label : str
         How the map is named.
 
@@ -307,15 +305,16 @@ def simulate_adaptive_mission(
         raise UnknownNameError(f"prior_ground {prior_ground!r} has no preset; known grounds: {sorted(GROUND_PRESETS)!r}")
     check_real("leg_m", leg_m, low=0.0, low_inclusive=False)
     adapt = check_bool("adapt", adapt)
-    robot_given = robot_params(robot)
+    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    robot_given, model = pricing.params, pricing.model
     grounds = {name: ground_preset(name) for name in sorted(set(terrain.ground_names.values()) | {prior_ground})}
     truth = TruthSimulator(robot_given, grounds, seed=seed)
     battery = mission_battery(robot_given, battery_ah, battery_v, reserve_pct)
-    settings = AdaptiveSettings(speed_mps=speed_mps, leg_length_m=leg_m,
+    settings = AdaptiveSettings(speed_mps=pricing.speed_mps, leg_length_m=leg_m,
                                 max_updates=AdaptiveSettings().max_updates if adapt else 0, seed=seed)
     learned = None
     if model is not None:  # the saved model serves every ground class it drove (one model id each)
-        learned, _ = model_energy_model(terrain, model, robot_given, model_ground=model_ground,
+        learned, _ = model_energy_model(terrain, model, robot_given, model_ground=pricing.model_ground,
                                         physics_ground=grounds[prior_ground])
         registry = learned.registry
     else:
@@ -325,7 +324,8 @@ def simulate_adaptive_mission(
     t0 = time.perf_counter()
     result = run_adaptive_mission(terrain, registry, robot_given, battery, truth, start_xy_m, goal_xy_m,
                                   physics_ground=grounds[prior_ground], settings=settings, learned=learned)
-    return MissionReport(result=result, battery=battery, map_label=map_label, robot=robot, prior_ground=prior_ground,
+    return MissionReport(result=result, battery=battery, map_label=map_label, robot=pricing.robot,
+                         prior_ground=prior_ground,
                          adapt=adapt, start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),
                          goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])),
                          computing_time_s=time.perf_counter() - t0, terrain=terrain, registry=registry,

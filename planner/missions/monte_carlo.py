@@ -21,15 +21,15 @@ import numpy as np
 from energy import GROUND_PRESETS, Battery, GroundParams, RobotParams, TruthSimulator, ground_preset
 from energy.params import robot_params
 from terrain import TerrainMap
-from terrawatt_base.containers import memory_limit_bytes, over_budget_message
 from terrawatt_base.checks import check_bool, check_int, check_real, check_seed
+from terrawatt_base.containers import memory_limit_bytes, over_budget_message
 from terrawatt_base.dask_client import check_client, client_worker_count, dask_client
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
-from ..route import Route
 from ..edge_cost import EnergyCost
-from ..risk import RouteEnergyInterval, route_energy_interval
-from .forecast import route_forecast_j
+from ..risk import RouteEnergyInterval
+from ..route import Route
+from ..route_price import price_route
 from .monte_carlo_model import MC_DRAW_MODES, ModelMissionSetup
 from .monte_carlo_result import MonteCarloResult, mission_row
 from .monte_carlo_sampling import MissionDistributions
@@ -161,7 +161,7 @@ def simulate_missions_mc(
     cost : EnergyCost, optional
         The cost that planned the route: when it carries its physics model, the study's
         ``predicted_energy_j`` is that model's forecast of the driven stop-turn-go profile at
-        the nominal speed (:func:`planner.missions.forecast.route_forecast_j`), else the
+        the nominal speed (:func:`planner.route_price.route_forecast_j`), else the
         route's edge energy. When it carries a predictive interval (:mod:`planner.risk`), the
         result's ``forecast`` is the route's energy distribution (P50, P90) on it.
     draw_from : {"parameters", "model"}
@@ -173,7 +173,7 @@ def simulate_missions_mc(
         (:mod:`planner.missions.monte_carlo_model`); needs ``cost`` with an interval;
         ``ground_scale`` then holds the drawn factors ``z``.
     forecast : RouteEnergyInterval, optional
-        The route's energy distribution, instead of :func:`planner.route_energy_interval` of
+        The route's energy distribution, instead of :func:`planner.route_price.price_route` of
         ``route`` on ``cost``: what ``draw_from="model"`` draws from (e.g. a tour's, whose legs
         and service energy are priced apart, :func:`planner.tours.simulate_tours_mc`).
 
@@ -237,7 +237,7 @@ def simulate_missions_mc(
     if forecast is not None and not isinstance(forecast, RouteEnergyInterval):
         raise InvalidParameterError(f"forecast must be a RouteEnergyInterval or None, got {type(forecast).__name__!r}")
     if forecast is None and cost is not None and cost.has_interval:
-        forecast = route_energy_interval(cost, route.waypoints_m)
+        forecast = price_route(cost, route)
     setup: MissionSetup | ModelMissionSetup
     if draw_from == "model":
         if forecast is None:
@@ -252,7 +252,7 @@ def simulate_missions_mc(
         TruthSimulator(robot, setup.grounds, current_rate_hz=rate_hz)  # what every sample meets, checked once
         predicted_j = route.energy_j  # the forecast, before any mission runs
         if cost is not None and cost.physics_model is not None:
-            predicted_j = route_forecast_j(cost, route, speed_mps=nominal)
+            predicted_j = price_route(cost, route, how="profile", interval=False, speed_mps=nominal).mean_j
     client = check_client(client, "missions")
     n_workers = 1 if workers is None else check_int("workers", workers, low=1)
     if client is not None and (n_workers > 1 or scheduler is not None):

@@ -4,22 +4,17 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from energy import Battery
-from energy.params import robot_params
 from terrain import TerrainMap
-from terrawatt_base.checks import check_real
-from terrawatt_base.errors import InvalidParameterError
+from terrawatt_base.checks import check_instance, check_real
 from terrawatt_base.figure_file import draw_figure
 
-from ..cost_source import edge_costs
-from ..edge_cost import DEFAULT_MAX_SLOPE_RAD
+from ..cost_spec import CostSpec
 from ..planning import plan_route
-from ..risk import check_planning_risk
 from ..route import Route
 from .mission_report import check_preset_grounds, mission_battery
 from .monte_carlo import simulate_missions_mc
@@ -124,25 +119,19 @@ def monte_carlo_mission(
     battery_ah: float,
     battery_v: float | None = None,
     reserve_pct: float = 20.0,
-    robot: str = "husky",
-    speed_mps: float = 0.5,
+    pricing: CostSpec | None = None,
     seed: int | None = 0,
-    model: Any = None,
-    model_label: str | None = None,
-    model_ground: str | Mapping[str, str] | None = None,
-    risk: float | None = None,
     draw_from: str = "parameters",
     max_risk_pct: float = 5.0,
     client: Any = None,
     where: str | None = None,
     progress: bool = False,
     map_label: str = "map",
-    flags: tuple[str, str] = ("risk", "draw_from"),
 ) -> MonteCarloReport:
     """Plan the lattice route and drive it ``n`` times with drawn parameters (:func:`simulate_missions_mc`).
 
-    The edges are priced by the presets or ``model`` (:func:`planner.cost_source.edge_costs`,
-    at the default steepest slope); the route is the lattice planner's; the missions draw
+    The edges are priced as ``pricing`` says (:meth:`planner.cost_spec.CostSpec.build`, at the
+    mean); the route is the lattice planner's; the missions draw
     ground coefficients, payload, capacity fade, internal resistance and speed (or, with
     ``draw_from="model"``, the model's predictive distribution).
 
@@ -156,16 +145,13 @@ def monte_carlo_mission(
         Missions.
     battery_ah, battery_v, reserve_pct
         The battery (:func:`planner.missions.mission_report.mission_battery`).
-    robot, speed_mps, seed
-        Robot (a preset name or a robot file, :func:`energy.params.robot_params`), speed (m/s), seed of the draws
-        and of the route's refinement.
-    model, model_ground
-        A saved current model pricing the edges; how it serves the map's grounds.
-    model_label : str, optional
-        How messages name the model (default its class name).
-    risk : float, optional
-        Check the route energy forecast's ``risk`` quantile against the usable battery (needs a
-        model with an interval).
+    pricing : CostSpec, optional
+        How the edges are priced and the missions driven (:class:`planner.cost_spec.CostSpec`: the
+        robot, its speed, the presets or a saved current model; default ``CostSpec()``); its
+        ``risk``, when given, is the quantile of the route energy forecast checked against the
+        usable battery (needs a model with an interval).
+    seed : int or None
+        Seed of the draws and of the route's refinement.
     draw_from : str
         ``"parameters"`` or ``"model"`` (needs a model with an interval).
     max_risk_pct : float
@@ -176,8 +162,6 @@ def monte_carlo_mission(
         Show a progress bar.
     map_label : str
         How the map is named.
-    flags : (str, str)
-        How messages name ``risk`` and ``draw_from`` (the command line passes ``("--risk", "--mc-draw")``).
 
     Returns
     -------
@@ -193,23 +177,19 @@ def monte_carlo_mission(
     """
     check_preset_grounds(terrain)
     max_risk_pct = check_real("max_risk_pct", max_risk_pct, low=0.0, high=100.0)
-    if risk is not None:
-        check_planning_risk(risk, flags[0])
-    battery = mission_battery(robot, battery_ah, battery_v, reserve_pct)
-    cost = edge_costs(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=DEFAULT_MAX_SLOPE_RAD,
-                      unknown_ground=None, model=model, model_ground=model_ground)
-    if (risk is not None or draw_from == "model") and not cost.has_interval:
-        name = model_label or ("the physics model" if model is None else type(model).__name__)
-        raise InvalidParameterError(f"{flags[0]} and {flags[1]} model need a model with a predictive interval; "
-                                    f"{name} gives none")
+    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    battery = mission_battery(pricing.robot, battery_ah, battery_v, reserve_pct)
+    cost = pricing.build(terrain)
+    if pricing.risk is not None or draw_from == "model":
+        pricing.needs_interval(cost, also="draw_from")
     route = plan_route(terrain, start_xy_m, goal_xy_m, cost=cost, planner="lattice", seed=seed)
     result = None
     if route.found:
-        result = simulate_missions_mc(terrain, route, battery, n, robot=robot_params(robot), speed_mps=speed_mps,
+        result = simulate_missions_mc(terrain, route, battery, n, robot=pricing.params, speed_mps=pricing.speed_mps,
                                       seed=seed, client=client, progress=progress, cost=cost, draw_from=draw_from)
         if client is not None and where is not None:  # where it ran, as the caller names it
             result = dataclasses.replace(result, where=where)
-    return MonteCarloReport(route=route, result=result, battery=battery, map_label=map_label, robot=robot,
+    return MonteCarloReport(route=route, result=result, battery=battery, map_label=map_label, robot=pricing.robot,
                             start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),
-                            goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), n=n, risk_q=risk,
+                            goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), n=n, risk_q=pricing.risk,
                             max_risk_pct=max_risk_pct)

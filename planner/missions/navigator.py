@@ -1,7 +1,7 @@
 """The ride-along navigator: the learning loop a robot's own code drives, live or from a recorded drive.
 
 :class:`Navigator` holds a map, the per-cell current models (a
-:class:`terrain.CellModelRegistry`), the robot, its battery and a goal. ``plan(start)`` gives
+:class:`planner.registry.CellModelRegistry`), the robot, its battery and a goal. ``plan(start)`` gives
 the first route with its forecast; from then on the robot hands it what it measured,
 chunk by chunk (:meth:`Navigator.observe`: an :class:`energy.InteractionLog` slice or plain
 arrays, :mod:`planner.missions.observations`), and every call returns a
@@ -12,8 +12,8 @@ only checks the chunk, books its energy against the battery and keeps it. At a c
 loop of the design runs on what was driven since the last one:
 
 1. **compare per cell** — each sample's measured current against the current the model
-   serving its cell predicts (:meth:`terrain.CellModelRegistry.record`); the
-   :class:`terrain.UpdatePolicy` flags regions whose error passes its threshold;
+   serving its cell predicts (:meth:`planner.registry.CellModelRegistry.record`); the
+   :class:`planner.registry.UpdatePolicy` flags regions whose error passes its threshold;
 2. **update** each flagged region: a model the registry already holds that explains what was
    measured there (``"reuse"``); else a new model (``model_factory``, default
    :class:`energy.LinearCurrentModel`) fitted on **what the robot drove in the update's
@@ -23,7 +23,7 @@ loop of the design runs on what was driven since the last one:
    (``settings.update_source`` says which comes first; the robot's code decides whether to
    run it, :meth:`Navigator.observe_manoeuvre` / :meth:`Navigator.decline_manoeuvre`); the
    registry keeps the new model only if it validates better than the old
-   (:meth:`terrain.CellModelRegistry.propose_update`);
+   (:meth:`planner.registry.CellModelRegistry.propose_update`);
 3. **repair the route** — only the changed models' edge costs are recomputed, the incremental
    lattice search (:class:`~planner.IncrementalPlanner`) repairs its search from the robot's
    position, and the remaining legs are priced again;
@@ -72,16 +72,17 @@ from energy import (
     ground_preset,
 )
 from energy.budget import log_battery_power_w
-from terrain import CellModelRegistry, DataError, InvalidParameterError, TerrainMap
+from terrain import DataError, InvalidParameterError, TerrainMap
 from terrawatt_base.atomic import json_finite
 from terrawatt_base.checks import check_real, fmt_number, real_array
 
 from ..lattice import Lattice
 from ..learned_cost import LearnedEnergyModel
 from ..planning import plan_route
+from ..registry import CellModelRegistry
 from ..replan import IncrementalPlanner
-from ..risk import route_energy_interval
 from ..route import Route, evaluate_route
+from ..route_price import price_route
 from ..settings import PlannerSettings
 from .adaptive_results import AdaptiveResult, LegRecord, ReplanRecord, UpdateRecord
 from .charge import MAX_JOIN_GAP_S, ChargeAccount
@@ -447,7 +448,7 @@ class Navigator(RegionUpdates):
 
     def _route_dof(self, waypoints: np.ndarray) -> float:
         """The degrees of freedom of ``waypoints``' energy interval on the planning cost
-        (:func:`planner.route_energy_interval`): ``inf`` (the normal distribution) without an
+        (:func:`planner.route_price.price_route`): ``inf`` (the normal distribution) without an
         interval or where every row is Gaussian; cached per cost and route. A route the cost
         cannot price (it crosses what the last update blocked) takes the least of every row's."""
         cost = self.cost
@@ -458,7 +459,7 @@ class Navigator(RegionUpdates):
         if self._dof_cache is not None and self._dof_cache[0] is cost and self._dof_cache[1] == key:
             return self._dof_cache[2]
         try:
-            dof = route_energy_interval(cost, waypoints).dof
+            dof = price_route(cost, waypoints, interval=True).dof
         except InvalidParameterError:
             dof = min(cost.spread_dof)
         self._dof_cache = (cost, key, dof)

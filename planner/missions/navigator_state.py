@@ -11,7 +11,7 @@ a temporary name, then renamed into place: a robot killed mid-save keeps its las
   driven updates and the chunks since the last checkpoint (every field of each log), the
   vibration signals of learned models, the incremental search's memory;
 - ``registry/`` — the per-cell models with their evidence and history
-  (:meth:`terrain.CellModelRegistry.save`; each model through its own ``save`` and
+  (:meth:`planner.registry.CellModelRegistry.save`; each model through its own ``save`` and
   :func:`energy.load_current_model`).
 
 Functions here read and write a navigator's attributes; they never import its class, so
@@ -29,12 +29,13 @@ from typing import Any
 import numpy as np
 
 from energy import Battery, CommandProfile, GroundParams, InteractionLog, LogMeta, RobotParams, load_current_model
-from terrain import CellModelRegistry, FileFormatError, FlaggedRegion, InvalidParameterError, TerrainMap, UpdatePolicy
+from terrain import FileFormatError, InvalidParameterError, TerrainMap
 from terrawatt_base.atomic import atomic_directory, check_output_path, json_finite
 from terrawatt_base.containers import read_npz
 from terrawatt_base.formats import read_result_json, result_document, write_result_json
 
 from ..lattice import Lattice
+from ..registry import CellModelRegistry, FlaggedRegion, UpdatePolicy
 from ..replan import IncrementalPlanner
 from ..route import evaluate_route
 from ..settings import PlannerSettings

@@ -14,7 +14,7 @@ checkpoint flags, in order:
    when there is at least ``min_driven_s`` of it), or on the excitation manoeuvre the
    navigator asks for (its energy must fit above the reserve with the rest of the route);
    new and old models are validated on the held-back part, and the registry keeps the
-   better (:meth:`terrain.CellModelRegistry.propose_update`).
+   better (:meth:`planner.registry.CellModelRegistry.propose_update`).
 
 The scope of an update is, with ``update_scope="ground_class"``, every cell of the map's
 ground class at the region's representative cell that is served by the same model(s) (the

@@ -36,11 +36,12 @@ from typing import Any
 import numpy as np
 
 from energy import Battery, GroundParams, InteractionLog, RobotParams
-from terrain import CellModelRegistry, DataError, InvalidParameterError, TerrainMap
+from terrain import DataError, InvalidParameterError, TerrainMap
 from terrawatt_base.checks import check_real
 from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import result_document, write_result_json
 
+from ..registry import CellModelRegistry
 from ..replay_bag import write_replay_bag
 from .navigator import Navigator
 from .replay_figure import plot_replay

@@ -11,12 +11,13 @@ from typing import Any
 import numpy as np
 
 from energy import GROUND_PRESETS, InteractionLog, ground_preset, load_current_model
-from energy.params import robot_params
-from terrain import CellModelRegistry, TerrainMap
-from terrawatt_base.checks import check_real, option_names
+from terrain import TerrainMap
+from terrawatt_base.checks import check_instance, check_real, option_names
 from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
+from ..cost_spec import CostSpec
 from ..model_cost import model_energy_model
+from ..registry import CellModelRegistry
 from .mission_report import mission_battery
 from .replay import ReplayResult, replay_drive
 from .settings import AdaptiveSettings
@@ -74,16 +75,12 @@ def replay_recording(
     battery_v: float | None = None,
     reserve_pct: float = 20.0,
     initial_soc: float = 1.0,
-    robot: Any = "husky",
-    speed_mps: float = 0.5,
+    pricing: CostSpec | None = None,
     leg_m: float = 10.0,
     seed: int = 0,
     registry: str | os.PathLike[str] | CellModelRegistry | None = None,
-    model: Any = None,
-    model_ground: str | Mapping[str, str] | None = None,
     physics_ground: str = "asphalt",
     update_source: str = "manoeuvre",
-    risk: float | None = None,
     interval_level: float = 0.8,
     mode: str = "auto",
     chunk_s: float = 1.0,
@@ -96,7 +93,7 @@ def replay_recording(
     """Replay a recorded drive through a navigator set up as ``terrawatt mission`` sets up its loop.
 
     The models at the start: a saved registry (``registry``: a directory, e.g. the
-    ``start_registry/`` that ``mission --logs`` writes, or a :class:`terrain.CellModelRegistry`),
+    ``start_registry/`` that ``mission --logs`` writes, or a :class:`planner.registry.CellModelRegistry`),
     or one saved current model (``model``) serving every cell — per ground class through
     :func:`planner.model_cost.model_energy_model` when ``model_ground`` says how. With a
     ``state_path`` that holds a saved navigator, the replay resumes from it and these are not
@@ -111,12 +108,15 @@ def replay_recording(
     battery_ah, battery_v, reserve_pct, initial_soc
         The battery (:func:`~planner.missions.mission_report.mission_battery`) and its state
         of charge at the start.
-    robot : str, path or RobotParams
-        A preset name, a robot file or parameters.
-    speed_mps, leg_m, seed, update_source, risk, interval_level
+    pricing : CostSpec, optional
+        The robot, its driving speed, the saved current ``model`` the drive starts with (and its
+        ``model_ground``) and the navigator's ``risk`` (:class:`planner.cost_spec.CostSpec`;
+        default ``CostSpec()``); the edges are priced by the per-cell models, so its slope limit
+        and unknown ground do not apply.
+    leg_m, seed, update_source, interval_level
         The navigator's settings (:class:`AdaptiveSettings`).
-    registry, model, model_ground
-        The models at the start (above).
+    registry
+        The models at the start (above): a saved registry, instead of ``pricing.model``.
     physics_ground : str
         Ground preset of the physics slope term of the edge costs.
     mode, chunk_s, speed_up, depot_xy_m, state_path, on_decision
@@ -141,9 +141,10 @@ def replay_recording(
         raise UnknownNameError(f"{label['physics_ground']} {physics_ground!r} has no preset; known grounds: "
                                f"{sorted(GROUND_PRESETS)!r}")
     ground = ground_preset(physics_ground)
-    robot_given = robot_params(robot)
-    settings = AdaptiveSettings(speed_mps=speed_mps, leg_length_m=leg_m, seed=seed, update_source=update_source,
-                                risk=risk, interval_level=interval_level)
+    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    robot_given, model = pricing.params, pricing.model
+    settings = AdaptiveSettings(speed_mps=pricing.speed_mps, leg_length_m=leg_m, seed=seed,
+                                update_source=update_source, risk=pricing.risk, interval_level=interval_level)
     reg, learned, battery = None, None, None
     if not resuming:
         if (registry is None) == (model is None):
@@ -157,8 +158,8 @@ def replay_recording(
             reg = registry
         elif registry is not None:
             reg = CellModelRegistry.load(registry, load_current_model, terrain=terrain)
-        elif model_ground is not None:
-            learned, _ = model_energy_model(terrain, model, robot_given, model_ground=model_ground,
+        elif pricing.model_ground is not None:
+            learned, _ = model_energy_model(terrain, model, robot_given, model_ground=pricing.model_ground,
                                             physics_ground=ground)
             reg = learned.registry
         else:

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from terrain import InvalidParameterError, UpdatePolicy
+from terrain import InvalidParameterError
 from terrawatt_base.checks import check_bool, check_int, check_real, check_seed
+
+from ..registry import UpdatePolicy
 
 __all__ = ["UPDATE_SCOPES", "UPDATE_SOURCES", "AdaptiveSettings"]
 

@@ -54,7 +54,7 @@ from terrawatt_base.errors import DataError, GridMismatchError, InvalidParameter
 
 from ..edge_cost import EnergyCost
 from ..route import Route
-from .forecast import FORECAST_DT_S, profile_forecast_w, segment_forecasts_j
+from ..route_price import FORECAST_DT_S, profile_forecast_w, segment_forecasts_j
 from .results import MissionResult
 from .tracking import route_speed_mps, segments_by_pose
 
@@ -148,7 +148,7 @@ def simulate_mission(
     forecast : {"auto", "profile", "edges"}
         The predicted energy: ``"profile"`` prices the whole stop-turn-go profile (ramps,
         pivots, the electronics over the longer drive) with the physics model that priced
-        ``cost`` (:func:`planner.missions.forecast.profile_forecast_w`; a cost from
+        ``cost`` (:func:`planner.route_price.profile_forecast_w`; a cost from
         :meth:`EnergyCost.from_model` with a :class:`energy.PhysicsEnergyModel` or
         ``from_presets``); ``"edges"`` adds up the route's (or ``cost``'s) segment and turn
         energies, steady driving at the planning speed; ``"auto"`` (default): ``"profile"``

@@ -8,10 +8,11 @@ from typing import Any
 import numpy as np
 
 from energy import CurrentModel, InteractionLog
-from terrain import CellModelRegistry, InvalidParameterError
+from terrain import InvalidParameterError
 from terrawatt_base.errors import DataError
 
 from ..learned_cost import predict_currents
+from ..registry import CellModelRegistry
 
 __all__ = ["validation_error", "predicted_currents", "best_other_model", "charge_error", "adapted_model", "Comparison",
            "driven_runs", "split_runs"]

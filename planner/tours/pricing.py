@@ -5,7 +5,7 @@ A leg ``i -> j`` is the lattice route that minimises the leg's price at the risk
 mean), found by :meth:`planner.Lattice.paths_from`: one Dijkstra per point, not one per pair.
 The leg is then priced on the cost itself: its mean energy (drive and turns,
 :meth:`EnergyCost.path_energy_j`, the plan price), its run-level spread per ground
-(:func:`planner.route_energy_interval`, linear within a ground) and its duration. Legs are
+(:func:`planner.route_price.price_route`, linear within a ground) and its duration. Legs are
 directed: uphill != downhill, so the matrices are asymmetric.
 """
 
@@ -27,7 +27,8 @@ from terrawatt_base.errors import InvalidParameterError
 from ..batch import shippable_cost
 from ..edge_cost import EnergyCost
 from ..lattice import Lattice
-from ..risk import RouteEnergyInterval, check_risk_level, risk_cost, route_energy_interval
+from ..risk import RouteEnergyInterval, check_risk_level, risk_cost
+from ..route_price import price_route
 
 __all__ = ["PairPrices", "price_pairs", "price_from"]
 
@@ -86,7 +87,7 @@ class PairPrices:
 
         ``t_q`` is the quantile of the leg's predictive: the least degrees of freedom of the
         grounds it crosses (a Gaussian's ``z_q`` where every one is Gaussian), as
-        :func:`planner.route_energy_interval` gives a route. For ``q >= 0.5`` a sum of these
+        :func:`planner.route_price.price_route` gives a route. For ``q >= 0.5`` a sum of these
         along a tour is never below the tour's own quantile (the spreads of one ground add along
         the whole tour: the norm of a sum is at most the sum of the norms; a tour's degrees of
         freedom are at least its heaviest leg's), so a capacity on them is conservative.
@@ -106,7 +107,7 @@ class PairPrices:
         """The energy distribution of driving the legs ``points[0] -> points[1] -> ...`` in one run.
 
         The spreads of one ground add linearly along the whole tour; grounds combine by the root of
-        the sum of squares (as :func:`planner.route_energy_interval` does for one route).
+        the sum of squares (as :func:`planner.route_price.price_route` does for one route).
         ``extra_mean_j`` (e.g. the sites' service energy) is added to the mean.
         """
         idx = np.asarray(points, dtype=np.int64)
@@ -144,12 +145,12 @@ def price_from(search_cost: EnergyCost, cost: EnergyCost, i: int, xy_m: np.ndarr
             continue
         pts = path.waypoints_m
         if cost.has_interval:
-            iv = route_energy_interval(cost, pts, segment_cache=walked)
+            iv = price_route(cost, pts, interval=True, segment_cache=walked)
             mean[j] = iv.mean_j
             for label, s in iv.sd_by_ground_j.items():
                 sd[j, index[label]] = s
         else:
-            mean[j] = cost.path_energy_j(pts)
+            mean[j] = price_route(cost, pts, interval=False).mean_j
         angles, _ = cost.turn_energies_j(pts)
         length = float(np.sum(np.hypot(*np.diff(pts, axis=0).T)))
         dur[j] = length / cost.speed_mps + float(np.sum(angles)) / cost.turn_rate_radps

@@ -19,8 +19,8 @@ from terrawatt_base.plot_target import check_ax, check_plot_target, new_figure
 
 from ..edge_cost import EnergyCost
 from ..risk import INTERVAL_LEVEL, RouteEnergyInterval
-from ..route import Route, evaluate_route
 from ..ros_export import write_route_bag
+from ..route import Route, evaluate_route
 from ..route_geojson import write_geojson
 from .pricing import PairPrices
 from .sites import TourChargers

@@ -4,20 +4,17 @@ comes back above its reserve at Q."""
 from __future__ import annotations
 
 import dataclasses
-import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-from terrawatt_base.checks import check_int, check_real, check_seed
+from energy import Battery
+from terrain import TerrainMap
+from terrawatt_base.checks import check_instance, check_int, check_real, check_seed
 from terrawatt_base.errors import BlockedPositionError, InvalidParameterError
 
-from energy import Battery
-from energy.params import robot_params
-from terrain import TerrainMap
-
-from ..cost_source import edge_costs
+from ..cost_spec import CostSpec
 from ..edge_cost import EnergyCost
 from ..risk import RouteEnergyInterval, check_planning_risk
 from .pricing import PairPrices, price_pairs
@@ -292,12 +289,7 @@ def plan_tour_on_map(
     n_robots: int = 1,
     max_duration_s: float | None = None,
     risk: float = 0.9,
-    robot: str = "husky",
-    speed_mps: float = 0.5,
-    max_slope_deg: float = 20.0,
-    unknown_ground: str | None = "gravel",
-    model: Any = None,
-    model_ground: str | Mapping[str, str] | None = None,
+    pricing: CostSpec | None = None,
     time_limit_s: float = 10.0,
     seed: int = 0,
     workers: int | None = None,
@@ -309,8 +301,8 @@ def plan_tour_on_map(
     """:func:`plan_tour` on a map priced as ``terrawatt tour`` prices it: ``n_robots`` alike robots with one depot, or
     one each (``depot_xy_m`` a sequence of ``n_robots`` points), and the ``chargers`` they may stop at.
 
-    The edges are priced by the presets or a saved ``model`` (:func:`planner.cost_source.edge_costs`);
-    each robot's battery is ``battery_ah`` at ``voltage_v`` (default the robot's) keeping
+    The edges are priced as ``pricing`` says (:meth:`planner.cost_spec.CostSpec.build`, default
+    ``CostSpec()``; the tour's level is ``risk``, not the spec's); each robot's battery is ``battery_ah`` at ``voltage_v`` (default the robot's) keeping
     ``reserve_pct`` % in reserve; each tour lasts at most ``max_duration_s`` (s; ``None``: no limit); waiting
     for a window draws the robot's ``sensor_power_w + control_standby_power_w``.
 
@@ -322,13 +314,11 @@ def plan_tour_on_map(
     """
     battery_ah = check_real("battery_ah", battery_ah, low=0.0, low_inclusive=False)
     n_robots = check_int("n_robots", n_robots, low=1)
-    slope = check_real("max_slope_deg", max_slope_deg, low=0.0, high=90.0, low_inclusive=False, high_inclusive=False)
-    params = robot_params(robot)
-    voltage = params.battery_voltage_v if voltage_v is None else voltage_v
-    standby_w = params.sensor_power_w + params.control_standby_power_w  # what it draws waiting for a window
+    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    voltage = pricing.params.battery_voltage_v if voltage_v is None else voltage_v
+    standby_w = pricing.params.sensor_power_w + pricing.params.control_standby_power_w  # waiting for a window
     battery = Battery(battery_ah, voltage, min_reserve_pct=reserve_pct)
-    cost = edge_costs(terrain, robot=robot, speed_mps=speed_mps, max_slope_rad=math.radians(slope),
-                      unknown_ground=unknown_ground if model is None else None, model=model, model_ground=model_ground)
+    cost = pricing.build(terrain)
     depots = np.asarray(depot_xy_m, dtype=float)
     depots = depots.reshape(-1, 2) if depots.ndim == 2 else np.tile(depots, (n_robots, 1))
     if depots.shape[0] != n_robots:

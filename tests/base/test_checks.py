@@ -10,7 +10,6 @@ import pytest
 from terrain import InvalidParameterError, UnknownNameError
 from terrawatt_base.checks import (
     SEED_LIMIT,
-    option_names,
     check_bool,
     check_choice,
     check_int,
@@ -19,6 +18,7 @@ from terrawatt_base.checks import (
     check_seed,
     check_text,
     fmt_number,
+    option_names,
     readonly,
     real_array,
 )

@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 import json
 import zipfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -13,8 +14,6 @@ from energy import LinearCurrentModel, load_current_model
 from energy.io import read_borealtc
 from terrain import FileFormatError, TerrainMap
 from terrawatt_base.containers import load_npy, read_npz
-
-from pathlib import Path
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"
 

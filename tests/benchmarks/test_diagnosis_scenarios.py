@@ -4,20 +4,21 @@ import dataclasses
 
 import numpy as np
 import pytest
-
-from energy import PhysicsCurrentModel
-from energy.diagnosis import EFFECTS_CATALOGUE, NOT_IDENTIFIABLE_FROM_CURRENT, diagnose
-from diagnosis_scenarios import MANOEUVRES, manoeuvre_commands
 from diagnosis_scenarios import (
+    MANOEUVRES,
     POWER_ONLY_EFFECTS,
     SCENARIOS,
     Scenario,
+    manoeuvre_commands,
     null_scenario,
     pair_scenario,
     scenario,
     withheld_gap,
     withheld_gap_ratio,
 )
+
+from energy import PhysicsCurrentModel
+from energy.diagnosis import EFFECTS_CATALOGUE, NOT_IDENTIFIABLE_FROM_CURRENT, diagnose
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 EXCITABLE = [name for name, sc in SCENARIOS.items() if sc.excitable]

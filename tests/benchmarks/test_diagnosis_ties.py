@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import math
 
+import diagnosis_ties as dt
 import numpy as np
 import pytest
 
-import diagnosis_ties as dt
 from energy.logs import log_slope_rad
 
 sim = dt.sim

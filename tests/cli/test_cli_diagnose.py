@@ -7,11 +7,12 @@ import json
 from pathlib import Path
 
 import pytest
+from diagnosis_scenarios import scenario
 
 from energy import load_current_model, write_csv_log
-from diagnosis_scenarios import scenario
 from terrawatt_base import plot_target
-from terrawatt_cli import diagnose as diagnose_cli, main
+from terrawatt_cli import diagnose as diagnose_cli
+from terrawatt_cli import main
 
 PNG = b"\x89PNG\r\n\x1a\n"
 FIGURES = ("residual_time.png", "gap_by_regime.png", "gap_map.png", "effect_ranking.png", "waterfall.png")

@@ -5,8 +5,9 @@ from __future__ import annotations
 import dataclasses
 import json
 
-from energy import write_csv_log
 from diagnosis_scenarios import scenario
+
+from energy import write_csv_log
 from terrawatt_cli import main
 
 

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import terrawatt_cli.plan as plan_cli
-from terrawatt_cli import EXIT_BAD_INPUT, EXIT_CODES, EXIT_INTERNAL, build_parser, main
 from terrain.procedural import example_map
+from terrawatt_cli import EXIT_BAD_INPUT, EXIT_CODES, EXIT_INTERNAL, build_parser, main
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 
@@ -145,8 +145,8 @@ def test_a_binary_pairs_file_is_bad_input_not_a_crash(tmp_path, capsys):
 
 
 def test_messages_show_plain_numbers_not_numpy_reprs(tmp_path, capsys, monkeypatch):
-    from terrawatt_cli import plain_message
     from terrain import Grid, InvalidParameterError, OutOfBoundsError
+    from terrawatt_cli import plain_message
 
     assert plain_message("got np.float64(10.0) and np.int64(3), np.True_") == "got 10.0 and 3, np.True_"
     with pytest.raises(OutOfBoundsError) as info:

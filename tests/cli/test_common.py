@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from terrawatt_cli import main
-
 from cli_samples import one_line_error
+
+from terrawatt_cli import main
 
 
 def test_a_missing_map_file_is_one_line_and_exit_2(tmp_path, capsys):

@@ -5,13 +5,12 @@ from __future__ import annotations
 import argparse
 
 import pytest
+from cli_samples import FIXTURES, one_line_error
 
-from terrawatt_cli import EXIT_BAD_INPUT, main
-from terrawatt_cli.data import add_band_option, add_data_options, band_from_args, logs_from_args
 from terrain import InvalidParameterError
 from terrawatt_base.errors import TerrawattError
-
-from cli_samples import FIXTURES, one_line_error
+from terrawatt_cli import EXIT_BAD_INPUT, main
+from terrawatt_cli.data import add_band_option, add_data_options, band_from_args, logs_from_args
 
 
 def _parse(*argv: str) -> argparse.Namespace:

@@ -10,12 +10,11 @@ import shutil
 import sys
 
 import pytest
+from cli_samples import FIXTURES, is_png
 
+from terrain import InvalidParameterError, TerrawattWarning
 from terrawatt_cli import main
 from terrawatt_cli.evaluate import PROTOCOLS, adapt_settings_from_args, add_adapt_options
-from terrain import InvalidParameterError, TerrawattWarning
-
-from cli_samples import FIXTURES, is_png
 
 
 def test_evaluate_writes_json_and_markdown(tmp_path, capsys):

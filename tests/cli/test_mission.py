@@ -6,11 +6,11 @@ import json
 from pathlib import Path
 
 import pytest
+from cli_samples import is_png, one_line_error, patch_map
 
+import planner.registry
 import terrain
 from terrawatt_cli import main
-
-from cli_samples import is_png, one_line_error, patch_map
 
 _NO_DASK = "Monte Carlo on a cluster needs the distributed extra (dask[distributed])"
 
@@ -48,7 +48,7 @@ def _library_mission(path: Path):
     grounds = {name: ground_preset(name) for name in ("asphalt", "sand")}
     truth = TruthSimulator(robot, grounds, seed=0)
     prior = fit_prior_model(truth, "asphalt", seed=0)
-    registry = terrain.CellModelRegistry.from_terrain(tmap, prior, prior_name="asphalt-prior")
+    registry = planner.registry.CellModelRegistry.from_terrain(tmap, prior, prior_name="asphalt-prior")
     return run_adaptive_mission(tmap, registry, robot, Battery(20.0, robot.battery_voltage_v, min_reserve_pct=20.0),
                                 truth, (3.0, 12.0), (57.0, 12.0), physics_ground=grounds["asphalt"],
                                 settings=AdaptiveSettings(speed_mps=0.5, leg_length_m=10.0, seed=0))

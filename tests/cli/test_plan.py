@@ -6,11 +6,10 @@ import json
 
 import numpy as np
 import pytest
+from cli_samples import is_png, one_line_error
 
 import terrain
 from terrawatt_cli import main
-
-from cli_samples import is_png, one_line_error
 
 
 def test_demo_plans_on_the_bundled_map_and_writes_json_and_plot(tmp_path, capsys):

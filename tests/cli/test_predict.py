@@ -6,10 +6,9 @@ import json
 
 import numpy as np
 import pytest
+from cli_samples import FIXTURES, is_png
 
 from terrawatt_cli import main
-
-from cli_samples import FIXTURES, is_png
 
 
 def test_train_then_predict_round_trip(tmp_path, capsys):

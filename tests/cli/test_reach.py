@@ -6,12 +6,11 @@ import json
 from pathlib import Path
 
 import pytest
+from cli_samples import PNG_MAGIC
 
 import terrain
 from planner import Reachability
 from terrawatt_cli import main
-
-from cli_samples import PNG_MAGIC
 
 
 # ---------------------------------------------------------------- CLI

@@ -5,10 +5,9 @@ from __future__ import annotations
 import json
 
 import pytest
+from cli_samples import is_png, one_line_error, patch_map
 
 from terrawatt_cli import main
-
-from cli_samples import is_png, one_line_error, patch_map
 
 
 def _mission(tmp_path, capsys, *extra):

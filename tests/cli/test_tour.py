@@ -5,10 +5,9 @@ from __future__ import annotations
 import json
 
 import pytest
+from cli_samples import PNG_MAGIC
 
 from terrawatt_cli import main
-
-from cli_samples import PNG_MAGIC
 
 
 def _sites(tmp_path, rows):

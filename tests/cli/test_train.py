@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import pytest
+from cli_samples import FIXTURES, one_line_error
 
 from terrawatt_cli import main
-
-from cli_samples import FIXTURES, one_line_error
 
 
 @pytest.fixture

@@ -5,8 +5,6 @@ import dataclasses
 import numpy as np
 import pytest
 
-from energy.logs import at_rest, rest_samples
-
 from energy import (
     EFFECTS,
     ConstantCurrentModel,
@@ -18,6 +16,7 @@ from energy import (
     ground_preset,
     robot_preset,
 )
+from energy.logs import at_rest, rest_samples
 from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 

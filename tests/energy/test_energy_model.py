@@ -7,7 +7,8 @@ import pytest
 
 from energy import EnergyModel, IntervalEnergyModel, PhysicsEnergyModel, ground_preset, robot_preset
 from planner import EnergyCost, LearnedEnergyModel
-from terrain import CellModelRegistry, InvalidParameterError, flat_map
+from planner.registry import CellModelRegistry
+from terrain import InvalidParameterError, flat_map
 
 
 class FlatRate:

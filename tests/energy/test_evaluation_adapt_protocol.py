@@ -7,7 +7,6 @@ import pytest
 from evaluation_samples import adapt_log, adapt_logs, adapt_settings
 
 from energy import InteractionLog, LinearCurrentModel
-from terrawatt_base.errors import DataError, InvalidParameterError
 from energy.evaluation import (
     TRIGGER_SCHEDULE,
     AdaptationResult,
@@ -17,6 +16,7 @@ from energy.evaluation import (
     evaluate_few_shot,
 )
 from terrain import UnknownNameError
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 
 @pytest.fixture(scope="module")

@@ -10,9 +10,9 @@ from evaluation_samples import adapt_logs, score_logs
 
 from energy.evaluation import (
     ADAPT_FILES,
-    RELIABILITY_FILE,
     EVALUATION_FILES,
     EVALUATION_PROTOCOLS,
+    RELIABILITY_FILE,
     SPECTRA_FILE,
     AdaptationResult,
     EvaluationReport,
@@ -21,8 +21,8 @@ from energy.evaluation import (
     check_evaluation_options,
     evaluate_report,
     evaluation_files,
+    evaluation_report,
 )
-from energy.evaluation import evaluation_report
 from energy.models import CURRENT_MODEL_KINDS
 from terrawatt_base.errors import FigureWarning, InvalidParameterError, UnknownNameError
 

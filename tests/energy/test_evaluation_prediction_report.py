@@ -12,9 +12,9 @@ from evaluation_samples import score_logs
 from energy import LinearCurrentModel
 from energy.evaluation import PREDICTIONS_FILE, PredictionReport, predict_report
 from energy.evaluation.prediction_report import PREDICTIONS_FORMAT_VERSION
-from terrawatt_base.formats import read_result_json
 from terrawatt_base import plot_target
 from terrawatt_base.errors import FigureWarning, InvalidParameterError, UnknownNameError
+from terrawatt_base.formats import read_result_json
 
 
 @pytest.fixture(scope="module")

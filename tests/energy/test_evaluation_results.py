@@ -8,7 +8,14 @@ import pytest
 from evaluation_samples import score_logs
 
 from energy import ConstantCurrentModel, LinearCurrentModel, evaluate_current_models
-from energy.evaluation import EVALUATION_FILES, EVALUATION_FORMAT_VERSION, EvaluationResult, RunScore, check_evaluation_dir, summarise_scores
+from energy.evaluation import (
+    EVALUATION_FILES,
+    EVALUATION_FORMAT_VERSION,
+    EvaluationResult,
+    RunScore,
+    check_evaluation_dir,
+    summarise_scores,
+)
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 from terrawatt_base.formats import read_result_json
 

@@ -14,8 +14,8 @@ from energy import (
     LinearCurrentModel,
     evaluate_current_models,
 )
-from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 from terrain import TerrawattWarning
+from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 
 @pytest.fixture(scope="module")

@@ -17,11 +17,11 @@ from energy import (
     new_current_model,
     read_borealtc,
 )
-from energy.features import DEFAULT_BAND_HZ, BandNotServedError, band_rms_spectra, band_served, check_band_hz
 from energy.evaluation import evaluation_report
+from energy.features import DEFAULT_BAND_HZ, BandNotServedError, band_rms_spectra, band_served, check_band_hz
 from energy.models import training_report
-from terrawatt_cli import main
 from terrain import InvalidParameterError
+from terrawatt_cli import main
 
 SHARED = Path(__file__).resolve().parents[3] / "shared" / "data" / "borealtc"
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"

@@ -12,8 +12,8 @@ from robot_bags import requires_rosbags, write_robot_bag
 
 from energy import BagTopics, InteractionLog, LogMeta, new_current_model, read_borealtc, read_logs, write_csv_log
 from energy.io import LOG_SUFFIXES
-from terrawatt_cli import main
 from terrain import DataError, InvalidParameterError, UnknownNameError
+from terrawatt_cli import main
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"
 ODOM = BagTopics(cmd_vel_topic="/odometry/filtered")

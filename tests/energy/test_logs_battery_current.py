@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from energy import Battery, InteractionLog, NoiseModel, TruthSimulator, robot_preset
-from energy.sim import PAPER_GROUNDS
 from energy.io import read_csv_log, write_csv_log
+from energy.sim import PAPER_GROUNDS
 from terrawatt_base.errors import DataError, InvalidParameterError
 
 

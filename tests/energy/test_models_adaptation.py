@@ -8,8 +8,8 @@ from interval_samples import fit_two_ground_estimator, interval_log
 
 from energy import AdaptedCurrentModel, InteractionLog, LinearCurrentModel, LogMeta, load_current_model
 from energy.models import ADAPT_METHODS, MIN_ADAPT_SAMPLES, ModelRecord, log_currents
-from terrawatt_base.errors import DataError, FileFormatError, InvalidParameterError, NotFittedError
 from terrain import UnknownNameError
+from terrawatt_base.errors import DataError, FileFormatError, InvalidParameterError, NotFittedError
 
 
 def _log(seed: int, *, turn_extra_a: float = 0.0, offset_a: float = 0.0, turns_after_s: float = 0.0,

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from energy import ground_preset
-from energy.sim import FACTOR_LOG_STEP, GroundVariation, varied_ground_table, variation_factor
+from energy.sim import FACTOR_LOG_STEP, GroundVariation, variation_factor, varied_ground_table
 from terrain import InvalidParameterError
 
 

@@ -16,7 +16,6 @@ A deliberate change of an output: regenerate the copies and commit their diff wi
 from __future__ import annotations
 
 import pytest
-
 from golden_cases import CASES, DIGESTED, NEEDS
 from golden_files import check_case, members, regenerating, write_case
 

@@ -8,7 +8,6 @@ import pytest
 import terrain
 from planner import EnergyCost, Reachability, reachability
 
-
 DEPOT = (17.3, 21.6)  # not a cell centre: joined to the nodes within 1.5 cells, like a lattice query's start
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 

@@ -11,6 +11,7 @@ import time
 
 import numpy as np
 import pytest
+from batch_samples import EAST, EAST_LOW, ON_WALL, PAIRS, WEST, cost  # noqa: F401  (fixture)
 
 import terrain
 from planner import BatchPairs, EnergyCost, plan_batch, plan_route, read_pairs_csv
@@ -25,8 +26,6 @@ from terrawatt_base.errors import (
     UnknownNameError,
 )
 from terrawatt_cli import main
-
-from batch_samples import EAST, EAST_LOW, ON_WALL, PAIRS, WEST, cost  # noqa: F401  (fixture)
 
 _NO_DASK = "planning on a cluster needs the distributed extra (dask[distributed])"
 

@@ -7,13 +7,12 @@ import json
 import math
 
 import pytest
+from batch_samples import EAST, ON_WALL, PAIRS, cost  # noqa: F401  (fixture)
 
 from planner import BatchResult, plan_batch
 from planner.batch_result import BATCH_FORMAT_VERSION, BatchRow
 from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.formats import read_result_json
-
-from batch_samples import EAST, ON_WALL, PAIRS, cost  # noqa: F401  (fixture)
 
 
 def test_the_result_writes_csv_and_json_with_nan_as_empty_and_null(cost, tmp_path):

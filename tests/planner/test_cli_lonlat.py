@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from geo_fixtures import CLASSES, WATER, lonlat, write_geo_scene
 
-from terrawatt_cli import EXIT_BAD_INPUT, EXIT_NOT_ACHIEVED, EXIT_OK, main
 from terrain import ground_classes_from_landcover, read_geotiff, write_geotiff
+from terrawatt_cli import EXIT_BAD_INPUT, EXIT_NOT_ACHIEVED, EXIT_OK, main
 
 rasterio = pytest.importorskip("rasterio")
 

@@ -106,8 +106,8 @@ def test_bad_coarse_to_fine_points(hilly_cost):
 
 def test_coarse_to_fine_refuses_a_blocked_start(tmp_path):
     from planner import EnergyCost, plan_coarse_to_fine
-    from terrawatt_base.errors import BlockedPositionError
     from terrain import wall_map
+    from terrawatt_base.errors import BlockedPositionError
 
     cost = EnergyCost.from_presets(wall_map((32, 32), 1.0, wall_col=16, ground="asphalt"))
     with pytest.raises(BlockedPositionError, match="start_xy_m .* blocked cell"):

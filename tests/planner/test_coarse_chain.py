@@ -9,8 +9,8 @@ import pytest
 
 from planner import EnergyCost, Lattice, plan_coarse_to_fine_geotiff
 from planner.route import evaluate_route
-from terrawatt_base.errors import PlanningError
 from terrain import InvalidParameterError, procedural_map, read_geotiff, write_geotiff
+from terrawatt_base.errors import PlanningError
 
 rasterio = pytest.importorskip("rasterio", reason="GeoTIFF support needs the geo extra (rasterio)")
 

@@ -10,7 +10,6 @@ import pytest
 
 from planner import EnergyCost, plan_coarse_to_fine, plan_coarse_to_fine_geotiff
 from planner.coarse import downsample_cost
-from terrawatt_base.errors import BlockedPositionError, OutOfBoundsError
 from terrain import (
     FileFormatError,
     InvalidParameterError,
@@ -19,6 +18,7 @@ from terrain import (
     read_geotiff,
     write_geotiff,
 )
+from terrawatt_base.errors import BlockedPositionError, OutOfBoundsError
 
 rasterio = pytest.importorskip("rasterio", reason="GeoTIFF support needs the geo extra (rasterio)")
 

@@ -9,11 +9,11 @@ import re
 import pytest
 
 import terrain
+from planner.coarse_report import CoarsePlanReport, check_coarse_options, plan_coarse, plan_coarse_windowed
+from planner.cost_spec import CostSpec
+from planner.plan_report import ROUTE_JSON_FORMAT_VERSION, route_table
 from terrain import InvalidParameterError
 from terrain.procedural import procedural_map
-
-from planner.coarse_report import CoarsePlanReport, check_coarse_options, plan_coarse, plan_coarse_windowed
-from planner.plan_report import ROUTE_JSON_FORMAT_VERSION, route_table
 from terrawatt_base.formats import read_result_json
 
 START, GOAL = (5.0, 5.0), (35.0, 5.0)
@@ -52,9 +52,12 @@ def test_a_coarse_plan_without_route(tmp_path):
     assert [p.name for p in report.write(tmp_path, whole_map=True)] == ["route.json", "route.png"]
 
 
-def test_bad_slope_is_refused(wall_map):
-    with pytest.raises(InvalidParameterError, match="max_slope_deg"):
-        plan_coarse(wall_map, START, GOAL, max_slope_deg=0.0)
+def test_a_pricing_coarse_to_fine_cannot_use_is_refused(wall_map, known_model):
+    with pytest.raises(InvalidParameterError, match="physics presets") as err:
+        plan_coarse(wall_map, START, GOAL, pricing=CostSpec(model=known_model()))
+    assert err.value.parameter == "pricing"
+    with pytest.raises(InvalidParameterError, match="pricing must be a CostSpec"):
+        plan_coarse(wall_map, START, GOAL, pricing={"max_slope_deg": 10.0})
 
 
 def test_a_windowed_plan_equals_the_plan_in_memory(tmp_path):
@@ -65,7 +68,7 @@ def test_a_windowed_plan_equals_the_plan_in_memory(tmp_path):
     start, goal = (5.5, 6.5), (90.5, 120.5)
     windowed = plan_coarse_windowed(dem, start, goal, factor=4)
     whole = plan_coarse(terrain.read_map(dem), start, goal, factor=4, map_label="dem.tif")
-    assert windowed.windowed and windowed.map_label == "dem.tif" and windowed.map_preparation_s == 0.0
+    assert windowed.windowed and windowed.priced.map_label == "dem.tif" and windowed.priced.map_preparation_s == 0.0
     assert windowed.terrain is None and windowed.grid.shape == (131, 97)
     assert windowed.route.energy_j == whole.route.energy_j
     lines = windowed.summary().splitlines()

@@ -6,11 +6,12 @@ import dataclasses
 
 import numpy as np
 import pytest
+from diagnosis_scenarios import scenario
 
 from energy import diagnose, ground_preset, robot_preset
-from diagnosis_scenarios import scenario
 from planner import LearnedEnergyModel, plan_route
-from terrain import CellModelRegistry, flat_map
+from planner.registry import CellModelRegistry
+from terrain import flat_map
 
 
 @pytest.fixture(scope="module")

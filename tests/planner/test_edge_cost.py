@@ -6,12 +6,11 @@ import math
 
 import numpy as np
 import pytest
+from edge_cost_samples import LinearModel, flat_terrain, ramp_terrain, rough_terrain
 
 from energy import PhysicsEnergyModel, ground_preset, robot_preset
 from planner import EnergyCost, Lattice
 from terrain import GridMismatchError, InvalidParameterError, OutOfBoundsError, TerrainMap, UnknownNameError
-
-from edge_cost_samples import LinearModel, flat_terrain, ramp_terrain, rough_terrain
 
 GRAVITY_MPS2 = 9.80665
 

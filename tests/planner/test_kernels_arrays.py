@@ -6,10 +6,9 @@ import math
 
 import numpy as np
 import pytest
+from edge_cost_samples import LinearModel, ramp_terrain
 
 from planner import EnergyCost
-
-from edge_cost_samples import LinearModel, ramp_terrain
 
 
 def test_arrays_are_the_read_only_kernel_seam():

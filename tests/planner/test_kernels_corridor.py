@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
+from kernel_samples import kernel_cost
 
 from planner.kernels import UNIT_HALF, lattice_weights
 from planner.kernels.corridor import corridor_weights, corridor_weights_parallel, corridor_weights_serial
-
-from kernel_samples import kernel_cost
 
 
 def _corridor(mask: np.ndarray):

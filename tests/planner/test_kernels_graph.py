@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
+from kernel_samples import kernel_cost
 
 from planner.kernels import graph as graph_kernels
-
-from kernel_samples import kernel_cost
 
 
 def test_lattice_weight_variants_agree_exactly():

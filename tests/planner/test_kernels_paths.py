@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
+from edge_cost_samples import LinearModel, flat_terrain
 
 from planner import EnergyCost
 from planner.kernels.paths import drop_unpaid_vertices, string_pull_indices
-
-from edge_cost_samples import LinearModel, flat_terrain
 
 
 def _cost(obstacle=None) -> EnergyCost:

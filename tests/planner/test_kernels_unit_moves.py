@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from reach_samples import one_way_cost
 
 import terrain
 from planner import EnergyCost
-
-from reach_samples import one_way_cost
 
 
 @pytest.mark.parametrize("case", ["hilly", "offset", "steep", "example"])

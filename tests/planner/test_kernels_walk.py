@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from kernel_samples import kernel_cost
 
 from planner.kernels import walk as walk_kernels
-
-from kernel_samples import kernel_cost
 
 
 def test_segment_walk_variants_agree_exactly():

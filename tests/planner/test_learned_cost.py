@@ -6,12 +6,8 @@ import pytest
 from energy import InteractionLog, LogMeta, PhysicsEnergyModel, ground_preset, robot_preset
 from energy.budget import log_battery_power_w
 from planner import EnergyCost, LearnedEnergyModel
-from terrain import (
-    CellModelRegistry,
-    InvalidParameterError,
-    TerrainMap,
-    UnknownNameError,
-)
+from planner.registry import CellModelRegistry
+from terrain import InvalidParameterError, TerrainMap, UnknownNameError
 
 
 class ConstModel:

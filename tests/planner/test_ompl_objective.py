@@ -7,9 +7,9 @@ import pytest
 
 pytest.importorskip("ompl", reason="the OMPL planners need OMPL's Python bindings")
 
-from planner.ompl import EnergyProblem  # noqa: E402
-
 from ompl_samples import ramp_cost  # noqa: E402
+
+from planner.ompl import EnergyProblem  # noqa: E402
 
 
 def _problem(cost):

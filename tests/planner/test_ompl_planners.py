@@ -7,10 +7,10 @@ import pytest
 
 pytest.importorskip("ompl", reason="the OMPL planners need OMPL's Python bindings")
 
+from ompl_samples import flat_cost  # noqa: E402
+
 from planner import PlannerSettings  # noqa: E402
 from planner.ompl import OMPL_PLANNER_SPECS, OMPL_PLANNERS, solve  # noqa: E402
-
-from ompl_samples import flat_cost  # noqa: E402
 
 
 def test_the_registry_names_the_five_planners():

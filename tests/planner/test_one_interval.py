@@ -16,12 +16,14 @@ from planner import (
     Navigator,
     RouteEnergyInterval,
     plan_route,
+    price_route,
     risk_cost,
-    route_energy_interval,
     simulate_missions_mc,
 )
+from planner.cost_spec import CostSpec
 from planner.plan_report import plan_and_compare
-from terrain import CellModelRegistry, InvalidParameterError, TerrainMap
+from planner.registry import CellModelRegistry
+from terrain import InvalidParameterError, TerrainMap
 
 GRASS_START, GRASS_GOAL = (2.5, 2.5), (37.5, 2.5)  # the bottom strip: a ground the linear model never drove
 LOAM_START, LOAM_GOAL = (2.5, 8.5), (37.5, 8.5)  # the top strip: the known model's loam, a Gaussian forecast
@@ -81,7 +83,7 @@ def test_the_model_s_new_ground_dof_reaches_the_cost_rows_and_the_route_interval
     assert math.isinf(linear_model.predict_distribution(_run(99, "a", 0.0)).dof)
     assert cost.ground_labels == ("linear", "loam") and cost.spread_dof == (dof, math.inf)
     assert lem.table(lem.registry.prior_id).dof == dof
-    iv = route_energy_interval(cost, _route(tmap, cost, GRASS_START, GRASS_GOAL).waypoints_m)
+    iv = price_route(cost, _route(tmap, cost, GRASS_START, GRASS_GOAL))
     assert iv.dof == dof and iv.dof_by_ground == {"linear": dof} and iv.sd_j > 0
     t90 = predictive_quantile(0.9, dof)
     assert iv.p90_j == pytest.approx(iv.mean_j + t90 * iv.sd_j, rel=1e-12)
@@ -94,8 +96,8 @@ def test_the_model_s_new_ground_dof_reaches_the_cost_rows_and_the_route_interval
 def test_plan_with_a_model_reports_the_t_interval_of_a_ground_it_never_drove(linear_model):
     # what `terrawatt plan --model FILE --model-ground a --risk 0.9` reports on a map of grass
     tmap = TerrainMap(np.zeros((6, 30)), 1.0, ground=np.zeros((6, 30), int), ground_names={0: "grass"})
-    report = plan_and_compare(tmap, (2.5, 2.5), (27.5, 2.5), planner="lattice", model=linear_model,
-                              model_ground="a", risk=0.9)
+    report = plan_and_compare(tmap, (2.5, 2.5), (27.5, 2.5), planner="lattice",
+                              pricing=CostSpec(model=linear_model, model_ground="a", risk=0.9))
     iv = report.interval
     assert iv.dof == 3.0 and iv.p90_j == pytest.approx(iv.mean_j + predictive_quantile(0.9, 3.0) * iv.sd_j)
     assert report.route.energy_j == pytest.approx(iv.p90_j, rel=1e-9)  # planned on exactly that quantile
@@ -114,7 +116,7 @@ def test_risk_cost_prices_each_row_at_its_own_predictive_quantile(linear_model, 
     # on one ground the route planned at Q = 0.9 costs exactly its interval's P90
     for start, goal, dof in ((GRASS_START, GRASS_GOAL, 3.0), (LOAM_START, LOAM_GOAL, math.inf)):
         route = _route(tmap, risky, start, goal)
-        iv = route_energy_interval(cost, route.waypoints_m)
+        iv = price_route(cost, route)
         assert iv.dof == dof
         assert route.energy_j == pytest.approx(iv.p90_j, rel=1e-9)
 
@@ -124,7 +126,7 @@ def test_monte_carlo_draws_put_nine_in_ten_missions_below_the_route_p90(world):
     battery = Battery(capacity_ah=40.0, voltage_v=24.0)
     for start, goal, dof in ((GRASS_START, GRASS_GOAL, 3.0), (LOAM_START, LOAM_GOAL, math.inf)):
         route = _route(tmap, cost, start, goal)
-        iv = route_energy_interval(cost, route.waypoints_m)
+        iv = price_route(cost, route)
         mc = simulate_missions_mc(tmap, route, battery, 4000, cost=cost, draw_from="model", seed=7)
         assert mc.forecast == iv and iv.dof == dof
         share = float(np.mean(mc.energy_j <= iv.p90_j))
@@ -142,7 +144,7 @@ def test_the_navigator_reads_its_remaining_forecast_from_the_same_predictive(wor
         nav = Navigator(tmap, lem.registry, lem.robot, Battery(40.0, 24.0), goal, settings=settings, learned=lem)
         nav.plan(start)
         fc = nav.forecast()
-        assert fc.dof == route_energy_interval(nav.cost, nav.route.waypoints_m).dof == dof
+        assert fc.dof == price_route(nav.cost, nav.route).dof == dof
         z_level, z_risk = predictive_quantile(0.5 + fc.level / 2, dof), predictive_quantile(0.9, dof)
         assert (fc.risk_j - fc.energy_j) / (fc.high_j - fc.energy_j) == pytest.approx(z_risk / z_level, rel=1e-9)
         assert ("dof" in fc.to_dict()) == math.isfinite(dof)

@@ -9,10 +9,9 @@ import warnings
 import numpy as np
 import pytest
 
-import terrain
-from terrain import FigureWarning, InvalidParameterError, UnknownNameError
-
 import planner.plan_report as plan_report_module
+import terrain
+from planner.cost_spec import CostSpec
 from planner.plan_report import (
     ROUTE_JSON_FORMAT,
     ROUTE_JSON_FORMAT_VERSION,
@@ -24,6 +23,7 @@ from planner.plan_report import (
     route_row,
     route_table,
 )
+from terrain import FigureWarning, InvalidParameterError, UnknownNameError
 from terrawatt_base.formats import read_result_json
 
 START, GOAL = (5.0, 5.0), (35.0, 5.0)
@@ -127,15 +127,16 @@ def test_an_approximate_route_says_how_short_it_ends(wall_map):
 
 def test_unknown_ground_is_said_in_the_summary():
     unknown = terrain.wall_map((20, 20), 1.0, ground=None)
-    report = plan_and_compare(unknown, (2.0, 2.0), (18.0, 2.0), planner="lattice", unknown_ground="sand")
+    report = plan_and_compare(unknown, (2.0, 2.0), (18.0, 2.0), planner="lattice",
+                              pricing=CostSpec(unknown_ground="sand"))
     assert "ground class unknown in 400 of 400 cells: priced as 'sand'" in report.summary()
 
 
 def test_a_model_prices_the_edges_and_gives_the_interval(corridor_map, known_model, tmp_path):
     model = known_model()
-    report = plan_and_compare(corridor_map, (2.5, 7.5), (27.5, 7.5), planner="lattice", model=model,
-                              model_label="husky.tw", unknown_ground="gravel")
-    assert report.unknown_ground is None  # a model prices every ground itself
+    report = plan_and_compare(corridor_map, (2.5, 7.5), (27.5, 7.5), planner="lattice",
+                              pricing=CostSpec(model=model, model_label="husky.tw", unknown_ground="gravel"))
+    assert report.priced.spec.preset_unknown_ground is None  # a model prices every ground itself
     assert report.model == PlanModel(file="husky.tw", class_name="GroundKeyedModel", model_ground=None,
                                      grounds=("loam", "gravel"), gives_interval=True, risk_q=None)
     assert report.interval is not None and report.interval.sd_j > 0
@@ -145,22 +146,23 @@ def test_a_model_prices_the_edges_and_gives_the_interval(corridor_map, known_mod
     data = report.to_dict()
     assert data["model"]["objective"] == "energy mean" and data["model"]["class"] == "GroundKeyedModel"
     assert data["routes"]["min_energy"]["energy_interval"] == report.interval.to_dict()
-    risky = plan_and_compare(corridor_map, (2.5, 7.5), (27.5, 7.5), planner="lattice", model=model, risk=0.9)
+    risky = plan_and_compare(corridor_map, (2.5, 7.5), (27.5, 7.5), planner="lattice",
+                             pricing=CostSpec(model=model, risk=0.9))
     assert risky.risk_q == 0.9 and "(the table shows the planning objective)" in risky.summary()
     assert risky.to_dict()["model"]["objective"] == "0.9 quantile: mean + z sd per edge"
 
 
 def test_risk_needs_a_model_with_an_interval(corridor_map, known_model):
     flat = {"loam": [9.0, 2.0, 4.0, 0.0], "gravel": [10.5, 2.5, 4.5, 0.0]}
-    with pytest.raises(InvalidParameterError, match="--risk 0.9 needs a model with a predictive interval"):
-        plan_and_compare(corridor_map, (2.5, 7.5), (27.5, 7.5), planner="lattice", model=known_model(grounds=flat),
-                         risk=0.9, risk_name="--risk")
+    with pytest.raises(InvalidParameterError, match="risk 0.9 needs a model with a predictive interval") as err:
+        plan_and_compare(corridor_map, (2.5, 7.5), (27.5, 7.5), planner="lattice",
+                         pricing=CostSpec(model=known_model(grounds=flat), risk=0.9))
+    assert err.value.parameter == "risk"
 
 
 @pytest.mark.parametrize(("kwargs", "error", "match"), [
     ({"planner": "Astar"}, UnknownNameError, "planner must be one of"),
-    ({"max_slope_deg": 90.0}, InvalidParameterError, "max_slope_deg"),
-    ({"max_slope_deg": float("nan")}, InvalidParameterError, "max_slope_deg"),
+    ({"pricing": "husky"}, InvalidParameterError, "pricing must be a CostSpec"),
 ])
 def test_bad_arguments_are_refused(wall_map, kwargs, error, match):
     with pytest.raises(error, match=match):

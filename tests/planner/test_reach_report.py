@@ -6,13 +6,13 @@ import json
 
 import pytest
 
-import terrain
-from terrain import FigureWarning, InvalidParameterError
-
 import planner.reach_report as reach_report_module
+import terrain
 from planner import Reachability
+from planner.cost_spec import CostSpec
 from planner.reach_report import ReachReport, reach_on_battery
 from planner.reachability_result import REACH_FORMAT_VERSION
+from terrain import FigureWarning, InvalidParameterError
 from terrawatt_base.formats import read_result_json
 
 
@@ -27,13 +27,13 @@ def test_the_budget_is_capacity_times_voltage_less_the_reserve(report, flat_map)
     assert report.reach.budget_j == pytest.approx(0.2 * 24.0 * 3600.0)
     assert report.reach.reserve_j == pytest.approx(0.25 * report.reach.budget_j)
     assert report.reach.n_reachable_cells == flat_map.ground.size  # a flat 15 x 10 m map on 17 kJ: everywhere
-    assert report.total_time_s >= report.map_preparation_s >= 0.0 and report.model is None
+    assert report.total_time_s >= report.priced.map_preparation_s >= 0.0 and report.model is None
 
 
 def test_the_voltage_defaults_to_the_robot(flat_map):
     from energy import robot_preset
 
-    jackal = reach_on_battery(flat_map, (5.0, 5.0), battery_ah=0.01, robot="jackal")
+    jackal = reach_on_battery(flat_map, (5.0, 5.0), battery_ah=0.01, pricing=CostSpec(robot="jackal"))
     assert jackal.voltage_v == robot_preset("jackal").battery_voltage_v
     assert jackal.reach.budget_j == pytest.approx(0.01 * jackal.voltage_v * 3600.0)
 
@@ -74,13 +74,14 @@ def test_a_figure_that_fails_warns(report, tmp_path, monkeypatch):
 
 
 def test_a_model_is_named_in_reach_json(corridor_map, known_model):
-    report = reach_on_battery(corridor_map, (2.5, 7.5), battery_ah=1.0, model=known_model(), model_label="m.tw")
+    report = reach_on_battery(corridor_map, (2.5, 7.5), battery_ah=1.0,
+                              pricing=CostSpec(model=known_model(), model_label="m.tw"))
     assert report.to_dict()["model"] == {"file": "m.tw", "class": "GroundKeyedModel", "model_ground": None,
                                          "grounds": ["loam", "gravel"]}
 
 
 @pytest.mark.parametrize("kwargs", [{"battery_ah": 0.0}, {"reserve_pct": 100.0}, {"voltage_v": -1.0},
-                                    {"max_slope_deg": 95.0}])
+                                    {"pricing": "husky"}])
 def test_bad_numbers_are_refused(flat_map, kwargs):
     with pytest.raises(InvalidParameterError):
         reach_on_battery(flat_map, (5.0, 5.0), **{"battery_ah": 1.0, **kwargs})

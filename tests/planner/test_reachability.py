@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from reach_samples import DEPOT, hilly_cost, hilly_reach, one_way_cost  # noqa: F401  (fixtures)
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
@@ -13,8 +14,6 @@ import terrain
 from planner import EnergyCost, Lattice, reachability
 from planner.reachability import lattice_move_energies
 from terrawatt_base.errors import BlockedPositionError, InvalidParameterError, OutOfBoundsError
-
-from reach_samples import DEPOT, hilly_cost, hilly_reach, one_way_cost  # noqa: F401  (fixtures)
 
 
 def _sample_cells(cost: EnergyCost, n: int, seed: int = 0) -> list[tuple[int, int]]:

@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import pytest
+from reach_samples import DEPOT, PNG_MAGIC, hilly_cost  # noqa: F401  (fixtures)
 
 from planner import reachability
 from terrawatt_base.errors import InvalidParameterError
-
-from reach_samples import DEPOT, PNG_MAGIC, hilly_cost  # noqa: F401  (fixtures)
 
 
 def test_plot_writes_a_png_and_checks_its_path_first(tmp_path, hilly_cost):

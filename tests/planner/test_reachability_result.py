@@ -7,11 +7,10 @@ import json
 
 import numpy as np
 import pytest
+from reach_samples import DEPOT, hilly_cost, hilly_reach  # noqa: F401  (fixtures)
 
 from planner import EnergyCost, Reachability, reachability
 from terrawatt_base.errors import FileFormatError, FormatVersionError, InvalidParameterError, UnknownNameError
-
-from reach_samples import DEPOT, hilly_cost, hilly_reach  # noqa: F401  (fixtures)
 
 
 def test_figures_and_to_dict(hilly_cost):

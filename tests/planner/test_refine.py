@@ -6,11 +6,10 @@ import math
 
 import numpy as np
 import pytest
+from edge_cost_samples import LinearModel, flat_terrain
 
 from planner import EnergyCost
 from terrain import TerrainMap
-
-from edge_cost_samples import LinearModel, flat_terrain
 
 
 def test_relax_path_straightens_zigzag_and_never_raises_energy():

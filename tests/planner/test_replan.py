@@ -210,7 +210,7 @@ def test_the_adaptive_loop_replans_incrementally_with_the_same_lattice_optimum(m
     import planner.missions.navigator as adaptive_module
     from energy import Battery, LinearCurrentModel, TruthSimulator, excitation_commands, ground_preset, robot_preset
     from planner import AdaptiveSettings, run_adaptive_mission
-    from terrain import CellModelRegistry
+    from planner.registry import CellModelRegistry
 
     robot = robot_preset("husky")
     truth = TruthSimulator(robot, {"asphalt": ground_preset("asphalt"), "sand": ground_preset("sand")}, seed=0)

@@ -7,7 +7,8 @@ import pytest
 
 from energy import InteractionLog, LogMeta, robot_preset
 from energy.budget import log_battery_power_w
-from planner import EnergyCost, RouteEnergyInterval, model_energy_cost, plan_route, risk_cost, route_energy_interval
+from planner import EnergyCost, RouteEnergyInterval, model_energy_cost, plan_route, risk_cost
+from planner.risk import route_energy_interval
 from terrain import InvalidParameterError, TerrainMap
 
 START, GOAL = (2.5, 7.5), (27.5, 7.5)

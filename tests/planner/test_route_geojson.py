@@ -9,12 +9,12 @@ import pytest
 import shapely.geometry
 
 from planner import EnergyCost, plan_route
-from planner.route import evaluate_route
-from terrawatt_base.errors import InvalidParameterError, UnknownNameError
-from terrawatt_cli import main
 from planner.plot import RouteLine, plot_routes, view_bounds
+from planner.route import evaluate_route
 from planner.route_geojson import GEOJSON_FORMAT_VERSION, routes_geojson, write_geojson
 from terrain import procedural_map, transform_xy
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+from terrawatt_cli import main
 
 rasterio = pytest.importorskip("rasterio", reason="CRS transforms need the geo extra (rasterio)")
 

@@ -4,11 +4,11 @@ import dataclasses
 
 import numpy as np
 import pytest
+from diagnosis_scenarios import scenario
 
 from energy import LinearCurrentModel, PhysicsCurrentModel, load_current_model
-from terrawatt_base.errors import InvalidParameterError
 from energy.diagnosis import CorrectedCurrentModel
-from diagnosis_scenarios import scenario
+from terrawatt_base.errors import InvalidParameterError
 
 
 @pytest.fixture(scope="module")

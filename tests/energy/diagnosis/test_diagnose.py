@@ -5,12 +5,13 @@ import inspect
 
 import numpy as np
 import pytest
-
-from energy import CurrentModel, InteractionLog, LinearCurrentModel
-from terrawatt_base.errors import DataError, InvalidParameterError, NotFittedError, UnknownNameError
-from energy.diagnosis import CorrectedCurrentModel, Diagnosis, diagnose
 from diagnosis_scenarios import null_scenario, scenario
 from turning_samples import CANDIDATES, NoiseEffect, small_scenario, turning_diagnosis
+
+from energy import CurrentModel, InteractionLog, LinearCurrentModel
+from energy.diagnosis import CorrectedCurrentModel, Diagnosis, diagnose
+from terrawatt_base.errors import DataError, InvalidParameterError, NotFittedError, UnknownNameError
+
 
 @pytest.fixture(scope="module")
 def turning():

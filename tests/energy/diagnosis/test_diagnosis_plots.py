@@ -9,6 +9,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 import pytest
+from diagnosis_scenarios import scenario
 
 import terrain
 from energy.diagnosis import diagnose
@@ -23,7 +24,6 @@ from energy.diagnosis.plots import (
     plot_waterfall,
     skipped_figures,
 )
-from diagnosis_scenarios import scenario
 from terrain import DataError, FigureWarning, GridMismatchError, InvalidParameterError, UnknownNameError
 from terrawatt_base import plot_target
 

@@ -9,7 +9,6 @@ import pytest
 from gain_samples import gained_logs_and_model
 
 from energy import InteractionLog
-from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 from energy.diagnosis import Fold, effect, make_split
 from energy.diagnosis.fit import (
     SetRunner,
@@ -19,6 +18,7 @@ from energy.diagnosis.fit import (
     score_effect_set,
     shrink_pct,
 )
+from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 
 @pytest.fixture(scope="module")
@@ -66,8 +66,9 @@ def test_fewer_samples_than_parameters(setup):
 
 
 def test_parameter_errors_fit_on_the_interpolated_physics_as_on_the_exact():
-    from energy.diagnosis.effects_physics import MassEffect
     from diagnosis_scenarios import scenario
+
+    from energy.diagnosis.effects_physics import MassEffect
 
     class ExactMass(MassEffect):
         apply_surrogate = MassEffect.apply  # re-predicts the physics at every evaluation

@@ -5,12 +5,12 @@ import json
 
 import numpy as np
 import pytest
+from diagnosis_scenarios import scenario
 
 from energy import PhysicsCurrentModel, TruthSimulator, robot_preset
-from energy.sim import PAPER_GROUNDS, NoiseModel
 from energy.diagnosis import EFFECTS_CATALOGUE, EffectParameter, diagnose, effect
 from energy.diagnosis.effects_physics import MassEffect
-from diagnosis_scenarios import scenario
+from energy.sim import PAPER_GROUNDS, NoiseModel
 
 
 def test_every_catalogued_effect_states_physical_ranges_narrower_than_its_fit():

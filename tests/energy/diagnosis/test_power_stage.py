@@ -6,10 +6,10 @@ import dataclasses
 
 import numpy as np
 import pytest
-
-from energy.diagnosis import PowerDiagnosis, diagnose
 from diagnosis_scenarios import POWER_ONLY_EFFECTS
 from power_samples import N_BOOT, small_power_scenario
+
+from energy.diagnosis import PowerDiagnosis, diagnose
 from terrawatt_base.errors import DataError
 
 

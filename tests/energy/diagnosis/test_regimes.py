@@ -8,13 +8,12 @@ import numpy as np
 import pytest
 
 from energy import InteractionLog, LogMeta
-from energy.logs import rest_samples
 from energy.diagnosis.regimes import (
     OFF_MAP_LABEL,
     REGIME_DIMENSIONS,
-    UNKNOWN_LABEL,
     STANDSTILL_SPEED_MPS,
     TURN_RATE_RADPS,
+    UNKNOWN_LABEL,
     acceleration_labels,
     grade_labels,
     ground_labels,
@@ -25,6 +24,7 @@ from energy.diagnosis.regimes import (
     speed_labels,
     turning_labels,
 )
+from energy.logs import rest_samples
 from terrain import flat_map, ramp_map
 from terrawatt_base.errors import DataError, InvalidParameterError
 

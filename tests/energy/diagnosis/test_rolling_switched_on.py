@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from energy import PhysicsCurrentModel, TruthSimulator, robot_preset
-from energy.sim import PAPER_GROUNDS, NoiseModel
 from energy.diagnosis import effect
 from energy.diagnosis.model_currents import motoring_currents_a, physics_basis, unclipped_prediction
+from energy.sim import PAPER_GROUNDS, NoiseModel
 
 GROUNDS = ("coated_wood", "snow_over_concrete")
 
@@ -60,8 +60,8 @@ def test_switches_coulomb_on_with_a_coefficient_per_ground(model, logs):
 
 
 def test_table_interpolation_by_slot_equals_per_sample(model, logs):
-    from terrawatt_base.errors import InvalidParameterError
     from energy.diagnosis.model_currents import ParameterTable
+    from terrawatt_base.errors import InvalidParameterError
 
     log = logs[0]
     e = effect("rolling_resistance").bind(logs)

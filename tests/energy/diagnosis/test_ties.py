@@ -8,16 +8,15 @@ import math
 
 import numpy as np
 import pytest
+from gain_samples import gained_logs_and_model
 
 from energy import PhysicsCurrentModel, TruthSimulator, ground_preset, robot_preset
 from energy.diagnosis import diagnose
 from energy.diagnosis.fit import SetScore
+from energy.diagnosis.noise import residual_noise
 from energy.diagnosis.report import DiagnosisReport
 from energy.diagnosis.selection import SIGNIFICANT_SHRINK_PCT, units_needed
-from energy.diagnosis.noise import residual_noise
 from energy.diagnosis.separating import MAX_DRIVE_S, MAX_REPEATS, manoeuvre_library, runs_to_order
-
-from gain_samples import gained_logs_and_model
 
 GAIN = 1.3  # a current sensor reading 30 % high: at constant speed, a payload or an offset fits it as well
 

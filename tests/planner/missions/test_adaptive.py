@@ -14,7 +14,8 @@ from energy import (
     robot_preset,
 )
 from planner import AdaptiveSettings, run_adaptive_mission
-from terrain import CellModelRegistry, InvalidParameterError, TerrainMap
+from planner.registry import CellModelRegistry
+from terrain import InvalidParameterError, TerrainMap
 
 
 def _world():

@@ -17,9 +17,10 @@ from energy import (
     robot_preset,
 )
 from planner import AdaptiveSettings, EnergyCost, run_adaptive_mission, simulate_mission
-from planner.route import evaluate_route
 from planner.missions.figures import plot_adaptive_mission, plot_mission
-from terrain import CellModelRegistry, InvalidParameterError, TerrainMap, flat_map
+from planner.registry import CellModelRegistry
+from planner.route import evaluate_route
+from terrain import InvalidParameterError, TerrainMap, flat_map
 
 ROBOT = robot_preset("husky")
 PNG = b"\x89PNG\r\n\x1a\n"

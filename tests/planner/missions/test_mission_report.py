@@ -6,10 +6,8 @@ import json
 
 import pytest
 
-import terrain
-from terrain import FigureWarning, InvalidParameterError, TerrainMap, UnknownNameError
-
 import planner.missions.mission_report as mission_report_module
+import terrain
 from planner.missions import AdaptiveResult
 from planner.missions.mission_report import (
     MissionReport,
@@ -18,6 +16,7 @@ from planner.missions.mission_report import (
     mission_battery,
     simulate_adaptive_mission,
 )
+from terrain import FigureWarning, InvalidParameterError, TerrainMap, UnknownNameError
 
 START, GOAL = (3.0, 12.0), (37.0, 12.0)
 

@@ -6,12 +6,11 @@ import csv
 
 import numpy as np
 import pytest
+from mc_samples import FIXED, NO_DASK, NOMINAL, run_mc, setup  # noqa: F401  (fixture)
 
 from energy import Battery, PhysicsEnergyModel, TruthSimulator, ground_preset, robot_preset
 from planner import EnergyCost, MissionDistributions, plan_route, simulate_mission, simulate_missions_mc
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
-
-from mc_samples import FIXED, NOMINAL, NO_DASK, run_mc, setup  # noqa: F401  (fixture)
 
 
 def test_same_seed_same_missions_and_another_seed_other_missions(setup):

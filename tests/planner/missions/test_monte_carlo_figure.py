@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import pytest
+from mc_samples import run_mc, setup  # noqa: F401  (fixture)
 
 from energy import Battery
 from terrawatt_base.errors import InvalidParameterError
-
-from mc_samples import run_mc, setup  # noqa: F401  (fixture)
 
 
 def test_the_figure_draws_into_the_callers_axes_and_writes_nothing(setup, tmp_path):

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from energy import Battery, robot_preset
-from planner import MissionDistributions, model_energy_cost, plan_route, route_energy_interval, simulate_missions_mc
+from planner import MissionDistributions, model_energy_cost, plan_route, price_route, simulate_missions_mc
 from terrain import InvalidParameterError
 
 
@@ -12,7 +12,7 @@ from terrain import InvalidParameterError
 def study(corridor_map, known_model):
     cost = model_energy_cost(corridor_map, known_model(), robot_preset("husky"), 0.5)
     route = plan_route(corridor_map, (2.5, 7.5), (27.5, 7.5), cost=cost, planner="lattice")  # the uncertain loam
-    return corridor_map, cost, route, route_energy_interval(cost, route.waypoints_m)
+    return corridor_map, cost, route, price_route(cost, route)
 
 
 def test_model_draws_follow_the_route_interval_and_the_reserve_risk(study):

@@ -7,10 +7,10 @@ import json
 import pytest
 
 import terrain
-from terrain import FigureWarning, InvalidParameterError, TerrainMap
-
+from planner.cost_spec import CostSpec
 from planner.missions import MonteCarloResult
 from planner.missions.monte_carlo_report import MonteCarloReport, monte_carlo_mission
+from terrain import FigureWarning, InvalidParameterError, TerrainMap
 
 START, GOAL = (3.0, 12.0), (37.0, 12.0)
 
@@ -67,7 +67,7 @@ def test_the_model_quantile_is_checked_against_the_usable_battery(corridor_map, 
                        ground_names={0: "sand", 1: "gravel"})
     grounds = {"sand": [9.0, 2.0, 4.0, 1.0], "gravel": [10.5, 2.5, 4.5, 0.0]}
     model = known_model(trained_on=("sand", "gravel"), grounds=grounds)
-    kw = dict(model=model, risk=0.9, draw_from="model", seed=0)
+    kw = dict(pricing=CostSpec(model=model, risk=0.9), draw_from="model", seed=0)
     big = monte_carlo_mission(sandy, (2.5, 7.5), (27.5, 7.5), 20, battery_ah=5.0, **kw)
     assert big.fits and big.ok and big.risk_need_j == big.result.forecast.quantile_j(0.9)
     assert "reserve check at Q = 0.9: the route's 0.9 quantile" in big.summary() and "fits" in big.summary()
@@ -76,8 +76,8 @@ def test_the_model_quantile_is_checked_against_the_usable_battery(corridor_map, 
 
 
 def test_risk_needs_a_model_with_an_interval(wall):
-    with pytest.raises(InvalidParameterError, match="--risk and --mc-draw model need a model with a predictive "
+    with pytest.raises(InvalidParameterError, match="risk and draw_from model need a model with a predictive "
                                                     "interval; the physics model gives none"):
-        monte_carlo_mission(wall, START, GOAL, 2, battery_ah=5.0, risk=0.9, flags=("--risk", "--mc-draw"))
+        monte_carlo_mission(wall, START, GOAL, 2, battery_ah=5.0, pricing=CostSpec(risk=0.9))
     with pytest.raises(InvalidParameterError, match="max_risk_pct"):
         monte_carlo_mission(wall, START, GOAL, 2, battery_ah=5.0, max_risk_pct=101.0)

@@ -7,14 +7,13 @@ import json
 
 import numpy as np
 import pytest
+from mc_samples import FIXED, run_mc, setup  # noqa: F401  (fixture)
 
 from energy import Battery
 from planner import MonteCarloResult
 from planner.missions import MONTE_CARLO_FORMAT_VERSION
 from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.formats import read_result_json
-
-from mc_samples import FIXED, run_mc, setup  # noqa: F401  (fixture)
 
 
 def test_the_result_writes_its_table_json_and_figure(setup, tmp_path):

@@ -6,8 +6,8 @@ import pytest
 
 from energy import Battery, ground_preset, robot_preset
 from planner import MissionDistributions
-from terrawatt_base.errors import InvalidParameterError
 from planner.missions import MissionSample
+from terrawatt_base.errors import InvalidParameterError
 
 
 def test_sample_applies_its_draw_to_robot_grounds_and_battery():

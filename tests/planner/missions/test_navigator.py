@@ -15,8 +15,9 @@ from planner import AdaptiveSettings, Navigator, run_adaptive_mission
 from planner.missions.legs import split_polyline
 from planner.missions.replay import replay_drive
 from planner.missions.simulate import simulate_mission
+from planner.registry import CellModelRegistry
 from planner.route import evaluate_route
-from terrain import CellModelRegistry, DataError, InvalidParameterError, OutOfBoundsError, TerrainMap, UnitError
+from terrain import DataError, InvalidParameterError, OutOfBoundsError, TerrainMap, UnitError
 
 SETTINGS = AdaptiveSettings(leg_length_m=8.0, seed=0, max_updates=2)
 GOAL = (37.5, 8.0)
@@ -267,7 +268,7 @@ def _replay_script(tmp_path, kill_after):
         from energy import Battery, ground_preset
         from planner.missions.replay import replay_drive
         from energy.io import read_logs
-        from terrain import CellModelRegistry
+        from planner.registry import CellModelRegistry
         robot, truth, tmap, prior = _world()
         logs = read_logs({str(tmp_path / "logs")!r})
         seen = []

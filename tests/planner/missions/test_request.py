@@ -8,10 +8,9 @@ import numpy as np
 import pytest
 
 import terrain
+from planner.missions.request import MISSION_OPTIONS, MissionRequest
 from terrain import InvalidParameterError, OutOfBoundsError, TerrainMap, UnknownNameError
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
-
-from planner.missions.request import MISSION_OPTIONS, MissionRequest
 
 _FLAGS = {"start": "--start", "start_lonlat": "--start-lonlat", "goal": "--goal", "goal_lonlat": "--goal-lonlat",
           "prior_ground": "--prior-ground", "monte_carlo": "--monte-carlo", "workers": "--workers",

@@ -8,12 +8,11 @@ import math
 
 import numpy as np
 import pytest
+from simulate_samples import clean_sim, flat, flat_mission  # noqa: F401  (fixtures)
 
 from planner.missions import MISSION_FORMAT_VERSION
 from terrain import InvalidParameterError
 from terrawatt_base.formats import read_result_json
-
-from simulate_samples import clean_sim, flat, flat_mission  # noqa: F401  (fixtures)
 
 
 def test_json_and_plot(flat_mission, flat, tmp_path):

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from simulate_samples import GROUNDS, ROBOT, clean_sim, flat, flat_mission  # noqa: F401  (fixtures)
 
 from energy import Battery, PhysicsEnergyModel, TruthSimulator, ground_preset
 from planner import EnergyCost, simulate_mission
@@ -20,8 +21,6 @@ from terrain import (
     flat_map,
     ramp_map,
 )
-
-from simulate_samples import GROUNDS, ROBOT, clean_sim, flat, flat_mission  # noqa: F401  (fixtures)
 
 
 def test_flat_mission_matches_planner_prediction(flat_mission):

@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
+from tour_samples import hills_cost  # noqa: F401  (fixture)
 
 from energy import Battery
 from planner.tours import TourRobot, TourSites, plan_tour, simulate_tours_mc
-
-from tour_samples import hills_cost  # noqa: F401  (fixture)
 
 
 def test_monte_carlo_of_the_tours_ends_above_the_reserve_about_as_often_as_q(hills_cost):

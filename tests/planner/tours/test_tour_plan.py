@@ -7,6 +7,7 @@ import itertools
 
 import numpy as np
 import pytest
+from tour_samples import hills_cost, hills_map, ridge_map, with_interval  # noqa: F401  (fixture)
 
 from energy import Battery
 from planner import EnergyCost
@@ -14,8 +15,6 @@ from planner.tours import TourProblem, TourRobot, TourSites, plan_tour, price_pa
 from planner.tours.solver import solve_pyvrp
 from planner.tours.tour import NOT_WORTH_IT, TOO_FAR
 from terrain import flat_map
-
-from tour_samples import hills_cost, hills_map, ridge_map, with_interval  # noqa: F401  (fixture)
 
 
 def _exhaustive(problem: TourProblem) -> float:

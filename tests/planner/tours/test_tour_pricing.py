@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from tour_samples import hills_cost  # noqa: F401  (fixture)
 
 from planner import Lattice
-
-from tour_samples import hills_cost  # noqa: F401  (fixture)
 
 
 def test_paths_from_one_search_equals_the_pairwise_optimum(hills_cost):

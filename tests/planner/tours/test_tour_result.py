@@ -6,12 +6,11 @@ import json
 
 import numpy as np
 import pytest
+from tour_samples import hills_cost  # noqa: F401  (fixture)
 
 from energy import Battery
 from planner.tours import TourRobot, TourSites, plan_tour
 from planner.tours.tour import NOT_WORTH_IT
-
-from tour_samples import hills_cost  # noqa: F401  (fixture)
 
 
 def test_the_result_writes_json_geojson_and_figures_and_names_the_left_out(tmp_path, hills_cost):

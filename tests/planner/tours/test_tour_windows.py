@@ -7,14 +7,13 @@ import itertools
 
 import numpy as np
 import pytest
+from tour_samples import hills_cost, ridge_map  # noqa: F401  (fixture)
 
 from energy import Battery
 from planner import EnergyCost
 from planner.tours import TourProblem, TourRobot, TourSites, plan_tour, price_pairs, read_tour_sites_csv
 from planner.tours.tour import NOT_WORTH_IT, OUTSIDE_WINDOW, TOO_FAR, TOO_LONG
 from terrain import DataError, InvalidParameterError, flat_map
-
-from tour_samples import hills_cost, ridge_map  # noqa: F401  (fixture)
 
 
 def _problem(cost: EnergyCost, sites: TourSites, robots: list[TourRobot], q: float) -> TourProblem:

@@ -1,4 +1,4 @@
-"""Tests of terrain.registry: the model table, grid binding, assignments, updates and rollback."""
+"""Tests of planner.registry: the model table, grid binding, assignments, updates and rollback."""
 
 from __future__ import annotations
 
@@ -6,16 +6,8 @@ import numpy as np
 import pytest
 from registry_models import GainModel, cell_predictions, registry
 
-from terrain import (
-    CellModelRegistry,
-    CurrentModelProtocol,
-    GridMismatchError,
-    InvalidParameterError,
-    OutOfBoundsError,
-    TerrainMap,
-    UnknownNameError,
-    UpdatePolicy,
-)
+from planner.registry import CellModelRegistry, CurrentModelProtocol, UpdatePolicy
+from terrain import GridMismatchError, InvalidParameterError, OutOfBoundsError, TerrainMap, UnknownNameError
 
 
 # ------------------------------------------------------------------- model table

@@ -1,4 +1,4 @@
-"""Tests of terrain.registry.evidence (through the registry): policy, recorded charge, errors, flags, regions."""
+"""Tests of planner.registry.evidence (through the registry): policy, recorded charge, errors, flags, regions."""
 
 from __future__ import annotations
 
@@ -6,15 +6,9 @@ import numpy as np
 import pytest
 from registry_models import GainModel, record_error, registry
 
-from terrain import (
-    CellModelRegistry,
-    DataError,
-    InvalidParameterError,
-    OutOfBoundsError,
-    TerrainMap,
-    UpdatePolicy,
-)
-from terrain.registry.evidence import relative_error
+from planner.registry import CellModelRegistry, UpdatePolicy
+from planner.registry.evidence import relative_error
+from terrain import DataError, InvalidParameterError, OutOfBoundsError, TerrainMap
 
 
 # ----------------------------------------------------------------------- record

@@ -1,12 +1,13 @@
-"""terrain.registry.assignment: the cell map's numbered versions and exact rollback."""
+"""planner.registry.assignment: the cell map's numbered versions and exact rollback."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from terrain import PRIOR_MODEL_ID, InvalidParameterError
-from terrain.registry.assignment import CellAssignment
+from planner.registry import PRIOR_MODEL_ID
+from planner.registry.assignment import CellAssignment
+from terrain import InvalidParameterError
 
 
 def test_every_cell_starts_on_the_prior_with_no_history():

@@ -7,9 +7,10 @@ from typing import Any, Literal
 import numpy as np
 from scipy import ndimage
 
+from terrain.grid import Grid
 from terrawatt_base.checks import readonly
 from terrawatt_base.errors import DataError, InvalidParameterError
-from ..grid import Grid
+
 from .cells import check_rows_cols, flat_cells, unflat
 from .records import Cells, FlaggedRegion, UpdatePolicy
 
@@ -260,7 +261,7 @@ class CellEvidence:
 
 
 class EvidenceMixin:
-    """The evidence and flag methods of :class:`~terrain.registry.registry.CellModelRegistry`.
+    """The evidence and flag methods of :class:`~planner.registry.registry.CellModelRegistry`.
 
     The host class provides the public ``shape``, ``grid``, ``model_id_map`` and
     ``model_ids`` and sets ``_evidence`` (a :class:`CellEvidence` of its shape) when it is

@@ -9,10 +9,11 @@ from typing import Any
 
 import numpy as np
 
+from terrain.grid import Grid
+from terrain.terrain_map import TerrainMap
 from terrawatt_base.checks import check_real, check_shape, check_text
 from terrawatt_base.errors import GridMismatchError, InvalidParameterError
-from ..grid import Grid
-from ..terrain_map import TerrainMap
+
 from .assignment import CellAssignment
 from .cells import check_rows_cols, flat_cells
 from .evidence import CellEvidence, EvidenceMixin
@@ -58,7 +59,7 @@ class CellModelRegistry(EvidenceMixin):
     Examples
     --------
     >>> import numpy as np
-    >>> from terrain import CellModelRegistry, UpdatePolicy
+    >>> from planner.registry import CellModelRegistry, UpdatePolicy
     >>> class Const:
     ...     def __init__(self, current_a): self.current_a = current_a
     ...     def fit(self, *a, **k): return self
@@ -73,9 +74,9 @@ class CellModelRegistry(EvidenceMixin):
 
     Notes
     -----
-    A facade over the parts of :mod:`terrain.registry` (model table, cell assignment,
+    A facade over the parts of :mod:`planner.registry` (model table, cell assignment,
     evidence, store); the evidence and flag methods come from
-    :class:`~terrain.registry.evidence.EvidenceMixin`.
+    :class:`~planner.registry.evidence.EvidenceMixin`.
     """
 
     def __init__(
@@ -426,7 +427,7 @@ class CellModelRegistry(EvidenceMixin):
         *,
         model_suffix: str = "",
     ) -> Path:
-        """Write the registry to a directory, atomically (layout: :mod:`terrain.registry.store`).
+        """Write the registry to a directory, atomically (layout: :mod:`planner.registry.store`).
 
         The directory is built beside the target under a temporary name and renamed into
         place; a registry already there is replaced only once the new one is complete, and

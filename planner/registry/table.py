@@ -10,6 +10,7 @@ from typing import Any
 
 from terrawatt_base.checks import check_text
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+
 from .records import CurrentModelProtocol, MetaValue, ModelEntry
 
 __all__ = ["ModelTable", "check_meta"]

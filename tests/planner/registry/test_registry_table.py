@@ -1,4 +1,4 @@
-"""terrain.registry.table: models by id with unique names and checked metadata."""
+"""planner.registry.table: models by id with unique names and checked metadata."""
 
 from __future__ import annotations
 
@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from registry_models import GainModel
 
-from terrain import InvalidParameterError, ModelEntry, UnknownNameError
-from terrain.registry.table import ModelTable, check_meta
+from planner.registry import ModelEntry
+from planner.registry.table import ModelTable, check_meta
+from terrain import InvalidParameterError, UnknownNameError
 
 
 def test_check_meta_gives_a_read_only_mapping_of_plain_values():

@@ -1,12 +1,13 @@
-"""terrain.registry.cells: masks, (rows, cols) pairs and regions as flat cell indices."""
+"""planner.registry.cells: masks, (rows, cols) pairs and regions as flat cell indices."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from terrain import FlaggedRegion, GridMismatchError, InvalidParameterError, OutOfBoundsError
-from terrain.registry.cells import check_rows_cols, flat_cells, unflat
+from planner.registry import FlaggedRegion
+from planner.registry.cells import check_rows_cols, flat_cells, unflat
+from terrain import GridMismatchError, InvalidParameterError, OutOfBoundsError
 
 SHAPE = (3, 4)
 

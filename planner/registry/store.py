@@ -32,11 +32,12 @@ from typing import Any
 
 import numpy as np
 
+from terrain.grid import Grid
 from terrawatt_base.atomic import atomic_directory, fsync_directory, remove_stale_temporaries, stale_temporaries
 from terrawatt_base.checks import readonly
 from terrawatt_base.errors import FileFormatError, FormatVersionError, InvalidParameterError, RecoveryWarning
 from terrawatt_base.formats import read_result_json, read_versioned_npz, result_document, write_result_json
-from ..grid import Grid
+
 from .assignment import CellAssignment
 from .cells import unflat
 from .evidence import CellEvidence
@@ -71,7 +72,7 @@ _SUFFIX_RE = re.compile(r"[A-Za-z0-9._-]+")
 
 @dataclass(frozen=True, eq=False)
 class RegistryParts:
-    """Everything a :class:`~terrain.registry.registry.CellModelRegistry` is made of.
+    """Everything a :class:`~planner.registry.registry.CellModelRegistry` is made of.
 
     ``grid`` is ``None`` for a registry that knows only its ``shape``.
     """

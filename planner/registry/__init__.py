@@ -20,25 +20,25 @@ cell size and origin of a :class:`~terrain.grid.Grid`). It keeps
 
 The registry holds models through :class:`CurrentModelProtocol` and never calls them: the
 caller predicts, fits and validates, and passes the numbers in; saving and loading models go
-through caller-provided functions. So this package imports nothing from ``energy`` or
-``planner``.
+through caller-provided functions. So this package imports nothing from ``energy`` nor from the
+rest of ``planner`` (it lives here, beside its users: the learned edge costs and the navigator).
 
-How it is built (one idea per module, composed in :mod:`~terrain.registry.registry`):
+How it is built (one idea per module, composed in :mod:`~planner.registry.registry`):
 
-- :mod:`~terrain.registry.records` — the value types: the model protocol, the update
+- :mod:`~planner.registry.records` — the value types: the model protocol, the update
   policy, model records, history versions, update decisions, flagged regions.
-- :mod:`~terrain.registry.cells` — cell selections (mask, ``(rows, cols)``, region) as flat
+- :mod:`~planner.registry.cells` — cell selections (mask, ``(rows, cols)``, region) as flat
   indices, checked against the grid.
-- :mod:`~terrain.registry.table` — :class:`~terrain.registry.table.ModelTable`, models by id.
-- :mod:`~terrain.registry.assignment` — :class:`~terrain.registry.assignment.CellAssignment`,
+- :mod:`~planner.registry.table` — :class:`~planner.registry.table.ModelTable`, models by id.
+- :mod:`~planner.registry.assignment` — :class:`~planner.registry.assignment.CellAssignment`,
   the cell map, its numbered versions and exact rollback.
-- :mod:`~terrain.registry.evidence` — :class:`~terrain.registry.evidence.CellEvidence`,
+- :mod:`~planner.registry.evidence` — :class:`~planner.registry.evidence.CellEvidence`,
   charges, counts, flags with hysteresis and flagged regions, and the
-  :class:`~terrain.registry.evidence.EvidenceMixin` that gives the registry its evidence
+  :class:`~planner.registry.evidence.EvidenceMixin` that gives the registry its evidence
   methods.
-- :mod:`~terrain.registry.store` — the directory format, atomic save, load, and recovery
+- :mod:`~planner.registry.store` — the directory format, atomic save, load, and recovery
   of a save killed between its two renames.
-- :mod:`~terrain.registry.registry` — :class:`CellModelRegistry`, a facade that owns one of
+- :mod:`~planner.registry.registry` — :class:`CellModelRegistry`, a facade that owns one of
   each part (composition), checks the caller's arguments, converts cell selections, and
   keeps the parts consistent: a cell whose model changes loses its evidence. The evidence
   methods come from a small mixin that uses only the facade's public grid and cell-map

@@ -9,6 +9,7 @@ import numpy as np
 
 from terrawatt_base.checks import check_int, readonly
 from terrawatt_base.errors import InvalidParameterError
+
 from .cells import unflat
 from .records import PRIOR_MODEL_ID, RegistryVersion
 
@@ -18,7 +19,7 @@ __all__ = ["CellAssignment"]
 class CellAssignment:
     """The model id of every cell of a grid, changed only through numbered versions.
 
-    Every cell starts on the prior (id :data:`~terrain.registry.records.PRIOR_MODEL_ID`).
+    Every cell starts on the prior (id :data:`~planner.registry.records.PRIOR_MODEL_ID`).
     :meth:`apply` gives a set of cells a model as a new :class:`RegistryVersion` that
     remembers each cell's previous id; :meth:`rollback` pops versions and restores those
     ids, so any earlier state comes back exactly. Version numbers only grow, even after a

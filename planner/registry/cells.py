@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 
 from terrawatt_base.errors import GridMismatchError, InvalidParameterError, OutOfBoundsError
+
 from .records import Cells, FlaggedRegion
 
 __all__ = ["check_rows_cols", "flat_cells", "unflat"]

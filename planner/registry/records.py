@@ -88,7 +88,7 @@ class UpdatePolicy:
 
     Examples
     --------
-    >>> from terrain import UpdatePolicy
+    >>> from planner.registry import UpdatePolicy
     >>> UpdatePolicy(threshold_pct=10.0, min_samples=20, hysteresis_pct=3.0).clear_below_pct
     7.0
     """

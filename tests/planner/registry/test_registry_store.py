@@ -1,4 +1,4 @@
-"""Tests of terrain.registry.store: save, load, recovery of interrupted saves, corrupt directories."""
+"""Tests of planner.registry.store: save, load, recovery of interrupted saves, corrupt directories."""
 
 from __future__ import annotations
 
@@ -12,15 +12,8 @@ import numpy as np
 import pytest
 from registry_models import GainModel, cell_predictions, load_gain, registry, save_gain
 
-from terrain import (
-    CellModelRegistry,
-    FileFormatError,
-    FormatVersionError,
-    GridMismatchError,
-    InvalidParameterError,
-    TerrainMap,
-    UpdatePolicy,
-)
+from planner.registry import CellModelRegistry, UpdatePolicy
+from terrain import FileFormatError, FormatVersionError, GridMismatchError, InvalidParameterError, TerrainMap
 
 
 # ------------------------------------------------------------------- persistence

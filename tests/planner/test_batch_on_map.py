@@ -1,4 +1,4 @@
-"""Tests of planner.batch_report: plan_batch_on_map and BatchReport."""
+"""Tests of planner.batch.plan_batch_on_map: a batch on a map priced by a CostSpec, summarised and written."""
 
 from __future__ import annotations
 
@@ -6,31 +6,32 @@ import json
 
 import pytest
 
-from terrain import InvalidParameterError
-
 from planner import BatchPairs, BatchResult, EnergyCost, plan_batch
-from planner.batch_report import BatchReport, plan_batch_on_map
+from planner.batch import plan_batch_on_map
+from planner.cost_spec import CostSpec
+from terrain import InvalidParameterError
 
 PAIRS = [[5.0, 5.0, 35.0, 5.0], [35.0, 5.0, 5.0, 5.0], [5.0, 5.0, 20.5, 5.5]]  # the last one ends in the wall
 
 
 @pytest.fixture
-def report(wall_map) -> BatchReport:
+def report(wall_map) -> BatchResult:
     return plan_batch_on_map(wall_map, BatchPairs.from_array(PAIRS, ["there", "back", "wall"]), progress=False,
                              map_label="wall")
 
 
 def test_the_pairs_are_those_of_plan_batch_on_the_priced_map(report, wall_map):
-    assert isinstance(report.result, BatchResult) and len(report.result) == 3
+    assert isinstance(report, BatchResult) and len(report) == 3 and report.map_label == "wall"
     same = plan_batch(EnergyCost.from_presets(wall_map), PAIRS, progress=False)
-    assert [r.energy_j for r in report.result.rows[:2]] == [r.energy_j for r in same.rows[:2]]
-    assert [r.status for r in report.result.rows] == ["exact", "exact", "error"] and not report.all_found
-    assert report.result.where == "in process"
+    assert [r.energy_j for r in report.rows[:2]] == [r.energy_j for r in same.rows[:2]]
+    assert [r.status for r in report.rows] == ["exact", "exact", "error"] and not report.all_found
+    assert report.where == "in process"
 
 
 def test_the_summary_is_the_header_the_table_and_the_totals(report):
     assert report.header() == "map: wall  40 x 40 cells of 1 m; 3 pairs; planner lattice"
-    assert report.summary() == "\n".join([report.header(), report.result.table(), "", report.result.summary()])
+    assert report.summary() == "\n".join([report.header(), report.table(), "", report.totals()])
+    assert "3 pairs (2 exact, 1 error) planned with lattice" in report.totals()
 
 
 def test_write_gives_csv_and_json(report, tmp_path):
@@ -40,10 +41,11 @@ def test_write_gives_csv_and_json(report, tmp_path):
 
 
 def test_a_model_prices_the_map(corridor_map, known_model):
-    report = plan_batch_on_map(corridor_map, [[2.5, 7.5, 27.5, 7.5]], model=known_model(), progress=False)
-    assert report.all_found and report.result.rows[0].status == "exact"
+    report = plan_batch_on_map(corridor_map, [[2.5, 7.5, 27.5, 7.5]], pricing=CostSpec(model=known_model()),
+                               progress=False)
+    assert report.all_found and report.rows[0].status == "exact"
 
 
 def test_bad_slope_is_refused(wall_map):
     with pytest.raises(InvalidParameterError, match="max_slope_deg"):
-        plan_batch_on_map(wall_map, PAIRS, max_slope_deg=-1.0, progress=False)
+        plan_batch_on_map(wall_map, PAIRS, pricing=CostSpec(max_slope_deg=-1.0), progress=False)

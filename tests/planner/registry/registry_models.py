@@ -1,4 +1,4 @@
-"""Toy current models and registries shared by the tests of terrain.registry."""
+"""Toy current models and registries shared by the tests of planner.registry."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from terrain import CellModelRegistry
+from planner.registry import CellModelRegistry
 
 
 class GainModel:

@@ -1,19 +1,19 @@
-"""terrain.registry.records: the model protocol, the update policy and the registry's value types."""
+"""planner.registry.records: the model protocol, the update policy and the registry's value types."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from terrain import (
+from planner.registry import (
     PRIOR_MODEL_ID,
     CurrentModelProtocol,
     FlaggedRegion,
-    InvalidParameterError,
     ModelEntry,
     RegistryVersion,
     UpdatePolicy,
 )
+from terrain import InvalidParameterError
 
 
 # ------------------------------------------------------------------------ protocol

@@ -1,0 +1,90 @@
+"""Tests of planner.route_price: price_route, the one door to a route's price; segment energies of a power profile,
+a route's forecast energy."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from planner import EnergyCost, price_route
+from planner.route import evaluate_route
+from planner.route_price import route_forecast_j, segment_forecasts_j
+from terrain import InvalidParameterError, UnknownNameError, flat_map
+
+
+def test_segment_energies_integrate_the_power_between_the_planned_marks():
+    t = np.linspace(10.0, 16.0, 601)  # the profile's clock need not start at 0
+    power = t - 10.0  # W: a ramp, so each part is a difference of squares / 2
+    turn, straight = segment_forecasts_j(t, power, np.array([1.0, 1.0]), np.array([2.0, 2.0]))
+    np.testing.assert_allclose(turn, [0.5, (16.0 - 9.0) / 2], rtol=1e-9)
+    np.testing.assert_allclose(straight, [(9.0 - 1.0) / 2, (36.0 - 16.0) / 2], rtol=1e-9)
+
+
+def test_a_longer_route_and_a_turn_cost_more():
+    cost = EnergyCost.from_presets(flat_map((20, 40), 1.0, ground="asphalt"), speed_mps=0.5)
+    short = route_forecast_j(cost, evaluate_route(cost, [[2.5, 5.5], [12.5, 5.5]]))
+    long = route_forecast_j(cost, evaluate_route(cost, [[2.5, 5.5], [32.5, 5.5]]))
+    assert 0.0 < short < long
+    straight_25 = route_forecast_j(cost, evaluate_route(cost, [[2.5, 5.5], [27.5, 5.5]]))
+    bent_25 = route_forecast_j(cost, evaluate_route(cost, [[2.5, 5.5], [17.5, 5.5], [17.5, 15.5]]))
+    assert bent_25 > straight_25  # the same 25 m with a stop-turn-go corner
+
+
+def _learned_cost():
+    """A map priced by a learned model (constant currents per cell model) and the model itself."""
+    from energy import ground_preset, robot_preset
+    from planner import LearnedEnergyModel
+    from planner.registry import CellModelRegistry
+    from tests.planner.test_learned_cost import ConstModel
+
+    tmap = flat_map((12, 16), 1.0, ground="asphalt")
+    reg = CellModelRegistry.from_terrain(tmap, ConstModel(2.0, 5.0), prior_name="a")
+    lem = LearnedEnergyModel(reg, robot_preset("husky"), ground_preset("asphalt"), speeds_mps=(0.25, 0.5, 1.0),
+                             omegas_radps=(0.5, 1.0))
+    return tmap, lem, lem.energy_cost(tmap, 0.5)
+
+
+WAYPOINTS = [[1.5, 1.5], [10.5, 1.5], [10.5, 8.5]]
+
+
+def test_price_route_reads_the_edges_or_the_profile_of_the_model_that_priced_the_map():
+    cost = EnergyCost.from_presets(flat_map((12, 16), 1.0, ground="asphalt"), speed_mps=0.5)
+    edges = price_route(cost, WAYPOINTS)
+    assert edges.mean_j == cost.path_energy_j(np.array(WAYPOINTS)) and edges.sd_j == 0.0
+    assert edges.mean_j == price_route(cost, evaluate_route(cost, WAYPOINTS)).mean_j  # a Route or its waypoints
+    profile = price_route(cost, WAYPOINTS, how="profile")
+    assert profile.mean_j == route_forecast_j(cost, WAYPOINTS) > edges.mean_j
+    assert price_route(cost, WAYPOINTS, how="profile", speed_mps=0.8).mean_j == route_forecast_j(
+        cost, WAYPOINTS, speed_mps=0.8)
+    tmap, lem, learned = _learned_cost()
+    assert learned.learned_model is lem
+    assert price_route(learned, WAYPOINTS, how="profile").mean_j == lem.predict_route_energy_j(tmap, WAYPOINTS, 0.5)
+
+
+def test_price_route_carries_the_interval_where_the_map_has_one(corridor_map, known_model):
+    from energy import robot_preset
+    from planner import model_energy_cost
+    from planner.risk import route_energy_interval
+
+    cost = model_energy_cost(corridor_map, known_model(), robot_preset("husky"), 0.5)
+    wp = [[2.5, 7.5], [2.5, 11.5], [27.5, 11.5]]  # up the hub, along the loam corridor
+    assert price_route(cost, wp) == route_energy_interval(cost, wp) and price_route(cost, wp).sd_j > 0
+    point = price_route(cost, wp, interval=False)
+    assert point.mean_j == price_route(cost, wp).mean_j and point.sd_j == 0.0
+
+
+def test_price_route_refuses_what_it_cannot_price(wall_map):
+    from planner.route import empty_route
+
+    cost = EnergyCost.from_presets(wall_map)
+    with pytest.raises(InvalidParameterError, match="no standard-deviation tables"):
+        price_route(cost, [[2.5, 2.5], [8.5, 2.5]], interval=True)
+    with pytest.raises(UnknownNameError, match="how must be one of"):
+        price_route(cost, [[2.5, 2.5], [8.5, 2.5]], how="vibes")
+    with pytest.raises(InvalidParameterError, match="found Route"):
+        price_route(cost, empty_route("infeasible", "lattice", 0.0, 24.0))
+    with pytest.raises(InvalidParameterError, match="blocked"):
+        price_route(cost, [[2.5, 2.5], [38.5, 2.5]])  # through the wall
+    with pytest.raises(InvalidParameterError, match="no physics model"):
+        price_route(cost.with_tables(cost.grade_table_j_per_m, cost.turn_table_j), [[2.5, 2.5], [8.5, 2.5]],
+                    how="profile")
