@@ -222,8 +222,8 @@ def plan_tour(
         empty = tuple(_tour(prices, rb, [], d, service, value, q, timing, at_charger)
                       for rb, d in zip(fleet, depot_points.tolist()))
         return TourResult("planned" if reachable else "nothing reachable", q, empty, left_out, errors, values,
-                          solver or "pyvrp", prices.pricing_time_s, 0.0, 0, prices.where, map_label, where_xy,
-                          cost.terrain, cost, prices, windows, chargers)
+                          solver or ("ortools" if chargers is not None else "pyvrp"), prices.pricing_time_s, 0.0, 0,
+                          prices.where, map_label, where_xy, cost.terrain, cost, prices, windows, chargers)
     outcome = solve_tours(prices, problem(np.array(candidates)), solver=solver, time_limit_s=time_limit_s, seed=seed)
     chosen = {p for t in outcome.tours for p in t}
     for p in candidates:
