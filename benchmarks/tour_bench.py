@@ -281,8 +281,9 @@ def main(argv: list[str] | None = None) -> int:
     print(f"(1-minute load average during the run: about {load:.1f} on {os.cpu_count()} cores)")
     if args.out is not None:
         payload = {"benchmark": "tour_bench", "seed": args.seed, "kernel_compile_s": compile_s, "timing": timing,
-                   "monte_carlo": mc, "chargers": charging, "machine": {"python": platform.python_version(), "cpus": os.cpu_count(),
-                                                  "platform": platform.platform(), "load_average_1min": load}}
+                   "monte_carlo": mc, "chargers": charging,
+                   "machine": {"python": platform.python_version(), "cpus": os.cpu_count(),
+                               "platform": platform.platform(), "load_average_1min": load}}
         write_json_atomic(args.out, payload, indent=1)
         print(f"\nwrote {args.out}")
     return 0

@@ -1,4 +1,4 @@
-"""The sites of a tour (name, place, value, service, time window), its charging points and the robots (battery, depot)."""
+"""A tour's sites (name, place, value, service, time window), its charging points and robots (battery, depot)."""
 
 from __future__ import annotations
 

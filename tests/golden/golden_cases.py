@@ -135,7 +135,7 @@ def case_tour(work: Path) -> dict[str, Path]:
 
 
 def case_tour_chargers(work: Path) -> dict[str, Path]:
-    """One robot's tour of three sites with a charger: the far shed visited after a charge (OR-Tools, the bench extra)."""
+    """One robot's tour of three sites with a charger: the far shed visited after a charge (OR-Tools: bench extra)."""
     path = patch_map(work)
     sites = work / "sites.csv"
     sites.write_text("name,x_m,y_m,value\npump,10.5,20.5,2\nshed,55.5,20.5,3\nwell,50.5,5.5,1\n")
