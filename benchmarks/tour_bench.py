@@ -16,6 +16,12 @@
   interval prices the edges; without it, a small vibration estimator fitted here on simulated runs
   of the map's four grounds (its cross-validated interval; ``--stated-spread``: the presets with
   ``--rel-sd`` instead).
+- **charging points**: on the bundled example map with the stated spread, ``--charger-sites`` sites,
+  ``--chargers`` charging points in the depot's region and two robots whose charge reaches about one
+  median round trip: the value planned without the chargers (PyVRP) and with them (OR-Tools, its
+  time limit ``--ortools-s``; each segment between charges checked at its own quantile), the
+  seconds, the charging stops, and the Monte Carlo of the tours with charges at Q = 0.9: the share
+  above the reserve at every charger arrival and back, and at the worst single arrival.
 
 Needs the ``bench`` (OR-Tools) and ``distributed`` extras. Times are of a shared machine: run it with
 ``nice``. Usage::
@@ -41,7 +47,7 @@ from energy import Battery, TruthSimulator, VibrationCurrentEstimator, ground_pr
 from energy.models.config import estimator_preset
 from energy.sim import GroundVariation
 from planner import EnergyCost, model_energy_cost, warm_up_kernels
-from planner.tours import TourRobot, TourSites, plan_tour, price_pairs, simulate_tours_mc
+from planner.tours import TourChargers, TourRobot, TourSites, plan_tour, price_pairs, simulate_tours_mc
 from planner.tours.solver import TourProblem, solve_ortools, solve_pyvrp
 from terrain import TerrainMap, example_map
 from terrain.procedural import procedural_map
@@ -166,6 +172,42 @@ def monte_carlo_part(args: argparse.Namespace) -> dict[str, Any]:
     return out
 
 
+def chargers_part(args: argparse.Namespace) -> dict[str, Any]:
+    """Value without and with charging points on the bundled map (stated spread), solve times, the Monte Carlo."""
+    cost = with_spread(EnergyCost.from_presets(example_map()), args.rel_sd)
+    depot, sites = depot_and_sites(cost, args.charger_sites, np.random.default_rng(args.seed + 2))
+    _, spots = depot_and_sites(cost, args.chargers, np.random.default_rng(args.seed + 3))
+    chargers = TourChargers(tuple(f"charger{k}" for k in range(args.chargers)), spots.xy_m, power_w=200.0,
+                            connection_time_s=60.0, max_visits=2)
+    pts = np.vstack([depot, sites.xy_m, chargers.xy_m])
+    t0 = time.perf_counter()
+    prices = price_pairs(cost, pts, ("depot", *sites.names, *chargers.names), risk=0.9)
+    pricing_s = time.perf_counter() - t0
+    battery = battery_for(prices, args.charger_battery_trips, cost.battery_voltage_v)
+    robots = [TourRobot(battery, depot, f"robot {k}") for k in range(2)]
+    alone_prices = price_pairs(cost, pts[:-args.chargers], ("depot", *sites.names), risk=0.9)
+    t0 = time.perf_counter()
+    alone = plan_tour(cost, sites, robots, risk=0.9, time_limit_s=args.pyvrp_s, prices=alone_prices)
+    alone_s = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    charged = plan_tour(cost, sites, robots, risk=0.9, time_limit_s=args.ortools_s, prices=prices, chargers=chargers)
+    charged_s = time.perf_counter() - t0
+    check = simulate_tours_mc(charged, args.mc, seed=args.seed)
+    worst = min((min(check.share_above_at_stops(name)) for name in check.runs), default=float("nan"))
+    return {"map": "bundled example map", "sites": args.charger_sites, "chargers": args.chargers, "robots": 2,
+            "rel_sd": args.rel_sd, "battery_ah": battery.capacity_ah, "pricing_s": pricing_s,
+            "value_possible": float(sites.value.sum()),
+            "without": {"value": alone.value, "visited": len(alone.visited), "solver": alone.solver,
+                        "solve_s": alone_s,
+                        "too_far": sum(1 for v in alone.left_out.values() if v.startswith("too far"))},
+            "with": {"value": charged.value, "visited": len(charged.visited), "solver": charged.solver,
+                     "solve_s": charged_s, "rounds": charged.solve_rounds,
+                     "charging_stops": sum(len(t.charging_stops) for t in charged.tours),
+                     "too_far": sum(1 for v in charged.left_out.values() if v.startswith("too far"))},
+            "mc": {"missions_per_robot": args.mc, "share_above_reserve": check.share_above_reserve,
+                   "worst_arrival_share": worst}}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", type=int, default=512, help="map side in cells (default 512)")
@@ -185,39 +227,63 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--model", type=Path, default=None, help="a saved model with an interval for the MC part")
     parser.add_argument("--stated-spread", action="store_true",
                         help="MC part on the presets with --rel-sd instead of a fitted estimator's interval")
+    parser.add_argument("--chargers", type=int, default=3, help="charging points of the chargers part (default 3)")
+    parser.add_argument("--charger-sites", type=int, default=40, help="sites of the chargers part (default 40)")
+    parser.add_argument("--charger-battery-trips", type=float, default=1.0,
+                        help="the chargers part's budget per robot in median depot round trips (default 1)")
+    parser.add_argument("--parts", default="timing,mc,chargers",
+                        help="comma-separated parts to run: timing, mc, chargers (default all)")
     parser.add_argument("--seed", type=int, default=0, help="map, sites and Monte Carlo seed")
     parser.add_argument("--quick", action="store_true", help="small run: 192^2, 60 sites, 200 missions")
     parser.add_argument("--out", type=Path, default=None, help="write results as JSON here")
     args = parser.parse_args(argv)
     if args.quick:
         args.size, args.sites, args.mc, args.pyvrp_s, args.ortools_s = 192, 60, 200, 10.0, 10.0
+    parts = set(args.parts.split(","))
     compile_s = warm_up_kernels()
     load_before = os.getloadavg()[0]
-    timing = timing_part(args)
-    mc = monte_carlo_part(args)
+    timing = timing_part(args) if "timing" in parts else None
+    mc = monte_carlo_part(args) if "mc" in parts else None
+    charging = chargers_part(args) if "chargers" in parts else None
     load = (load_before + os.getloadavg()[0]) / 2
-    print(f"\n{timing['sites']} sites, {timing['robots']} robots, {timing['size']}^2 map, Q = {timing['risk']:g}, "
-          f"pricing on {timing['workers']} worker(s) ({timing['pricing_where']})")
-    rows = [("pair pricing", f"{timing['pricing_s']:.1f} s"), ("solving (PyVRP, checked)", f"{timing['solve_s']:.1f} s "
-            f"({timing['solve_rounds']} round(s))"), ("total", f"{timing['total_s']:.1f} s (target <= 120 s)"),
-            ("value", f"{timing['value']:g} of {timing['value_possible']:g} ({timing['visited']} sites; "
-                      f"{timing['too_far']} too far at Q)")]
-    for name, r in timing["compare"].items():
-        rows.append((f"{name}", f"value {r['value']:g} ({r['sites']} sites) in {r['solve_s']:.1f} s, "
-                                f"feasible {r['feasible']}"))
-    for q in ("q0.9", "q0.5"):
-        m = mc[q]
-        rows.append((f"MC at Q = {q[1:]}", f"{100 * m['share_above_reserve']:.1f} % end above the reserve "
-                                           f"(value {m['value']:g}, {m['visited']} sites)"))
+    rows = []
+    if timing is not None:
+        print(f"\n{timing['sites']} sites, {timing['robots']} robots, {timing['size']}^2 map, Q = {timing['risk']:g}, "
+              f"pricing on {timing['workers']} worker(s) ({timing['pricing_where']})")
+        rows += [("pair pricing", f"{timing['pricing_s']:.1f} s"),
+                 ("solving (PyVRP, checked)", f"{timing['solve_s']:.1f} s ({timing['solve_rounds']} round(s))"),
+                 ("total", f"{timing['total_s']:.1f} s (target <= 120 s)"),
+                 ("value", f"{timing['value']:g} of {timing['value_possible']:g} ({timing['visited']} sites; "
+                           f"{timing['too_far']} too far at Q)")]
+        for name, r in timing["compare"].items():
+            rows.append((f"{name}", f"value {r['value']:g} ({r['sites']} sites) in {r['solve_s']:.1f} s, "
+                                    f"feasible {r['feasible']}"))
+    if mc is not None:
+        for q in ("q0.9", "q0.5"):
+            m = mc[q]
+            rows.append((f"MC at Q = {q[1:]}", f"{100 * m['share_above_reserve']:.1f} % end above the reserve "
+                                               f"(value {m['value']:g}, {m['visited']} sites)"))
+    if charging is not None:
+        c = charging
+        for key, label in (("without", "no chargers"), ("with", f"{c['chargers']} chargers")):
+            r = c[key]
+            rows.append((label, f"value {r['value']:g} of {c['value_possible']:g} ({r['visited']} sites, "
+                                f"{r['too_far']} too far; {r['solver']} {r['solve_s']:.1f} s)"
+                                + (f", {r['charging_stops']} charging stops" if key == "with" else "")))
+        rows.append(("MC with charges, Q = 0.9", f"{100 * c['mc']['share_above_reserve']:.1f} % above the reserve "
+                                                 f"at every arrival and back (worst single arrival "
+                                                 f"{100 * c['mc']['worst_arrival_share']:.1f} %)"))
     width = max(len(n) for n, _ in rows)
     for name, value in rows:
         print(f"{name:<{width}}  {value}")
-    print(f"(MC on the {mc['map']}: {mc['interval']}; {mc['missions_per_robot']} tours per robot and level)")
+    if mc is not None:
+        print(f"(MC on the {mc['map']}: {mc['interval']}; {mc['missions_per_robot']} tours per robot and level)")
     print(f"(1-minute load average during the run: about {load:.1f} on {os.cpu_count()} cores)")
     if args.out is not None:
         payload = {"benchmark": "tour_bench", "seed": args.seed, "kernel_compile_s": compile_s, "timing": timing,
-                   "monte_carlo": mc, "machine": {"python": platform.python_version(), "cpus": os.cpu_count(),
-                                                  "platform": platform.platform(), "load_average_1min": load}}
+                   "monte_carlo": mc, "chargers": charging,
+                   "machine": {"python": platform.python_version(), "cpus": os.cpu_count(),
+                               "platform": platform.platform(), "load_average_1min": load}}
         write_json_atomic(args.out, payload, indent=1)
         print(f"\nwrote {args.out}")
     return 0

@@ -38,7 +38,7 @@ __all__ = [
 MAP_FLAGS = {"fill_nodata": "--fill-nodata", "reproject_to": "--reproject", "cell_size_m": "--cell-size",
              "landcover": "--landcover", "landcover_classes": "--landcover-classes"}
 #: Flags whose values are input paths (a ``--model`` that names a kind, a ``--map example``, are not files).
-INPUT_FLAGS = ("map", "data", "pairs", "sites", "model", "calibration_data", "landcover", "landcover_classes", "robot")
+INPUT_FLAGS = ("map", "data", "pairs", "sites", "chargers", "model", "calibration_data", "landcover", "landcover_classes", "robot")
 
 
 class Checked(argparse.Action):

@@ -6,8 +6,9 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from planner.points import point_on_map
 from planner.risk import check_planning_risk
-from planner.tours import plan_tour_on_map, read_tour_sites_csv
+from planner.tours import plan_tour_on_map, read_tour_chargers_csv, read_tour_sites_csv
 from terrain import InvalidParameterError
 
 from .common import (
@@ -16,7 +17,6 @@ from .common import (
     add_dask_options,
     add_map_options,
     add_model_options,
-    add_point_options,
     add_robot_options,
     bounded,
     check_dask_flags,
@@ -26,7 +26,6 @@ from .common import (
     input_paths,
     load_model_arg,
     map_arg,
-    point_arg,
     positive,
     pricing_arg,
     warn_figures,
@@ -54,13 +53,25 @@ def add_parser(sub: Any) -> None:
                    help="sites file (as batch's): columns name, x_m, y_m or name, lon, lat in WGS 84 degrees; "
                         "optional value (default 1), service_energy_j, service_time_s, and a time window "
                         "tw_start_s, tw_end_s (s from the departure; both columns or neither, empty cells: none)")
-    add_point_options(p, "depot", "the depot every robot starts from and comes back to", required=True)
+    p.add_argument("--chargers", type=Path, default=None, metavar="CSV",
+                   help="charging points the robots may stop at between sites, each stop charging to full (laid out as "
+                        "the sites file: name, x_m, y_m or name, lon, lat; optional power_w (W; empty: at once), "
+                        "connection_time_s (default 0) and max_visits (stops of the whole fleet, default 2)); the "
+                        "energy then holds at Q per segment between charges; solved by OR-Tools (the bench extra)")
+    depot = p.add_mutually_exclusive_group(required=True)
+    depot.add_argument("--depot", type=float, nargs=2, action="append", metavar=("X", "Y"),
+                       help="the depot the robots start from and come back to (m); repeat it for one depot per robot "
+                            "(as many as --robots, which then defaults to their number)")
+    depot.add_argument("--depot-lonlat", type=float, nargs=2, action="append", metavar=("LON", "LAT"),
+                       help="the depot as WGS 84 longitude and latitude (degrees), placed on the map by its CRS; "
+                            "instead of --depot, repeatable as it")
     add_battery_options(p, "each robot's battery capacity (Ah)")
     p.add_argument("--max-duration", type=float, default=None, metavar="S", action=Checked, check=positive,
                    help="each robot's longest tour, from leaving the depot to being back (s; driving, waiting and "
                         "service; default: no limit)")
-    p.add_argument("--robots", type=int, default=1, metavar="N", action=Checked,
-                   check=bounded("an integer >= 1", lambda v: v >= 1), help="robots sharing the sites (default 1)")
+    p.add_argument("--robots", type=int, default=None, metavar="N", action=Checked,
+                   check=bounded("an integer >= 1", lambda v: v >= 1),
+                   help="robots sharing the sites (default 1, or one per --depot when it is repeated)")
     p.add_argument("--risk", dest="tour_risk", type=float, default=0.9, metavar="Q", action=Checked,
                    check=check_planning_risk,
                    help="risk level Q in [0.5, 1) (default 0.9): every tour's energy at its Q quantile leaves the "
@@ -78,21 +89,29 @@ def add_parser(sub: Any) -> None:
 def run_tour(args: argparse.Namespace) -> int:
     """``terrawatt tour``: plan the tours, write their files, print the summary; exit 1 when nothing is reachable or
     a site is an error row (the others planned and written), as ``batch`` does for its rows."""
-    if args.robots != int(args.robots):
+    if args.robots is not None and args.robots != int(args.robots):
         raise InvalidParameterError(f"--robots must be an integer >= 1, got {args.robots!r}")
+    flag, given = ("--depot", args.depot) if args.depot else ("--depot-lonlat", args.depot_lonlat)
+    robots = int(args.robots) if args.robots is not None else len(given)
+    if len(given) > 1 and len(given) != robots:
+        raise InvalidParameterError(f"{flag} is given {len(given)} times but --robots is {robots}: give one depot "
+                                    "per robot, or one for all")
     check_dask_flags(args)
     check_model_flags(args)
-    bags = tuple(f"tour_{k}.mcap" for k in range(int(args.robots))) if args.bag else ()
+    bags = tuple(f"tour_{k}.mcap" for k in range(robots)) if args.bag else ()
     check_outputs(args.out, _OUTPUTS + bags, input_paths(args))  # the bags too: none may replace an input
     tmap, label = map_arg(args)
-    depot = point_arg(args, "depot", tmap)
+    depots = [point_on_map(xy if flag == "--depot" else None, xy if flag != "--depot" else None, tmap,
+                           names=("--depot", "--depot-lonlat")) for xy in given]
     sites = read_tour_sites_csv(args.sites, tmap)
+    chargers = read_tour_chargers_csv(args.chargers, tmap) if args.chargers is not None else None
     pricing = pricing_arg(args, tmap, load_model_arg(args))
     with dask_client_arg(args) as client:
         result = plan_tour_on_map(
-            tmap, sites, depot, battery_ah=args.battery_ah, voltage_v=args.voltage, reserve_pct=args.reserve,
-            n_robots=int(args.robots), max_duration_s=args.max_duration, risk=args.tour_risk, pricing=pricing,
-            time_limit_s=args.time_limit, seed=args.seed, client=client, map_label=label)
+            tmap, sites, depots[0] if len(depots) == 1 else depots, battery_ah=args.battery_ah,
+            voltage_v=args.voltage, reserve_pct=args.reserve, n_robots=robots, max_duration_s=args.max_duration,
+            risk=args.tour_risk, pricing=pricing, time_limit_s=args.time_limit, seed=args.seed, client=client,
+            map_label=label, chargers=chargers)
     with warn_figures():
         written = result.write(args.out, bag=args.bag)
     print(result.summary())

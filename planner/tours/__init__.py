@@ -1,11 +1,12 @@
-"""planner.tours — many sites on one charge: which to visit, in what order, and what is left when back (issue 33)."""
+"""planner.tours — many sites on one charge (or a few, at charging points): which to visit, in what order, and what is
+left when back (issue 33)."""
 
 from __future__ import annotations
 
 from .check import simulate_tours_mc
 from .pricing import PairPrices, price_pairs
 from .result import RobotTour, TourLeg, TourResult
-from .sites import TourRobot, TourSites, read_tour_sites_csv
+from .sites import TourChargers, TourRobot, TourSites, read_tour_chargers_csv, read_tour_sites_csv
 from .solver import TourProblem, solve_tours
 from .tour import plan_tour, plan_tour_on_map
 
@@ -16,6 +17,8 @@ __all__ = [
     "TourSites",
     "TourRobot",
     "read_tour_sites_csv",
+    "TourChargers",
+    "read_tour_chargers_csv",
     "RobotTour",
     "TourLeg",
     "PairPrices",

@@ -2,13 +2,20 @@
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
+from energy import Battery
 from terrawatt_base.checks import check_int, check_seed
 from terrawatt_base.errors import InvalidParameterError
 
 from ..missions import MonteCarloResult, simulate_missions_mc
+from ..risk import RouteEnergyInterval
+from ..route import Route
 from .result import TourResult
 
 __all__ = ["TourCheck", "simulate_tours_mc"]
@@ -16,33 +23,56 @@ __all__ = ["TourCheck", "simulate_tours_mc"]
 
 @dataclass(frozen=True)
 class TourCheck:
-    """Each robot's tour driven ``n`` times.
+    """Each robot's tour driven ``n`` times, segment by segment between charges.
 
     Attributes
     ----------
     risk : float
         The level the tours were planned at.
-    runs : dict of str to MonteCarloResult
-        Per robot (with a tour) its Monte Carlo study.
+    runs : dict of str to tuple of MonteCarloResult
+        Per robot (with a tour) one Monte Carlo study per segment of its tour: from the depot or a charge to
+        the next charge or back (one study without chargers). Mission ``i`` of every segment is one drive of
+        the whole tour: the same seed, the same draws (the run-level factors are shared by the whole run).
     draw_from : str
         ``"model"`` (the planning model's own distribution) or ``"parameters"`` (the truth simulator).
     """
 
     risk: float
-    runs: dict[str, MonteCarloResult]
+    runs: dict[str, tuple[MonteCarloResult, ...]]
     draw_from: str
+
+    def above_reserve(self, robot: str) -> np.ndarray:
+        """Per mission of ``robot``'s tour completed in every segment, whether it stayed above the reserve at every
+        charger arrival and back at the depot."""
+        studies = self.runs[robot]
+        done = np.logical_and.reduce([mc.completed for mc in studies])
+        below = np.logical_or.reduce([np.asarray(mc.below_reserve, dtype=bool) for mc in studies])
+        return ~below[done]
 
     @property
     def share_above_reserve(self) -> float:
-        """The share of the robots' simulated tours that end above the reserve (over every robot's missions)."""
-        done = [(1.0 - mc.p_below_reserve) * int(mc.completed.sum()) for mc in self.runs.values()]
-        n = sum(int(mc.completed.sum()) for mc in self.runs.values())
-        return sum(done) / n if n else float("nan")
+        """The share of the robots' simulated tours that end above the reserve, and above it at every charger arrival
+        (over every robot's missions)."""
+        flags = [self.above_reserve(name) for name in self.runs]
+        n = sum(f.size for f in flags)
+        return sum(int(f.sum()) for f in flags) / n if n else math.nan
+
+    def share_above_at_stops(self, robot: str) -> tuple[float, ...]:
+        """The share of ``robot``'s missions above the reserve at the end of each segment: at each charger arrival,
+        then back at the depot."""
+        return tuple(1.0 - mc.p_below_reserve for mc in self.runs[robot])
 
     def summary(self) -> str:
-        """One line per robot and the total, beside Q."""
-        lines = [f"{name}: {100 * (1 - mc.p_below_reserve):.1f} % of {mc.n} tours end above the reserve"
-                 for name, mc in self.runs.items()]
+        """One line per robot (with the share at each charger arrival, where it charges) and the total, beside Q."""
+        lines = []
+        for name, studies in self.runs.items():
+            flags = self.above_reserve(name)
+            line = (f"{name}: {100 * flags.mean() if flags.size else math.nan:.1f} % of {studies[0].n} tours end "
+                    "above the reserve")
+            if len(studies) > 1:
+                at = ", ".join(f"{100 * s:.1f} %" for s in self.share_above_at_stops(name)[:-1])
+                line += f" (above it at each charger arrival: {at}; at every one and back)"
+            lines.append(line)
         lines.append(f"all: {100 * self.share_above_reserve:.1f} % above the reserve at Q = {self.risk:g} "
                      f"(draws from the {self.draw_from})")
         return "\n".join(lines)
@@ -50,12 +80,16 @@ class TourCheck:
 
 def simulate_tours_mc(result: TourResult, n: int = 1000, *, seed: int | None = 0, draw_from: str | None = None,
                       workers: int | None = None, client: Any = None) -> TourCheck:
-    """Drive each planned tour ``n`` times through :func:`planner.simulate_missions_mc`.
+    """Drive each planned tour ``n`` times through :func:`planner.simulate_missions_mc`, its battery charged to full at
+    each charging stop.
 
     With a cost that carries an interval the missions draw from the planning model's own
     distribution (``draw_from="model"``: one factor per ground per tour, the whole tour's
     energy, service included, as priced); otherwise the truth simulator drives the tour's
-    route with drawn parameters (service energy not included).
+    route with drawn parameters (service energy not included). A tour with charging stops is
+    driven segment by segment (from the depot or a charge to the next charge or back), each
+    segment from the charge it starts with (the initial one, then full) and with the same seed, so
+    mission ``i`` of every segment draws the same factors: one drive of the whole tour.
 
     Raises
     ------
@@ -67,12 +101,32 @@ def simulate_tours_mc(result: TourResult, n: int = 1000, *, seed: int | None = 0
     n = check_int("n", n, low=1)
     seed = check_seed(seed)
     mode = draw_from or ("model" if result.cost.has_interval else "parameters")
-    runs: dict[str, MonteCarloResult] = {}
+    runs: dict[str, tuple[MonteCarloResult, ...]] = {}
     for k, tour in enumerate(result.tours):
         if not tour.legs:
             continue
-        runs[tour.robot] = simulate_missions_mc(
-            result.terrain, result.tour_route(k), tour.battery, n, seed=None if seed is None else seed + k,
-            cost=result.cost, draw_from=mode, forecast=tour.energy if mode == "model" else None,
-            workers=workers, client=client)
+        studies = []
+        for route, battery, forecast in _segments(result, k):
+            studies.append(simulate_missions_mc(
+                result.terrain, route, battery, n, seed=None if seed is None else seed + k, cost=result.cost,
+                draw_from=mode, forecast=forecast if mode == "model" else None, workers=workers, client=client))
+        runs[tour.robot] = tuple(studies)
     return TourCheck(result.risk, runs, mode)
+
+
+def _segments(result: TourResult, robot: int) -> list[tuple[Route, Battery, RouteEnergyInterval]]:
+    """Each segment of the robot's tour between charges: its route, its battery (full after a charge) and its energy
+    distribution over every ground of the tour (zero spread where it does not go), so that every segment draws the
+    same factors in the same order."""
+    tour = result.tours[robot]
+    if not tour.charging_stops:
+        return [(result.tour_route(robot), tour.battery, tour.energy)]
+    whole = tour.energy
+    full = dataclasses.replace(tour.battery, initial_soc=1.0)
+    out, first = [], 0
+    for s, (end, seg) in enumerate(zip([*tour.charging_stops, len(tour.legs) - 1], tour.segments)):
+        by = {g: seg.sd_by_ground_j.get(g, 0.0) for g in whole.sd_by_ground_j}
+        forecast = RouteEnergyInterval(seg.mean_j, seg.sd_j, by, seg.dof, {g: whole.ground_dof(g) for g in by})
+        out.append((result.tour_route(robot, slice(first, end + 1)), tour.battery if s == 0 else full, forecast))
+        first = end + 1
+    return out

@@ -23,12 +23,15 @@ from ..ros_export import write_route_bag
 from ..route import Route, evaluate_route
 from ..route_geojson import write_geojson
 from .pricing import PairPrices
+from .sites import TourChargers
 
 __all__ = ["TourLeg", "RobotTour", "TourResult", "TOUR_FORMAT_VERSION", "TOUR_STATUSES"]
 
 #: Version of tour.json (format ``terrawatt-tour``); 2: each robot's timeline (service time, arrival, start of
-#: service, return) and the sites' time windows.
-TOUR_FORMAT_VERSION = 2
+#: service, return) and the sites' time windows; 3: charging points: each robot's ``stops`` in visiting order (sites
+#: and charging stops, ``charging_stops`` their indices), its timeline and service per stop, its ``segments`` between
+#: charges with their energy at Q and budget, and the ``chargers``.
+TOUR_FORMAT_VERSION = 3
 #: What a tour query answers: tours were planned, or no site is reachable at Q by any robot.
 TOUR_STATUSES = ("planned", "nothing reachable")
 
@@ -65,7 +68,7 @@ class TourLeg:
 
 @dataclass(frozen=True)
 class RobotTour:
-    """One robot's tour: depot, the sites in order, back to the depot.
+    """One robot's tour: depot, the sites in order (charging on the way where it stops at chargers), back to the depot.
 
     Attributes
     ----------
@@ -78,28 +81,34 @@ class RobotTour:
     sites : tuple of str
         The sites visited, in order.
     legs : tuple of TourLeg
-        ``depot -> sites[0] -> ... -> depot`` (empty when no site is visited).
+        ``depot -> stops[0] -> ... -> depot`` (empty when no site is visited).
     service_energy_j : tuple of float
-        Energy spent at each visited site (J).
+        Energy spent at each stop (J; 0 at a charger).
     value : float
         The sum of the visited sites' values.
     energy : RouteEnergyInterval
-        The whole tour's energy (legs and service; the spreads of one ground add along the tour).
+        The whole tour's energy (legs and service; the spreads of one ground add along the tour), charges aside.
     cumulative : tuple of RouteEnergyInterval
-        The energy spent by the end of each leg (at each arrival, service included).
+        The energy spent by the end of each leg since the depot or the last charge (at each arrival, service
+        included).
     budget_j : float
-        What the battery may spend above its reserve (J).
+        What the battery may spend above its reserve from its initial charge (J): the first segment's budget.
     risk : float
         The level Q the tour holds at.
     service_time_s : tuple of float
-        Time spent at each visited site (s).
+        Time spent at each stop (s): a site's service, a charger's booked stop time.
     arrival_s, service_start_s : tuple of float
-        When the robot, leaving its depot at 0, arrives at each visited site and when it starts its service
+        When the robot, leaving its depot at 0, arrives at each stop and when it starts its service
         there (s): later than the arrival when it waits for the site's time window to open.
     return_s : float
         When it is back at its depot (s; driving, waiting and service).
     max_duration_s : float or None
         The robot's longest tour (s), if it has one.
+    charging_stops : tuple of int
+        Indices into :attr:`stops` of the stops at chargers, where the battery is charged to full.
+    waiting_energy_j : tuple of float
+        Energy spent waiting at each stop for its window to open (J): the robot's standby power times the
+        wait (in :attr:`cumulative` and :attr:`energy` with the service).
     """
 
     robot: str
@@ -118,6 +127,36 @@ class RobotTour:
     service_start_s: tuple[float, ...] = ()
     return_s: float = 0.0
     max_duration_s: float | None = None
+    charging_stops: tuple[int, ...] = ()
+    waiting_energy_j: tuple[float, ...] = ()
+
+    @property
+    def stops(self) -> tuple[str, ...]:
+        """Every place the tour stops at between leaving its depot and coming back, in order: its sites and chargers."""
+        return tuple(leg.end for leg in self.legs[:-1])
+
+    @property
+    def full_budget_j(self) -> float:
+        """What a full battery may spend above its reserve (J): a segment's budget after a charge."""
+        return max(1.0 - self.battery.reserve_soc, 0.0) * self.battery.energy_capacity_j
+
+    @property
+    def segments(self) -> tuple[RouteEnergyInterval, ...]:
+        """The energy of each segment between charges (from the depot or a charge to the next charge or back)."""
+        ends = [*self.charging_stops, len(self.legs) - 1] if self.legs else []
+        return tuple(self.cumulative[k] for k in ends)
+
+    @property
+    def segment_budgets_j(self) -> tuple[float, ...]:
+        """Each segment's budget above the reserve (J): from the initial charge, then from a full one."""
+        return tuple(self.budget_j if k == 0 else self.full_budget_j for k in range(len(self.segments)))
+
+    def _segment_start_soc(self) -> np.ndarray:
+        """Per leg, the state of charge its segment started at: the initial one, or full after a charge."""
+        start = np.full(len(self.legs), self.battery.initial_soc)
+        for k in self.charging_stops:
+            start[k + 1:] = 1.0
+        return start
 
     @property
     def energy_at_risk_j(self) -> float:
@@ -130,9 +169,11 @@ class RobotTour:
         return float(sum(leg.duration_s for leg in self.legs))
 
     def soc(self, q: float | None = None) -> np.ndarray:
-        """State of charge (fraction) at the depot and after each leg: at the mean, or at energy quantile ``q``."""
-        spent = [0.0] + [c.mean_j if q is None else c.quantile_j(q) for c in self.cumulative]
-        return self.battery.initial_soc - np.asarray(spent) / self.battery.energy_capacity_j
+        """State of charge (fraction) at the depot and at the end of each leg (on arrival, before a charge there): at
+        the mean, or at energy quantile ``q`` of its segment (the energy since the depot or the last charge)."""
+        spent = np.array([c.mean_j if q is None else c.quantile_j(q) for c in self.cumulative])
+        after = self._segment_start_soc() - spent / self.battery.energy_capacity_j
+        return np.concatenate([[self.battery.initial_soc], after])
 
     @property
     def arrival_soc_at_risk(self) -> float:
@@ -150,9 +191,15 @@ class RobotTour:
             "duration_s": self.duration_s, "service_energy_j": list(self.service_energy_j),
             "service_time_s": list(self.service_time_s), "arrival_s": list(self.arrival_s),
             "service_start_s": list(self.service_start_s), "return_s": self.return_s,
-            "max_duration_s": self.max_duration_s,
+            "max_duration_s": self.max_duration_s, "stops": list(self.stops),
+            "waiting_energy_j": list(self.waiting_energy_j),
+            "charging_stops": list(self.charging_stops),
+            "segments": [{"to": ([*self.stops, "depot"])[k], "energy": iv.to_dict(),
+                          "energy_at_risk_j": iv.quantile_j(self.risk), "budget_j": b}
+                         for k, iv, b in zip([*self.charging_stops, len(self.legs) - 1], self.segments,
+                                             self.segment_budgets_j)],
             "legs": [leg.to_dict() for leg in self.legs],
-            "soc": {"places": ["depot", *self.sites, "depot"][:len(self.legs) + 1],
+            "soc": {"places": ["depot", *self.stops, "depot"][:len(self.legs) + 1],
                     "mean": self.soc().tolist(), "at_risk": self.soc(self.risk).tolist(),
                     "band_level": INTERVAL_LEVEL, "band_low": self.soc(hi_q).tolist(),
                     "band_high": self.soc(lo_q).tolist()},
@@ -199,6 +246,8 @@ class TourResult:
         The map, its edge costs and the priced legs (not in the JSON).
     time_windows_s : dict of str to (float, float)
         The sites that have a time window: ``(earliest_s, latest_s)`` from the departure.
+    chargers : TourChargers or None
+        The charging points the tours could stop at.
     """
 
     status: str
@@ -218,6 +267,7 @@ class TourResult:
     cost: EnergyCost = field(default=None, repr=False, compare=False)  # type: ignore[assignment]
     prices: PairPrices | None = field(default=None, repr=False, compare=False)
     time_windows_s: dict[str, tuple[float, float]] = field(default_factory=dict)
+    chargers: TourChargers | None = None
 
     @property
     def value(self) -> float:
@@ -237,15 +287,22 @@ class TourResult:
                  f"({len(self.visited)} sites visited)"]
         for t in self.tours:
             lo, hi = t.energy.interval_j(INTERVAL_LEVEL)
+            if t.charging_stops:
+                at_q = ", ".join(f"{iv.quantile_j(self.risk) / S_PER_H:.1f} of {b / S_PER_H:.1f}"
+                                 for iv, b in zip(t.segments, t.segment_budgets_j))
+                held = f"segments between charges at Q {at_q} Wh above the reserve"
+            else:
+                held = f"at Q {t.energy_at_risk_j / S_PER_H:.1f} of {t.budget_j / S_PER_H:.1f} Wh above the reserve"
             lines.append(
                 f"  {t.robot}: {len(t.sites)} sites, value {t.value:g}; energy {t.energy.mean_j / S_PER_H:.1f} Wh "
-                f"(P10-P90 {lo / S_PER_H:.1f}-{hi / S_PER_H:.1f}), at Q {t.energy_at_risk_j / S_PER_H:.1f} of "
-                f"{t.budget_j / S_PER_H:.1f} Wh above the reserve; back with {100 * t.arrival_soc_at_risk:.1f} % at Q "
-                f"(reserve {t.battery.min_reserve_pct:g} %)")
+                f"(P10-P90 {lo / S_PER_H:.1f}-{hi / S_PER_H:.1f}), {held}; back with "
+                f"{100 * t.arrival_soc_at_risk:.1f} % at Q (reserve {t.battery.min_reserve_pct:g} %)")
             if t.sites:
-                lines.append("    depot -> " + " -> ".join(t.sites) + " -> depot")
+                shown = [f"[charge {n}]" if k in t.charging_stops else n for k, n in enumerate(t.stops)]
+                home = t.legs[0].start  # "depot", or "depot <k>" with several
+                lines.append(f"    {home} -> " + " -> ".join(shown) + f" -> {home}")
                 times = [f"{n} {a:.0f}" + (f" (waits until {b:.0f})" if b > a else "")
-                         for n, a, b in zip(t.sites, t.arrival_s, t.service_start_s)]
+                         for n, a, b in zip(t.stops, t.arrival_s, t.service_start_s)]
                 limit = f" (at most {t.max_duration_s:g} s)" if t.max_duration_s is not None else ""
                 lines.append(f"    arrives (s): {', '.join(times)}; back at {t.return_s:.0f} s{limit}")
         reasons: dict[str, list[str]] = {}
@@ -272,7 +329,8 @@ class TourResult:
             "errors": [{"site": k, "error": v} for k, v in self.errors.items()],
             "values": dict(self.values),
             "sites_xy_m": {k: list(v) for k, v in self.sites_xy_m.items()},
-            "time_windows_s": {k: list(v) for k, v in self.time_windows_s.items()}, "solver": self.solver,
+            "time_windows_s": {k: list(v) for k, v in self.time_windows_s.items()},
+            "chargers": self.chargers.to_dict() if self.chargers is not None else {}, "solver": self.solver,
             "pricing_time_s": self.pricing_time_s,
             "solve_time_s": self.solve_time_s, "solve_rounds": self.solve_rounds, "where": self.where,
         })
@@ -282,9 +340,10 @@ class TourResult:
         return {f"{t.robot}: {leg.start} -> {leg.end}": evaluate_route(self.cost, leg.waypoints_m, planner="tour")
                 for t in self.tours for leg in t.legs}
 
-    def tour_route(self, robot: int) -> Route:
-        """One robot's whole tour as one :class:`planner.Route` (its legs joined)."""
-        legs = self.tours[robot].legs
+    def tour_route(self, robot: int, legs: slice = slice(None)) -> Route:
+        """One robot's whole tour (or the slice ``legs`` of its legs, e.g. a segment between charges) as one
+        :class:`planner.Route` (its legs joined)."""
+        legs = self.tours[robot].legs[legs]
         pts = np.vstack([legs[0].waypoints_m] + [leg.waypoints_m[1:] for leg in legs[1:]])
         return evaluate_route(self.cost, pts, planner="tour")
 
@@ -323,9 +382,14 @@ class TourResult:
         for names, style in ((self.visited, dict(color="k")), (left, dict(mfc="none", mec="k"))):
             pts = np.array([xy[n] for n in names if n in xy]).reshape(-1, 2)
             ax.plot(pts[:, 0], pts[:, 1], "o", ms=4, ls="none", **style)
+        if self.chargers is not None:
+            ch = self.chargers.xy_m
+            ax.plot(ch[:, 0], ch[:, 1], marker="P", ms=9, ls="none", color="gold", mec="k", label="charger")
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
-        ax.set_title(f"tours at Q = {self.risk:g}: value {self.value:g}, {len(self.visited)} sites")
+        charges = sum(len(t.charging_stops) for t in self.tours)
+        ax.set_title(f"tours at Q = {self.risk:g}: value {self.value:g}, {len(self.visited)} sites"
+                     + (f", {charges} charging stop(s)" if charges else ""))
         if self.tours and any(t.legs for t in self.tours):
             ax.legend(loc="upper right", fontsize=8)
         return save_figure(ax.figure, target) if target is not None else None
@@ -341,21 +405,24 @@ class TourResult:
         for tour in self.tours:
             if not tour.legs:
                 continue
-            x = np.arange(len(tour.legs) + 1)
-            line, = ax.plot(x, 100 * tour.soc(), marker=".", label=f"{tour.robot} mean")
-            ax.fill_between(x, 100 * tour.soc(hi_q), 100 * tour.soc(lo_q), color=line.get_color(), alpha=0.25)
-            ax.plot(x, 100 * tour.soc(self.risk), ls="--", color=line.get_color(), label=f"{tour.robot} at Q")
+            x, rise = _with_charges(tour, None)
+            line, = ax.plot(x, 100 * rise, marker=".", label=f"{tour.robot} mean")
+            ax.fill_between(x, 100 * _with_charges(tour, hi_q)[1], 100 * _with_charges(tour, lo_q)[1],
+                            color=line.get_color(), alpha=0.25)
+            ax.plot(x, 100 * _with_charges(tour, self.risk)[1], ls="--", color=line.get_color(),
+                    label=f"{tour.robot} at Q")
             ax.axhline(tour.battery.min_reserve_pct, color="k", lw=0.8, ls=":")
         driven = [t for t in self.tours if t.legs]
         if len(driven) == 1:
-            places = ["depot", *driven[0].sites, "depot"]
+            places = ["depot", *driven[0].stops, "depot"]
             ax.set_xticks(range(len(places)), places, rotation=45 if len(places) > 8 else 0, fontsize=7)
             ax.set_xlabel("arrival at")
         else:
             ax.set_xlabel("legs driven")
         ax.set_ylabel("state of charge (%)")
-        ax.set_title(f"state of charge along the tours\nband P10-P90; dashed: at Q = {self.risk:g}; dotted: reserve",
-                     fontsize=10)
+        charged = any(t.charging_stops for t in self.tours)
+        ax.set_title(f"state of charge along the tours\nband P10-P90; dashed: at Q = {self.risk:g}; dotted: reserve"
+                     + ("; it rises where a robot charges" if charged else ""), fontsize=10)
         if any(t.legs for t in self.tours):
             ax.legend(fontsize=8)
         return save_figure(ax.figure, target) if target is not None else None
@@ -381,3 +448,17 @@ class TourResult:
                                                    cost=self.cost))
         return written
 
+
+
+def _with_charges(tour: RobotTour, q: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """The state of charge along ``tour`` against the legs driven, at the mean or at quantile ``q``: at each charging
+    stop twice (on arrival, then full), so the profile rises there."""
+    soc = tour.soc(q)
+    x, y = [0.0], [float(soc[0])]
+    for k in range(len(tour.legs)):
+        x.append(k + 1.0)
+        y.append(float(soc[k + 1]))
+        if k in tour.charging_stops:
+            x.append(k + 1.0)
+            y.append(1.0)
+    return np.array(x), np.array(y)

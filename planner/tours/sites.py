@@ -1,4 +1,4 @@
-"""The sites of a tour (name, place, value, service, time window) and the robots that visit them (battery, depot)."""
+"""A tour's sites (name, place, value, service, time window), its charging points and robots (battery, depot)."""
 
 from __future__ import annotations
 
@@ -15,17 +15,22 @@ from energy import Battery
 from terrain import TerrainMap
 from terrain.georef import lonlat_to_xy
 from terrawatt_base.checks import check_real, readonly, real_array
-from terrawatt_base.errors import DataError, InvalidParameterError
+from terrawatt_base.errors import BlockedPositionError, DataError, InvalidParameterError, OutOfBoundsError
 
 from ..batch_pairs import read_sites_csv
 from ..edge_cost import EnergyCost
 
-__all__ = ["TourSites", "TourRobot", "read_tour_sites_csv", "SITE_VALUE_COLUMNS", "SITE_WINDOW_COLUMNS"]
+__all__ = ["TourSites", "TourRobot", "TourChargers", "read_tour_sites_csv", "read_tour_chargers_csv",
+           "SITE_VALUE_COLUMNS", "SITE_WINDOW_COLUMNS", "CHARGER_COLUMNS"]
 
 #: Optional columns of a tour's sites CSV beside the batch command's (default 1, 0 and 0).
 SITE_VALUE_COLUMNS = ("value", "service_energy_j", "service_time_s")
 #: Optional columns of a site's time window (s from the robots' departure; both or neither; empty: no window).
 SITE_WINDOW_COLUMNS = ("tw_start_s", "tw_end_s")
+#: Optional columns of a chargers CSV beside the sites' ``name, x_m, y_m`` (or ``name, lon, lat``): the charging
+#: power (W; empty: to full at once, a battery swap), the fixed time of a stop (s, default 0) and how many stops the
+#: fleet may make there in all (default 2).
+CHARGER_COLUMNS = ("power_w", "connection_time_s", "max_visits")
 
 
 def _per_site(name: str, value: Any, n: int, default: float) -> np.ndarray:
@@ -157,19 +162,134 @@ class TourSites:
         dict of str to str
             Site name -> reason; the sites not named are kept.
         """
-        x, y = self.xy_m[:, 0], self.xy_m[:, 1]
-        inside = np.asarray(cost.terrain.contains(x, y), dtype=bool)
-        errors: dict[str, str] = {}
-        for k in np.flatnonzero(~inside).tolist():
-            errors[self.names[k]] = (f"off the map: ({x[k]:.6g}, {y[k]:.6g}) m lies outside the map bounds "
-                                     f"{tuple(round(b, 6) for b in cost.terrain.bounds)!r}")
-        idx = np.flatnonzero(inside)
-        if idx.size:
-            r, c = cost.terrain.rowcol(x[idx], y[idx])
-            for k in idx[np.asarray(cost.blocked)[r, c]].tolist():
-                errors[self.names[k]] = (f"on an obstacle: ({x[k]:.6g}, {y[k]:.6g}) m lies on a blocked cell "
-                                         "(an obstacle or a slope above the limit)")
-        return errors
+        return _not_on(self.names, self.xy_m, cost)
+
+
+def _not_on(names: tuple[str, ...], xy_m: np.ndarray, cost: EnergyCost) -> dict[str, str]:
+    """The points of ``xy_m`` off ``cost``'s map or on a blocked cell, each with why (``"off the map: ..."``,
+    ``"on an obstacle: ..."``)."""
+    x, y = xy_m[:, 0], xy_m[:, 1]
+    inside = np.asarray(cost.terrain.contains(x, y), dtype=bool)
+    errors: dict[str, str] = {}
+    for k in np.flatnonzero(~inside).tolist():
+        errors[names[k]] = (f"off the map: ({x[k]:.6g}, {y[k]:.6g}) m lies outside the map bounds "
+                            f"{tuple(round(b, 6) for b in cost.terrain.bounds)!r}")
+    idx = np.flatnonzero(inside)
+    if idx.size:
+        r, c = cost.terrain.rowcol(x[idx], y[idx])
+        for k in idx[np.asarray(cost.blocked)[r, c]].tolist():
+            errors[names[k]] = (f"on an obstacle: ({x[k]:.6g}, {y[k]:.6g}) m lies on a blocked cell "
+                                "(an obstacle or a slope above the limit)")
+    return errors
+
+
+@dataclass(frozen=True, eq=False)
+class TourChargers:
+    """Charging points a tour may stop at between its sites: each stop charges the battery **to full**.
+
+    A stop takes ``connection_time_s`` plus the time to put back, at ``power_w``, the most a robot can
+    have spent since its last charge (its battery from the reserve to full: the largest of the fleet),
+    whatever it actually spent: the time is booked before the energy is known, so a tour on time in
+    the plan is on time whatever the draw. The stop's time counts toward the sites' time windows and
+    the robots' ``max_duration_s``. Charging costs no energy of the budget; after it, the next segment
+    of the tour may spend ``(1 - reserve_soc) * capacity``.
+
+    Attributes
+    ----------
+    names : tuple of str
+        A unique, non-empty name per charger (what the result calls its stops).
+    xy_m : ndarray, shape (C, 2)
+        Places (m; :meth:`from_lonlat` for degrees).
+    power_w : ndarray, shape (C,)
+        Charging power (W, > 0; ``inf``, the default: to full at once, e.g. a battery swap).
+    connection_time_s : ndarray, shape (C,)
+        The fixed time of a stop (s, >= 0; default 0): docking, connecting, leaving.
+    max_visits : ndarray of int, shape (C,)
+        How many stops the fleet may make there in all (>= 1; default 2).
+
+    Raises
+    ------
+    InvalidParameterError
+        No chargers; repeated or empty names; NaN places; a power not > 0; a negative connection time;
+        fewer than one visit (the charger named).
+
+    Examples
+    --------
+    >>> ch = TourChargers(("dock",), [[20.0, 5.0]], power_w=100.0, connection_time_s=30.0)
+    >>> ch.stop_time_s(36_000.0).tolist()  # 30 s to connect, 360 s to put back 10 Wh
+    [390.0]
+    """
+
+    names: tuple[str, ...]
+    xy_m: Any
+    power_w: Any = None
+    connection_time_s: Any = None
+    max_visits: Any = None
+
+    def __post_init__(self) -> None:
+        xy = real_array("xy_m", self.xy_m, finite=True)
+        if xy.ndim != 2 or xy.shape[1] != 2 or xy.shape[0] == 0:
+            raise InvalidParameterError(f"chargers' xy_m must have shape (C, 2) with C >= 1, got shape {xy.shape!r}")
+        n = xy.shape[0]
+        names = tuple(self.names)
+        if len(names) != n or not all(isinstance(s, str) and s for s in names):
+            raise InvalidParameterError(f"chargers' names must be {n} non-empty strings, got {names!r:.120}")
+        if len(set(names)) != n:
+            dup = next(s for s in names if names.count(s) > 1)
+            raise InvalidParameterError(f"charger names must be unique; {dup!r} appears {names.count(dup)} times")
+        power = (np.full(n, math.inf) if self.power_w is None
+                 else real_array("power_w", self.power_w, finite=False).ravel() if np.ndim(self.power_w)
+                 else np.full(n, float(self.power_w)))
+        if power.shape != (n,):
+            raise InvalidParameterError(f"power_w must hold one power per charger ({n}), got shape {power.shape!r}")
+        for k in range(n):
+            if not power[k] > 0:
+                raise InvalidParameterError(f"power_w of charger {names[k]!r} must be > 0 (W; inf: to full at once), "
+                                            f"got {float(power[k])!r}")
+        visits = np.full(n, 2) if self.max_visits is None else np.asarray(self.max_visits).ravel() * np.ones(n)
+        if visits.shape != (n,) or np.any(visits != np.round(visits)) or np.any(visits < 1):
+            raise InvalidParameterError(f"max_visits must be one integer >= 1 per charger ({n}), got "
+                                        f"{np.asarray(self.max_visits).tolist()!r}")
+        set_ = object.__setattr__
+        set_(self, "names", names)
+        set_(self, "xy_m", readonly(xy))
+        set_(self, "power_w", readonly(power))
+        set_(self, "connection_time_s", _per_site("connection_time_s", self.connection_time_s, n, 0.0))
+        set_(self, "max_visits", readonly(visits.astype(np.int64)))
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+    @classmethod
+    def from_lonlat(cls, names: Any, lonlat: Any, where: TerrainMap, **per_charger: Any) -> TourChargers:
+        """Chargers given as WGS 84 longitude, latitude (degrees), placed on the georeferenced map ``where``."""
+        placed = TourSites.from_lonlat(names, lonlat, where)
+        return cls(placed.names, placed.xy_m, **per_charger)
+
+    def stop_time_s(self, refill_j: float) -> np.ndarray:
+        """The time booked for a stop at each charger (s): its connection time plus ``refill_j`` at its power."""
+        return self.connection_time_s + float(refill_j) / self.power_w
+
+    def check_on(self, cost: EnergyCost) -> None:
+        """Every charger must lie on a free cell of ``cost``'s map.
+
+        Raises
+        ------
+        OutOfBoundsError
+            A charger off the map (named).
+        BlockedPositionError
+            A charger on an obstacle or a slope above the limit (named).
+        """
+        for name, why in _not_on(self.names, self.xy_m, cost).items():
+            error = OutOfBoundsError if why.startswith("off the map") else BlockedPositionError
+            raise error(f"charger {name!r} is {why}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """The chargers in tour.json: per name its place, power (null: to full at once), connection time, visits."""
+        return {n: {"xy_m": [float(x), float(y)], "power_w": float(p) if math.isfinite(p) else None,
+                    "connection_time_s": float(c), "max_visits": int(v)}
+                for n, (x, y), p, c, v in zip(self.names, self.xy_m.tolist(), self.power_w.tolist(),
+                                              self.connection_time_s.tolist(), self.max_visits.tolist())}
 
 
 @dataclass(frozen=True)
@@ -187,6 +307,10 @@ class TourRobot:
     max_duration_s : float, optional
         The longest its tour may last, from leaving the depot at 0 to being back (s; driving, waiting and
         service); ``None``: no limit.
+    standby_power_w : float
+        What the robot draws while it waits for a site's window to open (W, >= 0; default 0): its electronics
+        at standstill (sensors and the control board's standby; the edge costs carry them while driving).
+        :func:`planner.tours.plan_tour_on_map` takes the robot's ``sensor_power_w + control_standby_power_w``.
 
     Examples
     --------
@@ -199,6 +323,7 @@ class TourRobot:
     depot_xy_m: tuple[float, float]
     name: str = "robot 0"
     max_duration_s: float | None = None
+    standby_power_w: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.battery, Battery):
@@ -212,12 +337,19 @@ class TourRobot:
         if self.max_duration_s is not None:
             object.__setattr__(self, "max_duration_s", check_real("max_duration_s", self.max_duration_s, low=0.0,
                                                                   low_inclusive=False))
+        object.__setattr__(self, "standby_power_w", check_real("standby_power_w", self.standby_power_w, low=0.0))
 
     @property
     def budget_j(self) -> float:
         """Energy the tour may spend above the reserve (J): ``(initial_soc - reserve_soc) * capacity``."""
         b = self.battery
         return max(b.initial_soc - b.reserve_soc, 0.0) * b.energy_capacity_j
+
+    @property
+    def full_budget_j(self) -> float:
+        """Energy a tour may spend above the reserve after a charge to full (J): ``(1 - reserve_soc) * capacity``."""
+        b = self.battery
+        return max(1.0 - b.reserve_soc, 0.0) * b.energy_capacity_j
 
     def soc_after(self, energy_j: Any) -> np.ndarray:
         """State of charge (fraction) after spending ``energy_j`` from the initial charge (no losses)."""
@@ -273,3 +405,32 @@ def _number(text: str, default: float, file: str, i: int, col: str) -> float:
     if not math.isfinite(v):
         raise DataError(f"sites file {file!r}, line {i + 2}: column {col!r} is {text!r}; expected a finite number")
     return v
+
+
+def read_tour_chargers_csv(path: str | os.PathLike[str], where: TerrainMap | None = None) -> TourChargers:
+    """Charging points from a CSV laid out as the sites file (``name, x_m, y_m`` or ``name, lon, lat``) with the
+    optional columns :data:`CHARGER_COLUMNS`: ``power_w`` (W; empty: to full at once), ``connection_time_s``
+    (s, default 0) and ``max_visits`` (default 2).
+
+    Raises
+    ------
+    FileNotFoundError, FileFormatError, DataError, InvalidParameterError
+        As :func:`read_tour_sites_csv`; a cell that is not a number (the line and column named); a power not > 0,
+        a negative connection time, a number of visits that is not an integer >= 1, repeated names.
+    """
+    names, xy = read_sites_csv(path, where)
+    file = Path(path).name
+    extra: dict[str, list[float]] = {}
+    with open(Path(path), newline="", encoding="utf-8-sig") as fh:
+        reader = csv.DictReader(fh)
+        reader.fieldnames = [h.strip() for h in (reader.fieldnames or [])]
+        present = [c for c in CHARGER_COLUMNS if c in reader.fieldnames]
+        defaults = {"power_w": math.inf, "connection_time_s": 0.0, "max_visits": 2.0}
+        for i, row in enumerate(reader):
+            for col in present:
+                text = (row.get(col) or "").strip()
+                if col == "power_w" and not text:
+                    extra.setdefault(col, []).append(math.inf)
+                    continue
+                extra.setdefault(col, []).append(_number(text, defaults[col], file, i, col))
+    return TourChargers(names, xy, **extra)

@@ -18,6 +18,17 @@ a robot's ``max_duration_s`` (rounded down) is its vehicle's ``shift_duration``.
 The chosen tours are then checked on their own quantile (:meth:`PairPrices.tour_interval`: the
 spreads of one ground add along the whole tour); a tour above its budget tightens that robot's
 capacity by the excess and the problem is solved again, until every tour holds.
+
+**Charging points** (:class:`planner.tours.TourChargers`) are extra points of the pair matrix a tour
+may stop at between sites, each stop charging the battery to full: the energy constraint holds per
+*segment* (from the depot or a charge to the next charge or back), the first on the robot's budget
+above the reserve from its initial charge, the others on a full battery's. Each segment is checked
+on its own quantile (the spreads of one ground add along the segment; after a charge to full the
+past segment's draw no longer matters for the charge). PyVRP's reload depots reset a vehicle's
+*load* (what its clients deliver or pick up), not its distance (``max_distance`` spans the whole
+route, reloads or not), and a tour's energy lies on its arcs, not at its clients: chargers do not
+map onto them, so a problem with chargers is solved by OR-Tools, whose energy dimension takes a
+charger's reset as slack (:func:`solve_ortools`): each charger is ``max_visits`` optional copies.
 """
 
 from __future__ import annotations
@@ -47,6 +58,8 @@ SOLVERS = ("pyvrp", "ortools")
 _MAX_ROUNDS = 8
 #: Seconds that stand for "never" (no window's end; a leg without a route).
 HORIZON_S = 10**12
+_PYVRP_NO_CHARGERS = ("solver 'pyvrp' cannot stop at charging points (its reload depots reset a vehicle's load, not "
+                      "the energy spent on the arcs); use solver='ortools' (the default with chargers)")
 
 
 def walk_timeline(drive_s: np.ndarray, service_s: np.ndarray, window_s: np.ndarray,
@@ -93,6 +106,23 @@ class TourProblem:
         (``(0, HORIZON_S)`` without a window).
     shift_s : ndarray of int64, shape (R,)
         Each robot's longest tour, whole seconds rounded down (:data:`HORIZON_S`: no limit).
+    full_units : ndarray of int64, shape (R,)
+        Each robot's budget at Q after a charge to full (its capacity from a charger on; without
+        chargers unused).
+    charger_points : ndarray of int, shape (C,)
+        The charging points (point indices; empty: none).
+    charger_visits : ndarray of int, shape (C,)
+        How many stops the fleet may make at each.
+    risk : float
+        The level Q.
+    budget_j, full_budget_j : ndarray, shape (R,)
+        Each robot's budget above the reserve from its initial charge and from a full one (J): what each
+        segment's own quantile is checked against.
+    service_j : ndarray, shape (P,)
+        Service energy at each point (J).
+    standby_w : ndarray, shape (R,)
+        What each robot draws while it waits for a window to open (W): the waiting's energy is not in the
+        arcs (it depends on the order), so the solver does not see it; the check of each tour counts it.
     """
 
     arc_units: np.ndarray
@@ -105,9 +135,30 @@ class TourProblem:
     service_s: np.ndarray = None  # type: ignore[assignment]
     window_s: np.ndarray = None  # type: ignore[assignment]
     shift_s: np.ndarray = None  # type: ignore[assignment]
+    full_units: np.ndarray = None  # type: ignore[assignment]
+    charger_points: np.ndarray = None  # type: ignore[assignment]
+    charger_visits: np.ndarray = None  # type: ignore[assignment]
+    risk: float = 0.5
+    budget_j: np.ndarray = None  # type: ignore[assignment]
+    full_budget_j: np.ndarray = None  # type: ignore[assignment]
+    service_j: np.ndarray = None  # type: ignore[assignment]
+    standby_w: np.ndarray = None  # type: ignore[assignment]
 
     def __post_init__(self) -> None:
         n = self.arc_units.shape[0]
+        if self.full_units is None:
+            object.__setattr__(self, "full_units", np.asarray(self.capacity_units, dtype=np.int64).copy())
+        if self.charger_points is None:
+            object.__setattr__(self, "charger_points", np.zeros(0, dtype=np.int64))
+            object.__setattr__(self, "charger_visits", np.zeros(0, dtype=np.int64))
+        if self.budget_j is None:
+            object.__setattr__(self, "budget_j", np.asarray(self.capacity_units, dtype=float) * self.unit_j)
+        if self.full_budget_j is None:
+            object.__setattr__(self, "full_budget_j", np.asarray(self.full_units, dtype=float) * self.unit_j)
+        if self.service_j is None:
+            object.__setattr__(self, "service_j", np.zeros(n))
+        if self.standby_w is None:
+            object.__setattr__(self, "standby_w", np.zeros(len(self.depot_points)))
         if self.drive_s is None:
             object.__setattr__(self, "drive_s", np.zeros((n, n), dtype=np.int64))
         if self.service_s is None:
@@ -123,18 +174,27 @@ class TourProblem:
         w = self.window_s[self.site_points]
         return bool(np.any(w[:, 0] > 0) or np.any(w[:, 1] < HORIZON_S))
 
+    @property
+    def has_chargers(self) -> bool:
+        """Whether the tours may stop at charging points."""
+        return bool(self.charger_points.size)
+
     @classmethod
     def build(cls, prices: PairPrices, q: float, budgets_j: Any, depot_points: Any, site_points: Any,
               values: Any, service_j: Any, service_time_s: Any = None, window_s: Any = None,
-              max_duration_s: Any = None) -> TourProblem:
+              max_duration_s: Any = None, full_budgets_j: Any = None) -> TourProblem:
         """The problem of visiting ``site_points`` (values, service energies, service times and time windows
         ``(earliest_s, latest_s)`` per point index; no service time and no windows by default) at risk ``q``, each
-        robot's tour lasting at most its ``max_duration_s`` (``None`` or inf: no limit)."""
+        robot's tour lasting at most its ``max_duration_s`` (``None`` or inf: no limit); ``full_budgets_j``: each
+        robot's budget after a charge to full (default its budget; :meth:`with_chargers` adds the chargers)."""
         budgets = np.asarray(budgets_j, dtype=float)
-        unit = max(float(budgets.max()), 1.0) / UNITS
+        full_j = budgets if full_budgets_j is None else np.asarray(full_budgets_j, dtype=float)
+        unit = max(float(budgets.max()), float(full_j.max()), 1.0) / UNITS
         cap = np.floor(budgets / unit).astype(np.int64)
-        arc = prices.arc_quantile_j(q) + np.asarray(service_j, dtype=float)[None, :]
-        big = int(cap.max()) * 4 + 1
+        full = np.floor(full_j / unit).astype(np.int64)
+        service_j = np.asarray(service_j, dtype=float)
+        arc = prices.arc_quantile_j(q) + service_j[None, :]
+        big = int(max(cap.max(), full.max())) * 4 + 1
         units = np.where(np.isfinite(arc), np.ceil(np.minimum(arc, big * unit) / unit - 1e-9), big).astype(np.int64)
         np.fill_diagonal(units, 0)
         sites = np.asarray(site_points, dtype=np.int64)
@@ -154,7 +214,60 @@ class TourProblem:
                  else np.array([HORIZON_S if v is None else v for v in max_duration_s], dtype=float))
         shift_s = np.floor(np.minimum(shift, HORIZON_S) + 1e-9).astype(np.int64)
         return cls(units, cap, np.asarray(depot_points, dtype=np.int64), sites, prize, unit, drive, service_s, windows,
-                   shift_s)
+                   shift_s, full, risk=float(q), budget_j=budgets, full_budget_j=full_j, service_j=service_j)
+
+    def with_chargers(self, charger_points: Any, max_visits: Any) -> TourProblem:
+        """The same problem whose tours may stop at ``charger_points`` (point indices, each at most ``max_visits``
+        times by the whole fleet) to charge to full (their stop time is their ``service_s``)."""
+        pts = np.asarray(charger_points, dtype=np.int64).ravel()
+        visits = np.broadcast_to(np.asarray(max_visits, dtype=np.int64), pts.shape).copy()
+        return dataclasses.replace(self, charger_points=pts, charger_visits=visits)
+
+    def segments(self, robot: int, stops: Any) -> list[list[int]]:
+        """The tour ``depot, stops..., depot`` of ``robot`` cut at its charging stops: each segment's points, from
+        the depot or a charger to the next charger or the depot (one segment without charging stops)."""
+        d = int(self.depot_points[robot])
+        chargers = set(self.charger_points.tolist())
+        out, seg = [], [d]
+        for p in [*(int(s) for s in stops), d]:
+            seg.append(p)
+            if p in chargers:
+                out.append(seg)
+                seg = [p]
+        out.append(seg)
+        return out
+
+    def segment_units(self, robot: int, stops: Any) -> list[tuple[int, int]]:
+        """Each segment's units and the capacity it must hold within (the robot's budget from its initial charge for
+        the first, from a full one for the others)."""
+        caps = (int(self.capacity_units[robot]), int(self.full_units[robot]))
+        return [(int(sum(self.arc_units[a, b] for a, b in zip(seg[:-1], seg[1:]))), caps[k > 0])
+                for k, seg in enumerate(self.segments(robot, stops))]
+
+    def reaches(self, robot: int, point: int) -> bool:
+        """Whether ``robot`` can visit ``point`` and come back, every segment within its capacity, charging at will
+        (every charger as often as needed: a relaxation of the charger visits)."""
+        d = int(self.depot_points[robot])
+        cap, full = int(self.capacity_units[robot]), int(self.full_units[robot])
+        arc = self.arc_units
+        chargers = [int(c) for c in self.charger_points.tolist()]
+        budget = {d: cap}
+        frontier = [d]
+        while frontier:  # the chargers the robot can get to from its depot
+            u = frontier.pop()
+            for c in chargers:
+                if c not in budget and arc[u, c] <= budget[u]:
+                    budget[c] = full
+                    frontier.append(c)
+        home = {d}
+        grew = True
+        while grew:  # the chargers it can get home from
+            grew = False
+            for c in chargers:
+                if c not in home and any(arc[c, v] <= full for v in home):
+                    home.add(c)
+                    grew = True
+        return any(arc[u, point] + arc[point, v] <= left for u, left in budget.items() for v in home)
 
     def tour_units(self, robot: int, sites: Any) -> int:
         """Units of the closed tour ``depot, sites..., depot`` of ``robot``."""
@@ -174,9 +287,19 @@ class TourProblem:
             return None
         return (arrivals, starts, back) if back <= int(self.shift_s[robot]) else None
 
-    def with_capacity(self, capacity_units: Any) -> TourProblem:
-        """The same problem with other capacities."""
-        return dataclasses.replace(self, capacity_units=np.asarray(capacity_units, dtype=np.int64))
+    def waiting_j(self, robot: int, stops: Any) -> list[float]:
+        """The energy ``robot`` spends waiting at each of ``stops`` for its window to open (J; its standby power
+        times the wait, on the solver's whole seconds)."""
+        if not self.standby_w[robot] or not stops:
+            return [0.0] * len(stops)
+        d = int(self.depot_points[robot])
+        arrivals, starts, _ = walk_timeline(self.drive_s, self.service_s, self.window_s, [d, *stops, d])
+        return [float(self.standby_w[robot]) * float(b - a) for a, b in zip(arrivals, starts)]
+
+    def with_capacity(self, capacity_units: Any, full_units: Any = None) -> TourProblem:
+        """The same problem with other capacities (and, with chargers, other capacities after a charge)."""
+        full = self.full_units if full_units is None else np.asarray(full_units, dtype=np.int64)
+        return dataclasses.replace(self, capacity_units=np.asarray(capacity_units, dtype=np.int64), full_units=full)
 
 
 def solve_pyvrp(problem: TourProblem, time_limit_s: float = 10.0, seed: int = 0,
@@ -185,7 +308,15 @@ def solve_pyvrp(problem: TourProblem, time_limit_s: float = 10.0, seed: int = 0,
 
     Stops after ``no_improvement`` iterations without a better solution (default
     ``max(2000, 100 * sites)``) or after ``time_limit_s``.
+
+    Raises
+    ------
+    InvalidParameterError
+        A problem with charging points (its reload depots reset a load, not the energy on the arcs:
+        :func:`solve_ortools` solves those).
     """
+    if problem.has_chargers:
+        raise InvalidParameterError(_PYVRP_NO_CHARGERS)
     import pyvrp
     from pyvrp.stop import MaxRuntime, MultipleCriteria, NoImprovement
 
@@ -226,11 +357,19 @@ def solve_pyvrp(problem: TourProblem, time_limit_s: float = 10.0, seed: int = 0,
 
 
 def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list[int]]:
-    """Each robot's sites by OR-Tools' routing solver (disjunctions with the prizes as penalties), for comparison.
+    """Each robot's stops by OR-Tools' routing solver (disjunctions with the prizes as penalties): its sites and,
+    with chargers, its charging stops (point indices, in visiting order).
 
     With time windows or longest tours, a time dimension (transit: the service where the arc leaves, then
     the drive; slack: the waiting) holds each site's start of service in its window and each robot's
     return within its longest tour, as PyVRP does.
+
+    With chargers, each charger is ``charger_visits`` optional copies (no penalty when left out); the energy
+    dimension counts what was spent since the last charge: it starts at ``full - capacity`` (what the robot
+    lacks of a full battery), every arc adds its units, and an arc leaving a charger first takes the charge
+    back (the transit less a constant ``K``, the slack there ``K`` less the dimension's value: down to 0,
+    a charge to full); every robot's dimension stays within its full capacity. A charger's stop time is its
+    service time in the time dimension.
 
     Raises
     ------
@@ -240,11 +379,15 @@ def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list
     try:
         from ortools.constraint_solver import pywrapcp, routing_enums_pb2
     except ImportError as exc:
-        raise OptionalDependencyError("solver 'ortools' needs OR-Tools: pip install 'terrawatt[bench]'") from exc
+        raise OptionalDependencyError("solver 'ortools' (the comparison solver, and the one of tours with charging "
+                                      "points) needs OR-Tools: pip install 'terrawatt[bench]'") from exc
     if problem.site_points.size == 0:
         return [[] for _ in problem.depot_points]
     depots = sorted(set(problem.depot_points.tolist()))
-    order = depots + problem.site_points.tolist()
+    copies = [int(c) for c, v in zip(problem.charger_points.tolist(), problem.charger_visits.tolist())
+              for _ in range(int(v))]
+    order = depots + problem.site_points.tolist() + copies
+    n_fixed = len(depots) + problem.site_points.size  # nodes from here on are charger copies
     idx = np.asarray(order)
     sub = problem.arc_units[np.ix_(idx, idx)]
     loc = {p: k for k, p in enumerate(depots)}
@@ -258,16 +401,21 @@ def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list
 
     cb = routing.RegisterTransitCallback(arc)
     routing.SetArcCostEvaluatorOfAllVehicles(cb)
-    routing.AddDimensionWithVehicleCapacity(cb, 0, [int(c) for c in problem.capacity_units], True, "energy")
+    if copies:
+        _ortools_charging(problem, routing, manager, matrix, n_fixed)
+    else:
+        routing.AddDimensionWithVehicleCapacity(cb, 0, [int(c) for c in problem.capacity_units], True, "energy")
     for k, prize in enumerate(problem.prize.tolist()):
         routing.AddDisjunction([manager.NodeToIndex(len(depots) + k)], int(prize))
+    for node in range(n_fixed, len(order)):
+        routing.AddDisjunction([manager.NodeToIndex(node)], 0)
     if problem.has_windows or np.any(problem.shift_s < HORIZON_S):
         _ortools_time(problem, routing, manager, idx, len(depots))
     params = pywrapcp.DefaultRoutingSearchParameters()
     params.first_solution_strategy = routing_enums_pb2.FirstSolutionStrategy.PATH_CHEAPEST_ARC
     params.local_search_metaheuristic = routing_enums_pb2.LocalSearchMetaheuristic.GUIDED_LOCAL_SEARCH
     params.time_limit.FromMilliseconds(int(1000 * time_limit_s))
-    solution = routing.SolveWithParameters(params)
+    solution = _solve_charging(routing, params, time_limit_s) if copies else routing.SolveWithParameters(params)
     tours: list[list[int]] = [[] for _ in problem.depot_points]
     if solution is None:
         return tours
@@ -275,10 +423,60 @@ def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list
         i = routing.Start(r)
         while not routing.IsEnd(i):
             node = manager.IndexToNode(i)
-            if node >= len(depots):
-                tours[r].append(int(problem.site_points[node - len(depots)]))
+            if node >= len(depots) and (not tours[r] or tours[r][-1] != order[node]):  # two copies of one charger
+                tours[r].append(int(order[node]))  # in a row are one stop (a leg of nothing, one charge to full)
             i = solution.Value(routing.NextVar(i))
     return tours
+
+
+def _solve_charging(routing: Any, params: Any, time_limit_s: float) -> Any:
+    """With chargers: OR-Tools' depth-first (complete) search for at most half the time limit, then its guided local
+    search from the best it found for the rest.
+
+    The local search alone moves one or two stops at a time, each move feasible, and a better tour
+    often needs a site and a charging stop inserted together (e.g. a second charger on the way to a far
+    site): it stalls in such local optima. The complete search finds those tours on small problems
+    (it exhausts the tree well within the time) and gives the local search a start on large ones."""
+    from ortools.constraint_solver import pywrapcp
+
+    exact = pywrapcp.DefaultRoutingSearchParameters()
+    exact.CopyFrom(params)
+    exact.use_depth_first_search = True
+    exact.time_limit.FromMilliseconds(int(500 * time_limit_s))
+    t0 = time.perf_counter()
+    first = routing.SolveWithParameters(exact)
+    rest = pywrapcp.DefaultRoutingSearchParameters()
+    rest.CopyFrom(params)
+    rest.time_limit.FromMilliseconds(max(int(1000 * (time_limit_s - (time.perf_counter() - t0))), 1))
+    if first is None:
+        return routing.SolveWithParameters(rest)
+    better = routing.SolveFromAssignmentWithParameters(first, rest)
+    return better if better is not None else first
+
+
+def _ortools_charging(problem: TourProblem, routing: Any, manager: Any, matrix: list[list[int]], n_fixed: int) -> None:
+    """OR-Tools' energy dimension with charges to full at the charger copies (nodes ``n_fixed`` on)."""
+    big = int(problem.full_units.max())
+
+    def spent(i: int, j: int) -> int:
+        a = manager.IndexToNode(i)
+        return matrix[a][manager.IndexToNode(j)] - (big if a >= n_fixed else 0)
+
+    routing.AddDimensionWithVehicleCapacity(routing.RegisterTransitCallback(spent), big,
+                                            [int(c) for c in problem.full_units], False, "energy")
+    energy = routing.GetDimensionOrDie("energy")
+    solver = routing.solver()
+    for r in range(len(problem.depot_points)):
+        energy.CumulVar(routing.Start(r)).SetValue(int(problem.full_units[r] - problem.capacity_units[r]))
+        energy.SlackVar(routing.Start(r)).SetValue(0)
+    for node in range(len(matrix)):
+        if node < len(set(problem.depot_points.tolist())):
+            continue  # a depot is a start or an end: its start's slack is set above, an end has none
+        i = manager.NodeToIndex(node)
+        if node < n_fixed:
+            energy.SlackVar(i).SetValue(0)
+        else:  # the charge to full: leave with nothing spent
+            solver.Add(energy.SlackVar(i) + energy.CumulVar(i) == big)
 
 
 def _ortools_time(problem: TourProblem, routing: Any, manager: Any, idx: np.ndarray, n_depots: int) -> None:
@@ -311,36 +509,46 @@ class SolverOutcome:
     rounds: int
 
 
-def solve_tours(prices: PairPrices, q: float, budgets_j: Any, depot_points: Any, site_points: Any, values: Any,
-                service_j: Any, *, solver: str = "pyvrp", time_limit_s: float = 10.0, seed: int = 0,
-                service_time_s: Any = None, window_s: Any = None, max_duration_s: Any = None) -> SolverOutcome:
-    """Solve, check each tour on its own quantile, tighten and solve again until every tour holds.
+def solve_tours(prices: PairPrices, problem: TourProblem, *, solver: str | None = None, time_limit_s: float = 10.0,
+                seed: int = 0) -> SolverOutcome:
+    """Solve ``problem`` (built on ``prices``), check each tour on its own quantile, segment by segment between
+    charges, tighten the capacities and solve again until every tour holds.
+
+    ``solver``: ``"pyvrp"`` (the default without chargers) or ``"ortools"`` (the default, and the only one, with
+    chargers: :func:`solve_pyvrp`).
 
     Raises
     ------
     InvalidParameterError
-        An unknown solver.
+        An unknown solver; ``"pyvrp"`` on a problem with chargers.
     """
+    solver = ("ortools" if problem.has_chargers else "pyvrp") if solver is None else solver
     if solver not in SOLVERS:
         raise InvalidParameterError(f"solver must be one of {SOLVERS!r}, got {solver!r}")
+    if solver == "pyvrp" and problem.has_chargers:
+        raise InvalidParameterError(_PYVRP_NO_CHARGERS)
     t0 = time.perf_counter()
-    budgets = np.asarray(budgets_j, dtype=float)
-    service = np.asarray(service_j, dtype=float)
-    problem = TourProblem.build(prices, q, budgets, depot_points, site_points, values, service, service_time_s,
-                                window_s, max_duration_s)
-    tours: list[list[int]] = [[] for _ in budgets]
+    q = problem.risk
+    tours: list[list[int]] = [[] for _ in problem.depot_points]
     for rounds in range(1, _MAX_ROUNDS + 1):
         tours = (solve_pyvrp(problem, time_limit_s, seed) if solver == "pyvrp"
                  else solve_ortools(problem, time_limit_s))
-        cap = problem.capacity_units.copy()
+        cap, full = problem.capacity_units.copy(), problem.full_units.copy()
         holds = True
-        for r, sites in enumerate(tours):
-            d = int(problem.depot_points[r])
-            need = prices.tour_interval([d, *sites, d], float(service[sites].sum())).quantile_j(q)
-            if need > budgets[r]:
+        for r, stops in enumerate(tours):
+            factor = 1.0
+            waiting = iter([*problem.waiting_j(r, stops), 0.0])  # per point after the depot (none back there)
+            for k, seg in enumerate(problem.segments(r, stops)):
+                budget = problem.budget_j[r] if k == 0 else problem.full_budget_j[r]
+                waited = sum(next(waiting) for _ in seg[1:])
+                need = prices.tour_interval(seg, float(problem.service_j[seg[1:]].sum()) + waited).quantile_j(q)
+                if need > budget:
+                    factor = min(factor, budget / need)
+            if factor < 1.0:
                 holds = False
-                cap[r] = int(math.floor(cap[r] * budgets[r] / need)) - 1
+                cap[r] = int(math.floor(cap[r] * factor)) - 1
+                full[r] = int(math.floor(full[r] * factor)) - 1
         if holds:
             break
-        problem = problem.with_capacity(np.maximum(cap, 0))
+        problem = problem.with_capacity(np.maximum(cap, 0), np.maximum(full, 0))
     return SolverOutcome(tours, problem, solver, time.perf_counter() - t0, rounds)

@@ -1,4 +1,5 @@
-"""plan_tour: which sites each robot visits on one charge, in what order, so that it comes back above its reserve at Q."""
+"""plan_tour: which sites each robot visits on one charge (or several, at charging points), in what order, so that it
+comes back above its reserve at Q."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ from ..edge_cost import EnergyCost
 from ..risk import RouteEnergyInterval, check_planning_risk
 from .pricing import PairPrices, price_pairs
 from .result import RobotTour, TourLeg, TourResult
-from .sites import TourRobot, TourSites
+from .sites import TourChargers, TourRobot, TourSites
 from .solver import HORIZON_S, TourProblem, solve_tours, walk_timeline
 
 __all__ = ["plan_tour", "plan_tour_on_map", "TOO_FAR", "NOT_WORTH_IT", "NO_ROUTE", "OUTSIDE_WINDOW", "TOO_LONG",
@@ -60,10 +61,11 @@ def plan_tour(
     seed: int = 0,
     workers: int | None = None,
     client: Any = None,
-    solver: str = "pyvrp",
+    solver: str | None = None,
     map_label: str = "map",
     progress: bool = False,
     prices: PairPrices | None = None,
+    chargers: TourChargers | None = None,
 ) -> TourResult:
     """Choose and order the sites each robot visits to maximise the value collected, every tour at risk level
     ``risk`` coming back above its reserve.
@@ -74,6 +76,12 @@ def plan_tour(
     chosen tour is checked on its own quantile (the spreads of one ground add along the whole tour),
     capacities tightened and the problem solved again until every tour holds
     (:mod:`planner.tours.solver`).
+
+    With ``chargers`` a tour may stop at charging points between its sites, each stop charging the battery
+    to full (:class:`planner.tours.TourChargers`: its stop time booked as service time); the energy then holds
+    at Q per segment between charges (the first from the robot's initial charge, the others from a full one),
+    each checked on its own quantile; the chargers are priced with the sites (extra points of the pair matrix)
+    and the problem is solved by OR-Tools (PyVRP's reload depots reset a load, not the energy on the arcs).
 
     Parameters
     ----------
@@ -92,8 +100,9 @@ def plan_tour(
         The solver's seed.
     workers, client
         Where the legs are priced (:func:`planner.plan_batch`'s dask path).
-    solver : {"pyvrp", "ortools"}
-        The routing solver ("ortools" needs the ``bench`` extra).
+    solver : {"pyvrp", "ortools"}, optional
+        The routing solver ("ortools" needs the ``bench`` extra); default "pyvrp", "ortools" with chargers (the
+        only one that stops at them).
     map_label : str
         How the result names the map.
     progress : bool
@@ -102,6 +111,8 @@ def plan_tour(
         The legs already priced (``result.prices`` of an earlier call on the same cost, depots and sites):
         solve again at another level, battery or with another solver without pricing again (the legs'
         routes stay those searched at the earlier level).
+    chargers : TourChargers, optional
+        Charging points the tours may stop at (each at most its ``max_visits`` times by the whole fleet).
 
     Returns
     -------
@@ -111,9 +122,12 @@ def plan_tour(
     Raises
     ------
     InvalidParameterError
-        Bad arguments; a risk level below 0.5; a depot off the map.
+        Bad arguments; a risk level below 0.5; a depot off the map; a charger named as a site; solver "pyvrp"
+        with chargers.
+    OutOfBoundsError
+        A charger off the map.
     BlockedPositionError
-        A depot on a blocked cell.
+        A depot or a charger on a blocked cell.
 
     Examples
     --------
@@ -141,31 +155,51 @@ def plan_tour(
         bad = depots[int(np.flatnonzero(np.asarray(cost.blocked)[r, c])[0])]
         raise BlockedPositionError(f"depot {bad!r} m lies on a blocked cell (an obstacle or a slope above the limit)")
     errors = sites.check_on(cost)
+    if chargers is not None:
+        if not isinstance(chargers, TourChargers):
+            raise InvalidParameterError(f"chargers must be a TourChargers or None, got {type(chargers).__name__!r}")
+        chargers.check_on(cost)
+        same = sorted(set(chargers.names) & set(sites.names))
+        if same:
+            raise InvalidParameterError(f"charger and site names must differ (the result names stops by them); "
+                                        f"{same[0]!r} is both")
     kept = [k for k, n in enumerate(sites.names) if n not in errors]
     depot_names = ["depot"] if len(depots) == 1 else [f"depot {k}" for k in range(len(depots))]
-    names = depot_names + [sites.names[k] for k in kept]
-    pts = np.vstack([dxy, sites.xy_m[kept]]) if kept else dxy
+    charger_names = list(chargers.names) if chargers is not None else []
+    names = depot_names + [sites.names[k] for k in kept] + charger_names
+    pts = np.vstack([dxy, sites.xy_m[kept]] + ([chargers.xy_m] if chargers is not None else []))
     if prices is None:
         prices = price_pairs(cost, pts, names, risk=q, workers=workers, client=client, progress=progress)
     elif not isinstance(prices, PairPrices) or prices.names != tuple(names) or not np.allclose(prices.xy_m, pts):
-        raise InvalidParameterError("prices must be the PairPrices of these depots and sites (result.prices of an "
-                                    "earlier plan_tour on the same inputs)")
-    nd = len(depots)
-    value = np.concatenate([np.zeros(nd), sites.value[kept]])
-    service = np.concatenate([np.zeros(nd), sites.service_energy_j[kept]])
-    timing = _Timing(prices.duration_s, np.concatenate([np.zeros(nd), sites.service_time_s[kept]]),
-                     np.vstack([np.tile([0.0, np.inf], (nd, 1)), sites.time_window_s[kept]]))
+        raise InvalidParameterError("prices must be the PairPrices of these depots, sites and chargers (result.prices "
+                                    "of an earlier plan_tour on the same inputs)")
+    nd, nc = len(depots), len(charger_names)
+    refill_j = max(rb.full_budget_j for rb in fleet)  # a stop is booked for the most a segment can leave to refill
+    stop_s = chargers.stop_time_s(refill_j) if chargers is not None else np.zeros(0)
+    value = np.concatenate([np.zeros(nd), sites.value[kept], np.zeros(nc)])
+    service = np.concatenate([np.zeros(nd), sites.service_energy_j[kept], np.zeros(nc)])
+    timing = _Timing(prices.duration_s, np.concatenate([np.zeros(nd), sites.service_time_s[kept], stop_s]),
+                     np.vstack([np.tile([0.0, np.inf], (nd, 1)), sites.time_window_s[kept],
+                                np.tile([0.0, np.inf], (nc, 1))]))
     depot_points = np.array([depots.index(rb.depot_xy_m) for rb in fleet])
     budgets = np.array([rb.budget_j for rb in fleet])
-    site_points = np.arange(nd, len(names))
+    site_points = np.arange(nd, nd + len(kept))
+    charger_points = np.arange(nd + len(kept), len(names))
     shifts = [rb.max_duration_s for rb in fleet]
-    whole = TourProblem.build(prices, q, budgets, depot_points, site_points, value, service, timing.service_s,
-                              timing.window_s, shifts)
+
+    def problem(points: Any) -> TourProblem:
+        built = dataclasses.replace(
+            TourProblem.build(prices, q, budgets, depot_points, points, value, service, timing.service_s,
+                              timing.window_s, shifts, [rb.full_budget_j for rb in fleet]),
+            standby_w=np.array([rb.standby_power_w for rb in fleet]))
+        return built.with_chargers(charger_points, chargers.max_visits) if chargers is not None else built
+
+    whole = problem(site_points)
     open_ = dataclasses.replace(whole, shift_s=np.full(len(fleet), HORIZON_S, dtype=np.int64))
     left_out: dict[str, str] = {}
     candidates = []
     for p in site_points.tolist():
-        fits = [k for k in range(len(fleet)) if whole.tour_units(k, [p]) <= whole.capacity_units[k]]
+        fits = [k for k in range(len(fleet)) if whole.reaches(k, p)]
         if not any(np.isfinite(prices.mean_j[d, p]) and np.isfinite(prices.mean_j[p, d]) for d in range(nd)):
             left_out[names[p]] = NO_ROUTE
         elif not fits:
@@ -182,25 +216,24 @@ def plan_tour(
     where_xy = {n: (float(x), float(y)) for n, (x, y) in zip(sites.names, sites.xy_m.tolist())}
     windows = {n: (float(e), float(late)) for n, (e, late) in zip(sites.names, sites.time_window_s.tolist())
                if e > 0 or np.isfinite(late)}
+    at_charger = set(charger_points.tolist())
     if not candidates:
         reachable = any(why == NOT_WORTH_IT for why in left_out.values())  # reachable, but worth nothing
-        empty = tuple(_tour(prices, rb, [], d, service, value, q, timing)
+        empty = tuple(_tour(prices, rb, [], d, service, value, q, timing, at_charger)
                       for rb, d in zip(fleet, depot_points.tolist()))
-        return TourResult("planned" if reachable else "nothing reachable", q, empty, left_out, errors, values, solver,
-                          prices.pricing_time_s, 0.0, 0, prices.where, map_label, where_xy, cost.terrain, cost, prices,
-                          windows)
-    outcome = solve_tours(prices, q, budgets, depot_points, candidates, value, service, solver=solver,
-                          time_limit_s=time_limit_s, seed=seed, service_time_s=timing.service_s,
-                          window_s=timing.window_s, max_duration_s=shifts)
+        return TourResult("planned" if reachable else "nothing reachable", q, empty, left_out, errors, values,
+                          solver or ("ortools" if chargers is not None else "pyvrp"), prices.pricing_time_s, 0.0, 0,
+                          prices.where, map_label, where_xy, cost.terrain, cost, prices, windows, chargers)
+    outcome = solve_tours(prices, problem(np.array(candidates)), solver=solver, time_limit_s=time_limit_s, seed=seed)
     chosen = {p for t in outcome.tours for p in t}
     for p in candidates:
         if p not in chosen:
             left_out[names[p]] = NOT_WORTH_IT
-    tours = tuple(_tour(prices, rb, t, d, service, value, q, timing)
+    tours = tuple(_tour(prices, rb, t, d, service, value, q, timing, at_charger)
                   for rb, t, d in zip(fleet, outcome.tours, depot_points.tolist()))
     return TourResult("planned", q, tours, left_out, errors, values, outcome.solver, prices.pricing_time_s,
                       outcome.solve_time_s, outcome.rounds, prices.where, map_label, where_xy, cost.terrain, cost,
-                      prices, windows)
+                      prices, windows, chargers)
 
 
 class _Timing:
@@ -219,30 +252,36 @@ class _Timing:
         return tuple(map(float, arrivals)), tuple(map(float, starts)), float(back)
 
 
-def _tour(prices: PairPrices, robot: TourRobot, sites: list[int], depot: int, service: np.ndarray,
-          value: np.ndarray, q: float, timing: _Timing) -> RobotTour:
-    """One robot's :class:`RobotTour` from its point indices."""
-    seq = [depot, *sites, depot] if sites else []
-    legs, cumulative = [], []
-    served = 0.0
-    for k, (a, b) in enumerate(zip(seq[:-1], seq[1:])):
-        leg_iv = prices.tour_interval([a, b])
-        legs.append(TourLeg(prices.names[a], prices.names[b], prices.waypoints[a][b], leg_iv,
-                            float(prices.duration_s[a, b])))
-        served += float(service[b])
-        cumulative.append(prices.tour_interval(seq[:k + 2], served))
-    energy = cumulative[-1] if cumulative else RouteEnergyInterval(0.0, 0.0, {})
+def _tour(prices: PairPrices, robot: TourRobot, stops: list[int], depot: int, service: np.ndarray,
+          value: np.ndarray, q: float, timing: _Timing, chargers: set[int]) -> RobotTour:
+    """One robot's :class:`RobotTour` from its stops (point indices: sites and ``chargers``), the energy counted
+    afresh after each charge."""
+    seq = [depot, *stops, depot] if stops else []
+    sites = [p for p in stops if p not in chargers]
     arrivals, starts, back = timing.walk(seq)
+    waiting = [robot.standby_power_w * (b - a) for a, b in zip(arrivals, starts)]  # electronics while it waits
+    legs, cumulative = [], []
+    first, served = 0, 0.0
+    for k, (a, b) in enumerate(zip(seq[:-1], seq[1:])):
+        legs.append(TourLeg(prices.names[a], prices.names[b], prices.waypoints[a][b], prices.tour_interval([a, b]),
+                            float(prices.duration_s[a, b])))
+        served += float(service[b]) + (waiting[k] if k < len(waiting) else 0.0)
+        cumulative.append(prices.tour_interval(seq[first:k + 2], served))  # since the depot or the last charge
+        if b in chargers:
+            first, served = k + 1, 0.0
+    energy = (prices.tour_interval(seq, float(service[sites].sum()) + sum(waiting)) if seq
+              else RouteEnergyInterval(0.0, 0.0, {}))
     return RobotTour(robot.name, robot.battery, robot.depot_xy_m, tuple(prices.names[p] for p in sites), tuple(legs),
-                     tuple(float(service[p]) for p in sites), float(value[sites].sum()) if sites else 0.0, energy,
-                     tuple(cumulative), robot.budget_j, q, tuple(float(timing.service_s[p]) for p in sites),
-                     arrivals, starts, back, robot.max_duration_s)
+                     tuple(float(service[p]) for p in stops), float(value[sites].sum()) if sites else 0.0, energy,
+                     tuple(cumulative), robot.budget_j, q, tuple(float(timing.service_s[p]) for p in stops),
+                     arrivals, starts, back, robot.max_duration_s,
+                     tuple(k for k, p in enumerate(stops) if p in chargers), tuple(waiting))
 
 
 def plan_tour_on_map(
     terrain: TerrainMap,
     sites: TourSites,
-    depot_xy_m: tuple[float, float],
+    depot_xy_m: tuple[float, float] | Sequence[tuple[float, float]],
     *,
     battery_ah: float,
     voltage_v: float | None = None,
@@ -257,25 +296,34 @@ def plan_tour_on_map(
     client: Any = None,
     map_label: str = "map",
     progress: bool = False,
+    chargers: TourChargers | None = None,
 ) -> TourResult:
-    """:func:`plan_tour` on a map priced as ``terrawatt tour`` prices it: ``n_robots`` alike robots with one depot.
+    """:func:`plan_tour` on a map priced as ``terrawatt tour`` prices it: ``n_robots`` alike robots with one depot, or
+    one each (``depot_xy_m`` a sequence of ``n_robots`` points), and the ``chargers`` they may stop at.
 
     The edges are priced as ``pricing`` says (:meth:`planner.cost_spec.CostSpec.build`, default
     ``CostSpec()``; the tour's level is ``risk``, not the spec's); each robot's battery is ``battery_ah`` at ``voltage_v`` (default the robot's) keeping
-    ``reserve_pct`` % in reserve; each tour lasts at most ``max_duration_s`` (s; ``None``: no limit).
+    ``reserve_pct`` % in reserve; each tour lasts at most ``max_duration_s`` (s; ``None``: no limit); waiting
+    for a window draws the robot's ``sensor_power_w + control_standby_power_w``.
 
     Raises
     ------
     InvalidParameterError
-        Bad numbers (a non-positive capacity, a reserve outside [0, 100), fewer than one robot), as
-        :func:`plan_tour`.
+        Bad numbers (a non-positive capacity, a reserve outside [0, 100), fewer than one robot), several depots
+        but not one per robot, as :func:`plan_tour`.
     """
     battery_ah = check_real("battery_ah", battery_ah, low=0.0, low_inclusive=False)
     n_robots = check_int("n_robots", n_robots, low=1)
     pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
     voltage = pricing.params.battery_voltage_v if voltage_v is None else voltage_v
+    standby_w = pricing.params.sensor_power_w + pricing.params.control_standby_power_w  # waiting for a window
     battery = Battery(battery_ah, voltage, min_reserve_pct=reserve_pct)
     cost = pricing.build(terrain)
-    fleet = [TourRobot(battery, depot_xy_m, f"robot {k}", max_duration_s) for k in range(n_robots)]
+    depots = np.asarray(depot_xy_m, dtype=float)
+    depots = depots.reshape(-1, 2) if depots.ndim == 2 else np.tile(depots, (n_robots, 1))
+    if depots.shape[0] != n_robots:
+        raise InvalidParameterError(f"depot_xy_m must be one point or one per robot (n_robots={n_robots}), got "
+                                    f"{depots.shape[0]} points")
+    fleet = [TourRobot(battery, tuple(depots[k]), f"robot {k}", max_duration_s, standby_w) for k in range(n_robots)]
     return plan_tour(cost, sites, fleet, risk=risk, time_limit_s=time_limit_s, seed=seed, workers=workers,
-                     client=client, map_label=map_label, progress=progress)
+                     client=client, map_label=map_label, progress=progress, chargers=chargers)

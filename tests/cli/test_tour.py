@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import pytest
 from cli_samples import PNG_MAGIC
 
 from terrawatt_cli import main
@@ -103,3 +104,45 @@ def test_cli_a_bag_that_would_replace_an_input_is_refused_before_any_work(tmp_pa
                "--voltage", "24", "--bag", "--out", str(out)])
     assert rc == 2 and "tour_0.mcap" in capsys.readouterr().err
     assert sites.read_bytes() == before and not (out / "tour.json").exists()
+
+
+def test_cli_chargers_let_a_far_site_be_visited_and_tour_json_names_the_stops(tmp_path, capsys, wall_map):
+    pytest.importorskip("ortools", reason="tours with chargers are solved by OR-Tools (the bench extra)")
+    tmap = wall_map.save(tmp_path / "wall.npz")
+    sites = _sites(tmp_path, ["pump,5.5,35.5,1", "shed,35.5,5.5,3"])
+    args = ["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "0.1",
+            "--voltage", "24", "--time-limit", "1"]
+    rc = main(args + ["--out", str(tmp_path / "alone")])
+    assert rc == 0 and "too far at Q: shed" in capsys.readouterr().out
+    chargers = tmp_path / "chargers.csv"
+    chargers.write_text("name,x_m,y_m,power_w,connection_time_s\ndock,20.5,32.5,80,10\n")
+    out = tmp_path / "out"
+    rc = main(args + ["--chargers", str(chargers), "--out", str(out)])
+    text = capsys.readouterr().out
+    assert rc == 0, text
+    doc = json.loads((out / "tour.json").read_text())
+    robot = doc["robots"][0]
+    assert "shed" in robot["sites"] and "dock" in robot["stops"] and robot["charging_stops"]
+    assert all(robot["stops"][k] == "dock" for k in robot["charging_stops"]) and "dock" in doc["chargers"]
+    assert all(s["energy_at_risk_j"] <= s["budget_j"] for s in robot["segments"])
+    assert "[charge dock]" in text
+    chargers.write_text("name,x_m,y_m\ndock,20.5,95.5\n")
+    rc = main(args + ["--chargers", str(chargers), "--out", str(tmp_path / "bad")])
+    err = capsys.readouterr().err
+    assert rc == 2 and "charger 'dock' is off the map" in err and err.count("\n") == 1
+
+
+def test_cli_one_depot_per_robot(tmp_path, capsys, wall_map):
+    tmap = wall_map.save(tmp_path / "wall.npz")
+    sites = _sites(tmp_path, ["pump,5.5,35.5,1", "shed,35.5,5.5,1"])
+    args = ["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--depot", "35.5", "35.5",
+            "--battery-ah", "0.1", "--voltage", "24"]
+    rc = main(args + ["--out", str(tmp_path / "out")])
+    text = capsys.readouterr().out
+    assert rc == 0, text
+    doc = json.loads((tmp_path / "out" / "tour.json").read_text())
+    assert [r["depot_xy_m"] for r in doc["robots"]] == [[5.5, 5.5], [35.5, 35.5]]  # --robots defaults to 2
+    assert "depot 1 ->" in text
+    rc = main(args + ["--robots", "3", "--out", str(tmp_path / "bad")])
+    err = capsys.readouterr().err
+    assert rc == 2 and "--depot is given 2 times but --robots is 3" in err

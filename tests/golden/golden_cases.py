@@ -134,6 +134,19 @@ def case_tour(work: Path) -> dict[str, Path]:
     return {f"tour/{p.name}": p for p in sorted(out.iterdir())}
 
 
+def case_tour_chargers(work: Path) -> dict[str, Path]:
+    """One robot's tour of three sites with a charger: the far shed visited after a charge (OR-Tools: bench extra)."""
+    path = patch_map(work)
+    sites = work / "sites.csv"
+    sites.write_text("name,x_m,y_m,value\npump,10.5,20.5,2\nshed,55.5,20.5,3\nwell,50.5,5.5,1\n")
+    chargers = work / "chargers.csv"
+    chargers.write_text("name,x_m,y_m,power_w,connection_time_s,max_visits\ndock,36.5,21.5,60,15,2\n")
+    out = work / "tour_chargers"
+    _cli("tour", "--map", path, "--sites", sites, "--chargers", chargers, "--depot", 3.5, 12.5, "--battery-ah", 0.08,
+         "--voltage", 24, "--risk", 0.9, "--time-limit", 1, "--out", out)
+    return {f"tour_chargers/{p.name}": p for p in sorted(out.iterdir())}
+
+
 def case_plan_exports(work: Path) -> dict[str, Path]:
     """The route and map for ROS 2 / Nav2 (needs the ros and geo extras: rosbags, rasterio)."""
     path = patch_map(work)
@@ -241,7 +254,7 @@ DIGESTED = ("replay/logs/*", "replay/state/state.npz/*", "replay/*/registry.npz/
             "replay/*/registry.npz/sample_count.npy")
 
 #: The optional packages a case needs (the extras a user installs for those outputs): skipped without them.
-NEEDS = {"plan_exports": ("rasterio", "rosbags")}
+NEEDS = {"plan_exports": ("rasterio", "rosbags"), "tour_chargers": ("ortools",)}
 
 #: Each case by name: a function of an empty work folder returning its outputs, ``{"<case>/<name>": path}``.
 CASES: dict[str, Callable[[Path], dict[str, Path]]] = {

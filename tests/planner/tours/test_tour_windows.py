@@ -179,3 +179,24 @@ def test_a_robots_longest_tour_bounds_its_sites():
     assert res.to_dict()["robots"][0]["max_duration_s"] == 80.0 and "at most 80 s" in res.summary()
     with pytest.raises(InvalidParameterError, match="max_duration_s"):
         TourRobot(Battery(1.0, 24.0), (2.0, 2.0), max_duration_s=0.0)
+
+
+def test_waiting_for_a_window_costs_the_robots_standby_power():
+    cost = EnergyCost.from_presets(flat_map((40, 40), 1.0))
+    sites = TourSites(("late",), [[20.0, 5.0]], time_window_s=[(300.0, 900.0)])
+    idle = TourRobot(Battery(0.2, 24.0), (5.0, 5.0))
+    busy = TourRobot(Battery(0.2, 24.0), (5.0, 5.0), standby_power_w=20.0)
+    plain, waiting = (plan_tour(cost, sites, r).tours[0] for r in (idle, busy))
+    wait_s = waiting.service_start_s[0] - waiting.arrival_s[0]
+    assert wait_s > 200.0 and plain.waiting_energy_j == (0.0,)
+    assert waiting.waiting_energy_j == pytest.approx((20.0 * wait_s,))
+    assert waiting.energy.mean_j == pytest.approx(plain.energy.mean_j + 20.0 * wait_s)
+    assert waiting.soc()[-1] < plain.soc()[-1]
+    # a battery that drives there and back but cannot also wait: the site is left out
+    drive_j = plain.energy.mean_j
+    short = TourRobot(Battery((drive_j + 10.0 * wait_s) / (0.8 * 24.0 * 3600.0), 24.0), (5.0, 5.0),
+                      standby_power_w=20.0)
+    res = plan_tour(cost, sites, short)
+    assert res.visited == () and "late" in res.left_out
+    with pytest.raises(InvalidParameterError, match="standby_power_w"):
+        TourRobot(Battery(0.2, 24.0), (5.0, 5.0), standby_power_w=-1.0)
