@@ -57,7 +57,7 @@ def add_parser(sub: Any) -> None:
                    help="charging points the robots may stop at between sites, each stop charging to full (laid out as "
                         "the sites file: name, x_m, y_m or name, lon, lat; optional power_w (W; empty: at once), "
                         "connection_time_s (default 0) and max_visits (stops of the whole fleet, default 2)); the "
-                        "energy then holds at Q per segment between charges; solved by OR-Tools (the bench extra)")
+                        "energy then holds at Q per segment between charges; solved by OR-Tools)")
     depot = p.add_mutually_exclusive_group(required=True)
     depot.add_argument("--depot", type=float, nargs=2, action="append", metavar=("X", "Y"),
                        help="the depot the robots start from and come back to (m); repeat it for one depot per robot "

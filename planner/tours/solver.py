@@ -374,13 +374,13 @@ def solve_ortools(problem: TourProblem, time_limit_s: float = 10.0) -> list[list
     Raises
     ------
     OptionalDependencyError
-        OR-Tools is not installed (the ``bench`` extra).
+        OR-Tools is not installed (a dependency of terrawatt: a broken install).
     """
     try:
         from ortools.constraint_solver import pywrapcp, routing_enums_pb2
     except ImportError as exc:
         raise OptionalDependencyError("solver 'ortools' (the comparison solver, and the one of tours with charging "
-                                      "points) needs OR-Tools: pip install 'terrawatt[bench]'") from exc
+                                      "points) needs OR-Tools, a dependency of terrawatt: pip install ortools") from exc
     if problem.site_points.size == 0:
         return [[] for _ in problem.depot_points]
     depots = sorted(set(problem.depot_points.tolist()))

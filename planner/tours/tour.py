@@ -101,7 +101,7 @@ def plan_tour(
     workers, client
         Where the legs are priced (:func:`planner.plan_batch`'s dask path).
     solver : {"pyvrp", "ortools"}, optional
-        The routing solver ("ortools" needs the ``bench`` extra); default "pyvrp", "ortools" with chargers (the
+        The routing solver; default "pyvrp", "ortools" with chargers (the
         only one that stops at them).
     map_label : str
         How the result names the map.

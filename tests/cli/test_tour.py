@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 
-import pytest
 from cli_samples import PNG_MAGIC
 
 from terrawatt_cli import main
@@ -107,7 +106,6 @@ def test_cli_a_bag_that_would_replace_an_input_is_refused_before_any_work(tmp_pa
 
 
 def test_cli_chargers_let_a_far_site_be_visited_and_tour_json_names_the_stops(tmp_path, capsys, wall_map):
-    pytest.importorskip("ortools", reason="tours with chargers are solved by OR-Tools (the bench extra)")
     tmap = wall_map.save(tmp_path / "wall.npz")
     sites = _sites(tmp_path, ["pump,5.5,35.5,1", "shed,35.5,5.5,3"])
     args = ["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "0.1",

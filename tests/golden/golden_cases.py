@@ -135,7 +135,7 @@ def case_tour(work: Path) -> dict[str, Path]:
 
 
 def case_tour_chargers(work: Path) -> dict[str, Path]:
-    """One robot's tour of three sites with a charger: the far shed visited after a charge (OR-Tools: bench extra)."""
+    """One robot's tour of three sites with a charger: the far shed visited after a charge (OR-Tools)."""
     path = patch_map(work)
     sites = work / "sites.csv"
     sites.write_text("name,x_m,y_m,value\npump,10.5,20.5,2\nshed,55.5,20.5,3\nwell,50.5,5.5,1\n")
@@ -254,7 +254,7 @@ DIGESTED = ("replay/logs/*", "replay/state/state.npz/*", "replay/*/registry.npz/
             "replay/*/registry.npz/sample_count.npy")
 
 #: The optional packages a case needs (the extras a user installs for those outputs): skipped without them.
-NEEDS = {"plan_exports": ("rasterio", "rosbags"), "tour_chargers": ("ortools",)}
+NEEDS = {"plan_exports": ("rasterio", "rosbags")}
 
 #: Each case by name: a function of an empty work folder returning its outputs, ``{"<case>/<name>": path}``.
 CASES: dict[str, Callable[[Path], dict[str, Path]]] = {

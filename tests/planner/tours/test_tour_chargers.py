@@ -17,7 +17,6 @@ from terrain import BlockedPositionError, DataError, InvalidParameterError, OutO
 
 from tour_samples import hills_cost, with_interval  # noqa: F401  (fixture)
 
-pytest.importorskip("ortools", reason="tours with charging points are solved by OR-Tools (the bench extra)")
 
 
 @pytest.fixture(scope="module")

@@ -151,7 +151,6 @@ def test_bad_windows_raise_the_librarys_errors_naming_the_site(tmp_path):
 
 @pytest.mark.parametrize("seed, shift_s", [(2, 10_000), (0, 200)])  # the windows bind; the longest tour binds
 def test_the_ortools_path_keeps_the_windows_and_finds_the_same_optimum(hills_cost, seed, shift_s):
-    pytest.importorskip("ortools", reason="the comparison solver needs the bench extra")
     sites = _windowed_sites(seed, 6, (20.0, 20.0))
     robot = TourRobot(Battery(0.2, 24.0, min_reserve_pct=20.0), (20.0, 20.0), max_duration_s=shift_s)
     problem = _problem(hills_cost, sites, [robot], 0.9)
