@@ -53,10 +53,11 @@ grounds, each ground held out of the choice in turn, the update whose worst harm
 unadapted forecast (median or p90 of total charge, 20 and 40 s) on the two other grounds is least
 — ties within the 1 point the target allows broken by the lower mean error — is ``"prior"`` for
 every choice of two; on the grounds of the independent generator (held out of every choice) it
-harms no ground and halves the gap the evidence shrink left (pooled 40 s: 13.7 / 54.0 % against
-20.2 / 64.4 %). A time-blocked check on the prefix (fit on its first half, keep the correction
-where it beats the unadapted forecast of the second half by more than its noise) was measured and
-dropped: within one run a run's own offset passes it as well as the ground's.
+raises no ground's error by more than a point and forecasts better than the evidence shrink
+(pooled, 40 s: 13.7 / 54.0 % against 20.2 / 64.4 %, median / p90). Choosing on the prefix
+itself (fit on its first half, keep the correction where it beats the unadapted forecast of the
+second half by more than its noise) was measured and dropped: within one run a run's own offset
+passes that check as well as the ground's.
 """
 
 from __future__ import annotations
