@@ -43,7 +43,8 @@ new-ground spread; zero on a ground the model drove). The correction is scaled b
   R + E)`` the rest of the same run (``scope="run"``) — the posterior mean of a Gaussian offset
   whose spreads are the learned ones. It does not look at ``obs``: the prefix of one run cannot
   say whether its offset is the ground's or its own, the spreads learned over many runs and
-  grounds can.
+  grounds can. A model trained on one ground learned no ground spread: on a ground it never
+  drove it falls back to ``"evidence"``.
 - ``"evidence"``: the positive-part James–Stein factor ``max(0, 1 - V / obs**2)`` with ``V = E``
   (+ ``R`` with ``scope="ground"``): ``G`` estimated from the prefix alone.
 - ``"none"``: the correction as fitted.
@@ -314,7 +315,9 @@ class AdaptedCurrentModel(CurrentModel):
                   truths: list[np.ndarray]) -> np.ndarray:
         """Per side, the factor the correction is scaled by (``shrink``, module docstring), in [0, 1]."""
         obs, noise, run, ground = _evidence_parts(base, logs, preds, truths)
-        if self.shrink == "prior":
+        # a new ground and no ground spread learned (one training ground): the prior cannot say; the evidence can
+        unlearned = base.interval_.new_ground_cov is None and not base.knows_ground(logs[0].meta.ground_label)
+        if self.shrink == "prior" and not unlearned:
             carried = ground if self.scope == "ground" else ground + run
             total = ground + run + noise
             lam = np.divide(carried, total, out=np.zeros(2), where=total > 0)

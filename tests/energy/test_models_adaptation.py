@@ -1,5 +1,6 @@
 """Tests of energy.models.adaptation: in-run adaptation of a fitted current model (model.adapt)."""
 
+import copy
 import dataclasses
 
 import numpy as np
@@ -278,6 +279,17 @@ def test_prior_shrink_learns_nothing_of_a_ground_the_model_drove(two_ground_esti
     np.testing.assert_array_equal(other_runs.shrink_, [0.0, 0.0])  # its offset is known: zero
     np.testing.assert_allclose(other_runs.predict(train[2]), est.predict(train[2]))
     assert np.all(AdaptedCurrentModel(est, scope="run").fit(prefix).shrink_ > 0.5)
+
+
+def test_prior_shrink_without_a_learned_ground_spread_reads_the_evidence(two_ground_estimator):
+    est, _ = two_ground_estimator
+    one_ground = copy.copy(est)  # as if trained on one ground: no ground spread learned
+    one_ground.interval_ = dataclasses.replace(est.interval_, new_ground_cov=None, n_grounds=0)
+    far = interval_log(40, "c", vibration=0.5, offset_a=3.0).slice(0.0, 20.0)
+    prior = AdaptedCurrentModel(one_ground, scope="ground").fit(far)
+    evidence = AdaptedCurrentModel(one_ground, scope="ground", shrink="evidence").fit(far)
+    np.testing.assert_array_equal(prior.shrink_, evidence.shrink_)
+    assert np.all(prior.shrink_ > 0.8)  # a clear offset on a new ground is followed, not ignored
 
 
 def test_evidence_shrink_keeps_a_residual_within_noise_and_follows_a_clear_one(two_ground_estimator):
