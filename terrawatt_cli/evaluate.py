@@ -16,7 +16,7 @@ from energy.evaluation import (
     evaluate_report,
     evaluation_files,
 )
-from energy.models import ADAPT_METHODS, CURRENT_MODEL_KINDS
+from energy.models import ADAPT_METHODS, ADAPT_SHRINKS, CURRENT_MODEL_KINDS
 from terrawatt_base.errors import InvalidParameterError
 
 from .common import (
@@ -70,9 +70,10 @@ def add_adapt_options(parser: argparse.ArgumentParser) -> None:
                              f"{' '.join(f'{t:g}' for t in DEFAULT_ADAPT_SECONDS)})")
     parser.add_argument("--adapt-method", choices=ADAPT_METHODS, default=None,
                         help=f"the in-run update (default {ADAPT_METHODS[0]})")
-    parser.add_argument("--adapt-shrink", action=argparse.BooleanOptionalAction, default=None,
-                        help="scale the update by the evidence of the seconds it adapts on (default on; "
-                             "--no-adapt-shrink follows the prefix fully)")
+    parser.add_argument("--adapt-shrink", choices=ADAPT_SHRINKS, default=None,
+                        help="how far the update follows the seconds it adapts on: prior: the share of their residual "
+                             "the spreads learned across runs and grounds carry to the forecast (default); evidence: "
+                             "the James-Stein factor of the residual against noise and run spread; none: fully")
     parser.add_argument("--adapt-threshold", type=float, default=None, metavar="PCT",
                         help="adapt protocol: the running charge error (%%) above which the trigger schedule updates "
                              "(default 10)")
@@ -94,7 +95,7 @@ def adapt_settings_from_args(args: argparse.Namespace) -> AdaptSettings | None:
         args.protocol, adapt_seconds=DEFAULT_ADAPT_SECONDS if args.adapt_seconds is None else args.adapt_seconds,
         adapt_method=args.adapt_method or ADAPT_METHODS[0],
         adapt_threshold_pct=10.0 if args.adapt_threshold is None else args.adapt_threshold,
-        adapt_shrink=True if args.adapt_shrink is None else args.adapt_shrink, names=_NAMES)
+        adapt_shrink=ADAPT_SHRINKS[0] if args.adapt_shrink is None else args.adapt_shrink, names=_NAMES)
 
 
 def run_evaluate(args: argparse.Namespace) -> int:

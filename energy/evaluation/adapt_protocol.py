@@ -27,7 +27,7 @@ from terrawatt_base.errors import DataError, InvalidParameterError
 from ..battery import Battery
 from ..logs import InteractionLog
 from ..metrics import DEFAULT_SECTION_S, compare_currents
-from ..models.adaptation import ADAPT_METHODS, AdaptedCurrentModel
+from ..models.adaptation import ADAPT_METHODS, ADAPT_SHRINKS, AdaptedCurrentModel
 from ..models.base import CurrentModel, log_currents
 from ..params import robot_params
 from ..robot import RobotParams
@@ -94,7 +94,7 @@ class AdaptSettings:
     prior_s: float = 20.0
     turn_scale_radps: float = 0.3
     min_seconds: float = 5.0
-    shrink: bool = True
+    shrink: str = ADAPT_SHRINKS[0]
     section_s: float = DEFAULT_SECTION_S
     robot: str | RobotParams = "husky"
     battery: Battery | None = None
@@ -116,7 +116,7 @@ class AdaptSettings:
         for name in ("trigger_from_s", "min_remainder_s", "min_seconds"):
             check_real(name, getattr(self, name), low=0.0, owner=own)
         check_choice(f"{own}.method", self.method, ADAPT_METHODS)
-        check_bool(f"{own}.shrink", self.shrink)
+        check_choice(f"{own}.shrink", self.shrink, ADAPT_SHRINKS)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-types form."""

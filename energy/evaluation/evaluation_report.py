@@ -16,7 +16,7 @@ from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.figure_file import draw_figure
 
 from ..logs import InteractionLog
-from ..models.adaptation import ADAPT_METHODS
+from ..models.adaptation import ADAPT_METHODS, ADAPT_SHRINKS
 from ..models.base import check_logs
 from ..models.kinds import CURRENT_MODEL_KINDS, LEARNED_KINDS, new_current_model
 from ..models.training_report import check_learned_band
@@ -58,7 +58,7 @@ def evaluation_files(protocol: str = "loo") -> tuple[str, ...]:
 
 def check_adapt_options(protocol: str = "adapt", *, adapt_seconds: Sequence[float] = DEFAULT_ADAPT_SECONDS,
                         adapt_method: str = ADAPT_METHODS[0], adapt_threshold_pct: float = 10.0,
-                        adapt_shrink: bool = True, names: Mapping[str, str] | None = None) -> AdaptSettings:
+                        adapt_shrink: str = ADAPT_SHRINKS[0], names: Mapping[str, str] | None = None) -> AdaptSettings:
     """The :class:`AdaptSettings` of the adapt options, checked; the trigger schedule runs with ``protocol="adapt"``.
 
     Parameters
@@ -71,9 +71,9 @@ def check_adapt_options(protocol: str = "adapt", *, adapt_seconds: Sequence[floa
         The in-run update (:data:`~energy.models.ADAPT_METHODS`).
     adapt_threshold_pct : float
         The running charge error (%, >= 0) above which the trigger schedule updates.
-    adapt_shrink : bool
-        Scale the update's correction by the evidence of its prefix
-        (:class:`~energy.models.AdaptedCurrentModel` ``shrink``).
+    adapt_shrink : str
+        How the update's correction is scaled by the evidence of its prefix
+        (:data:`~energy.models.ADAPT_SHRINKS`; :class:`~energy.models.AdaptedCurrentModel` ``shrink``).
     names : mapping, optional
         How messages name the options (keys of :data:`EVALUATION_NAMES`, e.g. ``{"adapt_seconds": "--adapt-seconds"}``).
 
@@ -111,7 +111,7 @@ def check_adapt_options(protocol: str = "adapt", *, adapt_seconds: Sequence[floa
     if isinstance(threshold, bool) or not isinstance(threshold, numbers.Real) or not threshold >= 0:
         raise InvalidParameterError(f"{n['adapt_threshold_pct']} must be a percentage >= 0, got {threshold!r}")
     check_choice(n["adapt_method"], adapt_method, ADAPT_METHODS)
-    check_bool(n["adapt_shrink"], adapt_shrink)
+    check_choice(n["adapt_shrink"], adapt_shrink, ADAPT_SHRINKS)
     return AdaptSettings(adapt_seconds=tuple(seconds), method=adapt_method, threshold_pct=threshold,
                          shrink=adapt_shrink, trigger=protocol == "adapt")
 

@@ -22,6 +22,7 @@ from typing import Any
 from .adaptation import (
     ADAPT_METHODS,
     ADAPT_SCOPES,
+    ADAPT_SHRINKS,
     MIN_ADAPT_SAMPLES,
     MIN_ADAPT_SECONDS,
     AdaptedCurrentModel,
@@ -123,6 +124,7 @@ __all__ = [
     "MIN_ADAPT_SAMPLES",
     "AdaptedCurrentModel",
     "ADAPT_SCOPES",
+    "ADAPT_SHRINKS",
     "TORCH_NAMES",
     *TORCH_NAMES,
 ]

@@ -138,6 +138,13 @@ def test_defaults_give_the_leave_one_out_protocol_and_the_adapt_defaults_elsewhe
     assert s.adapt_seconds == (10.0, 20.0, 40.0) and s.threshold_pct == 10.0 and not s.trigger
 
 
+def test_the_update_follows_its_prefix_by_the_learned_share_unless_told_otherwise():
+    assert adapt_settings_from_args(_parse("--protocol", "few-shot")).shrink == "prior"
+    assert adapt_settings_from_args(_parse("--protocol", "few-shot", "--adapt-shrink", "evidence")).shrink == "evidence"
+    with pytest.raises(SystemExit):
+        _parse("--protocol", "few-shot", "--no-adapt-shrink")
+
+
 def test_the_adapt_protocol_triggers_on_its_threshold():
     s = adapt_settings_from_args(_parse("--protocol", "adapt", "--adapt-seconds", "8", "--adapt-threshold", "3"))
     assert s.trigger and s.adapt_seconds == (8.0,) and s.threshold_pct == 3.0

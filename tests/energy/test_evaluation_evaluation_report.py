@@ -27,7 +27,7 @@ from energy.models import CURRENT_MODEL_KINDS
 from terrawatt_base.errors import FigureWarning, InvalidParameterError, UnknownNameError
 
 FLAGS = {"kinds": "--model", "protocol": "--protocol", "band_hz": "--band", "adapt_seconds": "--adapt-seconds",
-         "adapt_method": "--adapt-method", "adapt_threshold_pct": "--adapt-threshold"}
+         "adapt_method": "--adapt-method", "adapt_threshold_pct": "--adapt-threshold", "adapt_shrink": "--adapt-shrink"}
 
 
 def test_leave_one_run_out_is_scored_and_written_with_the_spectra(tmp_path):
@@ -86,6 +86,7 @@ def test_the_default_kinds_follow_the_protocol_and_a_kind_named_twice_counts_onc
         (lambda: check_adapt_options(adapt_threshold_pct=-1.0, names=FLAGS), InvalidParameterError,
          "--adapt-threshold must be a percentage >= 0, got -1.0"),
         (lambda: check_adapt_options(adapt_method="guess", names=FLAGS), UnknownNameError, "--adapt-method"),
+        (lambda: check_adapt_options(adapt_shrink=True, names=FLAGS), UnknownNameError, "--adapt-shrink must be one of"),
         (lambda: check_adapt_options("cv"), UnknownNameError, "protocol must be one of"),
         (lambda: check_evaluation_options(["linear"], band_hz=(1.0, 12.0), names=FLAGS), InvalidParameterError,
          "--band applies to the estimator and paper models only, got --model linear"),

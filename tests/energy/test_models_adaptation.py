@@ -1,5 +1,6 @@
 """Tests of energy.models.adaptation: in-run adaptation of a fitted current model (model.adapt)."""
 
+import copy
 import dataclasses
 
 import numpy as np
@@ -238,27 +239,89 @@ def test_bayes_update_learns_a_new_ground_offset_and_narrows_its_interval(two_gr
 
 
 
-# ------------------------------------------------------- the evidence shrink of a point update
-def test_shrink_keeps_a_residual_within_noise_and_follows_a_clear_one(two_ground_estimator):
+# ------------------------------------------------------- the shrink of a point update by its evidence
+def _with_currents(log: InteractionLog, currents: np.ndarray) -> InteractionLog:
+    return dataclasses.replace(log, current_left_a=currents[:, 0], current_right_a=currents[:, 1])
+
+
+def test_prior_shrink_keeps_a_noise_prefix_and_follows_a_large_offset_by_the_learned_share(two_ground_estimator):
+    est, _ = two_ground_estimator
+    drive = interval_log(40, "c", vibration=0.5).slice(0.0, 20.0)  # a ground the model never drove
+    base = est.predict(drive)
+    rng = np.random.default_rng(7)
+    noise = _with_currents(drive, base + 0.1 * rng.standard_normal(base.shape))  # the prefix is pure noise
+    offset = _with_currents(drive, base + 3.0)  # 3 A off on every sample
+    quiet = AdaptedCurrentModel(est, scope="ground").fit(noise)
+    clear = AdaptedCurrentModel(est, scope="ground").fit(offset)
+    assert quiet.shrink == "prior"
+    # the share is the learned one: what the ground's offset adds to the prefix's charge over everything that does
+    iv, t = est.interval_, drive.time_s
+    ground = np.trapezoid(iv.run_sd_a(drive, base, known=True, cov=iv.new_ground_cov), t, axis=0) ** 2
+    run = np.trapezoid(iv.run_sd_a(drive, base, known=True), t, axis=0) ** 2
+    noise_var = np.sum(iv.sample_sd(drive) ** 2 * np.gradient(t)[:, None], axis=0) * iv.correlation_s
+    np.testing.assert_allclose(clear.shrink_, ground / (ground + run + noise_var), rtol=1e-9)
+    np.testing.assert_array_equal(quiet.shrink_, clear.shrink_)  # not read off one prefix's residual
+    assert np.all((clear.shrink_ > 0.1) & (clear.shrink_ < 1.0))
+    later = interval_log(41, "c", vibration=0.5)
+    moved = clear.predict(later) - est.predict(later)
+    assert np.all(np.abs(quiet.predict(later) - est.predict(later)).mean(axis=0) < 0.05)  # noise: the forecast stays
+    plain = AdaptedCurrentModel(est, scope="ground", shrink="none").fit(offset)
+    assert np.all(moved.mean(axis=0) > 1.0)  # an offset: followed, by the share it carries
+    np.testing.assert_allclose(moved, (plain.predict(later) - est.predict(later)) * clear.shrink_, atol=1e-9)
+    same_run = AdaptedCurrentModel(est, scope="run").fit(offset)
+    assert np.all(same_run.shrink_ > clear.shrink_)  # a run's own offset carries to the rest of that run
+
+
+def test_prior_shrink_learns_nothing_of_a_ground_the_model_drove(two_ground_estimator):
+    est, train = two_ground_estimator
+    prefix = _with_currents(train[1].slice(0.0, 20.0), est.predict(train[1].slice(0.0, 20.0)) + 3.0)
+    other_runs = AdaptedCurrentModel(est, scope="ground").fit(prefix)
+    np.testing.assert_array_equal(other_runs.shrink_, [0.0, 0.0])  # its offset is known: zero
+    np.testing.assert_allclose(other_runs.predict(train[2]), est.predict(train[2]))
+    assert np.all(AdaptedCurrentModel(est, scope="run").fit(prefix).shrink_ > 0.5)
+
+
+def test_prior_shrink_without_a_learned_ground_spread_reads_the_evidence(two_ground_estimator):
+    est, _ = two_ground_estimator
+    one_ground = copy.copy(est)  # as if trained on one ground: no ground spread learned
+    one_ground.interval_ = dataclasses.replace(est.interval_, new_ground_cov=None, n_grounds=0)
+    far = interval_log(40, "c", vibration=0.5, offset_a=3.0).slice(0.0, 20.0)
+    prior = AdaptedCurrentModel(one_ground, scope="ground").fit(far)
+    evidence = AdaptedCurrentModel(one_ground, scope="ground", shrink="evidence").fit(far)
+    np.testing.assert_array_equal(prior.shrink_, evidence.shrink_)
+    assert np.all(prior.shrink_ > 0.8)  # a clear offset on a new ground is followed, not ignored
+
+
+def test_evidence_shrink_keeps_a_residual_within_noise_and_follows_a_clear_one(two_ground_estimator):
     est, train = two_ground_estimator
     known = train[1].slice(0.0, 20.0)  # a ground the model was fitted on: the residual is noise
-    plain = AdaptedCurrentModel(est, method="regime", shrink=False).fit(known)
-    shrunk = AdaptedCurrentModel(est, method="regime", shrink=True, scope="ground").fit(known)
+    plain = AdaptedCurrentModel(est, method="regime", shrink="none").fit(known)
+    shrunk = AdaptedCurrentModel(est, method="regime", shrink="evidence", scope="ground").fit(known)
     assert np.all(plain.shrink_ == 1.0)
     assert np.all(shrunk.shrink_ < 0.5)
     assert np.all(np.abs(shrunk.coefficients_) <= np.abs(plain.coefficients_) + 1e-12)
     far = interval_log(40, "c", vibration=0.5, offset_a=3.0).slice(0.0, 20.0)  # 3 A off on every sample
-    clear = AdaptedCurrentModel(est, method="regime", shrink=True, scope="ground").fit(far)
+    clear = AdaptedCurrentModel(est, method="regime", shrink="evidence", scope="ground").fit(far)
     assert np.all(clear.shrink_ > 0.8)
-    run = AdaptedCurrentModel(est, method="regime", shrink=True, scope="run").fit(far)
+    run = AdaptedCurrentModel(est, method="regime", shrink="evidence", scope="run").fit(far)
     assert np.all(run.shrink_ >= clear.shrink_)  # a run's own offset carries to the rest of that run
+
+
+def test_a_file_from_before_the_shrink_choices_keeps_its_update(two_ground_estimator, tmp_path):
+    est, train = two_ground_estimator
+    adapted = AdaptedCurrentModel(est, method="gain", shrink="evidence", scope="ground").fit(train[0].slice(0.0, 20.0))
+    rec = adapted.to_record()
+    for old, now in ((True, "evidence"), (False, "none")):
+        back = AdaptedCurrentModel.from_record(dataclasses.replace(rec, params={**rec.params, "shrink": old}), "old")
+        assert back.shrink == now
+    np.testing.assert_allclose(back.predict(train[2]), adapted.predict(train[2]))
 
 
 def test_shrink_moves_a_gain_from_one_and_is_saved(two_ground_estimator, tmp_path):
     est, train = two_ground_estimator
     prefix = train[0].slice(0.0, 20.0)
-    plain = AdaptedCurrentModel(est, method="gain", shrink=False).fit(prefix)
-    shrunk = AdaptedCurrentModel(est, method="gain", shrink=True, scope="ground").fit(prefix)
+    plain = AdaptedCurrentModel(est, method="gain", shrink="none").fit(prefix)
+    shrunk = AdaptedCurrentModel(est, method="gain", shrink="evidence", scope="ground").fit(prefix)
     np.testing.assert_allclose(shrunk.coefficients_[:, 0] - 1.0, (plain.coefficients_[:, 0] - 1.0) * shrunk.shrink_)
     path = tmp_path / "shrunk.zip"
     shrunk.save(path)
@@ -269,9 +332,9 @@ def test_shrink_moves_a_gain_from_one_and_is_saved(two_ground_estimator, tmp_pat
 
 def test_shrink_is_ignored_without_an_interval_and_by_bayes(base, two_ground_estimator):
     run = _log(3, offset_a=1.0)
-    assert np.all(base.adapt(_head(run, 20.0), shrink=True).shrink_ == 1.0)  # a model without an interval
+    assert np.all(base.adapt(_head(run, 20.0)).shrink_ == 1.0)  # a model without an interval
     est, train = two_ground_estimator
-    bayes = AdaptedCurrentModel(est, method="bayes", shrink=True).fit(train[1].slice(0.0, 20.0))
+    bayes = AdaptedCurrentModel(est, method="bayes", shrink="prior").fit(train[1].slice(0.0, 20.0))
     assert np.all(bayes.shrink_ == 1.0)
-    with pytest.raises(InvalidParameterError, match="shrink"):
-        base.adapt(_head(run, 20.0), shrink="yes")
+    with pytest.raises(UnknownNameError, match="shrink"):
+        base.adapt(_head(run, 20.0), shrink=True)  # one of ADAPT_SHRINKS, not a flag
