@@ -112,6 +112,28 @@ PAIRS: dict[str, dict[str, Any]] = {
         "value": ("mass_scale", 30.0 / sim.MASS_KG), "slope": SLOPE,
     },
 }
+#: The speed-squared resistance of the robot of ``inertia_vs_lag`` (N s^2 / m^2 per side, before and after
+#: the change): the current grows with the speed, so its slope follows the acceleration.
+DRAG_N_S2_PER_M2 = 20.0
+#: How much heavier the drivetrain of ``inertia_vs_lag`` is (the independent simulator's ``rotor_inertia_scale``).
+ROTOR_SCALE = 3.0
+
+
+def rotor_inertia_truth_kg_m2(scale: float) -> float:
+    """The independent simulator's rotating parts, ``scale`` times its own, as the library's rotor inertia at the
+    motor shaft: its current ``m_rot a_s r / (eta N K_t)`` is the library's ``Jm N a_s / (r K_t)`` at
+    ``Jm = m_rot r^2 / (eta N^2)`` (the simulator's wheels included; the library charges the rotor no gear loss)."""
+    m_rot = scale * (sim.GEAR_RATIO ** 2 * sim.ROTOR_INERTIA_KG_M2 + 2.0 * sim.WHEEL_INERTIA_KG_M2) / sim.WHEEL_RADIUS_M ** 2
+    return m_rot * sim.WHEEL_RADIUS_M ** 2 / (sim.GEAR_EFFICIENCY * sim.GEAR_RATIO ** 2)
+
+
+PAIRS["inertia_vs_lag"] = {
+    "calibration": sim.SimEffects(speed_friction_n_s2_per_m2=DRAG_N_S2_PER_M2),
+    "diagnosed": sim.SimEffects(speed_friction_n_s2_per_m2=DRAG_N_S2_PER_M2, rotor_inertia_scale=ROTOR_SCALE),
+    "driving": "waves", "calibration_driving": "waves", "crop": 0.2, "truth": ("rotor_inertia",),
+    "fit": ("rolling_resistance_coef", "lateral_friction_coef", "rest_current_a", "viscous_friction_coef_s_per_m"),
+    "value": ("rotor_inertia_kg_m2", rotor_inertia_truth_kg_m2(ROTOR_SCALE)),
+}
 TARGETS = {"tie_named_pct": 100.0, "truth_first_after_pct": 90.0, "value_ok_after_pct": 90.0,
            "drive_max_s": 60.0, "z_min": 3.0, "measured_over_expected": (0.5, 2.0)}
 VALUE_TOL = 0.2
@@ -133,14 +155,18 @@ def _value(d: Any, how: str) -> float | None:
         return p["mass_scale"] - 1.0
     if how == "gain_ratio" and {"gain_left", "gain_right"} <= set(p):
         return p["gain_left"] / p["gain_right"] - 1.0
+    if how == "rotor_inertia_kg_m2" and "rotor_inertia_scale" in p:
+        return p["rotor_inertia_scale"] * energy.robot_preset("husky").motor.rotor_inertia_kg_m2
     return None
 
 
 def run_pair(name: str, seed: int, max_repeats: int) -> dict[str, Any]:
     """One pair, one seed: the diagnosis, its separating drive, the drive simulated, the diagnosis again."""
     pair = PAIRS[name]
-    cal = [sim.simulate_run(50_000 + 1000 * seed + k, pair["calibration"]) for k in range(RUNS)]
-    model = energy.PhysicsCurrentModel("husky", "flooring").fit(cal)
+    cal = [sim.simulate_run(50_000 + 1000 * seed + k, pair["calibration"], driving=pair.get("calibration_driving", "mixed"))
+           for k in range(RUNS)]
+    model = energy.PhysicsCurrentModel("husky", "flooring",
+                                       **({"fit_parameters": pair["fit"]} if "fit" in pair else {})).fit(cal)
     slope = pair.get("slope")
     terrain = None if slope is None else slope_map()
     if terrain is not None:

@@ -302,9 +302,42 @@ DRIVING: dict[str, tuple[float, ...]] = {
     "straights": (0.90, 0.0, 0.0, 0.10),  # long straights: a payload and a rolling resistance look alike
     "pivots": (0.0, 0.0, 0.85, 0.15),  # turning on the spot only: a payload and a turning resistance look alike
     "cruise": (1.0, 0.0, 0.0, 0.0),  # one speed, no stops: a current gain and an offset look alike
+    # straight, no stops, the speed swelling and easing smoothly between WAVE_SPEEDS_MPS: where the current
+    # grows with the speed, its slope follows the acceleration, so a current lag and a drivetrain inertia look alike
+    "waves": (1.0, 0.0, 0.0, 0.0),
 }
 #: The one speed of ``"cruise"`` driving (m/s).
 CRUISE_SPEED_MPS = 0.6
+#: ``"waves"`` driving: the range of its speeds (m/s), the length of one smooth change (s) and the hold
+#: between the driver's small command steps (s; the controller's limits and smoothing make them one curve).
+WAVE_SPEEDS_MPS = (0.25, 0.95)
+WAVE_CHANGE_S = (8.0, 11.0)
+WAVE_STEP_S = 0.05
+
+
+def _wave_segments(duration_s: float, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``"waves"`` commands: a rest, one smooth start, then raised-cosine changes up and down in turn between
+    random speeds in the top and bottom quarters of :data:`WAVE_SPEEDS_MPS`, each over :data:`WAVE_CHANGE_S`,
+    commanded in steps of :data:`WAVE_STEP_S`; the last 1.5 s a stop."""
+    t0 = float(rng.uniform(2.0, 3.0))
+    end = duration_s - 1.5
+    low, high = WAVE_SPEEDS_MPS
+    band = 0.25 * (high - low)
+    knots_t, knots_v = [t0], [0.0]
+    t = t0
+    while t < end:  # up and down in turn: each change spans most of the range
+        t += float(rng.uniform(*WAVE_CHANGE_S))
+        knots_t.append(min(t, end))
+        up = len(knots_v) % 2 == 1
+        knots_v.append(float(rng.uniform(high - band, high) if up else rng.uniform(low, low + band)))
+    knots_v[-1] = min(knots_v[-1], WAVE_SPEEDS_MPS[0])  # ease down before the stop
+    starts = np.arange(t0, end, WAVE_STEP_S)
+    k = np.clip(np.searchsorted(knots_t, starts, side="right") - 1, 0, len(knots_t) - 2)
+    kt, kv = np.asarray(knots_t), np.asarray(knots_v)
+    phase = (starts - kt[k]) / (kt[k + 1] - kt[k])
+    v = kv[k] + (kv[k + 1] - kv[k]) * 0.5 * (1.0 - np.cos(np.pi * phase))
+    return (np.concatenate([[0.0], starts, [end]]), np.concatenate([[0.0], v, [0.0]]),
+            np.zeros(starts.size + 2))
 
 
 def command_segments(duration_s: float, rng: np.random.Generator,
@@ -320,6 +353,8 @@ def command_segments(duration_s: float, rng: np.random.Generator,
     (start_s, v_mps, omega_radps) : arrays of equal length; command k holds from
     ``start_s[k]`` until the next start.
     """
+    if driving == "waves":
+        return _wave_segments(duration_s, rng)
     starts, vs, ws = [0.0], [0.0], [0.0]
     t = float(rng.uniform(2.0, 3.0))
     end = duration_s - 1.5
