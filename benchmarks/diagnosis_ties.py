@@ -21,9 +21,18 @@ Each pair is a case where the diagnosed runs cannot tell the true cause from a l
   given the map (the model calibrated on level runs is put on it), so its separating drive
   may go up and back down the ramp; the drive is simulated where the diagnosis placed it.
   The truth: ``mass`` (mass scale - 1 = 0.6).
+- ``inertia_vs_lag``: the drivetrain's rotating parts 3 times heavier than in the calibration runs
+  (the simulator's ``rotor_inertia_scale``), on ``"waves"`` driving (straight, no stops, the speed
+  swelling and easing between ~0.3 and ~0.9 m/s over 8-11 s) cropped above 0.2 m/s, the robot itself
+  with a speed-squared drag (:data:`DRAG_N_S2_PER_M2`) in the calibration runs too, which are waves
+  as well and fit the viscous coefficient besides the defaults. Where the current grows with the
+  speed its slope follows the acceleration, so a current lag (the currents leading, ``-tau dI/dt``)
+  adds what a heavier drivetrain adds (``m_rot a``), up to the model's own inertia term shifted; a
+  stop and a start part them. The truth: ``rotor_inertia``, its value the simulator's rotating
+  parts at the motor shaft as the library charges them (:func:`rotor_inertia_truth_kg_m2`, kg m^2).
 
 Protocol per pair and seed: 6 calibration runs of the robot before the change (mixed
-driving) fit ``PhysicsCurrentModel("husky", "flooring")``; 6 diagnosed runs with the change;
+driving unless the pair says) fit ``PhysicsCurrentModel("husky", "flooring")``; 6 diagnosed runs with the change;
 ``diagnose`` (the library call ``terrawatt diagnose`` makes). Recorded: whether a tie holding
 the truth is named, the separating drive (duration, its smallest expected difference in A and
 in noise units, its separation per run ``z``, the runs it asks for), then that drive simulated
@@ -33,9 +42,6 @@ those runs added to the data: the truth first, its fitted value within 20 %, a t
 
 For a pair on a map, the difference is also given in noise units over the drive's samples on
 the ramp (``noise_units_ramp``), where the two explanations part.
-
-Not covered here: inertia against a sensor lag (the catalogue has no rotor-inertia candidate:
-docs/results.md, issue 31).
 
 Usage::
 
