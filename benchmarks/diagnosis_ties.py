@@ -29,10 +29,11 @@ Each pair is a case where the diagnosed runs cannot tell the true cause from a l
   speed its slope follows the acceleration, so a current lag (the currents leading, ``-tau dI/dt``)
   adds what a heavier drivetrain adds (``m_rot a``), up to the model's own inertia term shifted; a
   stop and a start part them. The truth: ``rotor_inertia``, its value the simulator's rotating
-  parts at the motor shaft as the library charges them (:func:`rotor_inertia_truth_kg_m2`, kg m^2).
+  parts at the motor shaft as the library charges them (:func:`independent_sim.rotor_inertia_kg_m2`, kg m^2).
 
 Protocol per pair and seed: 6 calibration runs of the robot before the change (mixed
-driving unless the pair says) fit ``PhysicsCurrentModel("husky", "flooring")``; 6 diagnosed runs with the change;
+driving unless the pair says) fit ``PhysicsCurrentModel(sim.husky_robot(), "flooring")`` (the Husky
+preset with the simulator's drivetrain inertia, :func:`independent_sim.husky_robot`); 6 diagnosed runs with the change;
 ``diagnose`` (the library call ``terrawatt diagnose`` makes). Recorded: whether a tie holding
 the truth is named, the separating drive (duration, its smallest expected difference in A and
 in noise units, its separation per run ``z``, the runs it asks for), then that drive simulated
@@ -125,20 +126,12 @@ DRAG_N_S2_PER_M2 = 20.0
 ROTOR_SCALE = 3.0
 
 
-def rotor_inertia_truth_kg_m2(scale: float) -> float:
-    """The independent simulator's rotating parts, ``scale`` times its own, as the library's rotor inertia at the
-    motor shaft: its current ``m_rot a_s r / (eta N K_t)`` is the library's ``Jm N a_s / (r K_t)`` at
-    ``Jm = m_rot r^2 / (eta N^2)`` (the simulator's wheels included; the library charges the rotor no gear loss)."""
-    m_rot = scale * (sim.GEAR_RATIO ** 2 * sim.ROTOR_INERTIA_KG_M2 + 2.0 * sim.WHEEL_INERTIA_KG_M2) / sim.WHEEL_RADIUS_M ** 2
-    return m_rot * sim.WHEEL_RADIUS_M ** 2 / (sim.GEAR_EFFICIENCY * sim.GEAR_RATIO ** 2)
-
-
 PAIRS["inertia_vs_lag"] = {
     "calibration": sim.SimEffects(speed_friction_n_s2_per_m2=DRAG_N_S2_PER_M2),
     "diagnosed": sim.SimEffects(speed_friction_n_s2_per_m2=DRAG_N_S2_PER_M2, rotor_inertia_scale=ROTOR_SCALE),
     "driving": "waves", "calibration_driving": "waves", "crop": 0.2, "truth": ("rotor_inertia",),
     "fit": ("rolling_resistance_coef", "lateral_friction_coef", "rest_current_a", "viscous_friction_coef_s_per_m"),
-    "value": ("rotor_inertia_kg_m2", rotor_inertia_truth_kg_m2(ROTOR_SCALE)),
+    "value": ("rotor_inertia_kg_m2", sim.rotor_inertia_kg_m2(ROTOR_SCALE)),
 }
 TARGETS = {"tie_named_pct": 100.0, "truth_first_after_pct": 90.0, "value_ok_after_pct": 90.0,
            "drive_max_s": 60.0, "z_min": 3.0, "measured_over_expected": (0.5, 2.0)}
@@ -152,8 +145,8 @@ def _moving_part(log: Any, speed: float = 0.3) -> Any:
     return log.slice(float(log.time_s[fast[0]]), float(log.time_s[fast[-1]]))
 
 
-def _value(d: Any, how: str) -> float | None:
-    """The fitted size of the truth's effect in ``d`` (first chosen), as ``how`` reads it."""
+def _value(d: Any, how: str, model: Any) -> float | None:
+    """The fitted size of the truth's effect in ``d`` (first chosen) of ``model``, as ``how`` reads it."""
     if not d.chosen:
         return None
     p = d.score(d.chosen[0]).parameters
@@ -162,7 +155,7 @@ def _value(d: Any, how: str) -> float | None:
     if how == "gain_ratio" and {"gain_left", "gain_right"} <= set(p):
         return p["gain_left"] / p["gain_right"] - 1.0
     if how == "rotor_inertia_kg_m2" and "rotor_inertia_scale" in p:
-        return p["rotor_inertia_scale"] * energy.robot_preset("husky").motor.rotor_inertia_kg_m2
+        return p["rotor_inertia_scale"] * model.robot_.motor.rotor_inertia_kg_m2
     return None
 
 
@@ -171,7 +164,7 @@ def run_pair(name: str, seed: int, max_repeats: int) -> dict[str, Any]:
     pair = PAIRS[name]
     cal = [sim.simulate_run(50_000 + 1000 * seed + k, pair["calibration"], driving=pair.get("calibration_driving", "mixed"))
            for k in range(RUNS)]
-    model = energy.PhysicsCurrentModel("husky", "flooring",
+    model = energy.PhysicsCurrentModel(sim.husky_robot(), "flooring",
                                        **({"fit_parameters": pair["fit"]} if "fit" in pair else {})).fit(cal)
     slope = pair.get("slope")
     terrain = None if slope is None else slope_map()
@@ -213,7 +206,7 @@ def run_pair(name: str, seed: int, max_repeats: int) -> dict[str, Any]:
     row["truth_first_after"] = bool(after.chosen) and after.chosen[0] in truth
     row["tie_after"] = any(truth & set(t.effects) for t in after.ties)
     how, size = pair["value"]
-    value = _value(after, how) if row["truth_first_after"] else None
+    value = _value(after, how, model) if row["truth_first_after"] else None
     row["value_after"] = {"fitted": value, "truth": size}
     row["value_ok_after"] = value is not None and abs(value / size - 1.0) <= VALUE_TOL
     return row

@@ -80,12 +80,14 @@ from typing import Any
 
 import numpy as np
 
-from energy import InteractionLog, LogMeta
+from energy import InteractionLog, LogMeta, RobotParams, robot_preset
 from energy.io import write_csv_log
 
 __all__ = [
     "CASES",
     "DRIVING",
+    "rotor_inertia_kg_m2",
+    "husky_robot",
     "SimEffects",
     "Slope",
     "case_effects",
@@ -291,6 +293,24 @@ def case_effects(spec: str) -> SimEffects:
     if name == "none":
         raise ValueError(f"case 'none' takes no value, got {spec!r}")
     return replace(CASES[name], **{_CASE_FIELD[name]: float(value)})
+
+
+def rotor_inertia_kg_m2(scale: float = 1.0) -> float:
+    """This simulator's rotating parts (``scale`` times its own) as the library's rotor inertia at the motor shaft.
+
+    Its current ``m_rot a_s r / (eta N K_t)`` is the library's ``Jm N a_s / (r K_t)`` at
+    ``Jm = m_rot r^2 / (eta N^2)`` (the wheels included; the library charges the rotor no gear loss):
+    3.2e-5 kg m^2, twice the Husky preset's rotor alone.
+    """
+    m_rot = scale * (GEAR_RATIO**2 * ROTOR_INERTIA_KG_M2 + 2.0 * WHEEL_INERTIA_KG_M2) / WHEEL_RADIUS_M**2
+    return m_rot * WHEEL_RADIUS_M**2 / (GEAR_EFFICIENCY * GEAR_RATIO**2)
+
+
+def husky_robot() -> RobotParams:
+    """The library's Husky preset with this simulator's drivetrain inertia (:func:`rotor_inertia_kg_m2`): what a
+    user who knows the robot's rotating parts gives the physics model (the preset holds the rotor alone)."""
+    rb = robot_preset("husky")
+    return rb.replace(motor=replace(rb.motor, rotor_inertia_kg_m2=rotor_inertia_kg_m2()))
 
 
 # ---------------------------------------------------------------------------- excitation

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import energy
 from energy.io import read_csv_log
 
 SIM_PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "independent_sim.py"
@@ -274,3 +275,25 @@ def test_start_pose_is_honoured_and_a_ramp_only_pitches_its_band():
 def test_docstring_examples():
     result = doctest.testmod(sim)
     assert result.attempted > 0 and result.failed == 0
+
+
+def test_the_rotor_inertia_truth_is_the_simulators_rotating_parts_as_the_library_charges_them():
+    # a stop-and-go the simulator drives with its rotating parts x2 and x1: the extra current while accelerating
+    # (motoring, not braking) is the library's rotor term at the difference of the two truths
+    t = np.arange(0.0, 12.0, 0.1)
+    v = np.where((t % 6.0 > 0.5) & (t % 6.0 < 3.5), 0.6, 0.0)
+    prof = energy.CommandProfile(t, v, np.zeros_like(t))
+    heavy = sim.simulate_run(1, sim.SimEffects(rotor_inertia_scale=2.0), commands=prof, ideal=True)
+    light = sim.simulate_run(1, sim.SimEffects(), commands=prof, ideal=True)
+    extra = heavy.current_left_a - light.current_left_a
+    acc = np.gradient(heavy.v_mps, heavy.time_s)
+    motor = energy.robot_preset("husky").motor
+    jm = sim.rotor_inertia_kg_m2(2.0) - sim.rotor_inertia_kg_m2(1.0)
+    library = jm * motor.gear_ratio * acc / (energy.robot_preset("husky").wheel_radius_m
+                                             * motor.torque_constant_nm_per_a)
+    steady = acc > 0.9  # at the controller's 1 m/s^2 limit
+    assert steady.sum() >= 4
+    np.testing.assert_allclose(extra[steady], library[steady], rtol=0.05)
+    assert sim.rotor_inertia_kg_m2(3.0) == pytest.approx(3.0 * sim.rotor_inertia_kg_m2(1.0))
+    assert sim.husky_robot().motor.rotor_inertia_kg_m2 == pytest.approx(sim.rotor_inertia_kg_m2())
+    assert sim.husky_robot().replace(motor=energy.robot_preset("husky").motor) == energy.robot_preset("husky")
