@@ -17,8 +17,10 @@ Protocol, for each case (one effect switched on in the diagnosed runs) and each 
 
   * ``preset``: ``--model physics --ground flooring``, the preset as the CLI gives it (whether
     the CLI refits it on the diagnosed runs is read from its first printed line and recorded);
-  * ``calibrated``: ``PhysicsCurrentModel("husky", "flooring").fit(calibration runs)``, saved,
-    then ``--model FILE``;
+  * ``calibrated``: ``PhysicsCurrentModel(sim.husky_robot(), "flooring").fit(calibration runs)``
+    (the Husky preset with the simulator's drivetrain inertia: the preset holds the rotor alone, half
+    of it, which the catalogue's ``rotor_inertia`` names on any run with hard starts), saved, then
+    ``--model FILE``;
   * ``cal-turning`` / ``cal-viscous`` (for the cases whose nearest catalogue term is a physics
     term the full model already has, which the diagnosis then does not score, and for ``none``
     as their null and paired reference): the calibrated base without turning resistance /
@@ -238,13 +240,13 @@ def _calibrated(seed: int, runs: int, folder: Path, reduced: tuple[str, str] | N
     logs = [sim.simulate_run(run_seed(seed, k, calibration=True), sim.CASES["none"], label="none (calibration)")
             for k in range(runs)]
     if reduced is None:
-        model = energy.PhysicsCurrentModel("husky", "flooring")
+        model = energy.PhysicsCurrentModel(sim.husky_robot(), "flooring")
         name = "calibrated.zip"
     else:
         term, coef = reduced
         default = inspect.signature(energy.PhysicsCurrentModel).parameters["fit_parameters"].default
         model = energy.PhysicsCurrentModel(
-            "husky", "flooring", effects=tuple(e for e in DRIVE_EFFECTS if e != term),
+            sim.husky_robot(), "flooring", effects=tuple(e for e in DRIVE_EFFECTS if e != term),
             fit_parameters=tuple(p for p in default if p != coef),
         )
         name = f"calibrated_without_{term}.zip"

@@ -21,9 +21,19 @@ Each pair is a case where the diagnosed runs cannot tell the true cause from a l
   given the map (the model calibrated on level runs is put on it), so its separating drive
   may go up and back down the ramp; the drive is simulated where the diagnosis placed it.
   The truth: ``mass`` (mass scale - 1 = 0.6).
+- ``inertia_vs_lag``: the drivetrain's rotating parts 3 times heavier than in the calibration runs
+  (the simulator's ``rotor_inertia_scale``), on ``"waves"`` driving (straight, no stops, the speed
+  swelling and easing between ~0.3 and ~0.9 m/s over 8-11 s) cropped above 0.2 m/s, the robot itself
+  with a speed-squared drag (:data:`DRAG_N_S2_PER_M2`) in the calibration runs too, which are waves
+  as well and fit the viscous coefficient besides the defaults. Where the current grows with the
+  speed its slope follows the acceleration, so a current lag (the currents leading, ``-tau dI/dt``)
+  adds what a heavier drivetrain adds (``m_rot a``), up to the model's own inertia term shifted; a
+  stop and a start part them. The truth: ``rotor_inertia``, its value the simulator's rotating
+  parts at the motor shaft as the library charges them (:func:`independent_sim.rotor_inertia_kg_m2`, kg m^2).
 
 Protocol per pair and seed: 6 calibration runs of the robot before the change (mixed
-driving) fit ``PhysicsCurrentModel("husky", "flooring")``; 6 diagnosed runs with the change;
+driving unless the pair says) fit ``PhysicsCurrentModel(sim.husky_robot(), "flooring")`` (the Husky
+preset with the simulator's drivetrain inertia, :func:`independent_sim.husky_robot`); 6 diagnosed runs with the change;
 ``diagnose`` (the library call ``terrawatt diagnose`` makes). Recorded: whether a tie holding
 the truth is named, the separating drive (duration, its smallest expected difference in A and
 in noise units, its separation per run ``z``, the runs it asks for), then that drive simulated
@@ -33,9 +43,6 @@ those runs added to the data: the truth first, its fitted value within 20 %, a t
 
 For a pair on a map, the difference is also given in noise units over the drive's samples on
 the ramp (``noise_units_ramp``), where the two explanations part.
-
-Not covered here: inertia against a sensor lag (the catalogue has no rotor-inertia candidate:
-docs/results.md, issue 31).
 
 Usage::
 
@@ -111,6 +118,20 @@ PAIRS: dict[str, dict[str, Any]] = {
         "value": ("mass_scale", 30.0 / sim.MASS_KG), "slope": SLOPE,
     },
 }
+#: The speed-squared resistance of the robot of ``inertia_vs_lag`` (N s^2 / m^2 per side, before and after
+#: the change): the current grows with the speed, so its slope follows the acceleration.
+DRAG_N_S2_PER_M2 = 20.0
+#: How much heavier the drivetrain of ``inertia_vs_lag`` is (the independent simulator's ``rotor_inertia_scale``).
+ROTOR_SCALE = 3.0
+
+
+PAIRS["inertia_vs_lag"] = {
+    "calibration": sim.SimEffects(speed_friction_n_s2_per_m2=DRAG_N_S2_PER_M2),
+    "diagnosed": sim.SimEffects(speed_friction_n_s2_per_m2=DRAG_N_S2_PER_M2, rotor_inertia_scale=ROTOR_SCALE),
+    "driving": "waves", "calibration_driving": "waves", "crop": 0.2, "truth": ("rotor_inertia",),
+    "fit": ("rolling_resistance_coef", "lateral_friction_coef", "rest_current_a", "viscous_friction_coef_s_per_m"),
+    "value": ("rotor_inertia_kg_m2", sim.rotor_inertia_kg_m2(ROTOR_SCALE)),
+}
 TARGETS = {"tie_named_pct": 100.0, "truth_first_after_pct": 90.0, "value_ok_after_pct": 90.0,
            "drive_max_s": 60.0, "z_min": 3.0, "measured_over_expected": (0.5, 2.0)}
 VALUE_TOL = 0.2
@@ -123,8 +144,8 @@ def _moving_part(log: Any, speed: float = 0.3) -> Any:
     return log.slice(float(log.time_s[fast[0]]), float(log.time_s[fast[-1]]))
 
 
-def _value(d: Any, how: str) -> float | None:
-    """The fitted size of the truth's effect in ``d`` (first chosen), as ``how`` reads it."""
+def _value(d: Any, how: str, model: Any) -> float | None:
+    """The fitted size of the truth's effect in ``d`` (first chosen) of ``model``, as ``how`` reads it."""
     if not d.chosen:
         return None
     p = d.score(d.chosen[0]).parameters
@@ -132,14 +153,18 @@ def _value(d: Any, how: str) -> float | None:
         return p["mass_scale"] - 1.0
     if how == "gain_ratio" and {"gain_left", "gain_right"} <= set(p):
         return p["gain_left"] / p["gain_right"] - 1.0
+    if how == "rotor_inertia_kg_m2" and "rotor_inertia_scale" in p:
+        return p["rotor_inertia_scale"] * model.robot_.motor.rotor_inertia_kg_m2
     return None
 
 
 def run_pair(name: str, seed: int, max_repeats: int) -> dict[str, Any]:
     """One pair, one seed: the diagnosis, its separating drive, the drive simulated, the diagnosis again."""
     pair = PAIRS[name]
-    cal = [sim.simulate_run(50_000 + 1000 * seed + k, pair["calibration"]) for k in range(RUNS)]
-    model = energy.PhysicsCurrentModel("husky", "flooring").fit(cal)
+    cal = [sim.simulate_run(50_000 + 1000 * seed + k, pair["calibration"], driving=pair.get("calibration_driving", "mixed"))
+           for k in range(RUNS)]
+    model = energy.PhysicsCurrentModel(sim.husky_robot(), "flooring",
+                                       **({"fit_parameters": pair["fit"]} if "fit" in pair else {})).fit(cal)
     slope = pair.get("slope")
     terrain = None if slope is None else slope_map()
     if terrain is not None:
@@ -180,7 +205,7 @@ def run_pair(name: str, seed: int, max_repeats: int) -> dict[str, Any]:
     row["truth_first_after"] = bool(after.chosen) and after.chosen[0] in truth
     row["tie_after"] = any(truth & set(t.effects) for t in after.ties)
     how, size = pair["value"]
-    value = _value(after, how) if row["truth_first_after"] else None
+    value = _value(after, how, model) if row["truth_first_after"] else None
     row["value_after"] = {"fitted": value, "truth": size}
     row["value_ok_after"] = value is not None and abs(value / size - 1.0) <= VALUE_TOL
     return row

@@ -35,7 +35,8 @@ Physics (SI, per side s in {L, R}, sigma_L = -1, sigma_R = +1), integrated on a 
   hold it (the current of the holding torque).
 - DC motor per side, motoring only: wheel torque ``T_s = F_s r``; the motor current in the
   direction of rotation is ``I_s = max(T_s sign(v_s), 0) / (eta N K_t)``: a back-driven
-  (braking) side logs 0, as the Husky driver does.
+  (braking) side logs an exact 0, its sensor offset included, as the Husky driver does (the
+  BorealTC logs hold exact zeros in 0-41 % of a run's samples; a side standing still logs the offset).
 
 Measurement (BorealTC-like, PHYSICS_NOTES "What the real logs show"):
 
@@ -79,12 +80,14 @@ from typing import Any
 
 import numpy as np
 
-from energy import InteractionLog, LogMeta
+from energy import InteractionLog, LogMeta, RobotParams, robot_preset
 from energy.io import write_csv_log
 
 __all__ = [
     "CASES",
     "DRIVING",
+    "rotor_inertia_kg_m2",
+    "husky_robot",
     "SimEffects",
     "Slope",
     "case_effects",
@@ -292,6 +295,24 @@ def case_effects(spec: str) -> SimEffects:
     return replace(CASES[name], **{_CASE_FIELD[name]: float(value)})
 
 
+def rotor_inertia_kg_m2(scale: float = 1.0) -> float:
+    """This simulator's rotating parts (``scale`` times its own) as the library's rotor inertia at the motor shaft.
+
+    Its current ``m_rot a_s r / (eta N K_t)`` is the library's ``Jm N a_s / (r K_t)`` at
+    ``Jm = m_rot r^2 / (eta N^2)`` (the wheels included; the library charges the rotor no gear loss):
+    3.2e-5 kg m^2, twice the Husky preset's rotor alone.
+    """
+    m_rot = scale * (GEAR_RATIO**2 * ROTOR_INERTIA_KG_M2 + 2.0 * WHEEL_INERTIA_KG_M2) / WHEEL_RADIUS_M**2
+    return m_rot * WHEEL_RADIUS_M**2 / (GEAR_EFFICIENCY * GEAR_RATIO**2)
+
+
+def husky_robot() -> RobotParams:
+    """The library's Husky preset with this simulator's drivetrain inertia (:func:`rotor_inertia_kg_m2`): what a
+    user who knows the robot's rotating parts gives the physics model (the preset holds the rotor alone)."""
+    rb = robot_preset("husky")
+    return rb.replace(motor=replace(rb.motor, rotor_inertia_kg_m2=rotor_inertia_kg_m2()))
+
+
 # ---------------------------------------------------------------------------- excitation
 #: Segment kinds and their probabilities.
 _KINDS = ("straight", "arc", "pivot", "stop")
@@ -302,9 +323,42 @@ DRIVING: dict[str, tuple[float, ...]] = {
     "straights": (0.90, 0.0, 0.0, 0.10),  # long straights: a payload and a rolling resistance look alike
     "pivots": (0.0, 0.0, 0.85, 0.15),  # turning on the spot only: a payload and a turning resistance look alike
     "cruise": (1.0, 0.0, 0.0, 0.0),  # one speed, no stops: a current gain and an offset look alike
+    # straight, no stops, the speed swelling and easing smoothly between WAVE_SPEEDS_MPS: where the current
+    # grows with the speed, its slope follows the acceleration, so a current lag and a drivetrain inertia look alike
+    "waves": (1.0, 0.0, 0.0, 0.0),
 }
 #: The one speed of ``"cruise"`` driving (m/s).
 CRUISE_SPEED_MPS = 0.6
+#: ``"waves"`` driving: the range of its speeds (m/s), the length of one smooth change (s) and the hold
+#: between the driver's small command steps (s; the controller's limits and smoothing make them one curve).
+WAVE_SPEEDS_MPS = (0.25, 0.95)
+WAVE_CHANGE_S = (8.0, 11.0)
+WAVE_STEP_S = 0.05
+
+
+def _wave_segments(duration_s: float, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``"waves"`` commands: a rest, one smooth start, then raised-cosine changes up and down in turn between
+    random speeds in the top and bottom quarters of :data:`WAVE_SPEEDS_MPS`, each over :data:`WAVE_CHANGE_S`,
+    commanded in steps of :data:`WAVE_STEP_S`; the last 1.5 s a stop."""
+    t0 = float(rng.uniform(2.0, 3.0))
+    end = duration_s - 1.5
+    low, high = WAVE_SPEEDS_MPS
+    band = 0.25 * (high - low)
+    knots_t, knots_v = [t0], [0.0]
+    t = t0
+    while t < end:  # up and down in turn: each change spans most of the range
+        t += float(rng.uniform(*WAVE_CHANGE_S))
+        knots_t.append(min(t, end))
+        up = len(knots_v) % 2 == 1
+        knots_v.append(float(rng.uniform(high - band, high) if up else rng.uniform(low, low + band)))
+    knots_v[-1] = min(knots_v[-1], WAVE_SPEEDS_MPS[0])  # ease down before the stop
+    starts = np.arange(t0, end, WAVE_STEP_S)
+    k = np.clip(np.searchsorted(knots_t, starts, side="right") - 1, 0, len(knots_t) - 2)
+    kt, kv = np.asarray(knots_t), np.asarray(knots_v)
+    phase = (starts - kt[k]) / (kt[k + 1] - kt[k])
+    v = kv[k] + (kv[k + 1] - kv[k]) * 0.5 * (1.0 - np.cos(np.pi * phase))
+    return (np.concatenate([[0.0], starts, [end]]), np.concatenate([[0.0], v, [0.0]]),
+            np.zeros(starts.size + 2))
 
 
 def command_segments(duration_s: float, rng: np.random.Generator,
@@ -320,6 +374,8 @@ def command_segments(duration_s: float, rng: np.random.Generator,
     (start_s, v_mps, omega_radps) : arrays of equal length; command k holds from
     ``start_s[k]`` until the next start.
     """
+    if driving == "waves":
+        return _wave_segments(duration_s, rng)
     starts, vs, ws = [0.0], [0.0], [0.0]
     t = float(rng.uniform(2.0, 3.0))
     end = duration_s - 1.5
@@ -367,7 +423,8 @@ def _ramped(starts: np.ndarray, target: np.ndarray, limit: float, grid: np.ndarr
 # ---------------------------------------------------------------------------- physics
 def _side_currents(v: np.ndarray, w: np.ndarray, dt_s: float, fx: SimEffects, pitch: Any = 0.0,
                    cos_tilt: Any = 1.0) -> tuple[np.ndarray, ...]:
-    """Motor currents (A, motoring only) of the left and right sides on the simulation grid, on ground
+    """Motor currents (A, in the direction of rotation: negative when back-driven) of the left and right sides
+    on the simulation grid, on ground
     pitched by ``pitch`` (rad, along the heading) and inclined by ``arccos(cos_tilt)``."""
     m = MASS_KG + fx.payload_kg
     cos_tilt = np.asarray(cos_tilt, float)  # the share of the weight that is the normal force
@@ -398,7 +455,7 @@ def _side_currents(v: np.ndarray, w: np.ndarray, dt_s: float, fx: SimEffects, pi
         )
         torque = force * WHEEL_RADIUS_M
         direction = np.where(np.abs(v_s) > 1e-3, np.sign(v_s), np.sign(torque))
-        out.append(np.maximum(torque * direction, 0.0) / (GEAR_EFFICIENCY * GEAR_RATIO * TORQUE_CONSTANT_NM_PER_A))
+        out.append(torque * direction / (GEAR_EFFICIENCY * GEAR_RATIO * TORQUE_CONSTANT_NM_PER_A))
     return out[0], out[1]
 
 
@@ -507,10 +564,12 @@ def simulate_run(seed: int, effects: SimEffects = SimEffects(), duration_s: floa
     gains = (np.ones(2) if ideal else side_gain) * np.array([effects.left_gain, 1.0])
     logged = []
     for g, i_side in zip(gains, (i_left, i_right)):
-        i_s = np.interp(t_true - effects.current_lag_s, grid, i_side)
+        signed = np.interp(t_true - effects.current_lag_s, grid, i_side)
+        i_s = np.maximum(signed, 0.0)
         noise = cur_rng.normal(0.0, 1.0, td.size) * (CURRENT_NOISE_A + CURRENT_NOISE_REL * i_s)
         reading = REST_CURRENT_A + g * i_s
-        logged.append(reading if ideal else _quantise(reading + noise))
+        # a back-driven side logs an exact 0, its sensor offset included (the real logs' zeros)
+        logged.append(np.where(signed < 0.0, 0.0, reading if ideal else _quantise(reading + noise)))
     v_log = np.interp(t_true, grid, v) + cur_rng.normal(0.0, ODOMETRY_NOISE_MPS, td.size)
     w_log = np.interp(t_true, grid, w) + cur_rng.normal(0.0, ODOMETRY_NOISE_RADPS, td.size)
     pose = (np.column_stack([np.interp(t_true, grid, q) for q in (x, y, heading)]) if placed else None)

@@ -99,6 +99,7 @@ PARAMETER_EFFECTS: dict[str, str] = {
     "rolling_resistance": "rolling resistance of the ground: truth 1.6 x the model's",
     "lateral_friction": "lateral friction of skid steering: truth 1.5 x the model's",
     "motor_constant": "torque constant: truth 0.85 x the model's (current / 0.85)",
+    "rotor_inertia": "drivetrain inertia: truth 6 x the model's rotor inertia (a heavier gearbox and wheels)",
 }
 #: Measurement effects and how the truth logs are altered.
 MEASUREMENT_EFFECTS: dict[str, str] = {
@@ -464,6 +465,8 @@ def _make_scenarios() -> dict[str, Scenario]:
                  robot=_husky_variant(torque_constant_nm_per_a=0.85 * 0.044, back_emf_v_s_per_rad=0.85 * 0.044,
                                       max_torque_nm=0.85 * 0.044 * 30.0),
                  model_robot=husky),
+        Scenario("rotor_inertia", ("rotor_inertia",), "start_stop", ground=wood,
+                 robot=_husky_variant(rotor_inertia_kg_m2=6.0 * husky.motor.rotor_inertia_kg_m2), model_robot=husky),
         Scenario("current_gain", ("current_gain",), "mixed", ground=wood, current_gain=(1.12, 0.92)),
         Scenario("current_offset", ("current_offset",), "mixed", ground=wood, current_offset_a=(0.25, -0.15)),
         Scenario("time_lag", ("time_lag",), "start_stop", ground=wood, lag_s=0.12),

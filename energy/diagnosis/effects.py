@@ -26,6 +26,7 @@ from .effects_physics import (
     LateralFrictionEffect,
     PhysicsTermEffect,
     RollingResistanceEffect,
+    RotorInertiaEffect,
     SlopeEffect,
     TrackWidthEffect,
 )
@@ -51,6 +52,7 @@ _CLASSES: dict[str, Any] = {
     "rolling_resistance": RollingResistanceEffect,
     "lateral_friction": LateralFrictionEffect,
     "motor_constant": MotorConstantEffect,
+    "rotor_inertia": RotorInertiaEffect,
     "idle_current": IdleCurrentEffect,
     "rest_current": RestCurrentEffect,
     "current_offset": CurrentOffsetEffect,

@@ -147,8 +147,11 @@ class TimeLagEffect(Effect):
         return out
 
     def negligible(self, values: np.ndarray) -> bool:
-        # a shift below one sample period only smooths the prediction by interpolation
-        return abs(float(values[0])) < self.period_s
+        # Shifted by linear interpolation, a prediction is also smoothed, most at half a sample (the mean of two
+        # neighbours), not at all at a whole one: a fit that gains only by smoothing (noisy model inputs) lands
+        # within half a sample of 0. Beyond it a shift is a shift: a lag just under one sample (0.15 s at 6.5 Hz)
+        # is a lag, whose fit lands on the whole sample where interpolation smooths nothing.
+        return abs(float(values[0])) < 0.5 * self.period_s
 
     def prepare(self, model: Any, log: InteractionLog) -> np.ndarray:
         return np.asarray(log.time_s)
@@ -228,7 +231,7 @@ class ImuLagEffect(Effect):
 
     def negligible(self, values: np.ndarray) -> bool:
         # below one IMU sample the spectra barely move: a fit there is noise
-        return abs(float(values[0])) < self.period_s
+        return abs(float(values[0])) < 0.5 * self.period_s
 
     def prepare(self, model: Any, log: InteractionLog) -> np.ndarray:
         grid = np.asarray(IMU_LAG_GRID_S)

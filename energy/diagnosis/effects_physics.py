@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -19,7 +20,7 @@ from .model_currents import ParameterTable, PhysicsBasis, motoring_currents_a
 
 __all__ = ["PHYSICS_CANDIDATES", "PARAMETER_CANDIDATES", "ROLLING_RESISTANCE_PLAUSIBLE", "PhysicsTermEffect",
            "SlopeEffect", "MassEffect", "TrackWidthEffect", "RollingResistanceEffect", "LateralFrictionEffect",
-           "MotorConstantEffect", "Reprediction"]
+           "MotorConstantEffect", "RotorInertiaEffect", "Reprediction"]
 
 #: Physics effects offered as candidates (those that change the motor current).
 PHYSICS_CANDIDATES: tuple[str, ...] = (
@@ -29,7 +30,7 @@ PHYSICS_CANDIDATES: tuple[str, ...] = (
 )
 #: Parameter-error candidates of a physics model.
 PARAMETER_CANDIDATES: tuple[str, ...] = ("mass", "track_width", "rolling_resistance", "lateral_friction",
-                                         "motor_constant")
+                                         "motor_constant", "rotor_inertia")
 
 _GAIN = EffectParameter("gain", 1.0, 0.0, 3.0, "1", None, *GAIN_PLAUSIBLE,
                         "the physics' own term, within the usual error of its parameters")
@@ -367,3 +368,45 @@ class MotorConstantEffect(_RepredictEffect):
 
     def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: Reprediction) -> np.ndarray:
         return predicted_a + prepared.base_a * (1.0 / float(values[0]) - 1.0)
+
+
+class RotorInertiaEffect(_RepredictEffect):
+    """A drivetrain-inertia error: the physics re-predicted with the motor's rotor inertia ``Jm`` times
+    ``rotor_inertia_scale``.
+
+    The rotating parts (rotor, gearbox, wheels or tracks, referred to the motor shaft) add
+    ``Jm N_g a_side / (r K_t)`` to each side's current: a current in proportion to that side's
+    wheel acceleration, apart from the body's ``m a / 2`` (which the ``mass`` candidate scales
+    along with every other mass term). Offered to a physics model that has ``inertia`` switched
+    on and a rotor inertia to scale (without the term, the ``inertia`` candidate adds it whole).
+    The fitted value is reported in kg m^2 at the motor shaft and as the rotating mass it adds per
+    side at the wheels, ``Jm N_g^2 / r^2``.
+    """
+
+    name = "rotor_inertia"
+    parameters = (EffectParameter("rotor_inertia_scale", 1.0, 0.0, 20.0, "1", "rotor_inertia_kg_m2", 0.2, 10.0,
+                                  "the motor's rotor alone, up to ten times it with the gearbox and the wheels or "
+                                  "tracks referred to the motor shaft"),)
+    description = "rotor / drivetrain inertia error (scale on the motor's rotor inertia Jm)"
+
+    def applies_to(self, model: Any) -> bool:
+        return (_is_physics(model) and "inertia" in model.effects_
+                and float(model.robot_.motor.rotor_inertia_kg_m2) > 0.0)
+
+    def nominal(self, b: PhysicsBasis) -> float:
+        return 1.0
+
+    def describe(self, values: Any, prepared: Sequence[Any] = ()) -> str:
+        scale = float(np.asarray(values, dtype=np.float64).reshape(-1)[0])
+        if not prepared or not isinstance(prepared[0], Reprediction):
+            return f"rotor inertia x{fmt_number(scale, 3)}"
+        rb = prepared[0].basis.robot
+        jm = float(rb.motor.rotor_inertia_kg_m2)
+        change = jm * (scale - 1.0) * rb.motor.gear_ratio ** 2 / rb.wheel_radius_m ** 2
+        return (f"rotor inertia {fmt_number(jm * scale, 3)} kg m^2 (x{fmt_number(scale, 3)} of the model's "
+                f"{fmt_number(jm, 3)} kg m^2: {'+' if change >= 0 else '-'}{fmt_number(abs(change), 3)} kg of "
+                f"rotating mass per side at the wheels)")
+
+    def repredict(self, b: PhysicsBasis, log: InteractionLog, value: float, index: Any = None) -> np.ndarray:
+        motor = dataclasses.replace(b.robot.motor, rotor_inertia_kg_m2=b.robot.motor.rotor_inertia_kg_m2 * value)
+        return motoring_currents_a(b, log, robot=b.robot.replace(motor=motor))

@@ -44,3 +44,13 @@ def test_mass_vs_rolling_is_named_a_tie_and_settled_by_its_drive():
     assert row["value_after"]["fitted"] == pytest.approx(0.6, rel=dt.VALUE_TOL)
     summary = dt.summarise([row])["mass_vs_rolling"]
     assert summary["truth_first_after_pct"] == 100.0 and "mass_vs_rolling" in dt.table({"mass_vs_rolling": summary})
+
+
+def test_inertia_vs_lag_is_named_a_tie_on_waves_and_settled_by_its_drive():
+    row = dt.run_pair("inertia_vs_lag", 0, max_repeats=1)
+    assert row["tie_named"]
+    tie = next(t for t in row["ties"] if "rotor_inertia" in t["effects"])
+    assert "time_lag" in tie["effects"]  # the speed swelling and easing: a lag looks like a heavier drivetrain
+    assert row["drive"]["duration_s"] <= dt.TARGETS["drive_max_s"] and row["drive_runs"] == 1
+    assert row["truth_first_after"] and not row["tie_after"]
+    assert row["value_after"]["fitted"] == pytest.approx(row["value_after"]["truth"], rel=dt.VALUE_TOL)

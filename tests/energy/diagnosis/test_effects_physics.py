@@ -5,10 +5,13 @@ import dataclasses
 import numpy as np
 import pytest
 from effect_samples import coated_wood_log, coated_wood_model
+from turning_samples import small_scenario
+
+from diagnosis_scenarios import null_scenario, scenario
 
 from energy import PhysicsCurrentModel
-from energy.diagnosis import effect, effect_from_spec
-from energy.diagnosis.model_currents import clamps_at_zero, physics_basis, unclipped_prediction
+from energy.diagnosis import diagnose, effect, effect_from_spec
+from energy.diagnosis.model_currents import basis_breakdown, clamps_at_zero, physics_basis, unclipped_prediction
 from energy.sim import PAPER_GROUNDS
 
 
@@ -67,3 +70,49 @@ def test_track_width_cannot_show_on_measured_wheel_speeds(log):
                                                                  track_width_m=0.555))
     assert "measured wheel speeds" in effect("track_width").unsupported([measured], None)
     assert effect("track_width").unsupported([log], None) is None
+
+
+def test_rotor_inertia_adds_a_current_in_proportion_to_each_sides_wheel_acceleration(model, log):
+    e = effect("rotor_inertia").bind([log])
+    assert e.applies_to(model) and e.kind == "parameter" and e.parameters[0].true_name == "rotor_inertia_kg_m2"
+    no_inertia = PhysicsCurrentModel(ground=PAPER_GROUNDS["coated_wood"], fit_parameters=(),
+                                     effects=[x for x in model.effects_ if x != "inertia"]).fit([log])
+    assert not e.applies_to(no_inertia)  # without the term the inertia candidate adds it whole
+    basis = physics_basis(model)
+    base = unclipped_prediction(model, log, basis)
+    prep = e.prepare(model, log)
+    np.testing.assert_allclose(e.apply(np.array([1.0]), base, prep), base, atol=1e-12)
+    added = e.apply(np.array([4.0]), base, prep) - base
+    # the rotor's current, Jm N a_side / (r Kt) per side, written out from the robot's numbers
+    rb, t = basis.robot, log.time_s
+    half = rb.track_width_multiplier * rb.track_width_m / 2.0
+    a_side = np.gradient(log.v_mps, t)[:, None] + np.gradient(log.omega_radps, t)[:, None] * half * np.array([-1, 1])
+    motor = rb.motor
+    jm = motor.rotor_inertia_kg_m2
+    expected = 3.0 * motor.rotor_inertia_kg_m2 * motor.gear_ratio * a_side / (rb.wheel_radius_m
+                                                                              * motor.torque_constant_nm_per_a)
+    # where the motor is not at its torque limit (a step of the commands asks for more than it has)
+    free = ~basis_breakdown(basis, log, robot=rb.replace(motor=dataclasses.replace(motor, rotor_inertia_kg_m2=4 * jm))
+                            ).saturated
+    moving = (np.abs(log.v_mps) + np.abs(log.omega_radps) > 1e-3) & free
+    assert moving.mean() > 0.9
+    sign = np.sign(np.column_stack([log.v_mps, log.v_mps]) + np.outer(log.omega_radps, [-half, half]))
+    np.testing.assert_allclose((added * sign)[moving], expected[moving], atol=1e-9)
+    assert np.abs(added).max() > 0.01  # the drive accelerates: the term shows
+    fast = e.apply_surrogate(np.array([4.0]), base, prep)
+    np.testing.assert_allclose(fast, base + added, atol=1e-9)  # linear in the scale: the table is exact
+    text = e.describe(np.array([3.0]), [prep])
+    assert text.startswith(f"rotor inertia {3 * jm:.3g} kg m^2 (x3 of the model's {jm:.3g} kg m^2: +")
+    assert f"{2 * jm * motor.gear_ratio ** 2 / rb.wheel_radius_m ** 2:.3g} kg of rotating mass" in text
+
+
+def test_a_withheld_rotor_inertia_is_found_with_its_value_and_nothing_is_added_where_nothing_is_missing():
+    sc = small_scenario(scenario("rotor_inertia"))  # truth: 6 x the model's rotor inertia
+    cands = ["rotor_inertia", "mass", "time_lag", "current_gain"]
+    d = diagnose(sc.make_model(1), sc.make_logs(1), terrain=sc.terrain, effects=cands, n_bootstrap=50)
+    assert d.chosen[:1] == ("rotor_inertia",)
+    assert d.score("rotor_inertia").parameters["rotor_inertia_scale"] == pytest.approx(6.0, rel=0.1)
+    assert any("rotor_inertia" in s for s in d.verdict)
+    null = small_scenario(null_scenario())
+    d0 = diagnose(null.make_model(1), null.make_logs(1), terrain=null.terrain, effects=cands, n_bootstrap=50)
+    assert d0.chosen == ()
