@@ -33,6 +33,21 @@ SITE_WINDOW_COLUMNS = ("tw_start_s", "tw_end_s")
 CHARGER_COLUMNS = ("power_w", "connection_time_s", "max_visits")
 
 
+def _named_points(what: str, names: Any, xy_m: Any) -> tuple[tuple[str, ...], np.ndarray]:
+    """Unique non-empty names and their points ``(N, 2)``, N >= 1, checked together; ``what`` names one point."""
+    xy = real_array("xy_m", xy_m, finite=True)
+    if xy.ndim != 2 or xy.shape[1] != 2 or xy.shape[0] == 0:
+        raise InvalidParameterError(f"{what}s' xy_m must have shape (N, 2) with N >= 1 {what}s, got shape {xy.shape!r}")
+    n = xy.shape[0]
+    names = tuple(names)
+    if len(names) != n or not all(isinstance(s, str) and s for s in names):
+        raise InvalidParameterError(f"{what}s' names must be {n} non-empty strings, one per {what}, got {names!r:.120}")
+    if len(set(names)) != n:
+        dup = next(s for s in names if names.count(s) > 1)
+        raise InvalidParameterError(f"{what} names must be unique; {dup!r} appears {names.count(dup)} times")
+    return names, xy
+
+
 def _per_site(name: str, value: Any, n: int, default: float) -> np.ndarray:
     if value is None:
         return readonly(np.full(n, default))
@@ -113,16 +128,8 @@ class TourSites:
     time_window_s: Any = None
 
     def __post_init__(self) -> None:
-        xy = real_array("xy_m", self.xy_m, finite=True)
-        if xy.ndim != 2 or xy.shape[1] != 2 or xy.shape[0] == 0:
-            raise InvalidParameterError(f"xy_m must have shape (N, 2) with N >= 1 sites, got shape {xy.shape!r}")
+        names, xy = _named_points("site", self.names, self.xy_m)
         n = xy.shape[0]
-        names = tuple(self.names)
-        if len(names) != n or not all(isinstance(s, str) and s for s in names):
-            raise InvalidParameterError(f"names must be {n} non-empty strings, one per site, got {names!r:.120}")
-        if len(set(names)) != n:
-            dup = next(s for s in names if names.count(s) > 1)
-            raise InvalidParameterError(f"site names must be unique; {dup!r} appears {names.count(dup)} times")
         set_ = object.__setattr__
         set_(self, "names", names)
         set_(self, "xy_m", readonly(xy))
@@ -227,16 +234,8 @@ class TourChargers:
     max_visits: Any = None
 
     def __post_init__(self) -> None:
-        xy = real_array("xy_m", self.xy_m, finite=True)
-        if xy.ndim != 2 or xy.shape[1] != 2 or xy.shape[0] == 0:
-            raise InvalidParameterError(f"chargers' xy_m must have shape (C, 2) with C >= 1, got shape {xy.shape!r}")
+        names, xy = _named_points("charger", self.names, self.xy_m)
         n = xy.shape[0]
-        names = tuple(self.names)
-        if len(names) != n or not all(isinstance(s, str) and s for s in names):
-            raise InvalidParameterError(f"chargers' names must be {n} non-empty strings, got {names!r:.120}")
-        if len(set(names)) != n:
-            dup = next(s for s in names if names.count(s) > 1)
-            raise InvalidParameterError(f"charger names must be unique; {dup!r} appears {names.count(dup)} times")
         power = (np.full(n, math.inf) if self.power_w is None
                  else real_array("power_w", self.power_w, finite=False).ravel() if np.ndim(self.power_w)
                  else np.full(n, float(self.power_w)))
