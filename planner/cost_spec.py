@@ -194,10 +194,10 @@ class CostSpec:
         if cost.has_interval:
             return
         if also is None:
+            level = "" if self.risk is None else f" {self.risk:g}"
             raise InvalidParameterError(
-                f"risk {self.risk:g} needs a model with a predictive interval; the model {self.model_label or ''} "
-                f"gives none (its spreads are all 0): plan without risk, or with a model that has one",
-                parameter="risk")
+                f"risk{level} needs a model with a predictive interval; {self.model_name} gives none (its spreads are "
+                f"all 0): plan without risk, or with a model that has one", parameter="risk")
         raise InvalidParameterError(f"risk and {also} model need a model with a predictive interval; "
                                     f"{self.model_name} gives none", parameter=("risk", also))
 
