@@ -300,7 +300,8 @@ def check_coarse_options(
     if not windowed:
         return
     if factor is None:
-        raise InvalidParameterError("windowed plans coarse-to-fine; give factor F too", parameter=("windowed", "factor"))
+        raise InvalidParameterError("windowed plans coarse-to-fine; give factor F too",
+                                    parameter=("windowed", "factor"))
     if path is None or Path(path).suffix.lower() not in (".tif", ".tiff"):
         raise InvalidParameterError(f"windowed reads GeoTIFF DEMs (.tif, .tiff), got path "
                                     f"{None if path is None else Path(path).name}", parameter=("windowed", "path"))

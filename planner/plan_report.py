@@ -200,7 +200,8 @@ class PlanReport:
     def summary(self) -> str:
         """What ``terrawatt plan`` prints: the map, robot and planner, the table, the interval, the saving."""
         t, route, priced = self.terrain, self.route, self.priced
-        lines = [map_line(priced.map_label, t), f"{priced.robot_line()}; map preparation {priced.map_preparation_s:.2f} s"]
+        lines = [map_line(priced.map_label, t),
+                 f"{priced.robot_line()}; map preparation {priced.map_preparation_s:.2f} s"]
         if self.model is not None:
             lines.append(self.model.line())
         n_unknown = int(np.count_nonzero(np.asarray(t.ground) == UNKNOWN_GROUND))

@@ -186,15 +186,16 @@ def parse_crs(value: Any, name: str = "crs") -> Any:
     try:
         return rasterio.crs.CRS.from_user_input(value)
     except rasterio.errors.CRSError as exc:
-        raise InvalidParameterError(f"{name} {value!r} is not a CRS rasterio understands: {exc}") from exc
+        raise InvalidParameterError(f"{name} {value!r} is not a CRS rasterio understands: {exc}",
+                                    parameter=name) from exc
 
 
 def check_metric_crs(crs: Any, name: str) -> Any:
     """``crs`` (a rasterio CRS) if it is projected in metres, else an error naming ``name``."""
     if crs.is_geographic or crs.linear_units_factor[1] != 1.0:
         raise InvalidParameterError(
-            f"{name} must be a projected CRS in metres (e.g. a UTM zone 'EPSG:326NN'), got {crs.to_string()!r}"
-        )
+            f"{name} must be a projected CRS in metres (e.g. a UTM zone 'EPSG:326NN'), got {crs.to_string()!r}",
+            parameter=name)
     return crs
 
 

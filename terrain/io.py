@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Collection, Mapping
+from collections.abc import Collection
 from pathlib import Path
 
-from terrawatt_base.checks import fmt_number, option_names
+from terrawatt_base.checks import fmt_number
 from terrawatt_base.errors import FileFormatError, InvalidParameterError, NodataError, UnknownNameError
 
 from .geotiff import check_fill_method, read_geotiff
@@ -88,8 +88,8 @@ def read_map(
             raise InvalidParameterError(f"band applies to GeoTIFF DEMs; {str(p)!r} is a .npz map, got band={band!r}")
         if reproject_to is not None or cell_size_m is not None:
             raise InvalidParameterError(
-                f"reproject_to and cell_size_m apply to GeoTIFF DEMs; {str(p)!r} is a .npz map (already in metres)"
-            )
+                f"reproject_to and cell_size_m apply to GeoTIFF DEMs; {str(p)!r} is a .npz map (already in metres)",
+                parameter=("reproject_to", "cell_size_m"))
         return TerrainMap.load(p)
     raise FileFormatError(
         f"cannot read a map from {str(p)!r}: its suffix {p.suffix!r} is not one of "
@@ -110,7 +110,6 @@ def read_map_with_options(
     landcover: str | os.PathLike[str] | None = None,
     landcover_classes: str | os.PathLike[str] | None = None,
     known_grounds: Collection[str] | None = None,
-    names: Mapping[str, str] | None = None,
 ) -> TerrainMap:
     """A map file read with its options (:func:`read_map`), then its ground classes from a land cover.
 
@@ -129,9 +128,6 @@ def read_map_with_options(
         A land-cover GeoTIFF and the CSV naming each code's ground; they go together.
     known_grounds : collection of str, optional
         The ground names the classes file may use (e.g. the ground presets); None accepts any.
-    names : mapping, optional
-        How messages name each of :data:`MAP_OPTIONS` (e.g. ``{"fill_nodata": "--fill-nodata"}``);
-        default the parameters' own names.
 
     Returns
     -------
@@ -157,53 +153,49 @@ def read_map_with_options(
     >>> path = flat_map((4, 6), 0.5).save(pathlib.Path(folder.name) / "site.npz")
     >>> read_map_with_options(path).shape
     (4, 6)
-    >>> read_map_with_options(path, cell_size_m=5.0, names={"reproject_to": "--reproject", "cell_size_m": "--cell-size"})
+    >>> read_map_with_options(path, cell_size_m=5.0)
     Traceback (most recent call last):
     ...
-    terrawatt_base.errors.InvalidParameterError: --reproject and --cell-size go together: e.g. --reproject utm --cell-size 5 (got --reproject None, --cell-size 5.0)
+    terrawatt_base.errors.InvalidParameterError: reproject_to and cell_size_m go together: e.g. reproject_to utm cell_size_m 5 (got reproject_to None, cell_size_m 5.0)
     >>> folder.cleanup()
     """
-    name = option_names(names, MAP_OPTIONS)
     if (landcover is None) != (landcover_classes is None):
-        lc, lcc = name["landcover"], name["landcover_classes"]
         raise InvalidParameterError(
-            f"{lc} and {lcc} go together: the land-cover raster and the CSV naming the ground of each of its codes "
-            f"(got {lc} {landcover}, {lcc} {landcover_classes})")
+            f"landcover and landcover_classes go together: the land-cover raster and the CSV naming the ground of "
+            f"each of its codes (got landcover {landcover}, landcover_classes {landcover_classes})",
+            parameter=("landcover", "landcover_classes"))
     classes: LandcoverClasses | None = None
     if landcover_classes is not None:
         classes = read_landcover_classes(landcover_classes)
         unknown = sorted(set(classes.ground_names) - set(known_grounds if known_grounds is not None else
                                                           classes.ground_names))
         if unknown:
-            raise UnknownNameError(f"{name['landcover_classes']} {Path(landcover_classes).name}: grounds {unknown!r} "
-                                   f"have no preset; known grounds: {sorted(known_grounds or ())!r}")
+            raise UnknownNameError(f"landcover_classes {Path(landcover_classes).name}: grounds {unknown!r} have no "
+                                   f"preset; known grounds: {sorted(known_grounds or ())!r}",
+                                   parameter="landcover_classes")
     if isinstance(source, TerrainMap):
         if fill_nodata is not None or reproject_to is not None or cell_size_m is not None:
             raise InvalidParameterError("fill_nodata, reproject_to and cell_size_m apply to a map file, not to a map "
-                                        "in memory")
+                                        "in memory", parameter=("fill_nodata", "reproject_to", "cell_size_m"))
         tmap = source
     else:
-        tmap = _read_named(source, fill_nodata, reproject_to, cell_size_m, name)
+        tmap = _read_checked(source, fill_nodata, reproject_to, cell_size_m)
     return tmap if classes is None else ground_classes_from_landcover(tmap, landcover, classes)
 
 
-def _read_named(path: str | os.PathLike[str], fill_nodata: str | None, reproject_to: str | None,
-                cell_size_m: float | None, name: Mapping[str, str]) -> TerrainMap:
-    """:func:`read_map`, its messages naming the options as ``name`` does."""
-    rep, cell = name["reproject_to"], name["cell_size_m"]
+def _read_checked(path: str | os.PathLike[str], fill_nodata: str | None, reproject_to: str | None,
+                  cell_size_m: float | None) -> TerrainMap:
+    """:func:`read_map`, the options that go together checked first; its errors name the options they are about."""
     if (reproject_to is None) != (cell_size_m is None):
-        raise InvalidParameterError(f"{rep} and {cell} go together: e.g. {rep} utm {cell} 5 "
-                                    f"(got {rep} {reproject_to}, {cell} {cell_size_m})")
+        raise InvalidParameterError(f"reproject_to and cell_size_m go together: e.g. reproject_to utm cell_size_m 5 "
+                                    f"(got reproject_to {reproject_to}, cell_size_m {cell_size_m})",
+                                    parameter=("reproject_to", "cell_size_m"))
     if cell_size_m is not None and not (math.isfinite(cell_size_m) and cell_size_m > 0):
-        raise InvalidParameterError(f"{cell} must be a number > 0, got {fmt_number(cell_size_m)}")
+        raise InvalidParameterError(f"cell_size_m must be a number > 0, got {fmt_number(cell_size_m)}",
+                                    parameter="cell_size_m")
     try:
         return read_map(path, fill_nodata=fill_nodata, reproject_to=reproject_to, cell_size_m=cell_size_m)
     except NodataError as exc:
         raise NodataError(f"{Path(path).name} has {exc.n_nodata} nodata cells of {exc.n_cells}; give "
-                          f"{name['fill_nodata']} nearest to fill them from the nearest valid cell",
-                          n_nodata=exc.n_nodata, n_cells=exc.n_cells) from exc
-    except InvalidParameterError as exc:
-        text = str(exc)
-        if reproject_to is None or not text.startswith(("reproject_to", "cell_size_m")):
-            raise
-        raise InvalidParameterError(text.replace("reproject_to", rep).replace("cell_size_m", cell)) from exc
+                          f"fill_nodata nearest to fill them from the nearest valid cell",
+                          n_nodata=exc.n_nodata, n_cells=exc.n_cells, parameter="fill_nodata") from exc

@@ -95,8 +95,8 @@ def warp_band(src: Any, info: DemBand, to: str, cell_size_m: float, resampling: 
         raise UnknownNameError(f"resampling must be one of {RESAMPLING_METHODS!r}, got {resampling!r}")
     if src.crs is None:
         raise InvalidParameterError(
-            "reproject_to needs a source raster with a CRS; this one has none (set it first, e.g. gdal_edit -a_srs)"
-        )
+            "reproject_to needs a source raster with a CRS; this one has none (set it first, e.g. gdal_edit -a_srs)",
+            parameter="reproject_to")
     dst_crs = target_crs(src.crs, tuple(src.bounds), to)
     transform, width, height = calculate_default_transform(
         src.crs, dst_crs, src.width, src.height, *src.bounds, resolution=cell

@@ -238,7 +238,8 @@ def check_text(name: str, value: Any, *, owner: str | None = None) -> str:
         Not a string, or blank.
     """
     if not isinstance(value, str) or not value.strip():
-        raise InvalidParameterError(f"{_label(name, owner)} must be a non-empty string, got {_describe(value)}", parameter=name)
+        raise InvalidParameterError(f"{_label(name, owner)} must be a non-empty string, got {_describe(value)}",
+                                    parameter=name)
     return value
 
 
@@ -338,7 +339,8 @@ def real_array(name: str, value: Any, *, ndim: int | None = None, finite: bool =
     try:
         raw = np.asarray(value)
     except (TypeError, ValueError) as exc:  # ragged nested sequences
-        raise InvalidParameterError(f"{name} must be a real number or an array of them, got {_describe(value)}", parameter=name) from exc
+        raise InvalidParameterError(f"{name} must be a real number or an array of them, got {_describe(value)}",
+                                    parameter=name) from exc
     if raw.dtype.kind not in "iuf":  # booleans, strings ("0.5" is not parsed), objects, complex
         raise InvalidParameterError(
             f"{name} must be a real number or an array of them, got {_describe(value)} of dtype {raw.dtype}"
@@ -348,7 +350,8 @@ def real_array(name: str, value: Any, *, ndim: int | None = None, finite: bool =
         raise InvalidParameterError(f"{name} must be a {ndim}-D array, got shape {arr.shape!r}", parameter=name)
     if finite and not np.all(np.isfinite(arr)):
         n_bad = int(np.count_nonzero(~np.isfinite(arr)))
-        raise InvalidParameterError(f"{name} has {n_bad} NaN/inf entries of {arr.size}; expected finite values", parameter=name)
+        raise InvalidParameterError(f"{name} has {n_bad} NaN/inf entries of {arr.size}; expected finite values",
+                                    parameter=name)
     return arr
 
 

@@ -105,8 +105,9 @@ class NodataError(InvalidParameterError, DataError):
     command line names its ``--fill-nodata`` flag, the API its ``fill_nodata`` argument).
     """
 
-    def __init__(self, message: str, *, n_nodata: int = 0, n_cells: int = 0) -> None:
-        super().__init__(message)
+    def __init__(self, message: str, *, n_nodata: int = 0, n_cells: int = 0,
+                 parameter: str | tuple[str, ...] | None = None) -> None:
+        super().__init__(message, parameter=parameter)
         self.n_nodata = n_nodata
         self.n_cells = n_cells
 

@@ -93,7 +93,7 @@ def read_map_args(args: argparse.Namespace, source: Any = None) -> TerrainMap:
         reproject_to=getattr(args, "reproject", None) if whole else None,
         cell_size_m=getattr(args, "cell_size", None) if whole else None,
         landcover=getattr(args, "landcover", None), landcover_classes=getattr(args, "landcover_classes", None),
-        known_grounds=GROUND_PRESETS if getattr(args, "model", None) is None else None, names=MAP_FLAGS)
+        known_grounds=GROUND_PRESETS if getattr(args, "model", None) is None else None)
 
 
 def map_arg(args: argparse.Namespace) -> tuple[TerrainMap, str]:

@@ -42,21 +42,22 @@ def test_options_that_cannot_apply(tmp_path, flat_map):
         read_map(tmp_path / "none.npz")
 
 
-def test_read_map_with_options_reads_a_map_and_names_its_options_as_asked(tmp_path, ramp_map):
+def test_read_map_with_options_reads_a_map_and_its_errors_name_the_options(tmp_path, ramp_map):
     from terrain.io import read_map_with_options
 
     path = ramp_map.save(tmp_path / "m.npz")
     assert read_map_with_options(path).same_grid(ramp_map)
-    flags = {"reproject_to": "--reproject", "cell_size_m": "--cell-size", "landcover": "--landcover",
-             "landcover_classes": "--landcover-classes"}
-    with pytest.raises(InvalidParameterError, match="--reproject and --cell-size go together"):
-        read_map_with_options(path, reproject_to="utm", names=flags)
+    with pytest.raises(InvalidParameterError, match="reproject_to and cell_size_m go together") as err:
+        read_map_with_options(path, reproject_to="utm")
+    assert err.value.parameter == ("reproject_to", "cell_size_m")  # the command line says them as its flags
     with pytest.raises(InvalidParameterError, match="reproject_to and cell_size_m go together"):
         read_map_with_options(path, cell_size_m=5.0)
-    with pytest.raises(InvalidParameterError, match="--cell-size must be a number > 0, got -5"):
-        read_map_with_options(path, reproject_to="utm", cell_size_m=-5.0, names=flags)
-    with pytest.raises(InvalidParameterError, match="--landcover and --landcover-classes go together"):
-        read_map_with_options(path, landcover=tmp_path / "lc.tif", names=flags)
+    with pytest.raises(InvalidParameterError, match="cell_size_m must be a number > 0, got -5") as err:
+        read_map_with_options(path, reproject_to="utm", cell_size_m=-5.0)
+    assert err.value.parameter == "cell_size_m"
+    with pytest.raises(InvalidParameterError, match="landcover and landcover_classes go together") as err:
+        read_map_with_options(path, landcover=tmp_path / "lc.tif")
+    assert err.value.parameter == ("landcover", "landcover_classes")
     with pytest.raises(InvalidParameterError, match="apply to a map file, not to a map in memory"):
         read_map_with_options(ramp_map, fill_nodata="nearest")
     assert read_map_with_options(ramp_map) is ramp_map
@@ -67,9 +68,9 @@ def test_read_map_with_options_checks_the_classes_grounds_before_the_map(tmp_pat
 
     classes = tmp_path / "classes.csv"
     classes.write_text("code,ground\n10,grass\n20,lava\n")
-    with pytest.raises(UnknownNameError, match=r"--landcover-classes classes\.csv: grounds \['lava'\] have no preset"):
+    with pytest.raises(UnknownNameError, match=r"landcover_classes classes\.csv: grounds \['lava'\] have no preset"):
         read_map_with_options(tmp_path / "missing.npz", landcover=tmp_path / "lc.tif", landcover_classes=classes,
-                              known_grounds=("grass", "sand"), names={"landcover_classes": "--landcover-classes"})
+                              known_grounds=("grass", "sand"))
     with pytest.raises(FileFormatError):  # any ground accepted: the missing map is next
         read_map_with_options(tmp_path / "missing.npz", landcover=tmp_path / "lc.tif", landcover_classes=classes)
 
@@ -86,9 +87,9 @@ def test_read_map_with_options_phrases_the_nodata_advice_with_its_names(tmp_path
                        dtype="float32", crs="EPSG:32633", nodata=-9999.0,
                        transform=rasterio.Affine(1.0, 0.0, 500000.0, 0.0, -1.0, 4980000.0)) as dst:
         dst.write(elevation, 1)
-    with pytest.raises(NodataError, match="holes.tif has 1 nodata cells of .*; give --fill-nodata nearest") as err:
-        read_map_with_options(path, names={"fill_nodata": "--fill-nodata"})
-    assert err.value.n_nodata == 1
+    with pytest.raises(NodataError, match="holes.tif has 1 nodata cells of .*; give fill_nodata nearest") as err:
+        read_map_with_options(path)
+    assert err.value.n_nodata == 1 and err.value.parameter == "fill_nodata"
     from terrain import DataRepairWarning
 
     with pytest.warns(DataRepairWarning, match="filled 1 nodata cells of GeoTIFF"):  # a repair is never silent
