@@ -104,7 +104,7 @@ def warp_band(src: Any, info: DemBand, to: str, cell_size_m: float, resampling: 
     if width < 2 or height < 2 or width * height > 2**31:
         raise InvalidParameterError(
             f"cell_size_m {fmt_number(cell)} m gives a {height} x {width} grid for this DEM; expected at least 2 x 2 and at "
-            "most 2**31 cells (choose a cell size near the DEM's resolution in metres)"
+            "most 2**31 cells (choose a cell size near the DEM's resolution in metres)", parameter="cell_size_m"
         )
     data = src.read(info.band, masked=True)
     values = np.ma.getdata(data).astype(np.float64) * info.scale + info.offset
