@@ -214,13 +214,13 @@ class CostSpec:
         self.needs_interval(cost)
         return risk_cost(cost, self.risk)
 
-    def plan_model(self, cost: EnergyCost, *, with_risk: bool = True) -> PlanModel | None:
+    def plan_model(self, cost: EnergyCost) -> PlanModel | None:
         """What outputs say of the model that priced ``cost`` (route.json's ``model``); None for the presets."""
         if self.model is None:
             return None
         return PlanModel(file=self.model_name, class_name=type(self.model).__name__, model_ground=self.model_ground,
                          grounds=tuple(cost.ground_labels), gives_interval=bool(cost.has_interval),
-                         risk_q=self.risk if with_risk else None)
+                         risk_q=self.risk)
 
     def price(self, terrain: TerrainMap, *, map_label: str = "map") -> PricedMap:
         """Compile (or load) the kernels, then price ``terrain`` (:meth:`build`, :meth:`at_risk`), timed.

@@ -41,7 +41,7 @@ def test_at_risk_prices_every_edge_at_the_quantile_of_risk_cost(corridor_map, kn
     risky = spec.at_risk(mean)
     np.testing.assert_array_equal(risky.grade_table_j_per_m, risk_cost(mean, 0.9).grade_table_j_per_m)
     assert (risky.grade_table_j_per_m >= mean.grade_table_j_per_m).all()
-    assert spec.plan_model(mean).risk_q == 0.9 and spec.plan_model(mean, with_risk=False).risk_q is None
+    assert spec.plan_model(mean).risk_q == 0.9 and dataclasses.replace(spec, risk=None).plan_model(mean).risk_q is None
 
 
 def test_risk_without_an_interval_names_the_parameter(flat_map):
