@@ -48,6 +48,7 @@ from planner import EnergyCost, Lattice, plan_batch, plan_route, simulate_missio
 from planner.cache import CACHE_SIZE, ResultCache
 from terrain.procedural import procedural_map
 from terrawatt_base.atomic import write_json_atomic
+from terrawatt_base.dask_client import Compute
 
 
 def _need(module: str, extra: str) -> Any:
@@ -101,7 +102,7 @@ def _mc_rows(client: Any, cost: EnergyCost, pair: np.ndarray, n: int) -> dict[st
     route = plan_route(cost.terrain, pair[:2], pair[2:], cost=cost, planner="lattice")
     battery = Battery(2.0, 24.0)
     here = simulate_missions_mc(cost.terrain, route, battery, n, seed=0)
-    there = simulate_missions_mc(cost.terrain, route, battery, n, seed=0, client=client, chunk_size=4)
+    there = simulate_missions_mc(cost.terrain, route, battery, n, seed=0, compute=Compute(client=client), chunk_size=4)
     return {
         "missions": n, "route_length_m": route.length_m, "in_process_s": here.elapsed_s, "cluster_s": there.elapsed_s,
         "in_process_missions_per_s": n / here.elapsed_s, "cluster_missions_per_s": n / there.elapsed_s,
@@ -128,11 +129,11 @@ def _batch_rows(cost: EnergyCost, pairs: np.ndarray, workers: int, repeats: int,
         warm_s = time.perf_counter() - t1
         for _ in range(repeats):
             cpu0 = time.process_time()
-            here = plan_batch(_fresh(cost), pairs, progress=False)
+            here = plan_batch(_fresh(cost), pairs)
             cpu_here = time.process_time() - cpu0
-            warm_here = plan_batch(_fresh(cost, keep_lattices=True), pairs, progress=False)  # lattice built already
+            warm_here = plan_batch(_fresh(cost, keep_lattices=True), pairs)  # lattice built already
             cpu0 = client.run(time.process_time)
-            there = plan_batch(cost, pairs, client=client, progress=False)  # a fresh scatter: workers start cold
+            there = plan_batch(cost, pairs, compute=Compute(client=client))  # a fresh scatter: workers start cold
             cpu_there = sum(t - cpu0[w] for w, t in client.run(time.process_time).items())
             cpu_ratio.append(cpu_there / cpu_here)
             here_rps.append(here.routes_per_s)

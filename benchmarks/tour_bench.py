@@ -52,6 +52,7 @@ from planner.tours.solver import TourProblem, solve_ortools, solve_pyvrp
 from terrain import TerrainMap, example_map
 from terrain.procedural import procedural_map
 from terrawatt_base.atomic import write_json_atomic
+from terrawatt_base.dask_client import Compute
 
 
 def with_spread(cost: EnergyCost, rel_sd: float) -> EnergyCost:
@@ -90,7 +91,7 @@ def timing_part(args: argparse.Namespace) -> dict[str, Any]:
     depot, sites = depot_and_sites(cost, args.sites, np.random.default_rng(args.seed))
     pts = np.vstack([depot, sites.xy_m])
     t0 = time.perf_counter()
-    prices = price_pairs(cost, pts, ("depot", *sites.names), risk=args.risk, workers=args.workers)
+    prices = price_pairs(cost, pts, ("depot", *sites.names), risk=args.risk, compute=Compute(workers=args.workers))
     pricing_s = time.perf_counter() - t0
     battery = battery_for(prices, args.battery_trips, cost.battery_voltage_v)
     robots = [TourRobot(battery, depot, f"robot {k}") for k in range(args.robots)]

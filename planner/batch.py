@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import copy
 import dataclasses
 import math
@@ -10,8 +9,8 @@ import time
 from typing import Any
 
 from terrain import TerrainMap
-from terrawatt_base.checks import check_bool, check_instance, check_int, check_real, check_seed
-from terrawatt_base.dask_client import check_client, client_worker_count, dask_client
+from terrawatt_base.checks import check_instance, check_int, check_real, check_seed
+from terrawatt_base.dask_client import Compute, client_worker_count
 from terrawatt_base.errors import InvalidParameterError, TerrawattError, UnknownNameError
 
 from .batch_pairs import BatchPairs
@@ -93,16 +92,12 @@ def plan_batch(
     cost: EnergyCost,
     pairs: Any,
     *,
-    names: Any = None,
     planner: str = "lattice",
     settings: PlannerSettings | None = None,
     time_limit_s: float | None = 1.0,
     max_cost_evaluations: int | None = None,
     seed: int | None = 0,
-    client: Any = None,
-    workers: int | None = None,
-    scheduler: str | None = None,
-    progress: bool = True,
+    compute: Compute | None = None,
 ) -> BatchResult:
     """Plan many (start, goal) pairs on one cost: here, on a local dask cluster, or on a given client.
 
@@ -121,10 +116,9 @@ def plan_batch(
     cost : EnergyCost
         Edge costs of the map (the map is ``cost.terrain``).
     pairs : BatchPairs or array-like
-        :class:`BatchPairs` (e.g. :func:`read_pairs_csv`, :meth:`BatchPairs.all_pairs`), an
-        ``(N, 4)`` array ``[start_x_m, start_y_m, goal_x_m, goal_y_m]`` or ``(N, 2, 2)``.
-    names : sequence of str, optional
-        A unique name per pair for an array ``pairs`` (default ``"0"``, ``"1"``, ...).
+        :class:`BatchPairs` (e.g. :func:`read_pairs_csv`, :meth:`BatchPairs.all_pairs`,
+        ``BatchPairs.from_array(array, names)`` to name them), an ``(N, 4)`` array
+        ``[start_x_m, start_y_m, goal_x_m, goal_y_m]`` or ``(N, 2, 2)`` (named ``"0"``, ``"1"``, ...).
     planner : str
         One of :data:`PLANNERS`; ``"lattice"`` (default) is exact, deterministic and fast.
     settings : PlannerSettings, optional
@@ -132,15 +126,9 @@ def plan_batch(
     time_limit_s, max_cost_evaluations, seed
         As :func:`plan_route` (ignored by the lattice planner but ``seed``, which seeds the
         refinement).
-    client : distributed.Client, optional
-        Run the pairs as tasks on this client's cluster (not with ``workers`` / ``scheduler``).
-    workers : int, optional
-        ``None`` or 1: plan here (unless ``client`` or ``scheduler``); N > 1: on a new local
-        cluster of N worker processes, closed at the end.
-    scheduler : str, optional
-        Address of a running dask scheduler to plan on (e.g. ``"tcp://host:8786"``).
-    progress : bool
-        Show a tqdm bar over the pairs (the completed tasks on dask).
+    compute : Compute, optional
+        Where the pairs are planned and whether a bar shows over them
+        (:class:`terrawatt_base.dask_client.Compute`; default: here, one after another, no bar).
 
     Returns
     -------
@@ -149,10 +137,8 @@ def plan_batch(
     Raises
     ------
     InvalidParameterError
-        Not an EnergyCost; pairs of a bad shape, NaN coordinates, bad names; a ``client``
-        that is not a ``distributed.Client``; ``client`` together with ``workers`` > 1 or
-        ``scheduler``; ``workers < 1``; an unreachable ``scheduler`` (after a timeout); bad
-        budgets, seed or settings.
+        Not an EnergyCost; pairs of a bad shape, NaN coordinates, bad names; not a
+        ``Compute``; an unreachable scheduler (after a timeout); bad budgets, seed or settings.
     UnknownNameError
         An unknown planner.
     OptionalDependencyError
@@ -162,13 +148,13 @@ def plan_batch(
     --------
     >>> from terrain import flat_map
     >>> cost = EnergyCost.from_presets(flat_map((20, 20), 1.0))
-    >>> res = plan_batch(cost, [[2.0, 2.0, 15.0, 12.0], [15.0, 12.0, 2.0, 2.0]], progress=False)
+    >>> res = plan_batch(cost, [[2.0, 2.0, 15.0, 12.0], [15.0, 12.0, 2.0, 2.0]])
     >>> [r.status for r in res.rows], round(res.rows[0].length_m, 2)
     (['exact', 'exact'], 16.4)
     """
     if not isinstance(cost, EnergyCost):
         raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
-    batch = BatchPairs.from_array(pairs, names)
+    batch = BatchPairs.from_array(pairs)
     if not isinstance(planner, str) or planner not in PLANNERS:
         raise UnknownNameError(f"planner must be one of {list(PLANNERS)!r}, got {planner!r}")
     if settings is not None and not isinstance(settings, PlannerSettings):
@@ -180,29 +166,15 @@ def plan_batch(
         check_int("max_cost_evaluations", max_cost_evaluations, low=1)
     if planner not in GRAPH_PLANNERS and time_limit_s is None and max_cost_evaluations is None:
         raise InvalidParameterError("time_limit_s and max_cost_evaluations are both None; give at least one budget")
-    progress = check_bool("progress", progress)
-    client = check_client(client, "pairs")
-    n_workers = 1 if workers is None else check_int("workers", workers, low=1)
-    if client is not None and (n_workers > 1 or scheduler is not None):
-        raise InvalidParameterError(
-            "client excludes workers and scheduler: give a distributed.Client, or workers=N for a local cluster, "
-            "or scheduler=ADDRESS"
-        )
+    compute = Compute() if compute is None else check_instance("compute", compute, Compute)
     opts = (planner, settings, time_limit_s, max_cost_evaluations, seed)
-    with contextlib.ExitStack() as stack:
-        where = "in process"
-        if client is None and (n_workers > 1 or scheduler is not None):
-            client = stack.enter_context(dask_client(n_workers, scheduler))
-            where = "local cluster" if scheduler is None else scheduler
-        elif client is not None:
-            where = "given client"
+    with compute.session() as (client, where):
         t0 = time.perf_counter()
         if client is None:
-            rows = _plan_here(cost, batch, opts, progress)
-            n_used = 1
+            rows = _plan_here(cost, batch, opts, compute.progress)
         else:
-            rows = _plan_on_cluster(client, cost, batch, opts, progress)
-            n_used = client_worker_count(client)
+            rows = _plan_on_cluster(client, cost, batch, opts, compute.progress)
+        n_used = client_worker_count(client)
         elapsed = time.perf_counter() - t0
     return BatchResult(tuple(rows), planner, where, n_used, elapsed, terrain=cost.terrain)
 
@@ -259,9 +231,7 @@ def plan_batch_on_map(
     time_limit_s: float | None = 1.0,
     max_cost_evaluations: int | None = None,
     seed: int | None = 0,
-    client: Any = None,
-    where: str | None = None,
-    progress: bool = True,
+    compute: Compute | None = None,
     map_label: str = "map",
 ) -> BatchResult:
     """Price ``terrain`` (:meth:`planner.cost_spec.CostSpec.build`) and plan every pair on it (:func:`planner.plan_batch`).
@@ -272,8 +242,8 @@ def plan_batch_on_map(
         The map.
     pairs : BatchPairs or array-like
         As :func:`planner.plan_batch`.
-    planner, time_limit_s, max_cost_evaluations, seed, client, progress
-        As :func:`planner.plan_batch`; ``where`` says how the result names ``client``'s cluster.
+    planner, time_limit_s, max_cost_evaluations, seed, compute
+        As :func:`planner.plan_batch`.
     pricing : CostSpec, optional
         How the edges are priced (:class:`planner.cost_spec.CostSpec`, default ``CostSpec()``; its
         ``risk`` is not used: every pair at the mean).
@@ -293,15 +263,13 @@ def plan_batch_on_map(
     Examples
     --------
     >>> from terrain import flat_map
-    >>> report = plan_batch_on_map(flat_map((20, 20), 1.0), [[2.0, 2.0, 15.0, 12.0]], progress=False)
+    >>> report = plan_batch_on_map(flat_map((20, 20), 1.0), [[2.0, 2.0, 15.0, 12.0]])
     >>> report.all_found, report.header()
     (True, 'map: map  20 x 20 cells of 1 m; 1 pairs; planner lattice')
     """
     pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
     cost = pricing.build(terrain)
     warm_up_kernels()
-    result = plan_batch(cost, pairs, planner=planner, seed=seed, client=client, time_limit_s=time_limit_s,
-                        max_cost_evaluations=max_cost_evaluations, progress=progress)
-    if client is not None and where is not None:  # where it ran, as the caller names it
-        result = dataclasses.replace(result, where=where)
+    result = plan_batch(cost, pairs, planner=planner, seed=seed, compute=compute, time_limit_s=time_limit_s,
+                        max_cost_evaluations=max_cost_evaluations)
     return dataclasses.replace(result, map_label=map_label)

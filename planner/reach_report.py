@@ -10,9 +10,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from energy import Battery
 from energy.battery import S_PER_H
 from terrain import TerrainMap
-from terrawatt_base.checks import check_instance, check_real
+from terrawatt_base.checks import check_instance
 from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import result_document, write_result_json
 
@@ -38,7 +39,7 @@ class ReachReport:
     priced : PricedMap
         The map and how it was priced, with the times (its map preparation; the kernels' compile
         time includes the reachability kernels').
-    battery_ah, voltage_v, reserve_pct : float
+    battery : Battery
         The battery: capacity (Ah), voltage (V), share kept in reserve (%).
     total_time_s : float
         Seconds to price the map and search.
@@ -46,9 +47,7 @@ class ReachReport:
 
     reach: Reachability
     priced: PricedMap = field(repr=False, compare=False)
-    battery_ah: float
-    voltage_v: float
-    reserve_pct: float
+    battery: Battery
     total_time_s: float
 
     @property
@@ -63,7 +62,7 @@ class ReachReport:
 
     def summary(self) -> str:
         """What ``terrawatt reach`` prints: the map, robot and battery, then the reachable area and the times."""
-        reach, t, priced = self.reach, self.terrain, self.priced
+        reach, t, priced, b = self.reach, self.terrain, self.priced, self.battery
 
         def wh(j: float) -> str:
             return "-" if math.isnan(j) else f"{j / S_PER_H:.2f} Wh"
@@ -72,7 +71,7 @@ class ReachReport:
         lines = [
             f"map: {priced.map_label}  {t.shape[0]} x {t.shape[1]} cells of {t.cell_size_m:g} m",
             priced.robot_line(),
-            f"battery {self.battery_ah:g} Ah at {self.voltage_v:g} V = {budget_wh:.1f} Wh; reserve {self.reserve_pct:g} "
+            f"battery {b.capacity_ah:g} Ah at {b.voltage_v:g} V = {budget_wh:.1f} Wh; reserve {b.min_reserve_pct:g} "
             f"% -> {reach.usable_energy_j / S_PER_H:.1f} Wh usable {'there and back' if reach.round_trip else 'one way'}",
             f"depot {reach.depot_xy_m}",
             "",
@@ -91,7 +90,7 @@ class ReachReport:
                  ("search", f"{reach.search_time_s:.2f} s"), ("total", f"{self.total_time_s:.2f} s")]
         lines += [f"{name:<24} {value}" for name, value in rows]
         if not reach.n_reachable_cells:
-            lines += ["", "no cell is reachable within the usable energy: a larger battery or a smaller reserve (reserve_pct, --reserve)"]
+            lines += ["", "no cell is reachable within the usable energy: a larger battery or a smaller reserve"]
         if priced.kernel_compile_s > 1.0:
             lines.append(f"(compiled the kernels in {priced.kernel_compile_s:.1f} s: first run in this environment; not "
                          "in the times above)")
@@ -104,9 +103,9 @@ class ReachReport:
         result = result_document("reachability", reach.pop("format_version"), {
             "map": self.priced.map_label,
             **self.priced.fields(),
-            "battery_ah": self.battery_ah,
-            "battery_voltage_v": self.voltage_v,
-            "reserve_pct": self.reserve_pct,
+            "battery_ah": self.battery.capacity_ah,
+            "battery_voltage_v": self.battery.voltage_v,
+            "reserve_pct": self.battery.min_reserve_pct,
             "map_preparation_s": self.priced.map_preparation_s,
             "total_time_s": self.total_time_s,
             "kernel_compile_s": self.priced.kernel_compile_s,
@@ -140,16 +139,15 @@ def reach_on_battery(
     terrain: TerrainMap,
     depot_xy_m: tuple[float, float],
     *,
-    battery_ah: float,
-    voltage_v: float | None = None,
-    reserve_pct: float = 20.0,
+    battery: Battery,
     round_trip: bool = False,
     pricing: CostSpec | None = None,
     map_label: str = "map",
 ) -> ReachReport:
     """The cells a battery reaches from a depot (:func:`planner.reachability`), with its budget and timings.
 
-    The budget is ``battery_ah * voltage_v`` (in J), the reserve ``reserve_pct`` % of it.
+    The budget is the full battery's energy (capacity times voltage, in J; its initial charge is not
+    used), the reserve its ``min_reserve_pct`` % of it.
 
     Parameters
     ----------
@@ -157,12 +155,9 @@ def reach_on_battery(
         The map.
     depot_xy_m : (float, float)
         The depot (m).
-    battery_ah : float
-        Capacity (Ah, > 0).
-    voltage_v : float, optional
-        Voltage (V); default the robot preset's battery voltage.
-    reserve_pct : float
-        Share of the battery kept in reserve (%, in [0, 100)).
+    battery : Battery
+        Capacity, voltage and reserve (e.g. :func:`planner.missions.mission_report.mission_battery`: a capacity at
+        the robot's voltage).
     round_trip : bool
         Budget the way there and back.
     pricing : CostSpec, optional
@@ -178,29 +173,26 @@ def reach_on_battery(
     Raises
     ------
     InvalidParameterError
-        A bad number.
+        Not a Battery.
     TerrawattError
         As :meth:`planner.cost_spec.CostSpec.build` and :func:`planner.reachability`.
 
     Examples
     --------
     >>> from terrain import flat_map
-    >>> report = reach_on_battery(flat_map((20, 20), 1.0, ground="asphalt"), (10.0, 10.0), battery_ah=0.01)
-    >>> report.reach.n_reachable_cells > 0, report.voltage_v
-    (True, 24.0)
+    >>> from energy import Battery
+    >>> report = reach_on_battery(flat_map((20, 20), 1.0, ground="asphalt"), (10.0, 10.0), battery=Battery(0.01, 24.0))
+    >>> report.reach.n_reachable_cells > 0, report.battery.usable_energy_wh
+    (True, 0.192)
     """
-    battery_ah = check_real("battery_ah", battery_ah, low=0.0, low_inclusive=False)
-    reserve_pct = check_real("reserve_pct", reserve_pct, low=0.0, high=100.0, high_inclusive=False)
+    battery = check_instance("battery", battery, Battery)
     pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
-    voltage_v = pricing.params.battery_voltage_v if voltage_v is None else check_real(
-        "voltage_v", voltage_v, low=0.0, low_inclusive=False)
-    budget_j = battery_ah * voltage_v * S_PER_H
+    budget_j = battery.capacity_ah * battery.voltage_v * S_PER_H
     reach_compile_s = warm_up_reachability()
     priced = dataclasses.replace(pricing, risk=None).price(terrain, map_label=map_label)  # the reach is at the mean
     priced = dataclasses.replace(priced, kernel_compile_s=priced.kernel_compile_s + reach_compile_s)
     t1 = time.perf_counter()
-    reach = reachability(priced.cost, depot_xy_m, budget_j=budget_j, reserve_j=budget_j * reserve_pct / 100.0,
+    reach = reachability(priced.cost, depot_xy_m, budget_j=budget_j, reserve_j=budget_j * battery.min_reserve_pct / 100.0,
                          round_trip=round_trip)
     total_s = priced.map_preparation_s + time.perf_counter() - t1
-    return ReachReport(reach=reach, priced=priced, battery_ah=battery_ah, voltage_v=voltage_v,
-                       reserve_pct=reserve_pct, total_time_s=total_s)
+    return ReachReport(reach=reach, priced=priced, battery=battery, total_time_s=total_s)

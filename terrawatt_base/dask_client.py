@@ -1,8 +1,10 @@
 """The dask seam: open a ``distributed.Client`` (local cluster or scheduler address) and check a given one.
 
 Every part of terrawatt that runs tasks on dask (the evaluation folds, the diagnosis,
-:func:`planner.plan_batch`, :func:`planner.simulate_missions_mc`) opens and checks its client here, so the optional
-extra, the timeout of an unreachable scheduler and the messages are the same everywhere.
+:func:`planner.plan_batch`, :func:`planner.simulate_missions_mc`, the tours' pricing) opens and checks its client
+here, so the optional extra, the timeout of an unreachable scheduler and the messages are the same everywhere.
+:class:`Compute` says in one value where a batch of independent tasks runs (here, a new local cluster, a
+scheduler or a given client) and whether it shows a progress bar; ``Compute.session()`` opens what it names.
 """
 
 from __future__ import annotations
@@ -12,12 +14,13 @@ import contextlib
 import logging
 import threading
 from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 from terrawatt_base.checks import check_bool, check_int, check_real, check_text, fmt_number
 from terrawatt_base.errors import InvalidParameterError, OptionalDependencyError
 
-__all__ = ["dask_client", "check_dask_options", "check_client", "client_worker_count", "run_tasks", "DEFAULT_CONNECT_TIMEOUT_S"]
+__all__ = ["Compute", "dask_client", "check_dask_options", "check_client", "client_worker_count", "run_tasks", "DEFAULT_CONNECT_TIMEOUT_S"]
 
 #: Seconds to wait for a dask scheduler to answer before giving up.
 DEFAULT_CONNECT_TIMEOUT_S = 10.0
@@ -119,6 +122,92 @@ def check_dask_options(workers: int = 1, scheduler: str | None = None) -> None:
             f"workers {workers!r} and scheduler {scheduler!r} exclude each other: "
             f"give workers N for a local cluster or scheduler ADDRESS for an existing one",
             parameter=("workers", "scheduler"))
+
+
+@dataclass(frozen=True)
+class Compute:
+    """Where a batch of independent tasks runs, and whether a progress bar shows.
+
+    One value instead of the ``client`` / ``workers`` / ``scheduler`` / ``progress`` threads
+    every batch entry point took: :func:`planner.plan_batch`, :func:`planner.simulate_missions_mc`,
+    the Monte Carlo study, the tours' pricing. Checked when made.
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes of a new local cluster (>= 1; 1 runs the tasks here, one after another).
+    scheduler : str, optional
+        Address of a running dask scheduler; not with ``workers > 1``.
+    client : distributed.Client, optional
+        A client the caller opened (and closes); not with ``workers > 1`` or ``scheduler``.
+    progress : bool
+        Show a progress bar (tqdm).
+    quiet : bool
+        Keep dask's INFO messages out of the log while a cluster this value opened runs.
+    where : str, optional
+        How results name where the tasks ran when ``client`` is given (default ``"given client"``;
+        a command line that opened the client from its flags names the cluster it opened).
+
+    Raises
+    ------
+    InvalidParameterError
+        ``workers`` not an int >= 1; ``workers > 1`` with ``scheduler``; ``client`` not a
+        ``distributed.Client``, or with ``workers > 1`` or ``scheduler``; ``where`` without ``client``.
+    OptionalDependencyError
+        A client is given but dask.distributed is not installed.
+
+    Examples
+    --------
+    >>> with Compute().session() as (client, where):
+    ...     client, where
+    (None, 'in process')
+    """
+
+    workers: int = 1
+    scheduler: str | None = None
+    client: Any = None
+    progress: bool = False
+    quiet: bool = True
+    where: str | None = None
+
+    def __post_init__(self) -> None:
+        check_dask_options(self.workers, self.scheduler)
+        if self.scheduler is not None:
+            check_text("scheduler", self.scheduler)
+        check_client(self.client)
+        if self.client is not None and (self.workers > 1 or self.scheduler is not None):
+            raise InvalidParameterError(
+                "client excludes workers and scheduler: give a distributed.Client, or workers=N for a local cluster, "
+                "or scheduler=ADDRESS", parameter=("client", "workers", "scheduler"))
+        check_bool("progress", self.progress)
+        check_bool("quiet", self.quiet)
+        if self.where is not None:
+            check_text("where", self.where)
+            if self.client is None:
+                raise InvalidParameterError("where names a given client; give it with client", parameter="where")
+
+    @property
+    def here(self) -> bool:
+        """Whether the tasks run in this process (no client, no cluster)."""
+        return self.client is None and self.workers == 1 and self.scheduler is None
+
+    @contextlib.contextmanager
+    def session(self) -> Iterator[tuple[Any, str]]:
+        """``(client, where)`` while the tasks run: ``(None, "in process")`` here; a new local cluster's or the
+        scheduler's client (closed on leaving, as :func:`dask_client` opens it); or the given client, left open.
+
+        Raises
+        ------
+        OptionalDependencyError, InvalidParameterError
+            As :func:`dask_client`: no dask.distributed; an unreachable scheduler.
+        """
+        if self.client is not None:
+            yield self.client, self.where or "given client"
+        elif self.here:
+            yield None, "in process"
+        else:
+            with dask_client(self.workers, self.scheduler, quiet=self.quiet) as client:
+                yield client, ("local cluster" if self.scheduler is None else self.scheduler)
 
 
 def _connect(client_class: Any, scheduler: str, timeout_s: float) -> Any:

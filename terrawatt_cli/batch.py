@@ -20,7 +20,7 @@ from .common import (
     check_dask_flags,
     check_model_flags,
     check_outputs,
-    dask_client_arg,
+    compute_arg,
     input_paths,
     load_model_arg,
     map_arg,
@@ -72,12 +72,11 @@ def run_batch(args: argparse.Namespace) -> int:
         names, xy = read_sites_csv(args.sites, tmap)
         pairs = BatchPairs.all_pairs(xy, names)
     pricing = pricing_arg(args, tmap, load_model_arg(args))
-    with dask_client_arg(args) as client:  # a missing extra or scheduler fails before planning
+    with compute_arg(args, progress=not args.no_progress) as compute:  # a missing extra or scheduler fails first
         report = plan_batch_on_map(
-            tmap, pairs, planner=args.planner, pricing=pricing, seed=args.seed, client=client,
+            tmap, pairs, planner=args.planner, pricing=pricing, seed=args.seed, compute=compute,
             time_limit_s=None if args.max_evaluations is not None else args.time_limit,
-            max_cost_evaluations=args.max_evaluations, where=args.scheduler or "local cluster",
-            progress=not args.no_progress, map_label=label)
+            max_cost_evaluations=args.max_evaluations, map_label=label)
     csv_path, json_path = report.write(args.out)
     print(report.summary())
     print(f"wrote {csv_path} and {json_path}")

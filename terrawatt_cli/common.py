@@ -11,9 +11,10 @@ from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
-from energy import GROUND_PRESETS, CurrentModel, load_current_model
+from energy import GROUND_PRESETS, Battery, CurrentModel, load_current_model
 from energy.params import resolve_unknown_ground, robot_params
 from planner.cost_spec import CostSpec
+from planner.missions.mission_report import mission_battery
 from planner.model_cost import parse_model_ground
 from planner.points import point_on_map
 from planner.risk import check_planning_risk
@@ -23,14 +24,14 @@ from terrain.procedural import example_map
 from terrawatt_base import figure_file
 from terrawatt_base.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
 from terrawatt_base.checks import fmt_number
-from terrawatt_base.dask_client import check_dask_options, dask_client
+from terrawatt_base.dask_client import Compute, check_dask_options, dask_client
 
 __all__ = [
     "pricing_arg",
-    "Checked", "bounded", "positive", "add_battery_options", "MAP_FLAGS", "add_map_options", "read_map_args", "map_arg", "add_point_options",
+    "Checked", "bounded", "positive", "add_battery_options", "battery_arg", "MAP_FLAGS", "add_map_options", "read_map_args", "map_arg", "add_point_options",
     "point_arg", "add_robot_options", "add_physics_robot_option", "robot_arg", "add_planner_options", "check_outputs",
     "INPUT_FLAGS", "input_paths",
-    "check_output_file", "draw_figure", "warn_figures", "add_dask_options", "check_dask_flags", "dask_client_arg",
+    "check_output_file", "draw_figure", "warn_figures", "add_dask_options", "check_dask_flags", "dask_client_arg", "compute_arg",
     "add_model_options", "check_model_flags", "load_model_arg",
 ]
 
@@ -49,7 +50,7 @@ class Checked(argparse.Action):
         self.check = check
 
     def __call__(self, parser: Any, namespace: argparse.Namespace, values: Any, option_string: Any = None) -> None:
-        setattr(namespace, self.dest, self.check(values, self.option_strings[0]))
+        setattr(namespace, self.dest, self.check(values, option_string or self.option_strings[0]))  # the flag typed
 
 
 def bounded(expected: str, ok: Callable[[float], bool]) -> Callable[[float, str], float]:
@@ -118,15 +119,25 @@ def point_arg(args: argparse.Namespace, name: str, where: TerrainMap | DemWindow
                         names=(f"--{name}", f"--{name}-lonlat"))
 
 
-def add_battery_options(p: argparse.ArgumentParser, capacity: str = "battery capacity (Ah)") -> None:
-    """``--battery-ah`` (required), ``--voltage`` / ``--battery-v`` and ``--reserve`` / ``--reserve-pct`` (default 20 %)."""
-    p.add_argument("--battery-ah", type=float, required=True, metavar="AH", action=Checked, check=positive,
-                   help=capacity)
+def add_battery_options(p: argparse.ArgumentParser, capacity: str = "battery capacity (Ah)", *,
+                        required: bool = True) -> None:
+    """``--battery-ah`` (``required``), ``--voltage`` / ``--battery-v`` and ``--reserve`` / ``--reserve-pct`` (default
+    20 %): :func:`battery_arg` reads them."""
+    p.add_argument("--battery-ah", type=float, required=required, default=None, metavar="AH", action=Checked,
+                   check=positive, help=capacity)
     p.add_argument("--voltage", "--battery-v", dest="voltage", type=float, default=None, metavar="V", action=Checked,
                    check=positive, help="battery voltage (default: the robot's)")
     p.add_argument("--reserve", "--reserve-pct", dest="reserve", type=float, default=20.0, metavar="PCT",
                    action=Checked, check=bounded("a percentage in [0, 100)", lambda v: 0.0 <= v < 100.0),
                    help="share of the battery kept in reserve (%%, in [0, 100), default 20)")
+
+
+def battery_arg(args: argparse.Namespace, robot: Any) -> Battery | None:
+    """The :class:`energy.Battery` of ``--battery-ah``, ``--voltage`` (default ``robot``'s) and ``--reserve``; None
+    without ``--battery-ah`` (where it is not required)."""
+    if args.battery_ah is None:
+        return None
+    return mission_battery(robot, args.battery_ah, args.voltage, args.reserve)
 
 
 def add_robot_options(p: argparse.ArgumentParser, *, speed: str = "planning speed", slope: bool = True) -> None:
@@ -235,6 +246,17 @@ def dask_client_arg(args: argparse.Namespace) -> Iterator[Any]:
         return
     with dask_client(args.workers, args.scheduler, quiet=not args.verbose) as client:
         yield client
+
+
+@contextlib.contextmanager
+def compute_arg(args: argparse.Namespace, *, progress: bool) -> Iterator[Compute]:
+    """Where ``--workers N`` / ``--scheduler ADDRESS`` say the tasks run, as a :class:`Compute` (the cluster opened
+    here, before any work, so a missing extra or an unreachable scheduler fails fast; closed on leaving)."""
+    with dask_client_arg(args) as client:
+        if client is None:
+            yield Compute(progress=progress)
+        else:
+            yield Compute(client=client, where=args.scheduler or "local cluster", progress=progress)
 
 
 def add_model_options(p: argparse.ArgumentParser, *, risk: bool = False) -> None:

@@ -13,15 +13,17 @@ from terrain import InvalidParameterError
 
 from .common import (
     Checked,
+    add_battery_options,
     add_dask_options,
     add_map_options,
     add_model_options,
     add_point_options,
     add_robot_options,
+    battery_arg,
     bounded,
     check_model_flags,
     check_outputs,
-    dask_client_arg,
+    compute_arg,
     input_paths,
     load_model_arg,
     map_arg,
@@ -46,12 +48,7 @@ def add_parser(sub: Any) -> None:
     add_map_options(p)
     add_point_options(p, "start", "start", required=False, default="; default: the example's")
     add_point_options(p, "goal", "goal", required=False, default="; default: the example's")
-    p.add_argument("--battery-ah", type=float, required=True, metavar="AH", action=Checked, check=positive,
-                   help="battery capacity (Ah)")
-    p.add_argument("--battery-v", type=float, default=None, metavar="V", action=Checked, check=positive,
-                   help="battery voltage (default: the robot's)")
-    p.add_argument("--reserve-pct", type=float, default=20.0, metavar="P", action=Checked,
-                   check=bounded("in [0, 100)", lambda v: 0.0 <= v < 100.0), help="minimum reserve (%%, default 20)")
+    add_battery_options(p)
     add_robot_options(p, speed="driving speed", slope=False)
     p.add_argument("--prior-ground", default="asphalt",
                    help="ground the prior current model was trained on (default asphalt); other grounds are learned "
@@ -111,8 +108,7 @@ def run_mission(args: argparse.Namespace) -> int:
     pricing = pricing_arg(args, tmap, load_model_arg(args))
     if not mc:
         report = simulate_adaptive_mission(
-            tmap, start, goal, battery_ah=args.battery_ah, battery_v=args.battery_v, reserve_pct=args.reserve_pct,
-            pricing=pricing, prior_ground=args.prior_ground, leg_m=args.leg_m, adapt=not args.no_adapt,
+            tmap, start, goal, battery=battery_arg(args, pricing.params), pricing=pricing, prior_ground=args.prior_ground, leg_m=args.leg_m, adapt=not args.no_adapt,
             seed=args.seed, map_label=label)
         with warn_figures():
             written = report.write(args.out, logs=args.logs)
@@ -125,12 +121,10 @@ def run_mission(args: argparse.Namespace) -> int:
               + (f" and {len(legs)} leg logs and {len(logs_written) - len(legs)} manoeuvre runs in {legs[0].parent}"
                  if legs else ""))
         return 0 if report.completed else 1
-    with dask_client_arg(args) as client:
+    with compute_arg(args, progress=True) as compute:
         study = monte_carlo_mission(
-            tmap, start, goal, args.monte_carlo, battery_ah=args.battery_ah, battery_v=args.battery_v,
-            reserve_pct=args.reserve_pct, pricing=pricing, seed=args.seed, draw_from=args.mc_draw,
-            max_risk_pct=args.max_risk_pct, client=client, where=args.scheduler or "local cluster", progress=True,
-            map_label=label)
+            tmap, start, goal, args.monte_carlo, battery=battery_arg(args, pricing.params), pricing=pricing,
+            seed=args.seed, draw_from=args.mc_draw, max_risk_pct=args.max_risk_pct, compute=compute, map_label=label)
     print(study.summary())
     if study.result is None:
         return 1

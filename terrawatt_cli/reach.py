@@ -16,6 +16,7 @@ from .common import (
     add_model_options,
     add_point_options,
     add_robot_options,
+    battery_arg,
     check_model_flags,
     check_outputs,
     input_paths,
@@ -66,8 +67,7 @@ def run_reach(args: argparse.Namespace) -> int:
     pricing = pricing_arg(args, tmap, load_model_arg(args))
     geo = bool(tmap.crs) or str(args.map).lower().endswith((".tif", ".tiff"))
     report = reach_on_battery(
-        tmap, depot, battery_ah=args.battery_ah, voltage_v=args.voltage, reserve_pct=args.reserve,
-        round_trip=args.round_trip, pricing=pricing, map_label=label)
+        tmap, depot, battery=battery_arg(args, pricing.params), round_trip=args.round_trip, pricing=pricing, map_label=label)
     with warn_figures():
         written = report.write(args.out, raster="reach.tif" if geo else "reach.npz")
     print(report.summary())

@@ -8,14 +8,16 @@ from typing import Any
 
 from energy.io import read_navsat
 from planner.missions.replay_report import place_by_gps, replay_recording
-from planner.missions.settings import UPDATE_SOURCES
+from planner.missions.settings import UPDATE_SOURCES, AdaptiveSettings
 from planner.model_cost import parse_model_ground
 from planner.risk import check_planning_risk
 
 from .common import (
     Checked,
+    add_battery_options,
     add_map_options,
     add_point_options,
+    battery_arg,
     bounded,
     check_model_flags,
     check_outputs,
@@ -57,12 +59,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--model-ground", default=None, nargs="+", metavar="NAME|CLASS=NAME", action=Checked,
                    check=parse_model_ground, help="with --model: serve each map class by the model's ground of that name (as terrawatt mission "
                         "--model does)")
-    p.add_argument("--battery-ah", type=float, default=None, metavar="AH", action=Checked, check=positive,
-                   help="battery capacity (Ah; not needed when resuming from --state)")
-    p.add_argument("--battery-v", type=float, default=None, metavar="V", action=Checked, check=positive,
-                   help="battery voltage (default: the robot's)")
-    p.add_argument("--reserve-pct", type=float, default=20.0, metavar="P", action=Checked,
-                   check=bounded("in [0, 100)", lambda v: 0.0 <= v < 100.0), help="minimum reserve (%%, default 20)")
+    add_battery_options(p, "battery capacity (Ah; not needed when resuming from --state)", required=False)
     p.add_argument("--soc", type=float, default=1.0, metavar="F", action=Checked,
                    check=bounded("in (0, 1]", lambda v: 0.0 < v <= 1.0),
                    help="state of charge at the start of the recording (default 1)")
@@ -119,10 +116,12 @@ def run_replay(args: argparse.Namespace) -> int:
     def say(decision: Any) -> None:
         print(f"t={decision.time_s:9.2f} s  {decision.action:9s} {decision.reason}")
 
+    pricing = pricing_arg(args, tmap, model)
+    battery = battery_arg(args, pricing.params)
     result = replay_recording(
-        tmap, logs, goal, battery_ah=args.battery_ah, battery_v=args.battery_v, reserve_pct=args.reserve_pct,
-        initial_soc=args.soc, pricing=pricing_arg(args, tmap, model), leg_m=args.leg_m, seed=args.seed,
-        registry=args.registry, physics_ground=args.physics_ground, update_source=args.update_source, mode=args.mode,
+        tmap, logs, goal, battery=None if battery is None else battery.replace(initial_soc=args.soc), pricing=pricing,
+        settings=AdaptiveSettings(leg_length_m=args.leg_m, seed=args.seed, update_source=args.update_source),
+        registry=args.registry, physics_ground=args.physics_ground, mode=args.mode,
         chunk_s=args.chunk_s, speed_up=args.speed_up, depot_xy_m=point_arg(args, "depot", tmap),
         state_path=args.state, on_decision=say)
     print(f"map: {label}")

@@ -18,11 +18,12 @@ from .common import (
     add_map_options,
     add_model_options,
     add_robot_options,
+    battery_arg,
     bounded,
     check_dask_flags,
     check_model_flags,
     check_outputs,
-    dask_client_arg,
+    compute_arg,
     input_paths,
     load_model_arg,
     map_arg,
@@ -106,12 +107,11 @@ def run_tour(args: argparse.Namespace) -> int:
     sites = read_tour_sites_csv(args.sites, tmap)
     chargers = read_tour_chargers_csv(args.chargers, tmap) if args.chargers is not None else None
     pricing = pricing_arg(args, tmap, load_model_arg(args))
-    with dask_client_arg(args) as client:
+    with compute_arg(args, progress=False) as compute:
         result = plan_tour_on_map(
-            tmap, sites, depots[0] if len(depots) == 1 else depots, battery_ah=args.battery_ah,
-            voltage_v=args.voltage, reserve_pct=args.reserve, n_robots=robots, max_duration_s=args.max_duration,
-            risk=args.tour_risk, pricing=pricing, time_limit_s=args.time_limit, seed=args.seed, client=client,
-            map_label=label, chargers=chargers)
+            tmap, sites, depots[0] if len(depots) == 1 else depots, battery=battery_arg(args, pricing.params),
+            n_robots=robots, max_duration_s=args.max_duration, risk=args.tour_risk, pricing=pricing,
+            time_limit_s=args.time_limit, seed=args.seed, compute=compute, map_label=label, chargers=chargers)
     with warn_figures():
         written = result.write(args.out, bag=args.bag)
     print(result.summary())

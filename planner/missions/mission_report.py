@@ -248,9 +248,7 @@ def simulate_adaptive_mission(
     start_xy_m: tuple[float, float],
     goal_xy_m: tuple[float, float],
     *,
-    battery_ah: float,
-    battery_v: float | None = None,
-    reserve_pct: float = 20.0,
+    battery: Battery,
     pricing: CostSpec | None = None,
     prior_ground: str = "asphalt",
     leg_m: float = 10.0,
@@ -273,8 +271,8 @@ def simulate_adaptive_mission(
         The map; its grounds are presets.
     start_xy_m, goal_xy_m : (float, float)
         Start and goal (m).
-    battery_ah, battery_v, reserve_pct
-        The battery (:func:`mission_battery`).
+    battery : Battery
+        The battery driven against (e.g. :func:`mission_battery`: a capacity at the robot's voltage).
     pricing : CostSpec, optional
         The robot, its driving speed and, with a saved current model, the model serving the map's
         grounds instead of the prior (:class:`planner.cost_spec.CostSpec`; default ``CostSpec()``).
@@ -298,9 +296,10 @@ def simulate_adaptive_mission(
     UnknownNameError
         A ground of the map, or ``prior_ground``, without a preset.
     InvalidParameterError
-        A bad number.
+        A bad number; not a Battery.
     """
     check_preset_grounds(terrain)
+    battery = check_instance("battery", battery, Battery)
     if prior_ground not in GROUND_PRESETS:
         raise UnknownNameError(f"prior_ground {prior_ground!r} has no preset; known grounds: {sorted(GROUND_PRESETS)!r}")
     check_real("leg_m", leg_m, low=0.0, low_inclusive=False)
@@ -309,7 +308,6 @@ def simulate_adaptive_mission(
     robot_given, model = pricing.params, pricing.model
     grounds = {name: ground_preset(name) for name in sorted(set(terrain.ground_names.values()) | {prior_ground})}
     truth = TruthSimulator(robot_given, grounds, seed=seed)
-    battery = mission_battery(robot_given, battery_ah, battery_v, reserve_pct)
     settings = AdaptiveSettings(speed_mps=pricing.speed_mps, leg_length_m=leg_m,
                                 max_updates=AdaptiveSettings().max_updates if adapt else 0, seed=seed)
     learned = None

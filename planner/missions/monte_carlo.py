@@ -10,7 +10,6 @@ result is the same in process, on any number of workers and with any ``chunk_siz
 
 from __future__ import annotations
 
-import contextlib
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -21,9 +20,9 @@ import numpy as np
 from energy import GROUND_PRESETS, Battery, GroundParams, RobotParams, TruthSimulator, ground_preset
 from energy.params import robot_params
 from terrain import TerrainMap
-from terrawatt_base.checks import check_bool, check_int, check_real, check_seed
+from terrawatt_base.checks import check_instance, check_int, check_real, check_seed
 from terrawatt_base.containers import memory_limit_bytes, over_budget_message
-from terrawatt_base.dask_client import check_client, client_worker_count, dask_client
+from terrawatt_base.dask_client import Compute, client_worker_count
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from ..edge_cost import EnergyCost
@@ -118,10 +117,7 @@ def simulate_missions_mc(
     seed: int | None = 0,
     current_rate_hz: float = DEFAULT_MC_CURRENT_RATE_HZ,
     chunk_size: int = 8,
-    client: Any = None,
-    workers: int | None = None,
-    scheduler: str | None = None,
-    progress: bool = False,
+    compute: Compute | None = None,
     cost: EnergyCost | None = None,
     draw_from: str = "parameters",
     forecast: RouteEnergyInterval | None = None,
@@ -153,11 +149,9 @@ def simulate_missions_mc(
         Sampling rate of each simulated mission (Hz, > 0).
     chunk_size : int
         Missions per dask task (>= 1); does not change the result.
-    client, workers, scheduler
-        Where to run, as :func:`planner.plan_batch`: here (default), a given
-        ``distributed.Client``, a new local cluster of ``workers`` processes, or a scheduler.
-    progress : bool
-        Show a tqdm bar over the missions (over the completed tasks on dask).
+    compute : Compute, optional
+        Where the missions run and whether a bar shows over them, as :func:`planner.plan_batch`
+        (:class:`terrawatt_base.dask_client.Compute`; default here, no bar).
     cost : EnergyCost, optional
         The cost that planned the route: when it carries its physics model, the study's
         ``predicted_energy_j`` is that model's forecast of the driven stop-turn-go profile at
@@ -189,8 +183,7 @@ def simulate_missions_mc(
     ------
     InvalidParameterError
         ``n < 1``; wrong argument types; a route that was not found; a bad seed, rate,
-        chunk size, speed; ``client`` with ``workers`` > 1 or ``scheduler``; an
-        unreachable scheduler.
+        chunk size, speed; not a ``Compute``; an unreachable scheduler.
     UnknownNameError
         A ground of the map without parameters.
     OptionalDependencyError
@@ -228,7 +221,7 @@ def simulate_missions_mc(
         raise InvalidParameterError(f"distributions must be a MissionDistributions, got {type(distributions).__name__!r}")
     seed = check_seed(seed)
     chunk_size = check_int("chunk_size", chunk_size, low=1)
-    progress = check_bool("progress", progress)
+    compute = Compute() if compute is None else check_instance("compute", compute, Compute)
     nominal = (route_speed_mps(terrain, route, robot.turn_rate_radps) if speed_mps is None
                else check_real("speed_mps", speed_mps, low=0.0, low_inclusive=False))
     rate_hz = check_real("current_rate_hz", current_rate_hz, low=0.0, low_inclusive=False)
@@ -253,28 +246,17 @@ def simulate_missions_mc(
         predicted_j = route.energy_j  # the forecast, before any mission runs
         if cost is not None and cost.physics_model is not None:
             predicted_j = price_route(cost, route, how="profile", interval=False, speed_mps=nominal).mean_j
-    client = check_client(client, "missions")
-    n_workers = 1 if workers is None else check_int("workers", workers, low=1)
-    if client is not None and (n_workers > 1 or scheduler is not None):
-        raise InvalidParameterError(
-            "client excludes workers and scheduler: give a distributed.Client, or workers=N, or scheduler=ADDRESS"
-        )
     used = int(np.random.SeedSequence().generate_state(1)[0]) if seed is None else seed  # in [0, 2**32)
     seqs = np.random.SeedSequence(used).spawn(n)
-    with contextlib.ExitStack() as stack:
-        where = "in process" if client is None else "given client"
-        if client is None and (n_workers > 1 or scheduler is not None):
-            client = stack.enter_context(dask_client(n_workers, scheduler))
-            where = "local cluster" if scheduler is None else scheduler
+    with compute.session() as (client, where):
         t0 = time.perf_counter()
         if client is None:
             from tqdm.auto import tqdm
 
-            rows = [setup.run(q) for q in tqdm(seqs, desc="missions", disable=not progress)]
-            n_used = 1
+            rows = [setup.run(q) for q in tqdm(seqs, desc="missions", disable=not compute.progress)]
         else:
-            rows = _run_on_cluster(client, setup, seqs, chunk_size, progress)
-            n_used = client_worker_count(client)
+            rows = _run_on_cluster(client, setup, seqs, chunk_size, compute.progress)
+        n_used = client_worker_count(client)
         elapsed = time.perf_counter() - t0
     ground_names = setup.ground_names if draw_from == "model" else tuple(sorted(setup.grounds))
     k = len(ground_names)

@@ -2,21 +2,20 @@
 
 from __future__ import annotations
 
-import dataclasses
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from energy import Battery
 from terrain import TerrainMap
 from terrawatt_base.checks import check_instance, check_real
+from terrawatt_base.dask_client import Compute
 from terrawatt_base.figure_file import draw_figure
 
 from ..cost_spec import CostSpec
 from ..planning import plan_route
 from ..route import Route
-from .mission_report import check_preset_grounds, mission_battery
+from .mission_report import check_preset_grounds
 from .monte_carlo import simulate_missions_mc
 from .monte_carlo_result import MonteCarloResult
 
@@ -116,16 +115,12 @@ def monte_carlo_mission(
     goal_xy_m: tuple[float, float],
     n: int,
     *,
-    battery_ah: float,
-    battery_v: float | None = None,
-    reserve_pct: float = 20.0,
+    battery: Battery,
     pricing: CostSpec | None = None,
     seed: int | None = 0,
     draw_from: str = "parameters",
     max_risk_pct: float = 5.0,
-    client: Any = None,
-    where: str | None = None,
-    progress: bool = False,
+    compute: Compute | None = None,
     map_label: str = "map",
 ) -> MonteCarloReport:
     """Plan the lattice route and drive it ``n`` times with drawn parameters (:func:`simulate_missions_mc`).
@@ -143,8 +138,8 @@ def monte_carlo_mission(
         Start and goal (m).
     n : int
         Missions.
-    battery_ah, battery_v, reserve_pct
-        The battery (:func:`planner.missions.mission_report.mission_battery`).
+    battery : Battery
+        The nominal battery (e.g. :func:`planner.missions.mission_report.mission_battery`).
     pricing : CostSpec, optional
         How the edges are priced and the missions driven (:class:`planner.cost_spec.CostSpec`: the
         robot, its speed, the presets or a saved current model; default ``CostSpec()``); its
@@ -156,10 +151,8 @@ def monte_carlo_mission(
         ``"parameters"`` or ``"model"`` (needs a model with an interval).
     max_risk_pct : float
         Most missions (%) below the reserve for :attr:`MonteCarloReport.ok`.
-    client : distributed.Client, optional
-        Run the missions on this dask client; ``where`` says how the result names it.
-    progress : bool
-        Show a progress bar.
+    compute : Compute, optional
+        Where the missions run and whether a bar shows (:class:`terrawatt_base.dask_client.Compute`).
     map_label : str
         How the map is named.
 
@@ -178,7 +171,7 @@ def monte_carlo_mission(
     check_preset_grounds(terrain)
     max_risk_pct = check_real("max_risk_pct", max_risk_pct, low=0.0, high=100.0)
     pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
-    battery = mission_battery(pricing.robot, battery_ah, battery_v, reserve_pct)
+    battery = check_instance("battery", battery, Battery)
     cost = pricing.build(terrain)
     if pricing.risk is not None or draw_from == "model":
         pricing.needs_interval(cost, also="draw_from")
@@ -186,9 +179,7 @@ def monte_carlo_mission(
     result = None
     if route.found:
         result = simulate_missions_mc(terrain, route, battery, n, robot=pricing.params, speed_mps=pricing.speed_mps,
-                                      seed=seed, client=client, progress=progress, cost=cost, draw_from=draw_from)
-        if client is not None and where is not None:  # where it ran, as the caller names it
-            result = dataclasses.replace(result, where=where)
+                                      seed=seed, compute=compute, cost=cost, draw_from=draw_from)
     return MonteCarloReport(route=route, result=result, battery=battery, map_label=map_label, robot=pricing.robot,
                             start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),
                             goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), n=n, risk_q=pricing.risk,

@@ -10,15 +10,14 @@ from typing import Any
 
 import numpy as np
 
-from energy import GROUND_PRESETS, InteractionLog, ground_preset, load_current_model
+from energy import GROUND_PRESETS, Battery, InteractionLog, ground_preset, load_current_model
 from terrain import TerrainMap
-from terrawatt_base.checks import check_instance, check_real
+from terrawatt_base.checks import check_instance
 from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
 from ..cost_spec import CostSpec
 from ..model_cost import model_energy_model
 from ..registry import CellModelRegistry
-from .mission_report import mission_battery
 from .replay import ReplayResult, replay_drive
 from .settings import AdaptiveSettings
 
@@ -68,17 +67,11 @@ def replay_recording(
     goal_xy_m: tuple[float, float] | None = None,
     *,
     goal_lonlat_deg: tuple[float, float] | None = None,
-    battery_ah: float | None = None,
-    battery_v: float | None = None,
-    reserve_pct: float = 20.0,
-    initial_soc: float = 1.0,
+    battery: Battery | None = None,
     pricing: CostSpec | None = None,
-    leg_m: float = 10.0,
-    seed: int = 0,
+    settings: AdaptiveSettings | None = None,
     registry: str | os.PathLike[str] | CellModelRegistry | None = None,
     physics_ground: str = "asphalt",
-    update_source: str = "manoeuvre",
-    interval_level: float = 0.8,
     mode: str = "auto",
     chunk_s: float = 1.0,
     speed_up: float | None = None,
@@ -101,16 +94,18 @@ def replay_recording(
     logs : sequence of InteractionLog
         The recording (:func:`energy.io.read_logs`).
     goal_xy_m, goal_lonlat_deg : (float, float)
-    battery_ah, battery_v, reserve_pct, initial_soc
-        The battery (:func:`~planner.missions.mission_report.mission_battery`) and its state
-        of charge at the start.
+    battery : Battery
+        The battery, with its state of charge at the start of the recording (e.g.
+        :func:`~planner.missions.mission_report.mission_battery`, ``.replace(initial_soc=...)``);
+        not needed when resuming.
     pricing : CostSpec, optional
         The robot, its driving speed, the saved current ``model`` the drive starts with (and its
         ``model_ground``) and the navigator's ``risk`` (:class:`planner.cost_spec.CostSpec`;
         default ``CostSpec()``); the edges are priced by the per-cell models, so its slope limit
         and unknown ground do not apply.
-    leg_m, seed, update_source, interval_level
-        The navigator's settings (:class:`AdaptiveSettings`).
+    settings : AdaptiveSettings, optional
+        The navigator's settings (legs, seed, update source, interval level, ...; default
+        ``AdaptiveSettings()``); its speed and risk are the spec's.
     registry
         The models at the start (above): a saved registry, instead of ``pricing.model``.
     physics_ground : str
@@ -136,17 +131,17 @@ def replay_recording(
     ground = ground_preset(physics_ground)
     pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
     robot_given, model = pricing.params, pricing.model
-    settings = AdaptiveSettings(speed_mps=pricing.speed_mps, leg_length_m=leg_m, seed=seed,
-                                update_source=update_source, risk=pricing.risk, interval_level=interval_level)
-    reg, learned, battery = None, None, None
+    settings = AdaptiveSettings() if settings is None else check_instance("settings", settings, AdaptiveSettings)
+    settings = replace(settings, speed_mps=pricing.speed_mps, risk=pricing.risk)
+    reg, learned = None, None
     if not resuming:
         if (registry is None) == (model is None):
             raise InvalidParameterError("give the models the drive starts with: registry or pricing.model (exactly one)",
                                         parameter=("registry", "pricing.model"))
-        if battery_ah is None:
-            raise InvalidParameterError("battery_ah is needed (the battery's capacity, Ah)")
-        check_real("initial_soc", initial_soc, low=0.0, low_inclusive=False, high=1.0)
-        battery = mission_battery(robot_given, battery_ah, battery_v, reserve_pct).replace(initial_soc=initial_soc)
+        if battery is None:
+            raise InvalidParameterError("battery is needed (its capacity, voltage, reserve and charge at the start)",
+                                        parameter="battery")
+        battery = check_instance("battery", battery, Battery)
         if isinstance(registry, CellModelRegistry):
             reg = registry
         elif registry is not None:

@@ -5,12 +5,12 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from energy import Battery
 from terrawatt_base.checks import check_int, check_seed
+from terrawatt_base.dask_client import Compute
 from terrawatt_base.errors import InvalidParameterError
 
 from ..missions import MonteCarloResult, simulate_missions_mc
@@ -79,7 +79,7 @@ class TourCheck:
 
 
 def simulate_tours_mc(result: TourResult, n: int = 1000, *, seed: int | None = 0, draw_from: str | None = None,
-                      workers: int | None = None, client: Any = None) -> TourCheck:
+                      compute: Compute | None = None) -> TourCheck:
     """Drive each planned tour ``n`` times through :func:`planner.simulate_missions_mc`, its battery charged to full at
     each charging stop.
 
@@ -90,6 +90,7 @@ def simulate_tours_mc(result: TourResult, n: int = 1000, *, seed: int | None = 0
     driven segment by segment (from the depot or a charge to the next charge or back), each
     segment from the charge it starts with (the initial one, then full) and with the same seed, so
     mission ``i`` of every segment draws the same factors: one drive of the whole tour.
+    ``compute`` says where the missions run (:class:`terrawatt_base.dask_client.Compute`, default here).
 
     Raises
     ------
@@ -109,7 +110,7 @@ def simulate_tours_mc(result: TourResult, n: int = 1000, *, seed: int | None = 0
         for route, battery, forecast in _segments(result, k):
             studies.append(simulate_missions_mc(
                 result.terrain, route, battery, n, seed=None if seed is None else seed + k, cost=result.cost,
-                draw_from=mode, forecast=forecast if mode == "model" else None, workers=workers, client=client))
+                draw_from=mode, forecast=forecast if mode == "model" else None, compute=compute))
         runs[tour.robot] = tuple(studies)
     return TourCheck(result.risk, runs, mode)
 

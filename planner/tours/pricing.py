@@ -11,7 +11,6 @@ directed: uphill != downhill, so the matrices are asymmetric.
 
 from __future__ import annotations
 
-import contextlib
 import math
 import time
 from dataclasses import dataclass
@@ -20,8 +19,8 @@ from typing import Any
 import numpy as np
 
 from energy.models.forecast import combine_ground_sds, predictive_quantile
-from terrawatt_base.checks import check_int
-from terrawatt_base.dask_client import check_client, client_worker_count, dask_client
+from terrawatt_base.checks import check_instance
+from terrawatt_base.dask_client import Compute, client_worker_count
 from terrawatt_base.errors import InvalidParameterError
 
 from ..batch import shippable_cost
@@ -164,9 +163,7 @@ def price_pairs(
     names: Any,
     *,
     risk: float = 0.9,
-    workers: int | None = None,
-    client: Any = None,
-    progress: bool = False,
+    compute: Compute | None = None,
 ) -> PairPrices:
     """Price every ordered pair of points on ``cost``: one lattice search per point, here or on dask.
 
@@ -180,13 +177,10 @@ def price_pairs(
         One per point.
     risk : float
         The level the legs are searched at (:func:`planner.risk_cost`; ignored without an interval).
-    workers : int, optional
-        ``None`` or 1: here; N > 1: a local dask cluster of N processes (one task per point, the
-        costs scattered once, as :func:`planner.plan_batch`).
-    client : distributed.Client, optional
-        Price on this client's cluster instead.
-    progress : bool
-        Show a tqdm bar over the points.
+    compute : Compute, optional
+        Where the points are priced and whether a bar shows over them
+        (:class:`terrawatt_base.dask_client.Compute`; default here; on dask one task per point,
+        the costs scattered once, as :func:`planner.plan_batch`).
 
     Returns
     -------
@@ -195,7 +189,7 @@ def price_pairs(
     Raises
     ------
     InvalidParameterError
-        Not an EnergyCost; bad points or names; ``client`` with ``workers`` > 1.
+        Not an EnergyCost; bad points or names; not a ``Compute``.
     """
     if not isinstance(cost, EnergyCost):
         raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
@@ -207,25 +201,17 @@ def price_pairs(
         raise InvalidParameterError(f"names must name the {pts.shape[0]} points, got {len(names)}")
     q = check_risk_level(risk, "risk")
     search = risk_cost(cost, q) if cost.has_interval else cost
-    client = check_client(client, "points")
-    n_workers = 1 if workers is None else check_int("workers", workers, low=1)
-    if client is not None and n_workers > 1:
-        raise InvalidParameterError("client excludes workers: give a distributed.Client or workers=N")
+    compute = Compute() if compute is None else check_instance("compute", compute, Compute)
     p = pts.shape[0]
-    with contextlib.ExitStack() as stack:
-        where = "in process" if client is None else "given client"
-        if client is None and n_workers > 1:
-            client = stack.enter_context(dask_client(n_workers, None))
-            where = "local cluster"
+    with compute.session() as (client, where):
         t0 = time.perf_counter()
         if client is None:
             from tqdm.auto import tqdm
 
-            rows = [price_from(search, cost, i, pts) for i in tqdm(range(p), desc="legs", disable=not progress)]
-            n_used = 1
+            rows = [price_from(search, cost, i, pts) for i in tqdm(range(p), desc="legs", disable=not compute.progress)]
         else:
-            rows = _price_on_cluster(client, search, cost, pts, progress)
-            n_used = client_worker_count(client)
+            rows = _price_on_cluster(client, search, cost, pts, compute.progress)
+        n_used = client_worker_count(client)
         elapsed = time.perf_counter() - t0
     rows.sort(key=lambda r: r[0])
     return PairPrices(

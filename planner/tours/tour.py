@@ -12,6 +12,7 @@ import numpy as np
 from energy import Battery
 from terrain import TerrainMap
 from terrawatt_base.checks import check_instance, check_int, check_real, check_seed
+from terrawatt_base.dask_client import Compute
 from terrawatt_base.errors import BlockedPositionError, InvalidParameterError
 
 from ..cost_spec import CostSpec
@@ -59,11 +60,9 @@ def plan_tour(
     risk: float = 0.9,
     time_limit_s: float = 10.0,
     seed: int = 0,
-    workers: int | None = None,
-    client: Any = None,
+    compute: Compute | None = None,
     solver: str | None = None,
     map_label: str = "map",
-    progress: bool = False,
     prices: PairPrices | None = None,
     chargers: TourChargers | None = None,
 ) -> TourResult:
@@ -98,15 +97,14 @@ def plan_tour(
         The solver's time limit per solve (s); it usually stops earlier (no improvement).
     seed : int
         The solver's seed.
-    workers, client
-        Where the legs are priced (:func:`planner.plan_batch`'s dask path).
+    compute : Compute, optional
+        Where the legs are priced and whether a bar shows over the pricing
+        (:class:`terrawatt_base.dask_client.Compute`, as :func:`planner.plan_batch`; default here).
     solver : {"pyvrp", "ortools"}, optional
         The routing solver; default "pyvrp", "ortools" with chargers (the
         only one that stops at them).
     map_label : str
         How the result names the map.
-    progress : bool
-        A progress bar over the pricing.
     prices : PairPrices, optional
         The legs already priced (``result.prices`` of an earlier call on the same cost, depots and sites):
         solve again at another level, battery or with another solver without pricing again (the legs'
@@ -169,7 +167,7 @@ def plan_tour(
     names = depot_names + [sites.names[k] for k in kept] + charger_names
     pts = np.vstack([dxy, sites.xy_m[kept]] + ([chargers.xy_m] if chargers is not None else []))
     if prices is None:
-        prices = price_pairs(cost, pts, names, risk=q, workers=workers, client=client, progress=progress)
+        prices = price_pairs(cost, pts, names, risk=q, compute=compute)
     elif not isinstance(prices, PairPrices) or prices.names != tuple(names) or not np.allclose(prices.xy_m, pts):
         raise InvalidParameterError("prices must be the PairPrices of these depots, sites and chargers (result.prices "
                                     "of an earlier plan_tour on the same inputs)")
@@ -283,41 +281,35 @@ def plan_tour_on_map(
     sites: TourSites,
     depot_xy_m: tuple[float, float] | Sequence[tuple[float, float]],
     *,
-    battery_ah: float,
-    voltage_v: float | None = None,
-    reserve_pct: float = 20.0,
+    battery: Battery,
     n_robots: int = 1,
     max_duration_s: float | None = None,
     risk: float = 0.9,
     pricing: CostSpec | None = None,
     time_limit_s: float = 10.0,
     seed: int = 0,
-    workers: int | None = None,
-    client: Any = None,
+    compute: Compute | None = None,
     map_label: str = "map",
-    progress: bool = False,
     chargers: TourChargers | None = None,
 ) -> TourResult:
     """:func:`plan_tour` on a map priced as ``terrawatt tour`` prices it: ``n_robots`` alike robots with one depot, or
     one each (``depot_xy_m`` a sequence of ``n_robots`` points), and the ``chargers`` they may stop at.
 
     The edges are priced as ``pricing`` says (:meth:`planner.cost_spec.CostSpec.build`, default
-    ``CostSpec()``; the tour's level is ``risk``, not the spec's); each robot's battery is ``battery_ah`` at ``voltage_v`` (default the robot's) keeping
-    ``reserve_pct`` % in reserve; each tour lasts at most ``max_duration_s`` (s; ``None``: no limit); waiting
-    for a window draws the robot's ``sensor_power_w + control_standby_power_w``.
+    ``CostSpec()``; the tour's level is ``risk``, not the spec's); every robot carries ``battery`` (e.g.
+    :func:`planner.missions.mission_report.mission_battery`: a capacity at the robot's voltage with its reserve); each tour lasts at
+    most ``max_duration_s`` (s; ``None``: no limit); waiting for a window draws the robot's
+    ``sensor_power_w + control_standby_power_w``.
 
     Raises
     ------
     InvalidParameterError
-        Bad numbers (a non-positive capacity, a reserve outside [0, 100), fewer than one robot), several depots
-        but not one per robot, as :func:`plan_tour`.
+        Not a Battery; fewer than one robot; several depots but not one per robot; as :func:`plan_tour`.
     """
-    battery_ah = check_real("battery_ah", battery_ah, low=0.0, low_inclusive=False)
+    battery = check_instance("battery", battery, Battery)
     n_robots = check_int("n_robots", n_robots, low=1)
     pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
-    voltage = pricing.params.battery_voltage_v if voltage_v is None else voltage_v
     standby_w = pricing.params.sensor_power_w + pricing.params.control_standby_power_w  # waiting for a window
-    battery = Battery(battery_ah, voltage, min_reserve_pct=reserve_pct)
     cost = pricing.build(terrain)
     depots = np.asarray(depot_xy_m, dtype=float)
     depots = depots.reshape(-1, 2) if depots.ndim == 2 else np.tile(depots, (n_robots, 1))
@@ -325,5 +317,5 @@ def plan_tour_on_map(
         raise InvalidParameterError(f"depot_xy_m must be one point or one per robot (n_robots={n_robots}), got "
                                     f"{depots.shape[0]} points")
     fleet = [TourRobot(battery, tuple(depots[k]), f"robot {k}", max_duration_s, standby_w) for k in range(n_robots)]
-    return plan_tour(cost, sites, fleet, risk=risk, time_limit_s=time_limit_s, seed=seed, workers=workers,
-                     client=client, map_label=map_label, progress=progress, chargers=chargers)
+    return plan_tour(cost, sites, fleet, risk=risk, time_limit_s=time_limit_s, seed=seed, compute=compute,
+                     map_label=map_label, chargers=chargers)

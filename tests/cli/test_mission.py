@@ -80,7 +80,7 @@ def test_mission_with_a_small_battery_stops_and_says_why(tmp_path, capsys):
     ("extra", "message"),
     [(["--battery-ah", "0"], "--battery-ah must be a number > 0, got 0"),
      (["--battery-ah", "5", "--prior-ground", "lava"], "--prior-ground 'lava' has no preset"),
-     (["--battery-ah", "5", "--reserve-pct", "100"], "--reserve-pct must be in [0, 100), got 100"),
+     (["--battery-ah", "5", "--reserve-pct", "100"], "--reserve-pct must be a percentage in [0, 100), got 100"),
      (["--battery-ah", "5", "--leg-m", "-1"], "--leg-m must be a number > 0, got -1")],
 )
 def test_mission_bad_input_is_an_error(tmp_path, capsys, extra, message):

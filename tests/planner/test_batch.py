@@ -17,7 +17,7 @@ import terrain
 from planner import BatchPairs, EnergyCost, plan_batch, plan_route, read_pairs_csv
 from planner.batch_pairs import read_sites_csv
 from planner.batch_result import BatchRow
-from terrawatt_base.dask_client import dask_client
+from terrawatt_base.dask_client import Compute, dask_client
 from terrawatt_base.errors import (
     DataError,
     FileFormatError,
@@ -48,7 +48,7 @@ def _outcome(row: BatchRow) -> dict:
 
 # ------------------------------------------------------------------ in process
 def test_in_process_rows_are_plan_route_with_its_comparison_in_pair_order(cost, wall_map):
-    res = plan_batch(cost, PAIRS, progress=False)
+    res = plan_batch(cost, PAIRS)
     assert [r.name for r in res.rows] == ["0", "1", "2", "3"]
     assert res.where == "in process" and res.n_workers == 1 and res.planner == "lattice"
     for row, pair in zip(res.rows, PAIRS):
@@ -66,7 +66,7 @@ def test_in_process_rows_are_plan_route_with_its_comparison_in_pair_order(cost, 
 
 def test_a_pair_that_raises_is_reported_and_the_others_are_planned(cost):
     pairs = [[*WEST, *EAST], [*ON_WALL, *EAST], [*EAST, *ON_WALL], [*EAST, *WEST]]
-    res = plan_batch(cost, pairs, names=["ok1", "from-wall", "to-wall", "ok2"], progress=False)
+    res = plan_batch(cost, BatchPairs.from_array(pairs, ["ok1", "from-wall", "to-wall", "ok2"]))
     assert [r.status for r in res.rows] == ["exact", "error", "error", "exact"]
     assert res.rows[1].error.startswith("BlockedPositionError: start_xy_m (20.5, 10.5) m lies on an obstacle")
     assert res.rows[2].error.startswith("BlockedPositionError: goal_xy_m (20.5, 10.5) m lies on an obstacle")
@@ -77,22 +77,22 @@ def test_a_pair_that_raises_is_reported_and_the_others_are_planned(cost):
 
 def test_disconnected_pairs_are_infeasible_rows():
     closed = terrain.wall_map((40, 40), 1.0, wall_col=20, gap_rows=(0, 0), ground="asphalt")
-    res = plan_batch(EnergyCost.from_presets(closed), [[*WEST, *EAST]], progress=False)
+    res = plan_batch(EnergyCost.from_presets(closed), [[*WEST, *EAST]])
     assert res.rows[0].status == "infeasible" and math.isnan(res.rows[0].energy_j) and res.n_found == 0
 
 
 # ------------------------------------------------------------------ on a dask cluster
 def test_a_local_cluster_plans_the_in_process_rows(cost, local_client):
     pairs = [*PAIRS, [*ON_WALL, *WEST]]
-    here = plan_batch(cost, pairs, progress=False)
-    there = plan_batch(cost, pairs, client=local_client, progress=True)
+    here = plan_batch(cost, pairs)
+    there = plan_batch(cost, pairs, compute=Compute(client=local_client, progress=True))
     assert there.where == "given client" and there.n_workers == 2
     assert [_outcome(r) for r in there.rows] == [_outcome(r) for r in here.rows]
     assert there.rows[-1].status == "error" and "BlockedPositionError" in there.rows[-1].error
 
 
 def test_the_cost_goes_to_the_workers_once_without_its_caches(cost, local_client):
-    plan_batch(cost, PAIRS, progress=False)  # fills the caller's caches
+    plan_batch(cost, PAIRS)  # fills the caller's caches
     assert cost.lattices and len(cost.results)
     submitted = []
     original = local_client.submit
@@ -103,7 +103,7 @@ def test_the_cost_goes_to_the_workers_once_without_its_caches(cost, local_client
 
     local_client.submit = spy
     try:
-        plan_batch(cost, PAIRS, client=local_client, progress=False)
+        plan_batch(cost, PAIRS, compute=Compute(client=local_client))
     finally:
         local_client.submit = original
     from distributed import Future
@@ -121,9 +121,9 @@ def test_an_exception_outside_the_library_in_a_task_is_a_row_too(cost, local_cli
         raise ZeroDivisionError("boom")
 
     monkeypatch.setattr(batch_module, "plan_pair", broken)  # the processes=False workers see the patch
-    res = plan_batch(cost, PAIRS[:2], client=local_client, progress=False)
+    res = plan_batch(cost, PAIRS[:2], compute=Compute(client=local_client))
     assert [r.error for r in res.rows] == ["ZeroDivisionError: boom"] * 2
-    here = plan_batch(cost, PAIRS[:2], progress=False)
+    here = plan_batch(cost, PAIRS[:2])
     assert [r.error for r in here.rows] == ["ZeroDivisionError: boom"] * 2
 
 
@@ -152,7 +152,7 @@ def test_pairs_from_arrays_of_both_layouts_and_all_pairs_of_sites():
 )
 def test_bad_pairs_are_refused(cost, pairs, kwargs, error, match):
     with pytest.raises(error, match=match):
-        plan_batch(cost, pairs, progress=False, **kwargs)
+        plan_batch(cost, BatchPairs.from_array(pairs, **kwargs))
 
 
 def test_sites_need_two_and_unique_names():
@@ -163,7 +163,7 @@ def test_sites_need_two_and_unique_names():
 
 
 def test_a_point_outside_the_map_is_an_error_row_like_any_failed_pair(cost):
-    res = plan_batch(cost, [[*WEST, *EAST], [*WEST, 55.0, 5.0]], progress=False)  # one rule for per-item failures
+    res = plan_batch(cost, [[*WEST, *EAST], [*WEST, 55.0, 5.0]])  # one rule for per-item failures
     assert [r.status for r in res.rows] == ["exact", "error"]
     assert res.rows[1].error.startswith("OutOfBoundsError") and "outside" in res.rows[1].error
 
@@ -177,7 +177,7 @@ def test_a_pairs_csv_is_read_with_its_names(tmp_path, cost):
     f = _write(tmp_path / "p.csv", "name,start_x_m,start_y_m,goal_x_m,goal_y_m\nthere,5.5,10.5,35.5,10.5\nback,35.5,10.5,5.5,10.5\n")
     pairs = read_pairs_csv(f)
     assert pairs.names == ("there", "back")
-    res = plan_batch(cost, pairs, progress=False)
+    res = plan_batch(cost, pairs)
     assert res.rows[0].energy_j != res.rows[1].energy_j or res.rows[0].status == "exact"
     names, xy = read_sites_csv(_write(tmp_path / "s.csv", "x_m,y_m\n1,2\n3,4\n"))
     assert names == ("0", "1") and xy.tolist() == [[1.0, 2.0], [3.0, 4.0]]
@@ -211,10 +211,8 @@ def test_a_missing_pairs_file_is_a_file_not_found_error(tmp_path):
     ("kwargs", "error", "match"),
     [
         ({"planner": "Dijkstra"}, UnknownNameError, "planner must be one of"),
-        ({"client": "tcp://127.0.0.1:8786"}, InvalidParameterError, r"client must be None .* or a distributed\.Client"),
-        ({"workers": 0}, InvalidParameterError, "workers must be >= 1"),
+        ({"compute": "tcp://127.0.0.1:8786"}, InvalidParameterError, "compute must be a Compute"),
         ({"seed": -1}, InvalidParameterError, "seed must be None or an integer"),
-        ({"progress": "yes"}, InvalidParameterError, "progress must be True or False"),
         ({"settings": {"lattice_stride_cells": 2}}, InvalidParameterError, "settings must be a PlannerSettings"),
         ({"time_limit_s": 0.0}, InvalidParameterError, "time_limit_s must be > 0"),
         ({"max_cost_evaluations": 0}, InvalidParameterError, "max_cost_evaluations must be >= 1"),
@@ -231,10 +229,25 @@ def test_a_cost_that_is_not_an_energy_cost_is_refused(wall_map):
         plan_batch(wall_map, PAIRS)
 
 
-def test_a_client_excludes_workers_and_scheduler(cost, local_client):
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"client": "tcp://127.0.0.1:8786"}, r"client must be None .* or a distributed\.Client"),
+        ({"workers": 0}, "workers must be a positive number of processes"),
+        ({"progress": "yes"}, "progress must be True or False"),
+        ({"where": "over there"}, "where names a given client"),
+    ],
+)
+def test_a_bad_compute_is_refused_when_made(kwargs, match):
+    with pytest.raises(InvalidParameterError, match=match):
+        Compute(**kwargs)
+
+
+def test_a_client_excludes_workers_and_scheduler(local_client):
     for extra in ({"workers": 2}, {"scheduler": "tcp://127.0.0.1:1"}):
-        with pytest.raises(InvalidParameterError, match="client excludes workers and scheduler"):
-            plan_batch(cost, PAIRS, client=local_client, **extra)
+        with pytest.raises(InvalidParameterError, match="client excludes workers and scheduler") as err:
+            Compute(client=local_client, **extra)
+        assert err.value.parameter == ("client", "workers", "scheduler")
 
 
 def _free_port() -> int:
@@ -396,9 +409,9 @@ def test_cli_batch_checks_the_output_folder_before_reading_anything(tmp_path, ca
 
 
 def test_an_ompl_planner_with_seed_and_work_bound_gives_the_same_rows_on_the_cluster(cost, local_client):
-    kw = {"planner": "RRTstar", "time_limit_s": None, "max_cost_evaluations": 3000, "seed": 1, "progress": False}
+    kw = {"planner": "RRTstar", "time_limit_s": None, "max_cost_evaluations": 3000, "seed": 1}
     here = plan_batch(cost, PAIRS, **kw)
-    there = plan_batch(cost, PAIRS, client=local_client, **kw)
+    there = plan_batch(cost, PAIRS, compute=Compute(client=local_client), **kw)
     assert all(r.planning_time_s >= 0 for r in here.rows) and here.n_found == 4
     assert [_outcome(r) for r in there.rows] == [_outcome(r) for r in here.rows]
 
@@ -406,18 +419,18 @@ def test_an_ompl_planner_with_seed_and_work_bound_gives_the_same_rows_on_the_clu
 def test_workers_and_scheduler_open_a_client_through_the_seam(cost, local_client, monkeypatch):
     import contextlib
 
-    import planner.batch as batch_module
+    import terrawatt_base.dask_client as seam
 
     calls = []
 
     @contextlib.contextmanager
-    def fake_dask_client(workers, scheduler):
+    def fake_dask_client(workers, scheduler, quiet):
         calls.append((workers, scheduler))
         yield local_client
 
-    monkeypatch.setattr(batch_module, "dask_client", fake_dask_client)
-    on_local = plan_batch(cost, PAIRS[:2], workers=2, progress=False)
-    on_scheduler = plan_batch(cost, PAIRS[:2], scheduler="tcp://127.0.0.1:8786", progress=False)
+    monkeypatch.setattr(seam, "dask_client", fake_dask_client)
+    on_local = plan_batch(cost, PAIRS[:2], compute=Compute(workers=2))
+    on_scheduler = plan_batch(cost, PAIRS[:2], compute=Compute(scheduler="tcp://127.0.0.1:8786"))
     assert calls == [(2, None), (1, "tcp://127.0.0.1:8786")]
     assert on_local.where == "local cluster" and on_scheduler.where == "tcp://127.0.0.1:8786"
     assert on_local.n_workers == 2 and [r.status for r in on_scheduler.rows] == ["exact", "exact"]

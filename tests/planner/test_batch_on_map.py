@@ -16,13 +16,13 @@ PAIRS = [[5.0, 5.0, 35.0, 5.0], [35.0, 5.0, 5.0, 5.0], [5.0, 5.0, 20.5, 5.5]]  #
 
 @pytest.fixture
 def report(wall_map) -> BatchResult:
-    return plan_batch_on_map(wall_map, BatchPairs.from_array(PAIRS, ["there", "back", "wall"]), progress=False,
+    return plan_batch_on_map(wall_map, BatchPairs.from_array(PAIRS, ["there", "back", "wall"]),
                              map_label="wall")
 
 
 def test_the_pairs_are_those_of_plan_batch_on_the_priced_map(report, wall_map):
     assert isinstance(report, BatchResult) and len(report) == 3 and report.map_label == "wall"
-    same = plan_batch(EnergyCost.from_presets(wall_map), PAIRS, progress=False)
+    same = plan_batch(EnergyCost.from_presets(wall_map), PAIRS)
     assert [r.energy_j for r in report.rows[:2]] == [r.energy_j for r in same.rows[:2]]
     assert [r.status for r in report.rows] == ["exact", "exact", "error"] and not report.all_found
     assert report.where == "in process"
@@ -41,11 +41,10 @@ def test_write_gives_csv_and_json(report, tmp_path):
 
 
 def test_a_model_prices_the_map(corridor_map, known_model):
-    report = plan_batch_on_map(corridor_map, [[2.5, 7.5, 27.5, 7.5]], pricing=CostSpec(model=known_model()),
-                               progress=False)
+    report = plan_batch_on_map(corridor_map, [[2.5, 7.5, 27.5, 7.5]], pricing=CostSpec(model=known_model()))
     assert report.all_found and report.rows[0].status == "exact"
 
 
 def test_bad_slope_is_refused(wall_map):
     with pytest.raises(InvalidParameterError, match="max_slope_deg"):
-        plan_batch_on_map(wall_map, PAIRS, pricing=CostSpec(max_slope_deg=-1.0), progress=False)
+        plan_batch_on_map(wall_map, PAIRS, pricing=CostSpec(max_slope_deg=-1.0))

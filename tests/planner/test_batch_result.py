@@ -16,7 +16,7 @@ from terrawatt_base.formats import read_result_json
 
 
 def test_the_result_writes_csv_and_json_with_nan_as_empty_and_null(cost, tmp_path):
-    res = plan_batch(cost, [*PAIRS[:2], [*ON_WALL, *EAST]], progress=False)
+    res = plan_batch(cost, [*PAIRS[:2], [*ON_WALL, *EAST]])
     res.to_csv(tmp_path / "b.csv")
     res.write_json(tmp_path / "b.json")
     with open(tmp_path / "b.csv", newline="") as fh:
@@ -46,7 +46,7 @@ def test_rows_and_results_check_themselves():
 
 
 def test_the_table_shows_missing_numbers_as_dashes_and_cuts_long_batches(cost):
-    res = plan_batch(cost, [*PAIRS, [*ON_WALL, *EAST]], progress=False)
+    res = plan_batch(cost, [*PAIRS, [*ON_WALL, *EAST]])
     lines = res.table(max_rows=4).splitlines()
     assert lines[0].split() == ["pair", "status", "energy", "Wh", "length", "m", "time", "s", "saved", "%"]
     assert lines[2].split()[:2] == ["0", "exact"] and float(lines[2].split()[2]) == round(res.rows[0].energy_wh, 2)

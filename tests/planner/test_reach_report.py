@@ -8,8 +8,10 @@ import pytest
 
 import planner.reach_report as reach_report_module
 import terrain
+from energy import Battery
 from planner import Reachability
 from planner.cost_spec import CostSpec
+from planner.missions.mission_report import mission_battery
 from planner.reach_report import ReachReport, reach_on_battery
 from planner.reachability_result import REACH_FORMAT_VERSION
 from terrain import FigureWarning, InvalidParameterError
@@ -18,7 +20,7 @@ from terrawatt_base.formats import read_result_json
 
 @pytest.fixture
 def report(flat_map) -> ReachReport:
-    return reach_on_battery(flat_map, (5.0, 5.0), battery_ah=0.2, voltage_v=24.0, reserve_pct=25.0,
+    return reach_on_battery(flat_map, (5.0, 5.0), battery=Battery(0.2, 24.0, min_reserve_pct=25.0),
                             round_trip=True, map_label="flat")
 
 
@@ -30,12 +32,13 @@ def test_the_budget_is_capacity_times_voltage_less_the_reserve(report, flat_map)
     assert report.total_time_s >= report.priced.map_preparation_s >= 0.0 and report.model is None
 
 
-def test_the_voltage_defaults_to_the_robot(flat_map):
+def test_the_mission_battery_takes_the_robots_voltage(flat_map):
     from energy import robot_preset
 
-    jackal = reach_on_battery(flat_map, (5.0, 5.0), battery_ah=0.01, pricing=CostSpec(robot="jackal"))
-    assert jackal.voltage_v == robot_preset("jackal").battery_voltage_v
-    assert jackal.reach.budget_j == pytest.approx(0.01 * jackal.voltage_v * 3600.0)
+    battery = mission_battery("jackal", 0.01)
+    jackal = reach_on_battery(flat_map, (5.0, 5.0), battery=battery, pricing=CostSpec(robot="jackal"))
+    assert jackal.battery.voltage_v == robot_preset("jackal").battery_voltage_v
+    assert jackal.reach.budget_j == pytest.approx(0.01 * jackal.battery.voltage_v * 3600.0)
 
 
 def test_the_summary_lists_the_battery_the_area_and_the_times(report):
@@ -51,7 +54,7 @@ def test_the_summary_lists_the_battery_the_area_and_the_times(report):
 
 
 def test_nothing_reachable_is_said(flat_map):
-    report = reach_on_battery(flat_map, (5.0, 5.0), battery_ah=1e-9)
+    report = reach_on_battery(flat_map, (5.0, 5.0), battery=Battery(1e-9, 24.0))
     assert report.reach.n_reachable_cells == 0
     assert report.summary().splitlines()[-1].startswith("no cell is reachable within the usable energy")
 
@@ -74,22 +77,22 @@ def test_a_figure_that_fails_warns(report, tmp_path, monkeypatch):
 
 
 def test_a_model_is_named_in_reach_json(corridor_map, known_model):
-    report = reach_on_battery(corridor_map, (2.5, 7.5), battery_ah=1.0,
+    report = reach_on_battery(corridor_map, (2.5, 7.5), battery=Battery(1.0, 24.0),
                               pricing=CostSpec(model=known_model(), model_label="m.tw"))
     assert report.to_dict()["model"] == {"file": "m.tw", "class": "GroundKeyedModel", "model_ground": None,
                                          "grounds": ["loam", "gravel"]}
 
 
-@pytest.mark.parametrize("kwargs", [{"battery_ah": 0.0}, {"reserve_pct": 100.0}, {"voltage_v": -1.0},
-                                    {"pricing": "husky"}])
-def test_bad_numbers_are_refused(flat_map, kwargs):
-    with pytest.raises(InvalidParameterError):
-        reach_on_battery(flat_map, (5.0, 5.0), **{"battery_ah": 1.0, **kwargs})
+@pytest.mark.parametrize(("kwargs", "match"), [({"battery": 1.0}, "battery must be a Battery"),
+                                               ({"pricing": "husky"}, "pricing must be a CostSpec")])
+def test_bad_arguments_are_refused(flat_map, kwargs, match):
+    with pytest.raises(InvalidParameterError, match=match):
+        reach_on_battery(flat_map, (5.0, 5.0), **{"battery": Battery(1.0, 24.0), **kwargs})
 
 
 def test_a_map_with_a_crs_writes_a_geotiff(flat_map, tmp_path):
     pytest.importorskip("rasterio")
     geo = terrain.flat_map((20, 30), 0.5, ground="asphalt")
     geo.crs = "EPSG:32633"
-    report = reach_on_battery(geo, (5.0, 5.0), battery_ah=0.01)
+    report = reach_on_battery(geo, (5.0, 5.0), battery=Battery(0.01, 24.0))
     assert report.write(tmp_path)[0].name == "reach.tif"

@@ -8,6 +8,7 @@ import pytest
 
 import planner.missions.mission_report as mission_report_module
 import terrain
+from energy import Battery
 from planner.missions import AdaptiveResult
 from planner.missions.mission_report import (
     MissionReport,
@@ -24,7 +25,7 @@ START, GOAL = (3.0, 12.0), (37.0, 12.0)
 @pytest.fixture(scope="module")
 def report() -> MissionReport:
     wall = terrain.wall_map((40, 40), 1.0, wall_col=20, gap_rows=(10, 14))
-    return simulate_adaptive_mission(wall, START, GOAL, battery_ah=20.0, map_label="wall", seed=0)
+    return simulate_adaptive_mission(wall, START, GOAL, battery=Battery(20.0, 24.0), map_label="wall", seed=0)
 
 
 def test_the_mission_reaches_the_goal_on_its_battery(report):
@@ -86,7 +87,7 @@ def test_a_figure_that_fails_warns(report, tmp_path, monkeypatch):
 
 def test_without_adaptation_no_update_is_made():
     flat = terrain.flat_map((10, 30), 1.0, ground="grass")
-    report = simulate_adaptive_mission(flat, (2.0, 5.0), (27.0, 5.0), battery_ah=20.0, adapt=False, leg_m=5.0)
+    report = simulate_adaptive_mission(flat, (2.0, 5.0), (27.0, 5.0), battery=Battery(20.0, 24.0), adapt=False, leg_m=5.0)
     assert report.result.updates == () and "adaptive updates off" in report.summary()
 
 
@@ -94,12 +95,12 @@ def test_grounds_without_presets_are_refused(corridor_map):
     with pytest.raises(UnknownNameError, match=r"the map's grounds \['Loam'\] have no preset"):
         check_preset_grounds(corridor_map)
     with pytest.raises(UnknownNameError, match="have no preset"):
-        simulate_adaptive_mission(corridor_map, (2.5, 7.5), (27.5, 7.5), battery_ah=5.0)
+        simulate_adaptive_mission(corridor_map, (2.5, 7.5), (27.5, 7.5), battery=Battery(5.0, 24.0))
     flat = TerrainMap(corridor_map.elevation_m, 1.0, obstacle=corridor_map.obstacle)
     with pytest.raises(UnknownNameError, match="prior_ground 'lava'"):
-        simulate_adaptive_mission(flat, (2.5, 7.5), (27.5, 7.5), battery_ah=5.0, prior_ground="lava")
+        simulate_adaptive_mission(flat, (2.5, 7.5), (27.5, 7.5), battery=Battery(5.0, 24.0), prior_ground="lava")
     with pytest.raises(InvalidParameterError, match="leg_m"):
-        simulate_adaptive_mission(flat, (2.5, 7.5), (27.5, 7.5), battery_ah=5.0, leg_m=0.0)
+        simulate_adaptive_mission(flat, (2.5, 7.5), (27.5, 7.5), battery=Battery(5.0, 24.0), leg_m=0.0)
 
 
 def test_the_battery_voltage_defaults_to_the_robot():
@@ -119,7 +120,7 @@ def test_an_update_after_the_last_leg_ends_the_mission_at_the_goal():
     # On the example map, 20 m east of (10, 10) are two legs; the second one (on grass, unknown
     # to the asphalt prior) is followed by an accepted update. The loop used to replan from the
     # goal itself, and the mission failed with "start equals goal".
-    report = simulate_adaptive_mission(terrain.example_map(), (10.0, 10.0), (30.0, 10.0), battery_ah=20.0)
+    report = simulate_adaptive_mission(terrain.example_map(), (10.0, 10.0), (30.0, 10.0), battery=Battery(20.0, 24.0))
     result = report.result
     assert result.status == "completed" and result.distance_to_goal_m == pytest.approx(0.0, abs=1e-6)
     last = len(result.legs) - 1

@@ -10,6 +10,7 @@ from mc_samples import FIXED, NO_DASK, NOMINAL, run_mc, setup  # noqa: F401  (fi
 
 from energy import Battery, PhysicsEnergyModel, TruthSimulator, ground_preset, robot_preset
 from planner import EnergyCost, MissionDistributions, plan_route, simulate_mission, simulate_missions_mc
+from terrawatt_base.dask_client import Compute
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 
@@ -37,8 +38,8 @@ def test_percentiles_equal_with_one_and_two_workers(setup):
     here = run_mc(setup, n=10, seed=11)
     with distributed.LocalCluster(processes=False, n_workers=2, threads_per_worker=1,
                                   dashboard_address=":0") as cluster, distributed.Client(cluster) as client:
-        one_per_task = run_mc(setup, n=10, seed=11, client=client, chunk_size=1, progress=True)
-        chunks = run_mc(setup, n=10, seed=11, client=client, chunk_size=4)
+        one_per_task = run_mc(setup, n=10, seed=11, compute=Compute(client=client, progress=True), chunk_size=1)
+        chunks = run_mc(setup, n=10, seed=11, compute=Compute(client=client), chunk_size=4)
     for other in (one_per_task, chunks):
         assert other.energy_percentiles_wh == here.energy_percentiles_wh
         assert np.array_equal(other.energy_j, here.energy_j)
@@ -107,8 +108,7 @@ def test_the_reserve_risk_follows_the_battery(setup):
         ({"robot": "rover9"}, UnknownNameError, "rover9"),
         ({"grounds": {"sand": ground_preset("sand")}}, UnknownNameError, r"grounds lacks the map's ground\(s\) \['asphalt'\]"),
         ({"distributions": {"payload_kg": (0, 1)}}, InvalidParameterError, "distributions must be a MissionDistributions"),
-        ({"client": "tcp://127.0.0.1:8786"}, InvalidParameterError, r"client must be None .* distributed\.Client"),
-        ({"workers": 0}, InvalidParameterError, "workers must be >= 1"),
+        ({"compute": {"workers": 2}}, InvalidParameterError, "compute must be a Compute"),
     ],
 )
 def test_bad_arguments_are_refused(setup, kwargs, error, match):
@@ -128,7 +128,7 @@ def test_a_route_that_was_not_found_is_refused(setup):
 def test_workers_open_a_local_cluster_through_the_seam(setup, monkeypatch):
     import contextlib
 
-    import planner.missions.monte_carlo as mc_module
+    import terrawatt_base.dask_client as seam
 
     distributed = pytest.importorskip("distributed", reason=NO_DASK)
     calls = []
@@ -136,12 +136,12 @@ def test_workers_open_a_local_cluster_through_the_seam(setup, monkeypatch):
                                   dashboard_address=":0") as cluster, distributed.Client(cluster) as client:
 
         @contextlib.contextmanager
-        def fake_dask_client(workers, scheduler):
+        def fake_dask_client(workers, scheduler, quiet):
             calls.append((workers, scheduler))
             yield client
 
-        monkeypatch.setattr(mc_module, "dask_client", fake_dask_client)
-        mc = run_mc(setup, n=3, seed=1, workers=2)
+        monkeypatch.setattr(seam, "dask_client", fake_dask_client)
+        mc = run_mc(setup, n=3, seed=1, compute=Compute(workers=2))
     assert calls == [(2, None)] and mc.where == "local cluster" and mc.n_workers == 2
     assert np.array_equal(mc.energy_j, run_mc(setup, n=3, seed=1).energy_j)
 
