@@ -1,13 +1,18 @@
-"""Reachability: the energy rasters from a depot (and back), the cells within a budget, their files and figures."""
+"""Reachability: the energy rasters from a depot (and back), the cells within a budget, their files and figures.
+
+The answer of :func:`planner.reachability` (the rasters alone) and of
+:func:`planner.reach_report.reach_on_battery` (the same, with the priced map's header and the battery:
+what ``terrawatt reach`` prints and writes).
+"""
 
 from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -17,16 +22,22 @@ from terrain.geotiff import write_geotiff
 from terrain.grid import Grid
 from terrawatt_base.atomic import atomic_open, check_output_path, remove_stale_temporaries
 from terrawatt_base.errors import FileFormatError, InvalidParameterError, UnknownNameError
-from terrawatt_base.formats import read_versioned_npz, result_document
+from terrawatt_base.figure_file import draw_figure
+from terrawatt_base.formats import read_versioned_npz, result_document, write_result_json
 
 from .reachability_plot import plot_reachability
 
+if TYPE_CHECKING:  # the header's types: the spec's module prices maps, which needs this one
+    from energy import Battery
+
+    from .cost_spec import PlanModel, PricedMap
+
 __all__ = ["Reachability", "REACH_FORMAT_VERSION", "REACH_LAYERS"]
 
-#: Format version of the ``.npz`` files :meth:`Reachability.write` writes and :meth:`Reachability.load` reads.
+#: Format version of the ``.npz`` files :meth:`Reachability.write_raster` writes and :meth:`Reachability.load` reads.
 REACH_FORMAT_VERSION = 1
 _MAGIC = "terrawatt-reachability"
-#: Rasters :meth:`Reachability.write` can put in a GeoTIFF (``"energy"``: the one the budget applies to).
+#: Rasters :meth:`Reachability.write_raster` can put in a GeoTIFF (``"energy"``: the one the budget applies to).
 REACH_LAYERS = ("energy", "forward", "back", "round_trip", "reachable")
 
 
@@ -76,6 +87,14 @@ class Reachability:
         Whether the budget applies to the round trip (else to the way out).
     graph_time_s, search_time_s : float
         Seconds spent costing the lattice moves (0 when cached on the cost) and searching.
+    priced : PricedMap or None
+        The header of a reach on a battery (:func:`planner.reach_report.reach_on_battery`): the map
+        and how it was priced, with the times (its kernels' compile time includes the reachability
+        kernels'); None for :func:`planner.reachability` alone.
+    battery : Battery or None
+        The battery of the budget (capacity, voltage, reserve), with ``priced``.
+    total_time_s : float
+        Seconds to price the map and search, with ``priced`` (else NaN).
     """
 
     grid: Grid
@@ -90,8 +109,13 @@ class Reachability:
     round_trip: bool
     graph_time_s: float = 0.0
     search_time_s: float = 0.0
+    priced: PricedMap | None = field(default=None, repr=False)
+    battery: Battery | None = None
+    total_time_s: float = math.nan
 
     def __post_init__(self) -> None:
+        if (self.priced is None) != (self.battery is None):
+            raise InvalidParameterError("priced and battery come together (the header of a reach on a battery)")
         if not isinstance(self.grid, Grid):
             raise InvalidParameterError(f"grid must be a terrain Grid, got {type(self.grid).__name__!r}")
         shape = self.grid.shape
@@ -177,15 +201,38 @@ class Reachability:
         """Largest round-trip energy over the reachable cells (J); NaN if none or not a round trip."""
         return self._max_over_reachable(self.round_trip_energy_j)
 
-    def to_dict(self) -> dict[str, Any]:
+    @property
+    def terrain(self) -> TerrainMap | None:
+        """The map of a reach on a battery (None without the header)."""
+        return None if self.priced is None else self.priced.terrain
+
+    @property
+    def model(self) -> PlanModel | None:
+        """The saved model that priced the edges; None for the physics presets or without the header."""
+        return None if self.priced is None else self.priced.model
+
+    def to_dict(self, raster: str | None = None) -> dict[str, Any]:
         """The scalar figures as a JSON-ready result document, format ``terrawatt-reachability`` (energies in J and Wh;
-        NaN left for the writer, :func:`terrawatt_base.formats.write_result_json`)."""
+        NaN left for the writer, :func:`terrawatt_base.formats.write_result_json`): reach.json.
+
+        With the header of a reach on a battery, the map, how it was priced, the battery, the
+        times and ``raster`` (the raster file's name) come first, the saved model (if one priced
+        the edges) last.
+        """
 
         def wh(x: float | None) -> float | None:
             return None if x is None else x / S_PER_H
 
+        header: dict[str, Any] = {}
+        priced, b = self.priced, self.battery
+        if priced is not None and b is not None:
+            header = {"map": priced.map_label, **priced.fields(), "battery_ah": b.capacity_ah,
+                      "battery_voltage_v": b.voltage_v, "reserve_pct": b.min_reserve_pct,
+                      "map_preparation_s": priced.map_preparation_s, "total_time_s": self.total_time_s,
+                      "kernel_compile_s": priced.kernel_compile_s, "raster": raster}
         rows, cols = self.grid.shape
-        return result_document("reachability", REACH_FORMAT_VERSION, {
+        document = result_document("reachability", REACH_FORMAT_VERSION, {
+            **header,
             "depot_xy_m": list(self.depot_xy_m),
             "round_trip": self.round_trip,
             "budget_j": self.budget_j,
@@ -207,6 +254,53 @@ class Reachability:
             "graph_time_s": self.graph_time_s,
             "search_time_s": self.search_time_s,
         })
+        if self.model is not None:  # files priced by the presets stay as they were
+            m = self.model.to_dict()
+            document["model"] = {k: m[k] for k in ("file", "class", "model_ground", "grounds")}
+        return document
+
+    def summary(self) -> str:
+        """What ``terrawatt reach`` prints: the map, robot and battery (with the header), then the reachable area and
+        the times."""
+        priced, b, grid = self.priced, self.battery, self.grid
+
+        def wh(j: float) -> str:
+            return "-" if math.isnan(j) else f"{j / S_PER_H:.2f} Wh"
+
+        lines = []
+        if priced is not None and b is not None:
+            budget_wh = self.budget_j / S_PER_H if self.budget_j is not None else math.nan
+            lines = [
+                f"map: {priced.map_label}  {grid.shape[0]} x {grid.shape[1]} cells of {grid.cell_size_m:g} m",
+                priced.robot_line(),
+                f"battery {b.capacity_ah:g} Ah at {b.voltage_v:g} V = {budget_wh:.1f} Wh; reserve "
+                f"{b.min_reserve_pct:g} % -> {self.usable_energy_j / S_PER_H:.1f} Wh usable "
+                f"{'there and back' if self.round_trip else 'one way'}",
+                f"depot {self.depot_xy_m}",
+                "",
+            ]
+        farthest = self.farthest_reachable_m
+        rows = [
+            ("reachable area", f"{self.reachable_area_m2:,.0f} m^2 ({100 * self.reachable_fraction:.1f} % of free "
+                               "cells)"),
+            ("reachable cells", f"{self.n_reachable_cells:,}"),
+            ("farthest reachable", "-" if math.isnan(farthest) else f"{farthest:,.1f} m"),
+            ("max one-way energy", wh(self.max_forward_energy_j)),
+        ]
+        if self.round_trip:
+            rows.append(("max round-trip energy", wh(self.max_round_trip_energy_j)))
+        if priced is not None:
+            rows.append(("map preparation", f"{priced.map_preparation_s:.2f} s"))
+        rows += [("lattice moves", f"{self.graph_time_s:.2f} s"), ("search", f"{self.search_time_s:.2f} s")]
+        if priced is not None:
+            rows.append(("total", f"{self.total_time_s:.2f} s"))
+        lines += [f"{name:<24} {value}" for name, value in rows]
+        if not self.n_reachable_cells:
+            lines += ["", "no cell is reachable within the usable energy: a larger battery or a smaller reserve"]
+        if priced is not None and priced.kernel_compile_s > 1.0:
+            lines.append(f"(compiled the kernels in {priced.kernel_compile_s:.1f} s: first run in this environment; "
+                         "not in the times above)")
+        return "\n".join(lines)
 
     def layer(self, name: str) -> np.ndarray:
         """One raster by name, one of :data:`REACH_LAYERS` (``"reachable"`` as 0/1 uint8).
@@ -227,7 +321,24 @@ class Reachability:
         return value
 
     # ------------------------------------------------------------------ files
-    def write(self, path: str | os.PathLike[str], *, layer: str = "energy") -> Path:
+    def write(self, out_dir: str | os.PathLike[str], *, raster: str | None = None,
+              on_figure_error: str = "warn") -> list[Path]:
+        """Write the raster (``raster``: ``reach.tif`` or ``reach.npz``; default ``reach.tif`` when the map has a
+        CRS, else ``reach.npz``), reach.json and reach.png into ``out_dir``; return the files written.
+
+        A figure that fails warns and is left out (:func:`terrawatt_base.figure_file.draw_figure`).
+        """
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        name = raster if raster is not None else ("reach.tif" if self.crs else "reach.npz")
+        written = [self.write_raster(out / name)]
+        written.append(write_result_json(out / "reach.json", self.to_dict(written[0].name)))
+        label = "a map" if self.priced is None else self.priced.map_label
+        png = draw_figure(out / "reach.png", lambda: self.plot(
+            out / "reach.png", title=f"terrawatt: energy reachability on {label}"), on_error=on_figure_error)
+        return written + ([png] if png is not None else [])
+
+    def write_raster(self, path: str | os.PathLike[str], *, layer: str = "energy") -> Path:
         """Write the rasters atomically: a ``.npz`` file (every raster and figure, versioned) or a GeoTIFF.
 
         A ``.tif`` / ``.tiff`` path gets one band, ``layer`` (default: :attr:`energy_j`, in J,
@@ -275,7 +386,7 @@ class Reachability:
 
     @classmethod
     def load(cls, path: str | os.PathLike[str]) -> Reachability:
-        """Read a ``.npz`` file written by :meth:`write`.
+        """Read a ``.npz`` file written by :meth:`write_raster`.
 
         Raises
         ------

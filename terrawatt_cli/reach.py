@@ -72,4 +72,4 @@ def run_reach(args: argparse.Namespace) -> int:
         written = report.write(args.out, raster="reach.tif" if geo else "reach.npz")
     print(report.summary())
     print(f"\nwrote {written[0]}, {written[1]}" + (f" and {written[2]}" if len(written) > 2 else ""))
-    return 0 if report.reach.n_reachable_cells else 1
+    return 0 if report.n_reachable_cells else 1

@@ -1,4 +1,4 @@
-"""Tests of planner.reach_report: reach_on_battery and ReachReport (summary, reach.json, files)."""
+"""Tests of planner.reach_report: reach_on_battery, a Reachability with its header (summary, reach.json, files)."""
 
 from __future__ import annotations
 
@@ -6,29 +6,28 @@ import json
 
 import pytest
 
-import planner.reach_report as reach_report_module
 import terrain
 from energy import Battery
 from planner import Reachability
 from planner.cost_spec import CostSpec
 from planner.missions.mission_report import mission_battery
-from planner.reach_report import ReachReport, reach_on_battery
+from planner.reach_report import reach_on_battery
 from planner.reachability_result import REACH_FORMAT_VERSION
 from terrain import FigureWarning, InvalidParameterError
 from terrawatt_base.formats import read_result_json
 
 
 @pytest.fixture
-def report(flat_map) -> ReachReport:
+def report(flat_map) -> Reachability:
     return reach_on_battery(flat_map, (5.0, 5.0), battery=Battery(0.2, 24.0, min_reserve_pct=25.0),
                             round_trip=True, map_label="flat")
 
 
 def test_the_budget_is_capacity_times_voltage_less_the_reserve(report, flat_map):
-    assert isinstance(report.reach, Reachability) and report.reach.round_trip
-    assert report.reach.budget_j == pytest.approx(0.2 * 24.0 * 3600.0)
-    assert report.reach.reserve_j == pytest.approx(0.25 * report.reach.budget_j)
-    assert report.reach.n_reachable_cells == flat_map.ground.size  # a flat 15 x 10 m map on 17 kJ: everywhere
+    assert isinstance(report, Reachability) and report.round_trip
+    assert report.budget_j == pytest.approx(0.2 * 24.0 * 3600.0)
+    assert report.reserve_j == pytest.approx(0.25 * report.budget_j)
+    assert report.n_reachable_cells == flat_map.ground.size  # a flat 15 x 10 m map on 17 kJ: everywhere
     assert report.total_time_s >= report.priced.map_preparation_s >= 0.0 and report.model is None
 
 
@@ -38,7 +37,7 @@ def test_the_mission_battery_takes_the_robots_voltage(flat_map):
     battery = mission_battery("jackal", 0.01)
     jackal = reach_on_battery(flat_map, (5.0, 5.0), battery=battery, pricing=CostSpec(robot="jackal"))
     assert jackal.battery.voltage_v == robot_preset("jackal").battery_voltage_v
-    assert jackal.reach.budget_j == pytest.approx(0.01 * jackal.battery.voltage_v * 3600.0)
+    assert jackal.budget_j == pytest.approx(0.01 * jackal.battery.voltage_v * 3600.0)
 
 
 def test_the_summary_lists_the_battery_the_area_and_the_times(report):
@@ -55,7 +54,7 @@ def test_the_summary_lists_the_battery_the_area_and_the_times(report):
 
 def test_nothing_reachable_is_said(flat_map):
     report = reach_on_battery(flat_map, (5.0, 5.0), battery=Battery(1e-9, 24.0))
-    assert report.reach.n_reachable_cells == 0
+    assert report.n_reachable_cells == 0
     assert report.summary().splitlines()[-1].startswith("no cell is reachable within the usable energy")
 
 
@@ -71,7 +70,7 @@ def test_reach_json_and_the_files(report, tmp_path):
 
 
 def test_a_figure_that_fails_warns(report, tmp_path, monkeypatch):
-    monkeypatch.setattr(reach_report_module.Reachability, "plot", lambda *a, **k: 1 / 0)
+    monkeypatch.setattr(Reachability, "plot", lambda *a, **k: 1 / 0)
     with pytest.warns(FigureWarning, match="reach.png: ZeroDivisionError"):
         assert [p.name for p in report.write(tmp_path, raster="reach.npz")] == ["reach.npz", "reach.json"]
 

@@ -27,6 +27,18 @@ def test_figures_and_to_dict(hilly_cost):
     assert d["farthest_reachable_m"] == pytest.approx(np.max(np.hypot(x - DEPOT[0], y - DEPOT[1])))
 
 
+def test_without_a_header_the_answer_says_the_search_alone(hilly_cost, tmp_path):
+    reach = reachability(hilly_cost, DEPOT, budget_j=20_000.0, round_trip=True)
+    assert reach.priced is None and reach.terrain is None and reach.model is None
+    lines = reach.summary().splitlines()
+    assert lines[0].startswith("reachable area") and not any(s.startswith(("map", "total")) for s in lines)
+    assert "map" not in reach.to_dict() and "raster" not in reach.to_dict("r.npz")
+    assert [p.name for p in reach.write(tmp_path)] == ["reach.npz", "reach.json", "reach.png"]
+    assert json.loads((tmp_path / "reach.json").read_text()) == json.loads(json.dumps(reach.to_dict()))
+    with pytest.raises(InvalidParameterError, match="priced and battery come together"):
+        dataclasses.replace(reach, battery=object())
+
+
 def test_result_is_frozen_and_its_rasters_read_only(hilly_reach):
     with pytest.raises(dataclasses.FrozenInstanceError):
         hilly_reach.budget_j = 1.0
@@ -39,17 +51,17 @@ def test_result_is_frozen_and_its_rasters_read_only(hilly_reach):
 # ---------------------------------------------------------------- files and figure
 def test_npz_round_trip_and_bad_files(tmp_path, hilly_cost):
     reach = reachability(hilly_cost, DEPOT, budget_j=20_000.0, reserve_j=1_000.0, round_trip=True)
-    path = reach.write(tmp_path / "reach.npz")
+    path = reach.write_raster(tmp_path / "reach.npz")
     back = Reachability.load(path)
     for name in ("forward_energy_j", "back_energy_j", "round_trip_energy_j", "blocked", "reachable"):
         np.testing.assert_array_equal(getattr(back, name), getattr(reach, name))
     assert (back.budget_j, back.reserve_j, back.round_trip, back.depot_xy_m) == (20_000.0, 1_000.0, True, DEPOT)
     assert back.grid == reach.grid
     one_way = reachability(hilly_cost, DEPOT)
-    again = Reachability.load(one_way.write(tmp_path / "one.npz"))
+    again = Reachability.load(one_way.write_raster(tmp_path / "one.npz"))
     assert again.budget_j is None and again.back_energy_j is None
     with pytest.raises(InvalidParameterError, match="end in '.npz', '.tif' or '.tiff'"):
-        reach.write(tmp_path / "reach.csv")
+        reach.write_raster(tmp_path / "reach.csv")
     (tmp_path / "junk.npz").write_bytes(b"not a zip")
     with pytest.raises(FileFormatError, match="corrupt"):
         Reachability.load(tmp_path / "junk.npz")
@@ -69,16 +81,16 @@ def test_geotiff_keeps_the_grid_and_crs(tmp_path, hilly_cost):
     tmap.crs = "EPSG:32633"
     cost = EnergyCost.from_presets(tmap)
     reach = reachability(cost, DEPOT, budget_j=20_000.0, round_trip=True)
-    path = reach.write(tmp_path / "reach.tif")
+    path = reach.write_raster(tmp_path / "reach.tif")
     with rasterio.open(path) as src:
         assert src.crs.to_string() == "EPSG:32633"
         band = src.read(1)[::-1]  # north-up in the file
         assert src.transform.a == 1.0 and src.bounds.top == tmap.bounds[3]
     np.testing.assert_array_equal(band, reach.round_trip_energy_j)
-    mask = reach.write(tmp_path / "mask.tif", layer="reachable")
+    mask = reach.write_raster(tmp_path / "mask.tif", layer="reachable")
     with rasterio.open(mask) as src:
         np.testing.assert_array_equal(src.read(1)[::-1], reach.reachable.astype(np.uint8))
     with pytest.raises(UnknownNameError, match="layer must be one of"):
-        reach.write(tmp_path / "x.tif", layer="slope")
+        reach.write_raster(tmp_path / "x.tif", layer="slope")
     with pytest.raises(UnknownNameError, match="only for a round trip"):
-        reachability(cost, DEPOT).write(tmp_path / "y.tif", layer="back")
+        reachability(cost, DEPOT).write_raster(tmp_path / "y.tif", layer="back")
