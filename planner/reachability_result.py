@@ -12,10 +12,11 @@ import os
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
+from energy import Battery
 from energy.battery import S_PER_H
 from terrain import TerrainMap
 from terrain.geotiff import write_geotiff
@@ -26,11 +27,6 @@ from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import read_versioned_npz, result_document, write_result_json
 
 from .reachability_plot import plot_reachability
-
-if TYPE_CHECKING:  # the header's types: the spec's module prices maps, which needs this one
-    from energy import Battery
-
-    from .cost_spec import PlanModel, PricedMap
 
 __all__ = ["Reachability", "REACH_FORMAT_VERSION", "REACH_LAYERS"]
 
@@ -87,7 +83,7 @@ class Reachability:
         Whether the budget applies to the round trip (else to the way out).
     graph_time_s, search_time_s : float
         Seconds spent costing the lattice moves (0 when cached on the cost) and searching.
-    priced : PricedMap or None
+    priced : planner.cost_spec.PricedMap or None
         The header of a reach on a battery (:func:`planner.reach_report.reach_on_battery`): the map
         and how it was priced, with the times (its kernels' compile time includes the reachability
         kernels'); None for :func:`planner.reachability` alone.
@@ -109,7 +105,7 @@ class Reachability:
     round_trip: bool
     graph_time_s: float = 0.0
     search_time_s: float = 0.0
-    priced: PricedMap | None = field(default=None, repr=False)
+    priced: Any = field(default=None, repr=False)  # a PricedMap: its module prices maps, which needs this one
     battery: Battery | None = None
     total_time_s: float = math.nan
 
@@ -207,8 +203,9 @@ class Reachability:
         return None if self.priced is None else self.priced.terrain
 
     @property
-    def model(self) -> PlanModel | None:
-        """The saved model that priced the edges; None for the physics presets or without the header."""
+    def model(self) -> Any:
+        """The saved model that priced the edges (a :class:`planner.cost_spec.PlanModel`); None for the physics
+        presets or without the header."""
         return None if self.priced is None else self.priced.model
 
     def to_dict(self, raster: str | None = None) -> dict[str, Any]:
