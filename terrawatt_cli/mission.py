@@ -6,7 +6,8 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from planner.missions.mission_report import check_logs_folder, simulate_adaptive_mission
+from planner.missions.adaptive_results import check_logs_folder
+from planner.missions.mission_report import simulate_adaptive_mission
 from planner.missions.monte_carlo_report import monte_carlo_mission
 from planner.missions.request import MissionRequest
 from terrain import InvalidParameterError
@@ -126,7 +127,7 @@ def run_mission(args: argparse.Namespace) -> int:
             tmap, start, goal, args.monte_carlo, battery=battery_arg(args, pricing.params), pricing=pricing,
             seed=args.seed, draw_from=args.mc_draw, max_risk_pct=args.max_risk_pct, compute=compute, map_label=label)
     print(study.summary())
-    if study.result is None:
+    if not study.n:  # no route: no mission driven
         return 1
     with warn_figures():
         written = study.write(args.out)

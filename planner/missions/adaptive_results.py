@@ -1,18 +1,28 @@
-"""The adaptive loop's records (legs, updates, replans) and its outcome, :class:`AdaptiveResult`."""
+"""The adaptive loop's records (legs, updates, replans) and its outcome, :class:`AdaptiveResult`.
+
+The answer of :func:`planner.missions.run_adaptive_mission` and, with the header ``terrawatt mission``
+prints (the map, the robot, the prior, the computing time) and the models it started with, of
+:func:`planner.missions.mission_report.simulate_adaptive_mission`: mission.json, mission.png, the legs' logs
+and their drive bag.
+"""
 
 from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
+import re
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from energy import EnergyBudget, InteractionLog
+from energy import Battery, EnergyBudget, InteractionLog
+from energy.io import write_csv_log, write_drive_bag
 from terrain import TerrainMap
+from terrawatt_base.atomic import check_output_path
 from terrawatt_base.errors import InvalidParameterError
+from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import result_document, write_result_json
 
 from ..registry import CellModelRegistry
@@ -26,7 +36,14 @@ __all__ = [
     "UpdateRecord",
     "ReplanRecord",
     "AdaptiveResult",
+    "check_logs_folder",
+    "LOGS_FOLDER",
+    "START_REGISTRY",
 ]
+
+def _percent(value: float) -> str:
+    return "n/a" if math.isnan(value) else f"{value:.1f} %"  # NaN: nothing to compare
+
 
 ADAPTIVE_STATUSES = ("completed", "budget_exceeded", "reserve_violated", "no_route", "max_legs")
 ADAPTIVE_FORMAT_VERSION = 1
@@ -118,8 +135,24 @@ class AdaptiveResult:
     leg_logs : tuple of InteractionLog
         What the robot's sensors recorded on each leg, in order (commands, currents, IMU,
         poses, ground labels; the truth simulator's logs): the data to diagnose the planning
-        model's gap on (:meth:`planner.missions.MissionReport.write` with ``logs=True``).
-        Not in the JSON document.
+        model's gap on (:meth:`write` with ``logs=True``). Not in the JSON document.
+    battery : Battery or None
+        The battery driven against (the header of :meth:`summary`).
+    map_label, robot, prior_ground : str
+        How the map is named; the robot; the ground the prior model was trained on.
+    adapt : bool
+        Whether the models were updated on the way.
+    start_xy_m, goal_xy_m : (float, float) or None
+        Start and goal (m).
+    computing_time_s : float or None
+        Seconds the loop took (in mission.json when known).
+    terrain : TerrainMap or None
+        The map (for the figure and the drive bag's GPS fixes).
+    registry : CellModelRegistry or None
+        The per-cell models after the mission (for the figure).
+    start_registry : CellModelRegistry or None
+        A copy of the per-cell models as the mission started: what a replay of its logs
+        starts from (written as ``start_registry/`` beside the logs).
     """
 
     status: str
@@ -144,12 +177,28 @@ class AdaptiveResult:
     budget: EnergyBudget | None = None
     leg_logs: tuple[InteractionLog, ...] = ()
     manoeuvre_logs: tuple[tuple[int, InteractionLog], ...] = ()
+    battery: Battery | None = None
+    map_label: str = "map"
+    robot: str = ""
+    prior_ground: str = ""
+    adapt: bool = True
+    start_xy_m: tuple[float, float] | None = None
+    goal_xy_m: tuple[float, float] | None = None
+    computing_time_s: float | None = None
+    terrain: TerrainMap | None = field(default=None, repr=False)
+    registry: CellModelRegistry | None = field(default=None, repr=False)
+    start_registry: CellModelRegistry | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         if self.status not in ADAPTIVE_STATUSES:
             raise InvalidParameterError(f"status must be one of {ADAPTIVE_STATUSES!r}, got {self.status!r}")
 
     # ------------------------------------------------------------------ metrics
+    @property
+    def completed(self) -> bool:
+        """Whether the robot reached the goal."""
+        return self.status == "completed"
+
     @property
     def accepted_updates(self) -> int:
         """Number of accepted updates."""
@@ -235,6 +284,99 @@ class AdaptiveResult:
         """Write :meth:`to_json_dict` atomically to ``path`` (:func:`~terrawatt_base.formats.write_result_json`)."""
         return write_result_json(path, self.to_json_dict(series_every=series_every))
 
+    def to_dict(self) -> dict[str, Any]:
+        """The content of mission.json: :meth:`to_json_dict` and, when known, ``computing_time_s``."""
+        doc = self.to_json_dict()
+        return doc if self.computing_time_s is None else {**doc, "computing_time_s": self.computing_time_s}
+
+    def summary(self) -> str:
+        """What ``terrawatt mission`` prints: battery, status, plan against drive, errors, updates, final charge."""
+        result, battery = self, self.battery
+        if battery is None:
+            raise InvalidParameterError("the summary needs the battery driven against (a mission's result has it)")
+        budget, route0 = result.budget, result.initial_route
+        lines = [
+            f"map: {self.map_label}; robot {self.robot}; battery {battery.capacity_ah:g} Ah at {battery.voltage_v:g} V "
+            f"({battery.energy_capacity_wh:.0f} Wh, {battery.usable_energy_wh:.0f} Wh above the "
+            f"{battery.min_reserve_pct:g} % reserve)",
+            f"start {self.start_xy_m} -> goal {self.goal_xy_m}; prior trained on {self.prior_ground}; "
+            f"adaptive updates {'on' if self.adapt else 'off'}",
+            f"status: {result.status} — {result.reason}",
+            f"first plan (prior models):  {budget.predicted_energy_wh:8.2f} Wh  {route0.length_m:7.1f} m  "
+            f"({'fits' if budget.predicted_feasible else 'does NOT fit'} the usable {battery.usable_energy_wh:.0f} Wh)",
+            f"driven (actual):            {result.driven_energy_j / 3600:8.2f} Wh  in {len(result.legs)} legs",
+            f"excitation manoeuvres:      {result.excitation_energy_j / 3600:8.2f} Wh",
+            f"prediction error before / after updates: {_percent(result.error_before_update_pct)} / "
+            f"{_percent(result.error_after_update_pct)}",
+            f"updates accepted: {result.accepted_updates} of {len(result.updates)}; route changes {result.route_changes}",
+        ]
+        lines += [f"skipped update {line}" for line in result.skipped_updates]
+        if budget.depleted:
+            lines.append(f"the battery ran out {budget.depleted_time_s:.1f} s into the mission")
+        lines.append(f"final state of charge {budget.arrival_soc_pct:.1f} % (margin {budget.reserve_margin_pct:+.1f} "
+                     f"points above the reserve); loop computing {self.computing_time_s:.1f} s")
+        return "\n".join(lines)
+
+    def write(self, out_dir: str | os.PathLike[str], *, logs: bool = False, on_figure_error: str = "warn"
+              ) -> list[Path]:
+        """Write mission.json and mission.png into ``out_dir``; return the files written (a figure that fails
+        warns and is left out, :func:`terrawatt_base.figure_file.draw_figure`).
+
+        With ``logs``, also each leg's log (:attr:`AdaptiveResult.leg_logs`) as a CSV log
+        ``logs/leg_NNN.csv`` (:func:`energy.io.write_csv_log`) and each manoeuvre run
+        (:attr:`AdaptiveResult.manoeuvre_logs`) as ``logs/manoeuvre_NNN_K.csv`` (run K after leg
+        NNN), all on the robot's clock: a folder that ``terrawatt diagnose --data``,
+        ``terrawatt replay --data`` and :func:`energy.io.read_logs` read; and the models the
+        mission started with as ``start_registry/`` (:attr:`start_registry`, what ``terrawatt
+        replay --registry`` starts from): the previous mission's leg files there are
+        replaced, and a folder holding anything else is refused before anything is written
+        (:func:`check_logs_folder`).
+        """
+        out = Path(out_dir)
+        if logs:
+            check_logs_folder(out)
+        out.mkdir(parents=True, exist_ok=True)
+        written = [write_result_json(out / "mission.json", self.to_dict())]
+        png = draw_figure(out / "mission.png", lambda: self.plot(out / "mission.png", self.terrain, self.registry), on_error=on_figure_error)
+        written += [png] if png is not None else []
+        if logs:
+            folder = out / LOGS_FOLDER
+            folder.mkdir(exist_ok=True)
+            new = [folder / f"leg_{k:03d}.csv" for k in range(len(self.leg_logs))]
+            for path, log in zip(new, self.leg_logs):
+                written.append(write_csv_log(log, path))
+            runs: dict[int, int] = {}
+            for after, log in self.manoeuvre_logs:
+                k = runs[after] = runs.get(after, -1) + 1
+                path = folder / f"manoeuvre_{after:03d}_{k}.csv"
+                new.append(path)
+                written.append(write_csv_log(log, path))
+            for stale in sorted(set(_leg_files(folder)) - set(new)):
+                stale.unlink()
+            if self.start_registry is not None:
+                written.append(self.start_registry.save(out / START_REGISTRY, lambda model, p: model.save(p)))
+        return written
+
+    def write_drive_bag(self, path: str | os.PathLike[str]) -> Path:
+        """The legs the robot drove as one recorded drive, a ROS 2 MCAP (``.mcap``) or a ROS 1 bag
+        (``.bag``): odometry (map poses), IMU, drive currents and, on a map with a CRS, GPS fixes
+        (:func:`energy.io.write_drive_bag`). The manoeuvre runs are not in it (they were made on
+        the spot, without poses): a replay of the bag learns from the driving. Atomic.
+
+        Raises
+        ------
+        InvalidParameterError
+            A path of another suffix; a mission that drove no leg.
+        """
+        legs = self.leg_logs
+        if not legs:
+            raise InvalidParameterError("the mission drove no leg: there is no drive to write")
+        lonlat = None
+        if self.terrain is not None and self.terrain.crs is not None:
+            lonlat = [np.column_stack(self.terrain.xy_to_lonlat(log.pose_xyh[:, 0], log.pose_xyh[:, 1]))
+                      for log in legs]
+        return write_drive_bag(list(legs), path, lonlat_deg=lonlat)
+
     def plot(self, path: str | os.PathLike[str] | None = None, terrain: TerrainMap | None = None,
              registry: CellModelRegistry | None = None, *, axes: Any = None) -> Path | tuple[Any, ...]:
         """Four panels: route over cells coloured by model and by error, SoC, cumulative energy
@@ -251,3 +393,45 @@ class AdaptiveResult:
             ``terrain`` or ``registry``.
         """
         return plot_adaptive_mission(self, path, terrain, registry, axes=axes)
+
+
+#: The folder of :meth:`AdaptiveResult.write` (``logs=True``) that holds the legs' logs.
+LOGS_FOLDER = "logs"
+#: The folder of :meth:`AdaptiveResult.write` (``logs=True``) that holds the models the mission started with.
+START_REGISTRY = "start_registry"
+
+
+def _leg_files(folder: Path) -> list[Path]:
+    """The files an earlier mission wrote there: exactly the names :meth:`AdaptiveResult.write` gives
+    (``leg_NNN.csv``, ``manoeuvre_NNN_K.csv``; a user's ``leg_0042.csv`` is not one of them)."""
+    def ours(name: str) -> bool:
+        m = re.fullmatch(r"leg_(\d{3,})\.csv", name)
+        if m:
+            return name == f"leg_{int(m.group(1)):03d}.csv"
+        m = re.fullmatch(r"manoeuvre_(\d{3,})_(\d+)\.csv", name)
+        return m is not None and name == f"manoeuvre_{int(m.group(1)):03d}_{int(m.group(2))}.csv"
+
+    return [p for p in folder.iterdir() if p.is_file() and ours(p.name)] if folder.is_dir() else []
+
+
+def check_logs_folder(out_dir: str | os.PathLike[str]) -> Path:
+    """Before any work: ``out_dir/logs`` can take a mission's leg logs (missing, or a folder holding
+    nothing but an earlier mission's ``leg_NNN.csv`` files, which writing replaces); returns it.
+
+    Raises
+    ------
+    InvalidParameterError
+        It is a file, or a folder holding other files (they would be read as logs beside the legs').
+    """
+    folder = check_output_path(Path(out_dir) / LOGS_FOLDER, "the mission's logs folder", directory=True)
+    if folder.is_dir():
+        others = sorted(p.name for p in folder.iterdir() if p not in set(_leg_files(folder)))
+        if others:
+            raise InvalidParameterError(f"the mission's logs folder {str(folder)!r} holds other files ({others[:3]!r}"
+                                        f"{' ...' if len(others) > 3 else ''}): they would be read as logs beside the "
+                                        "legs'; give another output folder or move them")
+    start = Path(out_dir) / START_REGISTRY
+    if start.exists() and not (start.is_dir() and ((start / "registry.npz").is_file() or not any(start.iterdir()))):
+        raise InvalidParameterError(f"{str(start)!r} exists and is not a registry the mission wrote: the models the "
+                                    "mission starts with cannot be written there")
+    return folder

@@ -1,4 +1,9 @@
-"""MonteCarloResult: the per-sample table of a Monte Carlo mission study, its risk of crossing the reserve and energy percentiles."""
+"""MonteCarloResult: the per-sample table of a Monte Carlo mission study, its risk of crossing the reserve and energy percentiles.
+
+The answer of :func:`planner.simulate_missions_mc` (the missions of a given route) and of
+:func:`planner.missions.monte_carlo_report.monte_carlo_mission` (the same, with the route it planned
+and the header ``terrawatt mission --monte-carlo`` prints: the map, the robot, the reserve check).
+"""
 
 from __future__ import annotations
 
@@ -7,7 +12,7 @@ import io
 import math
 import os
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -17,9 +22,11 @@ from energy import Battery
 from terrawatt_base.atomic import write_text_atomic
 from terrawatt_base.checks import check_real, readonly, real_array
 from terrawatt_base.errors import InvalidParameterError, TerrawattError
+from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import result_document, write_result_json
 
 from ..risk import RouteEnergyInterval
+from ..route import Route
 from .monte_carlo_figure import plot_monte_carlo
 from .monte_carlo_sampling import MissionDistributions
 
@@ -97,6 +104,17 @@ class MonteCarloResult:
         Per sample, ``"ExceptionType: message"`` for a mission that failed with a library
         error (its outcome columns NaN, flags false), else ``""``; empty means none failed.
         The risk and the percentiles are over the completed missions (:attr:`completed`).
+    route : Route or None
+        The route the study planned and drove (:func:`~planner.missions.monte_carlo_report.monte_carlo_mission`);
+        a route that was not found drives no mission (``n == 0``, made by :meth:`no_route`).
+    map_label, robot : str
+        How the map is named; the robot (its preset name or file), for the header.
+    start_xy_m, goal_xy_m : (float, float) or None
+        The start and goal the route was asked for.
+    risk_q : float or None
+        The quantile of the route's energy forecast checked against the usable battery (:attr:`fits`).
+    max_risk_pct : float
+        Most missions (%) that may go below the reserve for :attr:`ok`.
     """
 
     seed: int | None
@@ -123,6 +141,23 @@ class MonteCarloResult:
     draw_from: str = "parameters"
     forecast: RouteEnergyInterval | None = None
     errors: tuple[str, ...] = ()
+    route: Route | None = field(default=None, repr=False)
+    map_label: str = "map"
+    robot: str = ""
+    start_xy_m: tuple[float, float] | None = None
+    goal_xy_m: tuple[float, float] | None = None
+    risk_q: float | None = None
+    max_risk_pct: float = 5.0
+
+    @classmethod
+    def no_route(cls, route: Route, battery: Battery, **header: Any) -> MonteCarloResult:
+        """The study of a route that was not found: no mission driven, the header kept (``header``: the fields from
+        ``map_label`` on)."""
+        empty = np.empty(0)
+        return cls(seed=None, entropy=0, distributions=MissionDistributions(), battery=battery,
+                   predicted_energy_j=math.nan, ground_names=(), ground_scale=np.empty((0, 0)),
+                   **{c: empty for c in SAMPLE_COLUMNS}, **{f: np.empty(0, dtype=bool) for f in _FLAGS},
+                   route=route, **header)
 
     def __post_init__(self) -> None:
         if self.draw_from not in ("parameters", "model"):
@@ -130,8 +165,14 @@ class MonteCarloResult:
         if self.forecast is not None and not isinstance(self.forecast, RouteEnergyInterval):
             raise InvalidParameterError(f"forecast must be a RouteEnergyInterval or None, got {self.forecast!r:.80}")
         n = np.asarray(self.energy_j).shape[0] if np.ndim(self.energy_j) == 1 else -1
-        if n < 1:
-            raise InvalidParameterError("energy_j must be a 1-D array of at least one sample")
+        if self.route is not None and not isinstance(self.route, Route):
+            raise InvalidParameterError(f"route must be a Route or None, got {type(self.route).__name__!r}")
+        unplanned = self.route is not None and not self.route.found
+        if n < 1 and not (unplanned and n == 0):
+            raise InvalidParameterError("energy_j must be a 1-D array of at least one sample (none only when the "
+                                        "route was not found)")
+        if unplanned and n:
+            raise InvalidParameterError(f"a route that was not found drives no mission, got {n} samples")
         for name in SAMPLE_COLUMNS:
             arr = real_array(name, getattr(self, name), ndim=1, finite=False)
             if arr.shape != (n,):
@@ -254,7 +295,56 @@ class MonteCarloResult:
                              *(str(bool(getattr(self, f)[i])).lower() for f in _FLAGS), self.errors[i]])
         return write_text_atomic(path, buf.getvalue())
 
+    @property
+    def risk_need_j(self) -> float | None:
+        """The route energy's :attr:`risk_q` quantile (J, of the forecast), or None without ``risk_q`` or missions."""
+        if self.risk_q is None or not self.n or self.forecast is None:
+            return None
+        return self.forecast.quantile_j(self.risk_q)
+
+    @property
+    def fits(self) -> bool:
+        """Whether :attr:`risk_need_j` fits the usable battery (True without ``risk_q``)."""
+        need = self.risk_need_j
+        return need is None or need <= self.battery.usable_energy_wh * 3600.0
+
+    @property
+    def ok(self) -> bool:
+        """Missions were driven, at most ``max_risk_pct`` % went below the reserve, the quantile fits and none failed."""
+        return bool(self.n) and 100.0 * self.p_below_reserve <= self.max_risk_pct and self.fits and not self.n_failed
+
     def summary(self) -> str:
+        """What ``terrawatt mission --monte-carlo N`` prints: with the route's header the map, robot and battery, the
+        route, then the study (:meth:`study_summary`) and the reserve check at :attr:`risk_q`."""
+        if self.route is None:
+            return self.study_summary()
+        b, route = self.battery, self.route
+        lines = [f"map: {self.map_label}; robot {self.robot}; battery {b.capacity_ah:g} Ah at {b.voltage_v:g} V, "
+                 f"reserve {b.min_reserve_pct:g} %"]
+        if not route.found:
+            lines.append(f"no route from {self.start_xy_m} to {self.goal_xy_m}: status {route.status!r}")
+            return "\n".join(lines)
+        lines += [f"route: {route.length_m:.1f} m, planned {route.energy_wh:.2f} Wh; {self.n} missions",
+                  self.study_summary()]
+        if self.risk_q is not None:  # the reserve check on the forecast's quantile
+            need = self.risk_need_j
+            lines.append(f"reserve check at Q = {self.risk_q:g}: the route's {self.risk_q:g} quantile "
+                         f"{math.nan if need is None else need / 3600:.2f} Wh {'fits' if self.fits else 'does NOT fit'} "
+                         f"the usable {b.usable_energy_wh:.2f} Wh")
+        return "\n".join(lines)
+
+    def write(self, out_dir: str | os.PathLike[str], *, on_figure_error: str = "warn") -> list[Path]:
+        """Write monte_carlo.json, monte_carlo.csv and monte_carlo.png into ``out_dir`` (nothing without a mission);
+        return the files written (a figure that fails warns and is left out)."""
+        if not self.n:
+            return []
+        out = Path(out_dir)
+        out.mkdir(parents=True, exist_ok=True)
+        written = [self.write_json(out / "monte_carlo.json"), self.to_csv(out / "monte_carlo.csv")]
+        png = draw_figure(out / "monte_carlo.png", lambda: self.plot(out / "monte_carlo.png"), on_error=on_figure_error)
+        return written + ([png] if png is not None else [])
+
+    def study_summary(self) -> str:
         """A few lines for people: the reserve risk and the energy percentiles against the battery."""
         pct = self.energy_percentiles_wh
         lo, hi = self.p_below_reserve_ci95

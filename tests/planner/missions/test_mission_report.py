@@ -1,4 +1,4 @@
-"""Tests of planner.missions.mission_report: simulate_adaptive_mission and MissionReport."""
+"""Tests of planner.missions.mission_report: simulate_adaptive_mission, an AdaptiveResult with its header."""
 
 from __future__ import annotations
 
@@ -10,26 +10,21 @@ import planner.missions.mission_report as mission_report_module
 import terrain
 from energy import Battery
 from planner.missions import AdaptiveResult
-from planner.missions.mission_report import (
-    MissionReport,
-    check_logs_folder,
-    check_preset_grounds,
-    mission_battery,
-    simulate_adaptive_mission,
-)
+from planner.missions.adaptive_results import check_logs_folder
+from planner.missions.mission_report import check_preset_grounds, mission_battery, simulate_adaptive_mission
 from terrain import FigureWarning, InvalidParameterError, TerrainMap, UnknownNameError
 
 START, GOAL = (3.0, 12.0), (37.0, 12.0)
 
 
 @pytest.fixture(scope="module")
-def report() -> MissionReport:
+def report() -> AdaptiveResult:
     wall = terrain.wall_map((40, 40), 1.0, wall_col=20, gap_rows=(10, 14))
     return simulate_adaptive_mission(wall, START, GOAL, battery=Battery(20.0, 24.0), map_label="wall", seed=0)
 
 
 def test_the_mission_reaches_the_goal_on_its_battery(report):
-    assert isinstance(report.result, AdaptiveResult) and report.completed and report.result.status == "completed"
+    assert isinstance(report, AdaptiveResult) and report.completed and report.status == "completed"
     assert report.battery.capacity_ah == 20.0 and report.battery.voltage_v == 24.0  # the husky's
     assert report.battery.min_reserve_pct == 20.0 and report.adapt and report.prior_ground == "asphalt"
     assert report.registry is not None and report.computing_time_s > 0
@@ -41,7 +36,7 @@ def test_the_summary_says_battery_plan_drive_and_final_charge(report):
     assert lines[1] == "start (3.0, 12.0) -> goal (37.0, 12.0); prior trained on asphalt; adaptive updates on"
     assert lines[2] == "status: completed — reached the goal"
     assert lines[3].startswith("first plan (prior models): ") and "(fits the usable 384 Wh)" in lines[3]
-    assert lines[4].startswith("driven (actual): ") and f"in {len(report.result.legs)} legs" in lines[4]
+    assert lines[4].startswith("driven (actual): ") and f"in {len(report.legs)} legs" in lines[4]
     assert lines[-1].startswith("final state of charge ") and "loop computing" in lines[-1]
 
 
@@ -56,9 +51,9 @@ def test_mission_json_and_figure(report, tmp_path):
 def test_the_legs_logs_are_what_the_mission_drove_and_read_back(report, tmp_path):
     from energy.io import read_logs
 
-    legs = report.result.leg_logs
-    assert len(legs) == len(report.result.legs) and [len(log) for log in legs] == [
-        leg.n_samples for leg in report.result.legs]
+    legs = report.leg_logs
+    assert len(legs) == len(report.legs) and [len(log) for log in legs] == [
+        leg.n_samples for leg in report.legs]
     written = report.write(tmp_path, logs=True)
     csvs = [p for p in written if p.suffix == ".csv"]
     assert [p.name for p in csvs] == [f"leg_{k:03d}.csv" for k in range(len(legs))]
@@ -80,7 +75,7 @@ def test_the_logs_folder_is_checked_before_writing(report, tmp_path):
 
 
 def test_a_figure_that_fails_warns(report, tmp_path, monkeypatch):
-    monkeypatch.setattr(type(report.result), "plot", lambda *a, **k: 1 / 0)
+    monkeypatch.setattr(AdaptiveResult, "plot", lambda *a, **k: 1 / 0)
     with pytest.warns(FigureWarning, match="mission.png: ZeroDivisionError"):
         assert [p.name for p in report.write(tmp_path)] == ["mission.json"]
 
@@ -88,7 +83,7 @@ def test_a_figure_that_fails_warns(report, tmp_path, monkeypatch):
 def test_without_adaptation_no_update_is_made():
     flat = terrain.flat_map((10, 30), 1.0, ground="grass")
     report = simulate_adaptive_mission(flat, (2.0, 5.0), (27.0, 5.0), battery=Battery(20.0, 24.0), adapt=False, leg_m=5.0)
-    assert report.result.updates == () and "adaptive updates off" in report.summary()
+    assert report.updates == () and "adaptive updates off" in report.summary()
 
 
 def test_grounds_without_presets_are_refused(corridor_map):
@@ -111,9 +106,8 @@ def test_the_battery_voltage_defaults_to_the_robot():
 
 
 def test_the_module_names_its_api():
-    assert set(mission_report_module.__all__) == {"MissionReport", "simulate_adaptive_mission", "mission_battery",
-                                                  "check_preset_grounds", "check_logs_folder", "LOGS_FOLDER",
-                                                  "START_REGISTRY"}
+    assert set(mission_report_module.__all__) == {"simulate_adaptive_mission", "mission_battery",
+                                                  "check_preset_grounds"}
 
 
 def test_an_update_after_the_last_leg_ends_the_mission_at_the_goal():
@@ -121,7 +115,7 @@ def test_an_update_after_the_last_leg_ends_the_mission_at_the_goal():
     # to the asphalt prior) is followed by an accepted update. The loop used to replan from the
     # goal itself, and the mission failed with "start equals goal".
     report = simulate_adaptive_mission(terrain.example_map(), (10.0, 10.0), (30.0, 10.0), battery=Battery(20.0, 24.0))
-    result = report.result
+    result = report
     assert result.status == "completed" and result.distance_to_goal_m == pytest.approx(0.0, abs=1e-6)
     last = len(result.legs) - 1
     assert any(u.after_leg == last and u.accepted for u in result.updates)

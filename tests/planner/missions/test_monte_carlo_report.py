@@ -1,4 +1,4 @@
-"""Tests of planner.missions.monte_carlo_report: monte_carlo_mission and MonteCarloReport."""
+"""Tests of planner.missions.monte_carlo_report: monte_carlo_mission, a MonteCarloResult with its route and header."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import terrain
 from energy import Battery
 from planner.cost_spec import CostSpec
 from planner.missions import MonteCarloResult
-from planner.missions.monte_carlo_report import MonteCarloReport, monte_carlo_mission
+from planner.missions.monte_carlo_report import monte_carlo_mission
 from terrain import FigureWarning, InvalidParameterError, TerrainMap
 
 START, GOAL = (3.0, 12.0), (37.0, 12.0)
@@ -22,21 +22,21 @@ def wall() -> TerrainMap:
 
 
 @pytest.fixture(scope="module")
-def report(wall) -> MonteCarloReport:
+def report(wall) -> MonteCarloResult:
     return monte_carlo_mission(wall, START, GOAL, 4, battery=Battery(5.0, 24.0), seed=3, map_label="wall")
 
 
 def test_the_lattice_route_is_driven_n_times(report):
     assert report.route.status == "exact" and report.route.planner.startswith("lattice")
-    assert isinstance(report.result, MonteCarloResult) and report.result.n == 4 and report.n == 4
-    assert report.result.where == "in process" and report.ok and report.fits and report.risk_need_j is None
+    assert isinstance(report, MonteCarloResult) and report.n == 4
+    assert report.where == "in process" and report.ok and report.fits and report.risk_need_j is None
 
 
 def test_the_summary_gives_battery_route_and_study(report):
     lines = report.summary().splitlines()
     assert lines[0] == "map: wall; robot husky; battery 5 Ah at 24 V, reserve 20 %"
     assert lines[1] == f"route: {report.route.length_m:.1f} m, planned {report.route.energy_wh:.2f} Wh; 4 missions"
-    assert "\n".join(lines[2:]) == report.result.summary()
+    assert "\n".join(lines[2:]) == report.study_summary()
 
 
 def test_the_files(report, tmp_path):
@@ -53,13 +53,13 @@ def test_a_figure_that_fails_warns(report, tmp_path, monkeypatch):
 
 def test_too_small_a_risk_budget_is_not_ok(wall):
     tiny = monte_carlo_mission(wall, START, GOAL, 3, battery=Battery(0.01, 24.0), seed=0, max_risk_pct=0.0)
-    assert tiny.result.p_below_reserve > 0 and not tiny.ok
+    assert tiny.p_below_reserve > 0 and not tiny.ok
 
 
 def test_no_route_drives_nothing(tmp_path):
     closed = terrain.wall_map((40, 40), 1.0, wall_col=20, gap_rows=(0, 0))
     report = monte_carlo_mission(closed, START, GOAL, 3, battery=Battery(5.0, 24.0))
-    assert report.result is None and not report.ok and report.write(tmp_path) == []
+    assert report.n == 0 and not report.route.found and not report.ok and report.write(tmp_path) == []
     assert report.summary().splitlines()[-1] == "no route from (3.0, 12.0) to (37.0, 12.0): status 'infeasible'"
 
 
@@ -70,7 +70,7 @@ def test_the_model_quantile_is_checked_against_the_usable_battery(corridor_map, 
     model = known_model(trained_on=("sand", "gravel"), grounds=grounds)
     kw = dict(pricing=CostSpec(model=model, risk=0.9), draw_from="model", seed=0)
     big = monte_carlo_mission(sandy, (2.5, 7.5), (27.5, 7.5), 20, battery=Battery(5.0, 24.0), **kw)
-    assert big.fits and big.ok and big.risk_need_j == big.result.forecast.quantile_j(0.9)
+    assert big.fits and big.ok and big.risk_need_j == big.forecast.quantile_j(0.9)
     assert "reserve check at Q = 0.9: the route's 0.9 quantile" in big.summary() and "fits" in big.summary()
     small = monte_carlo_mission(sandy, (2.5, 7.5), (27.5, 7.5), 20, battery=Battery(0.01, 24.0), **kw)
     assert not small.fits and not small.ok and "does NOT fit" in small.summary()
