@@ -309,13 +309,13 @@ def robot_params(robot: str | os.PathLike[str] | RobotParams, *, name: str = "ro
         return robot
     if not isinstance(robot, (str, os.PathLike)):
         raise InvalidParameterError(f"{name} must be a RobotParams, a preset name or a robot file (.json), got "
-                                    f"{type(robot).__name__!r}")
+                                    f"{type(robot).__name__!r}", parameter=name)
     if isinstance(robot, str) and robot in ROBOT_PRESETS:
         return ROBOT_PRESETS[robot]
     if Path(robot).suffix.lower() == ".json":
         return read_robot_file(robot)
     raise UnknownNameError(f"{name} {robot!r:.80} is neither a robot preset ({', '.join(sorted(ROBOT_PRESETS))}) nor "
-                           "a robot file (.json, energy.params.write_robot_file)")
+                           "a robot file (.json, energy.params.write_robot_file)", parameter=name)
 
 
 def robot_spec(robot: str | os.PathLike[str] | RobotParams, *, name: str = "robot") -> str | RobotParams:

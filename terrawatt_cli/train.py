@@ -13,8 +13,8 @@ from .data import add_band_option, add_data_options, logs_from_args
 
 __all__ = ["add_parser", "run_train"]
 
-#: How the library's messages name the options of :func:`energy.models.train_report`: by their flags.
-_NAMES = {"kind": "--model", "n_threads": "--threads", "interval_folds": "--interval-folds", "band_hz": "--band",
+#: The flags of :func:`energy.models.train_report`'s parameters (how ``terrawatt`` says its errors).
+_FLAGS = {"kind": "--model", "n_threads": "--threads", "interval_folds": "--interval-folds", "band_hz": "--band",
           "robot": "--robot"}
 
 
@@ -33,7 +33,7 @@ def add_parser(sub: Any) -> None:
                        "interval of a model other than the estimator (whose ensemble gives its own): refit it K times "
                        f"leaving runs out, and once per ground left out (default {DEFAULT_INTERVAL_FOLDS}; 0: no interval)")
     add_band_option(train)
-    train.set_defaults(run=run_train)
+    train.set_defaults(run=run_train, flag_names=_FLAGS)
 
 
 def run_train(args: argparse.Namespace) -> int:
@@ -44,8 +44,7 @@ def run_train(args: argparse.Namespace) -> int:
     flags and the output path are checked before the logs are read, so a bad ``--out`` never costs
     a training. ``--band LO HI`` sets the learned models' vibration band (Hz).
     """
-    options = dict(n_threads=args.threads, interval_folds=args.interval_folds, band_hz=args.band, robot=args.robot,
-                   names=_NAMES)
+    options = dict(n_threads=args.threads, interval_folds=args.interval_folds, band_hz=args.band, robot=args.robot)
     check_training_options(args.model, **options)
     check_output_file(args.out, input_paths(args))
     report = train_report(args.model, logs_from_args(args, require_currents=True), seed=args.seed,

@@ -44,11 +44,13 @@ def check_band_hz(band_hz: Any, name: str = "band_hz") -> tuple[float, float]:
     terrawatt_base.errors.InvalidParameterError: band_hz must be (low_hz, high_hz) with low_hz < high_hz, got (12.0, 1.0)
     """
     if isinstance(band_hz, (str, bytes)) or not hasattr(band_hz, "__len__") or len(band_hz) != 2:
-        raise InvalidParameterError(f"{name} must be a pair (low_hz, high_hz) of frequencies in Hz, got {band_hz!r:.80}")
+        raise InvalidParameterError(f"{name} must be a pair (low_hz, high_hz) of frequencies in Hz, got {band_hz!r:.80}",
+                                    parameter=name)
     low = check_real(f"{name}[0] (low_hz)", band_hz[0], low=0.0)
     high = check_real(f"{name}[1] (high_hz)", band_hz[1], low=0.0, low_inclusive=False)
     if not low < high:
-        raise InvalidParameterError(f"{name} must be (low_hz, high_hz) with low_hz < high_hz, got ({low!r}, {high!r})")
+        raise InvalidParameterError(f"{name} must be (low_hz, high_hz) with low_hz < high_hz, got ({low!r}, {high!r})",
+                                    parameter=name)
     return (low, high)
 
 

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from terrawatt_base.checks import check_bool, check_choice, check_int, check_seed, option_names
+from terrawatt_base.checks import check_bool, check_choice, check_int, check_seed
 from terrawatt_base.errors import InvalidParameterError
 
 from ..features.band import check_band_hz
@@ -19,12 +19,7 @@ from .base import CurrentModel, check_logs
 from .calibration import DEFAULT_INTERVAL_FOLDS, fit_interval
 from .kinds import CURRENT_MODEL_KINDS, LEARNED_KINDS, new_current_model
 
-__all__ = ["TRAINING_NAMES", "check_learned_band", "check_training_options", "TrainingReport",
-           "train_report"]
-
-#: How messages name the options of :func:`check_training_options` (a caller passes its own, e.g. its flags).
-TRAINING_NAMES = {"kind": "kind", "n_threads": "n_threads", "interval_folds": "interval_folds", "band_hz": "band_hz",
-                  "robot": "robot"}
+__all__ = ["check_learned_band", "check_training_options", "TrainingReport", "train_report"]
 
 
 
@@ -40,7 +35,7 @@ def check_learned_band(band_hz: Sequence[float] | None, kinds: Sequence[str], *,
     kinds : sequence of str
         The model kinds it is for.
     name, kinds_name : str
-        How messages name the band and the kinds (e.g. ``"--band"``, ``"--model"``).
+        The parameters the band and the kinds are (the error's :attr:`~terrawatt_base.errors.TerrawattError.parameter`).
 
     Returns
     -------
@@ -61,14 +56,16 @@ def check_learned_band(band_hz: Sequence[float] | None, kinds: Sequence[str], *,
     band = check_band_hz(band_hz, name)
     if not set(kinds) & set(LEARNED_KINDS):
         raise InvalidParameterError(f"{name} applies to the estimator and paper models only, got {kinds_name} "
-                                    f"{' '.join(kinds)}")
+                                    f"{' '.join(kinds)}", parameter=(name, kinds_name))
     return band
 
 
 def check_training_options(kind: str, *, n_threads: int | None = None, interval_folds: int = DEFAULT_INTERVAL_FOLDS,
-                           band_hz: Sequence[float] | None = None, robot: Any = None,
-                           names: Mapping[str, str] | None = None) -> tuple[float, float] | None:
+                           band_hz: Sequence[float] | None = None, robot: Any = None) -> tuple[float, float] | None:
     """Check the options of :func:`train_report` before any work; return the checked band (or None).
+
+    The errors name the options they are about (:attr:`~terrawatt_base.errors.TerrawattError.parameter`:
+    a front end says them in its own words, e.g. the command line by its flags).
 
     Parameters
     ----------
@@ -82,8 +79,6 @@ def check_training_options(kind: str, *, n_threads: int | None = None, interval_
         The learned kinds' vibration band (Hz).
     robot : str, path or RobotParams, optional
         The physics kind's robot (:func:`energy.params.robot_params`; default husky).
-    names : mapping, optional
-        How messages name the options (keys of :data:`TRAINING_NAMES`, e.g. ``{"n_threads": "--threads"}``).
 
     Returns
     -------
@@ -102,27 +97,29 @@ def check_training_options(kind: str, *, n_threads: int | None = None, interval_
 
     Examples
     --------
-    >>> check_training_options("linear", n_threads=2, names={"n_threads": "--threads", "kind": "--model"})
+    >>> check_training_options("linear", n_threads=2)
     Traceback (most recent call last):
     ...
-    terrawatt_base.errors.InvalidParameterError: --threads applies to the estimator and paper models only, got --model 'linear'
+    terrawatt_base.errors.InvalidParameterError: n_threads applies to the estimator and paper models only, got kind 'linear'
     """
-    n = option_names(names, TRAINING_NAMES)
-    check_choice(n["kind"], kind, CURRENT_MODEL_KINDS)
+    check_choice("kind", kind, CURRENT_MODEL_KINDS)
     if n_threads is not None:
         if isinstance(n_threads, bool) or not isinstance(n_threads, int) or n_threads < 1:
-            raise InvalidParameterError(f"{n['n_threads']} must be a positive number of threads, got {n_threads!r}")
+            raise InvalidParameterError(f"n_threads must be a positive number of threads, got {n_threads!r}",
+                                        parameter="n_threads")
         if kind not in LEARNED_KINDS:
-            raise InvalidParameterError(f"{n['n_threads']} applies to the estimator and paper models only, got "
-                                        f"{n['kind']} {kind!r}")
+            raise InvalidParameterError(f"n_threads applies to the estimator and paper models only, got kind {kind!r}",
+                                        parameter=("n_threads", "kind"))
     if robot is not None:
         if kind != "physics":
-            raise InvalidParameterError(f"{n['robot']} applies to the physics model only, got {n['kind']} {kind!r}")
-        robot_params(robot, name=n["robot"])
-    folds = check_int(n["interval_folds"], interval_folds)
+            raise InvalidParameterError(f"robot applies to the physics model only, got kind {kind!r}",
+                                        parameter=("robot", "kind"))
+        robot_params(robot)
+    folds = check_int("interval_folds", interval_folds)
     if folds < 0 or folds == 1:
-        raise InvalidParameterError(f"{n['interval_folds']} must be 0 (no interval) or >= 2, got {folds}")
-    return check_learned_band(band_hz, [kind], name=n["band_hz"], kinds_name=n["kind"])
+        raise InvalidParameterError(f"interval_folds must be 0 (no interval) or >= 2, got {folds}",
+                                    parameter="interval_folds")
+    return check_learned_band(band_hz, [kind])
 
 
 @dataclass(frozen=True)
@@ -177,8 +174,7 @@ class TrainingReport:
 
 def train_report(kind: str, logs: InteractionLog | Sequence[InteractionLog], *, seed: int | None = 0,
                  progress: bool = False, n_threads: int | None = None, interval_folds: int = DEFAULT_INTERVAL_FOLDS,
-                 band_hz: Sequence[float] | None = None, robot: Any = None,
-                 names: Mapping[str, str] | None = None) -> TrainingReport:
+                 band_hz: Sequence[float] | None = None, robot: Any = None) -> TrainingReport:
     """A new model of ``kind`` (:func:`~energy.models.new_current_model`) fitted on ``logs``, and reported.
 
     A learned kind (:data:`LEARNED_KINDS`) is fitted as it is: its ensemble gives its own
@@ -195,7 +191,7 @@ def train_report(kind: str, logs: InteractionLog | Sequence[InteractionLog], *, 
         Seed of the learned kinds.
     progress : bool
         The learned kinds' progress bar with the training loss (the baselines have none).
-    n_threads, interval_folds, band_hz, robot, names
+    n_threads, interval_folds, band_hz, robot
         As :func:`check_training_options`.
 
     Returns
@@ -221,7 +217,7 @@ def train_report(kind: str, logs: InteractionLog | Sequence[InteractionLog], *, 
     ('constant', 1, False)
     """
     band = check_training_options(kind, n_threads=n_threads, interval_folds=interval_folds, band_hz=band_hz,
-                                  robot=robot, names=names)
+                                  robot=robot)
     seed = check_seed(seed)
     learned = kind in LEARNED_KINDS
     progress = check_bool("progress", progress) and learned

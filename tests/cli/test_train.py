@@ -86,3 +86,16 @@ def test_train_physics_on_a_robot_file_keeps_that_robot(tmp_path, capsys):
                  "--out", str(tmp_path / "rover.json")]) == 2  # the robot file is an input: never overwritten
     assert "would replace the input" in one_line_error(capsys)
     assert (tmp_path / "rover.json").read_bytes() == robot_file
+
+
+def test_the_command_line_says_the_libraries_parameters_by_its_flags():
+    from energy.models import check_training_options
+    from terrain import InvalidParameterError
+    from terrawatt_cli import error_message
+    from terrawatt_cli.train import _FLAGS
+
+    with pytest.raises(InvalidParameterError) as raised:
+        check_training_options("linear", n_threads=2)
+    assert error_message(raised.value, _FLAGS) == ("--threads applies to the estimator and paper models only, got "
+                                                   "--model 'linear'")
+    assert check_training_options("estimator", n_threads=2, band_hz=[0, 25]) == (0.0, 25.0)
