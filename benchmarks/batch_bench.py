@@ -46,6 +46,7 @@ import numpy as np
 from energy import Battery
 from planner import EnergyCost, Lattice, plan_batch, plan_route, simulate_missions_mc, warm_up_kernels
 from planner.cache import CACHE_SIZE, ResultCache
+from planner.cost_spec import CostSpec
 from terrain.procedural import procedural_map
 from terrawatt_base.atomic import write_json_atomic
 from terrawatt_base.dask_client import Compute
@@ -247,7 +248,7 @@ def main(argv: list[str] | None = None) -> int:
     compile_s = warm_up_kernels()
     tmap = procedural_map((args.size, args.size), 1.0, seed=args.seed)
     t0 = time.perf_counter()
-    cost = EnergyCost.from_presets(tmap)
+    cost = CostSpec().build(tmap)
     prep_s = time.perf_counter() - t0
     rng = np.random.default_rng(args.seed)
     pairs = _pairs(cost, args.pairs, rng, min_dist_m=args.size / 3)

@@ -77,6 +77,8 @@ from typing import Any
 
 import numpy as np
 
+from planner.cost_spec import CostSpec
+
 #: Start and goal as fractions of the map side.
 START_FRAC, GOAL_FRAC = (0.08, 0.10), (0.92, 0.86)
 #: Start and goal of the sizes only the windowed planner runs on (above ``C2F_MAX``).
@@ -192,14 +194,13 @@ def _peak_over(base_kib: int | None) -> int | None:
 
 def free_point(tif: Path, frac: tuple[float, float], win: int = 64) -> tuple[float, float]:
     """The free cell centre nearest to a fractional position, in the largest free region of a 129^2 window."""
-    from planner import EnergyCost
     from terrain import DemWindows
 
     with DemWindows(tif) as dem:
         rows, cols = dem.shape
         r0, c0 = int(frac[1] * (rows - 1)), int(frac[0] * (cols - 1))
         w = dem.read(slice(r0 - win if r0 >= win else 0, r0 + win + 1), slice(max(0, c0 - win), c0 + win + 1), halo=1)
-        cost = EnergyCost.from_presets(w.terrain_map())
+        cost = CostSpec().build(w.terrain_map())
     labels = cost.components()
     big = np.argmax(np.bincount(labels.ravel())[1:]) + 1
     rr, cc = np.nonzero(labels == big)
@@ -211,13 +212,13 @@ def free_point(tif: Path, frac: tuple[float, float], win: int = 64) -> tuple[flo
 
 def _warm() -> float:
     """Load (or compile) every kernel the children use, on a tiny map; seconds spent."""
-    from planner import EnergyCost, Lattice, plan_coarse_to_fine, plan_coarse_to_fine_geotiff, warm_up_kernels
+    from planner import Lattice, plan_coarse_to_fine, plan_coarse_to_fine_geotiff, warm_up_kernels
     from terrain import procedural_map, write_geotiff
 
     t0 = time.perf_counter()
     warm_up_kernels()
     tmap = procedural_map((48, 48), 1.0, seed=0, obstacle_fraction=0.0)
-    cost = EnergyCost.from_presets(tmap)
+    cost = CostSpec().build(tmap)
     plan_coarse_to_fine(cost, (4.5, 4.5), (40.5, 40.5), factor=4)
     with tempfile.TemporaryDirectory() as folder:
         plan_coarse_to_fine_geotiff(write_geotiff(tmap, Path(folder) / "warm.tif"), (4.5, 4.5), (40.5, 40.5), factor=4)
@@ -243,7 +244,7 @@ def tile_figures(tif: Path, factor: int, samples: int = TILE_SAMPLES) -> dict[st
     coarse and during price (Linux ``clear_refs``), the border graph's arrays."""
     from scipy.sparse import csgraph
 
-    from planner import EnergyCost, Lattice
+    from planner import Lattice
     from planner.coarse import coarse_cost, coarse_layers
     from terrain import DemWindows
     from terrain.surface import surface_layers
@@ -271,7 +272,7 @@ def tile_figures(tif: Path, factor: int, samples: int = TILE_SAMPLES) -> dict[st
             del blocked
             base = _reset_peak()
             clock.append((time.perf_counter(), time.process_time()))
-            cost = EnergyCost.from_presets(win.terrain_map())
+            cost = CostSpec().build(win.terrain_map())
             clock.append((time.perf_counter(), time.process_time()))
             per["price_peak_b"].append(_peak_over(base))
             clock.append((time.perf_counter(), time.process_time()))
@@ -313,7 +314,7 @@ def child(mode: str, tif: Path, factor: int, start: tuple[float, float], goal: t
     """One measurement in this (fresh) process."""
     warm_s = _warm()
     base_gib = _rss_gib()
-    from planner import EnergyCost, Lattice, plan_coarse_to_fine, plan_coarse_to_fine_geotiff
+    from planner import Lattice, plan_coarse_to_fine, plan_coarse_to_fine_geotiff
     from terrain import iter_surface_windows, read_geotiff
 
     out: dict[str, Any] = {"mode": mode, "warm_s": warm_s, "base_rss_gib": base_gib}
@@ -351,7 +352,7 @@ def child(mode: str, tif: Path, factor: int, start: tuple[float, float], goal: t
         out["peak_rss_gib"] = _rss_gib()
         return out
     tmap = read_geotiff(tif)
-    cost = EnergyCost.from_presets(tmap)
+    cost = CostSpec().build(tmap)
     out["prepare_s"] = time.perf_counter() - t0
     cpu_prep = time.process_time() - cpu0
     t1, cpu1 = time.perf_counter(), time.process_time()

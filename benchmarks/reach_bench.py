@@ -44,6 +44,7 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from planner import EnergyCost, reachability, warm_up_kernels
+from planner.cost_spec import CostSpec
 from planner.kernels import lattice_weights
 from planner.lattice import LATTICE_OFFSETS
 from planner.reachability import depot_links, lattice_move_energies, warm_up_reachability
@@ -109,7 +110,7 @@ def _run_size(n: int, args: argparse.Namespace) -> dict[str, Any]:
     tmap = procedural_map((n, n), 1.0, seed=args.seed, n_walls=1)
     map_s = time.perf_counter() - t0
     t0 = time.perf_counter()
-    cost = EnergyCost.from_presets(tmap)
+    cost = CostSpec().build(tmap)
     prep_s = time.perf_counter() - t0
     depot = _depot(cost)
     # a cold call on a fresh cost: the moves, then the round-trip search (wall and CPU seconds)

@@ -47,6 +47,7 @@ from energy import Battery, TruthSimulator, VibrationCurrentEstimator, ground_pr
 from energy.models.config import estimator_preset
 from energy.sim import GroundVariation
 from planner import EnergyCost, model_energy_cost, warm_up_kernels
+from planner.cost_spec import CostSpec
 from planner.tours import TourChargers, TourRobot, TourSites, plan_tour, price_pairs, simulate_tours_mc
 from planner.tours.solver import TourProblem, solve_ortools, solve_pyvrp
 from terrain import TerrainMap, example_map
@@ -87,7 +88,7 @@ def battery_for(prices: Any, trips: float, voltage_v: float, reserve_pct: float 
 def timing_part(args: argparse.Namespace) -> dict[str, Any]:
     """Pricing and solving times on the procedural map; PyVRP vs OR-Tools on the same problem."""
     tmap = procedural_map((args.size, args.size), 1.0, seed=args.seed)
-    cost = with_spread(EnergyCost.from_presets(tmap), args.rel_sd)
+    cost = with_spread(CostSpec().build(tmap), args.rel_sd)
     depot, sites = depot_and_sites(cost, args.sites, np.random.default_rng(args.seed))
     pts = np.vstack([depot, sites.xy_m])
     t0 = time.perf_counter()
@@ -152,7 +153,7 @@ def monte_carlo_part(args: argparse.Namespace) -> dict[str, Any]:
         interval = (f"a vibration estimator fitted on simulated runs of the map's grounds, its interval "
                     f"({time.perf_counter() - t0:.0f} s to fit and price)")
     else:
-        cost = with_spread(EnergyCost.from_presets(tmap), args.rel_sd)
+        cost = with_spread(CostSpec().build(tmap), args.rel_sd)
         interval = f"presets with a stated run-level spread of {args.rel_sd:g} of the mean"
     depot, sites = depot_and_sites(cost, args.mc_sites, np.random.default_rng(args.seed + 1))
     first = None
@@ -175,7 +176,7 @@ def monte_carlo_part(args: argparse.Namespace) -> dict[str, Any]:
 
 def chargers_part(args: argparse.Namespace) -> dict[str, Any]:
     """Value without and with charging points on the bundled map (stated spread), solve times, the Monte Carlo."""
-    cost = with_spread(EnergyCost.from_presets(example_map()), args.rel_sd)
+    cost = with_spread(CostSpec().build(example_map()), args.rel_sd)
     depot, sites = depot_and_sites(cost, args.charger_sites, np.random.default_rng(args.seed + 2))
     _, spots = depot_and_sites(cost, args.chargers, np.random.default_rng(args.seed + 3))
     chargers = TourChargers(tuple(f"charger{k}" for k in range(args.chargers)), spots.xy_m, power_w=200.0,

@@ -30,6 +30,7 @@ import numpy as np
 
 from energy import PhysicsEnergyModel, ground_preset, robot_preset
 from planner import EnergyCost, Lattice, plan_route
+from planner.cost_spec import CostSpec
 from planner.route import evaluate_route
 from terrain import example_map, procedural_map
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M
@@ -125,7 +126,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"robot {r}: {rows[-1]['routes']} routes", file=sys.stderr, flush=True)
     slow = robot_preset("husky").replace(turn_rate_radps=0.02)
     tmap = example_map()
-    case = _one(tmap, EnergyCost.from_presets(tmap, robot=slow), EXAMPLE_START_XY_M, EXAMPLE_GOAL_XY_M)  # the presets
+    case = _one(tmap, CostSpec(robot=slow).build(tmap), EXAMPLE_START_XY_M, EXAMPLE_GOAL_XY_M)  # the presets
     print(f"{'robot':>5} {'turn rad/s':>10} {'lat. fric':>9} {'elec W':>7} {'routes':>6} {'max/shortest':>12} "
           f"{'max/heading-free':>16} {'saved %':>8} {'turns %':>8} {'free turns %':>12}")
     for row in rows:

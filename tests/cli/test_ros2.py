@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 import terrain
-from planner import EnergyCost, plan_route
+from planner import plan_route
+from planner.cost_spec import CostSpec
 from planner.energy_costmap import read_energy_geotiff
 from planner.nav2_map import read_nav2_map
 from planner.ros_export import read_route_bag
@@ -25,7 +26,7 @@ def wall():
     """The wall map (a 1-cell wall at x in [20, 21) m open at y in [30, 34) m), its cost and a lattice route around it
     (the fixture of tests/planner/test_ros_export.py: the two test folders share no helper module)."""
     tmap = terrain.wall_map((40, 40), 1.0, wall_col=20, gap_rows=(30, 34), ground="asphalt")
-    cost = EnergyCost.from_presets(tmap)
+    cost = CostSpec().build(tmap)
     route = plan_route(tmap, (5.0, 5.0), (35.0, 5.0), cost=cost, planner="lattice")
     assert route.status == "exact" and route.waypoints_m.shape[0] >= 3 and route.turn_energy_j.sum() > 0
     return tmap, cost, route

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 import terrain
+from planner.cost_spec import CostSpec
 from terrawatt_cli import main
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
@@ -187,11 +188,11 @@ def case_library(work: Path) -> dict[str, Path]:
     """The versioned files only the library writes: a robot file, a simulated mission's ``MissionResult``."""
     from energy import Battery, TruthSimulator, ground_preset, robot_preset
     from energy.params import write_robot_file
-    from planner import EnergyCost, plan_route, simulate_mission
+    from planner import plan_route, simulate_mission
 
     tmap = terrain.read_map(patch_map(work))
     husky = robot_preset("husky")
-    cost = EnergyCost.from_presets(tmap, robot=husky, speed_mps=0.5)
+    cost = CostSpec(robot=husky, speed_mps=0.5).build(tmap)
     route = plan_route(tmap, (3.0, 12.0), (57.0, 12.0), cost=cost, planner="lattice")
     truth = TruthSimulator(husky, {g: ground_preset(g) for g in ("asphalt", "sand")}, seed=0)
     mission = simulate_mission(tmap, route, husky, Battery(20.0, husky.battery_voltage_v), truth, cost, seed=1)

@@ -7,6 +7,7 @@ import pytest
 
 import terrain
 from planner import EnergyCost, Reachability, reachability
+from planner.cost_spec import CostSpec
 
 DEPOT = (17.3, 21.6)  # not a cell centre: joined to the nodes within 1.5 cells, like a lattice query's start
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -20,7 +21,7 @@ def hilly_cost() -> EnergyCost:
     r, c = tmap.rowcol(*DEPOT)
     obstacle[r - 1:r + 2, c - 1:c + 2] = False  # keep the depot free whatever the seed draws
     tmap["obstacle"] = obstacle
-    return EnergyCost.from_presets(tmap, speed_mps=0.5)
+    return CostSpec(speed_mps=0.5).build(tmap)
 
 
 @pytest.fixture(scope="module")

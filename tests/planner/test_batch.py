@@ -14,9 +14,10 @@ import pytest
 from batch_samples import EAST, EAST_LOW, ON_WALL, PAIRS, WEST, cost  # noqa: F401  (fixture)
 
 import terrain
-from planner import BatchPairs, EnergyCost, plan_batch, plan_route, read_pairs_csv
+from planner import BatchPairs, plan_batch, plan_route, read_pairs_csv
 from planner.batch_pairs import read_sites_csv
 from planner.batch_result import BatchRow
+from planner.cost_spec import CostSpec
 from terrawatt_base.dask_client import Compute, dask_client
 from terrawatt_base.errors import (
     DataError,
@@ -77,7 +78,7 @@ def test_a_pair_that_raises_is_reported_and_the_others_are_planned(cost):
 
 def test_disconnected_pairs_are_infeasible_rows():
     closed = terrain.wall_map((40, 40), 1.0, wall_col=20, gap_rows=(0, 0), ground="asphalt")
-    res = plan_batch(EnergyCost.from_presets(closed), [[*WEST, *EAST]])
+    res = plan_batch(CostSpec().build(closed), [[*WEST, *EAST]])
     assert res.rows[0].status == "infeasible" and math.isnan(res.rows[0].energy_j) and res.n_found == 0
 
 

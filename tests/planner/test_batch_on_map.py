@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from planner import BatchPairs, BatchResult, EnergyCost, plan_batch
+from planner import BatchPairs, BatchResult, plan_batch
 from planner.batch import plan_batch_on_map
 from planner.cost_spec import CostSpec
 from terrain import InvalidParameterError
@@ -22,7 +22,7 @@ def report(wall_map) -> BatchResult:
 
 def test_the_pairs_are_those_of_plan_batch_on_the_priced_map(report, wall_map):
     assert isinstance(report, BatchResult) and len(report) == 3 and report.map_label == "wall"
-    same = plan_batch(EnergyCost.from_presets(wall_map), PAIRS)
+    same = plan_batch(CostSpec().build(wall_map), PAIRS)
     assert [r.energy_j for r in report.rows[:2]] == [r.energy_j for r in same.rows[:2]]
     assert [r.status for r in report.rows] == ["exact", "exact", "error"] and not report.all_found
     assert report.where == "in process"

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from energy import robot_preset
-from planner import EnergyCost, model_energy_cost, risk_cost
+from planner import model_energy_cost, risk_cost
 from planner.cost_spec import CostSpec, PlanModel
 from terrain import InvalidParameterError, UnknownNameError
 
@@ -17,7 +17,7 @@ from terrain import InvalidParameterError, UnknownNameError
 def test_without_a_model_the_presets_price_the_map(ramp_map):
     spec = CostSpec(robot="jackal", speed_mps=0.8, max_slope_deg=math.degrees(0.3))
     cost = spec.build(ramp_map)
-    same = EnergyCost.from_presets(ramp_map, robot="jackal", speed_mps=0.8, max_slope_rad=0.3)
+    same = CostSpec(robot="jackal", speed_mps=0.8, max_slope_deg=math.degrees(0.3)).build(ramp_map)
     np.testing.assert_array_equal(cost.grade_table_j_per_m, same.grade_table_j_per_m)
     np.testing.assert_array_equal(cost.blocked, same.blocked)
     assert spec.plan_model(cost) is None and spec.at_risk(cost) is cost and spec.model_name == "the physics model"

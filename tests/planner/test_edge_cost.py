@@ -10,6 +10,7 @@ from edge_cost_samples import LinearModel, flat_terrain, ramp_terrain, rough_ter
 
 from energy import PhysicsEnergyModel, ground_preset, robot_preset
 from planner import EnergyCost, Lattice
+from planner.cost_spec import CostSpec
 from terrain import GridMismatchError, InvalidParameterError, OutOfBoundsError, TerrainMap, UnknownNameError
 
 GRAVITY_MPS2 = 9.80665
@@ -287,7 +288,7 @@ def _preset_map(names=("asphalt", "grass"), unknown=False):
 
 def test_from_presets_equals_from_model_with_the_presets():
     tmap = _preset_map(unknown=True)
-    got = EnergyCost.from_presets(tmap, speed_mps=0.4, max_slope_rad=math.radians(15.0))
+    got = CostSpec(speed_mps=0.4, max_slope_deg=15.0).build(tmap)
     ref = EnergyCost.from_model(
         tmap, PhysicsEnergyModel(robot_preset("husky")),
         {"asphalt": ground_preset("asphalt"), "grass": ground_preset("grass")}, 0.4,
@@ -301,15 +302,15 @@ def test_from_presets_equals_from_model_with_the_presets():
 
 def test_from_presets_refuses_unknown_names_and_bad_speeds():
     with pytest.raises(UnknownNameError, match=r"named 'lava', which has no preset; known grounds: \[.*'asphalt'"):
-        EnergyCost.from_presets(_preset_map(("asphalt", "lava")))
+        CostSpec().build(_preset_map(("asphalt", "lava")))
     with pytest.raises(InvalidParameterError, match="speed_mps must be a real number, got 'fast'"):
-        EnergyCost.from_presets(_preset_map(), speed_mps="fast")
+        CostSpec(speed_mps="fast").build(_preset_map())
     with pytest.raises(InvalidParameterError, match="unknown_ground is None"):
-        EnergyCost.from_presets(_preset_map(unknown=True), unknown_ground=None)
+        CostSpec(unknown_ground=None).build(_preset_map(unknown=True))
     with pytest.raises(UnknownNameError):
-        EnergyCost.from_presets(_preset_map(), robot="no such robot")
+        CostSpec(robot="no such robot").build(_preset_map())
     with pytest.raises(InvalidParameterError, match="terrain must be a TerrainMap"):
-        EnergyCost.from_presets(np.zeros((4, 4)))
+        CostSpec().build(np.zeros((4, 4)))
 
 
 # ----------------------------------------------------------------- queries

@@ -7,6 +7,7 @@ import pytest
 
 import terrain
 from planner import EnergyCost, energy_costmap
+from planner.cost_spec import CostSpec
 from planner.energy_costmap import COSTMAP_STATISTICS, EnergyCostmap, read_energy_geotiff, write_energy_geotiff
 from terrawatt_base.errors import FileFormatError, InvalidParameterError, UnknownNameError
 
@@ -17,7 +18,7 @@ def _per_metre(cost: EnergyCost, a, b) -> float:
 
 @pytest.mark.parametrize("statistic", COSTMAP_STATISTICS)
 def test_a_flat_cell_costs_the_level_energy_per_metre_in_every_statistic(flat_map, statistic):
-    cost = EnergyCost.from_presets(flat_map)
+    cost = CostSpec().build(flat_map)
     costmap = energy_costmap(cost, statistic=statistic)
     level = _per_metre(cost, (0.25, 0.25), (12.25, 0.25))
     assert costmap.energy_per_metre_j.shape == flat_map.shape and costmap.statistic == statistic
@@ -26,7 +27,7 @@ def test_a_flat_cell_costs_the_level_energy_per_metre_in_every_statistic(flat_ma
 
 
 def test_on_a_ramp_max_is_uphill_min_at_most_downhill_and_mean_the_average_over_headings(ramp_map):
-    cost = EnergyCost.from_presets(ramp_map)
+    cost = CostSpec().build(ramp_map)
     by = {s: energy_costmap(cost, statistic=s).energy_per_metre_j[10, 20] for s in COSTMAP_STATISTICS}
     centre = np.array([10.25, 5.25])
     uphill = _per_metre(cost, centre - [2.0, 0.0], centre + [2.0, 0.0])
@@ -42,7 +43,7 @@ def test_on_a_ramp_max_is_uphill_min_at_most_downhill_and_mean_the_average_over_
 
 
 def test_blocked_cells_are_nan(wall_map):
-    cost = EnergyCost.from_presets(wall_map)
+    cost = CostSpec().build(wall_map)
     costmap = energy_costmap(cost)
     np.testing.assert_array_equal(costmap.blocked, wall_map.obstacle)
     assert np.isfinite(costmap.energy_per_metre_j[~wall_map.obstacle]).all()
@@ -50,7 +51,7 @@ def test_blocked_cells_are_nan(wall_map):
 
 def test_cells_steeper_than_the_limit_are_blocked_too():
     tmap = terrain.procedural_map((40, 50), 1.0, seed=3)
-    cost = EnergyCost.from_presets(tmap, max_slope_rad=np.radians(8.0))
+    cost = CostSpec(max_slope_deg=8.0).build(tmap)
     costmap = energy_costmap(cost)
     assert (tmap.slope_rad > np.radians(8.0)).any()
     np.testing.assert_array_equal(costmap.blocked, cost.blocked)
@@ -60,7 +61,7 @@ def test_geotiff_round_trip_keeps_values_grid_crs_and_the_north_up_order(tmp_pat
     rasterio = pytest.importorskip("rasterio", reason="GeoTIFF needs the geo extra (rasterio)")
     tmap = terrain.procedural_map((30, 40), 2.0, seed=5, origin_xy_m=(512_000.0, 4_990_000.0))
     tmap.crs = "EPSG:32633"
-    costmap = energy_costmap(EnergyCost.from_presets(tmap, speed_mps=0.8), statistic="max")
+    costmap = energy_costmap(CostSpec(speed_mps=0.8).build(tmap), statistic="max")
     path = write_energy_geotiff(tmp_path / "energy.tif", costmap)
     back = read_energy_geotiff(path)
     np.testing.assert_array_equal(back.energy_per_metre_j, costmap.energy_per_metre_j.astype(np.float32))
@@ -76,14 +77,14 @@ def test_geotiff_round_trip_keeps_values_grid_crs_and_the_north_up_order(tmp_pat
 
 def test_blocked_cells_are_nodata_in_the_geotiff(tmp_path, wall_map):
     pytest.importorskip("rasterio", reason="GeoTIFF needs the geo extra (rasterio)")
-    costmap = energy_costmap(EnergyCost.from_presets(wall_map))
+    costmap = energy_costmap(CostSpec().build(wall_map))
     back = read_energy_geotiff(write_energy_geotiff(tmp_path / "wall.tif", costmap))
     np.testing.assert_array_equal(back.blocked, wall_map.obstacle)
     assert back.crs is None
 
 
 def test_bad_arguments_are_refused(tmp_path, flat_map):
-    cost = EnergyCost.from_presets(flat_map)
+    cost = CostSpec().build(flat_map)
     with pytest.raises(UnknownNameError, match="statistic must be one of"):
         energy_costmap(cost, statistic="median")
     with pytest.raises(InvalidParameterError, match="n_headings must be >= 2"):

@@ -9,6 +9,7 @@ import pytest
 
 from energy import PhysicsEnergyModel, ground_preset, robot_preset
 from planner import EnergyCost, Lattice, plan_route
+from planner.cost_spec import CostSpec
 from planner.heading_lattice import (
     HEADING_COUNT,
     HeadingWorkspace,
@@ -98,7 +99,7 @@ def test_a_slow_turning_robot_trades_drive_energy_for_fewer_turns():
 
 def test_direct_and_single_node_routes_are_candidates_and_bad_methods_are_refused():
     tmap = procedural_map((20, 20), 1.0, seed=1)
-    cost = EnergyCost.from_presets(tmap)
+    cost = CostSpec().build(tmap)
     lattice = Lattice(cost, 1)
     start = (5.5, 5.5)
     path = heading_shortest_path(lattice, start, (6.2, 5.9))  # neighbours: the straight segment

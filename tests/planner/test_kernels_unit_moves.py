@@ -7,7 +7,7 @@ import pytest
 from reach_samples import one_way_cost
 
 import terrain
-from planner import EnergyCost
+from planner.cost_spec import CostSpec
 
 
 @pytest.mark.parametrize("case", ["hilly", "offset", "steep", "example"])
@@ -17,14 +17,14 @@ def test_stride1_move_kernel_equals_the_lattice_kernel(case):
 
     assert np.array_equal(UNIT_HALF, LATTICE_OFFSETS[:8])
     if case == "hilly":
-        cost = EnergyCost.from_presets(terrain.procedural_map((45, 52), 1.0, seed=3, n_walls=2, obstacle_fraction=0.05))
+        cost = CostSpec().build(terrain.procedural_map((45, 52), 1.0, seed=3, n_walls=2, obstacle_fraction=0.05))
     elif case == "offset":  # odd cell size, far origin, steep ground: coordinates do not round like 1 m cells
         tmap = terrain.procedural_map((41, 37), 0.7, seed=5, origin_xy_m=(4321.5, -77.3), slope_deg=15.0, n_walls=1)
-        cost = EnergyCost.from_presets(tmap)
+        cost = CostSpec().build(tmap)
     elif case == "steep":  # moves undrivable uphill only: one direction inf, the other finite
         cost = one_way_cost(terrain.ramp_map((20, 24), 0.5, grade=0.12), max_uphill_grade=0.1)
     else:
-        cost = EnergyCost.from_presets(terrain.example_map())
+        cost = CostSpec().build(terrain.example_map())
     arr = cost.arrays
     rows, cols = cost.shape
     ref = lattice_weights(arr.cells, arr.grade_table, arr.geo, 1, 0, rows, cols, LATTICE_OFFSETS[:8])

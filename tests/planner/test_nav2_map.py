@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 import terrain
-from planner import EnergyCost, energy_costmap, write_nav2_map
+from planner import energy_costmap, write_nav2_map
+from planner.cost_spec import CostSpec
 from planner.nav2_map import (
     NAV2_FREE_PIXEL,
     NAV2_OCCUPIED_PIXEL,
@@ -71,7 +72,7 @@ def test_a_frame_origin_moves_the_yaml_origin(tmp_path, marked_map):
 @pytest.mark.parametrize("origin", [(1e308, 0.0), (0.0, -1e308), (10.0, 20.0 + 1.0e7 + 3.0), (-1e7, -1e7)])
 def test_a_frame_origin_far_from_the_map_is_refused_before_writing(tmp_path, marked_map, origin):
     """1e308 would be written into the YAML (or overflow to -inf); an origin is a point near the site."""
-    costmap = energy_costmap(EnergyCost.from_presets(marked_map))
+    costmap = energy_costmap(CostSpec().build(marked_map))
     with pytest.raises(InvalidParameterError, match=r"^frame_origin_xy_m \(.*\) lies .* m from the map \(x 10 to "
                                                     r"13\.5, y 20 to 22\.5 m\); a map frame origin other than \(0, 0\) "
                                                     r"must lie within 1e\+07 m of the map's bounds"):
@@ -99,7 +100,7 @@ def test_unknown_cells_are_205_and_nav2_reads_them_as_unknown(tmp_path, marked_m
 
 def test_with_a_cost_the_too_steep_cells_are_occupied_too(tmp_path):
     tmap = terrain.procedural_map((30, 40), 1.0, seed=3)
-    cost = EnergyCost.from_presets(tmap, max_slope_rad=np.radians(8.0))
+    cost = CostSpec(max_slope_deg=8.0).build(tmap)
     assert (cost.blocked & ~tmap.obstacle).any()
     back = read_nav2_map(write_nav2_map(tmp_path / "site.yaml", tmap, cost=cost))
     np.testing.assert_array_equal(back.occupied, cost.blocked)
@@ -114,7 +115,7 @@ def test_the_energy_costmap_is_written_in_raw_mode_proportional_to_energy(tmp_pa
     obstacle[5, 0] = True
     tmap = terrain.TerrainMap(np.zeros((6, 8)), 1.0, ground=ground, ground_names={0: "asphalt", 1: "sand"},
                               obstacle=obstacle)
-    costmap = energy_costmap(EnergyCost.from_presets(tmap))
+    costmap = energy_costmap(CostSpec().build(tmap))
     asphalt, sand = costmap.energy_per_metre_j[0, 0], costmap.energy_per_metre_j[0, 7]
     assert sand > asphalt
     back = read_nav2_map(write_nav2_costmap(tmp_path / "energy.yaml", costmap))
@@ -129,7 +130,7 @@ def test_the_energy_costmap_is_written_in_raw_mode_proportional_to_energy(tmp_pa
 
 
 def test_an_infinite_energy_is_read_as_unknown(tmp_path, flat_map):
-    costmap = energy_costmap(EnergyCost.from_presets(flat_map))
+    costmap = energy_costmap(CostSpec().build(flat_map))
     values = costmap.energy_per_metre_j.copy()
     values[1, 2] = np.inf
     edited = type(costmap)(values, costmap.grid, None, "max", costmap.speed_mps)
@@ -147,7 +148,7 @@ def test_bad_arguments_are_refused(tmp_path, marked_map):
     with pytest.raises(InvalidParameterError, match="must be a TerrainMap"):
         write_nav2_map(tmp_path / "site.yaml", marked_map.obstacle)
     with pytest.raises(InvalidParameterError, match="top_j_per_m"):
-        write_nav2_costmap(tmp_path / "e.yaml", energy_costmap(EnergyCost.from_presets(marked_map)), top_j_per_m=0)
+        write_nav2_costmap(tmp_path / "e.yaml", energy_costmap(CostSpec().build(marked_map)), top_j_per_m=0)
     assert list(tmp_path.iterdir()) == []
 
 

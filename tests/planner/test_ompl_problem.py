@@ -7,13 +7,13 @@ import pytest
 
 pytest.importorskip("ompl", reason="the OMPL planners need OMPL's Python bindings")
 
-from planner import EnergyCost  # noqa: E402
+from planner.cost_spec import CostSpec
 from planner.ompl import EnergyProblem  # noqa: E402
 
 
 @pytest.fixture
 def problem(wall_map):
-    cost = EnergyCost.from_presets(wall_map)
+    cost = CostSpec().build(wall_map)
     return EnergyProblem(cost.arrays, cost.min_energy_per_metre_j, np.array([5.5, 10.5]), np.array([35.5, 10.5]),
                          max_evaluations=100)
 

@@ -5,14 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner import EnergyCost, PlannerSettings, PlanningProblem, plan_route
+from planner import PlannerSettings, PlanningProblem, plan_route
+from planner.cost_spec import CostSpec
 from planner.planning import PLANNER_SEARCHES, PLANNERS
 from terrain import BlockedPositionError, InvalidParameterError, OutOfBoundsError, flat_map, wall_map
 
 
 @pytest.fixture(scope="module")
 def cost():
-    return EnergyCost.from_presets(wall_map((40, 40), 1.0, wall_col=20, gap_rows=(30, 34), ground="asphalt"))
+    return CostSpec().build(wall_map((40, 40), 1.0, wall_col=20, gap_rows=(30, 34), ground="asphalt"))
 
 
 def test_a_problem_holds_checked_read_only_points_and_knows_if_they_connect(cost):
@@ -21,7 +22,7 @@ def test_a_problem_holds_checked_read_only_points_and_knows_if_they_connect(cost
     assert p.terrain is cost.terrain and p.connected  # through the gap in the wall
     with pytest.raises(ValueError):
         p.start[0] = 0.0  # read-only
-    walled = EnergyCost.from_presets(wall_map((20, 20), 1.0, wall_col=10, gap_rows=(0, 0), ground="asphalt"))
+    walled = CostSpec().build(wall_map((20, 20), 1.0, wall_col=10, gap_rows=(0, 0), ground="asphalt"))
     assert not PlanningProblem(walled, (2.5, 2.5), (17.5, 2.5)).connected
 
 

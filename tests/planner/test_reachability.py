@@ -12,6 +12,7 @@ from scipy.sparse.csgraph import dijkstra
 
 import terrain
 from planner import EnergyCost, Lattice, reachability
+from planner.cost_spec import CostSpec
 from planner.reachability import lattice_move_energies
 from terrawatt_base.errors import BlockedPositionError, InvalidParameterError, OutOfBoundsError
 
@@ -109,14 +110,14 @@ def test_obstacle_cells_and_cells_cut_off_are_inf(hilly_cost, hilly_reach, wall_
     closed[:, 20] = True  # close the gap: the east half is cut off
     tmap = terrain.TerrainMap(wall_map.elevation_m, 1.0, ground=wall_map.ground, ground_names=wall_map.ground_names,
                               obstacle=closed)
-    reach = reachability(EnergyCost.from_presets(tmap), (5.5, 5.5), round_trip=True)
+    reach = reachability(CostSpec().build(tmap), (5.5, 5.5), round_trip=True)
     assert np.all(np.isinf(reach.forward_energy_j[:, 21:])) and np.all(np.isinf(reach.back_energy_j[:, 21:]))
     assert np.all(np.isfinite(reach.forward_energy_j[:, :20]))
     assert reach.reachable_area_m2 == 40 * 20
 
 
 def test_flat_ground_costs_the_same_both_ways_and_grows_with_distance(flat_map):
-    cost = EnergyCost.from_presets(flat_map)
+    cost = CostSpec().build(flat_map)
     reach = reachability(cost, (7.25, 4.75), round_trip=True)
     np.testing.assert_allclose(reach.forward_energy_j, reach.back_energy_j, rtol=1e-12)
     r, c = flat_map.rowcol(7.25, 4.75)
@@ -126,7 +127,7 @@ def test_flat_ground_costs_the_same_both_ways_and_grows_with_distance(flat_map):
 
 
 def test_on_a_ramp_uphill_costs_more_than_downhill(ramp_map):
-    cost = EnergyCost.from_presets(ramp_map)
+    cost = CostSpec().build(ramp_map)
     depot = (10.25, 5.25)
     reach = reachability(cost, depot, round_trip=True)
     r, c = ramp_map.rowcol(*depot)
@@ -166,7 +167,7 @@ def test_budget_mask_is_monotone_in_the_budget_and_the_reserve_shrinks_it(hilly_
 
 
 def test_move_energies_are_cached_on_the_cost(flat_map):
-    cost = EnergyCost.from_presets(flat_map)
+    cost = CostSpec().build(flat_map)
     w, first_s = lattice_move_energies(cost)
     again, cached_s = lattice_move_energies(cost)
     assert again is w and cached_s == 0.0 and first_s > 0.0
@@ -176,7 +177,7 @@ def test_move_energies_are_cached_on_the_cost(flat_map):
 
 # ---------------------------------------------------------------- bad input
 def test_depot_in_an_obstacle_or_outside_the_map_is_a_clear_error(wall_map):
-    cost = EnergyCost.from_presets(wall_map)
+    cost = CostSpec().build(wall_map)
     with pytest.raises(BlockedPositionError, match=r"depot \(20\.5, 5\.0\) m lies on a blocked cell"):
         reachability(cost, (20.5, 5.0))
     with pytest.raises(OutOfBoundsError, match="depot point .* outside the map"):
@@ -203,7 +204,7 @@ def test_depot_in_an_obstacle_or_outside_the_map_is_a_clear_error(wall_map):
     ],
 )
 def test_bad_budgets_and_flags_are_refused(flat_map, kwargs, message):
-    cost = EnergyCost.from_presets(flat_map)
+    cost = CostSpec().build(flat_map)
     with pytest.raises(InvalidParameterError, match=message):
         reachability(cost, (3.0, 3.0), **kwargs)
 

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from reach_samples import DEPOT, hilly_cost, hilly_reach  # noqa: F401  (fixtures)
 
-from planner import EnergyCost, Reachability, reachability
+from planner import Reachability, reachability
+from planner.cost_spec import CostSpec
 from terrawatt_base.errors import FileFormatError, FormatVersionError, InvalidParameterError, UnknownNameError
 
 
@@ -79,7 +80,7 @@ def test_geotiff_keeps_the_grid_and_crs(tmp_path, hilly_cost):
     rasterio = pytest.importorskip("rasterio", reason="GeoTIFF output needs the geo extra (rasterio)")
     tmap = hilly_cost.terrain.copy()
     tmap.crs = "EPSG:32633"
-    cost = EnergyCost.from_presets(tmap)
+    cost = CostSpec().build(tmap)
     reach = reachability(cost, DEPOT, budget_j=20_000.0, round_trip=True)
     path = reach.write_raster(tmp_path / "reach.tif")
     with rasterio.open(path) as src:

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 import terrain
-from planner import EnergyCost, plan_route
+from planner import plan_route
+from planner.cost_spec import CostSpec
 from planner.replay_bag import FORECAST_FIELDS, FORECAST_VALUES, read_replay_bag, write_replay_bag
 from planner.ros_export import write_route_bag
 from terrawatt_base.errors import DataError, FileFormatError, InvalidParameterError, OutOfBoundsError
@@ -259,7 +260,7 @@ def test_reading_what_is_not_a_replay_bag_fails_clearly(tmp_path, hills):
         read_replay_bag(other)
     assert len(read_replay_bag(other, topic_prefix="/robot1").decisions) == 3
     flat = terrain.flat_map((10, 10), 1.0)
-    planned = plan_route(flat, (1.5, 1.5), (8.5, 8.5), cost=EnergyCost.from_presets(flat), planner="lattice")
+    planned = plan_route(flat, (1.5, 1.5), (8.5, 8.5), cost=CostSpec().build(flat), planner="lattice")
     route_bag = write_route_bag(tmp_path / "route.mcap", planned, flat)
     with pytest.raises(FileFormatError, match="'/terrawatt/remaining_energy'"):
         read_replay_bag(route_bag)

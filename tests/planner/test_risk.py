@@ -8,6 +8,7 @@ import pytest
 from energy import InteractionLog, LogMeta, robot_preset
 from energy.budget import log_battery_power_w
 from planner import EnergyCost, RouteEnergyInterval, model_energy_cost, plan_route, risk_cost
+from planner.cost_spec import CostSpec
 from planner.risk import route_energy_interval
 from terrain import InvalidParameterError, TerrainMap
 
@@ -114,7 +115,7 @@ def test_spreads_add_linearly_within_a_ground_and_in_quadrature_across_grounds()
 
 
 def test_risk_and_interval_need_a_cost_with_spreads_and_a_level_in_the_open_unit_interval(flat_map, cost):
-    plain = EnergyCost.from_presets(flat_map)
+    plain = CostSpec().build(flat_map)
     assert not plain.has_interval
     with pytest.raises(InvalidParameterError, match="no standard-deviation tables"):
         risk_cost(plain, 0.9)

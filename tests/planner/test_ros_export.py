@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 import terrain
-from planner import EnergyCost, plan_route, write_route_bag
+from planner import plan_route, write_route_bag
+from planner.cost_spec import CostSpec
 from planner.ros_export import read_route_bag, route_pose_times_s
 from planner.route import evaluate_route
 from terrawatt_base.errors import FileFormatError, GridMismatchError, InvalidParameterError
@@ -23,7 +24,7 @@ ORIGIN_UTM = (512_000.0, 4_990_000.0)  # zone 33N
 def wall():
     """The wall map (a 1-cell wall at x in [20, 21) m open at y in [30, 34) m), its cost and a lattice route around it."""
     tmap = terrain.wall_map((40, 40), 1.0, wall_col=20, gap_rows=(30, 34), ground="asphalt")
-    cost = EnergyCost.from_presets(tmap)
+    cost = CostSpec().build(tmap)
     route = plan_route(tmap, (5.0, 5.0), (35.0, 5.0), cost=cost, planner="lattice")
     assert route.status == "exact" and route.waypoints_m.shape[0] >= 3 and route.turn_energy_j.sum() > 0
     return tmap, cost, route
@@ -34,7 +35,7 @@ def utm():
     """A hilly procedural map in UTM zone 33N, its cost and a route across it."""
     tmap = terrain.procedural_map((50, 60), 1.0, seed=7, origin_xy_m=ORIGIN_UTM, obstacle_fraction=0.0)
     tmap.crs = "EPSG:32633"
-    cost = EnergyCost.from_presets(tmap)
+    cost = CostSpec().build(tmap)
     x0, y0 = ORIGIN_UTM
     route = plan_route(tmap, (x0 + 5.5, y0 + 5.5), (x0 + 54.5, y0 + 44.5), cost=cost, planner="lattice")
     assert route.status == "exact"
@@ -91,7 +92,7 @@ def test_poses_are_stamped_with_the_planned_leaving_times(tmp_path, wall):
 
 def test_pose_times_on_a_straight_flat_route_are_length_over_speed():
     tmap = terrain.flat_map((10, 30), 1.0)
-    cost = EnergyCost.from_presets(tmap, speed_mps=0.5)
+    cost = CostSpec(speed_mps=0.5).build(tmap)
     route = evaluate_route(cost, [[0.5, 5.5], [10.5, 5.5], [25.5, 5.5]])  # straight on: no turn
     np.testing.assert_allclose(route_pose_times_s(route, cost), [0.0, 20.0, 50.0], rtol=1e-12, atol=1e-12)
 
@@ -186,9 +187,9 @@ def test_a_route_not_found_and_a_foreign_cost_are_refused(tmp_path, wall):
         write_route_bag(tmp_path / "r.mcap", route.replace(status="infeasible", waypoints_m=np.empty((0, 2)),
                                                            segment_energy_j=[], turn_energy_j=[]), tmap)
     with pytest.raises(GridMismatchError):
-        write_route_bag(tmp_path / "r.mcap", route, tmap, cost=EnergyCost.from_presets(terrain.flat_map((8, 8), 1.0)))
+        write_route_bag(tmp_path / "r.mcap", route, tmap, cost=CostSpec().build(terrain.flat_map((8, 8), 1.0)))
     with pytest.raises(InvalidParameterError, match="duration"):
-        write_route_bag(tmp_path / "r.mcap", route, tmap, cost=EnergyCost.from_presets(tmap, speed_mps=1.0))
+        write_route_bag(tmp_path / "r.mcap", route, tmap, cost=CostSpec(speed_mps=1.0).build(tmap))
 
 
 def test_reading_what_is_not_a_route_bag_fails_clearly(tmp_path, wall):

@@ -5,13 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner import EnergyCost, plan_route
+from planner import plan_route
+from planner.cost_spec import CostSpec
 from planner.ros_outputs import nav2_targets, write_ros_outputs
 
 
 @pytest.fixture
 def wall(wall_map):
-    cost = EnergyCost.from_presets(wall_map)
+    cost = CostSpec().build(wall_map)
     return wall_map, cost, plan_route(wall_map, (5.0, 5.0), (35.0, 5.0), cost=cost, planner="lattice")
 
 

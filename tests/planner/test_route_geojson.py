@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 import shapely.geometry
 
-from planner import EnergyCost, plan_route
+from planner import plan_route
+from planner.cost_spec import CostSpec
 from planner.plot import RouteLine, plot_routes, view_bounds
 from planner.route import evaluate_route
 from planner.route_geojson import GEOJSON_FORMAT_VERSION, routes_geojson, write_geojson
@@ -30,7 +31,7 @@ def utm_map():
 
 @pytest.fixture(scope="module")
 def utm_route(utm_map):
-    cost = EnergyCost.from_presets(utm_map)
+    cost = CostSpec().build(utm_map)
     x0, y0 = ORIGIN_UTM
     return plan_route(utm_map, (x0 + 5.5, y0 + 5.5), (x0 + 74.5, y0 + 52.5), cost=cost, planner="lattice")
 
@@ -78,7 +79,7 @@ def test_the_maps_own_crs_and_another_one(utm_map, utm_route):
 
 
 def test_a_map_without_crs_is_written_in_local_metres(wall_map):
-    cost = EnergyCost.from_presets(wall_map)
+    cost = CostSpec().build(wall_map)
     route = evaluate_route(cost, [[5.5, 5.5], [10.5, 20.5]])
     for where in (wall_map, wall_map.grid):
         gj = routes_geojson({"a": route}, where)

@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner import EnergyCost, price_route
+from planner import price_route
+from planner.cost_spec import CostSpec
 from planner.route import evaluate_route
 from planner.route_price import route_forecast_j, segment_forecasts_j
 from terrain import InvalidParameterError, UnknownNameError, flat_map
@@ -21,7 +22,7 @@ def test_segment_energies_integrate_the_power_between_the_planned_marks():
 
 
 def test_a_longer_route_and_a_turn_cost_more():
-    cost = EnergyCost.from_presets(flat_map((20, 40), 1.0, ground="asphalt"), speed_mps=0.5)
+    cost = CostSpec(speed_mps=0.5).build(flat_map((20, 40), 1.0, ground="asphalt"))
     short = route_forecast_j(cost, evaluate_route(cost, [[2.5, 5.5], [12.5, 5.5]]))
     long = route_forecast_j(cost, evaluate_route(cost, [[2.5, 5.5], [32.5, 5.5]]))
     assert 0.0 < short < long
@@ -48,7 +49,7 @@ WAYPOINTS = [[1.5, 1.5], [10.5, 1.5], [10.5, 8.5]]
 
 
 def test_price_route_reads_the_edges_or_the_profile_of_the_model_that_priced_the_map():
-    cost = EnergyCost.from_presets(flat_map((12, 16), 1.0, ground="asphalt"), speed_mps=0.5)
+    cost = CostSpec(speed_mps=0.5).build(flat_map((12, 16), 1.0, ground="asphalt"))
     edges = price_route(cost, WAYPOINTS)
     assert edges.mean_j == cost.path_energy_j(np.array(WAYPOINTS)) and edges.sd_j == 0.0
     assert edges.mean_j == price_route(cost, evaluate_route(cost, WAYPOINTS)).mean_j  # a Route or its waypoints
@@ -76,7 +77,7 @@ def test_price_route_carries_the_interval_where_the_map_has_one(corridor_map, kn
 def test_price_route_refuses_what_it_cannot_price(wall_map):
     from planner.route import empty_route
 
-    cost = EnergyCost.from_presets(wall_map)
+    cost = CostSpec().build(wall_map)
     with pytest.raises(InvalidParameterError, match="no standard-deviation tables"):
         price_route(cost, [[2.5, 2.5], [8.5, 2.5]], interval=True)
     with pytest.raises(UnknownNameError, match="how must be one of"):

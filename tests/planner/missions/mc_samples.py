@@ -5,7 +5,8 @@ from __future__ import annotations
 import pytest
 
 from energy import Battery
-from planner import EnergyCost, MissionDistributions, plan_route, simulate_missions_mc
+from planner import MissionDistributions, plan_route, simulate_missions_mc
+from planner.cost_spec import CostSpec
 
 NOMINAL = Battery(2.0, 24.0)
 NO_DASK = "Monte Carlo on a cluster needs the distributed extra (dask[distributed])"
@@ -19,7 +20,7 @@ def setup():
     import terrain
 
     tmap = terrain.flat_map((20, 40), 1.0, ground="asphalt")
-    cost = EnergyCost.from_presets(tmap)
+    cost = CostSpec().build(tmap)
     route = plan_route(tmap, (3.5, 5.5), (33.5, 14.5), cost=cost, planner="lattice")
     assert route.found
     return tmap, route

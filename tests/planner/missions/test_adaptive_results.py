@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from planner import EnergyCost
+from planner.cost_spec import CostSpec
 from planner.missions.adaptive_results import ADAPTIVE_STATUSES, AdaptiveResult, LegRecord, ReplanRecord, UpdateRecord
 from planner.route import evaluate_route
 from terrain import InvalidParameterError, flat_map
@@ -28,7 +28,7 @@ def _replan(after_leg: int, reason: str, predicted: float, changed: bool) -> Rep
 
 
 def _result(status: str = "completed", updates=(), replans=()) -> AdaptiveResult:
-    cost = EnergyCost.from_presets(flat_map((10, 10), 1.0, ground="asphalt"))
+    cost = CostSpec().build(flat_map((10, 10), 1.0, ground="asphalt"))
     route = evaluate_route(cost, [[0.5, 0.5], [8.5, 0.5]])
     legs = (_leg(0, 90.0, 100.0), _leg(1, 80.0, 100.0), _leg(2, 105.0, 100.0), _leg(3, 95.0, 100.0))
     series = np.linspace(0.0, 1.0, 30)

@@ -10,6 +10,7 @@ from mc_samples import FIXED, NO_DASK, NOMINAL, run_mc, setup  # noqa: F401  (fi
 
 from energy import Battery, PhysicsEnergyModel, TruthSimulator, ground_preset, robot_preset
 from planner import EnergyCost, MissionDistributions, plan_route, simulate_mission, simulate_missions_mc
+from planner.cost_spec import CostSpec
 from terrawatt_base.dask_client import Compute
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
@@ -164,7 +165,7 @@ def test_with_the_planning_cost_the_forecast_prices_the_driven_profile(setup):
     # in place); with it, with the physics forecast of the whole stop-turn-go profile, which is
     # dearer and lies within the drawn missions' spread around nominal parameters.
     tmap, route = setup
-    cost = EnergyCost.from_presets(tmap)
+    cost = CostSpec().build(tmap)
     edges = run_mc(setup, n=8, seed=3)
     profile = run_mc(setup, n=8, seed=3, cost=cost)
     assert edges.predicted_energy_j == route.energy_j

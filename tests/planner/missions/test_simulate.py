@@ -11,6 +11,7 @@ from simulate_samples import GROUNDS, ROBOT, clean_sim, flat, flat_mission  # no
 
 from energy import Battery, PhysicsEnergyModel, TruthSimulator, ground_preset
 from planner import EnergyCost, simulate_mission
+from planner.cost_spec import CostSpec
 from planner.route import evaluate_route
 from terrain import (
     DataError,
@@ -236,7 +237,7 @@ def test_diagnosing_mission_logs_names_what_the_truth_does_differently():
 
     tmap = flat_map((60, 60), 1.0, ground="grass")
     grass = {"grass": ground_preset("grass")}
-    cost = EnergyCost.from_presets(tmap, speed_mps=0.5)
+    cost = CostSpec(speed_mps=0.5).build(tmap)
     logs = []
     for k, wp in enumerate(([[5.5, 5.5], [30.5, 5.5], [45.5, 30.5]], [[50.5, 8.5], [10.5, 40.5], [40.5, 55.5]],
                             [[8.5, 30.5], [30.5, 30.5], [55.5, 55.5]])):
@@ -263,7 +264,7 @@ def test_diagnosing_example_map_missions_against_the_planning_physics_names_the_
     from terrain import example_map
 
     tmap = example_map()
-    cost = EnergyCost.from_presets(tmap, speed_mps=0.5)
+    cost = CostSpec(speed_mps=0.5).build(tmap)
     grounds = {g: ground_preset(g) for g in tmap.ground_names.values()}
     logs = []
     for k, (start, goal) in enumerate((((10, 10), (40, 70)), ((30, 20), (80, 60)), ((5, 60), (62, 36))) * 2):

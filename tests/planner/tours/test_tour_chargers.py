@@ -7,22 +7,28 @@ import json
 
 import numpy as np
 import pytest
-
-from energy import Battery
-from planner import EnergyCost
-from planner.tours import (TourChargers, TourProblem, TourRobot, TourSites, plan_tour, price_pairs,
-                           read_tour_chargers_csv, simulate_tours_mc)
-from planner.tours.tour import TOO_FAR
-from terrain import BlockedPositionError, DataError, InvalidParameterError, OutOfBoundsError, TerrainMap, flat_map
-
 from tour_samples import hills_cost, with_interval  # noqa: F401  (fixture)
 
+from energy import Battery
+from planner.cost_spec import CostSpec
+from planner.tours import (
+    TourChargers,
+    TourProblem,
+    TourRobot,
+    TourSites,
+    plan_tour,
+    price_pairs,
+    read_tour_chargers_csv,
+    simulate_tours_mc,
+)
+from planner.tours.tour import TOO_FAR
+from terrain import BlockedPositionError, DataError, InvalidParameterError, OutOfBoundsError, TerrainMap, flat_map
 
 
 @pytest.fixture(scope="module")
 def corridor():
     """60 m x 20 m, flat, with a spread: a depot at the west end, a site near it, one far east, a charger between."""
-    cost = with_interval(EnergyCost.from_presets(flat_map((20, 60), 1.0)))
+    cost = with_interval(CostSpec().build(flat_map((20, 60), 1.0)))
     sites = TourSites(("near", "far"), [[10.0, 10.0], [55.0, 10.0]], value=[1.0, 5.0])
     robot = TourRobot(Battery(0.09, 24.0, min_reserve_pct=20.0), (2.0, 10.0))
     return cost, sites, robot
@@ -157,7 +163,7 @@ def test_bad_chargers_raise_the_librarys_errors(corridor, tmp_path):
         plan_tour(cost, sites, robot, chargers=TourChargers(("out",), [[30.0, 40.0]]))
     walled = TerrainMap(np.zeros((20, 60)), 1.0, obstacle=np.pad(np.ones((2, 2), bool), ((9, 9), (29, 29))))
     with pytest.raises(BlockedPositionError, match="charger 'rock' is on an obstacle"):
-        plan_tour(EnergyCost.from_presets(walled), sites, robot, chargers=TourChargers(("rock",), [[30.0, 10.0]]))
+        plan_tour(CostSpec().build(walled), sites, robot, chargers=TourChargers(("rock",), [[30.0, 10.0]]))
     with pytest.raises(InvalidParameterError, match="'far' is both"):
         plan_tour(cost, sites, robot, chargers=TourChargers(("far",), [[30.0, 10.0]]))
     with pytest.raises(InvalidParameterError, match="solver 'pyvrp' cannot stop at charging points"):

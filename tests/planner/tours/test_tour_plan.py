@@ -11,6 +11,7 @@ from tour_samples import hills_cost, hills_map, ridge_map, with_interval  # noqa
 
 from energy import Battery
 from planner import EnergyCost
+from planner.cost_spec import CostSpec
 from planner.tours import TourProblem, TourRobot, TourSites, plan_tour, price_pairs
 from planner.tours.solver import solve_pyvrp
 from planner.tours.tour import NOT_WORTH_IT, TOO_FAR
@@ -60,7 +61,7 @@ def test_the_tours_value_equals_the_exhaustive_optimum(hills_cost, n_sites, n_ro
 
 
 def test_a_higher_risk_level_visits_no_more():
-    cost = with_interval(EnergyCost.from_presets(hills_map()), rel_sd=0.3)
+    cost = with_interval(CostSpec().build(hills_map()), rel_sd=0.3)
     rng = np.random.default_rng(3)
     sites = TourSites(tuple(f"s{k}" for k in range(7)), rng.uniform(3.0, 37.0, size=(7, 2)))
     robot = TourRobot(Battery(0.1, 24.0), (20.0, 20.0))
@@ -71,7 +72,7 @@ def test_a_higher_risk_level_visits_no_more():
 def test_uphill_and_downhill_priced_apart_choose_the_cheaper_direction():
     """Over a ridge a loop costs another energy each way round; a symmetric cost prices both the same, so it
     cannot prefer the cheap direction and, with a tight battery, believes the loop does not fit."""
-    cost = EnergyCost.from_presets(ridge_map())
+    cost = CostSpec().build(ridge_map())
     sites = TourSites(("west", "east"), [[4.5, 36.5], [36.5, 36.5]])
     depot = (4.5, 4.5)
     prices = price_pairs(cost, np.vstack([depot, sites.xy_m]), ("depot", *sites.names))
@@ -93,7 +94,7 @@ def test_uphill_and_downhill_priced_apart_choose_the_cheaper_direction():
 
 
 def test_a_battery_that_reaches_no_site_answers_nothing_reachable():
-    cost = EnergyCost.from_presets(flat_map((40, 40), 1.0))
+    cost = CostSpec().build(flat_map((40, 40), 1.0))
     sites = TourSites(("a", "b"), [[30.0, 30.0], [35.0, 5.0]])
     res = plan_tour(cost, sites, TourRobot(Battery(0.001, 24.0), (2.0, 2.0)))
     assert res.status == "nothing reachable" and res.value == 0
@@ -102,6 +103,6 @@ def test_a_battery_that_reaches_no_site_answers_nothing_reachable():
 
 
 def test_sites_all_worth_nothing_are_a_plan_without_tours():
-    cost = EnergyCost.from_presets(flat_map((20, 20), 1.0))
+    cost = CostSpec().build(flat_map((20, 20), 1.0))
     res = plan_tour(cost, TourSites(("a",), [[5.0, 5.0]], value=[0.0]), TourRobot(Battery(1.0, 24.0), (2.0, 2.0)))
     assert res.status == "planned" and res.visited == () and res.left_out == {"a": NOT_WORTH_IT}

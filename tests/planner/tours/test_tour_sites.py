@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from energy import Battery
-from planner import EnergyCost
+from planner.cost_spec import CostSpec
 from planner.tours import TourRobot, TourSites, plan_tour, read_tour_sites_csv
 from terrain import DataError, InvalidParameterError, TerrainMap, flat_map
 from terrain.georef import xy_to_lonlat
@@ -17,7 +17,7 @@ def test_a_site_off_the_map_or_on_an_obstacle_is_an_error_row_and_the_others_are
     obstacle[10:14, 10:14] = True
     tmap = TerrainMap(np.zeros((30, 30)), 1.0, ground=np.zeros((30, 30), int), ground_names={0: "asphalt"},
                       obstacle=obstacle)
-    cost = EnergyCost.from_presets(tmap)
+    cost = CostSpec().build(tmap)
     sites = TourSites(("ok", "off", "rock", "ok2"), [[5.0, 5.0], [45.0, 5.0], [11.5, 11.5], [20.0, 25.0]])
     res = plan_tour(cost, sites, TourRobot(Battery(1.0, 24.0), (2.0, 2.0)))
     assert set(res.errors) == {"off", "rock"}
@@ -44,7 +44,7 @@ def test_bad_sites_raise_the_librarys_errors(tmp_path):
     csv.write_text("name,x_m,y_m,value\na,1,1,lots\n")
     with pytest.raises(DataError, match="line 2: column 'value' is 'lots'"):
         read_tour_sites_csv(csv)
-    cost = EnergyCost.from_presets(flat_map((20, 20), 1.0))
+    cost = CostSpec().build(flat_map((20, 20), 1.0))
     with pytest.raises(InvalidParameterError, match="risk 0.2 lies below the median"):
         plan_tour(cost, TourSites(("a",), [[5.0, 5.0]]), TourRobot(Battery(1.0, 24.0), (2.0, 2.0)), risk=0.2)
     twins = [TourRobot(Battery(1.0, 24.0), (2.0, 2.0), "r")] * 2

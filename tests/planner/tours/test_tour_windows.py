@@ -11,6 +11,7 @@ from tour_samples import hills_cost, ridge_map  # noqa: F401  (fixture)
 
 from energy import Battery
 from planner import EnergyCost
+from planner.cost_spec import CostSpec
 from planner.tours import TourProblem, TourRobot, TourSites, plan_tour, price_pairs, read_tour_sites_csv
 from planner.tours.tour import NOT_WORTH_IT, OUTSIDE_WINDOW, TOO_FAR, TOO_LONG
 from terrain import DataError, InvalidParameterError, flat_map
@@ -85,7 +86,7 @@ def test_the_tours_value_with_windows_equals_the_exhaustive_optimum(hills_cost, 
 def test_a_window_that_rules_out_the_cheap_order_changes_the_order():
     """Over the ridge the loop is cheaper east first; a window on the west site that closes before the east-first
     loop can get there makes the robot go west first, the dear way round."""
-    cost = EnergyCost.from_presets(ridge_map())
+    cost = CostSpec().build(ridge_map())
     xy, depot = [[4.5, 36.5], [36.5, 36.5]], (4.5, 4.5)
     open_ = plan_tour(cost, TourSites(("west", "east"), xy), TourRobot(Battery(5.0, 24.0), depot))
     assert open_.tours[0].sites == ("east", "west")
@@ -99,7 +100,7 @@ def test_a_window_that_rules_out_the_cheap_order_changes_the_order():
 
 
 def test_a_site_whose_window_closes_before_any_robot_arrives_is_left_out_as_such():
-    cost = EnergyCost.from_presets(flat_map((40, 40), 1.0))
+    cost = CostSpec().build(flat_map((40, 40), 1.0))
     sites = TourSites(("near", "shut", "far", "sliver"), [[10.0, 10.0], [30.0, 10.0], [39.0, 39.0], [10.0, 20.0]],
                       service_time_s=[30.0, 0.0, 0.0, 0.0],
                       time_window_s=[(100.0, 200.0), (0.0, 20.0), None, (300.2, 300.7)])
@@ -166,7 +167,7 @@ def test_the_ortools_path_keeps_the_windows_and_finds_the_same_optimum(hills_cos
 
 
 def test_a_robots_longest_tour_bounds_its_sites():
-    cost = EnergyCost.from_presets(flat_map((40, 40), 1.0))
+    cost = CostSpec().build(flat_map((40, 40), 1.0))
     sites = TourSites(("a", "b", "far"), [[10.0, 2.0], [2.0, 10.0], [38.0, 38.0]], value=[2.0, 1.0, 5.0],
                       service_time_s=[30.0, 30.0, 0.0])
     free = plan_tour(cost, sites, TourRobot(Battery(1.0, 24.0), (2.0, 2.0)))
@@ -181,7 +182,7 @@ def test_a_robots_longest_tour_bounds_its_sites():
 
 
 def test_waiting_for_a_window_costs_the_robots_standby_power():
-    cost = EnergyCost.from_presets(flat_map((40, 40), 1.0))
+    cost = CostSpec().build(flat_map((40, 40), 1.0))
     sites = TourSites(("late",), [[20.0, 5.0]], time_window_s=[(300.0, 900.0)])
     idle = TourRobot(Battery(0.2, 24.0), (5.0, 5.0))
     busy = TourRobot(Battery(0.2, 24.0), (5.0, 5.0), standby_power_w=20.0)

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from planner import EnergyCost
+from planner.cost_spec import CostSpec
 from terrain import TerrainMap
 
 __all__ = ["with_interval", "hills_map", "hills_cost", "ridge_map"]
@@ -28,7 +29,7 @@ def hills_map() -> TerrainMap:
 
 @pytest.fixture(scope="module")
 def hills_cost() -> EnergyCost:
-    return with_interval(EnergyCost.from_presets(hills_map()))
+    return with_interval(CostSpec().build(hills_map()))
 
 
 def ridge_map() -> TerrainMap:
