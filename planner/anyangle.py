@@ -152,7 +152,8 @@ def anyangle_path(
     --------
     >>> from planner import EnergyCost
     >>> from terrain import flat_map
-    >>> cost = EnergyCost.from_presets(flat_map((30, 40), 1.0))
+    >>> from planner import CostSpec
+    >>> cost = CostSpec().build(flat_map((30, 40), 1.0))
     >>> path = anyangle_path(cost, (2.0, 3.0), (37.0, 21.0))
     >>> path.waypoints_m.tolist()  # level ground: the straight line, at any angle
     [[2.0, 3.0], [37.0, 21.0]]

@@ -147,7 +147,7 @@ def plan_batch(
     Examples
     --------
     >>> from terrain import flat_map
-    >>> cost = EnergyCost.from_presets(flat_map((20, 20), 1.0))
+    >>> cost = CostSpec().build(flat_map((20, 20), 1.0))
     >>> res = plan_batch(cost, [[2.0, 2.0, 15.0, 12.0], [15.0, 12.0, 2.0, 2.0]])
     >>> [r.status for r in res.rows], round(res.rows[0].length_m, 2)
     (['exact', 'exact'], 16.4)

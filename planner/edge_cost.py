@@ -473,7 +473,8 @@ class EnergyCost:
         Examples
         --------
         >>> from terrain import flat_map
-        >>> cost = EnergyCost.from_presets(flat_map((8, 8), 1.0), speed_mps=0.5)
+        >>> from planner import CostSpec
+        >>> cost = CostSpec(speed_mps=0.5).build(flat_map((8, 8), 1.0))
         >>> cost.ground_labels
         ('asphalt',)
         """

@@ -164,7 +164,8 @@ def energy_costmap(cost: EnergyCost, *, statistic: str = "mean",
     >>> from planner import EnergyCost
     >>> from terrain import flat_map
     >>> tmap = flat_map((4, 5), 1.0)
-    >>> cost = EnergyCost.from_presets(tmap)
+    >>> from planner import CostSpec
+    >>> cost = CostSpec().build(tmap)
     >>> costmap = energy_costmap(cost)
     >>> per_metre = float(cost.segment_energy_j([[0.5, 0.5]], [[4.5, 0.5]])[0]) / 4.0
     >>> bool(abs(costmap.energy_per_metre_j[2, 3] - per_metre) < 1e-9 * per_metre)

@@ -99,7 +99,8 @@ class PlanningProblem:
     --------
     >>> from planner import EnergyCost
     >>> from terrain import flat_map
-    >>> problem = PlanningProblem(EnergyCost.from_presets(flat_map((20, 30), 1.0)), (2.5, 2.5), (27.5, 17.5))
+    >>> from planner import CostSpec
+    >>> problem = PlanningProblem(CostSpec().build(flat_map((20, 30), 1.0)), (2.5, 2.5), (27.5, 17.5))
     >>> problem.connected, problem.start.tolist()
     (True, [2.5, 2.5])
     """

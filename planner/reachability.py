@@ -151,7 +151,8 @@ def reachability(
     --------
     >>> from terrain import ramp_map
     >>> from planner import EnergyCost
-    >>> cost = EnergyCost.from_presets(ramp_map((20, 40), 1.0, grade=0.05))
+    >>> from planner import CostSpec
+    >>> cost = CostSpec().build(ramp_map((20, 40), 1.0, grade=0.05))
     >>> reach = reachability(cost, (20.0, 10.0), round_trip=True)
     >>> bool((reach.round_trip_energy_j >= reach.forward_energy_j).all())
     True

@@ -131,7 +131,7 @@ def plan_tour(
     --------
     >>> from energy import Battery
     >>> from terrain import flat_map
-    >>> cost = EnergyCost.from_presets(flat_map((40, 40), 1.0))
+    >>> cost = CostSpec().build(flat_map((40, 40), 1.0))
     >>> sites = TourSites(("a", "b", "far"), [[10.0, 10.0], [20.0, 10.0], [39.0, 39.0]], value=[1, 2, 5])
     >>> res = plan_tour(cost, sites, TourRobot(Battery(0.1, 24.0), (2.0, 2.0)))
     >>> res.tours[0].value, sorted(res.left_out)
