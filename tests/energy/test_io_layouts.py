@@ -244,7 +244,7 @@ def test_a_folder_of_csv_logs_of_another_layout_reads_as_read_csv_log_reads_each
     for name in ("a.csv", "b.csv"):
         shutil.copy(GENERIC, tmp_path / name)
     logs = read_logs(tmp_path, csv=CsvLayout(**GENERIC_LAYOUT), require_currents=True)
-    one = read_csv_log(GENERIC, GENERIC_LAYOUT["columns"], GENERIC_LAYOUT["units"])
+    one = read_csv_log(GENERIC, CsvLayout(GENERIC_LAYOUT["columns"], GENERIC_LAYOUT["units"]))
     assert len(logs) == 2
     for log in logs:
         assert log.time_s.tolist() == one.time_s.tolist() and log.current_left_a.tolist() == one.current_left_a.tolist()
@@ -265,7 +265,7 @@ def test_a_csv_of_another_layout_without_its_map_says_how_to_give_one(tmp_path):
      r"several fields to one column: \{'i': \['current_left', 'current_right'\]\}"),
     ({"columns": {"time": "t"}, "units": {"v": "m/s"}}, UnknownNameError, r"field\(s\) \['v'\] that are not"),
     ({"columns": {"time": "t"}, "units": {"time": "fortnights"}}, UnknownNameError, "unit 'fortnights'"),
-    ({"units": {"time": "ms"}}, InvalidParameterError, "units need columns"),
+    ({"units": {"time": "fortnights"}}, UnknownNameError, "unit 'fortnights'"),  # units of the default columns
     ({"rates": "double"}, UnknownNameError, "rates must be one of"),
     ({"columns": "time=t"}, InvalidParameterError, "columns must be a mapping of field names, got 'str'"),
     ({"columns": {"time": "t"}, "units": "ms"}, InvalidParameterError, "units must be a mapping"),
