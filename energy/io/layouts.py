@@ -34,7 +34,6 @@ def read_logs(
     robot: str = "unknown",
     ground_label: str | None = None,
     cleaning: LogCleaning | None = None,
-    name: str = "path",
 ) -> list[InteractionLog]:
     """Every interaction log at ``path``, whatever its layout.
 
@@ -66,8 +65,6 @@ def read_logs(
     cleaning : LogCleaning, optional
         Repairs, gaps and unit checks of every reader (:class:`~energy.io.cleaning.LogCleaning`;
         see :mod:`energy.io`).
-    name : str
-        The name of ``path`` in messages (the CLI passes ``"--data"``).
 
     Returns
     -------
@@ -94,7 +91,6 @@ def read_logs(
             current_topics=("/status",), current_fields=("left_driver_current", "right_driver_current"),
             voltage_field="battery_voltage"))
     """
-    check_text("name", name)
     if ground_label is not None:
         check_text("ground_label", ground_label)
     require_currents = check_bool("require_currents", require_currents)
@@ -110,10 +106,11 @@ def read_logs(
     root = Path(path)
     common = dict(cleaning=LogCleaning.check(cleaning))
     if not root.exists():
-        raise DataError(f"{name} {str(root)!r} does not exist; expected a log file or a folder of logs")
+        raise DataError(f"path {str(root)!r} does not exist; expected a log file or a folder of logs",
+                        parameter="path")
     if not (root.is_file() or root.is_dir()):  # a FIFO, a socket, a device: reading would block or never end
-        raise DataError(f"{name} {str(root)!r} is neither a regular file nor a folder; expected a log file or a "
-                        "folder of logs")
+        raise DataError(f"path {str(root)!r} is neither a regular file nor a folder; expected a log file or a "
+                        "folder of logs", parameter="path")
 
     def one(item: Path, label: str | None = ground_label) -> InteractionLog:
         if LOG_SUFFIXES.get(item.suffix.lower()) == "csv":
@@ -122,13 +119,13 @@ def read_logs(
 
     if root.is_file():
         if root.suffix.lower() not in LOG_SUFFIXES:
-            raise DataError(f"{name} {str(root)!r}: unknown log file type {root.suffix!r}; expected one of "
-                            f"{sorted(LOG_SUFFIXES)!r} or a folder")
+            raise DataError(f"path {str(root)!r}: unknown log file type {root.suffix!r}; expected one of "
+                            f"{sorted(LOG_SUFFIXES)!r} or a folder", parameter="path")
         items = [(root, ground_label)]
     elif (root / "metadata.yaml").exists():
         items = [(root, ground_label)]  # a ROS 2 bag folder
     elif any(sub.is_dir() and any(sub.glob("imu_*.csv")) for sub in root.iterdir()):
-        _no_csv_layout(csv, f"{name} {str(root)!r} is read as a BorealTC folder (GROUND/imu_NN.csv + pro_NN.csv), "
+        _no_csv_layout(csv, f"path {str(root)!r} is read as a BorealTC folder (GROUND/imu_NN.csv + pro_NN.csv), "
                             f"whose columns, units and track width ({BOREALTC_TRACK_WIDTH_M:g} m) are the format's own")
         return _required(read_borealtc(root, grounds=grounds, **common), require_currents)
     else:
@@ -136,17 +133,18 @@ def read_logs(
         for sub in sorted(p for p in root.iterdir() if p.is_dir() and not (p / "metadata.yaml").exists()):
             items += [(p, sub.name.lower()) for p in _log_items(sub)]  # a ground folder
         if not items:
-            raise DataError(f"{name} {str(root)!r} holds no logs: expected BorealTC ground folders, log files "
-                            f"({', '.join(sorted(LOG_SUFFIXES))}), ROS 2 bag folders, or ground folders of them")
+            raise DataError(f"path {str(root)!r} holds no logs: expected BorealTC ground folders, log files "
+                            f"({', '.join(sorted(LOG_SUFFIXES))}), ROS 2 bag folders, or ground folders of them",
+                            parameter="path")
     if not any(LOG_SUFFIXES.get(p.suffix.lower()) == "csv" for p, _ in items):
-        _no_csv_layout(csv, f"{name} {str(root)!r} holds no CSV log, only bags (read with the bag options)")
+        _no_csv_layout(csv, f"path {str(root)!r} holds no CSV log, only bags (read with the bag options)")
     logs = [one(p, label) for p, label in items]
     if wanted is not None:
         labels = sorted({str(log.meta.ground_label) for log in logs})
         unknown = [g for g in wanted if g not in {label.lower() for label in labels}]
         if unknown:
-            raise UnknownNameError(f"grounds {unknown!r}: no log at {name} {str(root)!r} has that ground label; "
-                                   f"the logs' labels: {labels!r}")
+            raise UnknownNameError(f"grounds {unknown!r}: no log at path {str(root)!r} has that ground label; "
+                                   f"the logs' labels: {labels!r}", parameter="path")
         logs = [log for log in logs if log.meta.ground_label is not None and log.meta.ground_label.lower() in wanted]
     return _required(logs, require_currents)
 
@@ -160,7 +158,7 @@ def _no_csv_layout(csv: CsvLayout, why: str) -> None:
     got = ", ".join(f"{k}={v!r}" for k, v in given.items() if v and v != getattr(default, k))
     raise InvalidParameterError(
         f"csv (--csv-columns, --csv-units, --csv-rates, --track-width) applies to CSV logs only, and {why}; give no "
-        f"CSV layout for them (got {got})")
+        f"CSV layout for them (got {got})", parameter="path")
 
 
 def _log_items(folder: Path) -> list[Path]:

@@ -114,3 +114,14 @@ def test_ignored_csv_flags_exit_2_with_one_line(tmp_path, capsys, flags):
     rc = main(["train", "--model", "physics", *[paths.get(f, f) for f in flags], "--out", str(tmp_path / "m")])
     assert rc == EXIT_BAD_INPUT
     assert "--track-width" in one_line_error(capsys) and not (tmp_path / "m").exists()
+
+
+def test_the_path_the_library_names_is_said_as_the_flag_that_gave_it(tmp_path):
+    from terrain import DataError
+
+    args = _parse("--data", str(tmp_path / "missing"))
+    with pytest.raises(DataError, match=r"^--data '.*missing' does not exist"):
+        logs_from_args(args, require_currents=False)
+    args.calibration_data = tmp_path / "gone"
+    with pytest.raises(DataError, match=r"^--calibration-data '.*gone' does not exist"):
+        logs_from_args(args, require_currents=False, flag="--calibration-data")

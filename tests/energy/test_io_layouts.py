@@ -123,8 +123,9 @@ def test_ground_folders_and_a_mixed_folder_of_bags(bag_layouts):
 
 
 def test_bad_paths_and_arguments(tmp_path, layouts):
-    with pytest.raises(DataError, match=r"--data '.*missing' does not exist"):
-        read_logs(tmp_path / "missing", name="--data")
+    with pytest.raises(DataError, match=r"^path '.*missing' does not exist") as err:
+        read_logs(tmp_path / "missing")
+    assert err.value.parameter == "path"  # the command line says it as its flag (--data)
     (tmp_path / "x.txt").write_text("x")
     with pytest.raises(DataError, match=r"unknown log file type '.txt'; expected one of \['.bag'"):
         read_logs(tmp_path / "x.txt")
@@ -290,10 +291,10 @@ def test_a_csv_layout_for_a_borealtc_folder_is_refused_not_ignored(kwargs, given
     from energy.io import CsvLayout
 
     with pytest.raises(InvalidParameterError, match=(
-            r"^csv \(--csv-columns, --csv-units, --csv-rates, --track-width\) applies to CSV logs only, and --data "
+            r"^csv \(--csv-columns, --csv-units, --csv-rates, --track-width\) applies to CSV logs only, and path "
             r"'.*borealtc' is read as a BorealTC folder \(GROUND/imu_NN\.csv \+ pro_NN\.csv\), whose columns, units "
             r"and track width \(0\.555 m\) are the format's own; give no CSV layout for them \(got " + given)):
-        read_logs(FIXTURES, csv=CsvLayout(**kwargs), name="--data")
+        read_logs(FIXTURES, csv=CsvLayout(**kwargs))
     assert len(read_logs(FIXTURES, csv=CsvLayout())) == len(read_borealtc(FIXTURES))  # the default layout: no layout
 
 
