@@ -393,37 +393,11 @@ def coarse_to_fine_in_memory(
     *,
     compare: bool = False,
 ) -> CoarseToFine:
-    """Plan on a downsampled cost, then at full resolution inside a corridor around the coarse route.
+    """:func:`planner.plan_coarse_to_fine` on a map in memory (its full-resolution ``cost``): module docstring.
 
-    The map-in-memory branch of :func:`planner.plan_coarse_to_fine` (module docstring).
-
-    Parameters
-    ----------
-    cost : EnergyCost
-        The full-resolution cost.
-    start_xy_m, goal_xy_m : (float, float)
-        Points on the map (m).
-    options : CoarseOptions
-        The factor and corridor (the options of windowed reads do not apply).
-    compare : bool
-        Also compute the full-resolution 1-cell lattice optimum (builds the whole lattice:
-        the expensive step this function avoids) and the ratio.
-
-    Returns
-    -------
-    CoarseToFine
-        The route (status ``"exact"``, or ``"infeasible"`` when not even the whole map
-        joins start and goal), the coarse route, corridor, times and, if compared, the ratio.
-
-    Raises
-    ------
-    InvalidParameterError
-        ``cost`` not an EnergyCost, ``options`` not a CoarseOptions, a factor leaving fewer than
-        2 x 2 coarse cells, bad points, start equals goal.
-    OutOfBoundsError
-        A point outside the map.
-    BlockedPositionError
-        A point on an obstacle or on ground steeper than ``cost.max_slope_rad``.
+    ``options`` gives the factor and corridor; ``compare`` also computes the full-resolution
+    1-cell lattice optimum (the whole lattice: the expensive step this avoids) and the ratio.
+    Raises as :func:`planner.plan_coarse_to_fine`.
     """
     if not isinstance(cost, EnergyCost):
         raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")

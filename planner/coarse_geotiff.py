@@ -204,55 +204,23 @@ def coarse_to_fine_windowed(
     *,
     cost_from: CostBuilder | None = None,
 ) -> CoarseToFine:
-    """Coarse-to-fine planning on a GeoTIFF DEM read by windows, never whole (module docstring).
+    """:func:`planner.plan_coarse_to_fine` on a GeoTIFF DEM read by windows, never whole (module docstring).
 
-    The GeoTIFF branch of :func:`planner.plan_coarse_to_fine`.
+    ``path``: a DEM in metres (one band, or ``options.band``) without nodata cells (windows fill
+    nothing). ``options``: factor, corridor, the coarse stage's tile side (``window_cells``:
+    memory holds one tile, about 100 bytes per cell priced, plus the coarse grid) and the fine
+    windows' budget (``fine_window_budget_cells``). ``cost_from``: ``TerrainMap -> EnergyCost``
+    applied to each window, pricing every window alike (e.g. ``functools.partial(
+    EnergyCost.from_presets, robot="jackal")``; default :meth:`EnergyCost.from_presets`).
 
-    Parameters
-    ----------
-    path : str or path-like
-        GeoTIFF DEM in metres (one band, or ``options.band``), without nodata cells (windows
-        fill nothing: fill it first).
-    start_xy_m, goal_xy_m : (float, float)
-        Points on the map (m, the map's CRS).
-    options : CoarseOptions
-        The factor and corridor, the coarse stage's tile side (``window_cells``: memory holds
-        one tile, about 100 bytes per cell priced, plus the coarse grid), the fine windows'
-        budget (``fine_window_budget_cells``: a corridor whose bounding window is bigger is
-        followed in chained windows) and the band.
-    cost_from : callable, optional
-        ``TerrainMap -> EnergyCost``, applied to each window (a georeferenced part of the
-        map); it must price every window with the same tables, as a preset or model does
-        (e.g. ``functools.partial(EnergyCost.from_presets, robot="jackal", speed_mps=0.8)``).
-        Default :meth:`EnergyCost.from_presets` (husky, 0.5 m/s, 20 degrees, unknown ground
-        priced as gravel).
-
-    Returns
-    -------
-    CoarseToFine
-        As for a map in memory (``optimum_j`` NaN: no comparison, it needs the whole map),
-        with ``fine_window_cells`` the full-resolution cells the fine stage read and
-        ``fine_windows`` its windows. ``coarse_time_s`` includes reading and pricing the
-        tiles, ``fine_time_s`` reading and pricing the fine windows. ``fine_map`` is the
-        window searched, None when the windows were chained (no one window holds the route).
-
-    Raises
-    ------
-    FileFormatError, UnitError
-        As :func:`terrain.read_geotiff` for the file, its band and georeferencing.
-    NodataError
-        A window read holds nodata / NaN cells.
-    InvalidParameterError
-        ``cost_from`` not callable, not returning an EnergyCost on the window, or tables that
-        differ between windows; a fine window budget too small for a window of the corridor;
-        bad points; start equals goal; a coarse grid under 2 x 2.
-    OutOfBoundsError
-        A point outside the map.
-    BlockedPositionError
-        A point on an obstacle or on ground steeper than the cost's slope limit.
-    PlanningError
-        The corridor holds no route (or the coarse map none) and the whole map exceeds the
-        budget, so the whole-map fallback cannot run.
+    Returns a :class:`CoarseToFine` (``optimum_j`` NaN: no comparison without the whole map)
+    whose ``fine_window_cells`` / ``fine_windows`` say what the fine stage read (its times
+    include reading and pricing) and whose ``fine_map`` is the window searched (None when the
+    windows were chained). Raises as :func:`planner.plan_coarse_to_fine`: FileFormatError /
+    UnitError / NodataError for the file, InvalidParameterError for ``cost_from`` (not
+    callable, not an EnergyCost on the window, tables that differ between windows) or a budget
+    too small for a window of the corridor, PlanningError when the corridor holds no route and
+    the whole map exceeds the budget.
     """
     options = check_instance("options", options, CoarseOptions)
     f, side, budget = options.factor, options.tile_side, options.budget_cells

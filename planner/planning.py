@@ -375,12 +375,15 @@ def plan_coarse_to_fine(
     ------
     InvalidParameterError
         ``source`` neither an EnergyCost nor a path; ``options`` not a CoarseOptions; ``compare``
-        with a GeoTIFF; ``cost_from`` with a map in memory; and as
-        :func:`planner.coarse.coarse_to_fine_in_memory` / :func:`planner.coarse_geotiff.coarse_to_fine_windowed`.
+        with a GeoTIFF; ``cost_from`` with a map in memory, or not pricing every window alike
+        with an EnergyCost on it; a fine-window budget too small for a window of the corridor;
+        bad points; start equal to goal; a factor leaving fewer than 2 x 2 coarse cells.
     OutOfBoundsError, BlockedPositionError
-        A point outside the map, or on a blocked cell.
-    FileFormatError, NodataError, PlanningError
-        As :func:`planner.coarse_geotiff.coarse_to_fine_windowed` for a GeoTIFF.
+        A point outside the map, or on an obstacle or ground steeper than the slope limit.
+    FileFormatError, UnitError, NodataError
+        A GeoTIFF that cannot be read as a DEM in metres, or a window with nodata cells.
+    PlanningError
+        A GeoTIFF whose corridor holds no route while the whole map exceeds the fine-window budget.
 
     Examples
     --------
