@@ -13,7 +13,7 @@ from .energy_model import EnergyModel, IntervalEnergyModel
 from .evaluation import EvaluationResult, evaluate_adaptation, evaluate_current_models, evaluate_few_shot
 from .excitation import excitation_commands
 from .ground import GroundParams
-from .io import BagTopics, CsvLayout, read_borealtc, read_csv_log, read_logs, read_rosbag, write_csv_log
+from .io import BagTopics, read_borealtc, read_csv_log, read_logs, read_rosbag, write_csv_log
 from .logs import InteractionLog, LogMeta
 from .metrics import charge_mah, compare_currents
 from .models import (  # torch-free: the contract, the baselines, the loader
@@ -53,7 +53,6 @@ __all__ = [
     "write_csv_log",
     "read_rosbag",
     "BagTopics",
-    "CsvLayout",
     "CurrentModel",
     "ConstantCurrentModel",
     "LinearCurrentModel",
