@@ -171,11 +171,11 @@ def read_layout_text(text: str) -> dict[str, Any]:
 def _read(kind: str, path: Path) -> Any:
     """Read ``path`` with the reader of ``kind`` (the whole reading path a command takes)."""
     if kind == "rosbag":
-        from energy import read_rosbag
+        from energy import BagTopics, read_rosbag
 
-        return read_rosbag(path, "/odometry/filtered", "/imu/data", "/status",
-                           current_fields=("left_driver_current", "right_driver_current"),
-                           voltage_field="battery_voltage", drive_clock="currents")
+        return read_rosbag(path, BagTopics("/odometry/filtered", "/imu/data", "/status",
+                                           current_fields=("left_driver_current", "right_driver_current"),
+                                           voltage_field="battery_voltage", drive_clock="currents"))
     if kind in ("model", "estimator_model"):
         from energy import load_current_model
 

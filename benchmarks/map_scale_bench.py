@@ -15,7 +15,7 @@ is excluded):
 - ``c2f``: the same preparation, then :func:`planner.plan_coarse_to_fine` (factor side / 256
   within 4..16 by default, a coarse lattice of about 256^2 nodes; the corridor is three
   coarse cells);
-- ``wc2f`` (windowed c2f): :func:`planner.plan_coarse_to_fine_geotiff` on the same file — the
+- ``wc2f`` (windowed c2f): :func:`planner.plan_coarse_to_fine` on the same file (its path) — the
   coarse map tile by tile, the full resolution only in the corridor's window, never the
   whole raster; its route is compared with ``c2f``'s (equal where both run).
 
@@ -212,16 +212,17 @@ def free_point(tif: Path, frac: tuple[float, float], win: int = 64) -> tuple[flo
 
 def _warm() -> float:
     """Load (or compile) every kernel the children use, on a tiny map; seconds spent."""
-    from planner import Lattice, plan_coarse_to_fine, plan_coarse_to_fine_geotiff, warm_up_kernels
+    from planner import CoarseOptions, Lattice, plan_coarse_to_fine, warm_up_kernels
     from terrain import procedural_map, write_geotiff
 
     t0 = time.perf_counter()
     warm_up_kernels()
     tmap = procedural_map((48, 48), 1.0, seed=0, obstacle_fraction=0.0)
     cost = CostSpec().build(tmap)
-    plan_coarse_to_fine(cost, (4.5, 4.5), (40.5, 40.5), factor=4)
+    plan_coarse_to_fine(cost, (4.5, 4.5), (40.5, 40.5), CoarseOptions(factor=4))
     with tempfile.TemporaryDirectory() as folder:
-        plan_coarse_to_fine_geotiff(write_geotiff(tmap, Path(folder) / "warm.tif"), (4.5, 4.5), (40.5, 40.5), factor=4)
+        plan_coarse_to_fine(write_geotiff(tmap, Path(folder) / "warm.tif"), (4.5, 4.5), (40.5, 40.5),
+                            CoarseOptions(factor=4))
     Lattice(cost, 1).shortest_path((4.5, 4.5), (40.5, 40.5))
     return time.perf_counter() - t0
 
@@ -314,7 +315,7 @@ def child(mode: str, tif: Path, factor: int, start: tuple[float, float], goal: t
     """One measurement in this (fresh) process."""
     warm_s = _warm()
     base_gib = _rss_gib()
-    from planner import Lattice, plan_coarse_to_fine, plan_coarse_to_fine_geotiff
+    from planner import CoarseOptions, Lattice, plan_coarse_to_fine
     from terrain import iter_surface_windows, read_geotiff
 
     out: dict[str, Any] = {"mode": mode, "warm_s": warm_s, "base_rss_gib": base_gib}
@@ -336,7 +337,7 @@ def child(mode: str, tif: Path, factor: int, start: tuple[float, float], goal: t
         out["peak_rss_gib"] = _rss_gib()
         return out
     if mode == "wc2f" or mode in CHAIN_MODES:
-        plan = plan_coarse_to_fine_geotiff(tif, start, goal, factor=factor, fine_window_budget_cells=budget)
+        plan = plan_coarse_to_fine(tif, start, goal, CoarseOptions(factor=factor, fine_window_budget_cells=budget))
         out["prepare_s"], out["plan_s"] = 0.0, time.perf_counter() - t0
         out["total_s"], out["cpu_s"] = out["plan_s"], time.process_time() - cpu0
         out["objective_j"] = plan.objective_j if plan.route.found else None
@@ -363,7 +364,7 @@ def child(mode: str, tif: Path, factor: int, start: tuple[float, float], goal: t
         out["objective_j"] = path.objective if path.found else None
         out["blocked_pct"] = 100.0 * float(cost.blocked.mean())
     else:
-        plan = plan_coarse_to_fine(cost, start, goal, factor=factor)
+        plan = plan_coarse_to_fine(cost, start, goal, CoarseOptions(factor=factor))
         out["objective_j"] = plan.objective_j if plan.route.found else None
         out["route"] = _route_digest(plan.route.waypoints_m)
         out["corridor_cells"] = plan.corridor_cells

@@ -5,8 +5,7 @@ from __future__ import annotations
 from .batch import plan_batch
 from .batch_pairs import BatchPairs, read_pairs_csv
 from .batch_result import BatchResult
-from .coarse import CoarseToFine, plan_coarse_to_fine
-from .coarse_geotiff import plan_coarse_to_fine_geotiff
+from .coarse import CoarseOptions, CoarseToFine
 from .cost_spec import CostSpec
 from .edge_cost import EnergyCost
 from .energy_costmap import energy_costmap
@@ -25,7 +24,7 @@ from .missions import (
 )
 from .model_cost import model_energy_cost
 from .nav2_map import write_nav2_map
-from .planning import PLANNERS, plan_route
+from .planning import PLANNERS, plan_coarse_to_fine, plan_route
 from .problem import PlanningProblem
 from .reachability import reachability
 from .reachability_result import Reachability
@@ -55,7 +54,7 @@ __all__ = [
     "RouteEnergyInterval",
     "risk_cost",
     "plan_coarse_to_fine",
-    "plan_coarse_to_fine_geotiff",
+    "CoarseOptions",
     "CoarseToFine",
     "reachability",
     "Reachability",

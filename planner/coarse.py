@@ -1,6 +1,10 @@
 """Coarse-to-fine planning for big maps: a lattice route on a downsampled cost, then the 1-cell lattice in a corridor.
 
-:func:`plan_coarse_to_fine` (1) downsamples the cost by ``factor`` (elevation averaged over
+:class:`CoarseOptions` says how (factor, corridor, the windows of a GeoTIFF read by windows),
+:class:`CoarseToFine` what was found. The door is :func:`planner.plan_coarse_to_fine` (a
+map in memory or a GeoTIFF read by windows, :mod:`planner.coarse_geotiff`) or
+``plan_route(planner="coarse")``. On a map in memory, :func:`coarse_to_fine_in_memory` (1)
+downsamples the cost by ``factor`` (elevation averaged over
 each block of ``factor x factor`` cells, a block blocked when most of its cells are, its
 ground the most common one; the energy tables are the fine cost's), (2) finds the
 minimum-energy route on that coarse map's 16-connected lattice, (3) marks a corridor of
@@ -23,8 +27,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage
 
-from terrain import TerrainMap
-from terrawatt_base.checks import check_bool, check_int, check_optional_real
+from terrain import Grid, TerrainMap
+from terrawatt_base.checks import check_bool, check_instance, check_int, check_optional_real
 from terrawatt_base.errors import BlockedPositionError, InvalidParameterError
 
 from .edge_cost import EnergyCost
@@ -35,8 +39,9 @@ from .points import as_points
 from .route import Route, empty_route, evaluate_route
 
 __all__ = [
+    "CoarseOptions",
     "CoarseToFine",
-    "plan_coarse_to_fine",
+    "coarse_to_fine_in_memory",
     "downsample_cost",
     "COARSE_FALLBACKS",
     "coarse_layers",
@@ -50,6 +55,86 @@ __all__ = [
 #: What a coarse-to-fine plan fell back to: nothing, a corridor four times wider, the whole map.
 COARSE_FALLBACKS = ("none", "wider corridor", "whole map")
 _HALF = LATTICE_OFFSETS[:8]
+#: Tile side (cells) of the coarse stage read by windows, rounded down to a multiple of the factor.
+DEFAULT_WINDOW_CELLS = 1024
+#: Most cells (halo included) of one fine window read from a GeoTIFF before the fine stage chains windows along
+#: the route: 8192^2, about 7 GiB once priced (some 110 bytes per cell, measured).
+DEFAULT_FINE_WINDOW_BUDGET_CELLS = 8192 * 8192
+
+
+@dataclass(frozen=True)
+class CoarseOptions:
+    """How to plan coarse-to-fine: one value, checked when made.
+
+    Attributes
+    ----------
+    factor : int
+        Downsampling factor (>= 2): the coarse lattice has ``factor**2`` times fewer nodes.
+    corridor_m : float, optional
+        Half-width (m, > 0) of the corridor searched at full resolution; default three coarse
+        cells (``3 * factor * cell_size_m``). A corridor that holds no route is widened four
+        times, then the whole map is searched (:data:`COARSE_FALLBACKS`).
+    window_cells : int, optional
+        A GeoTIFF read by windows: the tile side (cells) of the coarse stage, a multiple of
+        ``factor``; default :data:`DEFAULT_WINDOW_CELLS` rounded down to a multiple of ``factor``.
+    fine_window_budget_cells : int, optional
+        A GeoTIFF read by windows: the most full-resolution cells (halo included, >= 16) one
+        fine window may hold; a bigger corridor is followed in chained windows. Default
+        :data:`DEFAULT_FINE_WINDOW_BUDGET_CELLS` (8192^2).
+    band : int, optional
+        A GeoTIFF read by windows: its 1-based elevation band (default: the only one).
+
+    Raises
+    ------
+    InvalidParameterError
+        A bad value (the message names it), or ``window_cells`` not a multiple of ``factor``.
+
+    Examples
+    --------
+    >>> CoarseOptions(factor=8).tile_side
+    1024
+    >>> CoarseOptions(factor=3, corridor_m=12.0).tile_side
+    1023
+    """
+
+    factor: int = 4
+    corridor_m: float | None = None
+    window_cells: int | None = None
+    fine_window_budget_cells: int | None = None
+    band: int | None = None
+
+    def __post_init__(self) -> None:
+        owner = "CoarseOptions"
+        f = check_int("factor", self.factor, low=2, owner=owner)
+        check_optional_real("corridor_m", self.corridor_m, low=0.0, low_inclusive=False, owner=owner)
+        if self.window_cells is not None:
+            w = check_int("window_cells", self.window_cells, low=2, owner=owner)
+            if w % f:
+                raise InvalidParameterError(
+                    f"window_cells={w} is not a multiple of factor={f}: a coarse block would straddle two windows; "
+                    f"use e.g. window_cells={f * max(1, round(w / f))}", parameter=("window_cells", "factor"))
+        if self.fine_window_budget_cells is not None:
+            check_int("fine_window_budget_cells", self.fine_window_budget_cells, low=16, owner=owner)
+        if self.band is not None:
+            check_int("band", self.band, low=1, owner=owner)
+
+    @property
+    def tile_side(self) -> int:
+        """Tile side (cells) of the coarse stage read by windows."""
+        if self.window_cells is None:
+            return self.factor * max(1, DEFAULT_WINDOW_CELLS // self.factor)
+        return int(self.window_cells)
+
+    @property
+    def budget_cells(self) -> int:
+        """Most cells (halo included) of one fine window read by windows."""
+        if self.fine_window_budget_cells is None:
+            return DEFAULT_FINE_WINDOW_BUDGET_CELLS
+        return int(self.fine_window_budget_cells)
+
+    def corridor_for(self, cell_size_m: float) -> float:
+        """The corridor half-width (m) on a map of ``cell_size_m`` cells: ``corridor_m``, or three coarse cells."""
+        return 3.0 * self.factor * cell_size_m if self.corridor_m is None else float(self.corridor_m)
 
 
 @dataclass(frozen=True)
@@ -79,16 +164,18 @@ class CoarseToFine:
         the corridor graph; computing the optimum (0 unless compared).
     fine_window_cells : int
         Full-resolution cells the fine stage read from the file, summed over the windows it
-        read (0: the whole map was given in memory, :func:`plan_coarse_to_fine`).
+        read (0: the whole map was given in memory).
     fine_windows : tuple of (int, int, int, int)
         The windows the fine stage read, in order, as map ``(row_start, row_stop, col_start,
-        col_stop)`` with their halo cells (empty for :func:`plan_coarse_to_fine`).
+        col_stop)`` with their halo cells (empty for a map in memory).
+    grid : Grid or None
+        The whole map's full-resolution grid.
     coarse_map : TerrainMap or None
         The downsampled map the coarse route was planned on (elevation, blocked blocks as
         obstacles): a view of the whole map even when only windows of it were read.
     fine_map : TerrainMap or None
         The full-resolution map the route was searched and evaluated on: the cost's map, or
-        the window of the map read by :func:`planner.plan_coarse_to_fine_geotiff` (in the
+        the window of the map read from a GeoTIFF by windows (in the
         map's coordinates); None when no fine search ran, or when it ran in chained windows
         (no one window holds the route; ``fine_windows`` lists them).
     """
@@ -106,6 +193,7 @@ class CoarseToFine:
     optimum_time_s: float
     fine_window_cells: int = 0
     fine_windows: tuple[tuple[int, int, int, int], ...] = ()
+    grid: Grid | None = None
     coarse_map: TerrainMap | None = field(default=None, repr=False, compare=False)
     fine_map: TerrainMap | None = field(default=None, repr=False, compare=False)
 
@@ -297,60 +385,24 @@ def check_free_point(cost: EnergyCost, name: str, point_xy_m: np.ndarray, row_co
         )
 
 
-def plan_coarse_to_fine(
+def coarse_to_fine_in_memory(
     cost: EnergyCost,
     start_xy_m: tuple[float, float],
     goal_xy_m: tuple[float, float],
+    options: CoarseOptions,
     *,
-    factor: int = 4,
-    corridor_m: float | None = None,
     compare: bool = False,
 ) -> CoarseToFine:
-    """Plan on a downsampled cost, then at full resolution inside a corridor around the coarse route.
+    """:func:`planner.plan_coarse_to_fine` on a map in memory (its full-resolution ``cost``): module docstring.
 
-    Parameters
-    ----------
-    cost : EnergyCost
-        The full-resolution cost.
-    start_xy_m, goal_xy_m : (float, float)
-        Points on the map (m).
-    factor : int
-        Downsampling factor (>= 2): the coarse lattice has ``factor**2`` times fewer nodes.
-    corridor_m : float, optional
-        Half-width (m) of the corridor searched at full resolution; default three coarse
-        cells (``3 * factor * cell_size_m``).
-    compare : bool
-        Also compute the full-resolution 1-cell lattice optimum (builds the whole lattice:
-        the expensive step this function avoids) and the ratio.
-
-    Returns
-    -------
-    CoarseToFine
-        The route (status ``"exact"``, or ``"infeasible"`` when not even the whole map
-        joins start and goal), the coarse route, corridor, times and, if compared, the ratio.
-
-    Raises
-    ------
-    InvalidParameterError
-        ``cost`` not an EnergyCost, bad ``factor`` / ``corridor_m`` / points, start equals goal.
-    OutOfBoundsError
-        A point outside the map.
-    BlockedPositionError
-        A point on an obstacle or on ground steeper than ``cost.max_slope_rad``.
-
-    Examples
-    --------
-    >>> from planner import EnergyCost
-    >>> from terrain import procedural_map
-    >>> cost = EnergyCost.from_presets(procedural_map((96, 96), 1.0, seed=2), unknown_ground="gravel")
-    >>> plan = plan_coarse_to_fine(cost, (8.0, 8.0), (88.0, 80.0), factor=4, compare=True)
-    >>> plan.route.status, bool(1.0 <= plan.ratio_to_optimum < 1.05)
-    ('exact', True)
+    ``options`` gives the factor and corridor; ``compare`` also computes the full-resolution
+    1-cell lattice optimum (the whole lattice: the expensive step this avoids) and the ratio.
+    Raises as :func:`planner.plan_coarse_to_fine`.
     """
     if not isinstance(cost, EnergyCost):
         raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
-    f = check_int("factor", factor, low=2)
-    width = check_optional_real("corridor_m", corridor_m, low=0.0, low_inclusive=False)
+    options = check_instance("options", options, CoarseOptions)
+    f = options.factor
     compare = check_bool("compare", compare)
     pts = as_points([start_xy_m, goal_xy_m], "start/goal")
     cost.check_inside(pts, "start/goal")
@@ -359,7 +411,7 @@ def plan_coarse_to_fine(
         raise InvalidParameterError(f"start equals goal {tuple(start.tolist())!r} m; expected two different points")
     for name, p in (("start_xy_m", start), ("goal_xy_m", goal)):
         check_free_point(cost, name, p)
-    width = 3.0 * f * cost.terrain.cell_size_m if width is None else width
+    width = options.corridor_for(cost.terrain.cell_size_m)
 
     t0 = time.perf_counter()
     coarse = downsample_cost(cost, f)
@@ -391,5 +443,5 @@ def plan_coarse_to_fine(
         optimum = best.objective if best.found else math.nan
         optimum_s = time.perf_counter() - t0
     return CoarseToFine(route, coarse_path.waypoints_m, f, width, n_nodes, objective, optimum, fallback,
-                        coarse_s, fine_s, optimum_s, coarse_map=coarse.terrain,
+                        coarse_s, fine_s, optimum_s, grid=cost.terrain.grid, coarse_map=coarse.terrain,
                         fine_map=cost.terrain)

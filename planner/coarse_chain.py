@@ -1,6 +1,6 @@
 """The fine stage of coarse-to-fine in chained windows along the coarse route: memory bounded by the corridor, not its box.
 
-:func:`chain_corridor` is the fine stage of :func:`planner.plan_coarse_to_fine_geotiff` when
+:func:`chain_corridor` is the fine stage of :func:`planner.plan_coarse_to_fine` on a GeoTIFF read by windows when
 the corridor's bounding window would exceed a cell budget (a route across a map: the box of a
 diagonal corridor is most of the map). The coarse route is followed as the ordered coarse
 cells it crosses, in stretches of at most :data:`CHAIN_STRETCH_CELLS` fine cells, each read
@@ -15,8 +15,8 @@ window, halo included, fits the budget):
    the next window starts from its end. So each junction lies on a route that went on beyond
    it: junctions are not forced onto the coarse route, and the route is not bent towards
    them (the last third of each search is thrown away and re-planned from the next window);
-3. a stretch whose corridor holds no route is searched again with the corridor
-   ``widen`` times wider (a bigger window, the stretch shortened to the budget).
+3. a stretch whose corridor holds no route is searched again with the next of the
+   corridor half-widths ``widths_m`` (a bigger window, the stretch shortened to the budget).
 
 The route is a sequence of corridor lattice routes, each a subgraph route of the full 1-cell
 lattice, so its energy is never below the full-resolution optimum; it is evaluated piece by
@@ -37,7 +37,7 @@ from scipy import ndimage
 from terrain import ElevationWindow
 from terrawatt_base.errors import PlanningError
 
-from .coarse import corridor_mask, merge_straight, search_corridor
+from .coarse import CoarseOptions, corridor_mask, merge_straight, search_corridor
 from .edge_cost import EnergyCost
 from .route import Route
 
@@ -49,6 +49,9 @@ logger = logging.getLogger(__name__)
 #: of a diagonal stretch holds about its square over two, so shorter stretches read fewer
 #: cells per metre of route, longer ones have fewer junctions).
 CHAIN_STRETCH_CELLS = 2048
+#: Cells around the corridor searched in a fine window: a lattice move spans two cells and a
+#: segment through a cell corner checks the cells beside it.
+FINE_MARGIN_CELLS = 2
 #: Share (by length) of each window's route that is kept; the rest is planned again from
 #: the next window.
 CHAIN_KEEP = 2.0 / 3.0
@@ -227,15 +230,11 @@ def chain_corridor(
     coarse_waypoints_m: np.ndarray,
     start: np.ndarray,
     goal: np.ndarray,
-    *,
-    factor: int,
-    width_m: float,
+    options: CoarseOptions,
     shape: tuple[int, int],
-    budget_cells: int,
-    margin_cells: int,
-    widen: tuple[float, ...] = (1.0, 4.0),
+    widths_m: tuple[float, ...],
 ) -> ChainedRoute:
-    """The fine route along the coarse route in chained windows of at most ``budget_cells`` (module docstring).
+    """The fine route along the coarse route in chained windows of at most ``options.budget_cells`` (module docstring).
 
     Parameters
     ----------
@@ -248,19 +247,14 @@ def chain_corridor(
         The coarse route (start first, goal last).
     start, goal : ndarray, shape (2,)
         Free points on the map (m).
-    factor : int
-        Fine cells per coarse cell along a side.
-    width_m : float
-        Corridor half-width (m), as :func:`planner.coarse.corridor_mask`.
+    options : CoarseOptions
+        Its ``factor`` (fine cells per coarse cell along a side) and ``budget_cells`` (most cells
+        one window may hold, halo included); :data:`FINE_MARGIN_CELLS` are kept between the
+        corridor searched and a window's edge.
     shape : (int, int)
         The fine map's rows and columns.
-    budget_cells : int
-        Most cells one window may hold, halo included.
-    margin_cells : int
-        Cells kept between the corridor searched and a window's edge (a lattice move spans
-        two cells).
-    widen : tuple of float
-        Corridor widths tried per stretch, as multiples of ``width_m``.
+    widths_m : tuple of float
+        Corridor half-widths (m, as :func:`planner.coarse.corridor_mask`) tried per stretch, in order.
 
     Returns
     -------
@@ -273,7 +267,8 @@ def chain_corridor(
         coarse map saw but the full resolution does not have), a width whose windows exceed
         the budget counting as tried (:func:`min_window_cells` is the caller's check).
     """
-    chain = _Chain(read, coarse, coarse_waypoints_m, factor, shape, budget_cells, margin_cells)
+    factor, budget_cells = options.factor, options.budget_cells
+    chain = _Chain(read, coarse, coarse_waypoints_m, factor, shape, budget_cells, FINE_MARGIN_CELLS)
     cells, last = chain.cells, len(chain.cells) - 1
     here, a = np.asarray(start, dtype=float), 0
     pieces: list[_Piece] = []
@@ -281,8 +276,7 @@ def chain_corridor(
     widest, widened = 0.0, False
     for _ in range(4 * len(cells) + 16):
         found, too_big = None, set()
-        for i, scale in enumerate(widen):
-            width = width_m * scale
+        for i, width in enumerate(widths_m):
             reach = int(math.floor(width / coarse.terrain.cell_size_m + 1.0))  # corridor_mask's reach, whole cells
             fit = chain.stretch(a, chain.coarse_cell(here), reach)
             if fit is None:
@@ -308,7 +302,7 @@ def chain_corridor(
             skipped = sorted(too_big)
             raise PlanningError(
                 f"the corridor around the coarse route holds no full-resolution route near coarse cell "
-                f"{tuple(cells[a].tolist())!r} (half-widths {[width_m * s for s in widen]!r} m"
+                f"{tuple(cells[a].tolist())!r} (half-widths {list(widths_m)!r} m"
                 + (f"; {skipped!r} m not tried, its windows exceed budget_cells={budget_cells}" if skipped else "")
                 + "); a passage the coarse map sees may not exist at full resolution: plan with a smaller factor "
                 "or a wider corridor_m")

@@ -1,7 +1,7 @@
 """Coarse-to-fine planning straight from a GeoTIFF DEM larger than memory: the coarse map tile by tile, the fine stage in windows.
 
-:func:`plan_coarse_to_fine_geotiff` is :func:`planner.plan_coarse_to_fine` without ever
-holding the whole raster (:class:`terrain.DemWindows`):
+:func:`coarse_to_fine_windowed` is the branch of :func:`planner.plan_coarse_to_fine` that
+never holds the whole raster (:class:`terrain.DemWindows`):
 
 1. **coarse stage** — the DEM is read in block-aligned tiles (side a multiple of ``factor``,
    with one halo cell so that slopes equal the whole map's); each tile is priced with
@@ -15,11 +15,11 @@ holding the whole raster (:class:`terrain.DemWindows`):
    :func:`planner.coarse.search_corridor` does on the whole map. When the corridor holds no
    route it is widened four times, and a bigger window read if the wider one leaves the
    window; the last fallback reads the whole map (``fallback == "whole map"``; then memory
-   holds the whole map, as :func:`plan_coarse_to_fine` would).
+   holds the whole map, as a map in memory would).
 
 The fine window is a rectangle: a corridor along the map's diagonal has a bounding box of
 most of the map. When that window (halo included) would hold more than
-``fine_window_budget_cells`` the fine stage runs in **chained windows** instead
+``options.fine_window_budget_cells`` the fine stage runs in **chained windows** instead
 (:func:`planner.coarse_chain.chain_corridor`): stretches of the coarse route of a few
 thousand fine cells, each read as the window around its part of the corridor (never above
 the budget), the route searched from the point reached to the stretch's far end and only its
@@ -36,7 +36,7 @@ cells and rows are computed from those two facts of the cost priced on the first
 the same numbers, 1.6 times faster (41 vs 66 ms per 1024^2 tile, measured).
 
 With one window, the route, its energy and the coarse route equal those of
-``plan_coarse_to_fine(cost_from(read_geotiff(path)), ...)``: the same numbers go through the
+``plan_coarse_to_fine(cost_from(read_geotiff(path)), ...)`` (the map in memory): the same numbers go through the
 same operations, with cell coordinates counted from the window's corner instead of the map's
 (``origin + k * cell`` sums): bit for bit when the origin and cell size are exact binary
 fractions (whole metres, as DEMs usually are), else within rounding (about 1e-12 relative).
@@ -59,11 +59,12 @@ import numpy as np
 
 from terrain import DemWindows, ElevationWindow, TerrainMap
 from terrain.surface import surface_layers
-from terrawatt_base.checks import check_int, check_optional_real
+from terrawatt_base.checks import check_instance
 from terrawatt_base.errors import InvalidParameterError, OutOfBoundsError, PlanningError
 
 from .coarse import (
     COARSE_FALLBACKS,
+    CoarseOptions,
     CoarseToFine,
     check_free_point,
     coarse_cost,
@@ -71,25 +72,15 @@ from .coarse import (
     corridor_mask,
     search_corridor,
 )
-from .coarse_chain import chain_corridor, haloed_cells, min_window_cells
+from .coarse_chain import FINE_MARGIN_CELLS, chain_corridor, haloed_cells, min_window_cells
 from .edge_cost import EnergyCost
 from .lattice import Lattice
 from .points import as_points
 from .route import empty_route, evaluate_route
 
-__all__ = ["plan_coarse_to_fine_geotiff", "DEFAULT_WINDOW_CELLS", "FINE_MARGIN_CELLS",
-           "DEFAULT_FINE_WINDOW_BUDGET_CELLS"]
+__all__ = ["coarse_to_fine_windowed", "CostBuilder"]
 
 logger = logging.getLogger(__name__)
-
-#: Tile side (cells) of the coarse stage, rounded down to a multiple of the factor.
-DEFAULT_WINDOW_CELLS = 1024
-#: Cells around the corridor's bounding box in the fine window: a lattice move spans two
-#: cells and a segment through a cell corner checks the cells beside it.
-FINE_MARGIN_CELLS = 2
-#: Most cells (halo included) of one fine window before the fine stage chains windows along
-#: the route: 8192^2, about 7 GiB once priced (some 110 bytes per cell, measured).
-DEFAULT_FINE_WINDOW_BUDGET_CELLS = 8192 * 8192
 
 CostBuilder = Callable[[TerrainMap], EnergyCost]
 
@@ -161,17 +152,6 @@ class _Pricer:
         return cost.blocked[crop], cost.ground_rows[crop]
 
 
-def _window_side(window_cells: int | None, f: int) -> int:
-    if window_cells is None:
-        return f * max(1, DEFAULT_WINDOW_CELLS // f)
-    w = check_int("window_cells", window_cells, low=2)
-    if w % f:
-        raise InvalidParameterError(
-            f"window_cells={w} is not a multiple of factor={f}: a coarse block would straddle two windows; "
-            f"use e.g. window_cells={f * max(1, round(w / f))}")
-    return w
-
-
 def _coarse_stage(dem: DemWindows, price: _Pricer, f: int, side: int) -> EnergyCost:
     """The coarse cost of :func:`downsample_cost`, reduced tile by tile."""
     rows, cols = dem.shape
@@ -200,7 +180,7 @@ def _box(near: np.ndarray, f: int, shape: tuple[int, int]) -> tuple[slice, slice
 
 def _check_points(dem: DemWindows, price: _Pricer, start_xy_m: tuple[float, float], goal_xy_m: tuple[float, float]
                   ) -> tuple[np.ndarray, np.ndarray]:
-    """Start and goal checked as :func:`plan_coarse_to_fine` checks them, each from a 3 x 3 window."""
+    """Start and goal checked as a map in memory checks them, each from a 3 x 3 window."""
     pts = as_points([start_xy_m, goal_xy_m], "start/goal")
     grid = dem.grid
     inside = np.asarray(grid.contains(pts[:, 0], pts[:, 1]))
@@ -216,95 +196,48 @@ def _check_points(dem: DemWindows, price: _Pricer, start_xy_m: tuple[float, floa
     return start, goal
 
 
-def plan_coarse_to_fine_geotiff(
+def coarse_to_fine_windowed(
     path: str | os.PathLike[str],
     start_xy_m: tuple[float, float],
     goal_xy_m: tuple[float, float],
+    options: CoarseOptions,
     *,
-    factor: int = 4,
-    corridor_m: float | None = None,
-    band: int | None = None,
-    window_cells: int | None = None,
     cost_from: CostBuilder | None = None,
-    fine_window_budget_cells: int | None = None,
 ) -> CoarseToFine:
-    """Coarse-to-fine planning on a GeoTIFF DEM read by windows, never whole (module docstring).
+    """:func:`planner.plan_coarse_to_fine` on a GeoTIFF DEM read by windows, never whole (module docstring).
 
-    Parameters
-    ----------
-    path : str or path-like
-        GeoTIFF DEM in metres (one band, or ``band``), without nodata cells (windows fill
-        nothing: fill it first).
-    start_xy_m, goal_xy_m : (float, float)
-        Points on the map (m, the map's CRS).
-    factor : int
-        Downsampling factor (>= 2), as :func:`plan_coarse_to_fine`.
-    corridor_m : float, optional
-        Corridor half-width (m); default three coarse cells.
-    band : int, optional
-        1-based elevation band.
-    window_cells : int, optional
-        Tile side (cells) of the coarse stage, a multiple of ``factor``; default 1024 rounded
-        down to a multiple of ``factor``. Memory holds one tile (about 100 bytes per cell
-        priced) plus the coarse grid.
-    cost_from : callable, optional
-        ``TerrainMap -> EnergyCost``, applied to each window (a georeferenced part of the
-        map); it must price every window with the same tables, as a preset or model does
-        (e.g. ``functools.partial(EnergyCost.from_presets, robot="jackal", speed_mps=0.8)``).
-        Default :meth:`EnergyCost.from_presets` (husky, 0.5 m/s, 20 degrees, unknown ground
-        priced as gravel).
-    fine_window_budget_cells : int, optional
-        Most full-resolution cells (halo included) one fine window may hold; a corridor whose
-        bounding window is bigger is followed in chained windows (module docstring). Default
-        :data:`DEFAULT_FINE_WINDOW_BUDGET_CELLS` (8192^2).
+    ``path``: a DEM in metres (one band, or ``options.band``) without nodata cells (windows fill
+    nothing). ``options``: factor, corridor, the coarse stage's tile side (``window_cells``:
+    memory holds one tile, about 100 bytes per cell priced, plus the coarse grid) and the fine
+    windows' budget (``fine_window_budget_cells``). ``cost_from``: ``TerrainMap -> EnergyCost``
+    applied to each window, pricing every window alike (e.g. ``functools.partial(
+    EnergyCost.from_presets, robot="jackal")``; default :meth:`EnergyCost.from_presets`).
 
-    Returns
-    -------
-    CoarseToFine
-        As :func:`plan_coarse_to_fine` (``optimum_j`` NaN: no comparison, it needs the
-        whole map), with ``fine_window_cells`` the full-resolution cells the fine stage read
-        and ``fine_windows`` its windows. ``coarse_time_s`` includes reading and pricing the
-        tiles, ``fine_time_s`` reading and pricing the fine windows. ``fine_map`` is the
-        window searched, None when the windows were chained (no one window holds the route).
-
-    Raises
-    ------
-    FileFormatError, UnitError
-        As :func:`terrain.read_geotiff` for the file, its band and georeferencing.
-    NodataError
-        A window read holds nodata / NaN cells.
-    InvalidParameterError
-        Bad ``factor`` / ``corridor_m`` / ``window_cells`` (not a multiple of ``factor``) /
-        ``cost_from`` (not callable, not returning an EnergyCost on the window, tables that
-        differ between windows) / ``fine_window_budget_cells`` (not an integer >= 16, or too
-        small for a window of the corridor) / points; start equals goal; a coarse grid under
-        2 x 2.
-    OutOfBoundsError
-        A point outside the map.
-    BlockedPositionError
-        A point on an obstacle or on ground steeper than the cost's slope limit.
-    PlanningError
-        The corridor holds no route (or the coarse map none) and the whole map exceeds the
-        budget, so the whole-map fallback cannot run.
+    Returns a :class:`CoarseToFine` (``optimum_j`` NaN: no comparison without the whole map)
+    whose ``fine_window_cells`` / ``fine_windows`` say what the fine stage read (its times
+    include reading and pricing) and whose ``fine_map`` is the window searched (None when the
+    windows were chained). Raises as :func:`planner.plan_coarse_to_fine`: FileFormatError /
+    UnitError / NodataError for the file, InvalidParameterError for ``cost_from`` (not
+    callable, not an EnergyCost on the window, tables that differ between windows) or a budget
+    too small for a window of the corridor, PlanningError when the corridor holds no route and
+    the whole map exceeds the budget.
     """
-    f = check_int("factor", factor, low=2)
-    width = check_optional_real("corridor_m", corridor_m, low=0.0, low_inclusive=False)
-    side = _window_side(window_cells, f)
-    budget = (DEFAULT_FINE_WINDOW_BUDGET_CELLS if fine_window_budget_cells is None
-              else check_int("fine_window_budget_cells", fine_window_budget_cells, low=16))
+    options = check_instance("options", options, CoarseOptions)
+    f, side, budget = options.factor, options.tile_side, options.budget_cells
     price = _Pricer(cost_from)
-    with DemWindows(path, band) as dem:
+    with DemWindows(path, options.band) as dem:
         rows, cols = dem.shape
+        grid = dem.grid
         if -(-rows // f) < 2 or -(-cols // f) < 2:
             raise InvalidParameterError(f"factor={f} leaves fewer than 2 x 2 coarse cells on a {rows} x {cols} map")
         start, goal = _check_points(dem, price, start_xy_m, goal_xy_m)
-        width = 3.0 * f * dem.grid.cell_size_m if width is None else width
+        width = options.corridor_for(dem.grid.cell_size_m)
         need = min_window_cells(width, f * dem.grid.cell_size_m, f, FINE_MARGIN_CELLS)
         if need > budget and rows * cols > budget:  # the map fits: one window whatever the route
             raise InvalidParameterError(
                 f"fine_window_budget_cells={budget} cannot hold a window of the corridor (half-width {width:g} m at "
                 f"factor {f}: {need} cells around one diagonal coarse step); expected at least {need}, or a smaller "
-                "factor / corridor_m")
+                "factor / corridor_m", parameter="fine_window_budget_cells")
 
         t0 = time.perf_counter()
         coarse = _coarse_stage(dem, price, f, side)
@@ -341,9 +274,9 @@ def plan_coarse_to_fine_geotiff(
                 box = _box(near, f, (rows, cols))
                 if haloed_cells(*box, (rows, cols)) > budget:
                     fine = None
-                    chained = chain_corridor(read_priced, coarse, coarse_path.waypoints_m, start, goal, factor=f,
-                                             width_m=width * scale, shape=(rows, cols), budget_cells=budget,
-                                             margin_cells=FINE_MARGIN_CELLS, widen=(1.0, 4.0) if scale == 1.0 else (1.0,))
+                    widths = (width * scale, width * scale * 4.0) if scale == 1.0 else (width * scale,)
+                    chained = chain_corridor(read_priced, coarse, coarse_path.waypoints_m, start, goal, options,
+                                             (rows, cols), widths)
                     objective, n_nodes, width = chained.objective_j, chained.corridor_cells, chained.corridor_m
                     fallback = COARSE_FALLBACKS[1] if chained.widened or scale > 1.0 else label
                     break
@@ -375,5 +308,5 @@ def plan_coarse_to_fine_geotiff(
             route = empty_route("infeasible", "coarse-to-fine", coarse_s + fine_s, coarse.battery_voltage_v)
     cells_read = sum((r1 - r0) * (c1 - c0) for r0, r1, c0, c1 in windows)
     return CoarseToFine(route, coarse_path.waypoints_m, f, width, n_nodes, objective, math.nan, fallback,
-                        coarse_s, fine_s, 0.0, cells_read, tuple(windows), coarse_map=coarse.terrain,
+                        coarse_s, fine_s, 0.0, cells_read, tuple(windows), grid, coarse_map=coarse.terrain,
                         fine_map=None if fine is None else fine.cost.terrain)

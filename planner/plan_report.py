@@ -1,4 +1,10 @@
-"""A route planned with its comparison and reported: the printed table, route.json, GeoJSON and figure (PlanReport)."""
+"""A route planned and reported: the printed table, route.json, GeoJSON and figure (PlanReport).
+
+:func:`plan_and_compare` plans with a planner of :data:`planner.PLANNERS` and compares the route
+with the shortest route and the lattice optimum; :func:`plan_coarse` plans coarse-to-fine
+(:func:`planner.plan_coarse_to_fine`) on a map in memory or on a GeoTIFF read by windows, with
+no comparison (it needs the whole 1-cell lattice). Both give a :class:`PlanReport`.
+"""
 
 from __future__ import annotations
 
@@ -11,19 +17,21 @@ from typing import Any
 
 import numpy as np
 
-from terrain import UNKNOWN_GROUND, OptionalDependencyError, TerrainMap
+from terrain import UNKNOWN_GROUND, InvalidParameterError, OptionalDependencyError, TerrainMap
 from terrawatt_base.checks import check_choice, check_instance
 from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import format_name, result_document, write_result_json
 
+from .coarse import CoarseOptions, CoarseToFine
 from .cost_spec import CostSpec, PlanModel, PricedMap
 from .edge_cost import EnergyCost
-from .planning import GRAPH_PLANNERS, PLANNERS, plan_route, search_objective
+from .planning import GRAPH_PLANNERS, PLANNERS, plan_coarse_to_fine, plan_route, search_objective
 from .plot import RouteLine, plot_routes
 from .risk import INTERVAL_LEVEL, RouteEnergyInterval
 from .route import Route
 from .route_geojson import write_geojson
 from .route_price import price_route
+from .warmup import warm_up_kernels
 
 __all__ = [
     "ROUTE_JSON_FORMAT",
@@ -31,6 +39,8 @@ __all__ = [
     "PlanModel",
     "PlanReport",
     "plan_and_compare",
+    "plan_coarse",
+    "COARSE_SEARCH_OBJECTIVE",
     "route_row",
     "route_table",
     "lonlat_fields",
@@ -38,9 +48,13 @@ __all__ = [
     "compile_line",
 ]
 
-#: route.json's ``format`` and ``format_version`` (written by :meth:`PlanReport.write` and the coarse-to-fine report).
+#: route.json's ``format`` and ``format_version`` (written by :meth:`PlanReport.write`).
 ROUTE_JSON_FORMAT = format_name("route")
 ROUTE_JSON_FORMAT_VERSION = 1
+#: What coarse-to-fine minimises (route.json's ``search_objective``): its corridor search has no heading, so the
+#: route it returns is the least drive energy in the corridor and its turns are priced but not searched over.
+COARSE_SEARCH_OBJECTIVE = ("drive energy in the corridor (the coarse-to-fine search has no heading: the route's "
+                           "turns are priced, not minimised)")
 
 _TABLE_HEADER = (f"{'route':<26} {'status':<11} {'energy J':>10} {'Wh':>7} {'mAh':>8} {'length m':>9} {'time s':>8} "
                  f"{'/ optimum':>9} {'plan s':>7}")
@@ -116,28 +130,35 @@ def _finite_or_none(x: float) -> float | None:
 
 @dataclass(frozen=True)
 class PlanReport:
-    """A minimum-energy route compared with the shortest route and the lattice optimum, ready to print and write.
+    """A minimum-energy route, ready to print and write: compared, or planned coarse-to-fine.
 
-    Made by :func:`plan_and_compare`. :meth:`summary` is the text ``terrawatt plan`` prints,
-    :meth:`to_dict` the content of route.json, :meth:`write` writes route.json, route.geojson
-    and route.png.
+    Made by :func:`plan_and_compare` (the route compared with the shortest route and the lattice
+    optimum) or :func:`plan_coarse` (coarse-to-fine, ``coarse`` set: no comparison, on a map in
+    memory or on a GeoTIFF read by windows). :meth:`summary` is the text ``terrawatt plan``
+    prints, :meth:`to_dict` the content of route.json, :meth:`write` writes route.json,
+    route.geojson and route.png.
 
     Attributes
     ----------
     route : Route
-        The minimum-energy route of ``planner``, with its comparison (:class:`RouteComparison`).
+        The minimum-energy route of ``planner``, with its comparison (:class:`RouteComparison`)
+        unless planned coarse-to-fine.
     lattice : Route or None
         The lattice planner's route with refinement (``route`` itself when the planner is the
-        lattice); None when ``route`` was not found.
+        lattice); None when ``route`` was not found, or planned coarse-to-fine.
     interval : RouteEnergyInterval or None
         The route's energy distribution, when the cost has a predictive interval.
     start_xy_m, goal_xy_m : (float, float)
         Start and goal (m).
     planner, seed, time_limit_s, max_evaluations
-        How the route was planned (:func:`planner.plan_route`).
+        How the route was planned (:func:`planner.plan_route`; ``"coarse"`` and None for a
+        coarse-to-fine plan).
     priced : PricedMap
         The map and how it was priced (robot, speed, slope limit, model, risk), with the times:
-        the header of the summary and of route.json.
+        the header of the summary and of route.json. A GeoTIFF read by windows has only the
+        spec, the label and the compile time (each window is priced as it is read).
+    coarse : CoarseToFine or None
+        The coarse-to-fine plan (its coarse route, corridor, fallback, stages, windows read).
     """
 
     route: Route
@@ -150,11 +171,23 @@ class PlanReport:
     time_limit_s: float | None
     max_evaluations: int | None
     priced: PricedMap = field(repr=False, compare=False)
+    coarse: CoarseToFine | None = None
 
     @property
-    def terrain(self) -> TerrainMap:
-        """The map."""
+    def terrain(self) -> TerrainMap | None:
+        """The map (None for a GeoTIFF read by windows: no one map in memory)."""
         return self.priced.terrain
+
+    @property
+    def windowed(self) -> bool:
+        """Whether the map was a GeoTIFF read by windows (coarse-to-fine)."""
+        return self.coarse is not None and self.priced.terrain is None
+
+    @property
+    def fine_map(self) -> TerrainMap | None:
+        """The full-resolution map the route lies on: the map, or the fine window read by a windowed coarse-to-fine
+        plan (None for chained windows)."""
+        return self.coarse.fine_map if self.windowed else self.terrain
 
     @property
     def cost(self) -> EnergyCost:
@@ -181,6 +214,8 @@ class PlanReport:
         when no route was found."""
         if not self.route.found:
             return []
+        if self.coarse is not None:
+            return [route_row(f"coarse-to-fine (x{self.coarse.factor})", self.route, math.nan)]
         optimum_j = self.route.lattice_energy_j
         return [route_row(f"min-energy ({self.planner})", self.route, optimum_j),
                 route_row("lattice + refinement", self.lattice, optimum_j),
@@ -198,7 +233,10 @@ class PlanReport:
         return f"time limit {self.time_limit_s:g} s"
 
     def summary(self) -> str:
-        """What ``terrawatt plan`` prints: the map, robot and planner, the table, the interval, the saving."""
+        """What ``terrawatt plan`` prints: the map, robot and planner, the table, the interval, the saving (a
+        coarse-to-fine plan: the map, the robot, the stages and their times, the table)."""
+        if self.coarse is not None:
+            return self._coarse_summary()
         t, route, priced = self.terrain, self.route, self.priced
         lines = [map_line(priced.map_label, t),
                  f"{priced.robot_line()}; map preparation {priced.map_preparation_s:.2f} s"]
@@ -236,17 +274,40 @@ class PlanReport:
                          "it is not compared with the shortest route; give the planner more time")
         return "\n".join(lines)
 
+    def _coarse_summary(self) -> str:
+        plan, (rows, cols), priced = self.coarse, self.coarse.grid.shape, self.priced
+        speed = priced.robot_line() + "; "
+        if self.windowed:
+            lines = [f"map: {priced.map_label}  {rows} x {cols} cells of {plan.grid.cell_size_m:g} m, read by windows; "
+                     f"ground unknown, priced as {priced.spec.unknown_ground!r}",
+                     speed + f"full-resolution cells read by the fine stage: {plan.fine_window_cells} of {rows * cols} "
+                     f"({100 * plan.fine_window_cells / (rows * cols):.1f} %)"]
+        else:
+            lines = [map_line(priced.map_label, self.terrain),
+                     speed + f"map preparation {priced.map_preparation_s:.2f} s"]
+        lines += compile_line(priced.kernel_compile_s)
+        lines += [f"start {self.start_xy_m} -> goal {self.goal_xy_m}; coarse-to-fine, factor {plan.factor}, corridor "
+                  f"{plan.corridor_m:g} m ({plan.corridor_cells} free cells searched; fallback: {plan.fallback})",
+                  f"coarse route {plan.coarse_time_s:.2f} s, corridor search {plan.fine_time_s:.2f} s", ""]
+        lines.append(route_table(self.rows()) if self.route.found else f"no route: status {self.route.status!r}")
+        return "\n".join(lines)
+
     def _routes(self) -> dict[str, Route]:
         if not self.route.found:
             return {}
+        if self.coarse is not None:
+            return {"min_energy": self.route}
         return {"min_energy": self.route, "lattice": self.lattice, "shortest": self.shortest}
 
     def to_dict(self) -> dict[str, Any]:
         """The content of route.json: the query, how it was planned, the table and every route with its waypoints.
 
         A result document (:func:`terrawatt_base.formats.result_document`); NaN is written as null
-        (:func:`terrawatt_base.formats.write_result_json`).
+        (:func:`terrawatt_base.formats.write_result_json`). A coarse-to-fine plan writes its coarse route and
+        stages instead of the comparison.
         """
+        if self.coarse is not None:
+            return self._coarse_dict()
         route = self.route
         routes = {name: {**r.summary(), "waypoints_m": r.waypoints_m.tolist()} for name, r in self._routes().items()}
         if self.interval is not None:
@@ -275,9 +336,30 @@ class PlanReport:
             result["model"] = self.model.to_dict()
         return result
 
+    def _coarse_dict(self) -> dict[str, Any]:
+        plan, route = self.coarse, self.route
+        return result_document("route", ROUTE_JSON_FORMAT_VERSION, {
+            "map": self.priced.map_label, "map_crs": plan.coarse_map.crs if plan.coarse_map is not None else None,
+            **self.priced.fields(),
+            "start_xy_m": list(self.start_xy_m), "goal_xy_m": list(self.goal_xy_m),
+            **lonlat_fields(plan.coarse_map, self.start_xy_m, self.goal_xy_m),
+            "planner": "coarse-to-fine",
+            "search_objective": COARSE_SEARCH_OBJECTIVE,
+            "map_preparation_s": self.priced.map_preparation_s, "kernel_compile_s": self.priced.kernel_compile_s,
+            "status": route.status, "windowed": self.windowed,
+            "coarse_to_fine": {k: v for k, v in plan.summary().items() if k not in route.summary()},
+            "routes": ({"min_energy": {**route.summary(), "waypoints_m": route.waypoints_m.tolist()}}
+                       if route.found else {}),
+            "coarse_waypoints_m": plan.coarse_waypoints_m.tolist(),
+        })
+
     def plot(self, path: str | os.PathLike[str] | None = None, *, whole_map: bool = False, ax: Any = None) -> Any:
         """The map with the minimum-energy and the shortest routes (:func:`planner.plot.plot_routes`), zoomed on
-        the routes unless ``whole_map``; the route's energy interval shaded when there is one."""
+        the routes unless ``whole_map``; the route's energy interval shaded when there is one. A coarse-to-fine
+        route is drawn over the fine map (zoomed on it), or over the coarse map (``whole_map`` of a windowed plan,
+        or no fine map: the only whole view held)."""
+        if self.coarse is not None:
+            return self._coarse_plot(path, whole_map=whole_map, ax=ax)
         lines = []
         if self.route.found:
             risk = "" if self.risk_q is None else f", planned on the {self.risk_q:g} quantile"
@@ -291,20 +373,34 @@ class PlanReport:
                            title=f"terrawatt: minimum-energy route on {self.priced.map_label}",
                            extent="map" if whole_map else "routes", max_slope_rad=self.priced.spec.max_slope_rad)
 
+    def _coarse_plot(self, path: str | os.PathLike[str] | None, *, whole_map: bool, ax: Any) -> Any:
+        fine, coarse = self.fine_map, self.coarse.coarse_map
+        shown = coarse if fine is None or (self.windowed and whole_map) else fine
+        lines = [RouteLine("coarse-to-fine", self.route.waypoints_m, self.route.energy_j, colour="#d32f2f")
+                 ] if self.route.found else []
+        title = f"terrawatt: coarse-to-fine route on {self.priced.map_label}" + (
+            f" (the x{self.coarse.factor} coarse map)" if shown is coarse else "")
+        return plot_routes(shown, lines, self.start_xy_m, self.goal_xy_m, path, ax=ax, title=title,
+                           extent="map" if whole_map else "routes", max_slope_rad=self.priced.spec.max_slope_rad)
+
     def write(self, out_dir: str | os.PathLike[str], *, whole_map: bool = False,
               on_figure_error: str = "warn") -> list[Path]:
         """Write route.json, route.geojson (the routes found; WGS 84 when the map has a CRS) and route.png into
         ``out_dir`` (created), each atomically; return the files written.
 
         A figure that fails warns (:class:`~terrawatt_base.errors.FigureWarning`) and is left out,
-        unless ``on_figure_error="raise"`` (:func:`terrawatt_base.figure_file.draw_figure`).
+        unless ``on_figure_error="raise"`` (:func:`terrawatt_base.figure_file.draw_figure`). The GeoJSON of a
+        coarse-to-fine route takes its elevations from the fine map, or the coarse map when the fine stage ran in
+        chained windows (no one fine map holds the route).
         """
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
         written = [write_result_json(out / "route.json", self.to_dict())]
         found = {name: r for name, r in self._routes().items() if r.found}
         if found:
-            written.append(write_geojson(found, self.terrain, out / "route.geojson"))
+            where = self.terrain if self.coarse is None else (
+                self.fine_map if self.fine_map is not None else self.coarse.coarse_map)
+            written.append(write_geojson(found, where, out / "route.geojson"))
         png = draw_figure(out / "route.png", lambda: self.plot(out / "route.png", whole_map=whole_map),
                           on_error=on_figure_error)
         return written + ([png] if png is not None else [])
@@ -386,4 +482,76 @@ def plan_and_compare(
         route=route, lattice=lattice, interval=interval,
         start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])), goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])),
         planner=planner, seed=seed, time_limit_s=time_limit_s, max_evaluations=max_evaluations, priced=priced,
+    )
+
+
+def _presets_only(pricing: CostSpec | None) -> CostSpec:
+    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    if pricing.model is not None or pricing.risk is not None:
+        raise InvalidParameterError("coarse-to-fine prices the map with the physics presets: give pricing without a "
+                                    "model and a risk level", parameter="pricing")
+    return pricing
+
+
+def plan_coarse(
+    source: TerrainMap | str | os.PathLike[str],
+    start_xy_m: tuple[float, float],
+    goal_xy_m: tuple[float, float],
+    *,
+    options: CoarseOptions | None = None,
+    pricing: CostSpec | None = None,
+    map_label: str | None = None,
+) -> PlanReport:
+    """Price a map with the presets and plan coarse-to-fine on it (:func:`planner.plan_coarse_to_fine`): a map in
+    memory, or a GeoTIFF DEM read by windows, never whole.
+
+    Parameters
+    ----------
+    source : TerrainMap or path-like
+        The map in memory (priced whole), or a GeoTIFF DEM (every window priced by
+        ``pricing``: every cell of a DEM without classes is of its unknown ground, which must
+        name a preset).
+    start_xy_m, goal_xy_m : (float, float)
+        Start and goal (m).
+    options : CoarseOptions, optional
+        Factor, corridor and, for a GeoTIFF, its windows (default ``CoarseOptions()``).
+    pricing : CostSpec, optional
+        The physics presets (default ``CostSpec()``): coarse-to-fine takes no saved model and no
+        risk level.
+    map_label : str, optional
+        How the map is named (default ``"map"``, or a GeoTIFF's file name).
+
+    Returns
+    -------
+    PlanReport
+        With ``coarse`` set and no comparison.
+
+    Raises
+    ------
+    TerrawattError
+        As :meth:`planner.cost_spec.CostSpec.build` and :func:`planner.plan_coarse_to_fine`;
+        ``pricing`` with a model or a risk level.
+    OptionalDependencyError
+        A GeoTIFF without rasterio installed.
+
+    Examples
+    --------
+    >>> from terrain import wall_map
+    >>> report = plan_coarse(wall_map((40, 40), 1.0, wall_col=20, gap_rows=(30, 34)), (5.0, 5.0), (35.0, 5.0))
+    >>> report.route.status, report.rows()[0]["route"]
+    ('exact', 'coarse-to-fine (x4)')
+    """
+    pricing = _presets_only(pricing)
+    options = CoarseOptions() if options is None else check_instance("options", options, CoarseOptions)
+    if isinstance(source, TerrainMap):
+        priced = pricing.price(source, map_label="map" if map_label is None else map_label)
+        plan = plan_coarse_to_fine(priced.cost, start_xy_m, goal_xy_m, options)
+    else:
+        compile_s = warm_up_kernels()
+        plan = plan_coarse_to_fine(source, start_xy_m, goal_xy_m, options, cost_from=pricing.build)
+        priced = PricedMap(pricing, Path(source).name if map_label is None else map_label, kernel_compile_s=compile_s)
+    return PlanReport(
+        route=plan.route, lattice=None, interval=None, start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),
+        goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), planner="coarse", seed=None, time_limit_s=None,
+        max_evaluations=None, priced=priced, coarse=plan,
     )

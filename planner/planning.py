@@ -1,4 +1,4 @@
-"""Plan a minimum-energy route: plan_route (OMPL planners or the lattice, then refinement), shortest_route.
+"""Plan a minimum-energy route: plan_route (OMPL, lattice, any-angle, coarse), shortest_route, plan_coarse_to_fine.
 
 Choose a planner by name from :data:`PLANNERS`: the OMPL planners of
 :data:`~planner.ompl.OMPL_PLANNERS` (a 2-D problem over the map whose objective is the
@@ -22,6 +22,10 @@ objective motion-cost calls) and leave ``time_limit_s=None``, and the same input
 same route in any process, whatever was planned before. Time-bounded runs are not
 reproducible.
 
+Coarse-to-fine (``planner="coarse"``, :mod:`planner.coarse`) has one door for its own result,
+:func:`plan_coarse_to_fine`: on a map in memory (an :class:`EnergyCost`) or on a GeoTIFF DEM read
+by windows (a path, :mod:`planner.coarse_geotiff`), tuned by one :class:`~planner.coarse.CoarseOptions`.
+
 Comparisons (the shortest-distance route and the lattice optimum, :class:`RouteComparison`)
 are computed only with ``compare=True``, once per query: they are cached on the cost
 (:attr:`EnergyCost.results`, a bounded LRU cache).
@@ -30,6 +34,7 @@ are computed only with ``compare=True``, once per query: they are cached on the 
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections.abc import Callable
 from typing import Any
@@ -37,11 +42,12 @@ from typing import Any
 import numpy as np
 
 from terrain import TerrainMap
-from terrawatt_base.checks import check_bool, check_choice, check_int, check_real, check_seed
+from terrawatt_base.checks import check_bool, check_choice, check_instance, check_int, check_real, check_seed
 from terrawatt_base.errors import GridMismatchError, InvalidParameterError, UnknownNameError
 
 from .anyangle import anyangle_path, polish_path
-from .coarse import plan_coarse_to_fine
+from .coarse import CoarseOptions, CoarseToFine, coarse_to_fine_in_memory
+from .coarse_geotiff import CostBuilder, coarse_to_fine_windowed
 from .edge_cost import EnergyCost
 from .heading_lattice import heading_shortest_path
 from .lattice import Lattice, LatticePath
@@ -52,8 +58,8 @@ from .refine import refine_route, string_pull
 from .route import Route, RouteComparison, empty_route, evaluate_route
 from .settings import PlannerSettings
 
-__all__ = ["plan_route", "shortest_route", "compare_route", "PLANNERS", "PLANNER_SEARCHES", "PlannerSearch",
-           "OMPL_PLANNERS", "GRAPH_PLANNERS", "REFINE_DEFAULT_SEED", "search_objective", "refine_planned"]
+__all__ = ["plan_route", "shortest_route", "compare_route", "plan_coarse_to_fine", "PLANNERS", "PLANNER_SEARCHES",
+           "PlannerSearch", "OMPL_PLANNERS", "GRAPH_PLANNERS", "REFINE_DEFAULT_SEED", "search_objective", "refine_planned"]
 
 #: Every planner name :func:`plan_route` accepts (the keys of :data:`PLANNER_SEARCHES`).
 PLANNERS = OMPL_PLANNERS + ("anyangle", "coarse", "lattice")
@@ -197,7 +203,7 @@ def plan_route(
         ``"BITstar"``, ``"FMT"`` (OMPL, minimising drive energy), ``"lattice"`` (the
         heading lattice's optimum, drive and turns), ``"anyangle"`` (Theta* around a coarse
         lattice route, :func:`planner.anyangle.anyangle_path`) or ``"coarse"``
-        (coarse-to-fine for big maps, :func:`planner.coarse.plan_coarse_to_fine`, tuned by
+        (coarse-to-fine for big maps, :func:`plan_coarse_to_fine`, tuned by
         ``settings.coarse_factor`` / ``coarse_corridor_m``); the last three deterministic.
     time_limit_s : float or None
         Wall-clock budget of the OMPL solve (s); ignored by the graph planners
@@ -325,6 +331,84 @@ def _refined_or_shortest(problem: PlanningProblem, waypoints: np.ndarray, seed: 
     return pts, True
 
 
+def plan_coarse_to_fine(
+    source: EnergyCost | str | os.PathLike[str],
+    start_xy_m: tuple[float, float],
+    goal_xy_m: tuple[float, float],
+    options: CoarseOptions | None = None,
+    *,
+    cost_from: CostBuilder | None = None,
+    compare: bool = False,
+) -> CoarseToFine:
+    """Coarse-to-fine planning for big maps, in memory or from a GeoTIFF read by windows: the one door.
+
+    The lattice route on a cost ``options.factor`` times coarser, then the 1-cell lattice in a
+    corridor around it (widened four times, then the whole map, when it holds no route):
+    :mod:`planner.coarse` on a map in memory, :mod:`planner.coarse_geotiff` on a DEM never
+    read whole. ``plan_route(planner="coarse")`` is the same search on a map in memory,
+    returning its route only (and refined).
+
+    Parameters
+    ----------
+    source : EnergyCost or path-like
+        The full-resolution cost of a map in memory, or a GeoTIFF DEM (metres, no nodata) read
+        by windows, each window priced by ``cost_from``.
+    start_xy_m, goal_xy_m : (float, float)
+        Points on the map (m).
+    options : CoarseOptions, optional
+        Factor, corridor, and for a GeoTIFF its tiles, fine-window budget and band; default
+        ``CoarseOptions()`` (factor 4, a corridor of three coarse cells).
+    cost_from : callable, optional
+        A GeoTIFF only: ``TerrainMap -> EnergyCost`` pricing each window alike (default
+        :meth:`EnergyCost.from_presets`).
+    compare : bool
+        A map in memory only: also compute the full-resolution 1-cell lattice optimum (builds
+        the whole lattice: the expensive step this function avoids) and the ratio.
+
+    Returns
+    -------
+    CoarseToFine
+        The route (status ``"exact"``, or ``"infeasible"`` when not even the whole map joins
+        start and goal), the coarse route, corridor, fallback, times, the windows read.
+
+    Raises
+    ------
+    InvalidParameterError
+        ``source`` neither an EnergyCost nor a path; ``options`` not a CoarseOptions; ``compare``
+        with a GeoTIFF; ``cost_from`` with a map in memory, or not pricing every window alike
+        with an EnergyCost on it; a fine-window budget too small for a window of the corridor;
+        bad points; start equal to goal; a factor leaving fewer than 2 x 2 coarse cells.
+    OutOfBoundsError, BlockedPositionError
+        A point outside the map, or on an obstacle or ground steeper than the slope limit.
+    FileFormatError, UnitError, NodataError
+        A GeoTIFF that cannot be read as a DEM in metres, or a window with nodata cells.
+    PlanningError
+        A GeoTIFF whose corridor holds no route while the whole map exceeds the fine-window budget.
+
+    Examples
+    --------
+    >>> from planner import EnergyCost
+    >>> from terrain import procedural_map
+    >>> cost = EnergyCost.from_presets(procedural_map((96, 96), 1.0, seed=2), unknown_ground="gravel")
+    >>> plan = plan_coarse_to_fine(cost, (8.0, 8.0), (88.0, 80.0), CoarseOptions(factor=4), compare=True)
+    >>> plan.route.status, bool(1.0 <= plan.ratio_to_optimum < 1.05)
+    ('exact', True)
+    """
+    options = CoarseOptions() if options is None else check_instance("options", options, CoarseOptions)
+    if isinstance(source, (str, os.PathLike)):
+        if check_bool("compare", compare):
+            raise InvalidParameterError("compare needs the whole 1-cell lattice: a GeoTIFF read by windows has no "
+                                        "comparison; plan on a map in memory to compare", parameter="compare")
+        return coarse_to_fine_windowed(source, start_xy_m, goal_xy_m, options, cost_from=cost_from)
+    if not isinstance(source, EnergyCost):
+        raise InvalidParameterError(f"source must be an EnergyCost (a map in memory) or the path of a GeoTIFF DEM, got "
+                                    f"{type(source).__name__!r}", parameter="source")
+    if cost_from is not None:
+        raise InvalidParameterError("cost_from prices the windows of a GeoTIFF; a map in memory is priced already "
+                                    "(give its EnergyCost)", parameter="cost_from")
+    return coarse_to_fine_in_memory(source, start_xy_m, goal_xy_m, options, compare=compare)
+
+
 # --------------------------------------------------------------------------- the planners, by name
 #: A search: ``(problem, time_limit_s, max_cost_evaluations, seed, settings) -> (status, waypoints or None, seconds)``.
 PlannerSearch = Callable[[PlanningProblem, "float | None", "int | None", "int | None", PlannerSettings],
@@ -360,9 +444,9 @@ def _anyangle_search(problem: PlanningProblem, time_limit: float | None, max_eva
 def _coarse_search(problem: PlanningProblem, time_limit: float | None, max_evals: int | None, seed: int | None,
                    settings: PlannerSettings) -> tuple[str, np.ndarray | None, float]:
     """Coarse-to-fine: the lattice on a cost ``settings.coarse_factor`` times coarser, then the 1-cell lattice in a
-    corridor around that route (:func:`planner.coarse.plan_coarse_to_fine`)."""
-    found = plan_coarse_to_fine(problem.cost, problem.start, problem.goal, factor=settings.coarse_factor,
-                                corridor_m=settings.coarse_corridor_m)
+    corridor around that route (:func:`plan_coarse_to_fine`)."""
+    options = CoarseOptions(factor=settings.coarse_factor, corridor_m=settings.coarse_corridor_m)
+    found = coarse_to_fine_in_memory(problem.cost, problem.start, problem.goal, options)
     route = found.route
     if route.status != "exact":
         return route.status, None, route.planning_time_s

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -101,8 +102,13 @@ def logs_from_args(args: argparse.Namespace, require_currents: bool, *, flag: st
     (:func:`energy.io.read_logs`: errors name the flags; with ``require_currents`` a log without currents)."""
     bag = BagTopics(**{f.name: getattr(args, f.name) for f in dataclasses.fields(BagTopics)})
     path = getattr(args, flag.lstrip("-").replace("-", "_"))
-    return read_logs(path, getattr(args, "grounds", None), bag=bag, csv=_csv_layout(args),
-                     require_currents=require_currents, ground_label=args.ground_label, name=flag)
+    try:
+        return read_logs(path, getattr(args, "grounds", None), bag=bag, csv=_csv_layout(args),
+                         require_currents=require_currents, ground_label=args.ground_label)
+    except TerrawattError as exc:  # the library names its parameter `path`; here it is the flag that gave it
+        if exc.parameter != "path":
+            raise
+        raise type(exc)(re.sub(r"(?<![\w-])path(?![\w-])", flag, str(exc), count=1)) from None
 
 
 def add_band_option(parser: Any, help_text: str | None = None) -> None:

@@ -6,15 +6,13 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from planner import PLANNERS
-from planner.coarse_report import COARSE_OPTIONS, check_coarse_options, plan_coarse, plan_coarse_windowed
-from planner.plan_report import plan_and_compare
+from planner import PLANNERS, CoarseOptions
+from planner.plan_report import plan_and_compare, plan_coarse
 from planner.ros_export import check_frame_origin
-from terrain import DemWindows, TerrainMap
+from terrain import DemWindows, InvalidParameterError, TerrainMap
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
 
 from .common import (
-    MAP_FLAGS,
     Checked,
     add_map_options,
     add_model_options,
@@ -34,12 +32,14 @@ from .common import (
 )
 from .ros2 import add_ros2_arguments, check_ros2_outputs, write_ros2_outputs
 
-__all__ = ["add_parsers", "run_demo", "run_plan_command"]
+__all__ = ["add_parsers", "run_demo", "run_plan_command", "coarse_arg"]
 
 _OUTPUTS = ("route.json", "route.geojson", "route.png")
 #: How ``plan`` names the parameters of the library's messages (:func:`terrawatt_cli.error_message`).
-_FLAGS = {**{k: v for k, v in MAP_FLAGS.items() if k in COARSE_OPTIONS}, "factor": "--coarse-factor",
-          "corridor_m": "--corridor", "windowed": "--windowed", "path": "--map", "model": "--model", "planner": "--planner"}
+_FLAGS = {"factor": "--coarse-factor", "corridor_m": "--corridor", "fine_window_budget_cells": "--fine-window-cells",
+          "model": "--model", "planner": "--planner"}
+#: The map options a windowed read cannot apply (they need the whole map), by their flags.
+_WHOLE_MAP_FLAGS = ("fill_nodata", "reproject", "cell_size", "landcover")
 
 
 def add_parsers(sub: Any) -> None:
@@ -86,30 +86,55 @@ def run_demo(args: argparse.Namespace) -> int:
     return _run(args, example_map(), EXAMPLE_START_XY_M, EXAMPLE_GOAL_XY_M, "bundled example map")
 
 
+def coarse_arg(args: argparse.Namespace) -> CoarseOptions | None:
+    """The :class:`planner.CoarseOptions` of ``--coarse-factor``, ``--corridor`` and (with ``--windowed``)
+    ``--fine-window-cells``; None without ``--coarse-factor``. Refuses, before any work, the flags coarse-to-fine
+    planning cannot take: ``--corridor`` or ``--windowed`` alone, ``--model``, and with ``--windowed`` a map that is
+    not a GeoTIFF or the map options that need the whole map."""
+    factor, windowed = getattr(args, "coarse_factor", None), getattr(args, "windowed", False)
+    if args.corridor is not None and factor is None:
+        raise InvalidParameterError("--corridor applies to coarse-to-fine planning; give --coarse-factor F too")
+    if args.model is not None and (factor is not None or windowed):
+        raise InvalidParameterError("--model plans on the whole map with --planner; it does not apply to "
+                                    "--coarse-factor / --windowed yet")
+    if windowed:
+        if factor is None:
+            raise InvalidParameterError("--windowed plans coarse-to-fine; give --coarse-factor F too")
+        if args.map is None or Path(args.map).suffix.lower() not in (".tif", ".tiff"):
+            raise InvalidParameterError(f"--windowed reads GeoTIFF DEMs (.tif, .tiff), got --map "
+                                        f"{None if args.map is None else Path(args.map).name}")
+        for dest in _WHOLE_MAP_FLAGS:
+            if getattr(args, dest, None) is not None:
+                raise InvalidParameterError(
+                    f"--windowed reads the DEM as it is and cannot apply --{dest.replace('_', '-')} (it needs the "
+                    "whole map): fill or reproject the DEM first (gdal_fillnodata, gdalwarp), or plan without "
+                    "--windowed")
+    if factor is None:
+        return None
+    return CoarseOptions(factor=factor, corridor_m=args.corridor,
+                         fine_window_budget_cells=args.fine_window_cells if windowed else None)
+
+
 def run_plan_command(args: argparse.Namespace) -> int:
     """``terrawatt plan``: on a map file (coarse-to-fine with ``--coarse-factor``, by windows with ``--windowed``)."""
     _check_flags(args)
-    check_coarse_options(factor=args.coarse_factor, corridor_m=args.corridor, windowed=args.windowed, path=args.map,
-                         model=args.model, fill_nodata=args.fill_nodata, reproject_to=args.reproject,
-                         cell_size_m=args.cell_size, landcover=args.landcover)
+    coarse = coarse_arg(args)
     if args.windowed:
         pricing = pricing_arg(args, None)
         with DemWindows(args.map) as dem:
             start, goal = point_arg(args, "start", dem), point_arg(args, "goal", dem)
-        return _finish(args, plan_coarse_windowed(
-            args.map, start, goal, factor=args.coarse_factor, corridor_m=args.corridor, pricing=pricing,
-            fine_window_cells=args.fine_window_cells))
+        return _finish(args, plan_coarse(args.map, start, goal, options=coarse, pricing=pricing))
     tmap, label = map_arg(args)
-    return _run(args, tmap, point_arg(args, "start", tmap), point_arg(args, "goal", tmap), label)
+    return _run(args, tmap, point_arg(args, "start", tmap), point_arg(args, "goal", tmap), label, coarse)
 
 
 def _run(args: argparse.Namespace, tmap: TerrainMap, start: tuple[float, float], goal: tuple[float, float],
-         label: str) -> int:
+         label: str, coarse: CoarseOptions | None = None) -> int:
     if getattr(args, "map_frame_origin", None) is not None:  # before planning: near the map (the writers check it too)
         check_frame_origin(args.map_frame_origin, "--map-frame-origin", bounds=tmap.bounds)
-    if getattr(args, "coarse_factor", None) is not None:
-        return _finish(args, plan_coarse(tmap, start, goal, factor=args.coarse_factor, corridor_m=args.corridor,
-                                         pricing=pricing_arg(args, tmap), map_label=label))
+    if coarse is not None:
+        return _finish(args, plan_coarse(tmap, start, goal, options=coarse, pricing=pricing_arg(args, tmap),
+                                         map_label=label))
     return _finish(args, plan_and_compare(
         tmap, start, goal, planner=args.planner, pricing=pricing_arg(args, tmap, load_model_arg(args)),
         seed=args.seed, time_limit_s=args.time_limit, max_evaluations=args.max_evaluations, map_label=label),

@@ -4,7 +4,10 @@
 log, a bag, or a folder of them); the CLI's ``--data`` goes through it.
 
 Every reader returns :class:`~energy.logs.InteractionLog` objects in SI units and refuses
-bad input with a clear error instead of guessing:
+bad input with a clear error instead of guessing, as its ``cleaning`` (:class:`LogCleaning`:
+``repair``, ``allow_gaps``, ``gap_factor``, ``check_units``) says; a bag's topics, fields and
+units are one :class:`BagTopics`, its clocks one :class:`BagTiming`, a CSV log's columns and
+units one :class:`CsvLayout`:
 
 - unsorted timestamps, duplicated timestamps, NaNs (empty fields or ``nan``) -> DataError
   naming the stream, the first offending index and time, and the count; each can be
@@ -81,13 +84,14 @@ from .cleaning import (
     MIN_PEAK_CURRENT_A,
     MIN_STREAM_RATE_HZ,
     REPAIRS,
+    LogCleaning,
 )
 from .csv_header import CSV_LOG_FORMAT_VERSION
-from .csv_log import CSV_FIELDS, CSV_RATES, CSV_UNITS, DEFAULT_CSV_COLUMNS, read_csv_log, write_csv_log
+from .csv_log import CSV_FIELDS, CSV_RATES, CSV_UNITS, DEFAULT_CSV_COLUMNS, CsvLayout, read_csv_log, write_csv_log
 from .drive_bag import NavSatTrack, read_navsat, write_drive_bag
-from .layouts import LOG_SUFFIXES, BagTopics, CsvLayout, read_logs
+from .layouts import LOG_SUFFIXES, read_logs
 from .ros_messages import DriveBagTopics, log_from_messages
-from .rosbag import DRIVE_CLOCKS, MAX_CLOCK_OFFSET_S, read_rosbag
+from .rosbag import DRIVE_CLOCKS, MAX_CLOCK_OFFSET_S, BagTiming, BagTopics, read_rosbag
 
 __all__ = [
     "REPAIRS",
@@ -117,7 +121,9 @@ __all__ = [
     "read_rosbag",
     "LOG_SUFFIXES",
     "BagTopics",
+    "BagTiming",
     "CsvLayout",
+    "LogCleaning",
     "read_logs",
     "DriveBagTopics",
     "write_drive_bag",

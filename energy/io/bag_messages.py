@@ -14,6 +14,7 @@ from terrawatt_base.errors import DataError, FileFormatError, OptionalDependency
 
 __all__ = [
     "Messages",
+    "TopicMessages",
     "BAG_MESSAGE_BYTES",
     "import_rosbags",
     "bag_path",
@@ -26,6 +27,28 @@ __all__ = [
 
 #: Deserialised messages per topic: (receive time in ns, message) in bag order.
 Messages = dict[str, list[tuple[int, Any]]]
+
+
+@dataclasses.dataclass(frozen=True)
+class TopicMessages:
+    """Messages grouped by topic, as read from a bag or buffered by a node: what a log is built from.
+
+    Attributes
+    ----------
+    source : str
+        The source's name in messages and ``meta.source`` (a bag path).
+    raw : dict topic -> list of (int, message)
+        Per topic, its messages with their receive times (ns), in receive order.
+    types : dict topic -> str
+        Per topic, its message type (``"nav_msgs/msg/Odometry"``, ...).
+    container : str
+        What held the messages, in notes and messages (``"the bag"``).
+    """
+
+    source: str
+    raw: Messages
+    types: dict[str, str]
+    container: str = "the bag"
 
 
 def import_rosbags() -> tuple[Any, Any, Any]:

@@ -12,10 +12,11 @@ from typing import Any
 from terrawatt_base.checks import check_text, fmt_number
 from terrawatt_base.errors import DataError, FileFormatError, InvalidParameterError, UnknownNameError
 
-from ..logs import DEFAULT_GAP_FACTOR, InteractionLog, LogMeta, check_gap_factor
+from ..logs import InteractionLog, LogMeta
 from .cleaning import (
     MAX_OMEGA_RADPS,
     MAX_SPEED_MPS,
+    LogCleaning,
     bracket_accel,
     check_accel,
     check_current,
@@ -23,7 +24,6 @@ from .cleaning import (
     check_timing,
     check_track_width,
     clean_stream,
-    parse_repair,
 )
 from .csv_table import read_csv_text, read_table
 
@@ -45,10 +45,7 @@ def read_borealtc_run(
     ground_label: str | None = None,
     *,
     robot: str = "husky_a200",
-    repair: str | Iterable[str] = (),
-    allow_gaps: bool = False,
-    gap_factor: float = DEFAULT_GAP_FACTOR,
-    check_units: bool = True,
+    cleaning: LogCleaning | None = None,
 ) -> InteractionLog:
     """Read one BorealTC run (``imu_NN.csv`` + ``pro_NN.csv``) into an InteractionLog.
 
@@ -75,8 +72,9 @@ def read_borealtc_run(
         Run-level ground label (``read_borealtc`` passes the folder name, lowercased).
     robot : str
         Robot name for the metadata.
-    repair, allow_gaps, gap_factor, check_units
-        See :mod:`energy.io`.
+    cleaning : LogCleaning, optional
+        Repairs, gaps and unit checks (:class:`~energy.io.cleaning.LogCleaning`, default none
+        repaired, no gaps, units checked; see :mod:`energy.io`).
 
     Returns
     -------
@@ -94,7 +92,7 @@ def read_borealtc_run(
         [0.5 Hz, 10 kHz] or a run longer than a day (times in ms read as s); all with
         ``check_units``.
     InvalidParameterError, UnknownNameError
-        Bad ``track_width_m``, ``ground_label``, ``gap_factor`` or repair names.
+        Bad ``track_width_m``, ``ground_label`` or ``cleaning``.
 
     Examples
     --------
@@ -105,8 +103,8 @@ def read_borealtc_run(
     track_width_m = check_track_width(track_width_m)
     if ground_label is not None:
         check_text("ground_label", ground_label)
-    repairs = parse_repair(repair)
-    gap_factor = check_gap_factor(gap_factor)
+    cleaning = LogCleaning.check(cleaning)
+    repairs, allow_gaps, gap_factor = cleaning.repairs, cleaning.allow_gaps, cleaning.gap_factor
     imu_path, pro_path = Path(imu_csv), Path(pro_csv)
     pro = read_table(read_csv_text(pro_path), ("time", "curL", "curR", "velL", "velR"))
     imu = read_table(read_csv_text(imu_path), ("time", "az"), optional=("wz",))
@@ -117,7 +115,7 @@ def read_borealtc_run(
         repairs, allow_gaps, gap_factor,
     )
     ti, ic, _ = clean_stream(src_i, "IMU stream", imu["time"], imu_cols, repairs, allow_gaps, gap_factor)
-    if check_units:
+    if cleaning.check_units:
         check_current(src_p, "curL", pc["curL"], "A")
         check_current(src_p, "curR", pc["curR"], "A")
         for k in ("velL", "velR"):
@@ -180,7 +178,7 @@ def read_borealtc(
     grounds : iterable of str, optional
         Ground folders to read (case-insensitive); all folders with run files by default.
     **kwargs
-        Passed to :func:`read_borealtc_run` (``track_width_m``, ``repair``, ...).
+        Passed to :func:`read_borealtc_run` (``track_width_m``, ``robot``, ``cleaning``).
 
     Returns
     -------

@@ -12,16 +12,18 @@ import logging
 import math
 import warnings
 from collections.abc import Iterable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from terrawatt_base.checks import check_real, fmt_number
-from terrawatt_base.errors import DataError, DataRepairWarning, UnitError, UnknownNameError
+from terrawatt_base.checks import check_bool, check_real, fmt_number
+from terrawatt_base.errors import DataError, DataRepairWarning, InvalidParameterError, UnitError, UnknownNameError
 
-from ..logs import gap_steps
+from ..logs import DEFAULT_GAP_FACTOR, check_gap_factor, gap_steps
 
 __all__ = [
+    "LogCleaning",
     "REPAIRS",
     "UNIT_FACTORS",
     "MAX_MEDIAN_CURRENT_A",
@@ -88,6 +90,61 @@ UNIT_FACTORS: dict[str, dict[str, float]] = {
     "angle": {"rad": 1.0, "deg": math.pi / 180.0},
     "voltage": {"V": 1.0, "mV": 1e-3},
 }
+
+
+@dataclass(frozen=True)
+class LogCleaning:
+    """How every log reader checks and cleans its streams (module docstring of :mod:`energy.io`): one value.
+
+    Parameters
+    ----------
+    repair : str or iterable of str
+        Repairs asked for, from :data:`REPAIRS` (``"sort"``, ``"drop_duplicates"``,
+        ``"interpolate_nans"``); none by default: such streams are refused.
+    allow_gaps : bool
+        Accept steps longer than ``gap_factor`` median periods (split the log later).
+    gap_factor : float
+        A step longer than this many median periods is a gap (> 1).
+    check_units : bool
+        Refuse values whose magnitude betrays a wrong unit.
+
+    Raises
+    ------
+    UnknownNameError, InvalidParameterError
+        An unknown repair; a bad flag or gap factor (the message names the parameter).
+
+    Examples
+    --------
+    >>> LogCleaning(repair="sort").repairs
+    frozenset({'sort'})
+    """
+
+    repair: str | Iterable[str] = ()
+    allow_gaps: bool = False
+    gap_factor: float = DEFAULT_GAP_FACTOR
+    check_units: bool = True
+
+    def __post_init__(self) -> None:
+        repairs = parse_repair(self.repair)
+        object.__setattr__(self, "repair", tuple(r for r in REPAIRS if r in repairs))
+        object.__setattr__(self, "allow_gaps", check_bool("allow_gaps", self.allow_gaps))
+        object.__setattr__(self, "gap_factor", check_gap_factor(self.gap_factor))
+        object.__setattr__(self, "check_units", check_bool("check_units", self.check_units))
+
+    @property
+    def repairs(self) -> frozenset[str]:
+        """The repairs asked for, as :func:`parse_repair` gives them."""
+        return frozenset(self.repair)
+
+    @classmethod
+    def check(cls, cleaning: LogCleaning | None) -> LogCleaning:
+        """``cleaning``, or the default when None; anything else refused (parameter ``cleaning``)."""
+        if cleaning is None:
+            return cls()
+        if not isinstance(cleaning, cls):
+            raise InvalidParameterError(f"cleaning must be a LogCleaning, got {type(cleaning).__name__!r}",
+                                        parameter="cleaning")
+        return cleaning
 
 
 def parse_repair(repair: str | Iterable[str]) -> frozenset[str]:

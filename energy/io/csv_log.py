@@ -5,7 +5,8 @@ from __future__ import annotations
 import logging
 import os
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -15,11 +16,12 @@ from terrawatt_base.atomic import write_text_atomic
 from terrawatt_base.checks import fmt_number
 from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
-from ..logs import DEFAULT_GAP_FACTOR, VELOCITY_SOURCES, InteractionLog, LogMeta, check_gap_factor
+from ..logs import VELOCITY_SOURCES, InteractionLog, LogMeta
 from .cleaning import (
     MAX_OMEGA_RADPS,
     MAX_SPEED_MPS,
     UNIT_FACTORS,
+    LogCleaning,
     check_accel,
     check_current,
     check_limit,
@@ -27,7 +29,6 @@ from .cleaning import (
     check_track_width,
     clean_stream,
     gravity_note,
-    parse_repair,
 )
 from .csv_header import CSV_LOG_FORMAT_VERSION, LOG_HEADER_PREFIX, format_log_header, parse_log_header
 from .csv_table import CsvText, read_csv_text, read_table
@@ -39,6 +40,7 @@ __all__ = [
     "CSV_LOG_FORMAT_VERSION",
     "CSV_RATES",
     "csv_field_map",
+    "CsvLayout",
     "read_csv_log",
     "write_csv_log",
 ]
@@ -102,20 +104,92 @@ def _unit_factor(field: str, unit: str) -> float:
     return table[unit]
 
 
+@dataclass(frozen=True)
+class CsvLayout:
+    """How a CSV log names its columns and units (:func:`read_csv_log`, :func:`~energy.io.read_logs`); the default
+    is the layout :func:`write_csv_log` writes.
+
+    Parameters
+    ----------
+    columns : mapping field -> column name, optional
+        The column of each field (:data:`~energy.io.CSV_FIELDS`: ``time``, ``accel_z``, ``v`` and
+        ``omega`` or ``speed_left`` and ``speed_right``, ``current_left`` and ``current_right``,
+        optional ``x`` / ``y`` / ``heading``, ``gyro_z``, ``battery_voltage``, ``battery_current``,
+        ``ground``).
+    units : mapping field -> unit, optional
+        Declared units of the mapped fields, or of the default layout's (:data:`~energy.io.CSV_UNITS`);
+        undeclared fields are SI.
+    rates : {"mixed", "single"}
+        Streams of different rates interleaved by time (default), or one row per sample of both.
+    track_width_m : float, optional
+        With wheel speeds (``speed_left`` / ``speed_right``): the track width that gives omega.
+        Only then: a layout of ``v`` and ``omega`` has no omega to derive, so a track width
+        there is refused (when the layout is made; with the default layout, when a CSV log is
+        read) rather than recorded as the one omega came from.
+
+    Raises
+    ------
+    UnknownNameError, InvalidParameterError
+        An unknown field, unit or ``rates``, an empty column name, a unit for a field not mapped, a
+        bad track width or one beside ``v`` / ``omega`` columns; checked when the layout is made,
+        before any log is read (a track width with the default layout: by :meth:`read`).
+
+    Examples
+    --------
+    >>> CsvLayout({"time": "stamp_ms", "v": "cmd_v", "omega": "cmd_w", "accel_z": "az"}, {"time": "ms"}).rates
+    'mixed'
+    """
+
+    columns: dict[str, str] | None = None
+    units: dict[str, str] | None = None
+    rates: str = "mixed"
+    track_width_m: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.columns is not None or self.units:
+            columns, units, _ = csv_field_map(self.columns, self.units)
+            object.__setattr__(self, "columns", None if self.columns is None else columns)
+            object.__setattr__(self, "units", units)
+        if self.rates not in CSV_RATES:
+            raise UnknownNameError(f"rates must be one of {CSV_RATES!r}, got {self.rates!r}", parameter="rates")
+        if self.track_width_m is not None:
+            object.__setattr__(self, "track_width_m", check_track_width(self.track_width_m))
+            if self.columns is not None:
+                self._check_track_width()
+
+    def _check_track_width(self) -> None:
+        """Refuse a track width beside v / omega columns: there is no omega to derive with it."""
+        columns = DEFAULT_CSV_COLUMNS if self.columns is None else self.columns
+        if self.track_width_m is None or "speed_left" in columns or "speed_right" in columns:
+            return
+        whose = "the default layout's" if self.columns is None else "the layout's"
+        raise InvalidParameterError(
+            f"track_width_m (--track-width) {self.track_width_m:g} derives omega from wheel speeds (speed_left / "
+            f"speed_right columns), but {whose} velocities are v and omega ({columns.get('v')!r}, "
+            f"{columns.get('omega')!r}): there is no omega to derive; drop the track width, or map the wheel speeds "
+            "instead (--csv-columns speed_left=COLUMN speed_right=COLUMN)")
+
+    def read(self, path: str | os.PathLike[str], **options: Any) -> InteractionLog:
+        """:func:`read_csv_log` of ``path`` in this layout (``options``: its other keywords).
+
+        Raises
+        ------
+        InvalidParameterError
+            A track width with the default layout (v and omega columns), refused here rather
+            than when the layout was made, as it may be meant for logs of another kind.
+        """
+        self._check_track_width()
+        return read_csv_log(path, self, **options)
+
+
 def read_csv_log(
     path: str | os.PathLike[str],
-    columns: Mapping[str, str] | None = None,
-    units: Mapping[str, str] | None = None,
+    layout: CsvLayout | None = None,
     *,
     robot: str | None = None,
     ground_label: str | None = None,
     velocity_source: str | None = None,
-    track_width_m: float | None = None,
-    rates: str = "mixed",
-    repair: str | Iterable[str] = (),
-    allow_gaps: bool = False,
-    gap_factor: float = DEFAULT_GAP_FACTOR,
-    check_units: bool = True,
+    cleaning: LogCleaning | None = None,
 ) -> InteractionLog:
     """Read an interaction log from one CSV file with a column map and declared units.
 
@@ -138,6 +212,9 @@ def read_csv_log(
     Parameters
     ----------
     path : path-like
+    layout : CsvLayout, optional
+        The file's columns, units, rates and track width (default ``CsvLayout()``: the layout
+        :func:`write_csv_log` writes). Its fields:
     columns : mapping field -> column name, optional
         Fields (:data:`CSV_FIELDS`): ``time``, ``accel_z`` (required); ``v`` and ``omega``,
         or ``speed_left`` and ``speed_right`` (wheel speeds, with ``track_width_m``; v =
@@ -152,14 +229,16 @@ def read_csv_log(
         ``"s"``, ``"ms"``, ``"us"``, ``"ns"``; accel ``"m/s^2"``/``"g"``; x/y ``"m"``,
         ``"cm"``, ``"mm"``; heading ``"rad"``/``"deg"``; gyro_z as omega; battery_voltage
         ``"V"``/``"mV"``; battery_current as current). Undeclared fields are SI.
-    robot, ground_label, velocity_source, track_width_m : optional
+    track_width_m : float, optional
+        With wheel speeds, the track width that gives omega (default: the header's).
+    rates : {"mixed", "single"}
+        Whether the file interleaves streams of different rates (see above).
+    robot, ground_label, velocity_source : optional
         Metadata. ``None`` takes the value from a :func:`write_csv_log` header when the file
         has one; otherwise robot ``"unknown"``, velocity ``"measured"`` for wheel speeds and
         ``"commanded"`` for v/omega.
-    rates : {"mixed", "single"}
-        Whether the file interleaves streams of different rates (see above).
-    repair, allow_gaps, gap_factor, check_units
-        See :mod:`energy.io`.
+    cleaning : LogCleaning, optional
+        Repairs, gaps and unit checks (:class:`~energy.io.cleaning.LogCleaning`; see :mod:`energy.io`).
 
     Returns
     -------
@@ -180,16 +259,20 @@ def read_csv_log(
     --------
     Usage (needs data or fitted models, so not run as a doctest)::
 
-        log = read_csv_log("run.csv", columns={"time": "t", "v": "cmd_v", "omega": "cmd_w",
+        log = read_csv_log("run.csv", CsvLayout(columns={"time": "t", "v": "cmd_v", "omega": "cmd_w",
             "current_left": "iL", "current_right": "iR", "accel_z": "az"},
-            units={"current_left": "mA", "current_right": "mA"})
+            units={"current_left": "mA", "current_right": "mA"}))
     """
     path = Path(path)
     src = str(path)
-    if rates not in CSV_RATES:
-        raise UnknownNameError(f"rates must be one of {CSV_RATES!r}, got {rates!r}")
-    repairs = parse_repair(repair)
-    gap_factor = check_gap_factor(gap_factor)
+    if layout is None:
+        layout = CsvLayout()
+    if not isinstance(layout, CsvLayout):
+        raise InvalidParameterError(f"layout must be a CsvLayout, got {type(layout).__name__!r}", parameter="layout")
+    cleaning = LogCleaning.check(cleaning)
+    repairs, allow_gaps, gap_factor = cleaning.repairs, cleaning.allow_gaps, cleaning.gap_factor
+    check_units = cleaning.check_units
+    columns, units, rates, track_width_m = layout.columns, layout.units, layout.rates, layout.track_width_m
     explicit = columns is not None
     colmap, units, factors = csv_field_map(columns, units)
     text = read_csv_text(path)

@@ -230,8 +230,7 @@ def write_drive_bag(
     ``lonlat_deg``) at the drive times. Receive times equal the header stamps. The same input
     gives the same bytes (for the same file name: an MCAP's rosbag2 metadata names its file).
 
-    Read it back with ``read_rosbag(path, t.odom_topic, t.imu_topic, t.current_topics,
-    battery_topic=t.battery_topic)`` (or ``read_logs(path, bag=t.bag_topics())``): the same
+    Read it back with ``read_rosbag(path, t.bag_topics())`` (or ``read_logs(path, bag=t.bag_topics())``): the same
     streams (times to the nanosecond, the battery to float32 precision), the drive stream
     inside the IMU's span; several legs read as one log whose IMU has a gap between legs
     (``allow_gaps=True``, then :meth:`~energy.logs.InteractionLog.split_at_gaps`). The GPS
@@ -272,7 +271,8 @@ def write_drive_bag(
     Usage (needs rosbags, so not run as a doctest)::
 
         write_drive_bag([leg1, leg2], "drive.mcap", lonlat_deg=[ll1, ll2])
-        log = read_rosbag("drive.mcap", "/odom", battery_topic="/battery", allow_gaps=True)
+        log = read_rosbag("drive.mcap", BagTopics("/odom", battery_topic="/battery"),
+                          cleaning=LogCleaning(allow_gaps=True))
     """
     target = check_output_path(path)
     suffix = target.suffix.lower()

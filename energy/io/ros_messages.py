@@ -23,9 +23,10 @@ import numpy as np
 from terrawatt_base.checks import check_int, check_text, real_array
 from terrawatt_base.errors import DataError, InvalidParameterError
 
-from ..logs import DEFAULT_GAP_FACTOR, InteractionLog
-from .layouts import BagTopics
-from .rosbag import MAX_CLOCK_OFFSET_S, log_from_topic_messages
+from ..logs import InteractionLog
+from .bag_messages import TopicMessages
+from .cleaning import LogCleaning
+from .rosbag import BagTiming, BagTopics, log_from_topic_messages
 
 __all__ = [
     "DEFAULT_START_TIME_NS",
@@ -361,12 +362,8 @@ def log_from_messages(
     drive_clock: str = "currents",
     current_unit: str = "A",
     accel_unit: str = "m/s^2",
-    use_header_stamps: bool = True,
-    max_clock_offset_s: float = MAX_CLOCK_OFFSET_S,
-    repair: str | Iterable[str] = (),
-    allow_gaps: bool = False,
-    gap_factor: float = DEFAULT_GAP_FACTOR,
-    check_units: bool = True,
+    timing: BagTiming | None = None,
+    cleaning: LogCleaning | None = None,
 ) -> InteractionLog:
     """The interaction log of a chunk of live messages: the log a bag of the same messages gives.
 
@@ -393,10 +390,11 @@ def log_from_messages(
     robot, ground_label : metadata
     source : str
         ``meta.source`` and the name in messages.
-    drive_clock, current_unit, accel_unit, use_header_stamps, max_clock_offset_s, repair, allow_gaps, gap_factor
-        As :func:`~energy.io.read_rosbag`.
-    check_units
-        As :func:`~energy.io.read_rosbag`.
+    drive_clock, current_unit, accel_unit
+        As the fields of :class:`~energy.io.BagTopics`.
+    timing, cleaning
+        As :func:`~energy.io.read_rosbag` (:class:`~energy.io.BagTiming`: the header stamps and the
+        largest clock offset apply; :class:`~energy.io.cleaning.LogCleaning`).
 
     Returns
     -------
@@ -412,7 +410,7 @@ def log_from_messages(
         An empty stream, receive stamps out of order (both name the topic); as
         :func:`~energy.io.read_rosbag` (unsorted or duplicated header stamps, NaNs, gaps, no overlap).
     UnitError
-        As :func:`~energy.io.read_rosbag` with ``check_units``.
+        As :func:`~energy.io.read_rosbag` with ``cleaning.check_units``.
 
     Examples
     --------
@@ -440,10 +438,8 @@ def log_from_messages(
             continue
         raw[topic] = _stream(source, role, topic, value)
         types[topic] = _role_type(role)
-    return log_from_topic_messages(
-        source, raw, types, topics.odom_topic, topics.imu_topic, topics.current_topics,
-        battery_topic=topics.battery_topic if battery is not None else None, drive_clock=drive_clock,
-        current_unit=current_unit, accel_unit=accel_unit, robot=robot, ground_label=ground_label,
-        use_header_stamps=use_header_stamps, max_clock_offset_s=max_clock_offset_s, repair=repair,
-        allow_gaps=allow_gaps, gap_factor=gap_factor, check_units=check_units, container="the messages",
-    )
+    bag = BagTopics(topics.odom_topic, topics.imu_topic, topics.current_topics,
+                    battery_topic=topics.battery_topic if battery is not None else None, drive_clock=drive_clock,
+                    current_unit=current_unit, accel_unit=accel_unit)
+    return log_from_topic_messages(TopicMessages(source, raw, types, container="the messages"), bag, timing=timing,
+                                   robot=robot, ground_label=ground_label, cleaning=cleaning)

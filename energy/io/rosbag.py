@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import logging
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -25,10 +25,11 @@ import numpy as np
 from terrawatt_base.checks import check_bool, check_choice, check_optional_real, check_real, check_text, fmt_number
 from terrawatt_base.errors import DataError, InvalidParameterError
 
-from ..logs import DEFAULT_GAP_FACTOR, InteractionLog, LogMeta, check_gap_factor
+from ..logs import InteractionLog, LogMeta
 from .bag_align import CurrentStreams, align_streams
 from .bag_messages import (
     Messages,
+    TopicMessages,
     bag_path,
     expect_type,
     field_values,
@@ -41,16 +42,16 @@ from .cleaning import (
     MAX_OMEGA_RADPS,
     MAX_SPEED_MPS,
     UNIT_FACTORS,
+    LogCleaning,
     check_accel,
     check_current,
     check_limit,
     check_timing,
     clean_stream,
     gravity_note,
-    parse_repair,
 )
 
-__all__ = ["MAX_CLOCK_OFFSET_S", "DRIVE_CLOCKS", "read_rosbag", "log_from_topic_messages"]
+__all__ = ["MAX_CLOCK_OFFSET_S", "DRIVE_CLOCKS", "BagTopics", "BagTiming", "read_rosbag", "log_from_topic_messages"]
 
 _LOG = logging.getLogger(__name__)
 
@@ -74,6 +75,138 @@ _FIELDS_HINT = (
 
 
 @dataclass(frozen=True)
+class BagTopics:
+    """Where a bag keeps its streams: the topics and message fields :func:`read_rosbag` reads, their units,
+    and whose times the drive stream takes.
+
+    Parameters
+    ----------
+    cmd_vel_topic : str
+        Commands (``geometry_msgs/Twist``) or wheel odometry (``nav_msgs/Odometry``).
+    imu_topic : str
+        ``sensor_msgs/Imu``.
+    current_topics : tuple of str
+        Two ``std_msgs/Float*`` topics (left, right), or one multi-array or status topic.
+    current_fields : (str, str) or None
+        Left and right current fields of a status message on the one current topic, e.g.
+        ``("left_driver_current", "right_driver_current")`` for ``husky_msgs/HuskyStatus``.
+    voltage_field : str or None
+        Battery voltage field of that status message (e.g. ``"battery_voltage"``).
+    current_unit : {"A", "mA"}
+    accel_unit : {"m/s^2", "m/s2", "g"}
+        Unit of the IMU's ``linear_acceleration`` (some drivers publish g).
+    drive_clock : {"currents", "velocity"}
+        The drive stream on the current messages' times, or on the odometry's (currents
+        interpolated onto them: a 1 Hz status message beside 10-50 Hz odometry).
+    battery_topic : str or None
+        A ``sensor_msgs/BatteryState`` topic: battery voltage and pack current on the drive
+        clock, read when the bag has it (see :func:`read_rosbag`).
+
+    Raises
+    ------
+    InvalidParameterError, UnknownNameError
+        Empty or non-string names, the wrong number of topics or fields, a voltage field
+        without current fields, a voltage field beside a battery topic, an unknown unit.
+
+    Examples
+    --------
+    >>> BagTopics(cmd_vel_topic="/odometry/filtered", current_topics=("/status",),
+    ...           current_fields=("left_driver_current", "right_driver_current")).current_topics
+    ('/status',)
+    """
+
+    cmd_vel_topic: str = "/cmd_vel"
+    imu_topic: str = "/imu/data"
+    current_topics: tuple[str, ...] = ("/drive/current_left", "/drive/current_right")
+    current_fields: tuple[str, str] | None = None
+    voltage_field: str | None = None
+    current_unit: str = "A"
+    accel_unit: str = "m/s^2"
+    drive_clock: str = "currents"
+    battery_topic: str | None = None
+
+    def __post_init__(self) -> None:
+        check_text("cmd_vel_topic", self.cmd_vel_topic)
+        check_text("imu_topic", self.imu_topic)
+        topics = _names("current_topics", self.current_topics, (1, 2))
+        object.__setattr__(self, "current_topics", topics)
+        if self.current_fields is not None:
+            object.__setattr__(self, "current_fields", _names("current_fields", self.current_fields, (2,)))
+            if len(topics) != 1:
+                raise InvalidParameterError(
+                    f"current_fields (--current-fields) read one status topic; give one current topic "
+                    f"(current_topics, --current-topics), got {topics!r}"
+                )
+        if self.voltage_field is not None:
+            check_text("voltage_field", self.voltage_field)
+            if self.current_fields is None:
+                raise InvalidParameterError(
+                    "voltage_field (--voltage-field) is read beside the currents of a status message: name them "
+                    "too with current_fields (--current-fields)"
+                )
+        check_choice("current_unit", self.current_unit, tuple(UNIT_FACTORS["current"]))
+        check_choice("accel_unit", self.accel_unit, tuple(UNIT_FACTORS["accel"]))
+        check_choice("drive_clock", self.drive_clock, DRIVE_CLOCKS)
+        if self.battery_topic is not None:
+            check_text("battery_topic", self.battery_topic)
+            if self.voltage_field is not None:
+                raise InvalidParameterError(
+                    f"battery_topic {self.battery_topic!r} and voltage_field {self.voltage_field!r} (--voltage-field) "
+                    "both give the battery voltage; name one of them"
+                )
+
+
+def _names(name: str, value: Any, counts: tuple[int, ...]) -> tuple[str, ...]:
+    items = (value,) if isinstance(value, str) else tuple(value) if isinstance(value, Iterable) else (value,)
+    if len(items) not in counts or not all(isinstance(x, str) and x for x in items):
+        raise InvalidParameterError(
+            f"{name} must be {' or '.join(map(str, counts))} non-empty name(s), got {value!r:.80}"
+        )
+    return items
+
+
+@dataclass(frozen=True)
+class BagTiming:
+    """How a bag's streams are put on one clock and sampled: header stamps or receive times, commands held.
+
+    Parameters
+    ----------
+    use_header_stamps : bool
+        Read a topic whose messages carry a header on its header stamps (when all are
+        non-zero); else every topic on the receive times.
+    max_clock_offset_s : float
+        Largest tolerated |median(receive time - header stamp)| of a topic read on header
+        stamps (s, finite, > 0; default :data:`MAX_CLOCK_OFFSET_S`).
+    cmd_vel_timeout_s : float or None
+        A command older than this (s, > 0) counts as zero; None holds it indefinitely.
+    drive_rate_hz : float
+        Rate of the drive grid of a bag without odometry when the drive stream is not on the
+        currents (Hz, > 0).
+
+    Raises
+    ------
+    InvalidParameterError
+        A bad value (the message names the parameter).
+
+    Examples
+    --------
+    >>> BagTiming(use_header_stamps=False).cmd_vel_timeout_s
+    0.5
+    """
+
+    use_header_stamps: bool = True
+    max_clock_offset_s: float = MAX_CLOCK_OFFSET_S
+    cmd_vel_timeout_s: float | None = 0.5
+    drive_rate_hz: float = 10.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "use_header_stamps", check_bool("use_header_stamps", self.use_header_stamps))
+        check_optional_real("cmd_vel_timeout_s", self.cmd_vel_timeout_s, low=0.0, low_inclusive=False)
+        check_real("max_clock_offset_s", self.max_clock_offset_s, low=0.0, low_inclusive=False)
+        check_real("drive_rate_hz", self.drive_rate_hz, low=0.0, low_inclusive=False)
+
+
+@dataclass(frozen=True)
 class _Options:
     """The checked options of one read."""
 
@@ -85,29 +218,34 @@ class _Options:
     on_currents: bool
 
 
+def _checked(topics: Any, timing: Any, require_currents: Any, ground_label: Any, cleaning: Any
+             ) -> tuple[BagTopics, BagTiming, LogCleaning, _Options]:
+    """The values of one read, checked (None: the defaults), and what the steps need of them."""
+    topics = BagTopics() if topics is None else topics
+    if not isinstance(topics, BagTopics):
+        raise InvalidParameterError(f"topics must be a BagTopics, got {type(topics).__name__!r}", parameter="topics")
+    timing = BagTiming() if timing is None else timing
+    if not isinstance(timing, BagTiming):
+        raise InvalidParameterError(f"timing must be a BagTiming, got {type(timing).__name__!r}", parameter="timing")
+    cleaning = LogCleaning.check(cleaning)
+    require = check_bool("require_currents", require_currents)
+    if ground_label is not None:
+        check_text("ground_label", ground_label)
+    fields = topics.current_fields
+    return topics, timing, cleaning, _Options(topics.current_topics, fields, topics.voltage_field,
+                                              require or fields is not None, float(timing.drive_rate_hz),
+                                              topics.drive_clock == "currents")
+
+
 def read_rosbag(
     path: str | os.PathLike[str],
-    cmd_vel_topic: str = "/cmd_vel",
-    imu_topic: str = "/imu/data",
-    current_topics: str | Sequence[str] = ("/drive/current_left", "/drive/current_right"),
+    topics: BagTopics | None = None,
     *,
-    battery_topic: str | None = None,
-    current_fields: Sequence[str] | None = None,
-    voltage_field: str | None = None,
+    timing: BagTiming | None = None,
     require_currents: bool = False,
-    drive_rate_hz: float = 10.0,
-    drive_clock: str = "currents",
-    current_unit: str = "A",
-    accel_unit: str = "m/s^2",
     robot: str = "unknown",
     ground_label: str | None = None,
-    use_header_stamps: bool = True,
-    max_clock_offset_s: float = MAX_CLOCK_OFFSET_S,
-    cmd_vel_timeout_s: float | None = 0.5,
-    repair: str | Iterable[str] = (),
-    allow_gaps: bool = False,
-    gap_factor: float = DEFAULT_GAP_FACTOR,
-    check_units: bool = True,
+    cleaning: LogCleaning | None = None,
 ) -> InteractionLog:
     """Read an interaction log from a ROS 1 ``.bag``, a ROS 2 bag (sqlite3 ``.db3`` or MCAP).
 
@@ -180,36 +318,22 @@ def read_rosbag(
     ----------
     path : path-like
         ``.bag`` file, ROS 2 bag directory, or the ``.db3`` / ``.mcap`` file inside one.
-    cmd_vel_topic, imu_topic, current_topics : str
-        Topic names (see above).
-    battery_topic : str, optional
-        A ``sensor_msgs/msg/BatteryState`` topic (see above).
-    current_fields : (str, str), optional
-        Left and right current fields of the message on the one current topic.
-    voltage_field : str, optional
-        Battery voltage field (V) of the message on the one current topic; goes to
-        ``battery_voltage_v`` (current x voltage is the battery power).
+    topics : BagTopics, optional
+        The topics (``cmd_vel_topic``, ``imu_topic``, ``current_topics``, ``battery_topic``),
+        the fields of a status message (``current_fields``, ``voltage_field``: the battery
+        voltage, V, to ``battery_voltage_v``), the units (``current_unit``; ``accel_unit`` of
+        the IMU's ``linear_acceleration``, sensor_msgs/Imu says m/s^2, some drivers publish g:
+        an IMU whose vertical acceleration has a median of about 1 read as m/s^2 is refused,
+        UnitError, rather than taken for a gravity-free one) and the ``drive_clock`` (see
+        Alignment); default ``BagTopics()``.
+    timing : BagTiming, optional
+        ``use_header_stamps``, ``max_clock_offset_s``, ``cmd_vel_timeout_s`` and
+        ``drive_rate_hz`` (see Timestamps and Alignment); default ``BagTiming()``.
     require_currents : bool
         Refuse a bag without the current topics instead of reading a log without currents.
-    drive_rate_hz : float
-        Rate of the drive grid of a bag without odometry when the drive stream is not on
-        the currents (Hz, > 0).
-    drive_clock : {"currents", "velocity"}
-        Whose times the drive stream takes when the bag has currents (see Alignment).
-    current_unit : {"A", "mA"}
-        Unit of the currents.
-    accel_unit : {"m/s^2", "m/s2", "g"}
-        Unit of the IMU's ``linear_acceleration`` (sensor_msgs/Imu says m/s^2; some drivers
-        publish g). An IMU whose vertical acceleration has a median of about 1 read as m/s^2
-        is refused (UnitError) rather than taken for a gravity-free one.
     robot, ground_label : metadata
-    use_header_stamps : bool
-    max_clock_offset_s : float
-        Largest tolerated |median(receive time - header stamp)| of a topic read on header
-        stamps (s, finite, > 0).
-    cmd_vel_timeout_s : float or None
-    repair, allow_gaps, gap_factor, check_units
-        See :mod:`energy.io`.
+    cleaning : LogCleaning, optional
+        Repairs, gaps and unit checks (:class:`~energy.io.cleaning.LogCleaning`; see :mod:`energy.io`).
 
     Returns
     -------
@@ -233,53 +357,29 @@ def read_rosbag(
     UnitError, UnknownNameError, InvalidParameterError
         As documented in :mod:`energy.io` (with ``check_units``, also a current or IMU
         topic whose rate lies outside [0.5 Hz, 10 kHz], a battery voltage above 200 V);
-        unknown ``current_unit``; bad timeout or ``max_clock_offset_s``; both
-        ``battery_topic`` and ``voltage_field``.
+        ``topics`` not a BagTopics, ``timing`` not a BagTiming, ``cleaning`` not a LogCleaning.
     """
     import_rosbags()
-    options = dict(
-        battery_topic=battery_topic, current_fields=current_fields, voltage_field=voltage_field,
-        require_currents=require_currents, drive_rate_hz=drive_rate_hz, drive_clock=drive_clock,
-        current_unit=current_unit, accel_unit=accel_unit, robot=robot, ground_label=ground_label,
-        use_header_stamps=use_header_stamps, max_clock_offset_s=max_clock_offset_s, cmd_vel_timeout_s=cmd_vel_timeout_s,
-        repair=repair, allow_gaps=allow_gaps, gap_factor=gap_factor, check_units=check_units,
-    )
-    opts = _check_arguments(current_unit, cmd_vel_timeout_s, max_clock_offset_s, ground_label, current_topics,
-                            current_fields, voltage_field, require_currents, drive_rate_hz, drive_clock, battery_topic)
-    parse_repair(repair)
-    check_gap_factor(gap_factor)
+    topics, timing, cleaning, opts = _checked(topics, timing, require_currents, ground_label, cleaning)
     bag = bag_path(path)
+    battery_topic = topics.battery_topic
     optional = (() if opts.require else opts.topics_cur) + ((battery_topic,) if battery_topic is not None else ())
-    raw, types = read_messages(bag, (cmd_vel_topic, imu_topic) + (opts.topics_cur if opts.require else ()), optional)
-    return log_from_topic_messages(str(bag), raw, types, cmd_vel_topic, imu_topic, current_topics, **options)
+    wanted = (topics.cmd_vel_topic, topics.imu_topic) + (opts.topics_cur if opts.require else ())
+    raw, types = read_messages(bag, wanted, optional)
+    return log_from_topic_messages(TopicMessages(str(bag), raw, types), topics, timing=timing,
+                                   require_currents=require_currents, robot=robot, ground_label=ground_label,
+                                   cleaning=cleaning)
 
 
 def log_from_topic_messages(
-    src: str,
-    raw: Messages,
-    types: dict[str, str],
-    cmd_vel_topic: str = "/cmd_vel",
-    imu_topic: str = "/imu/data",
-    current_topics: str | Sequence[str] = ("/drive/current_left", "/drive/current_right"),
+    messages: TopicMessages,
+    topics: BagTopics | None = None,
     *,
-    battery_topic: str | None = None,
-    current_fields: Sequence[str] | None = None,
-    voltage_field: str | None = None,
+    timing: BagTiming | None = None,
     require_currents: bool = False,
-    drive_rate_hz: float = 10.0,
-    drive_clock: str = "currents",
-    current_unit: str = "A",
-    accel_unit: str = "m/s^2",
     robot: str = "unknown",
     ground_label: str | None = None,
-    use_header_stamps: bool = True,
-    max_clock_offset_s: float = MAX_CLOCK_OFFSET_S,
-    cmd_vel_timeout_s: float | None = 0.5,
-    repair: str | Iterable[str] = (),
-    allow_gaps: bool = False,
-    gap_factor: float = DEFAULT_GAP_FACTOR,
-    check_units: bool = True,
-    container: str = "the bag",
+    cleaning: LogCleaning | None = None,
 ) -> InteractionLog:
     """The interaction log of messages grouped by topic, as :func:`read_rosbag` builds it from a bag's.
 
@@ -290,16 +390,12 @@ def log_from_topic_messages(
 
     Parameters
     ----------
-    src : str
-        The source's name in messages and ``meta.source`` (a bag path).
-    raw : dict topic -> list of (int, message)
-        Per topic, its messages with their receive times (ns), in receive order.
-    types : dict topic -> str
-        Per topic, its message type (``"nav_msgs/msg/Odometry"``, ...).
-    cmd_vel_topic, imu_topic, current_topics, battery_topic, current_fields, ...
-        As :func:`read_rosbag`: a current or battery topic not in ``raw`` is a missing topic.
-    container : str
-        What held the messages, in the note of missing current topics (``"the bag"``).
+    messages : TopicMessages
+        The messages by topic with their receive times (ns) and types, the source's name (in
+        messages and ``meta.source``) and what held them (``"the bag"``, in the note of
+        missing current topics).
+    topics, timing, require_currents, robot, ground_label, cleaning
+        As :func:`read_rosbag`: a current or battery topic not in the messages is a missing topic.
 
     Returns
     -------
@@ -310,10 +406,15 @@ def log_from_topic_messages(
     DataError, UnitError, UnknownNameError, InvalidParameterError
         As :func:`read_rosbag`; also the velocity or IMU topic not in ``raw``.
     """
-    opts = _check_arguments(current_unit, cmd_vel_timeout_s, max_clock_offset_s, ground_label, current_topics,
-                            current_fields, voltage_field, require_currents, drive_rate_hz, drive_clock, battery_topic)
-    repairs = parse_repair(repair)
-    gap_factor = check_gap_factor(gap_factor)
+    if not isinstance(messages, TopicMessages):
+        raise InvalidParameterError(f"messages must be a TopicMessages, got {type(messages).__name__!r}",
+                                    parameter="messages")
+    topics, timing, cleaning, opts = _checked(topics, timing, require_currents, ground_label, cleaning)
+    src, raw, types, container = messages.source, messages.raw, messages.types, messages.container
+    cmd_vel_topic, imu_topic, battery_topic = topics.cmd_vel_topic, topics.imu_topic, topics.battery_topic
+    current_unit, accel_unit = topics.current_unit, topics.accel_unit
+    repairs, allow_gaps, gap_factor = cleaning.repairs, cleaning.allow_gaps, cleaning.gap_factor
+    check_units = cleaning.check_units
     needed = (cmd_vel_topic, imu_topic) + (opts.topics_cur if opts.require else ())
     absent = [t for t in needed if t not in raw or t not in types]
     if absent:
@@ -337,7 +438,8 @@ def log_from_topic_messages(
         notes.append(f"no battery: topic {battery_topic!r} not in {container}")
         _LOG.info("%s: no battery: topic %r not in %s", src, battery_topic, container)
     wanted = (cmd_vel_topic, imu_topic, *present, *((battery_topic,) if battery else ()))
-    times_ns = {t: topic_times(src, t, raw[t], use_header_stamps, max_clock_offset_s, notes) for t in wanted}
+    times_ns = {t: topic_times(src, t, raw[t], timing.use_header_stamps, timing.max_clock_offset_s, notes)
+                for t in wanted}
     origin = int(min(s.min() for s in times_ns.values()))
     secs = {t: (s - origin).astype(np.float64) / 1e9 for t, s in times_ns.items()}
     clean = dict(repairs=repairs, gap_factor=gap_factor)
@@ -345,7 +447,6 @@ def log_from_topic_messages(
     vcols = _velocity_columns(vel_type, [m for _, m in raw[cmd_vel_topic]])
     tv, vc, _ = clean_stream(src, cmd_vel_topic, secs[cmd_vel_topic], vcols, allow_gaps=allow_gaps or not measured, **clean)
     imu_msgs = [m for _, m in raw[imu_topic]]
-    check_choice("accel_unit", accel_unit, tuple(UNIT_FACTORS["accel"]))
     icols = {"accel_z": np.array([m.linear_acceleration.z for m in imu_msgs], dtype=np.float64)
              * UNIT_FACTORS["accel"][accel_unit]}
     if not all(float(m.angular_velocity_covariance[0]) == -1.0 for m in imu_msgs):
@@ -366,8 +467,8 @@ def log_from_topic_messages(
                            check_units)
     if gravity:
         notes.append(gravity)
-    log = align_streams(src, currents, (tv, vc, measured), (ti, ic), cmd_vel_timeout_s, opts.drive_rate_hz, notes,
-                        opts.on_currents)
+    log = align_streams(src, currents, (tv, vc, measured), (ti, ic), timing.cmd_vel_timeout_s, opts.drive_rate_hz,
+                        notes, opts.on_currents)
     if battery:
         log.update(_battery_on_drive(src, battery_topic, tb, bc, log["time_s"], gap_factor, allow_gaps, notes))
     if missing_currents:
@@ -383,55 +484,6 @@ def log_from_topic_messages(
         missing_currents=missing_currents,
     )
     return InteractionLog(**log, meta=meta)
-
-
-def _check_arguments(
-    current_unit: Any, cmd_vel_timeout_s: Any, max_clock_offset_s: Any, ground_label: Any, current_topics: Any,
-    current_fields: Any, voltage_field: Any, require_currents: Any, drive_rate_hz: Any, drive_clock: Any,
-    battery_topic: Any = None,
-) -> _Options:
-    """Check the options."""
-    check_choice("current_unit", current_unit, tuple(UNIT_FACTORS["current"]))
-    check_optional_real("cmd_vel_timeout_s", cmd_vel_timeout_s, low=0.0, low_inclusive=False)
-    check_real("max_clock_offset_s", max_clock_offset_s, low=0.0, low_inclusive=False)
-    rate = check_real("drive_rate_hz", drive_rate_hz, low=0.0, low_inclusive=False)
-    check_choice("drive_clock", drive_clock, DRIVE_CLOCKS)
-    require = check_bool("require_currents", require_currents)
-    if ground_label is not None:
-        check_text("ground_label", ground_label)
-    topics_cur = (current_topics,) if isinstance(current_topics, str) else tuple(current_topics)
-    if len(topics_cur) not in (1, 2) or not all(isinstance(x, str) and x for x in topics_cur):
-        raise InvalidParameterError(
-            f"current_topics must be one topic name (a [left, right] multi-array or a status message) or two "
-            f"(left, right), got {current_topics!r}"
-        )
-    fields = None
-    if current_fields is not None:
-        fields = (current_fields,) if isinstance(current_fields, str) else tuple(current_fields)
-        if len(fields) != 2 or not all(isinstance(x, str) and x for x in fields):
-            raise InvalidParameterError(
-                f"current_fields (--current-fields) must be two field names (left, right), got {current_fields!r}"
-            )
-    if voltage_field is not None:
-        check_text("voltage_field", voltage_field)
-    if (fields is not None or voltage_field is not None) and len(topics_cur) != 1:
-        raise InvalidParameterError(
-            f"current_fields and voltage_field (--current-fields, --voltage-field) read one status topic; "
-            f"give one current topic (current_topics, --current-topics), got {topics_cur!r}"
-        )
-    if voltage_field is not None and fields is None:
-        raise InvalidParameterError(
-            "voltage_field (--voltage-field) is read beside the currents of a status message: name them too "
-            "with current_fields (--current-fields)"
-        )
-    if battery_topic is not None:
-        check_text("battery_topic", battery_topic)
-        if voltage_field is not None:
-            raise InvalidParameterError(
-                f"battery_topic {battery_topic!r} and voltage_field {voltage_field!r} (--voltage-field) both give the "
-                "battery voltage; name one of them"
-            )
-    return _Options(topics_cur, fields, voltage_field, require or fields is not None, rate, drive_clock == "currents")
 
 
 def _current_columns(

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from energy import LinearCurrentModel, load_current_model
-from energy.io import read_borealtc
+from energy.io import BagTopics, read_borealtc
 from terrain import FileFormatError, TerrainMap
 from terrawatt_base.containers import load_npy, read_npz
 
@@ -138,13 +138,14 @@ def test_a_csv_log_or_a_bag_over_the_memory_budget_is_refused_before_it_is_read(
     from robot_bags import write_robot_bag
 
     write_robot_bag(tmp_path / "h.bag", duration_s=4.0)  # 60 odometry, 120 imu, 40 status messages
-    topics = dict(current_fields=("left_driver_current", "right_driver_current"), voltage_field="battery_voltage",
-                  drive_clock="currents")
+    topics = BagTopics(cmd_vel_topic="/odometry/filtered", imu_topic="/imu/data", current_topics="/status",
+                       current_fields=("left_driver_current", "right_driver_current"), voltage_field="battery_voltage",
+                       drive_clock="currents")
     monkeypatch.setenv("TERRAWATT_MEMORY_BUDGET_BYTES", str(100 * BAG_MESSAGE_BYTES))
     with pytest.raises(FileFormatError, match=r"the 2\d\d messages of topics .* more than the memory budget"):
-        read_rosbag(tmp_path / "h.bag", "/odometry/filtered", "/imu/data", "/status", **topics)
+        read_rosbag(tmp_path / "h.bag", topics)
     monkeypatch.delenv("TERRAWATT_MEMORY_BUDGET_BYTES")
-    assert len(read_rosbag(tmp_path / "h.bag", "/odometry/filtered", "/imu/data", "/status", **topics)) > 0
+    assert len(read_rosbag(tmp_path / "h.bag", topics)) > 0
 
 
 @pytest.mark.parametrize("raw", ["0", "-5", "abc", "1e3", "1e30", "4.5"])

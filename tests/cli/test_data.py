@@ -7,6 +7,7 @@ import argparse
 import pytest
 from cli_samples import FIXTURES, one_line_error
 
+from energy.io import CsvLayout
 from terrain import InvalidParameterError
 from terrawatt_base.errors import TerrawattError
 from terrawatt_cli import EXIT_BAD_INPUT, main
@@ -66,7 +67,7 @@ def test_csv_flags_read_csv_logs_of_another_layout(tmp_path):
                   "current_left=left_mA", "current_right=right_mA", "accel_z=acc_z", "ground=label",
                   "--csv-units", "time=ms", "current_left=mA", "current_right=mA", "omega=deg/s")
     (log,) = logs_from_args(args, require_currents=True)
-    same = read_csv_log(generic, dict(args.csv_columns), dict(args.csv_units))
+    same = read_csv_log(generic, CsvLayout(dict(args.csv_columns), dict(args.csv_units)))
     assert log.current_right_a.tolist() == same.current_right_a.tolist() and log.time_s[-1] == same.time_s[-1]
 
 
@@ -113,3 +114,14 @@ def test_ignored_csv_flags_exit_2_with_one_line(tmp_path, capsys, flags):
     rc = main(["train", "--model", "physics", *[paths.get(f, f) for f in flags], "--out", str(tmp_path / "m")])
     assert rc == EXIT_BAD_INPUT
     assert "--track-width" in one_line_error(capsys) and not (tmp_path / "m").exists()
+
+
+def test_the_path_the_library_names_is_said_as_the_flag_that_gave_it(tmp_path):
+    from terrain import DataError
+
+    args = _parse("--data", str(tmp_path / "missing"))
+    with pytest.raises(DataError, match=r"^--data '.*missing' does not exist"):
+        logs_from_args(args, require_currents=False)
+    args.calibration_data = tmp_path / "gone"
+    with pytest.raises(DataError, match=r"^--calibration-data '.*gone' does not exist"):
+        logs_from_args(args, require_currents=False, flag="--calibration-data")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -225,3 +226,39 @@ def test_plan_on_the_example_map_is_the_demo(tmp_path, capsys):
     assert plan["map"] == demo["map"] == "bundled example map"
     assert plan["routes"]["min_energy"]["waypoints_m"] == demo["routes"]["min_energy"]["waypoints_m"]
     capsys.readouterr()
+
+
+def _plan_args(*extra: str):
+    from terrawatt_cli import build_parser
+
+    return build_parser().parse_args(["plan", "--map", "dem.tif", "--start", "1", "1", "--goal", "5", "5",
+                                      "--out", "out", *extra])
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [(["--model", "m.zip", "--coarse-factor", "4"], "--model plans on the whole map with --planner; it does not apply "
+                                                     "to --coarse-factor / --windowed yet"),
+     (["--windowed"], "--windowed plans coarse-to-fine; give --coarse-factor F too"),
+     (["--coarse-factor", "4", "--windowed", "--cell-size", "5"], "--windowed reads the DEM as it is and cannot apply "
+      "--cell-size (it needs the whole map): fill or reproject the DEM first (gdal_fillnodata, gdalwarp), or plan "
+      "without --windowed"),
+     (["--coarse-factor", "4", "--windowed", "--landcover", "lc.tif"], "cannot apply --landcover")],
+)
+def test_the_coarse_flags_it_cannot_take_are_refused_before_any_work(extra, message):
+    from terrawatt_cli.plan import coarse_arg
+
+    with pytest.raises(terrain.InvalidParameterError, match=re.escape(message)):
+        coarse_arg(_plan_args(*extra))
+
+
+def test_the_coarse_flags_make_one_options_value():
+    from planner import CoarseOptions
+    from terrawatt_cli.plan import coarse_arg
+
+    assert coarse_arg(_plan_args()) is None
+    assert coarse_arg(_plan_args("--fill-nodata", "nearest", "--coarse-factor", "4")) == CoarseOptions(factor=4)
+    assert coarse_arg(_plan_args("--coarse-factor", "8", "--corridor", "30", "--fine-window-cells", "400")) == \
+        CoarseOptions(factor=8, corridor_m=30.0)  # the fine windows' budget applies to a windowed read only
+    assert coarse_arg(_plan_args("--coarse-factor", "8", "--windowed", "--fine-window-cells", "400")) == \
+        CoarseOptions(factor=8, fine_window_budget_cells=400)

@@ -22,6 +22,7 @@ from energy import (
     write_csv_log,
 )
 from energy.features import band_rms_spectra, log_band_edges_hz
+from energy.io import BagTiming, LogCleaning
 from terrain import DataError, InvalidParameterError, UnitError, UnknownNameError
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"
@@ -48,7 +49,7 @@ def bags(tmp_path_factory) -> dict[str, tuple[Path, dict]]:
 
 def test_husky_status_currents_and_voltage_by_field_name(bags):
     path, truth = bags["husky"]
-    log = read_rosbag(path, robot="husky", **HUSKY)
+    log = read_rosbag(path, BagTopics(**HUSKY), robot="husky")
     assert log.has_currents and log.meta.missing_currents == ""
     # the drive stream sits on the status messages inside the overlap of status, IMU and odometry
     i = np.searchsorted(truth["status_t"], log.time_s - 1e-9)
@@ -63,16 +64,16 @@ def test_husky_status_currents_and_voltage_by_field_name(bags):
 
 def test_husky_status_fields_in_milliamps_and_nested_names(bags, tmp_path):
     path, truth = bags["husky"]
-    log = read_rosbag(path, current_unit="mA", check_units=False, **HUSKY)
+    log = read_rosbag(path, BagTopics(**HUSKY, current_unit="mA"), cleaning=LogCleaning(check_units=False))
     np.testing.assert_allclose(log.current_left_a[:3], truth["left"][:3] / 1000.0)
-    nested = read_rosbag(path, **{**HUSKY, "current_fields": ("left_driver_current", "header.stamp.sec"),
-                                  "voltage_field": None}, check_units=False)
+    nested = read_rosbag(path, BagTopics(**{**HUSKY, "current_fields": ("left_driver_current", "header.stamp.sec"),
+                                            "voltage_field": None}), cleaning=LogCleaning(check_units=False))
     assert nested.current_right_a[0] == BASE_NS // 1_000_000_000
 
 
 def test_jackal_bag_without_current_topics_reads_for_prediction(bags):
     path, truth = bags["jackal"]
-    log = read_rosbag(path, "/odometry/filtered", robot="jackal")
+    log = read_rosbag(path, BagTopics(cmd_vel_topic="/odometry/filtered"), robot="jackal")
     assert not log.has_currents and log.current_left_a is None and log.current_right_a is None
     assert "'/drive/current_left', '/drive/current_right'" in log.meta.missing_currents
     assert "no currents" in log.meta.notes
@@ -83,13 +84,13 @@ def test_jackal_bag_without_current_topics_reads_for_prediction(bags):
                                         r"--current-fields"):
         log.require_currents("training")
     with pytest.raises(DataError, match=r"topic\(s\) \['/drive/current_left', '/drive/current_right'\] not in the bag"):
-        read_rosbag(path, "/odometry/filtered", require_currents=True)
+        read_rosbag(path, BagTopics(cmd_vel_topic="/odometry/filtered"), require_currents=True)
 
 
 def test_a_model_predicts_a_bag_without_currents(bags):
     model = new_current_model("physics", seed=0).fit(read_borealtc(FIXTURES))
-    jackal = read_rosbag(bags["jackal"][0], "/odometry/filtered")
-    husky = read_rosbag(bags["husky"][0], **HUSKY)
+    jackal = read_rosbag(bags["jackal"][0], BagTopics(cmd_vel_topic="/odometry/filtered"))
+    husky = read_rosbag(bags["husky"][0], BagTopics(**HUSKY))
     runs = predict_runs(model, [jackal, husky])
     assert [r.has_currents for r in runs] == [False, True]
     assert runs[0].charge_predicted_left_mah > 0 and np.isnan(runs[0].charge_measured_left_mah)
@@ -102,16 +103,16 @@ def test_a_model_predicts_a_bag_without_currents(bags):
 
 def test_commands_only_bag_without_currents_uses_a_drive_grid(bags):
     path, _ = bags["cmd_only"]
-    log = read_rosbag(path, "/cmd_vel", drive_rate_hz=5.0)
+    log = read_rosbag(path, BagTopics(cmd_vel_topic="/cmd_vel"), timing=BagTiming(drive_rate_hz=5.0))
     assert not log.has_currents and log.meta.velocity_source == "commanded"
     np.testing.assert_allclose(np.diff(log.time_s), 0.2, atol=1e-9)
     assert "5 Hz grid" in log.meta.notes
     with pytest.raises(InvalidParameterError, match="drive_rate_hz"):
-        read_rosbag(path, "/cmd_vel", drive_rate_hz=0.0)
+        read_rosbag(path, BagTopics(cmd_vel_topic="/cmd_vel"), timing=BagTiming(drive_rate_hz=0.0))
 
 
 def test_gravity_removed_imu_is_accepted_flagged_and_the_vibration_features_do_not_need_gravity(bags, tmp_path):
-    log = read_rosbag(bags["no_gravity"][0], "/odometry/filtered")
+    log = read_rosbag(bags["no_gravity"][0], BagTopics(cmd_vel_topic="/odometry/filtered"))
     assert log.meta.gravity_removed
     assert "linear_acceleration.z has gravity removed (median 0.0" in log.meta.notes
     assert abs(float(np.median(log.accel_z_mps2))) < 0.5
@@ -124,7 +125,7 @@ def test_gravity_removed_imu_is_accepted_flagged_and_the_vibration_features_do_n
     a = band_rms_spectra(log.accel_time_s, log.accel_z_mps2, centres, 2.0, edges)
     b = band_rms_spectra(log.accel_time_s, log.accel_z_mps2 + 9.81, centres, 2.0, edges)
     np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12)
-    with_gravity = read_rosbag(bags["jackal"][0], "/odometry/filtered")
+    with_gravity = read_rosbag(bags["jackal"][0], BagTopics(cmd_vel_topic="/odometry/filtered"))
     assert not with_gravity.meta.gravity_removed
 
 
@@ -144,7 +145,7 @@ def test_gravity_removed_imu_is_accepted_flagged_and_the_vibration_features_do_n
     (dict(cmd_vel_topic="/odometry/filtered", current_topics=("/status", "/status")), DataError,
      r"'/status' has type 'husky_msgs/msg/HuskyStatus'; expected one of .*Float64'"),
     (dict(HUSKY, current_fields=("left_driver_current",)), InvalidParameterError,
-     r"current_fields \(--current-fields\) must be two field names"),
+     r"current_fields must be 2 non-empty name\(s\)"),
     (dict(HUSKY, current_topics=("/status", "/other")), InvalidParameterError,
      r"give one current topic \(current_topics, --current-topics\)"),
     (dict(HUSKY, current_fields=None), InvalidParameterError,
@@ -154,18 +155,19 @@ def test_gravity_removed_imu_is_accepted_flagged_and_the_vibration_features_do_n
 ])
 def test_bad_status_names_are_clear_errors(bags, kwargs, error, match):
     with pytest.raises(error, match=match):
-        read_rosbag(bags["husky"][0], **kwargs)
+        read_rosbag(bags["husky"][0], BagTopics(**kwargs))
 
 
 def test_one_of_two_current_topics_and_a_voltage_in_millivolts(bags, tmp_path):
     with pytest.raises(DataError, match=r"current topic '/status' is in the bag but \['/missing'\] is not"):
-        read_rosbag(bags["husky"][0], "/odometry/filtered", current_topics=("/status", "/missing"))
+        read_rosbag(bags["husky"][0], BagTopics(cmd_vel_topic="/odometry/filtered",
+                                                current_topics=("/status", "/missing")))
     with pytest.raises(UnitError, match=r"battery voltage.*looks like mV"):
-        read_rosbag(bags["husky"][0], **{**HUSKY, "voltage_field": "uptime"})
+        read_rosbag(bags["husky"][0], BagTopics(**{**HUSKY, "voltage_field": "uptime"}))
 
 
 def test_logs_with_and_without_currents_do_not_concatenate(bags):
-    jackal = read_rosbag(bags["jackal"][0], "/odometry/filtered")
+    jackal = read_rosbag(bags["jackal"][0], BagTopics(cmd_vel_topic="/odometry/filtered"))
     t = np.arange(5) * 0.1
     other = InteractionLog(t, np.ones(5), np.zeros(5), np.ones(5), np.ones(5), t, np.full(5, 9.8),
                            pose_xyh=np.zeros((5, 3)), meta=LogMeta(velocity_source="measured"))
@@ -185,8 +187,8 @@ def test_read_logs_bag_topics_and_required_currents(bags):
 
 
 def test_training_refuses_a_log_without_currents(bags):
-    jackal = read_rosbag(bags["jackal"][0], "/odometry/filtered")
-    husky = read_rosbag(bags["husky"][0], **HUSKY)
+    jackal = read_rosbag(bags["jackal"][0], BagTopics(cmd_vel_topic="/odometry/filtered"))
+    husky = read_rosbag(bags["husky"][0], BagTopics(**HUSKY))
     match = r"training, adaptation, scoring or diagnosis needs measured drive currents.*'/drive/current_left'"
     for kind in ("constant", "linear", "physics"):
         with pytest.raises(DataError, match=match):
@@ -195,15 +197,15 @@ def test_training_refuses_a_log_without_currents(bags):
 
 def test_a_status_message_at_a_jittery_1_hz_passes_the_rate_check(tmp_path):
     truth = write_robot_bag(tmp_path / "slow.bag", status_hz=0.95, duration_s=12.0)
-    log = read_rosbag(tmp_path / "slow.bag", **HUSKY)
+    log = read_rosbag(tmp_path / "slow.bag", BagTopics(**HUSKY))
     assert log.has_currents and len(log) == truth["status_t"].size
     assert log.drive_rate_hz == pytest.approx(0.95, rel=1e-6)
 
 
 def test_a_slow_status_message_beside_fast_odometry_on_the_odometry_clock(tmp_path):
     truth = write_robot_bag(tmp_path / "slow.bag", status_hz=1.0, odom_hz=10.0, duration_s=12.0)
-    on_status = read_rosbag(tmp_path / "slow.bag", **HUSKY)
-    on_odom = read_rosbag(tmp_path / "slow.bag", **HUSKY, drive_clock="velocity")
+    on_status = read_rosbag(tmp_path / "slow.bag", BagTopics(**HUSKY))
+    on_odom = read_rosbag(tmp_path / "slow.bag", BagTopics(**HUSKY, drive_clock="velocity"))
     assert on_status.drive_rate_hz == pytest.approx(1.0) and on_odom.drive_rate_hz == pytest.approx(10.0)
     np.testing.assert_allclose(on_odom.current_left_a, np.interp(on_odom.time_s, truth["status_t"], truth["left"]))
     np.testing.assert_allclose(on_odom.battery_voltage_v, np.interp(on_odom.time_s, truth["status_t"], truth["volts"]))
@@ -214,20 +216,20 @@ def test_a_slow_status_message_beside_fast_odometry_on_the_odometry_clock(tmp_pa
                                                                    drive_clock="velocity"))
     np.testing.assert_array_equal(via_layouts.time_s, on_odom.time_s)
     with pytest.raises(UnknownNameError, match="drive_clock"):
-        read_rosbag(tmp_path / "slow.bag", **HUSKY, drive_clock="imu")
+        read_rosbag(tmp_path / "slow.bag", BagTopics(**HUSKY, drive_clock="imu"))
 
 
 def test_the_battery_power_of_a_log_uses_its_measured_voltage(bags):
     from energy import robot_preset
     from energy.budget import log_battery_power_w
 
-    husky = read_rosbag(bags["husky"][0], **HUSKY)
+    husky = read_rosbag(bags["husky"][0], BagTopics(**HUSKY))
     robot = robot_preset("husky")
     power = log_battery_power_w(husky, robot, current_convention="battery", electronics=False)
     drawn = husky.current_left_a + husky.current_right_a - 2 * robot.rest_current_a  # the rest offset is not drawn
     np.testing.assert_allclose(power, husky.battery_voltage_v * drawn)
     assert not np.allclose(power, robot.battery_voltage_v * drawn)
-    jackal = read_rosbag(bags["jackal"][0], "/odometry/filtered")
+    jackal = read_rosbag(bags["jackal"][0], BagTopics(cmd_vel_topic="/odometry/filtered"))
     with pytest.raises(DataError, match="log_battery_power_w needs measured drive currents"):
         log_battery_power_w(jackal, robot, current_convention="battery")
 
@@ -236,8 +238,8 @@ def test_the_battery_power_of_a_log_uses_its_measured_voltage(bags):
 def test_an_imu_publishing_in_g_is_refused_until_its_unit_is_given(tmp_path):
     truth = write_robot_bag(tmp_path / "g.bag", in_g=True)
     with pytest.raises(UnitError, match=r"looks like an acceleration in g.*--accel-unit g"):
-        read_rosbag(tmp_path / "g.bag", **HUSKY)
-    log = read_rosbag(tmp_path / "g.bag", **HUSKY, accel_unit="g")
+        read_rosbag(tmp_path / "g.bag", BagTopics(**HUSKY))
+    log = read_rosbag(tmp_path / "g.bag", BagTopics(**HUSKY, accel_unit="g"))
     assert not log.meta.gravity_removed
     assert np.median(log.accel_z_mps2) == pytest.approx(np.median(truth["az"]), rel=2e-3)  # m/s^2 again
     (via_layouts,) = read_logs(tmp_path / "g.bag", bag=BagTopics(**{**HUSKY, "current_topics": ("/status",)},

@@ -22,7 +22,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from energy import read_borealtc
-from energy.io import read_borealtc_run
+from energy.io import LogCleaning, read_borealtc_run
 from terrain import (
     DataError,
     DataRepairWarning,
@@ -106,7 +106,7 @@ def test_borealtc_unsorted_raises_then_sort_repair(tmp_path, caplog):
         read_borealtc_run(imu, pro)
     with caplog.at_level(logging.WARNING, logger="energy.io"):
         with pytest.warns(DataRepairWarning, match=r"sorted timestamps \(1 backward step"):
-            fixed = read_borealtc_run(imu, pro, repair=("sort",))
+            fixed = read_borealtc_run(imu, pro, cleaning=LogCleaning(repair=("sort",)))
     assert any("sorted timestamps" in r.getMessage() for r in caplog.records)
     np.testing.assert_array_equal(fixed.time_s, reference.time_s)
     np.testing.assert_array_equal(fixed.current_left_a, reference.current_left_a)
@@ -119,7 +119,7 @@ def test_borealtc_duplicates_raise_then_drop(tmp_path):
     with pytest.raises(DataError, match=r"IMU stream: 1 duplicated timestamp\(s\), first at index 5 \(t=0.04 s\)"):
         read_borealtc_run(imu, pro)
     with pytest.warns(DataRepairWarning, match=r"dropped 1 sample\(s\) with a duplicated timestamp"):
-        fixed = read_borealtc_run(imu, pro, repair="drop_duplicates")
+        fixed = read_borealtc_run(imu, pro, cleaning=LogCleaning(repair="drop_duplicates"))
     np.testing.assert_array_equal(fixed.accel_time_s, reference.accel_time_s)
 
 
@@ -130,7 +130,7 @@ def test_borealtc_nan_raises_then_interpolates(tmp_path):
     with pytest.raises(DataError, match=r"column 'curR' has 1 missing or non-finite value\(s\), first at index 3"):
         read_borealtc_run(imu, pro)
     with pytest.warns(DataRepairWarning, match="interpolated 1 missing value"):
-        log = read_borealtc_run(imu, pro, repair=["interpolate_nans"])
+        log = read_borealtc_run(imu, pro, cleaning=LogCleaning(repair=["interpolate_nans"]))
     t = raw[:, 0]
     expected = raw[2, 2] + (raw[4, 2] - raw[2, 2]) * (t[3] - t[2]) / (t[4] - t[2])
     assert log.current_right_a[3] == pytest.approx(expected, abs=1e-12)
@@ -147,7 +147,7 @@ def test_borealtc_nan_time_never_repaired(tmp_path):
     imu, pro = copy_run(tmp_path)
     edit_lines(pro, lambda ls: ls[:3] + ["," + ls[3].split(",", 1)[1]] + ls[4:])
     with pytest.raises(DataError, match=r"1 timestamp\(s\) are missing.*never repaired"):
-        read_borealtc_run(imu, pro, repair=("interpolate_nans",))
+        read_borealtc_run(imu, pro, cleaning=LogCleaning(repair=("interpolate_nans",)))
 
 
 def test_borealtc_gap_raises_or_allowed(tmp_path):
@@ -155,7 +155,7 @@ def test_borealtc_gap_raises_or_allowed(tmp_path):
     edit_lines(imu, lambda ls: ls[:40] + ls[100:])  # 0.6 s hole in a 100 Hz stream
     with pytest.raises(DataError, match=r"IMU stream: 1 gap\(s\) longer than 5 median periods.*allow_gaps=True"):
         read_borealtc_run(imu, pro)
-    log = read_borealtc_run(imu, pro, allow_gaps=True)
+    log = read_borealtc_run(imu, pro, cleaning=LogCleaning(allow_gaps=True))
     with pytest.warns(DataRepairWarning, match="split_at_gaps"):
         pieces = log.split_at_gaps()
     assert len(pieces) == 2
@@ -202,7 +202,7 @@ def test_borealtc_milliamps_declared_as_amps(tmp_path):
     edit_lines(pro, to_ma)
     with pytest.raises(UnitError, match="curL is declared in A but its values look like mA"):
         read_borealtc_run(imu, pro)
-    log = read_borealtc_run(imu, pro, check_units=False)  # explicit opt-out
+    log = read_borealtc_run(imu, pro, cleaning=LogCleaning(check_units=False))  # explicit opt-out
     assert log.current_left_a.max() > 1000
 
 
@@ -225,7 +225,7 @@ def test_borealtc_speed_in_mm_per_s(tmp_path):
 def test_unknown_repair_name():
     imu, pro = BOREALTC_FIX / "SNOW" / "imu_05.csv", BOREALTC_FIX / "SNOW" / "pro_05.csv"
     with pytest.raises(UnknownNameError, match=r"repair must name only .* unknown \['fill'\]"):
-        read_borealtc_run(imu, pro, repair=("fill",))
+        read_borealtc_run(imu, pro, cleaning=LogCleaning(repair=("fill",)))
 
 
 def test_borealtc_real_data_all_runs():
@@ -274,7 +274,7 @@ def test_borealtc_times_in_milliseconds_are_a_unit_error(tmp_path):
                                         r"of a recorded robot stream \(median step 153\.8 s\); the time unit looks wrong") as info:
         read_borealtc_run(imu, pro)
     assert not re.search(r"\d\.\d{6,}", str(info.value))  # numbers rounded for people
-    log = read_borealtc_run(imu, pro, check_units=False)  # the caller may still insist
+    log = read_borealtc_run(imu, pro, cleaning=LogCleaning(check_units=False))  # the caller may still insist
     assert log.drive_rate_hz == pytest.approx(0.0065)
 
 
@@ -312,7 +312,8 @@ def test_fuzz_borealtc_mutated_run_files(tmp_path, target, edits, truncate):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DataRepairWarning)  # repairs were asked for
         try:
-            read_borealtc(tmp_path, repair=("sort", "drop_duplicates", "interpolate_nans"), allow_gaps=True)
+            read_borealtc(tmp_path, cleaning=LogCleaning(repair=("sort", "drop_duplicates", "interpolate_nans"),
+                                                         allow_gaps=True))
             read_borealtc(tmp_path)
         except TerrawattError:
             pass
@@ -334,6 +335,6 @@ def test_fuzz_borealtc_random_bytes(tmp_path, data):
         pass
     pro.write_bytes(data)
     try:
-        read_borealtc_run(imu, pro, check_units=False)
+        read_borealtc_run(imu, pro, cleaning=LogCleaning(check_units=False))
     except TerrawattError:
         pass

@@ -11,6 +11,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from energy import LogMeta, read_csv_log, write_csv_log
+from energy.io import CsvLayout
 from energy.io.csv_header import (
     CSV_LOG_FORMAT_VERSION,
     LOG_HEADER_PREFIX,
@@ -22,7 +23,7 @@ from terrain import FileFormatError, FormatVersionError, TerrawattError
 
 
 def test_csv_format_version_and_corrupt_header(tmp_path):
-    log = read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS)
+    log = read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, GENERIC_UNITS))
     path = write_csv_log(log, tmp_path / "v.csv")
     edit_lines(path, lambda ls: [ls[0].replace('"format_version": 1', '"format_version": 2')] + ls[1:])
     with pytest.raises(FormatVersionError, match="format version 2"):
@@ -34,14 +35,14 @@ def test_csv_format_version_and_corrupt_header(tmp_path):
 
 
 def test_csv_header_notes_not_a_string(tmp_path):
-    path = write_csv_log(read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS), tmp_path / "n.csv")
+    path = write_csv_log(read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, GENERIC_UNITS)), tmp_path / "n.csv")
     edit_lines(path, lambda ls: [re.sub(r'"notes": "[^"]*"', '"notes": 5', ls[0])] + ls[1:])
     with pytest.raises(FileFormatError, match=r"n\.csv: terrawatt-log header: 'notes' must be a string or null, got 5"):
         read_csv_log(path)
 
 
 def test_csv_header_nested_100000_deep(tmp_path):
-    path = write_csv_log(read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS), tmp_path / "deep.csv")
+    path = write_csv_log(read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, GENERIC_UNITS)), tmp_path / "deep.csv")
     edit_lines(path, lambda ls: ["# terrawatt-log " + "[" * 100_000] + ls[1:])
     with pytest.raises(FileFormatError, match=r"deep\.csv: corrupt terrawatt-log header line .*nested too deeply"):
         read_csv_log(path)
@@ -63,14 +64,14 @@ def test_csv_header_nested_100000_deep(tmp_path):
     ("start_time_ns", str(2**70), "a 64-bit integer or null"),
 ])
 def test_csv_header_values_of_the_wrong_type(tmp_path, key, value, expected):
-    path = write_csv_log(read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS), tmp_path / "t.csv")
+    path = write_csv_log(read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, GENERIC_UNITS)), tmp_path / "t.csv")
     edit_lines(path, lambda ls: [re.sub(rf'"{key}": ([^,}}]*)', f'"{key}": {value}', ls[0])] + ls[1:])
     with pytest.raises(FileFormatError, match=rf"terrawatt-log header: '{key}' must be {expected}"):
         read_csv_log(path)
 
 
 def test_csv_header_format_version_true_is_not_1(tmp_path):
-    path = write_csv_log(read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS), tmp_path / "v.csv")
+    path = write_csv_log(read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, GENERIC_UNITS)), tmp_path / "v.csv")
     edit_lines(path, lambda ls: [ls[0].replace('"format_version": 1', '"format_version": true')] + ls[1:])
     with pytest.raises(FormatVersionError, match="format version True"):
         read_csv_log(path)

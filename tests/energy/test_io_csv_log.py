@@ -29,6 +29,7 @@ from energy import (
     read_csv_log,
     write_csv_log,
 )
+from energy.io import CsvLayout, LogCleaning
 from terrain import (
     DataError,
     DataRepairWarning,
@@ -41,7 +42,7 @@ from terrain import (
 
 # ========================================================================= generic CSV
 def test_generic_csv_units_and_mixed_rates():
-    log = read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS, robot="rover")
+    log = read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, GENERIC_UNITS), robot="rover")
     k = np.arange(11)
     np.testing.assert_allclose(log.time_s, k * 0.1, rtol=0, atol=1e-15)
     np.testing.assert_allclose(log.v_mps, 0.05 * k, atol=1e-15)
@@ -59,15 +60,15 @@ def test_generic_csv_units_and_mixed_rates():
 def test_generic_csv_milliamps_declared_as_amps():
     units = {k: v for k, v in GENERIC_UNITS.items() if not k.startswith("current")}
     with pytest.raises(UnitError, match="left_mA is declared in A but its values look like mA"):
-        read_csv_log(GENERIC, GENERIC_COLUMNS, units)
+        read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, units))
 
 
 def test_generic_csv_amps_declared_as_milliamps(tmp_path):
-    log = read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS)
+    log = read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, GENERIC_UNITS))
     path = write_csv_log(dataclass_replace_currents(log, 0.001), tmp_path / "small.csv")
     # the exported file is in A; declaring mA makes the peak 2 mA, which looks like A
     with pytest.raises(UnitError, match="declared in mA but its peak is .* look like A"):
-        read_csv_log(path, units={"current_left": "mA", "current_right": "mA"})
+        read_csv_log(path, CsvLayout(units={"current_left": "mA", "current_right": "mA"}))
 
 
 def dataclass_replace_currents(log: InteractionLog, scale: float) -> InteractionLog:
@@ -81,28 +82,28 @@ def dataclass_replace_currents(log: InteractionLog, scale: float) -> Interaction
 def test_generic_csv_deg_per_s_declared_as_rad_per_s():
     units = {k: v for k, v in GENERIC_UNITS.items() if k != "omega"}
     with pytest.raises(UnitError, match=r"\|cmd_w\| reaches 100 rad/s \(index 10\).*declared 'rad/s' looks like deg/s"):
-        read_csv_log(GENERIC, GENERIC_COLUMNS, units)
+        read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, units))
 
 
 def test_generic_csv_accel_declared_in_g():
     with pytest.raises(UnitError, match=r"median \|acc_z\| is .* m/s\^2"):
-        read_csv_log(GENERIC, GENERIC_COLUMNS, {**GENERIC_UNITS, "accel_z": "g"})
+        read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, {**GENERIC_UNITS, "accel_z": "g"}))
 
 
 def test_generic_csv_bad_maps():
     with pytest.raises(UnknownNameError, match=r"unknown field\(s\) \['speed'\]"):
-        read_csv_log(GENERIC, {**GENERIC_COLUMNS, "speed": "cmd_v"}, GENERIC_UNITS)
+        read_csv_log(GENERIC, CsvLayout({**GENERIC_COLUMNS, "speed": "cmd_v"}, GENERIC_UNITS))
     with pytest.raises(UnknownNameError, match="unit 'furlong/s' is not known for field 'v'"):
-        read_csv_log(GENERIC, GENERIC_COLUMNS, {**GENERIC_UNITS, "v": "furlong/s"})
+        read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, {**GENERIC_UNITS, "v": "furlong/s"}))
     with pytest.raises(UnknownNameError, match="units given for field"):
-        read_csv_log(GENERIC, GENERIC_COLUMNS, {**GENERIC_UNITS, "x": "m"})
+        read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, {**GENERIC_UNITS, "x": "m"}))
     cols = {k: v for k, v in GENERIC_COLUMNS.items() if k != "current_right"}
     with pytest.raises(InvalidParameterError, match=r"lacks required field\(s\) \['current_right'\]"):
-        read_csv_log(GENERIC, cols, {k: v for k, v in GENERIC_UNITS.items() if k != "current_right"})
+        read_csv_log(GENERIC, CsvLayout(cols, {k: v for k, v in GENERIC_UNITS.items() if k != "current_right"}))
     with pytest.raises(DataError, match=r"missing column\(s\) \['nope'\]"):
-        read_csv_log(GENERIC, {**GENERIC_COLUMNS, "accel_z": "nope"}, GENERIC_UNITS)
+        read_csv_log(GENERIC, CsvLayout({**GENERIC_COLUMNS, "accel_z": "nope"}, GENERIC_UNITS))
     with pytest.raises(InvalidParameterError, match="all of x, y, heading or none"):
-        read_csv_log(GENERIC, {**GENERIC_COLUMNS, "x": "pose_x"}, GENERIC_UNITS)
+        read_csv_log(GENERIC, CsvLayout({**GENERIC_COLUMNS, "x": "pose_x"}, GENERIC_UNITS))
 
 
 def test_generic_csv_wheel_speeds(tmp_path):
@@ -111,8 +112,8 @@ def test_generic_csv_wheel_speeds(tmp_path):
     cols = {"time": "t", "speed_left": "wl", "speed_right": "wr", "current_left": "il",
             "current_right": "ir", "accel_z": "az"}
     with pytest.raises(InvalidParameterError, match="need track_width_m"):
-        read_csv_log(path, cols)
-    log = read_csv_log(path, cols, track_width_m=0.5)
+        read_csv_log(path, CsvLayout(cols))
+    log = read_csv_log(path, CsvLayout(cols, track_width_m=0.5))
     np.testing.assert_allclose(log.v_mps, [0.2, 0.2, 0.2], atol=1e-15)
     np.testing.assert_allclose(log.omega_radps, [0.4, 0.0, -0.8], atol=1e-15)
     assert log.meta.velocity_source == "measured" and log.meta.track_width_m == 0.5
@@ -123,9 +124,10 @@ def test_generic_csv_nan_in_drive_row(tmp_path):
     shutil.copy(GENERIC, path)
     edit_lines(path, lambda ls: [line.replace("200,0.10,20,1200,1300", "200,0.10,,1200,1300") for line in ls])
     with pytest.raises(DataError, match=r"drive stream: column 'omega' has 1 missing .* index 2 \(t=0.2 s\)"):
-        read_csv_log(path, GENERIC_COLUMNS, GENERIC_UNITS)
+        read_csv_log(path, CsvLayout(GENERIC_COLUMNS, GENERIC_UNITS))
     with pytest.warns(DataRepairWarning, match="interpolated 1 missing value"):
-        log = read_csv_log(path, GENERIC_COLUMNS, GENERIC_UNITS, repair=("interpolate_nans",))
+        log = read_csv_log(path, CsvLayout(GENERIC_COLUMNS, GENERIC_UNITS),
+                           cleaning=LogCleaning(repair=("interpolate_nans",)))
     assert log.omega_radps[2] == pytest.approx(np.deg2rad(20))
 
 
@@ -161,9 +163,9 @@ def test_generic_csv_single_rate_row_without_drive_fields(tmp_path, caplog):
     # single: every row is a drive sample, the empty fields are NaNs
     with pytest.raises(DataError, match=r"drive stream: column 'current_left' has 1 missing or non-finite "
                                         r"value\(s\), first at index 7 \(t=0\.7"):
-        read_csv_log(path, rates="single")
+        read_csv_log(path, CsvLayout(rates="single"))
     with pytest.warns(DataRepairWarning, match="interpolated 1 missing value"):
-        fixed = read_csv_log(path, rates="single", repair=("interpolate_nans",))
+        fixed = read_csv_log(path, CsvLayout(rates="single"), cleaning=LogCleaning(repair=("interpolate_nans",)))
     assert len(fixed) == 30 and "split into" not in fixed.meta.notes
     assert fixed.v_mps[7] == pytest.approx(0.17, abs=1e-12)
 
@@ -174,20 +176,20 @@ def test_generic_csv_single_rate_row_without_accel(tmp_path):
     assert len(log) == 30 and log.accel_time_s.size == 29
     assert "29 drive+IMU, 1 drive-only and 0 IMU-only" in log.meta.notes
     with pytest.raises(DataError, match=r"acceleration stream: column 'accel_z' has 1 missing .* first at index 12"):
-        read_csv_log(path, rates="single")
+        read_csv_log(path, CsvLayout(rates="single"))
     with pytest.warns(DataRepairWarning, match=r"interpolated 1 missing value\(s\) of column 'accel_z'"):
-        fixed = read_csv_log(path, rates="single", repair="interpolate_nans")
+        fixed = read_csv_log(path, CsvLayout(rates="single"), cleaning=LogCleaning(repair="interpolate_nans"))
     assert fixed.accel_time_s.size == 30 and fixed.accel_z_mps2[12] == pytest.approx(9.812, abs=1e-12)
 
 
 def test_generic_csv_mixed_rates_reported_and_unknown_rates():
-    log = read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS)
+    log = read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, GENERIC_UNITS))
     assert "rates='mixed': 51 row(s) split into 11 drive+IMU, 0 drive-only and 40 IMU-only" in log.meta.notes
     with pytest.raises(UnknownNameError, match=r"rates must be one of \('mixed', 'single'\), got 'dual'"):
-        read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS, rates="dual")
+        read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, GENERIC_UNITS, rates="dual"))
     # a mixed-rate file read as single-rate: the IMU-only rows are NaNs of the drive stream
     with pytest.raises(DataError, match=r"drive stream: column 'current_left' has 40 missing .* first at index 1"):
-        read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS, rates="single")
+        read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, GENERIC_UNITS, rates="single"))
 
 
 def test_generic_csv_label_on_row_without_drive_values(tmp_path):
@@ -196,7 +198,7 @@ def test_generic_csv_label_on_row_without_drive_values(tmp_path):
     shutil.copy(GENERIC, path)
     edit_lines(path, lambda ls: [line + "grass" if line == "20,,,,,9.82," else line for line in ls])
     with pytest.raises(DataError, match=r"drive stream: column 'current_left' has 1 missing .* index 1 \(t=0\.02 s\)"):
-        read_csv_log(path, GENERIC_COLUMNS, GENERIC_UNITS)
+        read_csv_log(path, CsvLayout(GENERIC_COLUMNS, GENERIC_UNITS))
 
 
 def test_generic_csv_float_milliamps_mostly_idle_declared_as_amps(tmp_path):
@@ -205,12 +207,12 @@ def test_generic_csv_float_milliamps_mostly_idle_declared_as_amps(tmp_path):
     path = write_single_rate(tmp_path / "s.csv", right_a=right)
     with pytest.raises(UnitError, match=r"current_right_a is declared in A but its values look like mA \(median "
                                         r"\|I\| = 0 A, 99th percentile of the non-zero \|I\| = 1\.309e\+04 A.*declare 'mA'"):
-        read_csv_log(path, rates="single")
-    log = read_csv_log(path, rates="single", units={"current_right": "mA"})
+        read_csv_log(path, CsvLayout(rates="single"))
+    log = read_csv_log(path, CsvLayout(rates="single", units={"current_right": "mA"}))
     assert log.current_right_a.max() == pytest.approx(13.11475, abs=1e-12)
     # a ground robot's real peaks (tens of A) still read as A
     write_single_rate(path, right_a=np.where(np.arange(30) < 24, 0.0, 35.5))
-    assert read_csv_log(path, rates="single").current_right_a.max() == 35.5
+    assert read_csv_log(path, CsvLayout(rates="single")).current_right_a.max() == 35.5
 
 
 def test_generic_csv_empty_label(tmp_path):
@@ -218,7 +220,7 @@ def test_generic_csv_empty_label(tmp_path):
     shutil.copy(GENERIC, path)
     edit_lines(path, lambda ls: [line.replace(",grass", ",") if line.startswith("300,") else line for line in ls])
     with pytest.raises(DataError, match=r"1 empty ground label\(s\), first at index 3"):
-        read_csv_log(path, GENERIC_COLUMNS, GENERIC_UNITS)
+        read_csv_log(path, CsvLayout(GENERIC_COLUMNS, GENERIC_UNITS))
 
 
 def test_write_read_roundtrip_exact(tmp_path):
@@ -255,7 +257,7 @@ def test_write_roundtrip_borealtc_fixture(tmp_path):
 
 
 def test_write_rejects_bad_labels_and_objects(tmp_path):
-    log = read_csv_log(GENERIC, GENERIC_COLUMNS, GENERIC_UNITS)
+    log = read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, GENERIC_UNITS))
     import dataclasses
 
     bad = dataclasses.replace(log, ground=["a,b"] * 11)
@@ -271,20 +273,21 @@ def test_csv_times_in_ms_declared_as_s_are_a_unit_error():
     units = dict(GENERIC_UNITS, time="s")  # the fixture's stamps are ms
     with pytest.raises(UnitError, match=r"generic_ma\.csv: drive stream: median rate 0\.01 Hz is below the plausible 0.5 Hz "
                                         r".*the time unit looks wrong"):
-        read_csv_log(GENERIC, GENERIC_COLUMNS, units)
-    assert read_csv_log(GENERIC, GENERIC_COLUMNS, units, check_units=False).drive_rate_hz == pytest.approx(0.01)
+        read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, units))
+    unchecked = read_csv_log(GENERIC, CsvLayout(GENERIC_COLUMNS, units), cleaning=LogCleaning(check_units=False))
+    assert unchecked.drive_rate_hz == pytest.approx(0.01)
 
 
 def test_csv_columns_must_name_columns():
     with pytest.raises(InvalidParameterError, match="columns must map fields to non-empty column names"):
-        read_csv_log(GENERIC, dict(GENERIC_COLUMNS, accel_z=3), GENERIC_UNITS)
+        read_csv_log(GENERIC, CsvLayout(dict(GENERIC_COLUMNS, accel_z=3), GENERIC_UNITS))
 
 
-def _read_quietly(path: Path, **kwargs) -> None:
+def _read_quietly(path: Path, layout: dict | None = None, cleaning: dict | None = None) -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DataRepairWarning)
         try:
-            read_csv_log(path, **kwargs)
+            read_csv_log(path, CsvLayout(**(layout or {})), cleaning=LogCleaning(**(cleaning or {})))
         except TerrawattError:
             pass
 
@@ -307,8 +310,9 @@ def test_fuzz_csv_mutated_files(tmp_path, edits, truncate, which):
     data = mutate_bytes(source.read_bytes(), edits)
     path = tmp_path / "fuzz.csv"
     path.write_bytes(data if truncate is None else data[:truncate])
-    _read_quietly(path, **kwargs)
-    _read_quietly(path, rates="single", repair=("sort", "drop_duplicates", "interpolate_nans"), allow_gaps=True, **kwargs)
+    _read_quietly(path, kwargs, {})
+    _read_quietly(path, {"rates": "single", **kwargs}, {"repair": ("sort", "drop_duplicates", "interpolate_nans"),
+                                                        "allow_gaps": True})
 
 
 @fuzz_settings(60)
@@ -322,7 +326,7 @@ def test_fuzz_csv_random_bytes(tmp_path, data):
     path.write_bytes(data)
     _read_quietly(path)
     path.write_bytes(b"time_s,v_mps,omega_radps,current_left_a,current_right_a,accel_z_mps2\n" + data)
-    _read_quietly(path, check_units=False)
+    _read_quietly(path, cleaning={"check_units": False})
 
 
 def test_an_imu_column_in_g_is_refused_until_its_unit_is_declared(tmp_path):
@@ -334,7 +338,8 @@ def test_an_imu_column_in_g_is_refused_until_its_unit_is_declared(tmp_path):
     path = write_csv_log(log, tmp_path / "g.csv")
     with pytest.raises(UnitError, match=r"looks like an acceleration in g.*units=\{'accel_z': 'g'\}"):
         read_csv_log(path)
-    fixed = read_csv_log(path, units={"accel_z": "g"})
+    fixed = read_csv_log(path, CsvLayout(units={"accel_z": "g"}))
     np.testing.assert_allclose(fixed.accel_z_mps2, az_g * 9.80665)
     assert not fixed.meta.gravity_removed
-    assert read_csv_log(path, check_units=False).meta.gravity_removed  # the user said: no unit checks
+    unchecked = read_csv_log(path, cleaning=LogCleaning(check_units=False))
+    assert unchecked.meta.gravity_removed  # the user said: no unit checks

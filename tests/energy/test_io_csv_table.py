@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from energy import InteractionLog, LogMeta, read_csv_log, write_csv_log
+from energy.io import CsvLayout, LogCleaning
 from energy.io.csv_table import MISSING_TOKENS, CsvText, read_csv_text, read_table
 from terrain import DataError, FileFormatError
 
@@ -32,7 +33,7 @@ def test_csv_invalid_utf8_byte_beyond_8_kib(tmp_path):
                                               r"b'\\xc3', which is not valid UTF-8"):
         read_csv_log(path)
     with pytest.raises(FileFormatError, match=rf"byte {at} \(line {line}\)"):
-        read_csv_log(path, rates="single", repair=("interpolate_nans",))
+        read_csv_log(path, CsvLayout(rates="single"), cleaning=LogCleaning(repair=("interpolate_nans",)))
 
 
 # ------------------------------------------------------------------ read_csv_text

@@ -13,6 +13,7 @@ from energy import InteractionLog, LogMeta
 from energy.io import (
     BagTopics,
     DriveBagTopics,
+    LogCleaning,
     NavSatTrack,
     read_logs,
     read_navsat,
@@ -54,9 +55,10 @@ def lonlat_of(log: InteractionLog) -> np.ndarray:
     return np.column_stack([-71.2 + log.pose_xyh[:, 0] / 77_000.0, 46.8 + log.pose_xyh[:, 1] / 111_000.0])
 
 
-def read_back(path, **options) -> InteractionLog:
-    return read_rosbag(path, TOPICS.odom_topic, TOPICS.imu_topic, TOPICS.current_topics,
-                       battery_topic=TOPICS.battery_topic, **options)
+def read_back(path, **cleaning) -> InteractionLog:
+    topics = BagTopics(cmd_vel_topic=TOPICS.odom_topic, imu_topic=TOPICS.imu_topic,
+                       current_topics=TOPICS.current_topics, battery_topic=TOPICS.battery_topic)
+    return read_rosbag(path, topics, cleaning=LogCleaning(**cleaning))
 
 
 def wrapped(angle_rad: np.ndarray) -> np.ndarray:
@@ -250,8 +252,8 @@ def test_read_logs_reads_a_drive_bag_with_its_bag_topics(tmp_path):
 def test_the_battery_topic_and_a_status_voltage_field_are_one_or_the_other(tmp_path):
     path = write_drive_bag(drive_log(), tmp_path / "drive.mcap")
     with pytest.raises(InvalidParameterError, match="both give the battery voltage; name one of them"):
-        read_rosbag(path, "/odom", current_topics=("/status",), current_fields=("l", "r"), voltage_field="v",
-                    battery_topic="/battery")
+        read_rosbag(path, BagTopics(cmd_vel_topic="/odom", current_topics=("/status",), current_fields=("l", "r"),
+                                    voltage_field="v", battery_topic="/battery"))
     with pytest.raises(InvalidParameterError, match="both give the battery voltage; name one of them"):
         BagTopics(current_topics=("/status",), current_fields=("l", "r"), voltage_field="v", battery_topic="/battery")
     with pytest.raises(InvalidParameterError, match="battery_topic"):

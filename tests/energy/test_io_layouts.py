@@ -123,8 +123,9 @@ def test_ground_folders_and_a_mixed_folder_of_bags(bag_layouts):
 
 
 def test_bad_paths_and_arguments(tmp_path, layouts):
-    with pytest.raises(DataError, match=r"--data '.*missing' does not exist"):
-        read_logs(tmp_path / "missing", name="--data")
+    with pytest.raises(DataError, match=r"^path '.*missing' does not exist") as err:
+        read_logs(tmp_path / "missing")
+    assert err.value.parameter == "path"  # the command line says it as its flag (--data)
     (tmp_path / "x.txt").write_text("x")
     with pytest.raises(DataError, match=r"unknown log file type '.txt'; expected one of \['.bag'"):
         read_logs(tmp_path / "x.txt")
@@ -244,7 +245,7 @@ def test_a_folder_of_csv_logs_of_another_layout_reads_as_read_csv_log_reads_each
     for name in ("a.csv", "b.csv"):
         shutil.copy(GENERIC, tmp_path / name)
     logs = read_logs(tmp_path, csv=CsvLayout(**GENERIC_LAYOUT), require_currents=True)
-    one = read_csv_log(GENERIC, GENERIC_LAYOUT["columns"], GENERIC_LAYOUT["units"])
+    one = read_csv_log(GENERIC, CsvLayout(GENERIC_LAYOUT["columns"], GENERIC_LAYOUT["units"]))
     assert len(logs) == 2
     for log in logs:
         assert log.time_s.tolist() == one.time_s.tolist() and log.current_left_a.tolist() == one.current_left_a.tolist()
@@ -265,7 +266,7 @@ def test_a_csv_of_another_layout_without_its_map_says_how_to_give_one(tmp_path):
      r"several fields to one column: \{'i': \['current_left', 'current_right'\]\}"),
     ({"columns": {"time": "t"}, "units": {"v": "m/s"}}, UnknownNameError, r"field\(s\) \['v'\] that are not"),
     ({"columns": {"time": "t"}, "units": {"time": "fortnights"}}, UnknownNameError, "unit 'fortnights'"),
-    ({"units": {"time": "ms"}}, InvalidParameterError, "units need columns"),
+    ({"units": {"time": "fortnights"}}, UnknownNameError, "unit 'fortnights'"),  # units of the default columns
     ({"rates": "double"}, UnknownNameError, "rates must be one of"),
     ({"columns": "time=t"}, InvalidParameterError, "columns must be a mapping of field names, got 'str'"),
     ({"columns": {"time": "t"}, "units": "ms"}, InvalidParameterError, "units must be a mapping"),
@@ -290,10 +291,10 @@ def test_a_csv_layout_for_a_borealtc_folder_is_refused_not_ignored(kwargs, given
     from energy.io import CsvLayout
 
     with pytest.raises(InvalidParameterError, match=(
-            r"^csv \(--csv-columns, --csv-units, --csv-rates, --track-width\) applies to CSV logs only, and --data "
+            r"^csv \(--csv-columns, --csv-units, --csv-rates, --track-width\) applies to CSV logs only, and path "
             r"'.*borealtc' is read as a BorealTC folder \(GROUND/imu_NN\.csv \+ pro_NN\.csv\), whose columns, units "
             r"and track width \(0\.555 m\) are the format's own; give no CSV layout for them \(got " + given)):
-        read_logs(FIXTURES, csv=CsvLayout(**kwargs), name="--data")
+        read_logs(FIXTURES, csv=CsvLayout(**kwargs))
     assert len(read_logs(FIXTURES, csv=CsvLayout())) == len(read_borealtc(FIXTURES))  # the default layout: no layout
 
 

@@ -10,7 +10,7 @@ import pytest
 from energy_io_samples import requires_rosbags
 
 from energy import InteractionLog, LogMeta
-from energy.io import DriveBagTopics, log_from_messages, read_rosbag, write_drive_bag
+from energy.io import BagTopics, DriveBagTopics, LogCleaning, log_from_messages, read_rosbag, write_drive_bag
 from energy.io.ros_messages import DEFAULT_START_TIME_NS, DRIVE_MESSAGE_TYPES, MAX_STAMP_NS, messages_from_log
 from terrain import DataError, InvalidParameterError, UnitError
 
@@ -79,8 +79,9 @@ def test_live_messages_give_the_log_a_bag_of_them_gives(tmp_path, kind, streams)
     full = streams == "all"
     log = drive_log(1, currents=full, battery=full)
     path = write_drive_bag(log, tmp_path / ("drive.bag" if kind == "ros1" else "drive.mcap"))
-    from_bag = read_rosbag(path, TOPICS.odom_topic, TOPICS.imu_topic, TOPICS.current_topics,
-                           battery_topic=TOPICS.battery_topic, robot="husky")
+    from_bag = read_rosbag(path, BagTopics(cmd_vel_topic=TOPICS.odom_topic, imu_topic=TOPICS.imu_topic,
+                                           current_topics=TOPICS.current_topics, battery_topic=TOPICS.battery_topic),
+                           robot="husky")
     live = log_from_messages(**by_role(messages_from_log(log, typestore(kind))), robot="husky")
     assert_same_log(live, from_bag)
     assert live.meta.source == "ROS messages" and live.meta.robot == "husky"
@@ -189,7 +190,8 @@ def test_log_from_messages_checks_like_the_reader():
     with pytest.raises(UnitError, match=r"ROS messages: /drive/current_left \(left\) is declared in A but its "
                                         r"values look like mA"):
         log_from_messages(**{**streams, "current_left": milli})
-    assert log_from_messages(**{**streams, "current_left": milli}, check_units=False).current_left_a[0] == \
+    unchecked = LogCleaning(check_units=False)
+    assert log_from_messages(**{**streams, "current_left": milli}, cleaning=unchecked).current_left_a[0] == \
         pytest.approx(1000.0 * log.current_left_a[0])
     # header stamps far from the receive stamps: the reader's clock check
     late = [(ns + 2_000_000_000, m) for ns, m in streams["odom"]]

@@ -23,6 +23,7 @@ from hypothesis import strategies as st
 from energy import (
     read_rosbag,
 )
+from energy.io import BagTiming, BagTopics, LogCleaning
 from terrain import (
     DataError,
     DataRepairWarning,
@@ -56,8 +57,9 @@ def expected_drive(content: dict, timeout_s: float | None = 0.5) -> dict:
 def test_rosbag_roundtrip_exact(tmp_path, kind):
     content = bag_content()
     path = write_bag(tmp_path / ("run.bag" if kind == "ros1" else "run"), kind, content)
-    log = read_rosbag(path, "/cmd_vel", "/imu/data", ("/drive/current_left", "/drive/current_right"), robot="jackal",
-                      ground_label="grass")
+    log = read_rosbag(path, BagTopics(cmd_vel_topic="/cmd_vel", imu_topic="/imu/data",
+                                      current_topics=("/drive/current_left", "/drive/current_right")),
+                      robot="jackal", ground_label="grass")
     exp = expected_drive(content)
     np.testing.assert_array_equal(log.time_s, exp["time_s"])
     np.testing.assert_array_equal(log.v_mps, exp["v"])
@@ -82,8 +84,8 @@ def test_rosbag_roundtrip_exact(tmp_path, kind):
 def test_rosbag_receive_time_and_no_timeout(tmp_path):
     content = bag_content()
     path = write_bag(tmp_path / "run", "ros2", content)
-    log = read_rosbag(path, current_topics=("/drive/current_left", "/drive/current_right"),
-                      use_header_stamps=False, cmd_vel_timeout_s=None)
+    log = read_rosbag(path, BagTopics(current_topics=("/drive/current_left", "/drive/current_right")),
+                      timing=BagTiming(use_header_stamps=False, cmd_vel_timeout_s=None))
     assert "/imu/data: receive time" in log.meta.notes
     # without a timeout the drive stream starts at the first command and the last command is held
     received = dict(content, imu_ns=[ns + MS for ns in content["imu_ns"]])  # IMU receive time = stamp + 1 ms
@@ -100,8 +102,8 @@ def test_rosbag_multiarray_in_milliamps(tmp_path):
     content = bag_content()
     path = write_bag(tmp_path / "run", "mcap", content, multiarray=True, scale=1000.0)
     with pytest.raises(UnitError, match="declared in A but its values look like mA"):
-        read_rosbag(path, current_topics="/drive/current")
-    log = read_rosbag(path, current_topics="/drive/current", current_unit="mA")
+        read_rosbag(path, BagTopics(current_topics="/drive/current"))
+    log = read_rosbag(path, BagTopics(current_topics="/drive/current", current_unit="mA"))
     exp = expected_drive(content)
     np.testing.assert_allclose(log.current_left_a, exp["left"], rtol=1e-15)
     np.testing.assert_allclose(log.current_right_a, exp["right"], rtol=1e-15)
@@ -111,7 +113,8 @@ def test_rosbag_multiarray_in_milliamps(tmp_path):
 def test_rosbag_odometry_measured_with_pose(tmp_path):
     content = bag_content()
     path = write_bag(tmp_path / "run.bag", "ros1", content, odom=True)
-    log = read_rosbag(path, cmd_vel_topic="/odom", current_topics=("/drive/current_left", "/drive/current_right"))
+    log = read_rosbag(path, BagTopics(cmd_vel_topic="/odom",
+                                      current_topics=("/drive/current_left", "/drive/current_right")))
     assert log.meta.velocity_source == "measured" and log.pose_xyh is not None
     origin = BASE_NS
     tv = (np.asarray(content["cmd_ns"]) - origin) / 1e9
@@ -129,15 +132,15 @@ def test_rosbag_bad_inputs(tmp_path):
         read_rosbag(path, require_currents=True)
     assert not read_rosbag(path).has_currents  # optional by default: a log to predict from
     with pytest.raises(DataError, match="topic '/imu/data' has type 'sensor_msgs/msg/Imu'; expected one of"):
-        read_rosbag(path, cmd_vel_topic="/imu/data", current_topics="/drive/current")
+        read_rosbag(path, BagTopics(cmd_vel_topic="/imu/data", current_topics="/drive/current"))
     with pytest.raises(DataError, match="has type 'std_msgs/msg/Float64MultiArray'"):
-        read_rosbag(path, current_topics=("/drive/current", "/drive/current"))
+        read_rosbag(path, BagTopics(current_topics=("/drive/current", "/drive/current")))
     with pytest.raises(FileFormatError, match="does not exist"):
         read_rosbag(tmp_path / "nothing")
     with pytest.raises(UnknownNameError, match="current_unit must be one of"):
-        read_rosbag(path, current_topics="/drive/current", current_unit="uA")
+        read_rosbag(path, BagTopics(current_topics="/drive/current", current_unit="uA"))
     with pytest.raises(InvalidParameterError, match="cmd_vel_timeout_s must be"):
-        read_rosbag(path, current_topics="/drive/current", cmd_vel_timeout_s=0)
+        read_rosbag(path, BagTopics(current_topics="/drive/current"), timing=BagTiming(cmd_vel_timeout_s=0))
     not_a_bag = tmp_path / "junk.bag"
     not_a_bag.write_bytes(b"definitely not a bag")
     with pytest.raises(FileFormatError, match="cannot read bag"):
@@ -157,15 +160,15 @@ def test_rosbag_header_clock_offset_raises(tmp_path, shift_s):
                                         r"use_header_stamps=False"):
         read_rosbag(path)
     # on receive time the IMU and the currents share the recorder's clock: same as an unshifted bag
-    log = read_rosbag(path, use_header_stamps=False)
-    ref = read_rosbag(write_bag(tmp_path / "ref", "ros2", content), use_header_stamps=False)
+    log = read_rosbag(path, timing=BagTiming(use_header_stamps=False))
+    ref = read_rosbag(write_bag(tmp_path / "ref", "ros2", content), timing=BagTiming(use_header_stamps=False))
     np.testing.assert_array_equal(log.accel_time_s, ref.accel_time_s)
     np.testing.assert_array_equal(log.time_s, ref.time_s)
     # a wider tolerance is an explicit choice
     if abs(shift_s) < 1:
-        assert read_rosbag(path, max_clock_offset_s=1.0).meta.notes.count("header stamps") == 1
+        assert read_rosbag(path, timing=BagTiming(max_clock_offset_s=1.0)).meta.notes.count("header stamps") == 1
     with pytest.raises(InvalidParameterError, match=r"max_clock_offset_s must be finite, got nan"):
-        read_rosbag(path, max_clock_offset_s=float("nan"))
+        read_rosbag(path, timing=BagTiming(max_clock_offset_s=float("nan")))
 
 
 @requires_rosbags
@@ -185,7 +188,7 @@ def test_rosbag_unsorted_header_stamps_raise_then_sort(tmp_path):
                                         r"index 51 .*repair=\('sort',\)"):
         read_rosbag(path)
     with pytest.warns(DataRepairWarning, match=r"/imu/data: sorted timestamps \(1 backward step"):
-        log = read_rosbag(path, repair="sort")
+        log = read_rosbag(path, cleaning=LogCleaning(repair="sort"))
     np.testing.assert_array_equal(log.accel_time_s, ref.accel_time_s)
     i = int(np.searchsorted(log.accel_time_s, 0.5))  # stamp index 50 (t = 0.5 s)
     assert (log.accel_z_mps2[i], log.accel_z_mps2[i + 1]) == (content["az"][51], content["az"][50])
@@ -200,7 +203,7 @@ def test_rosbag_duplicated_receive_times_raise_then_drop(tmp_path):
                                         r"\(t=0\.45 s\); pass repair=\('drop_duplicates',\)"):
         read_rosbag(path)
     with pytest.warns(DataRepairWarning) as record:
-        log = read_rosbag(path, repair="drop_duplicates")
+        log = read_rosbag(path, cleaning=LogCleaning(repair="drop_duplicates"))
     assert sorted(str(w.message).split(": ", 1)[1] for w in record) == [
         f"/drive/current_{side}: dropped 1 sample(s) with a duplicated timestamp" for side in ("left", "right")
     ]
@@ -216,7 +219,7 @@ def test_rosbag_nan_current_raises_then_interpolates(tmp_path):
                                         r"first at index 3 \(t=0\.35 s\); pass repair=\('interpolate_nans',\)"):
         read_rosbag(path)
     with pytest.warns(DataRepairWarning, match=r"interpolated 1 missing value\(s\) of column 'left'"):
-        log = read_rosbag(path, repair=("interpolate_nans",))
+        log = read_rosbag(path, cleaning=LogCleaning(repair=("interpolate_nans",)))
     assert log.current_left_a[3] == pytest.approx(0.5 * (content["left"][2] + content["left"][4]), abs=1e-12)
 
 
@@ -261,7 +264,7 @@ def test_rosbag_multiarray_wrong_length(tmp_path):
             linear_acceleration_covariance=np.zeros(9))
         w.write(ci, BASE_NS, ts.serialize_cdr(imu, "sensor_msgs/msg/Imu"))
     with pytest.raises(DataError, match=r"1 message\(s\) do not hold exactly \[left, right\].*3 value"):
-        read_rosbag(path, current_topics="/drive/current")
+        read_rosbag(path, BagTopics(current_topics="/drive/current"))
 
 
 
@@ -304,7 +307,7 @@ def test_fuzz_rosbag_mutated_bags(tmp_path, valid_bags, kind, edits, truncate):
         warnings.simplefilter("ignore", DataRepairWarning)
         for kwargs in ({}, {"repair": ("sort", "drop_duplicates", "interpolate_nans"), "allow_gaps": True}):
             try:
-                read_rosbag(path, **kwargs)
+                read_rosbag(path, cleaning=LogCleaning(**kwargs))
             except TerrawattError:
                 pass
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from energy import Battery, InteractionLog, NoiseModel, TruthSimulator, robot_preset
-from energy.io import read_csv_log, write_csv_log
+from energy.io import CsvLayout, read_csv_log, write_csv_log
 from energy.sim import PAPER_GROUNDS
 from terrawatt_base.errors import DataError, InvalidParameterError
 
@@ -90,11 +90,11 @@ def test_csv_pack_current_in_milliamps_and_without_voltage(tmp_path):
     (tmp_path / "ma.csv").write_text("\n".join(text[:2] + [",".join(r) for r in rows]) + "\n")
     cols = {f: c for f, c in (("time", "time_s"), ("v", "v_mps"), ("omega", "omega_radps"), ("accel_z", "accel_z_mps2"),
                               ("battery_voltage", "battery_voltage_v"), ("battery_current", "battery_current_a"))}
-    back = read_csv_log(tmp_path / "ma.csv", columns=cols, units={"battery_current": "mA"})
+    back = read_csv_log(tmp_path / "ma.csv", CsvLayout(columns=cols, units={"battery_current": "mA"}))
     np.testing.assert_allclose(back.battery_current_a, log.battery_current_a)
     del cols["battery_voltage"]
     with pytest.raises(InvalidParameterError, match="needs battery_voltage_v"):
-        read_csv_log(tmp_path / "ma.csv", columns=cols, units={"battery_current": "mA"})
+        read_csv_log(tmp_path / "ma.csv", CsvLayout(columns=cols, units={"battery_current": "mA"}))
 
 
 def _sim_run(battery, noise, seed=3):

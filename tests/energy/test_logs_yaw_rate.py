@@ -10,7 +10,7 @@ import pytest
 from robot_bags import requires_rosbags, write_robot_bag
 
 from energy import InteractionLog, LogMeta, read_borealtc, read_csv_log, read_rosbag, write_csv_log
-from energy.io import read_borealtc_run
+from energy.io import BagTopics, CsvLayout, read_borealtc_run
 from terrain import DataError, DataRepairWarning, InvalidParameterError, UnitError
 
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures" / "borealtc"
@@ -121,16 +121,16 @@ def test_csv_gyro_in_degrees_is_converted_and_checked(tmp_path):
     path.write_text("\n".join(rows) + "\n")
     cols = {"time": "t", "v": "v", "omega": "w", "current_left": "il", "current_right": "ir", "accel_z": "az",
             "gyro_z": "gz"}
-    log = read_csv_log(path, cols, {"gyro_z": "deg/s"}, rates="single")
+    log = read_csv_log(path, CsvLayout(cols, {"gyro_z": "deg/s"}, rates="single"))
     np.testing.assert_allclose(log.gyro_z_radps, np.deg2rad(10.0 * np.arange(20)))
     with pytest.raises(UnitError, match="gz.*looks like deg/s"):
-        read_csv_log(path, cols, rates="single")
+        read_csv_log(path, CsvLayout(cols, rates="single"))
 
 
 @requires_rosbags
 def test_bag_gyro_is_the_imu_angular_velocity_z(tmp_path):
     truth = write_robot_bag(tmp_path / "j.bag", imu_hz=50.0, status_hz=None)
-    log = read_rosbag(tmp_path / "j.bag", "/odometry/filtered")
+    log = read_rosbag(tmp_path / "j.bag", BagTopics(cmd_vel_topic="/odometry/filtered"))
     i0 = int(np.argmin(np.abs(truth["imu_t"] - log.accel_time_s[0])))
     np.testing.assert_allclose(log.gyro_z_radps, truth["gz"][i0 : i0 + log.accel_time_s.size])
     part = log.slice(1.0, 3.0)
@@ -140,6 +140,6 @@ def test_bag_gyro_is_the_imu_angular_velocity_z(tmp_path):
 @requires_rosbags
 def test_bag_imu_without_gyro_says_so(tmp_path):
     write_robot_bag(tmp_path / "nogyro.bag", status_hz=None, gyro=False)
-    log = read_rosbag(tmp_path / "nogyro.bag", "/odometry/filtered")
+    log = read_rosbag(tmp_path / "nogyro.bag", BagTopics(cmd_vel_topic="/odometry/filtered"))
     assert log.gyro_z_radps is None
     assert "no gyro (angular_velocity_covariance[0] == -1)" in log.meta.notes

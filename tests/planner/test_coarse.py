@@ -18,9 +18,9 @@ def hilly_cost():
 
 
 def test_coarse_to_fine_is_close_to_the_full_resolution_optimum(hilly_cost):
-    from planner import plan_coarse_to_fine
+    from planner import CoarseOptions, plan_coarse_to_fine
 
-    plan = plan_coarse_to_fine(hilly_cost, (6.5, 8.5), (104.5, 110.5), factor=4, compare=True)
+    plan = plan_coarse_to_fine(hilly_cost, (6.5, 8.5), (104.5, 110.5), CoarseOptions(factor=4), compare=True)
     assert plan.route.status == "exact" and plan.route.planner == "coarse-to-fine"
     assert plan.ratio_to_optimum >= 1.0 - 1e-12
     assert plan.ratio_to_optimum <= 1.02
@@ -32,35 +32,35 @@ def test_coarse_to_fine_is_close_to_the_full_resolution_optimum(hilly_cost):
 
 
 def test_a_narrow_corridor_is_never_below_the_optimum(hilly_cost):
-    from planner import plan_coarse_to_fine
+    from planner import CoarseOptions, plan_coarse_to_fine
 
     for factor, corridor_m in ((2, 1.0), (8, 4.0), (3, 30.0)):
-        plan = plan_coarse_to_fine(hilly_cost, (10.5, 100.5), (100.5, 10.5), factor=factor, corridor_m=corridor_m,
-                                   compare=True)
+        options = CoarseOptions(factor=factor, corridor_m=corridor_m)
+        plan = plan_coarse_to_fine(hilly_cost, (10.5, 100.5), (100.5, 10.5), options, compare=True)
         assert plan.route.status == "exact"
         assert plan.ratio_to_optimum >= 1.0 - 1e-12
 
 
 def test_a_passage_the_coarse_map_cannot_see_falls_back():
-    from planner import EnergyCost, plan_coarse_to_fine
+    from planner import CoarseOptions, EnergyCost, plan_coarse_to_fine
     from terrain import wall_map
 
     # a 1-cell gap in a wall: blocks of 8 cells over the wall are mostly free, the coarse
     # route goes straight through where the fine wall is closed
     tmap = wall_map((64, 64), 1.0, wall_col=32, gap_rows=(60, 61), ground="asphalt")
     cost = EnergyCost.from_presets(tmap)
-    plan = plan_coarse_to_fine(cost, (4.5, 4.5), (60.5, 4.5), factor=8, corridor_m=2.0, compare=True)
+    plan = plan_coarse_to_fine(cost, (4.5, 4.5), (60.5, 4.5), CoarseOptions(factor=8, corridor_m=2.0), compare=True)
     assert plan.route.status == "exact"
     assert plan.fallback in ("wider corridor", "whole map")
     assert plan.ratio_to_optimum == pytest.approx(1.0, abs=1e-9)
 
 
 def test_separated_points_are_infeasible():
-    from planner import EnergyCost, plan_coarse_to_fine
+    from planner import CoarseOptions, EnergyCost, plan_coarse_to_fine
     from terrain import wall_map
 
     tmap = wall_map((32, 32), 1.0, wall_col=16, gap_rows=(0, 0), ground="asphalt")
-    plan = plan_coarse_to_fine(EnergyCost.from_presets(tmap), (4.5, 4.5), (28.5, 4.5), factor=4)
+    plan = plan_coarse_to_fine(EnergyCost.from_presets(tmap), (4.5, 4.5), (28.5, 4.5), CoarseOptions(factor=4))
     assert plan.route.status == "infeasible" and math.isnan(plan.ratio_to_optimum)
 
 
@@ -86,22 +86,27 @@ def test_downsampled_cost(hilly_cost):
     ],
 )
 def test_bad_coarse_to_fine_arguments(hilly_cost, kwargs, match):
-    from planner import plan_coarse_to_fine
+    from planner import CoarseOptions, plan_coarse_to_fine
 
+    compare = kwargs.pop("compare", False)
     with pytest.raises(InvalidParameterError, match=match):
-        plan_coarse_to_fine(hilly_cost, (6.5, 8.5), (100.5, 100.5), **kwargs)
+        plan_coarse_to_fine(hilly_cost, (6.5, 8.5), (100.5, 100.5), CoarseOptions(**kwargs), compare=compare)
 
 
 def test_bad_coarse_to_fine_points(hilly_cost):
-    from planner import plan_coarse_to_fine
+    from planner import EnergyCost, plan_coarse_to_fine
     from terrawatt_base.errors import OutOfBoundsError
 
     with pytest.raises(OutOfBoundsError):
         plan_coarse_to_fine(hilly_cost, (-1.0, 8.5), (100.5, 100.5))
     with pytest.raises(InvalidParameterError, match="start equals goal"):
         plan_coarse_to_fine(hilly_cost, (6.5, 8.5), (6.5, 8.5))
-    with pytest.raises(InvalidParameterError, match="cost must be an EnergyCost"):
-        plan_coarse_to_fine("cost", (6.5, 8.5), (100.5, 100.5))
+    with pytest.raises(InvalidParameterError, match="source must be an EnergyCost .* or the path of a GeoTIFF"):
+        plan_coarse_to_fine(3.0, (6.5, 8.5), (100.5, 100.5))
+    with pytest.raises(InvalidParameterError, match="options must be a CoarseOptions"):
+        plan_coarse_to_fine(hilly_cost, (6.5, 8.5), (100.5, 100.5), {"factor": 4})
+    with pytest.raises(InvalidParameterError, match="cost_from prices the windows of a GeoTIFF"):
+        plan_coarse_to_fine(hilly_cost, (6.5, 8.5), (100.5, 100.5), cost_from=EnergyCost.from_presets)
 
 
 def test_coarse_to_fine_refuses_a_blocked_start(tmp_path):

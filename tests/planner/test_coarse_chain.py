@@ -7,7 +7,7 @@ import functools
 import numpy as np
 import pytest
 
-from planner import EnergyCost, Lattice, plan_coarse_to_fine_geotiff
+from planner import CoarseOptions, EnergyCost, Lattice, plan_coarse_to_fine
 from planner.route import evaluate_route
 from terrain import InvalidParameterError, procedural_map, read_geotiff, write_geotiff
 from terrawatt_base.errors import PlanningError
@@ -43,7 +43,7 @@ def optimum(dem):
 @pytest.fixture(scope="module")
 def unlimited(dem):
     path, _, start, goal = dem
-    return plan_coarse_to_fine_geotiff(path, start, goal, factor=4)
+    return plan_coarse_to_fine(path, start, goal, CoarseOptions(factor=4))
 
 
 def window_cells(plan):
@@ -61,7 +61,7 @@ def test_the_default_budget_reads_one_window(unlimited):
 @pytest.mark.parametrize("budget", [100 * 100, 60 * 60])
 def test_a_small_budget_chains_windows_along_the_route(dem, optimum, unlimited, budget):
     path, cost, start, goal = dem
-    plan = plan_coarse_to_fine_geotiff(path, start, goal, factor=4, fine_window_budget_cells=budget)
+    plan = plan_coarse_to_fine(path, start, goal, CoarseOptions(factor=4, fine_window_budget_cells=budget))
     route = plan.route
     assert route.status == "exact" and route.planner == "coarse-to-fine" and plan.fallback == "none"
     # the windows read: several, none above the budget, their cells summed
@@ -89,11 +89,11 @@ def test_a_small_budget_chains_windows_along_the_route(dem, optimum, unlimited, 
 def test_a_budget_that_holds_the_bounding_window_changes_nothing(dem, unlimited):
     path, _, start, goal = dem
     budget = window_cells(unlimited)[0]
-    plan = plan_coarse_to_fine_geotiff(path, start, goal, factor=4, fine_window_budget_cells=budget)
+    plan = plan_coarse_to_fine(path, start, goal, CoarseOptions(factor=4, fine_window_budget_cells=budget))
     assert plan.fine_windows == unlimited.fine_windows
     assert np.array_equal(plan.route.waypoints_m, unlimited.route.waypoints_m)
     assert plan.objective_j == unlimited.objective_j
-    chained = plan_coarse_to_fine_geotiff(path, start, goal, factor=4, fine_window_budget_cells=budget - 1)
+    chained = plan_coarse_to_fine(path, start, goal, CoarseOptions(factor=4, fine_window_budget_cells=budget - 1))
     assert len(chained.fine_windows) > 1 and max(window_cells(chained)) < budget
 
 
@@ -104,8 +104,9 @@ def test_the_preset_pricer_shortcut_equals_a_general_pricer(dem):
     def general(tmap):  # not recognised as a preset pricer: an EnergyCost per tile
         return EnergyCost.from_presets(tmap, robot="jackal", max_slope_rad=0.3)
 
-    a = plan_coarse_to_fine_geotiff(path, start, goal, factor=8, cost_from=preset, fine_window_budget_cells=120 * 120)
-    b = plan_coarse_to_fine_geotiff(path, start, goal, factor=8, cost_from=general, fine_window_budget_cells=120 * 120)
+    options = CoarseOptions(factor=8, fine_window_budget_cells=120 * 120)
+    a = plan_coarse_to_fine(path, start, goal, options, cost_from=preset)
+    b = plan_coarse_to_fine(path, start, goal, options, cost_from=general)
     assert np.array_equal(a.coarse_map.elevation_m, b.coarse_map.elevation_m)
     assert np.array_equal(a.coarse_map.obstacle, b.coarse_map.obstacle) and a.coarse_map.obstacle.any()
     assert np.array_equal(a.route.waypoints_m, b.route.waypoints_m) and a.fine_windows == b.fine_windows
@@ -126,7 +127,8 @@ def wall_dem(path, gap_rows):
 def test_a_stretch_without_route_is_widened(tmp_path):
     path = wall_dem(tmp_path / "wall.tif", (44, 52))
     start, goal = (4.5, 20.5), (124.5, 20.5)
-    plan = plan_coarse_to_fine_geotiff(path, start, goal, factor=8, corridor_m=4.0, fine_window_budget_cells=60 * 60)
+    plan = plan_coarse_to_fine(path, start, goal, CoarseOptions(factor=8, corridor_m=4.0,
+                                                                fine_window_budget_cells=60 * 60))
     assert plan.route.status == "exact" and plan.fallback == "wider corridor" and plan.corridor_m == 16.0
     assert len(plan.fine_windows) > 1 and max(window_cells(plan)) <= 60 * 60
     assert plan.route.waypoints_m[:, 1].max() >= 44.0
@@ -138,13 +140,17 @@ def test_no_route_and_a_map_above_the_budget_is_a_planning_error(tmp_path):
     path = wall_dem(tmp_path / "wall.tif", None)
     start, goal = (4.5, 20.5), (124.5, 20.5)
     with pytest.raises(PlanningError, match="holds no full-resolution route"):
-        plan_coarse_to_fine_geotiff(path, start, goal, factor=8, corridor_m=4.0, fine_window_budget_cells=60 * 60)
+        plan_coarse_to_fine(path, start, goal, CoarseOptions(factor=8, corridor_m=4.0,
+                                                             fine_window_budget_cells=60 * 60))
     with pytest.raises(PlanningError, match=r"\[32.0\] m not tried, its windows exceed budget_cells=3600"):
-        plan_coarse_to_fine_geotiff(path, start, goal, factor=8, corridor_m=8.0, fine_window_budget_cells=60 * 60)
+        plan_coarse_to_fine(path, start, goal, CoarseOptions(factor=8, corridor_m=8.0,
+                                                             fine_window_budget_cells=60 * 60))
     with pytest.raises(PlanningError, match=r"exceeds fine_window_budget_cells=10000"):
-        plan_coarse_to_fine_geotiff(path, start, goal, factor=8, corridor_m=8.0, fine_window_budget_cells=100 * 100)
+        plan_coarse_to_fine(path, start, goal, CoarseOptions(factor=8, corridor_m=8.0,
+                                                             fine_window_budget_cells=100 * 100))
     # a budget that holds the whole map: the whole-map fallback proves it infeasible, as before
-    plan = plan_coarse_to_fine_geotiff(path, start, goal, factor=8, corridor_m=8.0, fine_window_budget_cells=128 * 128)
+    plan = plan_coarse_to_fine(path, start, goal, CoarseOptions(factor=8, corridor_m=8.0,
+                                                                fine_window_budget_cells=128 * 128))
     assert plan.route.status == "infeasible" and plan.fallback == "whole map"
 
 
@@ -158,4 +164,4 @@ def test_no_route_and_a_map_above_the_budget_is_a_planning_error(tmp_path):
 def test_bad_budgets(dem, budget, match):
     path, _, start, goal = dem
     with pytest.raises(InvalidParameterError, match=match):
-        plan_coarse_to_fine_geotiff(path, start, goal, factor=4, fine_window_budget_cells=budget)
+        plan_coarse_to_fine(path, start, goal, CoarseOptions(factor=4, fine_window_budget_cells=budget))

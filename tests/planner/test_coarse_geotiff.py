@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from planner import EnergyCost, plan_coarse_to_fine, plan_coarse_to_fine_geotiff
+from planner import CoarseOptions, EnergyCost, plan_coarse_to_fine
 from planner.coarse import downsample_cost
 from terrain import (
     FileFormatError,
@@ -71,8 +71,9 @@ def assert_same_plan(windowed, whole, *, rel=0.0):
 
 @pytest.mark.parametrize(("factor", "window_cells"), [(4, 8), (4, 36), (4, None), (3, 9), (5, 25), (2, 1000)])
 def test_windowed_plan_equals_the_whole_map_plan_exactly(dem_path, factor, window_cells):
-    whole = plan_coarse_to_fine(EnergyCost.from_presets(read_geotiff(dem_path)), START, GOAL, factor=factor)
-    windowed = plan_coarse_to_fine_geotiff(dem_path, START, GOAL, factor=factor, window_cells=window_cells)
+    whole = plan_coarse_to_fine(EnergyCost.from_presets(read_geotiff(dem_path)), START, GOAL,
+                                CoarseOptions(factor=factor))
+    windowed = plan_coarse_to_fine(dem_path, START, GOAL, CoarseOptions(factor=factor, window_cells=window_cells))
     assert whole.route.status == "exact"
     assert_same_plan(windowed, whole)
     assert windowed.route.planner == "coarse-to-fine" and np.isnan(windowed.optimum_j)
@@ -81,7 +82,7 @@ def test_windowed_plan_equals_the_whole_map_plan_exactly(dem_path, factor, windo
 
 def test_the_coarse_map_from_tiles_equals_downsample_cost(dem_path, tmp_path):
     coarse_whole = downsample_cost(EnergyCost.from_presets(read_geotiff(dem_path)), 5)  # 131 x 97: partial blocks
-    coarse = plan_coarse_to_fine_geotiff(dem_path, START, GOAL, factor=5, window_cells=10).coarse_map
+    coarse = plan_coarse_to_fine(dem_path, START, GOAL, CoarseOptions(factor=5, window_cells=10)).coarse_map
     assert np.array_equal(coarse.elevation_m, coarse_whole.terrain.elevation_m)
     assert np.array_equal(coarse.obstacle, coarse_whole.blocked)
     assert coarse.grid == coarse_whole.terrain.grid and coarse.crs == "EPSG:32633"
@@ -89,13 +90,13 @@ def test_the_coarse_map_from_tiles_equals_downsample_cost(dem_path, tmp_path):
     z = np.clip(np.arange(50.0) - 20.0, 0.0, 17.0)[None, :].repeat(40, axis=0)
     path = write_dem(tmp_path / "band.tif", z)
     coarse_whole = downsample_cost(EnergyCost.from_presets(read_geotiff(path)), 3)
-    coarse = plan_coarse_to_fine_geotiff(path, (2.5, 2.5), (10.5, 30.5), factor=3, window_cells=9).coarse_map
+    coarse = plan_coarse_to_fine(path, (2.5, 2.5), (10.5, 30.5), CoarseOptions(factor=3, window_cells=9)).coarse_map
     assert coarse_whole.blocked.any() and np.array_equal(coarse.obstacle, coarse_whole.blocked)
     assert np.array_equal(coarse.elevation_m, coarse_whole.terrain.elevation_m)
 
 
 def test_a_short_route_reads_a_small_window_in_map_coordinates(dem_path):
-    plan = plan_coarse_to_fine_geotiff(dem_path, (40.5, 60.5), (60.5, 70.5), factor=4)
+    plan = plan_coarse_to_fine(dem_path, (40.5, 60.5), (60.5, 70.5), CoarseOptions(factor=4))
     assert plan.route.status == "exact"
     assert plan.fine_window_cells < 0.3 * 131 * 97
     fine = plan.fine_map
@@ -109,8 +110,8 @@ def test_an_origin_that_is_not_a_binary_fraction_agrees_to_rounding(tmp_path):
     z = read_geotiff(write_geotiff(procedural_map((60, 70), 1.0, seed=8), tmp_path / "a.tif")).elevation_m
     path = write_dem(tmp_path / "dem.tif", z, origin=(500_000.3, 4_990_000.7), cell=0.7)
     start, goal = (500_000.3 + 3.1, 4_990_000.7 + 2.9), (500_000.3 + 44.0, 4_990_000.7 + 38.2)
-    whole = plan_coarse_to_fine(EnergyCost.from_presets(read_geotiff(path)), start, goal, factor=4)
-    windowed = plan_coarse_to_fine_geotiff(path, start, goal, factor=4, window_cells=16)
+    whole = plan_coarse_to_fine(EnergyCost.from_presets(read_geotiff(path)), start, goal, CoarseOptions(factor=4))
+    windowed = plan_coarse_to_fine(path, start, goal, CoarseOptions(factor=4, window_cells=16))
     assert whole.route.status == "exact"
     assert_same_plan(windowed, whole, rel=1e-9)
 
@@ -119,8 +120,9 @@ def test_an_origin_that_is_not_a_binary_fraction_agrees_to_rounding(tmp_path):
 def test_fallbacks_read_bigger_windows_and_equal_the_whole_map(tmp_path, gap, fallbacks):
     path = ridge_dem(tmp_path / "ridge.tif", gap)
     start, goal = (4.5, 4.5), (60.5, 4.5)
-    whole = plan_coarse_to_fine(EnergyCost.from_presets(read_geotiff(path)), start, goal, factor=8, corridor_m=2.0)
-    windowed = plan_coarse_to_fine_geotiff(path, start, goal, factor=8, corridor_m=2.0, window_cells=16)
+    whole = plan_coarse_to_fine(EnergyCost.from_presets(read_geotiff(path)), start, goal,
+                                CoarseOptions(factor=8, corridor_m=2.0))
+    windowed = plan_coarse_to_fine(path, start, goal, CoarseOptions(factor=8, corridor_m=2.0, window_cells=16))
     assert windowed.fallback in fallbacks
     assert_same_plan(windowed, whole)
     if gap == (0, 0):
@@ -132,28 +134,28 @@ def test_fallbacks_read_bigger_windows_and_equal_the_whole_map(tmp_path, gap, fa
 
 def test_cost_from_prices_every_window_alike(dem_path):
     cost_from = functools.partial(EnergyCost.from_presets, robot="jackal", speed_mps=0.8, unknown_ground="grass")
-    whole = plan_coarse_to_fine(cost_from(read_geotiff(dem_path)), START, GOAL, factor=4)
-    windowed = plan_coarse_to_fine_geotiff(dem_path, START, GOAL, factor=4, cost_from=cost_from)
+    whole = plan_coarse_to_fine(cost_from(read_geotiff(dem_path)), START, GOAL, CoarseOptions(factor=4))
+    windowed = plan_coarse_to_fine(dem_path, START, GOAL, CoarseOptions(factor=4), cost_from=cost_from)
     assert_same_plan(windowed, whole)
-    default = plan_coarse_to_fine_geotiff(dem_path, START, GOAL, factor=4)
+    default = plan_coarse_to_fine(dem_path, START, GOAL, CoarseOptions(factor=4))
     assert default.route.energy_j != windowed.route.energy_j
 
 
 def test_cost_from_that_is_not_a_window_pricer_is_refused(dem_path):
     with pytest.raises(InvalidParameterError, match="cost_from must be a callable"):
-        plan_coarse_to_fine_geotiff(dem_path, START, GOAL, cost_from="husky")
+        plan_coarse_to_fine(dem_path, START, GOAL, cost_from="husky")
     with pytest.raises(InvalidParameterError, match="cost_from must return an EnergyCost"):
-        plan_coarse_to_fine_geotiff(dem_path, START, GOAL, cost_from=lambda tmap: 3.0)
+        plan_coarse_to_fine(dem_path, START, GOAL, cost_from=lambda tmap: 3.0)
     other = EnergyCost.from_presets(procedural_map((8, 8), 1.0, seed=1))
     with pytest.raises(InvalidParameterError, match="cost_from must return an EnergyCost on the TerrainMap"):
-        plan_coarse_to_fine_geotiff(dem_path, START, GOAL, cost_from=lambda tmap: other)
+        plan_coarse_to_fine(dem_path, START, GOAL, cost_from=lambda tmap: other)
 
     def by_height(tmap):  # a cost that depends on the window's content: tables differ between windows
         speed = 0.5 if tmap.origin_xy_m[1] < 40 else 0.9
         return EnergyCost.from_presets(tmap, speed_mps=speed)
 
     with pytest.raises(InvalidParameterError, match="different energy tables"):
-        plan_coarse_to_fine_geotiff(dem_path, START, GOAL, window_cells=16, cost_from=by_height)
+        plan_coarse_to_fine(dem_path, START, GOAL, CoarseOptions(window_cells=16), cost_from=by_height)
 
 
 @pytest.mark.parametrize(
@@ -172,45 +174,45 @@ def test_cost_from_that_is_not_a_window_pricer_is_refused(dem_path):
 )
 def test_bad_arguments(dem_path, kwargs, error, match):
     with pytest.raises(error, match=match):
-        plan_coarse_to_fine_geotiff(dem_path, START, GOAL, **kwargs)
+        plan_coarse_to_fine(dem_path, START, GOAL, CoarseOptions(**kwargs))
 
 
 def test_bad_points(dem_path, tmp_path):
     with pytest.raises(OutOfBoundsError, match=r"start/goal point \(-1.0, 6.5\) m lies outside the map bounds"):
-        plan_coarse_to_fine_geotiff(dem_path, (-1.0, 6.5), GOAL)
+        plan_coarse_to_fine(dem_path, (-1.0, 6.5), GOAL)
     with pytest.raises(OutOfBoundsError, match="outside"):
-        plan_coarse_to_fine_geotiff(dem_path, START, (97.5, 10.0))
+        plan_coarse_to_fine(dem_path, START, (97.5, 10.0))
     with pytest.raises(InvalidParameterError, match="start equals goal"):
-        plan_coarse_to_fine_geotiff(dem_path, START, START)
+        plan_coarse_to_fine(dem_path, START, START)
     with pytest.raises(InvalidParameterError, match="start/goal"):
-        plan_coarse_to_fine_geotiff(dem_path, (float("nan"), 1.0), GOAL)
+        plan_coarse_to_fine(dem_path, (float("nan"), 1.0), GOAL)
     path = ridge_dem(tmp_path / "ridge.tif")
     with pytest.raises(BlockedPositionError, match=r"goal_xy_m \(31.5, 10.5\) m lies on a blocked cell .* row 10, col 31"):
-        plan_coarse_to_fine_geotiff(path, (4.5, 4.5), (31.5, 10.5), factor=4)
+        plan_coarse_to_fine(path, (4.5, 4.5), (31.5, 10.5), CoarseOptions(factor=4))
     whole = EnergyCost.from_presets(read_geotiff(path))
     with pytest.raises(BlockedPositionError, match=r"row 10, col 31"):  # the same message as on the whole map
-        plan_coarse_to_fine(whole, (4.5, 4.5), (31.5, 10.5), factor=4)
+        plan_coarse_to_fine(whole, (4.5, 4.5), (31.5, 10.5), CoarseOptions(factor=4))
     with pytest.raises(BlockedPositionError, match=r"start_xy_m \(31.5, 0.5\) m .* row 0, col 31"):  # at the edge
-        plan_coarse_to_fine_geotiff(path, (31.5, 0.5), (4.5, 4.5), factor=4)
+        plan_coarse_to_fine(path, (31.5, 0.5), (4.5, 4.5), CoarseOptions(factor=4))
 
 
 def test_bad_files(tmp_path):
     with pytest.raises(FileFormatError, match="does not exist"):
-        plan_coarse_to_fine_geotiff(tmp_path / "missing.tif", START, GOAL)
+        plan_coarse_to_fine(tmp_path / "missing.tif", START, GOAL)
     (tmp_path / "text.tif").write_text("not a raster")
     with pytest.raises(FileFormatError, match="cannot read"):
-        plan_coarse_to_fine_geotiff(tmp_path / "text.tif", START, GOAL)
+        plan_coarse_to_fine(tmp_path / "text.tif", START, GOAL)
     z = np.zeros((40, 40))
     z[30, 35] = -9999.0
     holed = write_dem(tmp_path / "holed.tif", z, nodata=-9999.0)
     with pytest.raises(NodataError, match=r"holed.tif.* 1 nodata/NaN cells in map rows 23..32, cols 31..39"):
-        plan_coarse_to_fine_geotiff(holed, (2.5, 2.5), (10.5, 3.5), factor=4, window_cells=8)
+        plan_coarse_to_fine(holed, (2.5, 2.5), (10.5, 3.5), CoarseOptions(factor=4, window_cells=8))
     geo = tmp_path / "geo.tif"
     with rasterio.open(geo, "w", driver="GTiff", height=10, width=10, count=1, dtype="float32", crs="EPSG:4326",
                        transform=rasterio.Affine(0.001, 0.0, 15.0, 0.0, -0.001, 45.0)) as dst:
         dst.write(np.zeros((10, 10), "float32"), 1)
     with pytest.raises(FileFormatError, match="units are not metres"):
-        plan_coarse_to_fine_geotiff(geo, (15.0005, 44.9995), (15.0055, 44.9955))
+        plan_coarse_to_fine(geo, (15.0005, 44.9995), (15.0055, 44.9955))
 
 
 # ------------------------------------------------------------------ the command line

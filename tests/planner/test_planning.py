@@ -379,7 +379,7 @@ def test_bad_flags_are_refused():
 
 def test_coarse_to_fine_is_a_planner_by_name_tuned_by_the_settings():
     # plan_route(planner="coarse") is plan_coarse_to_fine at the settings' factor and corridor, then refined
-    from planner.coarse import plan_coarse_to_fine
+    from planner import CoarseOptions, plan_coarse_to_fine
 
     tmap = _hill_map()
     cost = _cost(tmap)
@@ -387,7 +387,7 @@ def test_coarse_to_fine_is_a_planner_by_name_tuned_by_the_settings():
     for factor, corridor in ((4, None), (8, 6.0)):
         settings = PlannerSettings(coarse_factor=factor, coarse_corridor_m=corridor)
         raw = plan_route(tmap, start, goal, cost=cost, planner="coarse", settings=settings, refine=False)
-        direct = plan_coarse_to_fine(cost, start, goal, factor=factor, corridor_m=corridor).route
+        direct = plan_coarse_to_fine(cost, start, goal, CoarseOptions(factor=factor, corridor_m=corridor)).route
         assert raw.planner == "coarse" and raw.status == "exact"
         np.testing.assert_array_equal(raw.waypoints_m, direct.waypoints_m)
         assert raw.energy_j == pytest.approx(direct.energy_j, rel=1e-12)

@@ -1,17 +1,16 @@
-"""Tests of planner.coarse_report: plan_coarse, plan_coarse_windowed and CoarsePlanReport."""
+"""Tests of planner.plan_report.plan_coarse: a coarse-to-fine PlanReport, of a map in memory or of a GeoTIFF."""
 
 from __future__ import annotations
 
 import json
 import math
-import re
 
 import pytest
 
 import terrain
-from planner.coarse_report import CoarsePlanReport, check_coarse_options, plan_coarse, plan_coarse_windowed
+from planner import CoarseOptions
 from planner.cost_spec import CostSpec
-from planner.plan_report import ROUTE_JSON_FORMAT_VERSION, route_table
+from planner.plan_report import ROUTE_JSON_FORMAT_VERSION, PlanReport, plan_coarse, route_table
 from terrain import InvalidParameterError
 from terrain.procedural import procedural_map
 from terrawatt_base.formats import read_result_json
@@ -20,16 +19,16 @@ START, GOAL = (5.0, 5.0), (35.0, 5.0)
 
 
 def test_a_coarse_plan_reports_one_row_and_its_stages(wall_map, tmp_path):
-    report = plan_coarse(wall_map, START, GOAL, factor=4, map_label="wall")
-    assert isinstance(report, CoarsePlanReport) and not report.windowed and report.fine_map is wall_map
-    assert report.route.status == "exact" and report.grid == wall_map.grid
+    report = plan_coarse(wall_map, START, GOAL, options=CoarseOptions(factor=4), map_label="wall")
+    assert isinstance(report, PlanReport) and not report.windowed and report.fine_map is wall_map
+    assert report.route.status == "exact" and report.coarse.grid == wall_map.grid and report.lattice is None
     rows = report.rows()
     assert [r["route"] for r in rows] == ["coarse-to-fine (x4)"] and math.isnan(rows[0]["ratio_to_lattice_optimum"])
     lines = report.summary().splitlines()
     assert lines[0] == "map: wall  40 x 40 cells of 1 m; grounds {0: 'asphalt'}"
     assert lines[1].startswith("robot: husky, speed 0.5 m/s, max slope 20 deg; map preparation ")
     assert lines[2].startswith("start (5.0, 5.0) -> goal (35.0, 5.0); coarse-to-fine, factor 4, corridor ")
-    assert f"fallback: {report.plan.fallback})" in lines[2]
+    assert f"fallback: {report.coarse.fallback})" in lines[2]
     assert lines[3].startswith("coarse route ") and lines[4] == ""
     assert "\n".join(lines[5:]) == route_table(rows)
     data = report.to_dict()
@@ -45,7 +44,7 @@ def test_a_coarse_plan_reports_one_row_and_its_stages(wall_map, tmp_path):
 
 def test_a_coarse_plan_without_route(tmp_path):
     closed = terrain.wall_map((40, 40), 1.0, wall_col=20, gap_rows=(0, 0))
-    report = plan_coarse(closed, START, GOAL, factor=4)
+    report = plan_coarse(closed, START, GOAL)
     assert report.route.status == "infeasible" and report.rows() == []
     assert report.summary().splitlines()[-1] == "no route: status 'infeasible'"
     assert report.to_dict()["routes"] == {}
@@ -58,6 +57,8 @@ def test_a_pricing_coarse_to_fine_cannot_use_is_refused(wall_map, known_model):
     assert err.value.parameter == "pricing"
     with pytest.raises(InvalidParameterError, match="pricing must be a CostSpec"):
         plan_coarse(wall_map, START, GOAL, pricing={"max_slope_deg": 10.0})
+    with pytest.raises(InvalidParameterError, match="options must be a CoarseOptions"):
+        plan_coarse(wall_map, START, GOAL, options={"factor": 4})
 
 
 def test_a_windowed_plan_equals_the_plan_in_memory(tmp_path):
@@ -66,10 +67,10 @@ def test_a_windowed_plan_equals_the_plan_in_memory(tmp_path):
     tmap.crs = "EPSG:32633"
     dem = terrain.write_geotiff(tmap, tmp_path / "dem.tif")
     start, goal = (5.5, 6.5), (90.5, 120.5)
-    windowed = plan_coarse_windowed(dem, start, goal, factor=4)
-    whole = plan_coarse(terrain.read_map(dem), start, goal, factor=4, map_label="dem.tif")
+    windowed = plan_coarse(dem, start, goal, options=CoarseOptions(factor=4))
+    whole = plan_coarse(terrain.read_map(dem), start, goal, options=CoarseOptions(factor=4), map_label="dem.tif")
     assert windowed.windowed and windowed.priced.map_label == "dem.tif" and windowed.priced.map_preparation_s == 0.0
-    assert windowed.terrain is None and windowed.grid.shape == (131, 97)
+    assert windowed.terrain is None and windowed.coarse.grid.shape == (131, 97)
     assert windowed.route.energy_j == whole.route.energy_j
     lines = windowed.summary().splitlines()
     assert lines[0] == "map: dem.tif  131 x 97 cells of 1 m, read by windows; ground unknown, priced as 'gravel'"
@@ -80,33 +81,3 @@ def test_a_windowed_plan_equals_the_plan_in_memory(tmp_path):
                                                          "planning_time_s": w["routes"]["min_energy"]["planning_time_s"]}}
     assert [p.name for p in windowed.write(tmp_path / "w", whole_map=True)] == ["route.json", "route.geojson",
                                                                                  "route.png"]
-
-
-@pytest.mark.parametrize(
-    ("options", "message", "named"),
-    [({"corridor_m": 30.0}, "corridor_m applies to coarse-to-fine planning; give factor F too", ("corridor_m", "factor")),
-     ({"factor": 4, "model": "m.zip"}, "model plans on the whole map with planner; it does not apply to factor / "
-                                       "windowed yet", ("model", "planner", "factor", "windowed")),
-     ({"windowed": True, "path": "dem.tif"}, "windowed plans coarse-to-fine; give factor F too", ("windowed", "factor")),
-     ({"factor": 4, "windowed": True, "path": "map.npz"}, "windowed reads GeoTIFF DEMs (.tif, .tiff), got path map.npz",
-      ("windowed", "path")),
-     ({"factor": 4, "windowed": True, "path": "dem.tif", "cell_size_m": 5.0}, "windowed reads the DEM as it is and "
-      "cannot apply cell_size_m (it needs the whole map): fill or reproject the DEM first (gdal_fillnodata, "
-      "gdalwarp), or plan without windowed", ("windowed", "cell_size_m")),
-     ({"factor": 4, "windowed": True, "path": "dem.TIF", "landcover": "lc.tif"}, "cannot apply landcover",
-      ("windowed", "landcover")),
-     ({"windowed": "yes"}, "windowed must be", "windowed")],
-)
-def test_coarse_options_it_cannot_take_are_refused_naming_them(options, message, named):
-    with pytest.raises(InvalidParameterError, match=re.escape(message)) as err:
-        check_coarse_options(**options)
-    assert err.value.parameter == named  # a front end says them its way (terrawatt_cli.error_message)
-
-
-def test_coarse_options_it_can_take_pass_and_unnamed_options_are_named_as_themselves():
-    assert check_coarse_options() is None
-    assert check_coarse_options(model="m.zip", fill_nodata="nearest", cell_size_m=5.0) is None  # not coarse
-    assert check_coarse_options(factor=4, corridor_m=30.0, windowed=True, path="dem.tiff") is None
-    assert check_coarse_options(factor=4, fill_nodata="nearest") is None  # in memory: the map is read whole
-    with pytest.raises(InvalidParameterError, match="^windowed reads the DEM as it is and cannot apply fill_nodata"):
-        check_coarse_options(factor=4, windowed=True, path="dem.tif", fill_nodata="nearest")
