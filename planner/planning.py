@@ -389,7 +389,8 @@ def plan_coarse_to_fine(
     --------
     >>> from planner import EnergyCost
     >>> from terrain import procedural_map
-    >>> cost = EnergyCost.from_presets(procedural_map((96, 96), 1.0, seed=2), unknown_ground="gravel")
+    >>> from planner import CostSpec
+    >>> cost = CostSpec(unknown_ground="gravel").build(procedural_map((96, 96), 1.0, seed=2))
     >>> plan = plan_coarse_to_fine(cost, (8.0, 8.0), (88.0, 80.0), CoarseOptions(factor=4), compare=True)
     >>> plan.route.status, bool(1.0 <= plan.ratio_to_optimum < 1.05)
     ('exact', True)

@@ -7,14 +7,13 @@ import math
 import numpy as np
 import pytest
 
+from planner.cost_spec import CostSpec
 from terrain import InvalidParameterError, procedural_map
 
 
 @pytest.fixture(scope="module")
 def hilly_cost():
-    from planner import EnergyCost
-
-    return EnergyCost.from_presets(procedural_map((120, 112), 1.0, seed=5, obstacle_fraction=0.01))
+    return CostSpec().build(procedural_map((120, 112), 1.0, seed=5, obstacle_fraction=0.01))
 
 
 def test_coarse_to_fine_is_close_to_the_full_resolution_optimum(hilly_cost):
@@ -42,13 +41,13 @@ def test_a_narrow_corridor_is_never_below_the_optimum(hilly_cost):
 
 
 def test_a_passage_the_coarse_map_cannot_see_falls_back():
-    from planner import CoarseOptions, EnergyCost, plan_coarse_to_fine
+    from planner import CoarseOptions, plan_coarse_to_fine
     from terrain import wall_map
 
     # a 1-cell gap in a wall: blocks of 8 cells over the wall are mostly free, the coarse
     # route goes straight through where the fine wall is closed
     tmap = wall_map((64, 64), 1.0, wall_col=32, gap_rows=(60, 61), ground="asphalt")
-    cost = EnergyCost.from_presets(tmap)
+    cost = CostSpec().build(tmap)
     plan = plan_coarse_to_fine(cost, (4.5, 4.5), (60.5, 4.5), CoarseOptions(factor=8, corridor_m=2.0), compare=True)
     assert plan.route.status == "exact"
     assert plan.fallback in ("wider corridor", "whole map")
@@ -56,11 +55,11 @@ def test_a_passage_the_coarse_map_cannot_see_falls_back():
 
 
 def test_separated_points_are_infeasible():
-    from planner import CoarseOptions, EnergyCost, plan_coarse_to_fine
+    from planner import CoarseOptions, plan_coarse_to_fine
     from terrain import wall_map
 
     tmap = wall_map((32, 32), 1.0, wall_col=16, gap_rows=(0, 0), ground="asphalt")
-    plan = plan_coarse_to_fine(EnergyCost.from_presets(tmap), (4.5, 4.5), (28.5, 4.5), CoarseOptions(factor=4))
+    plan = plan_coarse_to_fine(CostSpec().build(tmap), (4.5, 4.5), (28.5, 4.5), CoarseOptions(factor=4))
     assert plan.route.status == "infeasible" and math.isnan(plan.ratio_to_optimum)
 
 
@@ -110,10 +109,10 @@ def test_bad_coarse_to_fine_points(hilly_cost):
 
 
 def test_coarse_to_fine_refuses_a_blocked_start(tmp_path):
-    from planner import EnergyCost, plan_coarse_to_fine
+    from planner import plan_coarse_to_fine
     from terrain import wall_map
     from terrawatt_base.errors import BlockedPositionError
 
-    cost = EnergyCost.from_presets(wall_map((32, 32), 1.0, wall_col=16, ground="asphalt"))
+    cost = CostSpec().build(wall_map((32, 32), 1.0, wall_col=16, ground="asphalt"))
     with pytest.raises(BlockedPositionError, match="start_xy_m .* blocked cell"):
         plan_coarse_to_fine(cost, (16.5, 4.5), (28.5, 4.5))

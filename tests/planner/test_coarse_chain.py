@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from planner import CoarseOptions, EnergyCost, Lattice, plan_coarse_to_fine
+from planner.cost_spec import CostSpec
 from planner.route import evaluate_route
 from terrain import InvalidParameterError, procedural_map, read_geotiff, write_geotiff
 from terrawatt_base.errors import PlanningError
@@ -23,7 +24,7 @@ def dem(tmp_path_factory):
     tmap = procedural_map((SIDE, SIDE), 1.0, seed=3, origin_xy_m=(0.0, 0.0))
     tmap.crs = "EPSG:32633"
     path = write_geotiff(tmap, tmp_path_factory.mktemp("dem") / "dem.tif")
-    cost = EnergyCost.from_presets(read_geotiff(path))
+    cost = CostSpec().build(read_geotiff(path))
     labels = cost.components()
     rr, cc = np.nonzero(labels == np.bincount(labels[labels > 0]).argmax())
 
@@ -132,7 +133,7 @@ def test_a_stretch_without_route_is_widened(tmp_path):
     assert plan.route.status == "exact" and plan.fallback == "wider corridor" and plan.corridor_m == 16.0
     assert len(plan.fine_windows) > 1 and max(window_cells(plan)) <= 60 * 60
     assert plan.route.waypoints_m[:, 1].max() >= 44.0
-    cost = EnergyCost.from_presets(read_geotiff(path))
+    cost = CostSpec().build(read_geotiff(path))
     assert np.all(np.isfinite(evaluate_route(cost, plan.route.waypoints_m).segment_energy_j))
 
 

@@ -10,6 +10,7 @@ import pytest
 
 from planner import CoarseOptions, EnergyCost, plan_coarse_to_fine
 from planner.coarse import downsample_cost
+from planner.cost_spec import CostSpec
 from terrain import (
     FileFormatError,
     InvalidParameterError,
@@ -71,7 +72,7 @@ def assert_same_plan(windowed, whole, *, rel=0.0):
 
 @pytest.mark.parametrize(("factor", "window_cells"), [(4, 8), (4, 36), (4, None), (3, 9), (5, 25), (2, 1000)])
 def test_windowed_plan_equals_the_whole_map_plan_exactly(dem_path, factor, window_cells):
-    whole = plan_coarse_to_fine(EnergyCost.from_presets(read_geotiff(dem_path)), START, GOAL,
+    whole = plan_coarse_to_fine(CostSpec().build(read_geotiff(dem_path)), START, GOAL,
                                 CoarseOptions(factor=factor))
     windowed = plan_coarse_to_fine(dem_path, START, GOAL, CoarseOptions(factor=factor, window_cells=window_cells))
     assert whole.route.status == "exact"
@@ -81,7 +82,7 @@ def test_windowed_plan_equals_the_whole_map_plan_exactly(dem_path, factor, windo
 
 
 def test_the_coarse_map_from_tiles_equals_downsample_cost(dem_path, tmp_path):
-    coarse_whole = downsample_cost(EnergyCost.from_presets(read_geotiff(dem_path)), 5)  # 131 x 97: partial blocks
+    coarse_whole = downsample_cost(CostSpec().build(read_geotiff(dem_path)), 5)  # 131 x 97: partial blocks
     coarse = plan_coarse_to_fine(dem_path, START, GOAL, CoarseOptions(factor=5, window_cells=10)).coarse_map
     assert np.array_equal(coarse.elevation_m, coarse_whole.terrain.elevation_m)
     assert np.array_equal(coarse.obstacle, coarse_whole.blocked)
@@ -89,7 +90,7 @@ def test_the_coarse_map_from_tiles_equals_downsample_cost(dem_path, tmp_path):
     # a steep band (45 degrees) of blocked cells, cut by tiles of 9 cells
     z = np.clip(np.arange(50.0) - 20.0, 0.0, 17.0)[None, :].repeat(40, axis=0)
     path = write_dem(tmp_path / "band.tif", z)
-    coarse_whole = downsample_cost(EnergyCost.from_presets(read_geotiff(path)), 3)
+    coarse_whole = downsample_cost(CostSpec().build(read_geotiff(path)), 3)
     coarse = plan_coarse_to_fine(path, (2.5, 2.5), (10.5, 30.5), CoarseOptions(factor=3, window_cells=9)).coarse_map
     assert coarse_whole.blocked.any() and np.array_equal(coarse.obstacle, coarse_whole.blocked)
     assert np.array_equal(coarse.elevation_m, coarse_whole.terrain.elevation_m)
@@ -110,7 +111,7 @@ def test_an_origin_that_is_not_a_binary_fraction_agrees_to_rounding(tmp_path):
     z = read_geotiff(write_geotiff(procedural_map((60, 70), 1.0, seed=8), tmp_path / "a.tif")).elevation_m
     path = write_dem(tmp_path / "dem.tif", z, origin=(500_000.3, 4_990_000.7), cell=0.7)
     start, goal = (500_000.3 + 3.1, 4_990_000.7 + 2.9), (500_000.3 + 44.0, 4_990_000.7 + 38.2)
-    whole = plan_coarse_to_fine(EnergyCost.from_presets(read_geotiff(path)), start, goal, CoarseOptions(factor=4))
+    whole = plan_coarse_to_fine(CostSpec().build(read_geotiff(path)), start, goal, CoarseOptions(factor=4))
     windowed = plan_coarse_to_fine(path, start, goal, CoarseOptions(factor=4, window_cells=16))
     assert whole.route.status == "exact"
     assert_same_plan(windowed, whole, rel=1e-9)
@@ -120,7 +121,7 @@ def test_an_origin_that_is_not_a_binary_fraction_agrees_to_rounding(tmp_path):
 def test_fallbacks_read_bigger_windows_and_equal_the_whole_map(tmp_path, gap, fallbacks):
     path = ridge_dem(tmp_path / "ridge.tif", gap)
     start, goal = (4.5, 4.5), (60.5, 4.5)
-    whole = plan_coarse_to_fine(EnergyCost.from_presets(read_geotiff(path)), start, goal,
+    whole = plan_coarse_to_fine(CostSpec().build(read_geotiff(path)), start, goal,
                                 CoarseOptions(factor=8, corridor_m=2.0))
     windowed = plan_coarse_to_fine(path, start, goal, CoarseOptions(factor=8, corridor_m=2.0, window_cells=16))
     assert windowed.fallback in fallbacks
@@ -146,13 +147,13 @@ def test_cost_from_that_is_not_a_window_pricer_is_refused(dem_path):
         plan_coarse_to_fine(dem_path, START, GOAL, cost_from="husky")
     with pytest.raises(InvalidParameterError, match="cost_from must return an EnergyCost"):
         plan_coarse_to_fine(dem_path, START, GOAL, cost_from=lambda tmap: 3.0)
-    other = EnergyCost.from_presets(procedural_map((8, 8), 1.0, seed=1))
+    other = CostSpec().build(procedural_map((8, 8), 1.0, seed=1))
     with pytest.raises(InvalidParameterError, match="cost_from must return an EnergyCost on the TerrainMap"):
         plan_coarse_to_fine(dem_path, START, GOAL, cost_from=lambda tmap: other)
 
     def by_height(tmap):  # a cost that depends on the window's content: tables differ between windows
         speed = 0.5 if tmap.origin_xy_m[1] < 40 else 0.9
-        return EnergyCost.from_presets(tmap, speed_mps=speed)
+        return CostSpec(speed_mps=speed).build(tmap)
 
     with pytest.raises(InvalidParameterError, match="different energy tables"):
         plan_coarse_to_fine(dem_path, START, GOAL, CoarseOptions(window_cells=16), cost_from=by_height)
@@ -189,7 +190,7 @@ def test_bad_points(dem_path, tmp_path):
     path = ridge_dem(tmp_path / "ridge.tif")
     with pytest.raises(BlockedPositionError, match=r"goal_xy_m \(31.5, 10.5\) m lies on a blocked cell .* row 10, col 31"):
         plan_coarse_to_fine(path, (4.5, 4.5), (31.5, 10.5), CoarseOptions(factor=4))
-    whole = EnergyCost.from_presets(read_geotiff(path))
+    whole = CostSpec().build(read_geotiff(path))
     with pytest.raises(BlockedPositionError, match=r"row 10, col 31"):  # the same message as on the whole map
         plan_coarse_to_fine(whole, (4.5, 4.5), (31.5, 10.5), CoarseOptions(factor=4))
     with pytest.raises(BlockedPositionError, match=r"start_xy_m \(31.5, 0.5\) m .* row 0, col 31"):  # at the edge
