@@ -387,9 +387,8 @@ def plan_coarse_to_fine(
 
     Examples
     --------
-    >>> from planner import EnergyCost
-    >>> from terrain import procedural_map
     >>> from planner import CostSpec
+    >>> from terrain import procedural_map
     >>> cost = CostSpec(unknown_ground="gravel").build(procedural_map((96, 96), 1.0, seed=2))
     >>> plan = plan_coarse_to_fine(cost, (8.0, 8.0), (88.0, 80.0), CoarseOptions(factor=4), compare=True)
     >>> plan.route.status, bool(1.0 <= plan.ratio_to_optimum < 1.05)
