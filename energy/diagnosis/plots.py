@@ -30,7 +30,6 @@ from typing import Any
 
 import numpy as np
 
-from terrain.terrain_map import TerrainMap
 from terrawatt_base import plot_target
 from terrawatt_base.atomic import check_output_path, save_figure
 from terrawatt_base.checks import check_choice, check_int, fmt_number
@@ -254,16 +253,13 @@ class DiagnosisFigures:
         return "\n".join(lines)
 
 
-def skipped_figures(diagnosis: Any, *, logs: Any = None, terrain: TerrainMap | None = None) -> dict[str, str]:
+def skipped_figures(diagnosis: Any) -> dict[str, str]:
     """The figures of :func:`plot_diagnosis` whose data is missing, and why (figure name -> reason).
 
     Parameters
     ----------
     diagnosis : Diagnosis
-    logs : InteractionLog or sequence of them, optional
-        The logs the diagnosis ran on.
-    terrain : TerrainMap, optional
-        The map the diagnosis ran on.
+        With the logs and the map it ran on (:attr:`Diagnosis.logs`, :attr:`Diagnosis.terrain`).
 
     Returns
     -------
@@ -276,7 +272,8 @@ def skipped_figures(diagnosis: Any, *, logs: Any = None, terrain: TerrainMap | N
         Not a Diagnosis, not a TerrainMap, logs that are not InteractionLogs.
     """
     diagnosis = checked_diagnosis(diagnosis)
-    terrain = check_terrain(terrain)
+    terrain = check_terrain(diagnosis.terrain)
+    logs = list(diagnosis.logs) or None
     skipped: dict[str, str] = {}
     if logs is None:
         skipped["residual_time"] = "no residual over time: no logs given"
@@ -291,13 +288,14 @@ def skipped_figures(diagnosis: Any, *, logs: Any = None, terrain: TerrainMap | N
     return skipped
 
 
-def plot_diagnosis(diagnosis: Any, directory: str | os.PathLike[str], *, logs: Any = None,
-                   predictions: Any = None, terrain: TerrainMap | None = None, figures: Sequence[str] | None = None,
-                   max_runs: int = 4, on_error: str = "raise", dpi: int = 110) -> DiagnosisFigures:
+def plot_diagnosis(diagnosis: Any, directory: str | os.PathLike[str], *, predictions: Any = None,
+                   figures: Sequence[str] | None = None, max_runs: int = 4, on_error: str = "raise",
+                   dpi: int = 110) -> DiagnosisFigures:
     """Draw every figure of a diagnosis into ``directory`` (file names :data:`FIGURES`).
 
+    It draws the logs and the map the diagnosis ran on (:attr:`Diagnosis.logs`, :attr:`Diagnosis.terrain`).
     A figure whose data is missing is skipped with its reason: the residual over time
-    without ``logs``; the map without ``terrain`` or poses. Without ``predictions`` the
+    without logs; the map without a map or poses. Without ``predictions`` the
     residual is that of the model as given (``diagnosis.corrected_model.base``), and the
     corrected model's (fitted on all logs: in-sample) is drawn dashed beside it.
 
@@ -306,12 +304,8 @@ def plot_diagnosis(diagnosis: Any, directory: str | os.PathLike[str], *, logs: A
     diagnosis : Diagnosis
     directory : path-like
         Folder to write into (created when missing).
-    logs : InteractionLog or sequence of them, optional
-        The logs the diagnosis ran on (same order).
     predictions : sequence of array_like (N, 2), optional
         Predictions of the model as given, per log.
-    terrain : TerrainMap, optional
-        The map the diagnosis ran on.
     figures : sequence of str, optional
         Names from :data:`FIGURES` (default all).
     max_runs : int
@@ -334,7 +328,8 @@ def plot_diagnosis(diagnosis: Any, directory: str | os.PathLike[str], *, logs: A
         A figure name not in :data:`FIGURES`, or an unknown ``on_error``.
     """
     diagnosis = checked_diagnosis(diagnosis)
-    terrain = check_terrain(terrain)
+    terrain = check_terrain(diagnosis.terrain)
+    logs = list(diagnosis.logs) or None
     check_choice("on_error", on_error, ("raise", "warn"))
     max_runs = check_int("max_runs", max_runs, low=1, high=8)
     dpi = check_int("dpi", dpi, low=10, high=1200)
@@ -347,7 +342,7 @@ def plot_diagnosis(diagnosis: Any, directory: str | os.PathLike[str], *, logs: A
     folder = check_output_path(directory, "directory", directory=True)
     paths = {n: check_output_path(folder / FIGURES[n], f"directory {str(folder)!r}: {FIGURES[n]}") for n in names}
 
-    skipped = skipped_figures(diagnosis, logs=logs, terrain=terrain)
+    skipped = skipped_figures(diagnosis)
 
     def residual(path: Path) -> Path:
         items = log_list(logs)

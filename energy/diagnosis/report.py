@@ -113,7 +113,7 @@ class Diagnosis:
         parts = ["\n".join(self.verdict), "", self.current.table()]
         if self.power is not None:
             parts += ["", self.power.table()]
-        skipped = skipped_figures(self, logs=list(self.logs) or None, terrain=self.terrain)
+        skipped = skipped_figures(self)
         parts += [f"skipped {FIGURES[name]}: {why}" for name, why in skipped.items()]
         return "\n".join(parts)
 
@@ -226,8 +226,7 @@ class Diagnosis:
                    self.corrected_model.save(out / "corrected_model.zip")]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", FigureWarning)  # warned below, once, naming the file
-            figures = plot_diagnosis(self, out, logs=list(self.logs) or None, terrain=self.terrain,
-                                     on_error=on_figure_error)
+            figures = plot_diagnosis(self, out, on_error=on_figure_error)
         for name, why in figures.failed.items():
             warnings.warn(f"could not draw {out / FIGURES[name]}: {why}", FigureWarning, stacklevel=2)
         written += list(figures.written.values())

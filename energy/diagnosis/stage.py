@@ -27,14 +27,14 @@ from terrawatt_base.checks import check_choice, check_int, check_real, check_see
 from ..logs import InteractionLog
 from ..robot import RobotParams
 from .effect_base import Effect
-from .fit import SPLITS, DiagnosisData, SetRunner, SetScore, Split, fit_effect_set, shrink_pct
+from .fit import SPLITS, DiagnosisData, SetRunner, Split, fit_effect_set, shrink_pct
 from .gap import CURRENT, POWER, GapShare, GapSummary, Quantity, WaterfallStep, gap_summary, largest_slices
 from .model_currents import PhysicsBasis, physics_basis
 from .power_data import check_power_logs, power_inputs, predicted_battery_power_w
 from .result import EffectScore, Tie
 from .selection import Selection, plausible_alternative, select_effects
 
-__all__ = ["FitSettings", "Stage", "stage_of", "stage_waterfall", "stage_verdict", "power_stage", "CONFUSED_FRACTION"]
+__all__ = ["FitSettings", "Stage", "stage_of", "stage_verdict", "power_stage", "CONFUSED_FRACTION"]
 
 #: A candidate whose shrink alone reaches this fraction of the chosen one's is called hard to tell apart from it
 #: (the power stage's verdict).
@@ -182,29 +182,18 @@ class Stage:
         return "\n".join(lines)
 
 
-def stage_waterfall(quantity: Quantity, logs: Sequence[InteractionLog], chosen: Sequence[Effect],
-                    sets: Sequence[SetScore], settings: FitSettings,
-                    stopped: Sequence[np.ndarray] | None = None) -> tuple[WaterfallStep, ...]:
-    """The held-out waterfall of a stage: ``"as given"`` (``sets[0]``), then ``"+ effect"`` per chosen effect,
-    each the :func:`~energy.diagnosis.gap.gap_summary` of the held-out prediction after it."""
-    none = sets[0]
-    labels = ["as given"] + [f"+ {e.name}" for e in chosen]
-    return tuple(WaterfallStep.of(label, gap_summary(logs, list(s.held_out_a), quantity=quantity, stopped=stopped,
-                                                     section_s=settings.section_s), shrink_pct(none, s))
-                 for label, s in zip(labels, sets))
-
-
 def stage_of(quantity: Quantity, logs: Sequence[InteractionLog], sel: Selection, settings: FitSettings,
              stopped: Sequence[np.ndarray] | None = None, **extra: Any) -> Stage:
-    """The :class:`Stage` of a selection: its gap before and after, ranking, chosen effects and waterfall
-    (``extra``: the other fields of :class:`Stage`; the verdict is the caller's, :func:`stage_verdict`)."""
-    none = sel.sets[0]
-    before = gap_summary(logs, list(none.held_out_a), quantity=quantity, stopped=stopped, section_s=settings.section_s)
-    after = before if len(sel.sets) == 1 else gap_summary(logs, list(sel.sets[-1].held_out_a), quantity=quantity,
-                                                          stopped=stopped, section_s=settings.section_s)
-    return Stage(quantity, before, after, tuple(sel.scores[e.name] for e in sel.order),
-                 tuple(e.name for e in sel.chosen), stage_waterfall(quantity, logs, sel.chosen, sel.sets, settings,
-                                                                   stopped), **extra)
+    """The :class:`Stage` of a selection: its ranking, chosen effects and held-out waterfall (``"as given"``, then
+    ``"+ effect"`` per chosen effect, each the :func:`~energy.diagnosis.gap.gap_summary` of the held-out prediction
+    after it: the first is the gap before, the last the gap after). ``extra``: the other fields of :class:`Stage`;
+    the verdict is the caller's (:func:`stage_verdict`)."""
+    gaps = [gap_summary(logs, list(s.held_out_a), quantity=quantity, stopped=stopped, section_s=settings.section_s)
+            for s in sel.sets]
+    labels = ["as given"] + [f"+ {e.name}" for e in sel.chosen]
+    steps = tuple(WaterfallStep.of(label, g, shrink_pct(sel.none, s)) for label, g, s in zip(labels, gaps, sel.sets))
+    return Stage(quantity, gaps[0], gaps[-1], tuple(sel.scores[e.name] for e in sel.order),
+                 tuple(e.name for e in sel.chosen), steps, **extra)
 
 
 # ---------------------------------------------------------------------- the verdict
