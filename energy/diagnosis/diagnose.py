@@ -14,7 +14,7 @@ from terrawatt_base.dask_client import check_client
 from terrawatt_base.errors import DataError, InvalidParameterError, NotFittedError
 
 from ..logs import InteractionLog
-from ..models.base import CurrentModel, check_logs, log_currents
+from ..models.base import CurrentModel, check_logs
 from ..params import robot_spec
 from .corrected import CorrectedCurrentModel
 from .effect_base import Effect
@@ -78,13 +78,17 @@ def _check_model(model: Any, logs: list[InteractionLog]) -> list[np.ndarray]:
     return out
 
 
-def _check_currents(logs: list[InteractionLog]) -> None:
-    for k, log in enumerate(logs):
+def _checked_logs(logs: Any) -> list[InteractionLog]:
+    """``logs`` as a list (:func:`check_logs`), each with at least 2 drive samples and drive currents not all zero."""
+    items = check_logs(logs)
+    for k, log in enumerate(items):
         if len(log) < 2:
             raise DataError(f"logs[{k}] has {len(log)} drive sample(s); the diagnosis needs at least 2 per log")
-        if not np.any(log_currents(log)):
+        log.require_currents("the diagnosis")
+        if not (np.any(log.current_left_a) or np.any(log.current_right_a)):
             raise DataError(f"logs[{k}] ({log.meta.source!r}) has no drive currents (all zero); "
                             "the diagnosis compares measured and predicted currents")
+    return items
 
 
 def _candidates(model: Any, logs: list[InteractionLog], items: list[Effect], effects: Any, terrain: Any,
@@ -186,15 +190,14 @@ def diagnose(model: CurrentModel | ModelUnderDiagnosis, logs: InteractionLog | S
     settings = FitSettings() if settings is None else settings
     if not isinstance(settings, FitSettings):
         raise InvalidParameterError(f"settings must be a FitSettings, got {type(settings).__name__!r}")
-    items = check_logs(logs)
+    items = _checked_logs(logs)
     progress = check_bool("progress", progress)
     check_client(client, "candidate effect sets")
     if robot is not None:
         robot = robot_spec(robot)  # a robot file read once: the corrected model keeps its parameters, not a path
     terrain = check_terrain(terrain)
-    _check_currents(items)
-    sp = make_split(items, settings.split, settings.n_blocks)
     predictions = _check_model(model, items)
+    sp = make_split(items, settings.split, settings.n_blocks)
     resolved = resolve_effects(effects)
     electrical = [e for e in resolved if e.kind == "electrical"]
     usable, learned, skipped = _candidates(model, items, [e for e in resolved if e.kind != "electrical"], effects,
