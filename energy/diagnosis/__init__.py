@@ -9,17 +9,7 @@ from .corrected import CorrectedCurrentModel
 from .diagnose import diagnose
 from .effect_base import EFFECT_KINDS, BasisEffect, Effect, EffectParameter
 from .effects import EFFECTS_CATALOGUE, NOT_IDENTIFIABLE_FROM_CURRENT, check_effect_names, effect, effect_from_spec
-from .gap import (
-    CURRENT,
-    POWER,
-    GapShare,
-    GapSummary,
-    Quantity,
-    WaterfallStep,
-    gap_summary,
-    localise_gap,
-    residual_currents_a,
-)
+from .gap import GapShare, GapSummary, WaterfallStep, gap_summary, localise_gap, residual_currents_a
 from .model_currents import DRIVE_EFFECTS
 from .model_source import (
     DEFAULT_SOURCE_NAMES,
@@ -30,6 +20,7 @@ from .model_source import (
 )
 from .plots import FIGURES, DiagnosisFigures, plot_diagnosis, plot_effect_ranking, plot_waterfall, skipped_figures
 from .plots_gap import plot_gap_by_regime, plot_gap_map, plot_residual_time
+from .quantity import CURRENT, POWER, Quantity
 from .regimes import regime_labels
 from .report import DIAGNOSIS_FILES, Diagnosis
 from .result import EffectScore, Tie

@@ -28,9 +28,10 @@ from ..logs import InteractionLog
 from ..robot import RobotParams
 from .effect_base import Effect
 from .fit import SPLITS, DiagnosisData, SetRunner, Split, fit_effect_set, shrink_pct
-from .gap import CURRENT, POWER, GapShare, GapSummary, Quantity, WaterfallStep, gap_summary, largest_slices
+from .gap import GapShare, GapSummary, WaterfallStep, gap_summary, largest_slices
 from .model_currents import PhysicsBasis, physics_basis
 from .power_data import check_power_logs, power_inputs, predicted_battery_power_w
+from .quantity import CURRENT, POWER, Quantity
 from .result import EffectScore, Tie
 from .selection import Selection, plausible_alternative, select_effects
 

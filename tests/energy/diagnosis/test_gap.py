@@ -11,9 +11,7 @@ import pytest
 
 from energy import InteractionLog, LogMeta, TruthSimulator, charge_mah, robot_preset
 from energy.diagnosis.gap import (
-    CURRENT,
     DIMENSIONS,
-    POWER,
     GapShare,
     GapSummary,
     WaterfallStep,
@@ -27,6 +25,7 @@ from energy.diagnosis.gap import (
     shares_of,
     time_labels,
 )
+from energy.diagnosis.quantity import CURRENT, POWER
 from energy.metrics import section_charges_mah, section_error_pct
 from energy.sim import PAPER_GROUNDS
 from terrain import flat_map, ramp_map
