@@ -53,7 +53,7 @@ from diagnosis_scenarios import (
     withheld_gap,
 )
 
-from energy.diagnosis import diagnose, effect
+from energy.diagnosis import FitSettings, diagnose, effect
 from terrawatt_base.atomic import write_json_atomic
 
 # Pairs of comparable withheld gaps, then one where turning resistance (85 % of the charge)
@@ -109,17 +109,17 @@ def _run_case(kind: str, names: tuple[str, ...], seed: int, n_bootstrap: int) ->
     gap = withheld_gap(sc, seed)
     logs, model = sc.make_logs(seed), sc.make_model(seed)
     t0 = time.perf_counter()
-    d = diagnose(model, logs, terrain=sc.terrain, seed=seed, n_bootstrap=n_bootstrap)
+    d = diagnose(model, logs, terrain=sc.terrain, settings=FitSettings(seed=seed, n_bootstrap=n_bootstrap))
     elapsed = time.perf_counter() - t0
     power = sc.power_logs and d.power is not None  # electrical effects: ranked and scored on battery power
-    ranking = d.power.ranking if power else d.ranking
+    ranking = d.power.ranking if power else d.current.ranking
     ranked = [r.name for r in ranking]
     ratios = (gap.ratio, gap.rms_ratio) + ((gap.power.ratio, gap.power.rms_ratio) if gap.power else ())
     row: dict[str, Any] = {"kind": kind, "scenario": sc.name, "seed": seed, "gap_ratio": max(ratios),
-                           "charge_change_pct": gap.charge_change_pct, "chosen": list(d.chosen),
+                           "charge_change_pct": gap.charge_change_pct, "chosen": list(d.current.chosen),
                            "top3": ranked[:3], "verdict": list(d.verdict), "time_s": elapsed,
-                           "after_shrink_pct": 100.0 * (1.0 - (d.after.rmse_a / d.before.rmse_a) ** 2)
-                           if d.before.rmse_a > 0 else 0.0}
+                           "after_shrink_pct": 100.0 * (1.0 - (d.current.after.rmse / d.current.before.rmse) ** 2)
+                           if d.current.before.rmse > 0 else 0.0}
     if kind == "single":
         name = names[0]
         score = next((r for r in ranking if r.name == name), None)
@@ -128,7 +128,7 @@ def _run_case(kind: str, names: tuple[str, ...], seed: int, n_bootstrap: int) ->
         ceiling = 100.0 * change**2 / (change**2 + noise**2)
         if power:
             row.update(power_chosen=list(d.power.chosen), power_verdict=list(d.power.verdict),
-                       energy_error_pct=[w.energy_error_pct for w in d.power.waterfall])
+                       energy_error_pct=[w.error_pct for w in d.power.waterfall])
         row.update(rank=ranked.index(name) + 1 if name in ranked else None, shrink_ceiling_pct=ceiling,
                    shrink_of_withheld_pct=None if score is None or ceiling <= 0 else 100.0 * score.shrink_pct / ceiling,
                    shrink_pct=None if score is None else score.shrink_pct,
@@ -137,12 +137,12 @@ def _run_case(kind: str, names: tuple[str, ...], seed: int, n_bootstrap: int) ->
                    param_error_pct=None if score is None else _param_error_pct(sc, name, score.parameters))
     elif kind == "pair":
         row["both_top3"] = all(n in ranked[:3] for n in names)
-        row["both_chosen"] = all(n in d.chosen for n in names)
+        row["both_chosen"] = all(n in d.current.chosen for n in names)
     elif kind == "power_null":
         row["no_effect_found"] = not d.power.chosen
         row["power_verdict"] = list(d.power.verdict)
     else:
-        row["no_effect_found"] = not d.chosen
+        row["no_effect_found"] = not d.current.chosen
     return row
 
 
@@ -150,9 +150,9 @@ def _time_forty_runs(n_runs: int, n_bootstrap: int) -> dict[str, Any]:
     sc = Scenario("forty_runs", ("gear_losses",), ("mixed", "pivots_arcs"), n_runs=n_runs, run_duration_s=20.0)
     logs, model = sc.make_logs(0), sc.make_model(0)
     t0 = time.perf_counter()
-    d = diagnose(model, logs, terrain=sc.terrain, seed=0, n_bootstrap=n_bootstrap)
+    d = diagnose(model, logs, terrain=sc.terrain, settings=FitSettings(seed=0, n_bootstrap=n_bootstrap))
     return {"n_runs": n_runs, "samples": sum(len(lg) for lg in logs), "time_s": time.perf_counter() - t0,
-            "chosen": list(d.chosen), "cpu_count": os.cpu_count()}
+            "chosen": list(d.current.chosen), "cpu_count": os.cpu_count()}
 
 
 def _pct(part: int, whole: int) -> float:

@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from energy import PhysicsCurrentModel, new_current_model, read_borealtc
-from energy.diagnosis import diagnose
+from energy.diagnosis import FitSettings, diagnose
 from energy.diagnosis.gap import largest_slices
 from energy.logs import rest_samples
 from energy.models.base import log_currents
@@ -110,22 +110,22 @@ def run_case(case: dict[str, Any], data: str, seed: int, n_bootstrap: int) -> di
     model = _model(case["kind"], case["preset"], case["without"], seed).fit(fit_logs)
     t_fit = time.perf_counter() - t0
     t0 = time.perf_counter()
-    d = diagnose(model, diag_logs, split="runs", seed=seed, n_bootstrap=n_bootstrap)
+    d = diagnose(model, diag_logs, settings=FitSettings(split="runs", seed=seed, n_bootstrap=n_bootstrap))
     t_diag = time.perf_counter() - t0
-    shrink = d.waterfall[-1].shrink_pct
-    by_name = {s.name: s for s in d.ranking}
+    shrink = d.current.waterfall[-1].shrink_pct
+    by_name = {s.name: s for s in d.current.ranking}
     return {
         "model": case["label"], "ground": case["ground"], "n_fit_runs": len(fit_logs), "n_runs": len(diag_logs),
         "n_samples": sum(len(g) for g in diag_logs), "fit_s": t_fit, "diagnose_s": t_diag,
-        "before": d.before.to_dict(), "after": d.after.to_dict(), "where": _where(d),
+        "before": d.current.before.to_dict(), "after": d.current.after.to_dict(), "where": _where(d),
         "rest": rest_error_a(model, diag_logs),
-        "doubtful": [n for n in d.chosen if getattr(by_name[n], "doubtful", False)],
-        "chosen": list(d.chosen), "learned_chosen": any(s.kind == "learned" for s in d.ranking if s.name in d.chosen),
+        "doubtful": [n for n in d.current.chosen if getattr(by_name[n], "doubtful", False)],
+        "chosen": list(d.current.chosen), "learned_chosen": any(s.kind == "learned" for s in d.current.ranking if s.name in d.current.chosen),
         "shrink_pct": shrink, "unexplained_pct": 100.0 - shrink,
         "top": [{"name": s.name, "kind": s.kind, "shrink_pct": s.shrink_pct,
                  "interval_pct": list(s.shrink_interval_pct), "parameters": dict(s.parameters),
-                 "flags": list(getattr(s, "flags", ()))} for s in d.ranking[:5]],
-        "waterfall": [w.to_dict() for w in d.waterfall], "verdict": list(d.verdict), "skipped": dict(d.skipped),
+                 "flags": list(getattr(s, "flags", ()))} for s in d.current.ranking[:5]],
+        "waterfall": [w.to_dict() for w in d.current.waterfall], "verdict": list(d.verdict), "skipped": dict(d.current.skipped),
         "ties": [t.to_dict() for t in d.ties],
         "separating_drives": [x.to_dict() for x in d.separating_drives],
         "more_data": {k: v for k, v in d.more_data.items() if k != "drive"}

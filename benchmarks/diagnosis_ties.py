@@ -146,9 +146,9 @@ def _moving_part(log: Any, speed: float = 0.3) -> Any:
 
 def _value(d: Any, how: str, model: Any) -> float | None:
     """The fitted size of the truth's effect in ``d`` (first chosen) of ``model``, as ``how`` reads it."""
-    if not d.chosen:
+    if not d.current.chosen:
         return None
-    p = d.score(d.chosen[0]).parameters
+    p = d.current.score(d.current.chosen[0]).parameters
     if how == "mass_scale" and "mass_scale" in p:
         return p["mass_scale"] - 1.0
     if how == "gain_ratio" and {"gain_left", "gain_right"} <= set(p):
@@ -176,11 +176,11 @@ def run_pair(name: str, seed: int, max_repeats: int) -> dict[str, Any]:
     t0 = time.perf_counter()
     d = diagnose(model, logs, terrain=terrain)
     row: dict[str, Any] = {"pair": name, "seed": seed, "diagnose_s": time.perf_counter() - t0,
-                           "chosen": list(d.chosen), "ties": [t.to_dict() for t in d.ties]}
+                           "chosen": list(d.current.chosen), "ties": [t.to_dict() for t in d.ties]}
     truth = set(pair["truth"])
     tie = next((t for t in d.ties if truth & set(t.effects)), None)
     row["tie_named"] = tie is not None
-    row["truth_first_before"] = bool(d.chosen) and d.chosen[0] in truth
+    row["truth_first_before"] = bool(d.current.chosen) and d.current.chosen[0] in truth
     drive = next((x for x in d.separating_drives if tie is not None and x.effects == tie.effects), None)
     row["drive"] = None if drive is None else {
         "description": drive.best.description, "duration_s": drive.best.duration_s, "repeats": drive.repeats,
@@ -201,8 +201,8 @@ def run_pair(name: str, seed: int, max_repeats: int) -> dict[str, Any]:
     row["projection"] = {alt: scores[alt]["projection"] for alt in drive.separated}
     row["drive_runs"] = n
     after = diagnose(model, logs + runs, terrain=terrain)
-    row["chosen_after"] = list(after.chosen)
-    row["truth_first_after"] = bool(after.chosen) and after.chosen[0] in truth
+    row["chosen_after"] = list(after.current.chosen)
+    row["truth_first_after"] = bool(after.current.chosen) and after.current.chosen[0] in truth
     row["tie_after"] = any(truth & set(t.effects) for t in after.ties)
     how, size = pair["value"]
     value = _value(after, how, model) if row["truth_first_after"] else None

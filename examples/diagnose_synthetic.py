@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from energy import PhysicsCurrentModel, TruthSimulator, excitation_commands, robot_preset
-from energy.diagnosis import diagnose
+from energy.diagnosis import FitSettings, diagnose
 from energy.sim import PAPER_GROUNDS
 
 EFFECTS_WITHOUT_TURNING = ("inertia", "slope", "static_friction", "coulomb_friction", "stribeck",
@@ -48,13 +48,13 @@ def main(argv: list[str] | None = None) -> dict[str, float | str]:
     model = PhysicsCurrentModel(husky, PAPER_GROUNDS["coated_wood"], fit_parameters=("rest_current_a",),
                                 effects=EFFECTS_WITHOUT_TURNING).fit([standstill])
 
-    d = diagnose(model, logs, seed=0, n_bootstrap=100)
+    d = diagnose(model, logs, settings=FitSettings(seed=0, n_bootstrap=100))
     print("\n".join(d.verdict))
-    best = d.ranking[0]
+    best = d.current.ranking[0]
     print(f"\nbest explanation: {best.name} ({best.kind}), held-out shrink {best.shrink_pct:.1f} % "
           f"(95 % interval {best.shrink_interval_pct[0]:.1f} ... {best.shrink_interval_pct[1]:.1f} %)")
-    for step in d.waterfall:
-        print(f"  {step.label:<24} charge error {step.charge_error_pct:+7.2f} %   RMSE {step.rmse_a:.3f} A")
+    for step in d.current.waterfall:
+        print(f"  {step.label:<24} charge error {step.error_pct:+7.2f} %   RMSE {step.rmse:.3f} A")
     corrected = d.corrected_model.predict(logs[0])
     print(f"corrected model predicts {corrected.shape[0]} samples of run 0")
     if args.out is not None:
@@ -62,9 +62,9 @@ def main(argv: list[str] | None = None) -> dict[str, float | str]:
         d.write_json(args.out / "diagnosis.json")
         d.write_markdown(args.out / "diagnosis.md")
         print(f"wrote {args.out / 'diagnosis.json'} and {args.out / 'diagnosis.md'}")
-    return {"best": best.name, "shrink_pct": best.shrink_pct, "chosen": ",".join(d.chosen),
-            "before_rmse_a": d.before.rmse_a, "after_rmse_a": d.after.rmse_a,
-            "before_charge_error_pct": d.before.charge_error_pct, "after_charge_error_pct": d.after.charge_error_pct}
+    return {"best": best.name, "shrink_pct": best.shrink_pct, "chosen": ",".join(d.current.chosen),
+            "before_rmse_a": d.current.before.rmse, "after_rmse_a": d.current.after.rmse,
+            "before_charge_error_pct": d.current.before.error_pct, "after_charge_error_pct": d.current.after.error_pct}
 
 
 if __name__ == "__main__":

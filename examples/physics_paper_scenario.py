@@ -57,7 +57,7 @@ from energy import (
     ground_preset,
     robot_preset,
 )
-from energy.diagnosis import Diagnosis, diagnose
+from energy.diagnosis import Diagnosis, FitSettings, diagnose
 from energy.sim import NoiseModel, TruthSimulator
 from terrain import TerrainMap
 
@@ -271,7 +271,8 @@ def by_hand_energy_errors(n_runs: int = 10, seed: int = 0) -> list[tuple[str, fl
 
 def waterfall_from_data(n_runs: int = 10, seed: int = 0) -> Diagnosis:
     """Diagnose the paper's base model on truth logs of the route (held-out runs)."""
-    return diagnose(base_model(seed), paper_route_runs(n_runs, seed), terrain=paper_route_map(), seed=seed)
+    return diagnose(base_model(seed), paper_route_runs(n_runs, seed), terrain=paper_route_map(),
+                    settings=FitSettings(seed=seed))
 
 
 def print_from_data(n_runs: int = 10, seed: int = 0) -> Diagnosis:
@@ -280,17 +281,17 @@ def print_from_data(n_runs: int = 10, seed: int = 0) -> Diagnosis:
     print(f"\nThe ablation from data: {n_runs} truth runs of the route, the paper's base model diagnosed "
           "(held-out runs)")
     print(f"{'from data (diagnosis)':32s} {'charge err %':>12s} {'8 s sect. %':>11s} {'RMSE mA':>8s}")
-    for w in d.waterfall:
-        print(f"{w.label:32s} {w.charge_error_pct:12.1f} {w.section_error_pct:11.1f} {1e3 * w.rmse_a:8.2f}")
+    for w in d.current.waterfall:
+        print(f"{w.label:32s} {w.error_pct:12.1f} {w.section_error_pct:11.1f} {1e3 * w.rmse:8.2f}")
     print(f"{'by hand (truth with the case)':32s} {'charge err %':>12s}")
     for label, err in by_hand_charge_errors(n_runs, seed):
         print(f"{label:32s} {err:12.1f}")
-    by_name = {s.name: s for s in d.ranking}
-    print("fitted: " + "; ".join(f"{n} {by_name[n].parameters}" for n in d.chosen))
+    by_name = {s.name: s for s in d.current.ranking}
+    print("fitted: " + "; ".join(f"{n} {by_name[n].parameters}" for n in d.current.chosen))
     if d.power is not None:
         print(f"{'battery power (power stage)':32s} {'energy err %':>12s} {'8 s sect. %':>11s} {'RMSE W':>8s}")
         for w in d.power.waterfall:
-            print(f"{w.label:32s} {w.energy_error_pct:12.1f} {w.section_error_pct:11.1f} {w.rmse_w:8.3f}")
+            print(f"{w.label:32s} {w.error_pct:12.1f} {w.section_error_pct:11.1f} {w.rmse:8.3f}")
         print(f"{'by hand (truth with the case)':32s} {'energy err %':>12s}")
         for label, err in by_hand_energy_errors(n_runs, seed):
             print(f"{label:32s} {err:12.1f}")

@@ -9,9 +9,10 @@ from typing import Any
 from energy import ROBOT_PRESETS
 from energy.diagnosis import (
     DIAGNOSIS_FILES,
+    FitSettings,
     check_effect_names,
     check_model_source,
-    diagnose_report,
+    diagnose,
     model_under_diagnosis,
 )
 from terrain import InvalidParameterError
@@ -113,10 +114,11 @@ def run_diagnose(args: argparse.Namespace) -> int:
     with dask_client_arg(args) as client:
         if client is not None:
             print(f"scoring effects on {client_worker_count(client)} dask workers", flush=True)
-        report = diagnose_report(source, logs, terrain=terrain, effects=args.effects, split=args.split,
-                                 seed=args.seed, client=client, progress=not args.quiet)
+        diagnosis = diagnose(source, logs, terrain=terrain, effects=args.effects,
+                             settings=FitSettings(split=args.split, seed=args.seed), client=client,
+                             progress=not args.quiet)
     with warn_figures():
-        written = report.write(args.out)
-    print(report.summary())
+        written = diagnosis.write(args.out)
+    print(diagnosis.summary())
     print(f"\n{len(logs)} runs; wrote {', '.join(str(p) for p in written)}")
     return 0

@@ -1,4 +1,4 @@
-"""The gap between measured and predicted currents: its size (mAh, %, A) and where it lies.
+"""The gap between measured and predicted currents (or battery power): its size (mAh, %, A) and where it lies.
 
 **Its size.** The residuals (measured - predicted current) of logs and their whole-set gap.
 A model's *gap* on a set of logs is the charge it misses: the measured minus the predicted
@@ -8,6 +8,10 @@ by regime, the trapezoid integral is written as a weighted sum over samples: sam
 carries the weight ``w_k = (t_{k+1} - t_{k-1}) / 2`` seconds (half of each neighbouring
 step; one half-step at either end), so ``sum_k w_k i_k`` *is* the trapezoid integral and the
 gaps of any partition of the samples add up exactly to the whole gap.
+
+The same :class:`GapSummary` and :class:`WaterfallStep` serve every :class:`Quantity` a stage of the
+diagnosis explains: :data:`CURRENT` (A, mAh) and :data:`POWER` (the battery power, W, Wh); its units,
+words and JSON keys are the quantity's.
 
 **Where it lies.** The net gap (mAh) split by time section, regime, drive side and map block,
 ranked (:func:`localise_gap`). Each drive sample carries its share of the gap, residual times
@@ -47,12 +51,14 @@ from terrawatt_base.checks import check_choice, check_int, check_real, check_see
 from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog
-from ..metrics import DEFAULT_SECTION_S, charge_mah, section_charges_mah, section_error_pct
+from ..metrics import DEFAULT_SECTION_S, section_charges_mah, section_error_pct
+from .quantity import AS_PER_MAH, CURRENT, Quantity
 from .regimes import UNKNOWN_LABEL, check_terrain, regime_labels
 
 __all__ = [
     "AS_PER_MAH",
     "GapSummary",
+    "WaterfallStep",
     "checked_pairs",
     "sample_weights_s",
     "residual_currents_a",
@@ -68,10 +74,6 @@ __all__ = [
     "largest_slices",
 ]
 
-#: Ampere-seconds in one milliampere-hour.
-AS_PER_MAH = 3.6
-
-
 def _checked_log(log: Any, where: str) -> InteractionLog:
     if not isinstance(log, InteractionLog):
         raise InvalidParameterError(f"{where} must be an InteractionLog, got {type(log).__name__!r}")
@@ -80,12 +82,15 @@ def _checked_log(log: Any, where: str) -> InteractionLog:
     return log
 
 
-def _checked_prediction(log: InteractionLog, predicted_a: Any, where: str) -> np.ndarray:
+def _checked_prediction(log: InteractionLog, predicted_a: Any, where: str, quantity: Quantity = CURRENT) -> np.ndarray:
     p = real_array(where, predicted_a, finite=False)
-    n = len(log)
-    if p.shape != (n, 2):
+    n, c = len(log), len(quantity.columns)
+    if c == 1 and p.shape == (n,):
+        p = p[:, None]
+    if p.shape != (n, c):
+        what = "[left, right] current" if quantity is CURRENT else f"the {quantity.name}"
         raise InvalidParameterError(
-            f"{where} must have shape ({n}, 2) ([left, right] current per drive sample of its log), got {p.shape!r}"
+            f"{where} must have shape ({n}, {c}) ({what} per drive sample of its log), got {p.shape!r}"
         )
     bad = ~np.isfinite(p)
     if bad.any():
@@ -94,8 +99,9 @@ def _checked_prediction(log: InteractionLog, predicted_a: Any, where: str) -> np
     return p
 
 
-def checked_pairs(logs: Any, predictions: Any) -> tuple[tuple[InteractionLog, ...], tuple[np.ndarray, ...]]:
-    """Validated ``(logs, predictions)``: a log (or sequence of logs) with its predicted currents.
+def checked_pairs(logs: Any, predictions: Any,
+                  quantity: Quantity = CURRENT) -> tuple[tuple[InteractionLog, ...], tuple[np.ndarray, ...]]:
+    """Validated ``(logs, predictions)``: a log (or sequence of logs) with its predicted currents (or powers).
 
     Parameters
     ----------
@@ -103,12 +109,14 @@ def checked_pairs(logs: Any, predictions: Any) -> tuple[tuple[InteractionLog, ..
         The runs, each with at least 2 drive samples.
     predictions : array_like (N, 2) or sequence of them
         ``[left, right]`` predicted current (A) per drive sample of each log, in the order of
-        ``logs`` (a single array goes with a single log).
+        ``logs`` (a single array goes with a single log); of :data:`POWER`, ``(N,)`` or ``(N, 1)``.
+    quantity : Quantity
+        What is predicted (default :data:`CURRENT`).
 
     Returns
     -------
     logs : tuple of InteractionLog
-    predictions : tuple of numpy.ndarray, shape (N_i, 2)
+    predictions : tuple of numpy.ndarray, shape (N_i, C)
         Float64 copies (the inputs are never modified).
 
     Raises
@@ -133,7 +141,8 @@ def checked_pairs(logs: Any, predictions: Any) -> tuple[tuple[InteractionLog, ..
             f"predictions must hold one array per log: {len(logs)} log(s), {len(predictions)} prediction(s)"
         )
     checked = tuple(_checked_log(log, f"logs[{i}]") for i, log in enumerate(logs))
-    preds = tuple(_checked_prediction(log, p, f"predictions[{i}]") for i, (log, p) in enumerate(zip(checked, predictions)))
+    preds = tuple(_checked_prediction(log, p, f"predictions[{i}]", quantity)
+                  for i, (log, p) in enumerate(zip(checked, predictions)))
     return checked, preds
 
 
@@ -219,71 +228,92 @@ def sample_gap_mah(log: InteractionLog, predicted_a: Any) -> np.ndarray:
     return res * (sample_weights_s(log.time_s) / AS_PER_MAH)[:, None]
 
 
+_NAN = float("nan")
+
+
 @dataclass(frozen=True)
 class GapSummary:
-    """Whole-set figures of a model's gap on a set of logs (both sides, all runs).
+    """Whole-set figures of a prediction of one quantity on a set of logs (every column, all runs).
 
     Attributes
     ----------
-    measured_mah, predicted_mah : float
-        Integrated measured and predicted current, both sides, all runs (mAh).
-    gap_mah : float
-        ``measured_mah - predicted_mah`` (positive: the model predicts too little).
-    charge_error_pct : float
-        ``100 * gap_mah / measured_mah`` (signed).
+    quantity : Quantity
+        What was predicted (:data:`CURRENT`, :data:`POWER`): the units of the figures below.
+    measured, predicted : float
+        Integrated measured and predicted values, every column, all runs (``quantity.total_unit``:
+        mAh of current, Wh of battery power).
+    gap : float
+        ``measured - predicted`` (positive: the model predicts too little).
+    error_pct : float
+        ``100 * gap / measured`` (signed): the charge or energy error.
     section_error_pct : float
         Median over runs of the aggregate section error
-        (:func:`energy.metrics.section_error_pct` over both sides' sections); runs with no
-        measured charge are left out.
-    rmse_a : float
-        RMSE of the current over all samples and both sides (A).
+        (:func:`energy.metrics.section_error_pct` over every column's sections); runs with no
+        measured total are left out.
+    rmse : float
+        RMSE over all samples and columns (``quantity.unit``: A, W).
     n_runs, n_samples : int
         Logs and drive samples behind the figures.
     duration_s : float
         Summed span of the logs (s).
+    stopped_gap_pct, stopped_time_pct : float
+        Share of ``gap`` while the robot stands still, and of the time it does (%), when the
+        standstill was given (the power stage); NaN otherwise.
     """
 
-    measured_mah: float
-    predicted_mah: float
-    gap_mah: float
-    charge_error_pct: float
+    quantity: Quantity
+    measured: float
+    predicted: float
+    gap: float
+    error_pct: float
     section_error_pct: float
-    rmse_a: float
+    rmse: float
     n_runs: int
     n_samples: int
     duration_s: float
+    stopped_gap_pct: float = _NAN
+    stopped_time_pct: float = _NAN
 
     def to_dict(self) -> dict[str, float | int]:
-        """The figures as a flat dict (JSON-ready)."""
-        return asdict(self)
+        """The figures as a flat dict (JSON-ready), under the quantity's keys (``measured_mah``, ``rmse_w`` ...)."""
+        return {self.quantity.key(f): getattr(self, f) for f in self.quantity.summary_fields}
 
     def __str__(self) -> str:
+        q = self.quantity
         return (
-            f"gap {fmt_number(self.gap_mah)} mAh of {fmt_number(self.measured_mah)} mAh measured "
-            f"({fmt_number(self.charge_error_pct, 3)} %), section error {fmt_number(self.section_error_pct, 3)} %, "
-            f"RMSE {fmt_number(self.rmse_a, 3)} A over {self.n_runs} run(s), {fmt_number(self.duration_s)} s"
+            f"gap {fmt_number(self.gap)} {q.total_unit} of {fmt_number(self.measured)} {q.total_unit} measured "
+            f"({fmt_number(self.error_pct, 3)} %), section error {fmt_number(self.section_error_pct, 3)} %, "
+            f"RMSE {fmt_number(self.rmse, 3)} {q.unit} over {self.n_runs} run(s), {fmt_number(self.duration_s)} s"
         )
 
 
-def _run_section_error_pct(log: InteractionLog, pred: np.ndarray, section_s: float) -> float:
+def _run_section_error_pct(log: InteractionLog, measured: np.ndarray, pred: np.ndarray, section_s: float) -> float:
     truth, model = [], []
-    for side, measured in enumerate((log.current_left_a, log.current_right_a)):
-        truth.append(section_charges_mah(log.time_s, measured, section_s)[1])
-        model.append(section_charges_mah(log.time_s, pred[:, side], section_s)[1])
+    for j in range(measured.shape[1]):
+        truth.append(section_charges_mah(log.time_s, measured[:, j], section_s)[1])
+        model.append(section_charges_mah(log.time_s, pred[:, j], section_s)[1])
     q_true, q_pred = np.concatenate(truth), np.concatenate(model)
     if not np.sum(q_true) > 0:
         return math.nan
     return section_error_pct(q_pred, q_true)
 
 
-def gap_summary(logs: Any, predictions: Any, *, section_s: float = DEFAULT_SECTION_S) -> GapSummary:
-    """The gap of predicted currents on a set of logs: mAh, %, section error, RMSE.
+def gap_summary(logs: Any, predictions: Any, *, quantity: Quantity = CURRENT, stopped: Any = None,
+                section_s: float = DEFAULT_SECTION_S) -> GapSummary:
+    """The gap of a predicted quantity on a set of logs: its total (mAh or Wh), %, section error, RMSE.
 
     Parameters
     ----------
     logs : InteractionLog or sequence of InteractionLog
-    predictions : array_like (N, 2) or sequence of them
-        ``[left, right]`` predicted current (A) per drive sample of each log.
+    predictions : array_like (N, C) or sequence of them
+        Per drive sample of each log, the predicted value of each of the quantity's columns:
+        ``[left, right]`` current (A), or the battery power (W; ``(N,)`` will do).
+    quantity : Quantity
+        :data:`CURRENT` (default; measured: the logged drive currents) or :data:`POWER`
+        (measured: the logged battery power).
+    stopped : sequence of array_like (N,), optional
+        Per log, 1 where the robot stands still: the summary then says which share of the gap
+        falls there (``stopped_gap_pct``, ``stopped_time_pct``).
     section_s : float
         Section length of the section error (s), > 0; default 8 s as in the paper.
 
@@ -294,10 +324,10 @@ def gap_summary(logs: Any, predictions: Any, *, section_s: float = DEFAULT_SECTI
     Raises
     ------
     DataError
-        No logs; a log with fewer than 2 samples; non-finite predictions; logs without drive
-        current (measured charge of every run not positive).
+        No logs; a log with fewer than 2 samples; non-finite predictions; logs without the
+        quantity (measured total of every run not positive).
     InvalidParameterError
-        As in :func:`checked_pairs`; ``section_s`` not a finite number > 0.
+        As in :func:`checked_pairs`; not a :class:`Quantity`; ``section_s`` not a finite number > 0.
 
     Examples
     --------
@@ -306,39 +336,89 @@ def gap_summary(logs: Any, predictions: Any, *, section_s: float = DEFAULT_SECTI
     >>> t = np.arange(37) * 100.0  # one hour at 0.01 Hz
     >>> log = InteractionLog(t, np.ones(37), np.zeros(37), np.full(37, 2.0), np.full(37, 2.0), t, np.full(37, 9.81))
     >>> s = gap_summary([log], [np.full((37, 2), 1.5)])
-    >>> round(s.gap_mah, 6), round(s.charge_error_pct, 6), round(s.rmse_a, 6)
-    (1000.0, 25.0, 0.5)
+    >>> round(s.gap, 6), round(s.error_pct, 6), round(s.rmse, 6), s.quantity.total_unit
+    (1000.0, 25.0, 0.5, 'mAh')
     """
+    if not isinstance(quantity, Quantity):
+        raise InvalidParameterError(f"quantity must be a Quantity (CURRENT or POWER), got {type(quantity).__name__!r}")
     section_s = check_real("section_s", section_s, low=0.0, low_inclusive=False)
-    logs, preds = checked_pairs(logs, predictions)
-    measured = predicted = 0.0
+    logs, preds = checked_pairs(logs, predictions, quantity)
+    measured = predicted = gap_stopped = t_stopped = t_all = 0.0
     sq_sum, n_values = 0.0, 0
     section_errors = []
-    for log, pred in zip(logs, preds):
-        measured += charge_mah(log.time_s, log.current_left_a) + charge_mah(log.time_s, log.current_right_a)
-        predicted += charge_mah(log.time_s, pred[:, 0]) + charge_mah(log.time_s, pred[:, 1])
-        res = np.column_stack([log.current_left_a, log.current_right_a]) - pred
+    for k, (log, pred) in enumerate(zip(logs, preds)):
+        meas = quantity.measured(log)
+        w = sample_weights_s(log.time_s)
+        measured += quantity.total(log.time_s, meas, w)
+        predicted += quantity.total(log.time_s, pred, w)
+        res = meas - pred
         sq_sum += float(np.sum(res * res))
         n_values += res.size
-        section_errors.append(_run_section_error_pct(log, pred, section_s))
+        section_errors.append(_run_section_error_pct(log, meas, pred, section_s))
+        if stopped is not None:
+            still = np.asarray(stopped[k], dtype=np.float64) > 0.5
+            gap_stopped += float(w[still] @ res[still].sum(axis=1)) / quantity.unit_s_per_total
+            t_stopped += float(w[still].sum())
+            t_all += float(w.sum())
     if not measured > 0:
+        what = "drive current" if quantity is CURRENT else "battery power"
         raise DataError(
-            f"the logs carry no drive current: the measured charge of both sides over {len(logs)} run(s) is "
-            f"{fmt_number(measured)} mAh; a gap in % needs a positive measured charge"
+            f"the logs carry no {what}: the measured {quantity.total_name} of {len(logs)} run(s) is "
+            f"{fmt_number(measured)} {quantity.total_unit}; a gap in % needs a positive measured {quantity.total_name}"
         )
     errors = np.asarray(section_errors)
-    section = float(np.median(errors[np.isfinite(errors)]))  # some run has charge, as the total is > 0
+    section = float(np.median(errors[np.isfinite(errors)]))  # some run has a total, as the whole is > 0
+    gap = measured - predicted
+    shares = {}
+    if stopped is not None:
+        shares = {"stopped_gap_pct": 100.0 * gap_stopped / gap if gap != 0 else 0.0,
+                  "stopped_time_pct": 100.0 * t_stopped / t_all if t_all > 0 else 0.0}
     return GapSummary(
-        measured_mah=float(measured),
-        predicted_mah=float(predicted),
-        gap_mah=float(measured - predicted),
-        charge_error_pct=float(100.0 * (measured - predicted) / measured),
+        quantity=quantity,
+        measured=float(measured),
+        predicted=float(predicted),
+        gap=float(gap),
+        error_pct=float(100.0 * gap / measured),
         section_error_pct=section,
-        rmse_a=float(math.sqrt(sq_sum / n_values)),
+        rmse=float(math.sqrt(sq_sum / n_values)),
         n_runs=len(logs),
         n_samples=int(sum(len(log) for log in logs)),
         duration_s=float(sum(log.duration_s for log in logs)),
+        **shares,
     )
+
+
+@dataclass(frozen=True)
+class WaterfallStep:
+    """The held-out gap after one more effect: the error of the total, the 8 s section error, the RMSE, the shrink.
+
+    Attributes
+    ----------
+    quantity : Quantity
+        What the stage explains: the units of ``rmse`` and the keys of :meth:`to_dict`.
+    label : str
+        ``"as given"``, then ``"+ effect"``.
+    error_pct, section_error_pct, rmse, shrink_pct : float
+        As in :class:`GapSummary`; ``shrink_pct`` the shrink of the squared held-out gap (%).
+    """
+
+    quantity: Quantity
+    label: str
+    error_pct: float
+    section_error_pct: float
+    rmse: float
+    shrink_pct: float
+
+    @classmethod
+    def of(cls, label: str, summary: GapSummary, shrink_pct: float) -> WaterfallStep:
+        """The step of a :class:`GapSummary`."""
+        return cls(summary.quantity, label, summary.error_pct, summary.section_error_pct, summary.rmse, shrink_pct)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict, under the quantity's keys (``charge_error_pct``, ``rmse_a`` ...)."""
+        q = self.quantity
+        return {"label": self.label, q.key("error_pct"): self.error_pct, "section_error_pct": self.section_error_pct,
+                q.key("rmse"): self.rmse, "shrink_pct": self.shrink_pct}
 
 
 # ---------------------------------------------------------------------- where the gap lies
@@ -348,8 +428,6 @@ DIMENSIONS = ("time", "speed", "turning", "acceleration", "grade", "ground", "si
 SIDES = ("left", "right")
 #: Level of the bootstrap interval of each slice's net gap.
 GAP_INTERVAL_LEVEL = 0.95
-
-_NAN = float("nan")
 
 
 @dataclass(frozen=True)

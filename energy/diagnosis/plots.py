@@ -35,7 +35,6 @@ from terrawatt_base.atomic import check_output_path, save_figure
 from terrawatt_base.checks import check_choice, check_int, fmt_number
 from terrawatt_base.errors import DataError, FigureWarning, InvalidParameterError
 from terrawatt_base.plot_target import check_ax, check_axes, check_plot_target
-from terrain.terrain_map import TerrainMap
 
 from .plots_gap import (
     REGIME_PANELS,
@@ -48,7 +47,6 @@ from .plots_gap import (
     plot_residual_time,
 )
 from .regimes import check_terrain
-from .result import Diagnosis
 
 __all__ = [
     "FIGURES",
@@ -73,14 +71,14 @@ FIGURES: dict[str, str] = {
 }
 
 _KIND_COLOURS = {"physics": "#3182bd", "parameter": "#31a354", "measurement": "#756bb1", "learned": "#969696"}
-_WATERFALL_PANELS = (("charge_error_pct", "whole-set charge error (%)", "#de2d26"),
+_WATERFALL_PANELS = (("error_pct", "whole-set charge error (%)", "#de2d26"),
                      ("section_error_pct", "8 s section error (%)", "#fd8d3c"),
-                     ("rmse_a", "RMSE (A)", "#3182bd"))
+                     ("rmse", "RMSE (A)", "#3182bd"))
 _NO_RANKING = "no effect ranking: no candidate effect was scored (every one was skipped for these data)"
 
 
 # ----------------------------------------------------------------- effect ranking
-def plot_effect_ranking(diagnosis: Diagnosis, path: str | os.PathLike[str] | None = None, *, ax: Any = None,
+def plot_effect_ranking(diagnosis: Any, path: str | os.PathLike[str] | None = None, *, ax: Any = None,
                         max_effects: int = 20, dpi: int = 110) -> Path | Any:
     """The effect ranking: what each candidate adds to the chosen effects above it (held-out, 95 % interval) and its shrink alone.
 
@@ -118,9 +116,9 @@ def plot_effect_ranking(diagnosis: Diagnosis, path: str | os.PathLike[str] | Non
         ax = check_ax(ax)
     max_effects = check_int("max_effects", max_effects, low=1)
     dpi = check_int("dpi", dpi, low=10, high=1200)
-    if not diagnosis.ranking:
+    if not diagnosis.current.ranking:
         raise DataError(_NO_RANKING)
-    ranking = list(diagnosis.ranking[:max_effects])
+    ranking = list(diagnosis.current.ranking[:max_effects])
     if target is None:
         _draw_ranking(ax, diagnosis, ranking)
         return ax
@@ -131,11 +129,11 @@ def plot_effect_ranking(diagnosis: Diagnosis, path: str | os.PathLike[str] | Non
     return save_figure(fig, target, dpi=dpi)
 
 
-def _draw_ranking(ax: Any, diagnosis: Diagnosis, ranking: Sequence[Any]) -> None:
+def _draw_ranking(ax: Any, diagnosis: Any, ranking: Sequence[Any]) -> None:
     """The bars of :func:`plot_effect_ranking`, drawn into ``ax``."""
     from matplotlib.patches import Patch
 
-    order = {n: k + 1 for k, n in enumerate(diagnosis.chosen)}
+    order = {n: k + 1 for k, n in enumerate(diagnosis.current.chosen)}
     y = np.arange(len(ranking))
     shrink = np.array([s.added_pct for s in ranking])
     lo = np.array([s.added_interval_pct[0] for s in ranking])
@@ -159,19 +157,20 @@ def _draw_ranking(ax: Any, diagnosis: Diagnosis, ranking: Sequence[Any]) -> None
     ax.set_yticks(y, names, fontsize=8)
     ax.invert_yaxis()
     ax.axvline(0.0, color="k", lw=0.6)
-    ax.set_xlabel(f"held-out shrink of the squared current gap (points of %), split by {diagnosis.split}: what each "
-                  "adds to the chosen effects above it (95 % bootstrap interval); o: the effect alone", fontsize=8)
+    ax.set_xlabel(f"held-out shrink of the squared current gap (points of %), split by {diagnosis.settings.split}: "
+                  "what each adds to the chosen effects above it (95 % bootstrap interval); o: the effect alone", fontsize=8)
     kinds = sorted({s.kind for s in ranking})
     handles = [Patch(facecolor=_KIND_COLOURS.get(k, "#969696"), label=k) for k in kinds]
     ax.legend(handles=handles + ax.get_legend_handles_labels()[0], fontsize=8, loc="lower right")
-    more = f" (best {len(ranking)} of {len(diagnosis.ranking)})" if len(diagnosis.ranking) > len(ranking) else ""
-    chosen = ", ".join(diagnosis.chosen) if diagnosis.chosen else "none"
+    n_ranked = len(diagnosis.current.ranking)
+    more = f" (best {len(ranking)} of {n_ranked})" if n_ranked > len(ranking) else ""
+    chosen = ", ".join(diagnosis.current.chosen) if diagnosis.current.chosen else "none"
     ax.set_title(f"candidate effects, added greedily{more}; chosen: {chosen}", fontsize=10)
     ax.grid(axis="x", alpha=0.3)
 
 
 # ----------------------------------------------------------------- waterfall
-def plot_waterfall(diagnosis: Diagnosis, path: str | os.PathLike[str] | None = None, *,
+def plot_waterfall(diagnosis: Any, path: str | os.PathLike[str] | None = None, *,
                    axes: Sequence[Any] | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:
     """The held-out waterfall: charge error (%), 8 s section error (%) and RMSE (A) after each added effect.
 
@@ -199,7 +198,7 @@ def plot_waterfall(diagnosis: Diagnosis, path: str | os.PathLike[str] | None = N
     diagnosis = checked_diagnosis(diagnosis)
     target = check_plot_target(path, axes, axes_name="axes")
     dpi = check_int("dpi", dpi, low=10, high=1200)
-    steps = diagnosis.waterfall
+    steps = diagnosis.current.waterfall
     if target is None:
         panels = check_axes(axes, 3, what="charge error, section error, RMSE")
         _draw_waterfall(panels, steps)
@@ -207,7 +206,7 @@ def plot_waterfall(diagnosis: Diagnosis, path: str | os.PathLike[str] | None = N
 
     fig, panels = plot_target.new_figure((4.0 * 3, 3.6 + 0.12 * len(steps)), 1, 3)
     _draw_waterfall(panels, steps)
-    held = "held-out runs" if diagnosis.split == "runs" else "held-out blocks"
+    held = "held-out runs" if diagnosis.settings.split == "runs" else "held-out blocks"
     fig.suptitle(f"how far the gap shrinks on {held}, effect by effect", fontsize=11)
     fig.tight_layout()
     return save_figure(fig, target, dpi=dpi)
@@ -254,16 +253,13 @@ class DiagnosisFigures:
         return "\n".join(lines)
 
 
-def skipped_figures(diagnosis: Diagnosis, *, logs: Any = None, terrain: TerrainMap | None = None) -> dict[str, str]:
+def skipped_figures(diagnosis: Any) -> dict[str, str]:
     """The figures of :func:`plot_diagnosis` whose data is missing, and why (figure name -> reason).
 
     Parameters
     ----------
     diagnosis : Diagnosis
-    logs : InteractionLog or sequence of them, optional
-        The logs the diagnosis ran on.
-    terrain : TerrainMap, optional
-        The map the diagnosis ran on.
+        With the logs and the map it ran on (:attr:`Diagnosis.logs`, :attr:`Diagnosis.terrain`).
 
     Returns
     -------
@@ -276,7 +272,8 @@ def skipped_figures(diagnosis: Diagnosis, *, logs: Any = None, terrain: TerrainM
         Not a Diagnosis, not a TerrainMap, logs that are not InteractionLogs.
     """
     diagnosis = checked_diagnosis(diagnosis)
-    terrain = check_terrain(terrain)
+    terrain = check_terrain(diagnosis.terrain)
+    logs = list(diagnosis.logs) or None
     skipped: dict[str, str] = {}
     if logs is None:
         skipped["residual_time"] = "no residual over time: no logs given"
@@ -286,18 +283,19 @@ def skipped_figures(diagnosis: Diagnosis, *, logs: Any = None, terrain: TerrainM
     why = missing_map_reason(diagnosis, terrain, logs)
     if why:
         skipped["gap_map"] = why
-    if not diagnosis.ranking:
+    if not diagnosis.current.ranking:
         skipped["effect_ranking"] = _NO_RANKING
     return skipped
 
 
-def plot_diagnosis(diagnosis: Diagnosis, directory: str | os.PathLike[str], *, logs: Any = None,
-                   predictions: Any = None, terrain: TerrainMap | None = None, figures: Sequence[str] | None = None,
-                   max_runs: int = 4, on_error: str = "raise", dpi: int = 110) -> DiagnosisFigures:
+def plot_diagnosis(diagnosis: Any, directory: str | os.PathLike[str], *, predictions: Any = None,
+                   figures: Sequence[str] | None = None, max_runs: int = 4, on_error: str = "raise",
+                   dpi: int = 110) -> DiagnosisFigures:
     """Draw every figure of a diagnosis into ``directory`` (file names :data:`FIGURES`).
 
+    It draws the logs and the map the diagnosis ran on (:attr:`Diagnosis.logs`, :attr:`Diagnosis.terrain`).
     A figure whose data is missing is skipped with its reason: the residual over time
-    without ``logs``; the map without ``terrain`` or poses. Without ``predictions`` the
+    without logs; the map without a map or poses. Without ``predictions`` the
     residual is that of the model as given (``diagnosis.corrected_model.base``), and the
     corrected model's (fitted on all logs: in-sample) is drawn dashed beside it.
 
@@ -306,12 +304,8 @@ def plot_diagnosis(diagnosis: Diagnosis, directory: str | os.PathLike[str], *, l
     diagnosis : Diagnosis
     directory : path-like
         Folder to write into (created when missing).
-    logs : InteractionLog or sequence of them, optional
-        The logs the diagnosis ran on (same order).
     predictions : sequence of array_like (N, 2), optional
         Predictions of the model as given, per log.
-    terrain : TerrainMap, optional
-        The map the diagnosis ran on.
     figures : sequence of str, optional
         Names from :data:`FIGURES` (default all).
     max_runs : int
@@ -334,7 +328,8 @@ def plot_diagnosis(diagnosis: Diagnosis, directory: str | os.PathLike[str], *, l
         A figure name not in :data:`FIGURES`, or an unknown ``on_error``.
     """
     diagnosis = checked_diagnosis(diagnosis)
-    terrain = check_terrain(terrain)
+    terrain = check_terrain(diagnosis.terrain)
+    logs = list(diagnosis.logs) or None
     check_choice("on_error", on_error, ("raise", "warn"))
     max_runs = check_int("max_runs", max_runs, low=1, high=8)
     dpi = check_int("dpi", dpi, low=10, high=1200)
@@ -347,7 +342,7 @@ def plot_diagnosis(diagnosis: Diagnosis, directory: str | os.PathLike[str], *, l
     folder = check_output_path(directory, "directory", directory=True)
     paths = {n: check_output_path(folder / FIGURES[n], f"directory {str(folder)!r}: {FIGURES[n]}") for n in names}
 
-    skipped = skipped_figures(diagnosis, logs=logs, terrain=terrain)
+    skipped = skipped_figures(diagnosis)
 
     def residual(path: Path) -> Path:
         items = log_list(logs)

@@ -17,12 +17,12 @@ from typing import Any
 
 import numpy as np
 
+from terrain.terrain_map import TerrainMap
 from terrawatt_base import plot_target
 from terrawatt_base.atomic import save_figure
 from terrawatt_base.checks import check_int, check_real, fmt_number, fmt_pct
 from terrawatt_base.errors import DataError, GridMismatchError, InvalidParameterError
 from terrawatt_base.plot_target import check_ax, check_axes, check_plot_target
-from terrain.terrain_map import TerrainMap
 
 from ..logs import InteractionLog
 from ..metrics import DEFAULT_SECTION_S, DEFAULT_SMOOTHING_SAMPLES, moving_median
@@ -36,7 +36,7 @@ from .regimes import (
     UNKNOWN_LABEL,
     check_terrain,
 )
-from .result import Diagnosis
+from .stage import Stage
 
 __all__ = [
     "REGIME_PANELS",
@@ -61,9 +61,10 @@ _LABELLED_SECTIONS = 6  # sections of a run labelled with their gap: the largest
 _BLOCK = re.compile(r"^cells? \((\d+)(?:-(\d+))?, (\d+)(?:-(\d+))?\)$")
 
 
-def checked_diagnosis(diagnosis: Any) -> Diagnosis:
-    """``diagnosis`` if it is a :class:`Diagnosis`, else InvalidParameterError."""
-    if not isinstance(diagnosis, Diagnosis):
+def checked_diagnosis(diagnosis: Any) -> Any:
+    """``diagnosis`` if it is a :class:`~energy.diagnosis.Diagnosis` (its current stage a :class:`Stage`), else
+    InvalidParameterError. (The figures stand below the answer that draws them: they know it by its stage.)"""
+    if not isinstance(getattr(diagnosis, "current", None), Stage) or not hasattr(diagnosis, "localisation"):
         raise InvalidParameterError(f"diagnosis must be a Diagnosis, got {type(diagnosis).__name__!r}")
     return diagnosis
 
@@ -210,7 +211,7 @@ def _draw_residual_runs(panels: Sequence[Any], items: Sequence[InteractionLog], 
 
 
 # ----------------------------------------------------------------- gap by regime
-def regime_rows(diagnosis: Diagnosis) -> dict[str, list[Any]]:
+def regime_rows(diagnosis: Any) -> dict[str, list[Any]]:
     """The known, non-empty localisation rows of each :data:`REGIME_PANELS` dimension, in a natural order."""
     out: dict[str, list[Any]] = {}
     for dim in REGIME_PANELS:
@@ -223,7 +224,7 @@ def regime_rows(diagnosis: Diagnosis) -> dict[str, list[Any]]:
     return out
 
 
-def plot_gap_by_regime(diagnosis: Diagnosis, path: str | os.PathLike[str] | None = None, *,
+def plot_gap_by_regime(diagnosis: Any, path: str | os.PathLike[str] | None = None, *,
                        axes: Sequence[Any] | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:
     """The net gap (mAh) by operating regime: one bar chart per dimension of :data:`REGIME_PANELS`.
 
@@ -304,7 +305,7 @@ def _draw_regimes(panels: Sequence[Any], rows: dict[str, list[Any]]) -> None:
         ax.grid(axis="x", alpha=0.3)
 
 
-def missing_regimes_reason(diagnosis: Diagnosis) -> str:
+def missing_regimes_reason(diagnosis: Any) -> str:
     """Why :func:`plot_gap_by_regime` has nothing to draw, or ``""``."""
     if regime_rows(diagnosis):
         return ""
@@ -312,7 +313,7 @@ def missing_regimes_reason(diagnosis: Diagnosis) -> str:
 
 
 # ----------------------------------------------------------------- gap on the map
-def _blocks(diagnosis: Diagnosis) -> list[tuple[int, int, int, int, float]]:
+def _blocks(diagnosis: Any) -> list[tuple[int, int, int, int, float]]:
     out = []
     for r in diagnosis.localisation:
         if r.dimension != "space":
@@ -324,7 +325,7 @@ def _blocks(diagnosis: Diagnosis) -> list[tuple[int, int, int, int, float]]:
     return out
 
 
-def missing_map_reason(diagnosis: Diagnosis, terrain: Any, logs: Any) -> str:
+def missing_map_reason(diagnosis: Any, terrain: Any, logs: Any) -> str:
     """Why :func:`plot_gap_map` has nothing to draw (no poses, no map, no block), or ``""``."""
     if logs is not None and all(getattr(log, "pose_xyh", None) is None for log in log_list(logs)):
         return "no map figure: the logs carry no poses, so the gap cannot be placed on a map"
@@ -339,7 +340,7 @@ def missing_map_reason(diagnosis: Diagnosis, terrain: Any, logs: Any) -> str:
     return ""
 
 
-def plot_gap_map(diagnosis: Diagnosis, terrain: TerrainMap, path: str | os.PathLike[str] | None = None, *,
+def plot_gap_map(diagnosis: Any, terrain: TerrainMap, path: str | os.PathLike[str] | None = None, *,
                  ax: Any = None, logs: Any = None, dpi: int = 110) -> Path | Any:
     """The gap on the map: the ``"space"`` rows of :attr:`Diagnosis.localisation` over a hillshade and contours.
 

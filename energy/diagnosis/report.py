@@ -1,89 +1,209 @@
-"""A diagnosis reported: its printed summary and its files (diagnosis.json, .md, the corrected model, figures)."""
+"""The answer of a diagnosis, :class:`Diagnosis`: printed (``summary``), saved (``to_dict``, ``write``) and drawn.
+
+``write`` writes :data:`DIAGNOSIS_FILES`: ``diagnosis.json`` (format ``terrawatt-diagnosis``),
+the one-page ``diagnosis.md``, the corrected model and the figures (:mod:`energy.diagnosis.plots`).
+"""
 
 from __future__ import annotations
 
-import dataclasses
 import os
 import warnings
-from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from terrawatt_base.atomic import save_figure
-from terrawatt_base.checks import check_choice
-from terrawatt_base.errors import FigureWarning, InvalidParameterError
 from terrain.terrain_map import TerrainMap
+from terrawatt_base.atomic import save_figure, write_text_atomic
+from terrawatt_base.checks import check_choice, fmt_number
+from terrawatt_base.errors import FigureWarning
+from terrawatt_base.formats import result_document, write_result_json
 
 from ..logs import InteractionLog
-from .diagnose import diagnose
-from .model_source import ModelUnderDiagnosis
+from ..models.base import CurrentModel
+from .gap import GapShare, largest_slices
 from .plots import FIGURES, plot_diagnosis, skipped_figures
-from .regimes import check_terrain
-from .result import Diagnosis
+from .result import Tie
+from .stage import FitSettings, Stage
 
-__all__ = ["DIAGNOSIS_FILES", "DiagnosisReport", "diagnose_report"]
+__all__ = ["DIAGNOSIS_FILES", "DIAGNOSIS_FORMAT_VERSION", "MARKDOWN_SLICES", "Diagnosis"]
 
-#: Files :meth:`DiagnosisReport.write` writes (the figures whose data is there).
+#: Slices of the localisation listed in :meth:`Diagnosis.to_markdown` (the largest ``|net gap|``).
+MARKDOWN_SLICES = 10
+#: Version of the ``diagnosis.json`` layout (format ``terrawatt-diagnosis``) written by :meth:`Diagnosis.write_json`.
+DIAGNOSIS_FORMAT_VERSION = 1
+#: Files :meth:`Diagnosis.write` writes (the figures whose data is there).
 DIAGNOSIS_FILES = ("diagnosis.json", "diagnosis.md", "corrected_model.zip", *FIGURES.values())
 
 
-@dataclass(frozen=True)
-class DiagnosisReport:
-    """A diagnosis with the logs and map it ran on, ready to print and write.
+def _signed(x: float, digits: int = 3) -> str:
+    return ("+" if x > 0 else "") + fmt_number(x, digits)
 
-    Made by :func:`diagnose_report`. :meth:`summary` is the text ``terrawatt diagnose``
-    prints, :meth:`write` writes :data:`DIAGNOSIS_FILES`.
+
+@dataclass(frozen=True, eq=False)
+class Diagnosis:
+    """What :func:`energy.diagnosis.diagnose` found (frozen), with the logs and map it ran on.
 
     Attributes
     ----------
-    diagnosis : Diagnosis
+    current : Stage
+        The current stage (:data:`~energy.diagnosis.gap.CURRENT`): the held-out gap of the
+        drive currents before and after, the ranking of the candidate effects, the chosen ones,
+        the waterfall.
+    localisation : tuple of GapShare
+        Where the current gap of the model as given lies, on all logs: every slice of every
+        dimension, each ranked by its net signed gap with a 95 % bootstrap interval
+        (:func:`~energy.diagnosis.localise_gap`); :meth:`largest_slices` picks the largest.
+    verdict : tuple of str
+        Plain sentences: the current stage's, the power stage's (or what current logs cannot
+        show), what the data could not score.
+    corrected_model : CurrentModel
+        The input model plus the chosen effects, fitted on all logs.
+    settings : FitSettings
+        The split, sections and bootstrap the stages were fitted and scored with.
+    power : Stage or None
+        The power stage (:data:`~energy.diagnosis.gap.POWER`: electrical effects on battery
+        power) when every log carries battery voltage and pack current; None otherwise.
+    model_note : str
+        Where the model under test comes from (a preset as given, runs it was calibrated on,
+        a file): the report's first line (:attr:`ModelUnderDiagnosis.note` when diagnosed from one).
+    ties : tuple of Tie
+        Per chosen effect whose step the runs cannot settle, the set of indistinguishable
+        explanations (``diagnosis.json``: ``"indistinguishable"``).
+    separating_drives : tuple of SeparatingDrive
+        Per pair of tied explanations, the test drive that tells them apart
+        (:mod:`energy.diagnosis.separating`; ``diagnosis.json``: ``"separating_drives"``).
+    more_data : dict
+        Where no candidate is significant: the likeliest one (``effect``, ``explanation``), its
+        mean gain and spread per unit (points), the ``units_needed`` (runs or blocks like these;
+        None when more would not do), the test drive that would show it (``drive``) and the
+        verdict's ``sentence``; empty otherwise.
     logs : tuple of InteractionLog
-        The logs it ran on.
+        The logs it ran on (the residual figure draws them).
     terrain : TerrainMap or None
         The map they drove on.
     """
 
-    diagnosis: Diagnosis
-    logs: tuple[InteractionLog, ...]
+    current: Stage
+    localisation: tuple[GapShare, ...]
+    verdict: tuple[str, ...]
+    corrected_model: CurrentModel
+    settings: FitSettings = field(default_factory=FitSettings)
+    power: Stage | None = None
+    model_note: str = ""
+    ties: tuple[Tie, ...] = ()
+    separating_drives: tuple[Any, ...] = ()
+    more_data: dict[str, Any] = field(default_factory=dict)
+    logs: tuple[InteractionLog, ...] = ()
     terrain: TerrainMap | None = None
 
-    def __post_init__(self) -> None:
-        if not isinstance(self.diagnosis, Diagnosis):
-            raise InvalidParameterError(f"diagnosis must be a Diagnosis, got {type(self.diagnosis).__name__!r}")
-        logs = tuple(self.logs)
-        if not logs or not all(isinstance(log, InteractionLog) for log in logs):
-            raise InvalidParameterError("logs must be a non-empty sequence of InteractionLog")
-        object.__setattr__(self, "logs", logs)
-        object.__setattr__(self, "terrain", check_terrain(self.terrain))
+    def largest_slices(self, n: int = MARKDOWN_SLICES) -> tuple[GapShare, ...]:
+        """The ``n`` slices of :attr:`localisation` with the largest ``|net gap|`` over all dimensions
+        (:func:`~energy.diagnosis.gap.largest_slices`: unknown and one-slice dimensions left out)."""
+        return largest_slices(self.localisation, n)
 
-    def waterfall_table(self) -> str:
-        """The held-out waterfall of the current: charge error, 8 s section error, RMSE and shrink per step."""
-        lines = [f"{'step':<28} {'charge err %':>12} {'8 s sect. %':>12} {'RMSE A':>8} {'shrink %':>9}"]
-        for w in self.diagnosis.waterfall:
-            lines.append(f"{w.label:<28} {w.charge_error_pct:>12.2f} {w.section_error_pct:>12.2f} {w.rmse_a:>8.3f} "
-                         f"{w.shrink_pct:>9.1f}")
-        return "\n".join(lines)
+    @property
+    def localisation_units(self) -> str:
+        """What the slices' intervals resample: ``"runs"``, or ``"time sections"`` of a single run."""
+        return "runs" if self.current.before.n_runs > 1 else "time sections"
 
-    def power_table(self) -> str:
-        """The waterfall of the battery power (``""`` without the power stage)."""
-        if self.diagnosis.power is None:
-            return ""
-        lines = ["battery power (voltage x pack current):",
-                 f"{'step':<28} {'energy err %':>12} {'8 s sect. %':>12} {'RMSE W':>8} {'shrink %':>9}"]
-        for w in self.diagnosis.power.waterfall:
-            lines.append(f"{w.label:<28} {w.energy_error_pct:>12.2f} {w.section_error_pct:>12.2f} {w.rmse_w:>8.2f} "
-                         f"{w.shrink_pct:>9.1f}")
-        return "\n".join(lines)
-
+    # ------------------------------------------------------------------ print
     def summary(self) -> str:
-        """The verdict, the waterfall (and the power waterfall), and the figures skipped for want of data."""
-        parts = ["\n".join(self.diagnosis.verdict), "", self.waterfall_table()]
-        if self.diagnosis.power is not None:
-            parts += ["", self.power_table()]
-        skipped = skipped_figures(self.diagnosis, logs=list(self.logs), terrain=self.terrain)
+        """The verdict, the waterfall of each stage, and the figures skipped for want of data (what
+        ``terrawatt diagnose`` prints)."""
+        parts = ["\n".join(self.verdict), "", self.current.table()]
+        if self.power is not None:
+            parts += ["", self.power.table()]
+        skipped = skipped_figures(self)
         parts += [f"skipped {FIGURES[name]}: {why}" for name, why in skipped.items()]
         return "\n".join(parts)
+
+    # ------------------------------------------------------------------ save
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready result document, format ``terrawatt-diagnosis`` (the corrected model is named by class, not
+        embedded; NaN left for the writer)."""
+        c = self.current
+        return result_document("diagnosis", DIAGNOSIS_FORMAT_VERSION, {
+            "before": c.before.to_dict(),
+            "after": c.after.to_dict(),
+            "localisation": [r.to_dict() for r in self.localisation],
+            "localisation_units": self.localisation_units,
+            "ranking": [s.to_dict() for s in c.ranking],
+            "chosen": list(c.chosen),
+            "waterfall": [w.to_dict() for w in c.waterfall],
+            "verdict": list(self.verdict),
+            "model_note": self.model_note,
+            "skipped": dict(c.skipped),
+            "split": self.settings.split,
+            "corrected_model": type(self.corrected_model).__name__,
+            "indistinguishable": [t.to_dict() for t in self.ties],
+            "separating_drives": [d.to_dict() for d in self.separating_drives],
+            "more_data": dict(self.more_data),
+        } | ({} if self.power is None else {"power": self.power.to_dict()}))
+
+    def write_json(self, path: str | os.PathLike[str]) -> Path:
+        """Write :meth:`to_dict` to ``path`` atomically (:func:`~terrawatt_base.formats.write_result_json`)."""
+        return write_result_json(path, self.to_dict())
+
+    def to_markdown(self) -> str:
+        """A one-page report: the verdict, the largest slices of the gap, each stage's ranking and waterfall.
+
+        The full slice table is in :meth:`to_dict` (``"localisation"``), not here.
+        """
+        c, split = self.current, self.settings.split
+        lines = ["# Sim-to-real gap diagnosis", ""]
+        if self.model_note:
+            lines += [f"Model under test: {self.model_note}", ""]
+        lines += [f"- {s}" for s in self.verdict]
+        top = self.largest_slices()
+        lines += ["", "## Where the gap lies (model as given, all logs)", "",
+                  f"Net gap = measured - predicted charge (mAh; positive: the model predicts too little), with its "
+                  f"95 % bootstrap interval over {self.localisation_units}. The {len(top)} largest of "
+                  f"{len(self.localisation)} slices by |net gap|; every slice is in diagnosis.json (localisation).", ""]
+        if top:
+            lines += ["| dimension | slice | net gap (mAh) | 95 % interval | of its charge | time (s) | runs |",
+                      "|---|---|---|---|---|---|---|"]
+            for r in top:
+                lo, hi = r.gap_interval_mah
+                lines.append(f"| {r.dimension} | {r.label} | {_signed(r.gap_mah)} | {fmt_number(lo, 3)} … "
+                             f"{fmt_number(hi, 3)} | {_signed(r.gap_pct)} % | {fmt_number(r.duration_s, 4)} | "
+                             f"{r.n_runs} |")
+        else:
+            lines.append("No slice tells where: every dimension has one known slice only.")
+        lines += ["", f"## Candidate effects (held-out shrink, split by {split})", "",
+                  "Ranked by what each adds to the chosen effects above it; *alone* is the effect on its own. "
+                  "Each fitted value beside its prior (the value that changes nothing) and its plausible range; "
+                  "flags: a value outside it or pinned at a fitting bound (doubtful), also of the effect fitted "
+                  "alone.", "",
+                  "| rank | effect | kind | adds | 95 % interval | alone | parameters | flags |",
+                  "|---|---|---|---|---|---|---|---|"]
+        for k, s in enumerate(c.ranking, 1):
+            lo, hi = s.added_interval_pct
+            flags = list(s.flags)
+            if s.alone_flags and s.alone_parameters != s.parameters:
+                flags.append("fitted alone: " + "; ".join(s.alone_flags))
+            flags = "; ".join(flags) if flags else "–"
+            lines.append(f"| {k} | {s.name}{' (chosen)' if s.name in c.chosen else ''} | {s.kind} | "
+                         f"{fmt_number(s.added_pct, 3)} % | {fmt_number(lo, 3)} … {fmt_number(hi, 3)} % | "
+                         f"{fmt_number(s.shrink_pct, 3)} % | {s.parameter_text()} | {flags} |")
+        if c.skipped:
+            lines += ["", "Not scored: " + "; ".join(f"{n} ({why})" for n, why in c.skipped.items()) + "."]
+        lines += ["", "## Waterfall (held-out)", "", *c.waterfall_markdown()]
+        if self.power is not None:
+            lines += ["", f"## Battery power: electrical candidates (held-out shrink, split by {split})", "",
+                      "Measured battery power = voltage x pack current; predicted from the measured drive currents "
+                      "with the model's electrical basis.", "",
+                      "| rank | effect | adds | 95 % interval | alone | parameters |", "|---|---|---|---|---|---|"]
+            for k, s in enumerate(self.power.ranking, 1):
+                lo, hi = s.added_interval_pct
+                params = ", ".join(f"{n} = {fmt_number(v, 4)}" for n, v in s.parameters.items())
+                lines.append(f"| {k} | {s.name} | {fmt_number(s.added_pct, 3)} % | {fmt_number(lo, 3)} … "
+                             f"{fmt_number(hi, 3)} % | {fmt_number(s.shrink_pct, 3)} % | {params} |")
+            lines += ["", *self.power.waterfall_markdown()]
+        return "\n".join(lines) + "\n"
+
+    def write_markdown(self, path: str | os.PathLike[str]) -> Path:
+        """Write :meth:`to_markdown` to ``path`` atomically; return the path."""
+        return write_text_atomic(path, self.to_markdown())
 
     def write(self, out_dir: str | os.PathLike[str], *, on_figure_error: str = "warn") -> list[Path]:
         """Write diagnosis.json, diagnosis.md, corrected_model.zip and the figures into ``out_dir`` (created).
@@ -102,16 +222,15 @@ class DiagnosisReport:
         check_choice("on_figure_error", on_figure_error, ("warn", "raise"))
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
-        d = self.diagnosis
-        written = [d.write_json(out / "diagnosis.json"), d.write_markdown(out / "diagnosis.md"),
-                   d.corrected_model.save(out / "corrected_model.zip")]
+        written = [self.write_json(out / "diagnosis.json"), self.write_markdown(out / "diagnosis.md"),
+                   self.corrected_model.save(out / "corrected_model.zip")]
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", FigureWarning)  # warned below, once, naming the file
-            figures = plot_diagnosis(d, out, logs=list(self.logs), terrain=self.terrain, on_error=on_figure_error)
+            figures = plot_diagnosis(self, out, on_error=on_figure_error)
         for name, why in figures.failed.items():
             warnings.warn(f"could not draw {out / FIGURES[name]}: {why}", FigureWarning, stacklevel=2)
         written += list(figures.written.values())
-        for drive in d.separating_drives:  # what to drive to tell tied explanations apart, and its figure
+        for drive in self.separating_drives:  # what to drive to tell tied explanations apart, and its figure
             written.append(drive.write_csv(out))
             path = out / f"{drive.file_stem}.png"
             try:
@@ -123,39 +242,3 @@ class DiagnosisReport:
             else:
                 written.append(path)
         return written
-
-
-def diagnose_report(source: ModelUnderDiagnosis, logs: Sequence[InteractionLog], *, terrain: TerrainMap | None = None,
-                    effects: Sequence[Any] | None = None, split: str = "runs", seed: int | None = 0, client: Any = None,
-                    progress: bool = False) -> DiagnosisReport:
-    """Diagnose the model of ``source`` on ``logs`` (:func:`energy.diagnose`) and report it.
-
-    The diagnosis says where its model comes from (``model_note``: ``source.note``); a model
-    that is not the physics is compared with the physics of ``source.robot``.
-
-    Parameters
-    ----------
-    source : ModelUnderDiagnosis
-        The model (:func:`energy.diagnosis.model_under_diagnosis`).
-    logs : sequence of InteractionLog
-        Runs with measured currents, none of them one the model was fitted on.
-    terrain, effects, split, seed, client, progress
-        As :func:`energy.diagnose`.
-
-    Returns
-    -------
-    DiagnosisReport
-
-    Raises
-    ------
-    InvalidParameterError
-        ``source`` is not a ModelUnderDiagnosis; as :func:`energy.diagnose`.
-    TerrawattError
-        As :func:`energy.diagnose`.
-    """
-    if not isinstance(source, ModelUnderDiagnosis):
-        raise InvalidParameterError(f"source must be a ModelUnderDiagnosis, got {type(source).__name__!r}")
-    logs = list(logs) if not isinstance(logs, InteractionLog) else [logs]
-    diagnosis = diagnose(source.model, logs, terrain=terrain, effects=effects, split=split, seed=seed,
-                         robot=source.reference_robot, client=client, progress=progress)
-    return DiagnosisReport(dataclasses.replace(diagnosis, model_note=source.note), tuple(logs), terrain)

@@ -18,7 +18,7 @@ from diagnosis_scenarios import (
 )
 
 from energy import PhysicsCurrentModel
-from energy.diagnosis import EFFECTS_CATALOGUE, NOT_IDENTIFIABLE_FROM_CURRENT, diagnose
+from energy.diagnosis import EFFECTS_CATALOGUE, NOT_IDENTIFIABLE_FROM_CURRENT, FitSettings, diagnose
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 EXCITABLE = [name for name, sc in SCENARIOS.items() if sc.excitable]
@@ -180,8 +180,9 @@ def test_manoeuvre_commands_ramp_and_stay_on_the_map():
 def test_a_withheld_effect_is_found_quickly():
     # a representative check of the benchmark: a short turning-resistance scenario, few candidates
     sc = dataclasses.replace(SCENARIOS["turning_resistance"], n_runs=3, run_duration_s=10.0)
-    d = diagnose(sc.make_model(0), sc.make_logs(0), terrain=sc.terrain, n_blocks=3, n_bootstrap=20,
-                 effects=["turning_resistance", "inertia", "current_gain", "idle_current"])
-    assert d.ranking[0].name == "turning_resistance" and d.chosen[0] == "turning_resistance"
-    assert d.ranking[0].shrink_pct > 80.0
-    assert d.ranking[0].parameters["gain"] == pytest.approx(1.0, abs=0.2)
+    d = diagnose(sc.make_model(0), sc.make_logs(0), terrain=sc.terrain,
+                 effects=["turning_resistance", "inertia", "current_gain", "idle_current"],
+                 settings=FitSettings(n_blocks=3, n_bootstrap=20))
+    assert d.current.ranking[0].name == "turning_resistance" and d.current.chosen[0] == "turning_resistance"
+    assert d.current.ranking[0].shrink_pct > 80.0
+    assert d.current.ranking[0].parameters["gain"] == pytest.approx(1.0, abs=0.2)

@@ -76,23 +76,23 @@ def from_data(scenario: dict):
 
 def test_the_diagnosis_finds_the_ablation_from_data(from_data) -> None:
     d, by_hand = from_data
-    assert d.chosen[0] == "inertia"  # the paper's case 2: the rotors' inertia dominates this robot's current
-    assert "rolling_resistance" in d.chosen[:2]  # case 3: Coulomb (rolling) friction, a coefficient per ground
-    scores = {s.name: s for s in d.ranking}
+    assert d.current.chosen[0] == "inertia"  # the paper's case 2: the rotors' inertia dominates this robot's current
+    assert "rolling_resistance" in d.current.chosen[:2]  # case 3: Coulomb (rolling) friction, a coefficient per ground
+    scores = {s.name: s for s in d.current.ranking}
     assert scores["inertia"].parameters["gain"] == pytest.approx(1.0, rel=0.2)
     coef = scores["rolling_resistance"].parameters
     assert coef["rolling_resistance_coef_sand"] > 2.0 * coef["rolling_resistance_coef_stone"]
-    before, after = d.waterfall[0], d.waterfall[-1]
+    before, after = d.current.waterfall[0], d.current.waterfall[-1]
     assert after.shrink_pct > 90.0
-    assert abs(before.charge_error_pct) > 50.0 and abs(after.charge_error_pct) < 5.0
+    assert abs(before.error_pct) > 50.0 and abs(after.error_pct) < 5.0
 
 
 def test_the_waterfall_has_the_shape_of_the_ablation_by_hand(from_data) -> None:
     d, by_hand = from_data
     hand = dict(by_hand)
     # the first two steps: the base and + inertia land where switching the truth's effects off puts them
-    assert d.waterfall[0].charge_error_pct == pytest.approx(hand["1 base motor + slope"], abs=10.0)
-    assert d.waterfall[1].charge_error_pct == pytest.approx(hand["2 + inertia"], abs=5.0)
+    assert d.current.waterfall[0].error_pct == pytest.approx(hand["1 base motor + slope"], abs=10.0)
+    assert d.current.waterfall[1].error_pct == pytest.approx(hand["2 + inertia"], abs=5.0)
     errors = [e for _, e in by_hand]
     assert errors[0] > errors[1] > errors[2] and abs(errors[-1]) < 1.0
 
@@ -106,7 +106,7 @@ def test_the_power_stage_finds_the_electronics(scenario: dict, from_data) -> Non
     fitted = {s.name: s.parameters for s in p.ranking}[p.chosen[0]]
     moving_w = fitted.get("control_stable_power_w", fitted.get("sensor_power_w", 0.0))
     assert moving_w == pytest.approx(truth_w, rel=0.2)
-    assert p.waterfall[0].energy_error_pct > 50.0 and abs(p.waterfall[-1].energy_error_pct) < 2.0
+    assert p.waterfall[0].error_pct > 50.0 and abs(p.waterfall[-1].error_pct) < 2.0
     hand = dict(scenario["by_hand_energy_errors"](6, 0))
-    assert p.waterfall[0].energy_error_pct == pytest.approx(hand["1-6, 8: every drive effect"], abs=5.0)
+    assert p.waterfall[0].error_pct == pytest.approx(hand["1-6, 8: every drive effect"], abs=5.0)
     assert hand["1-6, 8: every drive effect"] > hand["7 + sensor"] > hand["full (Table 2): + control board"] == 0.0

@@ -9,6 +9,7 @@ import pytest
 from diagnosis_scenarios import scenario
 
 from energy import diagnose, ground_preset, robot_preset
+from energy.diagnosis import FitSettings
 from planner import LearnedEnergyModel, plan_route
 from planner.registry import CellModelRegistry
 from terrain import flat_map
@@ -18,7 +19,7 @@ from terrain import flat_map
 def diagnosed():
     sc = dataclasses.replace(scenario("turning_resistance"), n_runs=3, run_duration_s=8.0)
     logs, model = sc.make_logs(0), sc.make_model(0)
-    return model, diagnose(model, logs, seed=0, n_bootstrap=50)
+    return model, diagnose(model, logs, settings=FitSettings(seed=0, n_bootstrap=50))
 
 
 def _cost(tmap, model):
@@ -28,7 +29,7 @@ def _cost(tmap, model):
 
 def test_the_corrected_model_prices_turns_the_given_model_missed(diagnosed) -> None:
     given, diagnosis = diagnosed
-    assert diagnosis.chosen[:1] == ("turning_resistance",)
+    assert diagnosis.current.chosen[:1] == ("turning_resistance",)
     tmap = flat_map((40, 40), 1.0)
     before, after = _cost(tmap, given), _cost(tmap, diagnosis.corrected_model)
     # a model without turning resistance prices every turn (columns: turn angle 0..pi) far

@@ -9,7 +9,7 @@ from diagnosis_scenarios import null_scenario, scenario
 from turning_samples import CANDIDATES, NoiseEffect, small_scenario, turning_diagnosis
 
 from energy import CurrentModel, InteractionLog, LinearCurrentModel
-from energy.diagnosis import CorrectedCurrentModel, Diagnosis, diagnose
+from energy.diagnosis import CorrectedCurrentModel, Diagnosis, FitSettings, diagnose
 from terrawatt_base.errors import DataError, InvalidParameterError, NotFittedError, UnknownNameError
 
 
@@ -21,19 +21,19 @@ def turning():
 def test_withheld_effect_ranks_first_and_closes_the_gap(turning):
     logs, model, d = turning
     assert isinstance(d, Diagnosis)
-    assert d.ranking[0].name == "turning_resistance"
-    assert d.ranking[0].shrink_pct >= 80.0 and d.ranking[0].shrink_interval_pct[0] > 0
-    assert abs(d.ranking[0].parameters["gain"] - 1.0) < 0.2  # the truth's term at gain 1
-    assert d.chosen[0] == "turning_resistance"
-    assert [w.label for w in d.waterfall][:2] == ["as given", "+ turning_resistance"]
-    assert d.waterfall[1].rmse_a < 0.5 * d.waterfall[0].rmse_a
-    assert abs(d.after.charge_error_pct) < abs(d.before.charge_error_pct)
+    assert d.current.ranking[0].name == "turning_resistance"
+    assert d.current.ranking[0].shrink_pct >= 80.0 and d.current.ranking[0].shrink_interval_pct[0] > 0
+    assert abs(d.current.ranking[0].parameters["gain"] - 1.0) < 0.2  # the truth's term at gain 1
+    assert d.current.chosen[0] == "turning_resistance"
+    assert [w.label for w in d.current.waterfall][:2] == ["as given", "+ turning_resistance"]
+    assert d.current.waterfall[1].rmse < 0.5 * d.current.waterfall[0].rmse
+    assert abs(d.current.after.error_pct) < abs(d.current.before.error_pct)
     assert "turning_resistance" in " ".join(d.verdict)
     added = [s for s in d.verdict if s.startswith("With turning_resistance")]
     assert len(added) == 1 and "shrinks by" in added[0] and "gets worse" not in added[0]
-    ranks = [s.name for s in d.ranking]
+    ranks = [s.name for s in d.current.ranking]
     assert ranks.index("pure_noise") > ranks.index("turning_resistance")  # noise never above a true effect
-    assert "pure_noise" not in d.chosen
+    assert "pure_noise" not in d.current.chosen
 
 
 def test_corrected_model_predicts_closer(turning):
@@ -82,8 +82,8 @@ def test_when_slices_cancel_the_verdict_says_so():
         w = np.where(phase == 0, 0.0, 0.7)
         base = 1.0 + 2.0 * np.abs(v) + 4.0 * np.abs(w) + np.where(phase == 1, 0.6, -0.6)
         logs.append(InteractionLog(t, v, w, base, base, t, np.full(t.size, 9.81)))
-    d = diagnose(_ExactToy().fit(logs), logs, effects=["current_gain"], n_bootstrap=20)
-    assert abs(d.before.charge_error_pct) < 1.0
+    d = diagnose(_ExactToy().fit(logs), logs, effects=["current_gain"], settings=FitSettings(n_bootstrap=20))
+    assert abs(d.current.before.error_pct) < 1.0
     top = d.largest_slices(1)[0]
     assert top.label in ("pivot", "0.5-1 m/s", "straight") and abs(top.gap_pct) > 5.0
     assert "slices of opposite sign cancel" in d.verdict[0]
@@ -92,15 +92,16 @@ def test_when_slices_cancel_the_verdict_says_so():
 def test_null_finds_no_unmodelled_effect():
     sc = small_scenario(null_scenario())
     d = diagnose(sc.make_model(1), sc.make_logs(1), terrain=sc.terrain,
-                 effects=["gear_losses", "current_gain", "idle_current", "time_lag"], n_bootstrap=50)
-    assert d.chosen == ()
+                 effects=["gear_losses", "current_gain", "idle_current", "time_lag"],
+                 settings=FitSettings(n_bootstrap=50))
+    assert d.current.chosen == ()
     assert any("No unmodelled effect found" in s for s in d.verdict)
 
 
 def test_no_public_way_to_score_on_fitting_data():
-    params = inspect.signature(diagnose).parameters
+    params = [*inspect.signature(diagnose).parameters, *inspect.signature(FitSettings).parameters]
     assert not any(("train" in p or "in_sample" in p or "fit_on" in p) for p in params)
-    assert params["split"].default == "runs"
+    assert FitSettings().split == "runs"
 
 
 def test_bad_input(turning):
@@ -118,9 +119,9 @@ def test_bad_input(turning):
         diagnose(model, [zero, logs[1]], effects=["current_gain"])
     short = [g.slice(g.time_s[0], g.time_s[0] + 0.015) for g in logs]
     with pytest.raises(DataError, match="parameters but the calibration data"):
-        diagnose(model, short, effects=["learned_residual"], split="runs")
+        diagnose(model, short, effects=["learned_residual"], settings=FitSettings(split="runs"))
     before = logs[0].current_left_a.copy()
-    diagnose(model, logs, effects=["current_gain"], n_bootstrap=5)
+    diagnose(model, logs, effects=["current_gain"], settings=FitSettings(n_bootstrap=5))
     np.testing.assert_array_equal(before, logs[0].current_left_a)  # nothing modified in place
 
 
@@ -143,9 +144,9 @@ def test_an_effect_that_only_fits_its_own_runs_is_not_credited():
                    for g in shifted)
 
     assert sq(in_sample) < 0.98 * sq(model)
-    d = diagnose(model, shifted, effects=["current_offset"], seed=0, n_bootstrap=50)
-    score = {s.name: s for s in d.ranking}["current_offset"]
-    assert score.shrink_pct < 0.0 and "current_offset" not in d.chosen
+    d = diagnose(model, shifted, effects=["current_offset"], settings=FitSettings(seed=0, n_bootstrap=50))
+    score = {s.name: s for s in d.current.ranking}["current_offset"]
+    assert score.shrink_pct < 0.0 and "current_offset" not in d.current.chosen
 
 
 def test_a_small_effect_beside_a_dominant_one_ranks_second():
@@ -157,17 +158,17 @@ def test_a_small_effect_beside_a_dominant_one_ranks_second():
     sc = dataclasses.replace(pair_scenario("turning_resistance", "inertia"), run_duration_s=10.0)
     logs, model = sc.make_logs(0), sc.make_model(0)
     d = diagnose(model, logs, terrain=sc.terrain, effects=["turning_resistance", "inertia", "current_gain"],
-                 n_bootstrap=50)
-    names = [s.name for s in d.ranking]
+                 settings=FitSettings(n_bootstrap=50))
+    names = [s.name for s in d.current.ranking]
     assert names == ["turning_resistance", "inertia", "current_gain"]
     # alone, a current gain (which absorbs part of the turning gap) looks better than inertia
-    assert d.score("current_gain").shrink_pct > d.score("inertia").shrink_pct
-    assert d.chosen[:2] == ("turning_resistance", "inertia")
-    first, second = d.ranking[0], d.ranking[1]
+    assert d.current.score("current_gain").shrink_pct > d.current.score("inertia").shrink_pct
+    assert d.current.chosen[:2] == ("turning_resistance", "inertia")
+    first, second = d.current.ranking[0], d.current.ranking[1]
     assert first.added_pct == pytest.approx(first.shrink_pct)
     assert second.added_pct > 0 and second.added_interval_pct[0] > 0
     # what the chosen pair explains is the sum of the added shrinks, and the waterfall agrees
-    assert d.waterfall[2].shrink_pct == pytest.approx(first.added_pct + second.added_pct)
+    assert d.current.waterfall[2].shrink_pct == pytest.approx(first.added_pct + second.added_pct)
     assert any(s.startswith("Then inertia") and "further" in s for s in d.verdict)
 
 
@@ -177,14 +178,15 @@ def test_on_a_dask_client_equals_serial(turning):
     cands = CANDIDATES + [NoiseEffect()]
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0") as cl, \
             distributed.Client(cl) as client:
-        d = diagnose(model, logs, terrain=scenario("turning_resistance").terrain, effects=cands, n_bootstrap=50,
-                     client=client, progress=True)
-    assert [s.name for s in d.ranking] == [s.name for s in serial.ranking]
-    assert d.chosen == serial.chosen
-    for a, b in zip(d.ranking, serial.ranking):
+        d = diagnose(model, logs, terrain=scenario("turning_resistance").terrain, effects=cands, client=client,
+                     progress=True,
+                     settings=FitSettings(n_bootstrap=50))
+    assert [s.name for s in d.current.ranking] == [s.name for s in serial.current.ranking]
+    assert d.current.chosen == serial.current.chosen
+    for a, b in zip(d.current.ranking, serial.current.ranking):
         assert a.added_pct == pytest.approx(b.added_pct, abs=1e-9)
         assert a.parameters == pytest.approx(b.parameters, abs=1e-9)
-    assert d.after.rmse_a == pytest.approx(serial.after.rmse_a, abs=1e-12)
+    assert d.current.after.rmse == pytest.approx(serial.current.after.rmse, abs=1e-12)
 
 
 def test_a_client_that_is_not_one(turning):
@@ -206,11 +208,11 @@ def test_the_learned_correction_is_reported_but_never_added_unless_asked_for():
         bump = 4.0 * np.abs(log.v_mps * log.omega_radps)
         logs.append(dataclasses.replace(log, current_left_a=log.current_left_a + bump,
                                         current_right_a=log.current_right_a + bump))
-    d = diagnose(model, logs, seed=0, n_bootstrap=50)
-    learned = {s.name: s for s in d.ranking}["learned_residual"]
-    assert d.chosen == () and learned.shrink_pct > 30.0  # it would explain much of the gap ...
-    assert "learned_residual" not in d.chosen and not d.corrected_model.effects_  # ... and is not slipped in
+    d = diagnose(model, logs, settings=FitSettings(seed=0, n_bootstrap=50))
+    learned = {s.name: s for s in d.current.ranking}["learned_residual"]
+    assert d.current.chosen == () and learned.shrink_pct > 30.0  # it would explain much of the gap ...
+    assert "learned_residual" not in d.current.chosen and not d.corrected_model.effects_  # ... and is not slipped in
     assert any("learned residual correction (not physics) would explain" in line for line in d.verdict)
-    asked = diagnose(model, logs, seed=0, n_bootstrap=50,
-                     effects=["coulomb_friction", "viscous_friction", "learned_residual"])
-    assert "learned_residual" in asked.chosen
+    asked = diagnose(model, logs, effects=["coulomb_friction", "viscous_friction", "learned_residual"],
+                     settings=FitSettings(seed=0, n_bootstrap=50))
+    assert "learned_residual" in asked.current.chosen

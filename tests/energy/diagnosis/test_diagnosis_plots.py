@@ -12,7 +12,7 @@ import pytest
 from diagnosis_scenarios import scenario
 
 import terrain
-from energy.diagnosis import diagnose
+from energy.diagnosis import FitSettings, diagnose
 from energy.diagnosis.plots import (
     FIGURES,
     DiagnosisFigures,
@@ -39,7 +39,7 @@ def case():
     """A physics model without turning resistance, diagnosed on 3 short runs with poses on a map."""
     sc = dataclasses.replace(scenario("turning_resistance"), n_runs=3, run_duration_s=8.0)
     logs = sc.make_logs(0)
-    d = diagnose(sc.make_model(0), logs, terrain=sc.terrain, seed=0, n_bootstrap=20)
+    d = diagnose(sc.make_model(0), logs, terrain=sc.terrain, settings=FitSettings(seed=0, n_bootstrap=20))
     return d, logs, sc.terrain
 
 
@@ -52,7 +52,7 @@ def _no_drawing(monkeypatch):
 
 def test_every_figure_is_written_with_no_temporary_left(case, tmp_path):
     d, logs, tmap = case
-    out = plot_diagnosis(d, tmp_path / "figs", logs=logs, terrain=tmap)
+    out = plot_diagnosis(d, tmp_path / "figs")
     assert isinstance(out, DiagnosisFigures)
     assert list(out.written) == list(FIGURES) and not out.skipped and not out.failed
     assert all(_png(p) for p in out.written.values())
@@ -77,12 +77,13 @@ def test_each_figure_function_returns_its_path(case, tmp_path):
 
 def test_missing_data_skips_a_figure_and_says_why(case, tmp_path):
     d, logs, tmap = case
-    out = plot_diagnosis(d, tmp_path, figures=["residual_time", "gap_map", "waterfall"])
+    out = plot_diagnosis(dataclasses.replace(d, logs=(), terrain=None), tmp_path,
+                         figures=["residual_time", "gap_map", "waterfall"])
     assert list(out.written) == ["waterfall"]
     assert out.skipped == {"residual_time": "no residual over time: no logs given",
                            "gap_map": "no map figure: no terrain map given (the map the runs drove on)"}
     no_poses = [dataclasses.replace(log, pose_xyh=None) for log in logs]
-    out = plot_diagnosis(d, tmp_path / "np", logs=no_poses, terrain=tmap, figures=["gap_map"])
+    out = plot_diagnosis(dataclasses.replace(d, logs=tuple(no_poses)), tmp_path / "np", figures=["gap_map"])
     assert out.written == {} and "carry no poses" in out.skipped["gap_map"]
     assert not (tmp_path / "np").exists()  # nothing to draw, no folder made
     with pytest.raises(DataError, match="no terrain map given"):
@@ -91,8 +92,9 @@ def test_missing_data_skips_a_figure_and_says_why(case, tmp_path):
 
 def test_a_diagnosis_without_map_blocks_or_regimes_or_ranking_is_skipped(case, tmp_path):
     d, logs, tmap = case
-    bare = dataclasses.replace(d, localisation=tuple(r for r in d.localisation if r.dimension == "time"), ranking=())
-    out = plot_diagnosis(bare, tmp_path, logs=logs, terrain=tmap)
+    bare = dataclasses.replace(d, localisation=tuple(r for r in d.localisation if r.dimension == "time"),
+                               current=dataclasses.replace(d.current, ranking=()))
+    out = plot_diagnosis(bare, tmp_path)
     assert set(out.skipped) == {"gap_by_regime", "gap_map", "effect_ranking"}
     assert "no map blocks" in out.skipped["gap_map"]
     assert "no candidate effect was scored" in out.skipped["effect_ranking"]
@@ -104,9 +106,10 @@ def test_a_diagnosis_without_map_blocks_or_regimes_or_ranking_is_skipped(case, t
 
 def test_learned_and_negative_scores_are_drawn(case, tmp_path):
     d, _, _ = case
-    learned = dataclasses.replace(d.ranking[0], name="learned_residual", kind="learned", shrink_pct=-3.0,
+    learned = dataclasses.replace(d.current.ranking[0], name="learned_residual", kind="learned", shrink_pct=-3.0,
                                   shrink_interval_pct=(-8.0, 1.0))
-    d2 = dataclasses.replace(d, ranking=(*d.ranking, learned), chosen=(*d.chosen, "learned_residual"))
+    d2 = dataclasses.replace(d, current=dataclasses.replace(d.current, ranking=(*d.current.ranking, learned),
+                                                            chosen=(*d.current.chosen, "learned_residual")))
     assert _png(plot_effect_ranking(d2, tmp_path / "ranking.png"))
 
 
@@ -124,10 +127,10 @@ def test_bad_paths_are_refused_before_drawing(case, tmp_path, monkeypatch):
         with pytest.raises(InvalidParameterError, match="which is a file"):
             call(tmp_path / "file" / "x.png")
     with pytest.raises(InvalidParameterError, match="is a file; expected a folder"):
-        plot_diagnosis(d, tmp_path / "file", logs=logs)
+        plot_diagnosis(d, tmp_path / "file")
     (tmp_path / "out" / "waterfall.png").mkdir(parents=True)
     with pytest.raises(InvalidParameterError, match="waterfall.png"):
-        plot_diagnosis(d, tmp_path / "out", logs=logs, terrain=tmap)
+        plot_diagnosis(d, tmp_path / "out")
     assert [p.name for p in (tmp_path / "out").iterdir()] == ["waterfall.png"]  # nothing drawn
 
 
@@ -162,11 +165,11 @@ def test_a_failing_figure_warns_when_asked_and_raises_otherwise(case, tmp_path, 
         plot_diagnosis(d, tmp_path, figures=["waterfall"])
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        out = plot_diagnosis(d, tmp_path, logs=logs, figures=["waterfall", "gap_by_regime"], on_error="warn")
+        out = plot_diagnosis(d, tmp_path, figures=["waterfall", "gap_by_regime"], on_error="warn")
     assert out.written == {} and set(out.failed) == {"waterfall", "gap_by_regime"}
     assert "RuntimeError: no canvas" in out.failed["waterfall"]
     assert sum(issubclass(w.category, FigureWarning) for w in caught) == 2
-    assert np.isfinite(d.before.rmse_a)  # the diagnosis is untouched
+    assert np.isfinite(d.current.before.rmse)  # the diagnosis is untouched
 
 
 # ----------------------------------------------------------------- drawn into the caller's axes
@@ -190,7 +193,7 @@ def test_each_figure_draws_into_the_callers_axes_and_writes_nothing(case, tmp_pa
     water = Figure().subplots(1, 3)
     assert plot_waterfall(d, axes=water) == tuple(water)
     assert [a.get_title() for a in water] == ["whole-set charge error (%)", "8 s section error (%)", "RMSE (A)"]
-    assert all(len(a.patches) == len(d.waterfall) for a in water)
+    assert all(len(a.patches) == len(d.current.waterfall) for a in water)
     assert water[0].figure.get_suptitle() == ""  # the suptitle belongs to a figure the function makes
 
     runs = Figure().subplots(2, 1)
@@ -237,13 +240,14 @@ def test_a_figure_takes_a_path_or_axes_of_its_panel_count(case, tmp_path):
 
 def test_the_skipped_figures_are_known_before_drawing(case, tmp_path):
     d, logs, tmap = case
-    assert skipped_figures(d, logs=logs, terrain=tmap) == {}
-    skipped = skipped_figures(d)
+    assert skipped_figures(d) == {}  # the logs and the map it ran on
+    bare = dataclasses.replace(d, logs=(), terrain=None)
+    skipped = skipped_figures(bare)
     assert list(skipped) == ["residual_time", "gap_map"] and "no logs given" in skipped["residual_time"]
-    assert skipped == plot_diagnosis(d, tmp_path, figures=["residual_time", "gap_map"]).skipped
-    assert "no candidate effect" in skipped_figures(dataclasses.replace(d, ranking=()), logs=logs,
-                                                    terrain=tmap)["effect_ranking"]
+    assert skipped == plot_diagnosis(bare, tmp_path, figures=["residual_time", "gap_map"]).skipped
+    unranked = dataclasses.replace(d, current=dataclasses.replace(d.current, ranking=()))
+    assert "no candidate effect" in skipped_figures(unranked)["effect_ranking"]
     with pytest.raises(InvalidParameterError, match="diagnosis must be a Diagnosis"):
         skipped_figures("d")
     with pytest.raises(InvalidParameterError, match="terrain must be a TerrainMap"):
-        skipped_figures(d, terrain="map")
+        skipped_figures(dataclasses.replace(d, terrain="map"))

@@ -8,7 +8,7 @@ from effect_samples import coated_wood_log, coated_wood_model
 
 from diagnosis_scenarios import null_scenario, scenario
 
-from energy.diagnosis import diagnose, effect
+from energy.diagnosis import FitSettings, diagnose, effect
 
 
 @pytest.fixture(scope="module")
@@ -40,12 +40,13 @@ def test_a_lag_just_under_one_drive_sample_is_a_lag_and_half_a_sample_is_not():
     sc = dataclasses.replace(scenario("time_lag"), lag_s=0.15, n_runs=4, run_duration_s=20.0)
     logs = [log.resample(6.5) for log in sc.make_logs(1)]
     cands = ["time_lag", "current_gain", "idle_current"]
-    d = diagnose(sc.make_model(1), logs, terrain=sc.terrain, effects=cands, n_bootstrap=50)
-    assert d.chosen[:1] == ("time_lag",)
-    assert d.score("time_lag").parameters["lag_s"] == pytest.approx(0.15, abs=0.01)
+    d = diagnose(sc.make_model(1), logs, terrain=sc.terrain, effects=cands, settings=FitSettings(n_bootstrap=50))
+    assert d.current.chosen[:1] == ("time_lag",)
+    assert d.current.score("time_lag").parameters["lag_s"] == pytest.approx(0.15, abs=0.01)
     null = dataclasses.replace(null_scenario(), n_runs=4, run_duration_s=20.0)
     logs = [log.resample(6.5) for log in null.make_logs(1)]
-    assert diagnose(null.make_model(1), logs, terrain=null.terrain, effects=cands, n_bootstrap=50).chosen == ()
+    assert diagnose(null.make_model(1), logs, terrain=null.terrain, effects=cands,
+                    settings=FitSettings(n_bootstrap=50)).current.chosen == ()
     lag = effect("time_lag").bind(logs)
     assert lag.period_s == pytest.approx(1 / 6.5)
     assert lag.negligible(np.array([0.49 / 6.5])) and not lag.negligible(np.array([-0.51 / 6.5]))

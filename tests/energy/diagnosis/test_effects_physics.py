@@ -10,7 +10,7 @@ from turning_samples import small_scenario
 from diagnosis_scenarios import null_scenario, scenario
 
 from energy import PhysicsCurrentModel
-from energy.diagnosis import diagnose, effect, effect_from_spec
+from energy.diagnosis import FitSettings, diagnose, effect, effect_from_spec
 from energy.diagnosis.model_currents import basis_breakdown, clamps_at_zero, physics_basis, unclipped_prediction
 from energy.sim import PAPER_GROUNDS
 
@@ -109,10 +109,12 @@ def test_rotor_inertia_adds_a_current_in_proportion_to_each_sides_wheel_accelera
 def test_a_withheld_rotor_inertia_is_found_with_its_value_and_nothing_is_added_where_nothing_is_missing():
     sc = small_scenario(scenario("rotor_inertia"))  # truth: 6 x the model's rotor inertia
     cands = ["rotor_inertia", "mass", "time_lag", "current_gain"]
-    d = diagnose(sc.make_model(1), sc.make_logs(1), terrain=sc.terrain, effects=cands, n_bootstrap=50)
-    assert d.chosen[:1] == ("rotor_inertia",)
-    assert d.score("rotor_inertia").parameters["rotor_inertia_scale"] == pytest.approx(6.0, rel=0.1)
+    d = diagnose(sc.make_model(1), sc.make_logs(1), terrain=sc.terrain, effects=cands,
+                 settings=FitSettings(n_bootstrap=50))
+    assert d.current.chosen[:1] == ("rotor_inertia",)
+    assert d.current.score("rotor_inertia").parameters["rotor_inertia_scale"] == pytest.approx(6.0, rel=0.1)
     assert any("rotor_inertia" in s for s in d.verdict)
     null = small_scenario(null_scenario())
-    d0 = diagnose(null.make_model(1), null.make_logs(1), terrain=null.terrain, effects=cands, n_bootstrap=50)
-    assert d0.chosen == ()
+    d0 = diagnose(null.make_model(1), null.make_logs(1), terrain=null.terrain, effects=cands,
+                  settings=FitSettings(n_bootstrap=50))
+    assert d0.current.chosen == ()

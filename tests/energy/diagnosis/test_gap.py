@@ -14,6 +14,7 @@ from energy.diagnosis.gap import (
     DIMENSIONS,
     GapShare,
     GapSummary,
+    WaterfallStep,
     checked_pairs,
     gap_summary,
     largest_slices,
@@ -24,6 +25,7 @@ from energy.diagnosis.gap import (
     shares_of,
     time_labels,
 )
+from energy.diagnosis.quantity import CURRENT, POWER
 from energy.metrics import section_charges_mah, section_error_pct
 from energy.sim import PAPER_GROUNDS
 from terrain import flat_map, ramp_map
@@ -79,17 +81,17 @@ def test_gap_summary_of_a_one_amp_offset_on_one_side():
     log = make_log(t, np.full(37, 3.0), np.full(37, 2.0))
     pred = np.column_stack([np.full(37, 2.0), np.full(37, 2.0)])  # left misses 1 A
     s = gap_summary([log], [pred])
-    assert isinstance(s, GapSummary)
-    assert s.measured_mah == pytest.approx(5000.0)
-    assert s.predicted_mah == pytest.approx(4000.0)
-    assert s.gap_mah == pytest.approx(1000.0)
-    assert s.charge_error_pct == pytest.approx(20.0)
-    assert s.rmse_a == pytest.approx(math.sqrt(0.5))
+    assert isinstance(s, GapSummary) and s.quantity is CURRENT
+    assert s.measured == pytest.approx(5000.0)
+    assert s.predicted == pytest.approx(4000.0)
+    assert s.gap == pytest.approx(1000.0)
+    assert s.error_pct == pytest.approx(20.0)
+    assert s.rmse == pytest.approx(math.sqrt(0.5))
     assert s.section_error_pct == pytest.approx(20.0)
     assert (s.n_runs, s.n_samples, s.duration_s) == (1, 37, pytest.approx(3600.0))
     d = s.to_dict()
-    assert set(d) == {"measured_mah", "predicted_mah", "gap_mah", "charge_error_pct", "section_error_pct",
-                      "rmse_a", "n_runs", "n_samples", "duration_s"}
+    assert list(d) == ["measured_mah", "predicted_mah", "gap_mah", "charge_error_pct", "section_error_pct",
+                       "rmse_a", "n_runs", "n_samples", "duration_s"]  # diagnosis.json's keys, in its order
     json.dumps(d)
     assert "1000 mAh" in str(s)
 
@@ -107,7 +109,7 @@ def test_gap_summary_section_error_is_the_median_over_runs(uneven_log):
         per_run.append(section_error_pct(model, truth))
     assert s.section_error_pct == pytest.approx(float(np.median(per_run)))
     assert s.n_runs == 2 and s.n_samples == 700
-    assert s.gap_mah == pytest.approx(s.measured_mah - s.predicted_mah)
+    assert s.gap == pytest.approx(s.measured - s.predicted)
 
 
 def test_a_single_log_with_a_single_prediction_is_accepted(uneven_log):
@@ -184,7 +186,7 @@ def test_a_model_that_misses_only_while_pivoting_puts_all_the_gap_in_pivot():
     assert turning[0].label == "pivot"
     assert turning[0].share_pct == pytest.approx(100.0)
     assert sum(r.share_pct for r in turning) == pytest.approx(100.0)
-    assert turning[0].gap_mah == pytest.approx(gap_summary([log], [pred]).gap_mah)
+    assert turning[0].gap_mah == pytest.approx(gap_summary([log], [pred]).gap)
     assert turning[0].n_samples == 100 and turning[0].duration_s == pytest.approx(10.0)
     np.testing.assert_array_equal(pred, before)
 
@@ -245,7 +247,7 @@ def test_every_dimension_adds_up_to_the_whole_gap_on_a_simulated_drive():
     whole = gap_summary(logs, preds)
     for dim in DIMENSIONS:
         part = shares_of(rows, dim)
-        assert sum(r.gap_mah for r in part) == pytest.approx(whole.gap_mah, abs=1e-9), dim
+        assert sum(r.gap_mah for r in part) == pytest.approx(whole.gap, abs=1e-9), dim
         if dim == "side":  # each side covers all the time
             assert [r.duration_s for r in part] == [pytest.approx(whole.duration_s)] * 2
         else:
@@ -299,7 +301,7 @@ def test_slices_of_opposite_sign_rank_by_their_net_gap_while_the_whole_gap_cance
     pred[straight] += 1.0  # as many samples as the pivot: the misses cancel
     rows = localise_gap([log], [pred])
     q = charge_mah(log.time_s, np.where(pivot, 2.0, 0.0))  # 1 A on each side
-    assert abs(gap_summary([log], [pred]).gap_mah) < 0.01 * q  # (up to the half-weight of the first sample)
+    assert abs(gap_summary([log], [pred]).gap) < 0.01 * q  # (up to the half-weight of the first sample)
     turning = shares_of(rows, "turning")
     assert {r.label: np.sign(r.gap_mah) for r in turning[:2]} == {"pivot": 1.0, "straight": -1.0}
     piv = next(r for r in turning if r.label == "pivot")
@@ -398,3 +400,52 @@ def test_bad_localisation_input_is_named():
         localise_gap([log], [good], n_bootstrap=0)
     with pytest.raises(UnknownNameError, match="dimension must be one of"):
         shares_of(localise_gap([log], [good]), "weather")
+
+
+# ---------------------------------------------------------------------- the battery power: the same summary
+def _power_log(power_w: np.ndarray, v: np.ndarray) -> InteractionLog:
+    t = np.arange(power_w.size, dtype=float)  # 1 s steps
+    ta = np.arange(0.0, t[-1] + 0.05, 0.1)
+    return InteractionLog(t, v, np.zeros(t.size), np.ones(t.size), np.ones(t.size), ta, np.full(ta.size, 9.81),
+                          meta=LogMeta(source="p.csv"), battery_voltage_v=np.full(t.size, 24.0),
+                          battery_current_a=power_w / 24.0)
+
+
+def test_the_power_gap_summary_of_a_constant_shortfall():
+    measured = np.full(37, 100.0)  # 36 s at 100 W = 1 Wh
+    still = (np.arange(37) < 10).astype(float)  # standing still for the first 10 samples
+    log = _power_log(measured, np.where(still > 0, 0.0, 0.5))
+    s = gap_summary([log], [measured - 10.0], quantity=POWER, stopped=[still], section_s=8.0)
+    assert isinstance(s, GapSummary) and s.quantity is POWER and (s.n_runs, s.n_samples) == (1, 37)
+    assert s.measured == pytest.approx(1.0) and s.predicted == pytest.approx(0.9) and s.gap == pytest.approx(0.1)
+    assert s.error_pct == pytest.approx(10.0) and s.rmse == pytest.approx(10.0)
+    assert s.section_error_pct == pytest.approx(10.0)
+    assert s.stopped_time_pct == pytest.approx(100.0 * 9.5 / 36.0)  # trapezoid weights: half a second at the ends
+    assert s.stopped_gap_pct == pytest.approx(s.stopped_time_pct)
+    d = json.loads(json.dumps(s.to_dict()))
+    assert list(d) == ["measured_wh", "predicted_wh", "gap_wh", "energy_error_pct", "section_error_pct", "rmse_w",
+                       "stopped_gap_pct", "stopped_time_pct", "n_runs", "n_samples"]  # diagnosis.json's "power" keys
+    assert "0.1 Wh" in str(s) and "W over 1 run" in str(s)
+
+
+def test_a_perfect_power_prediction_has_no_gap_and_no_stopped_share():
+    measured = np.linspace(50.0, 150.0, 20)
+    log = _power_log(measured, np.full(20, 0.5))
+    s = gap_summary([log], [measured[:, None]], quantity=POWER, stopped=[np.zeros(20)])
+    assert s.gap == pytest.approx(0.0, abs=1e-12) and s.rmse == pytest.approx(0.0, abs=1e-9)
+    assert s.stopped_gap_pct == 0.0  # no standstill
+    assert math.isnan(gap_summary([log], [np.ones((20, 2))]).stopped_gap_pct)  # the current's summary has no standstill
+    with pytest.raises(InvalidParameterError, match=r"predictions\[0\] must have shape \(20, 1\) \(the power"):
+        gap_summary([log], [np.ones((20, 2))], quantity=POWER)
+    with pytest.raises(DataError, match="the logs carry no battery power"):
+        gap_summary([_power_log(np.zeros(20), np.zeros(20))], [np.zeros(20)], quantity=POWER)
+    with pytest.raises(InvalidParameterError, match="quantity must be a Quantity"):
+        gap_summary([log], [measured], quantity="power")
+
+
+def test_a_waterfall_step_as_json_under_its_quantitys_keys():
+    w = WaterfallStep(CURRENT, "+ mass", 2.5, 4.0, 0.3, 60.0)
+    assert w.to_dict() == {"label": "+ mass", "charge_error_pct": 2.5, "section_error_pct": 4.0, "rmse_a": 0.3,
+                           "shrink_pct": 60.0}
+    p = WaterfallStep(POWER, "+ control", -0.5, 1.0, 2.5, 99.0)
+    assert list(p.to_dict()) == ["label", "energy_error_pct", "section_error_pct", "rmse_w", "shrink_pct"]

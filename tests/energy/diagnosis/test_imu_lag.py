@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from energy import CurrentModel, InteractionLog, LinearCurrentModel, LogMeta, PhysicsCurrentModel
-from energy.diagnosis import CorrectedCurrentModel, diagnose, effect
+from energy.diagnosis import CorrectedCurrentModel, FitSettings, diagnose, effect
 from energy.diagnosis.effects_measurement import reads_vibration
 
 TRUE_LAG_S = 0.17
@@ -58,10 +58,10 @@ def _logs(lag_s, n_logs=5, seed=0):
 def test_a_lagged_imu_clock_is_found_and_its_lag_fitted():
     logs = _logs(TRUE_LAG_S)
     model = VibrationToyModel().fit(_logs(0.0, seed=1))
-    d = diagnose(model, logs, effects=["imu_lag", "time_lag", "current_gain"], n_bootstrap=50)
-    assert d.ranking[0].name == "imu_lag" and d.chosen[0] == "imu_lag"
-    assert d.ranking[0].parameters["lag_s"] == pytest.approx(TRUE_LAG_S, abs=0.03)
-    assert d.ranking[0].added_pct > 50.0
+    d = diagnose(model, logs, effects=["imu_lag", "time_lag", "current_gain"], settings=FitSettings(n_bootstrap=50))
+    assert d.current.ranking[0].name == "imu_lag" and d.current.chosen[0] == "imu_lag"
+    assert d.current.ranking[0].parameters["lag_s"] == pytest.approx(TRUE_LAG_S, abs=0.03)
+    assert d.current.ranking[0].added_pct > 50.0
     # the corrected model carries the lag: it predicts the lagged logs closer than the model as given
     err = lambda m: np.mean([np.mean((m.predict(g) - np.column_stack([g.current_left_a, g.current_right_a])) ** 2)  # noqa: E731
                              for g in logs])
@@ -71,12 +71,12 @@ def test_a_lagged_imu_clock_is_found_and_its_lag_fitted():
 def test_no_lag_no_imu_lag_and_models_without_the_imu_skip_it():
     logs = _logs(0.0)
     model = VibrationToyModel().fit(_logs(0.0, seed=1))
-    d = diagnose(model, logs, effects=["imu_lag"], n_bootstrap=50)
-    assert "imu_lag" not in d.chosen
+    d = diagnose(model, logs, effects=["imu_lag"], settings=FitSettings(n_bootstrap=50))
+    assert "imu_lag" not in d.current.chosen
     assert reads_vibration(model) and not reads_vibration(LinearCurrentModel())
     lin = LinearCurrentModel().fit(logs)
-    d2 = diagnose(lin, logs, effects=["imu_lag", "current_gain"], n_bootstrap=20)
-    assert "imu_lag" in d2.skipped and d2.score("imu_lag") is None
+    d2 = diagnose(lin, logs, effects=["imu_lag", "current_gain"], settings=FitSettings(n_bootstrap=20))
+    assert "imu_lag" in d2.current.skipped and d2.current.score("imu_lag") is None
 
 
 def test_imu_lag_composes_as_a_difference():
@@ -132,10 +132,10 @@ def test_a_fitted_vibration_estimator_is_offered_imu_lag_and_a_physics_model_is_
     logs = [_estimator_log(s) for s in range(3)]
     est = VibrationCurrentEstimator("default", seed=0, n_threads=1).fit(logs)  # about 1 s on a CPU
     assert est.config == "default" and reads_vibration(est)
-    d = diagnose(est, logs, effects=["imu_lag", "current_gain"], n_bootstrap=20)
-    assert "imu_lag" not in d.skipped and d.score("imu_lag") is not None
+    d = diagnose(est, logs, effects=["imu_lag", "current_gain"], settings=FitSettings(n_bootstrap=20))
+    assert "imu_lag" not in d.current.skipped and d.current.score("imu_lag") is not None
     assert reads_vibration(CorrectedCurrentModel(est, ["current_gain"]).fit(logs))
     physics = PhysicsCurrentModel("husky").fit(logs)
     assert not reads_vibration(physics)
-    d2 = diagnose(physics, logs, effects=["imu_lag", "current_gain"], n_bootstrap=20)
-    assert "imu_lag" in d2.skipped and d2.score("imu_lag") is None
+    d2 = diagnose(physics, logs, effects=["imu_lag", "current_gain"], settings=FitSettings(n_bootstrap=20))
+    assert "imu_lag" in d2.current.skipped and d2.current.score("imu_lag") is None

@@ -166,6 +166,7 @@ def test_calibrated_physics_fits_a_ground_per_label_only_when_the_calibration_co
 
 def test_a_robot_file_is_the_physics_robot_and_the_corrected_model_keeps_its_parameters(tmp_path, runs):
     from energy import LinearCurrentModel, diagnose, robot_preset
+    from energy.diagnosis import FitSettings
     from energy.params import write_robot_file
 
     rover = robot_preset("husky").replace(name="rover", mass_kg=60.0)
@@ -174,5 +175,6 @@ def test_a_robot_file_is_the_physics_robot_and_the_corrected_model_keeps_its_par
     source = model_under_diagnosis("physics", logs, robot=str(tmp_path / "rover.json"))
     assert source.model.robot_ == rover and "rover (robot file rover.json)" in source.note
     linear = LinearCurrentModel().fit(logs)  # not a physics model: the robot is the diagnosis' reference physics
-    d = diagnose(linear, logs, effects=["slope", "current_gain"], n_bootstrap=20, robot=tmp_path / "rover.json")
+    d = diagnose(linear, logs, effects=["slope", "current_gain"], robot=tmp_path / "rover.json",
+                 settings=FitSettings(n_bootstrap=20))
     assert d.corrected_model.robot == rover  # the parameters, not a path a saved model would need again

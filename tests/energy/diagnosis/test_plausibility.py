@@ -8,7 +8,7 @@ import pytest
 from diagnosis_scenarios import scenario
 
 from energy import PhysicsCurrentModel, TruthSimulator, robot_preset
-from energy.diagnosis import EFFECTS_CATALOGUE, EffectParameter, diagnose, effect
+from energy.diagnosis import EFFECTS_CATALOGUE, EffectParameter, FitSettings, diagnose, effect
 from energy.diagnosis.effects_physics import MassEffect
 from energy.sim import PAPER_GROUNDS, NoiseModel
 
@@ -90,20 +90,21 @@ def test_of_two_effects_the_data_cannot_tell_apart_the_plausible_one_is_chosen(p
     stand-in does not beat significantly on held-out runs, is chosen; the stand-in stays in the
     ranking, doubted, with its flags."""
     sc, logs, model = payload
-    d = diagnose(model, logs, terrain=sc.terrain, effects=[StandInMass(), "mass", "current_gain"], n_bootstrap=50)
-    assert d.chosen[0] == "mass" and "stand_in" not in d.chosen
-    first = d.score("stand_in")
+    d = diagnose(model, logs, terrain=sc.terrain, effects=[StandInMass(), "mass", "current_gain"],
+                 settings=FitSettings(n_bootstrap=50))
+    assert d.current.chosen[0] == "mass" and "stand_in" not in d.current.chosen
+    first = d.current.score("stand_in")
     assert first.doubtful and first.flags and "outside its plausible 0.9 … 1.1" in first.flags[0]
     assert first.alone_parameters["mass_scale"] == pytest.approx(65.0 / 50.0, rel=0.05)  # on its own: the payload
     assert first.alone_flags and "outside its plausible 0.9 … 1.1" in first.alone_flags[0]
     assert first.priors == {"mass_scale": 1.0} and first.plausible == {"mass_scale": (0.9, 1.1)}
-    mass = d.score("mass")
+    mass = d.current.score("mass")
     assert mass.parameters["mass_scale"] == pytest.approx(65.0 / 50.0, rel=0.05)
     assert not mass.doubtful and not mass.alone_flags and mass.alone_summary.startswith("mass +")
     assert not any("is doubtful" in s for s in d.verdict)  # what is chosen is plausible
     assert any(s.startswith("mass (parameter) explains") for s in d.verdict)
     # the current gain fits the 15 kg payload too (1.29 alone, a plausible sensor error): mass fits better
-    assert d.score("current_gain").alone_parameters["gain_left"] == pytest.approx(1.29, abs=0.03)
+    assert d.current.score("current_gain").alone_parameters["gain_left"] == pytest.approx(1.29, abs=0.03)
     doc = json.loads(d.write_json(tmp_path / "diagnosis.json").read_text())
     row = next(r for r in doc["ranking"] if r["name"] == "stand_in")
     assert row["doubtful"] is True and row["flags"] == list(first.flags)
@@ -117,8 +118,9 @@ def test_of_two_effects_the_data_cannot_tell_apart_the_plausible_one_is_chosen(p
 def test_without_a_plausible_alternative_the_verdict_says_so(payload):
     sc, logs, model = payload
     # nothing plausible is significant: the implausible stand-in is taken, doubted, and the verdict says so
-    d = diagnose(model, logs, terrain=sc.terrain, effects=[StandInMass(), "time_lag"], n_bootstrap=50)
-    assert d.chosen[0] == "stand_in"
+    d = diagnose(model, logs, terrain=sc.terrain, effects=[StandInMass(), "time_lag"],
+                 settings=FitSettings(n_bootstrap=50))
+    assert d.current.chosen[0] == "stand_in"
     doubt = next(s for s in d.verdict if s.startswith("stand_in is doubtful"))
     assert "No candidate with plausible values explains a similar held-out gap" in doubt
 
@@ -127,15 +129,17 @@ def test_a_plausible_candidate_goes_first_only_when_it_explains_a_comparable_par
     # the idle current explains 42 % of a payload's gap with a plausible value, the stand-in (the payload
     # itself, with a value outside its tight range) 96 %: not comparable, the stand-in goes first, doubted
     sc, logs, model = payload
-    d = diagnose(model, logs, terrain=sc.terrain, effects=[StandInMass(), "idle_current"], n_bootstrap=50)
-    assert d.chosen[0] == "stand_in" and d.score("stand_in").doubtful
-    assert d.score("idle_current").shrink_pct < 0.5 * d.score("stand_in").shrink_pct
+    d = diagnose(model, logs, terrain=sc.terrain, effects=[StandInMass(), "idle_current"],
+                 settings=FitSettings(n_bootstrap=50))
+    assert d.current.chosen[0] == "stand_in" and d.current.score("stand_in").doubtful
+    assert d.current.score("idle_current").shrink_pct < 0.5 * d.current.score("stand_in").shrink_pct
 
 
 def test_a_plausible_choice_is_not_doubted(payload):
     sc, logs, model = payload
-    d = diagnose(model, logs, terrain=sc.terrain, effects=["mass", "current_gain"], n_bootstrap=50)
-    assert d.chosen[0] == "mass"
-    s = d.score("mass")
+    d = diagnose(model, logs, terrain=sc.terrain, effects=["mass", "current_gain"],
+                 settings=FitSettings(n_bootstrap=50))
+    assert d.current.chosen[0] == "mass"
+    s = d.current.score("mass")
     assert not s.doubtful and s.flags == () and s.summary.startswith("mass +")
     assert not any("doubtful" in v for v in d.verdict)

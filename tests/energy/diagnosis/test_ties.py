@@ -11,10 +11,9 @@ import pytest
 from gain_samples import gained_logs_and_model
 
 from energy import PhysicsCurrentModel, TruthSimulator, ground_preset, robot_preset
-from energy.diagnosis import diagnose
+from energy.diagnosis import FitSettings, diagnose
 from energy.diagnosis.fit import SetScore
 from energy.diagnosis.noise import residual_noise
-from energy.diagnosis.report import DiagnosisReport
 from energy.diagnosis.selection import SIGNIFICANT_SHRINK_PCT, units_needed
 from energy.diagnosis.separating import MAX_DRIVE_S, MAX_REPEATS, manoeuvre_library, runs_to_order
 
@@ -44,7 +43,7 @@ def test_a_tie_is_named_with_both_explanations_and_kept_in_the_json(tied):
     _, d = tied
     assert len(d.ties) == 1
     tie = d.ties[0]
-    assert tie.chosen == d.chosen[0]  # the corrected model is built from the first of the set
+    assert tie.chosen == d.current.chosen[0]  # the corrected model is built from the first of the set
     assert set(tie.effects) == {"mass", "current_offset"}
     for alt in tie.alternatives:  # about as much as the chosen one: a fraction of a point of the gap
         assert abs(tie.added_pct[tie.chosen] - tie.added_pct[alt]) < SIGNIFICANT_SHRINK_PCT
@@ -84,14 +83,14 @@ def test_the_separating_drive_differs_most_and_a_simulated_repeat_agrees_with_it
     assert header[:3] == ["time_s", "v_mps", "omega_radps"] and table.shape == (len(p.time_s), 3 + 2 * len(drive.effects))
     np.testing.assert_allclose(table[:, 1], p.v_mps, atol=1e-5)
     # and diagnose's report writes it with its figure
-    names = {w.name for w in DiagnosisReport(d, logs=tuple(logs)).write(tmp_path / "out", on_figure_error="raise")}
+    names = {w.name for w in d.write(tmp_path / "out", on_figure_error="raise")}
     assert f"{drive.file_stem}.csv" in names and f"{drive.file_stem}.png" in names
 
 
 def test_a_clear_winner_is_no_tie():
     logs, model = gained_logs_and_model()
     d = diagnose(model, logs)
-    assert d.chosen and d.chosen[0] == "current_gain"
+    assert d.current.chosen and d.current.chosen[0] == "current_gain"
     assert d.ties == () and d.separating_drives == ()
     assert not any("cannot tell them apart" in s for s in d.verdict)
 
@@ -122,7 +121,7 @@ def test_when_nothing_is_significant_the_verdict_says_how_many_runs_would_settle
     logs = [dataclasses.replace(log, current_left_a=p[:, 0], current_right_a=p[:, 1]) for log, p in
             ((log, 1.03 * model.predict(log) + rng.normal(0.0, 0.4, (len(log), 2))) for log in logs)]
     d = diagnose(model, logs, effects=["current_gain", "current_offset", "mass"])
-    assert not d.chosen
+    assert not d.current.chosen
     more = d.more_data
     assert more["effect"] in {"current_gain", "current_offset", "mass"} and more["n_units"] == 3
     assert more["sentence"] in d.verdict
@@ -187,7 +186,8 @@ def test_on_a_map_the_library_drives_up_a_slope_where_a_payload_and_a_rolling_re
         pose = np.column_stack([np.full(t.size, 10.0 + 10 * k), np.minimum(5.0 + v * t, 55.0), np.full(t.size, np.pi / 2)])
         runs.append(laden.simulate_commands(t, np.full(t.size, v), 0 * t, ground="asphalt", seed=k, pose_xyh=pose))
     model = PhysicsCurrentModel("husky", "asphalt", fit_parameters=(), terrain=plane).fit(runs[:1])
-    d = diagnose(model, runs, effects=["mass", "rolling_resistance", "current_offset"], terrain=plane, seed=0)
+    d = diagnose(model, runs, effects=["mass", "rolling_resistance", "current_offset"], terrain=plane,
+                 settings=FitSettings(seed=0))
     (drive,) = d.separating_drives
     assert drive.effects[0] == "mass" and "rolling_resistance" in drive.effects
     (slope,) = [c for c in drive.library if c.name == "slope"]

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 from diagnosis_scenarios import scenario
 
-from energy.diagnosis import Effect, EffectParameter, diagnose
+from energy.diagnosis import Effect, EffectParameter, FitSettings, diagnose
 
 __all__ = ["CANDIDATES", "NoiseEffect", "small_scenario", "turning_diagnosis"]
 
@@ -39,4 +39,4 @@ def turning_diagnosis():
     sc = small_scenario(scenario("turning_resistance"))
     logs, model = sc.make_logs(0), sc.make_model(0)
     return logs, model, diagnose(model, logs, terrain=sc.terrain, effects=CANDIDATES + [NoiseEffect()],
-                                 n_bootstrap=50)
+                                 settings=FitSettings(n_bootstrap=50))

@@ -234,6 +234,7 @@ def test_diagnosing_mission_logs_names_what_the_truth_does_differently():
     # velocity lag behind the commanded speeds the log records), diagnosed against the planning physics
     # as given: the lag is named first and fitted near 0.1 s; the flat map's slope is credited nothing.
     from energy import PhysicsCurrentModel, diagnose
+    from energy.diagnosis import FitSettings
 
     tmap = flat_map((60, 60), 1.0, ground="grass")
     grass = {"grass": ground_preset("grass")}
@@ -245,10 +246,10 @@ def test_diagnosing_mission_logs_names_what_the_truth_does_differently():
         logs.append(simulate_mission(tmap, evaluate_route(cost, wp), ROBOT, Battery(20.0, 24.0), truth=sim,
                                      cost=cost).log)
     model = PhysicsCurrentModel("husky", "grass", fit_parameters=()).fit(logs)
-    d = diagnose(model, logs, terrain=tmap, seed=0, n_bootstrap=50)
-    assert d.chosen[0] == "time_lag"
-    assert d.score("time_lag").parameters["lag_s"] == pytest.approx(0.1, abs=0.03)
-    assert "slope" not in d.chosen
+    d = diagnose(model, logs, terrain=tmap, settings=FitSettings(seed=0, n_bootstrap=50))
+    assert d.current.chosen[0] == "time_lag"
+    assert d.current.score("time_lag").parameters["lag_s"] == pytest.approx(0.1, abs=0.03)
+    assert "slope" not in d.current.chosen
 
 
 def test_diagnosing_example_map_missions_against_the_planning_physics_names_the_lag():
@@ -260,6 +261,7 @@ def test_diagnosing_example_map_missions_against_the_planning_physics_names_the_
     # which pivot at many waypoints (the turn-aware planner's routes are nearly straight here and leave
     # too few transients to size the lag: 0.027 s from six of them).
     from energy import PhysicsCurrentModel, diagnose
+    from energy.diagnosis import FitSettings
     from planner import Lattice
     from terrain import example_map
 
@@ -274,6 +276,6 @@ def test_diagnosing_example_map_missions_against_the_planning_physics_names_the_
     driven = sorted({str(g) for log in logs for g in np.unique(log.ground)})
     assert driven == ["asphalt", "grass"]
     planning = PhysicsCurrentModel(ROBOT, {g: g for g in driven}, fit_parameters=(), terrain=tmap).fit(logs)
-    d = diagnose(planning, logs, terrain=tmap, seed=0, n_bootstrap=50)
-    assert d.chosen == ("time_lag",)
-    assert d.score("time_lag").parameters["lag_s"] == pytest.approx(0.1, abs=0.03)
+    d = diagnose(planning, logs, terrain=tmap, settings=FitSettings(seed=0, n_bootstrap=50))
+    assert d.current.chosen == ("time_lag",)
+    assert d.current.score("time_lag").parameters["lag_s"] == pytest.approx(0.1, abs=0.03)

@@ -9,7 +9,7 @@ import pytest
 from diagnosis_scenarios import POWER_ONLY_EFFECTS
 from power_samples import N_BOOT, small_power_scenario
 
-from energy.diagnosis import PowerDiagnosis, diagnose
+from energy.diagnosis import FitSettings, Stage, diagnose
 from terrawatt_base.errors import DataError
 
 
@@ -19,14 +19,15 @@ def found():
     out = {}
     for name in POWER_ONLY_EFFECTS:
         sc = small_power_scenario(name)
-        out[name] = (sc, diagnose(sc.make_model(1), sc.make_logs(1), terrain=sc.terrain, seed=1, n_bootstrap=N_BOOT))
+        out[name] = (sc, diagnose(sc.make_model(1), sc.make_logs(1), terrain=sc.terrain,
+                                  settings=FitSettings(seed=1, n_bootstrap=N_BOOT)))
     return out
 
 
 @pytest.mark.parametrize("name", sorted(POWER_ONLY_EFFECTS))
 def test_each_electrical_effect_is_found_first_with_its_parameters(found, name):
     sc, d = found[name]
-    assert isinstance(d.power, PowerDiagnosis)
+    assert isinstance(d.power, Stage)
     assert d.power.chosen[:1] == (name,) and d.power.ranking[0].name == name
     score = d.power.score(name)
     assert score.kind == "electrical" and score.shrink_pct > 80.0 and score.shrink_interval_pct[0] > 50.0
@@ -35,10 +36,10 @@ def test_each_electrical_effect_is_found_first_with_its_parameters(found, name):
         if key != "sensor_power_per_mps_w":  # the speed part of the sensor power is small beside the noise
             assert value == pytest.approx(truth[key], rel=0.2), key
     before, after = d.power.waterfall[0], d.power.waterfall[-1]
-    assert abs(before.energy_error_pct) > 3.0 and abs(after.energy_error_pct) < 0.2 * abs(before.energy_error_pct)
-    assert after.rmse_w < 0.5 * before.rmse_w
+    assert abs(before.error_pct) > 3.0 and abs(after.error_pct) < 0.2 * abs(before.error_pct)
+    assert after.rmse < 0.5 * before.rmse
     # the current stage finds nothing: the electronics and the copper loss draw no motor current
-    assert not d.found
+    assert not d.current.found
     # the plain-words verdict replaces "not identifiable from current logs" with the power findings
     assert not any("Not identifiable from current logs" in v for v in d.verdict)
     assert any(v.startswith(f"{name} (electrical;") for v in d.verdict)
@@ -66,10 +67,11 @@ def test_sensor_and_control_are_said_to_be_hard_to_tell_apart(found):
 
 def test_null_with_power_logs_chooses_no_electrical_effect():
     sc = small_power_scenario("null")
-    d = diagnose(sc.make_model(2), sc.make_logs(2), terrain=sc.terrain, seed=2, n_bootstrap=N_BOOT)
+    d = diagnose(sc.make_model(2), sc.make_logs(2), terrain=sc.terrain,
+                 settings=FitSettings(seed=2, n_bootstrap=N_BOOT))
     assert d.power is not None and d.power.chosen == () and not d.power.found
     assert any("No unmodelled electrical effect found" in v for v in d.verdict)
-    assert abs(d.power.before.energy_error_pct) < 1.0
+    assert abs(d.power.before.error_pct) < 1.0
     assert d.power.waterfall[0].label == "as given" and len(d.power.waterfall) == 1
 
 
@@ -80,21 +82,23 @@ def _strip(log):
 def test_logs_without_power_keep_todays_diagnosis_exactly():
     sc = small_power_scenario("sensor")
     model, logs = sc.make_model(0), sc.make_logs(0)
-    with_power = diagnose(model, logs, terrain=sc.terrain, seed=0, n_bootstrap=N_BOOT)
-    plain = diagnose(model, [_strip(lg) for lg in logs], terrain=sc.terrain, seed=0, n_bootstrap=N_BOOT)
+    with_power = diagnose(model, logs, terrain=sc.terrain, settings=FitSettings(seed=0, n_bootstrap=N_BOOT))
+    plain = diagnose(model, [_strip(lg) for lg in logs], terrain=sc.terrain,
+                     settings=FitSettings(seed=0, n_bootstrap=N_BOOT))
     assert plain.power is None and "power" not in plain.to_dict()
     assert plain.verdict[-1].startswith("Not identifiable from current logs") or any(
         v.startswith("Not identifiable from current logs") for v in plain.verdict)
-    assert not any(n in plain.skipped for n in POWER_ONLY_EFFECTS)
+    assert not any(n in plain.current.skipped for n in POWER_ONLY_EFFECTS)
     # the current stage is the same with and without the power fields
-    assert [s.to_dict() for s in with_power.ranking] == [s.to_dict() for s in plain.ranking]
-    assert with_power.chosen == plain.chosen and with_power.before == plain.before
-    assert [w.to_dict() for w in with_power.waterfall] == [w.to_dict() for w in plain.waterfall]
+    assert [s.to_dict() for s in with_power.current.ranking] == [s.to_dict() for s in plain.current.ranking]
+    assert with_power.current.chosen == plain.current.chosen and with_power.current.before == plain.current.before
+    assert [w.to_dict() for w in with_power.current.waterfall] == [w.to_dict() for w in plain.current.waterfall]
     # some logs without power: no power stage; asked for by name: said why
     mixed = [logs[0], _strip(logs[1]), logs[2]]
-    assert diagnose(model, mixed, seed=0, n_bootstrap=N_BOOT).power is None
-    asked = diagnose(model, [_strip(lg) for lg in logs], effects=["sensor", "idle_current"], seed=0, n_bootstrap=N_BOOT)
-    assert "battery voltage and pack current" in asked.skipped["sensor"]
+    assert diagnose(model, mixed, settings=FitSettings(seed=0, n_bootstrap=N_BOOT)).power is None
+    asked = diagnose(model, [_strip(lg) for lg in logs], effects=["sensor", "idle_current"],
+                     settings=FitSettings(seed=0, n_bootstrap=N_BOOT))
+    assert "battery voltage and pack current" in asked.current.skipped["sensor"]
 
 
 def test_bad_battery_voltage_is_a_clear_error():
@@ -103,7 +107,7 @@ def test_bad_battery_voltage_is_a_clear_error():
     zero = dataclasses.replace(logs[1], battery_voltage_v=np.where(np.arange(len(logs[1])) == 7, 0.0,
                                                                    logs[1].battery_voltage_v))
     with pytest.raises(DataError, match=r"logs\[1\].*battery_voltage_v must be > 0 V.*index 7"):
-        diagnose(model, [logs[0], zero, logs[2]], seed=0, n_bootstrap=N_BOOT)
+        diagnose(model, [logs[0], zero, logs[2]], settings=FitSettings(seed=0, n_bootstrap=N_BOOT))
     before = logs[0].battery_current_a.copy()
-    diagnose(model, logs, effects=["sensor"], seed=0, n_bootstrap=N_BOOT)
+    diagnose(model, logs, effects=["sensor"], settings=FitSettings(seed=0, n_bootstrap=N_BOOT))
     np.testing.assert_array_equal(logs[0].battery_current_a, before)  # nothing modified in place
