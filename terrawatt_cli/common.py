@@ -31,7 +31,7 @@ __all__ = [
     "Checked", "bounded", "positive", "add_battery_options", "battery_arg", "MAP_FLAGS", "add_map_options", "read_map_args", "map_arg", "add_point_options",
     "point_arg", "add_robot_options", "add_physics_robot_option", "robot_arg", "add_planner_options", "check_outputs",
     "INPUT_FLAGS", "input_paths",
-    "check_output_file", "draw_figure", "warn_figures", "add_dask_options", "check_dask_flags", "dask_client_arg", "compute_arg",
+    "check_output_file", "draw_figure", "warn_figures", "add_dask_options", "check_dask_flags", "compute_arg",
     "add_model_options", "check_model_flags", "load_model_arg",
 ]
 
@@ -239,24 +239,15 @@ def check_dask_flags(args: argparse.Namespace) -> None:
 
 
 @contextlib.contextmanager
-def dask_client_arg(args: argparse.Namespace) -> Iterator[Any]:
-    """The dask client of ``--workers N`` / ``--scheduler ADDRESS`` (closed on leaving), or None to run here."""
+def compute_arg(args: argparse.Namespace, *, progress: bool) -> Iterator[Compute]:
+    """Where ``--workers N`` / ``--scheduler ADDRESS`` say the tasks run, as a :class:`Compute`: the cluster opened
+    here, before any work, so a missing extra or an unreachable scheduler fails fast (closed on leaving); ``-v``
+    keeps dask's log."""
     if args.workers == 1 and args.scheduler is None:
-        yield None
+        yield Compute(progress=progress)
         return
     with dask_client(args.workers, args.scheduler, quiet=not args.verbose) as client:
-        yield client
-
-
-@contextlib.contextmanager
-def compute_arg(args: argparse.Namespace, *, progress: bool) -> Iterator[Compute]:
-    """Where ``--workers N`` / ``--scheduler ADDRESS`` say the tasks run, as a :class:`Compute` (the cluster opened
-    here, before any work, so a missing extra or an unreachable scheduler fails fast; closed on leaving)."""
-    with dask_client_arg(args) as client:
-        if client is None:
-            yield Compute(progress=progress)
-        else:
-            yield Compute(client=client, where=args.scheduler or "local cluster", progress=progress)
+        yield Compute(client=client, where=args.scheduler or "local cluster", progress=progress)
 
 
 def add_model_options(p: argparse.ArgumentParser, *, risk: bool = False) -> None:

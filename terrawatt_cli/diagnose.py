@@ -25,7 +25,7 @@ from .common import (
     add_map_options,
     check_dask_flags,
     check_outputs,
-    dask_client_arg,
+    compute_arg,
     input_paths,
     map_arg,
     robot_arg,
@@ -111,12 +111,11 @@ def run_diagnose(args: argparse.Namespace) -> int:
                                    robot=args.robot, ground=args.ground, without=args.without, seed=args.seed,
                                    progress=not args.quiet, names=_NAMES, terrain=terrain)
     print(f"model: {source.note}", flush=True)
-    with dask_client_arg(args) as client:
-        if client is not None:
-            print(f"scoring effects on {client_worker_count(client)} dask workers", flush=True)
+    with compute_arg(args, progress=not args.quiet) as compute:
+        if compute.client is not None:
+            print(f"scoring effects on {client_worker_count(compute.client)} dask workers", flush=True)
         diagnosis = diagnose(source, logs, terrain=terrain, effects=args.effects,
-                             settings=FitSettings(split=args.split, seed=args.seed), client=client,
-                             progress=not args.quiet)
+                             settings=FitSettings(split=args.split, seed=args.seed), compute=compute)
     with warn_figures():
         written = diagnosis.write(args.out)
     print(diagnosis.summary())

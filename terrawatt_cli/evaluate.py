@@ -24,7 +24,7 @@ from .common import (
     add_physics_robot_option,
     check_dask_flags,
     check_outputs,
-    dask_client_arg,
+    compute_arg,
     input_paths,
     warn_figures,
 )
@@ -105,14 +105,14 @@ def run_evaluate(args: argparse.Namespace) -> int:
     settings = adapt_settings_from_args(args)
     check_evaluation_options(args.models, protocol=args.protocol, band_hz=args.band, robot=args.robot, names=_NAMES)
     check_outputs(args.out, evaluation_files(args.protocol), input_paths(args))
-    with dask_client_arg(args) as client:  # before reading: a missing extra or scheduler fails fast
+    with compute_arg(args, progress=True) as compute:  # before reading: a missing extra or scheduler fails fast
         workers = "1 worker (serial)"
-        if client is not None:
-            workers = f"{len(client.nthreads())} dask workers ({args.scheduler or 'a local cluster'})"
+        if compute.client is not None:
+            workers = f"{len(compute.client.nthreads())} dask workers ({args.scheduler or 'a local cluster'})"
             print(f"evaluating on {workers}", flush=True)
         report = evaluate_report(logs_from_args(args, require_currents=True), args.models, protocol=args.protocol,
                                  variants=args.variants, settings=settings, seed=args.seed, band_hz=args.band,
-                                 robot=args.robot, client=client, progress=True, names=_NAMES)
+                                 robot=args.robot, compute=compute, names=_NAMES)
     with warn_figures():
         written = report.write(args.out)
     print(report.summary())

@@ -9,8 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from terrawatt_base.checks import check_bool, fmt_number
-from terrawatt_base.dask_client import check_client
+from terrawatt_base.checks import check_instance, fmt_number
+from terrawatt_base.dask_client import Compute
 from terrawatt_base.errors import DataError, InvalidParameterError, NotFittedError
 
 from ..logs import InteractionLog
@@ -116,7 +116,7 @@ def _candidates(model: Any, logs: list[InteractionLog], items: list[Effect], eff
 
 def diagnose(model: CurrentModel | ModelUnderDiagnosis, logs: InteractionLog | Sequence[InteractionLog], *,
              terrain: Any = None, effects: Sequence[Any] | None = None, settings: FitSettings | None = None,
-             robot: Any = None, client: Any = None, progress: bool = False) -> Diagnosis:
+             robot: Any = None, compute: Compute | None = None) -> Diagnosis:
     """Diagnose the gap between a current model and logged currents.
 
     Every candidate effect (the catalogue, or ``effects``) that the model lacks is fitted on
@@ -154,11 +154,10 @@ def diagnose(model: CurrentModel | ModelUnderDiagnosis, logs: InteractionLog | S
         Robot of the reference physics for a model that is not a physics model: a preset name,
         a robot file or a RobotParams (:func:`energy.params.robot_params`); a
         ModelUnderDiagnosis brings its own.
-    client : distributed.Client, optional
-        Score the candidate sets as tasks on this dask client (the data go to each worker
-        once); the result equals the serial one.
-    progress : bool
-        Show a progress bar per batch of candidate sets.
+    compute : Compute, optional
+        Where the candidate sets are scored and whether a bar shows per batch of them
+        (:class:`terrawatt_base.dask_client.Compute`; on dask the data go to each worker once; the
+        result equals the serial one).
 
     Returns
     -------
@@ -168,10 +167,10 @@ def diagnose(model: CurrentModel | ModelUnderDiagnosis, logs: InteractionLog | S
     ------
     InvalidParameterError
         Not a CurrentModel, bad logs, settings that are not a FitSettings, an effect that is
-        neither a name nor an Effect, a ``client`` that is not a ``distributed.Client``, a
-        ``robot`` beside a ModelUnderDiagnosis.
+        neither a name nor an Effect, not a ``Compute``, a ``robot`` beside a ModelUnderDiagnosis; an
+        unreachable scheduler.
     OptionalDependencyError
-        A ``client`` without dask.distributed installed.
+        A cluster asked for without dask.distributed installed.
     NotFittedError
         An unfitted model.
     UnknownNameError
@@ -191,8 +190,7 @@ def diagnose(model: CurrentModel | ModelUnderDiagnosis, logs: InteractionLog | S
     if not isinstance(settings, FitSettings):
         raise InvalidParameterError(f"settings must be a FitSettings, got {type(settings).__name__!r}")
     items = _checked_logs(logs)
-    progress = check_bool("progress", progress)
-    check_client(client, "candidate effect sets")
+    compute = Compute() if compute is None else check_instance("compute", compute, Compute)
     if robot is not None:
         robot = robot_spec(robot)  # a robot file read once: the corrected model keeps its parameters, not a path
     terrain = check_terrain(terrain)
@@ -203,17 +201,20 @@ def diagnose(model: CurrentModel | ModelUnderDiagnosis, logs: InteractionLog | S
     usable, learned, skipped = _candidates(model, items, [e for e in resolved if e.kind != "electrical"], effects,
                                            terrain, robot)
     power = None
-    if electrical and not power_logs_missing(items):
-        power = power_stage(model, items, electrical, sp, settings, robot=robot, client=client, progress=progress)
-    elif electrical and effects is not None:  # asked for by name on logs without battery power
-        skipped.update({e.name: e.unsupported(items, terrain) or "" for e in electrical})
-    data = prepare_data(model, items, usable + ([learned] if learned is not None else []), physics_basis(model, robot))
-    case = _Case(model, items, terrain, robot, settings, sp, data)
-    runner = SetRunner(data, sp, client=client, progress=progress)
-    try:
-        sel, final, learned_note = _select(case, usable, learned, runner, learned_requested=effects is not None)
-    finally:
-        runner.close()
+    with compute.session() as (client, _):
+        if electrical and not power_logs_missing(items):
+            power = power_stage(model, items, electrical, sp, settings, robot=robot, client=client,
+                                progress=compute.progress)
+        elif electrical and effects is not None:  # asked for by name on logs without battery power
+            skipped.update({e.name: e.unsupported(items, terrain) or "" for e in electrical})
+        data = prepare_data(model, items, usable + ([learned] if learned is not None else []),
+                            physics_basis(model, robot))
+        case = _Case(model, items, terrain, robot, settings, sp, data)
+        runner = SetRunner(data, sp, client=client, progress=compute.progress)
+        try:
+            sel, final, learned_note = _select(case, usable, learned, runner, learned_requested=effects is not None)
+        finally:
+            runner.close()
 
     localisation = localise_gap(items, predictions, terrain=terrain, section_s=settings.section_s)
     ties = _ties(sel, data)

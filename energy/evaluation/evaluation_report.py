@@ -11,7 +11,8 @@ from pathlib import Path
 from typing import Any
 
 from terrawatt_base.atomic import save_figure
-from terrawatt_base.checks import check_bool, check_choice, check_seed, option_names
+from terrawatt_base.checks import check_choice, check_instance, check_seed, option_names
+from terrawatt_base.dask_client import Compute
 from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.figure_file import draw_figure
 
@@ -250,8 +251,7 @@ def _check_runs_long_enough(items: Sequence[InteractionLog], settings: AdaptSett
 def evaluate_report(logs: Sequence[InteractionLog], kinds: Sequence[str] | None = None, *, protocol: str = "loo",
                     variants: Sequence[str] = EVALUATION_VARIANTS, settings: AdaptSettings | None = None,
                     seed: int | None = 0, band_hz: Sequence[float] | None = None, robot: Any = None,
-                    client: Any = None, progress: bool = False,
-                    names: Mapping[str, str] | None = None) -> EvaluationReport:
+                    compute: Compute | None = None, names: Mapping[str, str] | None = None) -> EvaluationReport:
     """New models of ``kinds`` (:func:`~energy.models.new_current_model`) evaluated on ``logs`` by ``protocol``.
 
     ``"loo"``: leave one run out (:func:`evaluate_current_models`, over ``variants``);
@@ -273,10 +273,9 @@ def evaluate_report(logs: Sequence[InteractionLog], kinds: Sequence[str] | None 
         trigger with ``"adapt"``); none for ``"loo"``.
     seed : int or None
         Seed of the learned kinds.
-    client : distributed.Client, optional
-        Run the folds on a dask cluster.
-    progress : bool
-        A progress bar over the folds.
+    compute : Compute, optional
+        Where the folds run and whether a bar shows over them (:class:`terrawatt_base.dask_client.Compute`;
+        default here, no bar).
 
     Returns
     -------
@@ -292,7 +291,7 @@ def evaluate_report(logs: Sequence[InteractionLog], kinds: Sequence[str] | None 
     kinds = check_evaluation_options(kinds, protocol=protocol, band_hz=band_hz, robot=robot, names=names)
     band = check_learned_band(band_hz, kinds, name=option_names(names, EVALUATION_NAMES)["band_hz"])
     seed = check_seed(seed)
-    progress = check_bool("progress", progress)
+    compute = Compute() if compute is None else check_instance("compute", compute, Compute)
     if protocol == "loo" and settings is not None:
         raise InvalidParameterError("settings applies to the adapt and few-shot protocols, got protocol 'loo'")
     if protocol != "loo":
@@ -305,10 +304,11 @@ def evaluate_report(logs: Sequence[InteractionLog], kinds: Sequence[str] | None 
     models = {k: new_current_model(k, seed=seed, band_hz=band if k in LEARNED_KINDS else None,
                                    robot=robot if k == "physics" else None) for k in kinds}
     t0 = time.perf_counter()
-    if protocol == "loo":
-        result: EvaluationResult | AdaptationResult = evaluate_current_models(
-            items, models, variants=variants, progress=progress, client=client)
-    else:
-        run = evaluate_adaptation if protocol == "adapt" else evaluate_few_shot
-        result = run(items, models, settings=settings, progress=progress, client=client)
+    with compute.session() as (client, _):
+        if protocol == "loo":
+            result: EvaluationResult | AdaptationResult = evaluate_current_models(
+                items, models, variants=variants, progress=compute.progress, client=client)
+        else:
+            run = evaluate_adaptation if protocol == "adapt" else evaluate_few_shot
+            result = run(items, models, settings=settings, progress=compute.progress, client=client)
     return EvaluationReport(result, protocol, kinds, tuple(items), time.perf_counter() - t0)

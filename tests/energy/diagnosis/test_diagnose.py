@@ -10,6 +10,7 @@ from turning_samples import CANDIDATES, NoiseEffect, small_scenario, turning_dia
 
 from energy import CurrentModel, InteractionLog, LinearCurrentModel
 from energy.diagnosis import CorrectedCurrentModel, Diagnosis, FitSettings, diagnose
+from terrawatt_base.dask_client import Compute
 from terrawatt_base.errors import DataError, InvalidParameterError, NotFittedError, UnknownNameError
 
 
@@ -178,9 +179,8 @@ def test_on_a_dask_client_equals_serial(turning):
     cands = CANDIDATES + [NoiseEffect()]
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=":0") as cl, \
             distributed.Client(cl) as client:
-        d = diagnose(model, logs, terrain=scenario("turning_resistance").terrain, effects=cands, client=client,
-                     progress=True,
-                     settings=FitSettings(n_bootstrap=50))
+        d = diagnose(model, logs, terrain=scenario("turning_resistance").terrain, effects=cands,
+                     compute=Compute(client=client, progress=True), settings=FitSettings(n_bootstrap=50))
     assert [s.name for s in d.current.ranking] == [s.name for s in serial.current.ranking]
     assert d.current.chosen == serial.current.chosen
     for a, b in zip(d.current.ranking, serial.current.ranking):
@@ -189,12 +189,10 @@ def test_on_a_dask_client_equals_serial(turning):
     assert d.current.after.rmse == pytest.approx(serial.current.after.rmse, abs=1e-12)
 
 
-def test_a_client_that_is_not_one(turning):
+def test_a_compute_that_is_not_one(turning):
     logs, model, _ = turning
-    with pytest.raises(InvalidParameterError, match="client must be None"):
-        diagnose(model, logs, effects=CANDIDATES, client="tcp://localhost:8786")
-    with pytest.raises(InvalidParameterError, match="progress"):
-        diagnose(model, logs, effects=CANDIDATES, progress="yes")
+    with pytest.raises(InvalidParameterError, match="compute must be a Compute"):
+        diagnose(model, logs, effects=CANDIDATES, compute="tcp://localhost:8786")
 
 
 def test_the_learned_correction_is_reported_but_never_added_unless_asked_for():
