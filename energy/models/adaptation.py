@@ -75,8 +75,8 @@ from terrawatt_base.errors import DataError, InvalidParameterError
 from ..logs import InteractionLog
 from .base import CurrentModel, ModelRecord, TrainingSummary, check_logs, log_currents
 from .forecast import CurrentForecast
-from .uncertainty import MAX_RUN_VARIANCE, check_covariances, regime_design, sample_weights_s
 from .loading import model_class
+from .uncertainty import MAX_RUN_VARIANCE, check_covariances, regime_design, sample_weights_s
 
 __all__ = [
     "ADAPT_METHODS",
@@ -85,6 +85,8 @@ __all__ = [
     "MIN_ADAPT_SECONDS",
     "MIN_ADAPT_SAMPLES",
     "AdaptedCurrentModel",
+    "evidence_parts",
+    "regime_basis",
 ]
 
 #: Update methods of :class:`AdaptedCurrentModel`, the default first.
@@ -105,8 +107,12 @@ MIN_ADAPT_SAMPLES = 10
 _trapezoid = getattr(np, "trapezoid", None) or np.trapz
 
 
-def _regime_design(log: InteractionLog, side: int, turn_scale_radps: float) -> np.ndarray:
-    """``[1, |v|, m, m * outer]`` per sample for one side (0 left, 1 right)."""
+def regime_basis(log: InteractionLog, side: int, turn_scale_radps: float) -> np.ndarray:
+    """``[1, |v|, m, m * outer]`` per sample for one side (0 left, 1 right): the basis of the ``"regime"`` update.
+
+    ``m = tanh(|omega| / turn_scale_radps)`` (0 straight, 1 turning); ``outer`` is 1 on the
+    outer side of a turn. Shape (N, 4).
+    """
     m = np.tanh(np.abs(log.omega_radps) / turn_scale_radps)
     sign = -1.0 if side == 0 else 1.0
     outer = (sign * log.omega_radps > 0).astype(np.float64)
@@ -119,7 +125,7 @@ def _precision(cov: np.ndarray) -> np.ndarray:
     return np.linalg.inv(cov + 1e-3 * scale * np.eye(cov.shape[0]))
 
 
-def _evidence_parts(base: CurrentModel, logs: Sequence[InteractionLog], preds: Sequence[np.ndarray],
+def evidence_parts(base: CurrentModel, logs: Sequence[InteractionLog], preds: Sequence[np.ndarray],
                    truths: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Per side, over a prefix: its residual charge and the variances of that charge the base model's interval expects.
 
@@ -314,7 +320,7 @@ class AdaptedCurrentModel(CurrentModel):
     def _evidence(self, base: CurrentModel, logs: list[InteractionLog], preds: list[np.ndarray],
                   truths: list[np.ndarray]) -> np.ndarray:
         """Per side, the factor the correction is scaled by (``shrink``, module docstring), in [0, 1]."""
-        obs, noise, run, ground = _evidence_parts(base, logs, preds, truths)
+        obs, noise, run, ground = evidence_parts(base, logs, preds, truths)
         # a new ground and no ground spread learned (one training ground): the prior cannot say; the evidence can
         unlearned = base.interval_.new_ground_cov is None and not base.knows_ground(logs[0].meta.ground_label)
         if self.shrink == "prior" and not unlearned:
@@ -443,7 +449,7 @@ class AdaptedCurrentModel(CurrentModel):
             return regime_design(log, side, self.base_model.interval_.turn_scale_radps, pred[:, side])
         if self.method == "gain_offset":
             return np.column_stack([pred[:, side], np.ones(len(log))])
-        return _regime_design(log, side, self.turn_scale_radps)
+        return regime_basis(log, side, self.turn_scale_radps)
 
     # --------------------------------------------------------------- predict
     @property
