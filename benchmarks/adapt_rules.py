@@ -44,6 +44,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))  # the generator beside
 
 from energy import read_borealtc  # noqa: E402
 from energy.evaluation import run_names, trim_to_overlap  # noqa: E402
+from energy.logs import rest_samples  # noqa: E402
 from energy.models import AdaptedCurrentModel, new_current_model  # noqa: E402
 from energy.models.adaptation import evidence_parts, regime_basis  # noqa: E402
 from energy.models.base import log_currents  # noqa: E402
@@ -63,9 +64,23 @@ def _stats(log: Any) -> dict[str, float]:
             "rest": float(np.average(np.abs(log.v_mps) < 0.05, weights=w))}
 
 
-def _basis_integrals(log: Any) -> np.ndarray:
-    """``integral(regime_basis(log, k) dt)`` per side, shape (2, 4) (A s per unit coefficient)."""
-    return np.stack([_trapezoid(regime_basis(log, k, TURN_SCALE_RADPS), log.time_s, axis=0) for k in range(2)])
+def _basis(log: Any, k: int, moving: bool) -> np.ndarray:
+    """The update's regime basis of side ``k``; with ``moving``, zero at rest (as the interval's regime design)."""
+    x = regime_basis(log, k, TURN_SCALE_RADPS)
+    return x * (~rest_samples(log))[:, None] if moving else x
+
+
+def _basis_integrals(log: Any, moving: bool = False) -> np.ndarray:
+    """``integral(basis(log, k) dt)`` per side, shape (2, 4) (A s per unit coefficient)."""
+    return np.stack([_trapezoid(_basis(log, k, moving), log.time_s, axis=0) for k in range(2)])
+
+
+def _normal_equations(log: Any, residual: np.ndarray, moving: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Per side the update's time-weighted ``X'WX`` (2, 4, 4) and ``X'Wr`` (2, 4) (the ridge adds ``prior_s``)."""
+    w = sample_weights_s(log)
+    xs = [_basis(log, k, moving) for k in range(2)]
+    return (np.stack([(x * w[:, None]).T @ x for x in xs]),
+            np.stack([(x * w[:, None]).T @ residual[:, k] for k, x in enumerate(xs)]))
 
 
 def fold_cache(model: Any, runs: list, names: list[str], adapt_seconds: tuple[float, ...]) -> dict[str, Any]:
@@ -76,7 +91,8 @@ def fold_cache(model: Any, runs: list, names: list[str], adapt_seconds: tuple[fl
         y = log_currents(r)
         out["runs"].append({"name": name, "q_true": _trapezoid(y, r.time_s, axis=0),
                             "q_base": _trapezoid(p, r.time_s, axis=0), "xint": _basis_integrals(r),
-                            "duration_s": r.duration_s, "stats": _stats(r)})
+                            "xint_moving": _basis_integrals(r, moving=True), "duration_s": r.duration_s,
+                            "stats": _stats(r)})
     for a, run_a in enumerate(runs):
         t = run_a.time_s
         for T in adapt_seconds:
@@ -92,7 +108,9 @@ def fold_cache(model: Any, runs: list, names: list[str], adapt_seconds: tuple[fl
             gain = np.where(q_pred > 0, q_true / np.where(q_pred > 0, q_pred, 1.0), 1.0)
             out["prefixes"].append({"a": a, "T": float(T), "coef": upd.coefficients_.copy(), "obs": obs, "E": noise,
                                     "R": run_v, "G": ground_v, "gain": gain, "xint": _basis_integrals(prefix),
-                                    "stats": _stats(prefix), "nonneg": upd.nonnegative_})
+                                    "stats": _stats(prefix), "nonneg": upd.nonnegative_,
+                                    "normal": _normal_equations(prefix, yy - pp, False),
+                                    "normal_moving": _normal_equations(prefix, yy - pp, True)})
             for b, run_b in enumerate(runs):  # the exact (clamped) plain update, to size the clamp left out
                 if b != a:
                     out["pairs"][(a, float(T), b)] = _trapezoid(upd.correct(run_b, base[b]), run_b.time_s, axis=0)
@@ -161,17 +179,63 @@ def rule_evidence(p: dict, f: dict) -> np.ndarray:
         return _scaled(np.where(p["obs"] ** 2 > 0, 1.0 - (p["E"] + p["R"]) / p["obs"] ** 2, 0.0), p)
 
 
+def ridge(p: dict[str, Any], prior_s: float = 20.0, moving: bool = False) -> np.ndarray:
+    """The plain update's coefficients (2, 4) refitted with penalty ``prior_s`` (s), on the basis zero at rest or not."""
+    xtx, xtr = p["normal_moving" if moving else "normal"]
+    return np.stack([np.linalg.solve(xtx[k] + prior_s * np.eye(4), xtr[k]) for k in range(2)])
+
+
+def _prior_factor(p: dict[str, Any]) -> np.ndarray:
+    total = p["G"] + p["R"] + p["E"]
+    return np.divide(p["G"], total, out=np.zeros(2), where=total > 0)
+
+
+def rule_prior_moving(p: dict, f: dict) -> tuple[np.ndarray, str]:
+    """The default's factor on an update whose basis is zero at rest (fitted and applied on driving only)."""
+    if not np.any(p["G"] > 0):
+        return rule_evidence(p, f), "xint"
+    return ridge(p, moving=True) * _prior_factor(p)[:, None], "xint_moving"
+
+
+def scale_rule(c: float) -> Rule:
+    """The plain update scaled by ``c`` on both sides."""
+    return lambda p, f: p["coef"] * c
+
+
+def penalty_rule(prior_s: float) -> Rule:
+    """The plain update with the ridge penalty ``prior_s`` (s of data showing no residual)."""
+    return lambda p, f: ridge(p, prior_s)
+
+
+#: Rule families with one free constant, chosen on the inner folds (the held-out ground never seen).
+FAMILIES: dict[str, dict[float, Rule]] = {
+    "scale (LOGO)": {c: scale_rule(c) for c in np.round(np.linspace(0.0, 1.0, 11), 2)},
+    "penalty (LOGO)": {s_: penalty_rule(s_) for s_ in (20.0, 40.0, 80.0, 160.0, 320.0, 640.0, 1280.0, 1e9)},
+}
+
+
+def choose(rules: dict[float, Rule], folds: list[dict[str, Any]], tie_pts: float = 1.0) -> float:
+    """The constant whose worst harm over ``folds`` (median or p90, 20 and 40 s) is least; ties within ``tie_pts``
+    broken by the lower mean error (the choice rule of the defaults)."""
+    scored = {k: harm(r, folds) for k, r in rules.items()}
+    best = min(v[0] for v in scored.values())
+    return min((k for k, v in scored.items() if v[0] <= best + tie_pts), key=lambda k: scored[k][1])
+
+
 def charges(rule: Rule, fold: dict[str, Any]) -> list[dict[str, Any]]:
     """Per (prefix, scored run): the total-charge error % of the rule, unadapted and the gain baseline."""
     rows = []
     runs = fold["runs"]
     for p in fold["prefixes"]:
         coef = rule(p, fold)
+        key = "xint"
+        if isinstance(coef, tuple):  # (coefficients, "xint_moving"): a rule on the basis zero at rest
+            coef, key = coef
         for b, rb in enumerate(runs):
             if b == p["a"]:
                 continue
             q_true = float(np.sum(rb["q_true"]))
-            side = rb["q_base"] + np.sum(coef * rb["xint"], axis=1)
+            side = rb["q_base"] + np.sum(coef * rb[key], axis=1)
             rows.append({"a": p["a"], "b": b, "T": p["T"], "q_true": q_true,
                          "err": 100.0 * abs(float(np.sum(side)) - q_true) / q_true,
                          "err_side": 100.0 * (side - rb["q_true"]) / q_true,
@@ -238,8 +302,10 @@ def diagnose(fold: dict[str, Any], rule: Rule, T: float, top: int = 3) -> dict[s
     per = []
     for p in (q for q in fold["prefixes"] if q["T"] == T):
         mine = [r for r in rows if r["a"] == p["a"]]
-        coef = rule(p, fold)
-        parts = np.mean([coef * runs[r["b"]]["xint"] / r["q_true"] * 100.0 for r in mine], axis=0)  # (2, 4) % of charge
+        coef, key = rule(p, fold), "xint"
+        if isinstance(coef, tuple):
+            coef, key = coef
+        parts = np.mean([coef * runs[r["b"]][key] / r["q_true"] * 100.0 for r in mine], axis=0)  # (2, 4) % of charge
         per.append({"prefix": runs[p["a"]]["name"], "harm_pts": float(np.mean([r["err"] - r["base"] for r in mine])),
                     "signed_base_pct": float(np.mean([100.0 * (np.sum(runs[r["b"]]["q_base"]) - r["q_true"]) / r["q_true"]
                                                       for r in mine])),
@@ -282,12 +348,20 @@ def clamp_effect(fold: dict[str, Any]) -> float:
 
 
 def table(cache: dict[str, Any], rules: dict[str, Rule], Ts: tuple[float, ...]) -> dict[str, Any]:
-    """Per outer ground (then pooled) and T: median / p90 % of every rule, unadapted and the gain baseline."""
-    out: dict[str, Any] = {}
+    """Per outer ground (then pooled) and T: median / p90 % of every rule, unadapted and the gain baseline; the
+    families' constants chosen per outer ground on its inner folds (``chosen``)."""
+    out: dict[str, Any] = {"chosen": {}}
     pooled: dict[str, list[dict[str, Any]]] = {}
     for g, fold in cache["outer"].items():
         out[g] = {}
-        for name, rule in rules.items():
+        here = dict(rules)
+        inner = list(cache["inner"].get(g, {}).values())
+        for fam, members in FAMILIES.items():
+            if inner:
+                k = choose(members, inner)
+                out["chosen"].setdefault(fam, {})[g] = float(k)
+                here[fam] = members[k]
+        for name, rule in here.items():
             rows = charges(rule, fold)
             pooled.setdefault(name, []).extend(rows)
             out[g][name] = {f"{T:g}": summary(rows, "err", T) for T in Ts}
@@ -300,7 +374,8 @@ def table(cache: dict[str, Any], rules: dict[str, Rule], Ts: tuple[float, ...]) 
 
 
 def report(cache: dict[str, Any], Ts: tuple[float, ...], out: Path | None) -> None:
-    rules = {"unadapted": rule_unadapted, "none": rule_none, "evidence": rule_evidence, "prior": rule_prior}
+    rules = {"unadapted": rule_unadapted, "none": rule_none, "evidence": rule_evidence, "prior": rule_prior,
+             "prior, moving": rule_prior_moving}
     print("clamp left out of the cached charges, worst points per ground: " +
           ", ".join(f"{g} {clamp_effect(f):.2f}" for g, f in cache["outer"].items()))
     diag = {g: [diagnose(f, rule_prior, T) for T in Ts if T >= 20] for g, f in cache["outer"].items()}
@@ -309,7 +384,10 @@ def report(cache: dict[str, Any], Ts: tuple[float, ...], out: Path | None) -> No
             _print_diagnosis(g, d)
     tab = table(cache, rules, Ts)
     print("\ntotal charge median / p90 % per T " + " ".join(f"{T:g} s" for T in Ts))
+    print("constants chosen on the inner folds: " + "; ".join(f"{fam}: {v}" for fam, v in tab["chosen"].items()))
     for g, per in tab.items():
+        if g == "chosen":
+            continue
         for name, cells in per.items():
             print(f"{g:10s} {name:12s} " + "   ".join("{:6.1f} / {:6.1f}".format(*cells[f"{T:g}"]) for T in Ts))
     if out is not None:

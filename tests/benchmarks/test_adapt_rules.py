@@ -52,8 +52,23 @@ def test_cached_charges_equal_the_library_update(fold, shrink):
         assert r["base"] == pytest.approx(100.0 * abs(q0 - q_true) / q_true, abs=1e-6)
 
 
+def test_the_cached_normal_equations_refit_the_update(fold):
+    ar, _, _, cache = fold
+    for p in cache["prefixes"]:
+        np.testing.assert_allclose(ar.ridge(p, 20.0), p["coef"], rtol=1e-8, atol=1e-10)
+        assert not np.allclose(ar.ridge(p, 200.0), p["coef"])  # a larger penalty moves less
+
+
 def test_the_unadapted_rule_is_the_base_and_harm_is_measured_against_it(fold):
     ar, _, _, cache = fold
     rows = ar.charges(ar.rule_unadapted, cache)
     assert all(r["err"] == pytest.approx(r["base"]) for r in rows)
     assert ar.harm(ar.rule_unadapted, [cache], (20.0,))[0] == pytest.approx(0.0)
+
+
+def test_report_prints_and_writes_every_rule(fold, tmp_path, capsys):
+    ar, _, _, cache = fold
+    ar.report({"outer": {"c": cache}, "inner": {"c": {"c": cache}}}, (20.0,), tmp_path / "rules.json")
+    text = capsys.readouterr().out
+    assert "prior, moving" in text and "scale (LOGO)" in text and "gain" in text
+    assert (tmp_path / "rules.json").exists()
