@@ -197,6 +197,37 @@ def rule_prior_moving(p: dict, f: dict) -> tuple[np.ndarray, str]:
     return ridge(p, moving=True) * _prior_factor(p)[:, None], "xint_moving"
 
 
+#: From the update's basis ``[1, |v|, m, m outer]`` to the partition ``[1 - m, |v|, m, m outer]``: straight driving and
+#: turning get one level each, so a prefix that only pivots (m = 1) leaves the straight level at its prior, zero.
+PARTITION = np.array([[1.0, 0, 0, 0], [0, 1, 0, 0], [-1, 0, 1, 0], [0, 0, 0, 1]])
+
+
+def partition_coef(p: dict[str, Any], prior_s: float = 20.0, moving: bool = False) -> np.ndarray:
+    """The update refitted on the regime partition (same ridge), returned as coefficients of the update's basis."""
+    xtx, xtr = p["normal_moving" if moving else "normal"]
+    m = PARTITION
+    return np.stack([m @ np.linalg.solve(m.T @ xtx[k] @ m + prior_s * np.eye(4), m.T @ xtr[k]) for k in range(2)])
+
+
+def rule_partition(p: dict, f: dict) -> np.ndarray:
+    """The plain update on the regime partition: a regime the prefix did not drive keeps no correction."""
+    return partition_coef(p)
+
+
+def rule_partition_prior(p: dict, f: dict) -> np.ndarray:
+    """The regime partition shrunk by the default's factor."""
+    if not np.any(p["G"] > 0):
+        lam = rule_evidence(p, f)[:, 0] / np.where(p["coef"][:, 0] != 0, p["coef"][:, 0], 1.0)
+        return partition_coef(p) * np.clip(lam, 0.0, 1.0)[:, None]
+    return partition_coef(p) * _prior_factor(p)[:, None]
+
+
+def rule_partition_moving_prior(p: dict, f: dict) -> tuple[np.ndarray, str]:
+    """The regime partition on driving only (no correction at rest), shrunk by the default's factor."""
+    lam = _prior_factor(p) if np.any(p["G"] > 0) else np.ones(2)
+    return partition_coef(p, moving=True) * lam[:, None], "xint_moving"
+
+
 def scale_rule(c: float) -> Rule:
     """The plain update scaled by ``c`` on both sides."""
     return lambda p, f: p["coef"] * c
@@ -373,9 +404,25 @@ def table(cache: dict[str, Any], rules: dict[str, Rule], Ts: tuple[float, ...]) 
     return out
 
 
+#: The updates the held-out choice picks among (the default first).
+CANDIDATES = ("prior", "evidence", "none", "partition", "partition, prior")
+
+
+def held_out_choice(cache: dict[str, Any], rules: dict[str, Rule]) -> dict[str, str]:
+    """Per ground, the candidate :func:`choose` picks on the *other* grounds' few-shot folds (this one never seen)."""
+    out = {}
+    for g in cache["outer"]:
+        others = [f for h, f in cache["outer"].items() if h != g]
+        names = list(CANDIDATES)
+        pick = choose(dict(enumerate(rules[n] for n in names)), others)
+        out[g] = names[int(pick)]
+    return out
+
+
 def report(cache: dict[str, Any], Ts: tuple[float, ...], out: Path | None) -> None:
     rules = {"unadapted": rule_unadapted, "none": rule_none, "evidence": rule_evidence, "prior": rule_prior,
-             "prior, moving": rule_prior_moving}
+             "prior, moving": rule_prior_moving, "partition": rule_partition,
+             "partition, prior": rule_partition_prior, "partition, moving, prior": rule_partition_moving_prior}
     print("clamp left out of the cached charges, worst points per ground: " +
           ", ".join(f"{g} {clamp_effect(f):.2f}" for g, f in cache["outer"].items()))
     diag = {g: [diagnose(f, rule_prior, T) for T in Ts if T >= 20] for g, f in cache["outer"].items()}
@@ -383,10 +430,13 @@ def report(cache: dict[str, Any], Ts: tuple[float, ...], out: Path | None) -> No
         for d in ds:
             _print_diagnosis(g, d)
     tab = table(cache, rules, Ts)
+    tab["held_out_choice"] = held_out_choice(cache, rules) if len(cache["outer"]) > 2 else {}
+    print("update chosen on the other grounds (worst harm at 20 / 40 s, ties within 1 point by the mean error): "
+          + ", ".join(f"{g}: {n}" for g, n in tab["held_out_choice"].items()))
     print("\ntotal charge median / p90 % per T " + " ".join(f"{T:g} s" for T in Ts))
     print("constants chosen on the inner folds: " + "; ".join(f"{fam}: {v}" for fam, v in tab["chosen"].items()))
     for g, per in tab.items():
-        if g == "chosen":
+        if g in ("chosen", "held_out_choice"):
             continue
         for name, cells in per.items():
             print(f"{g:10s} {name:12s} " + "   ".join("{:6.1f} / {:6.1f}".format(*cells[f"{T:g}"]) for T in Ts))
