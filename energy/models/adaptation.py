@@ -17,6 +17,14 @@ run and scored on the rest; the README has the table):
   no residual. A regime the prefix did not drive (no turn in the first 20 s) keeps its
   correction near zero instead of inheriting one fitted on the other regime — the failure of
   a single gain.
+- ``"partition"``: ``"regime"`` on the partition ``[1 - m, |v|, m, m * outer]``: straight
+  driving (and rest) and turning get a level each instead of sharing one offset, so a prefix
+  that only pivots in place (``m`` = 1 throughout) leaves straight driving at its prior, zero;
+  with ``"regime"`` the ridge splits a pivot's residual between the offset and the turning
+  column and half of it lands on straight driving and rest. Few shots on the BorealTC grounds
+  (``benchmarks/adapt_rules.py``): chosen over ``"regime"`` on every ground held out of the
+  choice, with ``shrink="prior"`` (snow's p90 at 20 s 70.4 -> 59.7 %, unadapted 62.2 %); not yet
+  the default (docs/results.md).
 - ``"gain"``: one gain per side, the measured over the predicted charge of the prefix (the
   baseline every update is compared with).
 - ``"gain_offset"``: per side ``a * predicted + b`` by the same ridge as ``"regime"``.
@@ -90,7 +98,7 @@ __all__ = [
 ]
 
 #: Update methods of :class:`AdaptedCurrentModel`, the default first.
-ADAPT_METHODS = ("regime", "gain", "gain_offset", "bayes")
+ADAPT_METHODS = ("regime", "gain", "gain_offset", "bayes", "partition")
 #: What a ``"bayes"`` update forecasts: the rest of the same run, or other runs on the ground.
 ADAPT_SCOPES = ("run", "ground")
 #: How a point update is scaled by its evidence (module docstring), the default first.
@@ -172,7 +180,7 @@ class AdaptedCurrentModel(CurrentModel):
     base : CurrentModel
         The fitted model to adapt (an AdaptedCurrentModel is unwrapped to its own base:
         corrections are refitted, not stacked).
-    method : {"regime", "gain", "gain_offset"}
+    method : {"regime", "partition", "gain", "gain_offset", "bayes"}
         The update (see the module docstring).
     prior_s : float
         Ridge penalty of ``"regime"`` / ``"gain_offset"``, in seconds of data showing no
@@ -194,7 +202,8 @@ class AdaptedCurrentModel(CurrentModel):
     ----------
     coefficients_ : numpy.ndarray, shape (2, k)
         Per side: the gain (``"gain"``), ``[gain - 1, offset]`` (``"gain_offset"``) or the
-        regime residual coefficients ``[offset A, per |v| A s/m, turning A, outer turning A]``;
+        regime residual coefficients ``[offset A, per |v| A s/m, turning A, outer turning A]``
+        (``"partition"``: ``[straight level A, per |v| A s/m, turning level A, outer turning A]``);
         ``"bayes"``: the posterior mean of the ground offset then the run offset (8 columns).
     posterior_cov_ : numpy.ndarray, shape (2, 8, 8), or None
         ``"bayes"``: their posterior covariance per side.
@@ -221,7 +230,7 @@ class AdaptedCurrentModel(CurrentModel):
     """
 
     _param_names = ("base", "method", "prior_s", "turn_scale_radps", "min_seconds", "scope", "shrink")
-    _n_coefficients: ClassVar[dict[str, int]] = {"regime": 4, "gain": 1, "gain_offset": 2, "bayes": 8}
+    _n_coefficients: ClassVar[dict[str, int]] = {"regime": 4, "gain": 1, "gain_offset": 2, "bayes": 8, "partition": 4}
 
     def __init__(self, base: CurrentModel, method: str = "regime", prior_s: float = 20.0,
                  turn_scale_radps: float = 0.3, min_seconds: float = MIN_ADAPT_SECONDS, scope: str = "run",
@@ -449,7 +458,10 @@ class AdaptedCurrentModel(CurrentModel):
             return regime_design(log, side, self.base_model.interval_.turn_scale_radps, pred[:, side])
         if self.method == "gain_offset":
             return np.column_stack([pred[:, side], np.ones(len(log))])
-        return regime_basis(log, side, self.turn_scale_radps)
+        x = regime_basis(log, side, self.turn_scale_radps)
+        if self.method == "partition":  # straight and turning levels apart: [1 - m, |v|, m, m * outer]
+            x[:, 0] -= x[:, 2]
+        return x
 
     # --------------------------------------------------------------- predict
     @property

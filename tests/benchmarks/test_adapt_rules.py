@@ -36,14 +36,17 @@ def fold():
     return ar, est, runs, ar.fold_cache(est, runs, ["c/0", "c/1", "c/2"], (20.0,))
 
 
-@pytest.mark.parametrize("shrink", ["prior", "evidence", "none"])
-def test_cached_charges_equal_the_library_update(fold, shrink):
+@pytest.mark.parametrize(("method", "shrink"), [("regime", "prior"), ("regime", "evidence"), ("regime", "none"),
+                                                ("partition", "none"), ("partition", "prior")])
+def test_cached_charges_equal_the_library_update(fold, method, shrink):
     ar, est, runs, cache = fold
-    rule = {"prior": ar.rule_prior, "evidence": ar.rule_evidence, "none": ar.rule_none}[shrink]
+    rule = {("regime", "prior"): ar.rule_prior, ("regime", "evidence"): ar.rule_evidence,
+            ("regime", "none"): ar.rule_none, ("partition", "none"): ar.rule_partition,
+            ("partition", "prior"): ar.rule_partition_prior}[method, shrink]
     rows = ar.charges(rule, cache)
     assert len(rows) == 6 and ar.clamp_effect(cache) < 1e-9
     for r in rows:
-        upd = AdaptedCurrentModel(est, shrink=shrink, scope="ground").fit(runs[r["a"]].slice(0.0, 20.0))
+        upd = AdaptedCurrentModel(est, method=method, shrink=shrink, scope="ground").fit(runs[r["a"]].slice(0.0, 20.0))
         b = runs[r["b"]]
         q = float(np.sum(np.trapezoid(upd.predict(b), b.time_s, axis=0)))
         q_true = float(np.sum(np.trapezoid(log_currents(b), b.time_s, axis=0)))
