@@ -126,8 +126,13 @@ def load_logs(kind: str, data: Path, seed: int) -> list:
     return [trim_to_overlap(lg) for lg in ground_logs(draw_grounds(6, seed), 4, seed)]
 
 
-def build_cache(logs: list, seed: int, adapt_seconds: tuple[float, ...], inner: bool) -> dict[str, Any]:
-    """Outer folds (each ground held out) and, with ``inner``, the inner folds of each outer training set."""
+def build_cache(logs: list, seed: int, adapt_seconds: tuple[float, ...], inner: bool,
+                cache: dict[str, Any] | None = None, save: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
+    """Outer folds (each ground held out) and, with ``inner``, the inner folds of each outer training set.
+
+    ``cache``: a partial one to complete (the grounds it holds are kept); ``save`` is called after each outer fold,
+    so a long build stopped half-way resumes where it stopped.
+    """
     names = run_names(logs)
     grounds = list(dict.fromkeys(str(lg.meta.ground_label) for lg in logs))
     models: dict[frozenset, Any] = {}
@@ -141,12 +146,18 @@ def build_cache(logs: list, seed: int, adapt_seconds: tuple[float, ...], inner: 
         idx = [i for i, lg in enumerate(logs) if str(lg.meta.ground_label) == target]
         return fold_cache(models[train], [logs[i] for i in idx], [names[i] for i in idx], adapt_seconds)
 
-    cache: dict[str, Any] = {"version": CACHE_VERSION, "grounds": grounds, "outer": {}, "inner": {}}
+    if cache is None:
+        cache = {"version": CACHE_VERSION, "grounds": grounds, "outer": {}, "inner": {}, "complete": False}
     for g in grounds:
+        if g in cache["outer"]:
+            continue
         train = frozenset(grounds) - {g}
         cache["outer"][g] = fold(train, g)
         if inner and len(train) >= 2:
             cache["inner"][g] = {h: fold(train - {h}, h) for h in sorted(train)}
+        cache["complete"] = len(cache["outer"]) == len(grounds)
+        if save is not None:
+            save(cache)
     return cache
 
 
@@ -305,19 +316,23 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, help="JSON of every number")
     args = ap.parse_args(argv)
     Ts = tuple(args.adapt_seconds)
+    cache = None
     if args.cache is not None and args.cache.exists():
         cache = pickle.loads(args.cache.read_bytes())
         if cache.get("version") != CACHE_VERSION:
             ap.error(f"{args.cache} is a cache of version {cache.get('version')!r}, not {CACHE_VERSION}: delete it")
-    else:
-        t0 = time.perf_counter()
-        cache = build_cache(load_logs(args.data, args.path, args.seed), args.seed, Ts, not args.no_inner)
-        print(f"cache built in {time.perf_counter() - t0:.0f} s")
+
+    def save(c: dict[str, Any]) -> None:
         if args.cache is not None:
             args.cache.parent.mkdir(parents=True, exist_ok=True)
             tmp = args.cache.with_suffix(".tmp")
-            tmp.write_bytes(pickle.dumps(cache))
+            tmp.write_bytes(pickle.dumps(c))
             tmp.replace(args.cache)
+
+    if cache is None or not cache.get("complete", True):
+        t0 = time.perf_counter()
+        cache = build_cache(load_logs(args.data, args.path, args.seed), args.seed, Ts, not args.no_inner, cache, save)
+        print(f"cache built in {time.perf_counter() - t0:.0f} s")
     report(cache, Ts, args.out)
     return 0
 
