@@ -23,8 +23,10 @@ run and scored on the rest; the README has the table):
   with ``"regime"`` the ridge splits a pivot's residual between the offset and the turning
   column and half of it lands on straight driving and rest. Few shots on the BorealTC grounds
   (``benchmarks/adapt_rules.py``): chosen over ``"regime"`` on every ground held out of the
-  choice, with ``shrink="prior"`` (snow's p90 at 20 s 70.4 -> 59.7 %, unadapted 62.2 %); not yet
-  the default (docs/results.md).
+  choice, with ``shrink="prior"`` (snow's p90 at 20 s 70.4 -> 59.7 %, unadapted 62.2 %); on the
+  independent generator's grounds, whose prefixes never pivot in place, it gains less than
+  ``"regime"`` (pooled 22.4 / 74.2 against 18.7 / 56.7 %), so it is not the default
+  (docs/results.md).
 - ``"gain"``: one gain per side, the measured over the predicted charge of the prefix (the
   baseline every update is compared with).
 - ``"gain_offset"``: per side ``a * predicted + b`` by the same ridge as ``"regime"``.
