@@ -17,6 +17,16 @@ run and scored on the rest; the README has the table):
   no residual. A regime the prefix did not drive (no turn in the first 20 s) keeps its
   correction near zero instead of inheriting one fitted on the other regime — the failure of
   a single gain.
+- ``"partition"``: ``"regime"`` on the partition ``[1 - m, |v|, m, m * outer]``: straight
+  driving (and rest) and turning get a level each instead of sharing one offset, so a prefix
+  that only pivots in place (``m`` = 1 throughout) leaves straight driving at its prior, zero;
+  with ``"regime"`` the ridge splits a pivot's residual between the offset and the turning
+  column and half of it lands on straight driving and rest. Few shots on the BorealTC grounds
+  (``benchmarks/adapt_rules.py``): chosen over ``"regime"`` on every ground held out of the
+  choice, with ``shrink="prior"`` (snow's p90 at 20 s 70.4 -> 59.7 %, unadapted 62.2 %); on the
+  independent generator's grounds, whose prefixes never pivot in place, it gains less than
+  ``"regime"`` (pooled 22.4 / 74.2 against 18.7 / 56.7 %), so it is not the default
+  (docs/results.md).
 - ``"gain"``: one gain per side, the measured over the predicted charge of the prefix (the
   baseline every update is compared with).
 - ``"gain_offset"``: per side ``a * predicted + b`` by the same ridge as ``"regime"``.
@@ -75,8 +85,8 @@ from terrawatt_base.errors import DataError, InvalidParameterError
 from ..logs import InteractionLog
 from .base import CurrentModel, ModelRecord, TrainingSummary, check_logs, log_currents
 from .forecast import CurrentForecast
-from .uncertainty import MAX_RUN_VARIANCE, check_covariances, regime_design, sample_weights_s
 from .loading import model_class
+from .uncertainty import MAX_RUN_VARIANCE, check_covariances, regime_design, sample_weights_s
 
 __all__ = [
     "ADAPT_METHODS",
@@ -85,10 +95,12 @@ __all__ = [
     "MIN_ADAPT_SECONDS",
     "MIN_ADAPT_SAMPLES",
     "AdaptedCurrentModel",
+    "evidence_parts",
+    "regime_basis",
 ]
 
 #: Update methods of :class:`AdaptedCurrentModel`, the default first.
-ADAPT_METHODS = ("regime", "gain", "gain_offset", "bayes")
+ADAPT_METHODS = ("regime", "gain", "gain_offset", "bayes", "partition")
 #: What a ``"bayes"`` update forecasts: the rest of the same run, or other runs on the ground.
 ADAPT_SCOPES = ("run", "ground")
 #: How a point update is scaled by its evidence (module docstring), the default first.
@@ -105,8 +117,12 @@ MIN_ADAPT_SAMPLES = 10
 _trapezoid = getattr(np, "trapezoid", None) or np.trapz
 
 
-def _regime_design(log: InteractionLog, side: int, turn_scale_radps: float) -> np.ndarray:
-    """``[1, |v|, m, m * outer]`` per sample for one side (0 left, 1 right)."""
+def regime_basis(log: InteractionLog, side: int, turn_scale_radps: float) -> np.ndarray:
+    """``[1, |v|, m, m * outer]`` per sample for one side (0 left, 1 right): the basis of the ``"regime"`` update.
+
+    ``m = tanh(|omega| / turn_scale_radps)`` (0 straight, 1 turning); ``outer`` is 1 on the
+    outer side of a turn. Shape (N, 4).
+    """
     m = np.tanh(np.abs(log.omega_radps) / turn_scale_radps)
     sign = -1.0 if side == 0 else 1.0
     outer = (sign * log.omega_radps > 0).astype(np.float64)
@@ -119,7 +135,7 @@ def _precision(cov: np.ndarray) -> np.ndarray:
     return np.linalg.inv(cov + 1e-3 * scale * np.eye(cov.shape[0]))
 
 
-def _evidence_parts(base: CurrentModel, logs: Sequence[InteractionLog], preds: Sequence[np.ndarray],
+def evidence_parts(base: CurrentModel, logs: Sequence[InteractionLog], preds: Sequence[np.ndarray],
                    truths: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Per side, over a prefix: its residual charge and the variances of that charge the base model's interval expects.
 
@@ -166,7 +182,7 @@ class AdaptedCurrentModel(CurrentModel):
     base : CurrentModel
         The fitted model to adapt (an AdaptedCurrentModel is unwrapped to its own base:
         corrections are refitted, not stacked).
-    method : {"regime", "gain", "gain_offset"}
+    method : {"regime", "partition", "gain", "gain_offset", "bayes"}
         The update (see the module docstring).
     prior_s : float
         Ridge penalty of ``"regime"`` / ``"gain_offset"``, in seconds of data showing no
@@ -188,7 +204,8 @@ class AdaptedCurrentModel(CurrentModel):
     ----------
     coefficients_ : numpy.ndarray, shape (2, k)
         Per side: the gain (``"gain"``), ``[gain - 1, offset]`` (``"gain_offset"``) or the
-        regime residual coefficients ``[offset A, per |v| A s/m, turning A, outer turning A]``;
+        regime residual coefficients ``[offset A, per |v| A s/m, turning A, outer turning A]``
+        (``"partition"``: ``[straight level A, per |v| A s/m, turning level A, outer turning A]``);
         ``"bayes"``: the posterior mean of the ground offset then the run offset (8 columns).
     posterior_cov_ : numpy.ndarray, shape (2, 8, 8), or None
         ``"bayes"``: their posterior covariance per side.
@@ -215,7 +232,7 @@ class AdaptedCurrentModel(CurrentModel):
     """
 
     _param_names = ("base", "method", "prior_s", "turn_scale_radps", "min_seconds", "scope", "shrink")
-    _n_coefficients: ClassVar[dict[str, int]] = {"regime": 4, "gain": 1, "gain_offset": 2, "bayes": 8}
+    _n_coefficients: ClassVar[dict[str, int]] = {"regime": 4, "gain": 1, "gain_offset": 2, "bayes": 8, "partition": 4}
 
     def __init__(self, base: CurrentModel, method: str = "regime", prior_s: float = 20.0,
                  turn_scale_radps: float = 0.3, min_seconds: float = MIN_ADAPT_SECONDS, scope: str = "run",
@@ -314,7 +331,7 @@ class AdaptedCurrentModel(CurrentModel):
     def _evidence(self, base: CurrentModel, logs: list[InteractionLog], preds: list[np.ndarray],
                   truths: list[np.ndarray]) -> np.ndarray:
         """Per side, the factor the correction is scaled by (``shrink``, module docstring), in [0, 1]."""
-        obs, noise, run, ground = _evidence_parts(base, logs, preds, truths)
+        obs, noise, run, ground = evidence_parts(base, logs, preds, truths)
         # a new ground and no ground spread learned (one training ground): the prior cannot say; the evidence can
         unlearned = base.interval_.new_ground_cov is None and not base.knows_ground(logs[0].meta.ground_label)
         if self.shrink == "prior" and not unlearned:
@@ -443,7 +460,10 @@ class AdaptedCurrentModel(CurrentModel):
             return regime_design(log, side, self.base_model.interval_.turn_scale_radps, pred[:, side])
         if self.method == "gain_offset":
             return np.column_stack([pred[:, side], np.ones(len(log))])
-        return _regime_design(log, side, self.turn_scale_radps)
+        x = regime_basis(log, side, self.turn_scale_radps)
+        if self.method == "partition":  # straight and turning levels apart: [1 - m, |v|, m, m * outer]
+            x[:, 0] -= x[:, 2]
+        return x
 
     # --------------------------------------------------------------- predict
     @property

@@ -89,6 +89,32 @@ def test_straight_prefix_does_not_rescale_turns_unlike_the_gain(base):
     assert _charge_error_pct(run, regime.predict(run), 40.0) < 0.5 * _charge_error_pct(run, gain.predict(run), 40.0)
 
 
+def test_partition_keeps_a_pivot_correction_off_straight_driving_unlike_the_regime_update(base):
+    # the first 20 s pivot in place drawing 1 A more than the model says; then straight driving as predicted
+    t = np.arange(0.0, 60.0, 0.1)
+    pivot = t < 20.0
+    w = np.where(pivot, 0.6 * np.sign(np.sin(2 * np.pi * t / 6.0) + 1e-9), 0.0)
+    v = np.where(pivot, 0.0, 0.5)
+    ta = np.arange(0.0, t[-1] + 0.005, 0.01)
+    log = InteractionLog(t, v, w, np.ones_like(t), np.ones_like(t), ta, np.full(ta.size, 9.81),
+                         meta=LogMeta(source="g/pivot.csv", ground_label="g"))
+    log = _on_base(base, log, offset_a=0.0)
+    extra = np.tanh(np.abs(w) / 0.3)[:, None]
+    log = dataclasses.replace(log, current_left_a=log.current_left_a + extra[:, 0],
+                              current_right_a=log.current_right_a + extra[:, 0])
+    head = _head(log, 20.0)
+    regime = base.adapt(head)
+    partition = base.adapt(head, method="partition")
+    straight = ~pivot
+    moved = {k: (m.predict(log) - base.predict(log))[straight].mean(axis=0) for k, m in
+             (("regime", regime), ("partition", partition))}
+    assert np.all(moved["regime"] > 0.2)  # the shared offset carries the pivot's residual onto straights
+    assert np.all(np.abs(moved["partition"]) < 0.02)  # straight driving keeps its prior: no correction
+    turned = (partition.predict(head) - base.predict(head)).mean(axis=0)
+    assert np.all((turned > 0.3) & (turned < 1.0))  # the pivots are corrected (20 s of data against a 20 s prior)
+    assert np.all(np.abs(partition.coefficients_[:, 0]) < 0.02)  # the straight level
+
+
 def test_gain_method_is_measured_over_predicted_charge_of_the_prefix(base):
     run = _log(6, offset_a=0.4)
     head = _head(run, 15.0)

@@ -1,0 +1,465 @@
+"""Few-shot update rules in seconds: the fitted folds' charges cached once, every rule scored on them.
+
+``terrawatt evaluate --protocol few-shot`` adapts a model trained on the other grounds on the
+first T s of one run of a held-out ground and scores each of the ground's other runs, whole
+(total charge of both sides). A point update of the ``"regime"`` kind is linear in its
+coefficients: the adapted charge of a scored run ``b`` on side ``k`` is its unadapted charge
+plus ``coef_k @ integral(regime_basis(b, k) dt)``. So this benchmark fits each fold once,
+caches per run the measured and unadapted charges and the integrals of the regime basis, and
+per prefix the plain update's coefficients and its evidence (:func:`energy.models.adaptation.
+evidence_parts`: the residual charge ``obs`` and the variances ``E`` noise, ``R`` run, ``G``
+ground); a rule (a per-side factor, or new coefficients) then costs milliseconds. The clamp
+at 0 of a log whose currents are all >= 0 is left out of the cached charges (its effect on the
+plain update is printed: ``clamp``).
+
+Folds: each ground held out in turn (outer), and inside each outer fold's training grounds
+each ground held out in turn (inner: trained on the training grounds but one), so that a rule
+with a free constant can choose it without the held-out ground.
+
+Printed (``--out``: JSON of every number): the diagnosis (per ground and T, which prefixes
+the update harms most, on which side, and how the prefix's motion differs from the scored
+runs'), then per ground and T the total-charge error median / p90 % of every rule against
+the unadapted forecast and the gain baseline.
+
+Usage::
+
+    python benchmarks/adapt_rules.py --data borealtc --cache out/rules_boreal.pkl --out out/rules_boreal.json
+    python benchmarks/adapt_rules.py --data generated --cache out/rules_gen.pkl --out out/rules_gen.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import pickle
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the generator beside this file
+
+from energy import read_borealtc  # noqa: E402
+from energy.evaluation import run_names, trim_to_overlap  # noqa: E402
+from energy.logs import rest_samples  # noqa: E402
+from energy.models import AdaptedCurrentModel, new_current_model  # noqa: E402
+from energy.models.adaptation import evidence_parts, regime_basis  # noqa: E402
+from energy.models.base import log_currents  # noqa: E402
+from energy.models.uncertainty import sample_weights_s  # noqa: E402
+
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "borealtc"
+CACHE_VERSION = 1
+TURN_SCALE_RADPS = 0.3  # the update's default
+_trapezoid = getattr(np, "trapezoid", None) or np.trapz
+
+
+def _stats(log: Any) -> dict[str, float]:
+    """How a stretch was driven: mean |v| (m/s), mean turning share m, share of time at rest (|v| < 0.05 m/s)."""
+    w = sample_weights_s(log)
+    m = np.tanh(np.abs(log.omega_radps) / TURN_SCALE_RADPS)
+    return {"v_mps": float(np.average(np.abs(log.v_mps), weights=w)), "turning": float(np.average(m, weights=w)),
+            "rest": float(np.average(np.abs(log.v_mps) < 0.05, weights=w))}
+
+
+def _basis(log: Any, k: int, moving: bool) -> np.ndarray:
+    """The update's regime basis of side ``k``; with ``moving``, zero at rest (as the interval's regime design)."""
+    x = regime_basis(log, k, TURN_SCALE_RADPS)
+    return x * (~rest_samples(log))[:, None] if moving else x
+
+
+def _basis_integrals(log: Any, moving: bool = False) -> np.ndarray:
+    """``integral(basis(log, k) dt)`` per side, shape (2, 4) (A s per unit coefficient)."""
+    return np.stack([_trapezoid(_basis(log, k, moving), log.time_s, axis=0) for k in range(2)])
+
+
+def _normal_equations(log: Any, residual: np.ndarray, moving: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Per side the update's time-weighted ``X'WX`` (2, 4, 4) and ``X'Wr`` (2, 4) (the ridge adds ``prior_s``)."""
+    w = sample_weights_s(log)
+    xs = [_basis(log, k, moving) for k in range(2)]
+    return (np.stack([(x * w[:, None]).T @ x for x in xs]),
+            np.stack([(x * w[:, None]).T @ residual[:, k] for k, x in enumerate(xs)]))
+
+
+def fold_cache(model: Any, runs: list, names: list[str], adapt_seconds: tuple[float, ...]) -> dict[str, Any]:
+    """Everything a rule needs of one few-shot fold (``model`` fitted without ``runs``' ground)."""
+    base = [model.predict(r) for r in runs]
+    out: dict[str, Any] = {"runs": [], "prefixes": [], "pairs": {}}
+    for r, name, p in zip(runs, names, base):
+        y = log_currents(r)
+        out["runs"].append({"name": name, "q_true": _trapezoid(y, r.time_s, axis=0),
+                            "q_base": _trapezoid(p, r.time_s, axis=0), "xint": _basis_integrals(r),
+                            "xint_moving": _basis_integrals(r, moving=True), "duration_s": r.duration_s,
+                            "stats": _stats(r)})
+    for a, run_a in enumerate(runs):
+        t = run_a.time_s
+        for T in adapt_seconds:
+            if run_a.duration_s < T:
+                continue
+            prefix = run_a.slice(float(t[0]), float(t[0] + T))
+            upd = AdaptedCurrentModel(model, shrink="none", scope="ground").fit(prefix)
+            pp = model.predict(prefix)
+            yy = log_currents(prefix)
+            obs, noise, run_v, ground_v = evidence_parts(model, [prefix], [pp], [yy])
+            q_pred = _trapezoid(pp, prefix.time_s, axis=0)
+            q_true = _trapezoid(yy, prefix.time_s, axis=0)
+            gain = np.where(q_pred > 0, q_true / np.where(q_pred > 0, q_pred, 1.0), 1.0)
+            out["prefixes"].append({"a": a, "T": float(T), "coef": upd.coefficients_.copy(), "obs": obs, "E": noise,
+                                    "R": run_v, "G": ground_v, "gain": gain, "xint": _basis_integrals(prefix),
+                                    "stats": _stats(prefix), "nonneg": upd.nonnegative_,
+                                    "normal": _normal_equations(prefix, yy - pp, False),
+                                    "normal_moving": _normal_equations(prefix, yy - pp, True)})
+            for b, run_b in enumerate(runs):  # the exact (clamped) plain update, to size the clamp left out
+                if b != a:
+                    out["pairs"][(a, float(T), b)] = _trapezoid(upd.correct(run_b, base[b]), run_b.time_s, axis=0)
+    return out
+
+
+def load_logs(kind: str, data: Path, seed: int) -> list:
+    """The shared BorealTC logs, or the independent generator's grounds (``forecast_grounds.py``, 6 x 4 runs)."""
+    if kind == "borealtc":
+        return [trim_to_overlap(lg) for lg in read_borealtc(data)]
+    from forecast_grounds import draw_grounds, ground_logs
+
+    return [trim_to_overlap(lg) for lg in ground_logs(draw_grounds(6, seed), 4, seed)]
+
+
+def build_cache(logs: list, seed: int, adapt_seconds: tuple[float, ...], inner: bool,
+                cache: dict[str, Any] | None = None, save: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
+    """Outer folds (each ground held out) and, with ``inner``, the inner folds of each outer training set.
+
+    ``cache``: a partial one to complete (the grounds it holds are kept); ``save`` is called after each outer fold,
+    so a long build stopped half-way resumes where it stopped.
+    """
+    names = run_names(logs)
+    grounds = list(dict.fromkeys(str(lg.meta.ground_label) for lg in logs))
+    models: dict[frozenset, Any] = {}
+
+    def fold(train: frozenset, target: str) -> dict[str, Any]:
+        if train not in models:
+            t0 = time.perf_counter()
+            models[train] = new_current_model("estimator", seed=seed).fit(
+                [lg for lg in logs if str(lg.meta.ground_label) in train])
+            print(f"  fitted on {sorted(train)} in {time.perf_counter() - t0:.0f} s", flush=True)
+        idx = [i for i, lg in enumerate(logs) if str(lg.meta.ground_label) == target]
+        return fold_cache(models[train], [logs[i] for i in idx], [names[i] for i in idx], adapt_seconds)
+
+    if cache is None:
+        cache = {"version": CACHE_VERSION, "grounds": grounds, "outer": {}, "inner": {}, "complete": False}
+    for g in grounds:
+        if g in cache["outer"]:
+            continue
+        train = frozenset(grounds) - {g}
+        cache["outer"][g] = fold(train, g)
+        if inner and len(train) >= 2:
+            cache["inner"][g] = {h: fold(train - {h}, h) for h in sorted(train)}
+        cache["complete"] = len(cache["outer"]) == len(grounds)
+        if save is not None:
+            save(cache)
+    return cache
+
+
+# ------------------------------------------------------------------ rules
+# A rule maps (prefix entry, fold) to the coefficients (2, 4) added on the scored runs.
+Rule = Callable[[dict[str, Any], dict[str, Any]], np.ndarray]
+
+
+def _scaled(lam: np.ndarray, p: dict[str, Any]) -> np.ndarray:
+    return p["coef"] * np.clip(np.nan_to_num(lam, nan=0.0), 0.0, 1.0)[:, None]
+
+
+def rule_none(p: dict, f: dict) -> np.ndarray:
+    return p["coef"]
+
+
+def rule_unadapted(p: dict, f: dict) -> np.ndarray:
+    return np.zeros_like(p["coef"])
+
+
+def rule_prior(p: dict, f: dict) -> np.ndarray:
+    """The default: ``G / (G + R + E)``; without a learned ground spread the evidence shrink."""
+    if not np.any(p["G"] > 0):
+        return rule_evidence(p, f)
+    return _scaled(p["G"] / (p["G"] + p["R"] + p["E"]), p)
+
+
+def rule_evidence(p: dict, f: dict) -> np.ndarray:
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return _scaled(np.where(p["obs"] ** 2 > 0, 1.0 - (p["E"] + p["R"]) / p["obs"] ** 2, 0.0), p)
+
+
+def ridge(p: dict[str, Any], prior_s: float = 20.0, moving: bool = False) -> np.ndarray:
+    """The plain update's coefficients (2, 4) refitted with penalty ``prior_s`` (s), on the basis zero at rest or not."""
+    xtx, xtr = p["normal_moving" if moving else "normal"]
+    return np.stack([np.linalg.solve(xtx[k] + prior_s * np.eye(4), xtr[k]) for k in range(2)])
+
+
+def _prior_factor(p: dict[str, Any]) -> np.ndarray:
+    total = p["G"] + p["R"] + p["E"]
+    return np.divide(p["G"], total, out=np.zeros(2), where=total > 0)
+
+
+def rule_prior_moving(p: dict, f: dict) -> tuple[np.ndarray, str]:
+    """The default's factor on an update whose basis is zero at rest (fitted and applied on driving only)."""
+    if not np.any(p["G"] > 0):
+        return rule_evidence(p, f), "xint"
+    return ridge(p, moving=True) * _prior_factor(p)[:, None], "xint_moving"
+
+
+#: From the update's basis ``[1, |v|, m, m outer]`` to the partition ``[1 - m, |v|, m, m outer]``: straight driving and
+#: turning get one level each, so a prefix that only pivots (m = 1) leaves the straight level at its prior, zero.
+PARTITION = np.array([[1.0, 0, 0, 0], [0, 1, 0, 0], [-1, 0, 1, 0], [0, 0, 0, 1]])
+
+
+def partition_coef(p: dict[str, Any], prior_s: float = 20.0, moving: bool = False) -> np.ndarray:
+    """The update refitted on the regime partition (same ridge), returned as coefficients of the update's basis."""
+    xtx, xtr = p["normal_moving" if moving else "normal"]
+    m = PARTITION
+    return np.stack([m @ np.linalg.solve(m.T @ xtx[k] @ m + prior_s * np.eye(4), m.T @ xtr[k]) for k in range(2)])
+
+
+def rule_partition(p: dict, f: dict) -> np.ndarray:
+    """The plain update on the regime partition: a regime the prefix did not drive keeps no correction."""
+    return partition_coef(p)
+
+
+def rule_partition_prior(p: dict, f: dict) -> np.ndarray:
+    """The regime partition shrunk by the default's factor."""
+    if not np.any(p["G"] > 0):
+        lam = rule_evidence(p, f)[:, 0] / np.where(p["coef"][:, 0] != 0, p["coef"][:, 0], 1.0)
+        return partition_coef(p) * np.clip(lam, 0.0, 1.0)[:, None]
+    return partition_coef(p) * _prior_factor(p)[:, None]
+
+
+def rule_partition_moving_prior(p: dict, f: dict) -> tuple[np.ndarray, str]:
+    """The regime partition on driving only (no correction at rest), shrunk by the default's factor."""
+    lam = _prior_factor(p) if np.any(p["G"] > 0) else np.ones(2)
+    return partition_coef(p, moving=True) * lam[:, None], "xint_moving"
+
+
+def scale_rule(c: float) -> Rule:
+    """The plain update scaled by ``c`` on both sides."""
+    return lambda p, f: p["coef"] * c
+
+
+def penalty_rule(prior_s: float) -> Rule:
+    """The plain update with the ridge penalty ``prior_s`` (s of data showing no residual)."""
+    return lambda p, f: ridge(p, prior_s)
+
+
+#: Rule families with one free constant, chosen on the inner folds (the held-out ground never seen).
+FAMILIES: dict[str, dict[float, Rule]] = {
+    "scale (LOGO)": {c: scale_rule(c) for c in np.round(np.linspace(0.0, 1.0, 11), 2)},
+    "penalty (LOGO)": {s_: penalty_rule(s_) for s_ in (20.0, 40.0, 80.0, 160.0, 320.0, 640.0, 1280.0, 1e9)},
+}
+
+
+def choose(rules: dict[float, Rule], folds: list[dict[str, Any]], tie_pts: float = 1.0) -> float:
+    """The constant whose worst harm over ``folds`` (median or p90, 20 and 40 s) is least; ties within ``tie_pts``
+    broken by the lower mean error (the choice rule of the defaults)."""
+    scored = {k: harm(r, folds) for k, r in rules.items()}
+    best = min(v[0] for v in scored.values())
+    return min((k for k, v in scored.items() if v[0] <= best + tie_pts), key=lambda k: scored[k][1])
+
+
+def charges(rule: Rule, fold: dict[str, Any]) -> list[dict[str, Any]]:
+    """Per (prefix, scored run): the total-charge error % of the rule, unadapted and the gain baseline."""
+    rows = []
+    runs = fold["runs"]
+    for p in fold["prefixes"]:
+        coef = rule(p, fold)
+        key = "xint"
+        if isinstance(coef, tuple):  # (coefficients, "xint_moving"): a rule on the basis zero at rest
+            coef, key = coef
+        for b, rb in enumerate(runs):
+            if b == p["a"]:
+                continue
+            q_true = float(np.sum(rb["q_true"]))
+            side = rb["q_base"] + np.sum(coef * rb[key], axis=1)
+            rows.append({"a": p["a"], "b": b, "T": p["T"], "q_true": q_true,
+                         "err": 100.0 * abs(float(np.sum(side)) - q_true) / q_true,
+                         "err_side": 100.0 * (side - rb["q_true"]) / q_true,
+                         "base": 100.0 * abs(float(np.sum(rb["q_base"])) - q_true) / q_true,
+                         "gain": 100.0 * abs(float(np.sum(rb["q_base"] * p["gain"])) - q_true) / q_true})
+    return rows
+
+
+def summary(rows: list[dict[str, Any]], key: str, T: float) -> tuple[float, float]:
+    e = np.array([r[key] for r in rows if r["T"] == T])
+    return (float(np.median(e)), float(np.percentile(e, 90))) if e.size else (np.nan, np.nan)
+
+
+def harm(rule: Rule, folds: list[dict[str, Any]], Ts: tuple[float, ...] = (20.0, 40.0)) -> tuple[float, float]:
+    """Worst rise over the folds (median or p90 at each T) above the unadapted forecast, and the mean error."""
+    worst, errs = -np.inf, []
+    for f in folds:
+        rows = charges(rule, f)
+        for T in Ts:
+            m, p9 = summary(rows, "err", T)
+            bm, bp = summary(rows, "base", T)
+            if np.isfinite(m):
+                worst = max(worst, m - bm, p9 - bp)
+                errs += [m, p9]
+    return float(worst), float(np.mean(errs)) if errs else np.nan
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--data", choices=("borealtc", "generated"), default="borealtc")
+    ap.add_argument("--path", type=Path, default=DATA, help="the BorealTC folder")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--adapt-seconds", type=float, nargs="+", default=[10.0, 20.0, 40.0])
+    ap.add_argument("--no-inner", action="store_true", help="outer folds only")
+    ap.add_argument("--cache", type=Path, help="pickle of the fitted folds' charges: built when missing, read when there")
+    ap.add_argument("--out", type=Path, help="JSON of every number")
+    args = ap.parse_args(argv)
+    Ts = tuple(args.adapt_seconds)
+    cache = None
+    if args.cache is not None and args.cache.exists():
+        cache = pickle.loads(args.cache.read_bytes())
+        if cache.get("version") != CACHE_VERSION:
+            ap.error(f"{args.cache} is a cache of version {cache.get('version')!r}, not {CACHE_VERSION}: delete it")
+
+    def save(c: dict[str, Any]) -> None:
+        if args.cache is not None:
+            args.cache.parent.mkdir(parents=True, exist_ok=True)
+            tmp = args.cache.with_suffix(".tmp")
+            tmp.write_bytes(pickle.dumps(c))
+            tmp.replace(args.cache)
+
+    if cache is None or not cache.get("complete", True):
+        t0 = time.perf_counter()
+        cache = build_cache(load_logs(args.data, args.path, args.seed), args.seed, Ts, not args.no_inner, cache, save)
+        print(f"cache built in {time.perf_counter() - t0:.0f} s")
+    report(cache, Ts, args.out)
+    return 0
+
+
+COLUMNS = ("offset", "|v|", "turning", "outer turning")
+
+
+def diagnose(fold: dict[str, Any], rule: Rule, T: float, top: int = 3) -> dict[str, Any]:
+    """Where a rule harms one held-out ground at one T: per prefix, the mean rise of the total-charge error over
+    its scored runs, the side errors, the correction per regime column and how the prefix was driven."""
+    rows = [r for r in charges(rule, fold) if r["T"] == T]
+    runs = fold["runs"]
+    per = []
+    for p in (q for q in fold["prefixes"] if q["T"] == T):
+        mine = [r for r in rows if r["a"] == p["a"]]
+        coef, key = rule(p, fold), "xint"
+        if isinstance(coef, tuple):
+            coef, key = coef
+        parts = np.mean([coef * runs[r["b"]][key] / r["q_true"] * 100.0 for r in mine], axis=0)  # (2, 4) % of charge
+        per.append({"prefix": runs[p["a"]]["name"], "harm_pts": float(np.mean([r["err"] - r["base"] for r in mine])),
+                    "signed_base_pct": float(np.mean([100.0 * (np.sum(runs[r["b"]]["q_base"]) - r["q_true"]) / r["q_true"]
+                                                      for r in mine])),
+                    "correction_pct": parts.tolist(), "side_correction_pct": parts.sum(axis=1).tolist(),
+                    "prefix_residual_pct": (100.0 * p["obs"] / np.maximum(np.abs(p["xint"][:, 0]), 1e-9)).tolist(),
+                    "lam": [float(np.linalg.norm(c) / max(np.linalg.norm(c0), 1e-12)) for c, c0 in zip(coef, p["coef"])],
+                    "prefix_stats": p["stats"]})
+    per.sort(key=lambda d: -d["harm_pts"])
+    scored = {k: float(np.mean([r["stats"][k] for r in runs])) for k in runs[0]["stats"]}
+    return {"T": T, "mean_harm_pts": float(np.mean([d["harm_pts"] for d in per])) if per else np.nan,
+            "harmed_prefixes": sum(d["harm_pts"] > 0 for d in per), "n_prefixes": len(per),
+            "scored_stats": scored, "prefix_stats_mean": {k: float(np.mean([d["prefix_stats"][k] for d in per]))
+                                                           for k in scored} if per else {},
+            "worst": per[:top], "best": per[-top:]}
+
+
+def _print_diagnosis(g: str, d: dict[str, Any]) -> None:
+    s, ps = d["scored_stats"], d["prefix_stats_mean"]
+    print(f"\n{g}, T = {d['T']:g} s: mean harm {d['mean_harm_pts']:+.1f} points, {d['harmed_prefixes']} of "
+          f"{d['n_prefixes']} prefixes harm; motion |v| / turning / rest: prefixes {ps['v_mps']:.2f} / "
+          f"{ps['turning']:.2f} / {ps['rest']:.2f}, whole runs {s['v_mps']:.2f} / {s['turning']:.2f} / {s['rest']:.2f}")
+    for tag, items in (("worst", d["worst"]), ("best", d["best"])):
+        for w in items:
+            c = np.asarray(w["correction_pct"])
+            print(f"  {tag:5s} {w['prefix']:24s} harm {w['harm_pts']:+6.1f}  unadapted signed {w['signed_base_pct']:+6.1f} %  "
+                  f"correction L/R {c[0].sum():+6.1f} / {c[1].sum():+6.1f} % (columns, both sides: "
+                  + ", ".join(f"{n} {v:+.1f}" for n, v in zip(COLUMNS, c.sum(axis=0)))
+                  + f")  prefix |v| {w['prefix_stats']['v_mps']:.2f} turning {w['prefix_stats']['turning']:.2f}")
+
+
+def clamp_effect(fold: dict[str, Any]) -> float:
+    """Largest difference (points of total charge) between the cached plain update and the exact, clamped one."""
+    worst = 0.0
+    for p in fold["prefixes"]:
+        for b, rb in enumerate(fold["runs"]):
+            if b != p["a"]:
+                lin = rb["q_base"] + np.sum(p["coef"] * rb["xint"], axis=1)
+                worst = max(worst, 100.0 * abs(float(np.sum(lin - fold["pairs"][(p["a"], p["T"], b)]))) / float(np.sum(rb["q_true"])))
+    return worst
+
+
+def table(cache: dict[str, Any], rules: dict[str, Rule], Ts: tuple[float, ...]) -> dict[str, Any]:
+    """Per outer ground (then pooled) and T: median / p90 % of every rule, unadapted and the gain baseline; the
+    families' constants chosen per outer ground on its inner folds (``chosen``)."""
+    out: dict[str, Any] = {"chosen": {}}
+    pooled: dict[str, list[dict[str, Any]]] = {}
+    for g, fold in cache["outer"].items():
+        out[g] = {}
+        here = dict(rules)
+        inner = list(cache["inner"].get(g, {}).values())
+        for fam, members in FAMILIES.items():
+            if inner:
+                k = choose(members, inner)
+                out["chosen"].setdefault(fam, {})[g] = float(k)
+                here[fam] = members[k]
+        for name, rule in here.items():
+            rows = charges(rule, fold)
+            pooled.setdefault(name, []).extend(rows)
+            out[g][name] = {f"{T:g}": summary(rows, "err", T) for T in Ts}
+        rows = charges(rule_unadapted, fold)
+        pooled.setdefault("gain", []).extend(rows)
+        out[g]["gain"] = {f"{T:g}": summary(rows, "gain", T) for T in Ts}
+    out["all"] = {name: {f"{T:g}": summary(rows, "gain" if name == "gain" else "err", T) for T in Ts}
+                  for name, rows in pooled.items()}
+    return out
+
+
+#: The updates the held-out choice picks among (the default first).
+CANDIDATES = ("prior", "evidence", "none", "partition", "partition, prior")
+
+
+def held_out_choice(cache: dict[str, Any], rules: dict[str, Rule]) -> dict[str, str]:
+    """Per ground, the candidate :func:`choose` picks on the *other* grounds' few-shot folds (this one never seen)."""
+    out = {}
+    for g in cache["outer"]:
+        others = [f for h, f in cache["outer"].items() if h != g]
+        names = list(CANDIDATES)
+        pick = choose(dict(enumerate(rules[n] for n in names)), others)
+        out[g] = names[int(pick)]
+    return out
+
+
+def report(cache: dict[str, Any], Ts: tuple[float, ...], out: Path | None) -> None:
+    rules = {"unadapted": rule_unadapted, "none": rule_none, "evidence": rule_evidence, "prior": rule_prior,
+             "prior, moving": rule_prior_moving, "partition": rule_partition,
+             "partition, prior": rule_partition_prior, "partition, moving, prior": rule_partition_moving_prior}
+    print("clamp left out of the cached charges, worst points per ground: " +
+          ", ".join(f"{g} {clamp_effect(f):.2f}" for g, f in cache["outer"].items()))
+    diag = {g: [diagnose(f, rule_prior, T) for T in Ts if T >= 20] for g, f in cache["outer"].items()}
+    for g, ds in diag.items():
+        for d in ds:
+            _print_diagnosis(g, d)
+    tab = table(cache, rules, Ts)
+    tab["held_out_choice"] = held_out_choice(cache, rules) if len(cache["outer"]) > 2 else {}
+    print("update chosen on the other grounds (worst harm at 20 / 40 s, ties within 1 point by the mean error): "
+          + ", ".join(f"{g}: {n}" for g, n in tab["held_out_choice"].items()))
+    print("\ntotal charge median / p90 % per T " + " ".join(f"{T:g} s" for T in Ts))
+    print("constants chosen on the inner folds: " + "; ".join(f"{fam}: {v}" for fam, v in tab["chosen"].items()))
+    for g, per in tab.items():
+        if g in ("chosen", "held_out_choice"):
+            continue
+        for name, cells in per.items():
+            print(f"{g:10s} {name:12s} " + "   ".join("{:6.1f} / {:6.1f}".format(*cells[f"{T:g}"]) for T in Ts))
+    if out is not None:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps({"table": tab, "diagnosis": diag}, indent=1, default=float) + "\n")
+        print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
