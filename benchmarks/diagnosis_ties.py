@@ -31,6 +31,12 @@ Each pair is a case where the diagnosed runs cannot tell the true cause from a l
   stop and a start part them. The truth: ``rotor_inertia``, its value the simulator's rotating
   parts at the motor shaft as the library charges them (:func:`independent_sim.rotor_inertia_kg_m2`, kg m^2).
 
+- ``lag_vs_inertia``: the other direction of ``inertia_vs_lag``: the robot's drivetrain 3 times heavier
+  before and after (calibration runs and the model's rotor inertia both know it), and its currents'
+  stamps running :data:`CURRENT_LAG_S` late against the speeds in the diagnosed runs (the simulator's
+  ``current_lag_s``). A lag of the currents (``-tau dI/dt``) takes off what a lighter drivetrain
+  takes off. The truth: ``time_lag`` (``lag_s`` = :data:`CURRENT_LAG_S`).
+
 Protocol per pair and seed: 6 calibration runs of the robot before the change (mixed
 driving unless the pair says) fit ``PhysicsCurrentModel(sim.husky_robot(), "flooring")`` (the Husky
 preset with the simulator's drivetrain inertia, :func:`independent_sim.husky_robot`); 6 diagnosed runs with the change;
@@ -56,6 +62,7 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import platform
 import statistics
@@ -135,6 +142,16 @@ PAIRS["inertia_vs_lag"] = {
     "fit": ("rolling_resistance_coef", "lateral_friction_coef", "rest_current_a", "viscous_friction_coef_s_per_m"),
     "value": ("rotor_inertia_kg_m2", sim.rotor_inertia_kg_m2(ROTOR_SCALE)),
 }
+#: The current lag of ``lag_vs_inertia`` (s: the currents' stamps run late against the speeds).
+CURRENT_LAG_S = 0.2
+PAIRS["lag_vs_inertia"] = {
+    "calibration": sim.SimEffects(speed_friction_n_s2_per_m2=DRAG_N_S2_PER_M2, rotor_inertia_scale=ROTOR_SCALE),
+    "diagnosed": sim.SimEffects(speed_friction_n_s2_per_m2=DRAG_N_S2_PER_M2, rotor_inertia_scale=ROTOR_SCALE,
+                                current_lag_s=CURRENT_LAG_S),
+    "driving": "waves", "calibration_driving": "waves", "crop": 0.2, "truth": ("time_lag",),
+    "fit": PAIRS["inertia_vs_lag"]["fit"], "rotor_scale": ROTOR_SCALE,
+    "value": ("lag_s", CURRENT_LAG_S),
+}
 TARGETS = {"tie_named_pct": 100.0, "truth_first_after_pct": 90.0, "value_ok_after_pct": 90.0,
            "drive_max_s": 60.0, "z_min": 3.0, "measured_over_expected": (0.5, 2.0)}
 VALUE_TOL = 0.2
@@ -156,6 +173,8 @@ def _value(d: Any, how: str, model: Any) -> float | None:
         return p["mass_scale"] - 1.0
     if how == "gain_ratio" and {"gain_left", "gain_right"} <= set(p):
         return p["gain_left"] / p["gain_right"] - 1.0
+    if how == "lag_s" and "lag_s" in p:
+        return p["lag_s"]
     if how == "rotor_inertia_kg_m2" and "rotor_inertia_scale" in p:
         return p["rotor_inertia_scale"] * model.robot_.motor.rotor_inertia_kg_m2
     return None
@@ -166,7 +185,11 @@ def run_pair(name: str, seed: int, max_repeats: int) -> dict[str, Any]:
     pair = PAIRS[name]
     cal = [sim.simulate_run(50_000 + 1000 * seed + k, pair["calibration"], driving=pair.get("calibration_driving", "mixed"))
            for k in range(RUNS)]
-    model = energy.PhysicsCurrentModel(sim.husky_robot(), "flooring",
+    robot = sim.husky_robot()
+    if "rotor_scale" in pair:  # a user who knows the robot's heavier drivetrain gives it to the model
+        heavier = sim.rotor_inertia_kg_m2(pair["rotor_scale"])
+        robot = robot.replace(motor=dataclasses.replace(robot.motor, rotor_inertia_kg_m2=heavier))
+    model = energy.PhysicsCurrentModel(robot, "flooring",
                                        **({"fit_parameters": pair["fit"]} if "fit" in pair else {})).fit(cal)
     slope = pair.get("slope")
     terrain = None if slope is None else slope_map()

@@ -452,19 +452,22 @@ def separating_drive(effects: Sequence[str], models: dict[str, Any], like: Inter
     separates ``effects[0]``'s fitted model from every other one of ``effects``, against the
     runs' ``noise`` (:func:`~energy.diagnosis.noise.residual_noise`, per turning regime).
 
-    The best drive is the one whose predictions differ most over the whole drive against the
-    noise of that whole-drive quantity (its worst pair's ``z_per_repeat``: the runs' residual,
-    misfit included and its correlation counted, and their run-to-run spread; module docstring):
-    a misfit of the fitted models counts as noise there, so a small difference summed over many
-    samples earns no more than the residual lets it. A pair's runs of a drive are what
-    its matched-filter test needs at 95 % (module docstring);
+    The best drive is the one whose predictions differ most against the noise sample by sample
+    (its worst pair's RMS difference over the noise's RMS): a difference of several noise units
+    at every sample holds even where neither fitted model is exact, where a small difference
+    summed over many samples would rest on their being exact — and the residual that
+    ``z_per_repeat`` counts is the runs' misfit, not the drive's: on manoeuvres the runs never
+    drove the fitted models' misfit is unknown (ranked by ``z_per_repeat`` instead, the payload
+    against rolling resistance pair of ``benchmarks/diagnosis_ties.py`` drove where a run's
+    measured difference was 0.05 of the expected one). A pair's runs of a drive are what its
+    matched-filter test needs at 95 % with the whole drive's noise (module docstring);
     given ``base`` (the model without the step's effect, whose gap the diagnosis scores), a
     drive must also be one run of which tells the pair apart as the diagnosis judges it: the
     chosen model's expected gain over the alternative on it, in points of the run's own gap
     (effect and noise), at least :data:`ORDER_PCT` (a drive that does not is no separating
     drive, however many runs of it). Drives that settle every pair some drive settles within
     :data:`MAX_REPEATS` runs come first (the other pairs are :attr:`SeparatingDrive.equivalent`),
-    then the largest separation per drive, then the shortest. ``n_units`` (and ``units_per_run``): the
+    then the largest difference per sample in noise units, then the shortest. ``n_units`` (and ``units_per_run``): the
     units the diagnosis resamples, from which :func:`runs_to_order` and the mean lead the diagnosis asks
     for give the least runs of the drive (0: one run). Returns None when the library holds no drive (runs
     that neither drove nor turned).
@@ -511,10 +514,10 @@ def separating_drive(effects: Sequence[str], models: dict[str, Any], like: Inter
     def settles(c: DriveCandidate) -> bool:
         return all(c.pairs[a].repeats <= MAX_REPEATS for a in live)
 
-    def clearest(c: DriveCandidate) -> float:  # the worst pair's difference over the drive, in that quantity's noise
-        return min(c.pairs[a].z_per_repeat for a in live)
+    def clearest(c: DriveCandidate) -> float:  # the worst pair's difference per sample, in noise units
+        return min(c.pairs[a].noise_units for a in live)
 
-    # drives that settle every separable pair, then the largest separation per drive, then the shortest
+    # drives that settle every separable pair, then the largest difference per sample, then the shortest
     scored.sort(key=lambda c: (not settles(c[0]), -clearest(c[0]), c[0].duration_s))
     best, profile, preds, drive_noise = scored[0]
     return SeparatingDrive(tuple(effects), best, profile, preds, drive_noise, float(spread), float(noise.autocorrelation),
