@@ -38,6 +38,7 @@ mass                     mixed / snow_over_concrete             19.26    115.0  
 track_width              tight_arcs / coated_wood               29.78    258.9   21.26
 rolling_resistance       mixed / snow_over_concrete              8.96     43.7    2.33
 motor_constant           mixed / coated_wood                    12.70     80.9    4.62
+quadratic_drag           speed_sweep / coated_wood              27.00     57.4    3.38
 current_gain             mixed / coated_wood                     8.01     48.1    2.61
 current_offset           mixed / coated_wood                     5.81     32.6    1.40
 time_lag                 start_stop / coated_wood                0.13      0.2    9.31
