@@ -105,12 +105,9 @@ HITS: dict[str, tuple[str, ...]] = {
     "lag": ("imu_lag",),
     # currents late against the speeds: a lag of the whole prediction against the current
     "current_lag": ("time_lag",),
-    # F = c v|v| per side. Over the driven speeds (0.2-0.9 m/s straights, ~0.26 m/s wheel speed
-    # in pivots) a least-squares line through v^2 is ~1.1 v - 0.26: mostly a term growing with
-    # speed, so the nearest shape is the linear viscous term; its level (the mean extra force)
-    # is what a rolling-resistance coefficient error would add. Coulomb / static / Stribeck are
-    # speed-independent or falling with speed: no hit.
-    "speed_friction": ("viscous_friction", "rolling_resistance"),
+    # F = c v|v| per side: the catalogue's speed-squared drag, the same law (before it was catalogued the
+    # nearest shapes, the linear viscous term and a rolling-resistance error, counted as hits: they no longer do)
+    "speed_friction": ("quadratic_drag",),
 }
 #: Whether a correct diagnosis should find something on a calibrated physics base. On the
 #: ``preset`` base ``none`` and ``lag`` are no null cases: the preset is not this robot (it has
@@ -121,13 +118,14 @@ EXPECT_FOUND: dict[str, bool] = {case: bool(hits) for case, hits in HITS.items()
 def _truth(case: str) -> tuple[str, float] | None:
     """(how to read the size of the hit's fitted effect, the true size) where the case has one:
     the mass added (mass scale - 1, as a share of the robot's mass), the left gain's excess over
-    the right's (gain_left / gain_right - 1), the lag (s)."""
+    the right's (gain_left / gain_right - 1), the lag (s), the speed-squared drag per side (N s^2/m^2)."""
     name = case.partition(":")[0]
     fx = sim.case_effects(case)
     return {
         "payload": ("mass_scale-1", fx.payload_kg / sim.MASS_KG),
         "left_gain": ("gain_left/gain_right-1", fx.left_gain - 1.0),
         "current_lag": ("lag_s", fx.current_lag_s),
+        "speed_friction": ("drag_coef_n_s2_per_m2", fx.speed_friction_n_s2_per_m2),
     }.get(name)
 
 
@@ -424,7 +422,7 @@ def summary_table(summary: dict[str, Any]) -> str:
                  f"calibrated bases (the preset is not this robot); 'no catalogued': no catalogued effect chosen "
                  f"(a learned residual allowed); no tie: of the hits chosen first, those with no tie named on "
                  f"them (target >= 90 %); value ok: ranked-first hits whose fitted size is within "
-                 f"{VALUE_TOL:.0%} of the truth (added mass, left/right gain excess, lag)")
+                 f"{VALUE_TOL:.0%} of the truth (added mass, left/right gain excess, lag, drag)")
     return "\n".join(lines)
 
 
@@ -432,6 +430,8 @@ def summary_table(summary: dict[str, Any]) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=4, help="benchmark seeds per case (default 4)")
+    ap.add_argument("--first-seed", type=int, default=0,
+                    help="the first benchmark seed (default 0): seeds first-seed ... first-seed + seeds - 1")
     ap.add_argument("--runs", type=int, default=6, help="diagnosed runs (and calibration runs) per set (default 6)")
     ap.add_argument("--cases", nargs="+", default=DEFAULT_CASES, metavar="CASE[:VALUE]",
                     help=f"cases (default: {' '.join(DEFAULT_CASES)}); a value sets the effect's size, e.g. payload:40")
@@ -444,15 +444,16 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if args.quick:
         args.seeds = 1
-    if args.seeds < 1 or args.runs < 2:
-        ap.error(f"--seeds must be >= 1 and --runs >= 2, got {args.seeds} and {args.runs}")
+    if args.seeds < 1 or args.runs < 2 or args.first_seed < 0:
+        ap.error(f"--seeds must be >= 1, --runs >= 2 and --first-seed >= 0, got {args.seeds}, {args.runs} and "
+                 f"{args.first_seed}")
     for case in args.cases:
         try:
             sim.case_effects(case)
         except (KeyError, ValueError) as exc:
             ap.error(f"--cases: {exc}")
     work = args.keep if args.keep is not None else Path(tempfile.mkdtemp(prefix="diagnosis_independent_"))
-    jobs = [(case, seed) for case in args.cases for seed in range(args.seeds)]
+    jobs = [(case, seed) for case in args.cases for seed in range(args.first_seed, args.first_seed + args.seeds)]
     try:
         from tqdm import tqdm
     except ImportError:  # pragma: no cover
@@ -489,7 +490,8 @@ def main(argv: list[str] | None = None) -> int:
     write_json_atomic(args.out, {
         "protocol": {
             "description": __doc__.split("Usage::")[0].strip(),
-            "seeds": args.seeds, "runs": args.runs, "cases": args.cases, "bases": args.bases,
+            "seeds": args.seeds, "first_seed": args.first_seed, "runs": args.runs, "cases": args.cases,
+            "bases": args.bases,
             "hits": HITS, "expect_found": EXPECT_FOUND, "reduced": REDUCED, "reduced_cases": REDUCED_CASES,
             "targets": TARGETS, "value_tolerance": VALUE_TOL,
             "case_effects": {c: dataclasses.asdict(sim.case_effects(c)) for c in args.cases},

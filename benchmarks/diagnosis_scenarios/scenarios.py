@@ -38,6 +38,7 @@ mass                     mixed / snow_over_concrete             19.26    115.0  
 track_width              tight_arcs / coated_wood               29.78    258.9   21.26
 rolling_resistance       mixed / snow_over_concrete              8.96     43.7    2.33
 motor_constant           mixed / coated_wood                    12.70     80.9    4.62
+quadratic_drag           speed_sweep / coated_wood              27.00     57.4    3.38
 current_gain             mixed / coated_wood                     8.01     48.1    2.61
 current_offset           mixed / coated_wood                     5.81     32.6    1.40
 time_lag                 start_stop / coated_wood                0.13      0.2    9.31
@@ -84,7 +85,7 @@ from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 from .manoeuvres import MANOEUVRES, manoeuvre_commands
 from .power import PowerGap, battery_streams, power_gap
 
-__all__ = ["MEASUREMENT_EFFECTS", "PARAMETER_EFFECTS", "POWER_ONLY_EFFECTS", "Scenario",
+__all__ = ["MEASUREMENT_EFFECTS", "PARAMETER_EFFECTS", "LAW_EFFECTS", "POWER_ONLY_EFFECTS", "Scenario",
            "WithheldGap", "SCENARIOS", "scenario", "pair_scenario", "null_scenario", "withheld_gap",
            "withheld_gap_ratio"]
 
@@ -100,6 +101,10 @@ PARAMETER_EFFECTS: dict[str, str] = {
     "lateral_friction": "lateral friction of skid steering: truth 1.5 x the model's",
     "motor_constant": "torque constant: truth 0.85 x the model's (current / 0.85)",
     "rotor_inertia": "drivetrain inertia: truth 6 x the model's rotor inertia (a heavier gearbox and wheels)",
+}
+#: Resistance laws the truth's physics holds beyond the model's, and their size.
+LAW_EFFECTS: dict[str, str] = {
+    "quadratic_drag": "loose ground: a speed-squared drag of 12 N s^2/m^2 per side (12 N at 1 m/s)",
 }
 #: Measurement effects and how the truth logs are altered.
 MEASUREMENT_EFFECTS: dict[str, str] = {
@@ -148,6 +153,15 @@ def _rest(run: Any) -> np.ndarray:
     return at_rest(v, w, np.gradient(v, t), np.gradient(w, t))
 
 
+def _drag_current_a(robot: RobotParams, run: Any, drag_n_s2_per_m2: float) -> np.ndarray:
+    """The signed motor current (N, 2) of a drag ``c v_s |v_s|`` per side on a truth run's tracked motion."""
+    half = robot.track_width_multiplier * robot.track_width_m / 2.0
+    v_side = run.actual_v_mps[:, None] + np.outer(run.actual_omega_radps, [-half, half])
+    mo = robot.motor
+    return drag_n_s2_per_m2 * v_side * np.abs(v_side) * robot.wheel_radius_m / (
+        mo.gear_ratio * mo.gear_efficiency * mo.torque_constant_nm_per_a)
+
+
 def _husky_variant(**motor: float) -> RobotParams:
     rb = robot_preset("husky")
     return rb.replace(motor=dataclasses.replace(rb.motor, **motor)) if motor else rb
@@ -185,6 +199,10 @@ class Scenario:
         (:func:`energy.logs.at_rest` of the tracked speeds; a measurement effect).
     lag_s : float
         Delay of the current stream behind the drive stream (s).
+    drag_n_s2_per_m2 : float
+        The truth's speed-squared drag ``c v_s |v_s|`` per side (N s^2/m^2, >= 0; a law its physics lacks): its
+        current ``c v_s |v_s| r / (N_g eta K_t)`` (the truth robot's gear and motor, the tracked side speeds) is
+        added to each side's clean motor current.
     model_idle : bool
         The model is calibrated with the idle current (False for ``"idle_current"``).
     power_logs : bool
@@ -209,6 +227,7 @@ class Scenario:
     current_offset_a: tuple[float, float] = (0.0, 0.0)
     rest_shift_a: tuple[float, float] = (0.0, 0.0)
     lag_s: float = 0.0
+    drag_n_s2_per_m2: float = 0.0
     model_idle: bool = True
     power_logs: bool = False
     excitable: bool = True
@@ -221,7 +240,7 @@ class Scenario:
         if isinstance(self.withheld, str) or not all(isinstance(w, str) for w in self.withheld):
             raise InvalidParameterError(f"Scenario.withheld must be a tuple of effect names, got {self.withheld!r}")
         object.__setattr__(self, "withheld", tuple(self.withheld))
-        known = set(EFFECTS) | set(PARAMETER_EFFECTS) | set(MEASUREMENT_EFFECTS)
+        known = set(EFFECTS) | set(PARAMETER_EFFECTS) | set(LAW_EFFECTS) | set(MEASUREMENT_EFFECTS)
         for w in self.withheld:
             if w not in known:
                 raise UnknownNameError(f"withheld effect {w!r} is unknown; expected names from {sorted(known)!r}")
@@ -236,6 +255,7 @@ class Scenario:
         check_int("n_runs", self.n_runs, low=2, owner=own)
         check_real("run_duration_s", self.run_duration_s, low=5.0, high=600.0, owner=own)
         check_real("lag_s", self.lag_s, low=0.0, high=2.0, owner=own)
+        check_real("drag_n_s2_per_m2", self.drag_n_s2_per_m2, low=0.0, owner=own)
         for k, pair in (("current_gain", self.current_gain), ("current_offset_a", self.current_offset_a),
                         ("rest_shift_a", self.rest_shift_a)):
             if len(tuple(pair)) != 2:
@@ -331,7 +351,10 @@ class Scenario:
             profile = manoeuvre_commands(self.manoeuvres[k % len(self.manoeuvres)], self.run_duration_s,
                                          seed=run_seed, start_xy_m=(_MAP_CELLS / 2.0, _MAP_CELLS / 2.0))
             run = sim.run_drive(terrain, profile, seed=run_seed)
-            out.append((run, np.asarray(run.clean_current_a), run_seed))
+            current = np.asarray(run.clean_current_a)
+            if world == "truth" and self.drag_n_s2_per_m2 > 0:
+                current = current + _drag_current_a(self.robot, run, self.drag_n_s2_per_m2)
+            out.append((run, current, run_seed))
         return out
 
     def make_logs(self, seed: int | None = 0) -> list[InteractionLog]:
@@ -467,6 +490,7 @@ def _make_scenarios() -> dict[str, Scenario]:
                  model_robot=husky),
         Scenario("rotor_inertia", ("rotor_inertia",), "start_stop", ground=wood,
                  robot=_husky_variant(rotor_inertia_kg_m2=6.0 * husky.motor.rotor_inertia_kg_m2), model_robot=husky),
+        Scenario("quadratic_drag", ("quadratic_drag",), "speed_sweep", ground=wood, drag_n_s2_per_m2=12.0),
         Scenario("current_gain", ("current_gain",), "mixed", ground=wood, current_gain=(1.12, 0.92)),
         Scenario("current_offset", ("current_offset",), "mixed", ground=wood, current_offset_a=(0.25, -0.15)),
         Scenario("time_lag", ("time_lag",), "start_stop", ground=wood, lag_s=0.12),

@@ -19,12 +19,14 @@ from .effects_measurement import (
     TimeLagEffect,
 )
 from .effects_physics import (
+    LAW_CANDIDATES,
     PARAMETER_CANDIDATES,
     PHYSICS_CANDIDATES,
+    LateralFrictionEffect,
     MassEffect,
     MotorConstantEffect,
-    LateralFrictionEffect,
     PhysicsTermEffect,
+    QuadraticDragEffect,
     RollingResistanceEffect,
     RotorInertiaEffect,
     SlopeEffect,
@@ -41,12 +43,14 @@ LEARNED_EFFECT = "learned_residual"
 #: Physics effects that change power but not the drive current: a current log cannot show them; they are
 #: the electrical candidates, fitted on battery power (voltage x pack current) when every log carries it.
 NOT_IDENTIFIABLE_FROM_CURRENT: tuple[str, ...] = POWER_EFFECTS
-#: Every catalogued effect name: physics terms, parameter errors, measurement effects, electrical, learned.
-EFFECTS_CATALOGUE: tuple[str, ...] = (PHYSICS_CANDIDATES + PARAMETER_CANDIDATES + MEASUREMENT_CANDIDATES
-                                      + NOT_IDENTIFIABLE_FROM_CURRENT + (LEARNED_EFFECT,))
+#: Every catalogued effect name: physics terms, resistance laws, parameter errors, measurement effects, electrical,
+#: learned.
+EFFECTS_CATALOGUE: tuple[str, ...] = (PHYSICS_CANDIDATES + LAW_CANDIDATES + PARAMETER_CANDIDATES
+                                      + MEASUREMENT_CANDIDATES + NOT_IDENTIFIABLE_FROM_CURRENT + (LEARNED_EFFECT,))
 
 _CLASSES: dict[str, Any] = {
     "slope": SlopeEffect,
+    "quadratic_drag": QuadraticDragEffect,
     "mass": MassEffect,
     "track_width": TrackWidthEffect,
     "rolling_resistance": RollingResistanceEffect,

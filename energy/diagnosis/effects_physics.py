@@ -9,18 +9,18 @@ from typing import Any
 
 import numpy as np
 
+from terrain.terrain_map import TerrainMap
 from terrawatt_base.checks import fmt_number
 from terrawatt_base.errors import DataError
-from terrain.terrain_map import TerrainMap
 
-from ..logs import InteractionLog, log_slope_rad
+from ..logs import InteractionLog, log_slope_rad, rest_samples
 from ..models.baselines import PhysicsCurrentModel
 from .effect_base import GAIN_PLAUSIBLE, BasisEffect, Effect, EffectParameter
-from .model_currents import ParameterTable, PhysicsBasis, motoring_currents_a
+from .model_currents import ParameterTable, PhysicsBasis, motoring_currents_a, side_speeds_mps
 
-__all__ = ["PHYSICS_CANDIDATES", "PARAMETER_CANDIDATES", "ROLLING_RESISTANCE_PLAUSIBLE", "PhysicsTermEffect",
-           "SlopeEffect", "MassEffect", "TrackWidthEffect", "RollingResistanceEffect", "LateralFrictionEffect",
-           "MotorConstantEffect", "RotorInertiaEffect", "Reprediction"]
+__all__ = ["PHYSICS_CANDIDATES", "LAW_CANDIDATES", "PARAMETER_CANDIDATES", "ROLLING_RESISTANCE_PLAUSIBLE",
+           "PhysicsTermEffect", "SlopeEffect", "QuadraticDragEffect", "MassEffect", "TrackWidthEffect",
+           "RollingResistanceEffect", "LateralFrictionEffect", "MotorConstantEffect", "RotorInertiaEffect", "Reprediction"]
 
 #: Physics effects offered as candidates (those that change the motor current).
 PHYSICS_CANDIDATES: tuple[str, ...] = (
@@ -28,6 +28,8 @@ PHYSICS_CANDIDATES: tuple[str, ...] = (
     "longitudinal_slip", "lateral_slip", "turning_resistance", "gear_losses", "torque_saturation",
     "speed_saturation",
 )
+#: Resistance laws the physics does not hold, offered as candidates with their own coefficient.
+LAW_CANDIDATES: tuple[str, ...] = ("quadratic_drag",)
 #: Parameter-error candidates of a physics model.
 PARAMETER_CANDIDATES: tuple[str, ...] = ("mass", "track_width", "rolling_resistance", "lateral_friction",
                                          "motor_constant", "rotor_inertia")
@@ -109,6 +111,44 @@ class SlopeEffect(BasisEffect):
 
     def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: np.ndarray) -> np.ndarray:
         return predicted_a + values[0] * prepared
+
+
+class QuadraticDragEffect(BasisEffect):
+    """A resistance growing with the square of the speed: a drag force ``c v_s |v_s|`` on each side s.
+
+    Air drag, or loose ground (sand, mud, deep snow, tall grass) whose resistance rises with the
+    speed; the physics' viscous term grows with ``v``, its rolling resistance not at all. The
+    motor delivers it through the gear, so each side's current in the direction of rotation grows
+    by ``c v_s^2 r / (N_g eta K_t)`` (``eta`` the gear efficiency where the model has gear losses,
+    else 1), 0 where the log stands still. Linear in ``c`` (N s^2 / m^2 per side: the force in N at
+    1 m/s); the side speeds are :func:`~energy.diagnosis.model_currents.side_speeds_mps`.
+    """
+
+    name = "quadratic_drag"
+    kind = "physics"
+    parameters = (EffectParameter("drag_coef_n_s2_per_m2", 1.0, 0.0, 400.0, "N s^2/m^2", None, 0.0, 100.0,
+                                  "per side: air drag well below 1, loose ground rising with speed up to tens"),)
+    description = "speed-squared resistance per side (air drag, loose ground): F = c v|v|"
+
+    def prepare(self, model: Any, log: InteractionLog) -> np.ndarray:
+        b = self.basis(model)
+        motor = b.robot.motor
+        eta = motor.gear_efficiency if "gear_losses" in b.effects else 1.0
+        per_coef = side_speeds_mps(b, log) ** 2 * b.robot.wheel_radius_m / (motor.gear_ratio * eta
+                                                                            * motor.torque_constant_nm_per_a)
+        return np.where(rest_samples(log)[:, None], 0.0, per_coef)
+
+    def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: np.ndarray) -> np.ndarray:
+        return predicted_a + values[0] * prepared
+
+    def priors(self, prepared: Sequence[Any] = ()) -> np.ndarray:
+        """No drag (the fit starts off the bound, at 1 N s^2/m^2: a least-squares start on it does not move)."""
+        return np.zeros(1)
+
+    def describe(self, values: Any, prepared: Sequence[Any] = ()) -> str:
+        c = float(np.asarray(values, dtype=np.float64).reshape(-1)[0])
+        return (f"speed-squared drag {fmt_number(c, 3)} N s^2/m^2 per side ({fmt_number(c, 3)} N per side at 1 m/s, "
+                f"{fmt_number(0.25 * c, 3)} N at 0.5 m/s: air drag or loose ground)")
 
 
 @dataclass(frozen=True, eq=False)

@@ -21,7 +21,7 @@ from ..power import PowerBreakdown
 from ..robot import RobotParams
 
 __all__ = ["DRIVE_EFFECTS", "TABLE_NODES", "PhysicsBasis", "ParameterTable", "physics_basis", "measured_side_speeds",
-           "basis_breakdown", "motoring_currents_a", "unclipped_prediction", "clamps_at_zero"]
+           "basis_breakdown", "side_speeds_mps", "motoring_currents_a", "unclipped_prediction", "clamps_at_zero"]
 
 #: Physics effects that change the motor current (the electronics draw no motor current).
 DRIVE_EFFECTS: tuple[str, ...] = tuple(e for e in EFFECTS if e not in ("sensor", "control"))
@@ -124,6 +124,14 @@ def basis_breakdown(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[
     slope = basis.slope_rad(log) if slope_rad is None else slope_rad
     return model.power(v, w, ground, accel_mps2=np.gradient(v, t), alpha_radps2=np.gradient(w, t),
                        slope_rad=slope, time_s=t, ground_index=ground_index)
+
+
+def side_speeds_mps(basis: PhysicsBasis, log: InteractionLog) -> np.ndarray:
+    """Each side's ground speed (N, 2; left, right), m/s: ``v -/+ omega chi B / 2`` with the basis's track
+    multiplier ``chi`` (or the log's, by the rule of :func:`measured_side_speeds`)."""
+    rb = _log_robot(basis.robot, log, basis.fitted_chi)
+    half = rb.track_width_multiplier * rb.track_width_m / 2.0
+    return np.asarray(log.v_mps, float)[:, None] + np.outer(np.asarray(log.omega_radps, float), [-half, half])
 
 
 def motoring_currents_a(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[str, ...] | None = None,

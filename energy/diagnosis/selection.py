@@ -136,10 +136,11 @@ def tied_with(best: Effect, eligible: Sequence[Effect], trials: dict[str, SetSco
     """The candidates these data cannot tell from ``best`` as the next effect.
 
     A physical candidate (not learned) with plausible fitted values that would itself be
-    :func:`significant`, and that the runs do not order below ``best``: per unit (run or
-    block), ``best``'s gain over it in points of that unit's own gap (:func:`unit_gains`) is
-    under :data:`SIGNIFICANT_SHRINK_PCT` on every unit (no run tells them apart), or the 95 %
-    bootstrap interval of its mean holds 0 (the runs disagree). Pairing cancels the runs' own
+    :func:`significant`, and that the runs do not order below ``best`` by the test that adds an
+    effect: per unit (run or block), ``best``'s gain over it in points of that unit's own gap
+    (:func:`unit_gains`), whose mean is under :data:`SIGNIFICANT_SHRINK_PCT` (a lead the
+    diagnosis would not call significant were it an effect's), or whose 95 % bootstrap
+    interval holds 0 (the runs disagree). Pairing cancels the runs' own
     spread (which widens each candidate's interval alone: this is the sharp form of "within the
     top one's interval"); judging per unit lets a short run that separates the two (a
     separating drive) decide, where its share of the whole gap would be small. Ordered by
@@ -155,8 +156,8 @@ def tied_with(best: Effect, eligible: Sequence[Effect], trials: dict[str, SetSco
         if not significant(current, trials[alt.name], none, n_bootstrap, seed):
             continue
         gains = unit_gains(none, trials[alt.name], trials[best.name])
-        _, lo, _ = _mean_interval(gains, n_bootstrap, rng_seed)
-        if float(np.max(gains)) < SIGNIFICANT_SHRINK_PCT or lo <= 0.0:
+        mean, lo, _ = _mean_interval(gains, n_bootstrap, rng_seed)
+        if mean < SIGNIFICANT_SHRINK_PCT or lo <= 0.0:
             out.append(alt)
     return tuple(out)
 

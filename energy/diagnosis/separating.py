@@ -8,28 +8,35 @@ part where the runs never went: a gain and an offset agree at the one current th
 the one on which the fitted models' predicted currents differ most against what the runs say a
 repeat of it would scatter:
 
-- the logs' noise: the white part of the measured current per logged sample, in each sample's
-  turning regime (:mod:`energy.diagnosis.noise`);
+- the logs' residual: what the runs' current holds besides the chosen fitted model, per logged
+  sample in each sample's turning regime (the sensor's noise and the model's misfit, each run's
+  mean removed), and how slowly it varies (its lag-1 autocorrelation ``rho``: correlated
+  samples count as ``kappa = (1 + rho) / (1 - rho)`` times fewer; :mod:`energy.diagnosis.noise`);
 - the run-to-run spread: the spread of the per-run mean residual beyond what the noise gives
   (``run_spread_a``, a per-run offset that no drive averages away).
 
 With ``d(t)`` the difference of the two predictions over the drive (both sides), a repeat is
 scored by projecting its residual against the first model on ``d``: ``T = sum(r d) / sum(d^2)``
 is about 0 when the first model is right and 1 when the second is; its standard deviation per
-repeat is ``sqrt(sum(d^2 noise^2) / sum(d^2)^2 + run_spread^2 ((sum d_L)^2 + (sum d_R)^2) / sum(d^2)^2)``
-(sums over the samples the runs' logging rate gives the drive).
-The separation per repeat is ``z = 1 / sd``; deciding at ``T = 0.5`` is right with 95 %
-probability after ``ceil((2 * 1.645 / z)^2)`` repeats. The expected difference is also given as
-an RMS current (A) and in noise units (``RMS(d) / noise_a``). Both assume that one of the fitted
-models is right up to the noise; where neither is (a misfit both share), a driven repeat shows a
-smaller difference than expected: :meth:`SeparatingDrive.score` measures it.
+repeat is ``sqrt(kappa sum(d^2 res^2) / sum(d^2)^2 + run_spread^2 ((sum d_L)^2 + (sum d_R)^2) / sum(d^2)^2)``
+(sums over the samples the runs' logging rate gives the drive, ``res`` the residual's RMS of
+each sample's regime). The separation per repeat ``z = 1 / sd`` is the expected difference over
+the whole drive in units of that whole-drive quantity's noise (:attr:`PairSeparation.z_per_repeat`:
+"x noise per drive"); deciding at ``T = 0.5`` is right with 95 % probability after
+``ceil((2 * 1.645 / z)^2)`` repeats. The expected difference is also given as an RMS current (A)
+and per sample in noise units (``RMS(d) / noise_a``, the sensor's white noise alone). Both assume
+that one of the fitted models is right up to the residual; where neither is (a misfit both share),
+a driven repeat shows a smaller difference than expected: :meth:`SeparatingDrive.score` measures it.
 
-The diagnosis itself orders a tied pair by the runs: the 95 % bootstrap interval of the mean lead
-per run (the runs resampled) must clear 0. Where the runs already diagnosed do not order the pair,
-that interval clears 0 only once fewer than 2.5 % of the resamples hold none of the drive's runs,
-``(N / (N + n))^(N + n) < 0.025`` for ``N`` runs diagnosed and ``n`` runs of the drive (4 runs for
-6 diagnosed ones, however clear each of them is): :func:`runs_to_order`. A drive's
-:attr:`SeparatingDrive.repeats` is the larger of the two counts.
+The diagnosis itself orders a tied pair by the runs (:func:`~energy.diagnosis.selection.tied_with`):
+the mean lead per run must reach :data:`ORDER_PCT` points of the run's own gap and its 95 %
+bootstrap interval (the runs resampled) must clear 0. Where the runs already diagnosed do not order
+the pair, that interval clears 0 only once fewer than 2.5 % of the resamples hold none of the
+drive's runs, ``(N / (N + n))^(N + n) < 0.025`` for ``N`` runs diagnosed and ``n`` runs of the drive
+(4 runs for 6 diagnosed ones, however clear each of them is): :func:`runs_to_order`; and the mean
+reaches :data:`ORDER_PCT` once ``n g >= ORDER_PCT (N + n)`` for a drive run's expected lead ``g``
+(the diagnosed runs, which do not order the pair, taken to lead by nothing). A drive's
+:attr:`SeparatingDrive.repeats` is the largest of these counts.
 """
 
 from __future__ import annotations
@@ -80,8 +87,10 @@ _GRAVITY_MPS2 = 9.80665
 @dataclass(frozen=True)
 class PairSeparation:
     """How one manoeuvre separates the chosen explanation from one alternative: the RMS difference
-    of their currents (A), the same over the noise's RMS on the drive, the separation per run and
-    the runs that settle the pair."""
+    of their currents (A), the same per sample over the sensor noise's RMS on the drive
+    (``noise_units``), the whole drive's difference over that quantity's noise (``z_per_repeat``:
+    the residual's correlation and the run-to-run spread counted; module docstring) and the runs
+    that settle the pair."""
 
     difference_rms_a: float
     noise_units: float
@@ -182,6 +191,12 @@ class SeparatingDrive:
         return min((v.noise_units for v in self.separated.values()), default=math.nan)
 
     @property
+    def drive_noise_units(self) -> float:
+        """The smallest separation of a separable pair over the whole drive: its expected difference against the
+        noise of that whole-drive quantity (:attr:`PairSeparation.z_per_repeat`; nan: none is separable)."""
+        return min((v.z_per_repeat for v in self.separated.values()), default=math.nan)
+
+    @property
     def file_stem(self) -> str:
         """``separating_drive_<chosen>``: the name of its CSV and figure."""
         return f"separating_drive_{self.effects[0]}"
@@ -196,7 +211,8 @@ class SeparatingDrive:
             out.append(f"To tell {chosen} from {' and '.join(self.separated)}, drive {self.best.description} "
                        f"({fmt_number(self.best.duration_s, 3)} s; {self.file_stem}.csv): the fitted models' currents "
                        f"differ there by {diffs} (the logs' noise is {fmt_number(self.noise_a, 3)} A, the run-to-run "
-                       f"spread {fmt_number(self.run_spread_a, 3)} A); "
+                       f"spread {fmt_number(self.run_spread_a, 3)} A; over the whole drive "
+                       f"{fmt_number(self.drive_noise_units, 3)} x its noise); "
                        f"{'one run of it settles' if n == 1 else f'{n} runs of it settle'} the choice at 95 %.")
         if self.equivalent:
             out.append(f"No drive of the library separates {chosen} from {' or '.join(self.equivalent)} within "
@@ -226,7 +242,8 @@ class SeparatingDrive:
         """JSON-ready dict (the profile and predictions are in the CSV)."""
         return {"effects": list(self.effects), "drive": self.best.to_dict(), "csv": f"{self.file_stem}.csv",
                 "repeats": self.repeats, "expected_difference_a": self.expected_difference_a,
-                "noise_units": self.noise_units, "noise_a": self.noise_a, "run_spread_a": self.run_spread_a,
+                "noise_units": self.noise_units, "drive_noise_units": self.drive_noise_units, "noise_a": self.noise_a,
+                "run_spread_a": self.run_spread_a,
                 "autocorrelation": self.autocorrelation, "equivalent": list(self.equivalent),
                 "runs_to_order": self.runs_to_order,
                 "library": [c.to_dict() for c in self.library]}
@@ -264,7 +281,8 @@ class SeparatingDrive:
         ax.set_xlabel("time (s)")
         ax.set_ylabel("predicted current (A)")
         ax.set_title(f"smallest difference {fmt_number(self.expected_difference_a, 3)} A RMS = "
-                     f"{fmt_number(self.noise_units, 3)} x noise; {self.repeats} run(s) for 95 %", fontsize=9)
+                     f"{fmt_number(self.noise_units, 3)} x noise per sample, {fmt_number(self.drive_noise_units, 3)} x "
+                     f"per drive; {self.repeats} run(s) for 95 %", fontsize=9)
         ax.legend(fontsize=8, ncol=2)
         fig.tight_layout()
         return fig
@@ -437,35 +455,41 @@ def separating_drive(effects: Sequence[str], models: dict[str, Any], like: Inter
     The best drive is the one whose predictions differ most against the noise sample by sample
     (its worst pair's RMS difference over the noise's RMS): a difference of several noise units
     at every sample holds even where neither fitted model is exact, where a small difference
-    summed over many samples would rest on their being exact. A pair's runs of a drive are what
-    its matched-filter test needs at 95 % (module docstring);
+    summed over many samples would rest on their being exact — and the residual that
+    ``z_per_repeat`` counts is the runs' misfit, not the drive's: on manoeuvres the runs never
+    drove the fitted models' misfit is unknown (ranked by ``z_per_repeat`` instead, the payload
+    against rolling resistance pair of ``benchmarks/diagnosis_ties.py`` drove where a run's
+    measured difference was 0.05 of the expected one). A pair's runs of a drive are what its
+    matched-filter test needs at 95 % with the whole drive's noise (module docstring);
     given ``base`` (the model without the step's effect, whose gap the diagnosis scores), a
     drive must also be one run of which tells the pair apart as the diagnosis judges it: the
     chosen model's expected gain over the alternative on it, in points of the run's own gap
     (effect and noise), at least :data:`ORDER_PCT` (a drive that does not is no separating
     drive, however many runs of it). Drives that settle every pair some drive settles within
     :data:`MAX_REPEATS` runs come first (the other pairs are :attr:`SeparatingDrive.equivalent`),
-    then the largest difference in noise units, then the shortest. ``n_units`` (and ``units_per_run``): the
-    units the diagnosis resamples, from which :func:`runs_to_order` gives the least runs of the drive it
-    asks for (0: one run). Returns None when the library holds no drive (runs that
-    neither drove nor turned).
+    then the largest difference per sample in noise units, then the shortest. ``n_units`` (and ``units_per_run``): the
+    units the diagnosis resamples, from which :func:`runs_to_order` and the mean lead the diagnosis asks
+    for give the least runs of the drive (0: one run). Returns None when the library holds no drive (runs
+    that neither drove nor turned).
     """
     chosen, alts = effects[0], list(effects[1:])
-    spread = noise.run_spread_a  # the noise is white (noise.residual_noise): each logged sample counts
+    spread = noise.run_spread_a
+    kappa = noise.kappa  # logged samples per independent one of the residual
     dt = 0.1
     f = like.drive_rate_hz * dt  # the noise is per logged sample: logged at the runs' rate, f samples per one here
     scored = []
     for name, text, profile in _drives(max_speed_mps, max_omega_radps, dt, max_accel_mps2, terrain):
         log = drive_log(profile, like)
         preds = {n: np.asarray(models[n].predict(log), dtype=float) for n in effects}
-        sigma2 = noise.per_sample(log)[:, None] ** 2  # each sample's noise: its regime's
+        sigma2 = noise.per_sample(log)[:, None] ** 2  # each sample's sensor noise: its regime's
+        res2 = noise.residual_per_sample(log)[:, None] ** 2  # each sample's residual (noise and misfit): its regime's
         gap2 = (float(np.sum((preds[chosen] - np.asarray(base.predict(log), dtype=float)) ** 2))
                 if base is not None else math.nan)
         pairs = {}
         for alt in alts:
             d = preds[alt] - preds[chosen]
             ss = float(np.sum(d**2))
-            var_t = (float(np.sum(d**2 * sigma2)) / (ss**2 * f)
+            var_t = (kappa * float(np.sum(d**2 * res2)) / (ss**2 * f)
                      + spread**2 * float(np.sum(d.sum(axis=0) ** 2)) / ss**2 if ss > 0 else math.inf)
             z = 1.0 / math.sqrt(var_t) if var_t > 0 else math.inf
             repeats = (max(int(math.ceil((2 * REPEAT_Z / z) ** 2)), 1) if 0 < z < math.inf
@@ -473,7 +497,10 @@ def separating_drive(effects: Sequence[str], models: dict[str, Any], like: Inter
             if math.isfinite(gap2):
                 # a run's gain in points of its own gap, if the chosen model is right up to the noise
                 gain = 100.0 * ss / (gap2 + float(np.sum(sigma2)) * d.shape[1]) if ss > 0 else 0.0
-                repeats = repeats if gain >= ORDER_PCT else 10**9
+                repeats = repeats if gain > ORDER_PCT else 10**9
+                if gain > ORDER_PCT and n_units > 0:  # the mean lead over all units must reach ORDER_PCT
+                    per = max(int(units_per_run), 1)
+                    repeats = max(repeats, int(math.ceil(ORDER_PCT * n_units / (per * (gain - ORDER_PCT)))))
             rms = float(math.sqrt(ss / d.size))
             pairs[alt] = PairSeparation(rms, rms / math.sqrt(float(np.mean(sigma2))) if np.any(sigma2) else math.inf,
                                         z, min(repeats, 10**9))
@@ -490,7 +517,7 @@ def separating_drive(effects: Sequence[str], models: dict[str, Any], like: Inter
     def clearest(c: DriveCandidate) -> float:  # the worst pair's difference per sample, in noise units
         return min(c.pairs[a].noise_units for a in live)
 
-    # drives that settle every separable pair, then the largest difference against the noise, then the shortest
+    # drives that settle every separable pair, then the largest difference per sample, then the shortest
     scored.sort(key=lambda c: (not settles(c[0]), -clearest(c[0]), c[0].duration_s))
     best, profile, preds, drive_noise = scored[0]
     return SeparatingDrive(tuple(effects), best, profile, preds, drive_noise, float(spread), float(noise.autocorrelation),

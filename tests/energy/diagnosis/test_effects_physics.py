@@ -4,10 +4,9 @@ import dataclasses
 
 import numpy as np
 import pytest
+from diagnosis_scenarios import null_scenario, scenario
 from effect_samples import coated_wood_log, coated_wood_model
 from turning_samples import small_scenario
-
-from diagnosis_scenarios import null_scenario, scenario
 
 from energy import PhysicsCurrentModel
 from energy.diagnosis import FitSettings, diagnose, effect, effect_from_spec
@@ -115,6 +114,46 @@ def test_a_withheld_rotor_inertia_is_found_with_its_value_and_nothing_is_added_w
     assert d.current.score("rotor_inertia").parameters["rotor_inertia_scale"] == pytest.approx(6.0, rel=0.1)
     assert any("rotor_inertia" in s for s in d.verdict)
     null = small_scenario(null_scenario())
+    d0 = diagnose(null.make_model(1), null.make_logs(1), terrain=null.terrain, effects=cands,
+                  settings=FitSettings(n_bootstrap=50))
+    assert d0.current.chosen == ()
+
+
+def test_quadratic_drag_adds_the_current_of_a_speed_squared_force_on_each_side(model, log):
+    e = effect("quadratic_drag").bind([log])
+    assert e.kind == "physics" and e.parameters[0].name == "drag_coef_n_s2_per_m2"
+    assert effect_from_spec(e.spec()).name == "quadratic_drag"
+    basis = physics_basis(model)
+    base = unclipped_prediction(model, log, basis)
+    prep = e.prepare(model, log)
+    np.testing.assert_allclose(e.apply(np.array([0.0]), base, prep), base, atol=1e-12)
+    np.testing.assert_allclose(e.priors([prep]), [0.0])
+    added = e.apply(np.array([15.0]), base, prep) - base
+    # F = c v_s |v_s| per side at the wheel, through the gear (its efficiency: the model has gear losses) and Kt
+    rb = basis.robot
+    half = rb.track_width_multiplier * rb.track_width_m / 2.0
+    v_side = np.column_stack([log.v_mps - log.omega_radps * half, log.v_mps + log.omega_radps * half])
+    motor = rb.motor
+    assert "gear_losses" in basis.effects
+    expected = 15.0 * v_side**2 * rb.wheel_radius_m / (motor.gear_ratio * motor.gear_efficiency
+                                                        * motor.torque_constant_nm_per_a)
+    np.testing.assert_allclose(added, expected, atol=1e-9)
+    assert added.min() >= 0.0 and added.max() > 0.05  # the arc and the pivot drive the sides: the term shows
+    text = e.describe(np.array([15.0]), [prep])
+    assert text.startswith("speed-squared drag 15 N s^2/m^2 per side (15 N per side at 1 m/s")
+    assert e.plausibility_flags(np.array([15.0])) == ()
+    assert e.plausibility_flags(np.array([150.0]))  # beyond loose ground
+
+
+def test_a_withheld_quadratic_drag_is_found_with_its_value_and_nothing_is_added_where_nothing_is_missing():
+    sc = small_scenario(scenario("quadratic_drag"))  # truth: 12 N s^2/m^2 per side on a speed sweep
+    cands = ["quadratic_drag", "mass", "rolling_resistance", "current_gain", "motor_constant", "idle_current"]
+    d = diagnose(sc.make_model(1), sc.make_logs(1), terrain=sc.terrain, effects=cands,
+                 settings=FitSettings(n_bootstrap=50))
+    assert d.current.chosen[:1] == ("quadratic_drag",)
+    assert d.current.score("quadratic_drag").parameters["drag_coef_n_s2_per_m2"] == pytest.approx(12.0, rel=0.1)
+    assert any("quadratic_drag" in s for s in d.verdict)
+    null = small_scenario(null_scenario("speed_sweep"))
     d0 = diagnose(null.make_model(1), null.make_logs(1), terrain=null.terrain, effects=cands,
                   settings=FitSettings(n_bootstrap=50))
     assert d0.current.chosen == ()

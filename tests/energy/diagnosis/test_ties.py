@@ -11,10 +11,10 @@ import pytest
 from gain_samples import gained_logs_and_model
 
 from energy import PhysicsCurrentModel, TruthSimulator, ground_preset, robot_preset
-from energy.diagnosis import FitSettings, diagnose
+from energy.diagnosis import Effect, EffectParameter, FitSettings, diagnose
 from energy.diagnosis.fit import SetScore
 from energy.diagnosis.noise import residual_noise
-from energy.diagnosis.selection import SIGNIFICANT_SHRINK_PCT, units_needed
+from energy.diagnosis.selection import SIGNIFICANT_SHRINK_PCT, tied_with, units_needed
 from energy.diagnosis.separating import MAX_DRIVE_S, MAX_REPEATS, manoeuvre_library, runs_to_order
 
 GAIN = 1.3  # a current sensor reading 30 % high: at constant speed, a payload or an offset fits it as well
@@ -59,9 +59,12 @@ def test_the_separating_drive_differs_most_and_a_simulated_repeat_agrees_with_it
     assert drive.effects == d.ties[0].effects and drive.equivalent == ()
     alt = drive.effects[1]
     assert drive.best.duration_s <= MAX_DRIVE_S
-    # of the drives that settle it, the largest difference per sample against the noise
+    # of the drives that settle it, the largest difference per sample against the noise; over the whole drive
+    # (the residual's correlation and the run-to-run spread counted) at least 3 x that quantity's noise
     settling = [c for c in drive.library if c.pairs[alt].repeats <= MAX_REPEATS]
     assert drive.best.pairs[alt].noise_units == max(c.pairs[alt].noise_units for c in settling)
+    assert drive.drive_noise_units == drive.best.pairs[alt].z_per_repeat >= 3.0
+    assert drive.to_dict()["drive_noise_units"] == drive.drive_noise_units
     assert drive.expected_difference_a > 0 and drive.repeats >= 1
     # as many runs as the diagnosis's ordering of the runs needs: none of 4 runs orders the pair, so 3 more
     assert drive.runs_to_order == runs_to_order(len(logs)) == 3 and drive.repeats >= 3
@@ -98,6 +101,34 @@ def test_a_clear_winner_is_no_tie():
 def _set_score(sse: list[float]) -> SetScore:
     sse = np.asarray(sse, float)
     return SetScore((), sse, np.full(sse.size, 100), (), ())
+
+
+class _Named(Effect):
+    """A one-parameter candidate for the tie rule's scores."""
+
+    kind = "physics"
+    parameters = (EffectParameter("size", 1.0, 0.0, 10.0, "1", None, 0.0, 10.0, "any"),)
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+
+def _trial(sse: list[float]) -> SetScore:
+    sse = np.asarray(sse, float)
+    return SetScore(("x",), sse, np.full(sse.size, 100), tuple((np.array([1.0]),) for _ in range(3)), ())
+
+
+@pytest.mark.parametrize(("leads", "tie"), [
+    ([1.79, 1.75, 2.25, 1.69, 2.38, -1.21], True),  # every resample leads, but by 1.4 points on average: below 2
+    ([1.5, 1.2, 1.8, 0.9, 1.6, 1.1], True),  # every run leads, by less than 2 points
+    ([3.1, 2.4, 4.0, 2.9, 3.5, 2.2], False),  # every run leads, by 3 points on average: ordered
+    ([9.0, -3.0, 8.0, -4.0, 10.0, -5.0], True),  # 2.5 points on average, but the runs disagree
+])
+def test_a_pair_is_ordered_only_by_a_lead_the_diagnosis_would_call_significant(leads, tie):
+    none = _trial([100.0] * 6)  # each run's gap before: 100, so a lead in sse is a lead in points
+    best, alt = _Named("best"), _Named("alt")
+    trials = {"best": _trial([50.0] * 6), "alt": _trial([50.0 + g for g in leads])}
+    assert tied_with(best, [best, alt], trials, none, none, 200, 0) == ((alt,) if tie else ())
 
 
 def test_units_needed_follows_the_spread_of_the_per_unit_gains():
