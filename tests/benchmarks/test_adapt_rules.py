@@ -2,35 +2,23 @@
 
 from __future__ import annotations
 
-import importlib.util
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-BENCH = Path(__file__).resolve().parents[2] / "benchmarks"
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "energy"))  # interval_samples
 
+import adapt_rules  # noqa: E402  (benchmarks/ is on sys.path: tests/conftest.py)
 from interval_samples import fit_two_ground_estimator, interval_log  # noqa: E402
 
 from energy.models import AdaptedCurrentModel, log_currents  # noqa: E402
 
 
-def _load():
-    sys.path.insert(0, str(BENCH))
-    try:
-        spec = importlib.util.spec_from_file_location("adapt_rules", BENCH / "adapt_rules.py")
-        mod = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(mod)
-        return mod
-    finally:
-        sys.path.remove(str(BENCH))
-
-
 @pytest.fixture(scope="module")
 def fold():
-    ar = _load()
+    ar = adapt_rules
     est, _ = fit_two_ground_estimator()
     runs = [interval_log(40 + s, "c", vibration=0.5, offset_a=1.0 + s) for s in range(3)]  # a ground never driven
     return ar, est, runs, ar.fold_cache(est, runs, ["c/0", "c/1", "c/2"], (20.0,))

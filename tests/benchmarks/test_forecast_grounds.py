@@ -2,28 +2,12 @@
 
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
+import forecast_grounds  # benchmarks/ is on sys.path: tests/conftest.py
 import numpy as np
-
-BENCH = Path(__file__).resolve().parents[2] / "benchmarks"
-
-
-def _load():
-    sys.path.insert(0, str(BENCH))
-    try:
-        spec = importlib.util.spec_from_file_location("forecast_grounds", BENCH / "forecast_grounds.py")
-        mod = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(mod)
-        return mod
-    finally:
-        sys.path.remove(str(BENCH))
 
 
 def test_grounds_are_seeded_within_their_ranges_and_differ():
-    fg = _load()
+    fg = forecast_grounds
     a, b = fg.draw_grounds(5, seed=3), fg.draw_grounds(5, seed=3)
     assert a == b and a != fg.draw_grounds(5, seed=4)
     for fx in a.values():
@@ -33,7 +17,7 @@ def test_grounds_are_seeded_within_their_ranges_and_differ():
 
 
 def test_each_run_carries_its_ground_and_runs_differ():
-    fg = _load()
+    fg = forecast_grounds
     grounds = fg.draw_grounds(2, seed=0)
     logs = fg.ground_logs(grounds, runs=2, seed=0)
     assert [lg.meta.ground_label for lg in logs] == ["g0", "g0", "g1", "g1"]
