@@ -291,30 +291,31 @@ class AdaptiveResult:
 
     def summary(self) -> str:
         """What ``terrawatt mission`` prints: battery, status, plan against drive, errors, updates, final charge."""
-        result, battery = self, self.battery
+        battery = self.battery
         if battery is None:
             raise InvalidParameterError("the summary needs the battery driven against (a mission's result has it)")
-        budget, route0 = result.budget, result.initial_route
+        budget, route0 = self.budget, self.initial_route
         lines = [
             f"map: {self.map_label}; robot {self.robot}; battery {battery.capacity_ah:g} Ah at {battery.voltage_v:g} V "
             f"({battery.energy_capacity_wh:.0f} Wh, {battery.usable_energy_wh:.0f} Wh above the "
             f"{battery.min_reserve_pct:g} % reserve)",
             f"start {self.start_xy_m} -> goal {self.goal_xy_m}; prior trained on {self.prior_ground}; "
             f"adaptive updates {'on' if self.adapt else 'off'}",
-            f"status: {result.status} — {result.reason}",
+            f"status: {self.status} — {self.reason}",
             f"first plan (prior models):  {budget.predicted_energy_wh:8.2f} Wh  {route0.length_m:7.1f} m  "
             f"({'fits' if budget.predicted_feasible else 'does NOT fit'} the usable {battery.usable_energy_wh:.0f} Wh)",
-            f"driven (actual):            {result.driven_energy_j / 3600:8.2f} Wh  in {len(result.legs)} legs",
-            f"excitation manoeuvres:      {result.excitation_energy_j / 3600:8.2f} Wh",
-            f"prediction error before / after updates: {_percent(result.error_before_update_pct)} / "
-            f"{_percent(result.error_after_update_pct)}",
-            f"updates accepted: {result.accepted_updates} of {len(result.updates)}; route changes {result.route_changes}",
+            f"driven (actual):            {self.driven_energy_j / 3600:8.2f} Wh  in {len(self.legs)} legs",
+            f"excitation manoeuvres:      {self.excitation_energy_j / 3600:8.2f} Wh",
+            f"prediction error before / after updates: {_percent(self.error_before_update_pct)} / "
+            f"{_percent(self.error_after_update_pct)}",
+            f"updates accepted: {self.accepted_updates} of {len(self.updates)}; route changes {self.route_changes}",
         ]
-        lines += [f"skipped update {line}" for line in result.skipped_updates]
+        lines += [f"skipped update {line}" for line in self.skipped_updates]
         if budget.depleted:
             lines.append(f"the battery ran out {budget.depleted_time_s:.1f} s into the mission")
+        loop = "" if self.computing_time_s is None else f"; loop computing {self.computing_time_s:.1f} s"
         lines.append(f"final state of charge {budget.arrival_soc_pct:.1f} % (margin {budget.reserve_margin_pct:+.1f} "
-                     f"points above the reserve); loop computing {self.computing_time_s:.1f} s")
+                     f"points above the reserve){loop}")
         return "\n".join(lines)
 
     def write(self, out_dir: str | os.PathLike[str], *, logs: bool = False, on_figure_error: str = "warn"
