@@ -46,8 +46,11 @@ def check_band_hz(band_hz: Any, name: str = "band_hz") -> tuple[float, float]:
     if isinstance(band_hz, (str, bytes)) or not hasattr(band_hz, "__len__") or len(band_hz) != 2:
         raise InvalidParameterError(f"{name} must be a pair (low_hz, high_hz) of frequencies in Hz, got {band_hz!r:.80}",
                                     parameter=name)
-    low = check_real(f"{name}[0] (low_hz)", band_hz[0], low=0.0)
-    high = check_real(f"{name}[1] (high_hz)", band_hz[1], low=0.0, low_inclusive=False)
+    try:
+        low = check_real(f"{name}[0] (low_hz)", band_hz[0], low=0.0)
+        high = check_real(f"{name}[1] (high_hz)", band_hz[1], low=0.0, low_inclusive=False)
+    except InvalidParameterError as exc:  # the error is about the band: a front end says it by its own word
+        raise InvalidParameterError(str(exc), parameter=name) from None
     if not low < high:
         raise InvalidParameterError(f"{name} must be (low_hz, high_hz) with low_hz < high_hz, got ({low!r}, {high!r})",
                                     parameter=name)
