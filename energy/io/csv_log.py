@@ -215,24 +215,25 @@ def read_csv_log(
     layout : CsvLayout, optional
         The file's columns, units, rates and track width (default ``CsvLayout()``: the layout
         :func:`write_csv_log` writes). Its fields:
-    columns : mapping field -> column name, optional
-        Fields (:data:`CSV_FIELDS`): ``time``, ``accel_z`` (required); ``v`` and ``omega``,
-        or ``speed_left`` and ``speed_right`` (wheel speeds, with ``track_width_m``; v =
-        mean, omega = (right - left) / track_width_m); ``current_left`` and
-        ``current_right`` (both, or neither for a log to predict from only); optional ``x``,
-        ``y``, ``heading`` (all three), ``gyro_z`` (IMU yaw rate), ``battery_voltage``,
-        ``battery_current`` (pack current, A; needs ``battery_voltage``) and ``ground`` (text labels). Default: :data:`DEFAULT_CSV_COLUMNS`, the layout written by
-        :func:`write_csv_log` (optional columns, the currents included, used when present).
-    units : mapping field -> unit, optional
-        Declared unit per field (:data:`CSV_UNITS`: current ``"A"``/``"mA"``; speed
-        ``"m/s"``, ``"cm/s"``, ``"mm/s"``, ``"km/h"``; omega ``"rad/s"``/``"deg/s"``; time
-        ``"s"``, ``"ms"``, ``"us"``, ``"ns"``; accel ``"m/s^2"``/``"g"``; x/y ``"m"``,
-        ``"cm"``, ``"mm"``; heading ``"rad"``/``"deg"``; gyro_z as omega; battery_voltage
-        ``"V"``/``"mV"``; battery_current as current). Undeclared fields are SI.
-    track_width_m : float, optional
-        With wheel speeds, the track width that gives omega (default: the header's).
-    rates : {"mixed", "single"}
-        Whether the file interleaves streams of different rates (see above).
+
+        - ``columns`` (mapping field -> column name, optional):
+          Fields (:data:`CSV_FIELDS`): ``time``, ``accel_z`` (required); ``v`` and ``omega``,
+          or ``speed_left`` and ``speed_right`` (wheel speeds, with ``track_width_m``; v =
+          mean, omega = (right - left) / track_width_m); ``current_left`` and
+          ``current_right`` (both, or neither for a log to predict from only); optional ``x``,
+          ``y``, ``heading`` (all three), ``gyro_z`` (IMU yaw rate), ``battery_voltage``,
+          ``battery_current`` (pack current, A; needs ``battery_voltage``) and ``ground`` (text labels). Default: :data:`DEFAULT_CSV_COLUMNS`, the layout written by
+          :func:`write_csv_log` (optional columns, the currents included, used when present).
+        - ``units`` (mapping field -> unit, optional):
+          Declared unit per field (:data:`CSV_UNITS`: current ``"A"``/``"mA"``; speed
+          ``"m/s"``, ``"cm/s"``, ``"mm/s"``, ``"km/h"``; omega ``"rad/s"``/``"deg/s"``; time
+          ``"s"``, ``"ms"``, ``"us"``, ``"ns"``; accel ``"m/s^2"``/``"g"``; x/y ``"m"``,
+          ``"cm"``, ``"mm"``; heading ``"rad"``/``"deg"``; gyro_z as omega; battery_voltage
+          ``"V"``/``"mV"``; battery_current as current). Undeclared fields are SI.
+        - ``track_width_m`` (float, optional):
+          With wheel speeds, the track width that gives omega (default: the header's).
+        - ``rates`` ({"mixed", "single"}):
+          Whether the file interleaves streams of different rates (see above).
     robot, ground_label, velocity_source : optional
         Metadata. ``None`` takes the value from a :func:`write_csv_log` header when the file
         has one; otherwise robot ``"unknown"``, velocity ``"measured"`` for wheel speeds and
