@@ -483,13 +483,8 @@ class CellModelRegistry(EvidenceMixin):
 
         Raises
         ------
-        FileFormatError
-            Missing directory; a missing, corrupt or inconsistent ``registry.npz``,
-            ``history.json`` or model file (the message names the piece); ``load_model``
-            failing or returning something without fit/predict.
-        FormatVersionError
-            ``registry.npz`` or ``history.json`` of another format version, or
-            ``load_model`` raising FormatVersionError.
+        FileFormatError, FormatVersionError
+            As :func:`planner.registry.store.load_registry` (the message names the piece).
         GridMismatchError
             ``terrain`` is on another grid.
         """

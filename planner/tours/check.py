@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from energy import Battery
-from terrawatt_base.checks import check_int, check_seed
+from terrawatt_base.checks import check_instance, check_int, check_seed
 from terrawatt_base.dask_client import Compute
 from terrawatt_base.errors import InvalidParameterError
 
@@ -102,16 +102,19 @@ def simulate_tours_mc(result: TourResult, n: int = 1000, *, seed: int | None = 0
     n = check_int("n", n, low=1)
     seed = check_seed(seed)
     mode = draw_from or ("model" if result.cost.has_interval else "parameters")
+    compute = Compute() if compute is None else check_instance("compute", compute, Compute)
     runs: dict[str, tuple[MonteCarloResult, ...]] = {}
-    for k, tour in enumerate(result.tours):
-        if not tour.legs:
-            continue
-        studies = []
-        for route, battery, forecast in _segments(result, k):
-            studies.append(simulate_missions_mc(
-                result.terrain, route, battery, n, seed=None if seed is None else seed + k, cost=result.cost,
-                draw_from=mode, forecast=forecast if mode == "model" else None, compute=compute))
-        runs[tour.robot] = tuple(studies)
+    with compute.session() as (client, where):  # one cluster for every segment of every tour
+        each = compute if client is None else Compute(client=client, where=where, progress=compute.progress)
+        for k, tour in enumerate(result.tours):
+            if not tour.legs:
+                continue
+            studies = []
+            for route, battery, forecast in _segments(result, k):
+                studies.append(simulate_missions_mc(
+                    result.terrain, route, battery, n, seed=None if seed is None else seed + k, cost=result.cost,
+                    draw_from=mode, forecast=forecast if mode == "model" else None, compute=each))
+            runs[tour.robot] = tuple(studies)
     return TourCheck(result.risk, runs, mode)
 
 
