@@ -10,7 +10,7 @@ is excluded):
 - ``windowed``: :func:`terrain.iter_surface_windows` (slope, aspect and gradients tile by tile
   with halo cells, kept as the blocked mask a cost needs) — preparation that never holds
   the whole raster;
-- ``full``: ``read_geotiff`` + ``EnergyCost.from_presets`` (prepare), then the directed
+- ``full``: ``read_geotiff`` + ``CostSpec().build`` (prepare), then the directed
   16-connected 1-cell lattice optimum (graph build + A*; the baseline, the exact optimum);
 - ``c2f``: the same preparation, then :func:`planner.plan_coarse_to_fine` (factor side / 256
   within 4..16 by default, a coarse lattice of about 256^2 nodes; the corridor is three

@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 
 from energy import PhysicsEnergyModel, ground_preset, robot_preset
-from planner import EnergyCost, Lattice, PlannerSettings, plan_route, warm_up_kernels
+from planner import CostSpec, EnergyCost, Lattice, PlannerSettings, plan_route, warm_up_kernels
 from planner.anyangle import DEFAULT_POLISH_SPACINGS_CELLS, anyangle_path, polish_path, warm_up_anyangle
 from planner.kernels import variants
 from planner.ompl import OMPL_PLANNERS
@@ -139,7 +139,7 @@ def _warm_up_planners() -> float:
 def _make_cost(tmap, robot: str) -> EnergyCost:
     model = PhysicsEnergyModel(robot_preset(robot))
     grounds = {name: ground_preset(name) for name in tmap.ground_names.values()}
-    return EnergyCost.from_model(tmap, model, grounds, speed_mps=0.5)
+    return CostSpec(energy_model=model, grounds=grounds, speed_mps=0.5).build(tmap)
 
 
 def _best_time(fn: Any, repeats: int) -> float:

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from energy import PhysicsEnergyModel, ground_preset, robot_preset
+from energy import ground_preset, robot_preset
 from planner import EnergyCost, Lattice, plan_route
 from planner.cost_spec import CostSpec
 from planner.route import evaluate_route
@@ -59,7 +59,7 @@ def family_cost(tmap: Any, robot: Any, lateral: float) -> EnergyCost:
     """The map priced for ``robot`` with every ground's lateral friction set to ``lateral``."""
     grounds = {name: ground_preset(name).replace(lateral_friction_coef=lateral)
                for name in sorted(set(tmap.ground_names.values()))}
-    return EnergyCost.from_model(tmap, PhysicsEnergyModel(robot), grounds, speed_mps=0.5)
+    return CostSpec(robot=robot, grounds=grounds, speed_mps=0.5).build(tmap)
 
 
 def _queries(cost: EnergyCost, rng: np.random.Generator, n: int) -> list[tuple[tuple[float, float], ...]]:

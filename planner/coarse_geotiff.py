@@ -27,11 +27,11 @@ first two thirds kept, so memory is bounded by the budget whatever the route's e
 ``fine_windows`` lists the windows read. The whole-map fallback then runs only if the whole
 map fits the budget (else :class:`PlanningError`).
 
-With the default pricer (``cost_from`` None, or ``functools.partial(EnergyCost.from_presets,
-...)`` with keywords only) the coarse stage does not build an EnergyCost per tile: such a cost
+With the physics presets (``cost_from`` None, or a :class:`~planner.CostSpec` without a model,
+an energy model or ground parameters of its own) the coarse stage does not build an EnergyCost per tile: such a cost
 of a window (no obstacles, ground unknown) blocks exactly the cells whose slope
 (:func:`terrain.surface.surface_layers`, the formula TerrainMap uses) exceeds its
-``max_slope_rad`` and gives every cell the unknown ground's table row, so the tile's blocked
+slope limit and gives every cell the unknown ground's table row, so the tile's blocked
 cells and rows are computed from those two facts of the cost priced on the first window —
 the same numbers, 1.6 times faster (41 vs 66 ms per 1024^2 tile, measured).
 
@@ -47,7 +47,6 @@ segment, which the lattice does not have.
 
 from __future__ import annotations
 
-import functools
 import logging
 import math
 import os
@@ -73,6 +72,7 @@ from .coarse import (
     search_corridor,
 )
 from .coarse_chain import FINE_MARGIN_CELLS, chain_corridor, haloed_cells, min_window_cells
+from .cost_spec import CostSpec
 from .edge_cost import EnergyCost
 from .lattice import Lattice
 from .points import as_points
@@ -82,7 +82,7 @@ __all__ = ["coarse_to_fine_windowed", "CostBuilder"]
 
 logger = logging.getLogger(__name__)
 
-CostBuilder = Callable[[TerrainMap], EnergyCost]
+CostBuilder = CostSpec | Callable[[TerrainMap], EnergyCost]
 
 
 @dataclass
@@ -115,15 +115,16 @@ class _Pricer:
     """``cost_from`` applied to windows, checked: an EnergyCost on the window, the same tables everywhere."""
 
     def __init__(self, cost_from: CostBuilder | None) -> None:
-        if cost_from is not None and not callable(cost_from):
+        spec = CostSpec() if cost_from is None else cost_from
+        if not isinstance(spec, CostSpec) and not callable(spec):
             raise InvalidParameterError(
-                f"cost_from must be a callable TerrainMap -> EnergyCost (e.g. functools.partial("
-                f"EnergyCost.from_presets, robot='husky')), got {type(cost_from).__name__!r}")
-        self.build = EnergyCost.from_presets if cost_from is None else cost_from
+                f"cost_from must be a CostSpec or a callable TerrainMap -> EnergyCost, got {type(spec).__name__!r}",
+                parameter="cost_from")
+        self.build = spec.build if isinstance(spec, CostSpec) else spec
         self.ref: EnergyCost | None = None
         #: A preset pricer: a window's blocked cells and table rows follow from the first cost (module docstring).
-        self.presets = cost_from is None or (isinstance(cost_from, functools.partial) and not cost_from.args
-                                             and cost_from.func == EnergyCost.from_presets)
+        self.presets = isinstance(spec, CostSpec) and spec.model is None and spec.energy_model is None \
+            and spec.grounds is None
 
     def __call__(self, window: ElevationWindow) -> EnergyCost:
         tmap = window.terrain_map()
@@ -138,7 +139,7 @@ class _Pricer:
             raise InvalidParameterError(
                 "cost_from priced two windows of the map with different energy tables or settings (ground rows "
                 f"{self.ref.ground_labels!r} vs {cost.ground_labels!r}); windowed planning needs one set of tables "
-                "for the whole map: price every window alike (e.g. EnergyCost.from_presets)")
+                "for the whole map: price every window alike (e.g. with one CostSpec)")
         return cost
 
     def tile(self, window: ElevationWindow) -> tuple[np.ndarray, np.ndarray]:
@@ -210,8 +211,8 @@ def coarse_to_fine_windowed(
     nothing). ``options``: factor, corridor, the coarse stage's tile side (``window_cells``:
     memory holds one tile, about 100 bytes per cell priced, plus the coarse grid) and the fine
     windows' budget (``fine_window_budget_cells``). ``cost_from``: ``TerrainMap -> EnergyCost``
-    applied to each window, pricing every window alike (e.g. ``functools.partial(
-    EnergyCost.from_presets, robot="jackal")``; default :meth:`EnergyCost.from_presets`).
+    applied to each window, pricing every window alike: a :class:`~planner.CostSpec` (e.g.
+    ``CostSpec(robot="jackal")``; default ``CostSpec()``, the Husky on the presets) or a callable.
 
     Returns a :class:`CoarseToFine` (``optimum_j`` NaN: no comparison without the whole map)
     whose ``fine_window_cells`` / ``fine_windows`` say what the fine stage read (its times

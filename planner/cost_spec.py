@@ -1,9 +1,11 @@
 """CostSpec: how a map is priced — one immutable value, and the one way from it to a map's :class:`EnergyCost`.
 
 Every answer of the planner prices a map the same way: a robot at a planning speed, a
-steepest drivable slope, and either the physics presets (with a preset for cells of unknown
-ground) or a saved current model (with the training grounds the map's classes are priced as),
-at the mean or at a risk level. A :class:`CostSpec` holds those choices, checked once; the
+steepest drivable slope, and either the robot's physics model over the map's grounds (the
+ground presets the classes are named after, or parameters given per class; a preset for cells
+of unknown ground), another :class:`energy.EnergyModel` over given grounds, or a saved current
+model (with the training grounds the map's classes are priced as), at the mean or at a risk
+level. A :class:`CostSpec` holds those choices, checked once; the
 entry points (:func:`planner.plan_report.plan_and_compare`, the batch, reach, mission, Monte
 Carlo, replay and tour entry points) take one instead of threading them one by one, and
 :meth:`CostSpec.build` is the one door to a map's edge costs (:meth:`CostSpec.at_risk` the one
@@ -22,14 +24,19 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
+from energy import GROUND_PRESETS, EnergyModel, PhysicsEnergyModel, ground_preset
 from energy.params import RobotParams, robot_params
 from terrain import TerrainMap
+from terrain.terrain_map import UNKNOWN_GROUND
 from terrawatt_base.checks import check_real
-from terrawatt_base.errors import InvalidParameterError
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from .edge_cost import EnergyCost
 from .model_cost import model_energy_cost
 from .risk import check_planning_risk, risk_cost
+from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES, ground_table_rows, tabulate
 from .warmup import warm_up_kernels
 
 __all__ = ["CostSpec", "PricedMap", "PlanModel"]
@@ -85,14 +92,27 @@ class CostSpec:
     ----------
     robot : str, path or RobotParams
         A robot preset name, a robot file (``.json``) or a :class:`~energy.RobotParams`
-        (:func:`energy.params.robot_params`); outputs name it as given.
+        (:func:`energy.params.robot_params`); outputs name it as given. Its physics model prices
+        the map unless ``energy_model`` or ``model`` is given; its battery voltage and turn rate
+        (for charge and turn durations) serve an ``energy_model`` that carries no robot of its own.
     speed_mps : float
         Planning speed (m/s, > 0).
     max_slope_deg : float
         Steepest drivable slope (degrees, in (0, 90)); steeper cells are blocked.
-    unknown_ground : str or None
-        The physics presets only: the ground preset of cells of unknown ground (class ``-1``);
+    unknown_ground : str, ground parameters or None
+        Cells of unknown ground (class ``-1``): a ground preset's name or
+        :class:`~energy.GroundParams` for the physics model; the parameters an ``energy_model``
+        takes for a ground (a preset's name is refused there, where the map has such cells);
         ``None`` refuses such cells. Ignored with ``model``.
+    grounds : mapping, optional
+        The ground parameters of the map's classes, keyed by class name
+        (``terrain.ground_names``) or class id (e.g. ``{"asphalt": ground_preset("asphalt"),
+        1: wet}``); every class of the map needs one, extra keys are ignored. Default: the
+        ground preset each class is named after. Not with ``model``.
+    energy_model : energy.EnergyModel, optional
+        An energy model to tabulate over ``grounds`` (``energy_per_metre_j`` and
+        ``turn_energy_j``) instead of the robot's :class:`energy.PhysicsEnergyModel`; ``grounds``
+        is then required. Not with ``model``.
     model : CurrentModel, optional
         A fitted current model (e.g. :func:`energy.load_current_model`) pricing the edges
         (:func:`planner.model_energy_cost`) instead of the physics presets.
@@ -108,7 +128,9 @@ class CostSpec:
     Raises
     ------
     InvalidParameterError
-        A bad speed, slope or risk level (the message names the parameter).
+        A bad speed, slope or risk level (the message names the parameter); ``model`` with
+        ``grounds`` or ``energy_model``; ``energy_model`` without ``grounds`` or not an
+        :class:`energy.EnergyModel`.
 
     Examples
     --------
@@ -122,7 +144,9 @@ class CostSpec:
     robot: str | os.PathLike[str] | RobotParams = "husky"
     speed_mps: float = 0.5
     max_slope_deg: float = 20.0
-    unknown_ground: str | None = "gravel"
+    unknown_ground: Any = "gravel"
+    grounds: Mapping[str, Any] | Mapping[int, Any] | None = None
+    energy_model: Any = None
     model: Any = None
     model_label: str | None = None
     model_ground: str | Mapping[str, str] | None = None
@@ -134,6 +158,20 @@ class CostSpec:
             "max_slope_deg", self.max_slope_deg, low=0.0, high=90.0, low_inclusive=False, high_inclusive=False))
         if self.risk is not None:
             object.__setattr__(self, "risk", check_planning_risk(self.risk, "risk"))
+        if self.model is not None and (self.grounds is not None or self.energy_model is not None):
+            raise InvalidParameterError("a current model prices the map by its training grounds (model_ground); "
+                                        "grounds and energy_model are for an energy model", parameter="model")
+        if self.energy_model is not None:
+            if not isinstance(self.energy_model, EnergyModel):
+                raise InvalidParameterError(
+                    f"energy_model must be an energy.EnergyModel (energy_per_metre_j and turn_energy_j), got "
+                    f"{type(self.energy_model).__name__!r}", parameter="energy_model")
+            if self.grounds is None:
+                raise InvalidParameterError("energy_model needs the ground parameters of the map's classes (grounds)",
+                                            parameter="grounds")
+        if self.grounds is not None and not isinstance(self.grounds, Mapping):
+            raise InvalidParameterError(f"grounds must be a mapping of ground class (name or id) to parameters, got "
+                                        f"{type(self.grounds).__name__!r}", parameter="grounds")
 
     @property
     def max_slope_rad(self) -> float:
@@ -158,7 +196,12 @@ class CostSpec:
         return self.model_label or type(self.model).__name__
 
     def build(self, terrain: TerrainMap) -> EnergyCost:
-        """The map's edge costs at the mean: :meth:`EnergyCost.from_presets`, or the model's.
+        """The map's edge costs at the mean: the energy model tabulated over the map's grounds, or the current model's.
+
+        The energy model (the robot's physics model, or :attr:`energy_model`) is asked once
+        per ground class of the map for its energy per metre at every grade of the table and
+        its turn energy at every angle (:func:`planner.tables.tabulate`); a current model is
+        priced by :func:`planner.model_energy_cost`.
 
         Parameters
         ----------
@@ -173,15 +216,36 @@ class CostSpec:
 
         Raises
         ------
+        UnknownNameError
+            A ground class of the map without parameters (named after no preset, when
+            :attr:`grounds` is not given: the message lists the presets); an unknown robot
+            or unknown-ground preset.
+        InvalidParameterError
+            ``terrain`` not a :class:`~terrain.TerrainMap`; unknown-ground cells with
+            :attr:`unknown_ground` None; an energy model returning negative, non-finite or
+            wrongly shaped energies, or without a battery voltage and turn rate of its own or
+            the robot's.
         TerrawattError
-            As :meth:`EnergyCost.from_presets` or :func:`planner.model_energy_cost`.
+            As :func:`planner.model_energy_cost` with a current model.
         """
+        if not isinstance(terrain, TerrainMap):
+            raise InvalidParameterError(f"terrain must be a TerrainMap, got {type(terrain).__name__!r}",
+                                        parameter="terrain")
         params = self.params  # a preset, a robot file or RobotParams: resolved once
-        if self.model is None:
-            return EnergyCost.from_presets(terrain, robot=params, speed_mps=self.speed_mps,
-                                           max_slope_rad=self.max_slope_rad, unknown_ground=self.unknown_ground)
-        return model_energy_cost(terrain, self.model, params, self.speed_mps, model_ground=self.model_ground,
-                                 max_slope_rad=self.max_slope_rad)
+        if self.model is not None:
+            return model_energy_cost(terrain, self.model, params, self.speed_mps, model_ground=self.model_ground,
+                                     max_slope_rad=self.max_slope_rad)
+        model = PhysicsEnergyModel(params) if self.energy_model is None else self.energy_model
+        physics = isinstance(model, PhysicsEnergyModel)
+        grounds = _preset_grounds(terrain) if self.grounds is None else self.grounds
+        unknown = self.unknown_ground
+        if isinstance(unknown, str):  # a preset's name: the physics model's ground
+            if not physics and np.any(np.asarray(terrain.ground) == UNKNOWN_GROUND):
+                raise InvalidParameterError(
+                    f"unknown_ground {unknown!r} names a ground preset of the physics model; give the energy model's "
+                    f"own parameters for the map's cells of unknown ground", parameter="unknown_ground")
+            unknown = ground_preset(unknown) if physics else None
+        return _tabulated_cost(terrain, model, grounds, unknown, self.speed_mps, self.max_slope_rad, params)
 
     def needs_interval(self, cost: EnergyCost, *, also: str | None = None) -> None:
         """Raise unless ``cost`` has a predictive interval, which :attr:`risk` (and the parameter ``also``) need.
@@ -242,6 +306,53 @@ class CostSpec:
         mean_cost = self.build(terrain)
         cost = self.at_risk(mean_cost)
         return PricedMap(self, map_label, terrain, mean_cost, cost, time.perf_counter() - t0, compile_s)
+
+
+def _preset_grounds(terrain: TerrainMap) -> dict[int, Any]:
+    """The ground preset of every class of the map, by class id (each class named after a preset)."""
+    grounds = {}
+    for gid, name in terrain.ground_names.items():
+        if name not in GROUND_PRESETS:
+            raise UnknownNameError(
+                f"ground class {gid} of the map is named {name!r}, which has no preset; "
+                f"known grounds: {sorted(GROUND_PRESETS)!r}", parameter="grounds")
+        grounds[gid] = ground_preset(name)
+    return grounds
+
+
+def _robot_figure(model: Any, robot: RobotParams, name: str) -> float:
+    """The model's (or its robot's) value of ``name``, else the spec's robot's."""
+    for owner in (model, getattr(model, "robot", None), robot):
+        value = getattr(owner, name, None)
+        if value is not None:
+            return float(value)
+    raise InvalidParameterError(f"neither the energy model nor the robot gives {name}", parameter="energy_model")
+
+
+def _tabulated_cost(terrain: TerrainMap, model: Any, grounds: Mapping[Any, Any], unknown_ground: Any,
+                    speed_mps: float, max_slope_rad: float, robot: RobotParams) -> EnergyCost:
+    """An energy model tabulated over the map's ground classes: the map-preparation step.
+
+    ``model.energy_per_metre_j(speed_mps, grades, ground)`` is called once per ground with
+    every grade of the table, and ``model.turn_energy_j(angles, ground)`` once per ground over
+    ``[0, pi]`` (turns are priced on level ground: a pivot's extra load on a slope is not in the
+    table). The model's energy is per metre *travelled*; the table stores it per *horizontal*
+    (map) metre, i.e. times ``sqrt(1 + grade**2)``. A model may return ``+inf`` for grades a
+    ground cannot be driven at; segments meeting such a grade in their direction of travel are
+    then invalid in that direction only.
+    """
+    t0 = time.perf_counter()
+    voltage = _robot_figure(model, robot, "battery_voltage_v")
+    turn_rate = _robot_figure(model, robot, "turn_rate_radps")
+    rows, params_rows, labels = ground_table_rows(terrain, grounds, unknown_ground)
+    grade_table, turn_table = tabulate(model, speed_mps, params_rows, labels, max_slope_rad=max_slope_rad,
+                                       grade_samples=DEFAULT_GRADE_SAMPLES, turn_samples=DEFAULT_TURN_SAMPLES)
+    cost = EnergyCost(terrain, rows, grade_table, turn_table, speed_mps=speed_mps, max_slope_rad=max_slope_rad,
+                      battery_voltage_v=voltage, turn_rate_radps=turn_rate, ground_labels=tuple(labels))
+    if isinstance(model, PhysicsEnergyModel):
+        cost.physics_model, cost.ground_params = model, tuple(params_rows)
+    cost.prep_time_s = time.perf_counter() - t0
+    return cost
 
 
 @dataclass(frozen=True, eq=False)

@@ -28,18 +28,15 @@ through which the lattice, the refinement and the OMPL objective call them.
 from __future__ import annotations
 
 import math
-import os
 import time
-from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
-from energy import GROUND_PRESETS, EnergyModel, PhysicsEnergyModel, RobotParams, ground_preset
-from energy.params import robot_params
+from energy import PhysicsEnergyModel
 from terrain import TerrainMap
 from terrawatt_base.checks import check_real
-from terrawatt_base.errors import InvalidParameterError, OutOfBoundsError, UnknownNameError
+from terrawatt_base.errors import InvalidParameterError, OutOfBoundsError
 
 from .cache import CACHE_SIZE, ResultCache
 from .kernels import CostArrays, walk_forward, walk_many
@@ -50,10 +47,7 @@ from .tables import (
     DEFAULT_TURN_SAMPLES,
     check_spread_dof,
     check_spread_tables,
-    check_table_sizes,
     check_tables,
-    ground_table_rows,
-    tabulate,
 )
 
 __all__ = [
@@ -67,19 +61,12 @@ __all__ = [
 DEFAULT_MAX_SLOPE_RAD = math.radians(20.0)
 
 
-def _model_turn_rate_radps(model: EnergyModel) -> float | None:
-    for owner in (model, getattr(model, "robot", None)):
-        value = getattr(owner, "turn_rate_radps", None)
-        if value is not None:
-            return float(value)
-    return None
-
-
 class EnergyCost:
     """Precomputed per-cell tables for the energy (J) of straight segments and turns on a map.
 
-    Build it with :meth:`from_model`; the constructor takes ready tables (for custom cost
-    models and tests) and validates them; then it answers segment, path and turn energies,
+    Build it for a map with :meth:`planner.CostSpec.build` (which tabulates an energy model over
+    the map's grounds); the constructor takes ready tables (for custom cost models and tests) and
+    validates them; then it answers segment, path and turn energies,
     free points, lower bounds and connected regions.
 
     Parameters
@@ -126,7 +113,7 @@ class EnergyCost:
         Lowest energy per metre over every free cell and every grade that cell can present to
         a straight motion (``|grade| <= tan(slope)``); ``lower_bound_j`` is this times distance.
     prep_time_s : float
-        Seconds spent building the tables (set by :meth:`from_model`; numba compilation excluded).
+        Seconds spent building the tables (set by :meth:`planner.CostSpec.build`; numba compilation excluded).
 
     Raises
     ------
@@ -198,7 +185,7 @@ class EnergyCost:
         #: Cells whose table row content differs from the cost this one was derived from
         #: (:meth:`with_tables`); ``None`` for a cost built from scratch.
         self.changed_cells: np.ndarray | None = None
-        #: The physics model that priced the tables (:meth:`from_model` with a
+        #: The physics model that priced the tables (:meth:`planner.CostSpec.build` with
         #: :class:`energy.PhysicsEnergyModel`) and its ground parameters per table row, so a
         #: mission forecast can price the whole driven profile (:func:`planner.route_price.profile_forecast_w`);
         #: ``None`` otherwise.
@@ -308,191 +295,6 @@ class EnergyCost:
             a, b = divmod(pair, n_new)
             differs[pair] = not np.array_equal(self.grade_table_j_per_m[a], other.grade_table_j_per_m[b])
         return differs[code] & ~self.blocked
-
-    # ------------------------------------------------------------------ construction
-    @classmethod
-    def from_model(
-        cls,
-        terrain: TerrainMap,
-        model: EnergyModel,
-        grounds: Mapping[str, Any] | Mapping[int, Any],
-        speed_mps: float,
-        *,
-        unknown_ground: Any = None,
-        max_slope_rad: float = DEFAULT_MAX_SLOPE_RAD,
-        battery_voltage_v: float | None = None,
-        turn_rate_radps: float | None = None,
-        grade_samples: int = DEFAULT_GRADE_SAMPLES,
-        turn_samples: int = DEFAULT_TURN_SAMPLES,
-    ) -> EnergyCost:
-        """Tabulate an energy model over a map's grounds (the map-preparation step).
-
-        ``model.energy_per_metre_j(speed_mps, grades, ground)`` is called once per ground
-        with all ``grade_samples`` grades, and ``model.turn_energy_j(angles, ground)`` once
-        per ground with ``turn_samples`` angles over ``[0, pi]`` (turns are priced on level
-        ground: a pivot's extra load on a slope is not in the table). The model's energy is per
-        metre *travelled*; the table stores it per *horizontal* (map) metre, i.e. times
-        ``sqrt(1 + grade**2)``. A model may return ``+inf`` for grades a ground cannot be
-        driven at; segments meeting such a grade in their direction of travel are then
-        invalid in that direction only.
-
-        Parameters
-        ----------
-        terrain : TerrainMap
-            The map.
-        model : energy.EnergyModel
-            The energy model (``energy_per_metre_j`` and ``turn_energy_j``), e.g.
-            :class:`energy.PhysicsEnergyModel`; its cell classes are the map's grounds here
-            (and, optionally, a ``robot`` with ``battery_voltage_v`` and ``turn_rate_radps``).
-        grounds : mapping
-            Ground parameters per ground class of the map, keyed by class name (see
-            ``terrain.ground_names``) or by class id. Every class present in the map's
-            ``ground`` layer needs an entry; extra entries are ignored.
-        speed_mps : float
-            Planning speed (m/s, > 0).
-        unknown_ground : ground params, optional
-            Parameters for cells of unknown ground (class ``-1``). Required when the map has
-            such cells.
-        max_slope_rad : float
-            Cells steeper than this are impassable (default 20 degrees).
-        battery_voltage_v, turn_rate_radps : float, optional
-            Default to ``model.robot.battery_voltage_v`` and ``model.robot.turn_rate_radps``
-            (or ``model.turn_rate_radps``).
-        grade_samples, turn_samples : int
-            Table sizes (``grade_samples`` odd, >= 3; ``turn_samples`` >= 2).
-
-        Returns
-        -------
-        EnergyCost
-
-        Raises
-        ------
-        UnknownNameError
-            A ground class of the map has no parameters in ``grounds``.
-        InvalidParameterError
-            Unknown-ground cells without ``unknown_ground``; a model returning negative,
-            non-finite or wrongly shaped energies; missing voltage / turn rate; bad sizes.
-
-        Examples
-        --------
-        >>> import numpy as np
-        >>> from terrain import TerrainMap
-        >>> from energy import PhysicsEnergyModel, robot_preset, ground_preset
-        >>> tmap = TerrainMap(np.zeros((8, 8)), 1.0, ground=np.zeros((8, 8), int), ground_names={0: "asphalt"})
-        >>> cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(robot_preset("husky")),
-        ...                              {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
-        >>> bool(cost.segment_energy_j([[0.5, 0.5]], [[6.5, 0.5]])[0] > 0)
-        True
-        """
-        t0 = time.perf_counter()
-        if not isinstance(terrain, TerrainMap):
-            raise InvalidParameterError(f"terrain must be a TerrainMap, got {type(terrain).__name__!r}")
-        if not isinstance(model, EnergyModel):
-            raise InvalidParameterError(f"model must be an energy.EnergyModel (energy_per_metre_j and turn_energy_j), "
-                                        f"got {type(model).__name__!r}")
-        speed = check_real("speed_mps", speed_mps, low=0.0, low_inclusive=False)
-        slope = check_real("max_slope_rad", max_slope_rad, low=0.0, high=math.pi / 2, low_inclusive=False,
-                           high_inclusive=False)
-        n_grade, n_turn = check_table_sizes(grade_samples, turn_samples)
-        robot = getattr(model, "robot", None)
-        if battery_voltage_v is None:
-            battery_voltage_v = getattr(robot, "battery_voltage_v", None)
-            if battery_voltage_v is None:
-                raise InvalidParameterError(
-                    "battery_voltage_v is None and the model has no robot.battery_voltage_v; pass it"
-                )
-        if turn_rate_radps is None:
-            turn_rate_radps = _model_turn_rate_radps(model)
-            if turn_rate_radps is None:
-                raise InvalidParameterError(
-                    "turn_rate_radps is None and the model has no turn_rate_radps (nor robot.turn_rate_radps); pass it"
-                )
-
-        rows, params_rows, labels = ground_table_rows(terrain, grounds, unknown_ground)
-        grade_table, turn_table = tabulate(
-            model, speed, params_rows, labels, max_slope_rad=slope, grade_samples=n_grade, turn_samples=n_turn
-        )
-        cost = cls(
-            terrain,
-            rows,
-            grade_table,
-            turn_table,
-            speed_mps=speed,
-            max_slope_rad=slope,
-            battery_voltage_v=float(battery_voltage_v),
-            turn_rate_radps=float(turn_rate_radps),
-            ground_labels=tuple(labels),
-        )
-        if isinstance(model, PhysicsEnergyModel):
-            cost.physics_model, cost.ground_params = model, tuple(params_rows)
-        cost.prep_time_s = time.perf_counter() - t0
-        return cost
-
-    @classmethod
-    def from_presets(
-        cls,
-        terrain: TerrainMap,
-        *,
-        robot: str | os.PathLike[str] | RobotParams = "husky",
-        speed_mps: float = 0.5,
-        max_slope_rad: float = DEFAULT_MAX_SLOPE_RAD,
-        unknown_ground: str | None = "gravel",
-    ) -> EnergyCost:
-        """Physics-model edge costs on a map whose ground names are preset names.
-
-        :meth:`from_model` with :class:`energy.PhysicsEnergyModel` of ``robot_params(robot)``
-        and ``ground_preset(name)`` for every ground class of the map.
-
-        Parameters
-        ----------
-        terrain : TerrainMap
-            The map; each name of ``terrain.ground_names`` must be a ground preset.
-        robot : str, path or RobotParams
-            A robot preset name, a robot file (``.json``) or a :class:`~energy.RobotParams`
-            (:func:`energy.params.robot_params`).
-        speed_mps : float
-            Planning speed (m/s, > 0).
-        max_slope_rad : float
-            Cells steeper than this are impassable.
-        unknown_ground : str or None
-            Ground preset for cells of unknown ground (class ``-1``); ``None``: the map must
-            have no such cells (as :meth:`from_model` without ``unknown_ground``).
-
-        Returns
-        -------
-        EnergyCost
-
-        Raises
-        ------
-        UnknownNameError
-            A ground class named after no preset (the message lists the presets), an
-            unknown robot or ``unknown_ground`` preset.
-        InvalidParameterError
-            As :meth:`from_model` (e.g. ``speed_mps="fast"``).
-
-        Examples
-        --------
-        >>> from terrain import flat_map
-        >>> from planner import CostSpec
-        >>> cost = CostSpec(speed_mps=0.5).build(flat_map((8, 8), 1.0))
-        >>> cost.ground_labels
-        ('asphalt',)
-        """
-        if not isinstance(terrain, TerrainMap):
-            raise InvalidParameterError(f"terrain must be a TerrainMap, got {type(terrain).__name__!r}")
-        model = PhysicsEnergyModel(robot_params(robot))
-        grounds = {}
-        for gid, name in terrain.ground_names.items():
-            if name not in GROUND_PRESETS:
-                raise UnknownNameError(
-                    f"ground class {gid} of the map is named {name!r}, which has no preset; "
-                    f"known grounds: {sorted(GROUND_PRESETS)!r}"
-                )
-            grounds[gid] = ground_preset(name)
-        unknown = None if unknown_ground is None else ground_preset(unknown_ground)
-        return cls.from_model(
-            terrain, model, grounds, speed_mps, unknown_ground=unknown, max_slope_rad=max_slope_rad
-        )
 
     def _min_energy_per_metre(self, dg: float) -> float:
         """Lowest J/m any straight motion through a free cell can cost (admissible per-metre bound)."""

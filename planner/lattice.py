@@ -134,12 +134,10 @@ class Lattice:
 
     Examples
     --------
-    >>> from energy import PhysicsEnergyModel, ground_preset, robot_preset
-    >>> from planner import EnergyCost
+    >>> from planner import CostSpec
     >>> from terrain import flat_map
     >>> tmap = flat_map((30, 40), 1.0)  # level asphalt, 1 m cells
-    >>> cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(robot_preset("husky")),
-    ...                              {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
+    >>> cost = CostSpec(speed_mps=0.5).build(tmap)  # the Husky's physics on the asphalt preset
     >>> lat = Lattice(cost, stride_cells=1)
     >>> path = lat.shortest_path((1.0, 1.0), (30.0, 20.0))
     >>> path.waypoints_m.shape  # string-pulled: level ground needs no intermediate waypoint

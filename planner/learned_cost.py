@@ -116,7 +116,7 @@ class LearnedEnergyModel:
 
     Implements ``energy_per_metre_j(speed_mps, grades, ground)`` and
     ``turn_energy_j(angles, ground)`` where ``ground`` is a **model id** of the registry,
-    so :meth:`EnergyCost.from_model` can tabulate it with the model ids as pseudo-grounds;
+    so :meth:`planner.CostSpec.build` can tabulate it with the model ids as pseudo-grounds;
     :meth:`energy_cost` does the same directly from cached tables (the fast path for
     replanning).
 
@@ -520,7 +520,7 @@ class LearnedEnergyModel:
     ) -> EnergyCost:
         """An :class:`EnergyCost` whose table rows are the models in use (cell row = its model).
 
-        Equal to ``EnergyCost.from_model`` on a map whose ground classes are the model ids,
+        Equal to :meth:`planner.CostSpec.build` with this adapter as the energy model on a map whose ground classes are the model ids,
         but only the tables of models not yet cached are computed. When a model in use has
         a predictive interval, the cost also carries the standard-deviation tables
         (:func:`planner.tables.tabulate` with ``spread=True``; zero rows for models without one).
@@ -536,7 +536,7 @@ class LearnedEnergyModel:
         GridMismatchError
             ``terrain`` is not on the registry's grid.
         InvalidParameterError
-            Bad speed or sizes (as :meth:`EnergyCost.from_model`).
+            Bad speed or table sizes.
         """
         t0 = time.perf_counter()
         self.registry.check_grid(terrain)

@@ -548,7 +548,7 @@ def plan_coarse(
         plan = plan_coarse_to_fine(priced.cost, start_xy_m, goal_xy_m, options)
     else:
         compile_s = warm_up_kernels()
-        plan = plan_coarse_to_fine(source, start_xy_m, goal_xy_m, options, cost_from=pricing.build)
+        plan = plan_coarse_to_fine(source, start_xy_m, goal_xy_m, options, cost_from=pricing)
         priced = PricedMap(pricing, Path(source).name if map_label is None else map_label, kernel_compile_s=compile_s)
     return PlanReport(
         route=plan.route, lattice=None, interval=None, start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),

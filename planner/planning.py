@@ -45,7 +45,7 @@ from terrain import TerrainMap
 from terrawatt_base.checks import check_bool, check_choice, check_instance, check_int, check_real, check_seed
 from terrawatt_base.errors import GridMismatchError, InvalidParameterError, UnknownNameError
 
-from .anyangle import anyangle_path, polish_path
+from .anyangle import anyangle_path
 from .coarse import CoarseOptions, CoarseToFine, coarse_to_fine_in_memory
 from .coarse_geotiff import CostBuilder, coarse_to_fine_windowed
 from .edge_cost import EnergyCost
@@ -54,7 +54,7 @@ from .lattice import Lattice, LatticePath
 from .ompl import OMPL_PLANNERS
 from .ompl import solve as solve_ompl
 from .problem import PlanningProblem
-from .refine import refine_route, string_pull
+from .refined import REFINE_DEFAULT_SEED, refine_planned, shortest_of, shortest_route
 from .route import Route, RouteComparison, empty_route, evaluate_route
 from .settings import PlannerSettings
 
@@ -65,8 +65,6 @@ __all__ = ["plan_route", "shortest_route", "compare_route", "plan_coarse_to_fine
 PLANNERS = OMPL_PLANNERS + ("anyangle", "coarse", "lattice")
 #: Planners that ignore time budgets (deterministic graph searches, run to their end).
 GRAPH_PLANNERS = ("anyangle", "coarse", "lattice")
-#: Seed of the refinement when :func:`plan_route` gets ``seed=None``.
-REFINE_DEFAULT_SEED = 0
 
 
 def search_objective(planner: str) -> str:
@@ -123,55 +121,11 @@ def _compare(problem: PlanningProblem) -> RouteComparison:
     if comparison is None:
         optimum = _lattice_optimum(problem)
         comparison = RouteComparison(
-            shortest=_shortest(problem),
+            shortest=shortest_of(problem),
             lattice_optimum_j=optimum.objective if optimum.found else math.nan,
         )
         problem.cost.results[key] = comparison
     return comparison
-
-
-def shortest_route(cost: EnergyCost, start_xy_m: tuple[float, float], goal_xy_m: tuple[float, float]) -> Route:
-    """The shortest-distance route between two points, costed in energy.
-
-    The straight line when it is free; otherwise the shortest route on the 1-cell lattice
-    (edge weights = lengths) straightened by greedy line-of-sight shortcuts
-    (:func:`string_pull`). It is the baseline of ``Route.energy_saved_pct``.
-
-    Returns
-    -------
-    Route
-        ``planner="shortest"``; status ``"exact"``, or ``"infeasible"`` when start and goal
-        lie in different free regions.
-
-    Raises
-    ------
-    InvalidParameterError, OutOfBoundsError, BlockedPositionError
-        As :func:`plan_route` for bad start / goal points.
-    """
-    return _shortest(PlanningProblem(cost, start_xy_m, goal_xy_m))
-
-
-def _shortest(problem: PlanningProblem) -> Route:
-    """:func:`shortest_route` of a checked problem (cached on the cost, as the comparisons)."""
-    key = ("shortest", *problem.key)
-    route = problem.cost.results.get(key)
-    if route is None:
-        route = _shortest_search(problem)
-        problem.cost.results[key] = route
-    return route
-
-
-def _shortest_search(problem: PlanningProblem) -> Route:
-    cost, start, goal = problem.cost, problem.start, problem.goal
-    t0 = time.perf_counter()
-    if math.isfinite(cost.segment_energy_one_j(start[0], start[1], goal[0], goal[1])):
-        pts = np.array([start, goal])
-    else:
-        lp = Lattice.for_cost(cost, 1).shortest_path(start, goal, weight="length")
-        if not lp.found:
-            return empty_route("infeasible", "shortest", time.perf_counter() - t0, cost.battery_voltage_v)
-        pts = string_pull(cost, lp.waypoints_m)
-    return evaluate_route(cost, pts, status="exact", planner="shortest", planning_time_s=time.perf_counter() - t0)
 
 
 def plan_route(
@@ -197,7 +151,7 @@ def plan_route(
     start_xy_m, goal_xy_m : (float, float)
         World coordinates (m) of a free cell each.
     cost : EnergyCost
-        Edge costs (see :meth:`EnergyCost.from_model`).
+        Edge costs (see :meth:`planner.CostSpec.build`).
     planner : str
         One of :data:`PLANNERS`: ``"RRTstar"``, ``"InformedRRTstar"``, ``"SORRTstar"``,
         ``"BITstar"``, ``"FMT"`` (OMPL, minimising drive energy), ``"lattice"`` (the
@@ -257,12 +211,10 @@ def plan_route(
 
     Examples
     --------
-    >>> from energy import PhysicsEnergyModel, ground_preset, robot_preset
-    >>> from planner import EnergyCost
+    >>> from planner import CostSpec
     >>> from terrain import flat_map
     >>> tmap = flat_map((30, 40), 1.0)  # level asphalt, 1 m cells
-    >>> cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(robot_preset("husky")),
-    ...                              {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
+    >>> cost = CostSpec(speed_mps=0.5).build(tmap)  # the Husky's physics on the asphalt preset
     >>> route = plan_route(tmap, (5.0, 5.0), (35.0, 25.0), cost=cost, planner="lattice")
     >>> route.status, round(route.length_m, 2)  # level ground: the straight line
     ('exact', 36.06)
@@ -296,41 +248,6 @@ def plan_route(
     return route
 
 
-def refine_planned(problem: PlanningProblem, planner: str, waypoints: np.ndarray, seed: int | None,
-                   settings: PlannerSettings) -> tuple[np.ndarray, str]:
-    """A search's exact route refined (an any-angle route by its polish, any other by :func:`refine_route`),
-    or the shortest route refined when that is cheaper (:func:`_refined_or_shortest`); and the
-    route's planner name (``"lattice+refine"``, ``"... (from the shortest route)"``)."""
-    cost = problem.cost
-    if planner == "anyangle":
-        waypoints = polish_path(cost, waypoints)
-    else:
-        waypoints = refine_route(cost, waypoints, seed=REFINE_DEFAULT_SEED if seed is None else seed,
-                                 max_steps=settings.refine_max_steps, rounds=settings.refine_rounds)
-    waypoints, from_shortest = _refined_or_shortest(problem, waypoints, seed, settings)
-    return waypoints, f"{planner}+refine (from the shortest route)" if from_shortest else f"{planner}+refine"
-
-
-def _refined_or_shortest(problem: PlanningProblem, waypoints: np.ndarray, seed: int | None,
-                         settings: PlannerSettings) -> tuple[np.ndarray, bool]:
-    """``waypoints`` (a refined route), or the shortest-distance route refined the same way when it is cheaper;
-    and whether it was.
-
-    A search over a lattice's 16 directions, or a sampling planner within its budget, can end above
-    a route it never saw: on level ground in an off-lattice direction the straight line, whose
-    zig-zag lattice copy pays for its turns (a slow-turning robot: up to 8 % more). The shortest
-    route is a feasible candidate every query has; a minimum-energy planner returns the cheaper of
-    the two, so its answer never costs more than the baseline it is compared with.
-    """
-    shortest = _shortest(problem)
-    cost = problem.cost
-    if shortest.status != "exact" or not shortest.energy_j < cost.path_energy_j(waypoints):
-        return waypoints, False
-    pts = refine_route(cost, shortest.waypoints_m, seed=REFINE_DEFAULT_SEED if seed is None else seed,
-                       max_steps=settings.refine_max_steps, rounds=settings.refine_rounds)
-    return pts, True
-
-
 def plan_coarse_to_fine(
     source: EnergyCost | str | os.PathLike[str],
     start_xy_m: tuple[float, float],
@@ -358,9 +275,9 @@ def plan_coarse_to_fine(
     options : CoarseOptions, optional
         Factor, corridor, and for a GeoTIFF its tiles, fine-window budget and band; default
         ``CoarseOptions()`` (factor 4, a corridor of three coarse cells).
-    cost_from : callable, optional
-        A GeoTIFF only: ``TerrainMap -> EnergyCost`` pricing each window alike (default
-        :meth:`EnergyCost.from_presets`).
+    cost_from : CostSpec or callable, optional
+        A GeoTIFF only: how each window is priced, alike — a :class:`~planner.CostSpec` or a
+        ``TerrainMap -> EnergyCost`` (default ``CostSpec()``, the Husky on the presets).
     compare : bool
         A map in memory only: also compute the full-resolution 1-cell lattice optimum (builds
         the whole lattice: the expensive step this function avoids) and the ratio.

@@ -48,9 +48,9 @@ from terrawatt_base.errors import InvalidParameterError
 from .heading_lattice import HeadingWorkspace, heading_cost_to_go, heading_shortest_path, lower_cost_to_go
 from .kernels.incremental import dstar_path, dstar_rekey, dstar_search, dstar_touch, reverse_weights, set_moves
 from .lattice import LATTICE_OFFSETS, Lattice, LatticePath
-from .planning import refine_planned
 from .points import as_points
 from .problem import PlanningProblem
+from .refined import refine_planned
 from .route import Route, empty_route, evaluate_route
 from .settings import PlannerSettings
 
@@ -103,12 +103,10 @@ class IncrementalPlanner:
     Examples
     --------
     >>> import numpy as np
-    >>> from energy import PhysicsEnergyModel, ground_preset, robot_preset
-    >>> from planner import EnergyCost, Lattice
+    >>> from planner import CostSpec, Lattice
     >>> from terrain import flat_map
     >>> tmap = flat_map((30, 40), 1.0)  # level asphalt, 1 m cells
-    >>> cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(robot_preset("husky")),
-    ...                              {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
+    >>> cost = CostSpec(speed_mps=0.5).build(tmap)  # the Husky's physics on the asphalt preset
     >>> planner = IncrementalPlanner(Lattice.for_cost(cost), (35.0, 25.0))
     >>> planner.plan((5.0, 5.0)).found
     True
@@ -348,7 +346,7 @@ class IncrementalPlanner:
         ``"infeasible"``), the same fallback to the 1-cell lattice when a coarser one finds
         nothing, the same refinement (:func:`~planner.refine.refine_route`, seeded by ``seed`` or
         ``REFINE_DEFAULT_SEED``), the same shortest-route candidate
-        (:func:`~planner.planning.refine_planned`) and costing (:func:`evaluate_route`).
+        (:func:`~planner.refined.refine_planned`) and costing (:func:`evaluate_route`).
 
         Parameters
         ----------

@@ -315,12 +315,10 @@ def evaluate_route(
 
     Examples
     --------
-    >>> from energy import PhysicsEnergyModel, ground_preset, robot_preset
-    >>> from planner import EnergyCost
+    >>> from planner import CostSpec
     >>> from terrain import flat_map
     >>> tmap = flat_map((30, 40), 1.0)  # level asphalt, 1 m cells
-    >>> cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(robot_preset("husky")),
-    ...                              {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
+    >>> cost = CostSpec(speed_mps=0.5).build(tmap)  # the Husky's physics on the asphalt preset
     >>> route = evaluate_route(cost, [[0.5, 0.5], [10.5, 0.5], [10.5, 5.5]])
     >>> route.length_m, bool(route.turn_energy_j[1] > 0)
     (15.0, True)

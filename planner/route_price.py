@@ -51,8 +51,7 @@ def profile_forecast_w(cost: EnergyCost, profile: CommandProfile) -> np.ndarray:
     Parameters
     ----------
     cost : EnergyCost
-        Built by :meth:`EnergyCost.from_model` (or ``from_presets``) with a
-        :class:`energy.PhysicsEnergyModel`.
+        Built by :meth:`planner.CostSpec.build` on the robot's :class:`energy.PhysicsEnergyModel`.
     profile : CommandProfile
         Commands with poses on ``cost``'s map (e.g. :func:`energy.drive_profile`).
 
@@ -68,8 +67,8 @@ def profile_forecast_w(cost: EnergyCost, profile: CommandProfile) -> np.ndarray:
         A pose off the map.
     """
     if not isinstance(cost, EnergyCost) or cost.physics_model is None or cost.ground_params is None:
-        raise InvalidParameterError("cost carries no physics model (build it with EnergyCost.from_model and a "
-                                    "PhysicsEnergyModel, or from_presets) to forecast a profile with")
+        raise InvalidParameterError("cost carries no physics model (build it with CostSpec.build on the robot's "
+                                    "physics model) to forecast a profile with")
     if not isinstance(profile, CommandProfile) or profile.pose_xyh is None:
         raise InvalidParameterError("profile must be a CommandProfile with poses (pose_xyh)")
     t = np.asarray(profile.time_s, dtype=np.float64)
@@ -147,7 +146,7 @@ def price_route(cost: EnergyCost, route: Route | Any, *, how: str = "edges", int
     turns (what the planner minimised: :meth:`EnergyCost.path_energy_j`); ``how="profile"``
     prices the stop-turn-go drive the robot makes (start and stop at every waypoint, pivots
     with ramped yaw rates) with the model that priced the map: the physics model of
-    :meth:`EnergyCost.from_model` / ``from_presets`` (:func:`route_forecast_j`), or the learned
+    :meth:`planner.CostSpec.build` with the physics model (:func:`route_forecast_j`), or the learned
     model of :meth:`planner.LearnedEnergyModel.energy_cost`
     (:meth:`~planner.LearnedEnergyModel.predict_route_energy_j`). The spread is the edges'
     run-level spread per ground (:func:`planner.risk.route_energy_interval`) either way: the

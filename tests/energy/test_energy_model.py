@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from energy import EnergyModel, IntervalEnergyModel, PhysicsEnergyModel, ground_preset, robot_preset
-from planner import EnergyCost, LearnedEnergyModel
+from planner import CostSpec, LearnedEnergyModel
 from planner.registry import CellModelRegistry
 from terrain import InvalidParameterError, flat_map
 
@@ -39,10 +39,8 @@ def test_a_learned_energy_model_is_one_with_an_interval(known_model):
 
 def test_an_edge_cost_prices_any_energy_model_and_refuses_what_is_not_one():
     tmap = flat_map((10, 20), 1.0, ground="asphalt")
-    cost = EnergyCost.from_model(tmap, FlatRate(), {"asphalt": None}, speed_mps=0.5, battery_voltage_v=24.0,
-                                 turn_rate_radps=1.0)
+    cost = CostSpec(energy_model=FlatRate(), grounds={"asphalt": None}, speed_mps=0.5).build(tmap)
     # 12 m straight on level ground: 10 J/m
     assert cost.segment_energy_j([[2.5, 5.5]], [[14.5, 5.5]])[0] == pytest.approx(120.0)
-    with pytest.raises(InvalidParameterError, match=r"model must be an energy.EnergyModel .* got 'str'"):
-        EnergyCost.from_model(tmap, "physics", {"asphalt": None}, speed_mps=0.5, battery_voltage_v=24.0,
-                              turn_rate_radps=1.0)
+    with pytest.raises(InvalidParameterError, match=r"energy_model must be an energy.EnergyModel .* got 'str'"):
+        CostSpec(energy_model="physics", grounds={"asphalt": None}, speed_mps=0.5)

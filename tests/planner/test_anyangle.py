@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from energy import PhysicsEnergyModel, ground_preset, robot_preset
-from planner import PLANNERS, EnergyCost, Lattice, PlannerSettings, plan_route
+from planner import PLANNERS, CostSpec, Lattice, PlannerSettings, plan_route
 from planner.anyangle import AnyAnglePath, anyangle_path, polish_path
 from terrain import BlockedPositionError, InvalidParameterError, OutOfBoundsError, TerrainMap
 from terrain.procedural import procedural_map
@@ -19,7 +19,7 @@ GRAVITY_MPS2 = 9.80665
 def _cost(tmap):
     model = PhysicsEnergyModel(robot_preset("husky"))
     grounds = {name: ground_preset(name) for name in tmap.ground_names.values()}
-    return EnergyCost.from_model(tmap, model, grounds, speed_mps=0.5)
+    return CostSpec(energy_model=model, grounds=grounds, speed_mps=0.5).build(tmap)
 
 
 def _map(elevation, obstacle=None):

@@ -93,7 +93,7 @@ def test_bad_coarse_to_fine_arguments(hilly_cost, kwargs, match):
 
 
 def test_bad_coarse_to_fine_points(hilly_cost):
-    from planner import EnergyCost, plan_coarse_to_fine
+    from planner import plan_coarse_to_fine
     from terrawatt_base.errors import OutOfBoundsError
 
     with pytest.raises(OutOfBoundsError):
@@ -105,7 +105,7 @@ def test_bad_coarse_to_fine_points(hilly_cost):
     with pytest.raises(InvalidParameterError, match="options must be a CoarseOptions"):
         plan_coarse_to_fine(hilly_cost, (6.5, 8.5), (100.5, 100.5), {"factor": 4})
     with pytest.raises(InvalidParameterError, match="cost_from prices the windows of a GeoTIFF"):
-        plan_coarse_to_fine(hilly_cost, (6.5, 8.5), (100.5, 100.5), cost_from=EnergyCost.from_presets)
+        plan_coarse_to_fine(hilly_cost, (6.5, 8.5), (100.5, 100.5), cost_from=CostSpec())
 
 
 def test_coarse_to_fine_refuses_a_blocked_start(tmp_path):

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import functools
+import math
 
 import numpy as np
 import pytest
 
-from planner import CoarseOptions, EnergyCost, Lattice, plan_coarse_to_fine
+from planner import CoarseOptions, Lattice, plan_coarse_to_fine
 from planner.cost_spec import CostSpec
 from planner.route import evaluate_route
 from terrain import InvalidParameterError, procedural_map, read_geotiff, write_geotiff
@@ -100,10 +100,10 @@ def test_a_budget_that_holds_the_bounding_window_changes_nothing(dem, unlimited)
 
 def test_the_preset_pricer_shortcut_equals_a_general_pricer(dem):
     path, _, start, goal = dem
-    preset = functools.partial(EnergyCost.from_presets, robot="jackal", max_slope_rad=0.3)
+    preset = CostSpec(robot="jackal", max_slope_deg=math.degrees(0.3))
 
     def general(tmap):  # not recognised as a preset pricer: an EnergyCost per tile
-        return EnergyCost.from_presets(tmap, robot="jackal", max_slope_rad=0.3)
+        return preset.build(tmap)
 
     options = CoarseOptions(factor=8, fine_window_budget_cells=120 * 120)
     a = plan_coarse_to_fine(path, start, goal, options, cost_from=preset)

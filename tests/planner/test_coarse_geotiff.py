@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import functools
 import json
 
 import numpy as np
 import pytest
 
-from planner import CoarseOptions, EnergyCost, plan_coarse_to_fine
+from planner import CoarseOptions, plan_coarse_to_fine
 from planner.coarse import downsample_cost
 from planner.cost_spec import CostSpec
 from terrain import (
@@ -134,8 +133,8 @@ def test_fallbacks_read_bigger_windows_and_equal_the_whole_map(tmp_path, gap, fa
 
 
 def test_cost_from_prices_every_window_alike(dem_path):
-    cost_from = functools.partial(EnergyCost.from_presets, robot="jackal", speed_mps=0.8, unknown_ground="grass")
-    whole = plan_coarse_to_fine(cost_from(read_geotiff(dem_path)), START, GOAL, CoarseOptions(factor=4))
+    cost_from = CostSpec(robot="jackal", speed_mps=0.8, unknown_ground="grass")
+    whole = plan_coarse_to_fine(cost_from.build(read_geotiff(dem_path)), START, GOAL, CoarseOptions(factor=4))
     windowed = plan_coarse_to_fine(dem_path, START, GOAL, CoarseOptions(factor=4), cost_from=cost_from)
     assert_same_plan(windowed, whole)
     default = plan_coarse_to_fine(dem_path, START, GOAL, CoarseOptions(factor=4))
@@ -143,7 +142,7 @@ def test_cost_from_prices_every_window_alike(dem_path):
 
 
 def test_cost_from_that_is_not_a_window_pricer_is_refused(dem_path):
-    with pytest.raises(InvalidParameterError, match="cost_from must be a callable"):
+    with pytest.raises(InvalidParameterError, match="cost_from must be a CostSpec or a callable"):
         plan_coarse_to_fine(dem_path, START, GOAL, cost_from="husky")
     with pytest.raises(InvalidParameterError, match="cost_from must return an EnergyCost"):
         plan_coarse_to_fine(dem_path, START, GOAL, cost_from=lambda tmap: 3.0)

@@ -35,7 +35,7 @@ def _reference_energy(cost: EnergyCost, a, b) -> float:
 
 # --------------------------------------------------------------------------- flat and exactness
 def test_flat_uniform_map_energy_proportional_to_length():
-    cost = EnergyCost.from_model(flat_terrain(), LinearModel(a=50.0), {"g": 1.0}, speed_mps=0.5)
+    cost = CostSpec(energy_model=LinearModel(a=50.0), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain())
     rng = np.random.default_rng(1)
     a = rng.uniform([0, 0], [30, 20], size=(200, 2))
     b = rng.uniform([0, 0], [30, 20], size=(200, 2))
@@ -45,7 +45,7 @@ def test_flat_uniform_map_energy_proportional_to_length():
 
 def test_segment_energy_matches_reference_walk_on_rough_map():
     tmap = rough_terrain()
-    cost = EnergyCost.from_model(tmap, LinearModel(), {"a": 1.0, "b": 2.5}, speed_mps=0.5, max_slope_rad=0.6)
+    cost = CostSpec(energy_model=LinearModel(), grounds={"a": 1.0, "b": 2.5}, speed_mps=0.5, max_slope_deg=math.degrees(0.6)).build(tmap)
     xmin, ymin, xmax, ymax = tmap.bounds
     rng = np.random.default_rng(2)
     a = rng.uniform([xmin, ymin], [xmax, ymax], size=(150, 2))
@@ -67,14 +67,14 @@ def test_segment_energy_matches_reference_walk_on_rough_map():
 
 
 def test_zero_length_segment_costs_nothing():
-    cost = EnergyCost.from_model(flat_terrain(), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    cost = CostSpec(energy_model=LinearModel(), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain())
     assert cost.segment_energy_j([3.3, 4.4], [3.3, 4.4])[0] == 0.0
 
 
 # --------------------------------------------------------------------------- direction and slope
 def test_uphill_exceeds_downhill_by_gravity_term_closed_form():
     grade, length = 0.1, 30.0
-    cost = EnergyCost.from_model(ramp_terrain(grade), LinearModel(a=50.0, b=400.0), {"asphalt": 1.0}, speed_mps=0.5)
+    cost = CostSpec(energy_model=LinearModel(a=50.0, b=400.0), grounds={"asphalt": 1.0}, speed_mps=0.5).build(ramp_terrain(grade))
     up, down = cost.segment_energy_j([[5.0, 10.0], [35.0, 10.0]], [[35.0, 10.0], [5.0, 10.0]])
     factor = math.sqrt(1 + grade**2)  # per metre travelled -> per horizontal metre
     # rel 1e-5: the table interpolates sqrt(1 + s^2) linearly between grade samples.
@@ -87,20 +87,20 @@ def test_uphill_exceeds_downhill_by_gravity_term_physics_model():
     grade, length = 0.1, 30.0
     robot = robot_preset("husky")
     model = PhysicsEnergyModel(robot)
-    cost = EnergyCost.from_model(ramp_terrain(grade), model, {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
+    cost = CostSpec(energy_model=model, grounds={"asphalt": ground_preset("asphalt")}, speed_mps=0.5).build(ramp_terrain(grade))
     up, down = cost.segment_energy_j([[5.0, 10.0], [35.0, 10.0]], [[35.0, 10.0], [5.0, 10.0]])
     potential_j = robot.mass_kg * GRAVITY_MPS2 * grade * length
     # The battery pays at least the potential energy going up, and gravity only helps going down.
     assert up - down >= potential_j
     assert up - down < 4.0 * potential_j
-    flat = EnergyCost.from_model(ramp_terrain(0.0), model, {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
+    flat = CostSpec(energy_model=model, grounds={"asphalt": ground_preset("asphalt")}, speed_mps=0.5).build(ramp_terrain(0.0))
     e_flat = flat.segment_energy_j([5.0, 10.0], [35.0, 10.0])[0]
     assert up > e_flat and down < up
 
 
 def test_diagonal_on_ramp_sees_projected_grade():
     grade = 0.2
-    cost = EnergyCost.from_model(ramp_terrain(grade), LinearModel(a=0.0, b=100.0), {"asphalt": 1.0}, speed_mps=0.5)
+    cost = CostSpec(energy_model=LinearModel(a=0.0, b=100.0), grounds={"asphalt": 1.0}, speed_mps=0.5).build(ramp_terrain(grade))
     a, b = np.array([5.0, 2.0]), np.array([25.0, 17.0])
     length = float(np.hypot(*(b - a)))
     s = grade * (b[0] - a[0]) / length
@@ -110,19 +110,17 @@ def test_diagonal_on_ramp_sees_projected_grade():
 
 def test_too_steep_cells_are_blocked():
     tmap = ramp_terrain(0.5)  # 26.6 deg
-    cost = EnergyCost.from_model(tmap, LinearModel(), {"asphalt": 1.0}, speed_mps=0.5, max_slope_rad=math.radians(20))
+    cost = CostSpec(energy_model=LinearModel(), grounds={"asphalt": 1.0}, speed_mps=0.5, max_slope_deg=20).build(tmap)
     assert cost.blocked.all()
     assert np.isinf(cost.segment_energy_j([1.0, 1.0], [9.0, 9.0])[0])
-    relaxed = EnergyCost.from_model(
-        tmap, LinearModel(), {"asphalt": 1.0}, speed_mps=0.5, max_slope_rad=math.radians(30)
-    )
+    relaxed = CostSpec(energy_model=LinearModel(), grounds={"asphalt": 1.0}, speed_mps=0.5, max_slope_deg=30).build(tmap)
     assert np.isfinite(relaxed.segment_energy_j([1.0, 1.0], [9.0, 9.0])[0])
 
 
 def test_obstacle_blocks_segments_through_it_only():
     obstacle = np.zeros((20, 30), bool)
     obstacle[5:15, 10] = True
-    cost = EnergyCost.from_model(flat_terrain(obstacle=obstacle), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    cost = CostSpec(energy_model=LinearModel(), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain(obstacle=obstacle))
     e = cost.segment_energy_j([[2.5, 10.5], [2.5, 17.5]], [[20.5, 10.5], [20.5, 17.5]])
     assert np.isinf(e[0]) and np.isfinite(e[1])
     assert cost.is_free([[10.5, 10.5], [10.5, 17.5]]).tolist() == [False, True]
@@ -131,15 +129,15 @@ def test_obstacle_blocks_segments_through_it_only():
 def test_corner_squeeze_between_diagonal_obstacles_is_blocked():
     obstacle = np.zeros((6, 6), bool)
     obstacle[2, 3] = obstacle[3, 2] = True  # touching only at the corner (3, 3)
-    cost = EnergyCost.from_model(flat_terrain(6, 6, obstacle=obstacle), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    cost = CostSpec(energy_model=LinearModel(), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain(6, 6, obstacle=obstacle))
     # The diagonal from cell (2,2) to (3,3) passes exactly through the shared corner.
     assert np.isinf(cost.segment_energy_j([2.5, 2.5], [3.5, 3.5])[0])
     # One blocked side cell is enough (the robot is not a point); none blocked: free.
     one = obstacle.copy()
     one[3, 2] = False
-    cost_one = EnergyCost.from_model(flat_terrain(6, 6, obstacle=one), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    cost_one = CostSpec(energy_model=LinearModel(), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain(6, 6, obstacle=one))
     assert np.isinf(cost_one.segment_energy_j([2.5, 2.5], [3.5, 3.5])[0])
-    free = EnergyCost.from_model(flat_terrain(6, 6), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    free = CostSpec(energy_model=LinearModel(), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain(6, 6))
     assert free.segment_energy_j([2.5, 2.5], [3.5, 3.5])[0] == pytest.approx(50.0 * math.sqrt(2))
 
 
@@ -149,7 +147,7 @@ def test_undrivable_grade_blocks_one_direction_only():
             g = np.asarray(grade, dtype=float)
             return np.where(g > 0.05, np.inf, 50.0)
 
-    cost = EnergyCost.from_model(ramp_terrain(0.1), Steep(), {"asphalt": 1.0}, speed_mps=0.5)
+    cost = CostSpec(energy_model=Steep(), grounds={"asphalt": 1.0}, speed_mps=0.5).build(ramp_terrain(0.1))
     up, down = cost.segment_energy_j([[5.0, 10.0], [35.0, 10.0]], [[35.0, 10.0], [5.0, 10.0]])
     assert np.isinf(up) and np.isfinite(down)
     across = cost.segment_energy_j([10.0, 2.0], [10.0, 18.0])[0]  # along the contour: grade 0
@@ -169,7 +167,7 @@ def test_physics_model_refuses_grades_beyond_the_climbing_limit_so_routes_climb_
     x = np.arange(40) + 0.5
     tmap = TerrainMap(np.broadcast_to(grade * x, (60, 40)), 1.0, ground=np.zeros((60, 40), int),
                       ground_names={0: "snow"})
-    cost = EnergyCost.from_model(tmap, model, {"snow": snow}, speed_mps=0.5)
+    cost = CostSpec(energy_model=model, grounds={"snow": snow}, speed_mps=0.5).build(tmap)
     up, down = cost.segment_energy_j([[5.0, 30.0], [35.0, 30.0]], [[35.0, 30.0], [5.0, 30.0]])
     assert np.isinf(up) and np.isfinite(down)
     route = plan_route(tmap, (5.0, 30.0), (35.0, 30.0), cost=cost, planner="lattice", compare=False)
@@ -183,27 +181,29 @@ def test_physics_model_refuses_grades_beyond_the_climbing_limit_so_routes_climb_
 def test_speed_above_the_robot_maximum_is_refused():
     model = PhysicsEnergyModel(robot_preset("husky"))
     with pytest.raises(InvalidParameterError, match=r"speed_mps 5\.0 exceeds the robot's max_speed_mps 1\.0"):
-        EnergyCost.from_model(flat_terrain(), model, {"g": ground_preset("asphalt")}, speed_mps=5.0)
+        CostSpec(energy_model=model, grounds={"g": ground_preset("asphalt")}, speed_mps=5.0).build(flat_terrain())
 
 
 # --------------------------------------------------------------------------- construction errors
 def test_unknown_ground_class_without_params_raises():
     tmap = rough_terrain()
     with pytest.raises(UnknownNameError, match="'b'"):
-        EnergyCost.from_model(tmap, LinearModel(), {"a": 1.0}, speed_mps=0.5)
+        CostSpec(energy_model=LinearModel(), grounds={"a": 1.0}, speed_mps=0.5).build(tmap)
 
 
 def test_unknown_ground_cells_need_unknown_ground():
     tmap = TerrainMap(np.zeros((10, 10)), 1.0)  # every cell ground -1
-    with pytest.raises(InvalidParameterError, match="unknown_ground"):
-        EnergyCost.from_model(tmap, LinearModel(), {}, speed_mps=0.5)
-    cost = EnergyCost.from_model(tmap, LinearModel(a=50.0), {}, speed_mps=0.5, unknown_ground=2.0)
+    with pytest.raises(InvalidParameterError, match="'gravel' names a ground preset of the physics model"):
+        CostSpec(energy_model=LinearModel(), grounds={}, speed_mps=0.5).build(tmap)
+    with pytest.raises(InvalidParameterError, match="unknown_ground is None"):
+        CostSpec(energy_model=LinearModel(), grounds={}, speed_mps=0.5, unknown_ground=None).build(tmap)
+    cost = CostSpec(energy_model=LinearModel(a=50.0), grounds={}, speed_mps=0.5, unknown_ground=2.0).build(tmap)
     assert cost.segment_energy_j([1.0, 1.0], [5.0, 1.0])[0] == pytest.approx(400.0)
     assert cost.ground_labels == ("unknown",)
 
 
 def test_grounds_keyed_by_class_id():
-    cost = EnergyCost.from_model(rough_terrain(), LinearModel(a=10.0), {0: 1.0, 1: 3.0}, speed_mps=0.5, max_slope_rad=0.6)
+    cost = CostSpec(energy_model=LinearModel(a=10.0), grounds={0: 1.0, 1: 3.0}, speed_mps=0.5, max_slope_deg=math.degrees(0.6)).build(rough_terrain())
     assert cost.grade_table_j_per_m.shape == (2, 513)
     assert cost.grade_table_j_per_m[1, 256] == pytest.approx(30.0)
 
@@ -213,17 +213,18 @@ def test_grounds_keyed_by_class_id():
     [
         ({"speed_mps": 0.0}, "speed_mps"),
         ({"speed_mps": math.nan}, "speed_mps"),
-        ({"speed_mps": 0.5, "max_slope_rad": 2.0}, "max_slope_rad"),
-        ({"speed_mps": 0.5, "grade_samples": 100}, "grade_samples"),
-        ({"speed_mps": 0.5, "turn_samples": 1}, "turn_samples"),
+        ({"speed_mps": 0.5, "max_slope_deg": 95.0}, "max_slope_deg"),
         ({"speed_mps": "fast"}, "speed_mps must be a real number, got 'fast'"),
-        ({"speed_mps": 0.5, "max_slope_rad": "steep"}, "max_slope_rad must be a real number"),
-        ({"speed_mps": 0.5, "grade_samples": "many"}, "grade_samples must be an integer"),
+        ({"speed_mps": 0.5, "max_slope_deg": "steep"}, "max_slope_deg must be a real number"),
+        ({"speed_mps": 0.5, "energy_model": "physics"}, r"energy_model must be an energy.EnergyModel .* got 'str'"),
+        ({"speed_mps": 0.5, "grounds": None}, "energy_model needs the ground parameters"),
+        ({"speed_mps": 0.5, "grounds": [1.0]}, "grounds must be a mapping"),
     ],
 )
-def test_from_model_rejects_bad_parameters(kwargs, match):
-    with pytest.raises(InvalidParameterError, match=match):
-        EnergyCost.from_model(flat_terrain(), LinearModel(), {"g": 1.0}, **kwargs)
+def test_a_cost_spec_rejects_bad_parameters(kwargs, match):
+    with pytest.raises(InvalidParameterError, match=match) as err:
+        CostSpec(**{"energy_model": LinearModel(), "grounds": {"g": 1.0}, **kwargs}).build(flat_terrain())
+    assert err.value.parameter is not None
 
 
 def test_negative_or_nan_model_energy_rejected():
@@ -232,28 +233,25 @@ def test_negative_or_nan_model_energy_rejected():
             return 50.0 + 600.0 * np.asarray(grade, dtype=float)  # negative downhill
 
     with pytest.raises(InvalidParameterError, match="non-negative"):
-        EnergyCost.from_model(flat_terrain(), Regen(), {"g": 1.0}, speed_mps=0.5)
+        CostSpec(energy_model=Regen(), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain())
 
     class Broken(LinearModel):
         def turn_energy_j(self, heading_change_rad, ground):
             return np.full(np.shape(heading_change_rad), np.nan)
 
     with pytest.raises(InvalidParameterError, match="turn_table_j"):
-        EnergyCost.from_model(flat_terrain(), Broken(), {"g": 1.0}, speed_mps=0.5)
+        CostSpec(energy_model=Broken(), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain())
 
 
-def test_missing_voltage_or_turn_rate_raises():
+def test_a_model_without_a_robot_takes_the_specs_robots_voltage_and_turn_rate():
     class Bare(LinearModel):
         robot = None
 
-    with pytest.raises(InvalidParameterError, match="battery_voltage_v"):
-        EnergyCost.from_model(flat_terrain(), Bare(), {"g": 1.0}, speed_mps=0.5)
-    with pytest.raises(InvalidParameterError, match="turn_rate_radps"):
-        EnergyCost.from_model(flat_terrain(), Bare(), {"g": 1.0}, speed_mps=0.5, battery_voltage_v=24.0)
-    cost = EnergyCost.from_model(
-        flat_terrain(), Bare(), {"g": 1.0}, speed_mps=0.5, battery_voltage_v=24.0, turn_rate_radps=1.0
-    )
-    assert cost.battery_voltage_v == 24.0
+    jackal = robot_preset("jackal")
+    cost = CostSpec(robot=jackal, energy_model=Bare(), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain())
+    assert (cost.battery_voltage_v, cost.turn_rate_radps) == (jackal.battery_voltage_v, jackal.turn_rate_radps)
+    own = CostSpec(robot=jackal, energy_model=LinearModel(), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain())
+    assert own.battery_voltage_v == LinearModel.robot.battery_voltage_v != jackal.battery_voltage_v
 
 
 def test_constructor_checks_grid_and_tables():
@@ -277,7 +275,7 @@ def test_constructor_checks_grid_and_tables():
     assert ok.flags.writeable and not cost.grade_table_j_per_m.flags.writeable
 
 
-# --------------------------------------------------------------------------- from_presets
+# --------------------------------------------------------------------------- the presets
 def _preset_map(names=("asphalt", "grass"), unknown=False):
     ground = np.zeros((12, 16), int)
     ground[:, 8:] = 1
@@ -286,21 +284,17 @@ def _preset_map(names=("asphalt", "grass"), unknown=False):
     return TerrainMap(np.zeros((12, 16)), 1.0, ground=ground, ground_names=dict(enumerate(names)))
 
 
-def test_from_presets_equals_from_model_with_the_presets():
+def test_the_presets_equal_their_ground_parameters_given():
     tmap = _preset_map(unknown=True)
     got = CostSpec(speed_mps=0.4, max_slope_deg=15.0).build(tmap)
-    ref = EnergyCost.from_model(
-        tmap, PhysicsEnergyModel(robot_preset("husky")),
-        {"asphalt": ground_preset("asphalt"), "grass": ground_preset("grass")}, 0.4,
-        unknown_ground=ground_preset("gravel"), max_slope_rad=math.radians(15.0),
-    )
+    ref = CostSpec(grounds={"asphalt": ground_preset("asphalt"), "grass": ground_preset("grass")}, speed_mps=0.4, max_slope_deg=15.0, unknown_ground=ground_preset("gravel")).build(tmap)
     assert got.ground_labels == ref.ground_labels == ("unknown", "asphalt", "grass")
     assert np.array_equal(got.grade_table_j_per_m, ref.grade_table_j_per_m)
     assert np.array_equal(got.turn_table_j, ref.turn_table_j)
     assert np.array_equal(got.ground_rows, ref.ground_rows)
 
 
-def test_from_presets_refuses_unknown_names_and_bad_speeds():
+def test_a_spec_on_the_presets_refuses_unknown_names_and_bad_speeds():
     with pytest.raises(UnknownNameError, match=r"named 'lava', which has no preset; known grounds: \[.*'asphalt'"):
         CostSpec().build(_preset_map(("asphalt", "lava")))
     with pytest.raises(InvalidParameterError, match="speed_mps must be a real number, got 'fast'"):
@@ -315,7 +309,7 @@ def test_from_presets_refuses_unknown_names_and_bad_speeds():
 
 # ----------------------------------------------------------------- queries
 def test_turn_energies_and_path_energy():
-    cost = EnergyCost.from_model(flat_terrain(), LinearModel(a=50.0, c=30.0), {"g": 1.0}, speed_mps=0.5)
+    cost = CostSpec(energy_model=LinearModel(a=50.0, c=30.0), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain())
     pts = np.array([[1.0, 1.0], [11.0, 1.0], [11.0, 1.0], [11.0, 6.0], [6.0, 1.0]])
     angles, turns = cost.turn_energies_j(pts)
     # Repeated point: the 90 degree turn is taken where the new heading starts (index 2).
@@ -327,7 +321,7 @@ def test_turn_energies_and_path_energy():
 
 def test_surface_length_on_ramp():
     grade = 0.2
-    cost = EnergyCost.from_model(ramp_terrain(grade), LinearModel(), {"asphalt": 1.0}, speed_mps=0.5)
+    cost = CostSpec(energy_model=LinearModel(), grounds={"asphalt": 1.0}, speed_mps=0.5).build(ramp_terrain(grade))
     assert cost.surface_length_m([[5.0, 3.0], [25.0, 3.0], [25.0, 13.0]]) == pytest.approx(
         20 * math.sqrt(1 + grade**2) + 10, rel=1e-9
     )
@@ -337,7 +331,7 @@ def test_lower_bound_is_admissible():
     tmap = rough_terrain(seed=3, n=40, cell=1.0)
     model = PhysicsEnergyModel(robot_preset("husky"))
     grounds = {"a": ground_preset("asphalt"), "b": ground_preset("grass")}
-    cost = EnergyCost.from_model(tmap, model, grounds, speed_mps=0.5, max_slope_rad=0.6)
+    cost = CostSpec(energy_model=model, grounds=grounds, speed_mps=0.5, max_slope_deg=math.degrees(0.6)).build(tmap)
     assert cost.min_energy_per_metre_j > 0
     lattice = Lattice(cost)
     rng = np.random.default_rng(4)
@@ -374,14 +368,14 @@ def test_lower_bound_is_admissible():
     ],
 )
 def test_segment_energy_rejects_bad_points(a, b, exc, match):
-    cost = EnergyCost.from_model(flat_terrain(), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    cost = CostSpec(energy_model=LinearModel(), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain())
     with pytest.raises(exc, match=match):
         cost.segment_energy_j(a, b)
 
 
 @pytest.mark.parametrize("name", ["starts_xy_m", "ends_xy_m"])
 def test_segment_energy_names_a_non_numeric_point(name):
-    cost = EnergyCost.from_model(flat_terrain(), LinearModel(), {"g": 1.0}, speed_mps=0.5)
+    cost = CostSpec(energy_model=LinearModel(), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain())
     points = {"starts_xy_m": [[1.0, 1.0]], "ends_xy_m": [[2.0, 2.0]]}
     points[name] = [["one", "two"]]
     with pytest.raises(InvalidParameterError, match=f"{name} must be a real number or an array of them"):

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from energy import PhysicsEnergyModel, ground_preset, robot_preset
+from energy import ground_preset, robot_preset
 from planner import EnergyCost, Lattice, plan_route
 from planner.cost_spec import CostSpec
 from planner.heading_lattice import (
@@ -86,7 +86,7 @@ def test_a_slow_turning_robot_trades_drive_energy_for_fewer_turns():
     tmap = procedural_map((40, 40), 1.0, seed=3)
     husky = robot_preset("husky")
     grounds = {g: ground_preset(g) for g in set(tmap.ground_names.values())}
-    slow = EnergyCost.from_model(tmap, PhysicsEnergyModel(husky.replace(turn_rate_radps=0.02)), grounds, 0.5)
+    slow = CostSpec(robot=husky.replace(turn_rate_radps=0.02), grounds=grounds, speed_mps=0.5).build(tmap)
     lattice = Lattice(slow, 1)
     start, goal = (2.5, 3.0), (36.0, 31.5)
     free = lattice.shortest_path(start, goal)

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from edge_cost_samples import LinearModel, ramp_terrain
 
-from planner import EnergyCost
+from planner import CostSpec
 
 
 def test_arrays_are_the_read_only_kernel_seam():
-    cost = EnergyCost.from_model(ramp_terrain(), LinearModel(), {"asphalt": 1.0}, speed_mps=0.5)
+    cost = CostSpec(energy_model=LinearModel(), grounds={"asphalt": 1.0}, speed_mps=0.5).build(ramp_terrain())
     arr = cost.arrays
     assert arr.grid == cost.terrain.grid
     assert arr.cells.shape == cost.shape + (3,)

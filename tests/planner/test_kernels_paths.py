@@ -5,13 +5,12 @@ from __future__ import annotations
 import numpy as np
 from edge_cost_samples import LinearModel, flat_terrain
 
-from planner import EnergyCost
+from planner import CostSpec, EnergyCost
 from planner.kernels.paths import drop_unpaid_vertices, string_pull_indices
 
 
 def _cost(obstacle=None) -> EnergyCost:
-    return EnergyCost.from_model(flat_terrain(obstacle=obstacle), LinearModel(a=50.0, c=30.0), {"g": 1.0},
-                                 speed_mps=0.5)
+    return CostSpec(energy_model=LinearModel(a=50.0, c=30.0), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain(obstacle=obstacle))
 
 
 def test_on_open_ground_the_pull_keeps_only_the_ends():

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from planner import EnergyCost, Lattice
+from planner import CostSpec, Lattice
 from planner.lattice import LatticePath
 from planner.refine import string_pull
 from terrain import InvalidParameterError, TerrainMap, UnknownNameError
@@ -38,7 +38,7 @@ def _cost(elevation, obstacle=None, cell=1.0, **kw):
     tmap = TerrainMap(
         elevation, cell, ground=np.zeros(elevation.shape, int), ground_names={0: "g"}, obstacle=obstacle
     )
-    return EnergyCost.from_model(tmap, LinearModel(**kw), {"g": None}, speed_mps=0.5)
+    return CostSpec(energy_model=LinearModel(**kw), grounds={"g": None}, speed_mps=0.5).build(tmap)
 
 
 def test_flat_map_lattice_aligned_route_is_the_straight_line():

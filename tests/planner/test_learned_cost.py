@@ -5,7 +5,7 @@ import pytest
 
 from energy import InteractionLog, LogMeta, PhysicsEnergyModel, ground_preset, robot_preset
 from energy.budget import log_battery_power_w
-from planner import EnergyCost, LearnedEnergyModel
+from planner import CostSpec, LearnedEnergyModel
 from planner.registry import CellModelRegistry
 from terrain import InvalidParameterError, TerrainMap, UnknownNameError
 
@@ -62,12 +62,12 @@ def test_refresh_only_recomputes_changed_models():
     assert lem.table_builds == 3 and reg.model(0).calls == 1 and reg.model(new).calls == 1
 
 
-def test_energy_cost_matches_from_model_on_model_id_map():
+def test_energy_cost_matches_the_spec_on_the_model_id_map():
     _, tmap, reg, lem, mid = _setup()
     fast = lem.energy_cost(tmap, 0.5)
     ids = np.asarray(reg.model_id_map)
     pseudo = TerrainMap(np.zeros(tmap.shape), 1.0, ground=ids, ground_names={0: "a", 1: "b"})
-    slow = EnergyCost.from_model(pseudo, lem, {0: 0, 1: 1}, 0.5)
+    slow = CostSpec(energy_model=lem, grounds={0: 0, 1: 1}, speed_mps=0.5).build(pseudo)
     np.testing.assert_allclose(fast.grade_table_j_per_m, slow.grade_table_j_per_m, rtol=1e-12)
     np.testing.assert_allclose(fast.turn_table_j, slow.turn_table_j, rtol=1e-12)
     assert np.array_equal(fast.ground_rows, slow.ground_rows)

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from energy import PhysicsEnergyModel, ground_preset, robot_preset
-from planner import PLANNERS, EnergyCost, PlannerSettings, plan_route
+from planner import PLANNERS, CostSpec, PlannerSettings, plan_route
 from planner.ompl import OMPL_PLANNERS
 from planner.planning import compare_route, shortest_route
 from planner.refine import refine_route
@@ -33,7 +33,7 @@ def _model():
 
 
 def _cost(tmap):
-    return EnergyCost.from_model(tmap, _model(), {"asphalt": ground_preset("asphalt")}, speed_mps=0.5)
+    return CostSpec(energy_model=_model(), grounds={"asphalt": ground_preset("asphalt")}, speed_mps=0.5).build(tmap)
 
 
 def _map(elevation, obstacle=None):

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 from edge_cost_samples import LinearModel, flat_terrain
 
-from planner import EnergyCost
+from planner import CostSpec
 from terrain import TerrainMap
 
 
 def test_relax_path_straightens_zigzag_and_never_raises_energy():
-    cost = EnergyCost.from_model(flat_terrain(), LinearModel(a=50.0, c=30.0), {"g": 1.0}, speed_mps=0.5)
+    cost = CostSpec(energy_model=LinearModel(a=50.0, c=30.0), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain())
     zigzag = np.array([[1.0, 1.0], [6.0, 4.0], [11.0, 1.0], [16.0, 4.0], [25.0, 1.0]])
     out = cost.relax_path(zigzag)
     assert cost.path_energy_j(out) <= cost.path_energy_j(zigzag)
@@ -24,7 +24,7 @@ def test_relax_path_straightens_zigzag_and_never_raises_energy():
 def test_relax_path_keeps_route_valid_around_obstacle():
     obstacle = np.zeros((20, 30), bool)
     obstacle[0:15, 15] = True
-    cost = EnergyCost.from_model(flat_terrain(obstacle=obstacle), LinearModel(a=50.0, c=5.0), {"g": 1.0}, speed_mps=0.5)
+    cost = CostSpec(energy_model=LinearModel(a=50.0, c=5.0), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain(obstacle=obstacle))
     route = np.array([[5.5, 5.5], [10.5, 17.5], [20.5, 17.5], [25.5, 5.5]])
     out = cost.relax_path(route)
     assert np.isfinite(cost.path_energy_j(out))
@@ -41,7 +41,7 @@ def test_relax_path_refracts_at_a_ground_boundary_like_snell():
     ground[20:, :] = 1
     tmap = TerrainMap(np.zeros((40, 60)), 1.0, ground=ground, ground_names={0: "fast", 1: "slow"})
     model = LinearModel(a=50.0, c=0.5)
-    cost = EnergyCost.from_model(tmap, model, {"fast": 1.0, "slow": 2.0}, speed_mps=0.5)
+    cost = CostSpec(energy_model=model, grounds={"fast": 1.0, "slow": 2.0}, speed_mps=0.5).build(tmap)
     a, b = np.array([5.0, 2.0]), np.array([50.0, 38.0])
 
     def energy(x: float) -> float:

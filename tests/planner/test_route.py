@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from planner import EnergyCost, Route
+from planner import CostSpec, Route
 from planner.route import ROUTE_STATUSES, RouteComparison, evaluate_route
 from terrain import InvalidParameterError, OutOfBoundsError, PlanningError, TerrainMap
 
@@ -33,7 +33,7 @@ class LinearModel:
 def _cost(elevation=None, obstacle=None):
     z = np.zeros((20, 30)) if elevation is None else np.asarray(elevation, dtype=float)
     tmap = TerrainMap(z, 1.0, ground=np.zeros(z.shape, int), ground_names={0: "g"}, obstacle=obstacle)
-    return EnergyCost.from_model(tmap, LinearModel(), {"g": None}, speed_mps=0.5)
+    return CostSpec(energy_model=LinearModel(), grounds={"g": None}, speed_mps=0.5).build(tmap)
 
 
 def test_evaluate_route_on_flat_map():

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from energy import Battery, NoiseModel, PhysicsEnergyModel, TruthSimulator, ground_preset, robot_preset
-from planner import EnergyCost, simulate_mission
+from energy import Battery, NoiseModel, TruthSimulator, ground_preset, robot_preset
+from planner import CostSpec, simulate_mission
 from planner.route import evaluate_route
 from terrain import flat_map
 
@@ -17,7 +17,7 @@ L_ROUTE = [[2.5, 2.5], [35.5, 2.5], [35.5, 25.5]]
 @pytest.fixture(scope="module")
 def flat():
     tmap = flat_map((30, 40), 1.0)
-    cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(ROBOT), GROUNDS, speed_mps=0.5)
+    cost = CostSpec(robot=ROBOT, grounds=GROUNDS, speed_mps=0.5).build(tmap)
     return tmap, cost
 
 

@@ -10,13 +10,12 @@ from energy import (
     Battery,
     LinearCurrentModel,
     NoiseModel,
-    PhysicsEnergyModel,
     TruthSimulator,
     excitation_commands,
     ground_preset,
     robot_preset,
 )
-from planner import AdaptiveSettings, EnergyCost, run_adaptive_mission, simulate_mission
+from planner import AdaptiveSettings, CostSpec, run_adaptive_mission, simulate_mission
 from planner.missions.figures import plot_adaptive_mission, plot_mission
 from planner.registry import CellModelRegistry
 from planner.route import evaluate_route
@@ -30,7 +29,7 @@ PNG = b"\x89PNG\r\n\x1a\n"
 def mission():
     grounds = {"asphalt": ground_preset("asphalt")}
     tmap = flat_map((12, 20), 1.0)
-    cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(ROBOT), grounds, speed_mps=0.5)
+    cost = CostSpec(robot=ROBOT, grounds=grounds, speed_mps=0.5).build(tmap)
     truth = TruthSimulator(ROBOT, grounds, noise=NoiseModel.off(), current_rate_hz=20.0, seed=0)
     route = evaluate_route(cost, [[2.5, 2.5], [16.5, 2.5], [16.5, 9.5]])
     return simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=truth, cost=cost), tmap

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from mc_samples import FIXED, NO_DASK, NOMINAL, run_mc, setup  # noqa: F401  (fixture)
 
-from energy import Battery, PhysicsEnergyModel, TruthSimulator, ground_preset, robot_preset
-from planner import EnergyCost, MissionDistributions, plan_route, simulate_mission, simulate_missions_mc
+from energy import Battery, TruthSimulator, ground_preset, robot_preset
+from planner import MissionDistributions, plan_route, simulate_mission, simulate_missions_mc
 from planner.cost_spec import CostSpec
 from terrawatt_base.dask_client import Compute
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
@@ -151,7 +151,7 @@ def test_a_ground_the_truth_simulator_cannot_drive_is_refused_before_any_mission
     import terrain
 
     tmap = terrain.flat_map((10, 20), 1.0, ground="mud")
-    cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(robot_preset("husky")), {"mud": ground_preset("sand")}, 0.5)
+    cost = CostSpec(grounds={"mud": ground_preset("sand")}, speed_mps=0.5).build(tmap)
     route = plan_route(tmap, (2.5, 2.5), (17.5, 7.5), cost=cost, planner="lattice")
     mud = {"mud": ground_preset("sand").replace(name="mud")}
     with pytest.raises(UnknownNameError, match=r"no vibration signature for ground\(s\) \['mud'\]"):

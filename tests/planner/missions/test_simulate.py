@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from simulate_samples import GROUNDS, ROBOT, clean_sim, flat, flat_mission  # noqa: F401  (fixtures)
 
-from energy import Battery, PhysicsEnergyModel, TruthSimulator, ground_preset
-from planner import EnergyCost, simulate_mission
+from energy import Battery, TruthSimulator, ground_preset
+from planner import simulate_mission
 from planner.cost_spec import CostSpec
 from planner.route import evaluate_route
 from terrain import (
@@ -90,7 +90,7 @@ def test_a_noise_free_mission_books_the_physics_energy_of_its_driven_profile(fla
 
 def test_ramp_up_and_down_match_prediction(clean_sim):
     tmap = ramp_map((12, 30), 1.0, grade=0.1)
-    cost = EnergyCost.from_model(tmap, PhysicsEnergyModel(ROBOT), GROUNDS, speed_mps=0.5)
+    cost = CostSpec(robot=ROBOT, grounds=GROUNDS, speed_mps=0.5).build(tmap)
     up = simulate_mission(tmap, evaluate_route(cost, [[2.5, 5.5], [27.5, 5.5]]), ROBOT, Battery(20.0, 24.0),
                           truth=clean_sim, cost=cost)
     down = simulate_mission(tmap, evaluate_route(cost, [[27.5, 5.5], [2.5, 5.5]]), ROBOT, Battery(20.0, 24.0),
@@ -224,7 +224,7 @@ def test_bad_inputs(flat, flat_mission, clean_sim):
         simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=res.log, current_convention="duty")
     with pytest.raises(InvalidParameterError, match="accel_mps2 must be > 0"):
         simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, accel_mps2=0.0)
-    other = EnergyCost.from_model(flat_map((30, 41), 1.0), PhysicsEnergyModel(ROBOT), GROUNDS, speed_mps=0.5)
+    other = CostSpec(robot=ROBOT, grounds=GROUNDS, speed_mps=0.5).build(flat_map((30, 41), 1.0))
     with pytest.raises(GridMismatchError, match="cost was built on a grid"):
         simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=other)
 
