@@ -46,7 +46,7 @@ from scipy import ndimage
 from energy import Battery, TruthSimulator, VibrationCurrentEstimator, ground_preset, load_current_model, robot_preset
 from energy.models.config import estimator_preset
 from energy.sim import GroundVariation
-from planner import EnergyCost, model_energy_cost, warm_up_kernels
+from planner import EnergyCost, warm_up_kernels
 from planner.cost_spec import CostSpec
 from planner.tours import TourChargers, TourRobot, TourSites, plan_tour, price_pairs, simulate_tours_mc
 from planner.tours.solver import TourProblem, solve_ortools, solve_pyvrp
@@ -145,11 +145,11 @@ def monte_carlo_part(args: argparse.Namespace) -> dict[str, Any]:
     """The tours at Q = 0.9 and 0.5 on the bundled map, each driven ``args.mc`` times."""
     tmap: TerrainMap = example_map()
     if args.model is not None:
-        cost = model_energy_cost(tmap, load_current_model(args.model), robot_preset("husky"), 0.5)
+        cost = CostSpec(model=load_current_model(args.model)).build(tmap)
         interval = f"model {args.model.name}"
     elif not args.stated_spread:
         t0 = time.perf_counter()
-        cost = model_energy_cost(tmap, fit_estimator(tmap, args.seed), robot_preset("husky"), 0.5)
+        cost = CostSpec(model=fit_estimator(tmap, args.seed)).build(tmap)
         interval = (f"a vibration estimator fitted on simulated runs of the map's grounds, its interval "
                     f"({time.perf_counter() - t0:.0f} s to fit and price)")
     else:

@@ -22,14 +22,13 @@ from .missions import (
     simulate_mission,
     simulate_missions_mc,
 )
-from .model_cost import model_energy_cost
 from .nav2_map import write_nav2_map
 from .planning import PLANNERS, plan_coarse_to_fine, plan_route
 from .problem import PlanningProblem
 from .reachability import reachability
 from .reachability_result import Reachability
 from .replan import IncrementalPlanner
-from .risk import RouteEnergyInterval, risk_cost
+from .risk import RouteEnergyInterval
 from .ros_export import write_route_bag
 from .route import Route
 from .route_geojson import write_geojson
@@ -49,10 +48,8 @@ __all__ = [
     "IncrementalPlanner",
     "warm_up_kernels",
     "LearnedEnergyModel",
-    "model_energy_cost",
     "price_route",
     "RouteEnergyInterval",
-    "risk_cost",
     "plan_coarse_to_fine",
     "CoarseOptions",
     "CoarseToFine",

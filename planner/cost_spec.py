@@ -53,13 +53,13 @@ class PlanModel:
     class_name : str
         The model's class.
     model_ground : str, mapping or None
-        The ``model_ground`` it priced the map with (:func:`planner.model_energy_cost`).
+        The ``model_ground`` it priced the map with (:func:`planner.model_cost.model_energy_cost`).
     grounds : tuple of str
         The cost's ground labels.
     gives_interval : bool
         Whether the cost has a predictive interval.
     risk_q : float or None
-        The quantile planned on (:func:`planner.risk_cost`), or None for the mean.
+        The quantile planned on (:func:`planner.risk.risk_cost`), or None for the mean.
     """
 
     file: str
@@ -115,15 +115,15 @@ class CostSpec:
         is then required. Not with ``model``.
     model : CurrentModel, optional
         A fitted current model (e.g. :func:`energy.load_current_model`) pricing the edges
-        (:func:`planner.model_energy_cost`) instead of the physics presets.
+        (:func:`planner.model_cost.model_energy_cost`) instead of the physics presets.
     model_label : str, optional
         How outputs name the model (default its class name).
     model_ground : str or mapping, optional
         With ``model``: one training ground pricing every cell, or map classes priced as
-        training grounds (:func:`planner.model_energy_cost`).
+        training grounds (:func:`planner.model_cost.model_energy_cost`).
     risk : float, optional
         Plan on this quantile of energy (in [0.5, 1)), every edge at mean + z sd
-        (:func:`planner.risk_cost`); needs a model with a predictive interval. ``None``: the mean.
+        (:func:`planner.risk.risk_cost`); needs a model with a predictive interval. ``None``: the mean.
 
     Raises
     ------
@@ -201,7 +201,7 @@ class CostSpec:
         The energy model (the robot's physics model, or :attr:`energy_model`) is asked once
         per ground class of the map for its energy per metre at every grade of the table and
         its turn energy at every angle (:func:`planner.tables.tabulate`); a current model is
-        priced by :func:`planner.model_energy_cost`.
+        priced by :func:`planner.model_cost.model_energy_cost`.
 
         Parameters
         ----------
@@ -226,7 +226,7 @@ class CostSpec:
             wrongly shaped energies, or without a battery voltage and turn rate of its own or
             the robot's.
         TerrawattError
-            As :func:`planner.model_energy_cost` with a current model.
+            As :func:`planner.model_cost.model_energy_cost` with a current model.
         """
         if not isinstance(terrain, TerrainMap):
             raise InvalidParameterError(f"terrain must be a TerrainMap, got {type(terrain).__name__!r}",
@@ -266,7 +266,7 @@ class CostSpec:
                                     f"{self.model_name} gives none", parameter=("risk", also))
 
     def at_risk(self, cost: EnergyCost) -> EnergyCost:
-        """The cost to plan on: ``cost`` itself without :attr:`risk`, else :func:`planner.risk_cost` at it.
+        """The cost to plan on: ``cost`` itself without :attr:`risk`, else :func:`planner.risk.risk_cost` at it.
 
         Raises
         ------

@@ -438,7 +438,7 @@ def plan_and_compare(
         the physics presets or a saved current model, a risk level); default ``CostSpec()``, the
         husky presets at 0.5 m/s. With a model that gives an interval, the route's energy
         distribution is reported (:func:`planner.route_price.price_route`); with its ``risk`` the
-        route is planned on that quantile of energy (:func:`planner.risk_cost`).
+        route is planned on that quantile of energy (:func:`planner.risk.risk_cost`).
     seed, time_limit_s, max_evaluations
         As :func:`planner.plan_route` (``max_evaluations`` is its ``max_cost_evaluations``
         and, when given, replaces the time limit).

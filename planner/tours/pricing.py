@@ -1,7 +1,7 @@
 """Every ordered pair of a tour's points priced on the map: one lattice search per point, here or as dask tasks.
 
 A leg ``i -> j`` is the lattice route that minimises the leg's price at the risk level (on
-:func:`planner.risk_cost` when the cost carries an interval, as ``plan --risk`` does; else the
+:func:`planner.risk.risk_cost` when the cost carries an interval, as ``plan --risk`` does; else the
 mean), found by :meth:`planner.Lattice.paths_from`: one Dijkstra per point, not one per pair.
 The leg is then priced on the cost itself: its mean energy (drive and turns,
 :meth:`EnergyCost.path_energy_j`, the plan price), its run-level spread per ground
@@ -176,7 +176,7 @@ def price_pairs(
     names : sequence of str
         One per point.
     risk : float
-        The level the legs are searched at (:func:`planner.risk_cost`; ignored without an interval).
+        The level the legs are searched at (:func:`planner.risk.risk_cost`; ignored without an interval).
     compute : Compute, optional
         Where the points are priced and whether a bar shows over them
         (:class:`terrawatt_base.dask_client.Compute`; default here; on dask one task per point,

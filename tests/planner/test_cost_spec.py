@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from energy import robot_preset
-from planner import model_energy_cost, risk_cost
 from planner.cost_spec import CostSpec, PlanModel
+from planner.model_cost import model_energy_cost
+from planner.risk import risk_cost
 from terrain import InvalidParameterError, UnknownNameError
 
 

@@ -4,8 +4,13 @@ import numpy as np
 import pytest
 
 from energy import load_current_model, robot_preset
-from planner import model_energy_cost
-from planner.model_cost import ModelCompatibilityWarning, model_energy_model, model_grounds, robot_matches
+from planner.model_cost import (
+    ModelCompatibilityWarning,
+    model_energy_cost,
+    model_energy_model,
+    model_grounds,
+    robot_matches,
+)
 from terrain import DataError, InvalidParameterError, TerrainMap, UnknownNameError
 
 HUSKY = robot_preset("husky")

@@ -17,7 +17,6 @@ from planner import (
     RouteEnergyInterval,
     plan_route,
     price_route,
-    risk_cost,
     simulate_missions_mc,
 )
 from planner.cost_spec import CostSpec
@@ -107,7 +106,7 @@ def test_plan_with_a_model_reports_the_t_interval_of_a_ground_it_never_drove(lin
 
 def test_risk_cost_prices_each_row_at_its_own_predictive_quantile(linear_model, world):
     tmap, _, cost = world
-    risky = risk_cost(cost, 0.9)
+    risky = CostSpec(model=linear_model, risk=0.9).at_risk(cost)
     assert risky.spread_dof == cost.spread_dof
     for row, z in ((0, predictive_quantile(0.9, 3.0)), (1, predictive_quantile(0.9))):
         assert np.allclose(risky.grade_table_j_per_m[row],
@@ -174,11 +173,9 @@ def test_a_class_named_as_a_training_ground_is_priced_with_that_ground_s_own_gau
     ground = np.zeros((6, 30), int)
     ground[3:] = 1
     tmap = TerrainMap(np.zeros((6, 30)), 1.0, ground=ground, ground_names={0: "a", 1: "grass"})
-    from planner import model_energy_cost
-
-    named = model_energy_cost(tmap, linear_model, robot_preset("husky"), 0.5, model_ground={"grass": "b"})
+    named = CostSpec(model=linear_model, model_ground={"grass": "b"}).build(tmap)
     assert dict(zip(named.ground_labels, named.spread_dof)) == {"a": math.inf, "b": 3.0}
-    mapped = model_energy_cost(tmap, linear_model, robot_preset("husky"), 0.5, model_ground={"a": "b", "grass": "a"})
+    mapped = CostSpec(model=linear_model, model_ground={"a": "b", "grass": "a"}).build(tmap)
     row_named, row_mapped = named.ground_labels.index("a"), mapped.ground_labels.index("a")
     assert mapped.spread_dof[row_mapped] == 3.0  # "a" now also prices grass, a ground the model never drove
     # the ground's own run spread is narrower than the spread of a ground the model never drove

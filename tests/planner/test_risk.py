@@ -7,9 +7,10 @@ import pytest
 
 from energy import InteractionLog, LogMeta, robot_preset
 from energy.budget import log_battery_power_w
-from planner import EnergyCost, RouteEnergyInterval, model_energy_cost, plan_route, risk_cost
+from planner import EnergyCost, RouteEnergyInterval, plan_route
 from planner.cost_spec import CostSpec
-from planner.risk import route_energy_interval
+from planner.model_cost import model_energy_cost
+from planner.risk import risk_cost, route_energy_interval
 from terrain import InvalidParameterError, TerrainMap
 
 START, GOAL = (2.5, 7.5), (27.5, 7.5)

@@ -3,14 +3,14 @@
 import numpy as np
 import pytest
 
-from energy import Battery, robot_preset
-from planner import MissionDistributions, model_energy_cost, plan_route, price_route, simulate_missions_mc
+from energy import Battery
+from planner import CostSpec, MissionDistributions, plan_route, price_route, simulate_missions_mc
 from terrain import InvalidParameterError
 
 
 @pytest.fixture
 def study(corridor_map, known_model):
-    cost = model_energy_cost(corridor_map, known_model(), robot_preset("husky"), 0.5)
+    cost = CostSpec(model=known_model()).build(corridor_map)
     route = plan_route(corridor_map, (2.5, 7.5), (27.5, 7.5), cost=cost, planner="lattice")  # the uncertain loam
     return corridor_map, cost, route, price_route(cost, route)
 
