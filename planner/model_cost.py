@@ -46,7 +46,6 @@ from terrawatt_base.errors import DataError, InvalidParameterError, TerrawattWar
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
 from .learned_cost import LearnedEnergyModel
 from .registry import CellModelRegistry
-from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES
 
 if TYPE_CHECKING:  # annotations only: energy does not export the summary's class at the top level
     from energy.models.base import TrainingSummary
@@ -309,8 +308,6 @@ def model_energy_cost(
     model_ground: str | Mapping[str, str] | None = None,
     physics_ground: GroundParams | None = None,
     max_slope_rad: float = DEFAULT_MAX_SLOPE_RAD,
-    grade_samples: int = DEFAULT_GRADE_SAMPLES,
-    turn_samples: int = DEFAULT_TURN_SAMPLES,
 ) -> EnergyCost:
     """Edge costs of ``terrain`` priced by a saved current model (what ``terrawatt plan --model FILE`` uses).
 
@@ -321,18 +318,17 @@ def model_energy_cost(
     Raises
     ------
     InvalidParameterError, UnknownNameError, DataError
-        As :func:`model_energy_model`; bad speed, slope or table sizes.
+        As :func:`model_energy_model`; bad speed or slope.
 
     Examples
     --------
-    Usage (needs a trained model file, so not run as a doctest)::
+    Usage (needs a trained model file, so not run as a doctest; :meth:`planner.CostSpec.build` calls it)::
 
         model = load_current_model("husky.tw")
         cost = model_energy_cost(tmap, model, robot_preset("husky"), 0.5)
     """
     lem, _ = model_energy_model(terrain, model, robot, model_ground=model_ground, physics_ground=physics_ground)
-    return lem.energy_cost(terrain, speed_mps, max_slope_rad=max_slope_rad, grade_samples=grade_samples,
-                           turn_samples=turn_samples)
+    return lem.energy_cost(terrain, speed_mps, max_slope_rad=max_slope_rad)
 
 
 def parse_model_ground(tokens: Sequence[str] | str, name: str = "model_ground") -> str | dict[str, str]:
