@@ -53,7 +53,7 @@ from typing import Any
 import numpy as np
 
 from energy import PhysicsEnergyModel, ground_preset, robot_preset
-from planner import CostSpec, EnergyCost, Lattice, PlannerSettings, plan_route, warm_up_kernels
+from planner import CostSpec, CostTables, EnergyCost, Lattice, PlannerSettings, plan_route, warm_up_kernels
 from planner.anyangle import DEFAULT_POLISH_SPACINGS_CELLS, anyangle_path, polish_path, warm_up_anyangle
 from planner.kernels import variants
 from planner.ompl import OMPL_PLANNERS
@@ -302,7 +302,7 @@ def _run_size(n: int, args: argparse.Namespace, rng: np.random.Generator) -> dic
     }
     prep.update(_edge_rates(cost, rng))
     queries = _queries(cost, args.queries)
-    drive_cost = cost.with_tables(cost.grade_table_j_per_m, np.zeros_like(cost.turn_table_j))
+    drive_cost = cost.with_tables(CostTables(cost.grade_table_j_per_m, np.zeros_like(cost.turn_table_j)))
     runs: list[dict[str, Any]] = []
     curve: list[dict[str, Any]] = []
     for qi, (start, goal) in enumerate(queries):

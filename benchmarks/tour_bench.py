@@ -46,7 +46,7 @@ from scipy import ndimage
 from energy import Battery, TruthSimulator, VibrationCurrentEstimator, ground_preset, load_current_model, robot_preset
 from energy.models.config import estimator_preset
 from energy.sim import GroundVariation
-from planner import EnergyCost, warm_up_kernels
+from planner import CostTables, EnergyCost, warm_up_kernels
 from planner.cost_spec import CostSpec
 from planner.tours import TourChargers, TourRobot, TourSites, plan_tour, price_pairs, simulate_tours_mc
 from planner.tours.solver import TourProblem, solve_ortools, solve_pyvrp
@@ -59,8 +59,7 @@ from terrawatt_base.dask_client import Compute
 def with_spread(cost: EnergyCost, rel_sd: float) -> EnergyCost:
     """``cost`` with a run-level spread of ``rel_sd`` of every mean table entry."""
     sd = np.nan_to_num(np.abs(rel_sd * cost.grade_table_j_per_m), nan=0.0, posinf=0.0)
-    return cost.with_tables(cost.grade_table_j_per_m, cost.turn_table_j, ground_labels=cost.ground_labels,
-                            grade_sd_table_j_per_m=sd, turn_sd_table_j=np.abs(rel_sd * cost.turn_table_j))
+    return cost.with_tables(CostTables(cost.grade_table_j_per_m, cost.turn_table_j, ground_labels=cost.ground_labels, grade_sd_table_j_per_m=sd, turn_sd_table_j=np.abs(rel_sd * cost.turn_table_j)))
 
 
 def depot_and_sites(cost: EnergyCost, n: int, rng: np.random.Generator) -> tuple[tuple[float, float], TourSites]:

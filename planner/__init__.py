@@ -34,11 +34,13 @@ from .route import Route
 from .route_geojson import write_geojson
 from .route_price import price_route
 from .settings import PlannerSettings
+from .tables import CostTables
 from .warmup import warm_up_kernels
 
 __all__ = [
     "CostSpec",
     "EnergyCost",
+    "CostTables",
     "PlannerSettings",
     "PLANNERS",
     "plan_route",

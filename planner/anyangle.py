@@ -60,6 +60,7 @@ from .kernels import KEEP_RTOL
 from .kernels.anyangle import NEIGHBOURS_16, corridor_index, polish_polyline, theta_star
 from .lattice import Lattice
 from .points import as_points
+from .tables import CostTables
 
 __all__ = [
     "AnyAnglePath",
@@ -282,8 +283,9 @@ def polish_path(
 def warm_up_anyangle() -> float:
     """Compile (or load from numba's on-disk cache) the any-angle kernels; returns the seconds spent."""
     t0 = time.perf_counter()
-    cost = EnergyCost(TerrainMap(np.zeros((8, 8)), 1.0), np.zeros((8, 8), np.int32), np.ones((1, 3)), np.ones((1, 2)),
-                      speed_mps=1.0, battery_voltage_v=1.0, turn_rate_radps=1.0)
+    cost = EnergyCost(TerrainMap(np.zeros((8, 8)), 1.0), np.zeros((8, 8), np.int32),
+                      CostTables(np.ones((1, 3)), np.ones((1, 2))), speed_mps=1.0, battery_voltage_v=1.0,
+                      turn_rate_radps=1.0)
     path = anyangle_path(cost, (0.5, 0.5), (7.5, 6.5), guide_stride_cells=1)
     polish_path(cost, np.vstack([path.waypoints_m[:1], [[2.0, 5.0]], path.waypoints_m[-1:]]))
     return time.perf_counter() - t0

@@ -37,6 +37,7 @@ from .kernels.corridor import corridor_weights
 from .lattice import LATTICE_OFFSETS, Lattice
 from .points import as_points
 from .route import Route, empty_route, evaluate_route
+from .tables import CostTables
 
 __all__ = [
     "CoarseOptions",
@@ -281,10 +282,10 @@ def coarse_cost(tables: EnergyCost, elevation_m: np.ndarray, blocked: np.ndarray
                 cell_size_m: float, origin_xy_m: tuple[float, float], crs: str | None) -> EnergyCost:
     """The coarse map of :func:`coarse_layers` priced with the energy tables and settings of ``tables``."""
     coarse = TerrainMap(elevation_m, cell_size_m, origin_xy_m, obstacle=blocked, crs=crs)
-    return EnergyCost(coarse, ground_rows, tables.grade_table_j_per_m, tables.turn_table_j,
+    return EnergyCost(coarse, ground_rows, CostTables(tables.grade_table_j_per_m, tables.turn_table_j,
+                                                      tables.ground_labels),
                       speed_mps=tables.speed_mps, max_slope_rad=tables.max_slope_rad,
-                      battery_voltage_v=tables.battery_voltage_v, turn_rate_radps=tables.turn_rate_radps,
-                      ground_labels=tables.ground_labels)
+                      battery_voltage_v=tables.battery_voltage_v, turn_rate_radps=tables.turn_rate_radps)
 
 
 def corridor_mask(coarse: EnergyCost, waypoints_m: np.ndarray, width_m: float) -> np.ndarray:

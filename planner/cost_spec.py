@@ -36,7 +36,7 @@ from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 from .edge_cost import EnergyCost
 from .model_cost import model_energy_cost
 from .risk import check_planning_risk, risk_cost
-from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES, ground_table_rows, tabulate
+from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES, CostTables, ground_table_rows, tabulate
 from .warmup import warm_up_kernels
 
 __all__ = ["CostSpec", "PricedMap", "PlanModel"]
@@ -347,8 +347,8 @@ def _tabulated_cost(terrain: TerrainMap, model: Any, grounds: Mapping[Any, Any],
     rows, params_rows, labels = ground_table_rows(terrain, grounds, unknown_ground)
     grade_table, turn_table = tabulate(model, speed_mps, params_rows, labels, max_slope_rad=max_slope_rad,
                                        grade_samples=DEFAULT_GRADE_SAMPLES, turn_samples=DEFAULT_TURN_SAMPLES)
-    cost = EnergyCost(terrain, rows, grade_table, turn_table, speed_mps=speed_mps, max_slope_rad=max_slope_rad,
-                      battery_voltage_v=voltage, turn_rate_radps=turn_rate, ground_labels=tuple(labels))
+    cost = EnergyCost(terrain, rows, CostTables(grade_table, turn_table, tuple(labels)), speed_mps=speed_mps,
+                      max_slope_rad=max_slope_rad, battery_voltage_v=voltage, turn_rate_radps=turn_rate)
     if isinstance(model, PhysicsEnergyModel):
         cost.physics_model, cost.ground_params = model, tuple(params_rows)
     cost.prep_time_s = time.perf_counter() - t0

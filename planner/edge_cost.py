@@ -45,9 +45,7 @@ from .refine import relax_path
 from .tables import (
     DEFAULT_GRADE_SAMPLES,
     DEFAULT_TURN_SAMPLES,
-    check_spread_dof,
-    check_spread_tables,
-    check_tables,
+    CostTables,
 )
 
 __all__ = [
@@ -74,13 +72,11 @@ class EnergyCost:
     terrain : TerrainMap
         The map; its ``grad_x``, ``grad_y``, ``slope`` and ``obstacle`` layers are used.
     ground_rows : ndarray of int, shape (rows, cols)
-        Row of ``grade_table_j_per_m`` / ``turn_table_j`` that serves each cell.
-    grade_table_j_per_m : ndarray, shape (n_grounds, n_grade)
-        Energy per horizontal metre (J/m, >= 0; ``+inf`` = this grade cannot be driven on
-        this ground) at uniformly spaced grades from ``-tan(max_slope_rad)`` to
-        ``+tan(max_slope_rad)``; ``n_grade`` odd and >= 3.
-    turn_table_j : ndarray, shape (n_grounds, n_turn)
-        Energy (J, >= 0, finite) of turning in place by angles uniformly spaced over ``[0, pi]``.
+        The row of ``tables`` that serves each cell.
+    tables : CostTables
+        The energy of a straight metre at each grade and of a turn at each angle, a row per
+        kind of cell (with their spreads, when a model with an interval priced them); the
+        grades span ``[-tan(max_slope_rad), +tan(max_slope_rad)]``.
     speed_mps : float
         Planning speed (m/s), used for durations.
     max_slope_rad : float
@@ -89,18 +85,6 @@ class EnergyCost:
         Battery voltage (V) for charge in mAh.
     turn_rate_radps : float
         Rate of turning in place (rad/s), used for durations.
-    ground_labels : tuple of str, optional
-        A label per table row (ground names), for messages.
-    grade_sd_table_j_per_m, turn_sd_table_j : ndarray, optional
-        Run-level standard deviations of the two tables (same shapes, finite, >= 0), from a
-        model with a predictive interval (:class:`~planner.LearnedEnergyModel`); both or
-        neither. They do not change any query of this class: :mod:`planner.risk` reads them
-        for route energy intervals and risk-aware costs.
-    spread_dof : sequence of float, optional
-        Per table row, the degrees of freedom of the distribution the row's spreads are the
-        scale of: ``inf`` for a Gaussian, finite for the Student-t of a ground the model never
-        drove (:attr:`energy.models.forecast.CurrentForecast.dof`). Default: every row ``inf``;
-        only with the spread tables.
 
     Attributes
     ----------
@@ -118,7 +102,8 @@ class EnergyCost:
     Raises
     ------
     InvalidParameterError
-        Tables of the wrong shape, negative or non-finite energies, bad speed / slope / voltage.
+        ``tables`` not a :class:`CostTables`, rows that are not its rows, bad speed / slope /
+        voltage / turn rate.
     GridMismatchError
         ``ground_rows`` not on the map's grid.
     """
@@ -127,17 +112,12 @@ class EnergyCost:
         self,
         terrain: TerrainMap,
         ground_rows: np.ndarray,
-        grade_table_j_per_m: np.ndarray,
-        turn_table_j: np.ndarray,
+        tables: CostTables,
         *,
         speed_mps: float,
         max_slope_rad: float = DEFAULT_MAX_SLOPE_RAD,
         battery_voltage_v: float,
         turn_rate_radps: float,
-        ground_labels: tuple[str, ...] | None = None,
-        grade_sd_table_j_per_m: np.ndarray | None = None,
-        turn_sd_table_j: np.ndarray | None = None,
-        spread_dof: tuple[float, ...] | None = None,
     ) -> None:
         t0 = time.perf_counter()
         if not isinstance(terrain, TerrainMap):
@@ -147,32 +127,24 @@ class EnergyCost:
         turn_rate = check_real("turn_rate_radps", turn_rate_radps, low=0.0, low_inclusive=False)
         slope = check_real("max_slope_rad", max_slope_rad, low=0.0, high=math.pi / 2, low_inclusive=False,
                            high_inclusive=False)
-        grade_table, turn_table, labels, rows = check_tables(
-            terrain.shape, ground_rows, grade_table_j_per_m, turn_table_j, ground_labels
-        )
+        if not isinstance(tables, CostTables):
+            raise InvalidParameterError(f"tables must be a CostTables, got {type(tables).__name__!r}",
+                                        parameter="tables")
 
         self.terrain = terrain
         self.speed_mps = speed
         self.max_slope_rad = slope
         self.battery_voltage_v = voltage
         self.turn_rate_radps = turn_rate
-        self.ground_labels = labels
         self.grade_max = math.tan(self.max_slope_rad)
-        self.grade_table_j_per_m = grade_table
-        self.turn_table_j = turn_table
-        #: Run-level standard deviations of the tables (J per horizontal metre, J), or None
-        #: when the cost's model gives no interval (see :attr:`has_interval`).
-        self.grade_sd_table_j_per_m, self.turn_sd_table_j = check_spread_tables(
-            grade_table, turn_table, grade_sd_table_j_per_m, turn_sd_table_j)
-        #: Degrees of freedom of each row's spreads (``inf``: Gaussian), one per table row.
-        self.spread_dof = check_spread_dof(spread_dof, grade_table.shape[0], self.grade_sd_table_j_per_m is not None)
-        self.ground_rows = rows.astype(np.int32)
+        #: The energy tables, a row per kind of cell (:class:`CostTables`).
+        self.tables = tables
+        self.ground_rows = tables.rows_on(terrain.shape, ground_rows)
         self.blocked = np.asarray(terrain.obstacle) | (np.asarray(terrain["slope"]) > self.max_slope_rad)
-        for arr in (self.ground_rows, self.blocked):
-            arr.setflags(write=False)
+        self.blocked.setflags(write=False)
         self.arrays = CostArrays.build(
             terrain.grid, terrain["grad_x"], terrain["grad_y"], self.ground_rows, self.blocked,
-            grade_table, turn_table, self.grade_max,
+            tables.grade_table_j_per_m, tables.turn_table_j, self.grade_max,
         )
         self._free_grade_index: np.ndarray | None = None  # geometry only: shared by with_tables
         self.min_energy_per_metre_j = self._min_energy_per_metre(self.arrays.grade_step)
@@ -196,41 +168,23 @@ class EnergyCost:
         self.learned_model: Any = None
         self.prep_time_s = time.perf_counter() - t0
 
-    def with_tables(
-        self,
-        grade_table_j_per_m: np.ndarray,
-        turn_table_j: np.ndarray,
-        ground_rows: np.ndarray | None = None,
-        *,
-        ground_labels: tuple[str, ...] | None = None,
-        grade_sd_table_j_per_m: np.ndarray | None = None,
-        turn_sd_table_j: np.ndarray | None = None,
-        spread_dof: tuple[float, ...] | None = None,
-    ) -> EnergyCost:
+    def with_tables(self, tables: CostTables, ground_rows: np.ndarray | None = None) -> EnergyCost:
         """The same map geometry with new energy tables (a table-only refresh, e.g. after a model update).
 
-        Equal in every query to ``EnergyCost(self.terrain, ground_rows, grade_table_j_per_m,
-        turn_table_j, ...)`` with this cost's speed, slope limit, voltage and turn rate, but
-        the per-cell geometry (gradients, blocked cells, connected regions) is shared, and
-        every lattice graph cached on this cost is carried over by recomputing only the
-        weights of edges that cross a cell whose table row *content* changed
-        (:meth:`Lattice.refreshed`), instead of being rebuilt. Cells whose row index changed
-        but whose row content did not (rows renumbered) count as unchanged.
+        Equal in every query to ``EnergyCost(self.terrain, ground_rows, tables, ...)`` with this
+        cost's speed, slope limit, voltage and turn rate, but the per-cell geometry (gradients,
+        blocked cells, connected regions) is shared, and every lattice graph cached on this cost
+        is carried over by recomputing only the weights of edges that cross a cell whose table
+        row *content* changed (:meth:`Lattice.refreshed`), instead of being rebuilt. Cells whose
+        row index changed but whose row content did not (rows renumbered) count as unchanged.
 
         Parameters
         ----------
-        grade_table_j_per_m, turn_table_j : ndarray
-            New tables, as in the constructor; ``grade_table_j_per_m`` must have this cost's
-            number of grade samples (the grade grid is part of the geometry).
+        tables : CostTables
+            The new tables (their spreads, if any, with them: the old spreads are not carried
+            over); as many grade samples as this cost's (the grade grid is part of the geometry).
         ground_rows : ndarray of int, optional
             New per-cell rows (default: the current ones).
-        ground_labels : tuple of str, optional
-            Labels of the new rows.
-        grade_sd_table_j_per_m, turn_sd_table_j : ndarray, optional
-            Standard deviations of the new tables (as in the constructor); default none
-            (new tables do not inherit the spreads of the old ones).
-        spread_dof : sequence of float, optional
-            Degrees of freedom of the new rows' spreads (as in the constructor; default all ``inf``).
 
         Returns
         -------
@@ -242,33 +196,29 @@ class EnergyCost:
         Raises
         ------
         InvalidParameterError
-            Tables invalid as in the constructor, or another number of grade samples.
+            ``tables`` not a :class:`CostTables` or of another number of grade samples; rows
+            that are not its rows.
         GridMismatchError
             ``ground_rows`` not on the map's grid.
         """
         t0 = time.perf_counter()
-        rows_in = self.ground_rows if ground_rows is None else ground_rows
-        grade_table, turn_table, labels, rows = check_tables(
-            self.terrain.shape, rows_in, grade_table_j_per_m, turn_table_j, ground_labels
-        )
-        if grade_table.shape[1] != self.grade_table_j_per_m.shape[1]:
+        if not isinstance(tables, CostTables):
+            raise InvalidParameterError(f"tables must be a CostTables, got {type(tables).__name__!r}",
+                                        parameter="tables")
+        rows = tables.rows_on(self.terrain.shape, self.ground_rows if ground_rows is None else ground_rows)
+        if tables.grade_table_j_per_m.shape[1] != self.grade_table_j_per_m.shape[1]:
             raise InvalidParameterError(
-                f"grade_table_j_per_m has {grade_table.shape[1]} grade samples; this cost's grade grid has "
-                f"{self.grade_table_j_per_m.shape[1]} (build a new EnergyCost to change it)"
+                f"grade_table_j_per_m has {tables.grade_table_j_per_m.shape[1]} grade samples; this cost's grade "
+                f"grid has {self.grade_table_j_per_m.shape[1]} (build a new EnergyCost to change it)", parameter="tables"
             )
         new = object.__new__(EnergyCost)
         for name in ("terrain", "speed_mps", "max_slope_rad", "battery_voltage_v", "turn_rate_radps", "grade_max",
                      "blocked", "_free_grade_index", "_components"):
             setattr(new, name, getattr(self, name))
-        new.ground_labels = labels
-        new.grade_table_j_per_m = grade_table
-        new.turn_table_j = turn_table
-        new.grade_sd_table_j_per_m, new.turn_sd_table_j = check_spread_tables(
-            grade_table, turn_table, grade_sd_table_j_per_m, turn_sd_table_j)
-        new.spread_dof = check_spread_dof(spread_dof, grade_table.shape[0], new.grade_sd_table_j_per_m is not None)
-        new.ground_rows = rows.astype(np.int32)
-        new.ground_rows.setflags(write=False)
-        new.arrays = self.arrays.with_tables(new.ground_rows, self.blocked, grade_table, turn_table)
+        new.tables = tables
+        new.ground_rows = rows
+        new.arrays = self.arrays.with_tables(new.ground_rows, self.blocked, tables.grade_table_j_per_m,
+                                             tables.turn_table_j)
         new.min_energy_per_metre_j = new._min_energy_per_metre(self.arrays.grade_step)
         new.changed_cells = self._changed_cells(new)
         new.changed_cells.setflags(write=False)
@@ -278,6 +228,36 @@ class EnergyCost:
         new.lattices = {stride: lat.refreshed(new, new.changed_cells) for stride, lat in self.lattices.items()}
         new.prep_time_s = time.perf_counter() - t0
         return new
+
+    @property
+    def grade_table_j_per_m(self) -> np.ndarray:
+        """Energy per horizontal metre at each grade, a row per kind of cell (:class:`CostTables`)."""
+        return self.tables.grade_table_j_per_m
+
+    @property
+    def turn_table_j(self) -> np.ndarray:
+        """Energy of a turn in place at each angle over ``[0, pi]``, a row per kind of cell."""
+        return self.tables.turn_table_j
+
+    @property
+    def ground_labels(self) -> tuple[str, ...]:
+        """A label per table row (ground names)."""
+        return self.tables.ground_labels
+
+    @property
+    def grade_sd_table_j_per_m(self) -> np.ndarray | None:
+        """Run-level standard deviations of the grade table (J per horizontal metre), or None without an interval."""
+        return self.tables.grade_sd_table_j_per_m
+
+    @property
+    def turn_sd_table_j(self) -> np.ndarray | None:
+        """Run-level standard deviations of the turn table (J), or None without an interval."""
+        return self.tables.turn_sd_table_j
+
+    @property
+    def spread_dof(self) -> tuple[float, ...]:
+        """Degrees of freedom of each row's spreads (``inf``: Gaussian), one per table row."""
+        return self.tables.spread_dof
 
     @property
     def has_interval(self) -> bool:

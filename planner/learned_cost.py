@@ -93,7 +93,7 @@ from .learned_table import (
     predict_currents,
 )
 from .registry import CellModelRegistry
-from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES, check_table_sizes, tabulate
+from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES, CostTables, check_table_sizes, tabulate
 
 __all__ = [
     "LearnedEnergyModel",
@@ -568,15 +568,12 @@ class LearnedEnergyModel:
         lut = np.zeros(int(ids.max()) + 1, dtype=np.int32)
         lut[ids] = np.arange(ids.size, dtype=np.int32)
         rows = lut[np.asarray(self.registry.model_id_map)]
+        tables = CostTables(grade_table, turn_table, labels, grade_sd, turn_sd, spread_dof)
         if previous is not None:
-            cost = previous.with_tables(grade_table, turn_table, rows, ground_labels=labels,
-                                        grade_sd_table_j_per_m=grade_sd, turn_sd_table_j=turn_sd,
-                                        spread_dof=spread_dof)
+            cost = previous.with_tables(tables, rows)
         else:
-            cost = EnergyCost(terrain, rows, grade_table, turn_table, speed_mps=speed, max_slope_rad=slope,
-                              battery_voltage_v=self.robot.battery_voltage_v, turn_rate_radps=self.turn_rate_radps,
-                              ground_labels=labels, grade_sd_table_j_per_m=grade_sd, turn_sd_table_j=turn_sd,
-                              spread_dof=spread_dof)
+            cost = EnergyCost(terrain, rows, tables, speed_mps=speed, max_slope_rad=slope,
+                              battery_voltage_v=self.robot.battery_voltage_v, turn_rate_radps=self.turn_rate_radps)
         cost.learned_model = self  # a route's whole drive profile is priced by this model (price_route)
         cost.prep_time_s = time.perf_counter() - t0
         return cost

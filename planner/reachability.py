@@ -39,6 +39,7 @@ from .kernels import grid_dijkstra, unit_lattice_weights, unit_moves, use_parall
 from .lattice import LATTICE_OFFSETS
 from .points import as_points
 from .reachability_result import Reachability
+from .tables import CostTables
 
 __all__ = ["reachability", "lattice_move_energies", "depot_links", "warm_up_reachability"]
 
@@ -77,7 +78,7 @@ def warm_up_reachability() -> float:
     """
     t0 = time.perf_counter()
     tmap = TerrainMap(np.zeros((4, 4)), 1.0)
-    cost = EnergyCost(tmap, np.zeros((4, 4), np.int32), np.ones((1, 3)), np.ones((1, 2)),
+    cost = EnergyCost(tmap, np.zeros((4, 4), np.int32), CostTables(np.ones((1, 3)), np.ones((1, 2))),
                       speed_mps=1.0, battery_voltage_v=1.0, turn_rate_radps=1.0)
     arr = cost.arrays
     for kernel in (unit_moves.unit_lattice_weights_serial, unit_moves.unit_lattice_weights_parallel):

@@ -103,14 +103,14 @@ class IncrementalPlanner:
     Examples
     --------
     >>> import numpy as np
-    >>> from planner import CostSpec, Lattice
+    >>> from planner import CostSpec, CostTables, Lattice
     >>> from terrain import flat_map
     >>> tmap = flat_map((30, 40), 1.0)  # level asphalt, 1 m cells
     >>> cost = CostSpec(speed_mps=0.5).build(tmap)  # the Husky's physics on the asphalt preset
     >>> planner = IncrementalPlanner(Lattice.for_cost(cost), (35.0, 25.0))
     >>> planner.plan((5.0, 5.0)).found
     True
-    >>> cheaper = cost.with_tables(0.5 * cost.grade_table_j_per_m, cost.turn_table_j)  # a model update
+    >>> cheaper = cost.with_tables(CostTables(0.5 * cost.grade_table_j_per_m, cost.turn_table_j))  # a model update
     >>> path = planner.replan((8.0, 6.0), Lattice.for_cost(cheaper))  # moved, and repaired
     >>> bool(np.isclose(path.objective, Lattice(cheaper).shortest_path((8.0, 6.0), (35.0, 25.0)).objective))
     True

@@ -42,6 +42,7 @@ priced exactly (:func:`route_energy_interval`).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -335,6 +336,4 @@ def risk_cost(cost: EnergyCost, q: float) -> EnergyCost:
     z = np.array([predictive_quantile(q, dof) for dof in cost.spread_dof])[:, None]  # per row
     grade = np.maximum(cost.grade_table_j_per_m + z * cost.grade_sd_table_j_per_m, 0.0)
     turn = np.maximum(cost.turn_table_j + z * cost.turn_sd_table_j, 0.0)
-    return cost.with_tables(grade, turn, ground_labels=cost.ground_labels,
-                            grade_sd_table_j_per_m=cost.grade_sd_table_j_per_m, turn_sd_table_j=cost.turn_sd_table_j,
-                            spread_dof=cost.spread_dof)
+    return cost.with_tables(dataclasses.replace(cost.tables, grade_table_j_per_m=grade, turn_table_j=turn))

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -29,7 +30,7 @@ __all__ = [
     "check_table_sizes",
     "tabulate",
     "ground_table_rows",
-    "check_tables",
+    "CostTables",
     "check_spread_tables",
     "check_spread_dof",
 ]
@@ -148,7 +149,7 @@ def check_spread_tables(
     Parameters
     ----------
     grade_table, turn_table : ndarray
-        The checked mean tables (:func:`check_tables`); the spreads must have their shapes.
+        The checked mean tables (:class:`CostTables`); the spreads must have their shapes.
     grade_sd_table, turn_sd_table : array_like or None
         Run-level standard deviations (J per horizontal metre, J), finite and >= 0.
 
@@ -273,19 +274,98 @@ def ground_table_rows(
     return lut[ground.astype(np.int64) + 1], params_rows, labels
 
 
-def check_tables(
-    shape: tuple[int, int], ground_rows: Any, grade_table_j_per_m: Any, turn_table_j: Any, ground_labels: Any
-) -> tuple[np.ndarray, np.ndarray, tuple[str, ...], np.ndarray]:
-    """Validated copies of an edge cost's tables and per-cell rows (see :class:`~planner.EnergyCost`).
+@dataclass(frozen=True, eq=False)
+class CostTables:
+    """The energy tables of an edge cost, one row per kind of cell: a straight metre at each grade and a turn at each angle.
+
+    Checked when made, and read-only copies of what was given; an :class:`~planner.EnergyCost`
+    lays them over a map (a row per cell), :meth:`~planner.EnergyCost.with_tables` swaps them
+    (the replan after a model update).
+
+    Parameters
+    ----------
+    grade_table_j_per_m : array_like, shape (n_rows, n_grade)
+        Energy per horizontal metre (J/m, >= 0; ``+inf`` = this grade cannot be driven on
+        this row's ground) at uniformly spaced grades from ``-tan(max_slope_rad)`` to
+        ``+tan(max_slope_rad)``; ``n_grade`` odd and >= 3.
+    turn_table_j : array_like, shape (n_rows, n_turn)
+        Energy (J, >= 0, finite) of turning in place by angles uniformly spaced over ``[0, pi]``.
+    ground_labels : sequence of str, optional
+        A label per row (ground names), for messages; default ``row0``, ``row1``, ...
+    grade_sd_table_j_per_m, turn_sd_table_j : array_like, optional
+        Run-level standard deviations of the two tables (same shapes, finite, >= 0), from a
+        model with a predictive interval; both or neither. No query of the cost reads them:
+        :mod:`planner.risk` does, for route energy intervals and risk-aware costs.
+    spread_dof : sequence of float, optional
+        Per row, the degrees of freedom of the distribution the row's spreads are the scale of:
+        ``inf`` for a Gaussian, finite for the Student-t of a ground the model never drove
+        (:attr:`energy.models.forecast.CurrentForecast.dof`). Default: every row ``inf``; only
+        with the spread tables.
 
     Raises
     ------
     InvalidParameterError
         Tables of the wrong shape or with negative / NaN energies (or infinite turn
-        energies); rows that are not table indices; labels of the wrong length.
-    GridMismatchError
-        ``ground_rows`` not of ``shape``.
+        energies); labels of the wrong length; spreads alone, of other shapes, negative or
+        non-finite; degrees of freedom of another length, not > 0, or without spreads.
+
+    Examples
+    --------
+    >>> tables = CostTables([[20.0, 10.0, 30.0]], [[0.0, 5.0]], ground_labels=("asphalt",))
+    >>> tables.n_rows, tables.spread_dof, tables.grade_table_j_per_m.flags.writeable
+    (1, (inf,), False)
     """
+
+    grade_table_j_per_m: np.ndarray
+    turn_table_j: np.ndarray
+    ground_labels: tuple[str, ...] | None = None
+    grade_sd_table_j_per_m: np.ndarray | None = None
+    turn_sd_table_j: np.ndarray | None = None
+    spread_dof: tuple[float, ...] | None = None
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        grade, turn, labels = _check_mean_tables(self.grade_table_j_per_m, self.turn_table_j, self.ground_labels)
+        set_(self, "grade_table_j_per_m", grade)
+        set_(self, "turn_table_j", turn)
+        set_(self, "ground_labels", labels)
+        grade_sd, turn_sd = check_spread_tables(grade, turn, self.grade_sd_table_j_per_m, self.turn_sd_table_j)
+        set_(self, "grade_sd_table_j_per_m", grade_sd)
+        set_(self, "turn_sd_table_j", turn_sd)
+        set_(self, "spread_dof", check_spread_dof(self.spread_dof, grade.shape[0], grade_sd is not None))
+
+    @property
+    def n_rows(self) -> int:
+        """Number of rows (kinds of cell)."""
+        return int(self.grade_table_j_per_m.shape[0])
+
+    def rows_on(self, shape: tuple[int, int], ground_rows: Any) -> np.ndarray:
+        """``ground_rows`` checked as this table's rows of a map of ``shape``: a read-only int32 copy.
+
+        Raises
+        ------
+        GridMismatchError
+            ``ground_rows`` not of ``shape``.
+        InvalidParameterError
+            Values that are not rows of these tables.
+        """
+        rows = np.asarray(ground_rows)
+        if rows.shape != tuple(shape):
+            raise GridMismatchError(f"ground_rows has shape {rows.shape!r}; the map's grid is {tuple(shape)!r}")
+        n_rows = self.n_rows
+        if not np.issubdtype(rows.dtype, np.integer) or rows.min() < 0 or rows.max() >= n_rows:
+            raise InvalidParameterError(
+                f"ground_rows must hold integer table rows in 0..{n_rows - 1}, got values in "
+                f"[{rows.min()!r}, {rows.max()!r}] of dtype {rows.dtype}"
+            )
+        out = rows.astype(np.int32)
+        out.setflags(write=False)
+        return out
+
+
+def _check_mean_tables(grade_table_j_per_m: Any, turn_table_j: Any,
+                       ground_labels: Any) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
+    """Validated read-only copies of the two mean tables, and a label per row."""
     try:
         grade_table = np.array(grade_table_j_per_m, dtype=np.float64, order="C", copy=True)
         turn_table = np.array(turn_table_j, dtype=np.float64, order="C", copy=True)
@@ -318,12 +398,6 @@ def check_tables(
                 f"costs; a regenerating model must not go below 0), got {tab[i, j]!r} for "
                 f"ground {labels[i]!r} at sample {j}"
             )
-    rows = np.asarray(ground_rows)
-    if rows.shape != tuple(shape):
-        raise GridMismatchError(f"ground_rows has shape {rows.shape!r}; the map's grid is {tuple(shape)!r}")
-    if not np.issubdtype(rows.dtype, np.integer) or rows.min() < 0 or rows.max() >= n_rows:
-        raise InvalidParameterError(
-            f"ground_rows must hold integer table rows in 0..{n_rows - 1}, got values in "
-            f"[{rows.min()!r}, {rows.max()!r}] of dtype {rows.dtype}"
-        )
-    return grade_table, turn_table, labels, rows
+    for tab in (grade_table, turn_table):
+        tab.setflags(write=False)
+    return grade_table, turn_table, labels

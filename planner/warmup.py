@@ -17,6 +17,7 @@ from .lattice import LATTICE_OFFSETS, Lattice
 from .reachability import warm_up_reachability
 from .refine import relax_path, string_pull
 from .replan import IncrementalPlanner
+from .tables import CostTables
 
 __all__ = ["warm_up_kernels"]
 
@@ -36,10 +37,8 @@ def warm_up_kernels() -> float:
     """
     t0 = time.perf_counter()
     tmap = TerrainMap(np.zeros((4, 4)), 1.0)
-    cost = EnergyCost(
-        tmap, np.zeros((4, 4), np.int32), np.ones((1, 3)), np.ones((1, 2)),
-        speed_mps=1.0, battery_voltage_v=1.0, turn_rate_radps=1.0,
-    )
+    cost = EnergyCost(tmap, np.zeros((4, 4), np.int32), CostTables(np.ones((1, 3)), np.ones((1, 2))),
+                      speed_mps=1.0, battery_voltage_v=1.0, turn_rate_radps=1.0)
     arr = cost.arrays
     xs = np.array([0.5, 1.5])
     ys = np.array([0.5, 2.5])
@@ -63,7 +62,7 @@ def warm_up_kernels() -> float:
     lattice = Lattice.for_cost(cost, 1)
     path = lattice.shortest_path((0.5, 0.5), (3.5, 3.5), weight="length")
     heading_shortest_path(lattice, (0.5, 0.5), (3.5, 2.5))  # the heading lattice: cost-to-go, then its A*
-    dearer = cost.with_tables(2.0 * cost.grade_table_j_per_m, cost.turn_table_j)  # incremental lattice reweighting
+    dearer = cost.with_tables(CostTables(2.0 * cost.grade_table_j_per_m, cost.turn_table_j))  # incremental reweighting
     changed = np.zeros((4, 4), dtype=bool)
     changed[1, 1] = True
     replanner = IncrementalPlanner(lattice, (3.5, 3.5))  # D* Lite: search, then a repair after a refresh

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import terrain
-from planner import EnergyCost, Reachability, reachability
+from planner import CostTables, EnergyCost, Reachability, reachability
 from planner.cost_spec import CostSpec
 
 DEPOT = (17.3, 21.6)  # not a cell centre: joined to the nodes within 1.5 cells, like a lattice query's start
@@ -34,5 +34,4 @@ def one_way_cost(tmap: terrain.TerrainMap, max_uphill_grade: float) -> EnergyCos
     grades = np.linspace(-np.tan(np.radians(20.0)), np.tan(np.radians(20.0)), 41)
     table = 100.0 + 2000.0 * np.clip(grades, 0.0, None)
     table[grades > max_uphill_grade] = np.inf
-    return EnergyCost(tmap, np.zeros(tmap.shape, np.int32), table[None, :], np.ones((1, 5)), speed_mps=0.5,
-                      battery_voltage_v=24.0, turn_rate_radps=1.0)
+    return EnergyCost(tmap, np.zeros(tmap.shape, np.int32), CostTables(table[None, :], np.ones((1, 5))), speed_mps=0.5, battery_voltage_v=24.0, turn_rate_radps=1.0)

@@ -9,7 +9,7 @@ import pytest
 from edge_cost_samples import LinearModel, flat_terrain, ramp_terrain, rough_terrain
 
 from energy import PhysicsEnergyModel, ground_preset, robot_preset
-from planner import EnergyCost, Lattice
+from planner import CostTables, EnergyCost, Lattice
 from planner.cost_spec import CostSpec
 from terrain import GridMismatchError, InvalidParameterError, OutOfBoundsError, TerrainMap, UnknownNameError
 
@@ -259,19 +259,22 @@ def test_constructor_checks_grid_and_tables():
     ok = np.ones((1, 5))
     kw = {"speed_mps": 1.0, "battery_voltage_v": 24.0, "turn_rate_radps": 1.0}
     with pytest.raises(GridMismatchError):
-        EnergyCost(tmap, np.zeros((3, 3), int), ok, ok, **kw)
+        EnergyCost(tmap, np.zeros((3, 3), int), CostTables(ok, ok), **kw)
     with pytest.raises(InvalidParameterError, match="odd"):
-        EnergyCost(tmap, np.zeros((20, 30), int), np.ones((1, 4)), ok, **kw)
+        CostTables(np.ones((1, 4)), ok)
     with pytest.raises(InvalidParameterError, match="ground_rows"):
-        EnergyCost(tmap, np.ones((20, 30), int), ok, ok, **kw)
+        EnergyCost(tmap, np.ones((20, 30), int), CostTables(ok, ok), **kw)
     with pytest.raises(InvalidParameterError, match="turn_rate_radps"):
-        EnergyCost(tmap, np.zeros((20, 30), int), ok, ok, **{**kw, "turn_rate_radps": 0.0})
+        EnergyCost(tmap, np.zeros((20, 30), int), CostTables(ok, ok), **{**kw, "turn_rate_radps": 0.0})
     with pytest.raises(InvalidParameterError, match="speed_mps must be a real number, got 'fast'"):
-        EnergyCost(tmap, np.zeros((20, 30), int), ok, ok, **{**kw, "speed_mps": "fast"})
+        EnergyCost(tmap, np.zeros((20, 30), int), CostTables(ok, ok), **{**kw, "speed_mps": "fast"})
     with pytest.raises(InvalidParameterError, match="grade_table_j_per_m and turn_table_j must be arrays of numbers"):
-        EnergyCost(tmap, np.zeros((20, 30), int), [["a", "b", "c"]], ok, **kw)
+        CostTables([["a", "b", "c"]], ok)
+    with pytest.raises(InvalidParameterError, match="tables must be a CostTables, got 'tuple'") as err:
+        EnergyCost(tmap, np.zeros((20, 30), int), (ok, ok), **kw)
+    assert err.value.parameter == "tables"
     # Tables are copied and read-only: the caller's arrays stay writable.
-    cost = EnergyCost(tmap, np.zeros((20, 30), int), ok, ok, **kw)
+    cost = EnergyCost(tmap, np.zeros((20, 30), int), CostTables(ok, ok), **kw)
     assert ok.flags.writeable and not cost.grade_table_j_per_m.flags.writeable
 
 

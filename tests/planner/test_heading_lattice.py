@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from energy import ground_preset, robot_preset
-from planner import EnergyCost, Lattice, plan_route
+from planner import CostTables, EnergyCost, Lattice, plan_route
 from planner.cost_spec import CostSpec
 from planner.heading_lattice import (
     HEADING_COUNT,
@@ -186,7 +186,7 @@ def test_a_kept_cost_to_go_stays_a_consistent_lower_bound_through_rises_and_drop
         factor = (0.2, 4.0)[step % 2]  # cheaper, then dearer ground
         grade = np.vstack([cost.grade_table_j_per_m, factor * cost.grade_table_j_per_m[:1]])
         turn = np.vstack([cost.turn_table_j, cost.turn_table_j[:1]])
-        new = cost.with_tables(grade, turn, rows)
+        new = cost.with_tables(CostTables(grade, turn), rows)
         new_lattice = Lattice(new, 1)
         lowered += lower_cost_to_go(h, new_lattice, new_lattice.changed_moves_since(lattice), goal)
         cost, lattice = new, new_lattice
@@ -239,7 +239,7 @@ def test_the_last_answer_bounds_the_next_search_along_the_drive(seed):
         r, c = np.clip(np.array(cost.terrain.rowcol(*s)) - 3, 0, np.array(rows.shape) - 6)
         rows[r:r + 6, c:c + 6] = cost.grade_table_j_per_m.shape[0]
         grade = np.vstack([cost.grade_table_j_per_m, (0.3, 3.0)[step % 2] * cost.grade_table_j_per_m[:1]])
-        cost = cost.with_tables(grade, np.vstack([cost.turn_table_j, cost.turn_table_j[:1]]), rows)
+        cost = cost.with_tables(CostTables(grade, np.vstack([cost.turn_table_j, cost.turn_table_j[:1]])), rows)
         lattice = Lattice(cost, 1)
         q = _Query(lattice, np.asarray(s), np.asarray(goal))
         used += math.isfinite(_incumbent(lattice, q, ws.incumbent)[0])

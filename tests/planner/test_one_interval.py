@@ -11,6 +11,7 @@ from energy.models import fit_interval
 from energy.models.forecast import predictive_quantile
 from planner import (
     AdaptiveSettings,
+    CostTables,
     EnergyCost,
     LearnedEnergyModel,
     Navigator,
@@ -152,16 +153,11 @@ def test_the_navigator_reads_its_remaining_forecast_from_the_same_predictive(wor
 def test_degrees_of_freedom_are_checked_where_they_enter(world):
     tmap, _, cost = world
     with pytest.raises(InvalidParameterError, match="one value per table row"):
-        cost.with_tables(cost.grade_table_j_per_m, cost.turn_table_j, ground_labels=cost.ground_labels,
-                         grade_sd_table_j_per_m=cost.grade_sd_table_j_per_m, turn_sd_table_j=cost.turn_sd_table_j,
-                         spread_dof=(3.0,))
+        cost.with_tables(CostTables(cost.grade_table_j_per_m, cost.turn_table_j, ground_labels=cost.ground_labels, grade_sd_table_j_per_m=cost.grade_sd_table_j_per_m, turn_sd_table_j=cost.turn_sd_table_j, spread_dof=(3.0,)))
     with pytest.raises(InvalidParameterError, match="spread_dof must be > 0"):
-        cost.with_tables(cost.grade_table_j_per_m, cost.turn_table_j, ground_labels=cost.ground_labels,
-                         grade_sd_table_j_per_m=cost.grade_sd_table_j_per_m, turn_sd_table_j=cost.turn_sd_table_j,
-                         spread_dof=(0.0, 3.0))
+        cost.with_tables(CostTables(cost.grade_table_j_per_m, cost.turn_table_j, ground_labels=cost.ground_labels, grade_sd_table_j_per_m=cost.grade_sd_table_j_per_m, turn_sd_table_j=cost.turn_sd_table_j, spread_dof=(0.0, 3.0)))
     with pytest.raises(InvalidParameterError, match="goes with"):
-        EnergyCost(tmap, np.zeros(tmap.shape, int), cost.grade_table_j_per_m[:1], cost.turn_table_j[:1],
-                   speed_mps=0.5, battery_voltage_v=24.0, turn_rate_radps=0.5, spread_dof=(3.0,))
+        EnergyCost(tmap, np.zeros(tmap.shape, int), CostTables(cost.grade_table_j_per_m[:1], cost.turn_table_j[:1], spread_dof=(3.0,)), speed_mps=0.5, battery_voltage_v=24.0, turn_rate_radps=0.5)
     with pytest.raises(InvalidParameterError, match="RouteEnergyInterval.dof"):
         RouteEnergyInterval(1000.0, 100.0, {"sand": 100.0}, dof=-1.0)
     with pytest.raises(InvalidParameterError, match="without a spread"):

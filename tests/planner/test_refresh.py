@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner import EnergyCost, Lattice
+from planner import CostTables, EnergyCost, Lattice
 from terrain import InvalidParameterError, TerrainMap
 from terrain.procedural import procedural_map
 
@@ -21,8 +21,7 @@ def _tables(n_rows: int, n_grade: int = 33, scale: float = 1.0) -> tuple[np.ndar
 def _cost(seed: int = 0, shape: tuple[int, int] = (40, 48)) -> EnergyCost:
     tmap = procedural_map(shape, 1.0, seed=seed, grounds=("a", "b", "c"), obstacle_fraction=0.03)
     grade, turn = _tables(3)
-    return EnergyCost(tmap, np.asarray(tmap.ground), grade, turn, speed_mps=0.5, max_slope_rad=np.arctan(0.4),
-                      battery_voltage_v=24.0, turn_rate_radps=0.5)
+    return EnergyCost(tmap, np.asarray(tmap.ground), CostTables(grade, turn), speed_mps=0.5, max_slope_rad=np.arctan(0.4), battery_voltage_v=24.0, turn_rate_radps=0.5)
 
 
 def _assert_same_lattice(got: Lattice, ref: Lattice) -> None:
@@ -40,8 +39,7 @@ def _assert_same_lattice(got: Lattice, ref: Lattice) -> None:
 
 
 def _fresh(old: EnergyCost, grade: np.ndarray, turn: np.ndarray, rows: np.ndarray) -> EnergyCost:
-    return EnergyCost(old.terrain, rows, grade, turn, speed_mps=old.speed_mps, max_slope_rad=old.max_slope_rad,
-                      battery_voltage_v=old.battery_voltage_v, turn_rate_radps=old.turn_rate_radps)
+    return EnergyCost(old.terrain, rows, CostTables(grade, turn), speed_mps=old.speed_mps, max_slope_rad=old.max_slope_rad, battery_voltage_v=old.battery_voltage_v, turn_rate_radps=old.turn_rate_radps)
 
 
 @pytest.mark.parametrize("stride", [1, 2])
@@ -50,7 +48,7 @@ def test_refreshed_weights_equal_fresh_build_exactly(stride):
     lat = Lattice.for_cost(cost, stride)
     grade, turn = _tables(3)
     grade[1] *= 1.7  # one ground's model changed
-    new = cost.with_tables(grade, turn)
+    new = cost.with_tables(CostTables(grade, turn))
     ref = Lattice(_fresh(cost, grade, turn, cost.ground_rows), stride)
     got = Lattice.for_cost(new, stride)
     assert got is not lat and got.cost is new
@@ -66,7 +64,7 @@ def test_unchanged_rows_are_not_recomputed():
     cost = _cost()
     lat = Lattice.for_cost(cost, 1)
     grade, turn = _tables(3)
-    same = cost.with_tables(grade, turn)
+    same = cost.with_tables(CostTables(grade, turn))
     assert Lattice.for_cost(same, 1).edges_computed == 0 and not same.changed_cells.any()
     # one free cell moves to a changed row: only the moves whose cell box holds it are recomputed
     r, c = 20, 24
@@ -74,7 +72,7 @@ def test_unchanged_rows_are_not_recomputed():
     rows = cost.ground_rows.copy()
     grade4, turn4 = np.vstack([grade, 2.0 * grade[:1]]), np.vstack([turn, turn[:1]])
     rows[r, c] = 3
-    one = cost.with_tables(grade4, turn4, rows)
+    one = cost.with_tables(CostTables(grade4, turn4), rows)
     got = Lattice.for_cost(one, 1)
     ni, nj = cost.shape
     expected = 0
@@ -94,7 +92,7 @@ def test_renumbered_rows_with_equal_content_count_as_unchanged():
     Lattice.for_cost(cost, 1)
     grade, turn = _tables(3)
     perm = np.array([2, 0, 1])  # old row k is new row perm[k]
-    new = cost.with_tables(grade[np.argsort(perm)], turn[np.argsort(perm)], perm[cost.ground_rows])
+    new = cost.with_tables(CostTables(grade[np.argsort(perm)], turn[np.argsort(perm)]), perm[cost.ground_rows])
     assert not new.changed_cells.any() and Lattice.for_cost(new, 1).edges_computed == 0
     assert np.array_equal(new.segment_energy_j([[1.5, 1.5]], [[40.5, 30.5]]),
                           cost.segment_energy_j([[1.5, 1.5]], [[40.5, 30.5]]))
@@ -105,7 +103,7 @@ def test_edges_appearing_or_vanishing_rebuild_the_structure():
     lat = Lattice.for_cost(cost, 1)
     grade, turn = _tables(3)
     grade[2, grade.shape[1] // 2 + 3:] = np.inf  # ground "c" can no longer be driven uphill
-    new = cost.with_tables(grade, turn)
+    new = cost.with_tables(CostTables(grade, turn))
     got = Lattice.for_cost(new, 1)
     ref = Lattice(_fresh(cost, grade, turn, cost.ground_rows), 1)
     assert got.n_edges == ref.n_edges < lat.n_edges
@@ -116,20 +114,19 @@ def test_refresh_errors():
     cost = _cost()
     grade, turn = _tables(3, n_grade=17)
     with pytest.raises(InvalidParameterError, match="grade samples"):
-        cost.with_tables(grade, turn)
+        cost.with_tables(CostTables(grade, turn))
     grade, turn = _tables(3)
     with pytest.raises(InvalidParameterError, match="grade_table_j_per_m must hold"):
-        cost.with_tables(-grade, turn)
+        cost.with_tables(CostTables(-grade, turn))
     with pytest.raises(InvalidParameterError, match="ground_rows must hold"):
-        cost.with_tables(grade[:2], turn[:2])
+        cost.with_tables(CostTables(grade[:2], turn[:2]))
     lat = Lattice(cost, 1)
     flat = TerrainMap(np.zeros(cost.shape), 1.0)
-    other = EnergyCost(flat, np.zeros(cost.shape, int), grade[:1], turn[:1], speed_mps=0.5,
-                       max_slope_rad=cost.max_slope_rad, battery_voltage_v=24.0, turn_rate_radps=0.5)
+    other = EnergyCost(flat, np.zeros(cost.shape, int), CostTables(grade[:1], turn[:1]), speed_mps=0.5, max_slope_rad=cost.max_slope_rad, battery_voltage_v=24.0, turn_rate_radps=0.5)
     with pytest.raises(InvalidParameterError, match="geometry"):
         lat.refreshed(other, np.zeros(cost.shape, bool))
     with pytest.raises(InvalidParameterError, match="changed_cells"):
-        lat.refreshed(cost.with_tables(grade, turn), np.zeros((3, 3), bool))
+        lat.refreshed(cost.with_tables(CostTables(grade, turn)), np.zeros((3, 3), bool))
 
 
 def test_graph_is_a_copy_and_names_its_weight():
@@ -152,7 +149,7 @@ def test_refresh_reports_exactly_the_moves_whose_energy_changed(stride):
     grade[1] *= 0.6  # cheaper
     grade[2, grade.shape[1] // 2 + 3:] = np.inf  # and edges vanish: the structure is rebuilt
     for g in (grade, _tables(3)[0] * np.array([[1.0], [1.3], [1.0]])):
-        new = Lattice.for_cost(cost.with_tables(g, turn), stride)
+        new = Lattice.for_cost(cost.with_tables(CostTables(g, turn)), stride)
         before, after = lat.move_energies_j(), new.move_energies_j()
         assert before.shape == (lat.n_nodes, 16)
         expected = np.flatnonzero(before.ravel() != after.ravel())
@@ -160,7 +157,7 @@ def test_refresh_reports_exactly_the_moves_whose_energy_changed(stride):
         assert np.array_equal(new.changed_moves_since(lat), expected)
         assert np.array_equal(lat.changed_moves_since(new), expected)  # compared move by move
         assert np.array_equal(new.move_energies_j(expected), after.ravel()[expected])
-    assert Lattice.for_cost(cost.with_tables(*_tables(3)), stride).changed_moves.size == 0
+    assert Lattice.for_cost(cost.with_tables(CostTables(*_tables(3))), stride).changed_moves.size == 0
     assert lat.changed_moves_since(lat).size == 0
 
 
@@ -187,7 +184,7 @@ def test_chained_refreshes_of_small_patches_equal_fresh_builds_and_leave_their_a
         rows[r:r + 3, c:c + 3] = 3 + step  # a new table row on a 3 x 3 patch
         grade = np.vstack([grade, (1.5 + 0.2 * step) * grade[:1]])
         turn = np.vstack([turn, turn[:1]])
-        new_cost = reference[-1][0].with_tables(grade, turn, rows)
+        new_cost = reference[-1][0].with_tables(CostTables(grade, turn), rows)
         got = Lattice.for_cost(new_cost, 1)
         # only the slice of the recomputed moves is held: the moves read through it
         moves = got.changed_moves

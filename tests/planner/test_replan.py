@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner import EnergyCost, IncrementalPlanner, Lattice, plan_route
+from planner import CostTables, EnergyCost, IncrementalPlanner, Lattice, plan_route
 from planner.heading_lattice import heading_shortest_path
 from terrain import BlockedPositionError, InvalidParameterError, OutOfBoundsError, TerrainMap
 from terrain.procedural import procedural_map
@@ -26,8 +26,7 @@ def _tables(scale: np.ndarray | None = None, n_grade: int = 33) -> tuple[np.ndar
 def _cost(seed: int, shape: tuple[int, int] = (36, 44), obstacle_fraction: float = 0.05) -> EnergyCost:
     tmap = procedural_map(shape, 1.0, seed=seed, grounds=("a", "b", "c"), obstacle_fraction=obstacle_fraction)
     grade, turn = _tables()
-    return EnergyCost(tmap, np.asarray(tmap.ground), grade, turn, speed_mps=0.5, max_slope_rad=np.arctan(0.4),
-                      battery_voltage_v=24.0, turn_rate_radps=0.5)
+    return EnergyCost(tmap, np.asarray(tmap.ground), CostTables(grade, turn), speed_mps=0.5, max_slope_rad=np.arctan(0.4), battery_voltage_v=24.0, turn_rate_radps=0.5)
 
 
 def _free_point(cost: EnergyCost, rng: np.random.Generator) -> tuple[float, float]:
@@ -95,7 +94,7 @@ def test_incremental_replans_equal_full_searches_after_random_updates(seed, stri
     for _ in range(3):  # a moving start, no change of energies
         _check_equal(planner, _free_point(cost, rng), stride)
     for kind, grade, turn, rows in _updates(cost, rng):
-        new = planner.cost.with_tables(grade, turn, rows)
+        new = planner.cost.with_tables(CostTables(grade, turn), rows)
         lat = Lattice.for_cost(new, stride)
         if kind == "blocked":
             assert lat.n_edges < Lattice(cost, stride).n_edges  # the structure changed
@@ -111,8 +110,8 @@ def test_update_from_a_lattice_that_skipped_versions_and_back():
     planner = IncrementalPlanner(Lattice.for_cost(cost, 1), _free_point(cost, rng))
     start = _free_point(cost, rng)
     _check_equal(planner, start, 1)
-    mid = cost.with_tables(*_tables([1.0, 2.5, 1.0]))
-    last = mid.with_tables(*_tables([0.5, 2.5, 1.0]))
+    mid = cost.with_tables(CostTables(*_tables([1.0, 2.5, 1.0])))
+    last = mid.with_tables(CostTables(*_tables([0.5, 2.5, 1.0])))
     planner.update(Lattice.for_cost(last, 1))  # two refreshes at once: compared move by move
     _check_equal(planner, start, 1)
     planner.update(Lattice.for_cost(cost, 1))  # back to the first energies
@@ -130,7 +129,7 @@ def test_a_repair_far_from_the_route_expands_little():
     rows = np.asarray(cost.ground_rows).copy()
     rows[:3, :3] = N_ROWS  # a corner far from the route becomes more expensive
     grade, turn = _tables()
-    new = cost.with_tables(np.vstack([grade, 2.0 * grade[:1]]), np.vstack([turn, turn[:1]]), rows)
+    new = cost.with_tables(CostTables(np.vstack([grade, 2.0 * grade[:1]]), np.vstack([turn, turn[:1]])), rows)
     planner.update(Lattice.for_cost(new, 1))
     _check_equal(planner, start, 1)
     assert 0 < planner.touched < 100 and planner.expanded < first / 10
@@ -141,8 +140,7 @@ def test_unreachable_goal_is_not_found_like_shortest_path():
     obstacle[:, 15] = True  # a wall across the map
     tmap = TerrainMap(np.zeros((20, 30)), 1.0, obstacle=obstacle)
     grade, turn = _tables()
-    cost = EnergyCost(tmap, np.zeros((20, 30), int), grade, turn, speed_mps=0.5, battery_voltage_v=24.0,
-                      turn_rate_radps=0.5)
+    cost = EnergyCost(tmap, np.zeros((20, 30), int), CostTables(grade, turn), speed_mps=0.5, battery_voltage_v=24.0, turn_rate_radps=0.5)
     lat = Lattice(cost, 1)
     planner = IncrementalPlanner(lat, (25.5, 10.5))
     got, ref = planner.plan((3.5, 4.5)), lat.shortest_path((3.5, 4.5), (25.5, 10.5))
@@ -177,7 +175,7 @@ def test_the_heading_planner_reuses_an_answer_only_while_nothing_changed():
     planner = IncrementalPlanner(Lattice.for_cost(cost, 1), goal)
     first = planner.plan(start)
     assert planner.plan(start).objective == first.objective  # reused
-    dearer = cost.with_tables(*_tables([3.0, 3.0, 3.0]))
+    dearer = cost.with_tables(CostTables(*_tables([3.0, 3.0, 3.0])))
     planner.update(Lattice.for_cost(dearer, 1))
     again = planner.plan(start)
     assert again.objective == pytest.approx(heading_shortest_path(Lattice(dearer, 1), start, goal).objective, rel=1e-12)

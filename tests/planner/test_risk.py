@@ -7,7 +7,7 @@ import pytest
 
 from energy import InteractionLog, LogMeta, robot_preset
 from energy.budget import log_battery_power_w
-from planner import EnergyCost, RouteEnergyInterval, plan_route
+from planner import CostTables, EnergyCost, RouteEnergyInterval, plan_route
 from planner.cost_spec import CostSpec
 from planner.model_cost import model_energy_cost
 from planner.risk import risk_cost, route_energy_interval
@@ -102,9 +102,7 @@ def test_spreads_add_linearly_within_a_ground_and_in_quadrature_across_grounds()
     tmap = TerrainMap(np.zeros((4, 20)), 1.0, ground=g, ground_names={0: "a", 1: "b"})
     grade = np.full((2, 5), 10.0)
     turn = np.zeros((2, 3))
-    cost = EnergyCost(tmap, g, grade, turn, speed_mps=0.5, battery_voltage_v=24.0, turn_rate_radps=1.0,
-                      ground_labels=("a", "b"), grade_sd_table_j_per_m=np.array([[3.0] * 5, [4.0] * 5]),
-                      turn_sd_table_j=np.zeros((2, 3)))
+    cost = EnergyCost(tmap, g, CostTables(grade, turn, ground_labels=("a", "b"), grade_sd_table_j_per_m=np.array([[3.0] * 5, [4.0] * 5]), turn_sd_table_j=np.zeros((2, 3))), speed_mps=0.5, battery_voltage_v=24.0, turn_rate_radps=1.0)
     # 8 m on a (over two segments: linear, 24 J) and 8 m on b (32 J): sqrt(24^2 + 32^2) = 40
     iv = route_energy_interval(cost, [[2.0, 2.0], [6.0, 2.0], [18.0, 2.0]])
     assert iv.sd_by_ground_j == pytest.approx({"a": 8 * 3.0, "b": 8 * 4.0})
@@ -126,11 +124,8 @@ def test_risk_and_interval_need_a_cost_with_spreads_and_a_level_in_the_open_unit
         with pytest.raises(InvalidParameterError, match="q"):
             risk_cost(cost, q)
     with pytest.raises(InvalidParameterError, match="both or neither"):
-        EnergyCost(flat_map, np.zeros(flat_map.shape, int), np.ones((1, 3)), np.zeros((1, 2)), speed_mps=0.5,
-                   battery_voltage_v=24.0, turn_rate_radps=1.0, grade_sd_table_j_per_m=np.ones((1, 3)))
+        EnergyCost(flat_map, np.zeros(flat_map.shape, int), CostTables(np.ones((1, 3)), np.zeros((1, 2)), grade_sd_table_j_per_m=np.ones((1, 3))), speed_mps=0.5, battery_voltage_v=24.0, turn_rate_radps=1.0)
     with pytest.raises(InvalidParameterError, match="shape"):
-        EnergyCost(flat_map, np.zeros(flat_map.shape, int), np.ones((1, 3)), np.zeros((1, 2)), speed_mps=0.5,
-                   battery_voltage_v=24.0, turn_rate_radps=1.0, grade_sd_table_j_per_m=np.ones((1, 5)),
-                   turn_sd_table_j=np.zeros((1, 2)))
+        EnergyCost(flat_map, np.zeros(flat_map.shape, int), CostTables(np.ones((1, 3)), np.zeros((1, 2)), grade_sd_table_j_per_m=np.ones((1, 5)), turn_sd_table_j=np.zeros((1, 2))), speed_mps=0.5, battery_voltage_v=24.0, turn_rate_radps=1.0)
     with pytest.raises(InvalidParameterError, match="RouteEnergyInterval.sd_j"):
         RouteEnergyInterval(1.0, -1.0, {})

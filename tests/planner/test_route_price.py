@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planner import price_route
+from planner import CostTables, price_route
 from planner.cost_spec import CostSpec
 from planner.route import evaluate_route
 from planner.route_price import route_forecast_j, segment_forecasts_j
@@ -85,5 +85,5 @@ def test_price_route_refuses_what_it_cannot_price(wall_map):
     with pytest.raises(InvalidParameterError, match="blocked"):
         price_route(cost, [[2.5, 2.5], [38.5, 2.5]])  # through the wall
     with pytest.raises(InvalidParameterError, match="no physics model"):
-        price_route(cost.with_tables(cost.grade_table_j_per_m, cost.turn_table_j), [[2.5, 2.5], [8.5, 2.5]],
+        price_route(cost.with_tables(CostTables(cost.grade_table_j_per_m, cost.turn_table_j)), [[2.5, 2.5], [8.5, 2.5]],
                     how="profile")
