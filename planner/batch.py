@@ -9,17 +9,16 @@ import time
 from typing import Any
 
 from terrain import TerrainMap
-from terrawatt_base.checks import check_instance, check_int, check_real, check_seed
+from terrawatt_base.checks import check_instance
 from terrawatt_base.dask_client import Compute, client_worker_count
-from terrawatt_base.errors import InvalidParameterError, TerrawattError, UnknownNameError
+from terrawatt_base.errors import InvalidParameterError, TerrawattError
 
 from .batch_pairs import BatchPairs
 from .batch_result import BatchResult, BatchRow
 from .cache import CACHE_SIZE, ResultCache
 from .cost_spec import CostSpec
 from .edge_cost import EnergyCost
-from .planning import GRAPH_PLANNERS, PLANNERS, plan_route
-from .settings import PlannerSettings
+from .planning import RouteSearch
 from .warmup import warm_up_kernels
 
 __all__ = ["plan_batch", "plan_batch_on_map", "plan_pair", "shippable_cost"]
@@ -30,21 +29,14 @@ def plan_pair(
     name: str,
     start_xy_m: tuple[float, float],
     goal_xy_m: tuple[float, float],
-    planner: str = "lattice",
-    settings: PlannerSettings | None = None,
-    time_limit_s: float | None = 1.0,
-    max_cost_evaluations: int | None = None,
-    seed: int | None = 0,
+    search: RouteSearch,
 ) -> BatchRow:
-    """Plan one pair with its comparison (:func:`plan_route` with ``compare=True``) as a :class:`BatchRow`.
+    """Plan one pair with its comparison (:meth:`RouteSearch.plan` with ``compare=True``) as a :class:`BatchRow`.
 
     The task of :func:`plan_batch` (module-level, so dask workers import it by reference).
     Errors propagate: the caller turns them into an ``"error"`` row.
     """
-    route = plan_route(
-        cost.terrain, start_xy_m, goal_xy_m, cost=cost, planner=planner, time_limit_s=time_limit_s,
-        seed=seed, max_cost_evaluations=max_cost_evaluations, compare=True, settings=settings,
-    )
+    route = search.plan(cost, start_xy_m, goal_xy_m, compare=True)
     found = route.found
     nan = math.nan
     return BatchRow(
@@ -64,7 +56,7 @@ def _error_row(name: str, start_xy_m: Any, goal_xy_m: Any, exc: BaseException) -
 
 
 def _plan_pair_task(cost: EnergyCost, name: str, start_xy_m: tuple[float, float], goal_xy_m: tuple[float, float],
-                    *opts: Any) -> BatchRow:
+                    search: RouteSearch) -> BatchRow:
     """:func:`plan_pair`, a library error (a blocked start, ...) returned as an ``"error"`` row.
 
     Returning the row rather than raising keeps a dask worker from logging the expected
@@ -72,7 +64,7 @@ def _plan_pair_task(cost: EnergyCost, name: str, start_xy_m: tuple[float, float]
     by the caller).
     """
     try:
-        return plan_pair(cost, name, start_xy_m, goal_xy_m, *opts)
+        return plan_pair(cost, name, start_xy_m, goal_xy_m, search)
     except TerrawattError as exc:
         return _error_row(name, start_xy_m, goal_xy_m, exc)
 
@@ -92,16 +84,12 @@ def plan_batch(
     cost: EnergyCost,
     pairs: Any,
     *,
-    planner: str = "lattice",
-    settings: PlannerSettings | None = None,
-    time_limit_s: float | None = 1.0,
-    max_cost_evaluations: int | None = None,
-    seed: int | None = 0,
+    search: RouteSearch | None = None,
     compute: Compute | None = None,
 ) -> BatchResult:
     """Plan many (start, goal) pairs on one cost: here, on a local dask cluster, or on a given client.
 
-    Every pair is planned by :func:`plan_route` with ``compare=True`` (its saving against the
+    Every pair is planned by :func:`planner.plan_route` with ``compare=True`` (its saving against the
     shortest route). On dask, each pair is one task; the cost (map and tables, without its
     caches) is sent to every worker once (``client.scatter(..., broadcast=True)``), never
     with a task, and each worker builds the lattice graph once. A pair whose planning raises
@@ -109,7 +97,7 @@ def plan_batch(
     text; the other pairs are planned as usual. Rows come back in the order of the pairs,
     whichever task finishes first, so a batch gives the same rows in process and on any
     number of workers (the lattice planner is deterministic; OMPL planners need ``seed``
-    and ``max_cost_evaluations`` with ``time_limit_s=None`` for that).
+    and ``max_cost_evaluations`` with ``time_limit_s=None`` in the search for that).
 
     Parameters
     ----------
@@ -119,13 +107,10 @@ def plan_batch(
         :class:`BatchPairs` (e.g. :func:`read_pairs_csv`, :meth:`BatchPairs.all_pairs`,
         ``BatchPairs.from_array(array, names)`` to name them), an ``(N, 4)`` array
         ``[start_x_m, start_y_m, goal_x_m, goal_y_m]`` or ``(N, 2, 2)`` (named ``"0"``, ``"1"``, ...).
-    planner : str
-        One of :data:`PLANNERS`; ``"lattice"`` (default) is exact, deterministic and fast.
-    settings : PlannerSettings, optional
-        Planner tuning.
-    time_limit_s, max_cost_evaluations, seed
-        As :func:`plan_route` (ignored by the lattice planner but ``seed``, which seeds the
-        refinement).
+    search : RouteSearch, optional
+        The planner, its budget, seed and tuning (:class:`planner.planning.RouteSearch`);
+        default ``RouteSearch("lattice")``: exact, deterministic and fast (the lattice planner
+        ignores the budget; the seed seeds the refinement).
     compute : Compute, optional
         Where the pairs are planned and whether a bar shows over them
         (:class:`terrawatt_base.dask_client.Compute`; default: here, one after another, no bar).
@@ -138,9 +123,7 @@ def plan_batch(
     ------
     InvalidParameterError
         Not an EnergyCost; pairs of a bad shape, NaN coordinates, bad names; not a
-        ``Compute``; an unreachable scheduler (after a timeout); bad budgets, seed or settings.
-    UnknownNameError
-        An unknown planner.
+        ``RouteSearch`` or a ``Compute``; an unreachable scheduler (after a timeout).
     OptionalDependencyError
         A cluster is asked for but dask.distributed is not installed.
 
@@ -155,44 +138,34 @@ def plan_batch(
     if not isinstance(cost, EnergyCost):
         raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
     batch = BatchPairs.from_array(pairs)
-    if not isinstance(planner, str) or planner not in PLANNERS:
-        raise UnknownNameError(f"planner must be one of {list(PLANNERS)!r}, got {planner!r}")
-    if settings is not None and not isinstance(settings, PlannerSettings):
-        raise InvalidParameterError(f"settings must be a PlannerSettings, got {type(settings).__name__!r}")
-    seed = check_seed(seed)
-    if time_limit_s is not None:  # checked once here rather than failing every pair the same way
-        check_real("time_limit_s", time_limit_s, low=0.0, low_inclusive=False)
-    if max_cost_evaluations is not None:
-        check_int("max_cost_evaluations", max_cost_evaluations, low=1)
-    if planner not in GRAPH_PLANNERS and time_limit_s is None and max_cost_evaluations is None:
-        raise InvalidParameterError("time_limit_s and max_cost_evaluations are both None; give at least one budget")
+    search = RouteSearch("lattice") if search is None else check_instance("search", search, RouteSearch)
     compute = Compute() if compute is None else check_instance("compute", compute, Compute)
-    opts = (planner, settings, time_limit_s, max_cost_evaluations, seed)
     with compute.session() as (client, where):
         t0 = time.perf_counter()
         if client is None:
-            rows = _plan_here(cost, batch, opts, compute.progress)
+            rows = _plan_here(cost, batch, search, compute.progress)
         else:
-            rows = _plan_on_cluster(client, cost, batch, opts, compute.progress)
+            rows = _plan_on_cluster(client, cost, batch, search, compute.progress)
         n_used = client_worker_count(client)
         elapsed = time.perf_counter() - t0
-    return BatchResult(tuple(rows), planner, where, n_used, elapsed, terrain=cost.terrain)
+    return BatchResult(tuple(rows), search.planner, where, n_used, elapsed, terrain=cost.terrain)
 
 
-def _plan_here(cost: EnergyCost, batch: BatchPairs, opts: tuple, progress: bool) -> list[BatchRow]:
+def _plan_here(cost: EnergyCost, batch: BatchPairs, search: RouteSearch, progress: bool) -> list[BatchRow]:
     from tqdm.auto import tqdm
 
     rows = []
     for i in tqdm(range(len(batch)), desc="routes", disable=not progress):
         name, start, goal = batch.names[i], tuple(batch.starts_xy_m[i].tolist()), tuple(batch.goals_xy_m[i].tolist())
         try:
-            rows.append(_plan_pair_task(cost, name, start, goal, *opts))
+            rows.append(_plan_pair_task(cost, name, start, goal, search))
         except Exception as exc:  # noqa: BLE001 - a pair that raises is reported in its row, the others go on
             rows.append(_error_row(name, start, goal, exc))
     return rows
 
 
-def _plan_on_cluster(client: Any, cost: EnergyCost, batch: BatchPairs, opts: tuple, progress: bool) -> list[BatchRow]:
+def _plan_on_cluster(client: Any, cost: EnergyCost, batch: BatchPairs, search: RouteSearch,
+                     progress: bool) -> list[BatchRow]:
     """One task per pair on ``client``, the cost scattered once to every worker; rows in pair order."""
     from distributed import as_completed
     from tqdm.auto import tqdm
@@ -200,7 +173,7 @@ def _plan_on_cluster(client: Any, cost: EnergyCost, batch: BatchPairs, opts: tup
     [shared] = client.scatter([shippable_cost(cost)], broadcast=True, hash=False)
     futures = [
         client.submit(_plan_pair_task, shared, batch.names[i], tuple(batch.starts_xy_m[i].tolist()),
-                      tuple(batch.goals_xy_m[i].tolist()), *opts, pure=False)
+                      tuple(batch.goals_xy_m[i].tolist()), search, pure=False)
         for i in range(len(batch))
     ]
     position = {f.key: i for i, f in enumerate(futures)}
@@ -226,11 +199,8 @@ def plan_batch_on_map(
     terrain: TerrainMap,
     pairs: BatchPairs | Any,
     *,
-    planner: str = "lattice",
+    search: RouteSearch | None = None,
     pricing: CostSpec | None = None,
-    time_limit_s: float | None = 1.0,
-    max_cost_evaluations: int | None = None,
-    seed: int | None = 0,
     compute: Compute | None = None,
     map_label: str = "map",
 ) -> BatchResult:
@@ -242,7 +212,7 @@ def plan_batch_on_map(
         The map.
     pairs : BatchPairs or array-like
         As :func:`planner.plan_batch`.
-    planner, time_limit_s, max_cost_evaluations, seed, compute
+    search, compute
         As :func:`planner.plan_batch`.
     pricing : CostSpec, optional
         How the edges are priced (:class:`planner.cost_spec.CostSpec`, default ``CostSpec()``; its
@@ -270,6 +240,5 @@ def plan_batch_on_map(
     pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
     cost = pricing.build(terrain)
     warm_up_kernels()
-    result = plan_batch(cost, pairs, planner=planner, seed=seed, compute=compute, time_limit_s=time_limit_s,
-                        max_cost_evaluations=max_cost_evaluations)
+    result = plan_batch(cost, pairs, search=search, compute=compute)
     return dataclasses.replace(result, map_label=map_label)

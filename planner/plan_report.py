@@ -18,14 +18,14 @@ from typing import Any
 import numpy as np
 
 from terrain import UNKNOWN_GROUND, InvalidParameterError, OptionalDependencyError, TerrainMap
-from terrawatt_base.checks import check_choice, check_instance
+from terrawatt_base.checks import check_instance
 from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import format_name, result_document, write_result_json
 
 from .coarse import CoarseOptions, CoarseToFine
 from .cost_spec import CostSpec, PlanModel, PricedMap
 from .edge_cost import EnergyCost
-from .planning import GRAPH_PLANNERS, PLANNERS, plan_coarse_to_fine, plan_route, search_objective
+from .planning import GRAPH_PLANNERS, RouteSearch, plan_coarse_to_fine, plan_route, search_objective
 from .plot import RouteLine, plot_routes
 from .risk import INTERVAL_LEVEL, RouteEnergyInterval
 from .route import Route
@@ -150,9 +150,9 @@ class PlanReport:
         The route's energy distribution, when the cost has a predictive interval.
     start_xy_m, goal_xy_m : (float, float)
         Start and goal (m).
-    planner, seed, time_limit_s, max_evaluations
-        How the route was planned (:func:`planner.plan_route`; ``"coarse"`` and None for a
-        coarse-to-fine plan).
+    search : RouteSearch
+        How the route was searched (the planner, its budget and seed; ``"coarse"`` without a
+        budget or seed for a coarse-to-fine plan).
     priced : PricedMap
         The map and how it was priced (robot, speed, slope limit, model, risk), with the times:
         the header of the summary and of route.json. A GeoTIFF read by windows has only the
@@ -166,10 +166,7 @@ class PlanReport:
     interval: RouteEnergyInterval | None
     start_xy_m: tuple[float, float]
     goal_xy_m: tuple[float, float]
-    planner: str
-    seed: int | None
-    time_limit_s: float | None
-    max_evaluations: int | None
+    search: RouteSearch
     priced: PricedMap = field(repr=False, compare=False)
     coarse: CoarseToFine | None = None
 
@@ -225,12 +222,17 @@ class PlanReport:
         """The comparison table as text (:func:`route_table`)."""
         return route_table(self.rows())
 
+    @property
+    def planner(self) -> str:
+        """The planner's name (:attr:`search`)."""
+        return self.search.planner
+
     def _budget(self) -> str:
         if self.planner in GRAPH_PLANNERS:  # searches run to their end: no budget applies
             return "no budget (a graph search)"
-        if self.max_evaluations is not None:
-            return f"{self.max_evaluations} edge-cost evaluations"
-        return f"time limit {self.time_limit_s:g} s"
+        if self.search.max_cost_evaluations is not None:
+            return f"{self.search.max_cost_evaluations} edge-cost evaluations"
+        return f"time limit {self.search.time_limit_s:g} s"
 
     def summary(self) -> str:
         """What ``terrawatt plan`` prints: the map, robot and planner, the table, the interval, the saving (a
@@ -248,7 +250,7 @@ class PlanReport:
             lines.append(f"ground class unknown in {n_unknown} of {t.ground.size} cells: priced as "
                          f"{unknown_ground!r} (unknown_ground / --unknown-ground NAME to choose, None / 'none' to refuse them)")
         lines.append(f"start {self.start_xy_m} -> goal {self.goal_xy_m}; planner {self.planner}, {self._budget()}, "
-                     f"seed {self.seed}")
+                     f"seed {self.search.seed}")
         lines += compile_line(priced.kernel_compile_s)
         lines.append("")
         if not route.found:
@@ -321,9 +323,9 @@ class PlanReport:
             **lonlat_fields(self.terrain, self.start_xy_m, self.goal_xy_m),
             "planner": self.planner,
             "search_objective": search_objective(self.planner),
-            "time_limit_s": self.time_limit_s if self.max_evaluations is None else None,
-            "max_evaluations": self.max_evaluations,
-            "seed": self.seed,
+            "time_limit_s": self.search.time_limit_s if self.search.max_cost_evaluations is None else None,
+            "max_evaluations": self.search.max_cost_evaluations,
+            "seed": self.search.seed,
             "map_preparation_s": self.priced.map_preparation_s,
             "kernel_compile_s": self.priced.kernel_compile_s,
             "status": route.status,
@@ -411,11 +413,8 @@ def plan_and_compare(
     start_xy_m: tuple[float, float],
     goal_xy_m: tuple[float, float],
     *,
-    planner: str = "RRTstar",
+    search: RouteSearch | None = None,
     pricing: CostSpec | None = None,
-    seed: int | None = 0,
-    time_limit_s: float | None = 1.0,
-    max_evaluations: int | None = None,
     map_label: str = "map",
 ) -> PlanReport:
     """Plan a minimum-energy route and compare it with the shortest route and the lattice optimum.
@@ -431,17 +430,15 @@ def plan_and_compare(
         The map.
     start_xy_m, goal_xy_m : (float, float)
         Start and goal (m).
-    planner : str
-        One of :data:`planner.PLANNERS`.
+    search : RouteSearch, optional
+        The planner, its budget, seed and tuning (:class:`planner.planning.RouteSearch`; default
+        ``RouteSearch()``: RRT* for a second, seed 0).
     pricing : CostSpec, optional
         How the map is priced (:class:`planner.cost_spec.CostSpec`: the robot, speed, slope limit,
         the physics presets or a saved current model, a risk level); default ``CostSpec()``, the
         husky presets at 0.5 m/s. With a model that gives an interval, the route's energy
         distribution is reported (:func:`planner.route_price.price_route`); with its ``risk`` the
         route is planned on that quantile of energy (:func:`planner.risk.risk_cost`).
-    seed, time_limit_s, max_evaluations
-        As :func:`planner.plan_route` (``max_evaluations`` is its ``max_cost_evaluations``
-        and, when given, replaces the time limit).
     map_label : str
         How the map is named in the summary, the figure and route.json.
 
@@ -452,9 +449,8 @@ def plan_and_compare(
     Raises
     ------
     InvalidParameterError
-        A bad number; a ``risk`` with a model that gives no interval.
-    UnknownNameError
-        ``planner`` not one of :data:`planner.PLANNERS`.
+        ``search`` not a :class:`~planner.planning.RouteSearch`; a ``risk`` with a model that gives
+        no interval.
     TerrawattError
         As :func:`planner.plan_route` (points off the map or blocked, start equal to goal).
 
@@ -462,26 +458,27 @@ def plan_and_compare(
     --------
     >>> from terrain import wall_map
     >>> report = plan_and_compare(wall_map((40, 40), 1.0, wall_col=20, gap_rows=(30, 34)), (5.0, 5.0),
-    ...                           (35.0, 5.0), planner="lattice", map_label="wall")
+    ...                           (35.0, 5.0), search=RouteSearch("lattice"), map_label="wall")
     >>> report.route.status, [row["route"] for row in report.rows()]
     ('exact', ['min-energy (lattice)', 'lattice + refinement', 'shortest distance'])
     """
-    check_choice("planner", planner, PLANNERS)
+    search = RouteSearch() if search is None else check_instance("search", search, RouteSearch)
     pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
     priced = pricing.price(terrain, map_label=map_label)
     mean_cost, cost = priced.mean_cost, priced.cost
-    route = plan_route(terrain, start_xy_m, goal_xy_m, cost=cost, planner=planner, seed=seed, compare=True,
-                       time_limit_s=None if max_evaluations is not None else time_limit_s,
-                       max_cost_evaluations=max_evaluations)
+    route = plan_route(terrain, start_xy_m, goal_xy_m, cost=cost, planner=search.planner, seed=search.seed,
+                       compare=True, time_limit_s=search.time_limit_s, max_cost_evaluations=search.max_cost_evaluations,
+                       settings=search.settings)
     lattice = interval = None
     if route.found:
-        lattice = route if planner == "lattice" else plan_route(terrain, start_xy_m, goal_xy_m, cost=cost,
-                                                                planner="lattice", seed=seed, compare=False)
+        lattice = route if search.planner == "lattice" else plan_route(
+            terrain, start_xy_m, goal_xy_m, cost=cost, planner="lattice", seed=search.seed, compare=False,
+            settings=search.settings)
         interval = price_route(mean_cost, route) if mean_cost.has_interval else None
     return PlanReport(
         route=route, lattice=lattice, interval=interval,
         start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])), goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])),
-        planner=planner, seed=seed, time_limit_s=time_limit_s, max_evaluations=max_evaluations, priced=priced,
+        search=search, priced=priced,
     )
 
 
@@ -552,6 +549,6 @@ def plan_coarse(
         priced = PricedMap(pricing, Path(source).name if map_label is None else map_label, kernel_compile_s=compile_s)
     return PlanReport(
         route=plan.route, lattice=None, interval=None, start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),
-        goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), planner="coarse", seed=None, time_limit_s=None,
-        max_evaluations=None, priced=priced, coarse=plan,
+        goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), search=RouteSearch("coarse", None, seed=None),
+        priced=priced, coarse=plan,
     )

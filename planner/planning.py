@@ -37,6 +37,7 @@ import math
 import os
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -58,7 +59,7 @@ from .refined import REFINE_DEFAULT_SEED, refine_planned, shortest_of, shortest_
 from .route import Route, RouteComparison, empty_route, evaluate_route
 from .settings import PlannerSettings
 
-__all__ = ["plan_route", "shortest_route", "compare_route", "plan_coarse_to_fine", "PLANNERS", "PLANNER_SEARCHES",
+__all__ = ["plan_route", "RouteSearch", "shortest_route", "compare_route", "plan_coarse_to_fine", "PLANNERS", "PLANNER_SEARCHES",
            "PlannerSearch", "OMPL_PLANNERS", "GRAPH_PLANNERS", "REFINE_DEFAULT_SEED", "search_objective", "refine_planned"]
 
 #: Every planner name :func:`plan_route` accepts (the keys of :data:`PLANNER_SEARCHES`).
@@ -126,6 +127,65 @@ def _compare(problem: PlanningProblem) -> RouteComparison:
         )
         problem.cost.results[key] = comparison
     return comparison
+
+
+@dataclass(frozen=True)
+class RouteSearch:
+    """How a route is searched: the planner, its budget, its seed and its tuning — checked once.
+
+    What :func:`plan_route` takes beside the map, the points and the cost, as one value: the
+    batch (:func:`planner.plan_batch`) and the plan command (:func:`planner.plan_report.plan_and_compare`)
+    take one instead of threading five options, and :meth:`plan` plans a pair with it.
+
+    Parameters
+    ----------
+    planner : str
+        One of :data:`PLANNERS` (as :func:`plan_route`).
+    time_limit_s : float or None
+        Wall-clock budget of an OMPL solve (s, > 0); ignored by the graph planners. ``None``
+        requires ``max_cost_evaluations`` (but for those).
+    max_cost_evaluations : int, optional
+        Work bound of an OMPL solve (>= 1), as :func:`plan_route`.
+    seed : int, optional
+        Seeds OMPL and the refinement, as :func:`plan_route`.
+    settings : PlannerSettings, optional
+        Planner tuning (default ``PlannerSettings()``).
+
+    Raises
+    ------
+    UnknownNameError
+        An unknown planner.
+    InvalidParameterError
+        A bad budget (or none), seed or settings (the message names the parameter).
+
+    Examples
+    --------
+    >>> RouteSearch("lattice").time_limit_s, RouteSearch("BITstar", None, 20_000, seed=1).max_cost_evaluations
+    (1.0, 20000)
+    """
+
+    planner: str = "RRTstar"
+    time_limit_s: float | None = 1.0
+    max_cost_evaluations: int | None = None
+    seed: int | None = 0
+    settings: PlannerSettings | None = None
+
+    def __post_init__(self) -> None:
+        check_choice("planner", self.planner, PLANNERS)
+        if not (self.planner in GRAPH_PLANNERS and self.time_limit_s is None and self.max_cost_evaluations is None):
+            time_limit, max_evals = _check_budget(self.time_limit_s, self.max_cost_evaluations)
+            object.__setattr__(self, "time_limit_s", time_limit)
+            object.__setattr__(self, "max_cost_evaluations", max_evals)
+        object.__setattr__(self, "seed", check_seed(self.seed))
+        if self.settings is not None:
+            check_instance("settings", self.settings, PlannerSettings)
+
+    def plan(self, cost: EnergyCost, start_xy_m: tuple[float, float], goal_xy_m: tuple[float, float], *,
+             compare: bool = False) -> Route:
+        """:func:`plan_route` on ``cost``'s map with this search (``compare`` as there)."""
+        return plan_route(cost.terrain, start_xy_m, goal_xy_m, cost=cost, planner=self.planner,
+                          time_limit_s=self.time_limit_s, seed=self.seed,
+                          max_cost_evaluations=self.max_cost_evaluations, compare=compare, settings=self.settings)
 
 
 def plan_route(

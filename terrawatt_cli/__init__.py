@@ -12,7 +12,7 @@ from collections.abc import Sequence
 from terrain import TerrawattError
 
 from . import batch, diagnose, evaluate, mission, plan, predict, reach, replay, tour, train
-from .common import MAP_FLAGS
+from .common import MAP_FLAGS, SEARCH_FLAGS
 
 __all__ = ["main", "build_parser", "EXIT_OK", "EXIT_NOT_ACHIEVED", "EXIT_BAD_INPUT", "EXIT_INTERNAL", "EXIT_CODES"]
 
@@ -39,7 +39,7 @@ def plain_message(text: str) -> str:
 #: the parameter, :attr:`terrain.TerrawattError.parameter`; the command line says it by its flag). A command adds
 #: its own (``set_defaults(flag_names=...)``).
 PARAMETER_FLAGS = {"risk": "--risk", "draw_from": "--mc-draw", "workers": "--workers", "scheduler": "--scheduler",
-                   "model_ground": "--model-ground", "unknown_ground": "--unknown-ground", **MAP_FLAGS}
+                   "model_ground": "--model-ground", "unknown_ground": "--unknown-ground", **MAP_FLAGS, **SEARCH_FLAGS}
 
 
 def error_message(exc: BaseException, flags: dict[str, str] | None = None) -> str:

@@ -25,6 +25,7 @@ from .common import (
     load_model_arg,
     map_arg,
     pricing_arg,
+    search_arg,
 )
 
 __all__ = ["add_parser", "run_batch"]
@@ -73,10 +74,8 @@ def run_batch(args: argparse.Namespace) -> int:
         pairs = BatchPairs.all_pairs(xy, names)
     pricing = pricing_arg(args, tmap, load_model_arg(args))
     with compute_arg(args, progress=not args.no_progress) as compute:  # a missing extra or scheduler fails first
-        report = plan_batch_on_map(
-            tmap, pairs, planner=args.planner, pricing=pricing, seed=args.seed, compute=compute,
-            time_limit_s=None if args.max_evaluations is not None else args.time_limit,
-            max_cost_evaluations=args.max_evaluations, map_label=label)
+        report = plan_batch_on_map(tmap, pairs, search=search_arg(args), pricing=pricing, compute=compute,
+                                   map_label=label)
     csv_path, json_path = report.write(args.out)
     print(report.summary())
     print(f"wrote {csv_path} and {json_path}")

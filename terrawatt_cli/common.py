@@ -16,6 +16,7 @@ from energy.params import resolve_unknown_ground, robot_params
 from planner.cost_spec import CostSpec
 from planner.missions.mission_report import mission_battery
 from planner.model_cost import parse_model_ground
+from planner.planning import RouteSearch
 from planner.points import point_on_map
 from planner.risk import check_planning_risk
 from terrain import DemWindows, FigureWarning, InvalidParameterError, TerrainMap
@@ -29,7 +30,8 @@ from terrawatt_base.dask_client import Compute, check_dask_options, dask_client
 __all__ = [
     "pricing_arg",
     "Checked", "bounded", "positive", "add_battery_options", "battery_arg", "MAP_FLAGS", "add_map_options", "read_map_args", "map_arg", "add_point_options",
-    "point_arg", "add_robot_options", "add_physics_robot_option", "robot_arg", "add_planner_options", "check_outputs",
+    "point_arg", "add_robot_options", "add_physics_robot_option", "robot_arg", "add_planner_options", "SEARCH_FLAGS", "search_arg",
+    "check_outputs",
     "INPUT_FLAGS", "input_paths",
     "check_output_file", "draw_figure", "warn_figures", "add_dask_options", "check_dask_flags", "compute_arg",
     "add_model_options", "check_model_flags", "load_model_arg",
@@ -178,6 +180,18 @@ def add_planner_options(p: argparse.ArgumentParser, *, planner: str, time_s: flo
                    help="work bound of OMPL planners: stop after N edge-cost evaluations instead of after "
                         "--time-limit; with --seed the route is then the same on every run, machine and worker")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+
+
+#: The flag of each :class:`planner.planning.RouteSearch` parameter (:func:`search_arg`).
+SEARCH_FLAGS = {"planner": "--planner", "time_limit_s": "--time-limit", "max_cost_evaluations": "--max-evaluations",
+                "seed": "--seed"}
+
+
+def search_arg(args: argparse.Namespace) -> RouteSearch:
+    """The :class:`planner.planning.RouteSearch` of :func:`add_planner_options`' flags: ``--max-evaluations``,
+    when given, replaces ``--time-limit`` (the route is then the same on every run)."""
+    return RouteSearch(args.planner, None if args.max_evaluations is not None else args.time_limit,
+                       args.max_evaluations, seed=args.seed)
 
 
 def check_outputs(directory: Path, files: Iterable[str] = (), inputs: Iterable[Path | None] = ()) -> None:

@@ -28,6 +28,7 @@ from .common import (
     point_arg,
     positive,
     pricing_arg,
+    search_arg,
     warn_figures,
 )
 from .ros2 import add_ros2_arguments, check_ros2_outputs, write_ros2_outputs
@@ -136,9 +137,8 @@ def _run(args: argparse.Namespace, tmap: TerrainMap, start: tuple[float, float],
         return _finish(args, plan_coarse(tmap, start, goal, options=coarse, pricing=pricing_arg(args, tmap),
                                          map_label=label))
     return _finish(args, plan_and_compare(
-        tmap, start, goal, planner=args.planner, pricing=pricing_arg(args, tmap, load_model_arg(args)),
-        seed=args.seed, time_limit_s=args.time_limit, max_evaluations=args.max_evaluations, map_label=label),
-        ros2=True)
+        tmap, start, goal, search=search_arg(args), pricing=pricing_arg(args, tmap, load_model_arg(args)),
+        map_label=label), ros2=True)
 
 
 def _finish(args: argparse.Namespace, report: Any, *, ros2: bool = False) -> int:

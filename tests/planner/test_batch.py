@@ -18,6 +18,7 @@ from planner import BatchPairs, plan_batch, plan_route, read_pairs_csv
 from planner.batch_pairs import read_sites_csv
 from planner.batch_result import BatchRow
 from planner.cost_spec import CostSpec
+from planner.planning import RouteSearch
 from terrawatt_base.dask_client import Compute, dask_client
 from terrawatt_base.errors import (
     DataError,
@@ -212,16 +213,25 @@ def test_a_missing_pairs_file_is_a_file_not_found_error(tmp_path):
     ("kwargs", "error", "match"),
     [
         ({"planner": "Dijkstra"}, UnknownNameError, "planner must be one of"),
-        ({"compute": "tcp://127.0.0.1:8786"}, InvalidParameterError, "compute must be a Compute"),
-        ({"seed": -1}, InvalidParameterError, "seed must be None or an integer"),
-        ({"settings": {"lattice_stride_cells": 2}}, InvalidParameterError, "settings must be a PlannerSettings"),
-        ({"time_limit_s": 0.0}, InvalidParameterError, "time_limit_s must be > 0"),
-        ({"max_cost_evaluations": 0}, InvalidParameterError, "max_cost_evaluations must be >= 1"),
+        ({"planner": "lattice", "seed": -1}, InvalidParameterError, "seed must be None or an integer"),
+        ({"planner": "lattice", "settings": {"lattice_stride_cells": 2}}, InvalidParameterError,
+         "settings must be a PlannerSettings"),
+        ({"planner": "lattice", "time_limit_s": 0.0}, InvalidParameterError, "time_limit_s must be > 0"),
+        ({"planner": "lattice", "max_cost_evaluations": 0}, InvalidParameterError, "max_cost_evaluations must be >= 1"),
         ({"planner": "RRTstar", "time_limit_s": None}, InvalidParameterError, "give at least one budget"),
     ],
 )
-def test_bad_arguments_are_refused(cost, kwargs, error, match):
+def test_a_bad_search_is_refused_when_made(kwargs, error, match):
     with pytest.raises(error, match=match):
+        RouteSearch(**kwargs)
+
+
+@pytest.mark.parametrize(("kwargs", "match"), [
+    ({"compute": "tcp://127.0.0.1:8786"}, "compute must be a Compute"),
+    ({"search": "lattice"}, "search must be a RouteSearch"),
+])
+def test_bad_arguments_are_refused(cost, kwargs, match):
+    with pytest.raises(InvalidParameterError, match=match):
         plan_batch(cost, PAIRS, **kwargs)
 
 
@@ -410,9 +420,9 @@ def test_cli_batch_checks_the_output_folder_before_reading_anything(tmp_path, ca
 
 
 def test_an_ompl_planner_with_seed_and_work_bound_gives_the_same_rows_on_the_cluster(cost, local_client):
-    kw = {"planner": "RRTstar", "time_limit_s": None, "max_cost_evaluations": 3000, "seed": 1}
-    here = plan_batch(cost, PAIRS, **kw)
-    there = plan_batch(cost, PAIRS, compute=Compute(client=local_client), **kw)
+    search = RouteSearch("RRTstar", None, 3000, seed=1)
+    here = plan_batch(cost, PAIRS, search=search)
+    there = plan_batch(cost, PAIRS, compute=Compute(client=local_client), search=search)
     assert all(r.planning_time_s >= 0 for r in here.rows) and here.n_found == 4
     assert [_outcome(r) for r in there.rows] == [_outcome(r) for r in here.rows]
 

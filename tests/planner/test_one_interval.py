@@ -22,6 +22,7 @@ from planner import (
 )
 from planner.cost_spec import CostSpec
 from planner.plan_report import plan_and_compare
+from planner.planning import RouteSearch
 from planner.registry import CellModelRegistry
 from terrain import InvalidParameterError, TerrainMap
 
@@ -96,7 +97,7 @@ def test_the_model_s_new_ground_dof_reaches_the_cost_rows_and_the_route_interval
 def test_plan_with_a_model_reports_the_t_interval_of_a_ground_it_never_drove(linear_model):
     # what `terrawatt plan --model FILE --model-ground a --risk 0.9` reports on a map of grass
     tmap = TerrainMap(np.zeros((6, 30)), 1.0, ground=np.zeros((6, 30), int), ground_names={0: "grass"})
-    report = plan_and_compare(tmap, (2.5, 2.5), (27.5, 2.5), planner="lattice",
+    report = plan_and_compare(tmap, (2.5, 2.5), (27.5, 2.5), search=RouteSearch("lattice"),
                               pricing=CostSpec(model=linear_model, model_ground="a", risk=0.9))
     iv = report.interval
     assert iv.dof == 3.0 and iv.p90_j == pytest.approx(iv.mean_j + predictive_quantile(0.9, 3.0) * iv.sd_j)

@@ -23,7 +23,8 @@ from planner.plan_report import (
     route_row,
     route_table,
 )
-from terrain import FigureWarning, InvalidParameterError, UnknownNameError
+from planner.planning import RouteSearch
+from terrain import FigureWarning, InvalidParameterError
 from terrawatt_base.formats import read_result_json
 
 START, GOAL = (5.0, 5.0), (35.0, 5.0)
@@ -31,7 +32,7 @@ START, GOAL = (5.0, 5.0), (35.0, 5.0)
 
 @pytest.fixture
 def report(wall_map) -> PlanReport:
-    return plan_and_compare(wall_map, START, GOAL, planner="lattice", map_label="wall")
+    return plan_and_compare(wall_map, START, GOAL, search=RouteSearch("lattice"), map_label="wall")
 
 
 def test_a_lattice_plan_compares_with_itself_and_the_shortest_route(report, wall_map):
@@ -48,7 +49,7 @@ def test_a_lattice_plan_compares_with_itself_and_the_shortest_route(report, wall
 
 
 def test_another_planner_gets_the_lattice_route_as_its_second_row(wall_map):
-    report = plan_and_compare(wall_map, START, GOAL, planner="anyangle", map_label="wall")
+    report = plan_and_compare(wall_map, START, GOAL, search=RouteSearch("anyangle"), map_label="wall")
     assert report.route.planner.startswith("anyangle") and report.lattice.planner.startswith("lattice")
     assert report.lattice is not report.route
     assert report.rows()[1]["energy_j"] == pytest.approx(report.lattice.energy_j)
@@ -104,7 +105,7 @@ def test_a_figure_that_fails_warns_and_leaves_the_results(report, tmp_path, monk
 
 def test_no_route_is_reported_and_written_without_geojson(tmp_path):
     closed = terrain.wall_map((40, 40), 1.0, wall_col=20, gap_rows=(0, 0))
-    report = plan_and_compare(closed, START, GOAL, planner="lattice", map_label="closed")
+    report = plan_and_compare(closed, START, GOAL, search=RouteSearch("lattice"), map_label="closed")
     assert report.route.status == "infeasible" and report.lattice is None and report.rows() == []
     assert report.summary().splitlines()[-1].startswith("no route: status 'infeasible' after ")
     data = report.to_dict()
@@ -116,7 +117,7 @@ def test_no_route_is_reported_and_written_without_geojson(tmp_path):
 
 
 def test_an_approximate_route_says_how_short_it_ends(wall_map):
-    report = plan_and_compare(wall_map, START, GOAL, planner="RRTstar", max_evaluations=30, seed=0)
+    report = plan_and_compare(wall_map, START, GOAL, search=RouteSearch("RRTstar", None, max_cost_evaluations=30, seed=0))
     if report.route.status != "approximate":
         pytest.skip(f"RRT* reached the goal in 30 evaluations: {report.route.status}")
     last = report.summary().splitlines()[-1]
@@ -127,14 +128,14 @@ def test_an_approximate_route_says_how_short_it_ends(wall_map):
 
 def test_unknown_ground_is_said_in_the_summary():
     unknown = terrain.wall_map((20, 20), 1.0, ground=None)
-    report = plan_and_compare(unknown, (2.0, 2.0), (18.0, 2.0), planner="lattice",
+    report = plan_and_compare(unknown, (2.0, 2.0), (18.0, 2.0), search=RouteSearch("lattice"),
                               pricing=CostSpec(unknown_ground="sand"))
     assert "ground class unknown in 400 of 400 cells: priced as 'sand'" in report.summary()
 
 
 def test_a_model_prices_the_edges_and_gives_the_interval(corridor_map, known_model, tmp_path):
     model = known_model()
-    report = plan_and_compare(corridor_map, (2.5, 7.5), (27.5, 7.5), planner="lattice",
+    report = plan_and_compare(corridor_map, (2.5, 7.5), (27.5, 7.5), search=RouteSearch("lattice"),
                               pricing=CostSpec(model=model, model_label="husky.tw", unknown_ground="gravel"))
     assert report.priced.spec.preset_unknown_ground is None  # a model prices every ground itself
     assert report.model == PlanModel(file="husky.tw", class_name="GroundKeyedModel", model_ground=None,
@@ -146,7 +147,7 @@ def test_a_model_prices_the_edges_and_gives_the_interval(corridor_map, known_mod
     data = report.to_dict()
     assert data["model"]["objective"] == "energy mean" and data["model"]["class"] == "GroundKeyedModel"
     assert data["routes"]["min_energy"]["energy_interval"] == report.interval.to_dict()
-    risky = plan_and_compare(corridor_map, (2.5, 7.5), (27.5, 7.5), planner="lattice",
+    risky = plan_and_compare(corridor_map, (2.5, 7.5), (27.5, 7.5), search=RouteSearch("lattice"),
                              pricing=CostSpec(model=model, risk=0.9))
     assert risky.risk_q == 0.9 and "(the table shows the planning objective)" in risky.summary()
     assert risky.to_dict()["model"]["objective"] == "0.9 quantile: mean + z sd per edge"
@@ -155,13 +156,13 @@ def test_a_model_prices_the_edges_and_gives_the_interval(corridor_map, known_mod
 def test_risk_needs_a_model_with_an_interval(corridor_map, known_model):
     flat = {"loam": [9.0, 2.0, 4.0, 0.0], "gravel": [10.5, 2.5, 4.5, 0.0]}
     with pytest.raises(InvalidParameterError, match="risk 0.9 needs a model with a predictive interval") as err:
-        plan_and_compare(corridor_map, (2.5, 7.5), (27.5, 7.5), planner="lattice",
+        plan_and_compare(corridor_map, (2.5, 7.5), (27.5, 7.5), search=RouteSearch("lattice"),
                          pricing=CostSpec(model=known_model(grounds=flat), risk=0.9))
     assert err.value.parameter == "risk"
 
 
 @pytest.mark.parametrize(("kwargs", "error", "match"), [
-    ({"planner": "Astar"}, UnknownNameError, "planner must be one of"),
+    ({"search": "lattice"}, InvalidParameterError, "search must be a RouteSearch"),
     ({"pricing": "husky"}, InvalidParameterError, "pricing must be a CostSpec"),
 ])
 def test_bad_arguments_are_refused(wall_map, kwargs, error, match):
