@@ -112,19 +112,17 @@ def tabulate(
     InvalidParameterError
         The model returned arrays of other shapes.
     """
+    grades, angles = grade_grid(max_slope_rad, grade_samples), turn_grid(turn_samples)
     if spread:
         return _table_rows(model.energy_per_metre_sd_j, model.turn_energy_sd_j, speed_mps, cell_classes, labels,
-                           max_slope_rad=max_slope_rad, grade_samples=grade_samples, turn_samples=turn_samples,
-                           what="spread ")
-    return _table_rows(model.energy_per_metre_j, model.turn_energy_j, speed_mps, cell_classes, labels,
-                       max_slope_rad=max_slope_rad, grade_samples=grade_samples, turn_samples=turn_samples, what="")
+                           grades, angles, "spread ")
+    return _table_rows(model.energy_per_metre_j, model.turn_energy_j, speed_mps, cell_classes, labels, grades, angles,
+                       "")
 
 
-def _table_rows(per_metre: Any, per_turn: Any, speed_mps: float, cell_classes: Sequence[Any], labels: Sequence[str], *,
-                max_slope_rad: float, grade_samples: int, turn_samples: int, what: str) -> tuple[np.ndarray, np.ndarray]:
+def _table_rows(per_metre: Any, per_turn: Any, speed_mps: float, cell_classes: Sequence[Any], labels: Sequence[str],
+                grades: np.ndarray, angles: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray]:
     """``per_metre(speed, grades, c) * sqrt(1 + grade**2)`` and ``per_turn(angles, c)`` per cell class ``c``."""
-    grades = grade_grid(max_slope_rad, grade_samples)
-    angles = turn_grid(turn_samples)
     horizontal = np.sqrt(1.0 + grades**2)
     grade_table = np.empty((len(cell_classes), grades.size))
     turn_table = np.empty((len(cell_classes), angles.size))
