@@ -65,7 +65,6 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -82,12 +81,14 @@ from energy import (
 from energy.budget import log_battery_power_w
 from energy.profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2
 from terrain import InvalidParameterError, TerrainMap
-from terrawatt_base.checks import check_choice, check_real, check_text, real_array
+from terrawatt_base.checks import check_choice, check_instance, check_real, check_text, real_array
 
 from .edge_cost import DEFAULT_MAX_SLOPE_RAD, EnergyCost
 from .learned_table import (
+    DEFAULT_TABLE_OMEGAS_RADPS,
+    DEFAULT_TABLE_SPEEDS_MPS,
     LearnedModelTable,
-    increasing_grid,
+    TableProbe,
     model_gives_interval,
     predict_current_spread,
     predict_currents,
@@ -99,14 +100,10 @@ __all__ = [
     "LearnedEnergyModel",
     "LearnedModelTable",
     "predict_currents",
+    "TableProbe",
     "DEFAULT_TABLE_SPEEDS_MPS",
     "DEFAULT_TABLE_OMEGAS_RADPS",
 ]
-
-#: Default speed grid of the tables (m/s).
-DEFAULT_TABLE_SPEEDS_MPS: tuple[float, ...] = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0)
-#: Default turn-rate grid of the tables (rad/s).
-DEFAULT_TABLE_OMEGAS_RADPS: tuple[float, ...] = (0.25, 0.5, 0.75, 1.0, 1.5)
 
 _GRAVITY_MPS2 = 9.81
 
@@ -128,13 +125,9 @@ class LearnedEnergyModel:
         The robot (motor constants for the battery power, electronics, turn rate).
     physics_ground : GroundParams
         Ground of the physics slope term.
-    speeds_mps, omegas_radps : sequence of float
-        Table grids (> 0, increasing).
-    hold_s, settle_s : float
-        Hold time of each level in the synthetic log and the settling time left out of the
-        average (0 <= settle_s < hold_s).
-    rate_hz : float
-        Sample rate of the synthetic log (Hz).
+    probe : TableProbe, optional
+        The table grids and the synthetic log each model is asked on (:class:`TableProbe`,
+        default ``TableProbe()``).
     current_convention : {"motor", "battery"}
         What the models' currents are (see :func:`energy.budget.log_battery_power_w`).
 
@@ -157,11 +150,7 @@ class LearnedEnergyModel:
         robot: RobotParams,
         physics_ground: GroundParams,
         *,
-        speeds_mps: Sequence[float] = DEFAULT_TABLE_SPEEDS_MPS,
-        omegas_radps: Sequence[float] = DEFAULT_TABLE_OMEGAS_RADPS,
-        hold_s: float = 2.0,
-        settle_s: float = 0.5,
-        rate_hz: float = 100.0,
+        probe: TableProbe | None = None,
         current_convention: str = "motor",
     ) -> None:
         if not isinstance(registry, CellModelRegistry):
@@ -173,11 +162,11 @@ class LearnedEnergyModel:
         self.registry = registry
         self.robot = robot
         self.physics_ground = physics_ground
-        self.speeds_mps = increasing_grid("speeds_mps", speeds_mps)
-        self.omegas_radps = increasing_grid("omegas_radps", omegas_radps)
-        self.hold_s = check_real("hold_s", hold_s, low=0.0, low_inclusive=False)
-        self.rate_hz = check_real("rate_hz", rate_hz, low=0.0, low_inclusive=False)
-        self.settle_s = check_real("settle_s", settle_s, low=0.0, high=self.hold_s, high_inclusive=False)
+        probe = TableProbe() if probe is None else check_instance("probe", probe, TableProbe)
+        #: The table grids and synthetic log (:class:`TableProbe`).
+        self.probe = probe
+        self.speeds_mps, self.omegas_radps = probe.speeds_mps, probe.omegas_radps
+        self.hold_s, self.settle_s, self.rate_hz = probe.hold_s, probe.settle_s, probe.rate_hz
         self.current_convention = check_choice("current_convention", current_convention, ("motor", "battery"))
         self.turn_rate_radps = float(robot.turn_rate_radps)
         self._physics = PhysicsEnergyModel(robot)

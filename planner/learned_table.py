@@ -11,9 +11,16 @@ import numpy as np
 
 from energy import InteractionLog
 from energy.models.forecast import check_dof
+from terrawatt_base.checks import check_real
 from terrawatt_base.errors import InvalidParameterError
 
-__all__ = ["LearnedModelTable", "predict_currents", "predict_current_spread", "model_gives_interval", "increasing_grid"]
+__all__ = ["TableProbe", "LearnedModelTable", "predict_currents", "predict_current_spread", "model_gives_interval",
+           "increasing_grid", "DEFAULT_TABLE_SPEEDS_MPS", "DEFAULT_TABLE_OMEGAS_RADPS"]
+
+#: Default speeds of the flat-ground tables (m/s).
+DEFAULT_TABLE_SPEEDS_MPS: tuple[float, ...] = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.8, 1.0)
+#: Default pivot rates of the turn tables (rad/s).
+DEFAULT_TABLE_OMEGAS_RADPS: tuple[float, ...] = (0.25, 0.5, 0.75, 1.0, 1.5)
 
 
 def increasing_grid(name: str, values: Sequence[float]) -> np.ndarray:
@@ -93,6 +100,52 @@ def predict_current_spread(model: Any, log: InteractionLog, label: str) -> tuple
             f"shapes {mean.shape!r} and {run_sd.shape!r}"
         )
     return mean, run_sd, dof
+
+
+@dataclass(frozen=True)
+class TableProbe:
+    """How a current model is asked for its flat-ground tables: a synthetic log of held levels, each averaged.
+
+    The log holds each speed (straight) and each pivot rate (turning in place) for ``hold_s``
+    at ``rate_hz``; the first ``settle_s`` of each level is left out of its average.
+
+    Parameters
+    ----------
+    speeds_mps, omegas_radps : sequence of float
+        The table grids (> 0, strictly increasing).
+    hold_s, settle_s : float
+        Hold time of each level and the settling time left out of its average
+        (0 <= settle_s < hold_s).
+    rate_hz : float
+        Sample rate of the synthetic log (Hz, > 0).
+
+    Raises
+    ------
+    InvalidParameterError
+        Bad grids or times (the message names the parameter).
+
+    Examples
+    --------
+    >>> TableProbe(speeds_mps=(0.25, 0.5, 1.0)).speeds_mps
+    array([0.25, 0.5 , 1.  ])
+    """
+
+    speeds_mps: Any = DEFAULT_TABLE_SPEEDS_MPS
+    omegas_radps: Any = DEFAULT_TABLE_OMEGAS_RADPS
+    hold_s: float = 2.0
+    settle_s: float = 0.5
+    rate_hz: float = 100.0
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        set_(self, "speeds_mps", increasing_grid("speeds_mps", self.speeds_mps))
+        set_(self, "omegas_radps", increasing_grid("omegas_radps", self.omegas_radps))
+        hold = check_real("hold_s", self.hold_s, low=0.0, low_inclusive=False)
+        set_(self, "hold_s", hold)
+        set_(self, "rate_hz", check_real("rate_hz", self.rate_hz, low=0.0, low_inclusive=False))
+        set_(self, "settle_s", check_real("settle_s", self.settle_s, low=0.0, high=hold, high_inclusive=False))
+        for grid in (self.speeds_mps, self.omegas_radps):
+            grid.setflags(write=False)
 
 
 @dataclass(frozen=True, eq=False)

@@ -6,6 +6,7 @@ import pytest
 from energy import InteractionLog, LogMeta, PhysicsEnergyModel, ground_preset, robot_preset
 from energy.budget import log_battery_power_w
 from planner import CostSpec, LearnedEnergyModel
+from planner.learned_table import TableProbe
 from planner.registry import CellModelRegistry
 from terrain import InvalidParameterError, TerrainMap, UnknownNameError
 
@@ -31,7 +32,7 @@ def _setup():
     reg = CellModelRegistry.from_terrain(tmap, ConstModel(2.0, 5.0), prior_name="a")
     mid = reg.add_model(ConstModel(4.0, 6.0), name="b")
     reg.assign((np.array([3, 4]), np.array([5, 5])), mid)
-    lem = LearnedEnergyModel(reg, robot, ground_preset("asphalt"), speeds_mps=(0.25, 0.5, 1.0), omegas_radps=(0.5, 1.0))
+    lem = LearnedEnergyModel(reg, robot, ground_preset("asphalt"), probe=TableProbe((0.25, 0.5, 1.0), (0.5, 1.0)))
     return robot, tmap, reg, lem, mid
 
 
@@ -88,7 +89,9 @@ def test_errors():
     with pytest.raises(UnknownNameError, match="no model with id"):
         lem.table(7)
     with pytest.raises(InvalidParameterError, match="speeds_mps"):
-        LearnedEnergyModel(reg, robot, ground_preset("asphalt"), speeds_mps=(0.5, 0.2))
+        TableProbe(speeds_mps=(0.5, 0.2))
+    with pytest.raises(InvalidParameterError, match="probe must be a TableProbe"):
+        LearnedEnergyModel(reg, robot, ground_preset("asphalt"), probe={"speeds_mps": (0.5, 1.0)})
     with pytest.raises(InvalidParameterError, match="speed_mps"):
         lem.energy_per_metre_j(0.0, [0.0], 0)
 
@@ -104,9 +107,12 @@ def test_errors():
 )
 def test_constructor_arguments_are_checked(kwargs, match):
     robot, _, reg, _, _ = _setup()
-    exc = UnknownNameError if "current_convention" in kwargs else InvalidParameterError
-    with pytest.raises(exc, match=match):
-        LearnedEnergyModel(reg, robot, ground_preset("asphalt"), **kwargs)
+    if "current_convention" in kwargs:
+        with pytest.raises(UnknownNameError, match=match):
+            LearnedEnergyModel(reg, robot, ground_preset("asphalt"), **kwargs)
+    else:  # the synthetic log's times: the probe's
+        with pytest.raises(InvalidParameterError, match=match):
+            TableProbe(**kwargs)
 
 
 def test_energy_cost_and_vibration_arguments_are_named():
@@ -132,8 +138,8 @@ def test_energy_cost_with_previous_equals_fresh_and_reuses_lattice():
     new = reg.add_model(ConstModel(8.0, 9.0), name="c")
     reg.assign((np.array([6, 7]), np.array([2, 2])), new)
     got = lem.energy_cost(tmap, 0.5, previous=cost)
-    ref = LearnedEnergyModel(reg, robot, ground_preset("asphalt"), speeds_mps=(0.25, 0.5, 1.0),
-                             omegas_radps=(0.5, 1.0)).energy_cost(tmap, 0.5)
+    ref = LearnedEnergyModel(reg, robot, ground_preset("asphalt"),
+                             probe=TableProbe((0.25, 0.5, 1.0), (0.5, 1.0))).energy_cost(tmap, 0.5)
     assert np.array_equal(got.grade_table_j_per_m, ref.grade_table_j_per_m)
     assert np.array_equal(got.ground_rows, ref.ground_rows)
     assert np.array_equal(got.changed_cells, np.asarray(reg.model_id_map) == new)

@@ -8,6 +8,7 @@ import pytest
 
 from planner import CostTables, price_route
 from planner.cost_spec import CostSpec
+from planner.learned_table import TableProbe
 from planner.route import evaluate_route
 from planner.route_price import route_forecast_j, segment_forecasts_j
 from terrain import InvalidParameterError, UnknownNameError, flat_map
@@ -40,8 +41,8 @@ def _learned_cost():
 
     tmap = flat_map((12, 16), 1.0, ground="asphalt")
     reg = CellModelRegistry.from_terrain(tmap, ConstModel(2.0, 5.0), prior_name="a")
-    lem = LearnedEnergyModel(reg, robot_preset("husky"), ground_preset("asphalt"), speeds_mps=(0.25, 0.5, 1.0),
-                             omegas_radps=(0.5, 1.0))
+    lem = LearnedEnergyModel(reg, robot_preset("husky"), ground_preset("asphalt"),
+                             probe=TableProbe((0.25, 0.5, 1.0), (0.5, 1.0)))
     return tmap, lem, lem.energy_cost(tmap, 0.5)
 
 
