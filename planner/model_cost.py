@@ -193,19 +193,22 @@ def model_grounds(terrain: TerrainMap, summary: TrainingSummary | None, *,
     if isinstance(model_ground, str):
         chosen = _lookup(model_ground, known) if summary is not None else str(model_ground)
         if chosen is None:
-            raise UnknownNameError(f"--model-ground {model_ground!r} is not a ground the model drove: {where}")
+            raise UnknownNameError(f"model_ground {model_ground!r} is not a ground the model drove: {where}",
+                                   parameter="model_ground")
         return ModelGrounds({gid: chosen for gid in present}, known)
     renamed = {} if model_ground is None else {str(k).strip().lower(): str(v) for k, v in dict(model_ground).items()}
     unused = sorted(set(renamed) - {n.lower() for n in map_names.values()})
     if unused:
-        raise UnknownNameError(f"--model-ground names map class(es) {unused!r} that the map does not have: {where}")
+        raise UnknownNameError(f"model_ground names map class(es) {unused!r} that the map does not have: {where}",
+                               parameter="model_ground")
     by_class: dict[int, str] = {}
     missing = []
     for gid, name in map_names.items():
         target = renamed.get(name.lower(), name)
         chosen = _lookup(target, known) if summary is not None else target
         if chosen is None and name.lower() in renamed:
-            raise UnknownNameError(f"--model-ground {name}={target} names a ground the model never drove: {where}")
+            raise UnknownNameError(f"model_ground {name}={target} names a ground the model never drove: {where}",
+                                   parameter="model_ground")
         if chosen is None:
             missing.append(name)
         else:
@@ -213,14 +216,14 @@ def model_grounds(terrain: TerrainMap, summary: TrainingSummary | None, *,
     if missing:
         raise UnknownNameError(
             f"the model never drove the map's ground(s) {sorted(missing)!r}: {where}; train it on them, give "
-            "--model-ground CLASS=NAME to price such a class as one of the model's grounds, or --model-ground NAME "
-            "to price every cell as one"
+            "model_ground CLASS=NAME to price such a class as one of the model's grounds, or model_ground NAME "
+            "to price every cell as one", parameter="model_ground"
         )
     if UNKNOWN_GROUND in present:
         if len(known) != 1:
             raise InvalidParameterError(
-                f"the map has cells of unknown ground and {where.split(';')[0]}: give --model-ground NAME to "
-                "say which of its grounds prices them"
+                f"the map has cells of unknown ground and {where.split(';')[0]}: give model_ground NAME to "
+                "say which of its grounds prices them", parameter="model_ground"
             )
         by_class[UNKNOWN_GROUND] = known[0]
     return ModelGrounds(by_class, known)
@@ -274,7 +277,7 @@ def model_energy_model(
             raise DataError(
                 f"the model is conditioned on vibration but holds no recorded vibration of ground {g!r} (a file "
                 f"saved before that was recorded, or a ground it did not drive): re-save the model with this "
-                f"release (terrawatt train), or give --model-ground NAME of a ground it holds"
+                f"release (terrawatt train), or give model_ground NAME of a ground it holds", parameter="model_ground"
             )
     ground = np.asarray(terrain.ground)
     names = plan.grounds
@@ -290,7 +293,7 @@ def model_energy_model(
     for g, (t, a) in vibration.items():
         lem.set_vibration(ids[g], t, a)
     # a class named as the training ground it is priced by is that ground: its own spread; a class the model
-    # never drove, priced as one it did (--model-ground grass=asphalt), keeps the new-ground spread of the mapping
+    # never drove, priced as one it did (model_ground {"grass": "asphalt"}), keeps the new-ground spread of the mapping
     class_names = getattr(terrain, "ground_names", None) or {}
     for g in names:
         mapped = [str(class_names.get(gid, "")).lower() for gid, tg in plan.by_class.items() if tg == g]

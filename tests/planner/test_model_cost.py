@@ -60,14 +60,15 @@ def test_an_unnamed_robot_is_a_warning_not_a_refusal(corridor_map, known_model):
 
 def test_a_map_ground_the_model_never_drove_is_refused_listing_both(corridor_map, known_model):
     with pytest.raises(UnknownNameError, match=r"never drove the map's ground\(s\) \['gravel'\].*trained on grounds "
-                                               r"\['loam'\]; the map has \['Loam', 'gravel'\].*--model-ground"):
+                                               r"\['loam'\]; the map has \['Loam', 'gravel'\].*model_ground") as err:
         model_energy_cost(corridor_map, known_model(trained_on=("loam",)), HUSKY, 0.5)
+    assert err.value.parameter == "model_ground"
 
 
 def test_model_ground_prices_every_cell_as_one_training_ground(corridor_map, known_model):
     cost = model_energy_cost(corridor_map, known_model(), HUSKY, 0.5, model_ground="GRAVEL")
     assert cost.ground_labels == ("gravel",) and not cost.has_interval  # gravel has no spread
-    with pytest.raises(UnknownNameError, match="--model-ground 'sand' is not a ground the model drove"):
+    with pytest.raises(UnknownNameError, match="model_ground 'sand' is not a ground the model drove"):
         model_energy_cost(corridor_map, known_model(), HUSKY, 0.5, model_ground="sand")
 
 
@@ -75,7 +76,7 @@ def test_a_map_without_ground_classes(known_model):
     tmap = _no_classes_map()
     one = model_energy_cost(tmap, known_model(trained_on=("loam",)), HUSKY, 0.5)  # one training ground: used directly
     assert one.ground_labels == ("loam",) and one.has_interval
-    with pytest.raises(InvalidParameterError, match="unknown ground.*--model-ground NAME"):
+    with pytest.raises(InvalidParameterError, match="unknown ground.*model_ground NAME"):
         model_energy_cost(tmap, known_model(), HUSKY, 0.5)
     assert model_grounds(tmap, known_model().training_summary, model_ground="loam").by_class == {-1: "loam"}
 
