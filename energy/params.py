@@ -369,7 +369,7 @@ def ground_preset(name: str) -> GroundParams:
         ) from None
 
 
-def resolve_unknown_ground(name: str, terrain: TerrainMap | None, *, flag: str = "unknown_ground") -> str | None:
+def resolve_unknown_ground(name: str, terrain: TerrainMap | None) -> str | None:
     """The ground preset assumed on cells of unknown ground: ``name``, or None for ``"none"`` (refuse them).
 
     Parameters
@@ -379,8 +379,6 @@ def resolve_unknown_ground(name: str, terrain: TerrainMap | None, *, flag: str =
     terrain : TerrainMap or None
         The map it applies to; None for a map without ground classes (a DEM read by windows),
         whose every cell is of unknown ground.
-    flag : str
-        How messages name the setting (the command line passes ``"--unknown-ground"``).
 
     Returns
     -------
@@ -391,7 +389,8 @@ def resolve_unknown_ground(name: str, terrain: TerrainMap | None, *, flag: str =
     UnknownNameError
         ``name`` is neither a ground preset nor ``"none"``.
     InvalidParameterError
-        ``"none"`` where the map has cells of unknown ground.
+        ``"none"`` where the map has cells of unknown ground. The errors' parameter is
+        ``unknown_ground``.
 
     Examples
     --------
@@ -399,21 +398,22 @@ def resolve_unknown_ground(name: str, terrain: TerrainMap | None, *, flag: str =
     >>> resolve_unknown_ground("sand", None), resolve_unknown_ground("none", flat_map((2, 2), 1.0, ground="ice"))
     ('sand', None)
     """
+    flag = "unknown_ground"
     if not isinstance(name, str):
-        raise UnknownNameError(f"{flag} must be a ground preset name or 'none', got {name!r}")
+        raise UnknownNameError(f"{flag} must be a ground preset name or 'none', got {name!r}", parameter=flag)
     if name.lower() == "none":
         if terrain is None:
             raise InvalidParameterError(f"a GeoTIFF DEM has no ground classes, so {flag} none refuses every cell; give "
-                                        f"{flag} NAME, one of {sorted(GROUND_PRESETS)!r}")
+                                        f"{flag} NAME, one of {sorted(GROUND_PRESETS)!r}", parameter=flag)
         if not isinstance(terrain, TerrainMap):
             raise InvalidParameterError(f"terrain must be a TerrainMap or None, got {type(terrain).__name__}")
         n = int(np.count_nonzero(np.asarray(terrain.ground) == UNKNOWN_GROUND))
         if n:
             raise InvalidParameterError(
                 f"the map's ground class is unknown in {n} of {terrain.ground.size} cells and {flag} none refuses "
-                f"them; give {flag} NAME, one of {sorted(GROUND_PRESETS)!r}")
+                f"them; give {flag} NAME, one of {sorted(GROUND_PRESETS)!r}", parameter=flag)
         return None
     if name not in GROUND_PRESETS:
         raise UnknownNameError(f"{flag} must be a ground preset, one of {sorted(GROUND_PRESETS)!r}, or 'none'; "
-                               f"got {name!r}")
+                               f"got {name!r}", parameter=flag)
     return name

@@ -334,7 +334,7 @@ def check_topic_prefix(topic_prefix: Any, name: str = "topic_prefix") -> str:
     return topic_prefix
 
 
-def check_frame_origin(frame_origin_xy_m: Any, name: str = "frame_origin_xy_m", *,
+def check_frame_origin(frame_origin_xy_m: Any, *,
                        bounds: tuple[float, float, float, float] | None = None) -> tuple[float, float]:
     """A frame origin ``(x, y)`` in metres, both finite, as two floats; with ``bounds``, near the map.
 
@@ -342,8 +342,6 @@ def check_frame_origin(frame_origin_xy_m: Any, name: str = "frame_origin_xy_m", 
     ----------
     frame_origin_xy_m : (float, float)
         The map frame's origin in the map's coordinates (m).
-    name : str
-        How messages name it (the command line passes ``"--map-frame-origin"``).
     bounds : (xmin, ymin, xmax, ymax), optional
         The map's bounds (m): an origin other than ``(0, 0)`` (the map's own coordinates,
         always accepted) must then lie within :data:`MAX_FRAME_ORIGIN_DISTANCE_M` of them.
@@ -351,8 +349,9 @@ def check_frame_origin(frame_origin_xy_m: Any, name: str = "frame_origin_xy_m", 
     Raises
     ------
     InvalidParameterError
-        Not a pair, or a coordinate not a finite real (the message names ``<name>[i]``); with
-        ``bounds``, an origin farther from the map than :data:`MAX_FRAME_ORIGIN_DISTANCE_M`.
+        Not a pair, or a coordinate not a finite real (the message names
+        ``frame_origin_xy_m[i]``); with ``bounds``, an origin farther from the map than
+        :data:`MAX_FRAME_ORIGIN_DISTANCE_M`. The error's parameter is ``frame_origin_xy_m``.
 
     Examples
     --------
@@ -363,11 +362,16 @@ def check_frame_origin(frame_origin_xy_m: Any, name: str = "frame_origin_xy_m", 
     ...
     terrawatt_base.errors.InvalidParameterError: frame_origin_xy_m (1e+308, 0) lies 1e+308 m from the map ...
     """
+    name = "frame_origin_xy_m"
     try:
         fx, fy = frame_origin_xy_m
     except (TypeError, ValueError) as exc:
-        raise InvalidParameterError(f"{name} must be (x, y) in metres, got {frame_origin_xy_m!r}") from exc
-    fx, fy = check_real(f"{name}[0]", fx), check_real(f"{name}[1]", fy)
+        raise InvalidParameterError(f"{name} must be (x, y) in metres, got {frame_origin_xy_m!r}",
+                                    parameter=name) from exc
+    try:
+        fx, fy = check_real(f"{name}[0]", fx), check_real(f"{name}[1]", fy)
+    except InvalidParameterError as exc:
+        raise InvalidParameterError(str(exc), parameter=name) from None
     if bounds is None or (fx == 0.0 and fy == 0.0):
         return fx, fy
     xmin, ymin, xmax, ymax = (float(b) for b in bounds)
@@ -376,7 +380,7 @@ def check_frame_origin(frame_origin_xy_m: Any, name: str = "frame_origin_xy_m", 
         raise InvalidParameterError(
             f"{name} ({fx:g}, {fy:g}) lies {distance:.3g} m from the map (x {xmin:g} to {xmax:g}, y {ymin:g} to "
             f"{ymax:g} m); a map frame origin other than (0, 0) must lie within {MAX_FRAME_ORIGIN_DISTANCE_M:g} m of "
-            "the map's bounds: give it in the map's coordinates, in metres")
+            "the map's bounds: give it in the map's coordinates, in metres", parameter=name)
     return fx, fy
 
 

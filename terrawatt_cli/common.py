@@ -298,7 +298,7 @@ def pricing_arg(args: argparse.Namespace, terrain: TerrainMap | None, model: Cur
     the command does not have takes the spec's default (``--unknown-ground``: none, refusing such cells)."""
     ground = None
     if model is None and getattr(args, "unknown_ground", None) is not None:
-        ground = resolve_unknown_ground(args.unknown_ground, terrain, flag="--unknown-ground")
+        ground = resolve_unknown_ground(args.unknown_ground, terrain)
     return CostSpec(robot=args.robot, speed_mps=args.speed, max_slope_deg=getattr(args, "max_slope_deg", 20.0),
                     unknown_ground=ground, model=model, model_label=None if model is None else Path(args.model).name,
                     model_ground=getattr(args, "model_ground", None), risk=getattr(args, "risk", None))

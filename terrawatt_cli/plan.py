@@ -38,7 +38,8 @@ __all__ = ["add_parsers", "run_demo", "run_plan_command", "coarse_arg"]
 _OUTPUTS = ("route.json", "route.geojson", "route.png")
 #: How ``plan`` names the parameters of the library's messages (:func:`terrawatt_cli.error_message`).
 _FLAGS = {"factor": "--coarse-factor", "corridor_m": "--corridor", "fine_window_budget_cells": "--fine-window-cells",
-          "model": "--model", "planner": "--planner"}
+          "model": "--model", "planner": "--planner",
+          "frame_origin_xy_m": "--map-frame-origin"}
 #: The map options a windowed read cannot apply (they need the whole map), by their flags.
 _WHOLE_MAP_FLAGS = ("fill_nodata", "reproject", "cell_size", "landcover")
 
@@ -132,7 +133,7 @@ def run_plan_command(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace, tmap: TerrainMap, start: tuple[float, float], goal: tuple[float, float],
          label: str, coarse: CoarseOptions | None = None) -> int:
     if getattr(args, "map_frame_origin", None) is not None:  # before planning: near the map (the writers check it too)
-        check_frame_origin(args.map_frame_origin, "--map-frame-origin", bounds=tmap.bounds)
+        check_frame_origin(args.map_frame_origin, bounds=tmap.bounds)
     if coarse is not None:
         return _finish(args, plan_coarse(tmap, start, goal, options=coarse, pricing=pricing_arg(args, tmap),
                                          map_label=label))

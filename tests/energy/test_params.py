@@ -105,8 +105,9 @@ def test_resolve_unknown_ground_names_a_preset_or_refuses_unknown_cells():
     ground = np.zeros((4, 5), dtype=int)
     ground[0, :2] = -1
     holes = TerrainMap(np.zeros((4, 5)), 1.0, ground=ground, ground_names={0: "asphalt"})
-    with pytest.raises(InvalidParameterError, match="unknown in 2 of 20 cells and --unknown-ground none refuses"):
-        resolve_unknown_ground("none", holes, flag="--unknown-ground")
+    with pytest.raises(InvalidParameterError, match="unknown in 2 of 20 cells and unknown_ground none refuses") as err:
+        resolve_unknown_ground("none", holes)
+    assert err.value.parameter == "unknown_ground"
     with pytest.raises(InvalidParameterError, match="no ground classes, so unknown_ground none refuses every cell"):
         resolve_unknown_ground("none", None)
     with pytest.raises(UnknownNameError, match="unknown_ground must be a ground preset, .* or 'none'; got 'lava'"):
