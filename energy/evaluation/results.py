@@ -1,22 +1,32 @@
-"""Scores of drive-current models on held-out runs: :class:`RunScore`, :class:`ScoreSummary`, :class:`EvaluationResult`."""
+"""Scores of drive-current models on held-out runs: :class:`RunScore`, :class:`ScoreSummary`, and the answer of every
+protocol, :class:`EvaluationResult` (its summary, JSON, files and figure)."""
 
 from __future__ import annotations
 
 import math
 import os
-from dataclasses import asdict, dataclass
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from terrawatt_base.atomic import check_output_path, json_finite, write_text_atomic
+from terrawatt_base.atomic import check_output_path, json_finite, save_figure, write_text_atomic
+from terrawatt_base.checks import check_choice
+from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import result_document, write_result_json
-from terrawatt_base.errors import UnknownNameError
 
+from ..logs import InteractionLog
+from ..plots import plot_vibration_spectra
+from .adapt_results import ADAPT_FILES, ADAPT_FORMAT_VERSION, AdaptScore, AdaptSummary, adapt_table
 from .run_totals import TOTALS_HEADING, RunTotal, plot_totals_reliability, summarise_totals, totals_markdown
 
 __all__ = [
+    "EVALUATION_PROTOCOLS",
+    "SPECTRA_FILE",
+    "RELIABILITY_FILE",
     "EVALUATION_VARIANTS",
     "PREFIT_VARIANT",
     "SCORE_VARIANTS",
@@ -27,8 +37,17 @@ __all__ = [
     "ScoreSummary",
     "EvaluationResult",
     "summarise_scores",
+    "evaluation_files",
     "check_evaluation_dir",
 ]
+
+#: The protocols: leave one run out, adapt on each held-out run's first seconds, few shots on a ground left out.
+EVALUATION_PROTOCOLS = ("loo", "adapt", "few-shot")
+#: The figure of a leave-one-run-out result with its logs: their vibration spectra per ground.
+SPECTRA_FILE = "spectra.png"
+#: The reliability figure of every protocol: observed against nominal coverage of the held-out total charge's
+#: intervals per protocol, ground and forecast.
+RELIABILITY_FILE = "reliability.png"
 
 #: Evaluation variants: one model per ground, or one model over all grounds.
 EVALUATION_VARIANTS = ("per_ground", "ground_agnostic")
@@ -39,7 +58,7 @@ SCORE_VARIANTS = (*EVALUATION_VARIANTS, PREFIT_VARIANT)
 #: Version of the ``evaluation.json`` layout (2: each run's pack energy, total charge and interval
 #: coverage, ``totals`` and ``total_summary``).
 EVALUATION_FORMAT_VERSION = 2
-#: Files :meth:`EvaluationResult.write` writes into its folder.
+#: The JSON and markdown files :meth:`EvaluationResult.write` writes leaving one run out.
 EVALUATION_FILES = ("evaluation.json", "evaluation.md")
 #: Drive sides, in the column order of a model's predictions.
 SIDES = ("left", "right")
@@ -117,118 +136,177 @@ def _summarise(variant: str, ground: str, model: str, scores: list[RunScore]) ->
 
 @dataclass(frozen=True)
 class EvaluationResult:
-    """All scores of :func:`evaluate_current_models` and their summaries.
+    """Current models scored on held-out runs by one protocol: the answer of ``terrawatt evaluate``.
+
+    Made by :func:`~energy.evaluation.evaluate_kinds` (with the header: the kinds, the logs, the
+    wall time), :func:`evaluate_current_models`, :func:`~energy.evaluation.score_current_model`,
+    :func:`~energy.evaluation.evaluate_adaptation` and :func:`~energy.evaluation.evaluate_few_shot`.
+    :meth:`summary` is the text the command prints, :meth:`to_dict` the versioned JSON
+    (``evaluation.json`` leaving one run out, ``adapt.json`` for the adapt protocols), :meth:`write`
+    writes :func:`evaluation_files`, :meth:`plot` draws the reliability of the total charge's intervals.
 
     Attributes
     ----------
-    runs : tuple of RunScore
-        One per (variant, held-out run, model, side).
-    summary : tuple of ScoreSummary
-        One per (variant, ground or ``"all"``, model).
-    models : tuple of str
-        Model names, in the order given.
-    variants : tuple of str
-    section_s : float
-    skipped : tuple of str
-        Grounds left out of the per-ground variant and why.
+    runs : tuple of RunScore or of AdaptScore
+        One per (variant, held-out run, model, side); with the adapt protocols one per (scored run,
+        run adapted on, model, schedule, side).
+    rows : tuple of ScoreSummary or of AdaptSummary
+        The medians and 90th percentiles: one per (variant, ground or ``"all"``, model); with the adapt
+        protocols one per (ground or ``"all"``, model, schedule). :meth:`row_for` finds one.
+    protocol : str
+        One of :data:`EVALUATION_PROTOCOLS`: ``"loo"`` (leave one run out, or variant ``"prefit"``: a
+        model fitted beforehand), ``"adapt"`` or ``"few-shot"``.
     totals : tuple of RunTotal
-        What the battery pays: per held-out run, the pack energy and total charge of both
-        sides with the model's interval (protocol ``"loo"``, schedule the variant);
-        summarised by :meth:`total_summary`.
+        What the battery pays: per scored run (schedule, variant), the pack energy and total charge of
+        both sides with the forecast's interval (:mod:`~energy.evaluation.run_totals`); summarised by
+        :meth:`total_summary`.
+    skipped : tuple of str
+        Grounds or runs left out and why.
+    models, variants : tuple of str
+        ``"loo"``: the model names, in the order given, and the variants.
+    section_s : float
+        ``"loo"``: the section length of the section error (s); the adapt protocols hold theirs in
+        ``settings``.
+    settings : dict
+        The adapt protocols' settings (method, prior, threshold, minimum remainder...).
+    kinds : tuple of str
+        The header: the model kinds evaluated (:func:`~energy.evaluation.evaluate_kinds`).
+    logs : tuple of InteractionLog
+        The header: the runs (their vibration spectra are drawn leaving one run out).
+    duration_s : float
+        The header: wall time of the evaluation, s (NaN without a header).
     """
 
-    runs: tuple[RunScore, ...]
-    summary: tuple[ScoreSummary, ...]
-    models: tuple[str, ...]
-    variants: tuple[str, ...]
-    section_s: float
-    skipped: tuple[str, ...] = ()
+    runs: tuple[RunScore, ...] | tuple[AdaptScore, ...]
+    rows: tuple[ScoreSummary, ...] | tuple[AdaptSummary, ...]
+    protocol: str = "loo"
     totals: tuple[RunTotal, ...] = ()
+    skipped: tuple[str, ...] = ()
+    models: tuple[str, ...] = ()
+    variants: tuple[str, ...] = ()
+    section_s: float = math.nan
+    settings: dict[str, Any] = field(default_factory=dict)
+    kinds: tuple[str, ...] = ()
+    logs: tuple[InteractionLog, ...] = ()
+    duration_s: float = math.nan
+
+    def __post_init__(self) -> None:
+        check_choice("protocol", self.protocol, EVALUATION_PROTOCOLS)
+        kind = RunScore if self.protocol == "loo" else AdaptScore
+        if not all(isinstance(r, kind) for r in self.runs):
+            raise InvalidParameterError(f"EvaluationResult.runs of protocol {self.protocol!r} must be "
+                                        f"{kind.__name__}s", parameter="runs")
 
     def total_summary(self) -> list[dict[str, Any]]:
-        """Per variant, ground (then all) and model: pack energy and total charge errors (median, p90 %)
-        and the coverage of the 50 / 80 / 95 % intervals (:func:`~energy.evaluation.run_totals.summarise_totals`)."""
+        """Per protocol, ground (then all), model, schedule and variant: pack energy and total charge errors
+        (median, p90 %) and the coverage of the 50 / 80 / 95 % intervals
+        (:func:`~energy.evaluation.run_totals.summarise_totals`)."""
         return summarise_totals(self.totals)
 
-    def plot_reliability(self, ax: Any = None) -> Any:
-        """Observed against nominal coverage of the total-charge intervals per variant and ground."""
+    def plot(self, ax: Any = None) -> Any:
+        """Observed against nominal coverage of the total-charge intervals per protocol, ground and variant;
+        on ``ax`` (default a new figure's); returns the axes."""
         return plot_totals_reliability(self.totals, ax, title="held-out total charge (both sides)")
 
-    def summary_for(self, variant: str, ground: str, model: str) -> ScoreSummary:
-        """The summary row of one variant, ground (or ``"all"``) and model.
+    def row_for(self, ground: str, model: str, *, variant: str | None = None,
+                schedule: str | None = None) -> ScoreSummary | AdaptSummary:
+        """The row of one ground (or ``"all"``) and model, and (leaving one run out) variant or (adapt
+        protocols) schedule; either may be left out when only one row matches.
 
         Raises
         ------
         UnknownNameError
-            No such row.
+            No such row, or several (give the variant or schedule).
         """
-        for s in self.summary:
-            if (s.variant, s.ground, s.model) == (variant, ground, model):
-                return s
-        raise UnknownNameError(
-            f"no summary for variant={variant!r}, ground={ground!r}, model={model!r}; rows exist for "
-            f"{sorted({(s.variant, s.ground, s.model) for s in self.summary})!r}"
-        )
+        key = {"ground": ground, "model": model, "variant": variant, "schedule": schedule}
+        match = [r for r in self.rows if all(getattr(r, k, None) == v for k, v in key.items() if v is not None)]
+        if len(match) == 1:
+            return match[0]
+        fields = ("variant", "ground", "model") if self.protocol == "loo" else ("ground", "model", "schedule")
+        asked = ", ".join(f"{k}={v!r}" for k, v in key.items() if v is not None)
+        what = "no row" if not match else f"{len(match)} rows (give the {fields[0] if self.protocol == 'loo' else 'schedule'})"
+        raise UnknownNameError(f"{what} for {asked}; rows exist for "
+                               f"{sorted({tuple(getattr(r, k) for k in fields) for r in self.rows})!r}")
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain-types form (NaN becomes ``None``), as written to ``evaluation.json``."""
+        """Plain-types form (NaN becomes ``None``), as written to ``evaluation.json`` (format ``terrawatt-evaluation``)
+        or, with the adapt protocols, ``adapt.json`` (``terrawatt-adaptation``)."""
+        common = {"total_summary": self.total_summary(), "summary": [asdict(s) for s in self.rows],
+                  "totals": [t.to_dict() for t in self.totals], "runs": [asdict(r) for r in self.runs]}
+        if self.protocol != "loo":
+            return json_finite(result_document("adaptation", ADAPT_FORMAT_VERSION, {
+                "settings": dict(self.settings), "skipped": list(self.skipped), **common}))
         return json_finite(result_document("evaluation", EVALUATION_FORMAT_VERSION, {
-            "section_s": self.section_s,
-            "models": list(self.models),
-            "variants": list(self.variants),
-            "skipped": list(self.skipped),
-            "total_summary": self.total_summary(),
-            "summary": [asdict(s) for s in self.summary],
-            "totals": [t.to_dict() for t in self.totals],
-            "runs": [asdict(r) for r in self.runs],
-        }))
+            "section_s": self.section_s, "models": list(self.models), "variants": list(self.variants),
+            "skipped": list(self.skipped), **common}))
 
-    def write_json(self, path: str | os.PathLike[str]) -> Path:
-        """Write :meth:`to_dict` as JSON, atomically (:func:`terrawatt_base.formats.write_result_json`)."""
-        return write_result_json(path, self.to_dict())
-
-    def to_markdown(self) -> str:
-        """Markdown tables: what the battery pays (both sides through the pack, total charge and its
-        interval's coverage) first, then per side: per variant, ground and model."""
-        def f(x: float, nd: int = 1) -> str:
-            return "–" if not math.isfinite(x) else f"{x:.{nd}f}"
-
+    def summary(self) -> str:
+        """Markdown tables: what the battery pays (both sides through the pack, total charge and its interval's
+        coverage) first, then per side: per variant (or schedule), ground and model."""
         lines = []
         if self.totals:
             lines += [TOTALS_HEADING, "", totals_markdown(self.total_summary()), "Per side (charge of each motor channel):",
                       ""]
-        lines += [
-            f"| variant | ground | model | runs | whole-run median % | whole-run p90 % | "
-            f"{self.section_s:g} s sections median % | sections p90 % | RMSE median A |",
-            "|---|---|---|---:|---:|---:|---:|---:|---:|",
-        ]
-        for s in self.summary:
-            lines.append(
-                f"| {s.variant} | {s.ground} | {s.model} | {s.n_runs} | {f(s.whole_run_median_pct)} | "
-                f"{f(s.whole_run_p90_pct)} | {f(s.section_median_pct)} | {f(s.section_p90_pct)} | {f(s.rmse_median_a, 2)} |"
-            )
+        lines += _score_table(self.rows, self.section_s) if self.protocol == "loo" else adapt_table(self.rows)
         if self.skipped:
             lines.append("")
             lines.extend(f"Skipped: {s}" for s in self.skipped)
         return "\n".join(lines) + "\n"
 
-    def write_markdown(self, path: str | os.PathLike[str]) -> Path:
-        """Write :meth:`to_markdown`, atomically."""
-        return write_text_atomic(path, self.to_markdown())
+    def written_line(self, written: Sequence[Path], *, workers: str = "1 worker (serial)") -> str:
+        """Runs, models, time and ``workers`` (where the folds ran), and the files :meth:`write` wrote (``written``)."""
+        names = [str(p) for p in written]
+        files = ", ".join(names) if self.protocol != "loo" or len(names) < 2 else (
+            ", ".join(names[:-1]) + " and " + names[-1])
+        return (f"{len(self.logs)} runs, {len(self.kinds)} models, {self.duration_s:.1f} s on {workers}; "
+                f"wrote {files}")
 
-    def write(self, out_dir: str | os.PathLike[str]) -> tuple[Path, Path]:
-        """Write ``evaluation.json`` and ``evaluation.md`` into ``out_dir`` (created if missing).
+    def write(self, out_dir: str | os.PathLike[str], *, on_figure_error: str = "warn") -> list[Path]:
+        """Write the JSON and markdown of :func:`evaluation_files` into ``out_dir`` (created if missing), the
+        logs' vibration spectra (:data:`SPECTRA_FILE`; leaving one run out, with the header's logs) and
+        the reliability figure (:data:`RELIABILITY_FILE`, :meth:`plot`); return the files written.
+
+        A figure that fails warns (:class:`~terrawatt_base.errors.FigureWarning`) and is left out,
+        unless ``on_figure_error="raise"``.
 
         Raises
         ------
         InvalidParameterError
             See :func:`check_evaluation_dir`.
         """
-        folder = check_evaluation_dir(out_dir)
+        check_choice("on_figure_error", on_figure_error, ("warn", "raise"))
+        folder = check_evaluation_dir(out_dir, self.protocol)
         folder.mkdir(parents=True, exist_ok=True)
-        json_name, md_name = EVALUATION_FILES
-        return self.write_json(folder / json_name), self.write_markdown(folder / md_name)
+        json_name, md_name = EVALUATION_FILES if self.protocol == "loo" else ADAPT_FILES
+        written = [write_result_json(folder / json_name, self.to_dict()),
+                   write_text_atomic(folder / md_name, self.summary())]
+        figures = [(folder / RELIABILITY_FILE, lambda p: save_figure(self.plot().figure, p))]
+        if self.protocol == "loo" and self.logs:
+            figures.insert(0, (folder / SPECTRA_FILE, lambda p: plot_vibration_spectra(list(self.logs), p)))
+        for png, draw in figures:
+            done = draw_figure(png, lambda png=png, draw=draw: draw(png), on_error=on_figure_error)
+            if done is not None:
+                written.append(done)
+        return written
 
+
+def _score_table(rows: Sequence[ScoreSummary], section_s: float) -> list[str]:
+    """The lines of the per-side markdown table of leave-one-run-out rows."""
+    lines = [
+        f"| variant | ground | model | runs | whole-run median % | whole-run p90 % | "
+        f"{section_s:g} s sections median % | sections p90 % | RMSE median A |",
+        "|---|---|---|---:|---:|---:|---:|---:|---:|",
+    ]
+    for s in rows:
+        lines.append(
+            f"| {s.variant} | {s.ground} | {s.model} | {s.n_runs} | {_f(s.whole_run_median_pct)} | "
+            f"{_f(s.whole_run_p90_pct)} | {_f(s.section_median_pct)} | {_f(s.section_p90_pct)} | {_f(s.rmse_median_a, 2)} |"
+        )
+    return lines
+
+
+def _f(x: float, nd: int = 1) -> str:
+    return "–" if not math.isfinite(x) else f"{x:.{nd}f}"
 
 
 def summarise_scores(scores: list[RunScore], variants: tuple[str, ...], grounds: list[str],
@@ -244,16 +322,30 @@ def summarise_scores(scores: list[RunScore], variants: tuple[str, ...], grounds:
     return tuple(summary)
 
 
-def check_evaluation_dir(out_dir: str | os.PathLike[str], name: str = "out_dir") -> Path:
+def evaluation_files(protocol: str = "loo") -> tuple[str, ...]:
+    """The files :meth:`EvaluationResult.write` writes for ``protocol`` (the figures last).
+
+    Examples
+    --------
+    >>> evaluation_files("loo"), evaluation_files("adapt")
+    (('evaluation.json', 'evaluation.md', 'spectra.png', 'reliability.png'), ('adapt.json', 'adapt.md', 'reliability.png'))
+    """
+    check_choice("protocol", protocol, EVALUATION_PROTOCOLS)
+    return (*EVALUATION_FILES, SPECTRA_FILE, RELIABILITY_FILE) if protocol == "loo" else (*ADAPT_FILES, RELIABILITY_FILE)
+
+
+def check_evaluation_dir(out_dir: str | os.PathLike[str], protocol: str = "loo", name: str = "out_dir") -> Path:
     """Check, before any work, that :meth:`EvaluationResult.write` can write into ``out_dir``.
 
     Raises
     ------
     InvalidParameterError
-        ``out_dir`` is a file, lies under a file, or one of :data:`EVALUATION_FILES` in it is
+        ``out_dir`` is a file, lies under a file, or one of :func:`evaluation_files` in it is
         a directory.
+    UnknownNameError
+        An unknown protocol.
     """
     folder = check_output_path(out_dir, name, directory=True)
-    for file in EVALUATION_FILES:
+    for file in evaluation_files(protocol):
         check_output_path(folder / file, name)
     return folder

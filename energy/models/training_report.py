@@ -19,7 +19,7 @@ from .base import CurrentModel, check_logs
 from .calibration import DEFAULT_INTERVAL_FOLDS, fit_interval
 from .kinds import CURRENT_MODEL_KINDS, LEARNED_KINDS, new_current_model
 
-__all__ = ["check_learned_band", "check_training_options", "TrainingReport", "train_report"]
+__all__ = ["ModelOptions", "check_learned_band", "check_training_options", "TrainingReport", "train_report"]
 
 
 
@@ -58,6 +58,67 @@ def check_learned_band(band_hz: Sequence[float] | None, kinds: Sequence[str], *,
         raise InvalidParameterError(f"{name} applies to the estimator and paper models only, got {kinds_name} "
                                     f"{' '.join(kinds)}", parameter=(name, kinds_name))
     return band
+
+
+@dataclass(frozen=True)
+class ModelOptions:
+    """How a new current model of a kind is made (:func:`~energy.models.new_current_model`): one checked value.
+
+    Parameters
+    ----------
+    seed : int or None
+        Seed of the learned kinds.
+    band_hz : pair of float, optional
+        The learned kinds' vibration band (Hz, :func:`energy.features.check_band_hz`).
+    robot : str, path or RobotParams, optional
+        The physics kind's robot (:func:`energy.params.robot_params`; default husky).
+
+    Raises
+    ------
+    InvalidParameterError
+        A bad seed or band (the error names it: :attr:`~terrawatt_base.errors.TerrawattError.parameter`).
+    UnknownNameError, FileFormatError
+        A robot that is no preset nor robot file, or a robot file that does not read.
+
+    Examples
+    --------
+    >>> ModelOptions(band_hz=[0, 25]).band_hz
+    (0.0, 25.0)
+    """
+
+    seed: int | None = 0
+    band_hz: tuple[float, float] | None = None
+    robot: Any = None
+
+    def __post_init__(self) -> None:
+        try:
+            object.__setattr__(self, "seed", check_seed(self.seed))
+        except InvalidParameterError as exc:
+            raise InvalidParameterError(str(exc), parameter="seed") from None
+        if self.band_hz is not None:
+            object.__setattr__(self, "band_hz", check_band_hz(self.band_hz, "band_hz"))
+        if self.robot is not None:
+            robot_params(self.robot)
+
+    def check_kinds(self, kinds: Sequence[str], *, kinds_name: str = "kinds") -> None:
+        """Check that the options apply to ``kinds``: a band needs a learned kind, a robot the physics kind.
+
+        Raises
+        ------
+        InvalidParameterError
+            A band while none of ``kinds`` is learned, a robot while none is physics (the error names both
+            parameters, ``kinds_name`` for the kinds).
+        """
+        check_learned_band(self.band_hz, kinds, kinds_name=kinds_name)
+        if self.robot is not None and "physics" not in kinds:
+            raise InvalidParameterError(f"`robot` is the physics model's robot; `{kinds_name}` {' '.join(kinds)} has no "
+                                        "physics", parameter=("robot", kinds_name))
+
+    def new_model(self, kind: str, *, progress: bool = False, n_threads: int | None = None) -> CurrentModel:
+        """A new unfitted model of ``kind`` with these options: the band for a learned kind, the robot for physics."""
+        return new_current_model(kind, seed=self.seed, progress=progress, n_threads=n_threads,
+                                 band_hz=self.band_hz if kind in LEARNED_KINDS else None,
+                                 robot=self.robot if kind == "physics" else None)
 
 
 def check_training_options(kind: str, *, n_threads: int | None = None, interval_folds: int = DEFAULT_INTERVAL_FOLDS,
