@@ -31,14 +31,19 @@ from .adapt_results import (
 )
 from .evaluation_report import check_adapt_options, check_evaluation_options, evaluate_kinds
 from .few_shot import evaluate_few_shot, few_shot_scores
-from .prediction_report import FIGURES_FOLDER, PREDICTIONS_FILE, PredictionReport, predict_report
+from .prediction_report import predict_logs
 from .results import (
     EVALUATION_FILES,
     EVALUATION_FORMAT_VERSION,
     EVALUATION_PROTOCOLS,
     EVALUATION_VARIANTS,
+    FIGURES_FOLDER,
+    PREDICTIONS_FILE,
+    PREDICTIONS_FORMAT_VERSION,
+    PREFIT_PROTOCOL,
     PREFIT_VARIANT,
     RELIABILITY_FILE,
+    RESULT_PROTOCOLS,
     SCORE_VARIANTS,
     SIDES,
     SPECTRA_FILE,
@@ -88,10 +93,12 @@ __all__ = [
     "evaluate_adaptation",
     "few_shot_scores",
     "evaluate_few_shot",
+    "PREFIT_PROTOCOL",
+    "RESULT_PROTOCOLS",
     "PREDICTIONS_FILE",
+    "PREDICTIONS_FORMAT_VERSION",
     "FIGURES_FOLDER",
-    "PredictionReport",
-    "predict_report",
+    "predict_logs",
     "RunTotal",
     "ScoredRun",
     "VARIANTS",

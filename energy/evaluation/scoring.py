@@ -43,6 +43,7 @@ from ..params import robot_params
 from ..robot import RobotParams
 from .results import (
     EVALUATION_VARIANTS,
+    PREFIT_PROTOCOL,
     PREFIT_VARIANT,
     SIDES,
     EvaluationResult,
@@ -154,7 +155,8 @@ def score_current_model(
 
     Each run is scored as it is (not trimmed): one :class:`RunScore` per run and side, of
     variant ``"prefit"`` with a NaN ``fit_duration_s``, and their summaries per ground and
-    over all grounds. Runs are named as in :func:`run_names`.
+    over all grounds. Runs are named as in :func:`run_names`. The result's protocol is
+    ``"prefit"``, its label ``name``.
 
     Parameters
     ----------
@@ -194,8 +196,8 @@ def score_current_model(
     grounds = list(dict.fromkeys(str(log.meta.ground_label) for log in items))
     variants = (PREFIT_VARIANT,)
     summary = summarise_scores(scores, variants, grounds, (name,))
-    return EvaluationResult(tuple(scores), summary, totals=tuple(totals), models=(name,), variants=variants,
-                            section_s=float(section_s))
+    return EvaluationResult(tuple(scores), summary, protocol=PREFIT_PROTOCOL, totals=tuple(totals), models=(name,),
+                            variants=variants, section_s=float(section_s), logs=tuple(items), label=name, model=model)
 
 
 def check_runs(logs: Any, *, labelled: bool = False, what: str = "the evaluation") -> list[InteractionLog]:

@@ -167,7 +167,7 @@ def test_a_prefit_model_is_scored_like_a_fold(logs, result):
 
     model = LinearCurrentModel().fit(logs[1:3])
     scored = score_current_model(model, [logs[0]], name="linear", section_s=result.section_s)
-    assert isinstance(scored, EvaluationResult) and scored.variants == ("prefit",)
+    assert isinstance(scored, EvaluationResult) and scored.variants == ("prefit",) and scored.protocol == "prefit"
     fold = {r.side: r for r in result.runs if (r.variant, r.model, r.run) == ("per_ground", "linear", "grass/pro_00")}
     for row in scored.runs:  # the same fit scored by the one scoring function
         expected = fold[row.side]
@@ -176,7 +176,8 @@ def test_a_prefit_model_is_scored_like_a_fold(logs, result):
         assert row.whole_run_error_pct == pytest.approx(expected.whole_run_error_pct)
         assert np.isnan(row.fit_duration_s)
     assert scored.row_for("all", "linear").n_values == 2
-    assert "| prefit | grass | linear |" in scored.summary()
+    assert scored.summary().splitlines()[1].split()[:2] == ["grass/pro_00", "left"]  # the scores per run and side
+    assert scored.to_dict()["model"] == "linear" and scored.to_dict()["variants"] == ["prefit"]
     with pytest.raises(InvalidParameterError, match="section_s"):
         score_current_model(model, logs, section_s="long")
     with pytest.raises(InvalidParameterError, match="CurrentModel"):
