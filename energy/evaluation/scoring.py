@@ -300,7 +300,7 @@ def evaluate_current_models(
         ``distributed`` extra; every worker must be able to import terrawatt). An
         exception raised in a task is raised here, and the remaining tasks are cancelled.
     out_dir : str or os.PathLike, optional
-        Folder to write ``evaluation.json`` and ``evaluation.md`` into
+        Folder to write ``evaluation.json``, ``evaluation.md`` and the reliability figure into
         (:meth:`EvaluationResult.write`); checked before any model is fitted.
 
     Returns
