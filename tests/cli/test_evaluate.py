@@ -84,6 +84,10 @@ def test_evaluate_on_two_local_workers_gives_the_serial_scores(tmp_path, capsys,
         (["--workers", "2", "--scheduler", "tcp://127.0.0.1:8786"],
          "--workers 2 and --scheduler 'tcp://127.0.0.1:8786' exclude each other"),
         (["--workers", "0"], "--workers must be a positive number of processes, got 0"),
+        # the library names its parameters, the command line says them by its flags
+        (["--robot", "jackal"], "--robot applies to the physics model only, got --model constant"),
+        (["--band", "1", "20"], "--band applies to the estimator and paper models only, got --model constant"),
+        (["--seed", "-1"], "--seed must be None or an integer in [0, 2**32), got -1"),
     ],
 )
 def test_evaluate_refuses_bad_worker_options(tmp_path, capsys, extra, message):

@@ -96,7 +96,7 @@ def test_the_default_kinds_follow_the_protocol_and_a_kind_named_twice_counts_onc
         (lambda: evaluate_kinds(adapt_logs(), ["linear"], protocol="adapt", settings=check_adapt_options(
             adapt_seconds=[100.0])), InvalidParameterError, "adapt_seconds 100: no run lasts", "adapt_seconds"),
         (lambda: check_evaluation_options(["linear"], options=ModelOptions(robot="jackal")),
-         InvalidParameterError, "`robot` is the physics model's robot; `kinds` linear has no physics", ("robot", "kinds")),
+         InvalidParameterError, "robot applies to the physics model only, got kinds linear", ("robot", "kinds")),
         (lambda: ModelOptions(robot="rover"), UnknownNameError, "robot 'rover' is neither a robot preset", "robot"),
     ],
 )
