@@ -228,6 +228,9 @@ class EvaluationResult:
         if not all(isinstance(r, kind) for r in self.runs):
             raise InvalidParameterError(f"EvaluationResult.runs of protocol {self.protocol!r} must be "
                                         f"{kind.__name__}s", parameter="runs")
+        if self.predictions and (self.protocol != PREFIT_PROTOCOL or self.runs):
+            raise InvalidParameterError("EvaluationResult.predictions are the answer of protocol 'prefit' on logs "
+                                        "without currents: no runs scored beside them", parameter="predictions")
 
     @property
     def scored(self) -> bool:

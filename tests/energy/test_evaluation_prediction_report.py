@@ -48,6 +48,8 @@ def test_logs_without_currents_are_predicted_only(fitted, tmp_path):
     model, logs = fitted
     report = predict_logs(model, [logs[0], _no_currents(logs[1])], label="m.zip")
     assert not report.scored and len(report.predictions) == 2 and report.runs == ()
+    with pytest.raises(InvalidParameterError, match="predictions are the answer of protocol 'prefit'"):
+        EvaluationResult((), (), predictions=report.predictions)
     lines = report.summary().splitlines()
     assert "pred L mAh" in lines[0] and lines[2].split()[3:5] == ["-", "-"]  # nothing measured on the second
     assert report.to_dict()["scored"] is False
