@@ -37,8 +37,8 @@ import numpy as np
 import energy.models.estimator as estimator_module
 from energy import VibrationCurrentEstimator, evaluate_few_shot, read_borealtc
 from energy.evaluation import (
-    AdaptationResult,
     AdaptSettings,
+    EvaluationResult,
     adaptation_scores,
     run_names,
     summarise_adapt_scores,
@@ -133,7 +133,7 @@ def _adapt_fold(proto: VibrationCurrentEstimator, train: list, test: Any, run: s
     return rows, notes
 
 
-def adapt(logs: list, *, workers: int, seed: int) -> tuple[AdaptationResult, AdaptationResult]:
+def adapt(logs: list, *, workers: int, seed: int) -> tuple[EvaluationResult, EvaluationResult]:
     """The adapt protocol per update method, and the few-shot table (default method)."""
     names = run_names(logs)
     settings = [(m, AdaptSettings(method=m)) for m in ADAPT_METHODS]
@@ -146,16 +146,17 @@ def adapt(logs: list, *, workers: int, seed: int) -> tuple[AdaptationResult, Ada
         for rows, notes in run_tasks(tasks, client=client, progress=True, description="adapt folds"):
             scores += rows
             skipped += notes
-        per_ground = AdaptationResult(tuple(scores), summarise_adapt_scores(scores),
-                                      {"methods": list(ADAPT_METHODS), **settings[0][1].to_dict()}, tuple(skipped))
+        per_ground = EvaluationResult(tuple(scores), summarise_adapt_scores(scores), protocol="adapt",
+                                      settings={"methods": list(ADAPT_METHODS), **settings[0][1].to_dict()},
+                                      skipped=tuple(skipped))
         few = evaluate_few_shot(logs, proto, name="regime", settings=AdaptSettings(trigger=False), client=client,
                                 progress=True)
     return per_ground, few
 
 
-def _target_rows(result: AdaptationResult) -> list[dict[str, Any]]:
+def _target_rows(result: EvaluationResult) -> list[dict[str, Any]]:
     out = []
-    for s in result.summary:
+    for s in result.rows:
         if s.schedule != "20 s" or s.protocol != "per_ground":
             continue
         out.append({
@@ -199,8 +200,8 @@ def main(argv: list[str] | None = None) -> int:
         report["adapt"] = per_ground.to_dict()
         report["few_shot"] = few.to_dict()
         report["targets"] = _target_rows(per_ground)
-        print("\n" + per_ground.to_markdown().split("\n\nSkipped")[0])
-        print("\nfew-shot on a ground left out of training:\n" + few.to_markdown().split("\n\nSkipped")[0])
+        print("\n" + per_ground.summary().split("\n\nSkipped")[0])
+        print("\nfew-shot on a ground left out of training:\n" + few.summary().split("\n\nSkipped")[0])
         print("| ground | method | median % | p90 % | sections % | meets 5/15/8 | beats gain (median and p90) |")
         print("|---|---|---:|---:|---:|---|---|")
         for r in report["targets"]:

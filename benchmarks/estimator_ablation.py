@@ -115,12 +115,12 @@ def main(argv: list[str] | None = None) -> int:
         result = evaluate_current_models(logs, models, variants=["per_ground"], progress=True, client=client)
         elapsed = time.perf_counter() - t0
     print(f"\n{len(logs)} runs, {len(models)} variants, per-ground leave-one-run-out, {elapsed:.0f} s")
-    grounds = sorted({s.ground for s in result.summary if s.ground != "all"}) + ["all"]
+    grounds = sorted({s.ground for s in result.rows if s.ground != "all"}) + ["all"]
     print(f"{'variant':<18} {'ground':<9} {'whole med %':>11} {'p90 %':>7} {'8 s sect %':>10} {'RMSE A':>7}")
     rows = []
     for name in models:
         for g in grounds:
-            s = result.summary_for("per_ground", g, name)
+            s = result.row_for(g, name, variant="per_ground")
             rows.append({"variant": name, "ground": g, "whole_run_median_pct": s.whole_run_median_pct,
                          "whole_run_p90_pct": s.whole_run_p90_pct, "section_median_pct": s.section_median_pct,
                          "rmse_median_a": s.rmse_median_a})

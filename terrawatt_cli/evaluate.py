@@ -1,5 +1,5 @@
-"""``terrawatt evaluate``: leave-one-run-out scores of current models (:class:`energy.EvaluationResult`), or the
-``adapt`` and ``few-shot`` protocols (:class:`energy.evaluation.AdaptationResult`)."""
+"""``terrawatt evaluate``: current models scored on held-out runs by one protocol (:class:`energy.EvaluationResult`):
+leave one run out, or the ``adapt`` and ``few-shot`` protocols."""
 
 from __future__ import annotations
 
@@ -13,10 +13,10 @@ from energy.evaluation import (
     AdaptSettings,
     check_adapt_options,
     check_evaluation_options,
-    evaluate_report,
+    evaluate_kinds,
     evaluation_files,
 )
-from energy.models import ADAPT_METHODS, ADAPT_SHRINKS, CURRENT_MODEL_KINDS
+from energy.models import ADAPT_METHODS, ADAPT_SHRINKS, CURRENT_MODEL_KINDS, ModelOptions
 from terrawatt_base.errors import InvalidParameterError
 
 from .common import (
@@ -30,15 +30,16 @@ from .common import (
 )
 from .data import add_band_option, add_data_options, logs_from_args
 
-__all__ = ["PROTOCOLS", "add_parser", "add_adapt_options", "adapt_settings_from_args", "run_evaluate"]
+__all__ = ["PROTOCOLS", "FLAGS", "add_parser", "add_adapt_options", "adapt_settings_from_args", "run_evaluate"]
 
 #: ``--protocol`` choices: leave one run out (the default), adapt on each held-out run's
 #: first seconds, few shots on a ground left out of training.
 PROTOCOLS = EVALUATION_PROTOCOLS
-#: How the library's messages name the options of :func:`energy.evaluation.evaluate_report`: by their flags.
-_NAMES = {"kinds": "--model", "protocol": "--protocol", "band_hz": "--band", "adapt_seconds": "--adapt-seconds",
+#: The flags of :func:`energy.evaluation.evaluate_kinds`'s parameters (how ``terrawatt`` says its errors).
+FLAGS = {"kinds": "--model", "protocol": "--protocol", "band_hz": "--band", "adapt_seconds": "--adapt-seconds",
           "adapt_method": "--adapt-method", "adapt_threshold_pct": "--adapt-threshold", "adapt_shrink": "--adapt-shrink",
-          "robot": "--robot"}
+          "robot": "--robot", "seed": "--seed"}
+
 
 def add_parser(sub: Any) -> None:
     """The ``evaluate`` subcommand."""
@@ -55,7 +56,7 @@ def add_parser(sub: Any) -> None:
     add_dask_options(evaluate, "the folds")
     add_band_option(evaluate)
     add_adapt_options(evaluate)
-    evaluate.set_defaults(run=run_evaluate)
+    evaluate.set_defaults(run=run_evaluate, flag_names=FLAGS)
 
 
 def add_adapt_options(parser: argparse.ArgumentParser) -> None:
@@ -95,26 +96,26 @@ def adapt_settings_from_args(args: argparse.Namespace) -> AdaptSettings | None:
         args.protocol, adapt_seconds=DEFAULT_ADAPT_SECONDS if args.adapt_seconds is None else args.adapt_seconds,
         adapt_method=args.adapt_method or ADAPT_METHODS[0],
         adapt_threshold_pct=10.0 if args.adapt_threshold is None else args.adapt_threshold,
-        adapt_shrink=ADAPT_SHRINKS[0] if args.adapt_shrink is None else args.adapt_shrink, names=_NAMES)
+        adapt_shrink=ADAPT_SHRINKS[0] if args.adapt_shrink is None else args.adapt_shrink)
 
 
 def run_evaluate(args: argparse.Namespace) -> int:
     """``terrawatt evaluate``: evaluation.json, evaluation.md and spectra.png (a figure that fails is a warning), or
-    adapt.json and adapt.md with ``--protocol adapt`` / ``few-shot`` (:func:`energy.evaluation.evaluate_report`)."""
+    adapt.json and adapt.md with ``--protocol adapt`` / ``few-shot`` (:func:`energy.evaluation.evaluate_kinds`)."""
     check_dask_flags(args)
     settings = adapt_settings_from_args(args)
-    check_evaluation_options(args.models, protocol=args.protocol, band_hz=args.band, robot=args.robot, names=_NAMES)
+    options = ModelOptions(seed=args.seed, band_hz=args.band, robot=args.robot)
+    check_evaluation_options(args.models, protocol=args.protocol, options=options)
     check_outputs(args.out, evaluation_files(args.protocol), input_paths(args))
     with compute_arg(args, progress=True) as compute:  # before reading: a missing extra or scheduler fails fast
         workers = "1 worker (serial)"
         if compute.client is not None:
             workers = f"{len(compute.client.nthreads())} dask workers ({args.scheduler or 'a local cluster'})"
             print(f"evaluating on {workers}", flush=True)
-        report = evaluate_report(logs_from_args(args, require_currents=True), args.models, protocol=args.protocol,
-                                 variants=args.variants, settings=settings, seed=args.seed, band_hz=args.band,
-                                 robot=args.robot, compute=compute, names=_NAMES)
+        result = evaluate_kinds(logs_from_args(args, require_currents=True), args.models, protocol=args.protocol,
+                                variants=args.variants, settings=settings, options=options, compute=compute)
     with warn_figures():
-        written = report.write(args.out)
-    print(report.summary())
-    print(f"\n{report.written_line(written, workers=workers)}")
+        written = result.write(args.out)
+    print(result.summary())
+    print(f"\n{result.written_line(written, workers=workers)}")
     return 0

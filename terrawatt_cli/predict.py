@@ -1,5 +1,6 @@
 """``terrawatt predict``: the scores of a saved current model on logs, or its predictions when some logs have no
-measured currents (:func:`energy.evaluation.predict_report`)."""
+measured currents (:func:`energy.evaluation.predict_logs`: an :class:`energy.EvaluationResult` of protocol
+``"prefit"``)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from energy import load_current_model
-from energy.evaluation import FIGURES_FOLDER, PREDICTIONS_FILE, predict_report
+from energy.evaluation import FIGURES_FOLDER, PREDICTIONS_FILE, predict_logs
 from energy.features import check_model_band
 
 from .common import check_outputs, input_paths, warn_figures
@@ -40,9 +41,9 @@ def run_predict(args: argparse.Namespace) -> int:
     band_hz = band_from_args(args)
     model = load_current_model(args.model)
     check_model_band(model, band_hz, "--band", str(args.model))
-    report = predict_report(model, logs_from_args(args, require_currents=False), label=str(args.model))
-    print(report.summary())
+    result = predict_logs(model, logs_from_args(args, require_currents=False), label=str(args.model))
+    print(result.summary())
     with warn_figures():
-        written = report.write(args.out, figures=args.plots)
-    print(report.written_line(written, figures=args.plots))
+        written = result.write(args.out, figures=args.plots)
+    print(result.written_line(written, figures=args.plots))
     return 0

@@ -6,7 +6,13 @@ import argparse
 from pathlib import Path
 from typing import Any
 
-from energy.models import CURRENT_MODEL_KINDS, DEFAULT_INTERVAL_FOLDS, check_training_options, train_report
+from energy.models import (
+    CURRENT_MODEL_KINDS,
+    DEFAULT_INTERVAL_FOLDS,
+    ModelOptions,
+    check_training_options,
+    train_report,
+)
 
 from .common import add_physics_robot_option, check_output_file, input_paths
 from .data import add_band_option, add_data_options, logs_from_args
@@ -15,7 +21,7 @@ __all__ = ["add_parser", "run_train"]
 
 #: The flags of :func:`energy.models.train_report`'s parameters (how ``terrawatt`` says its errors).
 _FLAGS = {"kind": "--model", "n_threads": "--threads", "interval_folds": "--interval-folds", "band_hz": "--band",
-          "robot": "--robot"}
+          "robot": "--robot", "seed": "--seed"}
 
 
 def add_parser(sub: Any) -> None:
@@ -44,10 +50,11 @@ def run_train(args: argparse.Namespace) -> int:
     flags and the output path are checked before the logs are read, so a bad ``--out`` never costs
     a training. ``--band LO HI`` sets the learned models' vibration band (Hz).
     """
-    options = dict(n_threads=args.threads, interval_folds=args.interval_folds, band_hz=args.band, robot=args.robot)
-    check_training_options(args.model, **options)
+    fit = dict(n_threads=args.threads, interval_folds=args.interval_folds)
+    options = check_training_options(args.model, options=ModelOptions(seed=args.seed, band_hz=args.band,
+                                                                      robot=args.robot), **fit)
     check_output_file(args.out, input_paths(args))
-    report = train_report(args.model, logs_from_args(args, require_currents=True), seed=args.seed,
-                          progress=not args.quiet, **options)
+    report = train_report(args.model, logs_from_args(args, require_currents=True), options=options,
+                          progress=not args.quiet, **fit)
     print(report.summary(report.write(args.out)))
     return 0

@@ -1,13 +1,14 @@
 """Scoring drive-current models on held-out runs: leave-one-run-out folds and their results.
 
-Modules: :mod:`~energy.evaluation.results` (the score records, their summaries and files)
+Modules: :mod:`~energy.evaluation.results` (the score records, their summary rows and the answer of every protocol,
+:class:`EvaluationResult`: its summary, JSON, files and figure)
 and :mod:`~energy.evaluation.scoring` (:func:`score_run`, the one per-run scoring,
 :func:`score_current_model` for a model fitted beforehand, :func:`evaluate_current_models`);
 what the battery pays for a run (both sides through the pack, the interval's coverage) in
 :mod:`~energy.evaluation.run_totals`; the ``adapt`` protocol in :mod:`~energy.evaluation.adapt_protocol` (adapt on a held-out run's
 first seconds, score the rest), :mod:`~energy.evaluation.few_shot` (adapt on a ground left out
-of training) and :mod:`~energy.evaluation.adapt_results`; models of named kinds evaluated by one protocol
-and reported in :mod:`~energy.evaluation.evaluation_report`; folds run here or on a dask cluster
+of training) and :mod:`~energy.evaluation.adapt_results` (their scores and rows); models of named kinds evaluated
+by one protocol in :mod:`~energy.evaluation.evaluation_report` (:func:`evaluate_kinds`); folds run here or on a dask cluster
 (:mod:`terrawatt_base.dask_client`).
 """
 
@@ -24,52 +25,53 @@ from .adapt_results import (
     ADAPT_FORMAT_VERSION,
     ADAPT_PROTOCOLS,
     TRIGGER_SCHEDULE,
-    AdaptationResult,
     AdaptScore,
     AdaptSummary,
-    check_adapt_dir,
     summarise_adapt_scores,
 )
-from .evaluation_report import (
-    EVALUATION_NAMES,
-    EVALUATION_PROTOCOLS,
-    RELIABILITY_FILE,
-    SPECTRA_FILE,
-    EvaluationReport,
-    check_adapt_options,
-    check_evaluation_options,
-    evaluate_report,
-    evaluation_files,
-)
+from .evaluation_report import check_adapt_options, check_evaluation_options, evaluate_kinds
 from .few_shot import evaluate_few_shot, few_shot_scores
-from .prediction_report import FIGURES_FOLDER, PREDICTIONS_FILE, PredictionReport, predict_report
-from .run_totals import VARIANTS, RunTotal, pack_energy_j, run_totals, summarise_totals
+from .prediction_report import predict_logs
 from .results import (
     EVALUATION_FILES,
     EVALUATION_FORMAT_VERSION,
+    EVALUATION_PROTOCOLS,
     EVALUATION_VARIANTS,
+    FIGURES_FOLDER,
+    PREDICTIONS_FILE,
+    PREDICTIONS_FORMAT_VERSION,
+    PREFIT_PROTOCOL,
     PREFIT_VARIANT,
+    RELIABILITY_FILE,
+    RESULT_PROTOCOLS,
     SCORE_VARIANTS,
     SIDES,
+    SPECTRA_FILE,
     EvaluationResult,
     RunScore,
     ScoreSummary,
     check_evaluation_dir,
+    evaluation_files,
     summarise_scores,
 )
+from .run_totals import VARIANTS, RunTotal, ScoredRun, pack_energy_j, run_totals, summarise_totals
 from .scoring import evaluate_current_models, run_names, score_current_model, score_run, trim_to_overlap
 
 __all__ = [
+    "EVALUATION_PROTOCOLS",
     "EVALUATION_VARIANTS",
     "PREFIT_VARIANT",
     "SCORE_VARIANTS",
     "EVALUATION_FORMAT_VERSION",
     "EVALUATION_FILES",
+    "SPECTRA_FILE",
+    "RELIABILITY_FILE",
     "SIDES",
     "RunScore",
     "ScoreSummary",
     "EvaluationResult",
     "summarise_scores",
+    "evaluation_files",
     "check_evaluation_dir",
     "run_names",
     "score_run",
@@ -83,32 +85,27 @@ __all__ = [
     "DEFAULT_ADAPT_SECONDS",
     "AdaptScore",
     "AdaptSummary",
-    "AdaptationResult",
     "AdaptSettings",
     "summarise_adapt_scores",
-    "check_adapt_dir",
     "adaptation_scores",
     "schedule_name",
     "named_models",
     "evaluate_adaptation",
     "few_shot_scores",
     "evaluate_few_shot",
+    "PREFIT_PROTOCOL",
+    "RESULT_PROTOCOLS",
     "PREDICTIONS_FILE",
+    "PREDICTIONS_FORMAT_VERSION",
     "FIGURES_FOLDER",
-    "PredictionReport",
-    "predict_report",
-    "EVALUATION_PROTOCOLS",
-    "EVALUATION_NAMES",
-    "SPECTRA_FILE",
-    "RELIABILITY_FILE",
+    "predict_logs",
     "RunTotal",
+    "ScoredRun",
     "VARIANTS",
     "pack_energy_j",
     "run_totals",
     "summarise_totals",
-    "evaluation_files",
     "check_adapt_options",
     "check_evaluation_options",
-    "EvaluationReport",
-    "evaluate_report",
+    "evaluate_kinds",
 ]

@@ -31,8 +31,9 @@ from ..models.adaptation import ADAPT_METHODS, ADAPT_SHRINKS, AdaptedCurrentMode
 from ..models.base import CurrentModel, log_currents
 from ..params import robot_params
 from ..robot import RobotParams
-from .adapt_results import TRIGGER_SCHEDULE, AdaptationResult, AdaptScore, check_adapt_dir, summarise_adapt_scores
-from .run_totals import RunTotal, run_totals
+from .adapt_results import TRIGGER_SCHEDULE, AdaptScore, summarise_adapt_scores
+from .results import EvaluationResult, check_evaluation_dir
+from .run_totals import RunTotal, ScoredRun, run_totals
 from .scoring import check_runs, run_names, trim_to_overlap
 
 __all__ = [
@@ -258,8 +259,8 @@ def adaptation_scores(
                 "per_ground", ground, run, run, model_name, side, schedule, float(start), remainder_s, n_updates,
                 *e_none[k], *e_adapt[k], *e_gain[k]))
         totals += run_totals(log, {"unadapted": (base_pred, base_fc), "adapted": (adapted, adapted_fc),
-                                   "gain": (gain, None)}, protocol="per_ground", run=run, adapt_run=run,
-                             model=model_name, schedule=schedule, robot=robot, battery=settings.battery, mask=rem)
+                                   "gain": (gain, None)}, ScoredRun("per_ground", run, run, model_name, schedule),
+                             robot=robot, battery=settings.battery, mask=rem)
     return scores, totals, skipped
 
 
@@ -298,7 +299,7 @@ def evaluate_adaptation(
     progress: bool = False,
     client: Any = None,
     out_dir: str | os.PathLike[str] | None = None,
-) -> AdaptationResult:
+) -> EvaluationResult:
     """The ``adapt`` protocol: leave one run out per ground, adapt on each held-out run's first seconds.
 
     Each log is cut to the span of both its streams; for every ground with at least two
@@ -320,11 +321,12 @@ def evaluate_adaptation(
     client : distributed.Client, optional
         Run the folds as tasks on a dask cluster (see :func:`evaluate_current_models`).
     out_dir : path-like, optional
-        Folder to write ``adapt.json`` and ``adapt.md`` into (checked before any work).
+        Folder to write the result's files into (:meth:`EvaluationResult.write`; checked before any work).
 
     Returns
     -------
-    AdaptationResult
+    EvaluationResult
+        Protocol ``"adapt"``.
 
     Raises
     ------
@@ -334,7 +336,7 @@ def evaluate_adaptation(
         A log without a ground label; no ground with two runs.
     """
     if out_dir is not None:
-        check_adapt_dir(out_dir)
+        check_evaluation_dir(out_dir, "adapt")
     settings = AdaptSettings() if settings is None else settings
     if not isinstance(settings, AdaptSettings):
         raise InvalidParameterError(f"settings must be an AdaptSettings, got {settings!r:.80}")
@@ -359,7 +361,7 @@ def evaluate_adaptation(
 
 
 def collect_adaptation(tasks: list[tuple[Any, tuple[Any, ...]]], settings: AdaptSettings, skipped: list[str], *,
-                       client: Any, progress: bool, description: str, out_dir: Any) -> AdaptationResult:
+                       client: Any, progress: bool, description: str, out_dir: Any) -> EvaluationResult:
     """Run fold tasks (each returns ``(scores, totals, notes)``) here or on ``client``; the result,
     written to ``out_dir`` when given."""
     scores: list[AdaptScore] = []
@@ -372,8 +374,9 @@ def collect_adaptation(tasks: list[tuple[Any, tuple[Any, ...]]], settings: Adapt
     if not scores:
         raise DataError(f"no run could be scored at any adapt time ({'; '.join(notes_all[:3]) or 'no runs'}"
                         f"{' ...' if len(notes_all) > 3 else ''})")
-    result = AdaptationResult(tuple(scores), summarise_adapt_scores(scores), settings.to_dict(), tuple(notes_all),
-                              tuple(totals))
+    protocol = {"per_ground": "adapt", "few_shot": "few-shot"}[scores[0].protocol]
+    result = EvaluationResult(tuple(scores), summarise_adapt_scores(scores), protocol=protocol, totals=tuple(totals),
+                              skipped=tuple(notes_all), settings=settings.to_dict())
     if out_dir is not None:
         result.write(out_dir)
     return result

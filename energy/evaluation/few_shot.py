@@ -25,8 +25,9 @@ from ..metrics import compare_currents
 from ..models.adaptation import AdaptedCurrentModel
 from ..models.base import CurrentModel, log_currents
 from .adapt_protocol import AdaptSettings, collect_adaptation, named_models, schedule_name
-from .adapt_results import AdaptationResult, AdaptScore, check_adapt_dir
-from .run_totals import RunTotal, run_totals
+from .adapt_results import AdaptScore
+from .results import EvaluationResult, check_evaluation_dir
+from .run_totals import RunTotal, ScoredRun, run_totals
 from .scoring import check_runs, run_names, trim_to_overlap
 
 __all__ = ["few_shot_scores", "evaluate_few_shot"]
@@ -126,8 +127,8 @@ def few_shot_scores(
                 e_ad = _errs(run_b, fc_ad.mean_a, settings.section_s)
                 e_g = _errs(run_b, pred_g, settings.section_s)
                 totals += run_totals(run_b, {"unadapted": (base[b], base_fc[b]), "adapted": (fc_ad.mean_a, fc_ad),
-                                             "gain": (pred_g, None)}, protocol="few_shot", run=labels[b],
-                                     adapt_run=labels[a], model=model_name, schedule=schedule, robot=robot,
+                                             "gain": (pred_g, None)},
+                                     ScoredRun("few_shot", labels[b], labels[a], model_name, schedule), robot=robot,
                                      battery=settings.battery)
                 for k, side in enumerate(("left", "right")):
                     scores.append(AdaptScore(
@@ -154,7 +155,7 @@ def evaluate_few_shot(
     progress: bool = False,
     client: Any = None,
     out_dir: str | os.PathLike[str] | None = None,
-) -> AdaptationResult:
+) -> EvaluationResult:
     """The cross-ground few-shot table: train on the other grounds, adapt and test on the target.
 
     Parameters
@@ -174,8 +175,8 @@ def evaluate_few_shot(
 
     Returns
     -------
-    AdaptationResult
-        Scores of protocol ``"few_shot"``.
+    EvaluationResult
+        Protocol ``"few-shot"`` (scores of protocol ``"few_shot"``).
 
     Raises
     ------
@@ -185,7 +186,7 @@ def evaluate_few_shot(
         Fewer than two grounds; a target ground that is missing or has fewer than 2 runs.
     """
     if out_dir is not None:
-        check_adapt_dir(out_dir)
+        check_evaluation_dir(out_dir, "few-shot")
     settings = AdaptSettings() if settings is None else settings
     if not isinstance(settings, AdaptSettings):
         raise InvalidParameterError(f"settings must be an AdaptSettings, got {settings!r:.80}")

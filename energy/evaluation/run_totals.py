@@ -40,7 +40,7 @@ from ..models.forecast import CurrentForecast, central_level
 from ..robot import RobotParams
 from .intervals import DEFAULT_LEVELS, IntervalRecord, plot_reliability
 
-__all__ = ["RunTotal", "VARIANTS", "TOTALS_HEADING", "pack_energy_j", "run_totals", "summarise_totals", "totals_markdown",
+__all__ = ["RunTotal", "ScoredRun", "VARIANTS", "TOTALS_HEADING", "pack_energy_j", "run_totals", "summarise_totals", "totals_markdown",
            "plot_totals_reliability"]
 
 #: The forecasts a run is scored with: the model as fitted, adapted, and the gain baseline.
@@ -109,6 +109,34 @@ class RunTotal:
                                "z": self.z}
 
 
+@dataclass(frozen=True)
+class ScoredRun:
+    """Which run a forecast is scored on, and how: the labels every :class:`RunTotal` of one call of
+    :func:`run_totals` shares.
+
+    ``protocol`` (``"loo"``, ``"per_ground"``, ``"few_shot"``), ``run`` the scored run, ``adapt_run``
+    the run adapted on (``run`` itself leaving one run out), ``model`` its name, ``schedule`` the
+    variant leaving one run out or the adapt schedule.
+
+    Raises
+    ------
+    InvalidParameterError
+        A label that is not a non-empty string (the error names it).
+    """
+
+    protocol: str
+    run: str
+    adapt_run: str
+    model: str
+    schedule: str
+
+    def __post_init__(self) -> None:
+        for name in ("protocol", "run", "adapt_run", "model", "schedule"):
+            value = getattr(self, name)
+            if not isinstance(value, str) or not value:
+                raise InvalidParameterError(f"{name} must be a non-empty string, got {value!r:.80}", parameter=name)
+
+
 def pack_energy_j(log: InteractionLog, currents_a: np.ndarray, robot: RobotParams, battery: Battery | None = None,
                   mask: np.ndarray | None = None) -> float:
     """Energy (J) the pack gives while the two drive sides draw ``currents_a`` (N, 2) along ``log``.
@@ -137,13 +165,14 @@ def pack_energy_j(log: InteractionLog, currents_a: np.ndarray, robot: RobotParam
     return float(battery.voltage_v * _trapezoid(battery.current_a(power), t))
 
 
-def run_totals(log: InteractionLog, forecasts: dict[str, tuple[np.ndarray, CurrentForecast | None]], *,
-               protocol: str, run: str, adapt_run: str, model: str, schedule: str, robot: RobotParams,
-               battery: Battery | None = None, mask: np.ndarray | None = None) -> list[RunTotal]:
-    """One :class:`RunTotal` per variant of ``forecasts`` (variant -> (mean currents (N, 2), forecast or None)).
+def run_totals(log: InteractionLog, forecasts: dict[str, tuple[np.ndarray, CurrentForecast | None]],
+               scored: ScoredRun, *, robot: RobotParams, battery: Battery | None = None,
+               mask: np.ndarray | None = None) -> list[RunTotal]:
+    """One :class:`RunTotal` per variant of ``forecasts`` (variant -> (mean currents (N, 2), forecast or None)),
+    labelled by ``scored``.
 
     The forecast gives the charge's standard deviation over ``mask``; None or one without an
-    interval gives NaN.
+    interval gives NaN. The pack energy is booked through ``battery`` (:func:`pack_energy_j`).
     """
     sel = np.ones(len(log), dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
     truth = log_currents(log)
@@ -157,7 +186,8 @@ def run_totals(log: InteractionLog, forecasts: dict[str, tuple[np.ndarray, Curre
         if fc is not None and fc.has_interval:
             charge = fc.charge(sel)
             sd, dof = float(charge.total_sd_as), charge.dof
-        out.append(RunTotal(protocol, str(log.meta.ground_label), run, adapt_run, model, schedule, variant,
+        out.append(RunTotal(scored.protocol, str(log.meta.ground_label), scored.run, scored.adapt_run, scored.model,
+                            scored.schedule, variant,
                             true_j, pack_energy_j(log, mean_a, robot, battery, sel), true_as, mean_as, sd, dof))
     return out
 

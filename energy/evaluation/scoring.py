@@ -15,6 +15,7 @@ runs) both use it, and both return an :class:`EvaluationResult`.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 import time
@@ -40,9 +41,9 @@ from ..metrics import DEFAULT_SECTION_S, compare_currents
 from ..models.base import CurrentModel, log_currents
 from ..params import robot_params
 from ..robot import RobotParams
-from .run_totals import RunTotal, run_totals
 from .results import (
     EVALUATION_VARIANTS,
+    PREFIT_PROTOCOL,
     PREFIT_VARIANT,
     SIDES,
     EvaluationResult,
@@ -50,6 +51,7 @@ from .results import (
     check_evaluation_dir,
     summarise_scores,
 )
+from .run_totals import RunTotal, ScoredRun, run_totals
 
 __all__ = ["check_runs", "run_names", "trim_to_overlap", "score_run", "score_current_model", "evaluate_current_models"]
 
@@ -85,7 +87,6 @@ def score_run(
     run: str,
     model_name: str,
     section_s: float = DEFAULT_SECTION_S,
-    fit_duration_s: float = math.nan,
     robot: str | RobotParams = "husky",
     battery: Battery | None = None,
 ) -> tuple[list[RunScore], list[RunTotal]]:
@@ -96,7 +97,7 @@ def score_run(
     per side; and what the battery pays (:class:`~energy.evaluation.RunTotal`, protocol
     ``"loo"``, schedule ``variant``): the pack energy of both sides through ``battery``
     (default the ``robot``'s nominal voltage, ideal) and the total charge with the model's
-    interval.
+    interval. The rows' ``fit_duration_s`` is NaN: the caller that fitted the model knows how long it took.
 
     Raises
     ------
@@ -116,10 +117,10 @@ def score_run(
             variant=variant, ground=str(log.meta.ground_label), run=run, model=model_name, side=side,
             duration_s=log.duration_s, charge_true_mah=e.charge_true_mah,
             charge_predicted_mah=e.charge_predicted_mah, whole_run_error_pct=e.whole_run_error_pct,
-            section_error_pct=e.section_error_pct, rmse_a=e.rmse_a, fit_duration_s=fit_duration_s,
+            section_error_pct=e.section_error_pct, rmse_a=e.rmse_a, fit_duration_s=math.nan,
         ))
-    totals = run_totals(log, {"unadapted": (pred, fc)}, protocol="loo", run=run, adapt_run=run, model=model_name,
-                        schedule=variant, robot=robot_params(robot), battery=battery)
+    totals = run_totals(log, {"unadapted": (pred, fc)}, ScoredRun("loo", run, run, model_name, variant),
+                        robot=robot_params(robot), battery=battery)
     return rows, totals
 
 
@@ -139,8 +140,8 @@ def _score_fold(
     t0 = time.perf_counter()
     model = proto.clone().fit(train_logs)
     fit_s = time.perf_counter() - t0
-    return score_run(model, log, variant=variant, run=run, model_name=model_name, section_s=section_s,
-                     fit_duration_s=fit_s)
+    rows, totals = score_run(model, log, variant=variant, run=run, model_name=model_name, section_s=section_s)
+    return [dataclasses.replace(row, fit_duration_s=fit_s) for row in rows], totals
 
 
 def score_current_model(
@@ -154,7 +155,8 @@ def score_current_model(
 
     Each run is scored as it is (not trimmed): one :class:`RunScore` per run and side, of
     variant ``"prefit"`` with a NaN ``fit_duration_s``, and their summaries per ground and
-    over all grounds. Runs are named as in :func:`run_names`.
+    over all grounds. Runs are named as in :func:`run_names`. The result's protocol is
+    ``"prefit"``, its label ``name``.
 
     Parameters
     ----------
@@ -194,7 +196,8 @@ def score_current_model(
     grounds = list(dict.fromkeys(str(log.meta.ground_label) for log in items))
     variants = (PREFIT_VARIANT,)
     summary = summarise_scores(scores, variants, grounds, (name,))
-    return EvaluationResult(tuple(scores), summary, (name,), variants, float(section_s), totals=tuple(totals))
+    return EvaluationResult(tuple(scores), summary, protocol=PREFIT_PROTOCOL, totals=tuple(totals), models=(name,),
+                            variants=variants, section_s=float(section_s), logs=tuple(items), label=name, model=model)
 
 
 def check_runs(logs: Any, *, labelled: bool = False, what: str = "the evaluation") -> list[InteractionLog]:
@@ -297,7 +300,7 @@ def evaluate_current_models(
         ``distributed`` extra; every worker must be able to import terrawatt). An
         exception raised in a task is raised here, and the remaining tasks are cancelled.
     out_dir : str or os.PathLike, optional
-        Folder to write ``evaluation.json`` and ``evaluation.md`` into
+        Folder to write ``evaluation.json``, ``evaluation.md`` and the reliability figure into
         (:meth:`EvaluationResult.write`); checked before any model is fitted.
 
     Returns
@@ -340,7 +343,7 @@ def evaluate_current_models(
 
         from energy import LinearCurrentModel, read_borealtc
         res = evaluate_current_models(read_borealtc("borealtc"), {"linear": LinearCurrentModel()})
-        print(res.to_markdown())
+        print(res.summary())
 
     The same folds on a local dask cluster of two worker processes::
 
@@ -395,8 +398,8 @@ def evaluate_current_models(
                 scores += rows
                 totals += run_rows
     summary = summarise_scores(scores, chosen, grounds, tuple(models))
-    result = EvaluationResult(tuple(scores), summary, tuple(models), chosen, float(section_s), tuple(skipped),
-                              tuple(totals))
+    result = EvaluationResult(tuple(scores), summary, totals=tuple(totals), skipped=tuple(skipped),
+                              models=tuple(models), variants=chosen, section_s=float(section_s))
     if out_dir is not None:
         result.write(out_dir)
     return result

@@ -50,6 +50,7 @@ from .forecast import ChargeForecast, CurrentForecast
 from .kinds import CURRENT_MODEL_KINDS, LEARNED_KINDS, new_current_model
 from .loading import MODEL_CLASSES, load_current_model, model_class
 from .training_report import (
+    ModelOptions,
     TrainingReport,
     check_learned_band,
     check_training_options,
@@ -109,6 +110,7 @@ __all__ = [
     "CURRENT_MODEL_KINDS",
     "new_current_model",
     "LEARNED_KINDS",
+    "ModelOptions",
     "check_learned_band",
     "check_training_options",
     "TrainingReport",

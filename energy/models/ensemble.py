@@ -111,13 +111,24 @@ def _member_losses(out: torch.Tensor, y: torch.Tensor, loss: str, weight: torch.
     return (per.mean(dim=2) * weight).sum(dim=1) / weight.sum(dim=1).clamp(min=1.0)
 
 
-def _mask_weights(masks: np.ndarray | None, members: int, windows: int, name: str) -> torch.Tensor | None:
-    if masks is None:
+def _check_run_folds(run_folds: np.ndarray | None, datasets: Sequence[WindowDataset | None]) -> np.ndarray | None:
+    """``run_folds`` as a 1-D array of ints >= 0 with one entry per run of the datasets' run indices, or None."""
+    if run_folds is None:
         return None
-    arr = np.asarray(masks)
-    if arr.dtype != bool or arr.shape != (members, windows):
-        raise InvalidParameterError(f"{name} must be a bool array of shape {(members, windows)!r}, got {arr.dtype} {arr.shape!r}")
-    return torch.as_tensor(arr, dtype=torch.float32)
+    arr = np.asarray(run_folds)
+    runs = max((int(d.run_index.max()) + 1 for d in datasets if d is not None and len(d) > 0), default=0)
+    if arr.ndim != 1 or arr.dtype.kind not in "iu" or arr.size < runs or (arr.size and arr.min() < 0):
+        raise InvalidParameterError(f"run_folds must be one fold index >= 0 per run ({runs} runs), got "
+                                    f"{arr.dtype} {arr.shape!r}", parameter="run_folds")
+    return arr
+
+
+def _fold_weights(run_folds: np.ndarray | None, members: int, data: WindowDataset | None) -> torch.Tensor | None:
+    """(members, windows): 1 where the member may learn from the window (its run is not in the member's fold)."""
+    if run_folds is None or data is None:
+        return None
+    run_fold = run_folds[data.run_index.numpy()]
+    return torch.as_tensor(run_fold[None, :] != np.arange(members)[:, None], dtype=torch.float32)
 
 
 def train_ensemble(
@@ -128,14 +139,13 @@ def train_ensemble(
     seeds: Sequence[int],
     progress: bool = False,
     description: str = "training",
-    train_masks: np.ndarray | None = None,
-    validation_masks: np.ndarray | None = None,
+    run_folds: np.ndarray | None = None,
 ) -> list[TrainingHistory]:
     """Train several CurrentNets of one configuration together; each ends as ``train_network`` would train it.
 
-    With ``train_masks`` each member learns only from its own windows (a cross-validation
-    ensemble: the windows a member never saw give out-of-fold predictions); without them,
-    every member sees every window.
+    With ``run_folds`` each member learns only from the runs not in its fold (a cross-validation
+    ensemble: the runs a member never saw give out-of-fold predictions), and is validated on the
+    same; without them, every member sees every window.
 
     Parameters
     ----------
@@ -145,9 +155,10 @@ def train_ensemble(
         As :func:`~energy.models.training.train_network`.
     seeds : sequence of int
         One shuffling seed per member.
-    train_masks, validation_masks : ndarray of bool, shape (members, windows), optional
-        Which training / validation windows each member may use (every member at least one
-        training window); ``None``: all.
+    run_folds : ndarray of int, shape (runs,), optional
+        The fold of each run of the datasets' run table (:attr:`WindowDataset.run_index
+        <energy.models.data.WindowDataset.run_index>` indexes it): member ``m`` never sees the runs of
+        fold ``m`` (every member keeps at least one training window); ``None``: all.
 
     Returns
     -------
@@ -158,7 +169,8 @@ def train_ensemble(
     ------
     InvalidParameterError
         No members, members of different shapes, a seed count that differs from the member
-        count, an empty training set, early stopping without validation windows.
+        count, an empty training set, early stopping without validation windows, run folds that
+        are not one int >= 0 per run or leave a member without a training window.
     """
     members = list(nets)
     if not members or not all(isinstance(n, CurrentNet) for n in members):
@@ -176,10 +188,11 @@ def train_ensemble(
     from tqdm.auto import tqdm
 
     m_count = len(members)
-    t_weight = _mask_weights(train_masks, m_count, len(train), "train_masks")
-    v_weight = _mask_weights(validation_masks, m_count, len(validation) if has_val else 0, "validation_masks")
+    folds = _check_run_folds(run_folds, [train, validation if has_val else None])
+    t_weight = _fold_weights(folds, m_count, train)
+    v_weight = _fold_weights(folds, m_count, validation if has_val else None)
     if t_weight is not None and bool((t_weight.sum(dim=1) == 0).any()):
-        raise InvalidParameterError("train_masks leave a member without a training window")
+        raise InvalidParameterError("run_folds leave a member without a training window", parameter="run_folds")
     stack = _Stack(members)
     gens = []
     for s in seeds:

@@ -313,10 +313,8 @@ class VibrationCurrentEstimator(CurrentModel):
                 histories = [train_network(networks[0], train, val, cfg.train_config(), seeds[0], self.progress,
                                            f"{cfg.name} member 1/1")]
             else:  # the members in lockstep, one batched step for all (same weights as one after another)
-                masks = (None, None) if folds is None else (_window_masks(folds, train, cfg.n_members),
-                                                            None if val is None else _window_masks(folds, val, cfg.n_members))
                 histories = train_ensemble(networks, train, val, cfg.train_config(), seeds, self.progress,
-                                           f"{cfg.name} {cfg.n_members} members", *masks)
+                                           f"{cfg.name} {cfg.n_members} members", folds)
             self.networks_ = networks
             self.history_ = tuple(histories)
             self.n_train_windows_ = len(train)
@@ -550,12 +548,6 @@ def _member_folds(n_runs: int, n_members: int) -> np.ndarray | None:
     if n_runs < 2 or n_members < 2:
         return None
     return np.arange(n_runs) % n_members
-
-
-def _window_masks(folds: np.ndarray, data: WindowDataset, n_members: int) -> np.ndarray:
-    """(members, windows): True where the member may learn from the window (its run is not in the member's fold)."""
-    run_fold = folds[data.run_index.numpy()]
-    return run_fold[None, :] != np.arange(n_members)[:, None]
 
 
 def _ground_vibration(logs: list[InteractionLog]) -> dict[str, tuple[np.ndarray, np.ndarray]]:

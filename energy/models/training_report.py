@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from terrawatt_base.checks import check_bool, check_choice, check_int, check_seed
+from terrawatt_base.checks import check_bool, check_choice, check_instance, check_int, check_seed
 from terrawatt_base.errors import InvalidParameterError
 
 from ..features.band import check_band_hz
@@ -19,7 +19,7 @@ from .base import CurrentModel, check_logs
 from .calibration import DEFAULT_INTERVAL_FOLDS, fit_interval
 from .kinds import CURRENT_MODEL_KINDS, LEARNED_KINDS, new_current_model
 
-__all__ = ["check_learned_band", "check_training_options", "TrainingReport", "train_report"]
+__all__ = ["ModelOptions", "check_learned_band", "check_training_options", "TrainingReport", "train_report"]
 
 
 
@@ -60,9 +60,70 @@ def check_learned_band(band_hz: Sequence[float] | None, kinds: Sequence[str], *,
     return band
 
 
+@dataclass(frozen=True)
+class ModelOptions:
+    """How a new current model of a kind is made (:func:`~energy.models.new_current_model`): one checked value.
+
+    Parameters
+    ----------
+    seed : int or None
+        Seed of the learned kinds.
+    band_hz : pair of float, optional
+        The learned kinds' vibration band (Hz, :func:`energy.features.check_band_hz`).
+    robot : str, path or RobotParams, optional
+        The physics kind's robot (:func:`energy.params.robot_params`; default husky).
+
+    Raises
+    ------
+    InvalidParameterError
+        A bad seed or band (the error names it: :attr:`~terrawatt_base.errors.TerrawattError.parameter`).
+    UnknownNameError, FileFormatError
+        A robot that is no preset nor robot file, or a robot file that does not read.
+
+    Examples
+    --------
+    >>> ModelOptions(band_hz=[0, 25]).band_hz
+    (0.0, 25.0)
+    """
+
+    seed: int | None = 0
+    band_hz: tuple[float, float] | None = None
+    robot: Any = None
+
+    def __post_init__(self) -> None:
+        try:
+            object.__setattr__(self, "seed", check_seed(self.seed))
+        except InvalidParameterError as exc:
+            raise InvalidParameterError(str(exc), parameter="seed") from None
+        if self.band_hz is not None:
+            object.__setattr__(self, "band_hz", check_band_hz(self.band_hz, "band_hz"))
+        if self.robot is not None:
+            robot_params(self.robot)
+
+    def check_kinds(self, kinds: Sequence[str], *, kinds_name: str = "kinds") -> None:
+        """Check that the options apply to ``kinds``: a band needs a learned kind, a robot the physics kind.
+
+        Raises
+        ------
+        InvalidParameterError
+            A band while none of ``kinds`` is learned, a robot while none is physics (the error names both
+            parameters, ``kinds_name`` for the kinds).
+        """
+        check_learned_band(self.band_hz, kinds, kinds_name=kinds_name)
+        if self.robot is not None and "physics" not in kinds:
+            raise InvalidParameterError(f"robot applies to the physics model only, got {kinds_name} {' '.join(kinds)}",
+                                        parameter=("robot", kinds_name))
+
+    def new_model(self, kind: str, *, progress: bool = False, n_threads: int | None = None) -> CurrentModel:
+        """A new unfitted model of ``kind`` with these options: the band for a learned kind, the robot for physics."""
+        return new_current_model(kind, seed=self.seed, progress=progress, n_threads=n_threads,
+                                 band_hz=self.band_hz if kind in LEARNED_KINDS else None,
+                                 robot=self.robot if kind == "physics" else None)
+
+
 def check_training_options(kind: str, *, n_threads: int | None = None, interval_folds: int = DEFAULT_INTERVAL_FOLDS,
-                           band_hz: Sequence[float] | None = None, robot: Any = None) -> tuple[float, float] | None:
-    """Check the options of :func:`train_report` before any work; return the checked band (or None).
+                           options: ModelOptions | None = None) -> ModelOptions:
+    """Check the options of :func:`train_report` before any work; return the model options (default ``ModelOptions()``).
 
     The errors name the options they are about (:attr:`~terrawatt_base.errors.TerrawattError.parameter`:
     a front end says them in its own words, e.g. the command line by its flags).
@@ -75,25 +136,20 @@ def check_training_options(kind: str, *, n_threads: int | None = None, interval_
         Torch threads while training: learned kinds only, >= 1.
     interval_folds : int
         0 (no interval) or >= 2.
-    band_hz : pair of float, optional
-        The learned kinds' vibration band (Hz).
-    robot : str, path or RobotParams, optional
-        The physics kind's robot (:func:`energy.params.robot_params`; default husky).
+    options : ModelOptions, optional
+        The seed, the learned kinds' band, the physics kind's robot (:meth:`ModelOptions.check_kinds`).
 
     Returns
     -------
-    (float, float) or None
-        ``band_hz`` checked.
+    ModelOptions
 
     Raises
     ------
     InvalidParameterError
-        Threads not >= 1 or for a baseline; 1 or fewer than 0 interval folds; a bad band or one for a baseline; a
-        robot for another kind than physics.
+        Threads not >= 1 or for a baseline; 1 or fewer than 0 interval folds; a band for a baseline; a robot
+        for another kind than physics; options that are no ModelOptions.
     UnknownNameError
-        ``kind`` is no model kind, ``robot`` no preset nor robot file.
-    FileFormatError
-        A robot file that does not read.
+        ``kind`` is no model kind.
 
     Examples
     --------
@@ -103,6 +159,7 @@ def check_training_options(kind: str, *, n_threads: int | None = None, interval_
     terrawatt_base.errors.InvalidParameterError: n_threads applies to the estimator and paper models only, got kind 'linear'
     """
     check_choice("kind", kind, CURRENT_MODEL_KINDS)
+    options = ModelOptions() if options is None else check_instance("options", options, ModelOptions)
     if n_threads is not None:
         if isinstance(n_threads, bool) or not isinstance(n_threads, int) or n_threads < 1:
             raise InvalidParameterError(f"n_threads must be a positive number of threads, got {n_threads!r}",
@@ -110,16 +167,12 @@ def check_training_options(kind: str, *, n_threads: int | None = None, interval_
         if kind not in LEARNED_KINDS:
             raise InvalidParameterError(f"n_threads applies to the estimator and paper models only, got kind {kind!r}",
                                         parameter=("n_threads", "kind"))
-    if robot is not None:
-        if kind != "physics":
-            raise InvalidParameterError(f"robot applies to the physics model only, got kind {kind!r}",
-                                        parameter=("robot", "kind"))
-        robot_params(robot)
+    options.check_kinds([kind], kinds_name="kind")
     folds = check_int("interval_folds", interval_folds)
     if folds < 0 or folds == 1:
         raise InvalidParameterError(f"interval_folds must be 0 (no interval) or >= 2, got {folds}",
                                     parameter="interval_folds")
-    return check_learned_band(band_hz, [kind])
+    return options
 
 
 @dataclass(frozen=True)
@@ -172,9 +225,9 @@ class TrainingReport:
         return self.model.save(path)
 
 
-def train_report(kind: str, logs: InteractionLog | Sequence[InteractionLog], *, seed: int | None = 0,
-                 progress: bool = False, n_threads: int | None = None, interval_folds: int = DEFAULT_INTERVAL_FOLDS,
-                 band_hz: Sequence[float] | None = None, robot: Any = None) -> TrainingReport:
+def train_report(kind: str, logs: InteractionLog | Sequence[InteractionLog], *, options: ModelOptions | None = None,
+                 progress: bool = False, n_threads: int | None = None,
+                 interval_folds: int = DEFAULT_INTERVAL_FOLDS) -> TrainingReport:
     """A new model of ``kind`` (:func:`~energy.models.new_current_model`) fitted on ``logs``, and reported.
 
     A learned kind (:data:`LEARNED_KINDS`) is fitted as it is: its ensemble gives its own
@@ -187,11 +240,12 @@ def train_report(kind: str, logs: InteractionLog | Sequence[InteractionLog], *, 
         One of :data:`~energy.models.CURRENT_MODEL_KINDS`.
     logs : InteractionLog or sequence of InteractionLog
         Training runs with measured currents.
-    seed : int or None
-        Seed of the learned kinds.
+    options : ModelOptions, optional
+        How the model is made: the seed of the learned kinds, their band, the physics kind's robot
+        (default ``ModelOptions()``: seed 0, the kind's own band, husky).
     progress : bool
         The learned kinds' progress bar with the training loss (the baselines have none).
-    n_threads, interval_folds, band_hz, robot
+    n_threads, interval_folds
         As :func:`check_training_options`.
 
     Returns
@@ -201,7 +255,7 @@ def train_report(kind: str, logs: InteractionLog | Sequence[InteractionLog], *, 
     Raises
     ------
     InvalidParameterError, UnknownNameError
-        As :func:`check_training_options`; no logs, a bad seed.
+        As :func:`check_training_options`; no logs.
     TerrawattError
         As the model's ``fit`` and :func:`~energy.models.fit_interval`.
 
@@ -216,13 +270,11 @@ def train_report(kind: str, logs: InteractionLog | Sequence[InteractionLog], *, 
     >>> report.kind, len(report.logs), report.model.gives_interval
     ('constant', 1, False)
     """
-    band = check_training_options(kind, n_threads=n_threads, interval_folds=interval_folds, band_hz=band_hz,
-                                  robot=robot)
-    seed = check_seed(seed)
+    options = check_training_options(kind, n_threads=n_threads, interval_folds=interval_folds, options=options)
     learned = kind in LEARNED_KINDS
     progress = check_bool("progress", progress) and learned
     items = check_logs(logs)
-    model = new_current_model(kind, seed=seed, progress=progress, n_threads=n_threads, band_hz=band, robot=robot)
+    model = options.new_model(kind, progress=progress, n_threads=n_threads)
     t0 = time.perf_counter()
     if learned or interval_folds == 0 or len(items) < 2:
         model.fit(items)

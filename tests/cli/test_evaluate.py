@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import shutil
 import sys
 
@@ -13,8 +14,8 @@ import pytest
 from cli_samples import FIXTURES, is_png
 
 from terrain import InvalidParameterError, TerrawattWarning
-from terrawatt_cli import main
-from terrawatt_cli.evaluate import PROTOCOLS, adapt_settings_from_args, add_adapt_options
+from terrawatt_cli import error_message, main
+from terrawatt_cli.evaluate import FLAGS, PROTOCOLS, adapt_settings_from_args, add_adapt_options
 
 
 def test_evaluate_writes_json_and_markdown(tmp_path, capsys):
@@ -83,6 +84,10 @@ def test_evaluate_on_two_local_workers_gives_the_serial_scores(tmp_path, capsys,
         (["--workers", "2", "--scheduler", "tcp://127.0.0.1:8786"],
          "--workers 2 and --scheduler 'tcp://127.0.0.1:8786' exclude each other"),
         (["--workers", "0"], "--workers must be a positive number of processes, got 0"),
+        # the library names its parameters, the command line says them by its flags
+        (["--robot", "jackal"], "--robot applies to the physics model only, got --model constant"),
+        (["--band", "1", "20"], "--band applies to the estimator and paper models only, got --model constant"),
+        (["--seed", "-1"], "--seed must be None or an integer in [0, 2**32), got -1"),
     ],
 )
 def test_evaluate_refuses_bad_worker_options(tmp_path, capsys, extra, message):
@@ -104,13 +109,13 @@ def test_evaluate_on_workers_without_distributed_names_the_extra(tmp_path, capsy
 
 
 def test_evaluate_whose_figure_fails_still_succeeds_with_its_results(tmp_path, capsys, monkeypatch):
-    from energy.evaluation import evaluation_report
+    from energy.evaluation import results
     from terrain import InvalidParameterError
 
     def no_spectra(*args, **kwargs):
         raise InvalidParameterError("band (0.5, 50.0) Hz exceeds the Nyquist frequency 25 Hz of a 50 Hz IMU")
 
-    monkeypatch.setattr(evaluation_report, "plot_vibration_spectra", no_spectra)
+    monkeypatch.setattr(results, "plot_vibration_spectra", no_spectra)
     data = tmp_path / "logs"
     shutil.copytree(FIXTURES, data)
     for kind in ("imu", "pro"):
@@ -164,5 +169,6 @@ def test_the_adapt_protocol_triggers_on_its_threshold():
     ],
 )
 def test_bad_adapt_flags_are_refused_naming_the_flag(argv, match):
-    with pytest.raises(InvalidParameterError, match=match):
+    with pytest.raises(InvalidParameterError) as caught:
         adapt_settings_from_args(_parse(*argv))
+    assert re.search(match, error_message(caught.value, FLAGS))  # the library names the parameter, the command its flag

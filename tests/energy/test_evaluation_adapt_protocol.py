@@ -9,8 +9,8 @@ from evaluation_samples import adapt_log, adapt_logs, adapt_settings
 from energy import InteractionLog, LinearCurrentModel
 from energy.evaluation import (
     TRIGGER_SCHEDULE,
-    AdaptationResult,
     AdaptSettings,
+    EvaluationResult,
     adaptation_scores,
     evaluate_adaptation,
     evaluate_few_shot,
@@ -30,24 +30,24 @@ def result(logs):
 
 
 def test_every_run_side_and_schedule_is_scored(result):
-    assert isinstance(result, AdaptationResult)
+    assert isinstance(result, EvaluationResult) and result.protocol == "adapt"
     schedules = {"10 s", "20 s", TRIGGER_SCHEDULE}
     assert {r.schedule for r in result.runs} == schedules
     assert len(result.runs) == 6 * 2 * 3
-    assert {(s.ground, s.schedule) for s in result.summary} == {(g, s) for g in ("grass", "sand", "all") for s in schedules}
-    row = result.summary_for("per_ground", "all", "linear", "20 s")
+    assert {(s.ground, s.schedule) for s in result.rows} == {(g, s) for g in ("grass", "sand", "all") for s in schedules}
+    row = result.row_for("all", "linear", schedule="20 s")
     assert row.n_values == 12
-    with pytest.raises(UnknownNameError, match="no adaptation summary"):
-        result.summary_for("per_ground", "all", "linear", "30 s")
+    with pytest.raises(UnknownNameError, match="no row"):
+        result.row_for("all", "linear", schedule="30 s")
 
 
 def test_adapting_removes_a_run_offset_the_model_cannot_know(result):
     for g in ("grass", "sand"):
-        row = result.summary_for("per_ground", g, "linear", "20 s")
+        row = result.row_for(g, "linear", schedule="20 s")
         assert row.unadapted_median_pct > 3.0
         assert row.adapted_median_pct < 0.5 * row.unadapted_median_pct
         assert row.adapted_rmse_median_a < row.unadapted_rmse_median_a
-    trig = result.summary_for("per_ground", "all", "linear", TRIGGER_SCHEDULE)
+    trig = result.row_for("all", "linear", schedule=TRIGGER_SCHEDULE)
     assert trig.updates_mean > 0.5 and trig.adapted_median_pct < trig.unadapted_median_pct
 
 

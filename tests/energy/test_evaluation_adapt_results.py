@@ -1,4 +1,4 @@
-"""Tests of energy.evaluation.adapt_results: AdaptScore, the adaptation summaries, AdaptationResult and its files."""
+"""Tests of energy.evaluation.adapt_results: AdaptScore, the adaptation rows, and the adapt protocols' EvaluationResult."""
 
 import json
 import math
@@ -10,9 +10,10 @@ from energy import LinearCurrentModel
 from energy.evaluation import (
     ADAPT_FILES,
     ADAPT_FORMAT_VERSION,
-    AdaptationResult,
+    RELIABILITY_FILE,
     AdaptScore,
-    check_adapt_dir,
+    EvaluationResult,
+    check_evaluation_dir,
     evaluate_adaptation,
     summarise_adapt_scores,
 )
@@ -59,19 +60,24 @@ def test_summaries_by_protocol_ground_then_all():
     assert a.adapted_median_pct == pytest.approx(2.0)  # NaN left out
     assert a.gain_median_pct == pytest.approx(4.0) and a.updates_mean == pytest.approx(2.0)
     assert rows[2].n_values == 3 and rows[2].unadapted_median_pct == pytest.approx(20.0)
-    res = AdaptationResult(tuple(scores), rows, {"method": "regime"}, skipped=("short run",))
-    assert res.summary_for("few_shot", "all", "m", "20 s").n_values == 1
-    with pytest.raises(UnknownNameError, match="no adaptation summary for protocol='few_shot', ground='a'"):
-        res.summary_for("few_shot", "a", "m", "20 s")
-    assert res.to_dict()["runs"][1]["adapted_whole_pct"] is None
-    assert res.to_markdown().endswith("Skipped: short run\n")
+    res = EvaluationResult(tuple(scores), rows, protocol="adapt", settings={"method": "regime"}, skipped=("short run",))
+    assert res.row_for("a", "m", schedule="20 s") is rows[0]
+    with pytest.raises(UnknownNameError, match="2 rows .give the schedule. for ground='all', model='m'"):
+        res.row_for("all", "m")
+    with pytest.raises(UnknownNameError, match="no row for ground='c', model='m', schedule='20 s'"):
+        res.row_for("c", "m", schedule="20 s")
+    assert res.to_dict()["runs"][1]["adapted_whole_pct"] is None and res.to_dict()["format"] == "terrawatt-adaptation"
+    assert res.summary().endswith("Skipped: short run\n")
+    with pytest.raises(InvalidParameterError, match="runs of protocol 'loo' must be RunScores"):
+        EvaluationResult(tuple(scores), rows)
 
 
-def test_check_adapt_dir(tmp_path):
-    assert check_adapt_dir(tmp_path / "new") == tmp_path / "new"
+def test_check_evaluation_dir_of_the_adapt_protocols(tmp_path):
+    assert check_evaluation_dir(tmp_path / "new", "adapt") == tmp_path / "new"
     (tmp_path / "f").write_text("x")
     with pytest.raises(InvalidParameterError, match="is a file"):
-        check_adapt_dir(tmp_path / "f")
-    (tmp_path / "d" / ADAPT_FILES[0]).mkdir(parents=True)
-    with pytest.raises(InvalidParameterError, match="is a directory"):
-        check_adapt_dir(tmp_path / "d")
+        check_evaluation_dir(tmp_path / "f", "few-shot")
+    for name in (ADAPT_FILES[0], RELIABILITY_FILE):
+        (tmp_path / name / name).mkdir(parents=True)
+        with pytest.raises(InvalidParameterError, match="is a directory"):
+            check_evaluation_dir(tmp_path / name, "adapt")

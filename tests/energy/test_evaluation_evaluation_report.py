@@ -14,27 +14,22 @@ from energy.evaluation import (
     EVALUATION_PROTOCOLS,
     RELIABILITY_FILE,
     SPECTRA_FILE,
-    AdaptationResult,
-    EvaluationReport,
     EvaluationResult,
     check_adapt_options,
     check_evaluation_options,
-    evaluate_report,
+    evaluate_kinds,
     evaluation_files,
-    evaluation_report,
+    results,
 )
-from energy.models import CURRENT_MODEL_KINDS
+from energy.models import CURRENT_MODEL_KINDS, ModelOptions
 from terrawatt_base.errors import FigureWarning, InvalidParameterError, UnknownNameError
-
-FLAGS = {"kinds": "--model", "protocol": "--protocol", "band_hz": "--band", "adapt_seconds": "--adapt-seconds",
-         "adapt_method": "--adapt-method", "adapt_threshold_pct": "--adapt-threshold", "adapt_shrink": "--adapt-shrink"}
 
 
 def test_leave_one_run_out_is_scored_and_written_with_the_spectra(tmp_path):
-    report = evaluate_report(score_logs(), ["constant", "linear"], variants=["per_ground"])
-    assert isinstance(report, EvaluationReport) and isinstance(report.result, EvaluationResult)
+    report = evaluate_kinds(score_logs(), ["constant", "linear"], variants=["per_ground"])
+    assert isinstance(report, EvaluationResult) and report.protocol == "loo"
     assert report.kinds == ("constant", "linear") and len(report.logs) == 6 and report.duration_s >= 0.0
-    assert report.summary() == report.result.to_markdown() and report.to_dict()["models"] == ["constant", "linear"]
+    assert report.summary().startswith("Both sides through the pack") and report.to_dict()["models"] == ["constant", "linear"]
     written = report.write(tmp_path)
     assert [p.name for p in written] == list(evaluation_files("loo")) == [*EVALUATION_FILES, SPECTRA_FILE, RELIABILITY_FILE]
     assert json.loads(written[0].read_text())["models"] == ["constant", "linear"]
@@ -47,8 +42,8 @@ def test_a_figure_that_fails_is_a_warning_and_left_out(tmp_path, monkeypatch):
     def no_spectra(*args, **kwargs):
         raise RuntimeError("no canvas")
 
-    monkeypatch.setattr(evaluation_report, "plot_vibration_spectra", no_spectra)
-    report = evaluate_report(score_logs(), ["constant"], variants=["per_ground"])
+    monkeypatch.setattr(results, "plot_vibration_spectra", no_spectra)
+    report = evaluate_kinds(score_logs(), ["constant"], variants=["per_ground"])
     with pytest.warns(FigureWarning, match="could not draw .*spectra.png: RuntimeError: no canvas"):
         written = report.write(tmp_path)
     assert [p.name for p in written] == [*EVALUATION_FILES, RELIABILITY_FILE] and not (tmp_path / SPECTRA_FILE).exists()
@@ -64,8 +59,9 @@ def test_the_adapt_protocols_write_their_files_and_reliability_figure(tmp_path, 
     assert settings.trigger is trigger and settings.adapt_seconds == (10.0,)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # skipped folds of the short samples
-        report = evaluate_report(adapt_logs(), ["linear"], protocol=protocol, settings=settings)
-    assert isinstance(report.result, AdaptationResult) and report.kinds == ("linear",)
+        report = evaluate_kinds(adapt_logs(), ["linear"], protocol=protocol, settings=settings)
+    assert report.protocol == protocol and report.kinds == ("linear",)
+    assert report.to_dict()["format"] == "terrawatt-adaptation"
     written = report.write(tmp_path)
     assert [p.name for p in written] == [*ADAPT_FILES, RELIABILITY_FILE] == list(evaluation_files(protocol))
     assert report.written_line(written).endswith(f"wrote {written[0]}, {written[1]}, {written[2]}")
@@ -79,34 +75,35 @@ def test_the_default_kinds_follow_the_protocol_and_a_kind_named_twice_counts_onc
 
 
 @pytest.mark.parametrize(
-    "call, error, message",
+    "call, error, message, parameter",
     [
-        (lambda: check_adapt_options(adapt_seconds=[10.0, 0.0], names=FLAGS), InvalidParameterError,
-         "--adapt-seconds must be seconds > 0, got 0.0"),
-        (lambda: check_adapt_options(adapt_threshold_pct=-1.0, names=FLAGS), InvalidParameterError,
-         "--adapt-threshold must be a percentage >= 0, got -1.0"),
-        (lambda: check_adapt_options(adapt_method="guess", names=FLAGS), UnknownNameError, "--adapt-method"),
-        (lambda: check_adapt_options(adapt_shrink=True, names=FLAGS), UnknownNameError, "--adapt-shrink must be one of"),
-        (lambda: check_adapt_options("cv"), UnknownNameError, "protocol must be one of"),
-        (lambda: check_evaluation_options(["linear"], band_hz=(1.0, 12.0), names=FLAGS), InvalidParameterError,
-         "--band applies to the estimator and paper models only, got --model linear"),
-        (lambda: check_evaluation_options(["estimator"], band_hz=(12.0, 1.0), names=FLAGS), InvalidParameterError,
-         "--band must be"),
-        (lambda: check_evaluation_options(["forest"], names=FLAGS), UnknownNameError, "--model must be one of"),
-        (lambda: check_evaluation_options([]), InvalidParameterError, "kinds must name at least one model kind"),
-        (lambda: check_evaluation_options(names={"model": "--model"}), UnknownNameError, "names has keys"),
-        (lambda: evaluate_report(score_logs(), ["linear"], settings=check_adapt_options()), InvalidParameterError,
-         "settings applies to the adapt and few-shot protocols"),
-        (lambda: evaluate_report([], ["linear"]), InvalidParameterError, "logs"),
-        (lambda: check_evaluation_options(["linear"], robot="jackal", names={**FLAGS, "robot": "--robot"}),
-         InvalidParameterError, "--robot is the physics model's robot; --model linear has no physics"),
-        (lambda: check_evaluation_options(["physics"], robot="rover"), UnknownNameError,
-         "robot 'rover' is neither a robot preset"),
+        (lambda: check_adapt_options(adapt_seconds=[10.0, 0.0]), InvalidParameterError,
+         "adapt_seconds must be seconds > 0, got 0.0", "adapt_seconds"),
+        (lambda: check_adapt_options(adapt_threshold_pct=-1.0), InvalidParameterError,
+         "adapt_threshold_pct must be a percentage >= 0, got -1.0", "adapt_threshold_pct"),
+        (lambda: check_adapt_options(adapt_method="guess"), UnknownNameError, "adapt_method", "adapt_method"),
+        (lambda: check_adapt_options(adapt_shrink=True), UnknownNameError, "adapt_shrink must be one of", "adapt_shrink"),
+        (lambda: check_adapt_options("cv"), UnknownNameError, "protocol must be one of", "protocol"),
+        (lambda: check_evaluation_options(["linear"], options=ModelOptions(band_hz=(1.0, 12.0))), InvalidParameterError,
+         "band_hz applies to the estimator and paper models only, got kinds linear", ("band_hz", "kinds")),
+        (lambda: ModelOptions(band_hz=(12.0, 1.0)), InvalidParameterError, "band_hz must be", "band_hz"),
+        (lambda: ModelOptions(seed=-1), InvalidParameterError, "seed must be None or an integer", "seed"),
+        (lambda: check_evaluation_options(["forest"]), UnknownNameError, "kinds must be one of", "kinds"),
+        (lambda: check_evaluation_options([]), InvalidParameterError, "kinds must name at least one model kind", "kinds"),
+        (lambda: check_evaluation_options(options={"seed": 1}), InvalidParameterError, "options must be", "options"),
+        (lambda: evaluate_kinds(score_logs(), ["linear"], settings=check_adapt_options()), InvalidParameterError,
+         "settings applies to the adapt and few-shot protocols", ("settings", "protocol")),
+        (lambda: evaluate_kinds(adapt_logs(), ["linear"], protocol="adapt", settings=check_adapt_options(
+            adapt_seconds=[100.0])), InvalidParameterError, "adapt_seconds 100: no run lasts", "adapt_seconds"),
+        (lambda: check_evaluation_options(["linear"], options=ModelOptions(robot="jackal")),
+         InvalidParameterError, "robot applies to the physics model only, got kinds linear", ("robot", "kinds")),
+        (lambda: ModelOptions(robot="rover"), UnknownNameError, "robot 'rover' is neither a robot preset", "robot"),
     ],
 )
-def test_bad_options_are_refused_naming_them(call, error, message):
-    with pytest.raises(error, match=message):
+def test_bad_options_are_refused_naming_them(call, error, message, parameter):
+    with pytest.raises(error, match=message) as caught:
         call()
+    assert caught.value.parameter == parameter  # the command line says it by its flag
 
 
 def test_the_physics_kind_is_evaluated_on_the_robot_given():
@@ -116,7 +113,7 @@ def test_the_physics_kind_is_evaluated_on_the_robot_given():
         return {r["ground"]: r["rmse_median_a"] for r in report.to_dict()["summary"] if r["model"] == model}
 
     heavy = robot_preset("husky").replace(mass_kg=120.0)
-    plain = evaluate_report(score_logs(), ["physics", "linear"], variants=["per_ground"])
-    other = evaluate_report(score_logs(), ["physics", "linear"], variants=["per_ground"], robot=heavy)
+    plain = evaluate_kinds(score_logs(), ["physics", "linear"], variants=["per_ground"])
+    other = evaluate_kinds(score_logs(), ["physics", "linear"], variants=["per_ground"], options=ModelOptions(robot=heavy))
     assert rmse(other, "linear") == rmse(plain, "linear")  # the robot is the physics model's only
     assert rmse(other, "physics") != rmse(plain, "physics")

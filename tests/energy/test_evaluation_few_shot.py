@@ -19,7 +19,7 @@ def test_few_shot_adapts_on_one_run_of_a_ground_left_out(logs):
     # 2 target grounds x 3 adaptation runs x 2 T x 2 other runs x 2 sides
     assert len(res.runs) == 2 * 3 * 2 * 2 * 2
     assert all(r.adapt_run != r.run and r.ground == r.adapt_run.split("/")[0] for r in res.runs)
-    sand = res.summary_for("few_shot", "sand", "linear", "20 s")
+    sand = res.row_for("sand", "linear", schedule="20 s")
     assert sand.unadapted_median_pct > 30.0  # trained on grass only: half the current
     assert sand.adapted_median_pct < 0.5 * sand.unadapted_median_pct
     one = evaluate_few_shot(logs, LinearCurrentModel(), settings=adapt_settings(trigger=False), target_grounds=["sand"])

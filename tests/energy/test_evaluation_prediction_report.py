@@ -1,4 +1,5 @@
-"""Tests of energy.evaluation.prediction_report: a fitted model on logs, scored or predicted, printed and written."""
+"""Tests of energy.evaluation.prediction_report: a fitted model on logs, scored or predicted (an EvaluationResult of
+protocol "prefit"), printed and written."""
 
 from __future__ import annotations
 
@@ -10,8 +11,7 @@ import pytest
 from evaluation_samples import score_logs
 
 from energy import LinearCurrentModel
-from energy.evaluation import PREDICTIONS_FILE, PredictionReport, predict_report
-from energy.evaluation.prediction_report import PREDICTIONS_FORMAT_VERSION
+from energy.evaluation import PREDICTIONS_FILE, PREDICTIONS_FORMAT_VERSION, EvaluationResult, predict_logs
 from terrawatt_base import plot_target
 from terrawatt_base.errors import FigureWarning, InvalidParameterError, UnknownNameError
 from terrawatt_base.formats import read_result_json
@@ -29,8 +29,9 @@ def _no_currents(log):
 
 def test_logs_with_currents_are_scored_and_written_with_figures(fitted, tmp_path):
     model, logs = fitted
-    report = predict_report(model, logs[:2], label="models/linear.zip")
-    assert isinstance(report, PredictionReport) and report.scored and report.name == "linear.zip"
+    report = predict_logs(model, logs[:2], label="models/linear.zip")
+    assert isinstance(report, EvaluationResult) and report.protocol == "prefit" and report.scored
+    assert report.models == ("linear.zip",) and report.label == "models/linear.zip"
     text = report.summary().splitlines()
     assert text[0].split()[:4] == ["run", "side", "truth", "mAh"] and len(text) == 1 + 4  # two runs, two sides
     doc = report.to_dict()
@@ -45,8 +46,10 @@ def test_logs_with_currents_are_scored_and_written_with_figures(fitted, tmp_path
 
 def test_logs_without_currents_are_predicted_only(fitted, tmp_path):
     model, logs = fitted
-    report = predict_report(model, [logs[0], _no_currents(logs[1])], label="m.zip")
-    assert not report.scored and len(report.runs) == 2
+    report = predict_logs(model, [logs[0], _no_currents(logs[1])], label="m.zip")
+    assert not report.scored and len(report.predictions) == 2 and report.runs == ()
+    with pytest.raises(InvalidParameterError, match="predictions are the answer of protocol 'prefit'"):
+        EvaluationResult((), (), predictions=report.predictions)
     lines = report.summary().splitlines()
     assert "pred L mAh" in lines[0] and lines[2].split()[3:5] == ["-", "-"]  # nothing measured on the second
     assert report.to_dict()["scored"] is False
@@ -60,7 +63,7 @@ def test_logs_without_currents_are_predicted_only(fitted, tmp_path):
 
 def test_a_failing_figure_warns_or_raises(fitted, tmp_path, monkeypatch):
     model, logs = fitted
-    report = predict_report(model, logs[:1])
+    report = predict_logs(model, logs[:1])
 
     def broken(*args, **kwargs):
         raise RuntimeError("no canvas")
@@ -79,8 +82,8 @@ def test_a_failing_figure_warns_or_raises(fitted, tmp_path, monkeypatch):
 def test_bad_arguments_are_refused(fitted):
     model, logs = fitted
     with pytest.raises(InvalidParameterError, match="model must be a CurrentModel"):
-        predict_report("linear", logs)
+        predict_logs("linear", logs)
     with pytest.raises(InvalidParameterError, match="logs must be"):
-        predict_report(model, [])
+        predict_logs(model, [])
     with pytest.raises(InvalidParameterError, match="label"):
-        predict_report(model, logs, label=" ")
+        predict_logs(model, logs, label=" ")

@@ -1,4 +1,4 @@
-"""Tests of energy.evaluation.results: RunScore, the summaries, EvaluationResult and its JSON / markdown files."""
+"""Tests of energy.evaluation.results: RunScore, the summary rows, EvaluationResult and its JSON / markdown files."""
 
 import json
 import math
@@ -11,6 +11,7 @@ from energy import ConstantCurrentModel, LinearCurrentModel, evaluate_current_mo
 from energy.evaluation import (
     EVALUATION_FILES,
     EVALUATION_FORMAT_VERSION,
+    RELIABILITY_FILE,
     EvaluationResult,
     RunScore,
     check_evaluation_dir,
@@ -28,25 +29,28 @@ def result():
 def test_summary_percentiles(result):
     rows = [r.whole_run_error_pct for r in result.runs
             if (r.variant, r.model, r.ground) == ("ground_agnostic", "constant", "sand")]
-    s = result.summary_for("ground_agnostic", "sand", "constant")
+    s = result.row_for("sand", "constant", variant="ground_agnostic")
     assert s.whole_run_median_pct == pytest.approx(float(np.median(rows)))
     assert s.whole_run_p90_pct == pytest.approx(float(np.percentile(rows, 90)))
-    with pytest.raises(UnknownNameError, match="no summary"):
-        result.summary_for("per_ground", "ice", "constant")
+    with pytest.raises(UnknownNameError, match="no row for ground='ice', model='constant', variant='per_ground'"):
+        result.row_for("ice", "constant", variant="per_ground")
+    with pytest.raises(UnknownNameError, match="2 rows .give the variant"):
+        result.row_for("sand", "constant")
 
 
 def test_json_and_markdown_outputs(result, tmp_path):
-    path = result.write_json(tmp_path / "evaluation.json")
-    data = json.loads(path.read_text())
+    written = result.write(tmp_path)
+    assert [p.name for p in written] == [*EVALUATION_FILES, RELIABILITY_FILE]  # no logs in the result: no spectra
+    data = json.loads(written[0].read_text())
     assert data["format_version"] == EVALUATION_FORMAT_VERSION and data["models"] == ["constant", "linear"]
-    assert len(data["runs"]) == len(result.runs) and len(data["summary"]) == len(result.summary)
-    md = result.to_markdown()
+    assert len(data["runs"]) == len(result.runs) and len(data["summary"]) == len(result.rows)
+    md = result.summary()
     battery, per_side = md.split("Per side (charge of each motor channel):")
-    assert per_side.strip().count("\n") == 1 + len(result.summary)  # header, rule and one row per summary
+    assert per_side.strip().count("\n") == 1 + len(result.rows)  # header, rule and one row per summary
     assert battery.count("| loo | all | linear | ground_agnostic | unadapted |") == 1  # the battery table: one row each
     assert len(data["totals"]) == len(result.runs) // 2 and len(data["total_summary"]) == len(result.total_summary())
     assert "| per_ground | sand | linear |" in md
-    assert result.write_markdown(tmp_path / "evaluation.md").read_text() == md
+    assert written[1].read_text() == md
 
 
 def _score(run: str, ground: str, whole_pct: float, side: str = "left", variant: str = "per_ground") -> RunScore:
@@ -76,9 +80,9 @@ def test_summaries_per_ground_then_all_with_undefined_scores_left_out():
 
 def test_a_result_with_nan_and_skipped_grounds_writes_its_folder(tmp_path):
     scores = [_score("a/1", "a", math.nan), _score("a/2", "a", 4.0)]
-    res = EvaluationResult(tuple(scores), summarise_scores(scores, ("per_ground",), ["a"], ("m",)), ("m",),
-                           ("per_ground",), 30.0, skipped=("ground 'ice' has 1 run",))
-    json_path, md_path = res.write(tmp_path / "out")
+    res = EvaluationResult(tuple(scores), summarise_scores(scores, ("per_ground",), ["a"], ("m",)), models=("m",),
+                           variants=("per_ground",), section_s=30.0, skipped=("ground 'ice' has 1 run",))
+    json_path, md_path, _ = res.write(tmp_path / "out")
     assert (json_path.name, md_path.name) == EVALUATION_FILES
     data = json.loads(json_path.read_text())
     assert data["format"] == "terrawatt-evaluation" and data["runs"][0]["whole_run_error_pct"] is None

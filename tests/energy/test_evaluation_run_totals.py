@@ -11,6 +11,7 @@ from energy.budget import log_battery_power_w
 from energy.evaluation import (
     AdaptSettings,
     RunTotal,
+    ScoredRun,
     evaluate_few_shot,
     few_shot_scores,
     pack_energy_j,
@@ -45,7 +46,7 @@ def test_run_totals_score_each_variant_and_only_intervals_get_a_z():
     model = fit_interval(LinearCurrentModel(), [adapt_log(i, "grass", offset_a=0.1 * i) for i in range(2, 7)], folds=5)
     fc = model.predict_distribution(log)
     rows = run_totals(log, {"unadapted": (fc.mean_a, fc), "adapted": (cur, None), "gain": (1.1 * cur, None)},
-                      protocol="few_shot", run="b", adapt_run="a", model="m", schedule="20 s", robot=HUSKY)
+                      ScoredRun("few_shot", "b", "a", "m", "20 s"), robot=HUSKY)
     by = {r.variant: r for r in rows}
     assert by["adapted"].energy_error_pct == pytest.approx(0.0, abs=1e-9)  # the truth itself
     assert by["adapted"].charge_error_pct == pytest.approx(0.0, abs=1e-9)
@@ -92,9 +93,9 @@ def test_the_few_shot_protocol_scores_what_the_battery_pays():
     doc = res.to_dict()
     assert {r["variant"] for r in doc["total_summary"]} == {"unadapted", "adapted", "gain"}
     assert len(doc["totals"]) == len(res.totals) > 0
-    md = res.to_markdown()
+    md = res.summary()
     assert md.index("Both sides through the pack") < md.index("Per side")
-    ax = res.plot_reliability()
+    ax = res.plot()
     assert ax.get_xlabel().startswith("nominal coverage")
 
 

@@ -37,12 +37,12 @@ def test_every_run_side_model_and_variant_is_scored(result):
 
 
 def test_linear_model_is_exact_per_ground_but_not_across_grounds(result):
-    exact = result.summary_for("per_ground", "all", "linear")
+    exact = result.row_for("all", "linear", variant="per_ground")
     assert exact.whole_run_median_pct < 1e-6 and exact.rmse_p90_a < 1e-6
     assert exact.n_runs == 6 and exact.n_values == 12
-    mixed = result.summary_for("ground_agnostic", "all", "linear")
+    mixed = result.row_for("all", "linear", variant="ground_agnostic")
     assert mixed.whole_run_median_pct > 10.0
-    const = result.summary_for("per_ground", "grass", "constant")
+    const = result.row_for("grass", "constant", variant="per_ground")
     assert const.section_median_pct >= const.whole_run_median_pct > 0.0
 
 
@@ -145,7 +145,7 @@ def test_cluster_scores_equal_the_serial_scores_in_the_same_order(logs, result, 
     )
     assert all(np.isfinite(r.whole_run_error_pct) for r in result.runs)  # so == below compares no NaN
     assert _without_fit_time(on_cluster.runs) == _without_fit_time(result.runs)
-    assert _without_fit_time(on_cluster.summary) == _without_fit_time(result.summary)
+    assert _without_fit_time(on_cluster.rows) == _without_fit_time(result.rows)
     assert (on_cluster.models, on_cluster.variants, on_cluster.skipped) == (result.models, result.variants, result.skipped)
     assert all(r.fit_duration_s >= 0.0 for r in on_cluster.runs)
 
@@ -167,7 +167,7 @@ def test_a_prefit_model_is_scored_like_a_fold(logs, result):
 
     model = LinearCurrentModel().fit(logs[1:3])
     scored = score_current_model(model, [logs[0]], name="linear", section_s=result.section_s)
-    assert isinstance(scored, EvaluationResult) and scored.variants == ("prefit",)
+    assert isinstance(scored, EvaluationResult) and scored.variants == ("prefit",) and scored.protocol == "prefit"
     fold = {r.side: r for r in result.runs if (r.variant, r.model, r.run) == ("per_ground", "linear", "grass/pro_00")}
     for row in scored.runs:  # the same fit scored by the one scoring function
         expected = fold[row.side]
@@ -175,8 +175,9 @@ def test_a_prefit_model_is_scored_like_a_fold(logs, result):
         assert row.charge_predicted_mah == pytest.approx(expected.charge_predicted_mah)
         assert row.whole_run_error_pct == pytest.approx(expected.whole_run_error_pct)
         assert np.isnan(row.fit_duration_s)
-    assert scored.summary_for("prefit", "all", "linear").n_values == 2
-    assert "| prefit | grass | linear |" in scored.to_markdown()
+    assert scored.row_for("all", "linear").n_values == 2
+    assert scored.summary().splitlines()[1].split()[:2] == ["grass/pro_00", "left"]  # the scores per run and side
+    assert scored.to_dict()["model"] == "linear" and scored.to_dict()["variants"] == ["prefit"]
     with pytest.raises(InvalidParameterError, match="section_s"):
         score_current_model(model, logs, section_s="long")
     with pytest.raises(InvalidParameterError, match="CurrentModel"):
@@ -201,4 +202,4 @@ def test_output_folder_is_checked_before_any_fold_and_written_after(logs, tmp_pa
                                   out_dir=tmp_path / "new")
     data = json.loads((tmp_path / "new" / "evaluation.json").read_text())
     assert len(data["runs"]) == len(res.runs)
-    assert (tmp_path / "new" / "evaluation.md").read_text() == res.to_markdown()
+    assert (tmp_path / "new" / "evaluation.md").read_text() == res.summary()

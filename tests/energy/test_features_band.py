@@ -17,7 +17,6 @@ from energy import (
     new_current_model,
     read_borealtc,
 )
-from energy.evaluation import evaluation_report
 from energy.features import DEFAULT_BAND_HZ, BandNotServedError, band_rms_spectra, band_served, check_band_hz
 from energy.models import training_report
 from terrain import InvalidParameterError
@@ -225,7 +224,7 @@ def test_cli_predicts_50hz_logs_with_a_model_trained_on_100hz_logs(model, logs, 
 
 @needs_shared
 def test_cli_evaluate_band_reaches_the_learned_models(logs, tmp_path, capsys, monkeypatch):
-    real, made = evaluation_report.new_current_model, []
+    real, made = training_report.new_current_model, []
 
     def small(kind, **kwargs):
         model = real(kind, **kwargs)
@@ -234,7 +233,7 @@ def test_cli_evaluate_band_reaches_the_learned_models(logs, tmp_path, capsys, mo
         made.append((kind, kwargs["band_hz"]))
         return model
 
-    monkeypatch.setattr(evaluation_report, "new_current_model", small)
+    monkeypatch.setattr(training_report, "new_current_model", small)
     out = tmp_path / "eval"
     assert main(["evaluate", "--data", str(logs["root"] / "train"), "--model", "estimator", "linear",
                  "--variants", "per_ground", "--band", "0", "14", "--out", str(out)]) == 0

@@ -63,3 +63,24 @@ def test_bad_ensembles():
         train_ensemble([net], train, None, cfg, [0, 1])
     with pytest.raises(InvalidParameterError, match="validation"):
         train_ensemble([net], train, None, TrainConfig(patience=2), [0])
+
+
+def test_a_member_never_learns_from_the_runs_of_its_fold():
+    cfg = TrainConfig(max_epochs=4, batch_size=32, patience=None)
+    net_cfg = CurrentNetConfig(4, 0, 2, hidden_sizes=(6,))
+    folds = np.array([0, 1, 1])  # run 0 is left out of member 0, runs 1 and 2 out of member 1
+    plain, moved = _data(4), _data(4)
+    moved.y[moved.run_index == 0] += 5.0  # the targets of run 0 changed
+    a = [CurrentNet(net_cfg, seed=s) for s in (1, 2)]
+    b = [CurrentNet(net_cfg, seed=s) for s in (1, 2)]
+    train_ensemble(a, plain, None, cfg, [5, 6], run_folds=folds)
+    train_ensemble(b, moved, None, cfg, [5, 6], run_folds=folds)
+    x = plain.inputs(slice(None))
+    with torch.no_grad():
+        assert torch.equal(a[0](*x), b[0](*x))  # member 0 never saw run 0
+        assert not torch.allclose(a[1](*x), b[1](*x))  # member 1 learned from it
+    with pytest.raises(InvalidParameterError, match="run_folds must be one fold index >= 0 per run") as bad:
+        train_ensemble(a, plain, None, cfg, [5, 6], run_folds=np.array([0, 1]))
+    assert bad.value.parameter == "run_folds"
+    with pytest.raises(InvalidParameterError, match="leave a member without a training window"):
+        train_ensemble(a, plain, None, cfg, [5, 6], run_folds=np.array([0, 0, 0]))

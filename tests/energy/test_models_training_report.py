@@ -7,6 +7,7 @@ from evaluation_samples import score_logs
 
 from energy.models import (
     LEARNED_KINDS,
+    ModelOptions,
     TrainingReport,
     check_learned_band,
     check_training_options,
@@ -43,15 +44,18 @@ def test_no_interval_without_folds_or_with_one_run(folds, logs):
         ({"interval_folds": 1}, InvalidParameterError, r"interval_folds must be 0 \(no interval\) or >= 2, got 1",
          "interval_folds"),
         ({"interval_folds": -1}, InvalidParameterError, "interval_folds must be 0", "interval_folds"),
-        ({"band_hz": (5.0, 1.0)}, InvalidParameterError, "band_hz must be", "band_hz"),
-        ({"kind": "constant", "band_hz": (1.0, 20.0)}, InvalidParameterError,
+        ({"kind": "constant", "options": lambda: ModelOptions(band_hz=(1.0, 20.0))}, InvalidParameterError,
          "band_hz applies to the estimator and paper models only, got kind constant", ("band_hz", "kind")),
+        ({"kind": "linear", "options": lambda: ModelOptions(robot="jackal")}, InvalidParameterError,
+         "robot applies to the physics model only, got kind linear", ("robot", "kind")),
+        ({"options": lambda: {"seed": 1}}, InvalidParameterError, "options must be", "options"),
         ({"kind": "forest"}, UnknownNameError, "kind must be one of", "kind"),
-        ({"kind": "physics", "robot": "rover9"}, UnknownNameError, "robot 'rover9' is neither", "robot"),
     ],
 )
 def test_bad_options_are_refused_naming_them(kwargs, error, message, parameter):
     kind = kwargs.pop("kind", "paper")
+    if "options" in kwargs:
+        kwargs["options"] = kwargs["options"]()
     with pytest.raises(error, match=message) as raised:
         check_training_options(kind, **kwargs)
     assert raised.value.parameter == parameter  # a front end says it in its own words (terrawatt_cli.error_message)
@@ -81,12 +85,36 @@ def test_the_physics_kind_is_fitted_on_the_robot_given_and_keeps_it(tmp_path):
     rover = robot_preset("jackal").replace(name="rover", mass_kg=25.0)
     write_robot_file(rover, tmp_path / "rover.json")
     husky = train_report("physics", logs, interval_folds=0).model
-    report = train_report("physics", logs, interval_folds=0, robot=tmp_path / "rover.json")
+    report = train_report("physics", logs, interval_folds=0, options=ModelOptions(robot=tmp_path / "rover.json"))
     assert husky.robot == "husky" and report.model.robot == rover and report.model.robot_ == rover
-    assert train_report("physics", logs, interval_folds=0, robot="jackal").model.robot == "jackal"  # a preset: its name
+    assert train_report("physics", logs, interval_folds=0, options=ModelOptions(robot="jackal")).model.robot == "jackal"
     back = load_current_model(report.write(tmp_path / "physics.zip"))
     assert back.robot_ == rover and (back.predict(logs[0]) == report.model.predict(logs[0])).all()
-    with pytest.raises(InvalidParameterError, match="robot applies to the physics model only, got kind 'linear'"):
-        check_training_options("linear", robot="jackal")
+    with pytest.raises(InvalidParameterError, match="robot applies to the physics model only, got kind linear"):
+        check_training_options("linear", options=ModelOptions(robot="jackal"))
     with pytest.raises(UnknownNameError, match="robot 'rover' is neither a robot preset"):
-        train_report("physics", logs, robot="rover")
+        ModelOptions(robot="rover")
+
+
+@pytest.mark.parametrize(
+    "kwargs, error, message, parameter",
+    [
+        ({"band_hz": (5.0, 1.0)}, InvalidParameterError, "band_hz must be", "band_hz"),
+        ({"seed": -1}, InvalidParameterError, "seed must be None or an integer", "seed"),
+        ({"robot": "rover9"}, UnknownNameError, "robot 'rover9' is neither", "robot"),
+    ],
+)
+def test_model_options_are_checked_when_made(kwargs, error, message, parameter):
+    with pytest.raises(error, match=message) as raised:
+        ModelOptions(**kwargs)
+    assert raised.value.parameter == parameter
+
+
+def test_model_options_give_the_band_to_the_learned_kinds_and_the_robot_to_physics():
+    options = ModelOptions(seed=3, band_hz=[0, 20], robot="jackal")
+    assert options.band_hz == (0.0, 20.0)
+    assert options.new_model("physics").robot == "jackal" and options.new_model("estimator").seed == 3
+    assert options.new_model("estimator").config.band_hz == (0.0, 20.0)
+    options.check_kinds(["estimator", "physics"])  # both apply
+    with pytest.raises(InvalidParameterError, match="band_hz applies to the estimator and paper models only"):
+        options.check_kinds(["physics"])

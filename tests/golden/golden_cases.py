@@ -167,21 +167,52 @@ def case_plan_coarse(work: Path) -> dict[str, Path]:
     return {f"plan_coarse/{p.name}": p for p in sorted(out.iterdir())}
 
 
-def case_evaluate_adapt(work: Path) -> dict[str, Path]:
-    """The adapt protocol on simulated 25 s runs (the BorealTC fixture's runs are too short to adapt on)."""
+def _simulated_runs(folder: Path) -> None:
+    """Two simulated 25 s runs on asphalt and two on sand, as CSV logs in one folder per ground."""
     from energy import TruthSimulator, excitation_commands, ground_preset, robot_preset, write_csv_log
 
     truth = TruthSimulator(robot_preset("husky"), {g: ground_preset(g) for g in ("asphalt", "sand")}, seed=0)
     for g, ground in enumerate(("asphalt", "sand")):
-        (work / "logs" / ground.upper()).mkdir(parents=True)
+        (folder / ground.upper()).mkdir(parents=True)
         for k in range(2):
             p = excitation_commands(25.0, seed=10 * g + k)
             log = truth.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground=ground, seed=100 + 10 * g + k)
-            write_csv_log(log, work / "logs" / ground.upper() / f"run_{k}.csv")
+            write_csv_log(log, folder / ground.upper() / f"run_{k}.csv")
+
+
+def case_evaluate_adapt(work: Path) -> dict[str, Path]:
+    """The adapt protocol on simulated 25 s runs (the BorealTC fixture's runs are too short to adapt on)."""
+    _simulated_runs(work / "logs")
     out = work / "evaluate_adapt"
     _cli("evaluate", "--data", work / "logs", "--model", "linear", "--protocol", "adapt", "--adapt-seconds", 10,
          "--seed", 0, "--out", out)
     return {f"evaluate_adapt/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_evaluate_few_shot(work: Path) -> dict[str, Path]:
+    """The few-shot protocol on the adapt case's simulated runs: train on one ground, adapt on 10 s of a run of the other."""
+    _simulated_runs(work / "logs")
+    out = work / "evaluate_few_shot"
+    _cli("evaluate", "--data", work / "logs", "--model", "linear", "--protocol", "few-shot", "--adapt-seconds", 10,
+         "--seed", 0, "--out", out)
+    return {f"evaluate_few_shot/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_predict_unscored(work: Path) -> dict[str, Path]:
+    """``predict`` on a log without measured currents: a ``terrawatt-predictions`` document, not scores."""
+    from energy import TruthSimulator, excitation_commands, ground_preset, robot_preset, write_csv_log
+
+    model = work / "linear.zip"
+    _cli("train", "--data", FIXTURES / "borealtc", "--model", "linear", "--seed", 0, "--out", model)
+    truth = TruthSimulator(robot_preset("husky"), {"asphalt": ground_preset("asphalt")}, seed=0)
+    p = excitation_commands(6.0, seed=1)
+    log = truth.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground="asphalt", seed=5)
+    (work / "logs").mkdir()
+    write_csv_log(dataclasses.replace(log, current_left_a=None, current_right_a=None), work / "logs" / "run.csv")
+    out = work / "predict_unscored"
+    with contextlib.chdir(work):
+        _cli("predict", "--model", model.name, "--data", "logs", "--out", out)
+    return {f"predict_unscored/{p.name}": p for p in sorted(out.iterdir()) if p.is_file()}
 
 
 def case_library(work: Path) -> dict[str, Path]:
