@@ -17,6 +17,7 @@ from .monte_carlo_result import MONTE_CARLO_FORMAT_VERSION, MonteCarloResult
 from .monte_carlo_sampling import MissionDistributions, MissionSample
 from .navigator import Navigator
 from .observations import CHUNK_FIELDS, observation_log
+from .options import MissionAccounting, MissionDrive
 from .results import MISSION_FORMAT_VERSION, MISSION_STATUSES, MissionResult
 from .settings import UPDATE_SCOPES, UPDATE_SOURCES, AdaptiveSettings
 from .simulate import simulate_mission
@@ -24,6 +25,8 @@ from .updates import adapted_model, validation_error
 
 __all__ = [
     "simulate_mission",
+    "MissionDrive",
+    "MissionAccounting",
     "MissionResult",
     "MISSION_STATUSES",
     "MISSION_FORMAT_VERSION",

@@ -40,6 +40,7 @@ from ..route import evaluate_route
 from .adaptive_results import AdaptiveResult
 from .legs import split_polyline
 from .navigator import Navigator
+from .options import MissionDrive
 from .settings import AdaptiveSettings
 from .simulate import simulate_mission
 
@@ -124,8 +125,8 @@ def run_adaptive_mission(
         head, _ = split_polyline(np.asarray(nav.route.waypoints_m), cfg.leg_length_m)
         leg_route = evaluate_route(nav.cost, head, status="exact", planner="leg")
         mr = simulate_mission(terrain, leg_route, robot, battery.replace(initial_soc=nav.soc), truth, nav.cost,
-                              speed_mps=cfg.speed_mps, start_heading_rad=nav.heading_rad, stop_at_reserve=True,
-                              seed=cfg.seed + 1000 + len(nav.legs))
+                              drive=MissionDrive(speed_mps=cfg.speed_mps, start_heading_rad=nav.heading_rad, stop_at_reserve=True,
+                                                 seed=cfg.seed + 1000 + len(nav.legs)))
         log = mr.log.shifted(nav.time_s + dt - float(mr.log.time_s[0]))
         leg_logs.append(log)
         decision = nav.observe(log, checkpoint=True)

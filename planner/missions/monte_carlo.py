@@ -32,6 +32,7 @@ from ..route_price import price_route
 from .monte_carlo_model import MC_DRAW_MODES, ModelMissionSetup
 from .monte_carlo_result import MonteCarloResult, mission_row
 from .monte_carlo_sampling import MissionDistributions
+from .options import MissionDrive
 from .simulate import simulate_mission
 from .tracking import route_speed_mps
 
@@ -72,8 +73,8 @@ class MissionSetup:
         def drive() -> tuple[float, ...]:
             truth = TruthSimulator(robot, s.grounds(self.grounds), current_rate_hz=self.current_rate_hz,
                                    seed=truth_seed)
-            m = simulate_mission(self.terrain, self.route, robot, battery, truth, speed_mps=s.speed_mps,
-                                 seed=truth_seed)
+            m = simulate_mission(self.terrain, self.route, robot, battery, truth,
+                                 drive=MissionDrive(speed_mps=s.speed_mps, seed=truth_seed))
             b = m.budget
             return (b.actual_energy_j, b.actual_charge_mah, b.duration_s, b.arrival_soc, float(np.min(m.soc)),
                     float(not b.feasible), float(b.depleted))

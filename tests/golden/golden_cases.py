@@ -202,13 +202,15 @@ def case_library(work: Path) -> dict[str, Path]:
     from energy import Battery, TruthSimulator, ground_preset, robot_preset
     from energy.params import write_robot_file
     from planner import plan_route, simulate_mission
+    from planner.missions import MissionDrive
 
     tmap = terrain.read_map(patch_map(work))
     husky = robot_preset("husky")
     cost = CostSpec(robot=husky, speed_mps=0.5).build(tmap)
     route = plan_route(tmap, (3.0, 12.0), (57.0, 12.0), cost=cost, planner="lattice")
     truth = TruthSimulator(husky, {g: ground_preset(g) for g in ("asphalt", "sand")}, seed=0)
-    mission = simulate_mission(tmap, route, husky, Battery(20.0, husky.battery_voltage_v), truth, cost, seed=1)
+    mission = simulate_mission(tmap, route, husky, Battery(20.0, husky.battery_voltage_v), truth, cost,
+                               drive=MissionDrive(seed=1))
     return {"library/husky.json": write_robot_file(husky, work / "husky.json"),
             "library/mission.json": mission.save_json(work / "mission.json", series_every=200)}
 
@@ -268,6 +270,7 @@ def case_mission_variants(work: Path) -> dict[str, Path]:
     (edge forecast, stopped at the reserve, no sensor offset)."""
     from energy import Battery, TruthSimulator, ground_preset, robot_preset
     from planner import plan_route, simulate_mission
+    from planner.missions import MissionAccounting, MissionDrive
 
     path = patch_map(work)
     model = work / "linear.zip"
@@ -288,10 +291,12 @@ def case_mission_variants(work: Path) -> dict[str, Path]:
     cost = CostSpec(robot=husky, speed_mps=0.5).build(tmap)
     route = plan_route(tmap, (3.0, 12.0), (57.0, 12.0), cost=cost, planner="lattice")
     truth = TruthSimulator(husky, {g: ground_preset(g) for g in ("asphalt", "sand")}, seed=0)
-    driven = simulate_mission(tmap, route, husky, Battery(20.0, husky.battery_voltage_v), truth, cost, seed=4)
+    driven = simulate_mission(tmap, route, husky, Battery(20.0, husky.battery_voltage_v), truth, cost,
+                              drive=MissionDrive(seed=4))
     small = Battery(0.04, husky.battery_voltage_v, min_reserve_pct=30.0)
-    replayed = simulate_mission(tmap, route, husky, small, driven.log, cost, forecast="edges", stop_at_reserve=True,
-                                current_offset_a=0.0, speed_mps=0.5, accel_mps2=0.8)
+    replayed = simulate_mission(tmap, route, husky, small, driven.log, cost,
+                                accounting=MissionAccounting(forecast="edges", current_offset_a=0.0),
+                                drive=MissionDrive(stop_at_reserve=True, speed_mps=0.5, accel_mps2=0.8))
     files = {f"mission_variants/mc_model/{p.name}": p for p in sorted(mc.iterdir())}
     files |= {f"mission_variants/replay_chunks/{p.name}": p for p in sorted(replay.iterdir())}
     return files | {"mission_variants/replayed.json": replayed.save_json(work / "replayed.json", series_every=50)}

@@ -11,6 +11,7 @@ from mc_samples import FIXED, NO_DASK, NOMINAL, run_mc, setup  # noqa: F401  (fi
 from energy import Battery, PhysicsEnergyModel, TruthSimulator, ground_preset, robot_preset
 from planner import EnergyCost, MissionDistributions, plan_route, simulate_mission, simulate_missions_mc
 from planner.cost_spec import CostSpec
+from planner.missions import MissionDrive
 from terrawatt_base.dask_client import Compute
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
@@ -59,7 +60,8 @@ def test_fixed_distributions_drive_the_nominal_mission(setup):
     truth_seed = int(rng.integers(0, 2**32))
     robot = robot_preset("husky")
     truth = TruthSimulator(robot, {"asphalt": ground_preset("asphalt")}, current_rate_hz=20.0, seed=truth_seed)
-    one = simulate_mission(tmap, route, robot, Battery(2.0, 24.0), truth, speed_mps=mc.speed_mps[0], seed=truth_seed)
+    one = simulate_mission(tmap, route, robot, Battery(2.0, 24.0), truth,
+                           drive=MissionDrive(speed_mps=mc.speed_mps[0], seed=truth_seed))
     assert mc.energy_j[0] == one.budget.actual_energy_j
     assert mc.arrival_soc[0] == one.budget.arrival_soc
 

@@ -12,6 +12,7 @@ import pytest
 
 from energy import Battery, LinearCurrentModel, TruthSimulator, excitation_commands, ground_preset, robot_preset
 from planner import AdaptiveSettings, Navigator, run_adaptive_mission
+from planner.missions import MissionDrive
 from planner.missions.legs import split_polyline
 from planner.missions.replay import replay_drive
 from planner.missions.simulate import simulate_mission
@@ -51,7 +52,8 @@ def _drive_leg(nav, truth, tmap, seed):
     head, _ = split_polyline(np.asarray(nav.route.waypoints_m), nav.settings.leg_length_m)
     leg = evaluate_route(nav.cost, head, status="exact", planner="leg")
     mr = simulate_mission(tmap, leg, nav.robot, nav.battery.replace(initial_soc=nav.soc), truth, nav.cost,
-                          speed_mps=nav.settings.speed_mps, start_heading_rad=nav.heading_rad, seed=seed)
+                          drive=MissionDrive(speed_mps=nav.settings.speed_mps, start_heading_rad=nav.heading_rad,
+                                             seed=seed))
     return mr.log.shifted(nav.time_s + 0.01 - float(mr.log.time_s[0]))
 
 
