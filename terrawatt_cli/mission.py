@@ -9,6 +9,7 @@ from typing import Any
 from planner.missions.adaptive_results import check_logs_folder
 from planner.missions.mission_report import simulate_adaptive_mission
 from planner.missions.monte_carlo_report import monte_carlo_mission
+from planner.missions.options import MonteCarloStudy
 from planner.missions.request import MissionRequest
 from terrain import InvalidParameterError
 
@@ -38,7 +39,8 @@ __all__ = ["add_parser", "run_mission"]
 #: How ``mission`` names the parameters of the library's messages (:func:`terrawatt_cli.error_message`).
 _FLAGS = {"start": "--start", "start_lonlat": "--start-lonlat", "goal": "--goal", "goal_lonlat": "--goal-lonlat",
           "prior_ground": "--prior-ground", "monte_carlo": "--monte-carlo", "workers": "--workers",
-          "scheduler": "--scheduler", "model": "--model", "risk": "--risk", "draw_from": "--mc-draw"}
+          "scheduler": "--scheduler", "model": "--model", "risk": "--risk", "draw_from": "--mc-draw",
+          "n": "--monte-carlo", "max_risk_pct": "--max-risk-pct", "seed": "--seed"}
 
 
 def add_parser(sub: Any) -> None:
@@ -124,8 +126,9 @@ def run_mission(args: argparse.Namespace) -> int:
         return 0 if report.completed else 1
     with compute_arg(args, progress=True) as compute:
         study = monte_carlo_mission(
-            tmap, start, goal, args.monte_carlo, battery=battery_arg(args, pricing.params), pricing=pricing,
-            seed=args.seed, draw_from=args.mc_draw, max_risk_pct=args.max_risk_pct, compute=compute, map_label=label)
+            tmap, start, goal, MonteCarloStudy(args.monte_carlo, seed=args.seed, draw_from=args.mc_draw,
+                                               max_risk_pct=args.max_risk_pct),
+            battery=battery_arg(args, pricing.params), pricing=pricing, compute=compute, map_label=label)
     print(study.summary())
     if not study.n:  # no route: no mission driven
         return 1

@@ -21,6 +21,7 @@ from planner import (
     simulate_missions_mc,
 )
 from planner.cost_spec import CostSpec
+from planner.missions import MonteCarloStudy
 from planner.plan_report import plan_and_compare
 from planner.registry import CellModelRegistry
 from terrain import InvalidParameterError, TerrainMap
@@ -127,13 +128,13 @@ def test_monte_carlo_draws_put_nine_in_ten_missions_below_the_route_p90(world):
     for start, goal, dof in ((GRASS_START, GRASS_GOAL, 3.0), (LOAM_START, LOAM_GOAL, math.inf)):
         route = _route(tmap, cost, start, goal)
         iv = price_route(cost, route)
-        mc = simulate_missions_mc(tmap, route, battery, 4000, cost=cost, draw_from="model", seed=7)
+        mc = simulate_missions_mc(tmap, route, battery, MonteCarloStudy(4000, draw_from="model", seed=7), cost=cost)
         assert mc.forecast == iv and iv.dof == dof
         share = float(np.mean(mc.energy_j <= iv.p90_j))
         assert share == pytest.approx(0.9, abs=0.02)  # 4.5 sampling sd; a Gaussian draw would give 0.95 on grass
         assert float(np.mean(mc.energy_j <= iv.quantile_j(0.99))) == pytest.approx(0.99, abs=0.006)
         assert ("Student-t" in mc.summary()) == math.isfinite(dof)
-    again = simulate_missions_mc(tmap, route, battery, 50, cost=cost, draw_from="model", seed=7)
+    again = simulate_missions_mc(tmap, route, battery, MonteCarloStudy(50, draw_from="model", seed=7), cost=cost)
     assert np.array_equal(again.energy_j, mc.energy_j[:50])
 
 
