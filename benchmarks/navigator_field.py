@@ -74,7 +74,7 @@ from scipy import ndimage
 from energy import Battery, GroundParams, InteractionLog, TruthSimulator, ground_preset, robot_preset
 from energy.sim import VIBRATION_PRESETS, GroundVariation
 from planner import AdaptiveSettings, Navigator, simulate_mission
-from planner.missions import MissionDrive, fit_prior_model
+from planner.missions import MissionDrive, NavigatorModels, fit_prior_model
 from planner.missions.legs import split_polyline
 from planner.registry import CellModelRegistry
 from planner.route import evaluate_route
@@ -237,8 +237,8 @@ def drive(sc: Scenario, *, gain: bool = True, chunk_s: float = CHUNK_S) -> dict[
     cfg = AdaptiveSettings(update_source="driven", leg_length_m=LEG_LENGTH_M, speed_mps=SPEED_MPS,
                            interval_level=INTERVAL_LEVEL, seed=sc.seed,
                            **({} if gain else {"forecast_prior_legs": NO_GAIN_PRIOR_LEGS}))
-    nav = Navigator(w["nav_map"], w["registry"], robot, battery, sc.goal_xy_m,
-                    physics_ground=ground_preset(sc.background), settings=cfg)
+    nav = Navigator(w["nav_map"], w["registry"], robot, battery, sc.goal_xy_m, settings=cfg,
+                    models=NavigatorModels(physics_ground=ground_preset(sc.background)))
     returned = [nav.plan(sc.start_xy_m)]
     dt = 1.0 / truth.current_rate_hz
     client_legs: list[dict[str, Any]] = []  # what the client drove, leg by leg

@@ -26,7 +26,7 @@ import numpy as np
 
 from energy import Battery, TruthSimulator, ground_preset, robot_preset
 from planner import AdaptiveSettings, LearnedEnergyModel, plan_route, run_adaptive_mission, simulate_mission
-from planner.missions import MissionDrive, fit_prior_model
+from planner.missions import MissionDrive, Navigator, NavigatorModels, fit_prior_model
 from planner.registry import CellModelRegistry
 from terrain import TerrainMap
 
@@ -78,8 +78,8 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
 
     # Adaptive loop.
     reg = CellModelRegistry.from_terrain(tmap, prior, prior_name="asphalt-prior")
-    res = run_adaptive_mission(tmap, reg, robot, battery, truth, start, goal, physics_ground=grounds["asphalt"],
-                               settings=settings)
+    res = run_adaptive_mission(Navigator(tmap, reg, robot, battery, goal, settings=settings,
+                                         models=NavigatorModels(physics_ground=grounds["asphalt"])), truth, start)
     adaptive_j = res.driven_energy_j + res.excitation_energy_j
     numbers = {
         "status": res.status,

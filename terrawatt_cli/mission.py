@@ -11,6 +11,7 @@ from planner.missions.mission_report import simulate_adaptive_mission
 from planner.missions.monte_carlo_report import monte_carlo_mission
 from planner.missions.options import MonteCarloStudy
 from planner.missions.request import MissionRequest
+from planner.missions.settings import AdaptiveSettings
 from terrain import InvalidParameterError
 
 from .common import (
@@ -40,7 +41,7 @@ __all__ = ["add_parser", "run_mission"]
 _FLAGS = {"start": "--start", "start_lonlat": "--start-lonlat", "goal": "--goal", "goal_lonlat": "--goal-lonlat",
           "prior_ground": "--prior-ground", "monte_carlo": "--monte-carlo", "workers": "--workers",
           "scheduler": "--scheduler", "model": "--model", "risk": "--risk", "draw_from": "--mc-draw",
-          "n": "--monte-carlo", "max_risk_pct": "--max-risk-pct", "seed": "--seed"}
+          "n": "--monte-carlo", "max_risk_pct": "--max-risk-pct", "seed": "--seed", "leg_length_m": "--leg-m"}
 
 
 def add_parser(sub: Any) -> None:
@@ -110,9 +111,11 @@ def run_mission(args: argparse.Namespace) -> int:
     start, goal = request.points(tmap)
     pricing = pricing_arg(args, tmap, load_model_arg(args))
     if not mc:
+        settings = AdaptiveSettings(leg_length_m=args.leg_m, seed=args.seed,
+                                    **({"max_updates": 0} if args.no_adapt else {}))
         report = simulate_adaptive_mission(
-            tmap, start, goal, battery=battery_arg(args, pricing.params), pricing=pricing, prior_ground=args.prior_ground, leg_m=args.leg_m, adapt=not args.no_adapt,
-            seed=args.seed, map_label=label)
+            tmap, start, goal, battery=battery_arg(args, pricing.params), pricing=pricing, settings=settings,
+            prior_ground=args.prior_ground, map_label=label)
         with warn_figures():
             written = report.write(args.out, logs=args.logs)
         if args.drive_bag is not None:

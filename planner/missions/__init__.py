@@ -19,7 +19,7 @@ from .navigator import Navigator
 from .observations import CHUNK_FIELDS, observation_log
 from .options import DEFAULT_MC_CURRENT_RATE_HZ, MissionAccounting, MissionDrive, MissionTruth, MonteCarloStudy
 from .results import MISSION_FORMAT_VERSION, MISSION_STATUSES, MissionResult
-from .settings import UPDATE_SCOPES, UPDATE_SOURCES, AdaptiveSettings
+from .settings import UPDATE_SCOPES, UPDATE_SOURCES, AdaptiveSettings, MissionGoal, NavigatorModels, ReplayFeed
 from .simulate import simulate_mission
 from .updates import adapted_model, validation_error
 
@@ -33,6 +33,9 @@ __all__ = [
     "run_adaptive_mission",
     # the ride-along loop
     "Navigator",
+    "MissionGoal",
+    "NavigatorModels",
+    "ReplayFeed",
     "Decision",
     "NAVIGATOR_ACTIONS",
     "RemainingForecast",

@@ -21,7 +21,7 @@ from planner import (
     simulate_missions_mc,
 )
 from planner.cost_spec import CostSpec
-from planner.missions import MonteCarloStudy
+from planner.missions import MonteCarloStudy, NavigatorModels
 from planner.plan_report import plan_and_compare
 from planner.registry import CellModelRegistry
 from terrain import InvalidParameterError, TerrainMap
@@ -142,7 +142,8 @@ def test_the_navigator_reads_its_remaining_forecast_from_the_same_predictive(wor
     tmap, lem, cost = world
     settings = AdaptiveSettings(leg_length_m=8.0, seed=0, risk=0.9, speed_mps=0.5)
     for start, goal, dof in ((GRASS_START, GRASS_GOAL, 3.0), (LOAM_START, LOAM_GOAL, math.inf)):
-        nav = Navigator(tmap, lem.registry, lem.robot, Battery(40.0, 24.0), goal, settings=settings, learned=lem)
+        nav = Navigator(tmap, lem.registry, lem.robot, Battery(40.0, 24.0), goal, settings=settings,
+                        models=NavigatorModels(learned=lem))
         nav.plan(start)
         fc = nav.forecast()
         assert fc.dof == price_route(nav.cost, nav.route).dof == dof
