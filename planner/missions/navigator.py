@@ -427,12 +427,9 @@ class Navigator(RegionUpdates):
 
     def _forecast_of(self, pending: list[float], waypoints: np.ndarray) -> RemainingForecast:
         """The forecast of driving ``waypoints``, priced leg by leg as ``pending``."""
-        cfg = self.settings
-        return remaining_forecast(pending, self.observed, level=cfg.interval_level, risk=cfg.risk,
-                                  prior_legs=cfg.forecast_prior_legs, prior_spread=cfg.forecast_prior_spread,
-                                  soc=self.soc, available_j=self.charge.available_j(), pooled=self.pooled,
+        return remaining_forecast(pending, self.observed, self.settings, self.charge, pooled=self.pooled,
                                   unseen_j=self._unseen_j(waypoints, float(sum(pending))),
-                                  unseen_spread=cfg.forecast_unseen_spread, dof=self._route_dof(waypoints))
+                                  dof=self._route_dof(waypoints))
 
     def _route_dof(self, waypoints: np.ndarray) -> float:
         """The degrees of freedom of ``waypoints``' energy interval on the planning cost
