@@ -47,6 +47,7 @@ from energy import Battery
 from planner import EnergyCost, Lattice, plan_batch, plan_route, simulate_missions_mc, warm_up_kernels
 from planner.cache import CACHE_SIZE, ResultCache
 from planner.cost_spec import CostSpec
+from planner.missions import MonteCarloStudy
 from terrain.procedural import procedural_map
 from terrawatt_base.atomic import write_json_atomic
 from terrawatt_base.dask_client import Compute
@@ -102,8 +103,9 @@ def _mc_rows(client: Any, cost: EnergyCost, pair: np.ndarray, n: int) -> dict[st
     """Monte Carlo missions of one route: missions/s in process and on the cluster, the same percentiles."""
     route = plan_route(cost.terrain, pair[:2], pair[2:], cost=cost, planner="lattice")
     battery = Battery(2.0, 24.0)
-    here = simulate_missions_mc(cost.terrain, route, battery, n, seed=0)
-    there = simulate_missions_mc(cost.terrain, route, battery, n, seed=0, compute=Compute(client=client), chunk_size=4)
+    here = simulate_missions_mc(cost.terrain, route, battery, MonteCarloStudy(n, seed=0))
+    there = simulate_missions_mc(cost.terrain, route, battery, MonteCarloStudy(n, seed=0, chunk_size=4),
+                                 compute=Compute(client=client))
     return {
         "missions": n, "route_length_m": route.length_m, "in_process_s": here.elapsed_s, "cluster_s": there.elapsed_s,
         "in_process_missions_per_s": n / here.elapsed_s, "cluster_missions_per_s": n / there.elapsed_s,

@@ -73,8 +73,8 @@ import numpy as np  # noqa: E402
 from energy import Battery, InteractionLog, LogMeta, TruthSimulator, ground_preset, robot_preset  # noqa: E402
 from energy.logs.arrays import DRIVE_FIELDS, IMU_FIELDS  # noqa: E402
 from planner import AdaptiveSettings, LearnedEnergyModel, Navigator, plan_route, warm_up_kernels  # noqa: E402
+from planner.missions import NavigatorModels, ReplayFeed, fit_prior_model, run_adaptive_mission  # noqa: E402
 from planner.missions import adaptive as adaptive_module  # noqa: E402
-from planner.missions import fit_prior_model, run_adaptive_mission  # noqa: E402
 from planner.missions import replay as replay_module  # noqa: E402
 from planner.missions.replay import replay_drive  # noqa: E402
 from planner.registry import CellModelRegistry  # noqa: E402
@@ -383,9 +383,10 @@ def run_replay(world: dict[str, Any], log: InteractionLog, chunk_s: float, *, pr
     t0 = time.perf_counter()
     if prof is not None:
         prof.enable()
-    res = replay_drive(world["map"], registry(world), world["robot"], battery(), [log], world["nav_goal"],
-                       mode="drive", chunk_s=chunk_s, settings=settings_for(world["seed"], scaled=scaled),
-                       physics_ground=ground_preset(PRIOR_GROUND))
+    res = replay_drive(Navigator(world["map"], registry(world), world["robot"], battery(), world["nav_goal"],
+                                 settings=settings_for(world["seed"], scaled=scaled),
+                                 models=NavigatorModels(physics_ground=ground_preset(PRIOR_GROUND))), [log],
+                       feed=ReplayFeed(mode="drive", chunk_s=chunk_s))
     if prof is not None:
         prof.disable()
     total = time.perf_counter() - t0
@@ -412,7 +413,8 @@ def run_calls(world: dict[str, Any], log: InteractionLog, chunk_s: float, *, sta
     cut_s = time.perf_counter() - t0
     rss_chunks = rss_mib()
     nav = Navigator(world["map"], registry(world), world["robot"], battery(), world["nav_goal"],
-                    physics_ground=ground_preset(PRIOR_GROUND), settings=settings_for(world["seed"]))
+                    settings=settings_for(world["seed"]),
+                    models=NavigatorModels(physics_ground=ground_preset(PRIOR_GROUND)))
     t = log.time_s
     t0 = time.perf_counter()
     nav.plan(tuple(log.pose_xyh[0, :2]), time_s=float(t[0]) - float(t[1] - t[0]))
@@ -548,11 +550,12 @@ def run_simulated(world: dict[str, Any], stretches: int) -> dict[str, Any]:
             reg = registry(world)
             lem = LearnedEnergyModel(reg, world["robot"], ground_preset(PRIOR_GROUND))
             try:
-                res = run_adaptive_mission(world["map"], reg, world["robot"], battery(), world["truth"], a, b,
-                                           physics_ground=ground_preset(PRIOR_GROUND),
-                                           settings=dataclasses.replace(settings_for(world["seed"], SIM_RATE_HZ),
-                                                                       seed=world["seed"] + i),
-                                           learned=lem)
+                res = run_adaptive_mission(Navigator(world["map"], reg, world["robot"], battery(), b,
+                                                     settings=dataclasses.replace(settings_for(world["seed"], SIM_RATE_HZ),
+                                                                                  seed=world["seed"] + i),
+                                                     models=NavigatorModels(physics_ground=ground_preset(PRIOR_GROUND),
+                                                                            learned=lem)),
+                                           world["truth"], a)
             except Exception as exc:  # noqa: BLE001 - a library error: recorded, the next stretch goes on
                 nav = last["self"]
                 span = float(nav.time_s) if nav is not None and math.isfinite(nav.time_s) else 0.0

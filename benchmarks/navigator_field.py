@@ -74,7 +74,7 @@ from scipy import ndimage
 from energy import Battery, GroundParams, InteractionLog, TruthSimulator, ground_preset, robot_preset
 from energy.sim import VIBRATION_PRESETS, GroundVariation
 from planner import AdaptiveSettings, Navigator, simulate_mission
-from planner.missions import fit_prior_model
+from planner.missions import MissionDrive, NavigatorModels, fit_prior_model
 from planner.missions.legs import split_polyline
 from planner.registry import CellModelRegistry
 from planner.route import evaluate_route
@@ -237,8 +237,8 @@ def drive(sc: Scenario, *, gain: bool = True, chunk_s: float = CHUNK_S) -> dict[
     cfg = AdaptiveSettings(update_source="driven", leg_length_m=LEG_LENGTH_M, speed_mps=SPEED_MPS,
                            interval_level=INTERVAL_LEVEL, seed=sc.seed,
                            **({} if gain else {"forecast_prior_legs": NO_GAIN_PRIOR_LEGS}))
-    nav = Navigator(w["nav_map"], w["registry"], robot, battery, sc.goal_xy_m,
-                    physics_ground=ground_preset(sc.background), settings=cfg)
+    nav = Navigator(w["nav_map"], w["registry"], robot, battery, sc.goal_xy_m, settings=cfg,
+                    models=NavigatorModels(physics_ground=ground_preset(sc.background)))
     returned = [nav.plan(sc.start_xy_m)]
     dt = 1.0 / truth.current_rate_hz
     client_legs: list[dict[str, Any]] = []  # what the client drove, leg by leg
@@ -254,8 +254,8 @@ def drive(sc: Scenario, *, gain: bool = True, chunk_s: float = CHUNK_S) -> dict[
         head, _ = split_polyline(np.asarray(nav.route.waypoints_m), cfg.leg_length_m)
         leg_route = evaluate_route(nav.cost, head, status="exact", planner="leg")
         mr = simulate_mission(w["truth_map"], leg_route, robot, battery.replace(initial_soc=nav.soc), truth, nav.cost,
-                              speed_mps=cfg.speed_mps, start_heading_rad=nav.heading_rad, stop_at_reserve=True,
-                              seed=(sc.seed + 1000 + len(client_legs)) % 2**32)
+                              drive=MissionDrive(speed_mps=cfg.speed_mps, start_heading_rad=nav.heading_rad, stop_at_reserve=True,
+                                                 seed=(sc.seed + 1000 + len(client_legs)) % 2**32))
         log = mr.log.shifted(nav.time_s + dt - float(mr.log.time_s[0]))
         rows, cols = w["truth_map"].rowcol(log.pose_xyh[:, 0], log.pose_xyh[:, 1])
         xy = log.pose_xyh[:, :2]

@@ -48,7 +48,16 @@ from energy.models.config import estimator_preset
 from energy.sim import GroundVariation
 from planner import CostTables, EnergyCost, warm_up_kernels
 from planner.cost_spec import CostSpec
-from planner.tours import TourChargers, TourRobot, TourSites, plan_tour, price_pairs, simulate_tours_mc
+from planner.tours import (
+    TourChargers,
+    TourPoints,
+    TourRobot,
+    TourSearch,
+    TourSites,
+    plan_tour,
+    price_pairs,
+    simulate_tours_mc,
+)
 from planner.tours.solver import TourProblem, solve_ortools, solve_pyvrp
 from terrain import TerrainMap, example_map
 from terrain.procedural import procedural_map
@@ -96,13 +105,14 @@ def timing_part(args: argparse.Namespace) -> dict[str, Any]:
     battery = battery_for(prices, args.battery_trips, cost.battery_voltage_v)
     robots = [TourRobot(battery, depot, f"robot {k}") for k in range(args.robots)]
     t0 = time.perf_counter()
-    res = plan_tour(cost, sites, robots, risk=args.risk, time_limit_s=args.pyvrp_s, prices=prices)
+    res = plan_tour(cost, sites, robots, prices=prices, search=TourSearch(risk=args.risk, time_limit_s=args.pyvrp_s))
     solve_s = time.perf_counter() - t0
     budgets = [r.budget_j for r in robots]
     cands = [k + 1 for k, n in enumerate(sites.names)
              if n in res.visited or res.left_out.get(n, "").startswith("not worth")]
     value = np.concatenate([[0.0], sites.value])
-    problem = TourProblem.build(prices, args.risk, budgets, [0] * args.robots, cands, value, np.zeros(len(pts)))
+    problem = TourProblem.build(prices, args.risk, budgets, [0] * args.robots, cands,
+                                TourPoints(value, np.zeros(len(pts))))
     compare = {}
     for name, solve in (("pyvrp", lambda: solve_pyvrp(problem, args.pyvrp_s, 0)),
                         ("ortools", lambda: solve_ortools(problem, args.ortools_s))):
@@ -164,7 +174,7 @@ def monte_carlo_part(args: argparse.Namespace) -> dict[str, Any]:
             battery = battery_for(prices, args.mc_battery_trips, cost.battery_voltage_v)
             robots = [TourRobot(battery, depot, f"robot {k}") for k in range(2)]
             first = prices
-        res = plan_tour(cost, sites, robots, risk=q, prices=first)
+        res = plan_tour(cost, sites, robots, prices=first, search=TourSearch(risk=q))
         check = simulate_tours_mc(res, args.mc, seed=args.seed)
         out[f"q{q:g}"] = {"value": res.value, "visited": len(res.visited),
                           "share_above_reserve": check.share_above_reserve,
@@ -188,10 +198,12 @@ def chargers_part(args: argparse.Namespace) -> dict[str, Any]:
     robots = [TourRobot(battery, depot, f"robot {k}") for k in range(2)]
     alone_prices = price_pairs(cost, pts[:-args.chargers], ("depot", *sites.names), risk=0.9)
     t0 = time.perf_counter()
-    alone = plan_tour(cost, sites, robots, risk=0.9, time_limit_s=args.pyvrp_s, prices=alone_prices)
+    alone = plan_tour(cost, sites, robots, prices=alone_prices,
+                      search=TourSearch(risk=0.9, time_limit_s=args.pyvrp_s))
     alone_s = time.perf_counter() - t0
     t0 = time.perf_counter()
-    charged = plan_tour(cost, sites, robots, risk=0.9, time_limit_s=args.ortools_s, prices=prices, chargers=chargers)
+    charged = plan_tour(cost, sites, robots, prices=prices, chargers=chargers,
+                        search=TourSearch(risk=0.9, time_limit_s=args.ortools_s))
     charged_s = time.perf_counter() - t0
     check = simulate_tours_mc(charged, args.mc, seed=args.seed)
     worst = min((min(check.share_above_at_stops(name)) for name in check.runs), default=float("nan"))

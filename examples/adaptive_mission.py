@@ -26,7 +26,7 @@ import numpy as np
 
 from energy import Battery, TruthSimulator, ground_preset, robot_preset
 from planner import AdaptiveSettings, LearnedEnergyModel, plan_route, run_adaptive_mission, simulate_mission
-from planner.missions import fit_prior_model
+from planner.missions import MissionDrive, Navigator, NavigatorModels, fit_prior_model
 from planner.registry import CellModelRegistry
 from terrain import TerrainMap
 
@@ -71,15 +71,15 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
     lem0 = LearnedEnergyModel(reg0, robot, grounds["asphalt"])
     cost0 = lem0.energy_cost(tmap, settings.speed_mps)
     route0 = plan_route(tmap, start, goal, cost=cost0, planner="lattice", compare=False)
-    base = simulate_mission(tmap, route0, robot, battery, truth, cost0, seed=1)
+    base = simulate_mission(tmap, route0, robot, battery, truth, cost0, drive=MissionDrive(seed=1))
     # the same prediction as the loop's: the prior models over the velocity profile of the route
     pred0_j = lem0.predict_route_energy_j(tmap, route0.waypoints_m, settings.speed_mps, dt_s=1.0 / truth.current_rate_hz)
     base_err = 100.0 * (pred0_j - base.budget.actual_energy_j) / base.budget.actual_energy_j
 
     # Adaptive loop.
     reg = CellModelRegistry.from_terrain(tmap, prior, prior_name="asphalt-prior")
-    res = run_adaptive_mission(tmap, reg, robot, battery, truth, start, goal, physics_ground=grounds["asphalt"],
-                               settings=settings)
+    res = run_adaptive_mission(Navigator(tmap, reg, robot, battery, goal, settings=settings,
+                                         models=NavigatorModels(physics_ground=grounds["asphalt"])), truth, start)
     adaptive_j = res.driven_energy_j + res.excitation_energy_j
     numbers = {
         "status": res.status,

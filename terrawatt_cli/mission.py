@@ -9,7 +9,9 @@ from typing import Any
 from planner.missions.adaptive_results import check_logs_folder
 from planner.missions.mission_report import simulate_adaptive_mission
 from planner.missions.monte_carlo_report import monte_carlo_mission
+from planner.missions.options import MonteCarloStudy
 from planner.missions.request import MissionRequest
+from planner.missions.settings import AdaptiveSettings
 from terrain import InvalidParameterError
 
 from .common import (
@@ -38,7 +40,8 @@ __all__ = ["add_parser", "run_mission"]
 #: How ``mission`` names the parameters of the library's messages (:func:`terrawatt_cli.error_message`).
 _FLAGS = {"start": "--start", "start_lonlat": "--start-lonlat", "goal": "--goal", "goal_lonlat": "--goal-lonlat",
           "prior_ground": "--prior-ground", "monte_carlo": "--monte-carlo", "workers": "--workers",
-          "scheduler": "--scheduler", "model": "--model", "risk": "--risk", "draw_from": "--mc-draw"}
+          "scheduler": "--scheduler", "model": "--model", "risk": "--risk", "draw_from": "--mc-draw",
+          "n": "--monte-carlo", "max_risk_pct": "--max-risk-pct", "seed": "--seed", "leg_length_m": "--leg-m"}
 
 
 def add_parser(sub: Any) -> None:
@@ -108,9 +111,11 @@ def run_mission(args: argparse.Namespace) -> int:
     start, goal = request.points(tmap)
     pricing = pricing_arg(args, tmap, load_model_arg(args))
     if not mc:
+        settings = AdaptiveSettings(leg_length_m=args.leg_m, seed=args.seed,
+                                    **({"max_updates": 0} if args.no_adapt else {}))
         report = simulate_adaptive_mission(
-            tmap, start, goal, battery=battery_arg(args, pricing.params), pricing=pricing, prior_ground=args.prior_ground, leg_m=args.leg_m, adapt=not args.no_adapt,
-            seed=args.seed, map_label=label)
+            tmap, start, goal, battery=battery_arg(args, pricing.params), pricing=pricing, settings=settings,
+            prior_ground=args.prior_ground, map_label=label)
         with warn_figures():
             written = report.write(args.out, logs=args.logs)
         if args.drive_bag is not None:
@@ -124,8 +129,9 @@ def run_mission(args: argparse.Namespace) -> int:
         return 0 if report.completed else 1
     with compute_arg(args, progress=True) as compute:
         study = monte_carlo_mission(
-            tmap, start, goal, args.monte_carlo, battery=battery_arg(args, pricing.params), pricing=pricing,
-            seed=args.seed, draw_from=args.mc_draw, max_risk_pct=args.max_risk_pct, compute=compute, map_label=label)
+            tmap, start, goal, MonteCarloStudy(args.monte_carlo, seed=args.seed, draw_from=args.mc_draw,
+                                               max_risk_pct=args.max_risk_pct),
+            battery=battery_arg(args, pricing.params), pricing=pricing, compute=compute, map_label=label)
     print(study.summary())
     if not study.n:  # no route: no mission driven
         return 1

@@ -8,7 +8,7 @@ from typing import Any
 
 from energy.io import read_navsat
 from planner.missions.replay_report import place_by_gps, replay_recording
-from planner.missions.settings import UPDATE_SOURCES, AdaptiveSettings
+from planner.missions.settings import UPDATE_SOURCES, AdaptiveSettings, MissionGoal, ReplayFeed
 from planner.model_cost import parse_model_ground
 from planner.risk import check_planning_risk
 
@@ -36,7 +36,8 @@ __all__ = ["add_parser", "run_replay"]
 
 #: How ``replay`` names the parameters of the library's messages (:func:`terrawatt_cli.error_message`).
 _FLAGS = {"registry": "--registry", "pricing.model": "--model", "physics_ground": "--physics-ground",
-          "initial_soc": "--soc", "state_path": "--state"}
+          "initial_soc": "--soc", "state_path": "--state", "goal_xy_m": "--goal", "goal_lonlat_deg": "--goal-lonlat",
+          "depot_xy_m": "--depot", "chunk_s": "--chunk-s", "speed_up": "--speed-up", "mode": "--mode"}
 
 
 def add_parser(sub: Any) -> None:
@@ -119,11 +120,12 @@ def run_replay(args: argparse.Namespace) -> int:
     pricing = pricing_arg(args, tmap, model)
     battery = battery_arg(args, pricing.params)
     result = replay_recording(
-        tmap, logs, goal, battery=None if battery is None else battery.replace(initial_soc=args.soc), pricing=pricing,
+        tmap, logs, None if goal is None else MissionGoal(xy_m=goal, depot_xy_m=point_arg(args, "depot", tmap)),
+        battery=None if battery is None else battery.replace(initial_soc=args.soc), pricing=pricing,
         settings=AdaptiveSettings(leg_length_m=args.leg_m, seed=args.seed, update_source=args.update_source),
-        registry=args.registry, physics_ground=args.physics_ground, mode=args.mode,
-        chunk_s=args.chunk_s, speed_up=args.speed_up, depot_xy_m=point_arg(args, "depot", tmap),
-        state_path=args.state, on_decision=say)
+        registry=args.registry, physics_ground=args.physics_ground,
+        feed=ReplayFeed(mode=args.mode, chunk_s=args.chunk_s, speed_up=args.speed_up, state_path=args.state,
+                        on_decision=say))
     print(f"map: {label}")
     print(result.summary())
     with warn_figures():

@@ -8,7 +8,7 @@ from typing import Any
 
 from planner.points import point_on_map
 from planner.risk import check_planning_risk
-from planner.tours import plan_tour_on_map, read_tour_chargers_csv, read_tour_sites_csv
+from planner.tours import TourFleet, TourSearch, plan_tour_on_map, read_tour_chargers_csv, read_tour_sites_csv
 from terrain import InvalidParameterError
 
 from .common import (
@@ -33,6 +33,10 @@ from .common import (
 )
 
 __all__ = ["add_parser", "run_tour"]
+
+#: How ``tour`` names the parameters of the library's messages (:func:`terrawatt_cli.error_message`).
+_FLAGS = {"depot_xy_m": "--depot", "n_robots": "--robots", "max_duration_s": "--max-duration",
+          "time_limit_s": "--time-limit"}
 
 _OUTPUTS = ("tour.json", "tour.geojson", "tour.png", "tour_soc.png")
 
@@ -84,7 +88,7 @@ def add_parser(sub: Any) -> None:
     add_dask_options(p, "the pricing of the legs")
     add_robot_options(p)
     add_model_options(p)
-    p.set_defaults(run=run_tour)
+    p.set_defaults(run=run_tour, flag_names=_FLAGS)
 
 
 def run_tour(args: argparse.Namespace) -> int:
@@ -108,10 +112,11 @@ def run_tour(args: argparse.Namespace) -> int:
     chargers = read_tour_chargers_csv(args.chargers, tmap) if args.chargers is not None else None
     pricing = pricing_arg(args, tmap, load_model_arg(args))
     with compute_arg(args, progress=False) as compute:
+        fleet = TourFleet(battery=battery_arg(args, pricing.params), depot_xy_m=depots[0] if len(depots) == 1 else depots,
+                          n_robots=robots, max_duration_s=args.max_duration)
         result = plan_tour_on_map(
-            tmap, sites, depots[0] if len(depots) == 1 else depots, battery=battery_arg(args, pricing.params),
-            n_robots=robots, max_duration_s=args.max_duration, risk=args.tour_risk, pricing=pricing,
-            time_limit_s=args.time_limit, seed=args.seed, compute=compute, map_label=label, chargers=chargers)
+            tmap, sites, fleet, search=TourSearch(risk=args.tour_risk, time_limit_s=args.time_limit, seed=args.seed),
+            pricing=pricing, compute=compute, map_label=label, chargers=chargers)
     with warn_figures():
         written = result.write(args.out, bag=args.bag)
     print(result.summary())

@@ -25,65 +25,42 @@ found (``"no_route"``) or after ``max_legs`` legs (``"max_legs"``); the result s
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import replace
-from typing import Any
 
 import numpy as np
 
-from energy import Battery, GroundParams, InteractionLog, RobotParams, TruthSimulator
-from terrain import InvalidParameterError, TerrainMap
+from energy import InteractionLog, TruthSimulator
+from terrain import InvalidParameterError
+from terrawatt_base.checks import check_instance
 
-from ..learned_cost import LearnedEnergyModel
-from ..registry import CellModelRegistry
 from ..route import evaluate_route
 from .adaptive_results import AdaptiveResult
 from .legs import split_polyline
 from .navigator import Navigator
-from .settings import AdaptiveSettings
+from .options import MissionDrive
 from .simulate import simulate_mission
 
 __all__ = ["run_adaptive_mission"]
 
 
 def run_adaptive_mission(
-    terrain: TerrainMap,
-    registry: CellModelRegistry,
-    robot: RobotParams,
-    battery: Battery,
+    navigator: Navigator,
     truth: TruthSimulator,
     start_xy_m: tuple[float, float],
-    goal_xy_m: tuple[float, float],
-    *,
-    physics_ground: GroundParams,
-    settings: AdaptiveSettings | None = None,
-    model_factory: Callable[[], Any] | None = None,
-    learned: LearnedEnergyModel | None = None,
 ) -> AdaptiveResult:
-    """Drive from start to goal, updating per-cell current models and replanning.
+    """Drive a navigator's mission from ``start_xy_m`` in a truth simulator, updating per-cell current models and
+    replanning.
 
     Parameters
     ----------
-    terrain : TerrainMap
-        The map (the truth simulator looks up its true grounds by the map's ground names).
-    registry : CellModelRegistry
-        Per-cell models on the map's grid (changed in place by accepted updates).
-    robot : RobotParams
-        The robot (normally ``truth.robot``).
-    battery : Battery
-        Capacity, voltage, reserve and initial state of charge.
+    navigator : Navigator
+        A navigator that has not planned yet: its map (the truth simulator looks up its true
+        grounds by the map's ground names), per-cell models (changed in place by accepted
+        updates), robot (normally ``truth.robot``), battery, goal, settings and models.
     truth : TruthSimulator
         Drives the legs and the excitation manoeuvres.
-    start_xy_m, goal_xy_m : (float, float)
+    start_xy_m : (float, float)
         World coordinates (m).
-    physics_ground : GroundParams
-        Ground of the physics slope term of the learned edge costs.
-    settings : AdaptiveSettings, optional
-    model_factory : callable, optional
-        Returns a new unfitted current model (``fit(logs)`` / ``predict(log)``); default
-        :class:`energy.LinearCurrentModel`.
-    learned : LearnedEnergyModel, optional
-        Edge-cost adapter over ``registry`` (to reuse its table cache); built when None.
 
     Returns
     -------
@@ -92,18 +69,22 @@ def run_adaptive_mission(
     Raises
     ------
     InvalidParameterError
-        Wrong argument types; ``learned`` bound to another registry.
-    GridMismatchError
-        ``registry`` on another grid.
+        Wrong argument types; a navigator that has already planned; start equals goal (within
+        ``settings.goal_tolerance_m``): nothing to drive.
     OutOfBoundsError, BlockedPositionError
         Start or goal outside the map or blocked.
-    InvalidParameterError
-        Start equals goal (within ``settings.goal_tolerance_m``): nothing to drive.
+
+    Examples
+    --------
+    Usage (drives a simulated mission, so not run as a doctest)::
+
+        nav = Navigator(tmap, CellModelRegistry.from_terrain(tmap, prior), husky, Battery(20.0, 24.0), (37.5, 8.0))
+        result = run_adaptive_mission(nav, truth, (2.5, 8.0))
     """
+    nav = check_instance("navigator", navigator, Navigator)
     if not isinstance(truth, TruthSimulator):
         raise InvalidParameterError(f"truth must be a TruthSimulator, got {type(truth).__name__!r}")
-    nav = Navigator(terrain, registry, robot, battery, goal_xy_m, physics_ground=physics_ground, settings=settings,
-                    model_factory=model_factory, learned=learned)  # it checks the rest
+    terrain, robot, battery = nav.terrain, nav.robot, nav.battery
     cfg = nav.settings
     decision = nav.plan(start_xy_m, time_s=0.0)
     dt = 1.0 / truth.current_rate_hz
@@ -124,8 +105,8 @@ def run_adaptive_mission(
         head, _ = split_polyline(np.asarray(nav.route.waypoints_m), cfg.leg_length_m)
         leg_route = evaluate_route(nav.cost, head, status="exact", planner="leg")
         mr = simulate_mission(terrain, leg_route, robot, battery.replace(initial_soc=nav.soc), truth, nav.cost,
-                              speed_mps=cfg.speed_mps, start_heading_rad=nav.heading_rad, stop_at_reserve=True,
-                              seed=cfg.seed + 1000 + len(nav.legs))
+                              drive=MissionDrive(speed_mps=cfg.speed_mps, start_heading_rad=nav.heading_rad,
+                                                 stop_at_reserve=True, seed=cfg.seed + 1000 + len(nav.legs)))
         log = mr.log.shifted(nav.time_s + dt - float(mr.log.time_s[0]))
         leg_logs.append(log)
         decision = nav.observe(log, checkpoint=True)

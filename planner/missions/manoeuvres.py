@@ -6,6 +6,7 @@ from collections.abc import Sequence
 
 from energy import CommandProfile, InteractionLog, LinearCurrentModel, TruthSimulator, excitation_commands
 from terrawatt_base.checks import SEED_LIMIT, check_int
+from terrawatt_base.errors import InvalidParameterError
 
 __all__ = ["excitation_profiles", "excitation_manoeuvre", "fit_prior_model"]
 
@@ -42,30 +43,25 @@ def excitation_profiles(
 def excitation_manoeuvre(
     truth: TruthSimulator,
     ground: str,
+    profiles: Sequence[CommandProfile],
     *,
-    straight_s: float,
-    turn_s: float,
-    speeds_mps: Sequence[float],
-    omega_radps: float,
-    seed: int,
     sim_seed: int,
-    dt_s: float = 0.01,
 ) -> list[InteractionLog]:
-    """Drive the excitation manoeuvre on ``ground`` in the truth simulator: two logs.
-
-    The commands of :func:`excitation_profiles` (seeded ``seed``), simulated with seeds
-    ``sim_seed`` and ``sim_seed + 1``.
+    """Drive the excitation manoeuvre's commands (:func:`excitation_profiles`) on ``ground`` in the truth
+    simulator: one log per profile, simulated with seeds ``sim_seed``, ``sim_seed + 1``, ...
 
     Raises
     ------
     InvalidParameterError
-        Bad durations, levels or seeds.
+        A bad seed; not command profiles.
     UnknownNameError
         ``truth`` does not know ``ground``.
     """
-    sim_seed = check_int("sim_seed", sim_seed, low=0, high=SEED_LIMIT - 2)
-    profiles = excitation_profiles(straight_s=straight_s, turn_s=turn_s, speeds_mps=speeds_mps,
-                                   omega_radps=omega_radps, seed=seed, dt_s=dt_s)
+    profiles = list(profiles)
+    sim_seed = check_int("sim_seed", sim_seed, low=0, high=SEED_LIMIT - len(profiles))
+    if not all(isinstance(p, CommandProfile) for p in profiles):
+        raise InvalidParameterError(f"profiles must be CommandProfiles (excitation_profiles), got {profiles!r:.80}",
+                                    parameter="profiles")
     return [truth.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground=ground, seed=sim_seed + i)
             for i, p in enumerate(profiles)]
 
@@ -97,6 +93,7 @@ def fit_prior_model(truth: TruthSimulator, ground: str, seed: int = 1) -> Linear
         If ``truth`` does not know ``ground``.
     """
     seed = check_int("seed", seed, low=0, high=SEED_LIMIT - 12)
-    logs = excitation_manoeuvre(truth, ground, straight_s=30.0, turn_s=12.0, speeds_mps=(0.2, 0.35, 0.5, 0.65, 0.8),
-                                omega_radps=0.5, seed=seed, sim_seed=seed + 10)
+    profiles = excitation_profiles(straight_s=30.0, turn_s=12.0, speeds_mps=(0.2, 0.35, 0.5, 0.65, 0.8),
+                                   omega_radps=0.5, seed=seed)
+    logs = excitation_manoeuvre(truth, ground, profiles, sim_seed=seed + 10)
     return LinearCurrentModel().fit(logs)

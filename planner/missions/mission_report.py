@@ -11,7 +11,7 @@ from pathlib import Path
 from energy import GROUND_PRESETS, Battery, RobotParams, TruthSimulator, ground_preset, load_current_model
 from energy.params import robot_params
 from terrain import TerrainMap
-from terrawatt_base.checks import check_bool, check_instance, check_real
+from terrawatt_base.checks import check_instance
 from terrawatt_base.errors import UnknownNameError
 
 from ..cost_spec import CostSpec
@@ -20,7 +20,8 @@ from ..registry import CellModelRegistry
 from .adaptive import run_adaptive_mission
 from .adaptive_results import AdaptiveResult
 from .manoeuvres import fit_prior_model
-from .settings import AdaptiveSettings
+from .navigator import Navigator
+from .settings import AdaptiveSettings, NavigatorModels
 
 __all__ = ["simulate_adaptive_mission", "mission_battery", "check_preset_grounds"]
 
@@ -52,10 +53,8 @@ def simulate_adaptive_mission(
     *,
     battery: Battery,
     pricing: CostSpec | None = None,
+    settings: AdaptiveSettings | None = None,
     prior_ground: str = "asphalt",
-    leg_m: float = 10.0,
-    adapt: bool = True,
-    seed: int = 0,
     map_label: str = "map",
 ) -> AdaptiveResult:
     """Drive from start to goal in the truth simulator against a battery, learning current models on the way.
@@ -64,8 +63,8 @@ def simulate_adaptive_mission(
     ``model``, the robot starts with a prior linear model fitted on ``prior_ground``
     (:func:`planner.missions.fit_prior_model`) in every cell; with ``model`` (a saved current
     model), that model serves each ground class it drove (:func:`planner.model_cost.model_energy_model`).
-    Then :func:`planner.missions.run_adaptive_mission` plans, drives ``leg_m`` legs, compares,
-    updates (unless not ``adapt``) and replans.
+    Then :func:`planner.missions.run_adaptive_mission` plans, drives ``settings.leg_length_m``
+    legs, compares, updates (unless ``settings.max_updates`` is 0) and replans.
 
     Parameters
     ----------
@@ -80,12 +79,12 @@ def simulate_adaptive_mission(
         grounds instead of the prior (:class:`planner.cost_spec.CostSpec`; default ``CostSpec()``).
         The mission prices its edges by the per-cell models it learns, so the spec's slope limit,
         unknown ground and risk do not apply.
-    leg_m, seed
-        Route driven between comparisons (m), seed of the simulator.
+    settings : AdaptiveSettings, optional
+        The navigator's settings (legs, updates allowed, seed of the simulator and of the prior, ...;
+        default ``AdaptiveSettings()``); its speed is the spec's. ``max_updates=0`` drives the first
+        plan (the result says ``adapt=False``).
     prior_ground : str
         Ground preset of the prior model, and the physics ground of the edge costs.
-    adapt : bool
-        Update the models on the way (False: drive the first plan).
     map_label : str
         How the map is named.
 
@@ -106,14 +105,13 @@ def simulate_adaptive_mission(
     battery = check_instance("battery", battery, Battery)
     if prior_ground not in GROUND_PRESETS:
         raise UnknownNameError(f"prior_ground {prior_ground!r} has no preset; known grounds: {sorted(GROUND_PRESETS)!r}")
-    check_real("leg_m", leg_m, low=0.0, low_inclusive=False)
-    adapt = check_bool("adapt", adapt)
     pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    settings = AdaptiveSettings() if settings is None else check_instance("settings", settings, AdaptiveSettings)
+    settings = dataclasses.replace(settings, speed_mps=pricing.speed_mps)
+    seed, adapt = settings.seed, settings.max_updates > 0
     robot_given, model = pricing.params, pricing.model
     grounds = {name: ground_preset(name) for name in sorted(set(terrain.ground_names.values()) | {prior_ground})}
     truth = TruthSimulator(robot_given, grounds, seed=seed)
-    settings = AdaptiveSettings(speed_mps=pricing.speed_mps, leg_length_m=leg_m,
-                                max_updates=AdaptiveSettings().max_updates if adapt else 0, seed=seed)
     learned = None
     if model is not None:  # the saved model serves every ground class it drove (one model id each)
         learned, _ = model_energy_model(terrain, model, robot_given, model_ground=pricing.model_ground,
@@ -124,8 +122,9 @@ def simulate_adaptive_mission(
         registry = CellModelRegistry.from_terrain(terrain, prior, prior_name=f"{prior_ground}-prior")
     start_registry = _snapshot(registry)
     t0 = time.perf_counter()
-    result = run_adaptive_mission(terrain, registry, robot_given, battery, truth, start_xy_m, goal_xy_m,
-                                  physics_ground=grounds[prior_ground], settings=settings, learned=learned)
+    nav = Navigator(terrain, registry, robot_given, battery, goal_xy_m, settings=settings,
+                    models=NavigatorModels(physics_ground=grounds[prior_ground], learned=learned))
+    result = run_adaptive_mission(nav, truth, start_xy_m)
     return dataclasses.replace(result, battery=battery, map_label=map_label, robot=pricing.robot,
                                prior_ground=prior_ground, adapt=adapt,
                                start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),

@@ -18,9 +18,8 @@ from typing import Any
 import numpy as np
 
 from energy import GROUND_PRESETS, Battery, GroundParams, RobotParams, TruthSimulator, ground_preset
-from energy.params import robot_params
 from terrain import TerrainMap
-from terrawatt_base.checks import check_instance, check_int, check_real, check_seed
+from terrawatt_base.checks import check_instance
 from terrawatt_base.containers import memory_limit_bytes, over_budget_message
 from terrawatt_base.dask_client import Compute, client_worker_count
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
@@ -29,21 +28,19 @@ from ..edge_cost import EnergyCost
 from ..risk import RouteEnergyInterval
 from ..route import Route
 from ..route_price import price_route
-from .monte_carlo_model import MC_DRAW_MODES, ModelMissionSetup
+from .monte_carlo_model import ModelMissionSetup
 from .monte_carlo_result import MonteCarloResult, mission_row
 from .monte_carlo_sampling import MissionDistributions
+from .options import MissionDrive, MissionTruth, MonteCarloStudy
 from .simulate import simulate_mission
 from .tracking import route_speed_mps
 
-__all__ = ["simulate_missions_mc", "MissionSetup", "DEFAULT_MC_CURRENT_RATE_HZ", "MC_SAMPLE_BYTES"]
+__all__ = ["simulate_missions_mc", "MissionSetup", "MC_SAMPLE_BYTES"]
 
 #: Bytes one Monte Carlo mission is planned to hold (its seed sequence, drawn parameters and outcome
 #: row): a study's size is checked against the memory budget before any seed is spawned.
 MC_SAMPLE_BYTES = 4096
 
-#: Current sampling rate (Hz) of the truth simulator of each Monte Carlo mission: a mission's
-#: energy moves by < 0.2 % from 100 Hz (its P50/P90/P99 by ~0.1 %), at a quarter of the work.
-DEFAULT_MC_CURRENT_RATE_HZ = 20.0
 
 
 @dataclass(frozen=True)
@@ -72,8 +69,8 @@ class MissionSetup:
         def drive() -> tuple[float, ...]:
             truth = TruthSimulator(robot, s.grounds(self.grounds), current_rate_hz=self.current_rate_hz,
                                    seed=truth_seed)
-            m = simulate_mission(self.terrain, self.route, robot, battery, truth, speed_mps=s.speed_mps,
-                                 seed=truth_seed)
+            m = simulate_mission(self.terrain, self.route, robot, battery, truth,
+                                 drive=MissionDrive(speed_mps=s.speed_mps, seed=truth_seed))
             b = m.budget
             return (b.actual_energy_j, b.actual_charge_mah, b.duration_s, b.arrival_soc, float(np.min(m.soc)),
                     float(not b.feasible), float(b.depleted))
@@ -96,8 +93,6 @@ def _grounds(terrain: TerrainMap, grounds: Any) -> dict[str, GroundParams]:
                 f"(known presets: {sorted(GROUND_PRESETS)!r})"
             )
         return {n: ground_preset(n) for n in names}
-    if not isinstance(grounds, Mapping) or not all(isinstance(g, GroundParams) for g in grounds.values()):
-        raise InvalidParameterError(f"grounds must be a mapping of ground name to GroundParams, got {grounds!r:.80}")
     missing = [n for n in names if n not in grounds]
     if missing:
         raise UnknownNameError(f"grounds lacks the map's ground(s) {missing!r}; it has {sorted(grounds)!r}")
@@ -108,47 +103,32 @@ def simulate_missions_mc(
     terrain: TerrainMap,
     route: Route,
     battery: Battery,
-    n: int,
+    study: MonteCarloStudy,
     *,
-    robot: RobotParams | str = "husky",
-    grounds: Mapping[str, GroundParams] | None = None,
-    distributions: MissionDistributions | None = None,
-    speed_mps: float | None = None,
-    seed: int | None = 0,
-    current_rate_hz: float = DEFAULT_MC_CURRENT_RATE_HZ,
-    chunk_size: int = 8,
+    truth: MissionTruth | None = None,
     compute: Compute | None = None,
     cost: EnergyCost | None = None,
-    draw_from: str = "parameters",
     forecast: RouteEnergyInterval | None = None,
 ) -> MonteCarloResult:
-    """Drive one route ``n`` times with drawn parameters: the risk of crossing the reserve and the energy percentiles.
+    """Drive one route ``study.n`` times with drawn parameters: the risk of crossing the reserve and the energy
+    percentiles.
 
     Parameters
     ----------
     terrain : TerrainMap
-        The map of the route; every ground of it needs parameters (``grounds``).
+        The map of the route; every ground of it needs parameters (``truth.grounds``).
     route : Route
         A found route (e.g. from :func:`planner.plan_route`).
     battery : Battery
         The nominal battery: capacity before fade, voltage, reserve, initial charge.
-    n : int
-        Number of missions (>= 1).
-    robot : RobotParams or str
-        The robot (or a preset name), before payload.
-    grounds : mapping of str to GroundParams, optional
-        Nominal parameters of the map's grounds; default the presets of their names.
-    distributions : MissionDistributions, optional
-        Ranges of the drawn parameters (default :class:`MissionDistributions`).
-    speed_mps : float, optional
-        Nominal driving speed (m/s); default the route's planning speed.
-    seed : int or None
-        Seed of the whole study (``None``: a fresh one, kept in ``result.entropy``: pass it
-        as ``seed`` to repeat the study).
-    current_rate_hz : float
-        Sampling rate of each simulated mission (Hz, > 0).
-    chunk_size : int
-        Missions per dask task (>= 1); does not change the result.
+    study : MonteCarloStudy
+        How many missions, drawn from what (typed parameter ranges or the planning model's
+        distribution), from which seed, in what chunks, and the share below the reserve it
+        accepts (:class:`planner.missions.options.MonteCarloStudy`).
+    truth : MissionTruth, optional
+        The nominal robot, the map's grounds, the driving speed and the sampling rate of each
+        simulated mission (:class:`planner.missions.options.MissionTruth`; default
+        ``MissionTruth()``: the husky on the presets of the map's grounds at the route's speed).
     compute : Compute, optional
         Where the missions run and whether a bar shows over them, as :func:`planner.plan_batch`
         (:class:`terrawatt_base.dask_client.Compute`; default here, no bar).
@@ -157,15 +137,8 @@ def simulate_missions_mc(
         ``predicted_energy_j`` is that model's forecast of the driven stop-turn-go profile at
         the nominal speed (:func:`planner.route_price.route_forecast_j`), else the
         route's edge energy. When it carries a predictive interval (:mod:`planner.risk`), the
-        result's ``forecast`` is the route's energy distribution (P50, P90) on it.
-    draw_from : {"parameters", "model"}
-        ``"parameters"`` (default): each mission draws :class:`MissionDistributions` and
-        drives the route against a truth simulation. ``"model"``: each mission draws one
-        factor per ground from the planning model's own predictive distribution (standard
-        normal, Student-t on a ground the model never drove) and prices every edge at
-        ``mean + z_ground * sd``
-        (:mod:`planner.missions.monte_carlo_model`); needs ``cost`` with an interval;
-        ``ground_scale`` then holds the drawn factors ``z``.
+        result's ``forecast`` is the route's energy distribution (P50, P90) on it;
+        ``study.draw_from="model"`` needs one.
     forecast : RouteEnergyInterval, optional
         The route's energy distribution, instead of :func:`planner.route_price.price_route` of
         ``route`` on ``cost``: what ``draw_from="model"`` draws from (e.g. a tour's, whose legs
@@ -182,8 +155,9 @@ def simulate_missions_mc(
     Raises
     ------
     InvalidParameterError
-        ``n < 1``; wrong argument types; a route that was not found; a bad seed, rate,
-        chunk size, speed; not a ``Compute``; an unreachable scheduler.
+        Too many missions for the memory budget; wrong argument types; a route that was not
+        found; not a ``Compute``; an unreachable scheduler; ``draw_from="model"`` without a
+        cost that carries an interval.
     UnknownNameError
         A ground of the map without parameters.
     OptionalDependencyError
@@ -194,10 +168,12 @@ def simulate_missions_mc(
     Usage (drives n simulated missions, so not run as a doctest)::
 
         route = plan_route(tmap, start, goal, cost=cost, planner="lattice")
-        mc = simulate_missions_mc(tmap, route, Battery(5.0, 24.0), 200, seed=1)
+        mc = simulate_missions_mc(tmap, route, Battery(5.0, 24.0), MonteCarloStudy(200, seed=1))
         print(mc.summary()); mc.plot("mc.png")
     """
-    n = check_int("n", n, low=1)
+    study = check_instance("study", study, MonteCarloStudy)
+    truth = MissionTruth() if truth is None else check_instance("truth", truth, MissionTruth)
+    n, seed, draw_from = study.n, study.seed, study.draw_from
     limit = memory_limit_bytes()
     if n * MC_SAMPLE_BYTES > limit:  # before a seed is spawned: a billion would exhaust memory
         raise InvalidParameterError(over_budget_message(
@@ -210,21 +186,10 @@ def simulate_missions_mc(
         raise InvalidParameterError(f"route must be a found Route, got {what!r}")
     if not isinstance(battery, Battery):
         raise InvalidParameterError(f"battery must be a Battery, got {type(battery).__name__!r}")
-    robot = robot_params(robot)
-    if draw_from not in MC_DRAW_MODES:
-        raise InvalidParameterError(f"draw_from must be one of {MC_DRAW_MODES!r}, got {draw_from!r}")
-    if draw_from == "model" and distributions is not None:
-        raise InvalidParameterError("distributions are the typed ranges of draw_from='parameters'; "
-                                    "draw_from='model' draws from the model and takes none")
-    distributions = MissionDistributions() if distributions is None else distributions
-    if not isinstance(distributions, MissionDistributions):
-        raise InvalidParameterError(f"distributions must be a MissionDistributions, got {type(distributions).__name__!r}")
-    seed = check_seed(seed)
-    chunk_size = check_int("chunk_size", chunk_size, low=1)
+    robot, rate_hz = truth.robot, truth.current_rate_hz
+    distributions = MissionDistributions() if study.distributions is None else study.distributions
     compute = Compute() if compute is None else check_instance("compute", compute, Compute)
-    nominal = (route_speed_mps(terrain, route, robot.turn_rate_radps) if speed_mps is None
-               else check_real("speed_mps", speed_mps, low=0.0, low_inclusive=False))
-    rate_hz = check_real("current_rate_hz", current_rate_hz, low=0.0, low_inclusive=False)
+    nominal = route_speed_mps(terrain, route, robot.turn_rate_radps) if truth.speed_mps is None else truth.speed_mps
     if cost is not None and not isinstance(cost, EnergyCost):
         raise InvalidParameterError(f"cost must be an EnergyCost or None, got {type(cost).__name__!r}")
     if forecast is not None and not isinstance(forecast, RouteEnergyInterval):
@@ -236,12 +201,12 @@ def simulate_missions_mc(
         if forecast is None:
             raise InvalidParameterError(
                 "draw_from='model' draws from the planning model's predictive distribution: give cost= built by a "
-                "current model with an interval (e.g. planner.model_energy_cost); "
+                "current model with an interval (e.g. CostSpec(model=...).build); "
                 + ("no cost was given" if cost is None else "this cost has none"))
         setup = ModelMissionSetup(forecast, battery, float(route.duration_s), nominal)
         predicted_j = forecast.mean_j
     else:
-        setup = MissionSetup(terrain, route, robot, _grounds(terrain, grounds), battery, distributions, nominal, rate_hz)
+        setup = MissionSetup(terrain, route, robot, _grounds(terrain, truth.grounds), battery, distributions, nominal, rate_hz)
         TruthSimulator(robot, setup.grounds, current_rate_hz=rate_hz)  # what every sample meets, checked once
         predicted_j = route.energy_j  # the forecast, before any mission runs
         if cost is not None and cost.physics_model is not None:
@@ -255,7 +220,7 @@ def simulate_missions_mc(
 
             rows = [setup.run(q) for q in tqdm(seqs, desc="missions", disable=not compute.progress)]
         else:
-            rows = _run_on_cluster(client, setup, seqs, chunk_size, compute.progress)
+            rows = _run_on_cluster(client, setup, seqs, study.chunk_size, compute.progress)
         n_used = client_worker_count(client)
         elapsed = time.perf_counter() - t0
     ground_names = setup.ground_names if draw_from == "model" else tuple(sorted(setup.grounds))
@@ -269,6 +234,7 @@ def simulate_missions_mc(
         energy_j=cols[4], charge_mah=cols[5], duration_s=cols[6], arrival_soc=cols[7], min_soc=cols[8],
         below_reserve=cols[9] > 0.5, depleted=cols[10] > 0.5, where=where, n_workers=n_used,
         elapsed_s=elapsed, draw_from=draw_from, forecast=forecast, errors=tuple(err for _, err in rows),
+        max_risk_pct=study.max_risk_pct,
     )
 
 

@@ -7,7 +7,7 @@ import dataclasses
 
 from energy import Battery
 from terrain import TerrainMap
-from terrawatt_base.checks import check_instance, check_real
+from terrawatt_base.checks import check_instance
 from terrawatt_base.dask_client import Compute
 
 from ..cost_spec import CostSpec
@@ -15,6 +15,7 @@ from ..planning import plan_route
 from .mission_report import check_preset_grounds
 from .monte_carlo import simulate_missions_mc
 from .monte_carlo_result import MonteCarloResult
+from .options import MissionTruth, MonteCarloStudy
 
 __all__ = ["monte_carlo_mission"]
 
@@ -23,22 +24,19 @@ def monte_carlo_mission(
     terrain: TerrainMap,
     start_xy_m: tuple[float, float],
     goal_xy_m: tuple[float, float],
-    n: int,
+    study: MonteCarloStudy,
     *,
     battery: Battery,
     pricing: CostSpec | None = None,
-    seed: int | None = 0,
-    draw_from: str = "parameters",
-    max_risk_pct: float = 5.0,
     compute: Compute | None = None,
     map_label: str = "map",
 ) -> MonteCarloResult:
-    """Plan the lattice route and drive it ``n`` times with drawn parameters (:func:`simulate_missions_mc`).
+    """Plan the lattice route and drive it ``study.n`` times with drawn parameters (:func:`simulate_missions_mc`).
 
     The edges are priced as ``pricing`` says (:meth:`planner.cost_spec.CostSpec.build`, at the
     mean); the route is the lattice planner's; the missions draw
     ground coefficients, payload, capacity fade, internal resistance and speed (or, with
-    ``draw_from="model"``, the model's predictive distribution).
+    ``study.draw_from="model"``, the model's predictive distribution).
 
     Parameters
     ----------
@@ -46,8 +44,11 @@ def monte_carlo_mission(
         The map; its grounds are presets.
     start_xy_m, goal_xy_m : (float, float)
         Start and goal (m).
-    n : int
-        Missions.
+    study : MonteCarloStudy
+        The missions: their number, what they draw (``"model"`` needs a model with an
+        interval), the seed of the draws and of the route's refinement, and the most missions
+        (%) below the reserve for :attr:`MonteCarloResult.ok`
+        (:class:`planner.missions.options.MonteCarloStudy`).
     battery : Battery
         The nominal battery (e.g. :func:`planner.missions.mission_report.mission_battery`).
     pricing : CostSpec, optional
@@ -55,12 +56,6 @@ def monte_carlo_mission(
         robot, its speed, the presets or a saved current model; default ``CostSpec()``); its
         ``risk``, when given, is the quantile of the route energy forecast checked against the
         usable battery (needs a model with an interval).
-    seed : int or None
-        Seed of the draws and of the route's refinement.
-    draw_from : str
-        ``"parameters"`` or ``"model"`` (needs a model with an interval).
-    max_risk_pct : float
-        Most missions (%) below the reserve for :attr:`MonteCarloResult.ok`.
     compute : Compute, optional
         Where the missions run and whether a bar shows (:class:`terrawatt_base.dask_client.Compute`).
     map_label : str
@@ -79,18 +74,18 @@ def monte_carlo_mission(
         A ground of the map without a preset.
     """
     check_preset_grounds(terrain)
-    max_risk_pct = check_real("max_risk_pct", max_risk_pct, low=0.0, high=100.0)
+    study = check_instance("study", study, MonteCarloStudy)
     pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
     battery = check_instance("battery", battery, Battery)
     cost = pricing.build(terrain)
-    if pricing.risk is not None or draw_from == "model":
+    if pricing.risk is not None or study.draw_from == "model":
         pricing.needs_interval(cost, also="draw_from")
-    route = plan_route(terrain, start_xy_m, goal_xy_m, cost=cost, planner="lattice", seed=seed)
+    route = plan_route(terrain, start_xy_m, goal_xy_m, cost=cost, planner="lattice", seed=study.seed)
     header = dict(route=route, map_label=map_label, robot=pricing.robot,
                   start_xy_m=(float(start_xy_m[0]), float(start_xy_m[1])),
-                  goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), risk_q=pricing.risk, max_risk_pct=max_risk_pct)
+                  goal_xy_m=(float(goal_xy_m[0]), float(goal_xy_m[1])), risk_q=pricing.risk, max_risk_pct=study.max_risk_pct)
     if not route.found:
         return MonteCarloResult.no_route(battery=battery, **header)
-    result = simulate_missions_mc(terrain, route, battery, n, robot=pricing.params, speed_mps=pricing.speed_mps,
-                                  seed=seed, compute=compute, cost=cost, draw_from=draw_from)
+    result = simulate_missions_mc(terrain, route, battery, study, cost=cost, compute=compute,
+                                  truth=MissionTruth(robot=pricing.params, speed_mps=pricing.speed_mps))
     return dataclasses.replace(result, **header)

@@ -65,16 +65,14 @@ import numpy as np
 from energy import (
     Battery,
     EnergyBudget,
-    GroundParams,
     InteractionLog,
     LinearCurrentModel,
     RobotParams,
-    ground_preset,
 )
 from energy.budget import log_battery_power_w
 from terrain import DataError, InvalidParameterError, TerrainMap
 from terrawatt_base.atomic import json_finite
-from terrawatt_base.checks import check_real, fmt_number, real_array
+from terrawatt_base.checks import check_instance, check_real, fmt_number, real_array
 
 from ..lattice import Lattice
 from ..learned_cost import LearnedEnergyModel
@@ -92,7 +90,7 @@ from .navigator_state import read_navigator_setup, restore_navigator_state, writ
 from .observations import observation_log
 from .region_updates import RegionUpdates, as_xy
 from .remaining import remaining_forecast
-from .settings import AdaptiveSettings
+from .settings import AdaptiveSettings, MissionGoal, NavigatorModels
 from .updates import (
     Comparison,
     predicted_currents,
@@ -117,24 +115,21 @@ class Navigator(RegionUpdates):
         The robot (motor constants and electronics turn currents into battery power).
     battery : Battery
         Capacity, voltage, reserve and the state of charge at the start.
-    goal_xy_m : (float, float), optional
-        The goal in map metres; or ``goal_lonlat_deg`` (WGS 84, through the map's CRS).
-    goal_lonlat_deg : (float, float), optional
-    physics_ground : GroundParams, optional
-        Ground of the physics slope term of the learned edge costs (default the asphalt preset).
+    goal : (float, float) or MissionGoal
+        The goal in map metres, or a :class:`~planner.missions.settings.MissionGoal` (a goal in
+        WGS 84 degrees through the map's CRS; a depot to return to when the rest of the mission
+        does not fit: without one, the navigator stops).
     settings : AdaptiveSettings, optional
-    model_factory : callable, optional
-        Returns a new unfitted current model; default :class:`energy.LinearCurrentModel`.
-    learned : LearnedEnergyModel, optional
-        Edge-cost adapter over ``registry`` (to reuse its table cache).
-    depot_xy_m : (float, float), optional
-        Where to return when the rest of the mission does not fit (default: no return, stop).
+    models : NavigatorModels, optional
+        The physics ground of the learned edge costs' slope term (default the asphalt preset),
+        the factory of new current models (default :class:`energy.LinearCurrentModel`) and an
+        edge-cost adapter over ``registry`` to reuse
+        (:class:`~planner.missions.settings.NavigatorModels`).
 
     Raises
     ------
     InvalidParameterError
-        Wrong argument types; both or neither of ``goal_xy_m`` and ``goal_lonlat_deg``;
-        ``learned`` bound to another registry.
+        Wrong argument types; ``models.learned`` bound to another registry.
     GridMismatchError
         ``registry`` on another grid.
     OutOfBoundsError, BlockedPositionError
@@ -151,40 +146,33 @@ class Navigator(RegionUpdates):
         registry: CellModelRegistry,
         robot: RobotParams,
         battery: Battery,
-        goal_xy_m: tuple[float, float] | None = None,
+        goal: tuple[float, float] | MissionGoal,
         *,
-        goal_lonlat_deg: tuple[float, float] | None = None,
-        physics_ground: GroundParams | None = None,
         settings: AdaptiveSettings | None = None,
-        model_factory: Callable[[], Any] | None = None,
-        learned: LearnedEnergyModel | None = None,
-        depot_xy_m: tuple[float, float] | None = None,
+        models: NavigatorModels | None = None,
     ) -> None:
-        ground = ground_preset("asphalt") if physics_ground is None else physics_ground
         for name, value, cls in (("terrain", terrain, TerrainMap), ("registry", registry, CellModelRegistry),
-                                 ("robot", robot, RobotParams), ("battery", battery, Battery),
-                                 ("physics_ground", ground, GroundParams)):
+                                 ("robot", robot, RobotParams), ("battery", battery, Battery)):
             if not isinstance(value, cls):
                 raise InvalidParameterError(f"{name} must be a {cls.__name__}, got {type(value).__name__!r}")
         registry.check_grid(terrain)
         cfg = AdaptiveSettings() if settings is None else settings
         if not isinstance(cfg, AdaptiveSettings):
             raise InvalidParameterError(f"settings must be an AdaptiveSettings, got {type(cfg).__name__!r}")
-        lem = learned if learned is not None else LearnedEnergyModel(registry, robot, ground)
+        models = NavigatorModels() if models is None else check_instance("models", models, NavigatorModels)
+        ground = models.physics_ground
+        lem = models.learned if models.learned is not None else LearnedEnergyModel(registry, robot, ground)
         if lem.registry is not registry:
             raise InvalidParameterError("learned must be a LearnedEnergyModel over the same registry")
-        if (goal_xy_m is None) == (goal_lonlat_deg is None):
-            raise InvalidParameterError("give the goal as goal_xy_m or as goal_lonlat_deg (exactly one)")
-        if goal_lonlat_deg is not None:
-            lonlat = real_array("goal_lonlat_deg", goal_lonlat_deg, ndim=1)
-            if lonlat.shape != (2,):
-                raise InvalidParameterError(f"goal_lonlat_deg must be a (lon, lat) pair, got {goal_lonlat_deg!r}")
-            goal_xy_m = tuple(float(v) for v in terrain.lonlat_toas_xy(lonlat[0], lonlat[1]))
+        goal = goal if isinstance(goal, MissionGoal) else MissionGoal(xy_m=goal)
+        goal_xy_m = goal.xy_m
+        if goal.lonlat_deg is not None:
+            goal_xy_m = tuple(float(v) for v in terrain.lonlat_toas_xy(*goal.lonlat_deg))
         self.terrain, self.registry, self.robot, self.battery = terrain, registry, robot, battery
         self.settings, self.learned, self.physics_ground = cfg, lem, ground
-        self.model_factory = LinearCurrentModel if model_factory is None else model_factory
+        self.model_factory = LinearCurrentModel if models.model_factory is None else models.model_factory
         self.goal_xy_m = _pair("goal_xy_m", goal_xy_m)
-        self.depot_xy_m = None if depot_xy_m is None else _pair("depot_xy_m", depot_xy_m)
+        self.depot_xy_m = None if goal.depot_xy_m is None else _pair("depot_xy_m", goal.depot_xy_m)
         self._predictor = LegPredictor(lem, terrain, speed_mps=cfg.speed_mps, leg_length_m=cfg.leg_length_m,
                                        dt_s=cfg.forecast_dt_s)
         self._init_state()
@@ -411,9 +399,9 @@ class Navigator(RegionUpdates):
             ``terrain`` is not the map the state was saved on.
         """
         setup = read_navigator_setup(path, terrain)
-        nav = cls(terrain, setup["registry"], setup["robot"], setup["battery"], setup["goal_xy_m"],
-                  physics_ground=setup["physics_ground"], settings=setup["settings"], model_factory=model_factory,
-                  depot_xy_m=setup["depot_xy_m"])
+        nav = cls(terrain, setup["registry"], setup["robot"], setup["battery"],
+                  MissionGoal(xy_m=setup["goal_xy_m"], depot_xy_m=setup["depot_xy_m"]), settings=setup["settings"],
+                  models=NavigatorModels(physics_ground=setup["physics_ground"], model_factory=model_factory))
         restore_navigator_state(nav, path, setup["document"])
         return nav
 
@@ -439,12 +427,9 @@ class Navigator(RegionUpdates):
 
     def _forecast_of(self, pending: list[float], waypoints: np.ndarray) -> RemainingForecast:
         """The forecast of driving ``waypoints``, priced leg by leg as ``pending``."""
-        cfg = self.settings
-        return remaining_forecast(pending, self.observed, level=cfg.interval_level, risk=cfg.risk,
-                                  prior_legs=cfg.forecast_prior_legs, prior_spread=cfg.forecast_prior_spread,
-                                  soc=self.soc, available_j=self.charge.available_j(), pooled=self.pooled,
+        return remaining_forecast(pending, self.observed, self.settings, self.charge, pooled=self.pooled,
                                   unseen_j=self._unseen_j(waypoints, float(sum(pending))),
-                                  unseen_spread=cfg.forecast_unseen_spread, dof=self._route_dof(waypoints))
+                                  dof=self._route_dof(waypoints))
 
     def _route_dof(self, waypoints: np.ndarray) -> float:
         """The degrees of freedom of ``waypoints``' energy interval on the planning cost

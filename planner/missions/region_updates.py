@@ -128,7 +128,7 @@ class RegionUpdates:
         if not train or not held:
             return None
         try:
-            return self._propose(region, scope, gid, gname, old_id, train, held, "driven", 0.0, 0.0, w0, runs[0])
+            return self._propose(region, train, held, "driven", 0.0, 0.0, w0, runs[0])
         except DataError:  # the model cannot be fitted on these pieces: as if they were too few
             return None
 
@@ -155,17 +155,16 @@ class RegionUpdates:
             cut = xl.time_s[0] + (1.0 - cfg.validation_fraction) * (xl.time_s[-1] - xl.time_s[0])
             train.append(xl.slice(xl.time_s[0], cut))
             held.append(xl.slice(cut, xl.time_s[-1] + 1.0))
-        scope, gid, gname, old_id = self._scope(region)
-        self.changed |= self._propose(region, scope, gid, gname, old_id, train, held, "excitation", x_e, x_t,
-                                      self._w0, xlogs[0])
+        self.changed |= self._propose(region, train, held, "excitation", x_e, x_t, self._w0, xlogs[0])
         self.queue.pop(0)
         return self._work_queue()
 
-    def _propose(self, region: Any, scope: np.ndarray, gid: int, gname: str, old_id: int,
-                 train: list[InteractionLog], held: list[InteractionLog], kind: str, x_e: float, x_t: float,
-                 w0: float, vibration: InteractionLog) -> bool:
-        """Fit a new model on ``train``, validate new and old on ``held``; the registry keeps the better."""
+    def _propose(self, region: Any, train: list[InteractionLog], held: list[InteractionLog], kind: str, x_e: float,
+                 x_t: float, w0: float, vibration: InteractionLog) -> bool:
+        """Fit a new model on ``train``, validate new and old on ``held``; the registry keeps the better (over the
+        region's scope, :meth:`_scope`, as it stands now)."""
         registry = self.registry
+        scope, gid, gname, old_id = self._scope(region)
         new_model = self.model_factory().fit(train)
         err_new = validation_error(new_model, held)
         adapted = adapted_model(registry.model(old_id), train) if self.settings.in_run_update else None

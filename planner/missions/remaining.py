@@ -28,7 +28,9 @@ import numpy as np
 
 from energy.models.forecast import check_dof, predictive_quantile
 
+from .charge import ChargeAccount
 from .decisions import RemainingForecast
+from .settings import AdaptiveSettings
 
 __all__ = ["remaining_forecast"]
 
@@ -36,16 +38,11 @@ __all__ = ["remaining_forecast"]
 def remaining_forecast(
     pending_j: Sequence[float],
     observed: Sequence[tuple[float, float]],
+    settings: AdaptiveSettings,
+    charge: ChargeAccount,
     *,
-    level: float,
-    risk: float | None,
-    prior_legs: float,
-    prior_spread: float,
-    soc: float,
-    available_j: float,
     pooled: tuple[float, float] = (0.0, 0.0),
     unseen_j: Sequence[float] = (),
-    unseen_spread: float = 0.0,
     dof: float = math.inf,
 ) -> RemainingForecast:
     """The energy of the remaining legs with the in-run correction (see the module docstring).
@@ -56,21 +53,19 @@ def remaining_forecast(
         The models' price of each remaining leg (J).
     observed : sequence of (predicted_j, actual_j)
         Legs driven since the models last changed.
-    level : float
-        Central interval's coverage, in (0, 1).
-    risk : float or None
-        Upper quantile decisions use (None: the point forecast).
-    prior_legs, prior_spread : float
-        ``n0`` and ``s0`` of the module docstring.
-    soc, available_j : float
-        State of charge and energy above the reserve now (J), carried into the result.
+    settings : AdaptiveSettings
+        The forecast's options: the central interval's coverage (``interval_level``), the upper
+        quantile decisions use (``risk``; None: the point forecast), ``n0`` and ``s0`` of the
+        module docstring (``forecast_prior_legs``, ``forecast_prior_spread``) and ``s_u``
+        (``forecast_unseen_spread``).
+    charge : ChargeAccount
+        The battery's account: its state of charge and energy above the reserve now (J), carried
+        into the result.
     pooled : (float, float)
         Sum of squared log-ratio deviations and their degrees of freedom from the run's earlier
         stretches (between model changes).
     unseen_j : sequence of float
         The models' price of the rest on each ground class not driven yet (J).
-    unseen_spread : float
-        ``s_u``.
     dof : float
         Degrees of freedom of the predictive the quantiles are read from (``inf``, the
         default: the normal distribution): the route interval's
@@ -81,6 +76,9 @@ def remaining_forecast(
     RemainingForecast
     """
     dof = check_dof(dof)
+    level, risk = settings.interval_level, settings.risk
+    prior_legs, prior_spread = settings.forecast_prior_legs, settings.forecast_prior_spread
+    unseen_spread = settings.forecast_unseen_spread
     p = np.asarray([float(x) for x in pending_j], dtype=np.float64)
     obs = np.asarray([(a, b) for a, b in observed if a > 0 and b > 0], dtype=np.float64).reshape(-1, 2)
     n = obs.shape[0]
@@ -104,5 +102,5 @@ def remaining_forecast(
     return RemainingForecast(
         energy_j=energy, low_j=max(energy - z * sd, 0.0), high_j=energy + z * sd, level=level, risk_j=risk_j,
         risk=risk, model_energy_j=model_j, gain=gain, spread=spread, legs_remaining=int(p.size),
-        legs_observed=n, soc=soc, available_j=available_j, unseen_j=float(np.sum(unseen_j)), dof=dof,
+        legs_observed=n, soc=charge.soc, available_j=charge.available_j(), unseen_j=float(np.sum(unseen_j)), dof=dof,
     )

@@ -9,10 +9,11 @@ navigator asks for a manoeuvre, the recording's next manoeuvre runs answer it; a
 recording without one declines it (the navigator then learns from the driven data, or
 leaves the model as it is).
 
-With ``state_path`` the navigator's state is saved every ``save_every`` checkpoints
-(:meth:`Navigator.save`, atomic); a replay started again with the same ``state_path``
-resumes from the last save, skipping the data it had already seen, and makes the same
-decisions as one that ran through.
+With ``feed.state_path`` the navigator's state is saved every ``feed.save_every`` checkpoints
+(:meth:`Navigator.save`, atomic); a replay started again from the navigator saved there
+(:meth:`Navigator.load`; :func:`~planner.missions.replay_report.replay_recording` does this when
+``feed.resumes``) resumes from the last save, skipping the data it had already seen, and makes
+the same decisions as one that ran through.
 
 The :class:`ReplayResult` holds the navigator, the per-cell model map before and after,
 every logged decision and the forecast of the remaining energy at each checkpoint against
@@ -28,24 +29,23 @@ import math
 import os
 import re
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from energy import Battery, GroundParams, InteractionLog, RobotParams
-from terrain import DataError, InvalidParameterError, TerrainMap
-from terrawatt_base.checks import check_real
+from energy import InteractionLog
+from terrain import DataError, InvalidParameterError
+from terrawatt_base.checks import check_instance
 from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import result_document, write_result_json
 
-from ..registry import CellModelRegistry
 from ..replay_bag import write_replay_bag
 from .navigator import Navigator
 from .replay_figure import plot_replay
-from .settings import AdaptiveSettings
+from .settings import ReplayFeed
 
 __all__ = ["REPLAY_FORMAT_VERSION", "MANOEUVRE_FILE", "drive_items", "drive_chunks", "replay_drive", "ReplayResult"]
 
@@ -248,55 +248,25 @@ def _forecast_series(nav: Navigator) -> dict[str, np.ndarray]:
 
 
 def replay_drive(
-    terrain: TerrainMap,
-    registry: CellModelRegistry | None,
-    robot: RobotParams | None,
-    battery: Battery | None,
+    navigator: Navigator,
     logs: Sequence[InteractionLog],
-    goal_xy_m: tuple[float, float] | None = None,
     *,
-    goal_lonlat_deg: tuple[float, float] | None = None,
-    mode: str = "auto",
-    chunk_s: float = 1.0,
-    speed_up: float | None = None,
-    settings: AdaptiveSettings | None = None,
-    physics_ground: GroundParams | None = None,
-    model_factory: Callable[[], Any] | None = None,
-    depot_xy_m: tuple[float, float] | None = None,
-    state_path: str | os.PathLike[str] | None = None,
-    save_every: int = 1,
-    on_decision: Callable[[Any], None] | None = None,
-    learned: Any = None,
+    feed: ReplayFeed | None = None,
 ) -> ReplayResult:
     """Feed a recorded drive through a navigator in time order (see the module docstring).
 
     Parameters
     ----------
-    terrain : TerrainMap
-    registry : CellModelRegistry or None
-        The per-cell models at the start (changed in place); None only when resuming.
-    robot, battery : RobotParams, Battery, or None
-        None only when resuming from ``state_path`` (the state holds them).
+    navigator : Navigator
+        A navigator that has not planned yet (it plans from the recording's first pose), or one
+        restored from a saved state (:meth:`Navigator.load`): it resumes, skipping the data it
+        had already seen.
     logs : sequence of InteractionLog
         The recording (:func:`energy.io.read_logs` of a folder, a bag, an MCAP or a CSV log);
         every drive log needs poses.
-    goal_xy_m, goal_lonlat_deg : (float, float)
-        The goal (exactly one, unless resuming).
-    mode : {"auto", "legs", "drive"}
-        ``"legs"``: each drive log is a leg, with a checkpoint at its end; ``"drive"``: the
-        logs are cut in chunks of ``chunk_s``; ``"auto"``: legs when there are several logs.
-    chunk_s : float
-        Chunk length (s, > 0) in ``"drive"`` mode.
-    speed_up : float, optional
-        Pace the replay at this many times real time (None: as fast as possible).
-    settings, physics_ground, model_factory, depot_xy_m
-        As :class:`~planner.Navigator`.
-    state_path : path, optional
-        Save the navigator's state here every ``save_every`` checkpoints; resume from it if it exists.
-    on_decision : callable, optional
-        Called with each decision that is not ``"continue"`` (e.g. to print it).
-    learned : LearnedEnergyModel, optional
-        The edge-cost adapter over ``registry`` (e.g. with a saved model's recorded vibration).
+    feed : ReplayFeed, optional
+        Legs or chunks, the pace, where the navigator's state is saved and who hears its
+        decisions (:class:`~planner.missions.settings.ReplayFeed`; default ``ReplayFeed()``).
 
     Returns
     -------
@@ -305,34 +275,26 @@ def replay_drive(
     Raises
     ------
     InvalidParameterError
-        Bad options; no logs.
+        Not a navigator or a feed; no logs.
     DataError
         A drive log without poses, overlapping logs, data refused by the navigator (named).
     """
+    nav = check_instance("navigator", navigator, Navigator)
+    feed = ReplayFeed() if feed is None else check_instance("feed", feed, ReplayFeed)
     items = drive_items(list(logs))
     if not items:
         raise InvalidParameterError("the recording holds no logs")
-    if mode not in ("auto", "legs", "drive"):
-        raise InvalidParameterError(f"mode must be 'auto', 'legs' or 'drive', got {mode!r}")
     n_drive = sum(kind == "drive" for kind, _ in items)
     if n_drive == 0:
         raise InvalidParameterError("the recording holds only manoeuvre runs: nothing was driven")
+    mode, chunk_s, speed_up, on_decision = feed.mode, feed.chunk_s, feed.speed_up, feed.on_decision
     mode = ("legs" if len(items) > 1 else "drive") if mode == "auto" else mode
-    chunk_s = check_real("chunk_s", chunk_s, low=0.0, low_inclusive=False)
-    if speed_up is not None:
-        speed_up = check_real("speed_up", speed_up, low=0.0, low_inclusive=False)
-    state = Path(state_path) if state_path is not None else None
-    resumed = state is not None and (state / "navigator.json").is_file()
+    state, save_every = feed.state_path, feed.save_every
+    resumed = nav.phase != "idle"
     if resumed:
-        nav = Navigator.load(state, terrain, model_factory=model_factory)
         before = np.asarray(nav.model_map_at_start).copy()
     else:
-        if registry is None or robot is None or battery is None:
-            raise InvalidParameterError("registry, robot and battery are needed unless resuming from a saved state")
-        nav = Navigator(terrain, registry, robot, battery, goal_xy_m, goal_lonlat_deg=goal_lonlat_deg,
-                        physics_ground=physics_ground, settings=settings, model_factory=model_factory,
-                        depot_xy_m=depot_xy_m, learned=learned)
-        before = np.asarray(registry.model_id_map).copy()
+        before = np.asarray(nav.registry.model_id_map).copy()
         first = next(log for kind, log in items if kind == "drive")
         if first.pose_xyh is None:
             raise DataError(f"{first.meta.source!r} holds no poses: a replay needs to know where the robot was")

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import replace
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -18,8 +17,9 @@ from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameE
 from ..cost_spec import CostSpec
 from ..model_cost import model_energy_model
 from ..registry import CellModelRegistry
+from .navigator import Navigator
 from .replay import ReplayResult, replay_drive
-from .settings import AdaptiveSettings
+from .settings import AdaptiveSettings, MissionGoal, NavigatorModels, ReplayFeed
 
 __all__ = ["replay_recording", "place_by_gps"]
 
@@ -64,20 +64,14 @@ def place_by_gps(logs: Sequence[InteractionLog], track: Any, terrain: TerrainMap
 def replay_recording(
     terrain: TerrainMap,
     logs: Sequence[InteractionLog],
-    goal_xy_m: tuple[float, float] | None = None,
+    goal: MissionGoal | None = None,
     *,
-    goal_lonlat_deg: tuple[float, float] | None = None,
     battery: Battery | None = None,
     pricing: CostSpec | None = None,
     settings: AdaptiveSettings | None = None,
     registry: str | os.PathLike[str] | CellModelRegistry | None = None,
     physics_ground: str = "asphalt",
-    mode: str = "auto",
-    chunk_s: float = 1.0,
-    speed_up: float | None = None,
-    depot_xy_m: tuple[float, float] | None = None,
-    state_path: str | os.PathLike[str] | None = None,
-    on_decision: Callable[[Any], None] | None = None,
+    feed: ReplayFeed | None = None,
 ) -> ReplayResult:
     """Replay a recorded drive through a navigator set up as ``terrawatt mission`` sets up its loop.
 
@@ -85,15 +79,17 @@ def replay_recording(
     ``start_registry/`` that ``mission --logs`` writes, or a :class:`planner.registry.CellModelRegistry`),
     or one saved current model (``model``) serving every cell — per ground class through
     :func:`planner.model_cost.model_energy_model` when ``model_ground`` says how. With a
-    ``state_path`` that holds a saved navigator, the replay resumes from it and these are not
-    needed.
+    ``feed.state_path`` that holds a saved navigator, the replay resumes from it and these (and
+    the goal) are not needed.
 
     Parameters
     ----------
     terrain : TerrainMap
     logs : sequence of InteractionLog
         The recording (:func:`energy.io.read_logs`).
-    goal_xy_m, goal_lonlat_deg : (float, float)
+    goal : MissionGoal
+        The goal, in map metres or WGS 84 degrees, and the depot to return to
+        (:class:`~planner.missions.settings.MissionGoal`); not needed when resuming.
     battery : Battery
         The battery, with its state of charge at the start of the recording (e.g.
         :func:`~planner.missions.mission_report.mission_battery`, ``.replace(initial_soc=...)``);
@@ -110,8 +106,9 @@ def replay_recording(
         The models at the start (above): a saved registry, instead of ``pricing.model``.
     physics_ground : str
         Ground preset of the physics slope term of the edge costs.
-    mode, chunk_s, speed_up, depot_xy_m, state_path, on_decision
-        As :func:`~planner.missions.replay.replay_drive`.
+    feed : ReplayFeed, optional
+        Legs or chunks, the pace, the state's folder and who hears the decisions, as
+        :func:`~planner.missions.replay.replay_drive` (default ``ReplayFeed()``).
 
     Returns
     -------
@@ -120,11 +117,13 @@ def replay_recording(
     Raises
     ------
     InvalidParameterError
-        Neither or both of ``registry`` and ``model`` (unless resuming); no battery; bad numbers.
+        Neither or both of ``registry`` and ``model`` (unless resuming); no goal or battery (unless
+        resuming); bad numbers.
     UnknownNameError
         ``physics_ground`` without a preset.
     """
-    resuming = state_path is not None and (Path(state_path) / "navigator.json").is_file()
+    feed = ReplayFeed() if feed is None else check_instance("feed", feed, ReplayFeed)
+    resuming = feed.resumes
     if physics_ground not in GROUND_PRESETS:
         raise UnknownNameError(f"physics_ground {physics_ground!r} has no preset; known grounds: "
                                f"{sorted(GROUND_PRESETS)!r}", parameter="physics_ground")
@@ -133,25 +132,30 @@ def replay_recording(
     robot_given, model = pricing.params, pricing.model
     settings = AdaptiveSettings() if settings is None else check_instance("settings", settings, AdaptiveSettings)
     settings = replace(settings, speed_mps=pricing.speed_mps, risk=pricing.risk)
-    reg, learned = None, None
-    if not resuming:
-        if (registry is None) == (model is None):
-            raise InvalidParameterError("give the models the drive starts with: registry or pricing.model (exactly one)",
-                                        parameter=("registry", "pricing.model"))
-        if battery is None:
-            raise InvalidParameterError("battery is needed (its capacity, voltage, reserve and charge at the start)",
-                                        parameter="battery")
-        battery = check_instance("battery", battery, Battery)
-        if isinstance(registry, CellModelRegistry):
-            reg = registry
-        elif registry is not None:
-            reg = CellModelRegistry.load(registry, load_current_model, terrain=terrain)
-        elif pricing.model_ground is not None:
-            learned, _ = model_energy_model(terrain, model, robot_given, model_ground=pricing.model_ground,
-                                            physics_ground=ground)
-            reg = learned.registry
-        else:
-            reg = CellModelRegistry.from_terrain(terrain, model)
-    return replay_drive(terrain, reg, robot_given, battery, logs, goal_xy_m, goal_lonlat_deg=goal_lonlat_deg,
-                        mode=mode, chunk_s=chunk_s, speed_up=speed_up, settings=settings, physics_ground=ground,
-                        depot_xy_m=depot_xy_m, state_path=state_path, on_decision=on_decision, learned=learned)
+    if resuming:
+        return replay_drive(Navigator.load(feed.state_path, terrain), logs, feed=feed)
+    learned = None
+    if (registry is None) == (model is None):
+        raise InvalidParameterError("give the models the drive starts with: registry or pricing.model (exactly one)",
+                                    parameter=("registry", "pricing.model"))
+    if battery is None:
+        raise InvalidParameterError("battery is needed (its capacity, voltage, reserve and charge at the start)",
+                                    parameter="battery")
+    battery = check_instance("battery", battery, Battery)
+    if goal is None:
+        raise InvalidParameterError("goal is needed (where the drive goes)",
+                                    parameter=("goal_xy_m", "goal_lonlat_deg"))
+    goal = check_instance("goal", goal, MissionGoal)
+    if isinstance(registry, CellModelRegistry):
+        reg = registry
+    elif registry is not None:
+        reg = CellModelRegistry.load(registry, load_current_model, terrain=terrain)
+    elif pricing.model_ground is not None:
+        learned, _ = model_energy_model(terrain, model, robot_given, model_ground=pricing.model_ground,
+                                        physics_ground=ground)
+        reg = learned.registry
+    else:
+        reg = CellModelRegistry.from_terrain(terrain, model)
+    nav = Navigator(terrain, reg, robot_given, battery, goal, settings=settings,
+                    models=NavigatorModels(physics_ground=ground, learned=learned))
+    return replay_drive(nav, logs, feed=feed)

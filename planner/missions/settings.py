@@ -1,15 +1,35 @@
-"""Knobs of the adaptive mission loop: :class:`AdaptiveSettings` and the update scopes."""
+"""Knobs of the adaptive mission loop: :class:`AdaptiveSettings` and the update scopes; where a mission goes
+(:class:`MissionGoal`), how its navigator prices and fits models (:class:`NavigatorModels`) and how a recording is fed
+to it (:class:`ReplayFeed`)."""
 
 from __future__ import annotations
 
+import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
 
-from terrain import InvalidParameterError
-from terrawatt_base.checks import check_bool, check_int, check_real, check_seed
+from energy import GROUND_PRESETS, GroundParams, ground_preset
+from terrain import InvalidParameterError, UnknownNameError
+from terrawatt_base.checks import (
+    check_bool,
+    check_choice,
+    check_instance,
+    check_int,
+    check_real,
+    check_seed,
+    real_array,
+)
 
+from ..learned_cost import LearnedEnergyModel
 from ..registry import UpdatePolicy
 
-__all__ = ["UPDATE_SCOPES", "UPDATE_SOURCES", "AdaptiveSettings"]
+__all__ = ["UPDATE_SCOPES", "UPDATE_SOURCES", "REPLAY_MODES", "AdaptiveSettings", "MissionGoal", "NavigatorModels",
+           "ReplayFeed"]
+
+#: How a recording is fed to a navigator (:class:`ReplayFeed`).
+REPLAY_MODES = ("auto", "legs", "drive")
 
 #: Cells an update covers: every cell of the flagged region's ground class served by the same
 #: model(s) (``"ground_class"``), or only the flagged cells (``"region"``).
@@ -148,3 +168,152 @@ class AdaptiveSettings:
         seed = check_seed(self.seed, f"{own}.seed")
         if seed is None:
             raise InvalidParameterError(f"{own}.seed must be an integer in [0, 2**32), got None")
+
+
+def _pair(name: str, value: Any) -> tuple[float, float] | None:
+    if value is None:
+        return None
+    arr = real_array(name, value, ndim=1)
+    if arr.shape != (2,):
+        raise InvalidParameterError(f"{name} must be a pair of numbers, got {value!r}", parameter=name)
+    return float(arr[0]), float(arr[1])
+
+
+@dataclass(frozen=True, kw_only=True)
+class MissionGoal:
+    """Where a mission goes, and where it returns when the rest does not fit.
+
+    Parameters
+    ----------
+    xy_m : (float, float), optional
+        The goal in map metres; or ``lonlat_deg`` (exactly one).
+    lonlat_deg : (float, float), optional
+        The goal in WGS 84 degrees (through the map's CRS).
+    depot_xy_m : (float, float), optional
+        Where to return when the rest of the mission does not fit (default: no return, stop).
+
+    Raises
+    ------
+    InvalidParameterError
+        Both or neither of ``xy_m`` and ``lonlat_deg``; a point that is not a pair of numbers.
+
+    Examples
+    --------
+    >>> MissionGoal(xy_m=(40, 70), depot_xy_m=(5, 5)).xy_m
+    (40.0, 70.0)
+    """
+
+    xy_m: tuple[float, float] | None = None
+    lonlat_deg: tuple[float, float] | None = None
+    depot_xy_m: tuple[float, float] | None = None
+
+    def __post_init__(self) -> None:
+        if (self.xy_m is None) == (self.lonlat_deg is None):
+            raise InvalidParameterError("give the goal as xy_m or as lonlat_deg (exactly one)",
+                                        parameter=("goal_xy_m", "goal_lonlat_deg"))
+        object.__setattr__(self, "xy_m", _pair("goal_xy_m", self.xy_m))
+        object.__setattr__(self, "lonlat_deg", _pair("goal_lonlat_deg", self.lonlat_deg))
+        object.__setattr__(self, "depot_xy_m", _pair("depot_xy_m", self.depot_xy_m))
+
+
+@dataclass(frozen=True, kw_only=True)
+class NavigatorModels:
+    """How a navigator prices its edges and fits new models.
+
+    Parameters
+    ----------
+    physics_ground : GroundParams or str
+        Ground (or its preset name) of the physics slope term of the learned edge costs
+        (default the asphalt preset); held as ``GroundParams``.
+    model_factory : callable, optional
+        Returns a new unfitted current model (``fit(logs)`` / ``predict(log)``); default
+        :class:`energy.LinearCurrentModel`.
+    learned : LearnedEnergyModel, optional
+        An edge-cost adapter over the navigator's registry (to reuse its table cache, or a saved
+        model's recorded vibration); built when None, with ``physics_ground``.
+
+    Raises
+    ------
+    InvalidParameterError, UnknownNameError
+        Not a ground, a callable or a LearnedEnergyModel; a ground name without a preset.
+
+    Examples
+    --------
+    >>> NavigatorModels(physics_ground="sand").physics_ground.name
+    'sand'
+    """
+
+    physics_ground: GroundParams | str = "asphalt"
+    model_factory: Callable[[], Any] | None = None
+    learned: LearnedEnergyModel | None = None
+
+    def __post_init__(self) -> None:
+        ground = self.physics_ground
+        if isinstance(ground, str):
+            if ground not in GROUND_PRESETS:
+                raise UnknownNameError(f"physics_ground {ground!r} has no preset; known grounds: "
+                                       f"{sorted(GROUND_PRESETS)!r}", parameter="physics_ground")
+            object.__setattr__(self, "physics_ground", ground_preset(ground))
+        check_instance("physics_ground", self.physics_ground, GroundParams)
+        if self.model_factory is not None and not callable(self.model_factory):
+            raise InvalidParameterError(f"model_factory must be callable, got {self.model_factory!r:.80}",
+                                        parameter="model_factory")
+        if self.learned is not None:
+            check_instance("learned", self.learned, LearnedEnergyModel)
+
+
+@dataclass(frozen=True, kw_only=True)
+class ReplayFeed:
+    """How a recording is fed to a navigator, where its state is kept and who hears its decisions.
+
+    Parameters
+    ----------
+    mode : {"auto", "legs", "drive"}
+        ``"legs"``: each drive log is a leg, with a checkpoint at its end; ``"drive"``: the
+        logs are cut in chunks of ``chunk_s``; ``"auto"``: legs when there are several logs.
+    chunk_s : float
+        Chunk length (s, > 0) in ``"drive"`` mode.
+    speed_up : float, optional
+        Pace the replay at this many times real time (> 0; None: as fast as possible).
+    state_path : path, optional
+        Save the navigator's state here every ``save_every`` checkpoints (a replay that finds a
+        state there resumes from it).
+    save_every : int
+        Checkpoints between saves (>= 1).
+    on_decision : callable, optional
+        Called with each decision that is not ``"continue"`` (e.g. to print it).
+
+    Raises
+    ------
+    InvalidParameterError, UnknownNameError
+        A bad chunk length, pace, save interval or callback; an unknown mode.
+
+    Examples
+    --------
+    >>> ReplayFeed(mode="drive", chunk_s=0.5).chunk_s
+    0.5
+    """
+
+    mode: str = "auto"
+    chunk_s: float = 1.0
+    speed_up: float | None = None
+    state_path: str | os.PathLike[str] | None = None
+    save_every: int = 1
+    on_decision: Callable[[Any], None] | None = None
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        check_choice("mode", self.mode, REPLAY_MODES)
+        set_(self, "chunk_s", check_real("chunk_s", self.chunk_s, low=0.0, low_inclusive=False))
+        if self.speed_up is not None:
+            set_(self, "speed_up", check_real("speed_up", self.speed_up, low=0.0, low_inclusive=False))
+        set_(self, "state_path", None if self.state_path is None else Path(self.state_path))
+        set_(self, "save_every", check_int("save_every", self.save_every, low=1))
+        if self.on_decision is not None and not callable(self.on_decision):
+            raise InvalidParameterError(f"on_decision must be callable, got {self.on_decision!r:.80}",
+                                        parameter="on_decision")
+
+    @property
+    def resumes(self) -> bool:
+        """Whether ``state_path`` holds a saved navigator to resume from."""
+        return self.state_path is not None and (Path(self.state_path) / "navigator.json").is_file()

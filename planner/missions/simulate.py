@@ -46,15 +46,16 @@ from energy import (
     energy_budget,
 )
 from energy.battery import Discharge
-from energy.budget import CURRENT_CONVENTIONS, log_battery_power_w
-from energy.profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, drivable_waypoints, planned_durations_s
+from energy.budget import log_battery_power_w
+from energy.profiles import drivable_waypoints, planned_durations_s
 from terrain import TerrainMap
-from terrawatt_base.checks import check_bool, check_choice, check_optional_real, check_real, fmt_number
+from terrawatt_base.checks import check_instance, check_real, fmt_number
 from terrawatt_base.errors import DataError, GridMismatchError, InvalidParameterError, OutOfBoundsError
 
 from ..edge_cost import EnergyCost
 from ..route import Route
 from ..route_price import FORECAST_DT_S, profile_forecast_w, segment_forecasts_j
+from .options import MissionAccounting, MissionDrive
 from .results import MissionResult
 from .tracking import route_speed_mps, segments_by_pose
 
@@ -86,18 +87,8 @@ def simulate_mission(
     truth: TruthSimulator | InteractionLog,
     cost: EnergyCost | None = None,
     *,
-    speed_mps: float | None = None,
-    accel_mps2: float = DEFAULT_ACCEL_MPS2,
-    turn_rate_radps: float | None = None,
-    yaw_accel_radps2: float = DEFAULT_YAW_ACCEL_RADPS2,
-    start_heading_rad: float | None = None,
-    current_convention: str = "motor",
-    electronics: bool = True,
-    current_offset_a: float | None = None,
-    forecast: str = "auto",
-    waypoint_tolerance_m: float | None = None,
-    stop_at_reserve: bool = False,
-    seed: int | None = None,
+    drive: MissionDrive | None = None,
+    accounting: MissionAccounting | None = None,
 ) -> MissionResult:
     """Drive a route (or replay a log that drove it) and account its energy against a battery.
 
@@ -117,50 +108,21 @@ def simulate_mission(
         A truth simulator to drive the route with (its ``run_drive``: it looks up the
         ground and slope along the path), or a recorded log of the route to replay. A log
         with ``pose_xyh`` is mapped onto the route's segments by its pose and must reach
-        the route's end (within ``waypoint_tolerance_m``); a log without pose is taken to
-        follow this function's velocity profile from its first sample and must last as
+        the route's end (within ``drive.waypoint_tolerance_m``); a log without pose is taken
+        to follow this function's velocity profile from its first sample and must last as
         long as the profile.
     cost : EnergyCost, optional
         Edge costs to predict the energy per segment with (e.g. another model's costs than
         the ones that planned the route); ``None`` uses the route's own energies. Its
         speed and turn rate are the profile's defaults.
-    speed_mps : float, optional
-        Cruise speed (m/s); default ``cost.speed_mps``, else the route's planning speed
-        recovered from ``route.duration_s`` (its surface length over its driving time).
-    accel_mps2, yaw_accel_radps2 : float
-        Acceleration limits of the profile (> 0).
-    turn_rate_radps : float, optional
-        Pivot yaw rate (rad/s); default ``cost.turn_rate_radps``, else
-        ``robot.turn_rate_radps``.
-    start_heading_rad : float, optional
-        Heading at the start; ``None`` starts facing the first segment. An initial turn is
-        driven (and booked to segment 0) but not predicted.
-    current_convention : {"motor", "battery"}
-        What the logged side currents measure (see :func:`energy.budget.log_battery_power_w`).
-    electronics : bool
-        Add the robot's sensor and control-board power to the logged drive power (keep it
-        equal to whether the planning model includes them).
-    current_offset_a : float, optional
-        The rest offset of the current sensor that logged the drive (A, >= 0): logged, never
-        paid, so removed before the currents become battery power. ``None``: the truth
-        simulator's own sensor (``truth.noise.current_offset_a``), or for a replayed log the
-        robot's ``rest_current_a``.
-    forecast : {"auto", "profile", "edges"}
-        The predicted energy: ``"profile"`` prices the whole stop-turn-go profile (ramps,
-        pivots, the electronics over the longer drive) with the physics model that priced
-        ``cost`` (:func:`planner.route_price.profile_forecast_w`; a cost from
-        :meth:`EnergyCost.from_model` with a :class:`energy.PhysicsEnergyModel` or
-        ``from_presets``); ``"edges"`` adds up the route's (or ``cost``'s) segment and turn
-        energies, steady driving at the planning speed; ``"auto"`` (default): ``"profile"``
-        where ``cost`` has a physics model, else ``"edges"``.
-    waypoint_tolerance_m : float, optional
-        How close to a segment's end (and to the goal) a logged pose must come (m);
-        default half a map cell.
-    stop_at_reserve : bool
-        End the series at the first sample below the reserve (the mission is aborted
-        there) instead of driving the whole route.
-    seed : int, optional
-        Seed of the truth simulator for this drive (default: the simulator's own).
+    drive : MissionDrive, optional
+        The velocity profile (speed, accelerations, turn rate, start heading), the waypoint
+        tolerance, whether to stop at the reserve and the simulated drive's seed
+        (:class:`planner.missions.options.MissionDrive`; default ``MissionDrive()``).
+    accounting : MissionAccounting, optional
+        What the logged currents measure, the electronics, the current sensor's offset and how
+        the energy is predicted (:class:`planner.missions.options.MissionAccounting`; default
+        ``MissionAccounting()``): ``forecast="profile"`` needs a cost with a physics model.
 
     Returns
     -------
@@ -187,18 +149,21 @@ def simulate_mission(
     --------
     Usage (needs data or fitted models, so not run as a doctest)::
 
-        result = simulate_mission(tmap, route, robot, Battery(20.0, 24.0), truth=sim)
+        result = simulate_mission(tmap, route, robot, Battery(20.0, 24.0), truth=sim,
+                                  drive=MissionDrive(stop_at_reserve=True))
         print(result.status, result.budget.error_pct)
     """
     # the named steps below run in this order; each checks what it is given
-    _check_inputs(terrain, route, robot, battery, truth, cost, current_convention)
-    stop_at_reserve = check_bool("stop_at_reserve", stop_at_reserve)
-    check_choice("forecast", forecast, ("auto", "profile", "edges"))
+    drive = MissionDrive() if drive is None else check_instance("drive", drive, MissionDrive)
+    accounting = MissionAccounting() if accounting is None else check_instance("accounting", accounting,
+                                                                               MissionAccounting)
+    _check_inputs(terrain, route, robot, battery, truth, cost)
+    forecast = accounting.forecast
     if forecast == "profile" and (cost is None or cost.physics_model is None):
         raise InvalidParameterError("forecast='profile' needs a cost built with a PhysicsEnergyModel "
-                                    "(EnergyCost.from_model or from_presets); use forecast='edges'")
-    prof = _profile(terrain, route, robot, cost, speed_mps, accel_mps2, turn_rate_radps, yaw_accel_radps2,
-                    waypoint_tolerance_m, start_heading_rad)
+                                    "(CostSpec.build on the robot's physics); use forecast='edges'",
+                                    parameter="accounting.forecast")
+    prof = _profile(terrain, route, robot, cost, drive)
     straight_pred, turn_pred = _segment_predictions(route, cost)
     pts, kept = drivable_waypoints(route.waypoints_m)
     turn_s, straight_s = planned_durations_s(pts, prof.start_heading_rad, prof.speed_mps, prof.accel_mps2,
@@ -214,18 +179,19 @@ def simulate_mission(
         forecast = "edges"
     seg_pred = straight_pred + turn_pred
 
-    log, truth_power, source = _drive_or_replay(terrain, truth, pts, prof, seed)
+    log, truth_power, source = _drive_or_replay(terrain, truth, pts, prof, drive.seed)
     t = log.time_s - log.time_s[0]
     if len(log) < 2:
         raise DataError(f"the log has {len(log)} drive sample(s); a mission needs at least 2")
     xy, heading, sub = _track(terrain, log, t, pts, turn_s, straight_s, prof)
     seg_index = kept[sub]
 
+    current_offset_a = accounting.current_offset_a
     if current_offset_a is None and isinstance(truth, TruthSimulator):
         current_offset_a = truth.noise.current_offset_a
-    power = log_battery_power_w(log, robot, current_convention=current_convention, electronics=electronics,
-                                current_offset_a=current_offset_a)
-    discharge, log, end = _discharge(battery, log, t, power, stop_at_reserve)
+    power = log_battery_power_w(log, robot, current_convention=accounting.current_convention,
+                                electronics=accounting.electronics, current_offset_a=current_offset_a)
+    discharge, log, end = _discharge(battery, log, t, power, drive.stop_at_reserve)
     aborted = end < len(t)
     sl = slice(0, end)
     si, ts = seg_index[sl], t[sl]
@@ -278,7 +244,7 @@ def simulate_mission(
         accel_mps2=prof.accel_mps2,
         turn_rate_radps=prof.turn_rate_radps,
         yaw_accel_radps2=prof.yaw_accel_radps2,
-        current_convention=current_convention,
+        current_convention=accounting.current_convention,
         truth_energy_j=truth_energy_j,
         log=log,
         depleted_time_s=empty_t,
@@ -289,7 +255,7 @@ def simulate_mission(
 
 # ------------------------------------------------------------------ the steps
 def _check_inputs(terrain: object, route: object, robot: object, battery: object, truth: object,
-                  cost: object, current_convention: object) -> None:
+                  cost: object) -> None:
     """Types, a found route of positive length inside the map, a cost on the map's grid."""
     for name, value, cls in (("terrain", terrain, TerrainMap), ("route", route, Route),
                              ("robot", robot, RobotParams), ("battery", battery, Battery)):
@@ -303,7 +269,6 @@ def _check_inputs(terrain: object, route: object, robot: object, battery: object
         )
     if cost is not None and not isinstance(cost, EnergyCost):
         raise InvalidParameterError(f"cost must be an EnergyCost or None, got {type(cost).__name__!r}")
-    check_choice("current_convention", current_convention, CURRENT_CONVENTIONS)
     wp = route.waypoints_m
     if np.all(wp == wp[0]):
         raise InvalidParameterError(
@@ -324,25 +289,23 @@ def _check_inputs(terrain: object, route: object, robot: object, battery: object
 
 
 def _profile(terrain: TerrainMap, route: Route, robot: RobotParams, cost: EnergyCost | None,
-             speed_mps: object, accel_mps2: object, turn_rate_radps: object, yaw_accel_radps2: object,
-             waypoint_tolerance_m: object, start_heading_rad: object) -> _Profile:
-    """The velocity profile: the arguments given, else the cost's, the robot's or the route's."""
-    positive = {"low": 0.0, "low_inclusive": False}
-    if turn_rate_radps is None:
-        turn_rate_radps = cost.turn_rate_radps if cost is not None else robot.turn_rate_radps
-    turn_rate = check_real("turn_rate_radps", turn_rate_radps, **positive)
-    if speed_mps is None:
+             drive: MissionDrive) -> _Profile:
+    """The velocity profile: the drive's values, else the cost's, the robot's or the route's."""
+    turn_rate = drive.turn_rate_radps
+    if turn_rate is None:
+        turn_rate = check_real("turn_rate_radps", cost.turn_rate_radps if cost is not None else robot.turn_rate_radps,
+                               low=0.0, low_inclusive=False)
+    speed = drive.speed_mps
+    if speed is None:
         speed = cost.speed_mps if cost is not None else route_speed_mps(terrain, route, turn_rate)
-    else:
-        speed = check_real("speed_mps", speed_mps, **positive)
-    tol = check_optional_real("waypoint_tolerance_m", waypoint_tolerance_m, low=0.0)
+    tol = drive.waypoint_tolerance_m
     return _Profile(
         speed_mps=speed,
-        accel_mps2=check_real("accel_mps2", accel_mps2, **positive),
+        accel_mps2=drive.accel_mps2,
         turn_rate_radps=turn_rate,
-        yaw_accel_radps2=check_real("yaw_accel_radps2", yaw_accel_radps2, **positive),
+        yaw_accel_radps2=drive.yaw_accel_radps2,
         tolerance_m=terrain.cell_size_m / 2.0 if tol is None else tol,
-        start_heading_rad=check_optional_real("start_heading_rad", start_heading_rad),
+        start_heading_rad=drive.start_heading_rad,
     )
 
 

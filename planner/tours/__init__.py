@@ -4,10 +4,11 @@ left when back (issue 33)."""
 from __future__ import annotations
 
 from .check import simulate_tours_mc
+from .options import TourFleet, TourSearch
 from .pricing import PairPrices, price_pairs
 from .result import RobotTour, TourLeg, TourResult
 from .sites import TourChargers, TourRobot, TourSites, read_tour_chargers_csv, read_tour_sites_csv
-from .solver import TourProblem, solve_tours
+from .solver import TourPoints, TourProblem, solve_tours
 from .tour import plan_tour, plan_tour_on_map
 
 __all__ = [
@@ -23,6 +24,9 @@ __all__ = [
     "TourLeg",
     "PairPrices",
     "price_pairs",
+    "TourSearch",
+    "TourFleet",
+    "TourPoints",
     "TourProblem",
     "solve_tours",
     "simulate_tours_mc",

@@ -13,7 +13,7 @@ from terrawatt_base.checks import check_instance, check_int, check_seed
 from terrawatt_base.dask_client import Compute
 from terrawatt_base.errors import InvalidParameterError
 
-from ..missions import MonteCarloResult, simulate_missions_mc
+from ..missions import MonteCarloResult, MonteCarloStudy, simulate_missions_mc
 from ..risk import RouteEnergyInterval
 from ..route import Route
 from .result import TourResult
@@ -112,8 +112,9 @@ def simulate_tours_mc(result: TourResult, n: int = 1000, *, seed: int | None = 0
             studies = []
             for route, battery, forecast in _segments(result, k):
                 studies.append(simulate_missions_mc(
-                    result.terrain, route, battery, n, seed=None if seed is None else seed + k, cost=result.cost,
-                    draw_from=mode, forecast=forecast if mode == "model" else None, compute=each))
+                    result.terrain, route, battery, MonteCarloStudy(n, seed=None if seed is None else seed + k,
+                                                                    draw_from=mode),
+                    cost=result.cost, forecast=forecast if mode == "model" else None, compute=each))
             runs[tour.robot] = tuple(studies)
     return TourCheck(result.risk, runs, mode)
 

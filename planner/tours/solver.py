@@ -46,7 +46,7 @@ from terrawatt_base.errors import InvalidParameterError, OptionalDependencyError
 
 from .pricing import PairPrices
 
-__all__ = ["TourProblem", "walk_timeline", "solve_pyvrp", "solve_ortools", "solve_tours", "UNITS", "VALUE_SCALE", "SOLVERS",
+__all__ = ["TourPoints", "TourProblem", "walk_timeline", "solve_pyvrp", "solve_ortools", "solve_tours", "UNITS", "VALUE_SCALE", "SOLVERS",
            "HORIZON_S"]
 
 #: Integer units of the largest budget (an arc is rounded up by less than one).
@@ -75,6 +75,17 @@ def walk_timeline(drive_s: np.ndarray, service_s: np.ndarray, window_s: np.ndarr
         t = starts[-1] + service_s[b]
     back = t + drive_s[seq[-2], seq[-1]] if len(seq) >= 2 else t
     return arrivals, starts, back
+
+
+@dataclass(frozen=True, eq=False)
+class TourPoints:
+    """What each point of a tour problem (depots, sites, chargers, by index) asks: its value, service energy (J),
+    service time (s) and time window ``(earliest_s, latest_s)`` (no service time and no windows by default)."""
+
+    value: Any
+    service_j: Any
+    service_time_s: Any = None
+    window_s: Any = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -181,12 +192,14 @@ class TourProblem:
 
     @classmethod
     def build(cls, prices: PairPrices, q: float, budgets_j: Any, depot_points: Any, site_points: Any,
-              values: Any, service_j: Any, service_time_s: Any = None, window_s: Any = None,
-              max_duration_s: Any = None, full_budgets_j: Any = None) -> TourProblem:
-        """The problem of visiting ``site_points`` (values, service energies, service times and time windows
-        ``(earliest_s, latest_s)`` per point index; no service time and no windows by default) at risk ``q``, each
+              points: TourPoints, max_duration_s: Any = None, full_budgets_j: Any = None) -> TourProblem:
+        """The problem of visiting ``site_points`` (what each point asks: :class:`TourPoints`) at risk ``q``, each
         robot's tour lasting at most its ``max_duration_s`` (``None`` or inf: no limit); ``full_budgets_j``: each
         robot's budget after a charge to full (default its budget; :meth:`with_chargers` adds the chargers)."""
+        if not isinstance(points, TourPoints):
+            raise InvalidParameterError(f"points must be a TourPoints, got {type(points).__name__!r}")
+        values, service_j, service_time_s, window_s = points.value, points.service_j, points.service_time_s, \
+            points.window_s
         budgets = np.asarray(budgets_j, dtype=float)
         full_j = budgets if full_budgets_j is None else np.asarray(full_budgets_j, dtype=float)
         unit = max(float(budgets.max()), float(full_j.max()), 1.0) / UNITS

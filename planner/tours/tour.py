@@ -5,23 +5,24 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from energy import Battery
 from terrain import TerrainMap
-from terrawatt_base.checks import check_instance, check_int, check_real, check_seed
+from terrawatt_base.checks import check_instance
 from terrawatt_base.dask_client import Compute
 from terrawatt_base.errors import BlockedPositionError, InvalidParameterError
 
 from ..cost_spec import CostSpec
 from ..edge_cost import EnergyCost
-from ..risk import RouteEnergyInterval, check_planning_risk
+from ..risk import RouteEnergyInterval
+from .options import TourFleet, TourSearch
 from .pricing import PairPrices, price_pairs
 from .result import RobotTour, TourLeg, TourResult
 from .sites import TourChargers, TourRobot, TourSites
-from .solver import HORIZON_S, TourProblem, solve_tours, walk_timeline
+from .solver import HORIZON_S, TourPoints, TourProblem, solve_tours, walk_timeline
 
 __all__ = ["plan_tour", "plan_tour_on_map", "TOO_FAR", "NOT_WORTH_IT", "NO_ROUTE", "OUTSIDE_WINDOW", "TOO_LONG",
            "REASONS"]
@@ -57,17 +58,14 @@ def plan_tour(
     sites: TourSites,
     robots: TourRobot | Sequence[TourRobot],
     *,
-    risk: float = 0.9,
-    time_limit_s: float = 10.0,
-    seed: int = 0,
+    search: TourSearch | None = None,
     compute: Compute | None = None,
-    solver: str | None = None,
     map_label: str = "map",
     prices: PairPrices | None = None,
     chargers: TourChargers | None = None,
 ) -> TourResult:
     """Choose and order the sites each robot visits to maximise the value collected, every tour at risk level
-    ``risk`` coming back above its reserve.
+    ``search.risk`` coming back above its reserve.
 
     Every ordered pair of depots and sites is priced on ``cost`` (:func:`planner.tours.pricing.price_pairs`:
     the planner's lattice routes, their mean energy and run-level spread per ground; asymmetric), the
@@ -91,18 +89,14 @@ def plan_tour(
         The candidate sites; one off the map or on a blocked cell is an error row, the others are kept.
     robots : TourRobot or sequence of TourRobot
         The fleet: battery, reserve and depot each.
-    risk : float
-        The level Q in [0.5, 1).
-    time_limit_s : float
-        The solver's time limit per solve (s); it usually stops earlier (no improvement).
-    seed : int
-        The solver's seed.
+    search : TourSearch, optional
+        The level Q in [0.5, 1) (``risk``), the routing solver (default "pyvrp", "ortools" with
+        chargers: the only one that stops at them), its time limit per solve (s; it usually stops
+        earlier, at no improvement) and its seed (:class:`planner.tours.options.TourSearch`;
+        default ``TourSearch()``: Q = 0.9, 10 s, seed 0).
     compute : Compute, optional
         Where the legs are priced and whether a bar shows over the pricing
         (:class:`terrawatt_base.dask_client.Compute`, as :func:`planner.plan_batch`; default here).
-    solver : {"pyvrp", "ortools"}, optional
-        The routing solver; default "pyvrp", "ortools" with chargers (the
-        only one that stops at them).
     map_label : str
         How the result names the map.
     prices : PairPrices, optional
@@ -142,9 +136,8 @@ def plan_tour(
     if not isinstance(sites, TourSites):
         raise InvalidParameterError(f"sites must be a TourSites, got {type(sites).__name__!r}")
     fleet = _robots(robots)
-    q = check_planning_risk(risk, "risk")
-    time_limit_s = check_real("time_limit_s", time_limit_s, low=0.0, low_inclusive=False)
-    seed = check_seed(seed) or 0
+    search = TourSearch() if search is None else check_instance("search", search, TourSearch)
+    q, solver = search.risk, search.solver
     depots = sorted({r.depot_xy_m for r in fleet})
     dxy = np.array(depots, dtype=float)
     cost.check_inside(dxy, "depot")
@@ -187,8 +180,9 @@ def plan_tour(
 
     def problem(points: Any) -> TourProblem:
         built = dataclasses.replace(
-            TourProblem.build(prices, q, budgets, depot_points, points, value, service, timing.service_s,
-                              timing.window_s, shifts, [rb.full_budget_j for rb in fleet]),
+            TourProblem.build(prices, q, budgets, depot_points, points,
+                              TourPoints(value, service, timing.service_s, timing.window_s), shifts,
+                              [rb.full_budget_j for rb in fleet]),
             standby_w=np.array([rb.standby_power_w for rb in fleet]))
         return built.with_chargers(charger_points, chargers.max_visits) if chargers is not None else built
 
@@ -214,20 +208,21 @@ def plan_tour(
     where_xy = {n: (float(x), float(y)) for n, (x, y) in zip(sites.names, sites.xy_m.tolist())}
     windows = {n: (float(e), float(late)) for n, (e, late) in zip(sites.names, sites.time_window_s.tolist())
                if e > 0 or np.isfinite(late)}
-    at_charger = set(charger_points.tolist())
+    at = _Points(value, service, timing, set(charger_points.tolist()), q)
     if not candidates:
         reachable = any(why == NOT_WORTH_IT for why in left_out.values())  # reachable, but worth nothing
-        empty = tuple(_tour(prices, rb, [], d, service, value, q, timing, at_charger)
+        empty = tuple(_tour(prices, rb, [], d, at)
                       for rb, d in zip(fleet, depot_points.tolist()))
         return TourResult("planned" if reachable else "nothing reachable", q, empty, left_out, errors, values,
                           solver or ("ortools" if chargers is not None else "pyvrp"), prices.pricing_time_s, 0.0, 0,
                           prices.where, map_label, where_xy, cost.terrain, cost, prices, windows, chargers)
-    outcome = solve_tours(prices, problem(np.array(candidates)), solver=solver, time_limit_s=time_limit_s, seed=seed)
+    outcome = solve_tours(prices, problem(np.array(candidates)), solver=solver, time_limit_s=search.time_limit_s,
+                          seed=search.seed)
     chosen = {p for t in outcome.tours for p in t}
     for p in candidates:
         if p not in chosen:
             left_out[names[p]] = NOT_WORTH_IT
-    tours = tuple(_tour(prices, rb, t, d, service, value, q, timing, at_charger)
+    tours = tuple(_tour(prices, rb, t, d, at)
                   for rb, t, d in zip(fleet, outcome.tours, depot_points.tolist()))
     return TourResult("planned", q, tours, left_out, errors, values, outcome.solver, prices.pricing_time_s,
                       outcome.solve_time_s, outcome.rounds, prices.where, map_label, where_xy, cost.terrain, cost,
@@ -250,10 +245,22 @@ class _Timing:
         return tuple(map(float, arrivals)), tuple(map(float, starts)), float(back)
 
 
-def _tour(prices: PairPrices, robot: TourRobot, stops: list[int], depot: int, service: np.ndarray,
-          value: np.ndarray, q: float, timing: _Timing, chargers: set[int]) -> RobotTour:
-    """One robot's :class:`RobotTour` from its stops (point indices: sites and ``chargers``), the energy counted
+@dataclass(frozen=True)
+class _Points:
+    """What a tour of the points (depots, sites, chargers by index) reads: value, service energy (J), timing, the
+    charger points and the level Q."""
+
+    value: np.ndarray
+    service: np.ndarray
+    timing: _Timing
+    chargers: set[int]
+    q: float
+
+
+def _tour(prices: PairPrices, robot: TourRobot, stops: list[int], depot: int, points: _Points) -> RobotTour:
+    """One robot's :class:`RobotTour` from its stops (point indices: sites and chargers), the energy counted
     afresh after each charge."""
+    service, value, q, timing, chargers = points.service, points.value, points.q, points.timing, points.chargers
     seq = [depot, *stops, depot] if stops else []
     sites = [p for p in stops if p not in chargers]
     arrivals, starts, back = timing.walk(seq)
@@ -279,43 +286,48 @@ def _tour(prices: PairPrices, robot: TourRobot, stops: list[int], depot: int, se
 def plan_tour_on_map(
     terrain: TerrainMap,
     sites: TourSites,
-    depot_xy_m: tuple[float, float] | Sequence[tuple[float, float]],
+    fleet: TourFleet,
     *,
-    battery: Battery,
-    n_robots: int = 1,
-    max_duration_s: float | None = None,
-    risk: float = 0.9,
+    search: TourSearch | None = None,
     pricing: CostSpec | None = None,
-    time_limit_s: float = 10.0,
-    seed: int = 0,
     compute: Compute | None = None,
     map_label: str = "map",
     chargers: TourChargers | None = None,
 ) -> TourResult:
-    """:func:`plan_tour` on a map priced as ``terrawatt tour`` prices it: ``n_robots`` alike robots with one depot, or
-    one each (``depot_xy_m`` a sequence of ``n_robots`` points), and the ``chargers`` they may stop at.
+    """:func:`plan_tour` on a map priced as ``terrawatt tour`` prices it: a fleet of alike robots and the
+    ``chargers`` they may stop at.
 
-    The edges are priced as ``pricing`` says (:meth:`planner.cost_spec.CostSpec.build`, default
-    ``CostSpec()``; the tour's level is ``risk``, not the spec's); every robot carries ``battery`` (e.g.
-    :func:`planner.missions.mission_report.mission_battery`: a capacity at the robot's voltage with its reserve); each tour lasts at
-    most ``max_duration_s`` (s; ``None``: no limit); waiting for a window draws the robot's
-    ``sensor_power_w + control_standby_power_w``.
+    Parameters
+    ----------
+    terrain : TerrainMap
+        The map.
+    sites : TourSites
+        The sites (value, service, time windows).
+    fleet : TourFleet
+        ``n_robots`` alike robots, each carrying ``battery``, with one depot or one each, each tour
+        lasting at most ``max_duration_s`` (:class:`planner.tours.options.TourFleet`); waiting for a
+        window draws the robot's ``sensor_power_w + control_standby_power_w``.
+    search : TourSearch, optional
+        The tour's risk level (not the spec's), the solver, its time and seed
+        (:class:`planner.tours.options.TourSearch`; default ``TourSearch()``).
+    pricing : CostSpec, optional
+        How the edges are priced (:meth:`planner.cost_spec.CostSpec.build`; default ``CostSpec()``).
+    compute, map_label, chargers
+        As :func:`plan_tour`.
+
+    Returns
+    -------
+    TourResult
 
     Raises
     ------
     InvalidParameterError
-        Not a Battery; fewer than one robot; several depots but not one per robot; as :func:`plan_tour`.
+        Not a TourFleet; as :func:`plan_tour`.
     """
-    battery = check_instance("battery", battery, Battery)
-    n_robots = check_int("n_robots", n_robots, low=1)
+    fleet = check_instance("fleet", fleet, TourFleet)
     pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
     standby_w = pricing.params.sensor_power_w + pricing.params.control_standby_power_w  # waiting for a window
     cost = pricing.build(terrain)
-    depots = np.asarray(depot_xy_m, dtype=float)
-    depots = depots.reshape(-1, 2) if depots.ndim == 2 else np.tile(depots, (n_robots, 1))
-    if depots.shape[0] != n_robots:
-        raise InvalidParameterError(f"depot_xy_m must be one point or one per robot (n_robots={n_robots}), got "
-                                    f"{depots.shape[0]} points")
-    fleet = [TourRobot(battery, tuple(depots[k]), f"robot {k}", max_duration_s, standby_w) for k in range(n_robots)]
-    return plan_tour(cost, sites, fleet, risk=risk, time_limit_s=time_limit_s, seed=seed, compute=compute,
-                     map_label=map_label, chargers=chargers)
+    robots = [TourRobot(fleet.battery, depot, f"robot {k}", fleet.max_duration_s, standby_w)
+              for k, depot in enumerate(fleet.depot_xy_m)]
+    return plan_tour(cost, sites, robots, search=search, compute=compute, map_label=map_label, chargers=chargers)

@@ -41,7 +41,7 @@ def _library_mission(path: Path):
     """The mission `terrawatt mission --map path --start 3 12 --goal 57 12 --battery-ah 20` runs, via the API."""
     from energy import Battery, TruthSimulator, ground_preset, robot_preset
     from planner import AdaptiveSettings, run_adaptive_mission
-    from planner.missions import fit_prior_model
+    from planner.missions import Navigator, NavigatorModels, fit_prior_model
 
     tmap = terrain.read_map(path)
     robot = robot_preset("husky")
@@ -49,9 +49,11 @@ def _library_mission(path: Path):
     truth = TruthSimulator(robot, grounds, seed=0)
     prior = fit_prior_model(truth, "asphalt", seed=0)
     registry = planner.registry.CellModelRegistry.from_terrain(tmap, prior, prior_name="asphalt-prior")
-    return run_adaptive_mission(tmap, registry, robot, Battery(20.0, robot.battery_voltage_v, min_reserve_pct=20.0),
-                                truth, (3.0, 12.0), (57.0, 12.0), physics_ground=grounds["asphalt"],
-                                settings=AdaptiveSettings(speed_mps=0.5, leg_length_m=10.0, seed=0))
+    return run_adaptive_mission(Navigator(tmap, registry, robot,
+                                          Battery(20.0, robot.battery_voltage_v, min_reserve_pct=20.0), (57.0, 12.0),
+                                          settings=AdaptiveSettings(speed_mps=0.5, leg_length_m=10.0, seed=0),
+                                          models=NavigatorModels(physics_ground=grounds["asphalt"])), truth,
+                                (3.0, 12.0))
 
 
 def test_mission_without_adaptation_makes_no_update(tmp_path, capsys):

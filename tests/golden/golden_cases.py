@@ -148,6 +148,19 @@ def case_tour_chargers(work: Path) -> dict[str, Path]:
     return {f"tour_chargers/{p.name}": p for p in sorted(out.iterdir())}
 
 
+def case_tour_windows(work: Path) -> dict[str, Path]:
+    """One robot's tour of four sites with service energy and time, two time windows and a duration limit."""
+    path = patch_map(work)
+    sites = work / "sites.csv"
+    sites.write_text("name,x_m,y_m,value,service_energy_j,service_time_s,tw_start_s,tw_end_s\n"
+                     "pump,10.5,20.5,2,50,5,,\ngate,30.5,3.5,1,0,0,100,400\nshed,55.5,20.5,3,80,10,0,300\n"
+                     "well,50.5,5.5,1,20,3,,\n")
+    out = work / "tour_windows"
+    _cli("tour", "--map", path, "--sites", sites, "--depot", 3.5, 12.5, "--battery-ah", 0.2, "--voltage", 24,
+         "--max-duration", 600, "--risk", 0.9, "--time-limit", 1, "--out", out)
+    return {f"tour_windows/{p.name}": p for p in sorted(out.iterdir())}
+
+
 def case_plan_exports(work: Path) -> dict[str, Path]:
     """The route and map for ROS 2 / Nav2 (needs the ros and geo extras: rosbags, rasterio)."""
     path = patch_map(work)
@@ -220,13 +233,15 @@ def case_library(work: Path) -> dict[str, Path]:
     from energy import Battery, TruthSimulator, ground_preset, robot_preset
     from energy.params import write_robot_file
     from planner import plan_route, simulate_mission
+    from planner.missions import MissionDrive
 
     tmap = terrain.read_map(patch_map(work))
     husky = robot_preset("husky")
     cost = CostSpec(robot=husky, speed_mps=0.5).build(tmap)
     route = plan_route(tmap, (3.0, 12.0), (57.0, 12.0), cost=cost, planner="lattice")
     truth = TruthSimulator(husky, {g: ground_preset(g) for g in ("asphalt", "sand")}, seed=0)
-    mission = simulate_mission(tmap, route, husky, Battery(20.0, husky.battery_voltage_v), truth, cost, seed=1)
+    mission = simulate_mission(tmap, route, husky, Battery(20.0, husky.battery_voltage_v), truth, cost,
+                               drive=MissionDrive(seed=1))
     return {"library/husky.json": write_robot_file(husky, work / "husky.json"),
             "library/mission.json": mission.save_json(work / "mission.json", series_every=200)}
 
@@ -278,6 +293,44 @@ def case_replay(work: Path) -> dict[str, Path]:
     files |= {f"replay/start_registry/{p.name}": p for p in sorted((mission / "start_registry").iterdir())}
     files |= {f"replay/state/{p.name}": p for p in sorted((work / "state").iterdir())}
     return files | {f"replay/{p.name}": p for p in sorted(out.iterdir())}
+
+
+def case_mission_variants(work: Path) -> dict[str, Path]:
+    """The mission paths the other cases do not take: a Monte Carlo study drawn from a model's predictive
+    distribution, a replay of a drive in chunks, and ``simulate_mission`` replaying a log against a small battery
+    (edge forecast, stopped at the reserve, no sensor offset)."""
+    from energy import Battery, TruthSimulator, ground_preset, robot_preset
+    from planner import plan_route, simulate_mission
+    from planner.missions import MissionAccounting, MissionDrive
+
+    path = patch_map(work)
+    model = work / "linear.zip"
+    _cli("train", "--data", FIXTURES / "borealtc", "--model", "linear", "--seed", 0, "--out", model)
+    mc = work / "mc_model"
+    _cli("mission", "--map", path, "--start", 3, 12, "--goal", 57, 12, "--battery-ah", 5, "--monte-carlo", 6,
+         "--mc-draw", "model", "--model", model, "--model-ground", "sand=snow", "--seed", 2, "--out", mc)
+    mission = work / "mission"
+    _cli("mission", "--map", path, "--start", 16, 12, "--goal", 30, 12, "--battery-ah", 20, "--speed", 1.0,
+         "--leg-m", 8, "--logs", "--out", mission)
+    replay = work / "replay_chunks"
+    with contextlib.chdir(work):
+        _cli("replay", "--data", "mission/logs", "--map", path.name, "--registry", "mission/start_registry",
+             "--goal", 30, 12, "--battery-ah", 20, "--speed", 1.0, "--mode", "drive", "--chunk-s", 2.5, "--no-mcap",
+             "--out", "replay_chunks")
+    tmap = terrain.read_map(path)
+    husky = robot_preset("husky")
+    cost = CostSpec(robot=husky, speed_mps=0.5).build(tmap)
+    route = plan_route(tmap, (3.0, 12.0), (57.0, 12.0), cost=cost, planner="lattice")
+    truth = TruthSimulator(husky, {g: ground_preset(g) for g in ("asphalt", "sand")}, seed=0)
+    driven = simulate_mission(tmap, route, husky, Battery(20.0, husky.battery_voltage_v), truth, cost,
+                              drive=MissionDrive(seed=4))
+    small = Battery(0.04, husky.battery_voltage_v, min_reserve_pct=30.0)
+    replayed = simulate_mission(tmap, route, husky, small, driven.log, cost,
+                                accounting=MissionAccounting(forecast="edges", current_offset_a=0.0),
+                                drive=MissionDrive(stop_at_reserve=True, speed_mps=0.5, accel_mps2=0.8))
+    files = {f"mission_variants/mc_model/{p.name}": p for p in sorted(mc.iterdir())}
+    files |= {f"mission_variants/replay_chunks/{p.name}": p for p in sorted(replay.iterdir())}
+    return files | {"mission_variants/replayed.json": replayed.save_json(work / "replayed.json", series_every=50)}
 
 
 #: Outputs compared by digest rather than in full (``fnmatch`` patterns of golden paths): the replay's inputs

@@ -7,6 +7,7 @@ from energy import InteractionLog, LogMeta, PhysicsEnergyModel, ground_preset, r
 from energy.budget import log_battery_power_w
 from planner import CostSpec, LearnedEnergyModel
 from planner.learned_table import TableProbe
+from planner.missions import MissionDrive
 from planner.registry import CellModelRegistry
 from terrain import InvalidParameterError, TerrainMap, UnknownNameError
 
@@ -189,7 +190,8 @@ def test_route_prediction_prices_the_stops_the_edge_costs_miss():
     cost = lem.energy_cost(tmap, 0.5)
     wp = [[2.5, 2.5], [12.5, 2.5], [12.5, 9.5], [20.5, 14.5]]  # two pivots, three stops
     route = evaluate_route(cost, wp)
-    actual = simulate_mission(tmap, route, robot, Battery(20.0, 24.0), truth, cost, seed=5).budget.actual_energy_j
+    actual = simulate_mission(tmap, route, robot, Battery(20.0, 24.0), truth, cost,
+                              drive=MissionDrive(seed=5)).budget.actual_energy_j
     predicted = lem.predict_route_energy_j(tmap, wp, 0.5, dt_s=1.0 / truth.current_rate_hz)
     assert abs(predicted / actual - 1.0) < 0.03
     assert abs(route.energy_j / actual - 1.0) > 2 * abs(predicted / actual - 1.0)

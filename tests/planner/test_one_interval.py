@@ -21,6 +21,7 @@ from planner import (
     simulate_missions_mc,
 )
 from planner.cost_spec import CostSpec
+from planner.missions import MonteCarloStudy, NavigatorModels
 from planner.plan_report import plan_and_compare
 from planner.planning import RouteSearch
 from planner.registry import CellModelRegistry
@@ -128,13 +129,13 @@ def test_monte_carlo_draws_put_nine_in_ten_missions_below_the_route_p90(world):
     for start, goal, dof in ((GRASS_START, GRASS_GOAL, 3.0), (LOAM_START, LOAM_GOAL, math.inf)):
         route = _route(tmap, cost, start, goal)
         iv = price_route(cost, route)
-        mc = simulate_missions_mc(tmap, route, battery, 4000, cost=cost, draw_from="model", seed=7)
+        mc = simulate_missions_mc(tmap, route, battery, MonteCarloStudy(4000, draw_from="model", seed=7), cost=cost)
         assert mc.forecast == iv and iv.dof == dof
         share = float(np.mean(mc.energy_j <= iv.p90_j))
         assert share == pytest.approx(0.9, abs=0.02)  # 4.5 sampling sd; a Gaussian draw would give 0.95 on grass
         assert float(np.mean(mc.energy_j <= iv.quantile_j(0.99))) == pytest.approx(0.99, abs=0.006)
         assert ("Student-t" in mc.summary()) == math.isfinite(dof)
-    again = simulate_missions_mc(tmap, route, battery, 50, cost=cost, draw_from="model", seed=7)
+    again = simulate_missions_mc(tmap, route, battery, MonteCarloStudy(50, draw_from="model", seed=7), cost=cost)
     assert np.array_equal(again.energy_j, mc.energy_j[:50])
 
 
@@ -142,7 +143,8 @@ def test_the_navigator_reads_its_remaining_forecast_from_the_same_predictive(wor
     tmap, lem, cost = world
     settings = AdaptiveSettings(leg_length_m=8.0, seed=0, risk=0.9, speed_mps=0.5)
     for start, goal, dof in ((GRASS_START, GRASS_GOAL, 3.0), (LOAM_START, LOAM_GOAL, math.inf)):
-        nav = Navigator(tmap, lem.registry, lem.robot, Battery(40.0, 24.0), goal, settings=settings, learned=lem)
+        nav = Navigator(tmap, lem.registry, lem.robot, Battery(40.0, 24.0), goal, settings=settings,
+                        models=NavigatorModels(learned=lem))
         nav.plan(start)
         fc = nav.forecast()
         assert fc.dof == price_route(nav.cost, nav.route).dof == dof

@@ -208,6 +208,7 @@ def test_the_adaptive_loop_replans_incrementally_with_the_same_lattice_optimum(m
     import planner.missions.navigator as adaptive_module
     from energy import Battery, LinearCurrentModel, TruthSimulator, excitation_commands, ground_preset, robot_preset
     from planner import AdaptiveSettings, run_adaptive_mission
+    from planner.missions import Navigator, NavigatorModels
     from planner.registry import CellModelRegistry
 
     robot = robot_preset("husky")
@@ -231,8 +232,9 @@ def test_the_adaptive_loop_replans_incrementally_with_the_same_lattice_optimum(m
         return route(self, start_xy_m, **kwargs)
 
     monkeypatch.setattr(adaptive_module.IncrementalPlanner, "route", checked_route)
-    res = run_adaptive_mission(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0), truth,
-                               (2.5, 8.0), (37.5, 8.0), physics_ground=ground_preset("asphalt"),
-                               settings=AdaptiveSettings(leg_length_m=8.0, seed=0, max_updates=2))
+    res = run_adaptive_mission(Navigator(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0),
+                                         (37.5, 8.0),
+                                         settings=AdaptiveSettings(leg_length_m=8.0, seed=0, max_updates=2),
+                                         models=NavigatorModels(physics_ground=ground_preset("asphalt"))), truth, (2.5, 8.0))
     assert res.status == "completed" and res.accepted_updates >= 1
     assert len(calls) == len(res.replans) - 1 >= 1 and all(t > 0 for t in calls)  # every replan, after an update

@@ -7,6 +7,7 @@ import pytest
 from energy import Battery
 from planner import MissionDistributions, plan_route, simulate_missions_mc
 from planner.cost_spec import CostSpec
+from planner.missions import MissionTruth, MonteCarloStudy
 
 NOMINAL = Battery(2.0, 24.0)
 NO_DASK = "Monte Carlo on a cluster needs the distributed extra (dask[distributed])"
@@ -26,6 +27,13 @@ def setup():
     return tmap, route
 
 
+STUDY = ("seed", "draw_from", "distributions", "chunk_size", "max_risk_pct")
+TRUTH = ("robot", "grounds", "speed_mps", "current_rate_hz")
+
+
 def run_mc(setup, n=6, battery=NOMINAL, **kw):
+    """A study of ``n`` missions; keywords of :class:`MonteCarloStudy` and :class:`MissionTruth` go to their value."""
     tmap, route = setup
-    return simulate_missions_mc(tmap, route, battery, n, **kw)
+    study = MonteCarloStudy(n, **{k: kw.pop(k) for k in STUDY if k in kw})
+    truth = MissionTruth(**{k: kw.pop(k) for k in TRUTH if k in kw})
+    return simulate_missions_mc(tmap, route, battery, study, truth=truth, **kw)

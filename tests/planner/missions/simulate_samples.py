@@ -6,6 +6,7 @@ import pytest
 
 from energy import Battery, NoiseModel, TruthSimulator, ground_preset, robot_preset
 from planner import CostSpec, simulate_mission
+from planner.missions import MissionAccounting
 from planner.route import evaluate_route
 from terrain import flat_map
 
@@ -33,4 +34,4 @@ def flat_mission(flat, clean_sim):
     tmap, cost = flat
     route = evaluate_route(cost, L_ROUTE)
     return route, simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=cost,
-                                   forecast="edges")
+                                   accounting=MissionAccounting(forecast="edges"))

@@ -14,6 +14,7 @@ from energy import (
     robot_preset,
 )
 from planner import AdaptiveSettings, run_adaptive_mission
+from planner.missions import Navigator, NavigatorModels
 from planner.registry import CellModelRegistry
 from terrain import InvalidParameterError, TerrainMap
 
@@ -35,13 +36,14 @@ def _world():
 
 
 SETTINGS = AdaptiveSettings(leg_length_m=8.0, seed=0, max_updates=2)
+ASPHALT = NavigatorModels(physics_ground=ground_preset("asphalt"))
 
 
 def test_unknown_region_flagged_updated_and_error_drops():
     robot, truth, tmap, prior = _world()
     reg = CellModelRegistry.from_terrain(tmap, prior)
-    res = run_adaptive_mission(tmap, reg, robot, Battery(20.0, 24.0), truth, (2.5, 8.0), (37.5, 8.0),
-                               physics_ground=ground_preset("asphalt"), settings=SETTINGS)
+    res = run_adaptive_mission(Navigator(tmap, reg, robot, Battery(20.0, 24.0), (37.5, 8.0), settings=SETTINGS,
+                                         models=ASPHALT), truth, (2.5, 8.0))
     assert res.status == "completed" and res.distance_to_goal_m <= SETTINGS.goal_tolerance_m
     assert res.accepted_updates >= 1
     up = next(u for u in res.updates if u.accepted)
@@ -71,8 +73,10 @@ def test_worse_model_rejected_and_old_kept():
     def bad_factory():
         return Worse()
 
-    res = run_adaptive_mission(tmap, reg, robot, Battery(20.0, 24.0), truth, (2.5, 8.0), (37.5, 8.0),
-                               physics_ground=ground_preset("asphalt"), settings=SETTINGS, model_factory=bad_factory)
+    res = run_adaptive_mission(Navigator(tmap, reg, robot, Battery(20.0, 24.0), (37.5, 8.0), settings=SETTINGS,
+                                         models=NavigatorModels(physics_ground=ground_preset("asphalt"),
+                                                                model_factory=bad_factory)),
+                               truth, (2.5, 8.0))
     assert len(res.updates) >= 1
     assert not any(u.accepted for u in res.updates)
     assert reg.model_ids == (0,) and np.all(np.asarray(reg.model_id_map) == 0)
@@ -85,8 +89,8 @@ def test_budget_violation_stops_with_reason_and_position():
     robot, truth, tmap, prior = _world()
     reg = CellModelRegistry.from_terrain(tmap, prior)
     tiny = Battery(capacity_ah=0.05, voltage_v=24.0, min_reserve_pct=20.0)
-    res = run_adaptive_mission(tmap, reg, robot, tiny, truth, (2.5, 8.0), (37.5, 8.0),
-                               physics_ground=ground_preset("asphalt"), settings=SETTINGS)
+    res = run_adaptive_mission(Navigator(tmap, reg, robot, tiny, (37.5, 8.0), settings=SETTINGS, models=ASPHALT),
+                               truth, (2.5, 8.0))
     assert res.status == "budget_exceeded"
     assert "reserve" in res.reason and "Wh" in res.reason
     assert res.final_xy_m == (2.5, 8.0) and res.distance_to_goal_m == pytest.approx(35.0)
@@ -97,8 +101,7 @@ def test_bad_input():
     robot, truth, tmap, prior = _world()
     reg = CellModelRegistry.from_terrain(tmap, prior)
     with pytest.raises(InvalidParameterError, match="battery"):
-        run_adaptive_mission(tmap, reg, robot, "battery", truth, (2.5, 8.0), (37.5, 8.0),
-                             physics_ground=ground_preset("asphalt"))
+        run_adaptive_mission(Navigator(tmap, reg, robot, "battery", (37.5, 8.0), models=ASPHALT), truth, (2.5, 8.0))
     with pytest.raises(InvalidParameterError, match="update_scope"):
         AdaptiveSettings(update_scope="everywhere")
 
@@ -112,8 +115,8 @@ def test_an_update_the_battery_cannot_afford_is_skipped_and_the_reserve_kept():
     # 2 Wh above the reserve: the route (~1.9 Wh driven) fits, the ~1 Wh sand manoeuvre does not
     robot, truth, tmap, prior = _world()
     reg = CellModelRegistry.from_terrain(tmap, prior)
-    res = run_adaptive_mission(tmap, reg, robot, _usable_wh_battery(2.0), truth, (2.5, 8.0), (37.5, 8.0),
-                               physics_ground=ground_preset("asphalt"), settings=SETTINGS)
+    res = run_adaptive_mission(Navigator(tmap, reg, robot, _usable_wh_battery(2.0), (37.5, 8.0), settings=SETTINGS,
+                                         models=ASPHALT), truth, (2.5, 8.0))
     assert res.status == "completed" and res.updates == ()
     assert res.skipped_updates and all("'sand'" in s and "reserve" in s for s in res.skipped_updates)
     assert res.excitation_energy_j == 0.0 and res.final_soc >= 0.2
@@ -133,8 +136,8 @@ def test_a_manoeuvre_that_crosses_the_reserve_stops_the_mission_where_it_stands(
 
     hungry = HungryTruth(robot, truth.grounds, seed=0)
     reg = CellModelRegistry.from_terrain(tmap, prior)
-    res = run_adaptive_mission(tmap, reg, robot, _usable_wh_battery(2.8), hungry, (2.5, 8.0), (37.5, 8.0),
-                               physics_ground=ground_preset("asphalt"), settings=SETTINGS)
+    res = run_adaptive_mission(Navigator(tmap, reg, robot, _usable_wh_battery(2.8), (37.5, 8.0), settings=SETTINGS,
+                                         models=ASPHALT), hungry, (2.5, 8.0))
     assert res.status == "reserve_violated"
     assert "excitation manoeuvre" in res.reason and "'sand'" in res.reason and "no update" in res.reason
     assert f"{res.final_xy_m!r}" in res.reason  # where it stands (a leg end: the manoeuvre is made in place)
@@ -150,8 +153,8 @@ def test_without_a_segmentation_a_learned_model_is_reused_instead_of_exciting_ag
     robot, truth, tmap, prior = _world()
     reg = CellModelRegistry.from_terrain(tmap, prior)
     settings = dataclasses.replace(SETTINGS, update_scope="region")
-    res = run_adaptive_mission(tmap, reg, robot, Battery(20.0, 24.0), truth, (2.5, 8.0), (37.5, 8.0),
-                               physics_ground=ground_preset("asphalt"), settings=settings)
+    res = run_adaptive_mission(Navigator(tmap, reg, robot, Battery(20.0, 24.0), (37.5, 8.0), settings=settings,
+                                         models=ASPHALT), truth, (2.5, 8.0))
     assert res.status == "completed"
     kinds = [u.kind for u in res.updates]
     assert kinds[0] == "excitation" and kinds.count("excitation") == 1 and "reuse" in kinds
@@ -171,16 +174,16 @@ def test_start_equal_to_goal_is_refused():
     robot, truth, tmap, prior = _world()
     reg = CellModelRegistry.from_terrain(tmap, prior)
     with pytest.raises(InvalidParameterError, match="start equals goal"):
-        run_adaptive_mission(tmap, reg, robot, Battery(20.0, 24.0), truth, (2.5, 8.0), (2.5, 8.0),
-                             physics_ground=ground_preset("asphalt"), settings=SETTINGS)
+        run_adaptive_mission(Navigator(tmap, reg, robot, Battery(20.0, 24.0), (2.5, 8.0), settings=SETTINGS,
+                                       models=ASPHALT), truth, (2.5, 8.0))
 
 
 def test_the_budget_is_the_batterys_own_over_driving_and_manoeuvres():
     robot, truth, tmap, prior = _world()
     reg = CellModelRegistry.from_terrain(tmap, prior)
     battery = Battery(20.0, 24.0, internal_resistance_ohm=0.1, peukert_exponent=1.2)
-    res = run_adaptive_mission(tmap, reg, robot, battery, truth, (2.5, 8.0), (37.5, 8.0),
-                               physics_ground=ground_preset("asphalt"), settings=SETTINGS)
+    res = run_adaptive_mission(Navigator(tmap, reg, robot, battery, (37.5, 8.0), settings=SETTINGS, models=ASPHALT),
+                               truth, (2.5, 8.0))
     assert res.status == "completed" and res.excitation_energy_j > 0
     b = res.budget
     assert b.battery == battery
@@ -214,15 +217,15 @@ def test_the_in_run_update_is_tried_and_proposed_when_it_validates_better(monkey
     monkeypatch.setattr(adaptive_module, "adapted_model", fake_adapted)
     reg = CellModelRegistry.from_terrain(tmap, prior)
     settings = dataclasses.replace(SETTINGS, in_run_update=True)
-    res = run_adaptive_mission(tmap, reg, robot, Battery(20.0, 24.0), truth, (2.5, 8.0), (37.5, 8.0),
-                               physics_ground=ground_preset("asphalt"), settings=settings)
+    res = run_adaptive_mission(Navigator(tmap, reg, robot, Battery(20.0, 24.0), (37.5, 8.0), settings=settings,
+                                         models=ASPHALT), truth, (2.5, 8.0))
     assert calls and all(n > 0 for n in calls)
     up = next(u for u in res.updates if u.accepted)
     assert up.kind == "in_run" and up.validation_error_new == pytest.approx(0.0, abs=1e-12)
     # off by default: the loop refits only
-    res_off = run_adaptive_mission(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0),
-                                   truth, (2.5, 8.0), (37.5, 8.0), physics_ground=ground_preset("asphalt"),
-                                   settings=SETTINGS)
+    res_off = run_adaptive_mission(Navigator(tmap, CellModelRegistry.from_terrain(tmap, prior), robot,
+                                             Battery(20.0, 24.0), (37.5, 8.0), settings=SETTINGS, models=ASPHALT),
+                                   truth, (2.5, 8.0))
     assert all(u.kind != "in_run" for u in res_off.updates)
     with pytest.raises(InvalidParameterError, match="in_run_update"):
         AdaptiveSettings(in_run_update="yes")
@@ -232,8 +235,8 @@ def test_the_real_in_run_update_runs_in_the_loop():
     robot, truth, tmap, prior = _world()
     reg = CellModelRegistry.from_terrain(tmap, prior)
     settings = dataclasses.replace(SETTINGS, in_run_update=True)
-    res = run_adaptive_mission(tmap, reg, robot, Battery(20.0, 24.0), truth, (2.5, 8.0), (37.5, 8.0),
-                               physics_ground=ground_preset("asphalt"), settings=settings)
+    res = run_adaptive_mission(Navigator(tmap, reg, robot, Battery(20.0, 24.0), (37.5, 8.0), settings=settings,
+                                         models=ASPHALT), truth, (2.5, 8.0))
     assert res.status == "completed" and res.accepted_updates >= 1
     assert {u.kind for u in res.updates} <= {"excitation", "in_run", "reuse"}
     assert abs(res.error_after_update_pct) < SETTINGS.policy.threshold_pct

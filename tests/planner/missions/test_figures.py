@@ -16,6 +16,7 @@ from energy import (
     robot_preset,
 )
 from planner import AdaptiveSettings, CostSpec, run_adaptive_mission, simulate_mission
+from planner.missions import Navigator, NavigatorModels
 from planner.missions.figures import plot_adaptive_mission, plot_mission
 from planner.registry import CellModelRegistry
 from planner.route import evaluate_route
@@ -49,9 +50,9 @@ def adaptive():
     logs = [truth.simulate_commands(p.time_s, p.v_mps, p.omega_radps, ground="asphalt", seed=3 + i)
             for i, p in enumerate((drive, turn))]
     registry = CellModelRegistry.from_terrain(tmap, LinearCurrentModel().fit(logs))
-    res = run_adaptive_mission(tmap, registry, ROBOT, Battery(20.0, 24.0), truth, (2.5, 8.0), (37.5, 8.0),
-                               physics_ground=grounds["asphalt"],
-                               settings=AdaptiveSettings(leg_length_m=8.0, seed=0, max_updates=1))
+    res = run_adaptive_mission(Navigator(tmap, registry, ROBOT, Battery(20.0, 24.0), (37.5, 8.0),
+                                         settings=AdaptiveSettings(leg_length_m=8.0, seed=0, max_updates=1),
+                                         models=NavigatorModels(physics_ground=grounds["asphalt"])), truth, (2.5, 8.0))
     return res, tmap, registry
 
 

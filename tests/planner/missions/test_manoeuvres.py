@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from energy import NoiseModel, TruthSimulator, ground_preset, robot_preset
-from planner.missions.manoeuvres import excitation_manoeuvre, fit_prior_model
+from planner.missions.manoeuvres import excitation_manoeuvre, excitation_profiles, fit_prior_model
 
 
 def _truth() -> TruthSimulator:
@@ -14,8 +15,11 @@ def _truth() -> TruthSimulator:
 
 
 def _drive(seed: int):
-    return excitation_manoeuvre(_truth(), "sand", straight_s=3.0, turn_s=3.0, speeds_mps=(0.3, 0.6),
-                                omega_radps=0.5, seed=seed, sim_seed=seed)
+    return excitation_manoeuvre(_truth(), "sand", _profiles(seed), sim_seed=seed)
+
+
+def _profiles(seed: int):
+    return excitation_profiles(straight_s=3.0, turn_s=3.0, speeds_mps=(0.3, 0.6), omega_radps=0.5, seed=seed)
 
 
 def test_the_manoeuvre_gives_two_logs_repeatable_by_seed():
@@ -29,11 +33,17 @@ def test_the_manoeuvre_gives_two_logs_repeatable_by_seed():
 def test_sand_draws_more_current_than_asphalt_for_the_same_manoeuvre():
     sand = np.mean([np.abs(log.current_left_a).mean() for log in _drive(0)])
     asphalt = np.mean([np.abs(log.current_left_a).mean() for log in
-                       excitation_manoeuvre(_truth(), "asphalt", straight_s=3.0, turn_s=3.0, speeds_mps=(0.3, 0.6),
-                                            omega_radps=0.5, seed=0, sim_seed=0)])
+                       excitation_manoeuvre(_truth(), "asphalt", _profiles(0), sim_seed=0)])
     assert sand > asphalt
 
 
 def test_the_prior_model_is_fitted_on_its_ground():
     model = fit_prior_model(_truth(), "asphalt", seed=1)
     assert model.is_fitted
+
+
+def test_the_manoeuvre_drives_command_profiles_only():
+    from terrain import InvalidParameterError
+
+    with pytest.raises(InvalidParameterError, match="profiles must be CommandProfiles"):
+        excitation_manoeuvre(_truth(), "sand", [{"v_mps": [0.5]}], sim_seed=0)

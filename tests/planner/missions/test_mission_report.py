@@ -9,7 +9,7 @@ import pytest
 import planner.missions.mission_report as mission_report_module
 import terrain
 from energy import Battery
-from planner.missions import AdaptiveResult
+from planner.missions import AdaptiveResult, AdaptiveSettings
 from planner.missions.adaptive_results import check_logs_folder
 from planner.missions.mission_report import check_preset_grounds, mission_battery, simulate_adaptive_mission
 from terrain import FigureWarning, InvalidParameterError, TerrainMap, UnknownNameError
@@ -20,7 +20,7 @@ START, GOAL = (3.0, 12.0), (37.0, 12.0)
 @pytest.fixture(scope="module")
 def report() -> AdaptiveResult:
     wall = terrain.wall_map((40, 40), 1.0, wall_col=20, gap_rows=(10, 14))
-    return simulate_adaptive_mission(wall, START, GOAL, battery=Battery(20.0, 24.0), map_label="wall", seed=0)
+    return simulate_adaptive_mission(wall, START, GOAL, battery=Battery(20.0, 24.0), map_label="wall")
 
 
 def test_the_mission_reaches_the_goal_on_its_battery(report):
@@ -82,7 +82,8 @@ def test_a_figure_that_fails_warns(report, tmp_path, monkeypatch):
 
 def test_without_adaptation_no_update_is_made():
     flat = terrain.flat_map((10, 30), 1.0, ground="grass")
-    report = simulate_adaptive_mission(flat, (2.0, 5.0), (27.0, 5.0), battery=Battery(20.0, 24.0), adapt=False, leg_m=5.0)
+    report = simulate_adaptive_mission(flat, (2.0, 5.0), (27.0, 5.0), battery=Battery(20.0, 24.0),
+                                       settings=AdaptiveSettings(max_updates=0, leg_length_m=5.0))
     assert report.updates == () and "adaptive updates off" in report.summary()
 
 
@@ -94,8 +95,9 @@ def test_grounds_without_presets_are_refused(corridor_map):
     flat = TerrainMap(corridor_map.elevation_m, 1.0, obstacle=corridor_map.obstacle)
     with pytest.raises(UnknownNameError, match="prior_ground 'lava'"):
         simulate_adaptive_mission(flat, (2.5, 7.5), (27.5, 7.5), battery=Battery(5.0, 24.0), prior_ground="lava")
-    with pytest.raises(InvalidParameterError, match="leg_m"):
-        simulate_adaptive_mission(flat, (2.5, 7.5), (27.5, 7.5), battery=Battery(5.0, 24.0), leg_m=0.0)
+    with pytest.raises(InvalidParameterError, match="settings must be an AdaptiveSettings"):
+        simulate_adaptive_mission(flat, (2.5, 7.5), (27.5, 7.5), battery=Battery(5.0, 24.0),
+                                  settings={"leg_length_m": 5.0})
 
 
 def test_the_battery_voltage_defaults_to_the_robot():

@@ -11,6 +11,7 @@ from mc_samples import FIXED, NO_DASK, NOMINAL, run_mc, setup  # noqa: F401  (fi
 from energy import Battery, TruthSimulator, ground_preset, robot_preset
 from planner import MissionDistributions, plan_route, simulate_mission, simulate_missions_mc
 from planner.cost_spec import CostSpec
+from planner.missions import MissionDrive, MissionTruth, MonteCarloStudy
 from terrawatt_base.dask_client import Compute
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
@@ -59,7 +60,8 @@ def test_fixed_distributions_drive_the_nominal_mission(setup):
     truth_seed = int(rng.integers(0, 2**32))
     robot = robot_preset("husky")
     truth = TruthSimulator(robot, {"asphalt": ground_preset("asphalt")}, current_rate_hz=20.0, seed=truth_seed)
-    one = simulate_mission(tmap, route, robot, Battery(2.0, 24.0), truth, speed_mps=mc.speed_mps[0], seed=truth_seed)
+    one = simulate_mission(tmap, route, robot, Battery(2.0, 24.0), truth,
+                           drive=MissionDrive(speed_mps=mc.speed_mps[0], seed=truth_seed))
     assert mc.energy_j[0] == one.budget.actual_energy_j
     assert mc.arrival_soc[0] == one.budget.arrival_soc
 
@@ -123,7 +125,8 @@ def test_a_route_that_was_not_found_is_refused(setup):
     with pytest.raises(InvalidParameterError, match="route must be a found Route, got \"status 'infeasible'\""):
         simulate_missions_mc(tmap, route.replace(status="infeasible", waypoints_m=np.empty((0, 2)),
                                                  segment_energy_j=np.empty(0), turn_energy_j=np.empty(0),
-                                                 energy_j=np.nan, length_m=np.nan, duration_s=np.nan), Battery(2, 24), 2)
+                                                 energy_j=np.nan, length_m=np.nan, duration_s=np.nan), Battery(2, 24),
+                             MonteCarloStudy(2))
 
 
 def test_workers_open_a_local_cluster_through_the_seam(setup, monkeypatch):
@@ -155,9 +158,9 @@ def test_a_ground_the_truth_simulator_cannot_drive_is_refused_before_any_mission
     route = plan_route(tmap, (2.5, 2.5), (17.5, 7.5), cost=cost, planner="lattice")
     mud = {"mud": ground_preset("sand").replace(name="mud")}
     with pytest.raises(UnknownNameError, match=r"no vibration signature for ground\(s\) \['mud'\]"):
-        simulate_missions_mc(tmap, route, NOMINAL, 3, grounds=mud)
+        simulate_missions_mc(tmap, route, NOMINAL, MonteCarloStudy(3), truth=MissionTruth(grounds=mud))
     with pytest.raises(UnknownNameError, match=r"the map's grounds \['mud'\] have no preset"):
-        simulate_missions_mc(tmap, route, NOMINAL, 3)
+        simulate_missions_mc(tmap, route, NOMINAL, MonteCarloStudy(3))
 
 
 def test_with_the_planning_cost_the_forecast_prices_the_driven_profile(setup):

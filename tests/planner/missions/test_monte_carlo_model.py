@@ -5,6 +5,7 @@ import pytest
 
 from energy import Battery
 from planner import CostSpec, MissionDistributions, plan_route, price_route, simulate_missions_mc
+from planner.missions import MonteCarloStudy
 from terrain import InvalidParameterError
 
 
@@ -19,7 +20,7 @@ def test_model_draws_follow_the_route_interval_and_the_reserve_risk(study):
     tmap, cost, route, forecast = study
     # a battery whose energy above the 20 % reserve is the route's P90: about 10 % of missions cross it
     battery = Battery(capacity_ah=forecast.p90_j / 3600 / 24.0 / 0.8, voltage_v=24.0, min_reserve_pct=20.0)
-    mc = simulate_missions_mc(tmap, route, battery, 2000, cost=cost, draw_from="model", seed=3)
+    mc = simulate_missions_mc(tmap, route, battery, MonteCarloStudy(2000, draw_from="model", seed=3), cost=cost)
     assert mc.draw_from == "model" and mc.ground_names == ("loam",)
     assert mc.predicted_energy_j == forecast.mean_j and mc.forecast == forecast
     assert np.mean(mc.energy_j) == pytest.approx(forecast.mean_j, abs=4 * forecast.sd_j / np.sqrt(2000))
@@ -27,7 +28,7 @@ def test_model_draws_follow_the_route_interval_and_the_reserve_risk(study):
     # one factor per ground: the energy is exactly mean + z * S_loam
     assert np.allclose(mc.energy_j, forecast.mean_j + mc.ground_scale[:, 0] * forecast.sd_by_ground_j["loam"])
     assert 0.07 < mc.p_below_reserve < 0.13
-    again = simulate_missions_mc(tmap, route, battery, 2000, cost=cost, draw_from="model", seed=3)
+    again = simulate_missions_mc(tmap, route, battery, MonteCarloStudy(2000, draw_from="model", seed=3), cost=cost)
     assert np.array_equal(again.energy_j, mc.energy_j)
     d = mc.to_dict(samples=False)
     assert d["draw_from"] == "model" and "distributions" not in d
@@ -39,8 +40,9 @@ def test_model_draws_need_a_cost_with_an_interval_and_no_typed_ranges(study, fla
     tmap, cost, route, _ = study
     battery = Battery(capacity_ah=5.0, voltage_v=24.0)
     with pytest.raises(InvalidParameterError, match="no cost was given"):
-        simulate_missions_mc(tmap, route, battery, 5, draw_from="model")
+        simulate_missions_mc(tmap, route, battery, MonteCarloStudy(5, draw_from="model"))
     with pytest.raises(InvalidParameterError, match="takes none"):
-        simulate_missions_mc(tmap, route, battery, 5, cost=cost, draw_from="model", distributions=MissionDistributions())
+        simulate_missions_mc(tmap, route, battery, MonteCarloStudy(5, draw_from="model", distributions=MissionDistributions()),
+                             cost=cost)
     with pytest.raises(InvalidParameterError, match="draw_from must be one of"):
-        simulate_missions_mc(tmap, route, battery, 5, cost=cost, draw_from="ranges")
+        simulate_missions_mc(tmap, route, battery, MonteCarloStudy(5, draw_from="ranges"), cost=cost)

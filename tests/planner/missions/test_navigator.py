@@ -12,6 +12,7 @@ import pytest
 
 from energy import Battery, LinearCurrentModel, TruthSimulator, excitation_commands, ground_preset, robot_preset
 from planner import AdaptiveSettings, Navigator, run_adaptive_mission
+from planner.missions import MissionDrive, MissionGoal, NavigatorModels, ReplayFeed
 from planner.missions.legs import split_polyline
 from planner.missions.replay import replay_drive
 from planner.missions.simulate import simulate_mission
@@ -20,6 +21,7 @@ from planner.route import evaluate_route
 from terrain import DataError, InvalidParameterError, OutOfBoundsError, TerrainMap, UnitError
 
 SETTINGS = AdaptiveSettings(leg_length_m=8.0, seed=0, max_updates=2)
+ASPHALT = NavigatorModels(physics_ground=ground_preset("asphalt"))
 GOAL = (37.5, 8.0)
 START = (2.5, 8.0)
 
@@ -42,7 +44,7 @@ def _world(seed: int = 0):
 def _navigator(settings=SETTINGS, **kw):
     robot, truth, tmap, prior = _world()
     nav = Navigator(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0), GOAL,
-                    physics_ground=ground_preset("asphalt"), settings=settings, **kw)
+                    settings=settings, models=ASPHALT, **kw)
     return nav, truth, tmap
 
 
@@ -51,7 +53,8 @@ def _drive_leg(nav, truth, tmap, seed):
     head, _ = split_polyline(np.asarray(nav.route.waypoints_m), nav.settings.leg_length_m)
     leg = evaluate_route(nav.cost, head, status="exact", planner="leg")
     mr = simulate_mission(tmap, leg, nav.robot, nav.battery.replace(initial_soc=nav.soc), truth, nav.cost,
-                          speed_mps=nav.settings.speed_mps, start_heading_rad=nav.heading_rad, seed=seed)
+                          drive=MissionDrive(speed_mps=nav.settings.speed_mps, start_heading_rad=nav.heading_rad,
+                                             seed=seed))
     return mr.log.shifted(nav.time_s + 0.01 - float(mr.log.time_s[0]))
 
 
@@ -161,13 +164,13 @@ def test_the_rest_that_does_not_fit_turns_back_to_the_depot_when_that_fits():
     per_m = big.plan((20.0, 8.0)).forecast.energy_j / 17.5
     soc = 0.2 + 10.0 * per_m / (1.0 * 24.0 * 3600.0)
     nav = Navigator(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(1.0, 24.0, initial_soc=soc),
-                    GOAL, settings=SETTINGS, depot_xy_m=(15.0, 8.0))
+                    MissionGoal(xy_m=GOAL, depot_xy_m=(15.0, 8.0)), settings=SETTINGS)
     d = nav.plan((20.0, 8.0))
     assert d.action == "return" and "the way back to the depot fits" in d.reason
     assert nav.returning and np.allclose(d.route.waypoints_m[-1], (15.0, 8.0))
     assert d.forecast.energy_j < d.forecast.available_j
     far = Navigator(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(1.0, 24.0, initial_soc=soc),
-                    GOAL, settings=SETTINGS, depot_xy_m=(2.5, 8.0))  # 17.5 m back: does not fit either
+                    MissionGoal(xy_m=GOAL, depot_xy_m=(2.5, 8.0)), settings=SETTINGS)  # 17.5 m back: does not fit
     assert far.plan((20.0, 8.0)).action == "stop" and far.status == "budget_exceeded"
 
 
@@ -238,18 +241,23 @@ def test_calls_out_of_order_are_refused():
     with pytest.raises(InvalidParameterError, match="no manoeuvre"):
         nav.decline_manoeuvre()
     with pytest.raises(InvalidParameterError, match="exactly one"):
-        Navigator(tmap, nav.registry, nav.robot, nav.battery)
+        Navigator(tmap, nav.registry, nav.robot, nav.battery, MissionGoal(depot_xy_m=(1.0, 1.0)))
+    with pytest.raises(InvalidParameterError, match="models must be a NavigatorModels"):
+        Navigator(tmap, nav.registry, nav.robot, nav.battery, GOAL, models="asphalt")
+    nav.plan(START)
+    with pytest.raises(InvalidParameterError, match="plan\\(\\) was already called"):
+        run_adaptive_mission(nav, truth, START)  # a navigator follows one mission
 
 
 # ------------------------------------------------------------------ one loop: the simulated mission replayed
 def test_the_simulated_missions_own_logs_replayed_give_its_updates_and_route():
     robot, truth, tmap, prior = _world()
-    res = run_adaptive_mission(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0), truth,
-                               START, GOAL, physics_ground=ground_preset("asphalt"), settings=SETTINGS)
+    res = run_adaptive_mission(Navigator(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0),
+                                         GOAL, settings=SETTINGS, models=ASPHALT), truth, START)
     assert res.status == "completed" and res.accepted_updates >= 1
     items = [("drive", log) for log in res.leg_logs] + [("manoeuvre", log) for _, log in res.manoeuvre_logs]
-    out = replay_drive(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0), items, GOAL,
-                       settings=SETTINGS, physics_ground=ground_preset("asphalt"))
+    out = replay_drive(Navigator(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0), GOAL,
+                                 settings=SETTINGS, models=ASPHALT), items)
     nav = out.navigator
     assert nav.status == "completed"
     assert [(u.kind, u.ground, u.accepted, u.model_id) for u in nav.updates] == \
@@ -264,8 +272,9 @@ def _replay_script(tmp_path, kill_after):
     return textwrap.dedent(f"""
         import os, signal, sys, json
         sys.path.insert(0, {str(os.path.dirname(__file__))!r})
-        from test_navigator import _world, SETTINGS, START, GOAL
-        from energy import Battery, ground_preset
+        from test_navigator import _world, SETTINGS, START, GOAL, ASPHALT
+        from energy import Battery
+        from planner.missions import Navigator, ReplayFeed
         from planner.missions.replay import replay_drive
         from energy.io import read_logs
         from planner.registry import CellModelRegistry
@@ -276,9 +285,13 @@ def _replay_script(tmp_path, kill_after):
             seen.append(d.action)
             if {kill_after} and len(seen) == {kill_after}:
                 os.kill(os.getpid(), signal.SIGKILL)
-        out = replay_drive(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0), logs, GOAL,
-                           settings=SETTINGS, physics_ground=ground_preset("asphalt"),
-                           state_path={str(tmp_path / "state")!r}, on_decision=on_decision)
+        feed = ReplayFeed(state_path={str(tmp_path / "state")!r}, on_decision=on_decision)
+        if feed.resumes:
+            nav = Navigator.load(feed.state_path, tmap)
+        else:
+            nav = Navigator(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0), GOAL,
+                            settings=SETTINGS, models=ASPHALT)
+        out = replay_drive(nav, logs, feed=feed)
         print(json.dumps([[d["action"], d["reason"], d["checkpoint"]] for d in out.decisions]))
     """)
 
@@ -287,8 +300,8 @@ def test_a_replay_killed_mid_drive_resumes_and_decides_as_one_that_ran_through(t
     from energy.io import write_csv_log
 
     robot, truth, tmap, prior = _world()
-    res = run_adaptive_mission(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0), truth,
-                               START, GOAL, physics_ground=ground_preset("asphalt"), settings=SETTINGS)
+    res = run_adaptive_mission(Navigator(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0),
+                                         GOAL, settings=SETTINGS, models=ASPHALT), truth, START)
     (tmp_path / "logs").mkdir()
     for k, log in enumerate(res.leg_logs):
         write_csv_log(log, tmp_path / "logs" / f"leg_{k:03d}.csv")
@@ -371,11 +384,11 @@ def test_a_long_drive_is_replayed_in_chunks_with_checkpoints_by_distance():
     from energy import InteractionLog
 
     robot, truth, tmap, prior = _world()
-    res = run_adaptive_mission(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0), truth,
-                               START, GOAL, physics_ground=ground_preset("asphalt"), settings=SETTINGS)
+    res = run_adaptive_mission(Navigator(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0),
+                                         GOAL, settings=SETTINGS, models=ASPHALT), truth, START)
     drive = InteractionLog.concatenate(res.leg_logs)  # one recording: the legs' rests kept, no manoeuvre in it
-    out = replay_drive(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0), [drive], GOAL,
-                       settings=SETTINGS, physics_ground=ground_preset("asphalt"), chunk_s=0.5)
+    out = replay_drive(Navigator(tmap, CellModelRegistry.from_terrain(tmap, prior), robot, Battery(20.0, 24.0), GOAL,
+                                 settings=SETTINGS, models=ASPHALT), [drive], feed=ReplayFeed(chunk_s=0.5))
     nav = out.navigator
     assert out.mode == "drive" and out.chunks > 50 and nav.status == "completed"
     assert len(nav.legs) >= 4 and any(u.accepted for u in nav.updates)  # manoeuvres declined: learned from driving

@@ -12,6 +12,7 @@ from simulate_samples import GROUNDS, ROBOT, clean_sim, flat, flat_mission  # no
 from energy import Battery, TruthSimulator, ground_preset
 from planner import simulate_mission
 from planner.cost_spec import CostSpec
+from planner.missions import MissionAccounting, MissionDrive
 from planner.route import evaluate_route
 from terrain import (
     DataError,
@@ -65,9 +66,11 @@ def test_the_default_forecast_prices_the_driven_profile(flat, flat_mission, clea
     alone = simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim)
     assert alone.forecast == "edges" and alone.budget.predicted_energy_j == pytest.approx(route.energy_j)
     with pytest.raises(InvalidParameterError, match="forecast='profile' needs a cost"):
-        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, forecast="profile")
+        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim,
+                         accounting=MissionAccounting(forecast="profile"))
     with pytest.raises(UnknownNameError, match="forecast"):
-        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=cost, forecast="magic")
+        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=cost,
+                         accounting=MissionAccounting(forecast="magic"))
 
 
 def test_a_noise_free_mission_books_the_physics_energy_of_its_driven_profile(flat, flat_mission):
@@ -84,7 +87,8 @@ def test_a_noise_free_mission_books_the_physics_energy_of_its_driven_profile(fla
     assert noisy.budget.actual_energy_j == pytest.approx(clean.budget.actual_energy_j, rel=0.01)
     assert noisy.truth_energy_j == pytest.approx(clean.truth_energy_j, rel=1e-12)
     # booked as drawn current, the offset would cost several per cent more
-    paid = simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=noisy_sim, cost=cost, current_offset_a=0.0)
+    paid = simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=noisy_sim, cost=cost,
+                            accounting=MissionAccounting(current_offset_a=0.0))
     assert paid.budget.actual_energy_j > 1.03 * clean.budget.actual_energy_j
 
 
@@ -111,14 +115,16 @@ def test_replay_of_log_gives_same_budget(flat, flat_mission):
     tmap, cost = flat
     route, res = flat_mission
     # the clean simulator's sensor has no rest offset; a replayed log is booked with the one given
-    replay = simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=res.log, cost=cost, current_offset_a=0.0)
+    replay = simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=res.log, cost=cost,
+                              accounting=MissionAccounting(current_offset_a=0.0))
     assert replay.source == "replay" and math.isnan(replay.truth_energy_j)
     np.testing.assert_array_equal(replay.segment_index, res.segment_index)
     assert replay.budget.actual_energy_j == res.budget.actual_energy_j
     np.testing.assert_allclose(replay.budget.segment_actual_j, res.budget.segment_actual_j)
     # without a pose the log is mapped by the velocity profile's timing
     blind = simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0),
-                             truth=dataclasses.replace(res.log, pose_xyh=None), cost=cost, current_offset_a=0.0)
+                             truth=dataclasses.replace(res.log, pose_xyh=None), cost=cost,
+                             accounting=MissionAccounting(current_offset_a=0.0))
     np.testing.assert_array_equal(blind.segment_index, res.segment_index)
     np.testing.assert_allclose(blind.x_m, res.x_m, atol=1e-9)
     assert blind.budget.actual_energy_j == pytest.approx(res.budget.actual_energy_j)
@@ -127,7 +133,8 @@ def test_replay_of_log_gives_same_budget(flat, flat_mission):
 def test_repeated_waypoint_segment_is_empty(flat, clean_sim):
     tmap, cost = flat
     route = evaluate_route(cost, [[2.5, 2.5], [10.5, 2.5], [10.5, 2.5], [10.5, 12.5]])
-    res = simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=cost, forecast="edges")
+    res = simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=cost,
+                           accounting=MissionAccounting(forecast="edges"))
     assert res.budget.segment_predicted_j[1] == 0.0 and res.budget.segment_actual_j[1] == 0.0
     assert set(np.unique(res.segment_index)) == {0, 2}
     assert res.budget.segment_predicted_j[2] == pytest.approx(route.segment_energy_j[2] + route.turn_energy_j[2])
@@ -154,7 +161,8 @@ def test_infeasible_mission_reports_crossing(flat, flat_mission, clean_sim):
     assert abs((b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0])) < 1e-6  # on the segment's line
     assert res.budget.reserve_margin_pct < 0
 
-    stopped = simulate_mission(tmap, route, ROBOT, battery, truth=clean_sim, cost=cost, stop_at_reserve=True)
+    stopped = simulate_mission(tmap, route, ROBOT, battery, truth=clean_sim, cost=cost,
+                               drive=MissionDrive(stop_at_reserve=True))
     assert stopped.status == "reserve_violated" and stopped.n_samples == k + 1
     assert stopped.soc[-1] < 0.25 and stopped.reserve_crossed_time_s == pytest.approx(tc)
     # the aborted budget covers the part driven, so its error stays small
@@ -192,9 +200,11 @@ def test_a_string_where_a_number_is_expected_names_the_parameter(flat, flat_miss
     tmap, cost = flat
     route, _ = flat_mission
     with pytest.raises(InvalidParameterError, match="speed_mps must be a real number, got 'fast'"):
-        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=cost, speed_mps="fast")
+        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=cost,
+                         drive=MissionDrive(speed_mps="fast"))
     with pytest.raises(InvalidParameterError, match="stop_at_reserve must be True or False"):
-        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=cost, stop_at_reserve="no")
+        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=cost,
+                         drive=MissionDrive(stop_at_reserve="no"))
 
 
 def test_log_shorter_than_route_raises(flat, flat_mission):
@@ -221,9 +231,10 @@ def test_bad_inputs(flat, flat_mission, clean_sim):
     with pytest.raises(InvalidParameterError, match="truth must be a TruthSimulator or an InteractionLog"):
         simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth="log.csv")
     with pytest.raises(UnknownNameError, match="current_convention must be one of"):
-        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=res.log, current_convention="duty")
+        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=res.log,
+                         accounting=MissionAccounting(current_convention="duty"))
     with pytest.raises(InvalidParameterError, match="accel_mps2 must be > 0"):
-        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, accel_mps2=0.0)
+        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, drive=MissionDrive(accel_mps2=0.0))
     other = CostSpec(robot=ROBOT, grounds=GROUNDS, speed_mps=0.5).build(flat_map((30, 41), 1.0))
     with pytest.raises(GridMismatchError, match="cost was built on a grid"):
         simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=other)
@@ -279,3 +290,16 @@ def test_diagnosing_example_map_missions_against_the_planning_physics_names_the_
     d = diagnose(planning, logs, terrain=tmap, settings=FitSettings(seed=0, n_bootstrap=50))
     assert d.current.chosen == ("time_lag",)
     assert d.current.score("time_lag").parameters["lag_s"] == pytest.approx(0.1, abs=0.03)
+
+
+def test_drive_and_accounting_are_checked_values(flat, flat_mission, clean_sim):
+    tmap, cost = flat
+    route, _ = flat_mission
+    with pytest.raises(InvalidParameterError, match="drive must be a MissionDrive"):
+        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, drive={"speed_mps": 0.5})
+    with pytest.raises(InvalidParameterError, match="accounting must be a MissionAccounting"):
+        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, accounting="edges")
+    with pytest.raises(InvalidParameterError, match="current_offset_a must be >= 0"):
+        MissionAccounting(current_offset_a=-0.1)
+    with pytest.raises(InvalidParameterError, match="waypoint_tolerance_m must be >= 0"):
+        MissionDrive(waypoint_tolerance_m=-1.0)

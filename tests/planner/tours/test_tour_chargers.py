@@ -13,8 +13,10 @@ from energy import Battery
 from planner.cost_spec import CostSpec
 from planner.tours import (
     TourChargers,
+    TourPoints,
     TourProblem,
     TourRobot,
+    TourSearch,
     TourSites,
     plan_tour,
     price_pairs,
@@ -36,10 +38,10 @@ def corridor():
 
 def test_a_site_out_of_reach_on_one_charge_is_visited_with_a_charge_and_every_segment_holds_at_q(corridor, tmp_path):
     cost, sites, robot = corridor
-    alone = plan_tour(cost, sites, robot, risk=0.9)
+    alone = plan_tour(cost, sites, robot, search=TourSearch(risk=0.9))
     assert alone.left_out == {"far": TOO_FAR} and alone.visited == ("near",)
     dock = TourChargers(("dock",), [[30.0, 10.0]], power_w=50.0, connection_time_s=20.0)
-    res = plan_tour(cost, sites, robot, risk=0.9, chargers=dock, time_limit_s=1.0, prices=None)
+    res = plan_tour(cost, sites, robot, chargers=dock, prices=None, search=TourSearch(risk=0.9, time_limit_s=1.0))
     tour = res.tours[0]
     assert set(res.visited) == {"near", "far"} and res.value == 6.0 and res.solver == "ortools"
     assert "dock" in tour.stops and tour.charging_stops and all(tour.stops[k] == "dock" for k in tour.charging_stops)
@@ -108,15 +110,16 @@ def test_the_value_with_chargers_equals_the_exhaustive_optimum(hills_cost, n_sit
                       value=rng.integers(1, 6, n_sites).astype(float))
     ch = TourChargers(tuple(f"c{k}" for k in range(len(chargers))), chargers, max_visits=visits)
     robot = TourRobot(Battery(ah, 24.0, min_reserve_pct=20.0), depot)
-    res = plan_tour(hills_cost, sites, robot, risk=0.9, chargers=ch, time_limit_s=1.0)
+    res = plan_tour(hills_cost, sites, robot, chargers=ch, search=TourSearch(risk=0.9, time_limit_s=1.0))
     # the integer problem plan_tour solves, from the same pricing
     pts = np.vstack([depot, sites.xy_m, ch.xy_m])
     names = ("depot", *sites.names, *ch.names)
     prices = price_pairs(hills_cost, pts, names, risk=0.9)
     n = len(pts)
     zeros = np.zeros(n)
-    problem = TourProblem.build(prices, 0.9, [robot.budget_j], [0], np.arange(1, n_sites + 1), zeros, zeros,
-                                full_budgets_j=[robot.full_budget_j]).with_chargers(np.arange(n_sites + 1, n), visits)
+    problem = TourProblem.build(prices, 0.9, [robot.budget_j], [0], np.arange(1, n_sites + 1),
+                                TourPoints(zeros, zeros), full_budgets_j=[robot.full_budget_j])
+    problem = problem.with_chargers(np.arange(n_sites + 1, n), visits)
     value = {k + 1: float(v) for k, v in enumerate(sites.value)}
     best = _exhaustive(problem, value)
     without = _exhaustive(problem.with_chargers([], []), value)
@@ -132,18 +135,18 @@ def test_the_value_with_chargers_equals_the_exhaustive_optimum(hills_cost, n_sit
 def test_the_charging_time_counts_toward_the_longest_tour(corridor):
     cost, sites, robot = corridor
     slow = TourChargers(("dock",), [[30.0, 10.0]], power_w=20.0, connection_time_s=60.0)
-    res = plan_tour(cost, sites, robot, chargers=slow, time_limit_s=1.0)
+    res = plan_tour(cost, sites, robot, chargers=slow, search=TourSearch(time_limit_s=1.0))
     tour = res.tours[0]
     assert "far" in tour.sites
     short = TourRobot(robot.battery, robot.depot_xy_m, max_duration_s=tour.return_s - 1.0)
-    res = plan_tour(cost, sites, short, chargers=slow, time_limit_s=1.0, prices=res.prices)
+    res = plan_tour(cost, sites, short, chargers=slow, prices=res.prices, search=TourSearch(time_limit_s=1.0))
     assert "far" not in res.tours[0].sites and res.tours[0].return_s <= tour.return_s - 1.0
 
 
 def test_the_monte_carlo_charges_at_the_stops_and_reports_each_arrival(corridor):
     cost, sites, robot = corridor
     dock = TourChargers(("dock",), [[30.0, 10.0]])
-    res = plan_tour(cost, sites, robot, risk=0.9, chargers=dock, time_limit_s=1.0)
+    res = plan_tour(cost, sites, robot, chargers=dock, search=TourSearch(risk=0.9, time_limit_s=1.0))
     check = simulate_tours_mc(res, 400, seed=1)
     tour = res.tours[0]
     at_stops = check.share_above_at_stops(tour.robot)
@@ -167,7 +170,8 @@ def test_bad_chargers_raise_the_librarys_errors(corridor, tmp_path):
     with pytest.raises(InvalidParameterError, match="'far' is both"):
         plan_tour(cost, sites, robot, chargers=TourChargers(("far",), [[30.0, 10.0]]))
     with pytest.raises(InvalidParameterError, match="solver 'pyvrp' cannot stop at charging points"):
-        plan_tour(cost, sites, robot, chargers=TourChargers(("dock",), [[30.0, 10.0]]), solver="pyvrp")
+        plan_tour(cost, sites, robot, chargers=TourChargers(("dock",), [[30.0, 10.0]]),
+                  search=TourSearch(solver="pyvrp"))
     with pytest.raises(InvalidParameterError, match="charger names must be unique"):
         TourChargers(("a", "a"), [[1.0, 1.0], [2.0, 2.0]])
     with pytest.raises(InvalidParameterError, match="power_w of charger 'b' must be > 0"):

@@ -6,7 +6,7 @@ import numpy as np
 from tour_samples import hills_cost  # noqa: F401  (fixture)
 
 from energy import Battery
-from planner.tours import TourRobot, TourSites, plan_tour, simulate_tours_mc
+from planner.tours import TourRobot, TourSearch, TourSites, plan_tour, simulate_tours_mc
 
 
 def test_monte_carlo_of_the_tours_ends_above_the_reserve_about_as_often_as_q(hills_cost):
@@ -15,7 +15,7 @@ def test_monte_carlo_of_the_tours_ends_above_the_reserve_about_as_often_as_q(hil
     robot = TourRobot(Battery(0.15, 24.0), (20.0, 20.0))
     shares = {}
     for q in (0.5, 0.9):
-        res = plan_tour(hills_cost, sites, robot, risk=q)
+        res = plan_tour(hills_cost, sites, robot, search=TourSearch(risk=q))
         check = simulate_tours_mc(res, 400, seed=2)
         shares[q] = check.share_above_reserve
         assert check.draw_from == "model" and "above the reserve" in check.summary()
@@ -37,7 +37,7 @@ def test_every_segment_of_every_tour_runs_on_one_cluster(hills_cost, monkeypatch
     rng = np.random.default_rng(5)
     sites = TourSites(tuple(f"s{k}" for k in range(8)), rng.uniform(3.0, 37.0, size=(8, 2)))
     robots = [TourRobot(Battery(0.08, 24.0), (20.0, 20.0), f"robot {k}") for k in range(2)]
-    res = plan_tour(hills_cost, sites, robots, risk=0.9)
+    res = plan_tour(hills_cost, sites, robots, search=TourSearch(risk=0.9))
     assert sum(bool(t.legs) for t in res.tours) == 2  # two tours: two studies
     opened = []
     with distributed.LocalCluster(processes=False, n_workers=2, threads_per_worker=1,

@@ -12,7 +12,7 @@ from tour_samples import hills_cost, hills_map, ridge_map, with_interval  # noqa
 from energy import Battery
 from planner import EnergyCost
 from planner.cost_spec import CostSpec
-from planner.tours import TourProblem, TourRobot, TourSites, plan_tour, price_pairs
+from planner.tours import TourPoints, TourProblem, TourRobot, TourSearch, TourSites, plan_tour, price_pairs
 from planner.tours.solver import solve_pyvrp
 from planner.tours.tour import NOT_WORTH_IT, TOO_FAR
 from terrain import flat_map
@@ -39,8 +39,8 @@ def _problem(cost: EnergyCost, sites: TourSites, robots: list[TourRobot], q: flo
     pts = np.vstack([depot, sites.xy_m])
     prices = price_pairs(cost, pts, ("depot", *sites.names), risk=q)
     value = np.concatenate([[0.0], sites.value])
-    return TourProblem.build(prices, q, [r.budget_j for r in robots], [0] * len(robots),
-                             np.arange(1, len(pts)), value, np.concatenate([[0.0], sites.service_energy_j]))
+    return TourProblem.build(prices, q, [r.budget_j for r in robots], [0] * len(robots), np.arange(1, len(pts)),
+                             TourPoints(value, np.concatenate([[0.0], sites.service_energy_j])))
 
 
 @pytest.mark.parametrize("n_sites, n_robots, q, ah", [(8, 1, 0.9, 0.12), (8, 1, 0.5, 0.12), (6, 2, 0.9, 0.06)])
@@ -49,7 +49,7 @@ def test_the_tours_value_equals_the_exhaustive_optimum(hills_cost, n_sites, n_ro
     xy = rng.uniform(3.0, 37.0, size=(n_sites, 2))
     sites = TourSites(tuple(f"s{k}" for k in range(n_sites)), xy, value=rng.integers(1, 6, n_sites).astype(float))
     robots = [TourRobot(Battery(ah, 24.0, min_reserve_pct=20.0), (20.0, 20.0), f"r{k}") for k in range(n_robots)]
-    res = plan_tour(hills_cost, sites, robots, risk=q, seed=1)
+    res = plan_tour(hills_cost, sites, robots, search=TourSearch(risk=q, seed=1))
     best = _exhaustive(_problem(hills_cost, sites, robots, q))
     assert res.status == "planned"
     assert 0 < res.value < sites.value.sum()  # the battery binds: a real choice
@@ -65,7 +65,7 @@ def test_a_higher_risk_level_visits_no_more():
     rng = np.random.default_rng(3)
     sites = TourSites(tuple(f"s{k}" for k in range(7)), rng.uniform(3.0, 37.0, size=(7, 2)))
     robot = TourRobot(Battery(0.1, 24.0), (20.0, 20.0))
-    values = [plan_tour(cost, sites, robot, risk=q).value for q in (0.5, 0.9, 0.99)]
+    values = [plan_tour(cost, sites, robot, search=TourSearch(risk=q)).value for q in (0.5, 0.9, 0.99)]
     assert values[0] >= values[1] >= values[2] and values[0] > values[2]
 
 
@@ -88,7 +88,8 @@ def test_uphill_and_downhill_priced_apart_choose_the_cheaper_direction():
     budget_j = (cheap + sym_loop) / 2
     battery = Battery(budget_j / (0.8 * 24.0 * 3600.0), 24.0, min_reserve_pct=20.0)
     tight = plan_tour(cost, sites, TourRobot(battery, depot))
-    sym_tours = solve_pyvrp(TourProblem.build(symmetric, 0.9, [budget_j], [0], [1, 2], [0.0, 1.0, 1.0], [0.0] * 3))
+    sym_tours = solve_pyvrp(TourProblem.build(symmetric, 0.9, [budget_j], [0], [1, 2],
+                                              TourPoints([0.0, 1.0, 1.0], [0.0] * 3)))
     assert tight.value == 2 and len(sym_tours[0]) == 1
     assert tight.tours[0].energy.mean_j <= budget_j
 

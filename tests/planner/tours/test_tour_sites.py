@@ -7,8 +7,8 @@ import pytest
 
 from energy import Battery
 from planner.cost_spec import CostSpec
-from planner.tours import TourRobot, TourSites, plan_tour, read_tour_sites_csv
-from terrain import DataError, InvalidParameterError, TerrainMap, flat_map
+from planner.tours import TourRobot, TourSearch, TourSites, plan_tour, read_tour_sites_csv
+from terrain import DataError, InvalidParameterError, TerrainMap, UnknownNameError, flat_map
 from terrain.georef import xy_to_lonlat
 
 
@@ -46,7 +46,8 @@ def test_bad_sites_raise_the_librarys_errors(tmp_path):
         read_tour_sites_csv(csv)
     cost = CostSpec().build(flat_map((20, 20), 1.0))
     with pytest.raises(InvalidParameterError, match="risk 0.2 lies below the median"):
-        plan_tour(cost, TourSites(("a",), [[5.0, 5.0]]), TourRobot(Battery(1.0, 24.0), (2.0, 2.0)), risk=0.2)
+        plan_tour(cost, TourSites(("a",), [[5.0, 5.0]]), TourRobot(Battery(1.0, 24.0), (2.0, 2.0)),
+                  search=TourSearch(risk=0.2))
     twins = [TourRobot(Battery(1.0, 24.0), (2.0, 2.0), "r")] * 2
     with pytest.raises(InvalidParameterError, match="robot names must be unique; 'r' appears 2 times"):
         plan_tour(cost, TourSites(("a",), [[5.0, 5.0]]), twins)
@@ -67,3 +68,20 @@ def test_sites_in_degrees_are_placed_by_the_maps_crs(tmp_path):
                                                      zip("ab", lon.tolist(), lat.tolist(), (1, 2))))
     read = read_tour_sites_csv(csv, tmap)
     assert read.names == ("a", "b") and np.allclose(read.xy_m, xy, atol=1e-3) and read.value.tolist() == [1.0, 2.0]
+
+
+def test_the_search_and_the_fleet_are_checked_values():
+    from planner.tours import TourFleet
+
+    with pytest.raises(InvalidParameterError, match="risk"):
+        TourSearch(risk=0.3)
+    with pytest.raises(InvalidParameterError, match="time_limit_s must be > 0"):
+        TourSearch(time_limit_s=0.0)
+    with pytest.raises(UnknownNameError, match="solver must be one of"):
+        TourSearch(solver="gurobi")
+    with pytest.raises(InvalidParameterError, match=r"one per robot \(n_robots=3\), got 2 points") as err:
+        TourFleet(battery=Battery(1.0, 24.0), depot_xy_m=[(1.0, 1.0), (2.0, 2.0)], n_robots=3)
+    assert err.value.parameter == "depot_xy_m"
+    assert TourFleet(battery=Battery(1.0, 24.0), depot_xy_m=(1, 2), n_robots=2).depot_xy_m == ((1.0, 2.0), (1.0, 2.0))
+    with pytest.raises(InvalidParameterError, match="battery must be a Battery"):
+        TourFleet(battery=1.0, depot_xy_m=(1, 2))

@@ -12,7 +12,16 @@ from tour_samples import hills_cost, ridge_map  # noqa: F401  (fixture)
 from energy import Battery
 from planner import EnergyCost
 from planner.cost_spec import CostSpec
-from planner.tours import TourProblem, TourRobot, TourSites, plan_tour, price_pairs, read_tour_sites_csv
+from planner.tours import (
+    TourPoints,
+    TourProblem,
+    TourRobot,
+    TourSearch,
+    TourSites,
+    plan_tour,
+    price_pairs,
+    read_tour_sites_csv,
+)
 from planner.tours.tour import NOT_WORTH_IT, OUTSIDE_WINDOW, TOO_FAR, TOO_LONG
 from terrain import DataError, InvalidParameterError, flat_map
 
@@ -21,10 +30,10 @@ def _problem(cost: EnergyCost, sites: TourSites, robots: list[TourRobot], q: flo
     """The integer problem plan_tour solves (energy units, whole seconds), from the same pricing (one depot)."""
     pts = np.vstack([robots[0].depot_xy_m, sites.xy_m])
     prices = price_pairs(cost, pts, ("depot", *sites.names), risk=q)
+    points = TourPoints(np.concatenate([[0.0], sites.value]), np.concatenate([[0.0], sites.service_energy_j]),
+                        np.concatenate([[0.0], sites.service_time_s]), np.vstack([[0.0, np.inf], sites.time_window_s]))
     return TourProblem.build(prices, q, [r.budget_j for r in robots], [0] * len(robots), np.arange(1, len(pts)),
-                             np.concatenate([[0.0], sites.value]), np.concatenate([[0.0], sites.service_energy_j]),
-                             np.concatenate([[0.0], sites.service_time_s]),
-                             np.vstack([[0.0, np.inf], sites.time_window_s]), [r.max_duration_s for r in robots])
+                             points, [r.max_duration_s for r in robots])
 
 
 def _on_time(problem: TourProblem, tour: tuple[int, ...]) -> bool:
@@ -68,7 +77,7 @@ def test_the_tours_value_with_windows_equals_the_exhaustive_optimum(hills_cost, 
     depot = (20.0, 20.0)
     sites = _windowed_sites(seed, 8, depot)
     robot = TourRobot(Battery(0.2, 24.0, min_reserve_pct=20.0), depot)
-    res = plan_tour(hills_cost, sites, robot, risk=0.9, seed=1)
+    res = plan_tour(hills_cost, sites, robot, search=TourSearch(risk=0.9, seed=1))
     problem = _problem(hills_cost, sites, [robot], 0.9)
     best = _exhaustive(problem)
     assert _exhaustive(problem, windows=False) > best  # the windows bind
@@ -158,7 +167,7 @@ def test_the_ortools_path_keeps_the_windows_and_finds_the_same_optimum(hills_cos
     best = _exhaustive(problem)
     assert _exhaustive(problem, windows=False) > best
     prices = plan_tour(hills_cost, sites, robot).prices
-    res = plan_tour(hills_cost, sites, robot, solver="ortools", time_limit_s=1.0, prices=prices)
+    res = plan_tour(hills_cost, sites, robot, prices=prices, search=TourSearch(solver="ortools", time_limit_s=1.0))
     assert round(res.value * 100) * (int(problem.capacity_units.sum()) + 1) == best
     w = dict(zip(sites.names, sites.time_window_s.tolist()))
     tour = res.tours[0]
