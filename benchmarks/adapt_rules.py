@@ -564,7 +564,7 @@ def report(cache: dict[str, Any], Ts: tuple[float, ...], out: Path | None,
     tab = table(cache, rules, Ts, choice_folds)
     tab["held_out_choice"] = (held_out_choice(cache, rules, choice_folds)
                               if len(cache["outer"]) > 2 or choice_folds is not None else {})
-    print("update chosen on the other grounds (worst harm at 20 / 40 s, ties within 1 point by the mean error): "
+    print("update chosen on the other grounds or --choice-cache (worst harm at 20 / 40 s, ties within 1 point by the mean error): "
           + ", ".join(f"{g}: {n}" for g, n in tab["held_out_choice"].items()))
     print("\ntotal charge median / p90 % per T " + " ".join(f"{T:g} s" for T in Ts))
     print("constants chosen (LOGO: on the inner folds; others: on the other grounds or --choice-cache): " + "; ".join(f"{fam}: {v}" for fam, v in tab["chosen"].items()))
