@@ -77,12 +77,12 @@ def _basis(log: Any, k: int, moving: bool) -> np.ndarray:
     return x * (~rest_samples(log))[:, None] if moving else x
 
 
-def _basis_integrals(log: Any, moving: bool = False) -> np.ndarray:
+def basis_integrals(log: Any, moving: bool = False) -> np.ndarray:
     """``integral(basis(log, k) dt)`` per side, shape (2, 4) (A s per unit coefficient)."""
     return np.stack([_trapezoid(_basis(log, k, moving), log.time_s, axis=0) for k in range(2)])
 
 
-def _normal_equations(log: Any, residual: np.ndarray, moving: bool) -> tuple[np.ndarray, np.ndarray]:
+def normal_equations(log: Any, residual: np.ndarray, moving: bool) -> tuple[np.ndarray, np.ndarray]:
     """Per side the update's time-weighted ``X'WX`` (2, 4, 4) and ``X'Wr`` (2, 4) (the ridge adds ``prior_s``)."""
     w = sample_weights_s(log)
     xs = [_basis(log, k, moving) for k in range(2)]
@@ -97,8 +97,8 @@ def fold_cache(model: Any, runs: list, names: list[str], adapt_seconds: tuple[fl
     for r, name, p in zip(runs, names, base):
         y = log_currents(r)
         out["runs"].append({"name": name, "q_true": _trapezoid(y, r.time_s, axis=0),
-                            "q_base": _trapezoid(p, r.time_s, axis=0), "xint": _basis_integrals(r),
-                            "xint_moving": _basis_integrals(r, moving=True), "duration_s": r.duration_s,
+                            "q_base": _trapezoid(p, r.time_s, axis=0), "xint": basis_integrals(r),
+                            "xint_moving": basis_integrals(r, moving=True), "duration_s": r.duration_s,
                             "stats": _stats(r)})
     for a, run_a in enumerate(runs):
         t = run_a.time_s
@@ -114,10 +114,10 @@ def fold_cache(model: Any, runs: list, names: list[str], adapt_seconds: tuple[fl
             q_true = _trapezoid(yy, prefix.time_s, axis=0)
             gain = np.where(q_pred > 0, q_true / np.where(q_pred > 0, q_pred, 1.0), 1.0)
             out["prefixes"].append({"a": a, "T": float(T), "coef": upd.coefficients_.copy(), "obs": obs, "E": noise,
-                                    "R": run_v, "G": ground_v, "gain": gain, "xint": _basis_integrals(prefix),
+                                    "R": run_v, "G": ground_v, "gain": gain, "xint": basis_integrals(prefix),
                                     "stats": _stats(prefix), "nonneg": upd.nonnegative_,
-                                    "normal": _normal_equations(prefix, yy - pp, False),
-                                    "normal_moving": _normal_equations(prefix, yy - pp, True)})
+                                    "normal": normal_equations(prefix, yy - pp, False),
+                                    "normal_moving": normal_equations(prefix, yy - pp, True)})
             for b, run_b in enumerate(runs):  # the exact (clamped) plain update, to size the clamp left out
                 if b != a:
                     out["pairs"][(a, float(T), b)] = _trapezoid(upd.correct(run_b, base[b]), run_b.time_s, axis=0)

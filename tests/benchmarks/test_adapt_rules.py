@@ -75,8 +75,8 @@ def _entry(turning: np.ndarray, residual_a: float = -1.0) -> dict:
     log = InteractionLog(t, np.full(n, 0.5), turning, np.ones(n), np.ones(n), t, np.full(n, 9.81),
                          meta=LogMeta(source="c/0", ground_label="c", robot="husky_a200"))
     ar = adapt_rules
-    normal = ar._normal_equations(log, np.full((n, 2), residual_a), False)
-    p = {"normal": normal, "xint": ar._basis_integrals(log), "G": np.ones(2), "R": np.full(2, 0.5),
+    normal = ar.normal_equations(log, np.full((n, 2), residual_a), False)
+    p = {"normal": normal, "xint": ar.basis_integrals(log), "G": np.ones(2), "R": np.full(2, 0.5),
          "E": np.full(2, 0.5), "obs": np.full(2, residual_a * t[-1])}
     p["coef"] = ar.ridge(p)
     return p
