@@ -16,6 +16,12 @@ Folds: each ground held out in turn (outer), and inside each outer fold's traini
 each ground held out in turn (inner: trained on the training grounds but one), so that a rule
 with a free constant can choose it without the held-out ground.
 
+Rules: the library's updates, and three candidates for an update that keeps the partition's fix where a prefix drove
+one regime without its cost where it drove both (none with a free constant but (c)'s, chosen without the held-out
+ground): (a) ``hierarchical``, the partition's levels sharing a common level learned in proportion to the prefix's
+balance; (b) ``overlap``, the default applied to a run in proportion to the regime overlap of prefix and run; (c)
+``switch``, the partition below a balance chosen on the other grounds (or, ``--choice-cache``, on another data set's).
+
 Printed (``--out``: JSON of every number): the diagnosis (per ground and T, which prefixes
 the update harms most, on which side, and how the prefix's motion differs from the scored
 runs'), then per ground and T the total-charge error median / p90 % of every rule against
@@ -24,7 +30,8 @@ the unadapted forecast and the gain baseline.
 Usage::
 
     python benchmarks/adapt_rules.py --data borealtc --cache out/rules_boreal.pkl --out out/rules_boreal.json
-    python benchmarks/adapt_rules.py --data generated --cache out/rules_gen.pkl --out out/rules_gen.json
+    python benchmarks/adapt_rules.py --data generated --no-inner --cache out/rules_gen.pkl \
+        --choice-cache out/rules_boreal.pkl --out out/rules_gen.json
 """
 
 from __future__ import annotations
@@ -70,12 +77,12 @@ def _basis(log: Any, k: int, moving: bool) -> np.ndarray:
     return x * (~rest_samples(log))[:, None] if moving else x
 
 
-def _basis_integrals(log: Any, moving: bool = False) -> np.ndarray:
+def basis_integrals(log: Any, moving: bool = False) -> np.ndarray:
     """``integral(basis(log, k) dt)`` per side, shape (2, 4) (A s per unit coefficient)."""
     return np.stack([_trapezoid(_basis(log, k, moving), log.time_s, axis=0) for k in range(2)])
 
 
-def _normal_equations(log: Any, residual: np.ndarray, moving: bool) -> tuple[np.ndarray, np.ndarray]:
+def normal_equations(log: Any, residual: np.ndarray, moving: bool) -> tuple[np.ndarray, np.ndarray]:
     """Per side the update's time-weighted ``X'WX`` (2, 4, 4) and ``X'Wr`` (2, 4) (the ridge adds ``prior_s``)."""
     w = sample_weights_s(log)
     xs = [_basis(log, k, moving) for k in range(2)]
@@ -90,8 +97,8 @@ def fold_cache(model: Any, runs: list, names: list[str], adapt_seconds: tuple[fl
     for r, name, p in zip(runs, names, base):
         y = log_currents(r)
         out["runs"].append({"name": name, "q_true": _trapezoid(y, r.time_s, axis=0),
-                            "q_base": _trapezoid(p, r.time_s, axis=0), "xint": _basis_integrals(r),
-                            "xint_moving": _basis_integrals(r, moving=True), "duration_s": r.duration_s,
+                            "q_base": _trapezoid(p, r.time_s, axis=0), "xint": basis_integrals(r),
+                            "xint_moving": basis_integrals(r, moving=True), "duration_s": r.duration_s,
                             "stats": _stats(r)})
     for a, run_a in enumerate(runs):
         t = run_a.time_s
@@ -107,10 +114,10 @@ def fold_cache(model: Any, runs: list, names: list[str], adapt_seconds: tuple[fl
             q_true = _trapezoid(yy, prefix.time_s, axis=0)
             gain = np.where(q_pred > 0, q_true / np.where(q_pred > 0, q_pred, 1.0), 1.0)
             out["prefixes"].append({"a": a, "T": float(T), "coef": upd.coefficients_.copy(), "obs": obs, "E": noise,
-                                    "R": run_v, "G": ground_v, "gain": gain, "xint": _basis_integrals(prefix),
+                                    "R": run_v, "G": ground_v, "gain": gain, "xint": basis_integrals(prefix),
                                     "stats": _stats(prefix), "nonneg": upd.nonnegative_,
-                                    "normal": _normal_equations(prefix, yy - pp, False),
-                                    "normal_moving": _normal_equations(prefix, yy - pp, True)})
+                                    "normal": normal_equations(prefix, yy - pp, False),
+                                    "normal_moving": normal_equations(prefix, yy - pp, True)})
             for b, run_b in enumerate(runs):  # the exact (clamped) plain update, to size the clamp left out
                 if b != a:
                     out["pairs"][(a, float(T), b)] = _trapezoid(upd.correct(run_b, base[b]), run_b.time_s, axis=0)
@@ -162,8 +169,18 @@ def build_cache(logs: list, seed: int, adapt_seconds: tuple[float, ...], inner: 
 
 
 # ------------------------------------------------------------------ rules
-# A rule maps (prefix entry, fold) to the coefficients (2, 4) added on the scored runs.
-Rule = Callable[[dict[str, Any], dict[str, Any]], np.ndarray]
+# A rule maps (prefix entry, fold) to the coefficients (2, 4) added on the scored runs; or to a function of the scored
+# run's entry giving them (a rule that depends on the run it forecasts); or to (either, "xint_moving").
+Rule = Callable[[dict[str, Any], dict[str, Any]], Any]
+
+
+def _resolve(out: Any) -> tuple[Any, str]:
+    """A rule's output as (coefficients or a function of the scored run, the key of the run's basis integrals)."""
+    return out if isinstance(out, tuple) else (out, "xint")
+
+
+def _at(coef: Any, rb: dict[str, Any]) -> np.ndarray:
+    return coef(rb) if callable(coef) else coef
 
 
 def _scaled(lam: np.ndarray, p: dict[str, Any]) -> np.ndarray:
@@ -227,16 +244,91 @@ def rule_partition(p: dict, f: dict) -> np.ndarray:
 
 def rule_partition_prior(p: dict, f: dict) -> np.ndarray:
     """The regime partition shrunk by the default's factor."""
-    if not np.any(p["G"] > 0):
-        lam = rule_evidence(p, f)[:, 0] / np.where(p["coef"][:, 0] != 0, p["coef"][:, 0], 1.0)
-        return partition_coef(p) * np.clip(lam, 0.0, 1.0)[:, None]
-    return partition_coef(p) * _prior_factor(p)[:, None]
+    return partition_coef(p) * _prior_or_evidence_factor(p, f)[:, None]
 
 
 def rule_partition_moving_prior(p: dict, f: dict) -> tuple[np.ndarray, str]:
     """The regime partition on driving only (no correction at rest), shrunk by the default's factor."""
     lam = _prior_factor(p) if np.any(p["G"] > 0) else np.ones(2)
     return partition_coef(p, moving=True) * lam[:, None], "xint_moving"
+
+
+def regime_seconds(xint: np.ndarray) -> np.ndarray:
+    """Soft seconds of a stretch straight (rest included) and turning, ``[integral(1 - m) dt, integral(m dt)]``, from its
+    basis integrals (``m`` is the same on both sides)."""
+    return np.array([xint[0, 0] - xint[0, 2], xint[0, 2]])
+
+
+def balance(xint: np.ndarray) -> float:
+    """``2 min(straight s, turning s) / T``: 0 when a stretch drove one regime only, 1 when half and half."""
+    s = regime_seconds(xint)
+    return float(2.0 * s.min() / max(s.sum(), 1e-12))
+
+
+#: From the update's basis ``[1, |v|, m, m outer]`` to a common level plus one deviation per regime, ``[1, 1 - m, m,
+#: |v|, m outer]`` (the columns of the first two rows of the partition, and a level shared by both).
+HIERARCHY = np.array([[1.0, 1, 0, 0, 0], [0, 0, 0, 1, 0], [0, -1, 1, 0, 0], [0, 0, 0, 0, 1]])
+
+
+def hierarchical_coef(p: dict[str, Any], prior_s: float = 20.0) -> np.ndarray:
+    """Candidate (a): the partition's levels sharing a common level whose ridge is ``prior_s / balance``.
+
+    Each regime's level is the common level plus its own deviation (ridge ``prior_s`` each, as every column of the
+    update). A prefix that drove one regime only (balance 0) cannot tell the common level from that regime's
+    deviation, so it learns none: the partition, other regimes left at zero. The more evenly it drove both, the more
+    the common level learns from all its seconds, down to the same ridge as the deviations at half and half.
+    """
+    beta = balance(p["xint"])
+    xtx, xtr = p["normal"]
+    if beta > 1e-9:
+        m, pen = HIERARCHY, np.array([prior_s / beta] + [prior_s] * 4)
+    else:
+        m, pen = HIERARCHY[:, 1:], np.full(4, prior_s)
+    return np.stack([m @ np.linalg.solve(m.T @ xtx[k] @ m + np.diag(pen), m.T @ xtr[k]) for k in range(2)])
+
+
+def _prior_or_evidence_factor(p: dict[str, Any], f: dict[str, Any]) -> np.ndarray:
+    """The default's factor; without a learned ground spread, the evidence shrink's factor (as the library)."""
+    if np.any(p["G"] > 0):
+        return _prior_factor(p)
+    lam = rule_evidence(p, f)[:, 0] / np.where(p["coef"][:, 0] != 0, p["coef"][:, 0], 1.0)
+    return np.clip(lam, 0.0, 1.0)
+
+
+def rule_hierarchical_prior(p: dict, f: dict) -> np.ndarray:
+    """Candidate (a), shrunk by the default's factor."""
+    return hierarchical_coef(p) * _prior_or_evidence_factor(p, f)[:, None]
+
+
+def _shares(xint: np.ndarray) -> np.ndarray:
+    s = regime_seconds(xint)
+    return s / max(float(s.sum()), 1e-12)
+
+
+def rule_overlap_prior(p: dict, f: dict) -> Callable[[dict[str, Any]], np.ndarray]:
+    """Candidate (b): the default, applied to each scored run in proportion to the regime overlap of prefix and run,
+    ``sum_j min(p_j, q_j)`` over the shares of time straight and turning (1 when they drove alike)."""
+    c, ps = rule_prior(p, f), _shares(p["xint"])
+    return lambda rb: c * float(np.sum(np.minimum(ps, _shares(rb["xint"]))))
+
+
+def rule_overlap_regime_prior(p: dict, f: dict) -> Callable[[dict[str, Any]], np.ndarray]:
+    """Candidate (b) per regime: the default's straight level (and its |v| term) scaled by ``min(1, p_s / q_s)``, its
+    turning level (and outer term) by ``min(1, p_t / q_t)`` — a regime the prefix drove less than the run is moved less."""
+    c, ps = rule_prior(p, f), _shares(p["xint"])
+    levels = np.linalg.solve(PARTITION, c.T).T  # the default's coefficients as partition levels
+
+    def at(rb: dict[str, Any]) -> np.ndarray:
+        w = np.minimum(1.0, ps / np.maximum(_shares(rb["xint"]), 1e-12))
+        return (PARTITION @ (levels * w[[0, 0, 1, 1]]).T).T
+
+    return at
+
+
+def switch_rule(theta: float) -> Rule:
+    """Candidate (c): the partition (with the default's factor) where the prefix's balance is below ``theta``, else
+    the default."""
+    return lambda p, f: rule_partition_prior(p, f) if balance(p["xint"]) < theta else rule_prior(p, f)
 
 
 def scale_rule(c: float) -> Rule:
@@ -249,11 +341,16 @@ def penalty_rule(prior_s: float) -> Rule:
     return lambda p, f: ridge(p, prior_s)
 
 
+#: Balances below which candidate (c) takes the partition: 0 never (the default), 1.01 always (ties go to the first).
+SWITCH_GRID = (0.0, *np.round(np.arange(0.05, 1.0001, 0.05), 2).tolist(), 1.01)
 #: Rule families with one free constant, chosen on the inner folds (the held-out ground never seen).
 FAMILIES: dict[str, dict[float, Rule]] = {
     "scale (LOGO)": {c: scale_rule(c) for c in np.round(np.linspace(0.0, 1.0, 11), 2)},
     "penalty (LOGO)": {s_: penalty_rule(s_) for s_ in (20.0, 40.0, 80.0, 160.0, 320.0, 640.0, 1280.0, 1e9)},
+    "switch (LOGO)": {th: switch_rule(th) for th in SWITCH_GRID},
 }
+#: Families chosen like the candidates (:func:`held_out_choice`): on the *other* grounds' few-shot folds.
+OTHERS_FAMILIES: dict[str, dict[float, Rule]] = {"switch (others)": {th: switch_rule(th) for th in SWITCH_GRID}}
 
 
 def choose(rules: dict[float, Rule], folds: list[dict[str, Any]], tie_pts: float = 1.0) -> float:
@@ -269,15 +366,12 @@ def charges(rule: Rule, fold: dict[str, Any]) -> list[dict[str, Any]]:
     rows = []
     runs = fold["runs"]
     for p in fold["prefixes"]:
-        coef = rule(p, fold)
-        key = "xint"
-        if isinstance(coef, tuple):  # (coefficients, "xint_moving"): a rule on the basis zero at rest
-            coef, key = coef
+        coef, key = _resolve(rule(p, fold))
         for b, rb in enumerate(runs):
             if b == p["a"]:
                 continue
             q_true = float(np.sum(rb["q_true"]))
-            side = rb["q_base"] + np.sum(coef * rb[key], axis=1)
+            side = rb["q_base"] + np.sum(_at(coef, rb) * rb[key], axis=1)
             rows.append({"a": p["a"], "b": b, "T": p["T"], "q_true": q_true,
                          "err": 100.0 * abs(float(np.sum(side)) - q_true) / q_true,
                          "err_side": 100.0 * (side - rb["q_true"]) / q_true,
@@ -314,6 +408,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-inner", action="store_true", help="outer folds only")
     ap.add_argument("--cache", type=Path, help="pickle of the fitted folds' charges: built when missing, read when there")
     ap.add_argument("--out", type=Path, help="JSON of every number")
+    ap.add_argument("--choice-cache", type=Path,
+                    help="another data set's cache: the update and the constants are chosen on its grounds (this data "
+                         "set held out of every choice)")
     args = ap.parse_args(argv)
     Ts = tuple(args.adapt_seconds)
     cache = None
@@ -333,7 +430,13 @@ def main(argv: list[str] | None = None) -> int:
         t0 = time.perf_counter()
         cache = build_cache(load_logs(args.data, args.path, args.seed), args.seed, Ts, not args.no_inner, cache, save)
         print(f"cache built in {time.perf_counter() - t0:.0f} s")
-    report(cache, Ts, args.out)
+    choice = None
+    if args.choice_cache is not None:
+        other = pickle.loads(args.choice_cache.read_bytes())
+        if other.get("version") != CACHE_VERSION:
+            ap.error(f"{args.choice_cache} is a cache of version {other.get('version')!r}, not {CACHE_VERSION}")
+        choice = list(other["outer"].values())
+    report(cache, Ts, args.out, choice)
     return 0
 
 
@@ -348,10 +451,10 @@ def diagnose(fold: dict[str, Any], rule: Rule, T: float, top: int = 3) -> dict[s
     per = []
     for p in (q for q in fold["prefixes"] if q["T"] == T):
         mine = [r for r in rows if r["a"] == p["a"]]
-        coef, key = rule(p, fold), "xint"
-        if isinstance(coef, tuple):
-            coef, key = coef
-        parts = np.mean([coef * runs[r["b"]][key] / r["q_true"] * 100.0 for r in mine], axis=0)  # (2, 4) % of charge
+        coef, key = _resolve(rule(p, fold))
+        parts = np.mean([_at(coef, runs[r["b"]]) * runs[r["b"]][key] / r["q_true"] * 100.0 for r in mine],
+                        axis=0)  # (2, 4) % of charge
+        coef = np.mean([_at(coef, runs[r["b"]]) for r in mine], axis=0)
         per.append({"prefix": runs[p["a"]]["name"], "harm_pts": float(np.mean([r["err"] - r["base"] for r in mine])),
                     "signed_base_pct": float(np.mean([100.0 * (np.sum(runs[r["b"]]["q_base"]) - r["q_true"]) / r["q_true"]
                                                       for r in mine])),
@@ -393,9 +496,11 @@ def clamp_effect(fold: dict[str, Any]) -> float:
     return worst
 
 
-def table(cache: dict[str, Any], rules: dict[str, Rule], Ts: tuple[float, ...]) -> dict[str, Any]:
+def table(cache: dict[str, Any], rules: dict[str, Rule], Ts: tuple[float, ...],
+          choice_folds: list[dict[str, Any]] | None = None) -> dict[str, Any]:
     """Per outer ground (then pooled) and T: median / p90 % of every rule, unadapted and the gain baseline; the
-    families' constants chosen per outer ground on its inner folds (``chosen``)."""
+    families' constants chosen per outer ground on its inner folds, :data:`OTHERS_FAMILIES`' on the other grounds'
+    folds or, given, on ``choice_folds`` (another data set's: this one held out of every choice) (``chosen``)."""
     out: dict[str, Any] = {"chosen": {}}
     pooled: dict[str, list[dict[str, Any]]] = {}
     for g, fold in cache["outer"].items():
@@ -405,6 +510,12 @@ def table(cache: dict[str, Any], rules: dict[str, Rule], Ts: tuple[float, ...]) 
         for fam, members in FAMILIES.items():
             if inner:
                 k = choose(members, inner)
+                out["chosen"].setdefault(fam, {})[g] = float(k)
+                here[fam] = members[k]
+        others = choice_folds if choice_folds is not None else [f for h, f in cache["outer"].items() if h != g]
+        for fam, members in OTHERS_FAMILIES.items():
+            if others:
+                k = choose(members, others)
                 out["chosen"].setdefault(fam, {})[g] = float(k)
                 here[fam] = members[k]
         for name, rule in here.items():
@@ -420,36 +531,43 @@ def table(cache: dict[str, Any], rules: dict[str, Rule], Ts: tuple[float, ...]) 
 
 
 #: The updates the held-out choice picks among (the default first).
-CANDIDATES = ("prior", "evidence", "none", "partition", "partition, prior")
+CANDIDATES = ("prior", "evidence", "none", "partition", "partition, prior", "hierarchical, prior", "overlap, prior",
+              "overlap per regime, prior")
 
 
-def held_out_choice(cache: dict[str, Any], rules: dict[str, Rule]) -> dict[str, str]:
-    """Per ground, the candidate :func:`choose` picks on the *other* grounds' few-shot folds (this one never seen)."""
+def held_out_choice(cache: dict[str, Any], rules: dict[str, Rule],
+                    choice_folds: list[dict[str, Any]] | None = None) -> dict[str, str]:
+    """Per ground, the candidate :func:`choose` picks on the *other* grounds' few-shot folds (this one never seen), or
+    on ``choice_folds``."""
     out = {}
     for g in cache["outer"]:
-        others = [f for h, f in cache["outer"].items() if h != g]
+        others = choice_folds if choice_folds is not None else [f for h, f in cache["outer"].items() if h != g]
         names = list(CANDIDATES)
         pick = choose(dict(enumerate(rules[n] for n in names)), others)
         out[g] = names[int(pick)]
     return out
 
 
-def report(cache: dict[str, Any], Ts: tuple[float, ...], out: Path | None) -> None:
+def report(cache: dict[str, Any], Ts: tuple[float, ...], out: Path | None,
+           choice_folds: list[dict[str, Any]] | None = None) -> None:
     rules = {"unadapted": rule_unadapted, "none": rule_none, "evidence": rule_evidence, "prior": rule_prior,
              "prior, moving": rule_prior_moving, "partition": rule_partition,
-             "partition, prior": rule_partition_prior, "partition, moving, prior": rule_partition_moving_prior}
+             "partition, prior": rule_partition_prior, "partition, moving, prior": rule_partition_moving_prior,
+             "hierarchical, prior": rule_hierarchical_prior, "overlap, prior": rule_overlap_prior,
+             "overlap per regime, prior": rule_overlap_regime_prior}
     print("clamp left out of the cached charges, worst points per ground: " +
           ", ".join(f"{g} {clamp_effect(f):.2f}" for g, f in cache["outer"].items()))
     diag = {g: [diagnose(f, rule_prior, T) for T in Ts if T >= 20] for g, f in cache["outer"].items()}
     for g, ds in diag.items():
         for d in ds:
             _print_diagnosis(g, d)
-    tab = table(cache, rules, Ts)
-    tab["held_out_choice"] = held_out_choice(cache, rules) if len(cache["outer"]) > 2 else {}
-    print("update chosen on the other grounds (worst harm at 20 / 40 s, ties within 1 point by the mean error): "
+    tab = table(cache, rules, Ts, choice_folds)
+    tab["held_out_choice"] = (held_out_choice(cache, rules, choice_folds)
+                              if len(cache["outer"]) > 2 or choice_folds is not None else {})
+    print("update chosen on the other grounds or --choice-cache (worst harm at 20 / 40 s, ties within 1 point by the mean error): "
           + ", ".join(f"{g}: {n}" for g, n in tab["held_out_choice"].items()))
     print("\ntotal charge median / p90 % per T " + " ".join(f"{T:g} s" for T in Ts))
-    print("constants chosen on the inner folds: " + "; ".join(f"{fam}: {v}" for fam, v in tab["chosen"].items()))
+    print("constants chosen (LOGO: on the inner folds; others: on the other grounds or --choice-cache): " + "; ".join(f"{fam}: {v}" for fam, v in tab["chosen"].items()))
     for g, per in tab.items():
         if g in ("chosen", "held_out_choice"):
             continue

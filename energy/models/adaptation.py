@@ -26,7 +26,11 @@ run and scored on the rest; the README has the table):
   choice, with ``shrink="prior"`` (snow's p90 at 20 s 70.4 -> 59.7 %, unadapted 62.2 %); on the
   independent generator's grounds, whose prefixes never pivot in place, it gains less than
   ``"regime"`` (pooled 22.4 / 74.2 against 18.7 / 56.7 %), so it is not the default
-  (docs/results.md).
+  (docs/results.md): its cost lies on prefixes that drove both regimes, whose levels each learn
+  from fewer seconds. Three rules meant to keep its fix without that cost (a common level shared
+  by the prefix's regime balance; the default scaled by the regime overlap of prefix and run; a
+  switch on the balance chosen on other grounds) were measured and dropped: each beats the default
+  held out on BorealTC and loses to it on the generator's grounds.
 - ``"gain"``: one gain per side, the measured over the predicted charge of the prefix (the
   baseline every update is compared with).
 - ``"gain_offset"``: per side ``a * predicted + b`` by the same ridge as ``"regime"``.

@@ -13,6 +13,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "energy"))  # inter
 import adapt_rules  # noqa: E402  (benchmarks/ is on sys.path: tests/conftest.py)
 from interval_samples import fit_two_ground_estimator, interval_log  # noqa: E402
 
+from energy import InteractionLog, LogMeta  # noqa: E402
 from energy.models import AdaptedCurrentModel, log_currents  # noqa: E402
 
 
@@ -59,7 +60,68 @@ def test_the_unadapted_rule_is_the_base_and_harm_is_measured_against_it(fold):
 
 def test_report_prints_and_writes_every_rule(fold, tmp_path, capsys):
     ar, _, _, cache = fold
-    ar.report({"outer": {"c": cache}, "inner": {"c": {"c": cache}}}, (20.0,), tmp_path / "rules.json")
+    ar.report({"outer": {"c": cache, "d": cache}, "inner": {"c": {"c": cache}}}, (20.0,), tmp_path / "rules.json")
     text = capsys.readouterr().out
     assert "prior, moving" in text and "scale (LOGO)" in text and "gain" in text
+    assert "hierarchical, prior" in text and "overlap, prior" in text and "switch (others)" in text
     assert (tmp_path / "rules.json").exists()
+
+
+def _entry(turning: np.ndarray, residual_a: float = -1.0) -> dict:
+    """A prefix entry of the cache (its normal equations and basis integrals) for 0.1-s samples of ``turning`` (rad/s,
+    0 straight) at 0.5 m/s whose residual current is ``residual_a`` on both sides; spreads that keep half of it."""
+    t = np.arange(turning.size) * 0.1
+    n = t.size
+    log = InteractionLog(t, np.full(n, 0.5), turning, np.ones(n), np.ones(n), t, np.full(n, 9.81),
+                         meta=LogMeta(source="c/0", ground_label="c", robot="husky_a200"))
+    ar = adapt_rules
+    normal = ar.normal_equations(log, np.full((n, 2), residual_a), False)
+    p = {"normal": normal, "xint": ar.basis_integrals(log), "G": np.ones(2), "R": np.full(2, 0.5),
+         "E": np.full(2, 0.5), "obs": np.full(2, residual_a * t[-1])}
+    p["coef"] = ar.ridge(p)
+    return p
+
+
+def _levels(coef: np.ndarray) -> np.ndarray:
+    """Per side the straight level (offset) and the turning level (offset + turning) of regime coefficients."""
+    return np.stack([coef[:, 0], coef[:, 0] + coef[:, 2]], axis=1)
+
+
+def test_the_hierarchical_level_is_the_partition_where_the_prefix_drove_one_regime():
+    ar = adapt_rules
+    p = _entry(np.zeros(200))  # 20 s straight
+    assert ar.balance(p["xint"]) == 0.0
+    np.testing.assert_allclose(ar.hierarchical_coef(p), ar.partition_coef(p), atol=1e-12)
+    assert np.allclose(_levels(ar.hierarchical_coef(p))[:, 1], 0.0)  # the turns keep no correction
+    assert np.all(_levels(p["coef"])[:, 1] < -0.1)  # the default moves them with the straight offset
+
+
+def test_the_hierarchical_level_shares_strength_where_the_prefix_drove_both():
+    ar = adapt_rules
+    p = _entry(np.r_[np.zeros(100), np.full(100, 3.0)])  # 10 s straight, 10 s turning
+    assert ar.balance(p["xint"]) == pytest.approx(1.0, abs=1e-6)
+    hier, part = _levels(ar.hierarchical_coef(p)), _levels(ar.partition_coef(p))
+    assert np.all(hier < part - 0.01) and np.all(hier > -1.0)  # each level nearer the residual, never beyond it
+
+
+def test_the_overlap_rule_moves_a_run_as_the_default_only_where_it_drove_like_the_prefix():
+    ar = adapt_rules
+    p = _entry(np.r_[np.zeros(150), np.full(50, 3.0)])
+    alike = {"xint": p["xint"]}
+    straight = {"xint": _entry(np.zeros(200))["xint"]}
+    default = ar.rule_prior(p, {})
+    moved = np.sum(default * straight["xint"], axis=1)  # the default's correction of a straight run's charge (A s)
+    assert np.all(np.abs(moved) > 0.1)
+    for rule in (ar.rule_overlap_prior, ar.rule_overlap_regime_prior):
+        at = rule(p, {})
+        np.testing.assert_allclose(at(alike), default, atol=1e-9)
+        # the prefix drove straight 3/4 of its time: a run that only drives straight is moved 3/4 as far
+        np.testing.assert_allclose(np.sum(at(straight) * straight["xint"], axis=1), 0.75 * moved, rtol=0.01)
+
+
+def test_the_switch_grid_runs_from_the_default_to_the_partition():
+    ar = adapt_rules
+    p = _entry(np.r_[np.zeros(150), np.full(50, 3.0)])
+    np.testing.assert_allclose(ar.switch_rule(ar.SWITCH_GRID[0])(p, {}), ar.rule_prior(p, {}))
+    np.testing.assert_allclose(ar.switch_rule(ar.SWITCH_GRID[-1])(p, {}), ar.rule_partition_prior(p, {}))
+    assert not np.allclose(ar.rule_prior(p, {}), ar.rule_partition_prior(p, {}))
