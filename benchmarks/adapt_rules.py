@@ -55,7 +55,7 @@ from energy.logs import rest_samples  # noqa: E402
 from energy.models import AdaptedCurrentModel, new_current_model  # noqa: E402
 from energy.models.adaptation import evidence_parts, regime_basis  # noqa: E402
 from energy.models.base import log_currents  # noqa: E402
-from energy.models.uncertainty import sample_weights_s  # noqa: E402
+from energy.models.uncertainty import sample_spans_s  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "borealtc"
 CACHE_VERSION = 1
@@ -65,7 +65,7 @@ _trapezoid = getattr(np, "trapezoid", None) or np.trapz
 
 def _stats(log: Any) -> dict[str, float]:
     """How a stretch was driven: mean |v| (m/s), mean turning share m, share of time at rest (|v| < 0.05 m/s)."""
-    w = sample_weights_s(log)
+    w = sample_spans_s(log)
     m = np.tanh(np.abs(log.omega_radps) / TURN_SCALE_RADPS)
     return {"v_mps": float(np.average(np.abs(log.v_mps), weights=w)), "turning": float(np.average(m, weights=w)),
             "rest": float(np.average(np.abs(log.v_mps) < 0.05, weights=w))}
@@ -84,7 +84,7 @@ def basis_integrals(log: Any, moving: bool = False) -> np.ndarray:
 
 def normal_equations(log: Any, residual: np.ndarray, moving: bool) -> tuple[np.ndarray, np.ndarray]:
     """Per side the update's time-weighted ``X'WX`` (2, 4, 4) and ``X'Wr`` (2, 4) (the ridge adds ``prior_s``)."""
-    w = sample_weights_s(log)
+    w = sample_spans_s(log)
     xs = [_basis(log, k, moving) for k in range(2)]
     return (np.stack([(x * w[:, None]).T @ x for x in xs]),
             np.stack([(x * w[:, None]).T @ residual[:, k] for k, x in enumerate(xs)]))

@@ -48,7 +48,7 @@ from .learned_cost import LearnedEnergyModel
 from .registry import CellModelRegistry
 
 if TYPE_CHECKING:  # annotations only: energy does not export the summary's class at the top level
-    from energy.models.base import TrainingSummary
+    from energy.models.base import TrainedOn
 
 __all__ = [
     "ModelCompatibilityWarning",
@@ -154,7 +154,7 @@ def _lookup(name: str, known: Sequence[str]) -> str | None:
     return next((k for k in known if k.lower() == key), None)
 
 
-def model_grounds(terrain: TerrainMap, summary: TrainingSummary | None, *,
+def model_grounds(terrain: TerrainMap, summary: TrainedOn | None, *,
                   model_ground: str | Mapping[str, str] | None = None) -> ModelGrounds:
     """Match the map's ground classes with the grounds a model was trained on (module docstring).
 
@@ -162,7 +162,7 @@ def model_grounds(terrain: TerrainMap, summary: TrainingSummary | None, *,
     ----------
     terrain : TerrainMap
         The map.
-    summary : TrainingSummary or None
+    summary : TrainedOn or None
         The model's :attr:`~energy.CurrentModel.training_summary`; ``None`` (an older file):
         the map's class names are taken as they are, and unknown cells need ``model_ground``.
     model_ground : str or mapping of str to str, optional

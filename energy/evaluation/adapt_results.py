@@ -1,4 +1,4 @@
-"""Scores of the adapt protocols: :class:`AdaptScore`, :class:`AdaptSummary` and their table (the answer is an
+"""Scores of the adapt protocols: :class:`AdaptScore`, :class:`AdaptRow` and their table (the answer is an
 :class:`~energy.evaluation.EvaluationResult`)."""
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ __all__ = [
     "ADAPT_FORMAT_VERSION",
     "TRIGGER_SCHEDULE",
     "AdaptScore",
-    "AdaptSummary",
+    "AdaptRow",
     "summarise_adapt_scores",
     "adapt_table",
 ]
@@ -74,8 +74,9 @@ class AdaptScore:
 
 
 @dataclass(frozen=True)
-class AdaptSummary:
-    """Medians and 90th percentiles over the (run, side) scores of one protocol, ground, model and schedule."""
+class AdaptRow:
+    """A row of the adapt and few-shot tables: medians and 90th percentiles over the (run, side) scores of one protocol,
+    ground, model and schedule."""
 
     protocol: str
     ground: str
@@ -103,7 +104,7 @@ def _stat(values: list[float], q: float) -> float:
     return float(np.percentile(arr, q)) if arr.size else math.nan
 
 
-def _summary(protocol: str, ground: str, model: str, schedule: str, rows: list[AdaptScore]) -> AdaptSummary:
+def _summary(protocol: str, ground: str, model: str, schedule: str, rows: list[AdaptScore]) -> AdaptRow:
     def col(name: str) -> list[float]:
         return [getattr(r, name) for r in rows]
 
@@ -113,12 +114,12 @@ def _summary(protocol: str, ground: str, model: str, schedule: str, rows: list[A
         out[f"{kind}_p90_pct"] = _stat(col(f"{kind}_whole_pct"), 90)
         out[f"{kind}_section_median_pct"] = _stat(col(f"{kind}_section_pct"), 50)
         out[f"{kind}_rmse_median_a"] = _stat(col(f"{kind}_rmse_a"), 50)
-    return AdaptSummary(protocol, ground, model, schedule, len(rows), **out,
+    return AdaptRow(protocol, ground, model, schedule, len(rows), **out,
                         updates_mean=float(np.mean(col("n_updates"))) if rows else math.nan)
 
 
-def summarise_adapt_scores(scores: list[AdaptScore] | tuple[AdaptScore, ...]) -> tuple[AdaptSummary, ...]:
-    """One :class:`AdaptSummary` per protocol, ground (then ``"all"``), model and schedule, in first-seen order."""
+def summarise_adapt_scores(scores: list[AdaptScore] | tuple[AdaptScore, ...]) -> tuple[AdaptRow, ...]:
+    """One :class:`AdaptRow` per protocol, ground (then ``"all"``), model and schedule, in first-seen order."""
     keys: dict[tuple[str, str, str, str], list[AdaptScore]] = {}
     for s in scores:
         for g in (s.ground, _ALL):
@@ -127,7 +128,7 @@ def summarise_adapt_scores(scores: list[AdaptScore] | tuple[AdaptScore, ...]) ->
     return tuple(_summary(*k, keys[k]) for k in order)
 
 
-def adapt_table(rows: Sequence[AdaptSummary]) -> list[str]:
+def adapt_table(rows: Sequence[AdaptRow]) -> list[str]:
     """The lines of the per-side markdown table of adaptation rows: per protocol, ground, model and schedule,
     unadapted | adapted | gain baseline."""
     def f(x: float, nd: int = 1) -> str:

@@ -1,4 +1,4 @@
-"""Scores of drive-current models on runs: :class:`RunScore`, :class:`ScoreSummary`, and the answer of every protocol,
+"""Scores of drive-current models on runs: :class:`RunScore`, :class:`ScoreRow`, and the answer of every protocol,
 :class:`EvaluationResult` (its summary, JSON, files and figures)."""
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from ..logs import InteractionLog
 from ..models.base import CurrentModel
 from ..plots import plot_current_estimate, plot_vibration_spectra
 from ..prediction import RunPrediction
-from .adapt_results import ADAPT_FILES, ADAPT_FORMAT_VERSION, AdaptScore, AdaptSummary, adapt_table
+from .adapt_results import ADAPT_FILES, ADAPT_FORMAT_VERSION, AdaptRow, AdaptScore, adapt_table
 from .run_totals import TOTALS_HEADING, RunTotal, plot_totals_reliability, summarise_totals, totals_markdown
 
 __all__ = [
@@ -41,7 +41,7 @@ __all__ = [
     "EVALUATION_FILES",
     "SIDES",
     "RunScore",
-    "ScoreSummary",
+    "ScoreRow",
     "EvaluationResult",
     "summarise_scores",
     "evaluation_files",
@@ -109,8 +109,8 @@ class RunScore:
 
 
 @dataclass(frozen=True)
-class ScoreSummary:
-    """Medians and 90th percentiles over the (run, side) scores of one model on one ground.
+class ScoreRow:
+    """A row of the leave-one-run-out table: medians and 90th percentiles over the (run, side) scores of one model on one ground.
 
     ``ground`` is ``"all"`` for the pool over every ground. NaN scores (a side with zero
     true charge) are left out and counted in ``n_undefined``.
@@ -137,12 +137,12 @@ def _stat(values: list[float], q: float) -> float:
     return float(np.percentile(arr, q)) if arr.size else math.nan
 
 
-def _summarise(variant: str, ground: str, model: str, scores: list[RunScore]) -> ScoreSummary:
+def _summarise(variant: str, ground: str, model: str, scores: list[RunScore]) -> ScoreRow:
     """The summary of one variant, ground and model over ``scores`` (already selected)."""
     whole = [s.whole_run_error_pct for s in scores]
     sec = [s.section_error_pct for s in scores]
     rmse = [s.rmse_a for s in scores]
-    return ScoreSummary(
+    return ScoreRow(
         variant=variant, ground=ground, model=model,
         n_runs=len({s.run for s in scores}), n_values=len(scores),
         n_undefined=int(sum(not math.isfinite(w) for w in whole)),
@@ -172,7 +172,7 @@ class EvaluationResult:
     runs : tuple of RunScore or of AdaptScore
         One per (variant, held-out run, model, side); with the adapt protocols one per (scored run,
         run adapted on, model, schedule, side).
-    rows : tuple of ScoreSummary or of AdaptSummary
+    rows : tuple of ScoreRow or of AdaptRow
         The medians and 90th percentiles: one per (variant, ground or ``"all"``, model); with the adapt
         protocols one per (ground or ``"all"``, model, schedule). :meth:`row_for` finds one.
     protocol : str
@@ -207,7 +207,7 @@ class EvaluationResult:
     """
 
     runs: tuple[RunScore, ...] | tuple[AdaptScore, ...]
-    rows: tuple[ScoreSummary, ...] | tuple[AdaptSummary, ...]
+    rows: tuple[ScoreRow, ...] | tuple[AdaptRow, ...]
     protocol: str = "loo"
     totals: tuple[RunTotal, ...] = ()
     skipped: tuple[str, ...] = ()
@@ -249,7 +249,7 @@ class EvaluationResult:
         return plot_totals_reliability(self.totals, ax, title="held-out total charge (both sides)")
 
     def row_for(self, ground: str, model: str, *, variant: str | None = None,
-                schedule: str | None = None) -> ScoreSummary | AdaptSummary:
+                schedule: str | None = None) -> ScoreRow | AdaptRow:
         """The row of one ground (or ``"all"``) and model, and (leaving one run out) variant or (adapt
         protocols) schedule; either may be left out when only one row matches.
 
@@ -357,7 +357,7 @@ class EvaluationResult:
         return written
 
 
-def _score_table(rows: Sequence[ScoreSummary], section_s: float) -> list[str]:
+def _score_table(rows: Sequence[ScoreRow], section_s: float) -> list[str]:
     """The lines of the per-side markdown table of leave-one-run-out rows."""
     lines = [
         f"| variant | ground | model | runs | whole-run median % | whole-run p90 % | "
@@ -396,9 +396,9 @@ def _f(x: float, nd: int = 1) -> str:
 
 
 def summarise_scores(scores: list[RunScore], variants: tuple[str, ...], grounds: list[str],
-                     models: tuple[str, ...]) -> tuple[ScoreSummary, ...]:
-    """One :class:`ScoreSummary` per variant, ground (then ``"all"``) and model that has scores."""
-    summary: list[ScoreSummary] = []
+                     models: tuple[str, ...]) -> tuple[ScoreRow, ...]:
+    """One :class:`ScoreRow` per variant, ground (then ``"all"``) and model that has scores."""
+    summary: list[ScoreRow] = []
     for variant in variants:
         for g in [*grounds, _ALL]:
             for mname in models:

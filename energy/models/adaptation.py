@@ -87,10 +87,10 @@ from terrawatt_base.checks import check_bool, check_choice, check_int, check_rea
 from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog
-from .base import CurrentModel, ModelRecord, TrainingSummary, check_logs, log_currents
+from .base import CurrentModel, ModelRecord, TrainedOn, check_logs, log_currents
 from .forecast import CurrentForecast
 from .loading import model_class
-from .uncertainty import MAX_RUN_VARIANCE, check_covariances, regime_design, sample_weights_s
+from .uncertainty import MAX_RUN_VARIANCE, check_covariances, regime_design, sample_spans_s
 
 __all__ = [
     "ADAPT_METHODS",
@@ -166,7 +166,7 @@ def evidence_parts(base: CurrentModel, logs: Sequence[InteractionLog], preds: Se
     for lg, p, y in zip(logs, preds, truths):
         t = lg.time_s
         obs += _trapezoid(y - p, t, axis=0)
-        noise += np.sum(interval.sample_sd(lg) ** 2 * sample_weights_s(lg)[:, None], axis=0) * interval.correlation_s
+        noise += np.sum(interval.sample_sd(lg) ** 2 * sample_spans_s(lg)[:, None], axis=0) * interval.correlation_s
         run += _trapezoid(interval.run_sd_a(lg, p, known=True), t, axis=0) ** 2
         if not known and interval.new_ground_cov is not None:
             ground += _trapezoid(interval.run_sd_a(lg, p, known=True, cov=interval.new_ground_cov), t, axis=0) ** 2
@@ -311,7 +311,7 @@ class AdaptedCurrentModel(CurrentModel):
                 continue
             x = np.concatenate([self._design(lg, p, k) for lg, p in zip(logs, preds)])
             r = np.concatenate([y[:, k] - p[:, k] for y, p in zip(truths, preds)])
-            w = np.concatenate([sample_weights_s(lg) for lg in logs])
+            w = np.concatenate([sample_spans_s(lg) for lg in logs])
             scale = np.ones(x.shape[1])
             if self.method == "gain_offset":  # the gain's column is in A: penalise it on the current's scale
                 scale[0] = max(float(np.average(np.abs(x[:, 0]), weights=w)), 0.5) ** 2
@@ -374,7 +374,7 @@ class AdaptedCurrentModel(CurrentModel):
               for k in range(2)]
         rs = [np.concatenate([y[:, k] - p[:, k] for y, p in zip(truths, preds)]) for k in range(2)]
         sds = [np.maximum(np.concatenate([interval.sample_sd(lg)[:, k] for lg in logs]), _NOISE_FLOOR_A) for k in range(2)]
-        dt = np.concatenate([sample_weights_s(lg) for lg in logs])
+        dt = np.concatenate([sample_spans_s(lg) for lg in logs])
 
         def solve(ratio: float) -> tuple[np.ndarray, np.ndarray]:
             mean = np.zeros((2, 2 * k_cols))
@@ -450,8 +450,8 @@ class AdaptedCurrentModel(CurrentModel):
         return CurrentForecast(log.time_s, mean, run, base_forecast.sample_sd_a * math.sqrt(self.noise_ratio_),
                                base_forecast.dof)
 
-    def _training_summary(self, logs: list[InteractionLog]) -> TrainingSummary:
-        own = TrainingSummary.from_logs(logs)
+    def _training_summary(self, logs: list[InteractionLog]) -> TrainedOn:
+        own = TrainedOn.from_logs(logs)
         base = getattr(self.base_model, "trained_on_", None)
         return own if base is None else base.merged(own)
 

@@ -9,7 +9,7 @@ arguments; ``fit(logs)`` validates, sets attributes ending in ``_`` and returns 
 A fitted model is saved as one file (:meth:`CurrentModel.save`), written atomically
 through :mod:`terrawatt_base.atomic`: a zip archive holding ``model.json`` (the format, its
 version, the model class, the constructor parameters, the fitted state in plain types, the
-package versions, what the model was trained on — :class:`TrainingSummary` — and its
+package versions, what the model was trained on — :class:`TrainedOn` — and its
 forecast interval, :class:`~energy.models.uncertainty.IntervalModel`; the last two are
 optional, older files lack them) and one ``.npy`` entry per array of the state (numpy's
 own format, read without pickle, sizes checked by :mod:`terrawatt_base.containers` before
@@ -59,7 +59,7 @@ __all__ = [
     "LEGACY_FORMAT_VERSIONS",
     "CurrentModel",
     "ModelRecord",
-    "TrainingSummary",
+    "TrainedOn",
     "check_logs",
     "log_currents",
     "package_versions",
@@ -133,7 +133,7 @@ class ModelRecord:
 
 
 @dataclass(frozen=True)
-class TrainingSummary:
+class TrainedOn:
     """What a model was fitted on: robots, grounds (seconds of driving each) and runs.
 
     Saved in the model file (``trained_on``) so that a planner can refuse a model of another
@@ -154,25 +154,25 @@ class TrainingSummary:
     runs: int
 
     @classmethod
-    def from_logs(cls, logs: Sequence[InteractionLog]) -> TrainingSummary:
+    def from_logs(cls, logs: Sequence[InteractionLog]) -> TrainedOn:
         grounds: dict[str, float] = {}
         for lg in logs:
             key = str(lg.meta.ground_label) if lg.meta.ground_label is not None else "unlabelled"
             grounds[key] = grounds.get(key, 0.0) + float(lg.duration_s)
         return cls(tuple(sorted({str(lg.meta.robot) for lg in logs})), grounds, len(logs))
 
-    def merged(self, other: TrainingSummary) -> TrainingSummary:
+    def merged(self, other: TrainedOn) -> TrainedOn:
         """Both summaries together (e.g. a model and the data it was adapted on)."""
         grounds = dict(self.grounds)
         for g, s in other.grounds.items():
             grounds[g] = grounds.get(g, 0.0) + s
-        return TrainingSummary(tuple(sorted(set(self.robots) | set(other.robots))), grounds, self.runs + other.runs)
+        return TrainedOn(tuple(sorted(set(self.robots) | set(other.robots))), grounds, self.runs + other.runs)
 
     def to_plain(self) -> dict[str, Any]:
         return {"robots": list(self.robots), "grounds": dict(self.grounds), "runs": self.runs}
 
     @classmethod
-    def from_plain(cls, value: Any) -> TrainingSummary:
+    def from_plain(cls, value: Any) -> TrainedOn:
         """The summary of a file entry (:meth:`to_plain`).
 
         Raises
@@ -422,12 +422,12 @@ class CurrentModel:
             raise
         return self
 
-    def _training_summary(self, logs: list[InteractionLog]) -> TrainingSummary:
+    def _training_summary(self, logs: list[InteractionLog]) -> TrainedOn:
         """What :attr:`trained_on_` records for a fit on ``logs`` (a wrapper adds its base's)."""
-        return TrainingSummary.from_logs(logs)
+        return TrainedOn.from_logs(logs)
 
     @property
-    def training_summary(self) -> TrainingSummary | None:
+    def training_summary(self) -> TrainedOn | None:
         """Robots, grounds and runs the model was fitted on (``None`` for a file saved before this was recorded)."""
         self._check_fitted()
         return getattr(self, "trained_on_", None)
@@ -632,7 +632,7 @@ class CurrentModel:
             raise FileFormatError(f"{source}: the {name} state restores no fitted attribute")
         if record.trained_on is not None:
             try:
-                model.trained_on_ = TrainingSummary.from_plain(record.trained_on)
+                model.trained_on_ = TrainedOn.from_plain(record.trained_on)
             except _FAILURES as exc:
                 raise FileFormatError(f"{source}: the training summary is malformed: {exc}") from exc
         if record.interval is not None:

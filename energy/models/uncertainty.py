@@ -99,8 +99,12 @@ def regime_design(log: InteractionLog, side: int, turn_scale_radps: float, level
     return np.column_stack([level, np.ones(len(log)), m, m * outer]) * moving[:, None]
 
 
-def sample_weights_s(log: InteractionLog) -> np.ndarray:
-    """The time each drive sample stands for (s)."""
+def sample_spans_s(log: InteractionLog) -> np.ndarray:
+    """The time each drive sample stands for (s): the central difference of its neighbours' times, a full step at the ends.
+
+    Not the trapezoid weights of :func:`energy.diagnosis.gap.sample_weights_s` (half a step at
+    the ends): the fits of the interval and the update weigh every sample by the span it stands for.
+    """
     return np.gradient(log.time_s) if len(log) > 1 else np.ones(len(log))
 
 
@@ -111,7 +115,7 @@ def run_coefficients(log: InteractionLog, residual_a: np.ndarray, level_a: np.nd
     ``level_a`` (N, 2) are the predictions the residual is of (the gain column's scale); the
     gain's penalty is on the scale of the mean squared level, the others' in A².
     """
-    w = sample_weights_s(log)
+    w = sample_spans_s(log)
     out = np.zeros((2, len(REGIME_COLUMNS)))
     for k in range(2):
         x = regime_design(log, k, turn_scale_radps, level_a[:, k])

@@ -11,7 +11,7 @@ from energy.models import (
     CURRENT_MODEL_FORMAT,
     CURRENT_MODEL_FORMAT_VERSION,
     ModelRecord,
-    TrainingSummary,
+    TrainedOn,
     check_logs,
     log_currents,
     read_model_file,
@@ -48,12 +48,12 @@ def test_log_currents_are_left_and_right_columns():
 
 
 def test_training_summary_counts_seconds_per_ground():
-    s = TrainingSummary.from_logs([_log(), _log(ground=None, robot="jackal"), _log(duration_s=4.0)])
+    s = TrainedOn.from_logs([_log(), _log(ground=None, robot="jackal"), _log(duration_s=4.0)])
     assert s.robots == ("husky", "jackal") and s.runs == 3
     assert s.grounds == {"sand": pytest.approx(9.5 + 3.5), "unlabelled": pytest.approx(9.5)}
-    both = s.merged(TrainingSummary(("husky",), {"sand": 1.0, "grass": 2.0}, 1))
+    both = s.merged(TrainedOn(("husky",), {"sand": 1.0, "grass": 2.0}, 1))
     assert both.runs == 4 and both.grounds["grass"] == 2.0 and both.grounds["sand"] == pytest.approx(14.0)
-    assert TrainingSummary.from_plain(s.to_plain()) == s
+    assert TrainedOn.from_plain(s.to_plain()) == s
 
 
 @pytest.mark.parametrize(("plain", "match"), [
@@ -65,7 +65,7 @@ def test_training_summary_counts_seconds_per_ground():
 ])
 def test_training_summary_from_a_malformed_entry(plain, match):
     with pytest.raises(InvalidParameterError, match=match):
-        TrainingSummary.from_plain(plain)
+        TrainedOn.from_plain(plain)
 
 
 def test_package_versions_name_terrawatt_numpy_python_and_extras():
