@@ -312,6 +312,8 @@ def table(summary: dict[str, Any]) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, default=10)
+    ap.add_argument("--first-seed", type=int, default=0,
+                    help="the first seed (default 0): seeds first-seed ... first-seed + seeds - 1")
     ap.add_argument("--pairs", nargs="+", default=list(PAIRS), choices=list(PAIRS))
     ap.add_argument("--max-repeats", type=int, default=10, help="most runs of a drive simulated (default 10)")
     ap.add_argument("--quick", action="store_true", help="two seeds")
@@ -319,7 +321,8 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     seeds = 2 if args.quick else args.seeds
     t0 = time.perf_counter()
-    rows = [run_pair(name, seed, args.max_repeats) for name in args.pairs for seed in range(seeds)]
+    rows = [run_pair(name, seed, args.max_repeats) for name in args.pairs
+            for seed in range(args.first_seed, args.first_seed + seeds)]
     summary = summarise(rows)
     print(table(summary))
     print(f"targets: tie named before the drive, truth first after it >= 90 %, value within 20 % >= 90 %, drive "
@@ -329,7 +332,8 @@ def main(argv: list[str] | None = None) -> int:
           f"{time.perf_counter() - t0:.0f} s")
     if args.out is not None:
         write_json_atomic(args.out, {"benchmark": "diagnosis_ties", "targets": TARGETS, "value_tolerance": VALUE_TOL,
-                                     "runs": RUNS, "seeds": seeds, "summary": summary, "rows": rows,
+                                     "runs": RUNS, "seeds": seeds, "first_seed": args.first_seed,
+                                     "summary": summary, "rows": rows,
                                      "machine": {"python": platform.python_version(),
                                                  "platform": platform.platform()}}, indent=1)
     return 0

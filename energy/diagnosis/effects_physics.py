@@ -18,7 +18,7 @@ from ..models.baselines import PhysicsCurrentModel
 from .effect_base import GAIN_PLAUSIBLE, BasisEffect, Effect, EffectParameter
 from .model_currents import ParameterTable, PhysicsBasis, motoring_currents_a, side_speeds_mps
 
-__all__ = ["PHYSICS_CANDIDATES", "LAW_CANDIDATES", "PARAMETER_CANDIDATES", "ROLLING_RESISTANCE_PLAUSIBLE",
+__all__ = ["PHYSICS_CANDIDATES", "BREAKAWAY_EFFECTS", "LAW_CANDIDATES", "PARAMETER_CANDIDATES", "ROLLING_RESISTANCE_PLAUSIBLE",
            "PhysicsTermEffect", "SlopeEffect", "QuadraticDragEffect", "MassEffect", "TrackWidthEffect",
            "RollingResistanceEffect", "LateralFrictionEffect", "MotorConstantEffect", "RotorInertiaEffect", "Reprediction"]
 
@@ -28,6 +28,9 @@ PHYSICS_CANDIDATES: tuple[str, ...] = (
     "longitudinal_slip", "lateral_slip", "turning_resistance", "gear_losses", "torque_saturation",
     "speed_saturation",
 )
+#: Physics effects whose current lives at the still sample before a start (the breakaway): their candidates
+#: are judged there too (:func:`~energy.diagnosis.model_currents.motoring_currents_a`).
+BREAKAWAY_EFFECTS: tuple[str, ...] = ("static_friction",)
 #: Resistance laws the physics does not hold, offered as candidates with their own coefficient.
 LAW_CANDIDATES: tuple[str, ...] = ("quadratic_drag",)
 #: Parameter-error candidates of a physics model.
@@ -67,7 +70,9 @@ class PhysicsTermEffect(BasisEffect):
             on, off = tuple(b.effects) + (self.name,), tuple(b.effects)
         else:
             on, off = tuple(b.effects), tuple(e for e in b.effects if e != self.name)
-        return motoring_currents_a(b, log, effects=on) - motoring_currents_a(b, log, effects=off)
+        starts = self.name in BREAKAWAY_EFFECTS  # the breakaway is judged where it lives: a start
+        return (motoring_currents_a(b, log, effects=on, starts=starts)
+                - motoring_currents_a(b, log, effects=off, starts=starts))
 
     def apply(self, values: np.ndarray, predicted_a: np.ndarray, prepared: np.ndarray) -> np.ndarray:
         return predicted_a + values[0] * prepared

@@ -13,7 +13,7 @@ import numpy as np
 from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..ground import GroundParams
-from ..logs import InteractionLog, log_slope_rad, rest_samples
+from ..logs import REST_OMEGA_RADPS, REST_SPEED_MPS, InteractionLog, log_slope_rad, rest_samples
 from ..models.baselines import PhysicsCurrentModel, ground_slots
 from ..params import ground_preset, robot_params
 from ..physics import EFFECTS, PhysicsEnergyModel
@@ -21,7 +21,8 @@ from ..power import PowerBreakdown
 from ..robot import RobotParams
 
 __all__ = ["DRIVE_EFFECTS", "TABLE_NODES", "PhysicsBasis", "ParameterTable", "physics_basis", "measured_side_speeds",
-           "basis_breakdown", "side_speeds_mps", "motoring_currents_a", "unclipped_prediction", "clamps_at_zero"]
+           "basis_breakdown", "side_speeds_mps", "standing_samples", "starting_samples", "motoring_currents_a", "unclipped_prediction",
+           "clamps_at_zero"]
 
 #: Physics effects that change the motor current (the electronics draw no motor current).
 DRIVE_EFFECTS: tuple[str, ...] = tuple(e for e in EFFECTS if e not in ("sensor", "control"))
@@ -134,29 +135,88 @@ def side_speeds_mps(basis: PhysicsBasis, log: InteractionLog) -> np.ndarray:
     return np.asarray(log.v_mps, float)[:, None] + np.outer(np.asarray(log.omega_radps, float), [-half, half])
 
 
+def standing_samples(log: InteractionLog) -> np.ndarray:
+    """Whether each drive sample stands, as far as the log can tell: the next sample's wheels are
+    still (``|v| < REST_SPEED_MPS`` and ``|omega| < REST_OMEGA_RADPS``), and so are this sample's
+    or the previous one's. That holds the rests, a stop's last instant (still, yet decelerating)
+    and a lone sample of noise-level motion between still ones; a start from rest (the next
+    sample moves) is not standing.
+
+    The physics reads a still wheel's intended motion from its acceleration, and a wheel that
+    barely moves has its full breakaway, Stribeck and turning-resistance forces (they do not
+    shrink with the speed): at a stop's last instant it charges a start in reverse, and at an
+    odometry's noise of a few mm/s or 0.01 rad/s a start that never comes — several amperes a
+    side the robot never draws.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from energy.logs import InteractionLog
+    >>> t = np.arange(8) * 0.2
+    >>> v = np.array([0.4, 0.2, 0.0, 0.0, 0.01, 0.0, 0.2, 0.4])  # a stop, a blip, a start
+    >>> standing_samples(InteractionLog(t, v, np.zeros(8), None, None, t, np.full(8, 9.81))).tolist()
+    [False, False, True, False, True, False, False, False]
+    """
+    v = np.abs(np.asarray(log.v_mps, dtype=np.float64))
+    w = np.abs(np.asarray(log.omega_radps, dtype=np.float64))
+    still = (v < REST_SPEED_MPS) & (w < REST_OMEGA_RADPS)
+    next_still = np.append(still[1:], still[-1:])
+    prev_still = np.concatenate([still[:1], still[:-1]])
+    return next_still & (still | prev_still)
+
+
+def _motoring(basis: PhysicsBasis, log: InteractionLog, **physics: Any) -> np.ndarray:
+    """Per-side motor current in the direction of rotation (N, 2), A, everywhere (rests included)."""
+    res = basis_breakdown(basis, log, **physics)
+    i_m = np.asarray(res.motor_current_a)
+    sign = np.sign(np.asarray(res.motor_speed_radps))
+    return np.where(sign != 0, i_m * sign, np.abs(i_m))
+
+
+def starting_samples(log: InteractionLog) -> np.ndarray:
+    """Whether each drive sample is the still one before a start: its wheels still (``|v| <
+    REST_SPEED_MPS``, ``|omega| < REST_OMEGA_RADPS``), the next sample's moving (and not a lone blip of
+    noise-level motion, :func:`standing_samples`). At the log's rate
+    the start falls anywhere up to the next sample; the physics charges the whole breakaway (and
+    the acceleration the next sample shows) at this one."""
+    v = np.abs(np.asarray(log.v_mps, dtype=np.float64))
+    w = np.abs(np.asarray(log.omega_radps, dtype=np.float64))
+    still = (v < REST_SPEED_MPS) & (w < REST_OMEGA_RADPS)
+    moves_next = ~np.append(still[1:], True) & ~np.append(standing_samples(log)[1:], False)  # not a lone blip
+    return still & moves_next
+
+
 def motoring_currents_a(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[str, ...] | None = None,
                         robot: RobotParams | None = None, ground: Any = None, ground_index: Any = None,
-                        slope_rad: Any = None) -> np.ndarray:
-    """Per-side motor current in the direction of rotation (N, 2), A, no idle, no clamp; 0 at rest.
+                        slope_rad: Any = None, starts: bool = False) -> np.ndarray:
+    """Per-side motor current in the direction of rotation (N, 2), A, no idle, no clamp; 0 where the log
+    stands, and (unless ``starts``) at the still sample before a start.
 
     The physics of ``basis`` (or the given ``effects`` / ``robot`` / ``ground``, which may be
     a list of GroundParams with ``ground_index``) for the log's ``v``, ``omega``, their time
     derivatives and ``slope_rad`` — what :class:`~energy.PhysicsCurrentModel` predicts: where
     the log stands still (:func:`energy.logs.rest_samples`) no motoring current, as the model
     predicts its rest level alone there (a robot standing on a slope is not charged the
-    current of holding it, and a candidate that scales gravity changes nothing at rest).
+    current of holding it, and a candidate that scales gravity changes nothing at rest). Where
+    the log stands otherwise (:func:`standing_samples`: a stop's last instant, noise-level
+    motion between still samples) it is 0 as well, and so at the still sample before a start
+    (:func:`starting_samples`) unless ``starts`` (the breakaway itself, judged where it lives):
+    the model charges a breakaway there, in reverse at a stop, that the robot may never draw at
+    that sample (several amperes a side), and a candidate that scales it (a heavier robot, a
+    larger one) would be judged on the model's guess of when the wheels broke away. The
+    model's own prediction (:func:`unclipped_prediction`) keeps it.
 
     Raises
     ------
     DataError
         Fewer than 2 drive samples.
     """
-    res = basis_breakdown(basis, log, effects=effects, robot=robot, ground=ground, ground_index=ground_index,
-                          slope_rad=slope_rad)
-    i_m = np.asarray(res.motor_current_a)
-    sign = np.sign(np.asarray(res.motor_speed_radps))
-    motoring = np.where(sign != 0, i_m * sign, np.abs(i_m))
-    return np.where(rest_samples(log)[:, None], 0.0, motoring)
+    motoring = _motoring(basis, log, effects=effects, robot=robot, ground=ground, ground_index=ground_index,
+                         slope_rad=slope_rad)
+    still = rest_samples(log) | standing_samples(log)
+    if not starts:
+        still |= starting_samples(log)
+    return np.where(still[:, None], 0.0, motoring)
 
 
 def unclipped_prediction(model: Any, log: InteractionLog, basis: PhysicsBasis | None = None) -> np.ndarray:
@@ -172,7 +232,7 @@ def unclipped_prediction(model: Any, log: InteractionLog, basis: PhysicsBasis | 
     """
     if basis is not None and basis.is_model:
         model.check_map()
-        moving = basis.idle_current_a + motoring_currents_a(basis, log)
+        moving = basis.idle_current_a + _motoring(basis, log)
         return np.asarray(basis.rest_current_a) + np.where(rest_samples(log)[:, None], 0.0, moving)
     return np.asarray(model.predict(log), dtype=np.float64)
 

@@ -61,13 +61,16 @@ from .noise import ResidualNoise
 from .selection import SIGNIFICANT_SHRINK_PCT
 
 __all__ = ["SeparatingDrive", "DriveCandidate", "PairSeparation", "manoeuvre_library", "separating_drive",
-           "drive_log", "slope_drive", "runs_to_order", "REPEAT_Z", "MAX_DRIVE_S", "MAX_REPEATS", "ORDER_PCT",
+           "drive_log", "slope_drive", "runs_to_order", "REPEAT_Z", "DRIVE_Z", "MAX_DRIVE_S", "MAX_REPEATS", "ORDER_PCT",
            "ORDER_TAIL"]
 
 #: One-sided 95 % normal quantile: a repeat count is enough when the midpoint decision errs < 5 %.
 REPEAT_Z = 1.6448536269514722
 #: Longest drive of the library (s), rests included.
 MAX_DRIVE_S = 60.0
+#: The whole drive's expected difference a drive should reach, in units of that quantity's noise
+#: (:attr:`PairSeparation.z_per_repeat`): drives that reach it for every pair rank first.
+DRIVE_Z = 3.0
 #: A pair that needs more runs of the best drive than this is called equivalent on the library's drives.
 MAX_REPEATS = 20
 #: Below these the runs never drove / turned: the library holds no manoeuvre that does.
@@ -79,6 +82,8 @@ ORDER_PCT = SIGNIFICANT_SHRINK_PCT
 #: The lower tail of the diagnosis's 95 % bootstrap interval, which must clear 0 for a pair to be ordered.
 ORDER_TAIL = 0.025
 _REST_S = 2.0
+_HOLD_S = 20.0  # a manoeuvre's hold alone (two in a row: half of it each; its long form: twice it)
+_SURGE_LOW = 0.3  # surges swing between this share of the stop-and-go speed and that speed
 _ACCEL_MPS2 = 0.5  # command ramps: gentle, within any ground robot's limits
 _ALPHA_RADPS2 = 1.0
 _GRAVITY_MPS2 = 9.80665
@@ -89,18 +94,20 @@ class PairSeparation:
     """How one manoeuvre separates the chosen explanation from one alternative: the RMS difference
     of their currents (A), the same per sample over the sensor noise's RMS on the drive
     (``noise_units``), the whole drive's difference over that quantity's noise (``z_per_repeat``:
-    the residual's correlation and the run-to-run spread counted; module docstring) and the runs
-    that settle the pair."""
+    the residual's correlation and the run-to-run spread counted; module docstring), the runs
+    that settle the pair and a run's expected lead in points of its own gap (``lead_pct``, the
+    diagnosis's unit; nan without the model the gap is scored against)."""
 
     difference_rms_a: float
     noise_units: float
     z_per_repeat: float
     repeats: int
+    lead_pct: float = math.nan
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict."""
         return {"difference_rms_a": self.difference_rms_a, "noise_units": self.noise_units,
-                "z_per_repeat": self.z_per_repeat, "repeats": self.repeats}
+                "z_per_repeat": self.z_per_repeat, "repeats": self.repeats, "lead_pct": self.lead_pct}
 
 
 @dataclass(frozen=True)
@@ -328,6 +335,14 @@ def _ramp(targets: Sequence[tuple[float, float, float]], dt_s: float, accel_mps2
     return CommandProfile(t, np.array(v_out), np.array(w_out))
 
 
+def _cycles(hold_s: float, swing_s: float, start_s: float) -> int:
+    """Cycles of a swing (``swing_s`` each way, 1.5 s holds) in one and a half ``hold_s`` (at least 2), as many as
+    fit in :data:`MAX_DRIVE_S` with the rests and the ramps from and to rest (``start_s``)."""
+    cycle = 2 * swing_s + 3.0
+    fit = int((MAX_DRIVE_S - 2 * _REST_S - 2 * start_s - 0.5) // cycle)
+    return max(min(int(1.5 * hold_s // cycle), fit), 2)
+
+
 def manoeuvre_library(max_speed_mps: float, max_omega_radps: float, dt_s: float = 0.1,
                       hold_s: float = 20.0, max_accel_mps2: float = _ACCEL_MPS2) -> list[tuple[str, str, CommandProfile]]:
     """The manoeuvres searched: (name, description, commands), each from rest to rest, at most
@@ -335,7 +350,11 @@ def manoeuvre_library(max_speed_mps: float, max_omega_radps: float, dt_s: float 
 
     Straights at constant speed (three speeds), arcs (four radii), pivots (two yaw rates, left
     then right), stop-and-go cycles (accelerations at ``max_accel_mps2``, at least the gentle
-    0.5 m/s² of the other ramps, and stops) and a slow creep; none that
+    0.5 m/s² of the other ramps, and stops), surges (the same accelerations between
+    :data:`_SURGE_LOW` of the top speed and the top speed, never standing still: a still
+    sample next to a start is where a model's breakaway is a guess at the log's rate) and a
+    slow creep; ``hold_s`` sets their length (the cycles: as many as fit in one and a half
+    ``hold_s``, and in :data:`MAX_DRIVE_S`); none that
     drives (turns) when ``max_speed_mps`` (``max_omega_radps``) is below :data:`MIN_SPEED_MPS`
     (:data:`MIN_OMEGA_RADPS`): runs that never drove (turned) say nothing of it.
     """
@@ -357,10 +376,16 @@ def manoeuvre_library(max_speed_mps: float, max_omega_radps: float, dt_s: float 
         go = 0.8 * vmax
         accel = max(float(max_accel_mps2), _ACCEL_MPS2)  # the starts as hard as the runs' (gentle at least)
         ramp = go / accel
-        cycles = max(int(1.5 * hold_s // (2 * ramp + 3.0)), 2)
+        cycles = _cycles(hold_s, ramp, go / accel)
         out.append(("stop_and_go", f"{cycles} stops and starts to {fmt_number(go, 2)} m/s at "
                     f"{fmt_number(accel, 2)} m/s² (1.5 s holds)",
                     _ramp([(ramp + 1.5, go, 0.0), (ramp + 1.5, 0.0, 0.0)] * cycles, dt_s, accel)))
+        low = _SURGE_LOW * go  # the same accelerations without standing still in between
+        swing = (go - low) / accel
+        cycles = _cycles(hold_s, swing, go / accel)
+        out.append(("surges", f"{cycles} surges from {fmt_number(low, 2)} to {fmt_number(go, 2)} m/s and back at "
+                    f"{fmt_number(accel, 2)} m/s² (1.5 s holds), without stopping",
+                    _ramp([(swing + 1.5, go, 0.0), (swing + 1.5, low, 0.0)] * cycles, dt_s, accel)))
         out.append(("creep", f"a creep at {fmt_number(0.1 * vmax, 2)} m/s held {fmt_number(hold_s, 2)} s",
                     _ramp([(hold_s, 0.1 * vmax, 0.0)], dt_s)))
     if wmax > 0:
@@ -467,7 +492,9 @@ def separating_drive(effects: Sequence[str], models: dict[str, Any], like: Inter
     (effect and noise), at least :data:`ORDER_PCT` (a drive that does not is no separating
     drive, however many runs of it). Drives that settle every pair some drive settles within
     :data:`MAX_REPEATS` runs come first (the other pairs are :attr:`SeparatingDrive.equivalent`),
-    then the largest difference per sample in noise units, then the shortest. ``n_units`` (and ``units_per_run``): the
+    then those whose whole drive reaches :data:`DRIVE_Z` x its noise for every pair (a manoeuvre of
+    20 s that falls short may reach it in its 40 s form), then the largest difference per sample in
+    noise units, then the shortest. ``n_units`` (and ``units_per_run``): the
     units the diagnosis resamples, from which :func:`runs_to_order` and the mean lead the diagnosis asks
     for give the least runs of the drive (0: one run). Returns None when the library holds no drive (runs
     that neither drove nor turned).
@@ -494,6 +521,7 @@ def separating_drive(effects: Sequence[str], models: dict[str, Any], like: Inter
             z = 1.0 / math.sqrt(var_t) if var_t > 0 else math.inf
             repeats = (max(int(math.ceil((2 * REPEAT_Z / z) ** 2)), 1) if 0 < z < math.inf
                        else (1 if z == math.inf else 10**9))
+            gain = math.nan
             if math.isfinite(gap2):
                 # a run's gain in points of its own gap, if the chosen model is right up to the noise
                 gain = 100.0 * ss / (gap2 + float(np.sum(sigma2)) * d.shape[1]) if ss > 0 else 0.0
@@ -503,7 +531,7 @@ def separating_drive(effects: Sequence[str], models: dict[str, Any], like: Inter
                     repeats = max(repeats, int(math.ceil(ORDER_PCT * n_units / (per * (gain - ORDER_PCT)))))
             rms = float(math.sqrt(ss / d.size))
             pairs[alt] = PairSeparation(rms, rms / math.sqrt(float(np.mean(sigma2))) if np.any(sigma2) else math.inf,
-                                        z, min(repeats, 10**9))
+                                        z, min(repeats, 10**9), gain)
         scored.append((DriveCandidate(name, text, float(profile.duration_s), pairs), profile, preds,
                        float(np.sqrt(np.mean(sigma2)))))
     if not scored:
@@ -517,8 +545,12 @@ def separating_drive(effects: Sequence[str], models: dict[str, Any], like: Inter
     def clearest(c: DriveCandidate) -> float:  # the worst pair's difference per sample, in noise units
         return min(c.pairs[a].noise_units for a in live)
 
-    # drives that settle every separable pair, then the largest difference per sample, then the shortest
-    scored.sort(key=lambda c: (not settles(c[0]), -clearest(c[0]), c[0].duration_s))
+    def clear_per_drive(c: DriveCandidate) -> bool:  # every pair's whole drive >= DRIVE_Z x its noise
+        return all(c.pairs[a].z_per_repeat >= DRIVE_Z for a in live)
+
+    # drives that settle every separable pair, then those DRIVE_Z x the noise per drive, then the largest
+    # difference per sample, then the shortest
+    scored.sort(key=lambda c: (not settles(c[0]), not clear_per_drive(c[0]), -clearest(c[0]), c[0].duration_s))
     best, profile, preds, drive_noise = scored[0]
     return SeparatingDrive(tuple(effects), best, profile, preds, drive_noise, float(spread), float(noise.autocorrelation),
                            equivalent, tuple(c[0] for c in scored), {n: models[n] for n in effects},
@@ -527,15 +559,18 @@ def separating_drive(effects: Sequence[str], models: dict[str, Any], like: Inter
 
 def _drives(max_speed_mps: float, max_omega_radps: float, dt: float, accel: float,
             terrain: Any = None) -> list[tuple[str, str, CommandProfile]]:
-    """The library's manoeuvres alone (20 s holds) and each two of them in a row (10 s holds) within a
+    """The library's manoeuvres alone (20 s holds, and 40 s: the longer or more often repeated form, where
+    one of 20 s falls short of :data:`DRIVE_Z`) and each two of them in a row (10 s holds) within a
     minute; with a map, its slope drive (alone: it is driven where it is), and every drive placed
     on the map (from its most level free spot near the centre; one that would leave the map or
     cross an obstacle is left out)."""
     single = manoeuvre_library(max_speed_mps, max_omega_radps, dt, max_accel_mps2=accel)
+    single += [(f"{name}_long", text, profile) for name, text, profile
+               in manoeuvre_library(max_speed_mps, max_omega_radps, dt, hold_s=2 * _HOLD_S, max_accel_mps2=accel)]
     slope = slope_drive(terrain, max_speed_mps, dt) if terrain is not None else None
     if slope is not None:
         single.append(slope)
-    half = manoeuvre_library(max_speed_mps, max_omega_radps, dt, hold_s=10.0, max_accel_mps2=accel)
+    half = manoeuvre_library(max_speed_mps, max_omega_radps, dt, hold_s=_HOLD_S / 2, max_accel_mps2=accel)
     out = list(single)
     for i, (na, ta, pa) in enumerate(half):
         for nb, tb, pb in half[i + 1:]:

@@ -41,3 +41,51 @@ def test_motoring_currents_are_zero_where_the_log_stands_still_even_on_a_slope()
                                 slope_rad=np.full(t.size, 0.17))
     cruising = (t > 3.5) & (t < 7.5)
     assert np.all(heavy[rest] == 0.0) and np.all(heavy[cruising] > cur[cruising])
+
+
+def _stop_blip_start_log():
+    """Cruise, stop, stand (one sample of odometry noise in it), start again: a 6.5 Hz-like log."""
+    from energy import InteractionLog, LogMeta
+
+    t = np.arange(0.0, 9.0, 0.15)
+    v = np.interp(t, [0.0, 1.5, 2.4, 5.4, 6.3, 9.0], [0.6, 0.6, 0.0, 0.0, 0.6, 0.6])
+    v[np.argmin(np.abs(t - 2.4))] = 0.0  # the stop's last instant: still, the central difference decelerating
+    w = np.zeros_like(t)
+    blip = int(np.argmin(np.abs(t - 3.9)))
+    w[blip] = 0.012  # a yaw rate just above the rest threshold between still samples: the odometry's noise
+    ta = np.arange(0.0, 9.0, 0.01)
+    log = InteractionLog(t, v, w, np.ones_like(t), np.ones_like(t), ta, np.full(ta.size, 9.81),
+                         meta=LogMeta(robot="husky"))
+    return log, int(np.argmin(np.abs(t - 2.4))), blip
+
+
+def test_where_the_log_stands_the_candidates_charge_no_breakaway_the_model_does():
+    """At a stop's last instant the physics reads a start in reverse from the deceleration, and at a lone sample
+    of noise-level yaw rate a full breakaway and turning moment: amperes a side the robot never draws. The
+    candidates' physics terms are 0 there (a heavier robot would be charged a larger spike); at the still sample
+    before a start too, unless asked for (the breakaway's own candidate); the model's own prediction keeps them."""
+    from energy.diagnosis.model_currents import (
+        basis_breakdown,
+        motoring_currents_a,
+        physics_basis,
+        standing_samples,
+        starting_samples,
+    )
+
+    log, stop, blip = _stop_blip_start_log()
+    basis = physics_basis(object())
+    res = basis_breakdown(basis, log)  # the physics everywhere: the current in the direction of rotation
+    sign = np.sign(res.motor_speed_radps)
+    raw = np.where(sign != 0, res.motor_current_a * sign, np.abs(res.motor_current_a))
+    standing, starting = standing_samples(log), starting_samples(log)
+    assert standing[stop] and standing[blip] and not standing[stop - 1]
+    (start,) = np.nonzero(starting)[0]
+    assert not standing[start] and log.v_mps[start + 1] > 0.0
+    assert np.all(np.abs(raw[[stop, blip, start]]).max(axis=1) > 0.5)  # what the physics charges there
+    cur = motoring_currents_a(basis, log)
+    assert np.all(cur[[stop, blip, start]] == 0.0)
+    assert np.all(motoring_currents_a(basis, log, starts=True)[start] == raw[start])
+    moving = np.abs(log.v_mps) > 0.1
+    np.testing.assert_array_equal(cur[moving], raw[moving])  # driving, nothing changes
+    heavy = motoring_currents_a(basis, log, robot=basis.robot.replace(mass_kg=2.0 * basis.robot.mass_kg))
+    assert np.all(heavy[[stop, blip, start]] == 0.0)
