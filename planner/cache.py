@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections import OrderedDict
+from collections.abc import Callable
 from typing import Any
 
 __all__ = ["ResultCache", "CACHE_SIZE"]
@@ -31,3 +32,11 @@ class ResultCache(OrderedDict):
         self.move_to_end(key)
         while len(self) > self.maxsize:
             self.popitem(last=False)
+
+    def get_or_make(self, key: Any, make: Callable[[], Any]) -> Any:
+        """The result cached under ``key``, or ``make()`` computed, cached and returned."""
+        if key in self:
+            return self[key]
+        value = make()
+        self[key] = value
+        return value

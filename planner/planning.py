@@ -92,12 +92,8 @@ def _check_budget(time_limit_s: Any, max_cost_evaluations: Any) -> tuple[float |
 
 def _lattice_optimum(problem: PlanningProblem) -> LatticePath:
     """The 1-cell heading lattice's minimum-energy path of a query, turns included (cached on the cost)."""
-    key = ("optimum", *problem.key)
-    path = problem.cost.results.get(key)
-    if path is None:
-        path = heading_shortest_path(Lattice.for_cost(problem.cost, 1), problem.start, problem.goal)
-        problem.cost.results[key] = path
-    return path
+    return problem.cost.results.get_or_make(("optimum", *problem.key), lambda: heading_shortest_path(
+        Lattice.for_cost(problem.cost, 1), problem.start, problem.goal))
 
 
 def compare_route(cost: EnergyCost, start_xy_m: tuple[float, float], goal_xy_m: tuple[float, float]) -> RouteComparison:
@@ -117,16 +113,12 @@ def compare_route(cost: EnergyCost, start_xy_m: tuple[float, float], goal_xy_m: 
 
 def _compare(problem: PlanningProblem) -> RouteComparison:
     """:func:`compare_route` of a checked problem."""
-    key = ("comparison", *problem.key)
-    comparison = problem.cost.results.get(key)
-    if comparison is None:
+    def make() -> RouteComparison:
         optimum = _lattice_optimum(problem)
-        comparison = RouteComparison(
-            shortest=shortest_of(problem),
-            lattice_optimum_j=optimum.objective if optimum.found else math.nan,
-        )
-        problem.cost.results[key] = comparison
-    return comparison
+        return RouteComparison(shortest=shortest_of(problem),
+                               lattice_optimum_j=optimum.objective if optimum.found else math.nan)
+
+    return problem.cost.results.get_or_make(("comparison", *problem.key), make)
 
 
 @dataclass(frozen=True)

@@ -51,12 +51,7 @@ def shortest_route(cost: EnergyCost, start_xy_m: tuple[float, float], goal_xy_m:
 
 def shortest_of(problem: PlanningProblem) -> Route:
     """:func:`shortest_route` of a checked problem (cached on the cost, as the comparisons)."""
-    key = ("shortest", *problem.key)
-    route = problem.cost.results.get(key)
-    if route is None:
-        route = _shortest_search(problem)
-        problem.cost.results[key] = route
-    return route
+    return problem.cost.results.get_or_make(("shortest", *problem.key), lambda: _shortest_search(problem))
 
 
 def _shortest_search(problem: PlanningProblem) -> Route:
