@@ -21,6 +21,10 @@ one regime without its cost where it drove both (none with a free constant but (
 ground): (a) ``hierarchical``, the partition's levels sharing a common level learned in proportion to the prefix's
 balance; (b) ``overlap``, the default applied to a run in proportion to the regime overlap of prefix and run; (c)
 ``switch``, the partition below a balance chosen on the other grounds (or, ``--choice-cache``, on another data set's).
+And ``once``, the update shrunk once: read as the posterior mean of a run's offset under the learned spreads, the ridge
+is the prior precision of a level, ``E T / (G + R)`` s (:func:`once_penalty`), and the ground's share ``G / (G + R)``
+carries it to other runs — on the regime basis and on the partition; ``once, levels`` gives that penalty to the levels
+only, the regime columns keeping the 20-s ridge.
 
 Printed (``--out``: JSON of every number): the diagnosis (per ground and T, which prefixes
 the update harms most, on which side, and how the prefix's motion differs from the scored
@@ -300,6 +304,69 @@ def rule_hierarchical_prior(p: dict, f: dict) -> np.ndarray:
     return hierarchical_coef(p) * _prior_or_evidence_factor(p, f)[:, None]
 
 
+def once_penalty(p: dict[str, Any]) -> np.ndarray:
+    """Per side, the ridge penalty (s) that makes the update the posterior mean of a run's whole offset: ``E T / (G + R)``.
+
+    The residual is white noise of density ``E / T`` (A² s: ``E`` is its charge's variance over the prefix's ``T``
+    seconds) around ``x (g + u)``, a ground offset ``g`` and the run's own ``u``, whose level's prior variance is
+    ``(G + R) / T²`` (A²: their charge's variance over the prefix). The normal equations divided by the density then
+    add ``(E / T) / ((G + R) / T²)`` to each column: the prior precision of each level, in seconds of data.
+    """
+    seconds = float(p["xint"][0, 0])  # the prefix's duration (the integral of the offset column)
+    spread = p["G"] + p["R"]
+    return np.divide(p["E"] * seconds, spread, out=np.full(2, np.inf), where=spread > 0)
+
+
+def once_coef(p: dict[str, Any], basis: np.ndarray | None = None, levels: tuple[int, ...] | None = None,
+              prior_s: float = 20.0) -> np.ndarray:
+    """The posterior mean of ``g + u`` on the update's basis (``basis``: a change of basis, :data:`PARTITION`), with
+    :func:`once_penalty` as the ridge of every column, or (``levels``) of those columns only, the others keeping the
+    update's ridge ``prior_s``; returned as coefficients of the update's basis."""
+    xtx, xtr = p["normal"]
+    m = np.eye(4) if basis is None else basis
+    out = np.zeros((2, 4))
+    for k, pen in enumerate(once_penalty(p)):
+        if np.isfinite(pen):
+            diag = np.full(4, pen) if levels is None else np.array([pen if j in levels else prior_s for j in range(4)])
+            out[k] = m @ np.linalg.solve(m.T @ xtx[k] @ m + np.diag(diag), m.T @ xtr[k])
+    return out
+
+
+def _ground_share(p: dict[str, Any]) -> np.ndarray:
+    spread = p["G"] + p["R"]
+    return np.divide(p["G"], spread, out=np.zeros(2), where=spread > 0)
+
+
+def rule_once(p: dict, f: dict) -> np.ndarray:
+    """Shrink once: the posterior mean of the run's offset (ridge :func:`once_penalty`), the ground's share ``G / (G +
+    R)`` carried to other runs; without a learned ground spread the evidence shrink (as the library)."""
+    if not np.any(p["G"] > 0):
+        return rule_evidence(p, f)
+    return once_coef(p) * _ground_share(p)[:, None]
+
+
+def rule_partition_once(p: dict, f: dict) -> np.ndarray:
+    """:func:`rule_once` on the regime partition: each level's posterior from its own seconds."""
+    if not np.any(p["G"] > 0):
+        return partition_coef(p) * _prior_or_evidence_factor(p, f)[:, None]
+    return once_coef(p, PARTITION) * _ground_share(p)[:, None]
+
+
+def rule_once_levels(p: dict, f: dict) -> np.ndarray:
+    """:func:`rule_once` with the posterior's penalty on the offset only; the regime columns (``|v|``, turning, outer
+    turning), which the learned spreads say nothing about apart, keep the update's 20-s ridge."""
+    if not np.any(p["G"] > 0):
+        return rule_evidence(p, f)
+    return once_coef(p, levels=(0,)) * _ground_share(p)[:, None]
+
+
+def rule_partition_once_levels(p: dict, f: dict) -> np.ndarray:
+    """:func:`rule_partition_once` with the posterior's penalty on the two levels (straight, turning) only."""
+    if not np.any(p["G"] > 0):
+        return partition_coef(p) * _prior_or_evidence_factor(p, f)[:, None]
+    return once_coef(p, PARTITION, levels=(0, 2)) * _ground_share(p)[:, None]
+
+
 def _shares(xint: np.ndarray) -> np.ndarray:
     s = regime_seconds(xint)
     return s / max(float(s.sum()), 1e-12)
@@ -532,7 +599,7 @@ def table(cache: dict[str, Any], rules: dict[str, Rule], Ts: tuple[float, ...],
 
 #: The updates the held-out choice picks among (the default first).
 CANDIDATES = ("prior", "evidence", "none", "partition", "partition, prior", "hierarchical, prior", "overlap, prior",
-              "overlap per regime, prior")
+              "overlap per regime, prior", "once", "partition, once", "once, levels", "partition, once, levels")
 
 
 def held_out_choice(cache: dict[str, Any], rules: dict[str, Rule],
@@ -554,7 +621,9 @@ def report(cache: dict[str, Any], Ts: tuple[float, ...], out: Path | None,
              "prior, moving": rule_prior_moving, "partition": rule_partition,
              "partition, prior": rule_partition_prior, "partition, moving, prior": rule_partition_moving_prior,
              "hierarchical, prior": rule_hierarchical_prior, "overlap, prior": rule_overlap_prior,
-             "overlap per regime, prior": rule_overlap_regime_prior}
+             "overlap per regime, prior": rule_overlap_regime_prior,
+             "once": rule_once, "partition, once": rule_partition_once,
+             "once, levels": rule_once_levels, "partition, once, levels": rule_partition_once_levels}
     print("clamp left out of the cached charges, worst points per ground: " +
           ", ".join(f"{g} {clamp_effect(f):.2f}" for g, f in cache["outer"].items()))
     diag = {g: [diagnose(f, rule_prior, T) for T in Ts if T >= 20] for g, f in cache["outer"].items()}

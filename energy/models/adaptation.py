@@ -72,7 +72,10 @@ raises no ground's error by more than a point and forecasts better than the evid
 (pooled, 40 s: 13.7 / 54.0 % against 20.2 / 64.4 %, median / p90). Choosing on the prefix
 itself (fit on its first half, keep the correction where it beats the unadapted forecast of the
 second half by more than its noise) was measured and dropped: within one run a run's own offset
-passes that check as well as the ground's.
+passes that check as well as the ground's. So was shrinking once — the ridge as the prior
+precision of the level, ``E T / (G + R)`` s instead of ``prior_s``, then ``G / (G + R)``: ahead of
+``"prior"`` held out on BorealTC (on the partition), behind it on the generator's grounds (the
+40-s median; harm after 10 s, where a ridge of a second lets the regime columns follow the prefix).
 """
 
 from __future__ import annotations

@@ -64,6 +64,7 @@ def test_report_prints_and_writes_every_rule(fold, tmp_path, capsys):
     text = capsys.readouterr().out
     assert "prior, moving" in text and "scale (LOGO)" in text and "gain" in text
     assert "hierarchical, prior" in text and "overlap, prior" in text and "switch (others)" in text
+    assert "partition, once" in text and "once, levels" in text
     assert (tmp_path / "rules.json").exists()
 
 
@@ -125,3 +126,20 @@ def test_the_switch_grid_runs_from_the_default_to_the_partition():
     np.testing.assert_allclose(ar.switch_rule(ar.SWITCH_GRID[0])(p, {}), ar.rule_prior(p, {}))
     np.testing.assert_allclose(ar.switch_rule(ar.SWITCH_GRID[-1])(p, {}), ar.rule_partition_prior(p, {}))
     assert not np.allclose(ar.rule_prior(p, {}), ar.rule_partition_prior(p, {}))
+
+
+def test_shrinking_once_is_the_posterior_mean_of_the_offset_carried_by_the_ground_share():
+    ar = adapt_rules
+    p = _entry(np.zeros(200))  # 20 s straight at 0.5 m/s, residual -1 A: the offset and |v| columns move as one level
+    seconds, weight = p["xint"][0, 0], p["normal"][0][0][0, 0]
+    np.testing.assert_allclose(ar.once_penalty(p), 0.5 * seconds / 1.5)  # E T / (G + R)
+    level = lambda coef: coef[:, 0] + 0.5 * coef[:, 1]  # noqa: E731  (the correction of a straight run at 0.5 m/s)
+    # the ridge along the level's direction (1, 0.5): the posterior mean of g + u, then the ground's share G / (G + R)
+    pen = 0.5 * seconds / 1.5
+    expected = -1.0 * 1.25 * weight / (1.25 * weight + pen) * (1.0 / 1.5)
+    np.testing.assert_allclose(level(ar.rule_once(p, {})), expected, rtol=1e-9)
+    default = level(ar.rule_prior(p, {}))  # the 20-s ridge, then G / (G + R + E): shrunk twice
+    assert np.all(default > expected + 0.1)
+    np.testing.assert_allclose(level(ar.rule_partition_once(p, {})), expected, rtol=1e-9)  # straight only: one level
+    no_ground = dict(p, G=np.zeros(2))
+    np.testing.assert_allclose(ar.rule_once(no_ground, {}), ar.rule_evidence(no_ground, {}))
