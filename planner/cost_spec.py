@@ -169,9 +169,11 @@ class CostSpec:
             if self.grounds is None:
                 raise InvalidParameterError("energy_model needs the ground parameters of the map's classes (grounds)",
                                             parameter="grounds")
-        if self.grounds is not None and not isinstance(self.grounds, Mapping):
-            raise InvalidParameterError(f"grounds must be a mapping of ground class (name or id) to parameters, got "
-                                        f"{type(self.grounds).__name__!r}", parameter="grounds")
+        if self.grounds is not None:
+            if not isinstance(self.grounds, Mapping):
+                raise InvalidParameterError(f"grounds must be a mapping of ground class (name or id) to parameters, "
+                                            f"got {type(self.grounds).__name__!r}", parameter="grounds")
+            object.__setattr__(self, "grounds", dict(self.grounds))  # the spec's own copy (a proxy would not pickle)
 
     @property
     def max_slope_rad(self) -> float:

@@ -243,6 +243,18 @@ def test_negative_or_nan_model_energy_rejected():
         CostSpec(energy_model=Broken(), grounds={"g": 1.0}, speed_mps=0.5).build(flat_terrain())
 
 
+def test_a_spec_keeps_its_own_grounds_and_refuses_grounds_beside_a_current_model(known_model):
+    grounds = {"g": 1.0}
+    spec = CostSpec(energy_model=LinearModel(a=50.0), grounds=grounds, speed_mps=0.5)
+    grounds["g"] = 3.0  # the caller's dict changes after the spec was made: the spec's does not
+    assert spec.grounds["g"] == 1.0
+    assert CostSpec(energy_model=LinearModel(a=50.0), grounds={"g": 1.0}, speed_mps=0.5).build(
+        flat_terrain()).grade_table_j_per_m[0, 256] == spec.build(flat_terrain()).grade_table_j_per_m[0, 256]
+    with pytest.raises(InvalidParameterError, match="a current model prices the map by its training grounds") as err:
+        CostSpec(model=known_model(), grounds={"g": 1.0})
+    assert err.value.parameter == "model"
+
+
 def test_a_model_without_a_robot_takes_the_specs_robots_voltage_and_turn_rate():
     class Bare(LinearModel):
         robot = None
