@@ -294,3 +294,38 @@ def test_surges_accelerate_as_stops_and_starts_do_without_standing_still():
     long = {n: p for n, _, p in manoeuvre_library(1.0, 1.2, hold_s=40.0, max_accel_mps2=0.7)}
     assert long["stop_and_go"].duration_s <= MAX_DRIVE_S and long["surges"].duration_s <= MAX_DRIVE_S
     assert long["stop_and_go"].duration_s > 1.5 * stops.duration_s  # more cycles, as many as fit in a minute
+
+
+class _TurnModel:
+    """A fitted model's stand-in: ``gain * |omega|`` A on each side (nothing on a straight)."""
+
+    def __init__(self, gain: float) -> None:
+        self.gain = gain
+
+    def predict(self, log):
+        return np.column_stack([self.gain * np.abs(log.omega_radps)] * 2)
+
+
+def test_on_a_map_the_slope_goes_first_among_the_drives_that_settle_every_pair(tied):
+    """Two explanations that part in proportion to the speed, against little noise: every drive settles them, and
+    the top-speed straight differs most per sample, but the slope (gravity: a force no fit sized) is driven. Where
+    the slope does not part them (a difference only in turns), it is not."""
+    from energy.diagnosis import ResidualNoise, separating_drive
+    from energy.diagnosis.separating import DRIVE_Z, SLOPE_DRIVE
+    from terrain import TerrainMap
+
+    logs, _ = tied
+    n = 60
+    plane = TerrainMap(0.15 * np.tile(np.arange(n, dtype=float), (n, 1)), 1.0, ground=np.zeros((n, n), int),
+                       ground_names={0: "asphalt"})
+    noise = ResidualNoise(0.01, 0.0, 0.0, residual_a=0.01)
+    drive = separating_drive(("a", "b"), {"a": _SpeedModel(1.0), "b": _SpeedModel(1.5)}, logs[0], noise, 1.0, 1.0,
+                             terrain=plane)
+    slope = next(c for c in drive.library if c.name == SLOPE_DRIVE)
+    assert slope.pairs["b"].repeats <= MAX_REPEATS and slope.pairs["b"].z_per_repeat >= DRIVE_Z  # it settles them
+    assert max(c.pairs["b"].noise_units for c in drive.library) > slope.pairs["b"].noise_units  # not the largest
+    assert drive.best.name == SLOPE_DRIVE and drive.profile.pose_xyh is not None
+    turns = separating_drive(("a", "b"), {"a": _TurnModel(1.0), "b": _TurnModel(1.5)}, logs[0], noise, 1.0, 1.0,
+                             terrain=plane)
+    assert turns.best.name != SLOPE_DRIVE
+    assert next(c for c in turns.library if c.name == SLOPE_DRIVE).pairs["b"].repeats > MAX_REPEATS
