@@ -23,7 +23,7 @@ from .missions import (
     simulate_missions_mc,
 )
 from .nav2_map import write_nav2_map
-from .planning import PLANNERS, plan_coarse_to_fine, plan_route
+from .planning import PLANNERS, RouteSearch, plan_coarse_to_fine, plan_route
 from .problem import PlanningProblem
 from .reachability import reachability
 from .reachability_result import Reachability
@@ -44,6 +44,7 @@ __all__ = [
     "PlannerSettings",
     "PLANNERS",
     "plan_route",
+    "RouteSearch",
     "PlanningProblem",
     "Route",
     "Lattice",
