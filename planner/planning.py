@@ -44,7 +44,7 @@ import numpy as np
 
 from terrain import TerrainMap
 from terrawatt_base.checks import check_bool, check_choice, check_instance, check_int, check_real, check_seed
-from terrawatt_base.errors import GridMismatchError, InvalidParameterError, UnknownNameError
+from terrawatt_base.errors import GridMismatchError, InvalidParameterError
 
 from .anyangle import anyangle_path
 from .coarse import CoarseOptions, CoarseToFine, coarse_to_fine_in_memory
@@ -271,30 +271,23 @@ def plan_route(
     >>> route.status, round(route.length_m, 2)  # level ground: the straight line
     ('exact', 36.06)
     """
-    if not isinstance(planner, str) or planner not in PLANNERS:
-        raise UnknownNameError(f"planner must be one of {list(PLANNERS)!r}, got {planner!r}")
+    search = RouteSearch(planner, time_limit_s, max_cost_evaluations, seed, settings)  # the search's options, checked
     if not isinstance(cost, EnergyCost):
         raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
     if not isinstance(terrain, TerrainMap):
         raise InvalidParameterError(f"terrain must be a TerrainMap, got {type(terrain).__name__!r}")
     if terrain is not cost.terrain and not terrain.same_grid(cost.terrain):
         raise GridMismatchError(f"cost was built for the grid of {cost.terrain!r}, not of {terrain!r}")
-    settings = PlannerSettings() if settings is None else settings
-    if not isinstance(settings, PlannerSettings):
-        raise InvalidParameterError(f"settings must be a PlannerSettings, got {type(settings).__name__!r}")
+    settings = PlannerSettings() if search.settings is None else search.settings
     refine = check_bool("refine", refine)
     compare = check_bool("compare", compare)
     problem = PlanningProblem(cost, start_xy_m, goal_xy_m)  # the points, checked once for the whole query
-    if planner in GRAPH_PLANNERS and time_limit_s is None and max_cost_evaluations is None:
-        time_limit, max_evals = None, None
-    else:
-        time_limit, max_evals = _check_budget(time_limit_s, max_cost_evaluations)
-    seed = check_seed(seed)
 
     if not problem.connected:
         route = empty_route("infeasible", planner, 0.0, cost.battery_voltage_v)
     else:
-        route = _plan(problem, planner, time_limit, max_evals, seed, refine, settings)
+        route = _plan(problem, planner, search.time_limit_s, search.max_cost_evaluations, search.seed, refine,
+                      settings)
     if compare:
         route = route.replace(comparison=_compare(problem))
     return route
