@@ -14,7 +14,7 @@ from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..ground import GroundParams
 from ..logs import REST_OMEGA_RADPS, REST_SPEED_MPS, InteractionLog, log_slope_rad, rest_samples
-from ..models.baselines import PhysicsCurrentModel, ground_slots
+from ..models.baselines import PhysicsCurrentModel, ground_slots, holding_currents_a
 from ..params import ground_preset, robot_params
 from ..physics import EFFECTS, PhysicsEnergyModel
 from ..power import PowerBreakdown
@@ -173,6 +173,22 @@ def _motoring(basis: PhysicsBasis, log: InteractionLog, **physics: Any) -> np.nd
     return np.where(sign != 0, i_m * sign, np.abs(i_m))
 
 
+def _holding(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[str, ...] | None = None,
+             robot: RobotParams | None = None, ground: Any = None, ground_index: Any = None,
+             slope_rad: Any = None) -> np.ndarray:
+    """Per-side current (N, 2), A, of holding the robot standing on the slope under each sample
+    (:func:`~energy.models.baselines.holding_currents_a`; zeros on level ground)."""
+    slope = basis.slope_rad(log) if slope_rad is None else slope_rad
+    if not np.any(np.asarray(slope) != 0.0):
+        return np.zeros((len(log), 2))
+    rb = _log_robot(basis.robot if robot is None else robot, log, basis.fitted_chi)
+    model = PhysicsEnergyModel(rb, basis.effects if effects is None else effects)
+    ground = basis.ground if ground is None else ground
+    if ground_index is None:
+        ground, ground_index = ground_slots(ground, log)
+    return holding_currents_a(model, ground, ground_index, slope, len(log))
+
+
 def starting_samples(log: InteractionLog) -> np.ndarray:
     """Whether each drive sample is the still one before a start: its wheels still (``|v| <
     REST_SPEED_MPS``, ``|omega| < REST_OMEGA_RADPS``), the next sample's moving (and not a lone blip of
@@ -189,17 +205,18 @@ def starting_samples(log: InteractionLog) -> np.ndarray:
 def motoring_currents_a(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[str, ...] | None = None,
                         robot: RobotParams | None = None, ground: Any = None, ground_index: Any = None,
                         slope_rad: Any = None, starts: bool = False) -> np.ndarray:
-    """Per-side motor current in the direction of rotation (N, 2), A, no idle, no clamp; 0 where the log
-    stands, and (unless ``starts``) at the still sample before a start.
+    """Per-side motor current in the direction of rotation (N, 2), A, no idle, no clamp; where the log
+    stands, and (unless ``starts``) at the still sample before a start, only the current of holding
+    the robot on the slope (0 on level ground).
 
     The physics of ``basis`` (or the given ``effects`` / ``robot`` / ``ground``, which may be
     a list of GroundParams with ``ground_index``) for the log's ``v``, ``omega``, their time
     derivatives and ``slope_rad`` — what :class:`~energy.PhysicsCurrentModel` predicts: where
-    the log stands still (:func:`energy.logs.rest_samples`) no motoring current, as the model
-    predicts its rest level alone there (a robot standing on a slope is not charged the
-    current of holding it, and a candidate that scales gravity changes nothing at rest). Where
+    the log stands still (:func:`energy.logs.rest_samples`) no motoring current but the
+    holding current, as the model predicts its rest level and that there (a candidate that
+    scales gravity, a heavier robot, scales the holding current too). Where
     the log stands otherwise (:func:`standing_samples`: a stop's last instant, noise-level
-    motion between still samples) it is 0 as well, and so at the still sample before a start
+    motion between still samples) the same, and so at the still sample before a start
     (:func:`starting_samples`) unless ``starts`` (the breakaway itself, judged where it lives):
     the model charges a breakaway there, in reverse at a stop, that the robot may never draw at
     that sample (several amperes a side), and a candidate that scales it (a heavier robot, a
@@ -211,12 +228,12 @@ def motoring_currents_a(basis: PhysicsBasis, log: InteractionLog, *, effects: tu
     DataError
         Fewer than 2 drive samples.
     """
-    motoring = _motoring(basis, log, effects=effects, robot=robot, ground=ground, ground_index=ground_index,
-                         slope_rad=slope_rad)
+    physics = dict(effects=effects, robot=robot, ground=ground, ground_index=ground_index, slope_rad=slope_rad)
+    motoring = _motoring(basis, log, **physics)
     still = rest_samples(log) | standing_samples(log)
     if not starts:
         still |= starting_samples(log)
-    return np.where(still[:, None], 0.0, motoring)
+    return np.where(still[:, None], _holding(basis, log, **physics), motoring)
 
 
 def unclipped_prediction(model: Any, log: InteractionLog, basis: PhysicsBasis | None = None) -> np.ndarray:
@@ -233,7 +250,7 @@ def unclipped_prediction(model: Any, log: InteractionLog, basis: PhysicsBasis | 
     if basis is not None and basis.is_model:
         model.check_map()
         moving = basis.idle_current_a + _motoring(basis, log)
-        return np.asarray(basis.rest_current_a) + np.where(rest_samples(log)[:, None], 0.0, moving)
+        return np.asarray(basis.rest_current_a) + np.where(rest_samples(log)[:, None], _holding(basis, log), moving)
     return np.asarray(model.predict(log), dtype=np.float64)
 
 

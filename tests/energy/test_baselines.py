@@ -260,3 +260,28 @@ def test_a_model_on_a_map_drives_the_slope_under_its_poses(tmp_path):
         on_map.predict(dataclasses.replace(log, pose_xyh=None))
     with pytest.raises(InvalidParameterError, match="terrain must be a TerrainMap"):
         PhysicsCurrentModel(terrain="map.npz").fit(log)
+
+
+def test_a_model_on_a_map_holds_the_robot_standing_on_its_slope():
+    """Standing still on a ramp the motors hold the robot: rest level plus m g sin(pitch) r / 2 a side through the
+    gear; on the ramp's level part (and on a model without a map) the rest level alone, exactly."""
+    from terrain.procedural import ramp_map
+
+    tmap = ramp_map((80, 80), 1.0, grade=0.15, axis="x")
+    t = np.arange(0.0, 4.0, 0.1)
+    still = np.zeros(t.size)
+    flat = np.full(t.size, 0.0)
+    pose = np.column_stack([np.full(t.size, 40.0), np.full(t.size, 40.0), flat])
+    log = _log(t, still, still, np.ones(t.size), np.ones(t.size), LogMeta(robot="husky"))
+    log = dataclasses.replace(log, pose_xyh=pose)
+    on_map = PhysicsCurrentModel("husky", "asphalt", fit_parameters=(), terrain=tmap).fit(log)
+    level = PhysicsCurrentModel("husky", "asphalt", fit_parameters=()).fit(log)
+    robot = robot_preset("husky")
+    motor = robot.motor
+    pitch = np.arctan(0.15)
+    holding = (robot.mass_kg * 9.81 * np.sin(pitch) / 2.0 * robot.wheel_radius_m
+               / (motor.gear_ratio * motor.gear_efficiency * motor.torque_constant_nm_per_a))
+    np.testing.assert_allclose(on_map.predict(log), robot.rest_current_a + holding, rtol=0.02)
+    np.testing.assert_array_equal(level.predict(log), np.full((t.size, 2), robot.rest_current_a))
+    facing_across = dataclasses.replace(log, pose_xyh=pose + [0.0, 0.0, np.pi / 2])  # across the slope: no pitch
+    np.testing.assert_allclose(on_map.predict(facing_across), robot.rest_current_a, atol=1e-9)

@@ -18,9 +18,10 @@ def test_parameter_table_is_exact_at_nodes_and_linear_between():
     assert table.nodes.size == 6 and table.n_computed == 6
 
 
-def test_motoring_currents_are_zero_where_the_log_stands_still_even_on_a_slope():
-    """The model predicts its rest level alone where the robot stands still; so do the candidates' physics terms:
-    standing on a slope, gravity is not charged as motoring current (a mass candidate changes nothing at rest)."""
+def test_motoring_currents_hold_the_robot_standing_on_a_slope_and_nothing_on_level_ground():
+    """Where the robot stands still the model predicts its rest level and, on a slope, the current of holding it
+    there; so do the candidates' physics terms: 0 standing on level ground, the holding torque through the gear
+    standing on a slope (m g sin(slope) r / 2 a side), scaled by a heavier robot."""
     from energy import InteractionLog, LogMeta
     from energy.diagnosis.model_currents import motoring_currents_a, physics_basis
     from energy.logs import rest_samples
@@ -33,14 +34,20 @@ def test_motoring_currents_are_zero_where_the_log_stands_still_even_on_a_slope()
     basis = physics_basis(object())  # the reference physics of the robot, every drive effect (gravity too)
     rest = rest_samples(log)
     assert rest.sum() > 40 and (~rest).sum() > 40
-    for slope in (0.0, 0.17):
-        cur = motoring_currents_a(basis, log, slope_rad=np.full(t.size, slope))
-        assert np.all(cur[rest] == 0.0)
-        assert np.all(cur[(t > 3.5) & (t < 7.5)] > 0.0)  # climbing or level, the cruising robot draws
-    heavy = motoring_currents_a(basis, log, robot=basis.robot.replace(mass_kg=2.0 * basis.robot.mass_kg),
-                                slope_rad=np.full(t.size, 0.17))
     cruising = (t > 3.5) & (t < 7.5)
-    assert np.all(heavy[rest] == 0.0) and np.all(heavy[cruising] > cur[cruising])
+    level = motoring_currents_a(basis, log, slope_rad=np.zeros(t.size))
+    assert np.all(level[rest] == 0.0) and np.all(level[cruising] > 0.0)
+    slope = 0.17
+    cur = motoring_currents_a(basis, log, slope_rad=np.full(t.size, slope))
+    robot, motor = basis.robot, basis.robot.motor
+    torque = robot.mass_kg * 9.81 * np.sin(slope) / 2.0 * robot.wheel_radius_m
+    expected = torque / (motor.gear_ratio * motor.gear_efficiency * motor.torque_constant_nm_per_a)
+    np.testing.assert_allclose(cur[rest], expected, rtol=0.02)
+    assert np.all(cur[cruising] > level[cruising])  # climbing draws more than cruising on the level
+    heavy = motoring_currents_a(basis, log, robot=basis.robot.replace(mass_kg=2.0 * basis.robot.mass_kg),
+                                slope_rad=np.full(t.size, slope))
+    np.testing.assert_allclose(heavy[rest], 2.0 * cur[rest], rtol=1e-9)
+    assert np.all(heavy[cruising] > cur[cruising])
 
 
 def _stop_blip_start_log():
