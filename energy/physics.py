@@ -158,6 +158,55 @@ class PhysicsEnergyModel:
         t = None if time_s is None else check_sample_times(time_s, n)
         return drive_power(self.robot, self.effects, v, omega, acc, alpha, slope, gr, t)
 
+    def holding_current_a(self, ground: GroundParams | Sequence[GroundParams], slope_rad: Any, *,
+                          ground_index: Any = None) -> np.ndarray:
+        """Per-side motor current (n, 2), A, that holds the robot standing still on ``slope_rad``.
+
+        The physics at zero speed and acceleration on the slope: gravity's pull along it,
+        ``m g sin(slope) / 2`` a side, held by the motors through the gear (the velocity
+        controller of a robot without brakes holds it there), taken positive — a holding motor
+        draws its current whichever way the slope pulls. Exact zeros where the slope is 0 and
+        with the ``"slope"`` effect off.
+
+        Parameters
+        ----------
+        ground : GroundParams or sequence of GroundParams
+            As in :meth:`power`.
+        slope_rad : array_like, shape (n,)
+            Pitch under the robot, rad, in (-pi/2, pi/2).
+        ground_index : array_like of int, optional
+            As in :meth:`power`.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, 2)
+
+        Raises
+        ------
+        InvalidParameterError
+            As in :meth:`power`.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from energy import PhysicsEnergyModel, robot_preset, ground_preset
+        >>> hold = PhysicsEnergyModel(robot_preset("husky")).holding_current_a(ground_preset("asphalt"),
+        ...                                                                    np.radians([0.0, 10.0]))
+        >>> hold[0].tolist(), bool(hold[1, 0] > 2.0)
+        ([0.0, 0.0], True)
+        """
+        slope = np.asarray(slope_rad, dtype=np.float64)
+        if slope.ndim != 1:
+            raise InvalidParameterError(f"slope_rad must be 1-D, got shape {slope.shape!r}")
+        out = np.zeros((slope.shape[0], 2))
+        on = slope != 0.0
+        if "slope" in self.effects and on.any():
+            still = np.zeros(int(on.sum()))
+            res = self.power(still, still, ground, slope_rad=slope[on],
+                             ground_index=None if ground_index is None else np.asarray(ground_index)[on])
+            out[on] = np.abs(res.motor_current_a)
+        return out
+
     def energy_j(
         self,
         time_s: Any,

@@ -14,7 +14,7 @@ from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..ground import GroundParams
 from ..logs import REST_OMEGA_RADPS, REST_SPEED_MPS, InteractionLog, log_slope_rad, rest_samples
-from ..models.baselines import PhysicsCurrentModel, ground_slots, holding_currents_a
+from ..models.baselines import PhysicsCurrentModel, ground_slots
 from ..params import ground_preset, robot_params
 from ..physics import EFFECTS, PhysicsEnergyModel
 from ..power import PowerBreakdown
@@ -114,6 +114,13 @@ def basis_breakdown(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[
     DataError
         Fewer than 2 drive samples.
     """
+    return _physics(basis, log, effects, robot, ground, ground_index, slope_rad)[0]
+
+
+def _physics(basis: PhysicsBasis, log: InteractionLog, effects: tuple[str, ...] | None, robot: RobotParams | None,
+             ground: Any, ground_index: Any, slope_rad: Any) -> tuple[PowerBreakdown, np.ndarray]:
+    """:func:`basis_breakdown`, and the current of holding the robot still on the slope under each sample
+    (N, 2; :meth:`~energy.PhysicsEnergyModel.holding_current_a`, zeros on level ground)."""
     if len(log) < 2:
         raise DataError(f"the physics terms need at least 2 drive samples per log, got {len(log)} ({log.meta.source!r})")
     rb = _log_robot(basis.robot if robot is None else robot, log, basis.fitted_chi)
@@ -123,8 +130,10 @@ def basis_breakdown(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[
     if ground_index is None:
         ground, ground_index = ground_slots(ground, log)
     slope = basis.slope_rad(log) if slope_rad is None else slope_rad
-    return model.power(v, w, ground, accel_mps2=np.gradient(v, t), alpha_radps2=np.gradient(w, t),
-                       slope_rad=slope, time_s=t, ground_index=ground_index)
+    res = model.power(v, w, ground, accel_mps2=np.gradient(v, t), alpha_radps2=np.gradient(w, t),
+                      slope_rad=slope, time_s=t, ground_index=ground_index)
+    holding = model.holding_current_a(ground, np.broadcast_to(slope, (len(log),)), ground_index=ground_index)
+    return res, holding
 
 
 def side_speeds_mps(basis: PhysicsBasis, log: InteractionLog) -> np.ndarray:
@@ -165,28 +174,15 @@ def standing_samples(log: InteractionLog) -> np.ndarray:
     return next_still & (still | prev_still)
 
 
-def _motoring(basis: PhysicsBasis, log: InteractionLog, **physics: Any) -> np.ndarray:
-    """Per-side motor current in the direction of rotation (N, 2), A, everywhere (rests included)."""
-    res = basis_breakdown(basis, log, **physics)
+def _motoring(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[str, ...] | None = None,
+              robot: RobotParams | None = None, ground: Any = None, ground_index: Any = None,
+              slope_rad: Any = None) -> tuple[np.ndarray, np.ndarray]:
+    """Per-side motor current in the direction of rotation (N, 2), A, everywhere (rests included), and the
+    current of holding the robot still on the slope (N, 2)."""
+    res, holding = _physics(basis, log, effects, robot, ground, ground_index, slope_rad)
     i_m = np.asarray(res.motor_current_a)
     sign = np.sign(np.asarray(res.motor_speed_radps))
-    return np.where(sign != 0, i_m * sign, np.abs(i_m))
-
-
-def _holding(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[str, ...] | None = None,
-             robot: RobotParams | None = None, ground: Any = None, ground_index: Any = None,
-             slope_rad: Any = None) -> np.ndarray:
-    """Per-side current (N, 2), A, of holding the robot standing on the slope under each sample
-    (:func:`~energy.models.baselines.holding_currents_a`; zeros on level ground)."""
-    slope = basis.slope_rad(log) if slope_rad is None else slope_rad
-    if not np.any(np.asarray(slope) != 0.0):
-        return np.zeros((len(log), 2))
-    rb = _log_robot(basis.robot if robot is None else robot, log, basis.fitted_chi)
-    model = PhysicsEnergyModel(rb, basis.effects if effects is None else effects)
-    ground = basis.ground if ground is None else ground
-    if ground_index is None:
-        ground, ground_index = ground_slots(ground, log)
-    return holding_currents_a(model, ground, ground_index, slope, len(log))
+    return np.where(sign != 0, i_m * sign, np.abs(i_m)), holding
 
 
 def starting_samples(log: InteractionLog) -> np.ndarray:
@@ -228,12 +224,12 @@ def motoring_currents_a(basis: PhysicsBasis, log: InteractionLog, *, effects: tu
     DataError
         Fewer than 2 drive samples.
     """
-    physics = dict(effects=effects, robot=robot, ground=ground, ground_index=ground_index, slope_rad=slope_rad)
-    motoring = _motoring(basis, log, **physics)
+    motoring, holding = _motoring(basis, log, effects=effects, robot=robot, ground=ground, ground_index=ground_index,
+                                  slope_rad=slope_rad)
     still = rest_samples(log) | standing_samples(log)
     if not starts:
         still |= starting_samples(log)
-    return np.where(still[:, None], _holding(basis, log, **physics), motoring)
+    return np.where(still[:, None], holding, motoring)
 
 
 def unclipped_prediction(model: Any, log: InteractionLog, basis: PhysicsBasis | None = None) -> np.ndarray:
@@ -249,8 +245,9 @@ def unclipped_prediction(model: Any, log: InteractionLog, basis: PhysicsBasis | 
     """
     if basis is not None and basis.is_model:
         model.check_map()
-        moving = basis.idle_current_a + _motoring(basis, log)
-        return np.asarray(basis.rest_current_a) + np.where(rest_samples(log)[:, None], _holding(basis, log), moving)
+        motoring, holding = _motoring(basis, log)
+        return np.asarray(basis.rest_current_a) + np.where(rest_samples(log)[:, None], holding,
+                                                           basis.idle_current_a + motoring)
     return np.asarray(model.predict(log), dtype=np.float64)
 
 

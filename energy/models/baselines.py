@@ -34,7 +34,6 @@ __all__ = [
     "ConstantCurrentModel",
     "LinearCurrentModel",
     "PhysicsCurrentModel",
-    "holding_currents_a",
     "PHYSICS_FIT_PARAMETERS",
     "DEFAULT_FIT_PARAMETERS",
     "ground_slots",
@@ -183,37 +182,6 @@ def _check_ground(ground: Any) -> GroundParams | dict[str, GroundParams]:
     return one(ground, "ground")
 
 
-def holding_currents_a(model: PhysicsEnergyModel, ground: GroundParams | list[GroundParams],
-                       ground_index: np.ndarray | None, slope_rad: Any, n: int) -> np.ndarray:
-    """Per-side motor current (n, 2), A, that holds the robot standing still on ``slope_rad``.
-
-    The physics of ``model`` at zero speed and acceleration on the slope: gravity's pull
-    along it, ``m g sin(slope) / 2`` a side, held by the motors through the gear (the velocity
-    controller of a robot without brakes holds it there), taken positive — a holding motor
-    draws its current whichever way the slope pulls. Exact zeros on level ground (``slope_rad``
-    0 everywhere) or with the ``"slope"`` effect off.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from energy import PhysicsEnergyModel, robot_preset, ground_preset
-    >>> model = PhysicsEnergyModel(robot_preset("husky"))
-    >>> hold = holding_currents_a(model, ground_preset("asphalt"), None, np.radians([0.0, 10.0]), 2)
-    >>> hold[0].tolist(), bool(hold[1, 0] > 2.0)
-    ([0.0, 0.0], True)
-    """
-    slope = np.broadcast_to(np.asarray(slope_rad, dtype=np.float64), (n,))
-    out = np.zeros((n, 2))
-    on = slope != 0.0
-    if "slope" not in model.effects or not on.any():
-        return out
-    still = np.zeros(int(on.sum()))
-    res = model.power(still, still, ground, slope_rad=slope[on],
-                      ground_index=None if ground_index is None else np.asarray(ground_index)[on])
-    out[on] = np.abs(res.motor_current_a)
-    return out
-
-
 def ground_slots(ground: GroundParams | Mapping[str, GroundParams],
                  log: InteractionLog) -> tuple[GroundParams | list[GroundParams], np.ndarray | None]:
     """The ground of each sample of ``log``: ``(ground, None)`` for one ground, else the list of
@@ -247,7 +215,8 @@ class PhysicsCurrentModel(CurrentModel):
     ``v``, ``omega``, their time derivatives (``numpy.gradient``) and the slope (level
     ground, or the pitch under the logged poses on ``terrain``), where the log moves;
     standing still (:func:`energy.logs.at_rest`) the rest level ``rest_current_a_`` and, on a
-    map's slope, the current of holding the robot there (:func:`holding_currents_a`; 0 on
+    map's slope, the current of holding the robot there
+    (:meth:`PhysicsEnergyModel.holding_current_a`; 0 on
     level ground): a robot at rest pushes against nothing else, whatever friction law the
     physics applies to a speed of a few mm/s read off jittery odometry. The rest level is what the current sensor
     logs with the wheels still (a sensor offset, in every sample: ``robot.rest_current_a``,
@@ -381,7 +350,7 @@ class PhysicsCurrentModel(CurrentModel):
         # current in the direction of rotation: > 0 motoring (either way round), < 0 back-driven
         sign = np.sign(res.motor_speed_radps)
         motoring = np.where(sign != 0, i_m * sign, np.abs(i_m))
-        holding = holding_currents_a(model, grounds, index, slope, len(v))
+        holding = model.holding_current_a(grounds, np.broadcast_to(slope, v.shape), ground_index=index)
         cur = rest_a + np.where(at_rest(v, w, a, alpha)[:, None], holding, idle_a + motoring)
         return np.maximum(cur, 0.0) if self.clip_negative else cur
 

@@ -480,3 +480,21 @@ def test_planner_energies_are_nonnegative(robot: str, ground: str, speed_fractio
     np.testing.assert_array_equal(capped[~infeasible], e[~infeasible])
     turn = m.turn_energy_j(np.array(grades) * 3.0, g)
     assert np.all(turn >= 0) and np.all((turn == 0) == (np.array(grades) == 0))
+
+
+def test_holding_current_is_gravity_through_the_gear_and_nothing_without_a_slope():
+    from energy import PhysicsEnergyModel, ground_preset, robot_preset
+    from terrawatt_base.errors import InvalidParameterError
+
+    robot, ground = robot_preset("husky"), ground_preset("asphalt")
+    slope = np.radians([0.0, 5.0, -5.0, 10.0])
+    hold = PhysicsEnergyModel(robot).holding_current_a(ground, slope)
+    motor = robot.motor
+    expected = (robot.mass_kg * 9.81 * np.abs(np.sin(slope)) / 2.0 * robot.wheel_radius_m
+                / (motor.gear_ratio * motor.gear_efficiency * motor.torque_constant_nm_per_a))
+    np.testing.assert_allclose(hold, np.column_stack([expected, expected]), rtol=0.02)
+    assert hold[0].tolist() == [0.0, 0.0]
+    no_gravity = PhysicsEnergyModel(robot, effects=[e for e in PhysicsEnergyModel(robot).effects if e != "slope"])
+    assert np.all(no_gravity.holding_current_a(ground, slope) == 0.0)
+    with pytest.raises(InvalidParameterError, match="1-D"):
+        PhysicsEnergyModel(robot).holding_current_a(ground, np.zeros((2, 2)))
