@@ -250,13 +250,6 @@ class TourProblem:
         out.append(seg)
         return out
 
-    def segment_units(self, robot: int, stops: Any) -> list[tuple[int, int]]:
-        """Each segment's units and the capacity it must hold within (the robot's budget from its initial charge for
-        the first, from a full one for the others)."""
-        caps = (int(self.capacity_units[robot]), int(self.full_units[robot]))
-        return [(int(sum(self.arc_units[a, b] for a, b in zip(seg[:-1], seg[1:]))), caps[k > 0])
-                for k, seg in enumerate(self.segments(robot, stops))]
-
     def reaches(self, robot: int, point: int) -> bool:
         """Whether ``robot`` can visit ``point`` and come back, every segment within its capacity, charging at will
         (every charger as often as needed: a relaxation of the charger visits)."""
