@@ -24,12 +24,11 @@ changed energy (:attr:`Lattice.changed_moves`, ids ``node * 16 + k`` with ``k`` 
 :data:`LATTICE_OFFSETS`), so an incremental search (:class:`planner.replan.IncrementalPlanner`)
 repairs only what they touch.
 
-Two exact solvers give the same optimum: ``method="astar"`` (default), a compiled A* that
-stops once no open node can beat the best route found, with the heuristic
-``min_energy_per_metre_j * |node - goal|`` (energy) or ``|node - goal|`` (length) — a lower
-bound of any route's rest, and consistent, since every move costs at least that per metre
-of its length; and ``method="dijkstra"``, :func:`scipy.sparse.csgraph.dijkstra` over the
-whole graph (the reference the tests compare A* with).
+:meth:`Lattice.shortest_path` is a compiled A* that stops once no open node can beat the best
+route found, with the heuristic ``min_energy_per_metre_j * |node - goal|`` (energy) or
+``|node - goal|`` (length) — a lower bound of any route's rest, and consistent, since every
+move costs at least that per metre of its length. :meth:`Lattice.paths_from` labels the whole
+graph from one start with :func:`scipy.sparse.csgraph.dijkstra` (one search for many goals).
 """
 
 from __future__ import annotations
@@ -51,7 +50,7 @@ from .kernels import astar, lattice_reweight, lattice_weights
 from .kernels.graph import reweight_band
 from .points import as_points
 
-__all__ = ["Lattice", "LatticePath", "LATTICE_OFFSETS", "LATTICE_WEIGHTS", "LATTICE_METHODS"]
+__all__ = ["Lattice", "LatticePath", "LATTICE_OFFSETS", "LATTICE_WEIGHTS"]
 
 #: The 8 (row, col) node offsets of one half-plane; with their negatives, the 16 lattice moves.
 _HALF = np.array([(0, 1), (1, 0), (1, 1), (1, -1), (1, 2), (2, 1), (2, -1), (1, -2)], dtype=np.int64)
@@ -59,8 +58,6 @@ _HALF = np.array([(0, 1), (1, 0), (1, 1), (1, -1), (1, 2), (2, 1), (2, -1), (1, 
 LATTICE_OFFSETS = np.concatenate([_HALF, -_HALF])
 #: Edge weights a lattice can search with.
 LATTICE_WEIGHTS = ("energy", "length")
-#: Exact shortest-path solvers of :meth:`Lattice.shortest_path`.
-LATTICE_METHODS = ("astar", "dijkstra")
 
 
 @dataclass(frozen=True)
@@ -491,7 +488,6 @@ class Lattice:
         start_xy_m: tuple[float, float],
         goal_xy_m: tuple[float, float],
         weight: str = "energy",
-        method: str = "astar",
     ) -> LatticePath:
         """Best lattice route from start to goal.
 
@@ -501,8 +497,6 @@ class Lattice:
             Points on the map (m).
         weight : {"energy", "length"}
             Minimise drive energy (J) or length (m).
-        method : {"astar", "dijkstra"}
-            Exact solver (module docstring); both return the same optimum.
 
         Returns
         -------
@@ -513,15 +507,13 @@ class Lattice:
         Raises
         ------
         UnknownNameError
-            Unknown ``weight`` or ``method``.
+            Unknown ``weight``.
         InvalidParameterError, OutOfBoundsError
             NaN points / points outside the map.
         """
         t0 = time.perf_counter()
         if weight not in LATTICE_WEIGHTS:
             raise UnknownNameError(f"weight must be one of {LATTICE_WEIGHTS!r}, got {weight!r}")
-        if method not in LATTICE_METHODS:
-            raise UnknownNameError(f"method must be one of {LATTICE_METHODS!r}, got {method!r}")
         pts = as_points([start_xy_m, goal_xy_m], "start/goal")
         self.cost.check_inside(pts, "start/goal")
         start, goal = pts
@@ -533,7 +525,7 @@ class Lattice:
             e_direct = float(np.hypot(*(goal - start))) if math.isfinite(e_direct) else math.inf
         best = e_direct
         best_nodes: list[int] = []
-        if src.size and dst.size and method == "astar":
+        if src.size and dst.size:
             h_per_m = cost.min_energy_per_metre_j if weight == "energy" else 1.0
             total, last, pred = astar(
                 self._indptr, self._indices, self._weights(weight), self._node_x, self._node_y, self._nj,
@@ -547,8 +539,6 @@ class Lattice:
                     chain.append(node)
                     node = int(pred[node])
                 best_nodes = chain[::-1]
-        elif src.size and dst.size:
-            best, best_nodes = self._best_exit(*self._from_source(src, e_src, weight), dst, e_dst, best)
         path = self.path_via(start, best_nodes, goal, best, weight)
         return dataclasses.replace(path, solve_time_s=time.perf_counter() - t0)
 
