@@ -46,16 +46,15 @@ from terrawatt_base.checks import check_int
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from .edge_cost import EnergyCost
-from .kernels import astar, lattice_reweight, lattice_weights
+from .kernels import UNIT_HALF, astar, lattice_reweight, lattice_weights
 from .kernels.graph import reweight_band
 from .points import as_points
 
 __all__ = ["Lattice", "LatticePath", "LATTICE_OFFSETS", "LATTICE_WEIGHTS"]
 
-#: The 8 (row, col) node offsets of one half-plane; with their negatives, the 16 lattice moves.
-_HALF = np.array([(0, 1), (1, 0), (1, 1), (1, -1), (1, 2), (2, 1), (2, -1), (1, -2)], dtype=np.int64)
-#: All 16 (row, col) node offsets: ``LATTICE_OFFSETS[k + 8] == -LATTICE_OFFSETS[k]``.
-LATTICE_OFFSETS = np.concatenate([_HALF, -_HALF])
+#: All 16 (row, col) node offsets: the 8 half-plane moves (:data:`~planner.kernels.UNIT_HALF`) and their
+#: negatives, ``LATTICE_OFFSETS[k + 8] == -LATTICE_OFFSETS[k]``.
+LATTICE_OFFSETS = np.concatenate([UNIT_HALF, -UNIT_HALF])
 #: Edge weights a lattice can search with.
 LATTICE_WEIGHTS = ("energy", "length")
 
@@ -160,7 +159,7 @@ class Lattice:
         self._ni, self._nj = ni, nj
         self._offset = off
         arr = cost.arrays
-        w = lattice_weights(arr.cells, arr.grade_table, arr.geo, s, off, ni, nj, _HALF)
+        w = lattice_weights(arr.cells, arr.grade_table, arr.geo, s, off, ni, nj, UNIT_HALF)
         self._set_structure(w)
         xc, yc = cost.terrain.cell_centres()
         self._node_x = xc[self.node_cols]
@@ -289,7 +288,7 @@ class Lattice:
             return new
         sat = np.zeros((changed.shape[0] + 1, changed.shape[1] + 1), dtype=np.int32)
         np.cumsum(np.cumsum(changed, axis=0, dtype=np.int32), axis=1, out=sat[1:, 1:])
-        band = reweight_band(sat, self.stride_cells, self._offset, self._ni, self._nj, _HALF)
+        band = reweight_band(sat, self.stride_cells, self._offset, self._ni, self._nj, UNIT_HALF)
         if band is None:  # no move reaches a changed cell
             new.edges_computed = 0
             new.changed_moves = np.empty(0, dtype=np.int64)
@@ -304,11 +303,11 @@ class Lattice:
         arr = cost.arrays
         recomputed, flips, new.changed_moves = lattice_reweight(
             arr.cells, arr.grade_table, arr.geo, self.stride_cells, self._offset, self._ni, self._nj,
-            _HALF, sat, self._pos, values, band, lo,
+            UNIT_HALF, sat, self._pos, values, band, lo,
         )
         if int(flips.sum()):
             w = lattice_weights(arr.cells, arr.grade_table, arr.geo, self.stride_cells, self._offset,
-                                self._ni, self._nj, _HALF)
+                                self._ni, self._nj, UNIT_HALF)
             new._set_structure(w)
             new.edges_computed = int(w.size - np.count_nonzero(self._out_of_grid_mask()))
         else:

@@ -32,15 +32,16 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import norm, t as student_t
+from scipy.stats import norm
+from scipy.stats import t as student_t
 
 from terrawatt_base.checks import check_real
 from terrawatt_base.errors import InvalidParameterError
 
+from ..power import trapezoid as _trapezoid
+
 __all__ = ["CurrentForecast", "ChargeForecast", "predictive_quantile", "central_level",
            "check_dof", "combine_ground_sds"]
-
-_trapezoid = getattr(np, "trapezoid", None) or np.trapz
 
 
 def check_dof(dof: float, name: str = "dof") -> float:
