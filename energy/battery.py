@@ -24,7 +24,7 @@ Conventions (all vectorised over sample arrays, integrated with the trapezoid ru
   ``min_reserve_pct / 100``; the crossing time is interpolated linearly between that sample
   and the previous one (exact for a constant current).
 
-:func:`discharge_from_power` / :func:`discharge_from_current` turn a time series into a
+:func:`discharge_from_power` turns a time series into a
 :class:`Discharge`; :meth:`Battery.soc_after_energy` steps a state of charge by one draw
 of energy at a power (same losses), for loops that book energy leg by leg. Comparing a
 discharge with a prediction is :func:`energy.energy_budget` (:mod:`energy.budget`).
@@ -46,7 +46,6 @@ __all__ = [
     "Battery",
     "Discharge",
     "discharge_from_power",
-    "discharge_from_current",
     "S_PER_H",
     "AS_PER_MAH",
 ]
@@ -463,38 +462,3 @@ def discharge_from_power(battery: Battery, time_s: Any, power_w: Any) -> Dischar
     battery = _check_battery(battery)
     t, p = _check_series(time_s, power_w, "power_w")
     return _discharge(battery, t, p, battery.current_a(p))
-
-
-def discharge_from_current(battery: Battery, time_s: Any, current_a: Any) -> Discharge:
-    """Discharge of a battery delivering a sampled battery current.
-
-    The terminal power is ``V I - R I**2``.
-
-    Parameters
-    ----------
-    battery : Battery
-    time_s : array_like, shape (N,)
-        Strictly increasing times (s), N >= 2.
-    current_a : array_like, shape (N,)
-        Battery current (A), positive when discharging.
-
-    Returns
-    -------
-    Discharge
-
-    Raises
-    ------
-    InvalidParameterError
-        ``battery`` not a Battery, shapes differ.
-    DataError
-        Fewer than 2 samples, non-finite values, times not strictly increasing.
-
-    Examples
-    --------
-    >>> d = discharge_from_current(Battery(2.0, 12.0), [0.0, 1800.0], [1.0, 1.0])
-    >>> round(d.final_soc, 12), round(d.total_energy_j / 3600.0, 9)
-    (0.75, 6.0)
-    """
-    battery = _check_battery(battery)
-    t, i = _check_series(time_s, current_a, "current_a")
-    return _discharge(battery, t, battery.terminal_power_w(i), i)

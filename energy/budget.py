@@ -250,8 +250,7 @@ def energy_budget(
     Parameters
     ----------
     discharge : Discharge
-        The driven (actual) series, from :func:`discharge_from_power` or
-        :func:`discharge_from_current`.
+        The driven (actual) series, from :func:`discharge_from_power`.
     predicted_energy_j : float
         Predicted load energy of the whole series (J), >= 0.
     segment_index : array_like of int, shape (N,), optional

@@ -95,7 +95,7 @@ from .ground import GroundParams
 from .power import PowerBreakdown
 from .robot import GRAVITY_MPS2, RobotParams
 
-__all__ = ["EFFECTS", "GroundArrays", "drive_power", "control_power", "battery_side_w"]
+__all__ = ["EFFECTS", "DRIVE_EFFECTS", "GroundArrays", "drive_power", "control_power", "battery_side_w"]
 
 #: Names of every effect of :class:`PhysicsEnergyModel`.
 EFFECTS: tuple[str, ...] = (
@@ -115,6 +115,8 @@ EFFECTS: tuple[str, ...] = (
     "sensor",
     "control",
 )
+#: The effects of driving: :data:`EFFECTS` without the electronics (``sensor``, ``control``).
+DRIVE_EFFECTS: tuple[str, ...] = tuple(e for e in EFFECTS if e not in ("sensor", "control"))
 
 _STANDSTILL_MPS = 1e-6  # |v_side| at or below this is standstill (static friction)
 _STOPPED_MPS = 1e-3  # robot counts as stopped for the control board below this speed

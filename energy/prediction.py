@@ -16,6 +16,7 @@ from terrawatt_base.errors import InvalidParameterError
 from .logs import InteractionLog
 from .metrics import charge_mah
 from .models import CurrentModel
+from .power import trapezoid
 
 __all__ = ["RunPrediction", "predict_runs"]
 
@@ -97,7 +98,7 @@ def predict_runs(model: CurrentModel, logs: Sequence[InteractionLog]) -> list[Ru
         )
         energy = math.nan
         if log.battery_voltage_v is not None:
-            energy = float(np.trapezoid(log.battery_voltage_v * pred.sum(axis=1), log.time_s)) / 3600.0
+            energy = float(trapezoid(log.battery_voltage_v * pred.sum(axis=1), log.time_s)) / 3600.0
         out.append(RunPrediction(
             run=stem if stems.count(stem) == 1 else f"{stem}#{k}",
             ground=str(log.meta.ground_label),

@@ -19,9 +19,7 @@ turn onto the goal segment. So the cost of a state path is exactly the price
 
 The search is the compiled A* of :mod:`planner.kernels.heading` with the heading-free
 lattice's exact cost-to-go as heuristic (a backward Dijkstra bounded by the heading-free
-route's own price, which is a feasible heading-lattice route). ``method="dijkstra"`` builds the
-state graph explicitly and solves it with :func:`scipy.sparse.csgraph.dijkstra`: the reference
-the tests compare the A* with (memory ``16 x`` the heading-free graph: small maps only).
+route's own price, which is a feasible heading-lattice route).
 """
 
 from __future__ import annotations
@@ -31,15 +29,13 @@ import time
 from typing import Any
 
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import dijkstra
 
-from terrawatt_base.errors import InvalidParameterError, UnknownNameError
+from terrawatt_base.errors import InvalidParameterError
 
 from .kernels import astar
 from .kernels.heading import backward_cost_to_go, heading_astar, heading_reset, heading_search
 from .kernels.heading import lower_cost_to_go as lower_kernel
-from .lattice import LATTICE_METHODS, LATTICE_OFFSETS, Lattice, LatticePath
+from .lattice import LATTICE_OFFSETS, Lattice, LatticePath
 from .points import as_points
 
 __all__ = ["heading_shortest_path", "heading_cost_to_go", "lower_cost_to_go", "HeadingWorkspace", "HEADING_COUNT",
@@ -144,7 +140,7 @@ def _index_of(sorted_or_not: np.ndarray, values: np.ndarray) -> np.ndarray:
 
 
 def heading_shortest_path(lattice: Lattice, start_xy_m: tuple[float, float], goal_xy_m: tuple[float, float],
-                          method: str = "astar", *, cost_to_go: np.ndarray | None = None,
+                          *, cost_to_go: np.ndarray | None = None,
                           workspace: HeadingWorkspace | None = None) -> LatticePath:
     """The minimum of drive plus turn energy over ``lattice``'s routes from start to goal.
 
@@ -154,9 +150,6 @@ def heading_shortest_path(lattice: Lattice, start_xy_m: tuple[float, float], goa
         The heading-free lattice whose moves and weights the heading lattice uses.
     start_xy_m, goal_xy_m : (float, float)
         Points on the map (m).
-    method : {"astar", "dijkstra"}
-        The compiled A* (module docstring) or scipy's Dijkstra over the explicit state graph
-        (the reference; memory 16 times the heading-free graph's).
     cost_to_go : ndarray, shape (lattice.n_nodes,), optional
         The A*'s heuristic: a consistent lower bound of each node's heading-free cost to this
         goal (:func:`heading_cost_to_go` computes one, :func:`lower_cost_to_go` keeps one
@@ -173,29 +166,22 @@ def heading_shortest_path(lattice: Lattice, start_xy_m: tuple[float, float], goa
 
     Raises
     ------
-    UnknownNameError
-        Unknown ``method``.
     InvalidParameterError, OutOfBoundsError
         NaN points / points outside the map.
     """
     t0 = time.perf_counter()
-    if method not in LATTICE_METHODS:
-        raise UnknownNameError(f"method must be one of {LATTICE_METHODS!r}, got {method!r}")
     pts = as_points([start_xy_m, goal_xy_m], "start/goal")
     cost = lattice.cost
     cost.check_inside(pts, "start/goal")
     start, goal = pts
     q = _Query(lattice, start, goal)
     best, nodes = _no_move_route(cost, q, start, goal)
-    if workspace is not None and workspace.incumbent is not None and method == "astar":
+    if workspace is not None and workspace.incumbent is not None:
         bound, suffix = _incumbent(lattice, q, workspace.incumbent)
         if bound < best:  # a lattice route of the last answer: the A* need only beat it
             best, nodes = bound, suffix
     if q.src.size and q.dst.size:
-        if method == "astar":
-            total, chain = _astar(lattice, q, start, goal, best, cost_to_go, workspace)
-        else:
-            total, chain = _dijkstra(lattice, q, start, goal, best)
+        total, chain = _astar(lattice, q, start, goal, best, cost_to_go, workspace)
         if chain and total < best:
             best, nodes = total, chain
     if workspace is not None:
@@ -399,47 +385,3 @@ def _state_nodes(lattice: Lattice, states: list[int]) -> list[int]:
     first, h0 = divmod(states[0], HEADING_COUNT)
     delta = LATTICE_OFFSETS[h0, 0] * nj + LATTICE_OFFSETS[h0, 1]
     return [int(first - delta)] + [s // HEADING_COUNT for s in states]
-
-
-def _dijkstra(lattice: Lattice, q: _Query, start: np.ndarray, goal: np.ndarray,
-              best: float) -> tuple[float, list[int]]:
-    """scipy's Dijkstra over the explicit state graph (the reference of the compiled A*)."""
-    n = lattice.n_nodes
-    ns = n * HEADING_COUNT
-    moves = lattice.move_energies_j()  # (n, 16), inf: no move
-    nj = lattice._nj
-    u, k = np.nonzero(np.isfinite(moves))
-    v = u + LATTICE_OFFSETS[k, 0] * nj + LATTICE_OFFSETS[k, 1]
-    h = np.arange(HEADING_COUNT)
-    # arcs (u, h) -> (v, k) for every heading h of u
-    tail = (u[:, None] * HEADING_COUNT + h[None, :]).ravel()
-    head = np.repeat(v * HEADING_COUNT + k, HEADING_COUNT)
-    weight = (q.turn[q.node_row[u][:, None], h[None, :], k[:, None]] + moves[u, k][:, None]).ravel()
-    # the virtual start (state ns) enters (v, k) from a start-joined node; the virtual goal is ns + 1
-    si, sk = np.nonzero(np.isfinite(moves[q.src]))
-    sv = q.src[si] + LATTICE_OFFSETS[sk, 0] * nj + LATTICE_OFFSETS[sk, 1]
-    s_tail = np.full(si.size, ns)
-    s_head = sv * HEADING_COUNT + sk
-    s_weight = q.e_src[si] + q.turn_src[si, sk] + moves[q.src[si], sk]
-    g_tail = (q.dst[:, None] * HEADING_COUNT + h[None, :]).ravel()
-    g_head = np.full(g_tail.size, ns + 1)
-    g_weight = q.exit_cost.ravel()
-    rows = np.concatenate([tail, s_tail, g_tail])
-    cols = np.concatenate([head, s_head, g_head])
-    w = np.concatenate([weight, s_weight, g_weight])
-    # scipy keeps the smallest of duplicate (row, col) entries only via an explicit reduction
-    order = np.lexsort((w, cols, rows))
-    rows, cols, w = rows[order], cols[order], w[order]
-    first = np.concatenate([[True], (np.diff(rows) != 0) | (np.diff(cols) != 0)])
-    rows, cols, w = rows[first], cols[first], w[first]
-    graph = csr_matrix((w, (rows, cols)), shape=(ns + 2, ns + 2))
-    dist, pred = dijkstra(graph, directed=True, indices=ns, return_predecessors=True)
-    total = float(dist[ns + 1])
-    if not (total < best):
-        return math.inf, []
-    states = []
-    s = int(pred[ns + 1])
-    while s != ns and s >= 0:
-        states.append(s)
-        s = int(pred[s])
-    return total, _state_nodes(lattice, states[::-1])

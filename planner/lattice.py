@@ -24,12 +24,11 @@ changed energy (:attr:`Lattice.changed_moves`, ids ``node * 16 + k`` with ``k`` 
 :data:`LATTICE_OFFSETS`), so an incremental search (:class:`planner.replan.IncrementalPlanner`)
 repairs only what they touch.
 
-Two exact solvers give the same optimum: ``method="astar"`` (default), a compiled A* that
-stops once no open node can beat the best route found, with the heuristic
-``min_energy_per_metre_j * |node - goal|`` (energy) or ``|node - goal|`` (length) — a lower
-bound of any route's rest, and consistent, since every move costs at least that per metre
-of its length; and ``method="dijkstra"``, :func:`scipy.sparse.csgraph.dijkstra` over the
-whole graph (the reference the tests compare A* with).
+:meth:`Lattice.shortest_path` is a compiled A* that stops once no open node can beat the best
+route found, with the heuristic ``min_energy_per_metre_j * |node - goal|`` (energy) or
+``|node - goal|`` (length) — a lower bound of any route's rest, and consistent, since every
+move costs at least that per metre of its length. :meth:`Lattice.paths_from` labels the whole
+graph from one start with :func:`scipy.sparse.csgraph.dijkstra` (one search for many goals).
 """
 
 from __future__ import annotations
@@ -47,20 +46,17 @@ from terrawatt_base.checks import check_int
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from .edge_cost import EnergyCost
-from .kernels import astar, lattice_reweight, lattice_weights
+from .kernels import UNIT_HALF, astar, lattice_reweight, lattice_weights
 from .kernels.graph import reweight_band
 from .points import as_points
 
-__all__ = ["Lattice", "LatticePath", "LATTICE_OFFSETS", "LATTICE_WEIGHTS", "LATTICE_METHODS"]
+__all__ = ["Lattice", "LatticePath", "LATTICE_OFFSETS", "LATTICE_WEIGHTS"]
 
-#: The 8 (row, col) node offsets of one half-plane; with their negatives, the 16 lattice moves.
-_HALF = np.array([(0, 1), (1, 0), (1, 1), (1, -1), (1, 2), (2, 1), (2, -1), (1, -2)], dtype=np.int64)
-#: All 16 (row, col) node offsets: ``LATTICE_OFFSETS[k + 8] == -LATTICE_OFFSETS[k]``.
-LATTICE_OFFSETS = np.concatenate([_HALF, -_HALF])
+#: All 16 (row, col) node offsets: the 8 half-plane moves (:data:`~planner.kernels.UNIT_HALF`) and their
+#: negatives, ``LATTICE_OFFSETS[k + 8] == -LATTICE_OFFSETS[k]``.
+LATTICE_OFFSETS = np.concatenate([UNIT_HALF, -UNIT_HALF])
 #: Edge weights a lattice can search with.
 LATTICE_WEIGHTS = ("energy", "length")
-#: Exact shortest-path solvers of :meth:`Lattice.shortest_path`.
-LATTICE_METHODS = ("astar", "dijkstra")
 
 
 @dataclass(frozen=True)
@@ -163,7 +159,7 @@ class Lattice:
         self._ni, self._nj = ni, nj
         self._offset = off
         arr = cost.arrays
-        w = lattice_weights(arr.cells, arr.grade_table, arr.geo, s, off, ni, nj, _HALF)
+        w = lattice_weights(arr.cells, arr.grade_table, arr.geo, s, off, ni, nj, UNIT_HALF)
         self._set_structure(w)
         xc, yc = cost.terrain.cell_centres()
         self._node_x = xc[self.node_cols]
@@ -292,7 +288,7 @@ class Lattice:
             return new
         sat = np.zeros((changed.shape[0] + 1, changed.shape[1] + 1), dtype=np.int32)
         np.cumsum(np.cumsum(changed, axis=0, dtype=np.int32), axis=1, out=sat[1:, 1:])
-        band = reweight_band(sat, self.stride_cells, self._offset, self._ni, self._nj, _HALF)
+        band = reweight_band(sat, self.stride_cells, self._offset, self._ni, self._nj, UNIT_HALF)
         if band is None:  # no move reaches a changed cell
             new.edges_computed = 0
             new.changed_moves = np.empty(0, dtype=np.int64)
@@ -307,11 +303,11 @@ class Lattice:
         arr = cost.arrays
         recomputed, flips, new.changed_moves = lattice_reweight(
             arr.cells, arr.grade_table, arr.geo, self.stride_cells, self._offset, self._ni, self._nj,
-            _HALF, sat, self._pos, values, band, lo,
+            UNIT_HALF, sat, self._pos, values, band, lo,
         )
         if int(flips.sum()):
             w = lattice_weights(arr.cells, arr.grade_table, arr.geo, self.stride_cells, self._offset,
-                                self._ni, self._nj, _HALF)
+                                self._ni, self._nj, UNIT_HALF)
             new._set_structure(w)
             new.edges_computed = int(w.size - np.count_nonzero(self._out_of_grid_mask()))
         else:
@@ -491,7 +487,6 @@ class Lattice:
         start_xy_m: tuple[float, float],
         goal_xy_m: tuple[float, float],
         weight: str = "energy",
-        method: str = "astar",
     ) -> LatticePath:
         """Best lattice route from start to goal.
 
@@ -501,8 +496,6 @@ class Lattice:
             Points on the map (m).
         weight : {"energy", "length"}
             Minimise drive energy (J) or length (m).
-        method : {"astar", "dijkstra"}
-            Exact solver (module docstring); both return the same optimum.
 
         Returns
         -------
@@ -513,15 +506,13 @@ class Lattice:
         Raises
         ------
         UnknownNameError
-            Unknown ``weight`` or ``method``.
+            Unknown ``weight``.
         InvalidParameterError, OutOfBoundsError
             NaN points / points outside the map.
         """
         t0 = time.perf_counter()
         if weight not in LATTICE_WEIGHTS:
             raise UnknownNameError(f"weight must be one of {LATTICE_WEIGHTS!r}, got {weight!r}")
-        if method not in LATTICE_METHODS:
-            raise UnknownNameError(f"method must be one of {LATTICE_METHODS!r}, got {method!r}")
         pts = as_points([start_xy_m, goal_xy_m], "start/goal")
         self.cost.check_inside(pts, "start/goal")
         start, goal = pts
@@ -533,7 +524,7 @@ class Lattice:
             e_direct = float(np.hypot(*(goal - start))) if math.isfinite(e_direct) else math.inf
         best = e_direct
         best_nodes: list[int] = []
-        if src.size and dst.size and method == "astar":
+        if src.size and dst.size:
             h_per_m = cost.min_energy_per_metre_j if weight == "energy" else 1.0
             total, last, pred = astar(
                 self._indptr, self._indices, self._weights(weight), self._node_x, self._node_y, self._nj,
@@ -547,8 +538,6 @@ class Lattice:
                     chain.append(node)
                     node = int(pred[node])
                 best_nodes = chain[::-1]
-        elif src.size and dst.size:
-            best, best_nodes = self._best_exit(*self._from_source(src, e_src, weight), dst, e_dst, best)
         path = self.path_via(start, best_nodes, goal, best, weight)
         return dataclasses.replace(path, solve_time_s=time.perf_counter() - t0)
 

@@ -14,7 +14,7 @@ from .geotiff import check_fill_method, read_geotiff
 from .landcover import LandcoverClasses, ground_classes_from_landcover, read_landcover_classes
 from .terrain_map import TerrainMap
 
-__all__ = ["read_map", "read_map_with_options", "MAP_SUFFIXES", "MAP_OPTIONS"]
+__all__ = ["read_map", "read_map_with_options", "MAP_SUFFIXES"]
 
 #: The suffixes :func:`read_map` reads (case-insensitive).
 MAP_SUFFIXES = (".npz", ".tif", ".tiff")
@@ -95,10 +95,6 @@ def read_map(
         f"cannot read a map from {str(p)!r}: its suffix {p.suffix!r} is not one of "
         f"{', '.join(repr(s) for s in MAP_SUFFIXES)}"
     )
-
-
-#: The options of :func:`read_map_with_options`, as its messages name them by default.
-MAP_OPTIONS = ("fill_nodata", "reproject_to", "cell_size_m", "landcover", "landcover_classes")
 
 
 def read_map_with_options(

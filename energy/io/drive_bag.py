@@ -36,7 +36,6 @@ from .rosbag import MAX_CLOCK_OFFSET_S
 
 __all__ = [
     "DRIVE_BAG_SUFFIXES",
-    "NAVSAT_STATUS",
     "NavSatTrack",
     "drive_bag_time_zeros_ns",
     "write_drive_bag",
@@ -45,8 +44,6 @@ __all__ = [
 
 #: What :func:`write_drive_bag` writes, by the target's suffix.
 DRIVE_BAG_SUFFIXES = {".mcap": "ROS 2 MCAP file", ".bag": "ROS 1 bag"}
-#: ``sensor_msgs/NavSatStatus.status`` values (ROS 2 adds ``-2``, unknown).
-NAVSAT_STATUS = {-2: "unknown", -1: "no fix", 0: "fix", 1: "SBAS fix", 2: "GBAS fix"}
 _NS = 1_000_000_000
 _NAVSAT_TYPES = ("sensor_msgs/msg/NavSatFix",)
 
@@ -65,7 +62,7 @@ class NavSatTrack:
     alt_m : ndarray, shape (K,)
         Altitude above the WGS 84 ellipsoid (m); NaN when not known.
     status : ndarray of int8, shape (K,)
-        ``NavSatStatus.status`` (:data:`NAVSAT_STATUS`: -1 no fix, 0 fix, 1 SBAS, 2 GBAS).
+        ``NavSatStatus.status`` (-2 unknown, -1 no fix, 0 fix, 1 SBAS, 2 GBAS).
     start_time_ns : int
         Absolute time (ns since the epoch) of ``time_s == 0``.
     topic : str

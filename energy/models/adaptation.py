@@ -90,6 +90,7 @@ from terrawatt_base.checks import check_bool, check_choice, check_int, check_rea
 from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog
+from ..power import trapezoid as _trapezoid
 from .base import CurrentModel, ModelRecord, TrainedOn, check_logs, log_currents
 from .forecast import CurrentForecast
 from .loading import model_class
@@ -120,8 +121,6 @@ NOISE_PRIOR_SAMPLES = 10.0
 MIN_ADAPT_SECONDS = 5.0
 #: Least number of drive samples (both streams overlapping) an adaptation accepts.
 MIN_ADAPT_SAMPLES = 10
-
-_trapezoid = getattr(np, "trapezoid", None) or np.trapz
 
 
 def regime_basis(log: InteractionLog, side: int, turn_scale_radps: float) -> np.ndarray:

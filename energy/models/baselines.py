@@ -25,9 +25,11 @@ from terrain.terrain_map import TerrainMap
 from terrawatt_base.checks import check_bool, real_array
 from terrawatt_base.errors import DataError, InvalidParameterError, UnknownNameError
 
+from ..drivetrain import DRIVE_EFFECTS
 from ..logs import InteractionLog, at_rest, log_slope_rad, rest_samples
 from ..params import GroundParams, RobotParams, ground_preset, robot_preset
-from ..physics import EFFECTS, PhysicsEnergyModel
+from ..physics import PhysicsEnergyModel
+from ..power import trapezoid as _trapezoid
 from .base import CurrentModel, log_currents
 
 __all__ = [
@@ -38,8 +40,6 @@ __all__ = [
     "DEFAULT_FIT_PARAMETERS",
     "ground_slots",
 ]
-
-_trapezoid = getattr(np, "trapezoid", None) or np.trapz
 
 
 def _time_mean(logs: list[InteractionLog]) -> np.ndarray:
@@ -141,7 +141,6 @@ PHYSICS_FIT_PARAMETERS: dict[str, tuple[float, float]] = {
     "rest_current_a": (0.0, 20.0),
     "track_width_multiplier": (1.0, 5.0),
 }
-_DRIVE_EFFECTS = tuple(e for e in EFFECTS if e not in ("sensor", "control"))
 
 
 def _robot_to_plain(robot: str | RobotParams) -> Any:
@@ -314,7 +313,7 @@ class PhysicsCurrentModel(CurrentModel):
         if len(set(names)) != len(names):
             raise InvalidParameterError(f"fit_parameters has duplicates: {names!r}")
         check_bool("clip_negative", self.clip_negative)
-        effects = _DRIVE_EFFECTS if self.effects is None else tuple(self.effects)
+        effects = DRIVE_EFFECTS if self.effects is None else tuple(self.effects)
         model = PhysicsEnergyModel(robot, effects)
         return robot, ground, names, model
 

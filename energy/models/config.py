@@ -11,6 +11,7 @@ from terrawatt_base.checks import check_bool, check_choice, check_int, check_rea
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from ..features import DEFAULT_BAND_HZ, DEFAULT_T_INTERVAL_S, SPECTRUM_SCALINGS, check_band_hz
+from ..logs import RESAMPLE_METHODS
 from ..params import ROBOT_PRESETS
 from .net import CurrentNetConfig
 from .training import TrainConfig
@@ -25,8 +26,6 @@ __all__ = [
 
 #: Whole-run vibration features of :class:`EstimatorConfig`.
 RUN_FEATURES = ("bins", "bands", "none")
-#: Resampling methods of :class:`EstimatorConfig` (those of :meth:`InteractionLog.resample`).
-RESAMPLE_METHODS = ("linear", "previous")
 
 
 @dataclass(frozen=True)

@@ -32,21 +32,16 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import norm, t as student_t
+from scipy.stats import norm
+from scipy.stats import t as student_t
 
 from terrawatt_base.checks import check_real
 from terrawatt_base.errors import InvalidParameterError
 
-__all__ = ["CurrentForecast", "ChargeForecast", "normal_quantile", "predictive_quantile", "central_level",
+from ..power import trapezoid as _trapezoid
+
+__all__ = ["CurrentForecast", "ChargeForecast", "predictive_quantile", "central_level",
            "check_dof", "combine_ground_sds"]
-
-_trapezoid = getattr(np, "trapezoid", None) or np.trapz
-
-
-def normal_quantile(q: float) -> float:
-    """``z`` with ``P(Z <= z) = q`` for a standard normal ``Z`` (``q`` in (0, 1))."""
-    q = check_real("q", q, low=0.0, high=1.0, low_inclusive=False, high_inclusive=False)
-    return float(norm.ppf(q))
 
 
 def check_dof(dof: float, name: str = "dof") -> float:

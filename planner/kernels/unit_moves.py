@@ -36,7 +36,7 @@ __all__ = [
     "unit_lattice_weights_parallel",
 ]
 
-#: The 8 half-plane (row, col) moves, in the order of ``planner.lattice.LATTICE_OFFSETS[:8]``.
+#: The 8 half-plane (row, col) moves of the lattice at every stride: ``planner.lattice.LATTICE_OFFSETS[:8]``.
 UNIT_HALF = np.array([(0, 1), (1, 0), (1, 1), (1, -1), (1, 2), (2, 1), (2, -1), (1, -2)], dtype=np.int64)
 
 # Cells each half-plane move crosses from node (i, j): (row offset, col offset, fraction of its length).

@@ -8,36 +8,34 @@ import numpy as np
 import pytest
 
 from energy import Battery, discharge_from_power, energy_budget
-from energy.battery import discharge_from_current
 from terrain import DataError, InvalidParameterError
 
 
 def test_constant_current_soc_closed_form():
-    # SoC = initial - I t / (3600 C), exactly, at every sample.
+    # No losses: a constant power P draws I = P / V and SoC = initial - I t / (3600 C) at every sample.
     b = Battery(capacity_ah=7.5, voltage_v=24.0, min_reserve_pct=10.0, initial_soc=0.9)
     t = np.linspace(0.0, 1234.5, 97)
     current = 3.3
-    d = discharge_from_current(b, t, np.full_like(t, current))
+    d = discharge_from_power(b, t, np.full_like(t, 24.0 * current))
     np.testing.assert_allclose(d.soc, 0.9 - current * t / (3600.0 * 7.5), rtol=0, atol=1e-13)
     np.testing.assert_allclose(d.charge_mah, current * t / 3.6, rtol=1e-13)
     np.testing.assert_allclose(d.energy_j, 24.0 * current * t, rtol=1e-13)
     assert d.reserve_crossed_index is None and not d.reserve_crossed
 
 
-def test_constant_power_equals_constant_current_without_resistance():
+def test_constant_power_draws_p_over_v_without_resistance():
     b = Battery(capacity_ah=2.0, voltage_v=12.0)
     t = np.linspace(0.0, 600.0, 11)
     dp = discharge_from_power(b, t, np.full(11, 24.0))
-    di = discharge_from_current(b, t, np.full(11, 2.0))
-    np.testing.assert_allclose(dp.soc, di.soc, atol=1e-15)
     np.testing.assert_allclose(dp.current_a, 2.0)
+    np.testing.assert_allclose(dp.soc, 1.0 - 2.0 * t / (3600.0 * 2.0), atol=1e-15)
 
 
 def test_reserve_crossing_time_closed_form():
     # 1 Ah, start full, reserve 25 %, 2 A: crossing at (1 - 0.25) * 3600 / 2 = 1350 s.
     b = Battery(capacity_ah=1.0, voltage_v=12.0, min_reserve_pct=25.0)
     t = np.arange(0.0, 2001.0, 7.0)
-    d = discharge_from_current(b, t, np.full(t.size, 2.0))
+    d = discharge_from_power(b, t, np.full(t.size, 24.0))  # 2 A
     assert d.reserve_crossed_time_s == pytest.approx(1350.0, abs=1e-9)
     k = d.reserve_crossed_index
     assert d.soc[k] < 0.25 <= d.soc[k - 1]
@@ -50,7 +48,7 @@ def test_reserve_crossing_time_closed_form():
 
 def test_start_below_reserve_crosses_at_first_sample():
     b = Battery(capacity_ah=1.0, voltage_v=12.0, min_reserve_pct=50.0, initial_soc=0.4)
-    d = discharge_from_current(b, [0.0, 1.0, 2.0], [0.0, 0.0, 0.0])
+    d = discharge_from_power(b, [0.0, 1.0, 2.0], [0.0, 0.0, 0.0])
     assert d.reserve_crossed_index == 0 and d.reserve_crossed_time_s == 0.0
 
 
@@ -79,7 +77,7 @@ def test_internal_resistance_roundtrip_and_extra_charge():
 def test_peukert_depletes_faster_above_reference_current():
     # Reference current 1 A (20 Ah over 20 h); at 4 A with k = 1.5, I_eff = 4 * 4**0.5 = 8 A.
     b = Battery(capacity_ah=20.0, voltage_v=12.0, peukert_exponent=1.5)
-    d = discharge_from_current(b, [0.0, 3600.0], [4.0, 4.0])
+    d = discharge_from_power(b, [0.0, 3600.0], [48.0, 48.0])  # 4 A
     assert d.final_soc == pytest.approx(1.0 - 8.0 / 20.0, abs=1e-12)
     assert d.total_charge_mah == pytest.approx(4000.0)
 
@@ -113,7 +111,7 @@ def test_series_validation():
     with pytest.raises(DataError, match="at least 2 samples"):
         discharge_from_power(b, [0.0], [1.0])
     with pytest.raises(InvalidParameterError, match="must have the shape of time_s"):
-        discharge_from_current(b, [0.0, 1.0], [1.0])
+        discharge_from_power(b, [0.0, 1.0], [1.0])
     with pytest.raises(DataError, match="power_w must be finite"):
         discharge_from_power(b, [0.0, 1.0], [1.0, math.nan])
     with pytest.raises(InvalidParameterError, match="battery must be a Battery"):

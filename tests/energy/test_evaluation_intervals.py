@@ -4,7 +4,7 @@ import pytest
 from interval_samples import fit_two_ground_estimator
 
 from energy.evaluation.intervals import IntervalRecord, charge_record, coverage, plot_reliability
-from energy.models.forecast import normal_quantile
+from energy.models.forecast import predictive_quantile
 
 
 @pytest.fixture(scope="module")
@@ -13,7 +13,7 @@ def two_ground_estimator():
 
 
 def test_coverage_counts_records_inside_each_central_interval():
-    z90 = normal_quantile(0.9)
+    z90 = predictive_quantile(0.9)
     recs = [IntervalRecord("g", "x", f"r{i}", true_as=10.0 + z, mean_as=10.0, sd_as=1.0)
             for i, z in enumerate([0.1, -0.5, 1.0, -z90 + 0.01, 3.0])]
     cov = coverage(recs)["g"]

@@ -9,7 +9,6 @@ from energy.models.forecast import (
     CurrentForecast,
     central_level,
     combine_ground_sds,
-    normal_quantile,
     predictive_quantile,
 )
 from terrawatt_base.errors import InvalidParameterError
@@ -29,7 +28,7 @@ def test_run_spread_adds_linearly_and_sample_spread_in_quadrature():
     assert qw.sd_as[0] == pytest.approx(np.sqrt(np.sum(dt**2)))  # ~ 1 A * sqrt(10 s * 0.1 s): averages out
     assert qw.sd_as[0] < 0.15 * 10.0  # the same 1 A shared by the run would give 10 A s
     lo, hi = q.interval(0.8)
-    assert (hi - q.total_mean_as) == pytest.approx(normal_quantile(0.9) * 8.0)
+    assert (hi - q.total_mean_as) == pytest.approx(predictive_quantile(0.9) * 8.0)
     assert q.quantile(0.5) == pytest.approx(40.0)
 
 
@@ -64,7 +63,7 @@ def test_a_forecast_with_few_degrees_of_freedom_has_heavier_tails_and_is_judged_
     assert h.quantile(0.5) == pytest.approx(g.quantile(0.5))
     assert h.quantile(0.95) - h.total_mean_as == pytest.approx(predictive_quantile(0.95, 3.0) * h.total_sd_as)
     assert h.quantile(0.95) > g.quantile(0.95) and h.interval(0.8)[0] < g.interval(0.8)[0]
-    assert predictive_quantile(0.9, 1e9) == pytest.approx(normal_quantile(0.9), abs=1e-6)
+    assert predictive_quantile(0.9, 1e9) == pytest.approx(predictive_quantile(0.9), abs=1e-6)
     # drawn from the Student-t itself, its own central intervals hold at their nominal level
     z = np.random.default_rng(0).standard_t(3.0, 20000)
     need = central_level(z, 3.0)

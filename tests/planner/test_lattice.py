@@ -141,15 +141,15 @@ def test_bad_arguments():
 
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("weight", ["energy", "length"])
-def test_astar_finds_the_same_optimum_as_scipy_dijkstra(seed, weight):
+def test_astar_finds_the_same_optimum_as_the_scipy_dijkstra_of_paths_from(seed, weight):
     rng = np.random.default_rng(seed)
     elevation = np.cumsum(rng.normal(0.0, 0.04, (30, 40)), axis=1)  # rough: uphill != downhill
     obstacle = rng.random((30, 40)) < 0.1
     obstacle[:3, :3] = obstacle[-3:, -3:] = False
     lat = Lattice(_cost(elevation, obstacle=obstacle))
     for start, goal in (((1.5, 1.5), (38.5, 28.5)), ((38.5, 28.5), (1.5, 1.5)), ((1.5, 1.5), (2.5, 1.5))):
-        a = lat.shortest_path(start, goal, weight, method="astar")
-        d = lat.shortest_path(start, goal, weight, method="dijkstra")
+        a = lat.shortest_path(start, goal, weight)
+        (d,) = lat.paths_from(start, [goal], weight)
         assert a.found and d.found
         assert a.objective == pytest.approx(d.objective, rel=1e-12)
 
@@ -158,8 +158,5 @@ def test_astar_and_dijkstra_agree_when_the_goal_is_walled_off():
     obstacle = np.zeros((20, 20), bool)
     obstacle[:, 10] = True  # a closed wall
     lat = Lattice(_cost(np.zeros((20, 20)), obstacle=obstacle))
-    for method in ("astar", "dijkstra"):
-        path = lat.shortest_path((2.5, 2.5), (17.5, 17.5), method=method)
+    for path in (lat.shortest_path((2.5, 2.5), (17.5, 17.5)), *lat.paths_from((2.5, 2.5), [(17.5, 17.5)])):
         assert not path.found and math.isinf(path.objective)
-    with pytest.raises(UnknownNameError, match="method must be one of"):
-        lat.shortest_path((2.5, 2.5), (5.5, 5.5), method="bfs")
