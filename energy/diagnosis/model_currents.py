@@ -12,11 +12,12 @@ import numpy as np
 
 from terrawatt_base.errors import DataError, InvalidParameterError
 
+from ..drivetrain import DRIVE_EFFECTS
 from ..ground import GroundParams
 from ..logs import REST_OMEGA_RADPS, REST_SPEED_MPS, InteractionLog, log_slope_rad, rest_samples
 from ..models.baselines import PhysicsCurrentModel, ground_slots
 from ..params import ground_preset, robot_params
-from ..physics import EFFECTS, PhysicsEnergyModel
+from ..physics import PhysicsEnergyModel
 from ..power import PowerBreakdown
 from ..robot import RobotParams
 
@@ -24,8 +25,6 @@ __all__ = ["DRIVE_EFFECTS", "TABLE_NODES", "PhysicsBasis", "ParameterTable", "ph
            "basis_breakdown", "side_speeds_mps", "standing_samples", "starting_samples", "motoring_currents_a", "unclipped_prediction",
            "clamps_at_zero"]
 
-#: Physics effects that change the motor current (the electronics draw no motor current).
-DRIVE_EFFECTS: tuple[str, ...] = tuple(e for e in EFFECTS if e not in ("sensor", "control"))
 #: Evenly spaced nodes of a :class:`ParameterTable` over a parameter's bounds (its nominal value is added;
 #: computed only where a fit needs them).
 TABLE_NODES = 129

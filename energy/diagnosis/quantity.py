@@ -7,13 +7,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..battery import AS_PER_MAH
 from ..logs import InteractionLog
 from ..metrics import charge_mah
 
 __all__ = ["AS_PER_MAH", "Quantity", "CURRENT", "POWER", "QUANTITIES"]
 
-#: Ampere-seconds in one milliampere-hour.
-AS_PER_MAH = 3.6
 
 
 @dataclass(frozen=True)

@@ -57,6 +57,7 @@ from terrawatt_base.plot_target import new_figure
 from ..commands import CommandProfile
 from ..logs import InteractionLog
 from ..models.base import log_currents
+from ..robot import GRAVITY_MPS2
 from .noise import ResidualNoise
 from .selection import SIGNIFICANT_SHRINK_PCT
 
@@ -88,7 +89,6 @@ _HOLD_S = 20.0  # a manoeuvre's hold alone (two in a row: half of it each; its l
 _SURGE_LOW = 0.3  # surges swing between this share of the stop-and-go speed and that speed
 _ACCEL_MPS2 = 0.5  # command ramps: gentle, within any ground robot's limits
 _ALPHA_RADPS2 = 1.0
-_GRAVITY_MPS2 = 9.80665
 
 
 @dataclass(frozen=True)
@@ -465,7 +465,7 @@ def drive_log(profile: CommandProfile, like: InteractionLog) -> InteractionLog:
     if like.ground is not None and len(like.ground):
         labels, counts = np.unique(np.asarray(like.ground, dtype=str), return_counts=True)
         ground = np.full(t.size, labels[np.argmax(counts)])
-    return InteractionLog(t, profile.v_mps, profile.omega_radps, None, None, ta, np.full(ta.size, _GRAVITY_MPS2),
+    return InteractionLog(t, profile.v_mps, profile.omega_radps, None, None, ta, np.full(ta.size, GRAVITY_MPS2),
                           pose_xyh=pose, ground=ground, meta=replace(like.meta, source="separating drive", notes=""),
                           gyro_z_radps=np.interp(ta, t, profile.omega_radps))
 
