@@ -16,6 +16,13 @@ cost's tables, on the map's ground and slope under every pose (the rule of
 :func:`energy.profiles.terrain_along`, which the truth simulator uses too), and
 :func:`segment_forecasts_j` splits it into the turn and the straight of each route segment,
 the way :func:`planner.simulate_mission` books them.
+
+The interval is read from the priced map's own tables (:class:`~planner.CostTables`): each
+segment walked cell by cell adds its horizontal length times its row's spread at the cell's
+grade in the direction of travel (linear interpolation, as the mean tables are read), each turn
+its row's turn spread; per ground the spreads add linearly, the grounds combine by
+root-sum-of-squares, and the tail is the Student-t of the least degrees of freedom crossed
+(:mod:`planner.risk` says why).
 """
 
 from __future__ import annotations
@@ -27,14 +34,16 @@ from typing import Any
 import numpy as np
 
 from energy import CommandProfile, drive_profile
+from energy.models.forecast import combine_ground_sds
 from energy.profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, terrain_along
 from terrawatt_base.checks import check_bool, check_choice, check_instance, check_real
 from terrawatt_base.errors import InvalidParameterError
 
 from .edge_cost import EnergyCost
 from .points import as_points
-from .risk import RouteEnergyInterval, route_energy_interval
+from .risk import RouteEnergyInterval
 from .route import Route
+from .tables import CostTables
 
 __all__ = ["PRICE_HOWS", "price_route", "profile_forecast_w", "segment_forecasts_j", "route_forecast_j"]
 
@@ -149,7 +158,7 @@ def price_route(cost: EnergyCost, route: Route | Any, *, how: str = "edges", int
     :meth:`planner.CostSpec.build` with the physics model (:func:`route_forecast_j`), or the learned
     model of :meth:`planner.LearnedEnergyModel.energy_cost`
     (:meth:`~planner.LearnedEnergyModel.predict_route_energy_j`). The spread is the edges'
-    run-level spread per ground (:func:`planner.risk.route_energy_interval`) either way: the
+    run-level spread per ground read from the map's tables (module docstring) either way: the
     profile moves the mean, not how much a ground's runs differ.
 
     Parameters
@@ -166,8 +175,9 @@ def price_route(cost: EnergyCost, route: Route | Any, *, how: str = "edges", int
     speed_mps : float, optional
         ``how="profile"``: the driving speed (default the cost's planning speed).
     segment_cache : dict, optional
-        As :func:`planner.risk.route_energy_interval`: many routes of one cost that share
-        segments walk each once.
+        Per-segment spreads already walked, keyed by ``(x0, y0, x1, y1)``, filled as segments
+        are walked: many routes of one cost that share segments (e.g. the legs of one
+        shortest-path tree, :mod:`planner.tours.pricing`) walk each segment once. Only for one cost.
 
     Returns
     -------
@@ -199,12 +209,23 @@ def price_route(cost: EnergyCost, route: Route | Any, *, how: str = "edges", int
     if pts.shape[0] < 2:
         raise InvalidParameterError(f"route needs at least 2 waypoints, got {pts.shape[0]}")
     with_interval = cost.has_interval if interval is None else check_bool("interval", interval)
+    tables = cost.tables
+    if with_interval and tables.grade_sd_table_j_per_m is None:
+        raise InvalidParameterError(
+            f"the cost ({cost!r}) carries no standard-deviation tables: its energy model gives no interval "
+            "(plan with a current model whose gives_interval is True)", parameter="interval")
+    mean = cost.path_energy_j(pts)
+    if not math.isfinite(mean):
+        raise InvalidParameterError("the route crosses a blocked cell or an undrivable grade: it has no price")
     if with_interval:
-        price = route_energy_interval(cost, pts, segment_cache=segment_cache)
+        angles, _ = cost.turn_energies_j(pts)
+        per_row = _spreads_by_row(cost, tables, pts, angles, segment_cache)
+        spread = np.flatnonzero(per_row > 0).tolist()
+        crossed = {tables.ground_labels[i]: float(per_row[i]) for i in spread}
+        dofs = {tables.ground_labels[i]: tables.spread_dof[i] for i in spread}
+        price = RouteEnergyInterval(mean, combine_ground_sds(per_row), crossed, min(dofs.values(), default=math.inf),
+                                    dofs)
     else:
-        mean = cost.path_energy_j(pts)
-        if not math.isfinite(mean):
-            raise InvalidParameterError("the route crosses a blocked cell or an undrivable grade: it has no price")
         price = RouteEnergyInterval(mean, 0.0, {})
     if how == "profile":
         speed = cost.speed_mps if speed_mps is None else check_real("speed_mps", speed_mps, low=0.0,
@@ -215,3 +236,45 @@ def price_route(cost: EnergyCost, route: Route | Any, *, how: str = "edges", int
             mean = route_forecast_j(cost, pts, speed_mps=speed)
         price = dataclasses.replace(price, mean_j=mean)
     return price
+
+
+def _spreads_by_row(cost: EnergyCost, tables: CostTables, pts: np.ndarray, angles: np.ndarray,
+                    segment_cache: dict | None) -> np.ndarray:
+    """The linear spread sums (J) per table row of driving the polyline ``pts``: its segments, then its turns."""
+    sd_table = tables.grade_sd_table_j_per_m
+    n_rows = sd_table.shape[0]
+    per_row = np.zeros(n_rows)
+    for a, b in zip(pts[:-1].tolist(), pts[1:].tolist()):
+        key = (a[0], a[1], b[0], b[1])
+        seg = None if segment_cache is None else segment_cache.get(key)
+        if seg is None:
+            seg = _segment_spreads(cost, sd_table, a, b)
+            if segment_cache is not None:
+                segment_cache[key] = seg
+        per_row += seg
+    if np.any(angles > 0):
+        r, c = cost.terrain.rowcol(pts[:, 0], pts[:, 1])
+        row = cost.ground_rows[r, c]
+        turn_table = tables.turn_sd_table_j
+        grid = np.linspace(0.0, math.pi, turn_table.shape[1])
+        turn_sd = np.array([np.interp(ang, grid, turn_table[k]) for ang, k in zip(angles, row)])
+        per_row += np.bincount(row, weights=turn_sd, minlength=n_rows)
+    return per_row
+
+
+def _segment_spreads(cost: EnergyCost, sd_table: np.ndarray, a: list[float], b: list[float]) -> np.ndarray:
+    """The linear spread sums (J) per table row of driving the straight segment ``a -> b`` (cell by cell)."""
+    n_rows, n_grade = sd_table.shape
+    length = math.hypot(b[0] - a[0], b[1] - a[1])
+    if length == 0.0:
+        return np.zeros(n_rows)
+    step = 2.0 * cost.grade_max / (n_grade - 1)
+    gx, gy = cost.terrain["grad_x"], cost.terrain["grad_y"]
+    rows, cols, pieces = cost.terrain.segment_cells(tuple(a), tuple(b))
+    grade = (gx[rows, cols] * (b[0] - a[0]) + gy[rows, cols] * (b[1] - a[1])) / length
+    f = np.clip((grade + cost.grade_max) / step, 0.0, n_grade - 1.0)
+    i0 = np.minimum(np.floor(f).astype(np.int64), n_grade - 2)
+    w = f - i0
+    row = cost.ground_rows[rows, cols]
+    sd = sd_table[row, i0] * (1.0 - w) + sd_table[row, i0 + 1] * w
+    return np.bincount(row, weights=np.asarray(pieces) * sd, minlength=n_rows)

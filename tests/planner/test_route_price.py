@@ -64,11 +64,9 @@ def test_price_route_reads_the_edges_or_the_profile_of_the_model_that_priced_the
 
 
 def test_price_route_carries_the_interval_where_the_map_has_one(corridor_map, known_model):
-    from planner.risk import route_energy_interval
-
     cost = CostSpec(model=known_model()).build(corridor_map)
     wp = [[2.5, 7.5], [2.5, 11.5], [27.5, 11.5]]  # up the hub, along the loam corridor
-    assert price_route(cost, wp) == route_energy_interval(cost, wp) and price_route(cost, wp).sd_j > 0
+    assert price_route(cost, wp) == price_route(cost, wp, interval=True) and price_route(cost, wp).sd_j > 0
     point = price_route(cost, wp, interval=False)
     assert point.mean_j == price_route(cost, wp).mean_j and point.sd_j == 0.0
 
