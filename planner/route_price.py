@@ -43,9 +43,8 @@ from .edge_cost import EnergyCost
 from .points import as_points
 from .risk import RouteEnergyInterval
 from .route import Route
-from .tables import CostTables
 
-__all__ = ["PRICE_HOWS", "price_route", "profile_forecast_w", "segment_forecasts_j", "route_forecast_j"]
+__all__ = ["PRICE_HOWS", "price_route", "profile_forecast_w", "segment_forecasts_j"]
 
 #: How a route is priced: its edge costs, or the whole drive profile.
 PRICE_HOWS = ("edges", "profile")
@@ -115,30 +114,6 @@ def segment_forecasts_j(time_s: np.ndarray, power_w: np.ndarray, turn_s: np.ndar
     return parts[0::2], parts[1::2]
 
 
-def route_forecast_j(cost: EnergyCost, route: Route | Any, *, speed_mps: float | None = None,
-                     accel_mps2: float = DEFAULT_ACCEL_MPS2, turn_rate_radps: float | None = None,
-                     yaw_accel_radps2: float = DEFAULT_YAW_ACCEL_RADPS2) -> float:
-    """Forecast battery energy (J) of driving ``route`` stop-turn-go, by the physics model that priced ``cost``.
-
-    The profile of :func:`planner.simulate_mission` (:func:`energy.drive_profile` at
-    ``speed_mps``, default ``cost.speed_mps``, and ``turn_rate_radps``, default
-    ``cost.turn_rate_radps``) priced by :func:`profile_forecast_w`. ``route`` is a found
-    :class:`Route` or its waypoints.
-
-    Raises
-    ------
-    InvalidParameterError
-        A cost without a physics model, a route that was not found, bad profile values.
-    """
-    pts = _waypoints(route)
-    profile = drive_profile(pts, cost.speed_mps if speed_mps is None else speed_mps,
-                            turn_rate_radps=cost.turn_rate_radps if turn_rate_radps is None else turn_rate_radps,
-                            dt_s=FORECAST_DT_S, accel_mps2=accel_mps2, yaw_accel_radps2=yaw_accel_radps2)
-    power = profile_forecast_w(cost, profile)
-    t = np.asarray(profile.time_s, dtype=np.float64)
-    return float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(t)))
-
-
 def _waypoints(route: Route | Any) -> np.ndarray:
     if isinstance(route, Route):
         if not route.found:
@@ -155,7 +130,8 @@ def price_route(cost: EnergyCost, route: Route | Any, *, how: str = "edges", int
     turns (what the planner minimised: :meth:`EnergyCost.path_energy_j`); ``how="profile"``
     prices the stop-turn-go drive the robot makes (start and stop at every waypoint, pivots
     with ramped yaw rates) with the model that priced the map: the physics model of
-    :meth:`planner.CostSpec.build` with the physics model (:func:`route_forecast_j`), or the learned
+    :meth:`planner.CostSpec.build` with the physics model (:func:`energy.drive_profile` at the speed and
+    the cost's turn rate, priced by :func:`profile_forecast_w` and integrated), or the learned
     model of :meth:`planner.LearnedEnergyModel.energy_cost`
     (:meth:`~planner.LearnedEnergyModel.predict_route_energy_j`). The spread is the edges'
     run-level spread per ground read from the map's tables (module docstring) either way: the
@@ -209,17 +185,12 @@ def price_route(cost: EnergyCost, route: Route | Any, *, how: str = "edges", int
     if pts.shape[0] < 2:
         raise InvalidParameterError(f"route needs at least 2 waypoints, got {pts.shape[0]}")
     with_interval = cost.has_interval if interval is None else check_bool("interval", interval)
-    tables = cost.tables
-    if with_interval and tables.grade_sd_table_j_per_m is None:
-        raise InvalidParameterError(
-            f"the cost ({cost!r}) carries no standard-deviation tables: its energy model gives no interval "
-            "(plan with a current model whose gives_interval is True)", parameter="interval")
     mean = cost.path_energy_j(pts)
     if not math.isfinite(mean):
         raise InvalidParameterError("the route crosses a blocked cell or an undrivable grade: it has no price")
-    if with_interval:
-        angles, _ = cost.turn_energies_j(pts)
-        per_row = _spreads_by_row(cost, tables, pts, angles, segment_cache)
+    per_row = cost.path_spreads_j(pts, segment_cache=segment_cache) if with_interval else None
+    if per_row is not None:
+        tables = cost.tables
         spread = np.flatnonzero(per_row > 0).tolist()
         crossed = {tables.ground_labels[i]: float(per_row[i]) for i in spread}
         dofs = {tables.ground_labels[i]: tables.spread_dof[i] for i in spread}
@@ -232,49 +203,11 @@ def price_route(cost: EnergyCost, route: Route | Any, *, how: str = "edges", int
                                                                     low_inclusive=False)
         if cost.learned_model is not None:
             mean = cost.learned_model.predict_route_energy_j(cost.terrain, pts, speed)
-        else:
-            mean = route_forecast_j(cost, pts, speed_mps=speed)
+        else:  # the profile of planner.simulate_mission, priced by the physics model of the tables
+            profile = drive_profile(pts, speed, turn_rate_radps=cost.turn_rate_radps, dt_s=FORECAST_DT_S,
+                                    accel_mps2=DEFAULT_ACCEL_MPS2, yaw_accel_radps2=DEFAULT_YAW_ACCEL_RADPS2)
+            power = profile_forecast_w(cost, profile)
+            t = np.asarray(profile.time_s, dtype=np.float64)
+            mean = float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(t)))
         price = dataclasses.replace(price, mean_j=mean)
     return price
-
-
-def _spreads_by_row(cost: EnergyCost, tables: CostTables, pts: np.ndarray, angles: np.ndarray,
-                    segment_cache: dict | None) -> np.ndarray:
-    """The linear spread sums (J) per table row of driving the polyline ``pts``: its segments, then its turns."""
-    sd_table = tables.grade_sd_table_j_per_m
-    n_rows = sd_table.shape[0]
-    per_row = np.zeros(n_rows)
-    for a, b in zip(pts[:-1].tolist(), pts[1:].tolist()):
-        key = (a[0], a[1], b[0], b[1])
-        seg = None if segment_cache is None else segment_cache.get(key)
-        if seg is None:
-            seg = _segment_spreads(cost, sd_table, a, b)
-            if segment_cache is not None:
-                segment_cache[key] = seg
-        per_row += seg
-    if np.any(angles > 0):
-        r, c = cost.terrain.rowcol(pts[:, 0], pts[:, 1])
-        row = cost.ground_rows[r, c]
-        turn_table = tables.turn_sd_table_j
-        grid = np.linspace(0.0, math.pi, turn_table.shape[1])
-        turn_sd = np.array([np.interp(ang, grid, turn_table[k]) for ang, k in zip(angles, row)])
-        per_row += np.bincount(row, weights=turn_sd, minlength=n_rows)
-    return per_row
-
-
-def _segment_spreads(cost: EnergyCost, sd_table: np.ndarray, a: list[float], b: list[float]) -> np.ndarray:
-    """The linear spread sums (J) per table row of driving the straight segment ``a -> b`` (cell by cell)."""
-    n_rows, n_grade = sd_table.shape
-    length = math.hypot(b[0] - a[0], b[1] - a[1])
-    if length == 0.0:
-        return np.zeros(n_rows)
-    step = 2.0 * cost.grade_max / (n_grade - 1)
-    gx, gy = cost.terrain["grad_x"], cost.terrain["grad_y"]
-    rows, cols, pieces = cost.terrain.segment_cells(tuple(a), tuple(b))
-    grade = (gx[rows, cols] * (b[0] - a[0]) + gy[rows, cols] * (b[1] - a[1])) / length
-    f = np.clip((grade + cost.grade_max) / step, 0.0, n_grade - 1.0)
-    i0 = np.minimum(np.floor(f).astype(np.int64), n_grade - 2)
-    w = f - i0
-    row = cost.ground_rows[rows, cols]
-    sd = sd_table[row, i0] * (1.0 - w) + sd_table[row, i0 + 1] * w
-    return np.bincount(row, weights=np.asarray(pieces) * sd, minlength=n_rows)
