@@ -9,8 +9,9 @@ level. A :class:`CostSpec` holds those choices, checked once; the
 entry points (:func:`planner.plan_report.plan_and_compare`, the batch, reach, mission, Monte
 Carlo, replay and tour entry points) take one instead of threading them one by one, and
 :meth:`CostSpec.build` is the one door to a map's edge costs (:meth:`CostSpec.at_risk` the one
-to its risk-priced twin: the same map on its tables' quantile, :meth:`CostTables.at_quantile`). :meth:`CostSpec.price` is the prologue every entry point shared (compile the
-kernels, price the map, at the risk level, timed): its :class:`PricedMap` is the header of every
+to its risk-priced twin: the same map on its tables' quantile, :meth:`CostTables.at_quantile`).
+:meth:`CostSpec.price` is the prologue every entry point shared (compile the kernels, price the
+map, at the risk level, timed): its :class:`PricedMap` is the header of every
 answer on a priced map (the map, the robot, the pricing, the timings), and :class:`PlanModel` what
 an output says of the model that priced it.
 """

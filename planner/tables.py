@@ -374,9 +374,9 @@ class CostTables:
         """
         q = check_risk_level(q)
         if self.grade_sd_table_j_per_m is None:
-            raise InvalidParameterError("these tables carry no standard deviations: their energy model gives no interval "
-                                        "(price the map with a current model whose gives_interval is True)",
-                                        parameter="tables")
+            raise InvalidParameterError(
+                "these tables carry no standard deviations: their energy model gives no interval (price the map "
+                "with a current model whose gives_interval is True)", parameter="tables")
         z = np.array([predictive_quantile(q, dof) for dof in self.spread_dof])[:, None]  # per row
         grade = np.maximum(self.grade_table_j_per_m + z * self.grade_sd_table_j_per_m, 0.0)
         turn = np.maximum(self.turn_table_j + z * self.turn_sd_table_j, 0.0)

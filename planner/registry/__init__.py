@@ -42,6 +42,7 @@ How it is built (one idea per module, composed in :mod:`~planner.registry.regist
   keeps the parts consistent: a cell whose model changes loses its evidence.
 """
 
+from .evidence import CellEvidence
 from .records import (
     PRIOR_MODEL_ID,
     CurrentModelProtocol,
@@ -56,6 +57,7 @@ from .store import REGISTRY_FORMAT_VERSION
 
 __all__ = [
     "CellModelRegistry",
+    "CellEvidence",
     "CurrentModelProtocol",
     "UpdatePolicy",
     "FlaggedRegion",

@@ -63,9 +63,9 @@ class UpdatePolicy:
     """When a cell's observed error says its model needs new data.
 
     A cell's error is the relative error of integrated current over the samples recorded
-    there, ``(predicted - measured) / |measured|`` (see
-    :meth:`CellEvidence.relative_error` of :attr:`CellModelRegistry.evidence`); the policy compares its magnitude, in per
-    cent, with the threshold.
+    there, ``(predicted - measured) / |measured|`` (see :meth:`CellEvidence.relative_error` of
+    :attr:`CellModelRegistry.evidence`); the policy compares its magnitude, in per cent, with
+    the threshold.
 
     Parameters
     ----------
