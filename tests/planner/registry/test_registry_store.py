@@ -71,6 +71,11 @@ def test_save_load_round_trip(tmp_path: Path) -> None:
     # hysteresis state survives: same flags on the next call
     policy = UpdatePolicy(threshold_pct=20.0, min_samples=3, hysteresis_pct=5.0)
     np.testing.assert_array_equal(back.evidence.flagged(policy), reg.evidence.flagged(policy))
+    # the loaded evidence knows the grid (world coordinates) and the current cell map (each region's models)
+    loose = UpdatePolicy(threshold_pct=1.0, min_samples=1, hysteresis_pct=0.5)
+    regions, back_regions = reg.evidence.flagged_regions(loose), back.evidence.flagged_regions(loose)
+    assert regions and [(r.bounds_m, r.model_ids) for r in back_regions] == [(r.bounds_m, r.model_ids) for r in regions]
+    assert all(r.bounds_m is not None for r in back_regions)
     with pytest.raises(GridMismatchError, match="shape"):
         CellModelRegistry.load(out, load_gain, terrain=TerrainMap(np.zeros((6, 5)), cell_size_m=0.5))
 
