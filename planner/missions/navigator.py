@@ -12,7 +12,7 @@ only checks the chunk, books its energy against the battery and keeps it. At a c
 loop of the design runs on what was driven since the last one:
 
 1. **compare per cell** — each sample's measured current against the current the model
-   serving its cell predicts (:meth:`planner.registry.CellModelRegistry.record`); the
+   serving its cell predicts (:meth:`planner.registry.CellEvidence.record` of the registry's evidence); the
    :class:`planner.registry.UpdatePolicy` flags regions whose error passes its threshold;
 2. **update** each flagged region: a model the registry already holds that explains what was
    measured there (``"reuse"``); else a new model (``model_factory``, default
