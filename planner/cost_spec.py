@@ -9,8 +9,9 @@ level. A :class:`CostSpec` holds those choices, checked once; the
 entry points (:func:`planner.plan_report.plan_and_compare`, the batch, reach, mission, Monte
 Carlo, replay and tour entry points) take one instead of threading them one by one, and
 :meth:`CostSpec.build` is the one door to a map's edge costs (:meth:`CostSpec.at_risk` the one
-to its risk-priced twin). :meth:`CostSpec.price` is the prologue every entry point shared (compile the
-kernels, price the map, at the risk level, timed): its :class:`PricedMap` is the header of every
+to its risk-priced twin: the same map on its tables' quantile, :meth:`CostTables.at_quantile`).
+:meth:`CostSpec.price` is the prologue every entry point shared (compile the kernels, price the
+map, at the risk level, timed): its :class:`PricedMap` is the header of every
 answer on a priced map (the map, the robot, the pricing, the timings), and :class:`PlanModel` what
 an output says of the model that priced it.
 """
@@ -35,7 +36,7 @@ from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from .edge_cost import EnergyCost
 from .model_cost import model_energy_cost
-from .risk import check_planning_risk, risk_cost
+from .risk import check_planning_risk
 from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES, CostTables, ground_table_rows, tabulate
 from .warmup import warm_up_kernels
 
@@ -59,7 +60,7 @@ class PlanModel:
     gives_interval : bool
         Whether the cost has a predictive interval.
     risk_q : float or None
-        The quantile planned on (:func:`planner.risk.risk_cost`), or None for the mean.
+        The quantile planned on (:meth:`CostSpec.at_risk`), or None for the mean.
     """
 
     file: str
@@ -123,7 +124,7 @@ class CostSpec:
         training grounds (:func:`planner.model_cost.model_energy_cost`).
     risk : float, optional
         Plan on this quantile of energy (in [0.5, 1)), every edge at mean + z sd
-        (:func:`planner.risk.risk_cost`); needs a model with a predictive interval. ``None``: the mean.
+        (:meth:`at_risk`); needs a model with a predictive interval. ``None``: the mean.
 
     Raises
     ------
@@ -268,7 +269,11 @@ class CostSpec:
                                     f"{self.model_name} gives none", parameter=("risk", also))
 
     def at_risk(self, cost: EnergyCost) -> EnergyCost:
-        """The cost to plan on: ``cost`` itself without :attr:`risk`, else :func:`planner.risk.risk_cost` at it.
+        """The cost to plan on: ``cost`` itself without :attr:`risk`, else the same map on its tables at :attr:`risk`.
+
+        Every entry of the tables at its quantile (:meth:`planner.tables.CostTables.at_quantile`), laid on
+        the map's geometry (:meth:`EnergyCost.with_tables`); the spreads are kept, so a route's
+        interval can be read from either cost.
 
         Raises
         ------
@@ -278,7 +283,7 @@ class CostSpec:
         if self.risk is None:
             return cost
         self.needs_interval(cost)
-        return risk_cost(cost, self.risk)
+        return cost.with_tables(cost.tables.at_quantile(self.risk))
 
     def plan_model(self, cost: EnergyCost) -> PlanModel | None:
         """What outputs say of the model that priced ``cost`` (route.json's ``model``); None for the presets."""

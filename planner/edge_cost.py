@@ -147,7 +147,7 @@ class EnergyCost:
             tables.grade_table_j_per_m, tables.turn_table_j, self.grade_max,
         )
         self._free_grade_index: np.ndarray | None = None  # geometry only: shared by with_tables
-        self.min_energy_per_metre_j = self._min_energy_per_metre(self.arrays.grade_step)
+        self.min_energy_per_metre_j = self._min_energy_per_metre()
         self._components: np.ndarray | None = None
         #: Lattice graphs built over this cost, by stride (see :meth:`Lattice.for_cost`).
         self.lattices: dict[int, Any] = {}
@@ -219,7 +219,7 @@ class EnergyCost:
         new.ground_rows = rows
         new.arrays = self.arrays.with_tables(new.ground_rows, self.blocked, tables.grade_table_j_per_m,
                                              tables.turn_table_j)
-        new.min_energy_per_metre_j = new._min_energy_per_metre(self.arrays.grade_step)
+        new.min_energy_per_metre_j = new._min_energy_per_metre()
         new.changed_cells = self._changed_cells(new)
         new.changed_cells.setflags(write=False)
         new.results = ResultCache(CACHE_SIZE)
@@ -276,8 +276,9 @@ class EnergyCost:
             differs[pair] = not np.array_equal(self.grade_table_j_per_m[a], other.grade_table_j_per_m[b])
         return differs[code] & ~self.blocked
 
-    def _min_energy_per_metre(self, dg: float) -> float:
+    def _min_energy_per_metre(self) -> float:
         """Lowest J/m any straight motion through a free cell can cost (admissible per-metre bound)."""
+        dg = self.arrays.grade_step
         free = ~self.blocked
         if not np.any(free):
             return 0.0
@@ -450,6 +451,77 @@ class EnergyCost:
         seg = self.segment_energy_j(pts[:-1], pts[1:])
         _, turns = self.turn_energies_j(pts)
         return float(seg.sum() + turns.sum())
+
+    def path_spreads_j(self, waypoints_m: Any, *,
+                       segment_cache: dict[tuple[float, float, float, float], np.ndarray] | None = None) -> np.ndarray:
+        """The run-level spread (J) of driving a polyline, per table row: each row's spreads summed linearly.
+
+        Each straight segment is walked cell by cell (:meth:`terrain.TerrainMap.segment_cells`):
+        a cell adds its horizontal length times its row's spread at the cell's grade in the
+        direction of travel (linear interpolation of the tables' ``grade_sd_table_j_per_m``, as the
+        mean tables are read); each turn adds its row's turn spread at the waypoint. What a
+        route's interval is made of (:func:`planner.price_route`; :mod:`planner.risk` says how).
+
+        Parameters
+        ----------
+        waypoints_m : array_like, shape (K, 2)
+            The polyline (m).
+        segment_cache : dict, optional
+            Per-segment spreads already walked, keyed by ``(x0, y0, x1, y1)``, filled as segments
+            are walked: many routes of this cost that share segments walk each once.
+
+        Returns
+        -------
+        ndarray, shape (n_rows,)
+
+        Raises
+        ------
+        InvalidParameterError
+            Tables without spreads; bad points.
+        OutOfBoundsError
+            A waypoint outside the map.
+        """
+        sd_table = self.tables.grade_sd_table_j_per_m
+        if sd_table is None:
+            raise InvalidParameterError(
+                f"the cost ({self!r}) carries no standard-deviation tables: its energy model gives no interval "
+                "(plan with a current model whose gives_interval is True)", parameter="interval")
+        pts = as_points(waypoints_m, "waypoints_m")
+        angles, _ = self.turn_energies_j(pts)
+        per_row = np.zeros(sd_table.shape[0])
+        for a, b in zip(pts[:-1].tolist(), pts[1:].tolist()):
+            key = (a[0], a[1], b[0], b[1])
+            seg = None if segment_cache is None else segment_cache.get(key)
+            if seg is None:
+                seg = self._segment_spreads(sd_table, a, b)
+                if segment_cache is not None:
+                    segment_cache[key] = seg
+            per_row += seg
+        if np.any(angles > 0):
+            r, c = self.terrain.rowcol(pts[:, 0], pts[:, 1])
+            row = self.ground_rows[r, c]
+            turn_table = self.tables.turn_sd_table_j
+            grid = np.linspace(0.0, math.pi, turn_table.shape[1])
+            turn_sd = np.array([np.interp(ang, grid, turn_table[k]) for ang, k in zip(angles, row)])
+            per_row += np.bincount(row, weights=turn_sd, minlength=sd_table.shape[0])
+        return per_row
+
+    def _segment_spreads(self, sd_table: np.ndarray, a: list[float], b: list[float]) -> np.ndarray:
+        """The linear spread sums (J) per table row of driving the straight segment ``a -> b`` (cell by cell)."""
+        n_rows, n_grade = sd_table.shape
+        length = math.hypot(b[0] - a[0], b[1] - a[1])
+        if length == 0.0:
+            return np.zeros(n_rows)
+        step = 2.0 * self.grade_max / (n_grade - 1)
+        gx, gy = self.terrain["grad_x"], self.terrain["grad_y"]
+        rows, cols, pieces = self.terrain.segment_cells(tuple(a), tuple(b))
+        grade = (gx[rows, cols] * (b[0] - a[0]) + gy[rows, cols] * (b[1] - a[1])) / length
+        f = np.clip((grade + self.grade_max) / step, 0.0, n_grade - 1.0)
+        i0 = np.minimum(np.floor(f).astype(np.int64), n_grade - 2)
+        w = f - i0
+        row = self.ground_rows[rows, cols]
+        sd = sd_table[row, i0] * (1.0 - w) + sd_table[row, i0 + 1] * w
+        return np.bincount(row, weights=np.asarray(pieces) * sd, minlength=n_rows)
 
     def surface_length_m(self, waypoints_m: Any) -> float:
         """Length (m) of a polyline along the terrain surface: per cell, horizontal length

@@ -28,7 +28,8 @@ forecast's degrees of freedom (:attr:`LearnedModelTable.dof`: ``inf``, a Gaussia
 Student-t of a ground the model never drove). The electronics and the physics slope term carry
 no spread. :meth:`LearnedEnergyModel.energy_cost` then gives the :class:`EnergyCost`
 standard-deviation tables and each row's degrees of freedom (:attr:`EnergyCost.spread_dof`),
-which :mod:`planner.risk` adds up along a route. The per-sample spread averages out over a route and is not used.
+which :func:`planner.price_route` adds up along a route. The per-sample spread averages out over a route and is not
+used.
 
 **Vibration input.** Models conditioned on vibration (the
 :class:`energy.VibrationCurrentEstimator`) need an acceleration stream. The synthetic log

@@ -438,7 +438,7 @@ def plan_and_compare(
         the physics presets or a saved current model, a risk level); default ``CostSpec()``, the
         husky presets at 0.5 m/s. With a model that gives an interval, the route's energy
         distribution is reported (:func:`planner.route_price.price_route`); with its ``risk`` the
-        route is planned on that quantile of energy (:func:`planner.risk.risk_cost`).
+        route is planned on that quantile of energy (:meth:`planner.cost_spec.CostSpec.at_risk`).
     map_label : str
         How the map is named in the summary, the figure and route.json.
 

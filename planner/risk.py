@@ -1,19 +1,19 @@
-"""Route energy intervals and risk-aware costs, from an edge cost's standard-deviation tables.
+"""A route's energy distribution and the risk levels read from it (the math of intervals and risk-aware costs).
 
 A cost priced by a model with a predictive interval (:class:`~planner.LearnedEnergyModel`
 over a model whose ``gives_interval`` is True) carries, beside its mean tables, the
-**run-level** standard deviation of every table entry (:attr:`EnergyCost.grade_sd_table_j_per_m`,
-:attr:`EnergyCost.turn_sd_table_j`). That spread is the part of the model's error shared by a
+**run-level** standard deviation of every table entry (:attr:`planner.EnergyCost.grade_sd_table_j_per_m`,
+:attr:`planner.EnergyCost.turn_sd_table_j`). That spread is the part of the model's error shared by a
 whole run on one ground (what the model does not know about the ground, how one run differs
 from another), so along a route it does not average out:
 
-- the route's **mean** energy is the sum of its edge means (:meth:`EnergyCost.path_energy_j`);
+- the route's **mean** energy is the sum of its edge means (:meth:`planner.EnergyCost.path_energy_j`);
 - **within one ground** (one table row) the edge spreads add **linearly**;
 - the per-ground sums, grounds being independent of each other, combine by the **root of the
   sum of squares** (:func:`energy.models.forecast.combine_ground_sds`).
 
 **Shape.** Each row's spreads are the scale of the model's predictive on that ground
-(:attr:`EnergyCost.spread_dof`): a Gaussian (``dof = inf``) where the model knows the ground, a
+(:attr:`planner.EnergyCost.spread_dof`): a Gaussian (``dof = inf``) where the model knows the ground, a
 **Student-t** with as many degrees of freedom as grounds taught the new-ground spread where it
 never drove it (:mod:`energy.models.forecast`). The same predictive gives every interval the
 planner reports: :class:`RouteEnergyInterval` (P50, P90, central intervals) takes the route's
@@ -22,11 +22,11 @@ spread (a Gaussian when all are known); the Monte Carlo missions draw each groun
 its own predictive (:mod:`planner.missions.monte_carlo_model`); the navigator's forecast of what
 remains uses the same quantile (:mod:`planner.missions.remaining`).
 
-**Risk-aware planning.** :func:`risk_cost` returns the cost whose tables are
+**Risk-aware planning.** :meth:`planner.CostTables.at_quantile` gives the tables
 ``mean + z_Q * sd`` per entry, ``z_Q`` the ``Q`` quantile of the row's standardised predictive
 (:func:`energy.models.forecast.predictive_quantile` with the row's degrees of freedom: the
 standard normal's on a known ground), floored at 0 (an edge never pays back energy). A planner
-minimising it minimises
+minimising a cost on them minimises
 
 ``sum over edges (mean_e + z_Q,g(e) sd_e) = mean_route + sum over grounds z_Q,g S_g``
 
@@ -37,27 +37,20 @@ for ``Q > 0.5`` the objective is an **upper bound** of the route's ``Q`` quantil
 (conservative: it penalises crossing many uncertain grounds a little more than their
 independence warrants), for ``Q < 0.5`` a lower bound. The objective is still additive over
 edges, which the lattice and the OMPL objective need; the route that is finally reported is
-priced exactly (:func:`route_energy_interval`).
+priced exactly (:func:`planner.price_route`: a :class:`RouteEnergyInterval`).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
-from energy.models.forecast import check_dof, combine_ground_sds, predictive_quantile
+from energy.models.forecast import check_dof, predictive_quantile
 from terrawatt_base.checks import check_real
 from terrawatt_base.errors import InvalidParameterError
 
-from .edge_cost import EnergyCost
-from .points import as_points
-
-__all__ = ["RouteEnergyInterval", "route_energy_interval", "risk_cost", "check_risk_level", "check_planning_risk",
-           "INTERVAL_LEVEL"]
+__all__ = ["RouteEnergyInterval", "check_risk_level", "check_planning_risk", "INTERVAL_LEVEL"]
 
 #: Central interval reported beside P50 / P90 (0.8: P10-P90).
 INTERVAL_LEVEL = 0.8
@@ -78,7 +71,7 @@ def check_planning_risk(q: Any, name: str = "risk") -> float:
     """A risk level to plan or decide on: a number in [0.5, 1).
 
     Planning on a quantile below the median plans on luck: ``--risk 1e-9`` priced every edge at
-    mean - 6 sd, floored at 0, and reported a route "costing" 0 J. :func:`risk_cost` and
+    mean - 6 sd, floored at 0, and reported a route "costing" 0 J. :meth:`planner.CostTables.at_quantile` and
     :meth:`RouteEnergyInterval.quantile_j` still take any level in (0, 1) (a P10 is a fine thing to
     report); what a route is chosen or a mission is judged on is at least the median.
 
@@ -210,130 +203,3 @@ class RouteEnergyInterval:
             out["dof"] = self.dof
             out["dof_by_ground"] = {g: (d if math.isfinite(d) else None) for g, d in self.dof_by_ground.items()}
         return out
-
-
-def _check_interval_cost(cost: Any) -> EnergyCost:
-    if not isinstance(cost, EnergyCost):
-        raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
-    if cost.grade_sd_table_j_per_m is None:
-        raise InvalidParameterError(
-            f"the cost ({cost!r}) carries no standard-deviation tables: its energy model gives no interval "
-            "(plan with a current model whose gives_interval is True)"
-        )
-    return cost
-
-
-def route_energy_interval(cost: EnergyCost, waypoints_m: Any, *,
-                          segment_cache: dict[tuple[float, float, float, float], np.ndarray] | None = None
-                          ) -> RouteEnergyInterval:
-    """The energy distribution of driving a polyline on ``cost`` (see the module docstring).
-
-    Each straight segment is walked cell by cell (:meth:`terrain.TerrainMap.segment_cells`):
-    a cell adds its horizontal length times its row's spread at the cell's grade in the
-    direction of travel (linear interpolation of :attr:`EnergyCost.grade_sd_table_j_per_m`,
-    as the mean tables are read); each turn adds its row's turn spread at the waypoint. The
-    interval's degrees of freedom are the least of :attr:`EnergyCost.spread_dof` over the rows
-    the route crosses with a spread > 0 (``inf``, a Gaussian, when none is finite).
-
-    Parameters
-    ----------
-    cost : EnergyCost
-        A cost with standard-deviation tables (from a model with an interval).
-    waypoints_m : array_like, shape (K, 2)
-        The route (m).
-    segment_cache : dict, optional
-        Per-segment spreads already walked, keyed by ``(x0, y0, x1, y1)``, filled as segments are
-        walked: many routes of one cost that share segments (e.g. the legs of one shortest-path
-        tree, :mod:`planner.tours.pricing`) walk each segment once. Only for one cost.
-
-    Returns
-    -------
-    RouteEnergyInterval
-
-    Raises
-    ------
-    InvalidParameterError
-        A cost without spreads; a route that is not drivable (infinite energy); bad points.
-    OutOfBoundsError
-        A waypoint outside the map.
-    """
-    cost = _check_interval_cost(cost)
-    pts = as_points(waypoints_m, "waypoints_m")
-    mean = cost.path_energy_j(pts)
-    if not math.isfinite(mean):
-        raise InvalidParameterError("the route crosses a blocked cell or an undrivable grade: it has no energy interval")
-    n_rows = cost.grade_sd_table_j_per_m.shape[0]
-    per_row = np.zeros(n_rows)
-    for a, b in zip(pts[:-1].tolist(), pts[1:].tolist()):
-        key = (a[0], a[1], b[0], b[1])
-        seg = None if segment_cache is None else segment_cache.get(key)
-        if seg is None:
-            seg = _segment_spreads(cost, a, b)
-            if segment_cache is not None:
-                segment_cache[key] = seg
-        per_row += seg
-    angles, _ = cost.turn_energies_j(pts)
-    if np.any(angles > 0):
-        r, c = cost.terrain.rowcol(pts[:, 0], pts[:, 1])
-        row = cost.ground_rows[r, c]
-        grid = np.linspace(0.0, math.pi, cost.turn_sd_table_j.shape[1])
-        turn_sd = np.array([np.interp(ang, grid, cost.turn_sd_table_j[k]) for ang, k in zip(angles, row)])
-        per_row += np.bincount(row, weights=turn_sd, minlength=n_rows)
-    spread = np.flatnonzero(per_row > 0).tolist()
-    crossed = {cost.ground_labels[i]: float(per_row[i]) for i in spread}
-    dofs = {cost.ground_labels[i]: cost.spread_dof[i] for i in spread}
-    return RouteEnergyInterval(mean, combine_ground_sds(per_row), crossed, min(dofs.values(), default=math.inf), dofs)
-
-
-def _segment_spreads(cost: EnergyCost, a: list[float], b: list[float]) -> np.ndarray:
-    """The linear spread sums (J) per cost row of driving the straight segment ``a -> b`` (cell by cell)."""
-    sd_table = cost.grade_sd_table_j_per_m
-    n_rows, n_grade = sd_table.shape
-    length = math.hypot(b[0] - a[0], b[1] - a[1])
-    if length == 0.0:
-        return np.zeros(n_rows)
-    step = 2.0 * cost.grade_max / (n_grade - 1)
-    gx, gy = cost.terrain["grad_x"], cost.terrain["grad_y"]
-    rows, cols, pieces = cost.terrain.segment_cells(tuple(a), tuple(b))
-    grade = (gx[rows, cols] * (b[0] - a[0]) + gy[rows, cols] * (b[1] - a[1])) / length
-    f = np.clip((grade + cost.grade_max) / step, 0.0, n_grade - 1.0)
-    i0 = np.minimum(np.floor(f).astype(np.int64), n_grade - 2)
-    w = f - i0
-    row = cost.ground_rows[rows, cols]
-    sd = sd_table[row, i0] * (1.0 - w) + sd_table[row, i0 + 1] * w
-    return np.bincount(row, weights=np.asarray(pieces) * sd, minlength=n_rows)
-
-
-def risk_cost(cost: EnergyCost, q: float) -> EnergyCost:
-    """The cost whose tables price every entry at its ``q`` quantile, ``mean + z_q * sd`` (floored at 0).
-
-    ``z_q`` is read per table row from the row's predictive
-    (:func:`~energy.models.forecast.predictive_quantile` with :attr:`EnergyCost.spread_dof`):
-    the standard normal's on a ground the model knows, a Student-t's on one it never drove.
-    What ``plan --risk Q`` plans on: exactly the route's ``Q`` quantile on one ground, an upper
-    bound of it across independent grounds for ``Q > 0.5`` (module docstring). The result
-    shares the map geometry (:meth:`EnergyCost.with_tables`) and keeps the spreads, so
-    :func:`route_energy_interval` of a route planned on it can be computed on ``cost``.
-
-    Parameters
-    ----------
-    cost : EnergyCost
-        A cost with standard-deviation tables.
-    q : float
-        Risk level in (0, 1); 0.5 gives the mean cost.
-
-    Returns
-    -------
-    EnergyCost
-
-    Raises
-    ------
-    InvalidParameterError
-        ``q`` outside (0, 1); a cost without spreads.
-    """
-    q = check_risk_level(q)
-    cost = _check_interval_cost(cost)
-    z = np.array([predictive_quantile(q, dof) for dof in cost.spread_dof])[:, None]  # per row
-    grade = np.maximum(cost.grade_table_j_per_m + z * cost.grade_sd_table_j_per_m, 0.0)
-    turn = np.maximum(cost.turn_table_j + z * cost.turn_sd_table_j, 0.0)
-    return cost.with_tables(dataclasses.replace(cost.tables, grade_table_j_per_m=grade, turn_table_j=turn))

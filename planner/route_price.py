@@ -16,6 +16,13 @@ cost's tables, on the map's ground and slope under every pose (the rule of
 :func:`energy.profiles.terrain_along`, which the truth simulator uses too), and
 :func:`segment_forecasts_j` splits it into the turn and the straight of each route segment,
 the way :func:`planner.simulate_mission` books them.
+
+The interval is read from the priced map's own tables (:class:`~planner.CostTables`): each
+segment walked cell by cell adds its horizontal length times its row's spread at the cell's
+grade in the direction of travel (linear interpolation, as the mean tables are read), each turn
+its row's turn spread; per ground the spreads add linearly, the grounds combine by
+root-sum-of-squares, and the tail is the Student-t of the least degrees of freedom crossed
+(:mod:`planner.risk` says why).
 """
 
 from __future__ import annotations
@@ -27,16 +34,17 @@ from typing import Any
 import numpy as np
 
 from energy import CommandProfile, drive_profile
+from energy.models.forecast import combine_ground_sds
 from energy.profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, terrain_along
 from terrawatt_base.checks import check_bool, check_choice, check_instance, check_real
 from terrawatt_base.errors import InvalidParameterError
 
 from .edge_cost import EnergyCost
 from .points import as_points
-from .risk import RouteEnergyInterval, route_energy_interval
+from .risk import RouteEnergyInterval
 from .route import Route
 
-__all__ = ["PRICE_HOWS", "price_route", "profile_forecast_w", "segment_forecasts_j", "route_forecast_j"]
+__all__ = ["PRICE_HOWS", "price_route", "profile_forecast_w", "segment_forecasts_j"]
 
 #: How a route is priced: its edge costs, or the whole drive profile.
 PRICE_HOWS = ("edges", "profile")
@@ -106,30 +114,6 @@ def segment_forecasts_j(time_s: np.ndarray, power_w: np.ndarray, turn_s: np.ndar
     return parts[0::2], parts[1::2]
 
 
-def route_forecast_j(cost: EnergyCost, route: Route | Any, *, speed_mps: float | None = None,
-                     accel_mps2: float = DEFAULT_ACCEL_MPS2, turn_rate_radps: float | None = None,
-                     yaw_accel_radps2: float = DEFAULT_YAW_ACCEL_RADPS2) -> float:
-    """Forecast battery energy (J) of driving ``route`` stop-turn-go, by the physics model that priced ``cost``.
-
-    The profile of :func:`planner.simulate_mission` (:func:`energy.drive_profile` at
-    ``speed_mps``, default ``cost.speed_mps``, and ``turn_rate_radps``, default
-    ``cost.turn_rate_radps``) priced by :func:`profile_forecast_w`. ``route`` is a found
-    :class:`Route` or its waypoints.
-
-    Raises
-    ------
-    InvalidParameterError
-        A cost without a physics model, a route that was not found, bad profile values.
-    """
-    pts = _waypoints(route)
-    profile = drive_profile(pts, cost.speed_mps if speed_mps is None else speed_mps,
-                            turn_rate_radps=cost.turn_rate_radps if turn_rate_radps is None else turn_rate_radps,
-                            dt_s=FORECAST_DT_S, accel_mps2=accel_mps2, yaw_accel_radps2=yaw_accel_radps2)
-    power = profile_forecast_w(cost, profile)
-    t = np.asarray(profile.time_s, dtype=np.float64)
-    return float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(t)))
-
-
 def _waypoints(route: Route | Any) -> np.ndarray:
     if isinstance(route, Route):
         if not route.found:
@@ -146,10 +130,11 @@ def price_route(cost: EnergyCost, route: Route | Any, *, how: str = "edges", int
     turns (what the planner minimised: :meth:`EnergyCost.path_energy_j`); ``how="profile"``
     prices the stop-turn-go drive the robot makes (start and stop at every waypoint, pivots
     with ramped yaw rates) with the model that priced the map: the physics model of
-    :meth:`planner.CostSpec.build` with the physics model (:func:`route_forecast_j`), or the learned
+    :meth:`planner.CostSpec.build` with the physics model (:func:`energy.drive_profile` at the speed and
+    the cost's turn rate, priced by :func:`profile_forecast_w` and integrated), or the learned
     model of :meth:`planner.LearnedEnergyModel.energy_cost`
     (:meth:`~planner.LearnedEnergyModel.predict_route_energy_j`). The spread is the edges'
-    run-level spread per ground (:func:`planner.risk.route_energy_interval`) either way: the
+    run-level spread per ground read from the map's tables (module docstring) either way: the
     profile moves the mean, not how much a ground's runs differ.
 
     Parameters
@@ -166,8 +151,9 @@ def price_route(cost: EnergyCost, route: Route | Any, *, how: str = "edges", int
     speed_mps : float, optional
         ``how="profile"``: the driving speed (default the cost's planning speed).
     segment_cache : dict, optional
-        As :func:`planner.risk.route_energy_interval`: many routes of one cost that share
-        segments walk each once.
+        Per-segment spreads already walked, keyed by ``(x0, y0, x1, y1)``, filled as segments
+        are walked: many routes of one cost that share segments (e.g. the legs of one
+        shortest-path tree, :mod:`planner.tours.pricing`) walk each segment once. Only for one cost.
 
     Returns
     -------
@@ -199,19 +185,29 @@ def price_route(cost: EnergyCost, route: Route | Any, *, how: str = "edges", int
     if pts.shape[0] < 2:
         raise InvalidParameterError(f"route needs at least 2 waypoints, got {pts.shape[0]}")
     with_interval = cost.has_interval if interval is None else check_bool("interval", interval)
-    if with_interval:
-        price = route_energy_interval(cost, pts, segment_cache=segment_cache)
+    mean = cost.path_energy_j(pts)
+    if not math.isfinite(mean):
+        raise InvalidParameterError("the route crosses a blocked cell or an undrivable grade: it has no price")
+    per_row = cost.path_spreads_j(pts, segment_cache=segment_cache) if with_interval else None
+    if per_row is not None:
+        tables = cost.tables
+        spread = np.flatnonzero(per_row > 0).tolist()
+        crossed = {tables.ground_labels[i]: float(per_row[i]) for i in spread}
+        dofs = {tables.ground_labels[i]: tables.spread_dof[i] for i in spread}
+        price = RouteEnergyInterval(mean, combine_ground_sds(per_row), crossed, min(dofs.values(), default=math.inf),
+                                    dofs)
     else:
-        mean = cost.path_energy_j(pts)
-        if not math.isfinite(mean):
-            raise InvalidParameterError("the route crosses a blocked cell or an undrivable grade: it has no price")
         price = RouteEnergyInterval(mean, 0.0, {})
     if how == "profile":
         speed = cost.speed_mps if speed_mps is None else check_real("speed_mps", speed_mps, low=0.0,
                                                                     low_inclusive=False)
         if cost.learned_model is not None:
             mean = cost.learned_model.predict_route_energy_j(cost.terrain, pts, speed)
-        else:
-            mean = route_forecast_j(cost, pts, speed_mps=speed)
+        else:  # the profile of planner.simulate_mission, priced by the physics model of the tables
+            profile = drive_profile(pts, speed, turn_rate_radps=cost.turn_rate_radps, dt_s=FORECAST_DT_S,
+                                    accel_mps2=DEFAULT_ACCEL_MPS2, yaw_accel_radps2=DEFAULT_YAW_ACCEL_RADPS2)
+            power = profile_forecast_w(cost, profile)
+            t = np.asarray(profile.time_s, dtype=np.float64)
+            mean = float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(t)))
         price = dataclasses.replace(price, mean_j=mean)
     return price

@@ -4,11 +4,13 @@ An :class:`~planner.EnergyCost` prices a cell by a *table row*: the energy per h
 metre at grades uniformly spaced over ``[-tan(max_slope), +tan(max_slope)]`` and the energy
 of turning in place at angles uniformly spaced over ``[0, pi]``. :func:`tabulate` builds
 those rows from any energy model (the physics model per ground, the learned model per model
-id): it is the only place tables are computed.
+id): it is the only place tables are computed. :meth:`CostTables.at_quantile` prices every
+entry at a quantile of its predictive (what a risk level plans on).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -17,10 +19,12 @@ from typing import Any
 import numpy as np
 
 from energy import EnergyModel, IntervalEnergyModel
-from energy.models.forecast import check_dof
+from energy.models.forecast import check_dof, predictive_quantile
 from terrain.terrain_map import UNKNOWN_GROUND, TerrainMap
 from terrawatt_base.checks import check_int
 from terrawatt_base.errors import GridMismatchError, InvalidParameterError, UnknownNameError
+
+from .risk import check_risk_level
 
 __all__ = [
     "DEFAULT_GRADE_SAMPLES",
@@ -293,7 +297,7 @@ class CostTables:
     grade_sd_table_j_per_m, turn_sd_table_j : array_like, optional
         Run-level standard deviations of the two tables (same shapes, finite, >= 0), from a
         model with a predictive interval; both or neither. No query of the cost reads them:
-        :mod:`planner.risk` does, for route energy intervals and risk-aware costs.
+        a route's interval (:func:`planner.price_route`) and :meth:`at_quantile` do.
     spread_dof : sequence of float, optional
         Per row, the degrees of freedom of the distribution the row's spreads are the scale of:
         ``inf`` for a Gaussian, finite for the Student-t of a ground the model never drove
@@ -336,6 +340,47 @@ class CostTables:
     def n_rows(self) -> int:
         """Number of rows (kinds of cell)."""
         return int(self.grade_table_j_per_m.shape[0])
+
+    def at_quantile(self, q: float) -> CostTables:
+        """These tables with every entry at its ``q`` quantile, ``mean + z_q * sd`` floored at 0; the spreads kept.
+
+        ``z_q`` is read per row from the row's predictive
+        (:func:`~energy.models.forecast.predictive_quantile` with the row's :attr:`spread_dof`): the
+        standard normal's on a ground the model knows, a Student-t's on one it never drove. A cost
+        on these tables (:meth:`planner.EnergyCost.with_tables`) is what a risk level plans on:
+        exactly a route's ``q`` quantile on one ground, an upper bound of it across independent
+        grounds for ``q > 0.5`` (:mod:`planner.risk`).
+
+        Parameters
+        ----------
+        q : float
+            Risk level in (0, 1); 0.5 gives the mean tables.
+
+        Returns
+        -------
+        CostTables
+
+        Raises
+        ------
+        InvalidParameterError
+            ``q`` outside (0, 1); tables without spreads.
+
+        Examples
+        --------
+        >>> tables = CostTables([[20.0, 10.0, 30.0]], [[0.0, 5.0]], grade_sd_table_j_per_m=[[2.0, 2.0, 2.0]],
+        ...                     turn_sd_table_j=[[0.0, 1.0]])
+        >>> [round(float(x), 2) for x in tables.at_quantile(0.9).grade_table_j_per_m[0]]
+        [22.56, 12.56, 32.56]
+        """
+        q = check_risk_level(q)
+        if self.grade_sd_table_j_per_m is None:
+            raise InvalidParameterError(
+                "these tables carry no standard deviations: their energy model gives no interval (price the map "
+                "with a current model whose gives_interval is True)", parameter="tables")
+        z = np.array([predictive_quantile(q, dof) for dof in self.spread_dof])[:, None]  # per row
+        grade = np.maximum(self.grade_table_j_per_m + z * self.grade_sd_table_j_per_m, 0.0)
+        turn = np.maximum(self.turn_table_j + z * self.turn_sd_table_j, 0.0)
+        return dataclasses.replace(self, grade_table_j_per_m=grade, turn_table_j=turn)
 
     def rows_on(self, shape: tuple[int, int], ground_rows: Any) -> np.ndarray:
         """``ground_rows`` checked as this table's rows of a map of ``shape``: a read-only int32 copy.

@@ -198,7 +198,7 @@ def _draw_adaptive_mission(panels: Sequence[Any], result: Any, terrain: TerrainM
                      for m, c in zip(ids.tolist(), colours)]
     ax[0, 0].set_title("cells by model")
     with np.errstate(invalid="ignore"):
-        err = 100.0 * np.abs(registry.relative_error())
+        err = 100.0 * np.abs(registry.evidence.relative_error())
     im = ax[0, 1].imshow(err, origin="lower", extent=ext, cmap="magma", interpolation="nearest")
     ax[0, 1].figure.colorbar(im, ax=ax[0, 1], label="|error| of current (%) since last reset")
     ax[0, 1].set_title("cells by observed error")

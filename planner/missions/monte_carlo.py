@@ -135,7 +135,7 @@ def simulate_missions_mc(
     cost : EnergyCost, optional
         The cost that planned the route: when it carries its physics model, the study's
         ``predicted_energy_j`` is that model's forecast of the driven stop-turn-go profile at
-        the nominal speed (:func:`planner.route_price.route_forecast_j`), else the
+        the nominal speed (:func:`planner.route_price.price_route` with ``how="profile"``), else the
         route's edge energy. When it carries a predictive interval (:mod:`planner.risk`), the
         result's ``forecast`` is the route's energy distribution (P50, P90) on it;
         ``study.draw_from="model"`` needs one.

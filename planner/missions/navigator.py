@@ -12,7 +12,7 @@ only checks the chunk, books its energy against the battery and keeps it. At a c
 loop of the design runs on what was driven since the last one:
 
 1. **compare per cell** — each sample's measured current against the current the model
-   serving its cell predicts (:meth:`planner.registry.CellModelRegistry.record`); the
+   serving its cell predicts (:meth:`planner.registry.CellEvidence.record` of the registry's evidence); the
    :class:`planner.registry.UpdatePolicy` flags regions whose error passes its threshold;
 2. **update** each flagged region: a model the registry already holds that explains what was
    measured there (``"reuse"``); else a new model (``model_factory``, default
@@ -369,7 +369,7 @@ class Navigator(RegionUpdates):
         if outcome is None:
             self.skipped.append(f"after leg {len(self.legs) - 1}: no {req.ground!r} update, the manoeuvre was "
                                 f"{reason} and the driven data are too few")
-            self.registry.reset_evidence(region)
+            self.registry.evidence.reset(region)
         else:
             self.changed |= outcome
         self.queue.pop(0)
@@ -579,7 +579,7 @@ class Navigator(RegionUpdates):
             self.comparison.record(self.registry)
             self._count_classes(rows, cols)
             self._remember(seg, rows, cols)
-            regions = list(self.registry.flagged_regions(self.settings.policy))
+            regions = list(self.registry.evidence.flagged_regions(self.settings.policy))
             self.queue = regions
             evidence["flagged"] = [{"ground": self._ground_name(r), "cells": int(r.cell_count),
                                     "error_pct": 100.0 * float(r.relative_error)} for r in regions]

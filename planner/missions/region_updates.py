@@ -66,7 +66,7 @@ class RegionUpdates:
         if self._reuse(region, scope, gname, w0):
             return True
         if (gid, old_id) in self.validated:  # proved itself on fresh data of this ground: transients
-            registry.reset_evidence(region)
+            registry.evidence.reset(region)
             return False
         if cfg.update_source == "driven":
             outcome = self._fit_driven(region, scope, gid, gname, old_id)
@@ -76,7 +76,7 @@ class RegionUpdates:
         if x_e_est > self.charge.available_j() - sum(self.pending):
             self.skipped.append(f"after leg {len(self.legs) - 1}: no {gname!r} update, its ~{x_e_est / 3600:.2f} Wh "
                                 "manoeuvre and the remaining route do not both fit above the reserve")
-            registry.reset_evidence(region)
+            registry.evidence.reset(region)
             return False
         seed = cfg.seed + 10_000 + 10 * len(self.updates)
         profiles = excitation_profiles(straight_s=cfg.excitation_duration_s, turn_s=cfg.turn_excitation_duration_s,
@@ -187,7 +187,7 @@ class RegionUpdates:
             # within the threshold (else more driving there may yet tell a better model apart: not locked out)
             if kind != "driven" or err_old <= self.settings.policy.threshold_pct / 100.0:
                 self.validated.add((gid, old_id))
-            registry.reset_evidence(region)
+            registry.evidence.reset(region)
         wall = time.perf_counter() - w0
         self.update_wall += wall
         self.updates.append(UpdateRecord(leg, gname, region.cell_count, int(np.count_nonzero(scope)),

@@ -114,7 +114,7 @@ class Comparison:
 
     def record(self, registry: CellModelRegistry) -> None:
         """Add this leg's measured and predicted charge to the cells' evidence."""
-        registry.record(self.rows, self.cols, np.abs(self.meas), np.abs(self.pred), self.dt)
+        registry.evidence.record(self.rows, self.cols, np.abs(self.meas), np.abs(self.pred), self.dt)
 
 
 def driven_runs(history: Iterable[tuple[InteractionLog, np.ndarray, np.ndarray]], scope: np.ndarray,

@@ -12,11 +12,11 @@ cell size and origin of a :class:`~terrain.grid.Grid`). It keeps
   or :meth:`~CellModelRegistry.rollback`. Each change is a :class:`RegistryVersion` in
   :attr:`~CellModelRegistry.history` that remembers the previous id of every cell it
   touched, so a rollback restores the exact previous assignment.
-- per-cell **evidence**: measured and predicted charge (integrated current, C) and a sample
-  count, accumulated by :meth:`~CellModelRegistry.record`, from which
-  :meth:`~CellModelRegistry.relative_error` and, under an :class:`UpdatePolicy` (threshold,
-  minimum evidence, hysteresis), :meth:`~CellModelRegistry.flagged` and
-  :meth:`~CellModelRegistry.flagged_regions` say which cells need new data.
+- per-cell **evidence** (:attr:`~CellModelRegistry.evidence`, a
+  :class:`~planner.registry.evidence.CellEvidence`): measured and predicted charge
+  (integrated current, C) and a sample count, accumulated by its ``record``, from which its
+  ``relative_error`` and, under an :class:`UpdatePolicy` (threshold, minimum evidence,
+  hysteresis), its ``flagged`` and ``flagged_regions`` say which cells need new data.
 
 The registry holds models through :class:`CurrentModelProtocol` and never calls them: the
 caller predicts, fits and validates, and passes the numbers in; saving and loading models go
@@ -33,18 +33,16 @@ How it is built (one idea per module, composed in :mod:`~planner.registry.regist
 - :mod:`~planner.registry.assignment` — :class:`~planner.registry.assignment.CellAssignment`,
   the cell map, its numbered versions and exact rollback.
 - :mod:`~planner.registry.evidence` — :class:`~planner.registry.evidence.CellEvidence`,
-  charges, counts, flags with hysteresis and flagged regions, and the
-  :class:`~planner.registry.evidence.EvidenceMixin` that gives the registry its evidence
-  methods.
+  charges, counts, flags with hysteresis and flagged regions: the registry's
+  :attr:`~CellModelRegistry.evidence`, which its callers use directly.
 - :mod:`~planner.registry.store` — the directory format, atomic save, load, and recovery
   of a save killed between its two renames.
 - :mod:`~planner.registry.registry` — :class:`CellModelRegistry`, a facade that owns one of
   each part (composition), checks the caller's arguments, converts cell selections, and
-  keeps the parts consistent: a cell whose model changes loses its evidence. The evidence
-  methods come from a small mixin that uses only the facade's public grid and cell-map
-  properties, so the facade stays one readable class without one 1,000-line module.
+  keeps the parts consistent: a cell whose model changes loses its evidence.
 """
 
+from .evidence import CellEvidence
 from .records import (
     PRIOR_MODEL_ID,
     CurrentModelProtocol,
@@ -59,6 +57,7 @@ from .store import REGISTRY_FORMAT_VERSION
 
 __all__ = [
     "CellModelRegistry",
+    "CellEvidence",
     "CurrentModelProtocol",
     "UpdatePolicy",
     "FlaggedRegion",

@@ -11,10 +11,11 @@ from terrain.grid import Grid
 from terrawatt_base.checks import readonly
 from terrawatt_base.errors import DataError, InvalidParameterError
 
+from .assignment import CellAssignment
 from .cells import check_rows_cols, flat_cells, unflat
 from .records import Cells, FlaggedRegion, UpdatePolicy
 
-__all__ = ["CellEvidence", "EvidenceMixin", "relative_error"]
+__all__ = ["CellEvidence", "relative_error"]
 
 
 def relative_error(predicted: Any, measured: Any, count: Any) -> np.ndarray:
@@ -58,20 +59,34 @@ def _current_array(name: str, value: Any, n: int) -> np.ndarray:
 class CellEvidence:
     """Measured and predicted charge (C), sample count and flag state of every cell of a grid.
 
-    Cells are addressed by flat index (``row * cols + col``); the registry converts and
-    checks cell selections before it calls in here.
+    A registry's :attr:`~planner.registry.CellModelRegistry.evidence`: what was recorded
+    where, how wrong the serving model is there, and which cells need new data. Cells are
+    given as ``rows, cols`` arrays or a selection (a mask of the grid's shape, a ``(rows,
+    cols)`` tuple or a :class:`FlaggedRegion`), checked against the grid.
+
+    Parameters
+    ----------
+    shape : (int, int)
+        ``(rows, cols)`` of the grid.
+    grid : Grid, optional
+        The grid's cell size and origin: regions then carry world coordinates.
+    assignment : CellAssignment, optional
+        Which model serves each cell (each region's ``model_ids``); without it every cell
+        is on the prior.
 
     Examples
     --------
-    >>> import numpy as np
     >>> ev = CellEvidence((2, 2))
-    >>> ev.record(np.array([3, 3]), [2.0, 2.0], [1.0, 1.0], 0.5)
+    >>> ev.record([1, 1], [1, 1], [2.0, 2.0], [1.0, 1.0], 0.5)
     >>> ev.measured_charge_c.tolist(), ev.relative_error()[1, 1].item()
     ([[0.0, 0.0], [0.0, 2.0]], -0.5)
     """
 
-    def __init__(self, shape: tuple[int, int]) -> None:
+    def __init__(self, shape: tuple[int, int], *, grid: Grid | None = None,
+                 assignment: CellAssignment | None = None) -> None:
         self._shape = (int(shape[0]), int(shape[1]))
+        self._grid = grid
+        self._assignment = assignment
         self._measured_c = np.zeros(self._shape, np.float64)
         self._predicted_c = np.zeros(self._shape, np.float64)
         self._count = np.zeros(self._shape, np.int64)
@@ -111,19 +126,35 @@ class CellEvidence:
         self._flag[...] = flag
 
     # ---------------------------------------------------------------- update
-    def record(self, flat: np.ndarray, measured_current_a: Any, predicted_current_a: Any, dt_s: Any) -> None:
-        """Add each sample's charge (current x duration) and a count to its cell (vectorised).
+    def record(self, rows: Any, cols: Any, measured_current_a: Any, predicted_current_a: Any, dt_s: Any) -> None:
+        """Accumulate measured and predicted charge per cell from driving samples.
 
-        ``flat`` are checked flat cell indices; currents are ``(N,)`` or ``(N, k)`` (summed
-        over ``k``); ``dt_s`` a scalar or ``(N,)``. Nothing is recorded if any input is bad.
+        Each sample ``i`` adds ``measured_current_a[i] * dt_s[i]`` to the measured charge
+        (C) of cell ``(rows[i], cols[i])``, ``predicted_current_a[i] * dt_s[i]`` to its
+        predicted charge and 1 to its sample count. Vectorised (``np.add.at``); nothing is
+        recorded if any input is bad.
+
+        Parameters
+        ----------
+        rows, cols : array_like of int, shape (N,)
+            Cell of each sample (e.g. from :meth:`TerrainMap.rowcol` of the robot's position).
+        measured_current_a, predicted_current_a : array_like of float, shape (N,) or (N, k)
+            Drive current (A); a 2-D array is summed over its ``k`` channels (e.g. left and
+            right motors). Pass the quantity to compare, e.g. absolute currents.
+        dt_s : float or array_like of float, shape (N,)
+            Duration each sample stands for (s, > 0).
 
         Raises
         ------
         InvalidParameterError
-            Arrays of the wrong shape or not numeric.
+            Arrays whose lengths differ, non-integer cells, arrays of the wrong rank.
+        OutOfBoundsError
+            Cells outside the grid.
         DataError
             NaN/inf currents or durations, non-positive durations.
         """
+        r, c = check_rows_cols(self._shape, rows, cols)
+        flat = r * self._shape[1] + c
         n = flat.size
         meas = _current_array("measured_current_a", measured_current_a, n)
         pred = _current_array("predicted_current_a", predicted_current_a, n)
@@ -144,8 +175,22 @@ class CellEvidence:
         np.add.at(self._predicted_c.reshape(-1), flat, pred * dt)
         np.add.at(self._count.reshape(-1), flat, 1)
 
+    def reset(self, cells: Cells | None = None) -> None:
+        """Forget the evidence (charges, counts) and flag state of ``cells`` (all when ``None``).
+
+        Call it after data were collected and a model updated by other means than the
+        registry's :meth:`~planner.registry.CellModelRegistry.propose_update` /
+        :meth:`~planner.registry.CellModelRegistry.assign` (which reset the cells they change).
+
+        Raises
+        ------
+        InvalidParameterError, GridMismatchError, OutOfBoundsError
+            Bad ``cells``.
+        """
+        self.clear(np.arange(self._shape[0] * self._shape[1]) if cells is None else flat_cells(self._shape, cells))
+
     def clear(self, flat: np.ndarray) -> None:
-        """Forget charges, counts and flags of the cells ``flat``."""
+        """Forget charges, counts and flags of the cells of flat indices ``flat`` (checked by the caller)."""
         self._measured_c.reshape(-1)[flat] = 0.0
         self._predicted_c.reshape(-1)[flat] = 0.0
         self._count.reshape(-1)[flat] = 0
@@ -153,18 +198,43 @@ class CellEvidence:
 
     # ---------------------------------------------------------------- errors
     def relative_error(self) -> np.ndarray:
-        """Relative error of integrated current per cell (see :func:`relative_error`)."""
+        """Relative error of integrated current per cell, ``(predicted - measured) / |measured|``.
+
+        Positive when the model over-predicts. ``NaN`` where the cell has no samples; where
+        the measured charge is exactly 0 it is 0 if the predicted charge is 0 too, else
+        ``±inf`` (:func:`relative_error`).
+
+        Returns
+        -------
+        numpy.ndarray of float64, shape of the grid
+        """
         return relative_error(self._predicted_c, self._measured_c, self._count)
 
-    def relative_error_over(self, flat: np.ndarray) -> float:
-        """Relative error of the charge integrated over the cells ``flat`` (NaN without samples)."""
+    def relative_error_over(self, cells: Cells) -> float:
+        """Relative error of the charge integrated over a set of cells (NaN without samples).
+
+        Raises
+        ------
+        InvalidParameterError, GridMismatchError, OutOfBoundsError
+            Bad ``cells``.
+        """
+        flat = flat_cells(self._shape, cells)
         p = float(self._predicted_c.reshape(-1)[flat].sum())
         m = float(self._measured_c.reshape(-1)[flat].sum())
         n = int(self._count.reshape(-1)[flat].sum())
         return float(relative_error(np.array(p), np.array(m), np.array(n)))
 
     def flagged(self, policy: UpdatePolicy) -> np.ndarray:
-        """Advance the flags under ``policy`` (threshold, minimum samples, hysteresis); a copy.
+        """Cells whose model needs new data under ``policy``, with hysteresis.
+
+        A cell becomes flagged when it has at least ``policy.min_samples`` samples and
+        ``|relative error| > threshold_pct``; a flagged cell stays flagged until its error
+        falls below ``threshold_pct - hysteresis_pct``. The state is kept between calls, so
+        each call advances it (and :meth:`reset` clears it).
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape of the grid (a copy)
 
         Raises
         ------
@@ -181,20 +251,21 @@ class CellEvidence:
         self._flag = above | (self._flag & ~cleared)
         return self._flag.copy()
 
-    def flagged_regions(
-        self,
-        policy: UpdatePolicy,
-        cell_model: np.ndarray,
-        n_models: int,
-        *,
-        connectivity: Literal[4, 8] = 8,
-        grid: Grid | None = None,
-    ) -> list[FlaggedRegion]:
-        """Connected regions of flagged cells (advances the flags like :meth:`flagged`).
+    def flagged_regions(self, policy: UpdatePolicy, *, connectivity: Literal[4, 8] = 8) -> list[FlaggedRegion]:
+        """Connected regions of flagged cells (advances the flag state like :meth:`flagged`).
 
-        ``cell_model`` is the model id of every cell and ``n_models`` the size of the model
-        table (for each region's ``model_ids``); with ``grid`` the regions carry world
-        coordinates.
+        Parameters
+        ----------
+        policy : UpdatePolicy
+            Regions with fewer than ``policy.min_region_cells`` cells are left out.
+        connectivity : {4, 8}
+            Cells touching by an edge (4) or also by a corner (8) belong to one region.
+
+        Returns
+        -------
+        list of FlaggedRegion
+            In label order (raster scan order of each region's first cell); with world
+            coordinates when the evidence has a grid, with the models serving each region.
 
         Raises
         ------
@@ -227,7 +298,10 @@ class CellEvidence:
         meas_sum = np.add.reduceat(self._measured_c.reshape(-1)[members], heads)
         n_sum = np.add.reduceat(self._count.reshape(-1)[members], heads)
         errors = relative_error(pred_sum, meas_sum, n_sum)
-        pairs = np.unique(seg * n_models + np.asarray(cell_model).reshape(-1)[members])
+        cell_model = (np.zeros(self._shape, np.int64) if self._assignment is None
+                      else np.asarray(self._assignment.cell_model, np.int64))
+        n_models = int(cell_model.max()) + 1  # any bound above every id decodes the pairs alike
+        pairs = np.unique(seg * n_models + cell_model.reshape(-1)[members])
         pair_seg, pair_model = np.divmod(pairs, n_models)
         pair_starts = np.searchsorted(pair_seg, np.arange(n_regions + 1))
         regions: list[FlaggedRegion] = []
@@ -237,7 +311,8 @@ class CellEvidence:
             bbox = (int(row_min[k]), int(col_min[k]), int(row_max[k]), int(col_max[k]))
             rep_xy: tuple[float, float] | None = None
             bounds: tuple[float, float, float, float] | None = None
-            if grid is not None:
+            if self._grid is not None:
+                grid = self._grid
                 d = grid.cell_size_m
                 x0, y0 = grid.origin_xy_m
                 rep_xy = grid.xy(rep[0], rep[1])
@@ -258,150 +333,3 @@ class CellEvidence:
                 )
             )
         return regions
-
-
-class EvidenceMixin:
-    """The evidence and flag methods of :class:`~planner.registry.registry.CellModelRegistry`.
-
-    The host class provides the public ``shape``, ``grid``, ``model_id_map`` and
-    ``model_ids`` and sets ``_evidence`` (a :class:`CellEvidence` of its shape) when it is
-    built; this mixin reads and writes nothing else.
-    """
-
-    _evidence: CellEvidence
-    shape: Any
-    grid: Any
-    model_id_map: Any
-    model_ids: Any
-
-    def record(
-        self,
-        rows: Any,
-        cols: Any,
-        measured_current_a: Any,
-        predicted_current_a: Any,
-        dt_s: Any,
-    ) -> None:
-        """Accumulate measured and predicted charge per cell from driving samples.
-
-        Each sample ``i`` adds ``measured_current_a[i] * dt_s[i]`` to the measured charge
-        (C) of cell ``(rows[i], cols[i])``, ``predicted_current_a[i] * dt_s[i]`` to its
-        predicted charge and 1 to its sample count. Vectorised (``np.add.at``).
-
-        Parameters
-        ----------
-        rows, cols : array_like of int, shape (N,)
-            Cell of each sample (e.g. from :meth:`TerrainMap.rowcol` of the robot's position).
-        measured_current_a, predicted_current_a : array_like of float, shape (N,) or (N, k)
-            Drive current (A); a 2-D array is summed over its ``k`` channels (e.g. left and
-            right motors). Pass the quantity to compare, e.g. absolute currents.
-        dt_s : float or array_like of float, shape (N,)
-            Duration each sample stands for (s, > 0).
-
-        Raises
-        ------
-        InvalidParameterError
-            Arrays whose lengths differ, non-integer cells, arrays of the wrong rank.
-        OutOfBoundsError
-            Cells outside the grid.
-        DataError
-            NaN/inf currents or durations, non-positive durations.
-        """
-        r, c = check_rows_cols(self.shape, rows, cols)
-        self._evidence.record(r * self.shape[1] + c, measured_current_a, predicted_current_a, dt_s)
-
-    @property
-    def measured_charge_c(self) -> np.ndarray:
-        """Measured charge (C, integral of measured current) per cell (read-only copy)."""
-        return self._evidence.measured_charge_c
-
-    @property
-    def predicted_charge_c(self) -> np.ndarray:
-        """Predicted charge (C) per cell (read-only copy)."""
-        return self._evidence.predicted_charge_c
-
-    @property
-    def sample_count(self) -> np.ndarray:
-        """Samples recorded per cell since its evidence was last reset (read-only copy)."""
-        return self._evidence.sample_count
-
-    def relative_error(self) -> np.ndarray:
-        """Relative error of integrated current per cell, ``(predicted - measured) / |measured|``.
-
-        Positive when the model over-predicts. ``NaN`` where the cell has no samples; where
-        the measured charge is exactly 0 it is 0 if the predicted charge is 0 too, else
-        ``±inf``.
-
-        Returns
-        -------
-        numpy.ndarray of float64, shape :attr:`shape`
-        """
-        return self._evidence.relative_error()
-
-    def relative_error_over(self, cells: Cells) -> float:
-        """Relative error of the charge integrated over a set of cells (NaN without samples).
-
-        Raises
-        ------
-        InvalidParameterError, GridMismatchError, OutOfBoundsError
-            Bad ``cells``.
-        """
-        return self._evidence.relative_error_over(flat_cells(self.shape, cells))
-
-    def reset_evidence(self, cells: Cells | None = None) -> None:
-        """Forget the evidence (charges, counts) and flag state of ``cells`` (all when ``None``).
-
-        Call it after data were collected and a model updated by other means than
-        :meth:`propose_update` / :meth:`assign` (which reset the cells they change).
-        """
-        flat = np.arange(self.shape[0] * self.shape[1]) if cells is None else flat_cells(self.shape, cells)
-        self._evidence.clear(flat)
-
-    # ---------------------------------------------------------------- flags
-    def flagged(self, policy: UpdatePolicy) -> np.ndarray:
-        """Cells whose model needs new data under ``policy``, with hysteresis.
-
-        A cell becomes flagged when it has at least ``policy.min_samples`` samples and
-        ``|relative error| > threshold_pct``; a flagged cell stays flagged until its error
-        falls below ``threshold_pct - hysteresis_pct``. The state is kept between calls, so
-        each call advances it (and :meth:`reset_evidence` clears it).
-
-        Returns
-        -------
-        numpy.ndarray of bool, shape :attr:`shape` (a copy)
-
-        Raises
-        ------
-        InvalidParameterError
-            ``policy`` is not an :class:`UpdatePolicy`.
-        """
-        return self._evidence.flagged(policy)
-
-    @property
-    def flag_state(self) -> np.ndarray:
-        """The flags as of the last :meth:`flagged` call (read-only copy)."""
-        return self._evidence.flag_state
-
-    def flagged_regions(self, policy: UpdatePolicy, *, connectivity: Literal[4, 8] = 8) -> list[FlaggedRegion]:
-        """Connected regions of flagged cells (advances the flag state like :meth:`flagged`).
-
-        Parameters
-        ----------
-        policy : UpdatePolicy
-            Regions with fewer than ``policy.min_region_cells`` cells are left out.
-        connectivity : {4, 8}
-            Cells touching by an edge (4) or also by a corner (8) belong to one region.
-
-        Returns
-        -------
-        list of FlaggedRegion
-            In label order (raster scan order of each region's first cell).
-
-        Raises
-        ------
-        InvalidParameterError
-            Bad policy or connectivity.
-        """
-        return self._evidence.flagged_regions(
-            policy, self.model_id_map, len(self.model_ids), connectivity=connectivity, grid=self.grid
-        )

@@ -63,9 +63,9 @@ class UpdatePolicy:
     """When a cell's observed error says its model needs new data.
 
     A cell's error is the relative error of integrated current over the samples recorded
-    there, ``(predicted - measured) / |measured|`` (see
-    :meth:`CellModelRegistry.relative_error`); the policy compares its magnitude, in per
-    cent, with the threshold.
+    there, ``(predicted - measured) / |measured|`` (see :meth:`CellEvidence.relative_error` of
+    :attr:`CellModelRegistry.evidence`); the policy compares its magnitude, in per cent, with
+    the threshold.
 
     Parameters
     ----------
@@ -78,8 +78,8 @@ class UpdatePolicy:
         A flagged cell is cleared only when ``|error| < threshold_pct - hysteresis_pct``;
         between the two it keeps its previous state (>= 0 and < ``threshold_pct``).
     min_region_cells : int
-        :meth:`CellModelRegistry.flagged_regions` leaves out connected regions with fewer
-        flagged cells than this (>= 1; the cells stay flagged in :meth:`~CellModelRegistry.flagged`).
+        :meth:`CellEvidence.flagged_regions` leaves out connected regions with fewer
+        flagged cells than this (>= 1; the cells stay flagged in :meth:`CellEvidence.flagged`).
 
     Raises
     ------
@@ -132,10 +132,10 @@ class ModelEntry:
 
 @dataclass(frozen=True, eq=False)
 class FlaggedRegion:
-    """A connected region of flagged cells (from :meth:`CellModelRegistry.flagged_regions`).
+    """A connected region of flagged cells (from :meth:`CellEvidence.flagged_regions`).
 
     A region can be passed wherever the registry accepts cells (``assign``,
-    ``propose_update``, ``reset_evidence``).
+    ``propose_update``, ``evidence.reset``).
 
     Attributes
     ----------

@@ -16,7 +16,7 @@ from terrawatt_base.errors import GridMismatchError, InvalidParameterError
 
 from .assignment import CellAssignment
 from .cells import check_rows_cols, flat_cells
-from .evidence import CellEvidence, EvidenceMixin
+from .evidence import CellEvidence
 from .records import (
     PRIOR_MODEL_ID,
     Cells,
@@ -32,7 +32,7 @@ from .table import ModelTable
 __all__ = ["CellModelRegistry"]
 
 
-class CellModelRegistry(EvidenceMixin):
+class CellModelRegistry:
     """Which current model serves each cell of a grid, how wrong it is there, and its updates.
 
     Parameters
@@ -65,18 +65,18 @@ class CellModelRegistry(EvidenceMixin):
     ...     def fit(self, *a, **k): return self
     ...     def predict(self, n): return np.full(n, self.current_a)
     >>> reg = CellModelRegistry((3, 4), Const(1.0), prior_name="physics")
-    >>> reg.record([1, 1], [2, 2], measured_current_a=[2.0, 2.0],
-    ...            predicted_current_a=[1.0, 1.0], dt_s=0.1)
-    >>> float(reg.relative_error()[1, 2])
+    >>> reg.evidence.record([1, 1], [2, 2], measured_current_a=[2.0, 2.0],
+    ...                     predicted_current_a=[1.0, 1.0], dt_s=0.1)
+    >>> float(reg.evidence.relative_error()[1, 2])
     -0.5
-    >>> int(reg.flagged(UpdatePolicy(threshold_pct=10.0, min_samples=2)).sum())
+    >>> int(reg.evidence.flagged(UpdatePolicy(threshold_pct=10.0, min_samples=2)).sum())
     1
 
     Notes
     -----
     A facade over the parts of :mod:`planner.registry` (model table, cell assignment,
-    evidence, store); the evidence and flag methods come from
-    :class:`~planner.registry.evidence.EvidenceMixin`.
+    evidence, store); what was recorded where, the errors and the flags are its
+    :attr:`evidence` (a :class:`~planner.registry.evidence.CellEvidence`).
     """
 
     def __init__(
@@ -100,7 +100,7 @@ class CellModelRegistry(EvidenceMixin):
             self._grid = Grid(self._shape, cell_size_m, origin_xy_m)
         self._table = ModelTable()
         self._assignment = CellAssignment(self._shape)
-        self._evidence = CellEvidence(self._shape)
+        self._evidence = CellEvidence(self._shape, grid=self._grid, assignment=self._assignment)
         self.add_model(prior, name=prior_name, meta=prior_meta)
 
     @classmethod
@@ -178,6 +178,15 @@ class CellModelRegistry(EvidenceMixin):
                 f"terrain has cell size {terrain.cell_size_m!r} m and origin {terrain.origin_xy_m!r}; "
                 f"this registry's grid has {self._grid.cell_size_m!r} m and {self._grid.origin_xy_m!r}"
             )
+
+    @property
+    def evidence(self) -> CellEvidence:
+        """The evidence per cell: record driving samples, read the errors, flag the cells that need new data.
+
+        A cell whose model changes (:meth:`assign`, an accepted :meth:`propose_update`,
+        :meth:`rollback`) loses its evidence.
+        """
+        return self._evidence
 
     # ------------------------------------------------------------- model table
     def add_model(

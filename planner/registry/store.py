@@ -288,7 +288,7 @@ def load_registry(directory: str | os.PathLike[str], load_model: Callable[[Path]
     assignment = CellAssignment(rows_cols)
     last = versions[-1].version if versions else 0
     assignment.restore(cell_model, versions, max(next_version, last + 1))
-    evidence = CellEvidence(rows_cols)
+    evidence = CellEvidence(rows_cols, grid=grid, assignment=assignment)
     evidence.restore(measured, predicted, count, state["flag_state"])
     return RegistryParts(rows_cols, grid, table, assignment, evidence)
 

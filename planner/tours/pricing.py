@@ -1,7 +1,7 @@
 """Every ordered pair of a tour's points priced on the map: one lattice search per point, here or as dask tasks.
 
 A leg ``i -> j`` is the lattice route that minimises the leg's price at the risk level (on
-:func:`planner.risk.risk_cost` when the cost carries an interval, as ``plan --risk`` does; else the
+:meth:`planner.CostTables.at_quantile` when the cost carries an interval, as ``plan --risk`` does; else the
 mean), found by :meth:`planner.Lattice.paths_from`: one Dijkstra per point, not one per pair.
 The leg is then priced on the cost itself: its mean energy (drive and turns,
 :meth:`EnergyCost.path_energy_j`, the plan price), its run-level spread per ground
@@ -26,7 +26,7 @@ from terrawatt_base.errors import InvalidParameterError
 from ..batch import shippable_cost
 from ..edge_cost import EnergyCost
 from ..lattice import Lattice
-from ..risk import RouteEnergyInterval, check_risk_level, risk_cost
+from ..risk import RouteEnergyInterval, check_risk_level
 from ..route_price import price_route
 
 __all__ = ["PairPrices", "price_pairs", "price_from"]
@@ -176,7 +176,7 @@ def price_pairs(
     names : sequence of str
         One per point.
     risk : float
-        The level the legs are searched at (:func:`planner.risk.risk_cost`; ignored without an interval).
+        The level the legs are searched at (:meth:`planner.CostTables.at_quantile`; ignored without an interval).
     compute : Compute, optional
         Where the points are priced and whether a bar shows over them
         (:class:`terrawatt_base.dask_client.Compute`; default here; on dask one task per point,
@@ -200,7 +200,7 @@ def price_pairs(
     if len(names) != pts.shape[0]:
         raise InvalidParameterError(f"names must name the {pts.shape[0]} points, got {len(names)}")
     q = check_risk_level(risk, "risk")
-    search = risk_cost(cost, q) if cost.has_interval else cost
+    search = cost.with_tables(cost.tables.at_quantile(q)) if cost.has_interval else cost
     compute = Compute() if compute is None else check_instance("compute", compute, Compute)
     p = pts.shape[0]
     with compute.session() as (client, where):

@@ -11,7 +11,6 @@ import pytest
 from energy import robot_preset
 from planner.cost_spec import CostSpec, PlanModel
 from planner.model_cost import model_energy_cost
-from planner.risk import risk_cost
 from terrain import InvalidParameterError, UnknownNameError
 
 
@@ -36,11 +35,12 @@ def test_with_a_model_the_model_prices_the_map_and_unknown_ground_does_not_apply
                                               grounds=("loam", "gravel"), gives_interval=True, risk_q=None)
 
 
-def test_at_risk_prices_every_edge_at_the_quantile_of_risk_cost(corridor_map, known_model):
+def test_at_risk_prices_every_edge_at_the_quantile_of_its_tables(corridor_map, known_model):
     spec = CostSpec(model=known_model(), risk=0.9)
     mean = spec.build(corridor_map)
     risky = spec.at_risk(mean)
-    np.testing.assert_array_equal(risky.grade_table_j_per_m, risk_cost(mean, 0.9).grade_table_j_per_m)
+    np.testing.assert_array_equal(risky.grade_table_j_per_m, mean.tables.at_quantile(0.9).grade_table_j_per_m)
+    np.testing.assert_array_equal(risky.tables.grade_sd_table_j_per_m, mean.tables.grade_sd_table_j_per_m)  # kept
     assert (risky.grade_table_j_per_m >= mean.grade_table_j_per_m).all()
     assert spec.plan_model(mean).risk_q == 0.9 and dataclasses.replace(spec, risk=None).plan_model(mean).risk_q is None
 

@@ -395,3 +395,25 @@ def test_segment_energy_names_a_non_numeric_point(name):
     points[name] = [["one", "two"]]
     with pytest.raises(InvalidParameterError, match=f"{name} must be a real number or an array of them"):
         cost.segment_energy_j(points["starts_xy_m"], points["ends_xy_m"])
+
+
+def test_path_spreads_add_each_rows_spreads_linearly_and_reuse_walked_segments() -> None:
+    g = np.zeros((4, 20), dtype=int)
+    g[:, 10:] = 1
+    tmap = TerrainMap(np.zeros((4, 20)), 1.0, ground=g, ground_names={0: "a", 1: "b"})
+    tables = CostTables(np.full((2, 5), 10.0), np.zeros((2, 3)), ("a", "b"),
+                        grade_sd_table_j_per_m=np.array([[3.0] * 5, [4.0] * 5]),
+                        turn_sd_table_j=np.array([[0.0, 1.0, 2.0], [0.0, 0.0, 0.0]]))
+    cost = EnergyCost(tmap, g, tables, speed_mps=0.5, battery_voltage_v=24.0, turn_rate_radps=1.0)
+    walked: dict = {}
+    straight = cost.path_spreads_j([[2.0, 2.0], [6.0, 2.0], [18.0, 2.0]], segment_cache=walked)
+    np.testing.assert_allclose(straight, [8 * 3.0, 8 * 4.0])  # 8 m on a, 8 m on b
+    assert set(walked) == {(2.0, 2.0, 6.0, 2.0), (6.0, 2.0, 18.0, 2.0)}
+    walked[(2.0, 2.0, 6.0, 2.0)] = np.array([100.0, 0.0])  # a walked segment is not walked again
+    assert cost.path_spreads_j([[2.0, 2.0], [6.0, 2.0]], segment_cache=walked).tolist() == [100.0, 0.0]
+    turned = cost.path_spreads_j([[2.0, 1.5], [6.0, 1.5], [6.0, 3.5]])  # a right angle on a: half the turn table
+    np.testing.assert_allclose(turned, [4 * 3.0 + 2 * 3.0 + 1.0, 0.0])
+    plain = EnergyCost(tmap, g, CostTables(np.full((2, 5), 10.0), np.zeros((2, 3))), speed_mps=0.5,
+                       battery_voltage_v=24.0, turn_rate_radps=1.0)
+    with pytest.raises(InvalidParameterError, match="no standard-deviation tables"):
+        plain.path_spreads_j([[2.0, 2.0], [6.0, 2.0]])

@@ -107,7 +107,7 @@ def test_plan_with_a_model_reports_the_t_interval_of_a_ground_it_never_drove(lin
     assert report.to_dict()["routes"]["min_energy"]["energy_interval"]["dof"] == 3.0
 
 
-def test_risk_cost_prices_each_row_at_its_own_predictive_quantile(linear_model, world):
+def test_at_risk_prices_each_row_at_its_own_predictive_quantile(linear_model, world):
     tmap, _, cost = world
     risky = CostSpec(model=linear_model, risk=0.9).at_risk(cost)
     assert risky.spread_dof == cost.spread_dof

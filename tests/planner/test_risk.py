@@ -1,4 +1,4 @@
-"""Tests of planner.risk: route energy intervals and risk-aware planning on a cheap-but-uncertain vs dear-but-certain map."""
+"""Tests of planner.risk's ideas: route energy intervals (price_route) and risk-aware planning (CostTables.at_quantile) on a cheap-but-uncertain vs dear-but-certain map."""
 
 import math
 
@@ -7,13 +7,21 @@ import pytest
 
 from energy import InteractionLog, LogMeta, robot_preset
 from energy.budget import log_battery_power_w
-from planner import CostTables, EnergyCost, RouteEnergyInterval, plan_route
+from planner import CostTables, EnergyCost, RouteEnergyInterval, plan_route, price_route
 from planner.cost_spec import CostSpec
 from planner.model_cost import model_energy_cost
-from planner.risk import risk_cost, route_energy_interval
 from terrain import InvalidParameterError, TerrainMap
 
 START, GOAL = (2.5, 7.5), (27.5, 7.5)
+
+
+def risk_cost(cost, q):
+    """The cost a risk level ``q`` plans on (as CostSpec.at_risk lays it)."""
+    return cost.with_tables(cost.tables.at_quantile(q))
+
+
+def route_energy_interval(cost, waypoints):
+    return price_route(cost, waypoints, interval=True)
 Z90 = 1.2815515655446004
 
 
@@ -116,7 +124,7 @@ def test_spreads_add_linearly_within_a_ground_and_in_quadrature_across_grounds()
 def test_risk_and_interval_need_a_cost_with_spreads_and_a_level_in_the_open_unit_interval(flat_map, cost):
     plain = CostSpec().build(flat_map)
     assert not plain.has_interval
-    with pytest.raises(InvalidParameterError, match="no standard-deviation tables"):
+    with pytest.raises(InvalidParameterError, match="no standard deviations"):
         risk_cost(plain, 0.9)
     with pytest.raises(InvalidParameterError, match="no standard-deviation tables"):
         route_energy_interval(plain, [[1.0, 1.0], [5.0, 1.0]])

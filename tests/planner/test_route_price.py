@@ -6,11 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from energy import drive_profile
 from planner import CostTables, price_route
 from planner.cost_spec import CostSpec
 from planner.learned_table import TableProbe
 from planner.route import evaluate_route
-from planner.route_price import route_forecast_j, segment_forecasts_j
+from planner.route_price import FORECAST_DT_S, profile_forecast_w, segment_forecasts_j
 from terrain import InvalidParameterError, UnknownNameError, flat_map
 
 
@@ -20,6 +21,11 @@ def test_segment_energies_integrate_the_power_between_the_planned_marks():
     turn, straight = segment_forecasts_j(t, power, np.array([1.0, 1.0]), np.array([2.0, 2.0]))
     np.testing.assert_allclose(turn, [0.5, (16.0 - 9.0) / 2], rtol=1e-9)
     np.testing.assert_allclose(straight, [(9.0 - 1.0) / 2, (36.0 - 16.0) / 2], rtol=1e-9)
+
+
+def route_forecast_j(cost, route, speed_mps=None):
+    """The route's stop-turn-go drive priced by the cost's physics model."""
+    return price_route(cost, route, how="profile", speed_mps=speed_mps).mean_j
 
 
 def test_a_longer_route_and_a_turn_cost_more():
@@ -55,20 +61,20 @@ def test_price_route_reads_the_edges_or_the_profile_of_the_model_that_priced_the
     assert edges.mean_j == cost.path_energy_j(np.array(WAYPOINTS)) and edges.sd_j == 0.0
     assert edges.mean_j == price_route(cost, evaluate_route(cost, WAYPOINTS)).mean_j  # a Route or its waypoints
     profile = price_route(cost, WAYPOINTS, how="profile")
-    assert profile.mean_j == route_forecast_j(cost, WAYPOINTS) > edges.mean_j
-    assert price_route(cost, WAYPOINTS, how="profile", speed_mps=0.8).mean_j == route_forecast_j(
-        cost, WAYPOINTS, speed_mps=0.8)
+    driven = drive_profile(np.array(WAYPOINTS), 0.8, turn_rate_radps=cost.turn_rate_radps, dt_s=FORECAST_DT_S)
+    power, t = profile_forecast_w(cost, driven), np.asarray(driven.time_s)
+    assert profile.mean_j > edges.mean_j
+    assert price_route(cost, WAYPOINTS, how="profile", speed_mps=0.8).mean_j == pytest.approx(
+        float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(t))), rel=1e-12)  # the drive at 0.8 m/s, integrated
     tmap, lem, learned = _learned_cost()
     assert learned.learned_model is lem
     assert price_route(learned, WAYPOINTS, how="profile").mean_j == lem.predict_route_energy_j(tmap, WAYPOINTS, 0.5)
 
 
 def test_price_route_carries_the_interval_where_the_map_has_one(corridor_map, known_model):
-    from planner.risk import route_energy_interval
-
     cost = CostSpec(model=known_model()).build(corridor_map)
     wp = [[2.5, 7.5], [2.5, 11.5], [27.5, 11.5]]  # up the hub, along the loam corridor
-    assert price_route(cost, wp) == route_energy_interval(cost, wp) and price_route(cost, wp).sd_j > 0
+    assert price_route(cost, wp) == price_route(cost, wp, interval=True) and price_route(cost, wp).sd_j > 0
     point = price_route(cost, wp, interval=False)
     assert point.mean_j == price_route(cost, wp).mean_j and point.sd_j == 0.0
 

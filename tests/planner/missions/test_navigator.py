@@ -86,7 +86,7 @@ def test_chunks_of_a_leg_give_the_decisions_of_the_whole_leg():
     for a, b in zip(chunked.legs, whole.legs):
         assert a.actual_energy_j == pytest.approx(b.actual_energy_j, rel=1e-9) and a.n_samples == b.n_samples
     assert np.array_equal(np.asarray(chunked.registry.model_id_map), np.asarray(whole.registry.model_id_map))
-    np.testing.assert_allclose(chunked.registry.measured_charge_c, whole.registry.measured_charge_c, rtol=1e-12)
+    np.testing.assert_allclose(chunked.registry.evidence.measured_charge_c, whole.registry.evidence.measured_charge_c, rtol=1e-12)
 
 
 def test_checkpoints_come_every_leg_length_driven_without_being_told():
@@ -137,7 +137,7 @@ def test_a_drive_without_currents_forecasts_only():
     d = nav.observe(blind, checkpoint=True)
     assert d.evidence["mode"].startswith("forecast only") and nav.updates == []
     assert 0.0 < 1.0 - nav.soc  # the models' currents drew the battery
-    assert float(np.sum(nav.registry.sample_count)) == 0.0  # nothing learned
+    assert float(np.sum(nav.registry.evidence.sample_count)) == 0.0  # nothing learned
 
 
 def test_plain_arrays_with_gps_positions_are_placed_through_the_maps_crs():

@@ -42,7 +42,7 @@ def registry(shape: tuple[int, int] = (4, 5)) -> CellModelRegistry:
 def record_error(reg: CellModelRegistry, row: int, col: int, n: int, predicted_a: float,
                   measured_a: float = 1.0) -> None:
     """Record ``n`` one-second samples at one cell."""
-    reg.record(np.full(n, row), np.full(n, col), np.full(n, measured_a), np.full(n, predicted_a), 1.0)
+    reg.evidence.record(np.full(n, row), np.full(n, col), np.full(n, measured_a), np.full(n, predicted_a), 1.0)
 
 
 def cell_predictions(reg: CellModelRegistry, v_mps: float = 0.7) -> np.ndarray:

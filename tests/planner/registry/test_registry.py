@@ -85,15 +85,15 @@ def test_grid_binding_and_mismatch() -> None:
     with pytest.raises(GridMismatchError, match="mask has shape"):
         reg.assign(np.ones((5, 4), bool), 0)
     with pytest.raises(GridMismatchError, match="mask has shape"):
-        reg.reset_evidence(np.ones((4, 4), bool))
+        reg.evidence.reset(np.ones((4, 4), bool))
 
 
 # -------------------------------------------------------------------- updates
 def test_worse_model_is_rejected_and_old_one_kept() -> None:
     reg = registry()
     policy = UpdatePolicy(threshold_pct=10.0, min_samples=1, hysteresis_pct=2.0)
-    reg.record([1, 1], [1, 2], [1.0, 1.0], [2.0, 2.0], 1.0)
-    (region,) = reg.flagged_regions(policy)
+    reg.evidence.record([1, 1], [1, 2], [1.0, 1.0], [2.0, 2.0], 1.0)
+    (region,) = reg.evidence.flagged_regions(policy)
     before = reg.model_id_map
     for err_new in (0.30, 0.20):  # worse, then equal: both rejected
         decision = reg.propose_update(region, GainModel(9.0), err_new, 0.20, name="snow-v1", reason="test")
@@ -101,7 +101,7 @@ def test_worse_model_is_rejected_and_old_one_kept() -> None:
         assert decision.improvement == pytest.approx(0.20 - err_new) and decision.cell_count == 2
     np.testing.assert_array_equal(reg.model_id_map, before)
     assert reg.history == [] and reg.model_ids == (0,)
-    assert reg.sample_count.sum() == 2 and reg.flag_state.sum() == 2  # evidence untouched
+    assert reg.evidence.sample_count.sum() == 2 and reg.evidence.flag_state.sum() == 2  # evidence untouched
     assert reg.model_for(1, 1) is reg.model(0)
 
     better = GainModel(1.5)
@@ -111,7 +111,7 @@ def test_worse_model_is_rejected_and_old_one_kept() -> None:
     assert decision.improvement == pytest.approx(0.15)
     assert reg.model_for(1, 1) is better and reg.model_for(1, 2) is better
     assert int(np.count_nonzero(reg.model_id_map == 1)) == 2
-    assert reg.sample_count.sum() == 0 and not reg.flag_state.any()  # evidence reset in the region
+    assert reg.evidence.sample_count.sum() == 0 and not reg.evidence.flag_state.any()  # evidence reset in the region
     (v,) = reg.history
     assert (v.version, v.kind, v.model_id, v.cell_count, v.reason) == (1, "update", 1, 2, "error 100 %")
     assert (v.validation_error_new, v.validation_error_old) == (0.05, 0.20)
@@ -185,18 +185,18 @@ def test_rollback_to_a_middle_version_and_evidence_reset() -> None:
         mask[: k + 1, : k + 1] = True
         reg.assign(mask, mid)
         maps.append(reg.model_id_map)
-    reg.record([0, 2, 1], [0, 2, 2], [1.0, 1.0, 1.0], [1.5, 1.5, 1.5], 1.0)
+    reg.evidence.record([0, 2, 1], [0, 2, 2], [1.0, 1.0, 1.0], [1.5, 1.5, 1.5], 1.0)
     reg.rollback(version=2)
     np.testing.assert_array_equal(reg.model_id_map, maps[2])
     # (2, 2) and (1, 2) changed model (m4 -> prior / m3): evidence reset; (0, 0) changed m4 -> m3
-    assert reg.sample_count.sum() == 0
-    reg.record([0, 1], [0, 0], [1.0, 1.0], [1.5, 1.5], 1.0)
+    assert reg.evidence.sample_count.sum() == 0
+    reg.evidence.record([0, 1], [0, 0], [1.0, 1.0], [1.5, 1.5], 1.0)
     reg.rollback(version=1)
     np.testing.assert_array_equal(reg.model_id_map, maps[1])
-    assert reg.sample_count[0, 0] == 0 and reg.sample_count[1, 0] == 0  # both changed m3 -> m2 / prior
-    reg.record([0], [0], [1.0], [1.5], 1.0)
+    assert reg.evidence.sample_count[0, 0] == 0 and reg.evidence.sample_count[1, 0] == 0  # both changed m3 -> m2 / prior
+    reg.evidence.record([0], [0], [1.0], [1.5], 1.0)
     reg.assign((np.array([0]), np.array([0])), ids[0])  # same model as before: evidence kept
-    assert reg.sample_count[0, 0] == 1
+    assert reg.evidence.sample_count[0, 0] == 1
 
 
 def test_georeferencing_goes_through_grid() -> None:

@@ -27,12 +27,12 @@ def _populated(tmp_path: Path) -> tuple[CellModelRegistry, TerrainMap]:
     reg.assign(mask, sand, reason="ground layer")
     rng = np.random.default_rng(3)
     rows, cols = rng.integers(0, 5, 300), rng.integers(0, 6, 300)
-    reg.record(rows, cols, rng.uniform(1, 2, 300), rng.uniform(1, 3, 300), 0.01)
+    reg.evidence.record(rows, cols, rng.uniform(1, 2, 300), rng.uniform(1, 3, 300), 0.01)
     policy = UpdatePolicy(threshold_pct=20.0, min_samples=3, hysteresis_pct=5.0)
-    regions = reg.flagged_regions(policy)
+    regions = reg.evidence.flagged_regions(policy)
     reg.propose_update(regions[0], GainModel(2.5, -0.1), 0.03, 0.4, name="snow", reason="region 1 > 20 %")
-    reg.record(rows[:50], cols[:50], np.ones(50), np.full(50, 1.5), 0.01)
-    reg.flagged(policy)
+    reg.evidence.record(rows[:50], cols[:50], np.ones(50), np.full(50, 1.5), 0.01)
+    reg.evidence.flagged(policy)
     return reg, tmap
 
 
@@ -46,10 +46,10 @@ def test_save_load_round_trip(tmp_path: Path) -> None:
     back = CellModelRegistry.load(out, load_gain, terrain=tmap)
     assert back.shape == reg.shape and back.cell_size_m == 0.5 and back.origin_xy_m == (-1.0, 2.0)
     np.testing.assert_array_equal(back.model_id_map, reg.model_id_map)
-    np.testing.assert_array_equal(back.measured_charge_c, reg.measured_charge_c)
-    np.testing.assert_array_equal(back.predicted_charge_c, reg.predicted_charge_c)
-    np.testing.assert_array_equal(back.sample_count, reg.sample_count)
-    np.testing.assert_array_equal(back.flag_state, reg.flag_state)
+    np.testing.assert_array_equal(back.evidence.measured_charge_c, reg.evidence.measured_charge_c)
+    np.testing.assert_array_equal(back.evidence.predicted_charge_c, reg.evidence.predicted_charge_c)
+    np.testing.assert_array_equal(back.evidence.sample_count, reg.evidence.sample_count)
+    np.testing.assert_array_equal(back.evidence.flag_state, reg.evidence.flag_state)
     np.testing.assert_array_equal(cell_predictions(back), cell_predictions(reg))
     assert [back.model_record(i).name for i in back.model_ids] == ["physics", "sand", "snow"]
     assert dict(back.model_record(0).meta) == {"kind": "physics", "version": 2}
@@ -70,7 +70,12 @@ def test_save_load_round_trip(tmp_path: Path) -> None:
     assert not np.array_equal(back.model_id_map, before_update)
     # hysteresis state survives: same flags on the next call
     policy = UpdatePolicy(threshold_pct=20.0, min_samples=3, hysteresis_pct=5.0)
-    np.testing.assert_array_equal(back.flagged(policy), reg.flagged(policy))
+    np.testing.assert_array_equal(back.evidence.flagged(policy), reg.evidence.flagged(policy))
+    # the loaded evidence knows the grid (world coordinates) and the current cell map (each region's models)
+    loose = UpdatePolicy(threshold_pct=1.0, min_samples=1, hysteresis_pct=0.5)
+    regions, back_regions = reg.evidence.flagged_regions(loose), back.evidence.flagged_regions(loose)
+    assert regions and [(r.bounds_m, r.model_ids) for r in back_regions] == [(r.bounds_m, r.model_ids) for r in regions]
+    assert all(r.bounds_m is not None for r in back_regions)
     with pytest.raises(GridMismatchError, match="shape"):
         CellModelRegistry.load(out, load_gain, terrain=TerrainMap(np.zeros((6, 5)), cell_size_m=0.5))
 
