@@ -20,9 +20,9 @@ import numpy as np
 from energy import Battery, EnergyBudget, InteractionLog
 from energy.io import write_csv_log, write_drive_bag
 from terrain import TerrainMap
+from terrawatt_base.answer import write_answer
 from terrawatt_base.atomic import check_output_path
 from terrawatt_base.errors import InvalidParameterError
-from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import result_document, write_result_json
 
 from ..registry import CellModelRegistry
@@ -321,7 +321,7 @@ class AdaptiveResult:
     def write(self, out_dir: str | os.PathLike[str], *, logs: bool = False, on_figure_error: str = "warn"
               ) -> list[Path]:
         """Write mission.json and mission.png into ``out_dir``; return the files written (a figure that fails
-        warns and is left out, :func:`terrawatt_base.figure_file.draw_figure`).
+        warns and is left out, :func:`terrawatt_base.answer.write_answer`).
 
         With ``logs``, also each leg's log (:attr:`AdaptiveResult.leg_logs`) as a CSV log
         ``logs/leg_NNN.csv`` (:func:`energy.io.write_csv_log`) and each manoeuvre run
@@ -336,10 +336,9 @@ class AdaptiveResult:
         out = Path(out_dir)
         if logs:
             check_logs_folder(out)
-        out.mkdir(parents=True, exist_ok=True)
-        written = [write_result_json(out / "mission.json", self.to_dict())]
-        png = draw_figure(out / "mission.png", lambda: self.plot(out / "mission.png", self.terrain, self.registry), on_error=on_figure_error)
-        written += [png] if png is not None else []
+        written = write_answer(out, {"mission.json": lambda p: write_result_json(p, self.to_dict())},
+                               {"mission.png": lambda p: self.plot(p, self.terrain, self.registry)},
+                               on_figure_error=on_figure_error)
         if logs:
             folder = out / LOGS_FOLDER
             folder.mkdir(exist_ok=True)
