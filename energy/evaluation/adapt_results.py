@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from terrawatt_base.answer import fmt_fixed, markdown_table
 from terrawatt_base.errors import UnknownNameError
 
 __all__ = [
@@ -131,20 +132,15 @@ def summarise_adapt_scores(scores: list[AdaptScore] | tuple[AdaptScore, ...]) ->
 def adapt_table(rows: Sequence[AdaptRow]) -> list[str]:
     """The lines of the per-side markdown table of adaptation rows: per protocol, ground, model and schedule,
     unadapted | adapted | gain baseline."""
-    def f(x: float, nd: int = 1) -> str:
-        return "–" if not math.isfinite(x) else f"{x:.{nd}f}"
+    def f(*xs: float, nd: int = 1) -> str:
+        return " / ".join(fmt_fixed(x, nd) for x in xs)
 
-    lines = [
-        "| protocol | ground | model | adapt on | values | unadapted median / p90 % | adapted median / p90 % | "
-        "gain median / p90 % | sections unadapted / adapted / gain % | RMSE unadapted / adapted / gain A | updates |",
-        "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|",
-    ]
-    for s in rows:
-        lines.append(
-            f"| {s.protocol} | {s.ground} | {s.model} | {s.schedule} | {s.n_values} | "
-            f"{f(s.unadapted_median_pct)} / {f(s.unadapted_p90_pct)} | {f(s.adapted_median_pct)} / {f(s.adapted_p90_pct)} | "
-            f"{f(s.gain_median_pct)} / {f(s.gain_p90_pct)} | {f(s.unadapted_section_median_pct)} / "
-            f"{f(s.adapted_section_median_pct)} / {f(s.gain_section_median_pct)} | {f(s.unadapted_rmse_median_a, 2)} / "
-            f"{f(s.adapted_rmse_median_a, 2)} / {f(s.gain_rmse_median_a, 2)} | {f(s.updates_mean)} |"
-        )
-    return lines
+    header = ["protocol", "ground", "model", "adapt on", "values", "unadapted median / p90 %", "adapted median / p90 %",
+              "gain median / p90 %", "sections unadapted / adapted / gain %", "RMSE unadapted / adapted / gain A",
+              "updates"]
+    return markdown_table(header, ([
+        s.protocol, s.ground, s.model, s.schedule, s.n_values, f(s.unadapted_median_pct, s.unadapted_p90_pct),
+        f(s.adapted_median_pct, s.adapted_p90_pct), f(s.gain_median_pct, s.gain_p90_pct),
+        f(s.unadapted_section_median_pct, s.adapted_section_median_pct, s.gain_section_median_pct),
+        f(s.unadapted_rmse_median_a, s.adapted_rmse_median_a, s.gain_rmse_median_a, nd=2), f(s.updates_mean)]
+        for s in rows), left=4)

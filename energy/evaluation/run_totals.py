@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from terrawatt_base.answer import fmt_fixed, markdown_table
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from ..battery import Battery
@@ -235,21 +236,17 @@ def summarise_totals(totals: Sequence[RunTotal], levels: Sequence[float] = DEFAU
 def totals_markdown(rows: Sequence[dict[str, Any]], levels: Sequence[float] = DEFAULT_LEVELS) -> str:
     """The battery's table: pack energy and total charge errors, and the intervals' coverage, one row per summary
     (``schedule``: the adapt time, or the leave-one-run-out variant)."""
-    def f(x: Any, nd: int = 1) -> str:
-        return "–" if x is None or not math.isfinite(x) else f"{x:.{nd}f}"
+    def f(*xs: Any, nd: int = 1) -> str:
+        return " / ".join(fmt_fixed(x, nd) for x in xs)
 
-    cov = " / ".join(f"{100 * lv:g}" for lv in levels)
-    lines = [
-        f"| protocol | ground | model | schedule | forecast | runs | pack energy median / p90 % | "
-        f"total charge median / p90 % | coverage {cov} % | median \\|z\\| |",
-        "|---|---|---|---|---|---:|---:|---:|---:|---:|",
-    ]
-    for r in rows:
-        c = " / ".join(f(r[f"coverage_{100 * lv:g}_pct"], 0) for lv in levels)
-        lines.append(f"| {r['protocol']} | {r['ground']} | {r['model']} | {r['schedule']} | {r['variant']} | {r['n']} | "
-                     f"{f(r['energy_median_pct'])} / {f(r['energy_p90_pct'])} | "
-                     f"{f(r['charge_median_pct'])} / {f(r['charge_p90_pct'])} | {c} | {f(r['median_abs_z'], 2)} |")
-    return "\n".join(lines) + "\n"
+    header = ["protocol", "ground", "model", "schedule", "forecast", "runs", "pack energy median / p90 %",
+              "total charge median / p90 %", f"coverage {' / '.join(f'{100 * lv:g}' for lv in levels)} %",
+              "median \\|z\\|"]
+    return "\n".join(markdown_table(header, ([
+        r["protocol"], r["ground"], r["model"], r["schedule"], r["variant"], r["n"],
+        f(r["energy_median_pct"], r["energy_p90_pct"]), f(r["charge_median_pct"], r["charge_p90_pct"]),
+        f(*(r[f"coverage_{100 * lv:g}_pct"] for lv in levels), nd=0), f(r["median_abs_z"], nd=2)] for r in rows),
+        left=5)) + "\n"
 
 
 def plot_totals_reliability(totals: Sequence[RunTotal], ax: Any = None, *, title: str | None = None) -> Any:
