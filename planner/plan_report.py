@@ -19,6 +19,7 @@ import numpy as np
 
 from terrain import UNKNOWN_GROUND, InvalidParameterError, OptionalDependencyError, TerrainMap
 from terrawatt_base.answer import write_answer
+from terrawatt_base.atomic import json_finite
 from terrawatt_base.checks import check_instance
 from terrawatt_base.formats import format_name, result_document, write_result_json
 
@@ -122,10 +123,6 @@ def compile_line(compile_s: float) -> list[str]:
         return []
     return [f"(compiled the edge-cost kernels in {compile_s:.1f} s: first run in this environment; "
             "not in the times below)"]
-
-
-def _finite_or_none(x: float) -> float | None:
-    return x if math.isfinite(x) else None
 
 
 @dataclass(frozen=True)
@@ -329,8 +326,8 @@ class PlanReport:
             "map_preparation_s": self.priced.map_preparation_s,
             "kernel_compile_s": self.priced.kernel_compile_s,
             "status": route.status,
-            "energy_saved_pct": _finite_or_none(route.energy_saved_pct) if route.found else None,
-            "optimality_ratio": _finite_or_none(route.optimality_ratio) if route.found else None,
+            "energy_saved_pct": json_finite(route.energy_saved_pct) if route.found else None,
+            "optimality_ratio": json_finite(route.optimality_ratio) if route.found else None,
             "table": self.rows(),
             "routes": routes,
         })
