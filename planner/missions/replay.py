@@ -39,6 +39,7 @@ import numpy as np
 from energy import InteractionLog
 from terrain import DataError, InvalidParameterError
 from terrawatt_base.answer import write_answer
+from terrawatt_base.atomic import json_finite
 from terrawatt_base.checks import check_instance
 from terrawatt_base.formats import result_document, write_result_json
 
@@ -204,8 +205,7 @@ class ReplayResult:
             "adaptive": nav.result().to_json_dict(series_every=10),
             "model_map_before": self.model_map_before.tolist(), "model_map_after": self.model_map_after.tolist(),
             "decisions": list(self.decisions),
-            "forecast": {k: [float(x) if math.isfinite(x) else None for x in v.tolist()]
-                         for k, v in self.forecast.items()},
+            "forecast": {k: json_finite(v) for k, v in self.forecast.items()},
         })
 
     def plot(self, path: str | os.PathLike[str] | None = None, *, axes: Any = None) -> Any:
