@@ -21,6 +21,7 @@ __all__ = [
     "AdaptRow",
     "summarise_adapt_scores",
     "adapt_table",
+    "finite_percentile",
 ]
 
 #: Protocols of an :class:`AdaptScore`: leave one run out per ground (the held-out
@@ -99,7 +100,8 @@ class AdaptRow:
     updates_mean: float
 
 
-def _stat(values: list[float], q: float) -> float:
+def finite_percentile(values: Sequence[float], q: float) -> float:
+    """The ``q``-th percentile of the finite ``values`` (NaN when none is): a cell of the evaluation's tables."""
     arr = np.asarray(values, dtype=np.float64)
     arr = arr[np.isfinite(arr)]
     return float(np.percentile(arr, q)) if arr.size else math.nan
@@ -111,10 +113,10 @@ def _summary(protocol: str, ground: str, model: str, schedule: str, rows: list[A
 
     out: dict[str, float] = {}
     for kind in ("unadapted", "adapted", "gain"):
-        out[f"{kind}_median_pct"] = _stat(col(f"{kind}_whole_pct"), 50)
-        out[f"{kind}_p90_pct"] = _stat(col(f"{kind}_whole_pct"), 90)
-        out[f"{kind}_section_median_pct"] = _stat(col(f"{kind}_section_pct"), 50)
-        out[f"{kind}_rmse_median_a"] = _stat(col(f"{kind}_rmse_a"), 50)
+        out[f"{kind}_median_pct"] = finite_percentile(col(f"{kind}_whole_pct"), 50)
+        out[f"{kind}_p90_pct"] = finite_percentile(col(f"{kind}_whole_pct"), 90)
+        out[f"{kind}_section_median_pct"] = finite_percentile(col(f"{kind}_section_pct"), 50)
+        out[f"{kind}_rmse_median_a"] = finite_percentile(col(f"{kind}_rmse_a"), 50)
     return AdaptRow(protocol, ground, model, schedule, len(rows), **out,
                         updates_mean=float(np.mean(col("n_updates"))) if rows else math.nan)
 

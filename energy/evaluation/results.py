@@ -10,8 +10,6 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from terrawatt_base.answer import fmt_fixed, markdown_table, write_answer
 from terrawatt_base.atomic import check_output_path, json_finite, save_figure, write_text_atomic
 from terrawatt_base.checks import check_bool, check_choice
@@ -23,7 +21,7 @@ from ..logs import InteractionLog
 from ..models.base import CurrentModel
 from ..plots import plot_current_estimate, plot_vibration_spectra
 from ..prediction import RunPrediction
-from .adapt_results import ADAPT_FILES, ADAPT_FORMAT_VERSION, AdaptRow, AdaptScore, adapt_table
+from .adapt_results import ADAPT_FILES, ADAPT_FORMAT_VERSION, AdaptRow, AdaptScore, adapt_table, finite_percentile
 from .run_totals import TOTALS_HEADING, RunTotal, plot_totals_reliability, summarise_totals, totals_markdown
 
 __all__ = [
@@ -132,12 +130,6 @@ class ScoreRow:
     fit_duration_median_s: float
 
 
-def _stat(values: list[float], q: float) -> float:
-    arr = np.asarray(values, dtype=np.float64)
-    arr = arr[np.isfinite(arr)]
-    return float(np.percentile(arr, q)) if arr.size else math.nan
-
-
 def _summarise(variant: str, ground: str, model: str, scores: list[RunScore]) -> ScoreRow:
     """The summary of one variant, ground and model over ``scores`` (already selected)."""
     whole = [s.whole_run_error_pct for s in scores]
@@ -147,10 +139,10 @@ def _summarise(variant: str, ground: str, model: str, scores: list[RunScore]) ->
         variant=variant, ground=ground, model=model,
         n_runs=len({s.run for s in scores}), n_values=len(scores),
         n_undefined=int(sum(not math.isfinite(w) for w in whole)),
-        whole_run_median_pct=_stat(whole, 50), whole_run_p90_pct=_stat(whole, 90),
-        section_median_pct=_stat(sec, 50), section_p90_pct=_stat(sec, 90),
-        rmse_median_a=_stat(rmse, 50), rmse_p90_a=_stat(rmse, 90),
-        fit_duration_median_s=_stat([s.fit_duration_s for s in scores], 50),
+        whole_run_median_pct=finite_percentile(whole, 50), whole_run_p90_pct=finite_percentile(whole, 90),
+        section_median_pct=finite_percentile(sec, 50), section_p90_pct=finite_percentile(sec, 90),
+        rmse_median_a=finite_percentile(rmse, 50), rmse_p90_a=finite_percentile(rmse, 90),
+        fit_duration_median_s=finite_percentile([s.fit_duration_s for s in scores], 50),
     )
 
 

@@ -39,6 +39,7 @@ from ..logs import InteractionLog
 from ..models.base import log_currents
 from ..models.forecast import CurrentForecast, central_level
 from ..robot import RobotParams
+from .adapt_results import finite_percentile
 from .intervals import DEFAULT_LEVELS, IntervalRecord, plot_reliability
 
 __all__ = ["RunTotal", "ScoredRun", "VARIANTS", "TOTALS_HEADING", "pack_energy_j", "run_totals", "summarise_totals", "totals_markdown",
@@ -193,12 +194,6 @@ def run_totals(log: InteractionLog, forecasts: dict[str, tuple[np.ndarray, Curre
     return out
 
 
-def _pct(values: list[float], q: float) -> float:
-    arr = np.asarray(values, dtype=np.float64)
-    arr = arr[np.isfinite(arr)]
-    return float(np.percentile(arr, q)) if arr.size else math.nan
-
-
 def summarise_totals(totals: Sequence[RunTotal], levels: Sequence[float] = DEFAULT_LEVELS) -> list[dict[str, Any]]:
     """Per protocol, ground (then ``"all"``), model, schedule and variant: errors and interval coverage.
 
@@ -221,10 +216,10 @@ def summarise_totals(totals: Sequence[RunTotal], levels: Sequence[float] = DEFAU
         zs = zs[np.isfinite(zs)]
         row: dict[str, Any] = dict(zip(("protocol", "ground", "model", "schedule", "variant"), key))
         row |= {"n": len(rs),
-                "energy_median_pct": _pct([r.energy_error_pct for r in rs], 50),
-                "energy_p90_pct": _pct([r.energy_error_pct for r in rs], 90),
-                "charge_median_pct": _pct([r.charge_error_pct for r in rs], 50),
-                "charge_p90_pct": _pct([r.charge_error_pct for r in rs], 90),
+                "energy_median_pct": finite_percentile([r.energy_error_pct for r in rs], 50),
+                "energy_p90_pct": finite_percentile([r.energy_error_pct for r in rs], 90),
+                "charge_median_pct": finite_percentile([r.charge_error_pct for r in rs], 50),
+                "charge_p90_pct": finite_percentile([r.charge_error_pct for r in rs], 90),
                 "n_interval": int(zs.size)}
         for lv in levels:
             row[f"coverage_{100 * lv:g}_pct"] = 100.0 * float(np.mean(need <= lv)) if zs.size else math.nan
