@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from terrain import TerrainMap
+from terrawatt_base.answer import fmt_fixed, write_answer
 from terrawatt_base.atomic import write_text_atomic
 from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.formats import result_document, write_result_json
@@ -209,12 +210,10 @@ class BatchResult:
         """The first ``max_rows`` rows as a fixed-width text table (name, status, Wh, m, s, saving)."""
         header = f"{'pair':<20} {'status':<11} {'energy Wh':>9} {'length m':>9} {'time s':>8} {'saved %':>8}"
         lines = [header, "-" * len(header)]
-        def num(value: float, width: int, digits: int) -> str:
-            return f"{value:>{width}.{digits}f}" if math.isfinite(value) else f"{'-':>{width}}"
-
         for r in self.rows[:max_rows]:
-            lines.append(f"{r.name[:20]:<20} {r.status:<11} {num(r.energy_wh, 9, 2)} {num(r.length_m, 9, 1)} "
-                         f"{num(r.duration_s, 8, 1)} {num(r.energy_saved_pct, 8, 1)}")
+            wh, m, s, pct = (fmt_fixed(x, d, missing="-") for x, d in
+                             ((r.energy_wh, 2), (r.length_m, 1), (r.duration_s, 1), (r.energy_saved_pct, 1)))
+            lines.append(f"{r.name[:20]:<20} {r.status:<11} {wh:>9} {m:>9} {s:>8} {pct:>8}")
         if len(self.rows) > max_rows:
             lines.append(f"... {len(self.rows) - max_rows} more rows")
         return "\n".join(lines)
@@ -231,9 +230,7 @@ class BatchResult:
 
     def write(self, out_dir: str | os.PathLike[str]) -> list[Path]:
         """Write batch.csv and batch.json into ``out_dir`` (created); return them."""
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        return [self.to_csv(out / "batch.csv"), self.write_json(out / "batch.json")]
+        return write_answer(out_dir, {"batch.csv": self.to_csv, "batch.json": self.write_json})
 
     def totals(self) -> str:
         """A few lines for people: counts by status, throughput, median saving, the errors."""

@@ -18,8 +18,9 @@ from typing import Any
 import numpy as np
 
 from terrain import UNKNOWN_GROUND, InvalidParameterError, OptionalDependencyError, TerrainMap
+from terrawatt_base.answer import write_answer
+from terrawatt_base.atomic import json_finite
 from terrawatt_base.checks import check_instance
-from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import format_name, result_document, write_result_json
 
 from .coarse import CoarseOptions, CoarseToFine
@@ -122,10 +123,6 @@ def compile_line(compile_s: float) -> list[str]:
         return []
     return [f"(compiled the edge-cost kernels in {compile_s:.1f} s: first run in this environment; "
             "not in the times below)"]
-
-
-def _finite_or_none(x: float) -> float | None:
-    return x if math.isfinite(x) else None
 
 
 @dataclass(frozen=True)
@@ -329,8 +326,8 @@ class PlanReport:
             "map_preparation_s": self.priced.map_preparation_s,
             "kernel_compile_s": self.priced.kernel_compile_s,
             "status": route.status,
-            "energy_saved_pct": _finite_or_none(route.energy_saved_pct) if route.found else None,
-            "optimality_ratio": _finite_or_none(route.optimality_ratio) if route.found else None,
+            "energy_saved_pct": json_finite(route.energy_saved_pct) if route.found else None,
+            "optimality_ratio": json_finite(route.optimality_ratio) if route.found else None,
             "table": self.rows(),
             "routes": routes,
         })
@@ -391,21 +388,16 @@ class PlanReport:
         ``out_dir`` (created), each atomically; return the files written.
 
         A figure that fails warns (:class:`~terrawatt_base.errors.FigureWarning`) and is left out,
-        unless ``on_figure_error="raise"`` (:func:`terrawatt_base.figure_file.draw_figure`). The GeoJSON of a
+        unless ``on_figure_error="raise"`` (:func:`terrawatt_base.answer.write_answer`). The GeoJSON of a
         coarse-to-fine route takes its elevations from the fine map, or the coarse map when the fine stage ran in
         chained windows (no one fine map holds the route).
         """
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        written = [write_result_json(out / "route.json", self.to_dict())]
         found = {name: r for name, r in self._routes().items() if r.found}
-        if found:
-            where = self.terrain if self.coarse is None else (
-                self.fine_map if self.fine_map is not None else self.coarse.coarse_map)
-            written.append(write_geojson(found, where, out / "route.geojson"))
-        png = draw_figure(out / "route.png", lambda: self.plot(out / "route.png", whole_map=whole_map),
-                          on_error=on_figure_error)
-        return written + ([png] if png is not None else [])
+        where = self.terrain if self.coarse is None else (
+            self.fine_map if self.fine_map is not None else self.coarse.coarse_map)
+        return write_answer(out_dir, {"route.json": lambda p: write_result_json(p, self.to_dict()),
+                                      "route.geojson": lambda p: write_geojson(found, where, p) if found else None},
+                            {"route.png": lambda p: self.plot(p, whole_map=whole_map)}, on_figure_error=on_figure_error)
 
 
 def plan_and_compare(

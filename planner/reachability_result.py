@@ -21,9 +21,9 @@ from energy.battery import S_PER_H
 from terrain import TerrainMap
 from terrain.geotiff import write_geotiff
 from terrain.grid import Grid
+from terrawatt_base.answer import write_answer
 from terrawatt_base.atomic import atomic_open, check_output_path, remove_stale_temporaries
 from terrawatt_base.errors import FileFormatError, InvalidParameterError, UnknownNameError
-from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import read_versioned_npz, result_document, write_result_json
 
 from .reachability_plot import plot_reachability
@@ -323,17 +323,14 @@ class Reachability:
         """Write the raster (``raster``: ``reach.tif`` or ``reach.npz``; default ``reach.tif`` when the map has a
         CRS, else ``reach.npz``), reach.json and reach.png into ``out_dir``; return the files written.
 
-        A figure that fails warns and is left out (:func:`terrawatt_base.figure_file.draw_figure`).
+        A figure that fails warns and is left out (:func:`terrawatt_base.answer.write_answer`).
         """
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
         name = raster if raster is not None else ("reach.tif" if self.crs else "reach.npz")
-        written = [self.write_raster(out / name)]
-        written.append(write_result_json(out / "reach.json", self.to_dict(written[0].name)))
         label = "a map" if self.priced is None else self.priced.map_label
-        png = draw_figure(out / "reach.png", lambda: self.plot(
-            out / "reach.png", title=f"terrawatt: energy reachability on {label}"), on_error=on_figure_error)
-        return written + ([png] if png is not None else [])
+        return write_answer(out_dir, {name: self.write_raster,
+                                      "reach.json": lambda p: write_result_json(p, self.to_dict(Path(name).name))},
+                            {"reach.png": lambda p: self.plot(p, title=f"terrawatt: energy reachability on {label}")},
+                            on_figure_error=on_figure_error)
 
     def write_raster(self, path: str | os.PathLike[str], *, layer: str = "energy") -> Path:
         """Write the rasters atomically: a ``.npz`` file (every raster and figure, versioned) or a GeoTIFF.

@@ -14,6 +14,8 @@ Nothing here knows about maps, robots or routes:
 - :mod:`~terrawatt_base.plot_target`: where a figure goes (a file, or the caller's axes) and the
   figure made for a file (matplotlib's object API, never pyplot);
 - :mod:`~terrawatt_base.figure_file`: a report's figure drawn, or a ``FigureWarning`` when it fails.
+- :mod:`~terrawatt_base.answer`: an answer's files and figures written into a folder, its markdown
+  tables and fixed-point numbers.
 """
 
 #: Nothing is named here: import from the modules (``from terrawatt_base.errors import ...``).

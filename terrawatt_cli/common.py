@@ -22,7 +22,6 @@ from planner.risk import check_planning_risk
 from terrain import DemWindows, FigureWarning, InvalidParameterError, TerrainMap
 from terrain.io import read_map_with_options
 from terrain.procedural import example_map
-from terrawatt_base import figure_file
 from terrawatt_base.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
 from terrawatt_base.checks import fmt_number
 from terrawatt_base.dask_client import Compute, check_dask_options, dask_client
@@ -33,7 +32,7 @@ __all__ = [
     "point_arg", "add_robot_options", "add_physics_robot_option", "robot_arg", "add_planner_options", "SEARCH_FLAGS", "search_arg",
     "check_outputs",
     "INPUT_FLAGS", "input_paths",
-    "check_output_file", "draw_figure", "warn_figures", "add_dask_options", "check_dask_flags", "compute_arg",
+    "check_output_file", "warn_figures", "add_dask_options", "check_dask_flags", "compute_arg",
     "add_model_options", "check_model_flags", "load_model_arg",
 ]
 
@@ -217,12 +216,6 @@ def check_output_file(path: Path, inputs: Iterable[Path | None] = (), flag: str 
     check_output_path(path, flag)
     refuse_overwriting_inputs([path], list(inputs), flag)
     probe_writable(path.parent if str(path.parent) else Path("."), flag)
-
-
-def draw_figure(path: Path, draw: Callable[[], Path]) -> Path | None:
-    """``draw()`` (which writes the figure ``path``), or None and a warning on stderr if it fails."""
-    with warn_figures():
-        return figure_file.draw_figure(path, draw)
 
 
 @contextlib.contextmanager

@@ -13,9 +13,11 @@ from pathlib import Path
 from typing import Any
 
 from terrain.terrain_map import TerrainMap
+from terrawatt_base.answer import markdown_table, write_answer
 from terrawatt_base.atomic import save_figure, write_text_atomic
-from terrawatt_base.checks import check_choice, fmt_number
+from terrawatt_base.checks import fmt_number
 from terrawatt_base.errors import FigureWarning
+from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import result_document, write_result_json
 
 from ..logs import InteractionLog
@@ -37,6 +39,10 @@ DIAGNOSIS_FILES = ("diagnosis.json", "diagnosis.md", "corrected_model.zip", *FIG
 
 def _signed(x: float, digits: int = 3) -> str:
     return ("+" if x > 0 else "") + fmt_number(x, digits)
+
+
+def _interval(bounds: tuple[float, float]) -> str:
+    return f"{fmt_number(bounds[0], 3)} … {fmt_number(bounds[1], 3)}"
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,44 +166,34 @@ class Diagnosis:
                   f"95 % bootstrap interval over {self.localisation_units}. The {len(top)} largest of "
                   f"{len(self.localisation)} slices by |net gap|; every slice is in diagnosis.json (localisation).", ""]
         if top:
-            lines += ["| dimension | slice | net gap (mAh) | 95 % interval | of its charge | time (s) | runs |",
-                      "|---|---|---|---|---|---|---|"]
-            for r in top:
-                lo, hi = r.gap_interval_mah
-                lines.append(f"| {r.dimension} | {r.label} | {_signed(r.gap_mah)} | {fmt_number(lo, 3)} … "
-                             f"{fmt_number(hi, 3)} | {_signed(r.gap_pct)} % | {fmt_number(r.duration_s, 4)} | "
-                             f"{r.n_runs} |")
+            lines += markdown_table(
+                ["dimension", "slice", "net gap (mAh)", "95 % interval", "of its charge", "time (s)", "runs"],
+                ([r.dimension, r.label, _signed(r.gap_mah), _interval(r.gap_interval_mah), f"{_signed(r.gap_pct)} %",
+                  fmt_number(r.duration_s, 4), r.n_runs] for r in top))
         else:
             lines.append("No slice tells where: every dimension has one known slice only.")
         lines += ["", f"## Candidate effects (held-out shrink, split by {split})", "",
                   "Ranked by what each adds to the chosen effects above it; *alone* is the effect on its own. "
                   "Each fitted value beside its prior (the value that changes nothing) and its plausible range; "
                   "flags: a value outside it or pinned at a fitting bound (doubtful), also of the effect fitted "
-                  "alone.", "",
-                  "| rank | effect | kind | adds | 95 % interval | alone | parameters | flags |",
-                  "|---|---|---|---|---|---|---|---|"]
-        for k, s in enumerate(c.ranking, 1):
-            lo, hi = s.added_interval_pct
-            flags = list(s.flags)
-            if s.alone_flags and s.alone_parameters != s.parameters:
-                flags.append("fitted alone: " + "; ".join(s.alone_flags))
-            flags = "; ".join(flags) if flags else "–"
-            lines.append(f"| {k} | {s.name}{' (chosen)' if s.name in c.chosen else ''} | {s.kind} | "
-                         f"{fmt_number(s.added_pct, 3)} % | {fmt_number(lo, 3)} … {fmt_number(hi, 3)} % | "
-                         f"{fmt_number(s.shrink_pct, 3)} % | {s.parameter_text()} | {flags} |")
+                  "alone.", ""]
+        lines += markdown_table(["rank", "effect", "kind", "adds", "95 % interval", "alone", "parameters", "flags"], (
+            [k, s.name + (" (chosen)" if s.name in c.chosen else ""), s.kind, f"{fmt_number(s.added_pct, 3)} %",
+             f"{_interval(s.added_interval_pct)} %", f"{fmt_number(s.shrink_pct, 3)} %", s.parameter_text(),
+             "; ".join([*s.flags, *(["fitted alone: " + "; ".join(s.alone_flags)]
+                                    if s.alone_flags and s.alone_parameters != s.parameters else [])]) or "–"]
+            for k, s in enumerate(c.ranking, 1)))
         if c.skipped:
             lines += ["", "Not scored: " + "; ".join(f"{n} ({why})" for n, why in c.skipped.items()) + "."]
         lines += ["", "## Waterfall (held-out)", "", *c.waterfall_markdown()]
         if self.power is not None:
             lines += ["", f"## Battery power: electrical candidates (held-out shrink, split by {split})", "",
                       "Measured battery power = voltage x pack current; predicted from the measured drive currents "
-                      "with the model's electrical basis.", "",
-                      "| rank | effect | adds | 95 % interval | alone | parameters |", "|---|---|---|---|---|---|"]
-            for k, s in enumerate(self.power.ranking, 1):
-                lo, hi = s.added_interval_pct
-                params = ", ".join(f"{n} = {fmt_number(v, 4)}" for n, v in s.parameters.items())
-                lines.append(f"| {k} | {s.name} | {fmt_number(s.added_pct, 3)} % | {fmt_number(lo, 3)} … "
-                             f"{fmt_number(hi, 3)} % | {fmt_number(s.shrink_pct, 3)} % | {params} |")
+                      "with the model's electrical basis.", ""]
+            lines += markdown_table(["rank", "effect", "adds", "95 % interval", "alone", "parameters"], (
+                [k, s.name, f"{fmt_number(s.added_pct, 3)} %", f"{_interval(s.added_interval_pct)} %",
+                 f"{fmt_number(s.shrink_pct, 3)} %", ", ".join(f"{n} = {fmt_number(v, 4)}" for n, v in s.parameters.items())]
+                for k, s in enumerate(self.power.ranking, 1)))
             lines += ["", *self.power.waterfall_markdown()]
         return "\n".join(lines) + "\n"
 
@@ -219,11 +215,9 @@ class Diagnosis:
         UnknownNameError
             An ``on_figure_error`` other than ``"warn"`` or ``"raise"``.
         """
-        check_choice("on_figure_error", on_figure_error, ("warn", "raise"))
         out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        written = [self.write_json(out / "diagnosis.json"), self.write_markdown(out / "diagnosis.md"),
-                   self.corrected_model.save(out / "corrected_model.zip")]
+        written = write_answer(out, {"diagnosis.json": self.write_json, "diagnosis.md": self.write_markdown,
+                                     "corrected_model.zip": self.corrected_model.save}, on_figure_error=on_figure_error)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", FigureWarning)  # warned below, once, naming the file
             figures = plot_diagnosis(self, out, on_error=on_figure_error)
@@ -233,12 +227,6 @@ class Diagnosis:
         for drive in self.separating_drives:  # what to drive to tell tied explanations apart, and its figure
             written.append(drive.write_csv(out))
             path = out / f"{drive.file_stem}.png"
-            try:
-                save_figure(drive.plot(), path)
-            except Exception as exc:  # noqa: BLE001 - a figure never fails the report
-                if on_figure_error == "raise":
-                    raise
-                warnings.warn(f"could not draw {path}: {type(exc).__name__}: {exc}", FigureWarning, stacklevel=2)
-            else:
+            if draw_figure(path, lambda d=drive, p=path: save_figure(d.plot(), p), on_error=on_figure_error):
                 written.append(path)
         return written

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from terrawatt_base.answer import fmt_fixed, markdown_table
 from terrawatt_base.errors import UnknownNameError
 
 __all__ = [
@@ -20,6 +21,7 @@ __all__ = [
     "AdaptRow",
     "summarise_adapt_scores",
     "adapt_table",
+    "finite_percentile",
 ]
 
 #: Protocols of an :class:`AdaptScore`: leave one run out per ground (the held-out
@@ -98,7 +100,8 @@ class AdaptRow:
     updates_mean: float
 
 
-def _stat(values: list[float], q: float) -> float:
+def finite_percentile(values: Sequence[float], q: float) -> float:
+    """The ``q``-th percentile of the finite ``values`` (NaN when none is): a cell of the evaluation's tables."""
     arr = np.asarray(values, dtype=np.float64)
     arr = arr[np.isfinite(arr)]
     return float(np.percentile(arr, q)) if arr.size else math.nan
@@ -110,10 +113,10 @@ def _summary(protocol: str, ground: str, model: str, schedule: str, rows: list[A
 
     out: dict[str, float] = {}
     for kind in ("unadapted", "adapted", "gain"):
-        out[f"{kind}_median_pct"] = _stat(col(f"{kind}_whole_pct"), 50)
-        out[f"{kind}_p90_pct"] = _stat(col(f"{kind}_whole_pct"), 90)
-        out[f"{kind}_section_median_pct"] = _stat(col(f"{kind}_section_pct"), 50)
-        out[f"{kind}_rmse_median_a"] = _stat(col(f"{kind}_rmse_a"), 50)
+        out[f"{kind}_median_pct"] = finite_percentile(col(f"{kind}_whole_pct"), 50)
+        out[f"{kind}_p90_pct"] = finite_percentile(col(f"{kind}_whole_pct"), 90)
+        out[f"{kind}_section_median_pct"] = finite_percentile(col(f"{kind}_section_pct"), 50)
+        out[f"{kind}_rmse_median_a"] = finite_percentile(col(f"{kind}_rmse_a"), 50)
     return AdaptRow(protocol, ground, model, schedule, len(rows), **out,
                         updates_mean=float(np.mean(col("n_updates"))) if rows else math.nan)
 
@@ -131,20 +134,15 @@ def summarise_adapt_scores(scores: list[AdaptScore] | tuple[AdaptScore, ...]) ->
 def adapt_table(rows: Sequence[AdaptRow]) -> list[str]:
     """The lines of the per-side markdown table of adaptation rows: per protocol, ground, model and schedule,
     unadapted | adapted | gain baseline."""
-    def f(x: float, nd: int = 1) -> str:
-        return "–" if not math.isfinite(x) else f"{x:.{nd}f}"
+    def f(*xs: float, nd: int = 1) -> str:
+        return " / ".join(fmt_fixed(x, nd) for x in xs)
 
-    lines = [
-        "| protocol | ground | model | adapt on | values | unadapted median / p90 % | adapted median / p90 % | "
-        "gain median / p90 % | sections unadapted / adapted / gain % | RMSE unadapted / adapted / gain A | updates |",
-        "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|",
-    ]
-    for s in rows:
-        lines.append(
-            f"| {s.protocol} | {s.ground} | {s.model} | {s.schedule} | {s.n_values} | "
-            f"{f(s.unadapted_median_pct)} / {f(s.unadapted_p90_pct)} | {f(s.adapted_median_pct)} / {f(s.adapted_p90_pct)} | "
-            f"{f(s.gain_median_pct)} / {f(s.gain_p90_pct)} | {f(s.unadapted_section_median_pct)} / "
-            f"{f(s.adapted_section_median_pct)} / {f(s.gain_section_median_pct)} | {f(s.unadapted_rmse_median_a, 2)} / "
-            f"{f(s.adapted_rmse_median_a, 2)} / {f(s.gain_rmse_median_a, 2)} | {f(s.updates_mean)} |"
-        )
-    return lines
+    header = ["protocol", "ground", "model", "adapt on", "values", "unadapted median / p90 %", "adapted median / p90 %",
+              "gain median / p90 %", "sections unadapted / adapted / gain %", "RMSE unadapted / adapted / gain A",
+              "updates"]
+    return markdown_table(header, ([
+        s.protocol, s.ground, s.model, s.schedule, s.n_values, f(s.unadapted_median_pct, s.unadapted_p90_pct),
+        f(s.adapted_median_pct, s.adapted_p90_pct), f(s.gain_median_pct, s.gain_p90_pct),
+        f(s.unadapted_section_median_pct, s.adapted_section_median_pct, s.gain_section_median_pct),
+        f(s.unadapted_rmse_median_a, s.adapted_rmse_median_a, s.gain_rmse_median_a, nd=2), f(s.updates_mean)]
+        for s in rows), left=4)

@@ -10,19 +10,18 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
+from terrawatt_base.answer import fmt_fixed, markdown_table, write_answer
 from terrawatt_base.atomic import check_output_path, json_finite, save_figure, write_text_atomic
 from terrawatt_base.checks import check_bool, check_choice
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
-from terrawatt_base.figure_file import draw_figure
+from terrawatt_base.figure_file import FIGURE_ERRORS
 from terrawatt_base.formats import result_document, write_result_json
 
 from ..logs import InteractionLog
 from ..models.base import CurrentModel
 from ..plots import plot_current_estimate, plot_vibration_spectra
 from ..prediction import RunPrediction
-from .adapt_results import ADAPT_FILES, ADAPT_FORMAT_VERSION, AdaptRow, AdaptScore, adapt_table
+from .adapt_results import ADAPT_FILES, ADAPT_FORMAT_VERSION, AdaptRow, AdaptScore, adapt_table, finite_percentile
 from .run_totals import TOTALS_HEADING, RunTotal, plot_totals_reliability, summarise_totals, totals_markdown
 
 __all__ = [
@@ -131,12 +130,6 @@ class ScoreRow:
     fit_duration_median_s: float
 
 
-def _stat(values: list[float], q: float) -> float:
-    arr = np.asarray(values, dtype=np.float64)
-    arr = arr[np.isfinite(arr)]
-    return float(np.percentile(arr, q)) if arr.size else math.nan
-
-
 def _summarise(variant: str, ground: str, model: str, scores: list[RunScore]) -> ScoreRow:
     """The summary of one variant, ground and model over ``scores`` (already selected)."""
     whole = [s.whole_run_error_pct for s in scores]
@@ -146,10 +139,10 @@ def _summarise(variant: str, ground: str, model: str, scores: list[RunScore]) ->
         variant=variant, ground=ground, model=model,
         n_runs=len({s.run for s in scores}), n_values=len(scores),
         n_undefined=int(sum(not math.isfinite(w) for w in whole)),
-        whole_run_median_pct=_stat(whole, 50), whole_run_p90_pct=_stat(whole, 90),
-        section_median_pct=_stat(sec, 50), section_p90_pct=_stat(sec, 90),
-        rmse_median_a=_stat(rmse, 50), rmse_p90_a=_stat(rmse, 90),
-        fit_duration_median_s=_stat([s.fit_duration_s for s in scores], 50),
+        whole_run_median_pct=finite_percentile(whole, 50), whole_run_p90_pct=finite_percentile(whole, 90),
+        section_median_pct=finite_percentile(sec, 50), section_p90_pct=finite_percentile(sec, 90),
+        rmse_median_a=finite_percentile(rmse, 50), rmse_p90_a=finite_percentile(rmse, 90),
+        fit_duration_median_s=finite_percentile([s.fit_duration_s for s in scores], 50),
     )
 
 
@@ -334,42 +327,30 @@ class EvaluationResult:
             See :func:`check_evaluation_dir`.
         """
         figures = check_bool("figures", figures)
-        check_choice("on_figure_error", on_figure_error, ("warn", "raise"))
+        check_choice("on_figure_error", on_figure_error, FIGURE_ERRORS)
         folder = check_evaluation_dir(out_dir, self.protocol)
-        folder.mkdir(parents=True, exist_ok=True)
         if self.protocol == PREFIT_PROTOCOL:
-            written = [write_result_json(folder / PREDICTIONS_FILE, self.to_dict())]
-            drawings = [(folder / FIGURES_FOLDER / f"current_{log.meta.ground_label}_{Path(log.meta.source).stem}.png",
-                         lambda p, log=log: plot_current_estimate(log, self.model.predict(log), p,
-                                                                  label=Path(self.label).name))
-                        for log in self.logs if self.scored and self.model is not None]
+            files = {PREDICTIONS_FILE: lambda p: write_result_json(p, self.to_dict())}
+            drawings = {f"{FIGURES_FOLDER}/current_{log.meta.ground_label}_{Path(log.meta.source).stem}.png":
+                        lambda p, log=log: plot_current_estimate(log, self.model.predict(log), p, label=Path(self.label).name)
+                        for log in self.logs if self.scored and self.model is not None}
         else:
-            files = EVALUATION_FILES if self.protocol == "loo" else ADAPT_FILES
-            written = [write_result_json(folder / files[0], self.to_dict()),
-                       write_text_atomic(folder / files[1], self.summary())]
-            drawings = [(folder / RELIABILITY_FILE, lambda p: save_figure(self.plot().figure, p))]
-            if self.protocol == "loo" and self.logs:
-                drawings.insert(0, (folder / SPECTRA_FILE, lambda p: plot_vibration_spectra(list(self.logs), p)))
-        for png, draw in drawings if figures else ():
-            done = draw_figure(png, lambda png=png, draw=draw: draw(png), on_error=on_figure_error)
-            if done is not None:
-                written.append(done)
-        return written
+            names = EVALUATION_FILES if self.protocol == "loo" else ADAPT_FILES
+            files = {names[0]: lambda p: write_result_json(p, self.to_dict()),
+                     names[1]: lambda p: write_text_atomic(p, self.summary())}
+            drawings = {SPECTRA_FILE: lambda p: plot_vibration_spectra(list(self.logs), p)
+                        } if self.protocol == "loo" and self.logs else {}
+            drawings[RELIABILITY_FILE] = lambda p: save_figure(self.plot().figure, p)
+        return write_answer(folder, files, drawings if figures else {}, on_figure_error=on_figure_error)
 
 
 def _score_table(rows: Sequence[ScoreRow], section_s: float) -> list[str]:
     """The lines of the per-side markdown table of leave-one-run-out rows."""
-    lines = [
-        f"| variant | ground | model | runs | whole-run median % | whole-run p90 % | "
-        f"{section_s:g} s sections median % | sections p90 % | RMSE median A |",
-        "|---|---|---|---:|---:|---:|---:|---:|---:|",
-    ]
-    for s in rows:
-        lines.append(
-            f"| {s.variant} | {s.ground} | {s.model} | {s.n_runs} | {_f(s.whole_run_median_pct)} | "
-            f"{_f(s.whole_run_p90_pct)} | {_f(s.section_median_pct)} | {_f(s.section_p90_pct)} | {_f(s.rmse_median_a, 2)} |"
-        )
-    return lines
+    header = ["variant", "ground", "model", "runs", "whole-run median %", "whole-run p90 %",
+              f"{section_s:g} s sections median %", "sections p90 %", "RMSE median A"]
+    return markdown_table(header, ([s.variant, s.ground, s.model, s.n_runs, fmt_fixed(s.whole_run_median_pct),
+                                    fmt_fixed(s.whole_run_p90_pct), fmt_fixed(s.section_median_pct),
+                                    fmt_fixed(s.section_p90_pct), fmt_fixed(s.rmse_median_a, 2)] for s in rows), left=3)
 
 
 def _prefit_table(runs: Sequence[RunScore]) -> str:
@@ -389,10 +370,6 @@ def _predictions_table(predictions: Sequence[RunPrediction]) -> str:
         lines.append(f"{r.run:<28} {r.charge_predicted_left_mah:>10.1f} {r.charge_predicted_right_mah:>10.1f} "
                      f"{meas_l:>10} {meas_r:>10} {wh:>8}")
     return "\n".join(lines)
-
-
-def _f(x: float, nd: int = 1) -> str:
-    return "–" if not math.isfinite(x) else f"{x:.{nd}f}"
 
 
 def summarise_scores(scores: list[RunScore], variants: tuple[str, ...], grounds: list[str],

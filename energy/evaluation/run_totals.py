@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from terrawatt_base.answer import fmt_fixed, markdown_table
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from ..battery import Battery
@@ -38,6 +39,7 @@ from ..logs import InteractionLog
 from ..models.base import log_currents
 from ..models.forecast import CurrentForecast, central_level
 from ..robot import RobotParams
+from .adapt_results import finite_percentile
 from .intervals import DEFAULT_LEVELS, IntervalRecord, plot_reliability
 
 __all__ = ["RunTotal", "ScoredRun", "VARIANTS", "TOTALS_HEADING", "pack_energy_j", "run_totals", "summarise_totals", "totals_markdown",
@@ -192,12 +194,6 @@ def run_totals(log: InteractionLog, forecasts: dict[str, tuple[np.ndarray, Curre
     return out
 
 
-def _pct(values: list[float], q: float) -> float:
-    arr = np.asarray(values, dtype=np.float64)
-    arr = arr[np.isfinite(arr)]
-    return float(np.percentile(arr, q)) if arr.size else math.nan
-
-
 def summarise_totals(totals: Sequence[RunTotal], levels: Sequence[float] = DEFAULT_LEVELS) -> list[dict[str, Any]]:
     """Per protocol, ground (then ``"all"``), model, schedule and variant: errors and interval coverage.
 
@@ -220,10 +216,10 @@ def summarise_totals(totals: Sequence[RunTotal], levels: Sequence[float] = DEFAU
         zs = zs[np.isfinite(zs)]
         row: dict[str, Any] = dict(zip(("protocol", "ground", "model", "schedule", "variant"), key))
         row |= {"n": len(rs),
-                "energy_median_pct": _pct([r.energy_error_pct for r in rs], 50),
-                "energy_p90_pct": _pct([r.energy_error_pct for r in rs], 90),
-                "charge_median_pct": _pct([r.charge_error_pct for r in rs], 50),
-                "charge_p90_pct": _pct([r.charge_error_pct for r in rs], 90),
+                "energy_median_pct": finite_percentile([r.energy_error_pct for r in rs], 50),
+                "energy_p90_pct": finite_percentile([r.energy_error_pct for r in rs], 90),
+                "charge_median_pct": finite_percentile([r.charge_error_pct for r in rs], 50),
+                "charge_p90_pct": finite_percentile([r.charge_error_pct for r in rs], 90),
                 "n_interval": int(zs.size)}
         for lv in levels:
             row[f"coverage_{100 * lv:g}_pct"] = 100.0 * float(np.mean(need <= lv)) if zs.size else math.nan
@@ -235,21 +231,17 @@ def summarise_totals(totals: Sequence[RunTotal], levels: Sequence[float] = DEFAU
 def totals_markdown(rows: Sequence[dict[str, Any]], levels: Sequence[float] = DEFAULT_LEVELS) -> str:
     """The battery's table: pack energy and total charge errors, and the intervals' coverage, one row per summary
     (``schedule``: the adapt time, or the leave-one-run-out variant)."""
-    def f(x: Any, nd: int = 1) -> str:
-        return "–" if x is None or not math.isfinite(x) else f"{x:.{nd}f}"
+    def f(*xs: Any, nd: int = 1) -> str:
+        return " / ".join(fmt_fixed(x, nd) for x in xs)
 
-    cov = " / ".join(f"{100 * lv:g}" for lv in levels)
-    lines = [
-        f"| protocol | ground | model | schedule | forecast | runs | pack energy median / p90 % | "
-        f"total charge median / p90 % | coverage {cov} % | median \\|z\\| |",
-        "|---|---|---|---|---|---:|---:|---:|---:|---:|",
-    ]
-    for r in rows:
-        c = " / ".join(f(r[f"coverage_{100 * lv:g}_pct"], 0) for lv in levels)
-        lines.append(f"| {r['protocol']} | {r['ground']} | {r['model']} | {r['schedule']} | {r['variant']} | {r['n']} | "
-                     f"{f(r['energy_median_pct'])} / {f(r['energy_p90_pct'])} | "
-                     f"{f(r['charge_median_pct'])} / {f(r['charge_p90_pct'])} | {c} | {f(r['median_abs_z'], 2)} |")
-    return "\n".join(lines) + "\n"
+    header = ["protocol", "ground", "model", "schedule", "forecast", "runs", "pack energy median / p90 %",
+              "total charge median / p90 %", f"coverage {' / '.join(f'{100 * lv:g}' for lv in levels)} %",
+              "median \\|z\\|"]
+    return "\n".join(markdown_table(header, ([
+        r["protocol"], r["ground"], r["model"], r["schedule"], r["variant"], r["n"],
+        f(r["energy_median_pct"], r["energy_p90_pct"]), f(r["charge_median_pct"], r["charge_p90_pct"]),
+        f(*(r[f"coverage_{100 * lv:g}_pct"] for lv in levels), nd=0), f(r["median_abs_z"], nd=2)] for r in rows),
+        left=5)) + "\n"
 
 
 def plot_totals_reliability(totals: Sequence[RunTotal], ax: Any = None, *, title: str | None = None) -> Any:

@@ -20,9 +20,9 @@ import numpy as np
 from energy import Battery, EnergyBudget, InteractionLog
 from energy.io import write_csv_log, write_drive_bag
 from terrain import TerrainMap
-from terrawatt_base.atomic import check_output_path
+from terrawatt_base.answer import write_answer
+from terrawatt_base.atomic import check_output_path, json_finite
 from terrawatt_base.errors import InvalidParameterError
-from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import result_document, write_result_json
 
 from ..registry import CellModelRegistry
@@ -242,43 +242,31 @@ class AdaptiveResult:
     def to_json_dict(self, *, series_every: int = 10) -> dict[str, Any]:
         """Plain JSON result document, format ``terrawatt-adaptive-mission`` (non-finite numbers become ``None``);
         series every ``series_every`` samples."""
-        def num(x: Any) -> Any:
-            if isinstance(x, (float, np.floating)):
-                return float(x) if math.isfinite(x) else None
-            if isinstance(x, (np.integer,)):
-                return int(x)
-            if isinstance(x, tuple):
-                return [num(v) for v in x]
-            return x
-
-        def rec(r: Any) -> dict[str, Any]:
-            return {k: num(v) for k, v in vars(r).items()}
-
         k = max(1, int(series_every))
-        return result_document("adaptive-mission", ADAPTIVE_FORMAT_VERSION, {
+        return result_document("adaptive-mission", ADAPTIVE_FORMAT_VERSION, json_finite({
             "status": self.status,
             "reason": self.reason,
-            "final_xy_m": num(self.final_xy_m),
-            "distance_to_goal_m": num(self.distance_to_goal_m),
-            "final_soc": num(self.final_soc),
+            "final_xy_m": self.final_xy_m,
+            "distance_to_goal_m": self.distance_to_goal_m,
+            "final_soc": self.final_soc,
             "initial_route": self.initial_route.summary(),
             "initial_route_waypoints_m": self.initial_route.waypoints_m.tolist(),
-            "driven_energy_j": num(self.driven_energy_j),
-            "excitation_energy_j": num(self.excitation_energy_j),
-            "update_wall_time_s": num(self.update_wall_time_s),
+            "driven_energy_j": self.driven_energy_j,
+            "excitation_energy_j": self.excitation_energy_j,
+            "update_wall_time_s": self.update_wall_time_s,
             "accepted_updates": self.accepted_updates,
             "route_changes": self.route_changes,
-            "error_before_update_pct": num(self.error_before_update_pct),
-            "error_after_update_pct": num(self.error_after_update_pct),
-            "remaining_error_after_update_pct": num(self.remaining_error_after_update_pct),
-            "legs": [rec(r) for r in self.legs],
-            "updates": [rec(r) for r in self.updates],
+            "error_before_update_pct": self.error_before_update_pct,
+            "error_after_update_pct": self.error_after_update_pct,
+            "remaining_error_after_update_pct": self.remaining_error_after_update_pct,
+            "legs": [vars(r) for r in self.legs],
+            "updates": [vars(r) for r in self.updates],
             "skipped_updates": list(self.skipped_updates),
             "budget": None if self.budget is None else self.budget.to_json_dict(),
-            "replans": [rec(r) for r in self.replans],
-            "series": {name: [num(v) for v in getattr(self, name)[::k].tolist()]
-                       for name in ("time_s", "x_m", "y_m", "soc", "energy_j", "predicted_energy_j")},
-        })
+            "replans": [vars(r) for r in self.replans],
+            "series": {name: getattr(self, name)[::k] for name in ("time_s", "x_m", "y_m", "soc", "energy_j",
+                                                                      "predicted_energy_j")},
+        }))
 
     def save_json(self, path: str | os.PathLike[str], *, series_every: int = 10) -> Path:
         """Write :meth:`to_json_dict` atomically to ``path`` (:func:`~terrawatt_base.formats.write_result_json`)."""
@@ -321,7 +309,7 @@ class AdaptiveResult:
     def write(self, out_dir: str | os.PathLike[str], *, logs: bool = False, on_figure_error: str = "warn"
               ) -> list[Path]:
         """Write mission.json and mission.png into ``out_dir``; return the files written (a figure that fails
-        warns and is left out, :func:`terrawatt_base.figure_file.draw_figure`).
+        warns and is left out, :func:`terrawatt_base.answer.write_answer`).
 
         With ``logs``, also each leg's log (:attr:`AdaptiveResult.leg_logs`) as a CSV log
         ``logs/leg_NNN.csv`` (:func:`energy.io.write_csv_log`) and each manoeuvre run
@@ -336,10 +324,9 @@ class AdaptiveResult:
         out = Path(out_dir)
         if logs:
             check_logs_folder(out)
-        out.mkdir(parents=True, exist_ok=True)
-        written = [write_result_json(out / "mission.json", self.to_dict())]
-        png = draw_figure(out / "mission.png", lambda: self.plot(out / "mission.png", self.terrain, self.registry), on_error=on_figure_error)
-        written += [png] if png is not None else []
+        written = write_answer(out, {"mission.json": lambda p: write_result_json(p, self.to_dict())},
+                               {"mission.png": lambda p: self.plot(p, self.terrain, self.registry)},
+                               on_figure_error=on_figure_error)
         if logs:
             folder = out / LOGS_FOLDER
             folder.mkdir(exist_ok=True)

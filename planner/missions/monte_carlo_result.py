@@ -19,10 +19,10 @@ from typing import Any
 import numpy as np
 
 from energy import Battery
+from terrawatt_base.answer import write_answer
 from terrawatt_base.atomic import write_text_atomic
 from terrawatt_base.checks import check_real, readonly, real_array
 from terrawatt_base.errors import InvalidParameterError, TerrawattError
-from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import result_document, write_result_json
 
 from ..risk import RouteEnergyInterval
@@ -338,11 +338,8 @@ class MonteCarloResult:
         return the files written (a figure that fails warns and is left out)."""
         if not self.n:
             return []
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        written = [self.write_json(out / "monte_carlo.json"), self.to_csv(out / "monte_carlo.csv")]
-        png = draw_figure(out / "monte_carlo.png", lambda: self.plot(out / "monte_carlo.png"), on_error=on_figure_error)
-        return written + ([png] if png is not None else [])
+        return write_answer(out_dir, {"monte_carlo.json": self.write_json, "monte_carlo.csv": self.to_csv},
+                            {"monte_carlo.png": self.plot}, on_figure_error=on_figure_error)
 
     def study_summary(self) -> str:
         """A few lines for people: the reserve risk and the energy percentiles against the battery."""

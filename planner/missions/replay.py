@@ -38,8 +38,9 @@ import numpy as np
 
 from energy import InteractionLog
 from terrain import DataError, InvalidParameterError
+from terrawatt_base.answer import write_answer
+from terrawatt_base.atomic import json_finite
 from terrawatt_base.checks import check_instance
-from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import result_document, write_result_json
 
 from ..replay_bag import write_replay_bag
@@ -204,8 +205,7 @@ class ReplayResult:
             "adaptive": nav.result().to_json_dict(series_every=10),
             "model_map_before": self.model_map_before.tolist(), "model_map_after": self.model_map_after.tolist(),
             "decisions": list(self.decisions),
-            "forecast": {k: [float(x) if math.isfinite(x) else None for x in v.tolist()]
-                         for k, v in self.forecast.items()},
+            "forecast": {k: json_finite(v) for k, v in self.forecast.items()},
         })
 
     def plot(self, path: str | os.PathLike[str] | None = None, *, axes: Any = None) -> Any:
@@ -216,10 +216,8 @@ class ReplayResult:
     def write(self, out_dir: str | os.PathLike[str], *, mcap: bool = True, on_figure_error: str = "warn") -> list[Path]:
         """Write ``replay.json``, ``replay.png`` (a failing figure warns) and ``replay.mcap``; the files written."""
         out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        written = [write_result_json(out / "replay.json", self.to_dict())]
-        png = draw_figure(out / "replay.png", lambda: self.plot(out / "replay.png"), on_error=on_figure_error)
-        written += [png] if png is not None else []
+        written = write_answer(out, {"replay.json": lambda p: write_result_json(p, self.to_dict())},
+                               {"replay.png": self.plot}, on_figure_error=on_figure_error)
         if mcap:
             fc = self.forecast
             written.append(write_replay_bag(

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -13,6 +12,7 @@ import numpy as np
 from energy import EnergyBudget, InteractionLog
 from energy.budget import CURRENT_CONVENTIONS
 from terrain import TerrainMap
+from terrawatt_base.atomic import json_finite
 from terrawatt_base.checks import check_choice, check_int, readonly
 from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.formats import result_document, write_result_json
@@ -220,8 +220,7 @@ class MissionResult:
             keep = np.append(keep, self.n_samples - 1)
         series: dict[str, list[Any]] = {name: getattr(self, name)[keep].tolist() for name in _SERIES}
         series["segment_index"] = self.segment_index[keep].tolist()
-        route = self.route.summary()
-        route = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in route.items()}
+        route = json_finite(self.route.summary())
         route["waypoints_m"] = self.route.waypoints_m.tolist()
         route["segment_energy_j"] = self.route.segment_energy_j.tolist()
         route["turn_energy_j"] = self.route.turn_energy_j.tolist()
@@ -249,7 +248,7 @@ class MissionResult:
             "depletion": None
             if self.depleted_time_s is None
             else {"time_s": self.depleted_time_s, "xy_m": list(self.depleted_xy_m)},
-            "truth_energy_j": None if not math.isfinite(self.truth_energy_j) else self.truth_energy_j,
+            "truth_energy_j": json_finite(self.truth_energy_j),
             "forecast": self.forecast,
             "duration_s": self.duration_s,
             "series_every": int(series_every),

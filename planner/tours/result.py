@@ -12,8 +12,8 @@ import numpy as np
 from energy import Battery
 from energy.battery import S_PER_H
 from terrain import TerrainMap
+from terrawatt_base.answer import write_answer
 from terrawatt_base.atomic import save_figure
-from terrawatt_base.figure_file import draw_figure
 from terrawatt_base.formats import result_document, write_result_json
 from terrawatt_base.plot_target import check_ax, check_plot_target, new_figure
 
@@ -431,16 +431,11 @@ class TourResult:
         """Write tour.json, tour.geojson (every leg), tour.png, tour_soc.png and, with ``bag``, each robot's tour as a
         ROS 2 bag (``tour_<k>.mcap``) into ``out_dir``; return the files written."""
         out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        written = [write_result_json(out / "tour.json", self.to_dict())]
         routes = self.leg_routes() if self.cost is not None else {}
-        if routes:
-            written.append(write_geojson(routes, self.terrain, out / "tour.geojson"))
-        if self.terrain is not None:
-            for name, draw in (("tour.png", self.plot), ("tour_soc.png", self.plot_soc)):
-                png = draw_figure(out / name, lambda d=draw, n=name: d(out / n), on_error=on_figure_error)
-                if png is not None:
-                    written.append(png)
+        written = write_answer(out, {"tour.json": lambda p: write_result_json(p, self.to_dict()),
+                                     "tour.geojson": lambda p: write_geojson(routes, self.terrain, p) if routes else None},
+                               {"tour.png": self.plot, "tour_soc.png": self.plot_soc} if self.terrain is not None else {},
+                               on_figure_error=on_figure_error)
         if bag:
             for k, tour in enumerate(self.tours):
                 if tour.legs:
