@@ -107,7 +107,7 @@ __all__ = [
 ]
 
 #: Update methods of :class:`AdaptedCurrentModel`, the default first.
-ADAPT_METHODS = ("regime", "gain", "gain_offset", "bayes", "partition")
+ADAPT_METHODS = ("partition", "regime", "gain", "gain_offset", "bayes")
 #: What a ``"bayes"`` update forecasts: the rest of the same run, or other runs on the ground.
 ADAPT_SCOPES = ("run", "ground")
 #: How a point update is scaled by its evidence (module docstring), the default first.
@@ -241,7 +241,7 @@ class AdaptedCurrentModel(CurrentModel):
     _param_names = ("base", "method", "prior_s", "turn_scale_radps", "min_seconds", "scope", "shrink")
     _n_coefficients: ClassVar[dict[str, int]] = {"regime": 4, "gain": 1, "gain_offset": 2, "bayes": 8, "partition": 4}
 
-    def __init__(self, base: CurrentModel, method: str = "regime", prior_s: float = 20.0,
+    def __init__(self, base: CurrentModel, method: str = ADAPT_METHODS[0], prior_s: float = 20.0,
                  turn_scale_radps: float = 0.3, min_seconds: float = MIN_ADAPT_SECONDS, scope: str = "run",
                  shrink: str = ADAPT_SHRINKS[0]) -> None:
         self.base = base
