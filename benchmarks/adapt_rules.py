@@ -110,7 +110,7 @@ def fold_cache(model: Any, runs: list, names: list[str], adapt_seconds: tuple[fl
             if run_a.duration_s < T:
                 continue
             prefix = run_a.slice(float(t[0]), float(t[0] + T))
-            upd = AdaptedCurrentModel(model, shrink="none", scope="ground").fit(prefix)
+            upd = AdaptedCurrentModel(model, method="regime", shrink="none", scope="ground").fit(prefix)
             pp = model.predict(prefix)
             yy = log_currents(prefix)
             obs, noise, run_v, ground_v = evidence_parts(model, [prefix], [pp], [yy])

@@ -91,7 +91,7 @@ class AdaptSettings:
     check_s: float = 8.0
     trigger_from_s: float = 20.0
     min_remainder_s: float = 10.0
-    method: str = "regime"
+    method: str = ADAPT_METHODS[0]
     prior_s: float = 20.0
     turn_scale_radps: float = 0.3
     min_seconds: float = 5.0

@@ -59,7 +59,7 @@ def test_adapt_returns_a_new_model_and_leaves_the_fitted_one_unchanged(base):
     coef_before = {k: np.copy(v) for k, v in vars(base).items() if isinstance(v, np.ndarray)}
     adapted = base.adapt(_head(run, 20.0))
     assert isinstance(adapted, AdaptedCurrentModel) and adapted is not base
-    assert adapted.base is base and adapted.method == ADAPT_METHODS[0] == "regime"
+    assert adapted.base is base and adapted.method == ADAPT_METHODS[0] == "partition"
     np.testing.assert_array_equal(base.predict(run), before)
     for k, v in coef_before.items():
         np.testing.assert_array_equal(getattr(base, k), v)
@@ -69,7 +69,7 @@ def test_adapt_returns_a_new_model_and_leaves_the_fitted_one_unchanged(base):
 def test_regime_update_corrects_turns_seen_in_the_prefix(base):
     run = _on_base(base, _log(4), turn_extra_a=1.5)
     plain = _charge_error_pct(run, base.predict(run), 20.0)
-    adapted = base.adapt(_head(run, 20.0))
+    adapted = base.adapt(_head(run, 20.0), method="regime")
     assert plain > 10.0
     assert _charge_error_pct(run, adapted.predict(run), 20.0) < plain / 3
     outer = adapted.coefficients_[:, 3]
@@ -80,7 +80,7 @@ def test_straight_prefix_does_not_rescale_turns_unlike_the_gain(base):
     # +0.6 A on every sample (a higher idle current), turns only after 45 s: the first 40 s see straights only
     run = _on_base(base, _log(5, turns_after_s=45.0, duration_s=90.0), offset_a=0.6)
     head = _head(run, 40.0)
-    regime = base.adapt(head, prior_s=2.0)
+    regime = base.adapt(head, method="regime", prior_s=2.0)
     gain = base.adapt(head, method="gain")
     assert np.all(np.abs(regime.coefficients_[:, 2:]) < 0.05)  # no turn seen: no turn correction
     shift = (regime.predict(head) - base.predict(head)).mean(axis=0)
@@ -103,8 +103,8 @@ def test_partition_keeps_a_pivot_correction_off_straight_driving_unlike_the_regi
     log = dataclasses.replace(log, current_left_a=log.current_left_a + extra[:, 0],
                               current_right_a=log.current_right_a + extra[:, 0])
     head = _head(log, 20.0)
-    regime = base.adapt(head)
-    partition = base.adapt(head, method="partition")
+    regime = base.adapt(head, method="regime")
+    partition = base.adapt(head)  # the default
     straight = ~pivot
     moved = {k: (m.predict(log) - base.predict(log))[straight].mean(axis=0) for k, m in
              (("regime", regime), ("partition", partition))}
