@@ -20,7 +20,7 @@ import numpy as np
 
 from energy.models.forecast import combine_ground_sds, predictive_quantile
 from terrawatt_base.checks import check_instance
-from terrawatt_base.dask_client import Compute, client_worker_count
+from terrawatt_base.dask_client import Compute, client_worker_count, run_tasks
 from terrawatt_base.errors import InvalidParameterError
 
 from ..batch import shippable_cost
@@ -205,40 +205,16 @@ def price_pairs(
     p = pts.shape[0]
     with compute.session() as (client, where):
         t0 = time.perf_counter()
-        if client is None:
-            from tqdm.auto import tqdm
-
-            rows = [price_from(search, cost, i, pts) for i in tqdm(range(p), desc="legs", disable=not compute.progress)]
-        else:
-            rows = _price_on_cluster(client, search, cost, pts, compute.progress)
+        shared = (search, cost)
+        if client is not None:  # the workers get the costs without their caches, once
+            shipped = shippable_cost(cost)
+            shared = (shipped if search is cost else shippable_cost(search), shipped)
+        rows = list(run_tasks([(price_from, (i, pts)) for i in range(p)], client=client, shared=shared,
+                              progress=compute.progress, description="legs"))
         n_used = client_worker_count(client)
         elapsed = time.perf_counter() - t0
-    rows.sort(key=lambda r: r[0])
     return PairPrices(
         names=names, xy_m=pts, mean_j=np.array([r[1] for r in rows]), sd_by_ground_j=np.array([r[2] for r in rows]),
         ground_labels=tuple(cost.ground_labels), duration_s=np.array([r[3] for r in rows]),
         waypoints=tuple(tuple(r[4]) for r in rows), pricing_time_s=elapsed, where=where, n_workers=n_used,
         ground_dof=tuple(float(d) for d in getattr(cost, "spread_dof", ()) or ()))
-
-
-def _price_on_cluster(client: Any, search: EnergyCost, cost: EnergyCost, pts: np.ndarray, progress: bool) -> list:
-    """One task per point on ``client``, the costs scattered once to every worker."""
-    from distributed import as_completed
-    from tqdm.auto import tqdm
-
-    shipped_cost = shippable_cost(cost)
-    shipped_search = shipped_cost if search is cost else shippable_cost(search)
-    [s_search, s_cost] = client.scatter([shipped_search, shipped_cost], broadcast=True, hash=False)
-    futures = [client.submit(price_from, s_search, s_cost, i, pts, pure=False) for i in range(pts.shape[0])]
-    rows = []
-    try:
-        with tqdm(total=len(futures), desc="legs", disable=not progress) as bar:
-            for fut in as_completed(futures):
-                rows.append(fut.result())
-                bar.update()
-    except BaseException:
-        client.cancel(futures)
-        raise
-    finally:
-        client.cancel([s_search, s_cost])
-    return rows
