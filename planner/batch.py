@@ -193,7 +193,7 @@ def plan_batch_on_map(
     >>> report.all_found, report.header()
     (True, 'map: map  20 x 20 cells of 1 m; 1 pairs; planner lattice')
     """
-    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    pricing = CostSpec.given(pricing)
     cost = pricing.build(terrain)
     warm_up_kernels()
     result = plan_batch(cost, pairs, search=search, compute=compute)

@@ -31,7 +31,7 @@ from energy import GROUND_PRESETS, EnergyModel, PhysicsEnergyModel, ground_prese
 from energy.params import RobotParams, robot_params
 from terrain import TerrainMap
 from terrain.terrain_map import UNKNOWN_GROUND
-from terrawatt_base.checks import check_real
+from terrawatt_base.checks import check_instance, check_real
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from .edge_cost import EnergyCost
@@ -175,6 +175,22 @@ class CostSpec:
                 raise InvalidParameterError(f"grounds must be a mapping of ground class (name or id) to parameters, "
                                             f"got {type(self.grounds).__name__!r}", parameter="grounds")
             object.__setattr__(self, "grounds", dict(self.grounds))  # the spec's own copy (a proxy would not pickle)
+
+    @classmethod
+    def given(cls, pricing: CostSpec | None) -> CostSpec:
+        """An entry point's ``pricing``: the default ``CostSpec()`` for None, else ``pricing`` itself, checked.
+
+        Raises
+        ------
+        InvalidParameterError
+            ``pricing`` neither None nor a :class:`CostSpec` (the error names ``pricing``).
+
+        Examples
+        --------
+        >>> CostSpec.given(None) == CostSpec()
+        True
+        """
+        return cls() if pricing is None else check_instance("pricing", pricing, cls)
 
     @property
     def max_slope_rad(self) -> float:

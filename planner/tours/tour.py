@@ -325,7 +325,7 @@ def plan_tour_on_map(
         Not a TourFleet; as :func:`plan_tour`.
     """
     fleet = check_instance("fleet", fleet, TourFleet)
-    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    pricing = CostSpec.given(pricing)
     standby_w = pricing.params.sensor_power_w + pricing.params.control_standby_power_w  # waiting for a window
     cost = pricing.build(terrain)
     robots = [TourRobot(fleet.battery, depot, f"robot {k}", fleet.max_duration_s, standby_w)

@@ -75,3 +75,11 @@ def test_a_spec_is_immutable_and_errors_of_the_pricers_pass_through(flat_map):
         spec.speed_mps = 1.0  # type: ignore[misc]
     with pytest.raises(UnknownNameError, match="lava"):
         CostSpec(unknown_ground="lava").build(flat_map)
+
+
+def test_given_is_the_default_for_none_the_spec_itself_else_an_error_naming_pricing():
+    spec = CostSpec(speed_mps=0.5)
+    assert CostSpec.given(None) == CostSpec() and CostSpec.given(spec) is spec
+    with pytest.raises(InvalidParameterError, match="pricing must be a CostSpec") as info:
+        CostSpec.given({"speed_mps": 0.5})
+    assert info.value.parameter == "pricing"
