@@ -36,8 +36,14 @@ from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from .edge_cost import EnergyCost
 from .model_cost import model_energy_cost
-from .risk import check_planning_risk
-from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES, CostTables, ground_table_rows, tabulate
+from .tables import (
+    DEFAULT_GRADE_SAMPLES,
+    DEFAULT_TURN_SAMPLES,
+    CostTables,
+    check_planning_risk,
+    ground_table_rows,
+    tabulate,
+)
 from .warmup import warm_up_kernels
 
 __all__ = ["CostSpec", "PricedMap", "PlanModel"]

@@ -460,7 +460,7 @@ class EnergyCost:
         a cell adds its horizontal length times its row's spread at the cell's grade in the
         direction of travel (linear interpolation of the tables' ``grade_sd_table_j_per_m``, as the
         mean tables are read); each turn adds its row's turn spread at the waypoint. What a
-        route's interval is made of (:func:`planner.price_route`; :mod:`planner.risk` says how).
+        route's interval is made of (:func:`planner.price_route`; :mod:`planner.route_price` says how).
 
         Parameters
         ----------

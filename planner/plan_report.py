@@ -28,10 +28,9 @@ from .cost_spec import CostSpec, PlanModel, PricedMap
 from .edge_cost import EnergyCost
 from .planning import GRAPH_PLANNERS, RouteSearch, plan_coarse_to_fine, plan_route, search_objective
 from .plot import RouteLine, plot_routes
-from .risk import INTERVAL_LEVEL, RouteEnergyInterval
 from .route import Route
 from .route_geojson import write_geojson
-from .route_price import price_route
+from .route_price import INTERVAL_LEVEL, RouteEnergyInterval, price_route
 from .warmup import warm_up_kernels
 
 __all__ = [

@@ -25,9 +25,8 @@ from terrawatt_base.dask_client import Compute, client_worker_count, run_tasks
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from ..edge_cost import EnergyCost
-from ..risk import RouteEnergyInterval
 from ..route import Route
-from ..route_price import price_route
+from ..route_price import RouteEnergyInterval, price_route
 from .monte_carlo_model import ModelMissionSetup
 from .monte_carlo_result import MonteCarloResult, mission_row
 from .monte_carlo_sampling import MissionDistributions
@@ -136,7 +135,7 @@ def simulate_missions_mc(
         The cost that planned the route: when it carries its physics model, the study's
         ``predicted_energy_j`` is that model's forecast of the driven stop-turn-go profile at
         the nominal speed (:func:`planner.route_price.price_route` with ``how="profile"``), else the
-        route's edge energy. When it carries a predictive interval (:mod:`planner.risk`), the
+        route's edge energy. When it carries a predictive interval (:mod:`planner.route_price`), the
         result's ``forecast`` is the route's energy distribution (P50, P90) on it;
         ``study.draw_from="model"`` needs one.
     forecast : RouteEnergyInterval, optional

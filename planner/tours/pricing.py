@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from energy.models.forecast import combine_ground_sds, predictive_quantile
+from energy.models.forecast import predictive_quantile
 from terrawatt_base.checks import check_instance
 from terrawatt_base.dask_client import Compute, client_worker_count, run_tasks
 from terrawatt_base.errors import InvalidParameterError
@@ -26,8 +26,8 @@ from terrawatt_base.errors import InvalidParameterError
 from ..batch import shippable_cost
 from ..edge_cost import EnergyCost
 from ..lattice import Lattice
-from ..risk import RouteEnergyInterval, check_risk_level
-from ..route_price import price_route
+from ..route_price import RouteEnergyInterval, price_route
+from ..tables import check_risk_level
 
 __all__ = ["PairPrices", "price_pairs", "price_from"]
 
@@ -117,10 +117,8 @@ class PairPrices:
         if not math.isfinite(mean):
             raise InvalidParameterError(f"the tour {idx.tolist()!r} uses a leg that no route joins")
         per_ground = np.sum(self.sd_by_ground_j[a, b], axis=0)
-        crossed = np.flatnonzero(per_ground > 0).tolist()
-        by = {self.ground_labels[g]: float(per_ground[g]) for g in crossed}
-        dofs = {self.ground_labels[g]: self._dof(g) for g in crossed}
-        return RouteEnergyInterval(mean, combine_ground_sds(per_ground), by, min(dofs.values(), default=math.inf), dofs)
+        dofs = [self._dof(g) for g in range(len(self.ground_labels))]
+        return RouteEnergyInterval.from_ground_spreads(mean, per_ground, self.ground_labels, dofs)
 
 
 def price_from(search_cost: EnergyCost, cost: EnergyCost, i: int, xy_m: np.ndarray

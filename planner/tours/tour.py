@@ -17,7 +17,7 @@ from terrawatt_base.errors import BlockedPositionError, InvalidParameterError
 
 from ..cost_spec import CostSpec
 from ..edge_cost import EnergyCost
-from ..risk import RouteEnergyInterval
+from ..route_price import RouteEnergyInterval
 from .options import TourFleet, TourSearch
 from .pricing import PairPrices, price_pairs
 from .result import RobotTour, TourLeg, TourResult

@@ -1,4 +1,4 @@
-"""Tests of planner.risk's ideas: route energy intervals (price_route) and risk-aware planning (CostTables.at_quantile) on a cheap-but-uncertain vs dear-but-certain map."""
+"""Tests of the risk ideas: route energy intervals (price_route) and risk-aware planning (CostTables.at_quantile) on a cheap-but-uncertain vs dear-but-certain map."""
 
 import math
 
