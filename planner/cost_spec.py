@@ -312,7 +312,7 @@ class CostSpec:
         if self.model is None:
             return None
         return PlanModel(file=self.model_name, class_name=type(self.model).__name__, model_ground=self.model_ground,
-                         grounds=tuple(cost.ground_labels), gives_interval=bool(cost.has_interval),
+                         grounds=tuple(cost.tables.ground_labels), gives_interval=bool(cost.has_interval),
                          risk_q=self.risk)
 
     def price(self, terrain: TerrainMap, *, map_label: str = "map") -> PricedMap:

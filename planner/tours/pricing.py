@@ -128,14 +128,14 @@ def price_from(search_cost: EnergyCost, cost: EnergyCost, i: int, xy_m: np.ndarr
     Returns ``(i, mean_j, sd_by_ground_j, duration_s, waypoints)``, one entry per point (the task of
     :func:`price_pairs`, module-level so dask workers import it by reference).
     """
-    n, g = xy_m.shape[0], len(cost.ground_labels)
+    n, g = xy_m.shape[0], len(cost.tables.ground_labels)
     mean = np.full(n, math.inf)
     sd = np.zeros((n, g))
     dur = np.full(n, math.inf)
     ways: list[np.ndarray | None] = [None] * n
     mean[i], dur[i] = 0.0, 0.0
     paths = Lattice.for_cost(search_cost).paths_from(tuple(xy_m[i]), xy_m)
-    index = {label: k for k, label in enumerate(cost.ground_labels)}
+    index = {label: k for k, label in enumerate(cost.tables.ground_labels)}
     walked: dict = {}  # the legs of one search share most of their segments
     for j, path in enumerate(paths):
         if j == i or not path.found:
@@ -213,6 +213,6 @@ def price_pairs(
         elapsed = time.perf_counter() - t0
     return PairPrices(
         names=names, xy_m=pts, mean_j=np.array([r[1] for r in rows]), sd_by_ground_j=np.array([r[2] for r in rows]),
-        ground_labels=tuple(cost.ground_labels), duration_s=np.array([r[3] for r in rows]),
+        ground_labels=tuple(cost.tables.ground_labels), duration_s=np.array([r[3] for r in rows]),
         waypoints=tuple(tuple(r[4]) for r in rows), pricing_time_s=elapsed, where=where, n_workers=n_used,
-        ground_dof=tuple(float(d) for d in getattr(cost, "spread_dof", ()) or ()))
+        ground_dof=tuple(float(d) for d in cost.tables.spread_dof))
