@@ -311,6 +311,11 @@ def run_tasks(tasks: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]], *, cl
     sizes : sequence of int, optional
         How far each task moves the bar (e.g. the missions in a chunk; default 1 each).
 
+    Raises
+    ------
+    InvalidParameterError
+        ``sizes`` not one per task (when the results are first asked for).
+
     Examples
     --------
     >>> import operator
@@ -320,6 +325,9 @@ def run_tasks(tasks: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]], *, cl
     from tqdm.auto import tqdm
 
     steps = [1] * len(tasks) if sizes is None else list(sizes)
+    if len(steps) != len(tasks):
+        raise InvalidParameterError(f"sizes must give one size per task ({len(tasks)}), got {len(steps)}",
+                                    parameter="sizes")
     with tqdm(total=sum(steps), desc=description, disable=not progress) as bar:
         if client is None:
             for (fn, args), step in zip(tasks, steps):

@@ -97,6 +97,11 @@ def test_run_tasks_puts_the_shared_arguments_first():
     assert list(run_tasks([(operator.sub, (1,)), (operator.truediv, (4,))], shared=(8,), sizes=[3, 1])) == [7, 2.0]
 
 
+def test_run_tasks_wants_one_size_per_task():
+    with pytest.raises(InvalidParameterError, match=r"sizes must give one size per task \(2\), got 1"):
+        list(run_tasks([(operator.neg, (1,)), (operator.neg, (2,))], sizes=[1]))
+
+
 def _late_sum(base: int, delay_s: float, x: int) -> int:
     time.sleep(delay_s)  # lets a later task finish first
     return base + x
