@@ -302,7 +302,7 @@ def _run_size(n: int, args: argparse.Namespace, rng: np.random.Generator) -> dic
     }
     prep.update(_edge_rates(cost, rng))
     queries = _queries(cost, args.queries)
-    drive_cost = cost.with_tables(CostTables(cost.grade_table_j_per_m, np.zeros_like(cost.turn_table_j)))
+    drive_cost = cost.with_tables(CostTables(cost.tables.grade_table_j_per_m, np.zeros_like(cost.tables.turn_table_j)))
     runs: list[dict[str, Any]] = []
     curve: list[dict[str, Any]] = []
     for qi, (start, goal) in enumerate(queries):

@@ -106,7 +106,7 @@ def _warm_up() -> float:
     cost = EnergyCost(tmap, np.zeros((6, 6), np.int32), CostTables(np.ones((1, 3)), np.ones((1, 2))), speed_mps=1.0, battery_voltage_v=1.0, turn_rate_radps=1.0)
     planner = IncrementalPlanner(Lattice.for_cost(cost, 1), (5.5, 5.5), heading=False)
     planner.plan((0.5, 0.5))
-    planner.replan((0.5, 1.5), Lattice.for_cost(cost.with_tables(CostTables(2.0 * cost.grade_table_j_per_m, cost.turn_table_j)), 1))
+    planner.replan((0.5, 1.5), Lattice.for_cost(cost.with_tables(CostTables(2.0 * cost.tables.grade_table_j_per_m, cost.tables.turn_table_j)), 1))
     arr, half = cost.arrays, np.array([(0, 1), (1, 0)], dtype=np.int64)
     sat, pos = np.zeros((7, 7), dtype=np.int32), np.full((36, 4), -1, dtype=np.int32)
     for kernel in (graph.lattice_reweight_serial, graph.lattice_reweight_parallel):

@@ -67,8 +67,8 @@ from terrawatt_base.dask_client import Compute
 
 def with_spread(cost: EnergyCost, rel_sd: float) -> EnergyCost:
     """``cost`` with a run-level spread of ``rel_sd`` of every mean table entry."""
-    sd = np.nan_to_num(np.abs(rel_sd * cost.grade_table_j_per_m), nan=0.0, posinf=0.0)
-    return cost.with_tables(CostTables(cost.grade_table_j_per_m, cost.turn_table_j, ground_labels=cost.ground_labels, grade_sd_table_j_per_m=sd, turn_sd_table_j=np.abs(rel_sd * cost.turn_table_j)))
+    sd = np.nan_to_num(np.abs(rel_sd * cost.tables.grade_table_j_per_m), nan=0.0, posinf=0.0)
+    return cost.with_tables(CostTables(cost.tables.grade_table_j_per_m, cost.tables.turn_table_j, ground_labels=cost.tables.ground_labels, grade_sd_table_j_per_m=sd, turn_sd_table_j=np.abs(rel_sd * cost.tables.turn_table_j)))
 
 
 def depot_and_sites(cost: EnergyCost, n: int, rng: np.random.Generator) -> tuple[tuple[float, float], TourSites]:

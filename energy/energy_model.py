@@ -13,7 +13,7 @@ belongs to the model:
 So ``ground`` always means a ground (its name, class id or parameters) in this library, and
 the argument the protocol passes is called ``cell_class``. A model whose forecasts carry an
 interval (:class:`IntervalEnergyModel`) also gives the run-level standard deviation of both,
-which planning adds up along a route (:mod:`planner.risk`).
+which planning adds up along a route (:mod:`planner.route_price`).
 
 The protocols are structural (:class:`typing.Protocol`, checkable at run time): any object
 with these methods is an energy model, no base class is needed.

@@ -28,11 +28,10 @@ from .problem import PlanningProblem
 from .reachability import reachability
 from .reachability_result import Reachability
 from .replan import IncrementalPlanner
-from .risk import RouteEnergyInterval
 from .ros_export import write_route_bag
 from .route import Route
 from .route_geojson import write_geojson
-from .route_price import price_route
+from .route_price import RouteEnergyInterval, price_route
 from .settings import PlannerSettings
 from .tables import CostTables
 from .warmup import warm_up_kernels

@@ -10,8 +10,8 @@ from typing import Any
 
 from terrain import TerrainMap
 from terrawatt_base.checks import check_instance
-from terrawatt_base.dask_client import Compute, client_worker_count
-from terrawatt_base.errors import InvalidParameterError, TerrawattError
+from terrawatt_base.dask_client import Compute, client_worker_count, run_tasks
+from terrawatt_base.errors import InvalidParameterError
 
 from .batch_pairs import BatchPairs
 from .batch_result import BatchResult, BatchRow
@@ -57,15 +57,14 @@ def _error_row(name: str, start_xy_m: Any, goal_xy_m: Any, exc: BaseException) -
 
 def _plan_pair_task(cost: EnergyCost, name: str, start_xy_m: tuple[float, float], goal_xy_m: tuple[float, float],
                     search: RouteSearch) -> BatchRow:
-    """:func:`plan_pair`, a library error (a blocked start, ...) returned as an ``"error"`` row.
+    """:func:`plan_pair`, a pair whose planning raises (a blocked start, ...) returned as an ``"error"`` row.
 
-    Returning the row rather than raising keeps a dask worker from logging the expected
-    failure with a traceback; any other exception propagates (and is reported the same way
-    by the caller).
+    Returning the row rather than raising keeps the other pairs going and a dask worker from
+    logging the expected failure with a traceback.
     """
     try:
         return plan_pair(cost, name, start_xy_m, goal_xy_m, search)
-    except TerrawattError as exc:
+    except Exception as exc:  # noqa: BLE001 - a pair that raises is reported in its row, the others go on
         return _error_row(name, start_xy_m, goal_xy_m, exc)
 
 
@@ -140,59 +139,16 @@ def plan_batch(
     batch = BatchPairs.from_array(pairs)
     search = RouteSearch("lattice") if search is None else check_instance("search", search, RouteSearch)
     compute = Compute() if compute is None else check_instance("compute", compute, Compute)
+    tasks = [(_plan_pair_task, (batch.names[i], tuple(batch.starts_xy_m[i].tolist()),
+                                tuple(batch.goals_xy_m[i].tolist()), search)) for i in range(len(batch))]
     with compute.session() as (client, where):
         t0 = time.perf_counter()
-        if client is None:
-            rows = _plan_here(cost, batch, search, compute.progress)
-        else:
-            rows = _plan_on_cluster(client, cost, batch, search, compute.progress)
+        # the workers get the cost without its caches, once; here the caller's cost keeps what it learns
+        shared = (cost if client is None else shippable_cost(cost),)
+        rows = list(run_tasks(tasks, client=client, shared=shared, progress=compute.progress, description="routes"))
         n_used = client_worker_count(client)
         elapsed = time.perf_counter() - t0
     return BatchResult(tuple(rows), search.planner, where, n_used, elapsed, terrain=cost.terrain)
-
-
-def _plan_here(cost: EnergyCost, batch: BatchPairs, search: RouteSearch, progress: bool) -> list[BatchRow]:
-    from tqdm.auto import tqdm
-
-    rows = []
-    for i in tqdm(range(len(batch)), desc="routes", disable=not progress):
-        name, start, goal = batch.names[i], tuple(batch.starts_xy_m[i].tolist()), tuple(batch.goals_xy_m[i].tolist())
-        try:
-            rows.append(_plan_pair_task(cost, name, start, goal, search))
-        except Exception as exc:  # noqa: BLE001 - a pair that raises is reported in its row, the others go on
-            rows.append(_error_row(name, start, goal, exc))
-    return rows
-
-
-def _plan_on_cluster(client: Any, cost: EnergyCost, batch: BatchPairs, search: RouteSearch,
-                     progress: bool) -> list[BatchRow]:
-    """One task per pair on ``client``, the cost scattered once to every worker; rows in pair order."""
-    from distributed import as_completed
-    from tqdm.auto import tqdm
-
-    [shared] = client.scatter([shippable_cost(cost)], broadcast=True, hash=False)
-    futures = [
-        client.submit(_plan_pair_task, shared, batch.names[i], tuple(batch.starts_xy_m[i].tolist()),
-                      tuple(batch.goals_xy_m[i].tolist()), search, pure=False)
-        for i in range(len(batch))
-    ]
-    position = {f.key: i for i, f in enumerate(futures)}
-    rows: list[BatchRow | None] = [None] * len(futures)
-    try:
-        with tqdm(total=len(futures), desc="routes", disable=not progress) as bar:
-            for fut in as_completed(futures):
-                i = position[fut.key]
-                try:
-                    rows[i] = fut.result()
-                except Exception as exc:  # noqa: BLE001 - the task's exception, re-raised here: report it
-                    rows[i] = _error_row(batch.names[i], batch.starts_xy_m[i], batch.goals_xy_m[i], exc)
-                bar.update()
-    except BaseException:
-        client.cancel(futures)
-        raise
-    finally:
-        client.cancel([shared])
-    return rows  # type: ignore[return-value]
 
 
 def plan_batch_on_map(
@@ -237,7 +193,7 @@ def plan_batch_on_map(
     >>> report.all_found, report.header()
     (True, 'map: map  20 x 20 cells of 1 m; 1 pairs; planner lattice')
     """
-    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    pricing = CostSpec.given(pricing)
     cost = pricing.build(terrain)
     warm_up_kernels()
     result = plan_batch(cost, pairs, search=search, compute=compute)

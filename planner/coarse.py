@@ -278,14 +278,15 @@ def coarse_layers(elevation_m: np.ndarray, blocked: np.ndarray, ground_rows: np.
     return elevation, coarse_blocked, best
 
 
-def coarse_cost(tables: EnergyCost, elevation_m: np.ndarray, blocked: np.ndarray, ground_rows: np.ndarray,
+def coarse_cost(fine: EnergyCost, elevation_m: np.ndarray, blocked: np.ndarray, ground_rows: np.ndarray,
                 cell_size_m: float, origin_xy_m: tuple[float, float], crs: str | None) -> EnergyCost:
-    """The coarse map of :func:`coarse_layers` priced with the energy tables and settings of ``tables``."""
+    """The coarse map of :func:`coarse_layers` priced with the mean energy tables and settings of ``fine``."""
     coarse = TerrainMap(elevation_m, cell_size_m, origin_xy_m, obstacle=blocked, crs=crs)
+    tables = fine.tables
     return EnergyCost(coarse, ground_rows, CostTables(tables.grade_table_j_per_m, tables.turn_table_j,
                                                       tables.ground_labels),
-                      speed_mps=tables.speed_mps, max_slope_rad=tables.max_slope_rad,
-                      battery_voltage_v=tables.battery_voltage_v, turn_rate_radps=tables.turn_rate_radps)
+                      speed_mps=fine.speed_mps, max_slope_rad=fine.max_slope_rad,
+                      battery_voltage_v=fine.battery_voltage_v, turn_rate_radps=fine.turn_rate_radps)
 
 
 def corridor_mask(coarse: EnergyCost, waypoints_m: np.ndarray, width_m: float) -> np.ndarray:

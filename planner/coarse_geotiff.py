@@ -105,8 +105,8 @@ class _FineWindow:
 
 
 def _same_tables(ref: EnergyCost, cost: EnergyCost) -> bool:
-    return (np.array_equal(ref.grade_table_j_per_m, cost.grade_table_j_per_m)
-            and np.array_equal(ref.turn_table_j, cost.turn_table_j) and ref.ground_labels == cost.ground_labels
+    return (np.array_equal(ref.tables.grade_table_j_per_m, cost.tables.grade_table_j_per_m)
+            and np.array_equal(ref.tables.turn_table_j, cost.tables.turn_table_j) and ref.tables.ground_labels == cost.tables.ground_labels
             and (ref.speed_mps, ref.max_slope_rad, ref.battery_voltage_v, ref.turn_rate_radps)
             == (cost.speed_mps, cost.max_slope_rad, cost.battery_voltage_v, cost.turn_rate_radps))
 
@@ -138,7 +138,7 @@ class _Pricer:
         elif not _same_tables(self.ref, cost):
             raise InvalidParameterError(
                 "cost_from priced two windows of the map with different energy tables or settings (ground rows "
-                f"{self.ref.ground_labels!r} vs {cost.ground_labels!r}); windowed planning needs one set of tables "
+                f"{self.ref.tables.ground_labels!r} vs {cost.tables.ground_labels!r}); windowed planning needs one set of tables "
                 "for the whole map: price every window alike (e.g. with one CostSpec)")
         return cost
 

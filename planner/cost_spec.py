@@ -31,13 +31,19 @@ from energy import GROUND_PRESETS, EnergyModel, PhysicsEnergyModel, ground_prese
 from energy.params import RobotParams, robot_params
 from terrain import TerrainMap
 from terrain.terrain_map import UNKNOWN_GROUND
-from terrawatt_base.checks import check_real
+from terrawatt_base.checks import check_instance, check_real
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from .edge_cost import EnergyCost
 from .model_cost import model_energy_cost
-from .risk import check_planning_risk
-from .tables import DEFAULT_GRADE_SAMPLES, DEFAULT_TURN_SAMPLES, CostTables, ground_table_rows, tabulate
+from .tables import (
+    DEFAULT_GRADE_SAMPLES,
+    DEFAULT_TURN_SAMPLES,
+    CostTables,
+    check_planning_risk,
+    ground_table_rows,
+    tabulate,
+)
 from .warmup import warm_up_kernels
 
 __all__ = ["CostSpec", "PricedMap", "PlanModel"]
@@ -176,6 +182,22 @@ class CostSpec:
                                             f"got {type(self.grounds).__name__!r}", parameter="grounds")
             object.__setattr__(self, "grounds", dict(self.grounds))  # the spec's own copy (a proxy would not pickle)
 
+    @classmethod
+    def given(cls, pricing: CostSpec | None) -> CostSpec:
+        """An entry point's ``pricing``: the default ``CostSpec()`` for None, else ``pricing`` itself, checked.
+
+        Raises
+        ------
+        InvalidParameterError
+            ``pricing`` neither None nor a :class:`CostSpec` (the error names ``pricing``).
+
+        Examples
+        --------
+        >>> CostSpec.given(None) == CostSpec()
+        True
+        """
+        return cls() if pricing is None else check_instance("pricing", pricing, cls)
+
     @property
     def max_slope_rad(self) -> float:
         """The steepest drivable slope (rad)."""
@@ -290,7 +312,7 @@ class CostSpec:
         if self.model is None:
             return None
         return PlanModel(file=self.model_name, class_name=type(self.model).__name__, model_ground=self.model_ground,
-                         grounds=tuple(cost.ground_labels), gives_interval=bool(cost.has_interval),
+                         grounds=tuple(cost.tables.ground_labels), gives_interval=bool(cost.has_interval),
                          risk_q=self.risk)
 
     def price(self, terrain: TerrainMap, *, map_label: str = "map") -> PricedMap:

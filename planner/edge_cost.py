@@ -206,10 +206,10 @@ class EnergyCost:
             raise InvalidParameterError(f"tables must be a CostTables, got {type(tables).__name__!r}",
                                         parameter="tables")
         rows = tables.rows_on(self.terrain.shape, self.ground_rows if ground_rows is None else ground_rows)
-        if tables.grade_table_j_per_m.shape[1] != self.grade_table_j_per_m.shape[1]:
+        if tables.grade_table_j_per_m.shape[1] != self.tables.grade_table_j_per_m.shape[1]:
             raise InvalidParameterError(
                 f"grade_table_j_per_m has {tables.grade_table_j_per_m.shape[1]} grade samples; this cost's grade "
-                f"grid has {self.grade_table_j_per_m.shape[1]} (build a new EnergyCost to change it)", parameter="tables"
+                f"grid has {self.tables.grade_table_j_per_m.shape[1]} (build a new EnergyCost to change it)", parameter="tables"
             )
         new = object.__new__(EnergyCost)
         for name in ("terrain", "speed_mps", "max_slope_rad", "battery_voltage_v", "turn_rate_radps", "grade_max",
@@ -230,50 +230,20 @@ class EnergyCost:
         return new
 
     @property
-    def grade_table_j_per_m(self) -> np.ndarray:
-        """Energy per horizontal metre at each grade, a row per kind of cell (:class:`CostTables`)."""
-        return self.tables.grade_table_j_per_m
-
-    @property
-    def turn_table_j(self) -> np.ndarray:
-        """Energy of a turn in place at each angle over ``[0, pi]``, a row per kind of cell."""
-        return self.tables.turn_table_j
-
-    @property
-    def ground_labels(self) -> tuple[str, ...]:
-        """A label per table row (ground names)."""
-        return self.tables.ground_labels
-
-    @property
-    def grade_sd_table_j_per_m(self) -> np.ndarray | None:
-        """Run-level standard deviations of the grade table (J per horizontal metre), or None without an interval."""
-        return self.tables.grade_sd_table_j_per_m
-
-    @property
-    def turn_sd_table_j(self) -> np.ndarray | None:
-        """Run-level standard deviations of the turn table (J), or None without an interval."""
-        return self.tables.turn_sd_table_j
-
-    @property
-    def spread_dof(self) -> tuple[float, ...]:
-        """Degrees of freedom of each row's spreads (``inf``: Gaussian), one per table row."""
-        return self.tables.spread_dof
-
-    @property
     def has_interval(self) -> bool:
         """Whether the tables carry run-level standard deviations with some spread > 0."""
-        return self.grade_sd_table_j_per_m is not None and bool(
-            np.any(self.grade_sd_table_j_per_m > 0) or np.any(self.turn_sd_table_j > 0))
+        return self.tables.grade_sd_table_j_per_m is not None and bool(
+            np.any(self.tables.grade_sd_table_j_per_m > 0) or np.any(self.tables.turn_sd_table_j > 0))
 
     def _changed_cells(self, other: EnergyCost) -> np.ndarray:
         """Free cells whose grade-table row content differs between ``self`` and ``other``."""
-        n_new = other.grade_table_j_per_m.shape[0]
+        n_new = other.tables.grade_table_j_per_m.shape[0]
         code = self.ground_rows.astype(np.int64) * n_new + other.ground_rows
-        present = np.flatnonzero(np.bincount(code.ravel(), minlength=self.grade_table_j_per_m.shape[0] * n_new))
-        differs = np.zeros(self.grade_table_j_per_m.shape[0] * n_new, dtype=bool)
+        present = np.flatnonzero(np.bincount(code.ravel(), minlength=self.tables.grade_table_j_per_m.shape[0] * n_new))
+        differs = np.zeros(self.tables.grade_table_j_per_m.shape[0] * n_new, dtype=bool)
         for pair in present.tolist():
             a, b = divmod(pair, n_new)
-            differs[pair] = not np.array_equal(self.grade_table_j_per_m[a], other.grade_table_j_per_m[b])
+            differs[pair] = not np.array_equal(self.tables.grade_table_j_per_m[a], other.tables.grade_table_j_per_m[b])
         return differs[code] & ~self.blocked
 
     def _min_energy_per_metre(self) -> float:
@@ -282,7 +252,7 @@ class EnergyCost:
         free = ~self.blocked
         if not np.any(free):
             return 0.0
-        table = self.grade_table_j_per_m
+        table = self.tables.grade_table_j_per_m
         n = table.shape[1]
         m = (n - 1) // 2  # index of grade 0
         # prefix[row, k] = min of table[row, m-k .. m+k]: lowest J/m at |grade| <= k*dg.
@@ -422,15 +392,15 @@ class EnergyCost:
         Parameters
         ----------
         rows, angles_rad : array_like of int / float, broadcast together
-            Rows of :attr:`turn_table_j` (as :attr:`ground_rows`) and unsigned heading changes.
+            Rows of the tables' ``turn_table_j`` (as :attr:`ground_rows`) and unsigned heading changes.
         """
         rows = np.asarray(rows, dtype=np.int64)
         angles = np.asarray(angles_rad, dtype=np.float64)
-        n_turn = self.turn_table_j.shape[1]
+        n_turn = self.tables.turn_table_j.shape[1]
         f = angles / math.pi * (n_turn - 1)
         i0 = np.minimum(np.floor(f).astype(np.int64), n_turn - 2)
         w = f - i0
-        energies = self.turn_table_j[rows, i0] * (1 - w) + self.turn_table_j[rows, i0 + 1] * w
+        energies = self.tables.turn_table_j[rows, i0] * (1 - w) + self.tables.turn_table_j[rows, i0 + 1] * w
         return np.where(angles == 0, 0.0, energies)
 
     def path_energy_j(self, waypoints_m: Any) -> float:
@@ -460,7 +430,7 @@ class EnergyCost:
         a cell adds its horizontal length times its row's spread at the cell's grade in the
         direction of travel (linear interpolation of the tables' ``grade_sd_table_j_per_m``, as the
         mean tables are read); each turn adds its row's turn spread at the waypoint. What a
-        route's interval is made of (:func:`planner.price_route`; :mod:`planner.risk` says how).
+        route's interval is made of (:func:`planner.price_route`; :mod:`planner.route_price` says how).
 
         Parameters
         ----------
@@ -580,5 +550,5 @@ class EnergyCost:
     def __repr__(self) -> str:
         return (
             f"EnergyCost(shape={self.shape}, speed_mps={self.speed_mps}, max_slope_rad={self.max_slope_rad:.4f}, "
-            f"grounds={list(self.ground_labels)}, blocked_cells={int(self.blocked.sum())})"
+            f"grounds={list(self.tables.ground_labels)}, blocked_cells={int(self.blocked.sum())})"
         )

@@ -175,7 +175,7 @@ def energy_costmap(cost: EnergyCost, *, statistic: str = "mean",
         raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
     check_choice("statistic", statistic, COSTMAP_STATISTICS)
     k = check_int("n_headings", n_headings, low=2)
-    table = np.asarray(cost.grade_table_j_per_m, dtype=np.float64)
+    table = np.asarray(cost.tables.grade_table_j_per_m, dtype=np.float64)
     gmax = float(cost.grade_max)
     half = (table.shape[1] - 1) // 2  # index of grade 0
     step = 2.0 * gmax / (table.shape[1] - 1)

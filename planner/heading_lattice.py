@@ -69,7 +69,7 @@ def _node_turns(lattice: Lattice) -> tuple[np.ndarray, np.ndarray]:
     cost = lattice.cost
     cells = np.ix_(lattice.node_rows, lattice.node_cols)
     node_row = np.where(cost.blocked[cells], 0, cost.ground_rows[cells]).ravel().astype(np.int64)
-    rows = np.arange(cost.turn_table_j.shape[0])[:, None, None]
+    rows = np.arange(cost.tables.turn_table_j.shape[0])[:, None, None]
     return node_row, np.ascontiguousarray(cost.turn_energy_at(rows, move_turn_angles()[None, :, :]))
 
 

@@ -27,7 +27,7 @@ correlated: it does not average out), and is tabulated per metre and per radian
 forecast's degrees of freedom (:attr:`LearnedModelTable.dof`: ``inf``, a Gaussian, or the
 Student-t of a ground the model never drove). The electronics and the physics slope term carry
 no spread. :meth:`LearnedEnergyModel.energy_cost` then gives the :class:`EnergyCost`
-standard-deviation tables and each row's degrees of freedom (:attr:`EnergyCost.spread_dof`),
+standard-deviation tables and each row's degrees of freedom (:attr:`CostTables.spread_dof`),
 which :func:`planner.price_route` adds up along a route. The per-sample spread averages out over a route and is not
 used.
 
@@ -539,7 +539,7 @@ class LearnedEnergyModel:
                 raise InvalidParameterError(f"previous must be an EnergyCost or None, got {type(previous).__name__!r}")
             if not ((previous.terrain is terrain or previous.terrain.same_grid(terrain))
                     and (previous.speed_mps, previous.max_slope_rad) == (speed, slope)
-                    and (previous.grade_table_j_per_m.shape[1], previous.turn_table_j.shape[1]) == (n_grade, n_turn)):
+                    and (previous.tables.grade_table_j_per_m.shape[1], previous.tables.turn_table_j.shape[1]) == (n_grade, n_turn)):
                 raise InvalidParameterError(
                     f"previous ({previous!r}) was built for another grid, speed, slope limit or table size; "
                     f"expected speed_mps={speed!r}, max_slope_rad={slope!r}, "

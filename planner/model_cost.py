@@ -316,7 +316,7 @@ def model_energy_cost(
 
     :func:`model_energy_model` then :meth:`LearnedEnergyModel.energy_cost`; the cost's row
     labels are the model's training grounds, and it carries standard-deviation tables when
-    the model gives an interval (:mod:`planner.risk`).
+    the model gives an interval (:mod:`planner.route_price`).
 
     Raises
     ------

@@ -28,10 +28,9 @@ from .cost_spec import CostSpec, PlanModel, PricedMap
 from .edge_cost import EnergyCost
 from .planning import GRAPH_PLANNERS, RouteSearch, plan_coarse_to_fine, plan_route, search_objective
 from .plot import RouteLine, plot_routes
-from .risk import INTERVAL_LEVEL, RouteEnergyInterval
 from .route import Route
 from .route_geojson import write_geojson
-from .route_price import price_route
+from .route_price import INTERVAL_LEVEL, RouteEnergyInterval, price_route
 from .warmup import warm_up_kernels
 
 __all__ = [
@@ -455,7 +454,7 @@ def plan_and_compare(
     ('exact', ['min-energy (lattice)', 'lattice + refinement', 'shortest distance'])
     """
     search = RouteSearch() if search is None else check_instance("search", search, RouteSearch)
-    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    pricing = CostSpec.given(pricing)
     priced = pricing.price(terrain, map_label=map_label)
     mean_cost, cost = priced.mean_cost, priced.cost
     route = plan_route(terrain, start_xy_m, goal_xy_m, cost=cost, planner=search.planner, seed=search.seed,
@@ -475,7 +474,7 @@ def plan_and_compare(
 
 
 def _presets_only(pricing: CostSpec | None) -> CostSpec:
-    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    pricing = CostSpec.given(pricing)
     if pricing.model is not None or pricing.risk is not None:
         raise InvalidParameterError("coarse-to-fine prices the map with the physics presets: give pricing without a "
                                     "model and a risk level", parameter="pricing")

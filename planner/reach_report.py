@@ -74,7 +74,7 @@ def reach_on_battery(
     (True, 0.192)
     """
     battery = check_instance("battery", battery, Battery)
-    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    pricing = CostSpec.given(pricing)
     budget_j = battery.capacity_ah * battery.voltage_v * S_PER_H
     reach_compile_s = warm_up_reachability()
     priced = dataclasses.replace(pricing, risk=None).price(terrain, map_label=map_label)  # the reach is at the mean

@@ -110,7 +110,7 @@ class IncrementalPlanner:
     >>> planner = IncrementalPlanner(Lattice.for_cost(cost), (35.0, 25.0))
     >>> planner.plan((5.0, 5.0)).found
     True
-    >>> cheaper = cost.with_tables(CostTables(0.5 * cost.grade_table_j_per_m, cost.turn_table_j))  # a model update
+    >>> cheaper = cost.with_tables(CostTables(0.5 * cost.tables.grade_table_j_per_m, cost.tables.turn_table_j))  # a model update
     >>> path = planner.replan((8.0, 6.0), Lattice.for_cost(cheaper))  # moved, and repaired
     >>> bool(np.isclose(path.objective, Lattice(cheaper).shortest_path((8.0, 6.0), (35.0, 25.0)).objective))
     True

@@ -1,10 +1,10 @@
-"""The price of a route: :func:`price_route`, the one door, and the forecast of its whole stop-turn-go profile.
+"""The price of a route: :func:`price_route`, the one door, its interval and the forecast of its stop-turn-go profile.
 
 A route on a priced map (:class:`~planner.EnergyCost`) has one price with two readings
 (``how``): ``"edges"``, the sum of its segments' and turns' edge costs (what the searches
 minimise), or ``"profile"``, the drive the robot actually makes — priced by the model that priced
 the map. Either comes with the map's predictive interval when it has one
-(:class:`~planner.risk.RouteEnergyInterval`: a mean, a spread per ground, a tail), and with a
+(:class:`RouteEnergyInterval`: a mean, a spread per ground, a tail), and with a
 spread of 0 otherwise, so every caller (the plan, the Monte Carlo study, the navigator, the
 tours) reads a route's energy from one object.
 
@@ -17,40 +17,192 @@ cost's tables, on the map's ground and slope under every pose (the rule of
 :func:`segment_forecasts_j` splits it into the turn and the straight of each route segment,
 the way :func:`planner.simulate_mission` books them.
 
-The interval is read from the priced map's own tables (:class:`~planner.CostTables`): each
-segment walked cell by cell adds its horizontal length times its row's spread at the cell's
-grade in the direction of travel (linear interpolation, as the mean tables are read), each turn
-its row's turn spread; per ground the spreads add linearly, the grounds combine by
-root-sum-of-squares, and the tail is the Student-t of the least degrees of freedom crossed
-(:mod:`planner.risk` says why).
+**The interval.** A cost priced by a model with a predictive interval (:class:`~planner.LearnedEnergyModel`
+over a model whose ``gives_interval`` is True) carries, beside its mean tables, the
+**run-level** standard deviation of every table entry (:class:`~planner.CostTables`). That spread is
+the part of the model's error shared by a whole run on one ground (what the model does not know
+about the ground, how one run differs from another), so along a route it does not average out:
+
+- the route's **mean** energy is the sum of its edge means (:meth:`planner.EnergyCost.path_energy_j`);
+- **within one ground** (one table row) the edge spreads add **linearly**: each segment walked
+  cell by cell adds its horizontal length times its row's spread at the cell's grade in the
+  direction of travel (linear interpolation, as the mean tables are read), each turn its row's
+  turn spread (:meth:`planner.EnergyCost.path_spreads_j`);
+- the per-ground sums, grounds being independent of each other, combine by the **root of the
+  sum of squares** (:func:`energy.models.forecast.combine_ground_sds`).
+
+**Shape.** Each row's spreads are the scale of the model's predictive on that ground
+(:attr:`planner.CostTables.spread_dof`): a Gaussian (``dof = inf``) where the model knows the ground, a
+**Student-t** with as many degrees of freedom as grounds taught the new-ground spread where it
+never drove it (:mod:`energy.models.forecast`). The same predictive gives every interval the
+planner reports: :class:`RouteEnergyInterval` (P50, P90, central intervals) takes the route's
+energy as a Student-t with the **least** degrees of freedom of the grounds it crosses with a
+spread (a Gaussian when all are known); the Monte Carlo missions draw each ground's factor from
+its own predictive (:mod:`planner.missions.monte_carlo_model`); the navigator's forecast of what
+remains uses the same quantile (:mod:`planner.missions.remaining`). What a risk level plans on
+is :meth:`planner.CostTables.at_quantile` (:mod:`planner.tables` says why it bounds the route's quantile).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from energy import CommandProfile, drive_profile
-from energy.models.forecast import combine_ground_sds
+from energy.models.forecast import check_dof, combine_ground_sds, predictive_quantile
 from energy.profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, terrain_along
 from terrawatt_base.checks import check_bool, check_choice, check_instance, check_real
 from terrawatt_base.errors import InvalidParameterError
 
 from .edge_cost import EnergyCost
 from .points import as_points
-from .risk import RouteEnergyInterval
 from .route import Route
+from .tables import check_risk_level
 
-__all__ = ["PRICE_HOWS", "price_route", "profile_forecast_w", "segment_forecasts_j"]
+__all__ = ["PRICE_HOWS", "INTERVAL_LEVEL", "RouteEnergyInterval", "price_route", "profile_forecast_w",
+           "segment_forecasts_j"]
 
 #: How a route is priced: its edge costs, or the whole drive profile.
 PRICE_HOWS = ("edges", "profile")
 
 #: Time step (s) of the profile a forecast prices.
 FORECAST_DT_S = 0.05
+
+#: Central interval reported beside P50 / P90 (0.8: P10-P90).
+INTERVAL_LEVEL = 0.8
+
+
+@dataclass(frozen=True)
+class RouteEnergyInterval:
+    """The distribution of a route's battery energy under a model with an interval: a mean, a scale and a tail.
+
+    Attributes
+    ----------
+    mean_j : float
+        Mean energy (J): the sum of the edge means (turns included).
+    sd_j : float
+        Standard deviation (J): per ground the edge spreads summed linearly, the grounds
+        combined by root-sum-of-squares.
+    sd_by_ground_j : dict of str to float
+        The linear per-ground sums (J), keyed by the cost's row labels (grounds the route
+        does not cross are left out).
+    dof : float
+        Degrees of freedom of the Student-t the quantiles are read from (``inf``, the
+        default: Gaussian): the least of the grounds the route crosses with a non-zero spread.
+        A sum of independent Student-t's with other degrees of freedom has no closed form;
+        the least is **conservative** (its tails are the heaviest of the parts'), exact on a
+        route over one ground or over grounds that share one value.
+    dof_by_ground : dict of str to float
+        Each crossed ground's own degrees of freedom (keys of ``sd_by_ground_j``; a ground
+        left out has ``dof``): what a Monte Carlo draw of the route draws per ground.
+
+    Raises
+    ------
+    InvalidParameterError
+        A negative or non-finite mean or spread, degrees of freedom not > 0.
+
+    Examples
+    --------
+    >>> iv = RouteEnergyInterval(1000.0, 100.0, {"sand": 100.0})
+    >>> round(iv.p90_j, 1), [round(x, 1) for x in iv.interval_j(0.8)]
+    (1128.2, [871.8, 1128.2])
+    >>> round(RouteEnergyInterval(1000.0, 100.0, {"sand": 100.0}, dof=3.0).p90_j, 1)  # a ground never driven
+    1163.8
+    """
+
+    mean_j: float
+    sd_j: float
+    sd_by_ground_j: dict[str, float]
+    dof: float = math.inf
+    dof_by_ground: dict[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for name in ("mean_j", "sd_j"):
+            value = float(getattr(self, name))
+            if not (math.isfinite(value) and value >= 0):
+                raise InvalidParameterError(f"RouteEnergyInterval.{name} must be a finite energy >= 0, got {value!r}")
+            object.__setattr__(self, name, value)
+        by = {str(k): float(v) for k, v in dict(self.sd_by_ground_j).items()}
+        if any(not (math.isfinite(v) and v >= 0) for v in by.values()):
+            raise InvalidParameterError(f"RouteEnergyInterval.sd_by_ground_j must hold finite spreads >= 0, got {by!r}")
+        object.__setattr__(self, "sd_by_ground_j", by)
+        object.__setattr__(self, "dof", check_dof(self.dof, "RouteEnergyInterval.dof"))
+        dofs = {str(k): check_dof(v, "RouteEnergyInterval.dof_by_ground") for k, v in dict(self.dof_by_ground).items()}
+        if set(dofs) - set(by):
+            raise InvalidParameterError(f"RouteEnergyInterval.dof_by_ground names grounds without a spread: "
+                                        f"{sorted(set(dofs) - set(by))!r}")
+        object.__setattr__(self, "dof_by_ground", dofs)
+
+    @classmethod
+    def from_ground_spreads(cls, mean_j: float, sd_by_ground_j: Sequence[float], labels: Sequence[str],
+                            dof_by_ground: Sequence[float]) -> RouteEnergyInterval:
+        """A route's distribution from its linear spread sum on every ground (one per label, 0 where it does not go).
+
+        The grounds with a spread are kept (with their degrees of freedom), the sd is their root-sum-of-squares and
+        the tail the least degrees of freedom among them (a Gaussian when the route crosses no spread).
+
+        Examples
+        --------
+        >>> iv = RouteEnergyInterval.from_ground_spreads(1000.0, [60.0, 0.0, 80.0], ["sand", "clay", "gravel"],
+        ...                                              [float("inf"), 3.0, 5.0])
+        >>> iv.sd_j, iv.sd_by_ground_j, iv.dof
+        (100.0, {'sand': 60.0, 'gravel': 80.0}, 5.0)
+        """
+        crossed = [g for g, sd in enumerate(sd_by_ground_j) if sd > 0]
+        dofs = {labels[g]: dof_by_ground[g] for g in crossed}
+        return cls(mean_j, combine_ground_sds(sd_by_ground_j), {labels[g]: float(sd_by_ground_j[g]) for g in crossed},
+                   min(dofs.values(), default=math.inf), dofs)
+
+    def ground_dof(self, ground: str) -> float:
+        """The degrees of freedom of ``ground``'s factor (its own, else the route's :attr:`dof`)."""
+        return self.dof_by_ground.get(str(ground), self.dof)
+
+    def quantile_j(self, q: float) -> float:
+        """The ``q`` quantile of the route energy (J), ``q`` in (0, 1): ``mean + predictive_quantile(q, dof) * sd``."""
+        return self.mean_j + predictive_quantile(check_risk_level(q), self.dof) * self.sd_j
+
+    @property
+    def p50_j(self) -> float:
+        """Median energy (J); the mean, the distribution (Gaussian or Student-t) being symmetric."""
+        return self.mean_j
+
+    @property
+    def p90_j(self) -> float:
+        """90th percentile of the energy (J)."""
+        return self.quantile_j(0.9)
+
+    def interval_j(self, level: float = INTERVAL_LEVEL) -> tuple[float, float]:
+        """Central ``level`` interval of the energy (J), e.g. 0.8: (P10, P90)."""
+        lv = check_risk_level(level, "level")
+        return self.quantile_j(0.5 - lv / 2.0), self.quantile_j(0.5 + lv / 2.0)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The block route.json holds under ``energy_interval`` (J and Wh, units in the keys)."""
+        lo, hi = self.interval_j(INTERVAL_LEVEL)
+        shape = "gaussian" if math.isinf(self.dof) else f"student-t with {self.dof:g} degrees of freedom"
+        out = {
+            "distribution": f"{shape}: per ground the run-level spreads add linearly, grounds independent",
+            "mean_j": self.mean_j,
+            "sd_j": self.sd_j,
+            "p50_j": self.p50_j,
+            "p90_j": self.p90_j,
+            "central_level": INTERVAL_LEVEL,
+            "central_interval_j": [lo, hi],
+            "mean_wh": self.mean_j / 3600.0,
+            "p50_wh": self.p50_j / 3600.0,
+            "p90_wh": self.p90_j / 3600.0,
+            "central_interval_wh": [lo / 3600.0, hi / 3600.0],
+            "sd_by_ground_j": dict(self.sd_by_ground_j),
+        }
+        if not math.isinf(self.dof):  # a Gaussian's block stays as it was
+            out["dof"] = self.dof
+            out["dof_by_ground"] = {g: (d if math.isfinite(d) else None) for g, d in self.dof_by_ground.items()}
+        return out
 
 
 def profile_forecast_w(cost: EnergyCost, profile: CommandProfile) -> np.ndarray:
@@ -190,12 +342,7 @@ def price_route(cost: EnergyCost, route: Route | Any, *, how: str = "edges", int
         raise InvalidParameterError("the route crosses a blocked cell or an undrivable grade: it has no price")
     per_row = cost.path_spreads_j(pts, segment_cache=segment_cache) if with_interval else None
     if per_row is not None:
-        tables = cost.tables
-        spread = np.flatnonzero(per_row > 0).tolist()
-        crossed = {tables.ground_labels[i]: float(per_row[i]) for i in spread}
-        dofs = {tables.ground_labels[i]: tables.spread_dof[i] for i in spread}
-        price = RouteEnergyInterval(mean, combine_ground_sds(per_row), crossed, min(dofs.values(), default=math.inf),
-                                    dofs)
+        price = RouteEnergyInterval.from_ground_spreads(mean, per_row, cost.tables.ground_labels, cost.tables.spread_dof)
     else:
         price = RouteEnergyInterval(mean, 0.0, {})
     if how == "profile":

@@ -6,6 +6,23 @@ of turning in place at angles uniformly spaced over ``[0, pi]``. :func:`tabulate
 those rows from any energy model (the physics model per ground, the learned model per model
 id): it is the only place tables are computed. :meth:`CostTables.at_quantile` prices every
 entry at a quantile of its predictive (what a risk level plans on).
+
+**Risk-aware planning.** :meth:`planner.CostTables.at_quantile` gives the tables
+``mean + z_Q * sd`` per entry, ``z_Q`` the ``Q`` quantile of the row's standardised predictive
+(:func:`energy.models.forecast.predictive_quantile` with the row's degrees of freedom: the
+standard normal's on a known ground), floored at 0 (an edge never pays back energy). A planner
+minimising a cost on them minimises
+
+``sum over edges (mean_e + z_Q,g(e) sd_e) = mean_route + sum over grounds z_Q,g S_g``
+
+with ``S_g`` the linear sum of spreads on ground ``g``. On a route over **one ground** that is
+exactly the route's ``Q`` quantile (its sd is ``S_g``, its degrees of freedom those of ``g``).
+On a route over several independent grounds the route's sd is ``sqrt(sum S_g**2) <= sum S_g``:
+for ``Q > 0.5`` the objective is an **upper bound** of the route's ``Q`` quantile
+(conservative: it penalises crossing many uncertain grounds a little more than their
+independence warrants), for ``Q < 0.5`` a lower bound. The objective is still additive over
+edges, which the lattice and the OMPL objective need; the route that is finally reported is
+priced exactly (:func:`planner.price_route`: a :class:`~planner.route_price.RouteEnergyInterval`).
 """
 
 from __future__ import annotations
@@ -21,10 +38,8 @@ import numpy as np
 from energy import EnergyModel, IntervalEnergyModel
 from energy.models.forecast import check_dof, predictive_quantile
 from terrain.terrain_map import UNKNOWN_GROUND, TerrainMap
-from terrawatt_base.checks import check_int
+from terrawatt_base.checks import check_int, check_real
 from terrawatt_base.errors import GridMismatchError, InvalidParameterError, UnknownNameError
-
-from .risk import check_risk_level
 
 __all__ = [
     "DEFAULT_GRADE_SAMPLES",
@@ -37,6 +52,8 @@ __all__ = [
     "CostTables",
     "check_spread_tables",
     "check_spread_dof",
+    "check_risk_level",
+    "check_planning_risk",
 ]
 
 #: Default number of samples of each ground's energy-per-metre-vs-grade table (odd: grade 0 is a sample).
@@ -105,7 +122,7 @@ def tabulate(
     spread : bool
         Tabulate the run-level standard deviation instead of the mean, from
         ``model.energy_per_metre_sd_j`` / ``model.turn_energy_sd_j`` (a model with an
-        interval; see :mod:`planner.risk` for how a route adds the spreads up).
+        interval; see :mod:`planner.route_price` for how a route adds the spreads up).
 
     Returns
     -------
@@ -349,7 +366,7 @@ class CostTables:
         standard normal's on a ground the model knows, a Student-t's on one it never drove. A cost
         on these tables (:meth:`planner.EnergyCost.with_tables`) is what a risk level plans on:
         exactly a route's ``q`` quantile on one ground, an upper bound of it across independent
-        grounds for ``q > 0.5`` (:mod:`planner.risk`).
+        grounds for ``q > 0.5`` (the module docstring).
 
         Parameters
         ----------
@@ -444,3 +461,44 @@ def _check_mean_tables(grade_table_j_per_m: Any, turn_table_j: Any,
     for tab in (grade_table, turn_table):
         tab.setflags(write=False)
     return grade_table, turn_table, labels
+
+
+def check_risk_level(q: Any, name: str = "q") -> float:
+    """A risk level ``Q`` checked: a number in the open interval (0, 1).
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a number, or outside (0, 1); the message names ``name``.
+    """
+    return check_real(name, q, low=0.0, high=1.0, low_inclusive=False, high_inclusive=False)
+
+
+def check_planning_risk(q: Any, name: str = "risk") -> float:
+    """A risk level to plan or decide on: a number in [0.5, 1).
+
+    Planning on a quantile below the median plans on luck: ``--risk 1e-9`` priced every edge at
+    mean - 6 sd, floored at 0, and reported a route "costing" 0 J. :meth:`planner.CostTables.at_quantile` and
+    :meth:`RouteEnergyInterval.quantile_j` still take any level in (0, 1) (a P10 is a fine thing to
+    report); what a route is chosen or a mission is judged on is at least the median.
+
+    Raises
+    ------
+    InvalidParameterError
+        Not a number, outside (0, 1), or below 0.5; the message names ``name``.
+
+    Examples
+    --------
+    >>> check_planning_risk(0.9)
+    0.9
+    >>> check_planning_risk(0.1, "--risk")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    terrawatt_base.errors.InvalidParameterError: --risk 0.1 lies below the median: ...
+    """
+    q = check_risk_level(q, name)
+    if q < 0.5:
+        raise InvalidParameterError(
+            f"{name} {q:g} lies below the median: planning on it assumes the energy comes out lower than it does in "
+            f"{100 * (1 - q):.4g} % of runs; give a level in [0.5, 1), e.g. 0.9 (0.5 plans on the mean)", parameter=name)
+    return q

@@ -62,7 +62,7 @@ def warm_up_kernels() -> float:
     lattice = Lattice.for_cost(cost, 1)
     path = lattice.shortest_path((0.5, 0.5), (3.5, 3.5), weight="length")
     heading_shortest_path(lattice, (0.5, 0.5), (3.5, 2.5))  # the heading lattice: cost-to-go, then its A*
-    dearer = cost.with_tables(CostTables(2.0 * cost.grade_table_j_per_m, cost.turn_table_j))  # incremental reweighting
+    dearer = cost.with_tables(CostTables(2.0 * cost.tables.grade_table_j_per_m, cost.tables.turn_table_j))  # incremental reweighting
     changed = np.zeros((4, 4), dtype=bool)
     changed[1, 1] = True
     replanner = IncrementalPlanner(lattice, (3.5, 3.5))  # D* Lite: search, then a repair after a refresh

@@ -2,7 +2,9 @@
 
 Every part of terrawatt that runs tasks on dask (the evaluation folds, the diagnosis,
 :func:`planner.plan_batch`, :func:`planner.simulate_missions_mc`, the tours' pricing) opens and checks its client
-here, so the optional extra, the timeout of an unreachable scheduler and the messages are the same everywhere.
+here, and runs its tasks through :func:`run_tasks` (shared inputs sent once, results in task order, a progress bar,
+the rest cancelled on an error), so the optional extra, the timeout of an unreachable scheduler and the messages are
+the same everywhere.
 :class:`Compute` says in one value where a batch of independent tasks runs (here, a new local cluster, a
 scheduler or a given client) and whether it shows a progress bar; ``Compute.session()`` opens what it names.
 """
@@ -283,28 +285,73 @@ def client_worker_count(client: Any) -> int:
 
 
 def run_tasks(tasks: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]], *, client: Any = None,
-              progress: bool = False, description: str = "tasks") -> Iterator[Any]:
-    """Each task's ``fn(*args)``, yielded in the order of ``tasks``.
+              shared: Sequence[Any] = (), progress: bool = False, description: str = "tasks",
+              sizes: Sequence[int] | None = None) -> Iterator[Any]:
+    """Each task's ``fn(*shared, *args)``, yielded in the order of ``tasks``.
 
-    With a dask ``client`` every task is submitted at once (``fn`` must be importable by
-    the workers) and the results come back in task order, whichever finishes first; a
-    task's exception is raised here and the other tasks are cancelled.
+    Without a ``client`` the tasks run here, one after another, when the results are asked
+    for. With a dask ``client`` every task is submitted at once (``fn`` must be importable by
+    the workers); each of ``shared`` (what every task takes first: a map, a cost, the logs)
+    is sent to every worker once, never with a task, and released at the end. The results
+    come back in task order, whichever finishes first; the first task's exception is raised
+    here and the other tasks are cancelled.
+
+    Parameters
+    ----------
+    tasks : sequence of (callable, tuple)
+        Each task's function and its own arguments.
+    client : distributed.Client, optional
+        Where the tasks run (default here).
+    shared : sequence
+        Leading arguments of every task.
+    progress : bool
+        Show a tqdm bar over the tasks (as they complete on a cluster).
+    description : str
+        The bar's label.
+    sizes : sequence of int, optional
+        How far each task moves the bar (e.g. the missions in a chunk; default 1 each).
+
+    Raises
+    ------
+    InvalidParameterError
+        ``sizes`` not one per task (when the results are first asked for).
+
+    Examples
+    --------
+    >>> import operator
+    >>> list(run_tasks([(operator.add, (1,)), (operator.mul, (3,))], shared=(2,)))
+    [3, 6]
     """
     from tqdm.auto import tqdm
 
-    if client is None:
-        for fn, args in tqdm(tasks, desc=description, disable=not progress):
-            yield fn(*args)
-        return
-    from distributed import wait
+    steps = [1] * len(tasks) if sizes is None else list(sizes)
+    if len(steps) != len(tasks):
+        raise InvalidParameterError(f"sizes must give one size per task ({len(tasks)}), got {len(steps)}",
+                                    parameter="sizes")
+    with tqdm(total=sum(steps), desc=description, disable=not progress) as bar:
+        if client is None:
+            for (fn, args), step in zip(tasks, steps):
+                result = fn(*shared, *args)
+                bar.update(step)
+                yield result
+            return
+        from distributed import as_completed
 
-    futures = [client.submit(fn, *args, pure=False) for fn, args in tasks]
-    try:
-        with tqdm(total=len(futures), desc=description, disable=not progress) as bar:
-            for fut in futures:
-                wait(fut)
-                bar.update()
-                yield fut.result()  # re-raises the task's exception
-    except BaseException:
-        client.cancel(futures)
-        raise
+        sent = client.scatter(list(shared), broadcast=True, hash=False) if shared else []
+        futures = [client.submit(fn, *sent, *args, pure=False) for fn, args in tasks]
+        position = {f.key: i for i, f in enumerate(futures)}
+        done: dict[int, Any] = {}  # finished, waiting for the tasks before them
+        first = 0  # the next result to yield
+        try:
+            for fut in as_completed(futures):
+                i = position[fut.key]
+                done[i] = fut.result()  # re-raises the task's exception
+                bar.update(steps[i])
+                while first in done:
+                    yield done.pop(first)
+                    first += 1
+        except BaseException:
+            client.cancel(futures)
+            raise
+        finally:
+            client.cancel(sent)

@@ -18,7 +18,7 @@ from planner.missions.mission_report import mission_battery
 from planner.model_cost import parse_model_ground
 from planner.planning import RouteSearch
 from planner.points import point_on_map
-from planner.risk import check_planning_risk
+from planner.tables import check_planning_risk
 from terrain import DemWindows, FigureWarning, InvalidParameterError, TerrainMap
 from terrain.io import read_map_with_options
 from terrain.procedural import example_map

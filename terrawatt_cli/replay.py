@@ -10,7 +10,7 @@ from energy.io import read_navsat
 from planner.missions.replay_report import place_by_gps, replay_recording
 from planner.missions.settings import UPDATE_SOURCES, AdaptiveSettings, MissionGoal, ReplayFeed
 from planner.model_cost import parse_model_ground
-from planner.risk import check_planning_risk
+from planner.tables import check_planning_risk
 
 from .common import (
     Checked,

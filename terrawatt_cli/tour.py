@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from planner.points import point_on_map
-from planner.risk import check_planning_risk
+from planner.tables import check_planning_risk
 from planner.tours import TourFleet, TourSearch, plan_tour_on_map, read_tour_chargers_csv, read_tour_sites_csv
 from terrain import InvalidParameterError
 

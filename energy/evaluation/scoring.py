@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from terrawatt_base.checks import check_real, check_text
-from terrawatt_base.dask_client import check_client
+from terrawatt_base.dask_client import check_client, run_tasks
 from terrawatt_base.errors import (
     DataError,
     InvalidParameterError,
@@ -125,22 +125,23 @@ def score_run(
 
 
 def _score_fold(
+    logs: list[InteractionLog],
     variant: str,
+    test: int,
+    train: list[int],
     run: str,
-    log: InteractionLog,
-    train_logs: list[InteractionLog],
     model_name: str,
     proto: CurrentModel,
     section_s: float,
 ) -> tuple[list[RunScore], list[RunTotal]]:
-    """Fit a fresh copy of ``proto`` on ``train_logs`` and score it on ``log``: one row per side, and the total.
+    """Fit a fresh copy of ``proto`` on ``logs[train]`` and score it on ``logs[test]``: one row per side, and the total.
 
     Module-level so that dask workers can unpickle it by reference.
     """
     t0 = time.perf_counter()
-    model = proto.clone().fit(train_logs)
+    model = proto.clone().fit([logs[j] for j in train])
     fit_s = time.perf_counter() - t0
-    rows, totals = score_run(model, log, variant=variant, run=run, model_name=model_name, section_s=section_s)
+    rows, totals = score_run(model, logs[test], variant=variant, run=run, model_name=model_name, section_s=section_s)
     return [dataclasses.replace(row, fit_duration_s=fit_s) for row in rows], totals
 
 
@@ -224,41 +225,6 @@ def check_runs(logs: Any, *, labelled: bool = False, what: str = "the evaluation
     return items
 
 
-def _score_on_cluster(
-    client: Any,
-    items: list[InteractionLog],
-    names: list[str],
-    folds: list[tuple[str, int, list[int]]],
-    models: Mapping[str, CurrentModel],
-    section_s: float,
-    progress: bool,
-) -> tuple[list[RunScore], list[RunTotal]]:
-    """Every (fold, model) pair as one task on ``client``; rows in the serial order."""
-    from distributed import as_completed
-    from tqdm.auto import tqdm
-
-    scattered = client.scatter(items, broadcast=True, hash=False)
-    futures = [
-        client.submit(
-            _score_fold, variant, names[test], scattered[test], [scattered[j] for j in train], mname, proto,
-            section_s, pure=False,
-        )
-        for variant, test, train in folds
-        for mname, proto in models.items()
-    ]
-    position = {f.key: i for i, f in enumerate(futures)}
-    rows: list[tuple[list[RunScore], list[RunTotal]]] = [([], []) for _ in futures]
-    try:
-        with tqdm(total=len(futures), desc="evaluation tasks", disable=not progress) as bar:
-            for fut in as_completed(futures):
-                rows[position[fut.key]] = fut.result()  # re-raises a task's exception here
-                bar.update()
-    except BaseException:
-        client.cancel(futures + scattered)  # drop the tasks still queued or running
-        raise
-    return [row for task_rows, _ in rows for row in task_rows], [row for _, task_rows in rows for row in task_rows]
-
-
 def evaluate_current_models(
     logs: Sequence[InteractionLog],
     models: Mapping[str, CurrentModel],
@@ -293,7 +259,7 @@ def evaluate_current_models(
     section_s : float
         Section length of the section error (s).
     progress : bool
-        Show a tqdm bar over the folds (over the completed tasks with a ``client``).
+        Show a tqdm bar over the (fold, model) tasks.
     client : distributed.Client or None
         ``None`` (default): fit and score the folds here, one after another. A
         ``distributed.Client``: run them as tasks on its cluster (needs the
@@ -384,19 +350,15 @@ def evaluate_current_models(
     if "ground_agnostic" in chosen:
         folds += [("ground_agnostic", i, [j for j in range(len(items)) if j != i]) for i in range(len(items))]
 
+    # every (fold, model) pair one task; the trimmed logs sent to every worker once
+    tasks = [(_score_fold, (variant, test, train, names[test], mname, proto, section_s))
+             for variant, test, train in folds for mname, proto in models.items()]
     scores: list[RunScore] = []
     totals: list[RunTotal] = []
-    if client is not None:
-        scores, totals = _score_on_cluster(client, items, names, folds, models, section_s, progress)
-    else:
-        from tqdm.auto import tqdm
-
-        for variant, test, train in tqdm(folds, desc="evaluation folds", disable=not progress):
-            train_logs = [items[j] for j in train]
-            for mname, proto in models.items():
-                rows, run_rows = _score_fold(variant, names[test], items[test], train_logs, mname, proto, section_s)
-                scores += rows
-                totals += run_rows
+    for rows, run_rows in run_tasks(tasks, client=client, shared=(items,), progress=progress,
+                                    description="evaluation tasks"):
+        scores += rows
+        totals += run_rows
     summary = summarise_scores(scores, chosen, grounds, tuple(models))
     result = EvaluationResult(tuple(scores), summary, totals=tuple(totals), skipped=tuple(skipped),
                               models=tuple(models), variants=chosen, section_s=float(section_s))

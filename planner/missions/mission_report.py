@@ -105,7 +105,7 @@ def simulate_adaptive_mission(
     battery = check_instance("battery", battery, Battery)
     if prior_ground not in GROUND_PRESETS:
         raise UnknownNameError(f"prior_ground {prior_ground!r} has no preset; known grounds: {sorted(GROUND_PRESETS)!r}")
-    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    pricing = CostSpec.given(pricing)
     settings = AdaptiveSettings() if settings is None else check_instance("settings", settings, AdaptiveSettings)
     settings = dataclasses.replace(settings, speed_mps=pricing.speed_mps)
     seed, adapt = settings.seed, settings.max_updates > 0

@@ -21,13 +21,12 @@ from energy import GROUND_PRESETS, Battery, GroundParams, RobotParams, TruthSimu
 from terrain import TerrainMap
 from terrawatt_base.checks import check_instance
 from terrawatt_base.containers import memory_limit_bytes, over_budget_message
-from terrawatt_base.dask_client import Compute, client_worker_count
+from terrawatt_base.dask_client import Compute, client_worker_count, run_tasks
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from ..edge_cost import EnergyCost
-from ..risk import RouteEnergyInterval
 from ..route import Route
-from ..route_price import price_route
+from ..route_price import RouteEnergyInterval, price_route
 from .monte_carlo_model import ModelMissionSetup
 from .monte_carlo_result import MonteCarloResult, mission_row
 from .monte_carlo_sampling import MissionDistributions
@@ -136,7 +135,7 @@ def simulate_missions_mc(
         The cost that planned the route: when it carries its physics model, the study's
         ``predicted_energy_j`` is that model's forecast of the driven stop-turn-go profile at
         the nominal speed (:func:`planner.route_price.price_route` with ``how="profile"``), else the
-        route's edge energy. When it carries a predictive interval (:mod:`planner.risk`), the
+        route's edge energy. When it carries a predictive interval (:mod:`planner.route_price`), the
         result's ``forecast`` is the route's energy distribution (P50, P90) on it;
         ``study.draw_from="model"`` needs one.
     forecast : RouteEnergyInterval, optional
@@ -213,14 +212,12 @@ def simulate_missions_mc(
             predicted_j = price_route(cost, route, how="profile", interval=False, speed_mps=nominal).mean_j
     used = int(np.random.SeedSequence().generate_state(1)[0]) if seed is None else seed  # in [0, 2**32)
     seqs = np.random.SeedSequence(used).spawn(n)
+    chunks = [seqs[i:i + study.chunk_size] for i in range(0, n, study.chunk_size)]  # one task each
     with compute.session() as (client, where):
         t0 = time.perf_counter()
-        if client is None:
-            from tqdm.auto import tqdm
-
-            rows = [setup.run(q) for q in tqdm(seqs, desc="missions", disable=not compute.progress)]
-        else:
-            rows = _run_on_cluster(client, setup, seqs, study.chunk_size, compute.progress)
+        done = run_tasks([(type(setup).run_chunk, (chunk,)) for chunk in chunks], client=client, shared=(setup,),
+                         progress=compute.progress, description="missions", sizes=[len(c) for c in chunks])
+        rows = [row for chunk_rows in done for row in chunk_rows]
         n_used = client_worker_count(client)
         elapsed = time.perf_counter() - t0
     ground_names = setup.ground_names if draw_from == "model" else tuple(sorted(setup.grounds))
@@ -236,28 +233,3 @@ def simulate_missions_mc(
         elapsed_s=elapsed, draw_from=draw_from, forecast=forecast, errors=tuple(err for _, err in rows),
         max_risk_pct=study.max_risk_pct,
     )
-
-
-def _run_on_cluster(client: Any, setup: MissionSetup, seqs: list[np.random.SeedSequence], chunk_size: int,
-                    progress: bool) -> list[tuple[tuple[float, ...], str]]:
-    """Chunks of missions as tasks on ``client``, the setup scattered once to every worker; rows in seed order."""
-    from distributed import as_completed
-    from tqdm.auto import tqdm
-
-    [shared] = client.scatter([setup], broadcast=True, hash=False)
-    chunks = [seqs[i:i + chunk_size] for i in range(0, len(seqs), chunk_size)]
-    futures = [client.submit(MissionSetup.run_chunk, shared, chunk, pure=False) for chunk in chunks]
-    position = {f.key: i for i, f in enumerate(futures)}
-    out: list[list[tuple[tuple[float, ...], str]]] = [[] for _ in futures]
-    try:
-        with tqdm(total=len(seqs), desc="missions", disable=not progress) as bar:
-            for fut in as_completed(futures):
-                i = position[fut.key]
-                out[i] = fut.result()  # a task's exception is raised here
-                bar.update(len(chunks[i]))
-    except BaseException:
-        client.cancel(futures)
-        raise
-    finally:
-        client.cancel([shared])
-    return [row for chunk in out for row in chunk]

@@ -1,7 +1,7 @@
 """The model-driven Monte Carlo mission: the route's energy drawn from the planning model's own predictive distribution.
 
 Where the edge cost carries run-level standard deviations (a current model with an interval,
-:mod:`planner.risk`), one mission of :func:`planner.simulate_missions_mc` with
+:mod:`planner.route_price`), one mission of :func:`planner.simulate_missions_mc` with
 ``draw_from="model"`` draws **one factor** ``z_g`` **per ground** the route crosses from that
 ground's standardised predictive — standard normal where the model knows the ground, Student-t
 with the ground's degrees of freedom where it never drove it
@@ -27,7 +27,7 @@ import numpy as np
 
 from energy import Battery, discharge_from_power, energy_budget
 
-from ..risk import RouteEnergyInterval
+from ..route_price import RouteEnergyInterval
 from .monte_carlo_result import mission_row
 
 __all__ = ["ModelMissionSetup", "MC_DRAW_MODES"]

@@ -75,7 +75,7 @@ def monte_carlo_mission(
     """
     check_preset_grounds(terrain)
     study = check_instance("study", study, MonteCarloStudy)
-    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    pricing = CostSpec.given(pricing)
     battery = check_instance("battery", battery, Battery)
     cost = pricing.build(terrain)
     if pricing.risk is not None or study.draw_from == "model":

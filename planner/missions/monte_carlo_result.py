@@ -25,8 +25,8 @@ from terrawatt_base.checks import check_real, readonly, real_array
 from terrawatt_base.errors import InvalidParameterError, TerrawattError
 from terrawatt_base.formats import result_document, write_result_json
 
-from ..risk import RouteEnergyInterval
 from ..route import Route
+from ..route_price import RouteEnergyInterval
 from .monte_carlo_figure import plot_monte_carlo
 from .monte_carlo_sampling import MissionDistributions
 

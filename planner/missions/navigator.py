@@ -438,7 +438,7 @@ class Navigator(RegionUpdates):
         cannot price (it crosses what the last update blocked) takes the least of every row's."""
         cost = self.cost
         if len(waypoints) < 2 or cost is None or not cost.has_interval or not any(
-                math.isfinite(d) for d in cost.spread_dof):
+                math.isfinite(d) for d in cost.tables.spread_dof):
             return math.inf
         key = waypoints.tobytes() + repr(waypoints.shape).encode()
         if self._dof_cache is not None and self._dof_cache[0] is cost and self._dof_cache[1] == key:
@@ -446,7 +446,7 @@ class Navigator(RegionUpdates):
         try:
             dof = price_route(cost, waypoints, interval=True).dof
         except InvalidParameterError:
-            dof = min(cost.spread_dof)
+            dof = min(cost.tables.spread_dof)
         self._dof_cache = (cost, key, dof)
         return dof
 

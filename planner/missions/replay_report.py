@@ -128,7 +128,7 @@ def replay_recording(
         raise UnknownNameError(f"physics_ground {physics_ground!r} has no preset; known grounds: "
                                f"{sorted(GROUND_PRESETS)!r}", parameter="physics_ground")
     ground = ground_preset(physics_ground)
-    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    pricing = CostSpec.given(pricing)
     robot_given, model = pricing.params, pricing.model
     settings = AdaptiveSettings() if settings is None else check_instance("settings", settings, AdaptiveSettings)
     settings = replace(settings, speed_mps=pricing.speed_mps, risk=pricing.risk)

@@ -13,7 +13,7 @@ from terrawatt_base.dask_client import check_dask_options
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from ..points import point_on_map
-from ..risk import check_planning_risk
+from ..tables import check_planning_risk
 from .mission_report import check_preset_grounds
 from .monte_carlo_model import MC_DRAW_MODES
 

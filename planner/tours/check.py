@@ -14,8 +14,8 @@ from terrawatt_base.dask_client import Compute
 from terrawatt_base.errors import InvalidParameterError
 
 from ..missions import MonteCarloResult, MonteCarloStudy, simulate_missions_mc
-from ..risk import RouteEnergyInterval
 from ..route import Route
+from ..route_price import RouteEnergyInterval
 from .result import TourResult
 
 __all__ = ["TourCheck", "simulate_tours_mc"]

@@ -11,7 +11,7 @@ from energy import Battery
 from terrawatt_base.checks import check_choice, check_instance, check_int, check_optional_real, check_real, check_seed
 from terrawatt_base.errors import InvalidParameterError
 
-from ..risk import check_planning_risk
+from ..tables import check_planning_risk
 
 __all__ = ["TOUR_SOLVERS", "TourSearch", "TourFleet"]
 

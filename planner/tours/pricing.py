@@ -18,16 +18,16 @@ from typing import Any
 
 import numpy as np
 
-from energy.models.forecast import combine_ground_sds, predictive_quantile
+from energy.models.forecast import predictive_quantile
 from terrawatt_base.checks import check_instance
-from terrawatt_base.dask_client import Compute, client_worker_count
+from terrawatt_base.dask_client import Compute, client_worker_count, run_tasks
 from terrawatt_base.errors import InvalidParameterError
 
 from ..batch import shippable_cost
 from ..edge_cost import EnergyCost
 from ..lattice import Lattice
-from ..risk import RouteEnergyInterval, check_risk_level
-from ..route_price import price_route
+from ..route_price import RouteEnergyInterval, price_route
+from ..tables import check_risk_level
 
 __all__ = ["PairPrices", "price_pairs", "price_from"]
 
@@ -117,10 +117,8 @@ class PairPrices:
         if not math.isfinite(mean):
             raise InvalidParameterError(f"the tour {idx.tolist()!r} uses a leg that no route joins")
         per_ground = np.sum(self.sd_by_ground_j[a, b], axis=0)
-        crossed = np.flatnonzero(per_ground > 0).tolist()
-        by = {self.ground_labels[g]: float(per_ground[g]) for g in crossed}
-        dofs = {self.ground_labels[g]: self._dof(g) for g in crossed}
-        return RouteEnergyInterval(mean, combine_ground_sds(per_ground), by, min(dofs.values(), default=math.inf), dofs)
+        dofs = [self._dof(g) for g in range(len(self.ground_labels))]
+        return RouteEnergyInterval.from_ground_spreads(mean, per_ground, self.ground_labels, dofs)
 
 
 def price_from(search_cost: EnergyCost, cost: EnergyCost, i: int, xy_m: np.ndarray
@@ -130,14 +128,14 @@ def price_from(search_cost: EnergyCost, cost: EnergyCost, i: int, xy_m: np.ndarr
     Returns ``(i, mean_j, sd_by_ground_j, duration_s, waypoints)``, one entry per point (the task of
     :func:`price_pairs`, module-level so dask workers import it by reference).
     """
-    n, g = xy_m.shape[0], len(cost.ground_labels)
+    n, g = xy_m.shape[0], len(cost.tables.ground_labels)
     mean = np.full(n, math.inf)
     sd = np.zeros((n, g))
     dur = np.full(n, math.inf)
     ways: list[np.ndarray | None] = [None] * n
     mean[i], dur[i] = 0.0, 0.0
     paths = Lattice.for_cost(search_cost).paths_from(tuple(xy_m[i]), xy_m)
-    index = {label: k for k, label in enumerate(cost.ground_labels)}
+    index = {label: k for k, label in enumerate(cost.tables.ground_labels)}
     walked: dict = {}  # the legs of one search share most of their segments
     for j, path in enumerate(paths):
         if j == i or not path.found:
@@ -205,40 +203,16 @@ def price_pairs(
     p = pts.shape[0]
     with compute.session() as (client, where):
         t0 = time.perf_counter()
-        if client is None:
-            from tqdm.auto import tqdm
-
-            rows = [price_from(search, cost, i, pts) for i in tqdm(range(p), desc="legs", disable=not compute.progress)]
-        else:
-            rows = _price_on_cluster(client, search, cost, pts, compute.progress)
+        shared = (search, cost)
+        if client is not None:  # the workers get the costs without their caches, once
+            shipped = shippable_cost(cost)
+            shared = (shipped if search is cost else shippable_cost(search), shipped)
+        rows = list(run_tasks([(price_from, (i, pts)) for i in range(p)], client=client, shared=shared,
+                              progress=compute.progress, description="legs"))
         n_used = client_worker_count(client)
         elapsed = time.perf_counter() - t0
-    rows.sort(key=lambda r: r[0])
     return PairPrices(
         names=names, xy_m=pts, mean_j=np.array([r[1] for r in rows]), sd_by_ground_j=np.array([r[2] for r in rows]),
-        ground_labels=tuple(cost.ground_labels), duration_s=np.array([r[3] for r in rows]),
+        ground_labels=tuple(cost.tables.ground_labels), duration_s=np.array([r[3] for r in rows]),
         waypoints=tuple(tuple(r[4]) for r in rows), pricing_time_s=elapsed, where=where, n_workers=n_used,
-        ground_dof=tuple(float(d) for d in getattr(cost, "spread_dof", ()) or ()))
-
-
-def _price_on_cluster(client: Any, search: EnergyCost, cost: EnergyCost, pts: np.ndarray, progress: bool) -> list:
-    """One task per point on ``client``, the costs scattered once to every worker."""
-    from distributed import as_completed
-    from tqdm.auto import tqdm
-
-    shipped_cost = shippable_cost(cost)
-    shipped_search = shipped_cost if search is cost else shippable_cost(search)
-    [s_search, s_cost] = client.scatter([shipped_search, shipped_cost], broadcast=True, hash=False)
-    futures = [client.submit(price_from, s_search, s_cost, i, pts, pure=False) for i in range(pts.shape[0])]
-    rows = []
-    try:
-        with tqdm(total=len(futures), desc="legs", disable=not progress) as bar:
-            for fut in as_completed(futures):
-                rows.append(fut.result())
-                bar.update()
-    except BaseException:
-        client.cancel(futures)
-        raise
-    finally:
-        client.cancel([s_search, s_cost])
-    return rows
+        ground_dof=tuple(float(d) for d in cost.tables.spread_dof))

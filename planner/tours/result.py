@@ -18,10 +18,10 @@ from terrawatt_base.formats import result_document, write_result_json
 from terrawatt_base.plot_target import check_ax, check_plot_target, new_figure
 
 from ..edge_cost import EnergyCost
-from ..risk import INTERVAL_LEVEL, RouteEnergyInterval
 from ..ros_export import write_route_bag
 from ..route import Route, evaluate_route
 from ..route_geojson import write_geojson
+from ..route_price import INTERVAL_LEVEL, RouteEnergyInterval
 from .pricing import PairPrices
 from .sites import TourChargers
 

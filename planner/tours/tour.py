@@ -17,7 +17,7 @@ from terrawatt_base.errors import BlockedPositionError, InvalidParameterError
 
 from ..cost_spec import CostSpec
 from ..edge_cost import EnergyCost
-from ..risk import RouteEnergyInterval
+from ..route_price import RouteEnergyInterval
 from .options import TourFleet, TourSearch
 from .pricing import PairPrices, price_pairs
 from .result import RobotTour, TourLeg, TourResult
@@ -325,7 +325,7 @@ def plan_tour_on_map(
         Not a TourFleet; as :func:`plan_tour`.
     """
     fleet = check_instance("fleet", fleet, TourFleet)
-    pricing = CostSpec() if pricing is None else check_instance("pricing", pricing, CostSpec)
+    pricing = CostSpec.given(pricing)
     standby_w = pricing.params.sensor_power_w + pricing.params.control_standby_power_w  # waiting for a window
     cost = pricing.build(terrain)
     robots = [TourRobot(fleet.battery, depot, f"robot {k}", fleet.max_duration_s, standby_w)

@@ -1,9 +1,10 @@
-"""The dask seam: argument checks, client checks and the serial task runner (no cluster is started)."""
+"""The dask seam: argument checks, client checks and the task runner (here, and on one in-process cluster)."""
 
 from __future__ import annotations
 
 import operator
 import re
+import time
 
 import numpy as np
 import pytest
@@ -90,6 +91,31 @@ def test_run_tasks_is_lazy_and_raises_a_tasks_exception_when_reached():
 
 def test_run_tasks_of_nothing_yields_nothing():
     assert list(run_tasks([])) == []
+
+
+def test_run_tasks_puts_the_shared_arguments_first():
+    assert list(run_tasks([(operator.sub, (1,)), (operator.truediv, (4,))], shared=(8,), sizes=[3, 1])) == [7, 2.0]
+
+
+def test_run_tasks_wants_one_size_per_task():
+    with pytest.raises(InvalidParameterError, match=r"sizes must give one size per task \(2\), got 1"):
+        list(run_tasks([(operator.neg, (1,)), (operator.neg, (2,))], sizes=[1]))
+
+
+def _late_sum(base: int, delay_s: float, x: int) -> int:
+    time.sleep(delay_s)  # lets a later task finish first
+    return base + x
+
+
+def test_run_tasks_on_a_cluster_yields_in_task_order_whichever_finishes_first():
+    distributed = pytest.importorskip("distributed", reason="the cluster path needs dask.distributed")
+    tasks = [(_late_sum, (0.5, 1)), (_late_sum, (0.0, 3)), (_late_sum, (0.0, 2))]
+    with distributed.LocalCluster(processes=False, n_workers=2, threads_per_worker=1,
+                                  dashboard_address=":0") as cluster, distributed.Client(cluster) as client:
+        there = list(run_tasks(tasks, client=client, shared=(10,), sizes=[2, 1, 1]))
+        with pytest.raises(ZeroDivisionError):
+            list(run_tasks([(operator.truediv, (0,)), (operator.add, (1,))], client=client, shared=(1,)))
+    assert there == [11, 13, 12] == list(run_tasks(tasks, shared=(10,)))
 
 
 @pytest.mark.parametrize(

@@ -34,8 +34,8 @@ def test_the_corrected_model_prices_turns_the_given_model_missed(diagnosed) -> N
     before, after = _cost(tmap, given), _cost(tmap, diagnosis.corrected_model)
     # a model without turning resistance prices every turn (columns: turn angle 0..pi) far
     # below the corrected one; a zero turn costs nothing in both
-    assert np.all(before.turn_table_j[..., 0] == 0.0) and np.all(after.turn_table_j[..., 0] == 0.0)
-    assert np.all(after.turn_table_j[..., 1:] > 1.5 * before.turn_table_j[..., 1:])
+    assert np.all(before.tables.turn_table_j[..., 0] == 0.0) and np.all(after.tables.turn_table_j[..., 0] == 0.0)
+    assert np.all(after.tables.turn_table_j[..., 1:] > 1.5 * before.tables.turn_table_j[..., 1:])
     # and the corrected costs plan: an L-shaped route around a wall now pays for its corner
     wall = np.zeros((40, 40), bool)
     wall[0:30, 20] = True

@@ -27,9 +27,9 @@ def _reference_energy(cost: EnergyCost, a, b) -> float:
         return 0.0
     ux, uy = (b[0] - a[0]) / length, (b[1] - a[1]) / length
     grade = tmap["grad_x"][rows, cols] * ux + tmap["grad_y"][rows, cols] * uy
-    grades = np.linspace(-cost.grade_max, cost.grade_max, cost.grade_table_j_per_m.shape[1])
+    grades = np.linspace(-cost.grade_max, cost.grade_max, cost.tables.grade_table_j_per_m.shape[1])
     table_rows = cost.ground_rows[rows, cols]
-    per_m = np.array([np.interp(g, grades, cost.grade_table_j_per_m[k]) for g, k in zip(grade, table_rows)])
+    per_m = np.array([np.interp(g, grades, cost.tables.grade_table_j_per_m[k]) for g, k in zip(grade, table_rows)])
     return float(np.sum(lengths * per_m))
 
 
@@ -199,13 +199,13 @@ def test_unknown_ground_cells_need_unknown_ground():
         CostSpec(energy_model=LinearModel(), grounds={}, speed_mps=0.5, unknown_ground=None).build(tmap)
     cost = CostSpec(energy_model=LinearModel(a=50.0), grounds={}, speed_mps=0.5, unknown_ground=2.0).build(tmap)
     assert cost.segment_energy_j([1.0, 1.0], [5.0, 1.0])[0] == pytest.approx(400.0)
-    assert cost.ground_labels == ("unknown",)
+    assert cost.tables.ground_labels == ("unknown",)
 
 
 def test_grounds_keyed_by_class_id():
     cost = CostSpec(energy_model=LinearModel(a=10.0), grounds={0: 1.0, 1: 3.0}, speed_mps=0.5, max_slope_deg=math.degrees(0.6)).build(rough_terrain())
-    assert cost.grade_table_j_per_m.shape == (2, 513)
-    assert cost.grade_table_j_per_m[1, 256] == pytest.approx(30.0)
+    assert cost.tables.grade_table_j_per_m.shape == (2, 513)
+    assert cost.tables.grade_table_j_per_m[1, 256] == pytest.approx(30.0)
 
 
 @pytest.mark.parametrize(
@@ -249,7 +249,7 @@ def test_a_spec_keeps_its_own_grounds_and_refuses_grounds_beside_a_current_model
     grounds["g"] = 3.0  # the caller's dict changes after the spec was made: the spec's does not
     assert spec.grounds["g"] == 1.0
     assert CostSpec(energy_model=LinearModel(a=50.0), grounds={"g": 1.0}, speed_mps=0.5).build(
-        flat_terrain()).grade_table_j_per_m[0, 256] == spec.build(flat_terrain()).grade_table_j_per_m[0, 256]
+        flat_terrain()).tables.grade_table_j_per_m[0, 256] == spec.build(flat_terrain()).tables.grade_table_j_per_m[0, 256]
     with pytest.raises(InvalidParameterError, match="a current model prices the map by its training grounds") as err:
         CostSpec(model=known_model(), grounds={"g": 1.0})
     assert err.value.parameter == "model"
@@ -287,7 +287,7 @@ def test_constructor_checks_grid_and_tables():
     assert err.value.parameter == "tables"
     # Tables are copied and read-only: the caller's arrays stay writable.
     cost = EnergyCost(tmap, np.zeros((20, 30), int), CostTables(ok, ok), **kw)
-    assert ok.flags.writeable and not cost.grade_table_j_per_m.flags.writeable
+    assert ok.flags.writeable and not cost.tables.grade_table_j_per_m.flags.writeable
 
 
 # --------------------------------------------------------------------------- the presets
@@ -303,9 +303,9 @@ def test_the_presets_equal_their_ground_parameters_given():
     tmap = _preset_map(unknown=True)
     got = CostSpec(speed_mps=0.4, max_slope_deg=15.0).build(tmap)
     ref = CostSpec(grounds={"asphalt": ground_preset("asphalt"), "grass": ground_preset("grass")}, speed_mps=0.4, max_slope_deg=15.0, unknown_ground=ground_preset("gravel")).build(tmap)
-    assert got.ground_labels == ref.ground_labels == ("unknown", "asphalt", "grass")
-    assert np.array_equal(got.grade_table_j_per_m, ref.grade_table_j_per_m)
-    assert np.array_equal(got.turn_table_j, ref.turn_table_j)
+    assert got.tables.ground_labels == ref.tables.ground_labels == ("unknown", "asphalt", "grass")
+    assert np.array_equal(got.tables.grade_table_j_per_m, ref.tables.grade_table_j_per_m)
+    assert np.array_equal(got.tables.turn_table_j, ref.tables.turn_table_j)
     assert np.array_equal(got.ground_rows, ref.ground_rows)
 
 

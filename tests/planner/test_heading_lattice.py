@@ -218,10 +218,10 @@ def test_a_kept_cost_to_go_stays_a_consistent_lower_bound_through_rises_and_drop
         x, y = route.waypoints_m[rng.integers(len(route.waypoints_m))] if step < 3 else (np.inf, np.inf)
         r, c = (np.clip(np.array(cost.terrain.rowcol(x, y)) - 4, 0, np.array(rows.shape) - 8) if np.isfinite(x)
                 else (rng.integers(0, rows.shape[0] - 8), rng.integers(0, rows.shape[1] - 8)))
-        rows[r:r + 8, c:c + 8] = cost.grade_table_j_per_m.shape[0]  # a patch moves to a new table row
+        rows[r:r + 8, c:c + 8] = cost.tables.grade_table_j_per_m.shape[0]  # a patch moves to a new table row
         factor = (0.2, 4.0)[step % 2]  # cheaper, then dearer ground
-        grade = np.vstack([cost.grade_table_j_per_m, factor * cost.grade_table_j_per_m[:1]])
-        turn = np.vstack([cost.turn_table_j, cost.turn_table_j[:1]])
+        grade = np.vstack([cost.tables.grade_table_j_per_m, factor * cost.tables.grade_table_j_per_m[:1]])
+        turn = np.vstack([cost.tables.turn_table_j, cost.tables.turn_table_j[:1]])
         new = cost.with_tables(CostTables(grade, turn), rows)
         new_lattice = Lattice(new, 1)
         lowered += lower_cost_to_go(h, new_lattice, new_lattice.changed_moves_since(lattice), goal)
@@ -273,9 +273,9 @@ def test_the_last_answer_bounds_the_next_search_along_the_drive(seed):
         s = tuple(lattice.node_xy(chain[2 * step + 2:2 * step + 3])[0] + rng.uniform(-0.2, 0.2, 2))
         rows = np.asarray(cost.ground_rows).copy()
         r, c = np.clip(np.array(cost.terrain.rowcol(*s)) - 3, 0, np.array(rows.shape) - 6)
-        rows[r:r + 6, c:c + 6] = cost.grade_table_j_per_m.shape[0]
-        grade = np.vstack([cost.grade_table_j_per_m, (0.3, 3.0)[step % 2] * cost.grade_table_j_per_m[:1]])
-        cost = cost.with_tables(CostTables(grade, np.vstack([cost.turn_table_j, cost.turn_table_j[:1]])), rows)
+        rows[r:r + 6, c:c + 6] = cost.tables.grade_table_j_per_m.shape[0]
+        grade = np.vstack([cost.tables.grade_table_j_per_m, (0.3, 3.0)[step % 2] * cost.tables.grade_table_j_per_m[:1]])
+        cost = cost.with_tables(CostTables(grade, np.vstack([cost.tables.turn_table_j, cost.tables.turn_table_j[:1]])), rows)
         lattice = Lattice(cost, 1)
         q = _Query(lattice, np.asarray(s), np.asarray(goal))
         used += math.isfinite(_incumbent(lattice, q, ws.incumbent)[0])

@@ -17,7 +17,7 @@ def test_arrays_are_the_read_only_kernel_seam():
     assert arr.grid == cost.terrain.grid
     assert arr.cells.shape == cost.shape + (3,)
     assert np.array_equal(arr.cells[..., 2] < 0, cost.blocked)
-    assert arr.grade_table is cost.grade_table_j_per_m and arr.turn_table is cost.turn_table_j
+    assert arr.grade_table is cost.tables.grade_table_j_per_m and arr.turn_table is cost.tables.turn_table_j
     for a in (arr.cells, arr.grade_table, arr.turn_table, arr.geo):
         assert not a.flags.writeable
     assert arr.grade_max == pytest.approx(math.tan(cost.max_slope_rad))

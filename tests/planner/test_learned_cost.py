@@ -70,11 +70,11 @@ def test_energy_cost_matches_the_spec_on_the_model_id_map():
     ids = np.asarray(reg.model_id_map)
     pseudo = TerrainMap(np.zeros(tmap.shape), 1.0, ground=ids, ground_names={0: "a", 1: "b"})
     slow = CostSpec(energy_model=lem, grounds={0: 0, 1: 1}, speed_mps=0.5).build(pseudo)
-    np.testing.assert_allclose(fast.grade_table_j_per_m, slow.grade_table_j_per_m, rtol=1e-12)
-    np.testing.assert_allclose(fast.turn_table_j, slow.turn_table_j, rtol=1e-12)
+    np.testing.assert_allclose(fast.tables.grade_table_j_per_m, slow.tables.grade_table_j_per_m, rtol=1e-12)
+    np.testing.assert_allclose(fast.tables.turn_table_j, slow.tables.turn_table_j, rtol=1e-12)
     assert np.array_equal(fast.ground_rows, slow.ground_rows)
     # the costlier model's cells cost more
-    assert fast.grade_table_j_per_m[1].min() > fast.grade_table_j_per_m[0].min()
+    assert fast.tables.grade_table_j_per_m[1].min() > fast.tables.grade_table_j_per_m[0].min()
 
 
 def test_slope_term_from_physics():
@@ -141,7 +141,7 @@ def test_energy_cost_with_previous_equals_fresh_and_reuses_lattice():
     got = lem.energy_cost(tmap, 0.5, previous=cost)
     ref = LearnedEnergyModel(reg, robot, ground_preset("asphalt"),
                              probe=TableProbe((0.25, 0.5, 1.0), (0.5, 1.0))).energy_cost(tmap, 0.5)
-    assert np.array_equal(got.grade_table_j_per_m, ref.grade_table_j_per_m)
+    assert np.array_equal(got.tables.grade_table_j_per_m, ref.tables.grade_table_j_per_m)
     assert np.array_equal(got.ground_rows, ref.ground_rows)
     assert np.array_equal(got.changed_cells, np.asarray(reg.model_id_map) == new)
     got_lat = Lattice.for_cost(got, 1)

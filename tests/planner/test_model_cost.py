@@ -29,9 +29,9 @@ def test_each_ground_class_gets_its_own_model_id_fed_its_recorded_vibration(corr
     lem, plan = model_energy_model(corridor_map, known_model(), HUSKY)
     assert plan.by_class == {0: "loam", 1: "gravel"}  # the map's "Loam" matched case-insensitively
     cost = lem.energy_cost(corridor_map, 0.5)
-    assert cost.ground_labels == ("loam", "gravel")
-    mid = cost.grade_table_j_per_m.shape[1] // 2
-    loam, gravel = cost.grade_table_j_per_m[:, mid]
+    assert cost.tables.ground_labels == ("loam", "gravel")
+    mid = cost.tables.grade_table_j_per_m.shape[1] // 2
+    loam, gravel = cost.tables.grade_table_j_per_m[:, mid]
     assert loam < gravel  # 2 A vs 2.5 A per side: each id saw its own ground's vibration
     rows = np.asarray(cost.ground_rows)
     assert np.all(rows[np.asarray(corridor_map.ground) == 0] == 0) and np.all(rows[np.asarray(corridor_map.ground) == 1] == 1)
@@ -43,8 +43,8 @@ def test_a_saved_and_loaded_model_prices_the_map_like_the_fitted_one(tmp_path, c
     loaded = load_current_model(path)
     a = model_energy_cost(corridor_map, model, HUSKY, 0.5)
     b = model_energy_cost(corridor_map, loaded, HUSKY, 0.5)
-    assert np.array_equal(a.grade_table_j_per_m, b.grade_table_j_per_m)
-    assert np.array_equal(a.grade_sd_table_j_per_m, b.grade_sd_table_j_per_m)
+    assert np.array_equal(a.tables.grade_table_j_per_m, b.tables.grade_table_j_per_m)
+    assert np.array_equal(a.tables.grade_sd_table_j_per_m, b.tables.grade_sd_table_j_per_m)
 
 
 def test_a_model_of_another_robot_is_refused_naming_both(corridor_map, known_model):
@@ -55,7 +55,7 @@ def test_a_model_of_another_robot_is_refused_naming_both(corridor_map, known_mod
 def test_an_unnamed_robot_is_a_warning_not_a_refusal(corridor_map, known_model):
     with pytest.warns(ModelCompatibilityWarning, match="do not name their robot"):
         cost = model_energy_cost(corridor_map, known_model(robot="unknown"), HUSKY, 0.5)
-    assert cost.ground_labels == ("loam", "gravel")
+    assert cost.tables.ground_labels == ("loam", "gravel")
 
 
 def test_a_map_ground_the_model_never_drove_is_refused_listing_both(corridor_map, known_model):
@@ -67,7 +67,7 @@ def test_a_map_ground_the_model_never_drove_is_refused_listing_both(corridor_map
 
 def test_model_ground_prices_every_cell_as_one_training_ground(corridor_map, known_model):
     cost = model_energy_cost(corridor_map, known_model(), HUSKY, 0.5, model_ground="GRAVEL")
-    assert cost.ground_labels == ("gravel",) and not cost.has_interval  # gravel has no spread
+    assert cost.tables.ground_labels == ("gravel",) and not cost.has_interval  # gravel has no spread
     with pytest.raises(UnknownNameError, match="model_ground 'sand' is not a ground the model drove"):
         model_energy_cost(corridor_map, known_model(), HUSKY, 0.5, model_ground="sand")
 
@@ -75,7 +75,7 @@ def test_model_ground_prices_every_cell_as_one_training_ground(corridor_map, kno
 def test_a_map_without_ground_classes(known_model):
     tmap = _no_classes_map()
     one = model_energy_cost(tmap, known_model(trained_on=("loam",)), HUSKY, 0.5)  # one training ground: used directly
-    assert one.ground_labels == ("loam",) and one.has_interval
+    assert one.tables.ground_labels == ("loam",) and one.has_interval
     with pytest.raises(InvalidParameterError, match="unknown ground.*model_ground NAME"):
         model_energy_cost(tmap, known_model(), HUSKY, 0.5)
     assert model_grounds(tmap, known_model().training_summary, model_ground="loam").by_class == {-1: "loam"}
@@ -89,7 +89,7 @@ def test_a_vibration_conditioned_model_without_the_grounds_recording_is_refused(
 def test_a_model_without_an_interval_gives_a_cost_without_spread_tables(corridor_map, known_model):
     flat = {"loam": [9.0, 2.0, 4.0, 0.0], "gravel": [10.5, 2.5, 4.5, 0.0]}
     cost = model_energy_cost(corridor_map, known_model(grounds=flat), HUSKY, 0.5)
-    assert cost.grade_sd_table_j_per_m is None and not cost.has_interval
+    assert cost.tables.grade_sd_table_j_per_m is None and not cost.has_interval
 
 
 def test_a_class_the_model_never_drove_can_be_priced_as_one_it_did(corridor_map, known_model):

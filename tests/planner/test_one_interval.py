@@ -83,7 +83,7 @@ def test_the_model_s_new_ground_dof_reaches_the_cost_rows_and_the_route_interval
     # the model's own forecast: a t on a ground it never drove, Gaussian on one it knows
     assert linear_model.predict_distribution(_run(99, "grass", 0.0)).dof == dof
     assert math.isinf(linear_model.predict_distribution(_run(99, "a", 0.0)).dof)
-    assert cost.ground_labels == ("linear", "loam") and cost.spread_dof == (dof, math.inf)
+    assert cost.tables.ground_labels == ("linear", "loam") and cost.tables.spread_dof == (dof, math.inf)
     assert lem.table(lem.registry.prior_id).dof == dof
     iv = price_route(cost, _route(tmap, cost, GRASS_START, GRASS_GOAL))
     assert iv.dof == dof and iv.dof_by_ground == {"linear": dof} and iv.sd_j > 0
@@ -110,11 +110,11 @@ def test_plan_with_a_model_reports_the_t_interval_of_a_ground_it_never_drove(lin
 def test_at_risk_prices_each_row_at_its_own_predictive_quantile(linear_model, world):
     tmap, _, cost = world
     risky = CostSpec(model=linear_model, risk=0.9).at_risk(cost)
-    assert risky.spread_dof == cost.spread_dof
+    assert risky.tables.spread_dof == cost.tables.spread_dof
     for row, z in ((0, predictive_quantile(0.9, 3.0)), (1, predictive_quantile(0.9))):
-        assert np.allclose(risky.grade_table_j_per_m[row],
-                           np.maximum(cost.grade_table_j_per_m[row] + z * cost.grade_sd_table_j_per_m[row], 0))
-        assert np.allclose(risky.turn_table_j[row], cost.turn_table_j[row] + z * cost.turn_sd_table_j[row])
+        assert np.allclose(risky.tables.grade_table_j_per_m[row],
+                           np.maximum(cost.tables.grade_table_j_per_m[row] + z * cost.tables.grade_sd_table_j_per_m[row], 0))
+        assert np.allclose(risky.tables.turn_table_j[row], cost.tables.turn_table_j[row] + z * cost.tables.turn_sd_table_j[row])
     # on one ground the route planned at Q = 0.9 costs exactly its interval's P90
     for start, goal, dof in ((GRASS_START, GRASS_GOAL, 3.0), (LOAM_START, LOAM_GOAL, math.inf)):
         route = _route(tmap, risky, start, goal)
@@ -156,11 +156,11 @@ def test_the_navigator_reads_its_remaining_forecast_from_the_same_predictive(wor
 def test_degrees_of_freedom_are_checked_where_they_enter(world):
     tmap, _, cost = world
     with pytest.raises(InvalidParameterError, match="one value per table row"):
-        cost.with_tables(CostTables(cost.grade_table_j_per_m, cost.turn_table_j, ground_labels=cost.ground_labels, grade_sd_table_j_per_m=cost.grade_sd_table_j_per_m, turn_sd_table_j=cost.turn_sd_table_j, spread_dof=(3.0,)))
+        cost.with_tables(CostTables(cost.tables.grade_table_j_per_m, cost.tables.turn_table_j, ground_labels=cost.tables.ground_labels, grade_sd_table_j_per_m=cost.tables.grade_sd_table_j_per_m, turn_sd_table_j=cost.tables.turn_sd_table_j, spread_dof=(3.0,)))
     with pytest.raises(InvalidParameterError, match="spread_dof must be > 0"):
-        cost.with_tables(CostTables(cost.grade_table_j_per_m, cost.turn_table_j, ground_labels=cost.ground_labels, grade_sd_table_j_per_m=cost.grade_sd_table_j_per_m, turn_sd_table_j=cost.turn_sd_table_j, spread_dof=(0.0, 3.0)))
+        cost.with_tables(CostTables(cost.tables.grade_table_j_per_m, cost.tables.turn_table_j, ground_labels=cost.tables.ground_labels, grade_sd_table_j_per_m=cost.tables.grade_sd_table_j_per_m, turn_sd_table_j=cost.tables.turn_sd_table_j, spread_dof=(0.0, 3.0)))
     with pytest.raises(InvalidParameterError, match="goes with"):
-        EnergyCost(tmap, np.zeros(tmap.shape, int), CostTables(cost.grade_table_j_per_m[:1], cost.turn_table_j[:1], spread_dof=(3.0,)), speed_mps=0.5, battery_voltage_v=24.0, turn_rate_radps=0.5)
+        EnergyCost(tmap, np.zeros(tmap.shape, int), CostTables(cost.tables.grade_table_j_per_m[:1], cost.tables.turn_table_j[:1], spread_dof=(3.0,)), speed_mps=0.5, battery_voltage_v=24.0, turn_rate_radps=0.5)
     with pytest.raises(InvalidParameterError, match="RouteEnergyInterval.dof"):
         RouteEnergyInterval(1000.0, 100.0, {"sand": 100.0}, dof=-1.0)
     with pytest.raises(InvalidParameterError, match="without a spread"):
@@ -173,9 +173,9 @@ def test_a_class_named_as_a_training_ground_is_priced_with_that_ground_s_own_gau
     ground[3:] = 1
     tmap = TerrainMap(np.zeros((6, 30)), 1.0, ground=ground, ground_names={0: "a", 1: "grass"})
     named = CostSpec(model=linear_model, model_ground={"grass": "b"}).build(tmap)
-    assert dict(zip(named.ground_labels, named.spread_dof)) == {"a": math.inf, "b": 3.0}
+    assert dict(zip(named.tables.ground_labels, named.tables.spread_dof)) == {"a": math.inf, "b": 3.0}
     mapped = CostSpec(model=linear_model, model_ground={"a": "b", "grass": "a"}).build(tmap)
-    row_named, row_mapped = named.ground_labels.index("a"), mapped.ground_labels.index("a")
-    assert mapped.spread_dof[row_mapped] == 3.0  # "a" now also prices grass, a ground the model never drove
+    row_named, row_mapped = named.tables.ground_labels.index("a"), mapped.tables.ground_labels.index("a")
+    assert mapped.tables.spread_dof[row_mapped] == 3.0  # "a" now also prices grass, a ground the model never drove
     # the ground's own run spread is narrower than the spread of a ground the model never drove
-    assert np.all(named.grade_sd_table_j_per_m[row_named] < mapped.grade_sd_table_j_per_m[row_mapped])
+    assert np.all(named.tables.grade_sd_table_j_per_m[row_named] < mapped.tables.grade_sd_table_j_per_m[row_mapped])

@@ -193,5 +193,5 @@ def test_chained_refreshes_of_small_patches_equal_fresh_builds_and_leave_their_a
         chain.append(got)
         reference.append((new_cost, None))
     for (c, _), got in reversed(list(zip(reference[1:], chain[1:]))):  # made whole in any order
-        _assert_same_lattice(got, Lattice(_fresh(c, c.grade_table_j_per_m, c.turn_table_j, c.ground_rows), 1))
+        _assert_same_lattice(got, Lattice(_fresh(c, c.tables.grade_table_j_per_m, c.tables.turn_table_j, c.ground_rows), 1))
     assert np.array_equal(chain[0].move_energies_j(), reference[0][1])  # the first lattice never changes

@@ -1,4 +1,4 @@
-"""Tests of planner.risk's ideas: route energy intervals (price_route) and risk-aware planning (CostTables.at_quantile) on a cheap-but-uncertain vs dear-but-certain map."""
+"""Tests of the risk ideas: route energy intervals (price_route) and risk-aware planning (CostTables.at_quantile) on a cheap-but-uncertain vs dear-but-certain map."""
 
 import math
 
@@ -65,11 +65,11 @@ def test_the_spread_tables_are_the_battery_power_of_mean_plus_minus_run_sd(cost)
                              meta=LogMeta())
         power.append(log_battery_power_w(log, robot, electronics=False).mean())
     sd_per_m = 0.5 * (power[0] - power[1]) / 0.5
-    mid = cost.grade_sd_table_j_per_m.shape[1] // 2
-    assert cost.ground_labels == ("loam", "gravel")
-    assert cost.grade_sd_table_j_per_m[0, mid] == pytest.approx(sd_per_m, rel=1e-9)
-    assert np.all(cost.grade_sd_table_j_per_m[1] == 0) and np.all(cost.turn_sd_table_j[1] == 0)
-    assert cost.turn_sd_table_j[0, 0] == 0 and cost.turn_sd_table_j[0, -1] > 0
+    mid = cost.tables.grade_sd_table_j_per_m.shape[1] // 2
+    assert cost.tables.ground_labels == ("loam", "gravel")
+    assert cost.tables.grade_sd_table_j_per_m[0, mid] == pytest.approx(sd_per_m, rel=1e-9)
+    assert np.all(cost.tables.grade_sd_table_j_per_m[1] == 0) and np.all(cost.tables.turn_sd_table_j[1] == 0)
+    assert cost.tables.turn_sd_table_j[0, 0] == 0 and cost.tables.turn_sd_table_j[0, -1] > 0
     assert cost.has_interval
 
 
@@ -92,12 +92,12 @@ def test_reported_p90_matches_a_direct_computation(corridor_map, cost):
     # direct: loam metres (sampled every cm) times loam's J/m spread, plus loam's turn spread at loam waypoints
     cls, step = _cells_crossed(corridor_map, route.waypoints_m)
     loam_m = step * np.count_nonzero(cls == 0)
-    mid = cost.grade_sd_table_j_per_m.shape[1] // 2
+    mid = cost.tables.grade_sd_table_j_per_m.shape[1] // 2
     angles, _ = cost.turn_energies_j(route.waypoints_m)
     wp_cls = np.asarray(corridor_map.ground)[corridor_map.rowcol(route.waypoints_m[:, 0], route.waypoints_m[:, 1])]
-    grid = np.linspace(0, math.pi, cost.turn_sd_table_j.shape[1])
-    turns = sum(np.interp(a, grid, cost.turn_sd_table_j[0]) for a, g in zip(angles, wp_cls) if g == 0)
-    sd = loam_m * cost.grade_sd_table_j_per_m[0, mid] + turns
+    grid = np.linspace(0, math.pi, cost.tables.turn_sd_table_j.shape[1])
+    turns = sum(np.interp(a, grid, cost.tables.turn_sd_table_j[0]) for a, g in zip(angles, wp_cls) if g == 0)
+    sd = loam_m * cost.tables.grade_sd_table_j_per_m[0, mid] + turns
     assert iv.sd_j == pytest.approx(sd, rel=2e-3)
     assert iv.mean_j == pytest.approx(route.energy_j, rel=1e-12)
     assert iv.p90_j == pytest.approx(route.energy_j + Z90 * sd, rel=1e-3)

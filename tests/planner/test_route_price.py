@@ -92,5 +92,5 @@ def test_price_route_refuses_what_it_cannot_price(wall_map):
     with pytest.raises(InvalidParameterError, match="blocked"):
         price_route(cost, [[2.5, 2.5], [38.5, 2.5]])  # through the wall
     with pytest.raises(InvalidParameterError, match="no physics model"):
-        price_route(cost.with_tables(CostTables(cost.grade_table_j_per_m, cost.turn_table_j)), [[2.5, 2.5], [8.5, 2.5]],
+        price_route(cost.with_tables(CostTables(cost.tables.grade_table_j_per_m, cost.tables.turn_table_j)), [[2.5, 2.5], [8.5, 2.5]],
                     how="profile")

@@ -14,8 +14,8 @@ __all__ = ["with_interval", "hills_map", "hills_cost", "ridge_map"]
 
 def with_interval(cost: EnergyCost, rel_sd: float = 0.15) -> EnergyCost:
     """``cost`` with a run-level spread of ``rel_sd`` of every mean entry (one ground's spreads shared by the run)."""
-    sd = np.nan_to_num(np.abs(rel_sd * cost.grade_table_j_per_m), nan=0.0, posinf=0.0)
-    return cost.with_tables(CostTables(cost.grade_table_j_per_m, cost.turn_table_j, ground_labels=cost.ground_labels, grade_sd_table_j_per_m=sd, turn_sd_table_j=np.abs(rel_sd * cost.turn_table_j)))
+    sd = np.nan_to_num(np.abs(rel_sd * cost.tables.grade_table_j_per_m), nan=0.0, posinf=0.0)
+    return cost.with_tables(CostTables(cost.tables.grade_table_j_per_m, cost.tables.turn_table_j, ground_labels=cost.tables.ground_labels, grade_sd_table_j_per_m=sd, turn_sd_table_j=np.abs(rel_sd * cost.tables.turn_table_j)))
 
 
 def hills_map() -> TerrainMap:
