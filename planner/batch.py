@@ -145,7 +145,9 @@ def plan_batch(
         t0 = time.perf_counter()
         # the workers get the cost without its caches, once; here the caller's cost keeps what it learns
         shared = (cost if client is None else shippable_cost(cost),)
-        rows = list(run_tasks(tasks, client=client, shared=shared, progress=compute.progress, description="routes"))
+        rows = list(run_tasks(tasks, client=client, shared=shared, progress=compute.progress, description="routes",
+                              on_error=lambda i, exc: _error_row(batch.names[i], batch.starts_xy_m[i],
+                                                                 batch.goals_xy_m[i], exc)))
         n_used = client_worker_count(client)
         elapsed = time.perf_counter() - t0
     return BatchResult(tuple(rows), search.planner, where, n_used, elapsed, terrain=cost.terrain)

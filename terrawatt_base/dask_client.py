@@ -286,7 +286,8 @@ def client_worker_count(client: Any) -> int:
 
 def run_tasks(tasks: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]], *, client: Any = None,
               shared: Sequence[Any] = (), progress: bool = False, description: str = "tasks",
-              sizes: Sequence[int] | None = None) -> Iterator[Any]:
+              sizes: Sequence[int] | None = None,
+              on_error: Callable[[int, Exception], Any] | None = None) -> Iterator[Any]:
     """Each task's ``fn(*shared, *args)``, yielded in the order of ``tasks``.
 
     Without a ``client`` the tasks run here, one after another, when the results are asked
@@ -294,7 +295,8 @@ def run_tasks(tasks: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]], *, cl
     the workers); each of ``shared`` (what every task takes first: a map, a cost, the logs)
     is sent to every worker once, never with a task, and released at the end. The results
     come back in task order, whichever finishes first; the first task's exception is raised
-    here and the other tasks are cancelled.
+    here and the other tasks are cancelled — unless ``on_error`` turns it into that task's
+    result (a batch whose one task fails, or whose worker dies, keeps the others).
 
     Parameters
     ----------
@@ -310,6 +312,9 @@ def run_tasks(tasks: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]], *, cl
         The bar's label.
     sizes : sequence of int, optional
         How far each task moves the bar (e.g. the missions in a chunk; default 1 each).
+    on_error : callable, optional
+        ``on_error(i, exc)``: the result of task ``i`` that raised ``exc`` (an ``Exception``;
+        an interrupt still stops every task). Default: raise.
 
     Raises
     ------
@@ -330,8 +335,13 @@ def run_tasks(tasks: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]], *, cl
                                     parameter="sizes")
     with tqdm(total=sum(steps), desc=description, disable=not progress) as bar:
         if client is None:
-            for (fn, args), step in zip(tasks, steps):
-                result = fn(*shared, *args)
+            for i, ((fn, args), step) in enumerate(zip(tasks, steps)):
+                try:
+                    result = fn(*shared, *args)
+                except Exception as exc:
+                    if on_error is None:
+                        raise
+                    result = on_error(i, exc)
                 bar.update(step)
                 yield result
             return
@@ -345,7 +355,12 @@ def run_tasks(tasks: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]], *, cl
         try:
             for fut in as_completed(futures):
                 i = position[fut.key]
-                done[i] = fut.result()  # re-raises the task's exception
+                try:
+                    done[i] = fut.result()  # re-raises the task's exception (or the worker's death)
+                except Exception as exc:
+                    if on_error is None:
+                        raise
+                    done[i] = on_error(i, exc)
                 bar.update(steps[i])
                 while first in done:
                     yield done.pop(first)

@@ -118,6 +118,20 @@ def test_run_tasks_on_a_cluster_yields_in_task_order_whichever_finishes_first():
     assert there == [11, 13, 12] == list(run_tasks(tasks, shared=(10,)))
 
 
+def test_run_tasks_on_error_turns_a_failed_task_into_its_result_here_and_on_a_cluster():
+    distributed = pytest.importorskip("distributed", reason="the cluster path needs dask.distributed")
+    tasks = [(operator.truediv, (2,)), (operator.truediv, (0,)), (operator.add, (5,))]
+
+    def as_row(i, exc):
+        return f"task {i}: {type(exc).__name__}"
+
+    here = list(run_tasks(tasks, shared=(4,), on_error=as_row))
+    with distributed.LocalCluster(processes=False, n_workers=2, threads_per_worker=1,
+                                  dashboard_address=":0") as cluster, distributed.Client(cluster) as client:
+        there = list(run_tasks(tasks, client=client, shared=(4,), on_error=as_row))
+    assert here == there == [2.0, "task 1: ZeroDivisionError", 9]
+
+
 @pytest.mark.parametrize(
     ("workers", "scheduler", "message"),
     [(0, None, "workers must be a positive number of processes, got 0"),

@@ -129,6 +129,25 @@ def test_an_exception_outside_the_library_in_a_task_is_a_row_too(cost, local_cli
     assert [r.error for r in here.rows] == ["ZeroDivisionError: boom"] * 2
 
 
+def test_a_task_that_fails_outside_planning_is_a_row_and_the_batch_goes_on(cost, local_client, monkeypatch):
+    """A task whose future raises (a worker that dies, an argument that does not deserialise) is its pair's error
+    row: the other pairs' rows are kept."""
+    import planner.batch as batch_module
+
+    real = batch_module._plan_pair_task
+
+    def dies_on_the_second(cost, name, start_xy_m, *args):
+        if tuple(start_xy_m) == tuple(EAST):  # PAIRS[1], the only one of the three starting there
+            raise RuntimeError("worker lost")
+        return real(cost, name, start_xy_m, *args)
+
+    monkeypatch.setattr(batch_module, "_plan_pair_task", dies_on_the_second)
+    for compute in (Compute(client=local_client), Compute()):
+        res = plan_batch(cost, PAIRS[:3], compute=compute)
+        assert [r.status for r in res.rows][1] == "error" and res.rows[1].error == "RuntimeError: worker lost"
+        assert res.rows[0].status != "error" and res.rows[2].status != "error"
+
+
 # ------------------------------------------------------------------ pairs and their files
 def test_pairs_from_arrays_of_both_layouts_and_all_pairs_of_sites():
     a = BatchPairs.from_array(np.array(PAIRS))
