@@ -10,7 +10,7 @@ from terrain import TerrainMap
 
 from .anyangle import warm_up_anyangle
 from .edge_cost import EnergyCost
-from .heading_lattice import heading_shortest_path
+from .heading_lattice import heading_cost_to_go, heading_shortest_path, lower_cost_to_go
 from .kernels import graph, point_free, walk
 from .kernels.corridor import corridor_weights_parallel, corridor_weights_serial
 from .lattice import LATTICE_OFFSETS, Lattice
@@ -65,9 +65,14 @@ def warm_up_kernels() -> float:
     dearer = cost.with_tables(CostTables(2.0 * cost.tables.grade_table_j_per_m, cost.tables.turn_table_j))  # incremental reweighting
     changed = np.zeros((4, 4), dtype=bool)
     changed[1, 1] = True
-    replanner = IncrementalPlanner(lattice, (3.5, 3.5))  # D* Lite: search, then a repair after a refresh
+    refreshed = lattice.refreshed(dearer, changed)
+    replanner = IncrementalPlanner(lattice, (3.5, 3.5), heading=False)  # D* Lite: search, then a repair
     replanner.plan((0.5, 0.5))
-    replanner.replan((0.5, 0.5), lattice.refreshed(dearer, changed))
+    replanner.replan((0.5, 0.5), refreshed)
+    IncrementalPlanner(lattice, (3.5, 3.5)).plan((0.5, 0.5))  # the heading replanner: its workspace's A*
+    # and its heuristic lowered where moves got dearer (a replan on a map this small recomputes it instead)
+    h = heading_cost_to_go(lattice, (0.5, 0.5), (3.5, 3.5))
+    lower_cost_to_go(h, refreshed, np.arange(4, dtype=np.int64), (3.5, 3.5))
     string_pull(cost, np.vstack([path.waypoints_m, [[0.5, 3.5]]]))
     warm_up_reachability()
     warm_up_anyangle()
