@@ -202,16 +202,16 @@ class ReplayResult:
             "reason": nav.reason if nav.finished else "", "resumed": self.resumed,
             "chunks": self.chunks, "unused_s": self.unused_s, "wall_time_s": self.wall_time_s,
             "drive_time_s": self.drive_time_s,
-            "adaptive": nav.result().to_json_dict(series_every=10),
+            "adaptive": nav.result().to_dict(series_every=10),
             "model_map_before": self.model_map_before.tolist(), "model_map_after": self.model_map_after.tolist(),
             "decisions": list(self.decisions),
             "forecast": {k: json_finite(v) for k, v in self.forecast.items()},
         })
 
-    def plot(self, path: str | os.PathLike[str] | None = None, *, axes: Any = None) -> Any:
+    def plot(self, path: str | os.PathLike[str] | None = None, *, ax: Any = None) -> Any:
         """Model map before / after with the routes, the remaining energy's forecast against the
         actual, the state of charge (:func:`~planner.missions.replay_figure.plot_replay`)."""
-        return plot_replay(self, path, axes=axes)
+        return plot_replay(self, path, ax=ax)
 
     def write(self, out_dir: str | os.PathLike[str], *, mcap: bool = True, on_figure_error: str = "warn") -> list[Path]:
         """Write ``replay.json``, ``replay.png`` (a failing figure warns) and ``replay.mcap``; the files written."""

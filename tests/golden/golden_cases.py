@@ -268,7 +268,7 @@ def case_library(work: Path) -> dict[str, Path]:
     mission = simulate_mission(tmap, route, husky, Battery(20.0, husky.battery_voltage_v), truth, cost,
                                drive=MissionDrive(seed=1))
     return {"library/husky.json": write_robot_file(husky, work / "husky.json"),
-            "library/mission.json": mission.save_json(work / "mission.json", series_every=200)}
+            "library/mission.json": mission.write(work / "library", series_every=200)[0]}
 
 
 def case_plan_model(work: Path) -> dict[str, Path]:
@@ -355,7 +355,7 @@ def case_mission_variants(work: Path) -> dict[str, Path]:
                                 drive=MissionDrive(stop_at_reserve=True, speed_mps=0.5, accel_mps2=0.8))
     files = {f"mission_variants/mc_model/{p.name}": p for p in sorted(mc.iterdir())}
     files |= {f"mission_variants/replay_chunks/{p.name}": p for p in sorted(replay.iterdir())}
-    return files | {"mission_variants/replayed.json": replayed.save_json(work / "replayed.json", series_every=50)}
+    return files | {"mission_variants/replayed.json": replayed.write(work / "replayed", series_every=50)[0]}
 
 
 #: Outputs compared by digest rather than in full (``fnmatch`` patterns of golden paths): the replay's inputs
