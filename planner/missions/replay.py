@@ -139,6 +139,8 @@ class ReplayResult:
         Whether the replay resumed from a saved state.
     wall_time_s, drive_time_s : float
         The replay's computing time and the recording's duration.
+    map_label : str
+        The map's name in :meth:`summary` (``terrawatt replay``: the map file's).
     """
 
     navigator: Navigator
@@ -152,6 +154,7 @@ class ReplayResult:
     resumed: bool
     wall_time_s: float
     drive_time_s: float
+    map_label: str = "map"
 
     @property
     def replans(self) -> list[tuple[float, np.ndarray]]:
@@ -165,10 +168,13 @@ class ReplayResult:
         return tuple(self.navigator.updates)
 
     def summary(self) -> str:
+        """What ``terrawatt replay`` prints after the decisions: the map, the pace, the status, the updates and how
+        the remaining-energy forecast did."""
         nav = self.navigator
         changed = int(np.count_nonzero(self.model_map_before != self.model_map_after))
         acc = sum(u.accepted for u in nav.updates)
         lines = [
+            f"map: {self.map_label}",
             f"replay ({self.mode}): {len(nav.legs)} checkpoints, {self.drive_time_s:.1f} s of driving replayed in "
             f"{self.wall_time_s:.2f} s ({self.drive_time_s / max(self.wall_time_s, 1e-9):.0f}x real time)"
             + (" (resumed from a saved state)" if self.resumed else ""),
