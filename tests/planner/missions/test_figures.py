@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from matplotlib.figure import Figure
@@ -98,6 +100,9 @@ def test_the_adaptive_figure_is_written_or_drawn_into_four_axes(adaptive, tmp_pa
     assert drawn[2].get_ylabel() == "state of charge (%)" and drawn[3].get_ylabel() == "cumulative energy (Wh)"
     assert len(fig.axes) == 5 and fig.get_suptitle() == ""  # the error map's colour bar; no suptitle
     assert sorted(p.name for p in tmp_path.iterdir()) == ["adaptive.png"]
+    own = Figure().subplots(2, 2)  # a mission's result carries its map and registry: plot needs no more
+    assert dataclasses.replace(res, terrain=tmap, registry=registry).plot(ax=own) == tuple(own.ravel())
+    assert own[0, 0].get_title() == "cells by model"
 
 
 def test_the_adaptive_figure_needs_its_map_and_registry_and_one_target(adaptive, tmp_path):
