@@ -39,7 +39,8 @@ def _cli(*argv: object, expect: int = 0) -> None:
 
 def _with_printout(case: str, run: Callable[[Path], dict[str, Path]]) -> Callable[[Path], dict[str, Path]]:
     """``run``, its outputs joined by ``<case>/stdout.txt``: each command it ran (``$ terrawatt ...``) and what
-    that printed, the work folder written ``<work>`` (timings are masked when compared, ``golden_files``)."""
+    that printed, the work folder written ``<work>`` and the test fixtures' ``<fixtures>`` (the same text in every
+    checkout; timings are masked when compared, ``golden_files``)."""
 
     def with_printout(work: Path) -> dict[str, Path]:
         _PRINTED.clear()
@@ -49,7 +50,9 @@ def _with_printout(case: str, run: Callable[[Path], dict[str, Path]]) -> Callabl
         text = "".join(f"$ terrawatt {' '.join(args)}\n{out}\n" for args, out in _PRINTED)
         _PRINTED.clear()
         printout = work / f"{case}.stdout.txt"
-        printout.write_text(text.replace(str(work.resolve()), "<work>").replace(str(work), "<work>"), encoding="utf-8")
+        for folder, name in ((work, "<work>"), (FIXTURES, "<fixtures>")):
+            text = text.replace(str(folder.resolve()), name).replace(str(folder), name)
+        printout.write_text(text, encoding="utf-8")
         return files | {f"{case}/stdout.txt": printout}
 
     return with_printout
