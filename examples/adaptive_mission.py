@@ -19,6 +19,7 @@ Run:  python examples/adaptive_mission.py [--quick] [--out DIR] [--update-scope 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 from pathlib import Path
 
@@ -46,7 +47,7 @@ def scenario(quick: bool = False) -> tuple[TerrainMap, tuple[float, float], tupl
 def main(argv: list[str] | None = None) -> dict[str, float]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="smaller map (for tests)")
-    parser.add_argument("--out", type=Path, default=None, help="write adaptive_mission.json and a plot here")
+    parser.add_argument("--out", type=Path, default=None, help="write mission.json and mission.png here")
     parser.add_argument(
         "--update-scope", choices=["ground_class", "region"], default="ground_class",
         help="cells an accepted model serves: every cell of the map's ground class that the old model served "
@@ -111,9 +112,7 @@ def main(argv: list[str] | None = None) -> dict[str, float]:
           f"{numbers['saved_driving_only_wh']:+.3f} Wh, excitation cost {numbers['excitation_wh']:.3f} Wh; the loop "
           f"also stops every {settings.leg_length_m:g} m to compare, which the unadapted drive does not).")
     if args.out is not None:
-        args.out.mkdir(parents=True, exist_ok=True)
-        res.save_json(args.out / "adaptive_mission.json")
-        res.plot(args.out / "adaptive_mission.png", tmap, reg)
+        dataclasses.replace(res, terrain=tmap, registry=reg).write(args.out)  # the figure needs the map and models
     return numbers
 
 

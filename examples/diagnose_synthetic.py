@@ -58,10 +58,8 @@ def main(argv: list[str] | None = None) -> dict[str, float | str]:
     corrected = d.corrected_model.predict(logs[0])
     print(f"corrected model predicts {corrected.shape[0]} samples of run 0")
     if args.out is not None:
-        args.out.mkdir(parents=True, exist_ok=True)
-        d.write_json(args.out / "diagnosis.json")
-        d.write_markdown(args.out / "diagnosis.md")
-        print(f"wrote {args.out / 'diagnosis.json'} and {args.out / 'diagnosis.md'}")
+        written = d.write(args.out)  # diagnosis.json, diagnosis.md, the corrected model, the figures
+        print(f"wrote {', '.join(p.name for p in written)} in {args.out}")
     return {"best": best.name, "shrink_pct": best.shrink_pct, "chosen": ",".join(d.current.chosen),
             "before_rmse_a": d.current.before.rmse, "after_rmse_a": d.current.after.rmse,
             "before_charge_error_pct": d.current.before.error_pct, "after_charge_error_pct": d.current.after.error_pct}

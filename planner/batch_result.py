@@ -1,5 +1,5 @@
 """BatchResult: one row per (start, goal) pair of a batch (energy, length, time, status, saving, error): the printed
-summary, batch.csv and batch.json."""
+summary, batch.csv and batch.json, the figure of the routes' energies."""
 
 from __future__ import annotations
 
@@ -14,10 +14,12 @@ from typing import Any
 import numpy as np
 
 from terrain import TerrainMap
+from terrawatt_base import plot_target
 from terrawatt_base.answer import fmt_fixed, write_answer
-from terrawatt_base.atomic import write_text_atomic
+from terrawatt_base.atomic import save_figure, write_text_atomic
 from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.formats import result_document, write_result_json
+from terrawatt_base.plot_target import check_ax, check_plot_target
 
 from .route import ROUTE_STATUSES
 
@@ -25,7 +27,7 @@ __all__ = ["BatchRow", "BatchResult", "BATCH_STATUSES", "BATCH_FORMAT_VERSION"]
 
 #: Status of a row: a route status, or ``"error"`` when planning the pair raised.
 BATCH_STATUSES = (*ROUTE_STATUSES, "error")
-#: Version of the JSON layout written by :meth:`BatchResult.write_json`.
+#: Version of the JSON layout of :meth:`BatchResult.to_dict` (batch.json).
 BATCH_FORMAT_VERSION = 1
 
 
@@ -178,7 +180,7 @@ class BatchResult:
         return float(np.median(s)) if s.size else math.nan
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain JSON-friendly result document, format ``terrawatt-batch`` (NaN stays NaN here; :meth:`write_json`
+        """Plain JSON-friendly result document, format ``terrawatt-batch`` (NaN stays NaN here; :meth:`write`
         writes it as null)."""
         return result_document("batch", BATCH_FORMAT_VERSION, {
             "planner": self.planner,
@@ -191,10 +193,6 @@ class BatchResult:
             "median_energy_saved_pct": self.median_saving_pct(),
             "rows": [asdict(r) for r in self.rows],
         })
-
-    def write_json(self, path: str | os.PathLike[str]) -> Path:
-        """Write :meth:`to_dict` as JSON atomically (:func:`~terrawatt_base.formats.write_result_json`); return it."""
-        return write_result_json(path, self.to_dict())
 
     def to_csv(self, path: str | os.PathLike[str]) -> Path:
         """Write one line per row (header: the :class:`BatchRow` fields; NaN as an empty cell), atomically."""
@@ -230,7 +228,32 @@ class BatchResult:
 
     def write(self, out_dir: str | os.PathLike[str]) -> list[Path]:
         """Write batch.csv and batch.json into ``out_dir`` (created); return them."""
-        return write_answer(out_dir, {"batch.csv": self.to_csv, "batch.json": self.write_json})
+        return write_answer(out_dir, {"batch.csv": self.to_csv,
+                                      "batch.json": lambda p: write_result_json(p, self.to_dict())})
+
+    def plot(self, path: str | os.PathLike[str] | None = None, *, ax: Any = None, title: str | None = None,
+             dpi: int = 110) -> Path | Any:
+        """The routes' energies: a bar per pair (Wh of the minimum-energy route) with the shortest-distance
+        route's energy as a tick beside it; a pair without a route (no route, an error) is marked at zero.
+
+        Give exactly one of ``path`` (write a PNG atomically and return the path) or ``ax`` (a matplotlib
+        Axes to draw into; nothing is written and it is returned).
+
+        Raises
+        ------
+        InvalidParameterError
+            Both or neither of ``path`` and ``ax``; a bad ``path`` or ``ax``; a batch without pairs.
+        """
+        target = check_plot_target(path, ax)
+        if not self.rows:
+            raise InvalidParameterError("the batch has no pairs: there is no energy to draw")
+        if target is None:
+            _draw_energies(check_ax(ax), self, title)
+            return ax
+        fig, axes = plot_target.new_figure((max(6.0, min(16.0, 0.45 * len(self.rows) + 2.0)), 4.2))
+        _draw_energies(axes, self, title)
+        fig.tight_layout()
+        return save_figure(fig, target, dpi=dpi, format="png")
 
     def totals(self) -> str:
         """A few lines for people: counts by status, throughput, median saving, the errors."""
@@ -251,3 +274,26 @@ class BatchResult:
         if len(errors) > _SHOWN_ERRORS:
             lines.append(f"... and {len(errors) - _SHOWN_ERRORS} more errors (see the rows' error column)")
         return "\n".join(lines)
+
+
+def _draw_energies(ax: Any, result: BatchResult, title: str | None) -> None:
+    """A bar per pair (the minimum-energy route, Wh), a tick at the shortest route's energy, a red x where none."""
+    x = np.arange(len(result.rows))
+    wh = result.column("energy_wh").astype(float)
+    found = np.isfinite(wh)
+    ax.bar(x[found], wh[found], color="tab:green", label="minimum-energy route")
+    shortest = result.column("shortest_energy_j").astype(float) / 3600.0
+    if np.isfinite(shortest).any():
+        ax.plot(x, shortest, "_", color="black", markersize=14, markeredgewidth=2, label="shortest-distance route")
+    if not found.all():
+        ax.plot(x[~found], np.zeros(int(np.count_nonzero(~found))), "x", color="tab:red", clip_on=False,
+                label="no route")
+    if len(x) > 40:  # names would overlap: the pairs' order only
+        ax.set_xticks([])
+        ax.set_xlabel(f"{len(x)} pairs, in order")
+    else:
+        tilted = {"rotation": 60, "ha": "right", "fontsize": 8} if len(x) > 8 else {}
+        ax.set_xticks(x, [r.name for r in result.rows], **tilted)
+    ax.set_ylabel("route energy (Wh)")
+    ax.legend(loc="best", fontsize=8)
+    ax.set_title(title or f"{result.map_label}: {len(result.rows)} pairs, planner {result.planner}")

@@ -1,7 +1,10 @@
 """Where a figure goes: a PNG file the plotting function writes, or the caller's matplotlib axes.
 
 Every figure function of terrawatt takes an optional positional ``path`` and a keyword
-``ax=`` (a single-panel figure) or ``axes=`` (a figure of several panels); exactly one of
+``ax=``: one Axes for a single-panel figure, a sequence of them (one per panel, as
+``Figure.subplots`` returns them) for a figure of several panels — so every answer's
+``plot(path=None, *, ax=None)`` reads the same (the figure functions of :mod:`energy.plots` and
+the diagnosis' several-panel figures still name that sequence ``axes=``); exactly one of
 the two is given. With ``path`` the function makes its own figure, saves it atomically and
 returns the path; with ``ax`` / ``axes`` it draws into the caller's axes, writes nothing,
 leaves the caller's figure layout alone and returns the axes it drew into, so figures can

@@ -125,8 +125,7 @@ def run_replay(args: argparse.Namespace) -> int:
         settings=AdaptiveSettings(leg_length_m=args.leg_m, seed=args.seed, update_source=args.update_source),
         registry=args.registry, physics_ground=args.physics_ground,
         feed=ReplayFeed(mode=args.mode, chunk_s=args.chunk_s, speed_up=args.speed_up, state_path=args.state,
-                        on_decision=say))
-    print(f"map: {label}")
+                        on_decision=say), map_label=label)
     print(result.summary())
     with warn_figures():
         written = result.write(args.out, mcap=not args.no_mcap)

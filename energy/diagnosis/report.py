@@ -1,4 +1,5 @@
-"""The answer of a diagnosis, :class:`Diagnosis`: printed (``summary``), saved (``to_dict``, ``write``) and drawn.
+"""The answer of a diagnosis, :class:`Diagnosis`: printed (``summary``), saved (``to_dict``, ``write``) and drawn
+(``plot``: the effect ranking; ``write``: every figure).
 
 ``write`` writes :data:`DIAGNOSIS_FILES`: ``diagnosis.json`` (format ``terrawatt-diagnosis``),
 the one-page ``diagnosis.md``, the corrected model and the figures (:mod:`energy.diagnosis.plots`).
@@ -23,7 +24,7 @@ from terrawatt_base.formats import result_document, write_result_json
 from ..logs import InteractionLog
 from ..models.base import CurrentModel
 from .gap import GapShare, largest_slices
-from .plots import FIGURES, plot_diagnosis, skipped_figures
+from .plots import FIGURES, plot_diagnosis, plot_effect_ranking, skipped_figures
 from .result import Tie
 from .stage import FitSettings, Stage
 
@@ -31,7 +32,7 @@ __all__ = ["DIAGNOSIS_FILES", "DIAGNOSIS_FORMAT_VERSION", "MARKDOWN_SLICES", "Di
 
 #: Slices of the localisation listed in :meth:`Diagnosis.to_markdown` (the largest ``|net gap|``).
 MARKDOWN_SLICES = 10
-#: Version of the ``diagnosis.json`` layout (format ``terrawatt-diagnosis``) written by :meth:`Diagnosis.write_json`.
+#: Version of the ``diagnosis.json`` layout (format ``terrawatt-diagnosis``, :meth:`Diagnosis.to_dict`).
 DIAGNOSIS_FORMAT_VERSION = 1
 #: Files :meth:`Diagnosis.write` writes (the figures whose data is there).
 DIAGNOSIS_FILES = ("diagnosis.json", "diagnosis.md", "corrected_model.zip", *FIGURES.values())
@@ -146,10 +147,6 @@ class Diagnosis:
             "more_data": dict(self.more_data),
         } | ({} if self.power is None else {"power": self.power.to_dict()}))
 
-    def write_json(self, path: str | os.PathLike[str]) -> Path:
-        """Write :meth:`to_dict` to ``path`` atomically (:func:`~terrawatt_base.formats.write_result_json`)."""
-        return write_result_json(path, self.to_dict())
-
     def to_markdown(self) -> str:
         """A one-page report: the verdict, the largest slices of the gap, each stage's ranking and waterfall.
 
@@ -197,9 +194,23 @@ class Diagnosis:
             lines += ["", *self.power.waterfall_markdown()]
         return "\n".join(lines) + "\n"
 
-    def write_markdown(self, path: str | os.PathLike[str]) -> Path:
-        """Write :meth:`to_markdown` to ``path`` atomically; return the path."""
-        return write_text_atomic(path, self.to_markdown())
+    # ------------------------------------------------------------------ draw
+    def plot(self, path: str | os.PathLike[str] | None = None, *, ax: Any = None, max_effects: int = 20,
+             dpi: int = 110) -> Path | Any:
+        """The main figure, the effect ranking: what each candidate adds to the chosen effects above it
+        (:func:`~energy.diagnosis.plots.plot_effect_ranking`; :meth:`write` draws every figure).
+
+        Give exactly one of ``path`` (write a PNG atomically and return the path) or ``ax`` (a matplotlib
+        Axes to draw into; nothing is written and it is returned).
+
+        Raises
+        ------
+        InvalidParameterError
+            Both or neither of ``path`` and ``ax``; a bad ``path``, ``ax`` or ``max_effects``.
+        DataError
+            No candidate was scored.
+        """
+        return plot_effect_ranking(self, path, ax=ax, max_effects=max_effects, dpi=dpi)
 
     def write(self, out_dir: str | os.PathLike[str], *, on_figure_error: str = "warn") -> list[Path]:
         """Write diagnosis.json, diagnosis.md, corrected_model.zip and the figures into ``out_dir`` (created).
@@ -216,7 +227,8 @@ class Diagnosis:
             An ``on_figure_error`` other than ``"warn"`` or ``"raise"``.
         """
         out = Path(out_dir)
-        written = write_answer(out, {"diagnosis.json": self.write_json, "diagnosis.md": self.write_markdown,
+        written = write_answer(out, {"diagnosis.json": lambda p: write_result_json(p, self.to_dict()),
+                                     "diagnosis.md": lambda p: write_text_atomic(p, self.to_markdown()),
                                      "corrected_model.zip": self.corrected_model.save}, on_figure_error=on_figure_error)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", FigureWarning)  # warned below, once, naming the file

@@ -16,6 +16,7 @@ from terrawatt_base.checks import check_bool, check_choice
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 from terrawatt_base.figure_file import FIGURE_ERRORS
 from terrawatt_base.formats import result_document, write_result_json
+from terrawatt_base.plot_target import check_ax, check_plot_target
 
 from ..logs import InteractionLog
 from ..models.base import CurrentModel
@@ -236,10 +237,23 @@ class EvaluationResult:
         (:func:`~energy.evaluation.run_totals.summarise_totals`)."""
         return summarise_totals(self.totals)
 
-    def plot(self, ax: Any = None) -> Any:
-        """Observed against nominal coverage of the total-charge intervals per protocol, ground and variant;
-        on ``ax`` (default a new figure's); returns the axes."""
-        return plot_totals_reliability(self.totals, ax, title="held-out total charge (both sides)")
+    def plot(self, path: str | os.PathLike[str] | None = None, *, ax: Any = None) -> Path | Any:
+        """Observed against nominal coverage of the total-charge intervals per protocol, ground and variant
+        (:func:`~energy.evaluation.run_totals.plot_totals_reliability`).
+
+        Give exactly one of ``path`` (write a PNG atomically and return the path) or ``ax`` (a matplotlib
+        Axes to draw into; nothing is written and it is returned).
+
+        Raises
+        ------
+        InvalidParameterError
+            Both or neither of ``path`` and ``ax``; a bad ``path`` or ``ax``.
+        """
+        target = check_plot_target(path, ax)
+        title = "held-out total charge (both sides)"
+        if target is None:
+            return plot_totals_reliability(self.totals, check_ax(ax), title=title)
+        return save_figure(plot_totals_reliability(self.totals, None, title=title).figure, target)
 
     def row_for(self, ground: str, model: str, *, variant: str | None = None,
                 schedule: str | None = None) -> ScoreRow | AdaptRow:
@@ -340,7 +354,7 @@ class EvaluationResult:
                      names[1]: lambda p: write_text_atomic(p, self.summary())}
             drawings = {SPECTRA_FILE: lambda p: plot_vibration_spectra(list(self.logs), p)
                         } if self.protocol == "loo" and self.logs else {}
-            drawings[RELIABILITY_FILE] = lambda p: save_figure(self.plot().figure, p)
+            drawings[RELIABILITY_FILE] = self.plot
         return write_answer(folder, files, drawings if figures else {}, on_figure_error=on_figure_error)
 
 

@@ -239,11 +239,11 @@ class AdaptiveResult:
         """Replans that changed the route."""
         return sum(p.route_changed for p in self.replans if p.reason != "initial")
 
-    def to_json_dict(self, *, series_every: int = 10) -> dict[str, Any]:
-        """Plain JSON result document, format ``terrawatt-adaptive-mission`` (non-finite numbers become ``None``);
-        series every ``series_every`` samples."""
+    def to_dict(self, *, series_every: int = 10) -> dict[str, Any]:
+        """The content of mission.json, format ``terrawatt-adaptive-mission`` (non-finite numbers become ``None``):
+        series every ``series_every`` samples and, when known, ``computing_time_s``."""
         k = max(1, int(series_every))
-        return result_document("adaptive-mission", ADAPTIVE_FORMAT_VERSION, json_finite({
+        doc = result_document("adaptive-mission", ADAPTIVE_FORMAT_VERSION, json_finite({
             "status": self.status,
             "reason": self.reason,
             "final_xy_m": self.final_xy_m,
@@ -267,14 +267,6 @@ class AdaptiveResult:
             "series": {name: getattr(self, name)[::k] for name in ("time_s", "x_m", "y_m", "soc", "energy_j",
                                                                       "predicted_energy_j")},
         }))
-
-    def save_json(self, path: str | os.PathLike[str], *, series_every: int = 10) -> Path:
-        """Write :meth:`to_json_dict` atomically to ``path`` (:func:`~terrawatt_base.formats.write_result_json`)."""
-        return write_result_json(path, self.to_json_dict(series_every=series_every))
-
-    def to_dict(self) -> dict[str, Any]:
-        """The content of mission.json: :meth:`to_json_dict` and, when known, ``computing_time_s``."""
-        doc = self.to_json_dict()
         return doc if self.computing_time_s is None else {**doc, "computing_time_s": self.computing_time_s}
 
     def summary(self) -> str:
@@ -325,7 +317,7 @@ class AdaptiveResult:
         if logs:
             check_logs_folder(out)
         written = write_answer(out, {"mission.json": lambda p: write_result_json(p, self.to_dict())},
-                               {"mission.png": lambda p: self.plot(p, self.terrain, self.registry)},
+                               {"mission.png": self.plot},
                                on_figure_error=on_figure_error)
         if logs:
             folder = out / LOGS_FOLDER
@@ -365,22 +357,24 @@ class AdaptiveResult:
                       for log in legs]
         return write_drive_bag(list(legs), path, lonlat_deg=lonlat)
 
-    def plot(self, path: str | os.PathLike[str] | None = None, terrain: TerrainMap | None = None,
-             registry: CellModelRegistry | None = None, *, axes: Any = None) -> Path | tuple[Any, ...]:
+    def plot(self, path: str | os.PathLike[str] | None = None, *, ax: Any = None, terrain: TerrainMap | None = None,
+             registry: CellModelRegistry | None = None) -> Path | tuple[Any, ...]:
         """Four panels: route over cells coloured by model and by error, SoC, cumulative energy
         (:func:`~planner.missions.figures.plot_adaptive_mission`).
 
-        Give exactly one of ``path`` (write a PNG atomically and return the path) or ``axes``
+        Give exactly one of ``path`` (write a PNG atomically and return the path) or ``ax``
         (4 matplotlib Axes to draw into, row by row; nothing is written and they are
-        returned); ``terrain`` and ``registry`` are required.
+        returned). ``terrain`` and ``registry`` default to the result's own (:attr:`terrain`,
+        :attr:`registry`, which a mission's result has).
 
         Raises
         ------
         InvalidParameterError
-            Both or neither of ``path`` and ``axes``; a bad ``path`` or not 4 axes; no
-            ``terrain`` or ``registry``.
+            Both or neither of ``path`` and ``ax``; a bad ``path`` or not 4 axes; no
+            ``terrain`` or ``registry``, given or the result's.
         """
-        return plot_adaptive_mission(self, path, terrain, registry, axes=axes)
+        return plot_adaptive_mission(self, path, self.terrain if terrain is None else terrain,
+                                     self.registry if registry is None else registry, ax=ax)
 
 
 #: The folder of :meth:`AdaptiveResult.write` (``logs=True``) that holds the legs' logs.

@@ -1,13 +1,13 @@
 """Figures of mission results: the driven mission and the adaptive loop.
 
 Where a figure goes (the rule of every terrawatt figure, :mod:`terrawatt_base.plot_target`): give
-exactly one of ``path`` or ``axes=`` (a sequence of matplotlib Axes, one per panel; an array
+exactly one of ``path`` or ``ax=`` (a sequence of matplotlib Axes, one per panel; an array
 from ``Figure.subplots`` is read row by row). With ``path`` the function makes its own figure
 (matplotlib's object API on the Agg canvas, no pyplot), writes a PNG atomically and returns
-the path; with ``axes`` it draws into the caller's axes — a colour bar attached to the axes'
+the path; with ``ax`` it draws into the caller's axes — a colour bar attached to the axes'
 figure, beside its panel — writes nothing, leaves the caller's figure layout alone (no
 ``tight_layout``) and returns the axes as a tuple. The suptitle belongs to the figure and is
-drawn only with ``path``; with ``axes`` a ``title`` you give goes on the first axes.
+drawn only with ``path``; with ``ax`` a ``title`` you give goes on the first axes.
 """
 
 from __future__ import annotations
@@ -31,8 +31,8 @@ __all__ = ["plot_mission", "plot_adaptive_mission"]
 
 
 def plot_mission(result: Any, path: str | os.PathLike[str] | None = None, terrain: TerrainMap | None = None, *,
-                 axes: Sequence[Any] | None = None, title: str | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:
-    """Write a PNG of a :class:`~planner.missions.results.MissionResult` (or draw into ``axes``):
+                 ax: Sequence[Any] | None = None, title: str | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:
+    """Write a PNG of a :class:`~planner.missions.results.MissionResult` (or draw into ``ax``):
     SoC over time, predicted vs actual cumulative energy, and the driven path coloured by
     battery power (over the map's elevation when ``terrain`` is given).
 
@@ -40,14 +40,14 @@ def plot_mission(result: Any, path: str | os.PathLike[str] | None = None, terrai
     ----------
     result : MissionResult
     path : path-like, optional
-        PNG file to write (or give ``axes``).
+        PNG file to write (or give ``ax``).
     terrain : TerrainMap, optional
         The map the mission ran on (drawn under the path).
-    axes : sequence of 3 matplotlib Axes, optional
+    ax : sequence of 3 matplotlib Axes, optional
         State of charge, cumulative energy, map: draw into these instead of writing a file.
     title : str, optional
         Figure title (default: the status, energy and arrival state of charge); with
-        ``axes``, the first axes' title (none by default).
+        ``ax``, the first axes' title (none by default).
     dpi : int
         Resolution of the PNG (with ``path``).
 
@@ -59,12 +59,12 @@ def plot_mission(result: Any, path: str | os.PathLike[str] | None = None, terrai
     Raises
     ------
     InvalidParameterError
-        Both or neither of ``path`` and ``axes``; a bad ``path`` (checked before drawing)
+        Both or neither of ``path`` and ``ax``; a bad ``path`` (checked before drawing)
         or not 3 axes.
     """
-    target = check_plot_target(path, axes, axes_name="axes")
+    target = check_plot_target(path, ax)
     if target is None:
-        panels = check_axes(axes, 3, what="state of charge, cumulative energy, map")
+        panels = check_axes(ax, 3, what="state of charge, cumulative energy, map", name="ax")
         _draw_mission(panels, result, terrain)
         if title:
             panels[0].set_title(title)
@@ -124,22 +124,22 @@ def _draw_mission(panels: Sequence[Any], result: Any, terrain: TerrainMap | None
 
 
 def plot_adaptive_mission(result: Any, path: str | os.PathLike[str] | None = None, terrain: TerrainMap | None = None,
-                          registry: CellModelRegistry | None = None, *, axes: Sequence[Any] | None = None,
+                          registry: CellModelRegistry | None = None, *, ax: Sequence[Any] | None = None,
                           dpi: int = 90) -> Path | tuple[Any, ...]:
     """Write a PNG of an :class:`~planner.missions.adaptive_results.AdaptiveResult` (or draw
-    into ``axes``): the route over cells coloured by model and by error, the state of charge
+    into ``ax``): the route over cells coloured by model and by error, the state of charge
     and the cumulative energy.
 
     Parameters
     ----------
     result : AdaptiveResult
     path : path-like, optional
-        PNG file to write (or give ``axes``).
+        PNG file to write (or give ``ax``).
     terrain : TerrainMap
         The map the mission ran on (required).
     registry : CellModelRegistry
         The registry the mission updated (required).
-    axes : sequence of 4 matplotlib Axes, optional
+    ax : sequence of 4 matplotlib Axes, optional
         Cells by model, cells by error, state of charge, cumulative energy (a 2 x 2 array
         from ``Figure.subplots(2, 2)`` is read row by row): draw into these instead of
         writing a file.
@@ -154,10 +154,10 @@ def plot_adaptive_mission(result: Any, path: str | os.PathLike[str] | None = Non
     Raises
     ------
     InvalidParameterError
-        Both or neither of ``path`` and ``axes``; a bad ``path`` (checked before drawing)
+        Both or neither of ``path`` and ``ax``; a bad ``path`` (checked before drawing)
         or not 4 axes; no ``terrain`` or ``registry``.
     """
-    target = check_plot_target(path, axes, axes_name="axes")
+    target = check_plot_target(path, ax)
     if not isinstance(terrain, TerrainMap):
         raise InvalidParameterError(
             f"terrain must be the TerrainMap the mission ran on, got {type(terrain).__name__!r}")
@@ -165,7 +165,7 @@ def plot_adaptive_mission(result: Any, path: str | os.PathLike[str] | None = Non
         raise InvalidParameterError(
             f"registry must be the CellModelRegistry the mission updated, got {type(registry).__name__!r}")
     if target is None:
-        panels = check_axes(axes, 4, what="cells by model, cells by error, state of charge, cumulative energy")
+        panels = check_axes(ax, 4, what="cells by model, cells by error, state of charge, cumulative energy", name="ax")
         _draw_adaptive_mission(panels, result, terrain, registry)
         return panels
 

@@ -1,13 +1,13 @@
 """The figure of a Monte Carlo mission study: energy histogram with P50/P90/P99 and the exceedance curve.
 
 Where the figure goes (the rule of every terrawatt figure, :mod:`terrawatt_base.plot_target`): give
-exactly one of ``path`` or ``axes=`` (2 matplotlib Axes: histogram, exceedance curve). With
+exactly one of ``path`` or ``ax=`` (2 matplotlib Axes: histogram, exceedance curve). With
 ``path``, :func:`plot_monte_carlo` makes its own figure (matplotlib's object API on the Agg
-canvas, no pyplot), writes a PNG atomically and returns the path; with ``axes`` it draws into
+canvas, no pyplot), writes a PNG atomically and returns the path; with ``ax`` it draws into
 the caller's axes, writes nothing, leaves the caller's figure layout alone (no
 ``tight_layout``) and returns the axes as a tuple, so the study can be part of a larger
 figure. The suptitle (the reserve risk and the percentiles) belongs to the figure and is
-drawn only with ``path``; with ``axes`` a ``title`` you give goes on the first axes.
+drawn only with ``path``; with ``ax`` a ``title`` you give goes on the first axes.
 """
 
 from __future__ import annotations
@@ -27,9 +27,9 @@ from terrawatt_base.plot_target import check_axes, check_plot_target
 __all__ = ["plot_monte_carlo"]
 
 
-def plot_monte_carlo(result: Any, path: str | os.PathLike[str] | None = None, *, axes: Sequence[Any] | None = None,
+def plot_monte_carlo(result: Any, path: str | os.PathLike[str] | None = None, *, ax: Sequence[Any] | None = None,
                      title: str | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:
-    """Write a PNG of a :class:`~planner.missions.monte_carlo_result.MonteCarloResult` (or draw into ``axes``).
+    """Write a PNG of a :class:`~planner.missions.monte_carlo_result.MonteCarloResult` (or draw into ``ax``).
 
     Left: histogram of the mission energy (Wh) with its P50, P90 and P99, the forecast
     energy and the battery's usable energy above the reserve (nominal capacity), missions
@@ -40,11 +40,11 @@ def plot_monte_carlo(result: Any, path: str | os.PathLike[str] | None = None, *,
     ----------
     result : MonteCarloResult
     path : path-like, optional
-        PNG file to write (or give ``axes``).
-    axes : sequence of 2 matplotlib Axes, optional
+        PNG file to write (or give ``ax``).
+    ax : sequence of 2 matplotlib Axes, optional
         Histogram, exceedance curve: draw into these instead of writing a file.
     title : str, optional
-        Figure title (default: the reserve risk and the percentiles); with ``axes``, the
+        Figure title (default: the reserve risk and the percentiles); with ``ax``, the
         first axes' title (none by default).
     dpi : int
         Resolution of the PNG (with ``path``).
@@ -57,13 +57,13 @@ def plot_monte_carlo(result: Any, path: str | os.PathLike[str] | None = None, *,
     Raises
     ------
     InvalidParameterError
-        Both or neither of ``path`` and ``axes``; ``path`` cannot be written (a folder, or
+        Both or neither of ``path`` and ``ax``; ``path`` cannot be written (a folder, or
         under a file) or not 2 axes, checked before drawing; every mission failed (nothing
         to draw).
     """
-    target = check_plot_target(path, axes, axes_name="axes")
+    target = check_plot_target(path, ax)
     if target is None:
-        axes = check_axes(axes, 2, what="histogram, exceedance curve")
+        axes = check_axes(ax, 2, what="histogram, exceedance curve", name="ax")
     done = np.asarray(result.completed)
     if not done.any():
         raise InvalidParameterError(f"all {result.n} missions failed; there is no energy to draw")

@@ -32,7 +32,7 @@ from .monte_carlo_sampling import MissionDistributions
 
 __all__ = ["MonteCarloResult", "MONTE_CARLO_FORMAT_VERSION", "SAMPLE_COLUMNS", "mission_row"]
 
-#: Version of the JSON layout written by :meth:`MonteCarloResult.write_json` (2: per-sample
+#: Version of the JSON layout of :meth:`MonteCarloResult.to_dict` (monte_carlo.json; 2: per-sample
 #: ``error`` and ``n_failed``).
 MONTE_CARLO_FORMAT_VERSION = 2
 #: Per-sample numeric columns (besides the ground factors), in CSV order.
@@ -279,10 +279,6 @@ class MonteCarloResult:
                               "error": list(self.errors)}
         return out
 
-    def write_json(self, path: str | os.PathLike[str], *, samples: bool = True) -> Path:
-        """Write :meth:`to_dict` as JSON atomically (:func:`~terrawatt_base.formats.write_result_json`); return it."""
-        return write_result_json(path, self.to_dict(samples=samples))
-
     def to_csv(self, path: str | os.PathLike[str]) -> Path:
         """Write the per-sample table (one line per sample, a column per ground factor), atomically."""
         buf = io.StringIO()
@@ -338,7 +334,8 @@ class MonteCarloResult:
         return the files written (a figure that fails warns and is left out)."""
         if not self.n:
             return []
-        return write_answer(out_dir, {"monte_carlo.json": self.write_json, "monte_carlo.csv": self.to_csv},
+        return write_answer(out_dir, {"monte_carlo.json": lambda p: write_result_json(p, self.to_dict()),
+                                     "monte_carlo.csv": self.to_csv},
                             {"monte_carlo.png": self.plot}, on_figure_error=on_figure_error)
 
     def study_summary(self) -> str:
@@ -380,17 +377,17 @@ class MonteCarloResult:
             *failures,
         ])
 
-    def plot(self, path: str | os.PathLike[str] | None = None, *, axes: Any = None,
+    def plot(self, path: str | os.PathLike[str] | None = None, *, ax: Any = None,
              title: str | None = None) -> Path | tuple[Any, ...]:
         """The histogram and exceedance figure (:func:`plot_monte_carlo`).
 
         Give exactly one of ``path`` (write a PNG atomically and return the path) or
-        ``axes`` (2 matplotlib Axes to draw into; nothing is written and they are returned).
+        ``ax`` (2 matplotlib Axes to draw into; nothing is written and they are returned).
 
         Raises
         ------
         InvalidParameterError
-            Both or neither of ``path`` and ``axes``; a bad ``path`` or not 2 axes; every
+            Both or neither of ``path`` and ``ax``; a bad ``path`` or not 2 axes; every
             mission failed.
         """
-        return plot_monte_carlo(self, path, axes=axes, title=title)
+        return plot_monte_carlo(self, path, ax=ax, title=title)

@@ -139,6 +139,8 @@ class ReplayResult:
         Whether the replay resumed from a saved state.
     wall_time_s, drive_time_s : float
         The replay's computing time and the recording's duration.
+    map_label : str
+        The map's name in :meth:`summary` (``terrawatt replay``: the map file's).
     """
 
     navigator: Navigator
@@ -152,6 +154,7 @@ class ReplayResult:
     resumed: bool
     wall_time_s: float
     drive_time_s: float
+    map_label: str = "map"
 
     @property
     def replans(self) -> list[tuple[float, np.ndarray]]:
@@ -165,10 +168,13 @@ class ReplayResult:
         return tuple(self.navigator.updates)
 
     def summary(self) -> str:
+        """What ``terrawatt replay`` prints after the decisions: the map, the pace, the status, the updates and how
+        the remaining-energy forecast did."""
         nav = self.navigator
         changed = int(np.count_nonzero(self.model_map_before != self.model_map_after))
         acc = sum(u.accepted for u in nav.updates)
         lines = [
+            f"map: {self.map_label}",
             f"replay ({self.mode}): {len(nav.legs)} checkpoints, {self.drive_time_s:.1f} s of driving replayed in "
             f"{self.wall_time_s:.2f} s ({self.drive_time_s / max(self.wall_time_s, 1e-9):.0f}x real time)"
             + (" (resumed from a saved state)" if self.resumed else ""),
@@ -202,16 +208,16 @@ class ReplayResult:
             "reason": nav.reason if nav.finished else "", "resumed": self.resumed,
             "chunks": self.chunks, "unused_s": self.unused_s, "wall_time_s": self.wall_time_s,
             "drive_time_s": self.drive_time_s,
-            "adaptive": nav.result().to_json_dict(series_every=10),
+            "adaptive": nav.result().to_dict(series_every=10),
             "model_map_before": self.model_map_before.tolist(), "model_map_after": self.model_map_after.tolist(),
             "decisions": list(self.decisions),
             "forecast": {k: json_finite(v) for k, v in self.forecast.items()},
         })
 
-    def plot(self, path: str | os.PathLike[str] | None = None, *, axes: Any = None) -> Any:
+    def plot(self, path: str | os.PathLike[str] | None = None, *, ax: Any = None) -> Any:
         """Model map before / after with the routes, the remaining energy's forecast against the
         actual, the state of charge (:func:`~planner.missions.replay_figure.plot_replay`)."""
-        return plot_replay(self, path, axes=axes)
+        return plot_replay(self, path, ax=ax)
 
     def write(self, out_dir: str | os.PathLike[str], *, mcap: bool = True, on_figure_error: str = "warn") -> list[Path]:
         """Write ``replay.json``, ``replay.png`` (a failing figure warns) and ``replay.mcap``; the files written."""

@@ -1,7 +1,7 @@
 """The figure of a replayed drive: the per-cell models before and after, the routes, the forecast against the actual.
 
 Where a figure goes follows every terrawatt figure (:mod:`terrawatt_base.plot_target`): exactly
-one of ``path`` (a PNG written atomically) or ``axes=`` (four matplotlib Axes drawn into).
+one of ``path`` (a PNG written atomically) or ``ax=`` (four matplotlib Axes drawn into).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from terrawatt_base.plot_target import check_axes, check_plot_target
 __all__ = ["plot_replay"]
 
 
-def plot_replay(result: Any, path: str | os.PathLike[str] | None = None, *, axes: Sequence[Any] | None = None,
+def plot_replay(result: Any, path: str | os.PathLike[str] | None = None, *, ax: Sequence[Any] | None = None,
                 dpi: int = 90) -> Path | tuple[Any, ...]:
     """Four panels of a :class:`~planner.missions.replay.ReplayResult`: cells by model before and
     after (with the driven path and every route the navigator gave), the remaining energy's
@@ -34,15 +34,15 @@ def plot_replay(result: Any, path: str | os.PathLike[str] | None = None, *, axes
     Raises
     ------
     InvalidParameterError
-        Both or neither of ``path`` and ``axes``; a bad ``path``; not 4 axes.
+        Both or neither of ``path`` and ``ax``; a bad ``path``; not 4 axes.
     """
-    target = check_plot_target(path, axes, axes_name="axes")
+    target = check_plot_target(path, ax)
     if target is None:
-        panels = check_axes(axes, 4, what="models before, models after, remaining energy, state of charge")
+        panels = check_axes(ax, 4, what="models before, models after, remaining energy, state of charge", name="ax")
         _draw(panels, result)
         return panels
-    fig, ax = plot_target.new_figure((11, 9), 2, 2)
-    _draw(ax.ravel(), result)
+    fig, grid = plot_target.new_figure((11, 9), 2, 2)
+    _draw(grid.ravel(), result)
     nav = result.navigator
     fig.suptitle(f"replay: {nav.status if nav.finished else 'under way'}, {len(nav.legs)} checkpoints, "
                  f"{sum(u.accepted for u in nav.updates)} accepted updates")

@@ -72,6 +72,7 @@ def replay_recording(
     registry: str | os.PathLike[str] | CellModelRegistry | None = None,
     physics_ground: str = "asphalt",
     feed: ReplayFeed | None = None,
+    map_label: str = "map",
 ) -> ReplayResult:
     """Replay a recorded drive through a navigator set up as ``terrawatt mission`` sets up its loop.
 
@@ -109,6 +110,8 @@ def replay_recording(
     feed : ReplayFeed, optional
         Legs or chunks, the pace, the state's folder and who hears the decisions, as
         :func:`~planner.missions.replay.replay_drive` (default ``ReplayFeed()``).
+    map_label : str
+        The map's name in the result's summary.
 
     Returns
     -------
@@ -133,7 +136,7 @@ def replay_recording(
     settings = AdaptiveSettings() if settings is None else check_instance("settings", settings, AdaptiveSettings)
     settings = replace(settings, speed_mps=pricing.speed_mps, risk=pricing.risk)
     if resuming:
-        return replay_drive(Navigator.load(feed.state_path, terrain), logs, feed=feed)
+        return replace(replay_drive(Navigator.load(feed.state_path, terrain), logs, feed=feed), map_label=map_label)
     learned = None
     if (registry is None) == (model is None):
         raise InvalidParameterError("give the models the drive starts with: registry or pricing.model (exactly one)",
@@ -158,4 +161,4 @@ def replay_recording(
         reg = CellModelRegistry.from_terrain(terrain, model)
     nav = Navigator(terrain, reg, robot_given, battery, goal, settings=settings,
                     models=NavigatorModels(physics_ground=ground, learned=learned))
-    return replay_drive(nav, logs, feed=feed)
+    return replace(replay_drive(nav, logs, feed=feed), map_label=map_label)

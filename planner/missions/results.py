@@ -12,6 +12,7 @@ import numpy as np
 from energy import EnergyBudget, InteractionLog
 from energy.budget import CURRENT_CONVENTIONS
 from terrain import TerrainMap
+from terrawatt_base.answer import write_answer
 from terrawatt_base.atomic import json_finite
 from terrawatt_base.checks import check_choice, check_int, readonly
 from terrawatt_base.errors import InvalidParameterError
@@ -30,7 +31,7 @@ __all__ = [
 #: reserve throughout. ``reserve_violated``: the state of charge went below the reserve
 #: (the crossing point is reported; with ``stop_at_reserve`` the series ends there).
 MISSION_STATUSES = ("completed", "reserve_violated")
-#: Version of the JSON written by :meth:`MissionResult.save_json`.
+#: Version of the JSON of :meth:`MissionResult.to_dict` (mission.json of :meth:`MissionResult.write`).
 MISSION_FORMAT_VERSION = 1
 
 _SERIES = (
@@ -56,7 +57,7 @@ class MissionResult:
     """A driven (or replayed) route: time series and energy budget.
 
     Derived: ``n_samples``, ``duration_s``, ``feasible``, ``completed``. Methods:
-    :meth:`to_json_dict`, :meth:`save_json`, :meth:`plot`.
+    :meth:`summary`, :meth:`to_dict`, :meth:`plot`, :meth:`write`.
 
     Attributes
     ----------
@@ -200,7 +201,7 @@ class MissionResult:
         return self.status == "completed"
 
     # ---------------------------------------------------------------- output
-    def to_json_dict(self, *, series_every: int = 1) -> dict[str, Any]:
+    def to_dict(self, *, series_every: int = 1) -> dict[str, Any]:
         """JSON-ready result document, format ``terrawatt-mission``: settings, route, budget, crossing, series.
 
         Parameters
@@ -255,30 +256,44 @@ class MissionResult:
             "series": series,
         })
 
-    def save_json(self, path: str | os.PathLike[str], *, series_every: int = 1) -> Path:
-        """Write :meth:`to_json_dict` to a file atomically (:func:`~terrawatt_base.formats.write_result_json`:
-        a non-finite number is written as null).
+    def summary(self) -> str:
+        """A few lines for people: status, predicted against actual energy, arrival charge, the reserve crossing."""
+        b = self.budget
+        lines = [f"mission {self.status} ({self.source}): {self.route.length_m:.1f} m in {self.duration_s:.1f} s",
+                 f"energy: predicted {b.predicted_energy_wh:.2f} Wh ({self.forecast} forecast), actual "
+                 f"{b.actual_energy_wh:.2f} Wh, error {b.error_pct:+.2f} %",
+                 f"arrival state of charge {b.arrival_soc_pct:.1f} % (margin {b.reserve_margin_pct:+.1f} points "
+                 f"above the reserve)"]
+        if self.reserve_crossed_time_s is not None:
+            x, y = self.reserve_crossed_xy_m
+            lines.append(f"below the reserve {self.reserve_crossed_time_s:.1f} s in, at ({x:.1f}, {y:.1f}) m")
+        if self.depleted_time_s is not None:
+            lines.append(f"the battery ran out {self.depleted_time_s:.1f} s in")
+        return "\n".join(lines)
 
-        Returns
-        -------
-        Path
-            The written file.
+    def write(self, out_dir: str | os.PathLike[str], *, series_every: int = 1, terrain: TerrainMap | None = None,
+              on_figure_error: str = "warn") -> list[Path]:
+        """Write mission.json (:meth:`to_dict` with ``series_every``, a non-finite number as null) and mission.png
+        (:meth:`plot`, over ``terrain`` when given) into ``out_dir``; return the files written (a figure that fails
+        warns and is left out, :func:`terrawatt_base.answer.write_answer`).
 
         Raises
         ------
         InvalidParameterError
-            ``series_every`` not an int >= 1.
+            ``series_every`` not an int >= 1 (before anything is written).
         """
-        return write_result_json(path, self.to_json_dict(series_every=series_every))
+        doc = self.to_dict(series_every=series_every)
+        return write_answer(out_dir, {"mission.json": lambda p: write_result_json(p, doc)},
+                            {"mission.png": lambda p: self.plot(p, terrain=terrain)}, on_figure_error=on_figure_error)
 
-    def plot(self, path: str | os.PathLike[str] | None = None, terrain: TerrainMap | None = None, *,
-             axes: Any = None, title: str | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:
+    def plot(self, path: str | os.PathLike[str] | None = None, *, ax: Any = None, terrain: TerrainMap | None = None,
+             title: str | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:
         """SoC over time, predicted vs actual cumulative energy, and the driven path coloured
         by battery power (over the map's elevation when ``terrain`` is given):
         :func:`~planner.missions.figures.plot_mission`.
 
         Give exactly one of ``path`` (a PNG written atomically with matplotlib's Agg backend,
-        no display needed) or ``axes`` (3 matplotlib Axes to draw into; nothing is written).
+        no display needed) or ``ax`` (3 matplotlib Axes to draw into; nothing is written).
 
         Returns
         -------
@@ -288,9 +303,9 @@ class MissionResult:
         Raises
         ------
         InvalidParameterError
-            Both or neither of ``path`` and ``axes``; a bad ``path`` or not 3 axes.
+            Both or neither of ``path`` and ``ax``; a bad ``path`` or not 3 axes.
         """
-        return plot_mission(self, path, terrain, axes=axes, title=title, dpi=dpi)
+        return plot_mission(self, path, terrain, ax=ax, title=title, dpi=dpi)
 
     def __repr__(self) -> str:
         b = self.budget

@@ -96,8 +96,12 @@ def test_the_few_shot_protocol_scores_what_the_battery_pays():
     assert len(doc["totals"]) == len(res.totals) > 0
     md = res.summary()
     assert md.index("Both sides through the pack") < md.index("Per side")
-    ax = res.plot()
-    assert ax.get_xlabel().startswith("nominal coverage")
+    from matplotlib.figure import Figure
+
+    ax = Figure().subplots()
+    assert res.plot(ax=ax) is ax and ax.get_xlabel().startswith("nominal coverage")
+    with pytest.raises(InvalidParameterError, match="got neither"):
+        res.plot()
 
 
 def test_settings_check_the_robot_and_battery():

@@ -20,4 +20,4 @@ def test_adaptive_mission_quick(tmp_path, capsys):
     assert abs(numbers["error_after_update_pct"]) < abs(numbers["error_without_updates_pct"])
     assert abs(numbers["error_after_update_pct"]) < 5.0  # the target for the remaining route
     assert math.isfinite(numbers["saved_driving_only_wh"])
-    assert (tmp_path / "adaptive_mission.json").exists() and (tmp_path / "adaptive_mission.png").exists()
+    assert (tmp_path / "mission.json").exists() and (tmp_path / "mission.png").exists()

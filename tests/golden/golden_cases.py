@@ -19,15 +19,43 @@ from terrawatt_cli import main
 FIXTURES = Path(__file__).resolve().parents[1] / "fixtures"
 
 
+#: What the commands of the running case printed: ``(argv, stdout)`` per call of :func:`_cli`.
+_PRINTED: list[tuple[list[str], str]] = []
+
+
 def _cli(*argv: object, expect: int = 0) -> None:
-    """Run ``terrawatt *argv`` in process, its printout swallowed; fail on an unexpected exit code."""
+    """Run ``terrawatt *argv`` in process, its printout kept for the case's ``stdout.txt`` (stderr, where the
+    progress bars go, swallowed); fail on an unexpected exit code."""
     out, err = io.StringIO(), io.StringIO()
+    args = [str(a) for a in argv]
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        rc = main([str(a) for a in argv])
+        rc = main(args)
     if rc != expect:
-        raise AssertionError(f"terrawatt {' '.join(map(str, argv))} exited {rc}, expected {expect}:\n"
+        raise AssertionError(f"terrawatt {' '.join(args)} exited {rc}, expected {expect}:\n"
                              f"{out.getvalue()}\n{err.getvalue()}")
+    _PRINTED.append((args, out.getvalue()))
+
+
+def _with_printout(case: str, run: Callable[[Path], dict[str, Path]]) -> Callable[[Path], dict[str, Path]]:
+    """``run``, its outputs joined by ``<case>/stdout.txt``: each command it ran (``$ terrawatt ...``) and what
+    that printed, the work folder written ``<work>`` and the test fixtures' ``<fixtures>`` (the same text in every
+    checkout; timings are masked when compared, ``golden_files``)."""
+
+    def with_printout(work: Path) -> dict[str, Path]:
+        _PRINTED.clear()
+        files = run(work)
+        if not _PRINTED:  # only the library ran: nothing printed
+            return files
+        text = "".join(f"$ terrawatt {' '.join(args)}\n{out}\n" for args, out in _PRINTED)
+        _PRINTED.clear()
+        printout = work / f"{case}.stdout.txt"
+        for folder, name in ((work, "<work>"), (FIXTURES, "<fixtures>")):
+            text = text.replace(str(folder.resolve()), name).replace(str(folder), name)
+        printout.write_text(text, encoding="utf-8")
+        return files | {f"{case}/stdout.txt": printout}
+
+    return with_printout
 
 
 def patch_map(folder: Path) -> Path:
@@ -243,7 +271,7 @@ def case_library(work: Path) -> dict[str, Path]:
     mission = simulate_mission(tmap, route, husky, Battery(20.0, husky.battery_voltage_v), truth, cost,
                                drive=MissionDrive(seed=1))
     return {"library/husky.json": write_robot_file(husky, work / "husky.json"),
-            "library/mission.json": mission.save_json(work / "mission.json", series_every=200)}
+            "library/mission.json": mission.write(work / "library", series_every=200)[0]}
 
 
 def case_plan_model(work: Path) -> dict[str, Path]:
@@ -330,7 +358,7 @@ def case_mission_variants(work: Path) -> dict[str, Path]:
                                 drive=MissionDrive(stop_at_reserve=True, speed_mps=0.5, accel_mps2=0.8))
     files = {f"mission_variants/mc_model/{p.name}": p for p in sorted(mc.iterdir())}
     files |= {f"mission_variants/replay_chunks/{p.name}": p for p in sorted(replay.iterdir())}
-    return files | {"mission_variants/replayed.json": replayed.save_json(work / "replayed.json", series_every=50)}
+    return files | {"mission_variants/replayed.json": replayed.write(work / "replayed", series_every=50)[0]}
 
 
 #: Outputs compared by digest rather than in full (``fnmatch`` patterns of golden paths): the replay's inputs
@@ -342,6 +370,8 @@ DIGESTED = ("replay/logs/*", "replay/state/state.npz/*", "replay/*/registry.npz/
 NEEDS = {"plan_exports": ("rasterio", "rosbags")}
 
 #: Each case by name: a function of an empty work folder returning its outputs, ``{"<case>/<name>": path}``.
+#: Each runs through :func:`_with_printout`: what its commands print is an output too (``<case>/stdout.txt``).
 CASES: dict[str, Callable[[Path], dict[str, Path]]] = {
-    name.removeprefix("case_"): fn for name, fn in sorted(globals().items()) if name.startswith("case_")
+    name.removeprefix("case_"): _with_printout(name.removeprefix("case_"), fn)
+    for name, fn in sorted(globals().items()) if name.startswith("case_")
 }

@@ -39,7 +39,8 @@ from urllib.parse import quote
 
 import numpy as np
 
-__all__ = ["GOLDEN", "MASK", "DIGEST_OVER_BYTES", "MASKED_KEYS", "REGEN_ENV", "check_case", "members", "regenerating", "write_case"]
+__all__ = ["GOLDEN", "MASK", "DIGEST_OVER_BYTES", "MASKED_KEYS", "REGEN_ENV", "MASKED_PRINTED", "MASKED_PRINTED_COLUMNS",
+           "check_case", "mask_printed_text", "members", "regenerating", "write_case"]
 
 GOLDEN = Path(__file__).resolve().parent / "data"
 REGEN_ENV = "TERRAWATT_REGEN_GOLDEN"
@@ -76,6 +77,25 @@ _JSON_VALUE = re.compile(
 )
 
 
+#: The same fields where the commands print them (``<case>/stdout.txt``): wall-clock timings, and the rates
+#: derived from one, in the words that introduce them. Each pattern's groups are replaced by :data:`MASK`;
+#: nothing else of the printout is.
+MASKED_PRINTED = tuple(re.compile(p, re.MULTILINE) for p in (
+    r"map preparation +(\d+\.\d+) s",  # plan, reach
+    r"^(?:lattice moves|search|total) +(\d+\.\d+) s$",  # reach: graph_time_s, search_time_s, total_time_s
+    r"coarse route (\d+\.\d+) s, corridor search (\d+\.\d+) s",  # plan --coarse-factor
+    r"(\d+\.\d+) s on \d+ worker",  # batch, mission --monte-carlo, evaluate: elapsed_s
+    r"(\d+\.\d+) routes/s",  # batch: routes_per_s
+    r"loop computing (\d+\.\d+) s",  # mission: computing_time_s
+    r"replayed in (\d+\.\d+) s \((\d+)x real time\)",  # replay: wall_time_s and the ratio to it
+    r"pricing (\d+\.\d+) s .*solving (\d+\.\d+) s",  # tour: pricing_time_s, solve_time_s
+    r"in (\d+\.\d+) s; wrote",  # train: fit_duration_s
+))
+
+#: Printed tables whose last column is a wall-clock timing, by that column's title (plan: planning_time_s).
+MASKED_PRINTED_COLUMNS = ("plan s",)
+
+
 def regenerating() -> bool:
     """True when ``TERRAWATT_REGEN_GOLDEN=1``: write the golden copies instead of comparing."""
     return os.environ.get(REGEN_ENV, "") == "1"
@@ -86,6 +106,32 @@ def mask_json_text(text: str) -> str:
     masked = _JSON_VALUE.sub(lambda m: f'{m.group(1)}"{MASK}"', text)
     json.loads(masked)  # still JSON: a value the pattern could not span would show here
     return masked
+
+
+def mask_printed_text(text: str) -> str:
+    """A command's printout ``text`` with every :data:`MASKED_PRINTED` group, and the last cell of each row of a
+    table headed by a :data:`MASKED_PRINTED_COLUMNS` title (down to its first empty line), replaced by ``<masked>``."""
+    for pattern in MASKED_PRINTED:
+        text = pattern.sub(_mask_groups, text)
+    lines, in_table = text.split("\n"), False
+    for i, line in enumerate(lines):
+        if line.rstrip().endswith(MASKED_PRINTED_COLUMNS):
+            in_table = True
+        elif not line.strip():
+            in_table = False
+        elif in_table and not set(line.strip()) <= {"-", "|", ":"}:
+            head, _, _ = line.rstrip().rpartition(" ")
+            lines[i] = f"{head} {MASK}"
+    return "\n".join(lines)
+
+
+def _mask_groups(match: re.Match) -> str:
+    """``match``'s text with each of its groups replaced by :data:`MASK`."""
+    text, start = match.group(0), match.start()
+    for g in range(match.re.groups, 0, -1):  # from the last, so earlier offsets stand
+        a, b = match.span(g)
+        text = text[: a - start] + MASK + text[b - start:]
+    return text
 
 
 def mask_csv_text(text: str) -> str:
@@ -172,6 +218,8 @@ def _text_member(name: str, data: bytes) -> bytes:
         return mask_json_text(data.decode("utf-8")).encode("utf-8")
     if name.endswith(".csv"):
         return mask_csv_text(data.decode("utf-8")).encode("utf-8")
+    if name == "stdout.txt":
+        return mask_printed_text(data.decode("utf-8")).encode("utf-8")
     return data
 
 

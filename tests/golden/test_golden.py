@@ -29,3 +29,15 @@ def test_output_is_its_golden_copy(case, tmp_path):
         write_case(case, produced)
         return
     check_case(case, produced)
+
+
+def test_printout_masking_hides_timings_only():
+    from golden_files import MASK, mask_printed_text
+
+    text = ("robot: husky, speed 0.5 m/s; map preparation 0.02 s\n\n"
+            "route     energy J  plan s\n------------------------\nlattice     6759.9   0.037\n\n"
+            "3 pairs planned in 0.11 s on 1 worker(s) (in process): 26.5 routes/s\nenergy 1.88 Wh\n")
+    masked = mask_printed_text(text)
+    assert masked.count(MASK) == 4
+    assert "speed 0.5 m/s" in masked and "6759.9" in masked and "energy 1.88 Wh" in masked
+    assert mask_printed_text(text.replace("1.88", "1.89")) != masked  # a printed number still counts

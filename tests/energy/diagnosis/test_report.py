@@ -24,7 +24,7 @@ from energy.diagnosis import (
 from energy.diagnosis.report import DIAGNOSIS_FORMAT_VERSION, MARKDOWN_SLICES
 from terrawatt_base import plot_target
 from terrawatt_base.errors import FigureWarning, InvalidParameterError, UnknownNameError
-from terrawatt_base.formats import read_result_json
+from terrawatt_base.formats import read_result_json, write_result_json
 
 
 @pytest.fixture(scope="module")
@@ -66,7 +66,7 @@ def test_the_summary_is_the_verdict_then_the_waterfall(case):
 
 def test_the_json_goes_through_the_one_result_codec(turning, tmp_path):
     _, _, d = turning
-    p = d.write_json(tmp_path / "diagnosis.json")
+    p = write_result_json(tmp_path / "diagnosis.json", d.to_dict())  # as write writes it
     doc = read_result_json(p, "diagnosis", DIAGNOSIS_FORMAT_VERSION)
     assert (doc["format"], doc["format_version"]) == ("terrawatt-diagnosis", 1)
     assert doc["chosen"] == list(d.current.chosen) and doc["split"] == d.settings.split
@@ -90,9 +90,22 @@ def test_the_report_is_one_page_and_the_json_keeps_every_slice(turning, tmp_path
     table = [line for line in where.splitlines() if line.startswith("| ") and not line.startswith("| dimension")]
     assert len(table) == MARKDOWN_SLICES == 10
     assert len(md.splitlines()) < 60
-    doc = json.loads(big.write_json(tmp_path / "diagnosis.json").read_text())
+    doc = json.loads(write_result_json(tmp_path / "diagnosis.json", big.to_dict()).read_text())
     assert len(doc["localisation"]) == len(rows)
     assert {"gap_mah", "gap_pct", "measured_mah", "gap_interval_mah", "share_pct"} <= set(doc["localisation"][0])
+
+
+def test_plot_draws_the_effect_ranking(turning, tmp_path):
+    from matplotlib.figure import Figure
+
+    _, _, d = turning
+    ax = Figure().subplots()
+    assert d.plot(ax=ax, max_effects=2) is ax
+    assert len(ax.patches) >= 2 and ax.patches[0].get_width() > 0
+    png = d.plot(tmp_path / "ranking.png")
+    assert png == tmp_path / "ranking.png" and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    with pytest.raises(InvalidParameterError, match="got neither"):
+        d.plot()
 
 
 def test_write_writes_every_file(case, tmp_path):

@@ -52,7 +52,7 @@ def test_unknown_region_flagged_updated_and_error_drops():
     assert abs(res.error_before_update_pct) > SETTINGS.policy.threshold_pct
     assert abs(res.error_after_update_pct) < SETTINGS.policy.threshold_pct
     assert len(reg.history) >= 1 and reg.history[-1].kind == "update"
-    d = res.to_json_dict()
+    d = res.to_dict()
     assert d["status"] == "completed" and d["accepted_updates"] == res.accepted_updates
 
 
@@ -120,7 +120,7 @@ def test_an_update_the_battery_cannot_afford_is_skipped_and_the_reserve_kept():
     assert res.status == "completed" and res.updates == ()
     assert res.skipped_updates and all("'sand'" in s and "reserve" in s for s in res.skipped_updates)
     assert res.excitation_energy_j == 0.0 and res.final_soc >= 0.2
-    assert res.to_json_dict()["skipped_updates"] == list(res.skipped_updates)
+    assert res.to_dict()["skipped_updates"] == list(res.skipped_updates)
 
 
 def test_a_manoeuvre_that_crosses_the_reserve_stops_the_mission_where_it_stands():
@@ -194,7 +194,7 @@ def test_the_budget_is_the_batterys_own_over_driving_and_manoeuvres():
     assert b.arrival_soc == pytest.approx(res.final_soc, abs=1e-6)
     naive = battery.initial_soc - (res.driven_energy_j + res.excitation_energy_j) / battery.energy_capacity_j
     assert res.final_soc < naive  # the pack's losses cost more than energy / capacity
-    assert res.to_json_dict()["budget"] == b.to_json_dict()
+    assert res.to_dict()["budget"] == b.to_json_dict()
 
 
 def test_the_in_run_update_is_tried_and_proposed_when_it_validates_better(monkeypatch):

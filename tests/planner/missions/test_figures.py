@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from matplotlib.figure import Figure
@@ -60,7 +62,7 @@ def test_the_mission_figure_draws_into_the_callers_axes(mission, tmp_path):
     res, tmap = mission
     fig = Figure()
     panels = fig.subplots(1, 3)
-    out = res.plot(terrain=tmap, axes=panels, title="mine")
+    out = res.plot(terrain=tmap, ax=panels, title="mine")
     assert out == tuple(panels)
     soc, energy, where = out
     assert soc.get_ylabel() == "state of charge (%)" and soc.get_title() == "mine" and soc.lines
@@ -76,9 +78,9 @@ def test_the_mission_figure_takes_a_path_or_three_axes(mission, tmp_path):
     with pytest.raises(InvalidParameterError, match="got neither"):
         plot_mission(res, terrain=tmap)
     with pytest.raises(InvalidParameterError, match="not both"):
-        plot_mission(res, tmp_path / "m.png", tmap, axes=panels)
+        plot_mission(res, tmp_path / "m.png", tmap, ax=panels)
     with pytest.raises(InvalidParameterError, match=r"3 matplotlib Axes \(state of charge, cumulative energy, map\)"):
-        res.plot(axes=panels[:2])
+        res.plot(ax=panels[:2])
     (tmp_path / "taken.png").mkdir()
     with pytest.raises(InvalidParameterError, match="is a directory"):  # checked before drawing
         res.plot(tmp_path / "taken.png")
@@ -87,17 +89,20 @@ def test_the_mission_figure_takes_a_path_or_three_axes(mission, tmp_path):
 
 def test_the_adaptive_figure_is_written_or_drawn_into_four_axes(adaptive, tmp_path):
     res, tmap, registry = adaptive
-    out = res.plot(tmp_path / "adaptive.png", tmap, registry)
+    out = res.plot(tmp_path / "adaptive.png", terrain=tmap, registry=registry)
     assert out == tmp_path / "adaptive.png" and out.read_bytes()[:8] == PNG
     fig = Figure()
     grid = fig.subplots(2, 2)
-    drawn = plot_adaptive_mission(res, terrain=tmap, registry=registry, axes=grid)
+    drawn = plot_adaptive_mission(res, terrain=tmap, registry=registry, ax=grid)
     assert drawn == tuple(grid.ravel())
     assert [ax.get_title() for ax in drawn[:2]] == ["cells by model", "cells by observed error"]
     assert all(ax.images for ax in drawn[:2]) and all(ax.lines for ax in drawn)
     assert drawn[2].get_ylabel() == "state of charge (%)" and drawn[3].get_ylabel() == "cumulative energy (Wh)"
     assert len(fig.axes) == 5 and fig.get_suptitle() == ""  # the error map's colour bar; no suptitle
     assert sorted(p.name for p in tmp_path.iterdir()) == ["adaptive.png"]
+    own = Figure().subplots(2, 2)  # a mission's result carries its map and registry: plot needs no more
+    assert dataclasses.replace(res, terrain=tmap, registry=registry).plot(ax=own) == tuple(own.ravel())
+    assert own[0, 0].get_title() == "cells by model"
 
 
 def test_the_adaptive_figure_needs_its_map_and_registry_and_one_target(adaptive, tmp_path):
@@ -106,11 +111,11 @@ def test_the_adaptive_figure_needs_its_map_and_registry_and_one_target(adaptive,
     with pytest.raises(InvalidParameterError, match="got neither"):
         res.plot(terrain=tmap, registry=registry)
     with pytest.raises(InvalidParameterError, match="not both"):
-        res.plot(tmp_path / "a.png", tmap, registry, axes=grid)
+        res.plot(tmp_path / "a.png", terrain=tmap, registry=registry, ax=grid)
     with pytest.raises(InvalidParameterError, match="registry must be the CellModelRegistry"):
-        res.plot(terrain=tmap, axes=grid)
+        res.plot(terrain=tmap, ax=grid)
     with pytest.raises(InvalidParameterError, match="terrain must be the TerrainMap"):
-        plot_adaptive_mission(res, registry=registry, axes=grid)
+        plot_adaptive_mission(res, registry=registry, ax=grid)
     with pytest.raises(InvalidParameterError, match=r"4 matplotlib Axes .*got 2"):
-        res.plot(terrain=tmap, registry=registry, axes=grid[0])
+        res.plot(terrain=tmap, registry=registry, ax=grid[0])
     assert not any(ax.has_data() for ax in grid.ravel()) and list(tmp_path.iterdir()) == []

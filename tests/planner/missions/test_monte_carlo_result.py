@@ -18,16 +18,16 @@ from terrawatt_base.formats import read_result_json
 
 def test_the_result_writes_its_table_json_and_figure(setup, tmp_path):
     mc = run_mc(setup, n=5, seed=7, battery=Battery(0.12, 24.0))
-    mc.to_csv(tmp_path / "mc.csv")
-    mc.write_json(tmp_path / "mc.json")
-    png = mc.plot(tmp_path / "mc.png")
-    with open(tmp_path / "mc.csv", newline="") as fh:
+    written = mc.write(tmp_path)
+    assert [p.name for p in written] == ["monte_carlo.json", "monte_carlo.csv", "monte_carlo.png"]
+    png = tmp_path / "monte_carlo.png"
+    with open(tmp_path / "monte_carlo.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
     assert len(rows) == 5 and float(rows[2]["energy_j"]) == mc.energy_j[2]
     assert rows[0]["below_reserve"] in ("true", "false") and "ground_scale_asphalt" in rows[0]
-    data = json.loads((tmp_path / "mc.json").read_text())
+    data = json.loads((tmp_path / "monte_carlo.json").read_text())
     assert data["format_version"] == MONTE_CARLO_FORMAT_VERSION and data["n"] == 5 and data["seed"] == 7
-    assert read_result_json(tmp_path / "mc.json", "monte-carlo", MONTE_CARLO_FORMAT_VERSION) == data  # the one codec
+    assert read_result_json(tmp_path / "monte_carlo.json", "monte-carlo", MONTE_CARLO_FORMAT_VERSION) == data  # the one codec
     assert data["energy_wh"]["p90"] == pytest.approx(mc.energy_percentiles_wh["p90"])
     assert data["p_below_reserve"] == mc.p_below_reserve and len(data["samples"]["energy_j"]) == 5
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

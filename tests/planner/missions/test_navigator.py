@@ -260,6 +260,7 @@ def test_the_simulated_missions_own_logs_replayed_give_its_updates_and_route():
                                  settings=SETTINGS, models=ASPHALT), items)
     nav = out.navigator
     assert nav.status == "completed"
+    assert out.summary().splitlines()[:3:2] == ["map: map", "status: completed (reached the goal)"]
     assert [(u.kind, u.ground, u.accepted, u.model_id) for u in nav.updates] == \
         [(u.kind, u.ground, u.accepted, u.model_id) for u in res.updates]
     assert [(p.after_leg, p.route_changed) for p in nav.replans] == [(p.after_leg, p.route_changed) for p in res.replans]

@@ -57,7 +57,7 @@ def test_the_default_forecast_prices_the_driven_profile(flat, flat_mission, clea
     route, edges = flat_mission
     res = simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=cost)
     b = res.budget
-    assert res.forecast == "profile" and res.to_json_dict()["forecast"] == "profile"
+    assert res.forecast == "profile" and res.to_dict()["forecast"] == "profile"
     assert abs(b.error_pct) < 0.5 < abs(edges.budget.error_pct)
     assert np.all(np.abs(b.segment_error_pct) < 1.0)
     assert b.predicted_energy_j > route.energy_j  # the profile costs more than steady driving
@@ -183,10 +183,13 @@ def test_a_battery_that_runs_out_says_where_and_never_goes_below_zero(flat, flat
     x, y = res.depleted_xy_m
     assert (x, y) == pytest.approx((np.interp(res.depleted_time_s, res.time_s, res.x_m),
                                     np.interp(res.depleted_time_s, res.time_s, res.y_m)))
-    data = res.to_json_dict(series_every=50)
+    data = res.to_dict(series_every=50)
     assert data["depletion"] == {"time_s": res.depleted_time_s, "xy_m": [x, y]}
     assert "depleted_time_s=" in repr(res)
-    assert full.depleted_time_s is None and full.to_json_dict(series_every=50)["depletion"] is None
+    printed = res.summary()
+    assert printed.startswith("mission reserve_violated (truth)") and "below the reserve" in printed
+    assert f"the battery ran out {res.depleted_time_s:.1f} s in" in printed and "ran out" not in full.summary()
+    assert full.depleted_time_s is None and full.to_dict(series_every=50)["depletion"] is None
 
 
 def test_a_route_whose_start_equals_its_goal_is_refused(flat, clean_sim):
