@@ -113,13 +113,15 @@ def basis_breakdown(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[
     DataError
         Fewer than 2 drive samples.
     """
-    return _physics(basis, log, effects, robot, ground, ground_index, slope_rad)[0]
+    return _physics(basis, log, effects, robot, ground, ground_index, slope_rad, None)[0]
 
 
 def _physics(basis: PhysicsBasis, log: InteractionLog, effects: tuple[str, ...] | None, robot: RobotParams | None,
-             ground: Any, ground_index: Any, slope_rad: Any) -> tuple[PowerBreakdown, np.ndarray]:
-    """:func:`basis_breakdown`, and the current of holding the robot still on the slope under each sample
-    (N, 2; :meth:`~energy.PhysicsEnergyModel.holding_current_a`, zeros on level ground)."""
+             ground: Any, ground_index: Any, slope_rad: Any,
+             still: np.ndarray | None) -> tuple[PowerBreakdown, np.ndarray]:
+    """:func:`basis_breakdown`, and the current of holding the robot on the slope at the ``still`` samples
+    (N, 2; :meth:`~energy.PhysicsEnergyModel.holding_current_a`; zeros elsewhere, on level ground, and
+    everywhere without ``still``)."""
     if len(log) < 2:
         raise DataError(f"the physics terms need at least 2 drive samples per log, got {len(log)} ({log.meta.source!r})")
     rb = _log_robot(basis.robot if robot is None else robot, log, basis.fitted_chi)
@@ -131,8 +133,8 @@ def _physics(basis: PhysicsBasis, log: InteractionLog, effects: tuple[str, ...] 
     slope = basis.slope_rad(log) if slope_rad is None else slope_rad
     res = model.power(v, w, ground, accel_mps2=np.gradient(v, t), alpha_radps2=np.gradient(w, t),
                       slope_rad=slope, time_s=t, ground_index=ground_index)
-    holding = model.holding_current_a(ground, np.broadcast_to(slope, (len(log),)), ground_index=ground_index)
-    return res, holding
+    held = np.zeros(len(log)) if still is None else np.where(still, slope, 0.0)  # the physics only where it stands
+    return res, model.holding_current_a(ground, held, ground_index=ground_index)
 
 
 def side_speeds_mps(basis: PhysicsBasis, log: InteractionLog) -> np.ndarray:
@@ -173,12 +175,12 @@ def standing_samples(log: InteractionLog) -> np.ndarray:
     return next_still & (still | prev_still)
 
 
-def _motoring(basis: PhysicsBasis, log: InteractionLog, *, effects: tuple[str, ...] | None = None,
+def _motoring(basis: PhysicsBasis, log: InteractionLog, still: np.ndarray, *, effects: tuple[str, ...] | None = None,
               robot: RobotParams | None = None, ground: Any = None, ground_index: Any = None,
               slope_rad: Any = None) -> tuple[np.ndarray, np.ndarray]:
     """Per-side motor current in the direction of rotation (N, 2), A, everywhere (rests included), and the
-    current of holding the robot still on the slope (N, 2)."""
-    res, holding = _physics(basis, log, effects, robot, ground, ground_index, slope_rad)
+    current of holding the robot on the slope at the ``still`` samples (N, 2; zeros elsewhere)."""
+    res, holding = _physics(basis, log, effects, robot, ground, ground_index, slope_rad, still)
     i_m = np.asarray(res.motor_current_a)
     sign = np.sign(np.asarray(res.motor_speed_radps))
     return np.where(sign != 0, i_m * sign, np.abs(i_m)), holding
@@ -223,11 +225,11 @@ def motoring_currents_a(basis: PhysicsBasis, log: InteractionLog, *, effects: tu
     DataError
         Fewer than 2 drive samples.
     """
-    motoring, holding = _motoring(basis, log, effects=effects, robot=robot, ground=ground, ground_index=ground_index,
-                                  slope_rad=slope_rad)
     still = rest_samples(log) | standing_samples(log)
     if not starts:
         still |= starting_samples(log)
+    motoring, holding = _motoring(basis, log, still, effects=effects, robot=robot, ground=ground,
+                                  ground_index=ground_index, slope_rad=slope_rad)
     return np.where(still[:, None], holding, motoring)
 
 
@@ -244,9 +246,9 @@ def unclipped_prediction(model: Any, log: InteractionLog, basis: PhysicsBasis | 
     """
     if basis is not None and basis.is_model:
         model.check_map()
-        motoring, holding = _motoring(basis, log)
-        return np.asarray(basis.rest_current_a) + np.where(rest_samples(log)[:, None], holding,
-                                                           basis.idle_current_a + motoring)
+        rest = rest_samples(log)
+        motoring, holding = _motoring(basis, log, rest)
+        return np.asarray(basis.rest_current_a) + np.where(rest[:, None], holding, basis.idle_current_a + motoring)
     return np.asarray(model.predict(log), dtype=np.float64)
 
 

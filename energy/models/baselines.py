@@ -349,8 +349,9 @@ class PhysicsCurrentModel(CurrentModel):
         # current in the direction of rotation: > 0 motoring (either way round), < 0 back-driven
         sign = np.sign(res.motor_speed_radps)
         motoring = np.where(sign != 0, i_m * sign, np.abs(i_m))
-        holding = model.holding_current_a(grounds, np.broadcast_to(slope, v.shape), ground_index=index)
-        cur = rest_a + np.where(at_rest(v, w, a, alpha)[:, None], holding, idle_a + motoring)
+        rest = at_rest(v, w, a, alpha)
+        holding = model.holding_current_a(grounds, np.where(rest, slope, 0.0), ground_index=index)  # where it stands
+        cur = rest_a + np.where(rest[:, None], holding, idle_a + motoring)
         return np.maximum(cur, 0.0) if self.clip_negative else cur
 
     @staticmethod
