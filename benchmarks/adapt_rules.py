@@ -26,7 +26,11 @@ is the prior precision of a level, ``E T / (G + R)`` s (:func:`once_penalty`), a
 carries it to other runs — on the regime basis and on the partition; ``once, levels`` gives that penalty to the levels
 only, the regime columns keeping the 20-s ridge.
 
-Printed (``--out``: JSON of every number): the diagnosis (per ground and T, which prefixes
+Intervals: the cache (version 2) keeps what each scored run's forecast interval is made of (:func:`spread_parts`),
+so the coverage of the default update's 50 / 80 / 95 % intervals per ground and T is scored with the base's spread
+kept (the interval before it read the prefix) and given the prefix (the library's, :data:`INTERVAL_RULES`).
+
+Printed (``--out``: JSON of every number): the coverage per ground, the diagnosis (per ground and T, which prefixes
 the update harms most, on which side, and how the prefix's motion differs from the scored
 runs'), then per ground and T the total-charge error median / p90 % of every rule against
 the unadapted forecast and the gain baseline.
@@ -62,7 +66,7 @@ from energy.models.base import log_currents  # noqa: E402
 from energy.models.uncertainty import sample_spans_s  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "borealtc"
-CACHE_VERSION = 1
+CACHE_VERSION = 2  # 2: the scored runs' interval parts (``spread``)
 TURN_SCALE_RADPS = 0.3  # the update's default
 _trapezoid = getattr(np, "trapezoid", None) or np.trapz
 
@@ -103,7 +107,7 @@ def fold_cache(model: Any, runs: list, names: list[str], adapt_seconds: tuple[fl
         out["runs"].append({"name": name, "q_true": _trapezoid(y, r.time_s, axis=0),
                             "q_base": _trapezoid(p, r.time_s, axis=0), "xint": basis_integrals(r),
                             "xint_moving": basis_integrals(r, moving=True), "duration_s": r.duration_s,
-                            "stats": _stats(r)})
+                            "stats": _stats(r), "spread": spread_parts(model, r, p)})
     for a, run_a in enumerate(runs):
         t = run_a.time_s
         for T in adapt_seconds:
@@ -125,6 +129,116 @@ def fold_cache(model: Any, runs: list, names: list[str], adapt_seconds: tuple[fl
             for b, run_b in enumerate(runs):  # the exact (clamped) plain update, to size the clamp left out
                 if b != a:
                     out["pairs"][(a, float(T), b)] = _trapezoid(upd.correct(run_b, base[b]), run_b.time_s, axis=0)
+    return out
+
+
+def spread_parts(model: Any, log: Any, pred: np.ndarray) -> dict[str, Any]:
+    """What a scored run's forecast interval is made of, per sample and side (A²): the run spread of a known ground
+    (``own2``), the new-ground part (``ground2``, zero on a known ground) and the members' disagreement (``ens2``);
+    per side the per-sample noise's charge variance (``white2``, A² s²), and the predictive's ``dof``.
+
+    ``run_sd² = own2 + ground2 + ens2`` is the base forecast's run spread exactly, so an interval rule can rescale
+    the new-ground part and integrate (:func:`total_sd`)."""
+    f = model.predict_distribution(log)
+    interval = model.interval_
+    own2 = interval.run_sd_a(log, pred, known=True) ** 2
+    known = model.knows_ground(log.meta.ground_label)
+    ground2 = (np.zeros_like(own2) if known or interval.new_ground_cov is None
+               else interval.run_sd_a(log, pred, known=True, cov=interval.new_ground_cov) ** 2)
+    ens2 = np.maximum(f.run_sd_a ** 2 - own2 - ground2, 0.0)
+    dt = np.gradient(log.time_s)
+    return {"t": log.time_s.copy(), "own2": own2, "ground2": ground2, "ens2": ens2,
+            "white2": np.sum((f.sample_sd_a * dt[:, None]) ** 2, axis=0), "dof": float(f.dof),
+            "total_sd": f.charge().total_sd_as}
+
+
+def total_sd(sp: dict[str, Any], ground_factor: np.ndarray | float = 1.0, scale2: float = 1.0) -> float:
+    """The total charge's scale of a scored run with the new-ground part of its run spread times ``ground_factor``
+    (per side) and every part times ``scale2`` (as :meth:`CurrentForecast.charge`)."""
+    gf = np.broadcast_to(np.asarray(ground_factor, dtype=np.float64), (2,))
+    run = np.sqrt(scale2 * (sp["own2"] + gf[None, :] * sp["ground2"] + sp["ens2"]))
+    q_run = _trapezoid(run, sp["t"], axis=0)
+    return float(np.sqrt(float(q_run.sum()) ** 2 + scale2 * float(np.sum(sp["white2"]))))
+
+
+# ------------------------------------------------------------- intervals
+#: The central levels whose coverage the interval rules are scored on.
+LEVELS = (0.5, 0.8, 0.95)
+
+
+def ground_factor_kept(p: dict[str, Any], coef: np.ndarray, rb: dict[str, Any]) -> np.ndarray:
+    """The interval before it read the prefix: the base forecast's spread, whatever the update."""
+    return np.ones(2)
+
+
+def ground_factor_given_prefix(p: dict[str, Any], coef: np.ndarray, rb: dict[str, Any]) -> np.ndarray:
+    """The library's (``AdaptedCurrentModel.correct_distribution``): the new-ground part scaled by the posterior
+    variance of the ground's offset given the prefix's ``obs`` plus the update's departure from that posterior's mean
+    (standardised), per side. Without the clamp at 0 (as every cached charge)."""
+    G, R, E, obs = p["G"], p["R"], p["E"], p["obs"]
+    sp = rb["spread"]
+    v_sd = _trapezoid(np.sqrt(sp["ground2"]), sp["t"], axis=0)
+    d = np.sum(coef * rb["xint"], axis=1)
+    total = G + R + E
+    with np.errstate(divide="ignore", invalid="ignore"):
+        post = np.where(total > 0, (R + E) / total, 1.0)
+        bias = np.where((G > 0) & (v_sd > 0), G / total * obs / np.sqrt(G) - d / v_sd, 0.0)
+    return np.where(G > 0, post + bias**2, 1.0)
+
+
+INTERVAL_RULES = {"kept": ground_factor_kept, "given the prefix": ground_factor_given_prefix}
+
+
+def interval_rows(fold: dict[str, Any], rule: Rule, factor: Callable[..., np.ndarray]) -> list[dict[str, Any]]:
+    """Per (prefix, scored run): the standardised total-charge error of the update ``rule`` with the interval rule
+    ``factor``, and the central level its predictive needs to hold the measurement."""
+    from energy.models.forecast import central_level
+
+    out = []
+    for p in fold["prefixes"]:
+        coef, key = _resolve(rule(p, fold))
+        if key != "xint":
+            raise ValueError("the interval rules take updates on the whole-run basis")
+        for b, rb in enumerate(fold["runs"]):
+            if b == p["a"]:
+                continue
+            c = _at(coef, rb)
+            z = (float(np.sum(rb["q_true"])) - float(np.sum(rb["q_base"] + np.sum(c * rb["xint"], axis=1)))) / total_sd(
+                rb["spread"], factor(p, c, rb))
+            out.append({"T": p["T"], "z": z, "level": float(central_level(z, rb["spread"]["dof"]))})
+    return out
+
+
+def coverage(rows: list[dict[str, Any]]) -> list[float]:
+    """Coverage % of the :data:`LEVELS` intervals, then the median |z|."""
+    lv = np.array([r["level"] for r in rows])
+    return [100.0 * float(np.mean(lv <= L)) for L in LEVELS] + [float(np.median(np.abs([r["z"] for r in rows])))]
+
+
+def interval_table(cache: dict[str, Any], rule: Rule, Ts: tuple[float, ...]) -> dict[str, Any]:
+    """Per ground (then pooled), T and interval rule: coverage of the update ``rule``'s forecasts; ``unadapted`` the
+    base forecast of every run (its interval unchanged by any rule)."""
+    out: dict[str, Any] = {}
+    pooled: dict[str, list[dict[str, Any]]] = {}
+    for g, fold in list(cache["outer"].items()) + [("all", None)]:
+        out[g] = {}
+        if fold is None:
+            out[g] = {name: {f"{T:g}": coverage([r for r in rows if r["T"] == T]) for T in Ts}
+                      for name, rows in pooled.items() if name != "unadapted"}
+            out[g]["unadapted"] = coverage(pooled["unadapted"])
+            continue
+        from energy.models.forecast import central_level
+
+        base = []
+        for rb in fold["runs"]:
+            z = (float(np.sum(rb["q_true"])) - float(np.sum(rb["q_base"]))) / rb["spread"]["total_sd"]
+            base.append({"T": 0.0, "z": z, "level": float(central_level(z, rb["spread"]["dof"]))})
+        pooled.setdefault("unadapted", []).extend(base)
+        out[g]["unadapted"] = coverage(base)
+        for name, factor in INTERVAL_RULES.items():
+            rows = interval_rows(fold, rule, factor)
+            pooled.setdefault(name, []).extend(rows)
+            out[g][name] = {f"{T:g}": coverage([r for r in rows if r["T"] == T]) for T in Ts}
     return out
 
 
@@ -631,6 +745,14 @@ def report(cache: dict[str, Any], Ts: tuple[float, ...], out: Path | None,
         for d in ds:
             _print_diagnosis(g, d)
     tab = table(cache, rules, Ts, choice_folds)
+    tab["intervals"] = interval_table(cache, rule_partition_prior, Ts)
+    print("coverage of the 50 / 80 / 95 % intervals of total charge, median |z| (the default update, partition + prior):")
+    for g, per in tab["intervals"].items():
+        u = per["unadapted"]
+        print(f"{g:10s} unadapted {u[0]:5.1f} / {u[1]:5.1f} / {u[2]:5.1f}  |z| {u[3]:.2f}")
+        for name in INTERVAL_RULES:
+            print(f"{g:10s} {name:16s} " + "   ".join("{:5.1f} / {:5.1f} / {:5.1f}  |z| {:.2f}".format(*per[name][f"{T:g}"])
+                                                     for T in Ts))
     tab["held_out_choice"] = (held_out_choice(cache, rules, choice_folds)
                               if len(cache["outer"]) > 2 or choice_folds is not None else {})
     print("update chosen on the other grounds or --choice-cache (worst harm at 20 / 40 s, ties within 1 point by the mean error): "
@@ -638,7 +760,7 @@ def report(cache: dict[str, Any], Ts: tuple[float, ...], out: Path | None,
     print("\ntotal charge median / p90 % per T " + " ".join(f"{T:g} s" for T in Ts))
     print("constants chosen (LOGO: on the inner folds; others: on the other grounds or --choice-cache): " + "; ".join(f"{fam}: {v}" for fam, v in tab["chosen"].items()))
     for g, per in tab.items():
-        if g in ("chosen", "held_out_choice"):
+        if g in ("chosen", "held_out_choice", "intervals"):
             continue
         for name, cells in per.items():
             print(f"{g:10s} {name:12s} " + "   ".join("{:6.1f} / {:6.1f}".format(*cells[f"{T:g}"]) for T in Ts))

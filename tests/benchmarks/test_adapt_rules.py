@@ -44,6 +44,24 @@ def test_cached_charges_equal_the_library_update(fold, method, shrink):
         assert r["base"] == pytest.approx(100.0 * abs(q0 - q_true) / q_true, abs=1e-6)
 
 
+def test_cached_intervals_equal_the_library_forecast(fold):
+    ar, est, runs, cache = fold
+    rows = ar.interval_rows(cache, ar.rule_partition_prior, ar.ground_factor_given_prefix)
+    kept = ar.interval_rows(cache, ar.rule_partition_prior, ar.ground_factor_kept)
+    pairs = [(p["a"], b) for p in cache["prefixes"] for b in range(len(runs)) if b != p["a"]]
+    assert len(rows) == len(pairs) == 6
+    for (a, b), r, k in zip(pairs, rows, kept):
+        upd = AdaptedCurrentModel(est, scope="ground").fit(runs[a].slice(0.0, 20.0))
+        fc = upd.predict_distribution(runs[b]).charge()
+        q_true = float(np.sum(np.trapezoid(log_currents(runs[b]), runs[b].time_s, axis=0)))
+        assert r["z"] == pytest.approx((q_true - fc.total_mean_as) / fc.total_sd_as, rel=1e-6)
+        base = est.predict_distribution(runs[b]).charge()
+        assert k["z"] == pytest.approx((q_true - fc.total_mean_as) / base.total_sd_as, rel=1e-6)
+    table = ar.interval_table({"outer": {"c": cache}}, ar.rule_partition_prior, (20.0,))
+    assert table["c"]["given the prefix"]["20"] == ar.coverage(rows)
+    assert len(table["all"]["unadapted"]) == len(ar.LEVELS) + 1
+
+
 def test_the_cached_normal_equations_refit_the_update(fold):
     ar, _, _, cache = fold
     for p in cache["prefixes"]:
