@@ -73,9 +73,12 @@ def test_with_nothing_to_carry_the_base_spread_is_kept(two_ground_estimator):
     other_runs = AdaptedCurrentModel(est, scope="ground").fit(prefix)  # a ground the model drove: G = 0
     np.testing.assert_array_equal(other_runs.predict_distribution(train[2]).run_sd_a,
                                   est.predict_distribution(train[2]).run_sd_a)
-    same_run = AdaptedCurrentModel(est, scope="run", shrink="none").fit(prefix)  # R carries to the rest of the run
-    rest = train[1].slice(20.0, float(train[1].time_s[-1]))
-    assert not np.allclose(same_run.predict_distribution(rest).run_sd_a, est.predict_distribution(rest).run_sd_a)
+    new_ground = interval_log(40, "c", vibration=0.5, offset_a=3.0)
+    same_run = AdaptedCurrentModel(est, scope="run").fit(new_ground.slice(0.0, 20.0))  # a run's offset drifts along it
+    rest = new_ground.slice(20.0, float(new_ground.time_s[-1]))
+    np.testing.assert_array_equal(same_run.predict_distribution(rest).run_sd_a, est.predict_distribution(rest).run_sd_a)
+    other = AdaptedCurrentModel(est, scope="ground").fit(new_ground.slice(0.0, 20.0))
+    assert not np.allclose(other.predict_distribution(rest).run_sd_a, est.predict_distribution(rest).run_sd_a)
 
 
 def test_the_prefix_evidence_is_saved_and_a_file_without_it_keeps_the_base_spread(two_ground_estimator, tmp_path):
