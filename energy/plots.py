@@ -6,14 +6,14 @@ data's Nyquist frequency, with a warning and a note on the figure, instead of fa
 the results that the figure illustrates are done.
 
 Where a figure goes (the rule of every terrawatt figure, :mod:`terrawatt_base.plot_target`): give
-exactly one of ``path`` or ``axes=``. With ``path`` the function makes its own figure
+exactly one of ``path`` or ``ax=``. With ``path`` the function makes its own figure
 (:func:`terrawatt_base.plot_target.new_figure`: matplotlib's object API on an Agg canvas, no
 pyplot, the user's backend left alone), writes it as a PNG atomically
 (:func:`terrawatt_base.atomic.save_figure`) and returns the path, so this works on a robot or a
-CI machine without a display. With ``axes=`` (a sequence of matplotlib Axes, one per panel) it draws
+CI machine without a display. With ``ax=`` (a sequence of matplotlib Axes, one per panel) it draws
 into the caller's axes, writes nothing, leaves the caller's figure layout alone (no
 ``tight_layout``) and returns the axes as a tuple, so figures can be composed. The figure's
-own title belongs to the figure and is drawn only with ``path``; with ``axes`` a ``title``
+own title belongs to the figure and is drawn only with ``path``; with ``ax`` a ``title``
 you give goes on the first axes, and what is needed to read the panels (the spectra's axis
 unit, the note of a clipped band) is written on the axes themselves.
 """
@@ -69,7 +69,7 @@ def plot_current_estimate(
     predicted_a: Any,
     path: str | os.PathLike[str] | None = None,
     *,
-    axes: Sequence[Any] | None = None,
+    ax: Sequence[Any] | None = None,
     window_samples: int = DEFAULT_SMOOTHING_SAMPLES,
     label: str = "estimate",
     title: str | None = None,
@@ -88,15 +88,15 @@ def plot_current_estimate(
     predicted_a : array_like, shape (N, 2)
         Estimated ``[left, right]`` current (A) at ``log.time_s`` (``model.predict(log)``).
     path : str or os.PathLike, optional
-        PNG file to write (or give ``axes``).
-    axes : sequence of 2 matplotlib Axes, optional
+        PNG file to write (or give ``ax``).
+    ax : sequence of 2 matplotlib Axes, optional
         Draw the left and right panels into these instead of writing a file.
     window_samples : int
         Moving-median window in drive samples (default 100, the paper's).
     label : str
         Name of the estimate in the legend.
     title : str, optional
-        Figure title (default: the log's source and ground); with ``axes``, the first
+        Figure title (default: the log's source and ground); with ``ax``, the first
         axes' title (none by default).
     dpi : int
         Resolution of the PNG (with ``path``).
@@ -111,11 +111,11 @@ def plot_current_estimate(
     GridMismatchError
         ``predicted_a`` is not of shape ``(len(log.time_s), 2)``.
     InvalidParameterError
-        Both or neither of ``path`` and ``axes``, a bad ``path`` or not 2 axes; ``log`` is
+        Both or neither of ``path`` and ``ax``, a bad ``path`` or not 2 axes; ``log`` is
         not an InteractionLog, ``predicted_a`` holds non-finite values, or a bad
         ``window_samples``.
     """
-    target = check_plot_target(path, axes, axes_name="axes")
+    target = check_plot_target(path, ax)
     if not isinstance(log, InteractionLog):
         raise InvalidParameterError(f"log must be an InteractionLog, got {type(log).__name__!r}")
     pred = np.asarray(predicted_a, dtype=float)
@@ -131,7 +131,7 @@ def plot_current_estimate(
     smooth_pred = moving_median(pred, window_samples)
     t = log.time_s - log.time_s[0]
     if target is None:
-        panels = check_axes(axes, 2, what="left, right current")
+        panels = check_axes(ax, 2, what="left, right current", name="ax")
         _draw_currents(panels, t, measured, smooth_meas, smooth_pred, window_samples, label)
         if title:
             panels[0].set_title(title)
@@ -209,7 +209,7 @@ def plot_vibration_spectra(
     logs: Sequence[InteractionLog] | Mapping[str, np.ndarray],
     path: str | os.PathLike[str] | None = None,
     *,
-    axes: Sequence[Any] | None = None,
+    ax: Sequence[Any] | None = None,
     frequency_hz: Any = None,
     smoothing_bins: int = 25,
     n_bins: int = 2000,
@@ -239,8 +239,8 @@ def plot_vibration_spectra(
         Runs (grouped by ground with :func:`ground_spectra`), or precomputed spectra per
         ground together with ``frequency_hz``.
     path : str or os.PathLike, optional
-        PNG file to write (or give ``axes``).
-    axes : sequence of matplotlib Axes, optional
+        PNG file to write (or give ``ax``).
+    ax : sequence of matplotlib Axes, optional
         One per ground, in the order grounds first appear in ``logs`` (or the mapping's
         order): draw into these instead of writing a file. Each gets the y-axis label; the
         note of a clipped band is added to the last one's x-axis label.
@@ -253,7 +253,7 @@ def plot_vibration_spectra(
         :func:`energy.features.whole_run_spectrum`) when spectra are computed from logs; ``scaling``
         also names the y axis (say which one precomputed spectra use).
     title : str, optional
-        Figure title (default "vertical vibration spectra by ground"); with ``axes``, the
+        Figure title (default "vertical vibration spectra by ground"); with ``ax``, the
         first axes' title (none by default).
     dpi : int
         Resolution of the PNG (with ``path``).
@@ -266,7 +266,7 @@ def plot_vibration_spectra(
     Raises
     ------
     InvalidParameterError
-        Both or neither of ``path`` and ``axes``, a bad ``path``, or not one axes per
+        Both or neither of ``path`` and ``ax``, a bad ``path``, or not one axes per
         ground; bad ``smoothing_bins``; a mapping without ``frequency_hz``; empty input.
     GridMismatchError
         A precomputed spectrum whose length differs from ``frequency_hz``.
@@ -278,7 +278,7 @@ def plot_vibration_spectra(
         the 50 Hz default band of 50 Hz IMU logs): the spectra are drawn up to the lowest
         Nyquist frequency of the logs instead, and a note on the figure says so.
     """
-    target = check_plot_target(path, axes, axes_name="axes")
+    target = check_plot_target(path, ax)
     check_int("smoothing_bins", smoothing_bins, low=1)
     note = ""
     if isinstance(logs, Mapping):
@@ -300,10 +300,10 @@ def plot_vibration_spectra(
     else:
         ylabel = "amplitude (m/s²)"
     if target is None:
-        panels = check_axes(axes, len(spectra), what="one per ground: " + ", ".join(map(repr, spectra)))
+        panels = check_axes(ax, len(spectra), what="one per ground: " + ", ".join(map(repr, spectra)), name="ax")
         _draw_spectra(panels, freq, spectra, smoothing_bins)
-        for ax in panels:
-            ax.set_ylabel(ylabel, fontsize=9)
+        for panel in panels:
+            panel.set_ylabel(ylabel, fontsize=9)
         if note:
             panels[-1].set_xlabel(f"frequency (Hz)\n{note}")
         if title:

@@ -3,10 +3,9 @@
 Every figure function of terrawatt takes an optional positional ``path`` and a keyword
 ``ax=``: one Axes for a single-panel figure, a sequence of them (one per panel, as
 ``Figure.subplots`` returns them) for a figure of several panels — so every answer's
-``plot(path=None, *, ax=None)`` reads the same (the figure functions of :mod:`energy.plots` and
-the diagnosis' several-panel figures still name that sequence ``axes=``); exactly one of
+``plot(path=None, *, ax=None)`` reads the same; exactly one of
 the two is given. With ``path`` the function makes its own figure, saves it atomically and
-returns the path; with ``ax`` / ``axes`` it draws into the caller's axes, writes nothing,
+returns the path; with ``ax`` it draws into the caller's axes, writes nothing,
 leaves the caller's figure layout alone and returns the axes it drew into, so figures can
 be composed. The checks here make that rule read the same in every module, and
 :func:`new_figure` makes the figure of the ``path`` route: matplotlib's object API on an Agg
@@ -41,8 +40,8 @@ from .errors import InvalidParameterError
 __all__ = ["check_plot_target", "check_ax", "check_axes", "new_figure"]
 
 
-def check_plot_target(path: Any, axes: Any, *, axes_name: str = "ax") -> Path | None:
-    """The checked output path, or ``None`` when the figure is to be drawn into ``axes``.
+def check_plot_target(path: Any, ax: Any) -> Path | None:
+    """The checked output path, or ``None`` when the figure is to be drawn into ``ax``.
 
     Call it before any work, so a bad path is refused before anything is drawn.
 
@@ -50,10 +49,8 @@ def check_plot_target(path: Any, axes: Any, *, axes_name: str = "ax") -> Path | 
     ----------
     path : str, os.PathLike or None
         The PNG file to write.
-    axes : matplotlib Axes, sequence of them, or None
+    ax : matplotlib Axes, sequence of them, or None
         The caller's axes (checked by :func:`check_ax` / :func:`check_axes`, not here).
-    axes_name : str
-        The keyword the function takes the axes as (``"ax"`` or ``"axes"``), for messages.
 
     Returns
     -------
@@ -62,17 +59,17 @@ def check_plot_target(path: Any, axes: Any, *, axes_name: str = "ax") -> Path | 
     Raises
     ------
     InvalidParameterError
-        Both or neither of ``path`` and the axes given; ``path`` not a file name, a
+        Both or neither of ``path`` and ``ax`` given; ``path`` not a file name, a
         directory, or under a file (:func:`terrawatt_base.atomic.check_output_path`).
     """
-    if path is None and axes is None:
+    if path is None and ax is None:
         raise InvalidParameterError(
-            f"give either path (a PNG file to write) or {axes_name}= (matplotlib axes to draw into), got neither")
-    if path is not None and axes is not None:
+            "give either path (a PNG file to write) or ax= (matplotlib axes to draw into), got neither")
+    if path is not None and ax is not None:
         raise InvalidParameterError(
-            f"give either path or {axes_name}=, not both: with {axes_name}= the figure is drawn into your axes and "
+            "give either path or ax=, not both: with ax= the figure is drawn into your axes and "
             f"nothing is written (got path={str(path)!r:.80})")
-    if axes is not None:
+    if ax is not None:
         return None
     if not isinstance(path, (str, os.PathLike)):
         raise InvalidParameterError(f"path must be a file name, got {type(path).__name__!r}")
@@ -94,7 +91,7 @@ def check_ax(ax: Any, name: str = "ax") -> Any:
     return ax
 
 
-def check_axes(axes: Any, n: int, *, what: str = "", name: str = "axes") -> tuple[Any, ...]:
+def check_axes(axes: Any, n: int, *, what: str = "", name: str = "ax") -> tuple[Any, ...]:
     """``axes`` as a tuple of ``n`` matplotlib Axes.
 
     A sequence, a nested list or an array of axes (as ``Figure.subplots`` returns them) is

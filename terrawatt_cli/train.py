@@ -56,5 +56,6 @@ def run_train(args: argparse.Namespace) -> int:
     check_output_file(args.out, input_paths(args))
     report = train_report(args.model, logs_from_args(args, require_currents=True), options=options,
                           progress=not args.quiet, **fit)
-    print(report.summary(report.write(args.out)))
+    written = report.write(args.out)
+    print(f"{report.summary()}; wrote {written}")
     return 0

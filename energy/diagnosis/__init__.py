@@ -9,6 +9,7 @@ from .corrected import CorrectedCurrentModel
 from .diagnose import diagnose
 from .effect_base import EFFECT_KINDS, BasisEffect, Effect, EffectParameter
 from .effects import EFFECTS_CATALOGUE, NOT_IDENTIFIABLE_FROM_CURRENT, check_effect_names, effect, effect_from_spec
+from .fit import SPLITS, Fold, Split, make_split
 from .gap import GapShare, GapSummary, WaterfallStep, gap_summary, localise_gap, residual_currents_a
 from .model_currents import DRIVE_EFFECTS
 from .model_source import (
@@ -18,16 +19,15 @@ from .model_source import (
     check_model_source,
     model_under_diagnosis,
 )
+from .noise import ResidualNoise, residual_noise
 from .plots import FIGURES, DiagnosisFigures, plot_diagnosis, plot_effect_ranking, plot_waterfall, skipped_figures
 from .plots_gap import plot_gap_by_regime, plot_gap_map, plot_residual_time
 from .quantity import CURRENT, POWER, Quantity
 from .regimes import regime_labels
 from .report import DIAGNOSIS_FILES, Diagnosis
 from .result import EffectScore, Tie
-from .stage import FitSettings, Stage
-from .noise import ResidualNoise, residual_noise
 from .separating import DriveCandidate, PairSeparation, SeparatingDrive, manoeuvre_library, separating_drive
-from .fit import SPLITS, Fold, Split, make_split
+from .stage import FitSettings, Stage
 
 __all__ = [
     "CURRENT",

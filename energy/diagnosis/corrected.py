@@ -7,9 +7,9 @@ from typing import Any
 
 import numpy as np
 
+from terrain.terrain_map import TerrainMap
 from terrawatt_base.checks import real_array
 from terrawatt_base.errors import InvalidParameterError
-from terrain.terrain_map import TerrainMap
 
 from ..logs import InteractionLog
 from ..models.base import CurrentModel, ModelRecord

@@ -11,10 +11,9 @@ from typing import Any
 
 import numpy as np
 
+from terrain.terrain_map import TerrainMap
 from terrawatt_base.checks import check_bool, check_seed, fmt_number, option_names
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
-
-from terrain.terrain_map import TerrainMap
 
 from ..logs import InteractionLog, named_robots, rest_samples, robot_matches
 from ..models.base import CurrentModel

@@ -1,14 +1,14 @@
 """Figures of a diagnosis: effect ranking, waterfall, and :func:`plot_diagnosis`, which draws every figure.
 
 Each figure is a public function. Where it goes (the rule of every terrawatt figure,
-:mod:`terrawatt_base.plot_target`): give exactly one of ``path`` or ``ax=`` (single-panel figures:
-the effect ranking, the gap map) / ``axes=`` (a sequence of one matplotlib Axes per panel).
+:mod:`terrawatt_base.plot_target`): give exactly one of ``path`` or ``ax=``: one matplotlib Axes for a single-panel figure (the
+effect ranking, the gap map), a sequence of one Axes per panel for the others.
 With ``path`` the function makes its own figure, writes one PNG through
 :func:`terrawatt_base.atomic.save_figure` and returns its path; the output path is checked before
-anything is drawn. With ``ax`` / ``axes`` it draws into the caller's axes, writes nothing,
+anything is drawn. With ``ax`` it draws into the caller's axes, writes nothing,
 leaves the caller's figure layout alone (no ``tight_layout``) and returns the axes (a tuple
-for ``axes``), so figures can be composed. A figure's suptitle belongs to the figure it makes
-and is drawn only with ``path``; with ``axes`` it is left out (the panels keep their own
+for several panels), so figures can be composed. A figure's suptitle belongs to the figure it makes
+and is drawn only with ``path``; with ``ax`` it is left out (the panels keep their own
 titles, labels and legends). A colour bar is attached to ``ax.figure``, beside ``ax``.
 :func:`plot_diagnosis` writes a folder of figures and stays path-based.
 
@@ -171,15 +171,15 @@ def _draw_ranking(ax: Any, diagnosis: Any, ranking: Sequence[Any]) -> None:
 
 # ----------------------------------------------------------------- waterfall
 def plot_waterfall(diagnosis: Any, path: str | os.PathLike[str] | None = None, *,
-                   axes: Sequence[Any] | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:
+                   ax: Sequence[Any] | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:
     """The held-out waterfall: charge error (%), 8 s section error (%) and RMSE (A) after each added effect.
 
     Parameters
     ----------
     diagnosis : Diagnosis
     path : path-like, optional
-        PNG file to write (or give ``axes``).
-    axes : sequence of 3 matplotlib Axes, optional
+        PNG file to write (or give ``ax``).
+    ax : sequence of 3 matplotlib Axes, optional
         Charge error, section error, RMSE: draw into these instead of writing a file.
     dpi : int
         Resolution of the PNG (with ``path``).
@@ -192,15 +192,15 @@ def plot_waterfall(diagnosis: Any, path: str | os.PathLike[str] | None = None, *
     Raises
     ------
     InvalidParameterError
-        Not a Diagnosis; both or neither of ``path`` and ``axes``; a bad ``path`` (checked
+        Not a Diagnosis; both or neither of ``path`` and ``ax``; a bad ``path`` (checked
         before drawing); not 3 axes.
     """
     diagnosis = checked_diagnosis(diagnosis)
-    target = check_plot_target(path, axes, axes_name="axes")
+    target = check_plot_target(path, ax)
     dpi = check_int("dpi", dpi, low=10, high=1200)
     steps = diagnosis.current.waterfall
     if target is None:
-        panels = check_axes(axes, 3, what="charge error, section error, RMSE")
+        panels = check_axes(ax, 3, what="charge error, section error, RMSE", name="ax")
         _draw_waterfall(panels, steps)
         return panels
 

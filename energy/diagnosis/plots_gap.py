@@ -1,7 +1,7 @@
 """Figures of where a gap lies: residual over time per side, gap by regime, gap on the map.
 
 Where a figure goes is the rule of :mod:`energy.diagnosis.plots` (give ``path`` or
-``ax=`` / ``axes=``; see there); a figure for ``path`` is made by
+``ax=``; see there); a figure for ``path`` is made by
 :func:`terrawatt_base.plot_target.new_figure` (no pyplot) and written by
 :func:`terrawatt_base.atomic.save_figure`. The helpers shared with it (argument checks, the
 reasons a figure's data is missing) live here too.
@@ -95,7 +95,7 @@ def _runs_to_draw(gaps: Sequence[float], runs: Sequence[int] | None, max_runs: i
 
 
 def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str] | None = None, *,
-                       axes: Sequence[Any] | None = None, corrected: Any = None, runs: Sequence[int] | None = None,
+                       ax: Sequence[Any] | None = None, corrected: Any = None, runs: Sequence[int] | None = None,
                        max_runs: int = 4, section_s: float = DEFAULT_SECTION_S,
                        window_samples: int = DEFAULT_SMOOTHING_SAMPLES, dpi: int = 110) -> Path | tuple[Any, ...]:
     """Residual current (measured - predicted) over time per side, one panel per run, sections shaded.
@@ -111,8 +111,8 @@ def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str]
     predictions : array_like (N, 2) or sequence of them
         ``[left, right]`` predicted current (A) of the model as given, per log.
     path : path-like, optional
-        PNG file to write (or give ``axes``).
-    axes : sequence of matplotlib Axes, optional
+        PNG file to write (or give ``ax``).
+    ax : sequence of matplotlib Axes, optional
         One per run drawn (``len(runs)``, or by default ``min(max_runs, number of logs)``):
         draw into these instead of writing a file.
     corrected : sequence of array_like (N, 2), optional
@@ -138,13 +138,13 @@ def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str]
     Raises
     ------
     InvalidParameterError
-        Both or neither of ``path`` and ``axes``; ``path`` is a folder or lies under a file
+        Both or neither of ``path`` and ``ax``; ``path`` is a folder or lies under a file
         (checked before drawing); not one axes per run drawn; bad logs, predictions, runs
         or numbers.
     DataError
         A log with fewer than 2 samples; non-finite predictions.
     """
-    target = check_plot_target(path, axes, axes_name="axes")
+    target = check_plot_target(path, ax)
     max_runs = check_int("max_runs", max_runs, low=1, high=8)
     section_s = check_real("section_s", section_s, low=0.0, low_inclusive=False)
     window_samples = check_int("window_samples", window_samples, low=1)
@@ -155,7 +155,7 @@ def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str]
     chosen = _runs_to_draw([float(g.sum()) for g in sample_gaps], runs, max_runs)
     if target is None:
         what = f"one per run drawn: runs {', '.join(map(str, chosen))}; choose them with runs= or max_runs="
-        panels = check_axes(axes, len(chosen), what=what)
+        panels = check_axes(ax, len(chosen), what=what, name="ax")
         _draw_residual_runs(panels, items, preds, after, sample_gaps, chosen, section_s, window_samples)
         return panels
 
@@ -225,7 +225,7 @@ def regime_rows(diagnosis: Any) -> dict[str, list[Any]]:
 
 
 def plot_gap_by_regime(diagnosis: Any, path: str | os.PathLike[str] | None = None, *,
-                       axes: Sequence[Any] | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:
+                       ax: Sequence[Any] | None = None, dpi: int = 110) -> Path | tuple[Any, ...]:
     """The net gap (mAh) by operating regime: one bar chart per dimension of :data:`REGIME_PANELS`.
 
     Bars are the net signed gap of each slice (measured - predicted charge, the model as
@@ -238,8 +238,8 @@ def plot_gap_by_regime(diagnosis: Any, path: str | os.PathLike[str] | None = Non
     ----------
     diagnosis : Diagnosis
     path : path-like, optional
-        PNG file to write (or give ``axes``).
-    axes : sequence of matplotlib Axes, optional
+        PNG file to write (or give ``ax``).
+    ax : sequence of matplotlib Axes, optional
         One per dimension with a known slice (the keys of :func:`regime_rows`, in the
         order of :data:`REGIME_PANELS`): draw into these instead of writing a file.
     dpi : int
@@ -253,20 +253,20 @@ def plot_gap_by_regime(diagnosis: Any, path: str | os.PathLike[str] | None = Non
     Raises
     ------
     InvalidParameterError
-        Not a Diagnosis; both or neither of ``path`` and ``axes``; a bad ``path``
+        Not a Diagnosis; both or neither of ``path`` and ``ax``; a bad ``path``
         (checked before drawing); not one axes per dimension drawn.
     DataError
         No dimension has a known slice.
     """
     diagnosis = checked_diagnosis(diagnosis)
-    target = check_plot_target(path, axes, axes_name="axes")
+    target = check_plot_target(path, ax)
     dpi = check_int("dpi", dpi, low=10, high=1200)
     why = missing_regimes_reason(diagnosis)
     if why:
         raise DataError(why)
     rows = regime_rows(diagnosis)
     if target is None:
-        panels = check_axes(axes, len(rows), what="one per dimension: " + ", ".join(map(repr, rows)))
+        panels = check_axes(ax, len(rows), what="one per dimension: " + ", ".join(map(repr, rows)), name="ax")
         _draw_regimes(panels, rows)
         return panels
 
@@ -274,8 +274,8 @@ def plot_gap_by_regime(diagnosis: Any, path: str | os.PathLike[str] | None = Non
     nrows = -(-len(rows) // ncols)
     fig, grid = plot_target.new_figure((4.2 * ncols, 3.2 * nrows + 0.6), nrows, ncols, squeeze=False)
     _draw_regimes(grid.ravel()[:len(rows)], rows)
-    for ax in grid.ravel()[len(rows):]:
-        ax.set_visible(False)
+    for spare in grid.ravel()[len(rows):]:
+        spare.set_visible(False)
     missing = [d for d in REGIME_PANELS if d not in rows]
     note = f"; not known from these logs: {', '.join(missing)}" if missing else ""
     fig.suptitle(f"where the gap lies (model as given, all logs; bar = net measured - predicted charge, "

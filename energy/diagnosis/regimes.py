@@ -41,8 +41,8 @@ from typing import Any
 
 import numpy as np
 
-from terrawatt_base.errors import DataError, InvalidParameterError
 from terrain.terrain_map import TerrainMap
+from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..logs import InteractionLog, rest_samples
 

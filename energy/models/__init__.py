@@ -50,7 +50,9 @@ from .forecast import ChargeForecast, CurrentForecast
 from .kinds import CURRENT_MODEL_KINDS, LEARNED_KINDS, new_current_model
 from .loading import MODEL_CLASSES, load_current_model, model_class
 from .training_report import (
+    TRAINING_FORMAT_VERSION,
     ModelOptions,
+    RunCharge,
     TrainingReport,
     check_learned_band,
     check_training_options,
@@ -113,6 +115,8 @@ __all__ = [
     "ModelOptions",
     "check_learned_band",
     "check_training_options",
+    "TRAINING_FORMAT_VERSION",
+    "RunCharge",
     "TrainingReport",
     "train_report",
     "ConstantCurrentModel",

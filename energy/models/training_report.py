@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 import time
 from collections.abc import Sequence
@@ -9,19 +10,27 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from terrawatt_base.checks import check_bool, check_choice, check_instance, check_int, check_seed
+import numpy as np
+
+from terrawatt_base.atomic import json_finite, save_figure
+from terrawatt_base.checks import check_bool, check_choice, check_instance, check_int, check_real, check_seed
 from terrawatt_base.errors import InvalidParameterError
+from terrawatt_base.formats import result_document
+from terrawatt_base.plot_target import check_ax, check_plot_target, new_figure
 
 from ..features.band import check_band_hz
 from ..logs import InteractionLog
 from ..params import robot_params
-from .base import CurrentModel, check_logs
+from ..power import trapezoid
+from .base import CurrentModel, TrainedOn, check_logs, log_currents
 from .calibration import DEFAULT_INTERVAL_FOLDS, fit_interval
 from .kinds import CURRENT_MODEL_KINDS, LEARNED_KINDS, new_current_model
 
-__all__ = ["ModelOptions", "check_learned_band", "check_training_options", "TrainingReport", "train_report"]
+__all__ = ["TRAINING_FORMAT_VERSION", "ModelOptions", "check_learned_band", "check_training_options", "RunCharge",
+           "TrainingReport", "train_report"]
 
-
+#: Layout of :meth:`TrainingReport.to_dict` (format ``terrawatt-training``).
+TRAINING_FORMAT_VERSION = 1
 
 
 def check_learned_band(band_hz: Sequence[float] | None, kinds: Sequence[str], *, name: str = "band_hz",
@@ -176,11 +185,39 @@ def check_training_options(kind: str, *, n_threads: int | None = None, interval_
 
 
 @dataclass(frozen=True)
+class RunCharge:
+    """One training run's total charge (both sides), measured and as the fitted model gives it back.
+
+    Attributes
+    ----------
+    run : str
+        The run's name (its file's stem, or ``run <k>``).
+    ground : str
+        Its ground label (``"unlabelled"`` without one).
+    duration_s : float
+        Its duration, s.
+    measured_as, fitted_as : float
+        Its logged and fitted charge, both sides together, A s.
+    low_as, high_as : float
+        The fitted model's central interval of that charge, A s (NaN for a model without an interval).
+    """
+
+    run: str
+    ground: str
+    duration_s: float
+    measured_as: float
+    fitted_as: float
+    low_as: float
+    high_as: float
+
+
+@dataclass(frozen=True)
 class TrainingReport:
     """A model of a kind fitted on logs, ready to save and to say what it is.
 
-    Made by :func:`train_report`. :meth:`summary` is the line ``terrawatt train`` prints,
-    :meth:`write` saves the model to one file.
+    Made by :func:`train_report`. :meth:`summary` is the line ``terrawatt train`` prints (the command
+    adds the file it wrote), :meth:`to_dict` what the report knows as a versioned plain dict,
+    :meth:`plot` the fit on the training runs, :meth:`write` saves the model to one file.
 
     Attributes
     ----------
@@ -210,19 +247,120 @@ class TrainingReport:
         band = getattr(getattr(self.model, "config_", None), "band_hz", None)
         return None if band is None else (float(band[0]), float(band[1]))
 
-    def summary(self, written: str | os.PathLike[str] | None = None) -> str:
-        """What was fitted on what, with or without a forecast interval, in how long; with ``written`` (the file
-        :meth:`write` wrote) the file too."""
+    def summary(self) -> str:
+        """What was fitted on what, with or without a forecast interval, in how long (one line)."""
         band = self.band_hz
         band_text = f", vibration band {band[0]:g}-{band[1]:g} Hz" if band is not None else ""
         interval = "with a forecast interval" if self.model.gives_interval else "without a forecast interval"
-        line = (f"fitted {self.kind} on {len(self.logs)} runs ({self.logs_duration_s:.0f} s of logs{band_text}) "
+        return (f"fitted {self.kind} on {len(self.logs)} runs ({self.logs_duration_s:.0f} s of logs{band_text}) "
                 f"{interval} in {self.fit_duration_s:.1f} s")
-        return line if written is None else f"{line}; wrote {written}"
+
+    def to_dict(self) -> dict[str, Any]:
+        """What the report knows, plain and JSON-ready (format ``terrawatt-training``).
+
+        The kind and model class, the robots, seconds per ground, each run (name, ground,
+        seconds), the seconds of logs, the fit time, the band, and the interval's facts: whether
+        its residuals were cross-validated, the runs and grounds it was fitted on, the degrees of
+        freedom on a new ground (``None``: Gaussian) and the per-sample correlation time
+        (``"interval": None`` for a model without one). Nothing is predicted (see :meth:`run_charges`).
+        """
+        trained = TrainedOn.from_logs(self.logs)
+        interval = getattr(self.model, "interval_", None)
+        facts = None if interval is None else {
+            "cross_validated": bool(interval.cross_validated), "n_runs": int(interval.n_runs),
+            "n_grounds": int(interval.n_grounds), "new_ground_dof": interval.new_ground_dof,
+            "correlation_s": float(interval.correlation_s)}
+        return json_finite(result_document("training", TRAINING_FORMAT_VERSION, {
+            "kind": self.kind, "model_class": type(self.model).__name__, "robots": list(trained.robots),
+            "grounds_s": dict(trained.grounds),
+            "runs": [{"run": name, "ground": _ground(log), "duration_s": float(log.duration_s)}
+                     for name, log in zip(_run_names(self.logs), self.logs)],
+            "n_runs": len(self.logs), "logs_duration_s": self.logs_duration_s, "fit_duration_s": self.fit_duration_s,
+            "band_hz": self.band_hz, "gives_interval": self.model.gives_interval, "interval": facts}))
+
+    def run_charges(self, level: float = 0.8) -> tuple[RunCharge, ...]:
+        """Each training run's measured total charge against the fitted model's (in-sample: the model saw these runs).
+
+        Parameters
+        ----------
+        level : float
+            The central interval of the fitted charge (in (0, 1); NaN bounds without an interval).
+
+        Returns
+        -------
+        tuple of RunCharge
+        """
+        level = check_real("level", level, low=0.0, high=1.0, low_inclusive=False, high_inclusive=False)
+        out = []
+        for name, log in zip(_run_names(self.logs), self.logs):
+            charge = self.model.predict_distribution(log).charge()
+            low, high = charge.interval(level) if self.model.gives_interval else (math.nan, math.nan)
+            measured = float(trapezoid(log_currents(log).sum(axis=1), log.time_s))
+            out.append(RunCharge(name, _ground(log), float(log.duration_s), measured, float(charge.total_mean_as),
+                                 float(low), float(high)))
+        return tuple(out)
+
+    def plot(self, path: str | os.PathLike[str] | None = None, *, ax: Any = None, level: float = 0.8) -> Path | Any:
+        """Fitted against measured total charge of each training run (mAh), one colour per ground, with the
+        fitted model's ``level`` interval as bars (:meth:`run_charges`) and the line where they are equal.
+
+        Give exactly one of ``path`` (write a PNG atomically and return the path) or ``ax`` (a matplotlib
+        Axes to draw into; nothing is written and it is returned).
+
+        Raises
+        ------
+        InvalidParameterError
+            Both or neither of ``path`` and ``ax``; a bad ``path``, ``ax`` or ``level``.
+        """
+        target = check_plot_target(path, ax)
+        rows = self.run_charges(level)
+        if target is None:
+            axes = check_ax(ax)
+        else:
+            fig, axes = new_figure((5.0, 4.5))
+        mah = 1000.0 / 3600.0
+        for ground in sorted({r.ground for r in rows}):
+            sel = [r for r in rows if r.ground == ground]
+            x = np.array([r.measured_as for r in sel]) * mah
+            y = np.array([r.fitted_as for r in sel]) * mah
+            if self.model.gives_interval:
+                err = np.array([[r.fitted_as - r.low_as for r in sel], [r.high_as - r.fitted_as for r in sel]]) * mah
+                axes.errorbar(x, y, yerr=err, fmt="o", capsize=3, label=ground)
+            else:
+                axes.plot(x, y, "o", label=ground)
+        ends = np.array([[r.measured_as, r.fitted_as, r.low_as, r.high_as] for r in rows]) * mah
+        lo, hi = float(np.nanmin(ends)), float(np.nanmax(ends))
+        pad = 0.05 * (hi - lo) if hi > lo else 1.0
+        axes.plot([lo - pad, hi + pad], [lo - pad, hi + pad], color="0.5", lw=1, ls="--", label="fitted = measured")
+        axes.set_xlabel("measured charge, both sides (mAh)")
+        band = f", {100 * level:.0f} % interval" if self.model.gives_interval else ""
+        axes.set_ylabel(f"fitted charge (mAh{band})")
+        axes.set_title(f"{self.kind} on its {len(rows)} training runs (in-sample)")
+        axes.legend(fontsize="small")
+        if target is None:
+            return axes
+        fig.tight_layout()
+        return save_figure(fig, target)
 
     def write(self, path: str | os.PathLike[str]) -> Path:
         """Save the model to ``path`` (one file, atomic: :meth:`CurrentModel.save`); return the path written."""
         return self.model.save(path)
+
+
+def _ground(log: InteractionLog) -> str:
+    return str(log.meta.ground_label) if log.meta.ground_label is not None else "unlabelled"
+
+
+def _run_names(logs: Sequence[InteractionLog]) -> list[str]:
+    """Each log's file stem (``run <k>`` without a source), with ``#<n>`` on repeats."""
+    stems = [Path(str(log.meta.source)).stem if log.meta.source else f"run {k}" for k, log in enumerate(logs)]
+    seen: dict[str, int] = {}
+    names = []
+    for stem in stems:
+        n = seen.get(stem, 0)
+        seen[stem] = n + 1
+        names.append(stem if stems.count(stem) == 1 else f"{stem}#{n}")
+    return names
 
 
 def train_report(kind: str, logs: InteractionLog | Sequence[InteractionLog], *, options: ModelOptions | None = None,

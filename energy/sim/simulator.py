@@ -14,13 +14,13 @@ from typing import Any
 import numpy as np
 from scipy import signal
 
+from terrain.terrain_map import UNKNOWN_GROUND, TerrainMap
 from terrawatt_base.checks import check_real, check_seed
 from terrawatt_base.errors import (
     BlockedPositionError,
     InvalidParameterError,
     UnknownNameError,
 )
-from terrain.terrain_map import UNKNOWN_GROUND, TerrainMap
 
 from ..battery import Battery
 from ..commands import CommandProfile, command_series, uniform_step_s

@@ -28,7 +28,7 @@ from ..edge_cost import EnergyCost
 from ..route import Route
 from ..route_price import RouteEnergyInterval, price_route
 from .monte_carlo_model import ModelMissionSetup
-from .monte_carlo_result import MonteCarloResult, mission_row
+from .monte_carlo_result import MonteCarloResult, failed_row, mission_row
 from .monte_carlo_sampling import MissionDistributions
 from .options import MissionDrive, MissionTruth, MonteCarloStudy
 from .simulate import simulate_mission
@@ -55,13 +55,25 @@ class MissionSetup:
     nominal_speed_mps: float
     current_rate_hz: float
 
-    def run(self, seq: np.random.SeedSequence) -> tuple[tuple[float, ...], str]:
-        """One mission from one child seed: the drawn parameters, then the outcome, as a row of
-        numbers, and the error of a failed mission (:func:`mission_row`)."""
+    def _draw(self, seq: np.random.SeedSequence) -> tuple[Any, int, tuple[float, ...]]:
+        """One mission's draws from its child seed: the sample, the truth's seed, the row's drawn columns."""
         rng = np.random.default_rng(seq)
         names = sorted(self.grounds)
         s = self.distributions.draw(rng, names, nominal_speed_mps=self.nominal_speed_mps)
         truth_seed = int(rng.integers(0, 2**32))
+        drawn = (*(s.ground_scale[g] for g in names), s.payload_kg, s.battery(self.battery).capacity_ah,
+                 s.internal_resistance_ohm, s.speed_mps)
+        return s, truth_seed, drawn
+
+    def drawn(self, seq: np.random.SeedSequence) -> tuple[float, ...]:
+        """What one mission draws from its child seed: the ground factors, payload, capacity after fade,
+        internal resistance and speed (the row's first columns)."""
+        return self._draw(seq)[2]
+
+    def run(self, seq: np.random.SeedSequence) -> tuple[tuple[float, ...], str]:
+        """One mission from one child seed: the drawn parameters (:meth:`drawn`), then the outcome, as a row of
+        numbers, and the error of a failed mission (:func:`mission_row`)."""
+        s, truth_seed, drawn = self._draw(seq)
         robot = s.robot(self.robot)
         battery = s.battery(self.battery)
 
@@ -74,12 +86,16 @@ class MissionSetup:
             return (b.actual_energy_j, b.actual_charge_mah, b.duration_s, b.arrival_soc, float(np.min(m.soc)),
                     float(not b.feasible), float(b.depleted))
 
-        return mission_row((*(s.ground_scale[g] for g in names), s.payload_kg, battery.capacity_ah,
-                            s.internal_resistance_ohm, s.speed_mps), drive)
+        return mission_row(drawn, drive)
 
     def run_chunk(self, seqs: list[np.random.SeedSequence]) -> list[tuple[tuple[float, ...], str]]:
         """:meth:`run` over several seeds (one dask task)."""
         return [self.run(q) for q in seqs]
+
+    def failed_chunk(self, seqs: list[np.random.SeedSequence], exc: Exception) -> list[tuple[tuple[float, ...], str]]:
+        """The rows of a task of :meth:`run_chunk` that failed with ``exc`` (a worker that died, an error outside
+        the library): each mission's draws (:meth:`drawn`, here), its outcome NaN and ``exc`` its error."""
+        return [failed_row(self.drawn(q), exc) for q in seqs]
 
 
 def _grounds(terrain: TerrainMap, grounds: Any) -> dict[str, GroundParams]:
@@ -149,7 +165,10 @@ def simulate_missions_mc(
         One row per mission. A mission that fails with a library error (e.g. a drawn pack
         whose internal resistance cannot deliver the route's power) is a row of NaN outcomes
         with its reason in ``errors``, and the others go on (as a failed pair in
-        :func:`planner.plan_batch`); the statistics are over the completed missions.
+        :func:`planner.plan_batch`); so is every mission of a task that fails otherwise (a
+        worker that dies, an error outside the library: its missions' draws, redrawn here from
+        their seeds, are kept). The statistics are over the completed missions, the failed
+        ones counted (``n_failed``, the summary).
 
     Raises
     ------
@@ -215,8 +234,10 @@ def simulate_missions_mc(
     chunks = [seqs[i:i + study.chunk_size] for i in range(0, n, study.chunk_size)]  # one task each
     with compute.session() as (client, where):
         t0 = time.perf_counter()
+        # a task that fails (its worker died, an error outside the library) is a failed row per mission of it
         done = run_tasks([(type(setup).run_chunk, (chunk,)) for chunk in chunks], client=client, shared=(setup,),
-                         progress=compute.progress, description="missions", sizes=[len(c) for c in chunks])
+                         progress=compute.progress, description="missions", sizes=[len(c) for c in chunks],
+                         on_error=lambda i, exc: setup.failed_chunk(chunks[i], exc))
         rows = [row for chunk_rows in done for row in chunk_rows]
         n_used = client_worker_count(client)
         elapsed = time.perf_counter() - t0

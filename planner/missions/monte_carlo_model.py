@@ -28,7 +28,7 @@ import numpy as np
 from energy import Battery, discharge_from_power, energy_budget
 
 from ..route_price import RouteEnergyInterval
-from .monte_carlo_result import mission_row
+from .monte_carlo_result import failed_row, mission_row
 
 __all__ = ["ModelMissionSetup", "MC_DRAW_MODES"]
 
@@ -62,8 +62,9 @@ class ModelMissionSetup:
         """Grounds with a spread on the route, in the order of the drawn factors."""
         return tuple(sorted(self.forecast.sd_by_ground_j))
 
-    def run(self, seq: np.random.SeedSequence) -> tuple[tuple[float, ...], str]:
-        """One mission: the factors ``z_g``, then the row of :class:`MissionSetup.run` (no payload, nominal battery)."""
+    def drawn(self, seq: np.random.SeedSequence) -> tuple[float, ...]:
+        """What one mission draws from its seed: the factors ``z_g``, then no payload and the nominal battery and
+        speed (the row's drawn columns of :class:`MissionSetup.run`)."""
         rng = np.random.default_rng(seq)
         names = self.ground_names
         z = rng.standard_normal(len(names))
@@ -71,6 +72,13 @@ class ModelMissionSetup:
         heavy = np.isfinite(dof)
         if np.any(heavy):  # Student-t: a normal over the root of a chi-square by its degrees of freedom
             z[heavy] /= np.sqrt(rng.chisquare(dof[heavy]) / dof[heavy])
+        return (*z.tolist(), 0.0, self.battery.capacity_ah, self.battery.internal_resistance_ohm, self.speed_mps)
+
+    def run(self, seq: np.random.SeedSequence) -> tuple[tuple[float, ...], str]:
+        """One mission: the factors ``z_g`` (:meth:`drawn`), then the row of :class:`MissionSetup.run`."""
+        drawn = self.drawn(seq)
+        names = self.ground_names
+        z = np.array(drawn[:len(names)])
         spread = np.array([self.forecast.sd_by_ground_j[g] for g in names])
         energy_j = max(self.forecast.mean_j + float(np.dot(z, spread)), 0.0)
         power_w = energy_j / self.duration_s
@@ -81,9 +89,13 @@ class ModelMissionSetup:
             return (float(b.actual_energy_j), float(b.actual_charge_mah), float(b.duration_s), float(b.arrival_soc),
                     float(b.arrival_soc), float(not b.feasible), float(b.depleted))
 
-        return mission_row((*z.tolist(), 0.0, self.battery.capacity_ah, self.battery.internal_resistance_ohm,
-                            self.speed_mps), drain)
+        return mission_row(drawn, drain)
 
     def run_chunk(self, seqs: list[np.random.SeedSequence]) -> list[tuple[tuple[float, ...], str]]:
         """:meth:`run` over several seeds (one dask task)."""
         return [self.run(q) for q in seqs]
+
+    def failed_chunk(self, seqs: list[np.random.SeedSequence], exc: Exception) -> list[tuple[tuple[float, ...], str]]:
+        """The rows of a task of :meth:`run_chunk` that failed with ``exc``: each mission's draws (:meth:`drawn`,
+        here), its outcome NaN and ``exc`` its error (:func:`~planner.missions.monte_carlo_result.failed_row`)."""
+        return [failed_row(self.drawn(q), exc) for q in seqs]

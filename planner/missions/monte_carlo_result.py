@@ -30,7 +30,7 @@ from ..route_price import RouteEnergyInterval
 from .monte_carlo_figure import plot_monte_carlo
 from .monte_carlo_sampling import MissionDistributions
 
-__all__ = ["MonteCarloResult", "MONTE_CARLO_FORMAT_VERSION", "SAMPLE_COLUMNS", "mission_row"]
+__all__ = ["MonteCarloResult", "MONTE_CARLO_FORMAT_VERSION", "SAMPLE_COLUMNS", "mission_row", "failed_row"]
 
 #: Version of the JSON layout of :meth:`MonteCarloResult.to_dict` (monte_carlo.json; 2: per-sample
 #: ``error`` and ``n_failed``).
@@ -49,16 +49,29 @@ def mission_row(drawn: tuple[float, ...], outcome: Callable[[], tuple[float, ...
     """One Monte Carlo mission as ``(row, error)``: the drawn numbers, then ``outcome()``.
 
     A library error raised by ``outcome`` (a drawn pack that cannot deliver the route's
-    power, a drawn robot that cannot follow it, ...) fails this mission alone: its outcome
-    columns are NaN (flags false) and ``error`` is ``"ExceptionType: message"``, as a
-    failed pair's row in :func:`planner.plan_batch`. Any other exception is a bug and
-    propagates.
+    power, a drawn robot that cannot follow it, ...) fails this mission alone
+    (:func:`failed_row`), as a failed pair's row in :func:`planner.plan_batch`. Any other
+    exception propagates out of the mission's task (:func:`planner.simulate_missions_mc` makes
+    every mission of a task that fails a failed row).
     """
     try:
         out = outcome()
     except TerrawattError as exc:
-        return (*drawn, *([math.nan] * (_N_OUTCOMES - 2)), 0.0, 0.0), f"{type(exc).__name__}: {exc}"
+        return failed_row(drawn, exc)
     return (*drawn, *out), ""
+
+
+def failed_row(drawn: tuple[float, ...], exc: BaseException) -> tuple[tuple[float, ...], str]:
+    """A mission that failed as ``(row, error)``: the drawn numbers, NaN outcomes (flags false), and
+    ``"ExceptionType: message"`` of ``exc``.
+
+    Examples
+    --------
+    >>> row, error = failed_row((1.0, 2.0), RuntimeError("worker lost"))
+    >>> row[:3], row[-2:], error
+    ((1.0, 2.0, nan), (0.0, 0.0), 'RuntimeError: worker lost')
+    """
+    return (*drawn, *([math.nan] * (_N_OUTCOMES - 2)), 0.0, 0.0), f"{type(exc).__name__}: {exc}"
 
 
 @dataclass(frozen=True, eq=False)

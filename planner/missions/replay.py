@@ -240,7 +240,10 @@ def _forecast_series(nav: Navigator) -> dict[str, np.ndarray]:
     (driving only: a manoeuvre is not part of any route's forecast); NaN unless the mission completed."""
     rows = [d for d in nav.decisions if d.get("forecast") is not None and d.get("checkpoint") is not None]
     t = np.array([float(d["time_s"]) for d in rows])
-    get = (lambda k: np.array([np.nan if d["forecast"][k] is None else float(d["forecast"][k]) for d in rows]))
+
+    def get(k: str) -> np.ndarray:
+        return np.array([np.nan if d["forecast"][k] is None else float(d["forecast"][k]) for d in rows])
+
     if nav.finished and nav.status == "completed":  # the driving energy of the legs after each checkpoint
         legs = np.array([leg.actual_energy_j for leg in nav.legs])
         after = np.concatenate((np.cumsum(legs[::-1])[::-1], [0.0]))

@@ -32,7 +32,9 @@ class TourCheck:
     runs : dict of str to tuple of MonteCarloResult
         Per robot (with a tour) one Monte Carlo study per segment of its tour: from the depot or a charge to
         the next charge or back (one study without chargers). Mission ``i`` of every segment is one drive of
-        the whole tour: the same seed, the same draws (the run-level factors are shared by the whole run).
+        the whole tour: the same seed, the same draws (the run-level factors are shared by the whole run). A
+        mission that failed in any segment (its study's ``errors``: a library error, a task that failed) fails
+        the tour: the shares are over the others, the failed ones counted (:meth:`n_failed`, the summary).
     draw_from : str
         ``"model"`` (the planning model's own distribution) or ``"parameters"`` (the truth simulator).
     """
@@ -41,11 +43,19 @@ class TourCheck:
     runs: dict[str, tuple[MonteCarloResult, ...]]
     draw_from: str
 
+    def completed(self, robot: str) -> np.ndarray:
+        """Per mission of ``robot``'s tour, whether it completed in every segment."""
+        return np.logical_and.reduce([mc.completed for mc in self.runs[robot]])
+
+    def n_failed(self, robot: str) -> int:
+        """How many of ``robot``'s simulated tours failed in some segment (left out of the shares)."""
+        return int(np.count_nonzero(~self.completed(robot)))
+
     def above_reserve(self, robot: str) -> np.ndarray:
         """Per mission of ``robot``'s tour completed in every segment, whether it stayed above the reserve at every
         charger arrival and back at the depot."""
         studies = self.runs[robot]
-        done = np.logical_and.reduce([mc.completed for mc in studies])
+        done = self.completed(robot)
         below = np.logical_or.reduce([np.asarray(mc.below_reserve, dtype=bool) for mc in studies])
         return ~below[done]
 
@@ -63,18 +73,26 @@ class TourCheck:
         return tuple(1.0 - mc.p_below_reserve for mc in self.runs[robot])
 
     def summary(self) -> str:
-        """One line per robot (with the share at each charger arrival, where it charges) and the total, beside Q."""
+        """One line per robot (with the share at each charger arrival, where it charges) and the total, beside Q;
+        the tours that failed, if any, counted with the first reason."""
         lines = []
+        n_failed = 0
         for name, studies in self.runs.items():
             flags = self.above_reserve(name)
-            line = (f"{name}: {100 * flags.mean() if flags.size else math.nan:.1f} % of {studies[0].n} tours end "
-                    "above the reserve")
+            failed = self.n_failed(name)
+            n_failed += failed
+            tours = f"{studies[0].n} tours" if not failed else f"{flags.size} completed tours"
+            line = f"{name}: {100 * flags.mean() if flags.size else math.nan:.1f} % of {tours} end above the reserve"
             if len(studies) > 1:
                 at = ", ".join(f"{100 * s:.1f} %" for s in self.share_above_at_stops(name)[:-1])
                 line += f" (above it at each charger arrival: {at}; at every one and back)"
+            if failed:
+                first = next(e for mc in studies for e in mc.errors if e)
+                line += f"; {failed} of {studies[0].n} failed (first: {first})"
             lines.append(line)
+        failures = f"; {n_failed} tours failed" if n_failed else ""
         lines.append(f"all: {100 * self.share_above_reserve:.1f} % above the reserve at Q = {self.risk:g} "
-                     f"(draws from the {self.draw_from})")
+                     f"(draws from the {self.draw_from}){failures}")
         return "\n".join(lines)
 
 

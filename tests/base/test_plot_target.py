@@ -36,8 +36,8 @@ def test_both_or_neither_is_refused(tmp_path):
     ax = Figure().subplots()
     with pytest.raises(InvalidParameterError, match=r"either path .* or ax=.*got neither"):
         check_plot_target(None, None)
-    with pytest.raises(InvalidParameterError, match="either path or axes=, not both"):
-        check_plot_target(tmp_path / "a.png", [ax], axes_name="axes")
+    with pytest.raises(InvalidParameterError, match="either path or ax=, not both"):
+        check_plot_target(tmp_path / "a.png", [ax])
 
 
 def test_one_axes():
@@ -56,11 +56,11 @@ def test_several_axes_are_read_in_row_major_order():
     assert check_axes([[grid[0, 0]], [grid[1, 1]]], 2) == (grid[0, 0], grid[1, 1])
     pair = Figure().subplots(1, 2)
     assert check_axes(list(pair), 2) == tuple(pair)
-    with pytest.raises(InvalidParameterError, match=r"axes must hold 3 matplotlib Axes \(a, b, c\), got 2"):
+    with pytest.raises(InvalidParameterError, match=r"ax must hold 3 matplotlib Axes \(a, b, c\), got 2"):
         check_axes(pair, 3, what="a, b, c")
     with pytest.raises(InvalidParameterError, match="must be a sequence of 2 matplotlib Axes, got 'Axes'"):
         check_axes(pair[0], 2)
-    with pytest.raises(InvalidParameterError, match=r"axes\[1\] must be a matplotlib Axes, got 'str'"):
+    with pytest.raises(InvalidParameterError, match=r"ax\[1\] must be a matplotlib Axes, got 'str'"):
         check_axes(np.array([pair[0], "x"], dtype=object), 2)
 
 

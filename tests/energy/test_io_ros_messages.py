@@ -110,7 +110,7 @@ def test_messages_from_log_fills_each_stream():
     stamps = [ns for ns, *_ in messages]
     assert stamps == sorted(stamps) and stamps[0] == 10**18 - 10_000_000
     counts = {}
-    for _, topic, msgtype, _ in messages:
+    for _, topic, *_ in messages:
         counts[topic] = counts.get(topic, 0) + 1
     n, m = len(log), log.accel_time_s.size
     assert counts == {"/odom": n, "/imu/data": m, "/drive/current_left": n, "/drive/current_right": n,

@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import json
+
+import numpy as np
 import pytest
 from evaluation_samples import score_logs
 
 from energy.models import (
     LEARNED_KINDS,
+    TRAINING_FORMAT_VERSION,
     ModelOptions,
     TrainingReport,
     check_learned_band,
@@ -26,7 +30,65 @@ def test_a_baseline_gets_a_cross_validated_interval_and_says_so(tmp_path):
     assert line.startswith(f"fitted linear on 6 runs ({report.logs_duration_s:.0f} s of logs) with a forecast interval")
     path = report.write(tmp_path / "m.zip")
     assert path == tmp_path / "m.zip" and load_current_model(path).gives_interval
-    assert report.summary(path) == f"{line}; wrote {path}"
+    assert "\n" not in line and "wrote" not in line  # the command adds the file it wrote
+
+
+def test_the_report_as_a_dict_says_what_was_fitted_on_what_with_which_interval():
+    report = train_report("linear", score_logs(), interval_folds=3)
+    doc = report.to_dict()
+    assert json.loads(json.dumps(doc, allow_nan=False)) == doc  # plain, strict JSON
+    assert doc["format"] == "terrawatt-training" and doc["format_version"] == TRAINING_FORMAT_VERSION
+    assert doc["kind"] == "linear" and doc["model_class"] == "LinearCurrentModel" and doc["n_runs"] == 6
+    assert doc["grounds_s"] == pytest.approx({"grass": 3 * report.logs[0].duration_s,
+                                              "sand": 3 * report.logs[3].duration_s})
+    assert [r["run"] for r in doc["runs"]] == ["pro_00", "pro_01", "pro_02", "pro_10", "pro_11", "pro_12"]
+    assert [r["ground"] for r in doc["runs"]] == ["grass"] * 3 + ["sand"] * 3
+    assert doc["logs_duration_s"] == pytest.approx(report.logs_duration_s) and doc["band_hz"] is None
+    assert doc["gives_interval"] and doc["interval"]["cross_validated"] and doc["interval"]["n_runs"] == 6
+    assert doc["interval"]["n_grounds"] == 2 and doc["interval"]["new_ground_dof"] == 2.0  # a t with 2 dof
+    bare = train_report("constant", score_logs()[:1], interval_folds=0).to_dict()
+    assert bare["interval"] is None and not bare["gives_interval"] and bare["grounds_s"].keys() == {"grass"}
+
+
+def test_the_run_charges_are_the_fitted_model_given_back_its_training_runs():
+    logs = score_logs()
+    report = train_report("linear", logs, interval_folds=3)
+    rows = report.run_charges(0.8)
+    assert [r.ground for r in rows] == ["grass"] * 3 + ["sand"] * 3
+    for row, log in zip(rows, logs):
+        measured = np.trapezoid(log.current_left_a + log.current_right_a, log.time_s)
+        fitted = np.trapezoid(report.model.predict(log).sum(axis=1), log.time_s)
+        assert row.measured_as == pytest.approx(measured) and row.fitted_as == pytest.approx(fitted)
+        assert row.low_as < row.fitted_as < row.high_as
+    # the linear model does not see the ground (sand draws 2.5 times grass): a least-squares fit with an
+    # intercept gives the charge of all runs back, over on grass and under on sand - what the figure shows
+    assert sum(r.fitted_as for r in rows) == pytest.approx(sum(r.measured_as for r in rows), rel=1e-3)
+    assert all(r.fitted_as > 1.5 * r.measured_as for r in rows[:3])
+    assert all(r.fitted_as < 0.8 * r.measured_as for r in rows[3:])
+    wider = report.run_charges(0.95)
+    assert all(w.high_as - w.low_as > r.high_as - r.low_as for w, r in zip(wider, rows))
+    point = train_report("constant", logs, interval_folds=0).run_charges()
+    assert all(np.isnan(r.low_as) and np.isnan(r.high_as) for r in point)
+    with pytest.raises(InvalidParameterError, match="level"):
+        report.run_charges(1.0)
+
+
+def test_the_figure_draws_a_point_per_run_with_its_interval(tmp_path):
+    from matplotlib.figure import Figure
+
+    report = train_report("linear", score_logs(), interval_folds=3)
+    ax = Figure().subplots()
+    assert report.plot(ax=ax) is ax
+    rows = report.run_charges()
+    drawn = np.concatenate([line.get_xydata() for line in ax.lines if line.get_marker() == "o"])
+    expected = np.array([[r.measured_as, r.fitted_as] for r in rows]) * (1000.0 / 3600.0)
+    assert drawn.shape == (6, 2) and np.allclose(np.sort(drawn, axis=0), np.sort(expected, axis=0))
+    assert len(ax.collections) == 2  # the interval bars of both grounds
+    assert sorted(t.get_text() for t in ax.get_legend().get_texts()) == ["fitted = measured", "grass", "sand"]
+    path = report.plot(tmp_path / "fit.png")
+    assert path == tmp_path / "fit.png" and path.stat().st_size > 0
+    with pytest.raises(InvalidParameterError, match="either path"):
+        report.plot()
 
 
 @pytest.mark.parametrize("folds, logs", [(0, score_logs()), (5, score_logs()[:1])])

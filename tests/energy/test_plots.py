@@ -109,13 +109,13 @@ def test_current_figure_draws_into_the_callers_axes(tmp_path: Path) -> None:
     pred = np.column_stack([log.current_left_a, log.current_right_a]) * 1.1
     fig = Figure()
     panels = fig.subplots(2, 1)
-    out = plot_current_estimate(log, pred, axes=panels, window_samples=10, title="mine")
+    out = plot_current_estimate(log, pred, ax=panels, window_samples=10, title="mine")
     assert out == tuple(panels)
     assert [len(ax.lines) for ax in out] == [3, 3]
     assert [ax.get_ylabel() for ax in out] == ["left current (A)", "right current (A)"]
     assert out[0].get_title() == "mine" and fig.get_suptitle() == ""  # the caller's figure keeps its own title
-    with pytest.raises(InvalidParameterError, match=r"axes must hold 2 matplotlib Axes \(left, right current\), got 1"):
-        plot_current_estimate(log, pred, axes=[panels[0]])
+    with pytest.raises(InvalidParameterError, match=r"ax must hold 2 matplotlib Axes \(left, right current\), got 1"):
+        plot_current_estimate(log, pred, ax=[panels[0]])
     assert list(tmp_path.iterdir()) == []
 
 
@@ -125,13 +125,13 @@ def test_spectra_figure_draws_one_ground_per_axes_with_the_note_on_the_axes(tmp_
     logs = [_log_at("wood", 50.0, 8.0), _log_at("snow", 100.0, 21.0)]
     panels = Figure().subplots(1, 2)
     with pytest.warns(FigureWarning, match="drawn up to 25 Hz"):
-        out = plot_vibration_spectra(logs, axes=panels)
+        out = plot_vibration_spectra(logs, ax=panels)
     assert out == tuple(panels)
     assert [ax.get_title(loc="left") for ax in out] == ["wood", "snow"]
     assert all(len(ax.lines) == 2 and "spectral density" in ax.get_ylabel() for ax in out)
     assert "drawn up to 25 Hz" in out[-1].get_xlabel()
     with pytest.raises(InvalidParameterError, match=r"3 matplotlib Axes \(one per ground: 'wood', 'snow', 'grass'\)"):
-        plot_vibration_spectra([*logs, _log_at("grass", 100.0, 5.0)], axes=panels, max_frequency_hz=25.0)
+        plot_vibration_spectra([*logs, _log_at("grass", 100.0, 5.0)], ax=panels, max_frequency_hz=25.0)
     assert list(tmp_path.iterdir()) == []
 
 
@@ -144,9 +144,9 @@ def test_figures_take_a_path_or_axes_not_both_nor_neither(tmp_path: Path) -> Non
     with pytest.raises(InvalidParameterError, match="got neither"):
         plot_current_estimate(log, pred)
     with pytest.raises(InvalidParameterError, match="not both"):
-        plot_current_estimate(log, pred, tmp_path / "c.png", axes=panels)
+        plot_current_estimate(log, pred, tmp_path / "c.png", ax=panels)
     with pytest.raises(InvalidParameterError, match="got neither"):
         plot_vibration_spectra([log])
     with pytest.raises(InvalidParameterError, match="not both"):
-        plot_vibration_spectra([log], tmp_path / "s.png", axes=panels[:1])
+        plot_vibration_spectra([log], tmp_path / "s.png", ax=panels[:1])
     assert list(tmp_path.iterdir()) == []

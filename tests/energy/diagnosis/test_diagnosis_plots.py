@@ -191,19 +191,19 @@ def test_each_figure_draws_into_the_callers_axes_and_writes_nothing(case, tmp_pa
     assert len(ax_rank.patches) == 3 and ax_rank.get_title().startswith("candidate effects")
 
     water = Figure().subplots(1, 3)
-    assert plot_waterfall(d, axes=water) == tuple(water)
+    assert plot_waterfall(d, ax=water) == tuple(water)
     assert [a.get_title() for a in water] == ["whole-set charge error (%)", "8 s section error (%)", "RMSE (A)"]
     assert all(len(a.patches) == len(d.current.waterfall) for a in water)
     assert water[0].figure.get_suptitle() == ""  # the suptitle belongs to a figure the function makes
 
     runs = Figure().subplots(2, 1)
-    assert plot_residual_time(logs, preds, axes=runs, runs=[2, 0], section_s=4.0) == tuple(runs)
+    assert plot_residual_time(logs, preds, ax=runs, runs=[2, 0], section_s=4.0) == tuple(runs)
     assert [a.get_title(loc="left")[:6] for a in runs] == ["run 2:", "run 0:"]
     assert all(len(a.lines) >= 4 for a in runs)
 
     dims = list(regime_rows(d))  # the panels drawn: the dimensions with a known slice
     regimes = tuple(Figure().subplots(1, len(dims), squeeze=False).ravel())
-    assert plot_gap_by_regime(d, axes=regimes) == regimes
+    assert plot_gap_by_regime(d, ax=regimes) == regimes
     assert [a.get_title() for a in regimes] == dims and all(a.patches for a in regimes)
 
     assert list(tmp_path.iterdir()) == [] and plt.get_fignums() == open_before
@@ -216,25 +216,25 @@ def test_a_figure_takes_a_path_or_axes_of_its_panel_count(case, tmp_path):
     preds = [d.corrected_model.base.predict(log) for log in logs]
     fig = Figure()
     one, two = fig.subplots(1, 2)
-    calls = {
-        "ax": [lambda p, **k: plot_gap_map(d, tmap, p, logs=logs, **k), lambda p, **k: plot_effect_ranking(d, p, **k)],
-        "axes": [lambda p, **k: plot_waterfall(d, p, **k), lambda p, **k: plot_residual_time(logs, preds, p, **k),
-                 lambda p, **k: plot_gap_by_regime(d, p, **k)],
+    calls = {  # one Axes for a single panel, a sequence of them for several: the keyword is ax= for both
+        "one": [lambda p, **k: plot_gap_map(d, tmap, p, logs=logs, **k), lambda p, **k: plot_effect_ranking(d, p, **k)],
+        "several": [lambda p, **k: plot_waterfall(d, p, **k), lambda p, **k: plot_residual_time(logs, preds, p, **k),
+                    lambda p, **k: plot_gap_by_regime(d, p, **k)],
     }
-    for name, fns in calls.items():
+    for panels, fns in calls.items():
         for call in fns:
-            with pytest.raises(InvalidParameterError, match=f"either path .* or {name}=.*got neither"):
+            with pytest.raises(InvalidParameterError, match="either path .* or ax=.*got neither"):
                 call(None)
-            with pytest.raises(InvalidParameterError, match=f"either path or {name}=, not both"):
-                call(tmp_path / "x.png", **{name: one if name == "ax" else [one]})
+            with pytest.raises(InvalidParameterError, match="either path or ax=, not both"):
+                call(tmp_path / "x.png", ax=one if panels == "one" else [one])
     with pytest.raises(InvalidParameterError, match="ax must be a matplotlib Axes, got 'Figure'"):
         plot_effect_ranking(d, ax=fig)
-    with pytest.raises(InvalidParameterError, match=r"axes must hold 3 .*\(charge error, section error, RMSE\), got 2"):
-        plot_waterfall(d, axes=[one, two])
+    with pytest.raises(InvalidParameterError, match=r"ax must hold 3 .*\(charge error, section error, RMSE\), got 2"):
+        plot_waterfall(d, ax=[one, two])
     with pytest.raises(InvalidParameterError, match=r"one per run drawn: runs 0, 1, 2; choose them with runs="):
-        plot_residual_time(logs, preds, axes=[one, two])
+        plot_residual_time(logs, preds, ax=[one, two])
     with pytest.raises(InvalidParameterError, match=r"one per dimension: 'speed'"):
-        plot_gap_by_regime(d, axes=[one])
+        plot_gap_by_regime(d, ax=[one])
     assert list(tmp_path.iterdir()) == [] and not one.has_data() and not two.has_data()
 
 

@@ -4,9 +4,8 @@ import dataclasses
 
 import numpy as np
 import pytest
-from effect_samples import coated_wood_log, coated_wood_model
-
 from diagnosis_scenarios import null_scenario, scenario
+from effect_samples import coated_wood_log, coated_wood_model
 
 from energy.diagnosis import FitSettings, diagnose, effect
 

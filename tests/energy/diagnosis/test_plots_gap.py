@@ -34,10 +34,10 @@ def test_it_draws_the_runs_of_largest_gap_into_the_callers_axes(tmp_path):
     logs, preds = _runs()
     fig, axes = plt.subplots(2, 1)
     try:
-        out = plot_residual_time(logs, preds, axes=list(axes), max_runs=2)
+        out = plot_residual_time(logs, preds, ax=list(axes), max_runs=2)
         assert tuple(out) == tuple(axes)
         assert axes[0].get_title(loc="left").startswith("run 1: run1.csv, sand") and axes[1].get_title(loc="left").startswith("run 2")
-        chosen = plot_residual_time(logs, preds, axes=[axes[0]], runs=[0])
+        chosen = plot_residual_time(logs, preds, ax=[axes[0]], runs=[0])
         assert chosen[0] is axes[0]
     finally:
         plt.close(fig)

@@ -213,3 +213,38 @@ def test_a_study_where_every_mission_fails_reports_nan_statistics(setup):
     assert np.isnan(mc.p_below_reserve_ci95[0]) and "3 of 3 missions failed" in mc.summary()
     with pytest.raises(InvalidParameterError, match="all 3 missions failed"):
         mc.plot("unused.png")
+
+
+def _dies_on_the_chunk_of(sample, real):
+    """A ``run_chunk`` that fails (as a worker that dies would) on the task holding child seed ``sample``."""
+    def run_chunk(self, seqs):
+        if any(q.spawn_key == (sample,) for q in seqs):
+            raise RuntimeError("worker lost")
+        return real(self, seqs)
+    return run_chunk
+
+
+def test_a_task_that_fails_is_an_error_row_per_mission_and_the_study_goes_on(setup, monkeypatch):
+    """A failed task (a worker that dies, an error outside the library) keeps its missions as failed rows with their
+    draws, counted in the result and its summary; the other tasks' missions stand."""
+    distributed = pytest.importorskip("distributed", reason=NO_DASK)
+    from planner.missions.monte_carlo import MissionSetup
+
+    whole = run_mc(setup, n=6, seed=7, chunk_size=2)
+    monkeypatch.setattr(MissionSetup, "run_chunk", _dies_on_the_chunk_of(3, MissionSetup.run_chunk))
+    with distributed.LocalCluster(processes=False, n_workers=2, threads_per_worker=1,
+                                  dashboard_address=":0") as cluster, distributed.Client(cluster) as client:
+        there = run_mc(setup, n=6, seed=7, chunk_size=2, compute=Compute(client=client))
+    here = run_mc(setup, n=6, seed=7, chunk_size=2)
+    for mc in (there, here):
+        assert mc.failed.tolist() == [False, False, True, True, False, False]  # the task of samples 2 and 3
+        assert mc.errors[2] == mc.errors[3] == "RuntimeError: worker lost" and mc.n_failed == 2
+        assert np.all(np.isnan(mc.energy_j[2:4])) and not mc.below_reserve[2:4].any()
+        keep = ~mc.failed
+        assert np.array_equal(mc.energy_j[keep], whole.energy_j[keep])
+        # the failed missions' draws are those their seeds give
+        for name in ("payload_kg", "capacity_ah", "internal_resistance_ohm", "speed_mps", "ground_scale"):
+            assert np.array_equal(getattr(mc, name), getattr(whole, name))
+        assert "2 of 6 missions failed" in mc.summary() and "RuntimeError: worker lost" in mc.summary()
+        assert mc.to_dict()["n_failed"] == 2 and not mc.ok
+        assert mc.energy_percentile_j(50) == pytest.approx(np.percentile(whole.energy_j[keep], 50))

@@ -46,3 +46,25 @@ def test_model_draws_need_a_cost_with_an_interval_and_no_typed_ranges(study, fla
                              cost=cost)
     with pytest.raises(InvalidParameterError, match="draw_from must be one of"):
         simulate_missions_mc(tmap, route, battery, MonteCarloStudy(5, draw_from="ranges"), cost=cost)
+
+
+def test_a_model_draw_task_that_fails_keeps_its_missions_as_error_rows(study, monkeypatch):
+    from planner.missions.monte_carlo_model import ModelMissionSetup
+
+    tmap, cost, route, forecast = study
+    battery = Battery(capacity_ah=forecast.p90_j / 3600 / 24.0, voltage_v=24.0)
+    whole = simulate_missions_mc(tmap, route, battery, MonteCarloStudy(8, draw_from="model", seed=2, chunk_size=4),
+                                 cost=cost)
+
+    def dies_on_the_first(self, seqs):
+        if seqs[0].spawn_key == (0,):
+            raise MemoryError("out of memory")
+        return [self.run(q) for q in seqs]
+
+    monkeypatch.setattr(ModelMissionSetup, "run_chunk", dies_on_the_first)
+    mc = simulate_missions_mc(tmap, route, battery, MonteCarloStudy(8, draw_from="model", seed=2, chunk_size=4),
+                              cost=cost)
+    assert mc.failed.tolist() == [True] * 4 + [False] * 4 and set(mc.errors[:4]) == {"MemoryError: out of memory"}
+    assert np.array_equal(mc.ground_scale, whole.ground_scale)  # the failed missions' factors, drawn from their seeds
+    assert np.array_equal(mc.energy_j[4:], whole.energy_j[4:]) and np.all(np.isnan(mc.energy_j[:4]))
+    assert "4 of 8 missions failed" in mc.summary()

@@ -54,3 +54,29 @@ def test_every_segment_of_every_tour_runs_on_one_cluster(hills_cost, monkeypatch
     assert opened == [2]
     assert there.share_above_reserve == here.share_above_reserve
     assert all(s.where == "local cluster" for studies in there.runs.values() for s in studies)
+
+
+def test_a_failed_task_fails_its_tours_counted_in_the_summary_not_dropped(hills_cost, monkeypatch):
+    from planner.missions.monte_carlo_model import ModelMissionSetup
+
+    rng = np.random.default_rng(5)
+    sites = TourSites(tuple(f"s{k}" for k in range(6)), rng.uniform(3.0, 37.0, size=(6, 2)))
+    res = plan_tour(hills_cost, sites, TourRobot(Battery(0.15, 24.0), (20.0, 20.0)), search=TourSearch(risk=0.9))
+    whole = simulate_tours_mc(res, 20, seed=3)
+    real = ModelMissionSetup.run_chunk
+
+    def dies_on_the_first_five(self, seqs):  # one study of 20 missions in chunks: fail the missions 0-4
+        if any(q.spawn_key[0] < 5 for q in seqs):
+            raise RuntimeError("worker lost")
+        return real(self, seqs)
+
+    monkeypatch.setattr(ModelMissionSetup, "run_chunk", dies_on_the_first_five)
+    check = simulate_tours_mc(res, 20, seed=3)
+    (name,) = check.runs
+    failed = check.n_failed(name)
+    assert failed >= 5 and whole.n_failed(name) == 0
+    assert check.above_reserve(name).size == 20 - failed  # the shares are over the completed tours
+    assert np.array_equal(check.above_reserve(name), whole.above_reserve(name)[check.completed(name)])
+    text = check.summary()
+    assert f"of {20 - failed} completed tours" in text and f"{failed} of 20 failed (first: RuntimeError: worker lost)" in text
+    assert text.endswith(f"; {failed} tours failed") and "failed" not in whole.summary()
