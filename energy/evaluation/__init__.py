@@ -12,6 +12,7 @@ by one protocol in :mod:`~energy.evaluation.evaluation_report` (:func:`evaluate_
 (:mod:`terrawatt_base.dask_client`).
 """
 
+from ..logs import run_names
 from .adapt_protocol import (
     DEFAULT_ADAPT_SECONDS,
     AdaptSettings,
@@ -55,7 +56,7 @@ from .results import (
     summarise_scores,
 )
 from .run_totals import VARIANTS, RunTotal, ScoredRun, pack_energy_j, run_totals, summarise_totals
-from .scoring import evaluate_current_models, run_names, score_current_model, score_run, trim_to_overlap
+from .scoring import evaluate_current_models, score_current_model, score_run, trim_to_overlap
 
 __all__ = [
     "EVALUATION_PROTOCOLS",

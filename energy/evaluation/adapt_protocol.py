@@ -25,7 +25,7 @@ from terrawatt_base.dask_client import check_client, run_tasks
 from terrawatt_base.errors import DataError, InvalidParameterError
 
 from ..battery import Battery
-from ..logs import InteractionLog
+from ..logs import InteractionLog, run_names
 from ..metrics import DEFAULT_SECTION_S, compare_currents
 from ..models.adaptation import ADAPT_METHODS, ADAPT_SHRINKS, AdaptedCurrentModel
 from ..models.base import CurrentModel, log_currents
@@ -34,7 +34,7 @@ from ..robot import RobotParams
 from .adapt_results import TRIGGER_SCHEDULE, AdaptScore, summarise_adapt_scores
 from .results import EvaluationResult, check_evaluation_dir
 from .run_totals import RunTotal, ScoredRun, run_totals
-from .scoring import check_runs, run_names, trim_to_overlap
+from .scoring import check_runs, trim_to_overlap
 
 __all__ = [
     "DEFAULT_ADAPT_SECONDS",

@@ -20,7 +20,7 @@ from terrawatt_base.checks import check_text
 from terrawatt_base.dask_client import check_client
 from terrawatt_base.errors import DataError, InvalidParameterError
 
-from ..logs import InteractionLog
+from ..logs import InteractionLog, run_names
 from ..metrics import compare_currents
 from ..models.adaptation import AdaptedCurrentModel
 from ..models.base import CurrentModel, log_currents
@@ -28,7 +28,7 @@ from .adapt_protocol import AdaptSettings, collect_adaptation, named_models, sch
 from .adapt_results import AdaptScore
 from .results import EvaluationResult, check_evaluation_dir
 from .run_totals import RunTotal, ScoredRun, run_totals
-from .scoring import check_runs, run_names, trim_to_overlap
+from .scoring import check_runs, trim_to_overlap
 
 __all__ = ["few_shot_scores", "evaluate_few_shot"]
 

@@ -21,7 +21,6 @@ import os
 import time
 import warnings
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -36,7 +35,7 @@ from terrawatt_base.errors import (
 )
 
 from ..battery import Battery
-from ..logs import InteractionLog
+from ..logs import InteractionLog, run_names
 from ..metrics import DEFAULT_SECTION_S, compare_currents
 from ..models.base import CurrentModel, log_currents
 from ..params import robot_params
@@ -53,22 +52,7 @@ from .results import (
 )
 from .run_totals import RunTotal, ScoredRun, run_totals
 
-__all__ = ["check_runs", "run_names", "trim_to_overlap", "score_run", "score_current_model", "evaluate_current_models"]
-
-
-def run_names(logs: Sequence[InteractionLog]) -> list[str]:
-    """A unique name per log: ``<ground>/<source file stem>`` (``#k`` added to repeats)."""
-    names = []
-    for log in logs:
-        stem = Path(log.meta.source).stem if log.meta.source else "run"
-        names.append(f"{log.meta.ground_label}/{stem}")
-    seen: dict[str, int] = {}
-    out = []
-    for n in names:
-        k = seen.get(n, 0)
-        seen[n] = k + 1
-        out.append(n if names.count(n) == 1 else f"{n}#{k}")
-    return out
+__all__ = ["check_runs", "trim_to_overlap", "score_run", "score_current_model", "evaluate_current_models"]
 
 
 def trim_to_overlap(log: InteractionLog) -> InteractionLog:

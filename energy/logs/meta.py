@@ -4,13 +4,15 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from terrawatt_base.checks import check_optional_real
 from terrawatt_base.errors import InvalidParameterError
 
-__all__ = ["VELOCITY_SOURCES", "LogMeta", "robot_matches", "named_robots"]
+__all__ = ["VELOCITY_SOURCES", "LogMeta", "robot_matches", "named_robots", "run_names"]
 
 #: Allowed values of :attr:`LogMeta.velocity_source`.
 VELOCITY_SOURCES = ("commanded", "measured")
@@ -38,6 +40,30 @@ def named_robots(names: Iterable[str]) -> list[str]:
     ['Jackal', 'husky']
     """
     return sorted({str(n) for n in names if str(n).strip().lower() not in UNNAMED_ROBOTS})
+
+
+def run_names(logs: Iterable[Any]) -> list[str]:
+    """A unique name per log (anything with a :class:`LogMeta` ``meta``): ``<ground>/<source file stem>`` (``run``
+    without a source; ``#k`` added to repeats).
+
+    Examples
+    --------
+    >>> from types import SimpleNamespace as NS
+    >>> run_names([NS(meta=LogMeta(source="a/pro_00.csv", ground_label="snow")), NS(meta=LogMeta(ground_label="snow")),
+    ...            NS(meta=LogMeta(ground_label="snow"))])
+    ['snow/pro_00', 'snow/synthetic#0', 'snow/synthetic#1']
+    """
+    names = []
+    for log in logs:
+        stem = Path(log.meta.source).stem if log.meta.source else "run"
+        names.append(f"{log.meta.ground_label}/{stem}")
+    seen: dict[str, int] = {}
+    out = []
+    for n in names:
+        k = seen.get(n, 0)
+        seen[n] = k + 1
+        out.append(n if names.count(n) == 1 else f"{n}#{k}")
+    return out
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ from terrawatt_base.formats import result_document
 from terrawatt_base.plot_target import check_ax, check_plot_target, new_figure
 
 from ..features.band import check_band_hz
-from ..logs import InteractionLog
+from ..logs import InteractionLog, run_names
 from ..params import robot_params
 from ..power import trapezoid
 from .base import CurrentModel, TrainedOn, check_logs, log_currents
@@ -191,7 +191,7 @@ class RunCharge:
     Attributes
     ----------
     run : str
-        The run's name (its file's stem, or ``run <k>``).
+        The run's name (:func:`energy.logs.run_names`: ``<ground>/<file stem>``).
     ground : str
         Its ground label (``"unlabelled"`` without one).
     duration_s : float
@@ -274,7 +274,7 @@ class TrainingReport:
             "kind": self.kind, "model_class": type(self.model).__name__, "robots": list(trained.robots),
             "grounds_s": dict(trained.grounds),
             "runs": [{"run": name, "ground": _ground(log), "duration_s": float(log.duration_s)}
-                     for name, log in zip(_run_names(self.logs), self.logs)],
+                     for name, log in zip(run_names(self.logs), self.logs)],
             "n_runs": len(self.logs), "logs_duration_s": self.logs_duration_s, "fit_duration_s": self.fit_duration_s,
             "band_hz": self.band_hz, "gives_interval": self.model.gives_interval, "interval": facts}))
 
@@ -292,7 +292,7 @@ class TrainingReport:
         """
         level = check_real("level", level, low=0.0, high=1.0, low_inclusive=False, high_inclusive=False)
         out = []
-        for name, log in zip(_run_names(self.logs), self.logs):
+        for name, log in zip(run_names(self.logs), self.logs):
             charge = self.model.predict_distribution(log).charge()
             low, high = charge.interval(level) if self.model.gives_interval else (math.nan, math.nan)
             measured = float(trapezoid(log_currents(log).sum(axis=1), log.time_s))
@@ -349,18 +349,6 @@ class TrainingReport:
 
 def _ground(log: InteractionLog) -> str:
     return str(log.meta.ground_label) if log.meta.ground_label is not None else "unlabelled"
-
-
-def _run_names(logs: Sequence[InteractionLog]) -> list[str]:
-    """Each log's file stem (``run <k>`` without a source), with ``#<n>`` on repeats."""
-    stems = [Path(str(log.meta.source)).stem if log.meta.source else f"run {k}" for k, log in enumerate(logs)]
-    seen: dict[str, int] = {}
-    names = []
-    for stem in stems:
-        n = seen.get(stem, 0)
-        seen[stem] = n + 1
-        names.append(stem if stems.count(stem) == 1 else f"{stem}#{n}")
-    return names
 
 
 def train_report(kind: str, logs: InteractionLog | Sequence[InteractionLog], *, options: ModelOptions | None = None,

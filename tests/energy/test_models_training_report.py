@@ -41,7 +41,8 @@ def test_the_report_as_a_dict_says_what_was_fitted_on_what_with_which_interval()
     assert doc["kind"] == "linear" and doc["model_class"] == "LinearCurrentModel" and doc["n_runs"] == 6
     assert doc["grounds_s"] == pytest.approx({"grass": 3 * report.logs[0].duration_s,
                                               "sand": 3 * report.logs[3].duration_s})
-    assert [r["run"] for r in doc["runs"]] == ["pro_00", "pro_01", "pro_02", "pro_10", "pro_11", "pro_12"]
+    assert [r["run"] for r in doc["runs"]] == ["grass/pro_00", "grass/pro_01", "grass/pro_02",
+                                              "sand/pro_10", "sand/pro_11", "sand/pro_12"]
     assert [r["ground"] for r in doc["runs"]] == ["grass"] * 3 + ["sand"] * 3
     assert doc["logs_duration_s"] == pytest.approx(report.logs_duration_s) and doc["band_hz"] is None
     assert doc["gives_interval"] and doc["interval"]["cross_validated"] and doc["interval"]["n_runs"] == 6
