@@ -127,6 +127,7 @@ ADAPT_SCOPES = ("run", "ground")
 #: How a point update is scaled by its evidence (module docstring), the default first.
 ADAPT_SHRINKS = ("prior", "evidence", "none")
 _NOISE_FLOOR_A = 0.05  # least per-sample spread the Bayesian update assumes (A)
+_MAX_EVIDENCE = 1e12  # a prefix's residual charge (A s) or its variances (A² s²) beyond this are no log's: a forged file
 #: Effective samples' worth of belief that a new stretch of data is as noisy as the training runs
 #: (``"bayes"``: the noise ratio of the data is shrunk towards 1 by this many samples).
 NOISE_PRIOR_SAMPLES = 10.0
@@ -612,9 +613,10 @@ class AdaptedCurrentModel(CurrentModel):
         self.shrink_ = factors
         evidence = state.get("evidence")  # absent in files from before the interval read the prefix
         self.evidence_ = None if evidence is None else real_array("evidence", evidence, ndim=2)
-        if self.evidence_ is not None and (self.evidence_.shape != (4, 2) or np.any(self.evidence_[1:] < 0)):
-            raise ValueError(f"evidence must be (4, 2): the residual charge, then three variances >= 0; got "
-                             f"{self.evidence_!r:.80}")
+        if self.evidence_ is not None and (self.evidence_.shape != (4, 2) or np.any(self.evidence_[1:] < 0)
+                                           or np.any(np.abs(self.evidence_) > _MAX_EVIDENCE)):
+            raise ValueError(f"evidence must be (4, 2): the residual charge, then three variances >= 0, each at most "
+                             f"{_MAX_EVIDENCE:.0e}; got {self.evidence_!r:.80}")
         if not (math.isfinite(self.noise_ratio_) and self.noise_ratio_ > 0):
             raise ValueError(f"noise_ratio must be finite and > 0, got {self.noise_ratio_!r}")
         if self.method == "bayes" and (self.posterior_cov_ is None or self.posterior_cov_.shape != (2, 8, 8)):

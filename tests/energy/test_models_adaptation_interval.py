@@ -94,6 +94,7 @@ def test_the_prefix_evidence_is_saved_and_a_file_without_it_keeps_the_base_sprea
                                                       {k: v for k, v in rec.state.items() if k != "evidence"}), "old")
     assert old.evidence_ is None
     np.testing.assert_array_equal(old.predict_distribution(later).run_sd_a, est.predict_distribution(later).run_sd_a)
-    for bad in (np.zeros((3, 2)), np.array([[1.0, 1.0], [-1.0, 0.0], [0.0, 0.0], [0.0, 0.0]])):
+    for bad in (np.zeros((3, 2)), np.array([[1.0, 1.0], [-1.0, 0.0], [0.0, 0.0], [0.0, 0.0]]),
+                np.array([[1e300, 1.0], [1.0, 1.0], [1.0, 1.0], [1.0, 1.0]])):
         with pytest.raises(FileFormatError, match="evidence"):
             AdaptedCurrentModel.from_record(ModelRecord(rec.model_class, rec.params, {**rec.state, "evidence": bad}))
