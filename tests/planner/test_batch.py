@@ -148,6 +148,26 @@ def test_a_task_that_fails_outside_planning_is_a_row_and_the_batch_goes_on(cost,
         assert res.rows[0].status != "error" and res.rows[2].status != "error"
 
 
+def test_a_pair_that_kills_its_workers_is_an_error_row_and_the_other_pairs_are_planned(cost):
+    """The poison pair kills each worker dask retries it on (both, and their new ones): the cost they held is
+    computed again, the other five pairs come back as in process, the poison pair is a KilledWorker row."""
+    distributed = pytest.importorskip("distributed", reason=_NO_DASK)
+    import dask
+    from dask_samples import PoisonPair
+
+    pairs = BatchPairs.from_array([*PAIRS, [*WEST, *EAST], [*EAST, *EAST_LOW]], ["a", "b", "poison", "d", "e", "f"])
+    here = plan_batch(cost, pairs)
+    with dask.config.set({"distributed.comm.timeouts.connect": "5s"}), distributed.LocalCluster(
+        n_workers=2, processes=True, threads_per_worker=1, dashboard_address=":0"
+    ) as cluster, distributed.Client(cluster) as client:
+        client.register_plugin(PoisonPair("poison"))  # on the workers the nannies start too
+        there = plan_batch(cost, pairs, compute=Compute(client=client))
+    assert [r.status for r in there.rows] == ["exact", "exact", "error", "exact", "exact", "exact"]
+    assert there.rows[2].error.startswith("KilledWorker") and there.n_errors == 1
+    keep = [0, 1, 3, 4, 5]
+    assert [_outcome(there.rows[i]) for i in keep] == [_outcome(here.rows[i]) for i in keep]
+
+
 # ------------------------------------------------------------------ pairs and their files
 def test_pairs_from_arrays_of_both_layouts_and_all_pairs_of_sites():
     a = BatchPairs.from_array(np.array(PAIRS))
