@@ -110,9 +110,10 @@ def test_the_cost_goes_to_the_workers_once_without_its_caches(cost, local_client
         local_client.submit = original
     from distributed import Future
 
-    shared = {a[0].key for a in submitted}
-    assert len(submitted) == 4 and len(shared) == 1  # one scattered cost, referenced by every task
-    assert all(isinstance(a[0], Future) for a in submitted)
+    (held,), tasks = submitted[0], submitted[1:]  # the cost as a task of its own, then the pairs' tasks
+    assert not held.lattices and not len(held.results) and held.terrain is cost.terrain
+    assert len(tasks) == 4 and len({a[0].key for a in tasks}) == 1  # one cost, referenced by every task
+    assert all(isinstance(a[0], Future) for a in tasks)
     assert cost.lattices and len(cost.results)  # the caller's cost keeps its caches
 
 
