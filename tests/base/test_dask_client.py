@@ -7,6 +7,7 @@ import contextlib
 import operator
 import re
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -141,6 +142,14 @@ def test_run_tasks_on_error_turns_a_failed_task_into_its_result_here_and_on_a_cl
                                   dashboard_address=":0") as cluster, distributed.Client(cluster) as client:
         there = list(run_tasks(tasks, client=client, shared=(4,), on_error=as_row))
     assert here == there == [2.0, "task 1: ZeroDivisionError", 9]
+
+
+def test_a_large_shared_object_goes_once_without_dasks_large_graph_warning(local_client):
+    big = np.ones(12 * 2**20 // 8)  # 12 MiB: over dask's 10 MB "Sending large graph" threshold
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        there = list(run_tasks([(np.sum, ()), (np.size, ())], client=local_client, shared=(big,)))
+    assert there == [big.size, big.size]
 
 
 @contextlib.contextmanager
