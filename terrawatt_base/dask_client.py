@@ -365,21 +365,27 @@ def run_tasks(tasks: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]], *, cl
 def _run_on_cluster(client: Any, tasks: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]], shared: Sequence[Any],
                     steps: Sequence[int], bar: Any, on_error: Callable[[int, Exception], Any] | None) -> Iterator[Any]:
     """:func:`run_tasks` on a dask ``client``: every task submitted at once, the results yielded in task order."""
-    from distributed import KilledWorker, as_completed
+    from distributed import KilledWorker, as_completed, wait
 
-    # each shared object a task of its own whose spec keeps it on the scheduler, not scattered data: a worker
-    # that dies loses what it held, and dask computes a lost result again on a live worker, where scattered
-    # data is gone for good (and every task still to run with it); copied to every worker before the tasks are
-    # placed, as a broadcast scatter was, or dask would place them all on the one worker that computed it
-    sent = [_hold(client, obj) for obj in shared]
-    if sent:
-        client.replicate(sent)
-    futures = [client.submit(fn, *sent, *args, pure=False) for fn, args in tasks]
-    position = {f.key: i for i, f in enumerate(futures)}
+    sent: list[Any] = []
+    futures: list[Any] = []
     done: dict[int, Any] = {}  # finished, waiting for the tasks before them
     killed: dict[int, Exception] = {}  # lost with the workers that died running them
     first = 0  # the next result to yield
     try:
+        # each shared object a task of its own whose spec keeps it on the scheduler, not scattered data: a worker
+        # that dies loses what it held, and dask computes a lost result again on a live worker, where scattered
+        # data is gone for good (and every task still to run with it); copied to every worker before the tasks
+        # are placed, as a broadcast scatter was, or dask would place them all on the one worker that holds it
+        sent = [_hold(client, obj) for obj in shared]
+        if sent:
+            wait(sent)
+            for held in sent:
+                if held.status == "error":
+                    held.result()  # raises why the object does not load on the workers, before any task
+            client.replicate(sent)
+        futures = [client.submit(fn, *sent, *args, pure=False) for fn, args in tasks]
+        position = {f.key: i for i, f in enumerate(futures)}
         for fut in as_completed(futures):
             i = position[fut.key]
             try:
