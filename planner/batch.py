@@ -90,7 +90,7 @@ def plan_batch(
 
     Every pair is planned by :func:`planner.plan_route` with ``compare=True`` (its saving against the
     shortest route). On dask, each pair is one task; the cost (map and tables, without its
-    caches) is sent to every worker once (``client.scatter(..., broadcast=True)``), never
+    caches) is sent to every worker once (:func:`~terrawatt_base.dask_client.run_tasks`), never
     with a task, and each worker builds the lattice graph once. A pair whose planning raises
     (e.g. a start on an obstacle) becomes a row of status ``"error"`` with the exception's
     text; the other pairs are planned as usual. Rows come back in the order of the pairs,

@@ -1,10 +1,13 @@
-"""The dask seam: argument checks, client checks and the task runner (here, and on one in-process cluster)."""
+"""The dask seam: argument checks, client checks and the task runner (here, on an in-process cluster, and on worker
+processes that a task kills)."""
 
 from __future__ import annotations
 
+import contextlib
 import operator
 import re
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -102,6 +105,15 @@ def test_run_tasks_wants_one_size_per_task():
         list(run_tasks([(operator.neg, (1,)), (operator.neg, (2,))], sizes=[1]))
 
 
+@pytest.fixture
+def local_client():
+    """An in-process dask cluster of two single-thread workers."""
+    distributed = pytest.importorskip("distributed", reason="the cluster path needs dask.distributed")
+    with distributed.LocalCluster(processes=False, n_workers=2, threads_per_worker=1,
+                                  dashboard_address=":0") as cluster, distributed.Client(cluster) as client:
+        yield client
+
+
 def _late_sum(base: int, delay_s: float, x: int) -> int:
     time.sleep(delay_s)  # lets a later task finish first
     return base + x
@@ -130,6 +142,63 @@ def test_run_tasks_on_error_turns_a_failed_task_into_its_result_here_and_on_a_cl
                                   dashboard_address=":0") as cluster, distributed.Client(cluster) as client:
         there = list(run_tasks(tasks, client=client, shared=(4,), on_error=as_row))
     assert here == there == [2.0, "task 1: ZeroDivisionError", 9]
+
+
+def test_a_large_shared_object_goes_once_without_dasks_large_graph_warning(local_client):
+    big = np.ones(12 * 2**20 // 8)  # 12 MiB: over dask's 10 MB "Sending large graph" threshold
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        there = list(run_tasks([(np.sum, ()), (np.size, ())], client=local_client, shared=(big,)))
+    assert there == [big.size, big.size]
+
+
+@contextlib.contextmanager
+def dying_cluster():
+    """A client of two worker processes of one thread (which a task may kill: their nannies start new ones); a dead
+    worker's address refused for 5 s, not dask's 30, before its results are computed again."""
+    distributed = pytest.importorskip("distributed", reason="the cluster path needs dask.distributed")
+    import dask
+
+    with dask.config.set({"distributed.comm.timeouts.connect": "5s"}), distributed.LocalCluster(
+        n_workers=2, processes=True, threads_per_worker=1, dashboard_address=":0"
+    ) as cluster, distributed.Client(cluster) as client:
+        yield client
+
+
+def _as_row(i, exc):
+    return f"task {i}: {type(exc).__name__}"
+
+
+def test_a_task_that_kills_its_workers_fails_alone_and_the_shared_data_survives():
+    """dask retries a task whose worker died on the other workers (``allowed-failures``, 3), so it kills them all:
+    the shared data they held is computed again, the other tasks come back, the poison task is its error row."""
+    with dying_cluster() as client:
+        from dask_samples import POISON, add_or_die
+
+        xs = [1, 2, POISON, 4, 5, 6]
+        there = list(run_tasks([(add_or_die, (x,)) for x in xs], client=client, shared=(np.float64(10.0),),
+                               on_error=_as_row))
+        assert there == [11.0, 12.0, "task 2: KilledWorker", 14.0, 15.0, 16.0]
+        # and the cluster is whole again for the next run
+        assert list(run_tasks([(operator.add, (1,))], client=client, shared=(2,))) == [3]
+
+
+def test_tasks_killed_beside_the_one_that_killed_their_workers_run_again_alone(local_client):
+    """More than one ``KilledWorker`` means bystanders among them: each runs once more, alone; one alone is the task
+    that killed its workers, not run again."""
+    import dask_samples
+
+    dask_samples.SEEN.clear()
+    tasks = [(operator.add, (1,)), (dask_samples.killed_once, ("a",)), (dask_samples.killed_always, ("b",)),
+             (dask_samples.killed_once, ("c",)), (operator.add, (2,))]
+    there = list(run_tasks(tasks, client=local_client, shared=(10,), on_error=_as_row))
+    assert there == [11, "10 a", "task 2: KilledWorker", "10 c", 12]
+    assert dask_samples.SEEN == {"a", "c"}
+    only = list(run_tasks([(dask_samples.killed_once, ("d",)), (operator.add, (2,))], client=local_client,
+                          shared=(10,), on_error=_as_row))
+    assert only == ["task 0: KilledWorker", 12]
+    with pytest.raises(dask_samples.KilledWorker):
+        list(run_tasks(tasks, client=local_client, shared=(10,)))  # without on_error, raised as any error
 
 
 @pytest.mark.parametrize(

@@ -110,9 +110,10 @@ def test_the_cost_goes_to_the_workers_once_without_its_caches(cost, local_client
         local_client.submit = original
     from distributed import Future
 
-    shared = {a[0].key for a in submitted}
-    assert len(submitted) == 4 and len(shared) == 1  # one scattered cost, referenced by every task
-    assert all(isinstance(a[0], Future) for a in submitted)
+    (held,), tasks = submitted[0], submitted[1:]  # the cost as a task of its own, then the pairs' tasks
+    assert not held.lattices and not len(held.results) and held.terrain is cost.terrain
+    assert len(tasks) == 4 and len({a[0].key for a in tasks}) == 1  # one cost, referenced by every task
+    assert all(isinstance(a[0], Future) for a in tasks)
     assert cost.lattices and len(cost.results)  # the caller's cost keeps its caches
 
 
@@ -146,6 +147,26 @@ def test_a_task_that_fails_outside_planning_is_a_row_and_the_batch_goes_on(cost,
         res = plan_batch(cost, PAIRS[:3], compute=compute)
         assert [r.status for r in res.rows][1] == "error" and res.rows[1].error == "RuntimeError: worker lost"
         assert res.rows[0].status != "error" and res.rows[2].status != "error"
+
+
+def test_a_pair_that_kills_its_workers_is_an_error_row_and_the_other_pairs_are_planned(cost):
+    """The poison pair kills each worker dask retries it on (both, and their new ones): the cost they held is
+    computed again, the other five pairs come back as in process, the poison pair is a KilledWorker row."""
+    distributed = pytest.importorskip("distributed", reason=_NO_DASK)
+    import dask
+    from dask_samples import PoisonPair
+
+    pairs = BatchPairs.from_array([*PAIRS, [*WEST, *EAST], [*EAST, *EAST_LOW]], ["a", "b", "poison", "d", "e", "f"])
+    here = plan_batch(cost, pairs)
+    with dask.config.set({"distributed.comm.timeouts.connect": "5s"}), distributed.LocalCluster(
+        n_workers=2, processes=True, threads_per_worker=1, dashboard_address=":0"
+    ) as cluster, distributed.Client(cluster) as client:
+        client.register_plugin(PoisonPair("poison"))  # on the workers the nannies start too
+        there = plan_batch(cost, pairs, compute=Compute(client=client))
+    assert [r.status for r in there.rows] == ["exact", "exact", "error", "exact", "exact", "exact"]
+    assert there.rows[2].error.startswith("KilledWorker") and there.n_errors == 1
+    keep = [0, 1, 3, 4, 5]
+    assert [_outcome(there.rows[i]) for i in keep] == [_outcome(here.rows[i]) for i in keep]
 
 
 # ------------------------------------------------------------------ pairs and their files

@@ -248,3 +248,22 @@ def test_a_task_that_fails_is_an_error_row_per_mission_and_the_study_goes_on(set
         assert "2 of 6 missions failed" in mc.summary() and "RuntimeError: worker lost" in mc.summary()
         assert mc.to_dict()["n_failed"] == 2 and not mc.ok
         assert mc.energy_percentile_j(50) == pytest.approx(np.percentile(whole.energy_j[keep], 50))
+
+
+def test_a_task_that_kills_its_workers_fails_its_missions_only(setup):
+    """The task of samples 2 and 3 kills each worker process dask retries it on: the study's shared setup is
+    computed again on the new workers, the other four missions come back as in process."""
+    distributed = pytest.importorskip("distributed", reason=NO_DASK)
+    import dask
+    from dask_samples import PoisonSample
+
+    whole = run_mc(setup, n=6, seed=7, chunk_size=2)
+    with dask.config.set({"distributed.comm.timeouts.connect": "5s"}), distributed.LocalCluster(
+        n_workers=2, processes=True, threads_per_worker=1, dashboard_address=":0"
+    ) as cluster, distributed.Client(cluster) as client:
+        client.register_plugin(PoisonSample(3))  # on the workers the nannies start too
+        there = run_mc(setup, n=6, seed=7, chunk_size=2, compute=Compute(client=client))
+    assert there.failed.tolist() == [False, False, True, True, False, False]
+    assert there.errors[2] == there.errors[3] and there.errors[2].startswith("KilledWorker") and there.n_failed == 2
+    keep = ~there.failed
+    assert not whole.failed.any() and np.array_equal(there.energy_j[keep], whole.energy_j[keep])
