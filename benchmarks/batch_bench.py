@@ -8,7 +8,7 @@ region is planned three ways, all in the same run:
   graph is built inside the timing, as each worker has to;
 - **local cluster**: the same call on a ``LocalCluster`` of ``--workers`` processes of one
   thread (started and warmed up, numba kernels loaded, before the timing; both reported).
-  The cost is scattered once; each worker builds its lattice graph on its first pair.
+  The cost is sent once (``run_tasks``); each worker builds its lattice graph on its first pair.
   Scaling efficiency = cluster routes/s / (workers x in-process routes/s);
 - **peer baseline**: the bare search on the same directed 16-connected lattice graph (same
   edges, same energy weights, from :meth:`planner.Lattice.graph`): the library's compiled A*
@@ -136,7 +136,7 @@ def _batch_rows(cost: EnergyCost, pairs: np.ndarray, workers: int, repeats: int,
             cpu_here = time.process_time() - cpu0
             warm_here = plan_batch(_fresh(cost, keep_lattices=True), pairs)  # lattice built already
             cpu0 = client.run(time.process_time)
-            there = plan_batch(cost, pairs, compute=Compute(client=client))  # a fresh scatter: workers start cold
+            there = plan_batch(cost, pairs, compute=Compute(client=client))  # sent afresh: workers start cold
             cpu_there = sum(t - cpu0[w] for w, t in client.run(time.process_time).items())
             cpu_ratio.append(cpu_there / cpu_here)
             here_rps.append(here.routes_per_s)

@@ -211,10 +211,7 @@ def diagnose(model: CurrentModel | ModelUnderDiagnosis, logs: InteractionLog | S
                             physics_basis(model, robot))
         case = _Case(model, items, terrain, robot, settings, sp, data)
         runner = SetRunner(data, sp, client=client, progress=compute.progress)
-        try:
-            sel, final, learned_note = _select(case, usable, learned, runner, learned_requested=effects is not None)
-        finally:
-            runner.close()
+        sel, final, learned_note = _select(case, usable, learned, runner, learned_requested=effects is not None)
 
     localisation = localise_gap(items, predictions, terrain=terrain, section_s=settings.section_s)
     ties = _ties(sel, data)

@@ -359,31 +359,25 @@ def bootstrap_gain_interval_pct(none: SetScore, current: SetScore, trial: SetSco
 class SetRunner:
     """Scores effect sets on one :class:`DiagnosisData` and :class:`Split`, here or on ``client``.
 
-    On a client the data and the split go to every worker once (``scatter(broadcast=True)``);
-    each set is one task. Results come back in the order asked, equal to the serial ones
-    (the fits are deterministic least squares). ``progress`` shows a tqdm bar per batch.
+    On a client each batch of sets is one :func:`~terrawatt_base.dask_client.run_tasks` call:
+    the data and the split its shared inputs (sent once per batch, computed again if the workers
+    holding them die), each set one task. Results come back in the order asked, equal to the
+    serial ones (the fits are deterministic least squares). ``progress`` shows a tqdm bar per batch.
     """
 
     def __init__(self, data: DiagnosisData, split: Split, *, client: Any = None, progress: bool = False) -> None:
         self.data, self.split = data, split
         self.client = check_client(client, "candidate effect sets")
         self.progress = bool(progress)
-        self._remote: tuple[Any, Any] | None = None
 
     def score(self, sets: Sequence[Sequence[Effect]], desc: str = "effect sets") -> list[SetScore]:
         """The held-out score of each set in ``sets``, in order."""
-        if self.client is None or len(sets) < 2:
-            data, split = self.data, self.split
-        else:
-            if self._remote is None:
-                self._remote = tuple(self.client.scatter([self.data, self.split], broadcast=True, hash=False))
-            data, split = self._remote
-        tasks = [(score_effect_set, (list(s), data, split)) for s in sets]
+        tasks = [(_score_with, (list(s),)) for s in sets]
         client = self.client if len(sets) >= 2 else None
-        return list(run_tasks(tasks, client=client, progress=self.progress, description=desc))
+        return list(run_tasks(tasks, client=client, shared=(self.data, self.split), progress=self.progress,
+                              description=desc))
 
-    def close(self) -> None:
-        """Release the scattered data on the cluster."""
-        if self.client is not None and self._remote is not None:
-            self.client.cancel(list(self._remote))
-            self._remote = None
+
+def _score_with(data: DiagnosisData, split: Split, effects: Sequence[Effect]) -> SetScore:
+    """:func:`score_effect_set` with the shared inputs first (a task of :meth:`SetRunner.score`)."""
+    return score_effect_set(effects, data, split)

@@ -362,10 +362,7 @@ def power_stage(model: Any, logs: Sequence[InteractionLog], candidates: Sequence
     prepared = {e.name: tuple(e.prepare(model, log) for log in items) for e in usable}
     data = DiagnosisData(tuple(items), measured, base, False, prepared)
     runner = SetRunner(data, split, client=client, progress=progress)
-    try:
-        sel = select_effects(usable, data, split, runner, settings.n_bootstrap, settings.seed)
-    finally:
-        runner.close()
+    sel = select_effects(usable, data, split, runner, settings.n_bootstrap, settings.seed)
     values = fit_effect_set(list(sel.chosen), data) if sel.chosen else []
     robot_out, effects_out = _corrected(basis, sel.chosen, values)
     stage = stage_of(POWER, items, sel, settings, [i.stopped for i in inputs],

@@ -228,9 +228,9 @@ def evaluate_current_models(
     made of every other run of every ground.
 
     With a dask ``client``, every (fold, model) pair is one task on the cluster: the
-    trimmed logs are scattered to every worker once, each task fits, predicts and scores
-    one model on one fold, and the scores are put back in the order of the serial run, so
-    the result does not depend on which task finishes first.
+    trimmed logs are sent to every worker once (:func:`~terrawatt_base.dask_client.run_tasks`),
+    each task fits, predicts and scores one model on one fold, and the scores are put back in
+    the order of the serial run, so the result does not depend on which task finishes first.
 
     Parameters
     ----------

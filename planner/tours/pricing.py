@@ -178,7 +178,7 @@ def price_pairs(
     compute : Compute, optional
         Where the points are priced and whether a bar shows over them
         (:class:`terrawatt_base.dask_client.Compute`; default here; on dask one task per point,
-        the costs scattered once, as :func:`planner.plan_batch`).
+        the costs sent once, as :func:`planner.plan_batch`).
 
     Returns
     -------

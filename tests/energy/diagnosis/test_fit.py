@@ -158,7 +158,6 @@ def test_serial_scores_are_the_scores_of_each_set_in_order(case):
     for got, s in zip(scores, sets):
         np.testing.assert_array_equal(got.sse_units, score_effect_set(s, data, split).sse_units)
     assert scores[1].sse_units.sum() < scores[0].sse_units.sum()  # the gain explains the gap
-    runner.close()  # nothing scattered: nothing to release
 
 
 def test_a_client_that_is_not_one_is_refused(case):
@@ -174,7 +173,7 @@ def test_on_a_dask_client_equals_serial(case):
     with distributed.Client(processes=False, n_workers=1, threads_per_worker=1, dashboard_address=":0") as client:
         runner = SetRunner(data, split, client=client)
         remote = runner.score(sets)
-        runner.close()
+        assert not client.who_has()  # every shared input and task released after the batch
     serial = SetRunner(data, split).score(sets)
     for a, b in zip(remote, serial):
         np.testing.assert_array_equal(a.sse_units, b.sse_units)
