@@ -203,16 +203,29 @@ def interval_rows(fold: dict[str, Any], rule: Rule, factor: Callable[..., np.nda
             if b == p["a"]:
                 continue
             c = _at(coef, rb)
-            z = (float(np.sum(rb["q_true"])) - float(np.sum(rb["q_base"] + np.sum(c * rb["xint"], axis=1)))) / total_sd(
-                rb["spread"], factor(p, c, rb))
-            out.append({"T": p["T"], "z": z, "level": float(central_level(z, rb["spread"]["dof"]))})
+            q_true = float(np.sum(rb["q_true"]))
+            sd = total_sd(rb["spread"], factor(p, c, rb))
+            z = (q_true - float(np.sum(rb["q_base"] + np.sum(c * rb["xint"], axis=1)))) / sd
+            out.append({"T": p["T"], "z": z, "level": float(central_level(z, rb["spread"]["dof"])),
+                        "log_score": log_score(z, rb["spread"]["dof"], sd / q_true)})
     return out
 
 
+def log_score(z: float, dof: float, rel_sd: float) -> float:
+    """The log predictive density of the measured charge relative to itself (a proper score: higher is better):
+    the standardised error's density under the forecast's Student-t (Gaussian for ``dof = inf``), over the scale."""
+    from scipy.stats import norm
+    from scipy.stats import t as student_t
+
+    dens = float(norm.logpdf(z)) if np.isinf(dof) else float(student_t.logpdf(z, dof))
+    return dens - float(np.log(rel_sd))
+
+
 def coverage(rows: list[dict[str, Any]]) -> list[float]:
-    """Coverage % of the :data:`LEVELS` intervals, then the median |z|."""
+    """Coverage % of the :data:`LEVELS` intervals, then the median |z| and the mean log score (:func:`log_score`)."""
     lv = np.array([r["level"] for r in rows])
-    return [100.0 * float(np.mean(lv <= L)) for L in LEVELS] + [float(np.median(np.abs([r["z"] for r in rows])))]
+    return [100.0 * float(np.mean(lv <= L)) for L in LEVELS] + [float(np.median(np.abs([r["z"] for r in rows]))),
+                                                               float(np.mean([r["log_score"] for r in rows]))]
 
 
 def interval_table(cache: dict[str, Any], rule: Rule, Ts: tuple[float, ...]) -> dict[str, Any]:
@@ -231,8 +244,10 @@ def interval_table(cache: dict[str, Any], rule: Rule, Ts: tuple[float, ...]) -> 
 
         base = []
         for rb in fold["runs"]:
-            z = (float(np.sum(rb["q_true"])) - float(np.sum(rb["q_base"]))) / rb["spread"]["total_sd"]
-            base.append({"T": 0.0, "z": z, "level": float(central_level(z, rb["spread"]["dof"]))})
+            q_true = float(np.sum(rb["q_true"]))
+            z = (q_true - float(np.sum(rb["q_base"]))) / rb["spread"]["total_sd"]
+            base.append({"T": 0.0, "z": z, "level": float(central_level(z, rb["spread"]["dof"])),
+                         "log_score": log_score(z, rb["spread"]["dof"], rb["spread"]["total_sd"] / q_true)})
         pooled.setdefault("unadapted", []).extend(base)
         out[g]["unadapted"] = coverage(base)
         for name, factor in INTERVAL_RULES.items():
@@ -746,13 +761,14 @@ def report(cache: dict[str, Any], Ts: tuple[float, ...], out: Path | None,
             _print_diagnosis(g, d)
     tab = table(cache, rules, Ts, choice_folds)
     tab["intervals"] = interval_table(cache, rule_partition_prior, Ts)
-    print("coverage of the 50 / 80 / 95 % intervals of total charge, median |z| (the default update, partition + prior):")
+    print("coverage of the 50 / 80 / 95 % intervals of total charge, median |z|, mean log score (the default update, "
+          "partition + prior):")
     for g, per in tab["intervals"].items():
         u = per["unadapted"]
-        print(f"{g:10s} unadapted {u[0]:5.1f} / {u[1]:5.1f} / {u[2]:5.1f}  |z| {u[3]:.2f}")
+        print(f"{g:10s} unadapted {u[0]:5.1f} / {u[1]:5.1f} / {u[2]:5.1f}  |z| {u[3]:.2f}  log {u[4]:.3f}")
         for name in INTERVAL_RULES:
-            print(f"{g:10s} {name:16s} " + "   ".join("{:5.1f} / {:5.1f} / {:5.1f}  |z| {:.2f}".format(*per[name][f"{T:g}"])
-                                                     for T in Ts))
+            print(f"{g:10s} {name:16s} " + "   ".join(
+                "{:5.1f} / {:5.1f} / {:5.1f}  |z| {:.2f}  log {:.3f}".format(*per[name][f"{T:g}"]) for T in Ts))
     tab["held_out_choice"] = (held_out_choice(cache, rules, choice_folds)
                               if len(cache["outer"]) > 2 or choice_folds is not None else {})
     print("update chosen on the other grounds or --choice-cache (worst harm at 20 / 40 s, ties within 1 point by the mean error): "

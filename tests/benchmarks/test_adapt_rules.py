@@ -59,7 +59,7 @@ def test_cached_intervals_equal_the_library_forecast(fold):
         assert k["z"] == pytest.approx((q_true - fc.total_mean_as) / base.total_sd_as, rel=1e-6)
     table = ar.interval_table({"outer": {"c": cache}}, ar.rule_partition_prior, (20.0,))
     assert table["c"]["given the prefix"]["20"] == ar.coverage(rows)
-    assert len(table["all"]["unadapted"]) == len(ar.LEVELS) + 1
+    assert len(table["all"]["unadapted"]) == len(ar.LEVELS) + 2  # and the median |z|, the mean log score
 
 
 def test_the_cached_normal_equations_refit_the_update(fold):
