@@ -536,9 +536,7 @@ def solve_tours(prices: PairPrices, problem: TourProblem, *, solver: str | None 
     t0 = time.perf_counter()
     q = problem.risk
     tours: list[list[int]] = [[] for _ in problem.depot_points]
-    rounds = 0  # how many rounds were solved (the outcome says)
-    for _ in range(_MAX_ROUNDS):
-        rounds += 1
+    for rounds in range(1, _MAX_ROUNDS + 1):  # noqa: B007 (how many rounds were solved: the outcome says)
         tours = (solve_pyvrp(problem, time_limit_s, seed) if solver == "pyvrp"
                  else solve_ortools(problem, time_limit_s))
         cap, full = problem.capacity_units.copy(), problem.full_units.copy()
