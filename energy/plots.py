@@ -131,7 +131,7 @@ def plot_current_estimate(
     smooth_pred = moving_median(pred, window_samples)
     t = log.time_s - log.time_s[0]
     if target is None:
-        panels = check_axes(ax, 2, what="left, right current", name="ax")
+        panels = check_axes(ax, 2, what="left, right current")
         _draw_currents(panels, t, measured, smooth_meas, smooth_pred, window_samples, label)
         if title:
             panels[0].set_title(title)
@@ -300,7 +300,7 @@ def plot_vibration_spectra(
     else:
         ylabel = "amplitude (m/s²)"
     if target is None:
-        panels = check_axes(ax, len(spectra), what="one per ground: " + ", ".join(map(repr, spectra)), name="ax")
+        panels = check_axes(ax, len(spectra), what="one per ground: " + ", ".join(map(repr, spectra)))
         _draw_spectra(panels, freq, spectra, smoothing_bins)
         for panel in panels:
             panel.set_ylabel(ylabel, fontsize=9)

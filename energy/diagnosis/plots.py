@@ -200,7 +200,7 @@ def plot_waterfall(diagnosis: Any, path: str | os.PathLike[str] | None = None, *
     dpi = check_int("dpi", dpi, low=10, high=1200)
     steps = diagnosis.current.waterfall
     if target is None:
-        panels = check_axes(ax, 3, what="charge error, section error, RMSE", name="ax")
+        panels = check_axes(ax, 3, what="charge error, section error, RMSE")
         _draw_waterfall(panels, steps)
         return panels
 

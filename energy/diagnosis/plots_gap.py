@@ -155,7 +155,7 @@ def plot_residual_time(logs: Any, predictions: Any, path: str | os.PathLike[str]
     chosen = _runs_to_draw([float(g.sum()) for g in sample_gaps], runs, max_runs)
     if target is None:
         what = f"one per run drawn: runs {', '.join(map(str, chosen))}; choose them with runs= or max_runs="
-        panels = check_axes(ax, len(chosen), what=what, name="ax")
+        panels = check_axes(ax, len(chosen), what=what)
         _draw_residual_runs(panels, items, preds, after, sample_gaps, chosen, section_s, window_samples)
         return panels
 
@@ -266,7 +266,7 @@ def plot_gap_by_regime(diagnosis: Any, path: str | os.PathLike[str] | None = Non
         raise DataError(why)
     rows = regime_rows(diagnosis)
     if target is None:
-        panels = check_axes(ax, len(rows), what="one per dimension: " + ", ".join(map(repr, rows)), name="ax")
+        panels = check_axes(ax, len(rows), what="one per dimension: " + ", ".join(map(repr, rows)))
         _draw_regimes(panels, rows)
         return panels
 

@@ -64,7 +64,7 @@ def plot_mission(result: Any, path: str | os.PathLike[str] | None = None, terrai
     """
     target = check_plot_target(path, ax)
     if target is None:
-        panels = check_axes(ax, 3, what="state of charge, cumulative energy, map", name="ax")
+        panels = check_axes(ax, 3, what="state of charge, cumulative energy, map")
         _draw_mission(panels, result, terrain)
         if title:
             panels[0].set_title(title)
@@ -165,7 +165,7 @@ def plot_adaptive_mission(result: Any, path: str | os.PathLike[str] | None = Non
         raise InvalidParameterError(
             f"registry must be the CellModelRegistry the mission updated, got {type(registry).__name__!r}")
     if target is None:
-        panels = check_axes(ax, 4, what="cells by model, cells by error, state of charge, cumulative energy", name="ax")
+        panels = check_axes(ax, 4, what="cells by model, cells by error, state of charge, cumulative energy")
         _draw_adaptive_mission(panels, result, terrain, registry)
         return panels
 

@@ -63,7 +63,7 @@ def plot_monte_carlo(result: Any, path: str | os.PathLike[str] | None = None, *,
     """
     target = check_plot_target(path, ax)
     if target is None:
-        axes = check_axes(ax, 2, what="histogram, exceedance curve", name="ax")
+        axes = check_axes(ax, 2, what="histogram, exceedance curve")
     done = np.asarray(result.completed)
     if not done.any():
         raise InvalidParameterError(f"all {result.n} missions failed; there is no energy to draw")

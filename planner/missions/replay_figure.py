@@ -38,7 +38,7 @@ def plot_replay(result: Any, path: str | os.PathLike[str] | None = None, *, ax: 
     """
     target = check_plot_target(path, ax)
     if target is None:
-        panels = check_axes(ax, 4, what="models before, models after, remaining energy, state of charge", name="ax")
+        panels = check_axes(ax, 4, what="models before, models after, remaining energy, state of charge")
         _draw(panels, result)
         return panels
     fig, grid = plot_target.new_figure((11, 9), 2, 2)
