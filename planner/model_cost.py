@@ -38,7 +38,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from energy import CurrentModel, GroundParams, RobotParams, ground_preset
-from energy.logs import named_robots, robot_matches
+from energy.logs import UNLABELLED, named_robots, robot_matches
 from terrain import TerrainMap
 from terrain.terrain_map import UNKNOWN_GROUND
 from terrawatt_base.errors import DataError, InvalidParameterError, TerrawattWarning, UnknownNameError
@@ -65,8 +65,6 @@ __all__ = [
 
 #: Ground preset of the physics slope term when a saved model prices the map.
 DEFAULT_MODEL_PHYSICS_GROUND = "asphalt"
-
-_UNNAMED_GROUND = "unlabelled"
 
 
 class ModelCompatibilityWarning(TerrawattWarning):
@@ -185,7 +183,7 @@ def model_grounds(terrain: TerrainMap, summary: TrainedOn | None, *,
     """
     if not isinstance(terrain, TerrainMap):
         raise InvalidParameterError(f"terrain must be a TerrainMap, got {type(terrain).__name__!r}")
-    known = tuple(g for g in (summary.grounds if summary is not None else {}) if g != _UNNAMED_GROUND)
+    known = tuple(g for g in (summary.grounds if summary is not None else {}) if g != UNLABELLED)
     present = [int(v) for v in np.unique(np.asarray(terrain.ground))]
     map_names = {gid: terrain.ground_names.get(gid, str(gid)) for gid in present if gid != UNKNOWN_GROUND}
     where = (f"the model was trained on grounds {list(known)!r}; the map has {sorted(map_names.values())!r}"

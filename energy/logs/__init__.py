@@ -11,7 +11,7 @@ stand still), :mod:`~energy.logs.slope` (the pitch under a run's poses on a map)
 from .arrays import DRIVE_FIELDS, IMU_FIELDS, OPTIONAL_FIELDS
 from .gaps import DEFAULT_GAP_FACTOR, check_gap_factor, gap_steps, median_period_s
 from .interaction_log import RESAMPLE_METHODS, InteractionLog
-from .meta import VELOCITY_SOURCES, LogMeta, named_robots, robot_matches, run_names
+from .meta import UNLABELLED, VELOCITY_SOURCES, LogMeta, ground_name, named_robots, robot_matches, run_names
 from .rest import REST_ACCEL_MPS2, REST_ALPHA_RADPS2, REST_OMEGA_RADPS, REST_SPEED_MPS, at_rest, rest_samples
 from .slope import log_slope_rad
 
@@ -20,6 +20,8 @@ __all__ = [
     "robot_matches",
     "named_robots",
     "run_names",
+    "ground_name",
+    "UNLABELLED",
     "InteractionLog",
     "VELOCITY_SOURCES",
     "RESAMPLE_METHODS",

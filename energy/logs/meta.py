@@ -12,7 +12,7 @@ import numpy as np
 from terrawatt_base.checks import check_optional_real
 from terrawatt_base.errors import InvalidParameterError
 
-__all__ = ["VELOCITY_SOURCES", "LogMeta", "robot_matches", "named_robots", "run_names"]
+__all__ = ["VELOCITY_SOURCES", "UNLABELLED", "LogMeta", "robot_matches", "named_robots", "run_names", "ground_name"]
 
 #: Allowed values of :attr:`LogMeta.velocity_source`.
 VELOCITY_SOURCES = ("commanded", "measured")
@@ -40,6 +40,15 @@ def named_robots(names: Iterable[str]) -> list[str]:
     ['Jackal', 'husky']
     """
     return sorted({str(n) for n in names if str(n).strip().lower() not in UNNAMED_ROBOTS})
+
+
+#: The ground name of a log without a ground label (:func:`ground_name`).
+UNLABELLED = "unlabelled"
+
+
+def ground_name(log: Any) -> str:
+    """A log's ground label as text, :data:`UNLABELLED` without one (anything with a :class:`LogMeta` ``meta``)."""
+    return str(log.meta.ground_label) if log.meta.ground_label is not None else UNLABELLED
 
 
 def run_names(logs: Iterable[Any]) -> list[str]:

@@ -49,7 +49,7 @@ from terrawatt_base.errors import (
     NotFittedError,
 )
 
-from ..logs import InteractionLog
+from ..logs import InteractionLog, ground_name
 from .forecast import CurrentForecast
 from .uncertainty import IntervalModel
 
@@ -157,7 +157,7 @@ class TrainedOn:
     def from_logs(cls, logs: Sequence[InteractionLog]) -> TrainedOn:
         grounds: dict[str, float] = {}
         for lg in logs:
-            key = str(lg.meta.ground_label) if lg.meta.ground_label is not None else "unlabelled"
+            key = ground_name(lg)
             grounds[key] = grounds.get(key, 0.0) + float(lg.duration_s)
         return cls(tuple(sorted({str(lg.meta.robot) for lg in logs})), grounds, len(logs))
 

@@ -19,7 +19,7 @@ from terrawatt_base.formats import result_document
 from terrawatt_base.plot_target import check_ax, check_plot_target, new_figure
 
 from ..features.band import check_band_hz
-from ..logs import InteractionLog, run_names
+from ..logs import InteractionLog, ground_name, run_names
 from ..params import robot_params
 from ..power import trapezoid
 from .base import CurrentModel, TrainedOn, check_logs, log_currents
@@ -273,7 +273,7 @@ class TrainingReport:
         return json_finite(result_document("training", TRAINING_FORMAT_VERSION, {
             "kind": self.kind, "model_class": type(self.model).__name__, "robots": list(trained.robots),
             "grounds_s": dict(trained.grounds),
-            "runs": [{"run": name, "ground": _ground(log), "duration_s": float(log.duration_s)}
+            "runs": [{"run": name, "ground": ground_name(log), "duration_s": float(log.duration_s)}
                      for name, log in zip(run_names(self.logs), self.logs)],
             "n_runs": len(self.logs), "logs_duration_s": self.logs_duration_s, "fit_duration_s": self.fit_duration_s,
             "band_hz": self.band_hz, "gives_interval": self.model.gives_interval, "interval": facts}))
@@ -296,7 +296,7 @@ class TrainingReport:
             charge = self.model.predict_distribution(log).charge()
             low, high = charge.interval(level) if self.model.gives_interval else (math.nan, math.nan)
             measured = float(trapezoid(log_currents(log).sum(axis=1), log.time_s))
-            out.append(RunCharge(name, _ground(log), float(log.duration_s), measured, float(charge.total_mean_as),
+            out.append(RunCharge(name, ground_name(log), float(log.duration_s), measured, float(charge.total_mean_as),
                                  float(low), float(high)))
         return tuple(out)
 
@@ -345,10 +345,6 @@ class TrainingReport:
     def write(self, path: str | os.PathLike[str]) -> Path:
         """Save the model to ``path`` (one file, atomic: :meth:`CurrentModel.save`); return the path written."""
         return self.model.save(path)
-
-
-def _ground(log: InteractionLog) -> str:
-    return str(log.meta.ground_label) if log.meta.ground_label is not None else "unlabelled"
 
 
 def train_report(kind: str, logs: InteractionLog | Sequence[InteractionLog], *, options: ModelOptions | None = None,
