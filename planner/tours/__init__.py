@@ -3,7 +3,7 @@ left when back (issue 33)."""
 
 from __future__ import annotations
 
-from .check import simulate_tours_mc
+from .check import TourCheck, simulate_tours_mc
 from .options import TourFleet, TourSearch
 from .pricing import PairPrices, price_pairs
 from .result import RobotTour, TourLeg, TourResult
@@ -30,4 +30,5 @@ __all__ = [
     "TourProblem",
     "solve_tours",
     "simulate_tours_mc",
+    "TourCheck",
 ]

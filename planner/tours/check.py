@@ -4,21 +4,31 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from energy import Battery
+from terrawatt_base.answer import fmt_fixed, write_answer
+from terrawatt_base.atomic import json_finite, save_figure
 from terrawatt_base.checks import check_instance, check_int, check_seed
 from terrawatt_base.dask_client import Compute
 from terrawatt_base.errors import InvalidParameterError
+from terrawatt_base.formats import result_document, write_result_json
+from terrawatt_base.plot_target import check_ax, check_plot_target, new_figure
 
 from ..missions import MonteCarloResult, MonteCarloStudy, simulate_missions_mc
 from ..route import Route
 from ..route_price import RouteEnergyInterval
 from .result import TourResult
 
-__all__ = ["TourCheck", "simulate_tours_mc"]
+__all__ = ["TourCheck", "simulate_tours_mc", "TOUR_CHECK_FORMAT_VERSION"]
+
+#: Version of tour_check.json (format ``terrawatt-tour-check``, :meth:`TourCheck.to_dict`).
+TOUR_CHECK_FORMAT_VERSION = 1
 
 
 @dataclass(frozen=True)
@@ -37,11 +47,40 @@ class TourCheck:
         the tour: the shares are over the others, the failed ones counted (:meth:`n_failed`, the summary).
     draw_from : str
         ``"model"`` (the planning model's own distribution) or ``"parameters"`` (the truth simulator).
+    stops : dict of str to tuple of str
+        Per robot, where each segment of its tour ends: its charging stops' names, then its depot's. A robot
+        not named here has its stops named ``"stop 1"``, ... and ``"depot"`` (:meth:`stop_names`).
+    map_label : str
+        How the map is named.
+
+    :meth:`summary` prints it, :meth:`to_dict` is tour_check.json, :meth:`plot` draws the share above the
+    reserve at each stop beside Q, :meth:`write` writes the JSON and the figure.
     """
 
     risk: float
     runs: dict[str, tuple[MonteCarloResult, ...]]
     draw_from: str
+    stops: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    map_label: str = "map"
+
+    def __post_init__(self) -> None:
+        if self.draw_from not in ("model", "parameters"):
+            raise InvalidParameterError(f"draw_from must be 'model' or 'parameters', got {self.draw_from!r}")
+        for name, studies in self.runs.items():
+            if not studies or not all(isinstance(mc, MonteCarloResult) for mc in studies):
+                raise InvalidParameterError(f"runs[{name!r}] must be one MonteCarloResult or more, got {studies!r:.80}")
+            if len({mc.n for mc in studies}) != 1:
+                raise InvalidParameterError(f"runs[{name!r}] must drive every segment as often, got "
+                                            f"{[mc.n for mc in studies]!r}")
+        for name, places in self.stops.items():
+            if name not in self.runs or len(places) != len(self.runs[name]):
+                raise InvalidParameterError(f"stops[{name!r}] must name the end of each of the robot's "
+                                            f"{len(self.runs.get(name, ()))} segments, got {places!r}")
+
+    def stop_names(self, robot: str) -> tuple[str, ...]:
+        """Where each segment of ``robot``'s tour ends: its charging stops, then back at its depot."""
+        k = len(self.runs[robot])
+        return self.stops.get(robot) or (*(f"stop {j + 1}" for j in range(k - 1)), "depot")
 
     def completed(self, robot: str) -> np.ndarray:
         """Per mission of ``robot``'s tour, whether it completed in every segment."""
@@ -59,6 +98,12 @@ class TourCheck:
         below = np.logical_or.reduce([np.asarray(mc.below_reserve, dtype=bool) for mc in studies])
         return ~below[done]
 
+    def share_of(self, robot: str) -> float:
+        """The share of ``robot``'s completed tours above the reserve at every charger arrival and back (NaN if none
+        completed)."""
+        flags = self.above_reserve(robot)
+        return float(flags.mean()) if flags.size else math.nan
+
     @property
     def share_above_reserve(self) -> float:
         """The share of the robots' simulated tours that end above the reserve, and above it at every charger arrival
@@ -75,14 +120,15 @@ class TourCheck:
     def summary(self) -> str:
         """One line per robot (with the share at each charger arrival, where it charges) and the total, beside Q;
         the tours that failed, if any, counted with the first reason."""
+        if not self.runs:
+            return f"no tour to drive at Q = {self.risk:g}: no robot visits a site"
         lines = []
         n_failed = 0
         for name, studies in self.runs.items():
-            flags = self.above_reserve(name)
             failed = self.n_failed(name)
             n_failed += failed
-            tours = f"{studies[0].n} tours" if not failed else f"{flags.size} completed tours"
-            line = f"{name}: {100 * flags.mean() if flags.size else math.nan:.1f} % of {tours} end above the reserve"
+            tours = f"{studies[0].n} tours" if not failed else f"{studies[0].n - failed} completed tours"
+            line = f"{name}: {100 * self.share_of(name):.1f} % of {tours} end above the reserve"
             if len(studies) > 1:
                 at = ", ".join(f"{100 * s:.1f} %" for s in self.share_above_at_stops(name)[:-1])
                 line += f" (above it at each charger arrival: {at}; at every one and back)"
@@ -94,6 +140,81 @@ class TourCheck:
         lines.append(f"all: {100 * self.share_above_reserve:.1f} % above the reserve at Q = {self.risk:g} "
                      f"(draws from the {self.draw_from}){failures}")
         return "\n".join(lines)
+
+    def to_dict(self) -> dict[str, Any]:
+        """tour_check.json: a ``terrawatt-tour-check`` result document (``format_version``
+        :data:`TOUR_CHECK_FORMAT_VERSION`), strict JSON (NaN as ``None``).
+
+        The level Q, what was drawn, the share above the reserve over every robot and the failed tours; per robot
+        (with a tour) its missions ``n`` and failed tours, its share above the reserve at every stop, where each
+        segment ends (``stops``) and the share above it there (``share_above_at_stops``), and each segment's Monte
+        Carlo study as its own ``terrawatt-monte-carlo`` document without the per-sample columns
+        (:meth:`planner.MonteCarloResult.to_dict` with ``samples=False``: energy percentiles, the reserve risk and
+        its interval, the battery, the forecast).
+        """
+        robots = [{"robot": name, "n": studies[0].n, "n_failed": self.n_failed(name),
+                   "share_above_reserve": self.share_of(name), "stops": list(self.stop_names(name)),
+                   "share_above_at_stops": list(self.share_above_at_stops(name)),
+                   "segments": [mc.to_dict(samples=False) for mc in studies]}
+                  for name, studies in self.runs.items()]
+        return json_finite(result_document("tour-check", TOUR_CHECK_FORMAT_VERSION, {
+            "map": self.map_label, "risk": self.risk, "draw_from": self.draw_from,
+            "share_above_reserve": self.share_above_reserve,
+            "n_failed": sum(self.n_failed(name) for name in self.runs), "robots": robots}))
+
+    def plot(self, path: str | os.PathLike[str] | None = None, *, ax: Any = None) -> Path | Any:
+        """Per robot, the share of its tours above the reserve at each stop (a bar per charger arrival and one back
+        at the depot), beside the level Q the tours were planned at; the legend gives each robot's share above it at
+        every stop and its failed tours.
+
+        Give exactly one of ``path`` (write a PNG atomically and return the path) or ``ax`` (a matplotlib Axes to
+        draw into; nothing is written and it is returned).
+
+        Raises
+        ------
+        InvalidParameterError
+            Both or neither of ``path`` and ``ax``; a bad ``path`` or ``ax``.
+        """
+        target = check_plot_target(path, ax)
+        n_bars = sum(len(studies) + 1 for studies in self.runs.values())
+        if target is None:
+            axes = check_ax(ax)
+        else:
+            fig, axes = new_figure((max(5.0, 1.5 + 0.55 * n_bars), 4.0))
+        ticks: list[float] = []
+        labels: list[str] = []
+        x0 = 0
+        for k, (name, studies) in enumerate(self.runs.items()):
+            shares = 100.0 * np.array(self.share_above_at_stops(name), dtype=float)
+            x = x0 + np.arange(shares.size)
+            failed = self.n_failed(name)
+            label = (f"{name}: {fmt_fixed(100 * self.share_of(name))} % above at every stop"
+                     + (f"; {failed} of {studies[0].n} tours failed" if failed else ""))
+            bars = axes.bar(x, np.nan_to_num(shares), width=0.7, color=f"C{k}", label=label)
+            axes.bar_label(bars, labels=[fmt_fixed(s) for s in shares], fontsize=7)
+            ticks += x.tolist()
+            labels += self.stop_names(name)
+            x0 += shares.size + 1
+        axes.axhline(100.0 * self.risk, color="k", ls="--", lw=1, label=f"planned at Q = {self.risk:g}")
+        axes.set_xticks(ticks, labels, rotation=45 if len(ticks) > 8 else 0, fontsize=8)
+        axes.set_ylim(0.0, 100.0 + 8.0 * (len(self.runs) + 2))  # room above the bars for the legend
+        axes.set_yticks(np.arange(0, 101, 20))
+        axes.set_xlabel("arrival at")
+        axes.set_ylabel("tours above the reserve (%)")
+        n = next(iter(self.runs.values()))[0].n if self.runs else 0
+        axes.set_title(f"{self.map_label}: the tours driven {n} times (draws from the {self.draw_from}),\n"
+                       "above the reserve at each stop", fontsize=10)
+        axes.legend(fontsize=8, loc="upper center")
+        if target is None:
+            return axes
+        fig.tight_layout()
+        return save_figure(fig, target)
+
+    def write(self, out_dir: str | os.PathLike[str], *, on_figure_error: str = "warn") -> list[Path]:
+        """Write tour_check.json and (with a tour driven) tour_check.png into ``out_dir``; return the files written
+        (a figure that fails warns and is left out)."""
+        return write_answer(out_dir, {"tour_check.json": lambda p: write_result_json(p, self.to_dict())},
+                            {"tour_check.png": self.plot} if self.runs else {}, on_figure_error=on_figure_error)
 
 
 def simulate_tours_mc(result: TourResult, n: int = 1000, *, seed: int | None = 0, draw_from: str | None = None,
@@ -122,6 +243,7 @@ def simulate_tours_mc(result: TourResult, n: int = 1000, *, seed: int | None = 0
     mode = draw_from or ("model" if result.cost.has_interval else "parameters")
     compute = Compute() if compute is None else check_instance("compute", compute, Compute)
     runs: dict[str, tuple[MonteCarloResult, ...]] = {}
+    stops: dict[str, tuple[str, ...]] = {}
     with compute.session() as (client, where):  # one cluster for every segment of every tour
         each = compute if client is None else Compute(client=client, where=where, progress=compute.progress)
         for k, tour in enumerate(result.tours):
@@ -134,7 +256,8 @@ def simulate_tours_mc(result: TourResult, n: int = 1000, *, seed: int | None = 0
                                                                     draw_from=mode),
                     cost=result.cost, forecast=forecast if mode == "model" else None, compute=each))
             runs[tour.robot] = tuple(studies)
-    return TourCheck(result.risk, runs, mode)
+            stops[tour.robot] = (*(tour.stops[j] for j in tour.charging_stops), tour.legs[-1].end)
+    return TourCheck(result.risk, runs, mode, stops, result.map_label)
 
 
 def _segments(result: TourResult, robot: int) -> list[tuple[Route, Battery, RouteEnergyInterval]]:

@@ -1,12 +1,15 @@
-"""The tours' Monte Carlo (planner.tours.check): the share above the reserve beside Q."""
+"""The tours' Monte Carlo (planner.tours.check): the share above the reserve beside Q, its JSON and its figure."""
 
 from __future__ import annotations
 
 import numpy as np
-from tour_samples import hills_cost  # noqa: F401  (fixture)
+import pytest
+from tour_samples import hills_cost, with_interval  # noqa: F401  (fixture)
 
 from energy import Battery
-from planner.tours import TourRobot, TourSearch, TourSites, plan_tour, simulate_tours_mc
+from planner.cost_spec import CostSpec
+from planner.tours import TourChargers, TourRobot, TourSearch, TourSites, plan_tour, simulate_tours_mc
+from terrain import flat_map
 
 
 def test_monte_carlo_of_the_tours_ends_above_the_reserve_about_as_often_as_q(hills_cost):
@@ -80,3 +83,120 @@ def test_a_failed_task_fails_its_tours_counted_in_the_summary_not_dropped(hills_
     text = check.summary()
     assert f"of {20 - failed} completed tours" in text and f"{failed} of 20 failed (first: RuntimeError: worker lost)" in text
     assert text.endswith(f"; {failed} tours failed") and "failed" not in whole.summary()
+
+
+def _charged_corridor():
+    """A flat 60 m x 20 m corridor with a spread: a near and a far site, a dock between (the far one needs a charge)."""
+    cost = with_interval(CostSpec().build(flat_map((20, 60), 1.0)))
+    sites = TourSites(("near", "far"), [[10.0, 10.0], [55.0, 10.0]], value=[1.0, 5.0])
+    robot = TourRobot(Battery(0.09, 24.0, min_reserve_pct=20.0), (2.0, 10.0))
+    return plan_tour(cost, sites, robot, chargers=TourChargers(("dock",), [[30.0, 10.0]]),
+                     search=TourSearch(risk=0.9, time_limit_s=1.0))
+
+
+def test_to_dict_is_the_versioned_strict_json_of_the_check_and_write_saves_it(tmp_path):
+    import json
+
+    from matplotlib.figure import Figure
+
+    from planner.tours.check import TOUR_CHECK_FORMAT_VERSION
+    from terrawatt_base.formats import read_result_json
+
+    res = _charged_corridor()
+    tour = res.tours[0]
+    assert tour.charging_stops  # the case has segments: a study per segment
+    check = simulate_tours_mc(res, 40, seed=1)
+    doc = check.to_dict()
+    assert doc["format"] == "terrawatt-tour-check" and doc["format_version"] == TOUR_CHECK_FORMAT_VERSION == 1
+    assert json.loads(json.dumps(doc, allow_nan=False)) == doc
+    assert doc["risk"] == 0.9 and doc["draw_from"] == "model" and doc["n_failed"] == 0
+    assert doc["share_above_reserve"] == check.share_above_reserve
+    (robot,) = doc["robots"]
+    name = tour.robot
+    assert robot["robot"] == name and robot["n"] == 40 and robot["n_failed"] == check.n_failed(name) == 0
+    assert robot["share_above_reserve"] == check.share_of(name) == check.above_reserve(name).mean()
+    assert robot["share_above_at_stops"] == list(check.share_above_at_stops(name))
+    # where each segment ends: the charging stops by name, then the depot; one Monte Carlo document per segment
+    assert robot["stops"] == [*(tour.stops[k] for k in tour.charging_stops), "depot"]
+    assert len(robot["segments"]) == len(tour.charging_stops) + 1 == len(check.runs[name])
+    for seg, mc in zip(robot["segments"], check.runs[name]):
+        assert seg["format"] == "terrawatt-monte-carlo" and "samples" not in seg
+        assert seg["p_below_reserve"] == mc.p_below_reserve and seg["n"] == 40
+    ax = Figure().subplots()
+    check.plot(ax=ax)  # a bar per segment's end, named as in the JSON
+    assert len(ax.patches) == len(robot["stops"]) and [t.get_text() for t in ax.get_xticklabels()] == robot["stops"]
+    written = check.write(tmp_path / "out")
+    assert [p.name for p in written] == ["tour_check.json", "tour_check.png"]
+    assert read_result_json(written[0], "tour-check", TOUR_CHECK_FORMAT_VERSION) == doc
+
+
+def test_failed_tours_are_counted_in_the_json_and_none_completed_is_null_not_nan(hills_cost, monkeypatch):
+    import json
+
+    from planner.missions.monte_carlo_model import ModelMissionSetup
+
+    rng = np.random.default_rng(5)
+    sites = TourSites(tuple(f"s{k}" for k in range(6)), rng.uniform(3.0, 37.0, size=(6, 2)))
+    res = plan_tour(hills_cost, sites, TourRobot(Battery(0.15, 24.0), (20.0, 20.0)), search=TourSearch(risk=0.9))
+    real = ModelMissionSetup.run_chunk
+    dead = {"below": 5}
+
+    def dies_below(self, seqs):  # fail the missions under dead["below"]
+        if any(q.spawn_key[0] < dead["below"] for q in seqs):
+            raise RuntimeError("worker lost")
+        return real(self, seqs)
+
+    monkeypatch.setattr(ModelMissionSetup, "run_chunk", dies_below)
+    check = simulate_tours_mc(res, 20, seed=3)
+    (name,) = check.runs
+    doc = check.to_dict()
+    failed = check.n_failed(name)
+    assert failed >= 5 and doc["n_failed"] == doc["robots"][0]["n_failed"] == failed
+    assert doc["robots"][0]["share_above_reserve"] == check.above_reserve(name).sum() / (20 - failed)
+    dead["below"] = 20  # every mission fails: no share to give
+    none = simulate_tours_mc(res, 20, seed=3)
+    doc = none.to_dict()
+    assert none.n_failed(name) == 20 and np.isnan(none.share_above_reserve)
+    assert doc["share_above_reserve"] is None and doc["robots"][0]["share_above_at_stops"] == [None]
+    json.dumps(doc, allow_nan=False)  # strict JSON
+
+
+def test_plot_draws_a_bar_per_stop_of_each_robot_beside_q(hills_cost, tmp_path):
+    from matplotlib.figure import Figure
+
+    from terrawatt_base.errors import InvalidParameterError
+
+    rng = np.random.default_rng(5)
+    sites = TourSites(tuple(f"s{k}" for k in range(8)), rng.uniform(3.0, 37.0, size=(8, 2)))
+    robots = [TourRobot(Battery(0.08, 24.0), (20.0, 20.0), f"robot {k}") for k in range(2)]
+    res = plan_tour(hills_cost, sites, robots, search=TourSearch(risk=0.9))
+    check = simulate_tours_mc(res, 20, seed=1)
+    assert len(check.runs) == 2
+    ax = Figure().subplots()
+    assert check.plot(ax=ax) is ax
+    heights = sorted(100 * s for name in check.runs for s in check.share_above_at_stops(name))
+    assert sorted(p.get_height() for p in ax.patches) == heights  # one bar per robot and stop
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["depot", "depot"]
+    assert [tuple(line.get_ydata()) for line in ax.get_lines()] == [(90.0, 90.0)]  # Q, the reference
+    assert all(name in ax.get_legend().get_texts()[k + 1].get_text() for k, name in enumerate(check.runs))
+    path = check.plot(tmp_path / "check.png")
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    with pytest.raises(InvalidParameterError, match="give either path or ax="):
+        check.plot(tmp_path / "again.png", ax=ax)
+
+
+def test_a_check_without_a_tour_says_so_and_writes_only_its_json(tmp_path):
+    import json
+
+    from planner.tours import TourCheck
+    from terrawatt_base.errors import InvalidParameterError
+
+    empty = TourCheck(0.9, {}, "model")
+    assert empty.summary() == "no tour to drive at Q = 0.9: no robot visits a site"
+    assert [p.name for p in empty.write(tmp_path)] == ["tour_check.json"]
+    doc = json.loads((tmp_path / "tour_check.json").read_text())
+    assert doc["robots"] == [] and doc["share_above_reserve"] is None
+    with pytest.raises(InvalidParameterError, match="draw_from must be 'model' or 'parameters', got 'truth'"):
+        TourCheck(0.9, {}, "truth")
+    with pytest.raises(InvalidParameterError, match=r"stops\['r'\] must name the end of each"):
+        TourCheck(0.9, {}, "model", stops={"r": ("depot",)})
