@@ -8,7 +8,14 @@ from typing import Any
 
 from planner.points import point_on_map
 from planner.tables import check_planning_risk
-from planner.tours import TourFleet, TourSearch, plan_tour_on_map, read_tour_chargers_csv, read_tour_sites_csv
+from planner.tours import (
+    TourFleet,
+    TourSearch,
+    plan_tour_on_map,
+    read_tour_chargers_csv,
+    read_tour_sites_csv,
+    simulate_tours_mc,
+)
 from terrain import InvalidParameterError
 
 from .common import (
@@ -39,6 +46,8 @@ _FLAGS = {"depot_xy_m": "--depot", "n_robots": "--robots", "max_duration_s": "--
           "time_limit_s": "--time-limit"}
 
 _OUTPUTS = ("tour.json", "tour.geojson", "tour.png", "tour_soc.png")
+#: What ``--monte-carlo N`` adds (:meth:`planner.tours.TourCheck.write`).
+_CHECK_OUTPUTS = ("tour_check.json", "tour_check.png")
 
 
 def add_parser(sub: Any) -> None:
@@ -46,7 +55,8 @@ def add_parser(sub: Any) -> None:
     p = sub.add_parser(
         "tour",
         help="many sites on one charge: which sites each robot visits, in what order, coming back above its reserve "
-             "at a risk level; writes tour.json, tour.geojson, tour.png and tour_soc.png",
+             "at a risk level; writes tour.json, tour.geojson, tour.png and tour_soc.png (with --monte-carlo N, "
+             "tour_check.json and tour_check.png)",
         description="Prices every ordered pair of the depot and the sites on the map (uphill != downhill; on dask "
                     "with --workers), then chooses and orders the sites with PyVRP to maximise the value visited while "
                     "every robot's tour, at the Q quantile of its energy, returns above the reserve. Exit 0 with "
@@ -83,7 +93,15 @@ def add_parser(sub: Any) -> None:
                         "reserve (with --model of a model with an interval; the presets' price is exact)")
     p.add_argument("--time-limit", type=float, default=10.0, metavar="S", action=Checked, check=positive,
                    help="the routing solver's time limit per solve (s, default 10)")
-    p.add_argument("--seed", type=int, default=0, help="the routing solver's seed (default 0)")
+    p.add_argument("--seed", type=int, default=0, help="the routing solver's seed, and the --monte-carlo draws' "
+                                                       "(default 0)")
+    p.add_argument("--monte-carlo", type=int, default=None, metavar="N", action=Checked,
+                   check=bounded("an integer >= 1", lambda v: v >= 1),
+                   help="then drive each planned tour N times through the mission simulator, charged to full at "
+                        "each charging stop (from the model's own distribution with --model of a model with an "
+                        "interval, else drawn parameters; on the --workers cluster) and print the share that ends "
+                        "above the reserve, and at each charger arrival, beside Q; writes tour_check.json and "
+                        "tour_check.png (exit 1 also when a drive fails, as a Monte Carlo row with an error)")
     p.add_argument("--bag", action="store_true", help="also write each robot's tour as a ROS 2 bag (tour_<k>.mcap)")
     add_dask_options(p, "the pricing of the legs")
     add_robot_options(p)
@@ -92,8 +110,9 @@ def add_parser(sub: Any) -> None:
 
 
 def run_tour(args: argparse.Namespace) -> int:
-    """``terrawatt tour``: plan the tours, write their files, print the summary; exit 1 when nothing is reachable or
-    a site is an error row (the others planned and written), as ``batch`` does for its rows."""
+    """``terrawatt tour``: plan the tours (with ``--monte-carlo N``, drive them N times), write their files, print the
+    summaries; exit 1 when nothing is reachable, a site is an error row (the others planned and written) or a driven
+    tour failed, as ``batch`` does for its rows."""
     if args.robots is not None and args.robots != int(args.robots):
         raise InvalidParameterError(f"--robots must be an integer >= 1, got {args.robots!r}")
     flag, given = ("--depot", args.depot) if args.depot else ("--depot-lonlat", args.depot_lonlat)
@@ -104,7 +123,8 @@ def run_tour(args: argparse.Namespace) -> int:
     check_dask_flags(args)
     check_model_flags(args)
     bags = tuple(f"tour_{k}.mcap" for k in range(robots)) if args.bag else ()
-    check_outputs(args.out, _OUTPUTS + bags, input_paths(args))  # the bags too: none may replace an input
+    checked = _CHECK_OUTPUTS if args.monte_carlo is not None else ()
+    check_outputs(args.out, _OUTPUTS + bags + checked, input_paths(args))  # the bags too: none may replace an input
     tmap, label = map_arg(args)
     depots = [point_on_map(xy if flag == "--depot" else None, xy if flag != "--depot" else None, tmap,
                            names=("--depot", "--depot-lonlat")) for xy in given]
@@ -117,8 +137,13 @@ def run_tour(args: argparse.Namespace) -> int:
         result = plan_tour_on_map(
             tmap, sites, fleet, search=TourSearch(risk=args.tour_risk, time_limit_s=args.time_limit, seed=args.seed),
             pricing=pricing, compute=compute, map_label=label, chargers=chargers)
+        check = simulate_tours_mc(result, args.monte_carlo, seed=args.seed, compute=compute) if checked else None
     with warn_figures():
         written = result.write(args.out, bag=args.bag)
+        written += check.write(args.out) if check is not None else []
     print(result.summary())
+    if check is not None:
+        print(f"\nMonte Carlo, each tour driven {args.monte_carlo} times:\n{check.summary()}")
     print("\nwrote " + ", ".join(str(w) for w in written))
-    return 0 if result.status == "planned" and not result.errors else 1
+    failed = check is not None and any(check.n_failed(robot) for robot in check.runs)
+    return 0 if result.status == "planned" and not result.errors and not failed else 1

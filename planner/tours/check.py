@@ -180,7 +180,7 @@ class TourCheck:
         if target is None:
             axes = check_ax(ax)
         else:
-            fig, axes = new_figure((max(5.0, 1.5 + 0.55 * n_bars), 4.0))
+            fig, axes = new_figure((max(6.0, 1.5 + 0.55 * n_bars), 4.0))
         ticks: list[float] = []
         labels: list[str] = []
         x0 = 0
@@ -202,8 +202,8 @@ class TourCheck:
         axes.set_xlabel("arrival at")
         axes.set_ylabel("tours above the reserve (%)")
         n = next(iter(self.runs.values()))[0].n if self.runs else 0
-        axes.set_title(f"{self.map_label}: the tours driven {n} times (draws from the {self.draw_from}),\n"
-                       "above the reserve at each stop", fontsize=10)
+        axes.set_title(f"tours on {self.map_label} driven {n} times (draws from the {self.draw_from}):\n"
+                       "the share above the reserve at each stop", fontsize=9)
         axes.legend(fontsize=8, loc="upper center")
         if target is None:
             return axes

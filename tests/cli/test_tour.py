@@ -144,3 +144,42 @@ def test_cli_one_depot_per_robot(tmp_path, capsys, wall_map):
     rc = main(args + ["--robots", "3", "--out", str(tmp_path / "bad")])
     err = capsys.readouterr().err
     assert rc == 2 and "--depot is given 2 times but --robots is 3" in err
+
+
+def test_cli_monte_carlo_drives_the_tours_and_writes_tour_check_json(tmp_path, capsys, wall_map, monkeypatch):
+    tmap = wall_map.save(tmp_path / "wall.npz")
+    sites = _sites(tmp_path, ["pump,5.5,35.5,2", "shed,35.5,5.5,1"])
+    out = tmp_path / "out"
+    rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "0.2",
+               "--voltage", "24", "--robots", "2", "--monte-carlo", "6", "--seed", "4", "--out", str(out)])
+    text = capsys.readouterr().out
+    assert rc == 0, text
+    tours = json.loads((out / "tour.json").read_text())
+    doc = json.loads((out / "tour_check.json").read_text())
+    assert doc["format"] == "terrawatt-tour-check" and doc["format_version"] == 1 and doc["risk"] == 0.9
+    driven = [r["robot"] for r in tours["robots"] if r["legs"]]
+    assert [r["robot"] for r in doc["robots"]] == driven and driven
+    assert all(r["n"] == 6 and r["stops"] == ["depot"] for r in doc["robots"])
+    assert doc["draw_from"] == "parameters"  # the presets' exact price: the truth simulator draws
+    assert (out / "tour_check.png").read_bytes()[:8] == PNG_MAGIC
+    assert "each tour driven 6 times" in text and "above the reserve at Q = 0.9" in text and "tour_check.json" in text
+    rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "0.2",
+               "--monte-carlo", "0", "--out", str(tmp_path / "again")])
+    err = capsys.readouterr().err
+    assert rc == 2 and "--monte-carlo" in err and "an integer >= 1" in err and not (tmp_path / "again").exists()
+    # a drive that fails is counted in tour_check.json and makes the exit code 1, as a Monte Carlo row with an error
+    from planner.missions.monte_carlo import MissionSetup
+
+    real = MissionSetup.run_chunk
+
+    def dies_on_the_first_two(self, seqs):
+        if any(q.spawn_key[0] < 2 for q in seqs):
+            raise RuntimeError("worker lost")
+        return real(self, seqs)
+
+    monkeypatch.setattr(MissionSetup, "run_chunk", dies_on_the_first_two)
+    rc = main(["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "0.2",
+               "--voltage", "24", "--monte-carlo", "6", "--out", str(tmp_path / "failed")])
+    text = capsys.readouterr().out
+    doc = json.loads((tmp_path / "failed" / "tour_check.json").read_text())
+    assert rc == 1 and doc["n_failed"] >= 2 and f"{doc['n_failed']} tours failed" in text
