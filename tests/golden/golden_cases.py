@@ -176,6 +176,19 @@ def case_tour_chargers(work: Path) -> dict[str, Path]:
     return {f"tour_chargers/{p.name}": p for p in sorted(out.iterdir())}
 
 
+def case_tour_check(work: Path) -> dict[str, Path]:
+    """The tour of ``tour_chargers`` driven 8 times (``--monte-carlo 8``): the share above the reserve at each stop."""
+    path = patch_map(work)
+    sites = work / "sites.csv"
+    sites.write_text("name,x_m,y_m,value\npump,10.5,20.5,2\nshed,55.5,20.5,3\nwell,50.5,5.5,1\n")
+    chargers = work / "chargers.csv"
+    chargers.write_text("name,x_m,y_m,power_w,connection_time_s,max_visits\ndock,36.5,21.5,60,15,2\n")
+    out = work / "tour_check"
+    _cli("tour", "--map", path, "--sites", sites, "--chargers", chargers, "--depot", 3.5, 12.5, "--battery-ah", 0.08,
+         "--voltage", 24, "--risk", 0.9, "--time-limit", 1, "--monte-carlo", 8, "--out", out)
+    return {f"tour_check/{name}": out / name for name in ("tour_check.json", "tour_check.png")}
+
+
 def case_tour_windows(work: Path) -> dict[str, Path]:
     """One robot's tour of four sites with service energy and time, two time windows and a duration limit."""
     path = patch_map(work)
