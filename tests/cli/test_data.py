@@ -109,7 +109,7 @@ def test_ignored_csv_flags_exit_2_with_one_line(tmp_path, capsys, flags):
     paths = {"BOREALTC": str(FIXTURES), "GENERIC": str(FIXTURES.parent / "generic_ma.csv")}
     rc = main(["train", "--model", "physics", *[paths.get(f, f) for f in flags], "--out", str(tmp_path / "m")])
     assert rc == EXIT_BAD_INPUT
-    assert "--track-width" in one_line_error(capsys) and not (tmp_path / "m").exists()
+    assert "--track-width" in one_line_error(capsys) and not (tmp_path / "m").exists()  # the `csv` layout, by its flags
 
 
 def test_the_path_the_library_names_is_said_as_the_flag_that_gave_it(tmp_path):

@@ -239,10 +239,28 @@ def test_the_battery_power_of_a_log_uses_its_measured_voltage(bags):
 
 @requires_rosbags
 def test_an_imu_publishing_in_g_is_refused_until_its_unit_is_given(tmp_path):
-    truth = write_robot_bag(tmp_path / "g.bag", in_g=True)
+    write_robot_bag(tmp_path / "g.bag", in_g=True)
     with pytest.raises(UnitError, match=r"looks like an acceleration in g.*give accel_unit='g'") as raised:
         read_rosbag(tmp_path / "g.bag", BagTopics(**HUSKY))
     assert raised.value.parameter == "accel_unit"
+
+
+@requires_rosbags
+def test_the_command_line_says_the_accel_unit_by_its_flag(tmp_path, capsys):
+    from terrawatt_cli import main
+
+    write_robot_bag(tmp_path / "g.bag", in_g=True)
+    rc = main(["train", "--model", "constant", "--data", str(tmp_path / "g.bag"), "--cmd-vel-topic",
+               "/odometry/filtered", "--current-topics", "/status", "--current-fields", "left_driver_current",
+               "right_driver_current", "--out", str(tmp_path / "m.zip")])
+    err = capsys.readouterr().err
+    assert rc == 2 and "looks like an acceleration in g" in err
+    assert "give --accel-unit='g' for an IMU driver that publishes in g" in err, err
+
+
+@requires_rosbags
+def test_an_imu_in_g_reads_once_its_unit_is_given(tmp_path):
+    truth = write_robot_bag(tmp_path / "g.bag", in_g=True)
     log = read_rosbag(tmp_path / "g.bag", BagTopics(**HUSKY, accel_unit="g"))
     assert not log.meta.gravity_removed
     assert np.median(log.accel_z_mps2) == pytest.approx(np.median(truth["az"]), rel=2e-3)  # m/s^2 again
