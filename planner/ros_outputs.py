@@ -125,7 +125,8 @@ def check_ros_outputs(
         ``bag`` without rosbags, ``energy_geotiff`` without rasterio.
 
     Each error names the parameter(s) of :data:`ROS_OUTPUTS` it is about
-    (:attr:`~terrawatt_base.errors.TerrawattError.parameter`, in backticks where the word is also prose: ```bag```).
+    (:attr:`~terrawatt_base.errors.TerrawattError.parameter`; in backticks, ```bag```, where the word is also prose
+    or a path in the message may hold it).
 
     Examples
     --------
@@ -150,19 +151,19 @@ def check_ros_outputs(
         outputs.append(("bag", check_route_bag_path(bag, "`bag`")[0]))
     if nav2_map is not None:
         for yaml_path in nav2_targets(nav2_map):
-            outputs += [("nav2_map", p) for p in nav2_map_paths(yaml_path, "nav2_map")]
+            outputs += [("nav2_map", p) for p in nav2_map_paths(yaml_path, "`nav2_map`")]
     if energy_geotiff is not None:
         import_rasterio()
-        target = check_output_path(energy_geotiff, "energy_geotiff")
+        target = check_output_path(energy_geotiff, "`energy_geotiff`")
         if target.suffix.lower() not in (".tif", ".tiff"):
-            raise InvalidParameterError(f"energy_geotiff writes a GeoTIFF ending in '.tif' or '.tiff', got "
+            raise InvalidParameterError(f"`energy_geotiff` writes a GeoTIFF ending in '.tif' or '.tiff', got "
                                         f"{str(target)!r}", parameter="energy_geotiff")
         outputs.append(("energy_geotiff", target))
     ins = [Path(p) for p in inputs if p is not None]
     taken_by: dict[Path, str] = {}
     taken = {Path(os.path.abspath(p)): "the command's own output" for p in others}
     for param, path in outputs:
-        said = "`bag`" if param == "bag" else param
+        said = f"`{param}`"  # marked: a path in the message may hold the word
         refuse_overwriting_inputs([path], ins, said)
         key = Path(os.path.abspath(path))
         if key in taken:
@@ -170,4 +171,4 @@ def check_ros_outputs(
                                         parameter=tuple(dict.fromkeys((param, taken_by.get(key, param)))))
         taken[key], taken_by[key] = f"written for {said}", param
     for param, path in outputs:
-        probe_writable(path.parent if str(path.parent) else Path("."), "`bag`" if param == "bag" else param)
+        probe_writable(path.parent if str(path.parent) else Path("."), f"`{param}`")
