@@ -248,7 +248,7 @@ def write_robot_file(robot: RobotParams, path: str | os.PathLike[str]) -> Path:
     """Write ``robot`` as a robot file: JSON (format ``terrawatt-robot``, versioned), written atomically.
 
     Start from a preset and edit the numbers (SI units; :class:`RobotParams` says what each is),
-    then give the file wherever a robot is named (``--robot FILE.json``, :func:`robot_params`).
+    then give the file wherever a robot is named (its path, :func:`robot_params`).
 
     Raises
     ------
@@ -289,7 +289,8 @@ def robot_params(robot: str | os.PathLike[str] | RobotParams, *, name: str = "ro
     """The robot that ``robot`` names: a :class:`RobotParams` as it is, a preset name
     (:data:`ROBOT_PRESETS`), or a robot file (a path ending in ``.json``, :func:`read_robot_file`).
 
-    ``name`` is how messages call it (the command line passes ``"--robot"``).
+    ``name`` is how messages call it: the caller's parameter, which the errors carry
+    (:attr:`~terrawatt_base.errors.TerrawattError.parameter`).
 
     Raises
     ------

@@ -106,7 +106,8 @@ def check_model_robot(model: CurrentModel, robot: RobotParams | str) -> list[str
         if other:
             raise InvalidParameterError(
                 f"the model was trained on robot(s) {list(summary.robots)!r}, not on the robot preset {name!r} "
-                f"({other!r} do not match): train a model on {name!r} logs, or give --robot for the model's robot"
+                f"({other!r} do not match): train a model on {name!r} logs, or give the model's robot as `robot`",
+                parameter="robot"
             )
         if len(named) < len(summary.robots):
             notes.append(f"some training logs of the model do not name their robot ({list(summary.robots)!r}): "
@@ -310,7 +311,7 @@ def model_energy_cost(
     physics_ground: GroundParams | None = None,
     max_slope_rad: float = DEFAULT_MAX_SLOPE_RAD,
 ) -> EnergyCost:
-    """Edge costs of ``terrain`` priced by a saved current model (what ``terrawatt plan --model FILE`` uses).
+    """Edge costs of ``terrain`` priced by a saved current model (what planning with a saved model uses).
 
     :func:`model_energy_model` then :meth:`LearnedEnergyModel.energy_cost`; the cost's row
     labels are the model's training grounds, and it carries standard-deviation tables when
@@ -340,7 +341,7 @@ def parse_model_ground(tokens: Sequence[str] | str, name: str = "model_ground") 
     tokens : str or sequence of str
         One training-ground name, or ``CLASS=NAME`` pairs (a map class priced as a training ground).
     name : str
-        How messages name the setting (the command line passes ``"--model-ground"``).
+        How messages name the setting: the caller's parameter (which the error carries).
 
     Returns
     -------

@@ -149,12 +149,13 @@ def nav2_map_paths(path: str | os.PathLike[str], name: str = "path") -> tuple[Pa
     Raises
     ------
     InvalidParameterError
-        A name not ending in ``.yaml`` / ``.yml``; either file's path of the wrong kind (a folder).
+        A name not ending in ``.yaml`` / ``.yml``; either file's path of the wrong kind (a folder); the message
+        names ``name`` (as :func:`terrawatt_base.atomic.check_output_path`).
     """
     target = check_output_path(path, name)
     if target.suffix.lower() not in (".yaml", ".yml"):
         raise InvalidParameterError(f"{name}: a Nav2 map is named by its YAML file ('.yaml' or '.yml'), got "
-                                    f"{str(target)!r}")
+                                    f"{str(target)!r}", parameter=name.strip("`"))
     return target, check_output_path(target.with_suffix(".pgm"), name)
 
 

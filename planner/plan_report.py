@@ -244,7 +244,7 @@ class PlanReport:
         unknown_ground = priced.spec.preset_unknown_ground
         if n_unknown and unknown_ground:
             lines.append(f"ground class unknown in {n_unknown} of {t.ground.size} cells: priced as "
-                         f"{unknown_ground!r} (unknown_ground / --unknown-ground NAME to choose, None / 'none' to refuse them)")
+                         f"{unknown_ground!r} (unknown_ground NAME to choose, None / 'none' to refuse them)")
         lines.append(f"start {self.start_xy_m} -> goal {self.goal_xy_m}; planner {self.planner}, {self._budget()}, "
                      f"seed {self.search.seed}")
         lines += compile_line(priced.kernel_compile_s)

@@ -45,7 +45,8 @@ def lonlat_points(lonlat: Any, where: TerrainMap | DemWindows, name: str) -> np.
     where : TerrainMap or DemWindows
         The georeferenced map (its ``crs`` and ``grid``).
     name : str
-        How messages name the points (``"start"``, ``"--start-lonlat"``).
+        How messages name the points: the caller's parameter (``"start"``, ``"start_lonlat"``), which the errors
+        carry (:attr:`~terrawatt_base.errors.TerrawattError.parameter`).
 
     Returns
     -------

@@ -477,18 +477,19 @@ def check_route_bag_path(path: str | os.PathLike[str], name: str = "path") -> tu
     Raises
     ------
     InvalidParameterError
-        A ``.bag`` / ``.db3`` name; a path of the wrong kind; a directory that is not a bag.
+        A ``.bag`` / ``.db3`` name; a path of the wrong kind; a directory that is not a bag; the message names
+        ``name`` (as :func:`terrawatt_base.atomic.check_output_path`).
     """
     target = Path(path)
     suffix = target.suffix.lower()
     if suffix in (".bag", ".db3"):
         raise InvalidParameterError(f"{name} {str(target)!r}: ROS 1 .bag and sqlite3 .db3 are not written; give a "
-                                    "'.mcap' file or a bag directory name")
+                                    "'.mcap' file or a bag directory name", parameter=name.strip("`"))
     single = suffix == ".mcap"
     check_output_path(target, name, directory=not single)
     if not single and target.is_dir() and not (target / "metadata.yaml").is_file():
         raise InvalidParameterError(f"{name} {str(target)!r} is a directory that is not a ROS 2 bag (no metadata.yaml); "
-                                    "give a new name or a '.mcap' file")
+                                    "give a new name or a '.mcap' file", parameter=name.strip("`"))
     return target, single
 
 

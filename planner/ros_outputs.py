@@ -5,14 +5,13 @@ from __future__ import annotations
 import importlib.util
 import math
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
 from terrain import InvalidParameterError, OptionalDependencyError, TerrainMap
 from terrain.georef import import_rasterio
 from terrawatt_base.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
-from terrawatt_base.checks import option_names
 
 from .edge_cost import EnergyCost
 from .energy_costmap import energy_costmap, write_energy_geotiff
@@ -105,7 +104,6 @@ def check_ros_outputs(
     frame_origin_xy_m: Any = None,
     inputs: Iterable[str | os.PathLike[str] | None] = (),
     others: Iterable[str | os.PathLike[str]] = (),
-    names: Mapping[str, str] | None = None,
 ) -> None:
     """Before any work: the outputs :func:`write_ros_outputs` would write can be written, and their extras are installed.
 
@@ -117,8 +115,6 @@ def check_ros_outputs(
         The caller's input files (None for one not given): no output may replace one.
     others : iterable of path-like
         The other files the caller writes: no output may be one of them, nor two outputs one path.
-    names : mapping, optional
-        How messages name each of :data:`ROS_OUTPUTS` (e.g. ``{"bag": "--ros2-out"}``); default the parameters'.
 
     Raises
     ------
@@ -128,44 +124,51 @@ def check_ros_outputs(
     OptionalDependencyError
         ``bag`` without rosbags, ``energy_geotiff`` without rasterio.
 
+    Each error names the parameter(s) of :data:`ROS_OUTPUTS` it is about
+    (:attr:`~terrawatt_base.errors.TerrawattError.parameter`; in backticks, ```bag```, where the word is also prose
+    or a path in the message may hold it).
+
     Examples
     --------
     >>> check_ros_outputs()  # nothing asked: nothing to check
     >>> check_ros_outputs(frame_origin_xy_m=(1.0, 2.0))
     Traceback (most recent call last):
     ...
-    terrawatt_base.errors.InvalidParameterError: frame_origin_xy_m applies to bag and nav2_map; give one of them
+    terrawatt_base.errors.InvalidParameterError: frame_origin_xy_m applies to `bag` and nav2_map; give one of them
     """
-    name = option_names(names, ROS_OUTPUTS)
-    origin = name["frame_origin_xy_m"]
     if frame_origin_xy_m is not None and bag is None and nav2_map is None:
-        raise InvalidParameterError(f"{origin} applies to {name['bag']} and {name['nav2_map']}; give one of them")
+        raise InvalidParameterError("frame_origin_xy_m applies to `bag` and nav2_map; give one of them",
+                                    parameter=("frame_origin_xy_m", "bag", "nav2_map"))
     if frame_origin_xy_m is not None and not (len(frame_origin_xy_m) == 2 and all(
             isinstance(v, (int, float)) and math.isfinite(v) for v in frame_origin_xy_m)):
-        raise InvalidParameterError(f"{origin} must be two finite numbers (m), got {list(frame_origin_xy_m)!r}")
+        raise InvalidParameterError(f"frame_origin_xy_m must be two finite numbers (m), got {list(frame_origin_xy_m)!r}",
+                                    parameter="frame_origin_xy_m")
     outputs: list[tuple[str, Path]] = []
     if bag is not None:
         if importlib.util.find_spec("rosbags") is None:
-            raise OptionalDependencyError(f"{name['bag']} needs the optional dependency 'rosbags': "
-                                          "pip install 'terrawatt[ros]'")
-        outputs.append((name["bag"], check_route_bag_path(bag, name["bag"])[0]))
+            raise OptionalDependencyError("`bag` needs the optional dependency 'rosbags': pip install 'terrawatt[ros]'",
+                                          parameter="bag")
+        outputs.append(("bag", check_route_bag_path(bag, "`bag`")[0]))
     if nav2_map is not None:
         for yaml_path in nav2_targets(nav2_map):
-            outputs += [(name["nav2_map"], p) for p in nav2_map_paths(yaml_path, name["nav2_map"])]
+            outputs += [("nav2_map", p) for p in nav2_map_paths(yaml_path, "`nav2_map`")]
     if energy_geotiff is not None:
         import_rasterio()
-        target = check_output_path(energy_geotiff, name["energy_geotiff"])
+        target = check_output_path(energy_geotiff, "`energy_geotiff`")
         if target.suffix.lower() not in (".tif", ".tiff"):
-            raise InvalidParameterError(f"{name['energy_geotiff']} writes a GeoTIFF ending in '.tif' or '.tiff', "
-                                        f"got {str(target)!r}")
-        outputs.append((name["energy_geotiff"], target))
+            raise InvalidParameterError(f"`energy_geotiff` writes a GeoTIFF ending in '.tif' or '.tiff', got "
+                                        f"{str(target)!r}", parameter="energy_geotiff")
+        outputs.append(("energy_geotiff", target))
     ins = [Path(p) for p in inputs if p is not None]
+    taken_by: dict[Path, str] = {}
     taken = {Path(os.path.abspath(p)): "the command's own output" for p in others}
-    for flag, path in outputs:
-        refuse_overwriting_inputs([path], ins, flag)
+    for param, path in outputs:
+        said = f"`{param}`"  # marked: a path in the message may hold the word
+        refuse_overwriting_inputs([path], ins, said)
         key = Path(os.path.abspath(path))
         if key in taken:
-            raise InvalidParameterError(f"{flag}: {str(path)!r} is also {taken[key]}; give another name")
-        taken[key] = f"written for {flag}"
-    for flag, path in outputs:
-        probe_writable(path.parent if str(path.parent) else Path("."), flag)
+            raise InvalidParameterError(f"{said}: {str(path)!r} is also {taken[key]}; give another name",
+                                        parameter=tuple(dict.fromkeys((param, taken_by.get(key, param)))))
+        taken[key], taken_by[key] = f"written for {said}", param
+    for param, path in outputs:
+        probe_writable(path.parent if str(path.parent) else Path("."), f"`{param}`")

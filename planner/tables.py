@@ -477,7 +477,7 @@ def check_risk_level(q: Any, name: str = "q") -> float:
 def check_planning_risk(q: Any, name: str = "risk") -> float:
     """A risk level to plan or decide on: a number in [0.5, 1).
 
-    Planning on a quantile below the median plans on luck: ``--risk 1e-9`` priced every edge at
+    Planning on a quantile below the median plans on luck: ``risk=1e-9`` priced every edge at
     mean - 6 sd, floored at 0, and reported a route "costing" 0 J. :meth:`planner.CostTables.at_quantile` and
     :meth:`RouteEnergyInterval.quantile_j` still take any level in (0, 1) (a P10 is a fine thing to
     report); what a route is chosen or a mission is judged on is at least the median.
@@ -491,10 +491,10 @@ def check_planning_risk(q: Any, name: str = "risk") -> float:
     --------
     >>> check_planning_risk(0.9)
     0.9
-    >>> check_planning_risk(0.1, "--risk")  # doctest: +ELLIPSIS
+    >>> check_planning_risk(0.1)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    terrawatt_base.errors.InvalidParameterError: --risk 0.1 lies below the median: ...
+    terrawatt_base.errors.InvalidParameterError: risk 0.1 lies below the median: ...
     """
     q = check_risk_level(q, name)
     if q < 0.5:

@@ -26,6 +26,7 @@ __all__ = [
     "WGS84",
     "METRE_UNITS",
     "REPROJECT_ADVICE",
+    "REPROJECT_PARAMETERS",
 ]
 
 #: The CRS of GeoJSON coordinates (longitude, latitude in degrees).
@@ -34,11 +35,10 @@ WGS84 = "EPSG:4326"
 METRE_UNITS = ("", "m", "metre", "metres", "meter", "meters")
 #: Cell sizes (m) plausible for a DEM without a CRS: outside, the unit is likely degrees.
 _CELL_RANGE_M = (0.01, 10_000.0)
-#: How to reproject a geographic DEM, for messages.
-REPROJECT_ADVICE = (
-    "pass reproject_to='utm' (or 'EPSG:N') and cell_size_m=M to read_geotiff, or on the command line "
-    "--reproject utm --cell-size M"
-)
+#: How to reproject a geographic DEM, for messages; their errors carry :data:`REPROJECT_PARAMETERS`.
+REPROJECT_ADVICE = "read it with reproject_to utm (or EPSG:N) and cell_size_m M"
+#: The parameters :data:`REPROJECT_ADVICE` names (the errors' :attr:`~terrawatt_base.errors.TerrawattError.parameter`).
+REPROJECT_PARAMETERS = ("reproject_to", "cell_size_m")
 
 
 def import_rasterio() -> ModuleType:
@@ -145,7 +145,7 @@ def dem_band(src: Any, band: int | None, where: str, *, allow_geographic: bool =
     if geographic and not allow_geographic:
         raise FileFormatError(
             f"{where} uses CRS {crs.to_string()!r} whose units are not metres; reproject it to a "
-            f"projected CRS in metres (e.g. UTM): {REPROJECT_ADVICE}"
+            f"projected CRS in metres (e.g. UTM): {REPROJECT_ADVICE}", parameter=REPROJECT_PARAMETERS
         )
     units = (src.units[band - 1] or "").strip().lower()
     if units not in METRE_UNITS:

@@ -130,8 +130,8 @@ def read_geotiff(
             if need > memory_limit_bytes():
                 raise FileFormatError(over_budget_message(
                     where, f"its {src.width} x {src.height} cells read whole", need,
-                    advice="read it by windows: terrain.iter_surface_windows, or terrawatt plan --windowed "
-                           "--coarse-factor F"))
+                    advice="read it by windows: terrain.iter_surface_windows, or plan coarse-to-fine by windows "
+                           "(planner.plan_coarse on the file, a coarse `factor` F)"), parameter="factor")
             if reproject_to is None:
                 data = src.read(info.band, masked=True)
                 values = np.ma.getdata(data).astype(np.float64)  # in place from here: big DEMs

@@ -7,7 +7,7 @@ them the map's ground-class layer. Two ground names are reserved:
 
 - ``obstacle``: the code's cells become obstacles (water, buildings, dense forest...);
 - ``unknown``: the code's cells have unknown ground (``-1``), priced as the planner's
-  ``unknown_ground`` (``--unknown-ground``) says — the same as a code the mapping omits,
+  ``unknown_ground`` says — the same as a code the mapping omits,
   but stated.
 
 A raster and a mapping that have nothing to say about the map are refused: a land cover
@@ -256,7 +256,7 @@ def ground_classes_from_landcover(
     - ``obstacle``: an obstacle (added to the map's obstacles; the ground is kept);
     - ``unknown``, an omitted code, nodata, or outside the raster: the map's ground is kept
       (unknown, ``-1``, for a GeoTIFF DEM), which the planner prices as its
-      ``unknown_ground`` (``--unknown-ground``).
+      ``unknown_ground``.
 
     Only the window of the raster around the map is read, and it must fit the memory budget
     (:func:`terrawatt_base.containers.memory_limit_bytes`), so a continental tile can serve a
@@ -460,11 +460,10 @@ def _warn_unknown_share(at_centre: np.ndarray, unknown: np.ndarray, values: np.n
     listed = ", ".join(f"{what}: {_percent(k / n)}" for what, k in ranked[:_FEW])
     more = f", and {len(ranked) - _FEW} more codes" if len(ranked) > _FEW else ""
     missing = (f"; codes {_few(absent)} of {classes.describe()} are nowhere over the map" if absent else "")
-    warnings.warn(
+    warnings.warn(ImplausibleDataWarning(
         f"{where} leaves {_percent(share)} of the map's cells with unknown ground ({listed}{more}), priced as the "
-        f"planner's unknown_ground (--unknown-ground){missing}; map the omitted codes in the classes file, or give a "
-        "land cover that covers the map",
-        ImplausibleDataWarning, stacklevel=3)
+        f"planner's unknown_ground{missing}; map the omitted codes in the classes file, or give a land cover that "
+        "covers the map", parameter="unknown_ground"), stacklevel=3)
 
 
 def _code_band(src: Any, band: int | None, where: str) -> int:

@@ -138,6 +138,9 @@ def check_output_path(path: str | os.PathLike[str], name: str = "path", *, direc
     file; a folder target must not be an existing file. Missing parents are fine (writers
     create them).
 
+    ``name`` is how the message names the path: the caller's parameter (in backticks where the word is also
+    prose, ```bag```), which the error carries without them (:attr:`~terrawatt_base.errors.TerrawattError.parameter`).
+
     Raises
     ------
     InvalidParameterError
@@ -148,13 +151,16 @@ def check_output_path(path: str | os.PathLike[str], name: str = "path", *, direc
     target = Path(path)
     if directory:
         if target.exists() and not target.is_dir():
-            raise InvalidParameterError(f"{name} {str(target)!r} is a file; expected a folder (or a new name)")
+            raise InvalidParameterError(f"{name} {str(target)!r} is a file; expected a folder (or a new name)",
+                                        parameter=name.strip("`"))
     elif target.is_dir():
-        raise InvalidParameterError(f"{name} {str(target)!r} is a directory; expected a file name")
+        raise InvalidParameterError(f"{name} {str(target)!r} is a directory; expected a file name",
+                                    parameter=name.strip("`"))
     for parent in target.parents:
         if parent.exists():
             if not parent.is_dir():
-                raise InvalidParameterError(f"{name} {str(target)!r} lies under {str(parent)!r}, which is a file")
+                raise InvalidParameterError(f"{name} {str(target)!r} lies under {str(parent)!r}, which is a file",
+                                            parameter=name.strip("`"))
             break
     return target
 
@@ -167,12 +173,15 @@ def _resolved(path: Path) -> Path:
 
 
 def refuse_overwriting_inputs(outputs: Iterable[str | os.PathLike[str]],
-                              inputs: Iterable[str | os.PathLike[str] | None], name: str = "--out") -> None:
+                              inputs: Iterable[str | os.PathLike[str] | None], name: str = "outputs") -> None:
     """Refuse, before any work, an output that is (or would replace) one of the command's inputs.
 
     An output file equal to an input file (the same path once resolved, or the same file on
     disk through another link) and an output folder that is an input folder are refused;
-    ``None`` inputs (flags not given) are skipped.
+    ``None`` inputs (not given) are skipped.
+
+    ``name`` is how the message names the path: the caller's parameter (in backticks where the word is also
+    prose, ```bag```), which the error carries without them (:attr:`~terrawatt_base.errors.TerrawattError.parameter`).
 
     Raises
     ------
@@ -193,15 +202,18 @@ def refuse_overwriting_inputs(outputs: Iterable[str | os.PathLike[str]],
                     same = False
             if same:
                 raise InvalidParameterError(
-                    f"{name}: writing {str(out)!r} would replace the input {str(inp)!r}; give another output"
-                )
+                    f"{name}: writing {str(out)!r} would replace the input {str(inp)!r}; give another output",
+                    parameter=name.strip("`"))
 
 
-def probe_writable(directory: str | os.PathLike[str], name: str = "--out") -> Path:
+def probe_writable(directory: str | os.PathLike[str], name: str = "directory") -> Path:
     """Write and remove a probe file in ``directory``: an unwritable output fails now, not after the work.
 
     Folders missing on the way are created for the probe and removed again, so a command that
     fails later leaves nothing behind.
+
+    ``name`` is how the message names the path: the caller's parameter (in backticks where the word is also
+    prose, ```bag```), which the error carries without them (:attr:`~terrawatt_base.errors.TerrawattError.parameter`).
 
     Raises
     ------
@@ -218,7 +230,8 @@ def probe_writable(directory: str | os.PathLike[str], name: str = "--out") -> Pa
         os.close(fd)
         os.unlink(probe)
     except OSError as exc:
-        raise InvalidParameterError(f"{name} {str(target)!r} is not writable: {exc.strerror or exc}") from exc
+        raise InvalidParameterError(f"{name} {str(target)!r} is not writable: {exc.strerror or exc}",
+                                    parameter=name.strip("`")) from exc
     finally:
         for folder in created:  # deepest first
             try:

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -42,7 +42,6 @@ __all__ = [
     "check_choice",
     "check_bool",
     "check_instance",
-    "option_names",
     "real_array",
     "readonly",
     "fmt_number",
@@ -255,36 +254,6 @@ def check_choice(name: str, value: Any, choices: Iterable[str]) -> str:
     if not isinstance(value, str) or value not in options:
         raise UnknownNameError(f"{name} must be one of {list(options)!r}, got {value!r}", parameter=name)
     return value
-
-
-def option_names(names: Mapping[str, str] | None, options: Iterable[str] | Mapping[str, str]) -> dict[str, str]:
-    """How messages name each of ``options``: itself (or its default name, when ``options`` maps options to their
-    default names), or what ``names`` says (a caller's own words, e.g. its flags).
-
-    The one rule of the library's ``names=`` arguments: a front end (the command line) passes
-    ``{"speed_mps": "--speed"}`` and the library's messages then speak its language.
-
-    Raises
-    ------
-    InvalidParameterError
-        ``names`` is not a mapping of strings to strings.
-    UnknownNameError
-        A key of ``names`` that is none of ``options``.
-
-    Examples
-    --------
-    >>> option_names({"speed_mps": "--speed"}, ("speed_mps", "seed"))
-    {'speed_mps': '--speed', 'seed': 'seed'}
-    """
-    out = dict(options) if isinstance(options, Mapping) else {key: key for key in options}
-    if names is None:
-        return out
-    if not isinstance(names, Mapping) or not all(isinstance(k, str) and isinstance(v, str) for k, v in names.items()):
-        raise InvalidParameterError(f"names must be a mapping of option to name, got {names!r:.80}")
-    unknown = sorted(set(names) - set(out))
-    if unknown:
-        raise UnknownNameError(f"names has keys {unknown!r}; expected some of {sorted(out)!r}")
-    return out | dict(names)
 
 
 def check_instance(name: str, value: Any, kind: type, what: str | None = None) -> Any:

@@ -46,8 +46,8 @@ class TerrawattError(Exception):
     parameter : str or tuple of str, optional
         The library parameter(s) the error is about, when there are (e.g. ``"risk"``), named so in
         the message (in backticks where the word also stands as prose: ```model```): a front end
-        that calls them by other words (the command line's ``--risk``) renames them there, so the
-        library never names a front end's flags.
+        that calls them by other words (a command line's flags) renames them there, so the
+        library never names a front end's words.
 
     Examples
     --------
@@ -101,8 +101,8 @@ class UnitError(DataError):
 class NodataError(InvalidParameterError, DataError):
     """A raster has nodata cells and the caller did not say how to fill them.
 
-    ``n_nodata`` and ``n_cells`` count them, so a front end can phrase its own advice (the
-    command line names its ``--fill-nodata`` flag, the API its ``fill_nodata`` argument).
+    ``n_nodata`` and ``n_cells`` count them, so a front end can phrase its own advice (a
+    command line names its flag, the API its ``fill_nodata`` argument).
     """
 
     def __init__(self, message: str, *, n_nodata: int = 0, n_cells: int = 0,
@@ -125,7 +125,25 @@ class OptionalDependencyError(TerrawattError, ImportError):
 
 
 class TerrawattWarning(UserWarning):
-    """Root of the warnings terrawatt emits."""
+    """Root of the warnings terrawatt emits.
+
+    Parameters
+    ----------
+    *args
+        The message (as for :class:`Warning`).
+    parameter : str or tuple of str, optional
+        The library parameter(s) the warning names, as :attr:`TerrawattError.parameter`.
+
+    Examples
+    --------
+    >>> w = ImplausibleDataWarning("priced as unknown_ground", parameter="unknown_ground")
+    >>> w.parameter, str(w)
+    ('unknown_ground', 'priced as unknown_ground')
+    """
+
+    def __init__(self, *args: object, parameter: str | tuple[str, ...] | None = None) -> None:
+        super().__init__(*args)
+        self.parameter = parameter
 
 
 class DataRepairWarning(TerrawattWarning):

@@ -12,7 +12,8 @@ from collections.abc import Sequence
 from terrain import TerrawattError
 
 from . import batch, diagnose, evaluate, mission, plan, predict, reach, replay, tour, train
-from .common import MAP_FLAGS, SEARCH_FLAGS
+from .common import COMMON_FLAGS, SEARCH_FLAGS, flag_text
+from .data import DATA_FLAGS
 
 __all__ = ["main", "build_parser", "EXIT_OK", "EXIT_NOT_ACHIEVED", "EXIT_BAD_INPUT", "EXIT_INTERNAL", "EXIT_CODES"]
 
@@ -38,8 +39,7 @@ def plain_message(text: str) -> str:
 #: The library's parameters a message may name, and the flags that set them, in every command (a library error names
 #: the parameter, :attr:`terrain.TerrawattError.parameter`; the command line says it by its flag). A command adds
 #: its own (``set_defaults(flag_names=...)``).
-PARAMETER_FLAGS = {"risk": "--risk", "draw_from": "--mc-draw", "workers": "--workers", "scheduler": "--scheduler",
-                   "model_ground": "--model-ground", "unknown_ground": "--unknown-ground", **MAP_FLAGS, **SEARCH_FLAGS}
+PARAMETER_FLAGS = {**COMMON_FLAGS, **SEARCH_FLAGS, **DATA_FLAGS}
 
 
 def error_message(exc: BaseException, flags: dict[str, str] | None = None) -> str:
@@ -48,7 +48,7 @@ def error_message(exc: BaseException, flags: dict[str, str] | None = None) -> st
 
     A parameter the message quotes in backticks (```model```) is replaced there only: the message
     marked which words are the parameter (``"draw_from 'model' ... a saved model: give `model`"``);
-    one it does not quote is replaced wherever it stands as a whole word.
+    one it does not quote is replaced wherever it stands as a whole word (:func:`~terrawatt_cli.common.flag_text`).
 
     Examples
     --------
@@ -59,16 +59,7 @@ def error_message(exc: BaseException, flags: dict[str, str] | None = None) -> st
     ...               {"model": "--model"})
     '--model prices the map like a model'
     """
-    text = plain_message(str(exc))
-    names = getattr(exc, "parameter", None)
-    known = PARAMETER_FLAGS | (flags or {})
-    for name in (names,) if isinstance(names, str) else (names or ()):
-        flag, marked = known.get(name), f"`{name}`"
-        if marked in text:
-            text = text.replace(marked, flag or marked)
-        elif flag is not None:
-            text = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", flag, text)
-    return text
+    return flag_text(plain_message(str(exc)), getattr(exc, "parameter", None), PARAMETER_FLAGS | (flags or {}))
 
 
 def build_parser() -> argparse.ArgumentParser:

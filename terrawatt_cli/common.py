@@ -5,9 +5,10 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
+import re
 import sys
 import warnings
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -19,7 +20,7 @@ from planner.model_cost import parse_model_ground
 from planner.planning import RouteSearch
 from planner.points import point_on_map
 from planner.tables import check_planning_risk
-from terrain import DemWindows, FigureWarning, InvalidParameterError, TerrainMap
+from terrain import DemWindows, FigureWarning, InvalidParameterError, TerrainMap, TerrawattWarning
 from terrain.io import read_map_with_options
 from terrain.procedural import example_map
 from terrawatt_base.atomic import check_output_path, probe_writable, refuse_overwriting_inputs
@@ -27,7 +28,7 @@ from terrawatt_base.checks import fmt_number
 from terrawatt_base.dask_client import Compute, check_dask_options, dask_client
 
 __all__ = [
-    "pricing_arg",
+    "pricing_arg", "flag_text", "POINT_FLAGS", "COMMON_FLAGS", "flagged_warnings",
     "Checked", "bounded", "positive", "add_battery_options", "battery_arg", "MAP_FLAGS", "add_map_options", "read_map_args", "map_arg", "add_point_options",
     "point_arg", "add_robot_options", "add_physics_robot_option", "robot_arg", "add_planner_options", "SEARCH_FLAGS", "search_arg",
     "check_outputs",
@@ -39,6 +40,16 @@ __all__ = [
 #: The flags of the map options, by their names in :func:`terrain.io.read_map_with_options`.
 MAP_FLAGS = {"fill_nodata": "--fill-nodata", "reproject_to": "--reproject", "cell_size_m": "--cell-size",
              "landcover": "--landcover", "landcover_classes": "--landcover-classes"}
+#: The flags of the points of :func:`add_point_options`, by the names :func:`point_arg` gives them.
+POINT_FLAGS = {key: f"--{flag}" for name in ("start", "goal", "depot")
+               for key, flag in ((name, name), (f"{name}_lonlat", f"{name}-lonlat"))}
+#: The library's parameters a message may name, and the flags that set them, in every command (a library error names
+#: the parameter, :attr:`terrain.TerrawattError.parameter`; the command line says it by its flag): with the log
+#: readers' (:data:`terrawatt_cli.data.DATA_FLAGS`), :data:`terrawatt_cli.PARAMETER_FLAGS`. A command adds its own
+#: (``set_defaults(flag_names=...)``).
+COMMON_FLAGS = {"risk": "--risk", "draw_from": "--mc-draw", "workers": "--workers", "scheduler": "--scheduler",
+                "model_ground": "--model-ground", "unknown_ground": "--unknown-ground", "robot": "--robot",
+                "band_hz": "--band", **MAP_FLAGS, **POINT_FLAGS}
 #: Flags whose values are input paths (a ``--model`` that names a kind, a ``--map example``, are not files).
 INPUT_FLAGS = ("map", "data", "pairs", "sites", "chargers", "model", "calibration_data", "landcover", "landcover_classes", "robot")
 
@@ -90,12 +101,13 @@ def read_map_args(args: argparse.Namespace, source: Any = None) -> TerrainMap:
     """The map of ``--map`` (or ``source``, a map in memory) with its options (:func:`terrain.io.read_map_with_options`;
     the classes' grounds must be presets unless ``--model`` prices them)."""
     whole = source is None
-    return read_map_with_options(
-        args.map if whole else source, fill_nodata=args.fill_nodata if whole else None,
-        reproject_to=getattr(args, "reproject", None) if whole else None,
-        cell_size_m=getattr(args, "cell_size", None) if whole else None,
-        landcover=getattr(args, "landcover", None), landcover_classes=getattr(args, "landcover_classes", None),
-        known_grounds=GROUND_PRESETS if getattr(args, "model", None) is None else None)
+    with flagged_warnings(COMMON_FLAGS):
+        return read_map_with_options(
+            args.map if whole else source, fill_nodata=args.fill_nodata if whole else None,
+            reproject_to=getattr(args, "reproject", None) if whole else None,
+            cell_size_m=getattr(args, "cell_size", None) if whole else None,
+            landcover=getattr(args, "landcover", None), landcover_classes=getattr(args, "landcover_classes", None),
+            known_grounds=GROUND_PRESETS if getattr(args, "model", None) is None else None)
 
 
 def map_arg(args: argparse.Namespace) -> tuple[TerrainMap, str]:
@@ -117,7 +129,49 @@ def add_point_options(p: argparse.ArgumentParser, name: str, what: str, *, requi
 def point_arg(args: argparse.Namespace, name: str, where: TerrainMap | DemWindows) -> tuple[float, float] | None:
     """The point of :func:`add_point_options` in the map's metres (:func:`planner.points.point_on_map`), or None."""
     return point_on_map(getattr(args, name, None), getattr(args, f"{name}_lonlat", None), where,
-                        names=(f"--{name}", f"--{name}-lonlat"))
+                        names=(name, f"{name}_lonlat"))  # said by their flags (POINT_FLAGS)
+
+
+def flag_text(text: str, parameter: str | Sequence[str] | None, flags: Mapping[str, str]) -> str:
+    """``text`` with the library parameters ``parameter`` names said by their ``flags``: the one place the command
+    line renames the library's words (:func:`terrawatt_cli.error_message`, a diagnosis' model note).
+
+    A parameter the text quotes in backticks (```model```) is replaced there only: the text marked which words
+    are the parameter; one it does not quote is replaced wherever it stands as a whole word. A parameter without
+    a flag is left as it is.
+
+    Examples
+    --------
+    >>> flag_text("give start or start_lonlat, not both", ("start", "start_lonlat"), POINT_FLAGS)
+    'give --start or --start-lonlat, not both'
+    >>> flag_text("`model` prices the map like a model", "model", {"model": "--model"})
+    '--model prices the map like a model'
+    """
+    for name in (parameter,) if isinstance(parameter, str) else (parameter or ()):
+        flag, marked = flags.get(name), f"`{name}`"
+        if marked in text:
+            text = text.replace(marked, flag or marked)
+        elif flag is not None:
+            text = re.sub(rf"(?<![\w-]){re.escape(name)}(?![\w-])", flag, text)
+    return text
+
+
+@contextlib.contextmanager
+def flagged_warnings(flags: Mapping[str, str]) -> Iterator[None]:
+    """The library's warnings of the block issued again at its end, the parameters they name
+    (:attr:`terrain.TerrawattWarning.parameter`) said by their ``flags`` (:func:`flag_text`); others as they were."""
+    caught: list[warnings.WarningMessage] = []
+    try:
+        with warnings.catch_warnings(record=True) as log:
+            warnings.simplefilter("always")
+            caught = log
+            yield
+    finally:  # an error in the block too: its warnings are still said
+        for w in caught:
+            message = w.message
+            if isinstance(message, TerrawattWarning) and message.parameter:
+                message = type(message)(flag_text(str(message), message.parameter, flags))
+            warnings.warn_explicit(message, w.category, w.filename, w.lineno)
 
 
 def add_battery_options(p: argparse.ArgumentParser, capacity: str = "battery capacity (Ah)", *,
@@ -201,8 +255,8 @@ def check_outputs(directory: Path, files: Iterable[str] = (), inputs: Iterable[P
     check_output_path(directory, "--out", directory=True)
     for name in names:
         check_output_path(directory / name, f"--out {directory}: {name}")
-    refuse_overwriting_inputs([directory, *(directory / n for n in names)], list(inputs))
-    probe_writable(directory)
+    refuse_overwriting_inputs([directory, *(directory / n for n in names)], list(inputs), "--out")
+    probe_writable(directory, "--out")
 
 
 def input_paths(args: argparse.Namespace) -> list[Path]:

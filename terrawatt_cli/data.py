@@ -12,14 +12,18 @@ from typing import Any
 from energy import InteractionLog
 from energy.features import DEFAULT_BAND_HZ, check_band_hz
 from energy.io import CSV_FIELDS, CSV_RATES, DRIVE_CLOCKS, LOG_SUFFIXES, BagTopics, CsvLayout, read_logs
-from energy.models import check_learned_band
 from terrain import InvalidParameterError, TerrawattError
 
 from .common import Checked, positive
 
-__all__ = ["add_data_options", "logs_from_args", "add_band_option", "band_from_args"]
+__all__ = ["DATA_FLAGS", "add_data_options", "logs_from_args", "add_band_option", "band_from_args"]
 
 _DEFAULT = BagTopics()
+#: The flags of the log readers' parameters (:class:`energy.io.BagTopics`' fields, :class:`energy.io.CsvLayout`'s and
+#: the ``csv`` layout as a whole), which their errors name.
+DATA_FLAGS = {**{f.name: f"--{f.name.replace('_', '-')}" for f in dataclasses.fields(BagTopics)},
+              "columns": "--csv-columns", "units": "--csv-units", "rates": "--csv-rates", "track_width_m": "--track-width",
+              "csv": "--csv-columns / --csv-units / --csv-rates / --track-width"}
 
 
 def add_data_options(parser: Any, *, grounds: bool = False) -> None:
@@ -106,9 +110,12 @@ def logs_from_args(args: argparse.Namespace, require_currents: bool, *, flag: st
         return read_logs(path, getattr(args, "grounds", None), bag=bag, csv=_csv_layout(args),
                          require_currents=require_currents, ground_label=args.ground_label)
     except TerrawattError as exc:  # the library names its parameter `path`; here it is the flag that gave it
-        if exc.parameter != "path":
+        names = (exc.parameter,) if isinstance(exc.parameter, str) else tuple(exc.parameter or ())
+        if "path" not in names:
             raise
-        raise type(exc)(re.sub(r"(?<![\w-])path(?![\w-])", flag, str(exc), count=1)) from None
+        others = tuple(n for n in names if n != "path")
+        raise type(exc)(re.sub(r"(?<![\w-])path(?![\w-])", flag, str(exc), count=1),
+                        parameter=others or None) from None
 
 
 def add_band_option(parser: Any, help_text: str | None = None) -> None:
@@ -119,11 +126,8 @@ def add_band_option(parser: Any, help_text: str | None = None) -> None:
         f"(default: the estimator's {lo:g} {hi:g}, served by any IMU of {2 * hi:g} Hz or more; the paper's 0 50)"))
 
 
-def band_from_args(args: argparse.Namespace, kinds: Sequence[str] | None = None) -> tuple[float, float] | None:
-    """The checked ``--band`` (errors name it), or None without it; with ``kinds`` (of ``--model``) one must be learned
-    (:func:`energy.models.check_learned_band`)."""
+def band_from_args(args: argparse.Namespace) -> tuple[float, float] | None:
+    """The checked ``--band`` (errors name it), or None without it."""
     if args.band is None:
         return None
-    if kinds is None:
-        return check_band_hz(tuple(args.band), "--band")
-    return check_learned_band(tuple(args.band), kinds, name="--band", kinds_name="--model")
+    return check_band_hz(tuple(args.band), "--band")

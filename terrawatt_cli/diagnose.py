@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 from typing import Any
 
@@ -26,6 +27,7 @@ from .common import (
     check_dask_flags,
     check_outputs,
     compute_arg,
+    flag_text,
     input_paths,
     map_arg,
     robot_arg,
@@ -35,8 +37,9 @@ from .data import add_data_options, logs_from_args
 
 __all__ = ["add_parser", "run_diagnose"]
 
-_NAMES = {"model": "--model", "robot": "--robot", "ground": "--ground", "without": "--without",
-          "calibration": "--calibration-data", "logs": "--data"}
+#: The flags of :func:`energy.diagnosis.model_under_diagnosis`' arguments (its errors name them).
+_FLAGS = {"model": "--model", "ground": "--ground", "without": "--without", "calibration": "--calibration-data",
+          "calibration_logs": "--calibration-data", "logs": "--data"}
 
 
 def add_parser(sub: Any) -> None:
@@ -71,7 +74,7 @@ def add_parser(sub: Any) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (and of the estimator's training)")
     add_dask_options(p, "the candidate effects' scoring")
     p.add_argument("--quiet", action="store_true", help="no progress bars (estimator training, effect scoring)")
-    p.set_defaults(run=run_diagnose)
+    p.set_defaults(run=run_diagnose, flag_names=_FLAGS)
 
 
 def _check_flags(args: argparse.Namespace) -> None:
@@ -82,7 +85,7 @@ def _check_flags(args: argparse.Namespace) -> None:
     if args.map is None and given:
         raise InvalidParameterError(f"{', '.join(given)} describe(s) the map of --map MAP, which is not given")
     check_model_source(args.model, calibration=args.calibration_data, robot=args.robot, ground=args.ground,
-                       without=args.without, names=_NAMES)
+                       without=args.without)
     if (cal := args.calibration_data) is not None:
         if not cal.exists():
             raise InvalidParameterError(f"--calibration-data {str(cal)!r} does not exist")
@@ -109,7 +112,8 @@ def run_diagnose(args: argparse.Namespace) -> int:
     cal = None if args.calibration_data is None else logs_from_args(args, True, flag="--calibration-data")
     source = model_under_diagnosis(args.model, logs, calibration_logs=cal, calibration_label=str(args.calibration_data),
                                    robot=args.robot, ground=args.ground, without=args.without, seed=args.seed,
-                                   progress=not args.quiet, names=_NAMES, terrain=terrain)
+                                   progress=not args.quiet, terrain=terrain)
+    source = dataclasses.replace(source, note=flag_text(source.note, "calibration_logs", _FLAGS))  # its flag, here
     print(f"model: {source.note}", flush=True)
     with compute_arg(args, progress=not args.quiet) as compute:
         if compute.client is not None:

@@ -13,6 +13,7 @@ from terrain import DemWindows, InvalidParameterError, TerrainMap
 from terrain.procedural import EXAMPLE_GOAL_XY_M, EXAMPLE_START_XY_M, example_map
 
 from .common import (
+    COMMON_FLAGS,
     Checked,
     add_map_options,
     add_model_options,
@@ -22,6 +23,7 @@ from .common import (
     bounded,
     check_model_flags,
     check_outputs,
+    flag_text,
     input_paths,
     load_model_arg,
     map_arg,
@@ -31,7 +33,7 @@ from .common import (
     search_arg,
     warn_figures,
 )
-from .ros2 import add_ros2_arguments, check_ros2_outputs, write_ros2_outputs
+from .ros2 import ROS2_FLAGS, add_ros2_arguments, check_ros2_outputs, write_ros2_outputs
 
 __all__ = ["add_parsers", "run_demo", "run_plan_command", "coarse_arg"]
 
@@ -39,7 +41,7 @@ _OUTPUTS = ("route.json", "route.geojson", "route.png")
 #: How ``plan`` names the parameters of the library's messages (:func:`terrawatt_cli.error_message`).
 _FLAGS = {"factor": "--coarse-factor", "corridor_m": "--corridor", "fine_window_budget_cells": "--fine-window-cells",
           "model": "--model", "planner": "--planner",
-          "frame_origin_xy_m": "--map-frame-origin"}
+          **ROS2_FLAGS}
 #: The map options a windowed read cannot apply (they need the whole map), by their flags.
 _WHOLE_MAP_FLAGS = ("fill_nodata", "reproject", "cell_size", "landcover")
 
@@ -143,8 +145,9 @@ def _run(args: argparse.Namespace, tmap: TerrainMap, start: tuple[float, float],
 
 
 def _finish(args: argparse.Namespace, report: Any, *, ros2: bool = False) -> int:
-    """Print the report, write its files (and the ROS 2 / Nav2 outputs asked for); exit 0 for an exact route."""
-    print(report.summary())
+    """Print the report (the setting it names, ``unknown_ground``, by its flag), write its files (and the ROS 2 / Nav2
+    outputs asked for); exit 0 for an exact route."""
+    print(flag_text(report.summary(), "unknown_ground", COMMON_FLAGS))
     with warn_figures():
         written = report.write(args.out, whole_map=args.whole_map)
     if ros2:

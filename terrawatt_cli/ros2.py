@@ -11,10 +11,11 @@ from planner.ros_outputs import check_ros_outputs, nav2_targets, write_ros_outpu
 from planner.route import Route
 from terrain import InvalidParameterError, TerrainMap
 
-__all__ = ["add_ros2_arguments", "nav2_targets", "check_ros2_outputs", "write_ros2_outputs"]
+__all__ = ["ROS2_FLAGS", "add_ros2_arguments", "nav2_targets", "check_ros2_outputs", "write_ros2_outputs"]
 
-_FLAGS = {"bag": "--ros2-out", "nav2_map": "--nav2-map", "energy_geotiff": "--energy-costmap",
-          "frame_origin_xy_m": "--map-frame-origin"}
+#: The flags of :func:`planner.ros_outputs.check_ros_outputs`' parameters (its errors name them).
+ROS2_FLAGS = {"bag": "--ros2-out", "nav2_map": "--nav2-map", "energy_geotiff": "--energy-costmap",
+              "frame_origin_xy_m": "--map-frame-origin"}
 
 
 def add_ros2_arguments(parser: argparse.ArgumentParser) -> None:
@@ -46,8 +47,7 @@ def check_ros2_outputs(args: argparse.Namespace, inputs: Iterable[Path | None] =
         raise InvalidParameterError(f"{', '.join(given)} need the whole map: plan without --coarse-factor / --windowed")
     check_ros_outputs(bag=getattr(args, "ros2_out", None), nav2_map=getattr(args, "nav2_map", None),
                       energy_geotiff=getattr(args, "energy_costmap", None),
-                      frame_origin_xy_m=getattr(args, "map_frame_origin", None), inputs=inputs, others=others,
-                      names=_FLAGS)
+                      frame_origin_xy_m=getattr(args, "map_frame_origin", None), inputs=inputs, others=others)
 
 
 def write_ros2_outputs(args: argparse.Namespace, route: Route, tmap: TerrainMap, cost: EnergyCost) -> list[Path]:

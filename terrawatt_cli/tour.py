@@ -127,7 +127,7 @@ def run_tour(args: argparse.Namespace) -> int:
     check_outputs(args.out, _OUTPUTS + bags + checked, input_paths(args))  # the bags too: none may replace an input
     tmap, label = map_arg(args)
     depots = [point_on_map(xy if flag == "--depot" else None, xy if flag != "--depot" else None, tmap,
-                           names=("--depot", "--depot-lonlat")) for xy in given]
+                           names=("depot", "depot_lonlat")) for xy in given]
     sites = read_tour_sites_csv(args.sites, tmap)
     chargers = read_tour_chargers_csv(args.chargers, tmap) if args.chargers is not None else None
     pricing = pricing_arg(args, tmap, load_model_arg(args))

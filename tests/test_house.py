@@ -10,6 +10,7 @@ import ast
 import importlib
 import inspect
 import pkgutil
+import re
 from pathlib import Path
 
 import pytest
@@ -189,6 +190,59 @@ def test_the_scan_finds_planted_faults(tmp_path: Path) -> None:
     assert _cycles(modules, edges) == [["terrain.a", "terrain.b"]]
     assert _upward(edges) == ["terrain.a imports planner (line 7)"]
     assert _private_imports(edges) == ["terrain.a imports _hidden from terrain.b (line 6)"]
+
+
+#: The library's floors: they speak in parameters; only ``terrawatt_cli`` speaks in flags (STYLE.md, line 20).
+LIBRARY = ("terrawatt_base", "terrain", "energy", "planner")
+#: A command-line flag spelled out: two dashes then a letter, not inside a word (``x--y``) nor a longer rule.
+_FLAG = re.compile(r"(?<![\w-])--[A-Za-z]")
+
+
+def _flag_faults(source: str, where: str) -> list[str]:
+    """Where a module speaks a command line's language: a string literal (a message, a docstring, a default) that
+    spells a flag, or a parameter whose job is to rename parameters for a front end (a ``flag`` / ``flags`` /
+    ``..._flag`` of strings, or ``names`` given as a ``Mapping[str, str]`` of parameter to word)."""
+    faults = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) and _FLAG.search(node.value):
+            faults.append(f"{where}:{node.lineno}: {node.value.strip()[:70]!r} spells a flag")
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            args = node.args
+            for arg in (*args.posonlyargs, *args.args, *args.kwonlyargs):
+                note = ast.unparse(arg.annotation) if arg.annotation is not None else ""
+                flag_like = arg.arg in ("flag", "flags") or arg.arg.endswith(("_flag", "_flags"))
+                if (flag_like and "str" in note) or (arg.arg.endswith("names") and "Mapping[str, str]" in note):
+                    faults.append(f"{where}:{node.lineno}: {node.name}({arg.arg}) renames parameters for a front end")
+    return faults
+
+
+def test_the_library_names_no_flag_and_takes_no_renaming_argument() -> None:
+    """Errors carry the parameter (:attr:`terrain.TerrawattError.parameter`); ``terrawatt_cli`` says it by its flag."""
+    paths = [path for name, path in MODULES.items() if name.split(".")[0] in LIBRARY]
+    assert len(paths) > 150  # the whole library was read, not an empty or moved tree
+    faults = [fault for path in paths for fault in _flag_faults(path.read_text(), str(path.relative_to(ROOT)))]
+    assert faults == []
+
+
+def test_the_flag_scan_finds_planted_faults() -> None:
+    """The scan above can fail: a flag in a message, in a docstring and as a default; a renaming argument."""
+    planted = (
+        '"""Reads a map (the command line passes --map)."""\n'
+        "from collections.abc import Mapping\n\n\n"
+        "def read(path, cell_size_m, names: Mapping[str, str] | None = None, name: str = '--out'):\n"
+        "    raise ValueError(f'{path}: give --cell-size ' f'{cell_size_m}')\n\n\n"
+        "def write(path, flag: str):\n"
+        "    return path\n"
+    )
+    faults = _flag_faults(planted, "m.py")
+    assert sorted(int(f.split(":")[1]) for f in faults) == [1, 5, 5, 6, 9], faults
+    assert any("read(names)" in f for f in faults) and any("write(flag)" in f for f in faults)
+    clean = (
+        "def read(path, names: tuple[str, str] = ('xy_m', 'lonlat'), ground_names: Mapping[int, str] = None,\n"
+        "         flag: np.ndarray = None):\n"
+        "    raise ValueError(f'{path}: x--y, a -- b, ---- rule, give cell_size_m', 'see `model`')\n"
+    )
+    assert _flag_faults(clean, "m.py") == []
 
 
 @pytest.mark.parametrize("pkg", PACKAGES)

@@ -13,7 +13,6 @@ from .fit import SPLITS, Fold, Split, make_split
 from .gap import GapShare, GapSummary, WaterfallStep, gap_summary, localise_gap, residual_currents_a
 from .model_currents import DRIVE_EFFECTS
 from .model_source import (
-    DEFAULT_SOURCE_NAMES,
     MODEL_SOURCES,
     ModelUnderDiagnosis,
     check_model_source,
@@ -41,7 +40,6 @@ __all__ = [
     "plot_diagnosis",
     "skipped_figures",
     "MODEL_SOURCES",
-    "DEFAULT_SOURCE_NAMES",
     "ModelUnderDiagnosis",
     "check_model_source",
     "model_under_diagnosis",

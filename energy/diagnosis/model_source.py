@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from terrain.terrain_map import TerrainMap
-from terrawatt_base.checks import check_bool, check_seed, fmt_number, option_names
+from terrawatt_base.checks import check_bool, check_seed, fmt_number
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
 
 from ..logs import InteractionLog, named_robots, rest_samples, robot_matches
@@ -23,14 +23,11 @@ from ..models.loading import load_current_model
 from ..params import GROUND_PRESETS, RobotParams, robot_params, robot_spec
 from .model_currents import DRIVE_EFFECTS
 
-__all__ = ["MODEL_SOURCES", "DEFAULT_SOURCE_NAMES", "ModelUnderDiagnosis", "check_model_source",
+__all__ = ["MODEL_SOURCES", "ModelUnderDiagnosis", "check_model_source",
            "check_calibration_logs", "model_under_diagnosis", "MIN_CALIBRATION_DRIVING_S"]
 
 #: The model sources named by a word; anything else is a saved model file.
 MODEL_SOURCES = ("physics", "estimator")
-#: How messages name the arguments of :func:`check_model_source` (a caller passes its own, e.g. its flags).
-DEFAULT_SOURCE_NAMES = {"model": "model", "robot": "robot", "ground": "ground", "without": "without",
-                        "calibration": "calibration_logs", "logs": "logs"}
 
 
 @dataclass(frozen=True)
@@ -63,8 +60,7 @@ class ModelUnderDiagnosis:
 
 
 def check_model_source(model: str | os.PathLike[str], *, calibration: Any = None, robot: str | None = None,
-                       ground: str | None = None, without: Sequence[str] = (),
-                       names: Mapping[str, str] | None = None) -> str:
+                       ground: str | None = None, without: Sequence[str] = ()) -> str:
     """Check a model source and the options that go with it, before any work; return its kind.
 
     Parameters
@@ -78,9 +74,6 @@ def check_model_source(model: str | os.PathLike[str], *, calibration: Any = None
         Robot and (physics only) starting ground presets.
     without : sequence of str
         Physics only: drive effects (:data:`DRIVE_EFFECTS`) switched off, each once.
-    names : mapping, optional
-        How messages name the arguments (keys of :data:`DEFAULT_SOURCE_NAMES`, e.g.
-        ``{"model": "--model"}``).
 
     Returns
     -------
@@ -95,41 +88,45 @@ def check_model_source(model: str | os.PathLike[str], *, calibration: Any = None
     UnknownNameError
         A robot or ground that is no preset, an effect that is no drive effect.
 
+    Each error names the argument(s) it is about (:attr:`~terrawatt_base.errors.TerrawattError.parameter`; in
+    backticks in the message, ```model```), so a front end can say them its own way.
+
     Examples
     --------
     >>> check_model_source("physics", without=["inertia"])
     'physics'
     """
-    n = option_names(names, DEFAULT_SOURCE_NAMES)
     if not isinstance(model, (str, os.PathLike)):
-        raise InvalidParameterError(f"{n['model']} must be a string or a path, got {type(model).__name__}")
+        raise InvalidParameterError(f"`model` must be a string or a path, got {type(model).__name__}",
+                                    parameter="model")
     kind = str(model) if str(model) in MODEL_SOURCES else "file"
     if kind == "file" and not Path(model).is_file():
-        raise InvalidParameterError(f"{n['model']} must be 'physics', 'estimator' or a model file; {str(model)!r} is "
-                                    "no file")
+        raise InvalidParameterError(f"`model` must be 'physics', 'estimator' or a model file; {str(model)!r} is "
+                                    "no file", parameter="model")
     if robot is not None:
-        robot_params(robot, name=n["robot"])  # a preset, or a robot file read (and checked) now
+        robot_params(robot)  # a preset, or a robot file read (and checked) now
     without = list(without)
     if kind != "physics":
         for key, value in (("ground", ground), ("without", without)):
             if value:
-                raise InvalidParameterError(f"{n[key]} applies to {n['model']} physics only, got {n['model']} "
-                                            f"{str(model)!r}")
+                raise InvalidParameterError(f"`{key}` applies to `model` physics only, got `model` {str(model)!r}",
+                                            parameter=(key, "model"))
     if kind == "file" and calibration is not None:
-        raise InvalidParameterError(f"{n['calibration']} applies to {n['model']} physics or estimator; a saved model "
-                                    "is diagnosed as it is")
+        raise InvalidParameterError("`calibration` applies to `model` physics or estimator; a saved model is "
+                                    "diagnosed as it is", parameter=("calibration", "model"))
     if kind == "estimator" and calibration is None:
-        raise InvalidParameterError(f"{n['model']} estimator needs {n['calibration']}: the estimator has no preset, "
-                                    "and training it on the logs it diagnoses would hide the gap (or give a saved "
-                                    "model file)")
+        raise InvalidParameterError("`model` estimator needs `calibration`: the estimator has no preset, and training "
+                                    "it on the logs it diagnoses would hide the gap (or give a saved model file)",
+                                    parameter=("model", "calibration"))
     if ground is not None and ground not in GROUND_PRESETS:
-        raise UnknownNameError(f"{n['ground']} {ground!r} is not a ground preset; known: {sorted(GROUND_PRESETS)!r}")
+        raise UnknownNameError(f"`ground` {ground!r} is not a ground preset; known: {sorted(GROUND_PRESETS)!r}",
+                               parameter="ground")
     bad = [e for e in without if e not in DRIVE_EFFECTS]
     if bad:
-        raise UnknownNameError(f"{n['without']} {bad!r}: not physics drive effects; expected names from "
-                               f"{list(DRIVE_EFFECTS)!r}")
+        raise UnknownNameError(f"`without` {bad!r}: not physics drive effects; expected names from "
+                               f"{list(DRIVE_EFFECTS)!r}", parameter="without")
     if len(set(without)) != len(without):
-        raise InvalidParameterError(f"{n['without']} names an effect twice: {without!r}")
+        raise InvalidParameterError(f"`without` names an effect twice: {without!r}", parameter="without")
     return kind
 
 
@@ -165,10 +162,10 @@ def _ground_text(ground: str | dict[str, str]) -> str:
     return ground if isinstance(ground, str) else ", ".join(ground) + " (a preset per ground label)"
 
 
-def _physics_robot(robot: str | os.PathLike[str] | None, flag: str) -> tuple[str | RobotParams, str]:
+def _physics_robot(robot: str | os.PathLike[str] | None) -> tuple[str | RobotParams, str]:
     """The robot of the physics model (a preset by its name, as model files keep it; a robot file's
     :class:`RobotParams`) and how the note names it."""
-    spec = robot_spec("husky" if robot is None else robot, name=flag)
+    spec = robot_spec("husky" if robot is None else robot)
     if isinstance(spec, str):
         return spec, spec
     return spec, f"{spec.name} (robot file {Path(robot).name})" if isinstance(robot, (str, os.PathLike)) else spec.name
@@ -198,8 +195,7 @@ def _content_key(log: InteractionLog) -> bytes:
 
 
 def check_calibration_logs(cal: Sequence[InteractionLog], logs: Sequence[InteractionLog], *,
-                           robot: str | os.PathLike[str] | None = None,
-                           names: Mapping[str, str] | None = None) -> str:
+                           robot: str | os.PathLike[str] | None = None) -> str:
     """Check that ``cal`` can calibrate a model to diagnose ``logs``; returns a note ("" or what to beware of).
 
     Calibration runs must be other runs of the same robot with currents: a copy of a diagnosed
@@ -214,8 +210,6 @@ def check_calibration_logs(cal: Sequence[InteractionLog], logs: Sequence[Interac
     robot : str or path-like, optional
         The physics' robot (a preset name, or a robot file whose robot name is compared); None
         compares the runs' robots with each other only.
-    names : mapping, optional
-        How messages name the arguments (:data:`DEFAULT_SOURCE_NAMES`' keys).
 
     Returns
     -------
@@ -227,31 +221,34 @@ def check_calibration_logs(cal: Sequence[InteractionLog], logs: Sequence[Interac
     ------
     InvalidParameterError
         A calibration run that is a diagnosed run (by source or by content), one without
-        current, of another robot, or less than :data:`MIN_CALIBRATION_DRIVING_S` of driving in all.
+        current, of another robot, or less than :data:`MIN_CALIBRATION_DRIVING_S` of driving in all. The
+        message names the runs as ```calibration_logs``` and ```logs``` (:func:`model_under_diagnosis`' arguments,
+        the error's :attr:`~terrawatt_base.errors.TerrawattError.parameter`).
     """
-    n = option_names(names, DEFAULT_SOURCE_NAMES)
-    cal_flag, logs_flag = n["calibration"], n["logs"]
+    cal_flag, logs_flag, both = "`calibration_logs`", "`logs`", ("calibration_logs", "logs")
     if not cal or not all(isinstance(log, InteractionLog) for log in cal):
-        raise InvalidParameterError(f"{cal_flag} must be a non-empty sequence of InteractionLog")
+        raise InvalidParameterError(f"{cal_flag} must be a non-empty sequence of InteractionLog",
+                                    parameter="calibration_logs")
     diagnosed = {log.meta.source for log in logs if log.meta.source}
     shared = sorted({log.meta.source for log in cal} & diagnosed)
     if shared:
         raise InvalidParameterError(f"{cal_flag} holds runs that {logs_flag} diagnoses too: {shared[:3]!r}; "
-                                    "calibrate on runs that are not diagnosed")
+                                    "calibrate on runs that are not diagnosed", parameter=both)
     keys = {_content_key(log): log.meta.source for log in logs}
     copies = [(log.meta.source, keys[k]) for log in cal if (k := _content_key(log)) in keys]
     if copies:
         raise InvalidParameterError(
             f"{cal_flag} holds copies of diagnosed runs (the same commands and currents): "
-            f"{', '.join(f'{a!r} = {b!r}' for a, b in copies[:3])}; calibrate on runs that are not diagnosed")
+            f"{', '.join(f'{a!r} = {b!r}' for a, b in copies[:3])}; calibrate on runs that are not diagnosed",
+            parameter="calibration_logs")
     silent = [log.meta.source for log in cal
               if not (np.nanmax(np.abs(np.concatenate([log.current_left_a, log.current_right_a])), initial=0.0)
                       > _NO_CURRENT_A)]
     if silent:
         raise InvalidParameterError(
             f"{cal_flag} holds runs without drive current (every sample 0 A): {silent[:3]!r}; a model cannot be "
-            "calibrated on them: check the current columns or topics")
-    spec = None if robot is None else robot_spec(robot, name=n["robot"])
+            "calibrated on them: check the current columns or topics", parameter="calibration_logs")
+    spec = None if robot is None else robot_spec(robot)
     target = named_robots(log.meta.robot for log in logs)
     if spec is not None:
         target = [spec if isinstance(spec, str) else spec.name]
@@ -260,12 +257,12 @@ def check_calibration_logs(cal: Sequence[InteractionLog], logs: Sequence[Interac
     if other:
         raise InvalidParameterError(
             f"{cal_flag} holds runs of robot(s) {other!r}, not of {target!r} that {logs_flag} diagnoses: calibrate on "
-            "runs of the same robot")
+            "runs of the same robot", parameter=both)
     driving = sum(_driving_s(log) for log in cal)
     if driving < MIN_CALIBRATION_DRIVING_S:
         raise InvalidParameterError(
             f"{cal_flag} drives {fmt_number(driving, 3)} s in all, fewer than the {fmt_number(MIN_CALIBRATION_DRIVING_S)} "
-            "s a calibration needs; give longer runs")
+            "s a calibration needs; give longer runs", parameter="calibration_logs")
     if driving < SHORT_CALIBRATION_DRIVING_S:
         return (f" (only {fmt_number(driving, 3)} s of driving: its coefficients are uncertain, and so is what the "
                 "diagnosis attributes to them)")
@@ -276,8 +273,7 @@ def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[Interact
                           calibration_logs: Sequence[InteractionLog] | None = None,
                           calibration_label: str = "the calibration logs", robot: str | None = None,
                           ground: str | None = None, without: Sequence[str] = (), seed: int | None = 0,
-                          progress: bool = False, names: Mapping[str, str] | None = None,
-                          terrain: TerrainMap | None = None) -> ModelUnderDiagnosis:
+                          progress: bool = False, terrain: TerrainMap | None = None) -> ModelUnderDiagnosis:
     """The model to diagnose on ``logs``, never fitted on them, and where it comes from.
 
     ``"physics"``: the ``robot`` (default husky) and ``ground`` presets as given, or their
@@ -308,8 +304,6 @@ def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[Interact
         Seed of the estimator's training.
     progress : bool
         The estimator's progress bar.
-    names : mapping, optional
-        How messages name the arguments (:func:`check_model_source`).
     terrain : TerrainMap, optional
         The map the diagnosed runs drove on (the physics as given drives its slope).
 
@@ -326,9 +320,7 @@ def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[Interact
     TerrawattError
         As the models' ``fit`` and :func:`energy.load_current_model`.
     """
-    n = option_names(names, DEFAULT_SOURCE_NAMES)
-    kind = check_model_source(model, calibration=calibration_logs, robot=robot, ground=ground, without=without,
-                              names=names)
+    kind = check_model_source(model, calibration=calibration_logs, robot=robot, ground=ground, without=without)
     seed = check_seed(seed)
     progress = check_bool("progress", progress)
     logs = list(logs)
@@ -337,11 +329,11 @@ def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[Interact
     cal = None if calibration_logs is None else list(calibration_logs)
     short_note = ""
     if cal is not None:
-        short_note = check_calibration_logs(cal, logs, robot=robot if kind == "physics" else None, names=names)
+        short_note = check_calibration_logs(cal, logs, robot=robot if kind == "physics" else None)
     if terrain is not None and not isinstance(terrain, TerrainMap):
         raise InvalidParameterError(f"terrain must be a TerrainMap or None, got {type(terrain).__name__!r}")
     if kind == "physics":
-        physics_robot, robot_name = _physics_robot(robot, n["robot"])
+        physics_robot, robot_name = _physics_robot(robot)
         effects = None if not without else tuple(e for e in DRIVE_EFFECTS if e not in without)
         off = f" without {', '.join(without)}" if without else " (every drive effect)"
         if cal is None:
@@ -352,7 +344,7 @@ def model_under_diagnosis(model: str | os.PathLike[str], logs: Sequence[Interact
             where = " on the map's slope under the logged poses" if on_map else ""
             return ModelUnderDiagnosis(fitted, (
                 f"physics, the {robot_name} and {_ground_text(ground_of)} presets as given{off}{where}, not fitted on "
-                f"the {_runs(logs)} it is diagnosed on ({n['calibration']} fits its coefficients on other runs)"),
+                f"the {_runs(logs)} it is diagnosed on (calibration_logs fits its coefficients on other runs)"),
                 kind, robot)
         ground_of = _physics_ground(ground, _labels(cal), _labels(logs))
         fitted = PhysicsCurrentModel(physics_robot, ground_of, effects=effects).fit(cal)

@@ -88,12 +88,13 @@ def check_model_band(model: Any, band_hz: Any, name: str = "band_hz", label: str
     config = getattr(model, "config_", None)
     if config is None or not hasattr(config, "band_hz"):
         raise InvalidParameterError(f"{name} applies to estimator and paper model files; {label!r} holds a "
-                                    f"{type(model).__name__}")
+                                    f"{type(model).__name__}", parameter=name)
     lo, hi = config.band_hz
     if lo < lo_served or hi > hi_served:
         raise BandNotServedError(
             f"the model {label!r} was trained on the vibration band {lo:g}-{hi:g} Hz, which does not lie within "
-            f"{name} {lo_served:g} {hi_served:g}; retrain it with terrawatt train --band LO HI inside that band"
+            f"{name} {lo_served:g} {hi_served:g}; train it again with a band_hz inside that band",
+            parameter=tuple(dict.fromkeys((name, "band_hz")))
         )
 
 
@@ -137,5 +138,5 @@ def require_band(band_hz: Any, top_hz: float, rate_hz: float, where: str = "the 
     raise BandNotServedError(
         f"the model's vibration band {fmt_number(lo)}-{fmt_number(hi)} Hz reaches {fmt_number(top_hz)} Hz, above the "
         f"Nyquist frequency {fmt_number(nyquist)} Hz of {where} (IMU at {fmt_number(rate_hz)} Hz); use a model trained "
-        f"on a band below {fmt_number(nyquist)} Hz (retrain with --band LO HI, or EstimatorConfig band_hz=(lo, hi))"
+        f"on a band below {fmt_number(nyquist)} Hz (retrain it with a band_hz LO HI below it)", parameter="band_hz"
     )

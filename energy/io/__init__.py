@@ -1,7 +1,7 @@
 """Readers and writers of interaction logs: BorealTC CSV, generic CSV, ROS 1/2 bags and MCAP, live ROS messages.
 
 :func:`read_logs` reads every log at a path whatever its layout (a BorealTC folder, a CSV
-log, a bag, or a folder of them); the CLI's ``--data`` goes through it.
+log, a bag, or a folder of them); the command line's logs go through it.
 
 Every reader returns :class:`~energy.logs.InteractionLog` objects in SI units and refuses
 bad input with a clear error instead of guessing, as its ``cleaning`` (:class:`LogCleaning`:

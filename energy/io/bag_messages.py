@@ -129,10 +129,12 @@ def read_messages(bag: Path, wanted: tuple[str, ...], optional: tuple[str, ...] 
 
 
 def expect_type(src: str, raw: Messages, types: dict[str, str], topic: str, allowed: tuple[str, ...],
-                hint: str = "") -> str:
-    """The topic's type, checked against ``allowed``, and that it has messages."""
+                hint: str = "", parameter: str | None = None) -> str:
+    """The topic's type, checked against ``allowed``, and that it has messages (``hint``: what else to give, naming
+    the reader's ``parameter``, which the error carries)."""
     if types[topic] not in allowed:
-        raise DataError(f"{src}: topic {topic!r} has type {types[topic]!r}; expected one of {allowed!r}{hint}")
+        raise DataError(f"{src}: topic {topic!r} has type {types[topic]!r}; expected one of {allowed!r}{hint}",
+                        parameter=parameter)
     if not raw[topic]:
         raise DataError(f"{src}: topic {topic!r} has no messages")
     return types[topic]
@@ -208,12 +210,12 @@ def field_values(src: str, topic: str, msgtype: str, msgs: list[tuple[int, Any]]
     ------
     DataError
         The message type has no such numeric field: the message names the topic, its type,
-        the option (``option``) and the numeric fields it does have.
+        the option (``option``, the reader's parameter: the error carries it) and the numeric fields it does have.
     """
     def bad(why: str) -> DataError:
         return DataError(
             f"{src}: topic {topic!r} ({msgtype}) {why} (named by {option}); its numeric fields are "
-            f"{message_fields(msgs[0][1])!r}"
+            f"{message_fields(msgs[0][1])!r}", parameter=option
         )
 
     def get(msg: Any) -> Any:

@@ -379,7 +379,7 @@ def bracket_accel(t_drive: np.ndarray, t_acc: np.ndarray) -> slice:
 
 
 def gravity_note(name: str, accel_z_mps2: np.ndarray, hint: str = "declare the acceleration's unit as g",
-                 check_g: bool = True) -> str:
+                 check_g: bool = True, parameter: str | None = None) -> str:
     """A note when the vertical acceleration has gravity removed, else ``""``; an IMU in g is refused.
 
     Gravity-free IMUs (e.g. a driver that publishes ``linear_acceleration`` minus gravity)
@@ -387,7 +387,8 @@ def gravity_note(name: str, accel_z_mps2: np.ndarray, hint: str = "declare the a
     features remove each segment's mean) and the note goes to its metadata. A median of
     about 1 (within :data:`G_UNITS_BAND`) is an IMU publishing in g, gravity included: read as
     m/s^2 its vibration would be ten times too small, so it is refused with ``hint`` (how
-    to declare the unit); ``check_g=False`` (the readers' ``check_units=False``) skips that.
+    to declare the unit; ``parameter``: the reader's parameter it names, which the error carries);
+    ``check_g=False`` (the readers' ``check_units=False``) skips that.
 
     Raises
     ------
@@ -405,7 +406,7 @@ def gravity_note(name: str, accel_z_mps2: np.ndarray, hint: str = "declare the a
     if check_g and G_UNITS_BAND[0] <= abs(median) <= G_UNITS_BAND[1]:
         raise UnitError(
             f"{name}: median {fmt_number(median, 3)} looks like an acceleration in g with gravity included "
-            f"(about 9.81 in m/s^2, about 0 with gravity removed); {hint}"
+            f"(about 9.81 in m/s^2, about 0 with gravity removed); {hint}", parameter=parameter
         )
     if abs(median) >= GRAVITY_REMOVED_MAX_MPS2:
         return ""

@@ -164,10 +164,10 @@ class CsvLayout:
             return
         whose = "the default layout's" if self.columns is None else "the layout's"
         raise InvalidParameterError(
-            f"track_width_m (--track-width) {self.track_width_m:g} derives omega from wheel speeds (speed_left / "
+            f"track_width_m {self.track_width_m:g} derives omega from wheel speeds (speed_left / "
             f"speed_right columns), but {whose} velocities are v and omega ({columns.get('v')!r}, "
             f"{columns.get('omega')!r}): there is no omega to derive; drop the track width, or map the wheel speeds "
-            "instead (--csv-columns speed_left=COLUMN speed_right=COLUMN)")
+            "instead (`columns` speed_left=COLUMN speed_right=COLUMN)", parameter=("track_width_m", "columns"))
 
     def read(self, path: str | os.PathLike[str], **options: Any) -> InteractionLog:
         """:func:`read_csv_log` of ``path`` in this layout (``options``: its other keywords).
@@ -294,9 +294,8 @@ def read_csv_log(
         if missing:
             raise DataError(
                 f"{src!r}: missing column(s) {missing!r} of the layout terrawatt writes; the header has {text.names!r}: "
-                "map the fields to your columns and declare their units (columns={'time': COLUMN, 'v': COLUMN, ...}, "
-                "units={'time': 'ms', ...}; on the command line --csv-columns time=COLUMN v=COLUMN ... --csv-units "
-                "time=ms ...)"
+                "map the fields to your columns and declare their units: `columns` (time=COLUMN v=COLUMN ...) and "
+                "`units` (time=ms ...) of the CSV layout", parameter=("columns", "units")
             )
     table = read_table(
         text,

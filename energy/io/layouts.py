@@ -157,8 +157,8 @@ def _no_csv_layout(csv: CsvLayout, why: str) -> None:
     given = {"columns": csv.columns, "units": csv.units, "rates": csv.rates, "track_width_m": csv.track_width_m}
     got = ", ".join(f"{k}={v!r}" for k, v in given.items() if v and v != getattr(default, k))
     raise InvalidParameterError(
-        f"csv (--csv-columns, --csv-units, --csv-rates, --track-width) applies to CSV logs only, and {why}; give no "
-        f"CSV layout for them (got {got})", parameter="path")
+        f"`csv` applies to CSV logs only, and {why}; give no CSV layout for them (got {got})",
+        parameter=("path", "csv"))
 
 
 def _log_items(folder: Path) -> list[Path]:

@@ -70,7 +70,7 @@ _ARRAY_TYPES = ("std_msgs/msg/Float64MultiArray", "std_msgs/msg/Float32MultiArra
 _BATTERY_TYPES = ("sensor_msgs/msg/BatteryState",)
 _FIELDS_HINT = (
     "; for a status message (e.g. husky_msgs/msg/HuskyStatus) name its current fields with "
-    "current_fields (--current-fields left_driver_current right_driver_current)"
+    "current_fields (e.g. left_driver_current right_driver_current)"
 )
 
 
@@ -134,15 +134,15 @@ class BagTopics:
             object.__setattr__(self, "current_fields", _names("current_fields", self.current_fields, (2,)))
             if len(topics) != 1:
                 raise InvalidParameterError(
-                    f"current_fields (--current-fields) read one status topic; give one current topic "
-                    f"(current_topics, --current-topics), got {topics!r}"
+                    f"current_fields read one status topic; give one current topic (current_topics), got {topics!r}",
+                    parameter=("current_fields", "current_topics")
                 )
         if self.voltage_field is not None:
             check_text("voltage_field", self.voltage_field)
             if self.current_fields is None:
                 raise InvalidParameterError(
-                    "voltage_field (--voltage-field) is read beside the currents of a status message: name them "
-                    "too with current_fields (--current-fields)"
+                    "voltage_field is read beside the currents of a status message: name them too with "
+                    "current_fields", parameter=("voltage_field", "current_fields")
                 )
         check_choice("current_unit", self.current_unit, tuple(UNIT_FACTORS["current"]))
         check_choice("accel_unit", self.accel_unit, tuple(UNIT_FACTORS["accel"]))
@@ -151,8 +151,8 @@ class BagTopics:
             check_text("battery_topic", self.battery_topic)
             if self.voltage_field is not None:
                 raise InvalidParameterError(
-                    f"battery_topic {self.battery_topic!r} and voltage_field {self.voltage_field!r} (--voltage-field) "
-                    "both give the battery voltage; name one of them"
+                    f"battery_topic {self.battery_topic!r} and voltage_field {self.voltage_field!r} both give the "
+                    "battery voltage; name one of them", parameter=("battery_topic", "voltage_field")
                 )
 
 
@@ -463,8 +463,8 @@ def log_from_topic_messages(
         if battery:
             _check_battery_units(src, battery_topic, tb, bc)
     gravity = gravity_note(f"{imu_topic} linear_acceleration.z", ic["accel_z"],
-                           "give accel_unit='g' (CLI: --accel-unit g) for an IMU driver that publishes in g",
-                           check_units)
+                           "give accel_unit='g' for an IMU driver that publishes in g", check_units,
+                           parameter="accel_unit")
     if gravity:
         notes.append(gravity)
     log = align_streams(src, currents, (tv, vc, measured), (ti, ic), timing.cmd_vel_timeout_s, opts.drive_rate_hz,
@@ -494,11 +494,11 @@ def _current_columns(
     first = opts.topics_cur[0]
     if len(opts.topics_cur) == 2:
         for t in opts.topics_cur:
-            expect_type(src, raw, types, t, _SCALAR_TYPES, _FIELDS_HINT)
+            expect_type(src, raw, types, t, _SCALAR_TYPES, _FIELDS_HINT, "current_fields")
         return {t: {side: np.array([m.data for _, m in raw[t]], dtype=np.float64) * scale}
                 for t, side in zip(opts.topics_cur, ("left", "right"))}
     if opts.current_fields is None:
-        expect_type(src, raw, types, first, _ARRAY_TYPES, _FIELDS_HINT)
+        expect_type(src, raw, types, first, _ARRAY_TYPES, _FIELDS_HINT, "current_fields")
         arrays = [np.asarray(m.data, dtype=np.float64).reshape(-1) for _, m in raw[first]]
         bad = [i for i, a in enumerate(arrays) if a.size != 2]
         if bad:
@@ -511,12 +511,12 @@ def _current_columns(
     if not raw[first]:
         raise DataError(f"{src}: topic {first!r} has no messages")
     cols = {
-        side: field_values(src, first, types[first], raw[first], name, "current_fields (--current-fields)") * scale
+        side: field_values(src, first, types[first], raw[first], name, "current_fields") * scale
         for side, name in zip(("left", "right"), opts.current_fields)
     }
     if opts.voltage_field is not None:
         cols["voltage"] = field_values(src, first, types[first], raw[first], opts.voltage_field,
-                                       "voltage_field (--voltage-field)")
+                                       "voltage_field")
     return {first: cols}
 
 

@@ -204,8 +204,8 @@ class InteractionLog:
             lacked = f" ({self.meta.missing_currents})" if self.meta.missing_currents else ""
             raise DataError(
                 f"{self.meta.source}: {purpose} needs measured drive currents, and this log has none{lacked}; "
-                f"read it with its current topics (current_topics, --current-topics) or the status message's "
-                f"current fields (current_fields, --current-fields)"
+                f"read it with its current topics (current_topics) or the status message's current fields "
+                f"(current_fields)", parameter=("current_topics", "current_fields")
             )
 
     @property

@@ -191,7 +191,7 @@ class EstimatorConfig:
             raise InvalidParameterError(
                 f"EstimatorConfig.band_hz={self.band_hz!r} holds {max(top - first, 0)} frequency bin(s) of "
                 f"{res:.4g} Hz (1 / spectrum_span_s), fewer than n_bands={self.n_bands!r}; widen the band "
-                f"(--band), use fewer bands or a longer spectrum_span_s"
+                f"(`band_hz`), use fewer bands or a longer spectrum_span_s", parameter="band_hz"
             )
 
     def net_config(self, n_window_inputs: int, n_run_inputs: int, n_outputs: int) -> CurrentNetConfig:

@@ -306,10 +306,10 @@ class AdaptiveResult:
         With ``logs``, also each leg's log (:attr:`AdaptiveResult.leg_logs`) as a CSV log
         ``logs/leg_NNN.csv`` (:func:`energy.io.write_csv_log`) and each manoeuvre run
         (:attr:`AdaptiveResult.manoeuvre_logs`) as ``logs/manoeuvre_NNN_K.csv`` (run K after leg
-        NNN), all on the robot's clock: a folder that ``terrawatt diagnose --data``,
-        ``terrawatt replay --data`` and :func:`energy.io.read_logs` read; and the models the
-        mission started with as ``start_registry/`` (:attr:`start_registry`, what ``terrawatt
-        replay --registry`` starts from): the previous mission's leg files there are
+        NNN), all on the robot's clock: a folder that :func:`energy.diagnose`,
+        :func:`planner.missions.replay.replay_drive` and :func:`energy.io.read_logs` read; and the models the
+        mission started with as ``start_registry/`` (:attr:`start_registry`, the ``registry`` a replay
+        starts from): the previous mission's leg files there are
         replaced, and a folder holding anything else is refused before anything is written
         (:func:`check_logs_folder`).
         """

@@ -2,7 +2,7 @@
 
 The answer of :func:`planner.simulate_missions_mc` (the missions of a given route) and of
 :func:`planner.missions.monte_carlo_report.monte_carlo_mission` (the same, with the route it planned
-and the header ``terrawatt mission --monte-carlo`` prints: the map, the robot, the reserve check).
+and the header a Monte Carlo mission's summary prints: the map, the robot, the reserve check).
 """
 
 from __future__ import annotations
@@ -323,7 +323,7 @@ class MonteCarloResult:
         return bool(self.n) and 100.0 * self.p_below_reserve <= self.max_risk_pct and self.fits and not self.n_failed
 
     def summary(self) -> str:
-        """What ``terrawatt mission --monte-carlo N`` prints: with the route's header the map, robot and battery, the
+        """What a Monte Carlo mission study prints: with the route's header the map, robot and battery, the
         route, then the study (:meth:`study_summary`) and the reserve check at :attr:`risk_q`."""
         if self.route is None:
             return self.study_summary()

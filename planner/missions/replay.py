@@ -1,6 +1,6 @@
 """A recorded drive fed through a :class:`~planner.Navigator` in time order: what it learned and decided.
 
-:func:`replay_drive` takes what a robot recorded — the legs of a mission (``mission --logs``:
+:func:`replay_drive` takes what a robot recorded — the legs of a mission (an adaptive mission's ``logs``:
 ``leg_NNN.csv`` and the manoeuvres it drove, ``manoeuvre_NNN_K.csv``), or one long drive
 (a bag, an MCAP, a CSV log) — and feeds it to a navigator as the robot would have: a folder
 of legs leg by leg with a checkpoint at each leg's end; a long drive in chunks of

@@ -77,7 +77,7 @@ def replay_recording(
     """Replay a recorded drive through a navigator set up as ``terrawatt mission`` sets up its loop.
 
     The models at the start: a saved registry (``registry``: a directory, e.g. the
-    ``start_registry/`` that ``mission --logs`` writes, or a :class:`planner.registry.CellModelRegistry`),
+    ``start_registry/`` that an adaptive mission writes with its ``logs``, or a :class:`planner.registry.CellModelRegistry`),
     or one saved current model (``model``) serving every cell — per ground class through
     :func:`planner.model_cost.model_energy_model` when ``model_ground`` says how. With a
     ``feed.state_path`` that holds a saved navigator, the replay resumes from it and these (and

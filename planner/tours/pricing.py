@@ -1,7 +1,7 @@
 """Every ordered pair of a tour's points priced on the map: one lattice search per point, here or as dask tasks.
 
 A leg ``i -> j`` is the lattice route that minimises the leg's price at the risk level (on
-:meth:`planner.CostTables.at_quantile` when the cost carries an interval, as ``plan --risk`` does; else the
+:meth:`planner.CostTables.at_quantile` when the cost carries an interval, as planning at a ``risk`` does; else the
 mean), found by :meth:`planner.Lattice.paths_from`: one Dijkstra per point, not one per pair.
 The leg is then priced on the cost itself: its mean energy (drive and turns,
 :meth:`EnergyCost.path_energy_j`, the plan price), its run-level spread per ground

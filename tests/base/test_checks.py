@@ -18,7 +18,6 @@ from terrawatt_base.checks import (
     check_seed,
     check_text,
     fmt_number,
-    option_names,
     readonly,
     real_array,
 )
@@ -139,14 +138,3 @@ def test_messages_show_numpy_scalars_as_plain_numbers():
         check_int("n", np.int64(0), low=1)
     with pytest.raises(InvalidParameterError, match=r"got 'x' \(str\)$"):
         check_real("speed", "x")
-
-
-def test_option_names_default_to_the_options_or_their_default_names_and_refuse_strangers() -> None:
-    assert option_names(None, ("speed_mps", "seed")) == {"speed_mps": "speed_mps", "seed": "seed"}
-    assert option_names({"seed": "--seed"}, {"seed": "seed", "logs": "calibration_logs"}) == {
-        "seed": "--seed", "logs": "calibration_logs"}
-    with pytest.raises(UnknownNameError, match=r"names has keys \['sped'\]"):
-        option_names({"sped": "--speed"}, ("speed_mps",))
-    for bad in ([("seed", "--seed")], {"seed": 3}):
-        with pytest.raises(InvalidParameterError, match="names must be a mapping of option to name"):
-            option_names(bad, ("seed",))

@@ -64,7 +64,8 @@ def test_plan_without_a_model_writes_no_interval_or_model_block(tmp_path, capsys
 
 
 @pytest.mark.parametrize("extra, message", [
-    (["--robot", "jackal"], "trained on robot(s) ['husky_a200'], not on the robot preset 'jackal'"),
+    (["--robot", "jackal"], "trained on robot(s) ['husky_a200'], not on the robot preset 'jackal' (['husky_a200'] do "
+                            "not match): train a model on 'jackal' logs, or give the model's robot as --robot"),
     (["--model-ground", "sand"], "--model-ground 'sand' is not a ground the model drove"),
     (["--risk", "1.5"], "--risk must be"),
     (["--risk", "1e-9"], "--risk 1e-09 lies below the median"),  # mean - 6 sd floored at 0: a route "costing" 0 J

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 
 import pytest
 from cli_samples import FIXTURES, one_line_error
@@ -10,7 +11,7 @@ from cli_samples import FIXTURES, one_line_error
 from energy.io import CsvLayout
 from terrain import InvalidParameterError
 from terrawatt_base.errors import TerrawattError
-from terrawatt_cli import EXIT_BAD_INPUT, main
+from terrawatt_cli import EXIT_BAD_INPUT, error_message, main
 from terrawatt_cli.data import add_band_option, add_data_options, band_from_args, logs_from_args
 
 
@@ -50,13 +51,6 @@ def test_a_band_is_two_frequencies_and_none_without_the_flag():
 def test_a_bad_band_is_refused_naming_the_flag(band):
     with pytest.raises(InvalidParameterError, match="--band"):
         band_from_args(_parse_band("--band", *band))
-
-
-def test_a_band_needs_a_learned_model_among_the_kinds():
-    assert band_from_args(_parse_band("--band", "1", "20"), ["linear", "paper"]) == (1.0, 20.0)
-    with pytest.raises(InvalidParameterError, match="--band applies to the estimator and paper models only, "
-                       "got --model linear constant"):
-        band_from_args(_parse_band("--band", "1", "20"), ["linear", "constant"])
 
 
 def test_csv_flags_read_csv_logs_of_another_layout(tmp_path):
@@ -99,9 +93,11 @@ def test_a_track_width_with_v_and_omega_columns_is_refused_naming_it():
     generic = FIXTURES.parent / "generic_ma.csv"
     args = _parse("--data", str(generic), "--csv-columns", "time=stamp_ms", "v=cmd_v", "omega=cmd_w",
                   "current_left=left_mA", "current_right=right_mA", "accel_z=acc_z", "--track-width", "0.55")
-    with pytest.raises(InvalidParameterError, match=r"^track_width_m \(--track-width\) 0\.55 derives omega from wheel "
-                                                    r"speeds .*the layout's velocities are v and omega"):
+    with pytest.raises(InvalidParameterError, match=r"^track_width_m 0\.55 derives omega from wheel "
+                                                    r"speeds .*the layout's velocities are v and omega") as raised:
         logs_from_args(args, require_currents=True)
+    assert re.match(r"--track-width 0\.55 derives omega .*map the wheel speeds instead \(--csv-columns speed_left=COLUMN "
+                    r"speed_right=COLUMN\)$", error_message(raised.value))  # said by the flags
 
 
 @pytest.mark.parametrize("flags", [["--data", "BOREALTC", "--csv-rates", "single"],
@@ -113,7 +109,7 @@ def test_ignored_csv_flags_exit_2_with_one_line(tmp_path, capsys, flags):
     paths = {"BOREALTC": str(FIXTURES), "GENERIC": str(FIXTURES.parent / "generic_ma.csv")}
     rc = main(["train", "--model", "physics", *[paths.get(f, f) for f in flags], "--out", str(tmp_path / "m")])
     assert rc == EXIT_BAD_INPUT
-    assert "--track-width" in one_line_error(capsys) and not (tmp_path / "m").exists()
+    assert "--track-width" in one_line_error(capsys) and not (tmp_path / "m").exists()  # the `csv` layout, by its flags
 
 
 def test_the_path_the_library_names_is_said_as_the_flag_that_gave_it(tmp_path):

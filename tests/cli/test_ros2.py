@@ -15,8 +15,8 @@ from planner.energy_costmap import read_energy_geotiff
 from planner.nav2_map import read_nav2_map
 from planner.ros_export import read_route_bag
 from terrawatt_base.errors import InvalidParameterError
-from terrawatt_cli import main
-from terrawatt_cli.ros2 import add_ros2_arguments, check_ros2_outputs, nav2_targets, write_ros2_outputs
+from terrawatt_cli import error_message, main
+from terrawatt_cli.ros2 import ROS2_FLAGS, add_ros2_arguments, check_ros2_outputs, nav2_targets, write_ros2_outputs
 
 pytest.importorskip("rosbags", reason="ROS 2 bags need the ros extra (rosbags)")
 
@@ -78,8 +78,10 @@ def test_a_map_frame_origin_far_from_the_map_is_refused_before_planning(tmp_path
 
 def test_the_ros2_flags_are_checked_before_any_work(tmp_path):
     check_ros2_outputs(_parse([]), [])  # nothing asked: nothing to check
-    with pytest.raises(InvalidParameterError, match="--map-frame-origin applies to"):
+    with pytest.raises(InvalidParameterError) as alone:
         check_ros2_outputs(_parse(["--map-frame-origin", "1", "2"]), [])
+    assert error_message(alone.value, ROS2_FLAGS) == ("--map-frame-origin applies to --ros2-out and --nav2-map; give "
+                                                      "one of them")  # the library's parameters, said by their flags
     with pytest.raises(InvalidParameterError, match="finite"):
         check_ros2_outputs(_parse(["--nav2-map", str(tmp_path / "m"), "--map-frame-origin", "nan", "0"]), [])
     dem = tmp_path / "dem.tif"
@@ -92,8 +94,10 @@ def test_the_ros2_flags_are_checked_before_any_work(tmp_path):
         check_ros2_outputs(_parse(["--ros2-out", str(tmp_path / "route.db3")]), [])
     with pytest.raises(InvalidParameterError, match="is also the command's own output"):
         check_ros2_outputs(_parse(["--ros2-out", str(tmp_path / "route.json")]), [], [tmp_path / "route.json"])
-    with pytest.raises(InvalidParameterError, match="is also written for --ros2-out"):
+    with pytest.raises(InvalidParameterError, match="is also written for `bag`") as twice:
         check_ros2_outputs(_parse(["--ros2-out", str(tmp_path / "m.yaml"), "--nav2-map", str(tmp_path / "m")]), [])
+    assert error_message(twice.value, ROS2_FLAGS).startswith("--nav2-map: ")
+    assert error_message(twice.value, ROS2_FLAGS).endswith("is also written for --ros2-out; give another name")
     coarse = _parse(["--nav2-map", str(tmp_path / "m")])
     coarse.coarse_factor = 4
     with pytest.raises(InvalidParameterError, match="need the whole map"):

@@ -3,6 +3,7 @@ without current topics (predict only), an IMU with gravity removed, and the erro
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -80,9 +81,10 @@ def test_jackal_bag_without_current_topics_reads_for_prediction(bags):
     # drive samples at the odometry messages (15 Hz), IMU at 50 Hz
     assert log.drive_rate_hz == pytest.approx(15.0, rel=1e-3) and log.accel_rate_hz == pytest.approx(50.0, rel=1e-3)
     np.testing.assert_allclose(log.v_mps, np.interp(log.time_s, truth["odom_t"], truth["v"]), atol=1e-9)
-    with pytest.raises(DataError, match=r"training needs measured drive currents.*'/drive/current_left'.*--current-topics.*"
-                                        r"--current-fields"):
+    with pytest.raises(DataError, match=r"training needs measured drive currents.*'/drive/current_left'.*"
+                                        r"\(current_topics\).*\(current_fields\)$") as raised:
         log.require_currents("training")
+    assert raised.value.parameter == ("current_topics", "current_fields")  # the command line says its flags
     with pytest.raises(DataError, match=r"topic\(s\) \['/drive/current_left', '/drive/current_right'\] not in the bag"):
         read_rosbag(path, BagTopics(cmd_vel_topic="/odometry/filtered"), require_currents=True)
 
@@ -131,31 +133,32 @@ def test_gravity_removed_imu_is_accepted_flagged_and_the_vibration_features_do_n
 
 @pytest.mark.parametrize(("kwargs", "error", "match"), [
     (dict(HUSKY, current_fields=("left_current", "right_driver_current")), DataError,
-     r"topic '/status' \(husky_msgs/msg/HuskyStatus\) has no field 'left_current' \(named by current_fields "
-     r"\(--current-fields\)\); its numeric fields are \[.*'left_driver_current'"),
+     r"topic '/status' \(husky_msgs/msg/HuskyStatus\) has no field 'left_current' \(named by current_fields\); its "
+     r"numeric fields are \[.*'left_driver_current'"),
     (dict(HUSKY, voltage_field="battery_volts"), DataError,
-     r"has no field 'battery_volts' \(named by voltage_field \(--voltage-field\)\)"),
+     r"has no field 'battery_volts' \(named by voltage_field\)"),
     (dict(HUSKY, current_fields=("left_driver_current", "e_stop")), DataError,
      r"field 'e_stop' is not a number \(got bool\)"),
     (dict(HUSKY, current_fields=("left_driver_current", "header.stamp.minutes")), DataError,
      r"has no field 'header.stamp.minutes'"),
     (dict(cmd_vel_topic="/odometry/filtered", current_topics="/status"), DataError,
      r"'/status' has type 'husky_msgs/msg/HuskyStatus'; expected one of .*Float64MultiArray.*name its current fields "
-     r"with current_fields \(--current-fields left_driver_current right_driver_current\)"),
+     r"with current_fields \(e.g. left_driver_current right_driver_current\)"),
     (dict(cmd_vel_topic="/odometry/filtered", current_topics=("/status", "/status")), DataError,
      r"'/status' has type 'husky_msgs/msg/HuskyStatus'; expected one of .*Float64'"),
     (dict(HUSKY, current_fields=("left_driver_current",)), InvalidParameterError,
      r"current_fields must be 2 non-empty name\(s\)"),
     (dict(HUSKY, current_topics=("/status", "/other")), InvalidParameterError,
-     r"give one current topic \(current_topics, --current-topics\)"),
+     r"give one current topic \(current_topics\)"),
     (dict(HUSKY, current_fields=None), InvalidParameterError,
-     r"voltage_field \(--voltage-field\) is read beside the currents"),
+     r"voltage_field is read beside the currents"),
     (dict(HUSKY, current_topics="/husky_status"), DataError,
      r"topic\(s\) \['/husky_status'\] not in the bag"),
 ])
 def test_bad_status_names_are_clear_errors(bags, kwargs, error, match):
-    with pytest.raises(error, match=match):
+    with pytest.raises(error, match=match) as raised:
         read_rosbag(bags["husky"][0], BagTopics(**kwargs))
+    assert not re.search(r"--[a-z]", str(raised.value))  # the library names parameters, never a command line's flags
 
 
 def test_one_of_two_current_topics_and_a_voltage_in_millivolts(bags, tmp_path):
@@ -236,9 +239,28 @@ def test_the_battery_power_of_a_log_uses_its_measured_voltage(bags):
 
 @requires_rosbags
 def test_an_imu_publishing_in_g_is_refused_until_its_unit_is_given(tmp_path):
-    truth = write_robot_bag(tmp_path / "g.bag", in_g=True)
-    with pytest.raises(UnitError, match=r"looks like an acceleration in g.*--accel-unit g"):
+    write_robot_bag(tmp_path / "g.bag", in_g=True)
+    with pytest.raises(UnitError, match=r"looks like an acceleration in g.*give accel_unit='g'") as raised:
         read_rosbag(tmp_path / "g.bag", BagTopics(**HUSKY))
+    assert raised.value.parameter == "accel_unit"
+
+
+@requires_rosbags
+def test_the_command_line_says_the_accel_unit_by_its_flag(tmp_path, capsys):
+    from terrawatt_cli import main
+
+    write_robot_bag(tmp_path / "g.bag", in_g=True)
+    rc = main(["train", "--model", "constant", "--data", str(tmp_path / "g.bag"), "--cmd-vel-topic",
+               "/odometry/filtered", "--current-topics", "/status", "--current-fields", "left_driver_current",
+               "right_driver_current", "--out", str(tmp_path / "m.zip")])
+    err = capsys.readouterr().err
+    assert rc == 2 and "looks like an acceleration in g" in err
+    assert "give --accel-unit='g' for an IMU driver that publishes in g" in err, err
+
+
+@requires_rosbags
+def test_an_imu_in_g_reads_once_its_unit_is_given(tmp_path):
+    truth = write_robot_bag(tmp_path / "g.bag", in_g=True)
     log = read_rosbag(tmp_path / "g.bag", BagTopics(**HUSKY, accel_unit="g"))
     assert not log.meta.gravity_removed
     assert np.median(log.accel_z_mps2) == pytest.approx(np.median(truth["az"]), rel=2e-3)  # m/s^2 again

@@ -200,11 +200,11 @@ def test_predict_on_a_bag_without_currents_and_the_others_refuse_it(bag_layouts,
 @requires_rosbags
 @pytest.mark.parametrize(("flags", "match"), [
     (["--current-topics", "/status", "--current-fields", "left_current", "right_driver_current"],
-     "has no field 'left_current' (named by current_fields (--current-fields))"),
-    (["--current-topics", "/status"], "name its current fields with current_fields (--current-fields"),
-    (["--current-topics", "/status", "--voltage-field", "battery_voltage"], "name them too with current_fields"),
+     "has no field 'left_current' (named by --current-fields)"),
+    (["--current-topics", "/status"], "name its current fields with --current-fields (e.g. left_driver_current"),
+    (["--current-topics", "/status", "--voltage-field", "battery_voltage"], "name them too with --current-fields"),
     (["--current-topics", "/status", "--current-fields", "left_driver_current", "right_driver_current",
-      "--voltage-field", "volts"], "has no field 'volts' (named by voltage_field (--voltage-field))"),
+      "--voltage-field", "volts"], "has no field 'volts' (named by --voltage-field)"),
     (["--imu-topic", "/imu/raw"], "topic(s) ['/imu/raw'] not in the bag"),
 ])
 @pytest.mark.parametrize("command", ["train", "predict"])
@@ -255,8 +255,10 @@ def test_a_folder_of_csv_logs_of_another_layout_reads_as_read_csv_log_reads_each
 
 def test_a_csv_of_another_layout_without_its_map_says_how_to_give_one(tmp_path):
     with pytest.raises(DataError, match=r"missing column\(s\) \['time_s', .* of the layout terrawatt writes; the header "
-                                        r"has \['stamp_ms'.*--csv-columns time=COLUMN"):
+                                        r"has \['stamp_ms'.*`columns` \(time=COLUMN v=COLUMN ...\) and `units` "
+                                        r"\(time=ms ...\) of the CSV layout$") as raised:
         read_logs(GENERIC)
+    assert raised.value.parameter == ("columns", "units")  # the command line says --csv-columns, --csv-units
 
 
 @pytest.mark.parametrize(("kwargs", "error", "match"), [
@@ -291,10 +293,11 @@ def test_a_csv_layout_for_a_borealtc_folder_is_refused_not_ignored(kwargs, given
     from energy.io import CsvLayout
 
     with pytest.raises(InvalidParameterError, match=(
-            r"^csv \(--csv-columns, --csv-units, --csv-rates, --track-width\) applies to CSV logs only, and path "
+            r"^`csv` applies to CSV logs only, and path "
             r"'.*borealtc' is read as a BorealTC folder \(GROUND/imu_NN\.csv \+ pro_NN\.csv\), whose columns, units "
-            r"and track width \(0\.555 m\) are the format's own; give no CSV layout for them \(got " + given)):
+            r"and track width \(0\.555 m\) are the format's own; give no CSV layout for them \(got " + given)) as raised:
         read_logs(FIXTURES, csv=CsvLayout(**kwargs))
+    assert raised.value.parameter == ("path", "csv")
     assert len(read_logs(FIXTURES, csv=CsvLayout())) == len(read_borealtc(FIXTURES))  # the default layout: no layout
 
 
@@ -312,11 +315,12 @@ def test_a_track_width_beside_v_and_omega_columns_is_refused_not_recorded(tmp_pa
     from energy.io import CsvLayout
 
     with pytest.raises(InvalidParameterError, match=(
-            r"track_width_m \(--track-width\) 0\.5 derives omega from wheel speeds \(speed_left / speed_right "
+            r"track_width_m 0\.5 derives omega from wheel speeds \(speed_left / speed_right "
             r"columns\), but the layout's velocities are v and omega \('cmd_v', 'cmd_w'\): there is no omega to "
-            r"derive; drop the track width, or map the wheel speeds instead \(--csv-columns speed_left=COLUMN "
-            r"speed_right=COLUMN\)")):
+            r"derive; drop the track width, or map the wheel speeds instead \(`columns` speed_left=COLUMN "
+            r"speed_right=COLUMN\)")) as raised:
         CsvLayout(**GENERIC_LAYOUT, track_width_m=0.5)
+    assert raised.value.parameter == ("track_width_m", "columns")
     default = CsvLayout(track_width_m=0.5)  # maybe meant for logs of another kind: refused when a CSV log is read
     with pytest.raises(InvalidParameterError, match=r"but the default layout's velocities are v and omega "
                                                     r"\('v_mps', 'omega_radps'\)"):

@@ -49,8 +49,9 @@ def write_geographic_dem(path, n=40, nodata_cell=None):
 # ------------------------------------------------------------------ reprojection
 def test_a_geographic_dem_is_refused_with_the_option_that_reprojects_it(tmp_path):
     path = write_geographic_dem(tmp_path / "geo.tif")
-    with pytest.raises(FileFormatError, match=r"reproject_to='utm'.*--reproject utm --cell-size M"):
+    with pytest.raises(FileFormatError, match=r"read it with reproject_to utm \(or EPSG:N\) and cell_size_m M$") as raised:
         read_geotiff(path)
+    assert raised.value.parameter == ("reproject_to", "cell_size_m")  # the command line says --reproject, --cell-size
 
 
 def test_reprojection_to_the_local_utm_zone(tmp_path):

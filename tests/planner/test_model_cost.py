@@ -48,8 +48,10 @@ def test_a_saved_and_loaded_model_prices_the_map_like_the_fitted_one(tmp_path, c
 
 
 def test_a_model_of_another_robot_is_refused_naming_both(corridor_map, known_model):
-    with pytest.raises(InvalidParameterError, match=r"trained on robot\(s\) \['jackal_1'\], not on the robot preset 'husky'"):
+    with pytest.raises(InvalidParameterError, match=r"trained on robot\(s\) \['jackal_1'\], not on the robot preset "
+                       r"'husky'.* or give the model's robot as `robot`$") as raised:
         model_energy_cost(corridor_map, known_model(robot="jackal_1"), HUSKY, 0.5)
+    assert raised.value.parameter == "robot"  # the command line says --robot
 
 
 def test_an_unnamed_robot_is_a_warning_not_a_refusal(corridor_map, known_model):

@@ -49,9 +49,12 @@ def test_point_on_map_takes_metres_or_degrees_and_names_them(utm_map):
     assert point_on_map([500010, 4982910], None, utm_map) == (500010.0, 4982910.0)
     x, y = point_on_map(None, (15.0, 45.0), utm_map)
     np.testing.assert_allclose([x, y], lonlat_points((15.0, 45.0), utm_map, "p")[0])
-    with pytest.raises(InvalidParameterError, match=r"--depot must be two finite coordinates \(m\), got \[nan, 5.0\]"):
-        point_on_map([float("nan"), 5.0], None, utm_map, names=("--depot", "--depot-lonlat"))
-    with pytest.raises(InvalidParameterError, match="give xy_m or lonlat, not both"):
+    with pytest.raises(InvalidParameterError, match=r"^depot must be two finite coordinates \(m\), got \[nan, 5.0\]") as bad:
+        point_on_map([float("nan"), 5.0], None, utm_map, names=("depot", "depot_lonlat"))
+    assert bad.value.parameter == "depot"  # the caller's parameter: a front end says it its own way
+    with pytest.raises(InvalidParameterError, match="give xy_m or lonlat, not both") as both:
         point_on_map((1.0, 2.0), (15.0, 45.0), utm_map)
-    with pytest.raises(OutOfBoundsError, match="--goal-lonlat"):
-        point_on_map(None, (16.0, 45.0), utm_map, names=("--goal", "--goal-lonlat"))
+    assert both.value.parameter == ("xy_m", "lonlat")
+    with pytest.raises(OutOfBoundsError, match="^goal_lonlat") as off:
+        point_on_map(None, (16.0, 45.0), utm_map, names=("goal", "goal_lonlat"))
+    assert off.value.parameter == "goal_lonlat"

@@ -65,16 +65,22 @@ def test_check_ros_outputs_refuses_bad_targets_before_any_work(tmp_path):
 
     check_ros_outputs()
     check_ros_outputs(nav2_map=tmp_path / "site", frame_origin_xy_m=(1.0, 2.0), others=[tmp_path / "route.json"])
-    with pytest.raises(InvalidParameterError, match="--map-frame-origin applies to --ros2-out and --nav2-map"):
-        check_ros_outputs(frame_origin_xy_m=(1.0, 2.0), names={"frame_origin_xy_m": "--map-frame-origin",
-                                                              "bag": "--ros2-out", "nav2_map": "--nav2-map"})
+    with pytest.raises(InvalidParameterError, match="^frame_origin_xy_m applies to `bag` and nav2_map") as alone:
+        check_ros_outputs(frame_origin_xy_m=(1.0, 2.0))
+    assert alone.value.parameter == ("frame_origin_xy_m", "bag", "nav2_map")  # the command line says its flags
     with pytest.raises(InvalidParameterError, match="frame_origin_xy_m must be two finite numbers"):
         check_ros_outputs(nav2_map=tmp_path / "site", frame_origin_xy_m=(np.nan, 0.0))
-    with pytest.raises(InvalidParameterError, match="nav2_map: .*site.yaml' is also the command's own output"):
+    with pytest.raises(InvalidParameterError, match="^`nav2_map`: .*site.yaml' is also the command's own output") as own:
         check_ros_outputs(nav2_map=tmp_path / "site", others=[tmp_path / "site.yaml"])
+    assert own.value.parameter == ("nav2_map",)
     (tmp_path / "in.pgm").write_text("x")
-    with pytest.raises(InvalidParameterError, match="would replace the input"):
+    with pytest.raises(InvalidParameterError, match="^`nav2_map`: writing .* would replace the input") as replaced:
         check_ros_outputs(nav2_map=tmp_path / "in", inputs=[tmp_path / "in.pgm", None])
+    assert replaced.value.parameter == "nav2_map"
+    pytest.importorskip("rosbags")
+    with pytest.raises(InvalidParameterError, match=r"^`nav2_map`: .*site.pgm' is also written for `bag`") as twice:
+        check_ros_outputs(bag=tmp_path / "site.pgm", nav2_map=tmp_path / "site")
+    assert twice.value.parameter == ("nav2_map", "bag")
 
 
 def test_check_ros_outputs_checks_the_geotiff_suffix(tmp_path):
@@ -83,5 +89,12 @@ def test_check_ros_outputs_checks_the_geotiff_suffix(tmp_path):
     from terrain import InvalidParameterError
 
     check_ros_outputs(energy_geotiff=tmp_path / "energy.tif")
-    with pytest.raises(InvalidParameterError, match="energy_geotiff writes a GeoTIFF ending in '.tif' or '.tiff'"):
-        check_ros_outputs(energy_geotiff=tmp_path / "energy.png")
+    with pytest.raises(InvalidParameterError, match="^`energy_geotiff` writes a GeoTIFF ending in '.tif' or '.tiff'") as bad:
+        check_ros_outputs(energy_geotiff=tmp_path / "energy_geotiff.png")
+    assert bad.value.parameter == "energy_geotiff"  # marked: the path's word stays a path when a front end renames it
+    from terrawatt_cli import error_message
+    from terrawatt_cli.ros2 import ROS2_FLAGS
+
+    assert error_message(bad.value, ROS2_FLAGS).startswith("--energy-costmap writes a GeoTIFF ending in '.tif' or "
+                                                           "'.tiff', got '") and "energy_geotiff.png'" in str(bad.value)
+    assert error_message(bad.value, ROS2_FLAGS).endswith("energy_geotiff.png'")

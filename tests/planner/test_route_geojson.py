@@ -182,7 +182,7 @@ def test_plan_on_a_geographic_dem_with_reproject(tmp_path, capsys):
     rc = main(["plan", "--map", str(dem), "--start", "1", "1", "--goal", "2", "2", "--planner", "lattice",
                "--out", str(tmp_path / "refused")])
     err = capsys.readouterr().err
-    assert rc == 2 and "--reproject utm --cell-size M" in err
+    assert rc == 2 and "read it with --reproject utm (or EPSG:N) and --cell-size M" in err  # the library's words, flagged
     from terrain import read_geotiff
 
     tmap = read_geotiff(dem, reproject_to="utm", cell_size_m=5.0)

@@ -259,8 +259,9 @@ def test_a_land_cover_leaving_much_of_the_map_unknown_warns_which_codes_and_what
     (warning,) = [w for w in caught if issubclass(w.category, ImplausibleDataWarning)]
     assert str(warning.message) == (
         f"land-cover GeoTIFF {str(path)!r} leaves 58 % of the map's cells with unknown ground (code 40: 50 %, "
-        "nodata: 8 %), priced as the planner's unknown_ground (--unknown-ground); codes [50, 80] of the mapping are "
+        "nodata: 8 %), priced as the planner's unknown_ground; codes [50, 80] of the mapping are "
         "nowhere over the map; map the omitted codes in the classes file, or give a land cover that covers the map")
+    assert warning.message.parameter == "unknown_ground"  # a front end says it its own way
     assert (out.ground[:, 2:] == out.ground_id("grass")).sum() == 5 and (out.ground[:, :2] == UNKNOWN_GROUND).all()
 
 

@@ -8,11 +8,8 @@ import pytest
 from diagnosis_scenarios import scenario
 
 from energy import PhysicsCurrentModel
-from energy.diagnosis import DEFAULT_SOURCE_NAMES, ModelUnderDiagnosis, check_model_source, model_under_diagnosis
+from energy.diagnosis import ModelUnderDiagnosis, check_model_source, model_under_diagnosis
 from terrawatt_base.errors import InvalidParameterError, UnknownNameError
-
-FLAGS = {"model": "--model", "robot": "--robot", "ground": "--ground", "without": "--without",
-         "calibration": "--calibration-data", "logs": "--data"}
 
 
 @pytest.fixture(scope="module")
@@ -29,33 +26,36 @@ def test_the_kind_of_each_source(tmp_path, runs):
     assert check_model_source("physics", robot="husky", ground="asphalt", without=["inertia"]) == "physics"
     assert check_model_source("estimator", calibration=[1]) == "estimator"
     assert check_model_source(path) == check_model_source(str(path)) == "file"
-    assert set(FLAGS) == set(DEFAULT_SOURCE_NAMES)
 
 
-@pytest.mark.parametrize("model, kwargs, error, message", [
-    ("nowhere.zip", {}, InvalidParameterError, "model must be 'physics', 'estimator' or a model file; 'nowhere.zip'"),
-    (3, {}, InvalidParameterError, "model must be a string or a path"),
-    ("physics", {"robot": "rover"}, UnknownNameError, "robot 'rover' is neither a robot preset"),
-    ("physics", {"ground": "lava"}, UnknownNameError, "ground 'lava' is not a ground preset"),
-    ("physics", {"without": ["warp"]}, UnknownNameError, r"without \['warp'\]: not physics drive effects"),
-    ("physics", {"without": ["inertia", "inertia"]}, InvalidParameterError, "without names an effect twice"),
-    ("estimator", {"ground": "sand"}, InvalidParameterError, "ground applies to model physics only"),
-    ("estimator", {"calibration": None, "without": ["inertia"]}, InvalidParameterError, "without applies to model"),
-    ("estimator", {}, InvalidParameterError, "model estimator needs calibration_logs"),
+@pytest.mark.parametrize("model, kwargs, error, message, parameter", [
+    ("nowhere.zip", {}, InvalidParameterError, "`model` must be 'physics', 'estimator' or a model file; 'nowhere.zip'",
+     "model"),
+    (3, {}, InvalidParameterError, "`model` must be a string or a path", "model"),
+    ("physics", {"robot": "rover"}, UnknownNameError, "robot 'rover' is neither a robot preset", "robot"),
+    ("physics", {"ground": "lava"}, UnknownNameError, "`ground` 'lava' is not a ground preset", "ground"),
+    ("physics", {"without": ["warp"]}, UnknownNameError, r"`without` \['warp'\]: not physics drive effects",
+     "without"),
+    ("physics", {"without": ["inertia", "inertia"]}, InvalidParameterError, "`without` names an effect twice",
+     "without"),
+    ("estimator", {"ground": "sand"}, InvalidParameterError, "`ground` applies to `model` physics only",
+     ("ground", "model")),
+    ("estimator", {"calibration": None, "without": ["inertia"]}, InvalidParameterError,
+     "`without` applies to `model`", ("without", "model")),
+    ("estimator", {}, InvalidParameterError, "`model` estimator needs `calibration`", ("model", "calibration")),
 ])
-def test_bad_sources_are_refused_naming_the_argument(model, kwargs, error, message):
-    with pytest.raises(error, match=message):
+def test_bad_sources_are_refused_naming_the_argument(model, kwargs, error, message, parameter):
+    with pytest.raises(error, match=message) as raised:
         check_model_source(model, **kwargs)
+    assert raised.value.parameter == parameter  # the command line says it by its flag
+    assert "--" not in str(raised.value)
 
 
-def test_messages_name_the_callers_flags(tmp_path, runs):
+def test_a_file_with_calibration_runs_is_refused_naming_both(tmp_path, runs):
     path = runs[1].save(tmp_path / "m.zip")
-    with pytest.raises(InvalidParameterError, match="--calibration-data applies to --model physics or estimator"):
-        check_model_source(path, calibration="cal", names=FLAGS)
-    with pytest.raises(InvalidParameterError, match="--without applies to --model physics only, got --model"):
-        check_model_source("estimator", calibration="cal", without=["inertia"], names=FLAGS)
-    with pytest.raises(UnknownNameError, match="names has keys"):
-        check_model_source("physics", names={"flag": "--flag"})
+    with pytest.raises(InvalidParameterError, match="`calibration` applies to `model` physics or estimator") as raised:
+        check_model_source(path, calibration="cal")
+    assert raised.value.parameter == ("calibration", "model")
 
 
 def test_the_physics_as_given_is_not_fitted_on_the_logs(runs):
@@ -76,9 +76,10 @@ def test_the_physics_is_calibrated_on_other_runs_only(runs):
     src = model_under_diagnosis("physics", logs[:1], calibration_logs=logs[1:], calibration_label="cal/")
     assert "coefficients fitted on the 2 runs of cal/" in src.note and "which are not diagnosed" in src.note
     assert src.model.fitted_ and all(f"{k} = " in src.note for k in src.model.fitted_)
-    with pytest.raises(InvalidParameterError, match=r"--calibration-data holds runs that --data diagnoses too: "
-                       r"\['run_1.csv'\]; calibrate on runs that are not diagnosed"):
-        model_under_diagnosis("physics", logs[:2], calibration_logs=logs[1:], names=FLAGS)
+    with pytest.raises(InvalidParameterError, match=r"`calibration_logs` holds runs that `logs` diagnoses too: "
+                       r"\['run_1.csv'\]; calibrate on runs that are not diagnosed") as raised:
+        model_under_diagnosis("physics", logs[:2], calibration_logs=logs[1:])
+    assert raised.value.parameter == ("calibration_logs", "logs")
     with pytest.raises(InvalidParameterError, match="logs must be a non-empty sequence"):
         model_under_diagnosis("physics", [])
 
@@ -95,7 +96,7 @@ def test_calibration_runs_that_cannot_calibrate_are_refused_naming_them(runs):
     # a byte-identical copy of a diagnosed run under another name, its clock shifted
     copy = dataclasses.replace(_renamed(logs[0], source="copy.csv"), time_s=logs[0].time_s + 100.0)
     with pytest.raises(InvalidParameterError, match=r"copies of diagnosed runs .* 'copy.csv' = 'run_0.csv'"):
-        model_under_diagnosis("physics", diagnosed, calibration_logs=[*cal, copy], names=FLAGS)
+        model_under_diagnosis("physics", diagnosed, calibration_logs=[*cal, copy])
     silent = dataclasses.replace(_renamed(logs[1], source="zero.csv"), current_left_a=np.zeros(len(logs[1])),
                                  current_right_a=np.zeros(len(logs[1])))
     with pytest.raises(InvalidParameterError, match=r"without drive current .* \['zero.csv'\]"):
