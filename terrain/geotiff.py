@@ -131,7 +131,7 @@ def read_geotiff(
                 raise FileFormatError(over_budget_message(
                     where, f"its {src.width} x {src.height} cells read whole", need,
                     advice="read it by windows: terrain.iter_surface_windows, or plan coarse-to-fine by windows "
-                           "(planner.plan_coarse on the file, a coarse `factor` F)"), parameter="factor")
+                           "(planner.plan_coarse_to_fine on the file's path, a coarse `factor` F)"), parameter="factor")
             if reproject_to is None:
                 data = src.read(info.band, masked=True)
                 values = np.ma.getdata(data).astype(np.float64)  # in place from here: big DEMs

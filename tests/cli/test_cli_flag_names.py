@@ -75,8 +75,8 @@ def test_a_dem_over_the_memory_budget_names_the_coarse_factor(tmp_path, capsys, 
                "--out", str(tmp_path / "o")])
     assert rc == EXIT_BAD_INPUT
     err = one_line_error(capsys)
-    assert ("read it by windows: terrain.iter_surface_windows, or plan coarse-to-fine by windows (planner.plan_coarse "
-            "on the file, a coarse --coarse-factor F), or raise the budget") in err, err
+    assert ("read it by windows: terrain.iter_surface_windows, or plan coarse-to-fine by windows (planner."
+            "plan_coarse_to_fine on the file's path, a coarse --coarse-factor F), or raise the budget") in err, err
 
 
 def test_a_csv_log_of_another_layout_is_said_with_the_csv_flags(tmp_path, capsys):
