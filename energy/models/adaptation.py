@@ -64,18 +64,22 @@ new-ground spread; zero on a ground the model drove). The correction is scaled b
   (+ ``R`` with ``scope="ground"``): ``G`` estimated from the prefix alone.
 - ``"none"``: the correction as fitted.
 
-**The interval.** Forecasting other runs on the prefix's ground (``scope="ground"``), a point
-update's forecast keeps the base's per-sample spread and the next run's own offset, and conditions
-the new-ground part of the run-level spread on the prefix: the ground's offset has a posterior
-given ``obs`` under the learned spreads, and the forecast error's variance is that posterior's plus
-the square of how far the update's correction lies from its mean
-(:meth:`AdaptedCurrentModel.correct_distribution`). A prefix near its forecast narrows the
-interval; one far from it that the update holds back from (the ridge, the shrink) keeps it wide.
-Measured held out on the BorealTC grounds and the independent generator's (docs/results.md, "The
-interval given the prefix"): a proper score (the log predictive density of the total charge) better
-than with the base's spread kept on seven grounds of nine, worse on the two whose spread the
-training grounds underestimate (snow: its 80 % interval covers 74–76 % against 78–80 %). With ``scope="run"`` the forecast keeps the base's spread: conditioned on the run's
-own offset too, the rest of the run was covered too little (a run's offset drifts along it).
+**The interval.** A point update's forecast keeps the base's per-sample spread and conditions the
+run-level spread on the prefix (:meth:`AdaptedCurrentModel.correct_distribution`): under the learned
+spreads the offset the forecast misses has a posterior given the prefix's residual charge ``obs``, and
+the forecast error's variance is that posterior's plus the square of how far the update's correction
+lies from its mean. A prefix near its forecast narrows the interval; one far from it that the update
+holds back from (the ridge, the shrink) keeps it wide. Forecasting other runs on the prefix's ground
+(``scope="ground"``) only the ground's offset is conditioned, the next run's own kept whole; measured
+held out on the BorealTC grounds and the independent generator's (docs/results.md, "The interval given
+the prefix"): a proper score (the log predictive density of the total charge) better than with the
+base's spread kept on seven grounds of nine, worse on the two whose spread the training grounds
+underestimate (snow: its 80 % interval covers 74–76 % against 78–80 %). Forecasting the rest of the
+prefix's run (``scope="run"``) the run's own offset is conditioned too, as far as it carries along a
+run: :attr:`~energy.models.uncertainty.IntervalModel.run_carry`, the correlation of the two halves of
+the training runs (a run's offset drifts along it: taken as constant, the 80 % intervals of the rest of
+the run covered 73 % on the BorealTC logs, the base's spread 88 %; with the learned carry 76–88 %,
+docs/results.md, "The rest of the run given its prefix").
 
 Chosen by measurement (docs/results.md, "Forecasts you can bank on"): few shots on the BorealTC
 grounds, each ground held out of the choice in turn, the update whose worst harm to the
@@ -183,7 +187,7 @@ def evidence_parts(base: CurrentModel, logs: Sequence[InteractionLog], preds: Se
     for lg, p, y in zip(logs, preds, truths):
         t = lg.time_s
         obs += _trapezoid(y - p, t, axis=0)
-        noise += np.sum(interval.sample_sd(lg) ** 2 * sample_spans_s(lg)[:, None], axis=0) * interval.correlation_s
+        noise += interval.noise_charge_var(lg)
         run += _trapezoid(interval.run_sd_a(lg, p, known=True), t, axis=0) ** 2
         if not known and interval.new_ground_cov is not None:
             ground += _trapezoid(interval.run_sd_a(lg, p, known=True, cov=interval.new_ground_cov), t, axis=0) ** 2
@@ -475,40 +479,51 @@ class AdaptedCurrentModel(CurrentModel):
                                base_forecast.dof)
 
     def _posterior_run_sd(self, log: InteractionLog, base_forecast: CurrentForecast, mean: np.ndarray) -> np.ndarray:
-        """A point update's run-level spread of ``log``, another run on the prefix's ground, given what the prefix showed.
+        """A point update's run-level spread of ``log`` given what the prefix showed (module docstring, "The interval").
 
-        ``scope="ground"`` (module docstring, "The interval"): the ground's offset has, per side,
-        the prior variance ``G`` over the prefix and ``V`` over ``log``; given the prefix's residual
-        charge ``obs`` its posterior has the mean ``G / (G + R + E) obs`` (scaled to ``log`` by
-        ``sqrt(V / G)``) and the variance ``V (R + E) / (G + R + E)``. The update's correction of
-        ``log``, ``d``, departs from that mean by ``b``: the forecast error's variance is ``V post +
-        b²``, so the new-ground part of the spread is scaled by ``post + (b / sqrt V)²`` — narrower
-        where the update follows the evidence, wider where it holds back from a prefix that lay
-        far from the forecast. The next run's own offset and the members' disagreement stay whole.
-        The base's spread where there is nothing to condition on: ``scope="run"`` (a run's own
-        offset drifts along the run: conditioned on it, the 95 % intervals of the rest of the run
-        held 85–88 % on the BorealTC logs), a ground the model drove (``G = 0``), no prefix evidence
-        (a model file from before it was kept, a base without an interval).
+        Per side, the prefix's residual charge is ``obs = g + r + e`` (variances ``G``, ``R``, ``E``); the
+        offset the forecast of ``log`` misses is ``g' + r'``: the same ground's offset (prior variance
+        ``Vg`` over ``log``) and, forecasting the rest of the prefix's run (``scope="run"``), the run's own
+        offset carried along it with the correlation :attr:`~energy.models.uncertainty.IntervalModel.run_carry`
+        (variance ``Vr``); forecasting another run (``scope="ground"``) that run's own offset is independent
+        and stays whole. Given ``obs`` the conditioned offset has the mean ``C / (G + R + E) obs`` with ``C =
+        sqrt(Vg G) + carry sqrt(Vr R)`` and the variance ``P - C² / (G + R + E)`` (``P`` its prior
+        variance); the update's correction of ``log``, ``d``, departs from that mean by ``b``, so the
+        forecast error's variance is the posterior's plus ``b²`` and the conditioned part of the spread is
+        scaled by ``(posterior + b²) / P`` — narrower where the update follows the evidence, wider where it
+        holds back from a prefix that lay far from the forecast (or carries more of it than the run's drift
+        lets through). The members' disagreement stays whole. The base's spread where there is nothing to
+        condition on: no prefix evidence (a model file from before it was kept, a base without an
+        interval), another run of a ground the model drove (``G = 0``), the rest of a run with no carry
+        learned (a base from before it was, or one trained on fewer than three runs).
         """
         run_sd = base_forecast.run_sd_a
-        if self.scope != "ground" or self.evidence_ is None or not base_forecast.has_interval:
+        if self.evidence_ is None or not base_forecast.has_interval:
             return run_sd
         obs, noise, run, ground = self.evidence_
         base = self.base_model
         interval = base.interval_
-        if not np.any(ground > 0) or base.knows_ground(log.meta.ground_label) or interval.new_ground_cov is None:
+        new_ground = not base.knows_ground(log.meta.ground_label) and interval.new_ground_cov is not None
+        carry = interval.run_carry if self.scope == "run" else 0.0
+        if carry is None or (self.scope == "ground" and not (new_ground and np.any(ground > 0))):
             return run_sd
-        ground2 = interval.run_sd_a(log, base_forecast.mean_a, known=True, cov=interval.new_ground_cov) ** 2
-        rest2 = np.maximum(run_sd**2 - ground2, 0.0)  # the next run's own offset and the members' disagreement
+        zero = np.zeros_like(run_sd)
+        ground2 = (interval.run_sd_a(log, base_forecast.mean_a, known=True, cov=interval.new_ground_cov) ** 2
+                   if new_ground else zero)
+        run2 = interval.run_sd_a(log, base_forecast.mean_a, known=True) ** 2 if self.scope == "run" else zero
+        held = ground2 + run2  # the part the prefix conditions
+        rest2 = np.maximum(run_sd**2 - held, 0.0)  # the next run's own offset (scope "ground"), the members' disagreement
         t = log.time_s
-        v_sd = _trapezoid(np.sqrt(ground2), t, axis=0)  # sqrt(V) per side (A s)
+        prior_sd = _trapezoid(np.sqrt(held), t, axis=0)  # sqrt(P) per side (A s)
+        cross = (_trapezoid(np.sqrt(ground2), t, axis=0) * np.sqrt(ground)
+                 + carry * _trapezoid(np.sqrt(run2), t, axis=0) * np.sqrt(run))
         d = _trapezoid(mean - base_forecast.mean_a, t, axis=0)
         total = ground + run + noise
         with np.errstate(divide="ignore", invalid="ignore"):
-            post = np.where(total > 0, (run + noise) / total, 1.0)
-            bias = np.where((ground > 0) & (v_sd > 0), ground / total * obs / np.sqrt(ground) - d / v_sd, 0.0)
-        factor = np.where(ground > 0, post + bias**2, 1.0)
-        return np.sqrt(rest2 + factor[None, :] * ground2)
+            gain = np.where(total > 0, cross / total, 0.0)
+            post = np.maximum(prior_sd**2 - gain * cross, 0.0)
+            factor = np.where(prior_sd > 0, (post + (gain * obs - d) ** 2) / prior_sd**2, 1.0)
+        return np.sqrt(rest2 + factor[None, :] * held)
 
     def _training_summary(self, logs: list[InteractionLog]) -> TrainedOn:
         own = TrainedOn.from_logs(logs)

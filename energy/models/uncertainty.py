@@ -34,6 +34,7 @@ quantities are the prior of the Bayesian few-shot update
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -41,9 +42,10 @@ from typing import Any
 
 import numpy as np
 
-from terrawatt_base.checks import check_bool, check_int
+from terrawatt_base.checks import check_bool, check_int, check_real
 
 from ..logs import InteractionLog, rest_samples
+from ..power import trapezoid as _trapezoid
 
 __all__ = ["REGIME_COLUMNS", "IntervalModel", "regime_design", "run_coefficients"]
 
@@ -58,6 +60,8 @@ DEFAULT_TURN_SCALE_RADPS = 0.3
 SAMPLE_REGIMES = ("rest", "straight", "turning")
 _POOLED = "*"
 _MIN_GROUND_RUNS = 3  # a ground's own run covariance needs this many runs, else the pooled one
+#: Least number of training runs the carry of a run's offset along it (:attr:`IntervalModel.run_carry`) is learned from.
+MIN_CARRY_RUNS = 3
 _MAX_LAGS = 50  # lags (drive samples) of the per-sample residual's autocorrelation (~8 s at 6.5 Hz)
 
 
@@ -188,6 +192,13 @@ class IntervalModel:
     n_grounds : int
         Grounds the new-ground covariance was learned from (0: none, or a file from before
         it was recorded).
+    run_carry : float or None
+        How much of a run's own offset carries along it: the correlation, over the training
+        runs, of the run-level parts of the residual charges of each run's two halves (the
+        per-sample noise's share taken out of their variances; in [0, 1]). 1 is an offset
+        constant along the run, 0 one that the first half says nothing of the second with.
+        ``None`` where it could not be learned (fewer than :data:`MIN_CARRY_RUNS` runs, no
+        run-level part left after the noise's) or in a file from before it was recorded.
     """
 
     turn_scale_radps: float
@@ -198,6 +209,7 @@ class IntervalModel:
     cross_validated: bool
     n_runs: int
     n_grounds: int = 0
+    run_carry: float | None = None
 
     @property
     def new_ground_dof(self) -> float:
@@ -269,8 +281,44 @@ class IntervalModel:
                 means.append(np.tensordot(w / w.sum(), b, axes=1))
             # a handful of grounds cannot tell how the columns co-vary: keep the variances only
             new_cov = _diagonal(_second_moment(np.stack(means)))
-        return cls(float(turn_scale_radps), run_cov, new_cov, sample_sd, float(correlation), bool(cross_validated),
-                   len(logs), n_grounds)
+        interval = cls(float(turn_scale_radps), run_cov, new_cov, sample_sd, float(correlation), bool(cross_validated),
+                       len(logs), n_grounds)
+        return dataclasses.replace(interval, run_carry=interval.carry_along_runs(logs, residuals_a, predictions_a))
+
+    def carry_along_runs(self, logs: Sequence[InteractionLog], residuals_a: Sequence[np.ndarray],
+                         predictions_a: Sequence[np.ndarray]) -> float | None:
+        """:attr:`run_carry` from residual currents ``residuals_a`` (N, 2) of ``logs`` and the predictions they are
+        residuals of (see the attribute).
+
+        Per run and side the residual charge of each half, ``q1`` and ``q2`` (A s), and the variance
+        ``E1``, ``E2`` of each that the per-sample spread explains (:meth:`noise_charge_var`); pooled over
+        runs and sides, ``sum(q1 q2) / sqrt((sum(q1²) - sum(E1)) (sum(q2²) - sum(E2)))``, clipped to [0, 1].
+        """
+        parts = []
+        for lg, r in zip(logs, residuals_a):
+            t = lg.time_s
+            first = t < t[0] + 0.5 * (t[-1] - t[0]) if len(lg) else np.zeros(0, dtype=bool)
+            if min(np.count_nonzero(first), np.count_nonzero(~first)) < 2:
+                continue
+            parts.append([_trapezoid(r[m], t[m], axis=0) for m in (first, ~first)]
+                         + [self.noise_charge_var(lg, m) for m in (first, ~first)])
+        if len(parts) < MIN_CARRY_RUNS:
+            return None
+        q1, q2, e1, e2 = np.moveaxis(np.asarray(parts), 1, 0)  # each (runs, 2)
+        signal = (float(np.sum(q1**2) - np.sum(e1)), float(np.sum(q2**2) - np.sum(e2)))
+        if min(signal) <= 0:
+            return None
+        return float(np.clip(np.sum(q1 * q2) / math.sqrt(signal[0] * signal[1]), 0.0, 1.0))
+
+    def noise_charge_var(self, log: InteractionLog, mask: np.ndarray | None = None) -> np.ndarray:
+        """Per side, the variance (A² s²) of ``log``'s residual charge (over the samples ``mask``) that the per-sample
+        spread explains.
+
+        White noise of correlation time :attr:`correlation_s`: the variance of its integral is ``sum(sd² dt) *
+        correlation_s``.
+        """
+        var = self.sample_sd(log) ** 2 * sample_spans_s(log)[:, None]
+        return np.sum(var if mask is None else var[mask], axis=0) * self.correlation_s
 
     # ------------------------------------------------------------- queries
     def knows(self, ground: str | None) -> bool:
@@ -301,7 +349,7 @@ class IntervalModel:
         return {"turn_scale_radps": self.turn_scale_radps, "run_cov": dict(self.run_cov),
                 "new_ground_cov": self.new_ground_cov, "sample_sd_a": self.sample_sd_a,
                 "correlation_s": self.correlation_s, "cross_validated": self.cross_validated, "n_runs": self.n_runs,
-                "n_grounds": self.n_grounds}
+                "n_grounds": self.n_grounds, "run_carry": self.run_carry}
 
     @classmethod
     def from_plain(cls, d: Mapping[str, Any]) -> IntervalModel:
@@ -333,4 +381,5 @@ class IntervalModel:
                              "(at most 100 rad/s and 3600 s)")
         return cls(scale, run_cov, None if new is None else cov("new_ground_cov", new), sd, corr,
                    check_bool("cross_validated", d["cross_validated"]), check_int("n_runs", d["n_runs"], low=0),
-                   check_int("n_grounds", d.get("n_grounds", 0), low=0))  # absent before it was recorded
+                   check_int("n_grounds", d.get("n_grounds", 0), low=0),  # absent before it was recorded
+                   None if d.get("run_carry") is None else check_real("run_carry", d["run_carry"], low=0.0, high=1.0))

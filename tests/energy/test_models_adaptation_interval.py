@@ -74,11 +74,51 @@ def test_with_nothing_to_carry_the_base_spread_is_kept(two_ground_estimator):
     np.testing.assert_array_equal(other_runs.predict_distribution(train[2]).run_sd_a,
                                   est.predict_distribution(train[2]).run_sd_a)
     new_ground = interval_log(40, "c", vibration=0.5, offset_a=3.0)
-    same_run = AdaptedCurrentModel(est, scope="run").fit(new_ground.slice(0.0, 20.0))  # a run's offset drifts along it
+    unlearned = _with_carry(est, None)  # no carry learned along a run (a file from before, too few runs)
+    same_run = AdaptedCurrentModel(unlearned, scope="run").fit(new_ground.slice(0.0, 20.0))
     rest = new_ground.slice(20.0, float(new_ground.time_s[-1]))
-    np.testing.assert_array_equal(same_run.predict_distribution(rest).run_sd_a, est.predict_distribution(rest).run_sd_a)
+    np.testing.assert_array_equal(same_run.predict_distribution(rest).run_sd_a,
+                                  unlearned.predict_distribution(rest).run_sd_a)
     other = AdaptedCurrentModel(est, scope="ground").fit(new_ground.slice(0.0, 20.0))
     assert not np.allclose(other.predict_distribution(rest).run_sd_a, est.predict_distribution(rest).run_sd_a)
+
+
+def _with_carry(est, carry):
+    """A copy of ``est`` whose interval carries a run's offset along it by ``carry``."""
+    other = est.clone()
+    other.__dict__.update({k: v for k, v in est.__dict__.items() if k.endswith("_")})
+    other.interval_ = dataclasses.replace(est.interval_, run_carry=carry)
+    return other
+
+
+@pytest.mark.parametrize("carry", [0.0, 0.6, 1.0])
+def test_the_rest_of_a_run_is_conditioned_on_its_prefix_by_the_learned_carry(two_ground_estimator, carry):
+    est, train = two_ground_estimator
+    model = _with_carry(est, carry)
+    run = train[1]  # a ground the model drove: G = 0, the run's own offset is what the prefix tells of
+    rng = np.random.default_rng(7)
+    shifted = _with_currents(run, np.column_stack([run.current_left_a, run.current_right_a]) + 0.8
+                             + 0.05 * rng.standard_normal((len(run), 2)))
+    ad = AdaptedCurrentModel(model, scope="run").fit(shifted.slice(0.0, 20.0))
+    obs, noise, own, ground = ad.evidence_
+    assert np.all(ground == 0)
+    rest = shifted.slice(20.0, float(run.time_s[-1]) + 1.0)
+    fc, own2, _, _ = _parts(model, rest)
+    ens2 = np.maximum(fc.run_sd_a**2 - own2, 0.0)  # a ground the model drove: no new-ground part
+    after = ad.predict_distribution(rest)
+    # the documented factor, computed here from its parts: C = carry sqrt(Vr R), posterior P - C² / total, departure b
+    t = rest.time_s
+    prior = np.trapezoid(np.sqrt(own2), t, axis=0)
+    cross = carry * prior * np.sqrt(own)
+    total = own + noise
+    d = np.trapezoid(after.mean_a - fc.mean_a, t, axis=0)
+    factor = (prior**2 - cross**2 / total + (cross / total * obs - d) ** 2) / prior**2
+    np.testing.assert_allclose(after.run_sd_a**2, ens2 + factor * own2, rtol=1e-9, atol=1e-12)
+    if carry == 1.0:  # the update carries (R / (R + E)) what the posterior does: the interval narrows
+        assert np.all(factor < 0.5)
+    if carry == 0.0:  # nothing carries, yet the update moved the forecast: its departure widens the interval
+        assert np.all(factor > 1.0)
+    np.testing.assert_array_equal(after.sample_sd_a, fc.sample_sd_a)
 
 
 def test_the_prefix_evidence_is_saved_and_a_file_without_it_keeps_the_base_spread(two_ground_estimator, tmp_path):

@@ -62,3 +62,40 @@ def test_a_new_ground_forecast_is_a_student_t_with_as_many_degrees_of_freedom_as
     assert IntervalModel.from_plain(plain).n_grounds == 2
     del plain["n_grounds"]  # a model file from before the count was recorded keeps its Gaussian forecasts
     assert IntervalModel.from_plain(plain).new_ground_dof == np.inf
+
+
+def _offset_runs(halves_agree: bool, n: int = 30, seed: int = 5):
+    """Runs whose residual is a run offset (1 A sd) on top of 0.2 A noise: the same along the run, or one per half."""
+    rng = np.random.default_rng(seed)
+    logs, residuals = [], []
+    for s in range(n):
+        lg = interval_log(s, duration_s=20.0)
+        first = lg.time_s < 10.0
+        a, b = rng.normal(0.0, 1.0, 2)
+        off = np.where(first, a, a if halves_agree else b)
+        logs.append(lg)
+        residuals.append(off[:, None] + 0.2 * rng.standard_normal((len(lg), 2)))
+    return logs, residuals, [np.full((len(lg), 2), 3.0) for lg in logs]
+
+
+def test_the_carry_of_a_run_offset_along_the_run_is_learned_from_its_halves():
+    steady = IntervalModel.fit(*_offset_runs(True), cross_validated=True)
+    drifting = IntervalModel.fit(*_offset_runs(False), cross_validated=True)
+    assert steady.run_carry == pytest.approx(1.0, abs=0.05)  # the first half says all of the second
+    assert drifting.run_carry < 0.35  # 30 runs: a correlation of 0 measured within ~2 standard errors
+    logs, residuals, preds = _offset_runs(True, n=2)
+    assert IntervalModel.fit(logs, residuals, preds, cross_validated=True).run_carry is None  # too few runs
+    noise_only = [0.2 * np.random.default_rng(s).standard_normal(r.shape) for s, r in enumerate(residuals * 5)]
+    quiet = IntervalModel.fit(logs * 5, noise_only, preds * 5, cross_validated=True)
+    assert quiet.run_carry is None or quiet.run_carry < 0.5  # nothing run-level to carry
+
+
+def test_the_carry_is_saved_and_a_file_without_it_or_a_forged_one_is_handled():
+    iv = IntervalModel.fit(*_offset_runs(True, n=6), cross_validated=True)
+    assert iv.run_carry is not None
+    assert IntervalModel.from_plain(iv.to_plain()).run_carry == iv.run_carry
+    old = {k: v for k, v in iv.to_plain().items() if k != "run_carry"}
+    assert IntervalModel.from_plain(old).run_carry is None  # a file from before: the base spread within a run
+    for bad in (1.5, -0.1, float("nan"), "x"):
+        with pytest.raises(ValueError):
+            IntervalModel.from_plain(iv.to_plain() | {"run_carry": bad})
