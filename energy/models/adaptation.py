@@ -218,7 +218,8 @@ class AdaptedCurrentModel(CurrentModel):
         Least duration of adaptation data (s, >= 0); less raises a DataError.
     scope : {"run", "ground"}
         What the update forecasts: the rest of the run it was fitted on, or other runs on the
-        same ground (see the module docstring); the point updates use it only with ``shrink``.
+        same ground (see the module docstring); the point updates use it with ``shrink`` and for
+        their interval (conditioned on the prefix).
     shrink : {"prior", "evidence", "none"}
         How a point update's correction is scaled by the evidence of the prefix (module
         docstring; ``True`` / ``False`` in files from before are ``"evidence"`` / ``"none"``);
