@@ -248,9 +248,9 @@ def _heading_table(args: argparse.Namespace) -> list[dict[str, Any]]:
         for k, (start, goal) in enumerate(_queries(cost, args.queries)):
             free = lattice.shortest_path(start, goal)
             heading = heading_shortest_path(lattice, start, goal)
-            t_free = _best_time(lambda s=start, g=goal: lattice.shortest_path(s, g), args.repeats)
-            t_head = _best_time(lambda s=start, g=goal: heading_shortest_path(lattice, s, g), args.repeats)
-            peak = _peak_rss_delta_bytes(lambda s=start, g=goal: heading_shortest_path(lattice, s, g))
+            t_free = _best_time(lambda s=start, g=goal, lat=lattice: lat.shortest_path(s, g), args.repeats)
+            t_head = _best_time(lambda s=start, g=goal, lat=lattice: heading_shortest_path(lat, s, g), args.repeats)
+            peak = _peak_rss_delta_bytes(lambda s=start, g=goal, lat=lattice: heading_shortest_path(lat, s, g))
             rows.append({
                 "cells": f"{n}^2", "query": k, "heading_free_s": t_free, "heading_s": t_head,
                 "ratio": t_head / t_free, "heading_peak_added_mib": peak / 2**20 if peak >= 0 else None,
