@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from energy import EstimatorConfig, InteractionLog, LogMeta, VibrationCurrentEstimator
 from energy.models.config import estimator_preset
 
-__all__ = ["interval_log", "small_interval_config", "fit_two_ground_estimator"]
+__all__ = ["interval_log", "small_interval_config", "fit_two_ground_estimator", "with_carry"]
 
 
 def interval_log(seed: int, ground: str = "g", *, offset_a: float = 0.0, gain: float = 1.0, vibration: float = 0.3,
@@ -41,3 +43,11 @@ def fit_two_ground_estimator() -> tuple[VibrationCurrentEstimator, list[Interact
         interval_log(10 + s, "b", vibration=1.0, gain=1.4) for s in range(4)]
     est = VibrationCurrentEstimator(small_interval_config(physics_prior="husky"), seed=0, n_threads=1).fit(logs)
     return est, logs
+
+
+def with_carry(est, carry):
+    """A copy of the fitted ``est`` whose interval carries a run's offset along it by ``carry``."""
+    other = est.clone()
+    other.__dict__.update({k: v for k, v in est.__dict__.items() if k.endswith("_")})
+    other.interval_ = dataclasses.replace(est.interval_, run_carry=carry)
+    return other

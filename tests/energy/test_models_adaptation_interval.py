@@ -4,7 +4,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from interval_samples import fit_two_ground_estimator, interval_log
+from interval_samples import fit_two_ground_estimator, interval_log, with_carry
 
 from energy import AdaptedCurrentModel
 from energy.models import ModelRecord
@@ -74,7 +74,7 @@ def test_with_nothing_to_carry_the_base_spread_is_kept(two_ground_estimator):
     np.testing.assert_array_equal(other_runs.predict_distribution(train[2]).run_sd_a,
                                   est.predict_distribution(train[2]).run_sd_a)
     new_ground = interval_log(40, "c", vibration=0.5, offset_a=3.0)
-    unlearned = _with_carry(est, None)  # no carry learned along a run (a file from before, too few runs)
+    unlearned = with_carry(est, None)  # no carry learned along a run (a file from before, too few runs)
     same_run = AdaptedCurrentModel(unlearned, scope="run").fit(new_ground.slice(0.0, 20.0))
     rest = new_ground.slice(20.0, float(new_ground.time_s[-1]))
     np.testing.assert_array_equal(same_run.predict_distribution(rest).run_sd_a,
@@ -83,18 +83,10 @@ def test_with_nothing_to_carry_the_base_spread_is_kept(two_ground_estimator):
     assert not np.allclose(other.predict_distribution(rest).run_sd_a, est.predict_distribution(rest).run_sd_a)
 
 
-def _with_carry(est, carry):
-    """A copy of ``est`` whose interval carries a run's offset along it by ``carry``."""
-    other = est.clone()
-    other.__dict__.update({k: v for k, v in est.__dict__.items() if k.endswith("_")})
-    other.interval_ = dataclasses.replace(est.interval_, run_carry=carry)
-    return other
-
-
 @pytest.mark.parametrize("carry", [0.0, 0.6, 1.0])
 def test_the_rest_of_a_run_is_conditioned_on_its_prefix_by_the_learned_carry(two_ground_estimator, carry):
     est, train = two_ground_estimator
-    model = _with_carry(est, carry)
+    model = with_carry(est, carry)
     run = train[1]  # a ground the model drove: G = 0, the run's own offset is what the prefix tells of
     rng = np.random.default_rng(7)
     shifted = _with_currents(run, np.column_stack([run.current_left_a, run.current_right_a]) + 0.8
