@@ -41,7 +41,8 @@ run and scored on the rest; the README has the table):
   residual of the new data is a ground offset (prior: the new-ground covariance, or none
   on a ground the model knows) plus this run's own offset (prior: the run covariance),
   seen through per-sample noise whose correlation time discounts seconds of data, not
-  samples. ``scope="run"`` forecasts the rest of the same run (ground + run offset);
+  samples. ``scope="run"`` forecasts the rest of the same run (ground offset + the run's own as
+  far as it carries along the run, :attr:`~energy.models.uncertainty.IntervalModel.run_carry`);
   ``scope="ground"`` forecasts *other* runs on the ground (ground offset only, the run
   spread kept in the interval). It needs a base model with an interval
   (:attr:`CurrentModel.gives_interval`), and its forecast carries the posterior interval.
@@ -427,15 +428,23 @@ class AdaptedCurrentModel(CurrentModel):
         return mean, cov, float(ratio)
 
     def _bayes_parts(self) -> tuple[np.ndarray, np.ndarray]:
-        """Per side, the coefficients (2, 4) the forecast adds and their covariance (2, 4, 4) for its scope."""
+        """Per side, the coefficients (2, 4) the forecast adds and their covariance (2, 4, 4) for its scope.
+
+        Other runs (``scope="ground"``): the ground's offset, and the next run's own offset whole. The rest of the
+        run (``scope="run"``): the ground's offset plus the run's own as far as it carries along the run
+        (:attr:`~energy.models.uncertainty.IntervalModel.run_carry` ``c``; 1, an offset constant along the run,
+        where none was learned): ``g + c r``, and ``1 - c²`` of the run spread the prefix does not speak for.
+        """
         k_cols = self.coefficients_.shape[1] // 2
+        interval = self.base_model.interval_
+        # a run's own offset: the ground's run spread where the model learned one, else the pooled one
+        run_cov = self.noise_ratio_ * interval.covariance(self.ground_, known=True)
         if self.scope == "ground":
-            # the next run's own offset: the ground's run spread where the model learned one, else the pooled one
-            run_cov = self.base_model.interval_.covariance(self.ground_, known=True)
-            return self.coefficients_[:, :k_cols], self.posterior_cov_[:, :k_cols, :k_cols] + self.noise_ratio_ * run_cov
-        lift = np.concatenate([np.eye(k_cols), np.eye(k_cols)], axis=1)
-        return (self.coefficients_[:, :k_cols] + self.coefficients_[:, k_cols:],
-                np.einsum("ij,sjk,lk->sil", lift, self.posterior_cov_, lift))
+            return self.coefficients_[:, :k_cols], self.posterior_cov_[:, :k_cols, :k_cols] + run_cov
+        carry = 1.0 if interval.run_carry is None else interval.run_carry
+        lift = np.concatenate([np.eye(k_cols), carry * np.eye(k_cols)], axis=1)
+        return (self.coefficients_[:, :k_cols] + carry * self.coefficients_[:, k_cols:],
+                np.einsum("ij,sjk,lk->sil", lift, self.posterior_cov_, lift) + (1.0 - carry**2) * run_cov)
 
     @property
     def uses_vibration(self) -> bool:

@@ -130,3 +130,22 @@ def test_the_prefix_evidence_is_saved_and_a_file_without_it_keeps_the_base_sprea
                 np.array([[1e300, 1.0], [1.0, 1.0], [1.0, 1.0], [1.0, 1.0]])):
         with pytest.raises(FileFormatError, match="evidence"):
             AdaptedCurrentModel.from_record(ModelRecord(rec.model_class, rec.params, {**rec.state, "evidence": bad}))
+
+
+def test_the_bayesian_update_of_the_rest_of_a_run_carries_its_offset_as_learned(two_ground_estimator):
+    est, _ = two_ground_estimator
+    prefix = interval_log(40, "c", vibration=0.5, offset_a=2.0).slice(0.0, 20.0)
+    rest = interval_log(40, "c", vibration=0.5, offset_a=2.0).slice(20.0, 40.0)
+    parts = {}
+    for carry in (None, 1.0, 0.5, 0.0):
+        ad = AdaptedCurrentModel(with_carry(est, carry), method="bayes", scope="run").fit(prefix)
+        ground, own = ad.coefficients_[:, :4], ad.coefficients_[:, 4:]
+        coef, cov = ad._bayes_parts()
+        c = 1.0 if carry is None else carry  # none learned: the offset taken as constant along the run
+        np.testing.assert_allclose(coef, ground + c * own, rtol=1e-12)
+        post = ad.posterior_cov_
+        run_cov = ad.noise_ratio_ * est.interval_.covariance("c", known=True)
+        expected = post[:, :4, :4] + c * (post[:, :4, 4:] + post[:, 4:, :4]) + c**2 * post[:, 4:, 4:] + (1 - c**2) * run_cov
+        np.testing.assert_allclose(cov, expected, rtol=1e-10, atol=1e-14)
+        parts[carry] = ad.predict_distribution(rest).charge().total_sd_as
+    assert parts[None] == parts[1.0] < parts[0.5] < parts[0.0]  # the less carries, the less the prefix narrows
