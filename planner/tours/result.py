@@ -47,7 +47,9 @@ class TourLeg:
     waypoints_m : ndarray, shape (K, 2)
         The route (m).
     energy : RouteEnergyInterval
-        The leg's energy distribution (mean, sd; the drive and turns, not the service).
+        The leg's energy distribution (mean, sd; the drive and turns, not the service): its route and, leaving a
+        stop, the turn in place there from the heading the robot arrived on (none leaving the depot), so the legs
+        of a tour add up to its energy.
     duration_s : float
         Driving time (s).
     """

@@ -82,8 +82,13 @@ def test_uphill_and_downhill_priced_apart_choose_the_cheaper_direction():
     res = plan_tour(cost, sites, TourRobot(Battery(5.0, 24.0), depot))
     assert res.tours[0].sites == ("east", "west") and res.tours[0].energy.mean_j == pytest.approx(cheap)
     symmetric = dataclasses.replace(prices, mean_j=(prices.mean_j + prices.mean_j.T) / 2)
-    sym_loop = symmetric.tour_interval([0, 1, 2, 0]).mean_j
-    assert sym_loop == pytest.approx(symmetric.tour_interval([0, 2, 1, 0]).mean_j) == pytest.approx((cheap + dear) / 2)
+    loop = lambda m, seq: float(sum(m[a, b] for a, b in zip(seq[:-1], seq[1:])))  # noqa: E731 (the legs summed)
+    sym_legs = loop(symmetric.mean_j, [0, 1, 2, 0])
+    assert sym_legs == pytest.approx(loop(symmetric.mean_j, [0, 2, 1, 0]))
+    assert sym_legs == pytest.approx((loop(prices.mean_j, [0, 2, 1, 0]) + loop(prices.mean_j, [0, 1, 2, 0])) / 2)
+    # what the symmetric matrix charges the loop: its legs and the allowance for the turns at the two sites
+    sym_loop = sym_legs + float(symmetric.stop_turn_quantile_j(0.9)[1:].sum())
+    assert cheap < sym_loop
     # a battery between the cheap direction and the symmetric price: both sites, against one by the symmetric cost
     budget_j = (cheap + sym_loop) / 2
     battery = Battery(budget_j / (0.8 * 24.0 * 3600.0), 24.0, min_reserve_pct=20.0)
