@@ -156,15 +156,22 @@ def main(argv: list[str] | None = None) -> int:
             tours.append({"robot": tour.robot, "stops": list(tour.stops), "segments": rows,
                           "reported_mean_j": tour.energy.mean_j, "reported_segments_at_q_j": seg_q,
                           "budget_j": tour.budget_j})
-        shares = []
+        shares, driven = [], []
         if case["mc"] and res.tours and any(t.legs for t in res.tours):
             for seed in args.seeds:
                 check = simulate_tours_mc(res, args.mc, seed=seed, draw_from="parameters")
                 shares.append(check.share_above_reserve)
+                if not driven:  # per segment: the stop-turn-go profile's forecast and the simulated median (J)
+                    driven = [(mc.predicted_energy_j, float(np.nanmedian(mc.energy_j)))
+                              for studies in check.runs.values() for mc in studies]
             print(f"  above the reserve (drawn parameters, {args.mc} drives x seeds {args.seeds}): "
                   + ", ".join(f"{100 * s:.1f} %" for s in shares) + f" at Q = {q:g}")
+            print("  per segment, the study's forecast (the driven profile with the physics model, else the edges) / the "
+                  "simulated median (seed "
+                  f"{args.seeds[0]}): " + ", ".join(f"{p:.0f} / {m:.0f} J" for p, m in driven))
         results.append({"case": name, "value": res.value, "visited": list(res.visited), "rounds": res.solve_rounds,
-                        "solve_s": res.solve_time_s, "tours": tours, "mc_shares": shares})
+                        "solve_s": res.solve_time_s, "tours": tours, "mc_shares": shares,
+                        "profile_and_simulated_median_j": driven})
     if args.out is not None:
         write_json_atomic(args.out, {"benchmark": "tour_turns", "mc": args.mc, "seeds": args.seeds,
                                      "cases": results}, indent=1)
