@@ -178,7 +178,7 @@ class PairPrices:
         else:
             before = [int(arrived_from), idx[0]]
             (mean, per_ground), (lead, lead_ground) = self._joined(before + idx[1:]), self._joined(before)
-            mean, per_ground = mean - lead, np.maximum(per_ground - lead_ground, 0.0)
+            mean, per_ground = mean - lead, _difference(per_ground, lead_ground)
         dofs = [self._dof(g) for g in range(len(self.ground_labels))]
         return RouteEnergyInterval.from_ground_spreads(max(mean, 0.0) + float(extra_mean_j), per_ground,
                                                        self.ground_labels, dofs)
@@ -189,7 +189,7 @@ class PairPrices:
         (both, both_g), (a, a_g), (b, b_g) = (self._joined([before, at, after]), self._joined([before, at]),
                                               self._joined([at, after]))
         dofs = [self._dof(g) for g in range(len(self.ground_labels))]
-        return RouteEnergyInterval.from_ground_spreads(max(both - a - b, 0.0), np.maximum(both_g - a_g - b_g, 0.0),
+        return RouteEnergyInterval.from_ground_spreads(max(both - a - b, 0.0), _difference(both_g, a_g + b_g),
                                                        self.ground_labels, dofs)
 
     def _joined(self, idx: list[int]) -> tuple[float, np.ndarray]:
@@ -207,6 +207,13 @@ class PairPrices:
         for label, sd in price.sd_by_ground_j.items():
             per_ground[index[label]] = sd
         return price.mean_j, per_ground
+
+
+def _difference(whole: np.ndarray, part: np.ndarray) -> np.ndarray:
+    """Per-ground linear spreads (J) of a route less those of its part: rounding left at 0 (a ground only the part
+    crosses is not crossed, its tail not counted)."""
+    out = whole - part
+    return np.where(out > 1e-9 * np.maximum(whole, 1.0), out, 0.0)
 
 
 def price_from(search_cost: EnergyCost, cost: EnergyCost, i: int, xy_m: np.ndarray

@@ -7,7 +7,7 @@ import itertools
 
 import numpy as np
 import pytest
-from tour_samples import hills_cost, hills_map, ridge_map, with_interval  # noqa: F401  (fixture)
+from tour_samples import exact_optimum, hills_cost, hills_map, ridge_map, with_interval  # noqa: F401  (fixture)
 
 from energy import Battery
 from planner import EnergyCost
@@ -54,6 +54,9 @@ def test_the_tours_value_equals_the_exhaustive_optimum(hills_cost, n_sites, n_ro
     assert res.status == "planned"
     assert 0 < res.value < sites.value.sum()  # the battery binds: a real choice
     assert round(res.value * 100) * (int(_problem(hills_cost, sites, robots, q).capacity_units.sum()) + 1) == best
+    if n_robots == 1:  # and over every subset and order priced as the robot drives it (the turns at its stops)
+        value = {k + 1: float(v) for k, v in enumerate(sites.value)}
+        assert res.value == exact_optimum(res.prices, robots[0].budget_j, q, value)
     for tour in res.tours:  # every tour holds at its own quantile
         assert tour.energy.quantile_j(q) <= tour.budget_j
         assert tour.arrival_soc_at_risk >= tour.battery.reserve_soc - 1e-12
