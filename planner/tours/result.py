@@ -89,7 +89,8 @@ class RobotTour:
     value : float
         The sum of the visited sites' values.
     energy : RouteEnergyInterval
-        The whole tour's energy (legs and service; the spreads of one ground add along the tour), charges aside.
+        The whole tour's energy as driven (its legs joined, the turn at every stop included, and the service; the
+        spreads of one ground add along the tour), charges aside.
     cumulative : tuple of RouteEnergyInterval
         The energy spent by the end of each leg since the depot or the last charge (at each arrival, service
         included).

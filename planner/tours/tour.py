@@ -69,10 +69,12 @@ def plan_tour(
 
     Every ordered pair of depots and sites is priced on ``cost`` (:func:`planner.tours.pricing.price_pairs`:
     the planner's lattice routes, their mean energy and run-level spread per ground; asymmetric), the
-    prize-collecting routing problem is solved by PyVRP on conservative integer arc prices, and each
-    chosen tour is checked on its own quantile (the spreads of one ground add along the whole tour),
-    capacities tightened and the problem solved again until every tour holds
-    (:mod:`planner.tours.solver`).
+    prize-collecting routing problem is solved by PyVRP on integer arc prices (each leg's own quantile, with an
+    allowance for the turn at the stop it leaves), and each chosen tour is priced as the route the robot drives
+    (its legs joined, the turn in place at every stop included: :meth:`PairPrices.tour_interval`) and checked on
+    its own quantile (the spreads of one ground add along the whole tour), allowances raised or capacities
+    tightened and the problem solved again until every tour holds (:mod:`planner.tours.solver`). The reported
+    energies are those exact prices.
 
     With ``chargers`` a tour may stop at charging points between its sites, each stop charging the battery
     to full (:class:`planner.tours.TourChargers`: its stop time booked as service time); the energy then holds
