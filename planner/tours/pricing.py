@@ -7,13 +7,23 @@ The leg is then priced on the cost itself: its mean energy (drive and turns,
 :meth:`EnergyCost.path_energy_j`, the plan price), its run-level spread per ground
 (:func:`planner.route_price.price_route`, linear within a ground) and its duration. Legs are
 directed: uphill != downhill, so the matrices are asymmetric.
+
+**Turns at the stops.** A leg is searched and priced from a free heading: its turns are those
+between its own waypoints. The robot drives the legs joined, and at every stop it turns in place
+from the heading it arrived on to the one it leaves on (a U-turn where it leaves a site the way it
+came) — a turn that depends on the stops before and after, which no leg of the matrix can know.
+So a tour is priced as what the robot drives, the legs joined into one route priced by
+:func:`planner.route_price.price_route` (:meth:`PairPrices.tour_interval`), and the matrix the
+solver reads carries, on every leg leaving a stop, an allowance for the expected turn in place at
+that stop (:meth:`PairPrices.stop_turn_quantile_j`; :mod:`planner.tours.solver` says why not the
+dearest).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -29,7 +39,11 @@ from ..lattice import Lattice
 from ..route_price import RouteEnergyInterval, price_route
 from ..tables import check_risk_level
 
-__all__ = ["PairPrices", "price_pairs", "price_from"]
+__all__ = ["PairPrices", "price_pairs", "price_from", "STOP_TURN_RAD"]
+
+#: The heading change the solver's matrix allows for at every stop (rad): a quarter turn, the mean heading change
+#: between two directions of no preferred sense (:meth:`PairPrices.stop_turn_quantile_j`).
+STOP_TURN_RAD = math.pi / 2
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,6 +75,10 @@ class PairPrices:
     ground_dof : tuple of float
         Per ground, the degrees of freedom of its spread (the cost's ``spread_dof``: ``inf`` for a
         Gaussian, a Student-t on a ground the model never drove; empty: all Gaussian).
+    cost : EnergyCost or None
+        The cost the legs were priced on: what prices a tour of them joined (:meth:`tour_interval`)
+        and the turns at the stops (:meth:`stop_turn_quantile_j`). None only for a matrix made by hand,
+        which prices no tour.
     """
 
     names: tuple[str, ...]
@@ -74,6 +92,8 @@ class PairPrices:
     where: str = "in process"
     n_workers: int = 1
     ground_dof: tuple[float, ...] = ()
+    cost: EnergyCost | None = field(default=None, repr=False)
+    _walked: dict = field(default_factory=dict, init=False, repr=False, compare=False)  # the cost's segment spreads
 
     def __len__(self) -> int:
         return len(self.names)
@@ -102,23 +122,98 @@ class PairPrices:
         sd = np.sqrt(np.sum(self.sd_by_ground_j ** 2, axis=2))
         return self.mean_j + z * sd
 
-    def tour_interval(self, points: Any, extra_mean_j: float = 0.0) -> RouteEnergyInterval:
-        """The energy distribution of driving the legs ``points[0] -> points[1] -> ...`` in one run.
+    def _priced_cost(self, what: str) -> EnergyCost:
+        if not isinstance(self.cost, EnergyCost):
+            raise InvalidParameterError(f"these prices carry no cost to price {what} with (make them with price_pairs, "
+                                        "which keeps the cost the legs were priced on)", parameter="prices")
+        return self.cost
 
-        The spreads of one ground add linearly along the whole tour; grounds combine by the root of
-        the sum of squares (as :func:`planner.route_price.price_route` does for one route).
-        ``extra_mean_j`` (e.g. the sites' service energy) is added to the mean.
+    def stop_turn_quantile_j(self, q: float) -> np.ndarray:
+        """Per point, the ``q`` quantile of the expected turn in place there (J): the allowance for the turn at a stop.
+
+        A tour turns at each stop from the heading it arrived on to the one it leaves on, which
+        depends on the stops before and after it: no leg of the matrix can know it. Between
+        headings of no preferred direction the heading change averages a quarter turn (pi / 2),
+        so the allowance is the turn of pi / 2 on the ground under the point
+        (:meth:`EnergyCost.turn_energy_at`, the cost's rule for a turn) at its ``q`` quantile
+        (``mean + t_q * sd``, ``t_q`` the quantile of that ground's predictive). It is what
+        :meth:`planner.tours.TourProblem.build` adds to every leg leaving a stop; it is not a bound
+        (a U-turn costs about twice as much), so each chosen tour is then priced exactly
+        (:meth:`tour_interval`) and checked (:func:`planner.tours.solve_tours`).
         """
-        idx = np.asarray(points, dtype=np.int64)
-        if idx.size < 2:
+        q = check_risk_level(q)
+        cost = self._priced_cost("the turns at the stops")
+        r, c = cost.terrain.rowcol(self.xy_m[:, 0], self.xy_m[:, 1])
+        rows = np.asarray(cost.ground_rows)[r, c]
+        turn = cost.turn_energy_at(rows, np.full(rows.shape, STOP_TURN_RAD))
+        sd_table = cost.tables.turn_sd_table_j
+        if sd_table is not None:
+            grid = np.linspace(0.0, math.pi, sd_table.shape[1])
+            z = np.array([predictive_quantile(q, self._dof(int(g))) for g in rows])
+            turn = turn + z * np.array([np.interp(STOP_TURN_RAD, grid, sd_table[g]) for g in rows])
+        return turn
+
+    def tour_interval(self, points: Any, extra_mean_j: float = 0.0, *, arrived_from: int | None = None
+                      ) -> RouteEnergyInterval:
+        """The energy distribution of driving the legs ``points[0] -> points[1] -> ...`` in one run: what the robot
+        drives, the legs joined into one route priced by :func:`planner.route_price.price_route` (the turn in place
+        at every stop between two legs included; from a free heading at ``points[0]``, none after the last).
+
+        The spreads of one ground add linearly along the whole route; grounds combine by the root of
+        the sum of squares. ``extra_mean_j`` (e.g. the sites' service energy) is added to the mean.
+        ``arrived_from``: the point the robot came to ``points[0]`` from (e.g. the stop before a charger, for the
+        segment that leaves it): the turn at ``points[0]`` is then counted too (the route from ``arrived_from``
+        less its first leg).
+
+        Raises
+        ------
+        InvalidParameterError
+            A leg that no route joins; prices without their cost.
+        """
+        idx = [int(p) for p in np.asarray(points, dtype=np.int64).ravel()]
+        if len(idx) < 2:
             return RouteEnergyInterval(float(extra_mean_j), 0.0, {})
-        a, b = idx[:-1], idx[1:]
-        mean = float(np.sum(self.mean_j[a, b])) + float(extra_mean_j)
-        if not math.isfinite(mean):
-            raise InvalidParameterError(f"the tour {idx.tolist()!r} uses a leg that no route joins")
-        per_ground = np.sum(self.sd_by_ground_j[a, b], axis=0)
+        if arrived_from is None:
+            mean, per_ground = self._joined(idx)
+        else:
+            before = [int(arrived_from), idx[0]]
+            (mean, per_ground), (lead, lead_ground) = self._joined(before + idx[1:]), self._joined(before)
+            mean, per_ground = mean - lead, _difference(per_ground, lead_ground)
         dofs = [self._dof(g) for g in range(len(self.ground_labels))]
-        return RouteEnergyInterval.from_ground_spreads(mean, per_ground, self.ground_labels, dofs)
+        return RouteEnergyInterval.from_ground_spreads(max(mean, 0.0) + float(extra_mean_j), per_ground,
+                                                       self.ground_labels, dofs)
+
+    def turn_interval(self, before: int, at: int, after: int) -> RouteEnergyInterval:
+        """The energy distribution of the turn in place at point ``at`` between the legs ``before -> at`` and
+        ``at -> after``: the two legs joined less each alone (:func:`planner.route_price.price_route` of each)."""
+        (both, both_g), (a, a_g), (b, b_g) = (self._joined([before, at, after]), self._joined([before, at]),
+                                              self._joined([at, after]))
+        dofs = [self._dof(g) for g in range(len(self.ground_labels))]
+        return RouteEnergyInterval.from_ground_spreads(max(both - a - b, 0.0), _difference(both_g, a_g + b_g),
+                                                       self.ground_labels, dofs)
+
+    def _joined(self, idx: list[int]) -> tuple[float, np.ndarray]:
+        """The mean (J) and the per-ground linear spreads (J) of the legs ``idx[0] -> idx[1] -> ...`` joined."""
+        cost = self._priced_cost("a tour")
+        ways = [self.waypoints[a][b] for a, b in zip(idx[:-1], idx[1:]) if a != b]
+        if any(w is None for w in ways):
+            raise InvalidParameterError(f"the tour {idx!r} uses a leg that no route joins")
+        if not ways:
+            return 0.0, np.zeros(len(self.ground_labels))
+        pts = np.vstack([ways[0]] + [w[1:] for w in ways[1:]])
+        price = price_route(cost, pts, interval=cost.has_interval, segment_cache=self._walked)
+        index = {label: g for g, label in enumerate(self.ground_labels)}
+        per_ground = np.zeros(len(self.ground_labels))
+        for label, sd in price.sd_by_ground_j.items():
+            per_ground[index[label]] = sd
+        return price.mean_j, per_ground
+
+
+def _difference(whole: np.ndarray, part: np.ndarray) -> np.ndarray:
+    """Per-ground linear spreads (J) of a route less those of its part: rounding left at 0 (a ground only the part
+    crosses is not crossed, its tail not counted)."""
+    out = whole - part
+    return np.where(out > 1e-9 * np.maximum(whole, 1.0), out, 0.0)
 
 
 def price_from(search_cost: EnergyCost, cost: EnergyCost, i: int, xy_m: np.ndarray
@@ -215,4 +310,4 @@ def price_pairs(
         names=names, xy_m=pts, mean_j=np.array([r[1] for r in rows]), sd_by_ground_j=np.array([r[2] for r in rows]),
         ground_labels=tuple(cost.tables.ground_labels), duration_s=np.array([r[3] for r in rows]),
         waypoints=tuple(tuple(r[4]) for r in rows), pricing_time_s=elapsed, where=where, n_workers=n_used,
-        ground_dof=tuple(float(d) for d in cost.tables.spread_dof))
+        ground_dof=tuple(float(d) for d in cost.tables.spread_dof), cost=cost)

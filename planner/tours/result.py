@@ -47,7 +47,9 @@ class TourLeg:
     waypoints_m : ndarray, shape (K, 2)
         The route (m).
     energy : RouteEnergyInterval
-        The leg's energy distribution (mean, sd; the drive and turns, not the service).
+        The leg's energy distribution (mean, sd; the drive and turns, not the service): its route and, leaving a
+        stop, the turn in place there from the heading the robot arrived on (none leaving the depot), so the legs
+        of a tour add up to its energy.
     duration_s : float
         Driving time (s).
     """
@@ -87,7 +89,8 @@ class RobotTour:
     value : float
         The sum of the visited sites' values.
     energy : RouteEnergyInterval
-        The whole tour's energy (legs and service; the spreads of one ground add along the tour), charges aside.
+        The whole tour's energy as driven (its legs joined, the turn at every stop included, and the service; the
+        spreads of one ground add along the tour), charges aside.
     cumulative : tuple of RouteEnergyInterval
         The energy spent by the end of each leg since the depot or the last charge (at each arrival, service
         included).

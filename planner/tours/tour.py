@@ -69,10 +69,12 @@ def plan_tour(
 
     Every ordered pair of depots and sites is priced on ``cost`` (:func:`planner.tours.pricing.price_pairs`:
     the planner's lattice routes, their mean energy and run-level spread per ground; asymmetric), the
-    prize-collecting routing problem is solved by PyVRP on conservative integer arc prices, and each
-    chosen tour is checked on its own quantile (the spreads of one ground add along the whole tour),
-    capacities tightened and the problem solved again until every tour holds
-    (:mod:`planner.tours.solver`).
+    prize-collecting routing problem is solved by PyVRP on integer arc prices (each leg's own quantile, with an
+    allowance for the turn at the stop it leaves), and each chosen tour is priced as the route the robot drives
+    (its legs joined, the turn in place at every stop included: :meth:`PairPrices.tour_interval`) and checked on
+    its own quantile (the spreads of one ground add along the whole tour), allowances raised or capacities
+    tightened and the problem solved again until every tour holds (:mod:`planner.tours.solver`). The reported
+    energies are those exact prices.
 
     With ``chargers`` a tour may stop at charging points between its sites, each stop charging the battery
     to full (:class:`planner.tours.TourChargers`: its stop time booked as service time); the energy then holds
@@ -164,6 +166,8 @@ def plan_tour(
     elif not isinstance(prices, PairPrices) or prices.names != tuple(names) or not np.allclose(prices.xy_m, pts):
         raise InvalidParameterError("prices must be the PairPrices of these depots, sites and chargers (result.prices "
                                     "of an earlier plan_tour on the same inputs)")
+    elif prices.cost is not cost:  # the tours joined from its legs are priced on this cost
+        prices = dataclasses.replace(prices, cost=cost)
     nd, nc = len(depots), len(charger_names)
     refill_j = max(rb.full_budget_j for rb in fleet)  # a stop is booked for the most a segment can leave to refill
     stop_s = chargers.stop_time_s(refill_j) if chargers is not None else np.zeros(0)
@@ -268,10 +272,12 @@ def _tour(prices: PairPrices, robot: TourRobot, stops: list[int], depot: int, po
     legs, cumulative = [], []
     first, served = 0, 0.0
     for k, (a, b) in enumerate(zip(seq[:-1], seq[1:])):
-        legs.append(TourLeg(prices.names[a], prices.names[b], prices.waypoints[a][b], prices.tour_interval([a, b]),
-                            float(prices.duration_s[a, b])))
+        came_from = seq[k - 1] if k else None  # a leg leaving a stop turns there first (none at the depot)
+        legs.append(TourLeg(prices.names[a], prices.names[b], prices.waypoints[a][b],
+                            prices.tour_interval([a, b], arrived_from=came_from), float(prices.duration_s[a, b])))
         served += float(service[b]) + (waiting[k] if k < len(waiting) else 0.0)
-        cumulative.append(prices.tour_interval(seq[first:k + 2], served))  # since the depot or the last charge
+        # since the depot or the last charge (a segment leaving a charger turns there first)
+        cumulative.append(prices.tour_interval(seq[first:k + 2], served, arrived_from=seq[first - 1] if first else None))
         if b in chargers:
             first, served = k + 1, 0.0
     energy = (prices.tour_interval(seq, float(service[sites].sum()) + sum(waiting)) if seq

@@ -107,8 +107,8 @@ def test_cli_a_bag_that_would_replace_an_input_is_refused_before_any_work(tmp_pa
 
 def test_cli_chargers_let_a_far_site_be_visited_and_tour_json_names_the_stops(tmp_path, capsys, wall_map):
     tmap = wall_map.save(tmp_path / "wall.npz")
-    sites = _sites(tmp_path, ["pump,5.5,35.5,1", "shed,35.5,5.5,3"])
-    args = ["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "0.1",
+    sites = _sites(tmp_path, ["pump,5.5,35.5,1", "shed,35.5,5.5,3"])  # dock -> shed -> dock with its U-turn: 0.12 Ah
+    args = ["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "0.13",
             "--voltage", "24", "--time-limit", "1"]
     rc = main(args + ["--out", str(tmp_path / "alone")])
     assert rc == 0 and "too far at Q: shed" in capsys.readouterr().out
@@ -132,9 +132,9 @@ def test_cli_chargers_let_a_far_site_be_visited_and_tour_json_names_the_stops(tm
 
 def test_cli_one_depot_per_robot(tmp_path, capsys, wall_map):
     tmap = wall_map.save(tmp_path / "wall.npz")
-    sites = _sites(tmp_path, ["pump,5.5,35.5,1", "shed,35.5,5.5,1"])
+    sites = _sites(tmp_path, ["pump,5.5,35.5,1", "shed,35.5,5.5,1"])  # each robot's near site and back: 0.107 Ah
     args = ["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--depot", "35.5", "35.5",
-            "--battery-ah", "0.1", "--voltage", "24"]
+            "--battery-ah", "0.12", "--voltage", "24"]
     rc = main(args + ["--out", str(tmp_path / "out")])
     text = capsys.readouterr().out
     assert rc == 0, text

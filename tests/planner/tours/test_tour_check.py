@@ -39,7 +39,7 @@ def test_every_segment_of_every_tour_runs_on_one_cluster(hills_cost, monkeypatch
     distributed = pytest.importorskip("distributed", reason="dask.distributed (the 'distributed' extra) is not installed")
     rng = np.random.default_rng(5)
     sites = TourSites(tuple(f"s{k}" for k in range(8)), rng.uniform(3.0, 37.0, size=(8, 2)))
-    robots = [TourRobot(Battery(0.08, 24.0), (20.0, 20.0), f"robot {k}") for k in range(2)]
+    robots = [TourRobot(Battery(0.1, 24.0), (20.0, 20.0), f"robot {k}") for k in range(2)]
     res = plan_tour(hills_cost, sites, robots, search=TourSearch(risk=0.9))
     assert sum(bool(t.legs) for t in res.tours) == 2  # two tours: two studies
     opened = []
@@ -86,10 +86,11 @@ def test_a_failed_task_fails_its_tours_counted_in_the_summary_not_dropped(hills_
 
 
 def _charged_corridor():
-    """A flat 60 m x 20 m corridor with a spread: a near and a far site, a dock between (the far one needs a charge)."""
+    """A flat 60 m x 20 m corridor with a spread: a near and a far site, a dock between (the far one needs a charge;
+    the battery holds the dock -> far -> dock segment with its U-turn at far)."""
     cost = with_interval(CostSpec().build(flat_map((20, 60), 1.0)))
     sites = TourSites(("near", "far"), [[10.0, 10.0], [55.0, 10.0]], value=[1.0, 5.0])
-    robot = TourRobot(Battery(0.09, 24.0, min_reserve_pct=20.0), (2.0, 10.0))
+    robot = TourRobot(Battery(0.12, 24.0, min_reserve_pct=20.0), (2.0, 10.0))
     return plan_tour(cost, sites, robot, chargers=TourChargers(("dock",), [[30.0, 10.0]]),
                      search=TourSearch(risk=0.9, time_limit_s=1.0))
 
@@ -168,7 +169,7 @@ def test_plot_draws_a_bar_per_stop_of_each_robot_beside_q(hills_cost, tmp_path):
 
     rng = np.random.default_rng(5)
     sites = TourSites(tuple(f"s{k}" for k in range(8)), rng.uniform(3.0, 37.0, size=(8, 2)))
-    robots = [TourRobot(Battery(0.08, 24.0), (20.0, 20.0), f"robot {k}") for k in range(2)]
+    robots = [TourRobot(Battery(0.1, 24.0), (20.0, 20.0), f"robot {k}") for k in range(2)]
     res = plan_tour(hills_cost, sites, robots, search=TourSearch(risk=0.9))
     check = simulate_tours_mc(res, 20, seed=1)
     assert len(check.runs) == 2

@@ -7,7 +7,7 @@ import itertools
 
 import numpy as np
 import pytest
-from tour_samples import hills_cost, hills_map, ridge_map, with_interval  # noqa: F401  (fixture)
+from tour_samples import exact_optimum, hills_cost, hills_map, ridge_map, with_interval  # noqa: F401  (fixture)
 
 from energy import Battery
 from planner import EnergyCost
@@ -54,6 +54,9 @@ def test_the_tours_value_equals_the_exhaustive_optimum(hills_cost, n_sites, n_ro
     assert res.status == "planned"
     assert 0 < res.value < sites.value.sum()  # the battery binds: a real choice
     assert round(res.value * 100) * (int(_problem(hills_cost, sites, robots, q).capacity_units.sum()) + 1) == best
+    if n_robots == 1:  # and over every subset and order priced as the robot drives it (the turns at its stops)
+        value = {k + 1: float(v) for k, v in enumerate(sites.value)}
+        assert res.value == exact_optimum(res.prices, robots[0].budget_j, q, value)
     for tour in res.tours:  # every tour holds at its own quantile
         assert tour.energy.quantile_j(q) <= tour.budget_j
         assert tour.arrival_soc_at_risk >= tour.battery.reserve_soc - 1e-12
@@ -82,8 +85,13 @@ def test_uphill_and_downhill_priced_apart_choose_the_cheaper_direction():
     res = plan_tour(cost, sites, TourRobot(Battery(5.0, 24.0), depot))
     assert res.tours[0].sites == ("east", "west") and res.tours[0].energy.mean_j == pytest.approx(cheap)
     symmetric = dataclasses.replace(prices, mean_j=(prices.mean_j + prices.mean_j.T) / 2)
-    sym_loop = symmetric.tour_interval([0, 1, 2, 0]).mean_j
-    assert sym_loop == pytest.approx(symmetric.tour_interval([0, 2, 1, 0]).mean_j) == pytest.approx((cheap + dear) / 2)
+    loop = lambda m, seq: float(sum(m[a, b] for a, b in zip(seq[:-1], seq[1:])))  # noqa: E731 (the legs summed)
+    sym_legs = loop(symmetric.mean_j, [0, 1, 2, 0])
+    assert sym_legs == pytest.approx(loop(symmetric.mean_j, [0, 2, 1, 0]))
+    assert sym_legs == pytest.approx((loop(prices.mean_j, [0, 2, 1, 0]) + loop(prices.mean_j, [0, 1, 2, 0])) / 2)
+    # what the symmetric matrix charges the loop: its legs and the allowance for the turns at the two sites
+    sym_loop = sym_legs + float(symmetric.stop_turn_quantile_j(0.9)[1:].sum())
+    assert cheap < sym_loop
     # a battery between the cheap direction and the symmetric price: both sites, against one by the symmetric cost
     budget_j = (cheap + sym_loop) / 2
     battery = Battery(budget_j / (0.8 * 24.0 * 3600.0), 24.0, min_reserve_pct=20.0)

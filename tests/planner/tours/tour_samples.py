@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pytest
 
 from planner import CostTables, EnergyCost
 from planner.cost_spec import CostSpec
+from planner.tours import PairPrices
 from terrain import TerrainMap
 
-__all__ = ["with_interval", "hills_map", "hills_cost", "ridge_map"]
+__all__ = ["with_interval", "hills_map", "hills_cost", "ridge_map", "exact_optimum"]
 
 
 def with_interval(cost: EnergyCost, rel_sd: float = 0.15) -> EnergyCost:
@@ -37,3 +40,33 @@ def ridge_map() -> TerrainMap:
     y, x = np.mgrid[0:40, 0:40] + 0.5
     prof = np.where(x < 12, 0.0, np.where(x < 18, 0.25 * (x - 12), np.maximum(1.5 - 0.075 * (x - 18), 0.0)))
     return TerrainMap(np.where(y >= 10, prof, 0.0), 1.0, ground=np.zeros((40, 40), int), ground_names={0: "snow"})
+
+
+def exact_optimum(prices: PairPrices, budget_j: float, q: float, value: dict[int, float], *, depot: int = 0,
+                  service_j: np.ndarray | None = None, on_time: Callable[[list[int]], bool] | None = None,
+                  chargers: dict[int, int] | None = None, full_budget_j: float | None = None) -> float:
+    """The best value of one robot's tour over every subset and order of the sites ``value`` (point -> value) and,
+    with ``chargers`` (point -> visits), every insertion of charging stops, priced as the robot drives it: each
+    segment between charges the legs joined (``prices.tour_interval``, the turns at the stops included) at its
+    ``q`` quantile, service included, within its budget (the first ``budget_j``, after a charge ``full_budget_j``),
+    ``on_time(sites so far)`` where given. A prefix priced above its budget prunes (its price only grows)."""
+    service = np.zeros(len(prices)) if service_j is None else np.asarray(service_j, dtype=float)
+    chargers = chargers or {}
+    best = 0.0
+
+    def fits(seg: list[int], came: int | None, limit: float) -> bool:
+        return prices.tour_interval(seg, float(service[seg[1:]].sum()), arrived_from=came).quantile_j(q) <= limit
+
+    def walk(seg: list[int], came: int | None, limit: float, sites: list[int], used: dict[int, int], got: float):
+        nonlocal best
+        if fits([*seg, depot], came, limit):
+            best = max(best, got)
+        for s in value:
+            if s not in sites and fits([*seg, s], came, limit) and (on_time is None or on_time([*sites, s])):
+                walk([*seg, s], came, limit, [*sites, s], used, got + value[s])
+        for c, visits in chargers.items():
+            if c != seg[-1] and used[c] < visits and fits([*seg, c], came, limit):
+                walk([c], seg[-1], full_budget_j, sites, {**used, c: used[c] + 1}, got)
+
+    walk([depot], None, budget_j, [], dict.fromkeys(chargers, 0), 0.0)
+    return best
