@@ -403,6 +403,29 @@ class EnergyCost:
         energies = self.tables.turn_table_j[rows, i0] * (1 - w) + self.tables.turn_table_j[rows, i0 + 1] * w
         return np.where(angles == 0, 0.0, energies)
 
+    def turn_spread_at(self, rows: Any, angles_rad: Any) -> np.ndarray:
+        """Run-level spread (J) of a turn in place of table ``rows`` at heading changes ``angles_rad`` (in [0, pi]):
+        the tables' ``turn_sd_table_j`` linearly interpolated. The one rule for a turn's spread: a route's
+        (:meth:`path_spreads_j`) and a tour's stop allowance (:meth:`planner.tours.PairPrices.stop_turn_quantile_j`).
+
+        Parameters
+        ----------
+        rows, angles_rad : array_like of int / float, same length
+            Rows of the tables (as :attr:`ground_rows`) and unsigned heading changes.
+
+        Raises
+        ------
+        InvalidParameterError
+            Tables without spreads.
+        """
+        table = self.tables.turn_sd_table_j
+        if table is None:
+            raise InvalidParameterError(f"the cost ({self!r}) carries no standard-deviation tables: its energy model "
+                                        "gives no interval", parameter="interval")
+        grid = np.linspace(0.0, math.pi, table.shape[1])
+        return np.array([np.interp(ang, grid, table[k]) for ang, k in
+                         zip(np.asarray(angles_rad, dtype=np.float64).ravel(), np.asarray(rows, dtype=np.int64).ravel())])
+
     def path_energy_j(self, waypoints_m: Any) -> float:
         """Total energy (J) of a polyline: every segment plus the turns at its waypoints.
 
@@ -470,10 +493,7 @@ class EnergyCost:
         if np.any(angles > 0):
             r, c = self.terrain.rowcol(pts[:, 0], pts[:, 1])
             row = self.ground_rows[r, c]
-            turn_table = self.tables.turn_sd_table_j
-            grid = np.linspace(0.0, math.pi, turn_table.shape[1])
-            turn_sd = np.array([np.interp(ang, grid, turn_table[k]) for ang, k in zip(angles, row)])
-            per_row += np.bincount(row, weights=turn_sd, minlength=sd_table.shape[0])
+            per_row += np.bincount(row, weights=self.turn_spread_at(row, angles), minlength=sd_table.shape[0])
         return per_row
 
     def _segment_spreads(self, sd_table: np.ndarray, a: list[float], b: list[float]) -> np.ndarray:

@@ -146,11 +146,9 @@ class PairPrices:
         r, c = cost.terrain.rowcol(self.xy_m[:, 0], self.xy_m[:, 1])
         rows = np.asarray(cost.ground_rows)[r, c]
         turn = cost.turn_energy_at(rows, np.full(rows.shape, STOP_TURN_RAD))
-        sd_table = cost.tables.turn_sd_table_j
-        if sd_table is not None:
-            grid = np.linspace(0.0, math.pi, sd_table.shape[1])
+        if cost.has_interval:
             z = np.array([predictive_quantile(q, self._dof(int(g))) for g in rows])
-            turn = turn + z * np.array([np.interp(STOP_TURN_RAD, grid, sd_table[g]) for g in rows])
+            turn = turn + z * cost.turn_spread_at(rows, np.full(rows.shape, STOP_TURN_RAD))
         return turn
 
     def tour_interval(self, points: Any, extra_mean_j: float = 0.0, *, arrived_from: int | None = None

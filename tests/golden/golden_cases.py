@@ -163,29 +163,28 @@ def case_tour(work: Path) -> dict[str, Path]:
     return {f"tour/{p.name}": p for p in sorted(out.iterdir())}
 
 
-def case_tour_chargers(work: Path) -> dict[str, Path]:
-    """One robot's tour of three sites with a charger: the far shed visited after a charge (OR-Tools)."""
+def _tour_with_a_charger(work: Path, name: str, *extra: object) -> Path:
+    """One robot's tour of three sites with a charger (``tour`` with ``extra`` flags) into ``work / name``."""
     path = patch_map(work)
     sites = work / "sites.csv"
     sites.write_text("name,x_m,y_m,value\npump,10.5,20.5,2\nshed,55.5,20.5,3\nwell,50.5,5.5,1\n")
     chargers = work / "chargers.csv"
     chargers.write_text("name,x_m,y_m,power_w,connection_time_s,max_visits\ndock,36.5,21.5,60,15,2\n")
-    out = work / "tour_chargers"
+    out = work / name
     _cli("tour", "--map", path, "--sites", sites, "--chargers", chargers, "--depot", 3.5, 12.5, "--battery-ah", 0.08,
-         "--voltage", 24, "--risk", 0.9, "--time-limit", 1, "--out", out)
+         "--voltage", 24, "--risk", 0.9, "--time-limit", 1, *extra, "--out", out)
+    return out
+
+
+def case_tour_chargers(work: Path) -> dict[str, Path]:
+    """One robot's tour of three sites with a charger: the far shed visited after a charge (OR-Tools)."""
+    out = _tour_with_a_charger(work, "tour_chargers")
     return {f"tour_chargers/{p.name}": p for p in sorted(out.iterdir())}
 
 
 def case_tour_check(work: Path) -> dict[str, Path]:
     """The tour of ``tour_chargers`` driven 8 times (``--monte-carlo 8``): the share above the reserve at each stop."""
-    path = patch_map(work)
-    sites = work / "sites.csv"
-    sites.write_text("name,x_m,y_m,value\npump,10.5,20.5,2\nshed,55.5,20.5,3\nwell,50.5,5.5,1\n")
-    chargers = work / "chargers.csv"
-    chargers.write_text("name,x_m,y_m,power_w,connection_time_s,max_visits\ndock,36.5,21.5,60,15,2\n")
-    out = work / "tour_check"
-    _cli("tour", "--map", path, "--sites", sites, "--chargers", chargers, "--depot", 3.5, 12.5, "--battery-ah", 0.08,
-         "--voltage", 24, "--risk", 0.9, "--time-limit", 1, "--monte-carlo", 8, "--out", out)
+    out = _tour_with_a_charger(work, "tour_check", "--monte-carlo", 8)
     return {f"tour_check/{name}": out / name for name in ("tour_check.json", "tour_check.png")}
 
 
