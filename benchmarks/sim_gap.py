@@ -39,6 +39,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import tour_turns  # the hills map and the tour cases (benchmarks/ is the script's directory)
 
 from energy import Battery, TruthSimulator, drive_profile, ground_preset, robot_preset
 from energy.sim import NoiseModel
@@ -48,9 +49,6 @@ from planner.route import evaluate_route
 from planner.tours import plan_tour
 from terrain import flat_map
 from terrawatt_base.atomic import write_json_atomic
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-import tour_turns  # noqa: E402  (the hills map and the tour cases)
 
 #: The simulator's causes, switched off in this order (the mission's booking down to the physics on the profile).
 SIM_STEPS = ("payload", "noise", "slip_unbooked", "velocity_lag", "sampling")
