@@ -25,14 +25,23 @@ The last column is the stop-turn-go forecast (``price_route(how="profile")``): t
 tables on the profile the simulator drives. Separately it prints the pack's internal resistance (the default draw's
 mean 0.05 ohm) as charge: the energy booked is the terminal energy, the reserve is a state of charge.
 
+With ``--mc N`` it also drives the tours of ``tour_turns.py``'s three Husky cases N times per seed, as
+:func:`planner.tours.simulate_tours_mc` does with drawn parameters (each segment between charges from the charge it
+starts with, mission ``i`` of every segment drawing the same parameters), once with the default draws
+(:class:`planner.MissionDistributions`) and then with the draws fixed at the priced robot one group at a time:
+no payload, then no capacity fade either, then every parameter nominal; it prints the share of tours above the
+reserve at every arrival and the segments' median energy.
+
 Usage::
 
     python benchmarks/sim_gap.py --out sim_gap.json
+    python benchmarks/sim_gap.py --mc 40 --seeds 0 1 2
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -43,8 +52,8 @@ import tour_turns  # the hills map and the tour cases (benchmarks/ is the script
 
 from energy import Battery, TruthSimulator, drive_profile, ground_preset, robot_preset
 from energy.sim import NoiseModel
-from planner import CostSpec, price_route, simulate_mission
-from planner.missions.options import MissionDrive
+from planner import CostSpec, MissionDistributions, price_route, simulate_mission, simulate_missions_mc
+from planner.missions.options import MissionDrive, MonteCarloStudy
 from planner.route import evaluate_route
 from planner.tours import plan_tour
 from terrain import flat_map
@@ -147,9 +156,50 @@ def gap(tmap: Any, wp: np.ndarray) -> dict[str, Any]:
             "segments": int(np.count_nonzero(np.hypot(*np.diff(wp, axis=0).T) > 0))}
 
 
+#: The draws of the Monte Carlo part, from the default to the priced robot, one group at a time.
+DRAWS = {
+    "default draws": None,
+    "no payload": MissionDistributions(payload_kg=(0.0, 0.0)),
+    "no payload, no fade": MissionDistributions(payload_kg=(0.0, 0.0), capacity_fade_pct=(0.0, 0.0)),
+    "every parameter nominal": MissionDistributions((1.0, 1.0), (0.0, 0.0), (0.0, 0.0), (0.0, 0.0), (1.0, 1.0)),
+}
+MC_CASES = ("golden tour_chargers", "hills, 8 sites", "bundled map, 14 sites, 2 robots")
+
+
+def tour_shares(case: dict[str, Any], n: int, seeds: list[int]) -> dict[str, Any]:
+    """Per draw of :data:`DRAWS`: the share (%) of a case's tours above the reserve at every arrival, per seed, and
+    the segments' median energy (J, first seed)."""
+    res = plan_tour(case["cost"], case["sites"], case["robots"], search=case["search"], chargers=case.get("chargers"))
+    out = {}
+    for label, draws in DRAWS.items():
+        shares, medians = [], []
+        for seed in seeds:
+            above = []
+            for k, tour in enumerate(res.tours):
+                if not tour.legs:
+                    continue
+                ok, first = np.ones(n, dtype=bool), 0
+                for s, end in enumerate([*tour.charging_stops, len(tour.legs) - 1]):
+                    battery = tour.battery if s == 0 else dataclasses.replace(tour.battery, initial_soc=1.0)
+                    mc = simulate_missions_mc(res.terrain, res.tour_route(k, slice(first, end + 1)), battery,
+                                              MonteCarloStudy(n, seed=seed + k, distributions=draws), cost=res.cost)
+                    ok &= ~np.asarray(mc.below_reserve)
+                    if seed == seeds[0]:
+                        medians.append(float(np.nanmedian(mc.energy_j)))
+                    first = end + 1
+                above.append(ok)
+            shares.append(100.0 * float(np.mean(np.concatenate(above))))
+        out[label] = {"above_reserve_pct": shares, "segment_medians_j": medians}
+    return {"risk": res.risk, "reported_segments_j": [iv.mean_j for t in res.tours for iv in t.segments],
+            "draws": out}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=None, help="write results as JSON here")
+    parser.add_argument("--mc", type=int, default=0, help="simulated drives of each tour per seed and draw (default 0: "
+                        "no Monte Carlo)")
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2], help="Monte Carlo seeds (default 0 1 2)")
     args = parser.parse_args(argv)
     t0 = time.perf_counter()
     rows = {}
@@ -166,10 +216,21 @@ def main(argv: list[str] | None = None) -> int:
               f"{100 * (r['profile_j'] / e - 1):+5.1f} %, sim / profile {100 * (r['simulated_nominal_j'] / r['profile_j'] - 1):+5.1f} %, "
               f"+10 kg / edges {100 * (r['simulated_payload_10kg_j'] / e - 1):+5.1f} %; charge {r['charge_mah']:.1f} mAh, "
               f"with a 0.05 ohm pack {100 * (r['charge_with_0.05_ohm_mah'] / r['charge_mah'] - 1):+.2f} %")
+    tours = {}
+    if args.mc > 0:
+        cases = tour_turns.cases()
+        print(f"\nTours above the reserve at every arrival ({args.mc} drives x seeds {args.seeds}); segment medians (J)")
+        for name in MC_CASES:
+            tours[name] = r = tour_shares(cases[name], args.mc, args.seeds)
+            print(f"{name} (planned at Q = {r['risk']:g}; priced segments "
+                  + ", ".join(f"{e:.0f}" for e in r["reported_segments_j"]) + " J)")
+            for label, d in r["draws"].items():
+                print(f"  {label:24s} {' / '.join(f'{x:5.1f}' for x in d['above_reserve_pct'])} %   medians "
+                      + ", ".join(f"{e:.0f}" for e in d["segment_medians_j"]))
     print(f"\n{time.perf_counter() - t0:.0f} s")
     if args.out is not None:
         write_json_atomic(args.out, {"benchmark": "sim_gap", "rate_hz": RATE_HZ, "steps": [*SIM_STEPS, *PROFILE_STEPS],
-                                     "routes": rows}, indent=1)
+                                     "routes": rows, "mc": args.mc, "seeds": args.seeds, "tours": tours}, indent=1)
         print(f"wrote {args.out}")
     return 0
 
