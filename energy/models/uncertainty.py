@@ -283,12 +283,10 @@ class IntervalModel:
             new_cov = _diagonal(_second_moment(np.stack(means)))
         interval = cls(float(turn_scale_radps), run_cov, new_cov, sample_sd, float(correlation), bool(cross_validated),
                        len(logs), n_grounds)
-        return dataclasses.replace(interval, run_carry=interval.carry_along_runs(logs, residuals_a, predictions_a))
+        return dataclasses.replace(interval, run_carry=interval.carry_along_runs(logs, residuals_a))
 
-    def carry_along_runs(self, logs: Sequence[InteractionLog], residuals_a: Sequence[np.ndarray],
-                         predictions_a: Sequence[np.ndarray]) -> float | None:
-        """:attr:`run_carry` from residual currents ``residuals_a`` (N, 2) of ``logs`` and the predictions they are
-        residuals of (see the attribute).
+    def carry_along_runs(self, logs: Sequence[InteractionLog], residuals_a: Sequence[np.ndarray]) -> float | None:
+        """:attr:`run_carry` from residual currents ``residuals_a`` (N, 2) of ``logs`` (see the attribute).
 
         Per run and side the residual charge of each half, ``q1`` and ``q2`` (A s), and the variance
         ``E1``, ``E2`` of each that the per-sample spread explains (:meth:`noise_charge_var`); pooled over
@@ -306,9 +304,10 @@ class IntervalModel:
             return None
         q1, q2, e1, e2 = np.moveaxis(np.asarray(parts), 1, 0)  # each (runs, 2)
         signal = (float(np.sum(q1**2) - np.sum(e1)), float(np.sum(q2**2) - np.sum(e2)))
-        if min(signal) <= 0:
+        if not min(signal) > 0:  # no run-level part above the noise (or non-finite residuals): nothing to learn
             return None
-        return float(np.clip(np.sum(q1 * q2) / math.sqrt(signal[0] * signal[1]), 0.0, 1.0))
+        carry = float(np.sum(q1 * q2)) / math.sqrt(signal[0] * signal[1])
+        return float(np.clip(carry, 0.0, 1.0)) if math.isfinite(carry) else None
 
     def noise_charge_var(self, log: InteractionLog, mask: np.ndarray | None = None) -> np.ndarray:
         """Per side, the variance (A² s²) of ``log``'s residual charge (over the samples ``mask``) that the per-sample

@@ -99,3 +99,11 @@ def test_the_carry_is_saved_and_a_file_without_it_or_a_forged_one_is_handled():
     for bad in (1.5, -0.1, float("nan"), "x"):
         with pytest.raises(ValueError):
             IntervalModel.from_plain(iv.to_plain() | {"run_carry": bad})
+
+
+def test_a_carry_is_never_learned_from_non_finite_residuals():
+    logs, residuals, preds = _offset_runs(True, n=6)
+    iv = IntervalModel.fit(logs, residuals, preds, cross_validated=True)
+    broken = [r.copy() for r in residuals]
+    broken[2][5, 0] = np.nan
+    assert iv.carry_along_runs(logs, broken) is None  # a file must stay loadable: no NaN saved as the carry
