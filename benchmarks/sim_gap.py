@@ -41,7 +41,6 @@ Usage::
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -52,10 +51,10 @@ import tour_turns  # the hills map and the tour cases (benchmarks/ is the script
 
 from energy import Battery, TruthSimulator, drive_profile, ground_preset, robot_preset
 from energy.sim import NoiseModel
-from planner import CostSpec, MissionDistributions, price_route, simulate_mission, simulate_missions_mc
-from planner.missions.options import MissionDrive, MonteCarloStudy
+from planner import CostSpec, MissionDistributions, price_route, simulate_mission
+from planner.missions.options import MissionDrive
 from planner.route import evaluate_route
-from planner.tours import plan_tour
+from planner.tours import plan_tour, simulate_tours_mc
 from terrain import flat_map
 from terrawatt_base.atomic import write_json_atomic
 
@@ -168,27 +167,16 @@ MC_CASES = ("golden tour_chargers", "hills, 8 sites", "bundled map, 14 sites, 2 
 
 def tour_shares(case: dict[str, Any], n: int, seeds: list[int]) -> dict[str, Any]:
     """Per draw of :data:`DRAWS`: the share (%) of a case's tours above the reserve at every arrival, per seed, and
-    the segments' median energy (J, first seed)."""
+    the segments' median energy (J, first seed): :func:`planner.tours.simulate_tours_mc` with the truth simulator."""
     res = plan_tour(case["cost"], case["sites"], case["robots"], search=case["search"], chargers=case.get("chargers"))
     out = {}
     for label, draws in DRAWS.items():
         shares, medians = [], []
         for seed in seeds:
-            above = []
-            for k, tour in enumerate(res.tours):
-                if not tour.legs:
-                    continue
-                ok, first = np.ones(n, dtype=bool), 0
-                for s, end in enumerate([*tour.charging_stops, len(tour.legs) - 1]):
-                    battery = tour.battery if s == 0 else dataclasses.replace(tour.battery, initial_soc=1.0)
-                    mc = simulate_missions_mc(res.terrain, res.tour_route(k, slice(first, end + 1)), battery,
-                                              MonteCarloStudy(n, seed=seed + k, distributions=draws), cost=res.cost)
-                    ok &= ~np.asarray(mc.below_reserve)
-                    if seed == seeds[0]:
-                        medians.append(float(np.nanmedian(mc.energy_j)))
-                    first = end + 1
-                above.append(ok)
-            shares.append(100.0 * float(np.mean(np.concatenate(above))))
+            check = simulate_tours_mc(res, n, seed=seed, draw_from="parameters", distributions=draws)
+            shares.append(100.0 * check.share_above_reserve)
+            if seed == seeds[0]:
+                medians += [float(np.nanmedian(mc.energy_j)) for studies in check.runs.values() for mc in studies]
         out[label] = {"above_reserve_pct": shares, "segment_medians_j": medians}
     return {"risk": res.risk, "reported_segments_j": [iv.mean_j for t in res.tours for iv in t.segments],
             "draws": out}

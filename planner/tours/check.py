@@ -20,7 +20,7 @@ from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.formats import result_document, write_result_json
 from terrawatt_base.plot_target import check_ax, check_plot_target, new_figure
 
-from ..missions import MonteCarloResult, MonteCarloStudy, simulate_missions_mc
+from ..missions import MissionDistributions, MissionTruth, MonteCarloResult, MonteCarloStudy, simulate_missions_mc
 from ..route import Route
 from ..route_price import RouteEnergyInterval
 from .result import TourResult
@@ -218,6 +218,7 @@ class TourCheck:
 
 
 def simulate_tours_mc(result: TourResult, n: int = 1000, *, seed: int | None = 0, draw_from: str | None = None,
+                      distributions: MissionDistributions | None = None, truth: MissionTruth | None = None,
                       compute: Compute | None = None) -> TourCheck:
     """Drive each planned tour ``n`` times through :func:`planner.simulate_missions_mc`, its battery charged to full at
     each charging stop.
@@ -229,18 +230,27 @@ def simulate_tours_mc(result: TourResult, n: int = 1000, *, seed: int | None = 0
     driven segment by segment (from the depot or a charge to the next charge or back), each
     segment from the charge it starts with (the initial one, then full) and with the same seed, so
     mission ``i`` of every segment draws the same factors: one drive of the whole tour.
-    ``compute`` says where the missions run (:class:`terrawatt_base.dask_client.Compute`, default here).
+    ``distributions`` are the drawn parameters' ranges with ``draw_from="parameters"`` (default
+    :class:`planner.missions.MissionDistributions`: a payload of 0–20 kg and a capacity fade of 0–20 % the
+    plan did not price, so the share above the reserve measures those draws as much as the plan —
+    docs/results.md, "The planner's price against the simulator, without draws"); ``truth`` the robot and
+    grounds the truth simulator drives (default the robot and ground parameters the tour's cost was
+    priced with, where it keeps them: :meth:`planner.CostSpec.build` with a physics model; else
+    ``MissionTruth()``). ``compute`` says where the missions run
+    (:class:`terrawatt_base.dask_client.Compute`, default here).
 
     Raises
     ------
     InvalidParameterError
-        Not a planned TourResult; ``n < 1``.
+        Not a planned TourResult; ``n < 1``; ``distributions`` with ``draw_from="model"``; a ``truth`` that is
+        not a MissionTruth.
     """
     if not isinstance(result, TourResult) or result.cost is None:
         raise InvalidParameterError(f"result must be a TourResult from plan_tour, got {type(result).__name__!r}")
     n = check_int("n", n, low=1)
     seed = check_seed(seed)
     mode = draw_from or ("model" if result.cost.has_interval else "parameters")
+    truth = _priced_truth(result) if truth is None else check_instance("truth", truth, MissionTruth)
     compute = Compute() if compute is None else check_instance("compute", compute, Compute)
     runs: dict[str, tuple[MonteCarloResult, ...]] = {}
     stops: dict[str, tuple[str, ...]] = {}
@@ -253,11 +263,20 @@ def simulate_tours_mc(result: TourResult, n: int = 1000, *, seed: int | None = 0
             for route, battery, forecast in _segments(result, k):
                 studies.append(simulate_missions_mc(
                     result.terrain, route, battery, MonteCarloStudy(n, seed=None if seed is None else seed + k,
-                                                                    draw_from=mode),
-                    cost=result.cost, forecast=forecast if mode == "model" else None, compute=each))
+                                                                    draw_from=mode, distributions=distributions),
+                    truth=truth, cost=result.cost, forecast=forecast if mode == "model" else None, compute=each))
             runs[tour.robot] = tuple(studies)
             stops[tour.robot] = (*(tour.stops[j] for j in tour.charging_stops), tour.legs[-1].end)
     return TourCheck(result.risk, runs, mode, stops, result.map_label)
+
+
+def _priced_truth(result: TourResult) -> MissionTruth:
+    """The robot and the grounds' parameters the tour's cost was priced with (a physics-priced cost keeps them), else
+    the default truth."""
+    model, params = result.cost.physics_model, result.cost.ground_params
+    if model is None or params is None:
+        return MissionTruth()
+    return MissionTruth(robot=model.robot, grounds=dict(zip(result.cost.tables.ground_labels, params)))
 
 
 def _segments(result: TourResult, robot: int) -> list[tuple[Route, Battery, RouteEnergyInterval]]:

@@ -10,6 +10,7 @@ from energy import Battery
 from planner.cost_spec import CostSpec
 from planner.tours import TourChargers, TourRobot, TourSearch, TourSites, plan_tour, simulate_tours_mc
 from terrain import flat_map
+from terrawatt_base.errors import InvalidParameterError
 
 
 def test_monte_carlo_of_the_tours_ends_above_the_reserve_about_as_often_as_q(hills_cost):
@@ -201,3 +202,30 @@ def test_a_check_without_a_tour_says_so_and_writes_only_its_json(tmp_path):
         TourCheck(0.9, {}, "truth")
     with pytest.raises(InvalidParameterError, match=r"stops\['r'\] must name the end of each"):
         TourCheck(0.9, {}, "model", stops={"r": ("depot",)})
+
+
+def test_the_truth_is_the_priced_robot_and_the_draws_are_the_callers(monkeypatch):
+    import planner.tours.check as check_module
+    from planner.missions import MissionDistributions, MissionTruth
+
+    cost = CostSpec(robot="jackal").build(flat_map((20, 40), 1.0))
+    sites = TourSites(("a", "b"), [[10.0, 10.0], [30.0, 10.0]])
+    res = plan_tour(cost, sites, TourRobot(Battery(0.15, 12.0), (2.0, 10.0)), search=TourSearch(risk=0.9))
+    seen = []
+    real = check_module.simulate_missions_mc
+
+    def spy(terrain, route, battery, study, **kw):
+        seen.append((study, kw["truth"]))
+        return real(terrain, route, battery, study, **kw)
+
+    monkeypatch.setattr(check_module, "simulate_missions_mc", spy)
+    fixed = MissionDistributions(payload_kg=(0.0, 0.0), capacity_fade_pct=(0.0, 0.0))
+    check = simulate_tours_mc(res, 8, seed=1, distributions=fixed)
+    assert check.draw_from == "parameters" and seen
+    assert all(study.distributions is fixed and truth.robot.name == "jackal" for study, truth in seen)
+    husky = MissionTruth()
+    seen.clear()
+    simulate_tours_mc(res, 8, seed=1, truth=husky)
+    assert all(truth is husky and study.distributions is None for study, truth in seen)
+    with pytest.raises(InvalidParameterError, match="truth"):
+        simulate_tours_mc(res, 8, truth="husky")
