@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from planner.missions import MissionDistributions
 from planner.points import point_on_map
 from planner.tables import check_planning_risk
 from planner.tours import (
@@ -43,9 +44,11 @@ __all__ = ["add_parser", "run_tour"]
 
 #: How ``tour`` names the parameters of the library's messages (:func:`terrawatt_cli.error_message`).
 _FLAGS = {"depot_xy_m": "--depot", "n_robots": "--robots", "max_duration_s": "--max-duration",
-          "time_limit_s": "--time-limit"}
+          "time_limit_s": "--time-limit", "distributions": "--mc-priced-load"}
 
 _OUTPUTS = ("tour.json", "tour.geojson", "tour.png", "tour_soc.png")
+#: ``--mc-priced-load``: the default draws but for the payload and the capacity fade, held at the priced robot's.
+_PRICED_LOAD = MissionDistributions(payload_kg=(0.0, 0.0), capacity_fade_pct=(0.0, 0.0))
 #: What ``--monte-carlo N`` adds (:meth:`planner.tours.TourCheck.write`).
 _CHECK_OUTPUTS = ("tour_check.json", "tour_check.png")
 
@@ -102,6 +105,13 @@ def add_parser(sub: Any) -> None:
                         "interval, else drawn parameters; on the --workers cluster) and print the share that ends "
                         "above the reserve, and at each charger arrival, beside Q; writes tour_check.json and "
                         "tour_check.png (exit 1 also when a drive fails, as a Monte Carlo row with an error)")
+    p.add_argument("--mc-draw", choices=("parameters", "model"), default=None,
+                   help="--monte-carlo: draw the typed parameter ranges and simulate each drive, or draw from the "
+                        "pricing model's distribution (default: the model's when it has an interval)")
+    p.add_argument("--mc-priced-load", action="store_true",
+                   help="--monte-carlo with drawn parameters: no payload and no capacity fade (the robot and battery "
+                        "the plan priced) instead of the default ranges of 0-20 kg and 0-20 %%, so that the share "
+                        "above the reserve checks the plan, not loads it never heard of")
     p.add_argument("--bag", action="store_true", help="also write each robot's tour as a ROS 2 bag (tour_<k>.mcap)")
     add_dask_options(p, "the pricing of the legs")
     add_robot_options(p)
@@ -122,6 +132,10 @@ def run_tour(args: argparse.Namespace) -> int:
                                     "per robot, or one for all")
     check_dask_flags(args)
     check_model_flags(args)
+    if args.monte_carlo is None and (args.mc_draw is not None or args.mc_priced_load):
+        raise InvalidParameterError("--mc-draw and --mc-priced-load apply to --monte-carlo N: add it")
+    if args.mc_priced_load and args.mc_draw == "model":
+        raise InvalidParameterError("--mc-priced-load holds drawn parameters, --mc-draw model draws none: give one")
     bags = tuple(f"tour_{k}.mcap" for k in range(robots)) if args.bag else ()
     checked = _CHECK_OUTPUTS if args.monte_carlo is not None else ()
     check_outputs(args.out, _OUTPUTS + bags + checked, input_paths(args))  # the bags too: none may replace an input
@@ -137,7 +151,9 @@ def run_tour(args: argparse.Namespace) -> int:
         result = plan_tour_on_map(
             tmap, sites, fleet, search=TourSearch(risk=args.tour_risk, time_limit_s=args.time_limit, seed=args.seed),
             pricing=pricing, compute=compute, map_label=label, chargers=chargers)
-        check = simulate_tours_mc(result, args.monte_carlo, seed=args.seed, compute=compute) if checked else None
+        check = simulate_tours_mc(result, args.monte_carlo, seed=args.seed, draw_from=args.mc_draw,
+                                  distributions=_PRICED_LOAD if args.mc_priced_load else None,
+                                  compute=compute) if checked else None
     with warn_figures():
         written = result.write(args.out, bag=args.bag)
         written += check.write(args.out) if check is not None else []

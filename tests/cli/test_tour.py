@@ -183,3 +183,31 @@ def test_cli_monte_carlo_drives_the_tours_and_writes_tour_check_json(tmp_path, c
     text = capsys.readouterr().out
     doc = json.loads((tmp_path / "failed" / "tour_check.json").read_text())
     assert rc == 1 and doc["n_failed"] >= 2 and f"{doc['n_failed']} tours failed" in text
+
+
+def test_cli_monte_carlo_draws_as_asked(tmp_path, capsys, wall_map, monkeypatch):
+    import planner.tours.check as check_module
+
+    tmap = wall_map.save(tmp_path / "wall.npz")
+    sites = _sites(tmp_path, ["pump,5.5,35.5,2"])
+    seen = []
+    real = check_module.simulate_missions_mc
+
+    def spy(terrain, route, battery, study, **kw):
+        seen.append(study)
+        return real(terrain, route, battery, study, **kw)
+
+    monkeypatch.setattr(check_module, "simulate_missions_mc", spy)
+    base = ["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "0.2",
+            "--voltage", "24"]
+    rc = main([*base, "--monte-carlo", "4", "--mc-priced-load", "--out", str(tmp_path / "priced")])
+    capsys.readouterr()
+    assert rc == 0 and seen and all(s.draw_from == "parameters" for s in seen)
+    assert all(s.distributions.payload_kg == (0.0, 0.0) and s.distributions.capacity_fade_pct == (0.0, 0.0)
+               for s in seen)
+    assert seen[0].distributions.ground_coef_scale == (0.8, 1.2)  # the other draws as by default
+    for extra, words in ((["--mc-priced-load"], "apply to --monte-carlo"),
+                         (["--monte-carlo", "4", "--mc-priced-load", "--mc-draw", "model"], "give one")):
+        rc = main([*base, *extra, "--out", str(tmp_path / "refused")])
+        err = capsys.readouterr().err
+        assert rc == 2 and words in err and not (tmp_path / "refused").exists()
