@@ -105,7 +105,7 @@ class TourProblem:
     Attributes
     ----------
     arc_units : ndarray of int64, shape (P, P)
-        Conservative price of leg ``i -> j`` (service at ``j`` and the dearest turn at ``i`` included, no turn at
+        Price of leg ``i -> j`` at Q (service at ``j`` and the allowance for the turn at ``i`` included, no turn at
         a depot); larger than every capacity where no route joins them.
     capacity_units : ndarray of int64, shape (R,)
         Each robot's budget at Q.
