@@ -423,8 +423,13 @@ class EnergyCost:
             raise InvalidParameterError(f"the cost ({self!r}) carries no standard-deviation tables: its energy model "
                                         "gives no interval", parameter="interval")
         grid = np.linspace(0.0, math.pi, table.shape[1])
-        return np.array([np.interp(ang, grid, table[k]) for ang, k in
-                         zip(np.asarray(angles_rad, dtype=np.float64).ravel(), np.asarray(rows, dtype=np.int64).ravel())])
+        angles = np.asarray(angles_rad, dtype=np.float64).ravel()
+        rows = np.asarray(rows, dtype=np.int64).ravel()
+        out = np.empty(angles.shape)
+        for k in np.unique(rows):  # one interpolation per table row, not per turn
+            at = rows == k
+            out[at] = np.interp(angles[at], grid, table[k])
+        return out
 
     def path_energy_j(self, waypoints_m: Any) -> float:
         """Total energy (J) of a polyline: every segment plus the turns at its waypoints.

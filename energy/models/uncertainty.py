@@ -289,7 +289,7 @@ class IntervalModel:
         """:attr:`run_carry` from residual currents ``residuals_a`` (N, 2) of ``logs`` (see the attribute).
 
         Per run and side the residual charge of each half, ``q1`` and ``q2`` (A s), and the variance
-        ``E1``, ``E2`` of each that the per-sample spread explains (:meth:`noise_charge_var`); pooled over
+        ``E1``, ``E2`` of each that the per-sample spread explains (:meth:`noise_charge_var_per_sample`); pooled over
         runs and sides, ``sum(q1 q2) / sqrt((sum(q1²) - sum(E1)) (sum(q2²) - sum(E2)))``, clipped to [0, 1].
         """
         parts = []
@@ -298,8 +298,9 @@ class IntervalModel:
             first = t < t[0] + 0.5 * (t[-1] - t[0]) if len(lg) else np.zeros(0, dtype=bool)
             if min(np.count_nonzero(first), np.count_nonzero(~first)) < 2:
                 continue
+            noise = self.noise_charge_var_per_sample(lg)
             parts.append([_trapezoid(r[m], t[m], axis=0) for m in (first, ~first)]
-                         + [self.noise_charge_var(lg, m) for m in (first, ~first)])
+                         + [np.sum(noise[m], axis=0) for m in (first, ~first)])
         if len(parts) < MIN_CARRY_RUNS:
             return None
         q1, q2, e1, e2 = np.moveaxis(np.asarray(parts), 1, 0)  # each (runs, 2)
@@ -309,15 +310,17 @@ class IntervalModel:
         carry = float(np.sum(q1 * q2)) / math.sqrt(signal[0] * signal[1])
         return float(np.clip(carry, 0.0, 1.0)) if math.isfinite(carry) else None
 
-    def noise_charge_var(self, log: InteractionLog, mask: np.ndarray | None = None) -> np.ndarray:
-        """Per side, the variance (A² s²) of ``log``'s residual charge (over the samples ``mask``) that the per-sample
-        spread explains.
+    def noise_charge_var(self, log: InteractionLog) -> np.ndarray:
+        """Per side, the variance (A² s²) of ``log``'s residual charge that the per-sample spread explains.
 
         White noise of correlation time :attr:`correlation_s`: the variance of its integral is ``sum(sd² dt) *
         correlation_s``.
         """
-        var = self.sample_sd(log) ** 2 * sample_spans_s(log)[:, None]
-        return np.sum(var if mask is None else var[mask], axis=0) * self.correlation_s
+        return np.sum(self.noise_charge_var_per_sample(log), axis=0)
+
+    def noise_charge_var_per_sample(self, log: InteractionLog) -> np.ndarray:
+        """Each drive sample's share (N, 2) of :meth:`noise_charge_var` (summed over a stretch: that stretch's)."""
+        return self.sample_sd(log) ** 2 * sample_spans_s(log)[:, None] * self.correlation_s
 
     # ------------------------------------------------------------- queries
     def knows(self, ground: str | None) -> bool:
