@@ -5,11 +5,11 @@ of the model) are experiment scaffolding and live with the benchmarks, in
 ``benchmarks/diagnosis_scenarios``.
 """
 
+from .case import SPLITS, FitSettings, Fold, Split, make_split
 from .corrected import CorrectedCurrentModel
 from .diagnose import diagnose
 from .effect_base import EFFECT_KINDS, BasisEffect, Effect, EffectParameter
 from .effects import EFFECTS_CATALOGUE, NOT_IDENTIFIABLE_FROM_CURRENT, check_effect_names, effect, effect_from_spec
-from .fit import SPLITS, Fold, Split, make_split
 from .gap import GapShare, GapSummary, WaterfallStep, gap_summary, localise_gap, residual_currents_a
 from .model_currents import DRIVE_EFFECTS
 from .model_source import (
@@ -26,7 +26,7 @@ from .regimes import regime_labels
 from .report import DIAGNOSIS_FILES, Diagnosis
 from .result import EffectScore, Tie
 from .separating import DriveCandidate, PairSeparation, SeparatingDrive, manoeuvre_library, separating_drive
-from .stage import FitSettings, Stage
+from .stage import Stage
 
 __all__ = [
     "CURRENT",

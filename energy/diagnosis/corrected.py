@@ -15,9 +15,10 @@ from ..logs import InteractionLog
 from ..models.base import CurrentModel, ModelRecord
 from ..models.baselines import PhysicsCurrentModel
 from ..params import RobotParams
+from .case import prepare_data
 from .effect_base import Effect
 from .effects import EFFECTS_CATALOGUE, effect_from_spec
-from .fit import compose, fit_effect_set, prepare_data
+from .fit import compose, fit_effect_set
 from .model_currents import clamps_at_zero, physics_basis, unclipped_prediction
 
 __all__ = ["CorrectedCurrentModel"]

@@ -4,28 +4,23 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from terrawatt_base.checks import check_instance, fmt_number
 from terrawatt_base.dask_client import Compute
-from terrawatt_base.errors import DataError, InvalidParameterError, NotFittedError
 
 from ..logs import InteractionLog
-from ..models.base import CurrentModel, check_logs
-from ..params import robot_spec
+from ..models.base import CurrentModel
+from .case import DiagnosisCase, DiagnosisData, FitSettings, diagnosis_case
 from .corrected import CorrectedCurrentModel
 from .effect_base import Effect
-from .effects import LEARNED_EFFECT, NOT_IDENTIFIABLE_FROM_CURRENT, effect, resolve_effects
-from .fit import DiagnosisData, SetRunner, SetScore, Split, make_split, prepare_data, score_effect_set, shrink_pct
+from .effects import NOT_IDENTIFIABLE_FROM_CURRENT
+from .fit import SetRunner, SetScore, score_effect_set, shrink_pct
 from .gap import CURRENT, localise_gap
-from .model_currents import physics_basis
 from .model_source import ModelUnderDiagnosis
 from .noise import residual_noise
-from .power_data import power_logs_missing
-from .regimes import check_terrain
 from .report import Diagnosis
 from .result import Tie
 from .selection import (
@@ -38,80 +33,14 @@ from .selection import (
     units_needed,
 )
 from .separating import SeparatingDrive, separating_drive
-from .stage import FitSettings, Stage, power_stage, stage_of, stage_verdict
+from .stage import Stage, power_stage, stage_of, stage_verdict
 
 __all__ = ["SIGNIFICANT_SHRINK_PCT", "diagnose"]
 
 
-@dataclass(frozen=True, eq=False)
-class _Case:
-    """What is diagnosed, checked once: the model, its logs, their map, the reference robot, the settings, the
-    split and the fitting data of the current stage."""
-
-    model: CurrentModel
-    logs: list[InteractionLog]
-    terrain: Any
-    robot: Any
-    settings: FitSettings
-    split: Split
-    data: DiagnosisData
-
-    def corrected(self, effects: Sequence[Effect]) -> CorrectedCurrentModel:
-        """The model with ``effects`` added, fitted on all logs."""
-        return CorrectedCurrentModel(self.model, list(effects), self.robot, self.terrain).fit(self.logs)
-
-
-def _check_model(model: Any, logs: list[InteractionLog]) -> list[np.ndarray]:
-    if not isinstance(model, CurrentModel):
-        raise InvalidParameterError(f"model must be a fitted CurrentModel, got {type(model).__name__!r}")
-    if not model.is_fitted:
-        raise NotFittedError(f"model {type(model).__name__} is not fitted; fit it (or load a saved one) before diagnosing")
-    out = []
-    for k, log in enumerate(logs):
-        try:
-            pred = np.asarray(model.predict(log), dtype=np.float64)
-        except (DataError, InvalidParameterError, ValueError, KeyError, AttributeError) as exc:
-            raise DataError(f"the {type(model).__name__} cannot predict logs[{k}] ({log.meta.source!r}): {exc}") from exc
-        if pred.shape != (len(log), 2) or not np.all(np.isfinite(pred)):
-            raise DataError(f"the {type(model).__name__} gives no finite (N, 2) prediction for logs[{k}]")
-        out.append(pred)
-    return out
-
-
-def _checked_logs(logs: Any) -> list[InteractionLog]:
-    """``logs`` as a list (:func:`check_logs`), each with at least 2 drive samples and drive currents not all zero."""
-    items = check_logs(logs)
-    for k, log in enumerate(items):
-        if len(log) < 2:
-            raise DataError(f"logs[{k}] has {len(log)} drive sample(s); the diagnosis needs at least 2 per log")
-        log.require_currents("the diagnosis")
-        if not (np.any(log.current_left_a) or np.any(log.current_right_a)):
-            raise DataError(f"logs[{k}] ({log.meta.source!r}) has no drive currents (all zero); "
-                            "the diagnosis compares measured and predicted currents")
-    return items
-
-
-def _candidates(model: Any, logs: list[InteractionLog], items: list[Effect], effects: Any, terrain: Any,
-                robot: Any) -> tuple[list[Effect], Effect | None, dict[str, str]]:
-    skipped: dict[str, str] = {}
-    usable: list[Effect] = []
-    learned: Effect | None = None
-    for e in items:
-        if not e.applies_to(model):
-            skipped[e.name] = "already in the model, or not applicable to it"
-            continue
-        why = e.unsupported(logs, terrain, model)
-        if why:
-            skipped[e.name] = why
-            continue
-        bound = e.bind(logs, terrain, robot)
-        if e.name == LEARNED_EFFECT:
-            learned = bound
-        elif bound.n_parameters:
-            usable.append(bound)
-    if learned is None and effects is None:
-        learned = effect(LEARNED_EFFECT)
-    return usable, learned, skipped
+def _corrected(case: DiagnosisCase, effects: Sequence[Effect]) -> CorrectedCurrentModel:
+    """The model with ``effects`` added, fitted on all logs."""
+    return CorrectedCurrentModel(case.model, list(effects), case.robot, case.terrain).fit(case.logs)
 
 
 def diagnose(model: CurrentModel | ModelUnderDiagnosis, logs: InteractionLog | Sequence[InteractionLog], *,
@@ -180,52 +109,29 @@ def diagnose(model: CurrentModel | ModelUnderDiagnosis, logs: InteractionLog | S
         held-out data, fewer calibration samples than an effect has parameters, a battery
         voltage <= 0 where a pack current is logged.
     """
-    note = ""
-    if isinstance(model, ModelUnderDiagnosis):
-        if robot is not None:
-            raise InvalidParameterError("robot must be None with a ModelUnderDiagnosis, which brings its own "
-                                        f"reference robot; got {robot!r:.80}")
-        note, robot, model = model.note, model.reference_robot, model.model
-    settings = FitSettings() if settings is None else settings
-    if not isinstance(settings, FitSettings):
-        raise InvalidParameterError(f"settings must be a FitSettings, got {type(settings).__name__!r}")
-    items = _checked_logs(logs)
     compute = Compute() if compute is None else check_instance("compute", compute, Compute)
-    if robot is not None:
-        robot = robot_spec(robot)  # a robot file read once: the corrected model keeps its parameters, not a path
-    terrain = check_terrain(terrain)
-    predictions = _check_model(model, items)
-    sp = make_split(items, settings.split, settings.n_blocks)
-    resolved = resolve_effects(effects)
-    electrical = [e for e in resolved if e.kind == "electrical"]
-    usable, learned, skipped = _candidates(model, items, [e for e in resolved if e.kind != "electrical"], effects,
-                                           terrain, robot)
+    case = diagnosis_case(model, logs, terrain=terrain, effects=effects, settings=settings, robot=robot)
+    settings = case.settings
     power = None
     with compute.session() as (client, _):
-        if electrical and not power_logs_missing(items):
-            power = power_stage(model, items, electrical, sp, settings, robot=robot, client=client,
-                                progress=compute.progress)
-        elif electrical and effects is not None:  # asked for by name on logs without battery power
-            skipped.update({e.name: e.unsupported(items, terrain) or "" for e in electrical})
-        data = prepare_data(model, items, usable + ([learned] if learned is not None else []),
-                            physics_basis(model, robot))
-        case = _Case(model, items, terrain, robot, settings, sp, data)
-        runner = SetRunner(data, sp, client=client, progress=compute.progress)
-        sel, final, learned_note = _select(case, usable, learned, runner, learned_requested=effects is not None)
+        if case.power is not None:
+            power = power_stage(case.power, case.power_candidates, settings, client=client, progress=compute.progress)
+        runner = SetRunner(case.data, client=client, progress=compute.progress)
+        sel, final, learned_note = _select(case, runner)
 
-    localisation = localise_gap(items, predictions, terrain=terrain, section_s=settings.section_s)
-    ties = _ties(sel, data)
+    localisation = localise_gap(case.logs, case.predictions, terrain=case.terrain, section_s=settings.section_s)
+    ties = _ties(sel, case.data)
     drives = _separating_drives(case, sel, ties)
     more = _more_data(case, sel) if not sel.chosen else {}
-    current = stage_of(CURRENT, items, final, settings, skipped=skipped)
+    current = stage_of(CURRENT, case.data, final, settings, skipped=case.skipped)
     current = dataclasses.replace(current, verdict=stage_verdict(current, settings, localisation=localisation,
                                                                  ties=ties, drives=drives))
-    verdict = [*current.verdict, *_closing_sentences(power, skipped)]
+    verdict = [*current.verdict, *_closing_sentences(power, case.skipped)]
     for sentence in (more.get("sentence"), learned_note):  # the learned note first, then the more-data one
         if sentence is not None:
             verdict.insert(2, sentence)
-    return Diagnosis(current, localisation, tuple(verdict), case.corrected(final.chosen), settings, power, note, ties,
-                     drives, more, tuple(items), terrain)
+    return Diagnosis(current, localisation, tuple(verdict), _corrected(case, final.chosen), settings, power, case.note,
+                     ties, drives, more, tuple(case.logs), case.terrain)
 
 
 def _closing_sentences(power: Stage | None, skipped: dict[str, str]) -> list[str]:
@@ -240,23 +146,22 @@ def _closing_sentences(power: Stage | None, skipped: dict[str, str]) -> list[str
     return out
 
 
-def _select(case: _Case, usable: list[Effect], learned: Effect | None, runner: SetRunner, *,
-            learned_requested: bool) -> tuple[Selection, Selection, str | None]:
+def _select(case: DiagnosisCase, runner: SetRunner) -> tuple[Selection, Selection, str | None]:
     """Rank and add greedily (:func:`select_effects`); where nothing is significant, score the learned correction.
 
     Returns the selection of the catalogued effects, the final one (the learned correction ranked, and chosen
-    only when ``learned_requested``: it was named among the candidates) and the verdict's note on the learned
+    only when ``case.learned_requested``: it was named among the candidates) and the verdict's note on the learned
     correction when it would explain the gap but was not asked for (else None)."""
-    s = case.settings
-    sel = select_effects(usable, case.data, case.split, runner, s.n_bootstrap, s.seed)
+    s, learned = case.settings, case.learned
+    sel = select_effects(case.candidates, runner, s.n_bootstrap, s.seed)
     if sel.chosen or learned is None:
         return sel, sel, None
-    trial = score_effect_set([learned], case.data, case.split)
+    trial = score_effect_set([learned], case.data)
     entry = score_entry(learned, sel.none, trial, sel.none, trial, s.n_bootstrap, s.seed)
     ranked = dataclasses.replace(sel, scores={**sel.scores, learned.name: entry}, order=(*sel.order, learned))
     if not significant(sel.none, trial, sel.none, s.n_bootstrap, s.seed):
         return sel, ranked, None
-    if learned_requested:
+    if case.learned_requested:
         return sel, dataclasses.replace(ranked, chosen=(learned,), sets=(*sel.sets, trial),
                                         order=(learned, *sel.order)), None
     lo, hi = entry.shrink_interval_pct
@@ -266,7 +171,7 @@ def _select(case: _Case, usable: list[Effect], learned: Effect | None, runner: S
                          "'learned_residual']).")
 
 
-def _separating_drives(case: _Case, sel: Selection, ties: Sequence[Tie]) -> tuple[SeparatingDrive, ...]:
+def _separating_drives(case: DiagnosisCase, sel: Selection, ties: Sequence[Tie]) -> tuple[SeparatingDrive, ...]:
     """Per tie, the drive that tells its fitted explanations apart (:func:`separating_drive`), within
     :data:`DRIVE_LIMIT_SHARE` of the robot's limits (:func:`_drive_limits`), with as many runs as the
     split's units need to order the pair."""
@@ -278,16 +183,16 @@ def _separating_drives(case: _Case, sel: Selection, ties: Sequence[Tie]) -> tupl
     for tie in ties:
         k = sel.chosen.index(by_name[tie.chosen])
         base = list(sel.chosen[:k])
-        models = {n: case.corrected(base + [by_name[n]]) for n in tie.effects}
+        models = {n: _corrected(case, base + [by_name[n]]) for n in tie.effects}
         noise = residual_noise(case.data.measured, sel.trials[k][tie.chosen].held_out_a, case.logs)
-        drive = separating_drive(tie.effects, models, case.logs[0], noise, vmax, wmax, amax, base=case.corrected(base),
+        drive = separating_drive(tie.effects, models, case.logs[0], noise, vmax, wmax, amax, base=_corrected(case, base),
                                  terrain=case.terrain, **_units(case))
         if drive is not None:
             out.append(drive)
     return tuple(out)
 
 
-def _units(case: _Case) -> dict[str, int]:
+def _units(case: DiagnosisCase) -> dict[str, int]:
     """The units the split resamples and how many a run adds (1, or its blocks)."""
     n_units = case.split.n_units
     return {"n_units": int(n_units), "units_per_run": max(int(round(n_units / max(len(case.logs), 1))), 1)}
@@ -297,12 +202,12 @@ def _units(case: _Case) -> dict[str, int]:
 DRIVE_LIMIT_SHARE = 0.8
 
 
-def _drive_limits(case: _Case) -> tuple[float, float, float]:
+def _drive_limits(case: DiagnosisCase) -> tuple[float, float, float]:
     """Speed, yaw rate and acceleration a test drive may use: :data:`DRIVE_LIMIT_SHARE` of the robot's
     top speed and yaw rate (where the explanations differ most is often where the runs never went:
     a gain and an offset agree at the one current the runs drew), and the runs' own hard starts
     (the 95th percentile of their accelerations)."""
-    basis = physics_basis(case.model, case.robot)
+    basis = case.data.basis
     vmax = DRIVE_LIMIT_SHARE * basis.robot.max_speed_mps
     wmax = DRIVE_LIMIT_SHARE * basis.robot.max_omega_radps
     accel = np.concatenate([np.abs(np.gradient(log.v_mps, log.time_s)) for log in case.logs if len(log) > 2]
@@ -310,7 +215,7 @@ def _drive_limits(case: _Case) -> tuple[float, float, float]:
     return vmax, wmax, float(np.percentile(accel, 95))
 
 
-def _more_data(case: _Case, sel: Selection) -> dict[str, Any]:
+def _more_data(case: DiagnosisCase, sel: Selection) -> dict[str, Any]:
     """Where nothing is significant: how many more runs (or blocks) like these would make the likeliest
     candidate so (:func:`units_needed`), and the test drive that would show it with fewer."""
     top = next((e for e in sel.order if e.kind != "learned"), None)
@@ -331,8 +236,8 @@ def _more_data(case: _Case, sel: Selection) -> dict[str, Any]:
     else:
         text += f": about {need} {unit} like these would make it significant at 95 %"
         vmax, wmax, amax = _drive_limits(case)
-        as_given = case.corrected([])
-        models = {"as_given": as_given, top.name: case.corrected([top])}
+        as_given = _corrected(case, [])
+        models = {"as_given": as_given, top.name: _corrected(case, [top])}
         noise = residual_noise(case.data.measured, sel.none.held_out_a, case.logs)
         # the candidate as the explanation to confirm, the model as given as the one to beat
         drive = separating_drive((top.name, "as_given"), models, case.logs[0], noise, vmax, wmax, amax, base=as_given,

@@ -1,12 +1,11 @@
-"""Held-out fitting: folds of the logs, candidate effects fitted on calibration data and scored on held-out data.
+"""Held-out fitting: candidate effects fitted on the calibration data of each fold and scored on its held-out data.
 
-:func:`make_split` cuts the logs into folds (whole runs held out, or contiguous blocks of
-every run) that hold out every sample exactly once. An effect set is fitted with
-:func:`scipy.optimize.least_squares` on the residual vector of all calibration samples (every
-column: both drive sides, or the one battery power) of a fold and scored on that fold's
-held-out samples, vectorised; so the pooled held-out squared error of a set is a fair measure
-of what it explains. There is no function here that scores a set on the data it was fitted
-on: :func:`score_effect_set` takes a :class:`Split`, whose folds never overlap, and
+An effect set is fitted with :func:`scipy.optimize.least_squares` on the residual vector of all
+calibration samples (every column: both drive sides, or the one battery power) of a fold of the
+prepared data's :class:`~energy.diagnosis.case.Split` and scored on that fold's held-out
+samples, vectorised; so the pooled held-out squared error of a set is a fair measure of what it
+explains. There is no function here that scores a set on the data it was fitted on:
+:func:`score_effect_set` scores on the split's folds, which never overlap, and
 :func:`fit_effect_set` (used for the final corrected model) returns values, never a score.
 :class:`SetRunner` scores many sets, one after another or as tasks on a dask.distributed
 client.
@@ -21,166 +20,16 @@ from typing import Any
 import numpy as np
 from scipy import optimize
 
-from terrawatt_base.checks import check_choice, check_int, check_seed, readonly
+from terrawatt_base.checks import check_int, check_seed
 from terrawatt_base.dask_client import check_client, run_tasks
 from terrawatt_base.errors import DataError, InvalidParameterError
 
-from ..logs import InteractionLog
-from ..models.base import log_currents
+from .case import DiagnosisData
 from .effect_base import Effect
 from .effects import composition_order
-from .model_currents import PhysicsBasis, clamps_at_zero, unclipped_prediction
 
-__all__ = ["SPLITS", "Fold", "Split", "make_split", "DiagnosisData", "SetScore", "prepare_data", "compose",
-           "fit_effect_set", "score_effect_set", "SetRunner", "bootstrap_shrink_interval_pct",
+__all__ = ["SetScore", "compose", "fit_effect_set", "score_effect_set", "SetRunner", "bootstrap_shrink_interval_pct",
            "bootstrap_gain_interval_pct", "shrink_pct"]
-
-#: Split kinds: whole runs held out, or contiguous blocks of every run.
-SPLITS = ("runs", "blocks")
-
-
-@dataclass(frozen=True, eq=False)
-class Fold:
-    """One fold: per log, boolean masks of the calibration and the held-out samples (never both)."""
-
-    calibration: tuple[np.ndarray, ...]
-    held_out: tuple[np.ndarray, ...]
-
-    def __post_init__(self) -> None:
-        if len(self.calibration) != len(self.held_out):
-            raise InvalidParameterError("a Fold needs one calibration and one held-out mask per log")
-        for k, (c, h) in enumerate(zip(self.calibration, self.held_out)):
-            if c.shape != h.shape or c.dtype != bool or h.dtype != bool:
-                raise InvalidParameterError(f"fold masks of log {k} must be boolean arrays of one shape")
-            if np.any(c & h):
-                raise InvalidParameterError(f"log {k}: a sample is both calibration and held out")
-        object.__setattr__(self, "calibration", tuple(readonly(c) for c in self.calibration))
-        object.__setattr__(self, "held_out", tuple(readonly(h) for h in self.held_out))
-
-    @property
-    def n_calibration(self) -> int:
-        """Number of calibration samples."""
-        return int(sum(int(c.sum()) for c in self.calibration))
-
-    @property
-    def n_held_out(self) -> int:
-        """Number of held-out samples."""
-        return int(sum(int(h.sum()) for h in self.held_out))
-
-
-@dataclass(frozen=True, eq=False)
-class Split:
-    """Folds that hold out every sample exactly once, and the bootstrap unit of each sample.
-
-    Attributes
-    ----------
-    kind : {"runs", "blocks"}
-    folds : tuple of Fold
-    units : tuple of numpy.ndarray
-        Per log, the integer unit (a run, or a block of a run) of each sample; the
-        bootstrap intervals resample these units.
-    n_units : int
-    """
-
-    kind: str
-    folds: tuple[Fold, ...]
-    units: tuple[np.ndarray, ...]
-    n_units: int
-
-    def __post_init__(self) -> None:
-        seen = [np.zeros(u.shape, dtype=np.int64) for u in self.units]
-        for fold in self.folds:
-            for k, h in enumerate(fold.held_out):
-                seen[k] += h
-        if any(np.any(s != 1) for s in seen):
-            raise InvalidParameterError("a Split must hold out every sample exactly once")
-
-
-def make_split(logs: Sequence[InteractionLog], kind: str = "runs", n_blocks: int = 5) -> Split:
-    """Split ``logs`` into calibration and held-out parts.
-
-    ``"runs"``: ``min(n_blocks, len(logs))`` folds of whole runs (run ``i`` in fold
-    ``i % K``); ``"blocks"``: every run cut into ``n_blocks`` contiguous blocks of equal
-    duration, fold ``k`` holding out block ``k`` of every run (never interleaved samples,
-    which leak through autocorrelation).
-
-    Raises
-    ------
-    UnknownNameError
-        ``kind`` not in :data:`SPLITS`.
-    InvalidParameterError
-        ``n_blocks`` not an integer >= 2.
-    DataError
-        A split that leaves no held-out or no calibration data: ``"runs"`` with a single
-        log, ``"blocks"`` with a run shorter than ``n_blocks`` samples.
-    """
-    check_choice("split", kind, SPLITS)
-    n_blocks = check_int("n_blocks", n_blocks, low=2)
-    sizes = [len(log) for log in logs]
-    if kind == "runs":
-        if len(logs) < 2:
-            raise DataError(
-                f"split='runs' needs at least 2 runs to hold one out, got {len(logs)}; use split='blocks' for a single run"
-            )
-        k = min(n_blocks, len(logs))
-        units = tuple(np.full(n, i, dtype=np.int64) for i, n in enumerate(sizes))
-        fold_of = [i % k for i in range(len(logs))]
-        folds = tuple(
-            Fold(tuple(np.full(n, fold_of[i] != f) for i, n in enumerate(sizes)),
-                 tuple(np.full(n, fold_of[i] == f) for i, n in enumerate(sizes)))
-            for f in range(k)
-        )
-        return Split("runs", folds, units, len(logs))
-    short = [i for i, n in enumerate(sizes) if n < n_blocks]
-    if short:
-        raise DataError(
-            f"split='blocks' with n_blocks={n_blocks} leaves no held-out data for run(s) {short!r} "
-            f"({[sizes[i] for i in short]!r} samples)"
-        )
-    blocks = []
-    for log in logs:
-        t = log.time_s
-        edges = np.linspace(t[0], t[-1], n_blocks + 1)
-        b = np.clip(np.searchsorted(edges, t, side="right") - 1, 0, n_blocks - 1)
-        if np.unique(b).size != n_blocks:  # uneven clocks: fall back to equal sample counts
-            b = (np.arange(len(log)) * n_blocks) // len(log)
-        blocks.append(b)
-    units = tuple(i * n_blocks + b for i, b in enumerate(blocks))
-    folds = tuple(Fold(tuple(b != f for b in blocks), tuple(b == f for b in blocks)) for f in range(n_blocks))
-    return Split("blocks", folds, units, len(logs) * n_blocks)
-
-
-@dataclass(frozen=True, eq=False)
-class DiagnosisData:
-    """Everything fitting needs, computed once: the measured values (per log ``(N, C)``: the
-    two side currents, or the battery power), the model's unclamped prediction of them, and
-    each candidate's per-log precomputation (by effect name)."""
-
-    logs: tuple[InteractionLog, ...]
-    measured: tuple[np.ndarray, ...]
-    base: tuple[np.ndarray, ...]
-    clip: bool
-    prepared: dict[str, tuple[Any, ...]]
-
-    @property
-    def n_samples(self) -> int:
-        """Number of drive samples over all logs."""
-        return int(sum(m.shape[0] for m in self.measured))
-
-    @property
-    def n_columns(self) -> int:
-        """Measured values per sample (2 side currents; 1 battery power)."""
-        return int(self.measured[0].shape[1]) if self.measured else 2
-
-
-def prepare_data(model: Any, logs: Sequence[InteractionLog], effects: Sequence[Effect],
-                 basis: PhysicsBasis | None = None) -> DiagnosisData:
-    """Measured currents, the model's unclamped predictions and every effect's per-log preparation."""
-    measured = tuple(log_currents(log) for log in logs)
-    base = tuple(unclipped_prediction(model, log, basis) for log in logs)
-    prepared = {e.name: tuple(e.prepare(model, log) for log in logs) for e in effects}
-    return DiagnosisData(tuple(logs), measured, base, clamps_at_zero(model), prepared)
-
 
 def compose(effects: Sequence[Effect], values: Sequence[np.ndarray], base_a: np.ndarray,
             prepared: Sequence[Any], clip: bool, *, surrogate: bool = False) -> np.ndarray:
@@ -293,14 +142,19 @@ class SetScore:
                 for i in range(n)]
 
 
-def score_effect_set(effects: Sequence[Effect], data: DiagnosisData, split: Split) -> SetScore:
+def score_effect_set(effects: Sequence[Effect], data: DiagnosisData) -> SetScore:
     """Fit ``effects`` jointly on each fold's calibration samples; score them on its held-out samples.
 
     Raises
     ------
+    InvalidParameterError
+        ``data`` prepared without a split.
     DataError
         A fold with fewer calibration values than the set has parameters.
     """
+    split = data.split
+    if split is None:
+        raise InvalidParameterError("data must be prepared with a split to score an effect set held out")
     n_logs = len(data.logs)
     held = [np.zeros_like(m) for m in data.measured]
     fold_values = []
@@ -357,16 +211,16 @@ def bootstrap_gain_interval_pct(none: SetScore, current: SetScore, trial: SetSco
 
 
 class SetRunner:
-    """Scores effect sets on one :class:`DiagnosisData` and :class:`Split`, here or on ``client``.
+    """Scores effect sets on one :class:`~energy.diagnosis.case.DiagnosisData` (and its split), here or on ``client``.
 
     On a client each batch of sets is one :func:`~terrawatt_base.dask_client.run_tasks` call:
-    the data and the split its shared inputs (sent once per batch, computed again if the workers
-    holding them die), each set one task. Results come back in the order asked, equal to the
-    serial ones (the fits are deterministic least squares). ``progress`` shows a tqdm bar per batch.
+    the data its shared input (sent once per batch, computed again if the workers holding it
+    die), each set one task. Results come back in the order asked, equal to the serial ones
+    (the fits are deterministic least squares). ``progress`` shows a tqdm bar per batch.
     """
 
-    def __init__(self, data: DiagnosisData, split: Split, *, client: Any = None, progress: bool = False) -> None:
-        self.data, self.split = data, split
+    def __init__(self, data: DiagnosisData, *, client: Any = None, progress: bool = False) -> None:
+        self.data = data
         self.client = check_client(client, "candidate effect sets")
         self.progress = bool(progress)
 
@@ -374,10 +228,9 @@ class SetRunner:
         """The held-out score of each set in ``sets``, in order."""
         tasks = [(_score_with, (list(s),)) for s in sets]
         client = self.client if len(sets) >= 2 else None
-        return list(run_tasks(tasks, client=client, shared=(self.data, self.split), progress=self.progress,
-                              description=desc))
+        return list(run_tasks(tasks, client=client, shared=(self.data,), progress=self.progress, description=desc))
 
 
-def _score_with(data: DiagnosisData, split: Split, effects: Sequence[Effect]) -> SetScore:
-    """:func:`score_effect_set` with the shared inputs first (a task of :meth:`SetRunner.score`)."""
-    return score_effect_set(effects, data, split)
+def _score_with(data: DiagnosisData, effects: Sequence[Effect]) -> SetScore:
+    """:func:`score_effect_set` with the shared input first (a task of :meth:`SetRunner.score`)."""
+    return score_effect_set(effects, data)

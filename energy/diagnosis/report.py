@@ -23,10 +23,11 @@ from terrawatt_base.formats import result_document, write_result_json
 
 from ..logs import InteractionLog
 from ..models.base import CurrentModel
+from .case import FitSettings
 from .gap import GapShare, largest_slices
 from .plots import FIGURES, plot_diagnosis, plot_effect_ranking, skipped_figures
 from .result import Tie
-from .stage import FitSettings, Stage
+from .stage import Stage
 
 __all__ = ["DIAGNOSIS_FILES", "DIAGNOSIS_FORMAT_VERSION", "MARKDOWN_SLICES", "Diagnosis"]
 

@@ -13,10 +13,8 @@ from terrawatt_base.checks import check_seed
 
 from .effect_base import Effect
 from .fit import (
-    DiagnosisData,
     SetRunner,
     SetScore,
-    Split,
     bootstrap_gain_interval_pct,
     bootstrap_shrink_interval_pct,
     score_effect_set,
@@ -85,12 +83,12 @@ class Selection:
     seed: int | None = 0
 
 
-def select_effects(usable: Sequence[Effect], data: DiagnosisData, split: Split, runner: SetRunner,
-                   n_bootstrap: int, seed: int | None) -> Selection:
-    """Rank ``usable`` by held-out shrink; add greedily (every remaining candidate refitted jointly
-    with the chosen ones at each step) while the next one is :func:`significant`. A candidate
+def select_effects(usable: Sequence[Effect], runner: SetRunner, n_bootstrap: int, seed: int | None) -> Selection:
+    """Rank ``usable`` by held-out shrink on the runner's data; add greedily (every remaining candidate refitted
+    jointly with the chosen ones at each step) while the next one is :func:`significant`. A candidate
     with plausible fitted values that is significant goes before one with implausible values."""
-    none = score_effect_set([], data, split)
+    data = runner.data
+    none = score_effect_set([], data)
     alone = dict(zip((e.name for e in usable), runner.score([[e] for e in usable], "candidates alone")))
     chosen: list[Effect] = []
     sets = [none]

@@ -22,20 +22,19 @@ from typing import Any
 
 import numpy as np
 
-from terrawatt_base.checks import check_choice, check_int, check_real, check_seed, fmt_number, fmt_pct
+from terrawatt_base.checks import fmt_number, fmt_pct
 
-from ..logs import InteractionLog
 from ..robot import RobotParams
+from .case import DiagnosisData, FitSettings
 from .effect_base import Effect
-from .fit import SPLITS, DiagnosisData, SetRunner, Split, fit_effect_set, shrink_pct
+from .fit import SetRunner, fit_effect_set, shrink_pct
 from .gap import GapShare, GapSummary, WaterfallStep, gap_summary, largest_slices
-from .model_currents import PhysicsBasis, physics_basis
-from .power_data import check_power_logs, power_inputs, predicted_battery_power_w
+from .model_currents import PhysicsBasis
 from .quantity import CURRENT, POWER, Quantity
 from .result import EffectScore, Tie
 from .selection import Selection, plausible_alternative, select_effects
 
-__all__ = ["FitSettings", "Stage", "stage_of", "stage_verdict", "power_stage", "CONFUSED_FRACTION"]
+__all__ = ["Stage", "stage_of", "stage_verdict", "power_stage", "CONFUSED_FRACTION"]
 
 #: A candidate whose shrink alone reaches this fraction of the chosen one's is called hard to tell apart from it
 #: (the power stage's verdict).
@@ -44,50 +43,6 @@ CONFUSED_FRACTION = 0.8
 _SEPARATES = {frozenset(("sensor", "control")): "stops, the start-up after a stop or a per-device current separate them",
               frozenset(("sensor", "armature_heat")): "runs of very different drive currents separate them",
               frozenset(("control", "armature_heat")): "runs of very different drive currents separate them"}
-
-
-@dataclass(frozen=True)
-class FitSettings:
-    """How a diagnosis fits and scores its candidates: the split, the sections, the bootstrap (validated).
-
-    Attributes
-    ----------
-    split : {"runs", "blocks"}
-        Held-out data: other runs, or contiguous blocks of each run.
-    n_blocks : int
-        Folds of runs (at most the number of runs), or blocks per run (>= 2).
-    seed : int or None
-        Seed of the bootstrap intervals.
-    section_s : float
-        Section length of the section error and the time localisation (s), > 0.
-    n_bootstrap : int
-        Bootstrap resamples (>= 1).
-
-    Raises
-    ------
-    UnknownNameError
-        An unknown ``split``.
-    InvalidParameterError
-        A bad number.
-    """
-
-    split: str = "runs"
-    n_blocks: int = 5
-    seed: int | None = 0
-    section_s: float = 8.0
-    n_bootstrap: int = 200
-
-    def __post_init__(self) -> None:
-        check_choice("split", self.split, SPLITS)
-        object.__setattr__(self, "n_blocks", check_int("n_blocks", self.n_blocks, low=2))
-        object.__setattr__(self, "seed", check_seed(self.seed))
-        object.__setattr__(self, "section_s", check_real("section_s", self.section_s, low=0.0, low_inclusive=False))
-        object.__setattr__(self, "n_bootstrap", check_int("n_bootstrap", self.n_bootstrap, low=1))
-
-    @property
-    def held(self) -> str:
-        """``"held-out runs"`` or ``"held-out blocks"``: the verdict's words for the scored data."""
-        return "held-out runs" if self.split == "runs" else "held-out blocks"
 
 
 @dataclass(frozen=True, eq=False)
@@ -183,13 +138,13 @@ class Stage:
         return "\n".join(lines)
 
 
-def stage_of(quantity: Quantity, logs: Sequence[InteractionLog], sel: Selection, settings: FitSettings,
-             stopped: Sequence[np.ndarray] | None = None, **extra: Any) -> Stage:
-    """The :class:`Stage` of a selection: its ranking, chosen effects and held-out waterfall (``"as given"``, then
-    ``"+ effect"`` per chosen effect, each the :func:`~energy.diagnosis.gap.gap_summary` of the held-out prediction
-    after it: the first is the gap before, the last the gap after). ``extra``: the other fields of :class:`Stage`;
-    the verdict is the caller's (:func:`stage_verdict`)."""
-    gaps = [gap_summary(logs, list(s.held_out_a), quantity=quantity, stopped=stopped, section_s=settings.section_s)
+def stage_of(quantity: Quantity, data: DiagnosisData, sel: Selection, settings: FitSettings, **extra: Any) -> Stage:
+    """The :class:`Stage` of a selection on ``data``: its ranking, chosen effects and held-out waterfall (``"as
+    given"``, then ``"+ effect"`` per chosen effect, each the :func:`~energy.diagnosis.gap.gap_summary` of the held-out
+    prediction after it: the first is the gap before, the last the gap after). ``extra``: the other fields of
+    :class:`Stage`; the verdict is the caller's (:func:`stage_verdict`)."""
+    stopped = None if data.stopped is None else list(data.stopped)
+    gaps = [gap_summary(data.logs, list(s.held_out_a), quantity=quantity, stopped=stopped, section_s=settings.section_s)
             for s in sel.sets]
     labels = ["as given"] + [f"+ {e.name}" for e in sel.chosen]
     steps = tuple(WaterfallStep.of(label, g, shrink_pct(sel.none, s)) for label, g, s in zip(labels, gaps, sel.sets))
@@ -337,35 +292,25 @@ def _corrected(basis: PhysicsBasis, chosen: Sequence[Effect], values: Sequence[n
     return rb, effects
 
 
-def power_stage(model: Any, logs: Sequence[InteractionLog], candidates: Sequence[Effect], split: Split,
-                settings: FitSettings, *, robot: Any = None, client: Any = None, progress: bool = False) -> Stage:
-    """The power stage on logs that all carry battery voltage and pack current.
+def power_stage(data: DiagnosisData, candidates: Sequence[Effect], settings: FitSettings, *, client: Any = None,
+                progress: bool = False) -> Stage:
+    """The power stage on the prepared battery-power data (:func:`~energy.diagnosis.case.diagnosis_case`).
 
     Measured: voltage x pack current of every log. Predicted: the model's electrical basis from
     the measured drive currents (:mod:`energy.diagnosis.power_data`). ``candidates``: electrical
-    effects (bound here to the logs and ``robot``); ``split``: the current stage's split. Nothing
-    is scored on the data it was fitted on.
+    effects bound to the logs; the split is the current stage's. Nothing is scored on the data
+    it was fitted on.
 
     Raises
     ------
     DataError
-        A battery voltage <= 0 where a pack current is logged; a fold with fewer values than
-        a set has parameters.
+        A fold with fewer values than a set has parameters.
     """
-    items = list(logs)
-    check_power_logs(items)
-    basis = physics_basis(model, robot)
-    usable = [e.bind(items, None, robot) for e in candidates]
-    inputs = [power_inputs(basis, log) for log in items]
-    measured = tuple(POWER.measured(log) for log in items)
-    base = tuple(predicted_battery_power_w(i)[:, None] for i in inputs)
-    prepared = {e.name: tuple(e.prepare(model, log) for log in items) for e in usable}
-    data = DiagnosisData(tuple(items), measured, base, False, prepared)
-    runner = SetRunner(data, split, client=client, progress=progress)
-    sel = select_effects(usable, data, split, runner, settings.n_bootstrap, settings.seed)
+    runner = SetRunner(data, client=client, progress=progress)
+    sel = select_effects(list(candidates), runner, settings.n_bootstrap, settings.seed)
     values = fit_effect_set(list(sel.chosen), data) if sel.chosen else []
-    robot_out, effects_out = _corrected(basis, sel.chosen, values)
-    stage = stage_of(POWER, items, sel, settings, [i.stopped for i in inputs],
+    robot_out, effects_out = _corrected(data.basis, sel.chosen, values)
+    stage = stage_of(POWER, data, sel, settings,
                      fitted={e.name: e.values_dict(v) for e, v in zip(sel.chosen, values)},
                      corrected_robot=robot_out, corrected_effects=effects_out)
     return dataclasses.replace(stage, verdict=stage_verdict(stage, settings))

@@ -4,7 +4,8 @@ import pytest
 from gain_samples import gained_logs_and_model
 
 from energy.diagnosis import effect, make_split
-from energy.diagnosis.fit import SetRunner, prepare_data, score_effect_set
+from energy.diagnosis.case import prepare_data
+from energy.diagnosis.fit import SetRunner, score_effect_set
 from energy.diagnosis.result import EffectScore
 from energy.diagnosis.selection import SIGNIFICANT_SHRINK_PCT, plausible_alternative, select_effects, significant
 
@@ -13,20 +14,20 @@ from energy.diagnosis.selection import SIGNIFICANT_SHRINK_PCT, plausible_alterna
 def case():
     logs, model = gained_logs_and_model()
     effects = [effect("current_gain"), effect("idle_current")]
-    return effects, prepare_data(model, logs, effects), make_split(logs, "runs", n_blocks=4)
+    return effects, prepare_data(model, logs, effects, split=make_split(logs, "runs", n_blocks=4))
 
 
 def test_the_gain_is_significant_and_nothing_improves_on_itself(case):
-    (gain, _), data, split = case
-    none, with_gain = score_effect_set([], data, split), score_effect_set([gain], data, split)
+    (gain, _), data = case
+    none, with_gain = score_effect_set([], data), score_effect_set([gain], data)
     assert significant(none, with_gain, none, n_bootstrap=50, seed=0)
     assert not significant(with_gain, with_gain, none, n_bootstrap=50, seed=0)  # 0 points gained
     assert SIGNIFICANT_SHRINK_PCT == 2.0
 
 
 def test_greedy_selection_chooses_the_gain_first_and_scores_every_candidate(case):
-    effects, data, split = case
-    sel = select_effects(effects, data, split, SetRunner(data, split), n_bootstrap=50, seed=0)
+    effects, data = case
+    sel = select_effects(effects, SetRunner(data), n_bootstrap=50, seed=0)
     assert sel.chosen[0].name == "current_gain" and sel.order[0].name == "current_gain"
     assert set(sel.scores) == {"current_gain", "idle_current"} and set(sel.alone) == set(sel.scores)
     assert len(sel.sets) == len(sel.chosen) + 1 and sel.sets[0] is sel.none
