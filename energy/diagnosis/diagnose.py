@@ -17,7 +17,7 @@ from .case import DiagnosisCase, DiagnosisData, FitSettings, diagnosis_case
 from .corrected import CorrectedCurrentModel
 from .effect_base import Effect
 from .effects import NOT_IDENTIFIABLE_FROM_CURRENT
-from .fit import SetRunner, SetScore, score_effect_set, shrink_pct
+from .fit import SetRunner, SetScore, score_effect_set
 from .gap import CURRENT, localise_gap
 from .model_source import ModelUnderDiagnosis
 from .noise import residual_noise
@@ -28,6 +28,7 @@ from .selection import (
     Selection,
     score_entry,
     select_effects,
+    shrink_pct,
     significant,
     unit_gain_interval,
     units_needed,

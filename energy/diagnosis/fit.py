@@ -20,7 +20,6 @@ from typing import Any
 import numpy as np
 from scipy import optimize
 
-from terrawatt_base.checks import check_int, check_seed
 from terrawatt_base.dask_client import check_client, run_tasks
 from terrawatt_base.errors import DataError, InvalidParameterError
 
@@ -28,8 +27,7 @@ from .case import DiagnosisData
 from .effect_base import Effect
 from .effects import composition_order
 
-__all__ = ["SetScore", "compose", "fit_effect_set", "score_effect_set", "SetRunner", "bootstrap_shrink_interval_pct",
-           "bootstrap_gain_interval_pct", "shrink_pct"]
+__all__ = ["SetScore", "compose", "fit_effect_set", "score_effect_set", "SetRunner"]
 
 def compose(effects: Sequence[Effect], values: Sequence[np.ndarray], base_a: np.ndarray,
             prepared: Sequence[Any], clip: bool, *, surrogate: bool = False) -> np.ndarray:
@@ -172,42 +170,6 @@ def score_effect_set(effects: Sequence[Effect], data: DiagnosisData) -> SetScore
         sse += np.bincount(split.units[k], weights=sq, minlength=split.n_units)
         count += np.bincount(split.units[k], minlength=split.n_units)
     return SetScore(tuple(e.name for e in effects), sse, count, tuple(fold_values), tuple(held), data.n_columns)
-
-
-def shrink_pct(before: SetScore, after: SetScore) -> float:
-    """``100 * (1 - MSE_after / MSE_before)`` over the held-out samples."""
-    b = float(before.sse_units.sum())
-    return 100.0 * (1.0 - float(after.sse_units.sum()) / b) if b > 0 else 0.0
-
-
-def bootstrap_shrink_interval_pct(before: SetScore, after: SetScore, *, n_bootstrap: int = 200,
-                                  seed: int | None = 0, level: float = 0.95) -> tuple[float, float]:
-    """Percentile interval of the held-out shrink, resampling the split's units (runs or blocks)."""
-    n_bootstrap = check_int("n_bootstrap", n_bootstrap, low=1)
-    rng = np.random.default_rng(check_seed(seed))
-    b, a = before.sse_units, after.sse_units
-    idx = rng.integers(0, b.size, size=(n_bootstrap, b.size))
-    sb = b[idx].sum(axis=1)
-    sa = a[idx].sum(axis=1)
-    vals = 100.0 * (1.0 - sa / np.where(sb > 0, sb, 1.0))
-    tail = (1.0 - level) / 2.0 * 100.0
-    return float(np.percentile(vals, tail)), float(np.percentile(vals, 100.0 - tail))
-
-
-def bootstrap_gain_interval_pct(none: SetScore, current: SetScore, trial: SetScore, *, n_bootstrap: int = 200,
-                                seed: int | None = 0, level: float = 0.95) -> tuple[float, float]:
-    """Percentile interval of what ``trial`` adds to ``current``, in points of the gap of ``none``.
-
-    The same resampled units (runs or blocks) enter all three sums, so the interval is that of
-    ``shrink_pct(none, trial) - shrink_pct(none, current)``.
-    """
-    n_bootstrap = check_int("n_bootstrap", n_bootstrap, low=1)
-    rng = np.random.default_rng(check_seed(seed))
-    idx = rng.integers(0, none.sse_units.size, size=(n_bootstrap, none.sse_units.size))
-    sn = none.sse_units[idx].sum(axis=1)
-    gain = (current.sse_units[idx].sum(axis=1) - trial.sse_units[idx].sum(axis=1)) / np.where(sn > 0, sn, 1.0)
-    tail = (1.0 - level) / 2.0 * 100.0
-    return float(np.percentile(100.0 * gain, tail)), float(np.percentile(100.0 * gain, 100.0 - tail))
 
 
 class SetRunner:

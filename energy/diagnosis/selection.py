@@ -1,4 +1,5 @@
-"""Greedy effect selection on held-out data: rank candidates, add the best while it is significant (any stage)."""
+"""Greedy effect selection on held-out data: how much a set shrinks the gap of another (with bootstrap intervals over
+the split's units), rank candidates, add the best while it is significant (any stage)."""
 
 from __future__ import annotations
 
@@ -9,24 +10,54 @@ from typing import Any
 
 import numpy as np
 
-from terrawatt_base.checks import check_seed
+from terrawatt_base.checks import check_int, check_seed
 
 from .effect_base import Effect
-from .fit import (
-    SetRunner,
-    SetScore,
-    bootstrap_gain_interval_pct,
-    bootstrap_shrink_interval_pct,
-    score_effect_set,
-    shrink_pct,
-)
+from .fit import SetRunner, SetScore, score_effect_set
 from .result import EffectScore
 
-__all__ = ["SIGNIFICANT_SHRINK_PCT", "Selection", "score_entry", "significant", "select_effects",
+__all__ = ["SIGNIFICANT_SHRINK_PCT", "shrink_pct", "bootstrap_shrink_interval_pct", "bootstrap_gain_interval_pct",
+           "Selection", "score_entry", "significant", "select_effects",
            "plausible_alternative", "tied_with", "unit_gains", "unit_gain_interval", "units_needed"]
 
 #: An effect is added only when it shrinks the held-out gap by at least this much (points of %).
 SIGNIFICANT_SHRINK_PCT = 2.0
+
+
+def shrink_pct(before: SetScore, after: SetScore) -> float:
+    """``100 * (1 - MSE_after / MSE_before)`` over the held-out samples."""
+    b = float(before.sse_units.sum())
+    return 100.0 * (1.0 - float(after.sse_units.sum()) / b) if b > 0 else 0.0
+
+
+def bootstrap_shrink_interval_pct(before: SetScore, after: SetScore, *, n_bootstrap: int = 200,
+                                  seed: int | None = 0, level: float = 0.95) -> tuple[float, float]:
+    """Percentile interval of the held-out shrink, resampling the split's units (runs or blocks)."""
+    n_bootstrap = check_int("n_bootstrap", n_bootstrap, low=1)
+    rng = np.random.default_rng(check_seed(seed))
+    b, a = before.sse_units, after.sse_units
+    idx = rng.integers(0, b.size, size=(n_bootstrap, b.size))
+    sb = b[idx].sum(axis=1)
+    sa = a[idx].sum(axis=1)
+    vals = 100.0 * (1.0 - sa / np.where(sb > 0, sb, 1.0))
+    tail = (1.0 - level) / 2.0 * 100.0
+    return float(np.percentile(vals, tail)), float(np.percentile(vals, 100.0 - tail))
+
+
+def bootstrap_gain_interval_pct(none: SetScore, current: SetScore, trial: SetScore, *, n_bootstrap: int = 200,
+                                seed: int | None = 0, level: float = 0.95) -> tuple[float, float]:
+    """Percentile interval of what ``trial`` adds to ``current``, in points of the gap of ``none``.
+
+    The same resampled units (runs or blocks) enter all three sums, so the interval is that of
+    ``shrink_pct(none, trial) - shrink_pct(none, current)``.
+    """
+    n_bootstrap = check_int("n_bootstrap", n_bootstrap, low=1)
+    rng = np.random.default_rng(check_seed(seed))
+    idx = rng.integers(0, none.sse_units.size, size=(n_bootstrap, none.sse_units.size))
+    sn = none.sse_units[idx].sum(axis=1)
+    gain = (current.sse_units[idx].sum(axis=1) - trial.sse_units[idx].sum(axis=1)) / np.where(sn > 0, sn, 1.0)
+    tail = (1.0 - level) / 2.0 * 100.0
+    return float(np.percentile(100.0 * gain, tail)), float(np.percentile(100.0 * gain, 100.0 - tail))
 
 
 def score_entry(e: Effect, none: SetScore, alone: SetScore, current: SetScore, trial: SetScore, n_bootstrap: int,

@@ -27,12 +27,12 @@ from terrawatt_base.checks import fmt_number, fmt_pct
 from ..robot import RobotParams
 from .case import DiagnosisData, FitSettings
 from .effect_base import Effect
-from .fit import SetRunner, fit_effect_set, shrink_pct
+from .fit import SetRunner, fit_effect_set
 from .gap import GapShare, GapSummary, WaterfallStep, gap_summary, largest_slices
 from .model_currents import PhysicsBasis
 from .quantity import CURRENT, POWER, Quantity
 from .result import EffectScore, Tie
-from .selection import Selection, plausible_alternative, select_effects
+from .selection import Selection, plausible_alternative, select_effects, shrink_pct
 
 __all__ = ["Stage", "stage_of", "stage_verdict", "power_stage", "CONFUSED_FRACTION"]
 

@@ -10,7 +10,8 @@ from gain_samples import gained_logs_and_model
 from energy import InteractionLog
 from energy.diagnosis import effect, make_split
 from energy.diagnosis.case import prepare_data
-from energy.diagnosis.fit import SetRunner, bootstrap_shrink_interval_pct, fit_effect_set, score_effect_set, shrink_pct
+from energy.diagnosis.fit import SetRunner, fit_effect_set, score_effect_set
+from energy.diagnosis.selection import bootstrap_shrink_interval_pct, shrink_pct
 from terrawatt_base.errors import DataError, InvalidParameterError
 
 
