@@ -320,6 +320,51 @@ def case_diagnose_power(work: Path) -> dict[str, Path]:
     return {f"diagnose_power/{p.name}": p for p in sorted(out.iterdir())}
 
 
+def case_diagnose_ties(work: Path) -> dict[str, Path]:
+    """The library's diagnosis where the runs cannot settle the chosen effect (a tie) and the drive that separates
+    it: straights at constant speed read by a current sensor 30 % high, three candidates."""
+    from energy import PhysicsCurrentModel, TruthSimulator, ground_preset, robot_preset
+    from energy.diagnosis import diagnose
+
+    sim = TruthSimulator(robot_preset("husky"), {"asphalt": ground_preset("asphalt")}, seed=0)
+    t = np.arange(0.0, 30.0, 0.05)
+    logs = []
+    for k in range(4):
+        log = sim.simulate_commands(t, np.full(t.size, 0.5 + 0.1 * k), np.zeros(t.size), ground="asphalt", seed=k)
+        logs.append(dataclasses.replace(log, current_left_a=1.3 * log.current_left_a,
+                                        current_right_a=1.3 * log.current_right_a))
+    model = PhysicsCurrentModel("husky", "asphalt", fit_parameters=()).fit(logs[:1])
+    d = diagnose(model, logs, effects=["current_gain", "current_offset", "mass"])
+    return _diagnosis_files(d, work / "diagnose_ties", "diagnose_ties")
+
+
+def case_diagnose_learned(work: Path) -> dict[str, Path]:
+    """The library's diagnosis where no catalogued effect is significant: the learned correction scored and noted
+    (never added unless named), how many more runs the likeliest candidate needs."""
+    from diagnosis_scenarios import null_scenario
+
+    from energy.diagnosis import FitSettings, diagnose
+
+    sc = dataclasses.replace(null_scenario(), n_runs=4, run_duration_s=12.0)
+    logs = []
+    for log in sc.make_logs(seed=0):  # 3 A per m/s x rad/s less than the model in arcs: no catalogued law's shape
+        dip = 3.0 * np.abs(log.v_mps * log.omega_radps)
+        logs.append(dataclasses.replace(log, current_left_a=np.maximum(log.current_left_a - dip, 0.0),
+                                        current_right_a=np.maximum(log.current_right_a - dip, 0.0)))
+    d = diagnose(sc.make_model(seed=0), logs, settings=FitSettings(seed=0, n_bootstrap=50))
+    return _diagnosis_files(d, work / "diagnose_learned", "diagnose_learned")
+
+
+def _diagnosis_files(diagnosis: object, out: Path, case: str) -> dict[str, Path]:
+    """A diagnosis' JSON and markdown (its figures and model file are compared in the CLI cases), and its summary."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        written = diagnosis.write(out)
+    (out / "summary.txt").write_text(diagnosis.summary(), encoding="utf-8")
+    keep = ("diagnosis.json", "diagnosis.md", "summary.txt")
+    return {f"{case}/{p.name}": p for p in [*written, out / "summary.txt"] if p.name in keep}
+
+
 def case_replay(work: Path) -> dict[str, Path]:
     path = patch_map(work)
     mission = work / "mission"
