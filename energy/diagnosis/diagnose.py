@@ -176,27 +176,27 @@ def _separating_drives(case: DiagnosisCase, sel: Selection, ties: Sequence[Tie])
     """Per tie, the drive that tells its fitted explanations apart (:func:`separating_drive`), within
     :data:`DRIVE_LIMIT_SHARE` of the robot's limits (:func:`_drive_limits`), with as many runs as the
     split's units need to order the pair."""
-    if not ties:
-        return ()
-    vmax, wmax, amax = _drive_limits(case)
     by_name = {e.name: e for e in sel.order}
+    n_units = case.split.n_units  # the units the split resamples, and how many a run adds (1, or its blocks)
+    units = {"n_units": int(n_units), "units_per_run": max(int(round(n_units / max(len(case.logs), 1))), 1)}
     out = []
     for tie in ties:
         k = sel.chosen.index(by_name[tie.chosen])
         base = list(sel.chosen[:k])
         models = {n: _corrected(case, base + [by_name[n]]) for n in tie.effects}
-        noise = residual_noise(case.data.measured, sel.trials[k][tie.chosen].held_out_a, case.logs)
-        drive = separating_drive(tie.effects, models, case.logs[0], noise, vmax, wmax, amax, base=_corrected(case, base),
-                                 terrain=case.terrain, **_units(case))
+        drive = _drive(case, tie.effects, models, sel.trials[k][tie.chosen], _corrected(case, base), **units)
         if drive is not None:
             out.append(drive)
     return tuple(out)
 
 
-def _units(case: DiagnosisCase) -> dict[str, int]:
-    """The units the split resamples and how many a run adds (1, or its blocks)."""
-    n_units = case.split.n_units
-    return {"n_units": int(n_units), "units_per_run": max(int(round(n_units / max(len(case.logs), 1))), 1)}
+def _drive(case: DiagnosisCase, effects: Sequence[str], models: dict[str, Any], current: SetScore, base: Any,
+           **units: int) -> SeparatingDrive | None:
+    """The drive that tells the fitted model of ``effects[0]`` from the others' (:func:`separating_drive`) against
+    the noise of the runs' held-out residual under ``current``, within :func:`_drive_limits`."""
+    noise = residual_noise(case.data.measured, current.held_out_a, case.logs)
+    return separating_drive(effects, models, case.logs[0], noise, *_drive_limits(case), base=base, terrain=case.terrain,
+                            **units)
 
 
 #: A test drive stays within this share of the robot's top speed and yaw rate.
@@ -236,13 +236,10 @@ def _more_data(case: DiagnosisCase, sel: Selection) -> dict[str, Any]:
                  "would not make it one")
     else:
         text += f": about {need} {unit} like these would make it significant at 95 %"
-        vmax, wmax, amax = _drive_limits(case)
         as_given = _corrected(case, [])
         models = {"as_given": as_given, top.name: _corrected(case, [top])}
-        noise = residual_noise(case.data.measured, sel.none.held_out_a, case.logs)
         # the candidate as the explanation to confirm, the model as given as the one to beat
-        drive = separating_drive((top.name, "as_given"), models, case.logs[0], noise, vmax, wmax, amax, base=as_given,
-                                 terrain=case.terrain)
+        drive = _drive(case, (top.name, "as_given"), models, sel.none, as_given)
         if drive is not None and drive.separated:
             out["drive"] = {k: v for k, v in drive.to_dict().items() if k != "csv"}  # described, not written
             text += (f", or {drive.repeats} run{'s' if drive.repeats != 1 else ''} of "
