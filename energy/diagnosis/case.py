@@ -6,8 +6,8 @@ prepares in one pass everything the stages read: the model's (clamped) predictio
 contiguous blocks of every run) that hold out every sample exactly once, the candidate effects
 the model lacks bound to the logs, and per stage a :class:`DiagnosisData` (the measured values,
 the model's unclamped prediction of them, each candidate's per-log preparation and the split).
-The fitting (:mod:`energy.diagnosis.fit`), the selection and the stages read these, never the
-raw logs again.
+The fitting (:mod:`energy.diagnosis.fit`) and the selection read the prepared data alone; the
+stages, the localisation and the corrected model take the checked logs from the case.
 """
 
 from __future__ import annotations
