@@ -296,3 +296,26 @@ def test_the_last_answer_bounds_the_next_search_along_the_drive(seed):
     assert math.isfinite(_incumbent(lattice, q, chain)[0])
     chain[1] = chain[0] + 3 * lattice._nj  # no lattice move between the first two nodes
     assert _incumbent(lattice, q, chain) == (math.inf, [])
+
+
+def test_a_search_that_pays_each_stop_turns_less_often():
+    """The stop-turn-go tables (a stop, a ramped pivot and a start per turn) against the same map with steady pivots:
+    the heading lattice's optimum on the stop-turn-go cost turns no more often, and less often somewhere."""
+    from planner.tables import turn_grid
+
+    fewer = 0
+    for seed in range(4):
+        tmap = procedural_map((40, 48), 1.0, seed=seed, obstacle_fraction=0.1)
+        driven = CostSpec().build(tmap)
+        steady_turns = np.array([driven.physics_model.turn_energy_j(turn_grid(driven.tables.turn_table_j.shape[1]), g)
+                                 for g in driven.ground_params])
+        steady = driven.with_tables(CostTables(driven.tables.grade_table_j_per_m, steady_turns))
+        start, goal = (2.5, 2.5), (44.5, 36.5)
+        turns = []
+        for cost in (driven, steady):
+            path = heading_shortest_path(Lattice(cost, 1), start, goal)
+            assert path.found
+            turns.append(int(np.count_nonzero(cost.turn_energies_j(path.waypoints_m)[0] > 1e-6)))
+        assert turns[0] <= turns[1], seed
+        fewer += turns[0] < turns[1]
+    assert fewer >= 1
