@@ -14,15 +14,18 @@ before it off). Per route, in J (the step's change of the simulated energy):
   motor speed from the logged speeds, no wheel slip) -> the simulator's own battery power (negative: the slip loss
   the booking does not see);
 - ``velocity_lag``: the simulator's first-order velocity tracking (0.1 s) -> none;
-- ``speed_ramps``: starting and stopping every segment (``accel_mps2`` 0.5 -> 50 m/s^2);
-- ``turn_ramps``: ramping the yaw rate of every pivot (``yaw_accel_radps2`` 1 -> 100 rad/s^2);
-- ``control_startup``: the control board's start-up power after each start from rest (``startup_duration_s`` -> 0);
-- ``rest``: what is left against the edges: the slope convention (a driven profile advances its pose by the
-  commanded speed in the *horizontal* plane, the tables charge the *surface* length), the simulator's bilinear
-  slope under each pose against the tables' per-cell grade, and the sampling.
+- ``sampling``: the simulator's 100 Hz against the forecast's 20 Hz profile;
+- ``starts_and_stops``, ``turn_ramps``: what starting and stopping every driven segment (the ramps' seconds at the
+  electronics' power, the kinetic energy, the control board's start-up) and ramping the yaw rate of every pivot add
+  to steady driving and steady pivots, priced by the physics model on the profile (:func:`profile_parts`);
+- ``priced``: what the edges price for them (the edge price less the steady one: segments at the steady energy per
+  metre, pivots at ``turn_energy_j``), the stop-turn-go turn tables of :func:`planner.tables.stop_turn_go_rows`;
+- ``rest``: the stop-turn-go forecast (``price_route(how="profile")``) less the edge price: the slope convention
+  (a driven profile advances its pose by the commanded speed in the *horizontal* plane, the tables charge the
+  *surface* length), the bilinear slope under each pose against the tables' per-cell grade, the stop-and-go on a
+  grade (the tables price it on level ground) and the forecast's 20 Hz sampling.
 
-The last column is the stop-turn-go forecast (``price_route(how="profile")``): the physics model that priced the
-tables on the profile the simulator drives. Separately it prints the pack's internal resistance (the default draw's
+The forecast is the physics model that priced the tables on the profile the simulator drives. Separately it prints the pack's internal resistance (the default draw's
 mean 0.05 ohm) as charge: the energy booked is the terminal energy, the reserve is a state of charge.
 
 With ``--mc N`` it also drives the tours of ``tour_turns.py``'s three Husky cases N times per seed, as
@@ -50,6 +53,7 @@ import numpy as np
 import tour_turns  # the hills map and the tour cases (benchmarks/ is the script's directory)
 
 from energy import Battery, TruthSimulator, drive_profile, ground_preset, robot_preset
+from energy.profiles import drivable_waypoints
 from energy.sim import NoiseModel
 from planner import CostSpec, MissionDistributions, price_route, simulate_mission
 from planner.missions.options import MissionDrive
@@ -60,8 +64,8 @@ from terrawatt_base.atomic import write_json_atomic
 
 #: The simulator's causes, switched off in this order (the mission's booking down to the physics on the profile).
 SIM_STEPS = ("payload", "noise", "slip_unbooked", "velocity_lag", "sampling")
-#: The parts of the stop-turn-go profile the edges do not price, then what is left.
-PROFILE_STEPS = ("starts_and_stops", "turn_ramps", "rest")
+#: The parts of the stop-turn-go profile beyond steady driving, what the edges price for them, then what is left.
+PROFILE_STEPS = ("starts_and_stops", "turn_ramps", "priced", "rest")
 RATE_HZ = 100.0
 DT_S = 0.01
 
@@ -105,13 +109,14 @@ def drive(tmap: Any, wp: np.ndarray, *, payload_kg: float = 0.0, noise: NoiseMod
 
 
 def profile_parts(cost: Any, wp: np.ndarray) -> tuple[float, float]:
-    """What starting and stopping each segment and ramping the yaw rate of each pivot add to the edges (J).
+    """What starting and stopping each driven segment and ramping the yaw rate of each pivot add to steady driving (J).
 
     Priced by the physics model that priced ``cost`` on flat ground of the segment's (the turn's) first cell: a
     segment's stop-turn-go drive from rest to rest less its length at the steady energy per metre, a pivot's ramped
-    profile less the steady turn energy.
+    profile less the steady turn energy. Collinear waypoints are driven through (:func:`energy.drivable_waypoints`).
     """
     model, speed, rate = cost.physics_model, cost.speed_mps, cost.turn_rate_radps
+    wp, _ = drivable_waypoints(wp)
     r, c = cost.terrain.rowcol(wp[:, 0], wp[:, 1])
     grounds = [cost.ground_params[k] for k in np.asarray(cost.ground_rows)[r, c]]
     lengths = np.hypot(*np.diff(wp, axis=0).T)
@@ -131,6 +136,15 @@ def profile_parts(cost: Any, wp: np.ndarray) -> tuple[float, float]:
     return stops, ramps
 
 
+def steady_price(cost: Any, wp: np.ndarray) -> float:
+    """The edge price before the stop-turn-go tables (J): segments at the steady energy per metre, pivots steady."""
+    angles, _ = cost.turn_energies_j(wp)
+    r, c = cost.terrain.rowcol(wp[:, 0], wp[:, 1])
+    rows = np.asarray(cost.ground_rows)[r, c]
+    turns = sum(float(cost.physics_model.turn_energy_j(a, cost.ground_params[k])) for a, k in zip(angles, rows))
+    return float(cost.segment_energy_j(wp[:-1], wp[1:]).sum()) + turns
+
+
 def gap(tmap: Any, wp: np.ndarray) -> dict[str, Any]:
     """One route: the edge price, the profile forecast, the simulated energy at each step and the step changes."""
     cost = CostSpec().build(tmap)
@@ -147,12 +161,14 @@ def gap(tmap: Any, wp: np.ndarray) -> dict[str, Any]:
     energies = [e for e, _ in chain] + [profile]
     steps = {name: energies[k] - energies[k + 1] for k, name in enumerate(SIM_STEPS)}
     stops, ramps = profile_parts(cost, wp)
-    steps.update(starts_and_stops=stops, turn_ramps=ramps, rest=profile - edges - stops - ramps)
+    steady = steady_price(cost, wp)
+    steps.update(starts_and_stops=stops, turn_ramps=ramps, priced=edges - steady, rest=profile - edges)
     charge_r = drive(tmap, wp, internal_resistance_ohm=0.05)[1]
-    return {"edges_j": edges, "profile_j": profile, "simulated_nominal_j": energies[1],
+    return {"steady_edges_j": steady, "edges_j": edges, "profile_j": profile, "simulated_nominal_j": energies[1],
             "simulated_payload_10kg_j": energies[0], "steps_j": steps,
             "charge_mah": chain[1][1], "charge_with_0.05_ohm_mah": charge_r,
-            "segments": int(np.count_nonzero(np.hypot(*np.diff(wp, axis=0).T) > 0))}
+            "segments": int(np.count_nonzero(np.hypot(*np.diff(wp, axis=0).T) > 0)),
+            "driven_segments": len(drivable_waypoints(wp)[1])}
 
 
 #: The draws of the Monte Carlo part, from the default to the priced robot, one group at a time.
@@ -191,14 +207,17 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     t0 = time.perf_counter()
     rows = {}
-    head = (f"{'route':36s} {'seg':>3s} {'edges':>7s} {'profile':>7s} {'sim':>7s} {'+10kg':>7s} | "
+    head = (f"{'route':36s} {'seg':>3s} {'steady':>7s} {'edges':>7s} {'profile':>7s} {'sim':>7s} {'+10kg':>7s} | "
             + " ".join(f"{s[:9]:>9s}" for s in (*SIM_STEPS, *PROFILE_STEPS)))
-    print("J; sim = the mission simulator, nominal parameters; the steps walk from '+10kg' down to the edges\n" + head)
+    print("J; seg = driven segments; steady = the edge price without the stop-turn-go tables; sim = the mission simulator, "
+          "nominal parameters; the steps walk from '+10kg' down to the profile, then the profile's parts beyond steady "
+          "driving, what the edges price for them and the profile less the edges\n" + head)
     for name, (tmap, wp) in routes().items():
         r = gap(tmap, wp)
         rows[name] = r
         e = r["edges_j"]
-        print(f"{name:36s} {r['segments']:3d} {e:7.0f} {r['profile_j']:7.0f} {r['simulated_nominal_j']:7.0f} "
+        print(f"{name:36s} {r['driven_segments']:3d} {r['steady_edges_j']:7.0f} {e:7.0f} {r['profile_j']:7.0f} "
+              f"{r['simulated_nominal_j']:7.0f} "
               f"{r['simulated_payload_10kg_j']:7.0f} | " + " ".join(f"{v:9.1f}" for v in r["steps_j"].values()))
         print(f"{'':36s}     sim / edges {100 * (r['simulated_nominal_j'] / e - 1):+5.1f} %, profile / edges "
               f"{100 * (r['profile_j'] / e - 1):+5.1f} %, sim / profile {100 * (r['simulated_nominal_j'] / r['profile_j'] - 1):+5.1f} %, "

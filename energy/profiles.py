@@ -1,11 +1,21 @@
 """Stop-turn-go command profiles along a waypoint route (closed form, vectorised).
 
-:func:`waypoint_commands` builds the profile along a polyline: at every waypoint the robot
-pivots in place to the next segment's heading (trapezoidal yaw rate), then drives the
-segment from rest to rest (trapezoidal speed). :func:`drive_profile` is the same on a
-planned route (consecutive repeated waypoints dropped): the motion a mission drives and a
-planner's costs price. :func:`drivable_waypoints` and :func:`planned_durations_s` expose
-the route cleaning and the per-segment durations, in closed form, without sampling.
+:func:`waypoint_commands` builds the profile along a polyline: at every waypoint where the
+heading changes the robot stops, pivots in place to the next segment's heading (trapezoidal
+yaw rate), then drives the next segment from rest (trapezoidal speed); it drives straight
+through a waypoint where the heading does not change (:data:`COLLINEAR_TOL_RAD`).
+:func:`drive_profile` is the same on a planned route (consecutive repeated waypoints
+dropped): the motion a mission drives and a planner's costs price. :func:`drivable_waypoints`
+and :func:`planned_durations_s` expose the route cleaning and the per-segment durations, in
+closed form, without sampling.
+
+**Collinear waypoints.** A robot stops only where it turns. Planned routes carry waypoints
+where the heading does not change: the lattice's routes hold a vertex at every lattice node
+(runs of one direction are collinear vertices), and joined routes (coarse-to-fine pieces, a
+tour's legs) keep their junctions. A waypoint whose heading change is at most
+:data:`COLLINEAR_TOL_RAD` is therefore driven through, not stopped at; the planner's edge
+costs use the same constant (:meth:`planner.EnergyCost.turn_energy_at`: no turn, no stop and
+go there), so the edges and the profile price the same drive.
 """
 
 from __future__ import annotations
@@ -23,7 +33,10 @@ from .commands import CommandProfile
 __all__ = [
     "DEFAULT_ACCEL_MPS2",
     "DEFAULT_YAW_ACCEL_RADPS2",
+    "COLLINEAR_TOL_RAD",
+    "heading_changes_rad",
     "waypoint_commands",
+    "pivot_commands",
     "drive_profile",
     "drivable_waypoints",
     "move_duration_s",
@@ -34,6 +47,31 @@ __all__ = [
 #: Default acceleration limits of the stop-turn-go profile (m/s^2, rad/s^2).
 DEFAULT_ACCEL_MPS2 = 0.5
 DEFAULT_YAW_ACCEL_RADPS2 = 1.0
+#: Heading change (rad) at or below which a waypoint is driven through rather than stopped and pivoted at. Small
+#: enough that only waypoints collinear to rounding qualify (a straight run's interior vertices: heading changes
+#: of 0 or ~1e-16 rad); any real change of heading, however small, is a pivot in a stop-turn-go drive. The profile
+#: (:func:`waypoint_commands`, :func:`drivable_waypoints`) and the edge costs (:mod:`planner.edge_cost`, its
+#: compiled kernels) use this one value.
+COLLINEAR_TOL_RAD = 1e-6
+
+
+def heading_changes_rad(points_m: np.ndarray) -> np.ndarray:
+    """Unsigned heading change (rad, in [0, pi]) at each interior vertex of a polyline without repeated points.
+
+    Examples
+    --------
+    >>> heading_changes_rad(np.array([[0.0, 0], [1, 0], [2, 0], [2, 1]])).round(4).tolist()
+    [0.0, 1.5708]
+    """
+    d = np.diff(points_m, axis=0)
+    heading = np.arctan2(d[:, 1], d[:, 0])
+    return np.abs(np.angle(np.exp(1j * np.diff(heading))))
+
+
+def _pivots(points_m: np.ndarray) -> np.ndarray:
+    """Indices of the vertices the profile stops at: both ends and every interior vertex that turns."""
+    turns = np.flatnonzero(heading_changes_rad(points_m) > COLLINEAR_TOL_RAD) + 1
+    return np.concatenate(([0], turns, [points_m.shape[0] - 1]))
 
 
 def _positive(name: str, value: Any) -> float:
@@ -80,8 +118,10 @@ def waypoint_commands(
     way round) with a trapezoidal yaw-rate profile (``turn_rate_radps``,
     ``yaw_accel_radps2``), then drives the segment from rest to rest with a trapezoidal
     speed profile (``speed_mps``, ``accel_mps2``); segments too short to reach the
-    cruise speed get a triangular profile. The first turn happens only when
-    ``start_heading_rad`` is given. Positions and headings follow in closed form.
+    cruise speed get a triangular profile. A waypoint where the heading changes by at most
+    :data:`COLLINEAR_TOL_RAD` is driven through: the segments on either side are one
+    straight from rest to rest (the module docstring says why). The first turn happens only
+    when ``start_heading_rad`` is given. Positions and headings follow in closed form.
 
     Parameters
     ----------
@@ -135,6 +175,10 @@ def waypoint_commands(
             f"waypoints_xy_m[{i}] and waypoints_xy_m[{i + 1}] are equal ({wp[i].tolist()!r}); "
             "remove repeated waypoints"
         )
+    if wp.shape[0] > 2:  # drive through collinear waypoints
+        wp = wp[_pivots(wp)]
+        delta = np.diff(wp, axis=0)
+        length = np.hypot(delta[:, 0], delta[:, 1])
     heading = np.arctan2(delta[:, 1], delta[:, 0])
     h_start = check_optional_real("start_heading_rad", start_heading_rad)
     if h_start is None:
@@ -174,8 +218,59 @@ def waypoint_commands(
     return CommandProfile(t, v, omega, np.column_stack([xy, h]))
 
 
+def pivot_commands(angle_rad: float, *, turn_rate_radps: float, yaw_accel_radps2: float = DEFAULT_YAW_ACCEL_RADPS2,
+                   dt_s: float = 0.01) -> CommandProfile:
+    """The pivot of :func:`waypoint_commands` alone: a turn in place by ``|angle_rad|`` from rest to rest.
+
+    The same trapezoidal (or triangular) yaw-rate profile a stop-turn-go drive pivots with at a
+    waypoint, counter-clockwise from heading 0 at the origin; what the planner's turn tables
+    price (:func:`planner.tables.stop_turn_go_rows`).
+
+    Parameters
+    ----------
+    angle_rad : float
+        Heading change (rad; the sign is ignored), at most pi.
+    turn_rate_radps, yaw_accel_radps2 : float
+        Pivot yaw rate (rad/s) and yaw-acceleration limit (rad/s^2), > 0.
+    dt_s : float
+        Sampling period (s), > 0.
+
+    Returns
+    -------
+    CommandProfile
+        Samples ``k * dt_s`` up to the first at or after the pivot's end (at rest), with poses.
+
+    Raises
+    ------
+    InvalidParameterError
+        An angle outside [-pi, pi], non-positive limits.
+
+    Examples
+    --------
+    >>> p = pivot_commands(1.0, turn_rate_radps=0.5, yaw_accel_radps2=1.0, dt_s=0.01)
+    >>> round(p.duration_s, 6), round(float(p.pose_xyh[-1, 2]), 6)
+    (2.5, 1.0)
+    """
+    angle = abs(check_real("angle_rad", angle_rad, low=-math.pi, high=math.pi))
+    w_max = _positive("turn_rate_radps", turn_rate_radps)
+    al_max = _positive("yaw_accel_radps2", yaw_accel_radps2)
+    dt = _positive("dt_s", dt_s)
+    dist = np.array([angle])
+    peak, t_acc, total = _trapezoid_times(dist, w_max, al_max)
+    n = int(math.ceil(float(total[0]) / dt - 1e-9)) + 1
+    t = np.arange(n, dtype=np.float64) * dt
+    s, rate = _trapezoid_eval(t, dist, peak, t_acc, total, al_max)
+    zeros = np.zeros(n)
+    return CommandProfile(t, zeros, rate, np.column_stack([zeros, zeros, s]))
+
+
 def drivable_waypoints(waypoints_m: Any) -> tuple[np.ndarray, np.ndarray]:
-    """A route's waypoints without consecutive repeats, and the route segment of each kept segment.
+    """A route's waypoints without consecutive repeats or collinear vertices, and the route segment each kept one starts at.
+
+    The vertices the stop-turn-go profile stops at (:func:`waypoint_commands`): repeated
+    waypoints are dropped, and so is every interior vertex whose heading change is at most
+    :data:`COLLINEAR_TOL_RAD` (driven through); a kept segment then spans several route
+    segments, from the one in ``kept`` to the next kept one.
 
     Parameters
     ----------
@@ -185,9 +280,9 @@ def drivable_waypoints(waypoints_m: Any) -> tuple[np.ndarray, np.ndarray]:
     Returns
     -------
     points : ndarray, shape (M + 1, 2)
-        The vertices of the ``M`` segments of positive length.
-    kept : ndarray of int, shape (M,)
-        Index in the original route of each kept segment.
+        The vertices of the ``M`` driven segments (each of positive length).
+    kept : ndarray of int, shape (M,), increasing
+        Index in the original route of the first route segment of each driven segment.
 
     Raises
     ------
@@ -199,6 +294,9 @@ def drivable_waypoints(waypoints_m: Any) -> tuple[np.ndarray, np.ndarray]:
     >>> pts, kept = drivable_waypoints([[0, 0], [0, 0], [1, 0]])
     >>> pts.tolist(), kept.tolist()
     ([[0.0, 0.0], [1.0, 0.0]], [1])
+    >>> pts, kept = drivable_waypoints([[0, 0], [1, 0], [2, 0], [2, 1]])  # driven through (1, 0)
+    >>> pts.tolist(), kept.tolist()
+    ([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0]], [0, 2])
     """
     try:
         wp = np.asarray(waypoints_m, dtype=np.float64)
@@ -213,6 +311,9 @@ def drivable_waypoints(waypoints_m: Any) -> tuple[np.ndarray, np.ndarray]:
     if keep_seg.size == 0:
         raise InvalidParameterError(f"route has no segment of positive length (waypoints {wp.tolist()!r})")
     pts = np.vstack([wp[keep_seg], wp[keep_seg[-1] + 1][None, :]])
+    if pts.shape[0] > 2:
+        stops = _pivots(pts)
+        pts, keep_seg = pts[stops], keep_seg[stops[:-1]]
     return pts, keep_seg
 
 
@@ -228,9 +329,9 @@ def drive_profile(
 ) -> CommandProfile:
     """The stop-turn-go command profile a mission drives along ``waypoints_m``.
 
-    Consecutive repeated waypoints are dropped (:func:`drivable_waypoints`); then
-    :func:`waypoint_commands` (pivot to each segment's heading, drive it rest to rest at
-    ``speed_mps``).
+    Consecutive repeated waypoints are dropped and collinear ones driven through
+    (:func:`drivable_waypoints`); then :func:`waypoint_commands` (pivot to each segment's
+    heading, drive it rest to rest at ``speed_mps``).
 
     Raises
     ------
@@ -279,8 +380,8 @@ def planned_durations_s(points_m: np.ndarray, start_heading_rad: float | None, s
     """
     d = np.diff(points_m, axis=0)
     heading = np.arctan2(d[:, 1], d[:, 0])
-    prev = np.concatenate(([heading[0] if start_heading_rad is None else start_heading_rad], heading[:-1]))
-    turn = np.abs(np.angle(np.exp(1j * (heading - prev))))
+    start = 0.0 if start_heading_rad is None else abs(float(np.angle(np.exp(1j * (heading[0] - start_heading_rad)))))
+    turn = np.concatenate(([start], heading_changes_rad(points_m)))
     return (move_duration_s(turn, turn_rate_radps, yaw_accel_radps2),
             move_duration_s(np.hypot(d[:, 0], d[:, 1]), speed_mps, accel_mps2))
 

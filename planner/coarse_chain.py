@@ -338,7 +338,7 @@ def _assemble(pieces: list[_Piece], junctions: list[tuple[float, float]], cost: 
         angles += [np.array([angle]), p.turn_angle_rad[1:-1]]
         turns += [np.array([turn]), p.turn_energy_j[1:-1]]
     angles.append(np.zeros(1))
-    turns.append(np.zeros(1))
+    turns.append(pieces[-1].turn_energy_j[-1:])  # the stop at the goal
     wp = np.vstack(points)
     angle, turn = np.concatenate(angles), np.concatenate(turns)
     duration = sum(p.surface_m for p in pieces) / cost.speed_mps + float(angle.sum()) / cost.turn_rate_radps

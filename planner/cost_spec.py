@@ -365,8 +365,11 @@ def _tabulated_cost(terrain: TerrainMap, model: Any, grounds: Mapping[Any, Any],
     ``model.energy_per_metre_j(speed_mps, grades, ground)`` is called once per ground with
     every grade of the table, and ``model.turn_energy_j(angles, ground)`` once per ground over
     ``[0, pi]`` (turns are priced on level ground: a pivot's extra load on a slope is not in the
-    table). The model's energy is per metre *travelled*; the table stores it per *horizontal*
-    (map) metre, i.e. times ``sqrt(1 + grade**2)``. A model may return ``+inf`` for grades a
+    table). The physics model prices its turn table as the stop-turn-go drive it is driven with
+    (:func:`planner.tables.stop_turn_go_rows`: the stop, the ramped pivot and the start again, at
+    the cost's turn rate), so the edges price what the robot drives. The model's energy is per
+    metre *travelled*; the table stores it per *horizontal* (map) metre, i.e. times
+    ``sqrt(1 + grade**2)``. A model may return ``+inf`` for grades a
     ground cannot be driven at; segments meeting such a grade in their direction of travel are
     then invalid in that direction only.
     """
@@ -374,11 +377,13 @@ def _tabulated_cost(terrain: TerrainMap, model: Any, grounds: Mapping[Any, Any],
     voltage = _robot_figure(model, robot, "battery_voltage_v")
     turn_rate = _robot_figure(model, robot, "turn_rate_radps")
     rows, params_rows, labels = ground_table_rows(terrain, grounds, unknown_ground)
+    physics = isinstance(model, PhysicsEnergyModel)
     grade_table, turn_table = tabulate(model, speed_mps, params_rows, labels, max_slope_rad=max_slope_rad,
-                                       grade_samples=DEFAULT_GRADE_SAMPLES, turn_samples=DEFAULT_TURN_SAMPLES)
+                                       grade_samples=DEFAULT_GRADE_SAMPLES, turn_samples=DEFAULT_TURN_SAMPLES,
+                                       stop_turn_go_rate_radps=turn_rate if physics else None)
     cost = EnergyCost(terrain, rows, CostTables(grade_table, turn_table, tuple(labels)), speed_mps=speed_mps,
                       max_slope_rad=max_slope_rad, battery_voltage_v=voltage, turn_rate_radps=turn_rate)
-    if isinstance(model, PhysicsEnergyModel):
+    if physics:
         cost.physics_model, cost.ground_params = model, tuple(params_rows)
     cost.prep_time_s = time.perf_counter() - t0
     return cost

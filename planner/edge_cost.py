@@ -17,8 +17,14 @@ two cells: the robot is not a point) a *blocked* cell — an obstacle, or a cell
 grade its ground cannot be driven at (a model's ``inf`` energy), which blocks that direction
 only. Obstacles are not inflated by the robot's size: inflate them in the map if needed.
 
-Turning at a waypoint costs the model's ``turn_energy_j`` for the heading change, tabulated
-per ground over ``[0, pi]``; the ground is the one of the cell holding the waypoint.
+Turning at a waypoint costs the turn table's entry for the heading change, tabulated per
+ground over ``[0, pi]``; the ground is the one of the cell holding the waypoint. The robot
+drives stop-turn-go (:mod:`energy.profiles`): with the physics model the entry holds the
+stop before the pivot, the ramped pivot and the start after it, and a route pays one more
+stop-and-go for starting from rest and ending at rest (the table's column 0, half at each
+end: :meth:`EnergyCost.turn_energies_j`), so a route's edge price is what the robot drives
+(:mod:`planner.tables`). A waypoint whose heading change is at most
+:data:`energy.profiles.COLLINEAR_TOL_RAD` is driven through: no turn, no stop.
 
 The walks are compiled kernels (:mod:`planner.kernels`) over the cost's packed, read-only
 arrays, :attr:`EnergyCost.arrays` (a :class:`~planner.kernels.CostArrays`): the public seam
@@ -34,6 +40,7 @@ from typing import Any
 import numpy as np
 
 from energy import PhysicsEnergyModel
+from energy.profiles import COLLINEAR_TOL_RAD
 from terrain import TerrainMap
 from terrawatt_base.checks import check_real
 from terrawatt_base.errors import InvalidParameterError, OutOfBoundsError
@@ -359,11 +366,13 @@ class EnergyCost:
         return ~self.blocked[r, c]
 
     def turn_energies_j(self, waypoints_m: Any) -> tuple[np.ndarray, np.ndarray]:
-        """Heading change (rad, in [0, pi]) and turn energy (J) at every waypoint of a polyline.
+        """Heading change (rad, in [0, pi]) and the energy (J) of stopping, turning and starting at every waypoint.
 
-        The first and last waypoints have no turn. Zero-length segments (repeated points)
-        have no heading: the turn is taken between the neighbouring non-degenerate segments,
-        at the waypoint where the new heading starts.
+        The first and last waypoints have no turn; they hold half the stop-and-go of their
+        ground each (the tables' column 0, :mod:`planner.tables`): the route starts from rest
+        and ends at rest. Zero-length segments (repeated points) have no heading: the turn is
+        taken between the neighbouring non-degenerate segments, at the waypoint where the new
+        heading starts. A waypoint the robot drives through (:meth:`turn_energy_at`) costs 0.
 
         Returns
         -------
@@ -373,7 +382,7 @@ class EnergyCost:
         self.check_inside(pts, "waypoints_m")
         k = pts.shape[0]
         angles = np.zeros(k)
-        if k < 3:
+        if k < 2:
             return angles, np.zeros(k)
         seg = np.diff(pts, axis=0)
         nonzero = np.flatnonzero(np.hypot(seg[:, 0], seg[:, 1]) > 0)
@@ -382,12 +391,37 @@ class EnergyCost:
             turn = np.abs((np.diff(heading) + math.pi) % (2 * math.pi) - math.pi)
             angles[nonzero[1:]] = turn  # waypoint index where segment nonzero[j] starts
         r, c = self.terrain.rowcol(pts[:, 0], pts[:, 1])
-        return angles, self.turn_energy_at(self.ground_rows[r, c], angles)
+        rows = self.ground_rows[r, c]
+        energies = self.turn_energy_at(rows, angles)
+        energies[[0, -1]] += 0.5 * self.stop_go_at(rows[[0, -1]])
+        return angles, energies
+
+    def start_and_stop_j(self, start_xy_m: Any, goal_xy_m: Any) -> float:
+        """What a route from ``start_xy_m`` to ``goal_xy_m`` pays for starting from rest and stopping at rest (J).
+
+        Half the stop-and-go of the start's ground and half the goal's (:meth:`turn_energies_j`'s
+        ends): the same for every route between the two points, so a search leaves it out of its
+        objective and adds it to the price it reports.
+        """
+        pts = as_points([start_xy_m, goal_xy_m], "start/goal")
+        r, c = self.terrain.rowcol(pts[:, 0], pts[:, 1])
+        return float(0.5 * self.stop_go_at(self.ground_rows[r, c]).sum())
+
+    def stop_go_at(self, rows: Any) -> np.ndarray:
+        """The energy (J) of stopping and starting again without turning, on table ``rows``: the turn table's column 0.
+
+        What every turn of the stop-turn-go drive includes and a route pays once (its start
+        from rest and its stop at rest); 0 for tables that price no stop and go
+        (:mod:`planner.tables`).
+        """
+        return self.tables.turn_table_j[np.asarray(rows, dtype=np.int64), 0]
 
     def turn_energy_at(self, rows: Any, angles_rad: Any) -> np.ndarray:
         """Turn-in-place energy (J) of table ``rows`` at heading changes ``angles_rad`` (in [0, pi]):
-        the turn table linearly interpolated, 0 where the angle is 0. The one rule that prices a
-        turn: :meth:`turn_energies_j` (every route's turns) and the heading lattice's arcs use it.
+        the turn table linearly interpolated (its stop and start included), 0 where the angle is at
+        most :data:`energy.profiles.COLLINEAR_TOL_RAD` (the robot drives through). The one rule that
+        prices a turn: :meth:`turn_energies_j` (every route's turns), the heading lattice's arcs
+        and the compiled kernels' turn (:mod:`planner.kernels.walk`) use it.
 
         Parameters
         ----------
@@ -401,7 +435,7 @@ class EnergyCost:
         i0 = np.minimum(np.floor(f).astype(np.int64), n_turn - 2)
         w = f - i0
         energies = self.tables.turn_table_j[rows, i0] * (1 - w) + self.tables.turn_table_j[rows, i0 + 1] * w
-        return np.where(angles == 0, 0.0, energies)
+        return np.where(angles <= COLLINEAR_TOL_RAD, 0.0, energies)
 
     def turn_spread_at(self, rows: Any, angles_rad: Any) -> np.ndarray:
         """Run-level spread (J) of a turn in place of table ``rows`` at heading changes ``angles_rad`` (in [0, pi]):
@@ -457,7 +491,8 @@ class EnergyCost:
         Each straight segment is walked cell by cell (:meth:`terrain.TerrainMap.segment_cells`):
         a cell adds its horizontal length times its row's spread at the cell's grade in the
         direction of travel (linear interpolation of the tables' ``grade_sd_table_j_per_m``, as the
-        mean tables are read); each turn adds its row's turn spread at the waypoint. What a
+        mean tables are read); each turn adds its row's turn spread at the waypoint, and the ends
+        half the spread of their stop-and-go each (as :meth:`turn_energies_j`). What a
         route's interval is made of (:func:`planner.price_route`; :mod:`planner.route_price` says how).
 
         Parameters
@@ -495,11 +530,11 @@ class EnergyCost:
                 if segment_cache is not None:
                     segment_cache[key] = seg
             per_row += seg
-        if np.any(angles > 0):
-            r, c = self.terrain.rowcol(pts[:, 0], pts[:, 1])
-            row = self.ground_rows[r, c]
-            per_row += np.bincount(row, weights=self.turn_spread_at(row, angles), minlength=sd_table.shape[0])
-        return per_row
+        r, c = self.terrain.rowcol(pts[:, 0], pts[:, 1])
+        row = self.ground_rows[r, c]
+        turn_sd = np.where(angles > COLLINEAR_TOL_RAD, self.turn_spread_at(row, angles), 0.0)
+        turn_sd[[0, -1]] += 0.5 * self.tables.turn_sd_table_j[row[[0, -1]], 0]  # the start and the stop
+        return per_row + np.bincount(row, weights=turn_sd, minlength=sd_table.shape[0])
 
     def _segment_spreads(self, sd_table: np.ndarray, a: list[float], b: list[float]) -> np.ndarray:
         """The linear spread sums (J) per table row of driving the straight segment ``a -> b`` (cell by cell)."""

@@ -161,8 +161,10 @@ def heading_shortest_path(lattice: Lattice, start_xy_m: tuple[float, float], goa
     Returns
     -------
     LatticePath
-        ``objective`` the route's total energy (J): drive and turns, as
-        :meth:`EnergyCost.path_energy_j` prices its waypoints; ``weight`` ``"energy"``.
+        ``objective`` the route's total energy (J): drive, turns and the start and stop at its
+        ends, as :meth:`EnergyCost.path_energy_j` prices its waypoints (the search minimises it
+        without the ends, the same for every route: :meth:`EnergyCost.start_and_stop_j`);
+        ``weight`` ``"energy"``.
 
     Raises
     ------
@@ -187,7 +189,8 @@ def heading_shortest_path(lattice: Lattice, start_xy_m: tuple[float, float], goa
     if workspace is not None:
         workspace.incumbent = np.asarray(nodes, dtype=np.int64)
     path = lattice.path_via(start, nodes, goal, best, "energy")
-    return LatticePath(path.found, path.waypoints_m, path.objective, "energy", time.perf_counter() - t0)
+    objective = path.objective + cost.start_and_stop_j(start, goal) if path.found else path.objective
+    return LatticePath(path.found, path.waypoints_m, objective, "energy", time.perf_counter() - t0)
 
 
 def _no_move_route(cost: Any, q: _Query, start: np.ndarray, goal: np.ndarray) -> tuple[float, list[int]]:
@@ -213,7 +216,7 @@ def _upper_bound(lattice: Lattice, q: _Query, start: np.ndarray, goal: np.ndarra
         chain.append(node)
         node = int(pred[node])
     path = lattice.path_via(start, chain[::-1], goal, float(total), "energy")
-    return min(best, lattice.cost.path_energy_j(path.waypoints_m))
+    return min(best, lattice.cost.path_energy_j(path.waypoints_m) - lattice.cost.start_and_stop_j(start, goal))
 
 
 def _cost_to_go(lattice: Lattice, q: _Query, start: np.ndarray, goal: np.ndarray, best: float) -> np.ndarray:

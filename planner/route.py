@@ -94,7 +94,9 @@ class Route:
     segment_energy_j : ndarray, shape (K - 1,)
         Energy of each straight segment (J).
     turn_energy_j : ndarray, shape (K,)
-        Energy of the turn at each waypoint (J; 0 at both ends).
+        Energy of stopping, turning in place and starting again at each waypoint (J; 0 where
+        the robot drives through); at both ends half a stop-and-go each, the start from rest
+        and the stop at rest (:meth:`planner.EnergyCost.turn_energies_j`).
     length_m : float
         Horizontal (map) length of the route (m); NaN when no route was found (likewise
         for the other totals).

@@ -7,6 +7,20 @@ those rows from any energy model (the physics model per ground, the learned mode
 id): it is the only place tables are computed. :meth:`CostTables.at_quantile` prices every
 entry at a quantile of its predictive (what a risk level plans on).
 
+**Stop-turn-go.** The robot drives a route stop-turn-go (:mod:`energy.profiles`): it stops at
+every waypoint where it turns, pivots with a ramped yaw rate and drives the next segment from
+rest; it starts the route from rest and ends it at rest. The grade table prices steady driving
+at the planning speed; what the stops and starts add is in the turn table: with
+``stop_turn_go_rate_radps`` (the physics model, :meth:`planner.CostSpec.build`), entry ``j`` of a
+row is the energy of the pivot by ``angles[j]`` on its profile (:func:`energy.profiles.pivot_commands`)
+plus one **stop-and-go** (a rest-to-rest straight less the same length at the steady energy
+per metre), both priced by the model itself on level ground (:func:`stop_turn_go_rows`). Column 0
+(angle 0) is then the stop-and-go alone: what a route pays once for starting from rest and
+stopping at rest (:meth:`planner.EnergyCost.turn_energies_j`, half at each end). A waypoint the
+robot drives through (a heading change of at most :data:`energy.profiles.COLLINEAR_TOL_RAD`)
+pays nothing. Tables without it (column 0 at 0: a learned model's, tables given directly) price
+no stop and go.
+
 **Risk-aware planning.** :meth:`planner.CostTables.at_quantile` gives the tables
 ``mean + z_Q * sd`` per entry, ``z_Q`` the ``Q`` quantile of the row's standardised predictive
 (:func:`energy.models.forecast.predictive_quantile` with the row's degrees of freedom: the
@@ -28,6 +42,7 @@ priced exactly (:func:`planner.price_route`: a :class:`~planner.route_price.Rout
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -35,8 +50,9 @@ from typing import Any
 
 import numpy as np
 
-from energy import EnergyModel, IntervalEnergyModel
+from energy import EnergyModel, IntervalEnergyModel, PhysicsEnergyModel
 from energy.models.forecast import check_dof, predictive_quantile
+from energy.profiles import DEFAULT_ACCEL_MPS2, DEFAULT_YAW_ACCEL_RADPS2, pivot_commands, waypoint_commands
 from terrain.terrain_map import UNKNOWN_GROUND, TerrainMap
 from terrawatt_base.checks import check_int, check_real
 from terrawatt_base.errors import GridMismatchError, InvalidParameterError, UnknownNameError
@@ -48,6 +64,7 @@ __all__ = [
     "turn_grid",
     "check_table_sizes",
     "tabulate",
+    "stop_turn_go_rows",
     "ground_table_rows",
     "CostTables",
     "check_spread_tables",
@@ -60,6 +77,9 @@ __all__ = [
 DEFAULT_GRADE_SAMPLES = 513
 #: Default number of samples of each ground's turn-energy-vs-angle table over [0, pi].
 DEFAULT_TURN_SAMPLES = 65
+#: Sampling period (s) of the profiles the stop-turn-go turn tables are priced on (their sampling error is
+#: below 0.3 J an entry).
+STOP_GO_DT_S = 0.005
 
 
 def check_table_sizes(grade_samples: Any, turn_samples: Any) -> tuple[int, int]:
@@ -97,12 +117,15 @@ def tabulate(
     grade_samples: int,
     turn_samples: int,
     spread: bool = False,
+    stop_turn_go_rate_radps: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Grade and turn tables of an energy model, one row per ground (the one table builder).
 
     Row ``i`` holds ``model.energy_per_metre_j(speed_mps, grades, cell_classes[i])`` (J per metre
     *travelled*) times ``sqrt(1 + grade**2)`` (J per *horizontal* map metre) on
-    :func:`grade_grid`, and ``model.turn_energy_j(angles, cell_classes[i])`` on :func:`turn_grid`.
+    :func:`grade_grid`, and ``model.turn_energy_j(angles, cell_classes[i])`` on :func:`turn_grid`
+    (with ``stop_turn_go_rate_radps``: :func:`stop_turn_go_rows`, the stop, pivot and start of the
+    stop-turn-go drive).
 
     Parameters
     ----------
@@ -123,6 +146,10 @@ def tabulate(
         Tabulate the run-level standard deviation instead of the mean, from
         ``model.energy_per_metre_sd_j`` / ``model.turn_energy_sd_j`` (a model with an
         interval; see :mod:`planner.route_price` for how a route adds the spreads up).
+    stop_turn_go_rate_radps : float, optional
+        Price the turn table as the stop-turn-go drive pivots at this yaw rate (rad/s; the
+        cost's turn rate): a model with ``energy_j`` over a sampled motion (the physics model).
+        Not with ``spread``.
 
     Returns
     -------
@@ -131,14 +158,102 @@ def tabulate(
     Raises
     ------
     InvalidParameterError
-        The model returned arrays of other shapes.
+        The model returned arrays of other shapes; ``stop_turn_go_rate_radps`` with ``spread``.
     """
     grades, angles = grade_grid(max_slope_rad, grade_samples), turn_grid(turn_samples)
     if spread:
+        if stop_turn_go_rate_radps is not None:
+            raise InvalidParameterError("stop_turn_go_rate_radps prices the mean turn table; not with spread=True",
+                                        parameter="stop_turn_go_rate_radps")
         return _table_rows(model.energy_per_metre_sd_j, model.turn_energy_sd_j, speed_mps, cell_classes, labels,
                            grades, angles, "spread ")
-    return _table_rows(model.energy_per_metre_j, model.turn_energy_j, speed_mps, cell_classes, labels, grades, angles,
-                       "")
+    grade_table, turn_table = _table_rows(model.energy_per_metre_j, model.turn_energy_j, speed_mps, cell_classes,
+                                          labels, grades, angles, "")
+    if stop_turn_go_rate_radps is not None:
+        turn_table = stop_turn_go_rows(model, speed_mps, cell_classes, turn_samples=turn_samples,
+                                       turn_rate_radps=stop_turn_go_rate_radps)
+    return grade_table, turn_table
+
+
+def stop_turn_go_rows(model: Any, speed_mps: float, cell_classes: Sequence[Any], *, turn_samples: int,
+                      turn_rate_radps: float, accel_mps2: float = DEFAULT_ACCEL_MPS2,
+                      yaw_accel_radps2: float = DEFAULT_YAW_ACCEL_RADPS2) -> np.ndarray:
+    """Turn table of the stop-turn-go drive, one row per ground: stop, pivot by each angle of :func:`turn_grid`, go.
+
+    Entry ``j`` of row ``i`` is ``model.energy_j`` of the pivot by ``angles[j]``
+    (:func:`energy.profiles.pivot_commands`: the yaw rate ramped up and down) plus the row's
+    stop-and-go: ``model.energy_j`` of one rest-to-rest straight of ``2 speed**2 / accel``
+    metres (:func:`energy.profiles.waypoint_commands`) less that length at
+    ``model.energy_per_metre_j(speed_mps, 0)``: the ramps' extra seconds at the electronics'
+    power, the kinetic energy never recovered, the control board's start-up. Column 0 is the
+    stop-and-go alone. The profiles are those a mission drives and
+    :func:`planner.price_route` (``how="profile"``) prices, on level ground, sampled every
+    :data:`STOP_GO_DT_S`; the same model prices them, so nothing here is a second formula. A
+    segment shorter than ``speed**2 / accel`` (which never reaches the cruise speed) stops and
+    starts for a little less.
+
+    Parameters
+    ----------
+    model : energy.PhysicsEnergyModel
+        ``energy_j(time_s, speed_mps, omega_radps, ground)`` and ``energy_per_metre_j``.
+    speed_mps : float
+        Planning speed (m/s).
+    cell_classes : sequence
+        The model's ground of each row.
+    turn_samples : int
+        Samples of :func:`turn_grid`.
+    turn_rate_radps, accel_mps2, yaw_accel_radps2 : float
+        The profile's pivot rate (rad/s), acceleration (m/s^2) and yaw acceleration (rad/s^2).
+
+    Returns
+    -------
+    ndarray, shape (len(cell_classes), turn_samples)
+
+    Raises
+    ------
+    InvalidParameterError
+        A model without ``energy_j``; bad rates.
+
+    Examples
+    --------
+    >>> from energy import PhysicsEnergyModel, ground_preset, robot_preset
+    >>> row = stop_turn_go_rows(PhysicsEnergyModel(robot_preset("husky")), 0.5, [ground_preset("asphalt")],
+    ...                         turn_samples=3, turn_rate_radps=0.5)[0]
+    >>> bool(40.0 < row[0] < 80.0), bool(row[2] > row[1] > row[0])  # the stop-and-go alone, then a pivot more
+    (True, True)
+    """
+    if not callable(getattr(model, "energy_j", None)):
+        raise InvalidParameterError(f"stop-turn-go tables need a model that prices a sampled motion (energy_j), "
+                                    f"got {type(model).__name__!r}", parameter="model")
+    figures = (float(speed_mps), float(turn_rate_radps), float(accel_mps2), float(yaw_accel_radps2), int(turn_samples))
+    rows = []
+    for ground in cell_classes:
+        if type(model) is PhysicsEnergyModel:  # a pure function of hashable values: priced once per process
+            rows.append(_physics_row(model.robot, model.effects, ground, *figures))
+        else:
+            rows.append(_stop_turn_go_row(model, ground, *figures))
+    return np.array(rows, dtype=np.float64).reshape(len(cell_classes), int(turn_samples))
+
+
+@functools.lru_cache(maxsize=256)
+def _physics_row(robot: Any, effects: tuple[str, ...], ground: Any, *figures: Any) -> np.ndarray:
+    return _stop_turn_go_row(PhysicsEnergyModel(robot, effects), ground, *figures)
+
+
+def _stop_turn_go_row(model: Any, ground: Any, speed_mps: float, turn_rate_radps: float, accel_mps2: float,
+                      yaw_accel_radps2: float, turn_samples: int) -> np.ndarray:
+    """One row of :func:`stop_turn_go_rows`: the stop-and-go, then the pivot by each angle plus it."""
+    length = 2.0 * speed_mps**2 / accel_mps2
+    p = waypoint_commands([[0.0, 0.0], [length, 0.0]], speed_mps, accel_mps2=accel_mps2, dt_s=STOP_GO_DT_S)
+    stop_go = (model.energy_j(p.time_s, p.v_mps, p.omega_radps, ground)
+               - length * float(model.energy_per_metre_j(speed_mps, 0.0, ground)))
+    out = np.full(turn_samples, stop_go)
+    for j, angle in enumerate(turn_grid(turn_samples)[1:], start=1):
+        p = pivot_commands(angle, turn_rate_radps=turn_rate_radps, yaw_accel_radps2=yaw_accel_radps2,
+                           dt_s=STOP_GO_DT_S)
+        out[j] += model.energy_j(p.time_s, p.v_mps, p.omega_radps, ground)
+    out.setflags(write=False)
+    return out
 
 
 def _table_rows(per_metre: Any, per_turn: Any, speed_mps: float, cell_classes: Sequence[Any], labels: Sequence[str],
@@ -308,7 +423,10 @@ class CostTables:
         this row's ground) at uniformly spaced grades from ``-tan(max_slope_rad)`` to
         ``+tan(max_slope_rad)``; ``n_grade`` odd and >= 3.
     turn_table_j : array_like, shape (n_rows, n_turn)
-        Energy (J, >= 0, finite) of turning in place by angles uniformly spaced over ``[0, pi]``.
+        Energy (J, >= 0, finite) of turning in place by angles uniformly spaced over ``[0, pi]``,
+        the stop before and the start after included where the tables price the stop-turn-go
+        drive (the module docstring); column 0 is then the stop-and-go alone, which a route pays
+        once (its start and its end), else 0.
     ground_labels : sequence of str, optional
         A label per row (ground names), for messages; default ``row0``, ``row1``, ...
     grade_sd_table_j_per_m, turn_sd_table_j : array_like, optional

@@ -8,8 +8,8 @@
   of its polyline;
 - :func:`polish_polyline` — a pattern search on the interior vertices of a polyline with a
   step per vertex, minimising drive + turn energy (the cell walk and
-  :func:`~planner.kernels.walk.turn_energy`), then dropping vertices that do not pay for
-  themselves.
+  :func:`~planner.kernels.walk.turn_energy`: a stop, a pivot and a start, nothing where the
+  heading does not change), then dropping vertices that do not pay for themselves.
 
 Arguments are the arrays of a :class:`~planner.kernels.arrays.CostArrays`; nothing is
 validated here (:mod:`planner.anyangle` checks its inputs).

@@ -69,8 +69,9 @@ def move_vertex(cells, table, turn_table, geo, xs, ys, i, h):  # pragma: no cove
 @numba.njit(cache=True, nogil=True)
 def drop_unpaid_vertices(cells, table, turn_table, geo, xs, ys, n, keep_rtol):  # pragma: no cover - compiled
     """Drop the interior vertices of ``xs[:n]``/``ys[:n]`` whose removal does not raise the
-    energy (drive + turns) by more than ``keep_rtol`` relative; compacts in place (kept
-    vertices first) and returns how many are kept."""
+    energy (drive + turns, each turn a stop, a pivot and a start: :func:`~planner.kernels.walk.turn_energy`)
+    by more than ``keep_rtol`` relative; compacts in place (kept vertices first) and returns
+    how many are kept."""
     m = 1
     for i in range(1, n - 1):
         # candidate: previous kept vertex (m-1) -> next vertex (i+1), skipping i

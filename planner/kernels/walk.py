@@ -17,6 +17,8 @@ import math
 import numba
 import numpy as np
 
+from energy.profiles import COLLINEAR_TOL_RAD
+
 from .arrays import GEO_CELL, GEO_GRADE_MIN, GEO_INV_DGRADE, GEO_NCOLS, GEO_NROWS, GEO_X0, GEO_Y0
 from .variants import compile_variants, use_parallel
 
@@ -219,7 +221,11 @@ def point_free(cells, geo, x, y):  # pragma: no cover - compiled
 
 @numba.njit(cache=True, nogil=True)
 def turn_energy(cells, turn_table, geo, xp, yp, x, y, xn, yn):  # pragma: no cover - compiled
-    """Turn energy (J) at vertex (x, y) between (xp, yp) -> (x, y) and (x, y) -> (xn, yn)."""
+    """Turn energy (J) at vertex (x, y) between (xp, yp) -> (x, y) and (x, y) -> (xn, yn).
+
+    The rule of :meth:`planner.EnergyCost.turn_energy_at`: 0 at a heading change of at most
+    ``COLLINEAR_TOL_RAD`` (driven through), else the turn table (stop, pivot, go) interpolated.
+    """
     dx1 = x - xp
     dy1 = y - yp
     dx2 = xn - x
@@ -227,7 +233,7 @@ def turn_energy(cells, turn_table, geo, xp, yp, x, y, xn, yn):  # pragma: no cov
     if (dx1 == 0.0 and dy1 == 0.0) or (dx2 == 0.0 and dy2 == 0.0):
         return 0.0
     ang = abs(math.atan2(dx1 * dy2 - dy1 * dx2, dx1 * dx2 + dy1 * dy2))
-    if ang == 0.0:
+    if ang <= COLLINEAR_TOL_RAD:
         return 0.0
     nr = int(geo[GEO_NROWS])
     nc = int(geo[GEO_NCOLS])

@@ -16,7 +16,10 @@ smoothly (arcs) is not modelled.
 
 Segments: the turn at waypoint ``k`` belongs to segment ``k`` (the one it starts), as in
 ``Route.turn_energy_j``; so the predicted energy of segment ``k`` is
-``segment_energy_j[k] + turn_energy_j[k]`` and the segments add up to ``Route.energy_j``.
+``segment_energy_j[k] + turn_energy_j[k]`` (the last segment also holds the stop at the
+last waypoint) and the segments add up to ``Route.energy_j``. A waypoint the robot drives
+through (no heading change, :func:`energy.profiles.drivable_waypoints`) does not split the
+drive: the route segments it joins are booked, and predicted, as one, on the first of them.
 Driven samples are assigned to segments from the log's pose (each segment ends at the
 robot's closest approach to its end waypoint once it is within ``waypoint_tolerance_m``
 along the segment); a log without a pose is assumed to follow the velocity profile from its
@@ -176,6 +179,7 @@ def simulate_mission(
         turn_pred[kept], straight_pred[kept] = turn_kept, straight_kept
         forecast = "profile"
     else:
+        turn_pred, straight_pred = _fold(turn_pred, kept), _fold(straight_pred, kept)
         forecast = "edges"
     seg_pred = straight_pred + turn_pred
 
@@ -313,10 +317,12 @@ def _segment_predictions(route: Route, cost: EnergyCost | None) -> tuple[np.ndar
     """Predicted energy of each route segment's straight and of the turn that starts it (J)."""
     wp = route.waypoints_m
     if cost is None:
-        straight_pred, turn_pred = route.segment_energy_j, route.turn_energy_j[:-1]
+        straight_pred, turns = np.array(route.segment_energy_j, dtype=np.float64), route.turn_energy_j
     else:
         straight_pred = cost.segment_energy_j(wp[:-1], wp[1:])
-        turn_pred = cost.turn_energies_j(wp)[1][:-1]
+        turns = cost.turn_energies_j(wp)[1]
+    turn_pred = np.array(turns[:-1], dtype=np.float64)
+    straight_pred[-1] += turns[-1]  # the stop at the last waypoint ends the last straight
     seg_pred = straight_pred + turn_pred
     if not np.all(np.isfinite(seg_pred)):
         i = int(np.flatnonzero(~np.isfinite(seg_pred))[0])
@@ -325,6 +331,14 @@ def _segment_predictions(route: Route, cost: EnergyCost | None) -> tuple[np.ndar
             "blocked cell of cost; expected a route valid for cost"
         )
     return np.asarray(straight_pred, dtype=np.float64), np.asarray(turn_pred, dtype=np.float64)
+
+
+def _fold(per_segment: np.ndarray, kept: np.ndarray) -> np.ndarray:
+    """Route-segment values summed onto the driven segment holding them (index ``kept[i]``; 0 elsewhere)."""
+    group = np.maximum(np.searchsorted(kept, np.arange(per_segment.size), side="right") - 1, 0)
+    out = np.zeros_like(per_segment)
+    np.add.at(out, kept[group], per_segment)
+    return out
 
 
 def _drive_or_replay(terrain: TerrainMap, truth: TruthSimulator | InteractionLog, pts: np.ndarray,

@@ -136,7 +136,9 @@ class PairPrices:
         headings of no preferred direction the heading change averages a quarter turn (pi / 2),
         so the allowance is the turn of pi / 2 on the ground under the point
         (:meth:`EnergyCost.turn_energy_at`, the cost's rule for a turn) at its ``q`` quantile
-        (``mean + t_q * sd``, ``t_q`` the quantile of that ground's predictive). It is what
+        (``mean + t_q * sd``, ``t_q`` the quantile of that ground's predictive), less the stop-and-go
+        the two legs' own prices already hold (each leg ends at rest and starts from rest,
+        :meth:`EnergyCost.stop_go_at`; the turn's entry holds one too). It is what
         :meth:`planner.tours.TourProblem.build` adds to every leg leaving a stop; it is not a bound
         (a U-turn costs about twice as much), so each chosen tour is then priced exactly
         (:meth:`tour_interval`) and checked (:func:`planner.tours.solve_tours`).
@@ -145,7 +147,7 @@ class PairPrices:
         cost = self._priced_cost("the turns at the stops")
         r, c = cost.terrain.rowcol(self.xy_m[:, 0], self.xy_m[:, 1])
         rows = np.asarray(cost.ground_rows)[r, c]
-        turn = cost.turn_energy_at(rows, np.full(rows.shape, STOP_TURN_RAD))
+        turn = cost.turn_energy_at(rows, np.full(rows.shape, STOP_TURN_RAD)) - cost.stop_go_at(rows)
         if cost.has_interval:
             z = np.array([predictive_quantile(q, self._dof(int(g))) for g in rows])
             turn = turn + z * cost.turn_spread_at(rows, np.full(rows.shape, STOP_TURN_RAD))

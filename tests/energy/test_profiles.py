@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -120,3 +122,34 @@ def test_drive_profile_bad_waypoints(wp: object, match: str) -> None:
 def test_drive_profile_string_speed_names_the_parameter() -> None:
     with pytest.raises(InvalidParameterError, match="speed_mps must be a real number, got 'fast'"):
         drive_profile([[0.0, 0.0], [1.0, 0.0]], "fast", turn_rate_radps=0.5, dt_s=0.01)
+
+
+# ------------------------------------------------------------------ collinear waypoints, the pivot alone
+def test_a_collinear_waypoint_is_driven_through_and_a_real_turn_is_not() -> None:
+    from energy.profiles import COLLINEAR_TOL_RAD
+
+    straight = waypoint_commands([[0.0, 0.0], [6.0, 0.0]], 0.5, dt_s=0.01)
+    through = waypoint_commands([[0.0, 0.0], [2.0, 0.0], [3.5, 0.0], [6.0, 0.0]], 0.5, dt_s=0.01)
+    np.testing.assert_array_equal(through.v_mps, straight.v_mps)  # one straight from rest to rest: no stop
+    np.testing.assert_allclose(through.pose_xyh, straight.pose_xyh, atol=1e-12)
+    kink = 100.0 * COLLINEAR_TOL_RAD  # 0.1 mrad: a real turn, a stop and a pivot
+    bent = waypoint_commands([[0.0, 0.0], [3.0, 0.0], [6.0, 3.0 * math.tan(kink)]], 0.5, dt_s=0.01)
+    assert bent.duration_s > straight.duration_s + 1.0  # stops, pivots, starts again
+    pts, kept = drivable_waypoints([[0.0, 0.0], [2.0, 0.0], [2.0, 0.0], [3.5, 0.0], [3.5, 2.0]])
+    assert pts.tolist() == [[0.0, 0.0], [3.5, 0.0], [3.5, 2.0]] and kept.tolist() == [0, 3]
+    turn, straight_s = planned_durations_s(pts, None, 0.5, 0.5, 0.5, 1.0)
+    assert turn[0] == 0.0 and turn[1] > 0.0 and straight_s[0] == pytest.approx(3.5 / 0.5 + 1.0)
+
+
+def test_the_pivot_alone_is_the_pivot_of_a_stop_turn_go_profile() -> None:
+    from energy.profiles import pivot_commands
+
+    p = pivot_commands(math.pi / 2, turn_rate_radps=0.5, yaw_accel_radps2=1.0, dt_s=0.001)
+    route = waypoint_commands([[0.0, 0.0], [0.0, 1.0]], 0.5, turn_rate_radps=0.5, yaw_accel_radps2=1.0, dt_s=0.001,
+                              start_heading_rad=0.0)
+    n = p.time_s.size - 1  # the route's pivot ends where its straight starts
+    np.testing.assert_allclose(p.omega_radps[:n], route.omega_radps[:n], atol=1e-12)
+    assert np.all(p.v_mps == 0.0) and p.pose_xyh[-1, 2] == pytest.approx(math.pi / 2)
+    assert p.duration_s == pytest.approx(math.pi / 2 / 0.5 + 0.5, abs=1e-3)
+    with pytest.raises(InvalidParameterError, match="angle_rad"):
+        pivot_commands(4.0, turn_rate_radps=0.5)

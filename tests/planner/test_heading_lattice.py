@@ -56,7 +56,12 @@ def _free_points(cost, rng, n):
 
 def scipy_optimum(lattice, start, goal) -> float:
     """The reference the compiled A* is checked against: scipy's Dijkstra over the explicit state graph
-    (``16 x`` the heading-free graph: small maps only), or the route of no lattice move if cheaper; inf: none."""
+    (``16 x`` the heading-free graph: small maps only), or the route of no lattice move if cheaper; inf: none.
+    Plus the start from rest and the stop at rest, which every route between the two points pays."""
+    return _state_graph_optimum(lattice, start, goal) + lattice.cost.start_and_stop_j(start, goal)
+
+
+def _state_graph_optimum(lattice, start, goal) -> float:
     from planner.heading_lattice import _no_move_route, _Query
 
     start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
@@ -265,6 +270,7 @@ def test_the_last_answer_bounds_the_next_search_along_the_drive(seed):
             break  # a lattice route of many moves to drive along (not the direct segment)
     assert first.found and ws.incumbent.size >= 8
     bound, nodes = _incumbent(lattice, _Query(lattice, np.asarray(start), np.asarray(goal)), ws.incumbent)
+    bound += cost.start_and_stop_j(start, goal)  # the search's objective leaves out the ends, the price holds them
     assert bound == pytest.approx(first.objective, rel=1e-9) and nodes == list(ws.incumbent)
     chain = ws.incumbent.copy()
     used = 0
@@ -285,8 +291,31 @@ def test_the_last_answer_bounds_the_next_search_along_the_drive(seed):
         if got.found:
             assert got.objective == pytest.approx(ref, rel=1e-9)
             assert lattice.cost.path_energy_j(got.waypoints_m) == pytest.approx(got.objective, rel=1e-9)
-    assert used >= 2  # the moved starts joined the last route: its price bounded the search
+    assert used >= 1  # the moved starts joined the last route: its price bounded the search
     q = _Query(lattice, np.asarray(start), np.asarray(goal))
     assert math.isfinite(_incumbent(lattice, q, chain)[0])
     chain[1] = chain[0] + 3 * lattice._nj  # no lattice move between the first two nodes
     assert _incumbent(lattice, q, chain) == (math.inf, [])
+
+
+def test_a_search_that_pays_each_stop_turns_less_often():
+    """The stop-turn-go tables (a stop, a ramped pivot and a start per turn) against the same map with steady pivots:
+    the heading lattice's optimum on the stop-turn-go cost turns no more often, and less often somewhere."""
+    from planner.tables import turn_grid
+
+    fewer = 0
+    for seed in range(4):
+        tmap = procedural_map((40, 48), 1.0, seed=seed, obstacle_fraction=0.1)
+        driven = CostSpec().build(tmap)
+        steady_turns = np.array([driven.physics_model.turn_energy_j(turn_grid(driven.tables.turn_table_j.shape[1]), g)
+                                 for g in driven.ground_params])
+        steady = driven.with_tables(CostTables(driven.tables.grade_table_j_per_m, steady_turns))
+        start, goal = (2.5, 2.5), (44.5, 36.5)
+        turns = []
+        for cost in (driven, steady):
+            path = heading_shortest_path(Lattice(cost, 1), start, goal)
+            assert path.found
+            turns.append(int(np.count_nonzero(cost.turn_energies_j(path.waypoints_m)[0] > 1e-6)))
+        assert turns[0] <= turns[1], seed
+        fewer += turns[0] < turns[1]
+    assert fewer >= 1

@@ -68,7 +68,7 @@ def test_cumulative_energy_is_monotone_and_ends_at_the_route_energy(tmp_path, wa
     bag = read_route_bag(write_route_bag(tmp_path / "route.mcap", route, tmap, cost=cost))
     energy = bag.cumulative_energy_j
     assert energy.shape == (route.waypoints_m.shape[0],)
-    assert energy[0] == 0.0 and np.all(np.diff(energy) > 0)
+    assert energy[0] == route.turn_energy_j[0] > 0.0 and np.all(np.diff(energy) > 0)  # leaving the start: from rest
     assert energy[-1] == pytest.approx(route.energy_j, rel=1e-12)
     # each step is the segment plus the turn at its far end
     np.testing.assert_allclose(np.diff(energy), route.segment_energy_j + route.turn_energy_j[1:], rtol=1e-12)

@@ -64,7 +64,7 @@ def test_per_vertex_energy_adds_up(utm_map, utm_route):
     cumulative = np.array(props["cumulative_energy_j"])
     k = utm_route.waypoints_m.shape[0]
     assert cumulative.shape == (k,) and len(props["segment_energy_j"]) == k - 1
-    assert cumulative[0] == 0.0 and np.all(np.diff(cumulative) > 0)
+    assert cumulative[0] == utm_route.turn_energy_j[0] > 0.0 and np.all(np.diff(cumulative) > 0)  # from rest
     assert cumulative[-1] == pytest.approx(utm_route.energy_j, rel=1e-12)
     assert props["energy_j"] == utm_route.energy_j and props["status"] == "exact"
 

@@ -164,18 +164,16 @@ def test_a_ground_the_truth_simulator_cannot_drive_is_refused_before_any_mission
 
 
 def test_with_the_planning_cost_the_forecast_prices_the_driven_profile(setup):
-    # Without the cost the study compares with the route's edge energy (steady driving and turns
-    # in place); with it, with the physics forecast of the whole stop-turn-go profile, which is
-    # dearer and lies within the drawn missions' spread around nominal parameters.
+    # Without the cost the study compares with the route's edge energy; with it, with the physics forecast of the
+    # whole stop-turn-go profile, which the edges price too (their stops, starts and pivot ramps).
     tmap, route = setup
     cost = CostSpec().build(tmap)
     edges = run_mc(setup, n=8, seed=3)
     profile = run_mc(setup, n=8, seed=3, cost=cost)
     assert edges.predicted_energy_j == route.energy_j
-    assert profile.predicted_energy_j > route.energy_j
+    assert profile.predicted_energy_j != route.energy_j
+    assert profile.predicted_energy_j == pytest.approx(route.energy_j, rel=0.005)
     np.testing.assert_array_equal(profile.energy_j, edges.energy_j)  # the same missions
-    p50 = float(np.median(profile.energy_j))
-    assert abs(profile.predicted_energy_j - p50) < abs(edges.predicted_energy_j - p50)
     assert "forecast" in profile.summary()
 
 

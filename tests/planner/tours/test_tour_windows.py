@@ -156,7 +156,8 @@ def test_bad_windows_raise_the_librarys_errors_naming_the_site(tmp_path):
 
 
 # the windows bind; the longest tour binds (a battery that holds the turns at the stops)
-@pytest.mark.parametrize("seed, shift_s, ah", [(2, 10_000, 0.2), (0, 200, 0.3)])
+# seed 1: on seed 2 the windows no longer bind once the stops and starts are priced (the premise, checked below)
+@pytest.mark.parametrize("seed, shift_s, ah", [(1, 10_000, 0.2), (0, 200, 0.3)])
 def test_the_ortools_path_keeps_the_windows_and_finds_the_same_optimum(hills_cost, seed, shift_s, ah):
     sites = _windowed_sites(seed, 6, (20.0, 20.0))
     robot = TourRobot(Battery(ah, 24.0, min_reserve_pct=20.0), (20.0, 20.0), max_duration_s=shift_s)
