@@ -40,6 +40,7 @@ from terrawatt_base.errors import PlanningError
 from .coarse import CoarseOptions, corridor_mask, merge_straight, search_corridor
 from .edge_cost import EnergyCost
 from .route import Route
+from .route_time import route_duration_s
 
 __all__ = ["ChainedRoute", "chain_corridor", "haloed_cells", "min_window_cells", "CHAIN_STRETCH_CELLS", "CHAIN_KEEP"]
 
@@ -123,9 +124,7 @@ class _Piece:
 
     points: np.ndarray
     segment_energy_j: np.ndarray
-    turn_angle_rad: np.ndarray
     turn_energy_j: np.ndarray
-    surface_m: float
 
 
 def _evaluate(cost: EnergyCost, nodes: np.ndarray) -> _Piece:
@@ -133,8 +132,8 @@ def _evaluate(cost: EnergyCost, nodes: np.ndarray) -> _Piece:
     seg = cost.segment_energy_j(pts[:-1], pts[1:])
     if not np.all(np.isfinite(seg)):  # the searched moves were finite: a broken invariant, not a user error
         raise PlanningError("a chained corridor piece crosses a blocked cell once merged; this is a bug")
-    angles, turns = cost.turn_energies_j(pts)
-    return _Piece(pts, seg, angles, turns, cost.surface_length_m(pts))
+    _, turns = cost.turn_energies_j(pts)
+    return _Piece(pts, seg, turns)
 
 
 def _junction_turn(cost: EnergyCost, before: np.ndarray, at: np.ndarray, after: np.ndarray) -> tuple[float, float]:
@@ -333,15 +332,13 @@ def _assemble(pieces: list[_Piece], junctions: list[tuple[float, float]], cost: 
     """One route from the kept pieces: their segments, their inner turns and the turns at the junctions."""
     points = [pieces[0].points] + [p.points[1:] for p in pieces[1:]]
     seg = np.concatenate([p.segment_energy_j for p in pieces])
-    angles, turns = [pieces[0].turn_angle_rad[:-1]], [pieces[0].turn_energy_j[:-1]]
-    for p, (angle, turn) in zip(pieces[1:], junctions, strict=True):
-        angles += [np.array([angle]), p.turn_angle_rad[1:-1]]
+    turns = [pieces[0].turn_energy_j[:-1]]
+    for p, (_, turn) in zip(pieces[1:], junctions, strict=True):
         turns += [np.array([turn]), p.turn_energy_j[1:-1]]
-    angles.append(np.zeros(1))
     turns.append(pieces[-1].turn_energy_j[-1:])  # the stop at the goal
     wp = np.vstack(points)
-    angle, turn = np.concatenate(angles), np.concatenate(turns)
-    duration = sum(p.surface_m for p in pieces) / cost.speed_mps + float(angle.sum()) / cost.turn_rate_radps
+    turn = np.concatenate(turns)
+    duration = route_duration_s(wp, cost.speed_mps, cost.turn_rate_radps)
     route = Route(status="exact", waypoints_m=wp, segment_energy_j=seg, turn_energy_j=turn,
                   length_m=float(np.hypot(*np.diff(wp, axis=0).T).sum()), duration_s=duration,
                   energy_j=float(seg.sum() + turn.sum()), battery_voltage_v=cost.battery_voltage_v,

@@ -50,6 +50,7 @@ from terrawatt_base.errors import FileFormatError, InvalidParameterError, Option
 
 from .edge_cost import EnergyCost
 from .route import Route
+from .route_time import waypoint_times_s
 
 __all__ = [
     "ROUTE_BAG_FORMAT_VERSION",
@@ -157,8 +158,9 @@ def _check_route(route: Any) -> Route:
 
 
 def route_pose_times_s(route: Route, cost: EnergyCost) -> np.ndarray:
-    """Planned time (s) at which the robot leaves each waypoint: driving time of the segments
-    before it (surface length at the planning speed) plus the turns up to and at it.
+    """Planned time (s) at which the robot leaves each waypoint, driving the route stop-turn-go at the cost's
+    speed and turn rate (:func:`planner.route_time.waypoint_times_s`: after the pivot where it turns, as it passes
+    where it drives through).
 
     The last equals ``route.duration_s`` (the start's is 0: no turn there).
 
@@ -171,11 +173,7 @@ def route_pose_times_s(route: Route, cost: EnergyCost) -> np.ndarray:
     _check_route(route)
     if not isinstance(cost, EnergyCost):
         raise InvalidParameterError(f"cost must be an EnergyCost, got {type(cost).__name__!r}")
-    pts = route.waypoints_m
-    drive_s = np.array([cost.surface_length_m(pts[i:i + 2]) for i in range(pts.shape[0] - 1)]) / cost.speed_mps
-    angles, _ = cost.turn_energies_j(pts)
-    turn_s = np.asarray(angles, dtype=np.float64) / cost.turn_rate_radps
-    times = np.concatenate([[0.0], np.cumsum(drive_s)]) + np.cumsum(turn_s)
+    times = waypoint_times_s(route.waypoints_m, cost.speed_mps, cost.turn_rate_radps)
     if not math.isclose(times[-1], route.duration_s, rel_tol=1e-9, abs_tol=1e-9):
         raise InvalidParameterError(
             f"cost gives the route a duration of {times[-1]!r} s, the route says {route.duration_s!r} s: "

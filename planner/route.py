@@ -15,6 +15,7 @@ from terrawatt_base.errors import InvalidParameterError, PlanningError
 from .edge_cost import EnergyCost
 from .points import as_points
 from .route_geojson import routes_geojson
+from .route_time import route_duration_s
 
 __all__ = ["Route", "RouteComparison", "ROUTE_STATUSES", "evaluate_route", "empty_route"]
 
@@ -101,8 +102,8 @@ class Route:
         Horizontal (map) length of the route (m); NaN when no route was found (likewise
         for the other totals).
     duration_s : float
-        Driving time (surface length at the planning speed) plus turning time at the
-        robot's turn rate (s).
+        The time the robot takes to drive it stop-turn-go from rest to rest at the planning
+        speed and turn rate, its ramps included (s; :func:`planner.route_time.route_duration_s`).
     energy_j : float
         Total energy: segments plus turns (J).
     battery_voltage_v : float
@@ -337,10 +338,10 @@ def evaluate_route(
             f"segment {i} from {tuple(pts[i].tolist())!r} to {tuple(pts[i + 1].tolist())!r} m crosses a "
             "blocked cell (obstacle or steeper than max_slope_rad); expected a valid route"
         )
-    angles, turns = cost.turn_energies_j(pts)
+    _, turns = cost.turn_energies_j(pts)
     lengths = np.hypot(*np.diff(pts, axis=0).T)
     length = float(lengths.sum())
-    duration = cost.surface_length_m(pts) / cost.speed_mps + float(angles.sum()) / cost.turn_rate_radps
+    duration = route_duration_s(pts, cost.speed_mps, cost.turn_rate_radps)
     return Route(
         status=status,
         waypoints_m=pts,

@@ -207,7 +207,7 @@ def simulate_missions_mc(
     robot, rate_hz = truth.robot, truth.current_rate_hz
     distributions = MissionDistributions() if study.distributions is None else study.distributions
     compute = Compute() if compute is None else check_instance("compute", compute, Compute)
-    nominal = route_speed_mps(terrain, route, robot.turn_rate_radps) if truth.speed_mps is None else truth.speed_mps
+    nominal = route_speed_mps(route, robot.turn_rate_radps) if truth.speed_mps is None else truth.speed_mps
     if cost is not None and not isinstance(cost, EnergyCost):
         raise InvalidParameterError(f"cost must be an EnergyCost or None, got {type(cost).__name__!r}")
     if forecast is not None and not isinstance(forecast, RouteEnergyInterval):

@@ -301,7 +301,7 @@ def _profile(terrain: TerrainMap, route: Route, robot: RobotParams, cost: Energy
                                low=0.0, low_inclusive=False)
     speed = drive.speed_mps
     if speed is None:
-        speed = cost.speed_mps if cost is not None else route_speed_mps(terrain, route, turn_rate)
+        speed = cost.speed_mps if cost is not None else route_speed_mps(route, turn_rate)
     tol = drive.waypoint_tolerance_m
     return _Profile(
         speed_mps=speed,

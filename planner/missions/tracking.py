@@ -6,11 +6,11 @@ import math
 
 import numpy as np
 
-from terrain import TerrainMap
 from terrawatt_base.checks import fmt_number
 from terrawatt_base.errors import InvalidParameterError
 
 from ..route import Route
+from ..route_time import route_duration_s
 
 __all__ = ["segments_by_pose", "route_speed_mps"]
 
@@ -48,28 +48,27 @@ def segments_by_pose(xy: np.ndarray, pts: np.ndarray, tol_m: float) -> tuple[np.
     return idx, reached
 
 
-def route_speed_mps(terrain: TerrainMap, route: Route, turn_rate: float) -> float:
-    """Planning speed recovered from a route's duration: surface length / (duration - turning time)."""
+def route_speed_mps(route: Route, turn_rate: float) -> float:
+    """Planning speed recovered from a route's duration: the cruise speed at which the stop-turn-go drive of its
+    waypoints lasts ``route.duration_s`` (:func:`planner.route_time.route_duration_s`, the rule that set it; the
+    duration falls as the speed rises, so a bisection finds it to rounding)."""
     wp = route.waypoints_m
-    gx, gy = terrain["grad_x"], terrain["grad_y"]
-    surface = 0.0
-    for a, b in zip(wp[:-1], wp[1:]):
-        length = math.hypot(b[0] - a[0], b[1] - a[1])
-        if length == 0.0:
-            continue
-        rows, cols, pieces = terrain.segment_cells(tuple(a), tuple(b))
-        grade = (gx[rows, cols] * (b[0] - a[0]) + gy[rows, cols] * (b[1] - a[1])) / length
-        surface += float(np.sum(pieces * np.sqrt(1.0 + grade**2)))
-    d = np.diff(wp, axis=0)
-    nz = np.flatnonzero(np.hypot(d[:, 0], d[:, 1]) > 0)
-    heading = np.arctan2(d[nz, 1], d[nz, 0])
-    turning_s = float(np.sum(np.abs(np.angle(np.exp(1j * np.diff(heading)))))) / turn_rate
-    drive_s = route.duration_s - turning_s
-    speed = surface / drive_s if drive_s > 0 else math.nan
-    if not (math.isfinite(speed) and speed > 0):
+    target = float(route.duration_s)
+    lo, hi = 1e-6, 1e3
+
+    def duration(v: float) -> float:
+        return route_duration_s(wp, v, turn_rate)
+
+    if not (math.isfinite(target) and duration(hi) <= target <= duration(lo)):
         raise InvalidParameterError(
-            f"cannot recover the planning speed from route.duration_s={fmt_number(route.duration_s)} s (turning "
-            f"time {fmt_number(turning_s)} s at turn_rate_radps={fmt_number(turn_rate)}); pass speed_mps or cost"
+            f"cannot recover the planning speed from route.duration_s={fmt_number(route.duration_s)} s (no cruise "
+            f"speed gives the stop-turn-go drive that duration at turn_rate_radps={fmt_number(turn_rate)}); "
+            "pass speed_mps or cost"
         )
-    return speed
+    for _ in range(200):
+        mid = math.sqrt(lo * hi)
+        if mid in (lo, hi):
+            break
+        lo, hi = (mid, hi) if duration(mid) > target else (lo, mid)
+    return hi if abs(duration(hi) - target) <= abs(duration(lo) - target) else lo
 

@@ -90,11 +90,13 @@ def test_poses_are_stamped_with_the_planned_leaving_times(tmp_path, wall):
     assert np.all(plain.pose_stamps_ns == stamp)
 
 
-def test_pose_times_on_a_straight_flat_route_are_length_over_speed():
+def test_pose_times_on_a_straight_flat_route_are_the_ramped_profiles():
     tmap = terrain.flat_map((10, 30), 1.0)
     cost = CostSpec(speed_mps=0.5).build(tmap)
-    route = evaluate_route(cost, [[0.5, 5.5], [10.5, 5.5], [25.5, 5.5]])  # straight on: no turn
-    np.testing.assert_allclose(route_pose_times_s(route, cost), [0.0, 20.0, 50.0], rtol=1e-12, atol=1e-12)
+    route = evaluate_route(cost, [[0.5, 5.5], [10.5, 5.5], [25.5, 5.5]])  # straight on: driven through
+    # 0.5 s ramping up to 0.5 m/s (0.0625 m), then 0.5 m/s; the same ramp down at the end (0.5 m/s^2)
+    np.testing.assert_allclose(route_pose_times_s(route, cost), [0.0, 20.5, 51.0], rtol=1e-12, atol=1e-12)
+    assert route.duration_s == 51.0
 
 
 def test_the_map_crs_message_states_the_crs_and_the_frame_origin(tmp_path, utm):

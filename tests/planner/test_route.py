@@ -47,18 +47,20 @@ def test_evaluate_route_on_flat_map():
     assert route.energy_j == pytest.approx(750.0 + 15.0 * math.pi)
     assert route.energy_wh == pytest.approx(route.energy_j / 3600.0)
     assert route.charge_mah == pytest.approx(route.energy_j / 24.0 / 3.6)
-    # 15 m at 0.5 m/s plus a quarter turn at 0.5 rad/s
-    assert route.duration_s == pytest.approx(30.0 + (math.pi / 2) / 0.5)
+    # stop-turn-go: 10 m and 5 m at 0.5 m/s, each ramped from and to rest at 0.5 m/s^2 (+1 s), and a quarter turn
+    # at 0.5 rad/s ramped at 1 rad/s^2 (+0.5 s)
+    assert route.duration_s == pytest.approx(30.0 + 2 * 1.0 + (math.pi / 2) / 0.5 + 0.5)
     assert route.planning_time_s == 0.25
     assert math.isnan(route.energy_saved_pct) and math.isnan(route.optimality_ratio)
 
 
-def test_duration_uses_surface_length_on_slopes():
+def test_duration_on_slopes_is_the_profiles_on_the_horizontal_length():
+    # the stop-turn-go profile (what the simulator drives) advances at the planning speed over the map's plane
     grade = 0.3
     z = np.broadcast_to(grade * (np.arange(30) + 0.5), (20, 30))
-    route = evaluate_route(_cost(z), [[2.0, 5.0], [22.0, 5.0]])
+    route = evaluate_route(_cost(z), [[2.0, 5.0], [12.0, 5.0], [22.0, 5.0]])
     assert route.length_m == pytest.approx(20.0)
-    assert route.duration_s == pytest.approx(20.0 * math.sqrt(1 + grade**2) / 0.5)
+    assert route.duration_s == pytest.approx(20.0 / 0.5 + 1.0)  # driven through (12, 5): one ramp up, one down
 
 
 def test_comparisons_against_baselines():
