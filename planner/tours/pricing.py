@@ -17,6 +17,18 @@ So a tour is priced as what the robot drives, the legs joined into one route pri
 solver reads carries, on every leg leaving a stop, an allowance for the expected turn in place at
 that stop (:meth:`PairPrices.stop_turn_quantile_j`; :mod:`planner.tours.solver` says why not the
 dearest).
+
+**A stop at every site.** The robot stops at every site to serve it, whatever the turn there: where
+it arrives and leaves on one heading, the joined route would drive through, so the stop-and-go
+(the turn table's column 0) is added there (:meth:`PairPrices.tour_interval`); each leg's own price
+already holds it (from rest to rest), so the solver's allowance is the pivot alone.
+
+**Time.** A leg's time is its route driven stop-turn-go from rest to rest
+(:func:`planner.route_time.route_duration_s`: its ramps included); at each stop the robot pivots
+after serving, before it leaves (:meth:`PairPrices.turn_time_s`), which a tour's timeline counts
+(arrival at the next stop). The solver's matrix allows the longest pivot (a U-turn,
+:attr:`PairPrices.longest_turn_s`) on every leg leaving a stop: a bound, so the windows and longest
+tours it keeps hold for the turns the robot makes.
 """
 
 from __future__ import annotations
@@ -29,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from energy.models.forecast import predictive_quantile
+from energy.profiles import COLLINEAR_TOL_RAD, DEFAULT_YAW_ACCEL_RADPS2, move_duration_s
 from terrawatt_base.checks import check_instance
 from terrawatt_base.dask_client import Compute, client_worker_count, run_tasks
 from terrawatt_base.errors import InvalidParameterError
@@ -37,6 +50,7 @@ from ..batch import shippable_cost
 from ..edge_cost import EnergyCost
 from ..lattice import Lattice
 from ..route_price import RouteEnergyInterval, price_route
+from ..route_time import route_duration_s
 from ..tables import check_risk_level
 
 __all__ = ["PairPrices", "price_pairs", "price_from", "STOP_TURN_RAD"]
@@ -63,7 +77,9 @@ class PairPrices:
     ground_labels : tuple of str
         The ``G`` grounds (the cost's row labels).
     duration_s : ndarray, shape (P, P)
-        Driving time of each leg (s).
+        Driving time of each leg (s): its route driven stop-turn-go from rest to rest
+        (:func:`planner.route_time.route_duration_s`; the turn at the stop it leaves is
+        :meth:`turn_time_s`).
     waypoints : tuple of tuple of ndarray or None
         ``waypoints[i][j]`` the leg's route (m), None where there is none.
     pricing_time_s : float
@@ -153,11 +169,43 @@ class PairPrices:
             turn = turn + z * cost.turn_spread_at(rows, np.full(rows.shape, STOP_TURN_RAD))
         return turn
 
+    def turn_time_s(self, before: int, at: int, after: int) -> float:
+        """The time (s) the robot pivots at point ``at`` between the legs ``before -> at`` and ``at -> after``: from
+        the heading it arrived on to the one it leaves on, on the stop-turn-go profile's ramped yaw rate
+        (:func:`energy.profiles.move_duration_s` at the cost's turn rate; 0 where it leaves on the heading it came).
+        The stop-and-go there is in the two legs' own times (each is driven from rest to rest).
+
+        Raises
+        ------
+        InvalidParameterError
+            A leg that no route joins; prices without their cost.
+        """
+        cost = self._priced_cost("the turns at the stops")
+        ways = (self.waypoints[before][at], self.waypoints[at][after])
+        if before == at or at == after:
+            return 0.0
+        if ways[0] is None or ways[1] is None:
+            raise InvalidParameterError(f"the turn at {at!r} between {before!r} and {after!r} uses a leg that no "
+                                        "route joins")
+        angle = _heading_change_rad(*ways)
+        if angle <= COLLINEAR_TOL_RAD:
+            return 0.0
+        return float(move_duration_s(angle, cost.turn_rate_radps, DEFAULT_YAW_ACCEL_RADPS2))
+
+    @property
+    def longest_turn_s(self) -> float:
+        """The longest pivot at a stop (s): a U-turn at the cost's turn rate, what the solver allows on every leg
+        leaving a stop (:meth:`planner.tours.TourProblem.build`: a bound, so time windows and longest tours hold
+        for the turns the robot makes)."""
+        cost = self._priced_cost("the turns at the stops")
+        return float(move_duration_s(math.pi, cost.turn_rate_radps, DEFAULT_YAW_ACCEL_RADPS2))
+
     def tour_interval(self, points: Any, extra_mean_j: float = 0.0, *, arrived_from: int | None = None
                       ) -> RouteEnergyInterval:
         """The energy distribution of driving the legs ``points[0] -> points[1] -> ...`` in one run: what the robot
         drives, the legs joined into one route priced by :func:`planner.route_price.price_route` (the turn in place
-        at every stop between two legs included; from a free heading at ``points[0]``, none after the last).
+        at every stop between two legs included, and its stop-and-go where the robot leaves on the heading it
+        came: it stops to serve every stop; from a free heading at ``points[0]``, none after the last).
 
         The spreads of one ground add linearly along the whole route; grounds combine by the root of
         the sum of squares. ``extra_mean_j`` (e.g. the sites' service energy) is added to the mean.
@@ -206,7 +254,28 @@ class PairPrices:
         per_ground = np.zeros(len(self.ground_labels))
         for label, sd in price.sd_by_ground_j.items():
             per_ground[index[label]] = sd
-        return price.mean_j, per_ground
+        mean = price.mean_j
+        # the robot stops at every stop to serve it: where it arrives and leaves on one heading the joined route
+        # drives through, so the stop-and-go there is added (the turn table's column 0, its spread too)
+        through = [w[0] for v, w in zip(ways[:-1], ways[1:]) if _heading_change_rad(v, w) <= COLLINEAR_TOL_RAD]
+        if through:
+            xy = np.array(through)
+            r, c = cost.terrain.rowcol(xy[:, 0], xy[:, 1])
+            rows = np.asarray(cost.ground_rows)[r, c]
+            mean += float(np.sum(cost.stop_go_at(rows)))
+            if cost.has_interval:
+                for row in rows.tolist():
+                    per_ground[index[self.ground_labels[row]]] += float(cost.tables.turn_sd_table_j[row, 0])
+        return mean, per_ground
+
+
+def _heading_change_rad(arriving: np.ndarray, leaving: np.ndarray) -> float:
+    """The heading change (rad, in [0, pi]) where the leg ``arriving`` ends and the leg ``leaving`` starts (their
+    last and first segments of positive length)."""
+    a, b = np.diff(arriving, axis=0), np.diff(leaving, axis=0)
+    a, b = a[np.hypot(a[:, 0], a[:, 1]) > 0][-1], b[np.hypot(b[:, 0], b[:, 1]) > 0][0]
+    change = math.atan2(b[1], b[0]) - math.atan2(a[1], a[0])
+    return abs((change + math.pi) % (2.0 * math.pi) - math.pi)
 
 
 def _difference(whole: np.ndarray, part: np.ndarray) -> np.ndarray:
@@ -243,9 +312,7 @@ def price_from(search_cost: EnergyCost, cost: EnergyCost, i: int, xy_m: np.ndarr
                 sd[j, index[label]] = s
         else:
             mean[j] = price_route(cost, pts, interval=False).mean_j
-        angles, _ = cost.turn_energies_j(pts)
-        length = float(np.sum(np.hypot(*np.diff(pts, axis=0).T)))
-        dur[j] = length / cost.speed_mps + float(np.sum(angles)) / cost.turn_rate_radps
+        dur[j] = route_duration_s(pts, cost.speed_mps, cost.turn_rate_radps)
         ways[j] = pts
     return i, mean, sd, dur, ways
 

@@ -51,7 +51,8 @@ class TourLeg:
         stop, the turn in place there from the heading the robot arrived on (none leaving the depot), so the legs
         of a tour add up to its energy.
     duration_s : float
-        Driving time (s).
+        Driving time (s): its route driven stop-turn-go from rest to rest and, leaving a stop, the pivot there
+        (:meth:`planner.tours.pricing.PairPrices.turn_time_s`), so the legs of a tour add up to its driving time.
     """
 
     start: str

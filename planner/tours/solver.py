@@ -20,6 +20,9 @@ five (value 3-14 against exact optima 4-15), where the quarter turn reached the 
 all six (and in two of three instances with chargers: docs/tours.md). No turn is counted where a
 tour starts (its depot: a free heading, as the mission simulator starts facing its first segment)
 nor where it ends; a tour leaving a charger turns there first (in the segment after the charge).
+In time the matrix allows the longest pivot (a U-turn) on every leg leaving a stop: a bound of a
+few seconds a stop (:attr:`PairPrices.longest_turn_s`), so the time windows and longest tours the
+solver keeps hold for the turns the robot makes; the reported timeline counts the turns made.
 
 The chosen tours are then checked on their own quantile, priced exactly as the route the robot
 drives (:meth:`PairPrices.tour_interval`: the legs joined, the turns at the stops included, the
@@ -73,16 +76,17 @@ _PYVRP_NO_CHARGERS = ("solver 'pyvrp' cannot stop at charging points (its reload
 
 
 def walk_timeline(drive_s: np.ndarray, service_s: np.ndarray, window_s: np.ndarray,
-                  seq: Sequence[int]) -> tuple[list[Any], list[Any], Any]:
+                  seq: Sequence[int], turn_s: Sequence[Any] | None = None) -> tuple[list[Any], list[Any], Any]:
     """Arrival and start of service at each site of the tour ``seq`` (``depot, sites..., depot``, point
     indices) leaving at 0 and waiting where a window has not opened yet, and the return to the depot: in the
     arrays' own units (the solver's whole seconds, or the result's seconds); a start past a window's latest is
-    returned as it is (the caller decides)."""
+    returned as it is (the caller decides). ``turn_s``: the pivot at each stop ``seq[1:-1]`` after its service,
+    before the robot leaves (none: the legs' times hold it, as the solver's do)."""
     t, arrivals, starts = drive_s.dtype.type(0), [], []
-    for a, b in zip(seq[:-2], seq[1:-1]):
+    for k, (a, b) in enumerate(zip(seq[:-2], seq[1:-1])):
         arrivals.append(t + drive_s[a, b])
         starts.append(max(arrivals[-1], window_s[b, 0]))
-        t = starts[-1] + service_s[b]
+        t = starts[-1] + service_s[b] + (turn_s[k] if turn_s is not None else 0)
     back = t + drive_s[seq[-2], seq[-1]] if len(seq) >= 2 else t
     return arrivals, starts, back
 
@@ -118,7 +122,9 @@ class TourProblem:
     unit_j : float
         Joules per unit.
     drive_s : ndarray of int64, shape (P, P)
-        Driving time of leg ``i -> j`` (turns included), whole seconds rounded up (:data:`HORIZON_S` where
+        Driving time of leg ``i -> j`` (stop-turn-go, its ramps included) plus, leaving a site or a charger, the
+        longest pivot there (a U-turn, :attr:`PairPrices.longest_turn_s`: a bound on the turn the robot makes, so
+        windows and longest tours hold), whole seconds rounded up (:data:`HORIZON_S` where
         no route joins them).
     service_s : ndarray of int64, shape (P,)
         Service time at each point, whole seconds rounded up (0 at the depots).
@@ -234,7 +240,8 @@ class TourProblem:
         sites = np.asarray(site_points, dtype=np.int64)
         weight = int(cap.sum()) + 1
         prize = np.round(np.asarray(values, dtype=float)[sites] * VALUE_SCALE).astype(np.int64) * weight
-        dur = np.asarray(prices.duration_s, dtype=float)
+        dur = np.asarray(prices.duration_s, dtype=float) + prices.longest_turn_s  # the pivot at the stop it leaves
+        dur[np.asarray(depot_points, dtype=np.int64)] -= prices.longest_turn_s  # none at a depot
         drive = np.where(np.isfinite(dur), np.ceil(np.minimum(dur, HORIZON_S) - 1e-9), HORIZON_S).astype(np.int64)
         np.fill_diagonal(drive, 0)
         n = units.shape[0]

@@ -173,7 +173,7 @@ def plan_tour(
     stop_s = chargers.stop_time_s(refill_j) if chargers is not None else np.zeros(0)
     value = np.concatenate([np.zeros(nd), sites.value[kept], np.zeros(nc)])
     service = np.concatenate([np.zeros(nd), sites.service_energy_j[kept], np.zeros(nc)])
-    timing = _Timing(prices.duration_s, np.concatenate([np.zeros(nd), sites.service_time_s[kept], stop_s]),
+    timing = _Timing(prices, np.concatenate([np.zeros(nd), sites.service_time_s[kept], stop_s]),
                      np.vstack([np.tile([0.0, np.inf], (nd, 1)), sites.time_window_s[kept],
                                 np.tile([0.0, np.inf], (nc, 1))]))
     depot_points = np.array([depots.index(rb.depot_xy_m) for rb in fleet])
@@ -234,18 +234,24 @@ def plan_tour(
 
 
 class _Timing:
-    """Driving times (s) per leg, service time (s) and time window (s) per point: a tour's timeline."""
+    """Driving times (s) per leg, service time (s) and time window (s) per point, the pivots at the stops: a tour's
+    timeline."""
 
-    def __init__(self, drive_s: np.ndarray, service_s: np.ndarray, window_s: np.ndarray) -> None:
-        self.drive_s, self.service_s, self.window_s = np.asarray(drive_s, float), service_s, window_s
+    def __init__(self, prices: PairPrices, service_s: np.ndarray, window_s: np.ndarray) -> None:
+        self.prices, self.service_s, self.window_s = prices, service_s, window_s
+        self.drive_s = np.asarray(prices.duration_s, float)
+
+    def turns(self, seq: list[int]) -> list[float]:
+        """The pivot (s) at each stop ``seq[1:-1]`` before the robot leaves it (:meth:`PairPrices.turn_time_s`)."""
+        return [self.prices.turn_time_s(a, b, c) for a, b, c in zip(seq, seq[1:], seq[2:])]
 
     def walk(self, seq: list[int]) -> tuple[tuple[float, ...], tuple[float, ...], float]:
         """Arrival and start of service at each site of ``depot, sites..., depot`` leaving at 0 (waiting until a
-        window opens), and the return to the depot (s)."""
+        window opens; pivoting at each stop after its service), and the return to the depot (s)."""
         if not seq:
             return (), (), 0.0
         arrivals, starts, back = walk_timeline(self.drive_s, np.asarray(self.service_s, float),
-                                               np.asarray(self.window_s, float), seq)
+                                               np.asarray(self.window_s, float), seq, self.turns(seq))
         return tuple(map(float, arrivals)), tuple(map(float, starts)), float(back)
 
 
@@ -268,13 +274,15 @@ def _tour(prices: PairPrices, robot: TourRobot, stops: list[int], depot: int, po
     seq = [depot, *stops, depot] if stops else []
     sites = [p for p in stops if p not in chargers]
     arrivals, starts, back = timing.walk(seq)
+    turns = [0.0, *timing.turns(seq)]  # the pivot each leg starts with (none at the depot)
     waiting = [robot.standby_power_w * (b - a) for a, b in zip(arrivals, starts)]  # electronics while it waits
     legs, cumulative = [], []
     first, served = 0, 0.0
     for k, (a, b) in enumerate(zip(seq[:-1], seq[1:])):
         came_from = seq[k - 1] if k else None  # a leg leaving a stop turns there first (none at the depot)
         legs.append(TourLeg(prices.names[a], prices.names[b], prices.waypoints[a][b],
-                            prices.tour_interval([a, b], arrived_from=came_from), float(prices.duration_s[a, b])))
+                            prices.tour_interval([a, b], arrived_from=came_from),
+                            float(prices.duration_s[a, b]) + turns[k]))
         served += float(service[b]) + (waiting[k] if k < len(waiting) else 0.0)
         # since the depot or the last charge (a segment leaving a charger turns there first)
         cumulative.append(prices.tour_interval(seq[first:k + 2], served, arrived_from=seq[first - 1] if first else None))

@@ -71,3 +71,29 @@ def test_a_tour_still_above_its_budget_after_the_last_round_loses_stops(corridor
     monkeypatch.undo()
     again = plan_tour(cost, TourSites(("site",), [SITE]), robot, prices=prices, search=TourSearch(risk=0.9))
     assert again.visited == () and again.solve_rounds == 2  # the allowance raised to the U-turn, solved again
+
+
+def test_a_site_passed_straight_through_pays_its_stop_and_go_and_its_time():
+    # depot, near and far on one line: the tour drives straight on through one site and turns back at the other
+    cost = CostSpec().build(flat_map((12, 40), 1.0))
+    sites = TourSites(("near", "far"), [(15.5, 5.5), (30.5, 5.5)])
+    res = plan_tour(cost, sites, TourRobot(Battery(1.0, 24.0), DEPOT))
+    tour, prices = res.tours[0], res.prices
+    assert set(tour.sites) == {"near", "far"}
+    seq = [0, *(prices.names.index(s) for s in tour.stops), 0]
+    triples = list(zip(seq, seq[1:], seq[2:]))
+    turns = [prices.turn_time_s(*t) for t in triples]
+    through = turns.index(0.0)  # driven straight on there: no pivot ...
+    assert turns[1 - through] == pytest.approx(np.pi / 0.5 + 0.5)  # a U-turn at 0.5 rad/s, ramped at 1 rad/s^2
+    assert float(cost.stop_go_at([0])[0]) > 10.0
+    # ... but a stop: the tour pays the stop-and-go at every site (each leg's own, from rest to rest) and the pivot
+    legs = sum(prices.mean_j[a, b] for a, b in zip(seq[:-1], seq[1:]))
+    assert prices.turn_interval(*triples[through]).mean_j == pytest.approx(0.0, abs=1e-6)
+    pivot = prices.turn_interval(*triples[1 - through]).mean_j
+    assert tour.energy.mean_j == pytest.approx(legs + pivot, rel=1e-9)
+    # and its time: each leg driven from rest to rest (13 m at 0.5 m/s plus 1 s of ramps), each pivot after serving
+    assert prices.duration_s[0, prices.names.index("near")] == pytest.approx(13.0 / 0.5 + 1.0)
+    drive = prices.duration_s
+    assert tour.arrival_s[1] == pytest.approx(drive[0, seq[1]] + turns[0] + drive[seq[1], seq[2]])
+    assert tour.return_s == pytest.approx(tour.arrival_s[1] + turns[1] + drive[seq[2], 0])
+    assert tour.duration_s == pytest.approx(tour.return_s)  # no service, no wait: the legs' times add up

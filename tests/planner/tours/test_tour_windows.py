@@ -114,7 +114,9 @@ def test_a_site_whose_window_closes_before_any_robot_arrives_is_left_out_as_such
     assert res.left_out == {"shut": OUTSIDE_WINDOW, "far": TOO_FAR, "sliver": OUTSIDE_WINDOW}
     tour = res.tours[0]
     assert tour.sites == ("near",) and tour.arrival_s[0] < 100.0 and tour.service_start_s == (100.0,)
-    assert tour.return_s == pytest.approx(130.0 + res.prices.duration_s[1, 0])
+    # served 100-130 s, then the pivot at near (back the way it came: a U-turn) and the leg home
+    assert res.prices.turn_time_s(0, 1, 0) > 6.0
+    assert tour.return_s == pytest.approx(130.0 + res.prices.turn_time_s(0, 1, 0) + res.prices.duration_s[1, 0])
     text = res.summary()
     assert "left out, outside its time window: shut, sliver" in text and "waits until 100" in text
     doc = res.to_dict()
