@@ -14,7 +14,7 @@ spread, the point update's mean, the prefix's evidence ``obs, E, R, G`` and the 
 - ``learned, no members``: the members' disagreement left out of the run spread.
 
 Printed and written (``--out``): per ground and pooled, per T, the coverage of the total charge's 50 / 80 / 95 %
-intervals, the median |z|, the mean log score (the log predictive density of the measured charge relative to
+intervals (each forecast's own predictive: a Student-t where it is one), the median |z|, the mean log score (the log predictive density of the measured charge relative to
 itself: a proper score, higher is better) and the total-charge error median / p90 %.
 
 Usage::
@@ -67,7 +67,8 @@ def fold_rows(model: Any, log: Any, name: str, adapt_seconds: tuple[float, ...])
                     "truth": log_currents(log), "base": fc.mean_a, "mean": upd.correct(log, fc.mean_a),
                     "run_sd": fc.run_sd_a, "sample_sd": fc.sample_sd_a,
                     "run2": interval.run_sd_a(log, fc.mean_a, known=True) ** 2, "evidence": upd.evidence_,
-                    "carry": interval.run_carry, "known": model.knows_ground(log.meta.ground_label)})
+                    "carry": interval.run_carry, "known": model.knows_ground(log.meta.ground_label),
+                    "dof": float(fc.dof)})
     return out
 
 
@@ -120,6 +121,9 @@ RULES = {
 def score(row: dict[str, Any], run_sd: np.ndarray, mean: np.ndarray) -> dict[str, float]:
     """The remainder's total charge (both sides) against the forecast (as :meth:`CurrentForecast.charge`)."""
     from scipy.stats import norm
+    from scipy.stats import t as student_t
+
+    from energy.models.forecast import central_level
 
     m = row["rem"]
     t = row["t"][m]
@@ -129,17 +133,18 @@ def score(row: dict[str, Any], run_sd: np.ndarray, mean: np.ndarray) -> dict[str
     q_white = np.sqrt(np.sum((row["sample_sd"][m] * np.gradient(t)[:, None]) ** 2, axis=0))
     sd = math.sqrt(float(q_run.sum()) ** 2 + float(np.sum(q_white**2)))
     z = (q_true - q_mean) / sd
-    return {"z": z, "err": 100.0 * abs(q_true - q_mean) / abs(q_true),
-            "log_score": float(norm.logpdf(z)) - math.log(sd / abs(q_true))}
+    dof = row.get("dof", math.inf)  # the forecast's Student-t (a cache from before: Gaussian)
+    density = float(norm.logpdf(z)) if math.isinf(dof) else float(student_t.logpdf(z, dof))
+    return {"z": z, "level": float(central_level(z, dof)), "err": 100.0 * abs(q_true - q_mean) / abs(q_true),
+            "log_score": density - math.log(sd / abs(q_true))}
 
 
 def summary(scores: list[dict[str, float]]) -> dict[str, Any]:
     """Coverage % of the :data:`LEVELS` intervals, median |z|, mean log score, error median / p90 %, count."""
-    from scipy.stats import norm
-
     az = np.abs([s["z"] for s in scores])
+    level = np.array([s["level"] for s in scores])
     errs = [s["err"] for s in scores]
-    return {"coverage": [100.0 * float(np.mean(az <= norm.ppf(0.5 + lv / 2))) for lv in LEVELS],
+    return {"coverage": [100.0 * float(np.mean(level <= lv)) for lv in LEVELS],
             "median_abs_z": float(np.median(az)), "log_score": float(np.mean([s["log_score"] for s in scores])),
             "err_median": float(np.median(errs)), "err_p90": float(np.percentile(errs, 90)), "n": len(scores)}
 

@@ -26,7 +26,6 @@ from __future__ import annotations
 import importlib.metadata
 import io
 import json
-import math
 import os
 import platform
 import zipfile
@@ -541,7 +540,7 @@ class CurrentModel:
         if own_spread_a is not None:
             run = np.sqrt(run**2 + own_spread_a**2)
         return CurrentForecast(log.time_s, mean, run, interval.sample_sd(log),
-                               math.inf if known else interval.new_ground_dof)
+                               interval.run_dof(log.meta.ground_label) if known else interval.new_ground_dof)
 
     def score(self, logs: InteractionLog | Sequence[InteractionLog]) -> float:
         """Coefficient of determination R² of the per-sample currents, both sides pooled.

@@ -14,12 +14,13 @@ deviations that differ in how they add up over time:
 
 The charge of a stretch then has mean ``∫ mean dt`` and scale
 ``sqrt((∫ run_sd dt)² + Σ (sample_sd Δt)²)`` (per side; for both sides the run parts add
-linearly). Its shape is Gaussian where the spreads were learned on the forecast's own
-ground; on a ground the model never drove it is a **Student-t with** ``dof`` **degrees of
-freedom** — the number of grounds the new-ground spread was learned from
-(:attr:`~energy.models.uncertainty.IntervalModel.new_ground_dof`): a spread estimated from
-two or three grounds is itself uncertain, and its tails are heavier than a Gaussian's
-(``dof = inf`` is the Gaussian). A route crossing several grounds is priced the same way per ground, the grounds
+linearly). Its shape is a **Student-t with** ``dof`` **degrees of freedom**: on a ground the
+model never drove, the number of grounds the new-ground spread was learned from
+(:attr:`~energy.models.uncertainty.IntervalModel.new_ground_dof`); on a ground it drove, the
+number of runs its run spread was read from
+(:meth:`~energy.models.uncertainty.IntervalModel.run_dof`): a spread estimated from a few
+grounds or runs is itself uncertain, and its tails are heavier than a Gaussian's (``dof = inf``
+is the Gaussian: a model file from before the counts were recorded). A route crossing several grounds is priced the same way per ground, the grounds
 being independent of each other (see :func:`combine_ground_sds`).
 
 A model without an interval returns zero spreads (``has_interval`` False).

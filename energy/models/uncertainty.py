@@ -19,7 +19,12 @@ The error of a current model on a run is split in two (see :mod:`energy.models.f
   known ground differ from the model, fitted per ground where it has runs enough, else
   pooled) plus, for a ground the model never drove, the **new-ground covariance** (how far
   a ground left out of the fit lies from a model fitted on the others). The spread
-  ``sqrt(phi S phi)`` is heteroscedastic in the current level, turn rate and ground.
+  ``sqrt(phi S phi)`` is heteroscedastic in the current level, turn rate and ground. A run
+  covariance from few runs is shrunk to its diagonal, which alone forecasts a charge wider or
+  narrower than any run was off (the columns trade off within a run): its scale is read where
+  it is used, from the whole-run residual charges it was fitted on
+  (:meth:`IntervalModel.charge_scale`). The new-ground covariance keeps the scale of its
+  diagonal: two to five grounds cannot tell it (measured: docs/results.md).
 - a **per-sample** part (sensor noise, bumps): a standard deviation per side and regime
   (rest, straight, turning) with an integrated correlation time ``correlation_s``; over a
   stretch it averages out.
@@ -176,7 +181,9 @@ class IntervalModel:
         Of the regime basis.
     run_cov : dict of str to ndarray (2, 4, 4)
         Per ground (training label, lower case) and pooled (``"*"``): the second moment of
-        the run-level regime coefficients of out-of-fold residuals, per side.
+        the run-level regime coefficients of out-of-fold residuals, per side, scaled so that it
+        forecasts those runs' residual charges (:meth:`charge_scale`; a model file from before
+        holds it unscaled).
     new_ground_cov : ndarray (2, 4, 4) or None
         Added for a ground the model never drove; ``None`` when the training logs held one
         ground only (nothing to learn it from: such a forecast carries the run spread only).
@@ -192,6 +199,9 @@ class IntervalModel:
     n_grounds : int
         Grounds the new-ground covariance was learned from (0: none, or a file from before
         it was recorded).
+    run_counts : dict of str to int or None
+        Per key of :attr:`run_cov`, the training runs it was fitted and scaled on (the pooled key:
+        all of them); ``None`` in a model file from before they were recorded.
     run_carry : float or None
         How much of a run's own offset carries along it: the correlation, over the training
         runs, of the run-level parts of the residual charges of each run's two halves (the
@@ -210,6 +220,7 @@ class IntervalModel:
     n_runs: int
     n_grounds: int = 0
     run_carry: float | None = None
+    run_counts: dict[str, int] | None = None
 
     @property
     def new_ground_dof(self) -> float:
@@ -222,6 +233,20 @@ class IntervalModel:
         covariance or a recorded count.
         """
         return float(self.n_grounds) if self.new_ground_cov is not None and self.n_grounds > 0 else math.inf
+
+    def run_dof(self, ground: str | None) -> float:
+        """Degrees of freedom of a forecast on ``ground``, a ground the model drove.
+
+        The scale of the run covariance is read from the residual charges of the runs it was fitted
+        on (:meth:`charge_scale`), so a run's spread is itself an estimate from as many runs and the
+        forecast a Student-t with as many degrees of freedom: heavy-tailed where a ground taught it
+        with a handful of runs, near Gaussian with many. ``inf`` (Gaussian) in a model file from
+        before the counts were recorded.
+        """
+        if self.run_counts is None:
+            return math.inf
+        key = str(ground).lower() if ground is not None else _POOLED
+        return float(self.run_counts.get(key if key in self.run_cov else _POOLED, self.n_runs))
 
     # ------------------------------------------------------------------ fit
     @classmethod
@@ -283,7 +308,49 @@ class IntervalModel:
             new_cov = _diagonal(_second_moment(np.stack(means)))
         interval = cls(float(turn_scale_radps), run_cov, new_cov, sample_sd, float(correlation), bool(cross_validated),
                        len(logs), n_grounds)
-        return dataclasses.replace(interval, run_carry=interval.carry_along_runs(logs, residuals_a))
+        run_cov = {key: cov * interval.charge_scale([i for i, lb in enumerate(labels) if key in (_POOLED, lb)],
+                                                    logs, residuals_a, predictions_a, cov)
+                   for key, cov in run_cov.items()}
+        counts = {key: sum(key in (_POOLED, lb) for lb in labels) for key in run_cov}
+        return dataclasses.replace(interval, run_cov=run_cov, run_counts=counts,
+                                   run_carry=interval.carry_along_runs(logs, residuals_a))
+
+    def charge_scale(self, runs: Sequence[int], logs: Sequence[InteractionLog], residuals_a: Sequence[np.ndarray],
+                     predictions_a: Sequence[np.ndarray], cov: np.ndarray) -> float:
+        """The factor on a run covariance ``cov`` that makes it forecast the residual charges of the ``runs`` it was fitted on.
+
+        A run covariance is a second moment of per-run regime coefficients, shrunk towards its diagonal
+        where few runs inform it (:func:`_shrunk`: fully below four runs). The columns trade off within a
+        run — a gain and an offset fitted on one current level are nearly one degree of freedom — so their
+        diagonal alone forecasts a run's charge wider or narrower than any run was off: on the independent
+        generator (three training runs a ground) 3 to 12 times the residual charges' spread. The scale of
+        the spread is therefore read at the level it is used, the whole-run charge: per run and side, the
+        out-of-fold residual charge ``q`` (A s), the variance ``E`` the per-sample noise explains
+        (:meth:`noise_charge_var`) and the run spread's forecast ``s = integral(run_sd) dt`` (as
+        :meth:`~energy.models.forecast.CurrentForecast.charge` integrates it); the factor is ``(sum(q²) -
+        sum(E)) / sum(s²)``. ``1.0`` (the covariance as fitted) where the runs show no run-level part
+        above the noise or the factor is not finite.
+
+        Parameters
+        ----------
+        runs : sequence of int
+            Indices of the runs (of ``logs``) the covariance was fitted on.
+        logs, residuals_a, predictions_a
+            As :meth:`fit`'s.
+        cov : ndarray (2, 4, 4)
+            The run covariance to scale.
+        """
+        num = den = 0.0
+        for i in runs:
+            lg = logs[i]
+            if len(lg) < 2:
+                continue
+            t = lg.time_s
+            forecast = _trapezoid(self.run_sd_a(lg, np.asarray(predictions_a[i]), known=True, cov=cov), t, axis=0)
+            num += float(np.sum(_trapezoid(np.asarray(residuals_a[i]), t, axis=0) ** 2 - self.noise_charge_var(lg)))
+            den += float(np.sum(forecast**2))
+        factor = num / den if den > 0 else math.nan
+        return factor if math.isfinite(factor) and factor > 0 else 1.0
 
     def carry_along_runs(self, logs: Sequence[InteractionLog], residuals_a: Sequence[np.ndarray]) -> float | None:
         """:attr:`run_carry` from residual currents ``residuals_a`` (N, 2) of ``logs`` (see the attribute).
@@ -351,7 +418,8 @@ class IntervalModel:
         return {"turn_scale_radps": self.turn_scale_radps, "run_cov": dict(self.run_cov),
                 "new_ground_cov": self.new_ground_cov, "sample_sd_a": self.sample_sd_a,
                 "correlation_s": self.correlation_s, "cross_validated": self.cross_validated, "n_runs": self.n_runs,
-                "n_grounds": self.n_grounds, "run_carry": self.run_carry}
+                "n_grounds": self.n_grounds, "run_carry": self.run_carry,
+                "run_counts": None if self.run_counts is None else dict(self.run_counts)}
 
     @classmethod
     def from_plain(cls, d: Mapping[str, Any]) -> IntervalModel:
@@ -384,4 +452,15 @@ class IntervalModel:
         return cls(scale, run_cov, None if new is None else cov("new_ground_cov", new), sd, corr,
                    check_bool("cross_validated", d["cross_validated"]), check_int("n_runs", d["n_runs"], low=0),
                    check_int("n_grounds", d.get("n_grounds", 0), low=0),  # absent before it was recorded
-                   None if d.get("run_carry") is None else check_real("run_carry", d["run_carry"], low=0.0, high=1.0))
+                   None if d.get("run_carry") is None else check_real("run_carry", d["run_carry"], low=0.0, high=1.0),
+                   _run_counts(d.get("run_counts"), run_cov))  # both absent before they were recorded
+
+
+def _run_counts(value: Any, run_cov: Mapping[str, np.ndarray]) -> dict[str, int] | None:
+    """The saved :attr:`IntervalModel.run_counts` (None: absent), one count >= 1 per key of ``run_cov``."""
+    if value is None:
+        return None
+    counts = {str(k): check_int(f"run_counts[{k}]", v, low=1) for k, v in dict(value).items()}
+    if set(counts) != set(run_cov):
+        raise ValueError(f"run_counts must have one count per run covariance ({sorted(run_cov)}), got {sorted(counts)}")
+    return counts

@@ -22,7 +22,10 @@ def fold():
     fitted, train = fit_two_ground_estimator()
     est = with_carry(fitted, 0.6)  # its runs' offsets are noise only: no carry learned
     run = train[1]  # a ground the model drove, as in the adapt protocol
-    shifted = dataclasses.replace(run, current_left_a=run.current_left_a + 0.6, current_right_a=run.current_right_a + 0.6)
+    own = est.interval_.run_sd_a(run, est.predict(run), known=True)
+    shift = 2.0 * np.sqrt(np.median(own**2, axis=0))  # an offset of two of its learned run spreads
+    shifted = dataclasses.replace(run, current_left_a=run.current_left_a + shift[0],
+                                  current_right_a=run.current_right_a + shift[1])
     return est, shifted, wr.fold_rows(est, shifted, "a/1", (10.0, 20.0))
 
 

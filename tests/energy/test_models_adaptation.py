@@ -304,7 +304,12 @@ def test_prior_shrink_learns_nothing_of_a_ground_the_model_drove(two_ground_esti
     other_runs = AdaptedCurrentModel(est, scope="ground").fit(prefix)
     np.testing.assert_array_equal(other_runs.shrink_, [0.0, 0.0])  # its offset is known: zero
     np.testing.assert_allclose(other_runs.predict(train[2]), est.predict(train[2]))
-    assert np.all(AdaptedCurrentModel(est, scope="run").fit(prefix).shrink_ > 0.5)
+    # the rest of the prefix's own run: its offset carries by the run part's share of the prefix's evidence
+    same_run = AdaptedCurrentModel(est, scope="run").fit(prefix)
+    _, noise, run, ground = same_run.evidence_
+    np.testing.assert_array_equal(ground, [0.0, 0.0])
+    np.testing.assert_allclose(same_run.shrink_, run / (run + noise), rtol=1e-9)
+    assert np.all(same_run.shrink_ > 0.1)
 
 
 def test_prior_shrink_without_a_learned_ground_spread_reads_the_evidence(two_ground_estimator):

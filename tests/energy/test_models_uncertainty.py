@@ -6,6 +6,7 @@ from interval_samples import interval_log
 
 from energy.logs import rest_samples
 from energy.models.uncertainty import IntervalModel, regime_design, run_coefficients
+from energy.power import trapezoid
 
 
 def test_interval_model_learns_the_run_to_run_spread_of_offsets():
@@ -47,21 +48,27 @@ def test_run_coefficients_reproduce_a_known_offset_and_a_known_gain():
 
 
 
-def test_a_new_ground_forecast_is_a_student_t_with_as_many_degrees_of_freedom_as_grounds_taught_it():
+def test_a_forecast_is_a_student_t_with_as_many_degrees_of_freedom_as_grounds_or_runs_taught_it():
     from interval_samples import fit_two_ground_estimator, interval_log
 
     from energy.models.uncertainty import IntervalModel
 
     est, train = fit_two_ground_estimator()
     assert est.interval_.n_grounds == 2 and est.interval_.new_ground_dof == 2.0
-    assert est.predict_distribution(train[0]).dof == np.inf  # a ground it trained on: Gaussian
+    assert est.predict_distribution(train[0]).dof == 4.0  # a ground it trained on: as many as its runs (4 of "a")
     new = est.predict_distribution(interval_log(50, "c"))
     assert new.dof == 2.0 and new.charge().dof == 2.0
     assert est.adapt(interval_log(51, "c").slice(0.0, 20.0)).predict_distribution(interval_log(52, "c")).dof == 2.0
     plain = est.interval_.to_plain()
     assert IntervalModel.from_plain(plain).n_grounds == 2
-    del plain["n_grounds"]  # a model file from before the count was recorded keeps its Gaussian forecasts
-    assert IntervalModel.from_plain(plain).new_ground_dof == np.inf
+    assert IntervalModel.from_plain(plain).run_counts == {"*": 8, "a": 4, "b": 4}
+    del plain["n_grounds"], plain["run_counts"]  # a model file from before the counts: Gaussian forecasts
+    old = IntervalModel.from_plain(plain)
+    assert old.new_ground_dof == np.inf and old.run_dof("a") == np.inf and old.run_counts is None
+    with pytest.raises(ValueError, match="one count per run covariance"):
+        IntervalModel.from_plain(est.interval_.to_plain() | {"run_counts": {"*": 8}})
+    with pytest.raises(ValueError):
+        IntervalModel.from_plain(est.interval_.to_plain() | {"run_counts": {"*": 0, "a": 4, "b": 4}})
 
 
 def _offset_runs(halves_agree: bool, n: int = 30, seed: int = 5):
@@ -107,3 +114,30 @@ def test_a_carry_is_never_learned_from_non_finite_residuals():
     broken = [r.copy() for r in residuals]
     broken[2][5, 0] = np.nan
     assert iv.carry_along_runs(logs, broken) is None  # a file must stay loadable: no NaN saved as the carry
+
+
+def test_a_run_spread_from_few_runs_forecasts_their_residual_charges():
+    # three runs offset by +-0.8 A (second moment 0.64 A²) and per-sample noise: the regime coefficients of so few
+    # runs are shrunk to their diagonal and the ridge splits the offset between columns, so the covariance alone
+    # forecasts a spread that no run showed (0.49 A here); scaled at the charge level it is the runs' own 0.8 A
+    rng = np.random.default_rng(1)
+    logs, residuals = [], []
+    for s, off in enumerate([0.8, -0.8, 0.8]):
+        lg = interval_log(s, duration_s=30.0)
+        logs.append(lg)
+        residuals.append(off + 0.2 * rng.standard_normal((len(lg), 2)))
+    preds = [np.full((len(lg), 2), 3.0) for lg in logs]
+    iv = IntervalModel.fit(logs, residuals, preds, cross_validated=True)
+    new = interval_log(9, duration_s=30.0)
+    assert np.median(iv.run_sd_a(new, np.full((len(new), 2), 3.0), known=True)) == pytest.approx(0.8, rel=0.05)
+    # what it promises: the training runs' residual charges, less the noise's share, are what their spread forecasts
+    forecast = sum(float(np.sum(trapezoid(iv.run_sd_a(lg, p, known=True), lg.time_s, axis=0) ** 2))
+                   for lg, p in zip(logs, preds))
+    seen = sum(float(np.sum(trapezoid(r, lg.time_s, axis=0) ** 2 - iv.noise_charge_var(lg)))
+               for lg, r in zip(logs, residuals))
+    assert forecast == pytest.approx(seen, rel=1e-9)
+    # runs whose charges show nothing above the noise keep the covariance as fitted (never a spread of zero)
+    flat = [np.zeros((len(lg), 2)) for lg in logs]
+    assert iv.charge_scale(range(3), logs, flat, preds, np.stack([np.eye(4)] * 2)) == 1.0
+    assert iv.charge_scale(range(3), logs, residuals, preds, np.stack([np.eye(4)] * 2)) < 1.0
+

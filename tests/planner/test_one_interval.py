@@ -45,9 +45,10 @@ def _run(seed, ground, offset_a):
 
 @pytest.fixture(scope="module")
 def linear_model():
-    """A linear model with a cross-validated interval from three grounds: a new ground's forecast is a t with 3 dof."""
+    """A linear model with a cross-validated interval from three grounds of four runs: a new ground's forecast is a t
+    with 3 dof, a known ground's one with 4 (its runs)."""
     logs = [_run(10 * k + s, g, offset) for k, (g, offset) in enumerate((("a", 0.0), ("b", 0.6), ("c", -0.5)))
-            for s in range(3)]
+            for s in range(4)]
     return fit_interval(LinearCurrentModel(), logs, folds=3)
 
 
@@ -80,9 +81,9 @@ def test_the_model_s_new_ground_dof_reaches_the_cost_rows_and_the_route_interval
     tmap, lem, cost = world
     dof = linear_model.interval_.new_ground_dof
     assert dof == 3.0
-    # the model's own forecast: a t on a ground it never drove, Gaussian on one it knows
+    # the model's own forecast: a t with as many dof as grounds on a ground it never drove, as runs on one it knows
     assert linear_model.predict_distribution(_run(99, "grass", 0.0)).dof == dof
-    assert math.isinf(linear_model.predict_distribution(_run(99, "a", 0.0)).dof)
+    assert linear_model.predict_distribution(_run(99, "a", 0.0)).dof == linear_model.interval_.run_dof("a") == 4.0
     assert cost.tables.ground_labels == ("linear", "loam") and cost.tables.spread_dof == (dof, math.inf)
     assert lem.table(lem.registry.prior_id).dof == dof
     iv = price_route(cost, _route(tmap, cost, GRASS_START, GRASS_GOAL))
@@ -167,13 +168,13 @@ def test_degrees_of_freedom_are_checked_where_they_enter(world):
         RouteEnergyInterval(1000.0, 100.0, {"sand": 100.0}, dof=3.0, dof_by_ground={"clay": 3.0})
 
 
-def test_a_class_named_as_a_training_ground_is_priced_with_that_ground_s_own_gaussian_spread(linear_model):
+def test_a_class_named_as_a_training_ground_is_priced_with_that_ground_s_own_spread(linear_model):
     # class 0 is "a", a ground the model drove; class 1 "grass" is priced as "a" by the user's mapping only
     ground = np.zeros((6, 30), int)
     ground[3:] = 1
     tmap = TerrainMap(np.zeros((6, 30)), 1.0, ground=ground, ground_names={0: "a", 1: "grass"})
     named = CostSpec(model=linear_model, model_ground={"grass": "b"}).build(tmap)
-    assert dict(zip(named.tables.ground_labels, named.tables.spread_dof)) == {"a": math.inf, "b": 3.0}
+    assert dict(zip(named.tables.ground_labels, named.tables.spread_dof)) == {"a": 4.0, "b": 3.0}  # runs, grounds
     mapped = CostSpec(model=linear_model, model_ground={"a": "b", "grass": "a"}).build(tmap)
     row_named, row_mapped = named.tables.ground_labels.index("a"), mapped.tables.ground_labels.index("a")
     assert mapped.tables.spread_dof[row_mapped] == 3.0  # "a" now also prices grass, a ground the model never drove
