@@ -173,8 +173,8 @@ class LearnedModelTable:
         from the model's predictive distribution; None for a model without an interval.
     dof : float
         Degrees of freedom of the predictive the spreads are the scale of: ``inf`` (the
-        default) for a Gaussian, finite for the Student-t of a ground the model never drove
-        (:attr:`energy.models.forecast.CurrentForecast.dof`).
+        default) for a Gaussian, finite for a Student-t (as many as grounds on a ground the model
+        never drove, as runs on one it drove: :attr:`energy.models.forecast.CurrentForecast.dof`).
     """
 
     model_id: int

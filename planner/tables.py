@@ -435,8 +435,8 @@ class CostTables:
         a route's interval (:func:`planner.price_route`) and :meth:`at_quantile` do.
     spread_dof : sequence of float, optional
         Per row, the degrees of freedom of the distribution the row's spreads are the scale of:
-        ``inf`` for a Gaussian, finite for the Student-t of a ground the model never drove
-        (:attr:`energy.models.forecast.CurrentForecast.dof`). Default: every row ``inf``; only
+        ``inf`` for a Gaussian, finite for a Student-t (as many as grounds on a ground the model never
+        drove, as runs on one it drove: :attr:`energy.models.forecast.CurrentForecast.dof`). Default: every row ``inf``; only
         with the spread tables.
 
     Raises

@@ -90,7 +90,7 @@ class PairPrices:
         Processes that priced them.
     ground_dof : tuple of float
         Per ground, the degrees of freedom of its spread (the cost's ``spread_dof``: ``inf`` for a
-        Gaussian, a Student-t on a ground the model never drove; empty: all Gaussian).
+        Gaussian, finite for a Student-t; empty: all Gaussian).
     cost : EnergyCost or None
         The cost the legs were priced on: what prices a tour of them joined (:meth:`tour_interval`)
         and the turns at the stops (:meth:`stop_turn_quantile_j`). None only for a matrix made by hand,
