@@ -257,9 +257,11 @@ class PairPrices:
         mean = price.mean_j
         # the robot stops at every stop to serve it: where it arrives and leaves on one heading the joined route
         # drives through, so the stop-and-go there is added (the turn table's column 0, its spread too)
-        through = [w[0] for v, w in zip(ways[:-1], ways[1:]) if _heading_change_rad(v, w) <= COLLINEAR_TOL_RAD]
-        if through:
-            xy = np.array(through)
+        stops = np.cumsum([len(w) - 1 for w in ways[:-1]]).astype(np.int64)  # where one leg ends and the next starts
+        angles, _ = cost.turn_energies_j(pts)
+        through = stops[angles[stops] <= COLLINEAR_TOL_RAD]
+        if through.size:
+            xy = pts[through]
             r, c = cost.terrain.rowcol(xy[:, 0], xy[:, 1])
             rows = np.asarray(cost.ground_rows)[r, c]
             mean += float(np.sum(cost.stop_go_at(rows)))
