@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import brentq
 
 from terrawatt_base.checks import fmt_number
 from terrawatt_base.errors import InvalidParameterError
@@ -52,21 +51,24 @@ def segments_by_pose(xy: np.ndarray, pts: np.ndarray, tol_m: float) -> tuple[np.
 def route_speed_mps(route: Route, turn_rate: float) -> float:
     """Planning speed recovered from a route's duration: the cruise speed at which the stop-turn-go drive of its
     waypoints lasts ``route.duration_s`` (:func:`planner.route_time.route_duration_s`, the rule that set it; the
-    duration falls as the speed rises, so one root finder finds it to rounding)."""
+    duration falls as the speed rises, so a bisection finds it to rounding)."""
     wp = route.waypoints_m
     target = float(route.duration_s)
     lo, hi = 1e-6, 1e3
 
-    def excess(v: float) -> float:
-        return route_duration_s(wp, v, turn_rate) - target
+    def duration(v: float) -> float:
+        return route_duration_s(wp, v, turn_rate)
 
-    if not (math.isfinite(target) and excess(hi) <= 0.0 <= excess(lo)):
+    if not (math.isfinite(target) and duration(hi) <= target <= duration(lo)):
         raise InvalidParameterError(
             f"cannot recover the planning speed from route.duration_s={fmt_number(route.duration_s)} s (no cruise "
             f"speed gives the stop-turn-go drive that duration at turn_rate_radps={fmt_number(turn_rate)}); "
             "pass speed_mps or cost"
         )
-    if excess(hi) == 0.0 or excess(lo) == 0.0:
-        return hi if excess(hi) == 0.0 else lo
-    return float(brentq(excess, lo, hi, xtol=1e-15, rtol=4 * np.finfo(float).eps))
+    for _ in range(200):
+        mid = math.sqrt(lo * hi)
+        if mid in (lo, hi):
+            break
+        lo, hi = (mid, hi) if duration(mid) > target else (lo, mid)
+    return hi if abs(duration(hi) - target) <= abs(duration(lo) - target) else lo
 
