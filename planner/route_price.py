@@ -163,8 +163,18 @@ class RouteEnergyInterval:
         return self.dof_by_ground.get(str(ground), self.dof)
 
     def quantile_j(self, q: float) -> float:
-        """The ``q`` quantile of the route energy (J), ``q`` in (0, 1): ``mean + predictive_quantile(q, dof) * sd``."""
-        return self.mean_j + predictive_quantile(check_risk_level(q), self.dof) * self.sd_j
+        """The ``q`` quantile of the route energy (J), ``q`` in (0, 1): ``mean + predictive_quantile(q, dof) * sd``,
+        at least 0.
+
+        The energy a route draws from the battery is never negative (every edge's mean is >= 0, and a
+        risk level's tables floor each entry at 0: :meth:`~planner.tables.CostTables.at_quantile`), so the
+        symmetric predictive is read censored at 0: a low quantile of a route whose spread is wide beside its
+        mean is 0, not a negative energy; the upper quantiles a plan is priced at are the predictive's own.
+
+        >>> RouteEnergyInterval(100.0, 100.0, {"sand": 100.0}).interval_j(0.8)
+        (0.0, 228.15515655446004)
+        """
+        return max(self.mean_j + predictive_quantile(check_risk_level(q), self.dof) * self.sd_j, 0.0)
 
     @property
     def p50_j(self) -> float:

@@ -3,11 +3,14 @@ a route's forecast energy."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
 from energy import drive_profile
-from planner import CostTables, price_route
+from energy.models.forecast import predictive_quantile
+from planner import CostTables, RouteEnergyInterval, price_route
 from planner.cost_spec import CostSpec
 from planner.learned_table import TableProbe
 from planner.route import evaluate_route
@@ -123,3 +126,14 @@ def test_price_route_refuses_what_it_cannot_price(wall_map):
     with pytest.raises(InvalidParameterError, match="no physics model"):
         price_route(cost.with_tables(CostTables(cost.tables.grade_table_j_per_m, cost.tables.turn_table_j)), [[2.5, 2.5], [8.5, 2.5]],
                     how="profile")
+
+
+@pytest.mark.parametrize("dof", [math.inf, 2.0])
+def test_a_route_energy_is_read_censored_at_zero_its_upper_quantiles_unchanged(dof):
+    wide = RouteEnergyInterval(1000.0, 2000.0, {"sand": 2000.0}, dof=dof)
+    z90 = predictive_quantile(0.9, dof)
+    assert wide.interval_j(0.8) == (0.0, pytest.approx(1000.0 + z90 * 2000.0))  # the symmetric P10 is below 0
+    assert wide.quantile_j(0.3) == 0.0 and wide.quantile_j(0.6) > wide.mean_j
+    narrow = RouteEnergyInterval(1000.0, 100.0, {"sand": 100.0}, dof=dof)  # far from 0: the predictive's own
+    assert narrow.quantile_j(0.1) == pytest.approx(1000.0 - z90 * 100.0)
+    assert narrow.to_dict()["central_interval_j"][0] > 0 and wide.to_dict()["central_interval_j"][0] == 0.0
