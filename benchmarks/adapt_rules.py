@@ -28,7 +28,8 @@ only, the regime columns keeping the 20-s ridge.
 
 Intervals: the cache (version 2) keeps what each scored run's forecast interval is made of (:func:`spread_parts`),
 so the coverage of the default update's 50 / 80 / 95 % intervals per ground and T is scored with the base's spread
-kept (the interval before it read the prefix) and given the prefix (the library's, :data:`INTERVAL_RULES`).
+kept (the interval before it read the prefix), given the prefix (the library's) and, a candidate, its scale too
+(:data:`INTERVAL_RULES`).
 
 Printed (``--out``: JSON of every number): the coverage per ground, the diagnosis (per ground and T, which prefixes
 the update harms most, on which side, and how the prefix's motion differs from the scored
@@ -66,7 +67,7 @@ from energy.models.base import log_currents  # noqa: E402
 from energy.models.uncertainty import sample_spans_s  # noqa: E402
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "borealtc"
-CACHE_VERSION = 2  # 2: the scored runs' interval parts (``spread``)
+CACHE_VERSION = 3  # 2: the scored runs' interval parts (``spread``); 3: the regime gains' basis (``xint_gain``)
 TURN_SCALE_RADPS = 0.3  # the update's default
 _trapezoid = getattr(np, "trapezoid", None) or np.trapz
 
@@ -98,6 +99,27 @@ def normal_equations(log: Any, residual: np.ndarray, moving: bool) -> tuple[np.n
             np.stack([(x * w[:, None]).T @ residual[:, k] for k, x in enumerate(xs)]))
 
 
+def gain_basis(log: Any, pred: np.ndarray, k: int) -> np.ndarray:
+    """The ``"regime_gain"`` update's basis of side ``k``: ``[(1 - m) * predicted, m * predicted]``."""
+    m = np.tanh(np.abs(log.omega_radps) / TURN_SCALE_RADPS)
+    return np.column_stack([(1.0 - m) * pred[:, k], m * pred[:, k]])
+
+
+def gain_integrals(log: Any, pred: np.ndarray) -> np.ndarray:
+    """``integral(gain_basis(log, pred, k) dt)`` per side, shape (2, 2)."""
+    return np.stack([_trapezoid(gain_basis(log, pred, k), log.time_s, axis=0) for k in range(2)])
+
+
+def gain_normal_equations(log: Any, pred: np.ndarray, residual: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Per side ``X'WX`` (2, 2, 2), ``X'Wr`` (2, 2) of the regime gains and each column's mean ``|x|`` (2, 2) (the
+    ridge's scale, as the library's)."""
+    w = sample_spans_s(log)
+    xs = [gain_basis(log, pred, k) for k in range(2)]
+    return (np.stack([(x * w[:, None]).T @ x for x in xs]),
+            np.stack([(x * w[:, None]).T @ residual[:, k] for k, x in enumerate(xs)]),
+            np.stack([np.average(np.abs(x), axis=0, weights=w) for x in xs]))
+
+
 def fold_cache(model: Any, runs: list, names: list[str], adapt_seconds: tuple[float, ...]) -> dict[str, Any]:
     """Everything a rule needs of one few-shot fold (``model`` fitted without ``runs``' ground)."""
     base = [model.predict(r) for r in runs]
@@ -106,7 +128,8 @@ def fold_cache(model: Any, runs: list, names: list[str], adapt_seconds: tuple[fl
         y = log_currents(r)
         out["runs"].append({"name": name, "q_true": _trapezoid(y, r.time_s, axis=0),
                             "q_base": _trapezoid(p, r.time_s, axis=0), "xint": basis_integrals(r),
-                            "xint_moving": basis_integrals(r, moving=True), "duration_s": r.duration_s,
+                            "xint_moving": basis_integrals(r, moving=True), "xint_gain": gain_integrals(r, p),
+                            "duration_s": r.duration_s,
                             "stats": _stats(r), "spread": spread_parts(model, r, p)})
     for a, run_a in enumerate(runs):
         t = run_a.time_s
@@ -125,7 +148,8 @@ def fold_cache(model: Any, runs: list, names: list[str], adapt_seconds: tuple[fl
                                     "R": run_v, "G": ground_v, "gain": gain, "xint": basis_integrals(prefix),
                                     "stats": _stats(prefix), "nonneg": upd.nonnegative_,
                                     "normal": normal_equations(prefix, yy - pp, False),
-                                    "normal_moving": normal_equations(prefix, yy - pp, True)})
+                                    "normal_moving": normal_equations(prefix, yy - pp, True),
+                                    "normal_gain": gain_normal_equations(prefix, pp, yy - pp)})
             for b, run_b in enumerate(runs):  # the exact (clamped) plain update, to size the clamp left out
                 if b != a:
                     out["pairs"][(a, float(T), b)] = _trapezoid(upd.correct(run_b, base[b]), run_b.time_s, axis=0)
@@ -152,11 +176,14 @@ def spread_parts(model: Any, log: Any, pred: np.ndarray) -> dict[str, Any]:
             "total_sd": f.charge().total_sd_as}
 
 
-def total_sd(sp: dict[str, Any], ground_factor: np.ndarray | float = 1.0, scale2: float = 1.0) -> float:
+def total_sd(sp: dict[str, Any], ground_factor: np.ndarray | float = 1.0, scale2: float = 1.0,
+             own_factor: np.ndarray | float = 1.0) -> float:
     """The total charge's scale of a scored run with the new-ground part of its run spread times ``ground_factor``
-    (per side) and every part times ``scale2`` (as :meth:`CurrentForecast.charge`)."""
+    and a run's own part times ``own_factor`` (per side), and every part times ``scale2`` (as
+    :meth:`CurrentForecast.charge`)."""
     gf = np.broadcast_to(np.asarray(ground_factor, dtype=np.float64), (2,))
-    run = np.sqrt(scale2 * (sp["own2"] + gf[None, :] * sp["ground2"] + sp["ens2"]))
+    of = np.broadcast_to(np.asarray(own_factor, dtype=np.float64), (2,))
+    run = np.sqrt(scale2 * (of[None, :] * sp["own2"] + gf[None, :] * sp["ground2"] + sp["ens2"]))
     q_run = _trapezoid(run, sp["t"], axis=0)
     return float(np.sqrt(float(q_run.sum()) ** 2 + scale2 * float(np.sum(sp["white2"]))))
 
@@ -166,15 +193,39 @@ def total_sd(sp: dict[str, Any], ground_factor: np.ndarray | float = 1.0, scale2
 LEVELS = (0.5, 0.8, 0.95)
 
 
-def ground_factor_kept(p: dict[str, Any], coef: np.ndarray, rb: dict[str, Any]) -> np.ndarray:
+IntervalRule = Callable[[dict[str, Any], np.ndarray, dict[str, Any]], tuple[np.ndarray, np.ndarray, float]]
+
+
+def interval_kept(p: dict[str, Any], coef: np.ndarray, rb: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, float]:
     """The interval before it read the prefix: the base forecast's spread, whatever the update."""
-    return np.ones(2)
+    return np.ones(2), np.ones(2), rb["spread"]["dof"]
 
 
-def ground_factor_given_prefix(p: dict[str, Any], coef: np.ndarray, rb: dict[str, Any]) -> np.ndarray:
+def interval_given_prefix(p: dict[str, Any], coef: np.ndarray, rb: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, float]:
     """The library's (``AdaptedCurrentModel.correct_distribution``): the new-ground part scaled by the posterior
     variance of the ground's offset given the prefix's ``obs`` plus the update's departure from that posterior's mean
-    (standardised), per side. Without the clamp at 0 (as every cached charge)."""
+    (standardised), per side; the next run's own spread and the dof kept. Without the clamp at 0 (as every cached
+    charge)."""
+    return _given_prefix(p, coef, rb, np.ones(2)), np.ones(2), rb["spread"]["dof"]
+
+
+def interval_given_scale(p: dict[str, Any], coef: np.ndarray, rb: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, float]:
+    """A candidate, measured and dropped (docs/results.md): as :func:`interval_given_prefix` with the learned spreads'
+    scale updated by the prefix, the conjugate update of a normal's unknown variance by one look — the posterior and
+    the next run's own spread times ``kappa = (nu + z²) / (nu + 1)`` (``z² = obs² / (G + R + E)``), ``nu + 1``
+    degrees of freedom. Without the clamp at 0 (as every cached charge)."""
+    nu = rb["spread"]["dof"]
+    total = p["G"] + p["R"] + p["E"]
+    if not np.isfinite(nu) or not np.any(p["G"] > 0):
+        return interval_given_prefix(p, coef, rb)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        kappa = np.where(total > 0, (nu + p["obs"] ** 2 / total) / (nu + 1.0), 1.0)
+    return _given_prefix(p, coef, rb, kappa), kappa, nu + 1.0
+
+
+def _given_prefix(p: dict[str, Any], coef: np.ndarray, rb: dict[str, Any], kappa: np.ndarray) -> np.ndarray:
+    """Per side, the factor of the new-ground part given the prefix (its posterior times ``kappa``, plus the
+    update's departure from the posterior mean, standardised)."""
     G, R, E, obs = p["G"], p["R"], p["E"], p["obs"]
     sp = rb["spread"]
     v_sd = _trapezoid(np.sqrt(sp["ground2"]), sp["t"], axis=0)
@@ -183,13 +234,14 @@ def ground_factor_given_prefix(p: dict[str, Any], coef: np.ndarray, rb: dict[str
     with np.errstate(divide="ignore", invalid="ignore"):
         post = np.where(total > 0, (R + E) / total, 1.0)
         bias = np.where((G > 0) & (v_sd > 0), G / total * obs / np.sqrt(G) - d / v_sd, 0.0)
-    return np.where(G > 0, post + bias**2, 1.0)
+    return np.where(G > 0, kappa * post + bias**2, 1.0)
 
 
-INTERVAL_RULES = {"kept": ground_factor_kept, "given the prefix": ground_factor_given_prefix}
+INTERVAL_RULES: dict[str, IntervalRule] = {"kept": interval_kept, "given the prefix": interval_given_prefix,
+                                           "its scale too": interval_given_scale}
 
 
-def interval_rows(fold: dict[str, Any], rule: Rule, factor: Callable[..., np.ndarray]) -> list[dict[str, Any]]:
+def interval_rows(fold: dict[str, Any], rule: Rule, factor: IntervalRule) -> list[dict[str, Any]]:
     """Per (prefix, scored run): the standardised total-charge error of the update ``rule`` with the interval rule
     ``factor``, and the central level its predictive needs to hold the measurement."""
     from energy.models.forecast import central_level
@@ -204,10 +256,11 @@ def interval_rows(fold: dict[str, Any], rule: Rule, factor: Callable[..., np.nda
                 continue
             c = _at(coef, rb)
             q_true = float(np.sum(rb["q_true"]))
-            sd = total_sd(rb["spread"], factor(p, c, rb))
+            ground_f, own_f, dof = factor(p, c, rb)
+            sd = total_sd(rb["spread"], ground_f, own_factor=own_f)
             z = (q_true - float(np.sum(rb["q_base"] + np.sum(c * rb["xint"], axis=1)))) / sd
-            out.append({"T": p["T"], "z": z, "level": float(central_level(z, rb["spread"]["dof"])),
-                        "log_score": log_score(z, rb["spread"]["dof"], sd / q_true)})
+            out.append({"T": p["T"], "z": z, "level": float(central_level(z, dof)),
+                        "log_score": log_score(z, dof, sd / q_true)})
     return out
 
 
@@ -378,6 +431,24 @@ def rule_partition(p: dict, f: dict) -> np.ndarray:
 def rule_partition_prior(p: dict, f: dict) -> np.ndarray:
     """The regime partition shrunk by the default's factor."""
     return partition_coef(p) * _prior_or_evidence_factor(p, f)[:, None]
+
+
+def regime_gain_coef(p: dict[str, Any], prior_s: float = 20.0) -> np.ndarray:
+    """The ``"regime_gain"`` update's coefficients (2, 2): ``[straight gain - 1, turning gain - 1]`` per side, the ridge
+    ``prior_s`` seconds on each column's own current scale (``max(mean |x|, 0.5)²``, as the library's)."""
+    xtx, xtr, avg = p["normal_gain"]
+    return np.stack([np.linalg.solve(xtx[k] + np.diag(prior_s * np.maximum(avg[k], 0.5) ** 2), xtr[k])
+                     for k in range(2)])
+
+
+def rule_regime_gain(p: dict, f: dict) -> tuple[np.ndarray, str]:
+    """The regime gains, unshrunk."""
+    return regime_gain_coef(p), "xint_gain"
+
+
+def rule_regime_gain_prior(p: dict, f: dict) -> tuple[np.ndarray, str]:
+    """The regime gains shrunk by the default's factor (the library's ``method="regime_gain"``)."""
+    return regime_gain_coef(p) * _prior_or_evidence_factor(p, f)[:, None], "xint_gain"
 
 
 def rule_partition_moving_prior(p: dict, f: dict) -> tuple[np.ndarray, str]:
@@ -752,7 +823,8 @@ def report(cache: dict[str, Any], Ts: tuple[float, ...], out: Path | None,
              "hierarchical, prior": rule_hierarchical_prior, "overlap, prior": rule_overlap_prior,
              "overlap per regime, prior": rule_overlap_regime_prior,
              "once": rule_once, "partition, once": rule_partition_once,
-             "once, levels": rule_once_levels, "partition, once, levels": rule_partition_once_levels}
+             "once, levels": rule_once_levels, "partition, once, levels": rule_partition_once_levels,
+             "regime gain": rule_regime_gain, "regime gain, prior": rule_regime_gain_prior}
     print("clamp left out of the cached charges, worst points per ground: " +
           ", ".join(f"{g} {clamp_effect(f):.2f}" for g, f in cache["outer"].items()))
     diag = {g: [diagnose(f, rule_prior, T) for T in Ts if T >= 20] for g, f in cache["outer"].items()}

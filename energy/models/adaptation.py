@@ -32,6 +32,12 @@ run and scored on the rest; the README has the table):
   prefix's regime balance; the regime update scaled by the regime overlap of prefix and run; a
   switch on the balance chosen on other grounds) were measured and dropped: each beats it held
   out on BorealTC and loses to it on the generator's grounds.
+- ``"regime_gain"``: per side a gain on the prediction per regime, the residual regressed on
+  ``[(1 - m) * predicted, m * predicted]`` by the same ridge (each column penalised on its own
+  current's scale, as ``"gain_offset"``'s gain): a ground that scales the drive's resistance
+  (a softer ground: more rolling resistance, a scale on every current) is followed in proportion
+  to what the model predicts, straight driving and turning apart so that a prefix that pivots
+  does not set the straight gain.
 - ``"gain"``: one gain per side, the measured over the predicted charge of the prefix (the
   baseline every update is compared with).
 - ``"gain_offset"``: per side ``a * predicted + b`` by the same ridge as ``"regime"``.
@@ -127,7 +133,7 @@ __all__ = [
 ]
 
 #: Update methods of :class:`AdaptedCurrentModel`, the default first.
-ADAPT_METHODS = ("partition", "regime", "gain", "gain_offset", "bayes")
+ADAPT_METHODS = ("partition", "regime", "regime_gain", "gain", "gain_offset", "bayes")
 #: What a ``"bayes"`` update forecasts: the rest of the same run, or other runs on the ground.
 ADAPT_SCOPES = ("run", "ground")
 #: How a point update is scaled by its evidence (module docstring), the default first.
@@ -208,10 +214,10 @@ class AdaptedCurrentModel(CurrentModel):
     base : CurrentModel
         The fitted model to adapt (an AdaptedCurrentModel is unwrapped to its own base:
         corrections are refitted, not stacked).
-    method : {"regime", "partition", "gain", "gain_offset", "bayes"}
+    method : {"partition", "regime", "regime_gain", "gain", "gain_offset", "bayes"}
         The update (see the module docstring).
     prior_s : float
-        Ridge penalty of ``"regime"`` / ``"gain_offset"``, in seconds of data showing no
+        Ridge penalty of the regression updates (all but ``"gain"`` and ``"bayes"``), in seconds of data showing no
         residual (> 0): larger keeps the model closer to the base.
     turn_scale_radps : float
         ``|omega|`` (rad/s) at which ``"regime"`` counts a sample as 76 % turning (> 0).
@@ -230,7 +236,8 @@ class AdaptedCurrentModel(CurrentModel):
     Attributes
     ----------
     coefficients_ : numpy.ndarray, shape (2, k)
-        Per side: the gain (``"gain"``), ``[gain - 1, offset]`` (``"gain_offset"``) or the
+        Per side: the gain (``"gain"``), ``[gain - 1, offset]`` (``"gain_offset"``), ``[straight gain - 1,
+        turning gain - 1]`` (``"regime_gain"``) or the
         regime residual coefficients ``[offset A, per |v| A s/m, turning A, outer turning A]``
         (``"partition"``: ``[straight level A, per |v| A s/m, turning level A, outer turning A]``);
         ``"bayes"``: the posterior mean of the ground offset then the run offset (8 columns).
@@ -263,7 +270,8 @@ class AdaptedCurrentModel(CurrentModel):
     """
 
     _param_names = ("base", "method", "prior_s", "turn_scale_radps", "min_seconds", "scope", "shrink")
-    _n_coefficients: ClassVar[dict[str, int]] = {"regime": 4, "gain": 1, "gain_offset": 2, "bayes": 8, "partition": 4}
+    _n_coefficients: ClassVar[dict[str, int]] = {"regime": 4, "gain": 1, "gain_offset": 2, "bayes": 8, "partition": 4,
+                                                 "regime_gain": 2}
 
     def __init__(self, base: CurrentModel, method: str = ADAPT_METHODS[0], prior_s: float = 20.0,
                  turn_scale_radps: float = 0.3, min_seconds: float = MIN_ADAPT_SECONDS, scope: str = "run",
@@ -342,6 +350,8 @@ class AdaptedCurrentModel(CurrentModel):
             scale = np.ones(x.shape[1])
             if self.method == "gain_offset":  # the gain's column is in A: penalise it on the current's scale
                 scale[0] = max(float(np.average(np.abs(x[:, 0]), weights=w)), 0.5) ** 2
+            elif self.method == "regime_gain":  # both columns are currents: each on its own regime's scale
+                scale = np.maximum(np.average(np.abs(x), axis=0, weights=w), 0.5) ** 2
             a = (x * w[:, None]).T @ x + np.diag(self.prior_s * scale)
             coef[k] = np.linalg.solve(a, (x * w[:, None]).T @ r)
         self.shrink_ = np.ones(2)
@@ -549,6 +559,9 @@ class AdaptedCurrentModel(CurrentModel):
             return regime_design(log, side, self.base_model.interval_.turn_scale_radps, pred[:, side])
         if self.method == "gain_offset":
             return np.column_stack([pred[:, side], np.ones(len(log))])
+        if self.method == "regime_gain":  # a gain per regime: [(1 - m) pred, m pred]
+            m = np.tanh(np.abs(log.omega_radps) / self.turn_scale_radps)
+            return np.column_stack([(1.0 - m) * pred[:, side], m * pred[:, side]])
         x = regime_basis(log, side, self.turn_scale_radps)
         if self.method == "partition":  # straight and turning levels apart: [1 - m, |v|, m, m * outer]
             x[:, 0] -= x[:, 2]

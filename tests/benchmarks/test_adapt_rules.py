@@ -15,6 +15,7 @@ from interval_samples import fit_two_ground_estimator, interval_log  # noqa: E40
 
 from energy import InteractionLog, LogMeta  # noqa: E402
 from energy.models import AdaptedCurrentModel, log_currents  # noqa: E402
+from energy.models.forecast import central_level  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -44,10 +45,23 @@ def test_cached_charges_equal_the_library_update(fold, method, shrink):
         assert r["base"] == pytest.approx(100.0 * abs(q0 - q_true) / q_true, abs=1e-6)
 
 
+def test_cached_regime_gains_equal_the_library_update(fold):
+    ar, est, runs, cache = fold
+    rows = ar.charges(ar.rule_regime_gain_prior, cache)
+    assert len(rows) == 6
+    for r in rows:
+        upd = AdaptedCurrentModel(est, method="regime_gain", scope="ground").fit(runs[r["a"]].slice(0.0, 20.0))
+        b = runs[r["b"]]
+        q = float(np.sum(np.trapezoid(upd.predict(b), b.time_s, axis=0)))
+        q_true = float(np.sum(np.trapezoid(log_currents(b), b.time_s, axis=0)))
+        assert r["err"] == pytest.approx(100.0 * abs(q - q_true) / q_true, abs=1e-6)
+        assert np.any(upd.coefficients_ != 0)  # the update moved: the check compares two non-trivial charges
+
+
 def test_cached_intervals_equal_the_library_forecast(fold):
     ar, est, runs, cache = fold
-    rows = ar.interval_rows(cache, ar.rule_partition_prior, ar.ground_factor_given_prefix)
-    kept = ar.interval_rows(cache, ar.rule_partition_prior, ar.ground_factor_kept)
+    rows = ar.interval_rows(cache, ar.rule_partition_prior, ar.interval_given_prefix)
+    kept = ar.interval_rows(cache, ar.rule_partition_prior, ar.interval_kept)
     pairs = [(p["a"], b) for p in cache["prefixes"] for b in range(len(runs)) if b != p["a"]]
     assert len(rows) == len(pairs) == 6
     for (a, b), r, k in zip(pairs, rows, kept):
@@ -55,6 +69,7 @@ def test_cached_intervals_equal_the_library_forecast(fold):
         fc = upd.predict_distribution(runs[b]).charge()
         q_true = float(np.sum(np.trapezoid(log_currents(runs[b]), runs[b].time_s, axis=0)))
         assert r["z"] == pytest.approx((q_true - fc.total_mean_as) / fc.total_sd_as, rel=1e-6)
+        assert r["level"] == pytest.approx(float(central_level(r["z"], fc.dof)), abs=1e-12)
         base = est.predict_distribution(runs[b]).charge()
         assert k["z"] == pytest.approx((q_true - fc.total_mean_as) / base.total_sd_as, rel=1e-6)
     table = ar.interval_table({"outer": {"c": cache}}, ar.rule_partition_prior, (20.0,))

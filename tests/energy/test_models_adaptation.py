@@ -115,6 +115,23 @@ def test_partition_keeps_a_pivot_correction_off_straight_driving_unlike_the_regi
     assert np.all(np.abs(partition.coefficients_[:, 0]) < 0.02)  # the straight level
 
 
+def test_regime_gain_scales_the_prediction_of_the_regime_the_prefix_drove(base):
+    # a ground 30 % harder to drive on (every current scaled), turns only after 45 s: the first 40 s drive straight
+    run = _log(8, turns_after_s=45.0, duration_s=90.0)
+    pred = base.predict(run)
+    run = dataclasses.replace(run, current_left_a=1.3 * pred[:, 0], current_right_a=1.3 * pred[:, 1])
+    head = _head(run, 40.0)
+    adapted = base.adapt(head, method="regime_gain", prior_s=2.0, shrink="none")
+    straight, turning = adapted.coefficients_[:, 0], adapted.coefficients_[:, 1]
+    assert np.all((straight > 0.27) & (straight < 0.3))  # the 30 %, shrunk a little by the ridge
+    assert np.all(np.abs(turning) < 0.01)  # no turn seen: no turning gain
+    np.testing.assert_allclose(adapted.predict(head), base.predict(head) * (1.0 + straight)[None, :], rtol=1e-9)
+    m = np.tanh(np.abs(run.omega_radps) / 0.3)[:, None]  # the turns after 45 s keep the prediction's own scale
+    np.testing.assert_allclose(adapted.predict(run), pred * (1.0 + (1.0 - m) * straight + m * turning), rtol=1e-9)
+    back = AdaptedCurrentModel.from_record(adapted.to_record(), "regime_gain")
+    np.testing.assert_array_equal(back.predict(run), adapted.predict(run))
+
+
 def test_gain_method_is_measured_over_predicted_charge_of_the_prefix(base):
     run = _log(6, offset_a=0.4)
     head = _head(run, 15.0)
