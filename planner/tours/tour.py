@@ -18,6 +18,7 @@ from terrawatt_base.errors import BlockedPositionError, InvalidParameterError
 from ..cost_spec import CostSpec
 from ..edge_cost import EnergyCost
 from ..route_price import RouteEnergyInterval
+from .improve import improve_tours
 from .options import TourFleet, TourSearch
 from .pricing import PairPrices, price_pairs
 from .result import RobotTour, TourLeg, TourResult
@@ -222,15 +223,17 @@ def plan_tour(
                           prices.where, map_label, where_xy, cost.terrain, cost, prices, windows, chargers)
     outcome = solve_tours(prices, problem(np.array(candidates)), solver=solver, time_limit_s=search.time_limit_s,
                           seed=search.seed)
-    chosen = {p for t in outcome.tours for p in t}
+    step = improve_tours(prices, outcome.problem, outcome.tours, value=value, candidates=candidates,
+                         service_time_s=timing.service_s, window_s=timing.window_s, max_duration_s=shifts)
+    chosen = {p for t in step.tours for p in t}
     for p in candidates:
         if p not in chosen:
             left_out[names[p]] = NOT_WORTH_IT
     tours = tuple(_tour(prices, rb, t, d, at)
-                  for rb, t, d in zip(fleet, outcome.tours, depot_points.tolist()))
+                  for rb, t, d in zip(fleet, step.tours, depot_points.tolist()))
     return TourResult("planned", q, tours, left_out, errors, values, outcome.solver, prices.pricing_time_s,
                       outcome.solve_time_s, outcome.rounds, prices.where, map_label, where_xy, cost.terrain, cost,
-                      prices, windows, chargers)
+                      prices, windows, chargers, step.added, step.time_s)
 
 
 class _Timing:
