@@ -20,7 +20,9 @@ from planner.tours import (
     plan_tour,
     price_pairs,
 )
-from terrain import example_map
+from planner.tours.tour import NOT_WORTH_IT
+from terrain import InvalidParameterError
+from terrain.procedural import procedural_map
 
 
 def _points(seed: int, n: int) -> np.ndarray:
@@ -118,18 +120,30 @@ def test_the_plan_reaches_the_exhaustive_optimum_on_small_instances(hills_cost):
             assert tour.energy.quantile_j(q) <= tour.budget_j
 
 
-def test_the_step_adds_sites_the_matrix_left_out_on_a_larger_instance():
-    """On the bundled map, 14 sites and two robots (the tour_turns benchmark's third case): the answer is at least
-    the value the solver's tours had, and every tour holds at Q priced as driven."""
-    cost = with_interval(CostSpec().build(example_map()), 0.1)
-    rng = np.random.default_rng(1)
-    xy = rng.uniform(20.0, 140.0, size=(14, 2))
-    r, c = cost.terrain.rowcol(xy[:, 0], xy[:, 1])
-    xy = xy[~np.asarray(cost.blocked)[r, c]]
-    sites = TourSites(tuple(f"s{k}" for k in range(len(xy))), xy, value=rng.integers(1, 6, len(xy)).astype(float))
-    robots = [TourRobot(Battery(0.4, 24.0, min_reserve_pct=20.0), (80.0, 80.0), f"robot {k}") for k in range(2)]
-    res = plan_tour(cost, sites, robots, search=TourSearch(risk=0.9, time_limit_s=2.0))
-    assert res.sites_added >= 0 and res.improve_time_s >= 0.0
-    for tour in res.tours:
-        assert tour.energy.quantile_j(0.9) <= tour.budget_j
-        assert tour.arrival_soc_at_risk >= tour.battery.reserve_soc - 1e-12
+def test_after_the_step_no_left_out_site_fits_and_without_it_the_solvers_tours_stay():
+    """A Jackal on a procedural map, 12 sites: planned without the step (``improve=False``: the solver's tours) and
+    with it on the same legs, the value never drops (here the step adds a site), every tour holds at Q, and after the
+    step no site left out fits into any tour at any position priced as driven."""
+    cost = with_interval(CostSpec(robot="jackal").build(procedural_map((128, 128), 1.0, seed=3)), 0.1)
+    free = np.argwhere(~np.asarray(cost.blocked))
+    rng = np.random.default_rng(2)
+    pick = free[rng.choice(len(free), 12, replace=False)] + 0.5
+    sites = TourSites(tuple(f"s{k}" for k in range(12)), pick[:, ::-1], value=rng.integers(1, 6, 12).astype(float))
+    depot = tuple(float(v) for v in free[np.argmin(np.hypot(*(free - 64.0).T))][::-1] + 0.5)
+    robot = TourRobot(Battery(0.25, 25.6, min_reserve_pct=20.0), depot)
+    kept = plan_tour(cost, sites, robot, search=TourSearch(risk=0.9, improve=False, time_limit_s=2.0))
+    res = plan_tour(cost, sites, robot, prices=kept.prices, search=TourSearch(risk=0.9, time_limit_s=2.0))
+    assert kept.sites_added == 0 and res.value >= kept.value
+    assert res.sites_added >= 1  # here the solver's tour leaves room for a site priced as driven (value 24 -> 26)
+    assert res.sites_added >= len(res.visited) - len(kept.visited)
+    tour = res.tours[0]
+    assert tour.energy.quantile_j(0.9) <= tour.budget_j
+    pricer = DrivenPricer.of(res.prices, 0.9)
+    index = {n: k for k, n in enumerate(res.prices.names)}
+    stops = [index[n] for n in tour.stops]
+    for name, why in res.left_out.items():
+        if why == NOT_WORTH_IT:
+            seqs = np.array([[0, *stops[:k], index[name], *stops[k:], 0] for k in range(len(stops) + 1)])
+            assert pricer.segments(seqs, np.zeros(len(index), dtype=bool))[2][:, 0].min() > tour.budget_j
+    with pytest.raises(InvalidParameterError, match="improve"):
+        TourSearch(improve="yes")
