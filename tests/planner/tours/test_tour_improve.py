@@ -3,6 +3,8 @@ the value nor breaks a budget at Q, and on small instances it reaches the exhaus
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from tour_samples import exact_optimum, hills_cost, with_interval  # noqa: F401  (fixture)
@@ -20,6 +22,7 @@ from planner.tours import (
     plan_tour,
     price_pairs,
 )
+from planner.tours.solver import walk_timeline
 from planner.tours.tour import NOT_WORTH_IT
 from terrain import InvalidParameterError
 from terrain.procedural import procedural_map
@@ -147,3 +150,48 @@ def test_after_the_step_no_left_out_site_fits_and_without_it_the_solvers_tours_s
             assert pricer.segments(seqs, np.zeros(len(index), dtype=bool))[2][:, 0].min() > tour.budget_j
     with pytest.raises(InvalidParameterError, match="improve"):
         TourSearch(improve="yes")
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_the_step_keeps_the_windows_the_longest_tour_and_the_waiting(hills_cost, seed):
+    """Sites with service time, service energy and time windows, a robot that waits on standby power and a longest
+    tour, started from an empty tour: every tour the step returns starts each service in its window, is back in
+    time and holds at Q with its service and waiting energy, as plan_tour reports it."""
+    rng = np.random.default_rng(400 + seed)
+    n = 8
+    start = rng.uniform(0.0, 150.0, n)
+    windows = [(float(a), float(a + w)) if k % 2 else None for k, (a, w) in enumerate(zip(start, rng.uniform(20, 80, n)))]
+    sites = TourSites(tuple(f"s{k}" for k in range(n)), rng.uniform(3.0, 37.0, size=(n, 2)),
+                      value=rng.integers(1, 6, n).astype(float), service_time_s=rng.uniform(5.0, 30.0, n),
+                      service_energy_j=rng.uniform(50.0, 300.0, n), time_window_s=windows)
+    robot = TourRobot(Battery(0.12, 24.0, min_reserve_pct=20.0), (20.0, 20.0), max_duration_s=400.0,
+                      standby_power_w=20.0)
+    res = plan_tour(hills_cost, sites, robot, search=TourSearch(risk=0.9, seed=seed, time_limit_s=2.0))
+    kept = plan_tour(hills_cost, sites, robot, prices=res.prices,
+                     search=TourSearch(risk=0.9, seed=seed, time_limit_s=2.0, improve=False))
+    assert res.value >= kept.value
+    tour = res.tours[0]
+    for name, begin in zip(tour.stops, tour.service_start_s):
+        window = sites.time_window_s[sites.names.index(name)]
+        assert window[0] - 1e-9 <= begin <= window[1] + 1e-9
+    assert tour.return_s <= 400.0 + 1e-9
+    assert tour.energy.quantile_j(0.9) <= tour.budget_j
+    # and the step alone, from nothing: its tour as plan_tour would report it holds the same
+    value = np.concatenate([[0.0], sites.value])
+    service_j = np.concatenate([[0.0], sites.service_energy_j])
+    timing = TourPoints(value, service_j, np.concatenate([[0.0], sites.service_time_s]),
+                        np.vstack([[0.0, np.inf], sites.time_window_s]))
+    problem = dataclasses.replace(
+        TourProblem.build(res.prices, 0.9, [robot.budget_j], [0], np.arange(1, n + 1), timing, [400.0]),
+        standby_w=np.array([20.0]))
+    out = improve_tours(res.prices, problem, [[]], value=value, candidates=range(1, n + 1),
+                        service_time_s=timing.service_time_s, window_s=timing.window_s, max_duration_s=[400.0])
+    assert out.value_after > 0
+    seq = [0, *out.tours[0], 0]
+    turns = [res.prices.turn_time_s(a, b, c) for a, b, c in zip(seq, seq[1:], seq[2:])]
+    arrivals, starts, back = walk_timeline(np.asarray(res.prices.duration_s, float), timing.service_time_s,
+                                           timing.window_s, seq, turns)
+    assert back <= 400.0 and all(s <= timing.window_s[p, 1] for p, s in zip(out.tours[0], starts))
+    waits = sum(20.0 * (s - a) for a, s in zip(arrivals, starts))
+    need = res.prices.tour_interval(seq, float(service_j[out.tours[0]].sum()) + waits).quantile_j(0.9)
+    assert need <= robot.budget_j
