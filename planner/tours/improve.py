@@ -316,6 +316,8 @@ class _Step:
         energy = self.energy(robot, stops)
         while len(stops) >= 2:
             cands = _reorders(stops)
+            if not len(cands):
+                break
             holds, e = self.price(robot, cands)
             k = int(np.argmin(e))
             if not holds[k] or not e[k] < energy * (1.0 - _REL_TOL):
@@ -336,7 +338,8 @@ def _insertions(stops: list[int], sites: list[int]) -> np.ndarray:
 
 
 def _reorders(stops: list[int]) -> np.ndarray:
-    """Every tour of ``stops`` with one stop moved elsewhere or one run of stops reversed (2-opt)."""
+    """Every tour of ``stops`` with one stop moved elsewhere or one run of stops reversed (2-opt); none with one
+    charger twice in a row (two stops in a row at one point are one, and its turn would go unpriced)."""
     base = list(stops)
     seen, rows = {tuple(base)}, []
     n = len(base)
@@ -353,6 +356,7 @@ def _reorders(stops: list[int]) -> np.ndarray:
             if cand not in seen:
                 seen.add(cand)
                 rows.append(cand)
+    rows = [r for r in rows if all(a != b for a, b in zip(r, r[1:]))]
     return np.array(rows, dtype=np.int64).reshape(len(rows), n)
 
 
@@ -448,7 +452,8 @@ def _holds_as_reported(prices: PairPrices, step: _Step, robot: int, stops: list[
     problem = step.problem
     d = int(problem.depot_points[robot])
     seq = [d, *stops, d]
-    turns = [float(t) for t in step.pricer.turns(np.array(seq[:-2]), np.array(seq[1:-1]), np.array(seq[2:]))[3]]
+    ends = [np.array(part, dtype=np.int64) for part in (seq[:-2], seq[1:-1], seq[2:])]
+    turns = [float(t) for t in step.pricer.turns(*ends)[3]]
     arrivals, starts, back = walk_timeline(step.drive_s, step.service_s, step.window_s, seq, turns)
     if any(s > step.window_s[p, 1] for p, s in zip(stops, starts)) or back > step.shift_s[robot]:
         return False
