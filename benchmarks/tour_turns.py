@@ -8,14 +8,23 @@ each junction of two legs) and the rest, the tour's reported energy (mean and at
 the share of the planned tours that end above the reserve when the mission simulator drives them with drawn
 parameters (:func:`planner.tours.simulate_tours_mc`, ``draw_from="parameters"``) beside Q.
 
+Each case is planned twice on the same legs: the solver's tours alone (``TourSearch(improve=False)``) and after the
+improvement step priced as driven (:func:`planner.tours.improve_tours`); it prints the value before and after, the
+sites the step added, each tour's share of its budget at Q priced as driven, how many left-out sites would each still
+fit into one of the tours (inserted at their best position, priced as driven), and the solver's and the step's times.
+Case 5 (``--cases 5``, not run by default: about a minute of pricing) is ``tour_bench.py``'s binding-battery instance:
+a 256 x 256 procedural map, 100 sites, 3 Husky robots of 2 median round trips each.
+
 Run it on the code before and after a change with the same arguments to compare. Usage::
 
     python benchmarks/tour_turns.py --mc 20 --seeds 0 1 --out tour_turns.json
+    python benchmarks/tour_turns.py --cases 5 --mc 0
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import time
 from pathlib import Path
@@ -27,7 +36,16 @@ from scipy import ndimage
 from energy import Battery
 from planner import CostTables, EnergyCost, price_route
 from planner.cost_spec import CostSpec
-from planner.tours import TourChargers, TourRobot, TourSearch, TourSites, plan_tour, simulate_tours_mc
+from planner.tours import (
+    DrivenPricer,
+    TourChargers,
+    TourRobot,
+    TourSearch,
+    TourSites,
+    plan_tour,
+    price_pairs,
+    simulate_tours_mc,
+)
 from terrain import TerrainMap, example_map
 from terrain.procedural import procedural_map
 from terrawatt_base.atomic import write_json_atomic
@@ -103,6 +121,47 @@ def cases() -> dict[str, dict[str, Any]]:
     return out
 
 
+def large_case(seed: int = 0) -> dict[str, Any]:
+    """Case 5: tour_bench.py's binding battery (``--size 256 --sites 100 --battery-trips 2 --pyvrp-s 10``; its
+    ``--seed``: the map's and the sites')."""
+    from tour_bench import battery_for, depot_and_sites  # the benchmarks' folder is the script's
+
+    cost = with_spread(CostSpec().build(procedural_map((256, 256), 1.0, seed=seed)), 0.1)
+    depot, sites = depot_and_sites(cost, 100, np.random.default_rng(seed))
+    prices = price_pairs(cost, np.vstack([depot, sites.xy_m]), ("depot", *sites.names), risk=0.9)
+    battery = battery_for(prices, 2.0, cost.battery_voltage_v)
+    return dict(cost=cost, sites=sites, mc=False, search=TourSearch(risk=0.9, time_limit_s=10.0), prices=prices,
+                robots=[TourRobot(battery, depot, f"robot {k}") for k in range(3)])
+
+
+def still_fit(res: Any) -> list[str]:
+    """The left-out sites ("not worth it") that would each fit into one of the tours, inserted at their best position
+    and priced as driven (:class:`planner.tours.DrivenPricer`; tours without chargers, service or windows)."""
+    prices, q = res.prices, res.risk
+    pricer = DrivenPricer.of(prices, q)
+    index = {n: k for k, n in enumerate(prices.names)}
+    none = np.zeros(len(prices), dtype=bool)
+    out = []
+    for name, why in res.left_out.items():
+        if not why.startswith("not worth"):
+            continue
+        u = index[name]
+        for tour in res.tours:
+            d = index[tour.legs[0].start] if tour.legs else index[prices.names[0]]
+            stops = [index[s] for s in tour.stops]
+            seqs = np.array([[d, *stops[:k], u, *stops[k:], d] for k in range(len(stops) + 1)])
+            if float(pricer.segments(seqs, none)[2][:, 0].min()) <= tour.budget_j:
+                out.append(name)
+                break
+    return out
+
+
+def used(res: Any) -> list[float]:
+    """Each tour's share of its budget at Q priced as driven (its fullest segment; 0 for a robot left home)."""
+    return [max(iv.quantile_j(res.risk) / b for iv, b in zip(t.segments, t.segment_budgets_j)) if t.legs else 0.0
+            for t in res.tours]
+
+
 def split(res: Any, k: int) -> list[dict[str, Any]]:
     """Per segment of tour ``k`` between charges: the legs' prices summed, the joined route's price, the turns at
     its stops (the joined route's turn energy at each junction of two legs) and the rest of the difference (J)."""
@@ -127,20 +186,40 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--mc", type=int, default=20, help="simulated drives of each tour per seed (default 20)")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1], help="Monte Carlo seeds (default 0 1)")
-    parser.add_argument("--cases", nargs="*", default=None, help="case numbers to run (1-4; default all)")
+    parser.add_argument("--cases", nargs="*", default=None, help="case numbers to run (1-5; default 1-4)")
+    parser.add_argument("--large-seed", type=int, default=0, help="case 5's map and sites seed (default 0)")
     parser.add_argument("--out", type=Path, default=None, help="write results as JSON here")
     args = parser.parse_args(argv)
     results = []
-    for n, (name, case) in enumerate(cases().items(), start=1):
-        if args.cases and str(n) not in args.cases:
+    chosen = args.cases or ["1", "2", "3", "4"]
+    every = cases()
+    if "5" in chosen:
+        every["procedural 256^2, 100 sites, 3 robots"] = large_case(args.large_seed)
+    for n, (name, case) in enumerate(every.items(), start=1):
+        if str(n) not in chosen:
             continue
         t0 = time.perf_counter()
-        res = plan_tour(case["cost"], case["sites"], case["robots"], search=case["search"],
+        kept = plan_tour(case["cost"], case["sites"], case["robots"], prices=case.get("prices"),
+                         search=dataclasses.replace(case["search"], improve=False), chargers=case.get("chargers"))
+        res = plan_tour(case["cost"], case["sites"], case["robots"], prices=kept.prices, search=case["search"],
                         chargers=case.get("chargers"))
         plan_s = time.perf_counter() - t0
         q = res.risk
-        print(f"\n{n}. {name}: value {res.value:g}, {len(res.visited)} sites, solved in {res.solve_time_s:.2f} s "
-              f"({res.solve_rounds} round(s)), planned in {plan_s:.1f} s")
+
+        step = {"value_before": kept.value, "value_after": res.value, "sites_before": len(kept.visited),
+                "sites_after": len(res.visited), "sites_added": res.sites_added, "solve_s": res.solve_time_s,
+                "step_s": res.improve_time_s, "budget_used_before": used(kept), "budget_used_after": used(res),
+                "left_out_before": sum(why.startswith("not worth") for why in kept.left_out.values()),
+                "left_out_after": sum(why.startswith("not worth") for why in res.left_out.values()),
+                "still_fit_before": len(still_fit(kept)) if case.get("chargers") is None else None,
+                "still_fit_after": len(still_fit(res)) if case.get("chargers") is None else None}
+        print(f"\n{n}. {name}: value {kept.value:g} -> {res.value:g} ({len(kept.visited)} -> {len(res.visited)} "
+              f"sites, {res.sites_added} added by the step), solved in {res.solve_time_s:.2f} s "
+              f"({res.solve_rounds} round(s)), step {res.improve_time_s:.3f} s, planned twice in {plan_s:.1f} s")
+        print("  budget used at Q as driven: " + ", ".join(f"{100 * a:.1f} -> {100 * b:.1f} %" for a, b in
+                                                          zip(step["budget_used_before"], step["budget_used_after"]))
+              + f"; left out (not worth it) {step['left_out_before']} -> {step['left_out_after']}, of which would "
+              f"each still fit {step['still_fit_before']} -> {step['still_fit_after']}")
         tours = []
         for k, tour in enumerate(res.tours):
             if not tour.legs:
@@ -157,7 +236,7 @@ def main(argv: list[str] | None = None) -> int:
                           "reported_mean_j": tour.energy.mean_j, "reported_segments_at_q_j": seg_q,
                           "budget_j": tour.budget_j})
         shares, driven = [], []
-        if case["mc"] and res.tours and any(t.legs for t in res.tours):
+        if case["mc"] and args.mc > 0 and res.tours and any(t.legs for t in res.tours):
             for seed in args.seeds:
                 check = simulate_tours_mc(res, args.mc, seed=seed, draw_from="parameters")
                 shares.append(check.share_above_reserve)
@@ -169,7 +248,7 @@ def main(argv: list[str] | None = None) -> int:
             print("  per segment, the study's forecast (the driven profile with the physics model, else the edges) / the "
                   "simulated median (seed "
                   f"{args.seeds[0]}): " + ", ".join(f"{p:.0f} / {m:.0f} J" for p, m in driven))
-        results.append({"case": name, "value": res.value, "visited": list(res.visited), "rounds": res.solve_rounds,
+        results.append({"case": name, "step": step, "value": res.value, "visited": list(res.visited), "rounds": res.solve_rounds,
                         "solve_s": res.solve_time_s, "tours": tours, "mc_shares": shares,
                         "profile_and_simulated_median_j": driven})
     if args.out is not None:

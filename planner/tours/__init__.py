@@ -4,6 +4,7 @@ left when back (issue 33)."""
 from __future__ import annotations
 
 from .check import TourCheck, simulate_tours_mc
+from .improve import DrivenPricer, ImproveOutcome, improve_tours
 from .options import TourFleet, TourSearch
 from .pricing import PairPrices, price_pairs
 from .result import RobotTour, TourLeg, TourResult
@@ -29,6 +30,9 @@ __all__ = [
     "TourPoints",
     "TourProblem",
     "solve_tours",
+    "improve_tours",
+    "ImproveOutcome",
+    "DrivenPricer",
     "simulate_tours_mc",
     "TourCheck",
 ]

@@ -8,7 +8,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from energy import Battery
-from terrawatt_base.checks import check_choice, check_instance, check_int, check_optional_real, check_real, check_seed
+from terrawatt_base.checks import (
+    check_bool,
+    check_choice,
+    check_instance,
+    check_int,
+    check_optional_real,
+    check_real,
+    check_seed,
+)
 from terrawatt_base.errors import InvalidParameterError
 
 from ..tables import check_planning_risk
@@ -33,6 +41,9 @@ class TourSearch:
         The routing solver's seed (``None`` is 0).
     solver : {"pyvrp", "ortools"}, optional
         The routing solver; default PyVRP, or OR-Tools with charging points.
+    improve : bool
+        Whether the solver's tours go through the improvement step priced as driven
+        (:func:`planner.tours.improve_tours`; default True; False: the solver's tours as they are, to compare).
 
     Raises
     ------
@@ -49,6 +60,7 @@ class TourSearch:
     time_limit_s: float = 10.0
     seed: int | None = 0
     solver: str | None = None
+    improve: bool = True
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
@@ -57,6 +69,7 @@ class TourSearch:
         set_(self, "seed", check_seed(self.seed) or 0)
         if self.solver is not None:
             check_choice("solver", self.solver, TOUR_SOLVERS)
+        set_(self, "improve", check_bool("improve", self.improve))
 
 
 @dataclass(frozen=True, kw_only=True)

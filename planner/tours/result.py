@@ -252,6 +252,9 @@ class TourResult:
         The sites that have a time window: ``(earliest_s, latest_s)`` from the departure.
     chargers : TourChargers or None
         The charging points the tours could stop at.
+    sites_added, improve_time_s : int, float
+        Sites the improvement step priced as driven added to the solver's tours (:mod:`planner.tours.improve`) and
+        the seconds it took (beside ``solve_time_s``); not in tour.json, whose format stays at version 3.
     """
 
     status: str
@@ -272,6 +275,8 @@ class TourResult:
     prices: PairPrices | None = field(default=None, repr=False, compare=False)
     time_windows_s: dict[str, tuple[float, float]] = field(default_factory=dict)
     chargers: TourChargers | None = None
+    sites_added: int = 0
+    improve_time_s: float = field(default=0.0, compare=False)
 
     @property
     def value(self) -> float:

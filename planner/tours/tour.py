@@ -18,6 +18,7 @@ from terrawatt_base.errors import BlockedPositionError, InvalidParameterError
 from ..cost_spec import CostSpec
 from ..edge_cost import EnergyCost
 from ..route_price import RouteEnergyInterval
+from .improve import ImproveOutcome, improve_tours
 from .options import TourFleet, TourSearch
 from .pricing import PairPrices, price_pairs
 from .result import RobotTour, TourLeg, TourResult
@@ -73,8 +74,9 @@ def plan_tour(
     allowance for the turn at the stop it leaves), and each chosen tour is priced as the route the robot drives
     (its legs joined, the turn in place at every stop included: :meth:`PairPrices.tour_interval`) and checked on
     its own quantile (the spreads of one ground add along the whole tour), allowances raised or capacities
-    tightened and the problem solved again until every tour holds (:mod:`planner.tours.solver`). The reported
-    energies are those exact prices.
+    tightened and the problem solved again until every tour holds (:mod:`planner.tours.solver`). Then the
+    improvement step priced as driven inserts the left-out sites that still fit, or swaps them in for sites of less
+    value (:func:`planner.tours.improve_tours`). The reported energies are those exact prices.
 
     With ``chargers`` a tour may stop at charging points between its sites, each stop charging the battery
     to full (:class:`planner.tours.TourChargers`: its stop time booked as service time); the energy then holds
@@ -94,8 +96,8 @@ def plan_tour(
     search : TourSearch, optional
         The level Q in [0.5, 1) (``risk``), the routing solver (default "pyvrp", "ortools" with
         chargers: the only one that stops at them), its time limit per solve (s; it usually stops
-        earlier, at no improvement) and its seed (:class:`planner.tours.options.TourSearch`;
-        default ``TourSearch()``: Q = 0.9, 10 s, seed 0).
+        earlier, at no improvement), its seed and whether the improvement step priced as driven runs after it
+        (:class:`planner.tours.options.TourSearch`; default ``TourSearch()``: Q = 0.9, 10 s, seed 0, the step on).
     compute : Compute, optional
         Where the legs are priced and whether a bar shows over the pricing
         (:class:`terrawatt_base.dask_client.Compute`, as :func:`planner.plan_batch`; default here).
@@ -222,15 +224,21 @@ def plan_tour(
                           prices.where, map_label, where_xy, cost.terrain, cost, prices, windows, chargers)
     outcome = solve_tours(prices, problem(np.array(candidates)), solver=solver, time_limit_s=search.time_limit_s,
                           seed=search.seed)
-    chosen = {p for t in outcome.tours for p in t}
+    if search.improve:  # the sites the matrix's allowances left out that fit priced as driven
+        step = improve_tours(prices, outcome.problem, outcome.tours, value=value, candidates=candidates,
+                             service_time_s=timing.service_s, window_s=timing.window_s, max_duration_s=shifts)
+    else:
+        got = float(sum(value[p] for t in outcome.tours for p in t))
+        step = ImproveOutcome(outcome.tours, 0, 0, got, got, 0.0)
+    chosen = {p for t in step.tours for p in t}
     for p in candidates:
         if p not in chosen:
             left_out[names[p]] = NOT_WORTH_IT
     tours = tuple(_tour(prices, rb, t, d, at)
-                  for rb, t, d in zip(fleet, outcome.tours, depot_points.tolist()))
+                  for rb, t, d in zip(fleet, step.tours, depot_points.tolist()))
     return TourResult("planned", q, tours, left_out, errors, values, outcome.solver, prices.pricing_time_s,
                       outcome.solve_time_s, outcome.rounds, prices.where, map_label, where_xy, cost.terrain, cost,
-                      prices, windows, chargers)
+                      prices, windows, chargers, step.added, step.time_s)
 
 
 class _Timing:

@@ -12,7 +12,7 @@ from planner.cost_spec import CostSpec
 from planner.tours import PairPrices
 from terrain import TerrainMap
 
-__all__ = ["with_interval", "hills_map", "hills_cost", "ridge_map", "exact_optimum"]
+__all__ = ["with_interval", "hills_map", "hills_cost", "ridge_map", "exact_optimum", "exact_fleet_optimum"]
 
 
 def with_interval(cost: EnergyCost, rel_sd: float = 0.15) -> EnergyCost:
@@ -70,3 +70,34 @@ def exact_optimum(prices: PairPrices, budget_j: float, q: float, value: dict[int
 
     walk([depot], None, budget_j, [], dict.fromkeys(chargers, 0), 0.0)
     return best
+
+
+def exact_fleet_optimum(prices: PairPrices, budgets_j: list[float], q: float, value: dict[int, float], *,
+                        depot: int = 0) -> float:
+    """The best value of one or two robots' tours from one ``depot`` over every split of the sites ``value`` (point
+    -> value) between them and every order, each tour priced as the robot drives it (``prices.tour_interval`` at its
+    ``q`` quantile within its budget). A prefix priced above the largest budget prunes."""
+    top = max(budgets_j)
+    fits: dict[frozenset[int], float] = {}  # each set of sites some order visits: its least price at Q
+
+    def walk(seq: list[int]) -> None:
+        back = prices.tour_interval([*seq, depot]).quantile_j(q)
+        key = frozenset(seq[1:])
+        fits[key] = min(fits.get(key, float("inf")), back)
+        for s in value:
+            if s not in seq and prices.tour_interval([*seq, s]).quantile_j(q) <= top:
+                walk([*seq, s])
+
+    walk([depot])
+    sets = list(fits.items())
+
+    def worth(sites: frozenset[int]) -> float:
+        return float(sum(value[s] for s in sites))
+
+    if len(budgets_j) == 1:
+        return max((worth(k) for k, e in sets if e <= budgets_j[0]), default=0.0)
+    if len(budgets_j) != 2:
+        raise ValueError("one or two robots")
+    first = [k for k, e in sets if e <= budgets_j[0]]
+    second = [k for k, e in sets if e <= budgets_j[1]]
+    return max((worth(a) + worth(b) for a in first for b in second if not a & b), default=0.0)
