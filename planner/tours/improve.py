@@ -401,42 +401,39 @@ def improve_tours(prices: PairPrices, problem: TourProblem, tours: list[list[int
     chosen = {s for t in current for s in t}
     left = [int(s) for s in candidates if int(s) not in chosen and step.value[int(s)] > 0]
     added = swapped = 0
-    while left:
-        move = step.best_insertion(current, left)
+
+    def insert_or_swap(tours: list[list[int]]) -> tuple[int, list[int], str] | None:
+        """The best insertion of a left-out site into ``tours``, else the best swap (``left`` updated), or None."""
+        move = step.best_insertion(tours, left)
         if move is not None:
             r, new, _ = move
-            left.remove(next(s for s in new if s not in current[r]))
-            current[r], added = new, added + 1
-            continue
-        swap = step.best_swap(current, left)
-        if swap is not None:
-            r, new, out, into = swap
-            current[r], swapped = new, swapped + 1
-            left.remove(into)
-            left.append(out)
-            continue
-        charged = step.best_charged_insertion(current, left) if problem.has_chargers else None
+            left.remove(next(s for s in new if s not in tours[r]))
+            return r, new, "added"
+        swap = step.best_swap(tours, left)
+        if swap is None:
+            return None
+        r, new, out, into = swap
+        left.remove(into)
+        left.append(out)
+        return r, new, "swapped"
+
+    while left:
+        done = insert_or_swap(current)
+        charged = step.best_charged_insertion(current, left) if done is None and problem.has_chargers else None
         if charged is not None:
             r, new = charged
             left.remove(next(s for s in new if s in left))
-            current[r], added = new, added + 1
-            continue
-        shorter = [step.shortened(r, t) for r, t in enumerate(current)]
-        if shorter == current:
-            break
-        move = step.best_insertion(shorter, left)
-        if move is not None:
-            r, new, _ = move
-            left.remove(next(s for s in new if s not in shorter[r]))
-            current[r], added = new, added + 1
-            continue
-        swap = step.best_swap(shorter, left)
-        if swap is None:
-            break
-        r, new, out, into = swap
-        current[r], swapped = new, swapped + 1
-        left.remove(into)
-        left.append(out)
+            done = r, new, "added"
+        if done is None:
+            shorter = [step.shortened(r, t) for r, t in enumerate(current)]
+            if shorter == current:
+                break
+            done = insert_or_swap(shorter)
+            if done is None:
+                break
+        r, new, kind = done
+        current[r] = new
+        added, swapped = added + (kind == "added"), swapped + (kind == "swapped")
     for r, stops in enumerate(current):  # priced again one by one, as the result reports them
         if stops != start[r] and not _holds_as_reported(prices, step, r, stops):
             current[r] = start[r]
