@@ -146,6 +146,8 @@ def test_defaults_give_the_leave_one_out_protocol_and_the_adapt_defaults_elsewhe
 def test_the_update_follows_its_prefix_by_the_learned_share_unless_told_otherwise():
     assert adapt_settings_from_args(_parse("--protocol", "few-shot")).shrink == "prior"
     assert adapt_settings_from_args(_parse("--protocol", "few-shot", "--adapt-shrink", "evidence")).shrink == "evidence"
+    s = adapt_settings_from_args(_parse("--protocol", "few-shot", "--adapt-method", "regime_gain"))
+    assert s.method == "regime_gain" and s.update_options()["method"] == "regime_gain"
     with pytest.raises(SystemExit):
         _parse("--protocol", "few-shot", "--no-adapt-shrink")
 
