@@ -84,6 +84,22 @@ def test_the_cached_normal_equations_refit_the_update(fold):
         assert not np.allclose(ar.ridge(p, 200.0), p["coef"])  # a larger penalty moves less
 
 
+def test_the_scale_candidate_scales_by_the_prefix_standardised_charge_and_adds_a_degree(fold):
+    ar, _, _, cache = fold
+    p, rb = cache["prefixes"][0], cache["runs"][1]
+    coef = ar._resolve(ar.rule_partition_prior(p, cache))[0]
+    g_prefix, own_prefix, dof = ar.interval_given_prefix(p, coef, rb)
+    g_scale, own_scale, dof_scale = ar.interval_given_scale(p, coef, rb)
+    assert np.isfinite(dof) and np.all(own_prefix == 1.0)
+    kappa = (dof + p["obs"] ** 2 / (p["G"] + p["R"] + p["E"])) / (dof + 1.0)
+    np.testing.assert_allclose(own_scale, kappa)
+    assert dof_scale == dof + 1.0
+    gaussian = {**rb, "spread": {**rb["spread"], "dof": float("inf")}}  # a file from before the counts: no update
+    assert ar.interval_given_scale(p, coef, gaussian)[2] == float("inf")
+    np.testing.assert_array_equal(ar.interval_given_scale(p, coef, gaussian)[0], g_prefix)
+    assert not np.allclose(g_scale, g_prefix)  # the candidate differs from the library's where the dof is finite
+
+
 def test_the_unadapted_rule_is_the_base_and_harm_is_measured_against_it(fold):
     ar, _, _, cache = fold
     rows = ar.charges(ar.rule_unadapted, cache)
