@@ -68,10 +68,26 @@ def heading_changes_rad(points_m: np.ndarray) -> np.ndarray:
     return np.abs(np.angle(np.exp(1j * np.diff(heading))))
 
 
-def _pivots(points_m: np.ndarray) -> np.ndarray:
-    """Indices of the vertices the profile stops at: both ends and every interior vertex that turns."""
-    turns = np.flatnonzero(heading_changes_rad(points_m) > COLLINEAR_TOL_RAD) + 1
-    return np.concatenate(([0], turns, [points_m.shape[0] - 1]))
+def _pivots(points_m: np.ndarray, stops: np.ndarray | None = None) -> np.ndarray:
+    """Indices of the vertices the profile stops at: both ends, every interior vertex that turns and the ``stops``."""
+    turns = heading_changes_rad(points_m) > COLLINEAR_TOL_RAD
+    if stops is not None and stops.size:
+        turns[stops[(stops > 0) & (stops < points_m.shape[0] - 1)] - 1] = True
+    return np.concatenate(([0], np.flatnonzero(turns) + 1, [points_m.shape[0] - 1]))
+
+
+def _stops(stops: Any, n_points: int, name: str) -> np.ndarray:
+    """The checked indices of the vertices a drive must stop at (ints in [0, n_points))."""
+    if stops is None:
+        return np.zeros(0, dtype=np.int64)
+    try:
+        out = np.asarray(stops, dtype=np.float64).ravel()
+    except (TypeError, ValueError):
+        raise InvalidParameterError(f"{name} must be waypoint indices, got {stops!r:.80}") from None
+    if out.size and (not np.all(np.isfinite(out)) or np.any(out != np.round(out)) or out.min() < 0
+                     or out.max() >= n_points):
+        raise InvalidParameterError(f"{name} must be indices of the {n_points} waypoints, got {stops!r:.80}")
+    return out.astype(np.int64)
 
 
 def _positive(name: str, value: Any) -> float:
@@ -111,6 +127,7 @@ def waypoint_commands(
     yaw_accel_radps2: float = DEFAULT_YAW_ACCEL_RADPS2,
     dt_s: float = 0.01,
     start_heading_rad: float | None = None,
+    stops: Any = None,
 ) -> CommandProfile:
     """Stop-turn-go commands along a polyline, with the reference pose.
 
@@ -120,7 +137,8 @@ def waypoint_commands(
     speed profile (``speed_mps``, ``accel_mps2``); segments too short to reach the
     cruise speed get a triangular profile. A waypoint where the heading changes by at most
     :data:`COLLINEAR_TOL_RAD` is driven through: the segments on either side are one
-    straight from rest to rest (the module docstring says why). The first turn happens only
+    straight from rest to rest (the module docstring says why), unless it is one of ``stops``
+    (the robot stops there whatever its heading: e.g. a tour's site). The first turn happens only
     when ``start_heading_rad`` is given. Positions and headings follow in closed form.
 
     Parameters
@@ -136,6 +154,8 @@ def waypoint_commands(
         Sampling period (s), > 0.
     start_heading_rad : float, optional
         Heading at the start; ``None`` starts facing the first segment.
+    stops : sequence of int, optional
+        Indices of waypoints the robot stops at even where it drives on in the heading it came.
 
     Returns
     -------
@@ -175,8 +195,9 @@ def waypoint_commands(
             f"waypoints_xy_m[{i}] and waypoints_xy_m[{i + 1}] are equal ({wp[i].tolist()!r}); "
             "remove repeated waypoints"
         )
+    keep = _stops(stops, wp.shape[0], "stops")
     if wp.shape[0] > 2:  # drive through collinear waypoints
-        wp = wp[_pivots(wp)]
+        wp = wp[_pivots(wp, keep)]
         delta = np.diff(wp, axis=0)
         length = np.hypot(delta[:, 0], delta[:, 1])
     heading = np.arctan2(delta[:, 1], delta[:, 0])
@@ -264,18 +285,21 @@ def pivot_commands(angle_rad: float, *, turn_rate_radps: float, yaw_accel_radps2
     return CommandProfile(t, zeros, rate, np.column_stack([zeros, zeros, s]))
 
 
-def drivable_waypoints(waypoints_m: Any) -> tuple[np.ndarray, np.ndarray]:
+def drivable_waypoints(waypoints_m: Any, *, stops: Any = None) -> tuple[np.ndarray, np.ndarray]:
     """A route's waypoints without consecutive repeats or collinear vertices, and the route segment each kept one starts at.
 
     The vertices the stop-turn-go profile stops at (:func:`waypoint_commands`): repeated
     waypoints are dropped, and so is every interior vertex whose heading change is at most
-    :data:`COLLINEAR_TOL_RAD` (driven through); a kept segment then spans several route
-    segments, from the one in ``kept`` to the next kept one.
+    :data:`COLLINEAR_TOL_RAD` (driven through) that is not one of ``stops``; a kept segment then
+    spans several route segments, from the one in ``kept`` to the next kept one.
 
     Parameters
     ----------
     waypoints_m : array_like, shape (K, 2)
         Route vertices (m).
+    stops : sequence of int, optional
+        Indices of waypoints the robot stops at whatever its heading there (kept even where
+        collinear; a repeated waypoint stands for its last copy).
 
     Returns
     -------
@@ -297,6 +321,8 @@ def drivable_waypoints(waypoints_m: Any) -> tuple[np.ndarray, np.ndarray]:
     >>> pts, kept = drivable_waypoints([[0, 0], [1, 0], [2, 0], [2, 1]])  # driven through (1, 0)
     >>> pts.tolist(), kept.tolist()
     ([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0]], [0, 2])
+    >>> drivable_waypoints([[0, 0], [1, 0], [2, 0], [2, 1]], stops=[1])[1].tolist()  # stopped at (1, 0)
+    [0, 1, 2]
     """
     try:
         wp = np.asarray(waypoints_m, dtype=np.float64)
@@ -306,14 +332,16 @@ def drivable_waypoints(waypoints_m: Any) -> tuple[np.ndarray, np.ndarray]:
         raise InvalidParameterError(f"waypoints_m must have shape (K >= 2, 2), got {wp.shape!r}")
     if not np.all(np.isfinite(wp)):
         raise InvalidParameterError("waypoints_m must be finite (no NaN or inf)")
+    at = _stops(stops, wp.shape[0], "stops")
     length = np.hypot(*np.diff(wp, axis=0).T)
     keep_seg = np.flatnonzero(length > 0)
     if keep_seg.size == 0:
         raise InvalidParameterError(f"route has no segment of positive length (waypoints {wp.tolist()!r})")
     pts = np.vstack([wp[keep_seg], wp[keep_seg[-1] + 1][None, :]])
     if pts.shape[0] > 2:
-        stops = _pivots(pts)
-        pts, keep_seg = pts[stops], keep_seg[stops[:-1]]
+        # a stop at waypoint s is the vertex that starts the first kept segment from s on
+        pivots = _pivots(pts, np.searchsorted(keep_seg, at) if at.size else None)
+        pts, keep_seg = pts[pivots], keep_seg[pivots[:-1]]
     return pts, keep_seg
 
 
@@ -326,11 +354,12 @@ def drive_profile(
     accel_mps2: float = DEFAULT_ACCEL_MPS2,
     yaw_accel_radps2: float = DEFAULT_YAW_ACCEL_RADPS2,
     start_heading_rad: float | None = None,
+    stops: Any = None,
 ) -> CommandProfile:
     """The stop-turn-go command profile a mission drives along ``waypoints_m``.
 
-    Consecutive repeated waypoints are dropped and collinear ones driven through
-    (:func:`drivable_waypoints`); then :func:`waypoint_commands` (pivot to each segment's
+    Consecutive repeated waypoints are dropped and collinear ones other than ``stops`` driven
+    through (:func:`drivable_waypoints`); then :func:`waypoint_commands` (pivot to each segment's
     heading, drive it rest to rest at ``speed_mps``).
 
     Raises
@@ -344,9 +373,10 @@ def drive_profile(
     >>> round(p.duration_s, 6)
     5.0
     """
-    pts, _ = drivable_waypoints(waypoints_m)
+    pts, kept = drivable_waypoints(waypoints_m, stops=stops)
     return waypoint_commands(pts, speed_mps, accel_mps2=accel_mps2, turn_rate_radps=turn_rate_radps,
-                             yaw_accel_radps2=yaw_accel_radps2, dt_s=dt_s, start_heading_rad=start_heading_rad)
+                             yaw_accel_radps2=yaw_accel_radps2, dt_s=dt_s, start_heading_rad=start_heading_rad,
+                             stops=np.arange(1, len(kept)) if stops is not None else None)
 
 
 def move_duration_s(distance: Any, peak: float, accel: float) -> np.ndarray:

@@ -44,7 +44,7 @@ __all__ = ["add_parser", "run_tour"]
 
 #: How ``tour`` names the parameters of the library's messages (:func:`terrawatt_cli.error_message`).
 _FLAGS = {"depot_xy_m": "--depot", "n_robots": "--robots", "max_duration_s": "--max-duration",
-          "time_limit_s": "--time-limit", "distributions": "--mc-priced-load"}
+          "time_limit_s": "--time-limit", "distributions": "--mc-priced-load", "improve": "--no-improve"}
 
 _OUTPUTS = ("tour.json", "tour.geojson", "tour.png", "tour_soc.png")
 #: ``--mc-priced-load``: the default draws but for the payload and the capacity fade, held at the priced robot's.
@@ -98,6 +98,9 @@ def add_parser(sub: Any) -> None:
                    help="the routing solver's time limit per solve (s, default 10)")
     p.add_argument("--seed", type=int, default=0, help="the routing solver's seed, and the --monte-carlo draws' "
                                                        "(default 0)")
+    p.add_argument("--no-improve", dest="improve", action="store_false",
+                   help="report the routing solver's tours as they are, without the improvement step priced as driven "
+                        "(which inserts left-out sites that still fit, or swaps them in for sites of less value)")
     p.add_argument("--monte-carlo", type=int, default=None, metavar="N", action=Checked,
                    check=bounded("an integer >= 1", lambda v: v >= 1),
                    help="then drive each planned tour N times through the mission simulator, charged to full at "
@@ -149,7 +152,8 @@ def run_tour(args: argparse.Namespace) -> int:
         fleet = TourFleet(battery=battery_arg(args, pricing.params), depot_xy_m=depots[0] if len(depots) == 1 else depots,
                           n_robots=robots, max_duration_s=args.max_duration)
         result = plan_tour_on_map(
-            tmap, sites, fleet, search=TourSearch(risk=args.tour_risk, time_limit_s=args.time_limit, seed=args.seed),
+            tmap, sites, fleet, search=TourSearch(risk=args.tour_risk, time_limit_s=args.time_limit, seed=args.seed,
+                                              improve=args.improve),
             pricing=pricing, compute=compute, map_label=label, chargers=chargers)
         check = simulate_tours_mc(result, args.monte_carlo, seed=args.seed, draw_from=args.mc_draw,
                                   distributions=_PRICED_LOAD if args.mc_priced_load else None,

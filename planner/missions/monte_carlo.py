@@ -10,6 +10,7 @@ result is the same in process, on any number of workers and with any ``chunk_siz
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -54,6 +55,7 @@ class MissionSetup:
     distributions: MissionDistributions
     nominal_speed_mps: float
     current_rate_hz: float
+    drive: MissionDrive = MissionDrive()
 
     def _draw(self, seq: np.random.SeedSequence) -> tuple[Any, int, tuple[float, ...]]:
         """One mission's draws from its child seed: the sample, the truth's seed, the row's drawn columns."""
@@ -81,7 +83,7 @@ class MissionSetup:
             truth = TruthSimulator(robot, s.grounds(self.grounds), current_rate_hz=self.current_rate_hz,
                                    seed=truth_seed)
             m = simulate_mission(self.terrain, self.route, robot, battery, truth,
-                                 drive=MissionDrive(speed_mps=s.speed_mps, seed=truth_seed))
+                                 drive=dataclasses.replace(self.drive, speed_mps=s.speed_mps, seed=truth_seed))
             b = m.budget
             return (b.actual_energy_j, b.actual_charge_mah, b.duration_s, b.arrival_soc, float(np.min(m.soc)),
                     float(not b.feasible), float(b.depleted))
@@ -124,6 +126,7 @@ def simulate_missions_mc(
     compute: Compute | None = None,
     cost: EnergyCost | None = None,
     forecast: RouteEnergyInterval | None = None,
+    drive: MissionDrive | None = None,
 ) -> MonteCarloResult:
     """Drive one route ``study.n`` times with drawn parameters: the risk of crossing the reserve and the energy
     percentiles.
@@ -175,7 +178,7 @@ def simulate_missions_mc(
     InvalidParameterError
         Too many missions for the memory budget; wrong argument types; a route that was not
         found; not a ``Compute``; an unreachable scheduler; ``draw_from="model"`` without a
-        cost that carries an interval.
+        cost that carries an interval; a ``drive`` that sets a speed or a seed.
     UnknownNameError
         A ground of the map without parameters.
     OptionalDependencyError
@@ -204,6 +207,10 @@ def simulate_missions_mc(
         raise InvalidParameterError(f"route must be a found Route, got {what!r}")
     if not isinstance(battery, Battery):
         raise InvalidParameterError(f"battery must be a Battery, got {type(battery).__name__!r}")
+    drive = MissionDrive() if drive is None else check_instance("drive", drive, MissionDrive)
+    if drive.speed_mps is not None or drive.seed is not None:
+        raise InvalidParameterError("drive.speed_mps and drive.seed are each mission's draws; give neither (got "
+                                    f"speed_mps={drive.speed_mps!r}, seed={drive.seed!r})", parameter="drive")
     robot, rate_hz = truth.robot, truth.current_rate_hz
     distributions = MissionDistributions() if study.distributions is None else study.distributions
     compute = Compute() if compute is None else check_instance("compute", compute, Compute)
@@ -224,7 +231,8 @@ def simulate_missions_mc(
         setup = ModelMissionSetup(forecast, battery, float(route.duration_s), nominal)
         predicted_j = forecast.mean_j
     else:
-        setup = MissionSetup(terrain, route, robot, _grounds(terrain, truth.grounds), battery, distributions, nominal, rate_hz)
+        setup = MissionSetup(terrain, route, robot, _grounds(terrain, truth.grounds), battery, distributions, nominal,
+                             rate_hz, drive)
         TruthSimulator(robot, setup.grounds, current_rate_hz=rate_hz)  # what every sample meets, checked once
         predicted_j = route.energy_j  # the forecast, before any mission runs
         if cost is not None and cost.physics_model is not None:

@@ -56,6 +56,11 @@ class MissionDrive:
     stop_at_reserve : bool
         End the drive at the first sample below the battery's reserve (the mission is aborted
         there) instead of driving the whole route.
+    stops : tuple of int
+        Indices of the route's waypoints the robot stops at whatever its heading there (e.g. a
+        tour's sites, :func:`planner.tours.simulate_tours_mc`): it stops and goes again even where
+        it leaves on the heading it arrived on, where it would otherwise drive through
+        (:data:`energy.profiles.COLLINEAR_TOL_RAD`). Default none: it stops only where it turns.
     seed : int, optional
         Seed of the truth simulator for this drive (default: the simulator's own).
 
@@ -77,6 +82,7 @@ class MissionDrive:
     start_heading_rad: float | None = None
     waypoint_tolerance_m: float | None = None
     stop_at_reserve: bool = False
+    stops: tuple[int, ...] = ()
     seed: int | None = None
 
     def __post_init__(self) -> None:
@@ -90,6 +96,12 @@ class MissionDrive:
         set_(self, "waypoint_tolerance_m", check_optional_real("waypoint_tolerance_m", self.waypoint_tolerance_m,
                                                                low=0.0))
         set_(self, "stop_at_reserve", check_bool("stop_at_reserve", self.stop_at_reserve))
+        try:
+            stops = tuple(sorted({check_int("stops", k, low=0) for k in self.stops}))
+        except TypeError:
+            raise InvalidParameterError(f"stops must be waypoint indices, got {self.stops!r:.80}",
+                                        parameter="stops") from None
+        set_(self, "stops", stops)
         set_(self, "seed", check_seed(self.seed))
 
 

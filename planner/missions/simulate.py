@@ -20,6 +20,9 @@ Segments: the turn at waypoint ``k`` belongs to segment ``k`` (the one it starts
 last waypoint) and the segments add up to ``Route.energy_j``. A waypoint the robot drives
 through (no heading change, :func:`energy.profiles.drivable_waypoints`) does not split the
 drive: the route segments it joins are booked, and predicted, as one, on the first of them.
+A waypoint of ``drive.stops`` is stopped at whatever the heading (a tour's site): it splits the
+drive there, and the profile forecast prices its stop-and-go (the edges' forecast has no turn there
+to price: ``forecast="edges"`` leaves it out).
 Driven samples are assigned to segments from the log's pose (each segment ends at the
 robot's closest approach to its end waypoint once it is within ``waypoint_tolerance_m``
 along the segment); a log without a pose is assumed to follow the velocity profile from its
@@ -77,9 +80,12 @@ class _Profile:
     start_heading_rad: float | None
 
     def commands(self, points_m: np.ndarray, dt_s: float):  # -> energy.CommandProfile
+        """The commands along drivable waypoints (:func:`energy.profiles.drivable_waypoints`, the stops kept): the
+        robot stops at every one of them."""
         return drive_profile(points_m, self.speed_mps, accel_mps2=self.accel_mps2,
                              turn_rate_radps=self.turn_rate_radps, yaw_accel_radps2=self.yaw_accel_radps2,
-                             dt_s=dt_s, start_heading_rad=self.start_heading_rad)
+                             dt_s=dt_s, start_heading_rad=self.start_heading_rad,
+                             stops=np.arange(1, points_m.shape[0] - 1))
 
 
 def simulate_mission(
@@ -168,7 +174,10 @@ def simulate_mission(
                                     parameter="accounting.forecast")
     prof = _profile(terrain, route, robot, cost, drive)
     straight_pred, turn_pred = _segment_predictions(route, cost)
-    pts, kept = drivable_waypoints(route.waypoints_m)
+    if drive.stops and drive.stops[-1] >= len(route.waypoints_m):
+        raise InvalidParameterError(f"drive.stops must be indices of the route's {len(route.waypoints_m)} "
+                                    f"waypoints, got {drive.stops!r}", parameter="drive.stops")
+    pts, kept = drivable_waypoints(route.waypoints_m, stops=drive.stops)
     turn_s, straight_s = planned_durations_s(pts, prof.start_heading_rad, prof.speed_mps, prof.accel_mps2,
                                              prof.turn_rate_radps, prof.yaw_accel_radps2)
     if forecast != "edges" and cost is not None and cost.physics_model is not None:

@@ -20,7 +20,14 @@ from terrawatt_base.errors import InvalidParameterError
 from terrawatt_base.formats import result_document, write_result_json
 from terrawatt_base.plot_target import check_ax, check_plot_target, new_figure
 
-from ..missions import MissionDistributions, MissionTruth, MonteCarloResult, MonteCarloStudy, simulate_missions_mc
+from ..missions import (
+    MissionDistributions,
+    MissionDrive,
+    MissionTruth,
+    MonteCarloResult,
+    MonteCarloStudy,
+    simulate_missions_mc,
+)
 from ..route import Route
 from ..route_price import RouteEnergyInterval
 from .result import TourResult
@@ -226,7 +233,9 @@ def simulate_tours_mc(result: TourResult, n: int = 1000, *, seed: int | None = 0
     With a cost that carries an interval the missions draw from the planning model's own
     distribution (``draw_from="model"``: one factor per ground per tour, the whole tour's
     energy, service included, as priced); otherwise the truth simulator drives the tour's
-    route with drawn parameters (service energy not included). A tour with charging stops is
+    route with drawn parameters (service energy not included), stopping at every stop as the plan
+    prices it — at a site it leaves on the heading it arrived on too (:class:`planner.missions.MissionDrive`'s
+    ``stops``), where a route alone would be driven through. A tour with charging stops is
     driven segment by segment (from the depot or a charge to the next charge or back), each
     segment from the charge it starts with (the initial one, then full) and with the same seed, so
     mission ``i`` of every segment draws the same factors: one drive of the whole tour.
@@ -260,11 +269,12 @@ def simulate_tours_mc(result: TourResult, n: int = 1000, *, seed: int | None = 0
             if not tour.legs:
                 continue
             studies = []
-            for route, battery, forecast in _segments(result, k):
+            for route, stops_at, battery, forecast in _segments(result, k):
                 studies.append(simulate_missions_mc(
                     result.terrain, route, battery, MonteCarloStudy(n, seed=None if seed is None else seed + k,
                                                                     draw_from=mode, distributions=distributions),
-                    truth=truth, cost=result.cost, forecast=forecast if mode == "model" else None, compute=each))
+                    truth=truth, cost=result.cost, forecast=forecast if mode == "model" else None, compute=each,
+                    drive=MissionDrive(stops=stops_at)))
             runs[tour.robot] = tuple(studies)
             stops[tour.robot] = (*(tour.stops[j] for j in tour.charging_stops), tour.legs[-1].end)
     return TourCheck(result.risk, runs, mode, stops, result.map_label)
@@ -279,19 +289,29 @@ def _priced_truth(result: TourResult) -> MissionTruth:
     return MissionTruth(robot=model.robot, grounds=dict(zip(result.cost.tables.ground_labels, params)))
 
 
-def _segments(result: TourResult, robot: int) -> list[tuple[Route, Battery, RouteEnergyInterval]]:
-    """Each segment of the robot's tour between charges: its route, its battery (full after a charge) and its energy
-    distribution over every ground of the tour (zero spread where it does not go), so that every segment draws the
-    same factors in the same order."""
+def _stops_along(result: TourResult, robot: int, legs: slice) -> tuple[int, ...]:
+    """The waypoints of the route of ``legs`` joined (:meth:`TourResult.tour_route`) where one leg ends and the next
+    starts: the stops the robot makes there to serve, whatever its heading (the plan prices each one,
+    :meth:`planner.tours.PairPrices.tour_interval`)."""
+    lengths = [len(leg.waypoints_m) - 1 for leg in result.tours[robot].legs[legs]]
+    return tuple(int(k) for k in np.cumsum(lengths[:-1]))
+
+
+def _segments(result: TourResult, robot: int) -> list[tuple[Route, tuple[int, ...], Battery, RouteEnergyInterval]]:
+    """Each segment of the robot's tour between charges: its route, the waypoints of it the robot stops at (its
+    stops), its battery (full after a charge) and its energy distribution over every ground of the tour (zero spread
+    where it does not go), so that every segment draws the same factors in the same order."""
     tour = result.tours[robot]
     if not tour.charging_stops:
-        return [(result.tour_route(robot), tour.battery, tour.energy)]
+        return [(result.tour_route(robot), _stops_along(result, robot, slice(None)), tour.battery, tour.energy)]
     whole = tour.energy
     full = dataclasses.replace(tour.battery, initial_soc=1.0)
     out, first = [], 0
     for s, (end, seg) in enumerate(zip([*tour.charging_stops, len(tour.legs) - 1], tour.segments)):
         by = {g: seg.sd_by_ground_j.get(g, 0.0) for g in whole.sd_by_ground_j}
         forecast = RouteEnergyInterval(seg.mean_j, seg.sd_j, by, seg.dof, {g: whole.ground_dof(g) for g in by})
-        out.append((result.tour_route(robot, slice(first, end + 1)), tour.battery if s == 0 else full, forecast))
+        legs = slice(first, end + 1)
+        out.append((result.tour_route(robot, legs), _stops_along(result, robot, legs), tour.battery if s == 0 else full,
+                    forecast))
         first = end + 1
     return out

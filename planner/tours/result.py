@@ -31,7 +31,7 @@ __all__ = ["TourLeg", "RobotTour", "TourResult", "TOUR_FORMAT_VERSION", "TOUR_ST
 #: service, return) and the sites' time windows; 3: charging points: each robot's ``stops`` in visiting order (sites
 #: and charging stops, ``charging_stops`` their indices), its timeline and service per stop, its ``segments`` between
 #: charges with their energy at Q and budget, and the ``chargers``.
-TOUR_FORMAT_VERSION = 3
+TOUR_FORMAT_VERSION = 4
 #: What a tour query answers: tours were planned, or no site is reachable at Q by any robot.
 TOUR_STATUSES = ("planned", "nothing reachable")
 
@@ -252,9 +252,10 @@ class TourResult:
         The sites that have a time window: ``(earliest_s, latest_s)`` from the departure.
     chargers : TourChargers or None
         The charging points the tours could stop at.
-    sites_added, improve_time_s : int, float
-        Sites the improvement step priced as driven added to the solver's tours (:mod:`planner.tours.improve`) and
-        the seconds it took (beside ``solve_time_s``); not in tour.json, whose format stays at version 3.
+    sites_added, sites_swapped, improve_time_s : int, int, float
+        What the improvement step priced as driven did to the solver's tours (:mod:`planner.tours.improve`): the
+        sites it added (an insertion adds one, a swap none), the sites it swapped in for sites of less value, and
+        the seconds it took (beside ``solve_time_s``); all 0 when it did not run (``TourSearch(improve=False)``).
     """
 
     status: str
@@ -276,6 +277,7 @@ class TourResult:
     time_windows_s: dict[str, tuple[float, float]] = field(default_factory=dict)
     chargers: TourChargers | None = None
     sites_added: int = 0
+    sites_swapped: int = 0
     improve_time_s: float = field(default=0.0, compare=False)
 
     @property
@@ -322,6 +324,9 @@ class TourResult:
             lines.append(f"left out, {why}: {shown}")
         lines.append(f"pricing {self.pricing_time_s:.2f} s ({self.where}), solving {self.solve_time_s:.2f} s "
                      f"({self.solver}, {self.solve_rounds} round(s))")
+        if self.sites_added or self.sites_swapped:
+            lines.append(f"improvement step priced as driven: {self.sites_added} site(s) added, {self.sites_swapped} "
+                         f"swapped in, in {self.improve_time_s:.2f} s")
         if self.status == "nothing reachable":
             timed = any(why.startswith(("outside its time window", "too long")) for why in self.left_out.values())
             lines.append("nothing reachable: no site can be visited and left with the reserve at Q"
@@ -330,7 +335,8 @@ class TourResult:
         return "\n".join(lines)
 
     def to_dict(self) -> dict[str, Any]:
-        """tour.json: a ``terrawatt-tour`` result document (``format_version`` :data:`TOUR_FORMAT_VERSION`)."""
+        """tour.json: a ``terrawatt-tour`` result document (``format_version`` :data:`TOUR_FORMAT_VERSION`; 4 adds
+        what the improvement step did, ``sites_added``, ``sites_swapped`` and ``improve_time_s``)."""
         return result_document("tour", TOUR_FORMAT_VERSION, {
             "status": self.status, "map": self.map_label, "risk": self.risk, "value": self.value,
             "robots": [t.to_dict() for t in self.tours],
@@ -342,6 +348,7 @@ class TourResult:
             "chargers": self.chargers.to_dict() if self.chargers is not None else {}, "solver": self.solver,
             "pricing_time_s": self.pricing_time_s,
             "solve_time_s": self.solve_time_s, "solve_rounds": self.solve_rounds, "where": self.where,
+            "sites_added": self.sites_added, "sites_swapped": self.sites_swapped, "improve_time_s": self.improve_time_s,
         })
 
     def leg_routes(self) -> dict[str, Route]:

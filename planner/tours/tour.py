@@ -238,7 +238,7 @@ def plan_tour(
                   for rb, t, d in zip(fleet, step.tours, depot_points.tolist()))
     return TourResult("planned", q, tours, left_out, errors, values, outcome.solver, prices.pricing_time_s,
                       outcome.solve_time_s, outcome.rounds, prices.where, map_label, where_xy, cost.terrain, cost,
-                      prices, windows, chargers, step.added, step.time_s)
+                      prices, windows, chargers, step.added, step.swapped, step.time_s)
 
 
 class _Timing:

@@ -211,3 +211,30 @@ def test_cli_monte_carlo_draws_as_asked(tmp_path, capsys, wall_map, monkeypatch)
         rc = main([*base, *extra, "--out", str(tmp_path / "refused")])
         err = capsys.readouterr().err
         assert rc == 2 and words in err and not (tmp_path / "refused").exists()
+
+
+def test_cli_no_improve_reports_the_solvers_tours(tmp_path, capsys, wall_map, monkeypatch):
+    """``--no-improve`` is ``TourSearch(improve=False)``: the step does not run, tour.json says it added nothing and
+    the summary has no line for it; without the flag the step runs."""
+    import terrawatt_cli.tour as tour_command
+
+    tmap = wall_map.save(tmp_path / "wall.npz")
+    sites = _sites(tmp_path, ["pump,5.5,35.5,2", "gate,30.5,31.5,1", "shed,35.5,5.5,1"])
+    seen = []
+    real = tour_command.plan_tour_on_map
+
+    def spy(*args, search, **kw):
+        seen.append(search.improve)
+        return real(*args, search=search, **kw)
+
+    monkeypatch.setattr(tour_command, "plan_tour_on_map", spy)
+    base = ["tour", "--map", str(tmap), "--sites", str(sites), "--depot", "5.5", "5.5", "--battery-ah", "0.2",
+            "--voltage", "24"]
+    assert main([*base, "--no-improve", "--out", str(tmp_path / "plain")]) == 0
+    text = capsys.readouterr().out
+    doc = json.loads((tmp_path / "plain" / "tour.json").read_text())
+    assert doc["format_version"] == 4 and (doc["sites_added"], doc["sites_swapped"], doc["improve_time_s"]) == (0, 0, 0)
+    assert "improvement step" not in text
+    assert main([*base, "--out", str(tmp_path / "improved")]) == 0
+    capsys.readouterr()
+    assert seen == [False, True]

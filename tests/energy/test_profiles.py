@@ -85,6 +85,25 @@ def test_drive_profile_drops_repeated_waypoints_and_matches_waypoint_commands() 
     assert p.pose_xyh[-1, :2] == pytest.approx([2.0, 1.0])
 
 
+def test_a_stop_survives_the_collinear_rule() -> None:
+    """A waypoint named in ``stops`` is stopped at though the heading does not change there (a tour's site): the
+    straight splits in two, one ramp down and up (speed / accel) longer; repeated waypoints map a stop onto the kept
+    copy."""
+    wp = [[0.0, 0.0], [1.0, 0.0], [1.0, 0.0], [3.0, 0.0]]
+    through = drive_profile(wp, 0.5, turn_rate_radps=0.5, dt_s=0.01)
+    stopped = drive_profile(wp, 0.5, turn_rate_radps=0.5, dt_s=0.01, stops=[1])
+    assert stopped.duration_s - through.duration_s == pytest.approx(0.5 / DEFAULT_ACCEL_MPS2, abs=0.011)
+    at = np.flatnonzero(np.isclose(stopped.pose_xyh[:, 0], 1.0, atol=1e-9))
+    assert at.size and np.all(stopped.v_mps[at] == 0.0) and np.all(through.v_mps[1:-1] > 0.0)  # at rest only where stopped
+    pts, kept = drivable_waypoints(wp, stops=[1])
+    assert pts.tolist() == [[0.0, 0.0], [1.0, 0.0], [3.0, 0.0]] and kept.tolist() == [0, 2]
+    assert drivable_waypoints(wp, stops=[0, 3])[1].tolist() == [0]  # the ends are stops anyway
+    with pytest.raises(InvalidParameterError, match="stops must be indices of the 4 waypoints"):
+        drivable_waypoints(wp, stops=[4])
+    with pytest.raises(InvalidParameterError, match="stops must be indices"):
+        waypoint_commands([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]], 0.5, stops=[0.5])
+
+
 def test_drive_profile_is_exported_from_energy() -> None:
     import energy.profiles
 

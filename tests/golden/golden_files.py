@@ -60,7 +60,7 @@ MASKED_KEYS = frozenset({
     "refresh_time_s", "update_wall_time_s", "wall_time_s",  # mission.json
     "update_wall",  # navigator.json (scalars): seconds, though its name does not say so
     "routes_per_s",  # batch.json: routes / elapsed_s
-    "pricing_time_s", "solve_time_s",  # tour.json
+    "pricing_time_s", "solve_time_s", "improve_time_s",  # tour.json
     # the environment: {"terrawatt": ..., "numpy": ..., "python": ...} in a model file's model.json
     "versions",
 })
@@ -89,6 +89,7 @@ MASKED_PRINTED = tuple(re.compile(p, re.MULTILINE) for p in (
     r"loop computing (\d+\.\d+) s",  # mission: computing_time_s
     r"replayed in (\d+\.\d+) s \((\d+)x real time\)",  # replay: wall_time_s and the ratio to it
     r"pricing (\d+\.\d+) s .*solving (\d+\.\d+) s",  # tour: pricing_time_s, solve_time_s
+    r"swapped in, in (\d+\.\d+) s$",  # tour: improve_time_s
     r"in (\d+\.\d+) s; wrote",  # train: fit_duration_s
 ))
 

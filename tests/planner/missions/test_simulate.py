@@ -156,6 +156,29 @@ def test_a_collinear_waypoint_is_driven_through_and_booked_with_the_segment_befo
     assert res.budget.actual_energy_j == pytest.approx(straight.budget.actual_energy_j, rel=1e-9)  # the same drive
 
 
+def test_a_waypoint_of_drive_stops_is_stopped_at_though_collinear(flat, clean_sim):
+    """A stop the drive names (a tour's site) survives the collinear rule: the robot stops and goes again there, the
+    drive takes the stop-and-go's time longer, the profile forecast prices it and the segments split there."""
+    tmap, cost = flat
+    route = evaluate_route(cost, [[2.5, 2.5], [10.5, 2.5], [20.5, 2.5], [20.5, 12.5]])
+    through = simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=cost)
+    stopped = simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, cost=cost,
+                               drive=MissionDrive(stops=(1,)))
+    assert set(np.unique(through.segment_index)) == {0, 2} and set(np.unique(stopped.segment_index)) == {0, 1, 2}
+    v = np.interp(10.5, stopped.x_m[stopped.y_m < 3.0], stopped.v_mps[stopped.y_m < 3.0])
+    assert v == pytest.approx(0.0, abs=0.05)  # at rest at (10.5, 2.5)
+    ramp_s = stopped.speed_mps / stopped.accel_mps2  # a stop-and-go adds speed / accel to a straight
+    assert stopped.budget.duration_s - through.budget.duration_s == pytest.approx(ramp_s, abs=0.1)
+    extra = stopped.budget.actual_energy_j - through.budget.actual_energy_j
+    assert extra > 0 and stopped.budget.predicted_energy_j - through.budget.predicted_energy_j == pytest.approx(extra, rel=0.1)
+    with pytest.raises(InvalidParameterError, match="drive.stops must be indices of the route's 4 waypoints"):
+        simulate_mission(tmap, route, ROBOT, Battery(20.0, 24.0), truth=clean_sim, drive=MissionDrive(stops=(4,)))
+    with pytest.raises(InvalidParameterError, match="stops must be >= 0"):
+        MissionDrive(stops=(-1,))
+    with pytest.raises(InvalidParameterError, match="stops must be waypoint indices"):
+        MissionDrive(stops=3)
+
+
 def test_infeasible_mission_reports_crossing(flat, flat_mission, clean_sim):
     tmap, cost = flat
     route, full = flat_mission

@@ -64,7 +64,7 @@ def test_a_site_out_of_reach_on_one_charge_is_visited_with_a_charge_and_every_se
     assert soc[k + 2] > soc[k + 1]  # after the leg leaving the dock, more charge than on arriving at it
     doc = json.loads(json.dumps(res.to_dict()))
     block = doc["robots"][0]
-    assert doc["format_version"] == 3 and block["stops"] == list(tour.stops)
+    assert doc["format_version"] == 4 and block["stops"] == list(tour.stops)
     assert block["charging_stops"] == list(tour.charging_stops) and "dock" in doc["chargers"]
     assert [s["to"] for s in block["segments"]][-1] == "depot"
     assert "[charge dock]" in res.summary()

@@ -229,3 +229,34 @@ def test_the_truth_is_the_priced_robot_and_the_draws_are_the_callers(monkeypatch
     assert all(truth is husky and study.distributions is None for study, truth in seen)
     with pytest.raises(InvalidParameterError, match="truth"):
         simulate_tours_mc(res, 8, truth="husky")
+
+
+def test_the_simulated_drive_stops_at_a_site_it_passes_straight_through():
+    """A site on the straight line between its neighbours: the plan prices the stop-and-go there (the robot stops to
+    serve it), and so does the check's drive (its stops survive the collinear rule): the simulated mean agrees with the
+    plan's price as closely as on the tour without that site (the same U-turn at the far end), and the drive lasts
+    the stop-and-go longer than the same route driven through."""
+    from planner.missions import MissionDistributions, MissionTruth, MonteCarloStudy, simulate_missions_mc
+
+    cost = CostSpec(robot="jackal").build(flat_map((20, 60), 1.0))
+    fixed = MissionDistributions(ground_coef_scale=(1.0, 1.0), payload_kg=(0.0, 0.0), capacity_fade_pct=(0.0, 0.0),
+                                 internal_resistance_ohm=(0.0, 0.0), speed_scale=(1.0, 1.0))
+    gaps = {}
+    for names, xy in ((("mid", "far"), [[25.0, 10.0], [50.0, 10.0]]), (("far",), [[50.0, 10.0]])):
+        res = plan_tour(cost, TourSites(names, xy), TourRobot(Battery(0.3, 12.0), (2.0, 10.0)),
+                        search=TourSearch(risk=0.9, time_limit_s=1.0))
+        tour = res.tours[0]
+        assert tour.stops == names
+        check = simulate_tours_mc(res, 2, seed=1, distributions=fixed)
+        (mc,) = check.runs[tour.robot]
+        gaps[names] = float(np.mean(mc.energy_j)) / tour.energy.mean_j - 1.0
+        if "mid" in names:
+            through = simulate_missions_mc(res.terrain, res.tour_route(0), tour.battery,
+                                           MonteCarloStudy(2, seed=1, distributions=fixed),
+                                           truth=MissionTruth(robot="jackal"), cost=cost)
+            stop_go_j = float(cost.stop_go_at(np.array([0]))[0])
+            assert float(np.mean(mc.energy_j - through.energy_j)) == pytest.approx(stop_go_j, rel=0.1)
+            assert float(np.mean(mc.duration_s - through.duration_s)) == pytest.approx(1.0, abs=0.1)  # speed / accel
+    # driven through, the site's stop-and-go (0.6 % of the tour) would open a gap of that size between the two
+    assert gaps[("mid", "far")] == pytest.approx(gaps[("far",)], abs=0.001)
+    assert abs(gaps[("far",)]) < 0.005

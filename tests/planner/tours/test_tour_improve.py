@@ -139,6 +139,12 @@ def test_after_the_step_no_left_out_site_fits_and_without_it_the_solvers_tours_s
     assert kept.sites_added == 0 and res.value >= kept.value
     assert res.sites_added >= 1  # here the solver's tour leaves room for a site priced as driven (value 24 -> 26)
     assert res.sites_added >= len(res.visited) - len(kept.visited)
+    # the answer says what the step did: one line where it added or swapped sites, none where it did nothing
+    line = f"improvement step priced as driven: {res.sites_added} site(s) added, {res.sites_swapped} swapped in, in "
+    assert line in res.summary() and "improvement step" not in kept.summary()
+    doc, plain = res.to_dict(), kept.to_dict()
+    assert (doc["sites_added"], doc["sites_swapped"]) == (res.sites_added, res.sites_swapped)
+    assert (plain["sites_added"], plain["sites_swapped"], plain["improve_time_s"]) == (0, 0, 0.0)
     tour = res.tours[0]
     assert tour.energy.quantile_j(0.9) <= tour.budget_j
     pricer = DrivenPricer.of(res.prices, 0.9)

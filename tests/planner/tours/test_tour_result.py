@@ -20,7 +20,7 @@ def test_the_result_writes_json_geojson_and_figures_and_names_the_left_out(tmp_p
     files = {p.name for p in res.write(tmp_path)}
     assert files == {"tour.json", "tour.geojson", "tour.png", "tour_soc.png"}
     doc = json.loads((tmp_path / "tour.json").read_text())
-    assert doc["format"] == "terrawatt-tour" and doc["format_version"] == 3
+    assert doc["format"] == "terrawatt-tour" and doc["format_version"] == 4
     robot = doc["robots"][0]
     assert robot["sites"] == list(res.tours[0].sites) and res.left_out["zero"] == NOT_WORTH_IT
     assert len(robot["legs"]) == len(robot["sites"]) + 1
