@@ -173,7 +173,8 @@ class DrivenPricer:
         z = np.zeros(dof.shape)
         for d in np.unique(dof):  # a few distinct degrees of freedom: one quantile each
             z[dof == d] = predictive_quantile(self.q, float(d))
-        return mean, sd, mean + z * np.sqrt(np.sum(sd ** 2, axis=2))
+        # at least 0, as RouteEnergyInterval.quantile_j reads a route's energy (censored: never negative)
+        return mean, sd, np.maximum(mean + z * np.sqrt(np.sum(sd ** 2, axis=2)), 0.0)
 
 
 @dataclass(frozen=True)

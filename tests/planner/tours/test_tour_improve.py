@@ -38,6 +38,7 @@ def test_the_bulk_price_equals_tour_interval_segment_by_segment(hills_cost):
     xy = _points(5, 7)
     prices = price_pairs(hills_cost, xy, [f"p{k}" for k in range(len(xy))], risk=0.9)
     pricer = DrivenPricer.of(prices, 0.9)
+    low = DrivenPricer.of(prices, 0.001)  # a low level: read as tour_interval reads it (never below 0)
     charger = np.zeros(len(xy), dtype=bool)
     charger[7] = True
     rng = np.random.default_rng(0)
@@ -45,6 +46,7 @@ def test_the_bulk_price_equals_tour_interval_segment_by_segment(hills_cost):
         stops = rng.permutation(np.arange(1, 8))[:rng.integers(1, 8)].tolist()
         seq = [0, *stops, 0]
         mean, sd, at_q = pricer.segments(np.array([seq]), charger)
+        at_low = low.segments(np.array([seq]), charger)[2]
         cuts = [k for k, p in enumerate(seq) if charger[p]]
         bounds = [0, *cuts, len(seq) - 1]
         for s, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])):
@@ -52,6 +54,7 @@ def test_the_bulk_price_equals_tour_interval_segment_by_segment(hills_cost):
             assert mean[0, s] == pytest.approx(iv.mean_j, rel=1e-12)
             assert np.sqrt(np.sum(sd[0, s] ** 2)) == pytest.approx(iv.sd_j, rel=1e-9, abs=1e-9)
             assert at_q[0, s] == pytest.approx(iv.quantile_j(0.9), rel=1e-12)
+            assert at_low[0, s] == pytest.approx(iv.quantile_j(0.001), rel=1e-12, abs=1e-9)
         assert np.all(at_q[0, len(bounds) - 1:] == 0.0)  # no more segments than the tour has
 
 
